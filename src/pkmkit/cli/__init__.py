@@ -1,0 +1,1 @@
+"""The ``pkmkit`` command line (thin layer over the library)."""

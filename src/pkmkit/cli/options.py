@@ -1,0 +1,93 @@
+"""Shared command-line plumbing: resolving machines, parsing vectors, converting units."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import click
+import numpy as np
+
+from pkmkit.errors import InputError, ParameterError, UnknownParameterError
+from pkmkit.io.json_io import to_jsonable
+from pkmkit.machines.machine import Machine
+from pkmkit.machines.registry import load, machine, preset_path
+from pkmkit.model.machine_file import SUFFIXES
+from pkmkit.model.parameters import LENGTH_UNITS, length_scale
+
+UNITS_OPTION = click.option(
+    "--units",
+    type=click.Choice(sorted(LENGTH_UNITS)),
+    default="m",
+    show_default=True,
+    help="Length unit of every value on the command line and in the output "
+    "(angles are always in degrees).",
+)
+SET_OPTION = click.option(
+    "--set",
+    "assignments",
+    multiple=True,
+    metavar="NAME=VALUE",
+    help="Override a machine parameter (repeatable); vectors comma-separated, e.g. "
+    "--set A=0,0 --set angles=90,210,330.",
+)
+JSON_OPTION = click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
+
+
+def is_machine_file(name: str) -> bool:
+    """True if ``name`` designates a machine file rather than a built-in id."""
+    return Path(name).suffix.lower() in SUFFIXES
+
+
+def resolve_machine(name: str, assignments: Sequence[str], units: str) -> Machine:
+    """A machine from a built-in id or a machine-file path, with ``--set`` overrides given in
+    CLI units (lengths in ``units``, angles in degrees)."""
+    base = load(name) if is_machine_file(name) else machine(name)
+    if not assignments:
+        return base
+    if base.kind is None:
+        raise ParameterError(
+            f"machine {base.id!r} is described leg by leg; --set is not available, edit the file"
+        )
+    specs = {s.name: s for s in base.kind.parameters}
+    overrides: dict[str, Any] = {}
+    for text in assignments:
+        key, sep, value = text.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise ParameterError(f"--set expects NAME=VALUE, got {text!r}")
+        if key not in specs:
+            raise UnknownParameterError(key, base.id, specs)
+        overrides[key] = specs[key].parse_text(value, units, base.id)
+    return base.with_params(**overrides)
+
+
+def machine_document_path(name: str) -> str:
+    """Path of the machine file behind ``name`` (a preset id or a file)."""
+    return name if is_machine_file(name) else preset_path(name)
+
+
+def parse_vector(text: str, size: int, what: str, units: str) -> np.ndarray:
+    """Comma-separated numbers in CLI units → SI array ``(size,)``."""
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise InputError(f"{what}: cannot read {text!r} as comma-separated numbers") from None
+    if len(values) != size:
+        raise InputError(f"{what} needs {size} comma-separated values, got {len(values)}")
+    return np.asarray(values) * length_scale(units)
+
+
+def emit_json(payload: dict) -> None:
+    """Print ``payload`` as indented JSON (NaN/inf as null)."""
+    click.echo(json.dumps(to_jsonable(payload), indent=2))
+
+
+def fmt(values: Any, digits: int = 6) -> str:
+    """Compact text of a number or vector."""
+    arr = np.asarray(values, dtype=float)
+    if arr.ndim == 0:
+        return f"{float(arr):.{digits}g}"
+    return "[" + ", ".join(f"{v:.{digits}g}" for v in arr.ravel()) + "]"

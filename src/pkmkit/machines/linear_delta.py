@@ -1,0 +1,106 @@
+"""Linear Delta with vertical slides (seed 000, Bourebbou 2019, Ch. III–IV).
+
+Three vertical slides on a circle of radius R at angles θ_i; the carriage of slide i is at
+``(R cos θ_i, R sin θ_i, q_i)``; a parallelogram of two rods of length L joins it to the nacelle
+joint ``p + (r cos θ_i, r sin θ_i, 0)``. With d = R − r the closure is
+
+    (x − d cos θ_i)² + (y − d sin θ_i)² + (z − q_i)² = L²,
+    q_i = z + sqrt(L² − (x − d cos θ_i)² − (y − d sin θ_i)²)   (carriages above the nacelle, z up)
+
+(the seed's printed (III.2)–(III.5) carry sign errors; see docs/seed-errata.md). The two assembly
+modes are the nacelle below or above the plane of the three carriage joints. The parallelogram
+rods are offset tangentially by ± half the pair spacing, which the thesis never gives (a
+parameter here).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from pkmkit.errors import ParameterError
+from pkmkit.machines.machine import MachineKind
+from pkmkit.model.parameters import ParameterSpec
+from pkmkit.model.rods import LegSpec, RodModel, build_rod_model
+
+PARAMETERS = (
+    ParameterSpec("R", "length", 0.7, "radius of the circle of the three slides", positive=True),
+    ParameterSpec("r", "length", 0.15, "radius of the nacelle joint circle", positive=True),
+    ParameterSpec("L", "length", 1.3, "rod (arm) length", positive=True),
+    ParameterSpec(
+        "angles",
+        "angle",
+        tuple(math.radians(a) for a in (0.0, 120.0, 240.0)),
+        "angular positions of the three slides",
+        size=3,
+    ),
+    ParameterSpec(
+        "parallelogram_width",
+        "length",
+        0.1,
+        "spacing of the two rods of each parallelogram (not given by the seed; rod model only)",
+    ),
+)
+
+
+def build(params: Mapping[str, Any]) -> RodModel:
+    """Rod model of a vertical-slide linear Delta from R, r, L (m) and slide angles (rad)."""
+    big_r, small_r, length = params["R"], params["r"], params["L"]
+    theta = np.asarray(params["angles"], dtype=float)
+    radial = np.column_stack([np.cos(theta), np.sin(theta), np.zeros(3)])
+    orientation = np.linalg.det(np.column_stack([radial[:, :2], np.ones(3)]))
+    if abs(orientation) < 1e-9:
+        raise ParameterError("the three slide angles must be distinct (mod 360°)", "angles")
+    if big_r - small_r >= length:
+        raise ParameterError(
+            f"R − r = {big_r - small_r:.6g} m must be smaller than L = {length:.6g} m, otherwise "
+            "no pose below the slides is reachable",
+            "L",
+        )
+    tangent = np.column_stack([-np.sin(theta), np.cos(theta), np.zeros(3)])
+    legs = [
+        LegSpec(
+            name=f"leg {i + 1}",
+            actuator=i,
+            kind="slide",
+            base=big_r * radial[i],
+            axis=(0.0, 0.0, 1.0),
+            platform=small_r * radial[i],
+            length=length,
+            branch=1,
+            parallelogram_width=params["parallelogram_width"],
+            parallelogram_direction=tangent[i],
+        )
+        for i in range(3)
+    ]
+    # det A = −(distance below the carriage plane) × orientation of the slide triangle
+    below_above = ("nacelle-below", "nacelle-above")
+    names = below_above if orientation > 0 else below_above[::-1]
+    return build_rod_model(
+        legs,
+        dims=3,
+        actuator_names=("q1", "q2", "q3"),
+        home_pose=(0.0, 0.0, 0.0),
+        mode_names=names,
+    )
+
+
+def reference_poses(params: Mapping[str, Any], model: RodModel) -> dict[str, np.ndarray]:
+    """Corners of the seed's Table III.2 cube (x, y = ±0.25 m, z = 0 and 0.5 m)."""
+    return {
+        "corner(+,+,0)": np.array([0.25, 0.25, 0.0]),
+        "corner(-,-,0.5)": np.array([-0.25, -0.25, 0.5]),
+    }
+
+
+KIND = MachineKind(
+    kind="linear-delta",
+    title="Linear Delta (3-P(SS)2, vertical slides)",
+    parameters=PARAMETERS,
+    build=build,
+    reference_poses=reference_poses,
+    source="seed 000 (Bourebbou 2019), §III.5 and Table III.2; §IV Table IV.1",
+)

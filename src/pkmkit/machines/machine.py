@@ -1,0 +1,571 @@
+"""The :class:`Machine`: a rod-leg model with named parameters and its kinematic models.
+
+One class serves every translational rod-leg machine (built-in kinds and machines from files):
+the machine modules only declare parameters and build the geometry. Closed-form models come from
+:mod:`pkmkit.machines.closed_form`; ``method="numeric"`` solves the same problems with the
+generic least-squares engine over every rod (:mod:`pkmkit.solve.rod_closure`).
+
+Conventions: SI units (m, rad); poses ``(dims,)`` or ``(N, dims)``; actuator coordinates ``(n,)``
+or ``(N, n)``. Single-row calls raise a typed error on failure; batched calls return NaN rows
+and a per-row status (``full_output=True``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from pkmkit.errors import (
+    ConvergenceError,
+    InputError,
+    NoAssemblyError,
+    ParameterError,
+    SingularConfigurationError,
+    UnreachablePoseError,
+)
+from pkmkit.machines.closed_form import RodClosedForm
+from pkmkit.machines.results import (
+    AssemblyModes,
+    DirectResult,
+    InverseResult,
+    JacobianRates,
+    Jacobians,
+    Singularity,
+)
+from pkmkit.model.mobility import grubler_count
+from pkmkit.model.parameters import ParameterSpec, resolve_parameters
+from pkmkit.model.rods import RodModel
+from pkmkit.numerics.arrays import as_batch, finite_rows, require_finite, restore_shape
+from pkmkit.numerics.linalg import batched_det, condition_number, singular_values
+from pkmkit.solve.rod_closure import instantaneous_mobility, solve_direct, solve_inverse
+from pkmkit.status import Status
+
+#: Default threshold on the singularity measures (dimensionless).
+SINGULARITY_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class MachineKind:
+    """A family of machines built from named parameters.
+
+    Attributes:
+        kind: identifier (``"linear-delta"``).
+        title: one-line human description.
+        parameters: declared parameters with defaults.
+        build: ``params (SI) -> RodModel``; raises :class:`ParameterError` on inconsistent values.
+        reference_poses: ``(params, model) -> {name: pose}``, sample poses for summaries.
+        source: where the model comes from (seed, section).
+    """
+
+    kind: str
+    title: str
+    parameters: tuple[ParameterSpec, ...]
+    build: Callable[[Mapping[str, Any]], RodModel]
+    reference_poses: Callable[[Mapping[str, Any], RodModel], dict[str, np.ndarray]]
+    source: str = ""
+
+
+def _restore(result, single: bool, names: tuple[str, ...]):
+    values = {k: getattr(result, k) for k in result.__dataclass_fields__}
+    for k in names:
+        if values[k] is not None:
+            values[k] = restore_shape(values[k], single)
+    return type(result)(**values)
+
+
+@dataclass(frozen=True, eq=False)
+class Machine:
+    """A parallel kinematic machine (translational rod-leg family).
+
+    Attributes:
+        id: identifier (preset id or file path).
+        name: human-readable name.
+        kind: the :class:`MachineKind` it was built from (None for a ``rod-legs`` file machine).
+        params: parameter values in SI units (empty for ``rod-legs`` machines).
+        model: the immutable :class:`~pkmkit.model.rods.RodModel`.
+        description, source: documentation strings.
+        extra_poses: named sample poses in addition to ``home``.
+    """
+
+    id: str
+    name: str
+    kind: MachineKind | None
+    params: Mapping[str, Any]
+    model: RodModel
+    description: str = ""
+    source: str = ""
+    extra_poses: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        closed = RodClosedForm(self.model)
+        home = self.model.home_pose[None]
+        q_home = closed.inverse(home, self.model.leg_branch)
+        if not np.isfinite(q_home).all():
+            short = closed.shortfall(home)[0]
+            leg = int(np.argmax(short))
+            raise ParameterError(
+                f"machine {self.id!r}: the home pose {self.model.home_pose.tolist()} is out of "
+                f"reach (leg {self.model.leg_names[leg]} too short by {short[leg]:.6g} m)"
+            )
+        a, b = closed.jacobians(home, q_home)
+        det_a = float(batched_det(a)[0])
+        if det_a == 0.0 or not np.all(np.diag(b[0])):
+            raise ParameterError(f"machine {self.id!r}: the home pose is a singular configuration")
+        object.__setattr__(self, "_closed", closed)
+        object.__setattr__(self, "_home_q", q_home[0])
+        object.__setattr__(self, "_working_mode", 1 if det_a > 0 else -1)
+        object.__setattr__(self, "_home_jacobian", np.linalg.solve(a[0], b[0]))
+
+    # ---------------------------------------------------------------- properties
+    @property
+    def dims(self) -> int:
+        """Number of pose coordinates (2 planar, 3 spatial)."""
+        return self.model.dims
+
+    @property
+    def n_actuators(self) -> int:
+        """Number of actuators."""
+        return self.model.n_actuators
+
+    @property
+    def pose_names(self) -> tuple[str, ...]:
+        """Names of the pose coordinates."""
+        return self.model.pose_names
+
+    @property
+    def actuator_names(self) -> tuple[str, ...]:
+        """Names of the actuator coordinates."""
+        return self.model.actuator_names
+
+    @property
+    def home_pose(self) -> np.ndarray:
+        """Reference pose ``(dims,)``, m."""
+        return self.model.home_pose.copy()
+
+    @property
+    def home_q(self) -> np.ndarray:
+        """Actuator coordinates at the home pose ``(n,)``, m."""
+        return self._home_q.copy()
+
+    @property
+    def working_mode(self) -> int:
+        """Sign of det A in the working assembly mode (the one containing the home pose)."""
+        return self._working_mode
+
+    @property
+    def mode_labels(self) -> tuple[str, str]:
+        """Assembly-mode names, working mode first."""
+        neg, pos = self.model.mode_names
+        return (neg, pos) if self._working_mode < 0 else (pos, neg)
+
+    def mode_label(self, sign: int) -> str:
+        """Name of the assembly mode with det A of sign ``sign`` (±1)."""
+        return self.model.mode_names[0 if sign < 0 else 1]
+
+    def reference_poses(self) -> dict[str, np.ndarray]:
+        """Named sample poses, ``home`` first, each ``(dims,)`` m."""
+        poses = {"home": self.home_pose}
+        poses.update({k: np.asarray(v, dtype=float) for k, v in self.extra_poses.items()})
+        return poses
+
+    def with_params(self, **overrides: Any) -> Machine:
+        """A new machine of the same kind with some parameters changed (SI units)."""
+        if self.kind is None:
+            raise ParameterError(
+                f"machine {self.id!r} is described leg by leg and has no named parameters; "
+                "edit its machine file instead"
+            )
+        params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
+        return build_machine(self.kind, params, id=self.id, name=self.name,
+                             description=self.description, source=self.source)
+
+    # ---------------------------------------------------------------- helpers
+    def _branches(self, branches: Any) -> np.ndarray:
+        if branches is None:
+            return self.model.leg_branch
+        arr = np.asarray(branches, dtype=int).reshape(-1)
+        if arr.shape != (self.model.n_legs,) or not np.isin(arr, (-1, 1)).all():
+            raise InputError(
+                f"branches must be {self.model.n_legs} values of +1 or -1, got {branches!r}"
+            )
+        return arr
+
+    def _mode_sign(self, mode: Any) -> int:
+        if mode in ("working", None):
+            return self._working_mode
+        if mode == "other":
+            return -self._working_mode
+        if mode in (1, -1):
+            return int(mode)
+        if mode in self.model.mode_names:
+            return -1 if mode == self.model.mode_names[0] else 1
+        valid = ["working", "other", "-1", "1", *self.model.mode_names]
+        raise InputError(f"unknown assembly mode {mode!r}; valid modes: {', '.join(valid)}")
+
+    def _linear_guess_q(self, x: np.ndarray) -> np.ndarray:
+        """First-order guess of q near home: q_home + J⁻¹(home) (x − home)."""
+        j_inv = np.linalg.inv(self._home_jacobian)
+        return self._home_q + (x - self.model.home_pose) @ j_inv.T
+
+    def _linear_guess_pose(self, q: np.ndarray) -> np.ndarray:
+        """First-order guess of the pose near home: home + J(home) (q − q_home)."""
+        return self.model.home_pose + (q - self._home_q) @ self._home_jacobian.T
+
+    # ---------------------------------------------------------------- inverse
+    def ik(
+        self,
+        x: Any,
+        *,
+        method: str = "closed",
+        branches: Any = None,
+        q0: Any = None,
+        full_output: bool = False,
+        **engine_options: Any,
+    ) -> np.ndarray | InverseResult:
+        """Inverse kinematics: actuator coordinates of platform poses.
+
+        Args:
+            x: pose ``(dims,)`` or poses ``(N, dims)``, m.
+            method: ``"closed"`` (closed form) or ``"numeric"`` (least squares over every rod).
+            branches: inverse-model branch per leg (±1); default: the working branches.
+            q0: ``(n,)`` or ``(N, n)`` initial guesses for ``"numeric"`` (warm start); default:
+                first-order extrapolation from the home configuration.
+            full_output: return an :class:`InverseResult` (status, shortfall, diagnostics).
+            **engine_options: forwarded to the engine (``max_iter``, ``residual_tol``, ...).
+
+        Returns:
+            q ``(n,)`` / ``(N, n)`` in m (NaN rows where the pose is out of reach), or an
+            :class:`InverseResult`.
+
+        Raises:
+            InputError: mis-shaped input, non-finite single pose, bad ``branches``.
+            UnreachablePoseError: a single pose out of reach (names the leg and the shortfall).
+            ConvergenceError: a single numeric solve that failed.
+        """
+        xb, single = as_batch(x, self.dims, "pose")
+        if single:
+            require_finite(xb, "pose")
+        br = self._branches(branches)
+        iterations = residual = None
+        if method == "closed":
+            q = self._closed.inverse(xb, br)
+            status = np.zeros(xb.shape[0], dtype=int)
+            # a non-finite row sum flags rows with NaN (unreachable) or non-finite input
+            bad = np.flatnonzero(~np.isfinite(q @ np.ones(self.n_actuators)))
+            status[bad] = np.where(finite_rows(xb[bad]), Status.UNREACHABLE,
+                                   Status.INVALID_INPUT)
+            q[bad] = np.nan
+        elif method == "numeric":
+            guess = self._linear_guess_q(xb) if q0 is None else as_batch(q0, self.n_actuators,
+                                                                            "q0")[0]
+            guess = np.broadcast_to(guess, (xb.shape[0], self.n_actuators)).copy()
+            engine_options.setdefault("compute_rank", False)
+            result = solve_inverse(self.model, xb, guess, **engine_options)
+            q, status = result.u, result.status.copy()
+            status[status == Status.INCONSISTENT] = Status.UNREACHABLE
+            ok = status == Status.OK
+            wrong = ok.copy()
+            wrong[ok] = (self._closed.branch_signs(xb[ok], q[ok]) != br).any(axis=1)
+            status[wrong] = Status.WRONG_MODE
+            q = np.where((status == Status.OK)[:, None], q, np.nan)
+            iterations, residual = result.iterations, result.residual
+        else:
+            raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
+        if single and status[0] != Status.OK:
+            self._raise_inverse(xb, status[0], iterations)
+        if not full_output:
+            return restore_shape(q, single)
+        result = InverseResult(
+            q=q,
+            status=status,
+            branches=br.copy(),
+            shortfall=self._closed.shortfall(xb),
+            method=method,
+            iterations=iterations,
+            residual=residual,
+        )
+        return _restore(result, single, ("q", "status", "shortfall", "iterations", "residual"))
+
+    def _raise_inverse(self, xb: np.ndarray, status: int, iterations) -> None:
+        short = self._closed.shortfall(xb)[0]
+        if status == Status.UNREACHABLE or (short > 0).any():
+            leg = int(np.argmax(short))
+            raise UnreachablePoseError(leg, self.model.leg_names[leg], short[leg])
+        if status == Status.WRONG_MODE:
+            raise ConvergenceError(
+                "the numeric inverse model converged to another branch than requested; "
+                "pass q0 closer to the wanted solution"
+            )
+        raise ConvergenceError(
+            f"the numeric inverse model did not converge ({Status(status).label}) "
+            f"after {int(iterations[0])} iterations"
+        )
+
+    # ---------------------------------------------------------------- direct
+    def fk_all(self, q: Any) -> AssemblyModes:
+        """Every real assembly mode of actuator coordinates (closed form).
+
+        Args:
+            q: ``(n,)`` or ``(N, n)``, m.
+
+        Returns:
+            :class:`AssemblyModes`; working mode in column 0. For a single q, arrays lose the
+            leading axis. Rows without any real assembly have ``status`` NO_ASSEMBLY (no error is
+            raised here: zero solutions is a valid answer).
+        """
+        qb, single = as_batch(q, self.n_actuators, "q")
+        if single:
+            require_finite(qb, "q")
+        finite = finite_rows(qb)
+        poses, degenerate = self._closed.direct_all(qb)
+        order = [0, 1] if self._working_mode < 0 else [1, 0]
+        poses = poses[:, order]
+        valid = np.isfinite(poses).all(axis=2)
+        # a double root (t = 0) is one assembly, on a parallel singularity: keep it once
+        same = valid.all(axis=1) & (np.abs(poses[:, 0] - poses[:, 1]).max(axis=1) == 0.0)
+        valid[same, 1] = False
+        branches = np.zeros((*poses.shape[:2], self.n_actuators), dtype=int)
+        for col in range(2):
+            ok = valid[:, col]
+            branches[ok, col] = self._closed.branch_signs(poses[ok, col], qb[ok])
+        status = np.where(valid.any(axis=1), Status.OK, Status.NO_ASSEMBLY)
+        status[degenerate] = Status.SINGULAR
+        status[~finite] = Status.INVALID_INPUT
+        signs = np.array([self._working_mode, -self._working_mode])
+        modes = AssemblyModes(
+            poses=poses, valid=valid, mode_signs=signs, labels=self.mode_labels,
+            branches=branches, status=status,
+        )
+        return _restore(modes, single, ("poses", "valid", "branches", "status"))
+
+    def fk(
+        self,
+        q: Any,
+        *,
+        method: str = "closed",
+        mode: Any = "working",
+        x0: Any = None,
+        dof: str = "translation",
+        full_output: bool = False,
+        **engine_options: Any,
+    ) -> np.ndarray | DirectResult:
+        """Direct kinematics in one assembly mode (default: the working mode).
+
+        Args:
+            q: ``(n,)`` or ``(N, n)`` actuator coordinates, m.
+            method: ``"closed"`` or ``"numeric"``.
+            mode: ``"working"``, ``"other"``, a mode name, or the sign of det A (±1).
+            x0: ``(dims,)`` or ``(N, dims)`` initial poses for ``"numeric"`` (warm start);
+                default: first-order extrapolation from home.
+            dof: platform unknowns of the numeric solve, ``"translation"`` or ``"full"``
+                (also solves the platform rotation, which the rods must then fix).
+            full_output: return a :class:`DirectResult`.
+            **engine_options: forwarded to the engine.
+
+        Returns:
+            pose ``(dims,)`` / ``(N, dims)`` in m (NaN rows where there is no assembly in that
+            mode), or a :class:`DirectResult`.
+
+        Raises:
+            InputError: mis-shaped input or non-finite single q, unknown mode.
+            NoAssemblyError: a single q with no real assembly in the requested mode.
+            SingularConfigurationError: a single q whose sphere centres are aligned.
+            ConvergenceError: a single numeric solve that failed or reached another mode.
+        """
+        qb, single = as_batch(q, self.n_actuators, "q")
+        if single:
+            require_finite(qb, "q")
+        finite = finite_rows(qb)
+        sign = self._mode_sign(mode)
+        rotation = iterations = residual = None
+        if method == "closed":
+            poses, degenerate = self._closed.direct_all(qb)
+            pose = poses[:, 0 if sign < 0 else 1]
+            status = np.where(np.isnan(pose).any(axis=1), Status.NO_ASSEMBLY, Status.OK)
+            status[degenerate] = Status.SINGULAR
+        elif method == "numeric":
+            guess = (self._linear_guess_pose(qb) if x0 is None
+                     else as_batch(x0, self.dims, "x0")[0])
+            guess = np.broadcast_to(guess, (qb.shape[0], self.dims))
+            if dof == "full":
+                extra = 3 if self.dims == 3 else 1
+                guess = np.concatenate([guess, np.zeros((qb.shape[0], extra))], axis=1)
+            engine_options.setdefault("compute_rank", False)
+            result = solve_direct(self.model, qb, np.array(guess), dof=dof, **engine_options)
+            pose = result.u[:, : self.dims].copy()
+            status = result.status.copy()
+            status[status == Status.INCONSISTENT] = Status.NO_ASSEMBLY
+            if dof == "full":
+                rotation = np.zeros((qb.shape[0], 3))
+                if self.dims == 3:
+                    rotation[:] = result.u[:, 3:6]
+                else:
+                    rotation[:, 2] = result.u[:, 2]
+            ok = status == Status.OK
+            a, _ = self._closed.jacobians(pose[ok], qb[ok])
+            wrong = ok.copy()
+            wrong[ok] = np.sign(batched_det(a)) != sign
+            status[wrong] = Status.WRONG_MODE
+            iterations, residual = result.iterations, result.residual
+        else:
+            raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
+        status = np.asarray(status, dtype=int)
+        status[~finite] = Status.INVALID_INPUT
+        ok = status == Status.OK
+        pose = np.where(ok[:, None], pose, np.nan)
+        if single and not ok[0]:
+            self._raise_direct(qb[0], sign, status[0])
+        if not full_output:
+            return restore_shape(pose, single)
+        branches = np.zeros((qb.shape[0], self.n_actuators), dtype=int)
+        branches[ok] = self._closed.branch_signs(pose[ok], qb[ok])
+        result = DirectResult(
+            pose=pose,
+            status=status,
+            mode=np.where(ok, sign, 0),
+            mode_label=self.mode_label(sign),
+            branches=branches,
+            method=method,
+            rotation=rotation,
+            iterations=iterations,
+            residual=residual,
+        )
+        names = ("pose", "status", "mode", "branches", "rotation", "iterations", "residual")
+        return _restore(result, single, names)
+
+    def _raise_direct(self, q: np.ndarray, sign: int, status: int) -> None:
+        label = self.mode_label(sign)
+        if status == Status.SINGULAR:
+            raise SingularConfigurationError(
+                f"q = {q.tolist()}: the leg sphere centres are aligned; the direct model has no "
+                "isolated solution"
+            )
+        if status == Status.NO_ASSEMBLY:
+            raise NoAssemblyError(
+                f"q = {q.tolist()} admits no real assembly in mode {label!r}: the legs cannot "
+                "meet at a common platform point"
+            )
+        if status == Status.WRONG_MODE:
+            raise ConvergenceError(
+                f"the numeric direct model converged to the other assembly mode than {label!r}; "
+                "pass x0 closer to the wanted solution"
+            )
+        raise ConvergenceError(f"the numeric direct model failed ({Status(status).label})")
+
+    # ---------------------------------------------------------------- velocity
+    def jacobian(
+        self, x: Any, *, q: Any = None, branches: Any = None, tol: float = SINGULARITY_TOL
+    ) -> Jacobians:
+        """Velocity model at poses: A, B, J, singular values, conditioning, singularities.
+
+        Args:
+            x: ``(dims,)`` or ``(N, dims)`` poses, m.
+            q: actuator coordinates at those poses; default: the inverse model (``branches``).
+            branches: inverse-model branches used when ``q`` is not given.
+            tol: threshold on the dimensionless singularity measures (see :class:`Jacobians`).
+
+        Returns:
+            :class:`Jacobians` (leading axis dropped for a single pose). Rows out of reach are
+            NaN.
+
+        Raises:
+            InputError, UnreachablePoseError: as for :meth:`ik` (single pose).
+        """
+        xb, qb, single = self._poses_and_q(x, q, branches)
+        jac = self._jacobians(xb, qb, tol)
+        names = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
+                 "parallel_measure", "serial_measure", "singularity", "q")
+        return _restore(jac, single, names)
+
+    def _poses_and_q(self, x: Any, q: Any, branches: Any) -> tuple[np.ndarray, np.ndarray, bool]:
+        xb, single = as_batch(x, self.dims, "pose")
+        if q is None:
+            return xb, np.atleast_2d(self.ik(xb[0] if single else xb, branches=branches)), single
+        qb, _ = as_batch(q, self.n_actuators, "q")
+        if qb.shape[0] != xb.shape[0]:
+            raise InputError(f"x has {xb.shape[0]} rows but q has {qb.shape[0]}")
+        return xb, qb, single
+
+    def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> Jacobians:
+        a, b = self._closed.jacobians(xb, qb)
+        diag = np.einsum("kii->ki", b)
+        det_a, det_b = batched_det(a), np.prod(diag, axis=1)
+        rows_ok = np.isfinite(det_a) & (det_a != 0.0)
+        j = np.full((*a.shape[:1], self.dims, self.n_actuators), np.nan)
+        j[rows_ok] = np.linalg.solve(a[rows_ok], b[rows_ok])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            j_inv = a / diag[:, :, None]
+            lengths = np.linalg.norm(a, axis=2)
+            serial = np.min(np.abs(diag) / lengths, axis=1)
+            sv_unit = singular_values(a / lengths[:, :, None])
+            parallel = sv_unit[:, -1] / sv_unit[:, 0]
+        sv = singular_values(j)
+        flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
+        flags |= np.where((parallel < tol) | (det_a == 0.0), int(Singularity.PARALLEL), 0)
+        condition = np.where(flags & Singularity.PARALLEL, np.nan, condition_number(sv))
+        return Jacobians(
+            A=a, B=b, J=j, J_inv=j_inv, singular_values=sv, condition=condition,
+            det_A=det_a, det_B=det_b, parallel_measure=parallel, serial_measure=serial,
+            singularity=flags, tolerance=float(tol), q=qb,
+        )
+
+    def jacobian_dot(self, x: Any, xd: Any, *, q: Any = None) -> JacobianRates:
+        """Time derivatives of the velocity model for platform velocities ``xd`` at poses ``x``.
+
+        Args:
+            x: ``(dims,)`` or ``(N, dims)`` poses, m.
+            xd: platform velocities of the same shape, m/s.
+            q: actuator coordinates (default: inverse model, working branches).
+
+        Returns:
+            :class:`JacobianRates` with q̇ = J⁻¹ẋ, Ȧ, Ḃ and J̇ = A⁻¹(Ḃ − ȦJ).
+        """
+        xb, qb, single = self._poses_and_q(x, q, None)
+        xdb, _ = as_batch(xd, self.dims, "xd")
+        if xdb.shape[0] != xb.shape[0]:
+            raise InputError(f"x has {xb.shape[0]} rows but xd has {xdb.shape[0]}")
+        jac = self._jacobians(xb, qb, SINGULARITY_TOL)
+        qd = np.einsum("kij,kj->ki", jac.J_inv, xdb)
+        a_dot, b_dot = self._closed.jacobian_rates(xdb, qd)
+        rhs = b_dot - np.einsum("kij,kjl->kil", a_dot, jac.J)
+        j_dot = np.full_like(rhs, np.nan)
+        ok = np.isfinite(jac.A).all(axis=(1, 2)) & np.isfinite(rhs).all(axis=(1, 2))
+        j_dot[ok] = np.linalg.solve(jac.A[ok], rhs[ok])
+        rates = JacobianRates(qd=qd, A_dot=a_dot, B_dot=b_dot, J_dot=j_dot)
+        return _restore(rates, single, ("qd", "A_dot", "B_dot", "J_dot"))
+
+    # ---------------------------------------------------------------- structure
+    def mobility(self) -> dict[str, Any]:
+        """Grübler–Kutzbach count and rank-based mobility at the home configuration."""
+        return {
+            "grubler": grubler_count(self.model),
+            "instantaneous": instantaneous_mobility(
+                self.model, self.model.home_pose, self._home_q
+            ),
+        }
+
+
+def build_machine(
+    kind: MachineKind,
+    params: Mapping[str, Any],
+    *,
+    id: str,
+    name: str = "",
+    description: str = "",
+    source: str = "",
+) -> Machine:
+    """Build a :class:`Machine` of ``kind`` from validated SI parameters."""
+    model = kind.build(params)
+    return Machine(
+        id=id,
+        name=name or kind.title,
+        kind=kind,
+        params=dict(params),
+        model=model,
+        description=description,
+        source=source or kind.source,
+        extra_poses=kind.reference_poses(params, model),
+    )

@@ -1,0 +1,297 @@
+"""Machine library: kinds, built-in presets (shipped machine files) and machines from files.
+
+Every built-in machine is a machine file in ``pkmkit/machines/data/`` — the same format users
+write — so presets and user files go through one loader. A file either names a built-in *kind*
+and gives its ``[parameters]``, or has ``kind = "rod-legs"`` and describes its legs one by one::
+
+    [machine]
+    kind = "linear-delta"          # or "orthoglide", "five-bar", "rod-legs"
+    name = "My Delta"
+    units = "mm"                   # lengths in this file; angles are always in degrees
+    [parameters]
+    R = 700
+    angles = [0, 120, 240]
+    [poses]                        # optional named sample poses
+    low = [0, 0, 400]
+
+See ``docs/machine-files.md`` for the ``rod-legs`` format.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import cache
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pkmkit.errors import MachineFileError, ParameterError, UnknownMachineError
+from pkmkit.machines import five_bar, linear_delta, orthoglide
+from pkmkit.machines.machine import Machine, MachineKind, build_machine
+from pkmkit.model.machine_file import MachineDocument, read_machine_document
+from pkmkit.model.parameters import length_scale, resolve_parameters
+from pkmkit.model.rods import LegSpec, build_rod_model
+
+#: Built-in machine kinds by name.
+KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (orthoglide, linear_delta, five_bar)}
+ROD_LEGS = "rod-legs"
+#: Short ids naming a kind's reference preset.
+ALIASES = {"linear-delta": "linear-delta-ch3", "five-bar": "five-bar-isotropic"}
+
+_MACHINE_KEYS = {"kind", "id", "name", "description", "source", "units", "dims", "home",
+                 "mode_names"}
+_TOP_KEYS = {"machine", "parameters", "legs", "poses"}
+_LEG_KEYS = {"name", "actuator", "type", "base", "axis", "platform", "length", "branch",
+             "parallelogram"}
+
+
+def _data_dir():
+    return resources.files("pkmkit.machines") / "data"
+
+
+@cache
+def _preset_paths() -> dict[str, str]:
+    paths = {}
+    for entry in sorted(_data_dir().iterdir(), key=lambda e: e.name):
+        if entry.name.endswith(".toml"):
+            paths[entry.name[: -len(".toml")]] = str(entry)
+    return paths
+
+
+def machines() -> list[str]:
+    """Ids of every built-in machine (presets and their short aliases), sorted."""
+    return sorted([*_preset_paths(), *ALIASES])
+
+
+def preset_path(machine_id: str) -> str:
+    """Path of the machine file of a built-in preset (aliases resolved)."""
+    try:
+        return _preset_paths()[ALIASES.get(machine_id, machine_id)]
+    except KeyError:
+        raise UnknownMachineError(machine_id, machines()) from None
+
+
+def machine(machine_id: str, **params: Any) -> Machine:
+    """A built-in machine by id, with parameter overrides in SI units (m, rad).
+
+    Raises:
+        UnknownMachineError: the id is not a preset (the message lists the valid ids).
+        UnknownParameterError, ParameterError: bad overrides.
+    """
+    return load(preset_path(machine_id), _overrides=params, _id=machine_id)
+
+
+def load(path: str | Path, *, _overrides: Mapping[str, Any] | None = None,
+         _id: str | None = None) -> Machine:
+    """A machine from a TOML or YAML machine file.
+
+    Raises:
+        MachineFileError: unreadable or malformed file, with the offending line when known.
+    """
+    doc = read_machine_document(path)
+    return machine_from_document(doc, overrides=_overrides or {}, machine_id=_id)
+
+
+def _table(doc: MachineDocument, key: str, required: bool) -> dict[str, Any]:
+    value = doc.data.get(key)
+    if value is None:
+        if required:
+            raise doc.error(f"missing [{key}] table")
+        return {}
+    if not isinstance(value, dict):
+        raise doc.error(f"[{key}] must be a table of key = value entries", (key,))
+    return value
+
+
+def _check_keys(doc: MachineDocument, found: Mapping[str, Any], allowed: set[str],
+                where: tuple, what: str) -> None:
+    for key in found:
+        if key not in allowed:
+            raise doc.error(
+                f"unknown key {key!r} in {what}; valid keys: {', '.join(sorted(allowed))}",
+                (*where, key),
+            )
+
+
+def machine_from_document(
+    doc: MachineDocument,
+    *,
+    overrides: Mapping[str, Any] | None = None,
+    machine_id: str | None = None,
+) -> Machine:
+    """Build a machine from a parsed machine file (see the module docstring).
+
+    Args:
+        doc: parsed file.
+        overrides: parameter values in SI units replacing the file's (built-in kinds only).
+        machine_id: id to give the machine (default: ``[machine] id`` or the file name).
+    """
+    _check_keys(doc, doc.data, _TOP_KEYS, (), "the file")
+    head = _table(doc, "machine", required=True)
+    _check_keys(doc, head, _MACHINE_KEYS, ("machine",), "[machine]")
+    kind_name = head.get("kind")
+    valid_kinds = [*sorted(KINDS), ROD_LEGS]
+    if kind_name not in valid_kinds:
+        raise doc.error(
+            f"[machine] kind must be one of {', '.join(valid_kinds)}; got {kind_name!r}",
+            ("machine", "kind"),
+        )
+    units = head.get("units", "m")
+    try:
+        scale = length_scale(units)
+    except ParameterError as exc:
+        raise doc.error(str(exc), ("machine", "units")) from None
+    ident = machine_id or str(head.get("id", Path(doc.path).stem))
+    text = {k: str(head.get(k, "")) for k in ("name", "description", "source")}
+    poses = _poses(doc, scale)
+    try:
+        if kind_name == ROD_LEGS:
+            if overrides:
+                raise ParameterError(
+                    f"machine {ident!r} is described leg by leg and has no named parameters"
+                )
+            built = _rod_legs_machine(doc, head, scale, ident, text)
+        else:
+            built = _kind_machine(doc, KINDS[kind_name], units, ident, text, overrides or {})
+    except MachineFileError:
+        raise
+    except ParameterError as exc:
+        raise doc.error(str(exc), _parameter_path(kind_name, exc.parameter)) from None
+    if poses:
+        built = _with_poses(doc, built, poses)
+    return built
+
+
+def _parameter_path(kind_name: str, parameter: str | None) -> tuple:
+    if parameter is None:
+        return ("machine",)
+    if kind_name == ROD_LEGS:
+        return tuple(int(p) if p.isdigit() else p for p in parameter.split("."))
+    return ("parameters", parameter)
+
+
+def _kind_machine(doc, kind: MachineKind, units: str, ident: str, text: dict,
+                  overrides: Mapping[str, Any]) -> Machine:
+    table = _table(doc, "parameters", required=False)
+    specs = {s.name: s for s in kind.parameters}
+    values = {}
+    for name, raw in table.items():
+        if name not in specs:
+            raise doc.error(
+                f"unknown parameter {name!r} for kind {kind.kind!r}; valid parameters: "
+                f"{', '.join(sorted(specs))}",
+                ("parameters", name),
+            )
+        values[name] = specs[name].from_boundary(raw, units, ident)
+    values = resolve_parameters(kind.parameters, values, ident)
+    params = resolve_parameters(kind.parameters, {**values, **overrides}, ident)
+    return build_machine(kind, params, id=ident, **text)
+
+
+def _vector(value: Any, size: int, what: str, scale: float = 1.0) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{what} must be {size} numbers, got {value!r}", what) from None
+    if arr.shape != (size,) or not np.isfinite(arr).all():
+        raise ParameterError(f"{what} must be {size} finite numbers, got {value!r}", what)
+    return arr * scale
+
+
+def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
+                      text: dict) -> Machine:
+    dims = head.get("dims", 3)
+    if dims not in (2, 3):
+        raise doc.error(f"[machine] dims must be 2 or 3, got {dims!r}", ("machine", "dims"))
+    legs_raw = doc.data.get("legs")
+    if not isinstance(legs_raw, list) or not legs_raw:
+        raise doc.error("a rod-legs machine needs [[legs]] entries", ("legs",))
+
+    def pad(v: np.ndarray) -> np.ndarray:
+        return np.append(v, 0.0) if dims == 2 else v
+
+    legs = []
+    actuators: list[str] = []
+    for i, raw in enumerate(legs_raw):
+        where = f"legs.{i}"
+        if not isinstance(raw, dict):
+            raise doc.error(f"legs entry {i} must be a table", ("legs", i))
+        _check_keys(doc, raw, _LEG_KEYS, ("legs", i), f"legs entry {i}")
+        for key in ("base", "platform", "length"):
+            if key not in raw:
+                raise ParameterError(f"{where} needs {key!r}", f"{where}")
+        kind = raw.get("type", "slide")
+        actuator = str(raw.get("actuator", f"q{i + 1}"))
+        if actuator in actuators:
+            raise ParameterError(f"{where}: actuator {actuator!r} already drives another leg",
+                                 f"{where}.actuator")
+        actuators.append(actuator)
+        axis = None
+        if kind == "slide":
+            if "axis" not in raw:
+                raise ParameterError(f"{where}: a slide leg needs 'axis'", where)
+            axis = pad(_vector(raw["axis"], dims, f"{where}.axis"))
+        para = raw.get("parallelogram", {})
+        if not isinstance(para, dict) or set(para) - {"width", "direction"}:
+            raise ParameterError(
+                f"{where}.parallelogram must be a table with 'width' and 'direction'",
+                f"{where}.parallelogram",
+            )
+        width = float(para.get("width", 0.0)) * scale
+        direction = (pad(_vector(para["direction"], dims, f"{where}.parallelogram"))
+                     if width > 0 else None)
+        try:
+            length = float(raw["length"]) * scale
+        except (TypeError, ValueError):
+            raise ParameterError(f"{where}.length must be a number", f"{where}.length") from None
+        legs.append(
+            LegSpec(
+                name=str(raw.get("name", f"leg {i + 1}")),
+                actuator=i,
+                kind=kind,
+                base=pad(_vector(raw["base"], dims, f"{where}.base", scale)),
+                platform=pad(_vector(raw["platform"], dims, f"{where}.platform", scale)),
+                length=length,
+                axis=axis,
+                branch=raw.get("branch", 1),
+                parallelogram_width=width,
+                parallelogram_direction=direction,
+            )
+        )
+    home = _vector(head.get("home", [0.0] * dims), dims, "home", scale)
+    mode_names = head.get("mode_names", ["det(A)<0", "det(A)>0"])
+    if not (isinstance(mode_names, list) and len(mode_names) == 2):
+        raise ParameterError("[machine] mode_names must be a list of two names", "mode_names")
+    model = build_rod_model(
+        legs, dims=dims, actuator_names=actuators, home_pose=home,
+        mode_names=(str(mode_names[0]), str(mode_names[1])),
+    )
+    return Machine(id=ident, name=text["name"] or ident, kind=None, params={}, model=model,
+                   description=text["description"], source=text["source"])
+
+
+def _poses(doc: MachineDocument, scale: float) -> dict[str, np.ndarray]:
+    table = _table(doc, "poses", required=False)
+    out = {}
+    for name, value in table.items():
+        try:
+            out[name] = _vector(value, len(value) if isinstance(value, list) else -1,
+                                f"poses.{name}", scale)
+        except ParameterError as exc:
+            raise doc.error(str(exc), ("poses", name)) from None
+    return out
+
+
+def _with_poses(doc: MachineDocument, machine: Machine,
+                poses: dict[str, np.ndarray]) -> Machine:
+    for name, pose in poses.items():
+        if pose.shape != (machine.dims,):
+            raise doc.error(f"pose {name!r} must have {machine.dims} coordinates",
+                            ("poses", name))
+    return Machine(
+        id=machine.id, name=machine.name, kind=machine.kind, params=machine.params,
+        model=machine.model, description=machine.description, source=machine.source,
+        extra_poses={**machine.extra_poses, **poses},
+    )

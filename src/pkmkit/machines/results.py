@@ -1,0 +1,179 @@
+"""Result records returned by :class:`pkmkit.machines.machine.Machine` methods.
+
+Shapes: N poses, n actuators, ``dims`` pose coordinates. A single-pose call returns the same
+records with the leading N axis removed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntFlag
+
+import numpy as np
+
+
+class Singularity(IntFlag):
+    """Singularity class of a configuration (flags combine)."""
+
+    REGULAR = 0
+    #: det B = 0: a leg is perpendicular to its slide (workspace boundary, loss of a velocity).
+    SERIAL = 1
+    #: det A = 0: the legs are linearly dependent (assembly modes merge, loss of stiffness).
+    PARALLEL = 2
+
+    @property
+    def label(self) -> str:
+        """``"regular"``, ``"serial"``, ``"parallel"`` or ``"serial+parallel"``."""
+        if self == Singularity.REGULAR:
+            return "regular"
+        parts = [f.name.lower() for f in (Singularity.SERIAL, Singularity.PARALLEL) if f & self]
+        return "+".join(parts)
+
+
+@dataclass(frozen=True)
+class InverseResult:
+    """Inverse kinematics of N poses.
+
+    Attributes:
+        q: ``(N, n)`` actuator coordinates, m (NaN for failed rows).
+        status: ``(N,)`` :class:`~pkmkit.status.Status` codes.
+        branches: ``(n,)`` inverse-model branch of each leg used (±1).
+        shortfall: ``(N, n)`` how much each leg is too short to reach the pose (m, > 0 means
+            out of reach, ≤ 0 reachable).
+        method: ``"closed"`` or ``"numeric"``.
+        iterations: ``(N,)`` engine iterations (numeric method), else None.
+        residual: ``(N,)`` largest rod closure residual (numeric method), m, else None.
+    """
+
+    q: np.ndarray
+    status: np.ndarray
+    branches: np.ndarray
+    shortfall: np.ndarray
+    method: str
+    iterations: np.ndarray | None = None
+    residual: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class DirectResult:
+    """Direct kinematics of N actuator vectors in one requested assembly mode.
+
+    Attributes:
+        pose: ``(N, dims)`` platform position, m (NaN for failed rows).
+        status: ``(N,)`` status codes.
+        mode: ``(N,)`` assembly-mode sign of the solution (sign of det A; 0 if none).
+        mode_label: name of the requested mode.
+        branches: ``(N, n)`` inverse-model branch (±1) of each leg at the solution.
+        method: ``"closed"`` or ``"numeric"``.
+        rotation: ``(N, 3)`` rotation vector of the platform (numeric method with
+            ``dof="full"``), rad, else None.
+        iterations, residual: engine diagnostics (numeric method), else None.
+    """
+
+    pose: np.ndarray
+    status: np.ndarray
+    mode: np.ndarray
+    mode_label: str
+    branches: np.ndarray
+    method: str
+    rotation: np.ndarray | None = None
+    iterations: np.ndarray | None = None
+    residual: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class AssemblyModes:
+    """Every real assembly mode of N actuator vectors.
+
+    Attributes:
+        poses: ``(N, 2, dims)`` — index 0 is the working mode, index 1 the other mode; NaN where
+            that mode has no real solution.
+        valid: ``(N, 2)`` bool, a real solution exists in that mode.
+        mode_signs: ``(2,)`` sign of det A of each column (working mode first).
+        labels: ``(2,)`` mode names, working mode first.
+        branches: ``(N, 2, n)`` inverse-model branches at each solution (0 where invalid).
+        status: ``(N,)`` OK if at least one mode exists, else NO_ASSEMBLY / INVALID_INPUT /
+            SINGULAR.
+    """
+
+    poses: np.ndarray
+    valid: np.ndarray
+    mode_signs: np.ndarray
+    labels: tuple[str, str]
+    branches: np.ndarray
+    status: np.ndarray
+
+    @property
+    def count(self) -> np.ndarray:
+        """Number of real assembly modes per row ``(N,)``."""
+        return self.valid.sum(axis=-1)
+
+
+@dataclass(frozen=True)
+class Jacobians:
+    """Velocity model ``A ẋ = B q̇``, ``ẋ = J q̇`` at N poses.
+
+    Attributes:
+        A: ``(N, n, dims)`` parallel Jacobian, rows ``(p − c_i)ᵀ`` (m).
+        B: ``(N, n, n)`` serial Jacobian (diagonal, m).
+        J: ``(N, dims, n)`` ``A⁻¹B`` (dimensionless for translational machines); NaN at a
+            parallel singularity.
+        J_inv: ``(N, n, dims)`` ``B⁻¹A``; NaN at a serial singularity.
+        singular_values: ``(N, n)`` singular values of J, decreasing — the velocity
+            transmission factors.
+        condition: ``(N,)`` σ_max/σ_min of J (inf at a serial singularity, NaN at a parallel one).
+        det_A, det_B: ``(N,)`` determinants (m^n).
+        parallel_measure: ``(N,)`` σ_min/σ_max of A with unit rows (0 at a parallel
+            singularity, 1 when the legs are orthogonal).
+        serial_measure: ``(N,)`` smallest |cos| of the angle between a leg and its slide
+            (0 at a serial singularity).
+        singularity: ``(N,)`` :class:`Singularity` flags.
+        tolerance: threshold applied to both measures to classify a singularity.
+        q: ``(N, n)`` actuator coordinates used.
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    J: np.ndarray
+    J_inv: np.ndarray
+    singular_values: np.ndarray
+    condition: np.ndarray
+    det_A: np.ndarray
+    det_B: np.ndarray
+    parallel_measure: np.ndarray
+    serial_measure: np.ndarray
+    singularity: np.ndarray
+    tolerance: float
+    q: np.ndarray
+
+    @property
+    def reachable(self) -> np.ndarray | bool:
+        """Poses whose actuator coordinates are finite (the others have NaN Jacobians)."""
+        return np.isfinite(self.q).all(axis=-1)
+
+    @property
+    def status(self) -> list[str] | str:
+        """``"regular"``, ``"serial"``, ``"parallel"``, ``"serial+parallel"`` or
+        ``"unreachable"``: one string for a single pose, else a list of N strings."""
+        flags = np.asarray(self.singularity)
+        reach = np.asarray(self.reachable).ravel()
+        labels = [Singularity(int(f)).label if ok else "unreachable"
+                  for f, ok in zip(flags.ravel(), reach, strict=True)]
+        return labels[0] if flags.ndim == 0 else labels
+
+
+@dataclass(frozen=True)
+class JacobianRates:
+    """Time derivatives of the velocity model along a motion (N samples).
+
+    Attributes:
+        qd: ``(N, n)`` actuator rates q̇ = J⁻¹ ẋ, m/s.
+        A_dot: ``(N, n, dims)`` Ȧ, m/s.
+        B_dot: ``(N, n, n)`` Ḃ, m/s.
+        J_dot: ``(N, dims, n)`` J̇ = A⁻¹(Ḃ − ȦJ), 1/s.
+    """
+
+    qd: np.ndarray
+    A_dot: np.ndarray
+    B_dot: np.ndarray
+    J_dot: np.ndarray

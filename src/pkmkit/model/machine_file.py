@@ -1,0 +1,153 @@
+"""Reading machine files (TOML or YAML) with line numbers for error messages.
+
+A machine file is a mapping with a ``[machine]`` table (``kind``, ``name``, ``units``, ...) and,
+depending on the kind, a ``[parameters]`` table or ``[[legs]]`` entries. This module only parses
+the text and keeps, for every key, the line where it was written, so that the machine builders
+can report *which line* of the file is wrong. Building the machine is the job of
+:mod:`pkmkit.machines.registry`.
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from pkmkit.errors import MachineFileError
+
+KeyPath = tuple[str | int, ...]
+
+SUFFIXES = {".toml": "toml", ".yaml": "yaml", ".yml": "yaml"}
+
+
+@dataclass(frozen=True)
+class MachineDocument:
+    """Parsed machine file.
+
+    Attributes:
+        path: the file path as given.
+        data: the parsed mapping.
+        lines: 1-based line of each key path that was located (e.g. ``("parameters", "L")`` or
+            ``("legs", 2, "axis")``).
+    """
+
+    path: str
+    data: dict[str, Any]
+    lines: dict[KeyPath, int]
+
+    def line_of(self, key_path: KeyPath) -> int | None:
+        """Line of ``key_path``, or of its longest located prefix; ``None`` if nothing matches."""
+        for end in range(len(key_path), 0, -1):
+            line = self.lines.get(tuple(key_path[:end]))
+            if line is not None:
+                return line
+        return None
+
+    def error(self, message: str, key_path: KeyPath = ()) -> MachineFileError:
+        """A :class:`MachineFileError` for this file, at the line of ``key_path``."""
+        return MachineFileError(self.path, message, self.line_of(key_path))
+
+
+def read_machine_document(path: str | Path) -> MachineDocument:
+    """Parse a ``.toml``, ``.yaml`` or ``.yml`` machine file.
+
+    Raises:
+        MachineFileError: missing file, unknown extension, syntax error (with its line), or a
+            document that is not a mapping.
+    """
+    p = Path(path)
+    fmt = SUFFIXES.get(p.suffix.lower())
+    if fmt is None:
+        raise MachineFileError(
+            str(path), f"unknown machine file type {p.suffix!r}; use one of {sorted(SUFFIXES)}"
+        )
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise MachineFileError(str(path), f"cannot read file: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise MachineFileError(str(path), f"file is not UTF-8 text: {exc.reason}") from None
+    parse: Callable[[str, str], tuple[Any, dict[KeyPath, int]]] = (
+        _parse_toml if fmt == "toml" else _parse_yaml
+    )
+    data, lines = parse(text, str(path))
+    if not isinstance(data, dict):
+        raise MachineFileError(str(path), "a machine file must hold a mapping of tables", 1)
+    return MachineDocument(str(path), data, lines)
+
+
+_TOML_LINE = re.compile(r"at line (\d+)")
+_TABLE = re.compile(r"^\s*\[\s*([^\[\]]+?)\s*\]\s*(#.*)?$")
+_ARRAY_TABLE = re.compile(r"^\s*\[\[\s*([^\[\]]+?)\s*\]\]\s*(#.*)?$")
+_KEY = re.compile(r"^\s*([A-Za-z0-9_\-\.\"']+)\s*=")
+
+
+def _parse_toml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        match = _TOML_LINE.search(str(exc))
+        line = int(match.group(1)) if match else None
+        message = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
+        raise MachineFileError(path, f"TOML syntax error: {message}", line) from None
+    return data, _toml_lines(text)
+
+
+def _split_key(key: str) -> tuple[str, ...]:
+    return tuple(part.strip().strip("\"'") for part in key.split("."))
+
+
+def _toml_lines(text: str) -> dict[KeyPath, int]:
+    """Locate table headers and keys line by line (tomllib keeps no positions)."""
+    lines: dict[KeyPath, int] = {}
+    table: KeyPath = ()
+    array_counts: dict[tuple[str, ...], int] = {}
+    for number, raw in enumerate(text.splitlines(), start=1):
+        if m := _ARRAY_TABLE.match(raw):
+            name = _split_key(m.group(1))
+            index = array_counts.get(name, -1) + 1
+            array_counts[name] = index
+            table = (*name, index)
+            lines.setdefault(name, number)
+            lines[table] = number
+        elif m := _TABLE.match(raw):
+            table = _split_key(m.group(1))
+            lines.setdefault(table, number)
+        elif m := _KEY.match(raw):
+            lines.setdefault((*table, *_split_key(m.group(1))), number)
+    return lines
+
+
+def _parse_yaml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        data = yaml.safe_load(text)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line = mark.line + 1 if mark is not None else None
+        problem = exc.problem or exc.context or "invalid YAML"
+        raise MachineFileError(path, f"YAML syntax error: {problem}", line) from None
+    except yaml.YAMLError as exc:
+        raise MachineFileError(path, f"YAML error: {exc}") from None
+    lines: dict[KeyPath, int] = {}
+    if node is not None:
+        _yaml_lines(node, (), lines)
+    return data, lines
+
+
+def _yaml_lines(node: yaml.Node, prefix: KeyPath, lines: dict[KeyPath, int]) -> None:
+    if isinstance(node, yaml.MappingNode):
+        for key_node, value_node in node.value:
+            key = (*prefix, str(key_node.value))
+            lines[key] = key_node.start_mark.line + 1
+            _yaml_lines(value_node, key, lines)
+    elif isinstance(node, yaml.SequenceNode):
+        for index, item in enumerate(node.value):
+            key = (*prefix, index)
+            lines[key] = item.start_mark.line + 1
+            _yaml_lines(item, key, lines)

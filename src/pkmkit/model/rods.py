@@ -1,0 +1,265 @@
+"""Rod-leg machine models.
+
+A rod-leg machine is a platform joined to actuated carriages by rods of fixed length::
+
+    | p + R b_j − a_j(q) | = ℓ_j(q)
+
+- **slide** leg: a carriage moves along a fixed line, ``a_j(q) = a0_j + q_k u_j``, ``ℓ_j`` fixed
+  (Orthoglide, linear Delta, five-bar with prismatic actuators);
+- **strut** leg: the rod itself is actuated, ``a_j`` fixed and ``ℓ_j(q) = ℓ0_j + q_k``
+  (hexapod-type legs).
+
+Each leg is described twice:
+
+- the *equivalent leg* (one rod per actuator, along the midline of a parallelogram) is what the
+  closed-form models and the velocity Jacobians use — exact for a platform that only translates;
+- the *rods* are what the generic least-squares engine closes: a parallelogram is two rods offset
+  by ± half its width, so a translational machine gives an over-constrained closure (that is also
+  where geometric defects of each rod enter later).
+
+Geometry is always stored in 3-D (z = 0 for planar machines, ``dims = 2``). All lengths in metres.
+The model is an immutable value: arrays are read-only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pkmkit.errors import ParameterError
+
+SLIDE = 0
+STRUT = 1
+LEG_KINDS = {"slide": SLIDE, "strut": STRUT}
+
+
+@dataclass(frozen=True)
+class LegSpec:
+    """Input description of one leg, used to build a :class:`RodModel`.
+
+    Attributes:
+        name: leg name (used in error messages, e.g. ``"leg 2"``).
+        actuator: index of the actuator driving the leg.
+        kind: ``"slide"`` or ``"strut"``.
+        base: slide: carriage joint centre at q = 0; strut: fixed base joint centre. ``(3,)`` m.
+        platform: platform joint centre in the platform frame, ``(3,)`` m.
+        length: slide: rod length; strut: rod length at q = 0. m.
+        axis: slide direction ``(3,)`` (normalised here); ignored for struts.
+        branch: working branch of the inverse model, +1 or −1: the actuator coordinate is
+            ``q = u·w + branch·sqrt(…)`` (see :func:`pkmkit.machines.closed_form.inverse`).
+        parallelogram_width: distance between the two rods of a parallelogram (0: single rod), m.
+        parallelogram_direction: direction of the offset between the two rods ``(3,)``.
+    """
+
+    name: str
+    actuator: int
+    kind: str
+    base: Sequence[float]
+    platform: Sequence[float]
+    length: float
+    axis: Sequence[float] | None = None
+    branch: int = 1
+    parallelogram_width: float = 0.0
+    parallelogram_direction: Sequence[float] | None = None
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a = np.ascontiguousarray(a)
+    a.setflags(write=False)
+    return a
+
+
+def _unit(v: Sequence[float] | None, what: str) -> np.ndarray:
+    arr = np.asarray(v if v is not None else (), dtype=float).reshape(-1)
+    if arr.shape != (3,) or not np.isfinite(arr).all():
+        raise ParameterError(f"{what} must be 3 finite numbers, got {v!r}", what)
+    norm = float(np.linalg.norm(arr))
+    if norm == 0.0:
+        raise ParameterError(f"{what} must not be the zero vector", what)
+    return arr / norm
+
+
+def _point(v: Sequence[float], what: str) -> np.ndarray:
+    arr = np.asarray(v, dtype=float).reshape(-1)
+    if arr.shape != (3,) or not np.isfinite(arr).all():
+        raise ParameterError(f"{what} must be 3 finite numbers, got {v!r}", what)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class RodModel:
+    """Immutable rod-leg model (see the module docstring for the equations).
+
+    Shapes: n legs (= actuators for the machines built here), m rods (m ≥ n).
+
+    Attributes:
+        dims: 2 for a planar machine (motion in the x-y plane), 3 for a spatial one.
+        pose_names: names of the pose coordinates, ``("x", "y")`` or ``("x", "y", "z")``.
+        actuator_names: names of the actuator coordinates.
+        leg_names: names of the legs.
+        leg_actuator, leg_kind, leg_branch: ``(n,)`` int.
+        leg_base, leg_axis, leg_platform: ``(n, 3)`` m (axis: unit, zero for struts).
+        leg_length: ``(n,)`` m.
+        rod_leg, rod_actuator, rod_kind: ``(m,)`` int.
+        rod_base, rod_axis, rod_platform: ``(m, 3)`` m.
+        rod_length: ``(m,)`` m.
+        home_pose: ``(dims,)`` m, the reference (home / isotropic) configuration.
+        mode_names: names of the two assembly modes, for det(A) < 0 and det(A) > 0.
+    """
+
+    dims: int
+    pose_names: tuple[str, ...]
+    actuator_names: tuple[str, ...]
+    leg_names: tuple[str, ...]
+    leg_actuator: np.ndarray
+    leg_kind: np.ndarray
+    leg_branch: np.ndarray
+    leg_base: np.ndarray
+    leg_axis: np.ndarray
+    leg_platform: np.ndarray
+    leg_length: np.ndarray
+    rod_leg: np.ndarray
+    rod_base: np.ndarray
+    rod_axis: np.ndarray
+    rod_platform: np.ndarray
+    rod_length: np.ndarray
+    home_pose: np.ndarray
+    mode_names: tuple[str, str] = field(default=("det(A)<0", "det(A)>0"))
+
+    @property
+    def n_legs(self) -> int:
+        """Number of legs (equivalent rods)."""
+        return len(self.leg_names)
+
+    @property
+    def n_actuators(self) -> int:
+        """Number of actuators (joint-space dimension)."""
+        return len(self.actuator_names)
+
+    @property
+    def n_rods(self) -> int:
+        """Number of rods closed by the generic engine."""
+        return len(self.rod_leg)
+
+    @property
+    def rod_actuator(self) -> np.ndarray:
+        """Actuator of each rod ``(m,)``."""
+        return self.leg_actuator[self.rod_leg]
+
+    @property
+    def rod_kind(self) -> np.ndarray:
+        """Kind (:data:`SLIDE` or :data:`STRUT`) of each rod ``(m,)``."""
+        return self.leg_kind[self.rod_leg]
+
+    @property
+    def planar(self) -> bool:
+        """True for a planar machine (``dims == 2``)."""
+        return self.dims == 2
+
+    def pad(self, x: np.ndarray) -> np.ndarray:
+        """Pose rows ``(N, dims)`` as 3-D points ``(N, 3)`` (z = 0 for planar machines)."""
+        if self.dims == 3:
+            return x
+        out = np.zeros((x.shape[0], 3))
+        out[:, : self.dims] = x
+        return out
+
+
+def build_rod_model(
+    legs: Sequence[LegSpec],
+    *,
+    dims: int,
+    actuator_names: Sequence[str],
+    home_pose: Sequence[float],
+    mode_names: tuple[str, str] = ("det(A)<0", "det(A)>0"),
+    pose_names: Sequence[str] | None = None,
+) -> RodModel:
+    """Validate leg descriptions and build the immutable :class:`RodModel`.
+
+    Raises:
+        ParameterError: inconsistent description (unknown kind, bad vectors, non-positive
+            lengths, a planar machine with out-of-plane geometry, actuators without exactly one
+            leg, ...), naming the leg and the field.
+    """
+    if dims not in (2, 3):
+        raise ParameterError(f"dims must be 2 or 3, got {dims}", "dims")
+    n_act = len(actuator_names)
+    if len(legs) != n_act:
+        raise ParameterError(
+            f"each actuator needs exactly one leg: {n_act} actuators, {len(legs)} legs", "legs"
+        )
+    if n_act != dims:
+        raise ParameterError(
+            f"a {dims}-D translational rod-leg machine needs {dims} actuators, got {n_act}",
+            "legs",
+        )
+    seen = sorted(leg.actuator for leg in legs)
+    if seen != list(range(n_act)):
+        raise ParameterError("each actuator must drive exactly one leg", "legs")
+
+    leg_rows = []
+    rod_rows = []
+    for i, leg in enumerate(legs):
+        where = f"legs.{i}"
+        if leg.kind not in LEG_KINDS:
+            raise ParameterError(
+                f"{where}.kind must be one of {sorted(LEG_KINDS)}, got {leg.kind!r}",
+                f"{where}.kind",
+            )
+        kind = LEG_KINDS[leg.kind]
+        base = _point(leg.base, f"{where}.base")
+        platform = _point(leg.platform, f"{where}.platform")
+        axis = _unit(leg.axis, f"{where}.axis") if kind == SLIDE else np.zeros(3)
+        length = float(leg.length)
+        if not np.isfinite(length) or length <= 0:
+            raise ParameterError(f"{where}.length must be > 0, got {leg.length}", f"{where}.length")
+        if leg.branch not in (1, -1):
+            raise ParameterError(f"{where}.branch must be +1 or -1, got {leg.branch}", where)
+        if dims == 2 and (base[2] != 0 or platform[2] != 0 or axis[2] != 0):
+            raise ParameterError(f"{where}: a planar machine needs z = 0 geometry", where)
+        leg_rows.append((leg.actuator, kind, leg.branch, base, axis, platform, length))
+
+        width = float(leg.parallelogram_width)
+        if not np.isfinite(width) or width < 0:
+            raise ParameterError(
+                f"{where}.parallelogram width must be >= 0, got {width}", f"{where}.parallelogram"
+            )
+        if width == 0:
+            rod_rows.append((i, base, axis, platform, length))
+            continue
+        offset = 0.5 * width * _unit(leg.parallelogram_direction, f"{where}.parallelogram")
+        if dims == 2 and offset[2] != 0:
+            raise ParameterError(f"{where}: a planar parallelogram must lie in the plane", where)
+        for sign in (-1.0, 1.0):
+            rod_rows.append((i, base + sign * offset, axis, platform + sign * offset, length))
+
+    home = np.asarray(home_pose, dtype=float).reshape(-1)
+    if home.shape != (dims,) or not np.isfinite(home).all():
+        raise ParameterError(f"home pose must be {dims} finite numbers, got {home_pose!r}", "home")
+    names = tuple(pose_names) if pose_names is not None else ("x", "y", "z")[:dims]
+
+    def column(rows, k, dtype=float):
+        return _frozen(np.array([r[k] for r in rows], dtype=dtype))
+
+    return RodModel(
+        dims=dims,
+        pose_names=names,
+        actuator_names=tuple(actuator_names),
+        leg_names=tuple(leg.name for leg in legs),
+        leg_actuator=column(leg_rows, 0, int),
+        leg_kind=column(leg_rows, 1, int),
+        leg_branch=column(leg_rows, 2, int),
+        leg_base=column(leg_rows, 3),
+        leg_axis=column(leg_rows, 4),
+        leg_platform=column(leg_rows, 5),
+        leg_length=column(leg_rows, 6),
+        rod_leg=column(rod_rows, 0, int),
+        rod_base=column(rod_rows, 1),
+        rod_axis=column(rod_rows, 2),
+        rod_platform=column(rod_rows, 3),
+        rod_length=column(rod_rows, 4),
+        home_pose=_frozen(home),
+        mode_names=(str(mode_names[0]), str(mode_names[1])),
+    )

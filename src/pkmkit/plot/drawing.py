@@ -1,0 +1,91 @@
+"""Drawings of a rod-leg machine at a pose (matplotlib, any backend; PNG/SVG by extension)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from pkmkit.machines.machine import Machine
+from pkmkit.model.rods import SLIDE
+
+_LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+
+
+def machine_geometry(machine: Machine, pose: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
+    """3-D points of the drawing at ``pose (dims,)`` with actuator coordinates ``q (n,)``.
+
+    Returns a dict with ``carriage (m, 3)`` and ``platform (m, 3)`` rod end points,
+    ``rails (n, 2, 3)`` slide segments around each carriage, ``tool (3,)``.
+    """
+    model = machine.model
+    p = model.pad(np.asarray(pose, dtype=float)[None])[0]
+    qr = q[model.rod_actuator]
+    slide = model.rod_kind == SLIDE
+    carriage = model.rod_base + (qr * slide)[:, None] * model.rod_axis
+    platform = p + model.rod_platform
+    span = 0.6 * float(model.leg_length.max())
+    leg_carriage = model.leg_base + (q * (model.leg_kind == SLIDE))[:, None] * model.leg_axis
+    rails = np.stack(
+        [leg_carriage - span * model.leg_axis, leg_carriage + span * model.leg_axis], axis=1
+    )
+    return {"carriage": carriage, "platform": platform, "rails": rails, "tool": p}
+
+
+def draw_machine(machine: Machine, pose=None, *, path: str | Path | None = None) -> Figure:
+    """Draw ``machine`` at ``pose`` (default: home): slides, carriages, rods, platform, tool.
+
+    Args:
+        machine: the machine.
+        pose: ``(dims,)`` pose in m (must be reachable).
+        path: if given, the figure is saved there (format from the extension).
+
+    Returns:
+        The matplotlib ``Figure`` (pyplot-free, so no GUI backend is involved).
+    """
+    pose = machine.home_pose if pose is None else np.asarray(pose, dtype=float)
+    q = machine.ik(pose)
+    geo = machine_geometry(machine, pose, q)
+    spatial = machine.dims == 3
+    fig = Figure(figsize=(6.4, 5.6))
+    ax = fig.add_subplot(projection="3d" if spatial else None)
+    coords = slice(0, 3 if spatial else 2)
+
+    def line(points: np.ndarray, **style) -> None:
+        ax.plot(*points[:, coords].T, **style)
+
+    for i, rail in enumerate(geo["rails"]):
+        line(rail, color="0.6", lw=4, solid_capstyle="butt",
+             label="slides" if i == 0 else None)
+    for j in range(machine.model.n_rods):
+        leg = int(machine.model.rod_leg[j])
+        colour = _LEG_COLOURS[leg % len(_LEG_COLOURS)]
+        line(np.stack([geo["carriage"][j], geo["platform"][j]]), color=colour, lw=1.8,
+             label=machine.model.leg_names[leg] if j == np.flatnonzero(
+                 machine.model.rod_leg == leg)[0] else None)
+    ax.scatter(*geo["carriage"][:, coords].T, color="k", s=14, zorder=3)
+    ax.scatter(*geo["platform"][:, coords].T, color="k", s=10, zorder=3)
+    ax.scatter(*geo["tool"][coords], color="crimson", marker="*", s=120, zorder=4,
+               label="tool point")
+    units = "m"
+    ax.set_xlabel(f"x [{units}]")
+    ax.set_ylabel(f"y [{units}]")
+    if spatial:
+        ax.set_zlabel(f"z [{units}]")
+        points = np.concatenate([geo["carriage"], geo["platform"], geo["rails"].reshape(-1, 3)])
+        centre = 0.5 * (points.max(axis=0) + points.min(axis=0))
+        half = 0.5 * (points.max(axis=0) - points.min(axis=0)).max()
+        ax.set_xlim(centre[0] - half, centre[0] + half)
+        ax.set_ylim(centre[1] - half, centre[1] + half)
+        ax.set_zlim(centre[2] - half, centre[2] + half)
+    else:
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True, alpha=0.3)
+    pose_txt = ", ".join(f"{v:.3f}" for v in pose)
+    q_txt = ", ".join(f"{v:.3f}" for v in q)
+    ax.set_title(f"{machine.name}\npose ({pose_txt}) m   q ({q_txt}) m", fontsize=9)
+    ax.legend(loc="upper left", fontsize=7)
+    if path is not None:
+        fig.savefig(path, dpi=120, bbox_inches="tight")
+    return fig

@@ -1,0 +1,220 @@
+"""Batched Levenberg–Marquardt for many small, independent least-squares problems.
+
+Direct kinematics, inverse kinematics of whole machines, passive-joint recovery and parameter
+identification are all the same problem: find ``u`` with ``r(u; knowns) = 0`` in the
+least-squares sense. This module solves N such problems at once, one per row, with vectorised
+NumPy (no per-row Python loop):
+
+- each row has its own damping factor, acceptance test and convergence flag; rows that have
+  converged leave the active set and cost nothing more;
+- steps solve the damped normal equations ``(JᵀJ + λ (D + εI)) δ = −Jᵀr`` with Marquardt's
+  diagonal scaling D plus a small isotropic floor ε, so rank-deficient Jacobians (unobservable
+  directions, over-constrained closures with redundant rows) give finite steps with no component
+  along the null space; the final numerical rank of each row's Jacobian is reported;
+- unknowns may live on a manifold: the caller's ``retract(u, δ)`` applies a step (e.g. a
+  rotation update ``R ← exp(δ)R``); Jacobians are taken with respect to that local increment;
+- warm starts: the caller passes the initial guesses ``u0`` (e.g. the previous solution along a
+  path).
+
+**Layout.** Inside the engine and in the ``evaluate`` callback the batch axis is *last*
+(structure of arrays): ``u (n, k)``, ``r (m, k)``, ``J (m, n, k)``. Each problem is only a few
+dozen scalar operations, so this layout makes every NumPy call one long loop over the batch
+(several times faster than stacks of tiny matrices). The normal equations are solved by a
+vectorised Cholesky factorisation for up to :data:`SMALL` unknowns, by LAPACK beyond.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkmkit.status import Status
+
+#: ``evaluate(u (n, k), rows (k,)) -> (r (m, k), J (m, n, k))`` for the given rows of the batch.
+Evaluate = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+#: ``retract(u (n, k), delta (n, k), rows (k,)) -> u_new (n, k)``.
+Retract = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+#: Largest number of unknowns solved by the vectorised Cholesky factorisation.
+SMALL = 8
+
+
+@dataclass(frozen=True)
+class SolveResult:
+    """Outcome of :func:`solve_least_squares` for a batch of N problems.
+
+    Attributes:
+        u: ``(N, n)`` solutions (the last accepted iterate; check ``status``).
+        status: ``(N,)`` int :class:`~pkmkit.status.Status` codes: ``OK`` (converged, residual
+            within ``residual_tol``), ``INCONSISTENT`` (converged to a non-zero residual),
+            ``NOT_CONVERGED`` (iteration limit), ``INVALID_INPUT`` (non-finite start or
+            residual).
+        residual: ``(N,)`` largest absolute residual component at the solution.
+        iterations: ``(N,)`` iterations used by each row.
+        rank: ``(N,)`` numerical rank of each row's final Jacobian.
+    """
+
+    u: np.ndarray
+    status: np.ndarray
+    residual: np.ndarray
+    iterations: np.ndarray
+    rank: np.ndarray
+
+    @property
+    def ok(self) -> np.ndarray:
+        """``(N,)`` bool, rows that converged to a zero residual."""
+        return self.status == Status.OK
+
+
+def normal_matrix(jac: np.ndarray) -> np.ndarray:
+    """``JᵀJ`` for batch-last Jacobians ``(m, n, k)`` → ``(n, n, k)``."""
+    n = jac.shape[1]
+    out = np.empty((n, n, jac.shape[2]))
+    for i in range(n):
+        for j in range(i + 1):
+            out[i, j] = out[j, i] = np.einsum("mk,mk->k", jac[:, i], jac[:, j])
+    return out
+
+
+def solve_spd(h: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve ``H x = b`` for batch-last symmetric positive-definite ``H (n, n, k)``, ``b (n, k)``.
+
+    Vectorised Cholesky for n ≤ :data:`SMALL`; LAPACK otherwise.
+    """
+    n = h.shape[0]
+    if n > SMALL:
+        return np.linalg.solve(h.transpose(2, 0, 1), b.T[:, :, None])[:, :, 0].T
+    low = np.zeros_like(h)
+    for j in range(n):
+        s = h[j, j] - (low[j, :j] ** 2).sum(axis=0)
+        low[j, j] = np.sqrt(s)
+        for i in range(j + 1, n):
+            low[i, j] = (h[i, j] - (low[i, :j] * low[j, :j]).sum(axis=0)) / low[j, j]
+    y = np.empty_like(b)
+    for i in range(n):
+        y[i] = (b[i] - (low[i, :i] * y[:i]).sum(axis=0)) / low[i, i]
+    x = np.empty_like(b)
+    for i in range(n - 1, -1, -1):
+        x[i] = (y[i] - (low[i + 1 :, i] * x[i + 1 :]).sum(axis=0)) / low[i, i]
+    return x
+
+
+def _add(u: np.ndarray, delta: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    return u + delta
+
+
+def solve_least_squares(
+    evaluate: Evaluate,
+    u0: np.ndarray,
+    *,
+    retract: Retract | None = None,
+    max_iter: int = 60,
+    xtol: float = 1e-14,
+    atol: float = 1e-14,
+    residual_tol: float = 1e-9,
+    damping: float = 1e-4,
+    rcond: float = 1e-10,
+    compute_rank: bool = True,
+) -> SolveResult:
+    """Solve N independent nonlinear least-squares problems ``min ½‖r(u)‖²`` in one batch.
+
+    Args:
+        evaluate: residuals and Jacobians of a subset of rows, batch axis last (see
+            :data:`Evaluate` and the module docstring).
+        u0: ``(N, n)`` initial guesses (warm starts).
+        retract: how a step is applied (default: addition), batch axis last.
+        max_iter: iteration limit per row.
+        xtol: a row stops when an accepted step is shorter than ``xtol · (1 + ‖u‖)``.
+        atol: a row stops when its residuals are all below ``atol`` (exact solution reached),
+            or when a rejected step changed the cost by rounding error only.
+        residual_tol: a stopped row is ``OK`` when its largest residual is below this
+            (units of the residuals), else ``INCONSISTENT``.
+        damping: initial Levenberg–Marquardt factor λ (relative, Marquardt-scaled).
+        rcond: singular values below ``rcond · σ_max`` do not count in the reported rank.
+        compute_rank: report each row's final Jacobian rank (one eigen-decomposition per row);
+            with False, ``rank`` is −1.
+
+    Returns:
+        :class:`SolveResult` (batch axis first).
+    """
+    retract = retract or _add
+    u = np.array(np.asarray(u0, dtype=float).T, copy=True)  # (n, N)
+    n, n_rows = u.shape
+    rows_all = np.arange(n_rows)
+    valid = np.isfinite(u).all(axis=0)
+    iterations = np.zeros(n_rows, dtype=int)
+    residual = np.full(n_rows, np.nan)
+    rank = np.zeros(n_rows, dtype=int)
+    status = np.full(n_rows, int(Status.INVALID_INPUT))
+    if not valid.any():
+        return SolveResult(u.T.copy(), status, residual, iterations, rank)
+
+    live = rows_all[valid]
+    r_live, j_live = evaluate(u[:, live], live)
+    m = r_live.shape[0]
+    r = np.full((m, n_rows), np.nan)
+    jac = np.full((m, n, n_rows), np.nan)
+    r[:, live], jac[:, :, live] = r_live, j_live
+    cost = np.full(n_rows, np.inf)
+    cost[live] = 0.5 * np.einsum("mk,mk->k", r_live, r_live)
+    valid &= np.isfinite(cost) & np.isfinite(jac).all(axis=(0, 1))
+    lam = np.full(n_rows, float(damping))
+    active = valid.copy()
+    stopped = np.zeros(n_rows, dtype=bool)
+    diag_idx = np.arange(n)
+
+    for _ in range(max_iter):
+        idx = np.flatnonzero(active)
+        if idx.size == 0:
+            break
+        if idx.size == n_rows:  # every row active: slices avoid copies
+            idx = slice(None)
+        j_a, r_a = jac[:, :, idx], r[:, idx]
+        jtj = normal_matrix(j_a)
+        grad = np.einsum("mnk,mk->nk", j_a, r_a)
+        diag = jtj[diag_idx, diag_idx]  # (n, k)
+        floor = 1e-9 * diag.max(axis=0) + 1e-300
+        jtj[diag_idx, diag_idx] += lam[idx] * (diag + floor)
+        step = -solve_spd(jtj, grad)
+        u_new = retract(u[:, idx], step, idx)
+        r_new, j_new = evaluate(u_new, idx)
+        cost_new = 0.5 * np.einsum("mk,mk->k", r_new, r_new)
+        accept = np.isfinite(cost_new) & (cost_new <= cost[idx])
+        iterations[idx] += 1
+        if isinstance(idx, slice):
+            idx = rows_all
+
+        took = idx[accept]
+        if took.size == idx.size == n_rows:
+            u[:], r[:], jac[:], cost[:] = u_new, r_new, j_new, cost_new
+        else:
+            u[:, took] = u_new[:, accept]
+            r[:, took] = r_new[:, accept]
+            jac[:, :, took] = j_new[:, :, accept]
+            cost[took] = cost_new[accept]
+        lam[took] = np.maximum(lam[took] * 0.1, 1e-12)
+        lam[idx[~accept]] *= 10.0
+
+        step_norm = np.sqrt(np.einsum("nk,nk->k", step, step))
+        u_norm = np.sqrt(np.einsum("nk,nk->k", u[:, idx], u[:, idx]))
+        small = step_norm <= xtol * (1.0 + u_norm)
+        exact = cost[idx] <= 0.5 * atol * atol
+        flat = ~accept & (cost_new <= cost[idx] * (1.0 + 1e-12))
+        done = (accept & small) | exact | flat | (lam[idx] > 1e12)
+        stopped[idx[done]] = True
+        active[idx[done]] = False
+
+    live = rows_all[valid]
+    residual[live] = np.abs(r[:, live]).max(axis=0)
+    status[valid] = Status.NOT_CONVERGED
+    status[stopped & (residual <= residual_tol)] = Status.OK
+    status[stopped & ~(residual <= residual_tol)] = Status.INCONSISTENT
+    if compute_rank:
+        eig = np.linalg.eigvalsh(normal_matrix(jac[:, :, live]).transpose(2, 0, 1))  # σ²
+        rank[live] = (eig > (rcond**2) * eig[:, -1:]).sum(axis=1)
+    else:
+        rank[:] = -1
+    return SolveResult(u=u.T.copy(), status=status, residual=residual, iterations=iterations,
+                       rank=rank)

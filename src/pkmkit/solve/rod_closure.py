@@ -1,0 +1,252 @@
+"""Closure equations of rod-leg machines and their analytic Jacobians, for the generic engine.
+
+Residual of rod j (metres)::
+
+    r_j = | p + R b_j − a_j(q) | − ℓ_j(q)
+    a_j(q) = a0_j + κs_j q_k u_j,    ℓ_j(q) = ℓ0_j + κt_j q_k
+
+(κs = 1 for slide rods, κt = 1 for strut rods, k the rod's actuator.) With d_j the rod vector and
+d̂_j = d_j / |d_j|:
+
+    ∂r_j/∂p = d̂_jᵀ,   ∂r_j/∂δ = (R b_j × d̂_j)ᵀ  (left rotation increment R ← exp(δ)R),
+    ∂r_j/∂q_k = −(κs_j d̂_j·u_j + κt_j).
+
+Direct kinematics solves for the platform pose with q known; inverse kinematics for q with the
+pose known; both through :func:`pkmkit.solve.least_squares.solve_least_squares`. The platform
+unknowns are either its translation (``"translation"``: the closure of a parallelogram machine
+is then over-constrained, two rods per leg for one translational constraint) or its full pose
+(``"full"``: 6 unknowns in space, x, y, θz in the plane — the rods then also fix the rotation).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkmkit.model.rods import SLIDE, STRUT, RodModel
+from pkmkit.solve.least_squares import SolveResult, solve_least_squares
+from pkmkit.spatial.rotation import compose_rotvec, rotvec_to_matrix
+
+PLATFORM_DOF = ("translation", "full")
+
+
+@dataclass(frozen=True)
+class RodVectors:
+    """Rod geometry at a batch of k configurations, batch axis last (m rods).
+
+    Attributes:
+        d: ``(3, m, k)`` rod vectors from carriage/base joint to platform joint, m.
+        dist: ``(m, k)`` their lengths |d|, m.
+        length: ``(m, k)`` required rod lengths ℓ(q), m.
+        rb: ``(3, m, k)`` or ``(3, m, 1)``: platform joint offsets R b in the fixed frame, m.
+    """
+
+    d: np.ndarray
+    dist: np.ndarray
+    length: np.ndarray
+    rb: np.ndarray
+
+
+def rod_vectors(
+    model: RodModel, p: np.ndarray, q: np.ndarray, rot: np.ndarray | None = None
+) -> RodVectors:
+    """Rod vectors, batch axis last: platform positions ``p (3, k)``, rotations
+    ``rot (3, 3, k)`` (None: identity), actuator coordinates ``q (n_act, k)``."""
+    qr = q[model.rod_actuator]  # (m, k)
+    kind = model.rod_kind[:, None]
+    carriage = model.rod_base.T[:, :, None] + model.rod_axis.T[:, :, None] * np.where(
+        kind == SLIDE, qr, 0.0
+    )
+    if rot is None:
+        rb = model.rod_platform.T[:, :, None]
+    else:
+        rb = np.einsum("ijk,mj->imk", rot, model.rod_platform)
+    d = p[:, None, :] + rb - carriage
+    dist = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    length = model.rod_length[:, None] + np.where(kind == STRUT, qr, 0.0)
+    return RodVectors(d=d, dist=dist, length=length, rb=rb)
+
+
+def _unit_rods(v: RodVectors) -> np.ndarray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return v.d / v.dist
+
+
+def _q_columns(model: RodModel, unit: np.ndarray) -> np.ndarray:
+    """∂r/∂q ``(m, n_act, k)``."""
+    kind = model.rod_kind[:, None]
+    along = np.einsum("imk,im->mk", unit, model.rod_axis.T)
+    dr_dq = -np.where(kind == SLIDE, along, 1.0)
+    out = np.zeros((model.n_rods, model.n_actuators, unit.shape[2]))
+    out[np.arange(model.n_rods), model.rod_actuator] = dr_dq
+    return out
+
+
+def _pose_columns(model: RodModel, v: RodVectors, unit: np.ndarray, dof: str) -> np.ndarray:
+    """∂r/∂(platform unknowns) ``(m, n_pose, k)`` in the unknown layout of ``dof``."""
+    dims = model.dims
+    if dof == "translation":
+        return unit[:dims].transpose(1, 0, 2)
+    rb = np.broadcast_to(v.rb, unit.shape)
+    moment = np.cross(rb, unit, axis=0)
+    if dims == 3:
+        cols = np.concatenate([unit, moment], axis=0)
+    else:
+        cols = np.concatenate([unit[:2], moment[2:3]], axis=0)
+    return cols.transpose(1, 0, 2)
+
+
+def pose_unknown_count(model: RodModel, dof: str) -> int:
+    """Number of platform unknowns for ``dof`` (``"translation"`` or ``"full"``)."""
+    if dof not in PLATFORM_DOF:
+        raise ValueError(f"platform dof must be one of {PLATFORM_DOF}, got {dof!r}")
+    if dof == "translation":
+        return model.dims
+    return 6 if model.dims == 3 else 3
+
+
+def split_pose(model: RodModel, u: np.ndarray, dof: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """Platform position ``(3, k)`` and rotation ``(3, 3, k)`` (None: identity) from the
+    unknowns ``u (n_pose, k)``."""
+    p = np.zeros((3, u.shape[1]))
+    p[: model.dims] = u[: model.dims]
+    if dof == "translation":
+        return p, None
+    phi = np.zeros((u.shape[1], 3))
+    if model.dims == 3:
+        phi[:] = u[3:6].T
+    else:
+        phi[:, 2] = u[2]
+    return p, rotvec_to_matrix(phi).transpose(1, 2, 0)
+
+
+def _retract(model: RodModel, dof: str):
+    if dof == "full" and model.dims == 3:
+
+        def retract(u: np.ndarray, step: np.ndarray, rows: np.ndarray) -> np.ndarray:
+            out = u + step
+            out[3:6] = compose_rotvec(step[3:6].T, u[3:6].T).T
+            return out
+
+        return retract
+    return None  # additive: translations, and planar rotation angles
+
+
+def solve_direct(
+    model: RodModel,
+    q: np.ndarray,
+    u0: np.ndarray,
+    *,
+    dof: str = "translation",
+    **options,
+) -> SolveResult:
+    """Direct kinematics by least squares over every rod.
+
+    Args:
+        model: the machine's rod model.
+        q: ``(N, n_act)`` actuator coordinates (m).
+        u0: ``(N, n_pose)`` initial platform unknowns (see :func:`pose_unknown_count`):
+            position (m), then rotation vector (rad) for ``dof="full"`` (θz for planar).
+        dof: ``"translation"`` or ``"full"``.
+        **options: forwarded to :func:`solve_least_squares`.
+
+    Returns:
+        :class:`SolveResult` whose ``u`` holds the platform unknowns.
+    """
+    pose_unknown_count(model, dof)
+
+    q_t = np.ascontiguousarray(q.T)
+
+    def evaluate(u: np.ndarray, rows: np.ndarray):
+        p, rot = split_pose(model, u, dof)
+        v = rod_vectors(model, p, q_t[:, rows], rot)
+        unit = _unit_rods(v)
+        return v.dist - v.length, _pose_columns(model, v, unit, dof)
+
+    return solve_least_squares(evaluate, u0, retract=_retract(model, dof), **options)
+
+
+def solve_inverse(
+    model: RodModel,
+    pose: np.ndarray,
+    q0: np.ndarray,
+    *,
+    rotation: np.ndarray | None = None,
+    **options,
+) -> SolveResult:
+    """Inverse kinematics by least squares over every rod.
+
+    Args:
+        model: the machine's rod model.
+        pose: ``(N, dims)`` platform positions (m).
+        q0: ``(N, n_act)`` initial actuator coordinates (warm start), m.
+        rotation: ``(N, 3, 3)`` platform rotations (None: identity).
+        **options: forwarded to :func:`solve_least_squares`.
+    """
+    p_t = np.ascontiguousarray(model.pad(pose).T)
+    rot_t = None if rotation is None else rotation.transpose(1, 2, 0)
+
+    def evaluate(q: np.ndarray, rows: np.ndarray):
+        rot = None if rot_t is None else rot_t[:, :, rows]
+        v = rod_vectors(model, p_t[:, rows], q, rot)
+        unit = _unit_rods(v)
+        return v.dist - v.length, _q_columns(model, unit)
+
+    return solve_least_squares(evaluate, q0, **options)
+
+
+def closure_jacobians(
+    model: RodModel, pose: np.ndarray, q: np.ndarray, dof: str = "full"
+) -> tuple[np.ndarray, np.ndarray]:
+    """Closure Jacobians ``(∂r/∂pose (k, m, n_pose), ∂r/∂q (k, m, n_act))`` at poses
+    ``(k, dims)`` (platform not rotated) and actuator coordinates ``(k, n_act)``."""
+    v = rod_vectors(model, model.pad(pose).T, q.T)
+    unit = _unit_rods(v)
+    jp = _pose_columns(model, v, unit, dof).transpose(2, 0, 1)
+    return jp, _q_columns(model, unit).transpose(2, 0, 1)
+
+
+@dataclass(frozen=True)
+class InstantaneousMobility:
+    """Rank-based mobility of the rod closure at one configuration.
+
+    Attributes:
+        unknowns: platform unknowns (6 spatial, 3 planar) plus actuator coordinates.
+        constraints: number of rod equations.
+        rank: rank of the closure Jacobian with respect to all unknowns.
+        mobility: ``unknowns − rank`` (degrees of freedom of the mechanism).
+        platform_freedom_locked: platform degrees of freedom left with the actuators locked
+            (0 for a well-constrained machine).
+        redundant_constraints: ``constraints − rank`` (over-constraint degree).
+    """
+
+    unknowns: int
+    constraints: int
+    rank: int
+    mobility: int
+    platform_freedom_locked: int
+    redundant_constraints: int
+
+
+def instantaneous_mobility(
+    model: RodModel, pose: np.ndarray, q: np.ndarray, rcond: float = 1e-9
+) -> InstantaneousMobility:
+    """Rank-based mobility at a (non-singular) configuration ``pose (dims,)``, ``q (n_act,)``."""
+    jp, jq = closure_jacobians(model, pose[None], q[None], dof="full")
+    full = np.concatenate([jp[0], jq[0]], axis=1)
+
+    def rank(m: np.ndarray) -> int:
+        sv = np.linalg.svd(m, compute_uv=False)
+        return int((sv > rcond * sv[0]).sum())
+
+    r_full = rank(full)
+    n_pose = jp.shape[2]
+    return InstantaneousMobility(
+        unknowns=full.shape[1],
+        constraints=full.shape[0],
+        rank=r_full,
+        mobility=full.shape[1] - r_full,
+        platform_freedom_locked=n_pose - rank(jp[0]),
+        redundant_constraints=full.shape[0] - r_full,
+    )
