@@ -141,8 +141,9 @@ class RodClosedForm:
 
         Args:
             q: ``(N, n)`` actuator coordinates, m.
-            rel_tol: a slightly negative discriminant (within ``rel_tol`` of the radius²) is
-                taken as 0: the two modes merge on a parallel singularity.
+            rel_tol: a discriminant within ``rel_tol`` of the radius² (either sign) is taken as
+                0 — rounding cannot tell it from a double root, where the two modes merge on a
+                parallel singularity.
 
         Returns:
             ``(poses (N, 2, dims), degenerate (N,))``: ``poses[:, 0]`` is the mode with
@@ -175,7 +176,7 @@ class RodClosedForm:
                 normal = np.stack([-e[:, 1], e[:, 0]], axis=1)
                 degenerate = gram <= 1e-24 * rho_sq[:, 0]
             t_sq = (rho_sq[:, 0] - np.einsum("kd,kd->k", w, w)) / gram
-            t_sq = np.where((t_sq < 0) & (t_sq > -rel_tol * rho_sq[:, 0] / gram), 0.0, t_sq)
+            t_sq = np.where(np.abs(t_sq) <= rel_tol * rho_sq[:, 0] / gram, 0.0, t_sq)
             t = np.sqrt(t_sq)
         t[degenerate] = np.nan
         centre = c1 + w

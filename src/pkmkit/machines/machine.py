@@ -13,7 +13,7 @@ and a per-row status (``full_output=True``).
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -108,7 +108,8 @@ class Machine:
             leg = int(np.argmax(short))
             raise ParameterError(
                 f"machine {self.id!r}: the home pose {self.model.home_pose.tolist()} is out of "
-                f"reach (leg {self.model.leg_names[leg]} too short by {short[leg]:.6g} m)"
+                f"reach ({self.model.leg_names[leg]} too short by {short[leg]:.6g} m); choose other "
+                "dimensions"
             )
         a, b = closed.jacobians(home, q_home)
         det_a = float(batched_det(a)[0])
@@ -179,8 +180,10 @@ class Machine:
                 "edit its machine file instead"
             )
         params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
-        return build_machine(self.kind, params, id=self.id, name=self.name,
-                             description=self.description, source=self.source)
+        rebuilt = build_machine(self.kind, params, id=self.id, name=self.name,
+                                description=self.description, source=self.source)
+        extra = {k: v for k, v in self.extra_poses.items() if k not in rebuilt.extra_poses}
+        return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra})
 
     # ---------------------------------------------------------------- helpers
     def _branches(self, branches: Any) -> np.ndarray:

@@ -20,6 +20,7 @@ See ``docs/machine-files.md`` for the ``rod-legs`` format.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from functools import cache
 from importlib import resources
 from pathlib import Path
@@ -148,19 +149,17 @@ def machine_from_document(
     poses = _poses(doc, scale)
     try:
         if kind_name == ROD_LEGS:
-            if overrides:
-                raise ParameterError(
-                    f"machine {ident!r} is described leg by leg and has no named parameters"
-                )
             built = _rod_legs_machine(doc, head, scale, ident, text)
         else:
-            built = _kind_machine(doc, KINDS[kind_name], units, ident, text, overrides or {})
+            built = _kind_machine(doc, KINDS[kind_name], units, ident, text)
     except MachineFileError:
         raise
     except ParameterError as exc:
         raise doc.error(str(exc), _parameter_path(kind_name, exc.parameter)) from None
     if poses:
         built = _with_poses(doc, built, poses)
+    if overrides:  # errors here concern the caller's values, not the file
+        built = built.with_params(**overrides)
     return built
 
 
@@ -172,8 +171,7 @@ def _parameter_path(kind_name: str, parameter: str | None) -> tuple:
     return ("parameters", parameter)
 
 
-def _kind_machine(doc, kind: MachineKind, units: str, ident: str, text: dict,
-                  overrides: Mapping[str, Any]) -> Machine:
+def _kind_machine(doc, kind: MachineKind, units: str, ident: str, text: dict) -> Machine:
     table = _table(doc, "parameters", required=False)
     specs = {s.name: s for s in kind.parameters}
     values = {}
@@ -185,8 +183,7 @@ def _kind_machine(doc, kind: MachineKind, units: str, ident: str, text: dict,
                 ("parameters", name),
             )
         values[name] = specs[name].from_boundary(raw, units, ident)
-    values = resolve_parameters(kind.parameters, values, ident)
-    params = resolve_parameters(kind.parameters, {**values, **overrides}, ident)
+    params = resolve_parameters(kind.parameters, values, ident)
     return build_machine(kind, params, id=ident, **text)
 
 
@@ -290,8 +287,4 @@ def _with_poses(doc: MachineDocument, machine: Machine,
         if pose.shape != (machine.dims,):
             raise doc.error(f"pose {name!r} must have {machine.dims} coordinates",
                             ("poses", name))
-    return Machine(
-        id=machine.id, name=machine.name, kind=machine.kind, params=machine.params,
-        model=machine.model, description=machine.description, source=machine.source,
-        extra_poses={**machine.extra_poses, **poses},
-    )
+    return replace(machine, extra_poses={**machine.extra_poses, **poses})

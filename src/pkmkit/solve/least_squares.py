@@ -113,6 +113,8 @@ def solve_least_squares(
     max_iter: int = 60,
     xtol: float = 1e-14,
     atol: float = 1e-14,
+    gtol: float = 1e-12,
+    stall: float = 0.01,
     residual_tol: float = 1e-9,
     damping: float = 1e-4,
     rcond: float = 1e-10,
@@ -127,8 +129,12 @@ def solve_least_squares(
         retract: how a step is applied (default: addition), batch axis last.
         max_iter: iteration limit per row.
         xtol: a row stops when an accepted step is shorter than ``xtol · (1 + ‖u‖)``.
-        atol: a row stops when its residuals are all below ``atol`` (exact solution reached),
-            or when a rejected step changed the cost by rounding error only.
+        atol: a row stops when its residual norm is below ``atol`` (exact solution reached).
+        gtol: a row stops when the residual is orthogonal to every Jacobian column within this
+            cosine (a least-squares stationary point, exact or not).
+        stall: a row whose residual is still above ``residual_tol`` stops when ten iterations
+            reduced its cost by less than this fraction (Gauss–Newton crawls on large-residual
+            problems, e.g. actuator coordinates with no assembly): it is ``INCONSISTENT``.
         residual_tol: a stopped row is ``OK`` when its largest residual is below this
             (units of the residuals), else ``INCONSISTENT``.
         damping: initial Levenberg–Marquardt factor λ (relative, Marquardt-scaled).
@@ -161,6 +167,7 @@ def solve_least_squares(
     cost[live] = 0.5 * np.einsum("mk,mk->k", r_live, r_live)
     valid &= np.isfinite(cost) & np.isfinite(jac).all(axis=(0, 1))
     lam = np.full(n_rows, float(damping))
+    checkpoint = cost.copy()  # cost ten iterations ago, for the stall test
     active = valid.copy()
     stopped = np.zeros(n_rows, dtype=bool)
     diag_idx = np.arange(n)
@@ -175,13 +182,29 @@ def solve_least_squares(
         jtj = normal_matrix(j_a)
         grad = np.einsum("mnk,mk->nk", j_a, r_a)
         diag = jtj[diag_idx, diag_idx]  # (n, k)
+        # stationary (cosine test) or exact rows stop before stepping
+        with np.errstate(invalid="ignore", divide="ignore"):
+            cosine = np.abs(grad) / np.sqrt(diag * (2.0 * cost[idx]))
+        stop = (cost[idx] <= 0.5 * atol * atol) | ~(np.nan_to_num(cosine, nan=0.0).max(
+            axis=0) > gtol)
+        if stop.any():
+            rows = rows_all[idx][stop]
+            stopped[rows] = True
+            active[rows] = False
+            keep = ~stop
+            if not keep.any():
+                break
+            idx = rows_all[idx][keep]
+            j_a, r_a, jtj, grad, diag = (j_a[:, :, keep], r_a[:, keep], jtj[:, :, keep],
+                                         grad[:, keep], diag[:, keep])
         floor = 1e-9 * diag.max(axis=0) + 1e-300
         jtj[diag_idx, diag_idx] += lam[idx] * (diag + floor)
         step = -solve_spd(jtj, grad)
         u_new = retract(u[:, idx], step, idx)
         r_new, j_new = evaluate(u_new, idx)
         cost_new = 0.5 * np.einsum("mk,mk->k", r_new, r_new)
-        accept = np.isfinite(cost_new) & (cost_new <= cost[idx])
+        # accept rounding-level increases: near a solution the cost stops being informative
+        accept = np.isfinite(cost_new) & (cost_new <= cost[idx] * (1.0 + 1e-13))
         iterations[idx] += 1
         if isinstance(idx, slice):
             idx = rows_all
@@ -200,9 +223,15 @@ def solve_least_squares(
         step_norm = np.sqrt(np.einsum("nk,nk->k", step, step))
         u_norm = np.sqrt(np.einsum("nk,nk->k", u[:, idx], u[:, idx]))
         small = step_norm <= xtol * (1.0 + u_norm)
-        exact = cost[idx] <= 0.5 * atol * atol
-        flat = ~accept & (cost_new <= cost[idx] * (1.0 + 1e-12))
-        done = (accept & small) | exact | flat | (lam[idx] > 1e12)
+        done = (accept & small) | (lam[idx] > 1e12)
+        at_checkpoint = iterations[idx] % 10 == 0
+        if at_checkpoint.any():
+            rows = idx[at_checkpoint]
+            crawling = (cost[rows] > (1.0 - stall) * checkpoint[rows]) & (
+                cost[rows] > 0.5 * residual_tol**2
+            )
+            done[at_checkpoint] |= crawling
+            checkpoint[rows] = cost[rows]
         stopped[idx[done]] = True
         active[idx[done]] = False
 

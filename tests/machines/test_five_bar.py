@@ -1,0 +1,127 @@
+"""Five-bar with prismatic actuators against seed 004 (Chablat, Wenger & Angeles 2000)."""
+
+import numpy as np
+import pytest
+
+import pkmkit
+from tests.conftest import random_poses
+
+
+@pytest.fixture(scope="module", params=["five-bar-isotropic", "five-bar-biglide"])
+def five(request):
+    return pkmkit.machine(request.param)
+
+
+def leg_angles(m, x, q):
+    """θ1, θ2: directions of the legs C→P and D→P."""
+    jac = m.jacobian(x, q=q)
+    return np.arctan2(jac.A[..., 1], jac.A[..., 0])
+
+
+def test_kappa_a_closed_form(five):
+    x = random_poses(five, 300, seed=6)
+    q = five.ik(x)
+    theta = leg_angles(five, x, q)
+    jac = five.jacobian(x)
+    sv = np.linalg.svd(jac.A, compute_uv=False)
+    expected = 1 / np.abs(np.tan((theta[:, 1] - theta[:, 0]) / 2))
+    # seed: κ(A) = σmax/σmin = 1/|tan((θ2 − θ1)/2)| when ≥ 1, its inverse otherwise
+    kappa = sv[:, 0] / sv[:, 1]
+    np.testing.assert_allclose(kappa, np.maximum(expected, 1 / expected), rtol=1e-10)
+    # A Aᵀ = L² [[1, cos(θ1 − θ2)], [cos(θ1 − θ2), 1]]
+    aat = jac.A @ np.swapaxes(jac.A, 1, 2)
+    length = five.params["L"]
+    np.testing.assert_allclose(aat[:, 0, 1], length**2 * np.cos(theta[:, 0] - theta[:, 1]),
+                               atol=1e-12)
+
+
+def test_kappa_b_closed_form(five):
+    x = random_poses(five, 300, seed=7)
+    q = five.ik(x)
+    theta = leg_angles(five, x, q)
+    alpha = np.array([five.params["alpha1"], five.params["alpha2"]])
+    c = np.abs(np.cos(theta - alpha))
+    jac = five.jacobian(x)
+    length = five.params["L"]
+    np.testing.assert_allclose(np.abs(np.diagonal(jac.B, axis1=1, axis2=2)), length * c,
+                               atol=1e-12)
+    sv = np.abs(np.diagonal(jac.B, axis1=1, axis2=2))
+    np.testing.assert_allclose(sv.max(1) / sv.min(1), c.max(1) / c.min(1), rtol=1e-12)
+
+
+def test_isotropic_configuration():
+    m = pkmkit.machine("five-bar-isotropic")
+    big_m = m.params["B"][0]
+    assert m.params["B"] == (big_m, -big_m) and m.params["A"] == (0.0, 0.0)
+    length = m.params["L"]
+    np.testing.assert_allclose(m.home_q, [big_m - length] * 2, atol=1e-15)  # ρ1 = ρ2
+    jac = m.jacobian(m.home_pose)
+    np.testing.assert_allclose(jac.J_inv, np.eye(2), atol=1e-15)
+    np.testing.assert_allclose(jac.J, np.eye(2), atol=1e-15)
+    # moving ρ1 moves P along x, ρ2 along y, like a PP table
+    np.testing.assert_allclose(m.fk(m.home_q + [1e-4, 0]) - m.home_pose, [1e-4, 0], atol=1e-7)
+    np.testing.assert_allclose(m.fk(m.home_q + [0, 1e-4]) - m.home_pose, [0, 1e-4], atol=1e-7)
+
+
+def test_parallel_singularity_iff_c_d_p_aligned(five):
+    rng = np.random.default_rng(8)
+    length = five.params["L"]
+    u = np.array([[np.cos(five.params["alpha1"]), np.sin(five.params["alpha1"])],
+                  [np.cos(five.params["alpha2"]), np.sin(five.params["alpha2"])]])
+    a, b = np.array(five.params["A"]), np.array(five.params["B"])
+    for _ in range(20):
+        # pick P and a common leg direction θ1 = θ2: C, D, P aligned
+        p = five.home_pose + rng.uniform(-0.05, 0.05, 2)
+        phi = rng.uniform(0, 2 * np.pi)
+        e = np.array([np.cos(phi), np.sin(phi)])
+        c, d = p - length * e, p + length * e  # D on the other side: θ2 = θ1 + π
+        # actuator values exist only if C and D lie on their slide lines: solve for P instead
+        q1 = np.dot(c - a, u[0])
+        q2 = np.dot(d - b, u[1])
+        c_on, d_on = a + q1 * u[0], b + q2 * u[1]
+        # place P at the midpoint of the on-slide carriages with |CP| = |DP| = |CD|/2 = L
+        if abs(np.linalg.norm(d_on - c_on) - 2 * length) > 1e-9:
+            continue
+        p_mid = 0.5 * (c_on + d_on)
+        jac = five.jacobian(p_mid, q=np.array([q1, q2]))
+        assert "parallel" in jac.status
+    # generic: det A = 0 exactly when (D − C) × (P − C) = 0
+    x = random_poses(five, 200, seed=9)
+    q = five.ik(x)
+    jac = five.jacobian(x)
+    c = x - jac.A[:, 0]
+    d = x - jac.A[:, 1]
+    cross = (d - c)[:, 0] * (x - c)[:, 1] - (d - c)[:, 1] * (x - c)[:, 0]
+    np.testing.assert_allclose(jac.det_A, cross, atol=1e-12)
+    assert np.isfinite(q).all()
+
+
+def test_parallel_singularity_flagged_at_double_root():
+    m = pkmkit.machine("five-bar-biglide")
+    # carriages exactly 2L apart on the rail: P at their midpoint, C, D, P aligned
+    length = m.params["L"]
+    base_b = m.model.leg_base[1, 0]
+    q = np.array([0.2, 0.2 + 2 * length - base_b])
+    modes = m.fk_all(q)
+    assert modes.count == 1
+    p = modes.poses[0]
+    jac = m.jacobian(p, q=q)
+    assert jac.status == "parallel" and np.isnan(jac.condition)
+
+
+def test_serial_singularity_at_workspace_boundary():
+    m = pkmkit.machine("five-bar-isotropic")
+    # leg 1 perpendicular to slide 1 (θ1 − α1 = 90°): P straight above C
+    q1 = 0.6
+    p = np.array([q1, m.params["L"]])
+    q = m.ik(p)
+    assert q[0] == pytest.approx(q1)
+    jac = m.jacobian(p)
+    assert "serial" in jac.status and jac.serial_measure < 1e-12
+
+
+def test_biglide_shares_ab_distance_and_legs():
+    iso, big = pkmkit.machine("five-bar-isotropic"), pkmkit.machine("five-bar-biglide")
+    ab = lambda m: np.linalg.norm(np.subtract(m.params["B"], m.params["A"]))  # noqa: E731
+    assert ab(iso) == pytest.approx(ab(big)) and iso.params["L"] == big.params["L"]
+    assert big.jacobian(big.home_pose).condition == pytest.approx(1.0)  # legs at 90°

@@ -1,0 +1,64 @@
+import numpy as np
+import pytest
+
+from pkmkit.errors import ParameterError
+from pkmkit.model.rods import SLIDE, STRUT, LegSpec, build_rod_model
+
+
+def legs3(**changes):
+    legs = [
+        LegSpec(f"leg {i + 1}", i, "slide", base=np.eye(3)[i], platform=(0, 0, 0), length=1.0,
+                axis=np.eye(3)[i])
+        for i in range(3)
+    ]
+    if changes:
+        legs[0] = LegSpec(**{**legs[0].__dict__, **changes})
+    return legs
+
+
+def test_parallelogram_makes_two_offset_rods():
+    legs = legs3(parallelogram_width=0.2, parallelogram_direction=(0, 0, 2))
+    model = build_rod_model(legs, dims=3, actuator_names=("a", "b", "c"), home_pose=(0, 0, 0))
+    assert model.n_rods == 4 and model.n_legs == 3
+    first = model.rod_leg == 0
+    np.testing.assert_allclose(model.rod_base[first] - model.rod_platform[first],
+                               np.tile(model.leg_base[0] - model.leg_platform[0], (2, 1)))
+    np.testing.assert_allclose(model.rod_platform[first][:, 2], [-0.1, 0.1])
+    assert model.rod_kind.tolist() == [SLIDE] * 4
+    with pytest.raises(ValueError):
+        model.leg_base[0, 0] = 3.0  # immutable
+
+
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"kind": "crank"}, "kind must be one of"),
+        ({"axis": (0, 0, 0)}, "zero vector"),
+        ({"axis": (1, 0)}, "3 finite numbers"),
+        ({"length": -1.0}, "length must be > 0"),
+        ({"branch": 2}, "branch must be"),
+        ({"parallelogram_width": -1.0}, "width must be >= 0"),
+    ],
+)
+def test_invalid_legs(changes, message):
+    with pytest.raises(ParameterError, match=message):
+        build_rod_model(legs3(**changes), dims=3, actuator_names=("a", "b", "c"),
+                        home_pose=(0, 0, 0))
+
+
+def test_counts_and_planar_geometry_checked():
+    with pytest.raises(ParameterError, match="exactly one leg"):
+        build_rod_model(legs3()[:2], dims=3, actuator_names=("a", "b", "c"), home_pose=(0, 0, 0))
+    raised = [LegSpec(f"leg {i}", i, "slide", base=(i, 0, 0.5), platform=(0, 0, 0), length=1.0,
+                      axis=(1, 0, 0)) for i in range(2)]
+    with pytest.raises(ParameterError, match="z = 0"):
+        build_rod_model(raised, dims=2, actuator_names=("a", "b"), home_pose=(0, 0))
+    with pytest.raises(ParameterError, match="home pose"):
+        build_rod_model(legs3(), dims=3, actuator_names=("a", "b", "c"), home_pose=(0, 0))
+
+
+def test_strut_has_no_axis():
+    legs = [LegSpec(f"s{i}", i, "strut", base=np.eye(3)[i], platform=(0, 0, 0), length=1.0)
+            for i in range(3)]
+    model = build_rod_model(legs, dims=3, actuator_names=("a", "b", "c"), home_pose=(0, 0, 0))
+    assert (model.leg_kind == STRUT).all() and not model.leg_axis.any()

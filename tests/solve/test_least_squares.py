@@ -1,0 +1,81 @@
+import numpy as np
+import pytest
+
+from pkmkit.solve.least_squares import normal_matrix, solve_least_squares, solve_spd
+from pkmkit.status import Status
+
+
+def linear_problem(a: np.ndarray, b: np.ndarray):
+    """r = A u − b for a batch: a (N, m, n), b (N, m); engine layout is batch-last."""
+    a_t = a.transpose(1, 2, 0)
+    b_t = b.T
+
+    def evaluate(u, rows):
+        return np.einsum("mnk,nk->mk", a_t[:, :, rows], u) - b_t[:, rows], a_t[:, :, rows]
+
+    return evaluate
+
+
+def test_linear_least_squares_matches_lstsq():
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(40, 7, 3))
+    b = rng.normal(size=(40, 7))
+    res = solve_least_squares(linear_problem(a, b), np.zeros((40, 3)), residual_tol=np.inf)
+    expected = np.array([np.linalg.lstsq(a[k], b[k], rcond=None)[0] for k in range(40)])
+    np.testing.assert_allclose(res.u, expected, atol=1e-10)
+    assert (res.status == Status.OK).all() and (res.rank == 3).all()
+
+
+def test_rosenbrock_rows_converge_independently():
+    def evaluate(u, rows):
+        x, y = u
+        r = np.stack([10 * (y - x**2), 1 - x])
+        jac = np.zeros((2, 2, u.shape[1]))
+        jac[0, 0], jac[0, 1], jac[1, 0] = -20 * x, 10.0, -1.0
+        return r, jac
+
+    starts = np.array([[-1.2, 1.0], [0.0, 0.0], [2.0, 2.0], [np.nan, 0.0]])
+    res = solve_least_squares(evaluate, starts)
+    np.testing.assert_allclose(res.u[:3], 1.0, atol=1e-10)
+    assert res.status.tolist() == [Status.OK] * 3 + [Status.INVALID_INPUT]
+    assert len(set(res.iterations[:3].tolist())) > 1  # per-row stopping
+
+
+def test_inconsistent_and_rank_deficient_rows():
+    # u0 + u1 = 1 and u0 + u1 = 3: rank 1 and no exact solution
+    a = np.tile(np.array([[1.0, 1.0], [1.0, 1.0]]), (2, 1, 1))
+    b = np.array([[1.0, 3.0], [2.0, 2.0]])
+    res = solve_least_squares(linear_problem(a, b), np.zeros((2, 2)))
+    assert res.status.tolist() == [Status.INCONSISTENT, Status.OK]
+    assert res.rank.tolist() == [1, 1]
+    np.testing.assert_allclose(res.u.sum(axis=1), [2.0, 2.0], atol=1e-10)
+    # the step never moves along the null space (1, -1): minimum-norm solution from 0
+    np.testing.assert_allclose(res.u[:, 0] - res.u[:, 1], 0.0, atol=1e-10)
+
+
+def test_iteration_limit_flag():
+    def evaluate(u, rows):
+        return np.exp(u) + 1.0, np.exp(u)[:, None, :]  # no zero: drifts to -inf
+
+    res = solve_least_squares(evaluate, np.zeros((1, 1)), max_iter=3)
+    assert res.status[0] == Status.NOT_CONVERGED and res.iterations[0] == 3
+
+
+def test_warm_start_needs_fewer_iterations():
+    def evaluate(u, rows):
+        return np.stack([u[0] ** 3 - 2.0]), 3 * u[None] ** 2
+
+    cold = solve_least_squares(evaluate, np.full((1, 1), 5.0))
+    warm = solve_least_squares(evaluate, cold.u + 1e-6)
+    assert warm.iterations[0] < cold.iterations[0]
+    np.testing.assert_allclose(cold.u, 2 ** (1 / 3), rtol=1e-14)
+
+
+@pytest.mark.parametrize("n", [1, 3, 6, 12])
+def test_solve_spd_matches_numpy(n):
+    rng = np.random.default_rng(n)
+    jac = rng.normal(size=(n + 4, n, 30))
+    h = normal_matrix(jac) + 1e-3 * np.eye(n)[:, :, None]
+    b = rng.normal(size=(n, 30))
+    expected = np.linalg.solve(h.transpose(2, 0, 1), b.T[:, :, None])[:, :, 0].T
+    np.testing.assert_allclose(solve_spd(h, b), expected, rtol=1e-9, atol=1e-12)

@@ -1,0 +1,24 @@
+import numpy as np
+
+from pkmkit.spatial.rotation import compose_rotvec, rotvec_to_matrix, skew
+
+
+def test_skew_is_cross_product():
+    rng = np.random.default_rng(0)
+    v, w = rng.normal(size=(2, 10, 3))
+    np.testing.assert_allclose(np.einsum("kij,kj->ki", skew(v), w), np.cross(v, w), atol=1e-15)
+
+
+def test_rotvec_matrices_are_rotations_and_compose():
+    rng = np.random.default_rng(1)
+    a, b = rng.normal(size=(2, 20, 3))
+    ra, rb = rotvec_to_matrix(a), rotvec_to_matrix(b)
+    np.testing.assert_allclose(ra @ ra.transpose(0, 2, 1), np.broadcast_to(np.eye(3), ra.shape),
+                               atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(ra), 1.0, atol=1e-12)
+    np.testing.assert_allclose(rotvec_to_matrix(compose_rotvec(a, b)), ra @ rb, atol=1e-12)
+
+
+def test_small_rotation_is_identity_plus_skew():
+    d = np.array([[1e-7, -2e-7, 3e-7]])
+    np.testing.assert_allclose(rotvec_to_matrix(d)[0], np.eye(3) + skew(d[0]), atol=1e-13)
