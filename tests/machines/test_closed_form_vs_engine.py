@@ -6,7 +6,6 @@ model must agree to 1e-9 m.
 """
 
 import numpy as np
-import pytest
 
 import pkmkit
 from pkmkit.status import Status

@@ -59,8 +59,9 @@ def test_isotropic_configuration():
     np.testing.assert_allclose(jac.J_inv, np.eye(2), atol=1e-15)
     np.testing.assert_allclose(jac.J, np.eye(2), atol=1e-15)
     # moving ρ1 moves P along x, ρ2 along y, like a PP table
-    np.testing.assert_allclose(m.fk(m.home_q + [1e-4, 0]) - m.home_pose, [1e-4, 0], atol=1e-7)
-    np.testing.assert_allclose(m.fk(m.home_q + [0, 1e-4]) - m.home_pose, [0, 1e-4], atol=1e-7)
+    for step in ([1e-4, 0.0], [0.0, 1e-4]):
+        moved = m.fk(m.home_q + np.array(step)) - m.home_pose
+        np.testing.assert_allclose(moved, step, atol=1e-7)
 
 
 def test_parallel_singularity_iff_c_d_p_aligned(five):

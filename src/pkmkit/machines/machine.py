@@ -108,8 +108,8 @@ class Machine:
             leg = int(np.argmax(short))
             raise ParameterError(
                 f"machine {self.id!r}: the home pose {self.model.home_pose.tolist()} is out of "
-                f"reach ({self.model.leg_names[leg]} too short by {short[leg]:.6g} m); choose other "
-                "dimensions"
+                f"reach ({self.model.leg_names[leg]} too short by {short[leg]:.6g} m); "
+                "choose other dimensions"
             )
         a, b = closed.jacobians(home, q_home)
         det_a = float(batched_det(a)[0])

@@ -1,0 +1,188 @@
+"""End-to-end tests of the ``pkmkit`` command line."""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from pkmkit.cli.main import cli
+
+
+@pytest.fixture
+def run():
+    runner = CliRunner()
+
+    def invoke(*args, **kwargs):
+        return runner.invoke(cli, [str(a) for a in args], catch_exceptions=False, **kwargs)
+
+    return invoke
+
+
+def as_json(result):
+    assert result.exit_code == 0, result.output
+    return json.loads(result.stdout)
+
+
+@pytest.mark.parametrize("command", [[], ["machines"], ["show"], ["ik"], ["fk"], ["jacobian"],
+                                     ["demo"]])
+def test_help_everywhere(run, command):
+    result = run(*command, "--help")
+    assert result.exit_code == 0 and "Usage:" in result.output
+
+
+def test_machines(run):
+    data = as_json(run("machines", "--json"))
+    ids = {m["id"] for m in data["machines"]}
+    assert {"orthoglide", "linear-delta", "five-bar"} <= ids
+    text = run("machines").output
+    assert "five-bar-biglide" in text
+
+
+def test_show(run):
+    data = as_json(run("show", "linear-delta", "--json", "--units", "mm"))
+    params = {p["name"]: p for p in data["parameters"]}
+    assert params["L"]["value"] == pytest.approx(1300) and params["L"]["unit"] == "mm"
+    assert params["angles"]["value"] == pytest.approx([0, 120, 240])
+    assert data["mobility"]["grubler"]["mobility"] == 3
+    assert data["assembly_modes"]["working"] == "nacelle-below"
+    text = run("show", "five-bar").output
+    assert "Grübler" in text and "redundant constraints: 1" in text
+
+
+def test_ik_reference_entry(run):
+    data = as_json(run("ik", "linear-delta", "--pose", "0.25,0.25,0", "--json"))
+    np.testing.assert_allclose(data["q"], [1.240, 1.1675, 0.94173], atol=5e-5)
+    assert data["status"] == "ok"
+    mm = as_json(run("ik", "linear-delta", "--pose", "250,250,0", "--units", "mm", "--json"))
+    np.testing.assert_allclose(mm["q"], [1240.0, 1167.5, 941.73], atol=0.05)
+    numeric = as_json(run("ik", "linear-delta", "--pose", "0.25,0.25,0", "--method", "numeric",
+                          "--json"))
+    np.testing.assert_allclose(numeric["q"], data["q"], atol=1e-12)
+
+
+def test_set_overrides(run):
+    data = as_json(run("ik", "linear-delta", "--set", "L=1.04", "--pose", "0,0,0", "--json"))
+    np.testing.assert_allclose(data["q"], [0.882666] * 3, atol=1e-6)
+    rotated = as_json(run("ik", "linear-delta", "--set", "angles=90,210,330", "--pose",
+                          "0,0.55,0", "--json"))
+    assert rotated["q"][0] == pytest.approx(1.3)  # leg 1 now on the y axis, rod vertical
+    five = as_json(run("ik", "five-bar", "--set", "A=0,0", "--set", "B=1.2,-1.2", "--pose",
+                       "1.2,0", "--json"))
+    np.testing.assert_allclose(five["q"], [0.7, 0.7], atol=1e-12)
+
+
+def test_fk_all_modes(run):
+    data = as_json(run("fk", "orthoglide", "--q", "0.31,0.31,0.31", "--all", "--json"))
+    np.testing.assert_allclose(data["pose"], [0, 0, 0], atol=1e-12)
+    assert data["mode"] == "origin-side" and data["modes"] == ["origin-side", "far-side"]
+    np.testing.assert_allclose(data["poses"][1], [0.31 * 2 / 3] * 3, atol=1e-12)
+    other = as_json(run("fk", "orthoglide", "--q", "0.31,0.31,0.31", "--mode", "far-side",
+                        "--json"))
+    np.testing.assert_allclose(other["pose"], data["poses"][1], atol=1e-12)
+    text = run("fk", "orthoglide", "--q", "310,310,310", "--units", "mm", "--all").output
+    assert "far-side" in text and "206.666" in text
+
+
+def test_jacobian(run):
+    data = as_json(run("jacobian", "orthoglide", "--pose", "0,0,0", "--json"))
+    for key in ("A", "B", "J", "singular_values", "condition", "status"):
+        assert key in data
+    np.testing.assert_allclose(data["J"], np.eye(3), atol=1e-15)
+    assert data["status"] == "regular" and data["condition"] == pytest.approx(1.0)
+    text = run("jacobian", "five-bar", "--pose", "1,0").output
+    assert "transmission factors" in text
+    singular = as_json(run("jacobian", "five-bar", "--pose", "0.6,0.5", "--json"))
+    assert singular["status"] == "serial" and singular["condition"] is None
+
+
+def test_batch_csv_with_bad_rows(run, tmp_path):
+    poses = tmp_path / "poses.csv"
+    poses.write_text("x,y,z\n0.25,0.25,0\n5,0,0\nnan,0,0\n-0.25,-0.25,0.5\n")
+    out = tmp_path / "q.csv"
+    result = run("ik", "linear-delta", "--input", poses, "--output", out)
+    assert result.exit_code == 3 and "2 flagged" in result.output
+    lines = out.read_text().splitlines()
+    assert lines[0] == "x,y,z,q1,q2,q3,status"
+    assert lines[1].endswith(",ok") and lines[2].endswith(",unreachable")
+    assert lines[3].endswith(",invalid-input") and lines[4].endswith(",ok")
+
+    good = tmp_path / "good.csv"
+    good.write_text("\n".join([lines[0], lines[1], lines[4]]) + "\n")
+    result = run("fk", "linear-delta", "--input", good, "--output", tmp_path / "x.csv")
+    assert result.exit_code == 0
+    back = (tmp_path / "x.csv").read_text().splitlines()
+    assert back[0] == "q1,q2,q3,x,y,z,mode,status"
+    values = [float(v) for v in back[1].split(",")[3:6]]
+    np.testing.assert_allclose(values, [0.25, 0.25, 0.0], atol=1e-12)
+
+    result = run("fk", "linear-delta", "--all", "--input", good, "--output", tmp_path / "a.csv")
+    assert result.exit_code == 0
+    assert len((tmp_path / "a.csv").read_text().splitlines()) == 1 + 4  # two modes per row
+
+    result = run("jacobian", "linear-delta", "--input", poses, "--output", tmp_path / "j.csv")
+    assert result.exit_code == 3
+    header = (tmp_path / "j.csv").read_text().splitlines()[0].split(",")
+    assert header[:6] == ["x", "y", "z", "q1", "q2", "q3"] and "J33" in header
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["ik", "delta", "--pose", "0,0,0"], "unknown machine 'delta'; valid ids:"),
+        (["ik", "linear-delta", "--set", "LL=1", "--pose", "0,0,0"], "valid parameters: L, R"),
+        (["ik", "linear-delta", "--pose", "3,0,0"], "too short by"),
+        (["ik", "linear-delta", "--pose", "0,0"], "needs 3 comma-separated"),
+        (["ik", "linear-delta", "--pose", "0,a,0"], "cannot read"),
+        (["ik", "linear-delta", "--pose", "0,nan,0"], "not finite"),
+        (["fk", "five-bar", "--q", "5,-5"], "no real assembly"),
+        (["fk", "five-bar", "--q", "0.5,0.5", "--mode", "upside"], "unknown assembly mode"),
+        (["ik", "linear-delta", "--set", "L=abc", "--pose", "0,0,0"], "comma-separated"),
+        (["ik", "linear-delta", "--set", "L", "--pose", "0,0,0"], "NAME=VALUE"),
+    ],
+)
+def test_errors_exit_non_zero_with_a_message(run, args, message):
+    result = run(*args)
+    assert result.exit_code == 1
+    assert message in result.output
+    assert "Traceback" not in result.output
+
+
+def test_usage_errors(run):
+    assert run("ik", "linear-delta").exit_code == 2
+    assert run("ik", "linear-delta", "--input", "x.csv").exit_code == 2
+    assert run("fk", "linear-delta", "--q", "1,1,1", "--method", "guess").exit_code == 2
+
+
+def test_malformed_machine_file(run, tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text('[machine]\nkind = "linear-delta"\n[parameters]\nR = 0.7\nL = "long"\n')
+    result = run("show", path)
+    assert result.exit_code == 1 and "bad.toml:5:" in result.output and "numeric" in result.output
+
+
+def test_user_machine_file_through_the_cli(run, tmp_path):
+    path = tmp_path / "mine.toml"
+    path.write_text('[machine]\nkind = "linear-delta"\nunits = "mm"\n[parameters]\n'
+                    "R = 700\nr = 150\nL = 1040\n")
+    data = as_json(run("ik", path, "--pose", "0,0,0", "--json"))
+    np.testing.assert_allclose(data["q"], [0.882666] * 3, atol=1e-6)
+
+
+def test_demo_writes_json_and_pngs(run, tmp_path):
+    out = tmp_path / "demo"
+    result = run("demo", "--out", out)
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / "summary.json").read_text())
+    machines = summary["machines"]
+    assert {"orthoglide", "linear-delta-ch3", "five-bar-isotropic"} <= set(machines)
+    delta = machines["linear-delta-ch3"]
+    corner = next(p for p in delta["poses"] if p["name"] == "corner(+,+,0)")
+    np.testing.assert_allclose(corner["q"], [1.240, 1.1675, 0.94173], atol=5e-5)
+    assert corner["fk"]["mode"] == "nacelle-below" and corner["singularity"] == "regular"
+    ortho = machines["orthoglide"]["poses"][0]
+    np.testing.assert_allclose(ortho["transmission_factors"], [1, 1, 1], atol=1e-12)
+    for ident in machines:
+        assert (out / f"{ident}.png").stat().st_size > 10_000
+        assert (out / f"{ident}.json").exists()
+    assert "nacelle-below" in result.output

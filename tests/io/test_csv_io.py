@@ -1,0 +1,50 @@
+import numpy as np
+import pytest
+
+from pkmkit.errors import InputError
+from pkmkit.io.csv_io import read_table, write_table
+from pkmkit.io.json_io import to_jsonable
+
+
+def test_header_matched_by_name(tmp_path):
+    path = tmp_path / "in.csv"
+    path.write_text("# poses\nz,x,y,note\n0.5,0.1,0.2,a\n0,nan,0,b\n")
+    table = read_table(path, ["x", "y", "z"])
+    np.testing.assert_array_equal(table[0], [0.1, 0.2, 0.5])
+    assert np.isnan(table[1, 0])
+
+
+def test_no_header_uses_column_order(tmp_path):
+    path = tmp_path / "in.csv"
+    path.write_text("1,2\n3,4\n")
+    np.testing.assert_array_equal(read_table(path, ["q1", "q2"]), [[1, 2], [3, 4]])
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("x,y\n1,2\n", "missing column"),
+        ("x,y,z\n1,2,abc\n", "in.csv:2: column 'z' is not a number"),
+        ("x,y,z\n1,2\n", "in.csv:2: expected at least 3"),
+        ("x,y,z\n", "no data rows"),
+        ("", "no data rows"),
+    ],
+)
+def test_errors_name_the_line(tmp_path, text, message):
+    path = tmp_path / "in.csv"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message):
+        read_table(path, ["x", "y", "z"])
+
+
+def test_write_round_trip(tmp_path):
+    path = tmp_path / "out.csv"
+    write_table(path, ["a", "status"], [[0.1, "ok"], [float("nan"), "unreachable"]])
+    lines = path.read_text().splitlines()
+    assert lines == ["a,status", "0.10000000000000001,ok", "nan,unreachable"]
+    assert read_table(path, ["a"])[0, 0] == 0.1
+
+
+def test_json_conversion_maps_non_finite_to_null():
+    value = {"a": np.array([1.0, np.nan]), "b": (np.float64(np.inf), 2), "c": np.int64(3)}
+    assert to_jsonable(value) == {"a": [1.0, None], "b": [None, 2], "c": 3}

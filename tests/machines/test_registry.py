@@ -1,0 +1,124 @@
+"""The machine library: ids, overrides, shipped machine files, user files and their errors."""
+
+import numpy as np
+import pytest
+
+import pkmkit
+from pkmkit.errors import MachineFileError, ParameterError, UnknownMachineError
+from pkmkit.machines.registry import preset_path
+
+
+def test_ids_and_aliases():
+    ids = pkmkit.machines()
+    for required in ("orthoglide", "linear-delta", "five-bar", "five-bar-biglide",
+                     "linear-delta-table-iv1"):
+        assert required in ids
+    np.testing.assert_array_equal(pkmkit.machine("linear-delta").ik([0.1, 0, 0]),
+                                  pkmkit.machine("linear-delta-ch3").ik([0.1, 0, 0]))
+
+
+def test_unknown_machine_lists_valid_ids():
+    with pytest.raises(UnknownMachineError, match="valid ids: five-bar, ") as info:
+        pkmkit.machine("tripteor")
+    assert "orthoglide" in info.value.valid
+
+
+def test_unknown_parameter_lists_valid_ones():
+    with pytest.raises(pkmkit.UnknownParameterError, match="valid parameters: L, R, angles"):
+        pkmkit.machine("linear-delta", length=1.0)
+
+
+def test_override_errors_are_not_blamed_on_the_file():
+    with pytest.raises(ParameterError) as info:
+        pkmkit.machine("linear-delta", L=0.4)
+    assert not isinstance(info.value, MachineFileError)
+
+
+def test_every_preset_is_a_machine_file_that_loads(preset):
+    again = pkmkit.load(preset_path(preset.id))
+    np.testing.assert_array_equal(again.home_q, preset.home_q)
+
+
+def test_yaml_and_toml_give_the_same_machine(tmp_path):
+    toml = tmp_path / "d.toml"
+    toml.write_text('[machine]\nkind = "linear-delta"\nunits = "mm"\n[parameters]\n'
+                    'R = 700\nr = 150\nL = 1040\nangles = [90, 210, 330]\n')
+    yaml_path = tmp_path / "d.yaml"
+    yaml_path.write_text("machine:\n  kind: linear-delta\n  units: mm\nparameters:\n"
+                         "  R: 700\n  r: 150\n  L: 1040\n  angles: [90, 210, 330]\n")
+    a, b = pkmkit.load(toml), pkmkit.load(yaml_path)
+    assert a.params == b.params and a.params["L"] == pytest.approx(1.04)
+    assert a.params["angles"] == pytest.approx(np.radians([90, 210, 330]))
+    np.testing.assert_allclose(a.ik([0.1, 0.0, 0.0]), b.ik([0.1, 0.0, 0.0]))
+    assert a.id == "d"
+
+
+def test_user_planar_rod_legs_machine(tmp_path):
+    """The isotropic five-bar written leg by leg equals the built-in one."""
+    path = tmp_path / "five.yaml"
+    path.write_text(
+        """
+machine:
+  kind: rod-legs
+  name: my five-bar
+  dims: 2
+  home: [1.0, 0.0]
+  mode_names: [right, left]
+legs:
+  - actuator: rho1
+    base: [0, 0]
+    axis: [1, 0]
+    platform: [0, 0]
+    length: 0.5
+    branch: -1
+    parallelogram: {width: 0.05, direction: [0, 1]}
+  - actuator: rho2
+    base: [1, -1]
+    axis: [0, 1]
+    platform: [0, 0]
+    length: 0.5
+    branch: -1
+poses:
+  corner: [1.1, 0.1]
+"""
+    )
+    user, builtin = pkmkit.load(path), pkmkit.machine("five-bar")
+    assert user.actuator_names == ("rho1", "rho2") and user.model.n_rods == 3
+    x = np.array([[1.05, -0.03], [0.95, 0.08]])
+    np.testing.assert_allclose(user.ik(x), builtin.ik(x), atol=1e-15)
+    np.testing.assert_allclose(user.jacobian(x).J, builtin.jacobian(x).J, atol=1e-14)
+    np.testing.assert_allclose(user.fk(user.ik(x), method="numeric"), x, atol=1e-12)
+    assert user.mode_labels == ("left", "right")
+    assert "corner" in user.reference_poses()
+    with pytest.raises(ParameterError, match="leg by leg"):
+        user.with_params(L=1.0)
+
+
+BAD_FILES = [
+    ('[machine]\nkind = "delta"\n', 2, "kind must be one of"),
+    ('[machine]\nkind = "linear-delta"\nunits = "inch"\n', 3, "unknown length unit"),
+    ('[machine]\nkind = "linear-delta"\n[parameters]\nR = 0.7\nRR = 1\n', 5,
+     "unknown parameter 'RR'"),
+    ('[machine]\nkind = "linear-delta"\n[parameters]\nR = 0.7\nL = -1\n', 5, "must be > 0"),
+    ('[machine]\nkind = "linear-delta"\n[parameters]\nL = 0.3\n', 4, "smaller than L"),
+    ('[machine]\nkind = "linear-delta"\n[parameters]\nangles = [0, 1]\n', 4, "vector of 3"),
+    ('[machine]\nkind = "five-bar"\ncolour = "red"\n', 3, "unknown key 'colour'"),
+    ('[machine]\nkind = "five-bar"\n[extras]\na = 1\n', 3, "unknown key 'extras'"),
+    ("[parameters]\nL = 1\n", None, "missing \\[machine\\]"),
+    ('[machine]\nkind = "rod-legs"\ndims = 3\n\n[[legs]]\nbase = [0, 0, 0]\n'
+     "platform = [0, 0, 0]\nlength = 1\naxis = [0, 0]\n", 9, "axis must be 3"),
+    ('[machine]\nkind = "rod-legs"\n\n[[legs]]\nbase = [0, 0, 0]\nlength = 1\n', 4,
+     "needs 'platform'"),
+    ('[machine]\nkind = "rod-legs"\n\n[[legs]]\nbase = [0, 0, 0]\nplatform = [0, 0, 0]\n'
+     "length = 1\naxis = [0, 0, 1]\nwheel = 3\n", 9, "unknown key 'wheel'"),
+    ('[machine]\nkind = "orthoglide"\n[poses]\np = [0, 0]\n', 4, "3 coordinates"),
+]
+
+
+@pytest.mark.parametrize("text, line, message", BAD_FILES)
+def test_malformed_files_report_the_line(tmp_path, text, line, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(MachineFileError, match=message) as info:
+        pkmkit.load(path)
+    assert info.value.line == line, str(info.value)
