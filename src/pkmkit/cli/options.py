@@ -86,8 +86,9 @@ def emit_json(payload: dict) -> None:
 
 
 def fmt(values: Any, digits: int = 6) -> str:
-    """Compact text of a number or vector."""
+    """Compact text of a number or vector (rounding noise below 1e-12 shown as 0)."""
     arr = np.asarray(values, dtype=float)
+    arr = np.where(np.abs(arr) < 1e-12, 0.0, arr)
     if arr.ndim == 0:
         return f"{float(arr):.{digits}g}"
     return "[" + ", ".join(f"{v:.{digits}g}" for v in arr.ravel()) + "]"

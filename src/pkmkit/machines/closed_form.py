@@ -149,8 +149,16 @@ class RodClosedForm:
             ``(poses (N, 2, dims), degenerate (N,))``: ``poses[:, 0]`` is the mode with
             det A < 0, ``poses[:, 1]`` the mode with det A > 0; NaN where no real assembly
             exists. ``degenerate`` flags rows whose sphere centres are aligned (the direct model
-            has no isolated solution there).
+            has no isolated solution there). Computed in cache-sized chunks.
         """
+        poses = np.empty((q.shape[0], 2, self.model.dims))
+        degenerate = np.empty(q.shape[0], dtype=bool)
+        for start in range(0, q.shape[0], CHUNK):
+            stop = start + CHUNK
+            poses[start:stop], degenerate[start:stop] = self._direct_chunk(q[start:stop], rel_tol)
+        return poses, degenerate
+
+    def _direct_chunk(self, q: np.ndarray, rel_tol: float) -> tuple[np.ndarray, np.ndarray]:
         c, rho = self.centres(q)
         rho_sq = rho**2
         c1 = c[:, 0]
@@ -180,8 +188,8 @@ class RodClosedForm:
             t = np.sqrt(t_sq)
         t[degenerate] = np.nan
         centre = c1 + w
-        poses = np.stack([centre - t[:, None] * normal, centre + t[:, None] * normal], axis=1)
-        return poses, degenerate
+        offset = t[:, None] * normal
+        return np.stack([centre - offset, centre + offset], axis=1), degenerate
 
     # ------------------------------------------------------------------ velocity
     def rod_vectors(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:

@@ -381,13 +381,14 @@ class Machine:
         qb, single = as_batch(q, self.n_actuators, "q")
         if single:
             require_finite(qb, "q")
-        finite = finite_rows(qb)
         sign = self._mode_sign(mode)
         rotation = iterations = residual = None
         if method == "closed":
             poses, degenerate = self._closed.direct_all(qb)
             pose = poses[:, 0 if sign < 0 else 1]
-            status = np.where(np.isnan(pose).any(axis=1), Status.NO_ASSEMBLY, Status.OK)
+            # a NaN row sum flags rows without a real solution (or with non-finite input)
+            status = np.where(np.isfinite(pose @ np.ones(self.dims)), Status.OK,
+                              Status.NO_ASSEMBLY)
             status[degenerate] = Status.SINGULAR
         elif method == "numeric":
             guess = (self._linear_guess_pose(qb) if x0 is None
@@ -416,9 +417,11 @@ class Machine:
         else:
             raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
         status = np.asarray(status, dtype=int)
-        status[~finite] = Status.INVALID_INPUT
+        bad = np.flatnonzero(status != Status.OK)
+        status[bad[~finite_rows(qb[bad])]] = Status.INVALID_INPUT
         ok = status == Status.OK
-        pose = np.where(ok[:, None], pose, np.nan)
+        if not ok.all():
+            pose = np.where(ok[:, None], pose, np.nan)
         if single and not ok[0]:
             self._raise_direct(qb[0], sign, status[0])
         if not full_output:

@@ -33,23 +33,30 @@ def machine_geometry(machine: Machine, pose: np.ndarray, q: np.ndarray) -> dict[
     return {"carriage": carriage, "platform": platform, "rails": rails, "tool": p}
 
 
-def draw_machine(machine: Machine, pose=None, *, path: str | Path | None = None) -> Figure:
+def draw_machine(machine: Machine, pose=None, *, q=None, ax=None, title: str | None = None,
+                 path: str | Path | None = None) -> Figure:
     """Draw ``machine`` at ``pose`` (default: home): slides, carriages, rods, platform, tool.
 
     Args:
         machine: the machine.
         pose: ``(dims,)`` pose in m (must be reachable).
+        q: actuator coordinates (default: inverse model, working branches) — pass them to draw
+            another assembly mode of the same q.
+        ax: draw into these axes (3-D axes for a spatial machine) instead of a new figure.
+        title: axes title (default: machine name, pose and q).
         path: if given, the figure is saved there (format from the extension).
 
     Returns:
         The matplotlib ``Figure`` (pyplot-free, so no GUI backend is involved).
     """
     pose = machine.home_pose if pose is None else np.asarray(pose, dtype=float)
-    q = machine.ik(pose)
+    q = machine.ik(pose) if q is None else np.asarray(q, dtype=float)
     geo = machine_geometry(machine, pose, q)
     spatial = machine.dims == 3
-    fig = Figure(figsize=(6.4, 5.6))
-    ax = fig.add_subplot(projection="3d" if spatial else None)
+    if ax is None:
+        fig = Figure(figsize=(6.4, 5.6))
+        ax = fig.add_subplot(projection="3d" if spatial else None)
+    fig = ax.figure
     coords = slice(0, 3 if spatial else 2)
 
     def line(points: np.ndarray, **style) -> None:
@@ -84,7 +91,9 @@ def draw_machine(machine: Machine, pose=None, *, path: str | Path | None = None)
         ax.grid(True, alpha=0.3)
     pose_txt = ", ".join(f"{v:.3f}" for v in pose)
     q_txt = ", ".join(f"{v:.3f}" for v in q)
-    ax.set_title(f"{machine.name}\npose ({pose_txt}) m   q ({q_txt}) m", fontsize=9)
+    if title is None:
+        title = f"{machine.name}\npose ({pose_txt}) m   q ({q_txt}) m"
+    ax.set_title(title, fontsize=9)
     ax.legend(loc="upper left", fontsize=7)
     if path is not None:
         fig.savefig(path, dpi=120, bbox_inches="tight")
