@@ -122,3 +122,18 @@ def test_malformed_files_report_the_line(tmp_path, text, line, message):
     with pytest.raises(MachineFileError, match=message) as info:
         pkmkit.load(path)
     assert info.value.line == line, str(info.value)
+
+
+def test_documented_machine_files_load(tmp_path):
+    """Every TOML and YAML example of docs/machine-files.md is a valid machine file."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "docs" / "machine-files.md").read_text()
+    blocks = re.findall(r"```(toml|yaml)\n(.*?)```", text, flags=re.S)
+    assert len(blocks) >= 3
+    for k, (fmt, body) in enumerate(blocks):
+        path = tmp_path / f"example{k}.{fmt}"
+        path.write_text(body)
+        m = pkmkit.load(path)
+        np.testing.assert_allclose(m.fk(m.ik(m.home_pose)), m.home_pose, atol=1e-12)
