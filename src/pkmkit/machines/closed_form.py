@@ -197,6 +197,29 @@ class RodClosedForm:
         c, _ = self.centres(q)
         return x[:, None, :] - c
 
+    def jacobians_t(self, x: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """A and the diagonal of B with the batch axis last: ``A (n, dims, N)``, ``b (n, N)``.
+
+        The layout of :mod:`pkmkit.numerics.small` (fast closed forms for many poses).
+        """
+        m = self.model
+        x_t = x.T  # (dims, N)
+        q_t = q.T  # (n, N)
+        a = np.empty((m.n_legs, m.dims, x.shape[0]))
+        b = np.zeros((m.n_legs, x.shape[0]))
+        for i in range(m.n_legs):
+            if m.leg_kind[i] == SLIDE:
+                for k in range(m.dims):
+                    np.subtract(x_t[k], self.centre0[i, k] + q_t[i] * self.axis[i, k],
+                                out=a[i, k])
+                    if self.axis[i, k]:
+                        b[i] += a[i, k] * self.axis[i, k]
+            else:
+                for k in range(m.dims):
+                    np.subtract(x_t[k], self.centre0[i, k], out=a[i, k])
+                b[i] = m.leg_length[i] + q_t[i]
+        return a, b
+
     def jacobians(self, x: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Parallel and serial Jacobians ``A (N, n, dims)``, ``B (N, n, n)`` (A ṗ = B q̇)."""
         d = self.rod_vectors(x, q)

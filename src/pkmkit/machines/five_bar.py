@@ -42,6 +42,10 @@ PARAMETERS = (
         0.05,
         "distance between the two rods of each parallelogram (rod model only)",
     ),
+    ParameterSpec("q_min", "length", (-1.0, -1.0), "lower stroke limit of each actuator",
+                  size=2),
+    ParameterSpec("q_max", "length", (1.0, 1.0), "upper stroke limit of each actuator",
+                  size=2),
 )
 
 
@@ -90,7 +94,8 @@ def build(params: Mapping[str, Any]) -> RodModel:
                 length=params["L"],
                 branch=branch,
                 parallelogram_width=params["parallelogram_width"],
-                parallelogram_direction=(-leg_dir[1], leg_dir[0], 0.0),
+                stroke=(params["q_min"][i], params["q_max"][i]),
+            parallelogram_direction=(-leg_dir[1], leg_dir[0], 0.0),
             )
         )
     return build_rod_model(

@@ -43,6 +43,10 @@ PARAMETERS = (
         0.1,
         "spacing of the two rods of each parallelogram (not given by the seed; rod model only)",
     ),
+    ParameterSpec("q_min", "length", (0.7, 0.7, 0.7), "lower stroke limit of each actuator",
+                  size=3),
+    ParameterSpec("q_max", "length", (2.0, 2.0, 2.0), "upper stroke limit of each actuator",
+                  size=3),
 )
 
 
@@ -72,6 +76,7 @@ def build(params: Mapping[str, Any]) -> RodModel:
             length=length,
             branch=1,
             parallelogram_width=params["parallelogram_width"],
+            stroke=(params["q_min"][i], params["q_max"][i]),
             parallelogram_direction=tangent[i],
         )
         for i in range(3)

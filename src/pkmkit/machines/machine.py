@@ -39,7 +39,8 @@ from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import ParameterSpec, resolve_parameters
 from pkmkit.model.rods import RodModel
 from pkmkit.numerics.arrays import as_batch, finite_rows, require_finite, restore_shape
-from pkmkit.numerics.linalg import batched_det, condition_number, singular_values
+from pkmkit.numerics import small
+from pkmkit.numerics.linalg import batched_det, condition_number
 from pkmkit.solve.rod_closure import instantaneous_mobility, solve_direct, solve_inverse
 from pkmkit.status import Status
 
@@ -496,26 +497,35 @@ class Machine:
         return xb, qb, single
 
     def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> Jacobians:
-        a, b = self._closed.jacobians(xb, qb)
-        diag = np.einsum("kii->ki", b)
-        det_a, det_b = batched_det(a), np.prod(diag, axis=1)
-        rows_ok = np.isfinite(det_a) & (det_a != 0.0)
-        j = np.full((*a.shape[:1], self.dims, self.n_actuators), np.nan)
-        j[rows_ok] = np.linalg.solve(a[rows_ok], b[rows_ok])
+        """Batched velocity model; closed forms in the batch-last layout (see
+        :mod:`pkmkit.numerics.small`), returned batch-first."""
+        a, b = self._closed.jacobians_t(xb, qb)  # (n, dims, N), (n, N)
+        det_a = small.det(a)
+        cof = small.cofactors(a)
+        n = self.n_actuators
         with np.errstate(divide="ignore", invalid="ignore"):
-            j_inv = a / diag[:, :, None]
-            lengths = np.linalg.norm(a, axis=2)
-            serial = np.min(np.abs(diag) / lengths, axis=1)
-            sv_unit = singular_values(a / lengths[:, :, None])
-            parallel = sv_unit[:, -1] / sv_unit[:, 0]
-        sv = singular_values(j)
+            inv_det = 1.0 / det_a
+            # J = A⁻¹ B = adj(A) B / det A, adj = cofactorsᵀ: J[k, j] = C[j, k] b_j / det
+            j = cof.transpose(1, 0, 2) * (b * inv_det)[None, :, :]
+            j_inv = a / b[:, None, :]
+            lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
+            serial = np.min(np.abs(b) / lengths, axis=0)
+            sv_unit = small.singular_values(a / lengths[:, None, :])
+            parallel = sv_unit[-1] / sv_unit[0]
+        singular = ~np.isfinite(inv_det)
+        j[:, :, singular] = np.nan
+        sv = small.singular_values(j)
         flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
         flags |= np.where((parallel < tol) | (det_a == 0.0), int(Singularity.PARALLEL), 0)
-        condition = np.where(flags & Singularity.PARALLEL, np.nan, condition_number(sv))
+        sv_t = sv.T
+        condition = np.where(flags & Singularity.PARALLEL, np.nan, condition_number(sv_t))
+        b_full = np.zeros((xb.shape[0], n, n))
+        b_full[:, np.arange(n), np.arange(n)] = b.T
         return Jacobians(
-            A=a, B=b, J=j, J_inv=j_inv, singular_values=sv, condition=condition,
-            det_A=det_a, det_B=det_b, parallel_measure=parallel, serial_measure=serial,
-            singularity=flags, tolerance=float(tol), q=qb,
+            A=a.transpose(2, 0, 1), B=b_full, J=j.transpose(2, 0, 1),
+            J_inv=j_inv.transpose(2, 0, 1), singular_values=sv_t, condition=condition,
+            det_A=det_a, det_B=np.prod(b, axis=0), parallel_measure=parallel,
+            serial_measure=serial, singularity=flags, tolerance=float(tol), q=qb,
         )
 
     def jacobian_dot(self, x: Any, xd: Any, *, q: Any = None) -> JacobianRates:

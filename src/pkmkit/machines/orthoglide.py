@@ -34,6 +34,10 @@ PARAMETERS = (
         "distance between the two rods of each parallelogram (rod model only; no effect on the "
         "translational kinematics)",
     ),
+    ParameterSpec("q_min", "length", (0.125, 0.125, 0.125), "lower stroke limit of each actuator",
+                  size=3),
+    ParameterSpec("q_max", "length", (0.382, 0.382, 0.382), "upper stroke limit of each actuator",
+                  size=3),
 )
 
 
@@ -51,6 +55,7 @@ def build(params: Mapping[str, Any]) -> RodModel:
             length=params["L"],
             branch=1,
             parallelogram_width=params["parallelogram_width"],
+            stroke=(params["q_min"][i], params["q_max"][i]),
             parallelogram_direction=axes[(i + 1) % 3],
         )
         for i in range(3)

@@ -45,7 +45,7 @@ _MACHINE_KEYS = {"kind", "id", "name", "description", "source", "units", "dims",
                  "mode_names"}
 _TOP_KEYS = {"machine", "parameters", "legs", "poses"}
 _LEG_KEYS = {"name", "actuator", "type", "base", "axis", "platform", "length", "branch",
-             "parallelogram"}
+             "parallelogram", "stroke"}
 
 
 def _data_dir():
@@ -243,6 +243,8 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
             length = float(raw["length"]) * scale
         except (TypeError, ValueError):
             raise ParameterError(f"{where}.length must be a number", f"{where}.length") from None
+        stroke = (_vector(raw["stroke"], 2, f"{where}.stroke", scale) if "stroke" in raw
+                  else (-np.inf, np.inf))
         legs.append(
             LegSpec(
                 name=str(raw.get("name", f"leg {i + 1}")),
@@ -255,6 +257,7 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
                 branch=raw.get("branch", 1),
                 parallelogram_width=width,
                 parallelogram_direction=direction,
+                stroke=tuple(stroke),
             )
         )
     home = _vector(head.get("home", [0.0] * dims), dims, "home", scale)

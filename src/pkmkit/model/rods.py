@@ -51,6 +51,7 @@ class LegSpec:
             ``q = u·w + branch·sqrt(…)`` (see :func:`pkmkit.machines.closed_form.inverse`).
         parallelogram_width: distance between the two rods of a parallelogram (0: single rod), m.
         parallelogram_direction: direction of the offset between the two rods ``(3,)``.
+        stroke: ``(q_min, q_max)`` limits of the actuator coordinate, m (default: unlimited).
     """
 
     name: str
@@ -63,6 +64,7 @@ class LegSpec:
     branch: int = 1
     parallelogram_width: float = 0.0
     parallelogram_direction: Sequence[float] | None = None
+    stroke: tuple[float, float] = (-np.inf, np.inf)
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -102,6 +104,7 @@ class RodModel:
         leg_actuator, leg_kind, leg_branch: ``(n,)`` int.
         leg_base, leg_axis, leg_platform: ``(n, 3)`` m (axis: unit, zero for struts).
         leg_length: ``(n,)`` m.
+        q_min, q_max: ``(n,)`` actuator strokes (±inf when unlimited), m, per actuator.
         rod_leg, rod_actuator, rod_kind: ``(m,)`` int.
         rod_base, rod_axis, rod_platform: ``(m, 3)`` m.
         rod_length: ``(m,)`` m.
@@ -120,6 +123,8 @@ class RodModel:
     leg_axis: np.ndarray
     leg_platform: np.ndarray
     leg_length: np.ndarray
+    q_min: np.ndarray
+    q_max: np.ndarray
     rod_leg: np.ndarray
     rod_base: np.ndarray
     rod_axis: np.ndarray
@@ -195,9 +200,10 @@ def build_rod_model(
             f"a {dims}-D translational rod-leg machine needs {dims} actuators, got {n_act}",
             "legs",
         )
-    seen = sorted(leg.actuator for leg in legs)
-    if seen != list(range(n_act)):
-        raise ParameterError("each actuator must drive exactly one leg", "legs")
+    if [leg.actuator for leg in legs] != list(range(n_act)):
+        raise ParameterError(
+            "each actuator must drive exactly one leg, leg i driving actuator i", "legs"
+        )
 
     leg_rows = []
     rod_rows = []
@@ -215,11 +221,17 @@ def build_rod_model(
         length = float(leg.length)
         if not np.isfinite(length) or length <= 0:
             raise ParameterError(f"{where}.length must be > 0, got {leg.length}", f"{where}.length")
+        lo, hi = (float(v) for v in leg.stroke)
+        if np.isnan(lo) or np.isnan(hi) or not lo < hi:
+            raise ParameterError(
+                f"{where}.stroke must be (min, max) with min < max, got {leg.stroke}",
+                f"{where}.stroke",
+            )
         if leg.branch not in (1, -1):
             raise ParameterError(f"{where}.branch must be +1 or -1, got {leg.branch}", where)
         if dims == 2 and (base[2] != 0 or platform[2] != 0 or axis[2] != 0):
             raise ParameterError(f"{where}: a planar machine needs z = 0 geometry", where)
-        leg_rows.append((leg.actuator, kind, leg.branch, base, axis, platform, length))
+        leg_rows.append((leg.actuator, kind, leg.branch, base, axis, platform, length, lo, hi))
 
         width = float(leg.parallelogram_width)
         if not np.isfinite(width) or width < 0:
@@ -255,6 +267,8 @@ def build_rod_model(
         leg_axis=column(leg_rows, 4),
         leg_platform=column(leg_rows, 5),
         leg_length=column(leg_rows, 6),
+        q_min=column(leg_rows, 7),
+        q_max=column(leg_rows, 8),
         rod_leg=column(rod_rows, 0, int),
         rod_base=column(rod_rows, 1),
         rod_axis=column(rod_rows, 2),

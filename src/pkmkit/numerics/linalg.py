@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from pkmkit.numerics import small
+
 
 def batched_det(m: np.ndarray) -> np.ndarray:
     """Determinants of a stack of square matrices.
