@@ -1,4 +1,5 @@
-"""``pkmkit`` command line: machines, show, ik, fk, jacobian, demo.
+"""``pkmkit`` command line: machines, show, ik, fk, jacobian, analyze, map, workspace,
+useful-workspace, demo.
 
 Every command accepts ``--help``. Lengths are in metres unless ``--units mm``; angles in degrees.
 Exit codes: 0 success; 1 an error (bad input, unreachable pose, malformed file: message on
@@ -23,6 +24,7 @@ from pkmkit.machines.registry import machines as builtin_ids
 from pkmkit.model.parameters import length_scale
 from pkmkit.status import Status, status_labels
 
+from .analysis_cmds import register as register_analysis_commands
 from .describe import describe_machine, print_description
 from .options import (
     JSON_OPTION,
@@ -289,6 +291,9 @@ def demo(out_dir: str) -> None:
     from .demo import run_demo
 
     run_demo(Path(out_dir))
+
+
+register_analysis_commands(cli)
 
 
 def main() -> None:

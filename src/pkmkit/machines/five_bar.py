@@ -114,11 +114,18 @@ def reference_poses(params: Mapping[str, Any], model: RodModel) -> dict[str, np.
     return {"offset+": home + np.array([s, s]), "offset-": home - np.array([s, -s])}
 
 
+def default_box(params: Mapping[str, Any], model: RodModel) -> tuple[np.ndarray, np.ndarray]:
+    """Square of half-side 1.2 L about the home pose."""
+    half = 1.2 * params["L"]
+    return model.home_pose - half, model.home_pose + half
+
+
 KIND = MachineKind(
     kind="five-bar",
     title="Planar five-bar with two prismatic actuators (biglide / isotropic)",
     parameters=PARAMETERS,
     build=build,
     reference_poses=reference_poses,
+    default_box=default_box,
     source="seed 004 (Chablat, Wenger, Angeles 2000), §1.3–2.5",
 )

@@ -101,11 +101,19 @@ def reference_poses(params: Mapping[str, Any], model: RodModel) -> dict[str, np.
     }
 
 
+def default_box(params: Mapping[str, Any], model: RodModel) -> tuple[np.ndarray, np.ndarray]:
+    """|x|, |y| ≤ 0.4 L and −0.4 L ≤ z ≤ 0.65 L below the slides' origin plane."""
+    length = params["L"]
+    return (np.array([-0.4 * length, -0.4 * length, -0.4 * length]),
+            np.array([0.4 * length, 0.4 * length, 0.65 * length]))
+
+
 KIND = MachineKind(
     kind="linear-delta",
     title="Linear Delta (3-P(SS)2, vertical slides)",
     parameters=PARAMETERS,
     build=build,
     reference_poses=reference_poses,
+    default_box=default_box,
     source="seed 000 (Bourebbou 2019), §III.5 and Table III.2; §IV Table IV.1",
 )

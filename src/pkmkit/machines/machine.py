@@ -38,8 +38,8 @@ from pkmkit.machines.results import (
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import ParameterSpec, resolve_parameters
 from pkmkit.model.rods import RodModel
-from pkmkit.numerics.arrays import as_batch, finite_rows, require_finite, restore_shape
 from pkmkit.numerics import small
+from pkmkit.numerics.arrays import as_batch, finite_rows, require_finite, restore_shape
 from pkmkit.numerics.linalg import batched_det, condition_number
 from pkmkit.solve.rod_closure import instantaneous_mobility, solve_direct, solve_inverse
 from pkmkit.status import Status
@@ -59,6 +59,8 @@ class MachineKind:
         build: ``params (SI) -> RodModel``; raises :class:`ParameterError` on inconsistent values.
         reference_poses: ``(params, model) -> {name: pose}``, sample poses for summaries.
         source: where the model comes from (seed, section).
+        default_box: ``(params, model) -> (lower (dims,), upper (dims,))``, a sensible region for
+            workspace studies (None: around home, see :meth:`Machine.default_box`).
     """
 
     kind: str
@@ -67,6 +69,8 @@ class MachineKind:
     build: Callable[[Mapping[str, Any]], RodModel]
     reference_poses: Callable[[Mapping[str, Any], RodModel], dict[str, np.ndarray]]
     source: str = ""
+    default_box: Callable[[Mapping[str, Any], RodModel], tuple[np.ndarray, np.ndarray]] | None = (
+        None)
 
 
 def _restore(result, single: bool, names: tuple[str, ...]):
@@ -172,6 +176,15 @@ class Machine:
         poses = {"home": self.home_pose}
         poses.update({k: np.asarray(v, dtype=float) for k, v in self.extra_poses.items()})
         return poses
+
+    def default_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """Region ``(lower (dims,), upper (dims,))`` (m) for workspace studies: the kind's
+        choice, else the home pose ± 0.6 × the longest leg."""
+        if self.kind is not None and self.kind.default_box is not None:
+            lo, hi = self.kind.default_box(self.params, self.model)
+            return np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        half = 0.6 * float(self.model.leg_length.max())
+        return self.home_pose - half, self.home_pose + half
 
     def with_params(self, **overrides: Any) -> Machine:
         """A new machine of the same kind with some parameters changed (SI units)."""

@@ -34,10 +34,10 @@ PARAMETERS = (
         "distance between the two rods of each parallelogram (rod model only; no effect on the "
         "translational kinematics)",
     ),
-    ParameterSpec("q_min", "length", (0.125, 0.125, 0.125), "lower stroke limit of each actuator",
-                  size=3),
-    ParameterSpec("q_max", "length", (0.382, 0.382, 0.382), "upper stroke limit of each actuator",
-                  size=3),
+    ParameterSpec("q_min", "length", (0.1265, 0.1265, 0.1265),
+                  "lower stroke limit of each actuator", size=3),
+    ParameterSpec("q_max", "length", (0.3831, 0.3831, 0.3831),
+                  "upper stroke limit of each actuator", size=3),
 )
 
 
@@ -75,11 +75,18 @@ def reference_poses(params: Mapping[str, Any], model: RodModel) -> dict[str, np.
     return {"diagonal+": np.full(3, s), "diagonal-": np.full(3, -s)}
 
 
+def default_box(params: Mapping[str, Any], model: RodModel) -> tuple[np.ndarray, np.ndarray]:
+    """Cube of half-side 0.65 L about the isotropic point (holds the prescribed cube)."""
+    half = 0.65 * params["L"]
+    return np.full(3, -half), np.full(3, half)
+
+
 KIND = MachineKind(
     kind="orthoglide",
     title="Orthoglide (3-PPa, orthogonal slides)",
     parameters=PARAMETERS,
     build=build,
     reference_poses=reference_poses,
+    default_box=default_box,
     source="seed 001 (Wenger, Chablat, Majou 2002), §3.2–3.4",
 )

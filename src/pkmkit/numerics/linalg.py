@@ -32,11 +32,16 @@ def batched_det(m: np.ndarray) -> np.ndarray:
 def singular_values(m: np.ndarray) -> np.ndarray:
     """Singular values, in decreasing order, of a stack of matrices ``(..., r, c)``.
 
-    Rows holding NaN give NaN singular values instead of a LAPACK error.
+    Square 2×2 and 3×3 stacks use the closed forms of :mod:`pkmkit.numerics.small`; others
+    LAPACK. Matrices holding NaN give NaN singular values instead of a LAPACK error.
 
     Returns:
         ``(..., min(r, c))``.
     """
+    if m.shape[-2:] in ((2, 2), (3, 3)):
+        flat = m.reshape(-1, *m.shape[-2:])
+        sv = small.singular_values(np.ascontiguousarray(flat.transpose(1, 2, 0)))
+        return sv.T.reshape(*m.shape[:-2], m.shape[-1])
     out = np.full((*m.shape[:-2], min(m.shape[-2:])), np.nan)
     ok = np.isfinite(m).all(axis=(-2, -1))
     if ok.any():

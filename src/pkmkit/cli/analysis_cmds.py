@@ -1,0 +1,368 @@
+"""``pkmkit analyze``, ``map``, ``workspace`` and ``useful-workspace`` commands."""
+
+from __future__ import annotations
+
+import click
+import numpy as np
+
+from pkmkit.analysis.grids import Grid, make_grid
+from pkmkit.analysis.indices import SCALAR_INDICES, indices, scalar_index
+from pkmkit.analysis.workspace import (
+    Criteria,
+    WorkspaceMap,
+    check_region,
+    compute_workspace,
+    useful_workspace,
+)
+from pkmkit.errors import InputError
+from pkmkit.machines.machine import Machine
+from pkmkit.model.parameters import length_scale
+from pkmkit.plot.maps import (
+    plot_actuator_maps,
+    plot_scalar_map,
+    plot_useful_workspace,
+    plot_workspace,
+)
+
+from .options import (
+    JSON_OPTION,
+    SET_OPTION,
+    UNITS_OPTION,
+    emit_json,
+    fmt,
+    parse_vector,
+    resolve_machine,
+)
+
+BOUNDS_OPTION = click.option(
+    "--bounds", metavar="LO,HI",
+    help="Bounds on every velocity transmission factor, e.g. 0.5,2.")
+KAPPA_OPTION = click.option("--kappa-max", type=float, help="Largest admissible condition number.")
+RESOLUTION_OPTION = click.option(
+    "--resolution", type=click.IntRange(5, 2001), default=None,
+    help="Grid points along the longest side (default 201 in 2-D, 61 in 3-D).")
+
+
+def _numbers(text: str, what: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise InputError(f"{what}: cannot read {text!r} as comma-separated numbers") from None
+
+
+def parse_bounds(text: str | None) -> tuple[float, float] | None:
+    """``"LO,HI"`` → (lo, hi), validated by :class:`Criteria`."""
+    if text is None:
+        return None
+    values = _numbers(text, "--bounds")
+    if len(values) != 2:
+        raise InputError(f"--bounds needs LO,HI, got {text!r}")
+    if not values[0] < values[1]:
+        raise InputError(f"--bounds: LO = {values[0]:g} must be below HI = {values[1]:g}")
+    return values[0], values[1]
+
+
+def parse_slice(machine: Machine, text: str | None, scale: float) -> tuple[int, float] | None:
+    """``"z=0.2"`` → (coordinate index, value in m)."""
+    if text is None:
+        return None
+    if machine.dims == 2:
+        raise InputError("--slice is for spatial machines; a planar machine is its own plane")
+    name, sep, value = text.partition("=")
+    name = name.strip()
+    if not sep or name not in machine.pose_names:
+        raise InputError(f"--slice expects NAME=VALUE with NAME in "
+                         f"{', '.join(machine.pose_names)}, got {text!r}")
+    return machine.pose_names.index(name), _numbers(value, "--slice")[0] * scale
+
+
+def build_grid(machine: Machine, box_text: str | None, slice_: tuple[int, float] | None,
+               scale: float, resolution: int | None) -> Grid:
+    """Grid over ``--box``/``--range`` (or the machine's default box), optionally a slice."""
+    lower, upper = machine.default_box()
+    free = list(range(machine.dims))
+    base = machine.home_pose.copy()
+    if slice_ is not None:
+        axis, value = slice_
+        free.remove(axis)
+        base[axis] = value
+    if box_text is not None:
+        values = np.asarray(_numbers(box_text, "--box/--range")) * scale
+        if values.size == 2 * machine.dims and slice_ is not None:
+            values = values.reshape(-1, 2)[free].ravel()
+        if values.size != 2 * len(free):
+            names = ",".join(f"{machine.pose_names[k].upper()}MIN,{machine.pose_names[k].upper()}"
+                             "MAX" for k in free)
+            raise InputError(f"the box needs {2 * len(free)} values: {names}")
+        pairs = values.reshape(-1, 2)
+        lower, upper = lower.copy(), upper.copy()
+        lower[free], upper[free] = pairs[:, 0], pairs[:, 1]
+    resolution = resolution or (201 if len(free) == 2 else 61)
+    return make_grid(lower[free], upper[free], free=free, base=base, names=machine.pose_names,
+                     resolution=resolution)
+
+
+def _criteria(bounds, kappa_max, no_strokes) -> Criteria:
+    return Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max, strokes=not no_strokes)
+
+
+def register(cli: click.Group) -> None:
+    """Add the analysis commands to the ``pkmkit`` group."""
+    cli.add_command(analyze)
+    cli.add_command(map_cmd)
+    cli.add_command(workspace)
+    cli.add_command(useful_workspace_cmd)
+
+
+@click.command()
+@click.argument("machine_name", metavar="MACHINE")
+@SET_OPTION
+@click.option("--pose", required=True, help="Platform position X,Y[,Z].")
+@UNITS_OPTION
+@JSON_OPTION
+def analyze(machine_name, assignments, pose, units, as_json):
+    """All kinetostatic indices at a pose: transmission factors, conditioning, ellipsoid,
+    distances to singularities."""
+    m = resolve_machine(machine_name, assignments, units)
+    scale = length_scale(units)
+    x = parse_vector(pose, m.dims, "--pose", units)
+    ind = indices(m, x, ellipsoids=True)
+    jac = m.jacobian(x)
+    payload = {
+        "machine": m.id, "units": units, "pose": x / scale, "q": jac.q / scale,
+        "velocity_factors": ind.velocity_factors, "force_factors": ind.force_factors,
+        "condition": ind.condition, "inverse_condition": ind.inverse_condition,
+        "isotropic": bool(ind.isotropic),
+        "ellipsoid": {"axes": ind.ellipsoid_axes, "directions": ind.ellipsoid_directions},
+        "parallel_distance": ind.parallel_distance, "serial_distance": ind.serial_distance,
+        "manipulability": float(np.prod(ind.velocity_factors)),
+        "det_A": jac.det_A / scale ** m.n_actuators, "det_B": jac.det_B / scale ** m.n_actuators,
+        "status": jac.status,
+    }
+    if as_json:
+        emit_json(payload)
+        return
+    click.echo(f"{m.name}: pose {fmt(x / scale)} {units}, q {fmt(jac.q / scale)} {units}")
+    click.echo(f"  velocity transmission factors: {fmt(ind.velocity_factors)}")
+    click.echo(f"  force transmission factors:    {fmt(ind.force_factors)}")
+    click.echo(f"  condition number {fmt(ind.condition)} (inverse {fmt(ind.inverse_condition)}),"
+               f" isotropic: {bool(ind.isotropic)}")
+    click.echo(f"  distance to parallel singularity {fmt(ind.parallel_distance)}, to serial "
+               f"singularity {fmt(ind.serial_distance)}; status {jac.status}")
+    for k in range(m.dims):
+        click.echo(f"  ellipsoid axis {k + 1}: {ind.ellipsoid_axes[k]:.6g} along "
+                   f"{fmt(ind.ellipsoid_directions[:, k])}")
+
+
+@click.command("map")
+@click.argument("machine_name", metavar="MACHINE")
+@SET_OPTION
+@click.option("--index", "index_name", required=True,
+              type=click.Choice([*SCALAR_INDICES, "actuators"]),
+              help="Index to map ('actuators' maps every actuator coordinate).")
+@click.option("--slice", "slice_text", help="Plane of a spatial machine, e.g. z=0.2.")
+@click.option("--range", "range_text", metavar="AMIN,AMAX,BMIN,BMAX",
+              help="Extent of the two free coordinates (default: the machine's box).")
+@RESOLUTION_OPTION
+@click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
+              help="Figure file (.png, .svg, .pdf).")
+@UNITS_OPTION
+@JSON_OPTION
+def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resolution, out,
+            units, as_json):
+    """Iso-contours of an index (or actuator coordinates) over a plane."""
+    m = resolve_machine(machine_name, assignments, units)
+    scale = length_scale(units)
+    if m.dims == 3 and slice_text is None:
+        raise InputError("a spatial machine needs --slice NAME=VALUE (e.g. --slice z=0)")
+    grid = build_grid(m, range_text, parse_slice(m, slice_text, scale), scale, resolution)
+    points = grid.points
+    q = m.ik(points)
+    reachable = np.isfinite(q).all(axis=1)
+    if not reachable.any():
+        raise InputError("no point of this plane is reachable; change --slice or --range")
+    summary = {"machine": m.id, "units": units, "index": index_name, "figure": out,
+               "plane": list(grid.free_names), "reachable_points": int(reachable.sum()),
+               "points": grid.size}
+    if index_name == "actuators":
+        plot_actuator_maps(m, grid, path=out)
+        summary["min"] = np.nanmin(q, axis=0) / scale
+        summary["max"] = np.nanmax(q, axis=0) / scale
+    else:
+        values = scalar_index(indices(m, points, q=q), index_name)
+        finite = np.isfinite(values)
+        if not finite.any():
+            raise InputError(f"{index_name} is undefined on every reachable point of the plane")
+        plot_scalar_map(grid, values.reshape(grid.shape), title=f"{m.name}: "
+                        f"{SCALAR_INDICES[index_name]}", label=index_name, path=out)
+        k_min, k_max = np.nanargmin(values), np.nanargmax(values)
+        summary.update({"min": float(values[k_min]), "at_min": points[k_min] / scale,
+                        "max": float(values[k_max]), "at_max": points[k_max] / scale})
+    if as_json:
+        emit_json(summary)
+        return
+    click.echo(f"{m.name}: {index_name} over {'-'.join(grid.free_names)} "
+               f"({summary['reachable_points']}/{grid.size} points reachable)")
+    click.echo(f"  min {fmt(summary['min'])}, max {fmt(summary['max'])}; figure {out}")
+
+
+def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) -> dict:
+    """JSON-ready summary of a workspace map (lengths in ``units``)."""
+    grid = wmap.grid
+    two_d = len(grid.free) == 2
+    box = wmap.inscribed
+    crit = wmap.criteria
+    factor_box = wmap.factor_range()
+    summary = {
+        "machine": m.id, "units": units,
+        "grid": {"free": list(grid.free_names),
+                 "lower": [float(a[0]) / scale for a in grid.axes],
+                 "upper": [float(a[-1]) / scale for a in grid.axes],
+                 "step": grid.step / scale, "shape": list(grid.shape),
+                 "fixed": {m.pose_names[k]: float(grid.base[k]) / scale
+                           for k in range(m.dims) if k not in grid.free}},
+        "criteria": {"bounds": crit.bounds, "kappa_max": crit.kappa_max,
+                     "strokes": crit.strokes, "connected": crit.connected},
+        ("area" if two_d else "volume"): wmap.measure / scale ** len(grid.free),
+        "feasible_points": int(wmap.feasible.sum()),
+        "points_per_criterion": {k: int(v.sum()) for k, v in wmap.masks.items()},
+        "reference": wmap.reference,
+        "inscribed": None if box is None else {
+            "side": box.side / scale, "center": box.center / scale, "lower": box.lower / scale},
+        "index_range": list(factor_box),
+        "workspace_index_range": list(wmap.factor_range(wmap.feasible)),
+    }
+    if wmap.inscribed_check is not None:
+        q_lo, q_hi = wmap.inscribed_check.q_range
+        summary["inscribed"]["q_min"] = q_lo / scale
+        summary["inscribed"]["q_max"] = q_hi / scale
+        summary["inscribed"]["verified"] = wmap.inscribed_check.feasible
+    return summary
+
+
+@click.command()
+@click.argument("machine_name", metavar="MACHINE")
+@SET_OPTION
+@BOUNDS_OPTION
+@KAPPA_OPTION
+@click.option("--box", "box_text", metavar="XMIN,XMAX,YMIN,YMAX[,ZMIN,ZMAX]",
+              help="Region studied (default: the machine's box).")
+@click.option("--slice", "slice_text", help="Study a plane of a spatial machine, e.g. z=0.")
+@click.option("--no-strokes", is_flag=True, help="Ignore the actuator strokes.")
+@click.option("--cube", "cube", type=float, metavar="SIDE",
+              help="Check a prescribed square/cube of this side (needs --center).")
+@click.option("--center", "center_text", help="Centre X,Y[,Z] of the prescribed square/cube.")
+@RESOLUTION_OPTION
+@click.option("--out", "out", type=click.Path(dir_okay=False), help="Figure file.")
+@UNITS_OPTION
+@JSON_OPTION
+def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text, no_strokes,
+              cube, center_text, resolution, out, units, as_json):
+    """Workspace over a box or a plane: area/volume, largest inscribed square/cube, transmission
+    factors inside it, and (with --cube/--center) whether a prescribed one is feasible."""
+    m = resolve_machine(machine_name, assignments, units)
+    scale = length_scale(units)
+    criteria = _criteria(bounds, kappa_max, no_strokes)
+    grid = build_grid(m, box_text, parse_slice(m, slice_text, scale), scale, resolution)
+    wmap = compute_workspace(m, grid, criteria, refine=True)
+    if not wmap.masks["reachable"].any():
+        raise InputError("no pose of the box is reachable; choose another --box or --slice")
+    if not wmap.feasible.any():
+        counts = ", ".join(f"{k} {int(v.sum())}" for k, v in wmap.masks.items())
+        raise InputError(f"no pose of the box satisfies every criterion (points passing each: "
+                         f"{counts} of {grid.size})")
+    summary = workspace_summary(m, wmap, scale, units)
+    if cube is not None or center_text is not None:
+        if cube is None or center_text is None:
+            raise InputError("--cube and --center go together")
+        center = parse_vector(center_text, m.dims, "--center", units)
+        check = check_region(m, center, cube * scale, criteria, free=grid.free)
+        summary["check"] = {"side": cube, "center": center / scale, "feasible": check.feasible,
+                            "samples": check.samples, "failures": check.failures,
+                            "worst": check.worst, "index_range": list(check.factor_range),
+                            "q_min": check.q_range[0] / scale, "q_max": check.q_range[1] / scale}
+    if out is not None:
+        plot_workspace(wmap, m, path=out)
+        summary["figure"] = out
+    if as_json:
+        emit_json(summary)
+        return
+    _print_workspace(m, summary, units)
+
+
+def _print_workspace(m: Machine, s: dict, units: str) -> None:
+    what = "area" if "area" in s else "volume"
+    power = 2 if what == "area" else 3
+    click.echo(f"{m.name}: workspace over {'-'.join(s['grid']['free'])} "
+               f"(step {s['grid']['step']:.4g} {units}, kept: {s['reference']})")
+    click.echo(f"  {what}: {s[what]:.6g} {units}^{power} "
+               f"({s['feasible_points']} of {int(np.prod(s['grid']['shape']))} points)")
+    box = s["inscribed"]
+    if box is None:
+        click.echo("  no inscribed square/cube")
+    else:
+        click.echo(f"  largest inscribed {'square' if power == 2 else 'cube'}: side "
+                   f"{box['side']:.6g} {units}, centre {fmt(box['center'])} {units}")
+        click.echo(f"  transmission factors inside it: {fmt(s['index_range'])}")
+    click.echo(f"  transmission factors over the workspace: {fmt(s['workspace_index_range'])}")
+    if "check" in s:
+        c = s["check"]
+        verdict = "feasible" if c["feasible"] else "NOT feasible"
+        click.echo(f"  prescribed side {c['side']:g} {units} at {fmt(c['center'])}: {verdict} "
+                   f"({c['samples']} samples; factors {fmt(c['index_range'])})")
+        for name, text in c["worst"].items():
+            click.echo(f"    {name}: {c['failures'][name]} samples fail; worst {text}")
+    if "figure" in s:
+        click.echo(f"  figure {s['figure']}")
+
+
+@click.command("useful-workspace")
+@click.argument("machine_name", metavar="MACHINE")
+@SET_OPTION
+@BOUNDS_OPTION
+@KAPPA_OPTION
+@click.option("--anywhere", is_flag=True,
+              help="Largest joint square anywhere instead of centred at the home configuration.")
+@RESOLUTION_OPTION
+@click.option("--out", "out", type=click.Path(dir_okay=False), help="Figure file.")
+@UNITS_OPTION
+@JSON_OPTION
+def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere, resolution,
+                         out, units, as_json):
+    """Seed 004's procedure: a square of actuator values satisfying the criteria (the useful
+    zone), its image (the useful workspace) and the square inscribed in it."""
+    m = resolve_machine(machine_name, assignments, units)
+    if m.n_actuators != 2:
+        raise InputError("useful-workspace draws joint-space squares: it needs 2 actuators "
+                         "(planar machines)")
+    scale = length_scale(units)
+    criteria = Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max)
+    useful = useful_workspace(m, criteria, centred=not anywhere, resolution=resolution or 301)
+    sq, box = useful.joint_square, useful.inscribed
+    summary = {
+        "machine": m.id, "units": units, "criteria": {"bounds": criteria.bounds,
+                                                      "kappa_max": kappa_max},
+        "joint_square": {"side": sq.side / scale, "q_min": sq.lower / scale,
+                         "q_max": (sq.lower + sq.side) / scale, "centred": not anywhere},
+        "useful_area": useful.workspace.measure / scale**2,
+        "inscribed": None if box is None else {"side": box.side / scale,
+                                               "center": box.center / scale},
+        "index_range": list(useful.factor_range),
+        "inscribed_index_range": list(useful.inscribed_factor_range),
+    }
+    if out is not None:
+        plot_useful_workspace(useful, m, path=out)
+        summary["figure"] = out
+    if as_json:
+        emit_json(summary)
+        return
+    click.echo(f"{m.name}: useful zone = actuator square of side {sq.side / scale:.6g} {units} "
+               f"from {fmt(sq.lower / scale)}")
+    click.echo(f"  useful workspace: area {summary['useful_area']:.6g} {units}^2, transmission "
+               f"factors {fmt(useful.factor_range)}")
+    if box is not None:
+        click.echo(f"  inscribed square: side {box.side / scale:.6g} {units}, centre "
+                   f"{fmt(box.center / scale)}, factors {fmt(useful.inscribed_factor_range)}")
+    if out is not None:
+        click.echo(f"  figure {out}")
+

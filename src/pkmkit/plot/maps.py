@@ -1,0 +1,256 @@
+"""Figures of the analysis layer: index maps, workspace maps with the inscribed square/cube,
+joint-space maps, velocity ellipses and actuator-coordinate maps (matplotlib, pyplot-free)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.colors import ListedColormap
+from matplotlib.figure import Figure
+from matplotlib.patches import Ellipse, Rectangle
+
+from pkmkit.analysis.grids import Grid
+from pkmkit.analysis.workspace import (
+    InscribedBox,
+    JointSpaceMap,
+    UsefulWorkspace,
+    WorkspaceMap,
+)
+from pkmkit.machines.machine import Machine
+
+#: Colours of the workspace classes: first failing criterion, then feasible.
+_CLASSES = (
+    ("unreachable", "#d9d9d9"),
+    ("strokes", "#fdd0a2"),
+    ("mode", "#bcbddc"),
+    ("bounds", "#fcbba1"),
+    ("condition", "#fc9272"),
+    ("disconnected", "#c7e9c0"),
+    ("workspace", "#41ab5d"),
+)
+
+
+def _save(fig: Figure, path: str | Path | None) -> Figure:
+    if path is not None:
+        fig.savefig(path, dpi=120, bbox_inches="tight")
+    return fig
+
+
+def _extent(grid: Grid) -> list[float]:
+    (ax0, ax1) = grid.axes
+    h = 0.5 * grid.step
+    return [ax0[0] - h, ax0[-1] + h, ax1[0] - h, ax1[-1] + h]
+
+
+def _labels(ax, grid: Grid, unit: str) -> None:
+    ax.set_xlabel(f"{grid.free_names[0]} [{unit}]")
+    ax.set_ylabel(f"{grid.free_names[1]} [{unit}]")
+    ax.set_aspect("equal")
+
+
+def plot_scalar_map(grid: Grid, values: np.ndarray, *, ax=None, title: str = "",
+                    label: str = "", levels: int | np.ndarray = 12, unit: str = "m",
+                    path: str | Path | None = None) -> Figure:
+    """Filled iso-contours of ``values`` (shape ``grid.shape``, 2 free axes; NaN = blank)."""
+    if len(grid.free) != 2:
+        raise ValueError("a map needs a grid with two free axes (a plane slice)")
+    if ax is None:
+        fig = Figure(figsize=(6.0, 5.0))
+        ax = fig.add_subplot()
+    fig = ax.figure
+    x, y = np.meshgrid(*grid.axes, indexing="ij")
+    data = np.ma.masked_invalid(values)
+    if data.count() == 0:
+        raise ValueError("nothing to draw: the index is undefined everywhere on the slice")
+    filled = ax.contourf(x, y, data, levels=levels, cmap="viridis")
+    lines = ax.contour(x, y, data, levels=filled.levels, colors="k", linewidths=0.4)
+    ax.clabel(lines, fmt="%.3g", fontsize=6)
+    fig.colorbar(filled, ax=ax, label=label)
+    _labels(ax, grid, unit)
+    ax.set_title(title, fontsize=9)
+    return _save(fig, path)
+
+
+def _draw_box(ax, box: InscribedBox | None, free: tuple[int, ...], **style) -> None:
+    if box is None:
+        return
+    i, j = free[:2]
+    ax.add_patch(Rectangle((box.lower[i], box.lower[j]), box.side, box.side, fill=False,
+                           **{"edgecolor": "k", "linewidth": 1.6, **style}))
+
+
+def classify(wmap: WorkspaceMap) -> np.ndarray:
+    """Integer class per grid point: index into the workspace classes (first failing criterion,
+    "disconnected", or "workspace")."""
+    out = np.full(wmap.grid.shape, len(_CLASSES) - 2)  # disconnected by default
+    order = ("reachable", "strokes", "mode", "bounds", "condition")
+    assigned = np.zeros(wmap.grid.shape, bool)
+    for k, name in enumerate(order):
+        fail = ~wmap.masks[name] & ~assigned
+        out[fail] = k
+        assigned |= fail
+    out[wmap.feasible] = len(_CLASSES) - 1
+    return out
+
+
+def _plot_classes(ax, classes: np.ndarray, grid: Grid) -> None:
+    cmap = ListedColormap([c for _, c in _CLASSES])
+    ax.imshow(classes.T, origin="lower", extent=_extent(grid), cmap=cmap,
+              vmin=-0.5, vmax=len(_CLASSES) - 0.5, interpolation="nearest")
+    present = set(np.unique(classes).tolist())
+    for k, (name, colour) in enumerate(_CLASSES):
+        if k in present:
+            ax.plot([], [], "s", color=colour, label=name)
+
+
+def plot_workspace(wmap: WorkspaceMap, machine: Machine, *, title: str = "",
+                   path: str | Path | None = None) -> Figure:
+    """Workspace classes on a 2-D grid (or three slices through the inscribed cube of a 3-D
+    grid), with the largest inscribed square/cube and the home pose."""
+    grid = wmap.grid
+    classes = classify(wmap)
+    if len(grid.free) == 2:
+        fig = Figure(figsize=(6.4, 5.6))
+        ax = fig.add_subplot()
+        _plot_classes(ax, classes, grid)
+        _draw_box(ax, wmap.inscribed, grid.free, label="inscribed square")
+        home = machine.home_pose
+        ax.plot(home[grid.free[0]], home[grid.free[1]], "r*", ms=10, label="home")
+        _labels(ax, grid, "m")
+        ax.legend(fontsize=7, loc="upper right", framealpha=0.8)
+        ax.set_title(title or _workspace_title(wmap), fontsize=9)
+        return _save(fig, path)
+    fig = Figure(figsize=(15, 5.2))
+    center = wmap.inscribed.center if wmap.inscribed is not None else machine.home_pose
+    index = grid.nearest_index(center) or tuple(n // 2 for n in grid.shape)
+    for panel, (a, b) in enumerate(((0, 1), (0, 2), (1, 2))):
+        ax = fig.add_subplot(1, 3, panel + 1)
+        cut = [slice(None)] * 3
+        other = ({0, 1, 2} - {a, b}).pop()
+        cut[other] = index[other]
+        sub = Grid(axes=(grid.axes[a], grid.axes[b]), free=(grid.free[a], grid.free[b]),
+                   base=grid.base, step=grid.step, names=grid.names)
+        _plot_classes(ax, classes[tuple(cut)], sub)
+        _draw_box(ax, wmap.inscribed, sub.free, label="inscribed cube")
+        _labels(ax, sub, "m")
+        name = grid.names[grid.free[other]]
+        ax.set_title(f"slice {name} = {grid.axes[other][index[other]]:.4g} m", fontsize=9)
+        if panel == 0:
+            ax.legend(fontsize=7, loc="upper right", framealpha=0.8)
+    fig.suptitle(title or _workspace_title(wmap), fontsize=10)
+    return _save(fig, path)
+
+
+def _workspace_title(wmap: WorkspaceMap) -> str:
+    what = "area" if len(wmap.grid.free) == 2 else "volume"
+    unit = "m²" if len(wmap.grid.free) == 2 else "m³"
+    text = f"{what} {wmap.measure:.4g} {unit}"
+    if wmap.inscribed is not None:
+        text += f", inscribed side {wmap.inscribed.side:.4g} m"
+    return text
+
+
+def plot_joint_space(jmap: JointSpaceMap, *, square: InscribedBox | None = None, ax=None,
+                     title: str = "", path: str | Path | None = None) -> Figure:
+    """Feasible actuator vectors (2 actuators) with a square of actuator values."""
+    if ax is None:
+        fig = Figure(figsize=(6.0, 5.4))
+        ax = fig.add_subplot()
+    fig = ax.figure
+    grid = jmap.grid
+    classes = np.where(jmap.feasible, 2, np.where(jmap.masks["assembly"], 1, 0))
+    cmap = ListedColormap(["#d9d9d9", "#fcbba1", "#41ab5d"])
+    ax.imshow(classes.T, origin="lower", extent=_extent(grid), cmap=cmap, vmin=-0.5, vmax=2.5,
+              interpolation="nearest")
+    for k, name in enumerate(("no assembly", "criteria fail", "feasible")):
+        ax.plot([], [], "s", color=cmap(k), label=name)
+    _draw_box(ax, square if square is not None else jmap.inscribed, grid.free,
+              label="useful zone")
+    _labels(ax, grid, "m")
+    ax.legend(fontsize=7, loc="upper right", framealpha=0.8)
+    ax.set_title(title, fontsize=9)
+    return _save(fig, path)
+
+
+def plot_useful_workspace(useful: UsefulWorkspace, machine: Machine, *, title: str = "",
+                          path: str | Path | None = None) -> Figure:
+    """Seed 004's pair of figures: joint space with the useful zone, and the useful workspace
+    (its image) with the inscribed square and iso-contours of λ_min and λ_max."""
+    fig = Figure(figsize=(12.5, 5.4))
+    plot_joint_space(useful.joint, square=useful.joint_square, ax=fig.add_subplot(1, 2, 1),
+                     title=f"joint space: useful zone of side {useful.joint_square.side:.4g} m")
+    ax = fig.add_subplot(1, 2, 2)
+    ws = useful.workspace
+    grid = ws.grid
+    ax.imshow(np.where(ws.feasible, 1.0, np.nan).T, origin="lower", extent=_extent(grid),
+              cmap=ListedColormap(["#c7e9c0"]), interpolation="nearest")
+    x, y = np.meshgrid(*grid.axes, indexing="ij")
+    for k, colour in ((0, "tab:red"), (-1, "tab:blue")):
+        values = np.where(ws.feasible, ws.factors[..., k], np.nan)
+        if np.isfinite(values).any():
+            lines = ax.contour(x, y, np.ma.masked_invalid(values), levels=8, colors=colour,
+                               linewidths=0.7)
+            ax.clabel(lines, fmt="%.2f", fontsize=6)
+    ax.plot([], [], color="tab:red", label="λ_max iso-lines")
+    ax.plot([], [], color="tab:blue", label="λ_min iso-lines")
+    _draw_box(ax, useful.inscribed, grid.free, label="inscribed square")
+    home = machine.home_pose
+    ax.plot(home[0], home[1], "r*", ms=10, label="home")
+    _labels(ax, grid, "m")
+    ax.legend(fontsize=7, loc="upper right", framealpha=0.8)
+    lo, hi = useful.factor_range
+    side = useful.inscribed.side if useful.inscribed is not None else float("nan")
+    ax.set_title(f"useful workspace: λ in [{lo:.2f}, {hi:.2f}], inscribed side {side:.4g} m",
+                 fontsize=9)
+    fig.suptitle(title or machine.name, fontsize=10)
+    return _save(fig, path)
+
+
+def plot_ellipses(machine: Machine, poses: np.ndarray, *, free: tuple[int, int] = (0, 1),
+                  scale: float | None = None, ax=None, title: str = "",
+                  path: str | Path | None = None) -> Figure:
+    """Velocity ellipses {J q̇ : ‖q̇‖ ≤ 1} at sample poses, projected on the ``free`` plane."""
+    poses = np.atleast_2d(np.asarray(poses, dtype=float))
+    jac = machine.jacobian(poses)
+    if ax is None:
+        fig = Figure(figsize=(6.0, 5.4))
+        ax = fig.add_subplot()
+    fig = ax.figure
+    i, j = free
+    span = np.ptp(poses[:, [i, j]], axis=0).max() if len(poses) > 1 else 0.1
+    sv_max = np.nanmax(jac.singular_values)
+    scale = scale or 0.35 * (span if span > 0 else 0.1) / sv_max
+    for pose, jm in zip(poses, jac.J, strict=True):
+        if not np.isfinite(jm).all():
+            continue
+        shape = (jm @ jm.T)[np.ix_([i, j], [i, j])]  # projection of the ellipsoid
+        values, vectors = np.linalg.eigh(shape)
+        angle = np.degrees(np.arctan2(vectors[1, 1], vectors[0, 1]))
+        width, height = 2 * scale * np.sqrt(np.maximum(values[::-1], 0))
+        ax.add_patch(Ellipse((pose[i], pose[j]), width, height, angle=angle, fill=False,
+                             color="tab:blue"))
+        ax.plot(pose[i], pose[j], "k.", ms=3)
+    names = machine.pose_names
+    ax.set_xlabel(f"{names[i]} [m]")
+    ax.set_ylabel(f"{names[j]} [m]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.autoscale_view()
+    ax.set_title(title or f"velocity ellipses (scale {scale:.3g} m per m/s)", fontsize=9)
+    return _save(fig, path)
+
+
+def plot_actuator_maps(machine: Machine, grid: Grid, *, title: str = "",
+                       path: str | Path | None = None) -> Figure:
+    """Actuator coordinates over a plane (one panel per actuator), as seed 000 Figs 3.9–3.11."""
+    q = machine.ik(grid.points).reshape((*grid.shape, machine.n_actuators))
+    n = machine.n_actuators
+    fig = Figure(figsize=(5.2 * n, 4.6))
+    for k in range(n):
+        ax = fig.add_subplot(1, n, k + 1)
+        values = q[..., k]
+        plot_scalar_map(grid, values, ax=ax, label=f"{machine.actuator_names[k]} [m]",
+                        title=f"{machine.actuator_names[k]}: {np.nanmin(values):.4f} … "
+                              f"{np.nanmax(values):.4f} m")
+    fig.suptitle(title or machine.name, fontsize=10)
+    return _save(fig, path)
