@@ -39,8 +39,23 @@ def assembly_modes() -> None:
     fig.savefig(OUT / "assembly-modes.png", dpi=110)
 
 
+def analysis() -> None:
+    """The analysis figures of docs/analysis.md (the same studies as ``pkmkit demo``)."""
+    from pkmkit.cli.demo_analysis import (
+        delta_actuator_maps,
+        five_bar_comparison,
+        machine_analysis,
+    )
+
+    for ident in ("orthoglide", "linear-delta-ch3", "five-bar-isotropic"):
+        machine_analysis(pkmkit.machine(ident), OUT)
+    five_bar_comparison(OUT)
+    delta_actuator_maps(OUT)
+
+
 if __name__ == "__main__":
     OUT.mkdir(exist_ok=True)
     machines()
     assembly_modes()
+    analysis()
     print(f"figures written to {OUT}")

@@ -186,3 +186,13 @@ def test_demo_writes_json_and_pngs(run, tmp_path):
         assert (out / f"{ident}.png").stat().st_size > 10_000
         assert (out / f"{ident}.json").exists()
     assert "nacelle-below" in result.output
+    analysis = summary["analysis"]
+    ortho_cube = analysis["seed001_orthoglide"]
+    assert ortho_cube["feasible"] and abs(ortho_cube["cube_side"] - 0.2) < 1e-3
+    assert 6.0 < analysis["seed004_five_bar"]["inscribed_area_ratio"] < 7.5
+    np.testing.assert_allclose(analysis["seed000_actuator_maps"]["q_max"],
+                               [1.2649, 1.2799, 1.2799], atol=1e-4)
+    for ident, res in analysis["machines"].items():
+        assert res["inscribed_side"] > 0, ident
+        for name in res["figures"]:
+            assert (out / "analysis" / name).stat().st_size > 10_000

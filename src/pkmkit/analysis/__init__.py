@@ -17,9 +17,11 @@ from pkmkit.analysis.workspace import (
     WorkspaceMap,
     check_region,
     compute_workspace,
+    feasible_interval,
     joint_grid,
     joint_space_map,
     largest_inscribed_box,
+    useful_workspace,
 )
 
 __all__ = [
@@ -33,6 +35,7 @@ __all__ = [
     "WorkspaceMap",
     "check_region",
     "compute_workspace",
+    "feasible_interval",
     "global_conditioning_index",
     "homogenize",
     "indices",
@@ -41,4 +44,5 @@ __all__ = [
     "largest_inscribed_box",
     "make_grid",
     "scalar_index",
+    "useful_workspace",
 ]

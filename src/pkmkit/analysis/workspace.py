@@ -431,6 +431,48 @@ def _worst(name: str, bad: np.ndarray, points: np.ndarray, ev: PoseEvaluation,
             f"({len(idx)} samples)")
 
 
+def feasible_interval(machine: Machine, point: Any, direction: Any, criteria: Criteria,
+                      *, reach: float | None = None, samples: int = 2001) -> tuple[float, float]:
+    """Interval ``(t_lo, t_hi)`` of the line ``point + t·direction`` around t = 0 where every
+    criterion holds (``connected`` is implied: the interval contains 0), each end refined by
+    bisection to machine precision.
+
+    For the Orthoglide, the ends along the cube diagonal from the isotropic point are the
+    reference points Q1 and Q2 of seed 001's sizing method.
+
+    Raises:
+        InputError: the criteria fail at ``point`` itself.
+    """
+    point = np.asarray(point, dtype=float)
+    direction = np.asarray(direction, dtype=float)
+    reach = reach or 2.0 * float(machine.model.leg_length.max())
+    loose = Criteria(bounds=criteria.bounds, kappa_max=criteria.kappa_max,
+                     strokes=criteria.strokes, q_limits=criteria.q_limits, connected=False,
+                     tol=criteria.tol)
+
+    def ok(t: np.ndarray) -> np.ndarray:
+        return evaluate_poses(machine, point + np.outer(t, direction), loose).feasible
+
+    if not ok(np.zeros(1))[0]:
+        raise InputError(f"the criteria fail at {point.tolist()} itself")
+    ends = []
+    for sign in (-1.0, 1.0):
+        t = sign * np.linspace(0.0, reach, samples)
+        good = ok(t)
+        first_bad = int(np.argmin(good)) if not good.all() else None
+        if first_bad is None:
+            ends.append(t[-1])
+            continue
+        inside, outside = t[first_bad - 1], t[first_bad]
+        for _ in range(60):
+            mid = 0.5 * (inside + outside)
+            inside, outside = (mid, outside) if ok(np.array([mid]))[0] else (inside, mid)
+            if abs(outside - inside) <= 1e-15 * max(1.0, abs(inside)):
+                break
+        ends.append(inside)
+    return float(ends[0]), float(ends[1])
+
+
 @dataclass(frozen=True)
 class JointSpaceMap:
     """Feasible set in actuator space and its image in the workspace.

@@ -1,9 +1,10 @@
-"""``pkmkit demo``: the main job — a kinematic summary of every built-in machine.
+"""``pkmkit demo``: the main job — a kinematic summary and analysis of every built-in machine.
 
 For each built-in preset and each of its reference poses: inverse model, direct model with its
 assembly mode (and every real mode), J, velocity transmission factors, conditioning and the
 singularity class, plus the machine's mobility. Printed as text, written as JSON
-(``summary.json`` and one file per machine), with a drawing of each machine (PNG).
+(``summary.json`` and one file per machine), with a drawing of each machine (PNG). Then the
+analysis studies of :mod:`pkmkit.cli.demo_analysis` (workspaces, maps, the seed studies).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from pkmkit.machines.registry import ALIASES, machine, machines
 from pkmkit.plot.drawing import draw_machine
 from pkmkit.status import Status
 
+from .demo_analysis import run_analysis_demo
 from .describe import describe_machine
 
 
@@ -74,10 +76,12 @@ def run_demo(out_dir: Path) -> dict[str, Any]:
         (out_dir / f"{ident}.json").write_text(json.dumps(to_jsonable(summary), indent=2))
         summaries[ident] = summary
         _print_summary(summary)
-    total = {"pkmkit_demo": "kinematic summary of the built-in machines", "units": "m",
-             "machines": summaries}
+    analysis = run_analysis_demo(out_dir, list(summaries))
+    total = {"pkmkit_demo": "kinematic summary and analysis of the built-in machines",
+             "units": "m", "machines": summaries, "analysis": analysis}
     (out_dir / "summary.json").write_text(json.dumps(to_jsonable(total), indent=2))
-    click.echo(f"\nwrote {out_dir}/summary.json, one JSON and one PNG per machine")
+    click.echo(f"\nwrote {out_dir}/summary.json, one JSON and one PNG per machine, and the "
+               "analysis figures in analysis/")
     return total
 
 

@@ -46,6 +46,24 @@ from pkmkit.status import Status
 
 #: Default threshold on the singularity measures (dimensionless).
 SINGULARITY_TOL = 1e-6
+#: Poses per chunk of the batched velocity model (keeps the temporaries in cache).
+JACOBIAN_CHUNK = 16384
+
+
+def _velocity_chunk(a: np.ndarray, b: np.ndarray):
+    """det A, J = A⁻¹B, singular values of J and σ_min/σ_max of A with unit rows, for one
+    chunk in the batch-last layout (``a (n, n, k)``, ``b (n, k)``)."""
+    cof = small.cofactors(a)
+    det_a = small.det(a, cof)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv_det = 1.0 / det_a
+        # J = A⁻¹ B = adj(A) B / det A with adj = cofactorsᵀ: J[k, j] = C[j, k] b_j / det A
+        j = cof.transpose(1, 0, 2) * (b * inv_det)[None, :, :]
+        inv_len = 1.0 / np.sqrt(np.einsum("ikn,ikn->in", a, a))
+        sv_unit = small.singular_values(a * inv_len[:, None, :])
+        parallel = sv_unit[-1] / sv_unit[0]
+    j[:, :, ~np.isfinite(inv_det)] = np.nan
+    return det_a, j, small.singular_values(j), parallel
 
 
 @dataclass(frozen=True)
@@ -511,28 +529,28 @@ class Machine:
 
     def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> Jacobians:
         """Batched velocity model; closed forms in the batch-last layout (see
-        :mod:`pkmkit.numerics.small`), returned batch-first."""
-        a, b = self._closed.jacobians_t(xb, qb)  # (n, dims, N), (n, N)
-        det_a = small.det(a)
-        cof = small.cofactors(a)
-        n = self.n_actuators
+        :mod:`pkmkit.numerics.small`), computed in cache-sized chunks, returned batch-first."""
+        size, n, dims = xb.shape[0], self.n_actuators, self.dims
+        a = np.empty((n, dims, size))
+        b = np.empty((n, size))
+        j = np.empty((dims, n, size))
+        sv = np.empty((n, size))
+        det_a = np.empty(size)
+        parallel = np.empty(size)
+        for start in range(0, size, JACOBIAN_CHUNK):
+            part = slice(start, start + JACOBIAN_CHUNK)
+            a[:, :, part], b[:, part] = self._closed.jacobians_t(xb[part], qb[part])
+            det_a[part], j[:, :, part], sv[:, part], parallel[part] = _velocity_chunk(
+                a[:, :, part], b[:, part])
         with np.errstate(divide="ignore", invalid="ignore"):
-            inv_det = 1.0 / det_a
-            # J = A⁻¹ B = adj(A) B / det A, adj = cofactorsᵀ: J[k, j] = C[j, k] b_j / det
-            j = cof.transpose(1, 0, 2) * (b * inv_det)[None, :, :]
             j_inv = a / b[:, None, :]
             lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
             serial = np.min(np.abs(b) / lengths, axis=0)
-            sv_unit = small.singular_values(a / lengths[:, None, :])
-            parallel = sv_unit[-1] / sv_unit[0]
-        singular = ~np.isfinite(inv_det)
-        j[:, :, singular] = np.nan
-        sv = small.singular_values(j)
         flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
         flags |= np.where((parallel < tol) | (det_a == 0.0), int(Singularity.PARALLEL), 0)
         sv_t = sv.T
         condition = np.where(flags & Singularity.PARALLEL, np.nan, condition_number(sv_t))
-        b_full = np.zeros((xb.shape[0], n, n))
+        b_full = np.zeros((size, n, n))
         b_full[:, np.arange(n), np.arange(n)] = b.T
         return Jacobians(
             A=a.transpose(2, 0, 1), B=b_full, J=j.transpose(2, 0, 1),

@@ -18,12 +18,18 @@ from __future__ import annotations
 import numpy as np
 
 
-def det(m: np.ndarray) -> np.ndarray:
-    """Determinants ``(N,)`` of ``m (n, n, N)``, n = 2 or 3."""
+def det(m: np.ndarray, cof: np.ndarray | None = None) -> np.ndarray:
+    """Determinants ``(N,)`` of ``m (n, n, N)``, n = 2 or 3 (``cof``: its cofactors, if known)."""
     if m.shape[0] == 2:
         return m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
-    c = cofactors(m)
+    c = cofactors(m) if cof is None else cof
     return m[0, 0] * c[0, 0] + m[0, 1] * c[0, 1] + m[0, 2] * c[0, 2]
+
+
+def _symmetric_det3(s: np.ndarray) -> np.ndarray:
+    return (s[0, 0] * (s[1, 1] * s[2, 2] - s[1, 2] ** 2)
+            - s[0, 1] * (s[0, 1] * s[2, 2] - s[1, 2] * s[0, 2])
+            + s[0, 2] * (s[0, 1] * s[1, 2] - s[1, 1] * s[0, 2]))
 
 
 def cofactors(m: np.ndarray) -> np.ndarray:
@@ -39,10 +45,10 @@ def cofactors(m: np.ndarray) -> np.ndarray:
     return out
 
 
-def singular_values(m: np.ndarray) -> np.ndarray:
+def singular_values(m: np.ndarray, cof: np.ndarray | None = None) -> np.ndarray:
     """Singular values ``(n, N)``, decreasing, of ``m (n, n, N)`` for n = 2 or 3.
 
-    NaN entries give NaN singular values.
+    ``cof``: the cofactors of m, if already known. NaN entries give NaN singular values.
     """
     if m.shape[0] == 2:
         a, b, c, d = m[0, 0], m[0, 1], m[1, 0], m[1, 1]
@@ -61,12 +67,12 @@ def singular_values(m: np.ndarray) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         scale = np.where(spread > 0, 1.0 / spread, 0.0)
         shifted = (g - mean * np.eye(3)[:, :, None]) * scale
-        half_det = np.clip(0.5 * det(shifted), -1.0, 1.0)
+        half_det = np.clip(0.5 * _symmetric_det3(shifted), -1.0, 1.0)
         phi = np.arccos(half_det) / 3.0
         lam1 = mean + 2.0 * spread * np.cos(phi)
         s1 = np.sqrt(np.maximum(lam1, 0.0))
-        c = cofactors(m)
-        d = np.abs(m[0, 0] * c[0, 0] + m[0, 1] * c[0, 1] + m[0, 2] * c[0, 2])
+        c = cofactors(m) if cof is None else cof
+        d = np.abs(det(m, c))
         e2 = np.einsum("ijn,ijn->n", c, c)
         pair = np.where(s1 > 0, d / s1, 0.0)  # σ2 σ3
         rest = np.where(lam1 > 0, (e2 - pair**2) / lam1, 0.0)  # σ2² + σ3²

@@ -56,7 +56,7 @@ def plot_scalar_map(grid: Grid, values: np.ndarray, *, ax=None, title: str = "",
     if len(grid.free) != 2:
         raise ValueError("a map needs a grid with two free axes (a plane slice)")
     if ax is None:
-        fig = Figure(figsize=(6.0, 5.0))
+        fig = Figure(figsize=(6.0, 5.0), layout="constrained")
         ax = fig.add_subplot()
     fig = ax.figure
     x, y = np.meshgrid(*grid.axes, indexing="ij")
@@ -111,7 +111,7 @@ def plot_workspace(wmap: WorkspaceMap, machine: Machine, *, title: str = "",
     grid = wmap.grid
     classes = classify(wmap)
     if len(grid.free) == 2:
-        fig = Figure(figsize=(6.4, 5.6))
+        fig = Figure(figsize=(6.4, 5.6), layout="constrained")
         ax = fig.add_subplot()
         _plot_classes(ax, classes, grid)
         _draw_box(ax, wmap.inscribed, grid.free, label="inscribed square")
@@ -121,7 +121,7 @@ def plot_workspace(wmap: WorkspaceMap, machine: Machine, *, title: str = "",
         ax.legend(fontsize=7, loc="upper right", framealpha=0.8)
         ax.set_title(title or _workspace_title(wmap), fontsize=9)
         return _save(fig, path)
-    fig = Figure(figsize=(15, 5.2))
+    fig = Figure(figsize=(15, 5.2), layout="constrained")
     center = wmap.inscribed.center if wmap.inscribed is not None else machine.home_pose
     index = grid.nearest_index(center) or tuple(n // 2 for n in grid.shape)
     for panel, (a, b) in enumerate(((0, 1), (0, 2), (1, 2))):
@@ -155,7 +155,7 @@ def plot_joint_space(jmap: JointSpaceMap, *, square: InscribedBox | None = None,
                      title: str = "", path: str | Path | None = None) -> Figure:
     """Feasible actuator vectors (2 actuators) with a square of actuator values."""
     if ax is None:
-        fig = Figure(figsize=(6.0, 5.4))
+        fig = Figure(figsize=(6.0, 5.4), layout="constrained")
         ax = fig.add_subplot()
     fig = ax.figure
     grid = jmap.grid
@@ -177,7 +177,7 @@ def plot_useful_workspace(useful: UsefulWorkspace, machine: Machine, *, title: s
                           path: str | Path | None = None) -> Figure:
     """Seed 004's pair of figures: joint space with the useful zone, and the useful workspace
     (its image) with the inscribed square and iso-contours of λ_min and λ_max."""
-    fig = Figure(figsize=(12.5, 5.4))
+    fig = Figure(figsize=(12.5, 5.4), layout="constrained")
     plot_joint_space(useful.joint, square=useful.joint_square, ax=fig.add_subplot(1, 2, 1),
                      title=f"joint space: useful zone of side {useful.joint_square.side:.4g} m")
     ax = fig.add_subplot(1, 2, 2)
@@ -214,7 +214,7 @@ def plot_ellipses(machine: Machine, poses: np.ndarray, *, free: tuple[int, int] 
     poses = np.atleast_2d(np.asarray(poses, dtype=float))
     jac = machine.jacobian(poses)
     if ax is None:
-        fig = Figure(figsize=(6.0, 5.4))
+        fig = Figure(figsize=(6.0, 5.4), layout="constrained")
         ax = fig.add_subplot()
     fig = ax.figure
     i, j = free
@@ -245,7 +245,7 @@ def plot_actuator_maps(machine: Machine, grid: Grid, *, title: str = "",
     """Actuator coordinates over a plane (one panel per actuator), as seed 000 Figs 3.9–3.11."""
     q = machine.ik(grid.points).reshape((*grid.shape, machine.n_actuators))
     n = machine.n_actuators
-    fig = Figure(figsize=(5.2 * n, 4.6))
+    fig = Figure(figsize=(5.2 * n, 4.6), layout="constrained")
     for k in range(n):
         ax = fig.add_subplot(1, n, k + 1)
         values = q[..., k]
