@@ -1,0 +1,406 @@
+"""Dimensional optimisation of any machine: variables, objectives, constraints, optimisers.
+
+A :class:`DesignProblem` varies named parameters of a machine within bounds and scores each
+candidate with the metrics of :mod:`pkmkit.design.metrics` (or user functions) evaluated on a
+prescribed region. The region must satisfy the criteria (``violation == 0``) unless told
+otherwise; further constraints bound any metric.
+
+- one objective: SciPy's ``differential_evolution`` (constraints by feasibility rules) or CMA-ES
+  (``cma`` package, constraints by penalty);
+- several objectives: NSGA-II from ``pymoo``; the result is the Pareto front of the feasible
+  designs.
+
+Runs are reproducible (``seed``), show a progress bar (``tqdm``) when asked, and keep every
+evaluated design, so the results can be written as CSV/JSON and plotted.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pkmkit.analysis.workspace import Criteria
+from pkmkit.design.metrics import METRICS, Region, metric_values
+from pkmkit.errors import InputError, ParameterError
+from pkmkit.io.json_io import to_jsonable
+from pkmkit.machines.machine import Machine
+
+UserMetric = Callable[[Machine], float]
+
+
+@dataclass(frozen=True)
+class Variable:
+    """A design variable: a scalar parameter ``name`` or a vector component ``name[i]``, varied
+    within ``[lower, upper]`` (SI units)."""
+
+    name: str
+    lower: float
+    upper: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.lower) and np.isfinite(self.upper)):
+            raise InputError(f"variable {self.name}: bounds must be finite")
+        if not self.lower < self.upper:
+            raise InputError(f"variable {self.name}: empty range [{self.lower:g}, "
+                             f"{self.upper:g}] (lower must be below upper)")
+
+    @property
+    def parameter(self) -> tuple[str, int | None]:
+        """(parameter name, component index or None)."""
+        m = re.fullmatch(r"([A-Za-z_]\w*)(?:\[(\d+)\])?", self.name)
+        if m is None:
+            raise InputError(f"bad variable name {self.name!r}; use NAME or NAME[i]")
+        return m.group(1), (int(m.group(2)) if m.group(2) is not None else None)
+
+
+@dataclass(frozen=True)
+class Objective:
+    """Minimise or maximise a metric: ``Objective("stroke", "min")``."""
+
+    metric: str
+    sense: str = "min"
+
+    @classmethod
+    def parse(cls, text: str) -> Objective:
+        """``"min:stroke"`` or ``"max:gci"``."""
+        sense, sep, metric = text.partition(":")
+        if not sep or sense not in ("min", "max") or not metric:
+            raise InputError(f"objective {text!r}: use min:METRIC or max:METRIC")
+        return cls(metric.strip(), sense)
+
+    def value(self, metrics: dict[str, float]) -> float:
+        """The metric in minimisation form (NaN → +inf)."""
+        v = metrics[self.metric]
+        v = v if self.sense == "min" else -v
+        return float(v) if np.isfinite(v) else float("inf")
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """A bound on a metric: ``Constraint("lambda_min", ">=", 0.5)``."""
+
+    metric: str
+    op: str
+    value: float
+
+    @classmethod
+    def parse(cls, text: str) -> Constraint:
+        """``"worst_condition<=4"`` or ``"compactness>=0.5"``."""
+        m = re.fullmatch(r"\s*(\w+)\s*(<=|>=)\s*([-+0-9.eE]+)\s*", text)
+        if m is None:
+            raise InputError(f"constraint {text!r}: use METRIC<=VALUE or METRIC>=VALUE")
+        return cls(m.group(1), m.group(2), float(m.group(3)))
+
+    def excess(self, metrics: dict[str, float]) -> float:
+        """> 0 when violated (by how much), ≤ 0 when satisfied; NaN → +inf."""
+        v = metrics[self.metric]
+        if not np.isfinite(v):
+            return float("inf")
+        return float(v - self.value if self.op == "<=" else self.value - v)
+
+
+@dataclass
+class DesignProblem:
+    """What to vary, what to optimise, and on which region.
+
+    Attributes:
+        base: the machine whose parameters are varied (its other parameters stay).
+        variables: design variables.
+        objectives: one (single-objective) or more (Pareto) objectives.
+        constraints: bounds on metrics; ``violation <= 0`` is added unless ``require_region``
+            is False.
+        region: the prescribed square/cube.
+        criteria: transmission-factor / conditioning bounds over the region.
+        user_metrics: extra metrics ``name -> f(machine)``.
+        samples: grid points per edge of the region.
+    """
+
+    base: Machine
+    variables: Sequence[Variable]
+    objectives: Sequence[Objective]
+    region: Region
+    criteria: Criteria = field(default_factory=Criteria)
+    constraints: Sequence[Constraint] = ()
+    user_metrics: dict[str, UserMetric] = field(default_factory=dict)
+    samples: int = 11
+    require_region: bool = True
+
+    def __post_init__(self) -> None:
+        if self.base.kind is None:
+            raise InputError(f"machine {self.base.id!r} has no named parameters to vary")
+        if not self.variables:
+            raise InputError("give at least one design variable")
+        if not self.objectives:
+            raise InputError("give at least one objective")
+        specs = {s.name: s for s in self.base.kind.parameters}
+        for var in self.variables:
+            name, index = var.parameter
+            if name not in specs:
+                raise InputError(f"unknown parameter {name!r}; valid parameters: "
+                                 f"{', '.join(sorted(specs))}")
+            size = specs[name].size
+            if (index is None) != (size is None) or (index is not None and index >= size):
+                raise InputError(f"variable {var.name}: parameter {name!r} "
+                                 f"{'is a scalar' if size is None else f'has {size} components'}")
+        known = set(METRICS) | set(self.user_metrics)
+        for item in [*self.objectives, *self.constraints]:
+            if item.metric not in known:
+                raise InputError(f"unknown metric {item.metric!r}; valid: {', '.join(sorted(known))}")
+        if self.require_region:
+            self.constraints = (*self.constraints, Constraint("violation", "<=", 0.0))
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """``(n_var, 2)`` lower and upper bounds."""
+        return np.array([[v.lower, v.upper] for v in self.variables])
+
+    @property
+    def metric_names(self) -> tuple[str, ...]:
+        names = {o.metric for o in self.objectives} | {c.metric for c in self.constraints}
+        return tuple(sorted(n for n in names if n in METRICS))
+
+    def build(self, x: np.ndarray) -> Machine | None:
+        """The candidate machine for variable values ``x`` (None if the parameters are
+        inconsistent, e.g. rods too short for the home pose)."""
+        updates: dict[str, Any] = {}
+        for var, value in zip(self.variables, x, strict=True):
+            name, index = var.parameter
+            if index is None:
+                updates[name] = float(value)
+            else:
+                current = list(updates.get(name, self.base.params[name]))
+                current[index] = float(value)
+                updates[name] = tuple(current)
+        try:
+            return self.base.with_params(**updates)
+        except ParameterError:
+            return None
+
+    def evaluate(self, x: np.ndarray) -> dict[str, Any]:
+        """Record of one candidate: variables, metrics, objective values, constraint excesses
+        and feasibility."""
+        candidate = self.build(np.asarray(x, dtype=float))
+        metrics = metric_values(candidate, self.region, self.criteria, self.metric_names,
+                                self.samples)
+        for name, func in self.user_metrics.items():
+            metrics[name] = float(func(candidate)) if candidate is not None else float("nan")
+        record: dict[str, Any] = {v.name: float(value) for v, value in
+                                  zip(self.variables, x, strict=True)}
+        record.update(metrics)
+        record["_objectives"] = [o.value(metrics) for o in self.objectives]
+        record["_excess"] = [c.excess(metrics) for c in self.constraints]
+        record["feasible"] = candidate is not None and all(e <= 0 for e in record["_excess"])
+        return record
+
+
+@dataclass
+class OptimizationResult:
+    """Every evaluated design, and the best one (one objective) or the Pareto front.
+
+    Attributes:
+        problem: the problem solved.
+        method: optimiser used.
+        records: every evaluated candidate (dicts).
+        best: best feasible record (single objective) or None.
+        pareto: non-dominated feasible records (several objectives), sorted by the first
+            objective.
+    """
+
+    problem: DesignProblem
+    method: str
+    records: list[dict[str, Any]]
+    best: dict[str, Any] | None
+    pareto: list[dict[str, Any]]
+
+    @property
+    def columns(self) -> list[str]:
+        names = [v.name for v in self.problem.variables]
+        metrics = [k for k in self.records[0] if not k.startswith("_") and k not in names
+                   and k != "feasible"] if self.records else []
+        return [*names, *metrics, "feasible"]
+
+    def write_csv(self, path: str | Path, records: list[dict[str, Any]] | None = None) -> None:
+        """All records (or the given ones) as CSV."""
+        rows = self.records if records is None else records
+        with open(path, "w", newline="", encoding="utf-8") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(self.columns)
+            for r in rows:
+                writer.writerow([f"{r[c]:.10g}" if isinstance(r[c], float) else r[c]
+                                 for c in self.columns])
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready summary."""
+        def clean(r: dict[str, Any]) -> dict[str, Any]:
+            return {k: v for k, v in r.items() if not k.startswith("_")}
+
+        return to_jsonable({
+            "machine": self.problem.base.id,
+            "method": self.method,
+            "variables": [{"name": v.name, "lower": v.lower, "upper": v.upper}
+                          for v in self.problem.variables],
+            "objectives": [f"{o.sense}:{o.metric}" for o in self.problem.objectives],
+            "constraints": [f"{c.metric}{c.op}{c.value:g}" for c in self.problem.constraints],
+            "region": {"side": self.problem.region.side, "center": self.problem.region.center},
+            "criteria": {"bounds": self.problem.criteria.bounds,
+                         "kappa_max": self.problem.criteria.kappa_max},
+            "evaluations": len(self.records),
+            "feasible_evaluations": sum(bool(r["feasible"]) for r in self.records),
+            "best": None if self.best is None else clean(self.best),
+            "pareto": [clean(r) for r in self.pareto],
+        })
+
+    def write_json(self, path: str | Path) -> None:
+        """:meth:`summary` as a JSON file."""
+        Path(path).write_text(json.dumps(self.summary(), indent=2))
+
+
+def pareto_front(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Non-dominated feasible records (minimisation of ``_objectives``)."""
+    feasible = [r for r in records if r["feasible"]]
+    if not feasible:
+        return []
+    f = np.array([r["_objectives"] for r in feasible])
+    keep = np.ones(len(feasible), bool)
+    for i in range(len(feasible)):
+        dominated = (f <= f[i]).all(axis=1) & (f < f[i]).any(axis=1)
+        if dominated.any():
+            keep[i] = False
+    front = [feasible[i] for i in np.flatnonzero(keep)]
+    unique: dict[tuple, dict[str, Any]] = {}
+    for r in front:
+        unique.setdefault(tuple(np.round(r["_objectives"], 12)), r)
+    return sorted(unique.values(), key=lambda r: r["_objectives"][0])
+
+
+def _progress(total: int, enabled: bool, label: str):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=label, unit="gen", leave=False)
+
+
+def optimize(problem: DesignProblem, *, method: str | None = None, seed: int = 0,
+             generations: int = 30, population: int = 24, progress: bool = False
+             ) -> OptimizationResult:
+    """Optimise ``problem``.
+
+    Args:
+        problem: the problem.
+        method: ``"de"`` (differential evolution, default for one objective), ``"cmaes"``
+            (one objective), ``"nsga2"`` (default for several objectives).
+        seed: random seed (runs are reproducible).
+        generations: iterations/generations of the optimiser.
+        population: population size (NSGA-II, CMA-ES) or DE population multiplier ×
+            number of variables.
+        progress: show a progress bar on stderr.
+
+    Raises:
+        InputError: a method that does not fit the number of objectives, bad sizes.
+    """
+    n_obj = len(problem.objectives)
+    method = method or ("de" if n_obj == 1 else "nsga2")
+    if generations < 1 or population < 4:
+        raise InputError("generations must be >= 1 and population >= 4")
+    if method in ("de", "cmaes") and n_obj != 1:
+        raise InputError(f"method {method!r} optimises one objective; use nsga2 for "
+                         f"{n_obj} objectives")
+    if method not in ("de", "cmaes", "nsga2"):
+        raise InputError(f"unknown method {method!r}; use de, cmaes or nsga2")
+    records: list[dict[str, Any]] = []
+    cache: dict[bytes, dict[str, Any]] = {}
+
+    def evaluate(x: np.ndarray) -> dict[str, Any]:
+        key = np.asarray(x, dtype=float).tobytes()
+        if key not in cache:
+            cache[key] = problem.evaluate(x)
+            records.append(cache[key])
+        return cache[key]
+
+    bar = _progress(generations, progress, f"{method} on {problem.base.id}")
+    try:
+        if method == "de":
+            _run_de(problem, evaluate, seed, generations, population, bar)
+        elif method == "cmaes":
+            _run_cmaes(problem, evaluate, seed, generations, population, bar)
+        else:
+            _run_nsga2(problem, evaluate, seed, generations, population, bar)
+    finally:
+        if bar is not None:
+            bar.close()
+    feasible = [r for r in records if r["feasible"]]
+    best = min(feasible, key=lambda r: r["_objectives"][0]) if (n_obj == 1 and feasible) else None
+    return OptimizationResult(problem=problem, method=method, records=records, best=best,
+                              pareto=pareto_front(records) if n_obj > 1 else [])
+
+
+def _penalised(record: dict[str, Any]) -> float:
+    excess = sum(max(e, 0.0) for e in record["_excess"])
+    value = record["_objectives"][0]
+    if not np.isfinite(value) or not np.isfinite(excess):
+        return 1e12
+    return value + (1e6 * (1.0 + excess) if excess > 0 else 0.0)
+
+
+def _run_de(problem, evaluate, seed, generations, population, bar) -> None:
+    from scipy.optimize import differential_evolution
+
+    def callback(*_args, **_kwargs):
+        if bar is not None:
+            bar.update(1)
+
+    differential_evolution(lambda x: _penalised(evaluate(x)), problem.bounds, seed=seed,
+                           maxiter=generations, popsize=max(2, population // len(
+                               problem.variables)), tol=0.0, polish=False, callback=callback)
+
+
+def _run_cmaes(problem, evaluate, seed, generations, population, bar) -> None:
+    import cma
+
+    bounds = problem.bounds
+    span = bounds[:, 1] - bounds[:, 0]
+    x0 = np.full(len(bounds), 0.5)
+    opts = {"bounds": [0.0, 1.0], "seed": seed + 1, "popsize": population,
+            "maxiter": generations, "verbose": -9}
+    es = cma.CMAEvolutionStrategy(x0, 0.3, opts)
+    while not es.stop():
+        xs = es.ask()
+        es.tell(xs, [_penalised(evaluate(bounds[:, 0] + np.asarray(x) * span)) for x in xs])
+        if bar is not None:
+            bar.update(1)
+
+
+def _run_nsga2(problem, evaluate, seed, generations, population, bar) -> None:
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.core.callback import Callback
+    from pymoo.core.problem import Problem
+    from pymoo.optimize import minimize
+
+    bounds = problem.bounds
+    n_con = len(problem.constraints)
+
+    class Wrapped(Problem):
+        def __init__(self):
+            super().__init__(n_var=len(bounds), n_obj=len(problem.objectives), n_ieq_constr=n_con,
+                             xl=bounds[:, 0], xu=bounds[:, 1])
+
+        def _evaluate(self, xs, out, *args, **kwargs):
+            recs = [evaluate(x) for x in xs]
+            out["F"] = np.array([[min(v, 1e12) for v in r["_objectives"]] for r in recs])
+            out["G"] = np.array([[min(e, 1e12) for e in r["_excess"]] for r in recs])
+
+    class Tick(Callback):
+        def notify(self, algorithm):
+            if bar is not None:
+                bar.update(1)
+
+    minimize(Wrapped(), NSGA2(pop_size=population), ("n_gen", generations), seed=seed,
+             callback=Tick(), verbose=False)

@@ -1,0 +1,106 @@
+"""Orthoglide sizing rule (seed 001 §3.4, Chablat & Wenger).
+
+Given a prescribed cube of side Lw and bounds [ψmin, ψmax] on the velocity transmission factors:
+
+1. the Orthoglide has a single length, L, so every point of its kinematics scales with L. Along the
+   cube diagonal through the isotropic point, ``feasible_interval`` finds, for L = 1, the points
+   Q1 = t1 (1, 1, 1) and Q2 = t2 (1, 1, 1) where a transmission factor first reaches a bound;
+2. the prescribed cube has Q1 and Q2 as opposite corners, so ``L = Lw / (t2 − t1)``;
+3. the slider positions and strokes are the range of ρ_i over that cube (direct model at the
+   corners in the seed; here the whole cube is sampled), and the compactness is Lw / stroke.
+
+Every result is verified by an independent brute-force evaluation of the whole cube (a dense grid
+through :func:`pkmkit.analysis.check_region`): the transmission factors must stay within the
+bounds everywhere, not only at Q1 and Q2.
+
+For [0.5, 2] and Lw = 200 mm this gives L = 310.6 mm, a 257.0 mm stroke and r = 0.778 — the
+seed's prototype (310 mm, 257 mm, 0.78).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkmkit.analysis.workspace import Criteria, RegionCheck, check_region, feasible_interval
+from pkmkit.errors import InputError
+from pkmkit.machines.machine import Machine
+from pkmkit.machines.registry import machine as builtin_machine
+
+
+@dataclass(frozen=True)
+class OrthoglideSizing:
+    """Result of :func:`size_orthoglide` (lengths in m).
+
+    Attributes:
+        cube_side: prescribed Lw.
+        bounds: (ψmin, ψmax).
+        L: leg length.
+        Q1, Q2: ``(3,)`` reference points, opposite corners of the cube.
+        q_min, q_max: ``(3,)`` slider positions at the ends of the strokes.
+        stroke: slider stroke (the same for the three sliders).
+        compactness: Lw / stroke.
+        side_over_L: Lw / L.
+        check: brute-force verification of the whole cube.
+        machine: the sized machine (strokes set to ``q_min``, ``q_max``).
+    """
+
+    cube_side: float
+    bounds: tuple[float, float]
+    L: float
+    Q1: np.ndarray
+    Q2: np.ndarray
+    q_min: np.ndarray
+    q_max: np.ndarray
+    stroke: float
+    compactness: float
+    side_over_L: float
+    check: RegionCheck
+    machine: Machine
+
+
+def size_orthoglide(cube_side: float, bounds: tuple[float, float], *,
+                    samples: int = 41, max_leg: float | None = None) -> OrthoglideSizing:
+    """Size an Orthoglide for a prescribed cube (see the module docstring).
+
+    Args:
+        cube_side: prescribed cube side Lw, m.
+        bounds: (ψmin, ψmax) bounds on every velocity transmission factor.
+        samples: points per cube edge of the brute-force verification.
+        max_leg: optional largest admissible leg length, m.
+
+    Raises:
+        InputError: a side that is not positive, bounds that exclude the isotropic configuration
+            (λ = 1 there), a leg longer than ``max_leg``, or a verification that fails.
+    """
+    if not (np.isfinite(cube_side) and cube_side > 0):
+        raise InputError(f"the cube side must be > 0, got {cube_side}")
+    lo, hi = bounds
+    criteria = Criteria(bounds=(lo, hi), strokes=False)  # validates 0 < lo < hi
+    if not lo < 1.0 < hi:
+        raise InputError(
+            f"bounds [{lo:g}, {hi:g}] exclude the isotropic configuration, where every "
+            "transmission factor equals 1: no Orthoglide can satisfy them around it"
+        )
+    unit = builtin_machine("orthoglide", L=1.0, q_min=(-3.0,) * 3, q_max=(3.0,) * 3)
+    t1, t2 = feasible_interval(unit, np.zeros(3), np.ones(3), criteria)
+    length = cube_side / (t2 - t1)
+    if max_leg is not None and length > max_leg:
+        raise InputError(
+            f"the cube needs legs of {length:.6g} m, longer than the admissible {max_leg:g} m"
+        )
+    q1, q2 = np.full(3, t1 * length), np.full(3, t2 * length)
+    wide = builtin_machine("orthoglide", L=length, q_min=(-3 * length,) * 3,
+                           q_max=(3 * length,) * 3)
+    check = check_region(wide, 0.5 * (q1 + q2), cube_side, criteria, samples=samples)
+    if not check.feasible:
+        raise InputError(f"the cube between Q1 and Q2 fails the brute-force check: {check.worst}")
+    q_min, q_max = check.q_range
+    stroke = float((q_max - q_min).max())
+    sized = builtin_machine("orthoglide", L=length, q_min=tuple(q_min), q_max=tuple(q_max))
+    return OrthoglideSizing(
+        cube_side=float(cube_side), bounds=(float(lo), float(hi)), L=float(length), Q1=q1,
+        Q2=q2, q_min=q_min, q_max=q_max, stroke=stroke, compactness=float(cube_side / stroke),
+        side_over_L=float(cube_side / length), check=check, machine=sized,
+    )
