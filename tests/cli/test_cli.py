@@ -103,12 +103,14 @@ def test_batch_csv_with_bad_rows(run, tmp_path):
     result = run("ik", "linear-delta", "--input", poses, "--output", out)
     assert result.exit_code == 3 and "2 flagged" in result.output
     lines = out.read_text().splitlines()
-    assert lines[0] == "x,y,z,q1,q2,q3,status"
+    assert lines[0] == "x,y,z,q1,q2,q3,mode,status"
     assert lines[1].endswith(",ok") and lines[2].endswith(",unreachable")
     assert lines[3].endswith(",invalid-input") and lines[4].endswith(",ok")
 
     good = tmp_path / "good.csv"
-    good.write_text("\n".join([lines[0], lines[1], lines[4]]) + "\n")
+    good.write_text("\n".join([lines[0].replace(",mode", ""), *(
+        ",".join(line.split(",")[:6] + line.split(",")[7:]) for line in (lines[1], lines[4]))])
+                    + "\n")
     result = run("fk", "linear-delta", "--input", good, "--output", tmp_path / "x.csv")
     assert result.exit_code == 0
     back = (tmp_path / "x.csv").read_text().splitlines()
@@ -196,3 +198,53 @@ def test_demo_writes_json_and_pngs(run, tmp_path):
         assert res["inscribed_side"] > 0, ident
         for name in res["figures"]:
             assert (out / "analysis" / name).stat().st_size > 10_000
+
+
+def test_batch_keeps_good_rows_when_a_cell_is_bad(run, tmp_path):
+    poses = tmp_path / "poses.csv"
+    poses.write_bytes(b"\xef\xbb\xbfx,y,z\n0,0,0\n0,,0\n")
+    out = tmp_path / "q.csv"
+    result = run("ik", "linear-delta", "--input", poses, "--output", out)
+    assert result.exit_code == 3 and "poses.csv:3" in result.output
+    lines = out.read_text().splitlines()
+    assert lines[1].endswith(",ok") and lines[2].endswith(",invalid-input")
+
+
+def test_jacobian_batch_statuses(run, tmp_path):
+    poses = tmp_path / "poses.csv"
+    poses.write_text("x,y\n1,0\nnan,0\n5,5\n0.6,0.5\n")
+    out = tmp_path / "j.csv"
+    result = run("jacobian", "five-bar", "--input", poses, "--output", out)
+    assert result.exit_code == 3 and "1 singular rows" in result.output
+    status = [line.rsplit(",", 1)[1] for line in out.read_text().splitlines()[1:]]
+    assert status == ["regular", "invalid-input", "unreachable", "serial"]
+
+
+def test_output_and_demo_paths_errors(run, tmp_path):
+    poses = tmp_path / "poses.csv"
+    poses.write_text("x,y,z\n0,0,0\n")
+    result = run("ik", "linear-delta", "--input", poses, "--output", tmp_path / "no" / "o.csv")
+    assert result.exit_code == 1 and "cannot write" in result.output
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    result = run("demo", "--out", blocker / "sub")
+    assert result.exit_code != 0 and "Traceback" not in result.output
+
+
+def test_modes_and_warm_starts_from_the_cli(run):
+    other = as_json(run("fk", "linear-delta", "--q", "1.2,1.2,1.2", "--mode", "other", "--json"))
+    by_sign = as_json(run("fk", "linear-delta", "--q", "1.2,1.2,1.2", "--mode", "1", "--json"))
+    np.testing.assert_allclose(by_sign["pose"], other["pose"], atol=1e-12)
+    numeric = as_json(run("fk", "linear-delta", "--q", "1.2,1.2,1.2", "--mode", "other",
+                          "--method", "numeric", "--json"))
+    np.testing.assert_allclose(numeric["pose"], other["pose"], atol=1e-9)
+    warm = as_json(run("fk", "linear-delta", "--q", "1.2,1.2,1.2", "--method", "numeric",
+                       "--x0", "0,0,0.1", "--json"))
+    assert warm["mode"] == "nacelle-below"
+    branch = as_json(run("ik", "linear-delta", "--pose", "0.1,0,0", "--branches", "1,-1,1",
+                         "--method", "numeric", "--json"))
+    closed = as_json(run("ik", "linear-delta", "--pose", "0.1,0,0", "--branches", "1,-1,1",
+                         "--json"))
+    np.testing.assert_allclose(branch["q"], closed["q"], atol=1e-9)
+    note = run("ik", "orthoglide", "--pose", "0.15,0.15,0.15").output
+    assert "far-side" in note and "--mode far-side" in note

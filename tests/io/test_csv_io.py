@@ -48,3 +48,18 @@ def test_write_round_trip(tmp_path):
 def test_json_conversion_maps_non_finite_to_null():
     value = {"a": np.array([1.0, np.nan]), "b": (np.float64(np.inf), 2), "c": np.int64(3)}
     assert to_jsonable(value) == {"a": [1.0, None], "b": [None, 2], "c": 3}
+
+
+def test_bom_header_and_collected_problems(tmp_path):
+    path = tmp_path / "in.csv"
+    path.write_bytes(b"\xef\xbb\xbfx,y,z\n0,0,0\n0,,0\n1,2\n")
+    problems = []
+    table = read_table(path, ["x", "y", "z"], problems)
+    assert table.shape == (3, 3) and np.isfinite(table[0]).all()
+    assert np.isnan(table[1, 1]) and np.isnan(table[2]).all()
+    assert len(problems) == 2 and "in.csv:3" in problems[0] and "in.csv:4" in problems[1]
+
+
+def test_unwritable_output(tmp_path):
+    with pytest.raises(InputError, match="cannot write"):
+        write_table(tmp_path / "missing" / "out.csv", ["a"], [[1.0]])

@@ -42,6 +42,24 @@ def test_inverse_closed_form_matches_engine(preset):
     assert np.abs(res.q - preset.ik(x)).max() <= TOL
 
 
+def test_closed_form_matches_engine_over_the_whole_working_workspace(preset):
+    """Not only near home: every reachable working-mode pose of the default box (not too close
+    to a parallel singularity, where the two assembly modes are closer than the warm start's
+    offset)."""
+    lo, hi = preset.default_box()
+    x = np.random.default_rng(15).uniform(lo, hi, (4000, preset.dims))
+    inv = preset.ik(x, full_output=True)
+    jac = preset.jacobian(x, q=inv.q)
+    keep = ((inv.status == 0) & (inv.mode == preset.working_mode)
+            & (jac.parallel_measure > 2e-2) & (jac.serial_measure > 1e-3))
+    assert keep.sum() > 500
+    x, q = x[keep], inv.q[keep]
+    np.testing.assert_allclose(preset.fk(q), x, atol=TOL)
+    numeric = preset.fk(q, method="numeric", x0=x + 1e-4, full_output=True)
+    assert (numeric.status == Status.OK).all()
+    np.testing.assert_allclose(numeric.pose, x, atol=TOL)
+
+
 def test_engine_reports_other_mode_and_unreachable_rows():
     m = pkmkit.machine("linear-delta")
     q = m.ik(np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.2]]))

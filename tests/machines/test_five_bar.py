@@ -13,9 +13,9 @@ def five(request):
 
 
 def leg_angles(m, x, q):
-    """θ1, θ2: directions of the legs C→P and D→P."""
-    jac = m.jacobian(x, q=q)
-    return np.arctan2(jac.A[..., 1], jac.A[..., 0])
+    """θ1, θ2: directions of the legs C→P and D→P, from the parameters and positions."""
+    c, d = slide_points(m, q)
+    return np.stack([np.arctan2(*(x - c).T[::-1]), np.arctan2(*(x - d).T[::-1])], axis=1)
 
 
 def test_kappa_a_closed_form(five):
@@ -64,37 +64,38 @@ def test_isotropic_configuration():
         np.testing.assert_allclose(moved, step, atol=1e-7)
 
 
-def test_parallel_singularity_iff_c_d_p_aligned(five):
-    rng = np.random.default_rng(8)
-    length = five.params["L"]
-    u = np.array([[np.cos(five.params["alpha1"]), np.sin(five.params["alpha1"])],
-                  [np.cos(five.params["alpha2"]), np.sin(five.params["alpha2"])]])
-    a, b = np.array(five.params["A"]), np.array(five.params["B"])
-    for _ in range(20):
-        # pick P and a common leg direction θ1 = θ2: C, D, P aligned
-        p = five.home_pose + rng.uniform(-0.05, 0.05, 2)
-        phi = rng.uniform(0, 2 * np.pi)
+def slide_points(m, q):
+    """Carriage points C, D ``(N, 2)`` from the parameters (independent of the library)."""
+    u = np.array([[np.cos(m.params["alpha1"]), np.sin(m.params["alpha1"])],
+                  [np.cos(m.params["alpha2"]), np.sin(m.params["alpha2"])]])
+    return np.asarray(m.params["A"]) + q[:, :1] * u[0], np.asarray(m.params["B"]) + q[:, 1:] * u[1]
+
+
+def test_parallel_singularity_when_c_d_p_aligned():
+    """Isotropic design: for any direction e, P = (M − L e_x, L e_y) has C = P − L e on slide 1
+    and D = P + L e on slide 2, aligned with P; the inverse model reaches it and it is flagged
+    parallel, with both assembly modes merged and J undefined."""
+    m = pkmkit.machine("five-bar-isotropic")
+    big_m, length = m.params["B"][0], m.params["L"]
+    for phi in np.radians([10.0, 35.0, 60.0, 80.0]):
         e = np.array([np.cos(phi), np.sin(phi)])
-        c, d = p - length * e, p + length * e  # D on the other side: θ2 = θ1 + π
-        # actuator values exist only if C and D lie on their slide lines: solve for P instead
-        q1 = np.dot(c - a, u[0])
-        q2 = np.dot(d - b, u[1])
-        c_on, d_on = a + q1 * u[0], b + q2 * u[1]
-        # place P at the midpoint of the on-slide carriages with |CP| = |DP| = |CD|/2 = L
-        if abs(np.linalg.norm(d_on - c_on) - 2 * length) > 1e-9:
-            continue
-        p_mid = 0.5 * (c_on + d_on)
-        jac = five.jacobian(p_mid, q=np.array([q1, q2]))
-        assert "parallel" in jac.status
-    # generic: det A = 0 exactly when (D − C) × (P − C) = 0
+        p = np.array([big_m - length * e[0], length * e[1]])
+        q = np.array([big_m - 2 * length * e[0], 2 * length * e[1] + big_m])
+        jac = m.jacobian(p, q=q)
+        assert jac.status == "parallel"
+        assert np.isnan(jac.J).all() and np.isnan(jac.condition)
+        modes = m.fk_all(q)
+        assert modes.count == 1
+        np.testing.assert_allclose(modes.poses[0], p, atol=1e-6)
+
+
+def test_det_a_is_the_cross_product_of_c_d_p(five):
+    """det A = (D − C) × (P − C): zero exactly when C, D and P are aligned."""
     x = random_poses(five, 200, seed=9)
     q = five.ik(x)
-    jac = five.jacobian(x)
-    c = x - jac.A[:, 0]
-    d = x - jac.A[:, 1]
+    c, d = slide_points(five, q)
     cross = (d - c)[:, 0] * (x - c)[:, 1] - (d - c)[:, 1] * (x - c)[:, 0]
-    np.testing.assert_allclose(jac.det_A, cross, atol=1e-12)
-    assert np.isfinite(q).all()
+    np.testing.assert_allclose(five.jacobian(x).det_A, cross, atol=1e-12)
 
 
 def test_parallel_singularity_flagged_at_double_root():
@@ -106,8 +107,9 @@ def test_parallel_singularity_flagged_at_double_root():
     modes = m.fk_all(q)
     assert modes.count == 1
     p = modes.poses[0]
-    jac = m.jacobian(p, q=q)
-    assert jac.status == "parallel" and np.isnan(jac.condition)
+    jac = m.jacobian(p)  # through the inverse model
+    np.testing.assert_allclose(jac.q, q, atol=1e-6)
+    assert jac.status == "parallel" and np.isnan(jac.condition) and np.isnan(jac.J).all()
 
 
 def test_serial_singularity_at_workspace_boundary():

@@ -64,9 +64,9 @@ def test_jacobian_rate_matches_finite_differences(preset):
     rates = preset.jacobian_dot(x, xd)
     h = 1e-6
     fd = (preset.jacobian(x + h * xd).J - preset.jacobian(x - h * xd).J) / (2 * h)
-    np.testing.assert_allclose(rates.J_dot, fd, atol=1e-6)
+    np.testing.assert_allclose(rates.J_dot, fd, rtol=1e-7, atol=1e-8)
     fd_a = (preset.jacobian(x + h * xd).A - preset.jacobian(x - h * xd).A) / (2 * h)
-    np.testing.assert_allclose(rates.A_dot, fd_a, atol=1e-6)
+    np.testing.assert_allclose(rates.A_dot, fd_a, rtol=1e-7, atol=1e-8)
     np.testing.assert_allclose(rates.qd, (preset.ik(x + h * xd) - preset.ik(x - h * xd)) / (2 * h),
                                atol=1e-7)
 

@@ -81,8 +81,10 @@ def test_parallel_singularity_where_the_modes_merge(ortho):
     assert modes.count == 1
     np.testing.assert_allclose(modes.poses[0], np.full(3, s / 3), atol=1e-7)
     jac = ortho.jacobian(np.full(3, s / 3), q=q)
-    assert jac.status == "parallel" and np.isnan(jac.condition)
+    assert jac.status == "parallel" and np.isnan(jac.condition) and np.isnan(jac.J).all()
     assert jac.parallel_measure < 1e-12
+    rates = ortho.jacobian_dot(np.full(3, s / 3), np.ones(3), q=q)
+    assert np.isnan(rates.J_dot).all()
 
 
 def test_serial_singularity_when_a_leg_is_perpendicular_to_its_slide(ortho):

@@ -94,6 +94,9 @@ poses:
         user.with_params(L=1.0)
 
 
+ROD = ('[machine]\nkind = "rod-legs"\n\n[[legs]]\nbase = [0.5, 0, 0]\n'
+       "platform = [0, 0, 0]\nlength = 1\naxis = [0, 0, 1]\n")
+
 BAD_FILES = [
     ('[machine]\nkind = "delta"\n', 2, "kind must be one of"),
     ('[machine]\nkind = "linear-delta"\nunits = "inch"\n', 3, "unknown length unit"),
@@ -112,6 +115,19 @@ BAD_FILES = [
     ('[machine]\nkind = "rod-legs"\n\n[[legs]]\nbase = [0, 0, 0]\nplatform = [0, 0, 0]\n'
      "length = 1\naxis = [0, 0, 1]\nwheel = 3\n", 9, "unknown key 'wheel'"),
     ('[machine]\nkind = "orthoglide"\n[poses]\np = [0, 0]\n', 4, "3 coordinates"),
+    ('[machine]\nkind = "linear-delta"\nunits = []\n', 3, "units must be a string"),
+    ('[machine]\nkind = "linear-delta"\n[parameters]\nL = true\n', 4, "numeric"),
+    ('[machine]\nkind = "linear-delta"\n[parameters]\nL = "1.3"\n', 4, "numeric"),
+    ('[machine]\nkind = "rod-legs"\ndims = 2.0\n', 3, "integer 2 or 3"),
+    (ROD + 'type = ["slide"]\n', 9, "type must be 'slide' or 'strut'"),
+    (ROD + 'parallelogram = { width = "abc", direction = [1, 0, 0] }\n', 9,
+     "width must be a finite number"),
+    (ROD + "parallelogram = { width = 0.05 }\n", 9, "needs a 'direction'"),
+    (ROD + "branch = 0.5\n", 9, "branch must be 1 or -1"),
+    (ROD.replace("\n\n", "\nhome = [1, 0]\n", 1), 3, "home must be 3"),
+    (ROD.replace("\n\n", '\nmode_names = ["a"]\n', 1), 3, "mode_names"),
+    ('[machine]\nkind = "linear-delta"\ndescription = """\n[parameters]\nL = 1\n"""\n'
+     "[parameters]\nR = 0.7\nL = -1\n", 9, "must be > 0"),
 ]
 
 
@@ -137,3 +153,40 @@ def test_documented_machine_files_load(tmp_path):
         path.write_text(body)
         m = pkmkit.load(path)
         np.testing.assert_allclose(m.fk(m.ik(m.home_pose)), m.home_pose, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "text, line, message",
+    [
+        ("machine: &m {kind: orthoglide, self: *m}\n", 1, "anchors and aliases"),
+        ("a0: &a0 [1, 1]\na1: [*a0, *a0]\nmachine: {kind: orthoglide}\n", 1,
+         "anchors and aliases"),
+        ("machine:\nparameters: {L: 0.3}\n", 1, "is empty"),
+        ("machine: {kind: linear-delta}\nparameters:\n  L: yes\n", 3, "numeric"),
+    ],
+)
+def test_malformed_yaml_files(tmp_path, text, line, message):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(MachineFileError, match=message) as info:
+        pkmkit.load(path)
+    assert info.value.line == line, str(info.value)
+
+
+def test_rods_that_do_not_fix_the_orientation_are_reported(tmp_path):
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    path = tmp_path / "tripod.toml"
+    path.write_text(
+        '[machine]\nkind = "rod-legs"\nhome = [0, 0, -0.8]\n'
+        + "".join(f'[[legs]]\ntype = "strut"\nbase = [{np.cos(a):.6f}, {np.sin(a):.6f}, 0]\n'
+                  "platform = [0, 0, 0]\nlength = 1.2\n"
+                  for a in np.radians([0.0, 120.0, 240.0]))
+    )
+    m = pkmkit.load(path)
+    assert m.mobility()["instantaneous"].platform_freedom_locked == 3
+    result = CliRunner().invoke(cli, ["show", str(path)])
+    assert result.exit_code == 0 and "warning:" in result.output
+    assert "orientation" in result.output

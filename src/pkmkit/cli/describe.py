@@ -43,6 +43,14 @@ def describe_machine(m: Machine, units: str = "m") -> dict[str, Any]:
             "rods": int((model.rod_leg == i).sum()),
         })
     mobility = m.mobility()
+    warnings = []
+    freedom = mobility["instantaneous"].platform_freedom_locked
+    if freedom:
+        warnings.append(
+            f"with the actuators locked the rods leave the platform {freedom} degree(s) of "
+            "freedom (rotations): the translational model assumes joints that fix the "
+            "orientation, which the rods alone do not"
+        )
     return {
         "id": m.id,
         "name": m.name,
@@ -63,6 +71,7 @@ def describe_machine(m: Machine, units: str = "m") -> dict[str, Any]:
             "grubler": mobility["grubler"].as_dict(),
             "instantaneous": asdict(mobility["instantaneous"]),
         },
+        "warnings": warnings,
     }
 
 
@@ -102,6 +111,8 @@ def print_description(info: dict[str, Any]) -> None:
         f"redundant constraints: {inst['redundant_constraints']}; platform freedom with "
         f"actuators locked: {inst['platform_freedom_locked']}"
     )
+    for text in info["warnings"]:
+        click.echo(f"warning: {text}")
     poses = np.array(list(info["reference_poses"].values()))
     click.echo(f"reference poses ({u}): " + "; ".join(
         f"{k} {fmt(v)}" for k, v in zip(info["reference_poses"], poses, strict=True)))

@@ -66,11 +66,21 @@ def _batch_options(func):
     return func
 
 
-def _finish_batch(status: np.ndarray, output: str) -> None:
+def _read_batch(path: str, columns, scale: float) -> np.ndarray:
+    """Batch input in SI units; unreadable cells become NaN rows, reported on stderr."""
+    problems: list[str] = []
+    table = read_table(path, columns, problems) * scale
+    for message in problems:
+        click.echo(f"warning: {message} (row flagged invalid-input)", err=True)
+    return table
+
+
+def _finish_batch(status: np.ndarray, output: str, note: str = "") -> None:
     bad = int((status != Status.OK).sum())
-    click.echo(f"wrote {len(status)} rows to {output}; {bad} flagged", err=True)
+    click.echo(f"wrote {len(status)} rows to {output}; {bad} flagged{note}", err=True)
     if bad:
-        counts = {lab: status_labels(status).count(lab) for lab in set(status_labels(status))}
+        labels = status_labels(status)
+        counts = {lab: labels.count(lab) for lab in sorted(set(labels))}
         click.echo(f"statuses: {counts}", err=True)
         sys.exit(EXIT_PARTIAL)
 
@@ -131,30 +141,36 @@ def show(machine_name: str, assignments, units: str, as_json: bool) -> None:
 @SET_OPTION
 @click.option("--pose", help="Platform position X,Y[,Z].")
 @click.option("--branches", help="Inverse-model branch per leg, e.g. 1,1,-1 (default: working).")
+@click.option("--q0", "q0_text", help="Initial actuator coordinates for --method numeric.")
 @click.option("--method", type=click.Choice(["closed", "numeric"]), default="closed",
               show_default=True, help="Closed form or the least-squares engine.")
 @_batch_options
 @UNITS_OPTION
 @JSON_OPTION
-def ik(machine_name, assignments, pose, branches, method, input_, output, units, as_json):
+def ik(machine_name, assignments, pose, branches, q0_text, method, input_, output, units,
+       as_json):
     """Inverse kinematics: actuator coordinates of a pose (or of every row of --input)."""
     _require_batch_pair(pose, input_, output, "--pose")
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     br = _parse_branches(branches, m)
     if input_ is not None:
-        x = read_table(input_, m.pose_names) * scale
+        x = _read_batch(input_, m.pose_names, scale)
         res = m.ik(x, method=method, branches=br, full_output=True)
-        header = [*m.pose_names, *m.actuator_names, "status"]
-        rows = [[*(x[k] / scale), *(res.q[k] / scale), lab]
+        header = [*m.pose_names, *m.actuator_names, "mode", "status"]
+        rows = [[*(x[k] / scale), *(res.q[k] / scale),
+                 m.mode_label(res.mode[k]) if res.mode[k] else "", lab]
                 for k, lab in enumerate(status_labels(res.status))]
         write_table(output, header, rows)
         _finish_batch(res.status, output)
         return
     x = parse_vector(pose, m.dims, "--pose", units)
-    res = m.ik(x, method=method, branches=br, full_output=True)
+    q0 = parse_vector(q0_text, m.n_actuators, "--q0", units) if q0_text else None
+    res = m.ik(x, method=method, branches=br, q0=q0, full_output=True)
+    mode = m.mode_label(int(res.mode))
     payload = {"machine": m.id, "units": units, "pose": x / scale, "q": res.q / scale,
                "actuators": list(m.actuator_names), "branches": res.branches,
+               "mode": mode, "working_mode": int(res.mode) == m.working_mode,
                "method": method, "status": Status(int(res.status)).label}
     if as_json:
         emit_json(payload)
@@ -162,6 +178,9 @@ def ik(machine_name, assignments, pose, branches, method, input_, output, units,
         click.echo(f"{m.name}: pose {fmt(x / scale)} {units}")
         for name, value in zip(m.actuator_names, res.q / scale, strict=True):
             click.echo(f"  {name} = {value:.9g} {units}")
+        if int(res.mode) != m.working_mode:
+            click.echo(f"  note: this configuration is in the {mode!r} assembly mode, not the "
+                       f"working one ({m.mode_labels[0]!r}); fk returns it with --mode {mode}")
 
 
 @cli.command()
@@ -170,24 +189,27 @@ def ik(machine_name, assignments, pose, branches, method, input_, output, units,
 @click.option("--q", "q_text", help="Actuator coordinates Q1,Q2[,Q3].")
 @click.option("--all", "all_modes", is_flag=True, help="Report every real assembly mode.")
 @click.option("--mode", default="working", show_default=True,
-              help="Assembly mode: working, other, or a mode name (see `pkmkit show`).")
+              help="Assembly mode: working, other, a mode name (see `pkmkit show`), or the "
+                   "sign of det A (1 or -1).")
+@click.option("--x0", "x0_text", help="Initial pose for --method numeric.")
 @click.option("--method", type=click.Choice(["closed", "numeric"]), default="closed",
               show_default=True, help="Closed form or the least-squares engine.")
 @_batch_options
 @UNITS_OPTION
 @JSON_OPTION
-def fk(machine_name, assignments, q_text, all_modes, mode, method, input_, output, units,
-       as_json):
+def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, input_, output,
+       units, as_json):
     """Direct kinematics: platform pose of actuator coordinates (or of every row of --input)."""
     _require_batch_pair(q_text, input_, output, "--q")
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     if input_ is not None:
-        q = read_table(input_, m.actuator_names) * scale
+        q = _read_batch(input_, m.actuator_names, scale)
         _fk_batch(m, q, all_modes, mode, method, output, scale)
         return
     q = parse_vector(q_text, m.n_actuators, "--q", units)
-    res = m.fk(q, mode=mode, method=method, full_output=True)
+    x0 = parse_vector(x0_text, m.dims, "--x0", units) if x0_text else None
+    res = m.fk(q, mode=mode, method=method, x0=x0, full_output=True)
     payload = {"machine": m.id, "units": units, "q": q / scale, "pose": res.pose / scale,
                "mode": res.mode_label, "mode_sign": res.mode, "branches": res.branches,
                "method": method, "status": Status(int(res.status)).label}
@@ -246,18 +268,21 @@ def jacobian(machine_name, assignments, pose, tol, input_, output, units, as_jso
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     if input_ is not None:
-        x = read_table(input_, m.pose_names) * scale
-        jac = m.jacobian(x, tol=tol)
+        x = _read_batch(input_, m.pose_names, scale)
+        inv = m.ik(x, full_output=True)
+        jac = m.jacobian(x, q=inv.q, tol=tol)
         n, d = m.n_actuators, m.dims
         header = [*m.pose_names, *m.actuator_names, *[f"sv{i + 1}" for i in range(n)],
                   "condition", "det_A", "det_B",
                   *[f"J{i + 1}{j + 1}" for i in range(d) for j in range(n)], "status"]
-        status = np.where(jac.reachable, Status.OK, Status.UNREACHABLE)
+        labels = [lab if ok else Status(int(st)).label for lab, ok, st in
+                  zip(jac.status, inv.status == Status.OK, inv.status, strict=True)]
         rows = [[*(x[k] / scale), *(jac.q[k] / scale), *jac.singular_values[k],
                  jac.condition[k], jac.det_A[k] / scale**n, jac.det_B[k] / scale**n,
-                 *jac.J[k].ravel(), lab] for k, lab in enumerate(jac.status)]
+                 *jac.J[k].ravel(), lab] for k, lab in enumerate(labels)]
         write_table(output, header, rows)
-        _finish_batch(status, output)
+        singular = int(((jac.singularity != 0) & (inv.status == Status.OK)).sum())
+        _finish_batch(inv.status, output, f" (and {singular} singular rows computed)")
         return
     x = parse_vector(pose, m.dims, "--pose", units)
     jac = m.jacobian(x, tol=tol)
@@ -287,10 +312,13 @@ def jacobian(machine_name, assignments, pose, tol, input_, output, units, as_jso
 @click.option("--out", "out_dir", default="pkmkit-demo", show_default=True,
               type=click.Path(file_okay=False), help="Directory for the JSON and PNG files.")
 def demo(out_dir: str) -> None:
-    """Kinematic summary of every built-in machine (text, JSON and drawings)."""
+    """Kinematic summary and analysis of every built-in machine (text, JSON and figures)."""
     from .demo import run_demo
 
-    run_demo(Path(out_dir))
+    try:
+        run_demo(Path(out_dir))
+    except OSError as exc:
+        raise click.ClickException(f"cannot write into {out_dir}: {exc.strerror or exc}") from None
 
 
 register_analysis_commands(cli)

@@ -55,7 +55,7 @@ def isotropic_orientations(starts: int = 64, seed: int = 0,
         pair = np.where(pair > 180.0 - tol_deg, pair - 180.0, pair)
         if not any(np.abs(pair - np.array(f)).max() < tol_deg for f in found):
             found.append(tuple(float(v) for v in pair))
-    digits = max(0, -int(math.floor(math.log10(tol_deg))))
+    digits = max(0, -math.floor(math.log10(tol_deg)))
     return sorted((round(a, digits) + 0.0, round(b, digits) + 0.0) for a, b in found)
 
 

@@ -4,16 +4,18 @@ Every metric is computed from one batched evaluation of the region (a grid of po
 inverse model and the velocity model), never pose by pose. The prescribed region is an
 axis-aligned square (planar machines) or cube, given by its side and centre.
 
-| metric | meaning |
-|---|---|
-| ``violation`` | 0 when every pose of the region satisfies the criteria; otherwise the fraction of unreachable poses plus the largest relative excess of a transmission-factor bound or of κ (a continuous measure for constraint handling) |
-| ``stroke`` | largest actuator range needed over the region, m |
-| ``compactness`` | region side / stroke |
-| ``lambda_min``, ``lambda_max`` | extreme velocity transmission factors over the region |
-| ``worst_condition`` | largest condition number over the region |
-| ``gci`` | global conditioning index (mean 1/κ) over the region |
-| ``footprint`` | area of the convex hull, in the x-y plane, of the carriage joints over the region, m² |
-| ``inscribed_side`` | side of the largest square/cube satisfying the criteria in the machine's default box (a workspace computation: slower) |
+- ``violation``: 0 when every pose of the region satisfies the criteria; otherwise the fraction of
+  unreachable poses plus the largest relative excess of a transmission-factor bound or of κ (a
+  continuous measure for constraint handling);
+- ``stroke``: largest actuator range needed over the region, m;
+- ``compactness``: region side / stroke;
+- ``lambda_min``, ``lambda_max``: extreme velocity transmission factors over the region;
+- ``worst_condition``: largest condition number over the region;
+- ``gci``: global conditioning index (mean 1/κ) over the region;
+- ``footprint``: area of the convex hull, in the x-y plane, of the carriage joints over the
+  region, m²;
+- ``inscribed_side``: side of the largest square/cube satisfying the criteria in the machine's
+  default box (a workspace computation: slower).
 """
 
 from __future__ import annotations

@@ -152,7 +152,8 @@ class DesignProblem:
         known = set(METRICS) | set(self.user_metrics)
         for item in [*self.objectives, *self.constraints]:
             if item.metric not in known:
-                raise InputError(f"unknown metric {item.metric!r}; valid: {', '.join(sorted(known))}")
+                raise InputError(f"unknown metric {item.metric!r}; valid: "
+                                 f"{', '.join(sorted(known))}")
         if self.require_region:
             self.constraints = (*self.constraints, Constraint("violation", "<=", 0.0))
 

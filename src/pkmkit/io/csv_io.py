@@ -1,8 +1,10 @@
 """Batch tables in CSV: numeric input columns, mixed output columns.
 
 Input files have one row per pose (or actuator vector), an optional header naming the columns,
-and ``#`` comment lines. Cells ``nan``/``inf`` are read as such (the batch call flags those rows);
-any other non-numeric cell is an error naming the file line and column.
+and ``#`` comment lines; a UTF-8 byte-order mark (spreadsheet exports) is accepted. Cells
+``nan``/``inf`` are read as such (the batch call flags those rows). Any other non-numeric cell is
+an error naming the file line and column — or, when the caller collects problems, a NaN that
+flags only that row.
 """
 
 from __future__ import annotations
@@ -16,18 +18,25 @@ import numpy as np
 from pkmkit.errors import InputError
 
 
-def read_table(path: str | Path, columns: Sequence[str]) -> np.ndarray:
+def read_table(path: str | Path, columns: Sequence[str],
+               problems: list[str] | None = None) -> np.ndarray:
     """Read the columns ``columns`` of a CSV file into a ``(N, len(columns))`` float array.
 
     With a header, columns are matched by name (extra columns are ignored); without one, the
     first ``len(columns)`` columns are used in order.
 
+    Args:
+        path: the file.
+        columns: wanted columns.
+        problems: if given, a bad cell or a short row becomes NaN (the batch call flags that
+            row) and a message ``"FILE:LINE: ..."`` is appended here instead of raising.
+
     Raises:
-        InputError: unreadable file, missing columns, a non-numeric cell (with its line), or no
-            data rows.
+        InputError: unreadable file, missing columns, no data rows, or (without ``problems``)
+            a non-numeric cell or a short row, with its line.
     """
     try:
-        with open(path, newline="", encoding="utf-8") as handle:
+        with open(path, newline="", encoding="utf-8-sig") as handle:
             rows = [
                 (number, row)
                 for number, row in enumerate(csv.reader(handle), start=1)
@@ -54,18 +63,23 @@ def read_table(path: str | Path, columns: Sequence[str]) -> np.ndarray:
     if not rows:
         raise InputError(f"{path}: no data rows after the header")
     out = np.empty((len(rows), len(columns)))
+
+    def problem(message: str) -> None:
+        if problems is None:
+            raise InputError(message)
+        problems.append(message)
+
     for k, (number, row) in enumerate(rows):
         if len(row) <= max(index):
-            raise InputError(
-                f"{path}:{number}: expected at least {max(index) + 1} columns, got {len(row)}"
-            )
+            problem(f"{path}:{number}: expected at least {max(index) + 1} columns, got {len(row)}")
+            out[k] = np.nan
+            continue
         for j, col in enumerate(index):
             try:
                 out[k, j] = float(row[col])
             except ValueError:
-                raise InputError(
-                    f"{path}:{number}: column {columns[j]!r} is not a number: {row[col]!r}"
-                ) from None
+                problem(f"{path}:{number}: column {columns[j]!r} is not a number: {row[col]!r}")
+                out[k, j] = np.nan
     return out
 
 
@@ -78,9 +92,17 @@ def _numeric(row: Sequence[str]) -> bool:
 
 
 def write_table(path: str | Path, header: Sequence[str], rows: Sequence[Sequence]) -> None:
-    """Write a CSV file with a header row; floats are written with 17 significant digits."""
-    with open(path, "w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(header)
-        for row in rows:
-            writer.writerow([f"{v:.17g}" if isinstance(v, float) else v for v in row])
+    """Write a CSV file with a header row; floats are written with 17 significant digits.
+
+    Raises:
+        InputError: the file cannot be written (missing directory, permissions).
+    """
+    try:
+        with open(path, "w", newline="", encoding="utf-8") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(header)
+            for row in rows:
+                writer.writerow([f"{float(v):.17g}" if isinstance(v, float | np.floating) else v
+                                 for v in row])
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write file: {exc.strerror or exc}") from None

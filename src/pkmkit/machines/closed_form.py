@@ -33,6 +33,9 @@ import numpy as np
 
 from pkmkit.model.rods import SLIDE, STRUT, RodModel
 
+#: Relative tolerance (on ℓ²) within which a negative inverse-model radicand is rounding noise at
+#: the workspace boundary (leg perpendicular to its slide) and is taken as 0.
+BOUNDARY_TOL = 1e-12
 #: Rows per chunk in the inverse model: keeps temporaries in cache (~2× faster than one pass).
 CHUNK = 32768
 
@@ -89,7 +92,7 @@ class RodClosedForm:
         kinds = self.model.leg_kind
         projection_t = np.ascontiguousarray(self.projection.T)
         offset = self.offset[:, None]
-        with np.errstate(invalid="ignore"):
+        with np.errstate(invalid="ignore", over="ignore"):
             for start in range(0, x.shape[0], CHUNK):
                 stop = start + CHUNK
                 y = projection_t @ x[start:stop].T  # (n*dims, chunk)
@@ -101,6 +104,9 @@ class RodClosedForm:
                         perp_sq += y[base + 2] * y[base + 2]
                     if kinds[i] == SLIDE:
                         np.subtract(self.length_sq[i], perp_sq, out=perp_sq)
+                        # a boundary pose's radicand may round slightly below 0: clamp it
+                        np.maximum(perp_sq, 0.0, out=perp_sq,
+                                   where=perp_sq > -BOUNDARY_TOL * self.length_sq[i])
                         root = np.sqrt(perp_sq, out=perp_sq)
                         if branches[i] < 0:
                             np.negative(root, out=root)
@@ -114,10 +120,10 @@ class RodClosedForm:
     def shortfall(self, x: np.ndarray) -> np.ndarray:
         """``(N, n)``: by how much each slide leg is too short to reach ``x`` (≤ 0 when it
         reaches; always −inf for struts), metres."""
-        w = x[:, None, :] - self.centre0[None]
-        with np.errstate(invalid="ignore"):
-            along = np.einsum("kid,id->ki", w, self.axis)
-            perp = np.sqrt(np.maximum(np.einsum("kid,kid->ki", w, w) - along**2, 0.0))
+        dims = self.model.dims
+        with np.errstate(invalid="ignore", over="ignore"):
+            y = (x @ self.projection - self.offset).reshape(x.shape[0], -1, dims)
+            perp = np.abs(y[:, :, 1]) if dims == 2 else np.hypot(y[:, :, 1], y[:, :, 2])
         out = perp - self.model.leg_length[None]
         out[:, self.model.leg_kind == STRUT] = -np.inf
         return out
@@ -132,8 +138,9 @@ class RodClosedForm:
     # ------------------------------------------------------------------ direct
     def centres(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Sphere centres ``(N, n, dims)`` and radii ``(N, n)`` for actuator coordinates q."""
-        c = self.centre0[None] + (q * self.slide)[:, :, None] * self.axis[None]
-        rho = self.model.leg_length[None] + q * self.strut
+        with np.errstate(invalid="ignore", over="ignore"):
+            c = self.centre0[None] + np.where(self.slide > 0, q, 0.0)[:, :, None] * self.axis[None]
+            rho = self.model.leg_length[None] + np.where(self.strut > 0, q, 0.0)
         return c, rho
 
     def direct_all(self, q: np.ndarray, rel_tol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:
@@ -160,9 +167,9 @@ class RodClosedForm:
 
     def _direct_chunk(self, q: np.ndarray, rel_tol: float) -> tuple[np.ndarray, np.ndarray]:
         c, rho = self.centres(q)
-        rho_sq = rho**2
         c1 = c[:, 0]
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            rho_sq = rho**2
             if self.model.dims == 3:
                 e1, e2 = c[:, 1] - c1, c[:, 2] - c1
                 g11 = np.einsum("kd,kd->k", e1, e1)
@@ -187,9 +194,11 @@ class RodClosedForm:
             t_sq = np.where(np.abs(t_sq) <= rel_tol * rho_sq[:, 0] / gram, 0.0, t_sq)
             t = np.sqrt(t_sq)
         t[degenerate] = np.nan
-        centre = c1 + w
-        offset = t[:, None] * normal
-        return np.stack([centre - offset, centre + offset], axis=1), degenerate
+        t[(rho <= 0).any(axis=1)] = np.nan  # a strut cannot have a negative length
+        with np.errstate(invalid="ignore", over="ignore"):
+            centre = c1 + w
+            offset = t[:, None] * normal
+            return np.stack([centre - offset, centre + offset], axis=1), degenerate
 
     # ------------------------------------------------------------------ velocity
     def rod_vectors(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:

@@ -49,6 +49,10 @@ PARAMETERS = (
 )
 
 
+#: |sin(α2 − α1)| below which (but not zero) the slides count as nearly parallel.
+NEARLY_PARALLEL = 1e-3
+
+
 def _cross(a: np.ndarray, b: np.ndarray) -> float:
     return float(a[0] * b[1] - a[1] * b[0])
 
@@ -61,13 +65,23 @@ def home_configuration(params: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarra
     length = params["L"]
     denom = _cross(u1, u2)
     if abs(denom) > 1e-9:
+        if abs(denom) < NEARLY_PARALLEL:
+            raise ParameterError(
+                f"the slides are nearly parallel ({math.degrees(math.asin(abs(denom))):.3g}°): "
+                "the home configuration (where the slide lines cross) would be "
+                f"{abs(_cross(b - a, u2) / denom):.3g} m away; make them parallel "
+                "(alpha1 = alpha2) or increase the angle",
+                "alpha2",
+            )
         s = _cross(b - a, u2) / denom
         p = a + s * u1
         return p, p - length * u1, p - length * u2
     normal = np.array([u1[1], -u1[0]])
-    p = 0.5 * (a + b) + length / math.sqrt(2.0) * normal
+    middle = 0.5 * (a + b)
+    p = middle + length / math.sqrt(2.0) * normal
     half = length / math.sqrt(2.0) * u1
-    c, d = (p - half, p + half) if np.dot(b - a, u1) >= 0 else (p + half, p - half)
+    c, d = (middle - half, middle + half) if np.dot(b - a, u1) >= 0 else (
+        middle + half, middle - half)
     return p, c, d
 
 

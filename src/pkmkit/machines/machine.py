@@ -36,16 +36,20 @@ from pkmkit.machines.results import (
     Singularity,
 )
 from pkmkit.model.mobility import grubler_count
-from pkmkit.model.parameters import ParameterSpec, resolve_parameters
-from pkmkit.model.rods import RodModel
+from pkmkit.model.parameters import ParameterSpec, is_plain_number, resolve_parameters
+from pkmkit.model.rods import SLIDE, RodModel
 from pkmkit.numerics import small
-from pkmkit.numerics.arrays import as_batch, finite_rows, require_finite, restore_shape
+from pkmkit.numerics.arrays import as_batch, require_finite, restore_shape
 from pkmkit.numerics.linalg import batched_det, condition_number
 from pkmkit.solve.rod_closure import instantaneous_mobility, solve_direct, solve_inverse
 from pkmkit.status import Status
 
 #: Default threshold on the singularity measures (dimensionless).
 SINGULARITY_TOL = 1e-6
+#: The home configuration must be at least this far from any singularity (same measures).
+HOME_TOL = 1e-4
+#: Pose or actuator coordinates beyond this magnitude (m) are rejected as invalid input.
+MAX_COORDINATE = 1e9
 #: Poses per chunk of the batched velocity model (keeps the temporaries in cache).
 JACOBIAN_CHUNK = 16384
 
@@ -89,6 +93,33 @@ class MachineKind:
     source: str = ""
     default_box: Callable[[Mapping[str, Any], RodModel], tuple[np.ndarray, np.ndarray]] | None = (
         None)
+
+
+def _valid_rows(arr: np.ndarray) -> np.ndarray:
+    """Rows ``(N,)`` whose entries are finite and within ±MAX_COORDINATE."""
+    with np.errstate(invalid="ignore"):
+        return (np.abs(arr) <= MAX_COORDINATE).all(axis=1)
+
+
+def _checked_batch(value: Any, width: int, name: str) -> tuple[np.ndarray, bool]:
+    """:func:`as_batch`, and for a single row: finite, sane magnitudes (typed errors)."""
+    arr, single = as_batch(value, width, name)
+    if single:
+        require_finite(arr, name)
+        if not _valid_rows(arr)[0]:
+            raise InputError(f"{name} {arr[0].tolist()} has a coordinate beyond "
+                             f"{MAX_COORDINATE:g} m")
+    return arr, single
+
+
+def _rows_like(value: Any, width: int, name: str, rows: int) -> np.ndarray:
+    """A warm start given for one row or for every row, as ``(rows, width)``."""
+    arr, single = as_batch(value, width, name)
+    if single:
+        return np.tile(arr, (rows, 1))
+    if arr.shape[0] != rows:
+        raise InputError(f"{name} has {arr.shape[0]} rows but the input has {rows}")
+    return arr.copy()
 
 
 def _restore(result, single: bool, names: tuple[str, ...]):
@@ -136,8 +167,15 @@ class Machine:
             )
         a, b = closed.jacobians(home, q_home)
         det_a = float(batched_det(a)[0])
-        if det_a == 0.0 or not np.all(np.diag(b[0])):
-            raise ParameterError(f"machine {self.id!r}: the home pose is a singular configuration")
+        lengths = np.linalg.norm(a[0], axis=1)
+        sv_unit = np.linalg.svd(a[0] / lengths[:, None], compute_uv=False)
+        serial = float(np.min(np.abs(np.diag(b[0])) / lengths))
+        if not (sv_unit[-1] / sv_unit[0] >= HOME_TOL and serial >= HOME_TOL):
+            kind = "a parallel" if sv_unit[-1] / sv_unit[0] < HOME_TOL else "a serial"
+            raise ParameterError(
+                f"machine {self.id!r}: the home pose {self.model.home_pose.tolist()} is (nearly) "
+                f"{kind} singularity; choose other dimensions"
+            )
         object.__setattr__(self, "_closed", closed)
         object.__setattr__(self, "_home_q", q_home[0])
         object.__setattr__(self, "_working_mode", 1 if det_a > 0 else -1)
@@ -221,24 +259,33 @@ class Machine:
     def _branches(self, branches: Any) -> np.ndarray:
         if branches is None:
             return self.model.leg_branch
-        arr = np.asarray(branches, dtype=int).reshape(-1)
-        if arr.shape != (self.model.n_legs,) or not np.isin(arr, (-1, 1)).all():
-            raise InputError(
-                f"branches must be {self.model.n_legs} values of +1 or -1, got {branches!r}"
-            )
-        return arr
+        message = f"branches must be {self.model.n_legs} values of +1 or -1, got {branches!r}"
+        if not is_plain_number(branches):
+            raise InputError(message)
+        arr = np.asarray(branches, dtype=float).reshape(-1)
+        if arr.shape != (self.model.n_legs,) or not np.isin(arr, (-1.0, 1.0)).all():
+            raise InputError(message)
+        return arr.astype(int)
 
     def _mode_sign(self, mode: Any) -> int:
-        if mode in ("working", None):
-            return self._working_mode
-        if mode == "other":
-            return -self._working_mode
-        if mode in (1, -1):
-            return int(mode)
-        if mode in self.model.mode_names:
-            return -1 if mode == self.model.mode_names[0] else 1
         valid = ["working", "other", "-1", "1", *self.model.mode_names]
-        raise InputError(f"unknown assembly mode {mode!r}; valid modes: {', '.join(valid)}")
+        error = InputError(f"unknown assembly mode {mode!r}; valid modes: {', '.join(valid)}")
+        if mode is None:
+            return self._working_mode
+        if isinstance(mode, str):
+            text = mode.strip()
+            if text == "working":
+                return self._working_mode
+            if text == "other":
+                return -self._working_mode
+            if text in ("1", "+1", "-1"):
+                return int(text)
+            if text in self.model.mode_names:
+                return -1 if text == self.model.mode_names[0] else 1
+            raise error
+        if isinstance(mode, int | np.integer) and not isinstance(mode, bool) and mode in (1, -1):
+            return int(mode)
+        raise error
 
     def _linear_guess_q(self, x: np.ndarray) -> np.ndarray:
         """First-order guess of q near home: q_home + J⁻¹(home) (x − home)."""
@@ -280,23 +327,24 @@ class Machine:
             UnreachablePoseError: a single pose out of reach (names the leg and the shortfall).
             ConvergenceError: a single numeric solve that failed.
         """
-        xb, single = as_batch(x, self.dims, "pose")
-        if single:
-            require_finite(xb, "pose")
+        xb, single = _checked_batch(x, self.dims, "pose")
         br = self._branches(branches)
         iterations = residual = None
         if method == "closed":
             q = self._closed.inverse(xb, br)
             status = np.zeros(xb.shape[0], dtype=int)
             # a non-finite row sum flags rows with NaN (unreachable) or non-finite input
-            bad = np.flatnonzero(~np.isfinite(q @ np.ones(self.n_actuators)))
-            status[bad] = np.where(finite_rows(xb[bad]), Status.UNREACHABLE,
+            with np.errstate(invalid="ignore", over="ignore"):
+                bad = np.flatnonzero(~np.isfinite(q @ np.ones(self.n_actuators)))
+            status[bad] = np.where(_valid_rows(xb[bad]), Status.UNREACHABLE,
                                    Status.INVALID_INPUT)
             q[bad] = np.nan
         elif method == "numeric":
-            guess = self._linear_guess_q(xb) if q0 is None else as_batch(q0, self.n_actuators,
-                                                                            "q0")[0]
-            guess = np.broadcast_to(guess, (xb.shape[0], self.n_actuators)).copy()
+            if q0 is None:
+                guess = self._branch_guess_q(xb, br)
+            else:
+                guess = _rows_like(q0, self.n_actuators, "q0", xb.shape[0])
+            guess[~_valid_rows(xb)] = np.nan  # the engine skips (and flags) these rows
             engine_options.setdefault("compute_rank", False)
             result = solve_inverse(self.model, xb, guess, **engine_options)
             q, status = result.u, result.status.copy()
@@ -306,6 +354,7 @@ class Machine:
             wrong[ok] = (self._closed.branch_signs(xb[ok], q[ok]) != br).any(axis=1)
             status[wrong] = Status.WRONG_MODE
             q = np.where((status == Status.OK)[:, None], q, np.nan)
+            status[~_valid_rows(xb)] = Status.INVALID_INPUT
             iterations, residual = result.iterations, result.residual
         else:
             raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
@@ -319,12 +368,37 @@ class Machine:
             branches=br.copy(),
             shortfall=self._closed.shortfall(xb),
             method=method,
+            mode=self._mode_of(xb, q),
             iterations=iterations,
             residual=residual,
         )
-        return _restore(result, single, ("q", "status", "shortfall", "iterations", "residual"))
+        names = ("q", "status", "shortfall", "mode", "iterations", "residual")
+        return _restore(result, single, names)
+
+    def _mode_of(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """Sign of det A (assembly mode) of each configuration, 0 where undefined."""
+        ok = np.isfinite(q).all(axis=1)
+        out = np.zeros(x.shape[0], dtype=int)
+        if ok.any():
+            a, _ = self._closed.jacobians(x[ok], q[ok])
+            out[ok] = np.sign(batched_det(a)).astype(int)
+        return out
+
+    def _branch_guess_q(self, x: np.ndarray, branches: np.ndarray) -> np.ndarray:
+        """Linear guess from home; for legs on a non-working branch, the other root of the
+        leg's quadratic (mirror of the carriage about the foot of the platform joint)."""
+        guess = self._linear_guess_q(x)
+        flip = (branches != self.model.leg_branch) & (self.model.leg_kind == SLIDE)
+        if flip.any():
+            along = np.einsum("kid,id->ki", x[:, None, :] - self._closed.centre0[None],
+                              self._closed.axis)
+            guess[:, flip] = 2.0 * along[:, flip] - guess[:, flip]
+        return guess
 
     def _raise_inverse(self, xb: np.ndarray, status: int, iterations) -> None:
+        if status == Status.INVALID_INPUT:
+            raise InputError(f"pose {xb[0].tolist()} has a coordinate beyond "
+                             f"{MAX_COORDINATE:g} m")
         short = self._closed.shortfall(xb)[0]
         if status == Status.UNREACHABLE or (short > 0).any():
             leg = int(np.argmax(short))
@@ -351,10 +425,8 @@ class Machine:
             leading axis. Rows without any real assembly have ``status`` NO_ASSEMBLY (no error is
             raised here: zero solutions is a valid answer).
         """
-        qb, single = as_batch(q, self.n_actuators, "q")
-        if single:
-            require_finite(qb, "q")
-        finite = finite_rows(qb)
+        qb, single = _checked_batch(q, self.n_actuators, "q")
+        finite = _valid_rows(qb)
         poses, degenerate = self._closed.direct_all(qb)
         order = [0, 1] if self._working_mode < 0 else [1, 0]
         poses = poses[:, order]
@@ -410,9 +482,7 @@ class Machine:
             SingularConfigurationError: a single q whose sphere centres are aligned.
             ConvergenceError: a single numeric solve that failed or reached another mode.
         """
-        qb, single = as_batch(q, self.n_actuators, "q")
-        if single:
-            require_finite(qb, "q")
+        qb, single = _checked_batch(q, self.n_actuators, "q")
         sign = self._mode_sign(mode)
         rotation = iterations = residual = None
         if method == "closed":
@@ -423,14 +493,19 @@ class Machine:
                               Status.NO_ASSEMBLY)
             status[degenerate] = Status.SINGULAR
         elif method == "numeric":
-            guess = (self._linear_guess_pose(qb) if x0 is None
-                     else as_batch(x0, self.dims, "x0")[0])
-            guess = np.broadcast_to(guess, (qb.shape[0], self.dims))
+            if dof not in ("translation", "full"):
+                raise InputError(f"dof must be 'translation' or 'full', got {dof!r}")
+            if x0 is None:
+                guess = self._mode_guess_pose(qb, sign)
+            else:
+                guess = _rows_like(x0, self.dims, "x0", qb.shape[0])
+            guess[~_valid_rows(qb)] = np.nan  # the engine skips (and flags) these rows
             if dof == "full":
                 extra = 3 if self.dims == 3 else 1
                 guess = np.concatenate([guess, np.zeros((qb.shape[0], extra))], axis=1)
             engine_options.setdefault("compute_rank", False)
-            result = solve_direct(self.model, qb, np.array(guess), dof=dof, **engine_options)
+            with np.errstate(invalid="ignore", over="ignore"):
+                result = solve_direct(self.model, qb, np.array(guess), dof=dof, **engine_options)
             pose = result.u[:, : self.dims].copy()
             status = result.status.copy()
             status[status == Status.INCONSISTENT] = Status.NO_ASSEMBLY
@@ -450,7 +525,7 @@ class Machine:
             raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
         status = np.asarray(status, dtype=int)
         bad = np.flatnonzero(status != Status.OK)
-        status[bad[~finite_rows(qb[bad])]] = Status.INVALID_INPUT
+        status[bad[~_valid_rows(qb[bad])]] = Status.INVALID_INPUT
         ok = status == Status.OK
         if not ok.all():
             pose = np.where(ok[:, None], pose, np.nan)
@@ -474,8 +549,27 @@ class Machine:
         names = ("pose", "status", "mode", "branches", "rotation", "iterations", "residual")
         return _restore(result, single, names)
 
+    def _mode_guess_pose(self, q: np.ndarray, sign: int) -> np.ndarray:
+        """Linear guess from home; for the other assembly mode, its mirror about the plane
+        (line) through the sphere centres — the two modes are mirror images."""
+        with np.errstate(invalid="ignore", over="ignore"):
+            guess = self._linear_guess_pose(q)
+            if sign == self._working_mode:
+                return guess
+            c, _ = self._closed.centres(q)
+            if self.dims == 3:
+                normal = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+            else:
+                e = c[:, 1] - c[:, 0]
+                normal = np.stack([-e[:, 1], e[:, 0]], axis=1)
+            normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+            depth = np.einsum("kd,kd->k", guess - c[:, 0], normal)
+            return guess - 2.0 * depth[:, None] * normal
+
     def _raise_direct(self, q: np.ndarray, sign: int, status: int) -> None:
         label = self.mode_label(sign)
+        if status == Status.INVALID_INPUT:
+            raise InputError(f"q = {q.tolist()} has a coordinate beyond {MAX_COORDINATE:g} m")
         if status == Status.SINGULAR:
             raise SingularConfigurationError(
                 f"q = {q.tolist()}: the leg sphere centres are aligned; the direct model has no "
@@ -510,21 +604,41 @@ class Machine:
             NaN.
 
         Raises:
-            InputError, UnreachablePoseError: as for :meth:`ik` (single pose).
+            InputError, UnreachablePoseError: as for :meth:`ik` (single pose); q that does not
+                fit x (single pose; batched rows become NaN); a tolerance that is not > 0.
         """
+        if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
+            raise InputError(f"tol must be a positive number, got {tol!r}")
         xb, qb, single = self._poses_and_q(x, q, branches)
         jac = self._jacobians(xb, qb, tol)
         names = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
-                 "parallel_measure", "serial_measure", "singularity", "q")
+                 "parallel_measure", "serial_measure", "singularity", "q", "mode")
         return _restore(jac, single, names)
 
     def _poses_and_q(self, x: Any, q: Any, branches: Any) -> tuple[np.ndarray, np.ndarray, bool]:
-        xb, single = as_batch(x, self.dims, "pose")
+        xb, single = _checked_batch(x, self.dims, "pose")
         if q is None:
             return xb, np.atleast_2d(self.ik(xb[0] if single else xb, branches=branches)), single
-        qb, _ = as_batch(q, self.n_actuators, "q")
+        qb, _q_single = _checked_batch(q, self.n_actuators, "q") if single else as_batch(
+            q, self.n_actuators, "q")
         if qb.shape[0] != xb.shape[0]:
             raise InputError(f"x has {xb.shape[0]} rows but q has {qb.shape[0]}")
+        # q must close every leg at x: otherwise the Jacobians describe no configuration
+        with np.errstate(invalid="ignore", over="ignore"):
+            d = self._closed.rod_vectors(xb, qb)
+            _, rho = self._closed.centres(qb)
+            error = np.abs(np.linalg.norm(d, axis=2) - rho)
+        scale = 1e-9 * (1.0 + float(self.model.leg_length.max()))
+        bad = ~(error <= scale).all(axis=1)
+        if bad.any():
+            if single:
+                leg = int(np.nanargmax(np.where(np.isfinite(error[0]), error[0], np.inf)))
+                raise InputError(
+                    f"q = {qb[0].tolist()} does not fit pose {xb[0].tolist()}: "
+                    f"{self.model.leg_names[leg]} misses its length by {error[0, leg]:.6g} m"
+                )
+            qb = qb.copy()
+            qb[bad] = np.nan
         return xb, qb, single
 
     def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> Jacobians:
@@ -548,8 +662,11 @@ class Machine:
             serial = np.min(np.abs(b) / lengths, axis=0)
         flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
         flags |= np.where((parallel < tol) | (det_a == 0.0), int(Singularity.PARALLEL), 0)
+        at_parallel = (flags & Singularity.PARALLEL).astype(bool)
+        j[:, :, at_parallel] = np.nan  # J does not exist there (A is singular)
+        sv[:, at_parallel] = np.nan
         sv_t = sv.T
-        condition = np.where(flags & Singularity.PARALLEL, np.nan, condition_number(sv_t))
+        condition = np.where(at_parallel, np.nan, condition_number(sv_t))
         b_full = np.zeros((size, n, n))
         b_full[:, np.arange(n), np.arange(n)] = b.T
         return Jacobians(
@@ -557,6 +674,7 @@ class Machine:
             J_inv=j_inv.transpose(2, 0, 1), singular_values=sv_t, condition=condition,
             det_A=det_a, det_B=np.prod(b, axis=0), parallel_measure=parallel,
             serial_measure=serial, singularity=flags, tolerance=float(tol), q=qb,
+            mode=np.sign(np.nan_to_num(det_a)).astype(int),
         )
 
     def jacobian_dot(self, x: Any, xd: Any, *, q: Any = None) -> JacobianRates:
@@ -571,7 +689,7 @@ class Machine:
             :class:`JacobianRates` with q̇ = J⁻¹ẋ, Ȧ, Ḃ and J̇ = A⁻¹(Ḃ − ȦJ).
         """
         xb, qb, single = self._poses_and_q(x, q, None)
-        xdb, _ = as_batch(xd, self.dims, "xd")
+        xdb, _ = _checked_batch(xd, self.dims, "xd") if single else as_batch(xd, self.dims, "xd")
         if xdb.shape[0] != xb.shape[0]:
             raise InputError(f"x has {xb.shape[0]} rows but xd has {xdb.shape[0]}")
         jac = self._jacobians(xb, qb, SINGULARITY_TOL)

@@ -32,7 +32,7 @@ from pkmkit.errors import MachineFileError, ParameterError, UnknownMachineError
 from pkmkit.machines import five_bar, linear_delta, orthoglide
 from pkmkit.machines.machine import Machine, MachineKind, build_machine
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
-from pkmkit.model.parameters import length_scale, resolve_parameters
+from pkmkit.model.parameters import is_plain_number, length_scale, resolve_parameters
 from pkmkit.model.rods import LegSpec, build_rod_model
 
 #: Built-in machine kinds by name.
@@ -96,10 +96,14 @@ def load(path: str | Path, *, _overrides: Mapping[str, Any] | None = None,
 
 
 def _table(doc: MachineDocument, key: str, required: bool) -> dict[str, Any]:
-    value = doc.data.get(key)
-    if value is None:
+    if key not in doc.data:
         if required:
             raise doc.error(f"missing [{key}] table")
+        return {}
+    value = doc.data[key]
+    if value is None:
+        if required:
+            raise doc.error(f"the [{key}] table is empty", (key,))
         return {}
     if not isinstance(value, dict):
         raise doc.error(f"[{key}] must be a table of key = value entries", (key,))
@@ -140,6 +144,10 @@ def machine_from_document(
             ("machine", "kind"),
         )
     units = head.get("units", "m")
+    for key in ("units", "name", "description", "source", "id"):
+        if key in head and not isinstance(head[key], str):
+            raise doc.error(f"[machine] {key} must be a string, got {head[key]!r}",
+                            ("machine", key))
     try:
         scale = length_scale(units)
     except ParameterError as exc:
@@ -188,20 +196,26 @@ def _kind_machine(doc, kind: MachineKind, units: str, ident: str, text: dict) ->
 
 
 def _vector(value: Any, size: int, what: str, scale: float = 1.0) -> np.ndarray:
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{what} must be {size} numbers, got {value!r}", what) from None
+    if not is_plain_number(value):
+        raise ParameterError(f"{what} must be {size} numbers, got {value!r}", what)
+    arr = np.asarray(value, dtype=float)
     if arr.shape != (size,) or not np.isfinite(arr).all():
         raise ParameterError(f"{what} must be {size} finite numbers, got {value!r}", what)
     return arr * scale
 
 
+def _number(value: Any, what: str, scale: float = 1.0) -> float:
+    if not is_plain_number(value) or np.ndim(value) != 0 or not np.isfinite(value):
+        raise ParameterError(f"{what} must be a finite number, got {value!r}", what)
+    return float(value) * scale
+
+
 def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
                       text: dict) -> Machine:
     dims = head.get("dims", 3)
-    if dims not in (2, 3):
-        raise doc.error(f"[machine] dims must be 2 or 3, got {dims!r}", ("machine", "dims"))
+    if isinstance(dims, bool) or dims not in (2, 3) or not isinstance(dims, int):
+        raise doc.error(f"[machine] dims must be the integer 2 or 3, got {dims!r}",
+                        ("machine", "dims"))
     legs_raw = doc.data.get("legs")
     if not isinstance(legs_raw, list) or not legs_raw:
         raise doc.error("a rod-legs machine needs [[legs]] entries", ("legs",))
@@ -220,7 +234,13 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
             if key not in raw:
                 raise ParameterError(f"{where} needs {key!r}", f"{where}")
         kind = raw.get("type", "slide")
-        actuator = str(raw.get("actuator", f"q{i + 1}"))
+        if kind not in ("slide", "strut"):
+            raise ParameterError(f"{where}.type must be 'slide' or 'strut', got {kind!r}",
+                                 f"{where}.type")
+        actuator = raw.get("actuator", f"q{i + 1}")
+        if not isinstance(actuator, str) or not actuator:
+            raise ParameterError(f"{where}.actuator must be a name, got {actuator!r}",
+                                 f"{where}.actuator")
         if actuator in actuators:
             raise ParameterError(f"{where}: actuator {actuator!r} already drives another leg",
                                  f"{where}.actuator")
@@ -236,13 +256,18 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
                 f"{where}.parallelogram must be a table with 'width' and 'direction'",
                 f"{where}.parallelogram",
             )
-        width = float(para.get("width", 0.0)) * scale
-        direction = (pad(_vector(para["direction"], dims, f"{where}.parallelogram"))
-                     if width > 0 else None)
-        try:
-            length = float(raw["length"]) * scale
-        except (TypeError, ValueError):
-            raise ParameterError(f"{where}.length must be a number", f"{where}.length") from None
+        width = _number(para.get("width", 0.0), f"{where}.parallelogram.width", scale)
+        direction = None
+        if width > 0:
+            if "direction" not in para:
+                raise ParameterError(f"{where}.parallelogram needs a 'direction'",
+                                     f"{where}.parallelogram")
+            direction = pad(_vector(para["direction"], dims,
+                                    f"{where}.parallelogram.direction"))
+        branch = raw.get("branch", 1)
+        if isinstance(branch, bool) or branch not in (1, -1):
+            raise ParameterError(f"{where}.branch must be 1 or -1, got {branch!r}",
+                                 f"{where}.branch")
         stroke = (_vector(raw["stroke"], 2, f"{where}.stroke", scale) if "stroke" in raw
                   else (-np.inf, np.inf))
         legs.append(
@@ -252,21 +277,24 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
                 kind=kind,
                 base=pad(_vector(raw["base"], dims, f"{where}.base", scale)),
                 platform=pad(_vector(raw["platform"], dims, f"{where}.platform", scale)),
-                length=length,
+                length=_number(raw["length"], f"{where}.length", scale),
                 axis=axis,
-                branch=raw.get("branch", 1),
+                branch=int(branch),
                 parallelogram_width=width,
                 parallelogram_direction=direction,
                 stroke=tuple(stroke),
             )
         )
-    home = _vector(head.get("home", [0.0] * dims), dims, "home", scale)
+    home = _vector(head.get("home", [0.0] * dims), dims, "machine.home", scale)
     mode_names = head.get("mode_names", ["det(A)<0", "det(A)>0"])
-    if not (isinstance(mode_names, list) and len(mode_names) == 2):
-        raise ParameterError("[machine] mode_names must be a list of two names", "mode_names")
+    if not (isinstance(mode_names, list) and len(mode_names) == 2
+            and all(isinstance(n, str) and n for n in mode_names)
+            and mode_names[0] != mode_names[1]):
+        raise ParameterError("[machine] mode_names must be a list of two different names",
+                             "machine.mode_names")
     model = build_rod_model(
         legs, dims=dims, actuator_names=actuators, home_pose=home,
-        mode_names=(str(mode_names[0]), str(mode_names[1])),
+        mode_names=(mode_names[0], mode_names[1]),
     )
     return Machine(id=ident, name=text["name"] or ident, kind=None, params={}, model=model,
                    description=text["description"], source=text["source"])

@@ -41,6 +41,10 @@ class InverseResult:
         shortfall: ``(N, n)`` how much each leg is too short to reach the pose (m, > 0 means
             out of reach, ≤ 0 reachable).
         method: ``"closed"`` or ``"numeric"``.
+        mode: ``(N,)`` assembly mode of each configuration (sign of det A; 0 where there is
+            none). A reachable pose may lie in the *other* assembly mode than the working one
+            (beyond a parallel singularity): ``fk(q)`` then returns another pose unless asked
+            for that mode.
         iterations: ``(N,)`` engine iterations (numeric method), else None.
         residual: ``(N,)`` largest rod closure residual (numeric method), m, else None.
     """
@@ -50,6 +54,7 @@ class InverseResult:
     branches: np.ndarray
     shortfall: np.ndarray
     method: str
+    mode: np.ndarray
     iterations: np.ndarray | None = None
     residual: np.ndarray | None = None
 
@@ -116,12 +121,13 @@ class Jacobians:
     Attributes:
         A: ``(N, n, dims)`` parallel Jacobian, rows ``(p − c_i)ᵀ`` (m).
         B: ``(N, n, n)`` serial Jacobian (diagonal, m).
-        J: ``(N, dims, n)`` ``A⁻¹B`` (dimensionless for translational machines); NaN at a
-            parallel singularity.
+        J: ``(N, dims, n)`` ``A⁻¹B`` (dimensionless for translational machines); NaN where the
+            pose is classified as a parallel singularity (J does not exist there).
         J_inv: ``(N, n, dims)`` ``B⁻¹A``; NaN at a serial singularity.
         singular_values: ``(N, n)`` singular values of J, decreasing — the velocity
-            transmission factors.
-        condition: ``(N,)`` σ_max/σ_min of J (inf at a serial singularity, NaN at a parallel one).
+            transmission factors (NaN at a parallel singularity).
+        condition: ``(N,)`` σ_max/σ_min of J: very large near a serial singularity (inf when a
+            singular value is exactly 0), NaN at a parallel one.
         det_A, det_B: ``(N,)`` determinants (m^n).
         parallel_measure: ``(N,)`` σ_min/σ_max of A with unit rows (0 at a parallel
             singularity, 1 when the legs are orthogonal).
@@ -130,6 +136,7 @@ class Jacobians:
         singularity: ``(N,)`` :class:`Singularity` flags.
         tolerance: threshold applied to both measures to classify a singularity.
         q: ``(N, n)`` actuator coordinates used.
+        mode: ``(N,)`` assembly mode (sign of det A) of each configuration.
     """
 
     A: np.ndarray
@@ -145,6 +152,7 @@ class Jacobians:
     singularity: np.ndarray
     tolerance: float
     q: np.ndarray
+    mode: np.ndarray
 
     @property
     def reachable(self) -> np.ndarray | bool:

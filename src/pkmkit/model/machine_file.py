@@ -107,7 +107,15 @@ def _toml_lines(text: str) -> dict[KeyPath, int]:
     lines: dict[KeyPath, int] = {}
     table: KeyPath = ()
     array_counts: dict[tuple[str, ...], int] = {}
+    open_quote: str | None = None  # inside a multi-line string
     for number, raw in enumerate(text.splitlines(), start=1):
+        if open_quote is not None:
+            if raw.count(open_quote) % 2 == 1:
+                open_quote = None
+            continue
+        for quote in ('"""', "'''"):
+            if raw.count(quote) % 2 == 1:
+                open_quote = quote
         if m := _ARRAY_TABLE.match(raw):
             name = _split_key(m.group(1))
             index = array_counts.get(name, -1) + 1
@@ -123,8 +131,18 @@ def _toml_lines(text: str) -> dict[KeyPath, int]:
     return lines
 
 
+def _reject_aliases(text: str, path: str) -> None:
+    """Anchors and aliases can expand exponentially (or recursively): machine files may not use
+    them."""
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
+            raise MachineFileError(path, "YAML anchors and aliases (&name, *name) are not "
+                                   "allowed in machine files", event.start_mark.line + 1)
+
+
 def _parse_yaml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
     try:
+        _reject_aliases(text, path)
         node = yaml.compose(text, Loader=yaml.SafeLoader)
         data = yaml.safe_load(text)
     except yaml.MarkedYAMLError as exc:

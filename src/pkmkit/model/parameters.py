@@ -19,6 +19,21 @@ from pkmkit.errors import ParameterError, UnknownParameterError
 
 #: Length units accepted at the boundaries, as metres per unit.
 LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3}
+#: Largest admissible magnitude of a length parameter, m (beyond it squares overflow and the
+#: number is certainly a unit mistake).
+MAX_LENGTH = 1e6
+
+
+def is_plain_number(value: Any) -> bool:
+    """True for real numbers and (nested) sequences of them — not booleans or strings, which
+    NumPy would silently convert."""
+    if isinstance(value, bool | np.bool_ | str | bytes):
+        return False
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in "iuf"
+    if isinstance(value, list | tuple):
+        return all(is_plain_number(v) for v in value)
+    return isinstance(value, int | float | np.integer | np.floating)
 
 Quantity = Literal["length", "angle", "number"]
 
@@ -27,7 +42,7 @@ def length_scale(unit: str) -> float:
     """Metres per ``unit``; raises :class:`ParameterError` for an unknown unit."""
     try:
         return LENGTH_UNITS[unit]
-    except KeyError:
+    except (KeyError, TypeError):
         raise ParameterError(
             f"unknown length unit {unit!r}; valid units: {', '.join(LENGTH_UNITS)}"
         ) from None
@@ -75,6 +90,8 @@ class ParameterSpec:
 
     def validate(self, value: Any, machine: str) -> float | tuple[float, ...]:
         """Check an SI value (shape, finiteness, sign) and return it as float or tuple."""
+        if not is_plain_number(value):
+            raise self._error(machine, f"must be numeric, got {value!r}")
         try:
             arr = np.asarray(value, dtype=float)
         except (TypeError, ValueError):
@@ -87,6 +104,9 @@ class ParameterSpec:
             raise self._error(machine, "must be finite")
         if self.positive and (arr <= 0).any():
             raise self._error(machine, f"must be > 0, got {value}")
+        if self.quantity == "length" and (np.abs(arr) > MAX_LENGTH).any():
+            raise self._error(machine, f"is a length beyond {MAX_LENGTH:g} m ({value}); check "
+                              "the units")
         if self.quantity == "angle" and (np.abs(arr) > 2 * math.pi + 1e-12).any():
             raise self._error(
                 machine,
@@ -97,6 +117,8 @@ class ParameterSpec:
 
     def from_boundary(self, value: Any, length_unit: str, machine: str) -> Any:
         """Convert a boundary value (file or CLI units) to a validated SI value."""
+        if not is_plain_number(value):
+            raise self._error(machine, f"must be numeric, got {value!r}")
         try:
             raw = np.asarray(value, dtype=float)
         except (TypeError, ValueError):
