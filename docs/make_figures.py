@@ -53,9 +53,18 @@ def analysis() -> None:
     delta_actuator_maps(OUT)
 
 
+def design() -> None:
+    """The design figures of docs/design.md (the same studies as ``pkmkit demo``)."""
+    from pkmkit.cli.demo_design import delta_pareto, orthoglide_sizing
+
+    orthoglide_sizing(OUT)
+    delta_pareto(OUT, generations=40)
+
+
 if __name__ == "__main__":
     OUT.mkdir(exist_ok=True)
     machines()
     assembly_modes()
     analysis()
+    design()
     print(f"figures written to {OUT}")

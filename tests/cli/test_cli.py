@@ -194,6 +194,12 @@ def test_demo_writes_json_and_pngs(run, tmp_path):
     assert 6.0 < analysis["seed004_five_bar"]["inscribed_area_ratio"] < 7.5
     np.testing.assert_allclose(analysis["seed000_actuator_maps"]["q_max"],
                                [1.2649, 1.2799, 1.2799], atol=1e-4)
+    design = summary["design"]
+    proto = design["orthoglide"]["prototype"]
+    assert abs(proto["L"] - 0.3106) < 1e-3 and abs(proto["stroke"] - 0.257) < 1e-3
+    assert design["five_bar"]["orientations_deg"] == [[0.0, 90.0]]
+    assert design["linear_delta"]["pareto_size"] > 5
+    assert (out / "design" / "linear-delta-pareto.png").stat().st_size > 10_000
     for ident, res in analysis["machines"].items():
         assert res["inscribed_side"] > 0, ident
         for name in res["figures"]:

@@ -386,13 +386,48 @@ def check_region(machine: Machine, center: Any, side: float, criteria: Criteria 
             continue
         failures[name] = int(bad.sum())
         worst[name] = _worst(name, bad, points, ev, criteria, machine, names)
-    lo_q = np.nanmin(ev.q, axis=0) if ev.masks["reachable"].any() else np.full(len(names), np.nan)
-    hi_q = np.nanmax(ev.q, axis=0) if ev.masks["reachable"].any() else np.full(len(names), np.nan)
     reach = ev.masks["reachable"]
+    if reach.any():
+        lo_q, hi_q = _q_extremes(machine, grid, ev.q, reach)
+    else:
+        lo_q = hi_q = np.full(len(names), np.nan)
     factor_range = ((float(np.nanmin(ev.factors[reach])), float(np.nanmax(ev.factors[reach])))
                     if reach.any() else (float("nan"), float("nan")))
     return RegionCheck(feasible=not failures, samples=len(points), failures=failures,
                        worst=worst, factor_range=factor_range, q_range=(lo_q, hi_q))
+
+
+def _q_extremes(machine: Machine, grid: Grid, q: np.ndarray, reach: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest value of each actuator coordinate over the region: the sampled
+    extremes, refined by bounded local optimisation (they may lie between samples, e.g. inside
+    a face)."""
+    from scipy.optimize import minimize
+
+    points = grid.points
+    bounds = [(axis[0], axis[-1]) for axis in grid.axes]
+
+    def pose(y: np.ndarray) -> np.ndarray:
+        full = grid.base.copy()
+        full[list(grid.free)] = y
+        return full
+
+    lo = np.nanmin(np.where(reach[:, None], q, np.nan), axis=0)
+    hi = np.nanmax(np.where(reach[:, None], q, np.nan), axis=0)
+    for k in range(q.shape[1]):
+        for sign, store in ((1.0, lo), (-1.0, hi)):
+            start = int(np.nanargmin(sign * np.where(reach, q[:, k], np.nan)))
+
+            def value(y: np.ndarray, k: int = k, sign: float = sign) -> float:
+                qk = machine.ik(pose(y)[None])[0, k]
+                return sign * qk if np.isfinite(qk) else np.inf
+
+            res = minimize(value, points[start, list(grid.free)], method="L-BFGS-B",
+                           bounds=bounds, options={"maxiter": 100, "ftol": 1e-15, "gtol": 1e-12})
+            found = sign * res.fun  # the actuator coordinate reached
+            if np.isfinite(found) and sign * found < sign * store[k]:
+                store[k] = found
+    return lo, hi
 
 
 def _fmt(p: np.ndarray) -> str:

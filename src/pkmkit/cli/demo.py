@@ -23,6 +23,7 @@ from pkmkit.plot.drawing import draw_machine
 from pkmkit.status import Status
 
 from .demo_analysis import run_analysis_demo
+from .demo_design import run_design_demo
 from .describe import describe_machine
 
 
@@ -77,8 +78,9 @@ def run_demo(out_dir: Path) -> dict[str, Any]:
         summaries[ident] = summary
         _print_summary(summary)
     analysis = run_analysis_demo(out_dir, list(summaries))
-    total = {"pkmkit_demo": "kinematic summary and analysis of the built-in machines",
-             "units": "m", "machines": summaries, "analysis": analysis}
+    design = run_design_demo(out_dir)
+    total = {"pkmkit_demo": "kinematic summary, analysis and design of the built-in machines",
+             "units": "m", "machines": summaries, "analysis": analysis, "design": design}
     (out_dir / "summary.json").write_text(json.dumps(to_jsonable(total), indent=2))
     click.echo(f"\nwrote {out_dir}/summary.json, one JSON and one PNG per machine, and the "
                "analysis figures in analysis/")

@@ -74,12 +74,7 @@ def evaluate_metrics(machine: Machine, region: Region, criteria: Criteria,
     if "violation" in names:
         excess = 0.0
         if sv.size:
-            if criteria.bounds is not None:
-                lo, hi = criteria.bounds
-                excess = max(excess, float(np.max(lo / sv[:, -1] - 1.0)),
-                             float(np.max(sv[:, 0] / hi - 1.0)))
-            if criteria.kappa_max is not None:
-                excess = max(excess, float(np.max(ev.condition[reach] / criteria.kappa_max - 1)))
+            excess = _excess(sv, ev.condition[reach], criteria)
         out["violation"] = float(1.0 - reach.mean()) + max(excess, 0.0)
     nan = float("nan")
     if "stroke" in names or "compactness" in names:
@@ -103,6 +98,20 @@ def evaluate_metrics(machine: Machine, region: Region, criteria: Criteria,
         box = compute_workspace(machine, grid, criteria).inscribed
         out["inscribed_side"] = box.side if box is not None else 0.0
     return {k: out[k] for k in names}
+
+
+def _excess(sv: np.ndarray, condition: np.ndarray, criteria: Criteria) -> float:
+    """Largest relative excess of a transmission-factor bound or of κ_max (inf on a
+    singularity)."""
+    excess = 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if criteria.bounds is not None:
+            lo, hi = criteria.bounds
+            excess = max(excess, float(np.max(lo / sv[:, -1] - 1.0)),
+                         float(np.max(sv[:, 0] / hi - 1.0)))
+        if criteria.kappa_max is not None:
+            excess = max(excess, float(np.max(condition / criteria.kappa_max - 1.0)))
+    return excess
 
 
 def _footprint(machine: Machine, q: np.ndarray) -> float:

@@ -120,6 +120,9 @@ class DesignProblem:
         criteria: transmission-factor / conditioning bounds over the region.
         user_metrics: extra metrics ``name -> f(machine)``.
         samples: grid points per edge of the region.
+        require_region: add the constraint ``violation <= 0``.
+        evaluator: computes the metrics of a candidate (default
+            :func:`pkmkit.design.metrics.metric_values`, batched over the region's poses).
     """
 
     base: Machine
@@ -131,6 +134,7 @@ class DesignProblem:
     user_metrics: dict[str, UserMetric] = field(default_factory=dict)
     samples: int = 11
     require_region: bool = True
+    evaluator: Callable[..., dict[str, float]] = metric_values
 
     def __post_init__(self) -> None:
         if self.base.kind is None:
@@ -188,8 +192,8 @@ class DesignProblem:
         """Record of one candidate: variables, metrics, objective values, constraint excesses
         and feasibility."""
         candidate = self.build(np.asarray(x, dtype=float))
-        metrics = metric_values(candidate, self.region, self.criteria, self.metric_names,
-                                self.samples)
+        metrics = self.evaluator(candidate, self.region, self.criteria, self.metric_names,
+                                 self.samples)
         for name, func in self.user_metrics.items():
             metrics[name] = float(func(candidate)) if candidate is not None else float("nan")
         record: dict[str, Any] = {v.name: float(value) for v, value in
@@ -227,6 +231,24 @@ class OptimizationResult:
                    and k != "feasible"] if self.records else []
         return [*names, *metrics, "feasible"]
 
+    def infeasibility(self) -> str | None:
+        """None when some design is feasible; otherwise which requirements no evaluated design
+        met, each with the closest value reached (and where)."""
+        if any(r["feasible"] for r in self.records) or not self.records:
+            return None if self.records else "no design was evaluated"
+        parts = []
+        names = [v.name for v in self.problem.variables]
+        for k, c in enumerate(self.problem.constraints):
+            excess = np.array([r["_excess"][k] for r in self.records])
+            if (excess <= 0).any():
+                continue
+            best = self.records[int(np.argmin(excess))]
+            where = ", ".join(f"{n} = {best[n]:.4g}" for n in names)
+            parts.append(f"{c.metric}{c.op}{c.value:g} (best {best[c.metric]:.4g} at {where})")
+        if not parts:
+            return "no design satisfies all the constraints together"
+        return "no evaluated design satisfies: " + "; ".join(parts)
+
     def write_csv(self, path: str | Path, records: list[dict[str, Any]] | None = None) -> None:
         """All records (or the given ones) as CSV."""
         rows = self.records if records is None else records
@@ -254,6 +276,7 @@ class OptimizationResult:
                          "kappa_max": self.problem.criteria.kappa_max},
             "evaluations": len(self.records),
             "feasible_evaluations": sum(bool(r["feasible"]) for r in self.records),
+            "infeasibility": self.infeasibility(),
             "best": None if self.best is None else clean(self.best),
             "pareto": [clean(r) for r in self.pareto],
         })

@@ -1,0 +1,67 @@
+"""Figures of the design layer: Pareto fronts and sizing sweeps."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from pkmkit.design.optimize import OptimizationResult
+
+
+def plot_pareto(result: OptimizationResult, *,
+                references: Sequence[tuple[str, dict[str, float]]] = (),
+                title: str = "", path: str | Path | None = None) -> Figure:
+    """Evaluated designs in the plane of the first two objectives, the Pareto front, and
+    reference designs (label, metrics) for comparison."""
+    o1, o2 = result.problem.objectives[:2]
+    fig = Figure(figsize=(6.6, 5.2), layout="constrained")
+    ax = fig.add_subplot()
+
+    def values(records: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
+        return (np.array([r[o1.metric] for r in records], dtype=float),
+                np.array([r[o2.metric] for r in records], dtype=float))
+
+    infeasible = [r for r in result.records if not r["feasible"]]
+    feasible = [r for r in result.records if r["feasible"]]
+    if infeasible:
+        ax.scatter(*values(infeasible), s=8, color="0.8", label="infeasible")
+    if feasible:
+        ax.scatter(*values(feasible), s=10, color="tab:blue", alpha=0.5, label="feasible")
+    if result.pareto:
+        x, y = values(result.pareto)
+        order = np.argsort(x)
+        ax.plot(x[order], y[order], "o-", color="tab:red", ms=4, label="Pareto front")
+    for label, metrics in references:
+        ax.plot(metrics[o1.metric], metrics[o2.metric], "k*", ms=12)
+        ax.annotate(label, (metrics[o1.metric], metrics[o2.metric]), textcoords="offset points",
+                    xytext=(6, 6), fontsize=8)
+    ax.set_xlabel(f"{o1.metric} ({o1.sense})")
+    ax.set_ylabel(f"{o2.metric} ({o2.sense})")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title or f"{result.problem.base.name}: {len(result.records)} designs",
+                 fontsize=9)
+    if path is not None:
+        fig.savefig(path, dpi=120, bbox_inches="tight")
+    return fig
+
+
+def plot_sizing_sweep(rows: Sequence[dict[str, float]], *, x: str, ys: Sequence[str],
+                      xlabel: str, title: str = "", path: str | Path | None = None) -> Figure:
+    """Curves of several sizing results (``ys``) against a swept input ``x``."""
+    fig = Figure(figsize=(6.4, 4.6), layout="constrained")
+    ax = fig.add_subplot()
+    xs = [r[x] for r in rows]
+    for name in ys:
+        ax.plot(xs, [r[name] for r in rows], "o-", label=name)
+    ax.set_xlabel(xlabel)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title, fontsize=9)
+    if path is not None:
+        fig.savefig(path, dpi=120, bbox_inches="tight")
+    return fig
