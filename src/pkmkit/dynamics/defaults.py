@@ -1,0 +1,33 @@
+"""Illustrative mass properties of the built-in machine kinds.
+
+The source documents give no masses. These values are plausible orders of magnitude, stated here
+so every result that uses them can be traced; pass a masses file for a real machine.
+
+- linear Delta (seed 000 scale): carriage (moving part of a linear motor and its slide) 8 kg;
+  arms Ø40 mm solid with ρ = 1000 kg/m³ — what the thesis's CAD models used (its arm masses imply
+  that density, see docs/seed-errata.md), 1.3 kg for 1.04 m; nacelle with spindle and tool 15 kg;
+- Orthoglide (prototype scale): carriages 2 kg, rods Ø10 mm aluminium, platform 2 kg;
+- five-bar: carriages 5 kg, rods Ø20 mm aluminium, platform (tool table) 5 kg;
+- any other machine: carriages 5 kg, rods Ø20 mm aluminium, platform 5 kg.
+Gravity is (0, 0, −9.81) m/s² (z up) for all.
+"""
+
+from __future__ import annotations
+
+from pkmkit.dynamics.masses import MassProperties, mass_properties, rod_section_mass
+from pkmkit.machines.machine import Machine
+
+_DEFAULTS = {
+    "linear-delta": {"carriage": 8.0, "diameter": 0.040, "density": 1000.0, "platform": 15.0},
+    "orthoglide": {"carriage": 2.0, "diameter": 0.010, "density": 2700.0, "platform": 2.0},
+    "five-bar": {"carriage": 5.0, "diameter": 0.020, "density": 2700.0, "platform": 5.0},
+}
+_GENERIC = {"carriage": 5.0, "diameter": 0.020, "density": 2700.0, "platform": 5.0}
+
+
+def default_masses(machine: Machine) -> MassProperties:
+    """The illustrative mass properties of ``machine``'s kind (see the module docstring)."""
+    spec = _DEFAULTS.get(machine.kind.kind if machine.kind else "", _GENERIC)
+    rod, radius = rod_section_mass(machine, spec["diameter"], spec["density"])
+    return mass_properties(machine, carriage=spec["carriage"], rod=rod, rod_radius=radius,
+                           platform=spec["platform"])

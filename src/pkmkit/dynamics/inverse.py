@@ -1,0 +1,183 @@
+"""Inverse dynamics of translational rod-leg machines by the principle of virtual work.
+
+Bodies (all moving masses, none neglected):
+
+- the **carriage** (moving part of the motor) of each slide: mass m_c, moving along u_k;
+- every **rod** as a uniform cylinder of mass m, length ℓ and radius ρ, with a spherical joint at
+  each end: its centre of mass is the mid-point of its ends A (carriage) and P (platform), and its
+  inertia about any transverse axis through the centre is m(ℓ²/12 + ρ²/4). Such a rod never spins
+  about its own axis, so its angular velocity and acceleration are
+  ω = d̂ × (v_P − v_A)/ℓ and α = d̂ × (a_P − a_A)/ℓ (d̂ the unit rod vector);
+- the **platform** with spindle and tool: mass M_p (it only translates, so its centre of mass and
+  inertia tensor do not enter the actuator forces — they only load the rods' constraint forces);
+- **gravity** g along any direction and an **external wrench** (F, M) at the tool point, constant or
+  one per sample (M does no virtual work on a platform that does not rotate).
+
+With δq the actuator displacements, δx = J δq, δA = u_k δq_k, δP = δx, the virtual work of the
+inertia and external forces equals f·δq, which gives, per sample::
+
+    f = m_c (q̈ − g·u) + Jᵀ [M_p (ẍ − g) − F]
+        + Σ_rods { Jᵀ G_P + e_k (u·G_A) },
+    G_P = F_m / 2 + (M_r × d̂)/ℓ,  G_A = F_m / 2 − (M_r × d̂)/ℓ,
+    F_m = m (a_com − g),  M_r = I_t α.
+
+Everything is batched over samples (no per-sample Python loop). Struts (variable-length rods) are
+not modelled yet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pkmkit.dynamics.masses import MassProperties
+from pkmkit.errors import InputError
+from pkmkit.machines.machine import Machine
+from pkmkit.model.rods import SLIDE
+
+
+@dataclass(frozen=True)
+class ForceResult:
+    """Actuator forces along a motion (N samples, n actuators).
+
+    Attributes:
+        force: ``(N, n)`` actuator forces along the slides, N (positive along u_k).
+        power: ``(N, n)`` mechanical power f_k q̇_k, W.
+        parts: ``{name: (N, n)}`` contributions: ``carriages``, ``rods``, ``platform``,
+            ``external`` (they sum to ``force``).
+        leg_axial: ``(N, n)`` axial force of each leg (sum over its rods, tension > 0), from the
+            carriage's equilibrium along its slide, N; NaN where the leg is perpendicular to the
+            slide.
+    """
+
+    force: np.ndarray
+    power: np.ndarray
+    parts: dict[str, np.ndarray]
+    leg_axial: np.ndarray
+
+
+def _pad(a: np.ndarray) -> np.ndarray:
+    if a.shape[-1] == 3:
+        return a
+    out = np.zeros((*a.shape[:-1], 3))
+    out[..., : a.shape[-1]] = a
+    return out
+
+
+def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd: np.ndarray,
+                     xdd: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                     *, wrench: Any = None) -> ForceResult:
+    """Actuator forces and powers for a motion (see the module docstring).
+
+    Args:
+        machine: a translational rod-leg machine with slide legs.
+        masses: its mass properties.
+        x, xd, xdd: ``(N, dims)`` tool position (m), velocity (m/s), acceleration (m/s²).
+        q, qd, qdd: ``(N, n)`` actuator positions, speeds, accelerations.
+        wrench: external force on the tool, ``(3,)`` or ``(N, 3)`` N (a moment may follow as
+            components 3–5: it does no work on a translating platform and is ignored).
+
+    Raises:
+        InputError: strut legs, mismatched shapes, non-finite wrench.
+    """
+    model = machine.model
+    if (model.leg_kind != SLIDE).any():
+        raise InputError("inverse dynamics of strut legs is not implemented yet")
+    masses.check(machine)
+    n_samples = x.shape[0]
+    for name, arr, width in (("xd", xd, machine.dims), ("xdd", xdd, machine.dims),
+                             ("q", q, machine.n_actuators), ("qd", qd, machine.n_actuators),
+                             ("qdd", qdd, machine.n_actuators)):
+        if arr.shape != (n_samples, width):
+            raise InputError(f"{name} must have shape ({n_samples}, {width}), got {arr.shape}")
+    force_ext = np.zeros((n_samples, 3))
+    if wrench is not None:
+        w = np.asarray(wrench, dtype=float)
+        if w.ndim == 1:
+            w = np.broadcast_to(w, (n_samples, w.shape[0]))
+        if w.shape[0] != n_samples or w.shape[1] not in (2, 3, 6):
+            raise InputError(f"the wrench must be (3,), (6,), (N, 3) or (N, 6); got {w.shape}")
+        if not np.isfinite(w).all():
+            raise InputError("the wrench must be finite")
+        force_ext[:, : min(3, w.shape[1])] = w[:, :3] if w.shape[1] >= 3 else w
+    g = masses.gravity
+    jac = machine.jacobian(x, q=q)
+    j3 = np.zeros((n_samples, 3, machine.n_actuators))
+    j3[:, : machine.dims] = jac.J
+    p, pdd = _pad(x), _pad(xdd)
+
+    # carriages
+    u_leg = model.leg_axis
+    carriages = masses.carriage_mass * (qdd - (u_leg @ g)[None])
+    # platform and external force
+    platform = np.einsum("kji,kj->ki", j3, masses.platform_mass * (pdd - g))
+    external = -np.einsum("kji,kj->ki", j3, force_ext)
+    # rods
+    k_of = model.rod_actuator
+    u = model.rod_axis
+    qr, qdr = q[:, k_of], qdd[:, k_of]
+    a_pt = model.rod_base[None] + qr[:, :, None] * u[None]            # carriage joint (N, m, 3)
+    d = p[:, None, :] + model.rod_platform[None] - a_pt
+    length = np.linalg.norm(d, axis=2)
+    unit = d / length[:, :, None]
+    acc_a = qdr[:, :, None] * u[None]
+    acc_p = np.broadcast_to(pdd[:, None, :], acc_a.shape)
+    m = masses.rod_mass[None, :, None]
+    f_m = m * (0.5 * (acc_a + acc_p) - g)
+    inertia = masses.rod_mass[None] * (length**2 / 12 + masses.rod_radius[None] ** 2 / 4)
+    alpha = np.cross(unit, acc_p - acc_a) / length[:, :, None]
+    torque_term = np.cross(inertia[:, :, None] * alpha, unit) / length[:, :, None]
+    g_p = 0.5 * f_m + torque_term
+    g_a = 0.5 * f_m - torque_term
+    rods = np.einsum("kji,kj->ki", j3, g_p.sum(axis=1))
+    along = np.einsum("kmi,mi->km", g_a, u)
+    np.add.at(rods.T, k_of, along.T)
+    force = carriages + platform + external + rods
+    # leg axial force: the carriage's equilibrium along the slide, f = m_c(q̈ − g·u) + u·G_A
+    # − T (d̂·u) summed over the leg's rods (equal split within a parallelogram)
+    cos = np.zeros((n_samples, machine.n_actuators))
+    np.add.at(cos.T, k_of, np.einsum("kmi,mi->km", unit, u).T)
+    counts = np.bincount(k_of, minlength=machine.n_actuators)
+    cos /= counts
+    with np.errstate(divide="ignore", invalid="ignore"):
+        carriage_side = np.zeros_like(force)
+        np.add.at(carriage_side.T, k_of, along.T)
+        axial = (carriages + carriage_side - force) / cos
+    axial[np.abs(cos) < 1e-9] = np.nan
+    return ForceResult(
+        force=force, power=force * qd,
+        parts={"carriages": carriages, "rods": rods, "platform": platform, "external": external},
+        leg_axial=axial,
+    )
+
+
+def mechanical_energy(machine: Machine, masses: MassProperties, x: np.ndarray, xd: np.ndarray,
+                      q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    """Kinetic plus potential energy ``(N,)`` of every moving body (J), for power-balance
+    checks: d/dt of it equals Σ f_k q̇_k + F·ẋ."""
+    model = machine.model
+    g = masses.gravity
+    p, pd = _pad(x), _pad(xd)
+    u = model.leg_axis
+    carriage_pos = model.leg_base[None] + q[:, :, None] * u[None]
+    energy = 0.5 * (masses.carriage_mass * qd**2).sum(axis=1)
+    energy -= (masses.carriage_mass[None, :, None] * carriage_pos * g).sum(axis=(1, 2))
+    energy += 0.5 * masses.platform_mass * (pd**2).sum(axis=1) - masses.platform_mass * (p @ g)
+    k_of = model.rod_actuator
+    ur = model.rod_axis
+    a_pt = model.rod_base[None] + q[:, k_of][:, :, None] * ur[None]
+    d = p[:, None, :] + model.rod_platform[None] - a_pt
+    length = np.linalg.norm(d, axis=2)
+    unit = d / length[:, :, None]
+    v_a = qd[:, k_of][:, :, None] * ur[None]
+    v_p = np.broadcast_to(pd[:, None, :], v_a.shape)
+    com = 0.5 * (a_pt + p[:, None, :] + model.rod_platform[None])
+    v_com = 0.5 * (v_a + v_p)
+    omega = np.cross(unit, v_p - v_a) / length[:, :, None]
+    inertia = masses.rod_mass[None] * (length**2 / 12 + masses.rod_radius[None] ** 2 / 4)
+    energy += (0.5 * masses.rod_mass[None] * (v_com**2).sum(axis=2)
+               + 0.5 * inertia * (omega**2).sum(axis=2)).sum(axis=1)
+    energy -= (masses.rod_mass[None, :, None] * com * g).sum(axis=(1, 2))
+    return energy

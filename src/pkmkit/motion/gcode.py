@@ -1,0 +1,172 @@
+"""A G-code reader for the usual milling subset.
+
+Supported: ``G0`` (rapid), ``G1`` (line), ``G2``/``G3`` (clockwise / counter-clockwise arcs and
+helices, centre by ``I``/``J``/``K`` offsets from the start point or radius ``R`` — negative for an
+arc over 180°), planes ``G17`` (XY), ``G18`` (ZX), ``G19`` (YZ), units ``G20`` (inch) / ``G21``
+(mm, default), ``G90`` absolute / ``G91`` incremental coordinates, ``F`` feed (units per minute),
+``N`` line numbers, comments in parentheses or after ``;``, and ``%`` tape marks. Motion modes are
+modal; a line with coordinates only repeats the last motion. Anything else is an error naming the
+file line.
+
+Program coordinates are added to ``origin`` (a work offset, m) to give machine coordinates.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path as FilePath
+
+import numpy as np
+
+from pkmkit.errors import InputError
+from pkmkit.motion.paths import Arc, Line, Path, arc_through
+
+_WORD = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+_UNITS = {20: 0.0254, 21: 1e-3}
+_PLANES = {17: (np.array([0.0, 0.0, 1.0]), "IJ"), 18: (np.array([0.0, 1.0, 0.0]), "IK"),
+           19: (np.array([1.0, 0.0, 0.0]), "JK")}
+_ALLOWED_G = {0, 1, 2, 3, 17, 18, 19, 20, 21, 90, 91}
+
+
+def _strip(line: str) -> str:
+    line = re.sub(r"\([^)]*\)", " ", line)
+    return line.split(";", 1)[0].strip()
+
+
+def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
+               name: str | None = None) -> Path:
+    """Parse G-code text or a file into a :class:`~pkmkit.motion.paths.Path`.
+
+    Args:
+        source: a file path, or the program text itself (when it contains a newline).
+        origin: work offset added to program coordinates, m.
+        start: tool position before the first move (machine coordinates, m; default ``origin``).
+        name: label used in error messages (default: the file name).
+
+    Raises:
+        InputError: unsupported words, malformed numbers, arcs whose radius is inconsistent,
+            moves without a feed, an empty program — each with ``name:line``.
+    """
+    if isinstance(source, str) and "\n" in source:
+        text, label = source, name or "<gcode>"
+    else:
+        path = FilePath(source)
+        try:
+            text = path.read_text(encoding="utf-8-sig")
+        except OSError as exc:
+            raise InputError(f"{source}: cannot read file: {exc.strerror or exc}") from None
+        label = name or str(source)
+    offset = np.asarray(origin, dtype=float).reshape(3)
+    position = offset.copy() if start is None else np.asarray(start, dtype=float).reshape(3)
+    scale, plane, absolute = _UNITS[21], 17, True
+    motion: int | None = None
+    feed: float | None = None
+    segments: list[Line | Arc] = []
+    lines: list[int] = []
+
+    def error(number: int, message: str) -> InputError:
+        return InputError(f"{label}:{number}: {message}")
+
+    for number, raw in enumerate(text.splitlines(), start=1):
+        body = _strip(raw)
+        if not body or body == "%":
+            continue
+        words = _WORD.findall(body)
+        leftover = _WORD.sub("", body).strip()
+        if leftover:
+            raise error(number, f"cannot read {leftover!r}")
+        values: dict[str, float] = {}
+        g_codes = []
+        for letter, number_text in words:
+            letter = letter.upper()
+            value = float(number_text)
+            if letter == "G":
+                if value != int(value) or int(value) not in _ALLOWED_G:
+                    raise error(number, f"unsupported G code G{number_text}; supported: "
+                                + ", ".join(f"G{g}" for g in sorted(_ALLOWED_G)))
+                g_codes.append(int(value))
+            elif letter == "N":
+                continue
+            elif letter in "XYZIJKRF":
+                if letter in values:
+                    raise error(number, f"{letter} appears twice")
+                values[letter] = value
+            else:
+                raise error(number, f"unsupported word {letter}{number_text} (only G0-G3, "
+                            "G17-G21, G90, G91, X Y Z I J K R F and N are read)")
+        for g in g_codes:
+            if g in _UNITS:
+                scale = _UNITS[g]
+            elif g in _PLANES:
+                plane = g
+            elif g in (90, 91):
+                absolute = g == 90
+            else:
+                motion = g
+        if "F" in values:
+            if not values["F"] > 0:
+                raise error(number, f"the feed must be > 0, got F{values['F']:g}")
+            feed = values["F"] * scale / 60.0
+        coords = {k: values[k] for k in "XYZ" if k in values}
+        if not coords and not any(k in values for k in "IJKR"):
+            continue
+        if motion is None:
+            raise error(number, "coordinates without a motion mode (G0, G1, G2 or G3)")
+        target = position.copy()
+        for axis, letter in enumerate("XYZ"):
+            if letter in coords:
+                v = coords[letter] * scale
+                target[axis] = v + offset[axis] if absolute else position[axis] + v
+        if motion in (1, 2, 3) and feed is None:
+            raise error(number, "a feed move needs a feed rate F first")
+        if motion in (0, 1):
+            if any(k in values for k in "IJKR"):
+                raise error(number, f"I/J/K/R make no sense with G{motion}")
+            if np.linalg.norm(target - position) == 0:
+                continue
+            segments.append(Line(position, target, rapid=motion == 0,
+                                 feed=None if motion == 0 else feed))
+        else:
+            segments.append(_arc(position, target, values, plane, motion == 2, scale, feed,
+                                 lambda m, n=number: error(n, m)))
+        lines.append(number)
+        position = target
+    if not segments:
+        raise InputError(f"{label}: the program contains no motion")
+    return Path(tuple(segments), tuple(lines))
+
+
+def _arc(start, end, values, plane, clockwise, scale, feed, error) -> Arc:
+    normal, letters = _PLANES[plane]
+    in_plane = [i for i in range(3) if normal[i] == 0]
+    if "R" in values:
+        if any(k in values for k in "IJK"):
+            raise error("give the arc centre by I/J/K or by R, not both")
+        radius = values["R"] * scale
+        chord_vec = (end - start)[in_plane]
+        chord = float(np.linalg.norm(chord_vec))
+        if chord == 0:
+            raise error("an R arc cannot describe a full circle; use I/J/K")
+        half = chord / 2
+        if abs(radius) < half * (1 - 1e-9):
+            raise error(f"inconsistent arc: radius {abs(radius) / scale:g} is smaller than half "
+                        f"the chord ({half / scale:g})")
+        h = np.sqrt(max(radius**2 - half**2, 0.0))
+        mid = 0.5 * (start + end)[in_plane]
+        perp = np.array([-chord_vec[1], chord_vec[0]]) / chord  # left of the chord
+        # in the plane seen from +normal: CCW short arcs have their centre on the left
+        sign = (1.0 if not clockwise else -1.0) * (1.0 if radius > 0 else -1.0)
+        if plane == 18:  # the ZX plane's (first, second) axes are (x, z) but it is seen from +y
+            sign = -sign
+        center = start.copy()
+        center[in_plane] = mid + sign * h * perp
+    else:
+        center = start.copy()
+        for axis, letter in zip(in_plane, [letters[0], letters[1]], strict=True):
+            center[axis] += values.get(letter, 0.0) * scale
+        if all(values.get(letter, 0.0) == 0.0 for letter in letters):
+            raise error(f"an arc needs its centre: {letters[0]}/{letters[1]} offsets or R")
+    try:
+        return arc_through(start, end, center, normal, clockwise=clockwise, feed=feed)
+    except InputError as exc:
+        raise error(str(exc)) from None

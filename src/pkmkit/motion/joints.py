@@ -1,0 +1,140 @@
+"""Joint trajectories of any machine along a sampled tool trajectory, and limit checks.
+
+q from the inverse model; q̇ and q̈ from the analytic velocity model — q̇ = J⁻¹ẋ and, differentiating
+A ẋ = B q̇, q̈ = B⁻¹(A ẍ + Ȧ ẋ − Ḃ q̇) — never from finite differences.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pkmkit.errors import InputError
+from pkmkit.machines.machine import Machine
+from pkmkit.motion.timelaw import Trajectory
+from pkmkit.status import Status
+
+
+@dataclass(frozen=True)
+class JointTrajectory:
+    """Actuator motion along a trajectory (N samples, n actuators).
+
+    Attributes:
+        t: ``(N,)`` s.
+        x, xd, xdd: ``(N, dims)`` tool position, velocity, acceleration.
+        q, qd, qdd: ``(N, n)`` actuator positions (m), speeds (m/s), accelerations (m/s²).
+        trajectory: the tool trajectory.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    xd: np.ndarray
+    xdd: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    trajectory: Trajectory
+
+    @property
+    def stroke(self) -> np.ndarray:
+        """``(n,)`` range of each actuator coordinate, m."""
+        return self.q.max(axis=0) - self.q.min(axis=0)
+
+
+def joint_trajectory(machine: Machine, trajectory: Trajectory) -> JointTrajectory:
+    """Actuator positions, speeds and accelerations along ``trajectory``.
+
+    Raises:
+        InputError: the path leaves the workspace (the first failing sample: time, pose, the leg
+            and by how much), enters the other assembly mode or meets a singularity — the
+            machine cannot follow it.
+    """
+    dims = machine.dims
+    if dims == 2 and np.abs(trajectory.x[:, 2]).max() > 1e-12:
+        raise InputError("a planar machine needs a path in the plane z = 0")
+    x, xd, xdd = trajectory.x[:, :dims], trajectory.xd[:, :dims], trajectory.xdd[:, :dims]
+    inv = machine.ik(x, full_output=True)
+    bad = np.flatnonzero(inv.status != Status.OK)
+    if bad.size:
+        k = int(bad[0])
+        short = inv.shortfall[k]
+        leg = int(np.nanargmax(short))
+        raise InputError(
+            f"the path leaves the workspace: first at t = {trajectory.t[k]:.6g} s, pose "
+            f"{np.round(x[k], 9).tolist()} m ({machine.model.leg_names[leg]} too short by "
+            f"{short[leg]:.6g} m)"
+        )
+    jac = machine.jacobian(x, q=inv.q)
+    other = np.flatnonzero((jac.mode != machine.working_mode) | (jac.singularity != 0))
+    if other.size:
+        k = int(other[0])
+        what = ("meets a singularity (" + jac.status[k] + ")" if jac.singularity[k]
+                else f"is in the other assembly mode ({machine.mode_label(int(jac.mode[k]))!r})")
+        raise InputError(f"the path {what} at t = {trajectory.t[k]:.6g} s, pose "
+                         f"{np.round(x[k], 9).tolist()} m")
+    rates = machine.jacobian_dot(x, xd, q=inv.q)
+    qd = rates.qd
+    b = np.einsum("kii->ki", jac.B)
+    rhs = (np.einsum("kij,kj->ki", jac.A, xdd) + np.einsum("kij,kj->ki", rates.A_dot, xd)
+           - np.einsum("kii->ki", rates.B_dot) * qd)
+    qdd = rhs / b
+    return JointTrajectory(t=trajectory.t, x=x, xd=xd, xdd=xdd, q=inv.q, qd=qd, qdd=qdd,
+                           trajectory=trajectory)
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Actuator limits; each is a scalar (all actuators) or ``(n,)``, None when not checked.
+
+    Attributes:
+        speed: m/s. accel: m/s². force: N (absolute value).
+        strokes: check the machine's ``q_min``/``q_max``.
+    """
+
+    speed: Any = None
+    accel: Any = None
+    force: Any = None
+    strokes: bool = True
+
+
+def check_limits(machine: Machine, motion: JointTrajectory, limits: Limits,
+                 forces: np.ndarray | None = None) -> dict[str, Any]:
+    """Compare the motion (and the actuator forces) with the limits.
+
+    Returns:
+        ``{kind: {"max": (n,), "limit": (n,), "exceeded": bool, "first": {...} | None}}`` for
+        each checked kind (``position``, ``speed``, ``accel``, ``force``); ``first`` says when,
+        where, which actuator and by how much the limit is first exceeded.
+    """
+    n = machine.n_actuators
+    report: dict[str, Any] = {}
+
+    def add(kind: str, values: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+            peak: np.ndarray) -> None:
+        excess = np.maximum(lower[None] - values, values - upper[None])
+        over = excess > 1e-12
+        entry = {"max": peak, "limit": upper if kind != "position" else np.stack([lower, upper]),
+                 "exceeded": bool(over.any()), "first": None}
+        if over.any():
+            k = int(np.flatnonzero(over.any(axis=1))[0])
+            a = int(np.argmax(excess[k]))
+            entry["first"] = {"t": float(motion.t[k]), "actuator": machine.actuator_names[a],
+                              "value": float(values[k, a]), "excess": float(excess[k, a]),
+                              "pose": motion.x[k]}
+        report[kind] = entry
+
+    if limits.strokes:
+        lo, hi = machine.model.q_min, machine.model.q_max
+        add("position", motion.q, lo, hi, motion.q.max(axis=0))
+    for kind, values, limit in (("speed", motion.qd, limits.speed),
+                                ("accel", motion.qdd, limits.accel),
+                                ("force", forces, limits.force)):
+        if limit is None or values is None:
+            continue
+        lim = np.broadcast_to(np.asarray(limit, dtype=float), (n,))
+        if not (np.isfinite(lim).all() and (lim > 0).all()):
+            raise InputError(f"{kind} limits must be > 0, got {limit}")
+        add(kind, values, -lim, lim, np.abs(values).max(axis=0))
+    return report

@@ -1,0 +1,262 @@
+"""Time laws along a path: constant feed with acceleration and jerk limits.
+
+The path is cut into *blocks* at every corner (tangent discontinuity) and wherever the feed or the
+move type (rapid / feed) changes; the tool stops at block ends (exact stop), which is what makes
+the limits hold through corners. Each block runs a rest-to-rest profile of its arc length:
+
+- ``"trapezoid"``: acceleration-limited (piecewise-constant acceleration);
+- ``"scurve"``: jerk-limited seven-phase profile (piecewise-constant jerk), with the cases where
+  the acceleration or the speed limit is not reached.
+
+On curved blocks the tool also accelerates towards the centre (v²κ) and that acceleration turns
+(jerk v³κ² + 2 v a_t κ); the block's speed and tangential limits are reduced so that the *total*
+acceleration ≤ A and jerk ≤ J: tangential acceleration ≤ (√3/2)A with normal ≤ A/2, and tangential
+jerk, normal jerk and the cross term ≤ J/3 each.
+
+Sampling at a fixed period gives positions, velocities and accelerations from the analytic path
+derivatives: ẋ = x'(s) ṡ, ẍ = x''(s) ṡ² + x'(s) s̈.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkmkit.errors import InputError
+from pkmkit.motion.paths import Path
+
+PROFILES = ("trapezoid", "scurve")
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Rest-to-rest motion over a distance: phases of constant jerk.
+
+    Attributes:
+        distance: m.
+        durations: ``(k,)`` phase durations, s.
+        accel0: ``(k,)`` acceleration at each phase start, m/s².
+        jerk: ``(k,)`` jerk in each phase, m/s³.
+        peak_speed: m/s.
+    """
+
+    distance: float
+    durations: np.ndarray
+    accel0: np.ndarray
+    jerk: np.ndarray
+    peak_speed: float
+
+    @property
+    def duration(self) -> float:
+        return float(self.durations.sum())
+
+    def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """s, ṡ, s̈ at times ``t`` (clipped to [0, duration])."""
+        t = np.clip(np.asarray(t, dtype=float), 0.0, self.duration)
+        starts = np.concatenate([[0.0], np.cumsum(self.durations)[:-1]])
+        s0 = np.zeros(len(self.durations))
+        v0 = np.zeros(len(self.durations))
+        for k in range(1, len(self.durations)):
+            d, a, j = self.durations[k - 1], self.accel0[k - 1], self.jerk[k - 1]
+            v0[k] = v0[k - 1] + a * d + j * d**2 / 2
+            s0[k] = s0[k - 1] + v0[k - 1] * d + a * d**2 / 2 + j * d**3 / 6
+        phase = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(starts) - 1)
+        tau = t - starts[phase]
+        a, j = self.accel0[phase], self.jerk[phase]
+        s = s0[phase] + v0[phase] * tau + a * tau**2 / 2 + j * tau**3 / 6
+        v = v0[phase] + a * tau + j * tau**2 / 2
+        acc = a + j * tau
+        return np.minimum(s, self.distance), v, acc
+
+
+def trapezoid(distance: float, speed: float, accel: float) -> Profile:
+    """Acceleration-limited rest-to-rest profile."""
+    t_acc = speed / accel
+    if speed * t_acc >= distance:  # triangular
+        t_acc = math.sqrt(distance / accel)
+        speed = accel * t_acc
+        cruise = 0.0
+    else:
+        cruise = (distance - speed * t_acc) / speed
+    durations = np.array([t_acc, cruise, t_acc])
+    return Profile(distance, durations, np.array([accel, 0.0, -accel]), np.zeros(3), speed)
+
+
+def scurve(distance: float, speed: float, accel: float, jerk: float) -> Profile:
+    """Jerk-limited (seven-phase) rest-to-rest profile."""
+
+    def accel_phase(v: float) -> tuple[float, float, float]:
+        """(jerk time, constant-acceleration time, peak acceleration) to reach speed v."""
+        if v * jerk >= accel**2:
+            return accel / jerk, v / accel - accel / jerk, accel
+        a = math.sqrt(v * jerk)
+        return a / jerk, 0.0, a
+
+    def accel_distance(v: float) -> float:
+        tj, ta, _ = accel_phase(v)
+        return v * (2 * tj + ta) / 2  # symmetric: average speed v/2
+
+    v = speed
+    if 2 * accel_distance(v) > distance:  # the speed limit is not reached: bisect the peak
+        lo, hi = 0.0, v
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if 2 * accel_distance(mid) <= distance else (lo, mid)
+        v = lo
+    tj, ta, a = accel_phase(v)
+    cruise = max(distance - 2 * accel_distance(v), 0.0) / v if v > 0 else 0.0
+    durations = np.array([tj, ta, tj, cruise, tj, ta, tj])
+    accel0 = np.array([0.0, a, a, 0.0, 0.0, -a, -a])
+    jerks = np.array([jerk, 0.0, -jerk, 0.0, -jerk, 0.0, jerk])
+    return Profile(distance, durations, accel0, jerks, v)
+
+
+@dataclass(frozen=True)
+class Block:
+    """Tangent-continuous run of segments with one feed, traversed rest to rest."""
+
+    segments: tuple[int, ...]
+    lengths: np.ndarray
+    profile: Profile
+    rapid: bool
+    speed_limit: float
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """A path sampled in time.
+
+    Attributes:
+        t: ``(N,)`` s.
+        x, xd, xdd: ``(N, 3)`` position (m), velocity (m/s), acceleration (m/s²).
+        segment: ``(N,)`` index of the path segment of each sample.
+        rapid: ``(N,)`` sample on a rapid move.
+        blocks: the motion blocks.
+        path: the path.
+        period: sampling period, s.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    xd: np.ndarray
+    xdd: np.ndarray
+    segment: np.ndarray
+    rapid: np.ndarray
+    blocks: tuple[Block, ...]
+    path: Path
+    period: float
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1])
+
+    @property
+    def length(self) -> float:
+        return self.path.length
+
+
+def _corner(a, b, tol: float) -> bool:
+    ta, tb = a.tangent(end=True), b.tangent(end=False)
+    cos = float(np.dot(ta, tb) / (np.linalg.norm(ta) * np.linalg.norm(tb)))
+    return cos < math.cos(tol)
+
+
+def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
+         profile: str = "scurve", rapid_feed: float | None = None, period: float = 0.01,
+         corner_tol: float = 1e-3, max_samples: int = 5_000_000) -> Trajectory:
+    """Time law along ``path`` and its samples every ``period`` seconds.
+
+    Args:
+        path: the path.
+        feed: default feed rate (m/s) for feed moves without a programmed one.
+        accel: acceleration limit A (m/s²), on the total Cartesian acceleration.
+        jerk: jerk limit J (m/s³); required for ``"scurve"``.
+        profile: ``"scurve"`` or ``"trapezoid"``.
+        rapid_feed: speed of rapid moves (default: 5 × feed).
+        period: sampling period (s).
+        corner_tol: tangent angle (rad) above which a joint between segments is a corner.
+        max_samples: refuse plans that would need more samples.
+
+    Raises:
+        InputError: non-positive limits or period, missing jerk, too many samples.
+    """
+    for name, value in (("feed", feed), ("accel", accel), ("period", period)):
+        if not (np.isfinite(value) and value > 0):
+            raise InputError(f"{name} must be > 0, got {value}")
+    if profile not in PROFILES:
+        raise InputError(f"unknown profile {profile!r}; use {' or '.join(PROFILES)}")
+    if profile == "scurve" and not (jerk is not None and np.isfinite(jerk) and jerk > 0):
+        raise InputError("the S-curve profile needs a jerk limit > 0")
+    rapid_feed = 5.0 * feed if rapid_feed is None else rapid_feed
+    if not (np.isfinite(rapid_feed) and rapid_feed > 0):
+        raise InputError(f"rapid feed must be > 0, got {rapid_feed}")
+    segs = path.segments
+
+    def speed_of(k: int) -> float:
+        seg = segs[k]
+        return rapid_feed if seg.rapid else (seg.feed or feed)
+
+    groups: list[list[int]] = [[0]]
+    for k in range(1, len(segs)):
+        prev = segs[groups[-1][-1]]
+        if (segs[k].rapid != prev.rapid or speed_of(k) != speed_of(groups[-1][-1])
+                or _corner(prev, segs[k], corner_tol)):
+            groups.append([k])
+        else:
+            groups[-1].append(k)
+    blocks = []
+    for group in groups:
+        lengths = np.array([segs[k].length for k in group])
+        kappa = max(segs[k].curvature for k in group)
+        v = speed_of(group[0])
+        a_t = accel * (math.sqrt(3) / 2 if kappa > 0 else 1.0)
+        j_t = None if jerk is None else jerk / (3.0 if kappa > 0 else 1.0)
+        if kappa > 0:
+            v = min(v, math.sqrt(accel / 2 / kappa))
+            if jerk is not None:
+                v = min(v, (jerk / 3 / kappa**2) ** (1 / 3), jerk / 3 / (2 * a_t * kappa))
+        prof = (trapezoid(float(lengths.sum()), v, a_t) if profile == "trapezoid"
+                else scurve(float(lengths.sum()), v, a_t, j_t))
+        blocks.append(Block(tuple(group), lengths, prof, segs[group[0]].rapid, v))
+    total = sum(b.profile.duration for b in blocks)
+    if total / period + 1 > max_samples:
+        raise InputError(f"{total:.6g} s at a {period:g} s period needs more than "
+                         f"{max_samples} samples; increase the period")
+    return _sample(path, tuple(blocks), period)
+
+
+def _sample(path: Path, blocks: tuple[Block, ...], period: float) -> Trajectory:
+    starts = np.concatenate([[0.0], np.cumsum([b.profile.duration for b in blocks])])
+    n = math.floor(starts[-1] / period + 1e-9) + 1
+    t = np.arange(n) * period
+    if t[-1] < starts[-1] - 1e-12:
+        t = np.append(t, starts[-1])
+    x = np.empty((len(t), 3))
+    xd = np.empty_like(x)
+    xdd = np.empty_like(x)
+    segment = np.empty(len(t), dtype=int)
+    rapid = np.empty(len(t), dtype=bool)
+    which = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(blocks) - 1)
+    for b, block in enumerate(blocks):
+        rows = np.flatnonzero(which == b)
+        if rows.size == 0:
+            continue
+        s, sd, sdd = block.profile.evaluate(t[rows] - starts[b])
+        bounds = np.concatenate([[0.0], np.cumsum(block.lengths)])
+        local = np.clip(np.searchsorted(bounds, s, side="right") - 1, 0, len(block.lengths) - 1)
+        for j, k in enumerate(block.segments):
+            sel = local == j
+            if not sel.any():
+                continue
+            seg = path.segments[k]
+            p, dp, ddp = seg.evaluate(np.clip(s[sel] - bounds[j], 0.0, seg.length))
+            r = rows[sel]
+            x[r] = p
+            xd[r] = dp * sd[sel, None]
+            xdd[r] = ddp * sd[sel, None] ** 2 + dp * sdd[sel, None]
+            segment[r] = k
+        rapid[rows] = block.rapid
+    return Trajectory(t=t, x=x, xd=xd, xdd=xdd, segment=segment, rapid=rapid, blocks=blocks,
+                      path=path, period=period)
