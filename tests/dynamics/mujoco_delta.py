@@ -80,7 +80,7 @@ class MujocoDelta:
 
     def set_state(self, x, xd, q, qd) -> None:
         """MuJoCo state of the machine's configuration (x, q) and velocities (ẋ, q̇)."""
-        machine, model = self.machine, self.machine.model
+        _machine, model = self.machine, self.machine.model
         m, d = self.model, self.data
         p = model.pad(x[None])[0]
         v = model.pad(xd[None])[0]

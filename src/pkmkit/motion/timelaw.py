@@ -1,8 +1,10 @@
 """Time laws along a path: constant feed with acceleration and jerk limits.
 
-The path is cut into *blocks* at every corner (tangent discontinuity) and wherever the feed or the
-move type (rapid / feed) changes; the tool stops at block ends (exact stop), which is what makes
-the limits hold through corners. Each block runs a rest-to-rest profile of its arc length:
+The path is cut into *blocks* at every corner (tangent discontinuity), wherever the feed or the
+move type (rapid / feed) changes and — for the jerk-limited profile — wherever the curvature jumps
+(a line meeting an arc: the normal acceleration would jump, an unbounded jerk); the tool stops at
+block ends (exact stop), which is what makes the limits hold through corners. Each block runs a
+rest-to-rest profile of its arc length:
 
 - ``"trapezoid"``: acceleration-limited (piecewise-constant acceleration);
 - ``"scurve"``: jerk-limited seven-phase profile (piecewise-constant jerk), with the cases where
@@ -198,11 +200,22 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
         seg = segs[k]
         return rapid_feed if seg.rapid else (seg.feed or feed)
 
+    def curvature_jump(a, b) -> bool:
+        """A change of curvature (line ↔ arc, another radius or plane): the normal
+        acceleration would jump, i.e. unbounded jerk, unless the tool stops there."""
+        if profile != "scurve":
+            return False
+        if a.curvature == 0 and b.curvature == 0:
+            return False
+        if abs(a.curvature - b.curvature) > 1e-9 * max(a.curvature, b.curvature):
+            return True
+        return not np.allclose(np.cross(a.e1, a.e2), np.cross(b.e1, b.e2), atol=1e-9)
+
     groups: list[list[int]] = [[0]]
     for k in range(1, len(segs)):
         prev = segs[groups[-1][-1]]
         if (segs[k].rapid != prev.rapid or speed_of(k) != speed_of(groups[-1][-1])
-                or _corner(prev, segs[k], corner_tol)):
+                or _corner(prev, segs[k], corner_tol) or curvature_jump(prev, segs[k])):
             groups.append([k])
         else:
             groups[-1].append(k)

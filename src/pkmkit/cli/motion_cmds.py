@@ -1,0 +1,251 @@
+"""``pkmkit path`` and ``pkmkit arm-sizing``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import numpy as np
+
+from pkmkit.dynamics.arms import Material, analyse_arm, seed_tables, size_arm
+from pkmkit.dynamics.masses import load_masses
+from pkmkit.dynamics.trajectory import simulate_path
+from pkmkit.errors import InputError
+from pkmkit.io.csv_io import write_table
+from pkmkit.model.parameters import length_scale
+from pkmkit.motion.gcode import read_gcode
+from pkmkit.motion.joints import Limits
+from pkmkit.motion.paths import circle, helix, line, raster
+from pkmkit.motion.timelaw import PROFILES
+from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
+
+from .options import JSON_OPTION, SET_OPTION, UNITS_OPTION, emit_json, fmt, resolve_machine
+
+
+def register(cli: click.Group) -> None:
+    """Add the motion commands to the ``pkmkit`` group."""
+    cli.add_command(path_cmd)
+    cli.add_command(arm_sizing)
+
+
+def _numbers(text: str, count: int | tuple[int, ...], what: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.replace(":", ",").split(",")]
+    except ValueError:
+        raise InputError(f"{what}: cannot read {text!r} as numbers") from None
+    counts = (count,) if isinstance(count, int) else count
+    if len(values) not in counts:
+        raise InputError(f"{what} needs {' or '.join(map(str, counts))} numbers, got "
+                         f"{len(values)}")
+    if not np.isfinite(values).all():
+        raise InputError(f"{what}: numbers must be finite")
+    return values
+
+
+def build_path(machine, scale: float, gcode, origin, line_text, circle_text, helix_text,
+               raster_text):
+    """The tool path from exactly one of the path options (lengths in CLI units)."""
+    given = [t for t in (gcode, line_text, circle_text, helix_text, raster_text) if t]
+    if len(given) != 1:
+        raise click.UsageError("give exactly one of --gcode, --line, --circle, --helix, --raster")
+    dims = machine.dims
+    if gcode:
+        shift = (np.asarray(_numbers(origin, (dims,), "--origin")) * scale if origin
+                 else np.zeros(dims))
+        return read_gcode(gcode, origin=np.pad(shift, (0, 3 - dims)))
+    if line_text:
+        v = np.asarray(_numbers(line_text, (2 * dims,), "--line")) * scale
+        return line(v[:dims], v[dims:])
+    if circle_text:
+        v = _numbers(circle_text, (dims + 1,), "--circle")
+        return circle(np.asarray(v[:dims]) * scale, v[dims] * scale)
+    if helix_text:
+        v = _numbers(helix_text, (6,), "--helix")
+        if dims != 3:
+            raise InputError("a helix needs a spatial machine")
+        return helix(np.asarray(v[:3]) * scale, v[3] * scale, pitch=v[4] * scale, turns=v[5])
+    parts = raster_text.split(",")
+    strategy = "zigzag"
+    if parts[-1].strip() in ("zigzag", "one-way"):
+        strategy = parts.pop().strip()
+    v = _numbers(",".join(parts), (6,), "--raster")
+    if dims != 3:
+        raise InputError("raster facing needs a spatial machine (it retracts along z)")
+    return raster(np.asarray(v[:3]) * scale, v[3] * scale, v[4] * scale, int(v[5]),
+                  strategy=strategy)
+
+
+@click.command("path")
+@click.argument("machine_name", metavar="MACHINE")
+@SET_OPTION
+@click.option("--gcode", type=click.Path(dir_okay=False), help="G-code program (units G20/G21).")
+@click.option("--origin", help="Work offset added to the G-code coordinates, X,Y[,Z].")
+@click.option("--line", "line_text", metavar="X0,Y0,Z0:X1,Y1,Z1", help="Straight move.")
+@click.option("--circle", "circle_text", metavar="CX,CY,CZ,R", help="Full circle (horizontal).")
+@click.option("--helix", "helix_text", metavar="CX,CY,CZ,R,PITCH,TURNS", help="Helix along z.")
+@click.option("--raster", "raster_text", metavar="X0,Y0,Z,W,H,PASSES[,zigzag|one-way]",
+              help="Facing of a rectangle in passes along x.")
+@click.option("--feed", type=float, required=True, help="Feed rate (length unit per second).")
+@click.option("--rapid-feed", type=float, help="Speed of rapid moves (default 5 × feed).")
+@click.option("--accel", type=float, required=True, help="Tool acceleration limit.")
+@click.option("--jerk", type=float, help="Tool jerk limit (required by the S-curve).")
+@click.option("--profile", type=click.Choice(PROFILES), default="scurve", show_default=True)
+@click.option("--period", type=float, default=0.005, show_default=True, help="Sampling period, s.")
+@click.option("--masses", type=click.Path(dir_okay=False),
+              help="Masses file (default: the kind's illustrative masses, see docs/motion.md).")
+@click.option("--wrench", help="Constant force on the tool FX,FY,FZ in N.")
+@click.option("--speed-limit", type=float, help="Actuator speed limit.")
+@click.option("--accel-limit", type=float, help="Actuator acceleration limit.")
+@click.option("--force-limit", type=float, help="Actuator force limit, N.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False),
+              help="Directory for motion.png, path.png and trajectory.csv.")
+@UNITS_OPTION
+@JSON_OPTION
+def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, helix_text,
+             raster_text, feed, rapid_feed, accel, jerk, profile, period, masses, wrench,
+             speed_limit, accel_limit, force_limit, out_dir, units, as_json):
+    """Move along a tool path: duration, actuator strokes, speeds, accelerations, forces and
+    powers, with a check of the actuator limits."""
+    m = resolve_machine(machine_name, assignments, units)
+    scale = length_scale(units)
+    tool_path = build_path(m, scale, gcode, origin, line_text, circle_text, helix_text,
+                           raster_text)
+    props, file_wrench = load_masses(masses, m) if masses else (None, None)
+    force = file_wrench
+    if wrench:
+        force = np.asarray(_numbers(wrench, (3,), "--wrench"))
+    for name, value in (("--feed", feed), ("--accel", accel), ("--jerk", jerk),
+                        ("--rapid-feed", rapid_feed), ("--speed-limit", speed_limit),
+                        ("--accel-limit", accel_limit), ("--force-limit", force_limit)):
+        if value is not None and not (np.isfinite(value) and value > 0):
+            raise InputError(f"{name} must be > 0, got {value:g}")
+    limits = Limits(speed=None if speed_limit is None else speed_limit * scale,
+                    accel=None if accel_limit is None else accel_limit * scale,
+                    force=force_limit)
+    result = simulate_path(m, tool_path, feed=feed * scale, accel=accel * scale,
+                           jerk=None if jerk is None else jerk * scale, profile=profile,
+                           rapid_feed=None if rapid_feed is None else rapid_feed * scale,
+                           period=period, masses=props, wrench=force, limits=limits)
+    summary = result.summary()
+    lengths = ("length", "cutting_length", "q_min", "q_max", "stroke", "qd_max", "qdd_max",
+               "tool_speed_max", "tool_accel_max")
+    for key in lengths:
+        summary[key] = np.asarray(summary[key]) / scale
+    summary["qd_range"] = [np.asarray(v) / scale for v in summary["qd_range"]]
+    for v in summary["violations"]:
+        if v["limit"] != "force":
+            v["value"] /= scale
+            v["excess"] /= scale
+        v["pose"] = np.asarray(v["pose"]) / scale
+    summary.update({"machine": m.id, "units": units, "profile": profile,
+                    "actuators": list(m.actuator_names), "total_mass": result.masses.total_mass})
+    if out_dir:
+        out = Path(out_dir)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"cannot create {out_dir}: {exc.strerror or exc}") from None
+        motion = result.motion
+        plot_joint_motion(motion, m.actuator_names, forces=result.forces.force,
+                          title=f"{m.name}: {summary['duration']:.3f} s", length_unit=units,
+                          path=out / "motion.png")
+        plot_tool_path(motion, title=m.name, length_unit=units, path=out / "path.png")
+        names = m.actuator_names
+        header = ["t", *m.pose_names, *names, *[f"{n}_dot" for n in names],
+                  *[f"{n}_ddot" for n in names], *[f"f_{n}" for n in names]]
+        rows = np.column_stack([motion.t, motion.x / scale, motion.q / scale, motion.qd / scale,
+                                motion.qdd / scale, result.forces.force])
+        write_table(out / "trajectory.csv", header, rows.tolist())
+        summary["files"] = ["motion.png", "path.png", "trajectory.csv"]
+    if as_json:
+        emit_json(summary)
+        return
+    u = units
+    click.echo(f"{m.name}: {summary['length']:.6g} {u} of path in {summary['duration']:.4f} s "
+               f"({summary['samples']} samples, {profile})")
+    click.echo(f"  actuator range {fmt(summary['q_min'])} .. {fmt(summary['q_max'])} {u}, "
+               f"stroke {fmt(summary['stroke'])} {u}")
+    click.echo(f"  speeds {fmt(summary['qd_range'][0])} .. {fmt(summary['qd_range'][1])} {u}/s; "
+               f"|accelerations| up to {fmt(summary['qdd_max'])} {u}/s²")
+    click.echo(f"  forces {fmt(summary['force_range'][0])} .. {fmt(summary['force_range'][1])} N"
+               f" (moving mass {summary['total_mass']:.3g} kg); power up to "
+               f"{fmt(summary['power_max'])} W")
+    if summary["violations"]:
+        for v in summary["violations"]:
+            click.echo(f"  LIMIT {v['limit']}: {v['actuator']} = {v['value']:.6g} exceeds it by "
+                       f"{v['excess']:.6g} at t = {v['t']:.4f} s, pose {fmt(v['pose'])}")
+    else:
+        click.echo("  every checked limit holds")
+
+
+@click.command("arm-sizing")
+@click.option("--force", "force", type=float, default=1000.0, show_default=True,
+              help="Design axial force, N (|F|, tension and compression).")
+@click.option("--length", "length", type=float, help="Arm length.")
+@click.option("--section", type=click.Choice(["solid", "hollow"]), default="solid",
+              show_default=True)
+@click.option("--inner", type=float, help="Fixed bore of a hollow arm (default: optimised).")
+@click.option("--diameter", type=float, help="Analyse this outer diameter instead of sizing.")
+@click.option("--min-stiffness", type=float, default=0.0, help="Minimum axial stiffness, N/m.")
+@click.option("--stress-safety", type=float, default=2.0, show_default=True)
+@click.option("--buckling-safety", type=float, default=3.0, show_default=True)
+@click.option("--accel", "transverse", type=float, default=9.81, show_default=True,
+              help="Transverse acceleration of the arm (weight + inertia), m/s².")
+@click.option("--density", type=float, default=7700.0, show_default=True, help="kg/m³.")
+@click.option("--young", type=float, default=210e9, show_default=True, help="E, Pa.")
+@click.option("--yield", "yield_strength", type=float, default=620e6, show_default=True,
+              help="Yield strength, Pa.")
+@click.option("--seed-tables", "reproduce", is_flag=True,
+              help="Reproduce seed 000 Tables IV.2 and IV.3 (masses at 1000 kg/m³).")
+@UNITS_OPTION
+@JSON_OPTION
+def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_safety,
+               buckling_safety, transverse, density, young, yield_strength, reproduce, units,
+               as_json):
+    """Size (or analyse) a solid or hollow circular arm: stress, buckling, bending, mass,
+    stiffness."""
+    scale = length_scale(units)
+    if reproduce:
+        rows = seed_tables()
+        if as_json:
+            emit_json({"rows": rows})
+            return
+        for r in rows:
+            click.echo(f"{r['table']:<12} {r['design']:<11} L {r['L_mm']:>5} D {r['D_mm']:>3} "
+                       f"d {r['d_mm']:>3} mm: mass {r['mass_g']:9.3f} g (seed {r['seed_mass_g']}),"
+                       f" F/A {r['stress_Pa']:.4g} Pa (seed {r['seed_stress_Pa']:.4g}, ratio "
+                       f"{r['stress_ratio']:.3f})")
+        return
+    if length is None:
+        raise click.UsageError("--length is required (or --seed-tables)")
+    material = Material(E=young, density=density, yield_strength=yield_strength)
+    bore = None if inner is None else inner * scale
+    if diameter is not None:
+        result = analyse_arm(length * scale, diameter * scale, bore or 0.0,
+                             axial_force=-abs(force), transverse_accel=transverse,
+                             material=material)
+        payload = {"mode": "analysis", **result.as_dict()}
+    else:
+        design = size_arm(axial_force=force, length=length * scale,
+                          transverse_accel=transverse, hollow=section == "hollow",
+                          inner_diameter=bore, stress_safety=stress_safety,
+                          buckling_safety=buckling_safety, min_stiffness=min_stiffness,
+                          material=material)
+        payload = {"mode": "sizing", "feasible": design.feasible, "message": design.message,
+                   "margins": design.constraints, **design.analysis.as_dict()}
+    if as_json:
+        emit_json(payload)
+        if payload.get("feasible") is False:
+            raise InputError(payload["message"])
+        return
+    for key in ("length", "outer_diameter", "inner_diameter"):
+        click.echo(f"  {key} = {payload[key] / scale:.6g} {units}")
+    click.echo(f"  mass {payload['mass']:.6g} kg, axial stiffness {payload['axial_stiffness']:.4g}"
+               f" N/m")
+    click.echo(f"  axial stress {payload['axial_stress']:.4g} Pa, bending "
+               f"{payload['bending_stress']:.4g} Pa, stress safety {payload['stress_safety']:.3g}")
+    click.echo(f"  Euler buckling load {payload['buckling_load']:.4g} N (safety "
+               f"{payload['buckling_safety']:.3g}), mid-span deflection "
+               f"{payload['deflection'] / scale:.4g} {units}")
+    if payload.get("feasible") is False:
+        raise InputError(payload["message"])

@@ -1,0 +1,106 @@
+"""``pkmkit path`` and ``pkmkit arm-sizing`` end to end."""
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from pkmkit.cli.main import cli
+
+
+@pytest.fixture
+def run():
+    runner = CliRunner()
+
+    def invoke(*args):
+        return runner.invoke(cli, [str(a) for a in args], catch_exceptions=False)
+
+    return invoke
+
+
+def as_json(result):
+    assert result.exit_code == 0, result.output
+    return json.loads(result.stdout)
+
+
+def test_path_circle_summary_and_files(run, tmp_path):
+    out = tmp_path / "circle"
+    data = as_json(run("path", "linear-delta-table-iv1", "--circle", "0,0,200,150", "--units",
+                       "mm", "--feed", "120", "--accel", "1000", "--jerk", "10000",
+                       "--json", "--out", out))
+    for key in ("duration", "q_min", "q_max", "qd_max", "qdd_max", "force_max", "violations"):
+        assert key in data
+    np.testing.assert_allclose(data["stroke"], 190.84, atol=0.02)
+    np.testing.assert_allclose(data["qd_max"], 76.34, atol=0.02)
+    assert data["violations"] == [] and data["duration"] > np.pi * 300 / 120
+    for name in ("motion.png", "path.png", "trajectory.csv"):
+        assert (out / name).stat().st_size > 1000
+    header = (out / "trajectory.csv").read_text().splitlines()[0]
+    assert header.startswith("t,x,y,z,q1,q2,q3,q1_dot")
+
+
+def test_path_gcode_with_violations(run, tmp_path):
+    program = tmp_path / "facing.nc"
+    program.write_text("G21 G90 G17\nG0 X-100 Y-50 Z0\nG1 X100 F3000\nG1 Y50\nG1 X-100\n")
+    result = run("path", "linear-delta-table-iv1", "--gcode", program, "--origin", "0,0,0.2",
+                 "--feed", "0.05", "--accel", "2", "--jerk", "20", "--speed-limit", "0.01")
+    assert result.exit_code == 0
+    assert "LIMIT speed" in result.output and "exceeds it by" in result.output
+
+
+def test_path_raster_and_wrench(run):
+    data = as_json(run("path", "linear-delta-table-iv1", "--raster", "-0.1,-0.05,0.2,0.2,0.1,3,"
+                       "one-way", "--feed", "0.05", "--accel", "1", "--jerk", "10", "--wrench",
+                       "0,0,-500", "--json"))
+    # a 500 N downward force on the tool adds about a third of it to each vertical motor
+    assert 300 < min(data["force_max"]) and data["total_mass"] * 9.81 / 3 < 160
+
+
+def test_arm_sizing(run):
+    seed = as_json(run("arm-sizing", "--seed-tables", "--json"))
+    assert len(seed["rows"]) == 14
+    sized = as_json(run("arm-sizing", "--force", "1000", "--length", "1.04", "--json"))
+    assert sized["feasible"] and sized["buckling_safety"] == pytest.approx(3.0, rel=1e-4)
+    analysed = as_json(run("arm-sizing", "--length", "1040", "--diameter", "40", "--units", "mm",
+                           "--json"))
+    assert analysed["mode"] == "analysis" and analysed["mass"] == pytest.approx(
+        7700 * np.pi / 4 * 0.04**2 * 1.04)
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["path", "linear-delta", "--feed", "0.1", "--accel", "1", "--jerk", "1"],
+         "exactly one of"),
+        (["path", "linear-delta", "--circle", "0,0,0.2", "--feed", "0.1", "--accel", "1",
+          "--jerk", "1"], "needs 4 numbers"),
+        (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "-1", "--accel", "1",
+          "--jerk", "1"], "must be > 0"),
+        (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "0.1", "--accel", "1"],
+         "jerk"),
+        (["path", "linear-delta", "--line", "0,0,0:3,0,0", "--feed", "0.1", "--accel", "1",
+          "--jerk", "10"], "leaves the workspace"),
+        (["path", "five-bar", "--helix", "1,0,0,0.1,0.01,2", "--feed", "0.1", "--accel", "1",
+          "--jerk", "10"], "spatial machine"),
+        (["arm-sizing", "--force", "1e7", "--length", "1.0"], "buckling"),
+        (["arm-sizing"], "--length"),
+    ],
+)
+def test_bad_input(run, args, message):
+    result = run(*args)
+    assert result.exit_code in (1, 2), result.output
+    assert message in result.output and "Traceback" not in result.output
+
+
+def test_bad_gcode_and_masses(run, tmp_path):
+    program = tmp_path / "bad.nc"
+    program.write_text("G21\nG1 X1 F100\nT1 M6\n")
+    result = run("path", "linear-delta", "--gcode", program, "--feed", "0.1", "--accel", "1",
+                 "--jerk", "10")
+    assert result.exit_code == 1 and "bad.nc:3:" in result.output
+    masses = tmp_path / "m.toml"
+    masses.write_text("[masses]\nplatform = -3\n")
+    result = run("path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "0.1", "--accel",
+                 "1", "--jerk", "10", "--masses", masses)
+    assert result.exit_code == 1 and ">= 0" in result.output

@@ -1,0 +1,81 @@
+import math
+
+import numpy as np
+import pytest
+
+from pkmkit.errors import InputError
+from pkmkit.motion.gcode import read_gcode
+
+PROGRAM = """%
+(facing test)
+N10 G21 G90 G17
+N20 G0 X10 Y0 Z5
+N30 G1 Z0 F600
+N40 G2 X0 Y10 I-10 J0
+N50 G3 X-10 Y0 R10 ; short arc
+N60 G1 X-10 Y-10
+N70 G2 X-10 Y-10 I10 Z-2 (helical full turn)
+%
+"""
+
+
+def test_program_segments():
+    path = read_gcode(PROGRAM)
+    kinds = [type(s).__name__ for s in path.segments]
+    assert kinds == ["Line", "Line", "Arc", "Arc", "Line", "Arc"]
+    assert path.source == (4, 5, 6, 7, 8, 9)
+    assert path.segments[0].rapid and path.segments[1].feed == pytest.approx(0.01)
+    assert path.segments[2].sweep == pytest.approx(-1.5 * math.pi)
+    assert path.segments[3].sweep == pytest.approx(math.pi / 2)
+    helix = path.segments[5]
+    assert helix.sweep == pytest.approx(-2 * math.pi) and helix.rise == pytest.approx(-0.002)
+    np.testing.assert_allclose(helix.end, [-0.01, -0.01, -0.002], atol=1e-12)
+
+
+def test_units_incremental_and_origin():
+    inch = read_gcode("G20 G91\nG1 X1 Y2 F60\nX1\n", origin=(0.1, 0, 0))
+    np.testing.assert_allclose(inch.segments[0].end, [0.1 + 0.0254, 0.0508, 0], atol=1e-12)
+    np.testing.assert_allclose(inch.segments[1].end, [0.1 + 0.0508, 0.0508, 0], atol=1e-12)
+    assert inch.segments[0].feed == pytest.approx(0.0254)
+
+
+@pytest.mark.parametrize("plane, ijk, end, normal", [
+    ("G17", "I-5 J0", "X0 Y5 Z0", (0, 0, 1)),
+    ("G18", "I-5 K0", "X0 Y0 Z5", (0, 1, 0)),
+    ("G19", "J-5 K0", "X0 Y0 Z5", (1, 0, 0)),
+])
+@pytest.mark.parametrize("motion", ["G2", "G3"])
+def test_centre_and_radius_forms_agree_in_every_plane(plane, ijk, end, normal, motion):
+    start = {"G17": "X5 Y0 Z0", "G18": "X5 Y0 Z0", "G19": "X0 Y5 Z0"}[plane]
+    head = f"G21 G90 {plane}\nG0 {start}\n"
+    by_centre = read_gcode(head + f"{motion} {end} {ijk} F100\n").segments[1]
+    # the same arc by its radius: R > 0 for the short way round, R < 0 for the long way
+    radius = 5 if abs(by_centre.sweep) <= math.pi else -5
+    by_radius = read_gcode(head + f"{motion} {end} R{radius} F100\n").segments[1]
+    assert abs(by_centre.sweep) in (pytest.approx(math.pi / 2), pytest.approx(1.5 * math.pi))
+    np.testing.assert_allclose(by_centre.center, by_radius.center, atol=1e-12)
+    assert by_centre.sweep == pytest.approx(by_radius.sweep)
+    np.testing.assert_allclose(np.cross(by_centre.e1, by_centre.e2), normal, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "text, line, message",
+    [
+        ("G1 X1 F100\nM3 S1000\n", 2, "unsupported word M3"),
+        ("G1 X1 F100\nG4 P1\n", 2, "unsupported G code G4"),
+        ("G1 X1\n", 1, "feed rate"),
+        ("X1 Y1\n", 1, "motion mode"),
+        ("G1 X1 F100\nG2 X2 Y1 I0 J0.6\n", 2, "inconsistent arc"),
+        ("G0 X0 Y0\nG2 X10 Y0 R2 F100\n", 2, "smaller than half the chord"),
+        ("G0 X1 Y0\nG2 X1 Y0 R1 F100\n", 2, "full circle"),
+        ("G1 X1 F-5\n", 1, "feed must be > 0"),
+        ("G1 X1 X2 F5\n", 1, "appears twice"),
+        ("G1 X1 F5 #3\n", 1, "cannot read"),
+        ("(only a comment)\n", None, "no motion"),
+    ],
+)
+def test_errors_name_the_line(text, line, message):
+    with pytest.raises(InputError, match=message) as info:
+        read_gcode(text, name="prog.nc")
+    if line is not None:
+        assert f"prog.nc:{line}:" in str(info.value)

@@ -1,0 +1,66 @@
+import numpy as np
+import pytest
+
+import pkmkit
+from pkmkit.errors import InputError
+from pkmkit.motion import Limits, check_limits, circle, helix, joint_trajectory, line, plan
+
+
+@pytest.fixture(scope="module")
+def delta_b():
+    return pkmkit.machine("linear-delta-table-iv1")
+
+
+def test_joint_rates_match_finite_differences(delta_b):
+    tr = plan(helix([0.02, -0.01, 0.2], 0.1, pitch=0.02, turns=1.5), feed=0.15, accel=1.0,
+              jerk=10.0, period=5e-4)
+    jt = joint_trajectory(delta_b, tr)
+    dt = np.diff(jt.t)
+    assert np.allclose(dt[:-1], dt[0])
+    qd_fd = np.gradient(jt.q, jt.t, axis=0)
+    qdd_fd = np.gradient(jt.qd, jt.t, axis=0)
+    np.testing.assert_allclose(jt.qd[2:-2], qd_fd[2:-2], atol=2e-6)
+    np.testing.assert_allclose(jt.qdd[2:-2], qdd_fd[2:-2], atol=2e-3)
+
+
+def test_seed_000_circle_and_helix(delta_b):
+    """Table IV.1 machine, Ø300 mm at 120 mm/s: stroke ≈ 190 mm (thesis), 190.84 mm computed;
+    motor speeds within ±76.3 mm/s (thesis: 69–82); helix of pitch 20 mm over 10 turns:
+    stroke 381 mm (thesis ≈ 390)."""
+    jt = joint_trajectory(delta_b, plan(circle([0, 0, 0.2], 0.15), feed=0.12, accel=1.0,
+                                        jerk=10.0, period=0.002))
+    np.testing.assert_allclose(jt.stroke, 0.19084, atol=2e-5)
+    assert np.abs(jt.qd).max() == pytest.approx(0.07634, abs=2e-5)
+    hx = joint_trajectory(delta_b, plan(helix([0, 0, 0.0], 0.15, pitch=0.02, turns=10),
+                                        feed=0.12, accel=1.0, jerk=10.0, period=0.01))
+    assert hx.stroke.max() == pytest.approx(0.381, abs=0.001)
+    assert hx.qd.min() == pytest.approx(-0.0738, abs=2e-4)
+    assert hx.qd.max() == pytest.approx(0.0789, abs=2e-4)
+
+
+def test_leaving_the_workspace_names_the_first_sample(delta_b):
+    tr = plan(line([0, 0, 0.2], [1.5, 0, 0.2]), feed=0.5, accel=2.0, jerk=20.0, period=0.01)
+    with pytest.raises(InputError, match=r"leaves the workspace: first at t = .* too short by"):
+        joint_trajectory(delta_b, tr)
+
+
+def test_crossing_into_the_other_mode_is_refused():
+    ortho = pkmkit.machine("orthoglide")
+    tr = plan(line([0, 0, 0], [0.2, 0.2, 0.2]), feed=0.1, accel=1.0, jerk=10.0, period=0.01)
+    with pytest.raises(InputError, match=r"singularity|other assembly mode"):
+        joint_trajectory(ortho, tr)
+
+
+def test_limit_report(delta_b):
+    jt = joint_trajectory(delta_b, plan(circle([0, 0, 0.2], 0.15), feed=0.12, accel=1.0,
+                                        jerk=10.0, period=0.002))
+    report = check_limits(delta_b, jt, Limits(speed=0.05, accel=1.0, force=1e4),
+                          forces=np.full_like(jt.q, 5.0))
+    assert report["position"]["exceeded"] is False
+    assert report["speed"]["exceeded"] and report["speed"]["first"]["excess"] > 0
+    first = report["speed"]["first"]
+    k = int(np.argmin(np.abs(jt.t - first["t"])))
+    assert np.abs(jt.qd[k]).max() > 0.05 and (np.abs(jt.qd[:k]) <= 0.05).all()
+    assert not report["accel"]["exceeded"] and not report["force"]["exceeded"]
+    with pytest.raises(InputError, match="> 0"):
+        check_limits(delta_b, jt, Limits(speed=-1.0))
