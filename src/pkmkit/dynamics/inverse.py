@@ -36,6 +36,7 @@ from pkmkit.dynamics.masses import MassProperties
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.rods import SLIDE
+from pkmkit.numerics import small
 
 
 @dataclass(frozen=True)
@@ -103,54 +104,72 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
             raise InputError("the wrench must be finite")
         force_ext[:, : min(3, w.shape[1])] = w[:, :3] if w.shape[1] >= 3 else w
     g = masses.gravity
-    jac = machine.jacobian(x, q=q)
-    j3 = np.zeros((n_samples, 3, machine.n_actuators))
-    j3[:, : machine.dims] = jac.J
-    p, pdd = _pad(x), _pad(xdd)
+    # batch-last layout: vectors are (3, ..., N) with contiguous components
+    a_leg, b_leg = machine._closed.jacobians_t(x, q)  # A (n, dims, N), diag B (n, N)
+    cof = small.cofactors(a_leg)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv_det = 1.0 / small.det(a_leg, cof)
 
+    def apply_jt(v: np.ndarray) -> np.ndarray:
+        """Jᵀ v for platform-space vectors v (3, N): J = A⁻¹B, so Jᵀv = B (A⁻ᵀ v) and
+        A⁻ᵀ = cofactors / det A. Returns (n, N)."""
+        v = v[: machine.dims]
+        with np.errstate(invalid="ignore"):
+            return b_leg * np.einsum("ijn,jn->in", cof, v) * inv_det
+
+    p = _pad(x).T
+    pdd = _pad(xdd).T
+    q_t, qdd_t = q.T, qdd.T
     # carriages
     u_leg = model.leg_axis
-    carriages = masses.carriage_mass * (qdd - (u_leg @ g)[None])
+    carriages = masses.carriage_mass[:, None] * (qdd_t - (u_leg @ g)[:, None])
     # platform and external force
-    platform = np.einsum("kji,kj->ki", j3, masses.platform_mass * (pdd - g))
-    external = -np.einsum("kji,kj->ki", j3, force_ext)
-    # rods
+    platform = apply_jt(masses.platform_mass * (pdd - g[:, None]))
+    external = -apply_jt(force_ext.T)
+    # rods, as (3, m, N)
     k_of = model.rod_actuator
-    u = model.rod_axis
-    qr, qdr = q[:, k_of], qdd[:, k_of]
-    a_pt = model.rod_base[None] + qr[:, :, None] * u[None]            # carriage joint (N, m, 3)
-    d = p[:, None, :] + model.rod_platform[None] - a_pt
-    length = np.linalg.norm(d, axis=2)
-    unit = d / length[:, :, None]
-    acc_a = qdr[:, :, None] * u[None]
-    acc_p = np.broadcast_to(pdd[:, None, :], acc_a.shape)
-    m = masses.rod_mass[None, :, None]
-    f_m = m * (0.5 * (acc_a + acc_p) - g)
-    inertia = masses.rod_mass[None] * (length**2 / 12 + masses.rod_radius[None] ** 2 / 4)
-    alpha = np.cross(unit, acc_p - acc_a) / length[:, :, None]
-    torque_term = np.cross(inertia[:, :, None] * alpha, unit) / length[:, :, None]
+    u = model.rod_axis.T[:, :, None]
+    qr, qddr = q_t[k_of], qdd_t[k_of]
+    a_pt = model.rod_base.T[:, :, None] + u * qr
+    d = p[:, None, :] + model.rod_platform.T[:, :, None] - a_pt
+    length = np.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2)
+    inv_len = 1.0 / length
+    unit = d * inv_len
+    acc_a = u * qddr
+    acc_p = pdd[:, None, :]
+    rod_mass = masses.rod_mass[:, None]
+    f_m = rod_mass * (0.5 * (acc_a + acc_p) - g[:, None, None])
+    inertia = rod_mass * (length**2 / 12 + masses.rod_radius[:, None] ** 2 / 4)
+    alpha = _cross(unit, acc_p - acc_a) * inv_len
+    torque_term = _cross(inertia * alpha, unit) * inv_len
     g_p = 0.5 * f_m + torque_term
     g_a = 0.5 * f_m - torque_term
-    rods = np.einsum("kji,kj->ki", j3, g_p.sum(axis=1))
-    along = np.einsum("kmi,mi->km", g_a, u)
-    np.add.at(rods.T, k_of, along.T)
+    rods = apply_jt(g_p.sum(axis=1))
+    along = np.einsum("imn,im->mn", g_a, model.rod_axis.T)  # (m, N)
+    np.add.at(rods, k_of, along)
     force = carriages + platform + external + rods
-    # leg axial force: the carriage's equilibrium along the slide, f = m_c(q̈ − g·u) + u·G_A
-    # − T (d̂·u) summed over the leg's rods (equal split within a parallelogram)
-    cos = np.zeros((n_samples, machine.n_actuators))
-    np.add.at(cos.T, k_of, np.einsum("kmi,mi->km", unit, u).T)
-    counts = np.bincount(k_of, minlength=machine.n_actuators)
-    cos /= counts
+    # leg axial force from the carriage's equilibrium along its slide:
+    # f = m_c (q̈ − g·u) + Σ u·G_A − Σ T (d̂·u), equal split within a parallelogram
+    cos = np.zeros_like(force)
+    np.add.at(cos, k_of, np.einsum("imn,im->mn", unit, model.rod_axis.T))
+    cos /= np.bincount(k_of, minlength=machine.n_actuators)[:, None]
+    carriage_side = np.zeros_like(force)
+    np.add.at(carriage_side, k_of, along)
     with np.errstate(divide="ignore", invalid="ignore"):
-        carriage_side = np.zeros_like(force)
-        np.add.at(carriage_side.T, k_of, along.T)
         axial = (carriages + carriage_side - force) / cos
     axial[np.abs(cos) < 1e-9] = np.nan
     return ForceResult(
-        force=force, power=force * qd,
-        parts={"carriages": carriages, "rods": rods, "platform": platform, "external": external},
-        leg_axial=axial,
+        force=force.T, power=force.T * qd,
+        parts={"carriages": carriages.T, "rods": rods.T, "platform": platform.T,
+               "external": external.T},
+        leg_axial=axial.T,
     )
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product of component-first arrays (3, ...)."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
 
 
 def mechanical_energy(machine: Machine, masses: MassProperties, x: np.ndarray, xd: np.ndarray,

@@ -1,6 +1,6 @@
 """Joint trajectories of any machine along a sampled tool trajectory, and limit checks.
 
-q from the inverse model; q̇ and q̈ from the analytic velocity model — q̇ = J⁻¹ẋ and, differentiating
+q from the inverse model; q̇ and q̈ from the analytic velocity model — q̇ = B⁻¹A ẋ and, differentiating
 A ẋ = B q̇, q̈ = B⁻¹(A ẍ + Ȧ ẋ − Ḃ q̇) — never from finite differences.
 """
 
@@ -12,9 +12,9 @@ from typing import Any
 import numpy as np
 
 from pkmkit.errors import InputError
-from pkmkit.machines.machine import Machine
+from pkmkit.machines.machine import SINGULARITY_TOL, Machine
 from pkmkit.motion.timelaw import Trajectory
-from pkmkit.status import Status
+from pkmkit.numerics import small
 
 
 @dataclass(frozen=True)
@@ -43,44 +43,64 @@ class JointTrajectory:
         return self.q.max(axis=0) - self.q.min(axis=0)
 
 
-def joint_trajectory(machine: Machine, trajectory: Trajectory) -> JointTrajectory:
+def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
+                     tol: float = SINGULARITY_TOL) -> JointTrajectory:
     """Actuator positions, speeds and accelerations along ``trajectory``.
+
+    Batched over the samples in the batch-last layout of the closed forms: A and the diagonal
+    of B once, then q̇ = B⁻¹A ẋ, Ȧ (rows ẋ − q̇_i u_i), Ḃ and q̈.
 
     Raises:
         InputError: the path leaves the workspace (the first failing sample: time, pose, the leg
-            and by how much), enters the other assembly mode or meets a singularity — the
-            machine cannot follow it.
+            and by how much), enters the other assembly mode or comes within ``tol`` of a
+            singularity (|cos| between a leg and its slide, or |det| of the unit leg
+            directions) — the machine cannot follow it.
     """
     dims = machine.dims
     if dims == 2 and np.abs(trajectory.x[:, 2]).max() > 1e-12:
         raise InputError("a planar machine needs a path in the plane z = 0")
-    x, xd, xdd = trajectory.x[:, :dims], trajectory.xd[:, :dims], trajectory.xdd[:, :dims]
-    inv = machine.ik(x, full_output=True)
-    bad = np.flatnonzero(inv.status != Status.OK)
+    x = np.ascontiguousarray(trajectory.x[:, :dims])
+    xd = np.ascontiguousarray(trajectory.xd[:, :dims])
+    xdd = np.ascontiguousarray(trajectory.xdd[:, :dims])
+    closed = machine._closed
+    q = closed.inverse(x, machine.model.leg_branch)
+    bad = np.flatnonzero(~np.isfinite(q @ np.ones(machine.n_actuators)))
     if bad.size:
         k = int(bad[0])
-        short = inv.shortfall[k]
+        short = closed.shortfall(x[k:k + 1])[0]
         leg = int(np.nanargmax(short))
         raise InputError(
             f"the path leaves the workspace: first at t = {trajectory.t[k]:.6g} s, pose "
             f"{np.round(x[k], 9).tolist()} m ({machine.model.leg_names[leg]} too short by "
             f"{short[leg]:.6g} m)"
         )
-    jac = machine.jacobian(x, q=inv.q)
-    other = np.flatnonzero((jac.mode != machine.working_mode) | (jac.singularity != 0))
-    if other.size:
-        k = int(other[0])
-        what = ("meets a singularity (" + jac.status[k] + ")" if jac.singularity[k]
-                else f"is in the other assembly mode ({machine.mode_label(int(jac.mode[k]))!r})")
+    a, b = closed.jacobians_t(x, q)  # (n, dims, N), (n, N)
+    lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
+    det = small.det(a)
+    det_unit = det / np.prod(lengths, axis=0)
+    serial = np.min(np.abs(b) / lengths, axis=0)
+    wrong = (np.sign(det) != machine.working_mode) | (np.abs(det_unit) < tol) | (serial < tol)
+    if wrong.any():
+        k = int(np.flatnonzero(wrong)[0])
+        if serial[k] < tol:
+            what = "meets a serial singularity (a leg perpendicular to its slide)"
+        elif abs(det_unit[k]) < tol:
+            what = "meets a parallel singularity"
+        else:
+            what = (f"is in the other assembly mode "
+                    f"({machine.mode_label(int(np.sign(det[k])))!r})")
         raise InputError(f"the path {what} at t = {trajectory.t[k]:.6g} s, pose "
                          f"{np.round(x[k], 9).tolist()} m")
-    rates = machine.jacobian_dot(x, xd, q=inv.q)
-    qd = rates.qd
-    b = np.einsum("kii->ki", jac.B)
-    rhs = (np.einsum("kij,kj->ki", jac.A, xdd) + np.einsum("kij,kj->ki", rates.A_dot, xd)
-           - np.einsum("kii->ki", rates.B_dot) * qd)
-    qdd = rhs / b
-    return JointTrajectory(t=trajectory.t, x=x, xd=xd, xdd=xdd, q=inv.q, qd=qd, qdd=qdd,
+    xd_t, xdd_t = xd.T, xdd.T
+    qd = np.einsum("ikn,kn->in", a, xd_t) / b
+    axis = closed.axis  # (n, dims), zero rows for struts
+    slide = closed.slide[:, None]
+    a_dot = xd_t[None] - (slide * qd)[:, None, :] * axis[:, :, None]
+    b_dot = (slide * np.einsum("ikn,ik->in", a_dot, axis)
+             + (1.0 - slide) * qd)
+    qdd = (np.einsum("ikn,kn->in", a, xdd_t) + np.einsum("ikn,kn->in", a_dot, xd_t)
+           - b_dot * qd) / b
+    return JointTrajectory(t=trajectory.t, x=x, xd=xd, xdd=xdd, q=q, qd=qd.T, qdd=qdd.T,
                            trajectory=trajectory)
 
 
