@@ -61,10 +61,21 @@ def design() -> None:
     delta_pareto(OUT, generations=40)
 
 
+def motion() -> None:
+    """The trajectory figures of docs/motion.md (the same studies as ``pkmkit demo``)."""
+    from pkmkit.cli.demo_motion import facing, seed_circle, seed_helix, seed_line
+
+    seed_circle(OUT)
+    seed_helix(OUT)
+    seed_line(OUT)
+    facing(OUT)
+
+
 if __name__ == "__main__":
     OUT.mkdir(exist_ok=True)
     machines()
     assembly_modes()
     analysis()
     design()
+    motion()
     print(f"figures written to {OUT}")

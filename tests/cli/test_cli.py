@@ -200,6 +200,20 @@ def test_demo_writes_json_and_pngs(run, tmp_path):
     assert design["five_bar"]["orientations_deg"] == [[0.0, 90.0]]
     assert design["linear_delta"]["pareto_size"] > 5
     assert (out / "design" / "linear-delta-pareto.png").stat().st_size > 10_000
+    motion = summary["motion"]
+    circle = motion["circle"]
+    np.testing.assert_allclose(circle["stroke"], 0.19084, atol=2e-5)
+    np.testing.assert_allclose(circle["qd_max"], 0.07634, atol=2e-5)
+    # the forces are dominated by weight: inertia at constant feed is about 1 % of them
+    assert circle["inertial_cruise_force_max"] < 0.02 * max(circle["force_max"])
+    assert abs(motion["helix"]["stroke"][0] - 0.381) < 1e-3
+    lo, hi = motion["line"]["carriages_only_7.2kg"]["cruise_force_range"]
+    assert 70.5 < lo <= hi < 72.0
+    assert motion["line"]["stroke_violations_default_machine"][0]["limit"] == "position"
+    assert motion["facing"]["zigzag"]["duration"] < motion["facing"]["one-way"]["duration"]
+    assert motion["arms"]["mass_error_g_max"] < 0.01 and motion["arms"]["sized_arm"]["feasible"]
+    for name in circle["figures"]:
+        assert (out / "motion" / name).stat().st_size > 10_000
     for ident, res in analysis["machines"].items():
         assert res["inscribed_side"] > 0, ident
         for name in res["figures"]:

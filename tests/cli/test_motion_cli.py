@@ -45,7 +45,7 @@ def test_path_gcode_with_violations(run, tmp_path):
     program.write_text("G21 G90 G17\nG0 X-100 Y-50 Z0\nG1 X100 F3000\nG1 Y50\nG1 X-100\n")
     result = run("path", "linear-delta-table-iv1", "--gcode", program, "--origin", "0,0,0.2",
                  "--feed", "0.05", "--accel", "2", "--jerk", "20", "--speed-limit", "0.01")
-    assert result.exit_code == 0
+    assert result.exit_code == 3  # the limit is reported, the results written
     assert "LIMIT speed" in result.output and "exceeds it by" in result.output
 
 
@@ -104,3 +104,19 @@ def test_bad_gcode_and_masses(run, tmp_path):
     result = run("path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "0.1", "--accel",
                  "1", "--jerk", "10", "--masses", masses)
     assert result.exit_code == 1 and ">= 0" in result.output
+
+
+def test_shipped_examples_run(run):
+    """The G-code program and the masses file of docs/examples/ work as documented."""
+    from pathlib import Path
+
+    examples = Path(__file__).parents[2] / "docs" / "examples"
+    plain = as_json(run("path", "linear-delta-table-iv1", "--gcode", examples / "pocket.nc",
+                        "--origin", "0,0,0.2", "--feed", "0.05", "--accel", "1", "--jerk", "10",
+                        "--json"))
+    assert plain["violations"] == [] and 20 < plain["duration"] < 21
+    heavy = as_json(run("path", "linear-delta-table-iv1", "--gcode", examples / "pocket.nc",
+                        "--origin", "0,0,0.2", "--feed", "0.05", "--accel", "1", "--jerk", "10",
+                        "--masses", examples / "delta-masses.toml", "--json"))
+    # Ø40 mm steel arms weigh 10.1 kg each instead of 1.31 kg at 1000 kg/m³: +52 kg in all
+    assert heavy["total_mass"] - plain["total_mass"] == pytest.approx(6 * (10.06 - 1.307), abs=0.05)

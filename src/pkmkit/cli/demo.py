@@ -4,7 +4,9 @@ For each built-in preset and each of its reference poses: inverse model, direct 
 assembly mode (and every real mode), J, velocity transmission factors, conditioning and the
 singularity class, plus the machine's mobility. Printed as text, written as JSON
 (``summary.json`` and one file per machine), with a drawing of each machine (PNG). Then the
-analysis studies of :mod:`pkmkit.cli.demo_analysis` (workspaces, maps, the seed studies).
+analysis studies of :mod:`pkmkit.cli.demo_analysis` (workspaces, maps, the seed studies), the
+design studies of :mod:`pkmkit.cli.demo_design` and the trajectories with actuator forces of
+:mod:`pkmkit.cli.demo_motion`.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from pkmkit.status import Status
 
 from .demo_analysis import run_analysis_demo
 from .demo_design import run_design_demo
+from .demo_motion import run_motion_demo
 from .describe import describe_machine
 
 
@@ -79,11 +82,14 @@ def run_demo(out_dir: Path) -> dict[str, Any]:
         _print_summary(summary)
     analysis = run_analysis_demo(out_dir, list(summaries))
     design = run_design_demo(out_dir)
-    total = {"pkmkit_demo": "kinematic summary, analysis and design of the built-in machines",
-             "units": "m", "machines": summaries, "analysis": analysis, "design": design}
+    motion = run_motion_demo(out_dir)
+    total = {"pkmkit_demo": "kinematic summary, analysis, design, trajectories and dynamics of "
+                            "the built-in machines",
+             "units": "m", "machines": summaries, "analysis": analysis, "design": design,
+             "motion": motion}
     (out_dir / "summary.json").write_text(json.dumps(to_jsonable(total), indent=2))
     click.echo(f"\nwrote {out_dir}/summary.json, one JSON and one PNG per machine, and the "
-               "analysis figures in analysis/")
+               "figures of the studies in analysis/, design/ and motion/")
     return total
 
 

@@ -29,6 +29,7 @@ from .describe import describe_machine, print_description
 from .design_cmds import register as register_design_commands
 from .motion_cmds import register as register_motion_commands
 from .options import (
+    EXIT_PARTIAL,
     JSON_OPTION,
     SET_OPTION,
     UNITS_OPTION,
@@ -37,8 +38,6 @@ from .options import (
     parse_vector,
     resolve_machine,
 )
-
-EXIT_PARTIAL = 3
 
 
 class PkmGroup(click.Group):

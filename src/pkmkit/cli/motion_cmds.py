@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
@@ -19,7 +20,15 @@ from pkmkit.motion.paths import circle, helix, line, raster
 from pkmkit.motion.timelaw import PROFILES
 from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
 
-from .options import JSON_OPTION, SET_OPTION, UNITS_OPTION, emit_json, fmt, resolve_machine
+from .options import (
+    EXIT_PARTIAL,
+    JSON_OPTION,
+    SET_OPTION,
+    UNITS_OPTION,
+    emit_json,
+    fmt,
+    resolve_machine,
+)
 
 
 def register(cli: click.Group) -> None:
@@ -85,7 +94,9 @@ def build_path(machine, scale: float, gcode, origin, line_text, circle_text, hel
 @click.option("--helix", "helix_text", metavar="CX,CY,CZ,R,PITCH,TURNS", help="Helix along z.")
 @click.option("--raster", "raster_text", metavar="X0,Y0,Z,W,H,PASSES[,zigzag|one-way]",
               help="Facing of a rectangle in passes along x.")
-@click.option("--feed", type=float, required=True, help="Feed rate (length unit per second).")
+@click.option("--feed", type=float, required=True,
+              help="Feed rate (length unit per second). With --gcode the program's F words "
+                   "take precedence; --feed then sets the default rapid speed.")
 @click.option("--rapid-feed", type=float, help="Speed of rapid moves (default 5 × feed).")
 @click.option("--accel", type=float, required=True, help="Tool acceleration limit.")
 @click.option("--jerk", type=float, help="Tool jerk limit (required by the S-curve).")
@@ -105,7 +116,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
              raster_text, feed, rapid_feed, accel, jerk, profile, period, masses, wrench,
              speed_limit, accel_limit, force_limit, out_dir, units, as_json):
     """Move along a tool path: duration, actuator strokes, speeds, accelerations, forces and
-    powers, with a check of the actuator limits."""
+    powers, with a check of the actuator limits (exit status 3 when a limit is exceeded)."""
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     tool_path = build_path(m, scale, gcode, origin, line_text, circle_text, helix_text,
@@ -159,7 +170,13 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
         summary["files"] = ["motion.png", "path.png", "trajectory.csv"]
     if as_json:
         emit_json(summary)
-        return
+    else:
+        _print_path_summary(m, summary, profile, units)
+    if summary["violations"]:
+        sys.exit(EXIT_PARTIAL)
+
+
+def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
     u = units
     click.echo(f"{m.name}: {summary['length']:.6g} {u} of path in {summary['duration']:.4f} s "
                f"({summary['samples']} samples, {profile})")
@@ -170,6 +187,8 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     click.echo(f"  forces {fmt(summary['force_range'][0])} .. {fmt(summary['force_range'][1])} N"
                f" (moving mass {summary['total_mass']:.3g} kg); power up to "
                f"{fmt(summary['power_max'])} W")
+    click.echo(f"  leg axial forces up to {fmt(summary['leg_axial_max'])} N (the load for "
+               "`pkmkit arm-sizing --force`, divided among the leg's rods)")
     if summary["violations"]:
         for v in summary["violations"]:
             click.echo(f"  LIMIT {v['limit']}: {v['actuator']} = {v['value']:.6g} exceeds it by "

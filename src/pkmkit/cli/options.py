@@ -35,6 +35,10 @@ SET_OPTION = click.option(
 )
 JSON_OPTION = click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
 
+#: Exit status when the command ran but some rows or samples were flagged (bad batch rows,
+#: exceeded actuator limits): the output is written and usable.
+EXIT_PARTIAL = 3
+
 
 def is_machine_file(name: str) -> bool:
     """True if ``name`` designates a machine file rather than a built-in id."""

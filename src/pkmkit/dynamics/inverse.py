@@ -59,6 +59,12 @@ class ForceResult:
     leg_axial: np.ndarray
 
 
+#: Samples per block: the rod temporaries, (3, rods, block) doubles, stay in cache.
+CHUNK = 8192
+#: Names of the force contributions in :attr:`ForceResult.parts`.
+PARTS = ("carriages", "rods", "platform", "external")
+
+
 def _pad(a: np.ndarray) -> np.ndarray:
     if a.shape[-1] == 3:
         return a
@@ -103,6 +109,26 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
         if not np.isfinite(w).all():
             raise InputError("the wrench must be finite")
         force_ext[:, : min(3, w.shape[1])] = w[:, :3] if w.shape[1] >= 3 else w
+    force = np.empty((machine.n_actuators, n_samples))
+    parts = {name: np.empty_like(force) for name in PARTS}
+    axial = np.empty_like(force)
+    # blocks of samples small enough for the temporaries to stay in cache
+    for first in range(0, n_samples, CHUNK):
+        block = slice(first, first + CHUNK)
+        _forces_block(machine, masses, x[block], xdd[block], q[block], qdd[block],
+                      force_ext[block], force[:, block], axial[:, block],
+                      {name: part[:, block] for name, part in parts.items()})
+    return ForceResult(force=force.T, power=force.T * qd,
+                       parts={name: part.T for name, part in parts.items()},
+                       leg_axial=axial.T)
+
+
+def _forces_block(machine: Machine, masses: MassProperties, x: np.ndarray, xdd: np.ndarray,
+                  q: np.ndarray, qdd: np.ndarray, force_ext: np.ndarray, force: np.ndarray,
+                  axial: np.ndarray, parts: dict[str, np.ndarray]) -> None:
+    """Forces of one block of samples, written into ``force``, ``axial`` and ``parts``
+    (``(n, N)`` views, batch-last)."""
+    model = machine.model
     g = masses.gravity
     # batch-last layout: vectors are (3, ..., N) with contiguous components
     a_leg, b_leg = machine._closed.jacobians_t(x, q)  # A (n, dims, N), diag B (n, N)
@@ -147,7 +173,7 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
     rods = apply_jt(g_p.sum(axis=1))
     along = np.einsum("imn,im->mn", g_a, model.rod_axis.T)  # (m, N)
     np.add.at(rods, k_of, along)
-    force = carriages + platform + external + rods
+    np.add(carriages + platform, external + rods, out=force)
     # leg axial force from the carriage's equilibrium along its slide:
     # f = m_c (q̈ − g·u) + Σ u·G_A − Σ T (d̂·u), equal split within a parallelogram
     cos = np.zeros_like(force)
@@ -156,14 +182,10 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
     carriage_side = np.zeros_like(force)
     np.add.at(carriage_side, k_of, along)
     with np.errstate(divide="ignore", invalid="ignore"):
-        axial = (carriages + carriage_side - force) / cos
+        np.divide(carriages + carriage_side - force, cos, out=axial)
     axial[np.abs(cos) < 1e-9] = np.nan
-    return ForceResult(
-        force=force.T, power=force.T * qd,
-        parts={"carriages": carriages.T, "rods": rods.T, "platform": platform.T,
-               "external": external.T},
-        leg_axial=axial.T,
-    )
+    for name, value in zip(PARTS, (carriages, rods, platform, external), strict=True):
+        parts[name][...] = value
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

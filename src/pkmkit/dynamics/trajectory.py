@@ -41,6 +41,7 @@ class PathResult:
             "force_max": np.abs(f.force).max(axis=0),
             "force_range": [f.force.min(axis=0), f.force.max(axis=0)],
             "power_max": np.abs(f.power).max(axis=0),
+            "leg_axial_max": np.abs(np.nan_to_num(f.leg_axial, nan=np.inf)).max(axis=0),
             "tool_speed_max": float(np.linalg.norm(m.xd, axis=1).max()),
             "tool_accel_max": float(np.linalg.norm(m.xdd, axis=1).max()),
             "violations": violations,
