@@ -1,30 +1,11 @@
 """``pkmkit analyze``, ``map``, ``workspace`` and ``useful-workspace`` end to end."""
 
-import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
-
-from pkmkit.cli.main import cli
 
 
-@pytest.fixture
-def run():
-    runner = CliRunner()
-
-    def invoke(*args):
-        return runner.invoke(cli, [str(a) for a in args], catch_exceptions=False)
-
-    return invoke
-
-
-def as_json(result):
-    assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
-
-
-def test_analyze(run):
+def test_analyze(run, as_json):
     data = as_json(run("analyze", "orthoglide", "--pose", "0,0,0", "--json"))
     np.testing.assert_allclose(data["velocity_factors"], [1, 1, 1], atol=1e-14)
     assert data["isotropic"] is True and data["condition"] == pytest.approx(1.0)
@@ -32,7 +13,7 @@ def test_analyze(run):
     assert "force transmission factors" in text and "ellipsoid axis 2" in text
 
 
-def test_map_index_and_actuators(run, tmp_path):
+def test_map_index_and_actuators(run, tmp_path, as_json):
     out = tmp_path / "cond.png"
     data = as_json(run("map", "linear-delta", "--index", "condition", "--slice", "z=0",
                        "--range", "-0.25,0.25,-0.25,0.25", "--out", out, "--json"))
@@ -47,7 +28,7 @@ def test_map_index_and_actuators(run, tmp_path):
     assert planar["plane"] == ["x", "y"]
 
 
-def test_workspace_json_summary(run, tmp_path):
+def test_workspace_json_summary(run, tmp_path, as_json):
     data = as_json(run("workspace", "orthoglide", "--bounds", "0.5,2", "--resolution", "41",
                        "--json", "--out", tmp_path / "w.png"))
     box = data["inscribed"]
@@ -59,7 +40,7 @@ def test_workspace_json_summary(run, tmp_path):
     assert "area" in planar and planar["inscribed"]["side"] > 0
 
 
-def test_workspace_prescribed_cube(run):
+def test_workspace_prescribed_cube(run, as_json):
     center = "-0.0267442,-0.0267442,-0.0267442"
     ok = as_json(run("workspace", "orthoglide", "--bounds", "0.5,2", "--resolution", "21",
                      "--cube", "0.1996", "--center", center, "--json"))
@@ -69,7 +50,7 @@ def test_workspace_prescribed_cube(run):
     assert bad.exit_code == 0 and "NOT feasible" in bad.output and "λ" in bad.output
 
 
-def test_useful_workspace(run, tmp_path):
+def test_useful_workspace(run, tmp_path, as_json):
     data = as_json(run("useful-workspace", "five-bar", "--bounds", "0.3333333,3",
                        "--resolution", "151", "--json", "--out", tmp_path / "u.png"))
     assert data["joint_square"]["side"] == pytest.approx(0.3868, abs=2e-3)

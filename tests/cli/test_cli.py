@@ -4,24 +4,6 @@ import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
-
-from pkmkit.cli.main import cli
-
-
-@pytest.fixture
-def run():
-    runner = CliRunner()
-
-    def invoke(*args, **kwargs):
-        return runner.invoke(cli, [str(a) for a in args], catch_exceptions=False, **kwargs)
-
-    return invoke
-
-
-def as_json(result):
-    assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
 
 
 @pytest.mark.parametrize("command", [[], ["machines"], ["show"], ["ik"], ["fk"], ["jacobian"],
@@ -31,7 +13,7 @@ def test_help_everywhere(run, command):
     assert result.exit_code == 0 and "Usage:" in result.output
 
 
-def test_machines(run):
+def test_machines(run, as_json):
     data = as_json(run("machines", "--json"))
     ids = {m["id"] for m in data["machines"]}
     assert {"orthoglide", "linear-delta", "five-bar"} <= ids
@@ -39,7 +21,7 @@ def test_machines(run):
     assert "five-bar-biglide" in text
 
 
-def test_show(run):
+def test_show(run, as_json):
     data = as_json(run("show", "linear-delta", "--json", "--units", "mm"))
     params = {p["name"]: p for p in data["parameters"]}
     assert params["L"]["value"] == pytest.approx(1300) and params["L"]["unit"] == "mm"
@@ -50,7 +32,7 @@ def test_show(run):
     assert "Grübler" in text and "redundant constraints: 1" in text
 
 
-def test_ik_reference_entry(run):
+def test_ik_reference_entry(run, as_json):
     data = as_json(run("ik", "linear-delta", "--pose", "0.25,0.25,0", "--json"))
     np.testing.assert_allclose(data["q"], [1.240, 1.1675, 0.94173], atol=5e-5)
     assert data["status"] == "ok"
@@ -61,7 +43,7 @@ def test_ik_reference_entry(run):
     np.testing.assert_allclose(numeric["q"], data["q"], atol=1e-12)
 
 
-def test_set_overrides(run):
+def test_set_overrides(run, as_json):
     data = as_json(run("ik", "linear-delta", "--set", "L=1.04", "--pose", "0,0,0", "--json"))
     np.testing.assert_allclose(data["q"], [0.882666] * 3, atol=1e-6)
     rotated = as_json(run("ik", "linear-delta", "--set", "angles=90,210,330", "--pose",
@@ -72,7 +54,7 @@ def test_set_overrides(run):
     np.testing.assert_allclose(five["q"], [0.7, 0.7], atol=1e-12)
 
 
-def test_fk_all_modes(run):
+def test_fk_all_modes(run, as_json):
     data = as_json(run("fk", "orthoglide", "--q", "0.31,0.31,0.31", "--all", "--json"))
     np.testing.assert_allclose(data["pose"], [0, 0, 0], atol=1e-12)
     assert data["mode"] == "origin-side" and data["modes"] == ["origin-side", "far-side"]
@@ -84,7 +66,7 @@ def test_fk_all_modes(run):
     assert "far-side" in text and "206.666" in text
 
 
-def test_jacobian(run):
+def test_jacobian(run, as_json):
     data = as_json(run("jacobian", "orthoglide", "--pose", "0,0,0", "--json"))
     for key in ("A", "B", "J", "singular_values", "condition", "status"):
         assert key in data
@@ -163,7 +145,7 @@ def test_malformed_machine_file(run, tmp_path):
     assert result.exit_code == 1 and "bad.toml:5:" in result.output and "numeric" in result.output
 
 
-def test_user_machine_file_through_the_cli(run, tmp_path):
+def test_user_machine_file_through_the_cli(run, tmp_path, as_json):
     path = tmp_path / "mine.toml"
     path.write_text('[machine]\nkind = "linear-delta"\nunits = "mm"\n[parameters]\n'
                     "R = 700\nr = 150\nL = 1040\n")
@@ -251,7 +233,7 @@ def test_output_and_demo_paths_errors(run, tmp_path):
     assert result.exit_code != 0 and "Traceback" not in result.output
 
 
-def test_modes_and_warm_starts_from_the_cli(run):
+def test_modes_and_warm_starts_from_the_cli(run, as_json):
     other = as_json(run("fk", "linear-delta", "--q", "1.2,1.2,1.2", "--mode", "other", "--json"))
     by_sign = as_json(run("fk", "linear-delta", "--q", "1.2,1.2,1.2", "--mode", "1", "--json"))
     np.testing.assert_allclose(by_sign["pose"], other["pose"], atol=1e-12)

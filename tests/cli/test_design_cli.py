@@ -3,27 +3,9 @@
 import json
 
 import pytest
-from click.testing import CliRunner
-
-from pkmkit.cli.main import cli
 
 
-@pytest.fixture
-def run():
-    runner = CliRunner()
-
-    def invoke(*args):
-        return runner.invoke(cli, [str(a) for a in args], catch_exceptions=False)
-
-    return invoke
-
-
-def as_json(result):
-    assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
-
-
-def test_design_orthoglide(run):
+def test_design_orthoglide(run, as_json):
     data = as_json(run("design", "orthoglide", "--cube", "200", "--bounds", "0.5,2",
                        "--units", "mm", "--json"))
     for key in ("L", "stroke", "Q1", "Q2", "compactness"):
@@ -36,7 +18,7 @@ def test_design_orthoglide(run):
     assert "compactness" in text
 
 
-def test_design_five_bar(run):
+def test_design_five_bar(run, as_json):
     data = as_json(run("design", "five-bar", "--square", "0.2", "--bounds", "0.333333,3",
                        "--json"))
     assert data["isotropic_orientations_deg"] == [[0.0, 90.0]]
@@ -44,7 +26,7 @@ def test_design_five_bar(run):
     assert iso["L"] < big["L"] and iso["verified"]["feasible"] and big["verified"]["feasible"]
 
 
-def test_optimize_single_and_pareto(run, tmp_path):
+def test_optimize_single_and_pareto(run, tmp_path, as_json):
     out = tmp_path / "single"
     data = as_json(run("optimize", "linear-delta", "--vary", "R=0.5:1.0", "--vary",
                        "L=0.9:1.6", "--objective", "max:compactness", "--region",

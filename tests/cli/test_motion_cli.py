@@ -1,30 +1,11 @@
 """``pkmkit path`` and ``pkmkit arm-sizing`` end to end."""
 
-import json
 
 import numpy as np
 import pytest
-from click.testing import CliRunner
-
-from pkmkit.cli.main import cli
 
 
-@pytest.fixture
-def run():
-    runner = CliRunner()
-
-    def invoke(*args):
-        return runner.invoke(cli, [str(a) for a in args], catch_exceptions=False)
-
-    return invoke
-
-
-def as_json(result):
-    assert result.exit_code == 0, result.output
-    return json.loads(result.stdout)
-
-
-def test_path_circle_summary_and_files(run, tmp_path):
+def test_path_circle_summary_and_files(run, tmp_path, as_json):
     out = tmp_path / "circle"
     data = as_json(run("path", "linear-delta-table-iv1", "--circle", "0,0,200,150", "--units",
                        "mm", "--feed", "120", "--accel", "1000", "--jerk", "10000",
@@ -49,7 +30,7 @@ def test_path_gcode_with_violations(run, tmp_path):
     assert "LIMIT speed" in result.output and "exceeds it by" in result.output
 
 
-def test_path_raster_and_wrench(run):
+def test_path_raster_and_wrench(run, as_json):
     data = as_json(run("path", "linear-delta-table-iv1", "--raster", "-0.1,-0.05,0.2,0.2,0.1,3,"
                        "one-way", "--feed", "0.05", "--accel", "1", "--jerk", "10", "--wrench",
                        "0,0,-500", "--json"))
@@ -57,7 +38,7 @@ def test_path_raster_and_wrench(run):
     assert 300 < min(data["force_max"]) and data["total_mass"] * 9.81 / 3 < 160
 
 
-def test_arm_sizing(run):
+def test_arm_sizing(run, as_json):
     seed = as_json(run("arm-sizing", "--seed-tables", "--json"))
     assert len(seed["rows"]) == 14
     sized = as_json(run("arm-sizing", "--force", "1000", "--length", "1.04", "--json"))
@@ -106,7 +87,7 @@ def test_bad_gcode_and_masses(run, tmp_path):
     assert result.exit_code == 1 and ">= 0" in result.output
 
 
-def test_shipped_examples_run(run):
+def test_shipped_examples_run(run, as_json):
     """The G-code program and the masses file of docs/examples/ work as documented."""
     from pathlib import Path
 
