@@ -101,3 +101,17 @@ def test_shipped_examples_run(run, as_json):
                         "--masses", examples / "delta-masses.toml", "--json"))
     # Ø40 mm steel arms weigh 10.1 kg each instead of 1.31 kg at 1000 kg/m³: +52 kg in all
     assert heavy["total_mass"] - plain["total_mass"] == pytest.approx(6 * (10.06 - 1.307), abs=0.05)
+
+
+def test_path_on_a_strut_machine(run, as_json, tmp_path):
+    """A user's machine of three actuated struts: the platform hangs from them (tension)."""
+    lines = ['[machine]\nkind = "rod-legs"\nhome = [0, 0, -0.8]\n']
+    for a in np.radians([0.0, 120.0, 240.0]):
+        lines.append(f'[[legs]]\ntype = "strut"\nbase = [{np.cos(a):.6f}, {np.sin(a):.6f}, 0]\n'
+                     'platform = [0, 0, 0]\nlength = 1.2\n')
+    machine = tmp_path / "tripod.toml"
+    machine.write_text("".join(lines))
+    data = as_json(run("path", machine, "--circle", "0,0,-0.8,0.1", "--feed", "0.2", "--accel",
+                       "2", "--jerk", "20", "--json"))
+    assert data["violations"] == [] and max(data["force_range"][1]) < 0
+    np.testing.assert_allclose(data["leg_axial_max"], data["force_max"])

@@ -55,7 +55,7 @@ def test_static_forces_are_the_gradient_of_the_potential(preset):
 
 def test_power_balance_along_a_helix(delta_b):
     """Σ f_k q̇_k + F·ẋ = dE/dt (kinetic + potential energy of every body)."""
-    mass, radius = rod_section_mass(delta_b, 0.04, 7700.0)
+    mass, radius, _ = rod_section_mass(delta_b, 0.04, 7700.0)
     masses = mass_properties(delta_b, carriage=8.0, rod=mass, rod_radius=radius, platform=15.0)
     tr = plan(helix([0, 0, 0.1], 0.12, pitch=0.05, turns=1.0), feed=0.4, accel=3.0, jerk=40.0,
               period=2e-4)
@@ -116,15 +116,138 @@ def test_masses_file_and_errors(tmp_path, delta_b):
             load_masses(path, delta_b)
 
 
-def test_struts_are_refused(tmp_path):
+STRUT_TRIPOD = "".join(
+    f'[[legs]]\ntype = "strut"\nbase = [{np.cos(a):.6f}, {np.sin(a):.6f}, 0]\n'
+    f'platform = [0, 0, 0]\nlength = 1.2\n' for a in np.radians([0.0, 120.0, 240.0]))
+
+#: A planar machine with one slide leg and one strut leg meeting at the tool point.
+MIXED_PLANAR = """[machine]
+kind = "rod-legs"
+dims = 2
+home = [0.5, -0.6]
+[[legs]]
+type = "slide"
+base = [0, 0]
+axis = [1, 0]
+platform = [0, 0]
+length = 0.8
+branch = -1
+[[legs]]
+type = "strut"
+base = [1.2, 0]
+platform = [0, 0]
+length = 0.7
+"""
+
+
+@pytest.fixture(scope="module", params=["tripod", "mixed", "delta"])
+def strut_machine(request, tmp_path_factory):
+    """A point-platform tripod of three struts, a planar slide + strut machine and the linear
+    Delta, with masses on every body (gravity in the plane of the planar one)."""
+    path = tmp_path_factory.mktemp("struts") / f"{request.param}.toml"
+    if request.param == "delta":
+        m = pkmkit.machine("linear-delta-table-iv1")
+        mass, radius, _ = rod_section_mass(m, 0.04, 7700.0)
+        masses = mass_properties(m, carriage=8.0, rod=mass, rod_radius=radius, platform=15.0,
+                                 gravity=(1.0, 0.5, -9.81))
+        tr = plan(helix([0.02, 0.01, 0.1], 0.12, pitch=0.05, turns=1.0), feed=0.4, accel=3.0,
+                  jerk=40.0, period=2e-4)
+    elif request.param == "tripod":
+        path.write_text('[machine]\nkind = "rod-legs"\nhome = [0, 0, -0.8]\n' + STRUT_TRIPOD)
+        m = pkmkit.load(path)
+        masses = mass_properties(m, carriage=0.3, rod=2.0, rod_radius=0.03, platform=4.0,
+                                 piston=1.5, cylinder_length=0.7, piston_length=0.8,
+                                 gravity=(0.5, -1.0, -9.81))
+        tr = plan(helix([0.05, -0.03, -0.85], 0.1, pitch=0.05, turns=1.0), feed=0.4,
+                  accel=3.0, jerk=40.0, period=2e-4)
+    else:
+        path.write_text(MIXED_PLANAR)
+        m = pkmkit.load(path)
+        masses = mass_properties(m, carriage=[3.0, 0.2], rod=[1.0, 2.5], rod_radius=0.02,
+                                 platform=4.0, piston=[0.0, 1.2], cylinder_length=0.5,
+                                 piston_length=0.45, gravity=(0.0, -9.81, 0.0))
+        tr = plan(circle([0.55, -0.55, 0.0], 0.08), feed=0.4, accel=3.0, jerk=40.0,
+                  period=2e-4)
+    return m, masses, joint_trajectory(m, tr)
+
+
+def test_power_balance_with_struts(strut_machine):
+    """Σ f_k q̇_k = dE/dt along the move, E the energy of every body (cylinders and pistons
+    turning with their struts)."""
+    m, masses, jt = strut_machine
+    res = inverse_dynamics(m, masses, jt.x, jt.xd, jt.xdd, jt.q, jt.qd, jt.qdd)
+    energy = mechanical_energy(m, masses, jt.x, jt.xd, jt.q, jt.qd)
+    d_energy = np.gradient(energy, jt.t)
+    scale = np.abs(res.power).max()
+    assert scale > 1.0
+    np.testing.assert_allclose(res.power.sum(axis=1)[3:-3], d_energy[3:-3], atol=2e-4 * scale)
+
+
+def test_forces_satisfy_lagrange_equations(strut_machine):
+    """Every component, not only the power: f = d/dt ∂T/∂q̇ − ∂T/∂q + ∂V/∂q, with T and V
+    from the energy as a function of (q, q̇) through the direct model and J, differentiated
+    numerically (an independent route to the same forces)."""
+    m, masses, jt = strut_machine
+    res = inverse_dynamics(m, masses, jt.x, jt.xd, jt.xdd, jt.q, jt.qd, jt.qdd)
+
+    def energy(q, qd):
+        x = m.fk(q)
+        xd = m.jacobian(x).J @ qd
+        return float(mechanical_energy(m, masses, x[None], xd[None], q[None], qd[None])[0])
+
+    def kinetic(q, qd):
+        return energy(q, qd) - energy(q, np.zeros_like(qd))
+
+    def grad(fun, v, h):
+        out = np.zeros_like(v)
+        for i in range(v.size):
+            e = np.zeros_like(v)
+            e[i] = h
+            out[i] = (fun(v + e) - fun(v - e)) / (2 * h)
+        return out
+
+    def momentum(k):
+        return grad(lambda w: kinetic(jt.q[k], w), jt.qd[k], 1e-3)
+
+    n = m.n_actuators
+    dt = jt.t[1] - jt.t[0]
+    for k in np.linspace(50, len(jt.t) - 50, 5).astype(int):
+        rate = (momentum(k + 1) - momentum(k - 1)) / (2 * dt)
+        dT = grad(lambda v, k=k: kinetic(v, jt.qd[k]), jt.q[k], 1e-6)
+        dV = grad(lambda v: energy(v, np.zeros(n)), jt.q[k], 1e-6)
+        expected = rate - dT + dV
+        np.testing.assert_allclose(res.force[k], expected, rtol=2e-4,
+                                   atol=2e-4 * np.abs(expected).max())
+
+
+def test_strut_axial_force_and_masses_file(tmp_path):
     path = tmp_path / "s.toml"
-    path.write_text('[machine]\nkind = "rod-legs"\nhome = [0, 0, -0.8]\n'
-                    + "".join(f'[[legs]]\ntype = "strut"\nbase = [{np.cos(a):.6f}, '
-                              f'{np.sin(a):.6f}, 0]\nplatform = [0, 0, 0]\nlength = 1.2\n'
-                              for a in np.radians([0.0, 120.0, 240.0])))
+    path.write_text('[machine]\nkind = "rod-legs"\nhome = [0, 0, -0.8]\n' + STRUT_TRIPOD)
     m = pkmkit.load(path)
-    with pytest.raises(InputError, match="strut"):
-        static(m, default_masses(m), m.home_pose[None])
+    masses = default_masses(m)  # Ø20 mm aluminium tubes, 0.6 × 1.2 m each
+    tube = 2700 * np.pi / 4 * 0.02**2 * 0.72
+    np.testing.assert_allclose(masses.rod_mass, tube)
+    np.testing.assert_allclose(masses.piston_mass, tube)
+    x = m.home_pose[None]
+    zeros = np.zeros_like(x)
+    q = m.ik(x)
+    res = inverse_dynamics(m, masses, x, zeros, zeros, q, np.zeros_like(q), np.zeros_like(q))
+    # the platform hangs from the struts: each one pulls (f < 0, tension > 0) and carries at
+    # least a third of the platform's weight along its own direction (cos = 0.8 / 1.28)
+    assert np.allclose(res.leg_axial, -res.force)
+    assert (res.leg_axial > 5.0 * 9.81 / 3 / (0.8 / 1.28)).all()
+    spec = tmp_path / "masses.toml"
+    spec.write_text("[masses]\nunits = 'mm'\nrod_diameter = 30\nrod_density = 7800\n"
+                    "cylinder_length = 600\npiston_length = 500\nplatform = 10\n")
+    props, _ = load_masses(spec, m)
+    area = np.pi / 4 * 0.03**2
+    np.testing.assert_allclose(props.rod_mass, 7800 * area * 0.6)
+    np.testing.assert_allclose(props.piston_mass, 7800 * area * 0.5)
+    delta = pkmkit.machine("linear-delta")
+    with pytest.raises(InputError, match="strut legs only"):
+        mass_properties(delta, piston=[1.0] * 6)
+    with pytest.raises(InputError, match="cylinder length"):
+        mass_properties(m, rod=1.0, cylinder_length=0.0)
 
 
 def test_forces_along_the_seed_circle(delta_b):

@@ -13,7 +13,7 @@ from .mujoco_delta import MujocoDelta
 @pytest.fixture(scope="module")
 def setup():
     m = pkmkit.machine("linear-delta-table-iv1")
-    mass, radius = rod_section_mass(m, 0.04, 1000.0)
+    mass, radius, _ = rod_section_mass(m, 0.04, 1000.0)
     masses = mass_properties(m, carriage=8.0, rod=mass, rod_radius=radius, platform=15.0)
     tr = plan(circle([0, 0, 0.2], 0.15), feed=0.3, accel=2.0, jerk=20.0, period=0.01)
     jt = joint_trajectory(m, tr)

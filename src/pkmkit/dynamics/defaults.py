@@ -8,7 +8,9 @@ so every result that uses them can be traced; pass a masses file for a real mach
   that density, see docs/seed-errata.md), 1.3 kg for 1.04 m; nacelle with spindle and tool 15 kg;
 - Orthoglide (prototype scale): carriages 2 kg, rods Ø10 mm aluminium, platform 2 kg;
 - five-bar: carriages 5 kg, rods Ø20 mm aluminium, platform (tool table) 5 kg;
-- any other machine: carriages 5 kg, rods Ø20 mm aluminium, platform 5 kg.
+- any other machine: carriages 5 kg, rods Ø20 mm aluminium, platform 5 kg; a strut leg is a
+  cylinder and a piston, Ø20 mm aluminium tubes of 0.6 × its length at q = 0 each, and its
+  "carriage" is the motor's equivalent translating inertia.
 Gravity is (0, 0, −9.81) m/s² (z up) for all.
 """
 
@@ -28,6 +30,6 @@ _GENERIC = {"carriage": 5.0, "diameter": 0.020, "density": 2700.0, "platform": 5
 def default_masses(machine: Machine) -> MassProperties:
     """The illustrative mass properties of ``machine``'s kind (see the module docstring)."""
     spec = _DEFAULTS.get(machine.kind.kind if machine.kind else "", _GENERIC)
-    rod, radius = rod_section_mass(machine, spec["diameter"], spec["density"])
+    rod, radius, piston = rod_section_mass(machine, spec["diameter"], spec["density"])
     return mass_properties(machine, carriage=spec["carriage"], rod=rod, rod_radius=radius,
-                           platform=spec["platform"])
+                           platform=spec["platform"], piston=piston)

@@ -4,13 +4,16 @@ A masses file (TOML) gives, in SI units unless ``units = "mm"`` (lengths only)::
 
     [masses]
     carriage = 8.0            # kg, moving part of each actuator (one value or one per actuator)
-    rod = 1.31                # kg per rod (one value or one per rod) ...
+    rod = 1.31                # kg per rod (one value or one per rod; a strut's cylinder) ...
     rod_diameter = 0.040      # ... or computed from a section and a density:
     rod_inner_diameter = 0.0  # (hollow rods)
     rod_density = 7700        # kg/m³
     platform = 15.0           # kg, platform with spindle and tool
     platform_com = [0, 0, -0.05]      # m, platform frame (not needed for actuator forces)
     gravity = [0, 0, -9.81]   # m/s²
+    piston = 2.0              # strut legs only: kg of the piston (platform side), and the
+    cylinder_length = 0.6     # lengths of the two tubes (default 0.6 × the strut length at
+    piston_length = 0.6       # q = 0 each); the cylinder hangs from the base joint
 
     [wrench]                  # optional constant cutting wrench at the tool point
     force = [0, 0, 100]       # N
@@ -18,6 +21,7 @@ A masses file (TOML) gives, in SI units unless ``units = "mm"`` (lengths only)::
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -29,6 +33,7 @@ import numpy as np
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.parameters import is_plain_number, length_scale
+from pkmkit.model.rods import STRUT
 
 
 @dataclass(frozen=True)
@@ -43,6 +48,10 @@ class MassProperties:
         platform_com: ``(3,)`` m, platform frame.
         platform_inertia: ``(3, 3)`` kg·m² about the centre of mass.
         gravity: ``(3,)`` m/s².
+        piston_mass: ``(m,)`` kg, strut legs only (0 for slide rods): the part of the strut
+            hinged at the platform joint; ``rod_mass`` is then the cylinder, hinged at the base.
+        cylinder_length, piston_length: ``(m,)`` m, strut legs only: lengths of the two uniform
+            tubes (centre of mass at mid-length, measured from their own joint).
     """
 
     carriage_mass: np.ndarray
@@ -52,45 +61,108 @@ class MassProperties:
     platform_com: np.ndarray = field(default_factory=lambda: np.zeros(3))
     platform_inertia: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
     gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
+    piston_mass: np.ndarray | None = None
+    cylinder_length: np.ndarray | None = None
+    piston_length: np.ndarray | None = None
+
+    def strut_parts(self, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(piston_mass, cylinder_length, piston_length)``, each ``(m,)`` (zeros if unset)."""
+        return tuple(np.zeros(m) if a is None else a
+                     for a in (self.piston_mass, self.cylinder_length, self.piston_length))
 
     def check(self, machine: Machine) -> None:
-        """Raise :class:`InputError` if the sizes do not fit ``machine`` or a mass is negative."""
+        """Raise :class:`InputError` if the sizes do not fit ``machine``, a mass is negative or
+        strut data is given for slide rods (or missing for struts with mass)."""
         n, m = machine.n_actuators, machine.model.n_rods
         if self.carriage_mass.shape != (n,):
             raise InputError(f"{n} carriage masses needed, got {self.carriage_mass.shape}")
         if self.rod_mass.shape != (m,) or self.rod_radius.shape != (m,):
             raise InputError(f"{m} rod masses and radii needed")
+        parts = self.strut_parts(m)
+        if any(a.shape != (m,) for a in parts):
+            raise InputError(f"{m} piston masses and tube lengths needed")
         values = np.concatenate([self.carriage_mass, self.rod_mass, self.rod_radius,
-                                 [self.platform_mass]])
+                                 [self.platform_mass], *parts])
         if not np.isfinite(values).all() or (values < 0).any():
-            raise InputError("masses and radii must be finite and >= 0")
+            raise InputError("masses, radii and lengths must be finite and >= 0")
         if not np.isfinite(self.gravity).all():
             raise InputError("gravity must be finite")
+        piston, cylinder_length, piston_length = parts
+        strut = machine.model.rod_kind == STRUT
+        if (piston[~strut] > 0).any():
+            raise InputError("piston masses apply to strut legs only")
+        for mass, length, what in ((self.rod_mass, cylinder_length, "cylinder"),
+                                   (piston, piston_length, "piston")):
+            if (strut & (mass > 0) & (length <= 0)).any():
+                raise InputError(f"a strut with a {what} mass needs a {what} length > 0")
 
     @property
     def total_mass(self) -> float:
-        return float(self.carriage_mass.sum() + self.rod_mass.sum() + self.platform_mass)
+        piston = 0.0 if self.piston_mass is None else float(self.piston_mass.sum())
+        return float(self.carriage_mass.sum() + self.rod_mass.sum() + self.platform_mass
+                     + piston)
+
+
+#: Default length of a strut's cylinder and of its piston, as a fraction of the strut's length at
+#: q = 0 (the two tubes overlap in the middle).
+STRUT_TUBE_FRACTION = 0.6
+
+
+def strut_tube_lengths(machine: Machine, cylinder_length: Any = None,
+                       piston_length: Any = None) -> tuple[np.ndarray, np.ndarray]:
+    """Cylinder and piston lengths ``(m,)`` (m) of the strut rods (0 for slide rods); None gives
+    :data:`STRUT_TUBE_FRACTION` of each strut's length at q = 0."""
+    model = machine.model
+    strut = model.rod_kind == STRUT
+    out = []
+    for value, what in ((cylinder_length, "cylinder_length"), (piston_length, "piston_length")):
+        if value is None:
+            arr = STRUT_TUBE_FRACTION * model.rod_length
+        elif not is_plain_number(value):
+            raise InputError(f"{what} must be numbers, got {value!r}")
+        elif np.ndim(value) == 0:
+            arr = np.full(model.n_rods, float(value))
+        elif np.shape(value) == (model.n_rods,):
+            arr = np.asarray(value, dtype=float)
+        else:
+            raise InputError(f"{what} needs 1 or {model.n_rods} values")
+        out.append(np.where(strut, arr, 0.0))
+    return out[0], out[1]
 
 
 def rod_section_mass(machine: Machine, diameter: float, density: float,
-                     inner_diameter: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """Masses ``(m,)`` (kg) and equivalent radii ``(m,)`` (m) of the machine's rods for a circular
-    (hollow) section of outer diameter D and inner diameter d: a tube's transverse inertia about
-    its centre is m(ℓ²/12 + (D² + d²)/16), the solid-cylinder formula m(ℓ²/12 + ρ²/4) with
-    ρ = √((D² + d²)/4)."""
+                     inner_diameter: float = 0.0, *, cylinder_length: Any = None,
+                     piston_length: Any = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Masses of the machine's rods for a circular (hollow) section of outer diameter D and inner
+    diameter d, and their equivalent radius: a tube's transverse inertia about its centre is
+    m(ℓ²/12 + (D² + d²)/16), the solid-cylinder formula m(ℓ²/12 + ρ²/4) with ρ = √((D² + d²)/4).
+
+    Returns:
+        ``(rod_mass, rod_radius, piston_mass)``, each ``(m,)`` (kg, m, kg): for a slide rod the
+        whole rod (piston 0); for a strut its cylinder and its piston, tubes of the lengths of
+        :func:`strut_tube_lengths`.
+    """
     if not (diameter > 0 and density > 0 and 0 <= inner_diameter < diameter):
         raise InputError("rod section: need diameter > 0, density > 0, 0 <= inner < diameter")
+    model = machine.model
     area = math.pi / 4 * (diameter**2 - inner_diameter**2)
-    mass = density * area * machine.model.rod_length
-    radius = np.full(machine.model.n_rods, math.sqrt((diameter**2 + inner_diameter**2) / 4))
-    return mass, radius
+    cylinder, piston = strut_tube_lengths(machine, cylinder_length, piston_length)
+    strut = model.rod_kind == STRUT
+    mass = density * area * np.where(strut, cylinder, model.rod_length)
+    radius = np.full(model.n_rods, math.sqrt((diameter**2 + inner_diameter**2) / 4))
+    return mass, radius, density * area * piston
 
 
 def mass_properties(machine: Machine, *, carriage: Any = 0.0, rod: Any = 0.0,
                     rod_radius: Any = 0.0, platform: float = 0.0, platform_com: Any = None,
-                    platform_inertia: Any = None, gravity: Any = (0.0, 0.0, -9.81)
+                    platform_inertia: Any = None, gravity: Any = (0.0, 0.0, -9.81),
+                    piston: Any = 0.0, cylinder_length: Any = None, piston_length: Any = None
                     ) -> MassProperties:
-    """Build and check :class:`MassProperties`, broadcasting scalars."""
+    """Build and check :class:`MassProperties`, broadcasting scalars (SI units).
+
+    For strut legs, ``rod`` is the cylinder (hinged at the base joint) and ``piston`` the part
+    hinged at the platform joint; their tube lengths default to :func:`strut_tube_lengths`.
+    Values given for slide rods in ``piston`` must be 0."""
     n, m = machine.n_actuators, machine.model.n_rods
 
     def vec(value: Any, size: int, what: str) -> np.ndarray:
@@ -113,12 +185,19 @@ def mass_properties(machine: Machine, *, carriage: Any = 0.0, rod: Any = 0.0,
                           else np.asarray(platform_inertia, dtype=float).reshape(3, 3)),
         gravity=vec(gravity, 3, "gravity"),
     )
+    cyl_len, pis_len = strut_tube_lengths(machine, cylinder_length, piston_length)
+    pis = vec(piston, m, "piston")
+    if np.ndim(piston) == 0:  # one value: the piston of every strut
+        pis = np.where(machine.model.rod_kind == STRUT, pis, 0.0)
+    props = dataclasses.replace(props, piston_mass=pis, cylinder_length=cyl_len,
+                                piston_length=pis_len)
     props.check(machine)
     return props
 
 
 _KEYS = {"carriage", "rod", "rod_diameter", "rod_inner_diameter", "rod_density", "rod_radius",
-         "platform", "platform_com", "platform_inertia", "gravity", "units"}
+         "platform", "platform_com", "platform_inertia", "gravity", "units", "piston",
+         "cylinder_length", "piston_length"}
 
 
 def load_masses(path: str | Path, machine: Machine) -> tuple[MassProperties, np.ndarray | None]:
@@ -148,13 +227,18 @@ def load_masses(path: str | Path, machine: Machine) -> tuple[MassProperties, np.
         raise InputError(f"{path}: {exc}") from None
     try:
         rod, radius = table.get("rod", 0.0), table.get("rod_radius", 0.0)
+        piston = table.get("piston", 0.0)
+        tubes = {key: (None if key not in table
+                       else np.asarray(table[key], dtype=float) * scale)
+                 for key in ("cylinder_length", "piston_length")}
         if "rod_diameter" in table:
-            if "rod" in table:
-                raise InputError("give either 'rod' (mass) or 'rod_diameter' with 'rod_density'")
-            rod, radius = rod_section_mass(
+            if "rod" in table or "piston" in table:
+                raise InputError("give either 'rod' (and 'piston') masses or 'rod_diameter' "
+                                 "with 'rod_density'")
+            rod, radius, piston = rod_section_mass(
                 machine, float(table["rod_diameter"]) * scale,
                 float(table.get("rod_density", 7700.0)),
-                float(table.get("rod_inner_diameter", 0.0)) * scale)
+                float(table.get("rod_inner_diameter", 0.0)) * scale, **tubes)
         else:
             radius = np.asarray(radius, dtype=float) * scale
         props = mass_properties(
@@ -163,7 +247,7 @@ def load_masses(path: str | Path, machine: Machine) -> tuple[MassProperties, np.
             platform_com=(None if "platform_com" not in table
                           else np.asarray(table["platform_com"], dtype=float) * scale),
             platform_inertia=table.get("platform_inertia"),
-            gravity=table.get("gravity", (0.0, 0.0, -9.81)))
+            gravity=table.get("gravity", (0.0, 0.0, -9.81)), piston=piston, **tubes)
     except (InputError, TypeError, ValueError) as exc:
         raise InputError(f"{path}: {exc}") from None
     wrench = None
