@@ -11,6 +11,7 @@ import numpy as np
 from pkmkit.dynamics.arms import Material, analyse_arm, seed_tables, size_arm
 from pkmkit.dynamics.masses import load_masses
 from pkmkit.dynamics.trajectory import simulate_path
+from pkmkit.dynamics.wrench import load_wrench_series
 from pkmkit.errors import InputError
 from pkmkit.io.csv_io import write_table
 from pkmkit.model.parameters import length_scale
@@ -105,6 +106,9 @@ def build_path(machine, scale: float, gcode, origin, line_text, circle_text, hel
 @click.option("--masses", type=click.Path(dir_okay=False),
               help="Masses file (default: the kind's illustrative masses, see docs/motion.md).")
 @click.option("--wrench", help="Constant force on the tool FX,FY,FZ in N.")
+@click.option("--wrench-file", type=click.Path(dir_okay=False),
+              help="Force on the tool against time: CSV with columns t,fx,fy,fz (s, N), "
+                   "interpolated, held at the ends.")
 @click.option("--speed-limit", type=float, help="Actuator speed limit.")
 @click.option("--accel-limit", type=float, help="Actuator acceleration limit.")
 @click.option("--force-limit", type=float, help="Actuator force limit, N.")
@@ -114,7 +118,7 @@ def build_path(machine, scale: float, gcode, origin, line_text, circle_text, hel
 @JSON_OPTION
 def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, helix_text,
              raster_text, feed, rapid_feed, accel, jerk, profile, period, masses, wrench,
-             speed_limit, accel_limit, force_limit, out_dir, units, as_json):
+             wrench_file, speed_limit, accel_limit, force_limit, out_dir, units, as_json):
     """Move along a tool path: duration, actuator strokes, speeds, accelerations, forces and
     powers, with a check of the actuator limits (exit status 3 when a limit is exceeded)."""
     m = resolve_machine(machine_name, assignments, units)
@@ -123,8 +127,12 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                            raster_text)
     props, file_wrench = load_masses(masses, m) if masses else (None, None)
     force = file_wrench
+    if wrench and wrench_file:
+        raise click.UsageError("--wrench and --wrench-file are exclusive")
     if wrench:
         force = np.asarray(_numbers(wrench, (3,), "--wrench"))
+    if wrench_file:
+        force = load_wrench_series(wrench_file)
     for name, value in (("--feed", feed), ("--accel", accel), ("--jerk", jerk),
                         ("--rapid-feed", rapid_feed), ("--speed-limit", speed_limit),
                         ("--accel-limit", accel_limit), ("--force-limit", force_limit)):

@@ -15,7 +15,9 @@ from pkmkit.dynamics.masses import (
     load_masses,
     mass_properties,
     rod_section_mass,
+    strut_tube_lengths,
 )
+from pkmkit.dynamics.wrench import WrenchSeries, load_wrench_series
 
 __all__ = [
     "ArmAnalysis",
@@ -23,13 +25,16 @@ __all__ = [
     "ForceResult",
     "MassProperties",
     "Material",
+    "WrenchSeries",
     "analyse_arm",
     "default_masses",
     "inverse_dynamics",
     "load_masses",
+    "load_wrench_series",
     "mass_properties",
     "mechanical_energy",
     "rod_section_mass",
     "seed_tables",
     "size_arm",
+    "strut_tube_lengths",
 ]

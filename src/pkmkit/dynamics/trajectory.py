@@ -10,6 +10,7 @@ import numpy as np
 from pkmkit.dynamics.defaults import default_masses
 from pkmkit.dynamics.inverse import ForceResult, inverse_dynamics
 from pkmkit.dynamics.masses import MassProperties
+from pkmkit.dynamics.wrench import WrenchSeries
 from pkmkit.machines.machine import Machine
 from pkmkit.motion.joints import JointTrajectory, Limits, check_limits, joint_trajectory
 from pkmkit.motion.paths import Path
@@ -60,7 +61,8 @@ def simulate_path(machine: Machine, path: Path, *, feed: float, accel: float,
         path: the tool path (machine coordinates, m).
         feed, accel, jerk, profile, rapid_feed, period: see :func:`pkmkit.motion.plan`.
         masses: mass properties (default: :func:`pkmkit.dynamics.defaults.default_masses`).
-        wrench: external force on the tool, ``(3,)`` / ``(6,)`` or one row per sample.
+        wrench: external force on the tool, ``(3,)`` / ``(6,)``, one row per sample, or a
+            :class:`~pkmkit.dynamics.wrench.WrenchSeries` (forces against time, interpolated).
         limits: actuator limits to check (strokes always).
 
     Raises:
@@ -71,6 +73,8 @@ def simulate_path(machine: Machine, path: Path, *, feed: float, accel: float,
                       rapid_feed=rapid_feed, period=period)
     motion = joint_trajectory(machine, trajectory)
     masses = masses or default_masses(machine)
+    if isinstance(wrench, WrenchSeries):
+        wrench = wrench.at(motion.t)
     forces = inverse_dynamics(machine, masses, motion.x, motion.xd, motion.xdd, motion.q,
                               motion.qd, motion.qdd, wrench=wrench)
     report = check_limits(machine, motion, limits or Limits(), forces.force)
