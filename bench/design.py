@@ -1,14 +1,19 @@
-"""Benchmark: Orthoglide sizing time, and a 3-variable linear-Delta optimisation with the batched
-evaluator against the same optimisation evaluating every design pose by pose.
+"""Benchmark: Orthoglide and linear-Delta sizing times, and a 3-variable linear-Delta
+optimisation with the batched evaluator against the same optimisation evaluating every design
+pose by pose.
 
 Both optimisations run differential evolution with the same seed, bounds and budget in the same
 process; the per-pose evaluator computes the same metrics with one ``m.ik``/``m.jacobian`` call
 per pose of the prescribed cube, so both runs visit the same designs and must find the same
 optimum (checked).
 
+The machines are shared and noisy: every timing is repeated and the **median** is reported (with
+the fastest and slowest run); the ratio is the ratio of the medians. Batched and per-pose runs
+alternate, so a slow spell of the machine hits both.
+
 Usage::
 
-    python bench/design.py [--generations 8] [--samples 7] [--json FILE]
+    python bench/design.py [--generations 8] [--samples 7] [--repeats 5] [--json FILE]
 """
 
 from __future__ import annotations
@@ -16,12 +21,14 @@ from __future__ import annotations
 import argparse
 import json
 import platform
+import statistics
 import time
 
 import numpy as np
 
 import pkmkit
 from pkmkit.analysis.workspace import Criteria
+from pkmkit.design.linear_delta import size_linear_delta
 from pkmkit.design.metrics import Region
 from pkmkit.design.optimize import DesignProblem, Objective, Variable, optimize
 from pkmkit.design.orthoglide import size_orthoglide
@@ -58,20 +65,36 @@ def per_pose_metrics(machine, region, criteria, names, samples):
     return {n: values[n] for n in names}
 
 
+def timed(func, repeats):
+    """(result of the last call, list of wall times in s)."""
+    times, result = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = func()
+        times.append(time.perf_counter() - start)
+    return result, times
+
+
+def spread(times):
+    return {"median": statistics.median(times), "min": min(times), "max": max(times),
+            "runs": len(times)}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--generations", type=int, default=8)
     parser.add_argument("--samples", type=int, default=7)
+    parser.add_argument("--repeats", type=int, default=5,
+                        help="runs of each timing (median reported)")
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args()
+    repeats = max(1, args.repeats)
 
-    size_orthoglide(0.2, (0.5, 2.0))
-    start = time.perf_counter()
-    repeats = 5
-    for _ in range(repeats):
-        sized = size_orthoglide(0.2, (0.5, 2.0))
-    t_sizing = (time.perf_counter() - start) / repeats
+    size_orthoglide(0.2, (0.5, 2.0))  # warm-up (imports, caches)
+    sized, t_sizing = timed(lambda: size_orthoglide(0.2, (0.5, 2.0)), 2 * repeats)
+    delta, t_delta = timed(
+        lambda: size_linear_delta(0.5, (0.4, 2.5), center=(0.0, 0.0, 0.25)), repeats)
 
     def problem(evaluator=None):
         extra = {} if evaluator is None else {"evaluator": evaluator}
@@ -81,33 +104,48 @@ def main() -> None:
             objectives=[Objective("compactness", "max")], region=Region(0.5, (0, 0, 0.25)),
             criteria=Criteria(bounds=(0.4, 2.5)), samples=args.samples, **extra)
 
-    start = time.perf_counter()
-    batched = optimize(problem(), seed=3, generations=args.generations, population=15)
-    t_batched = time.perf_counter() - start
-    start = time.perf_counter()
-    looped = optimize(problem(per_pose_metrics), seed=3, generations=args.generations,
-                      population=15)
-    t_looped = time.perf_counter() - start
+    def run(evaluator=None):
+        return optimize(problem(evaluator), seed=3, generations=args.generations, population=15)
+
+    t_batched, t_looped = [], []
+    for _ in range(repeats):  # alternate, so that a slow spell hits both
+        batched, t = timed(run, 1)
+        t_batched += t
+        looped, t = timed(lambda: run(per_pose_metrics), 1)
+        t_looped += t
     same = (batched.best is not None and looped.best is not None
             and abs(batched.best["compactness"] - looped.best["compactness"]) < 1e-9)
+    ratio = statistics.median(t_looped) / statistics.median(t_batched)
     result = {
-        "orthoglide_sizing_seconds": t_sizing,
+        "orthoglide_sizing_seconds": spread(t_sizing),
         "orthoglide_L_mm": sized.L * 1e3,
+        "linear_delta_sizing_seconds": spread(t_delta),
+        "linear_delta_sizing": {"R": delta.R, "r": delta.r, "L": delta.L, "stroke": delta.stroke,
+                                "compactness": delta.compactness},
         "designs": len(batched.records),
         "poses_per_design": args.samples**3,
-        "batched_seconds": t_batched,
-        "per_pose_seconds": t_looped,
-        "ratio": t_looped / t_batched,
+        "batched_seconds": spread(t_batched),
+        "per_pose_seconds": spread(t_looped),
+        "ratio_of_medians": ratio,
         "same_optimum": bool(same),
         "best": {k: batched.best[k] for k in ("R", "r", "L", "compactness")},
     }
+
+    def show(times):
+        return (f"median {statistics.median(times) * 1e3:.0f} ms (min {min(times) * 1e3:.0f}, "
+                f"max {max(times) * 1e3:.0f}, {len(times)} runs)")
+
     print(f"pkmkit {pkmkit.__version__}, numpy {np.__version__}, Python "
           f"{platform.python_version()}, {platform.machine()}")
     print(f"Orthoglide sizing (200 mm cube, [0.5, 2], verified on 41^3 poses): "
-          f"{t_sizing * 1e3:.0f} ms per call (L = {sized.L * 1e3:.1f} mm)")
+          f"{show(t_sizing)} per call (L = {sized.L * 1e3:.1f} mm)")
+    print(f"linear-Delta sizing (0.5 m cube, [0.4, 2.5], shortest arms, verified on 25^3 poses): "
+          f"{show(t_delta)} per call (R = {delta.R:.4f} m, L = {delta.L:.4f} m)")
     print(f"linear-Delta optimisation, 3 variables, {result['designs']} designs x "
-          f"{result['poses_per_design']} poses: batched {t_batched:.2f} s, per pose "
-          f"{t_looped:.2f} s -> ratio {result['ratio']:.0f}x; same optimum: {same} "
+          f"{result['poses_per_design']} poses:")
+    print(f"  batched   {show(t_batched)}")
+    print(f"  per pose  {show(t_looped)}")
+    print(f"  ratio of the medians {ratio:.0f}x; same optimum: {same} "
           f"(compactness {batched.best['compactness']:.4f})")
     if args.json:
         with open(args.json, "w") as handle:

@@ -30,16 +30,71 @@ def test_five_bar_designs_compared_as_in_seed_004():
     assert big.joint_square.side / length == pytest.approx(0.5324, abs=2e-3)
     ratio = iso.inscribed.side / big.inscribed.side
     assert 6.0 < ratio**2 < 7.5
-    lo, hi = iso.factor_range
-    assert 0.55 < lo < 0.65 and 2.7 < hi < 3.0
+    # exact ranges over the useful workspaces: the square is stopped by λ_max = 3 at a corner
+    # of the joint square (the grid used to report [0.6045, 2.891] and 2.93 for the biglide)
+    assert iso.factor_range == pytest.approx((0.6, 3.0), abs=1e-5)
+    assert big.factor_range == pytest.approx((0.3473, 3.0), abs=1e-4)
     lo, hi = iso.inscribed_factor_range
     assert 0.68 < lo < 0.73 and 1.65 < hi < 1.75
 
 
+def isotropic_five_bar_factors(q, length=0.5):
+    """λ of the isotropic five-bar (A = (0, 0) slide along x, B = (1, −1) slide along y) at
+    actuator vectors ``q (N, 2)`` by seed 004's formulas: direct model = intersection of the
+    circles of radius L about C and D in the working mode (det A > 0, as at home), then
+    J = A⁻¹B and numpy's SVD."""
+    c = np.stack([q[:, 0], np.zeros(len(q))], axis=1)
+    d = np.stack([np.ones(len(q)), -1.0 + q[:, 1]], axis=1)
+    cd = d - c
+    half = np.linalg.norm(cd, axis=1) / 2
+    normal = np.stack([-cd[:, 1], cd[:, 0]], axis=1) / (2 * half[:, None])
+    out = []
+    for sign in (1.0, -1.0):
+        p = (c + d) / 2 + sign * np.sqrt(length**2 - half**2)[:, None] * normal
+        pc, pd = p - c, p - d
+        det = pc[:, 0] * pd[:, 1] - pc[:, 1] * pd[:, 0]
+        a = np.stack([pc, pd], axis=1)
+        b = np.zeros((len(q), 2, 2))
+        b[:, 0, 0], b[:, 1, 1] = pc[:, 0], pd[:, 1]
+        s = np.linalg.svd(np.linalg.solve(a, b), compute_uv=False)
+        out.append(np.where((det > 0)[:, None], s, np.nan))
+    return np.where(np.isnan(out[0]), out[1], out[0])
+
+
+def test_isotropic_useful_workspace_range_against_independent_direct_model():
+    """The exact λ range over the useful workspace = extremes over the image of the joint
+    square, checked by a dense independent sweep of the square (its edges included)."""
+    m = pkmkit.machine("five-bar-isotropic")
+    useful = useful_workspace(m, Criteria(bounds=(1 / 3, 3.0)), resolution=151)
+    sq = useful.joint_square
+    t = np.linspace(0.0, 1.0, 4001)
+    edges = np.concatenate([np.stack([t, np.zeros_like(t)], 1), np.stack([t, np.ones_like(t)], 1),
+                            np.stack([np.zeros_like(t), t], 1), np.stack([np.ones_like(t), t], 1)])
+    g = np.linspace(0.0, 1.0, 201)
+    inner = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
+    s = isotropic_five_bar_factors(sq.lower + sq.side * np.concatenate([edges, inner]))
+    assert np.isfinite(s).all()
+    lo, hi = useful.factor_range
+    assert lo == pytest.approx(s[:, -1].min(), abs=1e-9)
+    assert hi == pytest.approx(s[:, 0].max(), abs=1e-9)
+    # reviewer's corner: q = (0.306625, 0.306625) gives λ = (3.000, 0.600)
+    np.testing.assert_allclose(isotropic_five_bar_factors(np.array([[0.306625, 0.306625]]))[0],
+                               [3.0, 0.6], atol=1e-4)
+
+
 def test_five_bar_results_do_not_depend_on_ab():
-    """Moving B along its slide line only offsets ρ2: the useful square is unchanged."""
+    """Moving B along its slide line only offsets ρ2: every result of the study is unchanged
+    (joint square side, useful area, inscribed square, exact factor ranges)."""
     crit = Criteria(bounds=(1 / 3, 3.0))
     a = useful_workspace(pkmkit.machine("five-bar-isotropic"), crit, resolution=121)
     b = useful_workspace(pkmkit.machine("five-bar-isotropic", B=(1.5, -1.5)), crit,
                          resolution=121)
     assert a.joint_square.side == pytest.approx(b.joint_square.side, rel=1e-6)
+    np.testing.assert_allclose(b.joint_square.lower - a.joint_square.lower, [0.5, 0.5],
+                               atol=1e-9)
+    np.testing.assert_allclose(a.factor_range, b.factor_range, atol=1e-7)
+    # the image moves by (0.5, 0) (home (1, 0) becomes (1.5, 0)) with its grid
+    assert a.workspace.measure == pytest.approx(b.workspace.measure, rel=1e-9)
+    assert a.inscribed.side == pytest.approx(b.inscribed.side, rel=1e-9)
+    np.testing.assert_allclose(b.inscribed.center - a.inscribed.center, [0.5, 0.0], atol=1e-9)
+    np.testing.assert_allclose(a.inscribed_factor_range, b.inscribed_factor_range, atol=1e-9)

@@ -1,3 +1,5 @@
+import warnings
+
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -64,27 +66,51 @@ def test_centred_box_and_3d():
     assert largest_inscribed_box(np.zeros((3, 3), bool), plane_grid((3, 3))) is None
 
 
-def orthoglide_q1_q2(m):
+def orthoglide_rho_and_factors(p, length=0.31):
+    """Orthoglide from seed 001's own formulas, without pkmkit: slide i carries its carriage
+    along e_i, |p − ρ_i e_i| = L with ρ_i = p_i + sqrt(L² − |p|² + p_i²); A has rows
+    (p − ρ_i e_i)ᵀ, B = diag(p_i − ρ_i), J = A⁻¹B; factors by numpy's SVD. ``p (N, 3)``."""
+    p = np.atleast_2d(p)
+    rho = p + np.sqrt(length**2 - (p**2).sum(axis=1, keepdims=True) + p**2)
+    a = p[:, None, :] - rho[:, :, None] * np.eye(3)[None]
+    b = np.zeros((len(p), 3, 3))
+    b[:, np.arange(3), np.arange(3)] = p - rho
+    return rho, np.linalg.svd(np.linalg.solve(a, b), compute_uv=False)
+
+
+def orthoglide_q1_q2():
     """Points of the cube diagonal where a transmission factor reaches 0.5 or 2."""
     def excess(t):
-        s = m.jacobian([t] * 3).singular_values
+        s = orthoglide_rho_and_factors(np.full(3, t))[1][0]
         return max(s[0] / 2, 0.5 / s[-1]) - 1
 
-    return brentq(excess, -0.2, 0.0), brentq(excess, 0.0, 0.1)
+    return brentq(excess, -0.2, 0.0, xtol=1e-15), brentq(excess, 0.0, 0.1, xtol=1e-15)
 
 
 def test_orthoglide_prototype_cube_between_q1_and_q2():
     """Seed 001: the cube whose diagonal joins Q1 and Q2 keeps the factors within [0.5, 2];
-    with L = 310 mm its side is 200 mm and the slider stroke 257 mm (r = 0.78)."""
+    with L = 310 mm its side is 200 mm and the slider stroke 257 mm (r = 0.78). Reference:
+    an independent brute force over the cube with the Orthoglide's own formulas."""
     m = pkmkit.machine("orthoglide")
-    t1, t2 = orthoglide_q1_q2(m)
+    t1, t2 = orthoglide_q1_q2()
     side = t2 - t1
     assert side == pytest.approx(0.200, abs=0.001)
-    check = check_region(m, np.full(3, 0.5 * (t1 + t2)), side, Criteria(bounds=(0.5, 2.0)),
-                         samples=41)
+    center = np.full(3, 0.5 * (t1 + t2))
+    check = check_region(m, center, side, Criteria(bounds=(0.5, 2.0)), samples=41)
     assert check.feasible, check.worst
+    g = np.linspace(-side / 2, side / 2, 61)
+    cube = center + np.stack(np.meshgrid(g, g, g, indexing="ij"), -1).reshape(-1, 3)
+    rho, factors = orthoglide_rho_and_factors(cube)
+    assert factors.min() >= 0.5 - 1e-9 and factors.max() <= 2.0 + 1e-9
     lo, hi = check.factor_range
-    assert lo == pytest.approx(0.5, abs=1e-9) and hi == pytest.approx(2.0, abs=1e-9)
+    assert lo == pytest.approx(factors.min(), abs=1e-9)
+    assert hi == pytest.approx(factors.max(), abs=1e-9)
+    # the stroke, in closed form: ρ_1 = p_1 + sqrt(L² − p_2² − p_3²) is largest at p_1 = t2,
+    # p_2 = p_3 = 0 (inside a face, between the samples) and smallest at the corner Q1
+    L = 0.31
+    np.testing.assert_allclose(check.q_range[0], t1 + np.sqrt(L**2 - 2 * t1**2), atol=1e-9)
+    np.testing.assert_allclose(check.q_range[1], t2 + L, atol=1e-9)
+    assert (rho.max(axis=0) <= t2 + L + 1e-12).all()
     stroke = check.q_range[1] - check.q_range[0]
     np.testing.assert_allclose(stroke, 0.257, atol=0.001)
     assert side / stroke[0] == pytest.approx(0.78, abs=0.005)
@@ -104,8 +130,124 @@ def test_orthoglide_workspace_inscribed_cube():
     assert 0.19 < w.inscribed.side <= 0.2 + 1e-3
     lo, hi = w.factor_range()
     assert lo >= 0.5 - 1e-9 and hi <= 2.0 + 1e-9
-    assert w.measure == pytest.approx(w.feasible.sum() * grid.step**3)
+    # the cube stays inside the grid's box
+    assert (w.inscribed.lower >= -0.2 - 1e-12).all()
+    assert (w.inscribed.lower + w.inscribed.side <= 0.2 + 1e-12).all()
     assert w.boundary.any() and not (w.boundary & ~w.feasible).any()
+
+
+def test_grid_measure_is_exact_on_boxes_and_converges_on_a_disc():
+    # a box whose short axis does not end on a grid point: measured exactly
+    g = make_grid([0.0, -0.05], [0.2, 0.075], free=(0, 1), base=np.zeros(2),
+                  names=("x", "y"), resolution=21)
+    assert g.axes[1][-1] < 0.075 - 1e-3
+    assert g.measure(np.ones(g.shape, bool)) == pytest.approx(0.2 * 0.125, rel=1e-12)
+    g3 = make_grid([0, 0, 0], [0.3, 0.2, 0.1], free=(0, 1, 2), base=np.zeros(3),
+                   names=("x", "y", "z"), resolution=7)
+    assert g3.measure(np.ones(g3.shape, bool)) == pytest.approx(0.006, rel=1e-12)
+    assert g3.weights().sum() == pytest.approx(0.006, rel=1e-12)
+    # a disc of radius 0.4 touching the box's edges: midpoint rule, no half-cell excess
+    d = make_grid([-0.4, -0.4], [0.4, 0.4], free=(0, 1), base=np.zeros(2), names=("x", "y"),
+                  resolution=161)
+    x, y = np.meshgrid(*d.axes, indexing="ij")
+    assert d.measure(x**2 + y**2 <= 0.16) == pytest.approx(np.pi * 0.16, rel=2e-3)
+    with pytest.raises(InputError, match="does not fit"):
+        d.measure(np.ones((3, 3), bool))
+
+
+def test_workspace_measure_of_an_analytic_region():
+    """Five-bar with only ρ1 ∈ [0.3, 0.5] enforced: ρ1 = x − sqrt(L² − y²), so every row
+    |y| ≤ 0.3 of the region has length exactly 0.2: area 0.2 × 0.6 = 0.12 m². The old count ×
+    step² over-estimated it by 2.6 % on this 41-point grid (half cells along y = ±0.3)."""
+    m = pkmkit.machine("five-bar")
+    crit = Criteria(q_limits=(np.array([0.3, -np.inf]), np.array([0.5, np.inf])),
+                    connected=False)
+    for resolution, tol in ((41, 2e-3), (201, 2e-4)):
+        g = make_grid([0.6, -0.3], [1.2, 0.3], free=(0, 1), base=m.home_pose,
+                      names=m.pose_names, resolution=resolution)
+        w = compute_workspace(m, g, crit)
+        assert w.measure == pytest.approx(0.12, rel=tol)
+
+
+def test_fully_feasible_box_area_and_inscribed_square_stay_in_the_box():
+    """Reviewer's case: the box 0.9..1.1 × −0.1..0.1 is entirely feasible; its area is 0.04
+    (was 0.040401) and the refined square may not leave it (was side 0.202 from (0.899,
+    −0.101))."""
+    m = pkmkit.machine("five-bar")
+    g = make_grid([0.9, -0.1], [1.1, 0.1], free=(0, 1), base=m.home_pose, names=m.pose_names,
+                  resolution=201)
+    w = compute_workspace(m, g, Criteria(bounds=(0.5, 2.0)), refine=True)
+    assert w.feasible.all()
+    assert w.measure == pytest.approx(0.04, rel=1e-12)
+    box = w.inscribed
+    assert box.side <= 0.2 + 1e-12
+    assert (box.lower >= [0.9 - 1e-12, -0.1 - 1e-12]).all()
+    assert (box.lower + box.side <= [1.1 + 1e-12, 0.1 + 1e-12]).all()
+    assert w.global_conditioning_index() == pytest.approx(
+        np.sum(g.weights() / w.condition) / 0.04, rel=1e-12)
+
+
+def test_refined_cube_stays_in_a_small_box():
+    """A box inside the Orthoglide's workspace: the cube is the box itself, not 2 steps more."""
+    m = pkmkit.machine("orthoglide")
+    g = make_grid([-0.05] * 3, [0.05] * 3, free=(0, 1, 2), base=np.zeros(3),
+                  names=m.pose_names, resolution=11)
+    w = compute_workspace(m, g, Criteria(bounds=(0.5, 2.0)), refine=True)
+    assert w.feasible.all() and w.measure == pytest.approx(1e-3, rel=1e-12)
+    assert w.inscribed.side == pytest.approx(0.1, rel=1e-12)
+    assert (w.inscribed.lower >= -0.05 - 1e-12).all()
+
+
+def test_global_conditioning_index_of_a_workspace_against_direct_mean():
+    """Mean of 1/κ over the feasible grid points (cell-weighted), with κ from numpy's SVD of
+    the Orthoglide's J written from its own formulas."""
+    m = pkmkit.machine("orthoglide")
+    g = make_grid([-0.15] * 3, [0.12] * 3, free=(0, 1, 2), base=np.zeros(3),
+                  names=m.pose_names, resolution=19)
+    w = compute_workspace(m, g, Criteria(bounds=(0.5, 2.0)))
+    pts = g.points[w.feasible.ravel()]
+    _, s = orthoglide_rho_and_factors(pts)
+    weights = g.weights()[w.feasible]
+    ref = np.sum(weights * s[:, -1] / s[:, 0]) / weights.sum()
+    assert w.global_conditioning_index() == pytest.approx(ref, rel=1e-9)
+    assert 0.4 < ref < 0.9
+
+
+def test_no_warning_reaches_the_user_on_a_partly_unreachable_cube():
+    """Reviewer's case (``workspace orthoglide --cube 0.5 --center 0,0,0``): L-BFGS-B used to
+    get inf from _q_extremes and SciPy printed a RuntimeWarning."""
+    m = pkmkit.machine("orthoglide")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check = check_region(m, np.zeros(3), 0.5, Criteria(bounds=(0.5, 2.0)))
+    assert not check.feasible and "reachable" in check.failures
+    assert np.isfinite(check.q_range[0]).all() and np.isfinite(check.q_range[1]).all()
+
+
+def test_chunked_evaluation_matches_one_block(monkeypatch):
+    import pkmkit.analysis.workspace as ws
+
+    m = pkmkit.machine("linear-delta")
+    lo, hi = m.default_box()
+    g = make_grid(lo, hi, free=(0, 1, 2), base=m.home_pose, names=m.pose_names, resolution=15)
+    whole = ws.evaluate_poses(m, g.points, Criteria(bounds=(0.5, 2.0)))
+    monkeypatch.setattr(ws, "EVALUATION_CHUNK", 257)
+    parts = ws.evaluate_grid(m, g, Criteria(bounds=(0.5, 2.0)))
+    np.testing.assert_array_equal(parts.q, whole.q)
+    np.testing.assert_array_equal(parts.factors, whole.factors)
+    for name in whole.masks:
+        np.testing.assert_array_equal(parts.masks[name], whole.masks[name])
+
+
+def test_grid_limits():
+    names = ("x", "y", "z")
+    with pytest.raises(InputError, match="limit of 5e"):
+        make_grid([-1] * 3, [1] * 3, free=(0, 1, 2), base=np.zeros(3), names=names,
+                  resolution=271)
+    with pytest.raises(InputError, match="overflows"):
+        make_grid([-1e308] * 2, [1e308] * 2, free=(0, 1), base=np.zeros(2), names=names)
+    with pytest.raises(InputError, match="too thin"):
+        make_grid([1e9, 0], [1e9 + 1e-6, 1e-6], free=(0, 1), base=np.zeros(2), names=names)
 
 
 def test_masks_explain_failures():
@@ -139,6 +281,43 @@ def test_parallel_singularity_splits_the_workspace():
     assert reachable[past].any() and not mode[past & reachable].any()
     assert mode[~past].all() and w.feasible[diagonal, diagonal, diagonal][~past].all()
     assert not w.feasible[diagonal, diagonal, diagonal][past].any()
+
+
+def test_useful_workspace_on_a_coarse_grid():
+    """Reviewer's case ``useful-workspace five-bar --bounds 0.5,2 --resolution 11``: the grid
+    square around home had side 0 ("criteria fail there" where λ = 1). The dense bisection now
+    decides: same joint square as on a fine grid."""
+    m = pkmkit.machine("five-bar")
+    crit = Criteria(bounds=(0.5, 2.0))
+    coarse = useful_workspace(m, crit, resolution=11)
+    fine = useful_workspace(m, crit, resolution=201)
+    assert coarse.joint_square.side == pytest.approx(fine.joint_square.side, abs=1e-6)
+    np.testing.assert_allclose(coarse.factor_range, fine.factor_range, atol=1e-5)
+    # the square is limited by λ_max = 2 on its boundary (λ_min = 2/3 at a corner)
+    assert fine.factor_range == pytest.approx((2 / 3, 2.0), abs=1e-5)
+    tight = useful_workspace(m, Criteria(bounds=(0.99, 1.01)), resolution=11)
+    assert 0 < tight.joint_square.side < 0.02
+    with pytest.raises(InputError, match="fail at the home configuration"):
+        useful_workspace(m, Criteria(bounds=(1.5, 3.0)), resolution=11)
+
+
+def test_useful_workspace_with_three_actuators():
+    """The same procedure with cubes for the Orthoglide, independent of the grid."""
+    m = pkmkit.machine("orthoglide")
+    crit = Criteria(bounds=(0.5, 2.0))
+    coarse = useful_workspace(m, crit, resolution=11)
+    fine = useful_workspace(m, crit, resolution=31)
+    np.testing.assert_allclose(coarse.joint_square.center, m.home_q, atol=1e-12)
+    assert coarse.joint_square.side == pytest.approx(fine.joint_square.side, abs=1e-5)
+    lo, hi = fine.factor_range
+    assert 0.5 <= lo and hi == pytest.approx(2.0, abs=1e-4)
+    # independent check: the factors over the joint cube, by the Orthoglide's own formulas
+    # at the poses of the cube's image
+    q = fine.joint_square.lower + fine.joint_square.side * np.stack(np.meshgrid(
+        *[np.linspace(0, 1, 15)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    _, s = orthoglide_rho_and_factors(m.fk(q))
+    assert lo <= s.min() + 1e-9 and s.max() <= hi + 1e-9
+    assert fine.inscribed is not None and fine.inscribed.side > 0
 
 
 def test_joint_space_map_and_useful_workspace():

@@ -54,8 +54,120 @@ def test_useful_workspace(run, tmp_path, as_json):
     data = as_json(run("useful-workspace", "five-bar", "--bounds", "0.3333333,3",
                        "--resolution", "151", "--json", "--out", tmp_path / "u.png"))
     assert data["joint_square"]["side"] == pytest.approx(0.3868, abs=2e-3)
-    assert 0.33 < data["index_range"][0] < data["index_range"][1] < 3.0
+    # exact range: the bound 3 is reached at a corner of the joint square
+    assert data["index_range"] == pytest.approx([0.6, 3.0], abs=1e-5)
+    assert 0 < data["global_conditioning_index"] < 1
     assert (tmp_path / "u.png").exists()
+
+
+def test_useful_workspace_coarse_grid_and_three_actuators(run, as_json):
+    """``--resolution 11`` used to say "criteria fail there" at home, where λ = 1."""
+    coarse = as_json(run("useful-workspace", "five-bar", "--bounds", "0.5,2", "--resolution",
+                         "11", "--json"))
+    assert coarse["joint_square"]["side"] == pytest.approx(0.341640, abs=1e-5)
+    assert coarse["index_range"] == pytest.approx([2 / 3, 2.0], abs=1e-5)
+    bad = run("useful-workspace", "five-bar", "--bounds", "1.5,3", "--resolution", "11")
+    assert bad.exit_code == 1 and "fail at the home configuration" in bad.output
+    cube = as_json(run("useful-workspace", "orthoglide", "--bounds", "0.5,2", "--resolution",
+                       "15", "--json"))
+    assert cube["joint_square"]["side"] > 0.1 and cube["useful_volume"] > 0
+    text = run("useful-workspace", "orthoglide", "--bounds", "0.5,2", "--resolution", "15")
+    assert "actuator cube" in text.output and "inscribed cube" in text.output
+
+
+def test_planar_map_ignores_unreachable_poses(run, tmp_path, as_json):
+    """λ_min over the five-bar's box: the unreachable corner (0.4, −0.6) used to be reported
+    as the minimum 0, and κ = inf as the maximum."""
+    low = as_json(run("map", "five-bar", "--index", "lambda_min", "--out", tmp_path / "l.png",
+                      "--json"))
+    assert low["min"] > 0.05
+    x, y = low["at_min"]
+    assert (y - 0.0) ** 2 <= 0.25 + 1e-9 and (x - 1.0) ** 2 <= 0.25 + 1e-9  # reachable
+    cond = as_json(run("map", "five-bar", "--index", "condition", "--out", tmp_path / "c.png",
+                       "--json"))
+    assert np.isfinite(cond["max"]) and cond["min"] == pytest.approx(1.0)
+
+
+def test_condition_map_levels_are_readable():
+    """κ up to 1e17 near a singularity: log levels stopping at the 95th percentile (linear
+    levels to 1e17 put every usable pose in one colour)."""
+    from pkmkit.plot.maps import color_levels
+
+    values = np.concatenate([np.linspace(1.0, 20.0, 990), np.logspace(3, 17, 10)])
+    levels, logarithmic, clipped = color_levels(values)
+    assert logarithmic and clipped and levels[0] == 1.0 and levels[-1] < 25
+    assert np.all(np.diff(levels) > 0) and np.searchsorted(levels, 5.0) >= 4
+    levels, logarithmic, clipped = color_levels(np.linspace(0.5, 2.0, 100))
+    assert not logarithmic and not clipped and levels[0] <= 0.5 and levels[-1] >= 2.0
+
+
+def test_analyze_isotropy_display_matches_its_tolerance(run, as_json):
+    """κ = 1 + 3.4e-9 used to print "condition number 1 ... isotropic: False"."""
+    args = ("analyze", "five-bar-biglide", "--pose", "0.70710678,-0.35355339")
+    text = run(*args).output
+    assert "condition number 1 + 3.4e-09" in text and "isotropic: False (κ ≤ 1 + 1e-09)" in text
+    loose = as_json(run(*args, "--isotropy-tol", "1e-6", "--json"))
+    assert loose["isotropic"] is True and loose["isotropy_tol"] == 1e-6
+
+
+def test_workspace_gci_and_fully_feasible_box(run, as_json):
+    data = as_json(run("workspace", "five-bar", "--box", "0.9,1.1,-0.1,0.1", "--bounds", "0.5,2",
+                       "--json"))
+    assert data["area"] == pytest.approx(0.04, rel=1e-12)
+    box = data["inscribed"]
+    assert box["side"] <= 0.2 + 1e-12 and box["lower"][0] >= 0.9 - 1e-12
+    assert 0.8 < data["global_conditioning_index"] < 1
+    text = run("workspace", "five-bar", "--box", "0.9,1.1,-0.1,0.1", "--bounds", "0.5,2").output
+    assert "global conditioning index" in text
+
+
+def test_workspace_slice_box_and_centre(run, as_json):
+    base = ("workspace", "orthoglide", "--bounds", "0.5,2", "--resolution", "41")
+    full = as_json(run(*base, "--slice", "z=0.05", "--box", "-0.2,0.2,-0.2,0.2,-0.2,0.2",
+                       "--json"))
+    assert full["grid"]["lower"] == [-0.2, -0.2] and full["grid"]["fixed"] == {"z": 0.05}
+    in_plane = as_json(run(*base, "--slice", "z=0.05", "--cube", "0.1", "--center", "0,0",
+                           "--json"))
+    same = as_json(run(*base, "--slice", "z=0.05", "--cube", "0.1", "--center", "0,0,0.05",
+                       "--json"))
+    assert in_plane["check"]["center"] == [0.0, 0.0, 0.05]
+    assert in_plane["check"]["index_range"] == same["check"]["index_range"]
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["map", "five-bar", "--index", "lambda_min", "--out", "missing/l.png"],
+         "does not exist"),
+        (["map", "five-bar", "--index", "lambda_min", "--out", "l.xyz"], "extension .xyz"),
+        (["workspace", "five-bar", "--out", "w"], "no extension"),
+        (["workspace", "five-bar", "--out", "missing/w.png"], "does not exist"),
+        (["useful-workspace", "five-bar", "--bounds", "0.5,2", "--out", "u.txt"],
+         "extension .txt"),
+        (["useful-workspace", "orthoglide", "--bounds", "0.5,2", "--out", "u.png"],
+         "needs 2 actuators"),
+        (["map", "five-bar", "--index", "condition", "--range", "-1e308,1e308,-1e308,1e308",
+          "--out", "m.png"], "beyond 1e+09 m"),
+        (["workspace", "five-bar", "--box", "-1e308,1e308,-1e308,1e308"], "beyond 1e+09 m"),
+        (["workspace", "five-bar", "--box", "0,nan,0,1"], "finite"),
+        (["workspace", "orthoglide", "--slice", "z=0.05,9"], "one value"),
+        (["workspace", "orthoglide", "--slice", "z=0.5", "--box",
+          "-0.2,0.2,-0.2,0.2,-0.2,0.2"], "outside the box"),
+        (["workspace", "orthoglide", "--slice", "z=0.05", "--cube", "0.1", "--center",
+          "0,0,0"], "not in the --slice plane"),
+        (["workspace", "orthoglide", "--slice", "z=0.05", "--cube", "0.1", "--center", "0"],
+         "in-plane coordinates"),
+        (["workspace", "orthoglide", "--cube", "nan", "--center", "0,0,0"], "side > 0"),
+        (["workspace", "orthoglide", "--resolution", "271"], "limit of 5e+06"),
+        (["analyze", "orthoglide", "--pose", "0,0,0", "--isotropy-tol", "-1"], "isotropy-tol"),
+    ],
+)
+def test_bad_analysis_input(run, args, message, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = run(*args)
+    assert result.exit_code == 1, result.output
+    assert message in result.output and "Traceback" not in result.output
+    assert len(result.output.strip().splitlines()) == 1
 
 
 @pytest.mark.parametrize(
@@ -75,7 +187,8 @@ def test_useful_workspace(run, tmp_path, as_json):
           "5,6,5,6", "--out", "x.png"], "no point of this plane is reachable"),
         (["map", "five-bar", "--index", "condition", "--slice", "z=0", "--out", "x.png"],
          "planar machine"),
-        (["useful-workspace", "orthoglide", "--bounds", "0.5,2"], "2 actuators"),
+        (["useful-workspace", "linear-delta", "--bounds", "0.5,2", "--out", "u.png"],
+         "2 actuators"),
     ],
 )
 def test_bad_input(run, args, message, tmp_path, monkeypatch):

@@ -189,8 +189,10 @@ def test_demo_writes_json_and_pngs(run, tmp_path):
     # the forces are dominated by weight: inertia at constant feed is about 1 % of them
     assert circle["inertial_cruise_force_max"] < 0.02 * max(circle["force_max"])
     assert abs(motion["helix"]["stroke"][0] - 0.381) < 1e-3
-    lo, hi = motion["line"]["carriages_only_7.2kg"]["cruise_force_range"]
+    lo, hi = motion["line"]["carriages_only_7.2kg"]["force_range"]
     assert 70.5 < lo <= hi < 72.0
+    lo, hi = motion["line"]["carriages_7.2kg_nacelle_1kg"]["force_range"]
+    assert lo > 72.0
     assert motion["line"]["stroke_violations_default_machine"][0]["limit"] == "position"
     assert motion["facing"]["zigzag"]["duration"] < motion["facing"]["one-way"]["duration"]
     assert motion["arms"]["mass_error_g_max"] < 0.01 and motion["arms"]["sized_arm"]["feasible"]

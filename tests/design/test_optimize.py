@@ -1,3 +1,5 @@
+import math
+
 import numpy as np
 import pytest
 
@@ -10,7 +12,6 @@ from pkmkit.design.optimize import (
     Objective,
     Variable,
     optimize,
-    pareto_front,
 )
 from pkmkit.errors import InputError
 
@@ -57,18 +58,69 @@ def test_single_objective_matches_a_brute_force_scan():
     assert again.best["compactness"] == result.best["compactness"]
 
 
+def dominates(a, b):
+    """Maximisation of both coordinates: a is at least as good everywhere, better somewhere."""
+    return a[0] >= b[0] and a[1] >= b[1] and (a[0] > b[0] or a[1] > b[1])
+
+
 def test_pareto_front_is_non_dominated_and_feasible(tmp_path):
     problem = delta_problem([Objective("compactness", "max"), Objective("gci", "max")])
     result = optimize(problem, seed=1, generations=10, population=24)
     front = result.pareto
     assert len(front) > 5 and all(r["feasible"] for r in front)
-    f = np.array([[r["compactness"], r["gci"]] for r in front])
-    for i in range(len(f)):
-        assert not ((f >= f[i]).all(axis=1) & (f > f[i]).any(axis=1)).any()
-    assert pareto_front(result.records) == front
+    feasible = [(r["compactness"], r["gci"]) for r in result.records if r["feasible"]]
+    points = [(r["compactness"], r["gci"]) for r in front]
+    # no feasible record dominates a point of the front ...
+    for p in points:
+        assert not any(dominates(q, p) for q in feasible), p
+    # ... and every feasible record not on the front is dominated by, or equal to, a front point
+    for q in feasible:
+        assert q in points or any(dominates(p, q) or p == q for p in points), q
+    # the records really are the metrics of their designs (not copied from elsewhere)
+    sample = front[len(front) // 2]
+    direct = evaluate_metrics(pkmkit.machine("linear-delta", R=sample["R"], L=sample["L"]),
+                              REGION, CRITERIA, ("compactness", "gci"), 7)
+    assert direct["compactness"] == pytest.approx(sample["compactness"], rel=1e-12)
+    assert direct["gci"] == pytest.approx(sample["gci"], rel=1e-12)
     result.write_csv(tmp_path / "r.csv")
     result.write_json(tmp_path / "s.json")
-    assert (tmp_path / "r.csv").read_text().startswith("R,L,compactness,gci,violation,feasible")
+    assert (tmp_path / "r.csv").read_text().startswith(
+        "R [m],L [m],compactness,gci,violation,feasible")
+
+
+def test_outputs_in_command_line_units(tmp_path):
+    """units="mm": lengths in mm (variables, stroke, constraint values, region), areas in mm²,
+    angles in degrees; the header and the summary name the units."""
+    problem = DesignProblem(
+        base=pkmkit.machine("linear-delta"),
+        variables=[Variable("R", 0.6, 0.8), Variable("angles[1]", math.radians(110),
+                                                      math.radians(130))],
+        objectives=[Objective("gci", "max")], constraints=[Constraint("stroke", "<=", 0.9)],
+        region=REGION, criteria=CRITERIA, samples=5)
+    result = optimize(problem, seed=0, generations=3, population=8)
+    best = result.best
+    summary = result.summary("mm")
+    assert summary["units"] == {"length": "mm", "area": "mm^2", "angle": "deg"}
+    assert summary["column_units"]["R"] == "mm" and summary["column_units"]["angles[1]"] == "deg"
+    assert summary["column_units"]["stroke"] == "mm" and summary["column_units"]["gci"] == ""
+    assert summary["best"]["R"] == pytest.approx(best["R"] * 1e3)
+    assert summary["best"]["angles[1]"] == pytest.approx(math.degrees(best["angles[1]"]))
+    assert summary["best"]["stroke"] == pytest.approx(best["stroke"] * 1e3)
+    assert summary["best"]["gci"] == best["gci"]
+    assert summary["constraints"][0] == "stroke<=900 mm"
+    assert summary["region"] == {"side": 500.0, "center": [0.0, 0.0, 250.0]}
+    assert summary["variables"][1] == {"name": "angles[1]", "lower": pytest.approx(110),
+                                       "upper": pytest.approx(130), "unit": "deg"}
+    result.write_csv(tmp_path / "r.csv", units="mm")
+    header, first = (tmp_path / "r.csv").read_text().splitlines()[:2]
+    assert header == "R [mm],angles[1] [deg],gci,stroke [mm],violation,feasible"
+    values = dict(zip(header.split(","), first.split(","), strict=True))
+    record = result.records[0]
+    assert float(values["R [mm]"]) == pytest.approx(record["R"] * 1e3, rel=1e-9)
+    assert float(values["angles[1] [deg]"]) == pytest.approx(math.degrees(record["angles[1]"]),
+                                                              rel=1e-9)
+    # SI by default, and says so
+    assert result.summary()["units"] == {"length": "m", "area": "m^2", "angle": "rad"}
 
 
 def test_cmaes_and_constraints():
@@ -99,6 +151,10 @@ def test_infeasible_problem_reports_no_best():
         (lambda: DesignProblem(base=pkmkit.machine("linear-delta"),
                                variables=[Variable("angles[5]", 0, 1)],
                                objectives=[Objective("gci", "max")], region=REGION),
+         "angles\\[0..2\\]"),
+        (lambda: DesignProblem(base=pkmkit.machine("linear-delta"),
+                               variables=[Variable("angles", 0, 1)],
+                               objectives=[Objective("gci", "max")], region=REGION),
          "3 components"),
         (lambda: optimize(delta_problem([Objective("gci", "max"), Objective("stroke", "min")]),
                           method="de"), "one objective"),
@@ -111,9 +167,125 @@ def test_bad_problems(make, message):
 
 
 def test_vector_component_variable():
+    """angles[1] must change the machine: the candidate is the machine built directly with that
+    angle, and its metrics differ from those of the nominal 120°."""
     problem = DesignProblem(base=pkmkit.machine("linear-delta"),
                             variables=[Variable("angles[1]", 1.8, 2.4)],
                             objectives=[Objective("gci", "max")], region=REGION,
                             criteria=CRITERIA, samples=5)
+    candidate = problem.build(np.array([2.0]))
+    assert candidate.params["angles"] == pytest.approx((0.0, 2.0, math.radians(240)))
+    direct = pkmkit.machine("linear-delta", angles=(0.0, 2.0, math.radians(240)))
+    pts = REGION.points(direct, 5)
+    np.testing.assert_array_equal(candidate.ik(pts), direct.ik(pts))
     record = problem.evaluate(np.array([2.0]))
-    assert record["angles[1]"] == 2.0 and np.isfinite(record["gci"])
+    assert record["gci"] == evaluate_metrics(direct, REGION, CRITERIA, ("gci",), 5)["gci"]
+    nominal = evaluate_metrics(pkmkit.machine("linear-delta"), REGION, CRITERIA, ("gci",), 5)
+    assert abs(record["gci"] - nominal["gci"]) > 1e-3
+    # the base machine is unchanged (machines are immutable values)
+    assert problem.base.params["angles"][1] == pytest.approx(math.radians(120))
+
+
+def test_cmaes_with_one_variable():
+    """CMA-ES needs two dimensions; one variable runs with a dummy coordinate. The optimum of
+    GCI over R alone matches a scan."""
+    problem = DesignProblem(base=pkmkit.machine("linear-delta"),
+                            variables=[Variable("R", 0.45, 1.0)],
+                            objectives=[Objective("gci", "max")], region=REGION,
+                            criteria=CRITERIA, samples=5)
+    result = optimize(problem, method="cmaes", seed=0, generations=12, population=6)
+    assert result.best is not None and 0.45 <= result.best["R"] <= 1.0
+    scan = [problem.evaluate(np.array([r])) for r in np.linspace(0.45, 1.0, 23)]
+    best_scan = max((g for g in scan if g["feasible"]), key=lambda g: g["gci"])
+    assert result.best["gci"] >= best_scan["gci"] - 1e-3
+    assert {len(k) for k in {tuple(r) for r in result.records}}  # records exist
+
+
+def test_duplicate_and_inert_variables():
+    base = pkmkit.machine("linear-delta")
+    with pytest.raises(InputError, match="given twice"):
+        DesignProblem(base=base, variables=[Variable("R", 0.5, 1.0), Variable("R", 0.6, 0.9)],
+                      objectives=[Objective("gci", "max")], region=REGION)
+    problem = DesignProblem(base=base, variables=[Variable("q_min[0]", 0.1, 0.5),
+                                                  Variable("R", 0.5, 1.0),
+                                                  Variable("parallelogram_width", 0.05, 0.2)],
+                            objectives=[Objective("gci", "max")], region=REGION,
+                            criteria=CRITERIA, samples=5)
+    assert problem.inert_variables() == ["q_min[0]", "parallelogram_width"]
+    with pytest.raises(InputError, match="q_min\\[0\\], parallelogram_width change none"):
+        optimize(problem, generations=2, population=4)
+    # r changes the kinematics through R − r: not inert
+    assert DesignProblem(base=base, variables=[Variable("r", 0.1, 0.2)],
+                         objectives=[Objective("gci", "max")], region=REGION,
+                         samples=5).inert_variables() == []
+
+
+@pytest.mark.parametrize("text", ["gci>=1e", "gci>=1.2.3", "gci>=nan", "stroke<=inf"])
+def test_malformed_constraint_values(text):
+    with pytest.raises(InputError, match="not a finite number"):
+        Constraint.parse(text)
+
+
+@pytest.mark.parametrize(
+    "region, message",
+    [(Region(0.5, (1.0, 2.0)), "needs 3 coordinates"),
+     (Region(0.5, (0.0, 0.0, 0.0, 0.0)), "needs 3 coordinates")],
+)
+def test_region_centre_must_fit_the_machine(region, message):
+    with pytest.raises(InputError, match=message):
+        DesignProblem(base=pkmkit.machine("linear-delta"), variables=[Variable("R", 0.5, 1.0)],
+                      objectives=[Objective("gci", "max")], region=region)
+
+
+def test_non_finite_region_centre():
+    with pytest.raises(InputError, match="must be finite"):
+        Region(0.5, (float("nan"), 0.0, 0.0))
+
+
+ROD_DELTA = """
+[machine]
+kind = "rod-legs"
+name = "delta leg by leg"
+units = "mm"
+[[legs]]
+base = [550, 0, 0]
+axis = [0, 0, 1]
+platform = [0, 0, 0]
+length = {L0}
+[[legs]]
+base = [-275, 476.3139720814412, 0]
+axis = [0, 0, 1]
+platform = [0, 0, 0]
+length = 1300
+[[legs]]
+base = [-275, -476.3139720814412, 0]
+axis = [0, 0, 1]
+platform = [0, 0, 0]
+length = 1300
+"""
+
+
+def test_rod_legs_machine_can_be_optimised(tmp_path):
+    """A machine described leg by leg: its leg fields are design variables (legs[0].length,
+    legs[2].base[0], ...). A candidate equals the machine written directly with those values."""
+    path = tmp_path / "delta.toml"
+    path.write_text(ROD_DELTA.format(L0=1300))
+    base = pkmkit.load(path)
+    problem = DesignProblem(base=base, variables=[Variable("legs[0].length", 1.2, 1.5),
+                                                  Variable("legs[2].base[0]", -0.35, -0.2)],
+                            objectives=[Objective("gci", "max")], region=REGION,
+                            criteria=CRITERIA, samples=5)
+    candidate = problem.build(np.array([1.4, -0.3]))
+    written = tmp_path / "direct.toml"
+    written.write_text(ROD_DELTA.format(L0=1400).replace("[-275, -476.3", "[-300, -476.3"))
+    direct = pkmkit.load(written)
+    pts = REGION.points(direct, 5)
+    np.testing.assert_allclose(candidate.ik(pts), direct.ik(pts), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(candidate.jacobian(pts).J, direct.jacobian(pts).J, atol=1e-12)
+    assert base.model.leg_length[0] == pytest.approx(1.3)  # unchanged
+    result = optimize(problem, seed=0, generations=3, population=8)
+    assert result.best is not None and 1.2 <= result.best["legs[0].length"] <= 1.5
+    assert result.summary("mm")["column_units"]["legs[0].length"] == "mm"
+    with pytest.raises(InputError, match=r"valid names: legs\[0\]\.length"):
+        DesignProblem(base=base, variables=[Variable("R", 0.5, 1.0)],
+                      objectives=[Objective("gci", "max")], region=REGION)

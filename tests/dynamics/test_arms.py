@@ -19,6 +19,22 @@ def test_seed_tables_iv2_iv3():
     assert optimum["mass_g"] == pytest.approx(12924.6, abs=1)  # what 7700 kg/m³ would weigh
 
 
+def test_handbook_values_of_a_steel_rod():
+    """Ø40 mm solid steel bar, 1.04 m, pinned at both ends, hand-computed: A = 1256.6 mm²,
+    I = 125 664 mm⁴, N_cr = π²EI/ℓ² = 240.8 kN, self-weight q = ρgA = 94.92 N/m, mid-span moment
+    qℓ²/8 = 12.83 N·m, bending stress M c / I = 2.04 MPa, deflection 5qℓ⁴/(384EI) = 0.055 mm,
+    mass 10.06 kg, axial stiffness EA/ℓ = 253.7 N/µm."""
+    a = analyse_arm(1.04, 0.040, axial_force=-1000.0, transverse_accel=9.81,
+                    material=Material(E=210e9, density=7700.0))
+    assert a.area * 1e6 == pytest.approx(1256.6, abs=0.1)
+    assert a.buckling_load == pytest.approx(240.8e3, rel=1e-3)
+    assert a.bending_stress == pytest.approx(2.04e6, rel=2e-3)
+    assert a.deflection == pytest.approx(0.055e-3, rel=1e-2)
+    assert a.mass == pytest.approx(10.06, abs=0.01)
+    assert a.axial_stiffness == pytest.approx(253.7e6, rel=1e-3)
+    assert a.axial_stress == pytest.approx(-0.796e6, rel=1e-3)
+
+
 def test_analysis_formulas():
     a = analyse_arm(1.0, 0.04, 0.02, axial_force=-1000.0, transverse_accel=9.81,
                     material=Material(E=2e11, density=8000.0, yield_strength=5e8))
@@ -56,3 +72,35 @@ def test_infeasible_and_bad_sizing():
     with pytest.raises(InputError):
         Material(E=-1.0)
     assert np.isinf(analyse_arm(1.0, 0.02, axial_force=10.0).buckling_safety)
+
+
+@pytest.mark.parametrize("force", [56.0, 1000.0, 2e4])
+def test_free_bore_tube_is_the_thinnest_wall_at_the_buckling_limit(force):
+    """With the bore free, the lightest tube has the thinnest allowed wall (1 mm) and the outer
+    diameter where Euler buckling reaches its safety factor: found here by bisection."""
+    design = size_arm(axial_force=force, length=1.04, hollow=True)
+    assert design.feasible
+
+    def critical(big):
+        small = big - 0.002
+        return math.pi**3 * 210e9 * (big**4 - small**4) / 64 / 1.04**2
+
+    lo, hi = 0.0021, 0.1
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if critical(mid) < 3 * force else (lo, mid)
+    a = design.analysis
+    assert a.outer_diameter == pytest.approx(hi, rel=1e-5)
+    assert a.outer_diameter - a.inner_diameter == pytest.approx(0.002, rel=1e-6)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"stress_safety": 0.0}, "stress safety"),
+    ({"buckling_safety": -3.0}, "buckling safety"),
+    ({"min_stiffness": -5.0}, "minimum stiffness"),
+    ({"axial_force": float("nan")}, "finite"),
+])
+def test_bad_sizing_requirements(kwargs, message):
+    args = {"axial_force": 1000.0, "length": 1.0, **kwargs}
+    with pytest.raises(InputError, match=message):
+        size_arm(**args)

@@ -263,3 +263,37 @@ def test_forces_along_the_seed_circle(delta_b):
     inertial = inverse_dynamics(delta_b, no_gravity, jt.x, jt.xd, jt.xdd, jt.q, jt.qd, jt.qdd)
     cruise = (jt.t > 2.0) & (jt.t < 6.0)
     assert np.abs(inertial.force[cruise]).max() < 0.05 * np.abs(res.force).min()
+
+
+def test_leg_axial_force_against_newton_euler_statics(tmp_path):
+    """Three single heavy rods on vertical slides meeting at a point platform: the rod end
+    forces from each body's own equilibrium (rods: forces and moments about A; platform:
+    forces), solved here independently; pkmkit reports the larger end tension of each rod and
+    the actuator forces that balance the carriages."""
+    angles = np.radians([0.0, 120.0, 240.0])
+    path = tmp_path / "single.toml"
+    path.write_text('[machine]\nkind = "rod-legs"\nhome = [0, 0, 0]\n' + "".join(
+        f'[[legs]]\ntype = "slide"\nbase = [{0.55 * np.cos(a):.9f}, {0.55 * np.sin(a):.9f}, 0]'
+        f'\naxis = [0, 0, 1]\nplatform = [0, 0, 0]\nlength = 1.04\n' for a in angles))
+    m = pkmkit.load(path)
+    g = np.array([0.4, -0.3, -9.81])
+    masses = mass_properties(m, carriage=6.0, rod=10.0, rod_radius=0.02, platform=20.0,
+                             gravity=g)
+    x = np.array([0.1, -0.05, 0.0])
+    q = m.ik(x)
+    res = inverse_dynamics(m, masses, x[None], np.zeros((1, 3)), np.zeros((1, 3)), q[None],
+                           np.zeros((1, 3)), np.zeros((1, 3)))
+    base = m.model.leg_base + q[:, None] * m.model.leg_axis
+    d = x[None] - base
+    unit = d / np.linalg.norm(d, axis=1, keepdims=True)
+    # R_P = −m g/2 + λ d̂ on each rod; platform: Σ λ_i d̂_i = M g + Σ m g/2
+    lam = np.linalg.solve(unit.T, 20.0 * g + 3 * 10.0 * g / 2)
+    n_platform_end = lam - 10.0 * (unit @ g) / 2
+    n_carriage_end = lam + 10.0 * (unit @ g) / 2
+    larger = np.where(np.abs(n_platform_end) > np.abs(n_carriage_end), n_platform_end,
+                      n_carriage_end)
+    np.testing.assert_allclose(res.leg_axial[0], larger, rtol=1e-10)
+    # carriage along its slide: actuator + weight + force from the rod (−R_A) balance
+    r_a = -(-10.0 * g / 2 + lam[:, None] * unit) - 10.0 * g
+    actuator = -(6.0 * g[2]) + r_a[:, 2]
+    np.testing.assert_allclose(res.force[0], actuator, rtol=1e-10)

@@ -79,3 +79,44 @@ def test_errors_name_the_line(text, line, message):
         read_gcode(text, name="prog.nc")
     if line is not None:
         assert f"prog.nc:{line}:" in str(info.value)
+
+
+@pytest.mark.parametrize("program, midpoint", [
+    # viewed from +Z (X right, Y up): clockwise from +X to −Y is the short quarter
+    ("G17 G0 X10 Y0 Z0\nG2 X0 Y-10 I-10 J0 F100\n", [7.0711, -7.0711, 0]),
+    # G18 is viewed from +Y (Z right, X up): clockwise from X10 (up) to Z10 (right) is short
+    ("G18 G0 X10 Y0 Z0\nG2 X0 Z10 I-10 K0 F100\n", [7.0711, 0, 7.0711]),
+    ("G18 G0 X10 Y0 Z0\nG3 X0 Z10 I-10 K0 F100\n", [-7.0711, 0, -7.0711]),
+    # G19 is viewed from +X (Y right, Z up): clockwise from Z10 (up) to Y10 (right) is short
+    ("G19 G0 X0 Y0 Z10\nG2 Y10 Z0 J0 K-10 F100\n", [0, 7.0711, 7.0711]),
+])
+def test_arc_direction_conventions(program, midpoint):
+    """G2/G3 directions per plane, from the RS274/NGC convention (each plane viewed from its
+    positive normal axis), checked at the arc's midpoint."""
+    arc = read_gcode("G21 G90\n" + program).segments[-1]
+    mid = arc.evaluate(np.array([arc.length / 2]))[0][0]
+    np.testing.assert_allclose(mid * 1e3, midpoint, atol=1e-3)
+
+
+def test_rounded_cam_arcs_are_accepted_and_end_on_the_programmed_point():
+    # 30° arc about the origin written with 3 decimals (radius error 2.5e-4 mm) and one 0.05 % off
+    for end in ("X8.660 Y5.000", "X8.6645 Y5.0025"):
+        path = read_gcode(f"G21 G90\nG0 X10 Y0\nG3 {end} I-10 J0 F600\n")
+        arc = path.segments[-1]
+        expected = np.array([float(w[1:]) for w in end.split()] + [0.0]) * 1e-3
+        np.testing.assert_allclose(arc.end, expected, atol=1e-12)
+    with pytest.raises(InputError, match=r"radius 10 mm at the start but 10.02"):
+        read_gcode("G21 G90\nG0 X10 Y0\nG3 X0 Y10.02 I-10 J0 F600\n")
+
+
+@pytest.mark.parametrize("text, message", [
+    ("G1 X1 G0 Y1 F100\n", "two motion codes on one line: G1 G0"),
+    ("G17 G18 G1 X1 F100\n", "two plane codes"),
+    ("G20 G21 G1 X1 F100\n", "two unit codes"),
+    ("G90 G91 G1 X1 F100\n", "two distance codes"),
+    ("G17 G2 X0 Y2 I0 J1 K3 F100\n", "K is not an offset of an arc in the G17 plane"),
+    ("G19 G2 Y0 Z2 I1 K1 F100\n", "I is not an offset"),
+])
+def test_modal_conflicts_and_off_plane_offsets(text, message):
+    with pytest.raises(InputError, match=message):
+        read_gcode(text, name="p.nc")

@@ -1,3 +1,5 @@
+import re
+
 import numpy as np
 import pytest
 
@@ -38,17 +40,39 @@ def test_seed_000_circle_and_helix(delta_b):
     assert hx.qd.max() == pytest.approx(0.0789, abs=2e-4)
 
 
+def _reported_time(error: InputError) -> float:
+    return float(re.search(r"first at t = ([0-9.e+-]+) s", str(error)).group(1))
+
+
 def test_leaving_the_workspace_names_the_first_sample(delta_b):
+    """The first sample where a leg cannot reach (radicand L² − horizontal distance² < 0,
+    computed here from the seed's geometry), and the stroke exceeded before it."""
     tr = plan(line([0, 0, 0.2], [1.5, 0, 0.2]), feed=0.5, accel=2.0, jerk=20.0, period=0.01)
-    with pytest.raises(InputError, match=r"leaves the workspace: first at t = .* too short by"):
+    with pytest.raises(InputError, match=r"leaves the workspace \(leg 3 too short by .*\): "
+                       r"first at t = .*; the stroke of q\d is already exceeded") as info:
         joint_trajectory(delta_b, tr)
+    angles = np.radians([0, 120, 240])
+    centres = (0.7 - 0.15) * np.column_stack([np.cos(angles), np.sin(angles)])
+    radicand = 1.04**2 - ((tr.x[:, None, :2] - centres[None]) ** 2).sum(axis=2)
+    first = np.flatnonzero((radicand < 0).any(axis=1))[0]
+    assert _reported_time(info.value) == pytest.approx(tr.t[first])
 
 
-def test_crossing_into_the_other_mode_is_refused():
+def test_crossing_into_the_other_mode_names_the_first_sample():
+    """Orthoglide along the diagonal: the first sample past det A = 0 (A's rows P − C_i with
+    the carriages at ρ_i e_i, ρ_i = p_i + √(L² − |p|² + p_i²))."""
     ortho = pkmkit.machine("orthoglide")
-    tr = plan(line([0, 0, 0], [0.2, 0.2, 0.2]), feed=0.1, accel=1.0, jerk=10.0, period=0.01)
-    with pytest.raises(InputError, match=r"singularity|other assembly mode"):
+    tr = plan(line([0, 0, 0], [0.5, 0.5, 0.5]), feed=0.1, accel=1.0, jerk=10.0, period=0.01)
+    with pytest.raises(InputError, match=r"crosses a parallel singularity") as info:
         joint_trajectory(ortho, tr)
+    p = tr.x
+    with np.errstate(invalid="ignore"):  # beyond the reach at the end of the line
+        rho = p + np.sqrt(0.31**2 - (p**2).sum(axis=1, keepdims=True) + p**2)
+    reach = np.isfinite(rho).all(axis=1)
+    rows = p[reach, None, :] - rho[reach, :, None] * np.eye(3)[None]
+    det = np.linalg.det(rows)
+    first = np.flatnonzero(np.sign(det) != np.sign(det[0]))[0]
+    assert _reported_time(info.value) == pytest.approx(tr.t[first])
 
 
 def test_limit_report(delta_b):

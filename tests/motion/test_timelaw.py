@@ -1,9 +1,11 @@
+import itertools
+
 import numpy as np
 import pytest
 
 from pkmkit.errors import InputError
 from pkmkit.motion.gcode import read_gcode
-from pkmkit.motion.paths import circle, line, raster
+from pkmkit.motion.paths import Arc, Line, Path, circle, line, raster
 from pkmkit.motion.timelaw import plan, scurve, trapezoid
 
 
@@ -34,6 +36,93 @@ def test_limits_hold_on_arcs_and_through_corners():
         np.testing.assert_allclose(tr.x[-1], [0, 0, 0], atol=1e-12)
         # exact stops at the corners (and, jerk-limited, where a line meets the arc)
         assert len(tr.blocks) == (4 if profile == "scurve" else 2)
+
+
+def _arc_from(start, tangent, normal, radius, sweep, rise=0.0):
+    """An arc leaving ``start`` along ``tangent`` (unit, ⊥ normal), turning about ``normal``."""
+    side = np.cross(normal, tangent)
+    sign = 1.0 if sweep > 0 else -1.0
+    center = start + sign * radius * side
+    e1 = -sign * side
+    return Arc(center, radius, e1, np.cross(normal, e1), 0.0, sweep, rise)
+
+
+def _random_chain(rng):
+    """Lines and arcs (some helical) in random planes; joints tangent, nearly tangent (1e-4
+    rad) or sharp, S-bends, and zero-length moves."""
+    point, tangent = np.zeros(3), np.array([1.0, 0.0, 0.0])
+    segs = []
+    for _ in range(8):
+        kind = rng.choice(["line", "arc", "arc", "zero"])
+        normal = np.cross(tangent, rng.normal(size=3))
+        normal /= np.linalg.norm(normal)
+        if kind == "line":
+            seg = Line(point, point + rng.uniform(0.002, 0.03) * tangent)
+        elif kind == "zero":
+            seg = Line(point, point.copy())
+        else:
+            rise = rng.choice([0.0, rng.uniform(-0.01, 0.01)])
+            seg = _arc_from(point, tangent, normal, rng.uniform(0.002, 0.02),
+                            rng.choice([-1, 1]) * rng.uniform(0.2, 3.0), rise)
+        segs.append(seg)
+        point = seg.end
+        if seg.length > 0:
+            tangent = seg.tangent(end=True) / np.linalg.norm(seg.tangent(end=True))
+        turn = rng.choice(["tangent", "tangent", "tiny", "sharp"])
+        if turn != "tangent":
+            angle = 1e-4 if turn == "tiny" else rng.uniform(0.3, 3.0)
+            axis = np.cross(tangent, rng.normal(size=3))
+            axis /= np.linalg.norm(axis)
+            tangent = np.cos(angle) * tangent + np.sin(angle) * np.cross(axis, tangent)
+    return Path(tuple(segs))
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_limits_hold_on_random_chains(seed):
+    """Acceleration, jerk and speed from finite differences of the sampled positions (not the
+    planner's own derivatives) stay within the limits, and the reported ẋ, ẍ match them."""
+    rng = np.random.default_rng(seed)
+    path = _random_chain(rng)
+    a_max, j_max, feed, h = 2.0, 20.0, 0.1, 2e-4
+    for profile in ("scurve", "trapezoid"):
+        tr = plan(path, feed=feed, accel=a_max, jerk=j_max, profile=profile, period=h)
+        x = tr.x[: np.flatnonzero(np.abs(np.diff(tr.t) - h) > 1e-12)[0] + 1]  # uniform part
+        vel = np.diff(x, axis=0) / h
+        acc = np.diff(x, 2, axis=0) / h**2
+        assert np.linalg.norm(vel, axis=1).max() <= feed * (1 + 1e-6)
+        assert np.linalg.norm(acc, axis=1).max() <= a_max * (1 + 1e-3)
+        np.testing.assert_allclose(tr.x[-1], path.segments[-1].end, atol=1e-12)
+        if profile == "scurve":
+            jerk = np.diff(x, 3, axis=0) / h**3
+            assert np.linalg.norm(jerk, axis=1).max() <= j_max * (1 + 1e-2)
+            np.testing.assert_allclose(acc, tr.xdd[1:len(x) - 1], atol=a_max * 1e-2)
+
+
+def test_s_bend_zero_length_and_polyline_stops():
+    # an S-bend: two tangent arcs turning opposite ways — the normal acceleration flips
+    s_bend = read_gcode("G21 G90\nG0 X0 Y0\nG3 X20 Y0 R10 F6000\nG2 X40 Y0 R10\n")
+    bend = plan(s_bend, feed=0.1, accel=2.0, jerk=20.0, period=1e-3)
+    assert [b.segments for b in bend.blocks] == [(0,), (1,)]
+    # a reversal hidden behind a zero-length move stops the tool
+    back = Path((Line(np.zeros(3), np.array([0.1, 0, 0])), Line(np.array([0.1, 0, 0]),
+                                                               np.array([0.1, 0, 0])),
+                 Line(np.array([0.1, 0, 0]), np.zeros(3))))
+    tr = plan(back, feed=0.1, accel=1.0, jerk=10.0, period=1e-3)
+    assert len(tr.blocks) == 2 and np.isfinite(tr.x).all()
+    # a polyline approximating a circle stops at each vertex (no corner blending)
+    angles = np.linspace(0, 2 * np.pi, 41)
+    pts = np.column_stack([0.05 * np.cos(angles), 0.05 * np.sin(angles), np.zeros(41)])
+    poly = Path(tuple(Line(a, b) for a, b in itertools.pairwise(pts)))
+    assert len(plan(poly, feed=0.1, accel=1.0, jerk=10.0, period=1e-3).blocks) == 40
+    with pytest.raises(InputError, match="zero length"):
+        plan(Path((Line(np.zeros(3), np.zeros(3)),)), feed=0.1, accel=1.0, jerk=10.0)
+
+
+def test_trapezoid_ignores_the_jerk():
+    arc = circle([0, 0, 0], 0.04)
+    plain = plan(arc, feed=0.1, accel=2.0, profile="trapezoid")
+    with_jerk = plan(arc, feed=0.1, accel=2.0, jerk=1.0, profile="trapezoid")
+    assert with_jerk.duration == pytest.approx(plain.duration)
 
 
 def test_circle_at_constant_speed_and_sampling():

@@ -1,6 +1,6 @@
 """Algorithms over any machine: kinetostatic indices and workspace analysis."""
 
-from pkmkit.analysis.grids import Grid, make_grid
+from pkmkit.analysis.grids import MAX_GRID_POINTS, Grid, make_grid
 from pkmkit.analysis.indices import (
     SCALAR_INDICES,
     Indices,
@@ -18,13 +18,16 @@ from pkmkit.analysis.workspace import (
     check_region,
     compute_workspace,
     feasible_interval,
+    joint_box_factor_range,
     joint_grid,
     joint_space_map,
     largest_inscribed_box,
+    region_factor_range,
     useful_workspace,
 )
 
 __all__ = [
+    "MAX_GRID_POINTS",
     "SCALAR_INDICES",
     "Criteria",
     "Grid",
@@ -39,10 +42,12 @@ __all__ = [
     "global_conditioning_index",
     "homogenize",
     "indices",
+    "joint_box_factor_range",
     "joint_grid",
     "joint_space_map",
     "largest_inscribed_box",
     "make_grid",
+    "region_factor_range",
     "scalar_index",
     "useful_workspace",
 ]

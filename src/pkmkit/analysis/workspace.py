@@ -19,6 +19,8 @@ step; :func:`check_region` then verifies any square or cube densely and says whe
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,6 +35,10 @@ from pkmkit.status import Status
 MASK_NAMES = ("reachable", "strokes", "bounds", "condition", "mode")
 
 
+#: Relative tolerance of the transmission-factor bounds (rounding at a bound is not a failure).
+FACTOR_RTOL = 1e-9
+
+
 @dataclass(frozen=True)
 class Criteria:
     """What makes a pose (or an actuator vector) usable.
@@ -45,6 +51,7 @@ class Criteria:
         connected: keep only the part connected to the home pose (no parallel singularity
             crossed).
         tol: singularity threshold.
+        rtol: relative tolerance of the bounds (rounding at a bound is not a failure).
     """
 
     bounds: tuple[float, float] | None = None
@@ -53,6 +60,7 @@ class Criteria:
     q_limits: tuple[np.ndarray, np.ndarray] | None = None
     connected: bool = True
     tol: float = SINGULARITY_TOL
+    rtol: float = FACTOR_RTOL
 
     def __post_init__(self) -> None:
         if self.bounds is not None:
@@ -63,6 +71,14 @@ class Criteria:
                 )
         if self.kappa_max is not None and not self.kappa_max >= 1:
             raise InputError(f"kappa_max must be >= 1, got {self.kappa_max}")
+
+    def within_bounds(self, factors: np.ndarray) -> np.ndarray:
+        """Rows of transmission factors ``(M, n)`` (largest first) within the bounds, up to a
+        relative ``rtol`` (a design sized to touch a bound must pass): ``(M,)``."""
+        lo, hi = self.bounds
+        with np.errstate(invalid="ignore"):
+            return ((factors[:, -1] >= lo * (1 - self.rtol))
+                    & (factors[:, 0] <= hi * (1 + self.rtol)))
 
     def limits(self, machine: Machine) -> tuple[np.ndarray, np.ndarray]:
         """Actuator limits in force (±inf when strokes are not enforced)."""
@@ -96,8 +112,38 @@ class PoseEvaluation:
         return np.logical_and.reduce(list(self.masks.values()))
 
 
+#: Poses evaluated at once by :func:`evaluate_poses` / :func:`evaluate_grid` (bounds the
+#: temporaries of the inverse and velocity models to a few tens of MB).
+EVALUATION_CHUNK = 1 << 16
+
+
 def evaluate_poses(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
-    """Evaluate the criteria (without connectivity) at poses ``points (M, dims)``."""
+    """Evaluate the criteria (without connectivity) at poses ``points (M, dims)``, in chunks of
+    :data:`EVALUATION_CHUNK` poses."""
+    points = np.asarray(points, dtype=float)
+    if len(points) <= EVALUATION_CHUNK:
+        return _evaluate_chunk(machine, points, criteria)
+    return _concatenate([_evaluate_chunk(machine, points[k:k + EVALUATION_CHUNK], criteria)
+                         for k in range(0, len(points), EVALUATION_CHUNK)])
+
+
+def evaluate_grid(machine: Machine, grid: Grid, criteria: Criteria) -> PoseEvaluation:
+    """:func:`evaluate_poses` over every point of ``grid`` (flat, C order), generating the
+    points chunk by chunk."""
+    parts = [_evaluate_chunk(machine, grid.points_between(k, k + EVALUATION_CHUNK), criteria)
+             for k in range(0, grid.size, EVALUATION_CHUNK)]
+    return parts[0] if len(parts) == 1 else _concatenate(parts)
+
+
+def _concatenate(parts: list[PoseEvaluation]) -> PoseEvaluation:
+    return PoseEvaluation(
+        q=np.concatenate([p.q for p in parts]),
+        factors=np.concatenate([p.factors for p in parts]),
+        condition=np.concatenate([p.condition for p in parts]),
+        masks={k: np.concatenate([p.masks[k] for p in parts]) for k in parts[0].masks})
+
+
+def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
     inv = machine.ik(points, full_output=True)
     q = inv.q
     reachable = inv.status == Status.OK
@@ -109,8 +155,7 @@ def evaluate_poses(machine: Machine, points: np.ndarray, criteria: Criteria) -> 
         if criteria.bounds is None:
             bounds = reachable.copy()
         else:
-            lo, hi = criteria.bounds
-            bounds = reachable & (sv[:, -1] >= lo) & (sv[:, 0] <= hi)
+            bounds = reachable & criteria.within_bounds(sv)
         condition = reachable.copy() if criteria.kappa_max is None else (
             reachable & (jac.condition <= criteria.kappa_max))
     mode = (reachable & (np.sign(jac.det_A) == machine.working_mode)
@@ -244,8 +289,24 @@ class WorkspaceMap:
 
     @property
     def measure(self) -> float:
-        """Area (2 free axes) or volume (3) of the feasible set, grid-estimated."""
-        return float(self.feasible.sum()) * self.grid.cell_measure
+        """Area (2 free axes) or volume (3) of the feasible set: the sum of the cells of the
+        feasible points (:meth:`Grid.measure`; cells clipped to the box, so a fully feasible
+        box gives exactly its area/volume)."""
+        return self.grid.measure(self.feasible)
+
+    def global_conditioning_index(self, region: np.ndarray | None = None) -> float:
+        """Mean of 1/κ over ``region`` (a mask of grid points; default the feasible set),
+        each point weighted by its cell (:meth:`Grid.weights`): ∫ 1/κ dW / ∫ dW. Points on a
+        parallel singularity count as 1/κ = 0 (the limit); NaN for an empty region."""
+        region = self.feasible if region is None else np.asarray(region, bool)
+        with np.errstate(divide="ignore"):
+            inverse = 1.0 / self.condition  # 0 where κ = inf
+        inverse[self.masks["reachable"] & np.isnan(self.condition)] = 0.0
+        keep = region & ~np.isnan(inverse)
+        if not keep.any():
+            return float("nan")
+        weights = self.grid.weights()[keep]
+        return float(np.sum(inverse[keep] * weights) / np.sum(weights))
 
     @property
     def boundary(self) -> np.ndarray:
@@ -284,7 +345,7 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     bisection with dense checks (:func:`check_region`), which removes most of the grid's
     under-estimate (up to two steps)."""
     criteria = criteria or Criteria()
-    evaluation = evaluate_poses(machine, grid.points, criteria)
+    evaluation = evaluate_grid(machine, grid, criteria)
     shape = grid.shape
     masks = {k: v.reshape(shape) for k, v in evaluation.masks.items()}
     feasible = evaluation.feasible.reshape(shape)
@@ -308,12 +369,17 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
 def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Grid
                ) -> InscribedBox:
     """Grow a feasible square/cube about its centre, by bisection on the side between the grid
-    result and two grid steps more, each candidate checked densely."""
+    result and two grid steps more, each candidate checked densely. The box never leaves the
+    grid's box (``grid.lower_bounds`` … ``grid.upper_bounds``): the region studied bounds the
+    answer."""
     def ok(side: float) -> bool:
         return check_region(machine, box.center, side, criteria, free=grid.free).feasible
 
-    good, bad = box.side, box.side + 2 * grid.step
-    if not ok(good):
+    center = box.center[list(grid.free)]
+    room = 2.0 * float(np.min(np.minimum(center - grid.lower_bounds,
+                                         grid.upper_bounds - center)))
+    good, bad = box.side, min(box.side + 2 * grid.step, room)
+    if not bad > good or not ok(good):
         return box
     if ok(bad):
         good = bad
@@ -397,37 +463,76 @@ def check_region(machine: Machine, center: Any, side: float, criteria: Criteria 
                        worst=worst, factor_range=factor_range, q_range=(lo_q, hi_q))
 
 
+def _bounded_minimum(fun: Callable[[np.ndarray], float], start: np.ndarray,
+                     bounds: list[tuple[float, float]], fallback: float) -> float:
+    """Local minimum of ``fun`` from ``start`` within ``bounds`` (L-BFGS-B).
+
+    ``fun`` returns NaN where it is undefined (unreachable pose, no assembly): such points are
+    given the finite value ``fallback + 1`` (worse than the start, whose value is ``fallback``)
+    so that the finite-difference gradients stay finite. Numerical warnings of the optimiser are
+    kept from the user. Returns the smallest *defined* value found (at least as good as
+    ``fallback``)."""
+    from scipy.optimize import minimize
+
+    best = [fallback]
+
+    def value(y: np.ndarray) -> float:
+        v = float(fun(y))
+        if not np.isfinite(v):
+            return fallback + 1.0 + abs(fallback)
+        best[0] = min(best[0], v)
+        return v
+
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)
+        minimize(value, start, method="L-BFGS-B", bounds=bounds,
+                 options={"maxiter": 100, "ftol": 1e-15, "gtol": 1e-12})
+    return best[0]
+
+
+def _grid_bounds(grid: Grid) -> list[tuple[float, float]]:
+    return [(float(lo), float(max(hi, axis[-1]))) for lo, hi, axis in
+            zip(grid.lower_bounds, grid.upper_bounds, grid.axes, strict=True)]
+
+
+def _full_point(grid: Grid, y: np.ndarray) -> np.ndarray:
+    full = grid.base.copy()
+    full[list(grid.free)] = y
+    return full
+
+
+def _column_extremes(grid: Grid, values: np.ndarray, fun: Callable[[np.ndarray], np.ndarray],
+                     columns: list[tuple[int, float]]) -> list[float]:
+    """Refined extremes of columns of ``values (M, k)`` sampled at ``grid.points``:
+    ``columns`` lists ``(column, sign)``, sign +1 for the minimum, −1 for the maximum; ``fun``
+    maps a full point ``(dims,)`` to a row ``(k,)`` (NaN where undefined)."""
+    points_free = list(grid.free)
+    bounds = _grid_bounds(grid)
+    out = []
+    for column, sign in columns:
+        signed = sign * values[:, column]
+        if not np.isfinite(signed).any():
+            out.append(float("nan"))
+            continue
+        start = int(np.nanargmin(signed))
+        found = _bounded_minimum(
+            lambda y, c=column, s=sign: s * fun(_full_point(grid, y))[c],
+            grid.point(np.unravel_index(start, grid.shape))[points_free], bounds,
+            float(signed[start]))
+        out.append(sign * found)
+    return out
+
+
 def _q_extremes(machine: Machine, grid: Grid, q: np.ndarray, reach: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Smallest and largest value of each actuator coordinate over the region: the sampled
     extremes, refined by bounded local optimisation (they may lie between samples, e.g. inside
     a face)."""
-    from scipy.optimize import minimize
-
-    points = grid.points
-    bounds = [(axis[0], axis[-1]) for axis in grid.axes]
-
-    def pose(y: np.ndarray) -> np.ndarray:
-        full = grid.base.copy()
-        full[list(grid.free)] = y
-        return full
-
-    lo = np.nanmin(np.where(reach[:, None], q, np.nan), axis=0)
-    hi = np.nanmax(np.where(reach[:, None], q, np.nan), axis=0)
-    for k in range(q.shape[1]):
-        for sign, store in ((1.0, lo), (-1.0, hi)):
-            start = int(np.nanargmin(sign * np.where(reach, q[:, k], np.nan)))
-
-            def value(y: np.ndarray, k: int = k, sign: float = sign) -> float:
-                qk = machine.ik(pose(y)[None])[0, k]
-                return sign * qk if np.isfinite(qk) else np.inf
-
-            res = minimize(value, points[start, list(grid.free)], method="L-BFGS-B",
-                           bounds=bounds, options={"maxiter": 100, "ftol": 1e-15, "gtol": 1e-12})
-            found = sign * res.fun  # the actuator coordinate reached
-            if np.isfinite(found) and sign * found < sign * store[k]:
-                store[k] = found
-    return lo, hi
+    values = np.where(reach[:, None], q, np.nan)
+    n = q.shape[1]
+    found = _column_extremes(grid, values, lambda x: machine.ik(x[None])[0],
+                             [(k, s) for k in range(n) for s in (1.0, -1.0)])
+    return np.array(found[0::2]), np.array(found[1::2])
 
 
 def _fmt(p: np.ndarray) -> str:
@@ -483,7 +588,7 @@ def feasible_interval(machine: Machine, point: Any, direction: Any, criteria: Cr
     reach = reach or 2.0 * float(machine.model.leg_length.max())
     loose = Criteria(bounds=criteria.bounds, kappa_max=criteria.kappa_max,
                      strokes=criteria.strokes, q_limits=criteria.q_limits, connected=False,
-                     tol=criteria.tol)
+                     tol=criteria.tol, rtol=0.0)  # the ends are located exactly
 
     def ok(t: np.ndarray) -> np.ndarray:
         return evaluate_poses(machine, point + np.outer(t, direction), loose).feasible
@@ -531,11 +636,11 @@ class JointSpaceMap:
     inscribed: InscribedBox | None
 
 
-def joint_space_map(machine: Machine, grid: Grid, criteria: Criteria | None = None
-                    ) -> JointSpaceMap:
-    """Evaluate the criteria over a grid of actuator vectors (direct model, working mode)."""
-    criteria = criteria or Criteria()
-    q = grid.points
+def _evaluate_joint(machine: Machine, q: np.ndarray, criteria: Criteria
+                    ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """Criteria at actuator vectors ``q (M, n)``: flat masks ``{"assembly", "bounds",
+    "condition", "mode"}``, poses ``(M, dims)`` (direct model, working mode; NaN where there is
+    no assembly) and transmission factors ``(M, n)`` (NaN there)."""
     res = machine.fk(q, full_output=True)
     assembly = res.status == Status.OK
     jac = machine.jacobian(np.where(assembly[:, None], res.pose, machine.home_pose), q=q,
@@ -545,19 +650,27 @@ def joint_space_map(machine: Machine, grid: Grid, criteria: Criteria | None = No
         if criteria.bounds is None:
             bounds = assembly.copy()
         else:
-            bounds = assembly & (sv[:, -1] >= criteria.bounds[0]) & (sv[:, 0] <= criteria.bounds[1])
+            bounds = assembly & criteria.within_bounds(sv)
         condition = assembly.copy() if criteria.kappa_max is None else (
             assembly & (jac.condition <= criteria.kappa_max))
     mode = assembly & (jac.parallel_measure >= criteria.tol)
+    masks = {"assembly": assembly, "bounds": bounds, "condition": condition, "mode": mode}
+    return masks, res.pose, sv
+
+
+def joint_space_map(machine: Machine, grid: Grid, criteria: Criteria | None = None
+                    ) -> JointSpaceMap:
+    """Evaluate the criteria over a grid of actuator vectors (direct model, working mode)."""
+    criteria = criteria or Criteria()
+    flat, poses, sv = _evaluate_joint(machine, grid.points, criteria)
     shape = grid.shape
-    masks = {"assembly": assembly.reshape(shape), "bounds": bounds.reshape(shape),
-             "condition": condition.reshape(shape), "mode": mode.reshape(shape)}
+    masks = {k: v.reshape(shape) for k, v in flat.items()}
     feasible = np.logical_and.reduce(list(masks.values()))
     reference = "all parts"
     if criteria.connected:
         feasible, reference = _connected_part(feasible, grid, machine.home_q)
     return JointSpaceMap(grid=grid, masks=masks, feasible=feasible,
-                         poses=res.pose.reshape((*shape, -1)), factors=sv.reshape((*shape, -1)),
+                         poses=poses.reshape((*shape, -1)), factors=sv.reshape((*shape, -1)),
                          reference=reference, inscribed=largest_inscribed_box(feasible, grid))
 
 
@@ -573,47 +686,133 @@ def joint_grid(machine: Machine, lower: Any = None, upper: Any = None,
                      names=machine.actuator_names, resolution=resolution)
 
 
+def _joint_samples(n: int) -> int:
+    """Samples per edge of the dense checks of a joint square (2 actuators) or cube (3)."""
+    return 61 if n <= 2 else 21
+
+
 def _joint_square_ok(machine: Machine, criteria: Criteria, center: np.ndarray, half: float,
-                     samples: int = 61) -> bool:
+                     samples: int | None = None) -> bool:
+    """Every criterion holds on a dense lattice (edges and corners included) of the joint box
+    ``center ± half``; ``half = 0`` checks ``center`` alone."""
     n = machine.n_actuators
-    grid = make_grid(center - half, center + half, free=tuple(range(n)), base=center,
-                     names=machine.actuator_names, resolution=samples)
     loose = Criteria(bounds=criteria.bounds, kappa_max=criteria.kappa_max, connected=False,
                      tol=criteria.tol)
-    return bool(joint_space_map(machine, grid, loose).feasible.all())
+    if half <= 0:
+        masks, _, _ = _evaluate_joint(machine, center[None], loose)
+        return bool(np.logical_and.reduce(list(masks.values()))[0])
+    grid = make_grid(center - half, center + half, free=tuple(range(n)), base=center,
+                     names=machine.actuator_names, resolution=samples or _joint_samples(n))
+    masks, _, _ = _evaluate_joint(machine, grid.points, loose)
+    return bool(np.logical_and.reduce(list(masks.values())).all())
 
 
-def _refine_centred_square(machine: Machine, criteria: Criteria, square: InscribedBox,
-                           step: float) -> InscribedBox:
-    """Bisection on the half-side between the grid result (feasible) and one step more."""
-    center = square.center
-    good, bad = 0.5 * square.side, 0.5 * square.side + step
-    if _joint_square_ok(machine, criteria, center, bad):
-        return square  # the grid edge, not the criteria, limited the square
-    for _ in range(30):
+def _centred_joint_square(machine: Machine, criteria: Criteria, grid: Grid,
+                          square: InscribedBox | None) -> InscribedBox:
+    """Largest joint square/cube centred at home, to within 1e-6 of a grid step.
+
+    The grid square (``square``, possibly of side 0 or None on a coarse grid) gives a bracket:
+    its half-side is feasible on the grid and one more step is not (or leaves the grid). Both
+    ends are checked densely (the upper one moved out step by step while it passes) and the
+    half-side is bisected between a densely feasible value and an infeasible one, so a coarse
+    grid does not decide the answer. The edge of the joint grid caps the square.
+
+    Raises:
+        InputError: the criteria fail at the home configuration itself.
+    """
+    center = machine.home_q
+    if not _joint_square_ok(machine, criteria, center, 0.0):
+        masks, _, sv = _evaluate_joint(machine, center[None], criteria)
+        failing = ", ".join(k for k, v in masks.items() if not v[0])
+        raise InputError(
+            f"the criteria fail at the home configuration q = {_fmt(center)} ({failing}; "
+            f"transmission factors {_fmt(sv[0])}): no useful zone can be centred there")
+    radius = 0 if square is None else (square.points_per_side - 1) // 2
+    room = float(np.min(np.minimum(center - grid.lower_bounds, grid.upper_bounds - center)))
+    good, bad = 0.0, min((radius + 1) * grid.step, room)
+    grid_half = radius * grid.step
+    if grid_half > 0:
+        if _joint_square_ok(machine, criteria, center, grid_half):
+            good = grid_half
+        else:
+            bad = grid_half
+    # grow by whole steps while the dense check passes (the grid may have missed room between
+    # its points), up to the edge of the joint grid, which then limits the square
+    while bad > good and _joint_square_ok(machine, criteria, center, bad):
+        good, bad = bad, min(bad + grid.step, room)
+    for _ in range(60):  # bisection between densely feasible and infeasible half-sides
+        if not bad - good > 1e-6 * grid.step:
+            break
         mid = 0.5 * (good + bad)
         if _joint_square_ok(machine, criteria, center, mid):
             good = mid
         else:
             bad = mid
-        if bad - good < 1e-6 * step:
-            break
-    return InscribedBox(side=2 * good, center=center, lower=center - good,
-                        points_per_side=square.points_per_side)
+    if good <= 0:
+        raise InputError(f"no usable actuator square around the home configuration "
+                         f"q = {_fmt(center)}: the criteria fail arbitrarily close to it")
+    n = machine.n_actuators
+    return InscribedBox(side=2 * good, center=center.copy(), lower=center - good,
+                        points_per_side=max(2 * radius + 1, _joint_samples(n)))
+
+
+def joint_box_factor_range(machine: Machine, lower: Any, upper: Any, *,
+                           samples: int | None = None) -> tuple[float, float]:
+    """(smallest λ_min, largest λ_max) over the image of the actuator box ``[lower, upper]``
+    (direct model, working mode), m/m.
+
+    The factors are sampled on a lattice of the box that contains its edges and corners
+    (``samples`` per edge; default 201 for 2 actuators, 41 for 3), and the best sample of each
+    extreme is refined by bounded optimisation (L-BFGS-B) over the box, so an extreme between
+    samples or on an edge is found to optimiser precision. This is the exact range over a useful
+    workspace, the image of its joint square — a grid in the *workspace* only approaches it
+    from inside, one step short of the boundary.
+    """
+    lower = np.asarray(lower, dtype=float)
+    upper = np.asarray(upper, dtype=float)
+    n = machine.n_actuators
+    grid = make_grid(lower, upper, free=tuple(range(n)), base=lower,
+                     names=machine.actuator_names,
+                     resolution=samples or (201 if n <= 2 else 41))
+    loose = Criteria(connected=False)
+
+    def factors(q: np.ndarray) -> np.ndarray:
+        return _evaluate_joint(machine, np.atleast_2d(q), loose)[2]
+
+    values = factors(grid.points)
+    lo, hi = _column_extremes(grid, values, lambda q: factors(q)[0],
+                              [(n - 1, 1.0), (0, -1.0)])
+    return float(lo), float(hi)
+
+
+def region_factor_range(machine: Machine, center: Any, side: float, *,
+                        free: tuple[int, ...] | None = None, samples: int | None = None
+                        ) -> tuple[float, float]:
+    """(smallest λ_min, largest λ_max) over the reachable poses of the square/cube of ``side``
+    centred at ``center``: sampled (faces included) then refined by bounded optimisation."""
+    grid = region_grid(machine, center, side, free, samples)
+    values = machine.jacobian(grid.points).singular_values
+    lo, hi = _column_extremes(grid, values,
+                              lambda x: machine.jacobian(x[None]).singular_values[0],
+                              [(machine.n_actuators - 1, 1.0), (0, -1.0)])
+    return float(lo), float(hi)
 
 
 @dataclass(frozen=True)
 class UsefulWorkspace:
     """Seed 004's procedure: a square of actuator values where the criteria hold (the *useful
     zone*), its image in the workspace (the *useful workspace*), and the square inscribed in it.
+    With 3 actuators the same with cubes.
 
     Attributes:
         joint: the joint-space map the square was taken from.
         joint_square: the useful zone (an :class:`InscribedBox` in actuator coordinates).
         workspace: workspace map of the image (actuator limits = the joint square).
         inscribed: largest square inscribed in the useful workspace.
-        factor_range: (min, max) transmission factor over the useful workspace.
-        inscribed_factor_range: (min, max) transmission factor over the inscribed square.
+        factor_range: (min λ_min, max λ_max) over the useful workspace, exact
+            (:func:`joint_box_factor_range`).
+        inscribed_factor_range: the same over the inscribed square (sampled and refined,
+            :func:`region_factor_range`), or the grid range when there is no inscribed square.
     """
 
     joint: JointSpaceMap
@@ -629,33 +828,40 @@ def useful_workspace(machine: Machine, criteria: Criteria, *, joint_lower: Any =
                      ) -> UsefulWorkspace:
     """Useful zone in joint space, its image and the square/cube inscribed in the image.
 
+    Works for 2 actuators (squares, seed 004) and 3 (cubes; keep ``resolution`` near 41–61:
+    both grids have ``resolution`` points per side).
+
     Args:
         machine: any machine.
         criteria: criteria on the transmission factors / conditioning (strokes are replaced by
             the joint square).
         joint_lower, joint_upper: actuator box searched (default: home ± 2 × the longest leg).
         centred: the joint square is centred at the home configuration (seed 004: joint stops
-            placed symmetrically about the isotropic configuration); otherwise the largest
-            square anywhere.
+            placed symmetrically about the isotropic configuration) and sized by bisection with
+            dense checks, whatever the grid (a coarse grid only slows the bisection); otherwise
+            the largest square of grid points anywhere.
         resolution: grid points along the longest side, in joint space and in the workspace.
 
     Raises:
-        InputError: no feasible actuator vector around home.
+        InputError: the criteria fail at home (centred), or no joint square of at least two grid
+            points per side is feasible (not centred).
     """
     reach = 2.0 * float(machine.model.leg_length.max())
     lo = machine.home_q - reach if joint_lower is None else np.asarray(joint_lower, float)
     hi = machine.home_q + reach if joint_upper is None else np.asarray(joint_upper, float)
     joint = joint_space_map(machine, joint_grid(machine, lo, hi, resolution), criteria)
-    square = largest_inscribed_box(joint.feasible, joint.grid,
-                                   center=machine.home_q if centred else None)
-    if square is None or square.side == 0:
-        raise InputError("no usable actuator square around the home configuration: the "
-                         "criteria fail there")
     if centred:
-        square = _refine_centred_square(machine, criteria, square, joint.grid.step)
+        square = largest_inscribed_box(joint.feasible, joint.grid, center=machine.home_q)
+        square = _centred_joint_square(machine, criteria, joint.grid, square)
+    else:
+        square = largest_inscribed_box(joint.feasible, joint.grid)
+        if square is None or square.side == 0:
+            raise InputError("no square of actuator values with two grid points per side "
+                             "satisfies the criteria; raise the resolution or relax them")
     q_lo, q_hi = square.lower, square.lower + square.side
     samples = make_grid(q_lo, q_hi, free=tuple(range(machine.n_actuators)), base=q_lo,
-                        names=machine.actuator_names, resolution=101)
+                        names=machine.actuator_names,
+                        resolution=101 if machine.n_actuators <= 2 else 31)
     image = machine.fk(samples.points)
     p_lo, p_hi = np.nanmin(image, axis=0), np.nanmax(image, axis=0)
     margin = 0.02 * float((p_hi - p_lo).max())
@@ -664,6 +870,9 @@ def useful_workspace(machine: Machine, criteria: Criteria, *, joint_lower: Any =
     limited = Criteria(bounds=criteria.bounds, kappa_max=criteria.kappa_max,
                        q_limits=(q_lo, q_hi), connected=criteria.connected, tol=criteria.tol)
     ws = compute_workspace(machine, grid, limited)
-    return UsefulWorkspace(joint=joint, joint_square=square, workspace=ws, inscribed=ws.inscribed,
-                           factor_range=ws.factor_range(ws.feasible),
-                           inscribed_factor_range=ws.factor_range())
+    box = ws.inscribed
+    inscribed_range = (region_factor_range(machine, box.center, box.side, free=grid.free)
+                       if box is not None and box.side > 0 else ws.factor_range())
+    return UsefulWorkspace(joint=joint, joint_square=square, workspace=ws, inscribed=box,
+                           factor_range=joint_box_factor_range(machine, q_lo, q_hi),
+                           inscribed_factor_range=inscribed_range)

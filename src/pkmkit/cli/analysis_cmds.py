@@ -15,9 +15,10 @@ from pkmkit.analysis.workspace import (
     useful_workspace,
 )
 from pkmkit.errors import InputError
-from pkmkit.machines.machine import Machine
+from pkmkit.machines.machine import MAX_COORDINATE, Machine
 from pkmkit.model.parameters import length_scale
 from pkmkit.plot.maps import (
+    check_figure_path,
     plot_actuator_maps,
     plot_scalar_map,
     plot_useful_workspace,
@@ -44,10 +45,23 @@ RESOLUTION_OPTION = click.option(
 
 
 def _numbers(text: str, what: str) -> list[float]:
+    """Comma-separated finite numbers (no magnitude check)."""
     try:
-        return [float(v) for v in text.split(",")]
+        values = [float(v) for v in text.split(",")]
     except ValueError:
         raise InputError(f"{what}: cannot read {text!r} as comma-separated numbers") from None
+    if not np.isfinite(values).all():
+        raise InputError(f"{what}: every value must be finite, got {text!r}")
+    return values
+
+
+def _coordinates(text: str, what: str, scale: float) -> np.ndarray:
+    """Comma-separated lengths in CLI units → m, each within ±MAX_COORDINATE."""
+    values = np.asarray(_numbers(text, what)) * scale
+    if (np.abs(values) > MAX_COORDINATE).any():
+        raise InputError(f"{what}: coordinates beyond {MAX_COORDINATE:g} m are not supported, "
+                         f"got {text!r}")
+    return values
 
 
 def parse_bounds(text: str | None) -> tuple[float, float] | None:
@@ -73,7 +87,10 @@ def parse_slice(machine: Machine, text: str | None, scale: float) -> tuple[int, 
     if not sep or name not in machine.pose_names:
         raise InputError(f"--slice expects NAME=VALUE with NAME in "
                          f"{', '.join(machine.pose_names)}, got {text!r}")
-    return machine.pose_names.index(name), _numbers(value, "--slice")[0] * scale
+    values = _coordinates(value, "--slice", scale)
+    if values.size != 1:
+        raise InputError(f"--slice expects one value after {name}=, got {value!r}")
+    return machine.pose_names.index(name), float(values[0])
 
 
 def build_grid(machine: Machine, box_text: str | None, slice_: tuple[int, float] | None,
@@ -87,8 +104,15 @@ def build_grid(machine: Machine, box_text: str | None, slice_: tuple[int, float]
         free.remove(axis)
         base[axis] = value
     if box_text is not None:
-        values = np.asarray(_numbers(box_text, "--box/--range")) * scale
+        values = _coordinates(box_text, "--box/--range", scale)
         if values.size == 2 * machine.dims and slice_ is not None:
+            # a full box with a slice: the plane must cut the box
+            axis, value = slice_
+            a_lo, a_hi = values.reshape(-1, 2)[axis]
+            name = machine.pose_names[axis]
+            if not a_lo <= value <= a_hi:
+                raise InputError(f"--slice {name} = {value / scale:g} lies outside the box's "
+                                 f"{name} range [{a_lo / scale:g}, {a_hi / scale:g}]")
             values = values.reshape(-1, 2)[free].ravel()
         if values.size != 2 * len(free):
             names = ",".join(f"{machine.pose_names[k].upper()}MIN,{machine.pose_names[k].upper()}"
@@ -118,21 +142,25 @@ def register(cli: click.Group) -> None:
 @click.argument("machine_name", metavar="MACHINE")
 @SET_OPTION
 @click.option("--pose", required=True, help="Platform position X,Y[,Z].")
+@click.option("--isotropy-tol", type=float, default=1e-9, show_default=True,
+              help="The pose counts as isotropic when κ ≤ 1 + this tolerance.")
 @UNITS_OPTION
 @JSON_OPTION
-def analyze(machine_name, assignments, pose, units, as_json):
+def analyze(machine_name, assignments, pose, isotropy_tol, units, as_json):
     """All kinetostatic indices at a pose: transmission factors, conditioning, ellipsoid,
     distances to singularities."""
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
+    if not (np.isfinite(isotropy_tol) and isotropy_tol >= 0):
+        raise InputError(f"--isotropy-tol must be a finite number >= 0, got {isotropy_tol}")
     x = parse_vector(pose, m.dims, "--pose", units)
-    ind = indices(m, x, ellipsoids=True)
+    ind = indices(m, x, ellipsoids=True, isotropy_tol=isotropy_tol)
     jac = m.jacobian(x)
     payload = {
         "machine": m.id, "units": units, "pose": x / scale, "q": jac.q / scale,
         "velocity_factors": ind.velocity_factors, "force_factors": ind.force_factors,
         "condition": ind.condition, "inverse_condition": ind.inverse_condition,
-        "isotropic": bool(ind.isotropic),
+        "isotropic": bool(ind.isotropic), "isotropy_tol": isotropy_tol,
         "ellipsoid": {"axes": ind.ellipsoid_axes, "directions": ind.ellipsoid_directions},
         "parallel_distance": ind.parallel_distance, "serial_distance": ind.serial_distance,
         "manipulability": float(np.prod(ind.velocity_factors)),
@@ -145,13 +173,22 @@ def analyze(machine_name, assignments, pose, units, as_json):
     click.echo(f"{m.name}: pose {fmt(x / scale)} {units}, q {fmt(jac.q / scale)} {units}")
     click.echo(f"  velocity transmission factors: {fmt(ind.velocity_factors)}")
     click.echo(f"  force transmission factors:    {fmt(ind.force_factors)}")
-    click.echo(f"  condition number {fmt(ind.condition)} (inverse {fmt(ind.inverse_condition)}),"
-               f" isotropic: {bool(ind.isotropic)}")
+    click.echo(f"  condition number {_condition_text(float(ind.condition))} (inverse "
+               f"{fmt(ind.inverse_condition)}), isotropic: {bool(ind.isotropic)} (κ ≤ 1 + "
+               f"{isotropy_tol:g})")
     click.echo(f"  distance to parallel singularity {fmt(ind.parallel_distance)}, to serial "
                f"singularity {fmt(ind.serial_distance)}; status {jac.status}")
     for k in range(m.dims):
         click.echo(f"  ellipsoid axis {k + 1}: {ind.ellipsoid_axes[k]:.6g} along "
                    f"{fmt(ind.ellipsoid_directions[:, k])}")
+
+
+def _condition_text(kappa: float) -> str:
+    """κ with the digits that matter: ``1 + 3.4e-09`` when it differs from 1 below the
+    display precision, so that the isotropy verdict and the number agree."""
+    if np.isfinite(kappa) and 0 < kappa - 1 < 1e-4:
+        return f"1 + {kappa - 1:.2g}"
+    return fmt(kappa)
 
 
 @click.command("map")
@@ -164,13 +201,18 @@ def analyze(machine_name, assignments, pose, units, as_json):
 @click.option("--range", "range_text", metavar="AMIN,AMAX,BMIN,BMAX",
               help="Extent of the two free coordinates (default: the machine's box).")
 @RESOLUTION_OPTION
+@click.option("--scale", "color_scale", type=click.Choice(["auto", "linear", "log"]),
+              default="auto", show_default=True,
+              help="Colour levels: log when the values span more than a decade (auto); "
+              "values far above the 95th percentile (near a singularity) take the top colour.")
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="Figure file (.png, .svg, .pdf).")
 @UNITS_OPTION
 @JSON_OPTION
-def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resolution, out,
-            units, as_json):
+def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resolution,
+            color_scale, out, units, as_json):
     """Iso-contours of an index (or actuator coordinates) over a plane."""
+    check_figure_path(out)
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     if m.dims == 3 and slice_text is None:
@@ -194,7 +236,8 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resol
         if not finite.any():
             raise InputError(f"{index_name} is undefined on every reachable point of the plane")
         plot_scalar_map(grid, values.reshape(grid.shape), title=f"{m.name}: "
-                        f"{SCALAR_INDICES[index_name]}", label=index_name, path=out)
+                        f"{SCALAR_INDICES[index_name]}", label=index_name, scale=color_scale,
+                        path=out)
         k_min, k_max = np.nanargmin(values), np.nanargmax(values)
         summary.update({"min": float(values[k_min]), "at_min": points[k_min] / scale,
                         "max": float(values[k_max]), "at_max": points[k_max] / scale})
@@ -231,6 +274,7 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
             "side": box.side / scale, "center": box.center / scale, "lower": box.lower / scale},
         "index_range": list(factor_box),
         "workspace_index_range": list(wmap.factor_range(wmap.feasible)),
+        "global_conditioning_index": wmap.global_conditioning_index(),
     }
     if wmap.inscribed_check is not None:
         q_lo, q_hi = wmap.inscribed_check.q_range
@@ -259,11 +303,22 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
 def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text, no_strokes,
               cube, center_text, resolution, out, units, as_json):
     """Workspace over a box or a plane: area/volume, largest inscribed square/cube, transmission
-    factors inside it, and (with --cube/--center) whether a prescribed one is feasible."""
+    factors inside it, global conditioning index, and (with --cube/--center) whether a
+    prescribed one is feasible (in the --slice plane when one is given)."""
+    if out is not None:
+        check_figure_path(out)
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     criteria = _criteria(bounds, kappa_max, no_strokes)
-    grid = build_grid(m, box_text, parse_slice(m, slice_text, scale), scale, resolution)
+    slice_ = parse_slice(m, slice_text, scale)
+    grid = build_grid(m, box_text, slice_, scale, resolution)
+    center = None
+    if cube is not None or center_text is not None:
+        if cube is None or center_text is None:
+            raise InputError("--cube and --center go together")
+        if not (np.isfinite(cube) and cube > 0):
+            raise InputError(f"--cube must be a side > 0, got {cube:g}")
+        center = _region_center(m, center_text, slice_, scale)
     wmap = compute_workspace(m, grid, criteria, refine=True)
     if not wmap.masks["reachable"].any():
         raise InputError("no pose of the box is reachable; choose another --box or --slice")
@@ -272,10 +327,7 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
         raise InputError(f"no pose of the box satisfies every criterion (points passing each: "
                          f"{counts} of {grid.size})")
     summary = workspace_summary(m, wmap, scale, units)
-    if cube is not None or center_text is not None:
-        if cube is None or center_text is None:
-            raise InputError("--cube and --center go together")
-        center = parse_vector(center_text, m.dims, "--center", units)
+    if center is not None:
         check = check_region(m, center, cube * scale, criteria, free=grid.free)
         summary["check"] = {"side": cube, "center": center / scale, "feasible": check.feasible,
                             "samples": check.samples, "failures": check.failures,
@@ -288,6 +340,36 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
         emit_json(summary)
         return
     _print_workspace(m, summary, units)
+
+
+def _region_center(m: Machine, text: str, slice_: tuple[int, float] | None,
+                   scale: float) -> np.ndarray:
+    """``--center``: every pose coordinate, or with ``--slice`` the free ones only; a full
+    centre must lie in the slice plane (the square is checked in that plane)."""
+    values = _coordinates(text, "--center", scale)
+    if slice_ is None:
+        if values.size != m.dims:
+            raise InputError(f"--center needs {m.dims} comma-separated values, got {values.size}")
+        return values
+    axis, value = slice_
+    free = [k for k in range(m.dims) if k != axis]
+    name = m.pose_names[axis]
+    if values.size == m.dims:
+        if not np.isclose(values[axis], value, rtol=1e-12, atol=1e-12):
+            raise InputError(f"--center {name} = {values[axis] / scale:g} is not in the --slice "
+                             f"plane {name} = {value / scale:g}; give the plane's value or only "
+                             f"the {len(free)} in-plane coordinates")
+        values = values.copy()
+        values[axis] = value
+        return values
+    if values.size != len(free):
+        raise InputError(f"--center with --slice needs the {len(free)} in-plane coordinates "
+                         f"({', '.join(m.pose_names[k] for k in free)}) or all {m.dims}, got "
+                         f"{values.size}")
+    center = np.empty(m.dims)
+    center[free] = values
+    center[axis] = value
+    return center
 
 
 def _print_workspace(m: Machine, s: dict, units: str) -> None:
@@ -305,6 +387,8 @@ def _print_workspace(m: Machine, s: dict, units: str) -> None:
                    f"{box['side']:.6g} {units}, centre {fmt(box['center'])} {units}")
         click.echo(f"  transmission factors inside it: {fmt(s['index_range'])}")
     click.echo(f"  transmission factors over the workspace: {fmt(s['workspace_index_range'])}")
+    click.echo(f"  global conditioning index (mean 1/κ over the workspace): "
+               f"{fmt(s['global_conditioning_index'], 4)}")
     if "check" in s:
         c = s["check"]
         verdict = "feasible" if c["feasible"] else "NOT feasible"
@@ -323,32 +407,46 @@ def _print_workspace(m: Machine, s: dict, units: str) -> None:
 @KAPPA_OPTION
 @click.option("--anywhere", is_flag=True,
               help="Largest joint square anywhere instead of centred at the home configuration.")
-@RESOLUTION_OPTION
-@click.option("--out", "out", type=click.Path(dir_okay=False), help="Figure file.")
+@click.option("--resolution", type=click.IntRange(5, 2001), default=None,
+              help="Grid points along the longest side, in joint space and in the workspace "
+              "(default 301 with 2 actuators, 41 with 3).")
+@click.option("--out", "out", type=click.Path(dir_okay=False),
+              help="Figure file (2 actuators).")
 @UNITS_OPTION
 @JSON_OPTION
 def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere, resolution,
                          out, units, as_json):
     """Seed 004's procedure: a square of actuator values satisfying the criteria (the useful
-    zone), its image (the useful workspace) and the square inscribed in it."""
+    zone), its image (the useful workspace) and the square inscribed in it; with 3 actuators,
+    cubes. The transmission-factor range over the useful workspace is exact (extremes over the
+    joint square refined by optimisation)."""
+    if out is not None:
+        check_figure_path(out)
     m = resolve_machine(machine_name, assignments, units)
-    if m.n_actuators != 2:
-        raise InputError("useful-workspace draws joint-space squares: it needs 2 actuators "
-                         "(planar machines)")
+    n = m.n_actuators
+    if n not in (2, 3):
+        raise InputError(f"useful-workspace needs 2 or 3 actuators, {m.id} has {n}")
+    if out is not None and n != 2:
+        raise InputError("--out draws joint-space squares: it needs 2 actuators (planar "
+                         "machines); drop --out for a 3-actuator machine")
     scale = length_scale(units)
     criteria = Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max)
-    useful = useful_workspace(m, criteria, centred=not anywhere, resolution=resolution or 301)
+    useful = useful_workspace(m, criteria, centred=not anywhere,
+                              resolution=resolution or (301 if n == 2 else 41))
     sq, box = useful.joint_square, useful.inscribed
+    shape = "square" if n == 2 else "cube"
+    measure_key = "useful_area" if m.dims == 2 else "useful_volume"
     summary = {
         "machine": m.id, "units": units, "criteria": {"bounds": criteria.bounds,
                                                       "kappa_max": kappa_max},
         "joint_square": {"side": sq.side / scale, "q_min": sq.lower / scale,
                          "q_max": (sq.lower + sq.side) / scale, "centred": not anywhere},
-        "useful_area": useful.workspace.measure / scale**2,
+        measure_key: useful.workspace.measure / scale**m.dims,
         "inscribed": None if box is None else {"side": box.side / scale,
                                                "center": box.center / scale},
         "index_range": list(useful.factor_range),
         "inscribed_index_range": list(useful.inscribed_factor_range),
+        "global_conditioning_index": useful.workspace.global_conditioning_index(),
     }
     if out is not None:
         plot_useful_workspace(useful, m, path=out)
@@ -356,13 +454,16 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
     if as_json:
         emit_json(summary)
         return
-    click.echo(f"{m.name}: useful zone = actuator square of side {sq.side / scale:.6g} {units} "
+    what = "area" if m.dims == 2 else "volume"
+    click.echo(f"{m.name}: useful zone = actuator {shape} of side {sq.side / scale:.6g} {units} "
                f"from {fmt(sq.lower / scale)}")
-    click.echo(f"  useful workspace: area {summary['useful_area']:.6g} {units}^2, transmission "
-               f"factors {fmt(useful.factor_range)}")
+    click.echo(f"  useful workspace: {what} {summary[measure_key]:.6g} {units}^{m.dims}, "
+               f"transmission factors {fmt(useful.factor_range)}, GCI "
+               f"{fmt(summary['global_conditioning_index'], 4)}")
     if box is not None:
-        click.echo(f"  inscribed square: side {box.side / scale:.6g} {units}, centre "
+        click.echo(f"  inscribed {shape}: side {box.side / scale:.6g} {units}, centre "
                    f"{fmt(box.center / scale)}, factors {fmt(useful.inscribed_factor_range)}")
+    else:
+        click.echo(f"  no inscribed {shape} on this grid; raise --resolution")
     if out is not None:
         click.echo(f"  figure {out}")
-

@@ -1,5 +1,6 @@
-"""Design part of ``pkmkit demo``: the Orthoglide sizing rule, the isotropic five-bar design and
-a linear-Delta Pareto front (figures in ``OUT/design/``)."""
+"""Design part of ``pkmkit demo``: the Orthoglide sizing rule, the isotropic five-bar design, the
+linear-Delta sizing for the seed 000 cube and a linear-Delta Pareto front (figures in
+``OUT/design/``)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import click
 
 from pkmkit.analysis.workspace import Criteria
 from pkmkit.design.five_bar import isotropic_orientations, size_five_bar
+from pkmkit.design.linear_delta import size_linear_delta
 from pkmkit.design.metrics import Region, evaluate_metrics
 from pkmkit.design.optimize import DesignProblem, Objective, Variable, optimize
 from pkmkit.design.orthoglide import size_orthoglide
@@ -51,8 +53,24 @@ def five_bar_design() -> dict[str, Any]:
     return out
 
 
-def delta_pareto(out: Path, generations: int = 25) -> dict[str, Any]:
-    """Compactness vs GCI over the Table III.2 cube, with the seed's two dimension sets."""
+def delta_sizing() -> dict[str, Any]:
+    """The shortest-arm linear Delta for the Table III.2 cube and λ in [0.4, 2.5]."""
+    res = size_linear_delta(DELTA_REGION.side, DELTA_CRITERIA.bounds,
+                            center=DELTA_REGION.center)
+    return {"R": res.R, "r": res.r, "L": res.L, "stroke": res.stroke, "q_min": res.q_min,
+            "q_max": res.q_max, "compactness": res.compactness, "gci": res.gci,
+            "index_range": res.index_range, "verified": res.check.feasible}
+
+
+def delta_pareto(out: Path, generations: int = 25,
+                 sized: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Compactness vs GCI over the Table III.2 cube, with the seed's two dimension sets and the
+    sized design (:func:`delta_sizing`, computed unless given).
+
+    Only d = R − r and L enter the kinematics, so the metrics of the front (compactness, GCI)
+    depend on (R − r, L): varying r as well would only add a line of identical designs per
+    point. r is therefore fixed at the seed's 0.15 m (the nacelle that carries the spindle) and
+    R is varied."""
     base = machine("linear-delta")
     problem = DesignProblem(
         base=base, variables=[Variable("R", 0.45, 1.0), Variable("L", 0.9, 1.6)],
@@ -65,7 +83,12 @@ def delta_pareto(out: Path, generations: int = 25) -> dict[str, Any]:
                          ("linear-delta-table-iv1", "seed set B (L = 1.04 m)")):
         metrics = evaluate_metrics(machine(ident), DELTA_REGION, DELTA_CRITERIA, names, 9)
         references.append((label, metrics))
-    plot_pareto(result, references=references,
+    sized = delta_sizing() if sized is None else sized
+    shown = [*references,
+             (f"sized, shortest arms (L = {sized['L']:.2f} m)",
+              evaluate_metrics(base.with_params(R=sized["R"], r=sized["r"], L=sized["L"]),
+                               DELTA_REGION, DELTA_CRITERIA, names, 9))]
+    plot_pareto(result, references=shown,
                 title="Linear Delta, 0.5 m cube, λ in [0.4, 2.5]: compactness vs GCI",
                 path=out / "linear-delta-pareto.png")
     return {"evaluations": len(result.records), "pareto_size": len(result.pareto),
@@ -90,7 +113,13 @@ def run_design_demo(out_dir: Path) -> dict[str, Any]:
                f"square, isotropic L = {five['isotropic']['L']:.3f} m, stroke "
                f"{five['isotropic']['stroke']:.3f} m; biglide L = {five['biglide']['L']:.3f} m, "
                f"stroke {five['biglide']['stroke']:.3f} m")
-    delta = delta_pareto(out)
+    sized = delta_sizing()
+    click.echo(f"   linear Delta for the 0.5 m cube, λ in [0.4, 2.5], shortest arms: "
+               f"R = {sized['R']:.3f} m, r = {sized['r']:.3f} m, L = {sized['L']:.3f} m, stroke "
+               f"{sized['stroke']:.3f} m, compactness {sized['compactness']:.3f}, verified: "
+               f"{sized['verified']}")
+    delta = delta_pareto(out, sized=sized)
+    delta["sizing"] = sized
     seeds = "; ".join(f"{k}: compactness {v['compactness']:.3f}, GCI {v['gci']:.3f}"
                       for k, v in delta["seed_sets"].items())
     best = max(delta["pareto"], key=lambda r: r["compactness"])

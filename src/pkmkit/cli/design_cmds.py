@@ -1,4 +1,8 @@
-"""``pkmkit design orthoglide|five-bar`` and ``pkmkit optimize``."""
+"""``pkmkit design orthoglide|five-bar|linear-delta`` and ``pkmkit optimize``.
+
+Values on the command line and in every output are in command-line units: lengths in ``--units``
+(m or mm), areas in its square, angles in degrees; outputs name their units.
+"""
 
 from __future__ import annotations
 
@@ -9,8 +13,11 @@ import click
 import numpy as np
 
 from pkmkit.analysis.workspace import Criteria
+from pkmkit.design.design_space import boundary_factor, scalar_parameters
 from pkmkit.design.five_bar import isotropic_orientations, size_five_bar
-from pkmkit.design.metrics import METRICS, Region
+from pkmkit.design.linear_delta import OBJECTIVES as DELTA_OBJECTIVES
+from pkmkit.design.linear_delta import size_linear_delta
+from pkmkit.design.metrics import METRIC_QUANTITIES, METRICS, Region
 from pkmkit.design.optimize import (
     Constraint,
     DesignProblem,
@@ -19,13 +26,21 @@ from pkmkit.design.optimize import (
     optimize,
 )
 from pkmkit.design.orthoglide import size_orthoglide
-from pkmkit.errors import InputError
+from pkmkit.errors import InputError, PkmError
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.model.parameters import length_scale
 from pkmkit.plot.design_figures import plot_pareto
 
 from .analysis_cmds import BOUNDS_OPTION, KAPPA_OPTION, parse_bounds
-from .options import JSON_OPTION, SET_OPTION, UNITS_OPTION, emit_json, fmt, resolve_machine
+from .options import (
+    JSON_OPTION,
+    SET_OPTION,
+    UNITS_OPTION,
+    emit_json,
+    fmt,
+    parse_vector,
+    resolve_machine,
+)
 
 
 def register(cli: click.Group) -> None:
@@ -41,9 +56,24 @@ def _required_bounds(text: str | None) -> tuple[float, float]:
     return bounds
 
 
+def _max_leg(value: float | None, scale: float) -> float | None:
+    """``--max-leg`` in m (None when not given); must be a positive finite number."""
+    if value is None:
+        return None
+    if not (np.isfinite(value) and value > 0):
+        raise InputError(f"--max-leg must be a positive length, got {value:g}")
+    return value * scale
+
+
+def _echo_notes(notes) -> None:
+    for note in notes:
+        click.echo(f"  note: {note}")
+
+
 @click.group()
 def design() -> None:
-    """Sizing rules: the Orthoglide for a cube, the isotropic five-bar for a square."""
+    """Sizing rules: the Orthoglide for a cube, the isotropic five-bar for a square, the linear
+    Delta for a cube."""
 
 
 @design.command("orthoglide")
@@ -57,8 +87,7 @@ def design_orthoglide(cube, bounds, max_leg, units, as_json):
     compactness — verified over the whole cube."""
     scale = length_scale(units)
     lo, hi = _required_bounds(bounds)
-    res = size_orthoglide(cube * scale, (lo, hi),
-                          max_leg=None if max_leg is None else max_leg * scale)
+    res = size_orthoglide(cube * scale, (lo, hi), max_leg=_max_leg(max_leg, scale))
     payload = {
         "cube": cube, "bounds": [lo, hi], "units": units,
         "L": res.L / scale, "stroke": res.stroke / scale, "compactness": res.compactness,
@@ -66,6 +95,7 @@ def design_orthoglide(cube, bounds, max_leg, units, as_json):
         "q_min": res.q_min / scale, "q_max": res.q_max / scale,
         "verified": {"feasible": res.check.feasible, "samples": res.check.samples,
                      "index_range": list(res.check.factor_range)},
+        "notes": list(res.notes),
     }
     if as_json:
         emit_json(payload)
@@ -79,6 +109,7 @@ def design_orthoglide(cube, bounds, max_leg, units, as_json):
     click.echo(f"  compactness Lw/stroke = {res.compactness:.4f}, Lw/L = {res.side_over_L:.4f}")
     click.echo(f"  verified on {res.check.samples} poses of the cube: factors in "
                f"{fmt(res.check.factor_range)}")
+    _echo_notes(res.notes)
 
 
 @design.command("five-bar")
@@ -94,19 +125,30 @@ def design_five_bar(square, bounds, design_name, units, as_json):
     scale = length_scale(units)
     lo, hi = _required_bounds(bounds)
     names = ["isotropic", "biglide"] if design_name == "both" else [design_name]
-    results = {}
+    results, failed = {}, {}
     for name in names:
-        res = size_five_bar(square * scale, (lo, hi), design=name)
+        try:
+            res = size_five_bar(square * scale, (lo, hi), design=name)
+        except PkmError as exc:
+            if design_name != "both":
+                raise
+            failed[name] = str(exc)
+            continue
         results[name] = {
+            "feasible": True,
             "L": res.L / scale, "A": res.A / scale, "B": res.B / scale,
             "alpha": np.degrees([res.machine.params["alpha1"], res.machine.params["alpha2"]]),
             "q_min": res.q_min / scale, "q_max": res.q_max / scale,
             "stroke": res.stroke / scale, "square_center": res.square_center / scale,
             "verified": {"feasible": res.check.feasible, "samples": res.check.samples,
                          "index_range": list(res.check.factor_range)},
+            "notes": list(res.notes),
         }
-    payload = {"square": square, "bounds": [lo, hi], "units": units,
-               "isotropic_orientations_deg": isotropic_orientations(), "designs": results}
+    if not results:  # both designs fail: say why for each
+        raise InputError("; ".join(f"{k}: {v}" for k, v in failed.items()))
+    designs = {**results, **{k: {"feasible": False, "reason": v} for k, v in failed.items()}}
+    payload = {"square": square, "bounds": [lo, hi], "units": units, "angle_unit": "deg",
+               "isotropic_orientations_deg": isotropic_orientations(), "designs": designs}
     if as_json:
         emit_json(payload)
         return
@@ -115,14 +157,70 @@ def design_five_bar(square, bounds, design_name, units, as_json):
     click.echo(f"  J⁻¹ = I is possible only for (α1, α2) = "
                f"{payload['isotropic_orientations_deg']} degrees")
     for name, r in results.items():
-        click.echo(f"  {name}: L = {r['L']:.6g} {units}, A = {fmt(r['A'])}, B = {fmt(r['B'])}, "
-                   f"α = {fmt(r['alpha'])} deg")
+        click.echo(f"  {name}: L = {r['L']:.6g} {units}, A = {fmt(r['A'])} {units}, B = "
+                   f"{fmt(r['B'])} {units}, α = {fmt(r['alpha'])} deg")
         click.echo(f"    joint stops {fmt(r['q_min'])} .. {fmt(r['q_max'])} {units} (stroke "
-                   f"{r['stroke']:.6g}); square centred at {fmt(r['square_center'])}; verified "
-                   f"factors {fmt(r['verified']['index_range'])}")
+                   f"{r['stroke']:.6g} {units}); square centred at {fmt(r['square_center'])} "
+                   f"{units}; verified factors {fmt(r['verified']['index_range'])}")
+        _echo_notes(r["notes"])
+    for name, reason in failed.items():
+        click.echo(f"  {name}: infeasible — {reason}")
+
+
+@design.command("linear-delta")
+@click.option("--cube", "cube", type=float, required=True, help="Prescribed cube side Lw.")
+@click.option("--center", "center_text", metavar="X,Y,Z",
+              help="Centre of the cube (default 0,0,Lw/2: the cube stands on z = 0 under the "
+                   "centre of the slides).")
+@BOUNDS_OPTION
+@click.option("--r", "nacelle", type=float,
+              help="Nacelle radius r (default 0.3 Lw); only R − r enters the kinematics.")
+@click.option("--objective", type=click.Choice(DELTA_OBJECTIVES), default="size",
+              show_default=True,
+              help="size: shortest arms; compactness: largest Lw/stroke with L <= --max-leg.")
+@click.option("--max-leg", type=float, help="Largest admissible arm length.")
+@UNITS_OPTION
+@JSON_OPTION
+def design_linear_delta(cube, center_text, bounds, nacelle, objective, max_leg, units, as_json):
+    """R, r, L and the slider strokes of a vertical-slide linear Delta for a prescribed cube
+    with bounds on the transmission factors — verified by brute force over the cube."""
+    scale = length_scale(units)
+    lo, hi = _required_bounds(bounds)
+    center = (parse_vector(center_text, 3, "--center", units) if center_text is not None
+              else None)
+    if nacelle is not None and not (np.isfinite(nacelle) and nacelle > 0):
+        raise InputError(f"--r must be a positive length, got {nacelle:g}")
+    res = size_linear_delta(cube * scale, (lo, hi), center=center,
+                            r=None if nacelle is None else nacelle * scale,
+                            objective=objective, max_leg=_max_leg(max_leg, scale))
+    payload = {
+        "cube": cube, "center": res.center / scale, "bounds": [lo, hi], "units": units,
+        "objective": objective, "R": res.R / scale, "r": res.r / scale, "L": res.L / scale,
+        "d": res.d / scale, "stroke": res.stroke / scale, "q_min": res.q_min / scale,
+        "q_max": res.q_max / scale, "compactness": res.compactness, "gci": res.gci,
+        "index_range": list(res.index_range),
+        "verified": {"feasible": res.check.feasible, "samples": res.check.samples,
+                     "index_range": list(res.check.factor_range)},
+        "notes": list(res.notes),
+    }
+    if as_json:
+        emit_json(payload)
+        return
+    click.echo(f"linear Delta for a {cube:g} {units} cube centred at {fmt(payload['center'])} "
+               f"{units}, transmission factors in [{lo:g}, {hi:g}] ({objective}):")
+    click.echo(f"  R = {payload['R']:.6g} {units}, r = {payload['r']:.6g} {units} "
+               f"(R − r = {payload['d']:.6g}), arms L = {payload['L']:.6g} {units}")
+    click.echo(f"  sliders from {fmt(payload['q_min'])} to {fmt(payload['q_max'])} {units}: "
+               f"stroke {payload['stroke']:.6g} {units}")
+    click.echo(f"  compactness Lw/stroke = {res.compactness:.4f}, GCI over the cube = "
+               f"{res.gci:.4f}")
+    click.echo(f"  verified on {res.check.samples} poses of the cube: factors in "
+               f"{fmt(res.check.factor_range)}")
+    _echo_notes(res.notes)
 
 
 def _parse_vary(text: str, scale: float, machine) -> Variable:
+    """``NAME=LO:HI`` in command-line units → a variable in SI units."""
     name, sep, rng = text.partition("=")
     lo, sep2, hi = rng.partition(":")
     if not sep or not sep2:
@@ -131,26 +229,41 @@ def _parse_vary(text: str, scale: float, machine) -> Variable:
         lower, upper = float(lo), float(hi)
     except ValueError:
         raise InputError(f"--vary {text!r}: LO and HI must be numbers") from None
-    base = name.split("[")[0].strip()
-    spec = {s.name: s for s in machine.kind.parameters}.get(base) if machine.kind else None
-    factor = 1.0
-    if spec is not None and spec.quantity == "length":
-        factor = scale
-    elif spec is not None and spec.quantity == "angle":
-        factor = np.pi / 180.0
-    return Variable(name.strip(), lower * factor, upper * factor)
+    name = name.strip()
+    parameter = scalar_parameters(machine).get(name)
+    factor = 1.0 if parameter is None else boundary_factor(parameter.quantity, scale)
+    return Variable(name, lower * factor, upper * factor)
+
+
+def _parse_constraint(text: str, scale: float) -> Constraint:
+    """``METRIC<=V`` with V in command-line units → a constraint in SI units."""
+    c = Constraint.parse(text)
+    factor = boundary_factor(METRIC_QUANTITIES.get(c.metric, "number"), scale)
+    return Constraint(c.metric, c.op, c.value * factor)
+
+
+def _parse_region(text: str, scale: float) -> Region:
+    side_text, _, center_text = text.partition("@")
+    try:
+        side = float(side_text) * scale
+        center = (tuple(float(v) * scale for v in center_text.split(",")) if center_text
+                  else None)
+    except ValueError:
+        raise InputError(f"--region expects SIDE[@X,Y[,Z]], got {text!r}") from None
+    return Region(side, center)
 
 
 @click.command("optimize")
 @click.argument("machine_name", metavar="MACHINE")
 @SET_OPTION
 @click.option("--vary", "vary", multiple=True, required=True, metavar="NAME=LO:HI",
-              help="Design variable (repeatable): a parameter, or NAME[i] for a component.")
+              help="Design variable (repeatable): a parameter, NAME[i] for a component, or "
+                   "legs[i].FIELD[k] for a leg of a rod-legs machine file (see docs/design.md).")
 @click.option("--objective", "objectives", multiple=True, required=True,
               metavar="min:METRIC|max:METRIC",
               help=f"Objective (repeatable); metrics: {', '.join(METRICS)}.")
 @click.option("--constraint", "constraints", multiple=True, metavar="METRIC<=V|METRIC>=V",
-              help="Constraint on a metric (repeatable).")
+              help="Constraint on a metric (repeatable); lengths in --units.")
 @click.option("--region", "region_text", required=True, metavar="SIDE[@X,Y[,Z]]",
               help="Prescribed square/cube: side, optionally @centre (default: home).")
 @BOUNDS_OPTION
@@ -171,18 +284,13 @@ def _parse_vary(text: str, scale: float, machine) -> Variable:
 def optimize_cmd(machine_name, assignments, vary, objectives, constraints, region_text, bounds,
                  kappa_max, method, pareto, generations, population, seed, samples, no_progress,
                  out_dir, units, as_json):
-    """Optimise parameters of any machine for a prescribed region (one or several objectives)."""
+    """Optimise parameters of any machine for a prescribed region (one or several objectives).
+
+    Lengths (variables, constraints, region, outputs) are in --units, angles in degrees; the
+    outputs name their units."""
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
-    if m.kind is None:
-        raise InputError(f"{m.id!r} is described leg by leg: it has no parameters to vary")
-    side_text, _, center_text = region_text.partition("@")
-    try:
-        side = float(side_text) * scale
-        center = (tuple(float(v) * scale for v in center_text.split(",")) if center_text
-                  else None)
-    except ValueError:
-        raise InputError(f"--region expects SIDE[@X,Y[,Z]], got {region_text!r}") from None
+    region = _parse_region(region_text, scale)
     objs = [Objective.parse(t) for t in objectives]
     if pareto and len(objs) < 2:
         raise InputError("--pareto needs at least two objectives")
@@ -190,35 +298,44 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
         raise InputError("several objectives: add --pareto (NSGA-II)")
     problem = DesignProblem(
         base=m, variables=[_parse_vary(t, scale, m) for t in vary], objectives=objs,
-        constraints=[Constraint.parse(t) for t in constraints], region=Region(side, center),
+        constraints=[_parse_constraint(t, scale) for t in constraints], region=region,
         criteria=Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max), samples=samples,
     )
-    result = optimize(problem, method=method, seed=seed, generations=generations,
-                      population=population, progress=not no_progress and not as_json)
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"cannot create {out_dir}: {exc.strerror or exc}") from None
-    result.write_csv(out / "results.csv")
-    result.write_json(out / "summary.json")
-    summary = result.summary()
-    if len(objs) >= 2:
-        result.write_csv(out / "pareto.csv", result.pareto)
-        plot_pareto(result, path=out / "pareto.png")
+    result = optimize(problem, method=method, seed=seed, generations=generations,
+                      population=population, progress=not no_progress and not as_json)
+    try:
+        result.write_csv(out / "results.csv", units=units)
+        result.write_json(out / "summary.json", units=units)
+        if len(objs) >= 2:
+            result.write_csv(out / "pareto.csv", result.pareto, units=units)
+            plot_pareto(result, path=out / "pareto.png", units=units)
+    except OSError as exc:
+        raise InputError(f"cannot write into {out_dir}: {exc.strerror or exc}") from None
+    summary = result.summary(units)
     if as_json:
         click.echo(json.dumps(to_jsonable(summary), indent=2))
         if summary["infeasibility"]:
             raise InputError(summary["infeasibility"])
         return
     click.echo(f"{summary['evaluations']} designs evaluated ({summary['feasible_evaluations']} "
-               f"feasible) with {result.method}; results in {out_dir}/")
+               f"feasible) with {result.method}; results in {out_dir}/ (lengths in {units}, "
+               "angles in deg)")
     if result.best is not None:
-        best = {k: v for k, v in summary["best"].items() if k != "feasible"}
-        click.echo("best: " + ", ".join(f"{k} = {v:.6g}" for k, v in best.items()
-                                        if isinstance(v, float)))
+        click.echo("best: " + ", ".join(_shown(result, k, v, units)
+                                        for k, v in summary["best"].items()
+                                        if k != "feasible" and isinstance(v, float)))
     elif len(objs) >= 2:
         click.echo(f"Pareto front: {len(result.pareto)} designs (pareto.csv, pareto.png)")
     else:
-        raise InputError(f"{result.infeasibility()}; relax the constraints or widen the "
+        raise InputError(f"{result.infeasibility(units)}; relax the constraints or widen the "
                          f"variables (all {len(result.records)} designs are in {out_dir}/)")
+
+
+def _shown(result, name: str, value: float, units: str) -> str:
+    unit = result.unit_of(name, units)
+    return f"{name} = {value:.6g}" + (f" {unit}" if unit else "")

@@ -79,6 +79,8 @@ def build_path(machine, scale: float, gcode, origin, line_text, circle_text, hel
     if parts[-1].strip() in ("zigzag", "one-way"):
         strategy = parts.pop().strip()
     v = _numbers(",".join(parts), (6,), "--raster")
+    if not float(v[5]).is_integer():
+        raise InputError(f"--raster: the number of passes must be an integer, got {v[5]:g}")
     if dims != 3:
         raise InputError("raster facing needs a spatial machine (it retracts along z)")
     return raster(np.asarray(v[:3]) * scale, v[3] * scale, v[4] * scale, int(v[5]),
@@ -216,8 +218,10 @@ def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
 @click.option("--min-stiffness", type=float, default=0.0, help="Minimum axial stiffness, N/m.")
 @click.option("--stress-safety", type=float, default=2.0, show_default=True)
 @click.option("--buckling-safety", type=float, default=3.0, show_default=True)
-@click.option("--accel", "transverse", type=float, default=9.81, show_default=True,
-              help="Transverse acceleration of the arm (weight + inertia), m/s².")
+@click.option("--transverse-accel", "transverse", type=float, default=9.81, show_default=True,
+              help="Transverse acceleration of the arm (weight + inertia), m/s² whatever "
+                   "--units.")
+@click.option("--diameter-range", help="Bounds on the outer diameter LO,HI (length unit).")
 @click.option("--density", type=float, default=7700.0, show_default=True, help="kg/m³.")
 @click.option("--young", type=float, default=210e9, show_default=True, help="E, Pa.")
 @click.option("--yield", "yield_strength", type=float, default=620e6, show_default=True,
@@ -227,8 +231,8 @@ def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
 @UNITS_OPTION
 @JSON_OPTION
 def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_safety,
-               buckling_safety, transverse, density, young, yield_strength, reproduce, units,
-               as_json):
+               buckling_safety, transverse, diameter_range, density, young, yield_strength,
+               reproduce, units, as_json):
     """Size (or analyse) a solid or hollow circular arm: stress, buckling, bending, mass,
     stiffness."""
     scale = length_scale(units)
@@ -253,7 +257,11 @@ def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_sa
                              material=material)
         payload = {"mode": "analysis", **result.as_dict()}
     else:
-        design = size_arm(axial_force=force, length=length * scale,
+        bounds = (0.005, 0.1)
+        if diameter_range:
+            lo, hi = _numbers(diameter_range, (2,), "--diameter-range")
+            bounds = (lo * scale, hi * scale)
+        design = size_arm(axial_force=force, length=length * scale, diameter_range=bounds,
                           transverse_accel=transverse, hollow=section == "hollow",
                           inner_diameter=bore, stress_safety=stress_safety,
                           buckling_safety=buckling_safety, min_stiffness=min_stiffness,

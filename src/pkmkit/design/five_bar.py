@@ -21,6 +21,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from pkmkit.analysis.workspace import Criteria, RegionCheck, check_region, useful_workspace
+from pkmkit.design.checks import degenerate_note, relaxed, require_side
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
@@ -73,8 +74,10 @@ class FiveBarSizing:
         stroke: joint stroke (the same for both actuators).
         square_center: ``(2,)`` centre of the square in the workspace.
         side_per_L: inscribed square side of the unit design.
-        check: dense verification of the square with these joint stops.
+        check: dense verification of the square with these joint stops (factors within a
+            relative :data:`~pkmkit.design.checks.VERIFY_RTOL` of the bounds).
         machine: the sized machine.
+        notes: remarks on the specification (e.g. a degenerate one).
     """
 
     design: str
@@ -90,18 +93,24 @@ class FiveBarSizing:
     side_per_L: float
     check: RegionCheck
     machine: Machine
+    notes: tuple[str, ...] = ()
 
 
 def size_five_bar(square_side: float, bounds: tuple[float, float], *,
                   design: str = "isotropic", resolution: int = 301) -> FiveBarSizing:
     """Size a five-bar (``"isotropic"`` or ``"biglide"``) for a prescribed square workspace.
 
+    Args:
+        square_side: prescribed square side S, m (between 1e-6 m and 1e6 m).
+        bounds: (λ_min, λ_max) bounds on the velocity transmission factors.
+        design: ``"isotropic"`` (α = (0°, 90°)) or ``"biglide"`` (α = (0°, 0°)).
+        resolution: grid points along the longest side of the useful-workspace study.
+
     Raises:
         InputError: bad side or bounds, bounds excluding the home configuration, unknown design,
             or a final check that fails.
     """
-    if not (np.isfinite(square_side) and square_side > 0):
-        raise InputError(f"the square side must be > 0, got {square_side}")
+    square_side = require_side(square_side, "square side")
     preset = {"isotropic": "five-bar-isotropic", "biglide": "five-bar-biglide"}.get(design)
     if preset is None:
         raise InputError(f"unknown design {design!r}; use 'isotropic' or 'biglide'")
@@ -128,12 +137,13 @@ def size_five_bar(square_side: float, bounds: tuple[float, float], *,
                              B=tuple(np.asarray(unit.params["B"]) * length),
                              q_min=tuple(q_min), q_max=tuple(q_min + stroke))
     scale_center = useful.inscribed.center * length
-    check = check_region(sized, scale_center, square_side, criteria, samples=61)
+    check = check_region(sized, scale_center, square_side, relaxed(criteria), samples=61)
     if not check.feasible:
         raise InputError(f"the sized square fails its check: {check.worst}")
+    note = degenerate_note(length, square_side, (lo, hi))
     return FiveBarSizing(
         design=design, square_side=float(square_side), bounds=(float(lo), float(hi)),
         L=float(length), A=np.asarray(sized.params["A"]), B=np.asarray(sized.params["B"]),
         q_min=q_min, q_max=q_min + stroke, stroke=float(stroke), square_center=scale_center,
-        side_per_L=float(per_l), check=check, machine=sized,
+        side_per_L=float(per_l), check=check, machine=sized, notes=(note,) if note else (),
     )

@@ -34,6 +34,9 @@ from pkmkit.model.rods import SLIDE
 
 METRICS = ("violation", "stroke", "compactness", "lambda_min", "lambda_max", "worst_condition",
            "gci", "footprint", "inscribed_side")
+#: Quantity of each metric (``"length"`` m, ``"area"`` m², ``"number"`` dimensionless).
+METRIC_QUANTITIES = {name: "number" for name in METRICS} | {
+    "stroke": "length", "footprint": "area", "inscribed_side": "length"}
 
 
 @dataclass(frozen=True)
@@ -46,12 +49,23 @@ class Region:
     def __post_init__(self) -> None:
         if not (np.isfinite(self.side) and self.side > 0):
             raise InputError(f"the prescribed region's side must be > 0, got {self.side}")
+        if self.center is not None:
+            center = np.asarray(self.center, dtype=float).reshape(-1)
+            if not np.isfinite(center).all():
+                raise InputError(f"the prescribed region's centre must be finite, got "
+                                 f"{list(self.center)}")
+
+    def check(self, machine: Machine) -> None:
+        """Raise :class:`InputError` unless the centre has ``machine.dims`` coordinates."""
+        if self.center is not None and len(np.reshape(self.center, -1)) != machine.dims:
+            raise InputError(f"the prescribed region's centre needs {machine.dims} coordinates "
+                             f"({', '.join(machine.pose_names)}) for {machine.id!r}, got "
+                             f"{len(np.reshape(self.center, -1))}")
 
     def points(self, machine: Machine, samples: int) -> np.ndarray:
         """Grid of ``samples`` points per edge over the region, ``(M, dims)``."""
+        self.check(machine)
         center = machine.home_pose if self.center is None else np.asarray(self.center, float)
-        if center.shape != (machine.dims,):
-            raise InputError(f"the region centre needs {machine.dims} coordinates")
         free = tuple(range(machine.dims))
         return make_grid(center - self.side / 2, center + self.side / 2, free=free,
                          base=center, names=machine.pose_names, resolution=samples).points

@@ -1,9 +1,12 @@
 """Dimensional optimisation of any machine: variables, objectives, constraints, optimisers.
 
-A :class:`DesignProblem` varies named parameters of a machine within bounds and scores each
-candidate with the metrics of :mod:`pkmkit.design.metrics` (or user functions) evaluated on a
-prescribed region. The region must satisfy the criteria (``violation == 0``) unless told
-otherwise; further constraints bound any metric.
+A :class:`DesignProblem` varies scalar parameters of a machine within bounds — named parameters
+of a built-in kind (``R``, ``angles[1]``) or leg fields of a ``rod-legs`` machine
+(``legs[0].length``, ``legs[2].base[0]``; see :mod:`pkmkit.design.design_space`) — and scores
+each candidate with the metrics of :mod:`pkmkit.design.metrics` (or user functions) evaluated on
+a prescribed region. The region must satisfy the criteria (``violation == 0``) unless told
+otherwise; further constraints bound any metric. A variable that changes none of the metrics
+(e.g. a stroke limit, which the metrics ignore) is refused before the run.
 
 - one objective: SciPy's ``differential_evolution`` (constraints by feasibility rules) or CMA-ES
   (``cma`` package, constraints by penalty);
@@ -11,7 +14,9 @@ otherwise; further constraints bound any metric.
   designs.
 
 Runs are reproducible (``seed``), show a progress bar (``tqdm``) when asked, and keep every
-evaluated design, so the results can be written as CSV/JSON and plotted.
+evaluated design, so the results can be written as CSV/JSON and plotted. Values are SI inside;
+the writers convert to command-line units on request (lengths in m or mm, angles in degrees) and
+every output names its units.
 """
 
 from __future__ import annotations
@@ -27,18 +32,27 @@ from typing import Any
 import numpy as np
 
 from pkmkit.analysis.workspace import Criteria
-from pkmkit.design.metrics import METRICS, Region, metric_values
+from pkmkit.design.design_space import (
+    ScalarParameter,
+    boundary_factor,
+    boundary_unit,
+    check_names,
+    with_values,
+)
+from pkmkit.design.metrics import METRIC_QUANTITIES, METRICS, Region, metric_values
 from pkmkit.errors import InputError, ParameterError
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.machines.machine import Machine
+from pkmkit.model.parameters import length_scale
 
 UserMetric = Callable[[Machine], float]
 
 
 @dataclass(frozen=True)
 class Variable:
-    """A design variable: a scalar parameter ``name`` or a vector component ``name[i]``, varied
-    within ``[lower, upper]`` (SI units)."""
+    """A design variable: a scalar parameter of the machine (``R``, a vector component
+    ``angles[1]``, a leg field ``legs[0].length``; see :mod:`pkmkit.design.design_space`),
+    varied within ``[lower, upper]`` (SI units)."""
 
     name: str
     lower: float
@@ -50,14 +64,6 @@ class Variable:
         if not self.lower < self.upper:
             raise InputError(f"variable {self.name}: empty range [{self.lower:g}, "
                              f"{self.upper:g}] (lower must be below upper)")
-
-    @property
-    def parameter(self) -> tuple[str, int | None]:
-        """(parameter name, component index or None)."""
-        m = re.fullmatch(r"([A-Za-z_]\w*)(?:\[(\d+)\])?", self.name)
-        if m is None:
-            raise InputError(f"bad variable name {self.name!r}; use NAME or NAME[i]")
-        return m.group(1), (int(m.group(2)) if m.group(2) is not None else None)
 
 
 @dataclass(frozen=True)
@@ -93,10 +99,16 @@ class Constraint:
     @classmethod
     def parse(cls, text: str) -> Constraint:
         """``"worst_condition<=4"`` or ``"compactness>=0.5"``."""
-        m = re.fullmatch(r"\s*(\w+)\s*(<=|>=)\s*([-+0-9.eE]+)\s*", text)
+        m = re.fullmatch(r"\s*(\w+)\s*(<=|>=)\s*(\S+)\s*", text)
         if m is None:
             raise InputError(f"constraint {text!r}: use METRIC<=VALUE or METRIC>=VALUE")
-        return cls(m.group(1), m.group(2), float(m.group(3)))
+        try:
+            value = float(m.group(3))
+        except ValueError:
+            value = float("nan")
+        if not np.isfinite(value):
+            raise InputError(f"constraint {text!r}: {m.group(3)!r} is not a finite number")
+        return cls(m.group(1), m.group(2), value)
 
     def excess(self, metrics: dict[str, float]) -> float:
         """> 0 when violated (by how much), ≤ 0 when satisfied; NaN → +inf."""
@@ -111,8 +123,9 @@ class DesignProblem:
     """What to vary, what to optimise, and on which region.
 
     Attributes:
-        base: the machine whose parameters are varied (its other parameters stay).
-        variables: design variables.
+        base: the machine whose parameters are varied (its other parameters stay); a built-in
+            kind or a ``rod-legs`` machine from a file.
+        variables: design variables (distinct names, see :mod:`pkmkit.design.design_space`).
         objectives: one (single-objective) or more (Pareto) objectives.
         constraints: bounds on metrics; ``violation <= 0`` is added unless ``require_region``
             is False.
@@ -123,6 +136,11 @@ class DesignProblem:
         require_region: add the constraint ``violation <= 0``.
         evaluator: computes the metrics of a candidate (default
             :func:`pkmkit.design.metrics.metric_values`, batched over the region's poses).
+        parameters: the varied parameters by name, with their quantity (set on creation).
+
+    Raises:
+        InputError: no variable or objective, a duplicate or unknown variable, a region whose
+            centre does not fit the machine, an unknown metric.
     """
 
     base: Machine
@@ -135,24 +153,15 @@ class DesignProblem:
     samples: int = 11
     require_region: bool = True
     evaluator: Callable[..., dict[str, float]] = metric_values
+    parameters: dict[str, ScalarParameter] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        if self.base.kind is None:
-            raise InputError(f"machine {self.base.id!r} has no named parameters to vary")
         if not self.variables:
             raise InputError("give at least one design variable")
         if not self.objectives:
             raise InputError("give at least one objective")
-        specs = {s.name: s for s in self.base.kind.parameters}
-        for var in self.variables:
-            name, index = var.parameter
-            if name not in specs:
-                raise InputError(f"unknown parameter {name!r}; valid parameters: "
-                                 f"{', '.join(sorted(specs))}")
-            size = specs[name].size
-            if (index is None) != (size is None) or (index is not None and index >= size):
-                raise InputError(f"variable {var.name}: parameter {name!r} "
-                                 f"{'is a scalar' if size is None else f'has {size} components'}")
+        self.parameters = check_names(self.base, [v.name for v in self.variables])
+        self.region.check(self.base)
         known = set(METRICS) | set(self.user_metrics)
         for item in [*self.objectives, *self.constraints]:
             if item.metric not in known:
@@ -168,25 +177,58 @@ class DesignProblem:
 
     @property
     def metric_names(self) -> tuple[str, ...]:
+        """Built-in metrics the objectives and constraints need."""
         names = {o.metric for o in self.objectives} | {c.metric for c in self.constraints}
         return tuple(sorted(n for n in names if n in METRICS))
+
+    def quantity(self, column: str) -> str:
+        """Quantity of a variable or metric column: ``"length"``, ``"area"``, ``"angle"`` or
+        ``"number"`` (user metrics: ``"number"``)."""
+        if column in self.parameters:
+            return self.parameters[column].quantity
+        return METRIC_QUANTITIES.get(column, "number")
 
     def build(self, x: np.ndarray) -> Machine | None:
         """The candidate machine for variable values ``x`` (None if the parameters are
         inconsistent, e.g. rods too short for the home pose)."""
-        updates: dict[str, Any] = {}
-        for var, value in zip(self.variables, x, strict=True):
-            name, index = var.parameter
-            if index is None:
-                updates[name] = float(value)
-            else:
-                current = list(updates.get(name, self.base.params[name]))
-                current[index] = float(value)
-                updates[name] = tuple(current)
+        values = {var.name: float(value) for var, value in zip(self.variables, x, strict=True)}
         try:
-            return self.base.with_params(**updates)
+            return with_values(self.base, values)
         except ParameterError:
             return None
+
+    def inert_variables(self) -> list[str]:
+        """Variables that change none of the metrics.
+
+        Each variable is set to its lower bound, its upper bound and a point at 30 % of its
+        range (not the middle, so that a range symmetric about a symmetric design cannot give
+        equal values by symmetry), the others at mid-range, and every metric of
+        :data:`~pkmkit.design.metrics.METRICS` (``inscribed_side`` only when requested) and
+        every user metric is computed; a variable is inert when all of them are bit-identical
+        at the three points — e.g. a stroke limit or the parallelogram width, which the metrics
+        (closed-form kinematics over the region) do not see. A variable whose points cannot be
+        evaluated (no machine, region unreachable) is not reported.
+        """
+        names = tuple(n for n in METRICS if n != "inscribed_side" or n in self.metric_names)
+        mid = self.bounds.mean(axis=1)
+        inert = []
+        for k, var in enumerate(self.variables):
+            values = []
+            for end in (var.lower, var.upper, var.lower + 0.3 * (var.upper - var.lower)):
+                x = mid.copy()
+                x[k] = end
+                machine = self.build(x)
+                if machine is None:
+                    break
+                metrics = metric_values(machine, self.region, self.criteria, names, self.samples)
+                if not np.isfinite(metrics["lambda_min"]):
+                    break
+                values.append([*metrics.values(),
+                               *(float(f(machine)) for f in self.user_metrics.values())])
+            else:
+                if all(np.array_equal(values[0], v, equal_nan=True) for v in values[1:]):
+                    inert.append(var.name)
+        return inert
 
     def evaluate(self, x: np.ndarray) -> dict[str, Any]:
         """Record of one candidate: variables, metrics, objective values, constraint excesses
@@ -209,6 +251,10 @@ class DesignProblem:
 class OptimizationResult:
     """Every evaluated design, and the best one (one objective) or the Pareto front.
 
+    Records hold SI values (m, rad). The writers take ``units``: None for SI, or a command-line
+    length unit (``"m"``, ``"mm"``) for lengths in that unit, areas in its square and angles in
+    degrees; column headers and the JSON summary name the units either way.
+
     Attributes:
         problem: the problem solved.
         method: optimiser used.
@@ -226,64 +272,115 @@ class OptimizationResult:
 
     @property
     def columns(self) -> list[str]:
+        """Variables, metrics, then ``feasible``."""
         names = [v.name for v in self.problem.variables]
         metrics = [k for k in self.records[0] if not k.startswith("_") and k not in names
                    and k != "feasible"] if self.records else []
         return [*names, *metrics, "feasible"]
 
-    def infeasibility(self) -> str | None:
+    def unit_of(self, column: str, units: str | None = None) -> str:
+        """Unit symbol of a column (``""`` for a dimensionless one); see the class docstring
+        for ``units``."""
+        quantity = self.problem.quantity(column)
+        if units is None:
+            return {"length": "m", "area": "m^2", "angle": "rad", "number": ""}[quantity]
+        length_scale(units)  # validates the unit
+        return boundary_unit(quantity, units)
+
+    def to_units(self, column: str, value: Any, units: str | None = None) -> Any:
+        """A value of ``column`` converted from SI to ``units`` (see the class docstring)."""
+        if units is None or not isinstance(value, float):
+            return value
+        return value / boundary_factor(self.problem.quantity(column), length_scale(units))
+
+    def record_in(self, record: dict[str, Any], units: str | None = None) -> dict[str, Any]:
+        """A record without its private entries, converted to ``units``."""
+        return {k: self.to_units(k, v, units) for k, v in record.items()
+                if not k.startswith("_")}
+
+    def header(self, units: str | None = None) -> list[str]:
+        """Column names with their units, ``"R [mm]"`` (dimensionless columns bare)."""
+        out = []
+        for c in self.columns:
+            unit = self.unit_of(c, units) if c != "feasible" else ""
+            out.append(f"{c} [{unit}]" if unit else c)
+        return out
+
+    def constraint_text(self, c: Constraint, units: str | None = None) -> str:
+        """``"stroke<=750"`` with the value in ``units`` (a unit suffix for dimensional
+        metrics)."""
+        unit = self.unit_of(c.metric, units)
+        return f"{c.metric}{c.op}{self.to_units(c.metric, float(c.value), units):g}" + (
+            f" {unit}" if unit else "")
+
+    def infeasibility(self, units: str | None = None) -> str | None:
         """None when some design is feasible; otherwise which requirements no evaluated design
-        met, each with the closest value reached (and where)."""
+        met, each with the closest value reached (and where), in ``units``."""
         if any(r["feasible"] for r in self.records) or not self.records:
             return None if self.records else "no design was evaluated"
         parts = []
         names = [v.name for v in self.problem.variables]
+
+        def show(name: str, value: float) -> str:
+            unit = self.unit_of(name, units)
+            return f"{self.to_units(name, value, units):.4g}" + (f" {unit}" if unit else "")
+
         for k, c in enumerate(self.problem.constraints):
             excess = np.array([r["_excess"][k] for r in self.records])
             if (excess <= 0).any():
                 continue
             best = self.records[int(np.argmin(excess))]
-            where = ", ".join(f"{n} = {best[n]:.4g}" for n in names)
-            parts.append(f"{c.metric}{c.op}{c.value:g} (best {best[c.metric]:.4g} at {where})")
+            where = ", ".join(f"{n} = {show(n, best[n])}" for n in names)
+            parts.append(f"{self.constraint_text(c, units)} (best "
+                         f"{show(c.metric, best[c.metric])} at {where})")
         if not parts:
             return "no design satisfies all the constraints together"
         return "no evaluated design satisfies: " + "; ".join(parts)
 
-    def write_csv(self, path: str | Path, records: list[dict[str, Any]] | None = None) -> None:
-        """All records (or the given ones) as CSV."""
+    def write_csv(self, path: str | Path, records: list[dict[str, Any]] | None = None,
+                  units: str | None = None) -> None:
+        """All records (or the given ones) as CSV, in ``units``, the header naming them."""
         rows = self.records if records is None else records
         with open(path, "w", newline="", encoding="utf-8") as handle:
             writer = csv.writer(handle)
-            writer.writerow(self.columns)
+            writer.writerow(self.header(units))
             for r in rows:
-                writer.writerow([f"{r[c]:.10g}" if isinstance(r[c], float) else r[c]
-                                 for c in self.columns])
+                values = self.record_in(r, units)
+                writer.writerow([f"{values[c]:.10g}" if isinstance(values[c], float)
+                                 else values[c] for c in self.columns])
 
-    def summary(self) -> dict[str, Any]:
-        """JSON-ready summary."""
-        def clean(r: dict[str, Any]) -> dict[str, Any]:
-            return {k: v for k, v in r.items() if not k.startswith("_")}
-
+    def summary(self, units: str | None = None) -> dict[str, Any]:
+        """JSON-ready summary in ``units``; ``"units"`` and ``"column_units"`` name them."""
+        region = self.problem.region
+        scale = 1.0 if units is None else length_scale(units)
+        length = "m" if units is None else units
+        center = None if region.center is None else [float(v) / scale for v in region.center]
         return to_jsonable({
             "machine": self.problem.base.id,
             "method": self.method,
-            "variables": [{"name": v.name, "lower": v.lower, "upper": v.upper}
+            "units": {"length": length, "area": f"{length}^2",
+                      "angle": "rad" if units is None else "deg"},
+            "column_units": {c: self.unit_of(c, units) for c in self.columns
+                             if c != "feasible"},
+            "variables": [{"name": v.name, "lower": self.to_units(v.name, v.lower, units),
+                           "upper": self.to_units(v.name, v.upper, units),
+                           "unit": self.unit_of(v.name, units)}
                           for v in self.problem.variables],
             "objectives": [f"{o.sense}:{o.metric}" for o in self.problem.objectives],
-            "constraints": [f"{c.metric}{c.op}{c.value:g}" for c in self.problem.constraints],
-            "region": {"side": self.problem.region.side, "center": self.problem.region.center},
+            "constraints": [self.constraint_text(c, units) for c in self.problem.constraints],
+            "region": {"side": region.side / scale, "center": center},
             "criteria": {"bounds": self.problem.criteria.bounds,
                          "kappa_max": self.problem.criteria.kappa_max},
             "evaluations": len(self.records),
             "feasible_evaluations": sum(bool(r["feasible"]) for r in self.records),
-            "infeasibility": self.infeasibility(),
-            "best": None if self.best is None else clean(self.best),
-            "pareto": [clean(r) for r in self.pareto],
+            "infeasibility": self.infeasibility(units),
+            "best": None if self.best is None else self.record_in(self.best, units),
+            "pareto": [self.record_in(r, units) for r in self.pareto],
         })
 
-    def write_json(self, path: str | Path) -> None:
+    def write_json(self, path: str | Path, units: str | None = None) -> None:
         """:meth:`summary` as a JSON file."""
-        Path(path).write_text(json.dumps(self.summary(), indent=2))
+        Path(path).write_text(json.dumps(self.summary(units), indent=2))
 
 
 def pareto_front(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -320,7 +417,9 @@ def optimize(problem: DesignProblem, *, method: str | None = None, seed: int = 0
     Args:
         problem: the problem.
         method: ``"de"`` (differential evolution, default for one objective), ``"cmaes"``
-            (one objective), ``"nsga2"`` (default for several objectives).
+            (one objective; with a single variable it runs in 2-D with a dummy coordinate
+            that the objective ignores, as CMA-ES needs at least two), ``"nsga2"`` (default for
+            several objectives).
         seed: random seed (runs are reproducible).
         generations: iterations/generations of the optimiser.
         population: population size (NSGA-II, CMA-ES) or DE population multiplier ×
@@ -328,7 +427,8 @@ def optimize(problem: DesignProblem, *, method: str | None = None, seed: int = 0
         progress: show a progress bar on stderr.
 
     Raises:
-        InputError: a method that does not fit the number of objectives, bad sizes.
+        InputError: a method that does not fit the number of objectives, bad sizes, a variable
+            that changes none of the metrics (:meth:`DesignProblem.inert_variables`).
     """
     n_obj = len(problem.objectives)
     method = method or ("de" if n_obj == 1 else "nsga2")
@@ -339,6 +439,12 @@ def optimize(problem: DesignProblem, *, method: str | None = None, seed: int = 0
                          f"{n_obj} objectives")
     if method not in ("de", "cmaes", "nsga2"):
         raise InputError(f"unknown method {method!r}; use de, cmaes or nsga2")
+    inert = problem.inert_variables()
+    if inert:
+        raise InputError(
+            f"design variable(s) {', '.join(inert)} change none of the metrics (every metric is "
+            "identical across the range): the metrics use the kinematics over the region, which "
+            "ignore e.g. the stroke limits and the parallelogram width; remove them")
     records: list[dict[str, Any]] = []
     cache: dict[bytes, dict[str, Any]] = {}
 
@@ -391,13 +497,16 @@ def _run_cmaes(problem, evaluate, seed, generations, population, bar) -> None:
 
     bounds = problem.bounds
     span = bounds[:, 1] - bounds[:, 0]
-    x0 = np.full(len(bounds), 0.5)
+    n = len(bounds)
+    # CMA-ES needs at least 2 dimensions: one variable gets a dummy coordinate, ignored below
+    x0 = np.full(max(n, 2), 0.5)
     opts = {"bounds": [0.0, 1.0], "seed": seed + 1, "popsize": population,
             "maxiter": generations, "verbose": -9}
     es = cma.CMAEvolutionStrategy(x0, 0.3, opts)
     while not es.stop():
         xs = es.ask()
-        es.tell(xs, [_penalised(evaluate(bounds[:, 0] + np.asarray(x) * span)) for x in xs])
+        es.tell(xs, [_penalised(evaluate(bounds[:, 0] + np.asarray(x)[:n] * span))
+                     for x in xs])
         if bar is not None:
             bar.update(1)
 

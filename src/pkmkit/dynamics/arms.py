@@ -150,6 +150,14 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
     lo_d, hi_d = diameter_range
     if not 0 < lo_d < hi_d:
         raise InputError(f"empty diameter range {diameter_range}")
+    for name, value in (("stress safety", stress_safety), ("buckling safety", buckling_safety),
+                        ("maximum deflection", max_deflection), ("minimum wall", min_wall)):
+        if not value > 0:
+            raise InputError(f"the {name} must be > 0, got {value:g}")
+    if not (np.isfinite(min_stiffness) and min_stiffness >= 0):
+        raise InputError(f"the minimum stiffness must be >= 0, got {min_stiffness:g}")
+    if not (np.isfinite(axial_force) and np.isfinite(transverse_accel)):
+        raise InputError("the loads must be finite")
     if length_range is not None and not 0 < length_range[0] < length_range[1]:
         raise InputError(f"empty length range {length_range}")
     load = abs(float(axial_force))
@@ -166,8 +174,8 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
             small = 0.0
         elif inner_diameter is not None:
             small = float(inner_diameter)
-        else:
-            small = max(big - 2 * float(v[1]), 0.0)
+        else:  # the wall, kept within [min_wall, big/2] even where the optimiser steps outside
+            small = max(big - 2 * min(max(float(v[1]), min_wall), big / 2), 0.0)
         ell = float(v[-1]) if length_range is not None else float(length)
         return big, small, ell
 
@@ -183,7 +191,6 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
             "stiffness": (a.axial_stiffness / min_stiffness - 1.0) if min_stiffness > 0 else 1.0,
             "deflection": (1.0 - a.deflection / max_deflection) if np.isfinite(max_deflection)
             else 1.0,
-            "wall": (big / 2 - float(v[1])) / big if free_bore else 1.0,
         }
 
     x0 = [hi_d]
@@ -199,7 +206,7 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
         big, small, ell = unpack(v)
         return material.density * math.pi / 4 * (big**2 - small**2) * ell
 
-    names = ("stress", "buckling", "stiffness", "deflection", "wall")
+    names = ("stress", "buckling", "stiffness", "deflection")
     feasible_set = NonlinearConstraint(lambda v: np.array([margins(v)[k] for k in names]),
                                        0.0, np.inf)
     with warnings.catch_warnings():  # SciPy's notes on the polish step are not for the user

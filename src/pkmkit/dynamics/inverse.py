@@ -58,9 +58,11 @@ class ForceResult:
         power: ``(N, n)`` mechanical power f_k q̇_k, W.
         parts: ``{name: (N, n)}`` contributions: ``carriages``, ``rods``, ``platform``,
             ``external`` (they sum to ``force``).
-        leg_axial: ``(N, n)`` axial force of each leg (sum over its rods, tension > 0), from the
-            carriage's equilibrium along its slide, N; NaN where the leg is perpendicular to the
-            slide.
+        leg_axial: ``(N, n)`` axial force of each leg (sum over its rods, tension > 0) at the
+            rod end where it is largest — the design load of the rods: from the carriage's
+            equilibrium along its slide (which gives the mid-span value) and the rods' own axial
+            inertia and weight, N; NaN where the leg is perpendicular to the slide. For a strut
+            leg, minus its actuator force.
     """
 
     force: np.ndarray
@@ -195,7 +197,12 @@ def _forces_block(machine: Machine, masses: MassProperties, x: np.ndarray, xd: n
     carriage_side = np.zeros_like(force)
     np.add.at(carriage_side, k_of, along)
     with np.errstate(divide="ignore", invalid="ignore"):
-        np.divide(carriages + carriage_side - force, cos, out=axial)
+        mid = (carriages + carriage_side - force) / cos
+    # along each rod the tension changes by its own axial load F_m·d̂ (inertia and weight):
+    # N_P − N_A = F_m·d̂, the mid-span value is their mean, the larger end |N_mid| + |F_m·d̂|/2
+    half = np.zeros_like(force)
+    np.add.at(half, k_of, 0.5 * np.einsum("imn,imn->mn", f_m, unit))
+    np.copyto(axial, mid + np.sign(mid) * np.abs(half))
     axial[np.abs(cos) < 1e-9] = np.nan
     # a strut carries its actuator's force: a pushing actuator (f > 0) compresses it
     strut_legs = model.leg_kind != SLIDE

@@ -153,6 +153,23 @@ def rod_section_mass(machine: Machine, diameter: float, density: float,
     return mass, radius, density * area * piston
 
 
+def _scalar(value: Any, what: str) -> float:
+    if not is_plain_number(value) or np.ndim(value) != 0:
+        raise InputError(f"{what} must be one number, got {value!r}")
+    return float(value)
+
+
+def _inertia(value: Any) -> np.ndarray:
+    if value is None:
+        return np.zeros((3, 3))
+    if not is_plain_number(value) or np.shape(value) not in ((3, 3), (9,)):
+        raise InputError(f"platform_inertia must be a 3 × 3 matrix (kg·m²), got {value!r}")
+    inertia = np.asarray(value, dtype=float).reshape(3, 3)
+    if not np.allclose(inertia, inertia.T):
+        raise InputError("platform_inertia must be symmetric")
+    return inertia
+
+
 def mass_properties(machine: Machine, *, carriage: Any = 0.0, rod: Any = 0.0,
                     rod_radius: Any = 0.0, platform: float = 0.0, platform_com: Any = None,
                     platform_inertia: Any = None, gravity: Any = (0.0, 0.0, -9.81),
@@ -178,11 +195,10 @@ def mass_properties(machine: Machine, *, carriage: Any = 0.0, rod: Any = 0.0,
     props = MassProperties(
         carriage_mass=vec(carriage, n, "carriage"), rod_mass=vec(rod, m, "rod"),
         rod_radius=vec(rod_radius, m, "rod_radius"),
-        platform_mass=float(vec(platform, 1, "platform")[0]),
+        platform_mass=_scalar(platform, "platform"),
         platform_com=np.zeros(3) if platform_com is None else vec(platform_com, 3,
                                                                   "platform_com"),
-        platform_inertia=(np.zeros((3, 3)) if platform_inertia is None
-                          else np.asarray(platform_inertia, dtype=float).reshape(3, 3)),
+        platform_inertia=_inertia(platform_inertia),
         gravity=vec(gravity, 3, "gravity"),
     )
     cyl_len, pis_len = strut_tube_lengths(machine, cylinder_length, piston_length)

@@ -9,7 +9,8 @@ import numpy as np
 
 
 def to_jsonable(value: Any) -> Any:
-    """Nested lists/dicts of plain Python values; NaN and ±inf become ``None`` (JSON null)."""
+    """Nested lists/dicts of plain Python values; NaN and ±inf become ``None`` (JSON null), and
+    −0.0 becomes 0.0."""
     if isinstance(value, dict):
         return {str(k): to_jsonable(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
@@ -19,5 +20,5 @@ def to_jsonable(value: Any) -> Any:
     if isinstance(value, np.generic):
         return to_jsonable(value.item())
     if isinstance(value, float):
-        return value if math.isfinite(value) else None
+        return value + 0.0 if math.isfinite(value) else None
     return value

@@ -54,20 +54,38 @@ MAX_COORDINATE = 1e9
 JACOBIAN_CHUNK = 16384
 
 
+#: Below this parallel-singularity measure the factors come from J⁻¹ (see _velocity_chunk):
+#: above it eps·κ² is below about 1e-11.
+NEAR_PARALLEL = 1e-2
+
+
 def _velocity_chunk(a: np.ndarray, b: np.ndarray):
     """det A, J = A⁻¹B, singular values of J and σ_min/σ_max of A with unit rows, for one
-    chunk in the batch-last layout (``a (n, n, k)``, ``b (n, k)``)."""
+    chunk in the batch-last layout (``a (n, n, k)``, ``b (n, k)``).
+
+    Near a parallel singularity J = adj(A) B / det A loses about eps·κ² of relative accuracy in
+    its singular values; there (where A is worse conditioned than B) they are taken instead as
+    the reversed reciprocals of those of J⁻¹ = B⁻¹A, which needs no division by det A
+    (eps·κ), wherever σ_min/σ_max of A with unit rows is below :data:`NEAR_PARALLEL`."""
     cof = small.cofactors(a)
     det_a = small.det(a, cof)
     with np.errstate(divide="ignore", invalid="ignore"):
         inv_det = 1.0 / det_a
         # J = A⁻¹ B = adj(A) B / det A with adj = cofactorsᵀ: J[k, j] = C[j, k] b_j / det A
         j = cof.transpose(1, 0, 2) * (b * inv_det)[None, :, :]
-        inv_len = 1.0 / np.sqrt(np.einsum("ikn,ikn->in", a, a))
-        sv_unit = small.singular_values(a * inv_len[:, None, :])
+        lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
+        sv_unit = small.singular_values(a / lengths[:, None, :])
         parallel = sv_unit[-1] / sv_unit[0]
+        serial = np.min(np.abs(b) / lengths, axis=0)
     j[:, :, ~np.isfinite(inv_det)] = np.nan
-    return det_a, j, small.singular_values(j), parallel
+    sv = small.singular_values(j)
+    near_parallel = np.flatnonzero((parallel < NEAR_PARALLEL) & (parallel < serial)
+                                   & np.isfinite(inv_det))
+    if near_parallel.size:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sv_inv = small.singular_values(a[:, :, near_parallel] / b[:, None, near_parallel])
+            sv[:, near_parallel] = 1.0 / sv_inv[::-1]
+    return det_a, j, sv, parallel
 
 
 @dataclass(frozen=True)

@@ -14,11 +14,15 @@ and gives its ``[parameters]``, or has ``kind = "rod-legs"`` and describes its l
     [poses]                        # optional named sample poses
     low = [0, 0, 400]
 
-See ``docs/machine-files.md`` for the ``rod-legs`` format.
+See ``docs/machine-files.md`` for the ``rod-legs`` format. A ``rod-legs`` machine has no named
+parameters; :func:`leg_parameters` lists its leg fields as scalar values (``legs[0].length``,
+``legs[2].base[0]``, ...) and :func:`with_leg_values` returns a new machine with some of them
+changed (the design layer varies them like parameters).
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from dataclasses import replace
 from functools import cache
@@ -33,7 +37,7 @@ from pkmkit.machines import five_bar, linear_delta, orthoglide
 from pkmkit.machines.machine import Machine, MachineKind, build_machine
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
 from pkmkit.model.parameters import is_plain_number, length_scale, resolve_parameters
-from pkmkit.model.rods import LegSpec, build_rod_model
+from pkmkit.model.rods import SLIDE, LegSpec, build_rod_model
 
 #: Built-in machine kinds by name.
 KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (orthoglide, linear_delta, five_bar)}
@@ -319,3 +323,98 @@ def _with_poses(doc: MachineDocument, machine: Machine,
             raise doc.error(f"pose {name!r} must have {machine.dims} coordinates",
                             ("poses", name))
     return replace(machine, extra_poses={**machine.extra_poses, **poses})
+
+
+# ------------------------------------------------------------------ leg fields of rod-legs machines
+#: Leg fields of a ``rod-legs`` machine that :func:`leg_parameters` exposes, with their quantity
+#: (vector fields have one scalar per pose coordinate).
+LEG_FIELDS = {"length": "length", "base": "length", "platform": "length", "axis": "number",
+              "parallelogram_width": "length", "stroke": "length"}
+_LEG_NAME = re.compile(r"legs\[(\d+)\]\.([a-z_]+)(?:\[(\d+)\])?")
+
+
+def _leg_specs(m: Machine) -> list[LegSpec]:
+    """The leg descriptions a ``rod-legs`` machine was built from (SI, 3-D vectors)."""
+    model = m.model
+    specs = []
+    for i in range(model.n_legs):
+        rods = np.flatnonzero(model.rod_leg == i)
+        width, direction = 0.0, None
+        if len(rods) == 2:  # a parallelogram: rods at base ∓ offset (see build_rod_model)
+            offset = 0.5 * (model.rod_base[rods[1]] - model.rod_base[rods[0]])
+            width = 2.0 * float(np.linalg.norm(offset))
+            direction = offset / (0.5 * width)
+        slide = model.leg_kind[i] == SLIDE
+        a = int(model.leg_actuator[i])
+        specs.append(LegSpec(
+            name=model.leg_names[i], actuator=a, kind="slide" if slide else "strut",
+            base=model.leg_base[i].copy(), platform=model.leg_platform[i].copy(),
+            length=float(model.leg_length[i]), axis=model.leg_axis[i].copy() if slide else None,
+            branch=int(model.leg_branch[i]), parallelogram_width=width,
+            parallelogram_direction=direction,
+            stroke=(float(model.q_min[a]), float(model.q_max[a]))))
+    return specs
+
+
+def leg_parameters(m: Machine) -> dict[str, tuple[float, str]]:
+    """The leg fields of a ``rod-legs`` machine as scalars: ``{name: (SI value, quantity)}``.
+
+    Names: ``legs[i].length``, ``legs[i].base[k]``, ``legs[i].platform[k]`` (k < dims),
+    ``legs[i].axis[k]`` (slides only; the axis is normalised when the machine is built),
+    ``legs[i].parallelogram_width`` (parallelogram legs only) and ``legs[i].stroke[0|1]``
+    (limited strokes only); legs are numbered from 0 in file order. Quantities are
+    ``"length"`` (m) or ``"number"``.
+
+    Raises:
+        ParameterError: ``m`` is a machine of a built-in kind (use its named parameters).
+    """
+    if m.kind is not None:
+        raise ParameterError(f"machine {m.id!r} has named parameters; leg fields are only "
+                             "exposed for rod-legs machines")
+    out: dict[str, tuple[float, str]] = {}
+    for i, leg in enumerate(_leg_specs(m)):
+        out[f"legs[{i}].length"] = (float(leg.length), "length")
+        for field in ("base", "platform", "axis"):
+            if field == "axis" and leg.axis is None:
+                continue
+            for k in range(m.dims):
+                out[f"legs[{i}].{field}[{k}]"] = (float(getattr(leg, field)[k]),
+                                                  LEG_FIELDS[field])
+        if leg.parallelogram_width > 0:
+            out[f"legs[{i}].parallelogram_width"] = (leg.parallelogram_width, "length")
+        for k, v in enumerate(leg.stroke):
+            if np.isfinite(v):
+                out[f"legs[{i}].stroke[{k}]"] = (float(v), "length")
+    return out
+
+
+def with_leg_values(m: Machine, values: Mapping[str, float]) -> Machine:
+    """A new ``rod-legs`` machine with some leg fields changed (names and SI units as in
+    :func:`leg_parameters`); ``m`` itself is not modified.
+
+    Raises:
+        ParameterError: an unknown name, or values that make an invalid machine (the message
+            names the leg and the field).
+    """
+    valid = leg_parameters(m)
+    legs = _leg_specs(m)
+    changes: dict[int, dict[str, Any]] = {}
+    for name, value in values.items():
+        match = _LEG_NAME.fullmatch(name)
+        if name not in valid or match is None:
+            raise ParameterError(f"unknown leg field {name!r} of {m.id!r}; valid names: "
+                                 f"{', '.join(valid)}", name)
+        i, field = int(match.group(1)), match.group(2)
+        index = None if match.group(3) is None else int(match.group(3))
+        leg = changes.setdefault(i, {})
+        if index is None:
+            leg[field] = float(value)
+        else:
+            current = list(leg.get(field, getattr(legs[i], field)))
+            current[index] = float(value)
+            leg[field] = tuple(current)
+    legs = [replace(leg, **changes.get(i, {})) for i, leg in enumerate(legs)]
+    model = build_rod_model(legs, dims=m.dims, actuator_names=m.actuator_names,
+                            home_pose=m.model.home_pose, mode_names=m.model.mode_names,
+                            pose_names=m.pose_names)
+    return replace(m, model=model)

@@ -3,7 +3,14 @@
 from pkmkit.motion.gcode import read_gcode
 from pkmkit.motion.joints import JointTrajectory, Limits, check_limits, joint_trajectory
 from pkmkit.motion.paths import Arc, Line, Path, arc_through, chain, circle, helix, line, raster
-from pkmkit.motion.timelaw import PROFILES, Trajectory, plan, scurve, trapezoid
+from pkmkit.motion.timelaw import (
+    PROFILES,
+    Trajectory,
+    constant_speed,
+    plan,
+    scurve,
+    trapezoid,
+)
 
 __all__ = [
     "PROFILES",
@@ -17,6 +24,7 @@ __all__ = [
     "chain",
     "check_limits",
     "circle",
+    "constant_speed",
     "helix",
     "joint_trajectory",
     "line",

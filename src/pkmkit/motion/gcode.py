@@ -5,8 +5,10 @@ helices, centre by ``I``/``J``/``K`` offsets from the start point or radius ``R`
 arc over 180°), planes ``G17`` (XY), ``G18`` (ZX), ``G19`` (YZ), units ``G20`` (inch) / ``G21``
 (mm, default), ``G90`` absolute / ``G91`` incremental coordinates, ``F`` feed (units per minute),
 ``N`` line numbers, comments in parentheses or after ``;``, and ``%`` tape marks. Motion modes are
-modal; a line with coordinates only repeats the last motion. Anything else is an error naming the
-file line.
+modal; a line with coordinates only repeats the last motion. Arcs whose end radius differs from
+the start radius by up to 0.1 % or 5 µm (rounded CAM output) are accepted, ending exactly at the
+programmed point. Anything else — an unknown word, two codes of one modal group on a line, an
+offset letter outside the arc's plane (K in G17) — is an error naming the file line.
 
 Program coordinates are added to ``origin`` (a work offset, m) to give machine coordinates.
 """
@@ -19,10 +21,11 @@ from pathlib import Path as FilePath
 import numpy as np
 
 from pkmkit.errors import InputError
-from pkmkit.motion.paths import Arc, Line, Path, arc_through
+from pkmkit.motion.paths import ARC_ABS_TOL, ARC_REL_TOL, Arc, Line, Path, arc_through
 
 _WORD = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 _UNITS = {20: 0.0254, 21: 1e-3}
+_UNIT_NAMES = {0.0254: "in", 1e-3: "mm"}
 _PLANES = {17: (np.array([0.0, 0.0, 1.0]), "IJ"), 18: (np.array([0.0, 1.0, 0.0]), "IK"),
            19: (np.array([1.0, 0.0, 0.0]), "JK")}
 _ALLOWED_G = {0, 1, 2, 3, 17, 18, 19, 20, 21, 90, 91}
@@ -94,6 +97,12 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
             else:
                 raise error(number, f"unsupported word {letter}{number_text} (only G0-G3, "
                             "G17-G21, G90, G91, X Y Z I J K R F and N are read)")
+        for group, what in ((set(_UNITS), "unit"), (set(_PLANES), "plane"), ({90, 91}, "distance"),
+                            ({0, 1, 2, 3}, "motion")):
+            clash = [g for g in g_codes if g in group]
+            if len(clash) > 1:
+                raise error(number, f"two {what} codes on one line: "
+                            + " ".join(f"G{g}" for g in clash))
         for g in g_codes:
             if g in _UNITS:
                 scale = _UNITS[g]
@@ -138,6 +147,10 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
 
 def _arc(start, end, values, plane, clockwise, scale, feed, error) -> Arc:
     normal, letters = _PLANES[plane]
+    off_plane = ({"I", "J", "K"} - set(letters)).pop()
+    if off_plane in values:
+        raise error(f"{off_plane} is not an offset of an arc in the G{plane} plane (use "
+                    f"{letters[0]} and {letters[1]})")
     in_plane = [i for i in range(3) if normal[i] == 0]
     if "R" in values:
         if any(k in values for k in "IJK"):
@@ -148,7 +161,7 @@ def _arc(start, end, values, plane, clockwise, scale, feed, error) -> Arc:
         if chord == 0:
             raise error("an R arc cannot describe a full circle; use I/J/K")
         half = chord / 2
-        if abs(radius) < half * (1 - 1e-9):
+        if abs(radius) < half - max(ARC_REL_TOL * half, ARC_ABS_TOL):
             raise error(f"inconsistent arc: radius {abs(radius) / scale:g} is smaller than half "
                         f"the chord ({half / scale:g})")
         h = np.sqrt(max(radius**2 - half**2, 0.0))
@@ -167,6 +180,7 @@ def _arc(start, end, values, plane, clockwise, scale, feed, error) -> Arc:
         if all(values.get(letter, 0.0) == 0.0 for letter in letters):
             raise error(f"an arc needs its centre: {letters[0]}/{letters[1]} offsets or R")
     try:
-        return arc_through(start, end, center, normal, clockwise=clockwise, feed=feed)
+        return arc_through(start, end, center, normal, clockwise=clockwise, feed=feed,
+                           units=(_UNIT_NAMES[scale], scale))
     except InputError as exc:
         raise error(str(exc)) from None

@@ -64,33 +64,33 @@ def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
     xdd = np.ascontiguousarray(trajectory.xdd[:, :dims])
     closed = machine._closed
     q = closed.inverse(x, machine.model.leg_branch)
-    bad = np.flatnonzero(~np.isfinite(q @ np.ones(machine.n_actuators)))
-    if bad.size:
-        k = int(bad[0])
-        short = closed.shortfall(x[k:k + 1])[0]
-        leg = int(np.nanargmax(short))
-        raise InputError(
-            f"the path leaves the workspace: first at t = {trajectory.t[k]:.6g} s, pose "
-            f"{np.round(x[k], 9).tolist()} m ({machine.model.leg_names[leg]} too short by "
-            f"{short[leg]:.6g} m)"
-        )
-    a, b = closed.jacobians_t(x, q)  # (n, dims, N), (n, N)
+    unreachable = ~np.isfinite(q @ np.ones(machine.n_actuators))
+    a, b = closed.jacobians_t(x, q)  # (n, dims, N), (n, N); NaN where unreachable
     lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
     det = small.det(a)
-    det_unit = det / np.prod(lengths, axis=0)
-    serial = np.min(np.abs(b) / lengths, axis=0)
-    wrong = (np.sign(det) != machine.working_mode) | (np.abs(det_unit) < tol) | (serial < tol)
-    if wrong.any():
-        k = int(np.flatnonzero(wrong)[0])
-        if serial[k] < tol:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        det_unit = det / np.prod(lengths, axis=0)
+        serial = np.min(np.abs(b) / lengths, axis=0)
+    wrong = ~unreachable & ((np.sign(det) != machine.working_mode) | (np.abs(det_unit) < tol)
+                            | (serial < tol))
+    failing = np.flatnonzero(unreachable | wrong)
+    if failing.size:
+        k = int(failing[0])
+        if unreachable[k]:
+            short = closed.shortfall(x[k:k + 1])[0]
+            leg = int(np.nanargmax(short))
+            what = (f"leaves the workspace ({machine.model.leg_names[leg]} too short by "
+                    f"{short[leg]:.6g} m)")
+        elif serial[k] < tol:
             what = "meets a serial singularity (a leg perpendicular to its slide)"
         elif abs(det_unit[k]) < tol:
             what = "meets a parallel singularity"
         else:
-            what = (f"is in the other assembly mode "
-                    f"({machine.mode_label(int(np.sign(det[k])))!r})")
-        raise InputError(f"the path {what} at t = {trajectory.t[k]:.6g} s, pose "
-                         f"{np.round(x[k], 9).tolist()} m")
+            mode = machine.mode_label(int(np.sign(det[k])))
+            what = (f"starts in the other assembly mode ({mode!r})" if k == 0 else
+                    f"crosses a parallel singularity into the other assembly mode ({mode!r})")
+        raise InputError(f"the path {what}: first at t = {trajectory.t[k]:.6g} s, pose "
+                         f"{np.round(x[k], 9).tolist()} m{_stroke_note(machine, trajectory, q, k)}")
     xd_t, xdd_t = xd.T, xdd.T
     qd = np.einsum("ikn,kn->in", a, xd_t) / b
     axis = closed.axis  # (n, dims), zero rows for struts
@@ -102,6 +102,18 @@ def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
            - b_dot * qd) / b
     return JointTrajectory(t=trajectory.t, x=x, xd=xd, xdd=xdd, q=q, qd=qd.T, qdd=qdd.T,
                            trajectory=trajectory)
+
+
+def _stroke_note(machine: Machine, trajectory: Trajectory, q: np.ndarray, k: int) -> str:
+    """Mention a stroke limit already exceeded before sample ``k`` (empty string if none)."""
+    model = machine.model
+    outside = (q[:k] < model.q_min) | (q[:k] > model.q_max)
+    if not outside.any():
+        return ""
+    first = int(np.flatnonzero(outside.any(axis=1))[0])
+    actuator = int(np.flatnonzero(outside[first])[0])
+    return (f"; the stroke of {machine.actuator_names[actuator]} is already exceeded from "
+            f"t = {trajectory.t[first]:.6g} s")
 
 
 @dataclass(frozen=True)

@@ -52,6 +52,10 @@ class Line:
     def curvature(self) -> float:
         return 0.0
 
+    @property
+    def torsion(self) -> float:
+        return 0.0
+
     def tangent(self, end: bool) -> np.ndarray:
         return (self.end - self.start) / self.length
 
@@ -86,6 +90,11 @@ class Arc:
         """Curvature of the (helical) arc, 1/m."""
         dphi = self.sweep / self.length
         return self.radius * dphi**2
+
+    @property
+    def torsion(self) -> float:
+        """|Torsion| of the helix (0 for a plane arc), 1/m."""
+        return abs(self.rise * self.sweep) / self.length**2
 
     def evaluate(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         dphi = self.sweep / self.length
@@ -162,29 +171,51 @@ def line(start, end, *, rapid: bool = False) -> Path:
     return Path((Line(a, b, rapid),))
 
 
+#: Arcs whose start and end radii differ by at most this fraction of the radius, or by
+#: :data:`ARC_ABS_TOL` (m), are accepted (rounded CAM output); their centre is then moved onto the
+#: chord's perpendicular bisector so the arc ends exactly at the programmed point.
+ARC_REL_TOL = 1e-3
+ARC_ABS_TOL = 5e-6
+
+
 def arc_through(start, end, center, normal, *, clockwise: bool, full_turns: int = 0,
-                rapid: bool = False, tol: float = 1e-6, feed: float | None = None) -> Arc:
+                rapid: bool = False, tol: float = ARC_REL_TOL, abs_tol: float = ARC_ABS_TOL,
+                feed: float | None = None, units: tuple[str, float] = ("m", 1.0)) -> Arc:
     """Arc from ``start`` to ``end`` about ``center`` in the plane of ``normal`` (any motion
     along ``normal`` becomes a helical rise), as G-code G2 (clockwise) / G3 describe it.
 
+    Args:
+        tol, abs_tol: accepted difference between the start and end radii, relative and
+            absolute (m): the larger applies.
+        units: (name, metres per unit) for error messages.
+
     Raises:
-        InputError: radii at start and end differing by more than ``tol`` (relative, at least
-            1e-9 m absolute), zero radius.
+        InputError: radii at start and end differing by more than the tolerance, zero radius.
     """
     start, end, center = (_vec3(v, w) for v, w in ((start, "arc start"), (end, "arc end"),
                                                    (center, "arc centre")))
     n = _vec3(normal, "arc normal")
     n = n / np.linalg.norm(n)
-    rs, re_ = start - center, end - center
     rise = float(np.dot(end - start, n))
-    rs_p = rs - np.dot(rs, n) * n
-    re_p = re_ - np.dot(re_, n) * n
+
+    def in_plane(v: np.ndarray) -> np.ndarray:
+        return v - np.dot(v, n) * n
+
+    rs_p, re_p = in_plane(start - center), in_plane(end - center)
     r0, r1 = np.linalg.norm(rs_p), np.linalg.norm(re_p)
     if r0 == 0:
         raise InputError("the arc has zero radius (start point on the centre)")
-    if abs(r0 - r1) > max(tol * r0, 1e-9):
-        raise InputError(f"inconsistent arc: radius {r0:.9g} m at the start but {r1:.9g} m at "
-                         "the end")
+    if abs(r0 - r1) > max(tol * r0, abs_tol):
+        name, scale = units
+        raise InputError(f"inconsistent arc: radius {r0 / scale:.9g} {name} at the start but "
+                         f"{r1 / scale:.9g} {name} at the end")
+    chord = re_p - rs_p
+    if np.linalg.norm(chord) > 0 and r0 != r1:
+        # move the centre onto the chord's perpendicular bisector: both radii become equal
+        u = chord / np.linalg.norm(chord)
+        center = center + np.dot(rs_p + 0.5 * chord, u) * u
+        rs_p, re_p = in_plane(start - center), in_plane(end - center)
+        r0 = np.linalg.norm(rs_p)
     e1 = rs_p / r0
     e2 = np.cross(n, e1)
     angle = math.atan2(float(np.dot(re_p, e2)), float(np.dot(re_p, e1)))
@@ -247,6 +278,8 @@ def raster(corner, width: float, height: float, passes: int, *, strategy: str = 
     c = _vec3(corner, "corner")
     if not (width > 0 and height >= 0):
         raise InputError(f"the rectangle needs width > 0 and height >= 0, got {width}, {height}")
+    if height == 0 and passes > 1:
+        raise InputError("a rectangle of height 0 is faced in one pass, not several")
     if int(passes) != passes or passes < 1:
         raise InputError(f"passes must be a positive integer, got {passes}")
     if strategy not in ("zigzag", "one-way"):

@@ -1,19 +1,22 @@
 """Time laws along a path: constant feed with acceleration and jerk limits.
 
-The path is cut into *blocks* at every corner (tangent discontinuity), wherever the feed or the
-move type (rapid / feed) changes and — for the jerk-limited profile — wherever the curvature jumps
-(a line meeting an arc: the normal acceleration would jump, an unbounded jerk); the tool stops at
-block ends (exact stop), which is what makes the limits hold through corners. Each block runs a
+The path is cut into *blocks* at every corner (tangent discontinuity, however small: a polyline
+stops at each vertex), wherever the feed or the move type (rapid / feed) changes and — for the
+jerk-limited profile — wherever the curvature vector jumps (a line meeting an arc, another radius
+or plane, an S-bend: the normal acceleration would jump, an unbounded jerk); the tool stops at
+block ends (exact stop), which is what makes the limits hold through corners. Zero-length
+segments are dropped. Each block runs a
 rest-to-rest profile of its arc length:
 
 - ``"trapezoid"``: acceleration-limited (piecewise-constant acceleration);
 - ``"scurve"``: jerk-limited seven-phase profile (piecewise-constant jerk), with the cases where
   the acceleration or the speed limit is not reached.
 
-On curved blocks the tool also accelerates towards the centre (v²κ) and that acceleration turns
-(jerk v³κ² + 2 v a_t κ); the block's speed and tangential limits are reduced so that the *total*
-acceleration ≤ A and jerk ≤ J: tangential acceleration ≤ (√3/2)A with normal ≤ A/2, and tangential
-jerk, normal jerk and the cross term ≤ J/3 each.
+On curved blocks the tool also accelerates towards the centre (v²κ) and that acceleration turns:
+the jerk is (ȧ_t − v³κ²) T + 3 v a_t κ N + v³κτ B on a helix of curvature κ and torsion τ. The
+block's speed and tangential limits are reduced so that the *total* acceleration ≤ A and jerk ≤ J:
+tangential acceleration ≤ (√3/2)A with normal ≤ A/2, and |ȧ_t|, v³κ², 3 v a_t κ, v³κτ ≤ J/3 each
+(|jerk| ≤ (√6/3) J).
 
 Sampling at a fixed period gives positions, velocities and accelerations from the analytic path
 derivatives: ẋ = x'(s) ṡ, ẍ = x''(s) ṡ² + x'(s) s̈.
@@ -165,24 +168,43 @@ def _corner(a, b, tol: float) -> bool:
     return cos < math.cos(tol)
 
 
+def _curvature_jump(a, b) -> bool:
+    """The curvature vector x'' differs across the joint (line ↔ arc, another radius, plane or
+    turning direction — an S-bend): the normal acceleration would jump, an unbounded jerk."""
+    ka = a.evaluate(np.array([a.length]))[2][0]
+    kb = b.evaluate(np.array([0.0]))[2][0]
+    scale = max(np.linalg.norm(ka), np.linalg.norm(kb))
+    return bool(np.linalg.norm(ka - kb) > 1e-9 * scale) if scale > 0 else False
+
+
+#: Segments shorter than this (m) are dropped by the planner: they carry no motion.
+MIN_SEGMENT = 1e-12
+
+
 def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
          profile: str = "scurve", rapid_feed: float | None = None, period: float = 0.01,
-         corner_tol: float = 1e-3, max_samples: int = 5_000_000) -> Trajectory:
+         corner_tol: float = 1e-6, max_samples: int = 5_000_000) -> Trajectory:
     """Time law along ``path`` and its samples every ``period`` seconds.
+
+    The tool stops exactly at every corner: a polyline approximating a curve stops at each
+    vertex (send arcs, G2/G3, to move through curves at feed); corner blending is not done.
 
     Args:
         path: the path.
         feed: default feed rate (m/s) for feed moves without a programmed one.
         accel: acceleration limit A (m/s²), on the total Cartesian acceleration.
-        jerk: jerk limit J (m/s³); required for ``"scurve"``.
+        jerk: jerk limit J (m/s³); required for ``"scurve"``, ignored by ``"trapezoid"``.
         profile: ``"scurve"`` or ``"trapezoid"``.
         rapid_feed: speed of rapid moves (default: 5 × feed).
         period: sampling period (s).
-        corner_tol: tangent angle (rad) above which a joint between segments is a corner.
+        corner_tol: tangent angle (rad) above which a joint between segments is a corner (the
+            default only absorbs rounding: the velocity jump v·angle it lets through is
+            negligible).
         max_samples: refuse plans that would need more samples.
 
     Raises:
-        InputError: non-positive limits or period, missing jerk, too many samples.
+        InputError: non-positive limits or period, missing jerk, a path of zero length, too
+            many samples.
     """
     for name, value in (("feed", feed), ("accel", accel), ("period", period)):
         if not (np.isfinite(value) and value > 0):
@@ -191,31 +213,26 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
         raise InputError(f"unknown profile {profile!r}; use {' or '.join(PROFILES)}")
     if profile == "scurve" and not (jerk is not None and np.isfinite(jerk) and jerk > 0):
         raise InputError("the S-curve profile needs a jerk limit > 0")
+    if profile == "trapezoid":
+        jerk = None
     rapid_feed = 5.0 * feed if rapid_feed is None else rapid_feed
     if not (np.isfinite(rapid_feed) and rapid_feed > 0):
         raise InputError(f"rapid feed must be > 0, got {rapid_feed}")
     segs = path.segments
+    moving = [k for k in range(len(segs)) if segs[k].length > MIN_SEGMENT]
+    if not moving:
+        raise InputError("the path has zero length")
 
     def speed_of(k: int) -> float:
         seg = segs[k]
         return rapid_feed if seg.rapid else (seg.feed or feed)
 
-    def curvature_jump(a, b) -> bool:
-        """A change of curvature (line ↔ arc, another radius or plane): the normal
-        acceleration would jump, i.e. unbounded jerk, unless the tool stops there."""
-        if profile != "scurve":
-            return False
-        if a.curvature == 0 and b.curvature == 0:
-            return False
-        if abs(a.curvature - b.curvature) > 1e-9 * max(a.curvature, b.curvature):
-            return True
-        return not np.allclose(np.cross(a.e1, a.e2), np.cross(b.e1, b.e2), atol=1e-9)
-
-    groups: list[list[int]] = [[0]]
-    for k in range(1, len(segs)):
+    groups: list[list[int]] = [[moving[0]]]
+    for k in moving[1:]:
         prev = segs[groups[-1][-1]]
         if (segs[k].rapid != prev.rapid or speed_of(k) != speed_of(groups[-1][-1])
-                or _corner(prev, segs[k], corner_tol) or curvature_jump(prev, segs[k])):
+                or _corner(prev, segs[k], corner_tol)
+                or (jerk is not None and _curvature_jump(prev, segs[k]))):
             groups.append([k])
         else:
             groups[-1].append(k)
@@ -223,13 +240,18 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
     for group in groups:
         lengths = np.array([segs[k].length for k in group])
         kappa = max(segs[k].curvature for k in group)
+        tau = max(segs[k].torsion for k in group)
         v = speed_of(group[0])
         a_t = accel * (math.sqrt(3) / 2 if kappa > 0 else 1.0)
         j_t = None if jerk is None else jerk / (3.0 if kappa > 0 else 1.0)
         if kappa > 0:
             v = min(v, math.sqrt(accel / 2 / kappa))
             if jerk is not None:
-                v = min(v, (jerk / 3 / kappa**2) ** (1 / 3), jerk / 3 / (2 * a_t * kappa))
+                # jerk on a helix: (ȧ_t − v³κ²) T + 3 v a_t κ N + v³ κ τ B; each of
+                # |ȧ_t|, v³κ², 3 v a_t κ and v³κτ ≤ J/3 keeps |jerk| ≤ √(6)/3 J < J
+                v = min(v, (jerk / 3 / kappa**2) ** (1 / 3), jerk / 9 / (a_t * kappa))
+                if tau > 0:
+                    v = min(v, (jerk / 3 / (kappa * tau)) ** (1 / 3))
         prof = (trapezoid(float(lengths.sum()), v, a_t) if profile == "trapezoid"
                 else scurve(float(lengths.sum()), v, a_t, j_t))
         blocks.append(Block(tuple(group), lengths, prof, segs[group[0]].rapid, v))
@@ -272,4 +294,39 @@ def _sample(path: Path, blocks: tuple[Block, ...], period: float) -> Trajectory:
             segment[r] = k
         rapid[rows] = block.rapid
     return Trajectory(t=t, x=x, xd=xd, xdd=xdd, segment=segment, rapid=rapid, blocks=blocks,
+                      path=path, period=period)
+
+
+def constant_speed(path: Path, *, speed: float, period: float) -> Trajectory:
+    """The path at a constant speed from the first sample to the last — no start or stop ramp,
+    as in a textbook (or the seeds' MATLAB) trajectory ``x = x0 + v t``: ẍ is only the
+    centripetal part on arcs. The velocity jumps from and to rest at the ends, so use it to
+    reproduce such studies, not to drive a machine (see :func:`plan`).
+
+    Raises:
+        InputError: non-positive speed or period, a path of zero length.
+    """
+    for name, value in (("speed", speed), ("period", period)):
+        if not (np.isfinite(value) and value > 0):
+            raise InputError(f"{name} must be > 0, got {value}")
+    lengths = np.array([seg.length for seg in path.segments])
+    if lengths.sum() <= MIN_SEGMENT:
+        raise InputError("the path has zero length")
+    duration = float(lengths.sum()) / speed
+    n = math.floor(duration / period + 1e-9) + 1
+    t = np.arange(n) * period
+    if t[-1] < duration - 1e-12:
+        t = np.append(t, duration)
+    s = np.minimum(speed * t, lengths.sum())
+    bounds = np.concatenate([[0.0], np.cumsum(lengths)])
+    which = np.clip(np.searchsorted(bounds, s, side="right") - 1, 0, len(lengths) - 1)
+    x, xd, xdd = (np.empty((len(t), 3)) for _ in range(3))
+    for k, seg in enumerate(path.segments):
+        rows = np.flatnonzero(which == k)
+        if rows.size == 0 or seg.length <= MIN_SEGMENT:
+            continue
+        p, dp, ddp = seg.evaluate(np.clip(s[rows] - bounds[k], 0.0, seg.length))
+        x[rows], xd[rows], xdd[rows] = p, dp * speed, ddp * speed**2
+    return Trajectory(t=t, x=x, xd=xd, xdd=xdd, segment=which,
+                      rapid=np.array([path.segments[k].rapid for k in which]), blocks=(),
                       path=path, period=period)

@@ -55,7 +55,11 @@ def singular_values(m: np.ndarray, cof: np.ndarray | None = None) -> np.ndarray:
         s1 = 0.5 * (np.hypot(a + d, c - b) + np.hypot(a - d, b + c))
         with np.errstate(invalid="ignore", divide="ignore"):
             s2 = np.where(s1 > 0, np.abs(a * d - b * c) / s1, 0.0)
-        return np.stack([s1, s2])
+        out = np.stack([s1, s2])
+        # NaN (or inf) entries: NaN singular values, never a silent 0 (np.where above maps a
+        # NaN s1 to the "zero matrix" branch)
+        out[:, ~np.isfinite(m).all(axis=(0, 1))] = np.nan
+        return out
     if m.shape[0] != 3:
         raise ValueError(f"closed-form singular values need 2x2 or 3x3 matrices, got {m.shape}")
     g = np.einsum("kin,kjn->ijn", m, m)  # MᵀM
@@ -83,8 +87,13 @@ def singular_values(m: np.ndarray, cof: np.ndarray | None = None) -> np.ndarray:
     out = np.stack([s1, s2, np.minimum(s3, s2)])
     finite = np.isfinite(m).all(axis=(0, 1))
     out[:, ~finite] = np.nan
-    close_top = np.flatnonzero(finite & (half_det < -1.0 + 1e-6) & (spread > 0))
-    if close_top.size:
-        out[:, close_top] = np.linalg.svd(m[:, :, close_top].transpose(2, 0, 1),
-                                          compute_uv=False).T
+    # nearly equal singular values make the closed forms lose about √eps: LAPACK for those
+    # (rare) matrices — the two largest (φ → π/3) or the two smallest (φ → 0, or σ2 − σ3
+    # obtained as a small difference)
+    with np.errstate(invalid="ignore"):
+        close = finite & (spread > 0) & ((np.abs(half_det) > 1.0 - 1e-6)
+                                         | (rest - 2 * pair < 1e-6 * rest))
+    close = np.flatnonzero(close)
+    if close.size:
+        out[:, close] = np.linalg.svd(m[:, :, close].transpose(2, 0, 1), compute_uv=False).T
     return out

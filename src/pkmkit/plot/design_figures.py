@@ -14,16 +14,20 @@ from pkmkit.design.optimize import OptimizationResult
 
 def plot_pareto(result: OptimizationResult, *,
                 references: Sequence[tuple[str, dict[str, float]]] = (),
-                title: str = "", path: str | Path | None = None) -> Figure:
+                title: str = "", path: str | Path | None = None,
+                units: str | None = None) -> Figure:
     """Evaluated designs in the plane of the first two objectives, the Pareto front, and
-    reference designs (label, metrics) for comparison."""
+    reference designs (label, metrics in SI) for comparison. ``units``: None for SI, or a
+    command-line length unit (see :class:`OptimizationResult`); the axis labels name it."""
     o1, o2 = result.problem.objectives[:2]
     fig = Figure(figsize=(6.6, 5.2), layout="constrained")
     ax = fig.add_subplot()
 
     def values(records: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndarray]:
-        return (np.array([r[o1.metric] for r in records], dtype=float),
-                np.array([r[o2.metric] for r in records], dtype=float))
+        return (np.array([result.to_units(o1.metric, float(r[o1.metric]), units)
+                          for r in records], dtype=float),
+                np.array([result.to_units(o2.metric, float(r[o2.metric]), units)
+                          for r in records], dtype=float))
 
     infeasible = [r for r in result.records if not r["feasible"]]
     feasible = [r for r in result.records if r["feasible"]]
@@ -36,11 +40,16 @@ def plot_pareto(result: OptimizationResult, *,
         order = np.argsort(x)
         ax.plot(x[order], y[order], "o-", color="tab:red", ms=4, label="Pareto front")
     for label, metrics in references:
-        ax.plot(metrics[o1.metric], metrics[o2.metric], "k*", ms=12)
-        ax.annotate(label, (metrics[o1.metric], metrics[o2.metric]), textcoords="offset points",
-                    xytext=(6, 6), fontsize=8)
-    ax.set_xlabel(f"{o1.metric} ({o1.sense})")
-    ax.set_ylabel(f"{o2.metric} ({o2.sense})")
+        x, y = values([metrics])
+        ax.plot(x[0], y[0], "k*", ms=12)
+        ax.annotate(label, (x[0], y[0]), textcoords="offset points", xytext=(6, 6), fontsize=8)
+
+    def axis_label(objective) -> str:
+        unit = result.unit_of(objective.metric, units)
+        return f"{objective.metric} ({objective.sense})" + (f" [{unit}]" if unit else "")
+
+    ax.set_xlabel(axis_label(o1))
+    ax.set_ylabel(axis_label(o2))
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title(title or f"{result.problem.base.name}: {len(result.records)} designs",

@@ -6,9 +6,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from matplotlib.colors import ListedColormap
+from matplotlib.backend_bases import FigureCanvasBase
+from matplotlib.colors import ListedColormap, LogNorm
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Rectangle
+from matplotlib.ticker import MaxNLocator
 
 from pkmkit.analysis.grids import Grid
 from pkmkit.analysis.workspace import (
@@ -17,6 +19,7 @@ from pkmkit.analysis.workspace import (
     UsefulWorkspace,
     WorkspaceMap,
 )
+from pkmkit.errors import InputError
 from pkmkit.machines.machine import Machine
 
 #: Colours of the workspace classes: first failing criterion, then feasible.
@@ -31,9 +34,35 @@ _CLASSES = (
 )
 
 
+def check_figure_path(path: str | Path) -> Path:
+    """Validate a figure file name before any work: an existing folder and an extension
+    matplotlib can write (.png, .svg, .pdf, ...).
+
+    Raises:
+        InputError: missing folder, no extension or an unsupported one.
+    """
+    path = Path(path)
+    formats = FigureCanvasBase.get_supported_filetypes()
+    suffix = path.suffix.lower().lstrip(".")
+    if suffix not in formats:
+        what = f"extension .{suffix}" if suffix else "no extension"
+        raise InputError(f"cannot write figure {str(path)!r}: {what}; use one of "
+                         f"{', '.join('.' + k for k in sorted(formats))}")
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise InputError(f"cannot write figure {str(path)!r}: folder {str(folder)!r} does not "
+                         "exist")
+    return path
+
+
 def _save(fig: Figure, path: str | Path | None) -> Figure:
     if path is not None:
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        check_figure_path(path)
+        try:
+            fig.savefig(path, dpi=120, bbox_inches="tight")
+        except OSError as exc:
+            raise InputError(f"cannot write figure {str(path)!r}: "
+                             f"{exc.strerror or exc}") from None
     return fig
 
 
@@ -49,10 +78,68 @@ def _labels(ax, grid: Grid, unit: str) -> None:
     ax.set_aspect("equal")
 
 
+#: A map's colour scale stops at the 95th percentile when the largest value exceeds it by more
+#: than this factor (a singular curve would otherwise squeeze every other value into one colour).
+TAIL_FACTOR = 10.0
+#: ``scale="auto"`` switches to logarithmic levels above this ratio of largest to smallest value.
+LOG_RATIO = 10.0
+
+
+def color_levels(values: np.ndarray, levels: int = 12, scale: str = "auto"
+                 ) -> tuple[np.ndarray, bool, bool]:
+    """Contour levels for the finite values of ``values``: ``(levels, logarithmic, clipped)``.
+
+    ``scale`` is ``"linear"``, ``"log"`` or ``"auto"`` (log when every value is positive and the
+    largest exceeds the smallest by more than :data:`LOG_RATIO`). Linear levels are round
+    numbers covering the values (``MaxNLocator``), logarithmic ones 1, 1.5, 2, 3, 5, 7 × 10^k.
+    When the largest value exceeds the 95th percentile by more than :data:`TAIL_FACTOR` (a
+    condition number near a singularity, up to 1e17), the levels stop at that percentile and
+    ``clipped`` is True: larger values get the top colour.
+    """
+    finite = np.asarray(values, dtype=float)
+    finite = finite[np.isfinite(finite)]
+    if finite.size == 0:
+        raise ValueError("nothing to draw: the index is undefined everywhere on the slice")
+    if scale not in ("auto", "linear", "log"):
+        raise InputError(f"unknown colour scale {scale!r}; use auto, linear or log")
+    low, high = float(finite.min()), float(finite.max())
+    if scale == "log" and low <= 0:
+        raise InputError("a logarithmic colour scale needs positive values")
+    logarithmic = scale == "log" or (scale == "auto" and low > 0 and high > LOG_RATIO * low)
+    top = high
+    p95 = float(np.percentile(finite, 95))
+    clipped = False
+    if logarithmic and high > TAIL_FACTOR * p95 and p95 > low:
+        top, clipped = p95, True
+    elif not logarithmic and high - low > TAIL_FACTOR * (p95 - low) and p95 > low:
+        top, clipped = p95, True
+    if not top > low:
+        return np.linspace(low - 0.5, low + 0.5, 3), False, False
+    if logarithmic:
+        return _log_levels(low, top, levels, clipped), True, clipped
+    return MaxNLocator(levels + 1).tick_values(low, top), False, clipped
+
+
+def _log_levels(low: float, top: float, count: int, clipped: bool) -> np.ndarray:
+    """Readable logarithmic levels (1, 1.5, 2, 3, 5, 7 × 10^k) from ``low`` to ``top``."""
+    first, last = int(np.floor(np.log10(low))), int(np.ceil(np.log10(top)))
+    nice = np.array([m * 10.0**k for k in range(first, last + 1)
+                     for m in (1.0, 1.5, 2.0, 3.0, 5.0, 7.0)])
+    nice = nice[(nice > low * (1 + 1e-9)) & (nice < top * (1 - 1e-9))]
+    while nice.size > count:
+        nice = nice[1::2] if nice.size % 2 == 0 else nice[::2]
+    return np.concatenate([[low], nice, [top]])
+
+
 def plot_scalar_map(grid: Grid, values: np.ndarray, *, ax=None, title: str = "",
                     label: str = "", levels: int | np.ndarray = 12, unit: str = "m",
-                    path: str | Path | None = None) -> Figure:
-    """Filled iso-contours of ``values`` (shape ``grid.shape``, 2 free axes; NaN = blank)."""
+                    scale: str = "auto", path: str | Path | None = None) -> Figure:
+    """Filled iso-contours of ``values`` (shape ``grid.shape``, 2 free axes; NaN = blank).
+
+    ``scale``: colour levels, see :func:`color_levels` (ignored when ``levels`` is an array).
+    Near a singularity (κ → ∞) the levels stop at the 95th percentile and the colour bar is
+    extended: the map stays readable where the machine is usable.
+    """
     if len(grid.free) != 2:
         raise ValueError("a map needs a grid with two free axes (a plane slice)")
     if ax is None:
@@ -63,10 +150,22 @@ def plot_scalar_map(grid: Grid, values: np.ndarray, *, ax=None, title: str = "",
     data = np.ma.masked_invalid(values)
     if data.count() == 0:
         raise ValueError("nothing to draw: the index is undefined everywhere on the slice")
-    filled = ax.contourf(x, y, data, levels=levels, cmap="viridis")
-    lines = ax.contour(x, y, data, levels=filled.levels, colors="k", linewidths=0.4)
+    norm = None
+    extend = "neither"
+    if np.ndim(levels) == 0:
+        levels, logarithmic, clipped = color_levels(data.compressed(), int(levels), scale)
+        if logarithmic:
+            norm = LogNorm(vmin=levels[0], vmax=levels[-1])
+        if clipped:  # larger values take the colour bar's extension
+            extend = "max"
+            label = f"{label} (top colour: above {levels[-1]:.3g})"
+    filled = ax.contourf(x, y, data, levels=levels, cmap="viridis", norm=norm, extend=extend)
+    lines = ax.contour(x, y, data, levels=filled.levels, colors="k", linewidths=0.4, norm=norm)
     ax.clabel(lines, fmt="%.3g", fontsize=6)
-    fig.colorbar(filled, ax=ax, label=label)
+    bar = fig.colorbar(filled, ax=ax, label=label)
+    if norm is not None:
+        bar.set_ticks(filled.levels, labels=[f"{v:.3g}" for v in filled.levels])
+        bar.minorticks_off()
     _labels(ax, grid, unit)
     ax.set_title(title, fontsize=9)
     return _save(fig, path)
