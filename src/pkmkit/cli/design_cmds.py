@@ -43,6 +43,12 @@ from .options import (
 )
 
 
+def _verified(check) -> dict:
+    """The brute-force verification of a sizing, for JSON."""
+    return {"feasible": check.feasible, "samples": check.samples,
+            "index_range": list(check.factor_range)}
+
+
 def register(cli: click.Group) -> None:
     """Add the design commands to the ``pkmkit`` group."""
     cli.add_command(design)
@@ -93,8 +99,7 @@ def design_orthoglide(cube, bounds, max_leg, units, as_json):
         "L": res.L / scale, "stroke": res.stroke / scale, "compactness": res.compactness,
         "side_over_L": res.side_over_L, "Q1": res.Q1 / scale, "Q2": res.Q2 / scale,
         "q_min": res.q_min / scale, "q_max": res.q_max / scale,
-        "verified": {"feasible": res.check.feasible, "samples": res.check.samples,
-                     "index_range": list(res.check.factor_range)},
+        "verified": _verified(res.check),
         "notes": list(res.notes),
     }
     if as_json:
@@ -140,8 +145,7 @@ def design_five_bar(square, bounds, design_name, units, as_json):
             "alpha": np.degrees([res.machine.params["alpha1"], res.machine.params["alpha2"]]),
             "q_min": res.q_min / scale, "q_max": res.q_max / scale,
             "stroke": res.stroke / scale, "square_center": res.square_center / scale,
-            "verified": {"feasible": res.check.feasible, "samples": res.check.samples,
-                         "index_range": list(res.check.factor_range)},
+            "verified": _verified(res.check),
             "notes": list(res.notes),
         }
     if not results:  # both designs fail: say why for each
@@ -199,8 +203,7 @@ def design_linear_delta(cube, center_text, bounds, nacelle, objective, max_leg, 
         "d": res.d / scale, "stroke": res.stroke / scale, "q_min": res.q_min / scale,
         "q_max": res.q_max / scale, "compactness": res.compactness, "gci": res.gci,
         "index_range": list(res.index_range),
-        "verified": {"feasible": res.check.feasible, "samples": res.check.samples,
-                     "index_range": list(res.check.factor_range)},
+        "verified": _verified(res.check),
         "notes": list(res.notes),
     }
     if as_json:
