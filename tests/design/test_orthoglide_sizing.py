@@ -16,15 +16,14 @@ def test_seed_001_prototype():
     assert res.compactness == pytest.approx(0.78, abs=0.003)
     # Q1 and Q2 sit on the diagonal, Lw apart per axis, where the bounds are reached
     np.testing.assert_allclose(res.Q2 - res.Q1, 0.2, atol=1e-12)
-    # exact positions (docs/design.md §1): Q1 = −L/√6 (1, 1, 1), Q2 = L/(3√2) (1, 1, 1). The
-    # bisection uses the closed-form singular values, accurate only to ~√eps where two of them
-    # coincide (λ = (2, 2, 0.5) at Q1), hence 1e-7 rather than machine precision
-    np.testing.assert_allclose(res.Q1, -res.L / np.sqrt(6), rtol=1e-7)
-    np.testing.assert_allclose(res.Q2, res.L / (3 * np.sqrt(2)), rtol=1e-7)
+    # exact positions (docs/design.md §1): Q1 = −L/√6 (1, 1, 1), Q2 = L/(3√2) (1, 1, 1), to
+    # machine precision also where two singular values coincide (λ = (2, 2, 0.5) at Q1)
+    np.testing.assert_allclose(res.Q1, -res.L / np.sqrt(6), rtol=1e-12)
+    np.testing.assert_allclose(res.Q2, res.L / (3 * np.sqrt(2)), rtol=1e-12)
     sv1 = np.linalg.svd(res.machine.jacobian(res.Q1).J, compute_uv=False)
     sv2 = np.linalg.svd(res.machine.jacobian(res.Q2).J, compute_uv=False)
-    assert max(sv1[0] / 2, 0.5 / sv1[-1]) == pytest.approx(1.0, abs=1e-7)
-    assert max(sv2[0] / 2, 0.5 / sv2[-1]) == pytest.approx(1.0, abs=1e-7)
+    assert max(sv1[0] / 2, 0.5 / sv1[-1]) == pytest.approx(1.0, abs=1e-12)
+    assert max(sv2[0] / 2, 0.5 / sv2[-1]) == pytest.approx(1.0, abs=1e-12)
     assert res.check.feasible and res.check.samples == 41**3
 
 
@@ -35,7 +34,7 @@ def test_independent_brute_force_of_the_whole_cube():
     g = np.linspace(res.Q1[0], res.Q2[0], 31)
     cube = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
     sv = np.linalg.svd(m.jacobian(cube).J, compute_uv=False)
-    assert sv.min() >= 0.5 * (1 - 1e-7) and sv.max() <= 2.0 * (1 + 1e-7)  # see above
+    assert sv.min() >= 0.5 * (1 - 1e-12) and sv.max() <= 2.0 * (1 + 1e-12)
     q = m.ik(cube)
     assert (q.min(axis=0) >= res.q_min - 1e-12).all() and (q.max(axis=0) <= res.q_max + 1e-12).all()
     np.testing.assert_allclose(q.min(axis=0), res.q_min, atol=1e-4)
