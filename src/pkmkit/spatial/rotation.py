@@ -1,16 +1,58 @@
-"""Batched rotations.
+"""Batched rotations and named angle conventions.
 
 Orientations are rotation vectors φ (axis × angle, radians) at the interfaces and rotation
 matrices inside computations. Conversions go through :class:`scipy.spatial.transform.Rotation`,
 which handles the small-angle and near-π cases carefully.
 
 Perturbations are *left* (world-frame) increments: ``R ← exp([δ]×) R``.
+
+**Angle conventions** are named, never guessed, and used only at I/O (command line, files,
+reports). A convention is a scipy-style axis sequence: three letters from ``xyz``, *upper case
+for intrinsic* rotations (about the moving axes, e.g. ``"ZYX"`` yaw–pitch–roll) and *lower case
+for extrinsic* rotations (about the fixed axes, e.g. ``"xyz"``). The angles are given in the
+order of the sequence. A few aliases name common choices (see :data:`CONVENTION_ALIASES`); the
+default of the command line, :data:`DEFAULT_CONVENTION`, is ``"xyz"``: A about the fixed x axis,
+then B about the fixed y axis, then C about the fixed z axis, i.e. ``R = Rz(C) Ry(B) Rx(A)``
+(roll–pitch–yaw, the A/B/C of machine-tool axes named after x/y/z).
+
+>>> import numpy as np
+>>> R = rotation_from_angles([90.0, 0.0, 0.0], "xyz", degrees=True)
+>>> np.round(R.apply([0.0, 1.0, 0.0]), 12)
+array([0., 0., 1.])
+>>> np.round(angles_from_rotation(R, "xyz", degrees=True), 9)
+array([90.,  0.,  0.])
 """
 
 from __future__ import annotations
 
+import re
+from typing import Any
+
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+from pkmkit.errors import InputError
+
+#: The command line's default angle convention (fixed axes x, then y, then z).
+DEFAULT_CONVENTION = "xyz"
+
+#: Common names of angle conventions, mapped to scipy axis sequences.
+CONVENTION_ALIASES: dict[str, str] = {
+    "rpy": "xyz",  # roll about x, pitch about y, yaw about z, fixed axes
+    "roll-pitch-yaw": "xyz",
+    "fixed-xyz": "xyz",
+    "cardan-xyz": "XYZ",  # Cardan/Bryant angles about the moving axes x, y', z''
+    "bryant": "XYZ",
+    "ypr": "ZYX",  # yaw-pitch-roll about the moving axes (aerospace)
+    "yaw-pitch-roll": "ZYX",
+    "euler-zyz": "ZYZ",
+    "euler-zxz": "ZXZ",
+}
+
+_SEQUENCE = re.compile(r"^(?:[xyz]{3}|[XYZ]{3})$")
+
+#: Tolerance on ‖RᵀR − I‖ and |det R − 1| for a matrix accepted as a rotation.
+ROTATION_TOL = 1e-6
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -35,8 +77,132 @@ def rotvec_to_matrix(phi: np.ndarray) -> np.ndarray:
     return Rotation.from_rotvec(np.asarray(phi, dtype=float).reshape(-1, 3)).as_matrix()
 
 
+def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
+    """Rotation vectors ``(N, 3)`` (radians, angle in [0, π]) of rotation matrices ``(N, 3, 3)``."""
+    return Rotation.from_matrix(np.asarray(matrix, dtype=float).reshape(-1, 3, 3)).as_rotvec()
+
+
 def compose_rotvec(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """Rotation vector of ``exp(δ) · exp(φ)`` (left increment δ applied to φ), rows ``(N, 3)``."""
     d = Rotation.from_rotvec(np.asarray(delta, dtype=float).reshape(-1, 3))
     p = Rotation.from_rotvec(np.asarray(phi, dtype=float).reshape(-1, 3))
     return (d * p).as_rotvec()
+
+
+def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rotation matrices about unit axes by angles (Rodrigues), batched.
+
+    Args:
+        axis: ``(..., 3)`` unit vectors.
+        angle: ``(...)`` radians (broadcast against ``axis[..., 0]``).
+
+    Returns:
+        ``(..., 3, 3)``.
+    """
+    axis = np.asarray(axis, dtype=float)
+    angle = np.asarray(angle, dtype=float)
+    c, s = np.cos(angle), np.sin(angle)
+    k = skew(axis)
+    outer = axis[..., :, None] * axis[..., None, :]
+    eye = np.eye(3)
+    return (c[..., None, None] * eye + s[..., None, None] * k
+            + (1.0 - c)[..., None, None] * outer)
+
+
+def resolve_convention(name: Any) -> str:
+    """The scipy axis sequence of a named angle convention.
+
+    Accepts a sequence (``"xyz"`` extrinsic, ``"ZYX"`` intrinsic, ...) or an alias of
+    :data:`CONVENTION_ALIASES` (case-insensitive for aliases).
+
+    Raises:
+        InputError: an unknown name (the message lists the valid forms).
+    """
+    if isinstance(name, str):
+        text = name.strip()
+        alias = CONVENTION_ALIASES.get(text.lower())
+        if alias is not None:
+            return alias
+        if _SEQUENCE.match(text) and len(set(text.lower())) >= 2 and text[0].lower() != text[
+                1].lower() and text[1].lower() != text[2].lower():
+            return text
+    raise InputError(
+        f"unknown angle convention {name!r}: give three axes from x, y, z with no axis twice in a "
+        "row, lower case for rotations about the fixed axes (e.g. 'xyz') or upper case about the "
+        f"moving axes (e.g. 'ZYX', 'ZYZ'), or one of {', '.join(sorted(CONVENTION_ALIASES))}"
+    )
+
+
+def describe_convention(name: Any) -> str:
+    """One-line description of a convention, e.g. ``"xyz: extrinsic (fixed axes) x, y, z"``."""
+    seq = resolve_convention(name)
+    kind = "intrinsic (moving axes)" if seq.isupper() else "extrinsic (fixed axes)"
+    return f"{seq}: {kind} {', '.join(seq.lower())}"
+
+
+def rotation_from_angles(angles: Any, convention: str = DEFAULT_CONVENTION, *,
+                         degrees: bool = False) -> Rotation:
+    """A (batched) :class:`~scipy.spatial.transform.Rotation` from angles in a named convention.
+
+    Args:
+        angles: ``(3,)`` or ``(N, 3)`` angles in the order of the convention's axes.
+        convention: see :func:`resolve_convention`.
+        degrees: angles in degrees (the command line) instead of radians.
+
+    Raises:
+        InputError: unknown convention, mis-shaped or non-finite angles.
+    """
+    seq = resolve_convention(convention)
+    arr = np.asarray(angles, dtype=float)
+    if arr.shape[-1:] != (3,) or arr.ndim > 2:
+        raise InputError(f"angles must have shape (3,) or (N, 3), got {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise InputError(f"angles must be finite, got {arr.tolist()}")
+    return Rotation.from_euler(seq, arr, degrees=degrees)
+
+
+def angles_from_rotation(rotation: Rotation, convention: str = DEFAULT_CONVENTION, *,
+                         degrees: bool = False) -> np.ndarray:
+    """Angles ``(3,)`` or ``(N, 3)`` of a rotation in a named convention.
+
+    At a gimbal lock (the middle angle at ±90° for Cardan sequences, 0/180° for Euler ones) the
+    first and third angles are not unique; scipy then sets the third to zero.
+    """
+    seq = resolve_convention(convention)
+    import warnings
+
+    with warnings.catch_warnings():  # the gimbal-lock warning: documented above
+        warnings.simplefilter("ignore", UserWarning)
+        return rotation.as_euler(seq, degrees=degrees)
+
+
+def as_rotation_matrices(value: Any, name: str = "rotation") -> np.ndarray:
+    """Validate rotation matrices ``(3, 3)`` or ``(N, 3, 3)``: finite, orthonormal, det +1.
+
+    Returns:
+        ``(N, 3, 3)`` float array.
+
+    Raises:
+        InputError: wrong shape, non-finite entries, or a matrix that is not a rotation (the
+            message names the first bad matrix and by how much it fails).
+    """
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be an array of real numbers") from None
+    if arr.shape[-2:] != (3, 3) or arr.ndim not in (2, 3):
+        raise InputError(f"{name} must have shape (3, 3) or (N, 3, 3), got {arr.shape}")
+    arr = arr.reshape(-1, 3, 3)
+    if not np.isfinite(arr).all():
+        k = int(np.flatnonzero(~np.isfinite(arr).all(axis=(1, 2)))[0])
+        raise InputError(f"{name} {k} has non-finite entries")
+    gram = np.einsum("kji,kjl->kil", arr, arr) - np.eye(3)
+    ortho = np.abs(gram).max(axis=(1, 2))
+    det = np.linalg.det(arr)
+    bad = (ortho > ROTATION_TOL) | (np.abs(det - 1.0) > ROTATION_TOL)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise InputError(
+            f"{name} {k} is not a rotation matrix: |RᵀR − I| = {ortho[k]:.3g}, det = {det[k]:.6g} "
+            f"(a rotation needs orthonormal columns and det = +1)")
+    return arr
