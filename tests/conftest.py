@@ -7,8 +7,11 @@ import pytest
 
 import pkmkit
 from pkmkit.machines.registry import ALIASES
+from pkmkit.model.rods import CRANK
 
 PRESETS = [m for m in pkmkit.machines() if m not in ALIASES]
+#: Presets whose actuators are all linear (slides, struts): what the dynamics layer models.
+LINEAR_PRESETS = [m for m in PRESETS if not (pkmkit.machine(m).model.leg_kind == CRANK).any()]
 
 
 def workspace_half_width(machine: pkmkit.Machine) -> float:
@@ -26,4 +29,10 @@ def random_poses(machine: pkmkit.Machine, n: int, seed: int = 0) -> np.ndarray:
 @pytest.fixture(params=PRESETS)
 def preset(request) -> pkmkit.Machine:
     """Every built-in preset machine."""
+    return pkmkit.machine(request.param)
+
+
+@pytest.fixture(params=LINEAR_PRESETS)
+def linear_preset(request) -> pkmkit.Machine:
+    """Every built-in preset machine with linear actuators only (slides, struts)."""
     return pkmkit.machine(request.param)

@@ -78,17 +78,22 @@ class UnreachablePoseError(PkmError, ValueError):
     Attributes:
         leg: 0-based index of the first leg that cannot close.
         leg_name: its name.
-        shortfall: by how much the leg is too short, in metres (> 0).
+        shortfall: by how much the leg is too short (or too long), in metres (> 0).
+        too_long: the leg's rod is too long rather than too short (a crank arm whose tip circle
+            passes too close to the platform joint).
     """
 
-    def __init__(self, leg: int, leg_name: str, shortfall: float, pose_index: int | None = None):
+    def __init__(self, leg: int, leg_name: str, shortfall: float, pose_index: int | None = None,
+                 *, too_long: bool = False):
         self.leg = leg
         self.leg_name = leg_name
         self.shortfall = float(shortfall)
         self.pose_index = pose_index
+        self.too_long = too_long
         where = f"pose {pose_index}: " if pose_index is not None else ""
+        how = "too long" if too_long else "too short"
         super().__init__(
-            f"{where}pose unreachable: {leg_name} (leg index {leg}) is too short by "
+            f"{where}pose unreachable: {leg_name} (leg index {leg}) is {how} by "
             f"{self.shortfall:.6g} m to reach it"
         )
 

@@ -113,7 +113,7 @@ def test_batch_csv_with_bad_rows(run, tmp_path):
 @pytest.mark.parametrize(
     "args, message",
     [
-        (["ik", "delta", "--pose", "0,0,0"], "unknown machine 'delta'; valid ids:"),
+        (["ik", "delta-x", "--pose", "0,0,0"], "unknown machine 'delta-x'; valid ids:"),
         (["ik", "linear-delta", "--set", "LL=1", "--pose", "0,0,0"], "valid parameters: L, R"),
         (["ik", "linear-delta", "--pose", "3,0,0"], "too short by"),
         (["ik", "linear-delta", "--pose", "0,0"], "needs 3 comma-separated"),

@@ -35,7 +35,8 @@ def test_static_equilibrium_of_the_vertical_slides(delta_b):
                                rtol=1e-12)
 
 
-def test_static_forces_are_the_gradient_of_the_potential(preset):
+def test_static_forces_are_the_gradient_of_the_potential(linear_preset):
+    preset = linear_preset
     """At rest f = ∂V/∂q (virtual work), for any machine and gravity direction."""
     masses = mass_properties(preset, carriage=3.0, rod=0.7, rod_radius=0.01, platform=4.0,
                              gravity=(0.3, -2.0, -9.81))

@@ -18,7 +18,7 @@ def test_ids_and_aliases():
 
 
 def test_unknown_machine_lists_valid_ids():
-    with pytest.raises(UnknownMachineError, match="valid ids: five-bar, ") as info:
+    with pytest.raises(UnknownMachineError, match="valid ids: delta, five-bar, ") as info:
         pkmkit.machine("tripteor")
     assert "orthoglide" in info.value.valid
 
@@ -98,7 +98,7 @@ ROD = ('[machine]\nkind = "rod-legs"\n\n[[legs]]\nbase = [0.5, 0, 0]\n'
        "platform = [0, 0, 0]\nlength = 1\naxis = [0, 0, 1]\n")
 
 BAD_FILES = [
-    ('[machine]\nkind = "delta"\n', 2, "kind must be one of"),
+    ('[machine]\nkind = "deltoid"\n', 2, "kind must be one of"),
     ('[machine]\nkind = "linear-delta"\nunits = "inch"\n', 3, "unknown length unit"),
     ('[machine]\nkind = "linear-delta"\n[parameters]\nR = 0.7\nRR = 1\n', 5,
      "unknown parameter 'RR'"),
@@ -119,7 +119,7 @@ BAD_FILES = [
     ('[machine]\nkind = "linear-delta"\n[parameters]\nL = true\n', 4, "numeric"),
     ('[machine]\nkind = "linear-delta"\n[parameters]\nL = "1.3"\n', 4, "numeric"),
     ('[machine]\nkind = "rod-legs"\ndims = 2.0\n', 3, "integer 2 or 3"),
-    (ROD + 'type = ["slide"]\n', 9, "type must be 'slide' or 'strut'"),
+    (ROD + 'type = ["slide"]\n', 9, "type must be 'slide', 'strut' or 'crank'"),
     (ROD + 'parallelogram = { width = "abc", direction = [1, 0, 0] }\n', 9,
      "width must be a finite number"),
     (ROD + "parallelogram = { width = 0.05 }\n", 9, "needs a 'direction'"),

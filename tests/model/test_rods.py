@@ -32,7 +32,8 @@ def test_parallelogram_makes_two_offset_rods():
 @pytest.mark.parametrize(
     "changes, message",
     [
-        ({"kind": "crank"}, "kind must be one of"),
+        ({"kind": "rotary"}, "kind must be one of"),
+        ({"kind": "crank"}, "pivot must be 3 finite numbers"),
         ({"axis": (0, 0, 0)}, "zero vector"),
         ({"axis": (1, 0)}, "3 finite numbers"),
         ({"length": -1.0}, "length must be > 0"),

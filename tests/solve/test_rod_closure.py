@@ -61,7 +61,7 @@ def test_q_jacobian_matches_finite_differences():
     u = rng.normal(0, 0.1, (3, 5))
     q = rng.normal(1.0, 0.1, (3, 5))
     v = rod_vectors(model, u, q)
-    jac = _q_columns(model, _unit_rods(v))
+    jac = _q_columns(model, _unit_rods(v), q)
     h = 1e-7
     for j in range(3):
         dq = np.zeros((3, 5))

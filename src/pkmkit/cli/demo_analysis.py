@@ -37,8 +37,10 @@ from pkmkit.plot.maps import (
     plot_workspace,
 )
 
-#: Transmission-factor bounds used for each kind (seed 001 and 004; [0.5, 2] for the Delta).
-BOUNDS = {"orthoglide": (0.5, 2.0), "linear-delta": (0.5, 2.0), "five-bar": (1 / 3, 3.0)}
+#: Transmission-factor bounds used for each kind (seed 001 and 004; [0.5, 2] for the linear
+#: Delta; for the Delta robot the factors are in m/rad: [0.1, 0.8] m/rad).
+BOUNDS = {"orthoglide": (0.5, 2.0), "linear-delta": (0.5, 2.0), "five-bar": (1 / 3, 3.0),
+          "delta": (0.1, 0.8)}
 
 
 def machine_analysis(m: Machine, out: Path) -> dict[str, Any]:

@@ -29,6 +29,9 @@ _GENERIC = {"carriage": 5.0, "diameter": 0.020, "density": 2700.0, "platform": 5
 
 def default_masses(machine: Machine) -> MassProperties:
     """The illustrative mass properties of ``machine``'s kind (see the module docstring)."""
+    from pkmkit.dynamics.inverse import require_linear_actuators
+
+    require_linear_actuators(machine, "a mass model")
     spec = _DEFAULTS.get(machine.kind.kind if machine.kind else "", _GENERIC)
     rod, radius, piston = rod_section_mass(machine, spec["diameter"], spec["density"])
     return mass_properties(machine, carriage=spec["carriage"], rod=rod, rod_radius=radius,

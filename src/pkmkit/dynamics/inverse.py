@@ -45,7 +45,7 @@ import numpy as np
 from pkmkit.dynamics.masses import MassProperties
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import Machine
-from pkmkit.model.rods import SLIDE
+from pkmkit.model.rods import CRANK, SLIDE
 from pkmkit.numerics import small
 
 
@@ -77,6 +77,15 @@ CHUNK = 8192
 PARTS = ("carriages", "rods", "platform", "external")
 
 
+def require_linear_actuators(machine: Machine, what: str) -> None:
+    """Refuse machines with crank (rotary) actuators, whose arm inertia is not modelled."""
+    if (machine.model.leg_kind == CRANK).any():
+        raise InputError(
+            f"{what} is not available for {machine.id!r}: it has rotary (crank) actuators, and "
+            "pkmkit's dynamics model only slides and struts so far (the arms' inertia and the "
+            "motor torques are not modelled); joint trajectories (q, q̇, q̈) are available")
+
+
 def _pad(a: np.ndarray) -> np.ndarray:
     if a.shape[-1] == 3:
         return a
@@ -90,6 +99,10 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
                      *, wrench: Any = None) -> ForceResult:
     """Actuator forces and powers for a motion (see the module docstring).
 
+    Raises:
+        InputError: a machine with crank (rotary) actuators — the inertia of its arms and the
+            motor torques are not modelled yet —, or mis-shaped arrays.
+
     Args:
         machine: a translational rod-leg machine with slide legs.
         masses: its mass properties.
@@ -101,6 +114,7 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
     Raises:
         InputError: mismatched shapes, non-finite wrench, masses that do not fit the machine.
     """
+    require_linear_actuators(machine, "inverse dynamics")
     masses.check(machine)
     n_samples = x.shape[0]
     for name, arr, width in (("xd", xd, machine.dims), ("xdd", xdd, machine.dims),

@@ -5,11 +5,20 @@ user machines of the same structure — shares these models; the machine modules
 geometry. Notation for leg i (actuator i), platform position p (``dims`` coordinates):
 
 - rod centre on the carriage side ``c_i(q) = a0_i − b_i + κs q_i u_i`` (κs = 1 for a slide),
-  rod length ``ρ_i(q) = ℓ_i + κt q_i`` (κt = 1 for a strut); closure ``|p − c_i| = ρ_i``.
+  rod length ``ρ_i(q) = ℓ_i + κt q_i`` (κt = 1 for a strut); closure ``|p − c_i| = ρ_i``;
+- for a **crank** (rotary actuator, axis w_i through P_i) the arm tip turns on a circle:
+  ``a_i(q) = P_i + h_i w_i + r_i (cos q e1_i + sin q e2_i)`` with ``e1_i`` the arm direction at
+  q = 0 (across the axis), ``e2_i = w_i × e1_i``, ``r_i`` the arm length and ``h_i`` the arm-tip
+  offset along the axis; ``c_i(q) = a_i(q) − b_i``, ``ρ_i = ℓ_i``.
 
 **Inverse model.** With ``w = p − (a0_i − b_i)`` split along the slide (``s = w·u_i``) and across
 it (``w⊥``): ``q_i = s + σ_i sqrt(ℓ_i² − |w⊥|²)`` for a slide (σ_i = ±1, the working branch),
 ``q_i = |w| − ℓ_i`` for a strut. The pose is out of reach of leg i when ``|w⊥| > ℓ_i``.
+For a crank, with ``v = p + b_i − P_i`` written ``(v_w, v_1, v_2)`` in ``(w, e1, e2)``:
+``|d|² = K − 2 r (v_1 cos q + v_2 sin q)``, ``K = (v_w − h)² + v_1² + v_2² + r²``, so
+``q = φ0 + σ acos((K − ℓ²) / (2 r ρ⊥))`` with ``φ0 = atan2(v_2, v_1)``, ``ρ⊥ = hypot(v_1, v_2)``;
+out of reach when ``|K − ℓ²| > 2 r ρ⊥``. In every kind the branch is ``σ = −sign(d·∂a/∂q)``
+(``d = p − c_i``): the sign of the serial Jacobian entry picks the root.
 
 **Direct model.** The intersection of ``dims`` spheres (circles in the plane) centred at c_i
 with radii ρ_i: subtracting the first equation from the others gives linear equations whose
@@ -19,10 +28,12 @@ solution is the point p0 of the centres' plane; the two assembly modes are
 sign of det A, and the parallel singularity det A = 0 is where they merge (t = 0).
 
 **Velocity model.** Differentiating the closure: ``A ṗ = B q̇`` with A rows ``(p − c_i)ᵀ``
-(parallel Jacobian) and ``B = diag(κs (p − c_i)·u_i + κt ρ_i)`` (serial Jacobian), as in seeds 000
-(J_x, J_q), 001 (eq. 2, J⁻¹ = B⁻¹A) and 004 (A, B). ``J = A⁻¹B`` maps actuator rates to
-platform velocity. Its time derivative: ``J̇ = A⁻¹(Ḃ − ȦJ)`` with Ȧ rows
-``(ṗ − κs q̇_i u_i)ᵀ`` and ``Ḃ = diag(κs ḋ_i·u_i + κt q̇_i)``.
+(parallel Jacobian) and ``B = diag((p − c_i)·∂c_i/∂q_i + κt ρ_i)`` (serial Jacobian), as in seeds
+000 (J_x, J_q), 001 (eq. 2, J⁻¹ = B⁻¹A) and 004 (A, B); ``∂c_i/∂q_i`` is ``u_i`` for a slide,
+``w_i × (a_i − P_i)`` for a crank, 0 for a strut. ``J = A⁻¹B`` maps actuator rates to platform
+velocity. Its time derivative: ``J̇ = A⁻¹(Ḃ − ȦJ)`` with Ȧ rows ``(ṗ − q̇_i ∂c_i/∂q_i)ᵀ`` and
+``Ḃ = diag(ḋ_i·∂c_i/∂q_i + d_i·∂²c_i/∂q_i² q̇_i + κt q̇_i)`` (``∂²c/∂q² = −r (cos q e1 + sin q e2)``
+for a crank, 0 otherwise).
 """
 
 from __future__ import annotations
@@ -31,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.model.rods import SLIDE, STRUT, RodModel
+from pkmkit.model.rods import CRANK, SLIDE, STRUT, RodModel
 
 #: Relative tolerance (on ℓ²) within which a negative inverse-model radicand is rounding noise at
 #: the workspace boundary (leg perpendicular to its slide) and is taken as 0.
@@ -67,10 +78,27 @@ class RodClosedForm:
         dims = m.dims
         centre0 = (m.leg_base - m.leg_platform)[:, :dims]
         axis = m.leg_axis[:, :dims]
-        blocks = [_orthonormal_basis(axis[i], dims) for i in range(m.n_legs)]
+        crank = m.leg_kind == CRANK
+        # crank frames: axis w, arm direction e1 at q = 0, e2 = w × e1; arm length and offset
+        arm = m.leg_base - m.leg_pivot
+        along = np.einsum("id,id->i", arm, m.leg_axis)
+        across = arm - along[:, None] * m.leg_axis
+        radius = np.where(crank, np.linalg.norm(across, axis=1), 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            e1 = np.where(crank[:, None], across / radius[:, None], 0.0)
+        e2 = np.cross(m.leg_axis, e1)
+        blocks = [np.array([m.leg_axis[i], e1[i], e2[i]]) if crank[i]
+                  else _orthonormal_basis(axis[i], dims) for i in range(m.n_legs)]
+        # projection origin: the carriage centre at q = 0, or the pivot − b for a crank
+        origin = np.where(crank[:, None], (m.leg_pivot - m.leg_platform)[:, :dims], centre0)
         projection = np.concatenate([b.T for b in blocks], axis=1)  # (dims, n*dims)
-        offset = np.concatenate([b @ centre0[i] for i, b in enumerate(blocks)])
+        offset = np.concatenate([b @ origin[i] for i, b in enumerate(blocks)])
         set_ = object.__setattr__
+        set_(self, "crank", crank.astype(float))
+        set_(self, "crank_radius", radius)
+        set_(self, "crank_offset", np.where(crank, along, 0.0))
+        set_(self, "crank_e1", e1)
+        set_(self, "crank_e2", e2)
         set_(self, "centre0", centre0)
         set_(self, "axis", axis)
         set_(self, "projection", projection)
@@ -111,29 +139,83 @@ class RodClosedForm:
                         if branches[i] < 0:
                             np.negative(root, out=root)
                         np.add(y[base], root, out=out[i, start:stop])
+                    elif kinds[i] == CRANK:
+                        out[i, start:stop] = self._crank_angle(
+                            y[base], y[base + 1], y[base + 2], perp_sq, i, branches[i])
                     else:
                         perp_sq += y[base] * y[base]
                         np.sqrt(perp_sq, out=out[i, start:stop])
                         out[i, start:stop] -= self.model.leg_length[i]
         return out.T
 
+    def _crank_terms(self, v_w, v_1, v_2, perp_sq, i):
+        """``(K − ℓ², 2 r ρ⊥)`` of crank leg i (see the module docstring)."""
+        radius = self.crank_radius[i]
+        along = v_w - self.crank_offset[i]
+        k = along * along + perp_sq + radius * radius
+        return k - self.length_sq[i], 2.0 * radius * np.sqrt(perp_sq)
+
+    def _crank_angle(self, v_w, v_1, v_2, perp_sq, i, branch):
+        """Crank angle of leg i (radians in (−π, π]); NaN out of reach."""
+        g, amplitude = self._crank_terms(v_w, v_1, v_2, perp_sq, i)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cosine = g / amplitude
+        # a boundary pose may round slightly beyond ±1: clamp it
+        near = np.abs(g) - amplitude <= BOUNDARY_TOL * self.length_sq[i]
+        cosine = np.where(near, np.clip(cosine, -1.0, 1.0), cosine)
+        q = np.arctan2(v_2, v_1) + branch * np.arccos(cosine)
+        return np.remainder(q + np.pi, 2.0 * np.pi) - np.pi
+
     def shortfall(self, x: np.ndarray) -> np.ndarray:
-        """``(N, n)``: by how much each slide leg is too short to reach ``x`` (≤ 0 when it
-        reaches; always −inf for struts), metres."""
+        """``(N, n)``: by how far each leg is out of reach of ``x`` (≤ 0 when it reaches;
+        always −inf for struts), metres. A slide leg is too short; a crank leg's rod is too
+        short (or too long: see :meth:`too_long`) to join the arm-tip circle to the platform."""
+        short, _ = self._reach(x)
+        return short
+
+    def too_long(self, x: np.ndarray) -> np.ndarray:
+        """``(N, n)`` bool: the leg's rod is out of reach because it is too *long* (a crank
+        whose arm-tip circle passes too close to the platform joint)."""
+        _, long = self._reach(x)
+        return long
+
+    def _reach(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dims = self.model.dims
         with np.errstate(invalid="ignore", over="ignore"):
             y = (x @ self.projection - self.offset).reshape(x.shape[0], -1, dims)
-            perp = np.abs(y[:, :, 1]) if dims == 2 else np.hypot(y[:, :, 1], y[:, :, 2])
-        out = perp - self.model.leg_length[None]
+            perp_sq = y[:, :, 1] ** 2 if dims == 2 else y[:, :, 1] ** 2 + y[:, :, 2] ** 2
+            out = np.sqrt(perp_sq) - self.model.leg_length[None]
+            long = np.zeros(out.shape, dtype=bool)
+            for i in np.flatnonzero(self.crank):
+                g, amplitude = self._crank_terms(y[:, i, 0], y[:, i, 1], y[:, i, 2],
+                                                 perp_sq[:, i], i)
+                length = self.model.leg_length[i]
+                nearest = np.sqrt(np.maximum(g + self.length_sq[i] - amplitude, 0.0))
+                farthest = np.sqrt(g + self.length_sq[i] + amplitude)
+                out[:, i] = np.maximum(nearest - length, length - farthest)
+                long[:, i] = length - farthest > nearest - length
         out[:, self.model.leg_kind == STRUT] = -np.inf
+        return out, long & (out > 0)
+
+    def carriage_rates(self, q: np.ndarray) -> np.ndarray:
+        """``∂c_i/∂q_i`` ``(N, n, dims)``: the slide axis, the crank-tip velocity per unit
+        angle ``r (−sin q e1 + cos q e2)``, zero for struts."""
+        out = np.broadcast_to(self.axis * self.slide[:, None], (q.shape[0], *self.axis.shape))
+        if not self.crank.any():
+            return out
+        out = np.array(out)
+        for i in np.flatnonzero(self.crank):
+            r = self.crank_radius[i]
+            out[:, i] = r * (np.cos(q[:, i])[:, None] * self.crank_e2[i, None]
+                             - np.sin(q[:, i])[:, None] * self.crank_e1[i, None])
         return out
 
     def branch_signs(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """Inverse-model branch ``(N, n)`` (±1) of each slide leg at ``(x, q)``: the sign of
-        ``−(p − c_i)·u_i``; +1 for struts."""
+        """Inverse-model branch ``(N, n)`` (±1) of each leg at ``(x, q)``: ``−sign`` of the
+        serial-Jacobian entry ``(p − c_i)·∂c_i/∂q_i`` (+1 for struts)."""
         d = self.rod_vectors(x, q)
-        along = np.einsum("kid,id->ki", d, self.axis)
-        return np.where((self.model.leg_kind == SLIDE) & (along > 0), -1, 1)
+        along = np.einsum("kid,kid->ki", d, self.carriage_rates(q))
+        return np.where((self.model.leg_kind != STRUT) & (along > 0), -1, 1)
 
     # ------------------------------------------------------------------ direct
     def centres(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -141,6 +223,13 @@ class RodClosedForm:
         with np.errstate(invalid="ignore", over="ignore"):
             c = self.centre0[None] + np.where(self.slide > 0, q, 0.0)[:, :, None] * self.axis[None]
             rho = self.model.leg_length[None] + np.where(self.strut > 0, q, 0.0)
+            if self.crank.any():
+                m = self.model
+                for i in np.flatnonzero(self.crank):
+                    tip = (m.leg_pivot[i] + self.crank_offset[i] * m.leg_axis[i]
+                           + self.crank_radius[i] * (np.cos(q[:, i])[:, None] * self.crank_e1[i]
+                                                     + np.sin(q[:, i])[:, None] * self.crank_e2[i]))
+                    c[:, i] = tip - m.leg_platform[i]
         return c, rho
 
     def direct_all(self, q: np.ndarray, rel_tol: float = 1e-12) -> tuple[np.ndarray, np.ndarray]:
@@ -216,6 +305,9 @@ class RodClosedForm:
         q_t = q.T  # (n, N)
         a = np.empty((m.n_legs, m.dims, x.shape[0]))
         b = np.zeros((m.n_legs, x.shape[0]))
+        if self.crank.any():
+            c, _ = self.centres(q)
+            rates = self.carriage_rates(q)
         for i in range(m.n_legs):
             if m.leg_kind[i] == SLIDE:
                 for k in range(m.dims):
@@ -223,6 +315,10 @@ class RodClosedForm:
                                 out=a[i, k])
                     if self.axis[i, k]:
                         b[i] += a[i, k] * self.axis[i, k]
+            elif m.leg_kind[i] == CRANK:
+                for k in range(m.dims):
+                    np.subtract(x_t[k], c[:, i, k], out=a[i, k])
+                    b[i] += a[i, k] * rates[:, i, k]
             else:
                 for k in range(m.dims):
                     np.subtract(x_t[k], self.centre0[i, k], out=a[i, k])
@@ -233,19 +329,27 @@ class RodClosedForm:
         """Parallel and serial Jacobians ``A (N, n, dims)``, ``B (N, n, n)`` (A ṗ = B q̇)."""
         d = self.rod_vectors(x, q)
         _, rho = self.centres(q)
-        diag = self.slide * np.einsum("kid,id->ki", d, self.axis) + self.strut * rho
+        diag = np.einsum("kid,kid->ki", d, self.carriage_rates(q)) + self.strut * rho
         b = np.zeros((*diag.shape, diag.shape[1]))
         idx = np.arange(diag.shape[1])
         b[:, idx, idx] = diag
         return d, b
 
     def jacobian_rates(
-        self, xd: np.ndarray, qd: np.ndarray
+        self, xd: np.ndarray, qd: np.ndarray, x: np.ndarray, q: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """Time derivatives ``Ȧ (N, n, dims)``, ``Ḃ (N, n, n)`` for platform velocity
-        ``xd (N, dims)`` and actuator rates ``qd (N, n)``."""
-        dd = xd[:, None, :] - (qd * self.slide)[:, :, None] * self.axis[None]
-        diag = self.slide * np.einsum("kid,id->ki", dd, self.axis) + self.strut * qd
+        ``xd (N, dims)`` and actuator rates ``qd (N, n)`` at poses ``x (N, dims)`` and actuator
+        coordinates ``q (N, n)``."""
+        rates = self.carriage_rates(q)
+        dd = xd[:, None, :] - qd[:, :, None] * rates
+        diag = np.einsum("kid,kid->ki", dd, rates) + self.strut * qd
+        if self.crank.any():
+            # the crank tip's velocity turns with the arm: d·(∂²c/∂q²) q̇ with ∂²c/∂q² = −radial
+            d = self.rod_vectors(x, q)
+            for i in np.flatnonzero(self.crank):
+                radial = np.cross(self.model.leg_axis[i][None, :self.model.dims], rates[:, i])
+                diag[:, i] += np.einsum("kd,kd->k", d[:, i], radial) * qd[:, i]
         b = np.zeros((*diag.shape, diag.shape[1]))
         idx = np.arange(diag.shape[1])
         b[:, idx, idx] = diag

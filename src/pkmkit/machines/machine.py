@@ -420,7 +420,8 @@ class Machine:
         short = self._closed.shortfall(xb)[0]
         if status == Status.UNREACHABLE or (short > 0).any():
             leg = int(np.argmax(short))
-            raise UnreachablePoseError(leg, self.model.leg_names[leg], short[leg])
+            raise UnreachablePoseError(leg, self.model.leg_names[leg], short[leg],
+                                       too_long=bool(self._closed.too_long(xb)[0, leg]))
         if status == Status.WRONG_MODE:
             raise ConvergenceError(
                 "the numeric inverse model converged to another branch than requested; "
@@ -712,7 +713,7 @@ class Machine:
             raise InputError(f"x has {xb.shape[0]} rows but xd has {xdb.shape[0]}")
         jac = self._jacobians(xb, qb, SINGULARITY_TOL)
         qd = np.einsum("kij,kj->ki", jac.J_inv, xdb)
-        a_dot, b_dot = self._closed.jacobian_rates(xdb, qd)
+        a_dot, b_dot = self._closed.jacobian_rates(xdb, qd, xb, jac.q)
         rhs = b_dot - np.einsum("kij,kjl->kil", a_dot, jac.J)
         j_dot = np.full_like(rhs, np.nan)
         ok = np.isfinite(jac.A).all(axis=(1, 2)) & np.isfinite(rhs).all(axis=(1, 2))

@@ -33,14 +33,17 @@ from typing import Any
 import numpy as np
 
 from pkmkit.errors import MachineFileError, ParameterError, UnknownMachineError
-from pkmkit.machines import five_bar, linear_delta, orthoglide
+from pkmkit.machines import delta_robot, five_bar, linear_delta, orthoglide
 from pkmkit.machines.machine import Machine, MachineKind, build_machine
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
 from pkmkit.model.parameters import is_plain_number, length_scale, resolve_parameters
-from pkmkit.model.rods import SLIDE, LegSpec, build_rod_model
+from pkmkit.model.rods import CRANK, LEG_KINDS, STRUT, LegSpec, build_rod_model
+
+_KIND_NAMES = {v: k for k, v in LEG_KINDS.items()}
 
 #: Built-in machine kinds by name.
-KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (orthoglide, linear_delta, five_bar)}
+KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (orthoglide, linear_delta, five_bar,
+                                                                delta_robot)}
 ROD_LEGS = "rod-legs"
 #: Short ids naming a kind's reference preset.
 ALIASES = {"linear-delta": "linear-delta-ch3", "five-bar": "five-bar-isotropic"}
@@ -49,7 +52,7 @@ _MACHINE_KEYS = {"kind", "id", "name", "description", "source", "units", "dims",
                  "mode_names"}
 _TOP_KEYS = {"machine", "parameters", "legs", "poses"}
 _LEG_KEYS = {"name", "actuator", "type", "base", "axis", "platform", "length", "branch",
-             "parallelogram", "stroke"}
+             "parallelogram", "stroke", "pivot"}
 
 
 def _data_dir():
@@ -238,9 +241,9 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
             if key not in raw:
                 raise ParameterError(f"{where} needs {key!r}", f"{where}")
         kind = raw.get("type", "slide")
-        if kind not in ("slide", "strut"):
-            raise ParameterError(f"{where}.type must be 'slide' or 'strut', got {kind!r}",
-                                 f"{where}.type")
+        if kind not in ("slide", "strut", "crank"):
+            raise ParameterError(
+                f"{where}.type must be 'slide', 'strut' or 'crank', got {kind!r}", f"{where}.type")
         actuator = raw.get("actuator", f"q{i + 1}")
         if not isinstance(actuator, str) or not actuator:
             raise ParameterError(f"{where}.actuator must be a name, got {actuator!r}",
@@ -249,11 +252,16 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
             raise ParameterError(f"{where}: actuator {actuator!r} already drives another leg",
                                  f"{where}.actuator")
         actuators.append(actuator)
-        axis = None
-        if kind == "slide":
+        axis = pivot = None
+        if kind in ("slide", "crank"):
             if "axis" not in raw:
-                raise ParameterError(f"{where}: a slide leg needs 'axis'", where)
+                raise ParameterError(f"{where}: a {kind} leg needs 'axis'", where)
             axis = pad(_vector(raw["axis"], dims, f"{where}.axis"))
+        if kind == "crank":
+            if "pivot" not in raw:
+                raise ParameterError(f"{where}: a crank leg needs 'pivot' (a point of its "
+                                     "rotation axis)", where)
+            pivot = pad(_vector(raw["pivot"], dims, f"{where}.pivot", scale))
         para = raw.get("parallelogram", {})
         if not isinstance(para, dict) or set(para) - {"width", "direction"}:
             raise ParameterError(
@@ -272,7 +280,8 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
         if isinstance(branch, bool) or branch not in (1, -1):
             raise ParameterError(f"{where}.branch must be 1 or -1, got {branch!r}",
                                  f"{where}.branch")
-        stroke = (_vector(raw["stroke"], 2, f"{where}.stroke", scale) if "stroke" in raw
+        stroke_scale = np.pi / 180.0 if kind == "crank" else scale  # crank strokes in degrees
+        stroke = (_vector(raw["stroke"], 2, f"{where}.stroke", stroke_scale) if "stroke" in raw
                   else (-np.inf, np.inf))
         legs.append(
             LegSpec(
@@ -287,6 +296,7 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
                 parallelogram_width=width,
                 parallelogram_direction=direction,
                 stroke=tuple(stroke),
+                pivot=pivot,
             )
         )
     home = _vector(head.get("home", [0.0] * dims), dims, "machine.home", scale)
@@ -344,15 +354,17 @@ def _leg_specs(m: Machine) -> list[LegSpec]:
             offset = 0.5 * (model.rod_base[rods[1]] - model.rod_base[rods[0]])
             width = 2.0 * float(np.linalg.norm(offset))
             direction = offset / (0.5 * width)
-        slide = model.leg_kind[i] == SLIDE
+        kind = int(model.leg_kind[i])
         a = int(model.leg_actuator[i])
         specs.append(LegSpec(
-            name=model.leg_names[i], actuator=a, kind="slide" if slide else "strut",
+            name=model.leg_names[i], actuator=a, kind=_KIND_NAMES[kind],
             base=model.leg_base[i].copy(), platform=model.leg_platform[i].copy(),
-            length=float(model.leg_length[i]), axis=model.leg_axis[i].copy() if slide else None,
+            length=float(model.leg_length[i]),
+            axis=model.leg_axis[i].copy() if kind != STRUT else None,
             branch=int(model.leg_branch[i]), parallelogram_width=width,
             parallelogram_direction=direction,
-            stroke=(float(model.q_min[a]), float(model.q_max[a]))))
+            stroke=(float(model.q_min[a]), float(model.q_max[a])),
+            pivot=model.leg_pivot[i].copy() if kind == CRANK else None))
     return specs
 
 

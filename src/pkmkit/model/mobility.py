@@ -2,9 +2,10 @@
 
 The joint graph is derived from the rods (no hand-typed counts):
 
-- spatial machine (``dims = 3``): each slide rod is a body with a spherical joint at each end and
-  one internal mobility (spin about its own axis); each actuator of slide legs is a carriage body
-  on a prismatic joint; a strut is two bodies (cylinder, piston) joined U–P–S;
+- spatial machine (``dims`` 3 or 6): each slide or crank rod is a body with a spherical joint at
+  each end and one internal mobility (spin about its own axis); each slide actuator is a carriage
+  body on a prismatic joint, each crank actuator an arm body on a revolute joint; a strut is two
+  bodies (cylinder, piston) joined U–P–S;
 - planar machine (``dims = 2``): the same with revolute joints and no internal mobility.
 
     m = d (N − 1 − j) + Σ f_i − m_int        (d = 6 spatial, 3 planar; N counts the base)
@@ -18,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from pkmkit.model.rods import SLIDE, RodModel
+from pkmkit.model.rods import CRANK, STRUT, RodModel
 
 
 @dataclass(frozen=True)
@@ -53,7 +54,7 @@ _FREEDOMS = {"P": 1, "R": 1, "U": 2, "S": 3}
 
 def grubler_count(model: RodModel) -> GrublerCount:
     """Grübler–Kutzbach mobility of ``model``'s joint graph (see the module docstring)."""
-    spatial = model.dims == 3
+    spatial = model.dims != 2
     end_joint = "S" if spatial else "R"
     joints: dict[str, int] = {}
 
@@ -62,20 +63,22 @@ def grubler_count(model: RodModel) -> GrublerCount:
 
     bodies = 2  # fixed base and platform
     internal = 0
-    slide_actuators = set()
+    carriages: dict[int, str] = {}
     for rod in range(model.n_rods):
-        if model.rod_kind[rod] == SLIDE:
+        if model.rod_kind[rod] != STRUT:
             bodies += 1
             add(end_joint, 2)
             internal += 1 if spatial else 0
-            slide_actuators.add(int(model.rod_actuator[rod]))
+            carriages[int(model.rod_actuator[rod])] = (
+                "R" if model.rod_kind[rod] == CRANK else "P")
         else:
             bodies += 2
             add("U" if spatial else "R")
             add("P")
             add(end_joint)
-    bodies += len(slide_actuators)
-    add("P", len(slide_actuators))
+    bodies += len(carriages)
+    for joint in carriages.values():
+        add(joint)
     d = 6 if spatial else 3
     n_joints = sum(joints.values())
     freedoms = sum(_FREEDOMS[k] * n for k, n in joints.items())

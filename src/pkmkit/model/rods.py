@@ -7,7 +7,17 @@ A rod-leg machine is a platform joined to actuated carriages by rods of fixed le
 - **slide** leg: a carriage moves along a fixed line, ``a_j(q) = a0_j + q_k u_j``, ``ℓ_j`` fixed
   (Orthoglide, linear Delta, five-bar with prismatic actuators);
 - **strut** leg: the rod itself is actuated, ``a_j`` fixed and ``ℓ_j(q) = ℓ0_j + q_k``
-  (hexapod-type legs).
+  (hexapod-type legs);
+- **crank** leg: a rotary actuator turns an arm about the axis (P_k, w_k); the rod's base-side
+  joint turns with it, ``a_j(q) = P_k + Rot(w_k, q_k)(a0_j − P_k)``, ``ℓ_j`` fixed (Delta robot).
+
+Several legs may share one actuator (the Verne-type module: two rods per slide, each described
+as a leg of its own with the same actuator); legs sharing an actuator must agree on its kind,
+axis, pivot and stroke.
+
+``dims`` is 2 (planar, translational platform), 3 (spatial, translational platform) or 6 (full
+pose: the platform also rotates; poses are position + rotation vector, see
+:mod:`pkmkit.spatial.poses`).
 
 Each leg is described twice:
 
@@ -32,7 +42,10 @@ from pkmkit.errors import ParameterError
 
 SLIDE = 0
 STRUT = 1
-LEG_KINDS = {"slide": SLIDE, "strut": STRUT}
+CRANK = 2
+LEG_KINDS = {"slide": SLIDE, "strut": STRUT, "crank": CRANK}
+#: Names of the pose coordinates of a full-pose (dims = 6) machine.
+FULL_POSE_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 
 
 @dataclass(frozen=True)
@@ -42,16 +55,21 @@ class LegSpec:
     Attributes:
         name: leg name (used in error messages, e.g. ``"leg 2"``).
         actuator: index of the actuator driving the leg.
-        kind: ``"slide"`` or ``"strut"``.
-        base: slide: carriage joint centre at q = 0; strut: fixed base joint centre. ``(3,)`` m.
+        kind: ``"slide"``, ``"strut"`` or ``"crank"``.
+        base: slide: carriage joint centre at q = 0; strut: fixed base joint centre; crank: the
+            arm-tip joint centre at q = 0. ``(3,)`` m.
         platform: platform joint centre in the platform frame, ``(3,)`` m.
         length: slide: rod length; strut: rod length at q = 0. m.
-        axis: slide direction ``(3,)`` (normalised here); ignored for struts.
-        branch: working branch of the inverse model, +1 or −1: the actuator coordinate is
-            ``q = u·w + branch·sqrt(…)`` (see :func:`pkmkit.machines.closed_form.inverse`).
+        axis: slide direction, or crank rotation axis ``(3,)`` (normalised here); ignored for
+            struts.
+        branch: working branch of the inverse model, +1 or −1: for a slide the actuator
+            coordinate is ``q = u·w + branch·sqrt(…)``; in general the branch is −sign of
+            ``d·∂a/∂q`` (see :mod:`pkmkit.machines.closed_form`).
         parallelogram_width: distance between the two rods of a parallelogram (0: single rod), m.
         parallelogram_direction: direction of the offset between the two rods ``(3,)``.
-        stroke: ``(q_min, q_max)`` limits of the actuator coordinate, m (default: unlimited).
+        stroke: ``(q_min, q_max)`` limits of the actuator coordinate, m or rad (default:
+            unlimited).
+        pivot: crank: a point of the rotation axis ``(3,)`` m; ignored for other kinds.
     """
 
     name: str
@@ -65,6 +83,7 @@ class LegSpec:
     parallelogram_width: float = 0.0
     parallelogram_direction: Sequence[float] | None = None
     stroke: tuple[float, float] = (-np.inf, np.inf)
+    pivot: Sequence[float] | None = None
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -94,17 +113,20 @@ def _point(v: Sequence[float], what: str) -> np.ndarray:
 class RodModel:
     """Immutable rod-leg model (see the module docstring for the equations).
 
-    Shapes: n legs (= actuators for the machines built here), m rods (m ≥ n).
+    Shapes: n legs, n_act actuators (n_act ≤ n, legs may share an actuator), m rods (m ≥ n).
 
     Attributes:
-        dims: 2 for a planar machine (motion in the x-y plane), 3 for a spatial one.
-        pose_names: names of the pose coordinates, ``("x", "y")`` or ``("x", "y", "z")``.
+        dims: 2 for a planar machine (motion in the x-y plane), 3 for a spatial translational
+            one, 6 for a full-pose one.
+        pose_names: names of the pose coordinates, ``("x", "y")``, ``("x", "y", "z")`` or
+            ``("x", "y", "z", "rx", "ry", "rz")``.
         actuator_names: names of the actuator coordinates.
         leg_names: names of the legs.
         leg_actuator, leg_kind, leg_branch: ``(n,)`` int.
         leg_base, leg_axis, leg_platform: ``(n, 3)`` m (axis: unit, zero for struts).
         leg_length: ``(n,)`` m.
-        q_min, q_max: ``(n,)`` actuator strokes (±inf when unlimited), m, per actuator.
+        leg_pivot: ``(n, 3)`` m, crank rotation centre (zero for other kinds).
+        q_min, q_max: ``(n_act,)`` actuator strokes (±inf when unlimited), m or rad.
         rod_leg, rod_actuator, rod_kind: ``(m,)`` int.
         rod_base, rod_axis, rod_platform: ``(m, 3)`` m.
         rod_length: ``(m,)`` m.
@@ -132,6 +154,11 @@ class RodModel:
     rod_length: np.ndarray
     home_pose: np.ndarray
     mode_names: tuple[str, str] = field(default=("det(A)<0", "det(A)>0"))
+    leg_pivot: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.leg_pivot is None:
+            object.__setattr__(self, "leg_pivot", _frozen(np.zeros((len(self.leg_names), 3))))
 
     @property
     def n_legs(self) -> int:
@@ -159,14 +186,39 @@ class RodModel:
         return self.leg_kind[self.rod_leg]
 
     @property
+    def rod_pivot(self) -> np.ndarray:
+        """Crank rotation centre of each rod's actuator ``(m, 3)`` (zero for other kinds)."""
+        return self.leg_pivot[self.rod_leg]
+
+    @property
     def planar(self) -> bool:
         """True for a planar machine (``dims == 2``)."""
         return self.dims == 2
 
+    @property
+    def full_pose(self) -> bool:
+        """True when the platform pose has six coordinates (position + rotation vector)."""
+        return self.dims == 6
+
+    @property
+    def actuator_kind(self) -> np.ndarray:
+        """Kind (:data:`SLIDE`, :data:`STRUT`, :data:`CRANK`) of each actuator ``(n_act,)``."""
+        first = [int(np.flatnonzero(self.leg_actuator == k)[0]) for k in range(self.n_actuators)]
+        return self.leg_kind[first]
+
+    @property
+    def actuator_quantities(self) -> tuple[str, ...]:
+        """``"angle"`` (radians inside, degrees at the boundaries) for crank actuators,
+        ``"length"`` (m) for slides and struts, per actuator."""
+        return tuple("angle" if k == CRANK else "length" for k in self.actuator_kind)
+
     def pad(self, x: np.ndarray) -> np.ndarray:
-        """Pose rows ``(N, dims)`` as 3-D points ``(N, 3)`` (z = 0 for planar machines)."""
+        """Platform positions ``(N, 3)`` of pose rows ``(N, dims)`` (z = 0 for planar machines,
+        the first three coordinates of a full pose)."""
         if self.dims == 3:
             return x
+        if self.dims == 6:
+            return x[:, :3]
         out = np.zeros((x.shape[0], 3))
         out[:, : self.dims] = x
         return out
@@ -183,27 +235,42 @@ def build_rod_model(
 ) -> RodModel:
     """Validate leg descriptions and build the immutable :class:`RodModel`.
 
+    A translational machine (``dims`` 2 or 3) has exactly one leg per actuator, leg i driving
+    actuator i (its closed forms use one equivalent rod per actuator). A full-pose machine
+    (``dims = 6``) may have several legs per actuator (each actuator must drive at least one).
+
     Raises:
         ParameterError: inconsistent description (unknown kind, bad vectors, non-positive
-            lengths, a planar machine with out-of-plane geometry, actuators without exactly one
-            leg, ...), naming the leg and the field.
+            lengths, a planar machine with out-of-plane geometry, actuators without a leg, legs
+            sharing an actuator inconsistently, ...), naming the leg and the field.
     """
-    if dims not in (2, 3):
-        raise ParameterError(f"dims must be 2 or 3, got {dims}", "dims")
+    if dims not in (2, 3, 6):
+        raise ParameterError(f"dims must be 2, 3 or 6, got {dims}", "dims")
     n_act = len(actuator_names)
-    if len(legs) != n_act:
-        raise ParameterError(
-            f"each actuator needs exactly one leg: {n_act} actuators, {len(legs)} legs", "legs"
-        )
-    if n_act != dims:
-        raise ParameterError(
-            f"a {dims}-D translational rod-leg machine needs {dims} actuators, got {n_act}",
-            "legs",
-        )
-    if [leg.actuator for leg in legs] != list(range(n_act)):
-        raise ParameterError(
-            "each actuator must drive exactly one leg, leg i driving actuator i", "legs"
-        )
+    if dims in (2, 3):
+        if len(legs) != n_act:
+            raise ParameterError(
+                f"each actuator needs exactly one leg: {n_act} actuators, {len(legs)} legs",
+                "legs")
+        if n_act != dims:
+            raise ParameterError(
+                f"a {dims}-D translational rod-leg machine needs {dims} actuators, got {n_act}",
+                "legs",
+            )
+        if [leg.actuator for leg in legs] != list(range(n_act)):
+            raise ParameterError(
+                "each actuator must drive exactly one leg, leg i driving actuator i", "legs"
+            )
+    else:
+        used = sorted({leg.actuator for leg in legs})
+        if used != list(range(n_act)):
+            missing = sorted(set(range(n_act)) - set(used))
+            what = (f"actuator {actuator_names[missing[0]]!r} drives no leg" if missing else
+                    f"legs name actuators {used} but there are {n_act}")
+            raise ParameterError(f"each actuator must drive at least one leg: {what}", "legs")
+        if n_act > 6:
+            raise ParameterError(f"a full-pose machine has at most 6 actuators, got {n_act}",
+                                 "legs")
 
     leg_rows = []
     rod_rows = []
@@ -217,7 +284,14 @@ def build_rod_model(
         kind = LEG_KINDS[leg.kind]
         base = _point(leg.base, f"{where}.base")
         platform = _point(leg.platform, f"{where}.platform")
-        axis = _unit(leg.axis, f"{where}.axis") if kind == SLIDE else np.zeros(3)
+        axis = _unit(leg.axis, f"{where}.axis") if kind != STRUT else np.zeros(3)
+        pivot = _point(leg.pivot, f"{where}.pivot") if kind == CRANK else np.zeros(3)
+        if kind == CRANK:
+            arm = base - pivot
+            if np.linalg.norm(arm - (arm @ axis) * axis) <= 1e-12 * (1.0 + np.linalg.norm(arm)):
+                raise ParameterError(
+                    f"{where}: the crank arm (from the pivot to the base joint) has no length "
+                    "across the rotation axis", f"{where}.pivot")
         length = float(leg.length)
         if not np.isfinite(length) or length <= 0:
             raise ParameterError(f"{where}.length must be > 0, got {leg.length}", f"{where}.length")
@@ -231,7 +305,10 @@ def build_rod_model(
             raise ParameterError(f"{where}.branch must be +1 or -1, got {leg.branch}", where)
         if dims == 2 and (base[2] != 0 or platform[2] != 0 or axis[2] != 0):
             raise ParameterError(f"{where}: a planar machine needs z = 0 geometry", where)
-        leg_rows.append((leg.actuator, kind, leg.branch, base, axis, platform, length, lo, hi))
+        if dims == 2 and kind == CRANK:
+            raise ParameterError(f"{where}: crank legs are spatial (dims 3 or 6)", where)
+        leg_rows.append((leg.actuator, kind, leg.branch, base, axis, platform, length, lo, hi,
+                         pivot))
 
         width = float(leg.parallelogram_width)
         if not np.isfinite(width) or width < 0:
@@ -247,14 +324,19 @@ def build_rod_model(
         for sign in (-1.0, 1.0):
             rod_rows.append((i, base + sign * offset, axis, platform + sign * offset, length))
 
+    _check_shared_actuators(leg_rows, actuator_names)
     home = np.asarray(home_pose, dtype=float).reshape(-1)
     if home.shape != (dims,) or not np.isfinite(home).all():
         raise ParameterError(f"home pose must be {dims} finite numbers, got {home_pose!r}", "home")
-    names = tuple(pose_names) if pose_names is not None else ("x", "y", "z")[:dims]
+    if pose_names is not None:
+        names = tuple(pose_names)
+    else:
+        names = FULL_POSE_NAMES if dims == 6 else ("x", "y", "z")[:dims]
 
     def column(rows, k, dtype=float):
         return _frozen(np.array([r[k] for r in rows], dtype=dtype))
 
+    first_leg = [next(r for r in leg_rows if r[0] == k) for k in range(n_act)]
     return RodModel(
         dims=dims,
         pose_names=names,
@@ -267,8 +349,8 @@ def build_rod_model(
         leg_axis=column(leg_rows, 4),
         leg_platform=column(leg_rows, 5),
         leg_length=column(leg_rows, 6),
-        q_min=column(leg_rows, 7),
-        q_max=column(leg_rows, 8),
+        q_min=column(first_leg, 7),
+        q_max=column(first_leg, 8),
         rod_leg=column(rod_rows, 0, int),
         rod_base=column(rod_rows, 1),
         rod_axis=column(rod_rows, 2),
@@ -276,4 +358,28 @@ def build_rod_model(
         rod_length=column(rod_rows, 4),
         home_pose=_frozen(home),
         mode_names=(str(mode_names[0]), str(mode_names[1])),
+        leg_pivot=column(leg_rows, 9),
     )
+
+
+def _check_shared_actuators(leg_rows: list, actuator_names: Sequence[str]) -> None:
+    """Legs driven by one actuator must agree on its kind, axis, pivot and stroke."""
+    first: dict[int, int] = {}
+    for i, row in enumerate(leg_rows):
+        k = row[0]
+        if k not in first:
+            first[k] = i
+            continue
+        j = first[k]
+        other = leg_rows[j]
+        name = actuator_names[k]
+        checks = (("kind", row[1] == other[1]),
+                  ("axis", np.allclose(row[4], other[4], rtol=0, atol=1e-12)),
+                  ("pivot", np.allclose(row[9], other[9], rtol=0, atol=1e-12)),
+                  ("stroke", row[7] == other[7] and row[8] == other[8]))
+        for what, same in checks:
+            if not same:
+                raise ParameterError(
+                    f"legs.{j} and legs.{i} share actuator {name!r} but have different {what}s; "
+                    "legs on one actuator must describe the same carriage, arm or strut",
+                    f"legs.{i}.{what}")

@@ -93,11 +93,13 @@ def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
                          f"{np.round(x[k], 9).tolist()} m{_stroke_note(machine, trajectory, q, k)}")
     xd_t, xdd_t = xd.T, xdd.T
     qd = np.einsum("ikn,kn->in", a, xd_t) / b
-    axis = closed.axis  # (n, dims), zero rows for struts
-    slide = closed.slide[:, None]
-    a_dot = xd_t[None] - (slide * qd)[:, None, :] * axis[:, :, None]
-    b_dot = (slide * np.einsum("ikn,ik->in", a_dot, axis)
-             + (1.0 - slide) * qd)
+    # ∂c/∂q (n, dims, N): slide axis, crank-tip velocity per radian, zero for struts
+    rates = closed.carriage_rates(q).transpose(1, 2, 0)
+    a_dot = xd_t[None] - qd[:, None, :] * rates
+    b_dot = np.einsum("ikn,ikn->in", a_dot, rates) + closed.strut[:, None] * qd
+    for i in np.flatnonzero(closed.crank):  # the crank tip's velocity turns with the arm
+        radial = np.cross(machine.model.leg_axis[i][:, None], rates[i], axis=0)
+        b_dot[i] += np.einsum("kn,kn->n", a[i], radial) * qd[i]
     qdd = (np.einsum("ikn,kn->in", a, xdd_t) + np.einsum("ikn,kn->in", a_dot, xd_t)
            - b_dot * qd) / b
     return JointTrajectory(t=trajectory.t, x=x, xd=xd, xdd=xdd, q=q, qd=qd.T, qdd=qdd.T,

@@ -8,7 +8,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from pkmkit.machines.machine import Machine
-from pkmkit.model.rods import SLIDE
+from pkmkit.model.rods import CRANK, SLIDE
+from pkmkit.solve.rod_closure import rod_base_points
+from pkmkit.spatial.rotation import rotvec_to_matrix
 
 _LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
 
@@ -17,19 +19,25 @@ def machine_geometry(machine: Machine, pose: np.ndarray, q: np.ndarray) -> dict[
     """3-D points of the drawing at ``pose (dims,)`` with actuator coordinates ``q (n,)``.
 
     Returns a dict with ``carriage (m, 3)`` and ``platform (m, 3)`` rod end points,
-    ``rails (n, 2, 3)`` slide segments around each carriage, ``tool (3,)``.
+    ``rails (n, 2, 3)`` one guide segment per leg — the slide around its carriage, the crank
+    arm from its pivot to its tip, a point for a strut —, ``tool (3,)``.
     """
     model = machine.model
-    p = model.pad(np.asarray(pose, dtype=float)[None])[0]
-    qr = q[model.rod_actuator]
-    slide = model.rod_kind == SLIDE
-    carriage = model.rod_base + (qr * slide)[:, None] * model.rod_axis
-    platform = p + model.rod_platform
+    x = np.asarray(pose, dtype=float)[None]
+    p = model.pad(x)[0]
+    q = np.asarray(q, dtype=float)
+    carriage = rod_base_points(model, q[:, None])[:, :, 0].T
+    rotation = rotvec_to_matrix(x[0, 3:6])[0] if model.full_pose else np.eye(3)
+    platform = p + model.rod_platform @ rotation.T
     span = 0.6 * float(model.leg_length.max())
-    leg_carriage = model.leg_base + (q * (model.leg_kind == SLIDE))[:, None] * model.leg_axis
-    rails = np.stack(
-        [leg_carriage - span * model.leg_axis, leg_carriage + span * model.leg_axis], axis=1
-    )
+    # one guide per leg, through the middle of its rods' base joints (a parallelogram's midline)
+    leg_carriage = np.array([carriage[model.rod_leg == i].mean(axis=0)
+                             for i in range(model.n_legs)])
+    rails = np.stack([leg_carriage - span * model.leg_axis, leg_carriage + span * model.leg_axis],
+                     axis=1)
+    crank = model.leg_kind == CRANK
+    rails[crank, 0] = model.leg_pivot[crank]
+    rails[crank, 1] = leg_carriage[crank]
     return {"carriage": carriage, "platform": platform, "rails": rails, "tool": p}
 
 
@@ -62,9 +70,13 @@ def draw_machine(machine: Machine, pose=None, *, q=None, ax=None, title: str | N
     def line(points: np.ndarray, **style) -> None:
         ax.plot(*points[:, coords].T, **style)
 
+    guide_names = {SLIDE: "slides", CRANK: "crank arms"}
     for i, rail in enumerate(geo["rails"]):
+        kind = int(machine.model.leg_kind[i])
+        first = kind in guide_names and i == int(
+            np.flatnonzero(machine.model.leg_kind == kind)[0])
         line(rail, color="0.6", lw=4, solid_capstyle="butt",
-             label="slides" if i == 0 else None)
+             label=guide_names[kind] if first else None)
     for j in range(machine.model.n_rods):
         leg = int(machine.model.rod_leg[j])
         colour = _LEG_COLOURS[leg % len(_LEG_COLOURS)]
@@ -89,10 +101,15 @@ def draw_machine(machine: Machine, pose=None, *, q=None, ax=None, title: str | N
     else:
         ax.set_aspect("equal", adjustable="datalim")
         ax.grid(True, alpha=0.3)
-    pose_txt = ", ".join(f"{v:.3f}" for v in pose)
-    q_txt = ", ".join(f"{v:.3f}" for v in q)
+    pose_txt = ", ".join(f"{v:.3f}" for v in pose[:3])
+    if machine.model.full_pose:
+        pose_txt += " m, rotation vector " + ", ".join(f"{v:.3f}" for v in pose[3:]) + " rad"
+    else:
+        pose_txt += " m"
+    q_txt = ", ".join(f"{np.degrees(v):.1f}°" if quantity == "angle" else f"{v:.3f} m"
+                      for v, quantity in zip(q, machine.model.actuator_quantities, strict=True))
     if title is None:
-        title = f"{machine.name}\npose ({pose_txt}) m   q ({q_txt}) m"
+        title = f"{machine.name}\npose ({pose_txt})   q ({q_txt})"
     ax.set_title(title, fontsize=9)
     ax.legend(loc="upper left", fontsize=7)
     if path is not None:

@@ -3,13 +3,15 @@
 Residual of rod j (metres)::
 
     r_j = | p + R b_j − a_j(q) | − ℓ_j(q)
-    a_j(q) = a0_j + κs_j q_k u_j,    ℓ_j(q) = ℓ0_j + κt_j q_k
+    a_j(q) = a0_j + κs_j q_k u_j          (slide, or fixed for a strut)
+    a_j(q) = P_k + Rot(w_k, q_k)(a0_j − P_k)   (crank turning about the axis (P_k, w_k))
+    ℓ_j(q) = ℓ0_j + κt_j q_k
 
 (κs = 1 for slide rods, κt = 1 for strut rods, k the rod's actuator.) With d_j the rod vector and
 d̂_j = d_j / |d_j|:
 
     ∂r_j/∂p = d̂_jᵀ,   ∂r_j/∂δ = (R b_j × d̂_j)ᵀ  (left rotation increment R ← exp(δ)R),
-    ∂r_j/∂q_k = −(κs_j d̂_j·u_j + κt_j).
+    ∂r_j/∂q_k = −(d̂_j·∂a_j/∂q_k + κt_j),   ∂a_j/∂q_k = u_k (slide), w_k × (a_j − P_k) (crank).
 
 Direct kinematics solves for the platform pose with q known; inverse kinematics for q with the
 pose known; both through :func:`pkmkit.solve.least_squares.solve_least_squares`. The platform
@@ -24,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.model.rods import SLIDE, STRUT, RodModel
+from pkmkit.model.rods import CRANK, SLIDE, STRUT, RodModel
 from pkmkit.solve.least_squares import SolveResult, solve_least_squares
 from pkmkit.spatial.rotation import compose_rotvec, rotvec_to_matrix
 
@@ -55,9 +57,7 @@ def rod_vectors(
     ``rot (3, 3, k)`` (None: identity), actuator coordinates ``q (n_act, k)``."""
     qr = q[model.rod_actuator]  # (m, k)
     kind = model.rod_kind[:, None]
-    carriage = model.rod_base.T[:, :, None] + model.rod_axis.T[:, :, None] * np.where(
-        kind == SLIDE, qr, 0.0
-    )
+    carriage = rod_base_points(model, q)
     if rot is None:
         rb = model.rod_platform.T[:, :, None]
     else:
@@ -68,16 +68,53 @@ def rod_vectors(
     return RodVectors(d=d, dist=dist, length=length, rb=rb)
 
 
+def rod_base_points(model: RodModel, q: np.ndarray) -> np.ndarray:
+    """Base-side joint centres ``a_j(q)`` ``(3, m, k)`` of every rod for actuator coordinates
+    ``q (n_act, k)`` (batch last): carriage joints moved along their slide, crank-arm joints
+    turned about their axis, fixed strut joints."""
+    qr = q[model.rod_actuator]
+    carriage = model.rod_base.T[:, :, None] + model.rod_axis.T[:, :, None] * np.where(
+        (model.rod_kind == SLIDE)[:, None], qr, 0.0)
+    if (model.rod_kind == CRANK).any():
+        carriage = carriage + _crank_displacement(model, qr)
+    return carriage
+
+
+def _crank_displacement(model: RodModel, qr: np.ndarray) -> np.ndarray:
+    """``a_j(q) − a0_j`` ``(3, m, k)`` of crank rods (Rodrigues), zero for the others."""
+    crank = (model.rod_kind == CRANK)[None, :, None]
+    w = model.rod_axis.T[:, :, None]  # (3, m, 1)
+    rel = (model.rod_base - model.rod_pivot).T[:, :, None]
+    c, s = np.cos(qr)[None], np.sin(qr)[None]
+    along = (w * rel).sum(axis=0, keepdims=True)
+    rotated = rel * c + np.cross(w, rel, axis=0) * s + w * along * (1.0 - c)
+    return np.where(crank, rotated - rel, 0.0)
+
+
+def actuator_rates(model: RodModel, q: np.ndarray) -> np.ndarray:
+    """``∂a_j/∂q`` ``(3, m, k)`` of every rod's base-side joint for actuator coordinates
+    ``q (n_act, k)``: the slide axis, ``w × (a_j − P)`` for a crank, zero for a strut."""
+    qr = q[model.rod_actuator]
+    kind = model.rod_kind[:, None]
+    out = model.rod_axis.T[:, :, None] * np.where(kind == SLIDE, 1.0, 0.0)
+    out = np.broadcast_to(out, (3, model.n_rods, q.shape[1]))
+    if (model.rod_kind == CRANK).any():
+        arm = (model.rod_base - model.rod_pivot).T[:, :, None] + _crank_displacement(model, qr)
+        spin = np.cross(model.rod_axis.T[:, :, None], arm, axis=0)
+        out = np.where((kind == CRANK)[None], spin, out)
+    return out
+
+
 def _unit_rods(v: RodVectors) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         return v.d / v.dist
 
 
-def _q_columns(model: RodModel, unit: np.ndarray) -> np.ndarray:
-    """∂r/∂q ``(m, n_act, k)``."""
+def _q_columns(model: RodModel, unit: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """∂r/∂q ``(m, n_act, k)`` for actuator coordinates ``q (n_act, k)``."""
     kind = model.rod_kind[:, None]
-    along = np.einsum("imk,im->mk", unit, model.rod_axis.T)
-    dr_dq = -np.where(kind == SLIDE, along, 1.0)
+    along = np.einsum("imk,imk->mk", unit, actuator_rates(model, q))
+    dr_dq = -np.where(kind == STRUT, 1.0, along)
     out = np.zeros((model.n_rods, model.n_actuators, unit.shape[2]))
     out[np.arange(model.n_rods), model.rod_actuator] = dr_dq
     return out
@@ -191,7 +228,7 @@ def solve_inverse(
         rot = None if rot_t is None else rot_t[:, :, rows]
         v = rod_vectors(model, p_t[:, rows], q, rot)
         unit = _unit_rods(v)
-        return v.dist - v.length, _q_columns(model, unit)
+        return v.dist - v.length, _q_columns(model, unit, q)
 
     return solve_least_squares(evaluate, q0, **options)
 
@@ -204,7 +241,7 @@ def closure_jacobians(
     v = rod_vectors(model, model.pad(pose).T, q.T)
     unit = _unit_rods(v)
     jp = _pose_columns(model, v, unit, dof).transpose(2, 0, 1)
-    return jp, _q_columns(model, unit).transpose(2, 0, 1)
+    return jp, _q_columns(model, unit, q.T).transpose(2, 0, 1)
 
 
 @dataclass(frozen=True)
