@@ -9,8 +9,13 @@ import pkmkit
 from pkmkit.machines.registry import ALIASES
 from pkmkit.model.rods import CRANK
 
-PRESETS = [m for m in pkmkit.machines() if m not in ALIASES]
-#: Presets whose actuators are all linear (slides, struts): what the dynamics layer models.
+ALL_PRESETS = [m for m in pkmkit.machines() if m not in ALIASES]
+#: Presets whose platform only translates (dims 2 or 3).
+PRESETS = [m for m in ALL_PRESETS if pkmkit.machine(m).dims in (2, 3)]
+#: Presets whose platform has a full pose (dims 6).
+FULL_POSE_PRESETS = [m for m in ALL_PRESETS if pkmkit.machine(m).dims == 6]
+#: Translational presets whose actuators are all linear (slides, struts): what the dynamics
+#: layer models.
 LINEAR_PRESETS = [m for m in PRESETS if not (pkmkit.machine(m).model.leg_kind == CRANK).any()]
 
 
@@ -28,7 +33,13 @@ def random_poses(machine: pkmkit.Machine, n: int, seed: int = 0) -> np.ndarray:
 
 @pytest.fixture(params=PRESETS)
 def preset(request) -> pkmkit.Machine:
-    """Every built-in preset machine."""
+    """Every built-in preset machine with a translational platform."""
+    return pkmkit.machine(request.param)
+
+
+@pytest.fixture(params=FULL_POSE_PRESETS)
+def full_pose_preset(request):
+    """Every built-in full-pose (6-DOF platform) machine."""
     return pkmkit.machine(request.param)
 
 

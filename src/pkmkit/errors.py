@@ -81,10 +81,13 @@ class UnreachablePoseError(PkmError, ValueError):
         shortfall: by how much the leg is too short (or too long), in metres (> 0).
         too_long: the leg's rod is too long rather than too short (a crank arm whose tip circle
             passes too close to the platform joint).
+
+    ``detail`` replaces the default explanation (e.g. a full pose whose orientation a machine
+    with fewer than six actuators cannot take).
     """
 
     def __init__(self, leg: int, leg_name: str, shortfall: float, pose_index: int | None = None,
-                 *, too_long: bool = False):
+                 *, too_long: bool = False, detail: str | None = None):
         self.leg = leg
         self.leg_name = leg_name
         self.shortfall = float(shortfall)
@@ -93,8 +96,9 @@ class UnreachablePoseError(PkmError, ValueError):
         where = f"pose {pose_index}: " if pose_index is not None else ""
         how = "too long" if too_long else "too short"
         super().__init__(
-            f"{where}pose unreachable: {leg_name} (leg index {leg}) is {how} by "
-            f"{self.shortfall:.6g} m to reach it"
+            f"{where}pose unreachable: " + (detail if detail is not None else
+                                            f"{leg_name} (leg index {leg}) is {how} by "
+                                            f"{self.shortfall:.6g} m to reach it")
         )
 
 

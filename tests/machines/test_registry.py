@@ -118,7 +118,7 @@ BAD_FILES = [
     ('[machine]\nkind = "linear-delta"\nunits = []\n', 3, "units must be a string"),
     ('[machine]\nkind = "linear-delta"\n[parameters]\nL = true\n', 4, "numeric"),
     ('[machine]\nkind = "linear-delta"\n[parameters]\nL = "1.3"\n', 4, "numeric"),
-    ('[machine]\nkind = "rod-legs"\ndims = 2.0\n', 3, "integer 2 or 3"),
+    ('[machine]\nkind = "rod-legs"\ndims = 2.0\n', 3, "integer 2, 3 or 6"),
     (ROD + 'type = ["slide"]\n', 9, "type must be 'slide', 'strut' or 'crank'"),
     (ROD + 'parallelogram = { width = "abc", direction = [1, 0, 0] }\n', 9,
      "width must be a finite number"),

@@ -74,6 +74,8 @@ def run_demo(out_dir: Path) -> dict[str, Any]:
         if ident in ALIASES:
             continue
         m = machine(ident)
+        if m.dims == 6:  # full-pose machines have their own demo section
+            continue
         summary = machine_summary(m)
         summary["drawing"] = f"{ident}.png"
         draw_machine(m, m.home_pose, path=out_dir / f"{ident}.png")

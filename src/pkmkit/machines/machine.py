@@ -741,9 +741,15 @@ def build_machine(
     description: str = "",
     source: str = "",
 ) -> Machine:
-    """Build a :class:`Machine` of ``kind`` from validated SI parameters."""
+    """Build a machine of ``kind`` from validated SI parameters: a :class:`Machine`, or a
+    :class:`~pkmkit.machines.full_pose.FullPoseMachine` when the kind builds a full-pose model."""
     model = kind.build(params)
-    return Machine(
+    cls: type = Machine
+    if model.full_pose:
+        from pkmkit.machines.full_pose import FullPoseMachine
+
+        cls = FullPoseMachine
+    return cls(
         id=id,
         name=name or kind.title,
         kind=kind,

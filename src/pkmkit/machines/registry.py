@@ -33,7 +33,14 @@ from typing import Any
 import numpy as np
 
 from pkmkit.errors import MachineFileError, ParameterError, UnknownMachineError
-from pkmkit.machines import delta_robot, five_bar, linear_delta, orthoglide
+from pkmkit.machines import (
+    delta_robot,
+    five_bar,
+    gough_stewart,
+    linear_delta,
+    orthoglide,
+    verne,
+)
 from pkmkit.machines.machine import Machine, MachineKind, build_machine
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
 from pkmkit.model.parameters import is_plain_number, length_scale, resolve_parameters
@@ -42,8 +49,8 @@ from pkmkit.model.rods import CRANK, LEG_KINDS, STRUT, LegSpec, build_rod_model
 _KIND_NAMES = {v: k for k, v in LEG_KINDS.items()}
 
 #: Built-in machine kinds by name.
-KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (orthoglide, linear_delta, five_bar,
-                                                                delta_robot)}
+KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (
+    orthoglide, linear_delta, five_bar, delta_robot, gough_stewart, verne)}
 ROD_LEGS = "rod-legs"
 #: Short ids naming a kind's reference preset.
 ALIASES = {"linear-delta": "linear-delta-ch3", "five-bar": "five-bar-isotropic"}
@@ -220,15 +227,16 @@ def _number(value: Any, what: str, scale: float = 1.0) -> float:
 def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
                       text: dict) -> Machine:
     dims = head.get("dims", 3)
-    if isinstance(dims, bool) or dims not in (2, 3) or not isinstance(dims, int):
-        raise doc.error(f"[machine] dims must be the integer 2 or 3, got {dims!r}",
+    if isinstance(dims, bool) or dims not in (2, 3, 6) or not isinstance(dims, int):
+        raise doc.error(f"[machine] dims must be the integer 2, 3 or 6, got {dims!r}",
                         ("machine", "dims"))
     legs_raw = doc.data.get("legs")
     if not isinstance(legs_raw, list) or not legs_raw:
         raise doc.error("a rod-legs machine needs [[legs]] entries", ("legs",))
+    space = 3 if dims == 6 else dims  # coordinates of points and directions
 
     def pad(v: np.ndarray) -> np.ndarray:
-        return np.append(v, 0.0) if dims == 2 else v
+        return np.append(v, 0.0) if space == 2 else v
 
     legs = []
     actuators: list[str] = []
@@ -248,20 +256,22 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
         if not isinstance(actuator, str) or not actuator:
             raise ParameterError(f"{where}.actuator must be a name, got {actuator!r}",
                                  f"{where}.actuator")
-        if actuator in actuators:
-            raise ParameterError(f"{where}: actuator {actuator!r} already drives another leg",
-                                 f"{where}.actuator")
-        actuators.append(actuator)
+        if actuator in actuators and dims != 6:
+            raise ParameterError(
+                f"{where}: actuator {actuator!r} already drives another leg (only full-pose "
+                "machines, dims = 6, may hang several legs on one actuator)", f"{where}.actuator")
+        if actuator not in actuators:
+            actuators.append(actuator)
         axis = pivot = None
         if kind in ("slide", "crank"):
             if "axis" not in raw:
                 raise ParameterError(f"{where}: a {kind} leg needs 'axis'", where)
-            axis = pad(_vector(raw["axis"], dims, f"{where}.axis"))
+            axis = pad(_vector(raw["axis"], space, f"{where}.axis"))
         if kind == "crank":
             if "pivot" not in raw:
                 raise ParameterError(f"{where}: a crank leg needs 'pivot' (a point of its "
                                      "rotation axis)", where)
-            pivot = pad(_vector(raw["pivot"], dims, f"{where}.pivot", scale))
+            pivot = pad(_vector(raw["pivot"], space, f"{where}.pivot", scale))
         para = raw.get("parallelogram", {})
         if not isinstance(para, dict) or set(para) - {"width", "direction"}:
             raise ParameterError(
@@ -274,7 +284,7 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
             if "direction" not in para:
                 raise ParameterError(f"{where}.parallelogram needs a 'direction'",
                                      f"{where}.parallelogram")
-            direction = pad(_vector(para["direction"], dims,
+            direction = pad(_vector(para["direction"], space,
                                     f"{where}.parallelogram.direction"))
         branch = raw.get("branch", 1)
         if isinstance(branch, bool) or branch not in (1, -1):
@@ -286,10 +296,10 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
         legs.append(
             LegSpec(
                 name=str(raw.get("name", f"leg {i + 1}")),
-                actuator=i,
+                actuator=actuators.index(actuator),
                 kind=kind,
-                base=pad(_vector(raw["base"], dims, f"{where}.base", scale)),
-                platform=pad(_vector(raw["platform"], dims, f"{where}.platform", scale)),
+                base=pad(_vector(raw["base"], space, f"{where}.base", scale)),
+                platform=pad(_vector(raw["platform"], space, f"{where}.platform", scale)),
                 length=_number(raw["length"], f"{where}.length", scale),
                 axis=axis,
                 branch=int(branch),
@@ -299,7 +309,8 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
                 pivot=pivot,
             )
         )
-    home = _vector(head.get("home", [0.0] * dims), dims, "machine.home", scale)
+    home = _vector(head.get("home", [0.0] * dims), dims, "machine.home")
+    home[:space] *= scale  # a full pose's rotation vector stays in radians
     mode_names = head.get("mode_names", ["det(A)<0", "det(A)>0"])
     if not (isinstance(mode_names, list) and len(mode_names) == 2
             and all(isinstance(n, str) and n for n in mode_names)
@@ -310,8 +321,13 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
         legs, dims=dims, actuator_names=actuators, home_pose=home,
         mode_names=(mode_names[0], mode_names[1]),
     )
-    return Machine(id=ident, name=text["name"] or ident, kind=None, params={}, model=model,
-                   description=text["description"], source=text["source"])
+    cls: type = Machine
+    if model.full_pose:
+        from pkmkit.machines.full_pose import FullPoseMachine
+
+        cls = FullPoseMachine
+    return cls(id=ident, name=text["name"] or ident, kind=None, params={}, model=model,
+               description=text["description"], source=text["source"])
 
 
 def _poses(doc: MachineDocument, scale: float) -> dict[str, np.ndarray]:
@@ -321,6 +337,8 @@ def _poses(doc: MachineDocument, scale: float) -> dict[str, np.ndarray]:
         try:
             out[name] = _vector(value, len(value) if isinstance(value, list) else -1,
                                 f"poses.{name}", scale)
+            if len(out[name]) == 6:  # a full pose: the rotation vector is in radians
+                out[name][3:] /= scale
         except ParameterError as exc:
             raise doc.error(str(exc), ("poses", name)) from None
     return out
@@ -328,10 +346,13 @@ def _poses(doc: MachineDocument, scale: float) -> dict[str, np.ndarray]:
 
 def _with_poses(doc: MachineDocument, machine: Machine,
                 poses: dict[str, np.ndarray]) -> Machine:
+    widths = {machine.dims}
+    if getattr(machine, "position_controlled", False):
+        widths.add(3)  # a position: the machine's orientation follows from it
     for name, pose in poses.items():
-        if pose.shape != (machine.dims,):
-            raise doc.error(f"pose {name!r} must have {machine.dims} coordinates",
-                            ("poses", name))
+        if pose.shape[0] not in widths:
+            raise doc.error(f"pose {name!r} must have {' or '.join(map(str, sorted(widths)))} "
+                            "coordinates", ("poses", name))
     return replace(machine, extra_poses={**machine.extra_poses, **poses})
 
 

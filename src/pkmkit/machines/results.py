@@ -47,6 +47,8 @@ class InverseResult:
             for that mode.
         iterations: ``(N,)`` engine iterations (numeric method), else None.
         residual: ``(N,)`` largest rod closure residual (numeric method), m, else None.
+        pose: ``(N, 6)`` full poses found with q when the input gave positions only (a
+            full-pose machine with fewer than six actuators), else None.
     """
 
     q: np.ndarray
@@ -57,6 +59,7 @@ class InverseResult:
     mode: np.ndarray
     iterations: np.ndarray | None = None
     residual: np.ndarray | None = None
+    pose: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -59,7 +59,8 @@ class LegSpec:
         base: slide: carriage joint centre at q = 0; strut: fixed base joint centre; crank: the
             arm-tip joint centre at q = 0. ``(3,)`` m.
         platform: platform joint centre in the platform frame, ``(3,)`` m.
-        length: slide: rod length; strut: rod length at q = 0. m.
+        length: slide or crank: rod length; strut: rod length at q = 0 (may be 0: q is then
+            the strut's length). m.
         axis: slide direction, or crank rotation axis ``(3,)`` (normalised here); ignored for
             struts.
         branch: working branch of the inverse model, +1 or −1: for a slide the actuator
@@ -293,8 +294,11 @@ def build_rod_model(
                     f"{where}: the crank arm (from the pivot to the base joint) has no length "
                     "across the rotation axis", f"{where}.pivot")
         length = float(leg.length)
-        if not np.isfinite(length) or length <= 0:
-            raise ParameterError(f"{where}.length must be > 0, got {leg.length}", f"{where}.length")
+        # a strut's length at q = 0 may be 0 (q is then the strut length itself)
+        if not np.isfinite(length) or length < 0 or (length == 0 and kind != STRUT):
+            what = ">= 0 for a strut" if kind == STRUT else "> 0"
+            raise ParameterError(f"{where}.length must be {what}, got {leg.length}",
+                                 f"{where}.length")
         lo, hi = (float(v) for v in leg.stroke)
         if np.isnan(lo) or np.isnan(hi) or not lo < hi:
             raise ParameterError(

@@ -124,10 +124,10 @@ def _pose_columns(model: RodModel, v: RodVectors, unit: np.ndarray, dof: str) ->
     """∂r/∂(platform unknowns) ``(m, n_pose, k)`` in the unknown layout of ``dof``."""
     dims = model.dims
     if dof == "translation":
-        return unit[:dims].transpose(1, 0, 2)
+        return unit[:min(dims, 3)].transpose(1, 0, 2)
     rb = np.broadcast_to(v.rb, unit.shape)
     moment = np.cross(rb, unit, axis=0)
-    if dims == 3:
+    if dims != 2:
         cols = np.concatenate([unit, moment], axis=0)
     else:
         cols = np.concatenate([unit[:2], moment[2:3]], axis=0)
@@ -139,19 +139,20 @@ def pose_unknown_count(model: RodModel, dof: str) -> int:
     if dof not in PLATFORM_DOF:
         raise ValueError(f"platform dof must be one of {PLATFORM_DOF}, got {dof!r}")
     if dof == "translation":
-        return model.dims
-    return 6 if model.dims == 3 else 3
+        return min(model.dims, 3)
+    return 3 if model.dims == 2 else 6
 
 
 def split_pose(model: RodModel, u: np.ndarray, dof: str) -> tuple[np.ndarray, np.ndarray | None]:
     """Platform position ``(3, k)`` and rotation ``(3, 3, k)`` (None: identity) from the
     unknowns ``u (n_pose, k)``."""
     p = np.zeros((3, u.shape[1]))
-    p[: model.dims] = u[: model.dims]
+    n_position = min(model.dims, 3)
+    p[:n_position] = u[:n_position]
     if dof == "translation":
         return p, None
     phi = np.zeros((u.shape[1], 3))
-    if model.dims == 3:
+    if model.dims != 2:
         phi[:] = u[3:6].T
     else:
         phi[:, 2] = u[2]
@@ -159,7 +160,7 @@ def split_pose(model: RodModel, u: np.ndarray, dof: str) -> tuple[np.ndarray, np
 
 
 def _retract(model: RodModel, dof: str):
-    if dof == "full" and model.dims == 3:
+    if dof == "full" and model.dims != 2:
 
         def retract(u: np.ndarray, step: np.ndarray, rows: np.ndarray) -> np.ndarray:
             out = u + step
@@ -237,11 +238,54 @@ def closure_jacobians(
     model: RodModel, pose: np.ndarray, q: np.ndarray, dof: str = "full"
 ) -> tuple[np.ndarray, np.ndarray]:
     """Closure Jacobians ``(∂r/∂pose (k, m, n_pose), ∂r/∂q (k, m, n_act))`` at poses
-    ``(k, dims)`` (platform not rotated) and actuator coordinates ``(k, n_act)``."""
-    v = rod_vectors(model, model.pad(pose).T, q.T)
+    ``(k, dims)`` and actuator coordinates ``(k, n_act)``. Translational machines' platforms are
+    taken unrotated; a full pose's rotation vector is applied. The pose columns are with respect
+    to the platform twist (v, ω) (left rotation increments) for ``dof="full"``."""
+    rot = None
+    if model.full_pose:
+        rot = rotvec_to_matrix(pose[:, 3:6]).transpose(1, 2, 0)
+    v = rod_vectors(model, model.pad(pose).T, q.T, rot)
     unit = _unit_rods(v)
     jp = _pose_columns(model, v, unit, dof).transpose(2, 0, 1)
     return jp, _q_columns(model, unit, q.T).transpose(2, 0, 1)
+
+
+def solve_position_inverse(
+    model: RodModel,
+    position: np.ndarray,
+    u0: np.ndarray,
+    **options,
+) -> SolveResult:
+    """Inverse kinematics of a full-pose machine with fewer than six actuators from the platform
+    *position* alone: the unknowns are the actuator coordinates and the platform rotation, which
+    the rods fix (the Verne-type module's coupled orientation).
+
+    Args:
+        model: a full-pose rod model (``dims = 6``).
+        position: ``(N, 3)`` platform positions (m).
+        u0: ``(N, n_act + 3)`` initial actuator coordinates then rotation vector (rad).
+        **options: forwarded to :func:`solve_least_squares`.
+
+    Returns:
+        :class:`SolveResult` whose ``u`` holds ``(q, rotation vector)``.
+    """
+    p_t = np.ascontiguousarray(position.T)
+    n_act = model.n_actuators
+
+    def evaluate(u: np.ndarray, rows: np.ndarray):
+        q = u[:n_act]
+        rot = rotvec_to_matrix(u[n_act:].T).transpose(1, 2, 0)
+        v = rod_vectors(model, p_t[:, rows], q, rot)
+        unit = _unit_rods(v)
+        moment = np.cross(np.broadcast_to(v.rb, unit.shape), unit, axis=0).transpose(1, 0, 2)
+        return v.dist - v.length, np.concatenate([_q_columns(model, unit, q), moment], axis=1)
+
+    def retract(u: np.ndarray, step: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        out = u + step
+        out[n_act:] = compose_rotvec(step[n_act:].T, u[n_act:].T).T
+        return out
+
+    return solve_least_squares(evaluate, u0, retract=retract, **options)
 
 
 @dataclass(frozen=True)

@@ -72,9 +72,15 @@ def skew(v: np.ndarray) -> np.ndarray:
     return out
 
 
+def _rows3(value: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` float rows scipy's kernels accept (they need writable buffers)."""
+    arr = np.asarray(value, dtype=float).reshape(-1, 3)
+    return arr if arr.flags.writeable else arr.copy()
+
+
 def rotvec_to_matrix(phi: np.ndarray) -> np.ndarray:
     """Rotation matrices ``(N, 3, 3)`` of rotation vectors ``(N, 3)`` (radians)."""
-    return Rotation.from_rotvec(np.asarray(phi, dtype=float).reshape(-1, 3)).as_matrix()
+    return Rotation.from_rotvec(_rows3(phi)).as_matrix()
 
 
 def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
@@ -84,8 +90,8 @@ def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
 
 def compose_rotvec(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """Rotation vector of ``exp(δ) · exp(φ)`` (left increment δ applied to φ), rows ``(N, 3)``."""
-    d = Rotation.from_rotvec(np.asarray(delta, dtype=float).reshape(-1, 3))
-    p = Rotation.from_rotvec(np.asarray(phi, dtype=float).reshape(-1, 3))
+    d = Rotation.from_rotvec(_rows3(delta))
+    p = Rotation.from_rotvec(_rows3(phi))
     return (d * p).as_rotvec()
 
 

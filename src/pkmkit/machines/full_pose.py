@@ -1,0 +1,579 @@
+"""The :class:`FullPoseMachine`: rod-leg machines whose platform moves in SE(3).
+
+The Gough–Stewart hexapod (six struts), the Verne-type module (three slides carrying six rods,
+whose platform tilts with its position) and any six-DOF rod machine from a file. Poses are
+rows ``(x, y, z, rx, ry, rz)``: position (m) and rotation vector (rad) of the platform frame
+(:mod:`pkmkit.spatial.poses`); angles in a named convention only at the command line.
+
+- :meth:`~FullPoseMachine.ik` — closed form rod by rod (:mod:`pkmkit.machines.full_pose_forms`);
+  a machine with fewer than six actuators (the Verne-type module) also takes platform
+  *positions* ``(N, 3)``, its orientation being then found with the actuators by the engine;
+- :meth:`~FullPoseMachine.fk` — the least-squares engine from a guess (warm starts), in the
+  working assembly mode;
+- :meth:`~FullPoseMachine.jacobian` — ``A t = B q̇`` for the platform twist t = (v, ω), J, the
+  homogenised J (characteristic length, documented per machine), transmission factors and
+  conditioning, separately for translation and rotation, and singularity measures.
+
+Conventions as for :class:`~pkmkit.machines.machine.Machine`: SI units, single rows raise typed
+errors, batches flag rows with a status and NaN.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from pkmkit.errors import (
+    ConvergenceError,
+    InputError,
+    NoAssemblyError,
+    ParameterError,
+    UnreachablePoseError,
+)
+from pkmkit.machines.full_pose_forms import FullPoseForms
+from pkmkit.machines.machine import (
+    HOME_TOL,
+    MAX_COORDINATE,
+    SINGULARITY_TOL,
+    MachineKind,
+    _checked_batch,
+    _restore,
+    _rows_like,
+    _valid_rows,
+)
+from pkmkit.machines.results import DirectResult, InverseResult, Jacobians, Singularity
+from pkmkit.model.mobility import grubler_count
+from pkmkit.model.parameters import resolve_parameters
+from pkmkit.model.rods import STRUT, RodModel
+from pkmkit.numerics.arrays import as_batch, restore_shape
+from pkmkit.solve.rod_closure import (
+    instantaneous_mobility,
+    solve_direct,
+    solve_position_inverse,
+)
+from pkmkit.spatial.rotation import compose_rotvec
+from pkmkit.status import Status
+
+#: Rods of one actuator must agree on its coordinate within this (m or rad, relative to
+#: 1 + the longest rod for lengths) for a full pose to be reachable by a machine with fewer
+#: than six actuators.
+CONSISTENCY_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class FullPoseJacobians(Jacobians):
+    """Velocity model of a full-pose machine at N poses (single pose: leading axis dropped).
+
+    Inherited fields, with these shapes and meanings (m rods, n actuators):
+    ``A (N, m, 6)`` rows ``(d_jᵀ, (R b_j × d_j)ᵀ)``; ``B (N, m, n)``; ``J (N, 6, n)`` twist per
+    unit actuator rate (linear rows m/m or m/rad, angular rows 1/m or rad/rad); ``J_inv (N, n, 6)``
+    = B⁺A; ``singular_values`` and ``condition`` of the **homogenised** J; ``det_A`` (six rods;
+    NaN otherwise); ``parallel_measure`` σ_min/σ_max of A with unit rows, moments divided by
+    the characteristic length; ``serial_measure`` the smallest |cos| between a rod and the
+    motion of its base joint (1 for struts).
+
+    Attributes:
+        J_homogeneous: ``(N, 6, n)`` ``diag(1, 1, 1, L, L, L) J``.
+        characteristic_length: L (m).
+        translation_singular_values: ``(N, min(3, n))`` singular values of J's linear rows.
+        rotation_singular_values: ``(N, min(3, n))`` of J's angular rows (rad per m or rad).
+    """
+
+    J_homogeneous: np.ndarray = None
+    characteristic_length: float = 1.0
+    translation_singular_values: np.ndarray = None
+    rotation_singular_values: np.ndarray = None
+
+
+def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
+    """Distance between pose rows: position difference plus L × rotation angle (m)."""
+    from scipy.spatial.transform import Rotation
+
+    angle = (Rotation.from_rotvec(a[..., 3:].reshape(-1, 3))
+             * Rotation.from_rotvec(b[..., 3:].reshape(-1, 3)).inv()).magnitude()
+    return np.linalg.norm(a[..., :3] - b[..., :3], axis=-1) + length * angle.reshape(
+        a.shape[:-1])
+
+
+@dataclass(frozen=True, eq=False)
+class FullPoseMachine:
+    """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
+
+    Attributes:
+        id, name, kind, params, model, description, source, extra_poses: as for
+            :class:`~pkmkit.machines.machine.Machine`.
+        characteristic_length: L (m) that homogenises the angular rows of J (default: the
+            radius of the platform joints around the platform origin, or 1 m if they coincide).
+    """
+
+    id: str
+    name: str
+    kind: MachineKind | None
+    params: Mapping[str, Any]
+    model: RodModel
+    description: str = ""
+    source: str = ""
+    extra_poses: Mapping[str, np.ndarray] = field(default_factory=dict)
+    characteristic_length: float | None = None
+
+    def __post_init__(self) -> None:
+        if not self.model.full_pose:
+            raise ParameterError(f"machine {self.id!r}: a full-pose machine needs dims = 6")
+        if self.model.n_rods < 6:
+            raise ParameterError(
+                f"machine {self.id!r} has {self.model.n_rods} rods: a six-DOF platform needs at "
+                "least six to be held")
+        if self.characteristic_length is None:
+            radius = float(np.linalg.norm(self.model.rod_platform, axis=1).mean())
+            object.__setattr__(self, "characteristic_length", radius if radius > 0 else 1.0)
+        forms = FullPoseForms(self.model)
+        object.__setattr__(self, "_forms", forms)
+        home = self.model.home_pose[None]
+        q_rod = forms.rod_coordinates(home)
+        q_home, spread = forms.combine(q_rod)
+        if not np.isfinite(q_home).all():
+            short = forms.shortfall(home)[0]
+            rod = int(np.argmax(short))
+            raise ParameterError(
+                f"machine {self.id!r}: the home pose {self.model.home_pose.tolist()} does not "
+                f"assemble ({self._rod_name(rod)} out of reach by {short[rod]:.6g} m); choose "
+                "other dimensions or another home pose")
+        if spread[0] > self._consistency_tol():
+            raise ParameterError(
+                f"machine {self.id!r}: the home pose {self.model.home_pose.tolist()} does not "
+                f"assemble: rods on one actuator disagree by {spread[0]:.6g}; give a home pose "
+                "that the rods reach (a machine with fewer than six actuators reaches only some "
+                "orientations)")
+        object.__setattr__(self, "_home_q", q_home[0])
+        jac = self._jacobians(home, q_home, SINGULARITY_TOL)
+        if not (jac.parallel_measure[0] >= HOME_TOL and jac.serial_measure[0] >= HOME_TOL):
+            which = "a parallel" if not jac.parallel_measure[0] >= HOME_TOL else "a serial"
+            raise ParameterError(
+                f"machine {self.id!r}: the home pose {self.model.home_pose.tolist()} is (nearly) "
+                f"{which} singularity; choose other dimensions")
+        object.__setattr__(self, "_home_jacobian", jac.J[0])
+        sign = int(np.sign(jac.det_A[0])) if np.isfinite(jac.det_A[0]) else 1
+        object.__setattr__(self, "_working_mode", sign or 1)
+
+    # ---------------------------------------------------------------- properties
+    @property
+    def dims(self) -> int:
+        """Pose width: 6 (position + rotation vector)."""
+        return 6
+
+    @property
+    def n_actuators(self) -> int:
+        """Number of actuators."""
+        return self.model.n_actuators
+
+    @property
+    def pose_names(self) -> tuple[str, ...]:
+        """``("x", "y", "z", "rx", "ry", "rz")``."""
+        return self.model.pose_names
+
+    @property
+    def actuator_names(self) -> tuple[str, ...]:
+        """Names of the actuator coordinates."""
+        return self.model.actuator_names
+
+    @property
+    def home_pose(self) -> np.ndarray:
+        """Reference pose ``(6,)``."""
+        return self.model.home_pose.copy()
+
+    @property
+    def home_q(self) -> np.ndarray:
+        """Actuator coordinates at the home pose ``(n,)``."""
+        return self._home_q.copy()
+
+    @property
+    def position_controlled(self) -> bool:
+        """True when the machine has fewer than six actuators: its orientation follows its
+        position (a Verne-type module), and :meth:`ik` also accepts positions ``(N, 3)``."""
+        return self.n_actuators < 6
+
+    @property
+    def working_mode(self) -> int:
+        """Sign of det A at home (six rods), the working assembly mode's sign."""
+        return self._working_mode
+
+    @property
+    def mode_labels(self) -> tuple[str, str]:
+        """Names of the det A signs, working sign first."""
+        neg, pos = self.model.mode_names
+        return (neg, pos) if self._working_mode < 0 else (pos, neg)
+
+    def mode_label(self, sign: int) -> str:
+        """Name of the det A sign ``sign`` (±1)."""
+        return self.model.mode_names[0 if sign < 0 else 1]
+
+    def reference_poses(self) -> dict[str, np.ndarray]:
+        """Named sample poses, ``home`` first, each ``(6,)``."""
+        poses = {"home": self.home_pose}
+        poses.update({k: np.asarray(v, dtype=float) for k, v in self.extra_poses.items()})
+        return poses
+
+    def default_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """Position region ``(lower (3,), upper (3,))`` (m) for workspace studies: the kind's
+        choice, else home ± 0.4 × the shortest rod."""
+        if self.kind is not None and self.kind.default_box is not None:
+            lo, hi = self.kind.default_box(self.params, self.model)
+            return np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        half = 0.4 * float(self.model.rod_length.min())
+        return self.home_pose[:3] - half, self.home_pose[:3] + half
+
+    def with_params(self, **overrides: Any) -> FullPoseMachine:
+        """A new machine of the same kind with some parameters changed (SI units)."""
+        if self.kind is None:
+            raise ParameterError(
+                f"machine {self.id!r} is described leg by leg and has no named parameters; "
+                "edit its machine file instead")
+        from pkmkit.machines.machine import build_machine
+
+        params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
+        rebuilt = build_machine(self.kind, params, id=self.id, name=self.name,
+                                description=self.description, source=self.source)
+        extra = {k: v for k, v in self.extra_poses.items() if k not in rebuilt.extra_poses}
+        return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra})
+
+    # ---------------------------------------------------------------- helpers
+    def _rod_name(self, rod: int) -> str:
+        leg = int(self.model.rod_leg[rod])
+        name = self.model.leg_names[leg]
+        rods = np.flatnonzero(self.model.rod_leg == leg)
+        return name if len(rods) == 1 else f"{name} rod {int(np.flatnonzero(rods == rod)[0]) + 1}"
+
+    def _consistency_tol(self) -> float:
+        return CONSISTENCY_TOL * (1.0 + float(self.model.rod_length.max()))
+
+    def _branches(self, branches: Any) -> np.ndarray:
+        """Per-rod branches from per-leg values (default: the working ones)."""
+        legs = self.model.leg_branch
+        if branches is not None:
+            arr = np.asarray(branches, dtype=float).reshape(-1)
+            if arr.shape != (self.model.n_legs,) or not np.isin(arr, (-1.0, 1.0)).all():
+                raise InputError(f"branches must be {self.model.n_legs} values of +1 or -1, "
+                                 f"got {branches!r}")
+            legs = arr.astype(int)
+        return legs[self.model.rod_leg]
+
+    def _guess_pose(self, q: np.ndarray) -> np.ndarray:
+        """First-order guess from home: the twist J(home)(q − q_home) applied to home."""
+        twist = (q - self._home_q) @ self._home_jacobian.T
+        guess = np.empty((q.shape[0], 6))
+        guess[:, :3] = self.model.home_pose[:3] + twist[:, :3]
+        guess[:, 3:] = compose_rotvec(twist[:, 3:], np.broadcast_to(self.model.home_pose[3:],
+                                                                    (q.shape[0], 3)))
+        return guess
+
+    # ---------------------------------------------------------------- inverse
+    def ik(
+        self,
+        x: Any,
+        *,
+        branches: Any = None,
+        q0: Any = None,
+        full_output: bool = False,
+        **engine_options: Any,
+    ) -> np.ndarray | InverseResult:
+        """Inverse kinematics.
+
+        Args:
+            x: full poses ``(6,)`` / ``(N, 6)`` (closed form, rod by rod); for a machine with
+                fewer than six actuators also platform positions ``(3,)`` / ``(N, 3)`` (the
+                orientation is solved with the actuators by the engine from ``q0`` or from
+                home, and returned in ``InverseResult.pose``).
+            branches: per-leg inverse-model branches (±1); default: the working ones.
+            q0: warm start for positions (``(n,)`` or ``(N, n)``).
+            full_output: return an :class:`InverseResult`.
+            **engine_options: forwarded to the engine (positions only).
+
+        Returns:
+            q ``(n,)`` / ``(N, n)`` (NaN rows where unreachable), or an :class:`InverseResult`
+            (``shortfall`` is per rod for this family).
+
+        Raises:
+            InputError: mis-shaped input, non-finite single pose.
+            UnreachablePoseError: a single pose out of reach (names the rod and by how much),
+                or a full pose that a machine with fewer than six actuators cannot take.
+            ConvergenceError: a single position whose orientation the engine did not find.
+        """
+        arr = np.asarray(x, dtype=float) if not isinstance(x, np.ndarray) else x
+        width = arr.shape[-1] if arr.ndim in (1, 2) else 6
+        if width == 3 and self.position_controlled:
+            return self._ik_position(arr, q0, branches, full_output, engine_options)
+        xb, single = _checked_batch(x, 6, "pose")
+        sigma = self._branches(branches)
+        with np.errstate(invalid="ignore", over="ignore"):
+            q_rod = self._forms.rod_coordinates(xb, sigma)
+            q, spread = self._forms.combine(q_rod)
+        status = np.full(xb.shape[0], int(Status.OK))
+        unreachable = ~np.isfinite(q_rod).all(axis=1)
+        inconsistent = ~unreachable & ~(spread <= self._consistency_tol())
+        status[unreachable | inconsistent] = Status.UNREACHABLE
+        status[~_valid_rows(xb)] = Status.INVALID_INPUT
+        q[status != Status.OK] = np.nan
+        if single and status[0] != Status.OK:
+            self._raise_inverse(xb, status[0], spread[0])
+        if not full_output:
+            return restore_shape(q, single)
+        result = InverseResult(q=q, status=status, branches=sigma.copy(),
+                               shortfall=self._forms.shortfall(xb), method="closed",
+                               mode=self._mode_of(xb, q))
+        return _restore(result, single, ("q", "status", "shortfall", "mode"))
+
+    def _ik_position(self, arr, q0, branches, full_output, engine_options):
+        pb, single = _checked_batch(arr, 3, "position")
+        n = self.n_actuators
+        if q0 is None:
+            # first order from home: the position rows of J(home) are square (n = 3)
+            j_t = self._home_jacobian[:3]
+            dq = np.linalg.lstsq(j_t, (pb - self.model.home_pose[:3]).T, rcond=None)[0].T
+            guess_q = self._home_q + dq
+        else:
+            guess_q = _rows_like(q0, n, "q0", pb.shape[0])
+        guess_pose = self._guess_pose(guess_q)
+        u0 = np.concatenate([guess_q, guess_pose[:, 3:]], axis=1)
+        u0[~_valid_rows(pb)] = np.nan
+        engine_options.setdefault("compute_rank", False)
+        with np.errstate(invalid="ignore", over="ignore"):
+            result = solve_position_inverse(self.model, pb, u0, **engine_options)
+        q = result.u[:, :n].copy()
+        pose = np.concatenate([pb, result.u[:, n:]], axis=1)
+        status = result.status.copy()
+        status[status == Status.INCONSISTENT] = Status.UNREACHABLE
+        ok = status == Status.OK
+        if branches is not None or ok.any():
+            # the engine may land on another branch or assembly mode: say so
+            sigma = self._branches(branches)
+            expected = np.full(pb.shape[0], False)
+            with np.errstate(invalid="ignore", over="ignore"):
+                q_rod = self._forms.rod_coordinates(pose[ok], sigma)
+                back, _ = self._forms.combine(q_rod)
+            expected[ok] = np.abs(back - q[ok]).max(axis=1) <= 1e-7
+            status[ok & ~expected] = Status.WRONG_MODE
+        status[~_valid_rows(pb)] = Status.INVALID_INPUT
+        bad = status != Status.OK
+        q[bad] = np.nan
+        pose[bad] = np.nan
+        if single and bad[0]:
+            if status[0] == Status.INVALID_INPUT:
+                raise InputError(f"position {pb[0].tolist()} has a coordinate beyond "
+                                 f"{MAX_COORDINATE:g} m")
+            if status[0] == Status.WRONG_MODE:
+                raise ConvergenceError(
+                    "the inverse model converged to another branch or assembly mode than the "
+                    "working one; pass q0 closer to the wanted solution")
+            raise UnreachablePoseError(-1, "the rods", float(result.residual[0]), detail=(
+                f"the rods cannot close at position {pb[0].tolist()} (least-squares residual "
+                f"{float(result.residual[0]):.6g} m)"))
+        if not full_output:
+            return restore_shape(q, single)
+        sigma = self._branches(branches)
+        out = InverseResult(q=q, status=status, branches=sigma, shortfall=np.full(
+            (pb.shape[0], self.model.n_rods), np.nan), method="numeric",
+            mode=self._mode_of(pose, q), iterations=result.iterations,
+            residual=result.residual, pose=pose)
+        return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
+                                      "residual", "pose"))
+
+    def _raise_inverse(self, xb: np.ndarray, status: int, spread: float) -> None:
+        if status == Status.INVALID_INPUT:
+            raise InputError(f"pose {xb[0].tolist()} has a coordinate beyond "
+                             f"{MAX_COORDINATE:g} m")
+        short = self._forms.shortfall(xb)[0]
+        rod = int(np.argmax(short))
+        if short[rod] > 0 or not np.isfinite(spread):
+            leg = int(self.model.rod_leg[rod])
+            raise UnreachablePoseError(leg, self._rod_name(rod), short[rod])
+        raise UnreachablePoseError(
+            -1, "the rods", spread, detail=(
+                f"the pose needs the rods of one actuator at coordinates {spread:.6g} apart: "
+                f"{self.id!r} has {self.n_actuators} actuators and reaches only the orientations "
+                "its rods impose; give a position (3 values) instead"))
+
+    def _mode_of(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
+        ok = np.isfinite(q).all(axis=1) & np.isfinite(x).all(axis=1)
+        out = np.zeros(x.shape[0], dtype=int)
+        if ok.any() and self.model.n_rods == 6:
+            a, _ = self._forms.jacobians(x[ok], q[ok])
+            out[ok] = np.sign(np.linalg.det(a)).astype(int)
+        return out
+
+    # ---------------------------------------------------------------- direct
+    def fk(
+        self,
+        q: Any,
+        *,
+        x0: Any = None,
+        full_output: bool = False,
+        **engine_options: Any,
+    ) -> np.ndarray | DirectResult:
+        """Direct kinematics by the least-squares engine over every rod, from ``x0`` (a warm
+        start, one pose or one per row) or from the first-order guess J(home)(q − q_home).
+
+        Returns:
+            poses ``(6,)`` / ``(N, 6)`` (NaN rows where the engine found no assembly), or a
+            :class:`DirectResult`.
+
+        Raises:
+            InputError: mis-shaped input or non-finite single q.
+            NoAssemblyError: a single q with no assembly reached from the guess.
+        """
+        qb, single = _checked_batch(q, self.n_actuators, "q")
+        guess = (self._guess_pose(qb) if x0 is None
+                 else _rows_like(x0, 6, "x0", qb.shape[0]))
+        guess[~_valid_rows(qb)] = np.nan
+        engine_options.setdefault("compute_rank", False)
+        with np.errstate(invalid="ignore", over="ignore"):
+            result = solve_direct(self.model, qb, guess, dof="full", **engine_options)
+        pose = result.u.copy()
+        status = result.status.copy()
+        status[status == Status.INCONSISTENT] = Status.NO_ASSEMBLY
+        status[~_valid_rows(qb)] = Status.INVALID_INPUT
+        ok = status == Status.OK
+        pose[~ok] = np.nan
+        if single and not ok[0]:
+            if status[0] == Status.INVALID_INPUT:
+                raise InputError(f"q = {qb[0].tolist()} has a coordinate beyond "
+                                 f"{MAX_COORDINATE:g}")
+            if status[0] == Status.NO_ASSEMBLY:
+                raise NoAssemblyError(
+                    f"q = {qb[0].tolist()}: no assembly found from the guess (closure residual "
+                    f"{result.residual[0]:.3g} m); the rods may not meet, or pass x0")
+            raise ConvergenceError(f"the direct model did not converge "
+                                   f"({Status(int(status[0])).label})")
+        if not full_output:
+            return restore_shape(pose, single)
+        mode = self._mode_of(pose, qb)
+        out = DirectResult(pose=pose, status=status, mode=mode,
+                           mode_label=self.mode_labels[0], branches=np.zeros(
+                               (qb.shape[0], self.model.n_legs), dtype=int),
+                           method="numeric", iterations=result.iterations,
+                           residual=result.residual)
+        return _restore(out, single, ("pose", "status", "mode", "branches", "iterations",
+                                      "residual"))
+
+    # ---------------------------------------------------------------- velocity
+    def jacobian(self, x: Any, *, q: Any = None, branches: Any = None,
+                 tol: float = SINGULARITY_TOL) -> FullPoseJacobians:
+        """Velocity model at full poses (see :class:`FullPoseJacobians`).
+
+        Args:
+            x: ``(6,)`` or ``(N, 6)`` poses (or positions ``(3,)``/``(N, 3)`` for a machine
+                with fewer than six actuators).
+            q: actuator coordinates at those poses (default: the inverse model).
+            branches: inverse-model branches when q is not given.
+            tol: threshold of the singularity measures.
+        """
+        if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
+            raise InputError(f"tol must be a positive number, got {tol!r}")
+        arr = np.asarray(x, dtype=float)
+        if self.position_controlled and arr.ndim in (1, 2) and arr.shape[-1] == 3:
+            inv = self.ik(arr, branches=branches, full_output=True)
+            xb, single = as_batch(np.asarray(inv.pose), 6, "pose")
+            qb = np.atleast_2d(inv.q)
+        else:
+            xb, single = _checked_batch(x, 6, "pose")
+            if q is None:
+                qb = np.atleast_2d(self.ik(xb[0] if single else xb, branches=branches))
+            else:
+                qb, _ = as_batch(q, self.n_actuators, "q")
+                if qb.shape[0] != xb.shape[0]:
+                    raise InputError(f"x has {xb.shape[0]} rows but q has {qb.shape[0]}")
+        jac = self._jacobians(xb, qb, float(tol))
+        names = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
+                 "parallel_measure", "serial_measure", "singularity", "q", "mode",
+                 "J_homogeneous", "translation_singular_values", "rotation_singular_values")
+        return _restore(jac, single, names)
+
+    def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> FullPoseJacobians:
+        n, size = self.n_actuators, xb.shape[0]
+        length = float(self.characteristic_length)
+        ok = np.isfinite(qb).all(axis=1) & np.isfinite(xb).all(axis=1)
+        m = self.model.n_rods
+        a = np.full((size, m, 6), np.nan)
+        b = np.full((size, m, n), np.nan)
+        if ok.any():
+            a[ok], b[ok] = self._forms.jacobians(xb[ok], qb[ok])
+        # singularity measures: unit rows, moments over L; base-joint motion vs rod direction
+        with np.errstate(invalid="ignore", divide="ignore"):
+            dist = np.linalg.norm(a[:, :, :3], axis=2)
+            unit = a / dist[:, :, None]
+            unit[:, :, 3:] /= length
+            sv_a = np.full((size, 6), np.nan)
+            sv_a[ok] = np.linalg.svd(unit[ok], compute_uv=False)[:, :6]
+            parallel = sv_a[:, -1] / sv_a[:, 0]
+            speed = self._base_joint_speeds(qb)
+            strut = self.model.rod_kind == STRUT
+            cos = np.abs(np.take_along_axis(b, self.model.rod_actuator[None, :, None], 2)[:, :, 0]
+                         ) / (dist * speed)
+            cos[:, strut] = 1.0
+            serial = cos.min(axis=1)
+        j = np.full((size, 6, n), np.nan)
+        if ok.any():
+            j[ok] = self._solve_j(a[ok], b[ok])
+        det_a = np.full(size, np.nan)
+        if m == 6 and ok.any():
+            det_a[ok] = np.linalg.det(a[ok])
+        flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
+        flags |= np.where(parallel < tol, int(Singularity.PARALLEL), 0)
+        at_parallel = (flags & Singularity.PARALLEL).astype(bool)
+        j[at_parallel] = np.nan
+        scale = np.array([1.0, 1.0, 1.0, length, length, length])
+        j_h = j * scale[None, :, None]
+        sv = self._singular_values(j_h)
+        sv_t = self._singular_values(j[:, :3])
+        sv_r = self._singular_values(j[:, 3:])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            condition = sv[:, 0] / sv[:, -1]
+            j_inv = np.full((size, n, 6), np.nan)
+            good = ok & ~at_parallel
+            if good.any():
+                j_inv[good] = np.linalg.pinv(b[good]) @ a[good]
+        det_b = np.full(size, np.nan)
+        if m == n and ok.any():
+            det_b[ok] = np.linalg.det(b[ok])
+        return FullPoseJacobians(
+            A=a, B=b, J=j, J_inv=j_inv, singular_values=sv, condition=condition, det_A=det_a,
+            det_B=det_b, parallel_measure=parallel, serial_measure=serial, singularity=flags,
+            tolerance=tol, q=qb, mode=np.sign(np.nan_to_num(det_a)).astype(int),
+            J_homogeneous=j_h, characteristic_length=length,
+            translation_singular_values=sv_t, rotation_singular_values=sv_r)
+
+    @staticmethod
+    def _solve_j(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """J = A⁻¹B (six rods) or the least-squares A⁺B (more rods)."""
+        if a.shape[1] == 6:
+            return np.linalg.solve(a, b)
+        return np.linalg.pinv(a) @ b
+
+    @staticmethod
+    def _singular_values(mat: np.ndarray) -> np.ndarray:
+        k = min(mat.shape[1], mat.shape[2])
+        out = np.full((mat.shape[0], k), np.nan)
+        ok = np.isfinite(mat).all(axis=(1, 2))
+        if ok.any():
+            out[ok] = np.linalg.svd(mat[ok], compute_uv=False)
+        return out
+
+    def _base_joint_speeds(self, q: np.ndarray) -> np.ndarray:
+        """``|∂a_j/∂q|`` ``(N, m)`` (1 for struts, whose base joints do not move)."""
+        from pkmkit.solve.rod_closure import actuator_rates
+
+        rates = actuator_rates(self.model, np.nan_to_num(q).T)  # (3, m, N)
+        speed = np.linalg.norm(rates, axis=0).T
+        speed[:, self.model.rod_kind == STRUT] = 1.0
+        return speed
+
+    # ---------------------------------------------------------------- structure
+    def mobility(self) -> dict[str, Any]:
+        """Grübler–Kutzbach count and rank-based mobility at the home configuration."""
+        return {
+            "grubler": grubler_count(self.model),
+            "instantaneous": instantaneous_mobility(self.model, self.model.home_pose,
+                                                    self._home_q),
+        }

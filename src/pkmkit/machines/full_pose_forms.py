@@ -1,0 +1,185 @@
+"""Closed-form kinematics of full-pose (6-DOF platform) rod machines, rod by rod.
+
+Each rod j joins its base-side joint a_j(q) to the platform joint ``P_j = p + R b_j`` with
+``|P_j − a_j(q)| = ℓ_j(q)`` (see :mod:`pkmkit.solve.rod_closure`). Given a full pose (p, R) every
+rod's closure has the actuator coordinate of its actuator k in closed form — the same formulas
+as the translational machines' legs (:mod:`pkmkit.machines.closed_form`) with b_j turned by R:
+
+- slide: ``w = P_j − a0_j``, ``q = w·u_k + σ sqrt(ℓ_j² − |w|² + (w·u_k)²)``;
+- strut: ``q = |P_j − a0_j| − ℓ0_j``;
+- crank: ``v = P_j − P_k`` in the arm frame (w_k, e1_j, e2_j), ``q = atan2(v2, v1) +
+  σ acos((K − ℓ_j²) / (2 r_j hypot(v1, v2)))``, ``K = (v_w − h_j)² + v1² + v2² + r_j²``.
+
+σ = ±1 is the rod's branch (−sign of ``d·∂a/∂q``). When several rods hang on one actuator (two
+per slide on a Verne-type module) they must agree: a pose for which they do not is not one the
+machine can reach (it has fewer than six degrees of freedom).
+
+**Velocity model** (twist t = (v, ω) of the platform reference point, linear part first):
+differentiating ``|d_j|² = ℓ_j²`` with ``d_j = P_j − a_j`` gives ``A t = B q̇`` with
+
+    A_j = (d_jᵀ, (R b_j × d_j)ᵀ)      (rows, m × 6; units m and m²)
+    B_jk = d_j·∂a_j/∂q_k + κt ℓ_j(q)  (m × n_act; only the rod's own actuator column)
+
+and ``J = A⁺B`` (``A⁻¹B`` for six rods) maps actuator rates to the platform twist: rows 0–2 are
+linear velocity per unit actuator rate, rows 3–5 angular velocity (rad/s per m/s for linear
+actuators, i.e. 1/m). The homogenised Jacobian multiplies the angular rows by a characteristic
+length L: ``J_h = diag(1, 1, 1, L, L, L) J``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkmkit.model.rods import CRANK, SLIDE, STRUT, RodModel
+from pkmkit.solve.rod_closure import actuator_rates, rod_base_points
+from pkmkit.spatial.rotation import rotvec_to_matrix
+
+#: Relative tolerance (on ℓ²) within which a negative radicand at the workspace boundary is
+#: rounding noise and is taken as 0 (as for the translational closed forms).
+BOUNDARY_TOL = 1e-12
+#: Rows per chunk of the inverse model (keeps the temporaries in cache).
+CHUNK = 16384
+
+
+@dataclass(frozen=True, eq=False)
+class FullPoseForms:
+    """Precomputed per-rod closed forms of a full-pose :class:`RodModel` (``dims = 6``)."""
+
+    model: RodModel
+
+    def __post_init__(self) -> None:
+        m = self.model
+        kind = m.rod_kind
+        crank = kind == CRANK
+        arm = m.rod_base - m.rod_pivot
+        along = np.einsum("jd,jd->j", arm, m.rod_axis)
+        across = arm - along[:, None] * m.rod_axis
+        radius = np.where(crank, np.linalg.norm(across, axis=1), 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            e1 = np.where(crank[:, None], across / radius[:, None], 0.0)
+        set_ = object.__setattr__
+        set_(self, "crank_e1", e1)
+        set_(self, "crank_e2", np.cross(m.rod_axis, e1))
+        set_(self, "crank_radius", radius)
+        set_(self, "crank_offset", np.where(crank, along, 0.0))
+        set_(self, "length_sq", m.rod_length**2)
+        set_(self, "rod_branch", m.leg_branch[m.rod_leg])
+
+    # ------------------------------------------------------------------ geometry
+    def platform_points(self, x: np.ndarray) -> np.ndarray:
+        """Platform joint centres ``P_j = p + R b_j`` ``(N, m, 3)`` of pose rows ``x (N, 6)``."""
+        rot = rotvec_to_matrix(x[:, 3:6])
+        return x[:, None, :3] + np.einsum("kab,jb->kja", rot, self.model.rod_platform)
+
+    def rod_vectors(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """Rod vectors ``d_j = P_j − a_j(q)`` ``(N, m, 3)``."""
+        return self.platform_points(x) - rod_base_points(self.model, q.T).transpose(2, 1, 0)
+
+    # ------------------------------------------------------------------ inverse
+    def rod_coordinates(self, x: np.ndarray, branches: np.ndarray | None = None) -> np.ndarray:
+        """The actuator coordinate each rod's closure implies ``(N, m)`` (NaN where the rod
+        cannot close); ``branches (m,)`` ±1 per rod (default: the working branches)."""
+        sigma = self.rod_branch if branches is None else branches
+        out = np.empty((x.shape[0], self.model.n_rods))
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            for start in range(0, x.shape[0], CHUNK):
+                part = slice(start, start + CHUNK)
+                out[part] = self._rod_coordinates_chunk(self.platform_points(x[part]), sigma)
+        return out
+
+    def _rod_coordinates_chunk(self, points: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+        m = self.model
+        out = np.empty(points.shape[:2])
+        for j in range(m.n_rods):
+            kind = m.rod_kind[j]
+            if kind == CRANK:
+                v = points[:, j] - m.rod_pivot[j]
+                v_w = v @ m.rod_axis[j] - self.crank_offset[j]
+                v1, v2 = v @ self.crank_e1[j], v @ self.crank_e2[j]
+                perp = np.hypot(v1, v2)
+                r = self.crank_radius[j]
+                g = v_w * v_w + perp * perp + r * r - self.length_sq[j]
+                amplitude = 2.0 * r * perp
+                cosine = g / amplitude
+                near = np.abs(g) - amplitude <= BOUNDARY_TOL * self.length_sq[j]
+                cosine = np.where(near, np.clip(cosine, -1.0, 1.0), cosine)
+                angle = np.arctan2(v2, v1) + sigma[j] * np.arccos(cosine)
+                out[:, j] = np.remainder(angle + np.pi, 2.0 * np.pi) - np.pi
+                continue
+            w = points[:, j] - m.rod_base[j]
+            if kind == STRUT:
+                out[:, j] = np.sqrt(np.einsum("kd,kd->k", w, w)) - m.rod_length[j]
+                continue
+            s = w @ m.rod_axis[j]
+            radicand = self.length_sq[j] - np.einsum("kd,kd->k", w, w) + s * s
+            radicand = np.where(radicand > -BOUNDARY_TOL * self.length_sq[j],
+                                np.maximum(radicand, 0.0), radicand)
+            out[:, j] = s + sigma[j] * np.sqrt(radicand)
+        return out
+
+    def combine(self, q_rod: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Actuator coordinates ``(N, n_act)`` from the rods' values ``(N, m)`` and the largest
+        disagreement between rods of one actuator ``(N,)`` (0 with one rod per actuator;
+        angle differences wrapped to (−π, π])."""
+        m = self.model
+        n_act = m.n_actuators
+        act = m.rod_actuator
+        if m.n_rods == n_act and (act == np.arange(n_act)).all():
+            return q_rod.copy(), np.zeros(q_rod.shape[0])
+        first = np.array([int(np.flatnonzero(act == k)[0]) for k in range(n_act)])
+        q = q_rod[:, first]
+        diff = q_rod - q[:, act]
+        angular = m.rod_kind == CRANK
+        diff[:, angular] = np.remainder(diff[:, angular] + np.pi, 2.0 * np.pi) - np.pi
+        counts = np.bincount(act, minlength=n_act)
+        mean_offset = np.zeros_like(q)
+        np.add.at(mean_offset.T, act, diff.T)
+        q = q + mean_offset / counts
+        spread = np.abs(q_rod - q[:, act])
+        spread[:, angular] = np.abs(np.remainder(spread[:, angular] + np.pi, 2.0 * np.pi)
+                                    - np.pi)
+        return q, spread.max(axis=1)
+
+    def shortfall(self, x: np.ndarray) -> np.ndarray:
+        """``(N, m)``: by how far each rod is out of reach of the pose (≤ 0 when it reaches;
+        −inf for struts), m."""
+        m = self.model
+        points = self.platform_points(x)
+        out = np.full(points.shape[:2], -np.inf)
+        with np.errstate(invalid="ignore", over="ignore"):
+            for j in range(m.n_rods):
+                kind = m.rod_kind[j]
+                if kind == SLIDE:
+                    w = points[:, j] - m.rod_base[j]
+                    s = w @ m.rod_axis[j]
+                    perp = np.sqrt(np.maximum(np.einsum("kd,kd->k", w, w) - s * s, 0.0))
+                    out[:, j] = perp - m.rod_length[j]
+                elif kind == CRANK:
+                    v = points[:, j] - m.rod_pivot[j]
+                    v_w = v @ m.rod_axis[j] - self.crank_offset[j]
+                    perp = np.hypot(v @ self.crank_e1[j], v @ self.crank_e2[j])
+                    r = self.crank_radius[j]
+                    nearest = np.hypot(v_w, perp - r)
+                    farthest = np.hypot(v_w, perp + r)
+                    out[:, j] = np.maximum(nearest - m.rod_length[j], m.rod_length[j] - farthest)
+        return out
+
+    # ------------------------------------------------------------------ velocity
+    def jacobians(self, x: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``A (N, m, 6)`` and ``B (N, m, n_act)`` of the velocity model ``A t = B q̇`` (see
+        the module docstring) at pose rows ``x (N, 6)`` and actuator coordinates ``q``."""
+        m = self.model
+        rot = rotvec_to_matrix(x[:, 3:6])
+        rb = np.einsum("kab,jb->kja", rot, m.rod_platform)
+        d = x[:, None, :3] + rb - rod_base_points(m, q.T).transpose(2, 1, 0)
+        a = np.concatenate([d, np.cross(rb, d)], axis=2)
+        rates = actuator_rates(m, q.T).transpose(2, 1, 0)  # (N, m, 3)
+        diag = np.einsum("kjd,kjd->kj", d, rates)
+        strut = m.rod_kind == STRUT
+        if strut.any():
+            diag[:, strut] = (m.rod_length[strut] + q[:, m.rod_actuator[strut]])
+        b = np.zeros((x.shape[0], m.n_rods, m.n_actuators))
+        b[:, np.arange(m.n_rods), m.rod_actuator] = diag
+        return a, b
