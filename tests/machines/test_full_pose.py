@@ -1,0 +1,193 @@
+"""Full-pose rod machines (hexapod, Verne-type module, six-DOF files): closed-form IK against
+leg lengths written here with scipy's Rotation and against the generic engine, IK∘FK round
+trips on 1000 poses, twist Jacobians against finite differences, the Verne module's coupled
+tilt against its symmetry, and bad input."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import pkmkit
+from pkmkit.errors import InputError, ParameterError, UnreachablePoseError
+from pkmkit.machines.full_pose import FullPoseMachine
+from pkmkit.solve.rod_closure import solve_inverse
+from pkmkit.spatial import pose_difference, pose_from_angles
+from pkmkit.status import Status
+
+RNG = np.random.default_rng(8)
+
+
+@pytest.fixture(scope="module")
+def hexapod():
+    return pkmkit.machine("gough-stewart")
+
+
+@pytest.fixture(scope="module")
+def verne():
+    return pkmkit.machine("verne")
+
+
+def _hexapod_poses(m, n, seed=0):
+    rng = np.random.default_rng(seed)
+    lo, hi = m.default_box()
+    return pose_from_angles(rng.uniform(lo, hi, (n, 3)), rng.uniform(-12, 12, (n, 3)),
+                            "xyz", degrees=True)
+
+
+def test_hexapod_leg_lengths_are_the_joint_distances(hexapod):
+    x = _hexapod_poses(hexapod, 200)
+    q = hexapod.ik(x)
+    model = hexapod.model
+    rot = Rotation.from_rotvec(x[:, 3:])
+    for j in range(6):
+        joint = x[:, :3] + rot.apply(model.rod_platform[j].copy())
+        np.testing.assert_allclose(q[:, j], np.linalg.norm(joint - model.rod_base[j], axis=1),
+                                   atol=1e-14)
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "verne"])
+def test_round_trips_on_a_thousand_poses(name):
+    m = pkmkit.machine(name)
+    if m.position_controlled:
+        lo, hi = m.default_box()
+        inv = m.ik(RNG.uniform(lo, hi, (1000, 3)), full_output=True)
+        assert (inv.status == Status.OK).all()
+        poses, q = inv.pose, inv.q
+        # the full pose the rods impose is consistent: the closed form gives the same q
+        np.testing.assert_allclose(m.ik(poses), q, atol=1e-9)
+    else:
+        poses = _hexapod_poses(m, 1000, seed=3)
+        q = m.ik(poses)
+    back = m.fk(q)
+    assert np.abs(pose_difference(back, poses)).max() < 1e-9
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "verne"])
+def test_closed_form_agrees_with_the_engine(name):
+    m = pkmkit.machine(name)
+    if m.position_controlled:
+        lo, hi = m.default_box()
+        poses = m.ik(RNG.uniform(lo, hi, (50, 3)), full_output=True).pose
+    else:
+        poses = _hexapod_poses(m, 50, seed=5)
+    q = m.ik(poses)
+    rot = Rotation.from_rotvec(poses[:, 3:]).as_matrix()
+    res = solve_inverse(m.model, poses[:, :3], np.tile(m.home_q, (50, 1)), rotation=rot)
+    assert (res.status == Status.OK).all()
+    np.testing.assert_allclose(res.u, q, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "verne"])
+def test_twist_jacobian_against_finite_differences(name):
+    m = pkmkit.machine(name)
+    if m.position_controlled:
+        poses = m.ik(np.array([[0.1, -0.05, 0.08], [-0.12, 0.1, -0.1]]), full_output=True).pose
+    else:
+        poses = _hexapod_poses(m, 2, seed=9)
+    jac = m.jacobian(poses)
+    h = 1e-6
+    for k in range(len(poses)):
+        for col in range(m.n_actuators):
+            dq = np.zeros(m.n_actuators)
+            dq[col] = h
+            fd = pose_difference(m.fk(jac.q[k] + dq), m.fk(jac.q[k] - dq))[0] / (2 * h)
+            np.testing.assert_allclose(jac.J[k][:, col], fd, atol=2e-8)
+        # homogenisation and the factors, against numpy's SVD
+        scale = np.array([1, 1, 1, *[m.characteristic_length] * 3])
+        np.testing.assert_allclose(jac.J_homogeneous[k], scale[:, None] * jac.J[k])
+        np.testing.assert_allclose(jac.singular_values[k],
+                                   np.linalg.svd(jac.J_homogeneous[k], compute_uv=False))
+        np.testing.assert_allclose(jac.translation_singular_values[k],
+                                   np.linalg.svd(jac.J[k][:3], compute_uv=False))
+        np.testing.assert_allclose(jac.rotation_singular_values[k],
+                                   np.linalg.svd(jac.J[k][3:], compute_uv=False))
+        # A t = B q̇ for every rod
+        np.testing.assert_allclose(jac.A[k] @ jac.J[k], jac.B[k], atol=1e-12)
+
+
+def test_verne_tilt_is_zero_exactly_on_the_symmetry_plane(verne):
+    lo, hi = verne.default_box()
+    positions = RNG.uniform(lo, hi, (300, 3))
+    on_plane = positions.copy()
+    on_plane[:, 0] = 0.0
+    tilt_on = np.linalg.norm(verne.ik(on_plane, full_output=True).pose[:, 3:], axis=1)
+    assert tilt_on.max() < 1e-12
+    off = positions[np.abs(positions[:, 0]) > 1e-3]
+    tilt_off = np.linalg.norm(verne.ik(off, full_output=True).pose[:, 3:], axis=1)
+    assert tilt_off.min() > 1e-6
+    # mirror symmetry about x = 0: the mirrored position has the mirrored rotation
+    mirrored = off * np.array([-1.0, 1.0, 1.0])
+    rv = verne.ik(off, full_output=True).pose[:, 3:]
+    rv_m = verne.ik(mirrored, full_output=True).pose[:, 3:]
+    # a reflection S = diag(-1, 1, 1) maps a rotation vector φ to −Sφ
+    np.testing.assert_allclose(rv_m, -rv * np.array([-1.0, 1.0, 1.0]), atol=1e-12)
+
+
+def test_verne_refuses_orientations_its_rods_do_not_impose(verne):
+    pose = verne.ik([0.1, 0.05, 0.0], full_output=True).pose
+    tilted = pose.copy()
+    tilted[3] += 0.01
+    with pytest.raises(UnreachablePoseError, match="reaches only the orientations"):
+        verne.ik(tilted)
+    res = verne.ik(np.stack([pose, tilted]), full_output=True)
+    assert res.status.tolist() == [Status.OK, Status.UNREACHABLE]
+    assert np.isfinite(res.q[0]).all() and np.isnan(res.q[1]).all()
+
+
+def test_mobility_counts(hexapod, verne):
+    assert hexapod.mobility()["grubler"].mobility == 6
+    assert hexapod.mobility()["instantaneous"].mobility == 6
+    assert verne.mobility()["grubler"].mobility == 3
+    inst = verne.mobility()["instantaneous"]
+    assert (inst.mobility, inst.platform_freedom_locked) == (3, 0)
+
+
+def test_out_of_reach_and_bad_input(hexapod):
+    far = hexapod.home_pose.copy()
+    far[2] += 5.0
+    q = hexapod.ik(far)  # struts: any pose has lengths; the stroke is a separate check
+    assert (q > hexapod.model.q_max).all()
+    with pytest.raises(InputError):
+        hexapod.ik([0.0, 0.0, np.nan, 0.0, 0.0, 0.0])
+    with pytest.raises(InputError, match="6 components"):
+        hexapod.ik(np.zeros(5))
+    batch = np.stack([hexapod.home_pose, np.full(6, np.nan)])
+    res = hexapod.ik(batch, full_output=True)
+    assert res.status.tolist() == [Status.OK, Status.INVALID_INPUT]
+
+
+def test_six_dof_file_machine_with_shared_actuators(tmp_path, verne):
+    """The Verne module described rod by rod in a file (two legs per actuator) is the same
+    machine; inconsistent sharing and a home pose that does not assemble are refused."""
+    model = verne.model
+    lines = ['[machine]', 'kind = "rod-legs"', 'dims = 6', 'units = "m"',
+             'home = [0, 0, 0, 0, 0, 0]']
+    for j in range(model.n_rods):
+        a = int(model.rod_actuator[j])
+        lines += ['[[legs]]', f'actuator = "q{a + 1}"', 'type = "slide"', 'axis = [0, 0, 1]',
+                  f'base = {model.rod_base[j].tolist()}',
+                  f'platform = {model.rod_platform[j].tolist()}',
+                  f'length = {model.rod_length[j]}']
+    path = tmp_path / "verne.toml"
+    path.write_text("\n".join(lines))
+    m = pkmkit.load(path)
+    assert isinstance(m, FullPoseMachine) and m.n_actuators == 3
+    positions = RNG.uniform(-0.1, 0.1, (20, 3))
+    np.testing.assert_allclose(m.ik(positions), verne.ik(positions), atol=1e-10)
+
+    bad = path.read_text().replace('axis = [0, 0, 1]', 'axis = [0, 0.1, 1]', 1)
+    (tmp_path / "bad.toml").write_text(bad)
+    with pytest.raises(pkmkit.MachineFileError, match="share actuator 'q1' but have different "
+                                                      "axiss|different axis"):
+        pkmkit.load(tmp_path / "bad.toml")
+    far = path.read_text().replace('home = [0, 0, 0, 0, 0, 0]', 'home = [0, 0, 0, 0.3, 0, 0]')
+    (tmp_path / "far.toml").write_text(far)
+    with pytest.raises(pkmkit.MachineFileError, match="does not assemble"):
+        pkmkit.load(tmp_path / "far.toml")
+
+
+def test_full_pose_kinds_validate_their_parameters():
+    with pytest.raises(ParameterError, match="third parallelogram"):
+        pkmkit.machine("verne", platform_width_1=0.3)
+    with pytest.raises(ParameterError, match="between 0 and 60"):
+        pkmkit.machine("gough-stewart", base_half_angle=0.0)
