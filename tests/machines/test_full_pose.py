@@ -191,3 +191,20 @@ def test_full_pose_kinds_validate_their_parameters():
         pkmkit.machine("verne", platform_width_1=0.3)
     with pytest.raises(ParameterError, match="between 0 and 60"):
         pkmkit.machine("gough-stewart", base_half_angle=0.0)
+
+
+def test_verne_carriages_hang_the_rods_down_at_home(verne):
+    """The working branch is the one with every carriage above its platform joints: at home,
+    q_k = joint_height + sqrt(L² − horizontal distance²), computed here from the parameters."""
+    p = verne.params
+    theta = np.asarray(p["angles"])
+    for k in range(3):
+        half = 0.5 * (p["carriage_width_1"] if k == 0 else p["width"])
+        half_p = 0.5 * (p["platform_width_1"] if k == 0 else p["width"])
+        radial = np.array([np.cos(theta[k]), np.sin(theta[k])])
+        tangent = np.array([-np.sin(theta[k]), np.cos(theta[k])])
+        carriage = p["R"] * radial + half * tangent
+        joint = p["r"] * radial + half_p * tangent
+        horizontal = np.linalg.norm(carriage - joint)
+        expected = p["joint_height"] + np.sqrt(p["L"] ** 2 - horizontal**2)
+        assert verne.home_q[k] == pytest.approx(expected, abs=1e-12)
