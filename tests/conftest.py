@@ -12,8 +12,12 @@ from pkmkit.model.rods import CRANK
 ALL_PRESETS = [m for m in pkmkit.machines() if m not in ALIASES]
 #: Presets whose platform only translates (dims 2 or 3).
 PRESETS = [m for m in ALL_PRESETS if pkmkit.machine(m).dims in (2, 3)]
-#: Presets whose platform has a full pose (dims 6).
-FULL_POSE_PRESETS = [m for m in ALL_PRESETS if pkmkit.machine(m).dims == 6]
+#: Rod-leg presets whose platform has a full pose (dims 6).
+FULL_POSE_PRESETS = [m for m in ALL_PRESETS
+                     if type(pkmkit.machine(m)).__name__ == "FullPoseMachine"]
+#: Joint-chain presets.
+CHAIN_PRESETS = [m for m in ALL_PRESETS
+                 if type(pkmkit.machine(m)).__name__ == "JointChainMachine"]
 #: Translational presets whose actuators are all linear (slides, struts): what the dynamics
 #: layer models.
 LINEAR_PRESETS = [m for m in PRESETS if not (pkmkit.machine(m).model.leg_kind == CRANK).any()]

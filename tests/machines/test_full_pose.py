@@ -177,8 +177,8 @@ def test_six_dof_file_machine_with_shared_actuators(tmp_path, verne):
 
     bad = path.read_text().replace('axis = [0, 0, 1]', 'axis = [0, 0.1, 1]', 1)
     (tmp_path / "bad.toml").write_text(bad)
-    with pytest.raises(pkmkit.MachineFileError, match="share actuator 'q1' but have different "
-                                                      "axiss|different axis"):
+    with pytest.raises(pkmkit.MachineFileError,
+                       match="share actuator 'q1' but have different axes"):
         pkmkit.load(tmp_path / "bad.toml")
     far = path.read_text().replace('home = [0, 0, 0, 0, 0, 0]', 'home = [0, 0, 0, 0.3, 0, 0]')
     (tmp_path / "far.toml").write_text(far)

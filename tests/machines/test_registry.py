@@ -18,8 +18,9 @@ def test_ids_and_aliases():
 
 
 def test_unknown_machine_lists_valid_ids():
-    with pytest.raises(UnknownMachineError, match="valid ids: delta, five-bar, ") as info:
-        pkmkit.machine("tripteor")
+    with pytest.raises(UnknownMachineError,
+                       match="valid ids: crank-slider, delta, five-bar, ") as info:
+        pkmkit.machine("tripteor-x8")
     assert "orthoglide" in info.value.valid
 
 

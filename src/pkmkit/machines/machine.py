@@ -35,6 +35,7 @@ from pkmkit.machines.results import (
     Jacobians,
     Singularity,
 )
+from pkmkit.model.chains import JointChainModel
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import ParameterSpec, is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, RodModel
@@ -741,21 +742,19 @@ def build_machine(
     description: str = "",
     source: str = "",
 ) -> Machine:
-    """Build a machine of ``kind`` from validated SI parameters: a :class:`Machine`, or a
-    :class:`~pkmkit.machines.full_pose.FullPoseMachine` when the kind builds a full-pose model."""
+    """Build a machine of ``kind`` from validated SI parameters: a :class:`Machine`, a
+    :class:`~pkmkit.machines.full_pose.FullPoseMachine` when the kind builds a full-pose rod
+    model, or a :class:`~pkmkit.machines.joint_chain.JointChainMachine` for a joint-chain one."""
     model = kind.build(params)
-    cls: type = Machine
+    common = dict(id=id, name=name or kind.title, kind=kind, params=dict(params), model=model,
+                  description=description, source=source or kind.source,
+                  extra_poses=kind.reference_poses(params, model))
+    if isinstance(model, JointChainModel):
+        from pkmkit.machines.joint_chain import JointChainMachine
+
+        return JointChainMachine(**common, tool_length=float(params.get("tool_length", 0.0)))
     if model.full_pose:
         from pkmkit.machines.full_pose import FullPoseMachine
 
-        cls = FullPoseMachine
-    return cls(
-        id=id,
-        name=name or kind.title,
-        kind=kind,
-        params=dict(params),
-        model=model,
-        description=description,
-        source=source or kind.source,
-        extra_poses=kind.reference_poses(params, model),
-    )
+        return FullPoseMachine(**common)
+    return Machine(**common)

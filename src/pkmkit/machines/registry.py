@@ -34,11 +34,13 @@ import numpy as np
 
 from pkmkit.errors import MachineFileError, ParameterError, UnknownMachineError
 from pkmkit.machines import (
+    crank_slider,
     delta_robot,
     five_bar,
     gough_stewart,
     linear_delta,
     orthoglide,
+    tripteor,
     verne,
 )
 from pkmkit.machines.machine import Machine, MachineKind, build_machine
@@ -50,7 +52,8 @@ _KIND_NAMES = {v: k for k, v in LEG_KINDS.items()}
 
 #: Built-in machine kinds by name.
 KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (
-    orthoglide, linear_delta, five_bar, delta_robot, gough_stewart, verne)}
+    orthoglide, linear_delta, five_bar, delta_robot, gough_stewart, verne, tripteor,
+    crank_slider)}
 ROD_LEGS = "rod-legs"
 #: Short ids naming a kind's reference preset.
 ALIASES = {"linear-delta": "linear-delta-ch3", "five-bar": "five-bar-isotropic"}

@@ -383,7 +383,8 @@ def _check_shared_actuators(leg_rows: list, actuator_names: Sequence[str]) -> No
                   ("stroke", row[7] == other[7] and row[8] == other[8]))
         for what, same in checks:
             if not same:
+                plural = {"axis": "axes"}.get(what, what + "s")
                 raise ParameterError(
-                    f"legs.{j} and legs.{i} share actuator {name!r} but have different {what}s; "
+                    f"legs.{j} and legs.{i} share actuator {name!r} but have different {plural}; "
                     "legs on one actuator must describe the same carriage, arm or strut",
                     f"legs.{i}.{what}")

@@ -1,0 +1,510 @@
+"""The :class:`JointChainMachine`: legs of revolute and prismatic joints closed on a platform,
+a serial head and a tool — the hyperstatic machines of seed 002 (Tripteor X7, TriMule 600, the
+crank–slider) and any such machine from a file.
+
+Every geometric quantity lives in the model's element frames and their named parameters and
+defects (:mod:`pkmkit.model.chains`); the kinematics are the batched closure of
+:mod:`pkmkit.solve.chains`, solved in least squares by the engine (exactly when the geometry is
+compatible, with the residual reported when it is not).
+
+Conventions: the **pose** of a joint-chain machine is its tool point and tool axis, rows
+``(x, y, z, i, j, k)`` (m, unit vector): the tool point lies ``tool_length`` along the z axis of
+the tool frame, and the tool axis is that z axis. Actuator coordinates are the actuated joint
+variables, legs first then head (rad for revolutes, m for prismatic joints).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from pkmkit.errors import ConvergenceError, InputError, NoAssemblyError, ParameterError
+from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
+from pkmkit.machines.machine import _valid_rows as valid_rows
+from pkmkit.model.chains import FIXED, JointChainModel
+from pkmkit.numerics.arrays import restore_shape
+from pkmkit.solve.chains import (
+    chain_pose,
+    closure,
+    solve_closure,
+    solve_machine_inverse,
+    tool_frame,
+)
+from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
+from pkmkit.status import Status
+
+#: A closure is exact when its largest residual is below this (m).
+CLOSURE_TOL = 1e-9
+#: Relative threshold on singular values for ranks.
+RANK_RCOND = 1e-9
+POSE_NAMES = ("x", "y", "z", "i", "j", "k")
+
+
+@dataclass(frozen=True)
+class ChainDirectResult:
+    """Direct model of a joint-chain machine at N actuator vectors.
+
+    Attributes:
+        pose: ``(N, 6)`` tool point (m) and unit tool axis (NaN rows where it failed).
+        tool_frame: ``(N, 6)`` tool frame origin (m) and rotation vector (rad).
+        platform: ``(N, 6)`` platform frame (the legs' common end) position and rotation vector.
+        passive: ``(N, n_p)`` passive joint values (rad or m), in :attr:`passive_names` order.
+        passive_names: names of the passive joints.
+        closure_residual: ``(N,)`` largest closure residual (m; rotation rows × L): ~1e-15 for a
+            compatible geometry, the least-squares misfit for an incompatible one.
+        status: ``(N,)`` status codes (OK, or NO_ASSEMBLY when the closure failed, or
+            INCONSISTENT when it converged to a non-zero residual: incompatible defects).
+        iterations: ``(N,)`` engine iterations.
+    """
+
+    pose: np.ndarray
+    tool_frame: np.ndarray
+    platform: np.ndarray
+    passive: np.ndarray
+    passive_names: tuple[str, ...]
+    closure_residual: np.ndarray
+    status: np.ndarray
+    iterations: np.ndarray
+
+
+@dataclass(frozen=True)
+class ChainJacobians:
+    """Velocity model of a joint-chain machine at N configurations.
+
+    Attributes:
+        J: ``(N, 6, n)`` tool twist per unit actuator rate: rows 0–2 the tool point's velocity
+            (m per m or per rad), rows 3–5 the tool frame's angular velocity.
+        J_homogeneous: ``(N, 6, n)`` angular rows times the characteristic length.
+        singular_values: ``(N, min(6, n))`` of ``J_homogeneous``; condition: ``(N,)``.
+        passive_rates: ``(N, n_p, n)`` passive joint rates per actuator rate.
+        closure_rank: ``(N,)`` rank of the closure Jacobian with respect to the platform and
+            passive joints (lower than at home: a parallel singularity).
+        expected_rank: that rank at home.
+        q: ``(N, n)`` actuator coordinates used.
+    """
+
+    J: np.ndarray
+    J_homogeneous: np.ndarray
+    singular_values: np.ndarray
+    condition: np.ndarray
+    passive_rates: np.ndarray
+    closure_rank: np.ndarray
+    expected_rank: int
+    q: np.ndarray
+
+
+@dataclass(frozen=True)
+class HyperstatismCount:
+    """Mobility and degree of hyperstatism of the parallel part (legs closed on the platform).
+
+    Attributes:
+        bodies: bodies of the parallel part, base and platform included.
+        joints: one-DOF joints (each shared joint once); joints_by_type ``{"R": …, "P": …}``.
+        loops: independent loops ν = joints − bodies + 1.
+        mobility: m, from the rank of the closure Jacobian at home (degrees of freedom).
+        hyperstatism: h = 6ν − Σ f + m (Fayet/Grübler).
+        grubler_mobility: 6(bodies − 1 − joints) + Σ f, the count blind to geometry.
+        rank_hyperstatism: closure equations − rank at home (the redundant equations).
+    """
+
+    bodies: int
+    joints: int
+    joints_by_type: dict[str, int]
+    loops: int
+    mobility: int
+    hyperstatism: int
+    grubler_mobility: int
+    rank_hyperstatism: int
+
+
+@dataclass(frozen=True, eq=False)
+class JointChainMachine:
+    """A hyperstatic (or isostatic) machine of joint chains (see the module docstring).
+
+    Attributes:
+        id, name, kind, params, description, source, extra_poses: as for
+            :class:`~pkmkit.machines.machine.Machine` (``extra_poses`` hold actuator vectors:
+            a joint-chain machine's reference configurations are given in joint space).
+        model: the :class:`~pkmkit.model.chains.JointChainModel`.
+        tool_length: default distance of the tool point along the tool frame's z axis (m).
+    """
+
+    id: str
+    name: str
+    kind: MachineKind | None
+    params: Mapping[str, Any]
+    model: JointChainModel
+    description: str = ""
+    source: str = ""
+    extra_poses: Mapping[str, np.ndarray] = field(default_factory=dict)
+    tool_length: float = 0.0
+
+    def __post_init__(self) -> None:
+        model = self.model
+        act = np.flatnonzero(model.actuated)
+        loop = model.loop_variables
+        object.__setattr__(self, "_actuated", act)
+        object.__setattr__(self, "_passive", np.flatnonzero(~model.actuated & loop))
+        home = self._solve_home()
+        object.__setattr__(self, "_home", home)
+
+    def _solve_home(self) -> dict[str, np.ndarray]:
+        """Close the legs at the home joint values: exactly for a compatible geometry, in least
+        squares (reported by :attr:`home_closure_residual`) for a machine with defects."""
+        model = self.model
+        values = model.home.copy()
+        start = chain_pose(model, model.legs[0], values[:, None])
+        u0 = np.concatenate([start.p[:, 0], matrix_to_rotvec(start.R[:, :, 0])[0],
+                             values[self._passive]])[None]
+        res = solve_closure(model, values[None], u0, unknown_variables=self._passive,
+                            compute_rank=False)
+        converged = res.status[0] == Status.OK or (
+            res.status[0] == Status.INCONSISTENT and model.defects.any())
+        if not converged:
+            raise ParameterError(
+                f"machine {self.id!r}: the legs do not close at the home joint values (closure "
+                f"residual {res.residual[0]:.3g} m after {res.iterations[0]} iterations); check "
+                "the geometry and the home values of the passive joints")
+        values[self._passive] = res.u[0, 6:]
+        return {"values": values, "platform": res.u[0, :6].copy(),
+                "residual": float(res.residual[0])}
+
+    @property
+    def home_closure_residual(self) -> float:
+        """Largest closure residual at home (m): ~0 for a compatible geometry."""
+        return self._home["residual"]
+
+    # ---------------------------------------------------------------- properties
+    @property
+    def dims(self) -> int:
+        """Pose width: tool point and tool axis (6 numbers, 5 degrees of freedom)."""
+        return 6
+
+    @property
+    def pose_names(self) -> tuple[str, ...]:
+        """``("x", "y", "z", "i", "j", "k")``: tool point then unit tool axis."""
+        return POSE_NAMES
+
+    @property
+    def actuator_names(self) -> tuple[str, ...]:
+        """Names of the actuated joints (legs, then head)."""
+        return self.model.actuator_names
+
+    @property
+    def n_actuators(self) -> int:
+        """Number of actuated joints."""
+        return len(self._actuated)
+
+    @property
+    def passive_names(self) -> tuple[str, ...]:
+        """Names of the passive joints of the legs."""
+        return tuple(self.model.variables[i] for i in self._passive)
+
+    @property
+    def actuator_quantities(self) -> tuple[str, ...]:
+        """``"angle"`` for revolute actuators, ``"length"`` for prismatic ones."""
+        return tuple("angle" if self._element_of(i).type == "R" else "length"
+                     for i in self._actuated)
+
+    def _element_of(self, variable: int):
+        e = int(np.flatnonzero(self.model.element_variable == variable)[0])
+        return self.model.elements[e]
+
+    @property
+    def home_q(self) -> np.ndarray:
+        """Actuator coordinates of the home configuration."""
+        return self._home["values"][self._actuated].copy()
+
+    @property
+    def home_pose(self) -> np.ndarray:
+        """Tool point and axis of the home configuration ``(6,)``."""
+        return self.fk(self.home_q)
+
+    @property
+    def home_passive(self) -> np.ndarray:
+        """Passive joint values of the home configuration."""
+        return self._home["values"][self._passive].copy()
+
+    def reference_poses(self) -> dict[str, np.ndarray]:
+        """Named reference *actuator vectors*, ``home`` first."""
+        out = {"home": self.home_q}
+        out.update({k: np.asarray(v, dtype=float) for k, v in self.extra_poses.items()})
+        return out
+
+    def with_params(self, **overrides: Any) -> JointChainMachine:
+        """A new machine of the same kind with some parameters changed (SI units)."""
+        if self.kind is None:
+            raise ParameterError(f"machine {self.id!r} is described element by element; edit "
+                                 "its machine file or apply defects (with_defects)")
+        from pkmkit.machines.machine import build_machine
+        from pkmkit.model.parameters import resolve_parameters
+
+        params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
+        return build_machine(self.kind, params, id=self.id, name=self.name,
+                             description=self.description, source=self.source)
+
+    def with_defects(self, values: Any) -> JointChainMachine:
+        """The same machine with geometric defects applied exactly (a mapping name → value in
+        SI units, or a vector in ``model.defect_index`` order). The home closure is solved
+        again — in least squares if the defects are incompatible."""
+        return replace(self, model=self.model.with_defects(values))
+
+    # ---------------------------------------------------------------- helpers
+    def _full_values(self, q: np.ndarray) -> np.ndarray:
+        values = np.tile(self._home["values"], (q.shape[0], 1))
+        values[:, self._actuated] = q
+        return values
+
+    def _tool_lengths(self, tool_length: Any, rows: int) -> np.ndarray:
+        if tool_length is None:
+            return np.full(rows, float(self.tool_length))
+        arr = np.asarray(tool_length, dtype=float).reshape(-1)
+        if arr.size == 1:
+            arr = np.full(rows, float(arr[0]))
+        if arr.shape != (rows,) or not np.isfinite(arr).all():
+            raise InputError(f"tool_length must be one finite value or one per row ({rows})")
+        return arr
+
+    # ---------------------------------------------------------------- direct
+    def fk(self, q: Any, *, x0: Any = None, tool_length: Any = None, full_output: bool = False,
+           **engine_options: Any) -> np.ndarray | ChainDirectResult:
+        """Direct model: the legs' closure (platform pose and passive joints) then the head.
+
+        Args:
+            q: ``(n,)`` or ``(N, n)`` actuator coordinates (legs then head).
+            x0: warm start: ``(6 + n_p,)`` or ``(N, 6 + n_p)`` platform position, rotation
+                vector and passive joints (e.g. the previous solution along a path); default
+                the home configuration.
+            tool_length: tool length(s) along the tool axis (m); default the machine's.
+            full_output: return a :class:`ChainDirectResult`.
+            **engine_options: forwarded to the engine (``max_iter``, ``residual_tol``, …).
+
+        Returns:
+            tool point and axis ``(6,)`` / ``(N, 6)``, or a :class:`ChainDirectResult`.
+
+        Raises:
+            InputError: mis-shaped q, a non-finite single q.
+            NoAssemblyError: a single q whose closure failed.
+        """
+        qb, single = _checked_batch(q, self.n_actuators, "q")
+        n = qb.shape[0]
+        values = self._full_values(qb)
+        if x0 is None:
+            u0 = np.tile(np.concatenate([self._home["platform"],
+                                         self._home["values"][self._passive]]), (n, 1))
+        else:
+            u0 = _rows_like(x0, 6 + len(self._passive), "x0", n)
+        u0[~valid_rows(qb)] = np.nan
+        engine_options.setdefault("compute_rank", False)
+        with np.errstate(invalid="ignore", over="ignore"):
+            res = solve_closure(self.model, values, u0, unknown_variables=self._passive,
+                                **engine_options)
+        status = res.status.copy()
+        status[status == Status.NOT_CONVERGED] = Status.NO_ASSEMBLY
+        status[~valid_rows(qb)] = Status.INVALID_INPUT
+        usable = (status == Status.OK) | (status == Status.INCONSISTENT)
+        values[:, self._passive] = res.u[:, 6:]
+        rot = rotvec_to_matrix(np.nan_to_num(res.u[:, 3:6])).transpose(1, 2, 0)
+        tool = tool_frame(self.model, rot, np.nan_to_num(res.u[:, :3]).T, values.T)
+        lengths = self._tool_lengths(tool_length, n)
+        axis = tool.R[:, 2].T
+        pose = np.concatenate([tool.p.T + lengths[:, None] * axis, axis], axis=1)
+        frame = np.concatenate([tool.p.T, matrix_to_rotvec(tool.R.transpose(2, 0, 1))], axis=1)
+        for arr in (pose, frame):
+            arr[~usable] = np.nan
+        if single and status[0] not in (Status.OK,):
+            if status[0] == Status.INVALID_INPUT:
+                raise InputError(f"q = {qb[0].tolist()} has a coordinate beyond "
+                                 f"{MAX_COORDINATE:g}")
+            raise NoAssemblyError(
+                f"q = {qb[0].tolist()}: the legs do not close (largest closure residual "
+                f"{res.residual[0]:.3g} m, {Status(int(status[0])).label}); the actuator values "
+                "may be out of the workspace, or pass x0 nearer the solution")
+        if not full_output:
+            return restore_shape(pose, single)
+        platform = res.u[:, :6].copy()
+        passive = res.u[:, 6:].copy()
+        platform[~usable] = np.nan
+        passive[~usable] = np.nan
+        out = ChainDirectResult(pose=pose, tool_frame=frame, platform=platform, passive=passive,
+                                passive_names=self.passive_names,
+                                closure_residual=res.residual, status=status,
+                                iterations=res.iterations)
+        if single:
+            return ChainDirectResult(**{k: (v[0] if isinstance(v, np.ndarray) else v)
+                                        for k, v in out.__dict__.items()})
+        return out
+
+    # ---------------------------------------------------------------- inverse
+    def ik(self, x: Any, *, q0: Any = None, tool_length: Any = None, full_output: bool = False,
+           **engine_options: Any) -> np.ndarray | ChainDirectResult:
+        """Inverse model: actuator coordinates that put the tool point and axis at ``x``.
+
+        Args:
+            x: ``(6,)`` or ``(N, 6)`` tool point (m) and tool axis (normalised here).
+            q0: warm start for the actuators (default: home); other branches of the head are
+                reached from other starts.
+            tool_length: tool length(s) (m); default the machine's.
+            full_output: return a :class:`ChainDirectResult` with ``q`` added as ``pose``'s
+                companion (see Returns).
+
+        Returns:
+            q ``(n,)`` / ``(N, n)``; with ``full_output`` a tuple ``(q, ChainDirectResult)``.
+
+        Raises:
+            InputError: mis-shaped input, an axis of zero length.
+            ConvergenceError: a single target the engine could not reach exactly.
+        """
+        xb, single = _checked_batch(x, 6, "pose")
+        norms = np.linalg.norm(xb[:, 3:], axis=1)
+        bad_axis = ~(norms > 0)
+        if single and bad_axis[0]:
+            raise InputError("the tool axis (components 4-6 of the pose) must not be zero")
+        targets = xb.copy()
+        with np.errstate(invalid="ignore", divide="ignore"):
+            targets[:, 3:] /= norms[:, None]
+        n = xb.shape[0]
+        values = np.tile(self._home["values"], (n, 1))
+        if q0 is not None:
+            values[:, self._actuated] = _rows_like(q0, self.n_actuators, "q0", n)
+        u0 = np.concatenate([np.tile(self._home["platform"], (n, 1)), values], axis=1)
+        u0[~valid_rows(xb) | bad_axis] = np.nan
+        lengths = self._tool_lengths(tool_length, n)
+        engine_options.setdefault("compute_rank", False)
+        with np.errstate(invalid="ignore", over="ignore"):
+            res = solve_machine_inverse(self.model, targets, u0, tool_length=lengths,
+                                        **engine_options)
+        status = res.status.copy()
+        status[status == Status.INCONSISTENT] = Status.UNREACHABLE
+        status[~valid_rows(xb) | bad_axis] = Status.INVALID_INPUT
+        q = res.u[:, 6:][:, self._actuated].copy()
+        q[status != Status.OK] = np.nan
+        if single and status[0] != Status.OK:
+            raise ConvergenceError(
+                f"the inverse model did not reach the tool point and axis {xb[0].tolist()} "
+                f"(residual {res.residual[0]:.3g} m, {Status(int(status[0])).label}): the target "
+                "may be out of the workspace; pass q0 near the wanted branch")
+        if not full_output:
+            return restore_shape(q, single)
+        direct = self.fk(q if not single else q[0], tool_length=lengths if not single else
+                         lengths[0], full_output=True) if np.isfinite(q).any() else None
+        return (restore_shape(q, single), direct)
+
+    # ---------------------------------------------------------------- velocity
+    def jacobian(self, q: Any) -> ChainJacobians:
+        """Velocity model at actuator coordinates ``q`` (the closure linearised:
+        ``dU = −C_U⁺ C_q dq`` for the platform and passive joints U, then the head).
+
+        Args:
+            q: ``(n,)`` or ``(N, n)`` actuator coordinates.
+        """
+        qb, single = _checked_batch(q, self.n_actuators, "q")
+        direct = self.fk(qb, full_output=True)
+        n = qb.shape[0]
+        values = self._full_values(qb)
+        values[:, self._passive] = direct.passive
+        rot = rotvec_to_matrix(np.nan_to_num(direct.platform[:, 3:])).transpose(1, 2, 0)
+        p_x = np.nan_to_num(direct.platform[:, :3]).T
+        c = closure(self.model, rot, p_x, values.T)
+        length = self.model.characteristic_length
+        loop_act = [i for i in self._actuated if self.model.loop_variables[i]]
+        head_act = [i for i in self._actuated if not self.model.loop_variables[i]]
+        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1).transpose(2, 0, 1)
+        cq = c.variables[:, loop_act].transpose(2, 0, 1)
+        du = -np.linalg.pinv(cu, rcond=RANK_RCOND) @ cq  # (N, 6 + n_p, n_loop_act)
+        sv_c = np.linalg.svd(cu, compute_uv=False)
+        rank = (sv_c > RANK_RCOND * sv_c[:, :1]).sum(axis=1)
+        tool = tool_frame(self.model, rot, p_x, values.T, twists=True)
+        # platform increments → tool twist, then loop actuators through them
+        plat = np.zeros((n, 6, 6))
+        plat[:, :3, :3] = np.eye(3)
+        plat[:, 3:, 3:] = np.eye(3)
+        from pkmkit.spatial.rotation import skew
+
+        plat[:, :3, 3:] = skew(p_x.T)
+        twist_q = np.zeros((n, 6, self.n_actuators))
+        order = {v: k for k, v in enumerate(self._actuated)}
+        loop_twist = plat @ du[:, :6, :]
+        for j, v in enumerate(loop_act):
+            twist_q[:, :, order[v]] = loop_twist[:, :, j]
+        for v in head_act:
+            twist_q[:, :, order[v]] = tool.variable_twists[:, v].T
+        # tool point velocity: v + ω × p_point
+        point = direct.pose[:, :3]
+        jac = twist_q.copy()
+        jac[:, :3] += np.cross(twist_q[:, 3:].transpose(0, 2, 1), point[:, None, :]
+                               ).transpose(0, 2, 1)
+        scale = np.array([1, 1, 1, length, length, length], dtype=float)
+        j_h = jac * scale[None, :, None]
+        ok = np.isfinite(j_h).all(axis=(1, 2))
+        sv = np.full((n, min(6, self.n_actuators)), np.nan)
+        if ok.any():
+            sv[ok] = np.linalg.svd(j_h[ok], compute_uv=False)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            condition = sv[:, 0] / sv[:, -1]
+        passive_rates = np.zeros((n, len(self._passive), self.n_actuators))
+        for j, v in enumerate(loop_act):
+            passive_rates[:, :, order[v]] = du[:, 6:, j]
+        expected = self._expected_rank()
+        out = ChainJacobians(J=jac, J_homogeneous=j_h, singular_values=sv, condition=condition,
+                             passive_rates=passive_rates, closure_rank=rank,
+                             expected_rank=expected, q=qb)
+        if single:
+            return ChainJacobians(**{k: (v[0] if isinstance(v, np.ndarray) else v)
+                                     for k, v in out.__dict__.items()})
+        return out
+
+    def _expected_rank(self) -> int:
+        values = self._home["values"][:, None]
+        rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
+        c = closure(self.model, rot, self._home["platform"][:3, None], values)
+        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1)[:, :, 0]
+        sv = np.linalg.svd(cu, compute_uv=False)
+        return int((sv > RANK_RCOND * sv[0]).sum())
+
+    # ---------------------------------------------------------------- structure
+    def hyperstatism(self) -> HyperstatismCount:
+        """Bodies, joints, loops, mobility and degree of hyperstatism of the parallel part."""
+        model = self.model
+        loop_elements = {e for leg in model.legs for e in leg}
+        joints = sorted(e for e in loop_elements if model.elements[e].type != FIXED)
+        by_type = {"R": 0, "P": 0}
+        for e in joints:
+            by_type[model.elements[e].type] += 1
+        last_joints = set()
+        for leg in model.legs:
+            movers = [e for e in leg if model.elements[e].type != FIXED]
+            last_joints.add(movers[-1])
+        bodies = 2 + len(joints) - len(last_joints)
+        loops = len(joints) - bodies + 1
+        freedoms = len(joints)
+        values = self._home["values"][:, None]
+        rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
+        c = closure(model, rot, self._home["platform"][:3, None], values)
+        loop_vars = np.flatnonzero(model.loop_variables)
+        full = np.concatenate([c.platform, c.variables[:, loop_vars]], axis=1)[:, :, 0]
+        sv = np.linalg.svd(full, compute_uv=False)
+        rank = int((sv > RANK_RCOND * sv[0]).sum())
+        mobility = full.shape[1] - rank
+        return HyperstatismCount(
+            bodies=bodies, joints=len(joints), joints_by_type=by_type, loops=loops,
+            mobility=mobility, hyperstatism=6 * loops - freedoms + mobility,
+            grubler_mobility=6 * (bodies - 1 - len(joints)) + freedoms,
+            rank_hyperstatism=full.shape[0] - rank)
+
+    def mobility(self) -> dict[str, Any]:
+        """The same as :meth:`hyperstatism`, as a dict (for ``pkmkit show``)."""
+        return {"hyperstatism": self.hyperstatism()}
+
+    def passive_values(self, q: Any) -> dict[str, np.ndarray]:
+        """Passive joints by name at actuator coordinates ``q`` (rad or m)."""
+        res = self.fk(q, full_output=True)
+        return {name: res.passive[..., i] for i, name in enumerate(self.passive_names)}
+
+
+def machine_with_tool(m: JointChainMachine, tool_length: float) -> JointChainMachine:
+    """The same machine with another default tool length (m)."""
+    return replace(m, tool_length=float(tool_length))
