@@ -141,6 +141,16 @@ class FullPoseMachine:
                 f"machine {self.id!r}: the home pose {self.model.home_pose.tolist()} does not "
                 f"assemble ({self._rod_name(rod)} out of reach by {short[rod]:.6g} m); choose "
                 "other dimensions or another home pose")
+        if spread[0] > self._consistency_tol() and self.model.n_actuators < 6:
+            # fewer than six actuators: the home *position* fixes the orientation, which a
+            # changed geometry (defects) may have moved a little: solve it from the rods
+            u0 = np.concatenate([q_home[0], self.model.home_pose[3:]])[None]
+            res = solve_position_inverse(self.model, self.model.home_pose[None, :3], u0,
+                                         compute_rank=False)
+            if res.status[0] == Status.OK:
+                home = np.concatenate([self.model.home_pose[:3], res.u[0, q_home.shape[1]:]])[
+                    None]
+                q_home, spread = forms.combine(forms.rod_coordinates(home))
         if spread[0] > self._consistency_tol():
             raise ParameterError(
                 f"machine {self.id!r}: the home pose {self.model.home_pose.tolist()} does not "
@@ -148,6 +158,7 @@ class FullPoseMachine:
                 "that the rods reach (a machine with fewer than six actuators reaches only some "
                 "orientations)")
         object.__setattr__(self, "_home_q", q_home[0])
+        object.__setattr__(self, "_home_pose", home[0].copy())
         jac = self._jacobians(home, q_home, SINGULARITY_TOL)
         if not (jac.parallel_measure[0] >= HOME_TOL and jac.serial_measure[0] >= HOME_TOL):
             which = "a parallel" if not jac.parallel_measure[0] >= HOME_TOL else "a serial"
@@ -181,8 +192,9 @@ class FullPoseMachine:
 
     @property
     def home_pose(self) -> np.ndarray:
-        """Reference pose ``(6,)``."""
-        return self.model.home_pose.copy()
+        """Reference pose ``(6,)`` (for a machine with fewer than six actuators, the model's
+        home position with the orientation its rods impose there)."""
+        return self._home_pose.copy()
 
     @property
     def home_q(self) -> np.ndarray:
@@ -264,8 +276,8 @@ class FullPoseMachine:
         """First-order guess from home: the twist J(home)(q − q_home) applied to home."""
         twist = (q - self._home_q) @ self._home_jacobian.T
         guess = np.empty((q.shape[0], 6))
-        guess[:, :3] = self.model.home_pose[:3] + twist[:, :3]
-        guess[:, 3:] = compose_rotvec(twist[:, 3:], np.broadcast_to(self.model.home_pose[3:],
+        guess[:, :3] = self._home_pose[:3] + twist[:, :3]
+        guess[:, 3:] = compose_rotvec(twist[:, 3:], np.broadcast_to(self._home_pose[3:],
                                                                     (q.shape[0], 3)))
         return guess
 
@@ -331,7 +343,7 @@ class FullPoseMachine:
         if q0 is None:
             # first order from home: the position rows of J(home) are square (n = 3)
             j_t = self._home_jacobian[:3]
-            dq = np.linalg.lstsq(j_t, (pb - self.model.home_pose[:3]).T, rcond=None)[0].T
+            dq = np.linalg.lstsq(j_t, (pb - self._home_pose[:3]).T, rcond=None)[0].T
             guess_q = self._home_q + dq
         else:
             guess_q = _rows_like(q0, n, "q0", pb.shape[0])
@@ -574,6 +586,6 @@ class FullPoseMachine:
         """Grübler–Kutzbach count and rank-based mobility at the home configuration."""
         return {
             "grubler": grubler_count(self.model),
-            "instantaneous": instantaneous_mobility(self.model, self.model.home_pose,
+            "instantaneous": instantaneous_mobility(self.model, self._home_pose,
                                                     self._home_q),
         }

@@ -283,7 +283,10 @@ class JointChainMachine:
             **engine_options: forwarded to the engine (``max_iter``, ``residual_tol``, …).
 
         Returns:
-            tool point and axis ``(6,)`` / ``(N, 6)``, or a :class:`ChainDirectResult`.
+            tool point and axis ``(6,)`` / ``(N, 6)``, or a :class:`ChainDirectResult`. A
+            machine with incompatible defects has no exact closure: its rows are the
+            least-squares closure (status INCONSISTENT, ``closure_residual`` > 0), as a real
+            hyperstatic machine deforms to assemble.
 
         Raises:
             InputError: mis-shaped q, a non-finite single q.
@@ -315,7 +318,7 @@ class JointChainMachine:
         frame = np.concatenate([tool.p.T, matrix_to_rotvec(tool.R.transpose(2, 0, 1))], axis=1)
         for arr in (pose, frame):
             arr[~usable] = np.nan
-        if single and status[0] not in (Status.OK,):
+        if single and not usable[0]:
             if status[0] == Status.INVALID_INPUT:
                 raise InputError(f"q = {qb[0].tolist()} has a coordinate beyond "
                                  f"{MAX_COORDINATE:g}")

@@ -46,9 +46,7 @@ from pkmkit.machines import (
 from pkmkit.machines.machine import Machine, MachineKind, build_machine
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
 from pkmkit.model.parameters import is_plain_number, length_scale, resolve_parameters
-from pkmkit.model.rods import CRANK, LEG_KINDS, STRUT, LegSpec, build_rod_model
-
-_KIND_NAMES = {v: k for k, v in LEG_KINDS.items()}
+from pkmkit.model.rods import LegSpec, build_rod_model, leg_specs
 
 #: Built-in machine kinds by name.
 KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (
@@ -369,27 +367,7 @@ _LEG_NAME = re.compile(r"legs\[(\d+)\]\.([a-z_]+)(?:\[(\d+)\])?")
 
 def _leg_specs(m: Machine) -> list[LegSpec]:
     """The leg descriptions a ``rod-legs`` machine was built from (SI, 3-D vectors)."""
-    model = m.model
-    specs = []
-    for i in range(model.n_legs):
-        rods = np.flatnonzero(model.rod_leg == i)
-        width, direction = 0.0, None
-        if len(rods) == 2:  # a parallelogram: rods at base ∓ offset (see build_rod_model)
-            offset = 0.5 * (model.rod_base[rods[1]] - model.rod_base[rods[0]])
-            width = 2.0 * float(np.linalg.norm(offset))
-            direction = offset / (0.5 * width)
-        kind = int(model.leg_kind[i])
-        a = int(model.leg_actuator[i])
-        specs.append(LegSpec(
-            name=model.leg_names[i], actuator=a, kind=_KIND_NAMES[kind],
-            base=model.leg_base[i].copy(), platform=model.leg_platform[i].copy(),
-            length=float(model.leg_length[i]),
-            axis=model.leg_axis[i].copy() if kind != STRUT else None,
-            branch=int(model.leg_branch[i]), parallelogram_width=width,
-            parallelogram_direction=direction,
-            stroke=(float(model.q_min[a]), float(model.q_max[a])),
-            pivot=model.leg_pivot[i].copy() if kind == CRANK else None))
-    return specs
+    return leg_specs(m.model)
 
 
 def leg_parameters(m: Machine) -> dict[str, tuple[float, str]]:

@@ -388,3 +388,29 @@ def _check_shared_actuators(leg_rows: list, actuator_names: Sequence[str]) -> No
                     f"legs.{j} and legs.{i} share actuator {name!r} but have different {plural}; "
                     "legs on one actuator must describe the same carriage, arm or strut",
                     f"legs.{i}.{what}")
+
+
+def leg_specs(model: RodModel) -> list[LegSpec]:
+    """The leg descriptions ``model`` can be rebuilt from (SI, 3-D vectors): the inverse of
+    :func:`build_rod_model` for models whose parallelograms keep equal rods."""
+    names = {v: k for k, v in LEG_KINDS.items()}
+    specs = []
+    for i in range(model.n_legs):
+        rods = np.flatnonzero(model.rod_leg == i)
+        width, direction = 0.0, None
+        if len(rods) == 2:  # a parallelogram: rods at base ∓ offset (see build_rod_model)
+            offset = 0.5 * (model.rod_base[rods[1]] - model.rod_base[rods[0]])
+            width = 2.0 * float(np.linalg.norm(offset))
+            direction = offset / (0.5 * width)
+        kind = int(model.leg_kind[i])
+        a = int(model.leg_actuator[i])
+        specs.append(LegSpec(
+            name=model.leg_names[i], actuator=a, kind=names[kind],
+            base=model.leg_base[i].copy(), platform=model.leg_platform[i].copy(),
+            length=float(model.leg_length[i]),
+            axis=model.leg_axis[i].copy() if kind != STRUT else None,
+            branch=int(model.leg_branch[i]), parallelogram_width=width,
+            parallelogram_direction=direction,
+            stroke=(float(model.q_min[a]), float(model.q_max[a])),
+            pivot=model.leg_pivot[i].copy() if kind == CRANK else None))
+    return specs

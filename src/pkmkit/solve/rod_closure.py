@@ -331,3 +331,90 @@ def instantaneous_mobility(
         platform_freedom_locked=n_pose - rank(jp[0]),
         redundant_constraints=full.shape[0] - r_full,
     )
+
+
+def defect_columns(model: RodModel, index, position: np.ndarray, rotation: np.ndarray | None,
+                   q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Closure residuals and their derivatives with respect to the rod defects.
+
+    The residual of rod j of the defect level (:func:`pkmkit.model.rod_defects.rod_set`) is
+    ``r_j = |p + R b_j − a_j(q)| − ℓ_j(q)``; its derivatives (d̂ the unit rod vector, Rot the
+    crank rotation by q, c = a0 − P):
+
+    - base ``∂r/∂a0 = −d̂`` (slide, strut), ``−Rotᵀ d̂`` (crank); platform ``Rᵀ d̂``; length −1;
+    - slide direction ``−q d̂·∂u``; crank axis ``−d̂·((∂w × c) sin q + (∂w (w·c) + w (∂w·c))
+      (1 − cos q))``; crank pivot ``−d̂·(I − Rot)``; offset ``∂r/∂q``.
+
+    Args:
+        model: the rod model.
+        index: its :class:`~pkmkit.model.rod_defects.RodDefectIndex`.
+        position: ``(N, 3)`` platform positions; rotation: ``(N, 3, 3)`` (None: identity).
+        q: ``(N, n_act)`` actuator coordinates.
+
+    Returns:
+        ``(residual (N, m), columns (N, m, d))``.
+    """
+    from pkmkit.model.rod_defects import direction_increment, rod_set
+
+    rods = rod_set(model)
+    n, m = position.shape[0], len(rods.length)
+    qr = q[:, rods.actuator]  # (N, m)
+    rel = rods.base - rods.pivot  # (m, 3)
+    w = rods.axis
+    c, s = np.cos(qr)[:, :, None], np.sin(qr)[:, :, None]
+    crank = (rods.kind == CRANK)[None, :, None]
+    slide = (rods.kind == SLIDE)[None, :, None]
+    turned = rel * c + np.cross(w, rel) * s + w * np.einsum("md,md->m", w, rel)[:, None] * (
+        1.0 - c)
+    base_now = np.where(crank, rods.pivot + turned, rods.base + np.where(slide, qr[:, :, None]
+                                                                         * w, 0.0))
+    rb = rods.platform[None] if rotation is None else np.einsum("kab,mb->kma", rotation,
+                                                                rods.platform)
+    d = position[:, None, :] + rb - base_now
+    dist = np.linalg.norm(d, axis=2)
+    unit = d / dist[:, :, None]
+    strut = rods.kind == STRUT
+    length = rods.length[None] + np.where(strut[None], qr, 0.0)
+    residual = dist - length
+    rates = np.where(slide, w[None], np.where(crank, np.cross(w[None], turned), 0.0))
+    dr_dq = -np.einsum("kmd,kmd->km", unit, rates) - strut[None]
+    cols = np.zeros((n, m, len(index)))
+    for i, (kind, t, comp) in enumerate(zip(index.kind, index.target, index.component,
+                                            strict=True)):
+        if kind == "base":
+            e = np.zeros(3)
+            e[comp] = 1.0
+            if rods.kind[t] == CRANK:
+                moved = e * c[:, t] + np.cross(w[t], e) * s[:, t] + w[t] * w[t, comp] * (
+                    1.0 - c[:, t])
+                cols[:, t, i] = -np.einsum("kd,kd->k", unit[:, t], moved)
+            else:
+                cols[:, t, i] = -unit[:, t, comp]
+        elif kind == "platform":
+            e = np.zeros(3)
+            e[comp] = 1.0
+            rv = e[None] if rotation is None else rotation[:, :, comp]
+            cols[:, t, i] = np.einsum("kd,kd->k", unit[:, t], rv)
+        elif kind == "length":
+            cols[:, t, i] = -1.0
+        else:
+            mine = np.flatnonzero(rods.actuator == t)
+            for j in mine:
+                if kind == "offset":
+                    cols[:, j, i] = dr_dq[:, j]
+                elif kind == "pivot":
+                    e = np.zeros(3)
+                    e[comp] = 1.0
+                    moved = e * c[:, j] + np.cross(w[j], e) * s[:, j] + w[j] * w[j, comp] * (
+                        1.0 - c[:, j])
+                    cols[:, j, i] = -np.einsum("kd,kd->k", unit[:, j], e[None] - moved)
+                elif rods.kind[j] == SLIDE:  # slide direction
+                    du = direction_increment(w[j], int(comp))
+                    cols[:, j, i] = -qr[:, j] * (unit[:, j] @ du)
+                else:  # crank axis
+                    dw = direction_increment(w[j], int(comp))
+                    cr = rel[j]
+                    moved = (np.cross(dw, cr)[None] * s[:, j]
+                             + (dw * (w[j] @ cr) + w[j] * (dw @ cr))[None] * (1.0 - c[:, j]))
+                    cols[:, j, i] = -np.einsum("kd,kd->k", unit[:, j], moved)
+    return residual, cols
