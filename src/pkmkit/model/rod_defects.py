@@ -88,7 +88,7 @@ def direction_components(u: np.ndarray, space: int) -> list[int]:
 
 def rod_defect_index(model: RodModel) -> RodDefectIndex:
     """The defect coordinates of ``model`` (see the module docstring)."""
-    base, _, _, actuator, level = _rod_table(model)
+    base, _, _, _, level = _rod_table(model)
     space = 2 if model.planar else 3
     rows = []
     for j in range(len(base)):
@@ -156,8 +156,7 @@ def apply_rod_defects(model: RodModel, index: RodDefectIndex, delta: np.ndarray)
     pivot = np.array(model.leg_pivot, dtype=float)
     tilts: dict[int, dict[int, float]] = {}
     offsets = np.zeros(model.n_actuators)
-    for i, (kind, t, c, d) in enumerate(zip(index.kind, index.target, index.component, delta,
-                                            strict=True)):
+    for kind, t, c, d in zip(index.kind, index.target, index.component, delta, strict=True):
         if d == 0.0:
             continue
         if kind == "base":
