@@ -180,7 +180,7 @@ def test_six_dof_file_machine_with_shared_actuators(tmp_path, verne):
     with pytest.raises(pkmkit.MachineFileError,
                        match="share actuator 'q1' but have different axes"):
         pkmkit.load(tmp_path / "bad.toml")
-    far = path.read_text().replace('home = [0, 0, 0, 0, 0, 0]', 'home = [0, 0, -3, 0, 0, 0]')
+    far = path.read_text().replace('home = [0, 0, 0, 0, 0, 0]', 'home = [3, 0, 0, 0, 0, 0]')
     (tmp_path / "far.toml").write_text(far)
     with pytest.raises(pkmkit.MachineFileError, match="does not assemble"):
         pkmkit.load(tmp_path / "far.toml")
