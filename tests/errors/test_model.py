@@ -88,3 +88,32 @@ def test_applying_defects_is_exact_and_checked():
         with_defects(m, np.zeros(3))
     with pytest.raises(InputError, match="components per row"):
         tool_sensitivity(m, np.zeros(4))
+
+
+@pytest.mark.parametrize("name", ["linear-delta", "verne", "gough-stewart"])
+def test_measurement_jacobians_against_finite_differences(name):
+    from pkmkit.errors.measurements import measure, measurement_jacobian
+
+    rng = np.random.default_rng(5)
+    m = pkmkit.machine(name)
+    ds = defect_set(m)
+    q = np.atleast_2d(m.home_q) + rng.uniform(-0.005, 0.005, (2, m.n_actuators))
+    points = measure(m, "point", q)
+    part = measure(m, "pose", q) if m.n_actuators == 6 else points
+    setups = {"point": {}, "height": {}, "ballbar": {"pivot": points[0] + [0.1, -0.2, -0.3]},
+              "part": {"points": part}}
+    if m.dims == 6:
+        setups["pose"] = {}
+    h = 1e-6
+    for kind, setup in setups.items():
+        jac = measurement_jacobian(m, kind, q, setup)
+        for i in rng.choice(len(ds), 8, replace=False):
+            plus = measure(with_defects(m, {ds.names[i]: h}), kind, q, setup)
+            minus = measure(with_defects(m, {ds.names[i]: -h}), kind, q, setup)
+            fd = (plus - minus) / (2 * h)
+            if kind == "pose":  # rotation rows: rotation vectors differ to first order only
+                fd[:, 3:] = [(Rotation.from_rotvec(a) * Rotation.from_rotvec(b).inv()
+                              ).as_rotvec() / (2 * h) for a, b in zip(plus[:, 3:], minus[:, 3:],
+                                                                       strict=True)]
+            np.testing.assert_allclose(jac[:, :, i], fd, atol=5e-9,
+                                       err_msg=f"{kind} {ds.names[i]}")

@@ -1,0 +1,162 @@
+"""Measurement models: what an instrument reads on a machine at actuator coordinates q, exactly
+and to first order in the machine's defects (the rows of identification Jacobians).
+
+Measurement types (``kind``), each a function of (machine with its defects, q, setup):
+
+- ``"point"`` — the tool point (3 rows, m): laser tracker; a joint-chain machine's tool point
+  depends on the tool length of each row (``setup["tool_length"]``, m);
+- ``"pose"`` — tool point and tool-frame rotation (6 rows; rotation vector of the tool frame in
+  the fixed frame, rad);
+- ``"ballbar"`` — the distance from a fixed pivot (``setup["pivot"]``, ``(3,)`` or
+  ``(N, 3)`` m) to the tool point (1 row, m);
+- ``"height"`` — the z coordinate of the tool point (1 row, m): a height probe touching a plane;
+- ``"part"`` — the actuator coordinates that put the tool point on measured points
+  (``setup["points"]``, ``(N, 3)`` m) with the machine's geometry (n rows): seed 003's
+  joint-space error of a machined part, compared with the commanded joints. Rod machines only
+  (the orientation, if any, follows the rods).
+
+:func:`measurement_jacobian` gives ``∂(reading)/∂(defects)`` analytically from
+:func:`pkmkit.errors.model.tool_sensitivity` (and, for ``"part"``, the closure's derivative in
+q at a fixed tool point).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from pkmkit.errors import InputError
+from pkmkit.errors.model import _family, _rod_index, tool_sensitivity
+
+MEASURES = ("point", "pose", "ballbar", "height", "part")
+#: Rows of each measurement type (``None``: the number of actuators).
+ROWS = {"point": 3, "pose": 6, "ballbar": 1, "height": 1, "part": None}
+
+
+def _check_kind(machine, kind: str) -> None:
+    if kind not in MEASURES:
+        raise InputError(f"unknown measurement type {kind!r}; valid types: {', '.join(MEASURES)}")
+    if kind == "part" and _family(machine) == "chain":
+        raise InputError("machined-part (joint-space) measurements are defined for rod machines "
+                         "(seed 003); use point or pose measurements for a joint-chain machine")
+    if kind == "pose" and _family(machine) == "translational":
+        raise InputError(f"{machine.id!r} only translates: a full-pose measurement has nothing "
+                         "to measure in its orientation; use point measurements")
+
+
+def measurement_rows(machine, kind: str) -> int:
+    """Scalar readings per configuration for ``kind``."""
+    _check_kind(machine, kind)
+    rows = ROWS[kind]
+    return machine.n_actuators if rows is None else rows
+
+
+def _pivot(setup: dict, n: int) -> np.ndarray:
+    if "pivot" not in setup:
+        raise InputError("a ball-bar measurement needs setup['pivot'] (the fixed pivot, m)")
+    pivot = np.broadcast_to(np.asarray(setup["pivot"], dtype=float), (n, 3))
+    if not np.isfinite(pivot).all():
+        raise InputError("the ball-bar pivot must be finite")
+    return pivot
+
+
+def measure(machine, kind: str, q: Any, setup: dict | None = None) -> np.ndarray:
+    """Exact readings ``(N, r)`` of a measurement type at actuator coordinates q (module
+    docstring); NaN rows where the machine cannot assemble."""
+    _check_kind(machine, kind)
+    setup = setup or {}
+    qb = np.atleast_2d(np.asarray(q, dtype=float))
+    n = qb.shape[0]
+    if kind == "part":
+        return _part_joints(machine, setup)
+    if _family(machine) == "chain":
+        res = machine.fk(qb, tool_length=setup.get("tool_length"), full_output=True)
+        point, rotvec = res.pose[:, :3], res.tool_frame[:, 3:]
+    else:
+        x = np.atleast_2d(machine.fk(qb))
+        point = np.zeros((n, 3))
+        point[:, :min(machine.dims, 3)] = x[:, :min(machine.dims, 3)]
+        rotvec = x[:, 3:6] if machine.dims == 6 else np.zeros((n, 3))
+    if kind == "point":
+        return point
+    if kind == "pose":
+        return np.concatenate([point, rotvec], axis=1)
+    if kind == "height":
+        return point[:, 2:3]
+    return np.linalg.norm(point - _pivot(setup, n), axis=1, keepdims=True)
+
+
+def _part_joints(machine, setup: dict) -> np.ndarray:
+    if "points" not in setup:
+        raise InputError("a machined-part measurement needs setup['points'] (measured tool "
+                         "points, (N, 3) m)")
+    points = _part_points(machine, setup)
+    if machine.dims == 6:
+        return np.atleast_2d(machine.ik(points))
+    return np.atleast_2d(machine.ik(points[:, :machine.dims]))
+
+
+def _part_points(machine, setup: dict) -> np.ndarray:
+    """The measured points (positions; full poses for a six-actuator machine)."""
+    points = np.atleast_2d(np.asarray(setup["points"], dtype=float))
+    width = 6 if machine.dims == 6 and not machine.position_controlled else 3
+    if points.shape[1] != width and not (width == 3 and points.shape[1] >= machine.dims):
+        what = "full poses (N, 6)" if width == 6 else "points (N, 3)"
+        raise InputError(f"machined-part measurements of {machine.id!r} need measured {what}")
+    return points
+
+
+def measurement_jacobian(machine, kind: str, q: Any, setup: dict | None = None) -> np.ndarray:
+    """``∂(reading)/∂(defects)`` ``(N, r, d)`` at actuator coordinates q (module docstring)."""
+    _check_kind(machine, kind)
+    setup = setup or {}
+    qb = np.atleast_2d(np.asarray(q, dtype=float))
+    if kind == "part":
+        return _part_jacobian(machine, setup)
+    sens = tool_sensitivity(machine, qb, tool_length=setup.get("tool_length"))
+    if kind == "point":
+        return sens.point
+    if kind == "pose":
+        return np.concatenate([sens.point, sens.rotation], axis=1)
+    if kind == "height":
+        return sens.point[:, 2:3]
+    point = sens.pose[:, :3]
+    bar = point - _pivot(setup, qb.shape[0])
+    unit = bar / np.linalg.norm(bar, axis=1, keepdims=True)
+    return np.einsum("kc,kcd->kd", unit, sens.point)[:, None, :]
+
+
+def _part_jacobian(machine, setup: dict) -> np.ndarray:
+    """``∂q/∂δ`` at fixed tool points: ``−(∂r/∂u)⁺ ∂r/∂δ`` with u the actuators (and the
+    platform rotation of a full-pose machine, which the rods fix)."""
+    from pkmkit.solve.rod_closure import defect_columns
+
+    index = _rod_index(machine)
+    points = _part_points(machine, setup)
+    n = points.shape[0]
+    if machine.dims == 6:
+        inv = machine.ik(points, full_output=True)
+        pose = points if points.shape[1] == 6 else np.atleast_2d(inv.pose)
+        q = np.atleast_2d(inv.q)
+        from pkmkit.machines.full_pose_forms import FullPoseForms
+        from pkmkit.spatial.rotation import rotvec_to_matrix
+
+        rot = rotvec_to_matrix(pose[:, 3:])
+        _, cols = defect_columns(machine.model, index, pose[:, :3], rot, q)
+        a, b = FullPoseForms(machine.model).jacobians(pose, q)
+        dist = np.linalg.norm(a[:, :, :3], axis=2)[:, :, None]
+        # residual r = |d| − ℓ: ∂r/∂q = −B/|d|, ∂r/∂ω = A_ω/|d|
+        unknowns = -b / dist
+        if points.shape[1] == 3:  # the orientation follows the rods: it is an unknown too
+            unknowns = np.concatenate([unknowns, a[:, :, 3:] / dist], axis=2)
+        du = -np.linalg.pinv(unknowns) @ cols
+        return du[:, :machine.n_actuators]
+    position = np.zeros((n, 3))
+    position[:, :machine.dims] = points[:, :machine.dims]
+    q = np.atleast_2d(machine.ik(points[:, :machine.dims]))
+    _, cols = defect_columns(machine.model, index, position, None, q)
+    jac = machine.jacobian(points[:, :machine.dims], q=q)
+    dist = np.linalg.norm(jac.A, axis=2)
+    dr_dq = -np.diagonal(jac.B, axis1=1, axis2=2) / dist  # (N, n)
+    return -cols / dr_dq[:, :, None]
