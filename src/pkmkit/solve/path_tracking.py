@@ -181,17 +181,22 @@ def _correct(
     tol: float,
     max_newton: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Newton's method at fixed t, each row stopping when its update is below ``tol · scale``.
+    """Newton's method at fixed t; each row stops once converged.
+
+    A row has converged when its update is below ``tol · scale``, or when, contracting by a
+    factor θ = |δ_k| / |δ_{k−1}| ≤ ½, the estimated remaining error ``θ |δ_k|`` is below it
+    (Newton converges at least linearly from there). A row whose update stops contracting is
+    abandoned.
 
     Returns the corrected points, ``H_x⁻¹ H_t`` from each row's last factorisation, the size of
-    the first update (relative) and whether each row converged while contracting.
+    the first update (relative) and whether each row converged.
     """
     x = x.copy()
     v = np.full_like(x, np.nan)
     first = np.full(x.shape[0], np.inf)
-    last = np.full(x.shape[0], np.inf)
     converged = np.zeros(x.shape[0], dtype=bool)
     live = np.arange(x.shape[0])
+    last = np.full(0, np.inf)
     for k in range(max_newton):
         res, jac, d_t = evaluate(x[live], t[live], rows[live])
         delta, v[live] = _solve_two(jac, res, d_t)
@@ -200,21 +205,14 @@ def _correct(
         size = np.where(np.isfinite(size), size, np.inf)
         if k == 0:
             first[live] = size
-            ok = size <= tol
+            ok, going = size <= tol, np.ones(live.size, dtype=bool)
         else:
-            contracting = size <= 0.5 * last[live]
-            ok = contracting & (size <= tol)
-            # a row that stops contracting will not converge: drop it now
-            live_keep = contracting & ~ok
-            last[live] = size
-            converged[live[ok]] = True
-            live = live[live_keep]
-            if live.size == 0:
-                break
-            continue
-        last[live] = size
+            theta = size / last
+            going = theta <= 0.5
+            ok = (size <= tol) | (going & (theta * size <= tol))
         converged[live[ok]] = True
-        live = live[~ok]
+        keep = going & ~ok
+        live, last = live[keep], size[keep]
         if live.size == 0:
             break
     return x, v, first, converged

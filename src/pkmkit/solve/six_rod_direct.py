@@ -204,7 +204,7 @@ def six_rod_direct_all(
     lengths,
     *,
     tol: float = 1e-10,
-    predictor_tol: float = 1e-4,
+    predictor_tol: float = 1e-3,
     retries: int = 1,
 ) -> SixRodSolutions:
     """Every real pose of six-rod platforms with given joint centres and rod lengths.
