@@ -222,11 +222,13 @@ def test_planar_base_and_platform_give_mirror_pairs():
         assert contains(poses, pose, 1e-9)
 
 
-def test_slide_module_with_two_rods_per_carriage():
-    """Verne-type: base points in pairs on three carriages of parallel vertical slides."""
+@pytest.mark.parametrize("spread", [0.08, 0.0])
+def test_slide_module_with_two_rods_per_carriage(spread):
+    """Verne-type: base points in pairs on three carriages of parallel vertical slides (two
+    joints per carriage, or one joint shared by both rods: a 3-6 platform)."""
     ang = np.radians([90, 210, 330])
     carriage = np.c_[np.cos(ang), np.sin(ang), [0.3, 0.5, 0.4]]
-    offset = np.c_[-np.sin(ang), np.cos(ang), np.zeros(3)] * 0.08
+    offset = np.c_[-np.sin(ang), np.cos(ang), np.zeros(3)] * spread
     sign = np.array([1.0, -1.0] * 3)[:, None]
     base = np.repeat(carriage, 2, axis=0) + np.repeat(offset, 2, axis=0) * sign
     pang = np.radians([80, 100, 200, 220, 320, 340])
@@ -235,6 +237,7 @@ def test_slide_module_with_two_rods_per_carriage():
     lengths = rod_lengths(base, platform, truth)
     sols = six_rod_direct_all(base, platform, lengths)
     assert sols.status == Status.OK
+    assert sols.n_finite == (40 if spread else 16)
     assert contains(sols.poses[: sols.count], truth, 1e-9)
     assert_verified(sols, base, platform, lengths)
 
@@ -256,6 +259,21 @@ def test_singular_configuration_is_reported_not_hidden():
     assert sols.multiplicity[k] >= 2
     assert sols.condition[k] > 1e5
     assert sols.residual[: sols.count].max() <= 1e-9
+
+
+def test_worked_example_of_the_docs():
+    """docs/full-pose.md §5: eight real assembly modes, the first the pose the (rounded) rod
+    lengths came from."""
+    base = np.array([[0.70, 0.05, 0.00], [0.30, 0.62, 0.08], [-0.33, 0.60, -0.05],
+                     [-0.68, 0.02, 0.04], [-0.30, -0.64, 0.00], [0.35, -0.58, -0.06]])
+    platform = np.array([[0.25, 0.10, 0.02], [-0.05, 0.27, 0.00], [-0.22, 0.15, -0.03],
+                         [-0.20, -0.16, 0.01], [0.02, -0.27, 0.03], [0.24, -0.08, -0.02]])
+    lengths = np.array([0.989367, 0.934041, 1.001207, 0.979918, 1.008889, 1.035137])
+    sols = six_rod_direct_all(base, platform, lengths)
+    assert sols.status == Status.OK and sols.count == 8 and sols.n_finite == 40
+    assert pose_gap(sols.poses[0], [0.02, -0.01, 0.85, 0.05, -0.03, 0.10])[0] < 2e-6
+    assert (sols.poses[: sols.count, 2] < 0).sum() == 2
+    assert_verified(sols, base, platform, lengths)
 
 
 def test_no_assembly_is_certified_empty():

@@ -207,7 +207,8 @@ def _correct(
             first[live] = size
             ok, going = size <= tol, np.ones(live.size, dtype=bool)
         else:
-            theta = size / last
+            with np.errstate(invalid="ignore", divide="ignore"):
+                theta = size / last  # inf / inf (a non-finite row): NaN, not going
             going = theta <= 0.5
             ok = (size <= tol) | (going & (theta * size <= tol))
         converged[live[ok]] = True

@@ -13,17 +13,20 @@ to each target by the coefficient-parameter homotopy of :mod:`pkmkit.solve.study
     of a positive-dimensional solution set (degenerate geometry). Paths whose step size
     collapsed within ``t ≤ 10⁻⁶`` of the target are in this class too, with their last point;
 ``INFINITE``
-    the translation diverges: ``|g|/|e|`` (half the normalised translation) exceeds 10⁷, or 10⁴
-    once ``t < 10⁻³`` (or 10² on the null quadric below). A real assembly has
-    ``|g|/|e| ≤ 1.5`` (centred joints, unit characteristic length: ``|p| ≤ ℓ + |a| + |b| ≤ 3``),
-    so no real solution is lost;
+    the translation diverges: ``|g|/|e|`` (half the normalised translation) exceeds 10⁷ at any
+    t, or 10⁴ at the end (``t < 10⁻⁶``, or where the steps collapsed after ``t = 10⁻³``), or
+    10² while tending to the null quadric below (e → 0). A real assembly has ``|g|/|e| ≤ 1.5``
+    (centred joints, unit characteristic length: ``|p| ≤ ℓ + |a| + |b| ≤ 3``), so no real
+    solution is lost;
 ``EXCEPTIONAL``
-    the rotation part tends to the null quadric ``e·e = 0`` (relative ``|e·e|/‖e‖² < 10⁻⁴``
-    once ``t < 10⁻³``): spurious solutions of the Study formulation, not rigid displacements
-    (a real rotation has ``e·e = ‖e‖²``, ratio 1). They appear for special geometries, e.g.
-    coincident joints (3-3, 6-3 platforms), whose extra paths converge there slowly;
+    the rotation part tends to the null quadric ``e·e = 0`` (relative ``|e·e|/‖e‖²`` below
+    10⁻⁶ at a regular end, 10⁻⁴ at a singular or collapsed one): spurious solutions of the
+    Study formulation, not rigid displacements (a real rotation has ``e·e = ‖e‖²``, ratio 1).
+    They appear for special geometries, e.g. coincident joints (3-3, 6-3 platforms), whose extra
+    paths converge there slowly;
 ``FAILED``
-    the step size collapsed (or the step budget ran out) before ``t = 10⁻⁶``.
+    the step size collapsed (or the step budget ran out) before ``t = 10⁻⁶`` at a point of
+    none of the classes above.
 
 Completeness checks per configuration (a configuration passing them is *certified*):
 no ``FAILED`` path; no two ``REGULAR`` end points coincide (two paths that jumped onto one
