@@ -271,7 +271,8 @@ def test_worked_example_of_the_docs():
     lengths = np.array([0.989367, 0.934041, 1.001207, 0.979918, 1.008889, 1.035137])
     sols = six_rod_direct_all(base, platform, lengths)
     assert sols.status == Status.OK and sols.count == 8 and sols.n_finite == 40
-    assert pose_gap(sols.poses[0], [0.02, -0.01, 0.85, 0.05, -0.03, 0.10])[0] < 2e-6
+    # lengths rounded to 1 µm, Jacobian condition ≈ 50: the pose to about 10⁻⁵
+    assert pose_gap(sols.poses[0], [0.02, -0.01, 0.85, 0.05, -0.03, 0.10])[0] < 5e-5
     assert (sols.poses[: sols.count, 2] < 0).sum() == 2
     assert_verified(sols, base, platform, lengths)
 
