@@ -233,13 +233,17 @@ def six_rod_direct_all(
     Example:
         >>> import numpy as np
         >>> from pkmkit.solve.six_rod_direct import six_rod_direct_all
-        >>> ang = np.radians([0, 100, 120, 220, 240, 340])
-        >>> a = np.c_[np.cos(ang), np.sin(ang), np.zeros(6)]
-        >>> b = 0.5 * np.c_[np.cos(ang + 0.9), np.sin(ang + 0.9), np.zeros(6)]
-        >>> pose_b = b + [0.0, 0.0, 1.0]
-        >>> sols = six_rod_direct_all(a, b, np.linalg.norm(pose_b - a, axis=1))
-        >>> int(sols.status), bool(np.isclose(sols.poses[:sols.count, 2], 1.0).any())
-        (0, True)
+        >>> def circle(radius, degrees):
+        ...     ang = np.radians(degrees)
+        ...     return radius * np.c_[np.cos(ang), np.sin(ang), np.zeros(6)]
+        >>> a = circle(1.0, [0, 100, 120, 220, 240, 340])
+        >>> b = circle(0.5, [50, 70, 170, 190, 290, 310])
+        >>> lengths = np.linalg.norm(b + [0.0, 0.0, 1.0] - a, axis=1)  # platform 1 m up
+        >>> sols = six_rod_direct_all(a, b, lengths)
+        >>> int(sols.status), int(sols.count), int(sols.n_finite)
+        (0, 8, 28)
+        >>> sols.poses[0].round(6) + 0.0
+        array([0., 0., 1., 0., 0., 0.])
     """
     a, b, ell, single = _broadcast_inputs(base, platform, lengths)
     n_rows = a.shape[0]
