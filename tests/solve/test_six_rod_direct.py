@@ -348,3 +348,14 @@ def test_broadcasting_a_shared_platform():
 def test_misshaped_arguments_raise(args, message):
     with pytest.raises(InputError, match=message):
         six_rod_direct_all(*args)
+
+
+@pytest.mark.parametrize(
+    ("option", "message"),
+    [({"tol": 0.0}, "tol must be"), ({"tol": np.nan}, "tol must be"),
+     ({"predictor_tol": 2.0}, "predictor_tol"), ({"retries": -1}, "retries"),
+     ({"retries": 0.5}, "retries")],
+)
+def test_options_out_of_range_raise(option, message):
+    with pytest.raises(InputError, match=message):
+        six_rod_direct_all(np.eye(6, 3), np.eye(6, 3), np.ones(6), **option)

@@ -227,8 +227,8 @@ def six_rod_direct_all(
 
     Raises:
         InputError: an argument has the wrong shape (the message names it and the expected
-            shape), or the batch sizes differ. Non-finite values and rod lengths ≤ 0 flag their
-            rows (``INVALID_INPUT``) instead.
+            shape), the batch sizes differ, or an option is out of range. Non-finite values and
+            rod lengths ≤ 0 flag their rows (``INVALID_INPUT``) instead.
 
     Example:
         >>> import numpy as np
@@ -245,6 +245,12 @@ def six_rod_direct_all(
         >>> sols.poses[0].round(6) + 0.0
         array([0., 0., 1., 0., 0., 0.])
     """
+    if not (np.isfinite(tol) and tol > 0):
+        raise InputError(f"tol must be a positive number, got {tol!r}")
+    if not (np.isfinite(predictor_tol) and 0 < predictor_tol < 1):
+        raise InputError(f"predictor_tol must lie in (0, 1), got {predictor_tol!r}")
+    if int(retries) != retries or retries < 0:
+        raise InputError(f"retries must be a non-negative integer, got {retries!r}")
     a, b, ell, single = _broadcast_inputs(base, platform, lengths)
     n_rows = a.shape[0]
     with np.errstate(invalid="ignore"):
