@@ -16,6 +16,7 @@ from scipy.spatial.transform import Rotation
 
 from pkmkit.errors import InputError
 from pkmkit.solve.six_rod_direct import MAX_SOLUTIONS, six_rod_direct_all
+from pkmkit.solve.six_rod_paths import EndKind
 from pkmkit.status import Status
 
 # Dietmaier, P. (1998) "The Stewart-Gough platform of general geometry can have 40 real
@@ -119,6 +120,7 @@ def test_general_geometries_find_the_true_pose_among_40(general):
     assert (sols.status == Status.OK).all()
     assert (sols.n_finite == 40).all()
     assert (sols.n_failed == 0).all() and (sols.n_singular == 0).all()
+    assert (sols.path_ends == EndKind.REGULAR).all()
     assert (sols.count >= 1).all() and (sols.count % 2 == 0).all()  # complex pairs: 40 − even
     for k in range(24):
         assert contains(sols.poses[k, : sols.count[k]], poses[k], 1e-9)
@@ -253,6 +255,7 @@ def test_singular_configuration_is_reported_not_hidden():
     sols = six_rod_direct_all(base, platform, lengths)
     assert sols.status == Status.SINGULAR
     assert sols.n_singular >= 2
+    assert (sols.path_ends == EndKind.SINGULAR).sum() == sols.n_singular
     poses = sols.poses[: sols.count]
     assert contains(poses, truth, 1e-5)
     k = np.argmin(pose_gap(poses, np.broadcast_to(truth, poses.shape)))
@@ -319,6 +322,7 @@ def test_bad_rows_are_flagged_and_the_others_kept(general):
     platform[4, 5, 2] = np.inf
     sols = six_rod_direct_all(base, platform, lengths)
     assert list(sols.status[1:]) == [Status.INVALID_INPUT] * 4
+    assert (sols.path_ends[1:] == -1).all()
     assert (sols.count[1:] == 0).all() and np.isnan(sols.poses[1:]).all()
     assert sols.status[0] == Status.OK and sols.count[0] == ref.count[0]
     np.testing.assert_allclose(sols.poses[0], ref.poses[0], atol=1e-12)

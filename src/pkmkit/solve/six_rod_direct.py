@@ -56,6 +56,10 @@ _MOVE_REGULAR, _MOVE_SINGULAR = 1e-6, 1e-2
 _SAME_REGULAR, _SAME_SINGULAR = 1e-9, 1e-5
 
 
+#: Result fields with one entry per solution (sorted together).
+_PER_SOLUTION = ("poses", "residual", "condition", "multiplicity")
+
+
 @dataclass(frozen=True)
 class SixRodSolutions:
     """Every real solution of a batch of N six-rod direct problems (padded to K = 40).
@@ -83,6 +87,9 @@ class SixRodSolutions:
             coordinates (spurious, not rigid displacements; special geometries such as
             coincident joints).
         n_failed: ``(N,)`` paths that could not be tracked to the end.
+        path_ends: ``(N, 40)`` the class of each path's end (−1 for invalid rows),
+            :class:`~pkmkit.solve.six_rod_paths.EndKind` codes (regular, singular, infinite,
+            exceptional, failed): which paths failed or ended singular.
         path_steps: ``(N,)`` accepted path-tracking steps, all paths and retries together.
         status: ``(N,)`` :class:`~pkmkit.status.Status` codes:
 
@@ -112,6 +119,7 @@ class SixRodSolutions:
     n_infinite: np.ndarray
     n_exceptional: np.ndarray
     n_failed: np.ndarray
+    path_ends: np.ndarray
     path_steps: np.ndarray
     status: np.ndarray
     characteristic_length: np.ndarray
@@ -269,10 +277,11 @@ def six_rod_direct_all(
         found["characteristic_length"] = geo.scale
         order = np.argsort(np.where(np.isnan(found["poses"][..., 2]), np.inf,
                                     -found["poses"][..., 2]), axis=1, kind="stable")
+        for name in _PER_SOLUTION:
+            value = found[name]
+            found[name] = np.take_along_axis(
+                value, order.reshape(order.shape + (1,) * (value.ndim - 2)), axis=1)
         for name, value in found.items():
-            if value.ndim >= 2 and value.shape[1] == MAX_SOLUTIONS:
-                value = np.take_along_axis(value, order.reshape(order.shape + (1,) * (
-                    value.ndim - 2)), axis=1)
             out[name][rows] = value
     result = SixRodSolutions(**out)
     if single:
@@ -289,6 +298,7 @@ def _empty_result(n_rows: int) -> dict[str, np.ndarray]:
         "residual": np.full((n_rows, k), np.nan),
         "condition": np.full((n_rows, k), np.nan),
         "multiplicity": np.zeros((n_rows, k), dtype=int),
+        "path_ends": np.full((n_rows, GENERIC_COUNT), -1),
         **{name: np.zeros(n_rows, dtype=int) for name in counts},
         "status": np.full(n_rows, int(Status.OK)),
         "characteristic_length": np.full(n_rows, np.nan),
@@ -309,6 +319,7 @@ def _real_solutions(ends: EndPoints, geo: _Normalised, tol: float) -> dict[str, 
         "n_infinite": (kind == EndKind.INFINITE).sum(axis=1),
         "n_exceptional": (kind == EndKind.EXCEPTIONAL).sum(axis=1),
         "n_failed": (kind == EndKind.FAILED).sum(axis=1),
+        "path_ends": kind,
         "path_steps": ends.steps,
     }
     # real candidates: regular end points equal to their own conjugate (and nearer to it than
