@@ -167,9 +167,14 @@ def read_start_system(path: str | Path) -> StartSystem:
 
 @functools.cache
 def load_start_system() -> StartSystem:
-    """The stored start system (package data), read and checked once per process."""
+    """The stored start system (package data), read and checked once per process (its arrays
+    are read-only: the cached value is shared)."""
     with resources.as_file(resources.files("pkmkit.solve") / "data" / DATA_FILE) as path:
-        return read_start_system(path)
+        system = read_start_system(path)
+    par = system.parameters
+    for arr in (par.base, par.platform, par.offset, system.patch, system.solutions):
+        arr.flags.writeable = False
+    return system
 
 
 def main() -> None:  # pragma: no cover - regeneration script
