@@ -214,10 +214,6 @@ class StudyHomotopy:
         coeffs[2, :, :, 6:15] = outer(da, db)
         return cls(coeffs, np.asarray(patch, dtype=complex))
 
-    @property
-    def n_configurations(self) -> int:
-        return self.coeffs.shape[1]
-
     def evaluate(
         self, x: np.ndarray, t: np.ndarray, cols: np.ndarray | None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
