@@ -10,6 +10,7 @@ from scipy.spatial.transform import Rotation
 import pkmkit
 from pkmkit.errors import InputError, ParameterError, UnreachablePoseError
 from pkmkit.machines.full_pose import FullPoseMachine
+from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.solve.rod_closure import solve_inverse
 from pkmkit.spatial import pose_difference, pose_from_angles
 from pkmkit.status import Status
@@ -208,3 +209,43 @@ def test_verne_carriages_hang_the_rods_down_at_home(verne):
         horizontal = np.linalg.norm(carriage - joint)
         expected = p["joint_height"] + np.sqrt(p["L"] ** 2 - horizontal**2)
         assert verne.home_q[k] == pytest.approx(expected, abs=1e-12)
+
+
+def test_every_assembly_mode_of_a_general_hexapod():
+    """Dietmaier's 1998 geometry (docs/examples): all 40 modes real, each closes every rod and
+    gives back the same strut lengths; the working one is where the engine goes from home."""
+    m = pkmkit.load("docs/examples/dietmaier-hexapod.toml")
+    modes = m.fk_all(m.home_q)
+    assert (modes.count, modes.n_finite, modes.status) == (40, 40, Status.OK)
+    poses = modes.poses[:40]
+    np.testing.assert_allclose(m.ik(poses), np.tile(m.home_q, (40, 1)), atol=1e-9)
+    assert np.abs(pose_difference(poses[modes.working], m.home_pose)).max() < 1e-9
+    assert modes.labels[modes.working] == "working" and len(set(modes.labels)) == 40
+    # distinct, and both det A signs occur
+    gaps = np.linalg.norm(poses[:, None, :3] - poses[None, :, :3], axis=2) + np.eye(40)
+    assert gaps.min() > 1e-6
+    assert set(modes.mode_sign[:40]) == {-1, 1}
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "verne"])
+def test_fk_all_batches_and_contains_the_engine_solution(name):
+    m = pkmkit.machine(name)
+    if m.position_controlled:
+        q = m.ik(RNG.uniform(-0.1, 0.1, (3, 3)))
+    else:
+        q = m.ik(_hexapod_poses(m, 3, seed=11))
+    q = np.vstack([q, np.full(m.n_actuators, np.nan)])
+    modes = m.fk_all(q)
+    assert modes.status[-1] == Status.INVALID_INPUT and modes.count[-1] == 0
+    engine = m.fk(q[:3])
+    for k in range(3):
+        assert modes.status[k] in (Status.OK, Status.SINGULAR)
+        assert modes.working[k] >= 0
+        np.testing.assert_allclose(modes.poses[k, modes.working[k]], engine[k], atol=1e-9)
+        # every mode closes every rod at q (other modes may use other inverse branches)
+        found = modes.poses[k, :modes.count[k]]
+        rods = FullPoseForms(m.model).rod_vectors(found, np.tile(q[k], (len(found), 1)))
+        np.testing.assert_allclose(np.linalg.norm(rods, axis=2),
+                                   np.broadcast_to(m.model.rod_length, rods.shape[:2]) if
+                                   not m.model.rod_kind.any() else np.tile(q[k], (len(found), 1)),
+                                   atol=1e-9)

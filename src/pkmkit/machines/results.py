@@ -188,3 +188,56 @@ class JacobianRates:
     A_dot: np.ndarray
     B_dot: np.ndarray
     J_dot: np.ndarray
+
+
+@dataclass(frozen=True)
+class PoseSolutions:
+    """Every real assembly mode of N actuator vectors of a full-pose machine (up to K).
+
+    Attributes:
+        poses: ``(N, K, 6)`` position (m) and rotation vector (rad) of each real solution, NaN
+            past ``count``; ``working`` says which one the working mode is.
+        count: ``(N,)`` number of real assembly modes.
+        working: ``(N,)`` index of the working-mode solution (the one reached continuously from
+            the home configuration by the engine), −1 if none of them.
+        mode_sign: ``(N, K)`` sign of det A of each solution (0 where unused).
+        residual: ``(N, K)`` largest rod-length error of each solution, m.
+        condition: ``(N, K)`` condition number of the rod Jacobian at each solution.
+        multiplicity: ``(N, K)`` paths meeting at each solution (≥ 2: a singular one).
+        n_finite: ``(N,)`` finite complex solutions (40 for a general 6-6 geometry).
+        status: ``(N,)`` OK (the list is certified complete), NO_ASSEMBLY (complete, none
+            real), SINGULAR, NOT_CONVERGED (completeness not certified), INVALID_INPUT.
+    """
+
+    poses: np.ndarray
+    count: np.ndarray
+    working: np.ndarray
+    mode_sign: np.ndarray
+    residual: np.ndarray
+    condition: np.ndarray
+    multiplicity: np.ndarray
+    n_finite: np.ndarray
+    status: np.ndarray
+
+    @property
+    def valid(self) -> np.ndarray:
+        """``(N, K)`` bool, the slots holding a solution."""
+        return ~np.isnan(self.poses[..., 0])
+
+    @property
+    def labels(self) -> list:
+        """Per row, one label per solution: ``"working"`` for the working mode, ``"mode k"``
+        (k from 2, in the order of the list) for the others."""
+        count = np.atleast_1d(self.count)
+        working = np.atleast_1d(self.working)
+        out = []
+        for n, w in zip(count, working, strict=True):
+            row, k = [], 2
+            for i in range(int(n)):
+                if i == w:
+                    row.append("working")
+                else:
+                    row.append(f"mode {k}")
+                    k += 1
+            out.append(row)
+        return out[0] if np.ndim(self.count) == 0 else out
