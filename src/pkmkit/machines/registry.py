@@ -40,6 +40,7 @@ from pkmkit.machines import (
     gough_stewart,
     linear_delta,
     orthoglide,
+    trimule,
     tripteor,
     verne,
 )
@@ -53,7 +54,7 @@ _KIND_NAMES = {v: k for k, v in LEG_KINDS.items()}
 #: Built-in machine kinds by name.
 KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (
     orthoglide, linear_delta, five_bar, delta_robot, gough_stewart, verne, tripteor,
-    crank_slider)}
+    crank_slider, trimule)}
 ROD_LEGS = "rod-legs"
 #: Short ids naming a kind's reference preset.
 ALIASES = {"linear-delta": "linear-delta-ch3", "five-bar": "five-bar-isotropic"}
