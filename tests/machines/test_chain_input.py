@@ -170,8 +170,16 @@ def test_nominal_misfit_is_no_assembly_but_defects_are_least_squares(trimule):
     # an incompatible defect: the machine still assembles (in least squares)
     tilted = trimule.with_defects({"dJ21": 1e-3})  # θ1's axis out of the ring's plane
     assert tilted.home_closure_residual > 1e-6
-    direct = tilted.fk(trimule.home_q[None], full_output=True)
-    assert direct.status[0] == Status.INCONSISTENT and np.isfinite(direct.pose).all()
+    rows = np.array([trimule.home_q, trimule.reference_poses()["tilt-psi1"], q])
+    direct = tilted.fk(rows, full_output=True, strokes="ignore")
+    assert (direct.status == Status.INCONSISTENT).all() and np.isfinite(direct.pose).all()
+    # the misfit tells them apart: bounded, the unreachable row has no assembly
+    assert direct.closure_residual[1] < 2 * tilted.home_closure_residual
+    assert direct.closure_residual[2] > 20 * tilted.home_closure_residual
+    bounded = tilted.fk(rows, full_output=True, strokes="ignore",
+                        max_misfit=10 * tilted.home_closure_residual)
+    assert bounded.status.tolist() == [Status.INCONSISTENT] * 2 + [Status.NO_ASSEMBLY]
+    assert np.isnan(bounded.pose[2]).all() and "misses the platform" in bounded.messages[2]
 
 
 # ----------------------------------------------------------------------------- singular

@@ -302,6 +302,7 @@ class JointChainMachine:
     # ---------------------------------------------------------------- direct
     def fk(self, q: Any, *, x0: Any = None, tool_length: Any = None, full_output: bool = False,
            strokes: str = "flag", check_singular: bool | None = None,
+           max_misfit: float | None = None,
            **engine_options: Any) -> np.ndarray | ChainDirectResult:
         """Direct model: the legs' closure (platform pose and passive joints) then the head.
 
@@ -324,15 +325,20 @@ class JointChainMachine:
                 determined by the actuators) get status SINGULAR, values kept; a single row
                 raises :class:`~pkmkit.errors.SingularConfigurationError`. Default: on for a
                 single row, off for a batch (one SVD per row).
+            max_misfit: largest closure residual (m) accepted as an assembly: default the
+                engine's tolerance for a nominal geometry, unbounded for one with defects
+                (whose least-squares misfit cannot be told from actuator values out of reach
+                but by its size — bound it, e.g. by a multiple of ``home_closure_residual``).
             **engine_options: forwarded to the engine (``max_iter``, ``residual_tol``, …).
 
         Returns:
             tool point and axis ``(6,)`` / ``(N, 6)``, or a :class:`ChainDirectResult`. A
             machine with incompatible defects has no exact closure: its rows are the
             least-squares closure (status INCONSISTENT, ``closure_residual`` > 0), as a real
-            hyperstatic machine deforms to assemble. For a compatible geometry a non-zero
-            misfit means the actuator values admit no assembly: status NO_ASSEMBLY, NaN, and
-            ``messages`` name the leg that misses the platform and by how much.
+            hyperstatic machine deforms to assemble — up to ``max_misfit`` if given. For a
+            nominal geometry any misfit means the actuator values admit no assembly. Such rows
+            have status NO_ASSEMBLY, NaN, and ``messages`` name the leg that misses the
+            platform and by how much.
 
         Raises:
             InputError: mis-shaped q, a non-finite single q, an unknown ``strokes`` mode.
@@ -363,9 +369,12 @@ class JointChainMachine:
         tol = engine_options.get("residual_tol", CLOSURE_TOL)
         status[(status == Status.NOT_CONVERGED) & (res.residual <= tol)] = Status.OK
         status[status == Status.NOT_CONVERGED] = Status.NO_ASSEMBLY
-        if self.home_closure_residual <= CLOSURE_TOL:
-            # a compatible geometry closes exactly wherever it assembles
-            status[status == Status.INCONSISTENT] = Status.NO_ASSEMBLY
+        # a nominal geometry closes exactly wherever it assembles; with defects the misfit is
+        # theirs unless the caller bounds it
+        if max_misfit is None:
+            max_misfit = np.inf if self.model.defects.any() else tol
+        status[(status == Status.INCONSISTENT) & (res.residual > max_misfit)] = (
+            Status.NO_ASSEMBLY)
         status[~valid] = Status.INVALID_INPUT
         values[:, self._passive] = res.u[:, 6:]
         report = self._direct_report(values, res, status, valid, strokes,
