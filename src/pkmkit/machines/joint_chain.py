@@ -113,7 +113,8 @@ class ChainJacobians:
         expected_rank: that rank at home.
         q: ``(N, n)`` actuator coordinates used.
         status: ``(N,)`` OK, NO_ASSEMBLY (the legs do not close: NaN), SINGULAR (the closure
-            Jacobian lost rank: the velocity model does not exist there, NaN).
+            Jacobian is singular, :data:`SINGULAR_TOL`: the velocity model does not exist
+            there, NaN).
     """
 
     J: np.ndarray
@@ -320,9 +321,10 @@ class JointChainMachine:
                 cannot go there; ``"refuse"`` makes those rows NaN with status OUT_OF_STROKE
                 (a single row raises :class:`~pkmkit.errors.OutOfStrokeError`); ``"ignore"``
                 does not look.
-            check_singular: check the rank of the closure at the solution: rows where it is
-                lower than at home (a parallel singularity: the passive joints are not
-                determined by the actuators) get status SINGULAR, values kept; a single row
+            check_singular: check the closure's Jacobian (platform and passive joints) at the
+                solution: rows where σ_min/σ_max falls below :data:`SINGULAR_TOL` (a parallel
+                singularity: the actuators do not determine the passive joints) get status
+                SINGULAR, values kept; a single row
                 raises :class:`~pkmkit.errors.SingularConfigurationError`. Default: on for a
                 single row, off for a batch (one SVD per row).
             max_misfit: largest closure residual (m) accepted as an assembly: default the
@@ -568,8 +570,8 @@ class JointChainMachine:
         Args:
             q: ``(n,)`` or ``(N, n)`` actuator coordinates.
 
-        Rows without assembly or at a singular closure (rank below :attr:`~ChainJacobians.
-        expected_rank`) are NaN with their status.
+        Rows without assembly or at a singular closure (σ_min/σ_max of the closure's Jacobian
+        below :data:`SINGULAR_TOL`) are NaN with their status.
 
         Raises:
             ClosureMissError: a single q whose legs do not close.
