@@ -30,6 +30,8 @@ class Status(IntEnum):
     WRONG_MODE = 6
     #: numeric engine: converged to a least-squares point whose residual is not zero.
     INCONSISTENT = 7
+    #: a joint value lies outside its stroke (joint-chain machines asked to refuse such rows).
+    OUT_OF_STROKE = 8
 
     @property
     def label(self) -> str:

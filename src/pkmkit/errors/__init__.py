@@ -117,3 +117,45 @@ class SingularConfigurationError(PkmError, ValueError):
 
 class ConvergenceError(PkmError, RuntimeError):
     """The least-squares engine did not converge for a single (non-batched) call."""
+
+
+class OutOfStrokeError(PkmError, ValueError):
+    """A joint value lies outside its stroke (joint-chain machines).
+
+    Attributes:
+        joint: the joint's name; value: its value; stroke: ``(min, max)`` (SI units, rad or m);
+        pose_index: the row, when the value came from a batch.
+    """
+
+    def __init__(self, message: str, joint: str, value: float, stroke: tuple[float, float],
+                 pose_index: int | None = None):
+        self.joint = joint
+        self.value = float(value)
+        self.stroke = (float(stroke[0]), float(stroke[1]))
+        self.pose_index = pose_index
+        where = f"pose {pose_index}: " if pose_index is not None else ""
+        super().__init__(f"{where}{message}")
+
+
+class ClosureMissError(NoAssemblyError):
+    """The legs of a joint-chain machine do not close on a common platform pose.
+
+    Attributes:
+        leg: 0-based index of the leg that misses the platform most; leg_name: its name.
+        translation: by how much it misses it at the least-squares point (m).
+        rotation: by which angle (rad).
+        residual: the largest closure residual (m; rotation rows × the characteristic length).
+    """
+
+    def __init__(self, message: str, leg: int, leg_name: str, translation: float,
+                 rotation: float, residual: float, pose_index: int | None = None):
+        self.leg = leg
+        self.leg_name = leg_name
+        self.translation = float(translation)
+        self.rotation = float(rotation)
+        self.residual = float(residual)
+        super().__init__(message, pose_index)
+
+
+class StrokeWarning(UserWarning):
+    """A single direct or inverse model computed a configuration beyond a joint's stroke."""

@@ -15,13 +15,28 @@ variables, legs first then head (rad for revolutes, m for prismatic joints).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import ConvergenceError, InputError, NoAssemblyError, ParameterError
+from pkmkit.errors import (
+    ClosureMissError,
+    ConvergenceError,
+    InputError,
+    OutOfStrokeError,
+    ParameterError,
+    SingularConfigurationError,
+    StrokeWarning,
+)
+from pkmkit.machines.chain_checks import (
+    closure_conditioning,
+    leg_misses,
+    miss_message,
+    stroke_violations,
+)
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
 from pkmkit.model.chains import FIXED, JointChainModel
@@ -40,7 +55,13 @@ from pkmkit.status import Status
 CLOSURE_TOL = 1e-9
 #: Relative threshold on singular values for ranks.
 RANK_RCOND = 1e-9
+#: A closure is singular where σ_min/σ_max of its Jacobian (platform and passive joints) falls
+#: below this: the engine converges only to ~sqrt(eps) of an exact singularity, where the ratio
+#: is ~1e-8; 0.002° from the crank-slider's folded configuration it is 1e-6.
+SINGULAR_TOL = 1e-6
 POSE_NAMES = ("x", "y", "z", "i", "j", "k")
+#: What the direct and inverse models do with joint values outside their strokes.
+STROKE_MODES = ("flag", "refuse", "ignore")
 
 
 @dataclass(frozen=True)
@@ -56,8 +77,13 @@ class ChainDirectResult:
         closure_residual: ``(N,)`` largest closure residual (m; rotation rows × L): ~1e-15 for a
             compatible geometry, the least-squares misfit for an incompatible one.
         status: ``(N,)`` status codes (OK, or NO_ASSEMBLY when the closure failed, or
-            INCONSISTENT when it converged to a non-zero residual: incompatible defects).
+            INCONSISTENT when it converged to a non-zero residual: incompatible defects;
+            OUT_OF_STROKE, SINGULAR: see :meth:`JointChainMachine.fk`).
         iterations: ``(N,)`` engine iterations.
+        out_of_stroke: ``(N,)`` bool, a joint (actuator given or passive joint found) lies
+            outside its stroke.
+        messages: one sentence per row saying what is wrong (``""`` for a good row): which
+            leg misses the platform and by how much, which joint is beyond its stroke.
     """
 
     pose: np.ndarray
@@ -68,6 +94,8 @@ class ChainDirectResult:
     closure_residual: np.ndarray
     status: np.ndarray
     iterations: np.ndarray
+    out_of_stroke: np.ndarray | None = None
+    messages: tuple[str, ...] | str = ()
 
 
 @dataclass(frozen=True)
@@ -84,6 +112,9 @@ class ChainJacobians:
             passive joints (lower than at home: a parallel singularity).
         expected_rank: that rank at home.
         q: ``(N, n)`` actuator coordinates used.
+        status: ``(N,)`` OK, NO_ASSEMBLY (the legs do not close: NaN), SINGULAR (the closure
+            Jacobian is singular, :data:`SINGULAR_TOL`: the velocity model does not exist
+            there, NaN).
     """
 
     J: np.ndarray
@@ -94,6 +125,7 @@ class ChainJacobians:
     closure_rank: np.ndarray
     expected_rank: int
     q: np.ndarray
+    status: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -270,6 +302,8 @@ class JointChainMachine:
 
     # ---------------------------------------------------------------- direct
     def fk(self, q: Any, *, x0: Any = None, tool_length: Any = None, full_output: bool = False,
+           strokes: str = "flag", check_singular: bool | None = None,
+           max_misfit: float | None = None,
            **engine_options: Any) -> np.ndarray | ChainDirectResult:
         """Direct model: the legs' closure (platform pose and passive joints) then the head.
 
@@ -280,18 +314,43 @@ class JointChainMachine:
                 the home configuration.
             tool_length: tool length(s) along the tool axis (m); default the machine's.
             full_output: return a :class:`ChainDirectResult`.
+            strokes: joint values outside their strokes (the actuators given, the passive
+                joints found): ``"flag"`` (default) computes the configuration, marks the rows
+                (``out_of_stroke``, ``messages``) and, for a single row, warns
+                (:class:`~pkmkit.errors.StrokeWarning`) — the geometry is right, the machine
+                cannot go there; ``"refuse"`` makes those rows NaN with status OUT_OF_STROKE
+                (a single row raises :class:`~pkmkit.errors.OutOfStrokeError`); ``"ignore"``
+                does not look.
+            check_singular: check the closure's Jacobian (platform and passive joints) at the
+                solution: rows where σ_min/σ_max falls below :data:`SINGULAR_TOL` (a parallel
+                singularity: the actuators do not determine the passive joints) get status
+                SINGULAR, values kept; a single row
+                raises :class:`~pkmkit.errors.SingularConfigurationError`. Default: on for a
+                single row, off for a batch (one SVD per row).
+            max_misfit: largest closure residual (m) accepted as an assembly: default the
+                engine's tolerance for a nominal geometry, unbounded for one with defects
+                (whose least-squares misfit cannot be told from actuator values out of reach
+                but by its size — bound it, e.g. by a multiple of ``home_closure_residual``).
             **engine_options: forwarded to the engine (``max_iter``, ``residual_tol``, …).
 
         Returns:
             tool point and axis ``(6,)`` / ``(N, 6)``, or a :class:`ChainDirectResult`. A
             machine with incompatible defects has no exact closure: its rows are the
             least-squares closure (status INCONSISTENT, ``closure_residual`` > 0), as a real
-            hyperstatic machine deforms to assemble.
+            hyperstatic machine deforms to assemble — up to ``max_misfit`` if given. For a
+            nominal geometry any misfit means the actuator values admit no assembly. Such rows
+            have status NO_ASSEMBLY, NaN, and ``messages`` name the leg that misses the
+            platform and by how much.
 
         Raises:
-            InputError: mis-shaped q, a non-finite single q.
-            NoAssemblyError: a single q whose closure failed.
+            InputError: mis-shaped q, a non-finite single q, an unknown ``strokes`` mode.
+            ClosureMissError: a single q whose legs do not close (a NoAssemblyError naming the
+                leg, its miss and the residual).
+            OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
+            SingularConfigurationError: a single q at a singular closure.
         """
+        if strokes not in STROKE_MODES:
+            raise InputError(f"strokes must be one of {', '.join(STROKE_MODES)}, got {strokes!r}")
         qb, single = _checked_batch(q, self.n_actuators, "q")
         n = qb.shape[0]
         values = self._full_values(qb)
@@ -300,16 +359,29 @@ class JointChainMachine:
                                          self._home["values"][self._passive]]), (n, 1))
         else:
             u0 = _rows_like(x0, 6 + len(self._passive), "x0", n)
-        u0[~valid_rows(qb)] = np.nan
+        valid = valid_rows(qb)
+        u0[~valid] = np.nan
         engine_options.setdefault("compute_rank", False)
         with np.errstate(invalid="ignore", over="ignore"):
             res = solve_closure(self.model, values, u0, unknown_variables=self._passive,
                                 **engine_options)
         status = res.status.copy()
+        # at (or next to) a singular closure Gauss–Newton converges only linearly: a row that
+        # ran out of iterations with the legs closed is an assembly
+        tol = engine_options.get("residual_tol", CLOSURE_TOL)
+        status[(status == Status.NOT_CONVERGED) & (res.residual <= tol)] = Status.OK
         status[status == Status.NOT_CONVERGED] = Status.NO_ASSEMBLY
-        status[~valid_rows(qb)] = Status.INVALID_INPUT
-        usable = (status == Status.OK) | (status == Status.INCONSISTENT)
+        # a nominal geometry closes exactly wherever it assembles; with defects the misfit is
+        # theirs unless the caller bounds it
+        if max_misfit is None:
+            max_misfit = np.inf if self.model.defects.any() else tol
+        status[(status == Status.INCONSISTENT) & (res.residual > max_misfit)] = (
+            Status.NO_ASSEMBLY)
+        status[~valid] = Status.INVALID_INPUT
         values[:, self._passive] = res.u[:, 6:]
+        report = self._direct_report(values, res, status, valid, strokes,
+                                     single if check_singular is None else check_singular)
+        usable = report["usable"]
         rot = rotvec_to_matrix(np.nan_to_num(res.u[:, 3:6])).transpose(1, 2, 0)
         tool = tool_frame(self.model, rot, np.nan_to_num(res.u[:, :3]).T, values.T)
         lengths = self._tool_lengths(tool_length, n)
@@ -318,14 +390,8 @@ class JointChainMachine:
         frame = np.concatenate([tool.p.T, matrix_to_rotvec(tool.R.transpose(2, 0, 1))], axis=1)
         for arr in (pose, frame):
             arr[~usable] = np.nan
-        if single and not usable[0]:
-            if status[0] == Status.INVALID_INPUT:
-                raise InputError(f"q = {qb[0].tolist()} has a coordinate beyond "
-                                 f"{MAX_COORDINATE:g}")
-            raise NoAssemblyError(
-                f"q = {qb[0].tolist()}: the legs do not close (largest closure residual "
-                f"{res.residual[0]:.3g} m, {Status(int(status[0])).label}); the actuator values "
-                "may be out of the workspace, or pass x0 nearer the solution")
+        if single:
+            self._raise_single(qb[0], status[0], report, res.residual[0])
         if not full_output:
             return restore_shape(pose, single)
         platform = res.u[:, :6].copy()
@@ -335,15 +401,88 @@ class JointChainMachine:
         out = ChainDirectResult(pose=pose, tool_frame=frame, platform=platform, passive=passive,
                                 passive_names=self.passive_names,
                                 closure_residual=res.residual, status=status,
-                                iterations=res.iterations)
+                                iterations=res.iterations,
+                                out_of_stroke=report["out_of_stroke"],
+                                messages=tuple(report["messages"]))
         if single:
-            return ChainDirectResult(**{k: (v[0] if isinstance(v, np.ndarray) else v)
-                                        for k, v in out.__dict__.items()})
+            fields = {k: (v[0] if isinstance(v, np.ndarray) else v)
+                      for k, v in out.__dict__.items()}
+            fields["messages"] = out.messages[0]
+            return ChainDirectResult(**fields)
         return out
+
+    def _direct_report(self, values: np.ndarray, res, status: np.ndarray, valid: np.ndarray,
+                       strokes: str, check_singular: bool) -> dict[str, Any]:
+        """Per-row diagnoses of a direct model (updates ``status`` in place): the legs' misses
+        of rows without assembly, stroke violations, singular closures."""
+        model = self.model
+        n = values.shape[0]
+        parts: list[list[str]] = [[] for _ in range(n)]
+        failed = np.flatnonzero(status == Status.NO_ASSEMBLY)
+        misses = {}
+        if failed.size:
+            trans, rot = leg_misses(model, values[failed], res.u[failed, :6])
+            for j, i in enumerate(failed):
+                leg, text = miss_message(model, trans[j], rot[j])
+                misses[int(i)] = (leg, trans[j, leg], rot[j, leg])
+                parts[i].append(f"the legs do not close: {text}; largest closure residual "
+                                f"{res.residual[i]:.3g} m")
+        for i in np.flatnonzero(status == Status.INVALID_INPUT):
+            parts[i].append("an actuator value is not finite or beyond "
+                            f"{MAX_COORDINATE:g}")
+        usable = (status == Status.OK) | (status == Status.INCONSISTENT)
+        out_of_stroke = np.zeros(n, dtype=bool)
+        first_violation: dict[int, tuple[int, float]] = {}
+        if strokes != "ignore":
+            for variables, rows in ((self._actuated, valid), (self._passive, usable)):
+                bad, texts = stroke_violations(model, values, variables, rows & ~out_of_stroke)
+                for i in np.flatnonzero(bad):
+                    parts[i].append(texts[i])
+                    sub = values[i, variables]
+                    k = int(np.flatnonzero((sub < model.q_min[variables])
+                                           | (sub > model.q_max[variables]))[0])
+                    first_violation[int(i)] = (int(variables[k]), float(sub[k]))
+                out_of_stroke |= bad
+            if strokes == "refuse":
+                status[out_of_stroke] = Status.OUT_OF_STROKE
+                usable &= ~out_of_stroke
+        if check_singular and usable.any():
+            rows = np.flatnonzero(usable)
+            ratio = closure_conditioning(model, values[rows], res.u[rows, :6], self._passive,
+                                         self._expected_rank())
+            for i, value in zip(rows, ratio, strict=True):
+                if value < SINGULAR_TOL:
+                    status[i] = Status.SINGULAR
+                    parts[i].append(f"singular closure (σ_min/σ_max of its Jacobian "
+                                    f"{value:.2g} < {SINGULAR_TOL:g}): the actuators do not "
+                                    "determine the passive joints and the platform there")
+        keep = usable | (status == Status.SINGULAR)
+        return {"usable": keep, "out_of_stroke": out_of_stroke, "misses": misses,
+                "violations": first_violation, "messages": ["; ".join(p) for p in parts]}
+
+    def _raise_single(self, q: np.ndarray, status: int, report: dict, residual: float) -> None:
+        """The typed error (or warning) of a single-row direct model."""
+        message = report["messages"][0]
+        if status == Status.INVALID_INPUT:
+            raise InputError(f"q = {q.tolist()} has a coordinate beyond {MAX_COORDINATE:g}")
+        if status == Status.NO_ASSEMBLY:
+            leg, trans, rot = report["misses"][0]
+            raise ClosureMissError(
+                f"q = {q.tolist()}: {message}; the actuator values may be out of the workspace, "
+                "or pass x0 nearer the solution", leg, self.model.leg_names[leg], trans, rot,
+                residual)
+        if status == Status.OUT_OF_STROKE:
+            variable, value = report["violations"][0]
+            raise OutOfStrokeError(message, self.model.variables[variable], value,
+                                   (self.model.q_min[variable], self.model.q_max[variable]))
+        if status == Status.SINGULAR:
+            raise SingularConfigurationError(f"q = {q.tolist()}: {message}")
+        if report["out_of_stroke"][0]:
+            warnings.warn(message, StrokeWarning, stacklevel=3)
 
     # ---------------------------------------------------------------- inverse
     def ik(self, x: Any, *, q0: Any = None, tool_length: Any = None, full_output: bool = False,
-           **engine_options: Any) -> np.ndarray | ChainDirectResult:
+           strokes: str = "flag", **engine_options: Any) -> np.ndarray | ChainDirectResult:
         """Inverse model: actuator coordinates that put the tool point and axis at ``x``.
 
         Args:
@@ -353,14 +492,23 @@ class JointChainMachine:
             tool_length: tool length(s) (m); default the machine's.
             full_output: return a :class:`ChainDirectResult` with ``q`` added as ``pose``'s
                 companion (see Returns).
+            strokes: joints of the solution (actuators and passive joints) outside their
+                strokes: ``"flag"`` (default; a single row warns with
+                :class:`~pkmkit.errors.StrokeWarning`), ``"refuse"`` (NaN rows; a single row
+                raises :class:`~pkmkit.errors.OutOfStrokeError`) or ``"ignore"``; the direct
+                result of ``full_output`` carries the messages.
 
         Returns:
             q ``(n,)`` / ``(N, n)``; with ``full_output`` a tuple ``(q, ChainDirectResult)``.
 
         Raises:
-            InputError: mis-shaped input, an axis of zero length.
+            InputError: mis-shaped input, an axis of zero length, an unknown ``strokes`` mode.
             ConvergenceError: a single target the engine could not reach exactly.
+            OutOfStrokeError: a single target reached beyond a stroke with
+                ``strokes="refuse"``.
         """
+        if strokes not in STROKE_MODES:
+            raise InputError(f"strokes must be one of {', '.join(STROKE_MODES)}, got {strokes!r}")
         xb, single = _checked_batch(x, 6, "pose")
         norms = np.linalg.norm(xb[:, 3:], axis=1)
         bad_axis = ~(norms > 0)
@@ -384,16 +532,34 @@ class JointChainMachine:
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
         status[~valid_rows(xb) | bad_axis] = Status.INVALID_INPUT
         q = res.u[:, 6:][:, self._actuated].copy()
+        joints = np.flatnonzero(self.model.loop_variables | self.model.actuated)
+        bad, texts = (stroke_violations(self.model, res.u[:, 6:], joints, status == Status.OK)
+                      if strokes != "ignore" else (np.zeros(n, dtype=bool), [""] * n))
+        if strokes == "refuse":
+            status[bad] = Status.OUT_OF_STROKE
         q[status != Status.OK] = np.nan
+        if single and status[0] == Status.OUT_OF_STROKE:
+            values = res.u[0, 6:]
+            k = int(next(j for j in joints if not (self.model.q_min[j] <= values[j]
+                                                    <= self.model.q_max[j])))
+            raise OutOfStrokeError(f"the inverse model of {xb[0].tolist()}: {texts[0]}",
+                                   self.model.variables[k], values[k],
+                                   (self.model.q_min[k], self.model.q_max[k]))
         if single and status[0] != Status.OK:
             raise ConvergenceError(
                 f"the inverse model did not reach the tool point and axis {xb[0].tolist()} "
                 f"(residual {res.residual[0]:.3g} m, {Status(int(status[0])).label}): the target "
                 "may be out of the workspace; pass q0 near the wanted branch")
+        if single and bad[0]:
+            warnings.warn(f"the inverse model of {xb[0].tolist()}: {texts[0]}", StrokeWarning,
+                          stacklevel=2)
         if not full_output:
             return restore_shape(q, single)
-        direct = self.fk(q if not single else q[0], tool_length=lengths if not single else
-                         lengths[0], full_output=True) if np.isfinite(q).any() else None
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", StrokeWarning)
+            direct = self.fk(q if not single else q[0], tool_length=lengths if not single else
+                             lengths[0], full_output=True, strokes=strokes,
+                             check_singular=False) if np.isfinite(q).any() else None
         return (restore_shape(q, single), direct)
 
     # ---------------------------------------------------------------- velocity
@@ -403,12 +569,19 @@ class JointChainMachine:
 
         Args:
             q: ``(n,)`` or ``(N, n)`` actuator coordinates.
+
+        Rows without assembly or at a singular closure (σ_min/σ_max of the closure's Jacobian
+        below :data:`SINGULAR_TOL`) are NaN with their status.
+
+        Raises:
+            ClosureMissError: a single q whose legs do not close.
+            SingularConfigurationError: a single q at a singular closure.
         """
         qb, single = _checked_batch(q, self.n_actuators, "q")
-        direct = self.fk(qb, full_output=True)
+        direct = self.fk(qb, full_output=True, strokes="ignore", check_singular=False)
         n = qb.shape[0]
-        values = self._full_values(qb)
-        values[:, self._passive] = direct.passive
+        values = self._full_values(np.nan_to_num(qb))
+        values[:, self._passive] = np.nan_to_num(direct.passive)  # failed rows: NaN at the end
         rot = rotvec_to_matrix(np.nan_to_num(direct.platform[:, 3:])).transpose(1, 2, 0)
         p_x = np.nan_to_num(direct.platform[:, :3]).T
         c = closure(self.model, rot, p_x, values.T)
@@ -417,9 +590,17 @@ class JointChainMachine:
         head_act = [i for i in self._actuated if not self.model.loop_variables[i]]
         cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1).transpose(2, 0, 1)
         cq = c.variables[:, loop_act].transpose(2, 0, 1)
-        du = -np.linalg.pinv(cu, rcond=RANK_RCOND) @ cq  # (N, 6 + n_p, n_loop_act)
-        sv_c = np.linalg.svd(cu, compute_uv=False)
-        rank = (sv_c > RANK_RCOND * sv_c[:, :1]).sum(axis=1)
+        closed = np.isfinite(direct.passive).all(axis=1)  # rows with an assembly
+        du = np.full((n, cu.shape[2], len(loop_act)), np.nan)
+        rank = np.zeros(n, dtype=int)
+        if closed.any():
+            du[closed] = -np.linalg.pinv(cu[closed], rcond=RANK_RCOND) @ cq[closed]
+            sv_c = np.linalg.svd(cu[closed], compute_uv=False)
+            rank[closed] = (sv_c > RANK_RCOND * sv_c[:, :1]).sum(axis=1)
+        expected = self._expected_rank()
+        ratio = np.full(n, np.nan)
+        if closed.any():
+            ratio[closed] = sv_c[:, expected - 1] / sv_c[:, 0]
         tool = tool_frame(self.model, rot, p_x, values.T, twists=True)
         # platform increments → tool twist, then loop actuators through them
         plat = np.zeros((n, 6, 6))
@@ -451,10 +632,21 @@ class JointChainMachine:
         passive_rates = np.zeros((n, len(self._passive), self.n_actuators))
         for j, v in enumerate(loop_act):
             passive_rates[:, :, order[v]] = du[:, 6:, j]
-        expected = self._expected_rank()
+        status = direct.status.copy()
+        status[((status == Status.OK) | (status == Status.INCONSISTENT)) & closed
+               & (ratio < SINGULAR_TOL)] = Status.SINGULAR
+        bad = (status != Status.OK) & (status != Status.INCONSISTENT)
+        for arr in (jac, j_h, sv, condition, passive_rates):
+            arr[bad] = np.nan
+        if single and status[0] == Status.NO_ASSEMBLY:
+            self.fk(qb[0], strokes="ignore")  # raises the ClosureMissError naming the leg
+        if single and status[0] == Status.SINGULAR:
+            raise SingularConfigurationError(
+                f"q = {qb[0].tolist()}: singular closure (σ_min/σ_max of its Jacobian "
+                f"{ratio[0]:.2g} < {SINGULAR_TOL:g}): the velocity model does not exist there")
         out = ChainJacobians(J=jac, J_homogeneous=j_h, singular_values=sv, condition=condition,
                              passive_rates=passive_rates, closure_rank=rank,
-                             expected_rank=expected, q=qb)
+                             expected_rank=expected, q=qb, status=status)
         if single:
             return ChainJacobians(**{k: (v[0] if isinstance(v, np.ndarray) else v)
                                      for k, v in out.__dict__.items()})

@@ -5,7 +5,7 @@ write — so presets and user files go through one loader. A file either names a
 and gives its ``[parameters]``, or has ``kind = "rod-legs"`` and describes its legs one by one::
 
     [machine]
-    kind = "linear-delta"          # or "orthoglide", "five-bar", "rod-legs"
+    kind = "linear-delta"          # or "orthoglide", "five-bar", "rod-legs", "joint-chain"
     name = "My Delta"
     units = "mm"                   # lengths in this file; angles are always in degrees
     [parameters]
@@ -40,9 +40,11 @@ from pkmkit.machines import (
     gough_stewart,
     linear_delta,
     orthoglide,
+    trimule,
     tripteor,
     verne,
 )
+from pkmkit.machines.chain_file import JOINT_CHAIN, chain_machine_from_document
 from pkmkit.machines.machine import Machine, MachineKind, build_machine
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
 from pkmkit.model.parameters import is_plain_number, length_scale, resolve_parameters
@@ -51,7 +53,7 @@ from pkmkit.model.rods import LegSpec, build_rod_model, leg_specs
 #: Built-in machine kinds by name.
 KINDS: dict[str, MachineKind] = {k.KIND.kind: k.KIND for k in (
     orthoglide, linear_delta, five_bar, delta_robot, gough_stewart, verne, tripteor,
-    crank_slider)}
+    crank_slider, trimule)}
 ROD_LEGS = "rod-legs"
 #: Short ids naming a kind's reference preset.
 ALIASES = {"linear-delta": "linear-delta-ch3", "five-bar": "five-bar-isotropic"}
@@ -148,11 +150,14 @@ def machine_from_document(
         overrides: parameter values in SI units replacing the file's (built-in kinds only).
         machine_id: id to give the machine (default: ``[machine] id`` or the file name).
     """
+    table = doc.data.get("machine")
+    if isinstance(table, dict) and table.get("kind") == JOINT_CHAIN:
+        return chain_machine_from_document(doc, machine_id=machine_id, overrides=overrides)
     _check_keys(doc, doc.data, _TOP_KEYS, (), "the file")
     head = _table(doc, "machine", required=True)
     _check_keys(doc, head, _MACHINE_KEYS, ("machine",), "[machine]")
     kind_name = head.get("kind")
-    valid_kinds = [*sorted(KINDS), ROD_LEGS]
+    valid_kinds = [*sorted(KINDS), ROD_LEGS, JOINT_CHAIN]
     if kind_name not in valid_kinds:
         raise doc.error(
             f"[machine] kind must be one of {', '.join(valid_kinds)}; got {kind_name!r}",

@@ -1,0 +1,228 @@
+"""Closed forms of the TriMule 600 (seed 002, Guyon 2021, §3.4, eqs. 3.24–3.36), in the frames of
+:mod:`pkmkit.machines.trimule`.
+
+The instrumented leg 4 (ψ1, θ4, L4) fixes the platform, and then everything is explicit:
+
+- :func:`platform_pose` — eq. (3.31): ``P = L4 (−sin θ4, cos θ4 sin ψ1, cos θ4 cos ψ1)`` and the
+  platform frame ``R_P = Rx(−ψ1) Rz(π) Ry(θ4)`` (the thesis's Cardan angles x–z–y with
+  α_P = −ψ1, β_P = π, γ_P = θ4; the printed α_P = ψ1 contradicts the printed position, see
+  docs/seed-errata.md);
+- :func:`actuators` — the inverse model of the parallel part: Q1, Q3 from (3.28) squared and
+  added ([derived] in the notes, §2.4) and Q2 = |A2B2|;
+- :func:`passive_joints` — every passive joint: (3.28) for legs 1 and 3 (η = κ = 0,
+  φ1 = θ4 − θ1, φ3 = θ3 − θ4), the direction of leg 2 for ψ2, θ2 and a z–y–x decomposition of
+  the leg-2 end rotation for η2, κ2, φ2 (which the thesis left to optimisation);
+- :func:`measured_leg` — the direct model of the parallel part: from Q1, Q3 (which do not
+  depend on ψ1) ``Q1² − Q3² = 2 L L4 sin θ4`` and ``4(Q1² + Q3²) = 2(L² + l²) + 16 L4²
+  − 4 L l cos θ4``, one monotonic equation in θ4 on the working mode |θ4| < θ* (< 90°), then
+  ``Q2² = L4² + h² + H² + 2H (L4 cos θ4 sin ψ1 − h cos ψ1)`` for ψ1 on the branch through
+  ψ1 = 0 at the symmetric configuration;
+- :func:`tool_pose` — eq. (3.36): ``T = P + R_P [(c2 + Lo sin Q5) cos Q4, (c2 + Lo sin Q5) sin
+  Q4, c1 + Lo cos Q5]`` and tool axis ``R_P (sin Q5 cos Q4, sin Q5 sin Q4, cos Q5)`` with
+  ``Lo = spindle + tool length`` (the thesis's L_outil, measured from the Q5 axis); the printed
+  (3.33)/(3.36) is this with c1, c2, L_outil of opposite signs (its head points along −z_P).
+
+Every function is batched (leading axis N), SI units (m, rad); ``params`` is the machine's
+parameter mapping (``L, H, l, h, c1, c2, spindle``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+#: Names of the passive joints :func:`passive_joints` returns, in the machine's order.
+PASSIVE = ("psi1", "theta1", "eta1", "kappa1", "phi1", "psi2", "theta2", "eta2", "kappa2",
+           "phi2", "theta3", "eta3", "kappa3", "phi3", "theta4", "L4")
+
+
+def _rows(*values: Any) -> list[np.ndarray]:
+    arrays = np.broadcast_arrays(*[np.atleast_1d(np.asarray(v, dtype=float)) for v in values])
+    return [a.reshape(-1) for a in arrays]
+
+
+def _rx(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    out = np.zeros((a.size, 3, 3))
+    out[:, 0, 0] = 1.0
+    out[:, 1, 1], out[:, 1, 2], out[:, 2, 1], out[:, 2, 2] = c, -s, s, c
+    return out
+
+
+def _ry(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    out = np.zeros((a.size, 3, 3))
+    out[:, 1, 1] = 1.0
+    out[:, 0, 0], out[:, 0, 2], out[:, 2, 0], out[:, 2, 2] = c, s, -s, c
+    return out
+
+
+def _rz(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    out = np.zeros((a.size, 3, 3))
+    out[:, 2, 2] = 1.0
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = c, -s, s, c
+    return out
+
+
+def platform_pose(L4: Any, psi1: Any, theta4: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. (3.31): the platform frame from the measured leg.
+
+    Args:
+        L4: ``(N,)`` length of the measured leg (m); psi1, theta4: ``(N,)`` its angles (rad).
+
+    Returns:
+        ``R (N, 3, 3)`` and ``p (N, 3)``: the platform frame MPS (origin P, the end of leg 4;
+        z along leg 4 away from the base; x from B1 to B3; y towards B2) in the base frame.
+    """
+    length, psi, theta = _rows(L4, psi1, theta4)
+    p = np.stack([-length * np.sin(theta), length * np.cos(theta) * np.sin(psi),
+                  length * np.cos(theta) * np.cos(psi)], axis=1)
+    rot = _rx(-psi) @ _rz(np.full_like(psi, np.pi)) @ _ry(theta)
+    return rot, p
+
+
+def platform_points(params: Mapping[str, Any], L4: Any, psi1: Any, theta4: Any
+                    ) -> dict[str, np.ndarray]:
+    """The joint centres ``(N, 3)`` of the parallel part: base points A1–A4 and platform points
+    B1, B2, B3, P (m, base frame)."""
+    rot, p = platform_pose(L4, psi1, theta4)
+    n = p.shape[0]
+    half_l, half_big = params["l"] / 2, params["L"] / 2
+    return {
+        "A1": np.tile([half_big, 0.0, 0.0], (n, 1)), "A2": np.tile([0.0, -params["H"], 0.0],
+                                                                   (n, 1)),
+        "A3": np.tile([-half_big, 0.0, 0.0], (n, 1)), "A4": np.zeros((n, 3)),
+        "B1": p - half_l * rot[:, :, 0], "B2": p + params["h"] * rot[:, :, 1],
+        "B3": p + half_l * rot[:, :, 0], "P": p,
+    }
+
+
+def actuators(params: Mapping[str, Any], L4: Any, psi1: Any, theta4: Any) -> np.ndarray:
+    """Inverse model of the parallel part: ``(N, 3)`` Q1, Q2, Q3 (m) from the measured leg.
+
+    Q1 and Q3 are (3.28) squared and added (notes §2.4 [derived]):
+    ``Q1 = ½ sqrt((L − l cos θ4 + 2 L4 sin θ4)² + (l sin θ4 + 2 L4 cos θ4)²)`` and the same with
+    ``L → −L, l → −l`` for Q3; Q2 is the distance A2B2.
+    """
+    length, psi, theta = _rows(L4, psi1, theta4)
+    big, small = params["L"], params["l"]
+    c, s = np.cos(theta), np.sin(theta)
+    q1 = 0.5 * np.hypot(big - small * c + 2 * length * s, small * s + 2 * length * c)
+    q3 = 0.5 * np.hypot(-big + small * c + 2 * length * s, -small * s + 2 * length * c)
+    pts = platform_points(params, length, psi, theta)
+    q2 = np.linalg.norm(pts["B2"] - pts["A2"], axis=1)
+    return np.stack([q1, q2, q3], axis=1)
+
+
+def passive_joints(params: Mapping[str, Any], L4: Any, psi1: Any, theta4: Any
+                   ) -> dict[str, np.ndarray]:
+    """Every passive joint ``(N,)`` (rad; ``L4`` in m) from the measured leg (module docstring).
+    """
+    length, psi, theta = _rows(L4, psi1, theta4)
+    big, small = params["L"], params["l"]
+    c, s = np.cos(theta), np.sin(theta)
+    theta1 = np.arctan2(big - small * c + 2 * length * s, small * s + 2 * length * c)
+    theta3 = np.arctan2(-big + small * c + 2 * length * s, -small * s + 2 * length * c)
+    pts = platform_points(params, length, psi, theta)
+    leg2 = pts["B2"] - pts["A2"]
+    leg2 /= np.linalg.norm(leg2, axis=1)[:, None]
+    # leg direction (−sin θ2, cos θ2 sin ψ2, cos θ2 cos ψ2)
+    theta2 = np.arcsin(np.clip(-leg2[:, 0], -1.0, 1.0))
+    psi2 = np.arctan2(leg2[:, 1], leg2[:, 2])
+    # leg-2 end rotation Rx(−ψ2) Ry(−θ2) Rz(η2) Ry(−κ2) Rx(φ2) = Rx(−ψ1) Ry(−θ4)
+    g = _ry(theta2) @ _rx(psi2 - psi) @ _ry(-theta)
+    kappa2 = np.arcsin(np.clip(g[:, 2, 0], -1.0, 1.0))
+    eta2 = np.arctan2(g[:, 1, 0], g[:, 0, 0])
+    phi2 = np.arctan2(g[:, 2, 1], g[:, 2, 2])
+    zero = np.zeros_like(psi)
+    return {"psi1": psi, "theta1": theta1, "eta1": zero, "kappa1": zero.copy(),
+            "phi1": theta - theta1, "psi2": psi2, "theta2": theta2, "eta2": eta2,
+            "kappa2": kappa2, "phi2": phi2, "theta3": theta3, "eta3": zero.copy(),
+            "kappa3": zero.copy(), "phi3": theta3 - theta, "theta4": theta, "L4": length}
+
+
+def _working_limit(a: np.ndarray, b: float) -> np.ndarray:
+    """θ* (rad): ``sqrt(A + B cos θ) sin θ`` increases strictly on (−θ*, θ*)."""
+    c_star = (-a + np.sqrt(a * a + 3 * b * b)) / (3 * b)
+    return np.arccos(np.clip(c_star, -1.0, 1.0))
+
+
+def measured_leg(params: Mapping[str, Any], q: Any, *, iterations: int = 60
+                 ) -> np.ndarray:
+    """Direct model of the parallel part: ``(N, 3)`` L4 (m), ψ1, θ4 (rad) from ``q (N, 3)`` =
+    Q1, Q2, Q3 (m), on the working mode of :mod:`pkmkit.machines.trimule` (|θ4| < θ*, the
+    branch of ψ1 through the symmetric configuration); NaN rows where the actuator lengths
+    admit no assembly in that mode.
+
+    θ4 solves ``sqrt(A + B cos θ) sin θ = k`` (``u = 2 L4``, ``u sin θ4 = k = (Q1² − Q3²)/L``,
+    ``u² = A + B cos θ4``, ``A = 2(Q1² + Q3²) − L² − l²``, ``B = 2 L l``), strictly increasing
+    on the working mode: bisection, then Newton steps to full precision.
+    """
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    q1, q2, q3 = q[:, 0], q[:, 1], q[:, 2]
+    big, small, hb, hs = params["L"], params["l"], params["H"], params["h"]
+    k = (q1 * q1 - q3 * q3) / big
+    a = 2 * (q1 * q1 + q3 * q3) - big * big - small * small
+    b = 2 * big * small
+    with np.errstate(invalid="ignore", divide="ignore"):
+        limit = _working_limit(a, b)
+        lo, hi = -limit, limit.copy()
+
+        def h(t):
+            return np.sqrt(np.maximum(a + b * np.cos(t), 0.0)) * np.sin(t) - k
+
+        feasible = (a - b > 0) & (h(lo) <= 0) & (h(hi) >= 0)
+        for _ in range(iterations):
+            mid = 0.5 * (lo + hi)
+            up = h(mid) > 0
+            hi = np.where(up, mid, hi)
+            lo = np.where(up, lo, mid)
+        theta = 0.5 * (lo + hi)
+        for _ in range(2):  # Newton polish: h' = (3B c² + 2A c − B) / (2u)
+            u = np.sqrt(a + b * np.cos(theta))
+            c = np.cos(theta)
+            theta = theta - h(theta) * 2 * u / (3 * b * c * c + 2 * a * c - b)
+        length = 0.5 * np.sqrt(a + b * np.cos(theta))
+        ca = 2 * hb * length * np.cos(theta)
+        cb = -2 * hb * hs
+        d = q2 * q2 - length * length - hs * hs - hb * hb
+        radius = np.hypot(ca, cb)
+        reach = np.abs(d) <= radius
+        psi = np.arctan2(ca, cb) - np.arccos(np.clip(d / radius, -1.0, 1.0))
+        psi = (psi + np.pi) % (2 * np.pi) - np.pi
+    ok = feasible & reach & np.isfinite(q).all(axis=1) & (q > 0).all(axis=1)
+    out = np.stack([length, psi, theta], axis=1)
+    out[~ok] = np.nan
+    return out
+
+
+def tool_pose(params: Mapping[str, Any], rot: np.ndarray, p: np.ndarray, q4: Any, q5: Any,
+              tool_length: Any) -> np.ndarray:
+    """Eq. (3.36) in the machine's frames: ``(N, 6)`` tool point (m) and unit tool axis.
+
+    Args:
+        rot, p: platform frames ``(N, 3, 3)``, ``(N, 3)`` (:func:`platform_pose`).
+        q4, q5: ``(N,)`` head angles (rad); tool_length: ``(N,)`` or scalar (m), from the
+            spindle gauge point (the thesis's L_outil is ``spindle + tool_length``).
+    """
+    q4, q5, tool = _rows(q4, q5, tool_length)
+    reach = params["spindle"] + tool
+    radial = params["c2"] + reach * np.sin(q5)
+    local_point = np.stack([radial * np.cos(q4), radial * np.sin(q4),
+                            params["c1"] + reach * np.cos(q5)], axis=1)
+    local_axis = np.stack([np.sin(q5) * np.cos(q4), np.sin(q5) * np.sin(q4), np.cos(q5)], axis=1)
+    point = p + np.einsum("nij,nj->ni", rot, local_point)
+    axis = np.einsum("nij,nj->ni", rot, local_axis)
+    return np.concatenate([point, axis], axis=1)
+
+
+def direct(params: Mapping[str, Any], q: Any, tool_length: Any) -> np.ndarray:
+    """Closed-form direct model of the complete machine: ``(N, 6)`` tool point and axis from
+    ``q (N, 5)`` = Q1, Q2, Q3 (m), Q4, Q5 (rad); NaN rows without assembly."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    leg = measured_leg(params, q[:, :3])
+    rot, p = platform_pose(leg[:, 0], leg[:, 1], leg[:, 2])
+    return tool_pose(params, rot, p, q[:, 3], q[:, 4], tool_length)
