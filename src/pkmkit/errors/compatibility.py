@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.errors import InputError
+from pkmkit.errors._blas import single_blas
 from pkmkit.errors.configurations import CHAIN_SPREAD, sample_configurations
 from pkmkit.errors.model import _family, closure_linearisation, defect_set
 from pkmkit.errors.selection import select_defects
@@ -201,6 +202,7 @@ def projected_defects(machine, q: np.ndarray, columns: np.ndarray
     return blocks, ranks, norms, cu.shape[1] - generic
 
 
+@single_blas
 def compatibility(machine, parameters: Any = None, *, kinds: Any = None, exclude: Any = None,
                   orientation_only: bool = False, reference_nominal: bool = False,
                   q: Any = None, n_configurations: int = 40, seed: int | None = 0,

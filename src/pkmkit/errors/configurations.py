@@ -133,10 +133,32 @@ def configurations_at(machine, points: np.ndarray) -> np.ndarray:
     return np.atleast_2d(machine.ik(pts))
 
 
+_PRIMES = (2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37)
+
+
+def halton(index: np.ndarray, dims: int) -> np.ndarray:
+    """Points ``(k, dims)`` in [0, 1) of the Halton sequence at integer ``index`` (k,) ≥ 0
+    (radical inverses in the first primes; skip 0 by passing index + 1)."""
+    if dims > len(_PRIMES):
+        raise InputError(f"Halton points in at most {len(_PRIMES)} dimensions")
+    idx = np.asarray(index, dtype=np.int64) + 1
+    out = np.zeros((idx.size, dims))
+    for d in range(dims):
+        base = _PRIMES[d]
+        i = idx.copy()
+        f = 1.0
+        while np.any(i > 0):
+            f /= base
+            out[:, d] += f * (i % base)
+            i //= base
+    return out
+
+
 def sample_configurations(machine, n: int, *, region: Any = None, seed: int | None = 0,
                           method: str = "random") -> Configurations:
-    """``n`` reachable configurations drawn in ``region`` (uniformly at random, or a scrambled
-    Sobol sequence with ``method="sobol"``); unreachable draws are replaced by new ones.
+    """``n`` reachable configurations drawn in ``region`` (uniformly at random, or a randomly
+    shifted Halton sequence with ``method="halton"``, which covers the box more evenly);
+    unreachable draws are replaced by new ones.
 
     Raises:
         InputError: n < 1, a bad region, or fewer than n reachable points after 50 n draws.
@@ -146,13 +168,9 @@ def sample_configurations(machine, n: int, *, region: Any = None, seed: int | No
     n = int(n)
     lo, hi = check_region(machine, region)
     rng = np.random.default_rng(seed)
-    sobol = None
-    if method == "sobol":
-        from scipy.stats import qmc
-
-        sobol = qmc.Sobol(lo.size, scramble=True, seed=rng)
-    elif method != "random":
-        raise InputError(f"unknown sampling method {method!r}; use 'random' or 'sobol'")
+    if method not in ("random", "halton"):
+        raise InputError(f"unknown sampling method {method!r}; use 'random' or 'halton'")
+    shift = rng.random(lo.size)
     found_q, found_p, drawn = [], [], 0
     while sum(len(a) for a in found_q) < n:
         batch = max(2 * n, 16)
@@ -160,7 +178,10 @@ def sample_configurations(machine, n: int, *, region: Any = None, seed: int | No
             raise InputError(f"only {sum(len(a) for a in found_q)} of {drawn} points drawn in "
                              f"the region of {machine.id!r} are reachable; choose a region "
                              "inside the workspace")
-        unit = sobol.random(batch) if sobol is not None else rng.random((batch, lo.size))
+        if method == "halton":
+            unit = (halton(drawn + np.arange(batch), lo.size) + shift) % 1.0
+        else:
+            unit = rng.random((batch, lo.size))
         pts = lo + unit * (hi - lo)
         drawn += batch
         with np.errstate(invalid="ignore"):

@@ -43,6 +43,7 @@ import numpy as np
 import scipy.linalg
 
 from pkmkit.errors import IdentifiabilityError, InputError
+from pkmkit.errors._blas import single_blas
 from pkmkit.errors.measurements import measurement_jacobian, measurement_rows
 from pkmkit.errors.model import _family, defect_set
 from pkmkit.errors.selection import select_defects
@@ -115,6 +116,7 @@ class IdentificationJacobian:
     length: float
 
 
+@single_blas
 def identification_jacobian(machine, kind: str, q: Any, setup: dict | None = None, *,
                             parameters: Any = None, kinds: Any = None, exclude: Any = None,
                             scope: str = "all", scaling: str = "length",
@@ -203,6 +205,7 @@ def combined_parameters(machine, groups: Mapping[str, Mapping[str, float]]
     return transform, tuple(str(n) for n in groups), tuple(units)
 
 
+@single_blas
 def observability(jacobian: Any, *, n_measurements: int | None = None) -> dict[str, float]:
     """The observability indices O1…O5 and the condition number of a Jacobian ``(m, L)``
     (module docstring). ``n_measurements`` is the m of O1 (default: the rows).
@@ -321,6 +324,7 @@ class IdentifiabilityResult:
         }
 
 
+@single_blas
 def identifiability(machine, kind: str, q: Any, setup: dict | None = None, *,
                     parameters: Any = None, kinds: Any = None, exclude: Any = None,
                     scope: str = "all", scaling: str = "length", rtol: float = RTOL,
@@ -363,7 +367,7 @@ def analyse_jacobian(j: np.ndarray, names: tuple[str, ...], column_scale: np.nda
     maps scaled coordinates back to SI (``x = δ · column_scale``)."""
     m, p = j.shape
     if m:
-        _, sv_all, vt = np.linalg.svd(j, full_matrices=True)
+        _, sv_all, vt = np.linalg.svd(j, full_matrices=m < p)
     else:
         sv_all, vt = np.zeros(0), np.eye(p)
     sv = np.zeros(p)

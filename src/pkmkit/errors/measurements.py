@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.errors import InputError, MeasurementError
+from pkmkit.errors._blas import single_blas
 from pkmkit.errors.model import _family, _rod_index, tool_sensitivity
 
 MEASURES = ("point", "pose", "ballbar", "height", "part")
@@ -110,6 +111,7 @@ def _part_points(machine, setup: dict) -> np.ndarray:
     return points
 
 
+@single_blas
 def measurement_jacobian(machine, kind: str, q: Any, setup: dict | None = None) -> np.ndarray:
     """``∂(reading)/∂(defects)`` ``(N, r, d)`` at actuator coordinates q (module docstring)."""
     _check_kind(machine, kind)

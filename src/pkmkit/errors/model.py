@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.errors import InputError, ParameterError
+from pkmkit.errors._blas import single_blas
 
 
 @dataclass(frozen=True)
@@ -153,6 +154,7 @@ class ToolSensitivity:
             -1, self.point.shape[2])
 
 
+@single_blas
 def tool_sensitivity(machine, q: Any, *, tool_length: Any = None) -> ToolSensitivity:
     """Analytic first-order effect of every defect on the tool point and rotation at
     actuator coordinates ``q`` ``(n,)`` or ``(N, n)`` (see the module docstring).
@@ -188,6 +190,7 @@ class ClosureLinearisation:
     pose: np.ndarray
 
 
+@single_blas
 def closure_linearisation(machine, q: Any, *, tool_length: Any = None) -> ClosureLinearisation:
     """The machine's closure linearised in its unknowns and its defects at actuator
     coordinates ``q`` ``(n,)`` or ``(N, n)`` — what compatibility (left null space of
