@@ -360,3 +360,82 @@ def _chain_samples(machine, q: np.ndarray, samples: np.ndarray, tool_length: Any
             continue  # does not even close at home: every pose of the sample fails
         out[:, s] = measure(moved, "point", q, setup)
     return out
+
+
+@dataclass(frozen=True)
+class AccuracyMap:
+    """Tool-position error percentile over a plane of the region.
+
+    Attributes:
+        axes: the two region coordinates mapped (names); x, y: ``(nx,)``, ``(ny,)`` values.
+        fixed: ``{name: value}`` of the other region coordinates.
+        exact: ``(ny, nx)`` percentile ``level`` of the exact Monte Carlo error norm (m; NaN
+            where unreachable); first_order: the same for the first-order prediction of the
+            same samples; rms: ``(ny, nx)`` first-order RMS (m).
+        level: the percentile; n_samples: samples per point; result: the Monte Carlo result of
+            the reachable points.
+    """
+
+    axes: tuple[str, str]
+    x: np.ndarray
+    y: np.ndarray
+    fixed: dict[str, float]
+    exact: np.ndarray
+    first_order: np.ndarray
+    rms: np.ndarray
+    level: float
+    n_samples: int
+    result: MonteCarloResult = field(repr=False)
+
+
+@single_blas
+def accuracy_map(machine, tol: Tolerances, *, n_samples: int = 200, resolution: int = 21,
+                 region: Any = None, axes: tuple[int, int] = (0, 1),
+                 fixed: dict[int, float] | None = None, level: float = 95.0,
+                 seed: int | None = 0, tool_length: Any = None) -> AccuracyMap:
+    """Percentile ``level`` of the tool-point error over a grid of two region coordinates
+    (others at the middle of the region, or ``fixed``), exact (Monte Carlo) and first order.
+
+    Raises:
+        InputError: bad axes, resolution or level; no reachable grid point.
+    """
+    from pkmkit.errors.configurations import check_region, configurations_at, region_names
+
+    lo, hi = check_region(machine, region)
+    names = region_names(machine)
+    if len(set(axes)) != 2 or not all(0 <= a < lo.size for a in axes):
+        raise InputError(f"axes must be two distinct indices among {lo.size} region "
+                         f"coordinates ({', '.join(names)})")
+    if not 2 <= int(resolution) <= 501:
+        raise InputError(f"resolution must be in [2, 501], got {resolution}")
+    if not 0 < level <= 100:
+        raise InputError(f"level must be in (0, 100], got {level}")
+    xs = np.linspace(lo[axes[0]], hi[axes[0]], int(resolution))
+    ys = np.linspace(lo[axes[1]], hi[axes[1]], int(resolution))
+    mid = (lo + hi) / 2.0
+    for k, v in (fixed or {}).items():
+        mid[k] = float(v)
+    gx, gy = np.meshgrid(xs, ys)
+    pts = np.tile(mid, (gx.size, 1))
+    pts[:, axes[0]] = gx.ravel()
+    pts[:, axes[1]] = gy.ravel()
+    with np.errstate(invalid="ignore"):
+        q = configurations_at(machine, pts)
+    ok = np.isfinite(q).all(axis=1)
+    if not ok.any():
+        raise InputError("no point of the map's plane is reachable; choose another region")
+    mc = monte_carlo(machine, q[ok], tol, n_samples, seed=seed, levels=(level,),
+                     tool_length=tool_length)
+    fo = first_order_error(machine, q[ok], tol, tool_length=tool_length)
+    exact = np.full(gx.size, np.nan)
+    lin = np.full(gx.size, np.nan)
+    rms = np.full(gx.size, np.nan)
+    exact[ok] = mc.percentiles[:, 0]
+    lin[ok] = np.percentile(np.linalg.norm(mc.linear, axis=2), level, axis=1)
+    rms[ok] = fo.rms
+    shape = gx.shape
+    return AccuracyMap(axes=(names[axes[0]], names[axes[1]]), x=xs, y=ys,
+                       fixed={names[k]: float(mid[k]) for k in range(lo.size)
+                              if k not in axes},
+                       exact=exact.reshape(shape), first_order=lin.reshape(shape),
+                       rms=rms.reshape(shape), level=level, n_samples=int(n_samples), result=mc)
