@@ -120,9 +120,12 @@ class IdentificationJacobian:
 def identification_jacobian(machine, kind: str, q: Any, setup: dict | None = None, *,
                             parameters: Any = None, kinds: Any = None, exclude: Any = None,
                             scope: str = "all", scaling: str = "length",
-                            length: float | None = None) -> IdentificationJacobian:
+                            length: float | None = None,
+                            compatible: bool = False) -> IdentificationJacobian:
     """The stacked identification Jacobian of ``kind`` readings at configurations ``q``
-    ``(N, n)`` for the selected defects (module docstring for the scaling).
+    ``(N, n)`` for the selected defects (module docstring for the scaling). With
+    ``compatible``, the defects of the closed loops are restricted to their compatible
+    subspace (:func:`compatible_parameters`).
 
     Raises:
         MeasurementError: a measurement type the machine cannot provide.
@@ -140,7 +143,11 @@ def identification_jacobian(machine, kind: str, q: Any, setup: dict | None = Non
         raise InputError(f"configuration {bad} is not finite: {qb[bad].tolist()}")
     ds = defect_set(machine)
     full_setup = default_setup(machine, kind, qb, setup)
-    if isinstance(parameters, Mapping):
+    if compatible:
+        transform, names, units = compatible_parameters(machine, parameters, kinds=kinds,
+                                                        exclude=exclude, scope=scope)
+        jac = measurement_jacobian(machine, kind, qb, full_setup) @ transform
+    elif isinstance(parameters, Mapping):
         transform, names, units = combined_parameters(machine, parameters)
         jac = measurement_jacobian(machine, kind, qb, full_setup) @ transform  # (N, r, p)
     else:
@@ -166,6 +173,41 @@ def identification_jacobian(machine, kind: str, q: Any, setup: dict | None = Non
     return IdentificationJacobian(matrix=rows_scaled * col, raw=raw, names=names, units=units,
                                   column_scale=col, row_scale=row_scale, kind=kind, rows=rows,
                                   n_poses=qb.shape[0], scaling=scaling, length=big_l)
+
+
+def compatible_parameters(machine, parameters: Any = None, *, kinds: Any = None,
+                          exclude: Any = None, scope: str = "all"
+                          ) -> tuple[np.ndarray, tuple[str, ...], tuple[str, ...]]:
+    """The selected defects restricted to the hyperstatic compatible subspace: the loop
+    defects become the compatible basis (:func:`pkmkit.errors.compatibility.compatibility`),
+    each named after its free defect (the others follow it through the conditions); head
+    defects stay as they are. Returns ``(transform (d, p), names, units)``."""
+    from pkmkit.errors.compatibility import compatibility
+    from pkmkit.errors.selection import loop_defects
+
+    ds = defect_set(machine)
+    columns = select_defects(machine, parameters, kinds=kinds, exclude=exclude, scope=scope)
+    loops = loop_defects(machine)
+    loop_cols = [i for i in columns if loops[i]]
+    cols, names, units = [], [], []
+    if loop_cols:
+        comp = compatibility(machine, [ds.names[i] for i in loop_cols])
+        index = {n: ds.index(n) for n in comp.names}
+        for j, free in enumerate(comp.free):
+            col = np.zeros(len(ds))
+            for name, value in zip(comp.names, comp.basis[:, j], strict=True):
+                col[index[name]] = value
+            cols.append(col)
+            names.append(free)
+            units.append(ds.units[index[free]])
+    for i in columns:
+        if not loops[i]:
+            col = np.zeros(len(ds))
+            col[i] = 1.0
+            cols.append(col)
+            names.append(ds.names[i])
+            units.append(ds.units[i])
+    return np.array(cols).T, tuple(names), tuple(units)
 
 
 def combined_parameters(machine, groups: Mapping[str, Mapping[str, float]]
@@ -328,7 +370,8 @@ class IdentifiabilityResult:
 def identifiability(machine, kind: str, q: Any, setup: dict | None = None, *,
                     parameters: Any = None, kinds: Any = None, exclude: Any = None,
                     scope: str = "all", scaling: str = "length", rtol: float = RTOL,
-                    require_full_rank: bool = False) -> IdentifiabilityResult:
+                    require_full_rank: bool = False,
+                    compatible: bool = False) -> IdentifiabilityResult:
     """Rank, base parameters, identifiable combinations, gauges and observability indices of
     ``kind`` measurements at configurations ``q`` (module docstring).
 
@@ -340,7 +383,8 @@ def identifiability(machine, kind: str, q: Any, setup: dict | None = None, *,
     if not 0 < rtol < 1:
         raise InputError(f"rtol must be in (0, 1), got {rtol}")
     ij = identification_jacobian(machine, kind, q, setup, parameters=parameters, kinds=kinds,
-                                 exclude=exclude, scope=scope, scaling=scaling)
+                                 exclude=exclude, scope=scope, scaling=scaling,
+                                 compatible=compatible)
     j = ij.matrix
     m, p = j.shape
     analysis = analyse_jacobian(j, ij.names, ij.column_scale, rtol=rtol)
