@@ -59,59 +59,8 @@ def test_crank_slider_symbolic_stationarity_agrees():
     space of their Jacobian, reduced with cos² + sin² = 1 and required to vanish for every crank
     angle (the thesis's stationarity, done symbolically)."""
     sp = pytest.importorskip("sympy")
-    L1, L2, L3, L4 = sp.Rational(1, 10), sp.Rational(3, 10), sp.Rational(1, 20), sp.Rational(1, 5)
-    th1, th2, th3, x4 = sp.symbols("th1 th2 th3 x4")
     names = ["dI2", "dJ2", "da2", "db2", "dI3", "dJ3", "da3", "db3", "dJ4", "dK4"]
-    d = dict(zip(names, sp.symbols(names)))
-    def H(R, p):
-        return sp.Matrix(sp.BlockMatrix([[sp.Matrix(R), sp.Matrix(p)], [sp.zeros(1, 3), sp.ones(1, 1)]]))
-    def skew(w):
-        return sp.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
-    def Rz(t):
-        return sp.Matrix([[sp.cos(t), -sp.sin(t), 0], [sp.sin(t), sp.cos(t), 0], [0, 0, 1]])
-    I3 = sp.eye(3)
-    def tilt(axis, tilt_vec):
-        # first-order rotation taking the unit axis a to a + tilt (tilt ⟂ a): ω = a × tilt
-        a = sp.Matrix(axis)
-        return I3 + skew(a.cross(sp.Matrix(tilt_vec)))
-    D1 = H([[1, 0, 0], [0, 0, -1], [0, 1, 0]], [0, 0, 0])
-    D2 = H(tilt([0, 0, 1], [d["dI2"], d["dJ2"], 0]), [L1 + d["da2"], d["db2"], 0])
-    D3 = H(tilt([0, 0, 1], [d["dI3"], d["dJ3"], 0]), [L2 + d["da3"], d["db3"], 0])
-    J3 = H([[1, 0, 0], [0, 0, 1], [0, -1, 0]], [L3, 0, 0])
-    R4 = sp.Matrix([[0, 0, 1], [1, 0, 0], [0, 1, 0]])
-    D4 = H(tilt([1, 0, 0], [0, d["dJ4"], d["dK4"]]) * R4, [L4, 0, 0])
-    J4 = H([[0, 1, 0], [0, 0, 1], [1, 0, 0]], [0, 0, 0])
-    def M(t): return H(Rz(t), [0, 0, 0])
-    T1 = D1 * M(th1) * D2 * M(th2) * D3 * M(th3) * J3
-    T2 = D4 * H(I3, [0, 0, x4]) * J4
-    F = (T1 - T2)[:3, :]
-    F = sp.Matrix(list(F))
-    dv = sp.Matrix([d[n] for n in names])
-    Mq = F.jacobian([th2, th3, x4])
-    B = F.jacobian(dv)
-    zero = {v: 0 for v in dv}
-    Mq = Mq.subs(zero); B = B.subs(zero)
-    c1, s1, c3 = sp.symbols("c1 s1 c3")
-    s3 = L1 / L2 * s1
-    nominal = {th2: -th1 - th3, x4: L1 * sp.cos(th1) + L2 * sp.cos(th3) + L3 - L4}
-    def reduce(expr):
-        e = sp.expand(sp.expand_trig(expr.subs(nominal)))
-        e = e.subs({sp.cos(th1): c1, sp.sin(th1): s1, sp.cos(th3): c3, sp.sin(th3): s3})
-        return sp.expand(e)
-    Mq = Mq.applyfunc(reduce); B = B.applyfunc(reduce)
-    N = Mq.T.nullspace()
-    rows = []
-    for n in N:
-        n = n.applyfunc(sp.together)
-        e = sp.together((n.T * B * dv)[0])
-        num = sp.expand(sp.numer(e))
-        # reduce with c1² = 1 − s1², c3² = 1 − s3²
-        red = 0
-        for (a, b), coeff in sp.Poly(num, c1, c3).terms():
-            red += coeff * c1 ** (a % 2) * (1 - s1**2) ** (a // 2) * c3 ** (b % 2) * (1 - s3**2) ** (b // 2)
-        poly = sp.Poly(sp.expand(red), c1, c3, s1)
-        for coeff in poly.coeffs():
-            rows.append([coeff.coeff(v) for v in dv])
+    rows = _symbolic_conditions(sp, names)
     a = sp.Matrix(rows)
     assert a.rank() == 5
     ns = a.nullspace()
@@ -121,6 +70,67 @@ def test_crank_slider_symbolic_stationarity_agrees():
     numeric = compatibility(pkmkit.machine("crank-slider"), reference_nominal=True,
                             exclude="*F")
     assert numeric.compatible_dimension == len(ns)
+
+
+def _symbolic_conditions(sp, names):
+    """Rows of the linear conditions on the defects ``names`` that make the crank–slider's
+    linearised closure solvable in (θ2, θ3, x4) for every crank angle θ1."""
+    l1, l2, l3, l4 = (sp.Rational(1, 10), sp.Rational(3, 10), sp.Rational(1, 20),
+                      sp.Rational(1, 5))
+    th1, th2, th3, x4 = sp.symbols("th1 th2 th3 x4")
+    d = dict(zip(names, sp.symbols(names), strict=True))
+    eye = sp.eye(3)
+
+    def hom(rot, p):
+        return sp.Matrix(sp.BlockMatrix([[sp.Matrix(rot), sp.Matrix(p)],
+                                         [sp.zeros(1, 3), sp.ones(1, 1)]]))
+
+    def skew(w):
+        return sp.Matrix([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+
+    def turn(t):
+        return hom([[sp.cos(t), -sp.sin(t), 0], [sp.sin(t), sp.cos(t), 0], [0, 0, 1]],
+                   [0, 0, 0])
+
+    def tilt(axis, change):
+        # first-order rotation taking the unit axis a to a + change (change ⟂ a): ω = a × change
+        return eye + skew(sp.Matrix(axis).cross(sp.Matrix(change)))
+
+    # Table 4.1 and eqs. (4.10)-(4.12), defects as in (4.14) at first order
+    d1 = hom([[1, 0, 0], [0, 0, -1], [0, 1, 0]], [0, 0, 0])
+    d2 = hom(tilt([0, 0, 1], [d["dI2"], d["dJ2"], 0]), [l1 + d["da2"], d["db2"], 0])
+    d3 = hom(tilt([0, 0, 1], [d["dI3"], d["dJ3"], 0]), [l2 + d["da3"], d["db3"], 0])
+    j3 = hom([[1, 0, 0], [0, 0, 1], [0, -1, 0]], [l3, 0, 0])
+    d4 = hom(tilt([1, 0, 0], [0, d["dJ4"], d["dK4"]]) * sp.Matrix([[0, 0, 1], [1, 0, 0],
+                                                                   [0, 1, 0]]), [l4, 0, 0])
+    j4 = hom([[0, 1, 0], [0, 0, 1], [1, 0, 0]], [0, 0, 0])
+    t1 = d1 * turn(th1) * d2 * turn(th2) * d3 * turn(th3) * j3
+    t2 = d4 * hom(eye, [0, 0, x4]) * j4
+    f = sp.Matrix(list((t1 - t2)[:3, :]))
+    dv = sp.Matrix([d[n] for n in names])
+    zero = dict.fromkeys(dv, 0)
+    c1, s1, c3 = sp.symbols("c1 s1 c3")
+    s3 = l1 / l2 * s1  # (4.8): L1 sin θ1 = L2 sin θ3
+    nominal = {th2: -th1 - th3, x4: l1 * sp.cos(th1) + l2 * sp.cos(th3) + l3 - l4}
+
+    def at_nominal(expr):
+        e = sp.expand(sp.expand_trig(expr.subs(zero).subs(nominal)))
+        return sp.expand(e.subs({sp.cos(th1): c1, sp.sin(th1): s1, sp.cos(th3): c3,
+                                 sp.sin(th3): s3}))
+
+    passive = f.jacobian([th2, th3, x4]).applyfunc(at_nominal)
+    defects = f.jacobian(dv).applyfunc(at_nominal)
+    rows = []
+    for n in passive.T.nullspace():  # left null space of the passive Jacobian
+        e = sp.together((n.applyfunc(sp.together).T * defects * dv)[0])
+        num = sp.expand(sp.numer(e))
+        reduced = 0  # with c1² = 1 − s1² and c3² = 1 − s3²
+        for (a, b), coeff in sp.Poly(num, c1, c3).terms():
+            reduced += (coeff * c1 ** (a % 2) * (1 - s1 ** 2) ** (a // 2) * c3 ** (b % 2)
+                        * (1 - s3 ** 2) ** (b // 2))
+        for coeff in sp.Poly(sp.expand(reduced), c1, c3, s1).coeffs():
+            rows.append([coeff.coeff(v) for v in dv])  # every θ1: each coefficient vanishes
+    return rows
 
 
 def test_tripteor_orientation_only_reproduces_table_4_6_legs_1_and_3(tripteor):
@@ -163,7 +173,7 @@ def test_leg_2_defects_close_exactly_unlike_the_forced_ones(tripteor):
     from pkmkit.errors.model import closure_linearisation
 
     cu = closure_linearisation(tripteor, q).unknowns
-    u, s, _ = np.linalg.svd(cu)
+    u, _, _ = np.linalg.svd(cu)
     left = u[:, :, 16:]
     assert np.abs(left[:, 6:12]).max() < 1e-10  # rows of leg 2
 
