@@ -65,3 +65,20 @@ def test_identifiability_and_pose_selection(run, as_json, tmp_path):
     assert few.exit_code == 1 and "4 scalar measurements for 30 parameters" in few.output
     wrong = run("identifiability", "tripteor-x7", "--measure", "part", "--poses", "3")
     assert wrong.exit_code == 1 and "rod machines" in wrong.output
+
+
+def test_demo_summary(tmp_path):
+    from pkmkit.calibration.identifiability import observability
+    from pkmkit.cli.demo_errors import error_summary
+
+    s = error_summary(tmp_path)
+    comp = s["tripteor_compatibility"]
+    assert comp["orientation_only"]["matches_thesis_legs_1_3"]
+    assert comp["orientation_only"]["thesis_leg_2_not_required"] == ["dI42", "dJ42", "dK52",
+                                                                    "dK62"]
+    assert comp["with_positions"]["added_by_positions"] == ["da13", "dc13"]
+    assert s["tripteor_identifiability"]["rank"] == 19
+    amap = s["hexapod_accuracy_map"]
+    assert (tmp_path / "errors-hexapod-accuracy-map.png").stat().st_size > 0
+    assert 1e-5 < amap["p95_min_m"] <= amap["p95_max_m"] < 1e-3
+    assert observability(np.eye(3))["condition"] == 1.0
