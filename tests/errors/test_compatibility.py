@@ -44,6 +44,17 @@ def test_crank_slider_as_the_thesis_with_dk4_free(crank):
     np.testing.assert_allclose(np.concatenate(blocks) @ r.basis, 0.0, atol=1e-12)
 
 
+def test_an_in_plane_slide_tilt_assembles_exactly(crank):
+    """The thesis's dK4 = 0 (4.18) is not a compatibility condition: a slide inclined in the
+    plane of motion closes exactly at every crank angle; an out-of-plane tilt does not."""
+    q = np.linspace(-2.5, 2.5, 25)[:, None]
+    assert with_defects(crank, {"dK4": 0.01}).fk(q, full_output=True).closure_residual.max() \
+        < 1e-12
+    for name in ("dJ4", "dI2", "dJ3"):
+        res = with_defects(crank, {name: 0.01}).fk(q, full_output=True).closure_residual
+        assert res.max() > 1e-4, name
+
+
 def test_crank_slider_junctions_and_base_give_frame_relations(crank):
     r = compatibility(crank)
     texts = [c.text() for c in r.conditions]

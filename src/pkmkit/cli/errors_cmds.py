@@ -33,9 +33,12 @@ def _actuator_scales(machine, units: str) -> np.ndarray:
 def _region_scales(machine, units: str) -> np.ndarray:
     from pkmkit.errors.model import _family
 
+    from pkmkit.errors.configurations import region_names
+
     if _family(machine) == "chain":
         return _actuator_scales(machine, units)
-    return np.full(3, length_scale(units))
+    n = len(region_names(machine))
+    return np.array([length_scale(units)] * 3 + [DEG] * (n - 3))
 
 
 def _numbers(text: str, what: str) -> np.ndarray:
@@ -56,10 +59,10 @@ def _region(machine, text: str | None, units: str):
     from pkmkit.errors.configurations import check_region, region_names
 
     names = region_names(machine)
-    if values.size != 2 * len(names):
+    if values.size != 2 * len(names) and not (len(names) == 6 and values.size == 6):
         raise InputError(f"--region needs MIN,MAX for each of {', '.join(names)} "
                          f"({2 * len(names)} values), got {values.size}")
-    scales = _region_scales(machine, units)
+    scales = _region_scales(machine, units)[:values.size // 2]
     return check_region(machine, (values[0::2] * scales, values[1::2] * scales))
 
 
@@ -164,7 +167,8 @@ def register(cli: click.Group) -> None:
     @click.option("--sensitivity", is_flag=True,
                   help="Largest tool displacement per defect over --region.")
     @click.option("--region", metavar="MIN,MAX,...",
-                  help="Region: tool x,y[,z] ranges (rod machines) or actuator ranges "
+                  help="Region: tool x,y[,z] ranges (rod machines; a six-actuator machine "
+                  "also rx,ry,rz rotation-vector ranges in degrees) or actuator ranges "
                   "(joint-chain machines), in --units and degrees.")
     @click.option("--points", type=click.IntRange(1, 100000), default=200, show_default=True,
                   help="Configurations drawn in the region (sensitivity).")

@@ -4,8 +4,11 @@ workspace, reachable with the nominal geometry.
 A **region** is a box ``(lower, upper)`` in the machine's *region coordinates*:
 
 - rod machines: tool positions (``dims`` coordinates for a translational machine; x, y, z for a
-  full-pose machine, whose orientation stays at home — or six coordinates, position and
-  rotation vector, for a six-actuator machine); default :meth:`default_box`;
+  full-pose machine with fewer than six actuators, whose orientation follows); for a
+  six-actuator machine position and rotation vector (six coordinates; three are accepted, the
+  orientation then stays at home); default :meth:`default_box`, with rotations of ±
+  :data:`ROTATION_SPREAD` about home for a six-actuator machine (identification needs the
+  orientation to vary);
 - joint-chain machines: actuator coordinates (m, rad) — their tool pose is a point and an axis
   reached through a closed-loop inverse model, so the natural region is the actuators' box;
   default the actuators' strokes where finite, else home ± :data:`CHAIN_SPREAD`.
@@ -24,6 +27,12 @@ from pkmkit.errors.model import _family
 #: Default half-range around home of a joint-chain actuator without stroke: prismatic (m,
 #: relative to |home|, at least 0.1 m) and revolute (rad).
 CHAIN_SPREAD = {"P": 0.15, "R": np.radians(60.0)}
+#: Default half-range of the rotation-vector components of a six-actuator machine (rad).
+ROTATION_SPREAD = np.radians(10.0)
+
+
+def _six_dof(machine) -> bool:
+    return _family(machine) == "full-pose" and machine.n_actuators == 6
 
 
 @dataclass(frozen=True)
@@ -51,7 +60,7 @@ def region_names(machine) -> tuple[str, ...]:
     if _family(machine) == "chain":
         return tuple(machine.actuator_names)
     if _family(machine) == "full-pose":
-        return tuple(machine.pose_names[:3])
+        return tuple(machine.pose_names[:6 if _six_dof(machine) else 3])
     return tuple(machine.pose_names)
 
 
@@ -71,8 +80,12 @@ def default_region(machine) -> tuple[np.ndarray, np.ndarray]:
             if not np.isfinite(hi[k]):
                 hi[k] = home[k] + half
         return lo, hi
-    lo, hi = machine.default_box()
-    return np.asarray(lo, dtype=float)[:3], np.asarray(hi, dtype=float)[:3]
+    lo, hi = (np.asarray(v, dtype=float)[:3] for v in machine.default_box())
+    if _six_dof(machine):
+        rot = np.asarray(machine.home_pose, dtype=float)[3:6]
+        lo = np.concatenate([lo, rot - ROTATION_SPREAD])
+        hi = np.concatenate([hi, rot + ROTATION_SPREAD])
+    return lo, hi
 
 
 def _joint_type(model, variable: int) -> str:
@@ -99,8 +112,8 @@ def check_region(machine, region: Any) -> tuple[np.ndarray, np.ndarray]:
             raise InputError(f"a region needs pairs MIN,MAX; got {flat.size} values")
         lo, hi = flat[0::2], flat[1::2]
     allowed = {len(names)}
-    if _family(machine) == "full-pose" and machine.n_actuators == 6:
-        allowed.add(6)
+    if _six_dof(machine):
+        allowed.add(3)
     if lo.shape != hi.shape or lo.size not in allowed:
         raise InputError(f"the region of {machine.id!r} needs MIN,MAX for each of "
                          f"{', '.join(names)} ({len(names)} pairs), got {lo.size}")
@@ -191,7 +204,5 @@ def sample_configurations(machine, n: int, *, region: Any = None, seed: int | No
         found_p.append(pts[ok])
     q = np.concatenate(found_q)[:n]
     pts = np.concatenate(found_p)[:n]
-    names = region_names(machine)
-    if pts.shape[1] == 6:
-        names = tuple(machine.pose_names)
+    names = region_names(machine)[:pts.shape[1]]
     return Configurations(q=q, points=pts, region=(lo, hi), names=names, drawn=drawn)

@@ -56,9 +56,10 @@ def plot_accuracy_map(amap, path: str | Path, *, unit: str = "mm", title: str = 
         ax.set_aspect("equal")
         ax.set_title(name, fontsize=9)
         fig.colorbar(mesh, ax=ax, label=f"{amap.level:g}th percentile of |error| ({label})")
-    fixed = ", ".join(f"{n} = {v * scale:.4g}" for n, v in amap.fixed.items())
+    fixed = ", ".join(f"{n} = {np.degrees(v):.4g}°" if n in ("rx", "ry", "rz") else
+                      f"{n} = {v * scale:.4g} {label}" for n, v in amap.fixed.items())
     fig.suptitle(title or f"tool-point error, {amap.n_samples} samples per point"
-                 + (f" ({fixed} {label})" if fixed else ""), fontsize=10)
+                 + (f" ({fixed})" if fixed else ""), fontsize=10)
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=110)
