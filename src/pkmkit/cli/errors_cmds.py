@@ -31,9 +31,8 @@ def _actuator_scales(machine, units: str) -> np.ndarray:
 
 
 def _region_scales(machine, units: str) -> np.ndarray:
-    from pkmkit.errors.model import _family
-
     from pkmkit.errors.configurations import region_names
+    from pkmkit.errors.model import _family
 
     if _family(machine) == "chain":
         return _actuator_scales(machine, units)
