@@ -195,7 +195,11 @@ def register(cli: click.Group) -> None:
                    tolerance_file, n_samples, resolution, seed, out_dir, parameters,
                    exclude, kinds, units, assignments, as_json):
         """Geometric error analyses of MACHINE: its defect set (default), hyperstatic
-        compatibility, sensitivity, tolerance analysis."""
+        compatibility, sensitivity, tolerance analysis.
+
+        JSON: the compatibility's keys at the top level (forced_zero, conditions,
+        compatible_dimension, …); the sensitivity and tolerance results under "sensitivity"
+        and "tolerance"."""
         m = resolve_machine(machine_name, assignments, units)
         out = Path(out_dir) if out_dir else None
         if out is not None:
@@ -214,9 +218,9 @@ def register(cli: click.Group) -> None:
                 click.echo(f"  {row['name']:<8} {row['unit']:<4} {row['kind']:<12} "
                            f"{row['owner']}")
             return
-        if compatibility:
-            payload["compatibility"] = _compatibility(m, sel, orientation_only, thesis,
-                                                      configurations, rtol, seed, as_json)
+        if compatibility:  # its keys at the top level ("forced_zero", "conditions", …)
+            payload.update(_compatibility(m, sel, orientation_only, thesis, configurations,
+                                          rtol, seed, as_json))
         region_si = _region(m, region, units)
         if sensitivity:
             payload["sensitivity"] = _sensitivity(m, sel, region_si, points, length_size,
