@@ -428,7 +428,9 @@ def _tolerance(m, path, n_samples, region, resolution, units, seed, out, as_json
                "first_order_percentile_max": float(np.nanmax(amap.first_order)) / scale,
                "first_order_rms_max": float(fo_map) / scale,
                "nonlinearity": mc.nonlinearity / scale,
-               "failed_pairs": mc.failed, "overall_exact": {"p95": overall.get("p95")},
+               "failed_pairs": mc.failed, "overall_exact": overall,
+               "overall_first_order": {f"p{k:g}": v / scale
+                                       for k, v in mc.linear_overall.items()},
                "evaluations_per_second": mc.rate, "map_axes": list(amap.axes)}
     if out is not None:
         from pkmkit.plot.error_figures import plot_accuracy_map
@@ -443,6 +445,8 @@ def _tolerance(m, path, n_samples, region, resolution, units, seed, out, as_json
                    f"{fmt(payload['exact_percentile_min'])} … "
                    f"{fmt(payload['exact_percentile_max'])} {units} (first order: max "
                    f"{fmt(payload['first_order_percentile_max'])})")
+        click.echo("  over every point and sample: " + ", ".join(
+            f"{k.replace('p100', 'max')} {fmt(v)}" for k, v in overall.items()) + f" {units}")
         click.echo(f"  largest |exact − first order| {fmt(payload['nonlinearity'])} {units}; "
                    f"{mc.failed} pairs did not assemble; "
                    f"{mc.rate / 1e6:.3g} M evaluations/s")

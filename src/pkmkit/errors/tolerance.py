@@ -424,13 +424,14 @@ def accuracy_map(machine, tol: Tolerances, *, n_samples: int = 200, resolution: 
     ok = np.isfinite(q).all(axis=1)
     if not ok.any():
         raise InputError("no point of the map's plane is reachable; choose another region")
-    mc = monte_carlo(machine, q[ok], tol, n_samples, seed=seed, levels=(level,),
+    levels = tuple(sorted({*PERCENTILES, float(level)}))
+    mc = monte_carlo(machine, q[ok], tol, n_samples, seed=seed, levels=levels,
                      tool_length=tool_length)
     fo = first_order_error(machine, q[ok], tol, tool_length=tool_length)
     exact = np.full(gx.size, np.nan)
     lin = np.full(gx.size, np.nan)
     rms = np.full(gx.size, np.nan)
-    exact[ok] = mc.percentiles[:, 0]
+    exact[ok] = mc.percentiles[:, levels.index(float(level))]
     lin[ok] = np.percentile(np.linalg.norm(mc.linear, axis=2), level, axis=1)
     rms[ok] = fo.rms
     shape = gx.shape
