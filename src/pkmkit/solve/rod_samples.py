@@ -211,20 +211,41 @@ def solve_sampled_direct(geom: SampledGeometry, q: np.ndarray, position0: np.nda
     res_out = np.empty((p_count, s_count))
     step = max(1, chunk // max(s_count, 1))
     iters_used = 0
+    one = step == 1 and not (geom.kind == CRANK).any()
+    if one:  # per-sample components once; each configuration only scales and shifts them
+        plat = [[np.ascontiguousarray(geom.platform[:, j, c]) for c in range(3)]
+                for j in range(m)]
+        base = [[np.ascontiguousarray(geom.base[:, j, c]) for c in range(3)] for j in range(m)]
+        axis = [[np.ascontiguousarray(geom.axis[:, j, c]) for c in range(3)] for j in range(m)]
+        length0 = [np.ascontiguousarray(geom.length[:, j]) for j in range(m)]
     for start in range(0, p_count, step):
         sl = slice(start, min(start + step, p_count))
-        a, ell = carriages(geom, q[sl])  # (Pc, S, m, 3), (Pc, S, m)
-        if full:
-            w = np.einsum("pab,smb->psma", rotation0[sl], geom.platform)  # R0 b (Pc,S,m,3)
-            wj = [[np.ascontiguousarray(w[..., j, c]) for c in range(3)] for j in range(m)]
+        if one:
+            qr = q[start, geom.actuator]
+            acomp = [[(base[j][c] + qr[j] * axis[j][c])[None] if geom.kind[j] == SLIDE
+                      else base[j][c][None] for j in range(m)] for c in range(3)]
+            ell_j = [(length0[j] + qr[j])[None] if geom.kind[j] == STRUT else length0[j][None]
+                     for j in range(m)]
+            if full:
+                r0 = rotation0[start]
+                wj = [[(r0[c, 0] * plat[j][0] + r0[c, 1] * plat[j][1]
+                        + r0[c, 2] * plat[j][2])[None] for c in range(3)] for j in range(m)]
+            else:
+                bcomp = [np.stack([plat[j][c] for j in range(m)], axis=-1)[None]
+                         for c in range(3)]
         else:
-            bcomp = [geom.platform[None, :, :, c] for c in range(3)]
-        acomp = [[np.ascontiguousarray(a[..., j, c]) for j in range(m)] for c in range(3)]
+            a, ell = carriages(geom, q[sl])  # (Pc, S, m, 3), (Pc, S, m)
+            if full:
+                w = np.einsum("pab,smb->psma", rotation0[sl], geom.platform)  # R0 b
+                wj = [[np.ascontiguousarray(w[..., j, c]) for c in range(3)] for j in range(m)]
+            else:
+                bcomp = [geom.platform[None, :, :, c] for c in range(3)]
+            acomp = [[np.ascontiguousarray(a[..., j, c]) for j in range(m)] for c in range(3)]
+            ell_j = [np.ascontiguousarray(ell[..., j]) for j in range(m)]
         p0 = position0[sl]
         u = [np.broadcast_to(p0[:, None, c], (p0.shape[0], s_count)).copy() for c in range(3)]
         om = [np.zeros((p0.shape[0], s_count)) for _ in range(3)] if full else None
         g = gain[sl]  # (Pc, k, m)
-        ell_j = [np.ascontiguousarray(ell[..., j]) for j in range(m)]
         if not full:  # b − a is constant for a translating platform
             fixed = [[np.ascontiguousarray(bcomp[c][..., j] - acomp[c][j])
                       for j in range(m)] for c in range(3)]
