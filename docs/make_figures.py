@@ -71,6 +71,45 @@ def motion() -> None:
     facing(OUT)
 
 
+def errors() -> None:
+    """The figures of docs/errors.md."""
+    from pkmkit.cli.demo_errors import hexapod_accuracy_map
+    from pkmkit.errors.compatibility import compatibility
+    from pkmkit.errors.sensitivity import sensitivity_analysis
+    from pkmkit.plot.error_figures import plot_sensitivity
+
+    hexapod_accuracy_map(OUT)
+    tripteor = pkmkit.machine("tripteor-x7")
+    table = sensitivity_analysis(tripteor, n_points=60, exact=True)
+    plot_sensitivity(table, OUT / "errors-tripteor-sensitivity.png", unit="um", top=40,
+                     title="Tripteor X7: largest tool-point displacement over the thesis's "
+                     "strokes (10 µm, 20 µrad)")
+    delta = pkmkit.machine("linear-delta")
+    plot_sensitivity(sensitivity_analysis(delta, exact=True),
+                     OUT / "errors-linear-delta-sensitivity.png", unit="um",
+                     title="Linear Delta: largest tool displacement over the default box "
+                     "(10 µm, 7.7 µrad)")
+    fig = Figure(figsize=(8, 3.6))
+    ax = fig.add_subplot(1, 1, 1)
+    for label, result in (
+            ("crank–slider (thesis set)", compatibility(pkmkit.machine("crank-slider"),
+                                                        reference_nominal=True,
+                                                        exclude="*F")),
+            ("Tripteor, orientation only (thesis set)",
+             compatibility(tripteor, orientation_only=True, reference_nominal=True)),
+            ("Tripteor, every loop defect", compatibility(tripteor))):
+        sv = np.maximum(result.singular_values / result.singular_values[0], 1e-17)
+        ax.semilogy(np.arange(1, sv.size + 1), sv, "o-", ms=3,
+                    label=f"{label}: rank {result.rank}")
+    ax.axhline(1e-8, color="grey", ls=":", label="relative tolerance 1e-8")
+    ax.set_xlabel("index")
+    ax.set_ylabel("σ / σ₁ of the stacked projections")
+    ax.legend(fontsize=7)
+    ax.set_title("Compatibility rank test: the singular-value gap", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(OUT / "errors-compatibility-gap.png", dpi=110)
+
+
 if __name__ == "__main__":
     OUT.mkdir(exist_ok=True)
     machines()
@@ -78,4 +117,5 @@ if __name__ == "__main__":
     analysis()
     design()
     motion()
+    errors()
     print(f"figures written to {OUT}")

@@ -159,3 +159,33 @@ class ClosureMissError(NoAssemblyError):
 
 class StrokeWarning(UserWarning):
     """A single direct or inverse model computed a configuration beyond a joint's stroke."""
+class MeasurementError(InputError):
+    """A measurement type the machine cannot provide (or a setup it needs is missing).
+
+    Attributes:
+        kind: the measurement type asked for.
+    """
+
+    def __init__(self, message: str, kind: str | None = None):
+        self.kind = kind
+        super().__init__(message)
+
+
+class IdentifiabilityError(PkmError, ValueError):
+    """An identification problem that cannot be posed: fewer scalar measurements than
+    parameters, or (when full rank is required) a rank-deficient identification Jacobian.
+
+    Attributes:
+        rank: numerical rank found. n_parameters: parameters asked for. n_measurements: scalar
+            measurements (rows) available.
+    """
+
+    def __init__(self, message: str, *, rank: int, n_parameters: int, n_measurements: int):
+        self.rank = rank
+        self.n_parameters = n_parameters
+        self.n_measurements = n_measurements
+        super().__init__(message)
+
+
+class ToleranceFileError(MachineFileError):
+    """A tolerance file cannot be read or holds a bad entry (path and line in the message)."""

@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.errors import InputError, MeasurementError
+from pkmkit.errors._blas import single_blas
 from pkmkit.errors.model import _family, _rod_index, tool_sensitivity
 
 MEASURES = ("point", "pose", "ballbar", "height", "part")
@@ -36,13 +37,16 @@ ROWS = {"point": 3, "pose": 6, "ballbar": 1, "height": 1, "part": None}
 
 def _check_kind(machine, kind: str) -> None:
     if kind not in MEASURES:
-        raise InputError(f"unknown measurement type {kind!r}; valid types: {', '.join(MEASURES)}")
+        raise MeasurementError(f"unknown measurement type {kind!r}; valid types: "
+                               f"{', '.join(MEASURES)}", kind)
     if kind == "part" and _family(machine) == "chain":
-        raise InputError("machined-part (joint-space) measurements are defined for rod machines "
-                         "(seed 003); use point or pose measurements for a joint-chain machine")
+        raise MeasurementError("machined-part (joint-space) measurements are defined for rod "
+                               "machines (seed 003); use point or pose measurements for a "
+                               "joint-chain machine", kind)
     if kind == "pose" and _family(machine) == "translational":
-        raise InputError(f"{machine.id!r} only translates: a full-pose measurement has nothing "
-                         "to measure in its orientation; use point measurements")
+        raise MeasurementError(f"{machine.id!r} only translates: a full-pose measurement has "
+                               "nothing to measure in its orientation; use point measurements",
+                               kind)
 
 
 def measurement_rows(machine, kind: str) -> int:
@@ -107,6 +111,7 @@ def _part_points(machine, setup: dict) -> np.ndarray:
     return points
 
 
+@single_blas
 def measurement_jacobian(machine, kind: str, q: Any, setup: dict | None = None) -> np.ndarray:
     """``∂(reading)/∂(defects)`` ``(N, r, d)`` at actuator coordinates q (module docstring)."""
     _check_kind(machine, kind)

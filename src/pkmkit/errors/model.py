@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.errors import InputError, ParameterError
+from pkmkit.errors._blas import single_blas
 
 
 @dataclass(frozen=True)
@@ -153,6 +154,7 @@ class ToolSensitivity:
             -1, self.point.shape[2])
 
 
+@single_blas
 def tool_sensitivity(machine, q: Any, *, tool_length: Any = None) -> ToolSensitivity:
     """Analytic first-order effect of every defect on the tool point and rotation at
     actuator coordinates ``q`` ``(n,)`` or ``(N, n)`` (see the module docstring).
@@ -170,7 +172,49 @@ def tool_sensitivity(machine, q: Any, *, tool_length: Any = None) -> ToolSensiti
     return _rod_sensitivity(machine, qb, family)
 
 
-def _rod_sensitivity(machine, q: np.ndarray, family: str) -> ToolSensitivity:
+@dataclass(frozen=True)
+class ClosureLinearisation:
+    """The closure of a machine linearised at N configurations: ``C_U dU + C_δ dδ = 0``.
+
+    Attributes:
+        unknowns: ``(N, r, u)`` ∂(closure residual)/∂(unknowns): the platform pose increments
+            (translation, then rotation for full-pose and joint-chain machines) and, for joint
+            chains, the passive joints; rows in m (rod residuals, chain translation rows, chain
+            rotation rows × the characteristic length).
+        defects: ``(N, r, d)`` ∂(closure residual)/∂(defects) (m per SI unit of the defect).
+        pose: ``(N, 6)`` the nominal tool pose (see :class:`ToolSensitivity`).
+    """
+
+    unknowns: np.ndarray
+    defects: np.ndarray
+    pose: np.ndarray
+
+
+@single_blas
+def closure_linearisation(machine, q: Any, *, tool_length: Any = None) -> ClosureLinearisation:
+    """The machine's closure linearised in its unknowns and its defects at actuator
+    coordinates ``q`` ``(n,)`` or ``(N, n)`` — what compatibility (left null space of
+    ``C_U``) and sensitivity (``dU = −C_U⁺ C_δ``) are built on. Rod residuals are
+    ``|p + R b − a(q)| − ℓ`` per rod of the defect level; joint-chain residuals are the legs'
+    closures on the platform (:mod:`pkmkit.solve.chains`).
+
+    Raises:
+        InputError: mis-shaped q, or configurations where the direct model fails.
+    """
+    qb = np.atleast_2d(np.asarray(q, dtype=float))
+    if qb.ndim != 2 or qb.shape[1] != machine.n_actuators:
+        raise InputError(f"q must have {machine.n_actuators} components per row, got "
+                         f"{qb.shape[-1]}")
+    family = _family(machine)
+    if family == "chain":
+        lin = _chain_linearisation(machine, qb, tool_length)
+        return ClosureLinearisation(lin["cu"], lin["cd"], lin["direct"].pose)
+    _, unknowns, cols, pose = _rod_linearisation(machine, qb, family)
+    return ClosureLinearisation(unknowns, cols, pose)
+
+
+def _rod_linearisation(machine, q: np.ndarray, family: str):
+    """(fk poses, ∂r/∂(platform) with unit rod rows, ∂r/∂δ, tool pose (N, 6))."""
     from pkmkit.solve.rod_closure import defect_columns
     from pkmkit.spatial.rotation import rotvec_to_matrix
 
@@ -180,7 +224,7 @@ def _rod_sensitivity(machine, q: np.ndarray, family: str) -> ToolSensitivity:
         bad = int(np.flatnonzero(~np.isfinite(x).all(axis=1))[0])
         raise InputError(f"configuration {bad}: the direct model has no assembly at q = "
                          f"{q[bad].tolist()}")
-    n, d = q.shape[0], len(index)
+    n = q.shape[0]
     if family == "full-pose":
         rot = rotvec_to_matrix(x[:, 3:6])
         _, cols = defect_columns(machine.model, index, x[:, :3], rot, q)
@@ -188,24 +232,32 @@ def _rod_sensitivity(machine, q: np.ndarray, family: str) -> ToolSensitivity:
 
         a, _ = FullPoseForms(machine.model).jacobians(x, q)
         a_unit = a / np.linalg.norm(a[:, :, :3], axis=2)[:, :, None]
-        motion = -np.linalg.pinv(a_unit) @ cols  # (N, 6, d)
-        return ToolSensitivity(point=motion[:, :3], rotation=motion[:, 3:], pose=x)
+        return x, a_unit, cols, x
     dims = machine.dims
     position = np.zeros((n, 3))
     position[:, :dims] = x
     _, cols = defect_columns(machine.model, index, position, None, q)
     a = machine.jacobian(x, q=q).A  # rows p − c_i (N, n, dims)
     a_unit = a / np.linalg.norm(a, axis=2)[:, :, None]
+    return x, a_unit, cols, np.concatenate([position, np.zeros((n, 3))], axis=1)
+
+
+def _rod_sensitivity(machine, q: np.ndarray, family: str) -> ToolSensitivity:
+    x, a_unit, cols, pose = _rod_linearisation(machine, q, family)
+    n, d = q.shape[0], cols.shape[2]
+    if family == "full-pose":
+        motion = -np.linalg.pinv(a_unit) @ cols  # (N, 6, d)
+        return ToolSensitivity(point=motion[:, :3], rotation=motion[:, 3:], pose=x)
+    dims = machine.dims
     motion = -np.linalg.solve(a_unit, cols)  # (N, dims, d)
     point = np.zeros((n, 3, d))
     point[:, :dims] = motion
-    return ToolSensitivity(point=point, rotation=np.zeros((n, 3, d)),
-                           pose=np.concatenate([position, np.zeros((n, 3))], axis=1))
+    return ToolSensitivity(point=point, rotation=np.zeros((n, 3, d)), pose=pose)
 
 
-def _chain_sensitivity(machine, q: np.ndarray, tool_length: Any) -> ToolSensitivity:
-    from pkmkit.solve.chains import closure, tool_frame
-    from pkmkit.spatial.rotation import rotvec_to_matrix, skew
+def _chain_linearisation(machine, q: np.ndarray, tool_length: Any) -> dict:
+    from pkmkit.solve.chains import closure
+    from pkmkit.spatial.rotation import rotvec_to_matrix
 
     model = machine.model
     direct = machine.fk(q, tool_length=tool_length, full_output=True)
@@ -223,11 +275,22 @@ def _chain_sensitivity(machine, q: np.ndarray, tool_length: Any) -> ToolSensitiv
     c = closure(model, rot, p_x, values.T, defects=True)
     cu = np.concatenate([c.platform, c.variables[:, passive]], axis=1).transpose(2, 0, 1)
     cd = c.defects.transpose(2, 0, 1)
+    return {"direct": direct, "cu": cu, "cd": cd, "values": values, "rot": rot, "p_x": p_x}
+
+
+def _chain_sensitivity(machine, q: np.ndarray, tool_length: Any) -> ToolSensitivity:
+    from pkmkit.solve.chains import tool_frame
+    from pkmkit.spatial.rotation import skew
+
+    lin = _chain_linearisation(machine, q, tool_length)
+    direct, cu, cd = lin["direct"], lin["cu"], lin["cd"]
+    rot, p_x, values = lin["rot"], lin["p_x"], lin["values"]
+    n = q.shape[0]
     pinv = np.linalg.pinv(cu, rcond=1e-9)
     du = -pinv @ cd  # (N, 6 + n_p, d)
     # the part of C_δ no motion absorbs: (I − C_U C_U⁺) C_δ
     incompatible = cd + cu @ du
-    tool = tool_frame(model, rot, p_x, values.T, defects=True)
+    tool = tool_frame(machine.model, rot, p_x, values.T, defects=True)
     plat = np.zeros((n, 6, 6))
     plat[:, :3, :3] = np.eye(3)
     plat[:, 3:, 3:] = np.eye(3)

@@ -74,14 +74,15 @@ def chain_pose(model: JointChainModel, chain: tuple[int, ...], values: np.ndarra
     def_tw = None
     if defects:
         def_tw = np.zeros((6, len(model.defect_index), k))
-        local = defect_twists(model.frames, model.defect_index)
+        local = _local_defect_twists(model)
     for e in chain:
         frame = model.frames[e]
         if defects:
-            for i in np.flatnonzero(model.defect_index.element == e):
-                w = np.einsum("abk,b->ak", rot, local[i, 3:])
-                v = np.einsum("abk,b->ak", rot, local[i, :3]) + np.cross(pos, w, axis=0)
-                def_tw[:3, i], def_tw[3:, i] = v, w
+            mine = np.flatnonzero(model.defect_index.element == e)
+            if mine.size:
+                w = np.einsum("abk,ib->aik", rot, local[mine, 3:])
+                v = np.einsum("abk,ib->aik", rot, local[mine, :3]) + _cross0(pos[:, None], w)
+                def_tw[:3, mine], def_tw[3:, mine] = v, w
         pos = pos + np.einsum("abk,b->ak", rot, frame[:3, 3])
         rot = np.einsum("abk,bc->ack", rot, frame[:3, :3])
         kind = model.elements[e].type
@@ -92,7 +93,7 @@ def chain_pose(model: JointChainModel, chain: tuple[int, ...], values: np.ndarra
         q = values[var]
         if kind == REVOLUTE:
             if twists:
-                var_tw[:3, var] = np.cross(pos, z, axis=0)
+                var_tw[:3, var] = _cross0(pos, z)
                 var_tw[3:, var] = z
             c, s = np.cos(q), np.sin(q)
             x, y = rot[:, 0].copy(), rot[:, 1].copy()
@@ -103,6 +104,22 @@ def chain_pose(model: JointChainModel, chain: tuple[int, ...], values: np.ndarra
                 var_tw[:3, var] = z
             pos = pos + q * z
     return ChainPose(R=rot, p=pos, variable_twists=var_tw, defect_twists=def_tw)
+
+
+def _cross0(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product along axis 0 of broadcastable ``(3, ...)`` arrays (np.cross moves axes
+    on every call, which dominated the closure's cost)."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
+def _local_defect_twists(model: JointChainModel) -> np.ndarray:
+    """:func:`defect_twists` of the model's frames, computed once per (immutable) model."""
+    cached = model.__dict__.get("_local_defect_twists")
+    if cached is None:
+        cached = defect_twists(model.frames, model.defect_index)
+        object.__setattr__(model, "_local_defect_twists", cached)
+    return cached
 
 
 def _s_matrix(m: np.ndarray) -> np.ndarray:
@@ -129,7 +146,7 @@ def leg_residual(leg: ChainPose, rot_x: np.ndarray, p_x: np.ndarray, length: flo
 def twist_rows(tw: np.ndarray, p_end: np.ndarray, m: np.ndarray, length: float) -> np.ndarray:
     """Residual rows ``(6, c, k)`` of spatial twists ``tw (6, c, k)`` on a leg's end frame."""
     v, w = tw[:3], tw[3:]
-    dp = v + np.cross(w, p_end[:, None, :], axis=0)
+    dp = v + _cross0(w, p_end[:, None, :])
     dr = 0.5 * length * np.einsum("abk,bck->ack", _s_matrix(m), w)
     return np.concatenate([dp, dr])
 
@@ -243,8 +260,8 @@ def tool_rows(tw: np.ndarray, point: np.ndarray, axis: np.ndarray, length: float
     """Rows ``(6, c, k)`` of the tool residual (tool point, L × tool axis) for spatial twists
     ``tw (6, c, k)`` of the tool frame."""
     v, w = tw[:3], tw[3:]
-    dp = v + np.cross(w, point[:, None, :], axis=0)
-    da = length * np.cross(w, axis[:, None, :], axis=0)
+    dp = v + _cross0(w, point[:, None, :])
+    da = length * _cross0(w, axis[:, None, :])
     return np.concatenate([dp, da])
 
 

@@ -1,0 +1,135 @@
+"""Identifiability: the Tripteor's structural gauges (notes §4.5, Annex B), the linear Delta's
+rod length / radius trap from height probing, gauges checked against the exact model, the
+observability indices against their definitions, and bad input."""
+
+import numpy as np
+import pytest
+
+import pkmkit
+from pkmkit.errors import IdentifiabilityError, MeasurementError, ParameterError
+from pkmkit.errors.compatibility import compatibility_configurations
+from pkmkit.errors.identifiability import (
+    identifiability,
+    identification_jacobian,
+    observability,
+)
+from pkmkit.errors.measurements import measure
+from pkmkit.errors.model import with_defects
+
+NOTES_UNSEEN = ("dJ21", "dJ41", "da51", "dJ12", "dK12", "dJ22", "dK22", "dJ32", "dK32", "dI42",
+                "dJ42", "dI52", "da52", "dJ23", "dJ43", "da53")
+
+
+@pytest.fixture(scope="module")
+def tripteor():
+    return pkmkit.machine("tripteor-x7")
+
+
+@pytest.fixture(scope="module")
+def tripteor_q(tripteor):
+    q = compatibility_configurations(tripteor, 40, seed=3)
+    q[:, 3:] = np.random.default_rng(1).uniform([-0.26, 0.0], [0.26, 0.96], (40, 2))
+    return q
+
+
+def test_tripteor_rank_19_of_36_compatible_parallel_part(tripteor, tripteor_q):
+    r = identifiability(tripteor, "point", tripteor_q, compatible=True, scope="loops",
+                        exclude=["*11", "dS*", "da62", "dc63"])
+    assert (r.rank, r.rank_qr, r.n_parameters) == (19, 19, 36)
+    assert r.unidentifiable == NOTES_UNSEEN  # J21, J41, J23, J43, leg-2 base pivots, ...
+    assert r.together == (("dJ62", "db62"),)
+    assert 1e4 < r.condition < 1e7
+    # full pose measurements see no more of the parallel part
+    pose = identifiability(tripteor, "pose", tripteor_q, compatible=True, scope="loops",
+                           exclude=["*11", "dS*", "da62", "dc63"])
+    assert pose.rank == 19 and pose.unidentifiable == NOTES_UNSEEN
+
+
+def test_unseen_defects_do_not_move_the_tool_exactly(tripteor, tripteor_q):
+    """Annex B's CATIA outcome: J21, J41, J23, J43 (0.01 each) change only passive angles."""
+    q = tripteor_q[:6]
+    nominal = tripteor.fk(q, full_output=True)
+    for name in ("dJ21", "dJ41", "dJ23", "dJ43", "dK22"):
+        moved = with_defects(tripteor, {name: 0.01}).fk(q, full_output=True)
+        np.testing.assert_allclose(moved.pose, nominal.pose, atol=1e-11, err_msg=name)
+        assert np.abs(moved.passive - nominal.passive).max() > 1e-3, name
+
+
+def test_linear_delta_rod_length_radius_trap_from_height_probing():
+    m = pkmkit.machine("linear-delta")
+    rng = np.random.default_rng(0)
+    r = rng.uniform(0, 1, 300) ** 0.5 * 0.1
+    t = rng.uniform(0, 2 * np.pi, 300)
+    q = m.ik(np.stack([r * np.cos(t), r * np.sin(t), np.zeros(300)], axis=1))
+    angles = np.asarray(m.params["angles"])
+    delta_printer = {"L": {f"dL{j + 1}": 1.0 for j in range(3)},
+                     "R": {**{f"dA{j + 1}x": float(np.cos(a)) for j, a in enumerate(angles)},
+                           **{f"dA{j + 1}y": float(np.sin(a)) for j, a in enumerate(angles)}},
+                     **{f"q{j + 1}": {f"dq{j + 1}": 1.0} for j in range(3)}}
+    height = identifiability(m, "height", q, parameters=delta_printer)
+    point = identifiability(m, "point", q, parameters=delta_printer)
+    assert height.rank == point.rank == 5  # identifiable in principle...
+    assert height.condition > 30 * point.condition  # ...but ill-conditioned from heights
+    j = identification_jacobian(m, "height", q, parameters=delta_printer).matrix
+    cos = j[:, 0] @ j[:, 1] / np.linalg.norm(j[:, 0]) / np.linalg.norm(j[:, 1])
+    assert abs(cos) > 0.9999  # rod length and radius act almost alike on heights
+    # per-rod defects: the platform and base offsets of an equivalent leg are one gauge
+    full = identifiability(m, "point", q)
+    assert ("dA1x", "dB1x") in full.together
+
+
+def test_gauges_are_invisible_on_the_exact_model():
+    m = pkmkit.machine("linear-delta")
+    q = m.ik(m.home_pose + np.random.default_rng(2).uniform(-0.2, 0.2, (30, 3)))
+    r = identifiability(m, "point", q)
+    assert r.rank == 18 and r.n_parameters == 30 and r.gauges.shape == (30, 12)
+    base = measure(m, "point", q)
+    for g in r.gauges.T:
+        step = 1e-4 * g / np.abs(g).max()
+        moved = measure(with_defects(m, step), "point", q)
+        assert np.abs(moved - base).max() < 1e-11  # exact gauges of the equivalent legs
+    # and the combinations are what the measurements see: J_nb = J_b β
+    jac = r.jacobian.raw
+    names = list(r.names)
+    for c in r.combinations:
+        for other, coef in list(c.terms.items())[1:]:
+            col_b, col_o = jac[:, names.index(c.base)], jac[:, names.index(other)]
+            assert np.linalg.norm(col_o) <= np.linalg.norm(col_b) * abs(coef) * 1.0001 + 1e-12
+
+
+def test_observability_indices_match_their_definitions():
+    rng = np.random.default_rng(4)
+    j = rng.normal(size=(40, 6))
+    s = np.linalg.svd(j, compute_uv=False)
+    out = observability(j)
+    assert out["O1"] == pytest.approx(np.prod(s) ** (1 / 6) / np.sqrt(40))
+    assert out["O2"] == pytest.approx(s[-1] / s[0])
+    assert out["O3"] == pytest.approx(s[-1])
+    assert out["O4"] == pytest.approx(s[-1] ** 2 / s[0])
+    assert out["O5"] == pytest.approx(1 / np.sum(1 / s))
+    assert out["condition"] == pytest.approx(s[0] / s[-1])
+    j[:, 2] = 0.0
+    assert observability(j)["O3"] == pytest.approx(0.0, abs=1e-12)
+    with pytest.raises(Exception, match="rows"):
+        observability(j[:3])
+
+
+def test_bad_input_is_typed():
+    m = pkmkit.machine("linear-delta")
+    q = m.ik(m.home_pose + np.random.default_rng(5).uniform(-0.1, 0.1, (3, 3)))
+    with pytest.raises(IdentifiabilityError, match=r"3 poses × 1 height readings = 3 scalar "
+                       r"measurements for 30 parameters.*rank 3") as info:
+        identifiability(m, "height", q)
+    assert info.value.rank == 3 and info.value.n_parameters == 30
+    with pytest.raises(MeasurementError, match="only translates"):
+        identifiability(m, "pose", q)
+    with pytest.raises(MeasurementError, match="unknown measurement type"):
+        identifiability(m, "laser", q)
+    with pytest.raises(MeasurementError, match="rod machines"):
+        identifiability(pkmkit.machine("tripteor-x7"), "part", np.atleast_2d(
+            pkmkit.machine("tripteor-x7").home_q))
+    with pytest.raises(ParameterError, match="unknown defect or owner 'dL9'"):
+        identifiability(m, "point", q, parameters="dL9")
+    many = m.ik(m.home_pose + np.random.default_rng(6).uniform(-0.1, 0.1, (30, 3)))
+    with pytest.raises(IdentifiabilityError, match="rank 18 of 30"):
+        identifiability(m, "point", many, require_full_rank=True)
