@@ -29,6 +29,9 @@ from pkmkit.numerics.arrays import restore_shape
 from pkmkit.solve.chains import (
     chain_pose,
     closure,
+    closure_residuals,
+    compose_rotvecs,
+    rotvec_matrices,
     solve_closure,
     solve_machine_inverse,
     tool_frame,
@@ -293,8 +296,7 @@ class JointChainMachine:
         n = qb.shape[0]
         values = self._full_values(qb)
         if x0 is None:
-            u0 = np.tile(np.concatenate([self._home["platform"],
-                                         self._home["values"][self._passive]]), (n, 1))
+            u0 = self._default_start(qb, values)
         else:
             u0 = _rows_like(x0, 6 + len(self._passive), "x0", n)
         u0[~valid_rows(qb)] = np.nan
@@ -337,6 +339,42 @@ class JointChainMachine:
             return ChainDirectResult(**{k: (v[0] if isinstance(v, np.ndarray) else v)
                                         for k, v in out.__dict__.items()})
         return out
+
+    def _home_rates(self) -> np.ndarray:
+        """``(6 + n_p, n)`` first-order change of the platform (δp, δω) and passive joints per
+        unit actuator change at home (zero columns for the head's actuators); cached."""
+        cached = self.__dict__.get("_home_rates_cache")
+        if cached is not None:
+            return cached
+        model = self.model
+        values = self._home["values"][:, None]
+        rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
+        c = closure(model, rot, self._home["platform"][:3, None], values)
+        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1)[:, :, 0]
+        rates = -np.linalg.pinv(cu, rcond=RANK_RCOND) @ c.variables[:, self._actuated, 0]
+        object.__setattr__(self, "_home_rates_cache", rates)
+        return rates
+
+    def _default_start(self, qb: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """Starts ``(N, 6 + n_p)`` of the direct model: home moved to first order towards each
+        q (one Gauss–Newton iteration fewer near home), or home itself where that prediction
+        closes the legs worse (far from home)."""
+        n = qb.shape[0]
+        home = np.concatenate([self._home["platform"], self._home["values"][self._passive]])
+        u_home = np.tile(home, (n, 1))
+        with np.errstate(invalid="ignore", over="ignore"):
+            du = (qb - self.home_q) @ self._home_rates().T
+            u_pred = u_home + du
+            u_pred[:, 3:6] = compose_rotvecs(du[:, 3:6].T, u_home[:, 3:6].T).T
+            both = np.concatenate([u_home, u_pred])
+            full = np.concatenate([values, values]).T.copy()
+            full[self._passive] = both[:, 6:].T
+            res = closure_residuals(self.model, rotvec_matrices(both[:, 3:6].T), both[:, :3].T,
+                                    full)
+        cost = np.einsum("mk,mk->k", res, res)
+        better = cost[n:] < cost[:n]
+        u_home[better] = u_pred[better]
+        return u_home
 
     # ---------------------------------------------------------------- inverse
     def ik(self, x: Any, *, q0: Any = None, tool_length: Any = None, full_output: bool = False,
