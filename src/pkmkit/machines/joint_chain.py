@@ -419,6 +419,10 @@ class JointChainMachine:
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
         status[~valid_rows(xb) | bad_axis] = Status.INVALID_INPUT
         q = res.u[:, 6:][:, self._actuated].copy()
+        # revolute actuators: the turn nearest the start (the engine may step a full turn)
+        turn = np.array([q == "angle" for q in self.actuator_quantities])
+        start = values[:, self._actuated][:, turn]
+        q[:, turn] = start + np.angle(np.exp(1j * (q[:, turn] - start)))
         q[status != Status.OK] = np.nan
         if single and status[0] != Status.OK:
             raise ConvergenceError(
