@@ -13,8 +13,10 @@ against a per-configuration ``scipy.optimize.least_squares`` on the same residua
   configurations. The answers of the two are compared.
 
 Both run in the same process on the same inputs, interleaved, ``--repeat`` times, first on the
-machine as it is ("quiet": other users' work included), then with a competing process started
-by this script (a NumPy loop on one core) — the ratios are what to compare across runs.
+machine as it is ("quiet": other users' work included, see the load average printed), then with
+a competing process started by this script (a NumPy loop on one core, single-threaded BLAS) —
+the ratios are what to compare across runs. The processor time of the batched call (``CPU µs``)
+is printed as well: it is what the call costs whatever else shares the cores.
 
 Usage::
 
@@ -111,11 +113,19 @@ def timed(func) -> float:
     return time.perf_counter() - start
 
 
+def cpu_timed(func) -> float:
+    """Processor time of this process (s): what the call costs whatever else runs."""
+    start = time.process_time()
+    func()
+    return time.process_time() - start
+
+
 def measure(m, qs, n_scipy: int, repeat: int) -> dict:
     sub = qs[:n_scipy]
-    t_batch, t_scipy = [], []
+    t_batch, t_scipy, t_cpu = [], [], []
     for _ in range(repeat):  # interleaved: both see the same load
         t_batch.append(timed(lambda: m.fk(qs, full_output=True)))
+        t_cpu.append(cpu_timed(lambda: m.fk(qs, full_output=True)))
         t_scipy.append(timed(lambda: scipy_direct(m, sub)) / len(sub))
     med, best = statistics.median(t_batch), min(t_batch)
     s_med, s_best = statistics.median(t_scipy), min(t_scipy)
@@ -124,6 +134,7 @@ def measure(m, qs, n_scipy: int, repeat: int) -> dict:
         "batched_seconds_best": best,
         "batched_us_per_config_median": med / len(qs) * 1e6,
         "batched_us_per_config_best": best / len(qs) * 1e6,
+        "batched_cpu_us_per_config_median": statistics.median(t_cpu) / len(qs) * 1e6,
         "scipy_us_per_config_median": s_med * 1e6,
         "scipy_us_per_config_best": s_best * 1e6,
         "ratio_median": s_med * len(qs) / med,
@@ -181,15 +192,16 @@ def main() -> None:
           f"iterations on average, at most {result['iterations_max']}); largest difference "
           f"from SciPy: tool pose {result['max_pose_difference_vs_scipy']:.1e}, passive joints "
           f"{result['max_passive_difference_vs_scipy_rad']:.1e} rad")
-    header = (f"{'run':<18}{'load':>6}{'µs/config med':>15}{'best':>8}{'scipy µs med':>14}"
-              f"{'ratio med':>11}{'best':>7}")
+    header = (f"{'run':<18}{'load':>6}{'µs/config med':>15}{'best':>8}{'CPU µs':>8}"
+              f"{'scipy µs med':>14}{'ratio med':>11}{'best':>7}")
     print(header)
     for name in ("quiet", "competing_process"):
         if name not in result:
             continue
         r = result[name]
         print(f"{name:<18}{r['load_average']:>6.1f}{r['batched_us_per_config_median']:>15.1f}"
-              f"{r['batched_us_per_config_best']:>8.1f}{r['scipy_us_per_config_median']:>14.0f}"
+              f"{r['batched_us_per_config_best']:>8.1f}"
+              f"{r['batched_cpu_us_per_config_median']:>8.1f}{r['scipy_us_per_config_median']:>14.0f}"
               f"{r['ratio_median']:>11.0f}{r['ratio_best']:>7.0f}")
     if args.json:
         with open(args.json, "w") as handle:

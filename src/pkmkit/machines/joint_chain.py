@@ -340,9 +340,10 @@ class JointChainMachine:
                                         for k, v in out.__dict__.items()})
         return out
 
-    def _home_rates(self) -> np.ndarray:
-        """``(6 + n_p, n)`` first-order change of the platform (δp, δω) and passive joints per
-        unit actuator change at home (zero columns for the head's actuators); cached."""
+    def _home_rates(self) -> tuple[np.ndarray, np.ndarray]:
+        """At home, per unit actuator change: ``(6 + n_p, n)`` first-order change of the
+        platform (δp, δω) and passive joints, and ``(6L, n)`` change of the closure residual
+        with the platform and passive joints held (zero columns for the head); cached."""
         cached = self.__dict__.get("_home_rates_cache")
         if cached is not None:
             return cached
@@ -351,30 +352,32 @@ class JointChainMachine:
         rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
         c = closure(model, rot, self._home["platform"][:3, None], values)
         cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1)[:, :, 0]
-        rates = -np.linalg.pinv(cu, rcond=RANK_RCOND) @ c.variables[:, self._actuated, 0]
+        cq = c.variables[:, self._actuated, 0]
+        rates = (-np.linalg.pinv(cu, rcond=RANK_RCOND) @ cq, cq)
         object.__setattr__(self, "_home_rates_cache", rates)
         return rates
 
     def _default_start(self, qb: np.ndarray, values: np.ndarray) -> np.ndarray:
         """Starts ``(N, 6 + n_p)`` of the direct model: home moved to first order towards each
-        q (one Gauss–Newton iteration fewer near home), or home itself where that prediction
-        closes the legs worse (far from home)."""
+        q (a Gauss–Newton iteration fewer near home), or home itself where the legs close worse
+        from that prediction than from home (far from home; the home residual to first order)."""
         n = qb.shape[0]
         home = np.concatenate([self._home["platform"], self._home["values"][self._passive]])
         u_home = np.tile(home, (n, 1))
-        with np.errstate(invalid="ignore", over="ignore"):
-            du = (qb - self.home_q) @ self._home_rates().T
+        rates, residual_rates = self._home_rates()
+        delta = qb - self.home_q
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            du = delta @ rates.T
             u_pred = u_home + du
             u_pred[:, 3:6] = compose_rotvecs(du[:, 3:6].T, u_home[:, 3:6].T).T
-            both = np.concatenate([u_home, u_pred])
-            full = np.concatenate([values, values]).T.copy()
-            full[self._passive] = both[:, 6:].T
-            res = closure_residuals(self.model, rotvec_matrices(both[:, 3:6].T), both[:, :3].T,
-                                    full)
-        cost = np.einsum("mk,mk->k", res, res)
-        better = cost[n:] < cost[:n]
-        u_home[better] = u_pred[better]
-        return u_home
+            full = values.T.copy()
+            full[self._passive] = u_pred[:, 6:].T
+            res = closure_residuals(self.model, rotvec_matrices(u_pred[:, 3:6].T),
+                                    u_pred[:, :3].T, full)
+            from_home = delta @ residual_rates.T
+        worse = ~(np.einsum("mk,mk->k", res, res) <= np.einsum("km,km->k", from_home, from_home))
+        u_pred[worse] = u_home[worse]
+        return u_pred
 
     # ---------------------------------------------------------------- inverse
     def ik(self, x: Any, *, q0: Any = None, tool_length: Any = None, full_output: bool = False,

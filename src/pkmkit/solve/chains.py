@@ -43,6 +43,9 @@ from pkmkit.model.chains import FIXED, PRISMATIC, REVOLUTE, JointChainModel, def
 from pkmkit.solve.least_squares import BlockPattern, SolveResult, solve_least_squares
 from pkmkit.spatial.rotation import skew
 
+#: Initial Levenberg–Marquardt factor of the closures (the engine's default is 1e-4).
+CLOSURE_DAMPING = 1e-8
+
 
 @dataclass(frozen=True)
 class ChainPose:
@@ -178,8 +181,9 @@ def rotation_rows(m: np.ndarray, length: float) -> np.ndarray:
     (world) rotation increment ω of the leg's end frame: ``L (½ S(M) / c + v vᵀ / (2c²))``."""
     v = _vee_skew(m)
     c = _gibbs_factor(m)
-    out = _s_matrix(m) * (0.5 * length / c)
-    out += v[:, None] * v[None, :] * (0.5 * length / (c * c))
+    with np.errstate(divide="ignore", invalid="ignore"):  # c = 0: a half turn, no derivative
+        out = _s_matrix(m) * (0.5 * length / c)
+        out += v[:, None] * v[None, :] * (0.5 * length / (c * c))
     return out
 
 
@@ -445,6 +449,9 @@ def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
         return res, jac
 
     options.setdefault("pattern", pattern)
+    # from a good start a closure is nearly linear: Gauss–Newton steps (the damping grows
+    # tenfold on every rejected step where it is not)
+    options.setdefault("damping", CLOSURE_DAMPING)
     return solve_least_squares(evaluate, u0, retract=_retract_pose_first(), **options)
 
 

@@ -323,16 +323,11 @@ def solve_least_squares(
         if idx.size == n_rows:  # every row active: slices avoid copies
             idx = slice(None)
         j_a, r_a = jac[:, :, idx], r[:, idx]
-        if pattern is None:
-            jtj = normal_matrix(j_a)
-            diag = jtj[diag_idx, diag_idx]  # (n, k)
-        else:
-            jtj = _BlockNormal.of(j_a, pattern)
-            diag = jtj.diagonal()
         grad = np.einsum("mnk,mk->nk", j_a, r_a)
-        # stationary (cosine test) or exact rows stop before stepping
+        # stationary (cosine test) or exact rows stop before stepping (and before JᵀJ)
+        columns = np.einsum("mnk,mnk->nk", j_a, j_a)  # the diagonal of JᵀJ
         with np.errstate(invalid="ignore", divide="ignore"):
-            cosine = np.abs(grad) / np.sqrt(diag * (2.0 * cost[idx]))
+            cosine = np.abs(grad) / np.sqrt(columns * (2.0 * cost[idx]))
         stop = (cost[idx] <= 0.5 * atol * atol) | ~(np.nan_to_num(cosine, nan=0.0).max(
             axis=0) > gtol)
         if stop.any():
@@ -343,8 +338,13 @@ def solve_least_squares(
             if not keep.any():
                 break
             idx = rows_all[idx][keep]
-            j_a, r_a, grad, diag = j_a[:, :, keep], r_a[:, keep], grad[:, keep], diag[:, keep]
-            jtj = jtj[:, :, keep] if pattern is None else jtj.take(keep)
+            j_a, r_a, grad = j_a[:, :, keep], r_a[:, keep], grad[:, keep]
+        if pattern is None:
+            jtj = normal_matrix(j_a)
+            diag = jtj[diag_idx, diag_idx]  # (n, k)
+        else:
+            jtj = _BlockNormal.of(j_a, pattern)
+            diag = jtj.diagonal()
         floor = 1e-9 * diag.max(axis=0) + 1e-300
         if pattern is None:
             jtj[diag_idx, diag_idx] += lam[idx] * (diag + floor)
