@@ -57,6 +57,14 @@ def configurations(m, n: int, seed: int = 2026) -> np.ndarray:
     return lo + (hi - lo) * rng.random((n, len(lo)))
 
 
+def path(n: int) -> np.ndarray:
+    """A smooth joint-space path of n samples through the measured ranges (a Lissajous curve)."""
+    t = np.linspace(0.0, 2 * np.pi, n)
+    return np.stack([0.985 + 0.01 * np.sin(t), 1.065 + 0.01 * np.sin(2 * t + 1.0),
+                     0.985 + 0.01 * np.sin(3 * t + 2.0), np.radians(15.0) * np.sin(t + 0.5),
+                     np.radians(27.5) * (1 + np.sin(2 * t))], axis=1)
+
+
 def left_jacobian(phi: np.ndarray) -> np.ndarray:
     """SO(3) left Jacobian: ``d exp(φ) = [J_l(φ) dφ]× exp(φ)``."""
     theta = float(np.linalg.norm(phi))
@@ -171,6 +179,21 @@ def main() -> None:
             np.abs(direct.passive[:n_check] - ref_passive).max()),
         "quiet": measure(m, qs, args.scipy_configs, args.repeat),
     }
+    # along a path, each sample warm-started from the solution at the previous one
+    along = path(args.configs)
+    first = m.fk(along, full_output=True)
+    x0 = np.concatenate([first.platform, first.passive], axis=1)
+    x0 = np.vstack([x0[:1], x0[:-1]])
+    warm = m.fk(along, x0=x0, full_output=True)
+    t_cold = statistics.median(timed(lambda: m.fk(along)) for _ in range(args.repeat))
+    t_warm = statistics.median(timed(lambda: m.fk(along, x0=x0)) for _ in range(args.repeat))
+    result["path"] = {
+        "cold_us_per_config_median": t_cold / args.configs * 1e6,
+        "warm_us_per_config_median": t_warm / args.configs * 1e6,
+        "cold_iterations_mean": float(first.iterations.mean()),
+        "warm_iterations_mean": float(warm.iterations.mean()),
+        "max_difference": float(np.abs(warm.pose - first.pose).max()),
+    }
     if not args.no_load:
         competitor = subprocess.Popen([sys.executable, "-c", COMPETITOR],
                                       env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
@@ -203,6 +226,13 @@ def main() -> None:
               f"{r['batched_us_per_config_best']:>8.1f}"
               f"{r['batched_cpu_us_per_config_median']:>8.1f}{r['scipy_us_per_config_median']:>14.0f}"
               f"{r['ratio_median']:>11.0f}{r['ratio_best']:>7.0f}")
+    p = result["path"]
+    print(f"along a path of {args.configs} samples: default start "
+          f"{p['cold_us_per_config_median']:.1f} µs/config "
+          f"({p['cold_iterations_mean']:.2f} iterations), warm-started from the "
+          f"previous sample {p['warm_us_per_config_median']:.1f} µs/config "
+          f"({p['warm_iterations_mean']:.2f} iterations); largest difference "
+          f"{p['max_difference']:.1e}")
     if args.json:
         with open(args.json, "w") as handle:
             json.dump(result, handle, indent=2)
