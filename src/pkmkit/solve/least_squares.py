@@ -218,22 +218,31 @@ def solve_spd(h: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def solve_spd_many(h: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Solve ``H X = B`` for batch-last SPD ``H (n, n, k)`` and ``B (n, r, k)`` (vectorised
-    Cholesky for n ≤ :data:`SMALL`, LAPACK otherwise)."""
+    Cholesky for n ≤ :data:`SMALL`, accumulating in place; LAPACK otherwise)."""
     n = h.shape[0]
     if n > SMALL:
         return np.linalg.solve(h.transpose(2, 0, 1), b.transpose(2, 0, 1)).transpose(1, 2, 0)
     low = np.zeros_like(h)
     for j in range(n):
-        s = h[j, j] - (low[j, :j] ** 2).sum(axis=0)
+        s = h[j, j].copy()
+        for m in range(j):
+            s -= low[j, m] * low[j, m]
         low[j, j] = np.sqrt(s)
+        inv = 1.0 / low[j, j]
         for i in range(j + 1, n):
-            low[i, j] = (h[i, j] - (low[i, :j] * low[j, :j]).sum(axis=0)) / low[j, j]
-    y = np.empty_like(b)
-    for i in range(n):
-        y[i] = (b[i] - (low[i, :i, None] * y[:i]).sum(axis=0)) / low[i, i]
-    x = np.empty_like(b)
-    for i in range(n - 1, -1, -1):
-        x[i] = (y[i] - (low[i + 1 :, i, None] * x[i + 1 :]).sum(axis=0)) / low[i, i]
+            s = h[i, j].copy()
+            for m in range(j):
+                s -= low[i, m] * low[j, m]
+            low[i, j] = s * inv
+    x = np.array(b, dtype=float)
+    for i in range(n):  # L y = b
+        for m in range(i):
+            x[i] -= low[i, m] * x[m]
+        x[i] /= low[i, i]
+    for i in range(n - 1, -1, -1):  # Lᵀ x = y
+        for m in range(i + 1, n):
+            x[i] -= low[m, i] * x[m]
+        x[i] /= low[i, i]
     return x
 
 
