@@ -387,6 +387,12 @@ def closure_pattern(model: JointChainModel, unknown_variables: np.ndarray,
     return BlockPattern(shared=tuple(sorted(shared)), groups=tuple(groups)), positions, members
 
 
+def _columns(a: np.ndarray, rows: slice | np.ndarray) -> np.ndarray:
+    """Batch entries of a batch-last 2-D array as a contiguous copy (the engine passes a slice
+    or an index array)."""
+    return a[:, rows].copy() if isinstance(rows, slice) else np.take(a, rows, axis=1)
+
+
 class _Buffers:
     """Residual and Jacobian arrays reused from one evaluation to the next (the engine copies
     what it keeps): the Jacobian's structural zeros are written once, and a fresh 20 MB array
@@ -441,7 +447,7 @@ def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
     buffers = _Buffers()
 
     def evaluate(u: np.ndarray, rows: np.ndarray):
-        values = known_t[:, rows]
+        values = _columns(known_t, rows)
         values[free] = u[6:]
         res, jac = buffers.get(n_rows, u.shape[0], u.shape[1])
         _closure_into(model, rotvec_matrices(u[3:6]), u[:3], values, res, jac, positions,
@@ -506,8 +512,8 @@ def solve_machine_inverse(model: JointChainModel, targets: np.ndarray, u0: np.nd
         frame = tool_frame(model, rot, u[:3], values, twists=True, twist_variables=head)
         axis = frame.R[:, 2]
         point = frame.p + tool_t[rows] * axis
-        res[tool] = np.concatenate([point - targets_t[:3, rows],
-                                    length * (axis - targets_t[3:, rows])])
+        target = _columns(targets_t, rows)
+        res[tool] = np.concatenate([point - target[:3], length * (axis - target[3:])])
         # the platform increments move the tool frame as a rigid body: (δp_X, δω_X) is the
         # spatial twist (δp_X + [p_X]× δω_X, δω_X)
         plat = np.zeros((6, 6, k))

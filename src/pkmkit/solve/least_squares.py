@@ -121,11 +121,6 @@ class _BlockNormal:
             out[list(cols)] = c_g[i, i]
         return out
 
-    def take(self, keep: np.ndarray) -> _BlockNormal:
-        """The same blocks for a subset of the batch."""
-        return _BlockNormal(self.pattern, self.a[:, :, keep], [b[:, :, keep] for b in self.b],
-                            [c[:, :, keep] for c in self.c])
-
     def add_diagonal(self, values: np.ndarray) -> None:
         """Add ``values (n, k)`` (column order) to the diagonal, in place."""
         s = np.arange(len(self.pattern.shared))
@@ -246,6 +241,12 @@ def solve_spd_many(h: np.ndarray, b: np.ndarray) -> np.ndarray:
     return x
 
 
+def _batch(a: np.ndarray, idx: slice | np.ndarray) -> np.ndarray:
+    """The batch entries ``idx`` of a batch-last array, contiguous (a fancy index on the last
+    axis, ``a[..., idx]``, strides the batch axis and slows every later pass several-fold)."""
+    return a[..., idx] if isinstance(idx, slice) else np.take(a, idx, axis=-1)
+
+
 def _add(u: np.ndarray, delta: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return u + delta
 
@@ -331,7 +332,7 @@ def solve_least_squares(
             break
         if idx.size == n_rows:  # every row active: slices avoid copies
             idx = slice(None)
-        j_a, r_a = jac[:, :, idx], r[:, idx]
+        j_a, r_a = _batch(jac, idx), _batch(r, idx)
         grad = np.einsum("mnk,mk->nk", j_a, r_a)
         # stationary (cosine test) or exact rows stop before stepping (and before JᵀJ)
         columns = np.einsum("mnk,mnk->nk", j_a, j_a)  # the diagonal of JᵀJ
@@ -347,7 +348,8 @@ def solve_least_squares(
             if not keep.any():
                 break
             idx = rows_all[idx][keep]
-            j_a, r_a, grad = j_a[:, :, keep], r_a[:, keep], grad[:, keep]
+            j_a, r_a, grad = (np.compress(keep, j_a, axis=-1), np.compress(keep, r_a, axis=-1),
+                              grad[:, keep])
         if pattern is None:
             jtj = normal_matrix(j_a)
             diag = jtj[diag_idx, diag_idx]  # (n, k)
@@ -361,7 +363,7 @@ def solve_least_squares(
         else:
             jtj.add_diagonal(lam[idx] * (diag + floor))
             step = -jtj.solve(grad)
-        u_new = retract(u[:, idx], step, idx)
+        u_new = retract(_batch(u, idx), step, idx)
         r_new, j_new = evaluate(u_new, idx)
         cost_new = 0.5 * np.einsum("mk,mk->k", r_new, r_new)
         # accept rounding-level increases: near a solution the cost stops being informative
@@ -376,7 +378,7 @@ def solve_least_squares(
         else:
             u[:, took] = u_new[:, accept]
             r[:, took] = r_new[:, accept]
-            jac[:, :, took] = j_new[:, :, accept]
+            jac[:, :, took] = np.compress(accept, j_new, axis=-1)
             cost[took] = cost_new[accept]
         lam[took] = np.maximum(lam[took] * 0.1, 1e-12)
         lam[idx[~accept]] *= 10.0
