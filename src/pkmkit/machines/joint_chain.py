@@ -44,6 +44,9 @@ from pkmkit.numerics.arrays import restore_shape
 from pkmkit.solve.chains import (
     chain_pose,
     closure,
+    closure_residuals,
+    compose_rotvecs,
+    rotvec_matrices,
     solve_closure,
     solve_machine_inverse,
     tool_frame,
@@ -355,8 +358,7 @@ class JointChainMachine:
         n = qb.shape[0]
         values = self._full_values(qb)
         if x0 is None:
-            u0 = np.tile(np.concatenate([self._home["platform"],
-                                         self._home["values"][self._passive]]), (n, 1))
+            u0 = self._default_start(qb, values)
         else:
             u0 = _rows_like(x0, 6 + len(self._passive), "x0", n)
         valid = valid_rows(qb)
@@ -480,6 +482,45 @@ class JointChainMachine:
         if report["out_of_stroke"][0]:
             warnings.warn(message, StrokeWarning, stacklevel=3)
 
+    def _home_rates(self) -> tuple[np.ndarray, np.ndarray]:
+        """At home, per unit actuator change: ``(6 + n_p, n)`` first-order change of the
+        platform (δp, δω) and passive joints, and ``(6L, n)`` change of the closure residual
+        with the platform and passive joints held (zero columns for the head); cached."""
+        cached = self.__dict__.get("_home_rates_cache")
+        if cached is not None:
+            return cached
+        model = self.model
+        values = self._home["values"][:, None]
+        rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
+        c = closure(model, rot, self._home["platform"][:3, None], values)
+        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1)[:, :, 0]
+        cq = c.variables[:, self._actuated, 0]
+        rates = (-np.linalg.pinv(cu, rcond=RANK_RCOND) @ cq, cq)
+        object.__setattr__(self, "_home_rates_cache", rates)
+        return rates
+
+    def _default_start(self, qb: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """Starts ``(N, 6 + n_p)`` of the direct model: home moved to first order towards each
+        q (a Gauss–Newton iteration fewer near home), or home itself where the legs close worse
+        from that prediction than from home (far from home; the home residual to first order)."""
+        n = qb.shape[0]
+        home = np.concatenate([self._home["platform"], self._home["values"][self._passive]])
+        u_home = np.tile(home, (n, 1))
+        rates, residual_rates = self._home_rates()
+        delta = qb - self.home_q
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            du = delta @ rates.T
+            u_pred = u_home + du
+            u_pred[:, 3:6] = compose_rotvecs(du[:, 3:6].T, u_home[:, 3:6].T).T
+            full = values.T.copy()
+            full[self._passive] = u_pred[:, 6:].T
+            res = closure_residuals(self.model, rotvec_matrices(u_pred[:, 3:6].T),
+                                    u_pred[:, :3].T, full)
+            from_home = delta @ residual_rates.T
+        worse = ~(np.einsum("mk,mk->k", res, res) <= np.einsum("km,km->k", from_home, from_home))
+        u_pred[worse] = u_home[worse]
+        return u_pred
+
     # ---------------------------------------------------------------- inverse
     def ik(self, x: Any, *, q0: Any = None, tool_length: Any = None, full_output: bool = False,
            strokes: str = "flag", **engine_options: Any) -> np.ndarray | ChainDirectResult:
@@ -532,14 +573,20 @@ class JointChainMachine:
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
         status[~valid_rows(xb) | bad_axis] = Status.INVALID_INPUT
         q = res.u[:, 6:][:, self._actuated].copy()
+        # revolute actuators: the turn nearest the start (the engine may step a full turn)
+        turn = np.array([q == "angle" for q in self.actuator_quantities])
+        start = values[:, self._actuated][:, turn]
+        q[:, turn] = start + np.angle(np.exp(1j * (q[:, turn] - start)))
+        joint_values = res.u[:, 6:].copy()
+        joint_values[:, self._actuated] = q
         joints = np.flatnonzero(self.model.loop_variables | self.model.actuated)
-        bad, texts = (stroke_violations(self.model, res.u[:, 6:], joints, status == Status.OK)
+        bad, texts = (stroke_violations(self.model, joint_values, joints, status == Status.OK)
                       if strokes != "ignore" else (np.zeros(n, dtype=bool), [""] * n))
         if strokes == "refuse":
             status[bad] = Status.OUT_OF_STROKE
         q[status != Status.OK] = np.nan
         if single and status[0] == Status.OUT_OF_STROKE:
-            values = res.u[0, 6:]
+            values = joint_values[0]
             k = int(next(j for j in joints if not (self.model.q_min[j] <= values[j]
                                                     <= self.model.q_max[j])))
             raise OutOfStrokeError(f"the inverse model of {xb[0].tolist()}: {texts[0]}",

@@ -13,14 +13,24 @@ A twist (v, ω) moves the end frame (R, p) by ``δp = v + ω × p``, ``δR = [ω
 
 **Closure of a leg on the platform pose X = (p_X, R_X)** (metres; L the characteristic length):
 
-    r = ( p_leg − p_X ,  L · ½ vee(M − Mᵀ) ),     M = R_leg R_Xᵀ
+    r = ( p_leg − p_X ,  L · v / c ),    M = R_leg R_Xᵀ,  v = ½ vee(M − Mᵀ),  c = (1 + tr M) / 4
 
-zero iff the leg's end frame is X (the rotation part is L·θ·axis for small differences). With
-``S(M) = tr(M) I − M``: a spatial twist on the leg changes it by ``(v + ω × p_leg,
-½ L S(M) ω)``; increments (δp_X, δω_X) of X (``p_X += δp_X``, ``R_X ← exp(δω_X) R_X``) by
-``(−δp_X, −½ L S(Mᵀ) δω_X)``. A machine's closure stacks one such 6-row block per leg; with more
-rows than unknowns (hyperstatic machines: Tripteor 18 rows, 16 unknowns) it is solved in the
-least-squares sense by the batched engine — exactly when the geometry is compatible.
+i.e. the translation error and L times the Gibbs vector 2 tan(θ/2)·n of the rotation error
+(angle θ about n): L·θ·n to first order, zero **only** at M = I and growing without bound
+towards θ = π. (A residual ``L·v`` = L sin θ·n alone also vanishes at θ = π: a least-squares
+solver can stop there on a leg turned upside down and call it closed.) With
+``S(M) = tr(M) I − M``: a spatial twist (v, ω) on the leg changes r by ``(v + ω × p_leg,
+L (½ S(M) / c + v vᵀ / (2c²)) ω)``; increments (δp_X, δω_X) of X (``p_X += δp_X``,
+``R_X ← exp(δω_X) R_X``) by ``(−δp_X, −L (½ S(Mᵀ) / c + v vᵀ / (2c²)) δω_X)``. A machine's
+closure stacks one such 6-row block per leg; with more rows than unknowns (hyperstatic
+machines: Tripteor 18 rows, 16 unknowns) it is solved in the least-squares sense by the batched
+engine — exactly when the geometry is compatible.
+
+**Structure.** Each leg's rows involve only the platform pose and that leg's joints, so the
+normal equations are bordered block-diagonal (:class:`pkmkit.solve.least_squares.BlockPattern`):
+the solvers pass that pattern to the engine, which then eliminates each leg's joints before
+solving for the platform pose. Joints shared by several legs (the TriMule's ψ1) join the shared
+block.
 """
 
 from __future__ import annotations
@@ -30,8 +40,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkmkit.model.chains import FIXED, PRISMATIC, REVOLUTE, JointChainModel, defect_twists
-from pkmkit.solve.least_squares import SolveResult, solve_least_squares
-from pkmkit.spatial.rotation import compose_rotvec, rotvec_to_matrix, skew
+from pkmkit.solve.least_squares import BlockPattern, SolveResult, solve_least_squares
+from pkmkit.spatial.rotation import skew
+
+#: Initial Levenberg–Marquardt factor of the closures (the engine's default is 1e-4).
+CLOSURE_DAMPING = 1e-8
 
 
 @dataclass(frozen=True)
@@ -53,7 +66,7 @@ class ChainPose:
 
 def chain_pose(model: JointChainModel, chain: tuple[int, ...], values: np.ndarray, *,
                start: tuple[np.ndarray, np.ndarray] | None = None, twists: bool = False,
-               defects: bool = False) -> ChainPose:
+               defects: bool = False, twist_variables: np.ndarray | None = None) -> ChainPose:
     """End frame of ``chain`` for joint values ``values (n_var, k)``.
 
     Args:
@@ -63,14 +76,23 @@ def chain_pose(model: JointChainModel, chain: tuple[int, ...], values: np.ndarra
         start: ``(R (3, 3, k), p (3, k))`` frame the chain starts from (default: the base).
         twists: also return the joint variables' spatial twists.
         defects: also return the defects' spatial twists.
+        twist_variables: with ``twists``, only these variables' twists, as
+            ``variable_twists (6, len(twist_variables), k)`` in this order (the others are not
+            computed).
     """
     k = values.shape[1]
     if start is None:
-        rot = np.broadcast_to(np.eye(3)[:, :, None], (3, 3, k)).copy()
+        rot = np.empty((3, 3, k))
+        rot[:] = np.eye(3)[:, :, None]
         pos = np.zeros((3, k))
     else:
         rot, pos = start[0].copy(), start[1].copy()
-    var_tw = np.zeros((6, model.n_variables, k)) if twists else None
+    column = None
+    if twists and twist_variables is not None:
+        column = {int(v): i for i, v in enumerate(twist_variables)}
+        var_tw = np.zeros((6, len(column), k))
+    else:
+        var_tw = np.zeros((6, model.n_variables, k)) if twists else None
     def_tw = None
     if defects:
         def_tw = np.zeros((6, len(model.defect_index), k))
@@ -81,34 +103,34 @@ def chain_pose(model: JointChainModel, chain: tuple[int, ...], values: np.ndarra
             mine = np.flatnonzero(model.defect_index.element == e)
             if mine.size:
                 w = np.einsum("abk,ib->aik", rot, local[mine, 3:])
-                v = np.einsum("abk,ib->aik", rot, local[mine, :3]) + _cross0(pos[:, None], w)
+                v = np.einsum("abk,ib->aik", rot, local[mine, :3]) + _cross(pos[:, None], w)
                 def_tw[:3, mine], def_tw[3:, mine] = v, w
-        pos = pos + np.einsum("abk,b->ak", rot, frame[:3, 3])
-        rot = np.einsum("abk,bc->ack", rot, frame[:3, :3])
+        pos = pos + _rotate(rot, frame[:3, 3])
+        rot = _times_constant(rot, frame[:3, :3])
         kind = model.elements[e].type
         if kind == FIXED:
             continue
         var = model.element_variable[e]
-        z = rot[:, 2].copy()
+        col = var if column is None else column.get(int(var))
+        z = rot[:, 2]
         q = values[var]
         if kind == REVOLUTE:
-            if twists:
-                var_tw[:3, var] = _cross0(pos, z)
-                var_tw[3:, var] = z
+            if twists and col is not None:
+                var_tw[:3, col] = _cross(pos, z)
+                var_tw[3:, col] = z
             c, s = np.cos(q), np.sin(q)
             x, y = rot[:, 0].copy(), rot[:, 1].copy()
             rot[:, 0] = c * x + s * y
             rot[:, 1] = c * y - s * x
         elif kind == PRISMATIC:
-            if twists:
-                var_tw[:3, var] = z
+            if twists and col is not None:
+                var_tw[:3, col] = z
             pos = pos + q * z
     return ChainPose(R=rot, p=pos, variable_twists=var_tw, defect_twists=def_tw)
 
 
-def _cross0(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cross product along axis 0 of broadcastable ``(3, ...)`` arrays (np.cross moves axes
-    on every call, which dominated the closure's cost)."""
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products of batch-last vectors ``(3, ...)``."""
     return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
                      a[0] * b[1] - a[1] * b[0]])
 
@@ -120,6 +142,29 @@ def _local_defect_twists(model: JointChainModel) -> np.ndarray:
         cached = defect_twists(model.frames, model.defect_index)
         object.__setattr__(model, "_local_defect_twists", cached)
     return cached
+
+
+def _rotate(rot: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """``R v`` for batch-last ``R (3, 3, k)`` and a constant ``v (3,)``."""
+    out = rot[:, 0] * vector[0]
+    for j in (1, 2):
+        if vector[j]:
+            out = out + rot[:, j] * vector[j]
+    return out
+
+
+def _times_constant(rot: np.ndarray, const: np.ndarray) -> np.ndarray:
+    """``R C`` for batch-last ``R (3, 3, k)`` and a constant ``C (3, 3)``; columns of C that
+    are signed unit vectors (most junction and invariant frames) cost a copy."""
+    out = np.empty_like(rot)
+    for j in range(3):
+        col = const[:, j]
+        nz = np.flatnonzero(col)
+        if nz.size == 1 and abs(col[nz[0]]) == 1.0:
+            out[:, j] = rot[:, nz[0]] if col[nz[0]] > 0 else -rot[:, nz[0]]
+        else:
+            out[:, j] = _rotate(rot, col)
+    return out
 
 
 def _s_matrix(m: np.ndarray) -> np.ndarray:
@@ -136,18 +181,39 @@ def _vee_skew(m: np.ndarray) -> np.ndarray:
     return 0.5 * np.stack([m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1]])
 
 
+def _gibbs_factor(m: np.ndarray) -> np.ndarray:
+    """``c = (1 + tr M) / 4 = cos²(θ/2)`` ``(k,)``."""
+    return 0.25 * (1.0 + m[0, 0] + m[1, 1] + m[2, 2])
+
+
+def rotation_rows(m: np.ndarray, length: float) -> np.ndarray:
+    """``(3, 3, k)`` derivative of the rotation residual ``L v / c`` with respect to a left
+    (world) rotation increment ω of the leg's end frame: ``L (½ S(M) / c + v vᵀ / (2c²))``."""
+    v = _vee_skew(m)
+    c = _gibbs_factor(m)
+    with np.errstate(divide="ignore", invalid="ignore"):  # c = 0: a half turn, no derivative
+        out = _s_matrix(m) * (0.5 * length / c)
+        out += v[:, None] * v[None, :] * (0.5 * length / (c * c))
+    return out
+
+
 def leg_residual(leg: ChainPose, rot_x: np.ndarray, p_x: np.ndarray, length: float
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Closure residual ``(6, k)`` of one leg on the platform pose and ``M = R_leg R_Xᵀ``."""
     m = np.einsum("abk,cbk->ack", leg.R, rot_x)
-    return np.concatenate([leg.p - p_x, length * _vee_skew(m)]), m
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rot_res = length * _vee_skew(m) / _gibbs_factor(m)
+    return np.concatenate([leg.p - p_x, rot_res]), m
 
 
-def twist_rows(tw: np.ndarray, p_end: np.ndarray, m: np.ndarray, length: float) -> np.ndarray:
-    """Residual rows ``(6, c, k)`` of spatial twists ``tw (6, c, k)`` on a leg's end frame."""
+def twist_rows(tw: np.ndarray, p_end: np.ndarray, m: np.ndarray, length: float,
+               rot_rows: np.ndarray | None = None) -> np.ndarray:
+    """Residual rows ``(6, c, k)`` of spatial twists ``tw (6, c, k)`` on a leg's end frame
+    (``rot_rows``: :func:`rotation_rows` of M, if already computed)."""
     v, w = tw[:3], tw[3:]
-    dp = v + _cross0(w, p_end[:, None, :])
-    dr = 0.5 * length * np.einsum("abk,bck->ack", _s_matrix(m), w)
+    dp = v + _cross(w, p_end[:, None, :])
+    rows = rotation_rows(m, length) if rot_rows is None else rot_rows
+    dr = np.einsum("abk,bck->ack", rows, w)
     return np.concatenate([dp, dr])
 
 
@@ -158,7 +224,8 @@ def platform_rows(m: np.ndarray, length: float) -> np.ndarray:
     out = np.zeros((6, 6, k))
     for i in range(3):
         out[i, i] = -1.0
-    out[3:, 3:] = -0.5 * length * _s_matrix(np.swapaxes(m, 0, 1))
+    # Mᵀ = R_X R_legᵀ takes the left increment δω_X and r(M) = −r(Mᵀ)
+    out[3:, 3:] = -rotation_rows(np.swapaxes(m, 0, 1), length)
     return out
 
 
@@ -199,11 +266,69 @@ def closure(model: JointChainModel, rot_x: np.ndarray, p_x: np.ndarray, values: 
         rows = slice(6 * i, 6 * i + 6)
         end = chain_pose(model, leg, values, twists=True, defects=defects)
         res[rows], m = leg_residual(end, rot_x, p_x, length)
+        rot_rows = rotation_rows(m, length)
         jp[rows] = platform_rows(m, length)
-        jv[rows] = twist_rows(end.variable_twists, end.p, m, length)
+        jv[rows] = twist_rows(end.variable_twists, end.p, m, length, rot_rows)
         if defects:
-            jd[rows] = twist_rows(end.defect_twists, end.p, m, length)
+            jd[rows] = twist_rows(end.defect_twists, end.p, m, length, rot_rows)
     return ClosureJacobians(residual=res, platform=jp, variables=jv, defects=jd)
+
+
+def closure_residuals(model: JointChainModel, rot_x: np.ndarray, p_x: np.ndarray,
+                      values: np.ndarray) -> np.ndarray:
+    """Closure residuals ``(6L, k)`` alone (no Jacobian): for choosing among starts."""
+    length = model.characteristic_length
+    return np.concatenate([leg_residual(chain_pose(model, leg, values), rot_x, p_x, length)[0]
+                           for leg in model.legs])
+
+
+def rotvec_matrices(phi: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(3, 3, k)`` of batch-last rotation vectors ``φ (3, k)`` (Rodrigues,
+    with series below 1e-4 rad)."""
+    sq = np.einsum("ak,ak->k", phi, phi)
+    theta = np.sqrt(sq)
+    small = theta < 1e-4
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(small, 1.0 - sq / 6.0 + sq * sq / 120.0, np.sin(theta) / theta)
+        b = np.where(small, 0.5 - sq / 24.0 + sq * sq / 720.0, (1.0 - np.cos(theta)) / sq)
+    x, y, z = phi
+    out = np.empty((3, 3, phi.shape[1]))
+    out[0, 0] = 1.0 - b * (y * y + z * z)
+    out[1, 1] = 1.0 - b * (x * x + z * z)
+    out[2, 2] = 1.0 - b * (x * x + y * y)
+    bxy, bxz, byz = b * x * y, b * x * z, b * y * z
+    out[0, 1], out[1, 0] = bxy - a * z, bxy + a * z
+    out[0, 2], out[2, 0] = bxz + a * y, bxz - a * y
+    out[1, 2], out[2, 1] = byz - a * x, byz + a * x
+    return out
+
+
+def _quaternions(phi: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(w, x, y, z)`` ``(4, k)`` of batch-last rotation vectors ``(3, k)``."""
+    sq = np.einsum("ak,ak->k", phi, phi)
+    half = 0.5 * np.sqrt(sq)
+    small = half < 1e-4
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(small, 0.5 - sq / 48.0 + sq * sq / 3840.0, np.sin(half) / (2 * half))
+    return np.concatenate([np.cos(half)[None], scale * phi])
+
+
+def compose_rotvecs(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Rotation vectors ``(3, k)`` of ``exp(δ) exp(φ)`` for batch-last ``δ, φ (3, k)``, angle in
+    [0, π] (through unit quaternions; the angle from atan2, accurate at every size)."""
+    a, b = _quaternions(delta), _quaternions(phi)
+    w = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3]
+    vec = np.stack([a[0] * b[1] + b[0] * a[1] + a[2] * b[3] - a[3] * b[2],
+                    a[0] * b[2] + b[0] * a[2] + a[3] * b[1] - a[1] * b[3],
+                    a[0] * b[3] + b[0] * a[3] + a[1] * b[2] - a[2] * b[1]])
+    vec = np.where(w < 0, -vec, vec)  # the same rotation with w ≥ 0: angle ≤ π
+    w = np.abs(w)
+    norm = np.sqrt(np.einsum("ak,ak->k", vec, vec))
+    angle = 2.0 * np.arctan2(norm, w)
+    small = norm < 1e-8
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(small, 2.0 / w * (1.0 + norm * norm / (3.0 * w * w)), angle / norm)
+    return scale * vec
 
 
 def _retract_pose_first(n_pose: int = 6):
@@ -212,10 +337,100 @@ def _retract_pose_first(n_pose: int = 6):
 
     def retract(u: np.ndarray, step: np.ndarray, rows: np.ndarray) -> np.ndarray:
         out = u + step
-        out[3:6] = compose_rotvec(step[3:6].T, u[3:6].T).T
+        out[3:6] = compose_rotvecs(step[3:6], u[3:6])
         return out
 
     return retract
+
+
+def leg_variables(model: JointChainModel) -> list[np.ndarray]:
+    """The joint variables of each leg (indices into ``model.variables``)."""
+    out = []
+    for leg in model.legs:
+        out.append(np.array([model.element_variable[e] for e in leg
+                             if model.element_variable[e] >= 0], dtype=int))
+    return out
+
+
+def _as_index(ids: list[int]) -> slice | np.ndarray:
+    """A slice for contiguous increasing indices (writes through a view), else an array."""
+    if ids and ids == list(range(ids[0], ids[0] + len(ids))):
+        return slice(ids[0], ids[0] + len(ids))
+    return np.array(ids, dtype=int)
+
+
+def closure_pattern(model: JointChainModel, unknown_variables: np.ndarray,
+                    extra_groups: tuple[np.ndarray, ...] = ()
+                    ) -> tuple[BlockPattern, list[np.ndarray], list[np.ndarray]]:
+    """Block pattern of a closure whose unknowns are ``(p_X, φ_X, unknown_variables)``.
+
+    The residual rows are 6 per leg, then 6 per extra group (e.g. the tool rows of the inverse
+    model, whose variables are ``extra_groups[0]``). An unknown variable seen by one row group
+    only is private to it; one seen by several (a joint shared by legs) is shared with the
+    platform pose.
+
+    Returns:
+        the pattern, and for every row group the positions in u of its variables (a slice when
+        contiguous) and those variables (the order of their twist columns).
+    """
+    unknown = np.asarray(unknown_variables, dtype=int)
+    position = {int(v): 6 + i for i, v in enumerate(unknown)}
+    seen = [*leg_variables(model), *extra_groups]
+    owners: dict[int, set[int]] = {}
+    for g, variables in enumerate(seen):
+        for v in variables:
+            if int(v) in position:
+                owners.setdefault(int(v), set()).add(g)
+    shared = list(range(6)) + [position[v] for v, g in owners.items() if len(g) > 1]
+    groups, positions, members = [], [], []
+    for g, variables in enumerate(seen):
+        mine = [int(v) for v in variables if int(v) in position]
+        private = [position[v] for v in mine if len(owners[v]) == 1]
+        if private:
+            groups.append((tuple(range(6 * g, 6 * g + 6)), tuple(private)))
+        positions.append(_as_index([position[v] for v in mine]))
+        members.append(np.array(mine, dtype=int))
+    unused = sorted(set(position.values()) - set(shared)
+                    - {c for _, cols in groups for c in cols})
+    if unused:  # unknowns no row sees: their own (empty) group keeps the pattern a partition
+        shared += unused
+    return BlockPattern(shared=tuple(sorted(shared)), groups=tuple(groups)), positions, members
+
+
+def _columns(a: np.ndarray, rows: slice | np.ndarray) -> np.ndarray:
+    """Batch entries of a batch-last 2-D array as a contiguous copy (the engine passes a slice
+    or an index array)."""
+    return a[:, rows].copy() if isinstance(rows, slice) else np.take(a, rows, axis=1)
+
+
+class _Buffers:
+    """Residual and Jacobian arrays reused from one evaluation to the next (the engine copies
+    what it keeps): the Jacobian's structural zeros are written once, and a fresh 20 MB array
+    per evaluation would cost its page faults every time."""
+
+    def __init__(self):
+        self._arrays: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
+
+    def get(self, m: int, n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
+        key = (m, n, k)
+        if key not in self._arrays:
+            self._arrays = {key: (np.empty((m, k)), np.zeros((m, n, k)))}
+        return self._arrays[key]
+
+
+def _closure_into(model: JointChainModel, rot: np.ndarray, p_x: np.ndarray, values: np.ndarray,
+                  res: np.ndarray, jac: np.ndarray, positions: list,
+                  members: list[np.ndarray]) -> None:
+    """Write every leg's closure residual and its non-zero Jacobian blocks (platform columns
+    0–5, the leg's unknown variables at ``positions``) into ``res``/``jac`` (zeros elsewhere)."""
+    length = model.characteristic_length
+    for i, leg in enumerate(model.legs):
+        rows = slice(6 * i, 6 * i + 6)
+        end = chain_pose(model, leg, values, twists=True, twist_variables=members[i])
+        res[rows], m = leg_residual(end, rot, p_x, length)
+        jac[rows, :6] = platform_rows(m, length)
+        if len(members[i]):
+            jac[rows, positions[i]] = twist_rows(end.variable_twists, end.p, m, length)
 
 
 def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
@@ -236,32 +451,41 @@ def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
     """
     known_t = np.ascontiguousarray(known.T)
     free = np.asarray(unknown_variables, dtype=int)
+    pattern, positions, members = closure_pattern(model, free)
+    n_rows = 6 * len(model.legs)
+
+    buffers = _Buffers()
 
     def evaluate(u: np.ndarray, rows: np.ndarray):
-        values = known_t[:, rows].copy()
+        values = _columns(known_t, rows)
         values[free] = u[6:]
-        rot = rotvec_to_matrix(u[3:6].T).transpose(1, 2, 0)
-        c = closure(model, rot, u[:3], values)
-        jac = np.concatenate([c.platform, c.variables[:, free]], axis=1)
-        return c.residual, jac
+        res, jac = buffers.get(n_rows, u.shape[0], u.shape[1])
+        _closure_into(model, rotvec_matrices(u[3:6]), u[:3], values, res, jac, positions,
+                      members)
+        return res, jac
 
+    options.setdefault("pattern", pattern)
+    # from a good start a closure is nearly linear: Gauss–Newton steps (the damping grows
+    # tenfold on every rejected step where it is not)
+    options.setdefault("damping", CLOSURE_DAMPING)
     return solve_least_squares(evaluate, u0, retract=_retract_pose_first(), **options)
 
 
 def tool_frame(model: JointChainModel, rot_x: np.ndarray, p_x: np.ndarray, values: np.ndarray,
-               *, twists: bool = False, defects: bool = False) -> ChainPose:
+               *, twists: bool = False, defects: bool = False,
+               twist_variables: np.ndarray | None = None) -> ChainPose:
     """The tool frame: the head chain from the platform frame (identity head: the platform
     frame itself), with its variables' and defects' spatial twists on request."""
     return chain_pose(model, model.head, values, start=(rot_x, p_x), twists=twists,
-                      defects=defects)
+                      defects=defects, twist_variables=twist_variables)
 
 
 def tool_rows(tw: np.ndarray, point: np.ndarray, axis: np.ndarray, length: float) -> np.ndarray:
     """Rows ``(6, c, k)`` of the tool residual (tool point, L × tool axis) for spatial twists
     ``tw (6, c, k)`` of the tool frame."""
     v, w = tw[:3], tw[3:]
-    dp = v + _cross0(w, point[:, None, :])
-    da = length * _cross0(w, axis[:, None, :])
+    dp = v + _cross(w, point[:, None, :])
+    da = length * _cross(w, axis[:, None, :])
     return np.concatenate([dp, da])
 
 
@@ -281,27 +505,37 @@ def solve_machine_inverse(model: JointChainModel, targets: np.ndarray, u0: np.nd
     length = model.characteristic_length
     targets_t = np.ascontiguousarray(targets.T)
     tool_t = np.ascontiguousarray(np.asarray(tool_length, dtype=float).reshape(-1))
+    every = np.arange(model.n_variables)
+    head = np.array([model.element_variable[e] for e in model.head
+                     if model.element_variable[e] >= 0], dtype=int)
+    pattern, positions, members = closure_pattern(model, every, (head,))
+    n_legs = len(model.legs)
+    buffers = _Buffers()
+    tool = slice(6 * n_legs, 6 * n_legs + 6)
 
     def evaluate(u: np.ndarray, rows: np.ndarray):
         values = u[6:]
-        rot = rotvec_to_matrix(u[3:6].T).transpose(1, 2, 0)
-        c = closure(model, rot, u[:3], values)
-        tool = tool_frame(model, rot, u[:3], values, twists=True)
-        axis = tool.R[:, 2]
-        point = tool.p + tool_t[rows] * axis
-        res_tool = np.concatenate([point - targets_t[:3, rows],
-                                   length * (axis - targets_t[3:, rows])])
-        # the platform increments move the tool frame as a rigid body (spatial twist)
         k = u.shape[1]
+        rot = rotvec_matrices(u[3:6])
+        res, jac = buffers.get(6 * n_legs + 6, u.shape[0], k)
+        _closure_into(model, rot, u[:3], values, res, jac, positions, members)
+        frame = tool_frame(model, rot, u[:3], values, twists=True, twist_variables=head)
+        axis = frame.R[:, 2]
+        point = frame.p + tool_t[rows] * axis
+        target = _columns(targets_t, rows)
+        res[tool] = np.concatenate([point - target[:3], length * (axis - target[3:])])
+        # the platform increments move the tool frame as a rigid body: (δp_X, δω_X) is the
+        # spatial twist (δp_X + [p_X]× δω_X, δω_X)
         plat = np.zeros((6, 6, k))
         for i in range(3):
             plat[i, i] = 1.0
             plat[3 + i, 3 + i] = 1.0
-        # (δp_X, δω_X) is the spatial twist (δp_X + [p_X]× δω_X, δω_X)
         plat[:3, 3:] = skew(u[:3].T).transpose(1, 2, 0)
-        jt = np.concatenate([tool_rows(plat, point, axis, length),
-                             tool_rows(tool.variable_twists, point, axis, length)], axis=1)
-        jac = np.concatenate([np.concatenate([c.platform, c.variables], axis=1), jt])
-        return np.concatenate([c.residual, res_tool]), jac
+        jac[tool, :6] = tool_rows(plat, point, axis, length)
+        if len(head):
+            jac[tool, positions[n_legs]] = tool_rows(frame.variable_twists, point, axis,
+                                                      length)
+        return res, jac
 
+    options.setdefault("pattern", pattern)
     return solve_least_squares(evaluate, u0, retract=_retract_pose_first(), **options)

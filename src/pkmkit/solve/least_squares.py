@@ -21,6 +21,14 @@ NumPy (no per-row Python loop):
 dozen scalar operations, so this layout makes every NumPy call one long loop over the batch
 (several times faster than stacks of tiny matrices). The normal equations are solved by a
 vectorised Cholesky factorisation for up to :data:`SMALL` unknowns, by LAPACK beyond.
+
+**Block structure** (optional, :class:`BlockPattern`). Closures of several legs on one platform,
+and identification problems with per-pose unknowns, have *bordered block-diagonal* normal
+equations: a few *shared* unknowns (the platform pose) touch every residual row, and each group
+of rows (one leg) has *private* unknowns (its passive joints) that no other group's rows see.
+Given that pattern, the engine forms only the non-zero blocks of ``JᵀJ`` and solves the damped
+system by the Schur complement on the shared unknowns (vectorised Cholesky throughout) — the
+same step as the dense path, to rounding, at a fraction of the cost.
 """
 
 from __future__ import annotations
@@ -30,15 +38,117 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pkmkit.errors import InputError
 from pkmkit.status import Status
 
 #: ``evaluate(u (n, k), rows (k,)) -> (r (m, k), J (m, n, k))`` for the given rows of the batch.
+#: The engine copies what it keeps, so ``evaluate`` may reuse its output arrays between calls.
 Evaluate = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 #: ``retract(u (n, k), delta (n, k), rows (k,)) -> u_new (n, k)``.
 Retract = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 #: Largest number of unknowns solved by the vectorised Cholesky factorisation.
 SMALL = 8
+
+
+@dataclass(frozen=True)
+class BlockPattern:
+    """Sparsity of the Jacobian that makes ``JᵀJ`` bordered block-diagonal.
+
+    Attributes:
+        shared: column indices that may be non-zero in any row (e.g. the platform pose).
+        groups: one ``(rows, columns)`` pair per group: the group's *private* columns are zero
+            outside its rows. Rows of different groups are disjoint; rows in no group may only
+            involve shared columns. Every column is shared or private to exactly one group.
+    """
+
+    shared: tuple[int, ...]
+    groups: tuple[tuple[tuple[int, ...], tuple[int, ...]], ...]
+
+    def check(self, n_rows: int, n_cols: int) -> None:
+        """Raise :class:`~pkmkit.errors.InputError` when the pattern does not partition the
+        columns or its groups' rows overlap."""
+        cols = list(self.shared) + [c for _, cs in self.groups for c in cs]
+        if sorted(cols) != list(range(n_cols)):
+            raise InputError(f"block pattern columns {sorted(cols)} do not partition "
+                             f"range({n_cols})")
+        rows = [r for rs, _ in self.groups for r in rs]
+        if len(set(rows)) != len(rows) or (rows and not 0 <= min(rows) <= max(rows) < n_rows):
+            raise InputError("block pattern groups must have disjoint rows within the residual")
+
+
+def _index(ids) -> slice | list[int]:
+    """A slice for contiguous increasing indices (a view, no copy), else the list."""
+    ids = list(ids)
+    if ids and ids == list(range(ids[0], ids[0] + len(ids))):
+        return slice(ids[0], ids[0] + len(ids))
+    return ids
+
+
+class _BlockNormal:
+    """``JᵀJ`` of a :class:`BlockPattern`: ``A`` (shared × shared), per group ``B_g`` (shared ×
+    private) and ``C_g`` (private × private), batch last."""
+
+    def __init__(self, pattern: BlockPattern, a, b, c):
+        self.pattern, self.a, self.b, self.c = pattern, a, b, c
+
+    @classmethod
+    def of(cls, jac: np.ndarray, pattern: BlockPattern) -> _BlockNormal:
+        n_shared = len(pattern.shared)
+        j_s = jac[:, _index(pattern.shared)]
+        a = normal_matrix(j_s)
+        b, c = [], []
+        for rows, cols in pattern.groups:
+            r_idx, c_idx = _index(rows), _index(cols)
+            j_g = jac[r_idx][:, c_idx]
+            j_sg = j_s[r_idx]
+            b_g = np.empty((n_shared, len(cols), jac.shape[2]))
+            for i in range(n_shared):
+                for j in range(len(cols)):
+                    b_g[i, j] = np.einsum("mk,mk->k", j_sg[:, i], j_g[:, j])
+            b.append(b_g)
+            c.append(normal_matrix(j_g))
+        return cls(pattern, a, b, c)
+
+    def diagonal(self) -> np.ndarray:
+        """``(n, k)`` diagonal of ``JᵀJ`` in column order."""
+        n = len(self.pattern.shared) + sum(len(cs) for _, cs in self.pattern.groups)
+        out = np.empty((n, self.a.shape[2]))
+        s = np.arange(len(self.pattern.shared))
+        out[list(self.pattern.shared)] = self.a[s, s]
+        for (_, cols), c_g in zip(self.pattern.groups, self.c, strict=True):
+            i = np.arange(len(cols))
+            out[list(cols)] = c_g[i, i]
+        return out
+
+    def add_diagonal(self, values: np.ndarray) -> None:
+        """Add ``values (n, k)`` (column order) to the diagonal, in place."""
+        s = np.arange(len(self.pattern.shared))
+        self.a[s, s] += values[list(self.pattern.shared)]
+        for (_, cols), c_g in zip(self.pattern.groups, self.c, strict=True):
+            i = np.arange(len(cols))
+            c_g[i, i] += values[list(cols)]
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """Solve ``JᵀJ x = rhs`` by the Schur complement on the shared unknowns."""
+        shared = _index(self.pattern.shared)
+        schur = self.a.copy()
+        top = rhs[shared].copy()
+        solved = []
+        for (_, cols), b_g, c_g in zip(self.pattern.groups, self.b, self.c, strict=True):
+            # C_g⁻¹ [B_gᵀ | rhs_g] in one factorisation
+            stacked = np.concatenate([np.swapaxes(b_g, 0, 1), rhs[_index(cols)][:, None]],
+                                     axis=1)
+            z = solve_spd_many(c_g, stacked)
+            schur -= np.einsum("ijk,jlk->ilk", b_g, z[:, :-1])
+            top -= np.einsum("ijk,jk->ik", b_g, z[:, -1])
+            solved.append(z)
+        x = np.empty_like(rhs)
+        x_s = solve_spd(schur, top)
+        x[shared] = x_s
+        for (_, cols), z in zip(self.pattern.groups, solved, strict=True):
+            x[_index(cols)] = z[:, -1] - np.einsum("jik,ik->jk", z[:, :-1], x_s)
+        return x
 
 
 @dataclass(frozen=True)
@@ -101,6 +211,42 @@ def solve_spd(h: np.ndarray, b: np.ndarray) -> np.ndarray:
     return x
 
 
+def solve_spd_many(h: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve ``H X = B`` for batch-last SPD ``H (n, n, k)`` and ``B (n, r, k)`` (vectorised
+    Cholesky for n ≤ :data:`SMALL`, accumulating in place; LAPACK otherwise)."""
+    n = h.shape[0]
+    if n > SMALL:
+        return np.linalg.solve(h.transpose(2, 0, 1), b.transpose(2, 0, 1)).transpose(1, 2, 0)
+    low = np.zeros_like(h)
+    for j in range(n):
+        s = h[j, j].copy()
+        for m in range(j):
+            s -= low[j, m] * low[j, m]
+        low[j, j] = np.sqrt(s)
+        inv = 1.0 / low[j, j]
+        for i in range(j + 1, n):
+            s = h[i, j].copy()
+            for m in range(j):
+                s -= low[i, m] * low[j, m]
+            low[i, j] = s * inv
+    x = np.array(b, dtype=float)
+    for i in range(n):  # L y = b
+        for m in range(i):
+            x[i] -= low[i, m] * x[m]
+        x[i] /= low[i, i]
+    for i in range(n - 1, -1, -1):  # Lᵀ x = y
+        for m in range(i + 1, n):
+            x[i] -= low[m, i] * x[m]
+        x[i] /= low[i, i]
+    return x
+
+
+def _batch(a: np.ndarray, idx: slice | np.ndarray) -> np.ndarray:
+    """The batch entries ``idx`` of a batch-last array, contiguous (a fancy index on the last
+    axis, ``a[..., idx]``, strides the batch axis and slows every later pass several-fold)."""
+    return a[..., idx] if isinstance(idx, slice) else np.take(a, idx, axis=-1)
+
+
 def _add(u: np.ndarray, delta: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return u + delta
 
@@ -119,6 +265,7 @@ def solve_least_squares(
     damping: float = 1e-4,
     rcond: float = 1e-10,
     compute_rank: bool = True,
+    pattern: BlockPattern | None = None,
 ) -> SolveResult:
     """Solve N independent nonlinear least-squares problems ``min ½‖r(u)‖²`` in one batch.
 
@@ -141,6 +288,8 @@ def solve_least_squares(
         rcond: singular values below ``rcond · σ_max`` do not count in the reported rank.
         compute_rank: report each row's final Jacobian rank (one eigen-decomposition per row);
             with False, ``rank`` is −1.
+        pattern: the Jacobian's block structure, if any (:class:`BlockPattern`): the normal
+            equations are then formed and solved block by block (module docstring).
 
     Returns:
         :class:`SolveResult` (batch axis first).
@@ -160,9 +309,14 @@ def solve_least_squares(
     live = rows_all[valid]
     r_live, j_live = evaluate(u[:, live], live)
     m = r_live.shape[0]
-    r = np.full((m, n_rows), np.nan)
-    jac = np.full((m, n, n_rows), np.nan)
-    r[:, live], jac[:, :, live] = r_live, j_live
+    if pattern is not None:
+        pattern.check(m, n)
+    if live.size == n_rows:  # every start valid: the evaluation's arrays, no NaN fill
+        r, jac = np.array(r_live), np.array(j_live)
+    else:
+        r = np.full((m, n_rows), np.nan)
+        jac = np.full((m, n, n_rows), np.nan)
+        r[:, live], jac[:, :, live] = r_live, j_live
     cost = np.full(n_rows, np.inf)
     cost[live] = 0.5 * np.einsum("mk,mk->k", r_live, r_live)
     valid &= np.isfinite(cost) & np.isfinite(jac).all(axis=(0, 1))
@@ -178,13 +332,12 @@ def solve_least_squares(
             break
         if idx.size == n_rows:  # every row active: slices avoid copies
             idx = slice(None)
-        j_a, r_a = jac[:, :, idx], r[:, idx]
-        jtj = normal_matrix(j_a)
+        j_a, r_a = _batch(jac, idx), _batch(r, idx)
         grad = np.einsum("mnk,mk->nk", j_a, r_a)
-        diag = jtj[diag_idx, diag_idx]  # (n, k)
-        # stationary (cosine test) or exact rows stop before stepping
+        # stationary (cosine test) or exact rows stop before stepping (and before JᵀJ)
+        columns = np.einsum("mnk,mnk->nk", j_a, j_a)  # the diagonal of JᵀJ
         with np.errstate(invalid="ignore", divide="ignore"):
-            cosine = np.abs(grad) / np.sqrt(diag * (2.0 * cost[idx]))
+            cosine = np.abs(grad) / np.sqrt(columns * (2.0 * cost[idx]))
         stop = (cost[idx] <= 0.5 * atol * atol) | ~(np.nan_to_num(cosine, nan=0.0).max(
             axis=0) > gtol)
         if stop.any():
@@ -195,12 +348,22 @@ def solve_least_squares(
             if not keep.any():
                 break
             idx = rows_all[idx][keep]
-            j_a, r_a, jtj, grad, diag = (j_a[:, :, keep], r_a[:, keep], jtj[:, :, keep],
-                                         grad[:, keep], diag[:, keep])
+            j_a, r_a, grad = (np.compress(keep, j_a, axis=-1), np.compress(keep, r_a, axis=-1),
+                              grad[:, keep])
+        if pattern is None:
+            jtj = normal_matrix(j_a)
+            diag = jtj[diag_idx, diag_idx]  # (n, k)
+        else:
+            jtj = _BlockNormal.of(j_a, pattern)
+            diag = jtj.diagonal()
         floor = 1e-9 * diag.max(axis=0) + 1e-300
-        jtj[diag_idx, diag_idx] += lam[idx] * (diag + floor)
-        step = -solve_spd(jtj, grad)
-        u_new = retract(u[:, idx], step, idx)
+        if pattern is None:
+            jtj[diag_idx, diag_idx] += lam[idx] * (diag + floor)
+            step = -solve_spd(jtj, grad)
+        else:
+            jtj.add_diagonal(lam[idx] * (diag + floor))
+            step = -jtj.solve(grad)
+        u_new = retract(_batch(u, idx), step, idx)
         r_new, j_new = evaluate(u_new, idx)
         cost_new = 0.5 * np.einsum("mk,mk->k", r_new, r_new)
         # accept rounding-level increases: near a solution the cost stops being informative
@@ -215,7 +378,7 @@ def solve_least_squares(
         else:
             u[:, took] = u_new[:, accept]
             r[:, took] = r_new[:, accept]
-            jac[:, :, took] = j_new[:, :, accept]
+            jac[:, :, took] = np.compress(accept, j_new, axis=-1)
             cost[took] = cost_new[accept]
         lam[took] = np.maximum(lam[took] * 0.1, 1e-12)
         lam[idx[~accept]] *= 10.0
