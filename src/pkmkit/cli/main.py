@@ -24,10 +24,8 @@ from pkmkit.machines.registry import machines as builtin_ids
 from pkmkit.model.parameters import length_scale
 from pkmkit.status import Status, status_labels
 
-from .analysis_cmds import register as register_analysis_commands
 from .describe import describe_machine, print_description
-from .design_cmds import register as register_design_commands
-from .motion_cmds import register as register_motion_commands
+from .lazy import LazyGroup
 from .options import (
     EXIT_PARTIAL,
     JSON_OPTION,
@@ -40,7 +38,7 @@ from .options import (
 )
 
 
-class PkmGroup(click.Group):
+class PkmGroup(LazyGroup):
     """Turns pkmkit's typed errors into a one-line message and exit status 1."""
 
     def invoke(self, ctx: click.Context):
@@ -320,11 +318,6 @@ def demo(out_dir: str) -> None:
         run_demo(Path(out_dir))
     except OSError as exc:
         raise click.ClickException(f"cannot write into {out_dir}: {exc.strerror or exc}") from None
-
-
-register_analysis_commands(cli)
-register_design_commands(cli)
-register_motion_commands(cli)
 
 
 def main() -> None:

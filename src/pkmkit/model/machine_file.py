@@ -14,11 +14,12 @@ import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
-
-import yaml
+from typing import TYPE_CHECKING, Any
 
 from pkmkit.errors import MachineFileError
+
+if TYPE_CHECKING:
+    import yaml
 
 KeyPath = tuple[str | int, ...]
 
@@ -134,6 +135,8 @@ def _toml_lines(text: str) -> dict[KeyPath, int]:
 def _reject_aliases(text: str, path: str) -> None:
     """Anchors and aliases can expand exponentially (or recursively): machine files may not use
     them."""
+    import yaml  # lazy: only YAML files need it
+
     for event in yaml.parse(text, Loader=yaml.SafeLoader):
         if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
             raise MachineFileError(path, "YAML anchors and aliases (&name, *name) are not "
@@ -141,6 +144,8 @@ def _reject_aliases(text: str, path: str) -> None:
 
 
 def _parse_yaml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
+    import yaml
+
     try:
         _reject_aliases(text, path)
         node = yaml.compose(text, Loader=yaml.SafeLoader)
@@ -159,6 +164,8 @@ def _parse_yaml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
 
 
 def _yaml_lines(node: yaml.Node, prefix: KeyPath, lines: dict[KeyPath, int]) -> None:
+    import yaml
+
     if isinstance(node, yaml.MappingNode):
         for key_node, value_node in node.value:
             key = (*prefix, str(key_node.value))

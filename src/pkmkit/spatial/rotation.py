@@ -10,7 +10,6 @@ Perturbations are *left* (world-frame) increments: ``R ← exp([δ]×) R``.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -32,11 +31,15 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 def rotvec_to_matrix(phi: np.ndarray) -> np.ndarray:
     """Rotation matrices ``(N, 3, 3)`` of rotation vectors ``(N, 3)`` (radians)."""
+    from scipy.spatial.transform import Rotation  # lazy: SciPy's spatial costs 0.2 s to import
+
     return Rotation.from_rotvec(np.asarray(phi, dtype=float).reshape(-1, 3)).as_matrix()
 
 
 def compose_rotvec(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """Rotation vector of ``exp(δ) · exp(φ)`` (left increment δ applied to φ), rows ``(N, 3)``."""
+    from scipy.spatial.transform import Rotation
+
     d = Rotation.from_rotvec(np.asarray(delta, dtype=float).reshape(-1, 3))
     p = Rotation.from_rotvec(np.asarray(phi, dtype=float).reshape(-1, 3))
     return (d * p).as_rotvec()
