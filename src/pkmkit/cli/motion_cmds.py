@@ -13,7 +13,7 @@ from pkmkit.dynamics.masses import load_masses
 from pkmkit.dynamics.trajectory import simulate_path
 from pkmkit.dynamics.wrench import load_wrench_series
 from pkmkit.errors import InputError
-from pkmkit.io.csv_io import write_table
+from pkmkit.io.table import write_table
 from pkmkit.model.parameters import length_scale
 from pkmkit.motion.gcode import read_gcode
 from pkmkit.motion.joints import Limits
