@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import click
 import numpy as np
@@ -13,7 +12,8 @@ from pkmkit.dynamics.masses import load_masses
 from pkmkit.dynamics.trajectory import simulate_path
 from pkmkit.dynamics.wrench import load_wrench_series
 from pkmkit.errors import InputError
-from pkmkit.io.table import write_table
+from pkmkit.io.atomic import check_output_dir
+from pkmkit.io.table import TableWriter
 from pkmkit.model.parameters import length_scale
 from pkmkit.motion.gcode import read_gcode
 from pkmkit.motion.joints import Limits
@@ -125,6 +125,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     powers, with a check of the actuator limits (exit status 3 when a limit is exceeded)."""
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
+    out = check_output_dir(out_dir) if out_dir else None
     tool_path = build_path(m, scale, gcode, origin, line_text, circle_text, helix_text,
                            raster_text)
     props, file_wrench = load_masses(masses, m) if masses else (None, None)
@@ -160,12 +161,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
         v["pose"] = np.asarray(v["pose"]) / scale
     summary.update({"machine": m.id, "units": units, "profile": profile,
                     "actuators": list(m.actuator_names), "total_mass": result.masses.total_mass})
-    if out_dir:
-        out = Path(out_dir)
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise InputError(f"cannot create {out_dir}: {exc.strerror or exc}") from None
+    if out is not None:
         motion = result.motion
         plot_joint_motion(motion, m.actuator_names, forces=result.forces.force,
                           title=f"{m.name}: {summary['duration']:.3f} s", length_unit=units,
@@ -176,7 +172,8 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                   *[f"{n}_ddot" for n in names], *[f"f_{n}" for n in names]]
         rows = np.column_stack([motion.t, motion.x / scale, motion.q / scale, motion.qd / scale,
                                 motion.qdd / scale, result.forces.force])
-        write_table(out / "trajectory.csv", header, rows.tolist())
+        with TableWriter(out / "trajectory.csv") as writer:
+            writer.write({name: rows[:, j] for j, name in enumerate(header)})
         summary["files"] = ["motion.png", "path.png", "trajectory.csv"]
     if as_json:
         emit_json(summary)

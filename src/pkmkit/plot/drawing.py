@@ -9,6 +9,7 @@ from matplotlib.figure import Figure
 
 from pkmkit.machines.machine import Machine
 from pkmkit.model.rods import SLIDE
+from pkmkit.plot.save import save_figure
 
 _LEG_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
 
@@ -96,5 +97,5 @@ def draw_machine(machine: Machine, pose=None, *, q=None, ax=None, title: str | N
     ax.set_title(title, fontsize=9)
     ax.legend(loc="upper left", fontsize=7)
     if path is not None:
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        save_figure(fig, path, dpi=120, bbox_inches="tight")
     return fig
