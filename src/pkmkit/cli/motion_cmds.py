@@ -186,7 +186,8 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
 def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
     u = units
     click.echo(f"{m.name}: {summary['length']:.6g} {u} of path in {summary['duration']:.4f} s "
-               f"({summary['samples']} samples, {profile})")
+               f"({summary['samples']} samples, {profile}); figures over the continuous motion "
+               f"(to {summary['between_samples']['rtol']:.0e} of each range)")
     click.echo(f"  actuator range {fmt(summary['q_min'])} .. {fmt(summary['q_max'])} {u}, "
                f"stroke {fmt(summary['stroke'])} {u}")
     click.echo(f"  speeds {fmt(summary['qd_range'][0])} .. {fmt(summary['qd_range'][1])} {u}/s; "
@@ -198,8 +199,9 @@ def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
                "`pkmkit arm-sizing --force`, divided among the leg's rods)")
     if summary["violations"]:
         for v in summary["violations"]:
-            click.echo(f"  LIMIT {v['limit']}: {v['actuator']} = {v['value']:.6g} exceeds it by "
-                       f"{v['excess']:.6g} at t = {v['t']:.4f} s, pose {fmt(v['pose'])}")
+            click.echo(f"  LIMIT {v['limit']}: {v['actuator']} exceeds it from t = {v['t']:.4f} s,"
+                       f" by up to {v['excess']:.6g} ({v['actuator']} = {v['value']:.6g} at "
+                       f"t = {v['t_peak']:.4f} s, pose {fmt(v['pose'])})")
     else:
         click.echo("  every checked limit holds")
 

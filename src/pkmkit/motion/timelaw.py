@@ -161,6 +161,48 @@ class Trajectory:
     def length(self) -> float:
         return self.path.length
 
+    def at(self, t: np.ndarray) -> Trajectory:
+        """The same motion evaluated at the times ``t`` ``(M,)`` s (clipped to [0, duration]),
+        whatever the sampling period: positions, velocities and accelerations of the continuous
+        time law."""
+        t = np.clip(np.asarray(t, dtype=float).reshape(-1), 0.0, self.duration)
+        if self.blocks:
+            return _evaluate_blocks(self.path, self.blocks, t, self.period)
+        return _constant_speed_at(self.path, self.length / self.duration, t, self.period)
+
+    def breakpoints(self) -> np.ndarray:
+        """Sorted times (s, from 0 to the duration) where the motion may be non-smooth: block
+        ends, the time law's phase changes (a jump of the acceleration or of the jerk) and the
+        joints between segments (a jump of the curvature). Between two consecutive breakpoints
+        every quantity of the motion is an analytic function of time."""
+        if not self.blocks:
+            lengths = np.array([seg.length for seg in self.path.segments])
+            times = np.concatenate([[0.0], np.cumsum(lengths)]) * (self.duration / lengths.sum())
+            return np.unique(np.clip(times, 0.0, self.duration))
+        times = [np.zeros(1)]
+        start = 0.0
+        for block in self.blocks:
+            prof = block.profile
+            times.append(start + np.cumsum(prof.durations))
+            joints = np.cumsum(block.lengths)[:-1]
+            if joints.size:
+                times.append(start + _times_at_distances(prof, joints))
+            start += prof.duration
+        return np.unique(np.clip(np.concatenate(times), 0.0, self.duration))
+
+
+def _times_at_distances(profile: Profile, distances: np.ndarray) -> np.ndarray:
+    """Times at which a rest-to-rest profile has covered ``distances`` (bisection: s(t) is
+    non-decreasing)."""
+    lo = np.zeros(len(distances))
+    hi = np.full(len(distances), profile.duration)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        below = profile.evaluate(mid)[0] < distances
+        lo = np.where(below, mid, lo)
+        hi = np.where(below, hi, mid)
+    return 0.5 * (lo + hi)
+
 
 def _corner(a, b, tol: float) -> bool:
     ta, tb = a.tangent(end=True), b.tangent(end=False)
@@ -268,6 +310,13 @@ def _sample(path: Path, blocks: tuple[Block, ...], period: float) -> Trajectory:
     t = np.arange(n) * period
     if t[-1] < starts[-1] - 1e-12:
         t = np.append(t, starts[-1])
+    return _evaluate_blocks(path, blocks, t, period)
+
+
+def _evaluate_blocks(path: Path, blocks: tuple[Block, ...], t: np.ndarray,
+                     period: float) -> Trajectory:
+    """The planned motion at times ``t`` (s, within [0, duration])."""
+    starts = np.concatenate([[0.0], np.cumsum([b.profile.duration for b in blocks])])
     x = np.empty((len(t), 3))
     xd = np.empty_like(x)
     xdd = np.empty_like(x)
@@ -317,6 +366,11 @@ def constant_speed(path: Path, *, speed: float, period: float) -> Trajectory:
     t = np.arange(n) * period
     if t[-1] < duration - 1e-12:
         t = np.append(t, duration)
+    return _constant_speed_at(path, speed, t, period)
+
+
+def _constant_speed_at(path: Path, speed: float, t: np.ndarray, period: float) -> Trajectory:
+    lengths = np.array([seg.length for seg in path.segments])
     s = np.minimum(speed * t, lengths.sum())
     bounds = np.concatenate([[0.0], np.cumsum(lengths)])
     which = np.clip(np.searchsorted(bounds, s, side="right") - 1, 0, len(lengths) - 1)
