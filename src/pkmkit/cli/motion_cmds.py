@@ -52,6 +52,18 @@ def _numbers(text: str, count: int | tuple[int, ...], what: str) -> list[float]:
     return values
 
 
+def _check_positive(name: str, value: float | None, unit: float, units: str) -> None:
+    """A positive, finite option whose value in SI units is still positive and finite."""
+    if value is None:
+        return
+    if not (np.isfinite(value) and value > 0):
+        raise InputError(f"{name} must be a finite number > 0, got {value:g}")
+    si = value * unit
+    if not (np.isfinite(si) and si > 0):
+        raise InputError(f"{name} {value:g} {'overflows' if si else 'underflows to 0'} in SI "
+                         f"units (from {units})")
+
+
 def build_path(machine, scale: float, gcode, origin, line_text, circle_text, helix_text,
                raster_text):
     """The tool path from exactly one of the path options (lengths in CLI units)."""
@@ -136,11 +148,12 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
         force = np.asarray(_numbers(wrench, (3,), "--wrench"))
     if wrench_file:
         force = load_wrench_series(wrench_file)
-    for name, value in (("--feed", feed), ("--accel", accel), ("--jerk", jerk),
-                        ("--rapid-feed", rapid_feed), ("--speed-limit", speed_limit),
-                        ("--accel-limit", accel_limit), ("--force-limit", force_limit)):
-        if value is not None and not (np.isfinite(value) and value > 0):
-            raise InputError(f"{name} must be > 0, got {value:g}")
+    for name, value, unit in (("--feed", feed, scale), ("--accel", accel, scale),
+                              ("--jerk", jerk, scale), ("--rapid-feed", rapid_feed, scale),
+                              ("--speed-limit", speed_limit, scale),
+                              ("--accel-limit", accel_limit, scale),
+                              ("--force-limit", force_limit, 1.0), ("--period", period, 1.0)):
+        _check_positive(name, value, unit, units)
     limits = Limits(speed=None if speed_limit is None else speed_limit * scale,
                     accel=None if accel_limit is None else accel_limit * scale,
                     force=force_limit)

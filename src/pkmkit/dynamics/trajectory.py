@@ -24,6 +24,11 @@ from pkmkit.motion.joints import JointTrajectory, Limits, joint_trajectory
 from pkmkit.motion.paths import Path
 from pkmkit.motion.timelaw import Trajectory, plan
 
+QUANTITY_NAMES = {"q": "actuator position", "qd": "actuator speed",
+                  "qdd": "actuator acceleration", "force": "actuator force",
+                  "power": "actuator power", "leg_axial": "leg axial force",
+                  "tool_speed": "tool speed", "tool_accel": "tool acceleration"}
+
 
 @dataclass(frozen=True)
 class PathResult:
@@ -171,6 +176,11 @@ def simulate_path(machine: Machine, path: Path, *, feed: float, accel: float,
         inside = wrench.t[(wrench.t > 0) & (wrench.t < trajectory.duration)]
         breakpoints = np.union1d(breakpoints, inside)
     extrema = continuous_extrema(evaluate, breakpoints, rtol=rtol)
+    for name in ("q", "qd", "qdd", "force", "power", "leg_axial", "tool_speed", "tool_accel"):
+        if not (np.isfinite(extrema.low[name]).all() and np.isfinite(extrema.high[name]).all()):
+            raise InputError(
+                f"the {QUANTITY_NAMES[name]} along the path is not finite (a value overflows): "
+                "check the feed, acceleration and jerk limits, the masses and the wrench")
     report = check_limits_continuous(machine, trajectory, extrema, limits or Limits())
     return PathResult(motion=motion, forces=forces, masses=masses, limits=report,
                       extrema=extrema)

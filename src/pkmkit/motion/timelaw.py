@@ -294,8 +294,18 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
                 v = min(v, (jerk / 3 / kappa**2) ** (1 / 3), jerk / 9 / (a_t * kappa))
                 if tau > 0:
                     v = min(v, (jerk / 3 / (kappa * tau)) ** (1 / 3))
-        prof = (trapezoid(float(lengths.sum()), v, a_t) if profile == "trapezoid"
-                else scurve(float(lengths.sum()), v, a_t, j_t))
+        try:
+            with np.errstate(over="raise", invalid="raise", divide="raise"):
+                prof = (trapezoid(float(lengths.sum()), v, a_t) if profile == "trapezoid"
+                        else scurve(float(lengths.sum()), v, a_t, j_t))
+        except (OverflowError, ZeroDivisionError, FloatingPointError):
+            prof = None
+        if prof is None or not (np.isfinite(prof.durations).all() and prof.duration > 0
+                                and np.isfinite(prof.peak_speed)):
+            raise InputError(
+                f"the time law of a {float(lengths.sum()):.6g} m block is not finite with feed "
+                f"{v:g} m/s, acceleration {a_t:g} m/s² and jerk "
+                f"{'-' if j_t is None else f'{j_t:g}'} m/s³: the limits are too far apart")
         blocks.append(Block(tuple(group), lengths, prof, segs[group[0]].rapid, v))
     total = sum(b.profile.duration for b in blocks)
     if total / period + 1 > max_samples:
