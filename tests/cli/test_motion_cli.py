@@ -57,7 +57,7 @@ def test_arm_sizing(run, as_json):
         (["path", "linear-delta", "--circle", "0,0,0.2", "--feed", "0.1", "--accel", "1",
           "--jerk", "1"], "needs 4 numbers"),
         (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "-1", "--accel", "1",
-          "--jerk", "1"], "must be > 0"),
+          "--jerk", "1"], "must be a finite number > 0"),
         (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "0.1", "--accel", "1"],
          "jerk"),
         (["path", "linear-delta", "--line", "0,0,0:3,0,0", "--feed", "0.1", "--accel", "1",
