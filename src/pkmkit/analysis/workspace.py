@@ -378,8 +378,10 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     maximised under "every slack ≥ 0" and "inside the grid's box" by SLSQP
     (:func:`pkmkit.analysis.inscribed.largest_box`). The optimum is then checked with the
     boolean criteria and, if rounding left a point failing, shrunk about its centre by
-    bisection; the side is known to ``rtol`` (relative). The box never leaves the grid's box
-    (``grid.lower_bounds`` … ``grid.upper_bounds``): the region studied bounds the answer."""
+    bisection — as it is if its faces fail on a lattice ten times denser (the region's boundary
+    can bulge in between lattice points); the side is known to ``rtol`` (relative). The box
+    never leaves the grid's box (``grid.lower_bounds`` … ``grid.upper_bounds``): the region
+    studied bounds the answer."""
     free = list(grid.free)
     samples = check_region_samples(len(free))
     length = float(np.max(machine.model.leg_length))
@@ -414,6 +416,23 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
                 mid = 0.5 * (good + bad)
                 good, bad = (mid, bad) if feasible(center, mid) else (good, mid)
             half = good
+    # the region's boundary can bulge into the box between two lattice points (by ~κΔ²/8):
+    # its faces are checked again on a lattice ten times denser, and the box shrunk until
+    # they pass
+    surface = _surface_offsets(len(free), 401 if len(free) <= 2 else 61)
+
+    def faces_ok(c: np.ndarray, h: float) -> bool:
+        points = np.tile(box.center, (len(surface), 1))
+        points[:, free] = c + h * surface
+        return bool(evaluate_poses(machine, points, criteria).feasible.all())
+
+    if not faces_ok(center, half):
+        good, bad = 0.0, half
+        while bad - good > 0.1 * rtol * bad:
+            mid = 0.5 * (good + bad)
+            good, bad = (mid, bad) if faces_ok(center, mid) and feasible(center, mid) \
+                else (good, mid)
+        half = good
     if half < start[1] and feasible(*start):  # never worse than the grid's box
         center, half = start
     middle = _full(box.center, free, center)
@@ -421,6 +440,19 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     lower[free] -= half
     return InscribedBox(side=float(2.0 * half), center=middle, lower=lower,
                         points_per_side=box.points_per_side)
+
+
+def _surface_offsets(d: int, per_edge: int) -> np.ndarray:
+    """Points of the faces of ``[-1, 1]^d``, ``per_edge`` per edge (duplicates removed)."""
+    axis = np.linspace(-1.0, 1.0, per_edge)
+    faces = []
+    for k in range(d):
+        grids = np.meshgrid(*([axis] * (d - 1)), indexing="ij")
+        inner = np.stack([g.ravel() for g in grids], axis=-1) if d > 1 else np.zeros((1, 0))
+        for side in (-1.0, 1.0):
+            face = np.insert(inner, k, side, axis=1)
+            faces.append(face)
+    return np.unique(np.concatenate(faces), axis=0)
 
 
 def _full(base: np.ndarray, free: list[int], values: np.ndarray) -> np.ndarray:
