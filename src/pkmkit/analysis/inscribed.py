@@ -51,6 +51,15 @@ def largest_box(slack: Slack, points_of: PointsOf, center: np.ndarray, half: flo
 
     Returns:
         ``(center, half)``; the start if the optimiser does not improve on it.
+
+    The largest square in the unit disc, from a small square off its centre (side √2):
+
+    >>> import numpy as np
+    >>> center, half = largest_box(lambda p: 1 - np.hypot(p[:, 0], p[:, 1]),
+    ...                            lambda c, h, u: c + h * u, np.array([0.3, 0.2]), 0.1,
+    ...                            np.full(2, -2.0), np.full(2, 2.0), samples=21)
+    >>> round(2 * half, 6), [round(v, 6) + 0.0 for v in center.tolist()]
+    (1.414214, [0.0, 0.0])
     """
     from scipy.optimize import minimize
 

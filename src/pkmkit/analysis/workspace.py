@@ -545,7 +545,19 @@ def check_region(machine: Machine, center: Any, side: float, criteria: Criteria 
                  *, free: tuple[int, ...] | None = None, samples: int | None = None
                  ) -> RegionCheck:
     """Is the axis-aligned square/cube of ``side`` centred at ``center`` usable, and where does
-    it fail? Checks ``samples`` points per edge (faces included)."""
+    it fail? Checks ``samples`` points per edge (faces included).
+
+    The Orthoglide prototype's 0.2 m cube under 1/2 ≤ λ ≤ 2 (seed 001), and a larger one:
+
+    >>> import pkmkit
+    >>> m = pkmkit.machine("orthoglide")
+    >>> c = -0.0267446 * np.ones(3)
+    >>> check_region(m, c, 0.199, Criteria(bounds=(0.5, 2.0))).feasible
+    True
+    >>> check = check_region(m, c, 0.21, Criteria(bounds=(0.5, 2.0)))
+    >>> check.feasible, sorted(check.failures)
+    (False, ['bounds', 'strokes'])
+    """
     criteria = criteria or Criteria()
     grid = region_grid(machine, center, side, free, samples)
     points = grid.points

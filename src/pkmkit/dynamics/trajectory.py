@@ -162,6 +162,20 @@ def simulate_path(machine: Machine, path: Path, *, feed: float, accel: float,
     Raises:
         InputError: bad limits, a path the machine cannot follow (with the first failing
             sample, between output samples too), bad masses or wrench.
+
+    Seed 000's circle sampled every second still gives its stroke and peak speeds:
+
+    >>> import pkmkit
+    >>> from pkmkit.dynamics.trajectory import simulate_path
+    >>> from pkmkit.motion import circle
+    >>> m = pkmkit.machine("linear-delta-table-iv1")
+    >>> r = simulate_path(m, circle([0, 0, 0.2], 0.15), feed=0.12, accel=1.0, jerk=10.0,
+    ...                   period=1.0)
+    >>> s = r.summary()
+    >>> s["samples"], [round(1000 * float(v), 2) for v in s["stroke"]]
+    (10, [190.84, 190.84, 190.84])
+    >>> [round(1000 * float(v), 2) for v in s["qd_max"]]  # mm/s
+    [76.34, 76.34, 76.34]
     """
     trajectory = plan(path, feed=feed, accel=accel, jerk=jerk, profile=profile,
                       rapid_feed=rapid_feed, period=period)

@@ -150,6 +150,15 @@ def read_table(path: str | Path, columns: Sequence[str],
     Raises:
         InputError: unreadable file, missing columns, no data rows, or (without ``problems``)
             a bad cell, with its line.
+
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "poses.csv"
+    >>> _ = path.write_text("# poses\\nz,x,y\\n0.1,0.2,0.3\\n0,abc,0\\n")
+    >>> problems = []
+    >>> read_table(path, ["x", "y", "z"], problems).tolist()
+    [[0.2, 0.3, 0.1], [nan, 0.0, 0.0]]
+    >>> problems[0].endswith("poses.csv:4: column 'x' is not a number: 'abc'")
+    True
     """
     chunk = TableReader(path, columns).read_all()
     if chunk.problems and problems is None:
@@ -504,6 +513,16 @@ class TableWriter:
     Raises:
         InputError: an unknown extension or a destination that cannot be written — at
             construction, before any work is done.
+
+    >>> import io
+    >>> out = io.BytesIO()
+    >>> with TableWriter("-", stdout=out) as writer:
+    ...     writer.write({"q": np.array([0.042444, 0.1 + 0.2]),
+    ...                   "status": Labels(np.array([0, 1]), ["ok", "unreachable"])})
+    >>> print(out.getvalue().decode(), end="")
+    q,status
+    0.042444,ok
+    0.30000000000000004,unreachable
     """
 
     def __init__(self, path: str | Path, *, stdout: BinaryIO | None = None):
