@@ -9,6 +9,9 @@ run on the same tables:
 - ``xold``: the former implementation (csv module, per-row ``float()`` and ``.17g`` formatting,
   per-row status labels) on the first ``--old-rows`` rows, scaled to ``--rows``.
 
+``cpu s``, ``lib cpu`` and ``solve cpu`` are the same in CPU time (user + system): on a loaded
+machine they estimate the wall time of a quiet one.
+
 ``solve s`` is the engine call the command makes (``Machine.ik(full_output=True)``,
 ``Machine.fk(full_output=True)``, ``Machine.jacobian``) timed in this process on the same rows;
 ``rest`` = total − solve is what the command line adds (start-up, reading, writing, statuses),
@@ -60,13 +63,33 @@ def _pkmkit_command() -> list[str]:
 
 def wall(cmd: list[str], repeat: int) -> float:
     """Median wall time (s) of ``cmd`` run ``repeat`` times (exit status 0 or 3 accepted)."""
-    times = []
+    return run_times(cmd, repeat)[0]
+
+
+def run_times(cmd: list[str], repeat: int) -> tuple[float, float]:
+    """Median wall time and median CPU time (user + system, s) of ``cmd`` over ``repeat`` runs.
+    On a loaded machine the CPU time estimates the wall time of a quiet one (an upper bound
+    where pyarrow uses both cores)."""
+    walls, cpus = [], []
     for _ in range(repeat):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         start = time.perf_counter()
         done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-        times.append(time.perf_counter() - start)
+        walls.append(time.perf_counter() - start)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpus.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
         if done.returncode not in (0, 3):
             raise RuntimeError(f"{' '.join(map(str, cmd))} failed: {done.stderr.decode()}")
+    return statistics.median(walls), statistics.median(cpus)
+
+
+def cpu_in_process(func, repeat: int) -> float:
+    """Median CPU time (s) of ``func()`` in this process."""
+    times = []
+    for _ in range(repeat):
+        start = time.process_time()
+        func()
+        times.append(time.process_time() - start)
     return statistics.median(times)
 
 
@@ -106,8 +129,9 @@ def make_tables(folder: Path, rows: int) -> dict[str, Path]:
     return paths
 
 
-def library_read_write(src: Path, produced: Path, repeat: int) -> float:
-    """pyarrow reading ``src`` and writing the table held in ``produced`` (same format)."""
+def library_read_write(src: Path, produced: Path, repeat: int, cpu: bool = False) -> float:
+    """pyarrow reading ``src`` and writing the table held in ``produced`` (same format): median
+    wall time, or CPU time with ``cpu``."""
     if src.suffix == ".csv":
         out_table = pcsv.read_csv(produced)
 
@@ -120,7 +144,7 @@ def library_read_write(src: Path, produced: Path, repeat: int) -> float:
         def run():
             pq.read_table(src)
             pq.write_table(out_table, produced.with_suffix(".lib.parquet"))
-    return median_in_process(run, repeat)
+    return cpu_in_process(run, repeat) if cpu else median_in_process(run, repeat)
 
 
 def old_implementation(src: Path, dst: Path, rows: int, columns: list[str]) -> None:
@@ -153,7 +177,7 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
     cmd = _pkmkit_command()
     print(f"\n== {label}")
     print(f"{'command':<20} {'format':<8} {'s':>7} {'lib s':>7} {'xlib':>6} {'solve s':>8} "
-          f"{'rest s':>7} {'rest/lib':>8}")
+          f"{'rest/lib':>8} {'cpu s':>6} {'lib cpu':>7} {'solve cpu':>9}")
     m = pkmkit.machine("linear-delta")
     x = np.column_stack([pq.read_table(paths["poses.parquet"]).column(c).to_numpy()
                          for c in "xyz"])
@@ -166,14 +190,17 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
     }
     for command, src_name in (("ik", "poses"), ("fk", "q"), ("jacobian", "poses")):
         solve = median_in_process(solves[command], args.repeat)
+        solve_cpu = cpu_in_process(solves[command], args.repeat)
         for fmt in ("csv", "parquet"):
             src = paths[f"{src_name}.{fmt}"]
             dst = folder / f"out-{command}.{fmt}"
-            t = wall([*cmd, command, "linear-delta", "--input", str(src), "--output", str(dst)],
-                     args.repeat)
+            t, cpu = run_times([*cmd, command, "linear-delta", "--input", str(src), "--output",
+                                str(dst)], args.repeat)
             lib = library_read_write(src, dst, args.repeat)
+            lib_cpu = library_read_write(src, dst, args.repeat, cpu=True)
             print(f"pkmkit {command:<13} {fmt:<8} {t:7.3f} {lib:7.3f} {t / lib:6.2f} "
-                  f"{solve:8.3f} {t - solve:7.3f} {(t - solve) / lib:8.2f}")
+                  f"{solve:8.3f} {(t - solve) / lib:8.2f} {cpu:6.3f} {lib_cpu:7.3f} "
+                  f"{solve_cpu:9.3f}")
     old_rows = min(args.old_rows, args.rows)
     start = time.perf_counter()
     old_implementation(paths["poses.csv"], folder / "old.csv", old_rows, ["x", "y", "z"])
@@ -182,14 +209,14 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
                  str(folder / "out-ik.csv")], args.repeat)
     print(f"former CSV path (csv module, .17g), ik on {old_rows} rows scaled to {args.rows}: "
           f"{old:.2f} s; pkmkit ik now {t_ik:.3f} s, xold {old / t_ik:.1f}")
-    print(f"{'start-up':<34} {'s':>7} {'x python':>9} {'x numpy':>8}")
+    print(f"{'start-up':<34} {'s':>7} {'x python':>9} {'x numpy':>8} {'cpu s':>6}")
     t_pass = wall([sys.executable, "-c", "pass"], args.repeat)
     t_numpy = wall([sys.executable, "-c", "import numpy"], args.repeat)
     for name, extra in (("pkmkit --help", ["--help"]),
                         ("pkmkit ik (one pose)", ["ik", "linear-delta", "--pose", "0.25,0.25,0"]),
                         ("pkmkit path --help", ["path", "--help"])):
-        t = wall([*cmd, *extra], args.repeat)
-        print(f"{name:<34} {t:7.3f} {t / t_pass:9.1f} {t / t_numpy:8.2f}")
+        t, cpu = run_times([*cmd, *extra], args.repeat)
+        print(f"{name:<34} {t:7.3f} {t / t_pass:9.1f} {t / t_numpy:8.2f} {cpu:6.3f}")
 
 
 def main() -> None:
