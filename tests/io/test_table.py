@@ -213,3 +213,20 @@ def _umask():
     current = os.umask(0)
     os.umask(current)
     return current
+
+
+def test_csv_formatted_in_parallel_slices_is_identical(tmp_path, monkeypatch):
+    import pkmkit.io.table as table
+
+    rng = np.random.default_rng(5)
+    columns = {"a": rng.normal(size=5000) * 10.0 ** rng.integers(-6, 6, 5000),
+               "s": Labels(rng.integers(0, 2, 5000), ["ok", "unreachable"])}
+    texts = []
+    for rows in (10**9, 100):
+        monkeypatch.setattr(table, "PARALLEL_CSV_ROWS", rows)
+        monkeypatch.setattr(table, "_cpu_count", lambda: 4)
+        path = tmp_path / f"out{rows}.csv"
+        with TableWriter(path) as writer:
+            writer.write(columns)
+        texts.append(path.read_text())
+    assert texts[0] == texts[1] and texts[0].count("\n") == 5001
