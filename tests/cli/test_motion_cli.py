@@ -27,7 +27,7 @@ def test_path_gcode_with_violations(run, tmp_path):
     result = run("path", "linear-delta-table-iv1", "--gcode", program, "--origin", "0,0,0.2",
                  "--feed", "0.05", "--accel", "2", "--jerk", "20", "--speed-limit", "0.01")
     assert result.exit_code == 3  # the limit is reported, the results written
-    assert "LIMIT speed" in result.output and "exceeds it by" in result.output
+    assert "LIMIT speed" in result.output and "exceeds it from t =" in result.output
 
 
 def test_path_raster_and_wrench(run, as_json):
@@ -57,7 +57,7 @@ def test_arm_sizing(run, as_json):
         (["path", "linear-delta", "--circle", "0,0,0.2", "--feed", "0.1", "--accel", "1",
           "--jerk", "1"], "needs 4 numbers"),
         (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "-1", "--accel", "1",
-          "--jerk", "1"], "must be > 0"),
+          "--jerk", "1"], "must be a finite number > 0"),
         (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "0.1", "--accel", "1"],
          "jerk"),
         (["path", "linear-delta", "--line", "0,0,0:3,0,0", "--feed", "0.1", "--accel", "1",
@@ -119,3 +119,16 @@ def test_path_on_a_strut_machine(run, as_json, tmp_path):
                        "2", "--jerk", "20", "--json"))
     assert data["violations"] == [] and max(data["force_range"][1]) < 0
     np.testing.assert_allclose(data["leg_axial_max"], data["force_max"])
+
+
+def test_cli_stroke_independent_of_period(run, as_json):
+    args = ("path", "linear-delta-table-iv1", "--circle", "0,0,200,150", "--units", "mm",
+            "--feed", "120", "--accel", "1000", "--jerk", "10000", "--json")
+    fine = as_json(run(*args))
+    coarse = as_json(run(*args, "--period", "10"))
+    assert coarse["samples"] == 2
+    np.testing.assert_allclose(coarse["stroke"], fine["stroke"], rtol=1e-4)
+    np.testing.assert_allclose(coarse["qd_max"], fine["qd_max"], rtol=1e-4)
+    np.testing.assert_allclose(coarse["stroke"], 190.845, atol=1e-3)
+    text = run(*args[:-1], "--period", "10", "--speed-limit", "20").output
+    assert "LIMIT speed" in text and "every checked limit holds" not in text

@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 
 from pkmkit.errors import InputError
-from pkmkit.io.csv_io import read_table, write_table
 from pkmkit.io.json_io import to_jsonable
+from pkmkit.io.table import read_table, write_table
 
 
 def test_header_matched_by_name(tmp_path):
@@ -41,7 +41,7 @@ def test_write_round_trip(tmp_path):
     path = tmp_path / "out.csv"
     write_table(path, ["a", "status"], [[0.1, "ok"], [float("nan"), "unreachable"]])
     lines = path.read_text().splitlines()
-    assert lines == ["a,status", "0.10000000000000001,ok", "nan,unreachable"]
+    assert lines == ["a,status", "0.1,ok", "nan,unreachable"]
     assert read_table(path, ["a"])[0, 0] == 0.1
 
 

@@ -28,6 +28,8 @@ import numpy as np
 from scipy import ndimage
 
 from pkmkit.analysis.grids import Grid, make_grid
+from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
+from pkmkit.analysis.inscribed import largest_box
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
 from pkmkit.status import Status
@@ -341,9 +343,9 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
                       refine: bool = False) -> WorkspaceMap:
     """Masks, feasible set and largest inscribed square/cube of ``machine`` over ``grid``.
 
-    With ``refine=True`` the inscribed box found on the grid is grown about its centre by
-    bisection with dense checks (:func:`check_region`), which removes most of the grid's
-    under-estimate (up to two steps)."""
+    With ``refine=True`` the inscribed box found on the grid is refined in its centre and side
+    to 10⁻⁴ of the side (:func:`refine_box`), which removes the grid's under-estimate (up to two
+    steps) and its centring on grid points."""
     criteria = criteria or Criteria()
     evaluation = evaluate_grid(machine, grid, criteria)
     shape = grid.shape
@@ -366,32 +368,139 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     )
 
 
-def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Grid
-               ) -> InscribedBox:
-    """Grow a feasible square/cube about its centre, by bisection on the side between the grid
-    result and two grid steps more, each candidate checked densely. The box never leaves the
-    grid's box (``grid.lower_bounds`` … ``grid.upper_bounds``): the region studied bounds the
-    answer."""
-    def ok(side: float) -> bool:
-        return check_region(machine, box.center, side, criteria, free=grid.free).feasible
+def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Grid, *,
+               rtol: float = INSCRIBED_RTOL) -> InscribedBox:
+    """Refine a feasible square/cube in all its unknowns — centre and side — beyond the grid.
 
-    center = box.center[list(grid.free)]
-    room = 2.0 * float(np.min(np.minimum(center - grid.lower_bounds,
-                                         grid.upper_bounds - center)))
-    good, bad = box.side, min(box.side + 2 * grid.step, room)
-    if not bad > good or not ok(good):
-        return box
-    if ok(bad):
-        good = bad
-    else:
-        for _ in range(12):
+    The box is a lattice of :func:`check_region` (41 points per edge for a square, 25 for a
+    cube, edges and corners included) whose points move with the centre and the side; each
+    criterion has a signed slack at each point (:func:`criteria_slack`), and the side is
+    maximised under "every slack ≥ 0" and "inside the grid's box" by SLSQP
+    (:func:`pkmkit.analysis.inscribed.largest_box`). The optimum is then checked with the
+    boolean criteria and, if rounding left a point failing, shrunk about its centre by
+    bisection — as it is if its faces fail on a lattice ten times denser (the region's boundary
+    can bulge in between lattice points); the side is known to ``rtol`` (relative). The box
+    never leaves the grid's box (``grid.lower_bounds`` … ``grid.upper_bounds``): the region
+    studied bounds the answer."""
+    free = list(grid.free)
+    samples = check_region_samples(len(free))
+    length = float(np.max(machine.model.leg_length))
+
+    def full_points(c: np.ndarray, half: float, offsets: np.ndarray) -> np.ndarray:
+        points = np.tile(box.center, (len(offsets), 1))
+        points[:, free] = c + half * offsets
+        return points
+
+    def slack(points: np.ndarray) -> np.ndarray:
+        return criteria_slack(machine, points, criteria, length)
+
+    def feasible(c: np.ndarray, half: float) -> bool:
+        if half <= 0:
+            return True
+        lattice = region_grid(machine, _full(box.center, free, c), 2.0 * half, grid.free,
+                              samples)
+        return bool(evaluate_poses(machine, lattice.points, criteria).feasible.all())
+
+    center, half = largest_box(slack, full_points, box.center[free], 0.5 * box.side,
+                               grid.lower_bounds, grid.upper_bounds, samples=samples,
+                               rtol=rtol)
+    start = (box.center[free], 0.5 * box.side)
+    if not feasible(center, half):  # rounding at the optimum: shrink about its centre
+        for cut in (1e-10, 1e-8, 1e-6, 1e-5):
+            if feasible(center, half * (1.0 - cut)):
+                half *= 1.0 - cut
+                break
+        else:
+            good, bad = 0.0, half
+            while bad - good > 0.25 * rtol * bad:
+                mid = 0.5 * (good + bad)
+                good, bad = (mid, bad) if feasible(center, mid) else (good, mid)
+            half = good
+    # the region's boundary can bulge into the box between two lattice points (by ~κΔ²/8):
+    # its faces are checked again on a lattice ten times denser, and the box shrunk until
+    # they pass
+    surface = _surface_offsets(len(free), 401 if len(free) <= 2 else 61)
+
+    def faces_ok(c: np.ndarray, h: float) -> bool:
+        points = np.tile(box.center, (len(surface), 1))
+        points[:, free] = c + h * surface
+        return bool(evaluate_poses(machine, points, criteria).feasible.all())
+
+    if not faces_ok(center, half):
+        good, bad = 0.0, half
+        while bad - good > 0.1 * rtol * bad:
             mid = 0.5 * (good + bad)
-            good, bad = (mid, bad) if ok(mid) else (good, mid)
-    lower = box.center.copy()
-    for axis in grid.free:
-        lower[axis] -= 0.5 * good
-    return InscribedBox(side=float(good), center=box.center, lower=lower,
+            good, bad = (mid, bad) if faces_ok(center, mid) and feasible(center, mid) \
+                else (good, mid)
+        half = good
+    if half < start[1] and feasible(*start):  # never worse than the grid's box
+        center, half = start
+    middle = _full(box.center, free, center)
+    lower = middle.copy()
+    lower[free] -= half
+    return InscribedBox(side=float(2.0 * half), center=middle, lower=lower,
                         points_per_side=box.points_per_side)
+
+
+def _surface_offsets(d: int, per_edge: int) -> np.ndarray:
+    """Points of the faces of ``[-1, 1]^d``, ``per_edge`` per edge (duplicates removed)."""
+    axis = np.linspace(-1.0, 1.0, per_edge)
+    faces = []
+    for k in range(d):
+        grids = np.meshgrid(*([axis] * (d - 1)), indexing="ij")
+        inner = np.stack([g.ravel() for g in grids], axis=-1) if d > 1 else np.zeros((1, 0))
+        for side in (-1.0, 1.0):
+            face = np.insert(inner, k, side, axis=1)
+            faces.append(face)
+    return np.unique(np.concatenate(faces), axis=0)
+
+
+def _full(base: np.ndarray, free: list[int], values: np.ndarray) -> np.ndarray:
+    out = np.array(base, dtype=float)
+    out[free] = values
+    return out
+
+
+def criteria_slack(machine: Machine, points: np.ndarray, criteria: Criteria,
+                   length: float) -> np.ndarray:
+    """``(M,)`` smallest signed slack of the criteria at poses ``points (M, dims)``: ≥ 0 where
+    :func:`evaluate_poses` finds every criterion met (connectivity aside; the factor bounds
+    without their rounding allowance ``criteria.rtol``), < 0 elsewhere,
+    varying smoothly with the pose between changes of the limiting criterion. Lengths
+    (reachability shortfall, strokes) are divided by ``length``; factor bounds and the
+    condition number are relative; the assembly mode is the signed parallel measure minus its
+    threshold."""
+    inv = machine.ik(points, full_output=True)
+    q = inv.q
+    reach = -np.max(inv.shortfall, axis=1) / length
+    jac = machine.jacobian(points, q=q, tol=criteria.tol)
+    parts = [reach]
+    lo_q, hi_q = criteria.limits(machine)
+    with np.errstate(invalid="ignore"):
+        stroke = np.minimum((q - lo_q[None]).min(axis=1), (hi_q[None] - q).min(axis=1))
+        parts.append(np.minimum(stroke / length, 1e3))
+        if criteria.bounds is not None:
+            lo, hi = criteria.bounds
+            sv = jac.singular_values
+            # the bounds themselves, not their rounding allowance: a refined box touching a
+            # bound stays within it
+            parts.append(sv[:, -1] / lo - 1.0)
+            parts.append(1.0 - sv[:, 0] / hi)
+        if criteria.kappa_max is not None:
+            parts.append(1.0 - jac.condition / criteria.kappa_max)
+        side = np.sign(jac.det_A) * machine.working_mode
+        parts.append(np.where(side > 0, jac.parallel_measure, -jac.parallel_measure)
+                     - criteria.tol)
+    out = np.min(np.column_stack(parts), axis=1)
+    # where the pose is unreachable the other criteria are NaN: the reach slack decides
+    unreachable = inv.status != Status.OK
+    out[unreachable] = np.minimum(reach[unreachable], -1e-12)
+    return np.where(np.isnan(out), -1.0, out)
+
+
+def check_region_samples(free_axes: int) -> int:
+    """Lattice points per edge of :func:`check_region` for a square (2 free axes) or a cube."""
+    return 41 if free_axes <= 2 else 25
 
 
 @dataclass(frozen=True)
@@ -425,7 +534,7 @@ def region_grid(machine: Machine, center: Any, side: float, free: tuple[int, ...
     if not side > 0:
         raise InputError(f"the side must be > 0, got {side}")
     free = tuple(range(machine.dims)) if free is None else free
-    samples = samples or (41 if len(free) <= 2 else 25)
+    samples = samples or check_region_samples(len(free))
     lower = [center[k] - side / 2 for k in free]
     upper = [center[k] + side / 2 for k in free]
     return make_grid(lower, upper, free=free, base=center, names=machine.pose_names,
@@ -436,7 +545,19 @@ def check_region(machine: Machine, center: Any, side: float, criteria: Criteria 
                  *, free: tuple[int, ...] | None = None, samples: int | None = None
                  ) -> RegionCheck:
     """Is the axis-aligned square/cube of ``side`` centred at ``center`` usable, and where does
-    it fail? Checks ``samples`` points per edge (faces included)."""
+    it fail? Checks ``samples`` points per edge (faces included).
+
+    The Orthoglide prototype's 0.2 m cube under 1/2 ≤ λ ≤ 2 (seed 001), and a larger one:
+
+    >>> import pkmkit
+    >>> m = pkmkit.machine("orthoglide")
+    >>> c = -0.0267446 * np.ones(3)
+    >>> check_region(m, c, 0.199, Criteria(bounds=(0.5, 2.0))).feasible
+    True
+    >>> check = check_region(m, c, 0.21, Criteria(bounds=(0.5, 2.0)))
+    >>> check.feasible, sorted(check.failures)
+    (False, ['bounds', 'strokes'])
+    """
     criteria = criteria or Criteria()
     grid = region_grid(machine, center, side, free, samples)
     points = grid.points
@@ -869,7 +990,7 @@ def useful_workspace(machine: Machine, criteria: Criteria, *, joint_lower: Any =
                      base=machine.home_pose, names=machine.pose_names, resolution=resolution)
     limited = Criteria(bounds=criteria.bounds, kappa_max=criteria.kappa_max,
                        q_limits=(q_lo, q_hi), connected=criteria.connected, tol=criteria.tol)
-    ws = compute_workspace(machine, grid, limited)
+    ws = compute_workspace(machine, grid, limited, refine=True)
     box = ws.inscribed
     inscribed_range = (region_factor_range(machine, box.center, box.side, free=grid.free)
                        if box is not None and box.side > 0 else ws.factor_range())

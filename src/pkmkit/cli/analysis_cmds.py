@@ -7,10 +7,12 @@ import numpy as np
 
 from pkmkit.analysis.grids import Grid, make_grid
 from pkmkit.analysis.indices import SCALAR_INDICES, indices, scalar_index
+from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.workspace import (
     Criteria,
     WorkspaceMap,
     check_region,
+    check_region_samples,
     compute_workspace,
     useful_workspace,
 )
@@ -225,7 +227,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resol
         raise InputError("no point of this plane is reachable; change --slice or --range")
     summary = {"machine": m.id, "units": units, "index": index_name, "figure": out,
                "plane": list(grid.free_names), "reachable_points": int(reachable.sum()),
-               "points": grid.size}
+               "points": grid.size, "step": grid.step / scale}
     if index_name == "actuators":
         plot_actuator_maps(m, grid, path=out)
         summary["min"] = np.nanmin(q, axis=0) / scale
@@ -246,7 +248,8 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resol
         return
     click.echo(f"{m.name}: {index_name} over {'-'.join(grid.free_names)} "
                f"({summary['reachable_points']}/{grid.size} points reachable)")
-    click.echo(f"  min {fmt(summary['min'])}, max {fmt(summary['max'])}; figure {out}")
+    click.echo(f"  min {fmt(summary['min'])}, max {fmt(summary['max'])} over the grid points "
+               f"(step {summary['step']:.4g} {units}: not between them); figure {out}")
 
 
 def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) -> dict:
@@ -271,7 +274,8 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
         "points_per_criterion": {k: int(v.sum()) for k, v in wmap.masks.items()},
         "reference": wmap.reference,
         "inscribed": None if box is None else {
-            "side": box.side / scale, "center": box.center / scale, "lower": box.lower / scale},
+            "side": box.side / scale, "center": box.center / scale, "lower": box.lower / scale,
+            "rtol": INSCRIBED_RTOL, "samples_per_edge": check_region_samples(len(grid.free))},
         "index_range": list(factor_box),
         "workspace_index_range": list(wmap.factor_range(wmap.feasible)),
         "global_conditioning_index": wmap.global_conditioning_index(),
@@ -329,8 +333,10 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
     summary = workspace_summary(m, wmap, scale, units)
     if center is not None:
         check = check_region(m, center, cube * scale, criteria, free=grid.free)
+        per_edge = check_region_samples(len(grid.free))
         summary["check"] = {"side": cube, "center": center / scale, "feasible": check.feasible,
-                            "samples": check.samples, "failures": check.failures,
+                            "samples": check.samples, "samples_per_edge": per_edge,
+                            "spacing": cube / (per_edge - 1), "failures": check.failures,
                             "worst": check.worst, "index_range": list(check.factor_range),
                             "q_min": check.q_range[0] / scale, "q_max": check.q_range[1] / scale}
     if out is not None:
@@ -384,16 +390,22 @@ def _print_workspace(m: Machine, s: dict, units: str) -> None:
         click.echo("  no inscribed square/cube")
     else:
         click.echo(f"  largest inscribed {'square' if power == 2 else 'cube'}: side "
-                   f"{box['side']:.6g} {units}, centre {fmt(box['center'])} {units}")
+                   f"{box['side']:.6g} {units}, centre {fmt(box['center'])} {units} (centre and "
+                   f"side refined to {box['rtol']:.0e} of the side, {box['samples_per_edge']} "
+                   "checks per edge)")
         click.echo(f"  transmission factors inside it: {fmt(s['index_range'])}")
     click.echo(f"  transmission factors over the workspace: {fmt(s['workspace_index_range'])}")
     click.echo(f"  global conditioning index (mean 1/κ over the workspace): "
                f"{fmt(s['global_conditioning_index'], 4)}")
+    click.echo(f"  the {what}, the factors over the workspace and the GCI hold at the grid's "
+               f"resolution ({s['grid']['step']:.4g} {units}): a feature narrower than a step "
+               "can lie between grid points")
     if "check" in s:
         c = s["check"]
         verdict = "feasible" if c["feasible"] else "NOT feasible"
         click.echo(f"  prescribed side {c['side']:g} {units} at {fmt(c['center'])}: {verdict} "
-                   f"({c['samples']} samples; factors {fmt(c['index_range'])})")
+                   f"({c['samples']} samples, {c['samples_per_edge']} per edge every "
+                   f"{c['spacing']:.4g} {units}; factors {fmt(c['index_range'])})")
         for name, text in c["worst"].items():
             click.echo(f"    {name}: {c['failures'][name]} samples fail; worst {text}")
     if "figure" in s:
@@ -462,7 +474,8 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
                f"{fmt(summary['global_conditioning_index'], 4)}")
     if box is not None:
         click.echo(f"  inscribed {shape}: side {box.side / scale:.6g} {units}, centre "
-                   f"{fmt(box.center / scale)}, factors {fmt(useful.inscribed_factor_range)}")
+                   f"{fmt(box.center / scale)}, factors {fmt(useful.inscribed_factor_range)} "
+                   f"(centre and side to {INSCRIBED_RTOL:.0e} of the side)")
     else:
         click.echo(f"  no inscribed {shape} on this grid; raise --resolution")
     if out is not None:

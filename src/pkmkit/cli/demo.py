@@ -18,6 +18,7 @@ from typing import Any
 import click
 import numpy as np
 
+from pkmkit.io.atomic import check_output_dir, write_text_atomic
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import ALIASES, machine, machines
@@ -68,7 +69,7 @@ def machine_summary(m: Machine) -> dict[str, Any]:
 
 def run_demo(out_dir: Path) -> dict[str, Any]:
     """Run the demo into ``out_dir`` and return the summary written to ``summary.json``."""
-    out_dir.mkdir(parents=True, exist_ok=True)
+    check_output_dir(out_dir)
     summaries = {}
     for ident in machines():
         if ident in ALIASES:
@@ -79,7 +80,7 @@ def run_demo(out_dir: Path) -> dict[str, Any]:
         summary = machine_summary(m)
         summary["drawing"] = f"{ident}.png"
         draw_machine(m, m.home_pose, path=out_dir / f"{ident}.png")
-        (out_dir / f"{ident}.json").write_text(json.dumps(to_jsonable(summary), indent=2))
+        write_text_atomic(out_dir / f"{ident}.json", json.dumps(to_jsonable(summary), indent=2))
         summaries[ident] = summary
         _print_summary(summary)
     analysis = run_analysis_demo(out_dir, list(summaries))
@@ -89,7 +90,7 @@ def run_demo(out_dir: Path) -> dict[str, Any]:
                             "the built-in machines",
              "units": "m", "machines": summaries, "analysis": analysis, "design": design,
              "motion": motion}
-    (out_dir / "summary.json").write_text(json.dumps(to_jsonable(total), indent=2))
+    write_text_atomic(out_dir / "summary.json", json.dumps(to_jsonable(total), indent=2))
     click.echo(f"\nwrote {out_dir}/summary.json, one JSON and one PNG per machine, and the "
                "figures of the studies in analysis/, design/ and motion/")
     return total

@@ -7,7 +7,6 @@ Values on the command line and in every output are in command-line units: length
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import click
 import numpy as np
@@ -27,6 +26,7 @@ from pkmkit.design.optimize import (
 )
 from pkmkit.design.orthoglide import size_orthoglide
 from pkmkit.errors import InputError, PkmError
+from pkmkit.io.atomic import check_output_dir
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.model.parameters import length_scale
 from pkmkit.plot.design_figures import plot_pareto
@@ -304,11 +304,7 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
         constraints=[_parse_constraint(t, scale) for t in constraints], region=region,
         criteria=Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max), samples=samples,
     )
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"cannot create {out_dir}: {exc.strerror or exc}") from None
+    out = check_output_dir(out_dir)
     result = optimize(problem, method=method, seed=seed, generations=generations,
                       population=population, progress=not no_progress and not as_json)
     try:

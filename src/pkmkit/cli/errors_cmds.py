@@ -146,7 +146,7 @@ def _selection_options(func):
     return func
 
 
-def register(cli: click.Group) -> None:
+def _define(cli: click.Group) -> None:
     """Add the error-analysis commands to ``cli``."""
 
     @cli.command("errors")
@@ -453,3 +453,17 @@ def _tolerance(m, path, n_samples, region, resolution, units, seed, out, as_json
         if out is not None:
             click.echo(f"  wrote {payload['figure']}")
     return payload
+
+
+# module-level commands for the lazy command table (pkmkit.cli.lazy)
+_COMMANDS = click.Group()
+_define(_COMMANDS)
+errors_cmd = _COMMANDS.commands["errors"]
+identifiability_cmd = _COMMANDS.commands["identifiability"]
+select_poses_cmd = _COMMANDS.commands["select-poses"]
+
+
+def register(cli: click.Group) -> None:
+    """Add this module's commands to ``cli``."""
+    for name, command in _COMMANDS.commands.items():
+        cli.add_command(command, name)

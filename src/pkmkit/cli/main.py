@@ -9,7 +9,6 @@ column of the output file).
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import click
@@ -17,20 +16,16 @@ import numpy as np
 
 from pkmkit import __version__
 from pkmkit.errors import InputError, PkmError
-from pkmkit.io.csv_io import read_table, write_table
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
 from pkmkit.machines.registry import machines as builtin_ids
 from pkmkit.model.parameters import length_scale
-from pkmkit.status import Status, status_labels
+from pkmkit.status import Status
 
-from .analysis_cmds import register as register_analysis_commands
+from .batch import batch_options, run_batch, status_names
 from .describe import describe_machine, print_description
-from .design_cmds import register as register_design_commands
-from .errors_cmds import register as register_error_commands
-from .motion_cmds import register as register_motion_commands
+from .lazy import LazyGroup
 from .options import (
-    EXIT_PARTIAL,
     JSON_OPTION,
     SET_OPTION,
     UNITS_OPTION,
@@ -41,7 +36,7 @@ from .options import (
 )
 
 
-class PkmGroup(click.Group):
+class PkmGroup(LazyGroup):
     """Turns pkmkit's typed errors into a one-line message and exit status 1."""
 
     def invoke(self, ctx: click.Context):
@@ -57,44 +52,20 @@ def cli() -> None:
     """pkmkit: parallel kinematic machine tools — models, kinematics, Jacobians.
 
     MACHINE is a built-in id (see `pkmkit machines`) or a machine file (.toml, .yaml).
+    `ik`, `fk` and `jacobian` also run over tables (--input/--output, see their --help).
     """
-
-
-def _batch_options(func):
-    func = click.option("--output", "output", type=click.Path(dir_okay=False),
-                        help="Output CSV file (batch mode).")(func)
-    func = click.option("--input", "input_", type=click.Path(dir_okay=False),
-                        help="Input CSV file, one row per case (batch mode).")(func)
-    return func
-
-
-def _read_batch(path: str, columns, scale: float) -> np.ndarray:
-    """Batch input in SI units; unreadable cells become NaN rows, reported on stderr."""
-    problems: list[str] = []
-    table = read_table(path, columns, problems) * scale
-    for message in problems:
-        click.echo(f"warning: {message} (row flagged invalid-input)", err=True)
-    return table
-
-
-def _finish_batch(status: np.ndarray, output: str, note: str = "") -> None:
-    bad = int((status != Status.OK).sum())
-    click.echo(f"wrote {len(status)} rows to {output}; {bad} flagged{note}", err=True)
-    if bad:
-        labels = status_labels(status)
-        counts = {lab: labels.count(lab) for lab in sorted(set(labels))}
-        click.echo(f"statuses: {counts}", err=True)
-        sys.exit(EXIT_PARTIAL)
 
 
 def _require_batch_pair(single: str | None, input_: str | None, output: str | None,
                         flag: str) -> None:
     if input_ is None and single is None:
-        raise click.UsageError(f"give {flag} or --input FILE.csv --output FILE.csv")
+        raise click.UsageError(f"give {flag} or --input TABLE --output TABLE")
     if input_ is not None and single is not None:
         raise click.UsageError(f"{flag} and --input are exclusive")
     if input_ is not None and output is None:
-        raise click.UsageError("--input needs --output FILE.csv")
+        raise click.UsageError("--input needs --output TABLE (- for standard output)")
+    if input_ is None and output is not None:
+        raise click.UsageError("--output goes with --input TABLE")
 
 
 def _parse_branches(text: str | None, m: Machine):
@@ -146,25 +117,29 @@ def show(machine_name: str, assignments, units: str, as_json: bool) -> None:
 @click.option("--q0", "q0_text", help="Initial actuator coordinates for --method numeric.")
 @click.option("--method", type=click.Choice(["closed", "numeric"]), default="closed",
               show_default=True, help="Closed form or the least-squares engine.")
-@_batch_options
+@batch_options
 @UNITS_OPTION
 @JSON_OPTION
-def ik(machine_name, assignments, pose, branches, q0_text, method, input_, output, units,
-       as_json):
-    """Inverse kinematics: actuator coordinates of a pose (or of every row of --input)."""
+def ik(machine_name, assignments, pose, branches, q0_text, method, input_, output, chunk_rows,
+       units, as_json):
+    """Inverse kinematics: actuator coordinates of a pose (or of every row of --input).
+
+    Batch input columns: the pose, named x,y (planar machines) or x,y,z, in --units. Output
+    columns: x,y[,z], the actuators (q1,q2[,q3]; `pkmkit show` names them), mode (the
+    assembly mode of the solution) and status (ok, unreachable, invalid-input, ...).
+    """
     _require_batch_pair(pose, input_, output, "--pose")
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     br = _parse_branches(branches, m)
     if input_ is not None:
-        x = _read_batch(input_, m.pose_names, scale)
-        res = m.ik(x, method=method, branches=br, full_output=True)
-        header = [*m.pose_names, *m.actuator_names, "mode", "status"]
-        rows = [[*(x[k] / scale), *(res.q[k] / scale),
-                 m.mode_label(res.mode[k]) if res.mode[k] else "", lab]
-                for k, lab in enumerate(status_labels(res.status))]
-        write_table(output, header, rows)
-        _finish_batch(res.status, output)
+        def compute(values, chunk):
+            res = m.ik(values * scale, method=method, branches=br, full_output=True)
+            return {**_named(m.pose_names, values), **_named(m.actuator_names, res.q / scale),
+                    "mode": _mode_column(m, res.mode), "status": _status_column(res.status)
+                    }, res.status
+
+        run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows)
         return
     x = parse_vector(pose, m.dims, "--pose", units)
     q0 = parse_vector(q0_text, m.n_actuators, "--q0", units) if q0_text else None
@@ -196,18 +171,22 @@ def ik(machine_name, assignments, pose, branches, q0_text, method, input_, outpu
 @click.option("--x0", "x0_text", help="Initial pose for --method numeric.")
 @click.option("--method", type=click.Choice(["closed", "numeric"]), default="closed",
               show_default=True, help="Closed form or the least-squares engine.")
-@_batch_options
+@batch_options
 @UNITS_OPTION
 @JSON_OPTION
 def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, input_, output,
-       units, as_json):
-    """Direct kinematics: platform pose of actuator coordinates (or of every row of --input)."""
+       chunk_rows, units, as_json):
+    """Direct kinematics: platform pose of actuator coordinates (or of every row of --input).
+
+    Batch input columns: the actuators (q1,q2[,q3]; `pkmkit show` names them), in --units.
+    Output columns: the actuators, x,y[,z], mode and status; with --all, one row per real
+    assembly mode, led by `row`, the 0-based input row.
+    """
     _require_batch_pair(q_text, input_, output, "--q")
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     if input_ is not None:
-        q = _read_batch(input_, m.actuator_names, scale)
-        _fk_batch(m, q, all_modes, mode, method, output, scale)
+        _fk_batch(m, all_modes, mode, method, input_, output, scale, chunk_rows)
         return
     q = parse_vector(q_text, m.n_actuators, "--q", units)
     x0 = parse_vector(x0_text, m.dims, "--x0", units) if x0_text else None
@@ -229,28 +208,61 @@ def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, inpu
             click.echo(f"  mode {label}: {fmt(p, 9)} {units}")
 
 
-def _fk_batch(m: Machine, q, all_modes, mode, method, output, scale) -> None:
+def _named(names, values: np.ndarray) -> dict[str, np.ndarray]:
+    """Columns ``names`` of a ``(N, k)`` array."""
+    return {name: values[:, j] for j, name in enumerate(names)}
+
+
+def _status_column(status: np.ndarray):
+    from pkmkit.io.table import Labels
+
+    return Labels(np.asarray(status), status_names())
+
+
+def _mode_column(m: Machine, sign: np.ndarray):
+    """Assembly-mode names of det A signs (empty where 0: no configuration)."""
+    from pkmkit.io.table import Labels
+
+    sign = np.nan_to_num(np.asarray(sign, dtype=float))
+    codes = np.where(sign < 0, 1, np.where(sign > 0, 2, 0))
+    return Labels(codes, ["", m.mode_label(-1), m.mode_label(1)])
+
+
+def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_rows) -> None:
+    from pkmkit.io.table import Labels
+
     if all_modes:
-        modes = m.fk_all(q)
-        header = ["row", *m.actuator_names, "mode", *m.pose_names, "status"]
-        rows = []
-        for k in range(q.shape[0]):
-            found = [c for c in range(2) if modes.valid[k, c]]
-            for c in found or [None]:
-                pose = modes.poses[k, c] / scale if c is not None else [np.nan] * m.dims
-                label = modes.labels[c] if c is not None else ""
-                rows.append([k, *(q[k] / scale), label, *pose,
-                             Status(int(modes.status[k])).label])
-        write_table(output, header, rows)
-        _finish_batch(modes.status, output)
+        def compute(values, chunk):
+            modes = m.fk_all(values * scale)
+            valid = np.asarray(modes.valid)
+            n = len(values)
+            # one output row per real mode of each input row, one NaN row if it has none
+            k_rows, c_rows = np.nonzero(valid)
+            none = np.flatnonzero(~valid.any(axis=1))
+            k_all = np.concatenate([k_rows, none])
+            c_all = np.concatenate([c_rows, np.full(len(none), -1)])
+            order = np.lexsort((c_all, k_all))
+            k_all, c_all = k_all[order], c_all[order]
+            pose = np.full((len(k_all), m.dims), np.nan)
+            has = c_all >= 0
+            pose[has] = modes.poses[k_all[has], c_all[has]] / scale
+            labels = Labels(c_all + 1, ["", *modes.labels[:2]])
+            return {"row": chunk.first_row + k_all, **_named(m.actuator_names, values[k_all]),
+                    "mode": labels, **_named(m.pose_names, pose),
+                    "status": _status_column(np.asarray(modes.status)[k_all])
+                    }, np.asarray(modes.status)[:n], k_all
+
+        run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
         return
-    res = m.fk(q, mode=mode, method=method, full_output=True)
-    header = [*m.actuator_names, *m.pose_names, "mode", "status"]
-    rows = [[*(q[k] / scale), *(res.pose[k] / scale),
-             res.mode_label if res.status[k] == Status.OK else "", lab]
-            for k, lab in enumerate(status_labels(res.status))]
-    write_table(output, header, rows)
-    _finish_batch(res.status, output)
+
+    def compute(values, chunk):
+        res = m.fk(values * scale, mode=mode, method=method, full_output=True)
+        ok = np.asarray(res.status) == Status.OK
+        label = Labels(ok.astype(np.int32), ["", res.mode_label])
+        return {**_named(m.actuator_names, values), **_named(m.pose_names, res.pose / scale),
+                "mode": label, "status": _status_column(res.status)}, res.status
+
+    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
 
 
 @cli.command()
@@ -259,32 +271,47 @@ def _fk_batch(m: Machine, q, all_modes, mode, method, output, scale) -> None:
 @click.option("--pose", help="Platform position X,Y[,Z].")
 @click.option("--tol", type=float, default=1e-6, show_default=True,
               help="Threshold on the singularity measures.")
-@_batch_options
+@batch_options
 @UNITS_OPTION
 @JSON_OPTION
-def jacobian(machine_name, assignments, pose, tol, input_, output, units, as_json):
-    """Velocity model at a pose: A, B, J, transmission factors, conditioning, singularity."""
+def jacobian(machine_name, assignments, pose, tol, input_, output, chunk_rows, units, as_json):
+    """Velocity model at a pose: A, B, J, transmission factors, conditioning, singularity.
+
+    Batch input columns: x,y[,z] in --units. Output columns: the pose, the actuators,
+    sv1..svn (singular values of J), condition, det_A, det_B, J11..Jdn (row-major) and status
+    (regular, serial, parallel, serial+parallel, or why the pose has no Jacobian).
+    """
     _require_batch_pair(pose, input_, output, "--pose")
     if not tol > 0:
         raise click.BadParameter("must be > 0", param_hint="--tol")
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     if input_ is not None:
-        x = _read_batch(input_, m.pose_names, scale)
-        inv = m.ik(x, full_output=True)
-        jac = m.jacobian(x, q=inv.q, tol=tol)
+        from pkmkit.io.table import Labels
+        from pkmkit.machines.results import Singularity
+
         n, d = m.n_actuators, m.dims
-        header = [*m.pose_names, *m.actuator_names, *[f"sv{i + 1}" for i in range(n)],
-                  "condition", "det_A", "det_B",
-                  *[f"J{i + 1}{j + 1}" for i in range(d) for j in range(n)], "status"]
-        labels = [lab if ok else Status(int(st)).label for lab, ok, st in
-                  zip(jac.status, inv.status == Status.OK, inv.status, strict=True)]
-        rows = [[*(x[k] / scale), *(jac.q[k] / scale), *jac.singular_values[k],
-                 jac.condition[k], jac.det_A[k] / scale**n, jac.det_B[k] / scale**n,
-                 *jac.J[k].ravel(), lab] for k, lab in enumerate(labels)]
-        write_table(output, header, rows)
-        singular = int(((jac.singularity != 0) & (inv.status == Status.OK)).sum())
-        _finish_batch(inv.status, output, f" (and {singular} singular rows computed)")
+        singular = [0]
+        sing_names = [Singularity(f).label for f in range(4)]
+
+        def compute(values, chunk):
+            x = values * scale
+            inv = m.ik(x, full_output=True)
+            jac = m.jacobian(x, q=inv.q, tol=tol)
+            ok = np.asarray(inv.status) == Status.OK
+            codes = np.where(ok, np.asarray(jac.singularity, dtype=np.int64),
+                             len(sing_names) + np.asarray(inv.status, dtype=np.int64))
+            singular[0] += int(((np.asarray(jac.singularity) != 0) & ok).sum())
+            jay = np.asarray(jac.J).reshape(len(x), d * n)
+            return {**_named(m.pose_names, values), **_named(m.actuator_names, jac.q / scale),
+                    **_named([f"sv{i + 1}" for i in range(n)], jac.singular_values),
+                    "condition": jac.condition, "det_A": jac.det_A / scale**n,
+                    "det_B": jac.det_B / scale**n,
+                    **_named([f"J{i + 1}{j + 1}" for i in range(d) for j in range(n)], jay),
+                    "status": Labels(codes, [*sing_names, *status_names()])}, inv.status
+
+        run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows,
+                  note=lambda: f" (and {singular[0]} singular rows computed)")
         return
     x = parse_vector(pose, m.dims, "--pose", units)
     jac = m.jacobian(x, tol=tol)
@@ -321,12 +348,6 @@ def demo(out_dir: str) -> None:
         run_demo(Path(out_dir))
     except OSError as exc:
         raise click.ClickException(f"cannot write into {out_dir}: {exc.strerror or exc}") from None
-
-
-register_analysis_commands(cli)
-register_design_commands(cli)
-register_motion_commands(cli)
-register_error_commands(cli)
 
 
 def main() -> None:

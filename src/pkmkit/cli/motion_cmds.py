@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import click
 import numpy as np
@@ -13,7 +12,8 @@ from pkmkit.dynamics.masses import load_masses
 from pkmkit.dynamics.trajectory import simulate_path
 from pkmkit.dynamics.wrench import load_wrench_series
 from pkmkit.errors import InputError
-from pkmkit.io.csv_io import write_table
+from pkmkit.io.atomic import check_output_dir
+from pkmkit.io.table import TableWriter
 from pkmkit.model.parameters import length_scale
 from pkmkit.motion.gcode import read_gcode
 from pkmkit.motion.joints import Limits
@@ -50,6 +50,18 @@ def _numbers(text: str, count: int | tuple[int, ...], what: str) -> list[float]:
     if not np.isfinite(values).all():
         raise InputError(f"{what}: numbers must be finite")
     return values
+
+
+def _check_positive(name: str, value: float | None, unit: float, units: str) -> None:
+    """A positive, finite option whose value in SI units is still positive and finite."""
+    if value is None:
+        return
+    if not (np.isfinite(value) and value > 0):
+        raise InputError(f"{name} must be a finite number > 0, got {value:g}")
+    si = value * unit
+    if not (np.isfinite(si) and si > 0):
+        raise InputError(f"{name} {value:g} {'overflows' if si else 'underflows to 0'} in SI "
+                         f"units (from {units})")
 
 
 def build_path(machine, scale: float, gcode, origin, line_text, circle_text, helix_text,
@@ -125,6 +137,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     powers, with a check of the actuator limits (exit status 3 when a limit is exceeded)."""
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
+    out = check_output_dir(out_dir) if out_dir else None
     tool_path = build_path(m, scale, gcode, origin, line_text, circle_text, helix_text,
                            raster_text)
     props, file_wrench = load_masses(masses, m) if masses else (None, None)
@@ -135,11 +148,12 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
         force = np.asarray(_numbers(wrench, (3,), "--wrench"))
     if wrench_file:
         force = load_wrench_series(wrench_file)
-    for name, value in (("--feed", feed), ("--accel", accel), ("--jerk", jerk),
-                        ("--rapid-feed", rapid_feed), ("--speed-limit", speed_limit),
-                        ("--accel-limit", accel_limit), ("--force-limit", force_limit)):
-        if value is not None and not (np.isfinite(value) and value > 0):
-            raise InputError(f"{name} must be > 0, got {value:g}")
+    for name, value, unit in (("--feed", feed, scale), ("--accel", accel, scale),
+                              ("--jerk", jerk, scale), ("--rapid-feed", rapid_feed, scale),
+                              ("--speed-limit", speed_limit, scale),
+                              ("--accel-limit", accel_limit, scale),
+                              ("--force-limit", force_limit, 1.0), ("--period", period, 1.0)):
+        _check_positive(name, value, unit, units)
     limits = Limits(speed=None if speed_limit is None else speed_limit * scale,
                     accel=None if accel_limit is None else accel_limit * scale,
                     force=force_limit)
@@ -160,12 +174,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
         v["pose"] = np.asarray(v["pose"]) / scale
     summary.update({"machine": m.id, "units": units, "profile": profile,
                     "actuators": list(m.actuator_names), "total_mass": result.masses.total_mass})
-    if out_dir:
-        out = Path(out_dir)
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise InputError(f"cannot create {out_dir}: {exc.strerror or exc}") from None
+    if out is not None:
         motion = result.motion
         plot_joint_motion(motion, m.actuator_names, forces=result.forces.force,
                           title=f"{m.name}: {summary['duration']:.3f} s", length_unit=units,
@@ -176,7 +185,8 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                   *[f"{n}_ddot" for n in names], *[f"f_{n}" for n in names]]
         rows = np.column_stack([motion.t, motion.x / scale, motion.q / scale, motion.qd / scale,
                                 motion.qdd / scale, result.forces.force])
-        write_table(out / "trajectory.csv", header, rows.tolist())
+        with TableWriter(out / "trajectory.csv") as writer:
+            writer.write({name: rows[:, j] for j, name in enumerate(header)})
         summary["files"] = ["motion.png", "path.png", "trajectory.csv"]
     if as_json:
         emit_json(summary)
@@ -189,7 +199,8 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
 def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
     u = units
     click.echo(f"{m.name}: {summary['length']:.6g} {u} of path in {summary['duration']:.4f} s "
-               f"({summary['samples']} samples, {profile})")
+               f"({summary['samples']} samples, {profile}); figures over the continuous motion "
+               f"(to {summary['between_samples']['rtol']:.0e} of each range)")
     click.echo(f"  actuator range {fmt(summary['q_min'])} .. {fmt(summary['q_max'])} {u}, "
                f"stroke {fmt(summary['stroke'])} {u}")
     click.echo(f"  speeds {fmt(summary['qd_range'][0])} .. {fmt(summary['qd_range'][1])} {u}/s; "
@@ -201,8 +212,9 @@ def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
                "`pkmkit arm-sizing --force`, divided among the leg's rods)")
     if summary["violations"]:
         for v in summary["violations"]:
-            click.echo(f"  LIMIT {v['limit']}: {v['actuator']} = {v['value']:.6g} exceeds it by "
-                       f"{v['excess']:.6g} at t = {v['t']:.4f} s, pose {fmt(v['pose'])}")
+            click.echo(f"  LIMIT {v['limit']}: {v['actuator']} exceeds it from t = {v['t']:.4f} s,"
+                       f" by up to {v['excess']:.6g} ({v['actuator']} = {v['value']:.6g} at "
+                       f"t = {v['t_peak']:.4f} s, pose {fmt(v['pose'])})")
     else:
         click.echo("  every checked limit holds")
 

@@ -41,6 +41,7 @@ from pkmkit.design.design_space import (
 )
 from pkmkit.design.metrics import METRIC_QUANTITIES, METRICS, Region, metric_values
 from pkmkit.errors import InputError, ParameterError
+from pkmkit.io.atomic import atomic_path, write_text_atomic
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.machines.machine import Machine
 from pkmkit.model.parameters import length_scale
@@ -341,7 +342,7 @@ class OptimizationResult:
                   units: str | None = None) -> None:
         """All records (or the given ones) as CSV, in ``units``, the header naming them."""
         rows = self.records if records is None else records
-        with open(path, "w", newline="", encoding="utf-8") as handle:
+        with atomic_path(path) as temp, open(temp, "w", newline="", encoding="utf-8") as handle:
             writer = csv.writer(handle)
             writer.writerow(self.header(units))
             for r in rows:
@@ -380,7 +381,7 @@ class OptimizationResult:
 
     def write_json(self, path: str | Path, units: str | None = None) -> None:
         """:meth:`summary` as a JSON file."""
-        Path(path).write_text(json.dumps(self.summary(units), indent=2))
+        write_text_atomic(path, json.dumps(self.summary(units), indent=2))
 
 
 def pareto_front(records: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -23,17 +23,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.errors import InputError, MachineFileError
 from pkmkit.machines.machine import Machine
+from pkmkit.model.machine_file import parse_toml
 from pkmkit.model.parameters import is_plain_number, length_scale
 from pkmkit.model.rods import STRUT
+from pkmkit.model.text_files import number_problem, read_text
 
 
 @dataclass(frozen=True)
@@ -220,14 +221,24 @@ def load_masses(path: str | Path, machine: Machine) -> tuple[MassProperties, np.
     """Read a masses file (see the module docstring): ``(mass properties, wrench or None)``.
 
     Raises:
-        InputError: unreadable file, unknown keys, negative masses, sizes that do not fit.
+        InputError: unreadable or binary file, syntax error, a number that overflows or
+            underflows to 0 (with its line), unknown keys, negative masses, sizes that do not
+            fit.
     """
+    def error(message: str, line: int | None) -> InputError:
+        return InputError(f"{path}:{line}: {message}" if line else f"{path}: {message}")
+
+    text = read_text(path, error)
     try:
-        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read file: {exc.strerror or exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: TOML syntax error: {exc}") from None
+        data, lines = parse_toml(text, str(path))
+    except MachineFileError as exc:
+        raise InputError(str(exc)) from None
+    rows = text.splitlines()
+    for key_path, line in sorted(lines.items(), key=lambda item: item[1]):
+        if len(key_path) == 2 and 0 < line <= len(rows):
+            problem = number_problem(rows[line - 1].split("#", 1)[0].partition("=")[2])
+            if problem:
+                raise error(f"{key_path[1]}: {problem}", line)
     unknown = set(data) - {"masses", "wrench"}
     if unknown or "masses" not in data:
         raise InputError(f"{path}: expected a [masses] table (and optionally [wrench]); found "

@@ -1,4 +1,10 @@
-"""A whole machining move: time law, actuator motion, inverse dynamics and limit checks."""
+"""A whole machining move: time law, actuator motion, inverse dynamics and limit checks.
+
+The figures of a move (strokes, extreme speeds, accelerations, forces and powers) and its limit
+verdicts hold for the continuous motion, not only at the output samples: they come from
+:func:`pkmkit.motion.extrema.continuous_extrema` (to 10⁻⁴ of each quantity's range), so the
+sampling period only sets the output.
+"""
 
 from __future__ import annotations
 
@@ -11,71 +17,184 @@ from pkmkit.dynamics.defaults import default_masses
 from pkmkit.dynamics.inverse import ForceResult, inverse_dynamics
 from pkmkit.dynamics.masses import MassProperties
 from pkmkit.dynamics.wrench import WrenchSeries
+from pkmkit.errors import InputError
 from pkmkit.machines.machine import Machine
-from pkmkit.motion.joints import JointTrajectory, Limits, check_limits, joint_trajectory
+from pkmkit.motion.extrema import DEFAULT_RTOL, Extrema, continuous_extrema, first_excursion
+from pkmkit.motion.joints import JointTrajectory, Limits, joint_trajectory
 from pkmkit.motion.paths import Path
-from pkmkit.motion.timelaw import plan
+from pkmkit.motion.timelaw import Trajectory, plan
+
+QUANTITY_NAMES = {"q": "actuator position", "qd": "actuator speed",
+                  "qdd": "actuator acceleration", "force": "actuator force",
+                  "power": "actuator power", "leg_axial": "leg axial force",
+                  "tool_speed": "tool speed", "tool_accel": "tool acceleration"}
 
 
 @dataclass(frozen=True)
 class PathResult:
-    """Everything about one move along a path."""
+    """Everything about one move along a path.
+
+    Attributes:
+        motion: actuator motion at the output samples.
+        forces: actuator forces at the output samples.
+        masses: the mass properties used.
+        limits: limit checks over continuous time (see :func:`check_limits_continuous`).
+        extrema: extrema over continuous time of ``q``, ``qd``, ``qdd``, ``force``, ``power``,
+            ``leg_axial``, ``tool_speed`` and ``tool_accel``.
+    """
 
     motion: JointTrajectory
     forces: ForceResult
     masses: MassProperties
     limits: dict[str, Any]
+    extrema: Extrema
 
     def summary(self) -> dict[str, Any]:
         """Duration, length, actuator ranges and peaks, forces, powers and limit violations
-        (SI units)."""
+        (SI units), over continuous time."""
         m = self.motion
-        f = self.forces
+        e = self.extrema
         violations = [{"limit": kind, **entry["first"]} for kind, entry in self.limits.items()
                       if entry["exceeded"]]
         return {
             "duration": m.trajectory.duration, "length": m.trajectory.length,
             "cutting_length": m.trajectory.path.cutting_length, "samples": len(m.t),
-            "q_min": m.q.min(axis=0), "q_max": m.q.max(axis=0), "stroke": m.stroke,
-            "qd_max": np.abs(m.qd).max(axis=0), "qd_range": [m.qd.min(axis=0), m.qd.max(axis=0)],
-            "qdd_max": np.abs(m.qdd).max(axis=0),
-            "force_max": np.abs(f.force).max(axis=0),
-            "force_range": [f.force.min(axis=0), f.force.max(axis=0)],
-            "power_max": np.abs(f.power).max(axis=0),
-            "leg_axial_max": np.abs(np.nan_to_num(f.leg_axial, nan=np.inf)).max(axis=0),
-            "tool_speed_max": float(np.linalg.norm(m.xd, axis=1).max()),
-            "tool_accel_max": float(np.linalg.norm(m.xdd, axis=1).max()),
+            "q_min": e.low["q"], "q_max": e.high["q"], "stroke": e.range("q"),
+            "qd_max": e.abs_max("qd"), "qd_range": [e.low["qd"], e.high["qd"]],
+            "qdd_max": e.abs_max("qdd"),
+            "force_max": e.abs_max("force"),
+            "force_range": [e.low["force"], e.high["force"]],
+            "power_max": e.abs_max("power"),
+            "leg_axial_max": e.abs_max("leg_axial"),
+            "tool_speed_max": float(e.high["tool_speed"][0]),
+            "tool_accel_max": float(e.high["tool_accel"][0]),
             "violations": violations,
+            "between_samples": {"rtol": e.rtol, "converged": e.converged, "levels": e.levels,
+                                "evaluations": e.evaluations},
         }
+
+
+def motion_quantities(machine: Machine, trajectory: Trajectory, masses: MassProperties,
+                      wrench: Any = None):
+    """``evaluate(t)``: the actuator motion, forces and tool speed at any times ``t`` (s) of the
+    continuous motion, as ``{name: (M, k)}`` (names as in :attr:`PathResult.extrema`).
+
+    ``wrench``: constant, a :class:`WrenchSeries`, or one row per output sample of
+    ``trajectory`` (then interpolated linearly in time between samples).
+    """
+    if wrench is not None and not isinstance(wrench, WrenchSeries):
+        w = np.asarray(wrench, dtype=float)
+        if w.ndim == 2 and w.shape[0] == len(trajectory.t) and w.shape[0] > 1:
+            wrench = WrenchSeries(trajectory.t, w[:, :3]) if np.all(np.diff(trajectory.t) > 0) \
+                else w
+    def evaluate(t: np.ndarray) -> dict[str, np.ndarray]:
+        traj = trajectory.at(t)
+        motion = joint_trajectory(machine, traj)
+        w = wrench.at(motion.t) if isinstance(wrench, WrenchSeries) else wrench
+        forces = inverse_dynamics(machine, masses, motion.x, motion.xd, motion.xdd, motion.q,
+                                  motion.qd, motion.qdd, wrench=w)
+        return {"q": motion.q, "qd": motion.qd, "qdd": motion.qdd, "force": forces.force,
+                "power": forces.power, "leg_axial": forces.leg_axial,
+                "tool_speed": np.linalg.norm(traj.xd, axis=1)[:, None],
+                "tool_accel": np.linalg.norm(traj.xdd, axis=1)[:, None]}
+
+    return evaluate
+
+
+def check_limits_continuous(machine: Machine, trajectory: Trajectory, extrema: Extrema,
+                            limits: Limits) -> dict[str, Any]:
+    """Compare the motion with the actuator limits over continuous time.
+
+    Returns:
+        ``{kind: {"max": (n,), "limit": (n,), "exceeded": bool, "first": {...} | None}}`` for
+        each checked kind (``position``, ``speed``, ``accel``, ``force``); ``first`` says when
+        the limit is first exceeded (``t``), which actuator, and the peak of that excursion
+        (``t_peak``, ``value``, ``excess``, ``pose``).
+    """
+    n = machine.n_actuators
+    report: dict[str, Any] = {}
+
+    def add(kind: str, name: str, lower: np.ndarray, upper: np.ndarray, peak: np.ndarray,
+            limit: Any) -> None:
+        first = None
+        for a in range(n):
+            hit = first_excursion(extrema, name, a, float(lower[a]), float(upper[a]))
+            if hit is not None and (first is None or hit.t < first["t"]):
+                pose = trajectory.at(np.array([hit.t_peak])).x[0, :machine.dims]
+                first = {"t": hit.t, "t_peak": hit.t_peak, "actuator": machine.actuator_names[a],
+                         "value": hit.value, "excess": hit.excess, "pose": pose}
+        report[kind] = {"max": peak, "limit": limit, "exceeded": first is not None,
+                        "first": first}
+
+    if limits.strokes:
+        lo, hi = machine.model.q_min, machine.model.q_max
+        add("position", "q", lo, hi, extrema.high["q"], np.stack([lo, hi]))
+    for kind, name, limit in (("speed", "qd", limits.speed), ("accel", "qdd", limits.accel),
+                              ("force", "force", limits.force)):
+        if limit is None:
+            continue
+        lim = np.broadcast_to(np.asarray(limit, dtype=float), (n,))
+        if not (np.isfinite(lim).all() and (lim > 0).all()):
+            raise InputError(f"{kind} limits must be > 0, got {limit}")
+        add(kind, name, -lim, lim, extrema.abs_max(name), lim)
+    return report
 
 
 def simulate_path(machine: Machine, path: Path, *, feed: float, accel: float,
                   jerk: float | None = None, profile: str = "scurve",
                   rapid_feed: float | None = None, period: float = 0.01,
                   masses: MassProperties | None = None, wrench: Any = None,
-                  limits: Limits | None = None) -> PathResult:
+                  limits: Limits | None = None, rtol: float = DEFAULT_RTOL) -> PathResult:
     """Plan the move, follow it with the machine and compute the actuator forces.
 
     Args:
         machine: the machine.
         path: the tool path (machine coordinates, m).
-        feed, accel, jerk, profile, rapid_feed, period: see :func:`pkmkit.motion.plan`.
+        feed, accel, jerk, profile, rapid_feed, period: see :func:`pkmkit.motion.plan`;
+            ``period`` only sets the output samples: the figures and limit checks hold for the
+            continuous motion.
         masses: mass properties (default: :func:`pkmkit.dynamics.defaults.default_masses`).
         wrench: external force on the tool, ``(3,)`` / ``(6,)``, one row per sample, or a
             :class:`~pkmkit.dynamics.wrench.WrenchSeries` (forces against time, interpolated).
         limits: actuator limits to check (strokes always).
+        rtol: tolerance of the extrema, relative to each quantity's range.
 
     Raises:
         InputError: bad limits, a path the machine cannot follow (with the first failing
-            sample), bad masses or wrench.
+            sample, between output samples too), bad masses or wrench.
+
+    Seed 000's circle sampled every second still gives its stroke and peak speeds:
+
+    >>> import pkmkit
+    >>> from pkmkit.dynamics.trajectory import simulate_path
+    >>> from pkmkit.motion import circle
+    >>> m = pkmkit.machine("linear-delta-table-iv1")
+    >>> r = simulate_path(m, circle([0, 0, 0.2], 0.15), feed=0.12, accel=1.0, jerk=10.0,
+    ...                   period=1.0)
+    >>> s = r.summary()
+    >>> s["samples"], [round(1000 * float(v), 2) for v in s["stroke"]]
+    (10, [190.84, 190.84, 190.84])
+    >>> [round(1000 * float(v), 2) for v in s["qd_max"]]  # mm/s
+    [76.34, 76.34, 76.34]
     """
     trajectory = plan(path, feed=feed, accel=accel, jerk=jerk, profile=profile,
                       rapid_feed=rapid_feed, period=period)
     motion = joint_trajectory(machine, trajectory)
     masses = masses or default_masses(machine)
-    if isinstance(wrench, WrenchSeries):
-        wrench = wrench.at(motion.t)
+    sampled_wrench = wrench.at(motion.t) if isinstance(wrench, WrenchSeries) else wrench
     forces = inverse_dynamics(machine, masses, motion.x, motion.xd, motion.xdd, motion.q,
-                              motion.qd, motion.qdd, wrench=wrench)
-    report = check_limits(machine, motion, limits or Limits(), forces.force)
-    return PathResult(motion=motion, forces=forces, masses=masses, limits=report)
+                              motion.qd, motion.qdd, wrench=sampled_wrench)
+    evaluate = motion_quantities(machine, trajectory, masses, wrench)
+    breakpoints = trajectory.breakpoints()
+    if isinstance(wrench, WrenchSeries):
+        inside = wrench.t[(wrench.t > 0) & (wrench.t < trajectory.duration)]
+        breakpoints = np.union1d(breakpoints, inside)
+    extrema = continuous_extrema(evaluate, breakpoints, rtol=rtol)
+    for name in ("q", "qd", "qdd", "force", "power", "leg_axial", "tool_speed", "tool_accel"):
+        if not (np.isfinite(extrema.low[name]).all() and np.isfinite(extrema.high[name]).all()):
+            raise InputError(
+                f"the {QUANTITY_NAMES[name]} along the path is not finite (a value overflows): "
+                "check the feed, acceleration and jerk limits, the masses and the wrench")
+    report = check_limits_continuous(machine, trajectory, extrema, limits or Limits())
+    return PathResult(motion=motion, forces=forces, masses=masses, limits=report,
+                      extrema=extrema)

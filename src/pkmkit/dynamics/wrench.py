@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from pkmkit.errors import InputError
-from pkmkit.io.csv_io import read_table
+from pkmkit.io.table import read_table
 
 COLUMNS = ("t", "fx", "fy", "fz")
 

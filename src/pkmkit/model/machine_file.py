@@ -14,11 +14,13 @@ import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
-
-import yaml
+from typing import TYPE_CHECKING, Any
 
 from pkmkit.errors import MachineFileError
+from pkmkit.model.text_files import MAX_NESTING, read_text, toml_nesting
+
+if TYPE_CHECKING:
+    import yaml
 
 KeyPath = tuple[str | int, ...]
 
@@ -57,8 +59,9 @@ def read_machine_document(path: str | Path) -> MachineDocument:
     """Parse a ``.toml``, ``.yaml`` or ``.yml`` machine file.
 
     Raises:
-        MachineFileError: missing file, unknown extension, syntax error (with its line), or a
-            document that is not a mapping.
+        MachineFileError: missing file, unknown extension, a binary or non-UTF-8 file, syntax
+            error, a key given twice, nesting deeper than :data:`MAX_NESTING` (each with its
+            line), or a document that is not a mapping.
     """
     p = Path(path)
     fmt = SUFFIXES.get(p.suffix.lower())
@@ -66,12 +69,7 @@ def read_machine_document(path: str | Path) -> MachineDocument:
         raise MachineFileError(
             str(path), f"unknown machine file type {p.suffix!r}; use one of {sorted(SUFFIXES)}"
         )
-    try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise MachineFileError(str(path), f"cannot read file: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        raise MachineFileError(str(path), f"file is not UTF-8 text: {exc.reason}") from None
+    text = read_text(p, lambda message, line: MachineFileError(str(path), message, line))
     parse: Callable[[str, str], tuple[Any, dict[KeyPath, int]]] = (
         _parse_toml if fmt == "toml" else _parse_yaml
     )
@@ -87,7 +85,21 @@ _ARRAY_TABLE = re.compile(r"^\s*\[\[\s*([^\[\]]+?)\s*\]\]\s*(#.*)?$")
 _KEY = re.compile(r"^\s*([A-Za-z0-9_\-\.\"']+)\s*=")
 
 
+def parse_toml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
+    """Parse TOML ``text`` (from file ``path``): the data and the line of each key.
+
+    Raises:
+        MachineFileError: nesting deeper than :data:`MAX_NESTING`, or a syntax error (a key
+            given twice included), with its line.
+    """
+    return _parse_toml(text, path)
+
+
 def _parse_toml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
+    depth, line = toml_nesting(text)
+    if depth > MAX_NESTING:
+        raise MachineFileError(path, f"arrays/tables nested {depth} deep; at most {MAX_NESTING} "
+                               "levels are accepted", line)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -133,14 +145,27 @@ def _toml_lines(text: str) -> dict[KeyPath, int]:
 
 def _reject_aliases(text: str, path: str) -> None:
     """Anchors and aliases can expand exponentially (or recursively): machine files may not use
-    them."""
+    them. Nesting deeper than :data:`MAX_NESTING` is refused too (the composer recurses), both
+    from the event stream, before anything is built."""
+    import yaml  # lazy: only YAML files need it
+
+    depth = 0
     for event in yaml.parse(text, Loader=yaml.SafeLoader):
         if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
             raise MachineFileError(path, "YAML anchors and aliases (&name, *name) are not "
                                    "allowed in machine files", event.start_mark.line + 1)
+        if isinstance(event, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_NESTING:
+                raise MachineFileError(path, f"mappings/sequences nested more than "
+                                       f"{MAX_NESTING} deep", event.start_mark.line + 1)
+        elif isinstance(event, yaml.CollectionEndEvent):
+            depth -= 1
 
 
 def _parse_yaml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
+    import yaml
+
     try:
         _reject_aliases(text, path)
         node = yaml.compose(text, Loader=yaml.SafeLoader)
@@ -154,18 +179,30 @@ def _parse_yaml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
         raise MachineFileError(path, f"YAML error: {exc}") from None
     lines: dict[KeyPath, int] = {}
     if node is not None:
-        _yaml_lines(node, (), lines)
+        _yaml_lines(node, (), lines, path)
     return data, lines
 
 
-def _yaml_lines(node: yaml.Node, prefix: KeyPath, lines: dict[KeyPath, int]) -> None:
+def _yaml_lines(node: yaml.Node, prefix: KeyPath, lines: dict[KeyPath, int],
+                path: str = "") -> None:
+    """Record the line of every key; a key given twice in one mapping is an error (PyYAML would
+    keep the last one silently)."""
+    import yaml
+
     if isinstance(node, yaml.MappingNode):
+        seen: dict[str, int] = {}
         for key_node, value_node in node.value:
-            key = (*prefix, str(key_node.value))
-            lines[key] = key_node.start_mark.line + 1
-            _yaml_lines(value_node, key, lines)
+            name = str(key_node.value)
+            line = key_node.start_mark.line + 1
+            if name in seen:
+                raise MachineFileError(path, f"key {name!r} given twice (first at line "
+                                       f"{seen[name]})", line)
+            seen[name] = line
+            key = (*prefix, name)
+            lines[key] = line
+            _yaml_lines(value_node, key, lines, path)
     elif isinstance(node, yaml.SequenceNode):
         for index, item in enumerate(node.value):
             key = (*prefix, index)
             lines[key] = item.start_mark.line + 1
-            _yaml_lines(item, key, lines)
+            _yaml_lines(item, key, lines, path)

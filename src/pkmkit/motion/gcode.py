@@ -21,7 +21,17 @@ from pathlib import Path as FilePath
 import numpy as np
 
 from pkmkit.errors import InputError
-from pkmkit.motion.paths import ARC_ABS_TOL, ARC_REL_TOL, Arc, Line, Path, arc_through
+from pkmkit.model.text_files import number_problem, read_text
+from pkmkit.motion.paths import (
+    ARC_ABS_TOL,
+    ARC_REL_TOL,
+    MAX_SEGMENTS,
+    SEGMENT_BYTES,
+    Arc,
+    Line,
+    Path,
+    arc_through,
+)
 
 _WORD = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 _UNITS = {20: 0.0254, 21: 1e-3}
@@ -53,12 +63,9 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
     if isinstance(source, str) and "\n" in source:
         text, label = source, name or "<gcode>"
     else:
-        path = FilePath(source)
-        try:
-            text = path.read_text(encoding="utf-8-sig")
-        except OSError as exc:
-            raise InputError(f"{source}: cannot read file: {exc.strerror or exc}") from None
         label = name or str(source)
+        text = read_text(source, lambda message, line: InputError(
+            f"{label}:{line}: {message}" if line else f"{label}: {message}"))
     offset = np.asarray(origin, dtype=float).reshape(3)
     position = offset.copy() if start is None else np.asarray(start, dtype=float).reshape(3)
     scale, plane, absolute = _UNITS[21], 17, True
@@ -83,6 +90,9 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
         for letter, number_text in words:
             letter = letter.upper()
             value = float(number_text)
+            problem = number_problem(number_text)
+            if problem:
+                raise error(number, f"{letter} word: {problem}")
             if letter == "G":
                 if value != int(value) or int(value) not in _ALLOWED_G:
                     raise error(number, f"unsupported G code G{number_text}; supported: "
@@ -138,6 +148,12 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
         else:
             segments.append(_arc(position, target, values, plane, motion == 2, scale, feed,
                                  lambda m, n=number: error(n, m)))
+        if not np.isfinite(target).all() or not np.isfinite(segments[-1].length):
+            raise error(number, "the move's coordinates overflow (a length beyond 1e308 m)")
+        if len(segments) > MAX_SEGMENTS:
+            raise error(number, f"more than {MAX_SEGMENTS} moves (about "
+                        f"{MAX_SEGMENTS * SEGMENT_BYTES / 2**30:.1f} GiB of path before any "
+                        "sampling); split the program")
         lines.append(number)
         position = target
     if not segments:

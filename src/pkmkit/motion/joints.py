@@ -55,6 +55,14 @@ def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
             and by how much), enters the other assembly mode or comes within ``tol`` of a
             singularity (|cos| between a leg and its slide, or |det| of the unit leg
             directions) — the machine cannot follow it.
+
+    >>> import pkmkit
+    >>> from pkmkit.motion import circle, joint_trajectory, plan
+    >>> m = pkmkit.machine("linear-delta-table-iv1")
+    >>> traj = plan(circle([0, 0, 0.2], 0.15), feed=0.12, accel=1.0, jerk=10.0, period=0.01)
+    >>> jt = joint_trajectory(m, traj)
+    >>> [round(1000 * v, 3) for v in jt.stroke.tolist()]  # mm, over the samples only
+    [190.844, 190.844, 190.844]
     """
     dims = machine.dims
     if dims == 2 and np.abs(trajectory.x[:, 2]).max() > 1e-12:

@@ -18,6 +18,12 @@ import numpy as np
 
 from pkmkit.errors import InputError
 
+#: Most segments a path may hold: each is a Python object (about :data:`SEGMENT_BYTES`), and
+#: a longer path would exhaust memory before it is even sampled.
+MAX_SEGMENTS = 2_000_000
+#: Approximate memory of one segment (object, arrays), bytes.
+SEGMENT_BYTES = 1000
+
 
 def _vec3(value, what: str) -> np.ndarray:
     arr = np.asarray(value, dtype=float).reshape(-1)
@@ -286,6 +292,11 @@ def raster(corner, width: float, height: float, passes: int, *, strategy: str = 
         raise InputError(f"unknown strategy {strategy!r}; use zigzag or one-way")
     if not clearance > 0:
         raise InputError(f"the clearance must be > 0, got {clearance}")
+    count = passes * (4 if strategy == "one-way" else 2) - 1
+    if count > MAX_SEGMENTS:
+        raise InputError(f"{passes:.6g} passes make {count:.3g} path segments (about "
+                         f"{count * SEGMENT_BYTES / 2**30:.3g} GiB), above the limit of "
+                         f"{MAX_SEGMENTS:.3g}; face in fewer passes")
     ys = [c[1]] if passes == 1 else list(np.linspace(c[1], c[1] + height, passes))
     up = np.array([0.0, 0.0, clearance])
     segs: list[Segment] = []

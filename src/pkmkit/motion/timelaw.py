@@ -161,6 +161,48 @@ class Trajectory:
     def length(self) -> float:
         return self.path.length
 
+    def at(self, t: np.ndarray) -> Trajectory:
+        """The same motion evaluated at the times ``t`` ``(M,)`` s (clipped to [0, duration]),
+        whatever the sampling period: positions, velocities and accelerations of the continuous
+        time law."""
+        t = np.clip(np.asarray(t, dtype=float).reshape(-1), 0.0, self.duration)
+        if self.blocks:
+            return _evaluate_blocks(self.path, self.blocks, t, self.period)
+        return _constant_speed_at(self.path, self.length / self.duration, t, self.period)
+
+    def breakpoints(self) -> np.ndarray:
+        """Sorted times (s, from 0 to the duration) where the motion may be non-smooth: block
+        ends, the time law's phase changes (a jump of the acceleration or of the jerk) and the
+        joints between segments (a jump of the curvature). Between two consecutive breakpoints
+        every quantity of the motion is an analytic function of time."""
+        if not self.blocks:
+            lengths = np.array([seg.length for seg in self.path.segments])
+            times = np.concatenate([[0.0], np.cumsum(lengths)]) * (self.duration / lengths.sum())
+            return np.unique(np.clip(times, 0.0, self.duration))
+        times = [np.zeros(1)]
+        start = 0.0
+        for block in self.blocks:
+            prof = block.profile
+            times.append(start + np.cumsum(prof.durations))
+            joints = np.cumsum(block.lengths)[:-1]
+            if joints.size:
+                times.append(start + _times_at_distances(prof, joints))
+            start += prof.duration
+        return np.unique(np.clip(np.concatenate(times), 0.0, self.duration))
+
+
+def _times_at_distances(profile: Profile, distances: np.ndarray) -> np.ndarray:
+    """Times at which a rest-to-rest profile has covered ``distances`` (bisection: s(t) is
+    non-decreasing)."""
+    lo = np.zeros(len(distances))
+    hi = np.full(len(distances), profile.duration)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        below = profile.evaluate(mid)[0] < distances
+        lo = np.where(below, mid, lo)
+        hi = np.where(below, hi, mid)
+    return 0.5 * (lo + hi)
+
 
 def _corner(a, b, tol: float) -> bool:
     ta, tb = a.tangent(end=True), b.tangent(end=False)
@@ -204,7 +246,17 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
 
     Raises:
         InputError: non-positive limits or period, missing jerk, a path of zero length, too
-            many samples.
+            many samples, a time law that is not finite.
+
+    Example: seed 000's Ø300 mm circle at 120 mm/s, A = 1 m/s², J = 10 m/s³.
+
+    >>> from pkmkit.motion import circle, plan
+    >>> traj = plan(circle([0, 0, 0.2], 0.15), feed=0.12, accel=1.0, jerk=10.0, period=0.01)
+    >>> round(traj.duration, 4), traj.x.shape
+    (8.2335, (825, 3))
+    >>> speed = traj.at([4.0]).xd[0]  # the velocity at any time, between samples too
+    >>> round(float(np.linalg.norm(speed)), 9)
+    0.12
     """
     for name, value in (("feed", feed), ("accel", accel), ("period", period)):
         if not (np.isfinite(value) and value > 0):
@@ -252,8 +304,18 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
                 v = min(v, (jerk / 3 / kappa**2) ** (1 / 3), jerk / 9 / (a_t * kappa))
                 if tau > 0:
                     v = min(v, (jerk / 3 / (kappa * tau)) ** (1 / 3))
-        prof = (trapezoid(float(lengths.sum()), v, a_t) if profile == "trapezoid"
-                else scurve(float(lengths.sum()), v, a_t, j_t))
+        try:
+            with np.errstate(over="raise", invalid="raise", divide="raise"):
+                prof = (trapezoid(float(lengths.sum()), v, a_t) if profile == "trapezoid"
+                        else scurve(float(lengths.sum()), v, a_t, j_t))
+        except (OverflowError, ZeroDivisionError, FloatingPointError):
+            prof = None
+        if prof is None or not (np.isfinite(prof.durations).all() and prof.duration > 0
+                                and np.isfinite(prof.peak_speed)):
+            raise InputError(
+                f"the time law of a {float(lengths.sum()):.6g} m block is not finite with feed "
+                f"{v:g} m/s, acceleration {a_t:g} m/s² and jerk "
+                f"{'-' if j_t is None else f'{j_t:g}'} m/s³: the limits are too far apart")
         blocks.append(Block(tuple(group), lengths, prof, segs[group[0]].rapid, v))
     total = sum(b.profile.duration for b in blocks)
     if total / period + 1 > max_samples:
@@ -268,6 +330,13 @@ def _sample(path: Path, blocks: tuple[Block, ...], period: float) -> Trajectory:
     t = np.arange(n) * period
     if t[-1] < starts[-1] - 1e-12:
         t = np.append(t, starts[-1])
+    return _evaluate_blocks(path, blocks, t, period)
+
+
+def _evaluate_blocks(path: Path, blocks: tuple[Block, ...], t: np.ndarray,
+                     period: float) -> Trajectory:
+    """The planned motion at times ``t`` (s, within [0, duration])."""
+    starts = np.concatenate([[0.0], np.cumsum([b.profile.duration for b in blocks])])
     x = np.empty((len(t), 3))
     xd = np.empty_like(x)
     xdd = np.empty_like(x)
@@ -317,6 +386,11 @@ def constant_speed(path: Path, *, speed: float, period: float) -> Trajectory:
     t = np.arange(n) * period
     if t[-1] < duration - 1e-12:
         t = np.append(t, duration)
+    return _constant_speed_at(path, speed, t, period)
+
+
+def _constant_speed_at(path: Path, speed: float, t: np.ndarray, period: float) -> Trajectory:
+    lengths = np.array([seg.length for seg in path.segments])
     s = np.minimum(speed * t, lengths.sum())
     bounds = np.concatenate([[0.0], np.cumsum(lengths)])
     which = np.clip(np.searchsorted(bounds, s, side="right") - 1, 0, len(lengths) - 1)

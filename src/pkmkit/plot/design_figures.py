@@ -10,6 +10,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from pkmkit.design.optimize import OptimizationResult
+from pkmkit.plot.save import save_figure
 
 
 def plot_pareto(result: OptimizationResult, *,
@@ -55,7 +56,7 @@ def plot_pareto(result: OptimizationResult, *,
     ax.set_title(title or f"{result.problem.base.name}: {len(result.records)} designs",
                  fontsize=9)
     if path is not None:
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        save_figure(fig, path, dpi=120, bbox_inches="tight")
     return fig
 
 
@@ -72,5 +73,5 @@ def plot_sizing_sweep(rows: Sequence[dict[str, float]], *, x: str, ys: Sequence[
     ax.legend(fontsize=8)
     ax.set_title(title, fontsize=9)
     if path is not None:
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        save_figure(fig, path, dpi=120, bbox_inches="tight")
     return fig

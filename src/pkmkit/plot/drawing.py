@@ -9,6 +9,7 @@ from matplotlib.figure import Figure
 
 from pkmkit.machines.machine import Machine
 from pkmkit.model.rods import CRANK, SLIDE
+from pkmkit.plot.save import save_figure
 from pkmkit.solve.rod_closure import rod_base_points
 from pkmkit.spatial.rotation import rotvec_to_matrix
 
@@ -113,5 +114,5 @@ def draw_machine(machine: Machine, pose=None, *, q=None, ax=None, title: str | N
     ax.set_title(title, fontsize=9)
     ax.legend(loc="upper left", fontsize=7)
     if path is not None:
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        save_figure(fig, path, dpi=120, bbox_inches="tight")
     return fig

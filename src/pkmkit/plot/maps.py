@@ -21,6 +21,7 @@ from pkmkit.analysis.workspace import (
 )
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import Machine
+from pkmkit.plot.save import save_figure
 
 #: Colours of the workspace classes: first failing criterion, then feasible.
 _CLASSES = (
@@ -59,7 +60,7 @@ def _save(fig: Figure, path: str | Path | None) -> Figure:
     if path is not None:
         check_figure_path(path)
         try:
-            fig.savefig(path, dpi=120, bbox_inches="tight")
+            save_figure(fig, path, dpi=120, bbox_inches="tight")
         except OSError as exc:
             raise InputError(f"cannot write figure {str(path)!r}: "
                              f"{exc.strerror or exc}") from None

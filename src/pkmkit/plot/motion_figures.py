@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from pkmkit.motion.joints import JointTrajectory
+from pkmkit.plot.save import save_figure
 
 
 def plot_joint_motion(motion: JointTrajectory, names, *, forces: np.ndarray | None = None,
@@ -32,7 +33,7 @@ def plot_joint_motion(motion: JointTrajectory, names, *, forces: np.ndarray | No
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(title, fontsize=10)
     if path is not None:
-        fig.savefig(path, dpi=110)
+        save_figure(fig, path, dpi=110)
     return fig
 
 
@@ -56,5 +57,5 @@ def plot_tool_path(motion: JointTrajectory, *, title: str = "", length_unit: str
     fig.colorbar(sc, ax=ax, label=f"speed [{length_unit}/s]", shrink=0.7)
     ax.set_title(title, fontsize=9)
     if path is not None:
-        fig.savefig(path, dpi=110)
+        save_figure(fig, path, dpi=110)
     return fig

@@ -20,18 +20,28 @@ array([ 0.,  0., 90.])
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial.transform import RigidTransform, Rotation
 
 from pkmkit.errors import InputError
 from pkmkit.spatial.rotation import (
     DEFAULT_CONVENTION,
     angles_from_rotation,
     as_rotation_matrices,
+    rotation_class,
     rotation_from_angles,
 )
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import RigidTransform, Rotation
+
+
+def _rigid_class():
+    from scipy.spatial.transform import RigidTransform  # lazy: start-up time
+
+    return RigidTransform
+
 
 #: Names of the six pose coordinates.
 POSE_NAMES = ("x", "y", "z", "rx", "ry", "rz")
@@ -54,16 +64,17 @@ def pose_from_parts(position: Any, rotation: Rotation | Any) -> np.ndarray:
     pos = np.asarray(position, dtype=float)
     if pos.shape[-1:] != (3,) or pos.ndim not in (1, 2) or not np.isfinite(pos).all():
         raise InputError(f"position must be finite with shape (3,) or (N, 3), got {pos.shape}")
-    if isinstance(rotation, Rotation):
+    rotation_type = rotation_class()
+    if isinstance(rotation, rotation_type):
         rotvec = rotation.as_rotvec().reshape(-1, 3)
     else:
-        rotvec = Rotation.from_matrix(as_rotation_matrices(rotation)).as_rotvec()
+        rotvec = rotation_type.from_matrix(as_rotation_matrices(rotation)).as_rotvec()
     p = pos.reshape(-1, 3)
     if rotvec.shape[0] != p.shape[0] and 1 not in (rotvec.shape[0], p.shape[0]):
         raise InputError(f"{p.shape[0]} positions but {rotvec.shape[0]} rotations")
     n = max(p.shape[0], rotvec.shape[0])
     out = np.concatenate([np.broadcast_to(p, (n, 3)), np.broadcast_to(rotvec, (n, 3))], axis=1)
-    rot_single = (rotation.single if isinstance(rotation, Rotation)
+    rot_single = (rotation.single if isinstance(rotation, rotation_type)
                   else np.asarray(rotation).ndim == 2)
     single = pos.ndim == 1 and rot_single
     return out[0] if single else out
@@ -79,7 +90,7 @@ def pose_from_angles(position: Any, angles: Any, convention: str = DEFAULT_CONVE
 def pose_parts(pose: Any) -> tuple[np.ndarray, Rotation]:
     """``(positions (N, 3) or (3,), Rotation)`` of pose rows ``(N, 6)`` or ``(6,)``."""
     rows, single = _pose_rows(pose)
-    rot = Rotation.from_rotvec(rows[:, 3:])
+    rot = rotation_class().from_rotvec(rows[:, 3:])
     if single:
         return rows[0, :3].copy(), rot[0]
     return rows[:, :3].copy(), rot
@@ -95,7 +106,8 @@ def pose_to_angles(pose: Any, convention: str = DEFAULT_CONVENTION, *,
 def to_transform(pose: Any) -> RigidTransform:
     """The pose rows as one (batched) :class:`RigidTransform`."""
     rows, single = _pose_rows(pose)
-    out = RigidTransform.from_components(rows[:, :3], Rotation.from_rotvec(rows[:, 3:]))
+    out = _rigid_class().from_components(rows[:, :3],
+                                         rotation_class().from_rotvec(rows[:, 3:]))
     return out[0] if single else out
 
 
@@ -110,7 +122,7 @@ def from_transform(transform: RigidTransform) -> np.ndarray:
 def pose_matrices(pose: Any) -> tuple[np.ndarray, np.ndarray]:
     """Positions ``(N, 3)`` and rotation matrices ``(N, 3, 3)`` of pose rows (kernel form)."""
     rows, _ = _pose_rows(pose)
-    return rows[:, :3], Rotation.from_rotvec(rows[:, 3:]).as_matrix().reshape(-1, 3, 3)
+    return rows[:, :3], rotation_class().from_rotvec(rows[:, 3:]).as_matrix().reshape(-1, 3, 3)
 
 
 def compose_poses(a: Any, b: Any) -> np.ndarray:

@@ -26,12 +26,22 @@ array([90.,  0.,  0.])
 from __future__ import annotations
 
 import re
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from pkmkit.errors import InputError
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
+
+
+def rotation_class():
+    """scipy's Rotation, imported on first use (SciPy's spatial costs ~0.2 s to import, which
+    the command line's start-up must not pay)."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation
 
 #: The command line's default angle convention (fixed axes x, then y, then z).
 DEFAULT_CONVENTION = "xyz"
@@ -80,18 +90,20 @@ def _rows3(value: np.ndarray) -> np.ndarray:
 
 def rotvec_to_matrix(phi: np.ndarray) -> np.ndarray:
     """Rotation matrices ``(N, 3, 3)`` of rotation vectors ``(N, 3)`` (radians)."""
-    return Rotation.from_rotvec(_rows3(phi)).as_matrix()
+    return rotation_class().from_rotvec(_rows3(phi)).as_matrix()
 
 
 def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
     """Rotation vectors ``(N, 3)`` (radians, angle in [0, π]) of rotation matrices ``(N, 3, 3)``."""
-    return Rotation.from_matrix(np.asarray(matrix, dtype=float).reshape(-1, 3, 3)).as_rotvec()
+    return rotation_class().from_matrix(np.asarray(matrix, dtype=float).reshape(-1, 3, 3)
+                                         ).as_rotvec()
 
 
 def compose_rotvec(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """Rotation vector of ``exp(δ) · exp(φ)`` (left increment δ applied to φ), rows ``(N, 3)``."""
-    d = Rotation.from_rotvec(_rows3(delta))
-    p = Rotation.from_rotvec(_rows3(phi))
+    rotation = rotation_class()
+    d = rotation.from_rotvec(_rows3(delta))
+    p = rotation.from_rotvec(_rows3(phi))
     return (d * p).as_rotvec()
 
 
@@ -164,7 +176,7 @@ def rotation_from_angles(angles: Any, convention: str = DEFAULT_CONVENTION, *,
         raise InputError(f"angles must have shape (3,) or (N, 3), got {arr.shape}")
     if not np.isfinite(arr).all():
         raise InputError(f"angles must be finite, got {arr.tolist()}")
-    return Rotation.from_euler(seq, arr, degrees=degrees)
+    return rotation_class().from_euler(seq, arr, degrees=degrees)
 
 
 def angles_from_rotation(rotation: Rotation, convention: str = DEFAULT_CONVENTION, *,

@@ -20,7 +20,6 @@ True
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import RigidTransform
 
 from pkmkit.spatial.rotation import skew
 
@@ -33,6 +32,8 @@ def _rows(x: np.ndarray, width: int) -> tuple[np.ndarray, bool]:
 
 def se3_exp(xi: np.ndarray) -> np.ndarray:
     """Homogeneous matrices ``(N, 4, 4)`` (or ``(4, 4)``) of twists ``(N, 6)`` = (v, ω)."""
+    from scipy.spatial.transform import RigidTransform  # lazy: start-up time
+
     arr, single = _rows(xi, 6)
     out = RigidTransform.from_exp_coords(np.concatenate([arr[:, 3:], arr[:, :3]], axis=1))
     mat = out.as_matrix().reshape(-1, 4, 4)
@@ -41,6 +42,8 @@ def se3_exp(xi: np.ndarray) -> np.ndarray:
 
 def se3_log(matrix: np.ndarray) -> np.ndarray:
     """Twists ``(N, 6)`` = (v, ω) (or ``(6,)``) of homogeneous matrices ``(N, 4, 4)``."""
+    from scipy.spatial.transform import RigidTransform  # lazy: start-up time
+
     arr = np.asarray(matrix, dtype=float)
     single = arr.ndim == 2
     coords = RigidTransform.from_matrix(arr.reshape(-1, 4, 4)).as_exp_coords().reshape(-1, 6)

@@ -1,0 +1,276 @@
+"""Benchmark: the command line end to end — batch tables and start-up.
+
+Batch (``pkmkit ik|fk|jacobian --input T --output T``, a fresh process each time, timed from
+outside, median of ``--repeat`` runs) on ``--rows`` rows, against baselines measured in the same
+run on the same tables:
+
+- ``xlib``: pyarrow's own read of the input table plus write of the command's output table (the
+  least any tool reading and writing those tables with that library pays);
+- ``xold``: the former implementation (csv module, per-row ``float()`` and ``.17g`` formatting,
+  per-row status labels) on the first ``--old-rows`` rows, scaled to ``--rows``.
+
+``cpu s``, ``lib cpu`` and ``solve cpu`` are the same in CPU time (user + system): on a loaded
+machine they estimate the wall time of a quiet one.
+
+``solve s`` is the engine call the command makes (``Machine.ik(full_output=True)``,
+``Machine.fk(full_output=True)``, ``Machine.jacobian``) timed in this process on the same rows;
+``rest`` = total − solve is what the command line adds (start-up, reading, writing, statuses),
+compared with the library's read + write in ``rest/lib``.
+
+Start-up: ``pkmkit --help`` and a one-pose ``pkmkit ik`` against ``python -c pass`` and
+``python -c "import numpy"`` (the floor any NumPy program pays).
+
+Memory: with ``--big-rows N`` (e.g. 10⁷), the peak resident memory of ``pkmkit ik`` on an
+N-row CSV → Parquet run, beside that of the ``--rows`` run (bounded by the chunk size, it should
+not grow with N).
+
+``--load`` runs everything again beside a competing busy process.
+
+Usage::
+
+    python bench/cli_io.py [--rows 1000000] [--repeat 5] [--big-rows 10000000] [--load]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import platform
+import resource
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.csv as pcsv
+import pyarrow.parquet as pq
+
+import pkmkit
+
+PKMKIT = [sys.executable, "-m", "pkmkit.cli.main"]
+
+
+def _pkmkit_command() -> list[str]:
+    exe = shutil.which("pkmkit")
+    return [exe] if exe else PKMKIT
+
+
+def wall(cmd: list[str], repeat: int) -> float:
+    """Median wall time (s) of ``cmd`` run ``repeat`` times (exit status 0 or 3 accepted)."""
+    return run_times(cmd, repeat)[0]
+
+
+def run_times(cmd: list[str], repeat: int) -> tuple[float, float]:
+    """Median wall time and median CPU time (user + system, s) of ``cmd`` over ``repeat`` runs.
+    On a loaded machine the CPU time estimates the wall time of a quiet one (an upper bound
+    where pyarrow uses both cores)."""
+    walls, cpus = [], []
+    for _ in range(repeat):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        start = time.perf_counter()
+        done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        walls.append(time.perf_counter() - start)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpus.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+        if done.returncode not in (0, 3):
+            raise RuntimeError(f"{' '.join(map(str, cmd))} failed: {done.stderr.decode()}")
+    return statistics.median(walls), statistics.median(cpus)
+
+
+def cpu_in_process(func, repeat: int) -> float:
+    """Median CPU time (s) of ``func()`` in this process."""
+    times = []
+    for _ in range(repeat):
+        start = time.process_time()
+        func()
+        times.append(time.process_time() - start)
+    return statistics.median(times)
+
+
+def peak_memory(cmd: list[str]) -> float:
+    """Peak resident memory (MB) of ``cmd``, from the kernel's accounting of the child."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    code = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:]); "
+            "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
+    out = subprocess.run([sys.executable, "-c", code, *cmd], capture_output=True, text=True)
+    del before
+    return int(out.stdout.split()[-1]) / 1024
+
+
+def median_in_process(func, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        func()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def make_tables(folder: Path, rows: int) -> dict[str, Path]:
+    rng = np.random.default_rng(0)
+    m = pkmkit.machine("linear-delta")
+    x = np.round(rng.uniform(-0.25, 0.25, (rows, 3)), 6)
+    q = m.ik(x)
+    paths = {}
+    for name, cols in (("poses", {"x": x[:, 0], "y": x[:, 1], "z": x[:, 2]}),
+                       ("q", {"q1": q[:, 0], "q2": q[:, 1], "q3": q[:, 2]})):
+        table = pa.table(cols)
+        paths[f"{name}.csv"] = folder / f"{name}.csv"
+        pcsv.write_csv(table, paths[f"{name}.csv"],
+                       write_options=pcsv.WriteOptions(quoting_style="none"))
+        paths[f"{name}.parquet"] = folder / f"{name}.parquet"
+        pq.write_table(table, paths[f"{name}.parquet"])
+    return paths
+
+
+def library_read_write(src: Path, produced: Path, repeat: int, cpu: bool = False) -> float:
+    """pyarrow reading ``src`` and writing the table held in ``produced`` (same format): median
+    wall time, or CPU time with ``cpu``."""
+    if src.suffix == ".csv":
+        out_table = pcsv.read_csv(produced)
+
+        def run():
+            pcsv.read_csv(src)
+            pcsv.write_csv(out_table, produced.with_suffix(".lib.csv"))
+    else:
+        out_table = pq.read_table(produced)
+
+        def run():
+            pq.read_table(src)
+            pq.write_table(out_table, produced.with_suffix(".lib.parquet"))
+    return cpu_in_process(run, repeat) if cpu else median_in_process(run, repeat)
+
+
+def old_implementation(src: Path, dst: Path, rows: int, columns: list[str]) -> None:
+    """The former batch path: csv module, per-cell float(), .17g, per-row labels."""
+    m = pkmkit.machine("linear-delta")
+    with open(src, newline="", encoding="utf-8-sig") as handle:
+        data = [(n, r) for n, r in enumerate(csv.reader(handle), start=1)
+                if r and not r[0].lstrip().startswith("#")][: rows + 1]
+    header = data[0][1]
+    index = [header.index(c) for c in columns]
+    values = np.empty((len(data) - 1, len(columns)))
+    for k, (_, row) in enumerate(data[1:]):
+        for j, c in enumerate(index):
+            values[k, j] = float(row[c])
+    res = m.ik(values, full_output=True)
+    labels = [pkmkit.Status(int(s)).label for s in res.status]
+    with open(dst, "w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle)
+        writer.writerow([*columns, "q1", "q2", "q3", "mode", "status"])
+        for k, lab in enumerate(labels):
+            writer.writerow([f"{float(v):.17g}" for v in (*values[k], *res.q[k])]
+                            + [m.mode_label(res.mode[k]) if res.mode[k] else "", lab])
+
+
+def busy() -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-c", "while True: pass"])
+
+
+def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
+    cmd = _pkmkit_command()
+    print(f"\n== {label}")
+    print(f"{'command':<20} {'format':<8} {'s':>7} {'lib s':>7} {'xlib':>6} {'solve s':>8} "
+          f"{'rest/lib':>8} {'cpu s':>6} {'lib cpu':>7} {'solve cpu':>9}")
+    m = pkmkit.machine("linear-delta")
+    x = np.column_stack([pq.read_table(paths["poses.parquet"]).column(c).to_numpy()
+                         for c in "xyz"])
+    q = np.column_stack([pq.read_table(paths["q.parquet"]).column(c).to_numpy()
+                         for c in ("q1", "q2", "q3")])
+    solves = {
+        "ik": lambda: m.ik(x, full_output=True),
+        "fk": lambda: m.fk(q, full_output=True),
+        "jacobian": lambda: m.jacobian(x, q=m.ik(x, full_output=True).q),
+    }
+    for command, src_name in (("ik", "poses"), ("fk", "q"), ("jacobian", "poses")):
+        solve = median_in_process(solves[command], args.repeat)
+        solve_cpu = cpu_in_process(solves[command], args.repeat)
+        for fmt in ("csv", "parquet"):
+            src = paths[f"{src_name}.{fmt}"]
+            dst = folder / f"out-{command}.{fmt}"
+            t, cpu = run_times([*cmd, command, "linear-delta", "--input", str(src), "--output",
+                                str(dst)], args.repeat)
+            lib = library_read_write(src, dst, args.repeat)
+            lib_cpu = library_read_write(src, dst, args.repeat, cpu=True)
+            print(f"pkmkit {command:<13} {fmt:<8} {t:7.3f} {lib:7.3f} {t / lib:6.2f} "
+                  f"{solve:8.3f} {(t - solve) / lib:8.2f} {cpu:6.3f} {lib_cpu:7.3f} "
+                  f"{solve_cpu:9.3f}")
+    old_rows = min(args.old_rows, args.rows)
+    start = time.perf_counter()
+    old_implementation(paths["poses.csv"], folder / "old.csv", old_rows, ["x", "y", "z"])
+    old = (time.perf_counter() - start) * args.rows / old_rows
+    t_ik = wall([*cmd, "ik", "linear-delta", "--input", str(paths["poses.csv"]), "--output",
+                 str(folder / "out-ik.csv")], args.repeat)
+    print(f"former CSV path (csv module, .17g), ik on {old_rows} rows scaled to {args.rows}: "
+          f"{old:.2f} s; pkmkit ik now {t_ik:.3f} s, xold {old / t_ik:.1f}")
+    print(f"{'start-up':<34} {'s':>7} {'x python':>9} {'x numpy':>8} {'cpu s':>6}")
+    t_pass = wall([sys.executable, "-c", "pass"], args.repeat)
+    t_numpy = wall([sys.executable, "-c", "import numpy"], args.repeat)
+    for name, extra in (("pkmkit --help", ["--help"]),
+                        ("pkmkit ik (one pose)", ["ik", "linear-delta", "--pose", "0.25,0.25,0"]),
+                        ("pkmkit path --help", ["path", "--help"])):
+        t, cpu = run_times([*cmd, *extra], args.repeat)
+        print(f"{name:<34} {t:7.3f} {t / t_pass:9.1f} {t / t_numpy:8.2f} {cpu:6.3f}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rows", type=int, default=1_000_000)
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--old-rows", type=int, default=100_000)
+    parser.add_argument("--big-rows", type=int, default=0)
+    parser.add_argument("--load", action="store_true", help="also run beside a busy process")
+    args = parser.parse_args()
+    print(f"pkmkit {pkmkit.__version__}, numpy {np.__version__}, pyarrow {pa.__version__}, "
+          f"Python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores")
+    print(f"{args.rows} rows, median of {args.repeat} runs (wall time of a fresh process)")
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        paths = make_tables(folder, args.rows)
+        run_all(args, folder, paths, "quiet")
+        if args.load:
+            competitor = busy()
+            try:
+                run_all(args, folder, paths, "beside a busy process")
+            finally:
+                competitor.kill()
+        if args.big_rows:
+            cmd = _pkmkit_command()
+            small = peak_memory([*cmd, "ik", "linear-delta", "--input",
+                                 str(paths["poses.csv"]), "--output", str(folder / "m.parquet")])
+            big_paths = make_big(folder, args.big_rows)
+            start = time.perf_counter()
+            big = peak_memory([*cmd, "ik", "linear-delta", "--input", str(big_paths),
+                               "--output", str(folder / "big.parquet")])
+            took = time.perf_counter() - start
+            print(f"\npeak memory of pkmkit ik, CSV -> Parquet, chunks of 500000 rows: "
+                  f"{args.rows} rows {small:.0f} MB; {args.big_rows} rows {big:.0f} MB "
+                  f"({took:.1f} s, {pq.ParquetFile(folder / 'big.parquet').metadata.num_rows}"
+                  " rows written)")
+
+
+def make_big(folder: Path, rows: int) -> Path:
+    """An N-row pose CSV written in pieces (never whole in memory)."""
+    path = folder / "big.csv"
+    rng = np.random.default_rng(1)
+    with open(path, "wb") as handle:
+        handle.write(b"x,y,z\n")
+        left = rows
+        while left:
+            n = min(left, 1_000_000)
+            block = pa.table({k: np.round(rng.uniform(-0.25, 0.25, n), 6) for k in "xyz"})
+            sink = pa.BufferOutputStream()
+            pcsv.write_csv(block, sink, write_options=pcsv.WriteOptions(include_header=False))
+            handle.write(sink.getvalue().to_pybytes())
+            left -= n
+    return path
+
+
+if __name__ == "__main__":
+    main()

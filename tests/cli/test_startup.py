@@ -1,0 +1,101 @@
+"""Start-up: ``import pkmkit`` and the kinematics commands import no plotting or optimisation
+library (checked in ``sys.modules`` of a fresh interpreter, never by timing), and the lazily
+imported commands are listed exactly as their modules define them."""
+
+import json
+import subprocess
+import sys
+import textwrap
+
+import click
+import pytest
+
+from pkmkit.cli.lazy import LAZY_COMMANDS
+from pkmkit.cli.main import cli
+
+HEAVY = ("matplotlib", "pymoo", "cma", "mujoco", "scipy.optimize", "scipy.spatial", "pyarrow")
+
+
+def _modules_after(code: str) -> set[str]:
+    """Top-level names of the modules a fresh interpreter holds after running ``code``."""
+    script = textwrap.dedent(code) + textwrap.dedent("""
+        import json, sys
+        print(json.dumps(sorted(sys.modules)))
+    """)
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         check=True).stdout
+    return set(json.loads(out.splitlines()[-1]))
+
+
+def _heavy(modules: set[str]) -> list[str]:
+    return sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in HEAVY))
+
+
+def test_import_pkmkit_is_light():
+    assert _heavy(_modules_after("import pkmkit")) == []
+
+
+@pytest.mark.parametrize("args", [
+    ["--help"],
+    ["show", "orthoglide"],
+    ["ik", "linear-delta", "--pose", "0.25,0.25,0"],
+    ["fk", "orthoglide", "--q", "0.31,0.31,0.31", "--all"],
+    ["jacobian", "five-bar", "--pose", "1.05,0.05"],
+])
+def test_kinematics_commands_are_light(args):
+    modules = _modules_after(f"""
+        from pkmkit.cli.main import cli
+        try:
+            cli({args!r}, standalone_mode=False)
+        except SystemExit:
+            pass
+    """)
+    assert "pkmkit.cli.main" in modules
+    assert _heavy(modules) == []
+
+
+def test_listing_machines_builds_them_without_the_heavy_packages():
+    """``pkmkit machines`` builds every built-in machine; the full-pose and joint-chain ones use
+    SciPy's rotations to assemble, nothing heavier."""
+    modules = _modules_after("""
+        from pkmkit.cli.main import cli
+        cli(["machines"], standalone_mode=False)
+    """)
+    allowed = {"scipy.spatial"}
+    assert [m for m in _heavy(modules) if not any(m == a or m.startswith(a + ".")
+                                                  for a in allowed)] == []
+
+
+def test_a_lazy_command_still_runs_with_its_imports():
+    modules = _modules_after("""
+        from pkmkit.cli.main import cli
+        cli(["path", "--help"], standalone_mode=False)
+    """)
+    assert "matplotlib" in modules
+
+
+def test_lazy_table_matches_the_commands():
+    """Every command a module registers is in the table with its help, and nothing else."""
+    import importlib
+
+    modules = {entry.module for entry in LAZY_COMMANDS.values()}
+    registered = {}
+    for name in modules:
+        group = click.Group()
+        importlib.import_module(name).register(group)
+        registered.update({k: (name, c) for k, c in group.commands.items()})
+    assert set(registered) == set(LAZY_COMMANDS)
+    for cmd_name, (module, command) in registered.items():
+        entry = LAZY_COMMANDS[cmd_name]
+        assert entry.module == module
+        assert getattr(importlib.import_module(module), entry.attribute) is command
+        for limit in (20, 45, 58, 74, 200):
+            stand_in = click.Command(cmd_name, help=entry.short_help)
+            assert stand_in.get_short_help_str(limit) == command.get_short_help_str(limit)
+
+
+def test_help_lists_every_command(run):
+    text = run("--help").output
+    for name in [*LAZY_COMMANDS, "ik", "fk", "jacobian", "machines", "show", "demo"]:
+        assert f"  {name} " in text
+    assert set(LAZY_COMMANDS) <= set(cli.list_commands(click.Context(cli)))

@@ -1,0 +1,176 @@
+"""Extract the runnable blocks of the Markdown documentation and compare what they print.
+
+A ``console`` block holds commands (``$ ...``, continued by a trailing ``\\``) each followed by
+the output it shows; a ``python`` block is a program. A block may be preceded by a marker
+comment ``<!-- docs-test: ... -->`` with any of:
+
+- ``skip (reason)``: not run;
+- ``ci``: run only in CI (long examples): when ``CI`` or ``PKMKIT_DOCS_CI`` is set;
+- ``any-numbers``: the numbers printed are not compared (timings);
+- ``command="..."``: a ``text`` block is the output of this command.
+
+Shown output is compared line by line: numbers to their printed precision (one unit in the
+last digit shown), everything else exactly (runs of spaces as one); a line ``...`` stands for
+any number of omitted lines and ``...`` inside a line for omitted text; an annotation after
+two spaces and ``# `` at the end of a line is the documentation's, not the program's. A command
+whose shown output starts with ``Error:`` must fail (exit status 1); the others must succeed
+(exit status 0, or 3: flagged rows or exceeded limits, which the output then shows). A command
+shown without output is run and its exit status checked.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_NUMBER_RE = re.compile(NUMBER)
+_MARKER = re.compile(r"<!--\s*docs-test:\s*(.*?)\s*-->")
+_ANNOTATION = re.compile(r"\s{2,}#\s.*$")
+
+
+@dataclass
+class Command:
+    text: str
+    expected: list[str]
+    line: int
+
+
+@dataclass
+class Block:
+    path: Path
+    line: int
+    lang: str
+    body: list[str]
+    options: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        return f"{self.path.name}:{self.line}"
+
+    def commands(self) -> list[Command]:
+        """The commands of a console block (or the ``command=`` of a text block)."""
+        if self.lang == "text":
+            return [Command(self.options["command"], self.body, self.line)]
+        out: list[Command] = []
+        lines = iter(enumerate(self.body, start=self.line + 1))
+        for number, raw in lines:
+            if raw.startswith("$ "):
+                text = raw[2:]
+                while text.endswith("\\"):
+                    text = text[:-1] + " " + next(lines)[1].strip()
+                out.append(Command(text, [], number))
+            elif out:
+                out[-1].expected.append(raw)
+            elif raw.strip():
+                raise ValueError(f"{self.name}: output before any command: {raw!r}")
+        for command in out:  # a blank line between a command's output and the next command
+            while command.expected and not command.expected[-1].strip():
+                command.expected.pop()
+        return out
+
+
+def blocks(path: Path) -> list[Block]:
+    """The ``console``, ``python`` and (with a ``command=`` marker) ``text`` blocks of a file."""
+    found: list[Block] = []
+    lines = path.read_text(encoding="utf-8").splitlines()
+    k = 0
+    while k < len(lines):
+        fence = re.match(r"^```(\w*)\s*$", lines[k])
+        if not fence:
+            k += 1
+            continue
+        lang, start = fence.group(1), k
+        k += 1
+        body = []
+        while k < len(lines) and not lines[k].startswith("```"):
+            body.append(lines[k])
+            k += 1
+        k += 1
+        options = _options(lines, start)
+        if lang in ("console", "python") or (lang == "text" and "command" in options):
+            found.append(Block(path, start + 1, lang, body, options))
+    return found
+
+
+def _options(lines: list[str], fence: int) -> dict[str, str]:
+    """Options of the marker comments right above a fence (blank lines allowed)."""
+    options: dict[str, str] = {}
+    k = fence - 1
+    while k >= 0 and (not lines[k].strip() or _MARKER.search(lines[k])):
+        match = _MARKER.search(lines[k])
+        if match:
+            text = match.group(1)
+            command = re.search(r'command="([^"]*)"', text)
+            if command:
+                options["command"] = command.group(1)
+                text = text.replace(command.group(0), "")
+            skip = re.search(r"skip\s*\((.*)\)", text)
+            if skip:
+                options["skip"] = skip.group(1)
+                text = text.replace(skip.group(0), "")
+            for word in re.split(r"[\s,]+", text):
+                if word:
+                    options[word] = "yes"
+        elif lines[k].strip():
+            break
+        k -= 1
+    return options
+
+
+def expected_pattern(expected: list[str]) -> tuple[re.Pattern, list[str]]:
+    """A regex for the shown output and the number texts it captures, in order."""
+    parts: list[str] = []
+    numbers: list[str] = []
+    for raw in expected:
+        line = _ANNOTATION.sub("", raw.rstrip())
+        if line.strip() == "...":
+            parts.append(r"(?:[^\n]*\n)*?")
+            continue
+        pieces = []
+        position = 0
+        for match in re.finditer(NUMBER + r"|\.\.\.|\s+", line):
+            pieces.append(re.escape(line[position:match.start()]))
+            token = match.group(0)
+            if token == "...":
+                pieces.append(r"[^\n]*?")
+            elif token.isspace():
+                pieces.append(r"[ \t]+" if match.start() > 0 else r"[ \t]*")
+            else:
+                pieces.append(f"({NUMBER}|nan|inf|-inf)")
+                numbers.append(token)
+            position = match.end()
+        pieces.append(re.escape(line[position:]))
+        parts.append("".join(pieces) + r"[ \t]*\n")
+    return re.compile("".join(parts), re.DOTALL), numbers
+
+
+def last_digit_unit(text: str) -> float:
+    """Value of one unit in the last digit of a printed number."""
+    mantissa, _, exponent = text.lower().partition("e")
+    decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
+    return 10.0 ** (int(exponent or 0) - decimals)
+
+
+def compare(expected: list[str], actual: str, *, numbers: bool = True) -> str | None:
+    """None if ``actual`` shows ``expected`` (see the module docstring), else why not."""
+    pattern, texts = expected_pattern(expected)
+    lines = [line.rstrip() for line in actual.replace("\r\n", "\n").split("\n")]
+    while lines and not lines[-1]:
+        lines.pop()
+    text = "\n".join(lines) + "\n"
+    match = pattern.fullmatch(text)
+    if match is None:
+        return ("the output does not have the shown form\n--- shown:\n" + "\n".join(expected)
+                + "\n--- actual:\n" + text)
+    if not numbers:
+        return None
+    for shown, got in zip(texts, match.groups(), strict=True):
+        value = float(got)
+        want = float(shown)
+        if math.isnan(value) or abs(value - want) > 1.0001 * last_digit_unit(shown):
+            return (f"number {shown} is now {got}\n--- shown:\n" + "\n".join(expected)
+                    + "\n--- actual:\n" + text)
+    return None

@@ -1,0 +1,120 @@
+"""The documentation runs: every console and Python block of README.md and docs/*.md is
+executed in a temporary folder (one per file, with ``docs/examples`` and ``bench`` beside it) and
+what it prints is compared with what the documentation shows (see ``docs_blocks``). Blocks
+marked ``ci`` run only in CI (``.ci/run`` sets ``PKMKIT_DOCS_CI``)."""
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from .docs_blocks import blocks, compare
+
+ROOT = Path(__file__).resolve().parents[2]
+FILES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+ALL_BLOCKS = [b for path in FILES for b in blocks(path)]
+IN_CI = bool(os.environ.get("CI") or os.environ.get("PKMKIT_DOCS_CI"))
+TIMEOUT = 900
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory):
+    """One working folder per documentation file, shared by its blocks in order."""
+    made: dict[Path, Path] = {}
+
+    def folder(path: Path) -> Path:
+        if path not in made:
+            work = tmp_path_factory.mktemp(path.stem)
+            shutil.copytree(ROOT / "docs" / "examples", work / "docs" / "examples")
+            (work / "bench").symlink_to(ROOT / "bench")
+            made[path] = work
+        return made[path]
+
+    return folder
+
+
+def _environment() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PATH"] = str(Path(sys.executable).parent) + os.pathsep + env.get("PATH", "")
+    env["COLUMNS"] = "100"
+    env.pop("PYTHONPATH", None)
+    return env
+
+
+def _params():
+    params = []
+    for block in ALL_BLOCKS:
+        marks = []
+        if "skip" in block.options:
+            marks.append(pytest.mark.skip(reason=block.options["skip"]))
+        elif "ci" in block.options and not IN_CI:
+            marks.append(pytest.mark.skip(reason="long example: run in CI (PKMKIT_DOCS_CI=1)"))
+        params.append(pytest.param(block, id=block.name, marks=marks))
+    return params
+
+
+@pytest.mark.parametrize("block", _params())
+def test_block_runs_as_shown(block, folders):
+    work = folders(block.path)
+    env = _environment()
+    if block.lang == "python":
+        done = subprocess.run([sys.executable, "-c", "\n".join(block.body)], cwd=work, env=env,
+                              capture_output=True, text=True, timeout=TIMEOUT)
+        assert done.returncode == 0, f"{block.name}: {done.stderr}"
+        return
+    for command in block.commands():
+        done = subprocess.run(["bash", "-c", command.text], cwd=work, env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                              timeout=TIMEOUT)
+        where = f"{block.path.name}:{command.line}: $ {command.text}"
+        shows_error = bool(command.expected) and command.expected[0].startswith("Error:")
+        if shows_error:
+            assert done.returncode == 1, f"{where}\nexpected a failure, got:\n{done.stdout}"
+        else:
+            assert done.returncode in (0, 3), f"{where}\nexit {done.returncode}:\n{done.stdout}"
+        if command.expected:
+            problem = compare(command.expected, done.stdout,
+                              numbers="any-numbers" not in block.options)
+            assert problem is None, f"{where}\n{problem}"
+
+
+def test_every_file_an_example_reads_ships_with_the_docs():
+    """Paths in the commands that are not written by an earlier command of the same file exist
+    under docs/examples (or are the repository's own scripts)."""
+    import re
+    import shlex
+
+    for path in FILES:
+        written: set[str] = set()
+        for block in blocks(path):
+            if block.lang == "python" or "skip" in block.options:
+                continue
+            for command in block.commands():
+                words = shlex.split(command.text.split("  #")[0], comments=True)
+                for k, word in enumerate(words):
+                    if word in (">", ">>") and k + 1 < len(words):
+                        written.add(words[k + 1])
+                    if words[max(k - 1, 0)] in ("--out", "--output"):
+                        written.add(word)
+                for word in words:
+                    if re.fullmatch(r"[\w./-]+\.(toml|yaml|yml|nc|csv|parquet|feather|py)",
+                                    word) and word not in written:
+                        assert (ROOT / word).exists() or any(
+                            word.startswith(w.rstrip("/") + "/") for w in written), (
+                            f"{path.name}:{command.line}: {word} is not shipped")
+
+
+def test_the_comparison_catches_a_wrong_number_and_a_dropped_line():
+    from .docs_blocks import compare
+
+    shown = ["result 1.235 m", "  next [0.5, 2]"]
+    assert compare(shown, "result 1.2351 m\n  next [0.5, 2]\n") is None
+    assert compare(shown, "result 1.2371 m\n  next [0.5, 2]\n") is not None
+    assert compare(shown, "result 1.235 m\n  extra\n  next [0.5, 2]\n") is not None
+    assert compare(["result 1.235 m", "...", "  next [0.5, 2]"],
+                   "result 1.235 m\n  extra\n  more\n  next [0.5, 2]\n") is None
+    assert compare(["a ... z 3"], "a b c z 3\n") is None
+    assert compare(["q = 1.5 m      # table: 1.50"], "q = 1.5 m\n") is None
