@@ -20,9 +20,11 @@ from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
 from pkmkit.machines.registry import machines as builtin_ids
 from pkmkit.model.parameters import length_scale
+from pkmkit.spatial.rotation import DEFAULT_CONVENTION, resolve_convention
 from pkmkit.status import Status
 
 from .batch import batch_options, run_batch, status_names
+from .coordinates import actuator_scales, actuator_units, family, parse_actuators
 from .describe import describe_machine, print_description
 from .lazy import LazyGroup
 from .options import (
@@ -77,6 +79,17 @@ def _parse_branches(text: str | None, m: Machine):
         raise InputError(f"--branches expects comma-separated +1/-1 values, got {text!r}") from None
 
 
+ANGLES_OPTION = click.option(
+    "--angles", "convention", default=DEFAULT_CONVENTION, show_default=True,
+    help="Angle convention of 6-DOF poses (A,B,C in degrees): xyz = fixed axes x, y, z "
+         "(R = Rz(C) Ry(B) Rx(A)); upper case for moving axes (ZYX, ZYZ, ...), or rpy, ypr, "
+         "euler-zyz, ...")
+TOOL_LENGTH_OPTION = click.option(
+    "--tool-length", type=float, default=None,
+    help="Tool length along the tool axis (joint-chain machines), in --units; default the "
+         "machine's.")
+
+
 @cli.command("machines")
 @JSON_OPTION
 def machines_cmd(as_json: bool) -> None:
@@ -112,16 +125,20 @@ def show(machine_name: str, assignments, units: str, as_json: bool) -> None:
 @cli.command()
 @click.argument("machine_name", metavar="MACHINE")
 @SET_OPTION
-@click.option("--pose", help="Platform position X,Y[,Z].")
+@click.option("--pose", help="Pose: X,Y[,Z] (translational machines), X,Y,Z,A,B,C (6-DOF; "
+                             "X,Y,Z for a Verne-type module), X,Y,Z,I,J,K (tool point and axis "
+                             "of a joint-chain machine).")
 @click.option("--branches", help="Inverse-model branch per leg, e.g. 1,1,-1 (default: working).")
 @click.option("--q0", "q0_text", help="Initial actuator coordinates for --method numeric.")
 @click.option("--method", type=click.Choice(["closed", "numeric"]), default="closed",
               show_default=True, help="Closed form or the least-squares engine.")
 @batch_options
+@ANGLES_OPTION
+@TOOL_LENGTH_OPTION
 @UNITS_OPTION
 @JSON_OPTION
 def ik(machine_name, assignments, pose, branches, q0_text, method, input_, output, chunk_rows,
-       units, as_json):
+       convention, tool_length, units, as_json):
     """Inverse kinematics: actuator coordinates of a pose (or of every row of --input).
 
     Batch input columns: the pose, named x,y (planar machines) or x,y,z, in --units. Output
@@ -130,31 +147,40 @@ def ik(machine_name, assignments, pose, branches, q0_text, method, input_, outpu
     """
     _require_batch_pair(pose, input_, output, "--pose")
     m = resolve_machine(machine_name, assignments, units)
+    if family(m) != "translational":
+        from .pose_cmds import ik as pose_ik
+
+        pose_ik(m, pose, q0_text, input_, output, chunk_rows, units, resolve_convention(
+            convention), tool_length, as_json)
+        return
     scale = length_scale(units)
+    qs = actuator_scales(m, units)
     br = _parse_branches(branches, m)
     if input_ is not None:
         def compute(values, chunk):
             res = m.ik(values * scale, method=method, branches=br, full_output=True)
-            return {**_named(m.pose_names, values), **_named(m.actuator_names, res.q / scale),
+            return {**_named(m.pose_names, values), **_named(m.actuator_names, res.q / qs),
                     "mode": _mode_column(m, res.mode), "status": _status_column(res.status)
                     }, res.status
 
         run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows)
         return
     x = parse_vector(pose, m.dims, "--pose", units)
-    q0 = parse_vector(q0_text, m.n_actuators, "--q0", units) if q0_text else None
+    q0 = parse_actuators(q0_text, m, units, "--q0") if q0_text else None
     res = m.ik(x, method=method, branches=br, q0=q0, full_output=True)
     mode = m.mode_label(int(res.mode))
-    payload = {"machine": m.id, "units": units, "pose": x / scale, "q": res.q / scale,
-               "actuators": list(m.actuator_names), "branches": res.branches,
+    payload = {"machine": m.id, "units": units, "pose": x / scale, "q": res.q / qs,
+               "actuators": list(m.actuator_names),
+               "actuator_units": actuator_units(m, units), "branches": res.branches,
                "mode": mode, "working_mode": int(res.mode) == m.working_mode,
                "method": method, "status": Status(int(res.status)).label}
     if as_json:
         emit_json(payload)
     else:
         click.echo(f"{m.name}: pose {fmt(x / scale)} {units}")
-        for name, value in zip(m.actuator_names, res.q / scale, strict=True):
-            click.echo(f"  {name} = {value:.9g} {units}")
+        for name, value, unit in zip(m.actuator_names, res.q / qs, actuator_units(m, units),
+                                     strict=True):
+            click.echo(f"  {name} = {value:.9g} {unit}")
         if int(res.mode) != m.working_mode:
             click.echo(f"  note: this configuration is in the {mode!r} assembly mode, not the "
                        f"working one ({m.mode_labels[0]!r}); fk returns it with --mode {mode}")
@@ -172,10 +198,12 @@ def ik(machine_name, assignments, pose, branches, q0_text, method, input_, outpu
 @click.option("--method", type=click.Choice(["closed", "numeric"]), default="closed",
               show_default=True, help="Closed form or the least-squares engine.")
 @batch_options
+@ANGLES_OPTION
+@TOOL_LENGTH_OPTION
 @UNITS_OPTION
 @JSON_OPTION
 def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, input_, output,
-       chunk_rows, units, as_json):
+       chunk_rows, convention, tool_length, units, as_json):
     """Direct kinematics: platform pose of actuator coordinates (or of every row of --input).
 
     Batch input columns: the actuators (q1,q2[,q3]; `pkmkit show` names them), in --units.
@@ -184,14 +212,21 @@ def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, inpu
     """
     _require_batch_pair(q_text, input_, output, "--q")
     m = resolve_machine(machine_name, assignments, units)
-    scale = length_scale(units)
-    if input_ is not None:
-        _fk_batch(m, all_modes, mode, method, input_, output, scale, chunk_rows)
+    if family(m) != "translational":
+        from .pose_cmds import fk as pose_fk
+
+        pose_fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units,
+                resolve_convention(convention), tool_length, as_json)
         return
-    q = parse_vector(q_text, m.n_actuators, "--q", units)
+    scale = length_scale(units)
+    qs = actuator_scales(m, units)
+    if input_ is not None:
+        _fk_batch(m, all_modes, mode, method, input_, output, scale, chunk_rows, qs)
+        return
+    q = parse_actuators(q_text, m, units)
     x0 = parse_vector(x0_text, m.dims, "--x0", units) if x0_text else None
     res = m.fk(q, mode=mode, method=method, x0=x0, full_output=True)
-    payload = {"machine": m.id, "units": units, "q": q / scale, "pose": res.pose / scale,
+    payload = {"machine": m.id, "units": units, "q": q / qs, "pose": res.pose / scale,
                "mode": res.mode_label, "mode_sign": res.mode, "branches": res.branches,
                "method": method, "status": Status(int(res.status)).label}
     if all_modes:
@@ -201,7 +236,7 @@ def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, inpu
     if as_json:
         emit_json(payload)
         return
-    click.echo(f"{m.name}: q {fmt(q / scale)} {units}")
+    click.echo(f"{m.name}: q {fmt(q / qs)} {_units_text(m, units)}")
     click.echo(f"  pose {fmt(res.pose / scale, 9)} {units}  (mode {res.mode_label})")
     if all_modes:
         for label, p in zip(payload["modes"], payload["poses"], strict=True):
@@ -228,12 +263,19 @@ def _mode_column(m: Machine, sign: np.ndarray):
     return Labels(codes, ["", m.mode_label(-1), m.mode_label(1)])
 
 
-def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_rows) -> None:
+def _units_text(m, units: str) -> str:
+    """The actuators' CLI unit, or units when they differ."""
+    found = actuator_units(m, units)
+    return found[0] if len(set(found)) == 1 else "(" + ", ".join(found) + ")"
+
+
+def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_rows,
+              qs) -> None:
     from pkmkit.io.table import Labels
 
     if all_modes:
         def compute(values, chunk):
-            modes = m.fk_all(values * scale)
+            modes = m.fk_all(values * qs)
             valid = np.asarray(modes.valid)
             n = len(values)
             # one output row per real mode of each input row, one NaN row if it has none
@@ -256,7 +298,7 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
         return
 
     def compute(values, chunk):
-        res = m.fk(values * scale, mode=mode, method=method, full_output=True)
+        res = m.fk(values * qs, mode=mode, method=method, full_output=True)
         ok = np.asarray(res.status) == Status.OK
         label = Labels(ok.astype(np.int32), ["", res.mode_label])
         return {**_named(m.actuator_names, values), **_named(m.pose_names, res.pose / scale),
@@ -268,24 +310,37 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
 @cli.command()
 @click.argument("machine_name", metavar="MACHINE")
 @SET_OPTION
-@click.option("--pose", help="Platform position X,Y[,Z].")
+@click.option("--pose", help="Pose (see `pkmkit ik --help`).")
+@click.option("--q", "q_text", help="Actuator coordinates (joint-chain machines, instead of "
+                                    "--pose).")
 @click.option("--tol", type=float, default=1e-6, show_default=True,
               help="Threshold on the singularity measures.")
 @batch_options
+@ANGLES_OPTION
 @UNITS_OPTION
 @JSON_OPTION
-def jacobian(machine_name, assignments, pose, tol, input_, output, chunk_rows, units, as_json):
+def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk_rows,
+             convention, units, as_json):
     """Velocity model at a pose: A, B, J, transmission factors, conditioning, singularity.
 
     Batch input columns: x,y[,z] in --units. Output columns: the pose, the actuators,
     sv1..svn (singular values of J), condition, det_A, det_B, J11..Jdn (row-major) and status
     (regular, serial, parallel, serial+parallel, or why the pose has no Jacobian).
     """
-    _require_batch_pair(pose, input_, output, "--pose")
     if not tol > 0:
         raise click.BadParameter("must be > 0", param_hint="--tol")
     m = resolve_machine(machine_name, assignments, units)
+    if family(m) != "translational":
+        if input_ is not None:
+            raise click.UsageError("batch Jacobians are available for translational machines; "
+                                   "give --pose (or --q)")
+        from .pose_cmds import jacobian as pose_jacobian
+
+        pose_jacobian(m, pose, q_text, tol, units, resolve_convention(convention), as_json)
+        return
+    _require_batch_pair(pose, input_, output, "--pose")
     scale = length_scale(units)
+    qs = actuator_scales(m, units)
     if input_ is not None:
         from pkmkit.io.table import Labels
         from pkmkit.machines.results import Singularity
@@ -303,7 +358,7 @@ def jacobian(machine_name, assignments, pose, tol, input_, output, chunk_rows, u
                              len(sing_names) + np.asarray(inv.status, dtype=np.int64))
             singular[0] += int(((np.asarray(jac.singularity) != 0) & ok).sum())
             jay = np.asarray(jac.J).reshape(len(x), d * n)
-            return {**_named(m.pose_names, values), **_named(m.actuator_names, jac.q / scale),
+            return {**_named(m.pose_names, values), **_named(m.actuator_names, jac.q / qs),
                     **_named([f"sv{i + 1}" for i in range(n)], jac.singular_values),
                     "condition": jac.condition, "det_A": jac.det_A / scale**n,
                     "det_B": jac.det_B / scale**n,
@@ -317,7 +372,7 @@ def jacobian(machine_name, assignments, pose, tol, input_, output, chunk_rows, u
     jac = m.jacobian(x, tol=tol)
     n = m.n_actuators
     payload = {
-        "machine": m.id, "units": units, "pose": x / scale, "q": jac.q / scale,
+        "machine": m.id, "units": units, "pose": x / scale, "q": jac.q / qs,
         "A": jac.A / scale, "B": jac.B / scale, "J": jac.J, "J_inv": jac.J_inv,
         "singular_values": jac.singular_values, "condition": jac.condition,
         "det_A": jac.det_A / scale**n, "det_B": jac.det_B / scale**n,
@@ -327,7 +382,8 @@ def jacobian(machine_name, assignments, pose, tol, input_, output, chunk_rows, u
     if as_json:
         emit_json(payload)
         return
-    click.echo(f"{m.name}: pose {fmt(x / scale)} {units}, q {fmt(jac.q / scale)} {units}")
+    click.echo(f"{m.name}: pose {fmt(x / scale)} {units}, q {fmt(jac.q / qs)} "
+               f"{_units_text(m, units)}")
     for key in ("A", "B", "J"):
         click.echo(f"  {key} =")
         for row in np.atleast_2d(payload[key]):

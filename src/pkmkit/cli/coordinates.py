@@ -1,0 +1,128 @@
+"""How poses and actuator coordinates appear on the command line, for every machine family.
+
+- Lengths are in ``--units`` (m or mm), angles in **degrees**.
+- Actuators: slides and struts in ``--units``; rotary actuators (cranks, the revolute joints of
+  a joint-chain machine's head) in degrees.
+- Poses: a translational machine's ``x, y[, z]``; a full-pose machine's ``x, y, z, A, B, C`` —
+  the position, then three angles in a named convention (``--angles``, default ``xyz``: fixed
+  axes, ``R = Rz(C) Ry(B) Rx(A)``; see :mod:`pkmkit.spatial.rotation`); a joint-chain machine's
+  tool point and unit tool axis ``x, y, z, i, j, k``. A Verne-type module (fewer than six
+  actuators) also takes a position ``x, y, z`` alone.
+
+Everything is converted to SI at this boundary; the library never sees degrees or millimetres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pkmkit.errors import InputError
+from pkmkit.model.parameters import length_scale
+
+ANGLE_NAMES = ("A", "B", "C")
+AXIS_NAMES = ("i", "j", "k")
+
+
+def family(m) -> str:
+    """``"translational"``, ``"full-pose"`` or ``"chain"``."""
+    name = type(m).__name__
+    return {"FullPoseMachine": "full-pose", "JointChainMachine": "chain"}.get(name,
+                                                                           "translational")
+
+
+def actuator_quantities(m) -> tuple[str, ...]:
+    """``"length"`` or ``"angle"`` per actuator."""
+    if family(m) == "chain":
+        return m.actuator_quantities
+    return m.model.actuator_quantities
+
+
+def actuator_scales(m, units: str) -> np.ndarray:
+    """SI value of one CLI unit of each actuator ``(n,)``: the length unit, or one degree."""
+    length = length_scale(units)
+    return np.array([np.pi / 180.0 if q == "angle" else length
+                     for q in actuator_quantities(m)])
+
+
+def actuator_units(m, units: str) -> list[str]:
+    """The CLI unit of each actuator (``"mm"``, ``"deg"``)."""
+    return ["deg" if q == "angle" else units for q in actuator_quantities(m)]
+
+
+def parse_numbers(text: str, what: str, sizes: tuple[int, ...]) -> np.ndarray:
+    """Comma-separated numbers, as many as one of ``sizes``."""
+    try:
+        values = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise InputError(f"{what}: cannot read {text!r} as comma-separated numbers") from None
+    if len(values) not in sizes:
+        need = " or ".join(str(s) for s in sizes)
+        raise InputError(f"{what} needs {need} comma-separated values, got {len(values)}")
+    if not np.isfinite(values).all():
+        raise InputError(f"{what}: every value must be finite, got {text!r}")
+    return values
+
+
+def parse_actuators(text: str, m, units: str, what: str = "--q") -> np.ndarray:
+    """Actuator values from the command line (CLI units) → SI ``(n,)``."""
+    return parse_numbers(text, what, (m.n_actuators,)) * actuator_scales(m, units)
+
+
+def pose_columns(m) -> list[str]:
+    """Names of the pose columns of batch files and text output."""
+    kind = family(m)
+    if kind == "full-pose":
+        return ["x", "y", "z", *ANGLE_NAMES]
+    if kind == "chain":
+        return ["x", "y", "z", *AXIS_NAMES]
+    return list(m.pose_names)
+
+
+def pose_widths(m) -> tuple[int, ...]:
+    """Accepted numbers of pose values on the command line."""
+    kind = family(m)
+    if kind == "full-pose" and m.position_controlled:
+        return (6, 3)
+    return (6,) if kind != "translational" else (m.dims,)
+
+
+def pose_from_cli(values: np.ndarray, m, units: str, convention: str) -> np.ndarray:
+    """CLI pose rows ``(N, w)`` → SI rows ``(N, dims)`` (or positions ``(N, 3)`` for a
+    position-controlled module given positions)."""
+    values = np.atleast_2d(np.asarray(values, dtype=float))
+    scale = length_scale(units)
+    kind = family(m)
+    if kind == "translational" or values.shape[1] == 3:
+        return values * scale
+    if kind == "chain":
+        out = values.copy()
+        out[:, :3] *= scale
+        return out
+    from pkmkit.spatial.poses import pose_from_angles
+
+    out = np.full((len(values), 6), np.nan)
+    finite = np.isfinite(values).all(axis=1)
+    if finite.any():
+        out[finite] = pose_from_angles(values[finite, :3] * scale, values[finite, 3:],
+                                       convention, degrees=True)
+    return out
+
+
+def pose_to_cli(poses: np.ndarray, m, units: str, convention: str) -> np.ndarray:
+    """SI pose rows → CLI rows (positions in ``units``, angles in degrees or axis components)."""
+    poses = np.atleast_2d(np.asarray(poses, dtype=float))
+    scale = length_scale(units)
+    kind = family(m)
+    if kind == "translational":
+        return poses / scale
+    out = poses.copy()
+    out[:, :3] /= scale
+    if kind == "full-pose":
+        from pkmkit.spatial.poses import pose_to_angles
+
+        finite = np.isfinite(poses).all(axis=1)
+        out[~finite, 3:] = np.nan
+        if finite.any():
+            out[finite, 3:] = np.atleast_2d(pose_to_angles(poses[finite], convention,
+                                                          degrees=True)[1])
+    return out

@@ -1,0 +1,306 @@
+"""``ik``, ``fk`` and ``jacobian`` for full-pose (6-DOF) and joint-chain machines.
+
+The translational machines' commands live in :mod:`pkmkit.cli.main`, which dispatches here for
+the other families. Coordinates on the command line follow :mod:`pkmkit.cli.coordinates`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+import numpy as np
+
+from pkmkit.model.parameters import length_scale
+from pkmkit.status import Status
+
+from .batch import run_batch, status_names
+from .coordinates import (
+    actuator_scales,
+    actuator_units,
+    family,
+    parse_actuators,
+    parse_numbers,
+    pose_columns,
+    pose_from_cli,
+    pose_to_cli,
+    pose_widths,
+)
+from .options import emit_json, fmt
+
+
+def _named(names, values: np.ndarray) -> dict[str, np.ndarray]:
+    return {name: values[:, j] for j, name in enumerate(names)}
+
+
+def _status_column(status: np.ndarray):
+    from pkmkit.io.table import Labels
+
+    return Labels(np.asarray(status), status_names())
+
+
+def _q_text(m, q: np.ndarray, units: str) -> str:
+    values = q / actuator_scales(m, units)
+    parts = [f"{name} = {v:.9g} {u}" for name, v, u in
+             zip(m.actuator_names, values, actuator_units(m, units), strict=True)]
+    return "\n".join(f"  {p}" for p in parts)
+
+
+def _pose_payload(m, pose: np.ndarray, units: str, convention: str) -> dict[str, Any]:
+    """JSON fields of a full pose: position, angles in the convention, rotation vector."""
+    cli = pose_to_cli(pose, m, units, convention)[0]
+    return {"position": cli[:3], "angles": cli[3:], "convention": convention,
+            "rotation_vector": np.asarray(pose)[3:]}
+
+
+def _pose_line(m, pose: np.ndarray, units: str, convention: str) -> str:
+    cli = pose_to_cli(pose, m, units, convention)[0]
+    return (f"position {fmt(cli[:3], 9)} {units}, angles ({convention}) {fmt(cli[3:], 9)} deg, "
+            f"rotation vector {fmt(np.asarray(pose)[3:], 9)} rad")
+
+
+# ------------------------------------------------------------------------------------- ik
+def ik(m, pose, q0_text, input_, output, chunk_rows, units, convention, tool_length,
+       as_json) -> None:
+    """Inverse model of a full-pose or joint-chain machine (single pose or batch)."""
+    kind = family(m)
+    widths = pose_widths(m)
+    scales = actuator_scales(m, units)
+    lengths = None if tool_length is None else tool_length * length_scale(units)
+    options = {} if kind != "chain" else {"tool_length": lengths}
+    if input_ is not None:
+        columns = pose_columns(m) if kind != "full-pose" or len(widths) == 1 else ["x", "y",
+                                                                                   "z"]
+
+        def compute(values, chunk):
+            x = pose_from_cli(values, m, units, convention)
+            if kind == "chain":
+                q, _ = m.ik(x, full_output=True, **options)
+                q = np.atleast_2d(q)
+                status = np.where(np.isfinite(q).all(axis=1), Status.OK, Status.UNREACHABLE)
+            else:
+                res = m.ik(x, full_output=True)
+                q, status = res.q, res.status
+            out = {**_named(columns, values), **_named(m.actuator_names, q / scales)}
+            if kind == "full-pose" and columns == ["x", "y", "z"]:
+                found = pose_to_cli(np.asarray(res.pose), m, units, convention)
+                out.update(_named(["A", "B", "C"], found[:, 3:]))
+            return {**out, "status": _status_column(status)}, status
+
+        run_batch(input_, output, columns, compute, chunk_rows=chunk_rows)
+        return
+    values = parse_numbers(pose, "--pose", widths)
+    x = pose_from_cli(values, m, units, convention)[0]
+    q0 = parse_actuators(q0_text, m, units, "--q0") if q0_text else None
+    payload: dict[str, Any] = {"machine": m.id, "units": units, "actuators":
+                               list(m.actuator_names), "actuator_units": actuator_units(m, units)}
+    if kind == "chain":
+        q, direct = m.ik(x, q0=q0, full_output=True, **options)
+        payload.update({"pose": values[:3], "tool_axis": x[3:], "q": q / scales,
+                        "passive": _passive(m, direct.passive), "status": "ok"})
+    else:
+        res = m.ik(x, full_output=True)
+        q = res.q
+        full = x if len(x) == 6 else np.asarray(res.pose)
+        payload.update({"q": q / scales, "status": Status(int(res.status)).label,
+                        "pose": _pose_payload(m, full, units, convention)})
+        if len(x) == 3:
+            from pkmkit.analysis.orientation import coupled_orientation
+
+            c = coupled_orientation(m, x[None])
+            payload["tilt"] = float(np.degrees(c.tilt[0]))
+    if as_json:
+        emit_json(payload)
+        return
+    if kind == "chain":
+        click.echo(f"{m.name}: tool point {fmt(values[:3], 9)} {units}, tool axis "
+                   f"{fmt(x[3:], 9)}")
+    elif len(x) == 3:
+        found = payload["pose"]
+        click.echo(f"{m.name}: position {fmt(values, 9)} {units}")
+        click.echo(f"  orientation the rods impose: angles ({convention}) "
+                   f"{fmt(found['angles'], 9)} deg, rotation vector "
+                   f"{fmt(found['rotation_vector'], 9)} rad; tilt {payload['tilt']:.6g} deg")
+    else:
+        click.echo(f"{m.name}: pose {_pose_line(m, x, units, convention)}")
+    click.echo(_q_text(m, q, units))
+    if kind == "chain":
+        click.echo("  passive joints: " + ", ".join(
+            f"{k} = {v:.6g}" for k, v in payload["passive"].items()) + " (deg or "
+            f"{units})")
+
+
+def _passive(m, passive: np.ndarray) -> dict[str, float]:
+    """Passive joint values in CLI units (degrees for revolutes) by name."""
+    out = {}
+    for i, name in enumerate(m.passive_names):
+        e = next(el for el in m.model.elements if el.name == name)
+        value = float(passive[i])
+        out[name] = float(np.degrees(value)) if e.type == "R" else value
+    return out
+
+
+# ------------------------------------------------------------------------------------- fk
+def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convention,
+       tool_length, as_json) -> None:
+    """Direct model of a full-pose or joint-chain machine."""
+    kind = family(m)
+    scales = actuator_scales(m, units)
+    lengths = None if tool_length is None else tool_length * length_scale(units)
+    columns = pose_columns(m)
+    if input_ is not None:
+        def compute(values, chunk):
+            q = values * scales
+            if all_modes and kind == "full-pose":
+                modes = m.fk_all(q)
+                rows, cols = np.nonzero(modes.valid)
+                poses = pose_to_cli(modes.poses[rows, cols], m, units, convention) if len(
+                    rows) else np.zeros((0, 6))
+                from pkmkit.io.table import Labels
+
+                labels = Labels(np.asarray([1 if c == modes.working[r] else 2
+                                            for r, c in zip(rows, cols, strict=True)],
+                                           dtype=np.int32), ["", "working", "other"])
+                return {"row": chunk.first_row + rows, **_named(m.actuator_names, values[rows]),
+                        "mode": labels, **_named(columns, poses),
+                        "status": _status_column(np.asarray(modes.status)[rows])
+                        }, np.asarray(modes.status), rows
+            if kind == "chain":
+                res = m.fk(q, tool_length=lengths, full_output=True)
+                status = res.status
+                poses = pose_to_cli(res.pose, m, units, convention)
+                extra = {**_named([f"passive_{n}" for n in m.passive_names],
+                                  _passive_matrix(m, res.passive)),
+                         "closure_residual": res.closure_residual / length_scale(units)}
+            else:
+                res = m.fk(q, full_output=True)
+                status = res.status
+                poses = pose_to_cli(res.pose, m, units, convention)
+                extra = {}
+            return {**_named(m.actuator_names, values), **_named(columns, poses), **extra,
+                    "status": _status_column(status)}, status
+
+        run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+        return
+    q = parse_actuators(q_text, m, units)
+    payload: dict[str, Any] = {"machine": m.id, "units": units, "q": q / scales,
+                               "actuators": list(m.actuator_names)}
+    if kind == "chain":
+        x0 = None
+        if x0_text:
+            raise click.UsageError("--x0 is not available for joint-chain machines")
+        res = m.fk(q, tool_length=lengths, full_output=True, x0=x0)
+        frame = res.tool_frame
+        payload.update({
+            "pose": res.pose[:3] / length_scale(units), "tool_axis": res.pose[3:],
+            "tool_frame": _pose_payload(m, frame, units, convention),
+            "platform": _pose_payload(m, res.platform, units, convention),
+            "passive": _passive(m, res.passive),
+            "closure_residual": float(res.closure_residual) / length_scale(units),
+            "status": Status(int(res.status)).label})
+        if as_json:
+            emit_json(payload)
+            return
+        click.echo(f"{m.name}: q " + ", ".join(
+            f"{v:.9g} {u}" for v, u in zip(q / scales, actuator_units(m, units), strict=True)))
+        click.echo(f"  tool point {fmt(payload['pose'], 9)} {units}, tool axis "
+                   f"{fmt(payload['tool_axis'], 9)}")
+        click.echo("  passive joints: " + ", ".join(
+            f"{k} = {v:.6g}" for k, v in payload["passive"].items()))
+        click.echo(f"  closure residual {payload['closure_residual']:.3g} {units} "
+                   f"({payload['status']})")
+        return
+    x0 = None
+    if x0_text:
+        x0 = pose_from_cli(parse_numbers(x0_text, "--x0", (6,)), m, units, convention)[0]
+    res = m.fk(q, x0=x0, full_output=True)
+    payload.update({"pose": _pose_payload(m, res.pose, units, convention),
+                    "mode_sign": int(res.mode), "status": Status(int(res.status)).label})
+    if all_modes:
+        modes = m.fk_all(q)
+        payload["poses"] = [_pose_payload(m, modes.poses[k], units, convention)
+                            for k in range(int(modes.count))]
+        payload["modes"] = modes.labels
+        payload["mode_signs"] = modes.mode_sign[:int(modes.count)]
+        payload["all_modes_status"] = Status(int(modes.status)).label
+        payload["finite_solutions"] = int(modes.n_finite)
+    if as_json:
+        emit_json(payload)
+        return
+    click.echo(f"{m.name}: q {fmt(q / scales, 9)}")
+    click.echo(f"  pose {_pose_line(m, res.pose, units, convention)}")
+    if all_modes:
+        complete = {"ok": "complete", "no-assembly": "complete"}.get(
+            payload["all_modes_status"], f"not certified complete: {payload['all_modes_status']}")
+        click.echo(f"  {int(modes.count)} real assembly modes of {payload['finite_solutions']} "
+                   f"finite complex solutions ({complete}):")
+        for label, p in zip(payload["modes"], payload["poses"], strict=True):
+            click.echo(f"    {label:<8} {fmt(p['position'], 6)} {units}, angles "
+                       f"{fmt(p['angles'], 6)} deg")
+
+
+def _passive_matrix(m, passive: np.ndarray) -> np.ndarray:
+    out = np.array(passive, dtype=float)
+    for i, name in enumerate(m.passive_names):
+        if next(el for el in m.model.elements if el.name == name).type == "R":
+            out[:, i] = np.degrees(out[:, i])
+    return out
+
+
+# ------------------------------------------------------------------------------- jacobian
+def jacobian(m, pose, q_text, tol, units, convention, as_json) -> None:
+    """Velocity model of a full-pose or joint-chain machine at one configuration."""
+    kind = family(m)
+    scales = actuator_scales(m, units)
+    if kind == "chain":
+        if q_text is None and pose is None:
+            raise click.UsageError("give --q Q1,...,Qn or --pose X,Y,Z,I,J,K")
+        q = (parse_actuators(q_text, m, units) if q_text is not None else
+             m.ik(pose_from_cli(parse_numbers(pose, "--pose", (6,)), m, units, convention)[0]))
+        jac = m.jacobian(q)
+        payload = {"machine": m.id, "units": units, "q": q / scales,
+                   "J": jac.J / _row_scales(units)[:, None] * scales[None, :],
+                   "singular_values": jac.singular_values, "condition": jac.condition,
+                   "closure_rank": int(jac.closure_rank), "expected_rank": jac.expected_rank,
+                   "characteristic_length": m.model.characteristic_length / length_scale(
+                       units)}
+    else:
+        if pose is None:
+            raise click.UsageError("give --pose")
+        x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
+                          convention)[0]
+        jac = m.jacobian(x, tol=tol)
+        payload = {"machine": m.id, "units": units, "q": jac.q / scales,
+                   "J": jac.J / _row_scales(units)[:, None] * scales[None, :],
+                   "J_homogeneous_singular_values": jac.singular_values,
+                   "condition": jac.condition,
+                   "translation_singular_values": jac.translation_singular_values,
+                   "rotation_singular_values": jac.rotation_singular_values,
+                   "characteristic_length": jac.characteristic_length / length_scale(units),
+                   "parallel_measure": jac.parallel_measure,
+                   "serial_measure": jac.serial_measure, "status": jac.status}
+    if as_json:
+        emit_json(payload)
+        return
+    click.echo(f"{m.name}: q {fmt(payload['q'], 9)}")
+    click.echo(f"  J (rows: velocity in {units}/s, angular velocity in deg/s, per unit "
+               f"actuator rate in {'/'.join(sorted(set(actuator_units(m, units))))}/s) =")
+    for row in payload["J"]:
+        click.echo("    " + "  ".join(f"{v:12.6g}" for v in row))
+    sv = payload.get("J_homogeneous_singular_values", payload.get("singular_values"))
+    click.echo(f"  singular values of the homogenised J (L = "
+               f"{payload['characteristic_length']:.6g} {units}): {fmt(sv)}")
+    click.echo(f"  condition number: {float(payload['condition']):.6g}")
+    if kind != "chain":
+        click.echo(f"  translation factors {fmt(payload['translation_singular_values'])}, "
+                   f"rotation factors {fmt(payload['rotation_singular_values'])} rad per unit; "
+                   f"status: {payload['status']} (tolerance {tol:g})")
+    else:
+        click.echo(f"  closure rank {payload['closure_rank']} (at home "
+                   f"{payload['expected_rank']})")
+
+
+def _row_scales(units: str) -> np.ndarray:
+    """SI value of one CLI unit of the twist rows: length, length, length, deg ×3."""
+    length = length_scale(units)
+    return np.array([length, length, length, np.pi / 180, np.pi / 180, np.pi / 180])
