@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkmkit.model.rods import SLIDE, STRUT, RodModel
+from pkmkit.numerics import jit
 
 #: Relative tolerance (on ℓ²) within which a negative inverse-model radicand is rounding noise at
 #: the workspace boundary (leg perpendicular to its slide) and is taken as 0.
@@ -75,6 +76,9 @@ class RodClosedForm:
         set_(self, "axis", axis)
         set_(self, "projection", projection)
         set_(self, "offset", offset)
+        # the same, leg by leg: basis (n, dims, dims) rows u_i, then across; offset (n, dims)
+        set_(self, "basis", np.ascontiguousarray(np.stack(blocks)))
+        set_(self, "basis_offset", np.ascontiguousarray(offset.reshape(m.n_legs, dims)))
         set_(self, "slide", (m.leg_kind == SLIDE).astype(float))
         set_(self, "strut", (m.leg_kind == STRUT).astype(float))
         set_(self, "length_sq", m.leg_length**2)
@@ -84,24 +88,44 @@ class RodClosedForm:
         """Actuator coordinates ``(N, n)`` of poses ``x (N, dims)``; NaN where a leg cannot
         close. ``branches (n,)`` holds ±1 per leg (ignored for struts).
 
-        The work runs in cache-sized chunks in a transposed layout (one contiguous row per
-        projection); the result is a Fortran-ordered ``(N, n)`` array (a transposed view).
+        Large batches run the compiled kernel :func:`pkmkit.machines.kernels.inverse`; small
+        ones (and ``PKMKIT_COMPILED=0``) the NumPy reference :meth:`inverse_numpy`. The result
+        is a Fortran-ordered ``(N, n)`` array (a transposed view of ``(n, N)``).
         """
+        return self.inverse_counted(x, branches)[0]
+
+    def inverse_counted(self, x: np.ndarray, branches: np.ndarray) -> tuple[np.ndarray, int]:
+        """:meth:`inverse` and the number of non-finite coordinates in the result (0: every
+        pose reached; callers then skip looking for failed rows)."""
+        if jit.use_compiled(x.shape[0]):
+            from pkmkit.machines import kernels
+
+            out = np.empty((self.model.n_legs, x.shape[0]))
+            bad = kernels.inverse(np.ascontiguousarray(x, dtype=float), self.basis,
+                                  self.basis_offset, self.model.leg_length,
+                                  self.model.leg_kind == SLIDE,
+                                  np.asarray(branches, dtype=float), BOUNDARY_TOL, out)
+            return out.T, int(bad)
+        q = self.inverse_numpy(x, branches)
+        return q, int(np.count_nonzero(~np.isfinite(q)))
+
+    def inverse_numpy(self, x: np.ndarray, branches: np.ndarray) -> np.ndarray:
+        """The NumPy reference of :meth:`inverse`: cache-sized chunks in a transposed layout
+        (one contiguous row per projection), projections written out (no BLAS: a
+        multi-threaded BLAS on tiny inner dimensions collapses when another process holds a
+        core)."""
         n, dims = self.model.n_legs, self.model.dims
         out = np.empty((n, x.shape[0]))
         kinds = self.model.leg_kind
-        projection_t = np.ascontiguousarray(self.projection.T)
-        offset = self.offset[:, None]
         with np.errstate(invalid="ignore", over="ignore"):
             for start in range(0, x.shape[0], CHUNK):
                 stop = start + CHUNK
-                y = projection_t @ x[start:stop].T  # (n*dims, chunk)
-                y -= offset
+                xt = x[start:stop].T
                 for i in range(n):
-                    base = i * dims
-                    perp_sq = y[base + 1] * y[base + 1]
+                    y = [self._project(xt, i, r) for r in range(dims)]
+                    perp_sq = y[1] * y[1]
                     if dims == 3:
-                        perp_sq += y[base + 2] * y[base + 2]
+                        perp_sq += y[2] * y[2]
                     if kinds[i] == SLIDE:
                         np.subtract(self.length_sq[i], perp_sq, out=perp_sq)
                         # a boundary pose's radicand may round slightly below 0: clamp it
@@ -110,19 +134,29 @@ class RodClosedForm:
                         root = np.sqrt(perp_sq, out=perp_sq)
                         if branches[i] < 0:
                             np.negative(root, out=root)
-                        np.add(y[base], root, out=out[i, start:stop])
+                        np.add(y[0], root, out=out[i, start:stop])
                     else:
-                        perp_sq += y[base] * y[base]
+                        perp_sq += y[0] * y[0]
                         np.sqrt(perp_sq, out=out[i, start:stop])
                         out[i, start:stop] -= self.model.leg_length[i]
         return out.T
+
+    def _project(self, xt: np.ndarray, leg: int, row: int) -> np.ndarray:
+        """``basis[leg, row] · x − offset`` for the columns of ``xt (dims, k)``."""
+        coef = self.basis[leg, row]
+        y = coef[0] * xt[0]
+        for d in range(1, xt.shape[0]):
+            y += coef[d] * xt[d]
+        y -= self.basis_offset[leg, row]
+        return y
 
     def shortfall(self, x: np.ndarray) -> np.ndarray:
         """``(N, n)``: by how much each slide leg is too short to reach ``x`` (≤ 0 when it
         reaches; always −inf for struts), metres."""
         dims = self.model.dims
         with np.errstate(invalid="ignore", over="ignore"):
-            y = (x @ self.projection - self.offset).reshape(x.shape[0], -1, dims)
+            y = (np.einsum("kd,de->ke", x, self.projection) - self.offset).reshape(
+                x.shape[0], -1, dims)
             perp = np.abs(y[:, :, 1]) if dims == 2 else np.hypot(y[:, :, 1], y[:, :, 2])
         out = perp - self.model.leg_length[None]
         out[:, self.model.leg_kind == STRUT] = -np.inf
