@@ -120,7 +120,7 @@ class RodClosedForm:
         with np.errstate(invalid="ignore", over="ignore"):
             for start in range(0, x.shape[0], CHUNK):
                 stop = start + CHUNK
-                xt = x[start:stop].T
+                xt = np.ascontiguousarray(x[start:stop].T)  # rows of one coordinate
                 for i in range(n):
                     y = [self._project(xt, i, r) for r in range(dims)]
                     perp_sq = y[1] * y[1]

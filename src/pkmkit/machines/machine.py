@@ -269,11 +269,13 @@ class Machine:
     def _linear_guess_q(self, x: np.ndarray) -> np.ndarray:
         """First-order guess of q near home: q_home + J⁻¹(home) (x − home)."""
         j_inv = np.linalg.inv(self._home_jacobian)
-        return self._home_q + (x - self.model.home_pose) @ j_inv.T
+        # einsum, not BLAS: tiny inner dimension (see pkmkit.machines.kernels)
+        return self._home_q + np.einsum("kd,ad->ka", x - self.model.home_pose, j_inv)
 
     def _linear_guess_pose(self, q: np.ndarray) -> np.ndarray:
         """First-order guess of the pose near home: home + J(home) (q − q_home)."""
-        return self.model.home_pose + (q - self._home_q) @ self._home_jacobian.T
+        return self.model.home_pose + np.einsum("ka,da->kd", q - self._home_q,
+                                                self._home_jacobian)
 
     # ---------------------------------------------------------------- inverse
     def ik(
