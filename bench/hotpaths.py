@@ -35,11 +35,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from kinematics import loop_ik  # noqa: E402
-from load import conditions  # noqa: E402
+from kinematics import loop_ik
+from load import conditions
 
-import pkmkit  # noqa: E402
-from pkmkit.machines.closed_form import CHUNK  # noqa: E402
+import pkmkit
+from pkmkit.machines.closed_form import CHUNK
 
 KINDS = ("orthoglide", "linear-delta", "five-bar")
 
@@ -168,7 +168,7 @@ def main() -> None:
     parser.add_argument("--json", help="also write the results to this JSON file")
     args = parser.parse_args()
 
-    pkmkit.machine("orthoglide").jacobian(np.zeros((10_000, 3))).condition  # compile / load
+    _ = pkmkit.machine("orthoglide").jacobian(np.zeros((10_000, 3))).condition  # compile, load
     print(f"pkmkit {pkmkit.__version__}, numpy {np.__version__}, Python "
           f"{platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores; "
           f"{args.poses} poses; medians of interleaved runs")

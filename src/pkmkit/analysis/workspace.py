@@ -30,6 +30,7 @@ from scipy import ndimage
 from pkmkit.analysis.grids import Grid, make_grid
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
+from pkmkit.parallel import map_chunks
 from pkmkit.status import Status
 
 MASK_NAMES = ("reachable", "strokes", "bounds", "condition", "mode")
@@ -127,11 +128,29 @@ def evaluate_poses(machine: Machine, points: np.ndarray, criteria: Criteria) -> 
                          for k in range(0, len(points), EVALUATION_CHUNK)])
 
 
-def evaluate_grid(machine: Machine, grid: Grid, criteria: Criteria) -> PoseEvaluation:
+def evaluate_grid(machine: Machine, grid: Grid, criteria: Criteria, *,
+                  scheduler: Any = None) -> PoseEvaluation:
     """:func:`evaluate_poses` over every point of ``grid`` (flat, C order), generating the
-    points chunk by chunk."""
-    parts = [_evaluate_chunk(machine, grid.points_between(k, k + EVALUATION_CHUNK), criteria)
-             for k in range(0, grid.size, EVALUATION_CHUNK)]
+    points chunk by chunk — in this process, or with ``scheduler`` (a Dask address, ``"local:N"``
+    or a client, see :mod:`pkmkit.parallel`) in tasks of :data:`TASK_CHUNKS` chunks, each
+    generating and evaluating its own points; the results are identical."""
+    if scheduler is None:
+        return _evaluate_range(0, grid.size, machine, grid, criteria)
+    parts = map_chunks(_evaluate_range, grid.size, chunk=TASK_CHUNKS * EVALUATION_CHUNK,
+                       scheduler=scheduler, args=(machine, grid, criteria))
+    return parts[0] if len(parts) == 1 else _concatenate(parts)
+
+
+#: Evaluation chunks per Dask task of :func:`evaluate_grid` (a task then takes ~0.1 s).
+TASK_CHUNKS = 4
+
+
+def _evaluate_range(start: int, stop: int, machine: Machine, grid: Grid,
+                    criteria: Criteria) -> PoseEvaluation:
+    """Grid points ``start:stop`` evaluated in chunks of :data:`EVALUATION_CHUNK`."""
+    parts = [_evaluate_chunk(machine, grid.points_between(k, min(k + EVALUATION_CHUNK, stop)),
+                             criteria)
+             for k in range(start, stop, EVALUATION_CHUNK)]
     return parts[0] if len(parts) == 1 else _concatenate(parts)
 
 
@@ -338,14 +357,15 @@ class WorkspaceMap:
 
 
 def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = None, *,
-                      refine: bool = False) -> WorkspaceMap:
+                      refine: bool = False, scheduler: Any = None) -> WorkspaceMap:
     """Masks, feasible set and largest inscribed square/cube of ``machine`` over ``grid``.
 
     With ``refine=True`` the inscribed box found on the grid is grown about its centre by
     bisection with dense checks (:func:`check_region`), which removes most of the grid's
-    under-estimate (up to two steps)."""
+    under-estimate (up to two steps). ``scheduler``: evaluate the grid on Dask (see
+    :func:`evaluate_grid`); the rest runs here."""
     criteria = criteria or Criteria()
-    evaluation = evaluate_grid(machine, grid, criteria)
+    evaluation = evaluate_grid(machine, grid, criteria, scheduler=scheduler)
     shape = grid.shape
     masks = {k: v.reshape(shape) for k, v in evaluation.masks.items()}
     feasible = evaluation.feasible.reshape(shape)

@@ -6,7 +6,7 @@ import click
 import numpy as np
 
 from pkmkit.analysis.grids import Grid, make_grid
-from pkmkit.analysis.indices import SCALAR_INDICES, indices, scalar_index
+from pkmkit.analysis.indices import SCALAR_INDICES, index_values, indices
 from pkmkit.analysis.workspace import (
     Criteria,
     WorkspaceMap,
@@ -34,6 +34,7 @@ from .options import (
     parse_vector,
     resolve_machine,
 )
+from .scheduler import SCHEDULER_OPTION
 
 BOUNDS_OPTION = click.option(
     "--bounds", metavar="LO,HI",
@@ -207,10 +208,11 @@ def _condition_text(kappa: float) -> str:
               "values far above the 95th percentile (near a singularity) take the top colour.")
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="Figure file (.png, .svg, .pdf).")
+@SCHEDULER_OPTION
 @UNITS_OPTION
 @JSON_OPTION
 def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resolution,
-            color_scale, out, units, as_json):
+            color_scale, out, scheduler, units, as_json):
     """Iso-contours of an index (or actuator coordinates) over a plane."""
     check_figure_path(out)
     m = resolve_machine(machine_name, assignments, units)
@@ -231,7 +233,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resol
         summary["min"] = np.nanmin(q, axis=0) / scale
         summary["max"] = np.nanmax(q, axis=0) / scale
     else:
-        values = scalar_index(indices(m, points, q=q), index_name)
+        values = index_values(m, points, index_name, scheduler=scheduler)
         finite = np.isfinite(values)
         if not finite.any():
             raise InputError(f"{index_name} is undefined on every reachable point of the plane")
@@ -298,10 +300,11 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
 @click.option("--center", "center_text", help="Centre X,Y[,Z] of the prescribed square/cube.")
 @RESOLUTION_OPTION
 @click.option("--out", "out", type=click.Path(dir_okay=False), help="Figure file.")
+@SCHEDULER_OPTION
 @UNITS_OPTION
 @JSON_OPTION
 def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text, no_strokes,
-              cube, center_text, resolution, out, units, as_json):
+              cube, center_text, resolution, out, scheduler, units, as_json):
     """Workspace over a box or a plane: area/volume, largest inscribed square/cube, transmission
     factors inside it, global conditioning index, and (with --cube/--center) whether a
     prescribed one is feasible (in the --slice plane when one is given)."""
@@ -319,7 +322,7 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
         if not (np.isfinite(cube) and cube > 0):
             raise InputError(f"--cube must be a side > 0, got {cube:g}")
         center = _region_center(m, center_text, slice_, scale)
-    wmap = compute_workspace(m, grid, criteria, refine=True)
+    wmap = compute_workspace(m, grid, criteria, refine=True, scheduler=scheduler)
     if not wmap.masks["reachable"].any():
         raise InputError("no pose of the box is reachable; choose another --box or --slice")
     if not wmap.feasible.any():
