@@ -30,6 +30,7 @@ from scipy import ndimage
 from pkmkit.analysis.grids import Grid, make_grid
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
+from pkmkit.numerics.arrays import real, real_pair
 from pkmkit.parallel import map_chunks
 from pkmkit.status import Status
 
@@ -65,12 +66,12 @@ class Criteria:
 
     def __post_init__(self) -> None:
         if self.bounds is not None:
-            lo, hi = self.bounds
-            if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+            lo, hi = real_pair(self.bounds, "the transmission-factor bounds")
+            if not 0 < lo < hi:
                 raise InputError(
                     f"transmission-factor bounds must satisfy 0 < lo < hi, got {self.bounds}"
                 )
-        if self.kappa_max is not None and not self.kappa_max >= 1:
+        if self.kappa_max is not None and not real(self.kappa_max, "kappa_max") >= 1:
             raise InputError(f"kappa_max must be >= 1, got {self.kappa_max}")
 
     def within_bounds(self, factors: np.ndarray) -> np.ndarray:

@@ -226,6 +226,9 @@ def load_masses(path: str | Path, machine: Machine) -> tuple[MassProperties, np.
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
         raise InputError(f"{path}: cannot read file: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not a text TOML file (byte {exc.start} is not UTF-8)"
+                         ) from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{path}: TOML syntax error: {exc}") from None
     unknown = set(data) - {"masses", "wrench"}

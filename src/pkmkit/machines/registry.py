@@ -74,7 +74,7 @@ def preset_path(machine_id: str) -> str:
     """Path of the machine file of a built-in preset (aliases resolved)."""
     try:
         return _preset_paths()[ALIASES.get(machine_id, machine_id)]
-    except KeyError:
+    except (KeyError, TypeError):  # TypeError: not a string (a list, a dict...)
         raise UnknownMachineError(machine_id, machines()) from None
 
 

@@ -74,6 +74,9 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
             text = path.read_text(encoding="utf-8-sig")
         except OSError as exc:
             raise InputError(f"{source}: cannot read file: {exc.strerror or exc}") from None
+        except UnicodeDecodeError as exc:
+            raise InputError(f"{source}: not a text G-code program (byte {exc.start} is not "
+                             "UTF-8)") from None
         label = name or str(source)
     offset = np.asarray(origin, dtype=float).reshape(3)
     position = offset.copy() if start is None else np.asarray(start, dtype=float).reshape(3)

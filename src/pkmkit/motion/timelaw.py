@@ -31,6 +31,7 @@ import numpy as np
 
 from pkmkit.errors import InputError
 from pkmkit.motion.paths import Path
+from pkmkit.numerics.arrays import real
 
 PROFILES = ("trapezoid", "scurve")
 
@@ -181,6 +182,14 @@ def _curvature_jump(a, b) -> bool:
 MIN_SEGMENT = 1e-12
 
 
+def _limit(value, name: str, largest: float) -> float:
+    """A limit > 0 (SI), at least 1e-9 and at most ``largest`` (else a unit mistake)."""
+    value = real(value, name, positive=True, limit=largest)
+    if value < 1e-9:
+        raise InputError(f"{name} = {value:g} is below 1e-9 (SI units); check the units")
+    return value
+
+
 #: Default S-curve jerk per unit of acceleration (1/s) when no jerk is given: the acceleration
 #: builds up in 0.1 s — the ratio of seed 000's examples (1000 mm/s², 10000 mm/s³) and a
 #: common CNC jerk time.
@@ -213,20 +222,19 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
         InputError: non-positive limits or period, a path of zero length, too
             many samples.
     """
-    for name, value in (("feed", feed), ("accel", accel), ("period", period)):
-        if not (np.isfinite(value) and value > 0):
-            raise InputError(f"{name} must be > 0, got {value}")
+    # beyond these limits a value is a unit mistake (and its powers overflow)
+    feed = _limit(feed, "feed", 1e4)
+    accel = _limit(accel, "accel", 1e7)
+    period = _limit(period, "period", 1e4)
     if profile not in PROFILES:
         raise InputError(f"unknown profile {profile!r}; use {' or '.join(PROFILES)}")
     if profile == "scurve" and jerk is None:
         jerk = DEFAULT_JERK_PER_ACCEL * accel
-    if profile == "scurve" and not (np.isfinite(jerk) and jerk > 0):
-        raise InputError(f"the S-curve profile needs a jerk limit > 0, got {jerk}")
+    if profile == "scurve":
+        jerk = _limit(jerk, "the S-curve's jerk limit", 1e11)
     if profile == "trapezoid":
         jerk = None
-    rapid_feed = 5.0 * feed if rapid_feed is None else rapid_feed
-    if not (np.isfinite(rapid_feed) and rapid_feed > 0):
-        raise InputError(f"rapid feed must be > 0, got {rapid_feed}")
+    rapid_feed = _limit(5.0 * feed if rapid_feed is None else rapid_feed, "rapid feed", 1e4)
     segs = path.segments
     moving = [k for k in range(len(segs)) if segs[k].length > MIN_SEGMENT]
     if not moving:
