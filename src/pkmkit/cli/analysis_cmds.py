@@ -128,6 +128,8 @@ def build_grid(machine: Machine, box_text: str | None, slice_: tuple[int, float]
 
 
 def _criteria(bounds, kappa_max, no_strokes) -> Criteria:
+    if kappa_max is not None and not (np.isfinite(kappa_max) and kappa_max >= 1):
+        raise InputError(f"--kappa-max must be a condition number >= 1, got {kappa_max:g}")
     return Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max, strokes=not no_strokes)
 
 
@@ -142,7 +144,7 @@ def register(cli: click.Group) -> None:
 @click.command()
 @click.argument("machine_name", metavar="MACHINE")
 @SET_OPTION
-@click.option("--pose", required=True, help="Platform position X,Y[,Z].")
+@click.option("--pose", help="Platform position X,Y[,Z] (default: the home pose).")
 @click.option("--isotropy-tol", type=float, default=1e-9, show_default=True,
               help="The pose counts as isotropic when κ ≤ 1 + this tolerance.")
 @UNITS_OPTION
@@ -154,7 +156,7 @@ def analyze(machine_name, assignments, pose, isotropy_tol, units, as_json):
     scale = length_scale(units)
     if not (np.isfinite(isotropy_tol) and isotropy_tol >= 0):
         raise InputError(f"--isotropy-tol must be a finite number >= 0, got {isotropy_tol}")
-    x = parse_vector(pose, m.dims, "--pose", units)
+    x = m.home_pose if pose is None else parse_vector(pose, m.dims, "--pose", units)
     ind = indices(m, x, ellipsoids=True, isotropy_tol=isotropy_tol)
     jac = m.jacobian(x)
     payload = {
