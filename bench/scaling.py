@@ -1,8 +1,9 @@
 """Benchmark: studies on Dask, serial → 1 worker → 2 workers, results checked identical.
 
 Three studies, each run in this process (serial, the reference) and on a Dask
-``LocalCluster`` of 1 and then 2 worker processes (one thread each), started before the timings
-(their start-up is printed apart):
+``LocalCluster`` of 1 and then 2 worker processes (one thread each, the environment of
+:func:`pkmkit.parallel.local_cluster`), started before the timings (their start-up is printed
+apart):
 
 - **workspace**: :func:`pkmkit.analysis.workspace.evaluate_grid` on an Orthoglide grid
   (``--resolution`` points per side, every mask, factors and q returned);
@@ -34,6 +35,7 @@ from pkmkit.analysis.indices import index_values
 from pkmkit.analysis.workspace import Criteria, evaluate_grid
 from pkmkit.design.metrics import Region
 from pkmkit.design.optimize import DesignProblem, Objective, Variable, evaluate_designs
+from pkmkit.parallel import local_cluster
 
 
 def timed(func, repeat: int):
@@ -105,9 +107,7 @@ def main() -> None:
         results[name] = {"serial_s": serial[name][0]}
     for workers in (1, 2):
         start = time.perf_counter()
-        with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                      dashboard_address=None) as cluster, \
-                distributed.Client(cluster) as client:
+        with local_cluster(workers) as cluster, distributed.Client(cluster) as client:
             startup = time.perf_counter() - start
             for name, func in work.items():
                 func(client)  # warm up the workers

@@ -19,7 +19,13 @@ reproducible per-chunk random streams from :func:`chunk_seeds`, independent of t
 
 Dask is an optional dependency: ``pip install 'pkmkit[dask]'``. Dask's worker processes bound
 BLAS/OpenMP threads to one (its nanny sets ``OMP_NUM_THREADS=1`` and the like), and pkmkit's hot
-paths use no BLAS, so tasks do not oversubscribe the cores.
+paths use no BLAS, so tasks do not oversubscribe the cores. The nanny also sets
+``MALLOC_TRIM_THRESHOLD_=65536``, which makes glibc return every freed block to the system: the
+NumPy temporaries of a chunk (hundreds of kB each) are then page-faulted in again at each
+allocation and a task runs about twice as slowly as the same call in the client. Local clusters
+started here get :data:`WORKER_ENVIRON` instead; for workers started elsewhere, put the same
+values under ``distributed.nanny.pre-spawn-environ`` in their Dask configuration (see
+docs/scaling.md).
 
     >>> from pkmkit.parallel import map_chunks
     >>> map_chunks(lambda a, b: list(range(a, b)), 5, chunk=2)
@@ -43,6 +49,11 @@ from pkmkit.errors import InputError
 DEFAULT_CHUNK = 1 << 18
 
 _INSTALL_HINT = "install the optional Dask support: pip install 'pkmkit[dask]'"
+
+#: Environment of the worker processes of local clusters: Dask's thread limits, and glibc
+#: thresholds that keep freed NumPy temporaries in the process (256 MiB trim, 32 MiB mmap).
+WORKER_ENVIRON = {"OMP_NUM_THREADS": 1, "MKL_NUM_THREADS": 1, "OPENBLAS_NUM_THREADS": 1,
+                  "MALLOC_TRIM_THRESHOLD_": 1 << 28, "MALLOC_MMAP_THRESHOLD_": 1 << 25}
 
 
 class SerialExecutor:
@@ -80,7 +91,11 @@ class DaskExecutor:
         raised by a task is raised here (the first one, with its type)."""
         if not items:
             return []
-        futures = self.client.map(func, list(items), pure=False)
+        items = list(items)
+        if any(isinstance(item, np.ndarray) for item in items):
+            # data blocks go to the workers directly, not inside the task graph
+            items = self.client.scatter(items)
+        futures = self.client.map(func, items, pure=False)
         return self.client.gather(futures)
 
 
@@ -124,10 +139,7 @@ def executor(scheduler: Any = None, *, timeout: float = 10.0
     text = scheduler.strip()
     with contextlib.ExitStack() as stack:
         if text == "local" or text.startswith("local:"):
-            cluster = stack.enter_context(distributed.LocalCluster(
-                n_workers=_local_workers(text), threads_per_worker=1, processes=True,
-                dashboard_address=None))
-            address = cluster
+            address = stack.enter_context(local_cluster(_local_workers(text)))
         else:
             address = text
         try:
@@ -137,6 +149,17 @@ def executor(scheduler: Any = None, *, timeout: float = 10.0
                              f"{timeout:g} s ({exc}); start one with `dask scheduler` and "
                              "`dask worker ADDRESS`, or use --scheduler local:N") from None
         yield DaskExecutor(client)
+
+
+def local_cluster(workers: int, **options: Any):
+    """A :class:`distributed.LocalCluster` of ``workers`` processes with one thread each and
+    the environment :data:`WORKER_ENVIRON` (use it as a context manager)."""
+    import dask
+
+    distributed = _require_distributed()
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": WORKER_ENVIRON}):
+        return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
+                                        processes=True, dashboard_address=None, **options)
 
 
 def chunk_ranges(size: int, chunk: int) -> list[tuple[int, int]]:

@@ -54,7 +54,19 @@ def inverse(x, basis, offset, length, slide, branch, boundary_tol, out):  # prag
                 o2 = offset[i, 2]
             o0, o1 = offset[i, 0], offset[i, 1]
             row = out[i, start:start + m]
-            if slide[i]:
+            if slide[i] and dims == 2:  # planar: one coordinate across the slide
+                length_sq = length[i] * length[i]
+                limit = -boundary_tol * length_sq
+                sign = branch[i]
+                for k in range(m):
+                    s = u0 * c0[k] + u1 * c1[k] - o0
+                    p = v0 * c0[k] + v1 * c1[k] - o1
+                    radicand = length_sq - p * p
+                    radicand = 0.0 if (radicand < 0.0 and radicand > limit) else radicand
+                    value = s + sign * np.sqrt(radicand)
+                    row[k] = value
+                    bad += 0 if value - value == 0.0 else 1
+            elif slide[i]:
                 length_sq = length[i] * length[i]
                 limit = -boundary_tol * length_sq
                 sign = branch[i]
