@@ -25,6 +25,10 @@ settings.register_profile("default", max_examples=25, **_COMMON)
 settings.register_profile("ci", max_examples=400, **_COMMON)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 
+#: For tests whose examples each run an optimiser (sizing rules, arm sizing): a fifth of the
+#: profile's examples (5 by default, 80 with the ci profile).
+slow_examples = settings(max_examples=max(5, settings.default.max_examples // 5))
+
 #: Wall-clock limit of one example, s (a hang fails the test instead of blocking it).
 EXAMPLE_TIMEOUT = 20.0
 

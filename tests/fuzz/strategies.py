@@ -27,10 +27,17 @@ NON_NUMBERS = st.one_of(st.text(max_size=5), st.none(), st.booleans(),
                         st.dictionaries(st.text(max_size=2), st.integers(), max_size=2))
 
 
-def arrays(width: int, *, plausible_weight: int = 3) -> st.SearchStrategy:
+def weighted(*choices: tuple[int, st.SearchStrategy]) -> st.SearchStrategy:
+    """``choices`` of ``(weight, strategy)``, drawn in proportion to the weights (``one_of``
+    of repeated strategies would not weight them)."""
+    table = [strategy for weight, strategy in choices for _ in range(weight)]
+    return st.integers(0, len(table) - 1).flatmap(lambda k: table[k])
+
+
+def arrays(width: int, *, plausible_weight: int = 8) -> st.SearchStrategy:
     """Batches ``(N, width)`` (or single rows) mixing plausible and hostile numbers, plus
-    wrongly shaped and non-numeric values."""
-    number = st.one_of(*([PLAUSIBLE] * plausible_weight), HOSTILE_FLOATS)
+    wrongly shaped and non-numeric values (one draw in six)."""
+    number = weighted((plausible_weight, PLAUSIBLE), (1, HOSTILE_FLOATS))
     row = st.lists(number, min_size=width, max_size=width)
     good = st.one_of(row.map(np.array),
                      st.lists(row, min_size=1, max_size=40).map(np.array))
@@ -41,7 +48,7 @@ def arrays(width: int, *, plausible_weight: int = 3) -> st.SearchStrategy:
         st.just(np.zeros((0, width))), st.just(np.zeros((2, 2, width))), NON_NUMBERS,
         st.lists(st.one_of(number, st.text(max_size=2)), min_size=width, max_size=width),
     )
-    return st.one_of(good, good, good, bad)
+    return weighted((5, good), (1, bad))
 
 
 def call(func, *args, **kwargs):

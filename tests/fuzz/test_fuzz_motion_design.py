@@ -15,17 +15,30 @@ from pkmkit.design import size_five_bar, size_linear_delta, size_orthoglide
 from pkmkit.dynamics import analyse_arm, inverse_dynamics, mass_properties, size_arm
 from pkmkit.motion import circle, helix, joint_trajectory, line, plan, raster
 
-from .strategies import HOSTILE_FLOATS, NON_NUMBERS, PLAUSIBLE, arrays, call
+from .conftest import slow_examples
+from .strategies import HOSTILE_FLOATS, NON_NUMBERS, PLAUSIBLE, arrays, call, weighted
 
 SMALL = st.floats(0.001, 0.5)
-number = st.one_of(PLAUSIBLE, PLAUSIBLE, SMALL, HOSTILE_FLOATS)
-anything = st.one_of(number, number, NON_NUMBERS)
+number = weighted((2, PLAUSIBLE), (2, SMALL), (1, HOSTILE_FLOATS))
+anything = weighted((4, number), (1, NON_NUMBERS))
 DELTA = pkmkit.machine("linear-delta-table-iv1")
 
 
 @st.composite
 def paths(draw):
     kind = draw(st.sampled_from(["line", "circle", "helix", "raster"]))
+    if draw(st.booleans()):  # plausible arguments: answers to check
+        c = draw(st.lists(st.floats(-0.3, 0.3), min_size=3, max_size=3))
+        size = draw(SMALL)
+        if kind == "line":
+            return call(line, c, [c[0] + size, c[1], c[2] - size])
+        if kind == "circle":
+            return call(circle, c, size)
+        if kind == "helix":
+            return call(helix, c, size, pitch=draw(st.floats(-0.05, 0.05)),
+                        turns=draw(st.floats(0.1, 3)))
+        return call(raster, c, size, draw(SMALL), draw(st.integers(1, 4)),
+                    strategy=draw(st.sampled_from(["zigzag", "one-way"])))
     v3 = st.one_of(arrays(3, plausible_weight=6), NON_NUMBERS)
     if kind == "line":
         return call(line, draw(v3), draw(v3), rapid=draw(st.booleans()))
@@ -46,11 +59,11 @@ def test_paths_and_time_laws(path, data):
         return
     for seg in path.segments:
         assert np.isfinite(seg.start).all() and np.isfinite(seg.end).all() and seg.length > 0
-    feed = data.draw(st.one_of(st.floats(0.01, 0.5), anything))
-    accel = data.draw(st.one_of(st.floats(0.1, 5.0), anything))
-    jerk = data.draw(st.one_of(st.none(), st.floats(1.0, 50.0), anything))
+    feed = data.draw(weighted((4, st.floats(0.01, 0.5)), (1, anything)))
+    accel = data.draw(weighted((4, st.floats(0.1, 5.0)), (1, anything)))
+    jerk = data.draw(weighted((2, st.none()), (2, st.floats(1.0, 50.0)), (1, anything)))
     profile = data.draw(st.sampled_from(["scurve", "trapezoid", "sine"]))
-    period = data.draw(st.one_of(st.just(0.01), st.floats(1e-4, 0.1), anything))
+    period = data.draw(weighted((4, st.floats(2e-3, 0.1)), (1, anything)))
     traj = call(plan, path, feed=feed, accel=accel, jerk=jerk, profile=profile, period=period,
                 max_samples=200_000)
     if traj is None:
@@ -68,7 +81,7 @@ def test_paths_and_time_laws(path, data):
 def test_joint_trajectory_and_dynamics(data):
     centre = data.draw(st.lists(st.floats(-0.3, 0.3), min_size=3, max_size=3))
     centre[2] = data.draw(st.floats(-0.2, 1.2))
-    radius = data.draw(st.one_of(st.floats(0.001, 0.6), number))
+    radius = data.draw(weighted((4, st.floats(0.001, 0.6)), (1, number)))
     path = call(circle, centre, radius)
     if path is None:
         return
@@ -81,8 +94,9 @@ def test_joint_trajectory_and_dynamics(data):
     d = DELTA._closed.rod_vectors(motion.x, motion.q)
     _, rho = DELTA._closed.centres(motion.q)
     assert np.abs(np.linalg.norm(d, axis=2) - rho).max() <= 1e-9
-    masses = call(mass_properties, DELTA, carriage=data.draw(anything),
-                  rod=data.draw(anything), platform=data.draw(st.one_of(SMALL, anything)),
+    masses = call(mass_properties, DELTA, carriage=data.draw(weighted((6, SMALL), (1, anything))),
+                  rod=data.draw(weighted((6, SMALL), (1, anything))),
+                  platform=data.draw(weighted((6, SMALL), (1, anything))),
                   gravity=data.draw(st.one_of(st.just((0, 0, -9.81)), arrays(3))))
     if masses is None:
         return
@@ -95,6 +109,7 @@ def test_joint_trajectory_and_dynamics(data):
         assert forces.force.shape == motion.q.shape
 
 
+@slow_examples
 @given(anything, anything, anything, anything)
 def test_arms(length, diameter, inner, force):
     result = call(analyse_arm, length, diameter, inner, axial_force=force)
@@ -133,6 +148,7 @@ def test_analysis(name, data):
     call(check_region, m, data.draw(arrays(m.dims)), side, criteria)
 
 
+@slow_examples
 @given(st.sampled_from(["orthoglide", "five-bar", "delta"]), number,
        st.one_of(st.tuples(number, number), st.tuples(st.floats(0.2, 0.9), st.floats(1.1, 4)),
                  NON_NUMBERS))
