@@ -440,11 +440,14 @@ def region_grid(machine: Machine, center: Any, side: float, free: tuple[int, ...
                 samples: int | None = None) -> Grid:
     """Grid of ``samples`` points per edge over the square/cube of ``side`` centred at
     ``center``; ``free`` defaults to every pose coordinate."""
-    center = np.asarray(center, dtype=float).reshape(-1)
+    try:
+        center = np.asarray(center, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"the centre must be {machine.dims} finite coordinates, got "
+                         f"{center!r}") from None
     if center.shape != (machine.dims,) or not np.isfinite(center).all():
         raise InputError(f"the centre must be {machine.dims} finite coordinates")
-    if not side > 0:
-        raise InputError(f"the side must be > 0, got {side}")
+    side = real(side, "the side", positive=True, limit=1e6)
     free = tuple(range(machine.dims)) if free is None else free
     samples = samples or (41 if len(free) <= 2 else 25)
     lower = [center[k] - side / 2 for k in free]

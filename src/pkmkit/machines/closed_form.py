@@ -37,6 +37,9 @@ from pkmkit.numerics import jit
 #: Relative tolerance (on ℓ²) within which a negative inverse-model radicand is rounding noise at
 #: the workspace boundary (leg perpendicular to its slide) and is taken as 0.
 BOUNDARY_TOL = 1e-12
+#: Largest closure residual (relative to 1 + the size of the configuration) of a direct-model
+#: solution; beyond it the row is flagged as (nearly) degenerate rather than returned.
+RESIDUAL_TOL = 1e-9
 #: Rows per chunk in the inverse model: keeps temporaries in cache (~2× faster than one pass).
 CHUNK = 32768
 
@@ -190,7 +193,9 @@ class RodClosedForm:
             ``(poses (N, 2, dims), degenerate (N,))``: ``poses[:, 0]`` is the mode with
             det A < 0, ``poses[:, 1]`` the mode with det A > 0; NaN where no real assembly
             exists. ``degenerate`` flags rows whose sphere centres are aligned (the direct model
-            has no isolated solution there). Computed in cache-sized chunks.
+            has no isolated solution there) or so nearly aligned that the solution found does
+            not close every leg to :data:`RESIDUAL_TOL` (relative); their poses are NaN.
+            Computed in cache-sized chunks.
         """
         poses = np.empty((q.shape[0], 2, self.model.dims))
         degenerate = np.empty(q.shape[0], dtype=bool)
@@ -232,7 +237,15 @@ class RodClosedForm:
         with np.errstate(invalid="ignore", over="ignore"):
             centre = c1 + w
             offset = t[:, None] * normal
-            return np.stack([centre - offset, centre + offset], axis=1), degenerate
+            poses = np.stack([centre - offset, centre + offset], axis=1)
+            # near a parallel singularity (centres nearly aligned) rounding can leave a
+            # solution that closes no leg: check every leg, flag such rows as degenerate
+            residual = np.abs(np.linalg.norm(poses[:, :, None, :] - c[:, None], axis=3)
+                              - rho[:, None, :]).max(axis=(1, 2))
+            scale = 1.0 + np.abs(c).max(axis=(1, 2)) + np.abs(rho).max(axis=1)
+            unresolved = residual > RESIDUAL_TOL * scale
+        poses[unresolved] = np.nan
+        return poses, degenerate | unresolved
 
     # ------------------------------------------------------------------ velocity
     def rod_vectors(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:

@@ -533,7 +533,7 @@ class Machine:
     def _mode_guess_pose(self, q: np.ndarray, sign: int) -> np.ndarray:
         """Linear guess from home; for the other assembly mode, its mirror about the plane
         (line) through the sphere centres — the two modes are mirror images."""
-        with np.errstate(invalid="ignore", over="ignore"):
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
             guess = self._linear_guess_pose(q)
             if sign == self._working_mode:
                 return guess
@@ -553,8 +553,9 @@ class Machine:
             raise InputError(f"q = {q.tolist()} has a coordinate beyond {MAX_COORDINATE:g} m")
         if status == Status.SINGULAR:
             raise SingularConfigurationError(
-                f"q = {q.tolist()}: the leg sphere centres are aligned; the direct model has no "
-                "isolated solution"
+                f"q = {q.tolist()}: the leg sphere centres are aligned or nearly so (a parallel "
+                "singularity): the direct model has no isolated solution, or none that rounding "
+                "lets it resolve to 1e-9 m"
             )
         if status == Status.NO_ASSEMBLY:
             raise NoAssemblyError(

@@ -95,7 +95,7 @@ class ParameterSpec:
             raise self._error(machine, f"must be numeric, got {value!r}")
         try:
             arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise self._error(machine, f"must be numeric, got {value!r}") from None
         expected = () if self.size is None else (self.size,)
         if arr.shape != expected:
@@ -122,7 +122,7 @@ class ParameterSpec:
             raise self._error(machine, f"must be numeric, got {value!r}")
         try:
             raw = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise self._error(machine, f"must be numeric, got {value!r}") from None
         if self.quantity == "angle" and (np.abs(raw) > 360.0).any():
             raise self._error(machine, f"is an angle in degrees within [-360, 360]; got {value}")

@@ -105,6 +105,8 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
         for letter, number_text in words:
             letter = letter.upper()
             value = float(number_text)
+            if not np.isfinite(value):
+                raise error(number, f"{letter}{number_text[:20]}…: the number is too large")
             if letter == "G":
                 if value == int(value) and int(value) in _IGNORED_G:
                     continue
