@@ -21,6 +21,8 @@ from pkmkit.numerics.arrays import real
 
 #: Largest coordinate or length of a path, m (beyond: a unit mistake, and squares overflow).
 MAX_PATH_LENGTH = 1e6
+#: Smallest arc radius, m (below, curvatures and their powers overflow).
+MIN_RADIUS = 1e-9
 
 
 def _vec3(value, what: str) -> np.ndarray:
@@ -86,6 +88,11 @@ class Arc:
     rise: float = 0.0
     rapid: bool = False
     feed: float | None = None
+
+    def __post_init__(self) -> None:
+        if not MIN_RADIUS <= self.radius <= MAX_PATH_LENGTH:
+            raise InputError(f"an arc radius of {self.radius:g} m is outside [{MIN_RADIUS:g}, "
+                             f"{MAX_PATH_LENGTH:g}] m; check the units")
 
     @property
     def normal(self) -> np.ndarray:

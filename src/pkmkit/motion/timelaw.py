@@ -258,6 +258,9 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
         lengths = np.array([segs[k].length for k in group])
         kappa = max(segs[k].curvature for k in group)
         tau = max(segs[k].torsion for k in group)
+        if kappa > 1e9 or tau > 1e9:
+            raise InputError(f"segment {group[0] + 1} curves with a radius below 1 nm; check "
+                             "the units")
         v = speed_of(group[0])
         a_t = accel * (math.sqrt(3) / 2 if kappa > 0 else 1.0)
         j_t = None if jerk is None else jerk / (3.0 if kappa > 0 else 1.0)
