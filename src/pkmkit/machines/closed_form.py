@@ -40,6 +40,10 @@ BOUNDARY_TOL = 1e-12
 #: Largest closure residual (relative to 1 + the size of the configuration) of a direct-model
 #: solution; beyond it the row is flagged as (nearly) degenerate rather than returned.
 RESIDUAL_TOL = 1e-9
+#: Rows whose sphere-centre Gram determinant is below this fraction of size^(2(dims−1)) (size²:
+#: the first rod's length² plus the squared centre offsets) get their direct-model solutions
+#: checked leg by leg; elsewhere the closed form is well conditioned.
+SUSPECT_GRAM = 1e-4
 #: Rows per chunk in the inverse model: keeps temporaries in cache (~2× faster than one pass).
 CHUNK = 32768
 
@@ -238,12 +242,22 @@ class RodClosedForm:
             centre = c1 + w
             offset = t[:, None] * normal
             poses = np.stack([centre - offset, centre + offset], axis=1)
-            # near a parallel singularity (centres nearly aligned) rounding can leave a
-            # solution that closes no leg: check every leg, flag such rows as degenerate
-            residual = np.abs(np.linalg.norm(poses[:, :, None, :] - c[:, None], axis=3)
-                              - rho[:, None, :]).max(axis=(1, 2))
-            scale = 1.0 + np.abs(c).max(axis=(1, 2)) + np.abs(rho).max(axis=1)
-            unresolved = residual > RESIDUAL_TOL * scale
+            # near a parallel singularity (centres nearly together or aligned: a small Gram
+            # determinant) rounding can leave a solution that closes no leg. Those rows get
+            # every leg checked, and are flagged as degenerate when one is not closed.
+            if self.model.dims == 3:  # size² of the configuration: ρ₁² + |e1|² + |e2|²
+                size_sq = rho_sq[:, 0] + g11 + g22
+                suspect = np.flatnonzero(gram < SUSPECT_GRAM * size_sq * size_sq)
+            else:
+                suspect = np.flatnonzero(gram < SUSPECT_GRAM * (rho_sq[:, 0] + gram))
+        unresolved = np.zeros(q.shape[0], dtype=bool)
+        if suspect.size:
+            with np.errstate(invalid="ignore", over="ignore"):
+                d = poses[suspect][:, :, None, :] - c[suspect][:, None]
+                residual = np.abs(np.linalg.norm(d, axis=3) - rho[suspect][:, None, :])
+                scale = (1.0 + np.abs(c[suspect]).max(axis=(1, 2))
+                         + np.abs(rho[suspect]).max(axis=1))
+                unresolved[suspect] = residual.max(axis=(1, 2)) > RESIDUAL_TOL * scale
         poses[unresolved] = np.nan
         return poses, degenerate | unresolved
 
