@@ -49,13 +49,20 @@ def main() -> None:
     m = pkmkit.machine("orthoglide")
     rng = np.random.default_rng(2026)
     poses = rng.uniform(-0.1, 0.07, (args.poses, 3))  # the prescribed cube and around
-    m.jacobian(poses[:1000])
-    jac = m.jacobian(poses)
+    def full_call(x):
+        """The call and every field this benchmark describes (m.jacobian computes its fields
+        when they are read, see pkmkit.machines.velocity)."""
+        jac = m.jacobian(x)
+        _ = jac.J, jac.singular_values, jac.condition, jac.singularity
+        return jac
+
+    full_call(poses[:1000])
+    jac = full_call(poses)
     j = np.ascontiguousarray(jac.J)
     sub = j[: args.loop_poses]
     t_batch, t_loop = [], []
     for k in range(args.repeat):  # interleaved: both see the same machine load
-        t_batch.append(timed(lambda: m.jacobian(poses)))
+        t_batch.append(timed(lambda: full_call(poses)))
         if k % 3 == 0:
             t_loop.append(timed(lambda: [np.linalg.cond(x) for x in sub]) / len(sub))
     loop_cond = np.array([np.linalg.cond(x) for x in sub[:2000]])

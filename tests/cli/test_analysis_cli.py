@@ -196,3 +196,11 @@ def test_bad_input(run, args, message, tmp_path, monkeypatch):
     result = run(*args)
     assert result.exit_code == 1, result.output
     assert message in result.output and "Traceback" not in result.output
+
+
+def test_analyze_defaults_to_the_home_pose(run, as_json):
+    home = as_json(run("analyze", "five-bar", "--json"))
+    explicit = as_json(run("analyze", "five-bar", "--pose", "1,0", "--json"))
+    assert home == explicit
+    result = run("workspace", "five-bar", "--kappa-max", "0.5")
+    assert result.exit_code == 1 and "--kappa-max" in result.output

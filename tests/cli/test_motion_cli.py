@@ -57,9 +57,11 @@ def test_arm_sizing(run, as_json):
         (["path", "linear-delta", "--circle", "0,0,0.2", "--feed", "0.1", "--accel", "1",
           "--jerk", "1"], "needs 4 numbers"),
         (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "-1", "--accel", "1",
-          "--jerk", "1"], "must be a finite number > 0"),
-        (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "0.1", "--accel", "1"],
-         "jerk"),
+          "--jerk", "1"], "must be > 0"),
+        (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--feed", "0.1", "--accel", "1",
+          "--jerk", "-2"], "--jerk must be > 0"),
+        (["path", "linear-delta", "--circle", "0,0,0.2,0.1", "--accel", "1"],
+         "--feed is required"),
         (["path", "linear-delta", "--line", "0,0,0:3,0,0", "--feed", "0.1", "--accel", "1",
           "--jerk", "10"], "leaves the workspace"),
         (["path", "five-bar", "--helix", "1,0,0,0.1,0.01,2", "--feed", "0.1", "--accel", "1",
@@ -76,7 +78,7 @@ def test_bad_input(run, args, message):
 
 def test_bad_gcode_and_masses(run, tmp_path):
     program = tmp_path / "bad.nc"
-    program.write_text("G21\nG1 X1 F100\nT1 M6\n")
+    program.write_text("G21\nG1 X1 F100\nG41 D1\n")
     result = run("path", "linear-delta", "--gcode", program, "--feed", "0.1", "--accel", "1",
                  "--jerk", "10")
     assert result.exit_code == 1 and "bad.nc:3:" in result.output
@@ -132,3 +134,22 @@ def test_cli_stroke_independent_of_period(run, as_json):
     np.testing.assert_allclose(coarse["stroke"], 190.845, atol=1e-3)
     text = run(*args[:-1], "--period", "10", "--speed-limit", "20").output
     assert "LIMIT speed" in text and "every checked limit holds" not in text
+
+
+def test_gcode_feeds_and_default_jerk(run, as_json, tmp_path):
+    """A G-code program with F words runs with no --feed and no --jerk; the defaults used
+    are printed and reported in JSON, and match giving them explicitly."""
+    program = tmp_path / "p.nc"
+    program.write_text("G21 G90 G94 G54\nM3 S1000\nG0 X0 Y0 Z0\nG1 X20 F600\n"
+                       "G2 X30 Y10 I0 J10 F300\nM30\n")
+    base = ["path", "linear-delta-table-iv1", "--gcode", program, "--origin", "0,0,200",
+            "--units", "mm", "--accel", "1000"]
+    result = run(*base)
+    assert result.exit_code == 0, result.output
+    assert "default --jerk 10000 mm/s³" in result.output
+    assert "default --rapid-feed 50 mm/s" in result.output
+    implicit = as_json(run(*base, "--json"))
+    explicit = as_json(run(*base, "--jerk", "10000", "--feed", "10", "--json"))
+    assert [d["option"] for d in implicit["defaults"]] == ["--rapid-feed", "--jerk"]
+    assert explicit["defaults"] == []
+    assert implicit["duration"] == explicit["duration"]

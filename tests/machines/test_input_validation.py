@@ -161,3 +161,20 @@ def test_biglide_home_carriages_lie_on_the_rails():
     # parallelogram offsets perpendicular to the legs
     offsets = m.model.rod_platform[m.model.rod_leg == 0]
     assert abs(np.dot(offsets[0, :2], jac.A[0])) < 1e-15
+
+
+def test_direct_model_near_parallel_singularity_is_flagged_not_wrong():
+    """Found by fuzzing: Orthoglide carriages all near q = 0 put the sphere centres nearly
+    together; rounding then gave a 'solution' 1 mm off every leg. Such rows are flagged."""
+    import pkmkit
+    from pkmkit.status import Status
+
+    m = pkmkit.machine("orthoglide")
+    q = np.array([[1e-5, 0.0, 1e-12], [0.31, 0.31, 0.31]])
+    modes = m.fk_all(q)
+    assert modes.status[0] == Status.SINGULAR and not modes.valid[0].any()
+    assert modes.status[1] == Status.OK
+    res = m.fk(q, full_output=True)
+    assert res.status[0] == Status.SINGULAR and np.isnan(res.pose[0]).all()
+    with pytest.raises(pkmkit.SingularConfigurationError, match="nearly"):
+        m.fk(q[0])

@@ -162,3 +162,34 @@ def test_invalid_dimensions():
         pkmkit.machine("linear-delta", L=0.5)
     with pytest.raises(pkmkit.ParameterError, match="distinct"):
         pkmkit.machine("linear-delta", angles=(0.0, 0.0, 1.0))
+    with pytest.raises(pkmkit.ParameterError, match=">= 0"):
+        pkmkit.machine("linear-delta", r=-0.01)
+
+
+def test_firmware_effective_radius_is_the_same_machine():
+    """Delta firmware gives R_eff = R − r and r = 0: every model agrees with (R, r)."""
+    seed = pkmkit.machine("linear-delta")
+    firmware = pkmkit.machine("linear-delta", R=R - r, r=0.0)
+    x = np.random.default_rng(5).uniform(-0.3, 0.3, (500, 3))
+    q = seed.ik(x)
+    np.testing.assert_allclose(firmware.ik(x), q, atol=1e-14)
+    np.testing.assert_allclose(firmware.fk(q), x, atol=1e-12)
+    np.testing.assert_allclose(firmware.jacobian(x).J, seed.jacobian(x).J, atol=1e-12)
+    numeric = firmware.fk(q[:50], method="numeric", dof="full", full_output=True)
+    assert (numeric.status == 0).all()
+    np.testing.assert_allclose(numeric.pose, x[:50], atol=1e-9)
+    assert firmware.mobility()["instantaneous"].mobility == 3
+
+
+def test_tower_angles_in_any_order():
+    """Klipper's default towers (210°, 330°, 90°) and a permuted, clockwise order: the same
+    carriages, relabelled; modes keep their physical names."""
+    x = np.random.default_rng(6).uniform(-0.25, 0.25, (300, 3))
+    ccw = pkmkit.machine("linear-delta", angles=np.radians([210.0, 330.0, 90.0]))
+    cw = pkmkit.machine("linear-delta", angles=np.radians([90.0, 330.0, 210.0]))
+    np.testing.assert_allclose(cw.ik(x), ccw.ik(x)[:, ::-1], atol=1e-14)
+    assert cw.mode_labels[0] == ccw.mode_labels[0] == "nacelle-below"
+    np.testing.assert_allclose(cw.fk(cw.ik(x)), x, atol=1e-12)
+    # angles beyond 180° and negative ones are the same towers
+    wrapped = pkmkit.machine("linear-delta", angles=np.radians([-150.0, -30.0, 90.0]))
+    np.testing.assert_allclose(wrapped.ik(x), ccw.ik(x), atol=1e-12)

@@ -59,3 +59,23 @@ def test_resolve_unknown_lists_valid_names():
 def test_unknown_unit():
     with pytest.raises(ParameterError, match="unknown length unit"):
         length_scale("inch")
+
+
+def test_inch_units_for_machine_tool_users():
+    """Inches are a length unit of the field (G20 programs, US machine tools)."""
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+    from pkmkit.model.parameters import length_scale
+
+    assert length_scale("in") == 0.0254
+    runner = CliRunner()
+    inch = runner.invoke(cli, ["ik", "linear-delta", "--pose", "1,2,8", "--units", "in",
+                               "--json"])
+    metre = runner.invoke(cli, ["ik", "linear-delta", "--pose", "0.0254,0.0508,0.2032",
+                                "--json"])
+    import json
+
+    q_in = json.loads(inch.stdout)["q"]
+    q_m = json.loads(metre.stdout)["q"]
+    assert q_in == pytest.approx([v / 0.0254 for v in q_m], rel=1e-12)

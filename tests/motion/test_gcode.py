@@ -61,7 +61,9 @@ def test_centre_and_radius_forms_agree_in_every_plane(plane, ijk, end, normal, m
 @pytest.mark.parametrize(
     "text, line, message",
     [
-        ("G1 X1 F100\nM3 S1000\n", 2, "unsupported word M3"),
+        ("G1 X1 F100\nG43 H1\n", 2, "unsupported G code G43"),
+        ("G1 X1 F100\nG41 D1\n", 2, "unsupported G code G41"),
+        ("G1 X1 F100\nP2\n", 2, "unsupported word P2"),
         ("G1 X1 F100\nG4 P1\n", 2, "unsupported G code G4"),
         ("G1 X1\n", 1, "feed rate"),
         ("X1 Y1\n", 1, "motion mode"),
@@ -120,3 +122,18 @@ def test_rounded_cam_arcs_are_accepted_and_end_on_the_programmed_point():
 def test_modal_conflicts_and_off_plane_offsets(text, message):
     with pytest.raises(InputError, match=message):
         read_gcode(text, name="p.nc")
+
+
+def test_cam_preamble_and_program_end_are_read():
+    """Words every post-processor writes (O, S, T, M, G40/G49/G80/G94/G54) leave the path as
+    it is; M30 ends the program."""
+    body = "G0 X0 Y0 Z5\nG1 Z-1 F300\nG1 X20 F600\nG2 X30 Y10 I0 J10\nG0 Z5\n"
+    plain = read_gcode("G21 G90 G17\n" + body)
+    decorated = read_gcode("%\nO1000 (pocket)\nN10 G21 G90 G94 G17 G40 G49 G80 G54\n"
+                           "N20 T1 M6\nN30 S12000 M3 M8\n" + body
+                           + "M5 M9\nM30\nG1 X500 Y500 F100\n%\n")
+    assert len(decorated.segments) == len(plain.segments)
+    for a, b in zip(decorated.segments, plain.segments, strict=True):
+        np.testing.assert_array_equal(a.start, b.start)
+        np.testing.assert_array_equal(a.end, b.end)
+        assert a.feed == b.feed

@@ -146,7 +146,8 @@ def test_zigzag_facing_is_faster_than_one_way():
     [
         ({"feed": 0.0, "accel": 1.0, "jerk": 1.0}, "feed"),
         ({"feed": 0.1, "accel": -1.0, "jerk": 1.0}, "accel"),
-        ({"feed": 0.1, "accel": 1.0}, "jerk"),
+        ({"feed": 0.1, "accel": 1.0, "jerk": -1.0}, "jerk"),
+        ({"feed": 0.1, "accel": 1.0, "jerk": float("nan")}, "jerk"),
         ({"feed": 0.1, "accel": 1.0, "jerk": 1.0, "profile": "sine"}, "profile"),
         ({"feed": 0.1, "accel": 1.0, "jerk": 1.0, "period": 1e-9}, "samples"),
     ],
@@ -154,3 +155,15 @@ def test_zigzag_facing_is_faster_than_one_way():
 def test_bad_plans(kwargs, message):
     with pytest.raises(InputError, match=message):
         plan(line([0, 0, 0], [1, 0, 0]), **kwargs)
+
+
+def test_default_jerk_is_ten_times_the_acceleration():
+    """An S-curve without a jerk uses DEFAULT_JERK_PER_ACCEL × accel (documented default)."""
+    from pkmkit.motion.timelaw import DEFAULT_JERK_PER_ACCEL
+
+    path = line([0, 0, 0], [0.2, 0, 0])
+    implicit = plan(path, feed=0.1, accel=0.5, period=1e-3)
+    explicit = plan(path, feed=0.1, accel=0.5, jerk=DEFAULT_JERK_PER_ACCEL * 0.5, period=1e-3)
+    np.testing.assert_array_equal(implicit.x, explicit.x)
+    other = plan(path, feed=0.1, accel=0.5, jerk=50.0, period=1e-3)
+    assert implicit.t[-1] != other.t[-1]

@@ -161,8 +161,14 @@ def make_grid(lower: Sequence[float], upper: Sequence[float], *, free: Sequence[
             a step too small to separate the points at that magnitude, more than
             :data:`MAX_GRID_POINTS` points.
     """
-    lo = np.asarray(lower, dtype=float).reshape(-1)
-    hi = np.asarray(upper, dtype=float).reshape(-1)
+    try:
+        lo = np.asarray(lower, dtype=float).reshape(-1)
+        hi = np.asarray(upper, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"the box bounds must be numbers, got {lower!r} and {upper!r}"
+                         ) from None
+    if isinstance(resolution, bool) or not isinstance(resolution, int | np.integer):
+        raise InputError(f"resolution must be an integer, got {resolution!r}")
     if lo.shape != (len(free),) or hi.shape != (len(free),):
         raise InputError(f"the box needs {len(free)} lower and upper bounds")
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):

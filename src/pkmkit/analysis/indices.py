@@ -31,6 +31,7 @@ from pkmkit.errors import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
 from pkmkit.machines.results import Jacobians
 from pkmkit.numerics.linalg import condition_number, singular_values
+from pkmkit.parallel import DEFAULT_CHUNK, map_rows
 
 
 @dataclass(frozen=True)
@@ -160,6 +161,23 @@ def scalar_index(ind: Indices, name: str) -> np.ndarray:
     if name not in values:
         raise InputError(f"unknown index {name!r}; valid indices: {', '.join(SCALAR_INDICES)}")
     return values[name]()
+
+
+def index_values(machine: Machine, points: Any, name: str, *, scheduler: Any = None,
+                 chunk: int = DEFAULT_CHUNK) -> np.ndarray:
+    """One scalar index (:data:`SCALAR_INDICES`) at every pose ``points (M, dims)`` — the
+    values of an index map — computed in blocks of ``chunk`` poses, in this process or with
+    ``scheduler`` on Dask (see :mod:`pkmkit.parallel`; identical results). NaN where a pose is
+    out of reach."""
+    if name not in SCALAR_INDICES:
+        raise InputError(f"unknown index {name!r}; valid indices: {', '.join(SCALAR_INDICES)}")
+    points = np.atleast_2d(np.asarray(points, dtype=float))
+    return map_rows(_index_block, points, chunk=chunk, scheduler=scheduler,
+                    args=(machine, name))
+
+
+def _index_block(points: np.ndarray, machine: Machine, name: str) -> np.ndarray:
+    return np.asarray(scalar_index(indices(machine, points), name), dtype=float)
 
 
 def global_conditioning_index(machine: Machine, points: np.ndarray,

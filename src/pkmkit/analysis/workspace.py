@@ -32,6 +32,8 @@ from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.inscribed import largest_box
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
+from pkmkit.numerics.arrays import real, real_pair
+from pkmkit.parallel import map_chunks
 from pkmkit.status import Status
 
 MASK_NAMES = ("reachable", "strokes", "bounds", "condition", "mode")
@@ -66,12 +68,12 @@ class Criteria:
 
     def __post_init__(self) -> None:
         if self.bounds is not None:
-            lo, hi = self.bounds
-            if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+            lo, hi = real_pair(self.bounds, "the transmission-factor bounds")
+            if not 0 < lo < hi:
                 raise InputError(
                     f"transmission-factor bounds must satisfy 0 < lo < hi, got {self.bounds}"
                 )
-        if self.kappa_max is not None and not self.kappa_max >= 1:
+        if self.kappa_max is not None and not real(self.kappa_max, "kappa_max") >= 1:
             raise InputError(f"kappa_max must be >= 1, got {self.kappa_max}")
 
     def within_bounds(self, factors: np.ndarray) -> np.ndarray:
@@ -129,11 +131,29 @@ def evaluate_poses(machine: Machine, points: np.ndarray, criteria: Criteria) -> 
                          for k in range(0, len(points), EVALUATION_CHUNK)])
 
 
-def evaluate_grid(machine: Machine, grid: Grid, criteria: Criteria) -> PoseEvaluation:
+def evaluate_grid(machine: Machine, grid: Grid, criteria: Criteria, *,
+                  scheduler: Any = None) -> PoseEvaluation:
     """:func:`evaluate_poses` over every point of ``grid`` (flat, C order), generating the
-    points chunk by chunk."""
-    parts = [_evaluate_chunk(machine, grid.points_between(k, k + EVALUATION_CHUNK), criteria)
-             for k in range(0, grid.size, EVALUATION_CHUNK)]
+    points chunk by chunk — in this process, or with ``scheduler`` (a Dask address, ``"local:N"``
+    or a client, see :mod:`pkmkit.parallel`) in tasks of :data:`TASK_CHUNKS` chunks, each
+    generating and evaluating its own points; the results are identical."""
+    if scheduler is None:
+        return _evaluate_range(0, grid.size, machine, grid, criteria)
+    parts = map_chunks(_evaluate_range, grid.size, chunk=TASK_CHUNKS * EVALUATION_CHUNK,
+                       scheduler=scheduler, args=(machine, grid, criteria))
+    return parts[0] if len(parts) == 1 else _concatenate(parts)
+
+
+#: Evaluation chunks per Dask task of :func:`evaluate_grid` (a task then takes ~0.1 s).
+TASK_CHUNKS = 4
+
+
+def _evaluate_range(start: int, stop: int, machine: Machine, grid: Grid,
+                    criteria: Criteria) -> PoseEvaluation:
+    """Grid points ``start:stop`` evaluated in chunks of :data:`EVALUATION_CHUNK`."""
+    parts = [_evaluate_chunk(machine, grid.points_between(k, min(k + EVALUATION_CHUNK, stop)),
+                             criteria)
+             for k in range(start, stop, EVALUATION_CHUNK)]
     return parts[0] if len(parts) == 1 else _concatenate(parts)
 
 
@@ -340,14 +360,15 @@ class WorkspaceMap:
 
 
 def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = None, *,
-                      refine: bool = False) -> WorkspaceMap:
+                      refine: bool = False, scheduler: Any = None) -> WorkspaceMap:
     """Masks, feasible set and largest inscribed square/cube of ``machine`` over ``grid``.
 
     With ``refine=True`` the inscribed box found on the grid is refined in its centre and side
     to 10⁻⁴ of the side (:func:`refine_box`), which removes the grid's under-estimate (up to two
-    steps) and its centring on grid points."""
+    steps) and its centring on grid points. ``scheduler``: evaluate the grid on Dask (see
+    :func:`evaluate_grid`); the rest runs here."""
     criteria = criteria or Criteria()
-    evaluation = evaluate_grid(machine, grid, criteria)
+    evaluation = evaluate_grid(machine, grid, criteria, scheduler=scheduler)
     shape = grid.shape
     masks = {k: v.reshape(shape) for k, v in evaluation.masks.items()}
     feasible = evaluation.feasible.reshape(shape)
@@ -528,11 +549,14 @@ def region_grid(machine: Machine, center: Any, side: float, free: tuple[int, ...
                 samples: int | None = None) -> Grid:
     """Grid of ``samples`` points per edge over the square/cube of ``side`` centred at
     ``center``; ``free`` defaults to every pose coordinate."""
-    center = np.asarray(center, dtype=float).reshape(-1)
+    try:
+        center = np.asarray(center, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"the centre must be {machine.dims} finite coordinates, got "
+                         f"{center!r}") from None
     if center.shape != (machine.dims,) or not np.isfinite(center).all():
         raise InputError(f"the centre must be {machine.dims} finite coordinates")
-    if not side > 0:
-        raise InputError(f"the side must be > 0, got {side}")
+    side = real(side, "the side", positive=True, limit=1e6)
     free = tuple(range(machine.dims)) if free is None else free
     samples = samples or check_region_samples(len(free))
     lower = [center[k] - side / 2 for k in free]

@@ -6,7 +6,7 @@ import click
 import numpy as np
 
 from pkmkit.analysis.grids import Grid, make_grid
-from pkmkit.analysis.indices import SCALAR_INDICES, indices, scalar_index
+from pkmkit.analysis.indices import SCALAR_INDICES, index_values, indices
 from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.workspace import (
     Criteria,
@@ -36,6 +36,7 @@ from .options import (
     parse_vector,
     resolve_machine,
 )
+from .scheduler import SCHEDULER_OPTION
 
 BOUNDS_OPTION = click.option(
     "--bounds", metavar="LO,HI",
@@ -129,6 +130,8 @@ def build_grid(machine: Machine, box_text: str | None, slice_: tuple[int, float]
 
 
 def _criteria(bounds, kappa_max, no_strokes) -> Criteria:
+    if kappa_max is not None and not (np.isfinite(kappa_max) and kappa_max >= 1):
+        raise InputError(f"--kappa-max must be a condition number >= 1, got {kappa_max:g}")
     return Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max, strokes=not no_strokes)
 
 
@@ -143,7 +146,7 @@ def register(cli: click.Group) -> None:
 @click.command()
 @click.argument("machine_name", metavar="MACHINE")
 @SET_OPTION
-@click.option("--pose", required=True, help="Platform position X,Y[,Z].")
+@click.option("--pose", help="Platform position X,Y[,Z] (default: the home pose).")
 @click.option("--isotropy-tol", type=float, default=1e-9, show_default=True,
               help="The pose counts as isotropic when κ ≤ 1 + this tolerance.")
 @UNITS_OPTION
@@ -155,7 +158,7 @@ def analyze(machine_name, assignments, pose, isotropy_tol, units, as_json):
     scale = length_scale(units)
     if not (np.isfinite(isotropy_tol) and isotropy_tol >= 0):
         raise InputError(f"--isotropy-tol must be a finite number >= 0, got {isotropy_tol}")
-    x = parse_vector(pose, m.dims, "--pose", units)
+    x = m.home_pose if pose is None else parse_vector(pose, m.dims, "--pose", units)
     ind = indices(m, x, ellipsoids=True, isotropy_tol=isotropy_tol)
     jac = m.jacobian(x)
     payload = {
@@ -209,10 +212,11 @@ def _condition_text(kappa: float) -> str:
               "values far above the 95th percentile (near a singularity) take the top colour.")
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="Figure file (.png, .svg, .pdf).")
+@SCHEDULER_OPTION
 @UNITS_OPTION
 @JSON_OPTION
 def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resolution,
-            color_scale, out, units, as_json):
+            color_scale, out, scheduler, units, as_json):
     """Iso-contours of an index (or actuator coordinates) over a plane."""
     check_figure_path(out)
     m = resolve_machine(machine_name, assignments, units)
@@ -233,7 +237,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resol
         summary["min"] = np.nanmin(q, axis=0) / scale
         summary["max"] = np.nanmax(q, axis=0) / scale
     else:
-        values = scalar_index(indices(m, points, q=q), index_name)
+        values = index_values(m, points, index_name, scheduler=scheduler)
         finite = np.isfinite(values)
         if not finite.any():
             raise InputError(f"{index_name} is undefined on every reachable point of the plane")
@@ -302,10 +306,11 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
 @click.option("--center", "center_text", help="Centre X,Y[,Z] of the prescribed square/cube.")
 @RESOLUTION_OPTION
 @click.option("--out", "out", type=click.Path(dir_okay=False), help="Figure file.")
+@SCHEDULER_OPTION
 @UNITS_OPTION
 @JSON_OPTION
 def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text, no_strokes,
-              cube, center_text, resolution, out, units, as_json):
+              cube, center_text, resolution, out, scheduler, units, as_json):
     """Workspace over a box or a plane: area/volume, largest inscribed square/cube, transmission
     factors inside it, global conditioning index, and (with --cube/--center) whether a
     prescribed one is feasible (in the --slice plane when one is given)."""
@@ -323,7 +328,7 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
         if not (np.isfinite(cube) and cube > 0):
             raise InputError(f"--cube must be a side > 0, got {cube:g}")
         center = _region_center(m, center_text, slice_, scale)
-    wmap = compute_workspace(m, grid, criteria, refine=True)
+    wmap = compute_workspace(m, grid, criteria, refine=True, scheduler=scheduler)
     if not wmap.masks["reachable"].any():
         raise InputError("no pose of the box is reachable; choose another --box or --slice")
     if not wmap.feasible.any():

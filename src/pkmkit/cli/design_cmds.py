@@ -41,6 +41,7 @@ from .options import (
     parse_vector,
     resolve_machine,
 )
+from .scheduler import SCHEDULER_OPTION
 
 
 def _verified(check) -> dict:
@@ -282,11 +283,12 @@ def _parse_region(text: str, scale: float) -> Region:
 @click.option("--no-progress", is_flag=True, help="Hide the progress bar.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Directory for results.csv, summary.json and pareto.png.")
+@SCHEDULER_OPTION
 @UNITS_OPTION
 @JSON_OPTION
 def optimize_cmd(machine_name, assignments, vary, objectives, constraints, region_text, bounds,
                  kappa_max, method, pareto, generations, population, seed, samples, no_progress,
-                 out_dir, units, as_json):
+                 out_dir, scheduler, units, as_json):
     """Optimise parameters of any machine for a prescribed region (one or several objectives).
 
     Lengths (variables, constraints, region, outputs) are in --units, angles in degrees; the
@@ -306,7 +308,8 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
     )
     out = check_output_dir(out_dir)
     result = optimize(problem, method=method, seed=seed, generations=generations,
-                      population=population, progress=not no_progress and not as_json)
+                      population=population, progress=not no_progress and not as_json,
+                      scheduler=scheduler)
     try:
         result.write_csv(out / "results.csv", units=units)
         result.write_json(out / "summary.json", units=units)

@@ -18,7 +18,7 @@ from pkmkit.model.parameters import length_scale
 from pkmkit.motion.gcode import read_gcode
 from pkmkit.motion.joints import Limits
 from pkmkit.motion.paths import circle, helix, line, raster
-from pkmkit.motion.timelaw import PROFILES
+from pkmkit.motion.timelaw import DEFAULT_JERK_PER_ACCEL, PROFILES
 from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
 
 from .options import (
@@ -109,12 +109,16 @@ def build_path(machine, scale: float, gcode, origin, line_text, circle_text, hel
 @click.option("--helix", "helix_text", metavar="CX,CY,CZ,R,PITCH,TURNS", help="Helix along z.")
 @click.option("--raster", "raster_text", metavar="X0,Y0,Z,W,H,PASSES[,zigzag|one-way]",
               help="Facing of a rectangle in passes along x.")
-@click.option("--feed", type=float, required=True,
-              help="Feed rate (length unit per second). With --gcode the program's F words "
-                   "take precedence; --feed then sets the default rapid speed.")
-@click.option("--rapid-feed", type=float, help="Speed of rapid moves (default 5 × feed).")
+@click.option("--feed", type=float,
+              help="Feed rate (length unit per second); required except with --gcode, whose F "
+                   "words set the feeds (--feed then only sets the default rapid speed).")
+@click.option("--rapid-feed", type=float,
+              help="Speed of rapid moves (default 5 × feed; with --gcode and no --feed, 5 × the "
+                   "program's highest F).")
 @click.option("--accel", type=float, required=True, help="Tool acceleration limit.")
-@click.option("--jerk", type=float, help="Tool jerk limit (required by the S-curve).")
+@click.option("--jerk", type=float,
+              help=f"Tool jerk limit of the S-curve (default {DEFAULT_JERK_PER_ACCEL:g} × "
+                   f"--accel: the acceleration builds up in {1 / DEFAULT_JERK_PER_ACCEL:g} s).")
 @click.option("--profile", type=click.Choice(PROFILES), default="scurve", show_default=True)
 @click.option("--period", type=float, default=0.005, show_default=True, help="Sampling period, s.")
 @click.option("--masses", type=click.Path(dir_okay=False),
@@ -140,6 +144,8 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     out = check_output_dir(out_dir) if out_dir else None
     tool_path = build_path(m, scale, gcode, origin, line_text, circle_text, helix_text,
                            raster_text)
+    feed, jerk, defaults = _time_law_defaults(tool_path, scale, units, feed, accel, jerk,
+                                              rapid_feed, profile, bool(gcode))
     props, file_wrench = load_masses(masses, m) if masses else (None, None)
     force = file_wrench
     if wrench and wrench_file:
@@ -174,6 +180,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
         v["pose"] = np.asarray(v["pose"]) / scale
     summary.update({"machine": m.id, "units": units, "profile": profile,
                     "actuators": list(m.actuator_names), "total_mass": result.masses.total_mass})
+    summary["defaults"] = defaults
     if out is not None:
         motion = result.motion
         plot_joint_motion(motion, m.actuator_names, forces=result.forces.force,
@@ -192,6 +199,9 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
         emit_json(summary)
     else:
         _print_path_summary(m, summary, profile, units)
+        for note in defaults:
+            click.echo(f"  default {note['option']} {note['value']:.6g} {note['unit']} "
+                       f"({note['rule']})")
     if summary["violations"]:
         sys.exit(EXIT_PARTIAL)
 
@@ -217,6 +227,28 @@ def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
                        f"t = {v['t_peak']:.4f} s, pose {fmt(v['pose'])})")
     else:
         click.echo("  every checked limit holds")
+
+
+def _time_law_defaults(tool_path, scale: float, units: str, feed, accel, jerk, rapid_feed,
+                       profile: str, gcode: bool):
+    """Feed and jerk (CLI units) with the defaults filled in, and a note per default used:
+    ``[{"option", "value", "unit", "rule"}]``."""
+    notes = []
+    if feed is None:
+        programmed = [s.feed for s in tool_path.segments if getattr(s, "feed", None)]
+        if not (gcode and programmed):
+            raise click.UsageError("--feed is required (except with --gcode, whose F words set "
+                                   "the feeds)")
+        feed = max(programmed) / scale
+        if rapid_feed is None:
+            notes.append({"option": "--rapid-feed", "value": 5.0 * feed, "unit": f"{units}/s",
+                          "rule": "5 × the program's highest feed; set --rapid-feed"})
+    if profile == "scurve" and jerk is None and accel is not None and accel > 0:
+        jerk = DEFAULT_JERK_PER_ACCEL * accel
+        notes.append({"option": "--jerk", "value": jerk, "unit": f"{units}/s³",
+                      "rule": f"{DEFAULT_JERK_PER_ACCEL:g} × --accel, the acceleration built up "
+                              f"in {1 / DEFAULT_JERK_PER_ACCEL:g} s; set --jerk"})
+    return feed, jerk, notes
 
 
 @click.command("arm-sizing")

@@ -25,6 +25,7 @@ from pkmkit.design.checks import degenerate_note, relaxed, require_side
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
+from pkmkit.numerics.arrays import real_pair
 
 
 def _isotropy_residual(v: np.ndarray) -> np.ndarray:
@@ -114,7 +115,7 @@ def size_five_bar(square_side: float, bounds: tuple[float, float], *,
     preset = {"isotropic": "five-bar-isotropic", "biglide": "five-bar-biglide"}.get(design)
     if preset is None:
         raise InputError(f"unknown design {design!r}; use 'isotropic' or 'biglide'")
-    criteria = Criteria(bounds=tuple(bounds))
+    criteria = Criteria(bounds=real_pair(bounds, "the transmission-factor bounds"))
     base = builtin_machine(preset)
     unit = base.with_params(L=1.0, B=tuple(np.asarray(base.params["B"]) / base.params["L"]),
                             q_min=(-10.0, -10.0), q_max=(10.0, 10.0))

@@ -48,6 +48,7 @@ from pkmkit.errors import InputError, ParameterError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
 from pkmkit.model.parameters import MAX_LENGTH
+from pkmkit.numerics.arrays import real_pair
 
 #: The transmission factor of a pure vertical motion, for every vertical-slide Delta.
 VERTICAL_FACTOR = 1.0 / math.sqrt(3.0)
@@ -212,7 +213,7 @@ def size_linear_delta(cube_side: float, bounds: tuple[float, float], *,
             a missing or too short ``max_leg``, or no design passing the verification.
     """
     cube_side = require_side(cube_side, "cube side")
-    lo, hi = bounds
+    lo, hi = real_pair(bounds, "the transmission-factor bounds")
     Criteria(bounds=(lo, hi))  # validates 0 < lo < hi
     if not lo <= VERTICAL_FACTOR <= hi:
         raise InputError(

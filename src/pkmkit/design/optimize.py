@@ -26,11 +26,13 @@ import json
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from pkmkit import parallel
 from pkmkit.analysis.workspace import Criteria
 from pkmkit.design.design_space import (
     ScalarParameter,
@@ -410,9 +412,37 @@ def _progress(total: int, enabled: bool, label: str):
     return tqdm(total=total, desc=label, unit="gen", leave=False)
 
 
+def _evaluate_block(xs: list[np.ndarray], problem: DesignProblem) -> list[dict[str, Any]]:
+    return [problem.evaluate(x) for x in xs]
+
+
+def evaluate_designs(problem: DesignProblem, xs: Any, *, scheduler: Any = None,
+                     executor: Any = None) -> list[dict[str, Any]]:
+    """Records (:meth:`DesignProblem.evaluate`) of many candidates — a design sweep or one
+    optimiser population — in order, here or on Dask.
+
+    Args:
+        problem: the problem.
+        xs: ``(P, n_variables)`` variable values (SI).
+        scheduler: where to run (see :mod:`pkmkit.parallel`): each task evaluates a block of
+            candidates (every candidate is one batched call over the region's poses).
+        executor: an open :func:`pkmkit.parallel.executor` instead of ``scheduler`` (reused
+            across generations by :func:`optimize`).
+    """
+    xs = [np.asarray(x, dtype=float) for x in np.atleast_2d(np.asarray(xs, dtype=float))]
+    if executor is None:
+        with parallel.executor(scheduler) as ex:
+            return evaluate_designs(problem, xs, executor=ex)
+    workers = getattr(executor, "workers", 1)
+    size = max(1, -(-len(xs) // (2 * workers)))  # two blocks per worker
+    blocks = [xs[k:k + size] for k in range(0, len(xs), size)]
+    return [r for block in executor.map(partial(_evaluate_block, problem=problem), blocks)
+            for r in block]
+
+
 def optimize(problem: DesignProblem, *, method: str | None = None, seed: int = 0,
-             generations: int = 30, population: int = 24, progress: bool = False
-             ) -> OptimizationResult:
+             generations: int = 30, population: int = 24, progress: bool = False,
+             scheduler: Any = None) -> OptimizationResult:
     """Optimise ``problem``.
 
     Args:
@@ -426,6 +456,10 @@ def optimize(problem: DesignProblem, *, method: str | None = None, seed: int = 0
         population: population size (NSGA-II, CMA-ES) or DE population multiplier ×
             number of variables.
         progress: show a progress bar on stderr.
+        scheduler: evaluate each population on Dask (see :mod:`pkmkit.parallel` and
+            :func:`evaluate_designs`); the optimiser itself runs here and the results are
+            identical to the serial run. Every method evaluates whole populations (differential
+            evolution with ``updating="deferred"``).
 
     Raises:
         InputError: a method that does not fit the number of objectives, bad sizes, a variable
@@ -449,24 +483,32 @@ def optimize(problem: DesignProblem, *, method: str | None = None, seed: int = 0
     records: list[dict[str, Any]] = []
     cache: dict[bytes, dict[str, Any]] = {}
 
-    def evaluate(x: np.ndarray) -> dict[str, Any]:
-        key = np.asarray(x, dtype=float).tobytes()
-        if key not in cache:
-            cache[key] = problem.evaluate(x)
-            records.append(cache[key])
-        return cache[key]
-
     bar = _progress(generations, progress, f"{method} on {problem.base.id}")
-    try:
-        if method == "de":
-            _run_de(problem, evaluate, seed, generations, population, bar)
-        elif method == "cmaes":
-            _run_cmaes(problem, evaluate, seed, generations, population, bar)
-        else:
-            _run_nsga2(problem, evaluate, seed, generations, population, bar)
-    finally:
-        if bar is not None:
-            bar.close()
+    with parallel.executor(scheduler) as ex:
+
+        def evaluate(xs: list[np.ndarray]) -> list[dict[str, Any]]:
+            """Records of a population, each candidate evaluated once (cached)."""
+            keys = [np.asarray(x, dtype=float).tobytes() for x in xs]
+            todo = {}
+            for key, x in zip(keys, xs, strict=True):
+                if key not in cache and key not in todo:
+                    todo[key] = np.asarray(x, dtype=float)
+            for key, record in zip(todo, evaluate_designs(problem, list(todo.values()),
+                                                          executor=ex), strict=True):
+                cache[key] = record
+                records.append(record)
+            return [cache[key] for key in keys]
+
+        try:
+            if method == "de":
+                _run_de(problem, evaluate, seed, generations, population, bar)
+            elif method == "cmaes":
+                _run_cmaes(problem, evaluate, seed, generations, population, bar)
+            else:
+                _run_nsga2(problem, evaluate, seed, generations, population, bar)
+        finally:
+            if bar is not None:
+                bar.close()
     feasible = [r for r in records if r["feasible"]]
     best = min(feasible, key=lambda r: r["_objectives"][0]) if (n_obj == 1 and feasible) else None
     return OptimizationResult(problem=problem, method=method, records=records, best=best,
@@ -488,9 +530,15 @@ def _run_de(problem, evaluate, seed, generations, population, bar) -> None:
         if bar is not None:
             bar.update(1)
 
-    differential_evolution(lambda x: _penalised(evaluate(x)), problem.bounds, seed=seed,
+    def population_map(_func, candidates):
+        # DE's map over a population: the same values as _func (the penalised objective of
+        # each candidate), computed for the whole population at once
+        return [_penalised(r) for r in evaluate(list(candidates))]
+
+    differential_evolution(lambda x: _penalised(evaluate([x])[0]), problem.bounds, seed=seed,
                            maxiter=generations, popsize=max(2, population // len(
-                               problem.variables)), tol=0.0, polish=False, callback=callback)
+                               problem.variables)), tol=0.0, polish=False, callback=callback,
+                           updating="deferred", workers=population_map)
 
 
 def _run_cmaes(problem, evaluate, seed, generations, population, bar) -> None:
@@ -506,8 +554,8 @@ def _run_cmaes(problem, evaluate, seed, generations, population, bar) -> None:
     es = cma.CMAEvolutionStrategy(x0, 0.3, opts)
     while not es.stop():
         xs = es.ask()
-        es.tell(xs, [_penalised(evaluate(bounds[:, 0] + np.asarray(x)[:n] * span))
-                     for x in xs])
+        recs = evaluate([bounds[:, 0] + np.asarray(x)[:n] * span for x in xs])
+        es.tell(xs, [_penalised(r) for r in recs])
         if bar is not None:
             bar.update(1)
 
@@ -527,7 +575,7 @@ def _run_nsga2(problem, evaluate, seed, generations, population, bar) -> None:
                              xl=bounds[:, 0], xu=bounds[:, 1])
 
         def _evaluate(self, xs, out, *args, **kwargs):
-            recs = [evaluate(x) for x in xs]
+            recs = evaluate(list(xs))
             out["F"] = np.array([[min(v, 1e12) for v in r["_objectives"]] for r in recs])
             out["G"] = np.array([[min(e, 1e12) for e in r["_excess"]] for r in recs])
 

@@ -42,6 +42,7 @@ from pkmkit.design.checks import degenerate_note, relaxed, require_side
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
+from pkmkit.numerics.arrays import real_pair
 
 
 @dataclass(frozen=True)
@@ -119,7 +120,7 @@ def size_orthoglide(cube_side: float, bounds: tuple[float, float], *,
     cube_side = require_side(cube_side, "cube side")
     if max_leg is not None and not (np.isfinite(max_leg) and max_leg > 0):
         raise InputError(f"the largest admissible leg length must be > 0, got {max_leg}")
-    lo, hi = bounds
+    lo, hi = real_pair(bounds, "the transmission-factor bounds")
     criteria = Criteria(bounds=(lo, hi), strokes=False)  # validates 0 < lo < hi
     if not lo < 1.0 < hi:
         raise InputError(

@@ -28,6 +28,7 @@ import numpy as np
 from scipy.optimize import NonlinearConstraint, differential_evolution
 
 from pkmkit.errors import InputError
+from pkmkit.numerics.arrays import real, real_pair
 
 
 @dataclass(frozen=True)
@@ -77,15 +78,17 @@ def analyse_arm(length: float, outer_diameter: float, inner_diameter: float = 0.
         InputError: non-positive length or diameter, inner ≥ outer, non-finite loads.
     """
     material = material or Material()
-    if not (np.isfinite(length) and length > 0):
-        raise InputError(f"the arm length must be > 0, got {length}")
-    if not (np.isfinite(outer_diameter) and outer_diameter > 0):
-        raise InputError(f"the outer diameter must be > 0, got {outer_diameter}")
-    if not (np.isfinite(inner_diameter) and 0 <= inner_diameter < outer_diameter):
+    length = real(length, "the arm length", positive=True, limit=1e3)
+    outer_diameter = real(outer_diameter, "the outer diameter", positive=True, limit=1e2)
+    inner_diameter = real(inner_diameter, "the inner diameter", nonnegative=True, limit=1e2)
+    if not inner_diameter < outer_diameter:
         raise InputError(f"the inner diameter must be in [0, {outer_diameter:g}), got "
                          f"{inner_diameter}")
-    if not (np.isfinite(axial_force) and np.isfinite(transverse_accel)):
-        raise InputError("the loads must be finite")
+    if min(length, outer_diameter - inner_diameter) < 1e-6:
+        raise InputError(f"an arm {length:g} m long with a {outer_diameter - inner_diameter:g} "
+                         "m thick section is below 1 µm; check the units")
+    axial_force = real(axial_force, "the axial force", limit=1e12)
+    transverse_accel = real(transverse_accel, "the transverse acceleration", limit=1e7)
     big, small = outer_diameter, inner_diameter
     area = math.pi / 4 * (big**2 - small**2)
     inertia = math.pi / 64 * (big**4 - small**4)
@@ -147,19 +150,23 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
         when no rod within the bounds meets them.
     """
     material = material or Material()
-    lo_d, hi_d = diameter_range
-    if not 0 < lo_d < hi_d:
+    lo_d, hi_d = real_pair(diameter_range, "the diameter range")
+    if not 0 < lo_d < hi_d <= 1e2:
         raise InputError(f"empty diameter range {diameter_range}")
     for name, value in (("stress safety", stress_safety), ("buckling safety", buckling_safety),
-                        ("maximum deflection", max_deflection), ("minimum wall", min_wall)):
-        if not value > 0:
-            raise InputError(f"the {name} must be > 0, got {value:g}")
-    if not (np.isfinite(min_stiffness) and min_stiffness >= 0):
-        raise InputError(f"the minimum stiffness must be >= 0, got {min_stiffness:g}")
-    if not (np.isfinite(axial_force) and np.isfinite(transverse_accel)):
-        raise InputError("the loads must be finite")
-    if length_range is not None and not 0 < length_range[0] < length_range[1]:
-        raise InputError(f"empty length range {length_range}")
+                        ("minimum wall", min_wall)):
+        real(value, f"the {name}", positive=True, limit=1e6)
+    if not (isinstance(max_deflection, int | float) and max_deflection > 0):
+        raise InputError(f"the maximum deflection must be > 0, got {max_deflection!r}")
+    real(min_stiffness, "the minimum stiffness", nonnegative=True)
+    axial_force = real(axial_force, "the axial force", limit=1e12)
+    length = real(length, "the arm length", positive=True, limit=1e3)
+    transverse_accel = real(transverse_accel, "the transverse acceleration", limit=1e7)
+    lo_l = hi_l = length
+    if length_range is not None:
+        lo_l, hi_l = real_pair(length_range, "the length range")
+        if not 0 < lo_l < hi_l <= 1e3:
+            raise InputError(f"empty length range {length_range}")
     load = abs(float(axial_force))
     free_bore = hollow and inner_diameter is None
     if hollow and inner_diameter is not None:
@@ -169,14 +176,15 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
 
     def unpack(v: np.ndarray) -> tuple[float, float, float]:
         """(outer, inner, length); a free bore is parameterised by the wall thickness."""
-        big = float(v[0])
+        big = min(max(float(v[0]), lo_d), hi_d)  # the polish step may leave the bounds
         if not hollow:
             small = 0.0
         elif inner_diameter is not None:
             small = float(inner_diameter)
         else:  # the wall, kept within [min_wall, big/2] even where the optimiser steps outside
             small = max(big - 2 * min(max(float(v[1]), min_wall), big / 2), 0.0)
-        ell = float(v[-1]) if length_range is not None else float(length)
+        ell = (min(max(float(v[-1]), lo_l), hi_l) if length_range is not None
+               else float(length))
         return big, small, ell
 
     def margins(v: np.ndarray) -> dict[str, float]:
@@ -207,8 +215,9 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
         return material.density * math.pi / 4 * (big**2 - small**2) * ell
 
     names = ("stress", "buckling", "stiffness", "deflection")
-    feasible_set = NonlinearConstraint(lambda v: np.array([margins(v)[k] for k in names]),
-                                       0.0, np.inf)
+    # margins capped: only their sign matters, and a vanishing load gives infinite ones
+    feasible_set = NonlinearConstraint(
+        lambda v: np.minimum([margins(v)[k] for k in names], 1e6), 0.0, np.inf)
     with warnings.catch_warnings():  # SciPy's notes on the polish step are not for the user
         warnings.simplefilter("ignore")
         res = differential_evolution(mass, bounds, constraints=(feasible_set,), seed=0,

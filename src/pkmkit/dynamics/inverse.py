@@ -124,10 +124,13 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
             raise InputError(f"{name} must have shape ({n_samples}, {width}), got {arr.shape}")
     force_ext = np.zeros((n_samples, 3))
     if wrench is not None:
-        w = np.asarray(wrench, dtype=float)
+        try:
+            w = np.asarray(wrench, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"the wrench must be numbers, got {wrench!r}") from None
         if w.ndim == 1:
             w = np.broadcast_to(w, (n_samples, w.shape[0]))
-        if w.shape[0] != n_samples or w.shape[1] not in (2, 3, 6):
+        if w.ndim != 2 or w.shape[0] != n_samples or w.shape[1] not in (2, 3, 6):
             raise InputError(f"the wrench must be (3,), (6,), (N, 3) or (N, 6); got {w.shape}")
         if not np.isfinite(w).all():
             raise InputError("the wrench must be finite")

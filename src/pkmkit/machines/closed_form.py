@@ -43,10 +43,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkmkit.model.rods import CRANK, SLIDE, STRUT, RodModel
+from pkmkit.numerics import jit
 
 #: Relative tolerance (on ℓ²) within which a negative inverse-model radicand is rounding noise at
 #: the workspace boundary (leg perpendicular to its slide) and is taken as 0.
 BOUNDARY_TOL = 1e-12
+#: Largest closure residual (relative to 1 + the size of the configuration) of a direct-model
+#: solution; beyond it the row is flagged as (nearly) degenerate rather than returned.
+RESIDUAL_TOL = 1e-9
+#: Rows whose sphere-centre Gram determinant is below this fraction of size^(2(dims−1)) (size²:
+#: the first rod's length² plus the squared centre offsets) get their direct-model solutions
+#: checked leg by leg; elsewhere the closed form is well conditioned.
+SUSPECT_GRAM = 1e-4
 #: Rows per chunk in the inverse model: keeps temporaries in cache (~2× faster than one pass).
 CHUNK = 32768
 
@@ -103,6 +111,9 @@ class RodClosedForm:
         set_(self, "axis", axis)
         set_(self, "projection", projection)
         set_(self, "offset", offset)
+        # the same, leg by leg: basis (n, dims, dims) rows u_i, then across; offset (n, dims)
+        set_(self, "basis", np.ascontiguousarray(np.stack(blocks)))
+        set_(self, "basis_offset", np.ascontiguousarray(offset.reshape(m.n_legs, dims)))
         set_(self, "slide", (m.leg_kind == SLIDE).astype(float))
         set_(self, "strut", (m.leg_kind == STRUT).astype(float))
         set_(self, "length_sq", m.leg_length**2)
@@ -112,24 +123,44 @@ class RodClosedForm:
         """Actuator coordinates ``(N, n)`` of poses ``x (N, dims)``; NaN where a leg cannot
         close. ``branches (n,)`` holds ±1 per leg (ignored for struts).
 
-        The work runs in cache-sized chunks in a transposed layout (one contiguous row per
-        projection); the result is a Fortran-ordered ``(N, n)`` array (a transposed view).
+        Large batches run the compiled kernel :func:`pkmkit.machines.kernels.inverse`; small
+        ones (and ``PKMKIT_COMPILED=0``) the NumPy reference :meth:`inverse_numpy`. The result
+        is a Fortran-ordered ``(N, n)`` array (a transposed view of ``(n, N)``).
         """
+        return self.inverse_counted(x, branches)[0]
+
+    def inverse_counted(self, x: np.ndarray, branches: np.ndarray) -> tuple[np.ndarray, int]:
+        """:meth:`inverse` and the number of non-finite coordinates in the result (0: every
+        pose reached; callers then skip looking for failed rows)."""
+        if jit.use_compiled(x.shape[0]) and not self.crank.any():  # kernels: slides, struts
+            from pkmkit.machines import kernels
+
+            out = np.empty((self.model.n_legs, x.shape[0]))
+            bad = kernels.inverse(np.ascontiguousarray(x, dtype=float), self.basis,
+                                  self.basis_offset, self.model.leg_length,
+                                  self.model.leg_kind == SLIDE,
+                                  np.asarray(branches, dtype=float), BOUNDARY_TOL, out)
+            return out.T, int(bad)
+        q = self.inverse_numpy(x, branches)
+        return q, int(np.count_nonzero(~np.isfinite(q)))
+
+    def inverse_numpy(self, x: np.ndarray, branches: np.ndarray) -> np.ndarray:
+        """The NumPy reference of :meth:`inverse`: cache-sized chunks in a transposed layout
+        (one contiguous row per projection), projections written out (no BLAS: a
+        multi-threaded BLAS on tiny inner dimensions collapses when another process holds a
+        core)."""
         n, dims = self.model.n_legs, self.model.dims
         out = np.empty((n, x.shape[0]))
         kinds = self.model.leg_kind
-        projection_t = np.ascontiguousarray(self.projection.T)
-        offset = self.offset[:, None]
         with np.errstate(invalid="ignore", over="ignore"):
             for start in range(0, x.shape[0], CHUNK):
                 stop = start + CHUNK
-                y = projection_t @ x[start:stop].T  # (n*dims, chunk)
-                y -= offset
+                xt = np.ascontiguousarray(x[start:stop].T)  # rows of one coordinate
                 for i in range(n):
-                    base = i * dims
-                    perp_sq = y[base + 1] * y[base + 1]
+                    y = [self._project(xt, i, r) for r in range(dims)]
+                    perp_sq = y[1] * y[1]
                     if dims == 3:
-                        perp_sq += y[base + 2] * y[base + 2]
+                        perp_sq += y[2] * y[2]
                     if kinds[i] == SLIDE:
                         np.subtract(self.length_sq[i], perp_sq, out=perp_sq)
                         # a boundary pose's radicand may round slightly below 0: clamp it
@@ -138,12 +169,12 @@ class RodClosedForm:
                         root = np.sqrt(perp_sq, out=perp_sq)
                         if branches[i] < 0:
                             np.negative(root, out=root)
-                        np.add(y[base], root, out=out[i, start:stop])
+                        np.add(y[0], root, out=out[i, start:stop])
                     elif kinds[i] == CRANK:
-                        out[i, start:stop] = self._crank_angle(
-                            y[base], y[base + 1], y[base + 2], perp_sq, i, branches[i])
+                        out[i, start:stop] = self._crank_angle(y[0], y[1], y[2], perp_sq, i,
+                                                               branches[i])
                     else:
-                        perp_sq += y[base] * y[base]
+                        perp_sq += y[0] * y[0]
                         np.sqrt(perp_sq, out=out[i, start:stop])
                         out[i, start:stop] -= self.model.leg_length[i]
         return out.T
@@ -166,6 +197,15 @@ class RodClosedForm:
         q = np.arctan2(v_2, v_1) + branch * np.arccos(cosine)
         return np.remainder(q + np.pi, 2.0 * np.pi) - np.pi
 
+    def _project(self, xt: np.ndarray, leg: int, row: int) -> np.ndarray:
+        """``basis[leg, row] · x − offset`` for the columns of ``xt (dims, k)``."""
+        coef = self.basis[leg, row]
+        y = coef[0] * xt[0]
+        for d in range(1, xt.shape[0]):
+            y += coef[d] * xt[d]
+        y -= self.basis_offset[leg, row]
+        return y
+
     def shortfall(self, x: np.ndarray) -> np.ndarray:
         """``(N, n)``: by how far each leg is out of reach of ``x`` (≤ 0 when it reaches;
         always −inf for struts), metres. A slide leg is too short; a crank leg's rod is too
@@ -182,7 +222,8 @@ class RodClosedForm:
     def _reach(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         dims = self.model.dims
         with np.errstate(invalid="ignore", over="ignore"):
-            y = (x @ self.projection - self.offset).reshape(x.shape[0], -1, dims)
+            y = (np.einsum("kd,de->ke", x, self.projection) - self.offset).reshape(
+                x.shape[0], -1, dims)
             perp_sq = y[:, :, 1] ** 2 if dims == 2 else y[:, :, 1] ** 2 + y[:, :, 2] ** 2
             out = np.sqrt(perp_sq) - self.model.leg_length[None]
             long = np.zeros(out.shape, dtype=bool)
@@ -245,7 +286,9 @@ class RodClosedForm:
             ``(poses (N, 2, dims), degenerate (N,))``: ``poses[:, 0]`` is the mode with
             det A < 0, ``poses[:, 1]`` the mode with det A > 0; NaN where no real assembly
             exists. ``degenerate`` flags rows whose sphere centres are aligned (the direct model
-            has no isolated solution there). Computed in cache-sized chunks.
+            has no isolated solution there) or so nearly aligned that the solution found does
+            not close every leg to :data:`RESIDUAL_TOL` (relative); their poses are NaN.
+            Computed in cache-sized chunks.
         """
         poses = np.empty((q.shape[0], 2, self.model.dims))
         degenerate = np.empty(q.shape[0], dtype=bool)
@@ -287,7 +330,25 @@ class RodClosedForm:
         with np.errstate(invalid="ignore", over="ignore"):
             centre = c1 + w
             offset = t[:, None] * normal
-            return np.stack([centre - offset, centre + offset], axis=1), degenerate
+            poses = np.stack([centre - offset, centre + offset], axis=1)
+            # near a parallel singularity (centres nearly together or aligned: a small Gram
+            # determinant) rounding can leave a solution that closes no leg. Those rows get
+            # every leg checked, and are flagged as degenerate when one is not closed.
+            if self.model.dims == 3:  # size² of the configuration: ρ₁² + |e1|² + |e2|²
+                size_sq = rho_sq[:, 0] + g11 + g22
+                suspect = np.flatnonzero(gram < SUSPECT_GRAM * size_sq * size_sq)
+            else:
+                suspect = np.flatnonzero(gram < SUSPECT_GRAM * (rho_sq[:, 0] + gram))
+        unresolved = np.zeros(q.shape[0], dtype=bool)
+        if suspect.size:
+            with np.errstate(invalid="ignore", over="ignore"):
+                d = poses[suspect][:, :, None, :] - c[suspect][:, None]
+                residual = np.abs(np.linalg.norm(d, axis=3) - rho[suspect][:, None, :])
+                scale = (1.0 + np.abs(c[suspect]).max(axis=(1, 2))
+                         + np.abs(rho[suspect]).max(axis=1))
+                unresolved[suspect] = residual.max(axis=(1, 2)) > RESIDUAL_TOL * scale
+        poses[unresolved] = np.nan
+        return poses, degenerate | unresolved
 
     # ------------------------------------------------------------------ velocity
     def rod_vectors(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:

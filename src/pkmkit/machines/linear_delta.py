@@ -7,10 +7,21 @@ joint ``p + (r cos θ_i, r sin θ_i, 0)``. With d = R − r the closure is
     (x − d cos θ_i)² + (y − d sin θ_i)² + (z − q_i)² = L²,
     q_i = z + sqrt(L² − (x − d cos θ_i)² − (y − d sin θ_i)²)   (carriages above the nacelle, z up)
 
-(the seed's printed (III.2)–(III.5) carry sign errors; see docs/seed-errata.md). The two assembly
+(the seed's printed (III.2)–(III.5) carry sign errors; see docs/seed-errata.md). Only
+d = R − r enters the kinematics. The two assembly
 modes are the nacelle below or above the plane of the three carriage joints. The parallelogram
 rods are offset tangentially by ± half the pair spacing, which the thesis never gives (a
 parameter here).
+
+**Delta firmware dimensions.** LinuxCNC (``lineardeltakins``), Klipper, RepRapFirmware and Marlin
+describe the machine by its *effective* radius — Klipper's ``delta_radius`` = smooth-rod offset −
+effector offset − carriage offset, RepRapFirmware's ``M665 R``, Marlin's ``DELTA_RADIUS`` — and
+the diagonal rod length (``arm_length``, ``M665 L``, ``DELTA_DIAGONAL_ROD``). That is this model
+with ``r = 0`` and ``R`` = the effective radius: ``--set R=<delta_radius> --set r=0 --set
+L=<arm_length>`` gives the same inverse and direct models, Jacobians and rods as any (R, r) with
+the same R − r. Tower angles may be given in any order and at any positions (Klipper's default
+210°, 330°, 90°; a firmware's angle corrections added to them); actuator i is the slide at the
+i-th angle.
 """
 
 from __future__ import annotations
@@ -28,7 +39,8 @@ from pkmkit.model.rods import LegSpec, RodModel, build_rod_model
 
 PARAMETERS = (
     ParameterSpec("R", "length", 0.7, "radius of the circle of the three slides", positive=True),
-    ParameterSpec("r", "length", 0.15, "radius of the nacelle joint circle", positive=True),
+    ParameterSpec("r", "length", 0.15,
+                  "radius of the nacelle joint circle (0: R is the firmware's effective radius)"),
     ParameterSpec("L", "length", 1.3, "rod (arm) length", positive=True),
     ParameterSpec(
         "angles",
@@ -53,6 +65,10 @@ PARAMETERS = (
 def build(params: Mapping[str, Any]) -> RodModel:
     """Rod model of a vertical-slide linear Delta from R, r, L (m) and slide angles (rad)."""
     big_r, small_r, length = params["R"], params["r"], params["L"]
+    if small_r < 0:
+        raise ParameterError(
+            f"r = {small_r:.6g} m: the nacelle joint radius must be >= 0 (give r = 0 and R = "
+            "the effective radius R - r, as delta firmware does)", "r")
     theta = np.asarray(params["angles"], dtype=float)
     radial = np.column_stack([np.cos(theta), np.sin(theta), np.zeros(3)])
     orientation = np.linalg.det(np.column_stack([radial[:, :2], np.ones(3)]))

@@ -33,15 +33,14 @@ from pkmkit.machines.results import (
     InverseResult,
     JacobianRates,
     Jacobians,
-    Singularity,
 )
+from pkmkit.machines.velocity import LazyJacobians, VelocityEvaluation
 from pkmkit.model.chains import JointChainModel
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import ParameterSpec, is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, RodModel
-from pkmkit.numerics import small
 from pkmkit.numerics.arrays import as_batch, require_finite, restore_shape
-from pkmkit.numerics.linalg import batched_det, condition_number
+from pkmkit.numerics.linalg import batched_det
 from pkmkit.solve.rod_closure import instantaneous_mobility, solve_direct, solve_inverse
 from pkmkit.status import Status
 
@@ -51,44 +50,6 @@ SINGULARITY_TOL = 1e-6
 HOME_TOL = 1e-4
 #: Pose or actuator coordinates beyond this magnitude (m) are rejected as invalid input.
 MAX_COORDINATE = 1e9
-#: Poses per chunk of the batched velocity model (keeps the temporaries in cache).
-JACOBIAN_CHUNK = 16384
-
-
-#: Below this parallel-singularity measure the factors come from J⁻¹ (see _velocity_chunk):
-#: above it eps·κ² is below about 1e-11.
-NEAR_PARALLEL = 1e-2
-
-
-def _velocity_chunk(a: np.ndarray, b: np.ndarray):
-    """det A, J = A⁻¹B, singular values of J and σ_min/σ_max of A with unit rows, for one
-    chunk in the batch-last layout (``a (n, n, k)``, ``b (n, k)``).
-
-    Near a parallel singularity J = adj(A) B / det A loses about eps·κ² of relative accuracy in
-    its singular values; there (where A is worse conditioned than B) they are taken instead as
-    the reversed reciprocals of those of J⁻¹ = B⁻¹A, which needs no division by det A
-    (eps·κ), wherever σ_min/σ_max of A with unit rows is below :data:`NEAR_PARALLEL`."""
-    cof = small.cofactors(a)
-    det_a = small.det(a, cof)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv_det = 1.0 / det_a
-        # J = A⁻¹ B = adj(A) B / det A with adj = cofactorsᵀ: J[k, j] = C[j, k] b_j / det A
-        j = cof.transpose(1, 0, 2) * (b * inv_det)[None, :, :]
-        lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
-        sv_unit = small.singular_values(a / lengths[:, None, :])
-        parallel = sv_unit[-1] / sv_unit[0]
-        serial = np.min(np.abs(b) / lengths, axis=0)
-    j[:, :, ~np.isfinite(inv_det)] = np.nan
-    sv = small.singular_values(j)
-    near_parallel = np.flatnonzero((parallel < NEAR_PARALLEL) & (parallel < serial)
-                                   & np.isfinite(inv_det))
-    if near_parallel.size:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            sv_inv = small.singular_values(a[:, :, near_parallel] / b[:, None, near_parallel])
-            sv[:, near_parallel] = 1.0 / sv_inv[::-1]
-    return det_a, j, sv, parallel
-
-
 @dataclass(frozen=True)
 class MachineKind:
     """A family of machines built from named parameters.
@@ -309,11 +270,13 @@ class Machine:
     def _linear_guess_q(self, x: np.ndarray) -> np.ndarray:
         """First-order guess of q near home: q_home + J⁻¹(home) (x − home)."""
         j_inv = np.linalg.inv(self._home_jacobian)
-        return self._home_q + (x - self.model.home_pose) @ j_inv.T
+        # einsum, not BLAS: tiny inner dimension (see pkmkit.machines.kernels)
+        return self._home_q + np.einsum("kd,ad->ka", x - self.model.home_pose, j_inv)
 
     def _linear_guess_pose(self, q: np.ndarray) -> np.ndarray:
         """First-order guess of the pose near home: home + J(home) (q − q_home)."""
-        return self.model.home_pose + (q - self._home_q) @ self._home_jacobian.T
+        return self.model.home_pose + np.einsum("ka,da->kd", q - self._home_q,
+                                                self._home_jacobian)
 
     # ---------------------------------------------------------------- inverse
     def ik(
@@ -350,14 +313,13 @@ class Machine:
         br = self._branches(branches)
         iterations = residual = None
         if method == "closed":
-            q = self._closed.inverse(xb, br)
+            q, n_bad = self._closed.inverse_counted(xb, br)
             status = np.zeros(xb.shape[0], dtype=int)
-            # a non-finite row sum flags rows with NaN (unreachable) or non-finite input
-            with np.errstate(invalid="ignore", over="ignore"):
-                bad = np.flatnonzero(~np.isfinite(q @ np.ones(self.n_actuators)))
-            status[bad] = np.where(_valid_rows(xb[bad]), Status.UNREACHABLE,
-                                   Status.INVALID_INPUT)
-            q[bad] = np.nan
+            if n_bad:  # rows with NaN (unreachable) or non-finite input
+                bad = np.flatnonzero(~np.isfinite(q).all(axis=1))
+                status[bad] = np.where(_valid_rows(xb[bad]), Status.UNREACHABLE,
+                                       Status.INVALID_INPUT)
+                q[bad] = np.nan
         elif method == "numeric":
             if q0 is None:
                 guess = self._branch_guess_q(xb, br)
@@ -509,8 +471,9 @@ class Machine:
             poses, degenerate = self._closed.direct_all(qb)
             pose = poses[:, 0 if sign < 0 else 1]
             # a NaN row sum flags rows without a real solution (or with non-finite input)
-            status = np.where(np.isfinite(pose @ np.ones(self.dims)), Status.OK,
-                              Status.NO_ASSEMBLY)
+            with np.errstate(invalid="ignore", over="ignore"):
+                row_sum = sum(pose[:, d] for d in range(self.dims))
+            status = np.where(np.isfinite(row_sum), Status.OK, Status.NO_ASSEMBLY)
             status[degenerate] = Status.SINGULAR
         elif method == "numeric":
             if dof not in ("translation", "full"):
@@ -572,7 +535,7 @@ class Machine:
     def _mode_guess_pose(self, q: np.ndarray, sign: int) -> np.ndarray:
         """Linear guess from home; for the other assembly mode, its mirror about the plane
         (line) through the sphere centres — the two modes are mirror images."""
-        with np.errstate(invalid="ignore", over="ignore"):
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
             guess = self._linear_guess_pose(q)
             if sign == self._working_mode:
                 return guess
@@ -592,8 +555,9 @@ class Machine:
             raise InputError(f"q = {q.tolist()} has a coordinate beyond {MAX_COORDINATE:g} m")
         if status == Status.SINGULAR:
             raise SingularConfigurationError(
-                f"q = {q.tolist()}: the leg sphere centres are aligned; the direct model has no "
-                "isolated solution"
+                f"q = {q.tolist()}: the leg sphere centres are aligned or nearly so (a parallel "
+                "singularity): the direct model has no isolated solution, or none that rounding "
+                "lets it resolve to 1e-9 m"
             )
         if status == Status.NO_ASSEMBLY:
             raise NoAssemblyError(
@@ -630,10 +594,7 @@ class Machine:
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be a positive number, got {tol!r}")
         xb, qb, single = self._poses_and_q(x, q, branches)
-        jac = self._jacobians(xb, qb, tol)
-        names = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
-                 "parallel_measure", "serial_measure", "singularity", "q", "mode")
-        return _restore(jac, single, names)
+        return self._jacobians(xb, qb, tol, single)
 
     def _poses_and_q(self, x: Any, q: Any, branches: Any) -> tuple[np.ndarray, np.ndarray, bool]:
         xb, single = _checked_batch(x, self.dims, "pose")
@@ -661,41 +622,11 @@ class Machine:
             qb[bad] = np.nan
         return xb, qb, single
 
-    def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> Jacobians:
-        """Batched velocity model; closed forms in the batch-last layout (see
-        :mod:`pkmkit.numerics.small`), computed in cache-sized chunks, returned batch-first."""
-        size, n, dims = xb.shape[0], self.n_actuators, self.dims
-        a = np.empty((n, dims, size))
-        b = np.empty((n, size))
-        j = np.empty((dims, n, size))
-        sv = np.empty((n, size))
-        det_a = np.empty(size)
-        parallel = np.empty(size)
-        for start in range(0, size, JACOBIAN_CHUNK):
-            part = slice(start, start + JACOBIAN_CHUNK)
-            a[:, :, part], b[:, part] = self._closed.jacobians_t(xb[part], qb[part])
-            det_a[part], j[:, :, part], sv[:, part], parallel[part] = _velocity_chunk(
-                a[:, :, part], b[:, part])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            j_inv = a / b[:, None, :]
-            lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
-            serial = np.min(np.abs(b) / lengths, axis=0)
-        flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
-        flags |= np.where((parallel < tol) | (det_a == 0.0), int(Singularity.PARALLEL), 0)
-        at_parallel = (flags & Singularity.PARALLEL).astype(bool)
-        j[:, :, at_parallel] = np.nan  # J does not exist there (A is singular)
-        sv[:, at_parallel] = np.nan
-        sv_t = sv.T
-        condition = np.where(at_parallel, np.nan, condition_number(sv_t))
-        b_full = np.zeros((size, n, n))
-        b_full[:, np.arange(n), np.arange(n)] = b.T
-        return Jacobians(
-            A=a.transpose(2, 0, 1), B=b_full, J=j.transpose(2, 0, 1),
-            J_inv=j_inv.transpose(2, 0, 1), singular_values=sv_t, condition=condition,
-            det_A=det_a, det_B=np.prod(b, axis=0), parallel_measure=parallel,
-            serial_measure=serial, singularity=flags, tolerance=float(tol), q=qb,
-            mode=np.sign(np.nan_to_num(det_a)).astype(int),
-        )
+    def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float,
+                   single: bool = False) -> LazyJacobians:
+        """Batched velocity model, computed field group by field group when read (see
+        :mod:`pkmkit.machines.velocity`)."""
+        return LazyJacobians(VelocityEvaluation(self._closed, xb, qb, tol), single)
 
     def jacobian_dot(self, x: Any, xd: Any, *, q: Any = None) -> JacobianRates:
         """Time derivatives of the velocity model for platform velocities ``xd`` at poses ``x``.

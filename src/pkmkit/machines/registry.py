@@ -87,7 +87,7 @@ def preset_path(machine_id: str) -> str:
     """Path of the machine file of a built-in preset (aliases resolved)."""
     try:
         return _preset_paths()[ALIASES.get(machine_id, machine_id)]
-    except KeyError:
+    except (KeyError, TypeError):  # TypeError: not a string (a list, a dict...)
         raise UnknownMachineError(machine_id, machines()) from None
 
 
@@ -218,14 +218,22 @@ def _kind_machine(doc, kind: MachineKind, units: str, ident: str, text: dict) ->
 def _vector(value: Any, size: int, what: str, scale: float = 1.0) -> np.ndarray:
     if not is_plain_number(value):
         raise ParameterError(f"{what} must be {size} numbers, got {value!r}", what)
-    arr = np.asarray(value, dtype=float)
+    try:
+        arr = np.asarray(value, dtype=float)
+    except OverflowError:  # an integer beyond the float range
+        raise ParameterError(f"{what} must be {size} finite numbers, got {value!r}",
+                             what) from None
     if arr.shape != (size,) or not np.isfinite(arr).all():
         raise ParameterError(f"{what} must be {size} finite numbers, got {value!r}", what)
     return arr * scale
 
 
 def _number(value: Any, what: str, scale: float = 1.0) -> float:
-    if not is_plain_number(value) or np.ndim(value) != 0 or not np.isfinite(value):
+    try:
+        finite = is_plain_number(value) and np.ndim(value) == 0 and np.isfinite(float(value))
+    except OverflowError:
+        finite = False
+    if not finite:
         raise ParameterError(f"{what} must be a finite number, got {value!r}", what)
     return float(value) * scale
 

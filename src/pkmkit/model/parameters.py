@@ -2,8 +2,9 @@
 
 A machine kind declares its parameters as :class:`ParameterSpec` values. Values are stored in SI
 units (metres, radians). At the boundaries (machine files, the command line) lengths may be
-given in another unit (``"m"`` or ``"mm"``) and angles are given in degrees; conversion happens
-only there, through :meth:`ParameterSpec.from_boundary` and :meth:`ParameterSpec.to_boundary`.
+given in another unit (``"m"``, ``"mm"`` or ``"in"``) and angles are given in degrees;
+conversion happens only there, through :meth:`ParameterSpec.from_boundary` and
+:meth:`ParameterSpec.to_boundary`.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 from pkmkit.errors import ParameterError, UnknownParameterError
 
 #: Length units accepted at the boundaries, as metres per unit.
-LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3}
+LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3, "in": 0.0254}
 #: Largest admissible magnitude of a length parameter, m (beyond it squares overflow and the
 #: number is certainly a unit mistake).
 MAX_LENGTH = 1e6
@@ -94,7 +95,7 @@ class ParameterSpec:
             raise self._error(machine, f"must be numeric, got {value!r}")
         try:
             arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise self._error(machine, f"must be numeric, got {value!r}") from None
         expected = () if self.size is None else (self.size,)
         if arr.shape != expected:
@@ -121,7 +122,7 @@ class ParameterSpec:
             raise self._error(machine, f"must be numeric, got {value!r}")
         try:
             raw = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise self._error(machine, f"must be numeric, got {value!r}") from None
         if self.quantity == "angle" and (np.abs(raw) > 360.0).any():
             raise self._error(machine, f"is an angle in degrees within [-360, 360]; got {value}")

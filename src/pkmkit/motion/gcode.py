@@ -10,6 +10,16 @@ the start radius by up to 0.1 % or 5 µm (rounded CAM output) are accepted, endi
 programmed point. Anything else — an unknown word, two codes of one modal group on a line, an
 offset letter outside the arc's plane (K in G17) — is an error naming the file line.
 
+The words every CAM post-processor writes around the moves and that leave the tool path and the
+feeds unchanged are read and ignored: program numbers ``O``, spindle ``S``, tools ``T``,
+``M`` codes (spindle, coolant, tool change, stops; ``M2``/``M30`` end the program — later lines
+are not read), and the modal codes ``G40`` (cutter compensation off), ``G49`` (tool length
+offset off), ``G80`` (canned cycle off), ``G94`` (feed per minute, the only feed mode), ``G54``–
+``G59`` (work offset selection: the offset itself is ``origin``), ``G61``/``G64`` (path control:
+the time law stops at corners anyway). Codes that would change the path — cutter or length
+compensation on (``G41``–``G43``), canned cycles, ``G28`` homing, inverse-time feed — are
+refused.
+
 Program coordinates are added to ``origin`` (a work offset, m) to give machine coordinates.
 """
 
@@ -39,6 +49,12 @@ _UNIT_NAMES = {0.0254: "in", 1e-3: "mm"}
 _PLANES = {17: (np.array([0.0, 0.0, 1.0]), "IJ"), 18: (np.array([0.0, 1.0, 0.0]), "IK"),
            19: (np.array([1.0, 0.0, 0.0]), "JK")}
 _ALLOWED_G = {0, 1, 2, 3, 17, 18, 19, 20, 21, 90, 91}
+#: Modal codes that leave the tool path and the feeds unchanged (see the module documentation).
+_IGNORED_G = {40, 49, 80, 94, 54, 55, 56, 57, 58, 59, 61, 64}
+#: Words that leave the tool path and the feeds unchanged.
+_IGNORED_WORDS = "OSTM"
+#: M codes that end the program.
+_PROGRAM_END = {2, 30}
 
 
 def _strip(line: str) -> str:
@@ -77,7 +93,10 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
     def error(number: int, message: str) -> InputError:
         return InputError(f"{label}:{number}: {message}")
 
+    ended = False
     for number, raw in enumerate(text.splitlines(), start=1):
+        if ended:
+            break
         body = _strip(raw)
         if not body or body == "%":
             continue
@@ -94,11 +113,17 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
             if problem:
                 raise error(number, f"{letter} word: {problem}")
             if letter == "G":
+                if value == int(value) and int(value) in _IGNORED_G:
+                    continue
                 if value != int(value) or int(value) not in _ALLOWED_G:
                     raise error(number, f"unsupported G code G{number_text}; supported: "
-                                + ", ".join(f"G{g}" for g in sorted(_ALLOWED_G)))
+                                + ", ".join(f"G{g}" for g in sorted(_ALLOWED_G))
+                                + " (and, ignored, "
+                                + ", ".join(f"G{g}" for g in sorted(_IGNORED_G)) + ")")
                 g_codes.append(int(value))
-            elif letter == "N":
+            elif letter == "M" and value in _PROGRAM_END:
+                ended = True
+            elif letter == "N" or letter in _IGNORED_WORDS:
                 continue
             elif letter in "XYZIJKRF":
                 if letter in values:
@@ -106,7 +131,8 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
                 values[letter] = value
             else:
                 raise error(number, f"unsupported word {letter}{number_text} (only G0-G3, "
-                            "G17-G21, G90, G91, X Y Z I J K R F and N are read)")
+                            "G17-G21, G90, G91, X Y Z I J K R F and N are read; O S T M are "
+                            "ignored)")
         for group, what in ((set(_UNITS), "unit"), (set(_PLANES), "plane"), ({90, 91}, "distance"),
                             ({0, 1, 2, 3}, "motion")):
             clash = [g for g in g_codes if g in group]

@@ -72,7 +72,7 @@ def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
     xdd = np.ascontiguousarray(trajectory.xdd[:, :dims])
     closed = machine._closed
     q = closed.inverse(x, machine.model.leg_branch)
-    unreachable = ~np.isfinite(q @ np.ones(machine.n_actuators))
+    unreachable = ~np.isfinite(q).all(axis=1)
     a, b = closed.jacobians_t(x, q)  # (n, dims, N), (n, N); NaN where unreachable
     lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
     det = small.det(a)

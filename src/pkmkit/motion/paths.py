@@ -17,6 +17,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pkmkit.errors import InputError
+from pkmkit.numerics.arrays import real
+
+#: Largest coordinate or length of a path, m (beyond: a unit mistake, and squares overflow).
+MAX_PATH_LENGTH = 1e6
+#: Smallest arc radius, m (below, curvatures and their powers overflow).
+MIN_RADIUS = 1e-9
 
 #: Most segments a path may hold: each is a Python object (about :data:`SEGMENT_BYTES`), and
 #: a longer path would exhaust memory before it is even sampled.
@@ -26,11 +32,17 @@ SEGMENT_BYTES = 1000
 
 
 def _vec3(value, what: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=float).reshape(-1)
+    try:
+        arr = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"{what} must be 2 or 3 finite coordinates, got {value!r}") from None
     if arr.size == 2:
         arr = np.append(arr, 0.0)
     if arr.shape != (3,) or not np.isfinite(arr).all():
         raise InputError(f"{what} must be 2 or 3 finite coordinates, got {value!r}")
+    if np.abs(arr).max() > MAX_PATH_LENGTH:
+        raise InputError(f"{what} {arr.tolist()} lies beyond {MAX_PATH_LENGTH:g} m; check the "
+                         "units")
     return arr
 
 
@@ -82,6 +94,11 @@ class Arc:
     rise: float = 0.0
     rapid: bool = False
     feed: float | None = None
+
+    def __post_init__(self) -> None:
+        if not MIN_RADIUS <= self.radius <= MAX_PATH_LENGTH:
+            raise InputError(f"an arc radius of {self.radius:g} m is outside [{MIN_RADIUS:g}, "
+                             f"{MAX_PATH_LENGTH:g}] m; check the units")
 
     @property
     def normal(self) -> np.ndarray:
@@ -252,13 +269,13 @@ def helix(center, radius: float, *, pitch: float, turns: float, normal=(0, 0, 1)
     """A helix of ``turns`` turns advancing ``pitch`` m per turn along ``normal`` (pitch may be
     negative: descending)."""
     c = _vec3(center, "centre")
-    if not (np.isfinite(radius) and radius > 0):
-        raise InputError(f"the radius must be > 0, got {radius}")
-    if not (np.isfinite(turns) and turns > 0):
-        raise InputError(f"the number of turns must be > 0, got {turns}")
-    if not np.isfinite(pitch):
-        raise InputError("the pitch must be finite")
+    radius = real(radius, "the radius", positive=True, limit=MAX_PATH_LENGTH)
+    turns = real(turns, "the number of turns", positive=True, limit=1e6)
+    pitch = real(pitch, "the pitch", limit=MAX_PATH_LENGTH)
+    start_angle = real(start_angle, "the start angle", limit=1e6)
     n = _vec3(normal, "normal")
+    if not np.linalg.norm(n) > 0:
+        raise InputError("the normal must be a non-zero vector")
     if np.allclose(n, [0, 0, 1]):
         e1, e2 = np.array([1.0, 0, 0]), np.array([0, 1.0, 0])
     else:
@@ -282,12 +299,15 @@ def raster(corner, width: float, height: float, passes: int, *, strategy: str = 
         clearance: retract height for one-way passes, m.
     """
     c = _vec3(corner, "corner")
-    if not (width > 0 and height >= 0):
-        raise InputError(f"the rectangle needs width > 0 and height >= 0, got {width}, {height}")
+    width = real(width, "the rectangle's width", positive=True, limit=MAX_PATH_LENGTH)
+    height = real(height, "the rectangle's height", nonnegative=True, limit=MAX_PATH_LENGTH)
+    passes = real(passes, "passes", positive=True, limit=1e6)
+    clearance = real(clearance, "the clearance", positive=True, limit=MAX_PATH_LENGTH)
+    if int(passes) != passes:
+        raise InputError(f"passes must be a positive integer, got {passes}")
+    passes = int(passes)
     if height == 0 and passes > 1:
         raise InputError("a rectangle of height 0 is faced in one pass, not several")
-    if int(passes) != passes or passes < 1:
-        raise InputError(f"passes must be a positive integer, got {passes}")
     if strategy not in ("zigzag", "one-way"):
         raise InputError(f"unknown strategy {strategy!r}; use zigzag or one-way")
     if not clearance > 0:

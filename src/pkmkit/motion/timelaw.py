@@ -31,6 +31,7 @@ import numpy as np
 
 from pkmkit.errors import InputError
 from pkmkit.motion.paths import Path
+from pkmkit.numerics.arrays import real
 
 PROFILES = ("trapezoid", "scurve")
 
@@ -223,6 +224,20 @@ def _curvature_jump(a, b) -> bool:
 MIN_SEGMENT = 1e-12
 
 
+def _limit(value, name: str, largest: float) -> float:
+    """A limit > 0 (SI), at least 1e-9 and at most ``largest`` (else a unit mistake)."""
+    value = real(value, name, positive=True, limit=largest)
+    if value < 1e-9:
+        raise InputError(f"{name} = {value:g} is below 1e-9 (SI units); check the units")
+    return value
+
+
+#: Default S-curve jerk per unit of acceleration (1/s) when no jerk is given: the acceleration
+#: builds up in 0.1 s — the ratio of seed 000's examples (1000 mm/s², 10000 mm/s³) and a
+#: common CNC jerk time.
+DEFAULT_JERK_PER_ACCEL = 10.0
+
+
 def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
          profile: str = "scurve", rapid_feed: float | None = None, period: float = 0.01,
          corner_tol: float = 1e-6, max_samples: int = 5_000_000) -> Trajectory:
@@ -235,7 +250,8 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
         path: the path.
         feed: default feed rate (m/s) for feed moves without a programmed one.
         accel: acceleration limit A (m/s²), on the total Cartesian acceleration.
-        jerk: jerk limit J (m/s³); required for ``"scurve"``, ignored by ``"trapezoid"``.
+        jerk: jerk limit J (m/s³) of ``"scurve"`` (default :data:`DEFAULT_JERK_PER_ACCEL` ×
+            accel); ignored by ``"trapezoid"``.
         profile: ``"scurve"`` or ``"trapezoid"``.
         rapid_feed: speed of rapid moves (default: 5 × feed).
         period: sampling period (s).
@@ -245,7 +261,7 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
         max_samples: refuse plans that would need more samples.
 
     Raises:
-        InputError: non-positive limits or period, missing jerk, a path of zero length, too
+        InputError: non-positive limits or period, a path of zero length, too
             many samples, a time law that is not finite.
 
     Example: seed 000's Ø300 mm circle at 120 mm/s, A = 1 m/s², J = 10 m/s³.
@@ -258,18 +274,19 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
     >>> round(float(np.linalg.norm(speed)), 9)
     0.12
     """
-    for name, value in (("feed", feed), ("accel", accel), ("period", period)):
-        if not (np.isfinite(value) and value > 0):
-            raise InputError(f"{name} must be > 0, got {value}")
+    # beyond these limits a value is a unit mistake (and its powers overflow)
+    feed = _limit(feed, "feed", 1e4)
+    accel = _limit(accel, "accel", 1e7)
+    period = _limit(period, "period", 1e4)
     if profile not in PROFILES:
         raise InputError(f"unknown profile {profile!r}; use {' or '.join(PROFILES)}")
-    if profile == "scurve" and not (jerk is not None and np.isfinite(jerk) and jerk > 0):
-        raise InputError("the S-curve profile needs a jerk limit > 0")
+    if profile == "scurve" and jerk is None:
+        jerk = DEFAULT_JERK_PER_ACCEL * accel
+    if profile == "scurve":
+        jerk = _limit(jerk, "the S-curve's jerk limit", 1e11)
     if profile == "trapezoid":
         jerk = None
-    rapid_feed = 5.0 * feed if rapid_feed is None else rapid_feed
-    if not (np.isfinite(rapid_feed) and rapid_feed > 0):
-        raise InputError(f"rapid feed must be > 0, got {rapid_feed}")
+    rapid_feed = _limit(5.0 * feed if rapid_feed is None else rapid_feed, "rapid feed", 1e4)
     segs = path.segments
     moving = [k for k in range(len(segs)) if segs[k].length > MIN_SEGMENT]
     if not moving:
@@ -293,6 +310,9 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
         lengths = np.array([segs[k].length for k in group])
         kappa = max(segs[k].curvature for k in group)
         tau = max(segs[k].torsion for k in group)
+        if kappa > 1e9 or tau > 1e9:
+            raise InputError(f"segment {group[0] + 1} curves with a radius below 1 nm; check "
+                             "the units")
         v = speed_of(group[0])
         a_t = accel * (math.sqrt(3) / 2 if kappa > 0 else 1.0)
         j_t = None if jerk is None else jerk / (3.0 if kappa > 0 else 1.0)

@@ -62,3 +62,39 @@ def require_finite(arr: np.ndarray, name: str) -> None:
 def restore_shape(arr: np.ndarray, single: bool) -> np.ndarray:
     """Drop the leading batch axis of ``arr`` when the caller passed a single row."""
     return arr[0] if single else arr
+
+
+def real(value: Any, name: str, *, positive: bool = False, nonnegative: bool = False,
+         limit: float | None = None) -> float:
+    """A finite real scalar argument as float, or an :class:`InputError` naming ``name``.
+
+    Args:
+        value: a Python or NumPy real number (not a bool, string, sequence or None).
+        positive, nonnegative: require > 0 / ≥ 0.
+        limit: reject magnitudes beyond it (a unit mistake rather than a value; it also keeps
+            squares and cubes of the value from overflowing).
+    """
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | float | np.integer
+                                                            | np.floating):
+        raise InputError(f"{name} must be a real number, got {value!r}")
+    number = float(value)
+    if not np.isfinite(number):
+        raise InputError(f"{name} must be finite, got {number}")
+    if positive and not number > 0:
+        raise InputError(f"{name} must be > 0, got {number:g}")
+    if nonnegative and not number >= 0:
+        raise InputError(f"{name} must be >= 0, got {number:g}")
+    if limit is not None and abs(number) > limit:
+        raise InputError(f"{name} = {number:g} is beyond {limit:g}; check the units")
+    return number
+
+
+def real_pair(value: Any, name: str) -> tuple[float, float]:
+    """Two finite real numbers ``(a, b)`` (e.g. bounds), or an :class:`InputError`."""
+    try:
+        a, b = value
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be two numbers (low, high), got {value!r}") from None
+    return real(a, f"{name}[0]"), real(b, f"{name}[1]")

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from pkmkit.model.parameters import length_scale
 from pkmkit.motion.joints import JointTrajectory
 from pkmkit.plot.save import save_figure
 
@@ -16,7 +17,7 @@ def plot_joint_motion(motion: JointTrajectory, names, *, forces: np.ndarray | No
                       title: str = "", length_unit: str = "m",
                       path: str | Path | None = None) -> Figure:
     """Stacked panels of q, q̇, q̈ (and forces) against time, one curve per actuator."""
-    scale = 1e3 if length_unit == "mm" else 1.0
+    scale = 1.0 / length_scale(length_unit)
     panels = [(motion.q * scale, f"q [{length_unit}]"),
               (motion.qd * scale, f"q̇ [{length_unit}/s]"),
               (motion.qdd * scale, f"q̈ [{length_unit}/s²]")]
@@ -40,7 +41,7 @@ def plot_joint_motion(motion: JointTrajectory, names, *, forces: np.ndarray | No
 def plot_tool_path(motion: JointTrajectory, *, title: str = "", length_unit: str = "m",
                    path: str | Path | None = None) -> Figure:
     """The sampled tool path, coloured by speed (3-D for spatial machines)."""
-    scale = 1e3 if length_unit == "mm" else 1.0
+    scale = 1.0 / length_scale(length_unit)
     x = motion.x * scale
     speed = np.linalg.norm(motion.xd, axis=1) * scale
     fig = Figure(figsize=(6.2, 5.2), layout="constrained")
