@@ -25,6 +25,7 @@ from pkmkit.model.parameters import length_scale
 from pkmkit.status import Status, status_labels
 
 from .analysis_cmds import register as register_analysis_commands
+from .calibration_cmds import register as register_calibration_commands
 from .describe import describe_machine, print_description
 from .design_cmds import register as register_design_commands
 from .motion_cmds import register as register_motion_commands
@@ -325,6 +326,7 @@ def demo(out_dir: str) -> None:
 register_analysis_commands(cli)
 register_design_commands(cli)
 register_motion_commands(cli)
+register_calibration_commands(cli)
 
 
 def main() -> None:
