@@ -69,6 +69,14 @@ class CompatibleDirections:
         return f"fixed by compatibility: follows {terms}"
 
 
+def _one_thread():
+    """Small dense linear algebra: one BLAS thread (a pool only loses time here, and collapses
+    when another process holds a core)."""
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
+
+
 def compatible_directions(closure_defect: np.ndarray, names: Sequence[str], scale: np.ndarray,
                           *, rcond: float = 1e-8) -> CompatibleDirections:
     """The compatible subspace from stacked incompatible closure parts.
@@ -81,6 +89,11 @@ def compatible_directions(closure_defect: np.ndarray, names: Sequence[str], scal
             compared at equal plausibility.
         rcond: singular values of the scaled matrix below ``rcond · σ_max`` do not count.
     """
+    with _one_thread():
+        return _compatible_directions(closure_defect, names, scale, rcond)
+
+
+def _compatible_directions(closure_defect, names, scale, rcond) -> CompatibleDirections:
     c = np.asarray(closure_defect, dtype=float)
     c = c.reshape(-1, c.shape[-1])
     d = c.shape[1]
@@ -177,6 +190,12 @@ def identifiable_parameters(jacobian: np.ndarray, names: Sequence[str], scale: n
     Raises:
         InputError: mis-shaped or non-finite input.
     """
+    with _one_thread():
+        return _identifiable_parameters(jacobian, names, scale, groups, rcond, group_labels)
+
+
+def _identifiable_parameters(jacobian, names, scale, groups, rcond, group_labels
+                             ) -> IdentifiableSet:
     jac = np.asarray(jacobian, dtype=float)
     names = tuple(names)
     p = jac.shape[1] if jac.ndim == 2 else -1

@@ -16,8 +16,8 @@ the identifiable parameters, with analytic Jacobians, validation and uncertainti
    defects that only move the machine rigidly with respect to the instrument are reported as
    gauges), then drops those the measurement noise cannot determine better than their tolerance
    (``prune=True``); every parameter left at its nominal value is reported with the reason;
-5. solves ``min Σ w_i ‖r_i / σ_i‖² (+ Σ (δ_j / tol_j)² with priors)`` by the batched engine
-   (Levenberg–Marquardt) with the analytic Jacobians of the residual models, the machine with
+5. solves ``min Σ w_i ‖r_i / σ_i‖² (+ Σ (δ_j / tol_j)² with priors)`` by Levenberg–Marquardt
+   (MINPACK through SciPy) with the analytic Jacobians of the residual models, the machine with
    defects rebuilt exactly at every step (inner closures included); with ``robust=True`` the
    weights w_i follow Huber's loss on each observation's normalised error (iteratively
    reweighted) and the observations beyond 3 robust standard deviations are reported;
@@ -52,7 +52,6 @@ from pkmkit.calibration.registration import Registration
 from pkmkit.errors import ConvergenceError, InputError, ParameterError
 from pkmkit.errors.model import _family, defect_set, tool_sensitivity
 from pkmkit.model.defects_table import apply_defect_vector
-from pkmkit.solve.least_squares import solve_least_squares
 from pkmkit.status import Status
 
 #: Default standard deviation of one reading per measurement type (m): a laser tracker
@@ -326,6 +325,7 @@ class _Problem:
     prior: bool
     weights: np.ndarray        # (N,) robust weights
     evaluations: int = 0
+    _last: tuple | None = None
 
     @property
     def n_machine(self) -> int:
@@ -338,7 +338,14 @@ class _Problem:
         return self.basis @ theta[:self.n_machine], setup
 
     def machine_at(self, delta: np.ndarray):
-        return apply_defect_vector(self.machine, delta)
+        """The machine with ``delta`` applied (the last one is cached: a Jacobian is often
+        evaluated where the last residual was)."""
+        key = delta.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        machine = apply_defect_vector(self.machine, delta)
+        self._last = (key, machine)
+        return machine
 
     def evaluate(self, u: np.ndarray, jacobian: bool = True):
         """Whitened residual ``(M,)``, Jacobian ``(M, p)`` in scaled unknowns (None without
@@ -370,25 +377,16 @@ class _Problem:
             jw = np.concatenate([jw, jp])
         return rw, jw, r
 
-    def retract(self, u: np.ndarray, step: np.ndarray) -> np.ndarray:
-        out = u + step
-        for i in self.model.setup.rotation:
-            k = np.flatnonzero(self.setup_index == i)
-            if k.size and np.isin(np.arange(i, i + 3), self.setup_index).all():
-                j = self.n_machine + int(k[0])
-                sc = self.scale[j:j + 3]
-                from pkmkit.spatial.rotation import compose_rotvec
 
-                out[j:j + 3] = compose_rotvec((step[j:j + 3] * sc)[None],
-                                              (u[j:j + 3] * sc)[None])[0] / sc
-        return out
-
-
-#: Rounds of frozen-Jacobian solves in :func:`_solve`, and iterations per round.
-MAX_ROUNDS = 12
-ROUND_ITER = 3
-#: A solve has converged when every column's gradient cosine is below this.
-COSINE_TOL = 1e-6
+#: A whitened residual norm below this is an exact fit.
+EXACT = 1e-9
+#: A decrease of the whitened squared residual below this per row over :data:`STALL`
+#: evaluations is no progress.
+NEGLIGIBLE = 1e-9
+STALL = 12
+#: A whitened residual row that cannot be evaluated (the machine does not assemble at a trial
+#: point) counts as this: the step is rejected.
+UNASSEMBLED = 1e8
 
 
 @dataclass
@@ -405,29 +403,60 @@ def _finite(*arrays) -> bool:
     return all(a is not None and np.isfinite(a).all() for a in arrays)
 
 
+#: Rounds of the chord stage of :func:`_solve`, iterations per round, and its convergence
+#: test on the gradient cosines.
+CHORD_ROUNDS = 4
+ROUND_ITER = 3
+COSINE_TOL = 1e-6
+
+
+def _cosines(rw: np.ndarray, jw: np.ndarray) -> np.ndarray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = np.abs(jw.T @ rw) / (np.linalg.norm(jw, axis=0) * np.linalg.norm(rw))
+    return np.nan_to_num(c, nan=0.0)
+
+
 def _solve(problem: _Problem, u0: np.ndarray, max_iter: int,
            start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> _Solution:
-    """Levenberg–Marquardt by the batched engine (one problem), in rounds: within a round the
-    Jacobian is frozen at the round's start and only residuals are evaluated (a chord method:
-    the defects are small, so the Jacobian barely changes); a fresh analytic Jacobian starts the
-    next round, until every gradient cosine ``|Jᵀr|_j / (‖J_j‖ ‖r‖)`` is below
-    :data:`COSINE_TOL` — the stationarity of the true problem, so the answer is the exact
-    least-squares solution, not the chord's.
+    """Least squares in two stages: a fast chord stage, then Levenberg–Marquardt if needed.
 
-    ``start``: ``(rw, jw, r)`` already evaluated at ``u0``.
+    1. :func:`_solve_chord` — the batched engine's Levenberg–Marquardt with the Jacobian
+       frozen for a few iterations (defects are small: the Jacobian barely changes, and
+       residual-only evaluations are cheap), refreshed between rounds; it usually reaches the
+       optimum of a noisy calibration in two rounds;
+    2. if the gradient cosines ``|Jᵀr|_j / (‖J_j‖ ‖r‖)`` are not all below
+       :data:`COSINE_TOL` (ill-conditioned or exact-fit problems, where a frozen Jacobian
+       crawls), :func:`_solve_lm` takes over from there.
     """
+    sol = _solve_chord(problem, u0, start, max_iter)
+    if sol.status != Status.OK:
+        if sol.rw is None:
+            return sol
+        sol = _Solution(u0, sol.iterations, int(Status.OK), *(start or problem.evaluate(
+            u0, jacobian=True)))
+    if float(sol.rw @ sol.rw) <= EXACT**2 or not (_cosines(sol.rw, sol.jw) > COSINE_TOL).any():
+        return sol
+    if sol.iterations >= max_iter:
+        return _Solution(sol.u, sol.iterations, int(Status.NOT_CONVERGED), sol.rw, sol.jw,
+                         sol.r)
+    out = _solve_lm(problem, sol.u, max_iter - sol.iterations, (sol.rw, sol.jw, sol.r))
+    return _Solution(out.u, out.iterations + sol.iterations, out.status, out.rw, out.jw, out.r)
+
+
+def _solve_chord(problem: _Problem, u0: np.ndarray,
+                 start: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+                 max_iter: int) -> _Solution:
+    """Rounds of :data:`ROUND_ITER` engine iterations on residual-only evaluations with the
+    Jacobian of the round's start."""
+    from pkmkit.solve.least_squares import solve_least_squares
+
     u = np.array(u0, dtype=float)
     rw, jw, r = start if start is not None else problem.evaluate(u, jacobian=True)
     if not _finite(rw, jw):
-        return _Solution(u, 0, int(Status.INVALID_INPUT), rw, jw, r)
-    total = 0
-    status = int(Status.OK)
-    m = len(rw)
-    for _ in range(MAX_ROUNDS):
-        grad = jw.T @ rw
-        with np.errstate(invalid="ignore", divide="ignore"):
-            cosine = np.abs(grad) / (np.linalg.norm(jw, axis=0) * np.linalg.norm(rw))
-        if not (np.nan_to_num(cosine, nan=0.0) > COSINE_TOL).any():
+        return _Solution(u, 0, int(Status.INVALID_INPUT), None, None, r)
+    total, m = 0, len(rw)
+    for _ in range(CHORD_ROUNDS):
+        if float(rw @ rw) <= EXACT**2 or not (_cosines(rw, jw) > COSINE_TOL).any():
             break
         frozen = jw[:, :, None]
 
@@ -437,30 +466,110 @@ def _solve(problem: _Problem, u0: np.ndarray, max_iter: int,
                 return np.full((m, 1), np.nan), np.full_like(frozen, np.nan)
             return res[:, None], frozen
 
-        def retract(uu, step, rows):
-            return problem.retract(uu[:, 0], step[:, 0])[:, None]
-
-        res = solve_least_squares(evaluate, u[None], retract=retract, max_iter=ROUND_ITER,
-                                  xtol=1e-10, atol=0.0, gtol=COSINE_TOL / 10,
-                                  residual_tol=np.inf, damping=1e-8, stall=1e-12,
-                                  compute_rank=False)
-        total += int(res.iterations[0])
-        status = int(res.status[0])
-        if status == Status.NOT_CONVERGED:  # the round's iterations are used up: refresh J
-            status = int(Status.OK)
-        if status not in (Status.OK, Status.INCONSISTENT) or total > max_iter:
-            return _Solution(res.u[0], total, status if total <= max_iter else
-                             int(Status.NOT_CONVERGED), None, None, None)
-        step = float(np.linalg.norm(res.u[0] - u))
-        u = res.u[0]
-        rw, jw, r = problem.evaluate(u, jacobian=True)
-        if not _finite(rw, jw):
-            return _Solution(u, total, int(Status.INVALID_INPUT), rw, jw, r)
-        if step == 0.0:
+        if total >= max_iter:
             break
-    else:
-        status = int(Status.NOT_CONVERGED)
-    return _Solution(u, total, status, rw, jw, r)
+        res = solve_least_squares(evaluate, u[None], max_iter=min(ROUND_ITER, max_iter - total),
+                                  xtol=1e-10,
+                                  atol=EXACT, gtol=COSINE_TOL / 10, residual_tol=np.inf,
+                                  damping=1e-8, stall=1e-12, compute_rank=False)
+        total += int(res.iterations[0])
+        if not np.isfinite(res.u[0]).all():
+            break
+        step = float(np.linalg.norm(res.u[0] - u))
+        new = problem.evaluate(res.u[0], jacobian=True)
+        if not _finite(new[0], new[1]):
+            break
+        u, (rw, jw, r) = res.u[0], new
+        if step <= 1e-10 * (1.0 + float(np.linalg.norm(u))):
+            break
+    return _Solution(u, total, int(Status.OK), rw, jw, r)
+
+
+def _solve_lm(problem: _Problem, u0: np.ndarray, max_iter: int,
+              start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> _Solution:
+    """Levenberg–Marquardt (MINPACK, via :func:`scipy.optimize.least_squares`) on the whitened
+    residual with its analytic Jacobian: residuals at trial points, the Jacobian at accepted
+    points only. (The batched engine of :mod:`pkmkit.solve` is built for many small problems;
+    this is one dense, often ill-conditioned problem, for which MINPACK's trust-region damping
+    is the proven tool.) A trial point where the machine does not assemble gets a huge
+    residual, so the step is rejected and the damping raised.
+
+    ``start``: ``(rw, jw, r)`` already evaluated at ``u0``.
+    """
+    from scipy.optimize import least_squares
+
+    u0 = np.array(u0, dtype=float)
+    rw0, jw0, r0 = start if start is not None else problem.evaluate(u0, jacobian=True)
+    if not _finite(rw0, jw0):
+        return _Solution(u0, 0, int(Status.INVALID_INPUT), rw0, jw0, r0)
+    if u0.size == 0:
+        return _Solution(u0, 0, int(Status.OK), rw0, jw0, r0)
+    m = len(rw0)
+    cache = {u0.tobytes(): (rw0, jw0, r0)}
+
+    def fun(u):
+        key = u.tobytes()
+        if key not in cache:
+            cache.clear()
+            cache[key] = problem.evaluate(u, jacobian=False)
+        rw = cache[key][0]
+        if rw is None:
+            return np.full(m, UNASSEMBLED)
+        return np.where(np.isfinite(rw), rw, UNASSEMBLED)
+
+    def jac(u):
+        key = u.tobytes()
+        hit = cache.get(key)
+        if hit is None or hit[1] is None:
+            cache.clear()
+            cache[key] = problem.evaluate(u, jacobian=True)
+        jw = cache[key][1]
+        if jw is None or not np.isfinite(jw).all():
+            raise _Unassembled(cache[key][2])
+        return jw
+
+    if m < u0.size:  # MINPACK needs at least as many rows as unknowns
+        return _Solution(u0, 0, int(Status.INVALID_INPUT), rw0, jw0, r0)
+    # MINPACK's tests are relative; a residual with a floor (an exact fit down to the inner
+    # closures' accuracy) would crawl: stop when the best cost has not dropped by a
+    # statistically meaningful amount (NEGLIGIBLE per row) over STALL evaluations
+    history = {"best": float(rw0 @ rw0), "u": u0.copy(), "since": 0, "mark": float(rw0 @ rw0)}
+
+    def watched(u):
+        out = fun(u)
+        cost = float(out @ out)
+        if cost < history["best"]:
+            history["best"], history["u"] = cost, u.copy()
+        history["since"] += 1
+        if history["since"] >= STALL:
+            if history["mark"] - history["best"] <= NEGLIGIBLE * m:
+                raise _Stalled()
+            history["since"], history["mark"] = 0, history["best"]
+        return out
+
+    try:
+        sol = least_squares(watched, u0, jac=jac, method="lm", xtol=1e-10, ftol=1e-12,
+                            gtol=1e-10, max_nfev=max_iter * 10)
+        u, status, iterations = sol.x, sol.status, int(sol.njev or sol.nfev)
+    except _Unassembled as exc:
+        return _Solution(u0, 0, int(Status.NO_ASSEMBLY), None, None, exc.residuals)
+    except _Stalled:
+        u, status, iterations = history["u"], 1, STALL
+    rw, jw, r = problem.evaluate(u, jacobian=True)
+    if status <= 0 or not _finite(rw, jw):
+        status = Status.NOT_CONVERGED if _finite(rw, jw) else Status.NO_ASSEMBLY
+        return _Solution(u, iterations, int(status), rw, jw, r)
+    return _Solution(u, iterations, int(Status.OK), rw, jw, r)
+
+
+class _Stalled(Exception):
+    pass
+
+
+class _Unassembled(Exception):
+    def __init__(self, residuals):
+        self.residuals = residuals
+        super().__init__("the machine does not assemble")
 
 
 def problem_rows(problem: _Problem) -> int:
@@ -539,8 +648,33 @@ def single_threaded_blas():
     return threadpool_limits(limits=1, user_api="blas")
 
 
-def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, tolerances,
-               sigma, compatible, rcond, prune, max_iter) -> CalibrationResult:
+@dataclass
+class _Prepared:
+    """Everything :func:`calibrate` sets up before solving (see :func:`identification_problem`
+    for the public face)."""
+
+    problem: _Problem
+    u0: np.ndarray
+    start: tuple
+    model: ResidualModel
+    dset: Any
+    setup0: np.ndarray
+    r_before: np.ndarray
+    unidentifiable: dict[str, str]
+    setup_unid: dict[str, str]
+    cand_names: list[str]
+    mach_sel: np.ndarray
+    setup_sel: np.ndarray
+    readings: int
+    rank: int
+    sigma: float
+    registration: Registration | None
+    identify_frame: bool
+    t_start: float
+
+
+def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances, sigma,
+             compatible, rcond, prune) -> _Prepared:
     t_start = time.perf_counter()
     if validation is not None and validation.kind != data.kind:
         raise InputError(f"validation measurements are {validation.kind!r}, identification "
@@ -607,6 +741,13 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
     s_count = len(model.setup)
     setup_sel = np.array([i for i in sel if i < s_count], dtype=int)
     mach_sel = np.array([i - s_count for i in sel if i >= s_count], dtype=int)
+    if prior:  # the priors make every parameter the measurements see determinate
+        seen = [k for k, n in enumerate(cand_names)
+                if not ident.reasons.get(n, "").startswith("no effect")]
+        mach_sel = np.array(seen, dtype=int)
+        for n in cand_names:
+            if not ident.reasons.get(n, "no effect").startswith("no effect"):
+                unidentifiable.pop(n, None)
     if prune and not prior and mach_sel.size:
         cols = np.concatenate([setup_sel, s_count + mach_sel])
         weak = prune_weak(full[:, cols], scale_all[cols], sigma=1.0,
@@ -635,8 +776,73 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
                        prior=prior, weights=np.ones(len(data)))
     u = np.concatenate([np.zeros(mach_sel.size), setup0[setup_sel] / model.setup.scale[
         setup_sel]])
+    return _Prepared(problem=problem, u0=u, start=problem.assemble(u, r_before, jd0, js0),
+                     model=model, dset=dset, setup0=setup0, r_before=r_before,
+                     unidentifiable=unidentifiable, setup_unid=setup_unid,
+                     cand_names=cand_names, mach_sel=mach_sel, setup_sel=setup_sel,
+                     readings=readings, rank=ident.rank if prior else int(
+                         mach_sel.size + setup_sel.size), sigma=sig, registration=registration,
+                     identify_frame=identify_frame, t_start=t_start)
+
+
+@dataclass(frozen=True)
+class IdentificationProblem:
+    """The least-squares problem :func:`calibrate` solves, exposed for independent solvers
+    (benchmarks, tests): unknowns ``u`` are the identified parameters divided by their scales
+    (machine defects first, then set-up parameters), the residual is whitened (and has the
+    prior rows with ``prior=True``).
+
+    Attributes:
+        names: ``(p,)`` parameter names. scale: ``(p,)`` SI per unit of u. u0: ``(p,)`` start.
+    """
+
+    names: tuple[str, ...]
+    scale: np.ndarray
+    u0: np.ndarray
+    _problem: Any = field(repr=False)
+
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """Whitened residual ``(M,)`` (NaN where the machine does not assemble)."""
+        rw, _, _ = self._problem.evaluate(np.asarray(u, dtype=float), jacobian=False)
+        return rw if rw is not None else np.full(len(self._problem_rows()), np.nan)
+
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """Analytic Jacobian ``(M, p)`` of :meth:`residual`."""
+        return self._problem.evaluate(np.asarray(u, dtype=float), jacobian=True)[1]
+
+    def _problem_rows(self):
+        return np.zeros(problem_rows(self._problem))
+
+
+def identification_problem(machine, data: MeasurementSet, *,
+                           parameters: str | Sequence[str] = "auto", frame: Any = None,
+                           prior: bool = False, tolerances: Mapping[str, float] | None = None,
+                           sigma: float | None = None, compatible: bool = True,
+                           rcond: float = RCOND, prune: bool = True) -> IdentificationProblem:
+    """The problem :func:`calibrate` would solve with these options (same arguments)."""
+    with single_threaded_blas():
+        prep = _prepare(machine, data, validation=None, parameters=parameters, frame=frame,
+                        prior=prior, tolerances=tolerances, sigma=sigma, compatible=compatible,
+                        rcond=rcond, prune=prune)
+    names = (tuple(prep.cand_names[i] for i in prep.mach_sel)
+             + tuple(prep.model.setup.names[i] for i in prep.setup_sel))
+    return IdentificationProblem(names=names, scale=prep.problem.scale.copy(),
+                                 u0=prep.u0.copy(), _problem=prep.problem)
+
+
+def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, tolerances,
+               sigma, compatible, rcond, prune, max_iter) -> CalibrationResult:
+    prep = _prepare(machine, data, validation=validation, parameters=parameters, frame=frame,
+                    prior=prior, tolerances=tolerances, sigma=sigma, compatible=compatible,
+                    rcond=rcond, prune=prune)
+    problem, u, model, dset = prep.problem, prep.u0, prep.model, prep.dset
+    setup0, r_before, unidentifiable = prep.setup0, prep.r_before, prep.unidentifiable
+    setup_unid, cand_names = prep.setup_unid, prep.cand_names
+    mach_sel, setup_sel, readings, sig = prep.mach_sel, prep.setup_sel, prep.readings, prep.sigma
+    registration, identify_frame, t_start = prep.registration, prep.identify_frame, prep.t_start
+    n_unknown = mach_sel.size + setup_sel.size
     iterations = 0
-    start = problem.assemble(u, r_before, jd0, js0)
+    start = prep.start
     for _ in range(8 if robust else 1):
         sol = _solve(problem, u, max_iter, start)
         iterations += sol.iterations
@@ -700,7 +906,7 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
         setup_values=setup[setup_sel], setup_std=std[p:], correlation=corr,
         defects=delta, defect_names=dset.names,
         before=_stats(model, r_before), after=_stats(model, r_after), validation=val,
-        rank=int(n_unknown), condition=condition, candidates=len(cand_names),
+        rank=prep.rank, condition=condition, candidates=len(cand_names),
         unidentifiable=unidentifiable, outliers=outliers, sigma=sig,
         sigma_posterior=float(np.sqrt(factor)) * sig, frame=final_frame,
         iterations=iterations, seconds=time.perf_counter() - t_start,

@@ -43,7 +43,7 @@ from pkmkit.calibration.measurement_set import MeasurementSet
 from pkmkit.calibration.registration import Registration
 from pkmkit.errors import InputError, PkmError
 from pkmkit.errors.model import _family, tool_sensitivity
-from pkmkit.spatial.rotation import compose_rotvec, matrix_to_rotvec, rotvec_to_matrix, skew
+from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix, skew
 
 #: Spacing of the samples of a commanded path in Cartesian space (m).
 PATH_SPACING = 5e-4
@@ -51,19 +51,18 @@ PATH_SPACING = 5e-4
 
 @dataclass(frozen=True)
 class SetupParameters:
-    """Parameters of the measurement set-up identified with the machine.
+    """Parameters of the measurement set-up identified with the machine (all additive; a
+    frame rotation is a rotation vector).
 
     Attributes:
         names, units (``"m"``, ``"rad"`` or ``"1"``), scale (typical magnitude, SI),
-        initial values (SI); rotation: indices of the (3-vector) rotation parameters composed
-        on the left rather than added.
+        initial values (SI).
     """
 
     names: tuple[str, ...] = ()
     units: tuple[str, ...] = ()
     scale: np.ndarray = field(default_factory=lambda: np.zeros(0))
     initial: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    rotation: tuple[int, ...] = ()
 
     def __len__(self) -> int:
         return len(self.names)
@@ -78,30 +77,39 @@ class ToolState:
     rotation: np.ndarray | None
     dpoint: np.ndarray | None
     drotation: np.ndarray | None
+    start: np.ndarray | None = None
 
 
 def tool_state(machine, q: np.ndarray, tool_length: np.ndarray | None, *, jacobian: bool,
-               rotation: bool = False) -> ToolState:
+               rotation: bool = False, x0: np.ndarray | None = None) -> ToolState:
     """Tool point (and rotation) of ``machine`` at ``q`` ``(N, n)``, with defect Jacobians on
-    request. Rows where the machine does not assemble are NaN (never an exception)."""
+    request. Rows where the machine does not assemble are NaN (never an exception).
+
+    ``x0``: a warm start of a joint-chain machine's closure (platform pose and passive joints,
+    ``ToolState.start`` of a previous call at the same q) for residual-only evaluations."""
     family = _family(machine)
     n = q.shape[0]
     tl = np.zeros(n) if tool_length is None else np.asarray(tool_length, dtype=float)
     try:
         if family == "chain":
             lengths = tool_length
+            start = None
             if jacobian:
                 sens = tool_sensitivity(machine, q, tool_length=lengths)
                 point, dpoint, drot = sens.pose[:, :3], sens.point, sens.rotation
             else:
-                point = machine.fk(q, tool_length=lengths)[:, :3]
+                direct = machine.fk(q, tool_length=lengths, x0=x0, full_output=True)
+                point = direct.pose[:, :3]
                 dpoint = drot = None
+                start = np.concatenate([direct.platform, direct.passive], axis=1)
+                if not np.isfinite(start).all():
+                    start = None
             rot = None
             if rotation:
                 frame = machine.fk(q, tool_length=lengths, full_output=True).tool_frame
                 rot = rotvec_to_matrix(np.nan_to_num(frame[:, 3:]))
                 rot[~np.isfinite(frame).all(axis=1)] = np.nan
-            return ToolState(point, rot, dpoint, drot)
+            return ToolState(point, rot, dpoint, drot, start)
         if jacobian:
             sens = tool_sensitivity(machine, q)
             x, dpoint, drot = sens.pose, sens.point.copy(), sens.rotation
@@ -157,6 +165,7 @@ class ResidualModel:
                                      (len(data), self.width)).copy()
         self.setup = SetupParameters()
         self._cache: tuple | None = None
+        self._warm: np.ndarray | None = None
 
     def _tool(self, machine, *, jacobian: bool, rotation: bool = False) -> ToolState:
         """:func:`tool_state` at the measured configurations, cached for the last machine (the
@@ -166,8 +175,10 @@ class ResidualModel:
                                                                             rotation):
             return c[3]
         state = tool_state(machine, self.data.q, self.data.tool_length, jacobian=jacobian,
-                           rotation=rotation)
+                           rotation=rotation, x0=self._warm)
         self._cache = (machine, jacobian, rotation, state)
+        if state.start is not None:
+            self._warm = state.start
         return state
 
     def residuals(self, machine, setup: np.ndarray, *, jacobian: bool
@@ -179,13 +190,6 @@ class ResidualModel:
     def errors(self, r: np.ndarray) -> np.ndarray:
         """Magnitude of each observation's error ``(N,)`` (SI) for statistics."""
         return np.linalg.norm(r[:, :3], axis=1)
-
-    def retract_setup(self, setup: np.ndarray, step: np.ndarray) -> np.ndarray:
-        """Apply a set-up increment (rotation parameters compose on the left)."""
-        out = setup + step
-        for i in self.setup.rotation:
-            out[i:i + 3] = compose_rotvec(step[i:i + 3][None], setup[i:i + 3][None])[0]
-        return out
 
     def refit_setup_for_validation(self) -> bool:
         """Whether the set-up belongs to the artefact (refitted on a validation set) rather
@@ -210,8 +214,7 @@ class _FramedModel(ResidualModel):
             self.setup = SetupParameters(
                 names=("frame_rx", "frame_ry", "frame_rz", "frame_x", "frame_y", "frame_z"),
                 units=("rad", "rad", "rad", "m", "m", "m"),
-                scale=np.array([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3]), initial=np.zeros(6),
-                rotation=(0,))
+                scale=np.array([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3]), initial=np.zeros(6))
 
     def frame(self, setup: np.ndarray) -> Registration:
         """The full measurement-to-machine transform for set-up values ``setup``."""
@@ -228,7 +231,8 @@ class _FramedModel(ResidualModel):
         rot = rotvec_to_matrix(setup[None, :3])[0]
         y = (self.y0 - self.centre) @ rot.T + self.centre + setup[3:6]
         dy = np.zeros((len(y), 3, 6))
-        dy[:, :, :3] = -skew(y - self.centre - setup[3:6])  # left increment of the rotation
+        # exp(ρ + dρ) ≈ exp(J_l(ρ) dρ) exp(ρ): d(exp(ρ) v) = −[exp(ρ) v]× J_l(ρ) dρ
+        dy[:, :, :3] = -skew(y - self.centre - setup[3:6]) @ _left_jacobian(setup[:3])
         dy[:, :, 3:] = np.eye(3)
         return y, dy, rot
 
@@ -263,15 +267,39 @@ class PoseModel(_FramedModel):
         r = np.concatenate([state.point - y, r_rot], axis=1)
         if not jacobian:
             return r, None, None
-        jd = np.concatenate([state.dpoint, state.drotation], axis=1)
+        # log(exp(ω) M) = r + J_l⁻¹(r) ω, log(M exp(−δ)) = r − J_r⁻¹(r) δ (first order in ω, δ)
+        jl_inv = _inverse_left_jacobian(np.nan_to_num(r_rot))
+        jd = np.concatenate([state.dpoint, jl_inv @ state.drotation], axis=1)
         js = np.zeros((len(r), 6, len(self.setup)))
         if self.identify_frame:
             js[:, :3] = -dy
-            js[:, 3:, :3] = -np.eye(3)
+            js[:, 3:, :3] = -_inverse_left_jacobian(-np.nan_to_num(r_rot)) @ _left_jacobian(
+                setup[:3])
         return r, jd, js
 
     def errors(self, r):
         return np.linalg.norm(r[:, :3], axis=1)
+
+
+def _left_jacobian(phi: np.ndarray) -> np.ndarray:
+    """``J_l(φ)`` ``(3, 3)`` of SO(3): ``exp(φ + dφ) ≈ exp(J_l(φ) dφ) exp(φ)``."""
+    theta = float(np.linalg.norm(phi))
+    k = skew(phi)
+    if theta < 1e-6:
+        return np.eye(3) + 0.5 * k + (k @ k) / 6.0
+    return (np.eye(3) + (1.0 - np.cos(theta)) / theta**2 * k
+            + (theta - np.sin(theta)) / theta**3 * (k @ k))
+
+
+def _inverse_left_jacobian(phi: np.ndarray) -> np.ndarray:
+    """``J_l⁻¹(φ)`` ``(N, 3, 3)`` of SO(3) for rotation vectors ``(N, 3)``."""
+    theta = np.linalg.norm(phi, axis=1)
+    k = skew(phi)
+    small = theta < 1e-6
+    safe = np.where(small, 1.0, theta)
+    coef = np.where(small, 1.0 / 12.0,
+                    1.0 / safe**2 - (1.0 + np.cos(safe)) / (2.0 * safe * np.sin(safe)))
+    return np.eye(3)[None] - 0.5 * k + coef[:, None, None] * (k @ k)
 
 
 class BallbarModel(ResidualModel):
@@ -463,8 +491,8 @@ def _dq_dp(machine, p: np.ndarray) -> np.ndarray:
 
 
 def _closest_on_polyline(curve: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Closest point of a polyline ``(K, n)`` to each point ``(M, n)`` and the unit tangent of
-    the segment it lies on."""
+    """The foot of each point ``(M, n)`` on the polyline ``(K, n)`` (on the line of its nearest
+    segment) and that segment's unit tangent."""
     a, b = curve[:-1], curve[1:]
     ab = b - a
     len2 = np.einsum("kn,kn->k", ab, ab)
@@ -474,9 +502,12 @@ def _closest_on_polyline(curve: np.ndarray, points: np.ndarray) -> tuple[np.ndar
     dist = np.linalg.norm(points[:, None, :] - foot, axis=2)
     dist = np.where(np.isfinite(dist), dist, np.inf)
     k = np.argmin(dist, axis=1)
-    rows = np.arange(len(points))
     unit = ab / np.sqrt(len2)[:, None]
-    return foot[rows, k], unit[k]
+    # the foot on the nearest segment's line, not clamped to its ends: the residual stays
+    # normal to the local tangent (so that its Jacobian is (I − t tᵀ) ∂V), also where the
+    # nearest point of the polyline would be a vertex
+    along = np.einsum("mn,mn->m", points - a[k], unit[k])
+    return a[k] + along[:, None] * unit[k], unit[k]
 
 
 def initial_placement(data: MeasurementSet) -> np.ndarray:

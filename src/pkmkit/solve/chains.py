@@ -74,7 +74,8 @@ def chain_pose(model: JointChainModel, chain: tuple[int, ...], values: np.ndarra
     def_tw = None
     if defects:
         def_tw = np.zeros((6, len(model.defect_index), k))
-        local = defect_twists(model.frames, model.defect_index)
+        local = defect_twists(model.frames, model.defect_index, model.nominal_frames,
+                              model.defects)
     for e in chain:
         frame = model.frames[e]
         if defects:
