@@ -9,7 +9,9 @@ X, the target X' whose nominal command is the real machine's command for X:
 ``IGM_nominal(X') = IGM_identified(X)``, i.e. ``X' = FGM_nominal(IGM_identified(X))``.
 
 Targets are tool points ``(N, 3)`` (m); for a joint-chain machine (5-axis head) tool point and
-unit tool axis ``(N, 6)`` — a point alone takes the machine's home tool axis. Tool points follow
+unit tool axis ``(N, 6)`` — a point alone takes the machine's home tool axis; for a six-actuator
+machine tool point and platform rotation vector ``(N, 6)`` (rad; a point alone takes the home
+orientation). Tool points follow
 :func:`pkmkit.calibration.models.tool_state` (``tool_length`` along the tool axis; below the
 platform for rod machines).
 """
@@ -27,13 +29,18 @@ from pkmkit.spatial.rotation import rotvec_to_matrix
 
 
 def target_width(machine) -> int:
-    """Columns of a target: 6 (point and tool axis) for joint-chain machines, else 3."""
-    return 6 if _family(machine) == "chain" else 3
+    """Columns of a target: 6 for joint-chain machines (tool point and axis) and six-actuator
+    machines (tool point and rotation vector of the platform), else 3 (tool point)."""
+    return 6 if _family(machine) == "chain" or _six_dof(machine) else 3
+
+
+def _six_dof(machine) -> bool:
+    return machine.dims == 6 and not getattr(machine, "position_controlled", True)
 
 
 def as_targets(machine, targets: Any) -> np.ndarray:
     """Targets ``(N, w)`` for ``machine``: points ``(N, 3)`` get the home tool axis of a
-    joint-chain machine."""
+    joint-chain machine, the home orientation of a six-actuator machine."""
     x = np.atleast_2d(np.asarray(targets, dtype=float))
     width = target_width(machine)
     if x.shape[1] == 3 and width == 6:
@@ -44,14 +51,18 @@ def as_targets(machine, targets: Any) -> np.ndarray:
     return x
 
 
-def commanded_q(machine, targets: Any, tool_length: Any = None, *, iterations: int = 4
+#: Largest residual (m) of a joint-chain machine's inverse model accepted as reached.
+CHAIN_IK_TOL = 1e-6
+
+
+def commanded_q(machine, targets: Any, tool_length: Any = None, *, iterations: int = 20
                 ) -> np.ndarray:
     """Actuator coordinates ``(N, n)`` that ``machine``'s model gives for tool targets (its
     inverse model with the tool offset); NaN rows out of reach.
 
     For a position-controlled full-pose machine (its platform tilts with its position) the
     tool offset depends on the tilt: the platform position is found by fixed-point iteration
-    (``iterations`` passes; the tilt changes by micro-radians per millimetre).
+    (at most ``iterations`` passes; the tilt changes by micro-radians per millimetre).
     """
     x = as_targets(machine, targets)
     n = len(x)
@@ -60,8 +71,10 @@ def commanded_q(machine, targets: Any, tool_length: Any = None, *, iterations: i
     family = _family(machine)
     with np.errstate(invalid="ignore"):
         if family == "chain":
+            # a calibrated hyperstatic machine closes its legs in least squares (residuals of
+            # 1e-8 m for second-order incompatible defects): accept those, not unreachability
             return np.atleast_2d(machine.ik(x, tool_length=tl if tool_length is not None
-                                            else None))
+                                            else None, residual_tol=CHAIN_IK_TOL))
         if family == "translational":
             p = x.copy()
             p[:, 2] += tl
@@ -73,13 +86,16 @@ def commanded_q(machine, targets: Any, tool_length: Any = None, *, iterations: i
             for _ in range(iterations):
                 inv = machine.ik(p, full_output=True)
                 rot = rotvec_to_matrix(np.nan_to_num(np.atleast_2d(inv.pose)[:, 3:]))
-                p = x + tl[:, None] * rot[:, :, 2]
+                new = x + tl[:, None] * rot[:, :, 2]
+                converged = np.nanmax(np.abs(new - p), initial=0.0) < 1e-13
+                p = new
+                if converged:
+                    break
             return np.atleast_2d(machine.ik(p))
-        # a six-actuator machine: the home orientation
-        rot = rotvec_to_matrix(np.tile(machine.home_pose[3:], (n, 1)))
-        p = x + tl[:, None] * rot[:, :, 2]
-        pose = np.concatenate([p, np.tile(machine.home_pose[3:], (n, 1))], axis=1)
-        return np.atleast_2d(machine.ik(pose))
+        # a six-actuator machine: the target's orientation
+        rot = rotvec_to_matrix(x[:, 3:6])
+        p = x[:, :3] + tl[:, None] * rot[:, :, 2]
+        return np.atleast_2d(machine.ik(np.concatenate([p, x[:, 3:6]], axis=1)))
 
 
 def reached(machine, q: Any, tool_length: Any = None) -> np.ndarray:
@@ -97,8 +113,14 @@ def reached(machine, q: Any, tool_length: Any = None) -> np.ndarray:
         with np.errstate(invalid="ignore"):
             out[ok] = machine.fk(q[ok], tool_length=None if tl is None else tl[ok])
         return out
-    state = tool_state(machine, q[ok], None if tl is None else tl[ok], jacobian=False)
-    out[ok] = state.point
+    six = _six_dof(machine)
+    state = tool_state(machine, q[ok], None if tl is None else tl[ok], jacobian=False,
+                       rotation=six)
+    out[ok, :3] = state.point
+    if six:
+        from pkmkit.spatial.rotation import matrix_to_rotvec
+
+        out[ok, 3:] = matrix_to_rotvec(state.rotation)
     return out
 
 

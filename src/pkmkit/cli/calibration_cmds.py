@@ -371,7 +371,8 @@ def _print_calibration(result, payload: dict, unit: str) -> None:
 @click.option("--grid", "grid_text", metavar="X0,Y0,Z0:X1,Y1,Z1:NX,NY,NZ",
               help="Correction table on a regular grid.")
 @click.option("--targets", "targets_file", type=click.Path(dir_okay=False),
-              help="CSV of targets x, y, z (and i, j, k tool axes for a 5-axis machine).")
+              help="CSV of targets x, y, z (and i, j, k tool axes for a 5-axis machine, or "
+                   "rx, ry, rz rotation vectors in degrees for a six-actuator machine).")
 @click.option("--tool-length", type=float, help="Tool length (length unit).")
 @click.option("--truth", type=click.Path(dir_okay=False),
               help="A true machine file (simulations): report the error left after "
@@ -409,8 +410,8 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
 
         if target_width(nominal) != 3:
             raise InputError("G-code correction is for machines whose commands are tool "
-                             "points; for a 5-axis joint-chain machine use --grid or --targets "
-                             "with tool axes")
+                             "points; a 5-axis or six-actuator machine's correction includes "
+                             "the orientation: use --grid or --targets")
         shift = (np.asarray(_numbers(origin, "--origin")) * scale if origin else np.zeros(3))
         if shift.shape != (3,):
             raise InputError("--origin needs X,Y,Z")
@@ -435,17 +436,23 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
         else:
             from pkmkit.io.measurements import read_csv_table
 
-            t = read_csv_table(targets_file, ("x", "y", "z"), ("i", "j", "k", "id"),
-                               units=units)
+            t = read_csv_table(targets_file, ("x", "y", "z"),
+                               ("i", "j", "k", "rx", "ry", "rz", "id"), units=units)
             targets = np.column_stack([t.numbers[c] for c in "xyz"]) * t.scale
             if all(c in t.numbers for c in "ijk"):
                 targets = np.column_stack([targets] + [t.numbers[c] for c in "ijk"])
+            elif all(c in t.numbers for c in ("rx", "ry", "rz")):
+                targets = np.column_stack([targets] + [np.radians(t.numbers[c])
+                                                       for c in ("rx", "ry", "rz")])
         fixed = correct_targets(nominal, identified, targets, tool_length=tl,
                                 progress=not as_json)
         from pkmkit.calibration.controller import as_targets
 
         targets = as_targets(identified, targets)
-        text = correction_table(targets, fixed, units=unit, comment=(
+        from pkmkit.errors.model import _family
+
+        orientation = "axis" if _family(nominal) == "chain" else "rotvec"
+        text = correction_table(targets, fixed, units=unit, orientation=orientation, comment=(
             f"corrected targets for the nominal controller of {nominal.id} "
             f"(pkmkit compensate --calibrated {Path(calibrated).name})"))
     check = None

@@ -36,18 +36,22 @@ def corrected_gcode(path: CorrectedPath, *, origin=(0.0, 0.0, 0.0), header: str 
 
 
 def correction_table(targets: np.ndarray, corrected: np.ndarray, *, units: str = "m",
-                     comment: str = "") -> str:
-    """CSV of targets, corrected targets and corrections (``dx = cx − x``…); with tool axes
-    for a 5-axis machine (``i, j, k``, ``ci, cj, ck``)."""
+                     comment: str = "", orientation: str = "axis") -> str:
+    """CSV of targets, corrected targets and corrections (``dx = cx − x``…); for 6-column
+    targets also the orientation: tool axes of a 5-axis machine (``orientation="axis"``:
+    ``i, j, k``, ``ci, cj, ck``) or rotation vectors of a six-actuator machine
+    (``"rotvec"``: ``rx, ry, rz``, ``crx, cry, crz`` in degrees)."""
     scale = length_scale(units)
     axes = targets.shape[1] == 6
     cols = ["x", "y", "z", "cx", "cy", "cz", "dx", "dy", "dz"]
+    names = ("i", "j", "k") if orientation == "axis" else ("rx", "ry", "rz")
+    factor = 1.0 if orientation == "axis" else np.degrees(1.0)
     if axes:
-        cols += ["i", "j", "k", "ci", "cj", "ck"]
+        cols += [*names, *(f"c{n}" for n in names)]
     lines = [f"# {c}" for c in comment.splitlines()] + [f"# units: {units}", ",".join(cols)]
     for t, c in zip(targets, corrected, strict=True):
         row = [*(t[:3] / scale), *(c[:3] / scale), *((c[:3] - t[:3]) / scale)]
         if axes:
-            row += [*t[3:], *c[3:]]
+            row += [*(t[3:] * factor), *(c[3:] * factor)]
         lines.append(",".join(f"{v:.10g}" for v in row))
     return "\n".join(lines) + "\n"
