@@ -124,16 +124,37 @@ def grid_targets(lower: Any, upper: Any, counts: Any) -> np.ndarray:
 @dataclass(frozen=True)
 class CompensationCheck:
     """Errors of a true machine at targets, commanded by the nominal controller without and
-    with compensation: ``before (N,)``, ``after (N,)`` (m)."""
+    with compensation: ``before (N,)``, ``after (N,)`` (m); ``after_rigid (N,)``: the errors
+    with compensation once the best rigid motion between reached and wanted points is removed
+    (what a frame identified with the machine leaves: a set-up offset of the workpiece, not an
+    error of its shape)."""
 
     before: np.ndarray
     after: np.ndarray
+    after_rigid: np.ndarray
 
     def to_dict(self, scale: float = 1.0) -> dict[str, float]:
-        b, a = self.before / scale, self.after / scale
+        b, a, r = self.before / scale, self.after / scale, self.after_rigid / scale
         return {"mean_before": float(b.mean()), "rms_before": float(np.sqrt((b**2).mean())),
                 "max_before": float(b.max()), "mean_after": float(a.mean()),
-                "rms_after": float(np.sqrt((a**2).mean())), "max_after": float(a.max())}
+                "rms_after": float(np.sqrt((a**2).mean())), "max_after": float(a.max()),
+                "mean_after_rigid": float(r.mean()), "max_after_rigid": float(r.max())}
+
+
+def rigid_residuals(reached: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+    """``(N,)`` distances between ``wanted`` points and the ``reached`` ones after the best
+    rigid motion of the latter (Kabsch; translation only for fewer than 3 points)."""
+    from pkmkit.calibration.registration import register_points
+
+    if len(reached) < 3:
+        return np.linalg.norm(reached - reached.mean(axis=0) - wanted + wanted.mean(axis=0),
+                              axis=1)
+    try:
+        reg = register_points(reached, wanted)
+    except InputError:  # collinear points: translation only
+        return np.linalg.norm(reached - reached.mean(axis=0) - wanted + wanted.mean(axis=0),
+                              axis=1)
+    return np.linalg.norm(reg.point_residuals, axis=1)
 
 
 def check_compensation(true_machine, nominal, identified, targets: Any, *,
@@ -148,4 +169,5 @@ def check_compensation(true_machine, nominal, identified, targets: Any, *,
     if not ok.all():
         raise InputError(f"{(~ok).sum()} validation target(s) out of reach")
     return CompensationCheck(before=np.linalg.norm(before[:, :3] - x[:, :3], axis=1),
-                             after=np.linalg.norm(after[:, :3] - x[:, :3], axis=1))
+                             after=np.linalg.norm(after[:, :3] - x[:, :3], axis=1),
+                             after_rigid=rigid_residuals(after[:, :3], x[:, :3]))

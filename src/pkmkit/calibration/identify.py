@@ -818,12 +818,16 @@ def identification_problem(machine, data: MeasurementSet, *,
                            parameters: str | Sequence[str] = "auto", frame: Any = None,
                            prior: bool = False, tolerances: Mapping[str, float] | None = None,
                            sigma: float | None = None, compatible: bool = True,
-                           rcond: float = RCOND, prune: bool = True) -> IdentificationProblem:
-    """The problem :func:`calibrate` would solve with these options (same arguments)."""
+                           rcond: float = RCOND, prune: bool = True,
+                           closure_options: dict | None = None) -> IdentificationProblem:
+    """The problem :func:`calibrate` would solve with these options (same arguments);
+    ``closure_options`` are engine options of the residual's inner closures (joint chains),
+    e.g. ``{"xtol": 1e-6}`` to emulate an inexact inner solver."""
     with single_threaded_blas():
         prep = _prepare(machine, data, validation=None, parameters=parameters, frame=frame,
                         prior=prior, tolerances=tolerances, sigma=sigma, compatible=compatible,
                         rcond=rcond, prune=prune)
+    prep.model.closure_options = dict(closure_options or {})
     names = (tuple(prep.cand_names[i] for i in prep.mach_sel)
              + tuple(prep.model.setup.names[i] for i in prep.setup_sel))
     return IdentificationProblem(names=names, scale=prep.problem.scale.copy(),

@@ -81,12 +81,15 @@ class ToolState:
 
 
 def tool_state(machine, q: np.ndarray, tool_length: np.ndarray | None, *, jacobian: bool,
-               rotation: bool = False, x0: np.ndarray | None = None) -> ToolState:
+               rotation: bool = False, x0: np.ndarray | None = None,
+               closure_options: dict | None = None) -> ToolState:
     """Tool point (and rotation) of ``machine`` at ``q`` ``(N, n)``, with defect Jacobians on
     request. Rows where the machine does not assemble are NaN (never an exception).
 
     ``x0``: a warm start of a joint-chain machine's closure (platform pose and passive joints,
-    ``ToolState.start`` of a previous call at the same q) for residual-only evaluations."""
+    ``ToolState.start`` of a previous call at the same q) for residual-only evaluations;
+    ``closure_options``: engine options of those closures (e.g. a loose ``xtol`` to emulate an
+    inexact inner solver)."""
     family = _family(machine)
     n = q.shape[0]
     tl = np.zeros(n) if tool_length is None else np.asarray(tool_length, dtype=float)
@@ -98,7 +101,8 @@ def tool_state(machine, q: np.ndarray, tool_length: np.ndarray | None, *, jacobi
                 sens = tool_sensitivity(machine, q, tool_length=lengths)
                 point, dpoint, drot = sens.pose[:, :3], sens.point, sens.rotation
             else:
-                direct = machine.fk(q, tool_length=lengths, x0=x0, full_output=True)
+                direct = machine.fk(q, tool_length=lengths, x0=x0, full_output=True,
+                                    **(closure_options or {}))
                 point = direct.pose[:, :3]
                 dpoint = drot = None
                 start = np.concatenate([direct.platform, direct.passive], axis=1)
@@ -166,6 +170,8 @@ class ResidualModel:
         self.setup = SetupParameters()
         self._cache: tuple | None = None
         self._warm: np.ndarray | None = None
+        #: engine options of a joint-chain machine's residual-only closures
+        self.closure_options: dict = {}
 
     def _tool(self, machine, *, jacobian: bool, rotation: bool = False) -> ToolState:
         """:func:`tool_state` at the measured configurations, cached for the last machine (the
@@ -175,7 +181,8 @@ class ResidualModel:
                                                                             rotation):
             return c[3]
         state = tool_state(machine, self.data.q, self.data.tool_length, jacobian=jacobian,
-                           rotation=rotation, x0=self._warm)
+                           rotation=rotation, x0=self._warm,
+                           closure_options=self.closure_options)
         self._cache = (machine, jacobian, rotation, state)
         if state.start is not None:
             self._warm = state.start

@@ -257,8 +257,11 @@ def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
               help="'auto' (every defect; the identifiable ones are selected) or "
                    "comma-separated defect names (candidates).")
 @click.option("--frame", "frame_spec", metavar="FILE|identify",
-              help="Point/pose readings in another frame: a registration JSON, or 'identify' "
-                   "(6 frame parameters identified with the machine).")
+              help="Point/pose readings in another frame: a registration JSON (pkmkit "
+                   "register --out), or 'identify' (6 frame parameters identified with the "
+                   "machine, from the identity).")
+@click.option("--identify-frame", is_flag=True,
+              help="With --frame FILE: refine that frame with the machine (6 parameters).")
 @click.option("--robust", is_flag=True, help="Huber loss; outliers reported by row.")
 @click.option("--prior", is_flag=True,
               help="Tolerances as priors (keeps every parameter the data see, weighted).")
@@ -273,7 +276,8 @@ def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
 @CAL_UNITS_OPTION
 @JSON_OPTION
 def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters, frame_spec,
-                  robust, prior, sigma, allow_incompatible, out_dir, units, as_json):
+                  identify_frame, robust, prior, sigma, allow_incompatible, out_dir, units,
+                  as_json):
     """Identify a machine's geometric defects from measurements, validate, report."""
     from pkmkit.calibration.identify import calibrate
     from pkmkit.calibration.registration import load_registration
@@ -289,6 +293,10 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
         frame = "identify"
     elif frame_spec:
         frame = load_registration(frame_spec)
+        if identify_frame:
+            frame = (frame, "identify")
+    elif identify_frame:
+        frame = "identify"
     result = calibrate(machine, data, validation=validation, parameters=parameters,
                        frame=frame, robust=robust, prior=prior,
                        sigma=None if sigma is None else sigma * length_scale(unit),
