@@ -326,6 +326,7 @@ class _Problem:
     weights: np.ndarray        # (N,) robust weights
     evaluations: int = 0
     _last: tuple | None = None
+    progress: Any = None       # a tqdm counter of model evaluations, or None
 
     @property
     def n_machine(self) -> int:
@@ -352,6 +353,8 @@ class _Problem:
         ``jacobian``) and the raw residual rows ``(N, w)``; ``(None, None, None)`` when the
         defects are not admissible."""
         self.evaluations += 1
+        if self.progress is not None:
+            self.progress.update(1)
         delta, setup = self.unpack(u)
         try:
             m = self.machine_at(delta)
@@ -604,7 +607,7 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
               robust: bool = False, prior: bool = False,
               tolerances: Mapping[str, float] | None = None, sigma: float | None = None,
               compatible: bool = True, rcond: float = RCOND, prune: bool = True,
-              max_iter: int = 60) -> CalibrationResult:
+              max_iter: int = 60, progress: bool = False) -> CalibrationResult:
     """Identify ``machine``'s defects from ``data`` (see the module docstring).
 
     Args:
@@ -625,6 +628,7 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
         rcond: relative rank threshold of the selection.
         prune: drop the parameters the noise determines worse than their tolerance.
         max_iter: iteration limit of each least-squares solve.
+        progress: show a progress counter of model evaluations on stderr (terminals only).
 
     Raises:
         InputError: measurements the machine cannot have produced (rows out of stroke, no
@@ -634,11 +638,14 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
     """
     # small dense problems: a multi-threaded BLAS only loses time, and collapses when another
     # process holds a core (docs/benchmarks.md)
-    with single_threaded_blas():
+    from tqdm import tqdm
+
+    with single_threaded_blas(), tqdm(desc="identification", unit=" evaluations",
+                                      disable=None if progress else True, leave=False) as bar:
         return _calibrate(machine, data, validation=validation, parameters=parameters,
                           frame=frame, robust=robust, prior=prior, tolerances=tolerances,
                           sigma=sigma, compatible=compatible, rcond=rcond, prune=prune,
-                          max_iter=max_iter)
+                          max_iter=max_iter, progress=bar if progress else None)
 
 
 def single_threaded_blas():
@@ -835,11 +842,12 @@ def identification_problem(machine, data: MeasurementSet, *,
 
 
 def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, tolerances,
-               sigma, compatible, rcond, prune, max_iter) -> CalibrationResult:
+               sigma, compatible, rcond, prune, max_iter, progress=None) -> CalibrationResult:
     prep = _prepare(machine, data, validation=validation, parameters=parameters, frame=frame,
                     prior=prior, tolerances=tolerances, sigma=sigma, compatible=compatible,
                     rcond=rcond, prune=prune)
     problem, u, model, dset = prep.problem, prep.u0, prep.model, prep.dset
+    problem.progress = progress
     setup0, r_before, unidentifiable = prep.setup0, prep.r_before, prep.unidentifiable
     setup_unid, cand_names = prep.setup_unid, prep.cand_names
     mach_sel, setup_sel, readings, sig = prep.mach_sel, prep.setup_sel, prep.readings, prep.sigma

@@ -300,7 +300,7 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
     result = calibrate(machine, data, validation=validation, parameters=parameters,
                        frame=frame, robust=robust, prior=prior,
                        sigma=None if sigma is None else sigma * length_scale(unit),
-                       compatible=not allow_incompatible)
+                       compatible=not allow_incompatible, progress=not as_json)
     payload = result.to_json(unit)
     if out_dir:
         from pkmkit.io.calibration_report import write_calibration_outputs
