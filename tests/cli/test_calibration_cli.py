@@ -190,3 +190,34 @@ def test_bad_input_exits_1_naming_the_line_and_writes_nothing(run, tmp_path):
     res = run("compensate", "linear-delta", "--calibrated", tmp_path / "none.toml", "--out",
               tmp_path / "c.csv")
     assert res.exit_code == 2
+
+
+def test_defects_table_file(run, as_json, tmp_path):
+    table = tmp_path / "d.toml"
+    table.write_text('units = "mm"\n[defects]\ndL1 = 0.2\ndq2 = -0.1\n')
+    out = as_json(run("simulate-measurements", "linear-delta", "--measure", "point", "--poses",
+                      20, "--defects", table, "--noise", "none", "--out", tmp_path / "m.csv",
+                      "--json"))
+    assert out["truth"] is None and out["defects"] == str(table)
+    res = as_json(run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+                      tmp_path / "m.csv", "--parameters", "dL1,dq2", "--units", "m", "--json"))
+    assert res["parameters"]["dL1"] == pytest.approx(2e-4, rel=1e-6)
+    assert res["parameters"]["dq2"] == pytest.approx(-1e-4, rel=1e-6)
+    table.write_text("[defects]\ndZ1 = 1\n")
+    res = run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 5,
+              "--defects", table, "--out", tmp_path / "n.csv")
+    assert res.exit_code == 1 and "d.toml:2: unknown defect 'dZ1'" in res.output
+
+
+def test_tolerances_and_correlations(run, as_json, delta_run):
+    d, _ = delta_run
+    out = as_json(run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+                      d / "ident.csv", "--prior", "--tolerance", "dL1=0.001", "--json"))
+    names = out["correlation"]["names"]
+    corr = np.array(out["correlation"]["matrix"])
+    assert corr.shape == (len(names), len(names))
+    np.testing.assert_allclose(np.diag(corr), 1.0)
+    assert abs(out["parameters"]["dL1"]) < 0.005  # mm: held near zero by its tight prior
+    res = run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+              d / "ident.csv", "--tolerance", "dQ9=1")
+    assert res.exit_code == 1 and "unknown defect 'dQ9'" in res.output

@@ -230,6 +230,8 @@ class CalibrationResult:
             "iterations": self.iterations,
             "seconds": self.seconds,
             "correlation_max": _max_correlation(self.correlation, self.names + self.setup_names),
+            "correlation": {"names": list(self.names + self.setup_names),
+                            "matrix": np.round(self.correlation, 6).tolist()},
             "residuals": {"rows": list(self.after.labels),
                           "before": (self.before.per_pose / scale).tolist(),
                           "after": (self.after.per_pose / scale).tolist()},

@@ -76,11 +76,12 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
     source = machine_document_path(machine_name)
     delta = np.zeros(0)
     truth_path = None
+    true = nominal
     if defects_spec == "random":
         delta = random_defects(nominal, rng)
+        true = apply_defect_vector(nominal, delta)
     elif defects_spec:
-        delta = _defects_file(defects_spec, nominal, unit)
-    true = apply_defect_vector(nominal, delta) if delta.size else nominal
+        true, delta = _defects_file(defects_spec, nominal, unit)
     q = None
     count = None
     if poses.strip().isdigit():
@@ -120,7 +121,7 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
     payload = {"machine": nominal.id, "measure": kind, "rows": len(data), "out": str(out_file),
                "units": unit, "seed": seed, "noise": noise,
                "truth": None if truth_path is None else str(truth_path),
-               "defects": int(np.count_nonzero(delta)) if delta.size else 0}
+               "defects": defects_spec or "none"}
     if as_json:
         emit_json(payload)
         return
@@ -139,25 +140,33 @@ def _numbers(text: str, what: str) -> list[float]:
     return values
 
 
-def _defects_file(path: str, machine, units: str) -> np.ndarray:
-    from pkmkit.model.defects_table import defects_from_table
+def _defects_file(path: str, machine, units: str):
+    """The true machine of ``--defects FILE`` and its defect vector: a complete machine file
+    (with a ``[machine]`` table, e.g. a ``.truth.toml`` written by this command) *is* the true
+    machine; a file with only a ``[defects]`` table (and optionally ``units``) is applied on
+    top of MACHINE."""
+    from pkmkit import load
+    from pkmkit.errors import ParameterError
+    from pkmkit.model.defects_table import apply_defect_vector, defects_from_table
     from pkmkit.model.machine_file import read_machine_document
 
     doc = read_machine_document(path)
     table = doc.data.get("defects")
     if not isinstance(table, dict):
         raise doc.error("a defects file needs a [defects] table (name = value)")
-    head = doc.data.get("machine") if isinstance(doc.data.get("machine"), dict) else {}
-    unit = head.get("units", doc.data.get("units", units))
+    if isinstance(doc.data.get("machine"), dict):
+        true = load(path)
+        if tuple(true.actuator_names) != tuple(machine.actuator_names):
+            raise InputError(f"{path} describes another machine (actuators "
+                             f"{', '.join(true.actuator_names)})")
+        return true, np.ones(1)
+    unit = doc.data.get("units", units)
     try:
-        return defects_from_table(machine, table, length_scale(unit))
-    except Exception as exc:  # unknown names or units: name the line
-        from pkmkit.errors import ParameterError
-
-        if isinstance(exc, ParameterError):
-            raise doc.error(str(exc), ("defects", exc.parameter) if exc.parameter else
-                            ("defects",)) from None
-        raise
+        delta = defects_from_table(machine, table, length_scale(unit))
+    except ParameterError as exc:
+        raise doc.error(str(exc), ("defects", exc.parameter) if exc.parameter else
+                        ("defects",)) from None
+    return apply_defect_vector(machine, delta), delta
 
 
 def _read_configurations(path: str, machine, units: str | None) -> np.ndarray:
@@ -265,6 +274,10 @@ def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
 @click.option("--robust", is_flag=True, help="Huber loss; outliers reported by row.")
 @click.option("--prior", is_flag=True,
               help="Tolerances as priors (keeps every parameter the data see, weighted).")
+@click.option("--tolerance", "tolerance_items", multiple=True, metavar="NAME=VALUE",
+              help="Tolerance of a defect (repeatable): lengths in the length unit, direction "
+                   "components dimensionless, angles in degrees. Default 0.1 mm, 0.005, "
+                   "0.29°. Scales the identifiability analysis; the prior with --prior.")
 @click.option("--sigma", type=float,
               help="Standard deviation of one reading (length unit; default by type).")
 @click.option("--allow-incompatible", is_flag=True,
@@ -276,8 +289,8 @@ def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
 @CAL_UNITS_OPTION
 @JSON_OPTION
 def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters, frame_spec,
-                  identify_frame, robust, prior, sigma, allow_incompatible, out_dir, units,
-                  as_json):
+                  identify_frame, robust, prior, tolerance_items, sigma, allow_incompatible,
+                  out_dir, units, as_json):
     """Identify a machine's geometric defects from measurements, validate, report."""
     from pkmkit.calibration.identify import calibrate
     from pkmkit.calibration.registration import load_registration
@@ -297,8 +310,9 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
             frame = (frame, "identify")
     elif identify_frame:
         frame = "identify"
+    tolerances = _tolerances(tolerance_items, machine, unit)
     result = calibrate(machine, data, validation=validation, parameters=parameters,
-                       frame=frame, robust=robust, prior=prior,
+                       frame=frame, robust=robust, prior=prior, tolerances=tolerances,
                        sigma=None if sigma is None else sigma * length_scale(unit),
                        compatible=not allow_incompatible, progress=not as_json)
     payload = result.to_json(unit)
@@ -316,6 +330,27 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
         emit_json(payload)
         return
     _print_calibration(result, payload, unit)
+
+
+def _tolerances(items, machine, unit: str) -> dict[str, float]:
+    from pkmkit.errors import ParameterError
+    from pkmkit.errors.model import defect_set
+
+    dset = defect_set(machine)
+    out = {}
+    for text in items:
+        name, sep, value = text.partition("=")
+        name = name.strip()
+        if not sep:
+            raise ParameterError(f"--tolerance expects NAME=VALUE, got {text!r}")
+        k = dset.index(name)
+        try:
+            v = float(value)
+        except ValueError:
+            raise ParameterError(f"--tolerance {name}: {value!r} is not a number", name) from None
+        u = dset.units[k]
+        out[name] = v * length_scale(unit) if u == "m" else (np.radians(v) if u == "rad" else v)
+    return out
 
 
 def _file_unit(path: str) -> str | None:
