@@ -229,14 +229,26 @@ def simulate(true_machine, nominal, kind: str, n: int, rng: np.random.Generator,
                                  bar_length, pivots, source)
     if kind == "height":
         return _simulate_height(true_machine, nominal, n, rng, model, q, source)
-    if q is None:
+    drawn = q is None
+    if drawn:
         q = default_configurations(nominal, n, rng)
-    q = np.atleast_2d(np.asarray(q, dtype=float))
+    q = np.atleast_2d(np.asarray(q, dtype=float)).copy()
     tl = _tool_lengths(nominal, len(q), tool_lengths)
     state = tool_state(true_machine, q, tl, jacobian=False, rotation=kind == "pose")
-    if not np.isfinite(state.point).all():
-        bad = int(np.flatnonzero(~np.isfinite(state.point).all(axis=1))[0])
-        raise InputError(f"the true machine does not assemble at configuration {bad}")
+    ok = np.isfinite(state.point).all(axis=1)
+    for _ in range(10 if drawn else 0):
+        # near the workspace's edge the true machine may not assemble where the nominal one
+        # does: draw replacements for those rows
+        if ok.all():
+            break
+        bad = np.flatnonzero(~ok)
+        q[bad] = default_configurations(nominal, len(bad), rng)
+        state = tool_state(true_machine, q, tl, jacobian=False, rotation=kind == "pose")
+        ok = np.isfinite(state.point).all(axis=1)
+    if not ok.all():
+        bad = int(np.flatnonzero(~ok)[0])
+        raise InputError(f"the true machine does not assemble at configuration {bad + 1}"
+                         + ("" if drawn else " of the given ones"))
     sigma = model.position_sigma(state.point)
     points = state.point + rng.standard_normal(state.point.shape) * sigma[:, None]
     inverse = frame.inverse() if frame is not None else None
