@@ -16,9 +16,11 @@ the identifiable parameters, with analytic Jacobians, validation and uncertainti
    defects that only move the machine rigidly with respect to the instrument are reported as
    gauges), then drops those the measurement noise cannot determine better than their tolerance
    (``prune=True``); every parameter left at its nominal value is reported with the reason;
-5. solves ``min Σ w_i ‖r_i / σ_i‖² (+ Σ (δ_j / tol_j)² with priors)`` by Levenberg–Marquardt
-   (MINPACK through SciPy) with the analytic Jacobians of the residual models, the machine with
-   defects rebuilt exactly at every step (inner closures included); with ``robust=True`` the
+5. solves ``min Σ w_i ‖r_i / σ_i‖² (+ Σ (δ_j / tol_j)² with priors)`` with the analytic
+   Jacobians of the residual models, the machine with defects rebuilt exactly at every step
+   (inner closures included): a chord stage (the batched engine's Levenberg–Marquardt on a
+   Jacobian frozen for a few iterations), then MINPACK's Levenberg–Marquardt (SciPy) if the
+   gradient is not yet orthogonal to every column (:func:`_solve`); with ``robust=True`` the
    weights w_i follow Huber's loss on each observation's normalised error (iteratively
    reweighted) and the observations beyond 3 robust standard deviations are reported;
 6. reports the identified values with standard deviations (``σ̂² (JᵀJ)⁻¹``, σ̂² the a-posteriori
