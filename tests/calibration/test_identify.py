@@ -90,7 +90,7 @@ def test_standard_deviations_match_the_scatter_over_noise_draws():
         stds.append(res.std)
     z = (np.array(values) - ref.values) / np.array(stds)
     spread = np.sqrt(np.mean(z**2))
-    assert 0.6 < spread < 1.5
+    assert 0.8 < spread < 1.25  # a covariance off by a factor 2 gives 0.71 or 1.41
 
 
 def test_robust_loss_reports_and_resists_outliers(delta_case):
