@@ -69,6 +69,19 @@ LAZY_COMMANDS: dict[str, LazyCommand] = {
         "pkmkit.cli.errors_cmds", "identifiability_cmd",
         "Which defects KIND measurements at the poses can identify: rank, base parameters, "
         "combinations, gauges, observability indices."),
+    "simulate-measurements": LazyCommand(
+        "pkmkit.cli.calibration_cmds", "simulate_cmd",
+        "Synthetic measurements of a machine with defects (for tests, studies and demos)."),
+    "register": LazyCommand(
+        "pkmkit.cli.calibration_cmds", "register_cmd",
+        "Rigid registration of a measurement frame to the machine frame (≥ 3 points, optional "
+        "direction vectors), with residuals."),
+    "calibrate": LazyCommand(
+        "pkmkit.cli.calibration_cmds", "calibrate_cmd",
+        "Identify a machine's geometric defects from measurements, validate, report."),
+    "compensate": LazyCommand(
+        "pkmkit.cli.calibration_cmds", "compensate_cmd",
+        "Corrected commands for the nominal controller from a calibrated machine."),
     "select-poses": LazyCommand(
         "pkmkit.cli.errors_cmds", "select_poses_cmd",
         "Choose N poses maximising an observability index; writes their actuator "

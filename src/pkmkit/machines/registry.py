@@ -60,7 +60,7 @@ ALIASES = {"linear-delta": "linear-delta-ch3", "five-bar": "five-bar-isotropic"}
 
 _MACHINE_KEYS = {"kind", "id", "name", "description", "source", "units", "dims", "home",
                  "mode_names"}
-_TOP_KEYS = {"machine", "parameters", "legs", "poses"}
+_TOP_KEYS = {"machine", "parameters", "legs", "poses", "defects"}
 _LEG_KEYS = {"name", "actuator", "type", "base", "axis", "platform", "length", "branch",
              "parallelogram", "stroke", "pivot"}
 
@@ -188,7 +188,20 @@ def machine_from_document(
         built = _with_poses(doc, built, poses)
     if overrides:  # errors here concern the caller's values, not the file
         built = built.with_params(**overrides)
+    if "defects" in doc.data:  # a calibrated (or simulated) machine: docs/machine-files.md
+        built = _with_defects_table(doc, built, scale)
     return built
+
+
+def _with_defects_table(doc: MachineDocument, machine: Machine, scale: float) -> Machine:
+    from pkmkit.model.defects_table import apply_defect_vector, defects_from_table
+
+    table = _table(doc, "defects", required=False)
+    try:
+        return apply_defect_vector(machine, defects_from_table(machine, table, scale))
+    except ParameterError as exc:
+        raise doc.error(str(exc), ("defects", exc.parameter) if exc.parameter else ("defects",)
+                        ) from None
 
 
 def _parameter_path(kind_name: str, parameter: str | None) -> tuple:

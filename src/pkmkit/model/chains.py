@@ -322,10 +322,17 @@ def axis_increment(z: np.ndarray, component: int) -> np.ndarray:
     return out
 
 
-def defect_twists(frames: np.ndarray, index: DefectIndex) -> np.ndarray:
+def defect_twists(frames: np.ndarray, index: DefectIndex, nominal: np.ndarray | None = None,
+                  delta: np.ndarray | None = None) -> np.ndarray:
     """First-order effect of each defect ``(d, 6)``: the twist (v, ω) in the previous frame by
-    which it moves the element's frame (left increment ``D ← exp(ξ̂ δ) D``, linear part first)."""
+    which it moves the element's frame (left increment ``D ← exp(ξ̂ δ) D``, linear part first).
+
+    With the ``nominal`` frames and the current defects ``delta``, the twists are the exact
+    derivatives of :func:`apply_defects` at ``delta`` (not only at zero): tilting an axis that
+    is already tilted also spins the frame about it (the minimal rotation from the nominal axis
+    has holonomy), and an existing spin defect turns the tilt."""
     out = np.zeros((len(index), 6))
+    exact = nominal is not None and delta is not None
     for i, (e, kind, k) in enumerate(zip(index.element, index.kind, index.component,
                                          strict=True)):
         frame = frames[e]
@@ -333,10 +340,34 @@ def defect_twists(frames: np.ndarray, index: DefectIndex) -> np.ndarray:
         if kind == "position":
             out[i, k] = 1.0
             continue
-        omega = z.copy() if kind == "spin" else np.cross(z, axis_increment(z, int(k)))
+        if kind == "spin":
+            omega = z.copy()
+        else:
+            dz = axis_increment(z, int(k))
+            omega = np.cross(z, dz)
+            if exact:
+                z0 = nominal[e][:3, 2]
+                # d(minimal rotation z0 → z) = z × dz + s z (its spin about z)
+                omega = omega - (z0 @ omega) / (1.0 + z0 @ z) * z
+                spin = sum(delta[j] for j in np.flatnonzero(index.element == e)
+                           if index.kind[j] == "spin")
+                if spin:
+                    # R = exp(σ[z]×) M N: ω = J_l(σ z) σ dz + exp(σ[z]×) ω_M
+                    omega = (_left_jacobian(spin * z) @ (spin * dz)
+                             + axis_rotation(z, np.asarray(spin)) @ omega)
         out[i, 3:] = omega
         out[i, :3] = np.cross(o, omega)  # rotation about the frame's point o
     return out
+
+
+def _left_jacobian(phi: np.ndarray) -> np.ndarray:
+    """``J_l(φ)`` of SO(3): ``exp(φ + dφ) ≈ exp(J_l(φ) dφ) exp(φ)``."""
+    theta = float(np.linalg.norm(phi))
+    k = skew(phi)
+    if theta < 1e-8:
+        return np.eye(3) + 0.5 * k
+    return (np.eye(3) + (1.0 - np.cos(theta)) / theta**2 * k
+            + (theta - np.sin(theta)) / theta**3 * (k @ k))
 
 
 def apply_defects(nominal: np.ndarray, index: DefectIndex, delta: np.ndarray) -> np.ndarray:

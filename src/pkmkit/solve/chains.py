@@ -139,7 +139,8 @@ def _local_defect_twists(model: JointChainModel) -> np.ndarray:
     """:func:`defect_twists` of the model's frames, computed once per (immutable) model."""
     cached = model.__dict__.get("_local_defect_twists")
     if cached is None:
-        cached = defect_twists(model.frames, model.defect_index)
+        cached = defect_twists(model.frames, model.defect_index, model.nominal_frames,
+                               model.defects)
         object.__setattr__(model, "_local_defect_twists", cached)
     return cached
 

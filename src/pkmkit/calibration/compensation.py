@@ -1,0 +1,173 @@
+"""Compensation of a nominal controller by an identified machine: corrected targets along tool
+paths (a corrected G-code program) and on grids (a correction table), and the error left after
+compensation.
+
+The identified machine reaches X when commanded ``q = IGM_identified(X)``; the nominal controller
+commands ``IGM_nominal(X')``, so the corrected target is ``X' = FGM_nominal(IGM_identified(X))``
+(:func:`pkmkit.calibration.controller.corrected_targets`). Paths are sampled at most ``step``
+apart (the correction varies along a move, so long moves become chains of short ones; arcs and
+helices become polylines), every sample corrected.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pkmkit.calibration.controller import as_targets, corrected_targets, executed
+from pkmkit.errors import InputError
+
+#: Targets per batch (progress bars advance per batch).
+CHUNK = 2000
+
+
+@dataclass(frozen=True)
+class CorrectedPath:
+    """A tool path sampled and corrected.
+
+    Attributes:
+        targets: ``(K, w)`` programmed points (m; with the tool axis for a 5-axis machine).
+        corrected: ``(K, w)`` what to send to the nominal controller.
+        rapid: ``(K,)`` the move ending at the point is a rapid (G0).
+        feed: ``(K,)`` programmed feed of that move (m/s, NaN for the default).
+        source: ``(K,)`` program line of the move.
+    """
+
+    targets: np.ndarray
+    corrected: np.ndarray
+    rapid: np.ndarray
+    feed: np.ndarray
+    source: np.ndarray
+
+    @property
+    def correction(self) -> np.ndarray:
+        """``(K,)`` size of the position correction (m)."""
+        return np.linalg.norm(self.corrected[:, :3] - self.targets[:, :3], axis=1)
+
+
+def _chunked(func, x: np.ndarray, progress: bool, label: str) -> np.ndarray:
+    from tqdm import tqdm
+
+    parts = []
+    starts = range(0, len(x), CHUNK)
+    for start in tqdm(starts, desc=label, unit="batch", disable=not progress or len(x) <= CHUNK,
+                      leave=False):
+        parts.append(func(x[start:start + CHUNK]))
+    return np.concatenate(parts) if parts else np.zeros((0, x.shape[1]))
+
+
+def correct_targets(nominal, identified, targets: Any, *, tool_length: float | None = None,
+                    progress: bool = False) -> np.ndarray:
+    """Corrected targets ``(N, w)`` for ``targets`` (module docstring), in batches.
+
+    Raises:
+        InputError: targets the identified machine cannot reach (their rows named).
+    """
+    x = as_targets(identified, targets)
+    out = _chunked(lambda part: corrected_targets(nominal, identified, part, tool_length), x,
+                   progress, "compensating")
+    bad = np.flatnonzero(~np.isfinite(out).all(axis=1))
+    if bad.size:
+        rows = ", ".join(str(i + 1) for i in bad[:10])
+        raise InputError(f"{bad.size} target(s) out of reach of the calibrated machine (rows "
+                         f"{rows}{' …' if bad.size > 10 else ''})")
+    return out
+
+
+def sample_path(path, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Points of a :class:`~pkmkit.motion.paths.Path` at most ``step`` apart (each segment's
+    end included; the path's start first), with per-point rapid flag, feed and source line."""
+    if not (np.isfinite(step) and step > 0):
+        raise InputError(f"the sampling step must be > 0, got {step!r}")
+    segs = path.segments
+    points = [segs[0].start]
+    rapid, feed = [True], [np.nan]
+    source = [path.source[0] if path.source else 0]
+    for k, seg in enumerate(segs):
+        n = max(1, int(np.ceil(seg.length / step)))
+        s = np.linspace(0.0, seg.length, n + 1)[1:]
+        pts = seg.evaluate(s)[0] if seg.length > 0 else np.atleast_2d(seg.end)
+        points.extend(pts)
+        rapid += [bool(seg.rapid)] * len(pts)
+        feed += [np.nan if seg.feed is None else float(seg.feed)] * len(pts)
+        source += [path.source[k] if path.source else k + 1] * len(pts)
+    return (np.array(points), np.array(rapid), np.array(feed), np.array(source, dtype=int))
+
+
+def correct_path(nominal, identified, path, *, step: float = 1e-3,
+                 tool_length: float | None = None, progress: bool = False) -> CorrectedPath:
+    """Sample ``path`` every ``step`` (m) and correct every point."""
+    pts, rapid, feed, source = sample_path(path, step)
+    targets = as_targets(identified, pts)
+    corrected = correct_targets(nominal, identified, targets, tool_length=tool_length,
+                                progress=progress)
+    return CorrectedPath(targets=targets, corrected=corrected, rapid=rapid, feed=feed,
+                         source=source)
+
+
+def grid_targets(lower: Any, upper: Any, counts: Any) -> np.ndarray:
+    """Points of a regular grid ``(nx·ny·nz, 3)`` between ``lower`` and ``upper`` (m)."""
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    n = np.asarray(counts, dtype=int)
+    if lo.shape != (3,) or hi.shape != (3,) or n.shape != (3,) or (n < 1).any():
+        raise InputError("a grid needs 3 lower and 3 upper coordinates and 3 counts ≥ 1")
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        raise InputError("grid bounds must be finite")
+    axes = [np.linspace(lo[k], hi[k], n[k]) if n[k] > 1 else np.array([(lo[k] + hi[k]) / 2])
+            for k in range(3)]
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return np.column_stack([m.ravel() for m in mesh])
+
+
+@dataclass(frozen=True)
+class CompensationCheck:
+    """Errors of a true machine at targets, commanded by the nominal controller without and
+    with compensation: ``before (N,)``, ``after (N,)`` (m); ``after_rigid (N,)``: the errors
+    with compensation once the best rigid motion between reached and wanted points is removed
+    (what a frame identified with the machine leaves: a set-up offset of the workpiece, not an
+    error of its shape)."""
+
+    before: np.ndarray
+    after: np.ndarray
+    after_rigid: np.ndarray
+
+    def to_dict(self, scale: float = 1.0) -> dict[str, float]:
+        b, a, r = self.before / scale, self.after / scale, self.after_rigid / scale
+        return {"mean_before": float(b.mean()), "rms_before": float(np.sqrt((b**2).mean())),
+                "max_before": float(b.max()), "mean_after": float(a.mean()),
+                "rms_after": float(np.sqrt((a**2).mean())), "max_after": float(a.max()),
+                "mean_after_rigid": float(r.mean()), "max_after_rigid": float(r.max())}
+
+
+def rigid_residuals(reached: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+    """``(N,)`` distances between ``wanted`` points and the ``reached`` ones after the best
+    rigid motion of the latter (Kabsch; translation only for fewer than 3 points)."""
+    from pkmkit.calibration.registration import register_points
+
+    if len(reached) < 3:
+        return np.linalg.norm(reached - reached.mean(axis=0) - wanted + wanted.mean(axis=0),
+                              axis=1)
+    try:
+        reg = register_points(reached, wanted)
+    except InputError:  # collinear points: translation only
+        return np.linalg.norm(reached - reached.mean(axis=0) - wanted + wanted.mean(axis=0),
+                              axis=1)
+    return np.linalg.norm(reg.point_residuals, axis=1)
+
+
+def check_compensation(true_machine, nominal, identified, targets: Any, *,
+                       tool_length: float | None = None) -> CompensationCheck:
+    """Where the true machine puts its tool for ``targets``: commanded by the nominal controller
+    as is, and with the corrected targets (the residual error after compensation)."""
+    x = as_targets(identified, targets)
+    before = executed(true_machine, nominal, x, tool_length)
+    corrected = corrected_targets(nominal, identified, x, tool_length)
+    after = executed(true_machine, nominal, corrected, tool_length)
+    ok = np.isfinite(before).all(axis=1) & np.isfinite(after).all(axis=1)
+    if not ok.all():
+        raise InputError(f"{(~ok).sum()} validation target(s) out of reach")
+    return CompensationCheck(before=np.linalg.norm(before[:, :3] - x[:, :3], axis=1),
+                             after=np.linalg.norm(after[:, :3] - x[:, :3], axis=1),
+                             after_rigid=rigid_residuals(after[:, :3], x[:, :3]))

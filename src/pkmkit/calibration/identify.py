@@ -1,0 +1,1032 @@
+"""Identification of a machine's geometric defects from measurements: nonlinear least squares over
+the identifiable parameters, with analytic Jacobians, validation and uncertainties.
+
+:func:`calibrate` runs the whole procedure:
+
+1. checks the measurements against the machine (strokes, assembly of the nominal machine),
+   naming the rows that fail;
+2. fits the set-up parameters alone on the nominal machine (measurement frame, part placement,
+   ball-bar pivots, bed plane: :mod:`pkmkit.calibration.models`) — the **before** state;
+3. for a hyperstatic machine, restricts the defects to the **compatible** subspace (the legs
+   close exactly; :func:`~pkmkit.calibration.identifiability.compatible_directions`: the
+   incompatible directions are named and fixed), unless ``compatible=False`` (then the forward
+   model closes the legs in least squares, as seed 002 did);
+4. selects the **identifiable** parameters on the whitened, tolerance-scaled Jacobian at the
+   nominal machine (QR with column pivoting; set-up parameters first, so that the machine
+   defects that only move the machine rigidly with respect to the instrument are reported as
+   gauges), then drops those the measurement noise cannot determine better than their tolerance
+   (``prune=True``); every parameter left at its nominal value is reported with the reason;
+5. solves ``min Σ w_i ‖r_i / σ_i‖² (+ Σ (δ_j / tol_j)² with priors)`` with the analytic
+   Jacobians of the residual models, the machine with defects rebuilt exactly at every step
+   (inner closures included): a chord stage (the batched engine's Levenberg–Marquardt on a
+   Jacobian frozen for a few iterations), then MINPACK's Levenberg–Marquardt (SciPy) if the
+   gradient is not yet orthogonal to every column (:func:`_solve`); with ``robust=True`` the
+   weights w_i follow Huber's loss on each observation's normalised error (iteratively
+   reweighted) and the observations beyond 3 robust standard deviations are reported;
+6. reports the identified values with standard deviations (``σ̂² (JᵀJ)⁻¹``, σ̂² the a-posteriori
+   variance factor) and correlations, the residuals before and after (mean, RMS, max, per
+   observation), the rank and condition of the identified problem, and the residuals of a
+   held-out validation set before and after.
+
+Units: SI inside (m, rad, and dimensionless direction components); :meth:`CalibrationResult.
+to_json` converts lengths to the caller's unit and angles (``"rad"`` parameters) to degrees.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from pkmkit.calibration.identifiability import (
+    RCOND,
+    CompatibleDirections,
+    compatible_directions,
+    identifiable_parameters,
+    prune_weak,
+)
+from pkmkit.calibration.measurement_set import MeasurementSet
+from pkmkit.calibration.models import ResidualModel, make_model
+from pkmkit.calibration.registration import Registration
+from pkmkit.errors import ConvergenceError, InputError, ParameterError
+from pkmkit.errors.model import _family, defect_set, tool_sensitivity
+from pkmkit.model.defects_table import apply_defect_vector
+from pkmkit.status import Status
+
+#: Default standard deviation of one reading per measurement type (m): a laser tracker
+#: (≈ ±15 µm + 6 µm/m as a 2σ bound at 2–3 m), a ball-bar (±1 µm), a touch probe, a CMM.
+DEFAULT_SIGMA = {"point": 1.5e-5, "pose": 1.5e-5, "ballbar": 1e-6, "height": 2e-6,
+                 "part": 2e-6}
+#: Standard deviation of a measured orientation (rad) for ``pose`` measurements.
+DEFAULT_SIGMA_ROTATION = 3e-5
+#: Default tolerance (typical magnitude) of a defect by unit: m, direction component, rad.
+DEFAULT_TOLERANCE = {"m": 1e-4, "1": 5e-3, "rad": 5e-3}
+#: Huber threshold on an observation's normalised error (robust loss).
+HUBER = 2.0
+#: Observations beyond this many robust standard deviations are reported as outliers.
+OUTLIER = 3.0
+
+
+@dataclass(frozen=True)
+class ResidualStats:
+    """Error magnitudes of N observations (SI): ``per_pose (N,)``, with their mean, RMS, max."""
+
+    per_pose: np.ndarray
+    labels: tuple[str, ...]
+
+    @property
+    def mean(self) -> float:
+        return float(np.mean(self.per_pose)) if self.per_pose.size else float("nan")
+
+    @property
+    def rms(self) -> float:
+        return float(np.sqrt(np.mean(self.per_pose**2))) if self.per_pose.size else float("nan")
+
+    @property
+    def max(self) -> float:
+        return float(np.max(self.per_pose)) if self.per_pose.size else float("nan")
+
+    def to_dict(self, scale: float = 1.0) -> dict[str, Any]:
+        return {"mean": self.mean / scale, "rms": self.rms / scale, "max": self.max / scale}
+
+
+@dataclass(frozen=True)
+class Validation:
+    """Residuals of a held-out set before (nominal machine) and after (identified machine)."""
+
+    before: ResidualStats
+    after: ResidualStats
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """Outcome of :func:`calibrate` (SI units; see :meth:`to_json` for output units).
+
+    Attributes:
+        machine: the identified machine (nominal with :attr:`defects` applied).
+        nominal: the machine calibrated.
+        kind: measurement type.
+        names, units, values, std: the identified machine parameters (defect names).
+        setup_names, setup_units, setup_values, setup_std: the identified set-up parameters.
+        correlation: ``(p + s, p + s)`` correlations of every identified parameter (machine
+            first, then set-up).
+        defects: ``(d,)`` the identified machine's full defect vector (dependent defects of a
+            hyperstatic machine follow their free ones; unidentified ones 0).
+        defect_names: ``(d,)``.
+        before, after: residuals of the identification set with the nominal and identified
+            machines (set-up fitted in both).
+        validation: held-out residuals, or None.
+        rank, condition: of the identified problem (whitened, tolerance-scaled Jacobian).
+        candidates: number of candidate machine parameters.
+        unidentifiable: name → why it was left at its nominal value.
+        outliers: ``(label, error (m), weight)`` of the observations the robust loss
+            down-weighted beyond :data:`OUTLIER` robust standard deviations.
+        sigma, sigma_posterior: the a-priori standard deviation of a reading and the
+            a-posteriori one (RMS of the normalised residuals × sigma).
+        frame: the measurement-to-machine transform (identified or given), or None.
+        iterations, seconds: solver iterations (all robust rounds) and wall time.
+        residuals: ``(N, w)`` final residual rows (SI) of the identification set.
+        weights: ``(N,)`` final robust weights (ones without ``robust``).
+        singular_values: of the identified problem's whitened, tolerance-scaled Jacobian
+            (measurement rows; the identifiability spectrum).
+        tolerance: ``(p,)`` the tolerances (scales, priors) of the identified parameters.
+    """
+
+    machine: Any
+    nominal: Any
+    kind: str
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    values: np.ndarray
+    std: np.ndarray
+    setup_names: tuple[str, ...]
+    setup_units: tuple[str, ...]
+    setup_values: np.ndarray
+    setup_std: np.ndarray
+    correlation: np.ndarray
+    defects: np.ndarray
+    defect_names: tuple[str, ...]
+    before: ResidualStats
+    after: ResidualStats
+    validation: Validation | None
+    rank: int
+    condition: float
+    candidates: int
+    unidentifiable: dict[str, str]
+    outliers: list[tuple[str, float, float]]
+    sigma: float
+    sigma_posterior: float
+    frame: Registration | None
+    iterations: int
+    seconds: float
+    residuals: np.ndarray = field(repr=False, default=None)
+    weights: np.ndarray = field(repr=False, default=None)
+    singular_values: np.ndarray = field(repr=False, default=None)
+    tolerance: np.ndarray = field(repr=False, default=None)
+
+    def value(self, name: str) -> float:
+        """An identified machine or set-up parameter by name (SI)."""
+        if name in self.names:
+            return float(self.values[self.names.index(name)])
+        if name in self.setup_names:
+            return float(self.setup_values[self.setup_names.index(name)])
+        raise ParameterError(f"{name!r} was not identified", name)
+
+    def to_json(self, units: str = "m") -> dict[str, Any]:
+        """JSON-ready summary: lengths in ``units``, ``"rad"`` parameters in degrees,
+        direction components dimensionless (≈ rad)."""
+        from pkmkit.model.parameters import length_scale
+
+        scale = length_scale(units)
+
+        def conv(v, u):
+            return v / scale if u == "m" else (float(np.degrees(v)) if u == "rad" else v)
+
+        def unit_label(u):
+            return units if u == "m" else ("deg" if u == "rad" else "1")
+
+        params = {n: conv(float(v), u) for n, v, u in zip(self.names, self.values, self.units,
+                                                          strict=True)}
+        std = {n: conv(float(v), u) for n, v, u in zip(self.names, self.std, self.units,
+                                                       strict=True)}
+        setup = {n: conv(float(v), u) for n, v, u in zip(self.setup_names, self.setup_values,
+                                                         self.setup_units, strict=True)}
+        setup_std = {n: conv(float(v), u) for n, v, u in zip(
+            self.setup_names, self.setup_std, self.setup_units, strict=True)}
+        out = {
+            "machine": self.nominal.id,
+            "measure": self.kind,
+            "units": units,
+            "parameters": params,
+            "std": std,
+            "parameter_units": {n: unit_label(u) for n, u in zip(self.names, self.units,
+                                                                  strict=True)},
+            "setup": setup,
+            "setup_std": setup_std,
+            "rms_before": self.before.rms / scale,
+            "rms_after": self.after.rms / scale,
+            "mean_before": self.before.mean / scale,
+            "mean_after": self.after.mean / scale,
+            "max_before": self.before.max / scale,
+            "max_after": self.after.max / scale,
+            "validation": None if self.validation is None else {
+                "poses": int(self.validation.after.per_pose.size),
+                "before": self.validation.before.to_dict(scale),
+                "after": self.validation.after.to_dict(scale),
+                "rms_before": self.validation.before.rms / scale,
+                "rms_after": self.validation.after.rms / scale,
+                "max_before": self.validation.before.max / scale,
+                "max_after": self.validation.after.max / scale},
+            "rank": self.rank,
+            "condition": self.condition,
+            "candidates": self.candidates,
+            "unidentifiable": dict(self.unidentifiable),
+            "outliers": [{"row": lab, "error": err / scale, "weight": w}
+                         for lab, err, w in self.outliers],
+            "sigma": self.sigma / scale,
+            "sigma_posterior": self.sigma_posterior / scale,
+            "poses": int(self.after.per_pose.size),
+            "iterations": self.iterations,
+            "seconds": self.seconds,
+            "correlation_max": _max_correlation(self.correlation, self.names + self.setup_names),
+            "correlation": {"names": list(self.names + self.setup_names),
+                            "matrix": np.round(self.correlation, 6).tolist()},
+            "residuals": {"rows": list(self.after.labels),
+                          "before": (self.before.per_pose / scale).tolist(),
+                          "after": (self.after.per_pose / scale).tolist()},
+        }
+        if self.frame is not None:
+            out["frame"] = {k: v for k, v in self.frame.to_dict(scale).items()
+                            if not k.startswith("point") and k not in ("rms", "max")
+                            and not k.startswith("direction")}
+        return out
+
+
+def _max_correlation(corr: np.ndarray, names: Sequence[str]) -> dict[str, Any] | None:
+    if corr.shape[0] < 2:
+        return None
+    c = np.abs(corr - np.eye(corr.shape[0]))
+    i, j = np.unravel_index(int(np.nanargmax(c)), c.shape)
+    return {"pair": [names[i], names[j]], "value": float(corr[i, j])}
+
+
+def default_tolerances(names: Sequence[str], units: Sequence[str],
+                       tolerances: Mapping[str, float] | None = None) -> np.ndarray:
+    """Tolerance (typical magnitude, SI) of each defect: ``tolerances[name]`` or the default of
+    its unit (:data:`DEFAULT_TOLERANCE`)."""
+    tolerances = dict(tolerances or {})
+    unknown = sorted(set(tolerances) - set(names))
+    if unknown:
+        raise ParameterError(f"tolerances given for unknown defects: {', '.join(unknown)}",
+                             unknown[0])
+    out = np.array([float(tolerances.get(n, DEFAULT_TOLERANCE[u])) for n, u in
+                    zip(names, units, strict=True)])
+    if not (np.isfinite(out).all() and (out > 0).all()):
+        raise ParameterError("tolerances must be positive numbers")
+    return out
+
+
+def check_measurements(machine, data: MeasurementSet) -> None:
+    """Typed errors for rows outside the strokes or where the nominal machine does not
+    assemble, naming the rows (file lines) and actuator columns.
+
+    Raises:
+        InputError: the rows and columns at fault (up to ten listed).
+    """
+    if data.q is None:
+        return
+    q = data.q
+    if q.shape[1] != machine.n_actuators:
+        raise InputError(f"{data.source}: {q.shape[1]} actuator columns for a machine with "
+                         f"{machine.n_actuators} actuators")
+    if not np.isfinite(q).all():
+        i = int(np.flatnonzero(~np.isfinite(q).all(axis=1))[0])
+        raise InputError(f"{data.labels[i]}: actuator values are not finite")
+    lo, hi = _strokes(machine)
+    angle = _angle_actuators(machine)
+    bad = []
+    for k, name in enumerate(machine.actuator_names):
+        rows = np.flatnonzero((q[:, k] < lo[k] - 1e-12) | (q[:, k] > hi[k] + 1e-12))
+        for i in rows:
+            f = (np.degrees if angle[k] else (lambda v: v))
+            bad.append(f"{data.labels[i]} column {name}: {f(q[i, k]):.6g} outside the stroke "
+                       f"[{f(lo[k]):.6g}, {f(hi[k]):.6g}] ({'deg' if angle[k] else 'm'})")
+    if bad:
+        more = f" (and {len(bad) - 10} more)" if len(bad) > 10 else ""
+        raise InputError("rows out of stroke: " + "; ".join(bad[:10]) + more)
+
+
+def _strokes(machine) -> tuple[np.ndarray, np.ndarray]:
+    model = machine.model
+    if _family(machine) == "chain":
+        act = np.flatnonzero(model.actuated)
+        return model.q_min[act], model.q_max[act]
+    return np.asarray(model.q_min, dtype=float), np.asarray(model.q_max, dtype=float)
+
+
+def _angle_actuators(machine) -> np.ndarray:
+    """``(n,)`` True for angular actuators (revolute joints, cranks)."""
+    if _family(machine) == "chain":
+        return np.array([quantity == "angle" for quantity in machine.actuator_quantities])
+    from pkmkit.model.rods import CRANK
+
+    return np.asarray(machine.model.actuator_kind) == CRANK
+
+
+@dataclass
+class _Problem:
+    """The least-squares problem in scaled unknowns u = θ / scale."""
+
+    machine: Any
+    model: ResidualModel
+    basis: np.ndarray          # (d, p) machine unknowns → full defect vector
+    setup_index: np.ndarray    # indices of the identified set-up parameters
+    setup_base: np.ndarray     # (s,) values of every set-up parameter (unidentified ones kept)
+    scale: np.ndarray          # (p + s_id,)
+    prior: bool
+    weights: np.ndarray        # (N,) robust weights
+    evaluations: int = 0
+    _last: tuple | None = None
+    progress: Any = None       # a tqdm counter of model evaluations, or None
+
+    @property
+    def n_machine(self) -> int:
+        return self.basis.shape[1]
+
+    def unpack(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        theta = u * self.scale
+        setup = self.setup_base.copy()
+        setup[self.setup_index] = theta[self.n_machine:]
+        return self.basis @ theta[:self.n_machine], setup
+
+    def machine_at(self, delta: np.ndarray):
+        """The machine with ``delta`` applied (the last one is cached: a Jacobian is often
+        evaluated where the last residual was)."""
+        key = delta.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        machine = apply_defect_vector(self.machine, delta)
+        self._last = (key, machine)
+        return machine
+
+    def evaluate(self, u: np.ndarray, jacobian: bool = True):
+        """Whitened residual ``(M,)``, Jacobian ``(M, p)`` in scaled unknowns (None without
+        ``jacobian``) and the raw residual rows ``(N, w)``; ``(None, None, None)`` when the
+        defects are not admissible."""
+        self.evaluations += 1
+        if self.progress is not None:
+            self.progress.update(1)
+        delta, setup = self.unpack(u)
+        try:
+            m = self.machine_at(delta)
+        except ParameterError:
+            return None, None, None
+        r, jd, js = self.model.residuals(m, setup, jacobian=jacobian)
+        return self.assemble(u, r, jd, js)
+
+    def assemble(self, u, r, jd, js):
+        """Whitened, scaled residual and Jacobian from a model's raw ones (prior rows
+        appended)."""
+        w = np.sqrt(self.weights)[:, None] / self.model.sigma
+        rw = (r * w).reshape(-1)
+        if self.prior:
+            rw = np.concatenate([rw, u[:self.n_machine]])
+        if jd is None:
+            return rw, None, r
+        jac = np.concatenate([jd @ self.basis, js[:, :, self.setup_index]], axis=2)
+        jw = (jac * w[:, :, None]).reshape(len(r) * r.shape[1], -1) * self.scale[None, :]
+        if self.prior:
+            jp = np.zeros((self.n_machine, len(u)))
+            jp[:, :self.n_machine] = np.eye(self.n_machine)
+            jw = np.concatenate([jw, jp])
+        return rw, jw, r
+
+
+#: A whitened residual norm below this is an exact fit.
+EXACT = 1e-9
+#: A decrease of the whitened squared residual below this per row over :data:`STALL`
+#: evaluations is no progress.
+NEGLIGIBLE = 1e-9
+STALL = 12
+#: A whitened residual row that cannot be evaluated (the machine does not assemble at a trial
+#: point) counts as this: the step is rejected.
+UNASSEMBLED = 1e8
+
+
+@dataclass
+class _Solution:
+    u: np.ndarray
+    iterations: int
+    status: int
+    rw: np.ndarray | None
+    jw: np.ndarray | None
+    r: np.ndarray | None
+
+
+def _finite(*arrays) -> bool:
+    return all(a is not None and np.isfinite(a).all() for a in arrays)
+
+
+#: Rounds of the chord stage of :func:`_solve`, iterations per round, and its convergence
+#: test on the gradient cosines.
+CHORD_ROUNDS = 4
+ROUND_ITER = 3
+COSINE_TOL = 1e-6
+
+
+def _cosines(rw: np.ndarray, jw: np.ndarray) -> np.ndarray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = np.abs(jw.T @ rw) / (np.linalg.norm(jw, axis=0) * np.linalg.norm(rw))
+    return np.nan_to_num(c, nan=0.0)
+
+
+def _solve(problem: _Problem, u0: np.ndarray, max_iter: int,
+           start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> _Solution:
+    """Least squares in two stages: a fast chord stage, then Levenberg–Marquardt if needed.
+
+    1. :func:`_solve_chord` — the batched engine's Levenberg–Marquardt with the Jacobian
+       frozen for a few iterations (defects are small: the Jacobian barely changes, and
+       residual-only evaluations are cheap), refreshed between rounds; it usually reaches the
+       optimum of a noisy calibration in two rounds;
+    2. if the gradient cosines ``|Jᵀr|_j / (‖J_j‖ ‖r‖)`` are not all below
+       :data:`COSINE_TOL` (ill-conditioned or exact-fit problems, where a frozen Jacobian
+       crawls), :func:`_solve_lm` takes over from there.
+    """
+    sol = _solve_chord(problem, u0, start, max_iter)
+    if sol.status != Status.OK:
+        if sol.rw is None:
+            return sol
+        sol = _Solution(u0, sol.iterations, int(Status.OK), *(start or problem.evaluate(
+            u0, jacobian=True)))
+    if float(sol.rw @ sol.rw) <= EXACT**2 or not (_cosines(sol.rw, sol.jw) > COSINE_TOL).any():
+        return sol
+    if sol.iterations >= max_iter:
+        return _Solution(sol.u, sol.iterations, int(Status.NOT_CONVERGED), sol.rw, sol.jw,
+                         sol.r)
+    out = _solve_lm(problem, sol.u, max_iter - sol.iterations, (sol.rw, sol.jw, sol.r))
+    return _Solution(out.u, out.iterations + sol.iterations, out.status, out.rw, out.jw, out.r)
+
+
+def _solve_chord(problem: _Problem, u0: np.ndarray,
+                 start: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+                 max_iter: int) -> _Solution:
+    """Rounds of :data:`ROUND_ITER` engine iterations on residual-only evaluations with the
+    Jacobian of the round's start."""
+    from pkmkit.solve.least_squares import solve_least_squares
+
+    u = np.array(u0, dtype=float)
+    rw, jw, r = start if start is not None else problem.evaluate(u, jacobian=True)
+    if not _finite(rw, jw):
+        return _Solution(u, 0, int(Status.INVALID_INPUT), None, None, r)
+    total, m = 0, len(rw)
+    for _ in range(CHORD_ROUNDS):
+        if float(rw @ rw) <= EXACT**2 or not (_cosines(rw, jw) > COSINE_TOL).any():
+            break
+        frozen = jw[:, :, None]
+
+        def evaluate(uu, rows, frozen=frozen):
+            res, _, _ = problem.evaluate(uu[:, 0], jacobian=False)
+            if res is None or not np.isfinite(res).all():
+                return np.full((m, 1), np.nan), np.full_like(frozen, np.nan)
+            return res[:, None], frozen
+
+        if total >= max_iter:
+            break
+        res = solve_least_squares(evaluate, u[None], max_iter=min(ROUND_ITER, max_iter - total),
+                                  xtol=1e-10,
+                                  atol=EXACT, gtol=COSINE_TOL / 10, residual_tol=np.inf,
+                                  damping=1e-8, stall=1e-12, compute_rank=False)
+        total += int(res.iterations[0])
+        if not np.isfinite(res.u[0]).all():
+            break
+        step = float(np.linalg.norm(res.u[0] - u))
+        new = problem.evaluate(res.u[0], jacobian=True)
+        if not _finite(new[0], new[1]):
+            break
+        u, (rw, jw, r) = res.u[0], new
+        if step <= 1e-10 * (1.0 + float(np.linalg.norm(u))):
+            break
+    return _Solution(u, total, int(Status.OK), rw, jw, r)
+
+
+def _solve_lm(problem: _Problem, u0: np.ndarray, max_iter: int,
+              start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> _Solution:
+    """Levenberg–Marquardt (MINPACK, via :func:`scipy.optimize.least_squares`) on the whitened
+    residual with its analytic Jacobian: residuals at trial points, the Jacobian at accepted
+    points only. (The batched engine of :mod:`pkmkit.solve` is built for many small problems;
+    this is one dense, often ill-conditioned problem, for which MINPACK's trust-region damping
+    is the proven tool.) A trial point where the machine does not assemble gets a huge
+    residual, so the step is rejected and the damping raised.
+
+    ``start``: ``(rw, jw, r)`` already evaluated at ``u0``.
+    """
+    from scipy.optimize import least_squares
+
+    u0 = np.array(u0, dtype=float)
+    rw0, jw0, r0 = start if start is not None else problem.evaluate(u0, jacobian=True)
+    if not _finite(rw0, jw0):
+        return _Solution(u0, 0, int(Status.INVALID_INPUT), rw0, jw0, r0)
+    if u0.size == 0:
+        return _Solution(u0, 0, int(Status.OK), rw0, jw0, r0)
+    m = len(rw0)
+    cache = {u0.tobytes(): (rw0, jw0, r0)}
+
+    def fun(u):
+        key = u.tobytes()
+        if key not in cache:
+            cache.clear()
+            cache[key] = problem.evaluate(u, jacobian=False)
+        rw = cache[key][0]
+        if rw is None:
+            return np.full(m, UNASSEMBLED)
+        return np.where(np.isfinite(rw), rw, UNASSEMBLED)
+
+    def jac(u):
+        key = u.tobytes()
+        hit = cache.get(key)
+        if hit is None or hit[1] is None:
+            cache.clear()
+            cache[key] = problem.evaluate(u, jacobian=True)
+        jw = cache[key][1]
+        if jw is None or not np.isfinite(jw).all():
+            raise _Unassembled(cache[key][2])
+        return jw
+
+    if m < u0.size:  # MINPACK needs at least as many rows as unknowns
+        return _Solution(u0, 0, int(Status.INVALID_INPUT), rw0, jw0, r0)
+    # MINPACK's tests are relative; a residual with a floor (an exact fit down to the inner
+    # closures' accuracy) would crawl: stop when the best cost has not dropped by a
+    # statistically meaningful amount (NEGLIGIBLE per row) over STALL evaluations
+    history = {"best": float(rw0 @ rw0), "u": u0.copy(), "since": 0, "mark": float(rw0 @ rw0)}
+
+    def watched(u):
+        out = fun(u)
+        cost = float(out @ out)
+        if cost < history["best"]:
+            history["best"], history["u"] = cost, u.copy()
+        history["since"] += 1
+        if history["since"] >= STALL:
+            if history["mark"] - history["best"] <= NEGLIGIBLE * m:
+                raise _Stalled()
+            history["since"], history["mark"] = 0, history["best"]
+        return out
+
+    try:
+        sol = least_squares(watched, u0, jac=jac, method="lm", xtol=1e-10, ftol=1e-12,
+                            gtol=1e-10, max_nfev=max_iter * 10)
+        u, status, iterations = sol.x, sol.status, int(sol.njev or sol.nfev)
+    except _Unassembled as exc:
+        return _Solution(u0, 0, int(Status.NO_ASSEMBLY), None, None, exc.residuals)
+    except _Stalled:
+        u, status, iterations = history["u"], 1, STALL
+    rw, jw, r = problem.evaluate(u, jacobian=True)
+    if status <= 0 or not _finite(rw, jw):
+        status = Status.NOT_CONVERGED if _finite(rw, jw) else Status.NO_ASSEMBLY
+        return _Solution(u, iterations, int(status), rw, jw, r)
+    return _Solution(u, iterations, int(Status.OK), rw, jw, r)
+
+
+class _Stalled(Exception):
+    pass
+
+
+class _Unassembled(Exception):
+    def __init__(self, residuals):
+        self.residuals = residuals
+        super().__init__("the machine does not assemble")
+
+
+def problem_rows(problem: _Problem) -> int:
+    m = len(problem.model.data) * problem.model.width
+    return m + (problem.n_machine if problem.prior else 0)
+
+
+def _fit_setup(machine, model: ResidualModel, max_iter: int = 50) -> np.ndarray:
+    """The set-up parameters fitted alone on ``machine`` (the machine fixed)."""
+    s = len(model.setup)
+    if s == 0:
+        return np.zeros(0)
+    problem = _Problem(machine=machine, model=model, basis=np.zeros((0, 0)),
+                       setup_index=np.arange(s), setup_base=model.setup.initial.copy(),
+                       scale=model.setup.scale.copy(), prior=False,
+                       weights=np.ones(len(model.data)))
+    problem.basis = np.zeros((len(defect_set(machine)), 0))
+    u0 = model.setup.initial / model.setup.scale
+    sol = _solve(problem, u0, max_iter)
+    if sol.status not in (Status.OK, Status.INCONSISTENT):
+        raise ConvergenceError(f"the {model.data.kind} set-up parameters could not be fitted on "
+                               f"the machine ({Status(sol.status).label})")
+    return sol.u * model.setup.scale
+
+
+def _stats(model: ResidualModel, r: np.ndarray) -> ResidualStats:
+    return ResidualStats(model.errors(r), tuple(model.data.labels))
+
+
+def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | None = None,
+              parameters: str | Sequence[str] = "auto", frame: Any = None,
+              robust: bool = False, prior: bool = False,
+              tolerances: Mapping[str, float] | None = None, sigma: float | None = None,
+              compatible: bool = True, rcond: float = RCOND, prune: bool = True,
+              max_iter: int = 60, progress: bool = False) -> CalibrationResult:
+    """Identify ``machine``'s defects from ``data`` (see the module docstring).
+
+    Args:
+        machine: the nominal machine (whose controller produced the commands).
+        data: identification measurements.
+        validation: held-out measurements of the same kind, or None.
+        parameters: ``"auto"`` (every defect, the identifiable ones selected) or defect names
+            (candidates; the identifiable ones among them are selected).
+        frame: for point and pose measurements: None (readings in the machine frame), a
+            :class:`Registration` (fixed), or ``"identify"`` (6 frame parameters identified
+            with the machine).
+        robust: Huber loss on each observation (iteratively reweighted), outliers reported.
+        prior: add the tolerances as priors (Tikhonov rows δ/tol): every candidate the
+            measurements see is kept, weighted against its tolerance.
+        tolerances: defect name → tolerance (SI); default by unit (:data:`DEFAULT_TOLERANCE`).
+        sigma: standard deviation of one reading (m); default by type (:data:`DEFAULT_SIGMA`).
+        compatible: restrict a hyperstatic machine's defects to its compatible subspace.
+        rcond: relative rank threshold of the selection.
+        prune: drop the parameters the noise determines worse than their tolerance.
+        max_iter: iteration limit of each least-squares solve.
+        progress: show a progress counter of model evaluations on stderr (terminals only).
+
+    Raises:
+        InputError: measurements the machine cannot have produced (rows out of stroke, no
+            assembly), too few independent measurements, mismatched kinds.
+        ParameterError: unknown parameter names or tolerances.
+        ConvergenceError: the identification diverged.
+    """
+    # small dense problems: a multi-threaded BLAS only loses time, and collapses when another
+    # process holds a core (docs/benchmarks.md)
+    from tqdm import tqdm
+
+    with single_threaded_blas(), tqdm(desc="identification", unit=" evaluations",
+                                      disable=None if progress else True, leave=False) as bar:
+        return _calibrate(machine, data, validation=validation, parameters=parameters,
+                          frame=frame, robust=robust, prior=prior, tolerances=tolerances,
+                          sigma=sigma, compatible=compatible, rcond=rcond, prune=prune,
+                          max_iter=max_iter, progress=bar if progress else None)
+
+
+def single_threaded_blas():
+    """A context in which BLAS/LAPACK run on one thread (threadpoolctl)."""
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+@dataclass
+class _Prepared:
+    """Everything :func:`calibrate` sets up before solving (see :func:`identification_problem`
+    for the public face)."""
+
+    problem: _Problem
+    u0: np.ndarray
+    start: tuple
+    model: ResidualModel
+    dset: Any
+    setup0: np.ndarray
+    r_before: np.ndarray
+    unidentifiable: dict[str, str]
+    setup_unid: dict[str, str]
+    cand_names: list[str]
+    mach_sel: np.ndarray
+    setup_sel: np.ndarray
+    readings: int
+    rank: int
+    sigma: float
+    registration: Registration | None
+    identify_frame: bool
+    t_start: float
+
+
+def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances, sigma,
+             compatible, rcond, prune) -> _Prepared:
+    t_start = time.perf_counter()
+    if validation is not None and validation.kind != data.kind:
+        raise InputError(f"validation measurements are {validation.kind!r}, identification "
+                         f"ones {data.kind!r}")
+    check_measurements(machine, data)
+    if validation is not None:
+        check_measurements(machine, validation)
+    sig = DEFAULT_SIGMA[data.kind] if sigma is None else float(sigma)
+    if not (np.isfinite(sig) and sig > 0):
+        raise InputError(f"sigma must be a positive length, got {sigma!r}")
+    registration, identify_frame = _frame_option(frame)
+    model = make_model(machine, data, _sigma_rows(data.kind, machine, sig),
+                       registration=registration, identify_frame=identify_frame)
+    dset = defect_set(machine)
+    d = len(dset)
+    tol = default_tolerances(dset.names, dset.units, tolerances)
+    candidates = _candidates(dset, parameters)
+
+    # ---- before: the nominal machine, set-up fitted alone
+    r_nom, _, _ = model.residuals(machine, model.setup.initial, jacobian=False)
+    _raise_unassembled(model, r_nom, "the nominal machine")
+    setup0 = _fit_setup(machine, model)
+    r_before, jd0, js0 = model.residuals(machine, setup0, jacobian=True)
+    _raise_unassembled(model, r_before, "the nominal machine")
+
+    # ---- compatible subspace (hyperstatic joint chains)
+    unidentifiable: dict[str, str] = {}
+    compat: CompatibleDirections | None = None
+    basis = np.eye(d)[:, candidates]
+    if compatible and _family(machine) == "chain":
+        compat = _compatibility(machine, data, tol)
+        basis = compat.basis
+        free = [int(i) for i in compat.free if i in set(candidates)]
+        dependents = [int(k) for k in compat.dependent]
+        for k in dependents:
+            if k in set(candidates):
+                unidentifiable[dset.names[k]] = compat.describe(dset.names[k])
+        keep = [list(compat.free).index(i) for i in free]
+        basis = basis[:, keep]
+        cand_names = [dset.names[i] for i in free]
+        cand_tol = tol[free]
+    else:
+        cand_names = [dset.names[i] for i in candidates]
+        cand_tol = tol[candidates]
+    for i in range(d):
+        if i not in set(candidates) and parameters != "auto":
+            unidentifiable[dset.names[i]] = "not among the requested parameters"
+
+    # ---- identifiability on the whitened, scaled Jacobian at the nominal machine
+    w = 1.0 / model.sigma
+    jm = (jd0 @ basis) * w[:, :, None]
+    jsw = js0 * w[:, :, None]
+    full = np.concatenate([jsw, jm], axis=2).reshape(-1, len(model.setup) + basis.shape[1])
+    names_all = list(model.setup.names) + cand_names
+    scale_all = np.concatenate([model.setup.scale, cand_tol])
+    groups = [0] * len(model.setup) + [1] * len(cand_names)
+    group_labels = {0: _setup_label(data.kind, identify_frame), 1: "machine defects"}
+    ident = identifiable_parameters(full, names_all, scale_all, groups=groups, rcond=rcond,
+                                    group_labels=group_labels)
+    unidentifiable.update({n: r for n, r in ident.reasons.items()
+                           if n not in model.setup.names})
+    setup_unid = {n: r for n, r in ident.reasons.items() if n in model.setup.names}
+    sel = ident.selected
+    s_count = len(model.setup)
+    setup_sel = np.array([i for i in sel if i < s_count], dtype=int)
+    mach_sel = np.array([i - s_count for i in sel if i >= s_count], dtype=int)
+    if prior:  # the priors make every parameter the measurements see determinate
+        seen = [k for k, n in enumerate(cand_names)
+                if not ident.reasons.get(n, "").startswith("no effect")]
+        mach_sel = np.array(seen, dtype=int)
+        for n in cand_names:
+            if not ident.reasons.get(n, "no effect").startswith("no effect"):
+                unidentifiable.pop(n, None)
+    if prune and not prior and mach_sel.size:
+        cols = np.concatenate([setup_sel, s_count + mach_sel])
+        weak = prune_weak(full[:, cols], scale_all[cols], sigma=1.0,
+                          keep=range(setup_sel.size))
+        kept = weak.kept
+        for idx, (std, tl) in weak.dropped.items():
+            name = names_all[cols[idx]]
+            unit = dset.units[dset.names.index(name)]
+            unidentifiable[name] = (f"weakly identifiable: these measurements would determine "
+                                    f"it to ±{_quantity(std, unit)}, worse than its tolerance "
+                                    f"{_quantity(tl, unit)}")
+        kept_cols = cols[kept]
+        mach_sel = np.array([c - s_count for c in kept_cols if c >= s_count], dtype=int)
+    readings = len(data) * model.width
+    n_unknown = mach_sel.size + setup_sel.size
+    if readings <= n_unknown:
+        raise InputError(f"too few independent measurements: {len(data)} {data.kind} rows give "
+                         f"{readings} readings for {n_unknown} identifiable parameters "
+                         f"({mach_sel.size} of the machine, {setup_sel.size} of the set-up); "
+                         "add measurements")
+
+    # ---- nonlinear least squares (robust: iteratively reweighted)
+    problem = _Problem(machine=machine, model=model, basis=basis[:, mach_sel],
+                       setup_index=setup_sel, setup_base=setup0.copy(),
+                       scale=np.concatenate([cand_tol[mach_sel], model.setup.scale[setup_sel]]),
+                       prior=prior, weights=np.ones(len(data)))
+    u = np.concatenate([np.zeros(mach_sel.size), setup0[setup_sel] / model.setup.scale[
+        setup_sel]])
+    return _Prepared(problem=problem, u0=u, start=problem.assemble(u, r_before, jd0, js0),
+                     model=model, dset=dset, setup0=setup0, r_before=r_before,
+                     unidentifiable=unidentifiable, setup_unid=setup_unid,
+                     cand_names=cand_names, mach_sel=mach_sel, setup_sel=setup_sel,
+                     readings=readings, rank=ident.rank if prior else int(
+                         mach_sel.size + setup_sel.size), sigma=sig, registration=registration,
+                     identify_frame=identify_frame, t_start=t_start)
+
+
+@dataclass(frozen=True)
+class IdentificationProblem:
+    """The least-squares problem :func:`calibrate` solves, exposed for independent solvers
+    (benchmarks, tests): unknowns ``u`` are the identified parameters divided by their scales
+    (machine defects first, then set-up parameters), the residual is whitened (and has the
+    prior rows with ``prior=True``).
+
+    Attributes:
+        names: ``(p,)`` parameter names. scale: ``(p,)`` SI per unit of u. u0: ``(p,)`` start.
+    """
+
+    names: tuple[str, ...]
+    scale: np.ndarray
+    u0: np.ndarray
+    _problem: Any = field(repr=False)
+
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """Whitened residual ``(M,)`` (NaN where the machine does not assemble)."""
+        rw, _, _ = self._problem.evaluate(np.asarray(u, dtype=float), jacobian=False)
+        return rw if rw is not None else np.full(len(self._problem_rows()), np.nan)
+
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """Analytic Jacobian ``(M, p)`` of :meth:`residual`."""
+        return self._problem.evaluate(np.asarray(u, dtype=float), jacobian=True)[1]
+
+    def _problem_rows(self):
+        return np.zeros(problem_rows(self._problem))
+
+
+def identification_problem(machine, data: MeasurementSet, *,
+                           parameters: str | Sequence[str] = "auto", frame: Any = None,
+                           prior: bool = False, tolerances: Mapping[str, float] | None = None,
+                           sigma: float | None = None, compatible: bool = True,
+                           rcond: float = RCOND, prune: bool = True,
+                           closure_options: dict | None = None) -> IdentificationProblem:
+    """The problem :func:`calibrate` would solve with these options (same arguments);
+    ``closure_options`` are engine options of the residual's inner closures (joint chains),
+    e.g. ``{"xtol": 1e-6}`` to emulate an inexact inner solver."""
+    with single_threaded_blas():
+        prep = _prepare(machine, data, validation=None, parameters=parameters, frame=frame,
+                        prior=prior, tolerances=tolerances, sigma=sigma, compatible=compatible,
+                        rcond=rcond, prune=prune)
+    prep.model.closure_options = dict(closure_options or {})
+    names = (tuple(prep.cand_names[i] for i in prep.mach_sel)
+             + tuple(prep.model.setup.names[i] for i in prep.setup_sel))
+    return IdentificationProblem(names=names, scale=prep.problem.scale.copy(),
+                                 u0=prep.u0.copy(), _problem=prep.problem)
+
+
+def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, tolerances,
+               sigma, compatible, rcond, prune, max_iter, progress=None) -> CalibrationResult:
+    prep = _prepare(machine, data, validation=validation, parameters=parameters, frame=frame,
+                    prior=prior, tolerances=tolerances, sigma=sigma, compatible=compatible,
+                    rcond=rcond, prune=prune)
+    problem, u, model, dset = prep.problem, prep.u0, prep.model, prep.dset
+    problem.progress = progress
+    setup0, r_before, unidentifiable = prep.setup0, prep.r_before, prep.unidentifiable
+    setup_unid, cand_names = prep.setup_unid, prep.cand_names
+    mach_sel, setup_sel, readings, sig = prep.mach_sel, prep.setup_sel, prep.readings, prep.sigma
+    registration, identify_frame, t_start = prep.registration, prep.identify_frame, prep.t_start
+    n_unknown = mach_sel.size + setup_sel.size
+    iterations = 0
+    start = prep.start
+    for _ in range(8 if robust else 1):
+        sol = _solve(problem, u, max_iter, start)
+        iterations += sol.iterations
+        if sol.status not in (Status.OK, Status.INCONSISTENT):
+            if sol.r is not None and not np.isfinite(sol.r).all():
+                _raise_unassembled(model, sol.r, "the machine being identified")
+            raise ConvergenceError(
+                f"the identification diverged ({Status(sol.status).label} after "
+                f"{sol.iterations} iterations); the measurements may not come from this "
+                "machine, or its defects are too large for the starting geometry")
+        u = sol.u
+        if not robust:
+            break
+        new = _huber_weights(model, sol.r)
+        converged = np.allclose(new, problem.weights, atol=1e-3)
+        problem.weights = new
+        start = problem.evaluate(u, jacobian=True)
+        if converged:
+            break
+    rw, jw, r_after = start if robust else (sol.rw, sol.jw, sol.r)
+    delta, setup = problem.unpack(u)
+    m_id = problem.machine_at(delta)
+
+    # ---- uncertainties
+    m_rows = readings
+    dof = max(m_rows - n_unknown, 1)
+    meas = rw[:m_rows]
+    factor = float(meas @ meas) / dof
+    jtj = jw.T @ jw
+    cov_u = np.linalg.pinv(jtj) * factor
+    cov = cov_u * np.outer(problem.scale, problem.scale)
+    std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(std, std)
+    corr[~np.isfinite(corr)] = 0.0
+    sv = np.linalg.svd(jw[:m_rows], compute_uv=False)
+    condition = float(sv[0] / sv[-1]) if sv.size and sv[-1] > 0 else float("inf")
+
+    p = mach_sel.size
+    theta = u * problem.scale
+    outliers = _outliers(model, r_after, problem.weights) if robust else []
+
+    # ---- validation
+    val = None
+    final_frame = (model.frame(setup) if registration is not None or identify_frame
+                   else None)
+    if validation is not None:
+        frames = ((model.frame(setup0), final_frame) if final_frame is not None
+                  else (None, None))  # the frame fitted with each machine
+        val = _validate(machine, m_id, validation, frames, sig)
+
+    unidentifiable.update({n: f"set-up parameter not identifiable: {r}" for n, r in
+                           setup_unid.items()})
+    return CalibrationResult(
+        machine=m_id, nominal=machine, kind=data.kind,
+        names=tuple(cand_names[i] for i in mach_sel),
+        units=tuple(dset.units[dset.names.index(cand_names[i])] for i in mach_sel),
+        values=theta[:p], std=std[:p],
+        setup_names=tuple(model.setup.names[i] for i in setup_sel),
+        setup_units=tuple(model.setup.units[i] for i in setup_sel),
+        setup_values=setup[setup_sel], setup_std=std[p:], correlation=corr,
+        defects=delta, defect_names=dset.names,
+        before=_stats(model, r_before), after=_stats(model, r_after), validation=val,
+        rank=prep.rank, condition=condition, candidates=len(cand_names),
+        unidentifiable=unidentifiable, outliers=outliers, sigma=sig,
+        sigma_posterior=float(np.sqrt(factor)) * sig, frame=final_frame,
+        iterations=iterations, seconds=time.perf_counter() - t_start,
+        residuals=r_after, weights=problem.weights.copy(), singular_values=sv,
+        tolerance=problem.scale[:p].copy())
+
+
+def _quantity(value: float, unit: str) -> str:
+    if unit == "m":
+        return f"{value * 1e3:.3g} mm"
+    if unit == "rad":
+        return f"{np.degrees(value):.3g}°"
+    return f"{value:.3g}"
+
+
+def _frame_option(frame: Any) -> tuple[Registration | None, bool]:
+    if frame is None:
+        return None, False
+    if isinstance(frame, str):
+        if frame == "identify":
+            return None, True
+        raise InputError(f"frame must be None, a Registration or 'identify', got {frame!r}")
+    if isinstance(frame, Registration):
+        return frame, False
+    if isinstance(frame, tuple) and len(frame) == 2 and frame[1] == "identify":
+        return frame[0], True
+    raise InputError(f"frame must be None, a Registration or 'identify', got {frame!r}")
+
+
+def _sigma_rows(kind: str, machine, sigma: float) -> np.ndarray:
+    if kind == "pose":
+        return np.array([sigma] * 3 + [DEFAULT_SIGMA_ROTATION * sigma / DEFAULT_SIGMA["pose"]] * 3)
+    if kind == "part":
+        return np.full(machine.n_actuators, sigma)
+    return np.array([sigma])
+
+
+def _setup_label(kind: str, identify_frame: bool) -> str:
+    return {"point": "the measurement frame", "pose": "the measurement frame",
+            "ballbar": "the pivot positions", "height": "the bed plane",
+            "part": "the part placement"}[kind]
+
+
+def _candidates(dset, parameters) -> list[int]:
+    if isinstance(parameters, str):
+        if parameters == "auto":
+            return list(range(len(dset)))
+        parameters = [p.strip() for p in parameters.split(",") if p.strip()]
+    out = []
+    for name in parameters:
+        out.append(dset.index(name))
+    if not out:
+        raise ParameterError("no parameter to identify")
+    return sorted(set(out))
+
+
+def _compatibility(machine, data: MeasurementSet, tol: np.ndarray) -> CompatibleDirections:
+    q = data.q
+    _, first = np.unique(np.round(q, 12), axis=0, return_index=True)
+    q = q[np.sort(first)]
+    if len(q) > 60:
+        q = q[np.linspace(0, len(q) - 1, 60).astype(int)]
+    extra = np.array(list(machine.reference_poses().values()), dtype=float)
+    sens = tool_sensitivity(machine, np.concatenate([q, extra]))
+    return compatible_directions(sens.closure_defect, defect_set(machine).names, tol)
+
+
+def _raise_unassembled(model: ResidualModel, r: np.ndarray, what: str) -> None:
+    bad = np.flatnonzero(~np.isfinite(r).all(axis=1))
+    if bad.size:
+        rows = ", ".join(model.data.labels[i] for i in bad[:10])
+        more = f" (and {bad.size - 10} more)" if bad.size > 10 else ""
+        raise InputError(f"{what} does not assemble (or cannot reach the measured point) at "
+                         f"{rows}{more}")
+
+
+def _huber_weights(model: ResidualModel, r: np.ndarray) -> np.ndarray:
+    e = np.linalg.norm(r / model.sigma, axis=1) / np.sqrt(model.width)
+    scale = max(1.4826 * float(np.median(e)), 1e-12)
+    z = e / scale
+    return np.where(z <= HUBER, 1.0, HUBER / np.maximum(z, 1e-300))
+
+
+def _outliers(model: ResidualModel, r: np.ndarray, weights: np.ndarray
+              ) -> list[tuple[str, float, float]]:
+    e = np.linalg.norm(r / model.sigma, axis=1) / np.sqrt(model.width)
+    scale = max(1.4826 * float(np.median(e)), 1e-12)
+    err = model.errors(r)
+    return [(model.data.labels[i], float(err[i]), float(weights[i]))
+            for i in np.flatnonzero(e > OUTLIER * scale)]
+
+
+def _validate(nominal, identified, data: MeasurementSet,
+              frames: tuple[Registration | None, Registration | None], sigma: float
+              ) -> Validation:
+    """Held-out residuals: the instrument frame carries over (the one fitted with each
+    machine); an artefact's set-up (part placement, pivots, bed) is refitted for each
+    machine."""
+    out = []
+    for m, frame in zip((nominal, identified), frames, strict=True):
+        vm = make_model(nominal, data, _sigma_rows(data.kind, nominal, sigma),
+                        registration=frame)
+        setup = _fit_setup(m, vm) if vm.refit_setup_for_validation() else vm.setup.initial
+        r, _, _ = vm.residuals(m, setup, jacobian=False)
+        _raise_unassembled(vm, r, "the validation set")
+        out.append(_stats(vm, r))
+    return Validation(before=out[0], after=out[1])

@@ -1,0 +1,520 @@
+"""``pkmkit simulate-measurements``, ``register``, ``calibrate`` and ``compensate``.
+
+File formats: docs/calibration.md (measurement CSV files: :mod:`pkmkit.io.measurements`).
+Lengths are in metres unless ``--units`` or the files say otherwise; angles in degrees.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import numpy as np
+
+from pkmkit.calibration.measurement_set import KINDS
+from pkmkit.errors import InputError
+from pkmkit.model.parameters import LENGTH_UNITS, length_scale
+
+from .options import JSON_OPTION, emit_json, fmt, machine_document_path, resolve_machine
+
+#: ``--units`` of the calibration commands: None when not given (a file's own unit is then used
+#: and a file in another unit is not a mismatch).
+CAL_UNITS_OPTION = click.option(
+    "--units", type=click.Choice(sorted(LENGTH_UNITS)), default=None,
+    help="Length unit of the files and of the output (default: the file's '# units:' line, "
+         "else m). A file declaring another unit is an error (units mismatch).")
+MEASURE_OPTION = click.option("--measure", "kind", type=click.Choice(KINDS), required=True,
+                              help="Measurement type (see docs/calibration.md).")
+
+
+def register(cli: click.Group) -> None:
+    """Add the calibration commands to the ``pkmkit`` group."""
+    cli.add_command(simulate_cmd)
+    cli.add_command(register_cmd)
+    cli.add_command(calibrate_cmd)
+    cli.add_command(compensate_cmd)
+
+
+# ---------------------------------------------------------------------------- simulate
+@click.command("simulate-measurements")
+@click.argument("machine_name", metavar="MACHINE")
+@MEASURE_OPTION
+@click.option("--poses", required=True, metavar="N|FILE",
+              help="Number of rows to draw in the machine's default region (docs/calibration.md"
+                   "), or a CSV file of actuator coordinates (columns named as the actuators).")
+@click.option("--defects", "defects_spec", default=None, metavar="FILE|random",
+              help="Defects of the simulated machine: 'random' (realistic magnitudes, compatible"
+                   " for hyperstatic machines; the true machine file is written beside --out) "
+                   "or a file with a [defects] table. Default: none.")
+@click.option("--noise", default="realistic", show_default=True,
+              metavar="none|realistic|tracker|cmm|probe|ballbar|SIGMA",
+              help="Noise model; SIGMA is a standard deviation in the length unit.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Random seed.")
+@click.option("--tool-lengths", metavar="L1,L2,...",
+              help="Tool lengths cycled over the rows (default: seed 002's 169.889 and 110.006 "
+                   "mm for a joint-chain machine, none otherwise).")
+@click.option("--frame", "frame_file", type=click.Path(dir_okay=False),
+              help="A registration JSON (pkmkit register --out): point and pose readings are "
+                   "written in that measurement frame.")
+@click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
+              help="Output measurement CSV file.")
+@CAL_UNITS_OPTION
+@JSON_OPTION
+def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_lengths, frame_file,
+                 out_file, units, as_json):
+    """Synthetic measurements of a machine with defects (for tests, studies and demos)."""
+    from pkmkit.calibration.registration import load_registration
+    from pkmkit.calibration.simulate import random_defects, simulate
+    from pkmkit.io.machine_defects import machine_text_with_defects
+    from pkmkit.io.measurements import atomic_write_text, format_measurements
+    from pkmkit.model.defects_table import apply_defect_vector
+
+    unit = units or "m"
+    scale = length_scale(unit)
+    nominal = resolve_machine(machine_name, (), "m")
+    rng = np.random.default_rng(seed)
+    source = machine_document_path(machine_name)
+    delta = np.zeros(0)
+    truth_path = None
+    true = nominal
+    if defects_spec == "random":
+        delta = random_defects(nominal, rng)
+        true = apply_defect_vector(nominal, delta)
+    elif defects_spec:
+        true, delta = _defects_file(defects_spec, nominal, unit)
+    q = None
+    count = None
+    if poses.strip().isdigit():
+        count = int(poses)
+        if count < 1:
+            raise InputError("--poses must be ≥ 1")
+    else:
+        if kind in ("ballbar", "part"):
+            raise InputError(f"--poses FILE is for point, pose and height measurements; "
+                             f"{kind} measurements draw their own configurations: give a number")
+        q = _read_configurations(poses, nominal, units)
+        count = len(q)
+    noise_spec = noise
+    try:
+        noise_spec = float(noise) * scale
+    except ValueError:
+        pass
+    tl = None
+    if tool_lengths:
+        tl = np.asarray(_numbers(tool_lengths, "--tool-lengths")) * scale
+    frame = load_registration(frame_file) if frame_file else None
+    data = simulate(true, nominal, kind, count, rng, noise=noise_spec, q=q, tool_lengths=tl,
+                    frame=frame, source=str(out_file))
+    note = (f"pkmkit simulate-measurements {nominal.id} --measure {kind} --seed {seed} "
+            f"--noise {noise}")
+    texts = {}
+    if defects_spec == "random":
+        out = Path(out_file)
+        truth_path = out.with_name(f"{out.stem}.truth{Path(source).suffix}")
+        texts[truth_path] = machine_text_with_defects(
+            source, nominal, delta, note=f"true machine of {out.name} (random defects, seed "
+                                         f"{seed})")
+        note += f"\ntrue machine: {truth_path.name}"
+    texts[Path(out_file)] = format_measurements(data, nominal, units=unit, comment=note)
+    for path, text in texts.items():  # everything rendered before anything is written
+        atomic_write_text(path, text)
+    payload = {"machine": nominal.id, "measure": kind, "rows": len(data), "out": str(out_file),
+               "units": unit, "seed": seed, "noise": noise,
+               "truth": None if truth_path is None else str(truth_path),
+               "defects": defects_spec or "none"}
+    if as_json:
+        emit_json(payload)
+        return
+    click.echo(f"{nominal.name}: {len(data)} {kind} measurements → {out_file} ({unit})")
+    if truth_path is not None:
+        click.echo(f"  true machine (random defects, seed {seed}) → {truth_path}")
+
+
+def _numbers(text: str, what: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise InputError(f"{what}: cannot read {text!r} as comma-separated numbers") from None
+    if not values or not np.isfinite(values).all():
+        raise InputError(f"{what}: numbers must be finite")
+    return values
+
+
+def _defects_file(path: str, machine, units: str):
+    """The true machine of ``--defects FILE`` and its defect vector: a complete machine file
+    (with a ``[machine]`` table, e.g. a ``.truth.toml`` written by this command) *is* the true
+    machine; a file with only a ``[defects]`` table (and optionally ``units``) is applied on
+    top of MACHINE."""
+    from pkmkit import load
+    from pkmkit.errors import ParameterError
+    from pkmkit.model.defects_table import apply_defect_vector, defects_from_table
+    from pkmkit.model.machine_file import read_machine_document
+
+    doc = read_machine_document(path)
+    table = doc.data.get("defects")
+    if not isinstance(table, dict):
+        raise doc.error("a defects file needs a [defects] table (name = value)")
+    if isinstance(doc.data.get("machine"), dict):
+        true = load(path)
+        if tuple(true.actuator_names) != tuple(machine.actuator_names):
+            raise InputError(f"{path} describes another machine (actuators "
+                             f"{', '.join(true.actuator_names)})")
+        return true, np.ones(1)
+    unit = doc.data.get("units", units)
+    try:
+        delta = defects_from_table(machine, table, length_scale(unit))
+    except ParameterError as exc:
+        raise doc.error(str(exc), ("defects", exc.parameter) if exc.parameter else
+                        ("defects",)) from None
+    return apply_defect_vector(machine, delta), delta
+
+
+def _read_configurations(path: str, machine, units: str | None) -> np.ndarray:
+    from pkmkit.io.measurements import actuator_columns, read_csv_table
+
+    names, angle = actuator_columns(machine)
+    table = read_csv_table(path, names, ("id",), units=units,
+                           what=f" (actuators of {machine.id!r})")
+    return np.column_stack([np.radians(table.numbers[n]) if a else table.numbers[n] *
+                            table.scale for n, a in zip(names, angle, strict=True)])
+
+
+# ---------------------------------------------------------------------------- register
+@click.command("register")
+@click.option("--measured", required=True, type=click.Path(dir_okay=False),
+              help="CSV of points in the measurement frame: x, y, z (optional i, j, k "
+                   "directions, id).")
+@click.option("--nominal", required=True, type=click.Path(dir_okay=False),
+              help="CSV of the same points in the machine frame (same order, or matched by an "
+                   "id column).")
+@click.option("--direction-weight", type=float,
+              help="Lever arm at which a direction counts like a pair of points (length unit; "
+                   "default: the RMS spread of the points).")
+@click.option("--out", "out_file", type=click.Path(dir_okay=False),
+              help="Write the transform as JSON (for calibrate/simulate-measurements --frame).")
+@CAL_UNITS_OPTION
+@JSON_OPTION
+def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
+    """Rigid registration of a measurement frame to the machine frame (≥ 3 points, optional
+    direction vectors), with residuals."""
+    from pkmkit.calibration.registration import register_points, save_registration
+    from pkmkit.io.measurements import read_csv_table
+
+    a = read_csv_table(measured, ("x", "y", "z"), ("i", "j", "k", "id"), units=units)
+    b = read_csv_table(nominal, ("x", "y", "z"), ("i", "j", "k", "id"), units=units)
+    if a.unit != b.unit and units is None:
+        raise InputError(f"measurement units mismatch: {measured} is in {a.unit}, {nominal} in "
+                         f"{b.unit}; convert one or give --units")
+    unit = units or a.unit
+    pa, pb = (np.column_stack([t.numbers[c] for c in "xyz"]) * t.scale for t in (a, b))
+    order_b = np.arange(len(pb))
+    if "id" in a.texts and "id" in b.texts:
+        missing = [i for i in a.texts["id"] if i not in b.texts["id"]]
+        if missing:
+            raise InputError(f"{nominal}: no point with id {missing[0]!r} (from {measured})")
+        order_b = np.array([b.texts["id"].index(i) for i in a.texts["id"]])
+    elif len(pa) != len(pb):
+        raise InputError(f"{measured} has {len(pa)} points and {nominal} {len(pb)}: give the "
+                         "same points in the same order (or an id column in both)")
+    pb = pb[order_b]
+    dirs = [all(c in t.numbers for c in "ijk") for t in (a, b)]
+    if dirs[0] != dirs[1]:
+        raise InputError("give directions (i, j, k) in both files or in neither")
+    da = db = None
+    if dirs[0]:
+        da = np.column_stack([a.numbers[c] for c in "ijk"])
+        db = np.column_stack([b.numbers[c] for c in "ijk"])[order_b]
+        keep = (np.linalg.norm(da, axis=1) > 0) & (np.linalg.norm(db, axis=1) > 0)
+        da, db = (da[keep], db[keep]) if keep.any() else (None, None)
+    reg = register_points(pa, pb, measured_directions=da, nominal_directions=db,
+                          direction_weight=None if direction_weight is None
+                          else direction_weight * length_scale(unit))
+    if out_file:
+        save_registration(out_file, reg, units=unit)
+    scale = length_scale(unit)
+    payload = {"units": unit, "points": len(pa), "directions": 0 if da is None else len(da),
+               **reg.to_dict(scale), "out": out_file}
+    if as_json:
+        emit_json(payload)
+        return
+    click.echo(f"registration of {len(pa)} points" + (f" and {len(da)} directions"
+                                                       if da is not None else "") +
+               f" ({unit}, degrees): nominal = R · measured + t")
+    for row in reg.rotation:
+        click.echo("  R  " + "  ".join(f"{v:12.8f}" for v in row))
+    click.echo(f"  t  {fmt(reg.translation / scale, 9)} {unit}")
+    click.echo(f"  rotation vector {fmt(payload['rotation_vector_deg'], 7)} deg")
+    for k, r in enumerate(np.linalg.norm(reg.point_residuals, axis=1) / scale):
+        click.echo(f"  point {k + 1}: residual {r:.4g} {unit}")
+    click.echo(f"  rms {reg.rms / scale:.4g} {unit}, max {reg.max / scale:.4g} {unit}")
+    if reg.direction_residuals.size:
+        click.echo("  direction residuals: " + ", ".join(
+            f"{v:.3g}°" for v in np.degrees(reg.direction_residuals)))
+    if out_file:
+        click.echo(f"  → {out_file}")
+
+
+# ---------------------------------------------------------------------------- calibrate
+@click.command("calibrate")
+@click.argument("machine_name", metavar="MACHINE")
+@MEASURE_OPTION
+@click.option("--measurements", required=True, type=click.Path(dir_okay=False),
+              help="Identification measurements (CSV, docs/calibration.md).")
+@click.option("--validate", "validation_file", type=click.Path(dir_okay=False),
+              help="Held-out measurements of the same type.")
+@click.option("--parameters", default="auto", show_default=True, metavar="auto|NAMES",
+              help="'auto' (every defect; the identifiable ones are selected) or "
+                   "comma-separated defect names (candidates).")
+@click.option("--frame", "frame_spec", metavar="FILE|identify",
+              help="Point/pose readings in another frame: a registration JSON (pkmkit "
+                   "register --out), or 'identify' (6 frame parameters identified with the "
+                   "machine, from the identity).")
+@click.option("--identify-frame", is_flag=True,
+              help="With --frame FILE: refine that frame with the machine (6 parameters).")
+@click.option("--robust", is_flag=True, help="Huber loss; outliers reported by row.")
+@click.option("--prior", is_flag=True,
+              help="Tolerances as priors (keeps every parameter the data see, weighted).")
+@click.option("--tolerance", "tolerance_items", multiple=True, metavar="NAME=VALUE",
+              help="Tolerance of a defect (repeatable): lengths in the length unit, direction "
+                   "components dimensionless, angles in degrees. Default 0.1 mm, 0.005, "
+                   "0.29°. Scales the identifiability analysis; the prior with --prior.")
+@click.option("--sigma", type=float,
+              help="Standard deviation of one reading (length unit; default by type).")
+@click.option("--allow-incompatible", is_flag=True,
+              help="Hyperstatic machines: identify incompatible defects too (least-squares "
+                   "closure, as seed 002).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False),
+              help="Directory for the calibrated machine file, calibration.json, residuals.csv,"
+                   " figures and report.html.")
+@CAL_UNITS_OPTION
+@JSON_OPTION
+def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters, frame_spec,
+                  identify_frame, robust, prior, tolerance_items, sigma, allow_incompatible,
+                  out_dir, units, as_json):
+    """Identify a machine's geometric defects from measurements, validate, report."""
+    from pkmkit.calibration.identify import calibrate
+    from pkmkit.calibration.registration import load_registration
+    from pkmkit.io.measurements import read_measurements
+
+    machine = resolve_machine(machine_name, (), "m")
+    data = read_measurements(measurements, machine, kind, units=units)
+    unit = units or _file_unit(measurements) or "m"
+    validation = (read_measurements(validation_file, machine, kind, units=units or unit)
+                  if validation_file else None)
+    frame = None
+    if frame_spec == "identify":
+        frame = "identify"
+    elif frame_spec:
+        frame = load_registration(frame_spec)
+        if identify_frame:
+            frame = (frame, "identify")
+    elif identify_frame:
+        frame = "identify"
+    tolerances = _tolerances(tolerance_items, machine, unit)
+    result = calibrate(machine, data, validation=validation, parameters=parameters,
+                       frame=frame, robust=robust, prior=prior, tolerances=tolerances,
+                       sigma=None if sigma is None else sigma * length_scale(unit),
+                       compatible=not allow_incompatible, progress=not as_json)
+    payload = result.to_json(unit)
+    if out_dir:
+        from pkmkit.io.calibration_report import write_calibration_outputs
+
+        sources = {"machine": machine_document_path(machine_name), "measurements": measurements}
+        if validation_file:
+            sources["validation"] = validation_file
+        written = write_calibration_outputs(result, out_dir,
+                                            machine_source=machine_document_path(machine_name),
+                                            units=unit, sources=sources)
+        payload["files"] = written
+    if as_json:
+        emit_json(payload)
+        return
+    _print_calibration(result, payload, unit)
+
+
+def _tolerances(items, machine, unit: str) -> dict[str, float]:
+    from pkmkit.errors import ParameterError
+    from pkmkit.errors.model import defect_set
+
+    dset = defect_set(machine)
+    out = {}
+    for text in items:
+        name, sep, value = text.partition("=")
+        name = name.strip()
+        if not sep:
+            raise ParameterError(f"--tolerance expects NAME=VALUE, got {text!r}")
+        k = dset.index(name)
+        try:
+            v = float(value)
+        except ValueError:
+            raise ParameterError(f"--tolerance {name}: {value!r} is not a number", name) from None
+        u = dset.units[k]
+        out[name] = v * length_scale(unit) if u == "m" else (np.radians(v) if u == "rad" else v)
+    return out
+
+
+def _file_unit(path: str) -> str | None:
+    from pkmkit.io.measurements import _UNIT_LINE
+
+    try:
+        with open(path, encoding="utf-8-sig") as handle:
+            for line in handle:
+                if not line.lstrip().startswith("#"):
+                    return None
+                match = _UNIT_LINE.match(line.strip())
+                if match:
+                    return match.group(1)
+    except OSError:
+        return None
+    return None
+
+
+def _print_calibration(result, payload: dict, unit: str) -> None:
+    scale = length_scale(unit)
+    click.echo(f"{result.nominal.name}: {result.kind} calibration, "
+               f"{payload['poses']} observations, {len(result.names)} machine + "
+               f"{len(result.setup_names)} set-up parameters identified of "
+               f"{result.candidates} (rank {result.rank}, condition {result.condition:.3g})")
+    click.echo(f"  residual before: mean {result.before.mean / scale:.4g}, RMS "
+               f"{result.before.rms / scale:.4g}, max {result.before.max / scale:.4g} {unit}")
+    click.echo(f"  residual after:  mean {result.after.mean / scale:.4g}, RMS "
+               f"{result.after.rms / scale:.4g}, max {result.after.max / scale:.4g} {unit}")
+    if result.validation is not None:
+        v = result.validation
+        click.echo(f"  validation ({v.after.per_pose.size}): RMS {v.before.rms / scale:.4g} → "
+                   f"{v.after.rms / scale:.4g}, max {v.before.max / scale:.4g} → "
+                   f"{v.after.max / scale:.4g} {unit}")
+    click.echo(f"  σ assumed {result.sigma / scale:.3g}, a posteriori "
+               f"{result.sigma_posterior / scale:.3g} {unit}; {result.iterations} iterations, "
+               f"{result.seconds:.2f} s")
+    click.echo("  identified (value ± std):")
+    for n in result.names:
+        click.echo(f"    {n:10s} {payload['parameters'][n]:+.6g} ± {payload['std'][n]:.2g} "
+                   f"{payload['parameter_units'][n]}")
+    for n in result.setup_names:
+        click.echo(f"    {n:10s} {payload['setup'][n]:+.8g} ± {payload['setup_std'][n]:.2g}")
+    click.echo(f"  left at nominal: {len(result.unidentifiable)} (see --json or report.html)")
+    if result.outliers:
+        click.echo("  outliers: " + ", ".join(f"{lab} ({err / scale:.3g} {unit})"
+                                              for lab, err, _ in result.outliers))
+    if "files" in payload:
+        click.echo(f"  → {payload['files'].get('report.html', '')}")
+
+
+# ---------------------------------------------------------------------------- compensate
+@click.command("compensate")
+@click.argument("machine_name", metavar="MACHINE")
+@click.option("--calibrated", required=True, type=click.Path(dir_okay=False),
+              help="The calibrated machine file (pkmkit calibrate --out).")
+@click.option("--gcode", type=click.Path(dir_okay=False),
+              help="G-code program to correct (3-axis moves; arcs become short lines).")
+@click.option("--origin", metavar="X,Y,Z", help="Work offset of the G-code program.")
+@click.option("--step", type=float,
+              help="Longest corrected move (length unit; default 1 mm).")
+@click.option("--grid", "grid_text", metavar="X0,Y0,Z0:X1,Y1,Z1:NX,NY,NZ",
+              help="Correction table on a regular grid.")
+@click.option("--targets", "targets_file", type=click.Path(dir_okay=False),
+              help="CSV of targets x, y, z (and i, j, k tool axes for a 5-axis machine, or "
+                   "rx, ry, rz rotation vectors in degrees for a six-actuator machine).")
+@click.option("--tool-length", type=float, help="Tool length (length unit).")
+@click.option("--truth", type=click.Path(dir_okay=False),
+              help="A true machine file (simulations): report the error left after "
+                   "compensation at the targets.")
+@click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
+              help="Corrected program (.nc) or correction table (.csv).")
+@CAL_UNITS_OPTION
+@JSON_OPTION
+def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, targets_file,
+                   tool_length, truth, out_file, units, as_json):
+    """Corrected commands for the nominal controller from a calibrated machine."""
+    from pkmkit import load
+    from pkmkit.calibration.compensation import (
+        check_compensation,
+        correct_path,
+        correct_targets,
+        grid_targets,
+    )
+    from pkmkit.io.compensation_files import corrected_gcode, correction_table
+    from pkmkit.io.measurements import atomic_write_text
+
+    given = [g for g in (gcode, grid_text, targets_file) if g]
+    if len(given) != 1:
+        raise click.UsageError("give exactly one of --gcode, --grid, --targets")
+    unit = units or "m"
+    scale = length_scale(unit)
+    nominal = resolve_machine(machine_name, (), "m")
+    identified = load(calibrated)
+    if identified.n_actuators != nominal.n_actuators or type(identified) is not type(nominal):
+        raise InputError(f"{calibrated} is not a calibration of {nominal.id!r}")
+    tl = None if tool_length is None else tool_length * scale
+    if gcode:
+        from pkmkit.calibration.controller import target_width
+        from pkmkit.motion.gcode import read_gcode
+
+        if target_width(nominal) != 3:
+            raise InputError("G-code correction is for machines whose commands are tool "
+                             "points; a 5-axis or six-actuator machine's correction includes "
+                             "the orientation: use --grid or --targets")
+        shift = (np.asarray(_numbers(origin, "--origin")) * scale if origin else np.zeros(3))
+        if shift.shape != (3,):
+            raise InputError("--origin needs X,Y,Z")
+        path = read_gcode(gcode, origin=shift)
+        corrected = correct_path(nominal, identified, path,
+                                 step=(step * scale if step else 1e-3), tool_length=tl,
+                                 progress=not as_json)
+        targets, fixed = corrected.targets, corrected.corrected
+        text = corrected_gcode(corrected, origin=shift, header=(
+            f"corrected by pkmkit compensate {nominal.id} --calibrated {Path(calibrated).name}"
+            f"\nfrom {Path(gcode).name}: {len(fixed) - 1} moves"))
+    else:
+        if grid_text:
+            parts = grid_text.split(":")
+            if len(parts) != 3:
+                raise InputError("--grid needs X0,Y0,Z0:X1,Y1,Z1:NX,NY,NZ")
+            lo, hi = (np.asarray(_numbers(p, "--grid")) * scale for p in parts[:2])
+            counts = _numbers(parts[2], "--grid counts")
+            if any(c != int(c) for c in counts):
+                raise InputError("--grid counts must be integers")
+            targets = grid_targets(lo, hi, counts)
+        else:
+            from pkmkit.io.measurements import read_csv_table
+
+            t = read_csv_table(targets_file, ("x", "y", "z"),
+                               ("i", "j", "k", "rx", "ry", "rz", "id"), units=units)
+            targets = np.column_stack([t.numbers[c] for c in "xyz"]) * t.scale
+            if all(c in t.numbers for c in "ijk"):
+                targets = np.column_stack([targets] + [t.numbers[c] for c in "ijk"])
+            elif all(c in t.numbers for c in ("rx", "ry", "rz")):
+                targets = np.column_stack([targets] + [np.radians(t.numbers[c])
+                                                       for c in ("rx", "ry", "rz")])
+        fixed = correct_targets(nominal, identified, targets, tool_length=tl,
+                                progress=not as_json)
+        from pkmkit.calibration.controller import as_targets
+
+        targets = as_targets(identified, targets)
+        from pkmkit.errors.model import _family
+
+        orientation = "axis" if _family(nominal) == "chain" else "rotvec"
+        text = correction_table(targets, fixed, units=unit, orientation=orientation, comment=(
+            f"corrected targets for the nominal controller of {nominal.id} "
+            f"(pkmkit compensate --calibrated {Path(calibrated).name})"))
+    check = None
+    if truth:
+        true_machine = load(truth)
+        check = check_compensation(true_machine, nominal, identified, targets, tool_length=tl)
+    atomic_write_text(out_file, text)
+    corr = np.linalg.norm(fixed[:, :3] - targets[:, :3], axis=1) / scale
+    payload = {"machine": nominal.id, "calibrated": calibrated, "out": out_file, "units": unit,
+               "targets": len(targets), "correction_mean": float(corr.mean()),
+               "correction_max": float(corr.max()),
+               "check": None if check is None else check.to_dict(scale)}
+    if as_json:
+        emit_json(payload)
+        return
+    click.echo(f"{len(targets)} corrected targets → {out_file}; correction mean "
+               f"{corr.mean():.4g}, max {corr.max():.4g} {unit}")
+    if check is not None:
+        c = check.to_dict(scale)
+        click.echo(f"  error of the true machine at the targets: RMS {c['rms_before']:.4g} → "
+                   f"{c['rms_after']:.4g}, max {c['max_before']:.4g} → {c['max_after']:.4g} "
+                   f"{unit}")

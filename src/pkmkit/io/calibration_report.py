@@ -1,0 +1,270 @@
+"""Outputs of a calibration: the calibrated machine file, the JSON summary, the residual table,
+the figures and one self-contained ``report.html`` (figures embedded as PNG data) that a person
+reads to judge the calibration.
+
+:func:`write_calibration_outputs` builds every file in memory first and then writes each one
+atomically, so that an error leaves no half-written output.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pkmkit import __version__
+from pkmkit.io.json_io import to_jsonable
+from pkmkit.io.machine_defects import machine_text_with_defects
+from pkmkit.io.measurements import atomic_write_bytes, atomic_write_text
+from pkmkit.model.parameters import length_scale
+
+FIGURES = ("residuals", "histograms", "parameters", "identifiability")
+
+
+def figure_pngs(result, *, units: str = "mm") -> dict[str, bytes]:
+    """The report's figures as PNG bytes, by name."""
+    from pkmkit.plot.calibration_figures import (
+        plot_histograms,
+        plot_identifiability,
+        plot_parameters,
+        plot_residuals,
+    )
+
+    out = {}
+    for name, func in (("residuals", plot_residuals), ("histograms", plot_histograms),
+                       ("parameters", plot_parameters),
+                       ("identifiability", plot_identifiability)):
+        fig = func(result) if name == "identifiability" else func(result, units=units)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=100)
+        out[name] = buf.getvalue()
+    return out
+
+
+def _num(v: float, digits: int = 4) -> str:
+    if v is None or not np.isfinite(v):
+        return "—"
+    return f"{v:.{digits}g}"
+
+
+def _table(header: list[str], rows: list[list[str]], cls: str = "") -> str:
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in row) + "</tr>" for row in rows)
+    return f'<table class="{cls}"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
+
+
+def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None = None,
+                sources: dict[str, str] | None = None, title: str | None = None) -> str:
+    """The HTML report of a :class:`~pkmkit.calibration.identify.CalibrationResult`.
+
+    Args:
+        result: the calibration.
+        units: length unit of the numbers shown.
+        figures: PNGs by name (default: :func:`figure_pngs`).
+        sources: labels → file names shown in the header (measurements, validation, …).
+        title: page title.
+    """
+    figures = figure_pngs(result, units=units) if figures is None else figures
+    scale = length_scale(units)
+    data = result.to_json(units)
+    esc = html.escape
+    title = title or f"Calibration of {result.nominal.name}"
+    parts = [f"<h1>{esc(title)}</h1>",
+             f"<p class='meta'>pkmkit {esc(__version__)} · machine <b>{esc(result.nominal.id)}"
+             f"</b> · measurement <b>{esc(result.kind)}</b> · lengths in {esc(units)}, angles "
+             "in degrees, direction components dimensionless (≈ rad)</p>"]
+    if sources:
+        parts.append("<p class='meta'>" + " · ".join(
+            f"{esc(k)}: <code>{esc(str(v))}</code>" for k, v in sources.items()) + "</p>")
+
+    # ---- verdict and summary
+    val = result.validation
+    gain = result.before.rms / result.after.rms if result.after.rms > 0 else float("inf")
+    verdict = (f"The identified machine reduces the RMS error of the {result.after.per_pose.size}"
+               f" identification observations from {_num(result.before.rms / scale)} to "
+               f"{_num(result.after.rms / scale)} {esc(units)} (× {_num(gain, 3)})")
+    if val is not None:
+        verdict += (f"; on the {val.after.per_pose.size} held-out validation observations from "
+                    f"{_num(val.before.rms / scale)} to {_num(val.after.rms / scale)} "
+                    f"{esc(units)}")
+    verdict += (f". The a-posteriori noise is {_num(result.sigma_posterior / scale)} {esc(units)}"
+                f" against {_num(result.sigma / scale)} {esc(units)} assumed"
+                + (" — the model explains the data to the noise level." if
+                   result.sigma_posterior < 1.5 * result.sigma else
+                   " — larger than assumed: unmodelled errors or outliers remain.") + "")
+    parts.append(f"<p class='verdict'>{verdict}</p>")
+    summary = [
+        ["observations (identification)", str(result.after.per_pose.size)],
+        ["observations (validation)", str(val.after.per_pose.size) if val else "—"],
+        ["candidate machine parameters", str(result.candidates)],
+        ["identified parameters (machine + set-up)",
+         f"{len(result.names)} + {len(result.setup_names)} (rank {result.rank})"],
+        ["condition number (whitened, tolerance-scaled)", _num(result.condition, 4)],
+        ["σ assumed / a posteriori", f"{_num(result.sigma / scale)} / "
+                                     f"{_num(result.sigma_posterior / scale)} {esc(units)}"],
+        ["iterations, time", f"{result.iterations}, {result.seconds:.3f} s"],
+    ]
+    if data.get("correlation_max"):
+        cm = data["correlation_max"]
+        summary.append(["largest correlation", f"{esc(cm['pair'][0])} / {esc(cm['pair'][1])}: "
+                                               f"{cm['value']:+.3f}"])
+    parts.append("<h2>Summary</h2>" + _table(["", ""], summary, "summary"))
+
+    stats = [["identification", _num(result.before.mean / scale), _num(result.before.rms / scale),
+              _num(result.before.max / scale), _num(result.after.mean / scale),
+              _num(result.after.rms / scale), _num(result.after.max / scale)]]
+    if val is not None:
+        stats.append(["validation", _num(val.before.mean / scale), _num(val.before.rms / scale),
+                      _num(val.before.max / scale), _num(val.after.mean / scale),
+                      _num(val.after.rms / scale), _num(val.after.max / scale)])
+    parts.append(f"<h2>Residuals [{esc(units)}]</h2>" + _table(
+        ["set", "mean before", "RMS before", "max before", "mean after", "RMS after",
+         "max after"], stats, "stats"))
+    parts.append("<p>Error of one observation: the distance between the measured and the "
+                 "predicted tool point (point and pose measurements), the bar-length error "
+                 "(ball-bar), the height error (probe) or the joint-space distance to the "
+                 "commanded path (machined part). <i>Before</i>: the nominal machine with the "
+                 "set-up parameters fitted alone; <i>after</i>: the identified machine.</p>")
+    for name, caption in (("residuals", "Error of each observation (log scale)"),
+                          ("histograms", "Distribution of the errors")):
+        if name in figures:
+            parts.append(_figure(figures[name], caption, name))
+
+    # ---- parameters
+    rows = []
+    for i, n in enumerate(result.names):
+        unit = data["parameter_units"][n]
+        v, s = data["parameters"][n], data["std"][n]
+        tol = result.tolerance[i] if result.tolerance is not None else np.nan
+        tol_out = (tol / scale if result.units[i] == "m" else
+                   np.degrees(tol) if result.units[i] == "rad" else tol)
+        ratio = abs(v) / s if s > 0 else float("inf")
+        rows.append([f"<code>{esc(n)}</code>", _num(v, 5), _num(s, 3), esc(unit),
+                     _num(tol_out, 3), _num(ratio, 3)])
+    parts.append(f"<h2>Identified machine parameters ({len(result.names)})</h2>")
+    parts.append(_table(["parameter", "value", "std (1σ)", "unit", "tolerance", "|value|/σ"],
+                        rows, "params"))
+    if "parameters" in figures:
+        parts.append(_figure(figures["parameters"], "Identified parameters ± 2σ", "parameters"))
+    if result.setup_names:
+        rows = [[f"<code>{esc(n)}</code>", _num(data["setup"][n], 7), _num(data["setup_std"][n],
+                                                                       3),
+                 esc(units if u == "m" else ("deg" if u == "rad" else "1"))]
+                for n, u in zip(result.setup_names, result.setup_units, strict=True)]
+        parts.append("<h2>Set-up parameters</h2>" + _table(["parameter", "value", "std", "unit"],
+                                                           rows, "setup"))
+    if "frame" in data:
+        fr = data["frame"]
+        parts.append("<h3>Measurement frame → machine frame</h3>"
+                     f"<p>rotation vector {esc(_vec(fr['rotation_vector_deg']))} deg, "
+                     f"translation {esc(_vec(fr['translation']))} {esc(units)}</p>")
+
+    # ---- identifiability
+    parts.append("<h2>Identifiability</h2>")
+    parts.append(f"<p>{result.rank} parameters identified out of {result.candidates} "
+                 "candidates. The singular values below are those of the identified problem "
+                 "with each column scaled by its tolerance and each row divided by its noise σ: "
+                 "a value of 1 means that a tolerance-sized change of that combination moves "
+                 "the readings by one σ.</p>")
+    if "identifiability" in figures:
+        parts.append(_figure(figures["identifiability"], "Singular values and correlations",
+                             "identifiability"))
+    rows = [[f"<code>{esc(n)}</code>", esc(r)] for n, r in sorted(result.unidentifiable.items())]
+    parts.append(f"<h3>Parameters left at their nominal value ({len(rows)})</h3>")
+    parts.append(_table(["parameter", "why"], rows, "unidentifiable") if rows else
+                 "<p>None.</p>")
+    if result.outliers:
+        rows = [[esc(lab), _num(err / scale), _num(w, 3)] for lab, err, w in result.outliers]
+        parts.append(f"<h2>Outliers ({len(rows)})</h2><p>Observations beyond 3 robust standard "
+                     "deviations, down-weighted by the robust loss.</p>"
+                     + _table(["row", f"error [{units}]", "weight"], rows, "outliers"))
+    style = ("body{font-family:sans-serif;max-width:980px;margin:1.5em auto;color:#222}"
+             "table{border-collapse:collapse;margin:0.6em 0;font-size:0.9em}"
+             "td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
+             "td:first-child,th:first-child{text-align:left}"
+             "table.unidentifiable td{text-align:left}"
+             ".meta{color:#555;font-size:0.85em}.verdict{background:#eef5ee;padding:0.6em;"
+             "border-left:4px solid #4a4}figure{margin:1em 0}img{max-width:100%}"
+             "figcaption{font-size:0.85em;color:#555}")
+    return ("<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
+            f"<title>{esc(title)}</title><style>{style}</style></head><body>\n"
+            + "\n".join(parts) + "\n</body></html>\n")
+
+
+def _vec(values) -> str:
+    return "(" + ", ".join(f"{v:.6g}" for v in values) + ")"
+
+
+def _figure(png: bytes, caption: str, name: str) -> str:
+    data = base64.b64encode(png).decode("ascii")
+    return (f"<figure id='fig-{name}'><img alt='{html.escape(caption)}' "
+            f"src='data:image/png;base64,{data}'><figcaption>{html.escape(caption)}"
+            "</figcaption></figure>")
+
+
+def residuals_csv(result, *, units: str = "mm") -> str:
+    """Per-observation errors before and after (and the robust weights)."""
+    scale = length_scale(units)
+    lines = [f"# units: {units}", "row,set,before,after,weight"]
+    w = result.weights if result.weights is not None else np.ones(result.after.per_pose.size)
+    for lab, b, a, wi in zip(result.after.labels, result.before.per_pose, result.after.per_pose,
+                             w, strict=True):
+        lines.append(f"{_csv_cell(lab)},identification,{b / scale:.9g},{a / scale:.9g},"
+                     f"{wi:.6g}")
+    if result.validation is not None:
+        v = result.validation
+        for lab, b, a in zip(v.after.labels, v.before.per_pose, v.after.per_pose, strict=True):
+            lines.append(f"{_csv_cell(lab)},validation,{b / scale:.9g},{a / scale:.9g},1")
+    return "\n".join(lines) + "\n"
+
+
+def _csv_cell(text: str) -> str:
+    return '"' + text.replace('"', '""') + '"' if ("," in text or '"' in text) else text
+
+
+def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: str | Path,
+                              units: str = "mm", sources: dict[str, str] | None = None
+                              ) -> dict[str, str]:
+    """Write the calibrated machine file, ``calibration.json``, ``residuals.csv``, the figures
+    and ``report.html`` into ``out_dir`` (created if needed). Returns name → path.
+
+    Everything is rendered in memory first; each file is then written atomically.
+    """
+    out = Path(out_dir)
+    suffix = Path(machine_source).suffix or ".toml"
+    machine_name = f"{result.nominal.id}-calibrated{suffix}"
+    note = (f"identified by pkmkit {__version__} calibrate from {result.kind} measurements: "
+            f"RMS {result.before.rms / length_scale(units):.6g} -> "
+            f"{result.after.rms / length_scale(units):.6g} {units}")
+    texts = {machine_name: machine_text_with_defects(machine_source, result.nominal,
+                                                     result.defects, note=note)}
+    payload = result.to_json(units)
+    payload["files"] = {"machine": machine_name, "report": "report.html"}
+    texts["calibration.json"] = json.dumps(to_jsonable(payload), indent=2) + "\n"
+    texts["residuals.csv"] = residuals_csv(result, units=units)
+    figures = figure_pngs(result, units=units)
+    texts["report.html"] = report_html(result, units=units, figures=figures, sources=sources)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        from pkmkit.errors import InputError
+
+        raise InputError(f"cannot create {out}: {exc.strerror or exc}") from None
+    written = {}
+    for name, png in figures.items():
+        atomic_write_bytes(out / f"{name}.png", png)
+        written[f"{name}.png"] = str(out / f"{name}.png")
+    for name, text in texts.items():
+        atomic_write_text(out / name, text)
+        written[name] = str(out / name)
+    return written
+
+
+def summary_for_json(result, units: str) -> dict[str, Any]:
+    """The JSON summary (as written to ``calibration.json``)."""
+    return to_jsonable(result.to_json(units))

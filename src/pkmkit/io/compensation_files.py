@@ -1,0 +1,57 @@
+"""Files of a compensation: a corrected G-code program and correction tables (CSV)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pkmkit.calibration.compensation import CorrectedPath
+from pkmkit.model.parameters import length_scale
+
+_LETTERS = "XYZ"
+
+
+def corrected_gcode(path: CorrectedPath, *, origin=(0.0, 0.0, 0.0), header: str = "",
+                    decimals: int = 4) -> str:
+    """A G-code program (G21, G90, millimetres) moving through the corrected points: G0 for
+    rapid moves, G1 with the programmed feed (mm/min) otherwise. Program coordinates are the
+    corrected machine coordinates minus ``origin`` (the work offset the program was read with).
+    """
+    offset = np.asarray(origin, dtype=float).reshape(3)
+    lines = ["%"]
+    for line in header.splitlines():
+        lines.append("(" + line.replace("(", "[").replace(")", "]") + ")")
+    lines.append("G21 G90 G17")
+    feed = None
+    fmt = f"{{:.{decimals}f}}"
+    for k in range(1, len(path.corrected)):
+        p = (path.corrected[k, :3] - offset) * 1e3
+        words = ["G0" if path.rapid[k] else "G1"]
+        words += [f"{_LETTERS[i]}{fmt.format(p[i] + 0.0)}" for i in range(3)]
+        if not path.rapid[k] and np.isfinite(path.feed[k]) and path.feed[k] != feed:
+            feed = path.feed[k]
+            words.append(f"F{feed * 60e3:.6g}")
+        lines.append(" ".join(words))
+    lines.append("%")
+    return "\n".join(lines) + "\n"
+
+
+def correction_table(targets: np.ndarray, corrected: np.ndarray, *, units: str = "m",
+                     comment: str = "", orientation: str = "axis") -> str:
+    """CSV of targets, corrected targets and corrections (``dx = cx − x``…); for 6-column
+    targets also the orientation: tool axes of a 5-axis machine (``orientation="axis"``:
+    ``i, j, k``, ``ci, cj, ck``) or rotation vectors of a six-actuator machine
+    (``"rotvec"``: ``rx, ry, rz``, ``crx, cry, crz`` in degrees)."""
+    scale = length_scale(units)
+    axes = targets.shape[1] == 6
+    cols = ["x", "y", "z", "cx", "cy", "cz", "dx", "dy", "dz"]
+    names = ("i", "j", "k") if orientation == "axis" else ("rx", "ry", "rz")
+    factor = 1.0 if orientation == "axis" else np.degrees(1.0)
+    if axes:
+        cols += [*names, *(f"c{n}" for n in names)]
+    lines = [f"# {c}" for c in comment.splitlines()] + [f"# units: {units}", ",".join(cols)]
+    for t, c in zip(targets, corrected, strict=True):
+        row = [*(t[:3] / scale), *(c[:3] / scale), *((c[:3] - t[:3]) / scale)]
+        if axes:
+            row += [*(t[3:] * factor), *(c[3:] * factor)]
+        lines.append(",".join(f"{v:.10g}" for v in row))
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,90 @@
+"""The ``[defects]`` table of a machine file: geometric defects applied to the machine the rest
+of the file describes (a calibrated machine, or a simulated "true" one).
+
+::
+
+    [machine]
+    kind = "tripteor"
+    units = "mm"
+    [parameters]
+    ...
+    [defects]          # name = value; lengths in the file's units, direction components
+    da13 = 0.012       # dimensionless (≈ rad), angles (spins, crank offsets) in degrees
+    dJ62 = -0.0004
+
+Names are the machine's defect names (``pkmkit.errors.model.defect_set``: ``dA1x``, ``dL3``,
+``dq2`` for rod machines; ``dI21``, ``da13``, ``dS62`` for joint chains). The defects are applied
+exactly (:mod:`pkmkit.model.rod_defects`, :meth:`pkmkit.model.chains.JointChainModel.
+with_defects`) after any parameter override; a rod machine of a built-in kind keeps its id but no
+longer has named parameters (its geometry is no longer the kind's).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from pkmkit.errors import ParameterError
+from pkmkit.model.parameters import is_plain_number
+
+
+def defect_index(machine):
+    """The defect index of ``machine``'s model: names, units (``"m"``, ``"1"``, ``"rad"``)."""
+    model = machine.model
+    if hasattr(model, "defect_index"):
+        return model.defect_index
+    from pkmkit.model.rod_defects import rod_defect_index
+
+    return rod_defect_index(model)
+
+
+def defects_from_table(machine, table: Mapping[str, Any], scale: float) -> np.ndarray:
+    """The SI defect vector of a ``[defects]`` table (values in file units: lengths × scale,
+    ``rad`` defects in degrees).
+
+    Raises:
+        ParameterError: an unknown name (``parameter`` = the name) or a value that is not a
+            finite number.
+    """
+    index = defect_index(machine)
+    delta = np.zeros(len(index.names))
+    for name, value in table.items():
+        if name not in index.names:
+            preview = ", ".join(index.names[:12]) + (", …" if len(index.names) > 12 else "")
+            raise ParameterError(f"unknown defect {name!r} for this machine; its defects are "
+                                 f"named like {preview}", name)
+        if not is_plain_number(value) or np.ndim(value) != 0 or not np.isfinite(value):
+            raise ParameterError(f"defect {name!r} must be a finite number, got {value!r}", name)
+        unit = index.units[index.names.index(name)]
+        factor = scale if unit == "m" else (np.pi / 180.0 if unit == "rad" else 1.0)
+        delta[index.names.index(name)] = float(value) * factor
+    return delta
+
+
+def table_from_defects(machine, delta: np.ndarray, scale: float, *, digits: int = 10
+                       ) -> dict[str, float]:
+    """The inverse of :func:`defects_from_table`: non-zero defects in file units."""
+    index = defect_index(machine)
+    out = {}
+    for name, unit, value in zip(index.names, index.units, delta, strict=True):
+        if value == 0.0:
+            continue
+        factor = scale if unit == "m" else (np.pi / 180.0 if unit == "rad" else 1.0)
+        out[name] = float(f"{value / factor:.{digits}g}")
+    return out
+
+
+def apply_defect_vector(machine, delta: np.ndarray):
+    """``machine`` with the SI defect vector ``delta`` applied exactly (joint chains: replacing
+    their defects; rod machines: on their current geometry)."""
+    if not np.any(delta):
+        return machine
+    if hasattr(machine.model, "defect_index"):
+        return machine.with_defects(np.asarray(machine.model.defects) + delta)
+    from pkmkit.model.rod_defects import apply_rod_defects, rod_defect_index
+
+    model = apply_rod_defects(machine.model, rod_defect_index(machine.model), delta)
+    return replace(machine, model=model, kind=None, params={})

@@ -1,0 +1,75 @@
+"""Compensation: corrected targets make the real machine reach the targets; corrected G-code
+and correction tables."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pkmkit
+from pkmkit.calibration import random_defects
+from pkmkit.calibration.compensation import (
+    check_compensation,
+    correct_path,
+    correct_targets,
+    grid_targets,
+)
+from pkmkit.calibration.controller import corrected_targets, executed
+from pkmkit.errors import InputError
+from pkmkit.io.compensation_files import corrected_gcode, correction_table
+from pkmkit.model.defects_table import apply_defect_vector
+from pkmkit.motion.gcode import read_gcode
+
+
+@pytest.mark.parametrize("name", ["linear-delta", "verne", "gough-stewart", "tripteor-x7"])
+def test_perfect_identification_compensates_exactly(name):
+    m = pkmkit.machine(name)
+    true = apply_defect_vector(m, random_defects(m, np.random.default_rng(4)))
+    lo, hi = m.default_box() if hasattr(m, "default_box") else (None, None)
+    if name == "tripteor-x7":
+        q = np.atleast_2d(m.home_q) + np.array([[0.003, -0.002, 0.002, 0.1, 0.3],
+                                                [-0.004, 0.004, 0.001, -0.1, 0.5]])
+        targets = m.fk(q)
+        tool = 0.15
+    else:
+        targets = np.asarray(lo)[:3] + (np.asarray(hi)[:3] - np.asarray(lo)[:3]) * np.array(
+            [[0.3, 0.4, 0.5], [0.6, 0.5, 0.4], [0.5, 0.5, 0.5]])
+        tool = 0.05 if name in ("verne", "gough-stewart") else None
+    check = check_compensation(true, m, true, targets, tool_length=tool)
+    assert check.before.max() > 1e-5
+    assert check.after.max() < 1e-8
+    corrected = corrected_targets(m, true, targets, tool)
+    reached = executed(true, m, corrected, tool)
+    np.testing.assert_allclose(reached[:, :3], np.atleast_2d(targets)[:, :3], atol=1e-8)
+
+
+def test_corrected_gcode_reads_back(tmp_path):
+    m = pkmkit.machine("linear-delta")
+    true = apply_defect_vector(m, random_defects(m, np.random.default_rng(5)))
+    program = "G21 G90\nG0 X0 Y0 Z50\nG1 X40 Y0 Z50 F600\nG2 X40 Y40 Z50 I0 J20\nG1 X0 Y40\n"
+    path = read_gcode(program, origin=(0.0, 0.0, 0.0))
+    fixed = correct_path(m, true, path, step=2e-3)
+    assert len(fixed.targets) > 40
+    assert fixed.rapid[1] and not fixed.rapid[-1]
+    text = corrected_gcode(fixed, header="test")
+    back = read_gcode(text, start=fixed.corrected[0])
+    ends = np.array([seg.end for seg in back.segments])
+    np.testing.assert_allclose(ends, fixed.corrected[1:], atol=1e-7)
+    assert "F600" in text
+    assert (fixed.correction > 1e-6).all()
+    table = correction_table(fixed.targets, fixed.corrected, units="mm")
+    rows = [r for r in table.splitlines() if not r.startswith("#")]
+    assert rows[0] == "x,y,z,cx,cy,cz,dx,dy,dz"
+    assert len(rows) == len(fixed.targets) + 1
+
+
+def test_grid_and_unreachable_targets():
+    g = grid_targets([0, 0, 0], [1, 2, 3], [2, 3, 1])
+    assert g.shape == (6, 3)
+    np.testing.assert_allclose(np.unique(g[:, 1]), [0, 1, 2])
+    np.testing.assert_allclose(np.unique(g[:, 2]), [1.5])
+    with pytest.raises(InputError):
+        grid_targets([0, 0], [1, 1, 1], [1, 1, 1])
+    m = pkmkit.machine("linear-delta")
+    with pytest.raises(InputError, match=r"out of reach of the calibrated machine \(rows 2\)"):
+        correct_targets(m, m, [[0, 0, 0.2], [9.0, 0, 0]])

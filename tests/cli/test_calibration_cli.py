@@ -1,0 +1,223 @@
+"""``pkmkit simulate-measurements``, ``register``, ``calibrate`` and ``compensate`` end to end,
+the report's content, and bad input (exit 1, the file line named, nothing written)."""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import re
+
+import numpy as np
+import pytest
+
+import pkmkit
+
+
+@pytest.fixture(scope="module")
+def delta_run(tmp_path_factory):
+    """Simulated Delta measurements (identification + validation) and their calibration."""
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    d = tmp_path_factory.mktemp("delta")
+    runner = CliRunner()
+
+    def run(*args):
+        res = runner.invoke(cli, [str(a) for a in args], catch_exceptions=False)
+        assert res.exit_code == 0, res.output
+        return res
+
+    run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 60,
+        "--defects", "random", "--seed", 3, "--units", "mm", "--out", d / "ident.csv")
+    run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 25,
+        "--defects", d / "ident.truth.toml", "--seed", 4, "--units", "mm",
+        "--out", d / "valid.csv")
+    out = run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+              d / "ident.csv", "--validate", d / "valid.csv", "--out", d / "cal", "--json")
+    return d, json.loads(out.stdout)
+
+
+def test_simulate_writes_measurements_and_truth(delta_run):
+    d, _ = delta_run
+    text = (d / "ident.csv").read_text()
+    assert "# units: mm" in text and "q1,q2,q3,x,y,z" in text
+    truth = pkmkit.load(d / "ident.truth.toml")
+    nominal = pkmkit.machine("linear-delta")
+    q = np.atleast_2d(nominal.home_q)
+    assert 1e-6 < np.abs(truth.fk(q) - nominal.fk(q)).max() < 2e-2
+
+
+def test_calibrate_json_and_outputs(delta_run):
+    d, payload = delta_run
+    for key in ("parameters", "std", "rms_before", "rms_after", "max_before", "max_after",
+                "validation", "rank", "condition", "unidentifiable"):
+        assert key in payload
+    assert payload["units"] == "mm"
+    assert payload["rms_after"] < 0.05 < payload["rms_before"]
+    assert payload["validation"]["rms_after"] < 0.06
+    assert set(payload["std"]) == set(payload["parameters"])
+    files = {p.name for p in (d / "cal").iterdir()}
+    assert {"report.html", "calibration.json", "residuals.csv", "residuals.png",
+            "histograms.png", "parameters.png", "identifiability.png",
+            "linear-delta-calibrated.toml"} <= files
+    # the calibrated machine file reads back and is closer to the truth than the nominal
+    calibrated = pkmkit.load(d / "cal" / "linear-delta-calibrated.toml")
+    truth = pkmkit.load(d / "ident.truth.toml")
+    nominal = pkmkit.machine("linear-delta")
+    q = nominal.ik(np.array([[0.1, -0.1, 0.2], [-0.2, 0.1, 0.3], [0.0, 0.2, 0.1]]))
+    err_cal = np.abs(calibrated.fk(q) - truth.fk(q)).max()
+    err_nom = np.abs(nominal.fk(q) - truth.fk(q)).max()
+    assert err_cal < 0.2 * err_nom
+
+
+def test_report_content(delta_run):
+    d, payload = delta_run
+    page = (d / "cal" / "report.html").read_text()
+    assert page.startswith("<!DOCTYPE html>")
+    # self-contained: every figure embedded as a PNG data URI, no external resource
+    images = re.findall(r"src='data:image/png;base64,([A-Za-z0-9+/=]+)'", page)
+    assert len(images) == 4
+    assert all(base64.b64decode(img)[:8] == b"\x89PNG\r\n\x1a\n" for img in images)
+    assert "http://" not in page and "https://" not in page
+    text = html.unescape(page)
+    for name in payload["parameters"]:
+        assert f"<code>{name}</code>" in text
+    for name in payload["unidentifiable"]:
+        assert f"<code>{name}</code>" in text
+    # the residual table shows before/after for both sets, as in the JSON
+    assert "identification" in text and "validation" in text
+    assert f"{payload['rms_after']:.4g}" in text
+    assert f"{payload['validation']['rms_after']:.4g}" in text
+    assert "Parameters left at their nominal value" in text
+    residuals = (d / "cal" / "residuals.csv").read_text().splitlines()
+    assert residuals[1] == "row,set,before,after,weight"
+    assert len(residuals) == 2 + 60 + 25
+
+
+def test_calibrate_text_output(run, delta_run):
+    d, _ = delta_run
+    res = run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+              d / "ident.csv", "--robust", "--parameters", "dL1,dL2,dL3,dq1,dq2,dq3")
+    assert res.exit_code == 0, res.output
+    assert "residual before" in res.output and "identified (value ± std)" in res.output
+    assert "dL1" in res.output
+
+
+def test_register_reproduces_table_5_4_and_feeds_calibrate(run, as_json, tmp_path):
+    lts = tmp_path / "lts.csv"
+    bcs = tmp_path / "bcs.csv"
+    lts.write_text("# units: mm\nx,y,z,i,j,k\n-331.205,2567.607,389.687,-5.357,42.349,41.987\n"
+                   "-809.819,2774.647,423.530,59.375,7.779,-0.283\n"
+                   "-330.062,2558.758,383.845,-5.382,42.412,41.934\n"
+                   "-808.695,2765.857,417.398,59.378,7.778,-0.286\n")
+    bcs.write_text("# units: mm\nx,y,z,i,j,k\n794.963,415.758,-59.545,-0.001,0.709,0.705\n"
+                   "1242.534,450.304,207.671,-0.999,0,0\n794.958,409.808,-68.367,-0.001,0.708,"
+                   "0.706\n1242.53,444.061,198.884,-0.999,0,0\n")
+    out = as_json(run("register", "--measured", lts, "--nominal", bcs, "--json"))
+    assert out["directions"] == 4 and out["units"] == "mm"
+    assert max(out["direction_residuals_deg"]) < 0.07
+    # points only: seed 002's 0.085 mm
+    lts.write_text("\n".join(line.rsplit(",", 3)[0] if "," in line else line
+                             for line in lts.read_text().splitlines()) + "\n")
+    bcs.write_text("\n".join(line.rsplit(",", 3)[0] if "," in line else line
+                             for line in bcs.read_text().splitlines()) + "\n")
+    frame = tmp_path / "frame.json"
+    res = run("register", "--measured", lts, "--nominal", bcs, "--out", frame)
+    assert res.exit_code == 0, res.output
+    assert "rms 0.085 mm" in res.output
+    # a tracker frame: simulate in it, calibrate through it
+    meas = tmp_path / "m.csv"
+    assert run("simulate-measurements", "verne", "--measure", "point", "--poses", 40,
+               "--defects", "random", "--frame", frame, "--out", meas).exit_code == 0
+    good = as_json(run("calibrate", "verne", "--measure", "point", "--measurements", meas,
+                       "--frame", frame, "--json"))
+    bad = as_json(run("calibrate", "verne", "--measure", "point", "--measurements", meas,
+                      "--parameters", "dL1,dL2", "--json"))
+    assert good["rms_after"] < 1e-4 < bad["rms_after"]
+    joint = as_json(run("calibrate", "verne", "--measure", "point", "--measurements", meas,
+                        "--frame", "identify", "--json", "--parameters",
+                        "dL1,dL2,dL3,dL4,dL5,dL6"))
+    assert set(joint["setup"]) == {"frame_rx", "frame_ry", "frame_rz", "frame_x", "frame_y",
+                                   "frame_z"}
+
+
+def test_compensate_grid_gcode_and_truth(run, as_json, delta_run, tmp_path):
+    d, _ = delta_run
+    cal = d / "cal" / "linear-delta-calibrated.toml"
+    out = as_json(run("compensate", "linear-delta", "--calibrated", cal, "--grid",
+                      "-200,-200,0:200,200,300:3,3,2", "--units", "mm",
+                      "--truth", d / "ident.truth.toml", "--out", tmp_path / "grid.csv",
+                      "--json"))
+    assert out["targets"] == 18
+    assert out["check"]["rms_after"] < 0.2 * out["check"]["rms_before"]
+    rows = (tmp_path / "grid.csv").read_text().splitlines()
+    assert rows[2] == "x,y,z,cx,cy,cz,dx,dy,dz"
+    program = tmp_path / "part.nc"
+    program.write_text("G21 G90\nG0 X0 Y0 Z100\nG1 X50 Y0 Z100 F300\nG2 X50 Y50 I0 J25\n")
+    res = run("compensate", "linear-delta", "--calibrated", cal, "--gcode", program,
+              "--step", 5, "--units", "mm", "--out", tmp_path / "fixed.nc")
+    assert res.exit_code == 0, res.output
+    from pkmkit.motion.gcode import read_gcode
+
+    fixed = read_gcode(tmp_path / "fixed.nc")
+    assert len(fixed.segments) > 15
+    res = run("compensate", "tripteor-x7", "--calibrated", cal, "--grid", "0,0,0:1,1,1:1,1,1",
+              "--out", tmp_path / "x.csv")
+    assert res.exit_code == 1 and "not a calibration of" in res.output
+
+
+def test_bad_input_exits_1_naming_the_line_and_writes_nothing(run, tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("# units: mm\nq1,q2,q3,x,y\n1000,1000,1000,0,0\n")
+    res = run("calibrate", "linear-delta", "--measure", "point", "--measurements", bad,
+              "--out", tmp_path / "out")
+    assert res.exit_code == 1
+    assert f"{bad}:2: missing column(s) z" in res.output
+    assert not (tmp_path / "out").exists()
+    bad.write_text("# units: mm\nq1,q2,q3,x,y,z\n1000,1000,1000,0,0,0\n")
+    res = run("calibrate", "linear-delta", "--measure", "point", "--measurements", bad,
+              "--units", "m")
+    assert res.exit_code == 1 and "units mismatch" in res.output
+    bad.write_text("q1,q2,q3,x,y,z\n" + "".join(f"{5 + k},1,1,0,0,{k}\n" for k in range(8)))
+    res = run("calibrate", "linear-delta", "--measure", "point", "--measurements", bad)
+    assert res.exit_code == 1 and "outside the stroke" in res.output and "bad.csv:2" in res.output
+    res = run("simulate-measurements", "verne", "--measure", "ballbar", "--poses", bad,
+              "--out", tmp_path / "b.csv")
+    assert res.exit_code == 1 and "--poses FILE" in res.output
+    assert not (tmp_path / "b.csv").exists()
+    res = run("compensate", "linear-delta", "--calibrated", tmp_path / "none.toml", "--out",
+              tmp_path / "c.csv")
+    assert res.exit_code == 2
+
+
+def test_defects_table_file(run, as_json, tmp_path):
+    table = tmp_path / "d.toml"
+    table.write_text('units = "mm"\n[defects]\ndL1 = 0.2\ndq2 = -0.1\n')
+    out = as_json(run("simulate-measurements", "linear-delta", "--measure", "point", "--poses",
+                      20, "--defects", table, "--noise", "none", "--out", tmp_path / "m.csv",
+                      "--json"))
+    assert out["truth"] is None and out["defects"] == str(table)
+    res = as_json(run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+                      tmp_path / "m.csv", "--parameters", "dL1,dq2", "--units", "m", "--json"))
+    assert res["parameters"]["dL1"] == pytest.approx(2e-4, rel=1e-6)
+    assert res["parameters"]["dq2"] == pytest.approx(-1e-4, rel=1e-6)
+    table.write_text("[defects]\ndZ1 = 1\n")
+    res = run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 5,
+              "--defects", table, "--out", tmp_path / "n.csv")
+    assert res.exit_code == 1 and "d.toml:2: unknown defect 'dZ1'" in res.output
+
+
+def test_tolerances_and_correlations(run, as_json, delta_run):
+    d, _ = delta_run
+    out = as_json(run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+                      d / "ident.csv", "--prior", "--tolerance", "dL1=0.001", "--json"))
+    names = out["correlation"]["names"]
+    corr = np.array(out["correlation"]["matrix"])
+    assert corr.shape == (len(names), len(names))
+    np.testing.assert_allclose(np.diag(corr), 1.0)
+    assert abs(out["parameters"]["dL1"]) < 0.005  # mm: held near zero by its tight prior
+    res = run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+              d / "ident.csv", "--tolerance", "dQ9=1")
+    assert res.exit_code == 1 and "unknown defect 'dQ9'" in res.output
