@@ -314,7 +314,7 @@ def prune_weak(jacobian: np.ndarray, scale: np.ndarray, *, sigma: float = 1.0,
 
 # the error-analysis package's identifiability and pose selection, under the calibration
 # namespace too (one implementation: pkmkit.errors.identifiability, pkmkit.errors.pose_selection)
-from pkmkit.errors.identifiability import (  # noqa: E402
+from pkmkit.errors.identifiability import (  # noqa: E402, F401
     INDICES,
     Combination,
     IdentifiabilityResult,
@@ -328,4 +328,4 @@ from pkmkit.errors.identifiability import (  # noqa: E402
     indices_from_singular_values,
     observability,
 )
-from pkmkit.errors.pose_selection import PoseSelection, select_poses  # noqa: E402
+from pkmkit.errors.pose_selection import PoseSelection, select_poses  # noqa: E402, F401
