@@ -5,6 +5,8 @@ import json
 import numpy as np
 import pytest
 
+import pkmkit
+
 
 @pytest.mark.parametrize("command", [[], ["machines"], ["show"], ["ik"], ["fk"], ["jacobian"],
                                      ["demo"]])
@@ -252,3 +254,19 @@ def test_modes_and_warm_starts_from_the_cli(run, as_json):
     np.testing.assert_allclose(branch["q"], closed["q"], atol=1e-9)
     note = run("ik", "orthoglide", "--pose", "0.15,0.15,0.15").output
     assert "far-side" in note and "--mode far-side" in note
+
+
+def test_batch_header_with_spaces_bom_and_mixed_order(run, tmp_path):
+    """A spreadsheet's CSV (byte-order mark, spaces after the commas, columns z, x, y) gives the
+    same actuator values as the poses typed in the x, y, z order."""
+    poses = np.array([[0.25, 0.25, 0.0], [-0.1, 0.2, 0.3]])
+    path = tmp_path / "poses.csv"
+    path.write_bytes(("\ufeff z , x, y\n" + "".join(f"{z!r}, {x!r}, {y!r}\n" for x, y, z in poses.tolist()))
+                     .encode("utf-8"))
+    out = tmp_path / "q.csv"
+    result = run("ik", "linear-delta", "--input", path, "--output", out)
+    assert result.exit_code == 0, result.output
+    lines = out.read_text().splitlines()
+    assert lines[0].split(",")[:3] == ["x", "y", "z"]
+    q = np.array([[float(v) for v in line.split(",")[3:6]] for line in lines[1:]])
+    np.testing.assert_allclose(q, pkmkit.machine("linear-delta").ik(poses), rtol=0, atol=1e-15)
