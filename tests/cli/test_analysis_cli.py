@@ -4,6 +4,8 @@
 import numpy as np
 import pytest
 
+import pkmkit
+
 
 def test_analyze(run, as_json):
     data = as_json(run("analyze", "orthoglide", "--pose", "0,0,0", "--json"))
@@ -196,3 +198,18 @@ def test_bad_input(run, args, message, tmp_path, monkeypatch):
     result = run(*args)
     assert result.exit_code == 1, result.output
     assert message in result.output and "Traceback" not in result.output
+
+
+@pytest.mark.parametrize("name", ["lambda_min", "lambda_max", "force_min", "force_max"])
+def test_map_reports_the_named_index(run, tmp_path, as_json, name):
+    """`pkmkit map --index NAME`: the extreme values and where they are match NAME's definition
+    from the singular values of J at that pose (λ_min must not plot λ_max)."""
+    data = as_json(run("map", "linear-delta", "--index", name, "--slice", "z=0.1",
+                       "--range", "-0.3,0.3,-0.3,0.3", "--resolution", "21",
+                       "--out", tmp_path / "m.png", "--json"))
+    m = pkmkit.machine("linear-delta")
+    for key in ("min", "max"):
+        s = np.linalg.svd(m.jacobian(np.asarray(data[f"at_{key}"])).J, compute_uv=False)
+        value = {"lambda_min": s[-1], "lambda_max": s[0], "force_min": 1 / s[0],
+                 "force_max": 1 / s[-1]}[name]
+        assert data[key] == pytest.approx(value, rel=1e-12)
