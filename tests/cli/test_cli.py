@@ -261,8 +261,8 @@ def test_batch_header_with_spaces_bom_and_mixed_order(run, tmp_path):
     same actuator values as the poses typed in the x, y, z order."""
     poses = np.array([[0.25, 0.25, 0.0], [-0.1, 0.2, 0.3]])
     path = tmp_path / "poses.csv"
-    path.write_bytes(("\ufeff z , x, y\n" + "".join(f"{z!r}, {x!r}, {y!r}\n" for x, y, z in poses.tolist()))
-                     .encode("utf-8"))
+    rows = "".join(f"{z!r}, {x!r}, {y!r}\n" for x, y, z in poses.tolist())
+    path.write_bytes(("\ufeff z , x, y\n" + rows).encode("utf-8"))
     out = tmp_path / "q.csv"
     result = run("ik", "linear-delta", "--input", path, "--output", out)
     assert result.exit_code == 0, result.output
