@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import pkmkit
+from pkmkit.analysis.workspace import Criteria, useful_workspace
 
 
 def test_analyze(run, as_json):
@@ -58,7 +59,15 @@ def test_useful_workspace(run, tmp_path, as_json):
     assert data["joint_square"]["side"] == pytest.approx(0.3868, abs=2e-3)
     # exact range: the bound 3 is reached at a corner of the joint square
     assert data["index_range"] == pytest.approx([0.6, 3.0], abs=1e-5)
-    assert 0 < data["global_conditioning_index"] < 1
+    # GCI: the cell-weighted mean of λ_min/λ_max (numpy's SVD) over the useful workspace
+    useful = useful_workspace(pkmkit.machine("five-bar"), Criteria(bounds=(0.3333333, 3.0)),
+                              resolution=151)
+    feasible = useful.workspace.feasible.ravel()
+    s = np.linalg.svd(pkmkit.machine("five-bar").jacobian(
+        useful.workspace.grid.points[feasible]).J, compute_uv=False)
+    weights = useful.workspace.grid.weights().ravel()[feasible]
+    assert data["global_conditioning_index"] == pytest.approx(
+        np.sum(s[:, -1] / s[:, 0] * weights) / weights.sum(), rel=1e-12)
     assert (tmp_path / "u.png").exists()
 
 
