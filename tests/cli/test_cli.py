@@ -155,11 +155,13 @@ def test_user_machine_file_through_the_cli(run, tmp_path, as_json):
     np.testing.assert_allclose(data["q"], [0.882666] * 3, atol=1e-6)
 
 
-def test_demo_writes_json_and_pngs(run, tmp_path):
-    out = tmp_path / "demo"
-    result = run("demo", "--out", out)
+def check_demo(run, out, *extra):
+    """Run ``pkmkit demo`` into ``out``; check what both modes must get right; return the
+    summary."""
+    result = run("demo", "--out", out, *extra)
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "summary.json").read_text())
+    assert summary["quick"] == ("--quick" in extra)
     machines = summary["machines"]
     assert {"orthoglide", "linear-delta-ch3", "five-bar-isotropic"} <= set(machines)
     delta = machines["linear-delta-ch3"]
@@ -204,6 +206,24 @@ def test_demo_writes_json_and_pngs(run, tmp_path):
         assert res["inscribed_side"] > 0, ident
         for name in res["figures"]:
             assert (out / "analysis" / name).stat().st_size > 10_000
+    return summary
+
+
+def test_demo_quick_writes_json_and_pngs(run, tmp_path):
+    """The demo's quick mode (coarser grids, shorter Pareto search): every study runs and
+    writes its files, with the numbers that do not depend on the grids."""
+    check_demo(run, tmp_path / "demo", "--quick")
+
+
+@pytest.mark.slow
+def test_full_demo_numbers(run, tmp_path):
+    """The full demo (what `.ci/run` also runs after the tests), with its grid-refined numbers:
+    the seed 004 area ratio on 301-point grids, the sized five-bar legs, the Pareto front."""
+    summary = check_demo(run, tmp_path / "demo")
+    five = summary["analysis"]["seed004_five_bar"]
+    assert five["inscribed_area_ratio"] == pytest.approx(6.631, abs=0.01)
+    assert summary["design"]["five_bar"]["isotropic"]["L"] == pytest.approx(0.28906, abs=1e-5)
+    assert summary["design"]["linear_delta"]["evaluations"] == 25 * 32
 
 
 def test_batch_keeps_good_rows_when_a_cell_is_bad(run, tmp_path):

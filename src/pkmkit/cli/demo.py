@@ -66,8 +66,11 @@ def machine_summary(m: Machine) -> dict[str, Any]:
     return info
 
 
-def run_demo(out_dir: Path) -> dict[str, Any]:
-    """Run the demo into ``out_dir`` and return the summary written to ``summary.json``."""
+def run_demo(out_dir: Path, quick: bool = False) -> dict[str, Any]:
+    """Run the demo into ``out_dir`` and return the summary written to ``summary.json``.
+
+    ``quick``: the same studies on coarser grids and with a shorter Pareto search (a check
+    that everything runs, for the test suite; the full demo is the reference)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     summaries = {}
     for ident in machines():
@@ -80,13 +83,13 @@ def run_demo(out_dir: Path) -> dict[str, Any]:
         (out_dir / f"{ident}.json").write_text(json.dumps(to_jsonable(summary), indent=2))
         summaries[ident] = summary
         _print_summary(summary)
-    analysis = run_analysis_demo(out_dir, list(summaries))
-    design = run_design_demo(out_dir)
+    analysis = run_analysis_demo(out_dir, list(summaries), quick)
+    design = run_design_demo(out_dir, quick)
     motion = run_motion_demo(out_dir)
     total = {"pkmkit_demo": "kinematic summary, analysis, design, trajectories and dynamics of "
                             "the built-in machines",
-             "units": "m", "machines": summaries, "analysis": analysis, "design": design,
-             "motion": motion}
+             "units": "m", "quick": quick, "machines": summaries, "analysis": analysis,
+             "design": design, "motion": motion}
     (out_dir / "summary.json").write_text(json.dumps(to_jsonable(total), indent=2))
     click.echo(f"\nwrote {out_dir}/summary.json, one JSON and one PNG per machine, and the "
                "figures of the studies in analysis/, design/ and motion/")

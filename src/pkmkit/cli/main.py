@@ -312,12 +312,15 @@ def jacobian(machine_name, assignments, pose, tol, input_, output, units, as_jso
 @cli.command()
 @click.option("--out", "out_dir", default="pkmkit-demo", show_default=True,
               type=click.Path(file_okay=False), help="Directory for the JSON and PNG files.")
-def demo(out_dir: str) -> None:
+@click.option("--quick", is_flag=True,
+              help="Coarser grids and a shorter Pareto search: every study runs, in about half "
+                   "the time, with less refined numbers and figures.")
+def demo(out_dir: str, quick: bool) -> None:
     """Kinematic summary and analysis of every built-in machine (text, JSON and figures)."""
     from .demo import run_demo
 
     try:
-        run_demo(Path(out_dir))
+        run_demo(Path(out_dir), quick=quick)
     except OSError as exc:
         raise click.ClickException(f"cannot write into {out_dir}: {exc.strerror or exc}") from None
 
