@@ -5,13 +5,16 @@ Usage (from the repository root, in the project's virtual environment with the `
     python tools/mutation.py pkmkit.spatial                       # every mutant of the package
     python tools/mutation.py pkmkit.machines --sample 120 --seed 15 --jobs 1
     python tools/mutation.py pkmkit.motion.gcode --report          # scores from the last runs only
+    python tools/mutation.py pkmkit.machines --sample 120 --survivors  # the sample's survivors
 
 mutmut's configuration is ``[tool.mutmut]`` in pyproject.toml. mutmut writes a mutated copy of the
 source and the tests to ``./mutants/`` (git-ignored); its first run also runs the whole suite once
 to learn which tests reach which function (cached afterwards). A sample is drawn with
 ``random.Random(seed)`` from the sorted mutant names of the target, so the same command draws the
 same mutants. The score printed is killed / (killed + survived), where a timeout counts as killed
-(an infinite loop is observable) and mutants that no test reaches count as survived.
+(an infinite loop is observable), mutants that no test reaches count as survived, and mutants
+listed in ``tools/equivalent_mutants.txt`` (no observable change; one per line with the reason)
+are left out.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+EQUIVALENT = ROOT / "tools" / "equivalent_mutants.txt"
 KILLED = {1, 3, 36, 24, -24, 152, 255}  # test failure, pytest internal error, timeouts
 SURVIVED = {0, 5, 33}  # no test failed, or no test reaches the function
 
@@ -51,18 +55,32 @@ def _generate() -> None:
     subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
 
 
+def _equivalent() -> dict[str, str]:
+    """Mutant name → why it is equivalent, from ``tools/equivalent_mutants.txt``."""
+    out = {}
+    if EQUIVALENT.exists():
+        for line in EQUIVALENT.read_text().splitlines():
+            if line.strip() and not line.startswith("#"):
+                name, _, reason = line.partition(" ")
+                out[name] = reason.strip()
+    return out
+
+
 def _report(names: list[str], codes: dict[str, int | None]) -> int:
     counts = Counter()
     survivors = []
+    equivalent = _equivalent()
     for name in names:
         code = codes.get(name)
-        if code in KILLED:
+        if name in equivalent:
+            counts["equivalent"] += 1
+        elif code in KILLED:
             counts["killed"] += 1
         elif code in SURVIVED:
             counts["survived"] += 1
             survivors.append(name)
         else:
-            counts[f"other ({code})"] += 1
+            counts[f"not run ({code})"] += 1
     decided = counts["killed"] + counts["survived"]
     score = 100.0 * counts["killed"] / decided if decided else float("nan")
     for name in survivors:
@@ -82,6 +100,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=15, help="seed of the random sample")
     parser.add_argument("--jobs", type=int, default=1, help="mutants tested in parallel")
     parser.add_argument("--report", action="store_true", help="only report the last results")
+    parser.add_argument("--survivors", action="store_true",
+                        help="re-run only the mutants of the sample that survived last time")
     args = parser.parse_args(argv)
 
     _generate()
@@ -93,9 +113,14 @@ def main(argv: list[str] | None = None) -> int:
     if args.sample and args.sample < len(names):
         names = sorted(random.Random(args.seed).sample(names, args.sample))
     print(f"{args.target}: {len(codes)} mutants, testing {len(names)}")
-    if not args.report:
+    todo = names
+    if args.survivors:
+        equivalent = _equivalent()
+        todo = [n for n in names if codes.get(n) in SURVIVED and n not in equivalent]
+        print(f"re-running {len(todo)} survivors")
+    if not args.report and todo:
         subprocess.run(
-            [sys.executable, "-m", "mutmut", "run", "--max-children", str(args.jobs), *names],
+            [sys.executable, "-m", "mutmut", "run", "--max-children", str(args.jobs), *todo],
             cwd=ROOT,
             check=False,
         )
