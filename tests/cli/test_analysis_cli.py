@@ -20,7 +20,7 @@ def test_map_index_and_actuators(run, tmp_path, as_json):
     out = tmp_path / "cond.png"
     data = as_json(run("map", "linear-delta", "--index", "condition", "--slice", "z=0",
                        "--range", "-0.25,0.25,-0.25,0.25", "--out", out, "--json"))
-    assert out.stat().st_size > 10_000
+    assert out.stat().st_size > 10_000 and data["plane"] == ["x", "y"]
     acts = as_json(run("map", "linear-delta", "--index", "actuators", "--slice", "z=0",
                        "--range", "-250,250,-250,250", "--units", "mm",
                        "--out", tmp_path / "q.png", "--json"))

@@ -4,12 +4,13 @@ the actuators' power plus the tool force's equals the rate of the mechanical ene
 stencil of the exact energy: an independent route, accurate to ~1e-9 here)."""
 
 import numpy as np
+import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from pkmkit.dynamics import inverse_dynamics, mass_properties, mechanical_energy
 from pkmkit.model.rods import STRUT
-from tests.strategies import machines, near_home, well_posed
+from tests.strategies import FAMILIES, near_home, well_posed
 
 
 def _motion(x0, a, b, omega, t):
@@ -18,9 +19,10 @@ def _motion(x0, a, b, omega, t):
     return (x0 + a * s + b * (1 - c), omega * (a * c + b * s), omega**2 * (-a * s + b * c))
 
 
-@given(st.data())
-def test_power_balance_on_random_machines(data):
-    m = data.draw(machines())
+@pytest.mark.parametrize("family", sorted(FAMILIES))
+@given(data=st.data())
+def test_power_balance_on_random_machines(family, data):
+    m = data.draw(FAMILIES[family])
     dims = m.dims
     scale = float(m.model.leg_length.max())
     x0 = near_home(data.draw, m, 0.1)

@@ -6,15 +6,16 @@ the geometry, invariance under a rigid motion of the whole machine and under a c
 import math
 
 import numpy as np
+import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
 import pkmkit
 from tests.strategies import (
+    FAMILIES,
     five_bars,
     linear_deltas,
     load_text,
-    machines,
     near_home,
     orthoglides,
     rod_leg_specs,
@@ -24,16 +25,20 @@ from tests.strategies import (
 
 
 @st.composite
-def machine_and_pose(draw, strategy=None):
-    m = draw(machines() if strategy is None else strategy)
+def machine_and_pose(draw, family):
+    m = draw(FAMILIES[family])
     x = near_home(draw, m)
     assume(well_posed(m, x))
     return m, x
 
 
-@given(machine_and_pose())
-def test_inverse_direct_round_trip_in_every_mode(case):
-    m, x = case
+every_family = pytest.mark.parametrize("family", sorted(FAMILIES))
+
+
+@every_family
+@given(data=st.data())
+def test_inverse_direct_round_trip_in_every_mode(family, data):
+    m, x = data.draw(machine_and_pose(family))
     q = m.ik(x)
     scale = float(m.model.leg_length.max())
     np.testing.assert_allclose(m.fk(q), x, rtol=0, atol=1e-11 * scale)
@@ -57,11 +62,12 @@ def central(f, v, h):
     return np.stack(cols, axis=-1)
 
 
-@given(machine_and_pose(), st.lists(st.floats(-1, 1), min_size=3, max_size=3))
-def test_jacobians_against_finite_differences(case, direction):
+@every_family
+@given(data=st.data(), direction=st.lists(st.floats(-1, 1), min_size=3, max_size=3))
+def test_jacobians_against_finite_differences(family, data, direction):
     """J = ∂x/∂q (direct model), J⁻¹ = ∂q/∂x (inverse model), A ẋ = B q̇, and J̇ = dJ/dt along
     ẋ — each against central differences of an independent route."""
-    m, x = case
+    m, x = data.draw(machine_and_pose(family))
     scale = float(m.model.leg_length.max())
     h = 1e-6 * scale
     jac = m.jacobian(x)
@@ -115,11 +121,12 @@ def _side(m, pose, q):
     return model.mode_names[0] if np.linalg.det(np.array(rows)) < 0 else model.mode_names[1]
 
 
-@given(machine_and_pose())
-def test_mode_names_follow_the_geometry(case):
+@every_family
+@given(data=st.data())
+def test_mode_names_follow_the_geometry(family, data):
     """Each real assembly mode's name is the side of the carriage points' line or plane the
     tool point is on (built-in kinds) or the sign of det of the rod vectors (rod-legs)."""
-    m, x = case
+    m, x = data.draw(machine_and_pose(family))
     q = m.ik(x)
     modes = m.fk_all(q)
     for col in np.flatnonzero(modes.valid):

@@ -41,11 +41,13 @@ def test_centre_and_radius_arcs_agree(plane, clockwise, start, radius, phase, sw
     signed = radius if sweep < math.pi else -radius
     by_radius = read_gcode(head + move + f" R{num(signed)} F600\n").segments[-1]
     for arc in (by_centre, by_radius):
-        np.testing.assert_allclose(arc.center, center / 1000, atol=1e-12)
+        # (the program's numbers carry 10 decimals of a millimetre; an R arc near a half turn
+        # amplifies that rounding in its centre)
+        np.testing.assert_allclose(arc.center, center / 1000, atol=1e-11)
         assert abs(arc.radius - radius / 1000) < 1e-12
-        assert abs(abs(arc.sweep) - sweep) < 1e-9
+        assert abs(abs(arc.sweep) - sweep) < 1e-7
         np.testing.assert_allclose(arc.normal * np.sign(arc.sweep),
                                    np.array(normal) * (-1 if clockwise else 1), atol=1e-12)
         np.testing.assert_allclose(arc.end, end / 1000, atol=1e-12)
     s = np.linspace(0.0, by_centre.length, 7)
-    np.testing.assert_allclose(by_radius.evaluate(s)[0], by_centre.evaluate(s)[0], atol=1e-12)
+    np.testing.assert_allclose(by_radius.evaluate(s)[0], by_centre.evaluate(s)[0], atol=1e-11)
