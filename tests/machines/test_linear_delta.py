@@ -180,6 +180,13 @@ def test_vertical_static_load_is_shared_in_thirds(delta):
     np.testing.assert_allclose(jac.J.T @ [0, 0, -300.0], [-100.0] * 3, atol=1e-10)
 
 
+def test_default_box_is_the_documented_one(delta):
+    """|x|, |y| ≤ 0.4 L and −0.4 L ≤ z ≤ 0.65 L (the maps' and workspaces' default region)."""
+    lower, upper = delta.default_box()
+    np.testing.assert_allclose(lower, [-0.52, -0.52, -0.52], rtol=1e-15)
+    np.testing.assert_allclose(upper, [0.52, 0.52, 0.845], rtol=1e-15)
+
+
 def test_invalid_dimensions():
     with pytest.raises(pkmkit.ParameterError, match="smaller than L"):
         pkmkit.machine("linear-delta", L=0.5)
