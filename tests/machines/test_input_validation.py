@@ -118,7 +118,8 @@ def test_strut_lengths_cannot_be_negative(tmp_path):
                   for a in np.radians([0.0, 120.0, 240.0]))
     )
     m = pkmkit.load(path)
-    assert m.id == "struts"  # a file machine is named after its file
+    # a file machine without a name is named after its file, and has no description
+    assert m.id == m.name == "struts" and m.description == m.source == ""
     # struts are never too short: their shortfall is −inf whatever the pose
     far = m.ik([[0.0, 0.0, -0.8], [5.0, 0.0, -0.8]], full_output=True)
     assert (far.shortfall == -np.inf).all() and far.status.tolist() == [Status.OK] * 2
