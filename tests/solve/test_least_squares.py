@@ -61,6 +61,32 @@ def test_iteration_limit_flag():
     assert res.status[0] == Status.NOT_CONVERGED and res.iterations[0] == 3
 
 
+def test_default_iteration_limit_is_60():
+    """r = u³ from 1e10: Gauss–Newton steps u → 2u/3 make steady progress (no stall), and
+    reaching |r| < residual_tol would take about 80 of them."""
+    def evaluate(u, rows):
+        return u**3, (3 * u**2)[:, None, :]
+
+    res = solve_least_squares(evaluate, np.full((1, 1), 1e10))
+    assert res.status[0] == Status.NOT_CONVERGED and res.iterations[0] == 60
+
+
+def test_rows_without_a_finite_start_are_flagged_and_left_alone():
+    calls = []
+
+    def evaluate(u, rows):
+        calls.append(rows)
+        return u - 1.0, np.ones((1, 1, u.shape[1]))
+
+    res = solve_least_squares(evaluate, np.full((3, 1), np.nan))
+    assert res.status.tolist() == [Status.INVALID_INPUT] * 3 and calls == []
+    assert res.iterations.tolist() == [0, 0, 0] and np.isnan(res.residual).all()
+    mixed = solve_least_squares(evaluate, np.array([[np.nan], [0.0], [np.inf]]))
+    assert mixed.status.tolist() == [Status.INVALID_INPUT, Status.OK, Status.INVALID_INPUT]
+    assert mixed.iterations[0] == mixed.iterations[2] == 0
+    assert mixed.u[1, 0] == pytest.approx(1.0, abs=1e-12)
+
+
 def test_warm_start_needs_fewer_iterations():
     def evaluate(u, rows):
         return np.stack([u[0] ** 3 - 2.0]), 3 * u[None] ** 2
