@@ -98,6 +98,17 @@ def test_leg_axial_forces_balance_the_weight(delta_b):
     assert (res.leg_axial > 0).all()  # the platform hangs from the legs
 
 
+def test_mass_properties_keep_what_they_are_given(delta_b):
+    inertia = np.array([[0.2, 0.01, 0.0], [0.01, 0.3, 0.0], [0.0, 0.0, 0.4]])
+    masses = mass_properties(delta_b, carriage=2.0, platform=5.0, platform_inertia=inertia,
+                             platform_com=(0.0, 0.0, 0.1), gravity=(0.0, 1.0, -9.0))
+    np.testing.assert_array_equal(masses.platform_inertia, inertia)
+    np.testing.assert_array_equal(masses.gravity, [0.0, 1.0, -9.0])
+    np.testing.assert_array_equal(masses.platform_com, [0.0, 0.0, 0.1])
+    with pytest.raises(InputError, match="gravity"):
+        mass_properties(delta_b, gravity=(0.0, -9.81))
+
+
 def test_masses_file_and_errors(tmp_path, delta_b):
     path = tmp_path / "m.toml"
     path.write_text("[masses]\nunits = 'mm'\ncarriage = [8, 8, 9]\nrod_diameter = 40\n"
