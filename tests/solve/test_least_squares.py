@@ -105,3 +105,33 @@ def test_solve_spd_matches_numpy(n):
     b = rng.normal(size=(n, 30))
     expected = np.linalg.solve(h.transpose(2, 0, 1), b.T[:, :, None])[:, :, 0].T
     np.testing.assert_allclose(solve_spd(h, b), expected, rtol=1e-9, atol=1e-12)
+
+
+def test_stationarity_stop_is_the_documented_cosine():
+    """Inconsistent rows (no zero residual) stop when every Jacobian column is orthogonal to
+    the residual within gtol: at the returned u, |J_iᵀ r| ≤ gtol ‖J_i‖ ‖r‖ for each column i,
+    checked here from the problem itself on 300 random rows."""
+    rng = np.random.default_rng(9)
+    a, b, c = rng.uniform(0.5, 2.0, (3, 300))
+
+    def residual(u):
+        return np.stack([u[0] - a, u[1] - b, 3.0 * (u[0] * u[1] - c * a * b)])
+
+    def evaluate(u, rows):
+        x, y = u
+        r = np.stack([x - a[rows], y - b[rows], 3.0 * (x * y - c[rows] * a[rows] * b[rows])])
+        jac = np.zeros((3, 2, u.shape[1]))
+        jac[0, 0], jac[1, 1], jac[2, 0], jac[2, 1] = 1.0, 1.0, 3.0 * y, 3.0 * x
+        return r, jac
+
+    gtol = 1e-3
+    res = solve_least_squares(evaluate, np.stack([a, b], axis=1), gtol=gtol, residual_tol=0.0)
+    assert (res.status == Status.INCONSISTENT).all()
+    u = res.u.T
+    r = residual(u)
+    jac = np.stack([np.stack([np.ones(300), np.zeros(300), 3.0 * u[1]]),
+                    np.stack([np.zeros(300), np.ones(300), 3.0 * u[0]])])  # (column, m, N)
+    cosine = np.abs(np.einsum("imk,mk->ik", jac, r)) / (
+        np.linalg.norm(jac, axis=1) * np.linalg.norm(r, axis=0))
+    assert cosine.max() <= gtol * (1 + 1e-9)
+    assert cosine.max() > 0.3 * gtol  # and stops there, not at rounding level
