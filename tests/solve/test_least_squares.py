@@ -135,3 +135,14 @@ def test_stationarity_stop_is_the_documented_cosine():
         np.linalg.norm(jac, axis=1) * np.linalg.norm(r, axis=0))
     assert cosine.max() <= gtol * (1 + 1e-9)
     assert cosine.max() > 0.3 * gtol  # and stops there, not at rounding level
+
+
+def test_steps_that_raise_the_cost_are_refused():
+    """r = arctan(u) from u = 1.5: the plain Gauss–Newton step overshoots to ever larger |u|
+    (each step raising the cost by 10–20 %); refusing those steps and damping instead
+    converges to u = 0."""
+    def evaluate(u, rows):
+        return np.arctan(u), (1.0 / (1.0 + u**2))[:, None, :]
+
+    res = solve_least_squares(evaluate, np.full((1, 1), 1.5))
+    assert res.status[0] == Status.OK and abs(res.u[0, 0]) < 1e-9
