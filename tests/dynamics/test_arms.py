@@ -126,6 +126,28 @@ def test_free_bore_tube_is_the_thinnest_wall_at_the_buckling_limit(force):
     assert a.outer_diameter - a.inner_diameter == pytest.approx(0.002, rel=1e-8)
 
 
+def test_tube_with_a_fixed_bore():
+    """The seed's tubes have a 25 mm bore: the lightest tube with that bore has the outer
+    diameter where buckling reaches its safety factor (bisection here), at least 2 walls wider;
+    a bore leaving no wall within the diameter range is refused."""
+    design = size_arm(axial_force=20e3, length=0.9, hollow=True, inner_diameter=0.025)
+    a = design.analysis
+    assert design.feasible and a.inner_diameter == 0.025
+
+    def critical(big):
+        return math.pi**3 * 210e9 * (big**4 - 0.025**4) / 64 / 0.9**2
+
+    lo, hi = 0.027, 0.1
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if critical(mid) < 3 * 20e3 else (lo, mid)
+    assert a.outer_diameter == pytest.approx(hi, rel=1e-8)
+    thin = size_arm(axial_force=10.0, length=0.9, hollow=True, inner_diameter=0.025)
+    assert thin.analysis.outer_diameter == pytest.approx(0.025 + 2 * 0.001, rel=1e-9)
+    with pytest.raises(InputError, match="no wall"):
+        size_arm(axial_force=10.0, length=0.9, hollow=True, inner_diameter=0.1 - 2 * 0.001)
+
+
 @pytest.mark.parametrize("kwargs, message", [
     ({"stress_safety": 0.0}, "stress safety"),
     ({"buckling_safety": -3.0}, "buckling safety"),

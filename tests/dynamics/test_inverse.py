@@ -109,6 +109,16 @@ def test_mass_properties_keep_what_they_are_given(delta_b):
         mass_properties(delta_b, gravity=(0.0, -9.81))
 
 
+@pytest.mark.parametrize("which", ["xd", "xdd", "q", "qd", "qdd"])
+def test_mis_shaped_motion_names_the_argument(delta_b, which):
+    x = np.array([[0.0, 0.0, 0.2], [0.01, 0.0, 0.2]])
+    args = {"x": x, "xd": np.zeros((2, 3)), "xdd": np.zeros((2, 3)), "q": delta_b.ik(x),
+            "qd": np.zeros((2, 3)), "qdd": np.zeros((2, 3))}
+    args[which] = args[which][:1]
+    with pytest.raises(InputError, match=rf"^{which} must have shape \(2, 3\)"):
+        inverse_dynamics(delta_b, default_masses(delta_b), *args.values())
+
+
 def test_masses_file_and_errors(tmp_path, delta_b):
     path = tmp_path / "m.toml"
     path.write_text("[masses]\nunits = 'mm'\ncarriage = [8, 8, 9]\nrod_diameter = 40\n"
