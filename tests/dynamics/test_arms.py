@@ -99,6 +99,10 @@ def test_infeasible_and_bad_sizing():
     assert not design.feasible and "buckling" in design.message
     with pytest.raises(InputError):
         analyse_arm(1.0, 0.02, 0.03)
+    for length, big in ((1.0, -0.02), (1.0, 0.0), (1.0, math.inf), (-1.0, 0.02), (0.0, 0.02),
+                        (math.nan, 0.02)):
+        with pytest.raises(InputError, match="must be > 0"):
+            analyse_arm(length, big)
     with pytest.raises(InputError):
         size_arm(axial_force=10.0, length=1.0, diameter_range=(0.05, 0.01))
     with pytest.raises(InputError):
