@@ -78,3 +78,11 @@ def test_raster_strategies():
 def test_bad_paths(make, message):
     with pytest.raises(InputError, match=message):
         make()
+
+
+def test_planar_points_are_lifted_to_z_0():
+    """Paths for planar machines: 2 coordinates are (x, y) at z = 0."""
+    seg = line([0.1, 0.2], [0.4, -0.2]).segments[0]
+    np.testing.assert_array_equal(seg.start, [0.1, 0.2, 0.0])
+    np.testing.assert_array_equal(seg.end, [0.4, -0.2, 0.0])
+    np.testing.assert_allclose(circle([1.0, 0.5], 0.2).segments[0].center, [1.0, 0.5, 0.0])
