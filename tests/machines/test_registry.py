@@ -193,6 +193,8 @@ def test_documented_machine_files_load(tmp_path):
          "anchors and aliases"),
         ("machine:\nparameters: {L: 0.3}\n", 1, "is empty"),
         ("machine: {kind: linear-delta}\nparameters:\n  L: yes\n", 3, "numeric"),
+        ("machine: {kind: orthoglide}\nparameters: {L: 0.3\n", 3,
+         "YAML syntax error: expected ',' or '}'"),  # the parser's own words
     ],
 )
 def test_malformed_yaml_files(tmp_path, text, line, message):
