@@ -35,6 +35,8 @@ def test_parallelogram_makes_two_offset_rods():
         ({"kind": "crank"}, "kind must be one of"),
         ({"axis": (0, 0, 0)}, "zero vector"),
         ({"axis": (1, 0)}, "3 finite numbers"),
+        ({"platform": (1, 0)}, r"^legs\.0\.platform must be"),
+        ({"base": (0, np.nan, 0)}, r"^legs\.0\.base must be"),
         ({"length": -1.0}, "length must be > 0"),
         ({"branch": 2}, "branch must be"),
         ({"parallelogram_width": -1.0}, "width must be >= 0"),
