@@ -25,6 +25,13 @@ def test_parallelogram_makes_two_offset_rods():
                                np.tile(model.leg_base[0] - model.leg_platform[0], (2, 1)))
     np.testing.assert_allclose(model.rod_platform[first][:, 2], [-0.1, 0.1])
     assert model.rod_kind.tolist() == [SLIDE] * 4
+    # the documented integer columns, and the default pose names
+    for column in (model.leg_kind, model.rod_kind, model.rod_leg, model.leg_actuator):
+        assert column.dtype.kind == "i"
+    assert model.pose_names == ("x", "y", "z")
+    named = build_rod_model(legs, dims=3, actuator_names=("a", "b", "c"), home_pose=(0, 0, 0),
+                            pose_names=("u", "v", "w"))
+    assert named.pose_names == ("u", "v", "w")
     with pytest.raises(ValueError):
         model.leg_base[0, 0] = 3.0  # immutable
 
