@@ -49,7 +49,7 @@ def machine_analysis(m: Machine, out: Path, quick: bool = False) -> dict[str, An
     grid = make_grid(lower, upper, free=free, base=m.home_pose, names=m.pose_names,
                      resolution=(21 if m.dims == 3 else 61) if quick else (41 if m.dims == 3
                                                                            else 161))
-    wmap = compute_workspace(m, grid, Criteria(bounds=bounds), refine=True)
+    wmap = compute_workspace(m, grid, Criteria(bounds=bounds), refine=not quick)
     plot_workspace(wmap, m, title=f"{m.name}: workspace with λ in [{bounds[0]:.3g}, "
                    f"{bounds[1]:.3g}]", path=out / f"{m.id}-workspace.png")
     plane = make_grid(lower[:2], upper[:2], free=(0, 1), base=m.home_pose, names=m.pose_names,

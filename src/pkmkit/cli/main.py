@@ -313,8 +313,8 @@ def jacobian(machine_name, assignments, pose, tol, input_, output, units, as_jso
 @click.option("--out", "out_dir", default="pkmkit-demo", show_default=True,
               type=click.Path(file_okay=False), help="Directory for the JSON and PNG files.")
 @click.option("--quick", is_flag=True,
-              help="Coarser grids and a shorter Pareto search: every study runs, in about half "
-                   "the time, with less refined numbers and figures.")
+              help="Coarser grids, no refinement of the inscribed cubes and a shorter Pareto "
+                   "search: every study runs, faster, with less refined numbers and figures.")
 def demo(out_dir: str, quick: bool) -> None:
     """Kinematic summary and analysis of every built-in machine (text, JSON and figures)."""
     from .demo import run_demo
