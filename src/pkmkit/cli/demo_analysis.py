@@ -42,7 +42,8 @@ BOUNDS = {"orthoglide": (0.5, 2.0), "linear-delta": (0.5, 2.0), "five-bar": (1 /
 
 
 def machine_analysis(m: Machine, out: Path, quick: bool = False) -> dict[str, Any]:
-    """Workspace, condition map and ellipses of one machine (``quick``: coarser grids)."""
+    """Workspace, condition map and ellipses of one machine (``quick``: coarser grids, the
+    inscribed box left as found on the grid)."""
     bounds = BOUNDS[m.kind.kind]
     lower, upper = m.default_box()
     free = tuple(range(m.dims))
