@@ -1,13 +1,27 @@
-"""Shared fixtures: built-in machines and random poses inside their workspaces."""
+"""Shared fixtures: built-in machines and random poses inside their workspaces; Hypothesis
+settings profiles (``dev`` locally, ``ci`` — four times the examples — when ``CI`` is set, as in
+``.ci/run``; ``HYPOTHESIS_PROFILE=NAME`` chooses one explicitly)."""
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
 
 import pkmkit
 from pkmkit.machines.registry import ALIASES
 from pkmkit.model.rods import CRANK
+
+settings.register_profile("dev", max_examples=25, deadline=None, derandomize=True,
+                          suppress_health_check=[HealthCheck.too_slow,
+                                                 HealthCheck.filter_too_much])
+settings.register_profile("ci", settings.get_profile("dev"), max_examples=100)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE")
+                      or ("ci" if os.environ.get("CI") else "dev"))
+
+
 
 ALL_PRESETS = [m for m in pkmkit.machines() if m not in ALIASES]
 #: Presets whose platform only translates (dims 2 or 3).

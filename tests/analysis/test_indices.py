@@ -54,6 +54,58 @@ def test_scalar_indices_and_unknown_name():
         scalar_index(ind, "stiffness")
 
 
+def independent_scalar_indices(machine, x):
+    """Every scalar index at poses ``x`` written from J, A and the slide axes with numpy only
+    (singular values of J and of J⁻ᵀ, A with unit rows, leg/slide cosines)."""
+    jac = machine.jacobian(x)
+    s = np.linalg.svd(jac.J, compute_uv=False)
+    force = np.linalg.svd(np.linalg.inv(jac.J).transpose(0, 2, 1), compute_uv=False)
+    unit_rows = jac.A / np.linalg.norm(jac.A, axis=2, keepdims=True)
+    sa = np.linalg.svd(unit_rows, compute_uv=False)
+    legs = machine.model.pad(np.atleast_2d(x))[:, None, :] - (
+        machine.model.leg_base[None] - machine.model.leg_platform[None]
+        + jac.q[:, :, None] * machine.model.leg_axis[None])
+    cosines = np.abs(np.einsum("kid,id->ki", legs, machine.model.leg_axis)) / np.linalg.norm(
+        legs, axis=2)
+    return {
+        "lambda_min": s[:, -1], "lambda_max": s[:, 0], "condition": s[:, 0] / s[:, -1],
+        "inverse_condition": s[:, -1] / s[:, 0], "force_min": force[:, -1],
+        "force_max": force[:, 0], "parallel_distance": sa[:, -1] / sa[:, 0],
+        "serial_distance": cosines.min(axis=1),
+        "manipulability": np.abs(np.linalg.det(jac.J)),
+    }
+
+
+@pytest.mark.parametrize("ident", ["linear-delta", "orthoglide", "five-bar"])
+def test_every_scalar_index_against_its_definition(ident):
+    """Each name maps to its own quantity (λ_min is not λ_max, the smallest force factor is
+    1/λ_max, ...) at anisotropic poses where all of them differ."""
+    m = pkmkit.machine(ident)
+    x = random_poses(m, 20, seed=31)
+    ind = indices(m, x)
+    expected = independent_scalar_indices(m, x)
+    assert set(expected) == set(SCALAR_INDICES)
+    assert (expected["lambda_max"] > expected["lambda_min"] * (1 + 1e-3)).all()
+    for name, value in expected.items():
+        np.testing.assert_allclose(scalar_index(ind, name), value, rtol=1e-10, err_msg=name)
+    np.testing.assert_allclose(expected["force_min"] * expected["lambda_max"], 1.0, rtol=1e-12)
+
+
+def test_global_conditioning_index_counts_parallel_singular_poses_as_zero():
+    """Orthoglide: the isotropic point (1/κ = 1) and a parallel singularity on the diagonal
+    (t = L√(3/2)/3, det A = 0, reachable, 1/κ → 0). The GCI of the two is 0.5, not 1.0 (the
+    singular pose dropped) nor NaN; with three samples 2/3 and with weights (1, 3) 0.25."""
+    ortho = pkmkit.machine("orthoglide")
+    t = ortho.params["L"] * np.sqrt(1.5) / 3
+    points = np.array([[0.0, 0.0, 0.0], [t, t, t]])
+    jac = ortho.jacobian(points)
+    assert jac.status == ["regular", "parallel"] and jac.reachable.all()
+    assert global_conditioning_index(ortho, points) == pytest.approx(0.5, abs=1e-15)
+    assert global_conditioning_index(ortho, points[[0, 1, 0]]) == pytest.approx(2 / 3, abs=1e-15)
+    assert global_conditioning_index(ortho, points, weights=np.array([1.0, 3.0])) == \
+        pytest.approx(0.25, abs=1e-15)
+
+
 def five_bar_inverse_condition(p, a=(0.0, 0.0), b=(1.0, -1.0), length=0.5):
     """1/κ of the isotropic five-bar (slides along x from A and along y from B, legs of
     length L, working branches as at home) from seed 004's formulas and numpy's SVD; NaN where

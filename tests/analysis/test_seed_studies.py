@@ -15,27 +15,88 @@ def test_orthoglide_reference_points_on_the_diagonal():
     np.testing.assert_allclose(m.jacobian([t1] * 3).singular_values, [2.0, 2.0, 0.5],
                                atol=1e-9)
     assert m.jacobian([t2] * 3).singular_values[0] == pytest.approx(2.0, abs=1e-9)
-    assert (t1, t2) == pytest.approx((-0.12656, 0.07307), abs=1e-5)
+    assert (t1, t2) == pytest.approx((-0.12656, 0.07307), abs=1e-5)  # the seed's numbers
+    # exactly: at p = t(1, 1, 1), w = sqrt(L² − 2t²), the factors are w/|t + w| (twice) and
+    # w/|2t − w|; λ = 2 = w/(t + w) gives t = −L/√6, λ = 2 = w/(w − 2t) gives t = L/√18
+    length = m.params["L"]
+    assert t1 == pytest.approx(-length / np.sqrt(6), abs=1e-13)
+    assert t2 == pytest.approx(length / np.sqrt(18), abs=1e-13)
+
+
+def five_bar_factors(q, a, b, alpha1, alpha2, length, sign):
+    """λ (decreasing) of a five-bar with slides from ``a`` and ``b`` along angles α1, α2 at
+    actuator vectors ``q (N, 2)``, by seed 004's formulas: P at the intersection of the circles
+    of radius L about C and D on the side where sign(det A) = ``sign``, then J = A⁻¹B."""
+    u1, u2 = np.array([np.cos(alpha1), np.sin(alpha1)]), np.array([np.cos(alpha2),
+                                                                    np.sin(alpha2)])
+    c, d = np.asarray(a) + q[:, :1] * u1, np.asarray(b) + q[:, 1:] * u2
+    cd = d - c
+    half = np.linalg.norm(cd, axis=1) / 2
+    normal = np.stack([-cd[:, 1], cd[:, 0]], axis=1) / (2 * half[:, None])
+    out = np.full((len(q), 2), np.nan)
+    for side in (1.0, -1.0):
+        with np.errstate(invalid="ignore"):
+            p = (c + d) / 2 + side * np.sqrt(length**2 - half**2)[:, None] * normal
+        pc, pd = p - c, p - d
+        det = pc[:, 0] * pd[:, 1] - pc[:, 1] * pd[:, 0]
+        ok = np.isfinite(det) & (np.sign(det) == sign)
+        a_mat = np.stack([pc, pd], axis=1)[ok]
+        b_mat = np.zeros((ok.sum(), 2, 2))
+        b_mat[:, 0, 0], b_mat[:, 1, 1] = pc[ok] @ u1, pd[ok] @ u2
+        out[ok] = np.linalg.svd(np.linalg.solve(a_mat, b_mat), compute_uv=False)
+    return out
+
+
+def joint_square_half_side(m, bounds):
+    """Largest h such that 1/3 ≤ λ ≤ 3 on the whole square home_q ± h (edges sampled with 2001
+    points each and a 61 × 61 interior grid), by bisection on h."""
+    p = m.params
+    sign = np.sign(np.linalg.det(m.jacobian(m.home_pose).A))
+    t = np.linspace(-1.0, 1.0, 2001)
+    one = np.ones_like(t)
+    g = np.linspace(-1.0, 1.0, 61)
+    unit = np.concatenate([np.stack([t, -one], 1), np.stack([t, one], 1), np.stack([-one, t], 1),
+                           np.stack([one, t], 1),
+                           np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)])
+
+    def ok(h):
+        s = five_bar_factors(m.home_q + h * unit, p["A"], p["B"], p["alpha1"], p["alpha2"],
+                             p["L"], sign)
+        return bool(np.isfinite(s).all() and s[:, 1].min() >= bounds[0]
+                    and s[:, 0].max() <= bounds[1])
+
+    lo, hi = 0.0, p["L"]
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo
 
 
 def test_five_bar_designs_compared_as_in_seed_004():
     """Isotropic vs biglide with the same AB and L and 1/3 < λ < 3: the square inscribed in the
-    useful workspace is about 7 times larger (by area) for the isotropic design."""
+    useful workspace is about 7 times larger (by area) for the isotropic design. The joint
+    squares are checked against an independent bisection with seed 004's formulas."""
     crit = Criteria(bounds=(1 / 3, 3.0))
-    iso = useful_workspace(pkmkit.machine("five-bar-isotropic"), crit, resolution=201)
-    big = useful_workspace(pkmkit.machine("five-bar-biglide"), crit, resolution=201)
+    iso_m, big_m = pkmkit.machine("five-bar-isotropic"), pkmkit.machine("five-bar-biglide")
+    iso = useful_workspace(iso_m, crit, resolution=201)
+    big = useful_workspace(big_m, crit, resolution=201)
     length = 0.5
-    # joint squares centred at the home configurations, refined by bisection
-    assert iso.joint_square.side / length == pytest.approx(0.7735, abs=2e-3)
-    assert big.joint_square.side / length == pytest.approx(0.5324, abs=2e-3)
+    # joint squares centred at the home configurations, refined by bisection (seed: 0.7735 and
+    # 0.5324 L)
+    assert iso.joint_square.side / length == pytest.approx(0.7735, abs=5e-5)
+    assert big.joint_square.side / length == pytest.approx(0.5324, abs=5e-5)
+    for machine, result in ((iso_m, iso), (big_m, big)):
+        half = joint_square_half_side(machine, (1 / 3, 3.0))
+        assert result.joint_square.side == pytest.approx(2 * half, abs=2e-8)
+        np.testing.assert_allclose(result.joint_square.lower, machine.home_q - half, atol=2e-8)
     ratio = iso.inscribed.side / big.inscribed.side
-    assert 6.0 < ratio**2 < 7.5
+    assert ratio**2 == pytest.approx(6.657, abs=0.02)  # "about 7"; grid-limited inscribed sides
     # exact ranges over the useful workspaces: the square is stopped by λ_max = 3 at a corner
     # of the joint square (the grid used to report [0.6045, 2.891] and 2.93 for the biglide)
-    assert iso.factor_range == pytest.approx((0.6, 3.0), abs=1e-5)
-    assert big.factor_range == pytest.approx((0.3473, 3.0), abs=1e-4)
+    assert iso.factor_range == pytest.approx((0.6, 3.0), abs=2e-7)
+    assert big.factor_range == pytest.approx((0.347332, 3.0), abs=2e-6)
     lo, hi = iso.inscribed_factor_range
-    assert 0.68 < lo < 0.73 and 1.65 < hi < 1.75
+    assert (lo, hi) == pytest.approx((0.70716, 1.70681), abs=1e-4)  # grid-limited square
 
 
 def isotropic_five_bar_factors(q, length=0.5):

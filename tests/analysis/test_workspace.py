@@ -327,6 +327,13 @@ def test_joint_space_map_and_useful_workspace():
     j = joint_space_map(m, grid, crit)
     assert j.reference == "home" and j.feasible[grid.nearest_index(m.home_q)]
     np.testing.assert_allclose(j.poses[grid.nearest_index(m.home_q)], m.home_pose, atol=0.02)
+    # poses and factors per grid point: the direct model and J's singular values there
+    assert j.poses.shape == (101, 101, 2) and j.factors.shape == (101, 101, 2)
+    k = (30, 70)
+    q = grid.points.reshape(101, 101, 2)[k]
+    np.testing.assert_allclose(j.poses[k], m.fk(q), atol=1e-12)
+    np.testing.assert_allclose(j.factors[k], m.jacobian(m.fk(q), q=q).singular_values,
+                               rtol=1e-12)
     useful = useful_workspace(m, crit, resolution=151)
     sq = useful.joint_square
     np.testing.assert_allclose(sq.center, m.home_q, atol=1e-12)
@@ -347,3 +354,41 @@ def test_bad_criteria_and_grids():
     m = pkmkit.machine("five-bar")
     with pytest.raises(InputError, match="side must be > 0"):
         check_region(m, m.home_pose, 0.0)
+
+
+def test_largest_connected_part_when_home_is_outside():
+    """Three separate feasible blobs, home in none of them: the largest is kept (here the last
+    one labelled)."""
+    from pkmkit.analysis.workspace import _connected_part
+
+    grid = make_grid([0.0, 0.0], [1.0, 1.0], free=(0, 1), base=np.zeros(2), names=("x", "y"),
+                     resolution=21)
+    mask = np.zeros(grid.shape, bool)
+    mask[1:3, 1:3] = True   # 4 points
+    mask[6:8, 6:9] = True   # 6 points
+    mask[12:19, 12:19] = True  # 49 points, labelled last
+    part, reference = _connected_part(mask, grid, np.array([0.5, 0.0]))
+    assert reference.startswith("largest connected part") and part.sum() == 49
+    assert part[15, 15] and not part[1, 1] and not part[7, 7]
+
+
+def test_region_centre_must_have_the_machine_dimension():
+    ortho = pkmkit.machine("orthoglide")
+    with pytest.raises(InputError, match="3 finite coordinates"):
+        check_region(ortho, [0.0, 0.0], 0.1, Criteria(bounds=(0.5, 2.0)))
+
+
+def test_global_conditioning_index_over_a_sub_region():
+    """WorkspaceMap.global_conditioning_index(region): the cell-weighted mean of 1/κ over that
+    region only (here the feasible points with x < 0), from numpy's SVD."""
+    m = pkmkit.machine("five-bar")
+    lower, upper = m.default_box()
+    grid = make_grid(lower, upper, free=(0, 1), base=m.home_pose, names=m.pose_names,
+                     resolution=41)
+    w = compute_workspace(m, grid, Criteria(bounds=(1 / 3, 3.0)))
+    left = w.feasible & (grid.points[:, 0] < m.home_pose[0]).reshape(grid.shape)
+    assert 0 < left.sum() < w.feasible.sum()
+    s = np.linalg.svd(m.jacobian(grid.points[left.ravel()]).J, compute_uv=False)
+    weights = grid.weights().ravel()[left.ravel()]
+    assert w.global_conditioning_index(left) == pytest.approx(
+        np.sum(s[:, -1] / s[:, 0] * weights) / weights.sum(), rel=1e-12)

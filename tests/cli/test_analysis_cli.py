@@ -4,6 +4,9 @@
 import numpy as np
 import pytest
 
+import pkmkit
+from pkmkit.analysis.workspace import Criteria, useful_workspace
+
 
 def test_analyze(run, as_json):
     data = as_json(run("analyze", "orthoglide", "--pose", "0,0,0", "--json"))
@@ -17,7 +20,7 @@ def test_map_index_and_actuators(run, tmp_path, as_json):
     out = tmp_path / "cond.png"
     data = as_json(run("map", "linear-delta", "--index", "condition", "--slice", "z=0",
                        "--range", "-0.25,0.25,-0.25,0.25", "--out", out, "--json"))
-    assert out.stat().st_size > 10_000 and data["min"] >= 1.0
+    assert out.stat().st_size > 10_000 and data["plane"] == ["x", "y"]
     acts = as_json(run("map", "linear-delta", "--index", "actuators", "--slice", "z=0",
                        "--range", "-250,250,-250,250", "--units", "mm",
                        "--out", tmp_path / "q.png", "--json"))
@@ -56,7 +59,15 @@ def test_useful_workspace(run, tmp_path, as_json):
     assert data["joint_square"]["side"] == pytest.approx(0.3868, abs=2e-3)
     # exact range: the bound 3 is reached at a corner of the joint square
     assert data["index_range"] == pytest.approx([0.6, 3.0], abs=1e-5)
-    assert 0 < data["global_conditioning_index"] < 1
+    # GCI: the cell-weighted mean of λ_min/λ_max (numpy's SVD) over the useful workspace
+    useful = useful_workspace(pkmkit.machine("five-bar"), Criteria(bounds=(0.3333333, 3.0)),
+                              resolution=151)
+    feasible = useful.workspace.feasible.ravel()
+    s = np.linalg.svd(pkmkit.machine("five-bar").jacobian(
+        useful.workspace.grid.points[feasible]).J, compute_uv=False)
+    weights = useful.workspace.grid.weights().ravel()[feasible]
+    assert data["global_conditioning_index"] == pytest.approx(
+        np.sum(s[:, -1] / s[:, 0] * weights) / weights.sum(), rel=1e-12)
     assert (tmp_path / "u.png").exists()
 
 
@@ -204,3 +215,20 @@ def test_analyze_defaults_to_the_home_pose(run, as_json):
     assert home == explicit
     result = run("workspace", "five-bar", "--kappa-max", "0.5")
     assert result.exit_code == 1 and "--kappa-max" in result.output
+
+
+@pytest.mark.parametrize("name", ["lambda_min", "lambda_max", "force_min", "force_max",
+                                  "condition", "inverse_condition", "manipulability"])
+def test_map_reports_the_named_index(run, tmp_path, as_json, name):
+    """`pkmkit map --index NAME`: the extreme values and where they are match NAME's definition
+    from the singular values of J at that pose (λ_min must not plot λ_max)."""
+    data = as_json(run("map", "linear-delta", "--index", name, "--slice", "z=0.1",
+                       "--range", "-0.3,0.3,-0.3,0.3", "--resolution", "21",
+                       "--out", tmp_path / "m.png", "--json"))
+    m = pkmkit.machine("linear-delta")
+    for key in ("min", "max"):
+        s = np.linalg.svd(m.jacobian(np.asarray(data[f"at_{key}"])).J, compute_uv=False)
+        value = {"lambda_min": s[-1], "lambda_max": s[0], "force_min": 1 / s[0],
+                 "force_max": 1 / s[-1], "condition": s[0] / s[-1],
+                 "inverse_condition": s[-1] / s[0], "manipulability": np.prod(s)}[name]
+        assert data[key] == pytest.approx(value, rel=1e-12)

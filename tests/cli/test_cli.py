@@ -5,6 +5,8 @@ import json
 import numpy as np
 import pytest
 
+import pkmkit
+
 
 @pytest.mark.parametrize("command", [[], ["machines"], ["show"], ["ik"], ["fk"], ["jacobian"],
                                      ["demo"]])
@@ -153,11 +155,13 @@ def test_user_machine_file_through_the_cli(run, tmp_path, as_json):
     np.testing.assert_allclose(data["q"], [0.882666] * 3, atol=1e-6)
 
 
-def test_demo_writes_json_and_pngs(run, tmp_path):
-    out = tmp_path / "demo"
-    result = run("demo", "--out", out)
+def check_demo(run, out, *extra):
+    """Run ``pkmkit demo`` into ``out``; check what both modes must get right; return the
+    summary."""
+    result = run("demo", "--out", out, *extra)
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "summary.json").read_text())
+    assert summary["quick"] == ("--quick" in extra)
     machines = summary["machines"]
     assert {"orthoglide", "linear-delta-ch3", "five-bar-isotropic"} <= set(machines)
     delta = machines["linear-delta-ch3"]
@@ -202,6 +206,24 @@ def test_demo_writes_json_and_pngs(run, tmp_path):
         assert res["inscribed_side"] > 0, ident
         for name in res["figures"]:
             assert (out / "analysis" / name).stat().st_size > 10_000
+    return summary
+
+
+def test_demo_quick_writes_json_and_pngs(run, tmp_path):
+    """The demo's quick mode (coarser grids, shorter Pareto search): every study runs and
+    writes its files, with the numbers that do not depend on the grids."""
+    check_demo(run, tmp_path / "demo", "--quick")
+
+
+@pytest.mark.slow
+def test_full_demo_numbers(run, tmp_path):
+    """The full demo (what `.ci/run` also runs after the tests), with its grid-refined numbers:
+    the seed 004 area ratio on 301-point grids, the sized five-bar legs, the Pareto front."""
+    summary = check_demo(run, tmp_path / "demo")
+    five = summary["analysis"]["seed004_five_bar"]
+    assert five["inscribed_area_ratio"] == pytest.approx(6.631, abs=0.01)
+    assert summary["design"]["five_bar"]["isotropic"]["L"] == pytest.approx(0.28906, abs=1e-5)
+    assert summary["design"]["linear_delta"]["evaluations"] == 25 * 32
 
 
 def test_batch_keeps_good_rows_when_a_cell_is_bad(run, tmp_path):
@@ -252,3 +274,19 @@ def test_modes_and_warm_starts_from_the_cli(run, as_json):
     np.testing.assert_allclose(branch["q"], closed["q"], atol=1e-9)
     note = run("ik", "orthoglide", "--pose", "0.15,0.15,0.15").output
     assert "far-side" in note and "--mode far-side" in note
+
+
+def test_batch_header_with_spaces_bom_and_mixed_order(run, tmp_path):
+    """A spreadsheet's CSV (byte-order mark, spaces after the commas, columns z, x, y) gives the
+    same actuator values as the poses typed in the x, y, z order."""
+    poses = np.array([[0.25, 0.25, 0.0], [-0.1, 0.2, 0.3]])
+    path = tmp_path / "poses.csv"
+    rows = "".join(f"{z!r}, {x!r}, {y!r}\n" for x, y, z in poses.tolist())
+    path.write_bytes(("\ufeff z , x, y\n" + rows).encode("utf-8"))
+    out = tmp_path / "q.csv"
+    result = run("ik", "linear-delta", "--input", path, "--output", out)
+    assert result.exit_code == 0, result.output
+    lines = out.read_text().splitlines()
+    assert lines[0].split(",")[:3] == ["x", "y", "z"]
+    q = np.array([[float(v) for v in line.split(",")[3:6]] for line in lines[1:]])
+    np.testing.assert_allclose(q, pkmkit.machine("linear-delta").ik(poses), rtol=0, atol=1e-15)

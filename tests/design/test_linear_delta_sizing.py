@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+import pkmkit
 from pkmkit.design.linear_delta import VERTICAL_FACTOR, size_linear_delta
 from pkmkit.errors import InputError
 
@@ -101,16 +102,24 @@ def test_most_compact_design_with_bounded_arms():
 
 
 def test_vertical_factor_is_always_there():
-    """1/√3 lies between λ_min and λ_max at every pose of every vertical-slide Delta (the
-    reason bounds excluding it are refused)."""
+    """1/√3 lies between λ_min and λ_max at every pose of every vertical-slide Delta built by
+    the library (J (1, 1, 1)/√3 = e_z/√3: moving every carriage alike lifts the nacelle as
+    fast) — the reason bounds excluding it are refused."""
     rng = np.random.default_rng(3)
+    assert VERTICAL_FACTOR == pytest.approx(1 / math.sqrt(3), rel=1e-15)
     for _ in range(20):
-        d, length = rng.uniform(0.1, 1.0), rng.uniform(1.1, 2.0)
-        _, sv = seed_model(d, length, rng.uniform(-0.3, 0.3, (50, 3)))
-        sv = sv[np.isfinite(sv).all(axis=1)]
+        small, d, length = rng.uniform(0.05, 0.2), rng.uniform(0.1, 1.0), rng.uniform(1.1, 2.0)
+        m = pkmkit.machine("linear-delta", R=d + small, r=small, L=length)
+        x = rng.uniform(-0.3, 0.3, (50, 3))
+        jac = m.jacobian(x)
+        ok = np.asarray(jac.reachable) & np.isfinite(jac.singular_values).all(axis=1)
+        assert ok.sum() > 10
+        sv = jac.singular_values[ok]
+        lifted = np.einsum("kij,j->ki", jac.J[ok], np.ones(3) / math.sqrt(3))
+        np.testing.assert_allclose(lifted, np.tile([0, 0, VERTICAL_FACTOR], (ok.sum(), 1)),
+                                   atol=1e-12)
         assert (sv[:, -1] <= VERTICAL_FACTOR + 1e-12).all()
         assert (sv[:, 0] >= VERTICAL_FACTOR - 1e-12).all()
-    assert VERTICAL_FACTOR == pytest.approx(1 / math.sqrt(3))
 
 
 @pytest.mark.parametrize(

@@ -36,17 +36,49 @@ def test_handbook_values_of_a_steel_rod():
 
 
 def test_analysis_formulas():
-    a = analyse_arm(1.0, 0.04, 0.02, axial_force=-1000.0, transverse_accel=9.81,
-                    material=Material(E=2e11, density=8000.0, yield_strength=5e8))
-    area = math.pi / 4 * (0.04**2 - 0.02**2)
-    inertia = math.pi / 64 * (0.04**4 - 0.02**4)
-    assert a.area == pytest.approx(area) and a.axial_stress == pytest.approx(-1000 / area)
-    assert a.buckling_load == pytest.approx(math.pi**2 * 2e11 * inertia)
-    assert a.buckling_safety == pytest.approx(a.buckling_load / 1000)
-    w = 8000 * area * 9.81
-    assert a.bending_stress == pytest.approx(w / 8 * 0.02 / inertia)
-    assert a.deflection == pytest.approx(5 * w / (384 * 2e11 * inertia))
-    assert a.axial_stiffness == pytest.approx(2e11 * area)
+    """Every formula at a length, diameters and material far from 1, so that a wrong power of
+    ℓ, D or d shows: ℓ = 0.7 m, D = 40 mm, d = 26 mm, E = 70 GPa, ρ = 2700 kg/m³."""
+    ell, big, small, accel = 0.7, 0.04, 0.026, 35.0
+    alu = Material(E=7e10, density=2700.0, yield_strength=2.6e8)
+    a = analyse_arm(ell, big, small, axial_force=-1500.0, transverse_accel=accel, material=alu)
+    area = math.pi / 4 * (big**2 - small**2)
+    inertia = math.pi / 64 * (big**4 - small**4)
+    mass = 2700 * area * ell
+    w = mass * accel / ell  # distributed load, N/m
+    bending = w * ell**2 / 8 * (big / 2) / inertia
+    exact = {
+        "area": area, "mass": mass, "axial_stress": -1500 / area,
+        "axial_stiffness": 7e10 * area / ell,
+        "buckling_load": math.pi**2 * 7e10 * inertia / ell**2,
+        "buckling_safety": math.pi**2 * 7e10 * inertia / ell**2 / 1500,
+        "bending_stress": bending,
+        "deflection": 5 * w * ell**4 / (384 * 7e10 * inertia),
+        "combined_stress": 1500 / area + bending,
+        "stress_safety": 2.6e8 / (1500 / area + bending),
+    }
+    for name, value in exact.items():
+        assert getattr(a, name) == pytest.approx(value, rel=1e-14), name
+    # the bending stress of a solid bar is ρ a ℓ² / D: a second, simpler form
+    solid = analyse_arm(ell, big, transverse_accel=accel, material=alu)
+    assert solid.bending_stress == pytest.approx(2700 * accel * ell**2 / big, rel=1e-14)
+    assert solid.stress_safety == pytest.approx(2.6e8 / solid.bending_stress, rel=1e-14)
+
+
+def test_sizing_where_the_combined_stress_binds():
+    """Short aluminium rod under a large transverse acceleration: neither buckling nor the
+    axial stress alone binds, the sum |N|/A + σ_b does. For a solid bar σ_b = ρ a ℓ²/D, so the
+    lightest diameter solves 4N/(πD²) + ρ a ℓ²/D = σ_y/s (a quadratic in 1/D)."""
+    alu = Material(E=7e10, density=2700.0, yield_strength=95e6)
+    force, ell, accel, safety = 5000.0, 0.2, 700.0, 2.0
+    design = size_arm(axial_force=force, length=ell, transverse_accel=accel, material=alu,
+                      stress_safety=safety)
+    quad, lin = 4 * force / math.pi, 2700 * accel * ell**2
+    inv = (-lin + math.sqrt(lin**2 + 4 * quad * 95e6 / safety)) / (2 * quad)
+    a = design.analysis
+    assert design.feasible and design.constraints["buckling"] > 0.3
+    assert a.bending_stress > 0.1 * a.combined_stress  # the bending part matters
+    assert a.outer_diameter == pytest.approx(1 / inv, rel=1e-9)
+    assert a.stress_safety == pytest.approx(safety, rel=1e-9)
 
 
 def test_sizing_is_the_lightest_admissible_rod():
@@ -54,12 +86,12 @@ def test_sizing_is_the_lightest_admissible_rod():
     assert design.feasible
     d = design.analysis.outer_diameter
     # buckling binds: N_cr = 3 × 1000 N for a solid bar
-    assert design.analysis.buckling_safety == pytest.approx(3.0, rel=1e-4)
+    assert design.analysis.buckling_safety == pytest.approx(3.0, rel=1e-9)
     expected = (3000 * 1.04**2 * 64 / (math.pi**3 * 210e9)) ** 0.25
-    assert d == pytest.approx(expected, rel=1e-4)
+    assert d == pytest.approx(expected, rel=1e-9)
     stiff = size_arm(axial_force=1000.0, length=1.04, hollow=True, min_stiffness=5e7)
     assert stiff.feasible and stiff.analysis.axial_stiffness >= 5e7 * (1 - 1e-6)
-    assert stiff.analysis.mass == pytest.approx(7700 * 5e7 * 1.04**2 / 210e9, rel=1e-3)
+    assert stiff.analysis.mass == pytest.approx(7700 * 5e7 * 1.04**2 / 210e9, rel=1e-8)
 
 
 def test_infeasible_and_bad_sizing():
@@ -67,6 +99,10 @@ def test_infeasible_and_bad_sizing():
     assert not design.feasible and "buckling" in design.message
     with pytest.raises(InputError):
         analyse_arm(1.0, 0.02, 0.03)
+    for length, big in ((1.0, -0.02), (1.0, 0.0), (1.0, math.inf), (-1.0, 0.02), (0.0, 0.02),
+                        (math.nan, 0.02)):
+        with pytest.raises(InputError, match="must be > 0"):
+            analyse_arm(length, big)
     with pytest.raises(InputError):
         size_arm(axial_force=10.0, length=1.0, diameter_range=(0.05, 0.01))
     with pytest.raises(InputError):
@@ -90,8 +126,30 @@ def test_free_bore_tube_is_the_thinnest_wall_at_the_buckling_limit(force):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if critical(mid) < 3 * force else (lo, mid)
     a = design.analysis
-    assert a.outer_diameter == pytest.approx(hi, rel=1e-5)
-    assert a.outer_diameter - a.inner_diameter == pytest.approx(0.002, rel=1e-6)
+    assert a.outer_diameter == pytest.approx(hi, rel=1e-8)
+    assert a.outer_diameter - a.inner_diameter == pytest.approx(0.002, rel=1e-8)
+
+
+def test_tube_with_a_fixed_bore():
+    """The seed's tubes have a 25 mm bore: the lightest tube with that bore has the outer
+    diameter where buckling reaches its safety factor (bisection here), at least 2 walls wider;
+    a bore leaving no wall within the diameter range is refused."""
+    design = size_arm(axial_force=20e3, length=0.9, hollow=True, inner_diameter=0.025)
+    a = design.analysis
+    assert design.feasible and a.inner_diameter == 0.025
+
+    def critical(big):
+        return math.pi**3 * 210e9 * (big**4 - 0.025**4) / 64 / 0.9**2
+
+    lo, hi = 0.027, 0.1
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if critical(mid) < 3 * 20e3 else (lo, mid)
+    assert a.outer_diameter == pytest.approx(hi, rel=1e-8)
+    thin = size_arm(axial_force=10.0, length=0.9, hollow=True, inner_diameter=0.025)
+    assert thin.analysis.outer_diameter == pytest.approx(0.025 + 2 * 0.001, rel=1e-9)
+    with pytest.raises(InputError, match="no wall"):
+        size_arm(axial_force=10.0, length=0.9, hollow=True, inner_diameter=0.1 - 2 * 0.001)
 
 
 @pytest.mark.parametrize("kwargs, message", [

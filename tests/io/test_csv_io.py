@@ -63,3 +63,14 @@ def test_bom_header_and_collected_problems(tmp_path):
 def test_unwritable_output(tmp_path):
     with pytest.raises(InputError, match="cannot write"):
         write_table(tmp_path / "missing" / "out.csv", ["a"], [[1.0]])
+
+
+@pytest.mark.parametrize("header", [" z , x,y ", "\ufeffz,x , y", "z,\tx,y,note"])
+def test_header_cells_with_spaces_bom_and_mixed_order(tmp_path, header):
+    """Spreadsheet exports: spaces around names, a byte-order mark, columns in another order.
+    The values must land in the requested order (a header that is not stripped would be
+    reported as missing columns, and a BOM glued to the first name would hide it)."""
+    path = tmp_path / "in.csv"
+    path.write_text(f"{header}\n3.5,1.25,-2,a\n0,0.5,7,b\n", encoding="utf-8")
+    table = read_table(path, ["x", "y", "z"])
+    np.testing.assert_array_equal(table, [[1.25, -2.0, 3.5], [0.5, 7.0, 0.0]])

@@ -128,3 +128,33 @@ def test_biglide_shares_ab_distance_and_legs():
     ab = lambda m: np.linalg.norm(np.subtract(m.params["B"], m.params["A"]))  # noqa: E731
     assert ab(iso) == pytest.approx(ab(big)) and iso.params["L"] == big.params["L"]
     assert big.jacobian(big.home_pose).condition == pytest.approx(1.0)  # legs at 90°
+
+
+def five_bar_cross(m, q, p):
+    """(D − C) × (P − C) for carriages C = A + ρ1 u1, D = B + ρ2 u2 from the parameters."""
+    a, b = np.asarray(m.params["A"]), np.asarray(m.params["B"])
+    u1 = np.array([np.cos(m.params["alpha1"]), np.sin(m.params["alpha1"])])
+    u2 = np.array([np.cos(m.params["alpha2"]), np.sin(m.params["alpha2"])])
+    c, d = a + q[0] * u1, b + q[1] * u2
+    return (d - c)[0] * (p - c)[1] - (d - c)[1] * (p - c)[0]
+
+
+@pytest.mark.parametrize("ident", ["five-bar-isotropic", "five-bar-biglide"])
+def test_mode_labels_follow_the_side_of_cd(ident):
+    """Each assembly mode's name says on which side of the directed line C→D the tool point
+    lies, computed here from the carriage positions: swapped names must fail."""
+    m = pkmkit.machine(ident)
+    x = random_poses(m, 30, seed=17)
+    q = m.ik(x)
+    modes = m.fk_all(q)
+    assert modes.valid.all()
+    for k in range(len(q)):
+        for col in range(2):
+            side = five_bar_cross(m, q[k], modes.poses[k, col])
+            assert abs(side) > 1e-6
+            assert modes.labels[col] == ("left-of-CD" if side > 0 else "right-of-CD")
+            assert np.sign(np.linalg.det(m.jacobian(modes.poses[k, col], q=q[k]).A)) == \
+                modes.mode_signs[col]
+    # the working mode is the home configuration's side
+    home_side = five_bar_cross(m, m.home_q, m.home_pose)
+    assert m.mode_labels[0] == ("left-of-CD" if home_side > 0 else "right-of-CD")

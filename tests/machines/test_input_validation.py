@@ -24,6 +24,8 @@ def test_jacobian_rejects_q_that_does_not_fit_the_pose():
     assert batch.status == ["regular", "unreachable"] and np.isnan(batch.J[1]).all()
     with pytest.raises(InputError, match="not finite"):
         ortho.jacobian_dot([0, 0, 0], [np.nan] * 3)
+    with pytest.raises(InputError, match=r"^q\b"):  # the message names the argument
+        ortho.jacobian([0, 0, 0], q=[0.31, 0.31])
 
 
 @pytest.mark.parametrize(
@@ -116,6 +118,11 @@ def test_strut_lengths_cannot_be_negative(tmp_path):
                   for a in np.radians([0.0, 120.0, 240.0]))
     )
     m = pkmkit.load(path)
+    # a file machine without a name is named after its file, and has no description
+    assert m.id == m.name == "struts" and m.description == m.source == ""
+    # struts are never too short: their shortfall is −inf whatever the pose
+    far = m.ik([[0.0, 0.0, -0.8], [5.0, 0.0, -0.8]], full_output=True)
+    assert (far.shortfall == -np.inf).all() and far.status.tolist() == [Status.OK] * 2
     q = m.home_q.copy()
     q[:2] -= 1.4  # rod lengths 1.2 + q < 0
     assert m.fk(q[None], full_output=True).status[0] == Status.NO_ASSEMBLY
@@ -146,6 +153,9 @@ def test_numeric_solutions_in_other_modes_and_branches(delta):
     res = delta.fk(q, method="numeric", mode="other", full_output=True)
     assert (res.status == Status.OK).all()
     np.testing.assert_allclose(res.pose, other, atol=1e-9)
+    # the engine reports its work per row: a few Gauss–Newton steps each
+    assert res.iterations.shape == (20,) and (res.iterations >= 1).all()
+    assert (res.iterations < 50).all()
     branches = [1, -1, 1]
     closed = delta.ik(x, branches=branches)
     numeric = delta.ik(x, method="numeric", branches=branches, full_output=True)

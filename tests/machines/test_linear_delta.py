@@ -62,15 +62,13 @@ def test_table_iii2_consistent_entries(delta, pose, leg, value):
     assert delta.ik(pose)[leg] == pytest.approx(value, abs=1.5e-4)
 
 
-@pytest.mark.parametrize("pose, leg, value", TABLE_III2_INCONSISTENT)
-def test_table_iii2_inconsistent_entries_are_not_reproduced(delta, pose, leg, value):
-    assert abs(delta.ik(pose)[leg] - value) > 1e-2
-
-
-def test_misprinted_q1_explains_the_x_minus_entries():
-    """(III.5) as printed, q1 = z + sqrt(L² + (x − R + r)² − y²), gives the table's 1.5058."""
-    x, y, z = -0.25, 0.25, 0.0
-    assert z + math.sqrt(L**2 + (x - R + r) ** 2 - y**2) == pytest.approx(1.5058, abs=1e-4)
+def test_table_iii2_inconsistent_entries_follow_the_corrected_model(delta):
+    """At the 13 misprinted entries the library gives the corrected (III.5) exactly — and so
+    not the printed number (each is ≥ 1 cm away; see docs/seed-errata.md)."""
+    for pose, leg, printed in TABLE_III2_INCONSISTENT:
+        value = delta.ik(pose)[leg]
+        assert value == pytest.approx(seed_igm(*pose)[leg], abs=1e-14)
+        assert abs(value - printed) > 1e-2
 
 
 def test_matches_independent_formula_on_random_poses(delta):
@@ -80,10 +78,19 @@ def test_matches_independent_formula_on_random_poses(delta):
     np.testing.assert_allclose(delta.ik(poses), expected, atol=1e-13)
 
 
-def test_centre_offsets_both_dimension_sets():
-    assert pkmkit.machine("linear-delta").ik([0, 0, 0]) == pytest.approx([1.17792] * 3, abs=1e-5)
-    set_b = pkmkit.machine("linear-delta-table-iv1")
-    assert set_b.ik([0, 0, 0]) == pytest.approx([0.882666] * 3, abs=1e-6)
+@pytest.mark.parametrize("ident, dims, value", [
+    ("linear-delta", (0.7, 0.15, 1.3), 1.1779218989),
+    ("linear-delta-table-iv1", (0.7, 0.15, 1.04), 0.8826664149),
+])
+def test_centre_of_both_dimension_sets(ident, dims, value):
+    """At the centre every carriage is sqrt(L² − (R − r)²) above the nacelle; the presets carry
+    the seed's dimensions (written here independently of the preset files)."""
+    m = pkmkit.machine(ident)
+    big_r, small_r, length = dims
+    assert (m.params["R"], m.params["r"], m.params["L"]) == pytest.approx(dims, rel=1e-15)
+    expected = math.sqrt(length**2 - (big_r - small_r) ** 2)
+    assert expected == pytest.approx(value, abs=1e-10)
+    np.testing.assert_allclose(m.ik([0, 0, 0]), [expected] * 3, rtol=0, atol=1e-15)
 
 
 def test_plane_map_extremes(delta):
@@ -151,10 +158,33 @@ def test_modes_are_nacelle_below_and_above(delta):
     assert flipped.mode_labels[0] == "nacelle-below"
 
 
+@pytest.mark.parametrize("outside", [1e-7, 1e-9])
+def test_a_pose_just_out_of_reach_is_unreachable(delta, outside):
+    """Leg 1's rod is too short by ``outside`` metres: no clamping tolerance may hide it, while
+    the same pose moved inside by as much is reachable with the rod horizontal (q1 = z)."""
+    d = R - r
+    z = 0.1
+    out = np.array([d - (L + outside), 0.0, z])
+    inside = np.array([d - (L - outside), 0.0, z])
+    res = delta.ik(np.array([out, inside]), full_output=True)
+    assert res.status.tolist() == [pkmkit.Status.UNREACHABLE, pkmkit.Status.OK]
+    assert np.isnan(res.q[0]).all()
+    assert res.q[1, 0] == pytest.approx(z + math.sqrt(L**2 - (L - outside) ** 2), abs=1e-12)
+    with pytest.raises(pkmkit.UnreachablePoseError, match="leg 1"):
+        delta.ik(out)
+
+
 def test_vertical_static_load_is_shared_in_thirds(delta):
     """F_mot = Jᵀ F_nac: at a symmetric pose a vertical load splits equally."""
     jac = delta.jacobian([0.0, 0.0, 0.2])
     np.testing.assert_allclose(jac.J.T @ [0, 0, -300.0], [-100.0] * 3, atol=1e-10)
+
+
+def test_default_box_is_the_documented_one(delta):
+    """|x|, |y| ≤ 0.4 L and −0.4 L ≤ z ≤ 0.65 L (the maps' and workspaces' default region)."""
+    lower, upper = delta.default_box()
+    np.testing.assert_allclose(lower, [-0.52, -0.52, -0.52], rtol=1e-15)
+    np.testing.assert_allclose(upper, [0.52, 0.52, 0.845], rtol=1e-15)
 
 
 def test_invalid_dimensions():

@@ -30,26 +30,37 @@ def test_isotropic_point(ortho):
     assert jac.condition == pytest.approx(1.0) and jac.status == "regular"
 
 
-def test_isotropy_conditions_eq_3_to_5(ortho):
-    p = np.zeros(3)
-    rho = ortho.ik(p)
+@pytest.mark.parametrize("length", [0.31, 0.45])
+def test_isotropy_conditions_eq_3_to_5(length):
+    """Seed 001 eq. (3)–(5) on the library's own A and B (A ẋ = B ρ̇, rows of A the legs
+    (p − b_i)ᵀ, B = diag((p − b_i)·e_i)) at the isotropic point: (4) the legs are mutually
+    orthogonal (A Aᵀ = L² I), (3) the ratios ‖A_i‖ / B_ii are equal and (5) of magnitude 1;
+    hence J = I. Off the isotropic point they fail, as they must."""
+    ortho = pkmkit.machine("orthoglide", L=length)
+    jac = ortho.jacobian([0.0, 0.0, 0.0])
+    np.testing.assert_allclose(jac.A @ jac.A.T, length**2 * np.eye(3), atol=1e-15)
+    ratios = np.linalg.norm(jac.A, axis=1) / np.diag(jac.B)
+    np.testing.assert_allclose(np.abs(ratios), 1.0, rtol=1e-15)
+    np.testing.assert_allclose(ratios, ratios[0], rtol=1e-15)
+    np.testing.assert_allclose(np.abs(np.diag(jac.B)), length, rtol=1e-15)
+    np.testing.assert_allclose(jac.J, np.eye(3), atol=1e-15)
+    off = ortho.jacobian([0.03, -0.05, 0.02])
+    gram = off.A @ off.A.T
+    assert np.abs(gram - np.diag(np.diag(gram))).max() > 1e-4 * length**2
+    assert np.ptp(np.linalg.norm(off.A, axis=1) / np.abs(np.diag(off.B))) > 1e-3
+
+
+def test_inverse_jacobian_is_seed_eq_2(ortho):
+    """Eq. 2 written from the carriage points ρ_i e_i and the tool point equals the library's
+    J⁻¹ = B⁻¹A, at the isotropic point and elsewhere."""
     a = np.zeros((3, 3))  # slide origins; the slides run from A_i along e_i
-    b = np.eye(3) * rho[:, None]  # carriage points B_i
-    c = np.tile(p, (3, 1))  # leg end points C_i on the tool
-    legs = c - b
-    eta = [np.dot(legs[i], np.eye(3)[i]) for i in range(3)]
-    ratios = [np.linalg.norm(legs[i]) / eta[i] for i in range(3)]
-    # (3): equal ratios, (5): equal to 1 in magnitude; (4): orthogonal legs
-    assert np.allclose(np.abs(ratios), 1.0)
-    for i in range(3):
-        assert abs(np.dot(legs[i], legs[(i + 1) % 3])) < 1e-15
-    # eq. 2 written independently equals the library's J^-1 = B^-1 A, here and elsewhere
-    np.testing.assert_allclose(seed_inverse_jacobian(a, b, c), ortho.jacobian(p).J_inv, atol=1e-15)
-    x = np.array([0.03, -0.05, 0.02])
-    rho = ortho.ik(x)
-    b = np.eye(3) * rho[:, None]
-    c = np.tile(x, (3, 1))
-    np.testing.assert_allclose(seed_inverse_jacobian(a, b, c), ortho.jacobian(x).J_inv, atol=1e-14)
+    for x in ([0.0, 0.0, 0.0], [0.03, -0.05, 0.02], [-0.08, 0.06, 0.1]):
+        x = np.asarray(x)
+        rho = np.array([x[i] + np.sqrt(0.31**2 - x @ x + x[i] ** 2) for i in range(3)])
+        b = np.eye(3) * rho[:, None]  # carriage points B_i, from the closed form of the docs
+        c = np.tile(x, (3, 1))  # leg end points C_i on the tool
+        np.testing.assert_allclose(seed_inverse_jacobian(a, b, c), ortho.jacobian(x).J_inv,
+                                   atol=1e-14)
 
 
 def test_working_mode_sign_test_holds_in_the_workspace(ortho):

@@ -35,9 +35,39 @@ def test_override_errors_are_not_blamed_on_the_file():
     assert not isinstance(info.value, MachineFileError)
 
 
-def test_every_preset_is_a_machine_file_that_loads(preset):
-    again = pkmkit.load(preset_path(preset.id))
-    np.testing.assert_array_equal(again.home_q, preset.home_q)
+#: The seed machines' dimensions (m, degrees) and home configurations, written from the seeds
+#: (000 Table IV.1 and Ch. III, 001 §3, 004 §2), independently of the shipped files.
+_S = 0.5 / np.sqrt(2.0)
+SEED_PRESETS = {
+    "orthoglide": ({"L": 0.31, "q_min": [0.1265] * 3, "q_max": [0.3831] * 3},
+                   [0.0, 0.0, 0.0], [0.31] * 3),
+    "linear-delta-ch3": ({"R": 0.7, "r": 0.15, "L": 1.3, "angles": [0.0, 120.0, 240.0]},
+                         [0.0, 0.0, 0.0], [np.sqrt(1.3**2 - 0.55**2)] * 3),
+    "linear-delta-table-iv1": ({"R": 0.7, "r": 0.15, "L": 1.04, "angles": [0.0, 120.0, 240.0],
+                                "q_min": [0.4] * 3, "q_max": [1.7] * 3},
+                               [0.0, 0.0, 0.0], [np.sqrt(1.04**2 - 0.55**2)] * 3),
+    "five-bar-isotropic": ({"A": [0.0, 0.0], "B": [1.0, -1.0], "alpha1": 0.0, "alpha2": 90.0,
+                            "L": 0.5}, [1.0, 0.0], [0.5, 0.5]),
+    "five-bar-biglide": ({"A": [0.0, 0.0], "B": [np.sqrt(2.0), 0.0], "alpha1": 0.0,
+                          "alpha2": 0.0, "L": 0.5}, [np.sqrt(2.0) / 2, -_S], [_S, -_S]),
+}
+
+
+@pytest.mark.parametrize("ident", sorted(SEED_PRESETS))
+def test_presets_carry_the_seed_dimensions(ident):
+    """Each shipped file, loaded as a user file and by id, has the seed's dimensions and home
+    configuration (and the inverse model closes there)."""
+    values, home_pose, home_q = SEED_PRESETS[ident]
+    for m in (pkmkit.machine(ident), pkmkit.load(preset_path(ident))):
+        for name, value in values.items():
+            expected = np.radians(value) if name.startswith(("angles", "alpha")) else value
+            np.testing.assert_allclose(m.params[name], expected, rtol=1e-15, atol=1e-15,
+                                       err_msg=f"{ident}: {name}")
+        np.testing.assert_allclose(m.home_pose, home_pose, atol=1e-15)
+        np.testing.assert_allclose(m.home_q, home_q, rtol=1e-15, atol=1e-15)
+        np.testing.assert_allclose(m.ik(m.home_pose), home_q, rtol=1e-14, atol=1e-15)
+    assert {m for m in pkmkit.machines() if m not in ("five-bar", "linear-delta")} == set(
+        SEED_PRESETS)
 
 
 def test_yaml_and_toml_give_the_same_machine(tmp_path):
@@ -164,6 +194,8 @@ def test_documented_machine_files_load(tmp_path):
          "anchors and aliases"),
         ("machine:\nparameters: {L: 0.3}\n", 1, "is empty"),
         ("machine: {kind: linear-delta}\nparameters:\n  L: yes\n", 3, "numeric"),
+        ("machine: {kind: orthoglide}\nparameters: {L: 0.3\n", 3,
+         "YAML syntax error: expected ',' or '}'"),  # the parser's own words
     ],
 )
 def test_malformed_yaml_files(tmp_path, text, line, message):

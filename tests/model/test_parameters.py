@@ -40,8 +40,18 @@ def test_validation_errors_name_the_parameter(spec, value, message):
 
 
 def test_degrees_out_of_range_at_the_boundary():
-    with pytest.raises(ParameterError, match="degrees"):
+    with pytest.raises(ParameterError, match=r"of 'x' is an angle in degrees within \[-360"):
         ANGLES.from_boundary([0, 120, 400], "m", "x")
+    with pytest.raises(ParameterError, match="of 'x' must be > 0"):  # the machine is named
+        LENGTH.from_boundary(-3.0, "mm", "x")
+
+
+@pytest.mark.parametrize("value", [7.0, -7.0, 9.0])
+def test_radians_beyond_a_turn_are_refused(value):
+    """Between 2π and 3π: an angle in degrees passed to the Python API by mistake."""
+    with pytest.raises(ParameterError, match="2π"):
+        ANGLES.validate((0.0, 1.0, value), "m")
+    assert ANGLES.validate((0.0, 1.0, 6.28), "m") == pytest.approx((0.0, 1.0, 6.28))
 
 
 def test_parse_text_rejects_words():

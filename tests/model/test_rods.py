@@ -25,6 +25,13 @@ def test_parallelogram_makes_two_offset_rods():
                                np.tile(model.leg_base[0] - model.leg_platform[0], (2, 1)))
     np.testing.assert_allclose(model.rod_platform[first][:, 2], [-0.1, 0.1])
     assert model.rod_kind.tolist() == [SLIDE] * 4
+    # the documented integer columns, and the default pose names
+    for column in (model.leg_kind, model.rod_kind, model.rod_leg, model.leg_actuator):
+        assert column.dtype.kind == "i"
+    assert model.pose_names == ("x", "y", "z")
+    named = build_rod_model(legs, dims=3, actuator_names=("a", "b", "c"), home_pose=(0, 0, 0),
+                            pose_names=("u", "v", "w"))
+    assert named.pose_names == ("u", "v", "w")
     with pytest.raises(ValueError):
         model.leg_base[0, 0] = 3.0  # immutable
 
@@ -36,6 +43,8 @@ def test_parallelogram_makes_two_offset_rods():
         ({"kind": "crank"}, "pivot must be 3 finite numbers"),
         ({"axis": (0, 0, 0)}, "zero vector"),
         ({"axis": (1, 0)}, "3 finite numbers"),
+        ({"platform": (1, 0)}, r"^legs\.0\.platform must be"),
+        ({"base": (0, np.nan, 0)}, r"^legs\.0\.base must be"),
         ({"length": -1.0}, "length must be > 0"),
         ({"branch": 2}, "branch must be"),
         ({"parallelogram_width": -1.0}, "width must be >= 0"),

@@ -66,6 +66,10 @@ def test_raster_strategies():
         (lambda: helix([0, 0, 0], 0.1, pitch=0.01, turns=0), "turns"),
         (lambda: raster([0, 0, 0], 0.1, 0.1, 0), "passes"),
         (lambda: raster([0, 0, 0], 0.1, 0.1, 3, strategy="spiral"), "strategy"),
+        (lambda: raster([0, 0, 0], -0.1, 0.1, 3), "width"),
+        (lambda: raster([0, 0, 0], 0.1, -0.1, 3), "height"),
+        (lambda: helix([0, 0, 0], 0.1, pitch=0.01, turns=1, normal=(0, np.inf, 1)),
+         "^normal must be"),
         (lambda: line([0, 0, np.nan], [1, 0, 0]), "finite"),
         (lambda: chain([line([0, 0, 0], [1, 0, 0]), line([2, 0, 0], [3, 0, 0])]),
          "continuous"),
@@ -74,3 +78,11 @@ def test_raster_strategies():
 def test_bad_paths(make, message):
     with pytest.raises(InputError, match=message):
         make()
+
+
+def test_planar_points_are_lifted_to_z_0():
+    """Paths for planar machines: 2 coordinates are (x, y) at z = 0."""
+    seg = line([0.1, 0.2], [0.4, -0.2]).segments[0]
+    np.testing.assert_array_equal(seg.start, [0.1, 0.2, 0.0])
+    np.testing.assert_array_equal(seg.end, [0.4, -0.2, 0.0])
+    np.testing.assert_allclose(circle([1.0, 0.5], 0.2).segments[0].center, [1.0, 0.5, 0.0])

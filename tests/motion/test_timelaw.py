@@ -1,4 +1,5 @@
 import itertools
+import math
 
 import numpy as np
 import pytest
@@ -167,3 +168,32 @@ def test_default_jerk_is_ten_times_the_acceleration():
     np.testing.assert_array_equal(implicit.x, explicit.x)
     other = plan(path, feed=0.1, accel=0.5, jerk=50.0, period=1e-3)
     assert implicit.t[-1] != other.t[-1]
+
+
+@pytest.mark.parametrize("radius, accel, jerk, feed", [
+    (0.02, 2.0, 20.0, 1.0),     # the jerk of the turning acceleration, 3 v a_t κ ≤ J/3, binds
+    (0.02, 2.0, 2000.0, 1.0),   # the normal acceleration v²κ ≤ A/2 binds
+    (0.05, 3.0, 500.0, 0.05),   # the feed binds
+])
+def test_arc_limits_are_the_documented_ones(radius, accel, jerk, feed):
+    """On a circle (κ = 1/r) the cruise speed is min(F, √(A/2κ), (J/3κ²)^⅓, J/(9 a_t κ)) with
+    a_t = (√3/2) A; along the whole move the tangential jerk stays ≤ J/3, the normal
+    acceleration ≤ A/2, the tangential one ≤ (√3/2) A, and the jerk ≤ (√6/3) J (module
+    docstring). Each is measured on the samples, not read from the plan."""
+    kappa = 1.0 / radius
+    a_t = math.sqrt(3) / 2 * accel
+    cruise = min(feed, math.sqrt(accel / 2 / kappa), (jerk / 3 / kappa**2) ** (1 / 3),
+                 jerk / 9 / (a_t * kappa))
+    tr = plan(circle([0.1, -0.2, 0.05], radius), feed=feed, accel=accel, jerk=jerk,
+              period=2e-4)
+    speed = np.linalg.norm(tr.xd, axis=1)
+    assert speed.max() == pytest.approx(cruise, rel=1e-9)
+    tangential = np.einsum("ij,ij->i", tr.xdd, tr.xd) / np.maximum(speed, 1e-300)
+    normal = np.sqrt(np.maximum(np.einsum("ij,ij->i", tr.xdd, tr.xdd) - tangential**2, 0.0))
+    np.testing.assert_allclose(normal, speed**2 * kappa, atol=1e-9 * accel)
+    assert np.abs(tangential).max() <= a_t * (1 + 1e-9)
+    assert normal.max() <= accel / 2 * (1 + 1e-9)
+    dt = np.diff(tr.t)
+    assert np.abs(np.diff(tangential) / dt).max() <= jerk / 3 * (1 + 1e-6)
+    total_jerk = np.linalg.norm(np.diff(tr.xdd, axis=0), axis=1) / dt
+    assert total_jerk.max() <= math.sqrt(6) / 3 * jerk * (1 + 1e-3)

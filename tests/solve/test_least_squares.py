@@ -69,6 +69,32 @@ def test_iteration_limit_flag():
     assert res.status[0] == Status.NOT_CONVERGED and res.iterations[0] == 3
 
 
+def test_default_iteration_limit_is_60():
+    """r = u³ from 1e10: Gauss–Newton steps u → 2u/3 make steady progress (no stall), and
+    reaching |r| < residual_tol would take about 80 of them."""
+    def evaluate(u, rows):
+        return u**3, (3 * u**2)[:, None, :]
+
+    res = solve_least_squares(evaluate, np.full((1, 1), 1e10))
+    assert res.status[0] == Status.NOT_CONVERGED and res.iterations[0] == 60
+
+
+def test_rows_without_a_finite_start_are_flagged_and_left_alone():
+    calls = []
+
+    def evaluate(u, rows):
+        calls.append(rows)
+        return u - 1.0, np.ones((1, 1, u.shape[1]))
+
+    res = solve_least_squares(evaluate, np.full((3, 1), np.nan))
+    assert res.status.tolist() == [Status.INVALID_INPUT] * 3 and calls == []
+    assert res.iterations.tolist() == [0, 0, 0] and np.isnan(res.residual).all()
+    mixed = solve_least_squares(evaluate, np.array([[np.nan], [0.0], [np.inf]]))
+    assert mixed.status.tolist() == [Status.INVALID_INPUT, Status.OK, Status.INVALID_INPUT]
+    assert mixed.iterations[0] == mixed.iterations[2] == 0
+    assert mixed.u[1, 0] == pytest.approx(1.0, abs=1e-12)
+
+
 def test_warm_start_needs_fewer_iterations():
     def evaluate(u, rows):
         return np.stack([u[0] ** 3 - 2.0]), 3 * u[None] ** 2
@@ -169,3 +195,44 @@ def test_block_pattern_is_checked(pattern, message):
 
     with pytest.raises(InputError, match=message):
         solve_least_squares(evaluate, np.zeros((2, 3)), pattern=pattern)
+
+
+def test_stationarity_stop_is_the_documented_cosine():
+    """Inconsistent rows (no zero residual) stop when every Jacobian column is orthogonal to
+    the residual within gtol: at the returned u, |J_iᵀ r| ≤ gtol ‖J_i‖ ‖r‖ for each column i,
+    checked here from the problem itself on 300 random rows."""
+    rng = np.random.default_rng(9)
+    a, b, c = rng.uniform(0.5, 2.0, (3, 300))
+
+    def residual(u):
+        return np.stack([u[0] - a, u[1] - b, 3.0 * (u[0] * u[1] - c * a * b)])
+
+    def evaluate(u, rows):
+        x, y = u
+        r = np.stack([x - a[rows], y - b[rows], 3.0 * (x * y - c[rows] * a[rows] * b[rows])])
+        jac = np.zeros((3, 2, u.shape[1]))
+        jac[0, 0], jac[1, 1], jac[2, 0], jac[2, 1] = 1.0, 1.0, 3.0 * y, 3.0 * x
+        return r, jac
+
+    gtol = 1e-3
+    res = solve_least_squares(evaluate, np.stack([a, b], axis=1), gtol=gtol, residual_tol=0.0)
+    assert (res.status == Status.INCONSISTENT).all()
+    u = res.u.T
+    r = residual(u)
+    jac = np.stack([np.stack([np.ones(300), np.zeros(300), 3.0 * u[1]]),
+                    np.stack([np.zeros(300), np.ones(300), 3.0 * u[0]])])  # (column, m, N)
+    cosine = np.abs(np.einsum("imk,mk->ik", jac, r)) / (
+        np.linalg.norm(jac, axis=1) * np.linalg.norm(r, axis=0))
+    assert cosine.max() <= gtol * (1 + 1e-9)
+    assert cosine.max() > 0.3 * gtol  # and stops there, not at rounding level
+
+
+def test_steps_that_raise_the_cost_are_refused():
+    """r = arctan(u) from u = 1.5: the plain Gauss–Newton step overshoots to ever larger |u|
+    (each step raising the cost by 10–20 %); refusing those steps and damping instead
+    converges to u = 0."""
+    def evaluate(u, rows):
+        return np.arctan(u), (1.0 / (1.0 + u**2))[:, None, :]
+
+    res = solve_least_squares(evaluate, np.full((1, 1), 1.5))
+    assert res.status[0] == Status.OK and abs(res.u[0, 0]) < 1e-9

@@ -78,3 +78,36 @@ def test_rotation_is_recovered_when_rods_fix_it():
     res = m.fk(q, method="numeric", dof="full", full_output=True)
     np.testing.assert_allclose(res.rotation, 0.0, atol=1e-12)
     np.testing.assert_allclose(res.pose, [[0.1, -0.2, 0.3]], atol=1e-12)
+
+
+def test_inverse_with_a_rotated_platform():
+    """solve_inverse with platform rotations R: every rod closes, |p + R b − a(q)| = ℓ, checked
+    here from the model's points (and the answer differs from the unrotated one)."""
+    from pkmkit.solve.rod_closure import solve_inverse
+    from pkmkit.spatial.rotation import rotvec_to_matrix
+
+    legs = [
+        LegSpec("a", 0, "slide", base=(0.6, 0.1, 0.0), platform=(0.1, 0.05, 0.02), length=1.1,
+                axis=(0.1, 0.2, 1.0)),
+        LegSpec("b", 1, "slide", base=(-0.3, 0.5, 0.1), platform=(-0.05, 0.1, 0.0), length=1.0,
+                axis=(0.0, 0.3, 1.0)),
+        LegSpec("c", 2, "strut", base=(-0.3, -0.5, 1.2), platform=(0.0, -0.1, 0.0), length=0.9),
+    ]
+    model = build_rod_model(legs, dims=3, actuator_names=("q1", "q2", "q3"),
+                            home_pose=(0, 0, 0))
+    rng = np.random.default_rng(5)
+    pose = rng.normal(0, 0.05, (4, 3))
+    rot = rotvec_to_matrix(rng.normal(0, 0.1, (4, 3)))
+    q0 = np.ones((4, 3))
+    res = solve_inverse(model, pose, q0, rotation=rot)
+    plain = solve_inverse(model, pose, q0)
+    assert (res.status == 0).all() and np.abs(res.u - plain.u).max() > 1e-3
+    q = res.u
+    for k in range(4):
+        for j in range(model.n_rods):
+            i = model.rod_actuator[j]
+            a = model.rod_base[j] + (q[k, i] * model.rod_axis[j] if model.rod_kind[j] == 0
+                                     else 0.0)
+            length = model.rod_length[j] + (q[k, i] if model.rod_kind[j] != 0 else 0.0)
+            tip = pose[k] + rot[k] @ model.rod_platform[j]
+            assert np.linalg.norm(tip - a) == pytest.approx(length, abs=1e-12)

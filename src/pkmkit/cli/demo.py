@@ -67,8 +67,11 @@ def machine_summary(m: Machine) -> dict[str, Any]:
     return info
 
 
-def run_demo(out_dir: Path) -> dict[str, Any]:
-    """Run the demo into ``out_dir`` and return the summary written to ``summary.json``."""
+def run_demo(out_dir: Path, quick: bool = False) -> dict[str, Any]:
+    """Run the demo into ``out_dir`` and return the summary written to ``summary.json``.
+
+    ``quick``: the same studies on coarser grids and with a shorter Pareto search (a check
+    that everything runs, for the test suite; the full demo is the reference)."""
     check_output_dir(out_dir)
     summaries = {}
     for ident in machines():
@@ -83,13 +86,13 @@ def run_demo(out_dir: Path) -> dict[str, Any]:
         write_text_atomic(out_dir / f"{ident}.json", json.dumps(to_jsonable(summary), indent=2))
         summaries[ident] = summary
         _print_summary(summary)
-    analysis = run_analysis_demo(out_dir, list(summaries))
-    design = run_design_demo(out_dir)
+    analysis = run_analysis_demo(out_dir, list(summaries), quick)
+    design = run_design_demo(out_dir, quick)
     motion = run_motion_demo(out_dir)
     total = {"pkmkit_demo": "kinematic summary, analysis, design, trajectories and dynamics of "
                             "the built-in machines",
-             "units": "m", "machines": summaries, "analysis": analysis, "design": design,
-             "motion": motion}
+             "units": "m", "quick": quick, "machines": summaries, "analysis": analysis,
+             "design": design, "motion": motion}
     write_text_atomic(out_dir / "summary.json", json.dumps(to_jsonable(total), indent=2))
     click.echo(f"\nwrote {out_dir}/summary.json, one JSON and one PNG per machine, and the "
                "figures of the studies in analysis/, design/ and motion/")

@@ -43,18 +43,20 @@ BOUNDS = {"orthoglide": (0.5, 2.0), "linear-delta": (0.5, 2.0), "five-bar": (1 /
           "delta": (0.1, 0.8)}
 
 
-def machine_analysis(m: Machine, out: Path) -> dict[str, Any]:
-    """Workspace, condition map and ellipses of one machine."""
+def machine_analysis(m: Machine, out: Path, quick: bool = False) -> dict[str, Any]:
+    """Workspace, condition map and ellipses of one machine (``quick``: coarser grids, the
+    inscribed box left as found on the grid)."""
     bounds = BOUNDS[m.kind.kind]
     lower, upper = m.default_box()
     free = tuple(range(m.dims))
     grid = make_grid(lower, upper, free=free, base=m.home_pose, names=m.pose_names,
-                     resolution=41 if m.dims == 3 else 161)
-    wmap = compute_workspace(m, grid, Criteria(bounds=bounds), refine=True)
+                     resolution=(21 if m.dims == 3 else 61) if quick else (41 if m.dims == 3
+                                                                           else 161))
+    wmap = compute_workspace(m, grid, Criteria(bounds=bounds), refine=not quick)
     plot_workspace(wmap, m, title=f"{m.name}: workspace with λ in [{bounds[0]:.3g}, "
                    f"{bounds[1]:.3g}]", path=out / f"{m.id}-workspace.png")
     plane = make_grid(lower[:2], upper[:2], free=(0, 1), base=m.home_pose, names=m.pose_names,
-                      resolution=121)
+                      resolution=41 if quick else 121)
     values = scalar_index(indices(m, plane.points), "condition").reshape(plane.shape)
     plot_scalar_map(plane, values, title=f"{m.name}: condition number over the plane through "
                     "home", label="κ", path=out / f"{m.id}-condition.png")
@@ -91,13 +93,14 @@ def orthoglide_prototype(out: Path) -> dict[str, Any]:
             "seed": {"cube_side": 0.200, "stroke": 0.257, "compactness": 0.78}}
 
 
-def five_bar_comparison(out: Path) -> dict[str, Any]:
-    """Seed 004: useful workspaces of the isotropic and biglide designs (1/3 < λ < 3)."""
+def five_bar_comparison(out: Path, quick: bool = False) -> dict[str, Any]:
+    """Seed 004: useful workspaces of the isotropic and biglide designs (1/3 < λ < 3)
+    (``quick``: a coarser grid)."""
     crit = Criteria(bounds=(1 / 3, 3.0))
     result = {}
     for ident in ("five-bar-isotropic", "five-bar-biglide"):
         m = machine(ident)
-        useful = useful_workspace(m, crit, resolution=301)
+        useful = useful_workspace(m, crit, resolution=121 if quick else 301)
         plot_useful_workspace(useful, m, path=out / f"{ident}-useful.png")
         result[ident] = {
             "joint_square_side": useful.joint_square.side,
@@ -117,11 +120,12 @@ def five_bar_comparison(out: Path) -> dict[str, Any]:
     return result
 
 
-def delta_actuator_maps(out: Path) -> dict[str, Any]:
-    """Seed 000 Figs 3.9–3.11: q_i over z = 0, |x|, |y| ≤ 0.25 m, set A."""
+def delta_actuator_maps(out: Path, quick: bool = False) -> dict[str, Any]:
+    """Seed 000 Figs 3.9–3.11: q_i over z = 0, |x|, |y| ≤ 0.25 m, set A (``quick``: a coarser
+    grid; the extremes are at its edges either way)."""
     m = machine("linear-delta")
     grid = make_grid([-0.25, -0.25], [0.25, 0.25], free=(0, 1), base=np.zeros(3),
-                     names=m.pose_names, resolution=101)
+                     names=m.pose_names, resolution=41 if quick else 101)
     plot_actuator_maps(m, grid, title="Linear Delta (0.7, 0.15, 1.3) m: actuator coordinates at "
                        "z = 0", path=out / "linear-delta-actuator-maps.png")
     q = m.ik(grid.points)
@@ -131,15 +135,15 @@ def delta_actuator_maps(out: Path) -> dict[str, Any]:
             "figure": "linear-delta-actuator-maps.png"}
 
 
-def run_analysis_demo(out_dir: Path, ids: list[str]) -> dict[str, Any]:
-    """All of the above; prints one line per study."""
+def run_analysis_demo(out_dir: Path, ids: list[str], quick: bool = False) -> dict[str, Any]:
+    """All of the above; prints one line per study (``quick``: coarser grids)."""
     out = out_dir / "analysis"
     out.mkdir(parents=True, exist_ok=True)
     summary: dict[str, Any] = {"machines": {}}
     click.echo("\n== analysis (figures in analysis/)")
     for ident in ids:
         m = machine(ident)
-        res = machine_analysis(m, out)
+        res = machine_analysis(m, out, quick)
         summary["machines"][ident] = res
         side = res["inscribed_side"]
         lo, hi = res["index_range_inscribed"]
@@ -153,7 +157,7 @@ def run_analysis_demo(out_dir: Path, ids: list[str]) -> dict[str, Any]:
                f"(seed 200), stroke {ortho['stroke'].max() * 1e3:.1f} mm (seed 257), r = "
                f"{ortho['compactness']:.3f} (seed 0.78), λ in [{ortho['index_range'][0]:.3f}, "
                f"{ortho['index_range'][1]:.3f}]")
-    five = five_bar_comparison(out)
+    five = five_bar_comparison(out, quick)
     summary["seed004_five_bar"] = five
     iso = five["five-bar-isotropic"]
     click.echo(f"   seed 004: inscribed squares isotropic {iso['inscribed_side']:.4f} m / biglide "
@@ -163,7 +167,7 @@ def run_analysis_demo(out_dir: Path, ids: list[str]) -> dict[str, Any]:
                "seed [0.4, 1.6], not reproducible, see docs/analysis.md), inside its inscribed "
                f"square [{iso['inscribed_index_range'][0]:.3f}, "
                f"{iso['inscribed_index_range'][1]:.3f}]")
-    delta = delta_actuator_maps(out)
+    delta = delta_actuator_maps(out, quick)
     summary["seed000_actuator_maps"] = delta
     click.echo(f"   seed 000: actuator maps at z = 0: q_min {np.round(delta['q_min'], 4)}, "
                f"q_max {np.round(delta['q_max'], 4)} m")

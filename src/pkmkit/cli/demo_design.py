@@ -43,11 +43,11 @@ def orthoglide_sizing(out: Path) -> dict[str, Any]:
             "sweep": rows, "figure": "orthoglide-sizing-sweep.png"}
 
 
-def five_bar_design() -> dict[str, Any]:
+def five_bar_design(resolution: int = 301) -> dict[str, Any]:
     """Slide orientations from J⁻¹ = I, and both designs sized for a 0.2 m square."""
     out = {"orientations_deg": isotropic_orientations()}
     for name in ("isotropic", "biglide"):
-        res = size_five_bar(0.2, (1 / 3, 3.0), design=name)
+        res = size_five_bar(0.2, (1 / 3, 3.0), design=name, resolution=resolution)
         out[name] = {"L": res.L, "stroke": res.stroke, "B": res.B,
                      "verified": res.check.feasible}
     return out
@@ -98,8 +98,8 @@ def delta_pareto(out: Path, generations: int = 25,
             "figure": "linear-delta-pareto.png"}
 
 
-def run_design_demo(out_dir: Path) -> dict[str, Any]:
-    """All of the above; prints a few lines."""
+def run_design_demo(out_dir: Path, quick: bool = False) -> dict[str, Any]:
+    """All of the above; prints a few lines (``quick``: a shorter Pareto search)."""
     out = out_dir / "design"
     out.mkdir(parents=True, exist_ok=True)
     click.echo("\n== design (figures in design/)")
@@ -108,7 +108,7 @@ def run_design_demo(out_dir: Path) -> dict[str, Any]:
     click.echo(f"   Orthoglide, 200 mm cube, λ in [0.5, 2]: L = {p['L'] * 1e3:.1f} mm (seed 310), "
                f"stroke {p['stroke'] * 1e3:.1f} mm (seed 257), r = {p['compactness']:.3f} "
                f"(seed 0.78), verified: {p['verified']}")
-    five = five_bar_design()
+    five = five_bar_design(121 if quick else 301)
     click.echo(f"   five-bar: J⁻¹ = I needs (α1, α2) = {five['orientations_deg']} deg; for a 0.2 m "
                f"square, isotropic L = {five['isotropic']['L']:.3f} m, stroke "
                f"{five['isotropic']['stroke']:.3f} m; biglide L = {five['biglide']['L']:.3f} m, "
@@ -118,7 +118,7 @@ def run_design_demo(out_dir: Path) -> dict[str, Any]:
                f"R = {sized['R']:.3f} m, r = {sized['r']:.3f} m, L = {sized['L']:.3f} m, stroke "
                f"{sized['stroke']:.3f} m, compactness {sized['compactness']:.3f}, verified: "
                f"{sized['verified']}")
-    delta = delta_pareto(out, sized=sized)
+    delta = delta_pareto(out, generations=8 if quick else 25, sized=sized)
     delta["sizing"] = sized
     seeds = "; ".join(f"{k}: compactness {v['compactness']:.3f}, GCI {v['gci']:.3f}"
                       for k, v in delta["seed_sets"].items())

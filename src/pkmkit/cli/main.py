@@ -396,12 +396,15 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
 @cli.command()
 @click.option("--out", "out_dir", default="pkmkit-demo", show_default=True,
               type=click.Path(file_okay=False), help="Directory for the JSON and PNG files.")
-def demo(out_dir: str) -> None:
+@click.option("--quick", is_flag=True,
+              help="Coarser grids, no refinement of the inscribed cubes and a shorter Pareto "
+                   "search: every study runs, faster, with less refined numbers and figures.")
+def demo(out_dir: str, quick: bool) -> None:
     """Kinematic summary and analysis of every built-in machine (text, JSON and figures)."""
     from .demo import run_demo
 
     try:
-        run_demo(Path(out_dir))
+        run_demo(Path(out_dir), quick=quick)
     except OSError as exc:
         raise click.ClickException(f"cannot write into {out_dir}: {exc.strerror or exc}") from None
 

@@ -1,0 +1,132 @@
+"""Mutation testing of one pkmkit package or module with mutmut, optionally on a random sample.
+
+Usage (from the repository root, in the project's virtual environment with the ``dev`` extra)::
+
+    python tools/mutation.py pkmkit.spatial                       # every mutant of the package
+    python tools/mutation.py pkmkit.machines --sample 120 --seed 15 --jobs 1
+    python tools/mutation.py pkmkit.motion.gcode --report          # scores from the last runs only
+    python tools/mutation.py pkmkit.machines --sample 120 --survivors  # the sample's survivors
+
+mutmut's configuration is ``[tool.mutmut]`` in pyproject.toml. mutmut writes a mutated copy of the
+source and the tests to ``./mutants/`` (git-ignored); its first run also runs the whole suite once
+to learn which tests reach which function (cached afterwards). A sample is drawn with
+``random.Random(seed)`` from the sorted mutant names of the target, so the same command draws the
+same mutants. The score printed is killed / (killed + survived), where a timeout counts as killed
+(an infinite loop is observable), mutants that no test reaches count as survived, and mutants
+listed in ``tools/equivalent_mutants.txt`` (no observable change; one per line with the reason)
+are left out.
+"""
+
+from __future__ import annotations
+
+import argparse
+import fnmatch
+import json
+import random
+import subprocess
+import sys
+from collections import Counter
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+EQUIVALENT = ROOT / "tools" / "equivalent_mutants.txt"
+KILLED = {1, 3, 36, 24, -24, 152, 255}  # test failure, pytest internal error, timeouts
+SURVIVED = {0, 5, 33}  # no test failed, or no test reaches the function
+
+
+def _mutants_of(target: str) -> dict[str, int | None]:
+    """All mutant names of ``target`` with their last exit code (None: not run yet)."""
+    found: dict[str, int | None] = {}
+    for meta in sorted((ROOT / "mutants" / "src").rglob("*.py.meta")):
+        for key, code in json.loads(meta.read_text())["exit_code_by_key"].items():
+            if fnmatch.fnmatch(key, target + ".*") or fnmatch.fnmatch(key, target + "__*"):
+                found[key] = code
+    return found
+
+
+def _generate() -> None:
+    """Write the mutated source under ./mutants (no test is run)."""
+    code = (
+        "import sys; from mutmut.__main__ import copy_src_dir, copy_also_copy_files, "
+        "setup_source_paths, create_mutants; from mutmut.mutation.trampoline import "
+        "set_mutant_under_test; set_mutant_under_test('mutant_generation'); copy_src_dir(); "
+        "copy_also_copy_files(); setup_source_paths(); create_mutants(1)"
+    )
+    subprocess.run([sys.executable, "-c", code], cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
+
+
+def _equivalent() -> dict[str, str]:
+    """Mutant name → why it is equivalent, from ``tools/equivalent_mutants.txt``."""
+    out = {}
+    if EQUIVALENT.exists():
+        for line in EQUIVALENT.read_text().splitlines():
+            if line.strip() and not line.startswith("#"):
+                name, _, reason = line.partition(" ")
+                out[name] = reason.strip()
+    return out
+
+
+def _report(names: list[str], codes: dict[str, int | None]) -> int:
+    counts = Counter()
+    survivors = []
+    equivalent = _equivalent()
+    for name in names:
+        code = codes.get(name)
+        if name in equivalent:
+            counts["equivalent"] += 1
+        elif code in KILLED:
+            counts["killed"] += 1
+        elif code in SURVIVED:
+            counts["survived"] += 1
+            survivors.append(name)
+        else:
+            counts[f"not run ({code})"] += 1
+    decided = counts["killed"] + counts["survived"]
+    score = 100.0 * counts["killed"] / decided if decided else float("nan")
+    for name in survivors:
+        print(f"survived: {name}")
+    print(
+        f"{len(names)} mutants: {counts['killed']} killed, {counts['survived']} survived"
+        + "".join(f", {v} {k}" for k, v in counts.items() if k not in ("killed", "survived"))
+        + f"; score {score:.1f} %"
+    )
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("target", help="package or module, e.g. pkmkit.motion.gcode")
+    parser.add_argument("--sample", type=int, default=0, help="random mutants to run (0: all)")
+    parser.add_argument("--seed", type=int, default=15, help="seed of the random sample")
+    parser.add_argument("--jobs", type=int, default=1, help="mutants tested in parallel")
+    parser.add_argument("--report", action="store_true", help="only report the last results")
+    parser.add_argument("--survivors", action="store_true",
+                        help="re-run only the mutants of the sample that survived last time")
+    args = parser.parse_args(argv)
+
+    _generate()
+    codes = _mutants_of(args.target)
+    if not codes:
+        print(f"no mutant found for {args.target!r}", file=sys.stderr)
+        return 2
+    names = sorted(codes)
+    if args.sample and args.sample < len(names):
+        names = sorted(random.Random(args.seed).sample(names, args.sample))
+    print(f"{args.target}: {len(codes)} mutants, testing {len(names)}")
+    todo = names
+    if args.survivors:
+        equivalent = _equivalent()
+        todo = [n for n in names if codes.get(n) in SURVIVED and n not in equivalent]
+        print(f"re-running {len(todo)} survivors")
+    if not args.report and todo:
+        subprocess.run(
+            [sys.executable, "-m", "mutmut", "run", "--max-children", str(args.jobs), *todo],
+            cwd=ROOT,
+            check=False,
+        )
+        codes = _mutants_of(args.target)
+    return _report(names, codes)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
