@@ -212,9 +212,9 @@ def test_verne_carriages_hang_the_rods_down_at_home(verne):
 
 
 def test_every_assembly_mode_of_a_general_hexapod():
-    """Dietmaier's 1998 geometry (docs/examples): all 40 modes real, each closes every rod and
-    gives back the same strut lengths; the working one is where the engine goes from home."""
-    m = pkmkit.load("docs/examples/dietmaier-hexapod.toml")
+    """Dietmaier's 1998 geometry (the dietmaier-hexapod preset): all 40 modes real, each closes
+    every rod and gives back the same strut lengths; the working one is where the engine goes from home."""
+    m = pkmkit.machine("dietmaier-hexapod")
     modes = m.fk_all(m.home_q)
     assert (modes.count, modes.n_finite, modes.status) == (40, 40, Status.OK)
     poses = modes.poses[:40]

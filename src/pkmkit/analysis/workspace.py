@@ -549,20 +549,23 @@ def region_grid(machine: Machine, center: Any, side: float, free: tuple[int, ...
                 samples: int | None = None) -> Grid:
     """Grid of ``samples`` points per edge over the square/cube of ``side`` centred at
     ``center``; ``free`` defaults to every pose coordinate."""
+    # a machine that takes positions alone (a Verne-type module) may be given a position
+    widths = {machine.dims} | ({3} if getattr(machine, "position_controlled", False) else set())
+    expected = " or ".join(str(w) for w in sorted(widths))
     try:
         center = np.asarray(center, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise InputError(f"the centre must be {machine.dims} finite coordinates, got "
+        raise InputError(f"the centre must be {expected} finite coordinates, got "
                          f"{center!r}") from None
-    if center.shape != (machine.dims,) or not np.isfinite(center).all():
-        raise InputError(f"the centre must be {machine.dims} finite coordinates")
+    if center.shape[0] not in widths or not np.isfinite(center).all():
+        raise InputError(f"the centre must be {expected} finite coordinates")
     side = real(side, "the side", positive=True, limit=1e6)
-    free = tuple(range(machine.dims)) if free is None else free
+    free = tuple(range(len(center))) if free is None else free
     samples = samples or check_region_samples(len(free))
     lower = [center[k] - side / 2 for k in free]
     upper = [center[k] + side / 2 for k in free]
-    return make_grid(lower, upper, free=free, base=center, names=machine.pose_names,
-                     resolution=samples)
+    return make_grid(lower, upper, free=free, base=center,
+                     names=machine.pose_names[:len(center)], resolution=samples)
 
 
 def check_region(machine: Machine, center: Any, side: float, criteria: Criteria | None = None,

@@ -89,14 +89,48 @@ def run_demo(out_dir: Path, quick: bool = False) -> dict[str, Any]:
     analysis = run_analysis_demo(out_dir, list(summaries), quick)
     design = run_design_demo(out_dir, quick)
     motion = run_motion_demo(out_dir)
+    from .demo_calibration import run_calibration_demo
+    from .demo_errors import error_summary
+    from .demo_machines import run_chain_demo, run_full_pose_demo
+
+    full_pose = run_full_pose_demo(out_dir, quick)
+    chains = run_chain_demo(out_dir, quick)
+    click.echo("\n== geometric errors (figures in errors/)")
+    errors = error_summary(out_dir / "errors")
+    _print_errors(errors)
+    click.echo("\n== calibration studies (in calibration/)")
+    calibration = run_calibration_demo(out_dir / "calibration", echo=True)
     total = {"pkmkit_demo": "kinematic summary, analysis, design, trajectories and dynamics of "
-                            "the built-in machines",
+                            "the built-in machines; full-pose and joint-chain machines; "
+                            "geometric errors and calibration",
              "units": "m", "quick": quick, "machines": summaries, "analysis": analysis,
-             "design": design, "motion": motion}
+             "design": design, "motion": motion, "full_pose": full_pose,
+             "joint_chains": chains, "errors": errors, "calibration": calibration}
     write_text_atomic(out_dir / "summary.json", json.dumps(to_jsonable(total), indent=2))
     click.echo(f"\nwrote {out_dir}/summary.json, one JSON and one PNG per machine, and the "
-               "figures of the studies in analysis/, design/ and motion/")
+               "figures of the studies in analysis/, design/, motion/, full-pose/, "
+               "joint-chains/, errors/ and calibration/ (each calibration with its report.html)")
     return total
+
+
+def _print_errors(errors: dict[str, Any]) -> None:
+    """One line per error study of the demo."""
+    compat = errors["tripteor_compatibility"]
+    orient, full = compat["orientation_only"], compat["with_positions"]
+    click.echo(f"   Tripteor compatibility (orientation defects, as the thesis): "
+               f"{len(orient['forced_zero'])} forced to zero ({', '.join(orient['forced_zero'])})"
+               f"; compatible subspace {orient['compatible_dimension']} of "
+               f"{orient['n_parameters']}; the thesis's leg-2 conditions "
+               f"{', '.join(orient['thesis_leg_2_not_required'])} are not required")
+    click.echo(f"   with position defects: also {', '.join(full['added_by_positions'])} = 0; "
+               f"compatible {full['compatible_dimension']} of {full['n_parameters']}")
+    ident = errors["tripteor_identifiability"]
+    click.echo(f"   Tripteor identifiability from tool points: rank {ident['rank']} of "
+               f"{ident['n_parameters']} (unseen: {', '.join(ident['unidentifiable'][:8])}, …)")
+    acc = errors["hexapod_accuracy_map"]
+    click.echo(f"   hexapod tolerance analysis: 95th-percentile tool error "
+               f"{acc['p95_min_m'] * 1e6:.1f}..{acc['p95_max_m'] * 1e6:.1f} µm over the map "
+               f"(first order {acc['first_order_p95_max_m'] * 1e6:.1f} µm)")
 
 
 def _vec(v: Any, digits: int = 4) -> str:

@@ -61,7 +61,7 @@ def draw_machine(machine: Machine, pose=None, *, q=None, ax=None, title: str | N
     pose = machine.home_pose if pose is None else np.asarray(pose, dtype=float)
     q = machine.ik(pose) if q is None else np.asarray(q, dtype=float)
     geo = machine_geometry(machine, pose, q)
-    spatial = machine.dims == 3
+    spatial = machine.dims != 2
     if ax is None:
         fig = Figure(figsize=(6.4, 5.6))
         ax = fig.add_subplot(projection="3d" if spatial else None)
