@@ -249,3 +249,43 @@ def test_fk_all_batches_and_contains_the_engine_solution(name):
                                    np.broadcast_to(m.model.rod_length, rods.shape[:2]) if
                                    not m.model.rod_kind.any() else np.tile(q[k], (len(found), 1)),
                                    atol=1e-9)
+
+
+def _full_pose_delta():
+    """The Delta robot's six forearm rods on a full-pose platform (crank actuators)."""
+    from pkmkit.model.rods import build_rod_model, leg_specs
+
+    delta = pkmkit.machine("delta")
+    model = build_rod_model(leg_specs(delta.model), dims=6, actuator_names=("q1", "q2", "q3"),
+                            home_pose=(*delta.home_pose, 0.0, 0.0, 0.0))
+    return FullPoseMachine(id="delta6", name="delta6", kind=None, params={}, model=model)
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "verne", "delta6"])
+def test_compiled_inverse_kernel_matches_the_numpy_reference(name, monkeypatch):
+    m = _full_pose_delta() if name == "delta6" else pkmkit.machine(name)
+    forms = FullPoseForms(m.model)
+    rng = np.random.default_rng(4)
+    poses = np.tile(m.home_pose, (3000, 1))
+    poses[:, :3] += rng.uniform(-0.3, 0.3, (3000, 3))  # some out of reach
+    poses[:, 3:] += rng.uniform(-0.1, 0.1, (3000, 3))
+    poses[7] = np.nan
+    monkeypatch.setenv("PKMKIT_COMPILED", "1")
+    compiled = forms.rod_coordinates(poses)
+    reference = forms.rod_coordinates_numpy(poses, forms.rod_branch)
+    np.testing.assert_array_equal(np.isnan(compiled), np.isnan(reference))
+    assert np.isnan(reference).any() and np.isfinite(reference).any()
+    np.testing.assert_allclose(compiled, reference, atol=1e-12, equal_nan=True)
+
+
+def test_a_crank_machine_on_a_full_pose_platform_keeps_its_translational_answers():
+    """The Delta robot's rods on a free platform: the parallelograms hold its orientation, so
+    the full-pose model reproduces the translational closed forms."""
+    delta = pkmkit.machine("delta")
+    full = _full_pose_delta()
+    positions = delta.home_pose + RNG.uniform(-0.1, 0.1, (20, 3))
+    q = delta.ik(positions)
+    poses = np.concatenate([positions, np.zeros((20, 3))], axis=1)
+    np.testing.assert_allclose(full.ik(poses), q, atol=1e-12)
+    np.testing.assert_allclose(full.fk(q)[:, :3], positions, atol=1e-10)
+    np.testing.assert_allclose(full.fk(q)[:, 3:], 0.0, atol=1e-10)

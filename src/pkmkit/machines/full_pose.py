@@ -278,8 +278,9 @@ class FullPoseMachine:
             legs = arr.astype(int)
         return legs[self.model.rod_leg]
 
-    def _guess_pose(self, q: np.ndarray) -> np.ndarray:
-        """First-order guess from home: the twist J(home)(q − q_home) applied to home."""
+    def first_order_pose(self, q: np.ndarray) -> np.ndarray:
+        """First-order guess ``(N, 6)`` of the pose of actuator coordinates ``q (N, n)``: the
+        twist J(home)(q − q_home) applied to the home pose (the engine's default start)."""
         bad = ~np.isfinite(q).all(axis=1)
         twist = (np.where(bad[:, None], self._home_q, q) - self._home_q) @ self._home_jacobian.T
         guess = np.empty((q.shape[0], 6))
@@ -355,7 +356,7 @@ class FullPoseMachine:
             guess_q = self._home_q + dq
         else:
             guess_q = _rows_like(q0, n, "q0", pb.shape[0])
-        guess_pose = self._guess_pose(guess_q)
+        guess_pose = self.first_order_pose(guess_q)
         u0 = np.concatenate([guess_q, guess_pose[:, 3:]], axis=1)
         u0[~_valid_rows(pb)] = np.nan
         engine_options.setdefault("compute_rank", False)
@@ -444,7 +445,7 @@ class FullPoseMachine:
             NoAssemblyError: a single q with no assembly reached from the guess.
         """
         qb, single = _checked_batch(q, self.n_actuators, "q")
-        guess = (self._guess_pose(qb) if x0 is None
+        guess = (self.first_order_pose(qb) if x0 is None
                  else _rows_like(x0, 6, "x0", qb.shape[0]))
         guess[~_valid_rows(qb)] = np.nan
         engine_options.setdefault("compute_rank", False)

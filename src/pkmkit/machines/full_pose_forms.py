@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkmkit.model.rods import CRANK, SLIDE, STRUT, RodModel
+from pkmkit.numerics import jit
 from pkmkit.solve.rod_closure import actuator_rates, rod_base_points
 from pkmkit.spatial.rotation import rotvec_to_matrix
 
@@ -80,8 +81,27 @@ class FullPoseForms:
     # ------------------------------------------------------------------ inverse
     def rod_coordinates(self, x: np.ndarray, branches: np.ndarray | None = None) -> np.ndarray:
         """The actuator coordinate each rod's closure implies ``(N, m)`` (NaN where the rod
-        cannot close); ``branches (m,)`` ±1 per rod (default: the working branches)."""
+        cannot close); ``branches (m,)`` ±1 per rod (default: the working branches).
+
+        Large batches run the compiled kernel :func:`pkmkit.machines.full_pose_kernels.
+        rod_coordinates` (the result is then a transposed view of ``(m, N)``); small ones the
+        NumPy reference :meth:`rod_coordinates_numpy`."""
         sigma = self.rod_branch if branches is None else branches
+        if jit.use_compiled(x.shape[0]):
+            from pkmkit.machines import full_pose_kernels
+
+            m = self.model
+            out = np.empty((m.n_rods, x.shape[0]))
+            full_pose_kernels.rod_coordinates(
+                np.ascontiguousarray(x, dtype=float), m.rod_kind.astype(np.int64), m.rod_base,
+                m.rod_platform, m.rod_axis, m.rod_pivot, self.crank_e1, self.crank_e2,
+                self.length_sq, m.rod_length, self.crank_radius, self.crank_offset,
+                np.asarray(sigma, dtype=float), BOUNDARY_TOL, out)
+            return out.T
+        return self.rod_coordinates_numpy(x, sigma)
+
+    def rod_coordinates_numpy(self, x: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+        """The NumPy reference of :meth:`rod_coordinates` (cache-sized chunks)."""
         out = np.empty((x.shape[0], self.model.n_rods))
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
             for start in range(0, x.shape[0], CHUNK):
@@ -128,19 +148,23 @@ class FullPoseForms:
         act = m.rod_actuator
         if m.n_rods == n_act and (act == np.arange(n_act)).all():
             return q_rod.copy(), np.zeros(q_rod.shape[0])
-        first = np.array([int(np.flatnonzero(act == k)[0]) for k in range(n_act)])
-        q = q_rod[:, first]
-        diff = q_rod - q[:, act]
-        angular = m.rod_kind == CRANK
-        diff[:, angular] = np.remainder(diff[:, angular] + np.pi, 2.0 * np.pi) - np.pi
-        counts = np.bincount(act, minlength=n_act)
-        mean_offset = np.zeros_like(q)
-        np.add.at(mean_offset.T, act, diff.T)
-        q = q + mean_offset / counts
-        spread = np.abs(q_rod - q[:, act])
-        spread[:, angular] = np.abs(np.remainder(spread[:, angular] + np.pi, 2.0 * np.pi)
-                                    - np.pi)
-        return q, spread.max(axis=1)
+        q = np.empty((q_rod.shape[0], n_act))
+        spread = np.zeros(q_rod.shape[0])
+        for k in range(n_act):
+            rods = np.flatnonzero(act == k)
+            first = q_rod[:, rods[0]]
+            if len(rods) == 1:
+                q[:, k] = first
+                continue
+            angular = m.rod_kind[rods[0]] == CRANK
+            diffs = [q_rod[:, j] - first for j in rods[1:]]
+            if angular:  # the same angle modulo a turn
+                diffs = [np.remainder(d + np.pi, 2.0 * np.pi) - np.pi for d in diffs]
+            mean_offset = sum(diffs) / len(rods)
+            q[:, k] = first + mean_offset
+            for d in [np.zeros_like(first), *diffs]:
+                np.maximum(spread, np.abs(d - mean_offset), out=spread)
+        return q, spread
 
     def shortfall(self, x: np.ndarray) -> np.ndarray:
         """``(N, m)``: by how far each rod is out of reach of the pose (≤ 0 when it reaches;

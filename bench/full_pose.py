@@ -1,0 +1,188 @@
+"""Benchmark: full-pose (6-DOF) rod machines, quiet and with a competing process.
+
+For each condition (``quiet``; ``loaded`` with one process keeping a core and the memory bus busy,
+:mod:`load`) and each figure, the timing and its baselines are interleaved and the median of
+``--repeat`` runs is reported:
+
+- **inverse model** — ``m.ik(X)`` on ``--poses`` full poses (closed form rod by rod, the compiled
+  kernel for large batches) of the hexapod and of the Verne-type module (full poses it reaches,
+  whose rods are checked for consistency): poses/s, the ratio to the same formula written per
+  pose in pure Python (``math``, on a 20 000-pose sample) and the ratio to a plain copy of the
+  input (``X.copy()``, the memory-bandwidth limit of a pass over the data);
+- **engine direct model** — ``m.fk(Q)`` (batched Levenberg–Marquardt over the six rods, from the
+  first-order guess) on ``--configurations`` hexapod configurations against
+  ``scipy.optimize.least_squares(method="lm")`` per configuration with the analytic Jacobian of
+  the same residual from the same guesses (on a 300-configuration sample); the largest
+  disagreement is printed;
+- **every assembly mode** — ``m.fk_all(q)`` of Dietmaier's general hexapod (40 real modes) and of
+  random general 6-6 configurations: seconds per configuration, count, worst residual.
+
+    python bench/full_pose.py [--poses 1000000] [--configurations 10000] [--repeat 5]
+                              [--load none|busy|both]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy
+from scipy.optimize import least_squares
+from scipy.spatial.transform import Rotation
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+from load import conditions
+
+import pkmkit
+from pkmkit.spatial import pose_from_angles
+
+
+def _median(fun, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fun()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def python_ik(model, poses: np.ndarray) -> list[list[float]]:
+    """The rod-by-rod inverse model written per pose in pure Python (slides and struts)."""
+    base, plat, axis = model.rod_base.tolist(), model.rod_platform.tolist(), model.rod_axis.tolist()
+    length = model.rod_length.tolist()
+    kinds = model.rod_kind.tolist()
+    out = []
+    for x, y, z, wx, wy, wz in poses.tolist():
+        theta = math.sqrt(wx * wx + wy * wy + wz * wz)
+        a = math.sin(theta) / theta if theta > 1e-12 else 1.0
+        b = (1.0 - math.cos(theta)) / theta**2 if theta > 1e-12 else 0.5
+        rot = [[1 - b * (wy * wy + wz * wz), b * wx * wy - a * wz, b * wx * wz + a * wy],
+               [b * wx * wy + a * wz, 1 - b * (wx * wx + wz * wz), b * wy * wz - a * wx],
+               [b * wx * wz - a * wy, b * wy * wz + a * wx, 1 - b * (wx * wx + wy * wy)]]
+        row = []
+        for j in range(len(kinds)):
+            p = [(x, y, z)[i] + sum(rot[i][c] * plat[j][c] for c in range(3)) for i in range(3)]
+            w = [p[i] - base[j][i] for i in range(3)]
+            if kinds[j] == 1:
+                row.append(math.sqrt(sum(v * v for v in w)) - length[j])
+            else:
+                s = sum(w[i] * axis[j][i] for i in range(3))
+                row.append(s + math.sqrt(length[j] ** 2 - sum(v * v for v in w) + s * s))
+        out.append(row)
+    return out
+
+
+def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
+    m.ik(poses[:5000])  # compile / warm up
+    sample = poses[:20000]
+    t_api, t_copy, t_loop = [], [], []
+    for _ in range(repeat):
+        t_api.append(_median(lambda: m.ik(poses), 1))
+        t_copy.append(_median(lambda: poses.copy(), 1))
+        t_loop.append(_median(lambda: python_ik(m.model, sample), 1) * len(poses) / len(sample))
+    api, copy, loop = (statistics.median(t) for t in (t_api, t_copy, t_loop))
+    first_rods = [int(np.flatnonzero(m.model.rod_actuator == k)[0])
+                  for k in range(m.n_actuators)]
+    loop_q = np.array(python_ik(m.model, sample[:2000]))[:, first_rods]
+    check = np.abs(loop_q - m.ik(sample[:2000])).max()
+    print(f"  IK {label:<14} {len(poses) / api / 1e6:6.2f} Mposes/s   ×loop {loop / api:6.0f}   "
+          f"time / copy {api / copy:5.1f}   (largest difference to the loop {check:.1e} m)")
+
+
+def engine_rows(m, q: np.ndarray, repeat: int) -> None:
+    model = m.model
+    guesses = np.array(m.fk(q, full_output=True).pose)  # reference answers
+    t_api = _median(lambda: m.fk(q), repeat)
+    sample = q[:300]
+    start = m.first_order_pose(sample)
+
+    def residual(u, qk):
+        rot = Rotation.from_rotvec(u[3:]).as_matrix()
+        rb = model.rod_platform @ rot.T
+        d = u[:3] + rb - model.rod_base
+        return np.linalg.norm(d, axis=1) - qk
+
+    def jac(u, qk):
+        rot = Rotation.from_rotvec(u[3:]).as_matrix()
+        rb = model.rod_platform @ rot.T
+        d = u[:3] + rb - model.rod_base
+        unit = d / np.linalg.norm(d, axis=1)[:, None]
+        return np.concatenate([unit, np.cross(rb, unit)], axis=1)  # ω = left increment, ≈ φ
+
+    def scipy_all():
+        out = []
+        for k in range(len(sample)):
+            out.append(least_squares(residual, start[k], jac=jac, args=(sample[k],),
+                                     method="lm", xtol=1e-14, ftol=1e-14).x)
+        return np.array(out)
+
+    t_scipy = _median(scipy_all, max(1, repeat // 2)) * len(q) / len(sample)
+    found = scipy_all()
+    gap = np.abs(found[:, :3] - guesses[:300, :3]).max()
+    print(f"  engine FK hexapod {len(q) / t_api / 1e3:8.1f} kconfigs/s   ×scipy "
+          f"{t_scipy / t_api:6.0f}   (largest position difference to scipy {gap:.1e} m)")
+
+
+def all_modes_rows(repeat: int) -> None:
+    general = pkmkit.machine("dietmaier-hexapod")
+    start = time.perf_counter()
+    modes = general.fk_all(general.home_q)
+    first = time.perf_counter() - start
+    t = _median(lambda: general.fk_all(general.home_q), repeat)
+    print(f"  every mode, Dietmaier: {int(modes.count)} real of {int(modes.n_finite)}, worst "
+          f"residual {np.nanmax(modes.residual):.1e} m, {t * 1000:.0f} ms per configuration "
+          f"(first call {first * 1000:.0f} ms)")
+    rng = np.random.default_rng(5)
+    base = rng.normal(size=(20, 6, 3))
+    plat = rng.normal(size=(20, 6, 3)) * 0.6
+    position = rng.normal(size=(20, 3)) + np.array([0.0, 0.0, 2.0])
+    pose = np.concatenate([position, rng.normal(size=(20, 3)) * 0.3], axis=1)
+    rot = Rotation.from_rotvec(pose[:, 3:]).as_matrix()
+    lengths = np.linalg.norm(pose[:, None, :3] + np.einsum("kab,kjb->kja", rot, plat) - base,
+                             axis=2)
+    from pkmkit.solve.six_rod_direct import six_rod_direct_all
+
+    t = _median(lambda: six_rod_direct_all(base, plat, lengths), max(1, repeat // 2))
+    sols = six_rod_direct_all(base, plat, lengths)
+    print(f"  every mode, 20 random 6-6 configurations (batched): {t / 20 * 1000:.0f} ms each, "
+          f"{int(sols.count.min())}–{int(sols.count.max())} real, finite {int(sols.n_finite.min())}"
+          f"–{int(sols.n_finite.max())}, worst residual {np.nanmax(sols.residual):.1e} m")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--poses", type=int, default=1_000_000)
+    parser.add_argument("--configurations", type=int, default=10_000)
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--load", choices=("none", "busy", "both"), default="both")
+    args = parser.parse_args()
+    print(f"pkmkit {pkmkit.__version__}, numpy {np.__version__}, scipy {scipy.__version__}, "
+          f"Python {platform.python_version()}, {platform.machine()}")
+    rng = np.random.default_rng(0)
+    hexapod = pkmkit.machine("gough-stewart")
+    verne = pkmkit.machine("verne")
+    poses = pose_from_angles(hexapod.home_pose[:3] + rng.uniform(-0.1, 0.1, (args.poses, 3)),
+                             rng.uniform(-8, 8, (args.poses, 3)), "xyz", degrees=True)
+    positions = rng.uniform(-0.15, 0.15, (min(args.poses, 20000), 3))
+    reached = verne.ik(positions, full_output=True).pose
+    verne_poses = np.ascontiguousarray(np.resize(reached, (args.poses, 6)))
+    q = hexapod.ik(poses[:args.configurations])
+    for label, context in conditions(args.load):
+        print(f"{label}:")
+        with context():
+            inverse_rows("hexapod", hexapod, poses, args.repeat)
+            inverse_rows("Verne (poses)", verne, verne_poses, args.repeat)
+            engine_rows(hexapod, q, args.repeat)
+            all_modes_rows(args.repeat)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,85 @@
+"""Compiled (Numba) kernel of the full-pose rod machines' closed-form inverse model.
+
+Imported lazily, only for large batches (see :mod:`pkmkit.numerics.jit`); the NumPy code of
+:meth:`pkmkit.machines.full_pose_forms.FullPoseForms.rod_coordinates` is the reference it is
+tested against. One fused loop per pose: the rotation matrix from the rotation vector
+(Rodrigues), then every rod's closed form — slide, strut or crank — with no temporaries, no
+BLAS, single-threaded (it holds beside other work and inside Dask workers).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+_OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
+
+
+@njit(**_OPTIONS)
+def rod_coordinates(x, kind, base, platform, axis, pivot, e1, e2, length_sq, length,
+                    crank_radius, crank_offset, sigma, boundary_tol, out):  # pragma: no cover
+    """Actuator coordinate implied by every rod ``out (m, N)`` for pose rows ``x (N, 6)``.
+
+    ``kind (m,)`` 0 slide, 1 strut, 2 crank; ``base``, ``platform``, ``axis``, ``pivot``,
+    ``e1``, ``e2`` ``(m, 3)``; ``length_sq``, ``length``, ``crank_radius``, ``crank_offset``,
+    ``sigma`` ``(m,)``; ``boundary_tol`` as in :mod:`pkmkit.machines.full_pose_forms`."""
+    size = x.shape[0]
+    m = kind.shape[0]
+    two_pi = 2.0 * math.pi
+    for k in range(size):
+        px, py, pz = x[k, 0], x[k, 1], x[k, 2]
+        wx, wy, wz = x[k, 3], x[k, 4], x[k, 5]
+        theta = math.sqrt(wx * wx + wy * wy + wz * wz)
+        if theta < 1e-8:  # series: R = I + [w] + [w]²/2
+            a = 1.0 - theta * theta / 6.0
+            b = 0.5 - theta * theta / 24.0
+        else:
+            a = math.sin(theta) / theta
+            b = (1.0 - math.cos(theta)) / (theta * theta)
+        r00 = 1.0 - b * (wy * wy + wz * wz)
+        r11 = 1.0 - b * (wx * wx + wz * wz)
+        r22 = 1.0 - b * (wx * wx + wy * wy)
+        r01 = b * wx * wy - a * wz
+        r10 = b * wx * wy + a * wz
+        r02 = b * wx * wz + a * wy
+        r20 = b * wx * wz - a * wy
+        r12 = b * wy * wz - a * wx
+        r21 = b * wy * wz + a * wx
+        for j in range(m):
+            bx, by, bz = platform[j, 0], platform[j, 1], platform[j, 2]
+            qx = px + r00 * bx + r01 * by + r02 * bz
+            qy = py + r10 * bx + r11 * by + r12 * bz
+            qz = pz + r20 * bx + r21 * by + r22 * bz
+            if kind[j] == 2:  # crank
+                vx, vy, vz = qx - pivot[j, 0], qy - pivot[j, 1], qz - pivot[j, 2]
+                vw = vx * axis[j, 0] + vy * axis[j, 1] + vz * axis[j, 2] - crank_offset[j]
+                v1 = vx * e1[j, 0] + vy * e1[j, 1] + vz * e1[j, 2]
+                v2 = vx * e2[j, 0] + vy * e2[j, 1] + vz * e2[j, 2]
+                perp = math.sqrt(v1 * v1 + v2 * v2)
+                r = crank_radius[j]
+                g = vw * vw + perp * perp + r * r - length_sq[j]
+                amplitude = 2.0 * r * perp
+                cosine = g / amplitude if amplitude > 0.0 else math.nan
+                if abs(g) - amplitude <= boundary_tol * length_sq[j]:
+                    cosine = min(1.0, max(-1.0, cosine))
+                if cosine > 1.0 or cosine < -1.0 or cosine != cosine:
+                    out[j, k] = math.nan
+                else:
+                    angle = math.atan2(v2, v1) + sigma[j] * math.acos(cosine)
+                    out[j, k] = (angle + math.pi) % two_pi - math.pi
+                continue
+            wxr, wyr, wzr = qx - base[j, 0], qy - base[j, 1], qz - base[j, 2]
+            dist_sq = wxr * wxr + wyr * wyr + wzr * wzr
+            if kind[j] == 1:  # strut
+                out[j, k] = math.sqrt(dist_sq) - length[j]
+                continue
+            s = wxr * axis[j, 0] + wyr * axis[j, 1] + wzr * axis[j, 2]
+            radicand = length_sq[j] - dist_sq + s * s
+            if radicand < 0.0:
+                if radicand > -boundary_tol * length_sq[j]:
+                    radicand = 0.0
+                else:
+                    out[j, k] = math.nan
+                    continue
+            out[j, k] = s + sigma[j] * math.sqrt(radicand)
