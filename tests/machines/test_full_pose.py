@@ -213,7 +213,8 @@ def test_verne_carriages_hang_the_rods_down_at_home(verne):
 
 def test_every_assembly_mode_of_a_general_hexapod():
     """Dietmaier's 1998 geometry (the dietmaier-hexapod preset): all 40 modes real, each closes
-    every rod and gives back the same strut lengths; the working one is where the engine goes from home."""
+    every rod and gives back the same strut lengths; the working one is where the engine goes
+    from home."""
     m = pkmkit.machine("dietmaier-hexapod")
     modes = m.fk_all(m.home_q)
     assert (modes.count, modes.n_finite, modes.status) == (40, 40, Status.OK)
@@ -289,3 +290,27 @@ def test_a_crank_machine_on_a_full_pose_platform_keeps_its_translational_answers
     np.testing.assert_allclose(full.ik(poses), q, atol=1e-12)
     np.testing.assert_allclose(full.fk(q)[:, :3], positions, atol=1e-10)
     np.testing.assert_allclose(full.fk(q)[:, 3:], 0.0, atol=1e-10)
+
+
+def test_positions_no_orientation_can_serve_are_refused_soundly():
+    """The Verne module's pre-test (dist(p, slide line) − |b| > L for some slide rod) flags only
+    positions that no rotation makes reachable: 3000 random rotations each leave a rod short,
+    and the positions it does not flag that the solver reaches are never flagged."""
+    from scipy.spatial.transform import Rotation
+
+    m = pkmkit.machine("verne")
+    rng = np.random.default_rng(7)
+    points = rng.uniform(-1.2, 1.2, (400, 3))
+    flagged = m._surely_unreachable(points)
+    assert 0 < flagged.sum() < len(points)
+    rot = Rotation.random(3000, random_state=1).as_matrix()
+    model = m.model
+    for p in points[flagged][:25]:
+        tips = p[None, None] + np.einsum("rij,kj->rki", rot, model.rod_platform)
+        w = tips - model.rod_base[None]
+        along = np.einsum("rki,ki->rk", w, model.rod_axis)
+        perp = np.sqrt(np.maximum((w * w).sum(axis=2) - along ** 2, 0.0))
+        assert ((perp - model.rod_length[None]) > 0).any(axis=1).all()
+    q = m.ik(points)
+    assert not np.isfinite(q[flagged]).any()
+    assert np.isfinite(q[~flagged]).all(axis=1).any()

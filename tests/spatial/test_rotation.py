@@ -22,3 +22,17 @@ def test_rotvec_matrices_are_rotations_and_compose():
 def test_small_rotation_is_identity_plus_skew():
     d = np.array([[1e-7, -2e-7, 3e-7]])
     np.testing.assert_allclose(rotvec_to_matrix(d)[0], np.eye(3) + skew(d[0]), atol=1e-13)
+
+
+def test_matrix_to_rotvec_keeps_good_rows_of_a_batch_with_failed_ones():
+    """A batch whose failed rows are NaN (a direct model that did not close) converts its good
+    rows and leaves NaN rows NaN — SciPy alone may raise on them (SVD did not converge)."""
+    from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
+
+    phi = np.array([[0.1, -0.2, 0.3], [0.0, 0.0, 0.0], [1.0, 2.0, -0.5]])
+    mats = rotvec_to_matrix(phi)
+    mats[1] = np.nan
+    mats[2, 0, 1] = np.inf
+    out = matrix_to_rotvec(mats)
+    np.testing.assert_allclose(out[0], phi[0], atol=1e-14)
+    assert np.isnan(out[1:]).all()

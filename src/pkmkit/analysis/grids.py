@@ -197,3 +197,70 @@ def make_grid(lower: Sequence[float], upper: Sequence[float], *, free: Sequence[
     return Grid(axes=axes, free=tuple(int(k) for k in free),
                 base=np.asarray(base, dtype=float).copy(), step=step, names=tuple(names),
                 upper=hi.copy())
+
+
+@dataclass(frozen=True)
+class PoseFrame:
+    """The pose vector a machine's workspace grids run over, and which part of it may vary.
+
+    Workspace grids vary the **position** and hold the orientation: a translational machine's
+    pose is its position; a hexapod's grid points are ``(x, y, z, rx, ry, rz)`` with the
+    rotation vector fixed (a constant-orientation workspace); a Verne-type module's are
+    positions ``(x, y, z)`` (its rods impose the orientation); a joint-chain machine's are
+    ``(x, y, z, i, j, k)`` with the tool axis fixed.
+
+    Attributes:
+        base: ``(w,)`` vector every grid point starts from (SI): the home position and the
+            orientation held.
+        names: ``(w,)`` names of its coordinates.
+        lower, upper: ``(p,)`` default box of the position coordinates ``0 … p-1`` (m).
+    """
+
+    base: np.ndarray
+    names: tuple[str, ...]
+    lower: np.ndarray
+    upper: np.ndarray
+
+    @property
+    def positions(self) -> int:
+        """Number of position coordinates (the ones a grid may vary)."""
+        return len(self.lower)
+
+
+def pose_frame(machine, orientation: Sequence[float] | None = None) -> PoseFrame:
+    """The :class:`PoseFrame` of ``machine``.
+
+    Args:
+        machine: any machine with ``home_pose``, ``pose_names`` and ``default_box()``.
+        orientation: the orientation held (SI: a rotation vector ``(3,)`` of a six-actuator
+            full-pose machine, a tool axis ``(3,)`` of a joint-chain machine; default the home
+            orientation).
+
+    Raises:
+        InputError: an orientation for a machine whose orientation is not free (a translational
+            machine, a Verne-type module), a wrong length, a non-finite value or a zero tool
+            axis.
+    """
+    home = np.asarray(machine.home_pose, dtype=float)
+    lower, upper = (np.asarray(v, dtype=float) for v in machine.default_box())
+    p = len(lower)
+    if p == len(home) or getattr(machine, "position_controlled", False):
+        if orientation is not None:
+            what = ("its rods impose its orientation" if p != len(home)
+                    else "it only translates")
+            raise InputError(f"machine {machine.id!r} takes no orientation: {what}")
+        return PoseFrame(base=home[:p].copy(), names=tuple(machine.pose_names[:p]),
+                         lower=lower, upper=upper)
+    base = home.copy()
+    if orientation is not None:
+        values = np.asarray(orientation, dtype=float).reshape(-1)
+        if values.shape != (len(home) - p,) or not np.isfinite(values).all():
+            raise InputError(f"the orientation needs {len(home) - p} finite values, got "
+                             f"{np.asarray(orientation).tolist()}")
+        if machine.pose_names[p:] == ("i", "j", "k"):
+            norm = float(np.linalg.norm(values))
+            if not norm > 0:
+                raise InputError("the tool axis must not be zero")
+            values = values / norm
+        base[p:] = values
+    return PoseFrame(base=base, names=tuple(machine.pose_names), lower=lower, upper=upper)

@@ -177,6 +177,12 @@ def index_values(machine: Machine, points: Any, name: str, *, scheduler: Any = N
 
 
 def _index_block(points: np.ndarray, machine: Machine, name: str) -> np.ndarray:
+    from pkmkit.analysis.workspace import is_joint_chain
+
+    if is_joint_chain(machine):
+        from pkmkit.analysis.chain_workspace import chain_index_values
+
+        return chain_index_values(machine, points, name)
     return np.asarray(scalar_index(indices(machine, points), name), dtype=float)
 
 

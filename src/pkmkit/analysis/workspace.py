@@ -165,7 +165,18 @@ def _concatenate(parts: list[PoseEvaluation]) -> PoseEvaluation:
         masks={k: np.concatenate([p.masks[k] for p in parts]) for k in parts[0].masks})
 
 
+def is_joint_chain(machine: Any) -> bool:
+    """A joint-chain machine (numerical inverse model, closure-based velocity model)."""
+    from pkmkit.machines.joint_chain import JointChainMachine
+
+    return isinstance(machine, JointChainMachine)
+
+
 def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
+    if is_joint_chain(machine):
+        from pkmkit.analysis.chain_workspace import evaluate_chain_poses
+
+        return evaluate_chain_poses(machine, points, criteria)
     inv = machine.ik(points, full_output=True)
     q = inv.q
     reachable = inv.status == Status.OK
@@ -358,6 +369,18 @@ class WorkspaceMap:
         out[tuple(slice(s, s + k) for s in start)] = True
         return out
 
+    def faces_reached(self) -> list[str]:
+        """Faces of the grid's box the feasible set touches, e.g. ``["x-", "z+"]``: where the
+        workspace may extend beyond the box studied (its measure is then a lower bound)."""
+        out = []
+        for axis, k in enumerate(self.grid.free):
+            name = self.grid.names[k]
+            if self.feasible.take(0, axis=axis).any():
+                out.append(f"{name}-")
+            if self.feasible.take(-1, axis=axis).any():
+                out.append(f"{name}+")
+        return out
+
 
 def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = None, *,
                       refine: bool = False, scheduler: Any = None) -> WorkspaceMap:
@@ -376,7 +399,8 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     if criteria.connected:
         feasible, reference = _connected_part(feasible, grid, machine.home_pose)
     box = largest_inscribed_box(feasible, grid)
-    if refine and box is not None and box.side > 0:
+    # a joint-chain machine's criteria have no smooth slack (numerical inverse): grid box only
+    if refine and box is not None and box.side > 0 and not is_joint_chain(machine):
         box = refine_box(machine, box, criteria, grid)
     box_check = None
     if box is not None and box.side > 0:
@@ -405,7 +429,7 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     studied bounds the answer."""
     free = list(grid.free)
     samples = check_region_samples(len(free))
-    length = float(np.max(machine.model.leg_length))
+    length = study_length(machine)
 
     def full_points(c: np.ndarray, half: float, offsets: np.ndarray) -> np.ndarray:
         points = np.tile(box.center, (len(offsets), 1))
@@ -461,6 +485,20 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     lower[free] -= half
     return InscribedBox(side=float(2.0 * half), center=middle, lower=lower,
                         points_per_side=box.points_per_side)
+
+
+def study_length(machine: Machine) -> float:
+    """A length (m) that sizes the machine: its longest leg or rod, else (struts whose length
+    is the actuator, a hexapod's) its longest finite stroke end, else 1 m. It scales the
+    length slacks of :func:`criteria_slack` and the search of :func:`feasible_interval`."""
+    leg = float(np.max(machine.model.leg_length, initial=0.0))
+    if leg > 0:
+        return leg
+    q_max = np.asarray(machine.model.q_max, dtype=float)
+    quantities = getattr(machine.model, "actuator_quantities", ("length",) * q_max.size)
+    ends = [abs(v) for v, kind in zip(q_max, quantities, strict=False)
+            if kind == "length" and np.isfinite(v)]
+    return max(ends, default=0.0) or 1.0
 
 
 def _surface_offsets(d: int, per_edge: int) -> np.ndarray:
@@ -690,6 +728,10 @@ def _fmt(p: np.ndarray) -> str:
 def _worst(name: str, bad: np.ndarray, points: np.ndarray, ev: PoseEvaluation,
            criteria: Criteria, machine: Machine, names) -> str:
     idx = np.flatnonzero(bad)
+    if is_joint_chain(machine) and name in ("reachable", "strokes"):
+        what = ("the inverse model closes no loop there" if name == "reachable" else
+                "a joint (actuator or passive) leaves its range")
+        return f"at {_fmt(points[idx[0]])}: {what} ({len(idx)} samples)"
     if name == "reachable":
         short = machine._closed.shortfall(points[idx])
         k = int(np.nanargmax(short.max(axis=1)))
@@ -733,7 +775,7 @@ def feasible_interval(machine: Machine, point: Any, direction: Any, criteria: Cr
     """
     point = np.asarray(point, dtype=float)
     direction = np.asarray(direction, dtype=float)
-    reach = reach or 2.0 * float(machine.model.leg_length.max())
+    reach = reach or 2.0 * study_length(machine)
     loose = Criteria(bounds=criteria.bounds, kappa_max=criteria.kappa_max,
                      strokes=criteria.strokes, q_limits=criteria.q_limits, connected=False,
                      tol=criteria.tol, rtol=0.0)  # the ends are located exactly

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import click
 import numpy as np
 
-from pkmkit.analysis.grids import Grid, make_grid
+from pkmkit.analysis.chain_workspace import CHAIN_INDICES
+from pkmkit.analysis.grids import Grid, PoseFrame, make_grid, pose_frame
 from pkmkit.analysis.indices import SCALAR_INDICES, index_values, indices
 from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.workspace import (
@@ -27,7 +30,9 @@ from pkmkit.plot.maps import (
     plot_workspace,
 )
 
+from .coordinates import family, parse_numbers, pose_from_cli, pose_to_cli, pose_widths
 from .options import (
+    ANGLES_OPTION,
     JSON_OPTION,
     SET_OPTION,
     UNITS_OPTION,
@@ -42,6 +47,10 @@ BOUNDS_OPTION = click.option(
     "--bounds", metavar="LO,HI",
     help="Bounds on every velocity transmission factor, e.g. 0.5,2.")
 KAPPA_OPTION = click.option("--kappa-max", type=float, help="Largest admissible condition number.")
+ORIENTATION_OPTION = click.option(
+    "--orientation", "orientation_text", metavar="A,B,C|I,J,K",
+    help="Orientation held over the grid (default: home): angles in degrees (--angles "
+         "convention) for a full-pose machine, the tool axis for a joint-chain machine.")
 RESOLUTION_OPTION = click.option(
     "--resolution", type=click.IntRange(5, 2001), default=None,
     help="Grid points along the longest side (default 201 in 2-D, 61 in 3-D).")
@@ -79,54 +88,109 @@ def parse_bounds(text: str | None) -> tuple[float, float] | None:
     return values[0], values[1]
 
 
-def parse_slice(machine: Machine, text: str | None, scale: float) -> tuple[int, float] | None:
-    """``"z=0.2"`` → (coordinate index, value in m)."""
+def parse_orientation(machine, text: str | None, convention: str) -> np.ndarray | None:
+    """``--orientation``: the orientation a workspace grid holds — angles ``A,B,C`` in degrees
+    (``--angles`` convention) for a full-pose machine, a tool axis ``I,J,K`` for a joint-chain
+    machine — as a rotation vector / unit axis; None for the home orientation."""
     if text is None:
         return None
-    if machine.dims == 2:
+    values = np.asarray(_numbers(text, "--orientation"))
+    if values.size != 3:
+        raise InputError(f"--orientation needs 3 comma-separated values, got {text!r}")
+    if family(machine) == "full-pose" and not machine.position_controlled:
+        from pkmkit.spatial.poses import pose_from_angles
+
+        return pose_from_angles(np.zeros(3), values, convention, degrees=True)[3:]
+    return values
+
+
+def machine_frame(machine, orientation: np.ndarray | None = None) -> PoseFrame:
+    """:func:`pose_frame` of a machine, refusing a family without pose-space workspaces."""
+    return pose_frame(machine, orientation)
+
+
+def parse_slice(frame: PoseFrame, text: str | None, scale: float) -> tuple[int, float] | None:
+    """``"z=0.2"`` → (coordinate index, value in m) of one of the frame's positions."""
+    if text is None:
+        return None
+    if frame.positions == 2:
         raise InputError("--slice is for spatial machines; a planar machine is its own plane")
+    names = frame.names[:frame.positions]
     name, sep, value = text.partition("=")
     name = name.strip()
-    if not sep or name not in machine.pose_names:
-        raise InputError(f"--slice expects NAME=VALUE with NAME in "
-                         f"{', '.join(machine.pose_names)}, got {text!r}")
+    if not sep or name not in names:
+        raise InputError(f"--slice expects NAME=VALUE with NAME in {', '.join(names)} (the "
+                         f"orientation is held with --orientation), got {text!r}")
     values = _coordinates(value, "--slice", scale)
     if values.size != 1:
         raise InputError(f"--slice expects one value after {name}=, got {value!r}")
-    return machine.pose_names.index(name), float(values[0])
+    return names.index(name), float(values[0])
 
 
-def build_grid(machine: Machine, box_text: str | None, slice_: tuple[int, float] | None,
+def build_grid(frame: PoseFrame, box_text: str | None, slice_: tuple[int, float] | None,
                scale: float, resolution: int | None) -> Grid:
-    """Grid over ``--box``/``--range`` (or the machine's default box), optionally a slice."""
-    lower, upper = machine.default_box()
-    free = list(range(machine.dims))
-    base = machine.home_pose.copy()
+    """Grid over ``--box``/``--range`` (or the machine's default box) of the frame's
+    positions, optionally a slice; the orientation is the frame's."""
+    lower, upper = frame.lower, frame.upper
+    free = list(range(frame.positions))
+    base = frame.base.copy()
+    names = frame.names
     if slice_ is not None:
         axis, value = slice_
         free.remove(axis)
         base[axis] = value
     if box_text is not None:
         values = _coordinates(box_text, "--box/--range", scale)
-        if values.size == 2 * machine.dims and slice_ is not None:
+        if values.size == 2 * frame.positions and slice_ is not None:
             # a full box with a slice: the plane must cut the box
             axis, value = slice_
             a_lo, a_hi = values.reshape(-1, 2)[axis]
-            name = machine.pose_names[axis]
+            name = names[axis]
             if not a_lo <= value <= a_hi:
                 raise InputError(f"--slice {name} = {value / scale:g} lies outside the box's "
                                  f"{name} range [{a_lo / scale:g}, {a_hi / scale:g}]")
             values = values.reshape(-1, 2)[free].ravel()
         if values.size != 2 * len(free):
-            names = ",".join(f"{machine.pose_names[k].upper()}MIN,{machine.pose_names[k].upper()}"
-                             "MAX" for k in free)
-            raise InputError(f"the box needs {2 * len(free)} values: {names}")
+            text = ",".join(f"{names[k].upper()}MIN,{names[k].upper()}MAX" for k in free)
+            raise InputError(f"the box needs {2 * len(free)} values: {text}")
         pairs = values.reshape(-1, 2)
         lower, upper = lower.copy(), upper.copy()
         lower[free], upper[free] = pairs[:, 0], pairs[:, 1]
     resolution = resolution or (201 if len(free) == 2 else 61)
-    return make_grid(lower[free], upper[free], free=free, base=base, names=machine.pose_names,
+    return make_grid(lower[free], upper[free], free=free, base=base, names=names,
                      resolution=resolution)
+
+
+#: Times the default box may be widened to hold the workspace (each time by half its extent
+#: on every face the workspace reaches).
+MAX_WIDENINGS = 4
+
+
+def enclosing_frame(m, frame: PoseFrame, criteria: Criteria,
+                    slice_: tuple[int, float] | None, scale: float, scheduler=None,
+                    resolution: int | None = None) -> tuple[PoseFrame, int]:
+    """The frame with its default box widened until the workspace (on a coarse grid) touches
+    none of its faces, at most :data:`MAX_WIDENINGS` times: ``(frame, times widened)``. A
+    machine's default box is a region of study; a workspace study wants all of the
+    workspace. The coarse grid has 25 points along the longest side in 3-D, 61 in 2-D (fewer
+    if ``resolution`` asks for fewer)."""
+    coarse = 25 if frame.positions == 3 and slice_ is None else 61
+    coarse = min(coarse, resolution or coarse)
+    for widened in range(MAX_WIDENINGS + 1):
+        grid = build_grid(frame, None, slice_, scale, coarse)
+        faces = compute_workspace(m, grid, criteria, scheduler=scheduler).faces_reached()
+        if not faces or widened == MAX_WIDENINGS:
+            return frame, widened
+        lower, upper = frame.lower.copy(), frame.upper.copy()
+        extent = upper - lower
+        for face in faces:
+            k = frame.names.index(face[:-1])
+            if face.endswith("-"):
+                lower[k] = max(lower[k] - extent[k] / 2, -MAX_COORDINATE)
+            else:
+                upper[k] = min(upper[k] + extent[k] / 2, MAX_COORDINATE)
+        frame = replace(frame, lower=lower, upper=upper)
+    return frame, MAX_WIDENINGS
 
 
 def _criteria(bounds, kappa_max, no_strokes) -> Criteria:
@@ -146,23 +210,37 @@ def register(cli: click.Group) -> None:
 @click.command()
 @click.argument("machine_name", metavar="MACHINE")
 @SET_OPTION
-@click.option("--pose", help="Platform position X,Y[,Z] (default: the home pose).")
+@click.option("--pose", help="Platform position X,Y[,Z], or X,Y,Z,A,B,C for a full-pose machine "
+              "(angles in degrees, --angles convention; default: the home pose).")
 @click.option("--isotropy-tol", type=float, default=1e-9, show_default=True,
               help="The pose counts as isotropic when κ ≤ 1 + this tolerance.")
+@ANGLES_OPTION
 @UNITS_OPTION
 @JSON_OPTION
-def analyze(machine_name, assignments, pose, isotropy_tol, units, as_json):
+def analyze(machine_name, assignments, pose, isotropy_tol, convention, units, as_json):
     """All kinetostatic indices at a pose: transmission factors, conditioning, ellipsoid,
     distances to singularities."""
     m = resolve_machine(machine_name, assignments, units)
+    if family(m) == "chain":
+        raise InputError(f"analyze reads rod machines' A and B matrices; for the joint-chain "
+                         f"machine {m.id!r} run `pkmkit jacobian {machine_name} --pose "
+                         "X,Y,Z,I,J,K` (or --q): its Jacobian, singular values, condition "
+                         "number and closure rank")
     scale = length_scale(units)
     if not (np.isfinite(isotropy_tol) and isotropy_tol >= 0):
         raise InputError(f"--isotropy-tol must be a finite number >= 0, got {isotropy_tol}")
-    x = m.home_pose if pose is None else parse_vector(pose, m.dims, "--pose", units)
+    if pose is None:
+        x = m.home_pose
+    elif family(m) == "translational":
+        x = parse_vector(pose, m.dims, "--pose", units)
+    else:
+        x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
+                          convention)[0]
+    shown = x / scale if x.size <= 3 else pose_to_cli(x, m, units, convention)[0]
     ind = indices(m, x, ellipsoids=True, isotropy_tol=isotropy_tol)
     jac = m.jacobian(x)
     payload = {
-        "machine": m.id, "units": units, "pose": x / scale, "q": jac.q / scale,
+        "machine": m.id, "units": units, "pose": shown, "q": jac.q / scale,
         "velocity_factors": ind.velocity_factors, "force_factors": ind.force_factors,
         "condition": ind.condition, "inverse_condition": ind.inverse_condition,
         "isotropic": bool(ind.isotropic), "isotropy_tol": isotropy_tol,
@@ -175,7 +253,8 @@ def analyze(machine_name, assignments, pose, isotropy_tol, units, as_json):
     if as_json:
         emit_json(payload)
         return
-    click.echo(f"{m.name}: pose {fmt(x / scale)} {units}, q {fmt(jac.q / scale)} {units}")
+    angles = f" (angles {convention}, deg)" if len(shown) == 6 else ""
+    click.echo(f"{m.name}: pose {fmt(shown)} {units}{angles}, q {fmt(jac.q / scale)} {units}")
     click.echo(f"  velocity transmission factors: {fmt(ind.velocity_factors)}")
     click.echo(f"  force transmission factors:    {fmt(ind.force_factors)}")
     click.echo(f"  condition number {_condition_text(float(ind.condition))} (inverse "
@@ -183,7 +262,7 @@ def analyze(machine_name, assignments, pose, isotropy_tol, units, as_json):
                f"{isotropy_tol:g})")
     click.echo(f"  distance to parallel singularity {fmt(ind.parallel_distance)}, to serial "
                f"singularity {fmt(ind.serial_distance)}; status {jac.status}")
-    for k in range(m.dims):
+    for k in range(len(ind.ellipsoid_axes)):
         click.echo(f"  ellipsoid axis {k + 1}: {ind.ellipsoid_axes[k]:.6g} along "
                    f"{fmt(ind.ellipsoid_directions[:, k])}")
 
@@ -205,6 +284,8 @@ def _condition_text(kappa: float) -> str:
 @click.option("--slice", "slice_text", help="Plane of a spatial machine, e.g. z=0.2.")
 @click.option("--range", "range_text", metavar="AMIN,AMAX,BMIN,BMAX",
               help="Extent of the two free coordinates (default: the machine's box).")
+@ORIENTATION_OPTION
+@ANGLES_OPTION
 @RESOLUTION_OPTION
 @click.option("--scale", "color_scale", type=click.Choice(["auto", "linear", "log"]),
               default="auto", show_default=True,
@@ -215,15 +296,22 @@ def _condition_text(kappa: float) -> str:
 @SCHEDULER_OPTION
 @UNITS_OPTION
 @JSON_OPTION
-def map_cmd(machine_name, assignments, index_name, slice_text, range_text, resolution,
-            color_scale, out, scheduler, units, as_json):
+def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orientation_text,
+            convention, resolution, color_scale, out, scheduler, units, as_json):
     """Iso-contours of an index (or actuator coordinates) over a plane."""
     check_figure_path(out)
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
-    if m.dims == 3 and slice_text is None:
+    if family(m) == "chain" and index_name not in (*CHAIN_INDICES, "actuators"):
+        raise InputError(f"index {index_name!r} is not defined for a joint-chain machine; its "
+                         f"indices: {', '.join(CHAIN_INDICES)}, actuators")
+    frame = machine_frame(m, parse_orientation(m, orientation_text, convention))
+    if frame.positions == 3 and slice_text is None:
         raise InputError("a spatial machine needs --slice NAME=VALUE (e.g. --slice z=0)")
-    grid = build_grid(m, range_text, parse_slice(m, slice_text, scale), scale, resolution)
+    slice_ = parse_slice(frame, slice_text, scale)
+    if range_text is None:  # the default box, widened to hold the plane's workspace
+        frame = enclosing_frame(m, frame, Criteria(), slice_, scale, scheduler, resolution)[0]
+    grid = build_grid(frame, range_text, slice_, scale, resolution)
     points = grid.points
     q = m.ik(points)
     reachable = np.isfinite(q).all(axis=1)
@@ -263,23 +351,27 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
     box = wmap.inscribed
     crit = wmap.criteria
     factor_box = wmap.factor_range()
+    p = min(grid.base.size, 3)  # the position coordinates (the orientation is held)
     summary = {
         "machine": m.id, "units": units,
         "grid": {"free": list(grid.free_names),
                  "lower": [float(a[0]) / scale for a in grid.axes],
                  "upper": [float(a[-1]) / scale for a in grid.axes],
                  "step": grid.step / scale, "shape": list(grid.shape),
-                 "fixed": {m.pose_names[k]: float(grid.base[k]) / scale
-                           for k in range(m.dims) if k not in grid.free}},
+                 "fixed": {grid.names[k]: float(grid.base[k]) / scale
+                           for k in range(min(grid.base.size, 3)) if k not in grid.free}},
         "criteria": {"bounds": crit.bounds, "kappa_max": crit.kappa_max,
                      "strokes": crit.strokes, "connected": crit.connected},
         ("area" if two_d else "volume"): wmap.measure / scale ** len(grid.free),
         "feasible_points": int(wmap.feasible.sum()),
         "points_per_criterion": {k: int(v.sum()) for k, v in wmap.masks.items()},
         "reference": wmap.reference,
+        "faces_reached": wmap.faces_reached(),
         "inscribed": None if box is None else {
-            "side": box.side / scale, "center": box.center / scale, "lower": box.lower / scale,
-            "rtol": INSCRIBED_RTOL, "samples_per_edge": check_region_samples(len(grid.free))},
+            "side": box.side / scale, "center": box.center[:p] / scale,
+            "lower": box.lower[:p] / scale,
+            "rtol": None if family(m) == "chain" else INSCRIBED_RTOL,
+            "samples_per_edge": check_region_samples(len(grid.free))},
         "index_range": list(factor_box),
         "workspace_index_range": list(wmap.factor_range(wmap.feasible)),
         "global_conditioning_index": wmap.global_conditioning_index(),
@@ -300,6 +392,8 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
 @click.option("--box", "box_text", metavar="XMIN,XMAX,YMIN,YMAX[,ZMIN,ZMAX]",
               help="Region studied (default: the machine's box).")
 @click.option("--slice", "slice_text", help="Study a plane of a spatial machine, e.g. z=0.")
+@ORIENTATION_OPTION
+@ANGLES_OPTION
 @click.option("--no-strokes", is_flag=True, help="Ignore the actuator strokes.")
 @click.option("--cube", "cube", type=float, metavar="SIDE",
               help="Check a prescribed square/cube of this side (needs --center).")
@@ -309,8 +403,9 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
 @SCHEDULER_OPTION
 @UNITS_OPTION
 @JSON_OPTION
-def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text, no_strokes,
-              cube, center_text, resolution, out, scheduler, units, as_json):
+def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text,
+              orientation_text, convention, no_strokes, cube, center_text, resolution, out,
+              scheduler, units, as_json):
     """Workspace over a box or a plane: area/volume, largest inscribed square/cube, transmission
     factors inside it, global conditioning index, and (with --cube/--center) whether a
     prescribed one is feasible (in the --slice plane when one is given)."""
@@ -319,15 +414,21 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
     criteria = _criteria(bounds, kappa_max, no_strokes)
-    slice_ = parse_slice(m, slice_text, scale)
-    grid = build_grid(m, box_text, slice_, scale, resolution)
+    frame = machine_frame(m, parse_orientation(m, orientation_text, convention))
+    slice_ = parse_slice(frame, slice_text, scale)
+    grid = build_grid(frame, box_text, slice_, scale, resolution)
     center = None
     if cube is not None or center_text is not None:
         if cube is None or center_text is None:
             raise InputError("--cube and --center go together")
         if not (np.isfinite(cube) and cube > 0):
             raise InputError(f"--cube must be a side > 0, got {cube:g}")
-        center = _region_center(m, center_text, slice_, scale)
+        center = _region_center(frame, center_text, slice_, scale)
+    widened = 0
+    if box_text is None:
+        frame, widened = enclosing_frame(m, frame, criteria, slice_, scale, scheduler,
+                                         resolution)
+        grid = build_grid(frame, None, slice_, scale, resolution)
     wmap = compute_workspace(m, grid, criteria, refine=True, scheduler=scheduler)
     if not wmap.masks["reachable"].any():
         raise InputError("no pose of the box is reachable; choose another --box or --slice")
@@ -336,6 +437,9 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
         raise InputError(f"no pose of the box satisfies every criterion (points passing each: "
                          f"{counts} of {grid.size})")
     summary = workspace_summary(m, wmap, scale, units)
+    summary["grid"]["default_box_widened"] = widened
+    if frame.positions < len(frame.base):
+        summary["orientation"] = _orientation_fields(m, frame, convention)
     if center is not None:
         check = check_region(m, center, cube * scale, criteria, free=grid.free)
         per_edge = check_region_samples(len(grid.free))
@@ -353,34 +457,49 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
     _print_workspace(m, summary, units)
 
 
-def _region_center(m: Machine, text: str, slice_: tuple[int, float] | None,
+def _region_center(frame: PoseFrame, text: str, slice_: tuple[int, float] | None,
                    scale: float) -> np.ndarray:
-    """``--center``: every pose coordinate, or with ``--slice`` the free ones only; a full
-    centre must lie in the slice plane (the square is checked in that plane)."""
+    """``--center``: every position coordinate, or with ``--slice`` the free ones only; a full
+    centre must lie in the slice plane (the square is checked in that plane). The orientation
+    is the frame's."""
     values = _coordinates(text, "--center", scale)
+    p = frame.positions
+    center = frame.base.copy()
     if slice_ is None:
-        if values.size != m.dims:
-            raise InputError(f"--center needs {m.dims} comma-separated values, got {values.size}")
-        return values
+        if values.size != p:
+            raise InputError(f"--center needs {p} comma-separated values, got {values.size}")
+        center[:p] = values
+        return center
     axis, value = slice_
-    free = [k for k in range(m.dims) if k != axis]
-    name = m.pose_names[axis]
-    if values.size == m.dims:
+    free = [k for k in range(p) if k != axis]
+    name = frame.names[axis]
+    if values.size == p:
         if not np.isclose(values[axis], value, rtol=1e-12, atol=1e-12):
             raise InputError(f"--center {name} = {values[axis] / scale:g} is not in the --slice "
                              f"plane {name} = {value / scale:g}; give the plane's value or only "
                              f"the {len(free)} in-plane coordinates")
-        values = values.copy()
-        values[axis] = value
-        return values
+        center[:p] = values
+        center[axis] = value
+        return center
     if values.size != len(free):
         raise InputError(f"--center with --slice needs the {len(free)} in-plane coordinates "
-                         f"({', '.join(m.pose_names[k] for k in free)}) or all {m.dims}, got "
+                         f"({', '.join(frame.names[k] for k in free)}) or all {p}, got "
                          f"{values.size}")
-    center = np.empty(m.dims)
     center[free] = values
     center[axis] = value
     return center
+
+
+def _orientation_fields(m, frame: PoseFrame, convention: str) -> dict:
+    """JSON fields of the orientation a grid holds."""
+    held = frame.base[frame.positions:]
+    if family(m) == "chain":
+        return {"tool_axis": held}
+    from pkmkit.spatial.poses import pose_to_angles
+
+    angles = pose_to_angles(frame.base, convention, degrees=True)[1]
+    return {"rotation_vector": held, "angles_deg": np.asarray(angles).ravel(),
+            "convention": convention}
 
 
 def _print_workspace(m: Machine, s: dict, units: str) -> None:
@@ -388,16 +507,30 @@ def _print_workspace(m: Machine, s: dict, units: str) -> None:
     power = 2 if what == "area" else 3
     click.echo(f"{m.name}: workspace over {'-'.join(s['grid']['free'])} "
                f"(step {s['grid']['step']:.4g} {units}, kept: {s['reference']})")
+    if s["grid"].get("default_box_widened"):
+        g = s["grid"]
+        click.echo(f"  default box widened {g['default_box_widened']} time(s) to hold the "
+                   f"workspace: {fmt(g['lower'])} to {fmt(g['upper'])} {units}")
     click.echo(f"  {what}: {s[what]:.6g} {units}^{power} "
                f"({s['feasible_points']} of {int(np.prod(s['grid']['shape']))} points)")
+    if "orientation" in s:
+        o = s["orientation"]
+        held = (f"tool axis {fmt(o['tool_axis'])}" if "tool_axis" in o else
+                f"angles ({o['convention']}) {fmt(o['angles_deg'])} deg")
+        click.echo(f"  orientation held over the grid: {held}")
+    if s["faces_reached"]:
+        click.echo(f"  the workspace reaches the box's faces {', '.join(s['faces_reached'])}: "
+                   f"it extends beyond the box studied (widen --box); the {what} is a lower "
+                   "bound")
     box = s["inscribed"]
     if box is None:
         click.echo("  no inscribed square/cube")
     else:
+        how = ("on the grid, within one step" if box["rtol"] is None else
+               f"centre and side refined to {box['rtol']:.0e} of the side")
         click.echo(f"  largest inscribed {'square' if power == 2 else 'cube'}: side "
-                   f"{box['side']:.6g} {units}, centre {fmt(box['center'])} {units} (centre and "
-                   f"side refined to {box['rtol']:.0e} of the side, {box['samples_per_edge']} "
-                   "checks per edge)")
+                   f"{box['side']:.6g} {units}, centre {fmt(box['center'])} {units} ({how}, "
+                   f"{box['samples_per_edge']} checks per edge)")
         click.echo(f"  transmission factors inside it: {fmt(s['index_range'])}")
     click.echo(f"  transmission factors over the workspace: {fmt(s['workspace_index_range'])}")
     click.echo(f"  global conditioning index (mean 1/κ over the workspace): "

@@ -363,6 +363,10 @@ def _compatibility(m, sel, orientation_only, thesis, configurations, rtol, seed,
         click.echo(f"  compatible subspace: dimension {result.compatible_dimension} of "
                    f"{len(result.names)}")
         gap = summary["singular_value_gap"]
+        if not result.conditions and result.compatible_dimension == len(result.names):
+            click.echo("  no closure constrains the defects (hyperstatism 0): every defect is "
+                       "compatible")
+            return summary
         click.echo(f"  singular values at the rank: {gap['kept']:.3g} kept, "
                    f"{gap['dropped']:.3g} dropped (ratio {gap['ratio']:.3g}"
                    f"{'' if gap['clear'] else ', NOT a clear gap'})")

@@ -20,7 +20,7 @@ from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
 from pkmkit.machines.registry import machines as builtin_ids
 from pkmkit.model.parameters import length_scale
-from pkmkit.spatial.rotation import DEFAULT_CONVENTION, resolve_convention
+from pkmkit.spatial.rotation import resolve_convention
 from pkmkit.status import Status
 
 from .batch import batch_options, run_batch, status_names
@@ -28,8 +28,10 @@ from .coordinates import actuator_scales, actuator_units, family, parse_actuator
 from .describe import describe_machine, print_description
 from .lazy import LazyGroup
 from .options import (
+    ANGLES_OPTION,
     JSON_OPTION,
     SET_OPTION,
+    TOOL_LENGTH_OPTION,
     UNITS_OPTION,
     emit_json,
     fmt,
@@ -77,17 +79,6 @@ def _parse_branches(text: str | None, m: Machine):
         return [int(v) for v in text.split(",")]
     except ValueError:
         raise InputError(f"--branches expects comma-separated +1/-1 values, got {text!r}") from None
-
-
-ANGLES_OPTION = click.option(
-    "--angles", "convention", default=DEFAULT_CONVENTION, show_default=True,
-    help="Angle convention of 6-DOF poses (A,B,C in degrees): xyz = fixed axes x, y, z "
-         "(R = Rz(C) Ry(B) Rx(A)); upper case for moving axes (ZYX, ZYZ, ...), or rpy, ypr, "
-         "euler-zyz, ...")
-TOOL_LENGTH_OPTION = click.option(
-    "--tool-length", type=float, default=None,
-    help="Tool length along the tool axis (joint-chain machines), in --units; default the "
-         "machine's.")
 
 
 @cli.command("machines")

@@ -16,6 +16,7 @@ from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import load, machine, preset_path
 from pkmkit.model.machine_file import SUFFIXES
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
+from pkmkit.spatial.rotation import DEFAULT_CONVENTION
 
 UNITS_OPTION = click.option(
     "--units",
@@ -34,6 +35,15 @@ SET_OPTION = click.option(
     "--set A=0,0 --set angles=90,210,330.",
 )
 JSON_OPTION = click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
+ANGLES_OPTION = click.option(
+    "--angles", "convention", default=DEFAULT_CONVENTION, show_default=True,
+    help="Angle convention of 6-DOF poses (A,B,C in degrees): xyz = fixed axes x, y, z "
+         "(R = Rz(C) Ry(B) Rx(A)); upper case for moving axes (ZYX, ZYZ, ...), or rpy, ypr, "
+         "euler-zyz, ...")
+TOOL_LENGTH_OPTION = click.option(
+    "--tool-length", type=float, default=None,
+    help="Tool length along the tool axis (joint-chain machines), in --units; default the "
+         "machine's.")
 
 #: Exit status when the command ran but some rows or samples were flagged (bad batch rows,
 #: exceeded actuator limits): the output is written and usable.

@@ -269,6 +269,29 @@ class JointChainMachine:
         out.update({k: np.asarray(v, dtype=float) for k, v in self.extra_poses.items()})
         return out
 
+    def default_box(self, per_axis: int = 5) -> tuple[np.ndarray, np.ndarray]:
+        """Tool-point region ``(lower (3,), upper (3,))`` (m) for workspace studies: the box of
+        the tool points reached with the legs' actuators on a ``per_axis``-point grid of their
+        strokes (±3 % of home where a stroke is unlimited) and the head at home, widened by
+        10 % of its extent on each side (at least 1 cm)."""
+        act = np.flatnonzero(self.model.actuated)
+        loop = [j for j, v in enumerate(act) if self.model.loop_variables[v]]
+        home = self.home_q
+        axes = []
+        for j in loop:
+            lo, hi = self.model.q_min[act[j]], self.model.q_max[act[j]]
+            if not (np.isfinite(lo) and np.isfinite(hi)):
+                lo, hi = home[j] - 0.03 * abs(home[j]), home[j] + 0.03 * abs(home[j])
+            axes.append(np.linspace(lo, hi, per_axis))
+        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(loop))
+        q = np.tile(home, (len(grid), 1))
+        q[:, loop] = grid
+        points = self.fk(q, full_output=True, strokes="ignore", check_singular=False).pose[:, :3]
+        points = np.vstack([points[np.isfinite(points).all(axis=1)], self.home_pose[:3]])
+        lower, upper = points.min(axis=0), points.max(axis=0)
+        pad = np.maximum(0.1 * (upper - lower), 0.01)
+        return lower - pad, upper + pad
+
     def with_params(self, **overrides: Any) -> JointChainMachine:
         """A new machine of the same kind with some parameters changed (SI units)."""
         if self.kind is None:

@@ -94,9 +94,16 @@ def rotvec_to_matrix(phi: np.ndarray) -> np.ndarray:
 
 
 def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
-    """Rotation vectors ``(N, 3)`` (radians, angle in [0, π]) of rotation matrices ``(N, 3, 3)``."""
-    return rotation_class().from_matrix(np.asarray(matrix, dtype=float).reshape(-1, 3, 3)
-                                         ).as_rotvec()
+    """Rotation vectors ``(N, 3)`` (radians, angle in [0, π]) of rotation matrices ``(N, 3, 3)``;
+    NaN rows for matrices with a non-finite entry (failed rows of a batch)."""
+    arr = np.asarray(matrix, dtype=float).reshape(-1, 3, 3)
+    finite = np.isfinite(arr).all(axis=(1, 2))
+    if finite.all():
+        return rotation_class().from_matrix(arr).as_rotvec()
+    out = np.full((arr.shape[0], 3), np.nan)
+    if finite.any():
+        out[finite] = rotation_class().from_matrix(arr[finite]).as_rotvec()
+    return out
 
 
 def compose_rotvec(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
