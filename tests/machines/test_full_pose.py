@@ -314,3 +314,56 @@ def test_positions_no_orientation_can_serve_are_refused_soundly():
     q = m.ik(points)
     assert not np.isfinite(q[flagged]).any()
     assert np.isfinite(q[~flagged]).all(axis=1).any()
+
+
+def _moved(x, twist, s):
+    """The pose reached from ``x`` after time ``s`` at constant twist (v, ω)."""
+    from pkmkit.spatial.rotation import compose_rotvec
+
+    return np.concatenate([x[:3] + twist[:3] * s,
+                           compose_rotvec(twist[3:][None] * s, x[3:][None])[0]])
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "dietmaier-hexapod"])
+def test_jacobian_dot_of_a_hexapod_matches_central_differences_along_its_twist(name):
+    m = pkmkit.machine(name)
+    x = m.reference_poses().get("tilted", m.home_pose)
+    twist = np.array([0.1, -0.05, 0.02, 0.3, -0.2, 0.1])
+    rates = m.jacobian_dot(x, twist)
+    h = 1e-6
+    fd_j = (m.jacobian(_moved(x, twist, h)).J - m.jacobian(_moved(x, twist, -h)).J) / (2 * h)
+    np.testing.assert_allclose(rates.J_dot, fd_j, atol=2e-8 * np.abs(fd_j).max())
+    fd_q = (m.ik(_moved(x, twist, h)) - m.ik(_moved(x, twist, -h))) / (2 * h)
+    np.testing.assert_allclose(rates.qd, fd_q, atol=1e-8)
+    # Ȧ and Ḃ are the rates of A and B themselves
+    jp, jm = m.jacobian(_moved(x, twist, h)), m.jacobian(_moved(x, twist, -h))
+    np.testing.assert_allclose(rates.A_dot, (jp.A - jm.A) / (2 * h), atol=1e-7)
+    np.testing.assert_allclose(rates.B_dot, (jp.B - jm.B) / (2 * h), atol=1e-7)
+    # batched rows equal single rows
+    batch = m.jacobian_dot(np.stack([x, m.home_pose]), np.stack([twist, -twist]))
+    np.testing.assert_allclose(batch.J_dot[0], rates.J_dot, rtol=1e-12, atol=1e-14)
+
+
+@pytest.mark.parametrize("name", ["verne", "delta6"])
+def test_jacobian_dot_of_a_position_controlled_module(name):
+    """Positions and their velocities in: the twist follows from the rods (the Verne module
+    tilts, the Delta's parallelograms hold the platform), J̇ against central differences of
+    J along the position's motion."""
+    m = _full_pose_delta() if name == "delta6" else pkmkit.machine(name)
+    p = m.home_pose[:3] + np.array([0.04, 0.03, -0.05])
+    pd = np.array([0.2, -0.1, 0.05])
+    rates = m.jacobian_dot(p, pd)
+    h = 1e-6
+    fd = (m.jacobian(p + pd * h).J - m.jacobian(p - pd * h).J) / (2 * h)
+    np.testing.assert_allclose(rates.J_dot, fd, atol=2e-8 * max(np.abs(fd).max(), 1.0))
+    np.testing.assert_allclose(m.jacobian(p).J[:3] @ rates.qd, pd, atol=1e-12)
+    if name == "verne":
+        with pytest.raises(InputError, match="not one the rods"):
+            m.jacobian_dot(p, np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]))
+
+
+def test_jacobian_dot_refuses_mismatched_rates(hexapod):
+    with pytest.raises(InputError, match="xd must have shape"):
+        hexapod.jacobian_dot(hexapod.home_pose, np.zeros(3))
+    with pytest.raises(InputError, match="finite"):
+        hexapod.jacobian_dot(hexapod.home_pose, np.full(6, np.nan))

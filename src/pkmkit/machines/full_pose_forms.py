@@ -207,3 +207,35 @@ class FullPoseForms:
         b = np.zeros((x.shape[0], m.n_rods, m.n_actuators))
         b[:, np.arange(m.n_rods), m.rod_actuator] = diag
         return a, b
+
+    def jacobian_rates(self, x: np.ndarray, q: np.ndarray, twist: np.ndarray,
+                       qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(Ȧ (N, m, 6), Ḃ (N, m, n_act))`` along a motion with platform twist
+        ``twist (N, 6)`` = (v, ω) and actuator rates ``qd (N, n_act)``, at pose rows ``x`` and
+        actuator coordinates ``q``.
+
+        With ``r_j = R b_j`` (ṙ = ω × r) and ``ḋ = v + ω × r − ∂a/∂q q̇``:
+        ``Ȧ_j = (ḋᵀ, (ṙ × d + r × ḋ)ᵀ)``; ``Ḃ_jk = ḋ·∂a/∂q + d·∂²a/∂q² q̇`` (slide: the second
+        term is zero; crank: ``∂²a/∂q² = w × (w × arm)``; strut: ``Ḃ = q̇``)."""
+        m = self.model
+        rot = rotvec_to_matrix(x[:, 3:6])
+        rb = np.einsum("kab,jb->kja", rot, m.rod_platform)
+        d = x[:, None, :3] + rb - rod_base_points(m, q.T).transpose(2, 1, 0)
+        rates = actuator_rates(m, q.T).transpose(2, 1, 0)  # (N, m, 3)
+        v, w = twist[:, None, :3], twist[:, None, 3:]
+        qd_rod = qd[:, m.rod_actuator]  # (N, m)
+        rb_dot = np.cross(np.broadcast_to(w, rb.shape), rb)
+        d_dot = v + rb_dot - rates * qd_rod[:, :, None]
+        a_dot = np.concatenate([d_dot, np.cross(rb_dot, d) + np.cross(rb, d_dot)], axis=2)
+        diag = np.einsum("kjd,kjd->kj", d_dot, rates)
+        crank = m.rod_kind == CRANK
+        if crank.any():
+            axis = np.broadcast_to(m.rod_axis[None], rates.shape)
+            second = np.cross(axis, rates)  # w × (w × arm): rates = w × arm
+            diag[:, crank] += (np.einsum("kjd,kjd->kj", d, second) * qd_rod)[:, crank]
+        strut = m.rod_kind == STRUT
+        if strut.any():
+            diag[:, strut] = qd_rod[:, strut]
+        b_dot = np.zeros((x.shape[0], m.n_rods, m.n_actuators))
+        b_dot[:, np.arange(m.n_rods), m.rod_actuator] = diag
+        return a_dot, b_dot
