@@ -3,6 +3,8 @@ leg lengths written here with scipy's Rotation and against the generic engine, I
 trips on 1000 poses, twist Jacobians against finite differences, the Verne module's coupled
 tilt against its symmetry, and bad input."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -367,3 +369,39 @@ def test_jacobian_dot_refuses_mismatched_rates(hexapod):
         hexapod.jacobian_dot(hexapod.home_pose, np.zeros(3))
     with pytest.raises(InputError, match="finite"):
         hexapod.jacobian_dot(hexapod.home_pose, np.full(6, np.nan))
+
+
+def test_characteristic_length_from_a_file_and_in_python(tmp_path, hexapod):
+    """L scales the angular rows of the homogenised Jacobian (and nothing else); it is read in
+    the file's units, kept by with_params, and refused where it means nothing."""
+    from pkmkit.machines.registry import preset_path
+
+    text = Path(preset_path("gough-stewart")).read_text()
+    path = tmp_path / "hexapod.toml"
+    assert 'units = "mm"' in text
+    path.write_text(text.replace("[machine]\n", "[machine]\ncharacteristic_length = 500\n", 1))
+    m = pkmkit.load(path)
+    assert m.characteristic_length == pytest.approx(0.5) and m.length_given
+    x = hexapod.reference_poses()["tilted"]
+    plain, scaled = hexapod.jacobian(x), m.jacobian(x)
+    np.testing.assert_allclose(scaled.J, plain.J, rtol=1e-14)
+    np.testing.assert_allclose(scaled.J_homogeneous[3:], 0.5 * plain.J[3:], rtol=1e-14)
+    np.testing.assert_allclose(scaled.J_homogeneous[:3], plain.J[:3], rtol=1e-14)
+    assert scaled.condition != pytest.approx(plain.condition)
+    assert m.with_params(height=0.85).characteristic_length == pytest.approx(0.5)
+    assert hexapod.with_params(platform_radius=0.35).characteristic_length == pytest.approx(
+        0.35)  # the default follows the platform
+    assert hexapod.with_characteristic_length(0.2).characteristic_length == 0.2
+    with pytest.raises(ParameterError, match="finite length > 0"):
+        hexapod.with_characteristic_length(-1.0)
+    bad = path.read_text().replace("characteristic_length = 500", "characteristic_length = 0")
+    path.write_text(bad)
+    with pytest.raises(pkmkit.MachineFileError, match="characteristic length") as info:
+        pkmkit.load(path)
+    line = bad.splitlines().index("characteristic_length = 0") + 1
+    assert f"hexapod.toml:{line}:" in str(info.value)
+    ortho = Path(preset_path("orthoglide")).read_text().replace(
+        "[machine]\n", "[machine]\ncharacteristic_length = 1\n", 1)
+    (tmp_path / "o.toml").write_text(ortho)
+    with pytest.raises(pkmkit.MachineFileError, match="applies to full-pose machines"):
+        pkmkit.load(tmp_path / "o.toml")

@@ -87,6 +87,9 @@ def describe_machine(m: Machine, units: str = "m") -> dict[str, Any]:
             "instantaneous": asdict(mobility["instantaneous"]),
         },
         "warnings": warnings,
+        **({"characteristic_length": m.characteristic_length / scale,
+            "characteristic_length_given": m.length_given}
+           if hasattr(m, "characteristic_length") else {}),
     }
 
 
@@ -158,6 +161,11 @@ def print_description(info: dict[str, Any]) -> None:
                f"{', '.join(info['actuators'])} = {fmt(home['q'])} {'/'.join(q_units)}")
     modes = info["assembly_modes"]
     click.echo(f"assembly modes: working {modes['working']!r}, other {modes['other']!r}")
+    if "characteristic_length" in info:
+        how = ("given" if info["characteristic_length_given"] else
+               "default: the platform joints' mean radius")
+        click.echo(f"characteristic length L = {fmt(info['characteristic_length'])} {u} "
+                   f"({how}): J_h = diag(1, 1, 1, L, L, L) J")
     g, inst = info["mobility"]["grubler"], info["mobility"]["instantaneous"]
     joints = ", ".join(f"{n} {k}" for k, n in g["joints_by_type"].items())
     click.echo(

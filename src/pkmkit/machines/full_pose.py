@@ -53,7 +53,7 @@ from pkmkit.machines.results import (
     Singularity,
 )
 from pkmkit.model.mobility import grubler_count
-from pkmkit.model.parameters import resolve_parameters
+from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, STRUT, RodModel
 from pkmkit.numerics.arrays import as_batch, restore_shape
 from pkmkit.solve.rod_closure import (
@@ -116,7 +116,11 @@ class FullPoseMachine:
         id, name, kind, params, model, description, source, extra_poses: as for
             :class:`~pkmkit.machines.machine.Machine`.
         characteristic_length: L (m) that homogenises the angular rows of J (default: the
-            radius of the platform joints around the platform origin, or 1 m if they coincide).
+            radius of the platform joints around the platform origin, or 1 m if they coincide);
+            set it with :meth:`with_characteristic_length` or ``[machine]
+            characteristic_length`` in a machine file.
+        length_given: True when L was given rather than defaulted (it then survives
+            :meth:`with_params`).
     """
 
     id: str
@@ -128,10 +132,19 @@ class FullPoseMachine:
     source: str = ""
     extra_poses: Mapping[str, np.ndarray] = field(default_factory=dict)
     characteristic_length: float | None = None
+    length_given: bool = field(init=False, default=False, repr=False)
 
     def __post_init__(self) -> None:
         if not self.model.full_pose:
             raise ParameterError(f"machine {self.id!r}: a full-pose machine needs dims = 6")
+        if self.characteristic_length is not None:
+            length = self.characteristic_length
+            if not (is_plain_number(length) and np.isfinite(length) and length > 0):
+                raise ParameterError(f"machine {self.id!r}: the characteristic length must be a "
+                                     f"finite length > 0, got {length!r}",
+                                     "characteristic_length")
+            object.__setattr__(self, "characteristic_length", float(length))
+            object.__setattr__(self, "length_given", True)
         if self.model.n_rods < 6:
             raise ParameterError(
                 f"machine {self.id!r} has {self.model.n_rods} rods: a six-DOF platform needs at "
@@ -259,7 +272,17 @@ class FullPoseMachine:
         rebuilt = build_machine(self.kind, params, id=self.id, name=self.name,
                                 description=self.description, source=self.source)
         extra = {k: v for k, v in self.extra_poses.items() if k not in rebuilt.extra_poses}
-        return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra})
+        kept = {"characteristic_length": self.characteristic_length} if self.length_given else {}
+        return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra}, **kept)
+
+    def with_characteristic_length(self, length: float) -> FullPoseMachine:
+        """The same machine with the characteristic length L (m) of its homogenised Jacobian
+        set (conditioning and transmission indices mix translation and rotation through it).
+
+        Raises:
+            ParameterError: L not a finite length > 0.
+        """
+        return replace(self, characteristic_length=length)
 
     # ---------------------------------------------------------------- helpers
     def _rod_name(self, rod: int) -> str:

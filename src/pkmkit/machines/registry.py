@@ -59,7 +59,7 @@ ROD_LEGS = "rod-legs"
 ALIASES = {"linear-delta": "linear-delta-ch3", "five-bar": "five-bar-isotropic"}
 
 _MACHINE_KEYS = {"kind", "id", "name", "description", "source", "units", "dims", "home",
-                 "mode_names"}
+                 "mode_names", "characteristic_length"}
 _TOP_KEYS = {"machine", "parameters", "legs", "poses", "defects"}
 _LEG_KEYS = {"name", "actuator", "type", "base", "axis", "platform", "length", "branch",
              "parallelogram", "stroke", "pivot"}
@@ -186,11 +186,26 @@ def machine_from_document(
         raise doc.error(str(exc), _parameter_path(kind_name, exc.parameter)) from None
     if poses:
         built = _with_poses(doc, built, poses)
+    if "characteristic_length" in head:
+        built = _with_length(doc, built, head["characteristic_length"], scale)
     if overrides:  # errors here concern the caller's values, not the file
         built = built.with_params(**overrides)
     if "defects" in doc.data:  # a calibrated (or simulated) machine: docs/machine-files.md
         built = _with_defects_table(doc, built, scale)
     return built
+
+
+def _with_length(doc: MachineDocument, machine: Machine, value: Any, scale: float) -> Machine:
+    """``[machine] characteristic_length`` (file units) of a full-pose machine."""
+    where = ("machine", "characteristic_length")
+    if not hasattr(machine, "with_characteristic_length"):
+        raise doc.error("[machine] characteristic_length applies to full-pose machines (dims = "
+                        "6); a joint-chain machine takes it as a parameter", where)
+    try:
+        return machine.with_characteristic_length(_number(value, "[machine] "
+                                                          "characteristic_length", scale))
+    except ParameterError as exc:
+        raise doc.error(str(exc), where) from None
 
 
 def _with_defects_table(doc: MachineDocument, machine: Machine, scale: float) -> Machine:
