@@ -392,3 +392,17 @@ def test_global_conditioning_index_over_a_sub_region():
     weights = grid.weights().ravel()[left.ravel()]
     assert w.global_conditioning_index(left) == pytest.approx(
         np.sum(s[:, -1] / s[:, 0] * weights) / weights.sum(), rel=1e-12)
+
+
+@pytest.mark.slow
+def test_useful_workspace_of_a_position_controlled_module_runs_over_positions():
+    """The Verne module's useful workspace (seed 004's procedure on three actuators) is a
+    volume over positions — its orientation follows from the rods — inside the image of the
+    joint cube."""
+    m = pkmkit.machine("verne")
+    u = useful_workspace(m, Criteria(kappa_max=6), resolution=9)
+    assert u.workspace.grid.free == (0, 1, 2) and u.workspace.grid.base.shape == (3,)
+    assert 0 < u.inscribed.side ** 3 <= u.workspace.measure
+    q = m.ik(u.workspace.grid.points[u.workspace.feasible.ravel()])
+    lo, hi = u.joint_square.lower, u.joint_square.lower + u.joint_square.side
+    assert ((q >= lo - 1e-9) & (q <= hi + 1e-9)).all()

@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from pkmkit.analysis.grids import Grid, make_grid
+from pkmkit.analysis.grids import Grid, make_grid, pose_frame
 from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.inscribed import largest_box
 from pkmkit.errors import InputError
@@ -1052,11 +1052,12 @@ def useful_workspace(machine: Machine, criteria: Criteria, *, joint_lower: Any =
     samples = make_grid(q_lo, q_hi, free=tuple(range(machine.n_actuators)), base=q_lo,
                         names=machine.actuator_names,
                         resolution=101 if machine.n_actuators <= 2 else 31)
-    image = machine.fk(samples.points)
+    frame = pose_frame(machine)  # positions (a Verne-type module's orientation follows)
+    image = machine.fk(samples.points)[:, :frame.positions]
     p_lo, p_hi = np.nanmin(image, axis=0), np.nanmax(image, axis=0)
     margin = 0.02 * float((p_hi - p_lo).max())
-    grid = make_grid(p_lo - margin, p_hi + margin, free=tuple(range(machine.dims)),
-                     base=machine.home_pose, names=machine.pose_names, resolution=resolution)
+    grid = make_grid(p_lo - margin, p_hi + margin, free=tuple(range(frame.positions)),
+                     base=frame.base, names=frame.names, resolution=resolution)
     limited = Criteria(bounds=criteria.bounds, kappa_max=criteria.kappa_max,
                        q_limits=(q_lo, q_hi), connected=criteria.connected, tol=criteria.tol)
     ws = compute_workspace(machine, grid, limited, refine=True)

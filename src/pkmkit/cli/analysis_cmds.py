@@ -585,13 +585,14 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
                               resolution=resolution or (301 if n == 2 else 41))
     sq, box = useful.joint_square, useful.inscribed
     shape = "square" if n == 2 else "cube"
-    measure_key = "useful_area" if m.dims == 2 else "useful_volume"
+    d = len(useful.workspace.grid.free)  # positions (the orientation of a module follows)
+    measure_key = "useful_area" if d == 2 else "useful_volume"
     summary = {
         "machine": m.id, "units": units, "criteria": {"bounds": criteria.bounds,
                                                       "kappa_max": kappa_max},
         "joint_square": {"side": sq.side / scale, "q_min": sq.lower / scale,
                          "q_max": (sq.lower + sq.side) / scale, "centred": not anywhere},
-        measure_key: useful.workspace.measure / scale**m.dims,
+        measure_key: useful.workspace.measure / scale**d,
         "inscribed": None if box is None else {"side": box.side / scale,
                                                "center": box.center / scale},
         "index_range": list(useful.factor_range),
@@ -604,10 +605,10 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
     if as_json:
         emit_json(summary)
         return
-    what = "area" if m.dims == 2 else "volume"
+    what = "area" if d == 2 else "volume"
     click.echo(f"{m.name}: useful zone = actuator {shape} of side {sq.side / scale:.6g} {units} "
                f"from {fmt(sq.lower / scale)}")
-    click.echo(f"  useful workspace: {what} {summary[measure_key]:.6g} {units}^{m.dims}, "
+    click.echo(f"  useful workspace: {what} {summary[measure_key]:.6g} {units}^{d}, "
                f"transmission factors {fmt(useful.factor_range)}, GCI "
                f"{fmt(summary['global_conditioning_index'], 4)}")
     if box is not None:
