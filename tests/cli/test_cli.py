@@ -21,6 +21,11 @@ def test_machines(run, as_json):
     assert {"orthoglide", "linear-delta", "five-bar"} <= ids
     text = run("machines").output
     assert "five-bar-biglide" in text
+    # the columns line up, whatever the longest kind (gough-stewart once touched its dimension)
+    lines = text.splitlines()
+    assert len(lines) == len(ids)
+    assert len({line.index("-D  ") for line in lines}) == 1
+    assert all(line[line.index("-D  ") - 3] == " " for line in lines)
 
 
 def test_show(run, as_json):

@@ -1,13 +1,16 @@
 """Extract the runnable blocks of the Markdown documentation and compare what they print.
 
 A ``console`` block holds commands (``$ ...``, continued by a trailing ``\\``) each followed by
-the output it shows; a ``python`` block is a program. A block may be preceded by a marker
-comment ``<!-- docs-test: ... -->`` with any of:
+the output it shows; a ``python`` block is a program, or a session when it starts with ``>>>``
+(statements after ``>>>``, continued by ``...``, each followed by what it prints or the value it
+shows, as in the interpreter). A block may be preceded by a marker comment
+``<!-- docs-test: ... -->`` with any of:
 
 - ``skip (reason)``: not run;
 - ``ci``: run only in CI (long examples): when ``CI`` or ``PKMKIT_DOCS_CI`` is set;
 - ``any-numbers``: the numbers printed are not compared (timings);
-- ``command="..."``: a ``text`` block is the output of this command.
+- ``command="..."``: a ``text`` block is the output of this command;
+- ``output``: a ``text`` block is what the ``python`` program right above it prints.
 
 Shown output is compared line by line: numbers to their printed precision (one unit in the
 last digit shown), everything else exactly (runs of spaces as one); a line ``...`` stands for
@@ -45,6 +48,7 @@ class Block:
     lang: str
     body: list[str]
     options: dict[str, str] = field(default_factory=dict)
+    shown: list[str] = field(default_factory=list)  # a program's output (an ``output`` block)
 
     @property
     def name(self) -> str:
@@ -71,6 +75,31 @@ class Block:
                 command.expected.pop()
         return out
 
+    def program(self) -> tuple[str, list[str]]:
+        """A ``python`` block's program and the output it shows (a session's is run statement by
+        statement, each expression's value shown as the interpreter shows it)."""
+        if not self.body or not self.body[0].startswith(">>>"):
+            return "\n".join(self.body), self.shown
+        statements: list[str] = []
+        expected: list[str] = []
+        continuing = False
+        for raw in self.body:
+            if raw.startswith(">>> ") or raw == ">>>":
+                statements.append(raw[4:] + "\n")
+                continuing = True
+            elif continuing and (raw.startswith("... ") or raw == "..."):
+                statements[-1] += raw[4:] + "\n"
+            else:
+                continuing = False
+                expected.append(raw)
+        return _SESSION.format(statements=statements), expected
+
+
+_SESSION = """_namespace = {{"__name__": "__main__"}}
+for _statement in {statements!r}:
+    exec(compile(_statement, "<session>", "single"), _namespace)
+"""
+
 
 def blocks(path: Path) -> list[Block]:
     """The ``console``, ``python`` and (with a ``command=`` marker) ``text`` blocks of a file."""
@@ -90,7 +119,12 @@ def blocks(path: Path) -> list[Block]:
             k += 1
         k += 1
         options = _options(lines, start)
-        if lang in ("console", "python") or (lang == "text" and "command" in options):
+        if lang == "text" and "output" in options:
+            if not found or found[-1].lang != "python" or found[-1].shown:
+                raise ValueError(f"{path.name}:{start + 1}: an output block must follow a "
+                                 "python program")
+            found[-1].shown = body
+        elif lang in ("console", "python") or (lang == "text" and "command" in options):
             found.append(Block(path, start + 1, lang, body, options))
     return found
 

@@ -1,7 +1,8 @@
 """The documentation runs: every console and Python block of README.md and docs/*.md is
-executed in a temporary folder (one per file, with ``docs/examples`` and ``bench`` beside it) and
-what it prints is compared with what the documentation shows (see ``docs_blocks``). Blocks
-marked ``ci`` run only in CI (``.ci/run`` sets ``PKMKIT_DOCS_CI``)."""
+executed in a temporary folder (one per file, with ``docs/examples``, ``bench``, ``tests`` and
+``pyproject.toml`` beside it) and what it prints is compared with what the documentation shows
+(see ``docs_blocks``). Blocks marked ``ci`` run only in CI (``.ci/run`` sets
+``PKMKIT_DOCS_CI``)."""
 
 import os
 import shutil
@@ -30,6 +31,9 @@ def folders(tmp_path_factory):
             work = tmp_path_factory.mktemp(path.stem)
             shutil.copytree(ROOT / "docs" / "examples", work / "docs" / "examples")
             (work / "bench").symlink_to(ROOT / "bench")
+            # the documentation's test commands run the repository's tests and configuration
+            (work / "tests").symlink_to(ROOT / "tests")
+            (work / "pyproject.toml").symlink_to(ROOT / "pyproject.toml")
             made[path] = work
         return made[path]
 
@@ -61,9 +65,13 @@ def test_block_runs_as_shown(block, folders):
     work = folders(block.path)
     env = _environment()
     if block.lang == "python":
-        done = subprocess.run([sys.executable, "-c", "\n".join(block.body)], cwd=work, env=env,
+        program, expected = block.program()
+        done = subprocess.run([sys.executable, "-c", program], cwd=work, env=env,
                               capture_output=True, text=True, timeout=TIMEOUT)
         assert done.returncode == 0, f"{block.name}: {done.stderr}"
+        if expected:
+            problem = compare(expected, done.stdout, numbers="any-numbers" not in block.options)
+            assert problem is None, f"{block.name}\n{problem}"
         return
     for command in block.commands():
         done = subprocess.run(["bash", "-c", command.text], cwd=work, env=env,
@@ -82,8 +90,9 @@ def test_block_runs_as_shown(block, folders):
 
 
 def test_every_file_an_example_reads_ships_with_the_docs():
-    """Paths in the commands that are not written by an earlier command of the same file exist
-    under docs/examples (or are the repository's own scripts)."""
+    """Paths in the commands that are not written by an earlier command of the same file (as
+    ``--out``/``--output``, a redirection, or a file its shown output reports as ``→ FILE``)
+    exist under docs/examples (or are the repository's own scripts)."""
     import re
     import shlex
 
@@ -99,6 +108,8 @@ def test_every_file_an_example_reads_ships_with_the_docs():
                         written.add(words[k + 1])
                     if words[max(k - 1, 0)] in ("--out", "--output"):
                         written.add(word)
+                for shown in command.expected:  # a file the (checked) output says it wrote
+                    written.update(re.findall(r"→ ([\w./-]+\.[A-Za-z]\w*)\b", shown))
                 for word in words:
                     if re.fullmatch(r"[\w./-]+\.(toml|yaml|yml|nc|csv|parquet|feather|py)",
                                     word) and word not in written:
@@ -118,3 +129,40 @@ def test_the_comparison_catches_a_wrong_number_and_a_dropped_line():
                    "result 1.235 m\n  extra\n  more\n  next [0.5, 2]\n") is None
     assert compare(["a ... z 3"], "a b c z 3\n") is None
     assert compare(["q = 1.5 m      # table: 1.50"], "q = 1.5 m\n") is None
+
+
+def test_a_python_session_and_a_program_output_are_compared(tmp_path):
+    """``>>>`` sessions show what the interpreter shows; an ``output`` block is a program's."""
+    page = tmp_path / "page.md"
+    page.write_text("""```python
+>>> x = [1.25,
+...      2]
+>>> x
+[1.25, 2]
+>>> for k in x:
+...     print(k * 2)
+2.5
+4
+```
+
+```python
+print(3.14159)
+```
+
+<!-- docs-test: output -->
+```text
+3.1416
+```
+""")
+    session, program = blocks(page)
+    source, shown = session.program()
+    done = subprocess.run([sys.executable, "-c", source], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert shown == ["[1.25, 2]", "2.5", "4"]
+    assert compare(shown, done.stdout) is None
+    assert compare(["[1.25, 5]", "2.5", "4"], done.stdout) is not None
+    source, shown = program.program()
+    assert shown == ["3.1416"]
+    done = subprocess.run([sys.executable, "-c", source], capture_output=True, text=True)
+    assert compare(shown, done.stdout) is None
+    assert compare(["3.1426"], done.stdout) is not None

@@ -6,8 +6,10 @@ model must agree to 1e-9 m.
 """
 
 import numpy as np
+import pytest
 
 import pkmkit
+from pkmkit.errors import ConvergenceError
 from pkmkit.status import Status
 from tests.conftest import random_poses
 
@@ -33,6 +35,21 @@ def test_direct_full_pose_engine_recovers_no_rotation(preset):
     assert (res.status == Status.OK).all()
     assert np.abs(res.pose - x).max() <= TOL
     assert np.abs(res.rotation).max() <= 1e-9
+
+
+@pytest.mark.parametrize("name, q", [("linear-delta-ch3", [0.0, 1.0, 2.0]),
+                                     ("delta", [0.0, 2.0, -2.0])])
+def test_direct_full_pose_engine_flags_a_turned_platform(name, q):
+    """From a poor start the six-unknown solve may close the rods with the platform turned:
+    another assembly of the rods, not a mode of the translating platform. Flagged (NaN),
+    never an OK translation that the legs do not close without that rotation (fuzzing)."""
+    m = pkmkit.machine(name)
+    res = m.fk(np.vstack([m.home_q, q]), method="numeric", dof="full", full_output=True)
+    assert res.status.tolist() == [Status.OK, Status.WRONG_MODE]
+    assert np.abs(res.rotation[0]).max() <= 1e-9
+    assert np.isnan(res.pose[1]).all() and np.isnan(res.rotation[1]).all()
+    with pytest.raises(ConvergenceError, match="platform turned by"):
+        m.fk(q, method="numeric", dof="full")
 
 
 def test_inverse_closed_form_matches_engine(preset):

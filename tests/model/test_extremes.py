@@ -145,6 +145,16 @@ def test_raster_too_many_passes_is_refused_with_the_estimate(passes):
         raster([0, 0, 0.2], 0.1, 0.1, passes)
 
 
+@pytest.mark.parametrize("passes, strategy", [(600_000, "one-way"), (1e300, "zigzag")])
+def test_raster_passes_have_one_limit_the_memory_estimate(passes, strategy):
+    """One check and one message for too many passes, whatever the strategy (one-way passes
+    make 4 segments each, so fewer of them reach the limit) or the magnitude."""
+    from pkmkit.motion import raster
+
+    with pytest.raises(InputError, match=r"passes make .* segments \(about .* GiB\), above"):
+        raster([0, 0, 0.2], 0.1, 0.1, passes, strategy=strategy)
+
+
 @given(st.integers(10_000, 10**6))
 def test_grid_too_large_is_refused_with_its_size(resolution):
     from pkmkit.analysis.grids import make_grid
@@ -166,6 +176,21 @@ def test_gcode_with_too_many_moves_is_refused(monkeypatch):
 @SETTINGS
 @given(st.floats(1e-300, 1e-8), st.floats(1e8, 1e300))
 def test_time_laws_that_overflow_are_refused(jerk, accel):
+    """Magnitudes whose time law would overflow are refused before any computation, as unit
+    mistakes naming the argument (accelerations above 1e7 m/s², jerks below 1e-9 m/s³)."""
+    from pkmkit.motion import circle, plan
+
+    unit_mistake = (r"^(accel|the S-curve's jerk limit) = .* is "
+                    r"(beyond 1e\+07|below 1e-9 \(SI units\)); check the units")
+    with pytest.raises(InputError, match=unit_mistake):
+        plan(circle([0, 0, 0.2], 0.15), feed=0.1, accel=accel, jerk=jerk, period=0.01,
+             max_samples=100_000)
+
+
+@SETTINGS
+@given(st.floats(1e-9, 1e11), st.floats(1e-9, 1e7))
+def test_time_laws_at_the_accepted_extremes_are_finite_or_refused(jerk, accel):
+    """Within the accepted magnitudes a time law is finite, or refused for its size."""
     from pkmkit.motion import circle, plan
 
     try:

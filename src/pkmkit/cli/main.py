@@ -94,8 +94,9 @@ def machines_cmd(as_json: bool) -> None:
         emit_json({"machines": rows})
         return
     width = max(len(r["id"]) for r in rows)
+    kind_width = max(len(r["kind"]) for r in rows)
     for r in rows:
-        click.echo(f"{r['id']:<{width}}  {r['kind']:<13} {r['dims']}-D  {r['name']}")
+        click.echo(f"{r['id']:<{width}}  {r['kind']:<{kind_width}}  {r['dims']}-D  {r['name']}")
 
 
 @cli.command()

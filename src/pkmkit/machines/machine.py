@@ -50,6 +50,9 @@ SINGULARITY_TOL = 1e-6
 HOME_TOL = 1e-4
 #: Pose or actuator coordinates beyond this magnitude (m) are rejected as invalid input.
 MAX_COORDINATE = 1e9
+#: A numeric ``dof="full"`` solution whose platform turned by more than this (rad) is another
+#: assembly of the rods than the translating platform's modes.
+TURNED_TOL = 1e-6
 @dataclass(frozen=True)
 class MachineKind:
     """A family of machines built from named parameters.
@@ -498,6 +501,16 @@ class Machine:
                     rotation[:] = result.u[:, 3:6]
                 else:
                     rotation[:, 2] = result.u[:, 2]
+                # the rods closed with the platform turned: not a mode of this translating
+                # platform (the engine went there from a poor start)
+                with np.errstate(invalid="ignore"):
+                    turned = np.linalg.norm(rotation, axis=1) > TURNED_TOL
+                status[turned & (status == Status.OK)] = Status.WRONG_MODE
+                if single and turned[0] and status[0] == Status.WRONG_MODE:
+                    raise ConvergenceError(
+                        f"the numeric direct model (dof='full') closed the rods with the platform "
+                        f"turned by {np.linalg.norm(rotation[0]):.3g} rad: not an assembly mode of "
+                        "this translating platform; pass x0 closer to the wanted solution")
             ok = status == Status.OK
             a, _ = self._closed.jacobians(pose[ok], qb[ok])
             wrong = ok.copy()
@@ -512,6 +525,8 @@ class Machine:
         ok = status == Status.OK
         if not ok.all():
             pose = np.where(ok[:, None], pose, np.nan)
+            if rotation is not None:
+                rotation = np.where(ok[:, None], rotation, np.nan)
         if single and not ok[0]:
             self._raise_direct(qb[0], sign, status[0])
         if not full_output:

@@ -301,7 +301,7 @@ def raster(corner, width: float, height: float, passes: int, *, strategy: str = 
     c = _vec3(corner, "corner")
     width = real(width, "the rectangle's width", positive=True, limit=MAX_PATH_LENGTH)
     height = real(height, "the rectangle's height", nonnegative=True, limit=MAX_PATH_LENGTH)
-    passes = real(passes, "passes", positive=True, limit=1e6)
+    passes = real(passes, "passes", positive=True)  # bounded by MAX_SEGMENTS below
     clearance = real(clearance, "the clearance", positive=True, limit=MAX_PATH_LENGTH)
     if int(passes) != passes:
         raise InputError(f"passes must be a positive integer, got {passes}")
@@ -312,9 +312,9 @@ def raster(corner, width: float, height: float, passes: int, *, strategy: str = 
         raise InputError(f"unknown strategy {strategy!r}; use zigzag or one-way")
     if not clearance > 0:
         raise InputError(f"the clearance must be > 0, got {clearance}")
-    count = passes * (4 if strategy == "one-way" else 2) - 1
+    count = float(passes) * (4 if strategy == "one-way" else 2) - 1  # a float: never huge ints
     if count > MAX_SEGMENTS:
-        raise InputError(f"{passes:.6g} passes make {count:.3g} path segments (about "
+        raise InputError(f"{passes:.10g} passes make {count:.3g} path segments (about "
                          f"{count * SEGMENT_BYTES / 2**30:.3g} GiB), above the limit of "
                          f"{MAX_SEGMENTS:.3g}; face in fewer passes")
     ys = [c[1]] if passes == 1 else list(np.linspace(c[1], c[1] + height, passes))
