@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.analysis.workspace import Criteria, feasible_interval, useful_workspace
+from pkmkit.analysis.workspace import Criteria, check_region, feasible_interval, useful_workspace
 
 
 def test_orthoglide_reference_points_on_the_diagonal():
@@ -90,13 +90,30 @@ def test_five_bar_designs_compared_as_in_seed_004():
         assert result.joint_square.side == pytest.approx(2 * half, abs=2e-8)
         np.testing.assert_allclose(result.joint_square.lower, machine.home_q - half, atol=2e-8)
     ratio = iso.inscribed.side / big.inscribed.side
-    assert ratio**2 == pytest.approx(6.657, abs=0.02)  # "about 7"; grid-limited inscribed sides
+    assert ratio**2 == pytest.approx(6.584, abs=0.02)  # "about 7"; grid-limited inscribed sides
+    # each inscribed square holds (joint limits and λ bounds, 401² samples) and is tight at its
+    # centre: 0.3 % larger breaks a stroke (an older search stopped 0.8 % and 1.3 % short)
+    for machine, result in ((iso_m, iso), (big_m, big)):
+        sq = result.joint_square
+        limited = Criteria(bounds=(1 / 3, 3.0), q_limits=(sq.lower, sq.lower + sq.side))
+        box = result.inscribed
+        assert check_region(machine, box.center, box.side, limited, samples=401).feasible
+        assert not check_region(machine, box.center, 1.003 * box.side, limited,
+                                samples=401).feasible
     # exact ranges over the useful workspaces: the square is stopped by λ_max = 3 at a corner
     # of the joint square (the grid used to report [0.6045, 2.891] and 2.93 for the biglide)
     assert iso.factor_range == pytest.approx((0.6, 3.0), abs=2e-7)
     assert big.factor_range == pytest.approx((0.347332, 3.0), abs=2e-6)
-    lo, hi = iso.inscribed_factor_range
-    assert (lo, hi) == pytest.approx((0.70716, 1.70681), abs=1e-4)  # grid-limited square
+    # over the inscribed square: the extremes of λ against a dense 401² sampling of that square
+    # through seed 004's formulas (the square itself is grid-limited, its range follows it)
+    p, box = iso_m.params, iso.inscribed
+    sign = np.sign(np.linalg.det(iso_m.jacobian(iso_m.home_pose).A))
+    t = np.linspace(-0.5, 0.5, 401) * box.side
+    poses = box.center + np.stack(np.meshgrid(t, t, indexing="ij"), -1).reshape(-1, 2)
+    factors = five_bar_factors(iso_m.ik(poses), p["A"], p["B"], p["alpha1"], p["alpha2"],
+                               p["L"], sign)
+    assert iso.inscribed_factor_range == pytest.approx(
+        (factors[:, 1].min(), factors[:, 0].max()), abs=2e-4)
 
 
 def isotropic_five_bar_factors(q, length=0.5):
