@@ -30,6 +30,7 @@ from pkmkit.machines.joint_chain import JointChainMachine
 from pkmkit.model.chains import build_chain_model
 from pkmkit.solve.chains import chain_pose
 from pkmkit.spatial.registration import rigid_registration
+from pkmkit.errors import ParameterError
 from pkmkit.status import Status
 
 L, D, SMALL_L, SMALL_D = 1.0006254, 0.7998675, 0.38986, 0.29024
@@ -597,3 +598,27 @@ def test_table_5_2_fixes_the_tool_lever(table_5_2):
     origin = tracker.rotation @ reg.translation + tracker.translation
     assert np.abs(origin - CHANAL_O_ICS_IN_BCS)[:2].max() < 2.5
     assert np.abs(origin - CHANAL_O_ICS_IN_BCS)[2] < 16.0
+
+
+def test_printed_4_31_joint_53_axis_does_not_close(tripteor, wide):
+    """(4.31) prints D_R43^L53 with its z column along x (I53 = 1): with φ3's axis there the two
+    loops do not close (least-squares residual of decimetres at the home actuator values, and
+    the machine refuses to be built), while Table 4.2's J53 = 1 (pkmkit's model) closes to
+    round-off (erratum, seed 002)."""
+    model = wide.model
+    names = model.element_names()
+    legs = [[names[e] for e in leg] for leg in model.legs]
+    head = [names[e] for e in model.head]
+
+    def machine_with(axis):
+        elements = [replace(e, axis=axis) if e.name == "phi3" else e for e in model.elements]
+        rebuilt = build_chain_model(elements, legs=legs, leg_names=model.leg_names, head=head,
+                                    characteristic_length=model.characteristic_length)
+        return JointChainMachine(id="tripteor-4-31", name="(4.31)", kind=None,
+                                 params=tripteor.params, model=rebuilt,
+                                 tool_length=tripteor.tool_length)
+
+    q = random_q(np.random.default_rng(431), 20)
+    assert machine_with((0.0, 1.0, 0.0)).fk(q, full_output=True).closure_residual.max() < 1e-12
+    with pytest.raises(ParameterError, match=r"do not close .*residual 0\.[1-9]"):
+        machine_with((1.0, 0.0, 0.0))
