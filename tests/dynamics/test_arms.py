@@ -101,7 +101,7 @@ def test_infeasible_and_bad_sizing():
         analyse_arm(1.0, 0.02, 0.03)
     for length, big in ((1.0, -0.02), (1.0, 0.0), (1.0, math.inf), (-1.0, 0.02), (0.0, 0.02),
                         (math.nan, 0.02)):
-        with pytest.raises(InputError, match="must be (> 0|finite)"):
+        with pytest.raises(InputError, match=r"must be (> 0|finite)"):
             analyse_arm(length, big)
     with pytest.raises(InputError):
         size_arm(axial_force=10.0, length=1.0, diameter_range=(0.05, 0.01))

@@ -26,11 +26,11 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import pkmkit
+from pkmkit.errors import ParameterError
 from pkmkit.machines.joint_chain import JointChainMachine
 from pkmkit.model.chains import build_chain_model
 from pkmkit.solve.chains import chain_pose
 from pkmkit.spatial.registration import rigid_registration
-from pkmkit.errors import ParameterError
 from pkmkit.status import Status
 
 L, D, SMALL_L, SMALL_D = 1.0006254, 0.7998675, 0.38986, 0.29024
