@@ -110,6 +110,42 @@ def errors() -> None:
     fig.savefig(OUT / "errors-compatibility-gap.png", dpi=110)
 
 
+def full_pose() -> None:
+    """The figures of docs/full-pose.md: drawings of the full-pose machines, the hexapod's
+    condition map and workspace (made by the commands the page shows), its orientation
+    workspace at home, the Verne-type module's coupled tilt and Dietmaier's 40 assembly modes
+    (plotted as by ``pkmkit demo``)."""
+    from click.testing import CliRunner
+
+    from pkmkit.analysis.orientation import coupled_orientation, orientation_workspace
+    from pkmkit.cli.demo_machines import _plot_modes, _plot_tilt, _plot_tilt_map
+    from pkmkit.cli.main import cli
+
+    hexapod = pkmkit.machine("gough-stewart")
+    draw_machine(hexapod, hexapod.reference_poses()["tilted"], path=OUT / "gough-stewart.png")
+    verne = pkmkit.machine("verne")
+    draw_machine(verne, verne.ik(verne.reference_poses()["offset"], full_output=True).pose,
+                 path=OUT / "verne.png")
+    delta = pkmkit.machine("delta")
+    draw_machine(delta, delta.reference_poses()["offset"], path=OUT / "delta.png")
+    for args in (["map", "gough-stewart", "--index", "condition", "--slice", "z=0.85",
+                  "--out", str(OUT / "gough-stewart-condition.png")],
+                 ["workspace", "gough-stewart", "--units", "mm",
+                  "--out", str(OUT / "gough-stewart-workspace.png")]):
+        result = CliRunner().invoke(cli, args)
+        assert result.exit_code == 0, result.output
+    ows = orientation_workspace(hexapod, hexapod.home_pose[:3], max_tilt=np.radians(85),
+                                azimuths=72, tilts=171)
+    _plot_tilt(ows, OUT / "gough-stewart-orientation.png")
+    xs = np.linspace(-0.2, 0.2, 61)
+    gx, gy = np.meshgrid(xs, xs, indexing="ij")
+    tilt = coupled_orientation(verne, np.column_stack([gx.ravel(), gy.ravel(),
+                                                       np.zeros(gx.size)]))
+    _plot_tilt_map(gx, gy, np.degrees(tilt.tilt).reshape(gx.shape), OUT / "verne-tilt.png")
+    general = pkmkit.machine("dietmaier-hexapod")
+    _plot_modes(general, general.fk_all(general.home_q), OUT / "dietmaier-modes.png")
+
+
 if __name__ == "__main__":
     OUT.mkdir(exist_ok=True)
     machines()
@@ -118,4 +154,5 @@ if __name__ == "__main__":
     design()
     motion()
     errors()
+    full_pose()
     print(f"figures written to {OUT}")

@@ -232,3 +232,16 @@ def test_map_reports_the_named_index(run, tmp_path, as_json, name):
                  "force_max": 1 / s[-1], "condition": s[0] / s[-1],
                  "inverse_condition": s[-1] / s[0], "manipulability": np.prod(s)}[name]
         assert data[key] == pytest.approx(value, rel=1e-12)
+
+
+def test_analyze_shows_crank_angles_in_degrees(run, as_json):
+    """The Delta robot's actuators are arm angles: analyze shows them in degrees (as ik does),
+    not radians labelled with the length unit."""
+    q_deg = as_json(run("ik", "delta", "--pose", "200,100,-900", "--units", "mm",
+                        "--json"))["q"]
+    data = as_json(run("analyze", "delta", "--pose", "200,100,-900", "--units", "mm", "--json"))
+    np.testing.assert_allclose(data["q"], q_deg, rtol=1e-12)
+    assert data["actuator_units"] == ["deg", "deg", "deg"]
+    text = run("analyze", "delta", "--pose", "0.2,0.1,-0.9").output
+    assert "q [35.6098, 62.4071, 33.4116] deg" in text
+    assert " mm" in run("analyze", "orthoglide", "--pose", "0,0,0", "--units", "mm").output

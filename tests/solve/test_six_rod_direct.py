@@ -265,7 +265,7 @@ def test_singular_configuration_is_reported_not_hidden():
 
 
 def test_worked_example_of_the_docs():
-    """docs/full-pose.md §5: eight real assembly modes, the first the pose the (rounded) rod
+    """docs/full-pose.md §8.5: eight real assembly modes, the first the pose the (rounded) rod
     lengths came from."""
     base = np.array([[0.70, 0.05, 0.00], [0.30, 0.62, 0.08], [-0.33, 0.60, -0.05],
                      [-0.68, 0.02, 0.04], [-0.30, -0.64, 0.00], [0.35, -0.58, -0.06]])

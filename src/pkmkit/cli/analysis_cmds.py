@@ -30,7 +30,15 @@ from pkmkit.plot.maps import (
     plot_workspace,
 )
 
-from .coordinates import family, parse_numbers, pose_from_cli, pose_to_cli, pose_widths
+from .coordinates import (
+    actuator_scales,
+    actuator_units,
+    family,
+    parse_numbers,
+    pose_from_cli,
+    pose_to_cli,
+    pose_widths,
+)
 from .options import (
     ANGLES_OPTION,
     JSON_OPTION,
@@ -239,8 +247,10 @@ def analyze(machine_name, assignments, pose, isotropy_tol, convention, units, as
     shown = x / scale if x.size <= 3 else pose_to_cli(x, m, units, convention)[0]
     ind = indices(m, x, ellipsoids=True, isotropy_tol=isotropy_tol)
     jac = m.jacobian(x)
+    q_units = actuator_units(m, units)  # a crank's angle in degrees, not in the length unit
     payload = {
-        "machine": m.id, "units": units, "pose": shown, "q": jac.q / scale,
+        "machine": m.id, "units": units, "pose": shown, "q": jac.q / actuator_scales(m, units),
+        "actuator_units": q_units,
         "velocity_factors": ind.velocity_factors, "force_factors": ind.force_factors,
         "condition": ind.condition, "inverse_condition": ind.inverse_condition,
         "isotropic": bool(ind.isotropic), "isotropy_tol": isotropy_tol,
@@ -254,7 +264,10 @@ def analyze(machine_name, assignments, pose, isotropy_tol, convention, units, as
         emit_json(payload)
         return
     angles = f" (angles {convention}, deg)" if len(shown) == 6 else ""
-    click.echo(f"{m.name}: pose {fmt(shown)} {units}{angles}, q {fmt(jac.q / scale)} {units}")
+    q_text = (f"{fmt(payload['q'])} {q_units[0]}" if len(set(q_units)) == 1 else
+              "[" + ", ".join(f"{v:.6g} {u}" for v, u in zip(payload["q"], q_units,
+                                                          strict=True)) + "]")
+    click.echo(f"{m.name}: pose {fmt(shown)} {units}{angles}, q {q_text}")
     click.echo(f"  velocity transmission factors: {fmt(ind.velocity_factors)}")
     click.echo(f"  force transmission factors:    {fmt(ind.force_factors)}")
     click.echo(f"  condition number {_condition_text(float(ind.condition))} (inverse "
