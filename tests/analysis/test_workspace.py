@@ -1,4 +1,5 @@
 import warnings
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -8,6 +9,7 @@ import pkmkit
 from pkmkit.analysis.grids import make_grid
 from pkmkit.analysis.workspace import (
     Criteria,
+    WorkspaceMap,
     check_region,
     compute_workspace,
     joint_grid,
@@ -406,3 +408,17 @@ def test_useful_workspace_of_a_position_controlled_module_runs_over_positions():
     q = m.ik(u.workspace.grid.points[u.workspace.feasible.ravel()])
     lo, hi = u.joint_square.lower, u.joint_square.lower + u.joint_square.side
     assert ((q >= lo - 1e-9) & (q <= hi + 1e-9)).all()
+
+
+def test_faces_reached_counts_the_layers_next_to_each_face():
+    """A feasible set one layer inside the y+ face: not reached at one layer, reached at two
+    (the workspace command then moves that face out by a step)."""
+    feasible = np.zeros((5, 6, 6), dtype=bool)
+    feasible[2, 4, 2] = True
+    grid = SimpleNamespace(free=(0, 1, 2), names=("x", "y", "z"))
+    view = SimpleNamespace(grid=grid, feasible=feasible)
+    assert WorkspaceMap.faces_reached(view) == []
+    assert WorkspaceMap.faces_reached(view, 2) == ["y+"]
+    feasible[0, 0, 5] = True
+    assert WorkspaceMap.faces_reached(view) == ["x-", "y-", "z+"]
+    assert WorkspaceMap.faces_reached(view, 2) == ["x-", "y-", "y+", "z+"]

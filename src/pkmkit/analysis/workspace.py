@@ -369,15 +369,19 @@ class WorkspaceMap:
         out[tuple(slice(s, s + k) for s in start)] = True
         return out
 
-    def faces_reached(self) -> list[str]:
+    def faces_reached(self, layers: int = 1) -> list[str]:
         """Faces of the grid's box the feasible set touches, e.g. ``["x-", "z+"]``: where the
-        workspace may extend beyond the box studied (its measure is then a lower bound)."""
+        workspace may extend beyond the box studied (its measure is then a lower bound).
+        ``layers``: how many grid layers next to a face count (2: the feasible set comes
+        within one grid step of the face, and may cross it between samples)."""
         out = []
         for axis, k in enumerate(self.grid.free):
             name = self.grid.names[k]
-            if self.feasible.take(0, axis=axis).any():
+            n = self.feasible.shape[axis]
+            near = min(max(int(layers), 1), n)
+            if self.feasible.take(range(near), axis=axis).any():
                 out.append(f"{name}-")
-            if self.feasible.take(-1, axis=axis).any():
+            if self.feasible.take(range(n - near, n), axis=axis).any():
                 out.append(f"{name}+")
         return out
 

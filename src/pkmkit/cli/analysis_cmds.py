@@ -178,7 +178,8 @@ def enclosing_frame(m, frame: PoseFrame, criteria: Criteria,
                     slice_: tuple[int, float] | None, scale: float, scheduler=None,
                     resolution: int | None = None) -> tuple[PoseFrame, int]:
     """The frame with its default box widened until the workspace (on a coarse grid) touches
-    none of its faces, at most :data:`MAX_WIDENINGS` times: ``(frame, times widened)``. A
+    none of its faces, at most :data:`MAX_WIDENINGS` times, then moved out by one coarse step
+    where the workspace comes within a step of a face: ``(frame, times widened)``. A
     machine's default box is a region of study; a workspace study wants all of the
     workspace. The coarse grid has 25 points along the longest side in 3-D, 61 in 2-D (fewer
     if ``resolution`` asks for fewer)."""
@@ -186,19 +187,30 @@ def enclosing_frame(m, frame: PoseFrame, criteria: Criteria,
     coarse = min(coarse, resolution or coarse)
     for widened in range(MAX_WIDENINGS + 1):
         grid = build_grid(frame, None, slice_, scale, coarse)
-        faces = compute_workspace(m, grid, criteria, scheduler=scheduler).faces_reached()
+        found = compute_workspace(m, grid, criteria, scheduler=scheduler)
+        faces = found.faces_reached()
         if not faces or widened == MAX_WIDENINGS:
-            return frame, widened
-        lower, upper = frame.lower.copy(), frame.upper.copy()
-        extent = upper - lower
-        for face in faces:
-            k = frame.names.index(face[:-1])
-            if face.endswith("-"):
-                lower[k] = max(lower[k] - extent[k] / 2, -MAX_COORDINATE)
-            else:
-                upper[k] = min(upper[k] + extent[k] / 2, MAX_COORDINATE)
-        frame = replace(frame, lower=lower, upper=upper)
-    return frame, MAX_WIDENINGS
+            break
+        frame = _moved_faces(frame, faces, (frame.upper - frame.lower) / 2)
+    # the workspace within one coarse step of a face may cross it between samples: one step more
+    near = [face for face in found.faces_reached(2) if face not in faces]
+    steps = np.full(len(frame.names), float(grid.step))
+    if not near:
+        return frame, widened
+    return _moved_faces(frame, near, steps), widened + 1
+
+
+def _moved_faces(frame: PoseFrame, faces: list[str], by: np.ndarray) -> PoseFrame:
+    """``frame`` with each face of ``faces`` (``"x-"``, ``"z+"``…) moved out by ``by`` (per
+    axis, SI units), within ±:data:`MAX_COORDINATE`."""
+    lower, upper = frame.lower.copy(), frame.upper.copy()
+    for face in faces:
+        k = frame.names.index(face[:-1])
+        if face.endswith("-"):
+            lower[k] = max(lower[k] - by[k], -MAX_COORDINATE)
+        else:
+            upper[k] = min(upper[k] + by[k], MAX_COORDINATE)
+    return replace(frame, lower=lower, upper=upper)
 
 
 def _criteria(bounds, kappa_max, no_strokes) -> Criteria:
