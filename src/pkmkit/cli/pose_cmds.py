@@ -48,6 +48,16 @@ def _q_text(m, q: np.ndarray, units: str) -> str:
 
 def _pose_payload(m, pose: np.ndarray, units: str, convention: str) -> dict[str, Any]:
     """JSON fields of a full pose: position, angles in the convention, rotation vector."""
+    if family(m) == "chain":
+        # a frame of a joint-chain machine (tool frame, platform): position and rotation
+        # vector, whereas its CLI pose rows are a tool point and axis
+        from pkmkit.spatial.poses import pose_to_angles
+
+        position, angles = pose_to_angles(np.asarray(pose, dtype=float), convention,
+                                          degrees=True)
+        return {"position": np.ravel(position) / length_scale(units),
+                "angles": np.ravel(angles), "convention": convention,
+                "rotation_vector": np.asarray(pose)[3:]}
     cli = pose_to_cli(pose, m, units, convention)[0]
     return {"position": cli[:3], "angles": cli[3:], "convention": convention,
             "rotation_vector": np.asarray(pose)[3:]}
