@@ -89,3 +89,16 @@ def test_sampled_path_keeps_a_zero_length_segment_as_its_end_point():
                           [[0.01, 0.01 / 3, 0], [0.01, 0.02 / 3, 0], c]])
     np.testing.assert_allclose(pts, expected, atol=1e-15)
     assert source.tolist() == [0, 1, 1, 1, 2, 3, 3, 3]
+
+
+def test_large_batches_show_a_compensating_progress_bar(capsys):
+    """More than one batch (CHUNK targets) with progress on: the bar is labelled, and the
+    correction through an identified model equal to the nominal one is the identity."""
+    from pkmkit.calibration.compensation import CHUNK
+
+    m = pkmkit.machine("linear-delta")
+    home = np.atleast_2d(m.fk(m.home_q))[0, :3]
+    x = home + 0.01 * np.random.default_rng(2).uniform(-1, 1, (CHUNK + 1, 3))
+    out = correct_targets(m, m, x, progress=True)
+    np.testing.assert_allclose(out, x, atol=1e-12)
+    assert "compensating" in capsys.readouterr().err
