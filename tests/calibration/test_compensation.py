@@ -83,12 +83,13 @@ def test_sampled_path_keeps_a_zero_length_segment_as_its_end_point():
 
     a, b, c = np.array([0.0, 0.0, 0.0]), np.array([0.01, 0.0, 0.0]), np.array([0.01, 0.01, 0.0])
     path = Path((Line(a, b), Line(b, b), Line(b, c)))
-    pts, rapid, feed, source = sample_path(path, 0.004)
+    pts, rapid, _feed, source = sample_path(path, 0.004)
     # 3 samples per 10 mm line at a 4 mm step (ceil(10/4)), the start, the zero segment's end
     expected = np.vstack([a, [[0.01 / 3, 0, 0], [0.02 / 3, 0, 0], b], b,
                           [[0.01, 0.01 / 3, 0], [0.01, 0.02 / 3, 0], c]])
     np.testing.assert_allclose(pts, expected, atol=1e-15)
     assert source.tolist() == [0, 1, 1, 1, 2, 3, 3, 3]
+    assert rapid.tolist() == [True] + [False] * 7  # the start: rapid, no feed
 
 
 def test_large_batches_show_a_compensating_progress_bar(capsys):
