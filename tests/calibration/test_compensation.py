@@ -73,3 +73,33 @@ def test_grid_and_unreachable_targets():
     m = pkmkit.machine("linear-delta")
     with pytest.raises(InputError, match=r"out of reach of the calibrated machine \(rows 2\)"):
         correct_targets(m, m, [[0, 0, 0.2], [9.0, 0, 0]])
+
+
+def test_sampled_path_keeps_a_zero_length_segment_as_its_end_point():
+    """Documented: each segment's end is included. A zero-length segment (a Path built
+    directly; G-code drops them) adds its end point once, not a 0/0 NaN."""
+    from pkmkit.calibration.compensation import sample_path
+    from pkmkit.motion.paths import Line, Path
+
+    a, b, c = np.array([0.0, 0.0, 0.0]), np.array([0.01, 0.0, 0.0]), np.array([0.01, 0.01, 0.0])
+    path = Path((Line(a, b), Line(b, b), Line(b, c)))
+    pts, rapid, _feed, source = sample_path(path, 0.004)
+    # 3 samples per 10 mm line at a 4 mm step (ceil(10/4)), the start, the zero segment's end
+    expected = np.vstack([a, [[0.01 / 3, 0, 0], [0.02 / 3, 0, 0], b], b,
+                          [[0.01, 0.01 / 3, 0], [0.01, 0.02 / 3, 0], c]])
+    np.testing.assert_allclose(pts, expected, atol=1e-15)
+    assert source.tolist() == [0, 1, 1, 1, 2, 3, 3, 3]
+    assert rapid.tolist() == [True] + [False] * 7  # the start: rapid, no feed
+
+
+def test_large_batches_show_a_compensating_progress_bar(capsys):
+    """More than one batch (CHUNK targets) with progress on: the bar is labelled, and the
+    correction through an identified model equal to the nominal one is the identity."""
+    from pkmkit.calibration.compensation import CHUNK
+
+    m = pkmkit.machine("linear-delta")
+    home = np.atleast_2d(m.fk(m.home_q))[0, :3]
+    x = home + 0.01 * np.random.default_rng(2).uniform(-1, 1, (CHUNK + 1, 3))
+    out = correct_targets(m, m, x, progress=True)
+    np.testing.assert_allclose(out, x, atol=1e-12)
+    assert "compensating" in capsys.readouterr().err

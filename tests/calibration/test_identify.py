@@ -177,3 +177,17 @@ def test_parameters_subset_reports_the_rest(delta_case):
     for key in ("parameters", "std", "rms_before", "rms_after", "max_before", "max_after",
                 "validation", "rank", "condition", "unidentifiable"):
         assert key in payload
+
+
+def test_single_threaded_blas_limits_every_blas_pool_to_one_thread():
+    """The context's documented effect, read back with threadpoolctl (the oracle): inside it
+    every BLAS pool runs one thread; outside, the limits are restored."""
+    from threadpoolctl import threadpool_info
+
+    from pkmkit.calibration.identify import single_threaded_blas
+
+    before = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+    with single_threaded_blas():
+        inside = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+    assert inside and all(n == 1 for n in inside)
+    assert [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"] == before

@@ -41,6 +41,8 @@ def test_demo_study_writes_reports(tmp_path, monkeypatch):
     trip = summary["tripteor"]
     assert trip["poses"] == {"identification": 40, "validation": 12}
     assert 0.01 < trip["identification"]["mean"] < 0.04  # mm: tracker noise level
+    # before: the nominal model's error, well above the tracker noise the calibration reaches
+    assert trip["identification"]["mean_before"] > 3 * trip["identification"]["mean"]
     assert trip["thesis"]["identification (thesis)"]["mean"] == 0.0216
     assert "dJ41" in trip["unidentifiable_no_effect"]
     for folder in ("calibration-tripteor", "calibration-verne-part"):

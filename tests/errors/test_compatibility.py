@@ -38,6 +38,10 @@ def test_crank_slider_as_the_thesis_with_dk4_free(crank):
     assert r.compatible_dimension == 5
     assert set(r.free) == {"da2", "db2", "da3", "db3", "dK4"}  # dK4: an in-plane slide tilt
     assert r.hyperstatism == 3 and r.clear_gap and r.gap_ratio > 1e10
+    # no condition: every defect not forced to zero is independent, in the JSON summary too
+    summary = r.summary()
+    assert summary["independent"] == [n for n in r.names if n not in CRANK_FORCED]
+    assert summary["forced_zero"] == list(CRANK_FORCED) and summary["free"] == list(r.free)
     # the basis is compatible: the projected columns annihilate it
     blocks, _, _, _ = projected_defects(crank, r.q, np.array([crank.model.defect_index.index(n)
                                                               for n in r.names]))
@@ -62,6 +66,11 @@ def test_crank_slider_junctions_and_base_give_frame_relations(crank):
     assert "dI1 − dJ4 = 0" in texts
     assert "dS3F − dS4F = 0" in texts
     assert set(r.forced_zero) == {"dI2", "dJ2", "dI3", "dJ3"}
+    # independent: neither forced to zero nor in a condition (the summary's definition)
+    involved = {name for c in r.conditions for name in c.terms}
+    assert {"dI1", "dJ4", "dS3F", "dS4F"} <= involved
+    assert r.summary()["independent"] == [n for n in r.names
+                                          if n not in r.forced_zero and n not in involved]
 
 
 def test_crank_slider_symbolic_stationarity_agrees():

@@ -133,3 +133,33 @@ def test_bad_input_is_typed():
     many = m.ik(m.home_pose + np.random.default_rng(6).uniform(-0.1, 0.1, (30, 3)))
     with pytest.raises(IdentifiabilityError, match="rank 18 of 30"):
         identifiability(m, "point", many, require_full_rank=True)
+
+
+def test_part_setup_measures_full_poses_of_a_six_actuator_machine():
+    """Documented default: the machined points of a ``"part"`` measurement are the nominal tool
+    poses for a six-actuator machine (position and orientation), tool points otherwise."""
+    from pkmkit.errors.identifiability import default_setup
+
+    hexapod = pkmkit.machine("gough-stewart")
+    q = hexapod.home_q + 0.01 * np.random.default_rng(3).standard_normal((4, 6))
+    points = default_setup(hexapod, "part", q)["points"]
+    fk = np.atleast_2d(hexapod.fk(q))
+    assert points.shape == (4, 6)
+    np.testing.assert_allclose(points, fk[:, :6], atol=1e-12)
+    verne = pkmkit.machine("verne")  # five actuators: position-controlled, points only
+    assert default_setup(verne, "part", np.atleast_2d(verne.home_q))["points"].shape == (1, 3)
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1.0, 1e6])
+def test_unidentifiable_columns_are_relative_to_the_jacobian(scale):
+    """A column is "no effect" when its norm is below rtol × σ_max, whatever the units of the
+    Jacobian: multiplying J by any factor changes neither the rank nor which columns are dead.
+    Hand-built J: column 3 is 1e-13 of the others (dead), column 2 is 1e-3 (alive)."""
+    from pkmkit.errors.identifiability import analyse_jacobian
+
+    rng = np.random.default_rng(5)
+    base = rng.standard_normal((12, 2))
+    j = np.column_stack([base[:, 0], 1e-3 * base[:, 1], 1e-13 * rng.standard_normal(12)])
+    out = analyse_jacobian(scale * j, ("a", "b", "c"), np.ones(3))
+    assert out["unidentifiable"] == ("c",)
+    assert set(out["base"]) == {"a", "b"}

@@ -20,6 +20,10 @@ def test_selection_beats_random_and_reports_its_own_index(index):
     # the index recomputed from scratch on the chosen poses
     again = identifiability(m, "point", sel.q, parameters="dL*,dq*,du*")
     assert again.indices[index] == pytest.approx(sel.value, rel=1e-9)
+    # the JSON summary reports the request and the result under its documented keys
+    s = sel.summary()
+    assert (s["n_poses"], s["n_candidates"], s["index"]) == (10, 150, index)
+    assert s["value"] == sel.value and s["chosen"] == sel.chosen.tolist()
 
 
 def test_bad_requests():
