@@ -195,7 +195,8 @@ def test_random_linear_deltas_round_trip(big_r, small_r, extra, angle, offset):
     length = big_r - small_r + extra
     m = pkmkit.machine("linear-delta", R=big_r, r=small_r, L=length,
                        angles=tuple(np.radians([0.0, angle, 2 * angle])))
-    x = 0.2 * length * np.asarray(offset)
+    # within 0.2·extra·√2 < extra of the axis horizontally: every leg reaches (0.2·L did not)
+    x = 0.2 * extra * np.asarray(offset)
     q = m.ik(x)
     np.testing.assert_allclose(m.fk(q), x, atol=1e-10)
     np.testing.assert_allclose(m.fk(q, method="numeric"), x, atol=1e-9)
