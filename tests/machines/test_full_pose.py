@@ -405,3 +405,11 @@ def test_characteristic_length_from_a_file_and_in_python(tmp_path, hexapod):
     (tmp_path / "o.toml").write_text(ortho)
     with pytest.raises(pkmkit.MachineFileError, match="applies to full-pose machines"):
         pkmkit.load(tmp_path / "o.toml")
+
+
+def test_jacobian_dot_refuses_bad_twists_with_typed_errors():
+    m = pkmkit.machine("gough-stewart")
+    x = m.home_pose
+    for bad in (["a"] * 6, [np.inf] + [0.0] * 5, [1e300] + [0.0] * 5, np.zeros(5)):
+        with pytest.raises(pkmkit.errors.InputError, match="xd"):
+            m.jacobian_dot(x, bad)

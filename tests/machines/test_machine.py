@@ -1,5 +1,7 @@
 """Generic behaviour of :class:`pkmkit.Machine` on every preset and on random machines."""
 
+import warnings
+
 import numpy as np
 import pytest
 from hypothesis import assume, given
@@ -279,3 +281,18 @@ def test_transmission_factors_stay_accurate_near_a_parallel_singularity(ident, s
         expected = np.array([float(1 / v) for v in sigma[::-1]])
         kappa = expected[0] / expected[-1]
         np.testing.assert_allclose(jac.singular_values, expected, rtol=50 * 2.2e-16 * kappa)
+
+
+def test_jacobian_dot_batch_flags_rows_with_absurd_velocities():
+    """A batch row with an infinite or 1e308 velocity gives NaN rates (no overflow warning);
+    the other rows are those of the same call on them alone."""
+    m = pkmkit.machine("linear-delta-ch3")
+    x = np.array([[0.0, 0.0, 0.0], [-0.05, 0.02, 0.01], [0.03, 0.0, -0.02]])
+    xd = np.array([[1.3e308, 0.0, 0.0], [0.1, -0.2, 0.05], [np.inf, 0.0, 0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rates = m.jacobian_dot(x, xd)
+    assert np.isnan(rates.J_dot[[0, 2]]).all() and np.isnan(rates.qd[[0, 2]]).all()
+    alone = m.jacobian_dot(x[1], xd[1])
+    np.testing.assert_allclose(rates.J_dot[1], alone.J_dot, rtol=1e-12)
+    np.testing.assert_allclose(rates.qd[1], alone.qd, rtol=1e-12)

@@ -711,7 +711,10 @@ class FullPoseMachine:
         b = jac.B[None] if single else jac.B
         qb = np.atleast_2d(jac.q)
         size = poses.shape[0]
-        xdb = np.asarray(xd, dtype=float)
+        try:
+            xdb = np.asarray(xd, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"xd must be an array of numbers: {exc}") from None
         xdb = xdb[None] if xdb.ndim == 1 else xdb
         widths = (6, 3) if self.position_controlled else (6,)
         if xdb.ndim != 2 or xdb.shape[1] not in widths or xdb.shape[0] != size:
@@ -719,6 +722,8 @@ class FullPoseMachine:
                              f"match x, got {np.shape(xd)}")
         if not np.isfinite(xdb).all():
             raise InputError("xd must be finite")
+        if (np.abs(xdb) > 1e9).any():
+            raise InputError("xd has a component beyond 1e9 (m/s or rad/s): check the units")
         with np.errstate(invalid="ignore"):
             if xdb.shape[1] == 3:
                 qd = np.full((size, self.n_actuators), np.nan)

@@ -658,6 +658,8 @@ class Machine:
         xdb, _ = _checked_batch(xd, self.dims, "xd") if single else as_batch(xd, self.dims, "xd")
         if xdb.shape[0] != xb.shape[0]:
             raise InputError(f"x has {xb.shape[0]} rows but xd has {xdb.shape[0]}")
+        # rows of a batch with non-finite or absurd velocities give NaN, the others go on
+        xdb = np.where(_valid_rows(xdb)[:, None], xdb, np.nan)
         jac = self._jacobians(xb, qb, SINGULARITY_TOL)
         qd = np.einsum("kij,kj->ki", jac.J_inv, xdb)
         a_dot, b_dot = self._closed.jacobian_rates(xdb, qd, xb, jac.q)
