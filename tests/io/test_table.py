@@ -70,6 +70,7 @@ def test_columns_by_name_and_without_header(tmp_path):
     (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR", "not a text file"),
     (b"x,y,z\n\xff\xfe,1,2\n", r"in.csv:2: column 'x' is not a number"),
     (b"\xff\xfex,y,z\n1,2,3\n", "in.csv:1: not a UTF-8 text line"),
+    (b"0\rx,y,z\n1,2,3\n", "in.csv:1: the header is not a CSV line"),
 ])
 def test_errors_name_file_and_line(tmp_path, data, message):
     path = tmp_path / "in.csv"
@@ -230,3 +231,15 @@ def test_csv_formatted_in_parallel_slices_is_identical(tmp_path, monkeypatch):
             writer.write(columns)
         texts.append(path.read_text())
     assert texts[0] == texts[1] and texts[0].count("\n") == 5001
+
+
+def test_a_stray_carriage_return_flags_its_row(tmp_path):
+    """A lone \\r inside a data line (found by fuzzing: the csv module raised) flags that row
+    and keeps the others."""
+    path = tmp_path / "in.csv"
+    path.write_bytes(b"x,y,z\n0,0,0\n0.1\r,0,0\n0,0.1,0\n")
+    values, invalid, problems = _read(path, ["x", "y", "z"], 1000)
+    assert invalid.tolist() == [False, True, False]
+    np.testing.assert_array_equal(values[[0, 2]], [[0, 0, 0], [0, 0.1, 0]])
+    assert problems == [f"{path}:3: not a CSV line (a stray carriage return or line break "
+                        "inside it)"]

@@ -243,7 +243,11 @@ class _CsvSource:
                 break
             buffer = buffer[len(line):]
             line_no += 1
-        cells = next(csv.reader([text]))
+        try:
+            cells = next(csv.reader([text]))
+        except csv.Error as exc:
+            raise InputError(f"{r.path}:{line_no}: the header is not a CSV line (a stray "
+                             f"carriage return or line break inside it)") from exc
         if _numeric(cells):
             self.width = len(cells)
             self.index = list(range(len(r.columns)))
@@ -339,7 +343,15 @@ class _CsvSource:
         invalid = np.zeros(len(rows), dtype=bool)
         problems: list[str] = []
         need = max(self.index) + 1
-        for k, (cells, number) in enumerate(zip(csv.reader(rows), lines, strict=True)):
+        for k, (row, number) in enumerate(zip(rows, lines, strict=True)):
+            try:
+                cells = next(csv.reader([row]), [])
+            except csv.Error:  # e.g. a lone carriage return inside the line
+                problems.append(f"{r.path}:{number}: not a CSV line (a stray carriage return "
+                                "or line break inside it)")
+                values[k] = np.nan
+                invalid[k] = True
+                continue
             if len(cells) < need:
                 problems.append(f"{r.path}:{number}: expected at least {need} columns, got "
                                 f"{len(cells)}")
