@@ -6,8 +6,9 @@ library: only :class:`pkmkit.PkmError` subclasses are raised on bad input (any o
 fails the test), no call hangs (each example runs under a wall-clock alarm), and an answer that
 is returned is checked (round trips, closure residuals, invariants).
 
-Profiles: ``default`` keeps the suite fast (few examples per test); ``ci`` runs many more —
-``HYPOTHESIS_PROFILE=ci python -m pytest tests/fuzz``.
+Profiles: ``default`` keeps the suite fast (few examples per test); ``ci`` runs many more,
+the same ones on every run (``HYPOTHESIS_PROFILE=ci python -m pytest tests/fuzz``, what
+``.ci/run`` runs); ``explore`` runs as many, new ones each time, to hunt for bugs.
 """
 
 from __future__ import annotations
@@ -18,11 +19,14 @@ import signal
 
 from hypothesis import HealthCheck, settings
 
-_COMMON = {"deadline": None, "derandomize": False,
+_COMMON = {"deadline": None,
            "suppress_health_check": [HealthCheck.too_slow, HealthCheck.data_too_large,
                                      HealthCheck.filter_too_much]}
-settings.register_profile("default", max_examples=25, **_COMMON)
-settings.register_profile("ci", max_examples=400, **_COMMON)
+settings.register_profile("default", max_examples=25, derandomize=False, **_COMMON)
+# the gate of .ci/run: many examples, the same ones on every run (a landing does not depend on
+# luck); `explore` draws new ones on every run, to hunt for bugs by hand
+settings.register_profile("ci", max_examples=400, derandomize=True, **_COMMON)
+settings.register_profile("explore", max_examples=400, derandomize=False, **_COMMON)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 
 #: For tests whose examples each run an optimiser (sizing rules, arm sizing): a fifth of the
