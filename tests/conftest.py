@@ -18,6 +18,7 @@ settings.register_profile("dev", max_examples=25, deadline=None, derandomize=Tru
                           suppress_health_check=[HealthCheck.too_slow,
                                                  HealthCheck.filter_too_much])
 settings.register_profile("ci", settings.get_profile("dev"), max_examples=100)
+settings.register_profile("explore", settings.get_profile("ci"), derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE")
                       or ("ci" if os.environ.get("CI") else "dev"))
 

@@ -86,3 +86,11 @@ def test_planar_points_are_lifted_to_z_0():
     np.testing.assert_array_equal(seg.start, [0.1, 0.2, 0.0])
     np.testing.assert_array_equal(seg.end, [0.4, -0.2, 0.0])
     np.testing.assert_allclose(circle([1.0, 0.5], 0.2).segments[0].center, [1.0, 0.5, 0.0])
+
+
+@pytest.mark.parametrize("width, height, passes", [(4.7e-180, 0.1, 2), (0.1, 1e-15, 3),
+                                                   (1e-10, 0.0, 1)])
+def test_raster_refuses_moves_of_nearly_zero_length(width, height, passes):
+    """Found by fuzzing: a 4.7e-180 m wide rectangle gave passes of length 0."""
+    with pytest.raises(InputError, match="shorter than 1e-09 m"):
+        raster((0.0, 0.0, 0.0), width, height, passes)

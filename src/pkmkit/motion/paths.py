@@ -335,6 +335,10 @@ def raster(corner, width: float, height: float, passes: int, *, strategy: str = 
                          Line(previous + up, a + up, rapid=True),
                          Line(a + up, a)]
             segs.append(Line(a, b))
+    shortest = min(seg.length for seg in segs)
+    if not shortest >= MIN_RADIUS:  # a pass, step-over or retract of (nearly) zero length
+        raise InputError(f"a facing move of {shortest:.3g} m (pass, step-over or clearance) is "
+                         f"shorter than {MIN_RADIUS:g} m: check the sizes and their units")
     return Path(tuple(segs))
 
 
