@@ -23,6 +23,8 @@ from pkmkit.numerics.arrays import real
 MAX_PATH_LENGTH = 1e6
 #: Smallest arc radius, m (below, curvatures and their powers overflow).
 MIN_RADIUS = 1e-9
+#: Shortest move of a generated path (facing passes, step-overs, retracts), m.
+MIN_MOVE = 1e-9
 
 #: Most segments a path may hold: each is a Python object (about :data:`SEGMENT_BYTES`), and
 #: a longer path would exhaust memory before it is even sampled.
@@ -336,9 +338,9 @@ def raster(corner, width: float, height: float, passes: int, *, strategy: str = 
                          Line(a + up, a)]
             segs.append(Line(a, b))
     shortest = min(seg.length for seg in segs)
-    if not shortest >= MIN_RADIUS:  # a pass, step-over or retract of (nearly) zero length
+    if not shortest >= MIN_MOVE:  # a pass, step-over or retract of (nearly) zero length
         raise InputError(f"a facing move of {shortest:.3g} m (pass, step-over or clearance) is "
-                         f"shorter than {MIN_RADIUS:g} m: check the sizes and their units")
+                         f"shorter than {MIN_MOVE:g} m: check the sizes and their units")
     return Path(tuple(segs))
 
 
