@@ -44,6 +44,7 @@ from pkmkit.machines.machine import (
     _rows_like,
     _valid_rows,
 )
+from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.results import (
     DirectResult,
     InverseResult,
@@ -109,7 +110,7 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class FullPoseMachine:
+class FullPoseMachine(ModeNaming):
     """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
 
     Attributes:
@@ -229,27 +230,6 @@ class FullPoseMachine:
         """True when the machine has fewer than six actuators: its orientation follows its
         position (a Verne-type module), and :meth:`ik` also accepts positions ``(N, 3)``."""
         return self.n_actuators < 6
-
-    @property
-    def working_mode(self) -> int:
-        """Sign of det A at home (six rods), the working assembly mode's sign."""
-        return self._working_mode
-
-    @property
-    def mode_labels(self) -> tuple[str, str]:
-        """Names of the det A signs, working sign first."""
-        neg, pos = self.model.mode_names
-        return (neg, pos) if self._working_mode < 0 else (pos, neg)
-
-    def mode_label(self, sign: int) -> str:
-        """Name of the det A sign ``sign`` (±1)."""
-        return self.model.mode_names[0 if sign < 0 else 1]
-
-    def reference_poses(self) -> dict[str, np.ndarray]:
-        """Named sample poses, ``home`` first, each ``(6,)``."""
-        poses = {"home": self.home_pose}
-        poses.update({k: np.asarray(v, dtype=float) for k, v in self.extra_poses.items()})
-        return poses
 
     def default_box(self) -> tuple[np.ndarray, np.ndarray]:
         """Position region ``(lower (3,), upper (3,))`` (m) for workspace studies: the kind's

@@ -27,6 +27,7 @@ from pkmkit.errors import (
     UnreachablePoseError,
 )
 from pkmkit.machines.closed_form import RodClosedForm
+from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.results import (
     AssemblyModes,
     DirectResult,
@@ -114,7 +115,7 @@ def _restore(result, single: bool, names: tuple[str, ...]):
 
 
 @dataclass(frozen=True, eq=False)
-class Machine:
+class Machine(ModeNaming):
     """A parallel kinematic machine (translational rod-leg family).
 
     Attributes:
@@ -194,27 +195,6 @@ class Machine:
     def home_q(self) -> np.ndarray:
         """Actuator coordinates at the home pose ``(n,)``, m."""
         return self._home_q.copy()
-
-    @property
-    def working_mode(self) -> int:
-        """Sign of det A in the working assembly mode (the one containing the home pose)."""
-        return self._working_mode
-
-    @property
-    def mode_labels(self) -> tuple[str, str]:
-        """Assembly-mode names, working mode first."""
-        neg, pos = self.model.mode_names
-        return (neg, pos) if self._working_mode < 0 else (pos, neg)
-
-    def mode_label(self, sign: int) -> str:
-        """Name of the assembly mode with det A of sign ``sign`` (±1)."""
-        return self.model.mode_names[0 if sign < 0 else 1]
-
-    def reference_poses(self) -> dict[str, np.ndarray]:
-        """Named sample poses, ``home`` first, each ``(dims,)`` m."""
-        poses = {"home": self.home_pose}
-        poses.update({k: np.asarray(v, dtype=float) for k, v in self.extra_poses.items()})
-        return poses
 
     def default_box(self) -> tuple[np.ndarray, np.ndarray]:
         """Region ``(lower (dims,), upper (dims,))`` (m) for workspace studies: the kind's
