@@ -26,11 +26,11 @@ import time
 import numpy as np
 
 import pkmkit
-from pkmkit.errors.compatibility import compatibility
-from pkmkit.errors.configurations import sample_configurations
-from pkmkit.errors.measurements import measure, measurement_jacobian
-from pkmkit.errors.model import defect_set, with_defects
-from pkmkit.errors.tolerance import exact_rod_points, tolerances
+from pkmkit.geometric_errors.compatibility import compatibility
+from pkmkit.geometric_errors.configurations import sample_configurations
+from pkmkit.geometric_errors.measurements import measure, measurement_jacobian
+from pkmkit.geometric_errors.model import defect_set, with_defects
+from pkmkit.geometric_errors.tolerance import exact_rod_points, tolerances
 
 
 def _busy(stop) -> None:  # pragma: no cover - a competing process

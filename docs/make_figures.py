@@ -74,8 +74,8 @@ def motion() -> None:
 def errors() -> None:
     """The figures of docs/errors.md."""
     from pkmkit.cli.demo_errors import hexapod_accuracy_map
-    from pkmkit.errors.compatibility import compatibility
-    from pkmkit.errors.sensitivity import sensitivity_analysis
+    from pkmkit.geometric_errors.compatibility import compatibility
+    from pkmkit.geometric_errors.sensitivity import sensitivity_analysis
     from pkmkit.plot.error_figures import plot_sensitivity
 
     hexapod_accuracy_map(OUT)

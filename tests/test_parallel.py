@@ -12,7 +12,7 @@ import pkmkit
 from pkmkit.analysis import Criteria, compute_workspace
 from pkmkit.analysis.grids import make_grid
 from pkmkit.analysis.indices import index_values, indices, scalar_index
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.parallel import (
     chunk_ranges,
     chunk_seeds,

@@ -22,7 +22,7 @@ Quick start:
 SI units everywhere in the Python API (m, rad).
 """
 
-from pkmkit.errors import (
+from pkmkit.exceptions import (
     ConvergenceError,
     InputError,
     MachineFileError,

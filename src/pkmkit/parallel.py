@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 #: Default rows per task for pose-level work: large enough that the per-task overhead of Dask
 #: (a few ms) is small against the batched call, small enough to spread over the workers.

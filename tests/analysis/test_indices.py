@@ -9,7 +9,7 @@ from pkmkit.analysis.indices import (
     indices,
     scalar_index,
 )
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from tests.conftest import random_poses
 
 

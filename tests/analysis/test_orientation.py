@@ -12,7 +12,7 @@ from pkmkit.analysis.orientation import (
     tilt_torsion_angles,
     tilt_torsion_rotation,
 )
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 
 def test_tilt_and_torsion_round_trip_and_meaning():

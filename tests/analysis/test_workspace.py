@@ -17,7 +17,7 @@ from pkmkit.analysis.workspace import (
     largest_inscribed_box,
     useful_workspace,
 )
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 
 def plane_grid(shape, step=1.0):

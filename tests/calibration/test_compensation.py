@@ -15,7 +15,7 @@ from pkmkit.calibration.compensation import (
     grid_targets,
 )
 from pkmkit.calibration.controller import corrected_targets, executed
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.io.compensation_files import corrected_gcode, correction_table
 from pkmkit.model.defects_table import apply_defect_vector
 from pkmkit.motion.gcode import read_gcode

@@ -13,8 +13,8 @@ from pkmkit.calibration.identifiability import (
     prune_weak,
 )
 from pkmkit.calibration.simulate import default_configurations
-from pkmkit.errors import InputError
-from pkmkit.errors.model import defect_set, tool_sensitivity
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
 
 
 def test_dependent_and_zero_columns_are_reported_with_their_combination():

@@ -11,7 +11,7 @@ import pkmkit
 from pkmkit.calibration import calibrate, identification_problem, random_defects, simulate
 from pkmkit.calibration.identify import check_measurements
 from pkmkit.calibration.registration import Registration
-from pkmkit.errors import InputError, ParameterError
+from pkmkit.exceptions import InputError, ParameterError
 from pkmkit.model.defects_table import apply_defect_vector
 from pkmkit.spatial.rotation import rotvec_to_matrix
 

@@ -8,7 +8,7 @@ import pytest
 
 import pkmkit
 from pkmkit.calibration import random_defects
-from pkmkit.errors import MachineFileError
+from pkmkit.exceptions import MachineFileError
 from pkmkit.io.machine_defects import machine_text_with_defects, write_machine_with_defects
 from pkmkit.machines.registry import preset_path
 from pkmkit.model.defects_table import apply_defect_vector

@@ -10,8 +10,8 @@ import pkmkit
 from pkmkit.calibration.models import make_model
 from pkmkit.calibration.registration import Registration
 from pkmkit.calibration.simulate import random_defects, simulate
-from pkmkit.errors import InputError
-from pkmkit.errors.model import defect_set
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors.model import defect_set
 from pkmkit.model.defects_table import apply_defect_vector
 
 CASES = [("linear-delta", "point"), ("linear-delta", "height"), ("verne", "ballbar"),

@@ -15,7 +15,7 @@ from pkmkit.calibration.registration import (
     register_points,
     save_registration,
 )
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 # seed 002, Table 5.4 (mm): tracker (LTS) and controller (BCS) coordinates of 4 points; LTS
 # "directions" are long-tool minus short-tool tips (norm 59.883 = 169.889 − 110.006)

@@ -9,8 +9,8 @@ import pkmkit
 from pkmkit.calibration import default_configurations, random_defects, simulate
 from pkmkit.calibration.identify import _strokes
 from pkmkit.calibration.simulate import Noise
-from pkmkit.errors import InputError
-from pkmkit.errors.model import tool_sensitivity
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors.model import tool_sensitivity
 from pkmkit.model.defects_table import apply_defect_vector
 
 

@@ -5,7 +5,7 @@ import pytest
 
 import pkmkit
 from pkmkit.analysis.grids import make_grid
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.spatial.rotation import rotvec_to_matrix
 
 

@@ -3,7 +3,7 @@ import pytest
 
 from pkmkit.analysis.workspace import Criteria, check_region
 from pkmkit.design.five_bar import isotropic_orientations, size_five_bar
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 
 def test_isotropy_of_j_inverse_fixes_the_slide_orientations():

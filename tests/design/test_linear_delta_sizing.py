@@ -10,7 +10,7 @@ import pytest
 
 import pkmkit
 from pkmkit.design.linear_delta import VERTICAL_FACTOR, size_linear_delta
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 THETA = np.radians([0.0, 120.0, 240.0])
 CENTER = np.array([0.0, 0.0, 0.25])

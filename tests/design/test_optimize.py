@@ -13,7 +13,7 @@ from pkmkit.design.optimize import (
     Variable,
     optimize,
 )
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 REGION = Region(0.5, (0.0, 0.0, 0.25))
 CRITERIA = Criteria(bounds=(0.4, 2.5))

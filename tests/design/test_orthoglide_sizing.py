@@ -5,7 +5,7 @@ import pkmkit
 from pkmkit.analysis.grids import make_grid
 from pkmkit.analysis.workspace import Criteria, check_region, compute_workspace
 from pkmkit.design.orthoglide import size_orthoglide
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 
 def test_seed_001_prototype():

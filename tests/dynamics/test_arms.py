@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pkmkit.dynamics.arms import Material, analyse_arm, seed_tables, size_arm
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 
 def test_seed_tables_iv2_iv3():

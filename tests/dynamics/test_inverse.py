@@ -10,7 +10,7 @@ from pkmkit.dynamics import (
     mechanical_energy,
     rod_section_mass,
 )
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.motion import circle, helix, joint_trajectory, plan
 from tests.conftest import random_poses
 

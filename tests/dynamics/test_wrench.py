@@ -6,7 +6,7 @@ import pytest
 import pkmkit
 from pkmkit.dynamics import WrenchSeries, inverse_dynamics, load_wrench_series, mass_properties
 from pkmkit.dynamics.trajectory import simulate_path
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.motion import line
 
 

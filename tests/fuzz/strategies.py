@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import event
 from hypothesis import strategies as st
 
-from pkmkit.errors import PkmError
+from pkmkit.exceptions import PkmError
 
 from .conftest import bounded
 

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.io.table import read_table, write_table
 

@@ -8,7 +8,7 @@ import pytest
 
 import pkmkit
 from pkmkit.calibration import simulate
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.io.measurements import (
     atomic_write_text,
     format_measurements,

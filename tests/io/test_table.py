@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.io.atomic import atomic_path, check_output_dir
 from pkmkit.io.table import Labels, TableReader, TableWriter, csv_text, read_table, table_format
 

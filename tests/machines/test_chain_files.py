@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 import pkmkit
-from pkmkit.errors import MachineFileError, ParameterError
+from pkmkit.exceptions import MachineFileError, ParameterError
 from pkmkit.machines.chain_file import machine_file_text
 
 EXAMPLE = Path(__file__).parents[2] / "docs" / "examples" / "crank-slider.toml"

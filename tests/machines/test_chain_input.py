@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import (
+from pkmkit.exceptions import (
     ClosureMissError,
     InputError,
     NoAssemblyError,

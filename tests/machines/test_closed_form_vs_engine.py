@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import ConvergenceError
+from pkmkit.exceptions import ConvergenceError
 from pkmkit.status import Status
 from tests.conftest import random_poses
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import UnreachablePoseError
+from pkmkit.exceptions import UnreachablePoseError
 from pkmkit.machines.delta_robot import symmetric_height
 
 RNG = np.random.default_rng(42)

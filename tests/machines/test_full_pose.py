@@ -10,7 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import pkmkit
-from pkmkit.errors import InputError, ParameterError, UnreachablePoseError
+from pkmkit.exceptions import InputError, ParameterError, UnreachablePoseError
 from pkmkit.machines.full_pose import FullPoseMachine
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.solve.rod_closure import solve_inverse
@@ -411,5 +411,5 @@ def test_jacobian_dot_refuses_bad_twists_with_typed_errors():
     m = pkmkit.machine("gough-stewart")
     x = m.home_pose
     for bad in (["a"] * 6, [np.inf] + [0.0] * 5, [1e300] + [0.0] * 5, np.zeros(5)):
-        with pytest.raises(pkmkit.errors.InputError, match="xd"):
+        with pytest.raises(pkmkit.exceptions.InputError, match="xd"):
             m.jacobian_dot(x, bad)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import InputError, NoAssemblyError, ParameterError
+from pkmkit.exceptions import InputError, NoAssemblyError, ParameterError
 from pkmkit.status import Status
 from tests.conftest import random_poses
 

@@ -8,7 +8,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 import pkmkit
-from pkmkit.errors import (
+from pkmkit.exceptions import (
     InputError,
     NoAssemblyError,
     SingularConfigurationError,

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import MachineFileError, ParameterError, UnknownMachineError
+from pkmkit.exceptions import MachineFileError, ParameterError, UnknownMachineError
 from pkmkit.machines.registry import preset_path
 
 

@@ -26,7 +26,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import pkmkit
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.machines.joint_chain import JointChainMachine
 from pkmkit.model.chains import build_chain_model
 from pkmkit.solve.chains import chain_pose

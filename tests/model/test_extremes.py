@@ -11,7 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import pkmkit
-from pkmkit.errors import InputError, MachineFileError, PkmError
+from pkmkit.exceptions import InputError, MachineFileError, PkmError
 from pkmkit.model.machine_file import read_machine_document
 from pkmkit.model.text_files import MAX_NESTING, number_problem, toml_nesting
 

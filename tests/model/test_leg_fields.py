@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.machines.registry import leg_parameters, with_leg_values
 
 TRIPOD = """

@@ -1,6 +1,6 @@
 import pytest
 
-from pkmkit.errors import MachineFileError
+from pkmkit.exceptions import MachineFileError
 from pkmkit.model.machine_file import read_machine_document
 
 TOML = """# comment

@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from pkmkit.errors import ParameterError, UnknownParameterError
+from pkmkit.exceptions import ParameterError, UnknownParameterError
 from pkmkit.model.parameters import ParameterSpec, length_scale, resolve_parameters
 
 LENGTH = ParameterSpec("L", "length", 1.0, "rod", positive=True)

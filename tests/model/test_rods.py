@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.model.rods import SLIDE, STRUT, LegSpec, build_rod_model
 
 

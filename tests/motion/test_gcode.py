@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.motion.gcode import read_gcode
 
 PROGRAM = """%

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.motion import Limits, check_limits, circle, helix, joint_trajectory, line, plan
 
 

@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.motion.paths import arc_through, chain, circle, helix, line, raster
 
 

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.motion.gcode import read_gcode
 from pkmkit.motion.paths import Arc, Line, Path, circle, line, raster
 from pkmkit.motion.timelaw import plan, scurve, trapezoid

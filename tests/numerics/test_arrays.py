@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.numerics.arrays import as_batch, finite_rows, require_finite, restore_shape
 
 

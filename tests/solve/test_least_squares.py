@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.solve.least_squares import (
     BlockPattern,
     _BlockNormal,

@@ -3,8 +3,8 @@
 import numpy as np
 
 import pkmkit
-from pkmkit.errors.model import _rod_index
-from pkmkit.errors.tolerance import exact_rod_points, nominal_gains
+from pkmkit.geometric_errors.model import _rod_index
+from pkmkit.geometric_errors.tolerance import exact_rod_points, nominal_gains
 from pkmkit.solve.rod_samples import sampled_geometry, solve_sampled_direct
 
 
@@ -25,14 +25,14 @@ def test_impossible_samples_are_nan_and_flagged():
 
 
 def test_one_configuration_path_equals_the_chunked_path():
-    from pkmkit.errors.configurations import sample_configurations
-    from pkmkit.errors.model import with_defects
-    from pkmkit.errors.tolerance import tolerances
+    from pkmkit.geometric_errors.configurations import sample_configurations
+    from pkmkit.geometric_errors.model import with_defects
+    from pkmkit.geometric_errors.tolerance import tolerances
 
     for name in ("gough-stewart", "verne", "linear-delta", "five-bar"):
         m = pkmkit.machine(name)
         index = _rod_index(m)
-        kinds = set(pkmkit.errors.model.defect_set(m).kinds)
+        kinds = set(pkmkit.geometric_errors.model.defect_set(m).kinds)
         tol = tolerances(m, classes=dict.fromkeys(kinds, 1e-4))
         samples = tol.sample(5, np.random.default_rng(3))
         q = sample_configurations(m, 3, seed=4).q

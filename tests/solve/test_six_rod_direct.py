@@ -14,7 +14,7 @@ import pytest
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.solve.six_rod_direct import MAX_SOLUTIONS, six_rod_direct_all
 from pkmkit.solve.six_rod_paths import EndKind
 from pkmkit.status import Status

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.spatial import (
     DEFAULT_CONVENTION,
     angles_from_rotation,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.spatial.registration import rigid_registration
 
 # Table 5.4 (L1884-1912): four points measured by the tracker (LTS) and read by the CNC (BCS),

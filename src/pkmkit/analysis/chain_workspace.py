@@ -22,7 +22,7 @@ import warnings
 
 import numpy as np
 
-from pkmkit.errors import StrokeWarning
+from pkmkit.exceptions import StrokeWarning
 from pkmkit.status import Status
 
 
@@ -81,7 +81,7 @@ def chain_index_values(machine, points: np.ndarray, name: str) -> np.ndarray:
         InputError: an index a joint-chain machine does not define (the distances to
             singularities are those of rod machines' A and B matrices).
     """
-    from pkmkit.errors import InputError
+    from pkmkit.exceptions import InputError
 
     if name not in CHAIN_INDICES:
         raise InputError(f"index {name!r} is not defined for a joint-chain machine; its "

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 #: Largest number of points of a grid (170³ ≈ 4.9e6 in 3-D; 2001² ≈ 4.0e6 in 2-D).
 MAX_GRID_POINTS = 5_000_000

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
 from pkmkit.machines.results import Jacobians
 from pkmkit.numerics.linalg import condition_number, singular_values

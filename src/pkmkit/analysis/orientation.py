@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.status import Status
 
 

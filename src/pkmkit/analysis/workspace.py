@@ -30,7 +30,7 @@ from scipy import ndimage
 from pkmkit.analysis.grids import Grid, make_grid, pose_frame
 from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.inscribed import largest_box
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
 from pkmkit.numerics.arrays import real, real_pair
 from pkmkit.parallel import map_chunks

@@ -6,7 +6,7 @@
 - :mod:`~pkmkit.calibration.models` — residual models of each measurement type with their
   analytic Jacobians (and the set-up parameters: frame, part placement, pivots, bed);
 - :mod:`~pkmkit.calibration.identifiability` — compatible subspace of a hyperstatic machine and
-  the identifiable parameters (a small interface meant to delegate to ``pkmkit.errors``'
+  the identifiable parameters (a small interface meant to delegate to ``pkmkit.geometric_errors``'
   identifiability analysis once it exists);
 - :mod:`~pkmkit.calibration.identify` — :func:`calibrate`: identification, uncertainties,
   validation;

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.calibration.controller import as_targets, corrected_targets, executed
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 #: Targets per batch (progress bars advance per batch).
 CHUNK = 2000

@@ -23,8 +23,8 @@ from typing import Any
 import numpy as np
 
 from pkmkit.calibration.models import tool_state
-from pkmkit.errors import InputError
-from pkmkit.errors.model import _family
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors.model import _family
 from pkmkit.spatial.rotation import rotvec_to_matrix
 
 

@@ -5,7 +5,7 @@ Two questions, both answered on Jacobians evaluated at the measured configuratio
 
 - **compatibility** (hyperstatic machines): a defect vector δ is *compatible* when the legs still
   close exactly, i.e. when its closure residual has no part that a motion can absorb
-  (``closure_defect`` of :func:`pkmkit.errors.model.tool_sensitivity`, stacked over many
+  (``closure_defect`` of :func:`pkmkit.geometric_errors.model.tool_sensitivity`, stacked over many
   configurations: ``C δ = 0``). :func:`compatible_directions` returns the compatible subspace
   as ``δ = N δ_free``: the *free* defects keep their names and the *dependent* ones (one per
   independent condition, chosen by QR with column pivoting on C) follow from them — so that the
@@ -21,8 +21,8 @@ Two questions, both answered on Jacobians evaluated at the measured configuratio
 
 This is deliberately a small interface (arrays in, indices and reasons out) so that it can later
 delegate to the error-analysis package's identifiability functions (issue 10:
-``pkmkit.errors.identifiability`` — base parameters, gauges, observability indices) without
-changing the calibration code that calls it.
+``pkmkit.geometric_errors.identifiability`` — base parameters, gauges, observability indices)
+without changing the calibration code that calls it.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 #: Default relative rank threshold on the pivoted-QR diagonal of tolerance-scaled columns.
 RCOND = 1e-7
@@ -313,8 +313,9 @@ def prune_weak(jacobian: np.ndarray, scale: np.ndarray, *, sigma: float = 1.0,
 
 
 # the error-analysis package's identifiability and pose selection, under the calibration
-# namespace too (one implementation: pkmkit.errors.identifiability, pkmkit.errors.pose_selection)
-from pkmkit.errors.identifiability import (  # noqa: E402, F401
+# namespace too (one implementation: pkmkit.geometric_errors.identifiability,
+# pkmkit.geometric_errors.pose_selection)
+from pkmkit.geometric_errors.identifiability import (  # noqa: E402, F401
     INDICES,
     Combination,
     IdentifiabilityResult,
@@ -328,4 +329,4 @@ from pkmkit.errors.identifiability import (  # noqa: E402, F401
     indices_from_singular_values,
     observability,
 )
-from pkmkit.errors.pose_selection import PoseSelection, select_poses  # noqa: E402, F401
+from pkmkit.geometric_errors.pose_selection import PoseSelection, select_poses  # noqa: E402, F401

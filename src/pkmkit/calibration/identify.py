@@ -51,8 +51,8 @@ from pkmkit.calibration.identifiability import (
 from pkmkit.calibration.measurement_set import MeasurementSet
 from pkmkit.calibration.models import ResidualModel, make_model
 from pkmkit.calibration.registration import Registration
-from pkmkit.errors import ConvergenceError, InputError, ParameterError
-from pkmkit.errors.model import _family, defect_set, tool_sensitivity
+from pkmkit.exceptions import ConvergenceError, InputError, ParameterError
+from pkmkit.geometric_errors.model import _family, defect_set, tool_sensitivity
 from pkmkit.model.defects_table import apply_defect_vector
 from pkmkit.status import Status
 

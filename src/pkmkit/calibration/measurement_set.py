@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 KINDS = ("point", "pose", "ballbar", "height", "part")
 #: Readings per row of each kind.

@@ -29,8 +29,9 @@ Residual ``r = predicted − measured`` per observation (row of a :class:`Measur
   normal part ``(I − t tᵀ) ∂V/∂(δ, placement)`` (t the curve's unit tangent; moving along the
   curve does not change the distance to first order).
 
-The Jacobians with respect to the defects come from :func:`pkmkit.errors.model.tool_sensitivity`
-and :func:`pkmkit.errors.measurements.measurement_jacobian` (analytic, through the closure).
+The Jacobians with respect to the defects come from
+:func:`pkmkit.geometric_errors.model.tool_sensitivity` and
+:func:`pkmkit.geometric_errors.measurements.measurement_jacobian` (analytic, through the closure).
 """
 
 from __future__ import annotations
@@ -41,8 +42,8 @@ import numpy as np
 
 from pkmkit.calibration.measurement_set import MeasurementSet
 from pkmkit.calibration.registration import Registration
-from pkmkit.errors import InputError, PkmError
-from pkmkit.errors.model import _family, tool_sensitivity
+from pkmkit.exceptions import InputError, PkmError
+from pkmkit.geometric_errors.model import _family, tool_sensitivity
 from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix, skew
 
 #: Spacing of the samples of a commanded path in Cartesian space (m).
@@ -143,7 +144,7 @@ def tool_state(machine, q: np.ndarray, tool_length: np.ndarray | None, *, jacobi
 
 
 def _nan_state(machine, q, rotation) -> ToolState:
-    from pkmkit.errors.model import defect_set
+    from pkmkit.geometric_errors.model import defect_set
 
     n, d = q.shape[0], len(defect_set(machine))
     nan3 = np.full((n, 3), np.nan)
@@ -443,7 +444,7 @@ class PartModel(ResidualModel):
         return p, dp
 
     def residuals(self, machine, setup, *, jacobian):
-        from pkmkit.errors.measurements import measurement_jacobian
+        from pkmkit.geometric_errors.measurements import measurement_jacobian
 
         p, dp = self.placed(setup)
         v = np.atleast_2d(_ik(machine, p))
@@ -466,7 +467,7 @@ class PartModel(ResidualModel):
         except PkmError:
             ok[:] = False
         if not ok.all():
-            from pkmkit.errors.model import defect_set
+            from pkmkit.geometric_errors.model import defect_set
 
             d = len(defect_set(machine))
             return r, np.full((n, w, d), np.nan), np.full((n, w, 4), np.nan)

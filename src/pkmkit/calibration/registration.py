@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
 
 

@@ -39,8 +39,8 @@ from pkmkit.calibration.identifiability import compatible_directions
 from pkmkit.calibration.measurement_set import KINDS, MeasurementSet
 from pkmkit.calibration.models import tool_state
 from pkmkit.calibration.registration import Registration
-from pkmkit.errors import InputError
-from pkmkit.errors.model import _family, defect_set, tool_sensitivity
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors.model import _family, defect_set, tool_sensitivity
 from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
 
 #: Default magnitude of random defects by unit: ±0.1 mm, ±0.5° (direction components, angles).

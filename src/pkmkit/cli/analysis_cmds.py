@@ -19,7 +19,7 @@ from pkmkit.analysis.workspace import (
     compute_workspace,
     useful_workspace,
 )
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import MAX_COORDINATE, Machine
 from pkmkit.model.parameters import length_scale
 from pkmkit.plot.maps import (

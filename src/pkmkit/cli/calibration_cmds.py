@@ -12,7 +12,7 @@ import click
 import numpy as np
 
 from pkmkit.calibration.measurement_set import KINDS
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 
 from .options import JSON_OPTION, emit_json, fmt, machine_document_path, resolve_machine
@@ -146,7 +146,7 @@ def _defects_file(path: str, machine, units: str):
     machine; a file with only a ``[defects]`` table (and optionally ``units``) is applied on
     top of MACHINE."""
     from pkmkit import load
-    from pkmkit.errors import ParameterError
+    from pkmkit.exceptions import ParameterError
     from pkmkit.model.defects_table import apply_defect_vector, defects_from_table
     from pkmkit.model.machine_file import read_machine_document
 
@@ -333,8 +333,8 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
 
 
 def _tolerances(items, machine, unit: str) -> dict[str, float]:
-    from pkmkit.errors import ParameterError
-    from pkmkit.errors.model import defect_set
+    from pkmkit.exceptions import ParameterError
+    from pkmkit.geometric_errors.model import defect_set
 
     dset = defect_set(machine)
     out = {}
@@ -492,7 +492,7 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
         from pkmkit.calibration.controller import as_targets
 
         targets = as_targets(identified, targets)
-        from pkmkit.errors.model import _family
+        from pkmkit.geometric_errors.model import _family
 
         orientation = "axis" if _family(nominal) == "chain" else "rotvec"
         text = correction_table(targets, fixed, units=unit, orientation=orientation, comment=(

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
 
 ANGLE_NAMES = ("A", "B", "C")

@@ -23,7 +23,7 @@ def tripteor_compatibility_summary() -> dict[str, Any]:
     """The Tripteor's compatibility as the thesis did it (orientation only, D_ICS^L11
     nominal), with position defects, and with every loop defect of pkmkit's model."""
     import pkmkit
-    from pkmkit.errors.compatibility import compatibility
+    from pkmkit.geometric_errors.compatibility import compatibility
 
     m = pkmkit.machine("tripteor-x7")
     orient = compatibility(m, orientation_only=True, reference_nominal=True)
@@ -58,8 +58,8 @@ def tripteor_compatibility_summary() -> dict[str, Any]:
 def tripteor_identifiability_summary() -> dict[str, Any]:
     """Tool-point identifiability of the compatible parallel part (notes §4.5)."""
     import pkmkit
-    from pkmkit.errors.compatibility import compatibility_configurations
-    from pkmkit.errors.identifiability import identifiability
+    from pkmkit.geometric_errors.compatibility import compatibility_configurations
+    from pkmkit.geometric_errors.identifiability import identifiability
 
     m = pkmkit.machine("tripteor-x7")
     q = compatibility_configurations(m, 40, seed=3)
@@ -75,7 +75,7 @@ def hexapod_accuracy_map(out_dir: Path) -> dict[str, Any]:
     """95th-percentile accuracy map of the hexapod (z at mid-height) from the demo
     tolerances; writes ``errors-hexapod-accuracy-map.png``."""
     import pkmkit
-    from pkmkit.errors.tolerance import accuracy_map, tolerances
+    from pkmkit.geometric_errors.tolerance import accuracy_map, tolerances
     from pkmkit.plot.error_figures import plot_accuracy_map
 
     m = pkmkit.machine("gough-stewart")

@@ -25,7 +25,7 @@ from pkmkit.design.optimize import (
     optimize,
 )
 from pkmkit.design.orthoglide import size_orthoglide
-from pkmkit.errors import InputError, PkmError
+from pkmkit.exceptions import InputError, PkmError
 from pkmkit.io.atomic import check_output_dir
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.model.parameters import length_scale

@@ -13,8 +13,8 @@ from pathlib import Path
 import click
 import numpy as np
 
-from pkmkit.errors import InputError
-from pkmkit.errors.measurements import MEASURES
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors.measurements import MEASURES
 from pkmkit.model.parameters import length_scale
 
 from .options import JSON_OPTION, SET_OPTION, UNITS_OPTION, emit_json, fmt, resolve_machine
@@ -31,8 +31,8 @@ def _actuator_scales(machine, units: str) -> np.ndarray:
 
 
 def _region_scales(machine, units: str) -> np.ndarray:
-    from pkmkit.errors.configurations import region_names
-    from pkmkit.errors.model import _family
+    from pkmkit.geometric_errors.configurations import region_names
+    from pkmkit.geometric_errors.model import _family
 
     if _family(machine) == "chain":
         return _actuator_scales(machine, units)
@@ -55,7 +55,7 @@ def _region(machine, text: str | None, units: str):
     if text is None:
         return None
     values = _numbers(text, "--region")
-    from pkmkit.errors.configurations import check_region, region_names
+    from pkmkit.geometric_errors.configurations import check_region, region_names
 
     names = region_names(machine)
     if values.size != 2 * len(names) and not (len(names) == 6 and values.size == 6):
@@ -86,7 +86,7 @@ def _read_poses(machine, path: str, units: str) -> np.ndarray:
 
 
 def _reachable(machine, q: np.ndarray, what: str) -> np.ndarray:
-    from pkmkit.errors.measurements import measure
+    from pkmkit.geometric_errors.measurements import measure
 
     with np.errstate(invalid="ignore"):
         points = measure(machine, "point", q)
@@ -101,7 +101,7 @@ def _reachable(machine, q: np.ndarray, what: str) -> np.ndarray:
 
 def _poses(machine, poses: str, units: str, region, seed: int) -> np.ndarray:
     """``--poses FILE|N``."""
-    from pkmkit.errors.configurations import sample_configurations
+    from pkmkit.geometric_errors.configurations import sample_configurations
 
     if poses.strip().isdigit():
         n = int(poses)
@@ -259,7 +259,7 @@ def _define(cli: click.Group) -> None:
                             assignments, as_json):
         """Which defects KIND measurements at the poses can identify: rank, base parameters,
         combinations, gauges, observability indices."""
-        from pkmkit.errors.identifiability import identifiability
+        from pkmkit.geometric_errors.identifiability import identifiability
 
         m = resolve_machine(machine_name, assignments, units)
         q = _poses(m, poses, units, _region(m, region, units), seed)
@@ -311,7 +311,7 @@ def _define(cli: click.Group) -> None:
                          assignments, as_json):
         """Choose N poses maximising an observability index; writes their actuator
         coordinates and reports the gain over random poses."""
-        from pkmkit.errors.pose_selection import select_poses
+        from pkmkit.geometric_errors.pose_selection import select_poses
         from pkmkit.io.csv_io import write_table
 
         m = resolve_machine(machine_name, assignments, units)
@@ -338,7 +338,7 @@ def _define(cli: click.Group) -> None:
 
 
 def _defect_rows(m) -> list[dict]:
-    from pkmkit.errors.model import defect_set
+    from pkmkit.geometric_errors.model import defect_set
 
     ds = defect_set(m)
     return [{"name": n, "unit": u, "kind": k, "owner": o}
@@ -346,7 +346,7 @@ def _defect_rows(m) -> list[dict]:
 
 
 def _compatibility(m, sel, orientation_only, thesis, configurations, rtol, seed, as_json):
-    from pkmkit.errors.compatibility import RTOL, compatibility
+    from pkmkit.geometric_errors.compatibility import RTOL, compatibility
 
     result = compatibility(m, orientation_only=orientation_only, reference_nominal=thesis,
                            n_configurations=configurations, seed=seed,
@@ -375,7 +375,7 @@ def _compatibility(m, sel, orientation_only, thesis, configurations, rtol, seed,
 
 def _sensitivity(m, sel, region, points, length_size, angle_size, exact, units, seed, out,
                  as_json):
-    from pkmkit.errors.sensitivity import LENGTH_SIZE, sensitivity_analysis
+    from pkmkit.geometric_errors.sensitivity import LENGTH_SIZE, sensitivity_analysis
 
     size = LENGTH_SIZE if length_size is None else length_size * length_scale(units)
     angle = None if angle_size is None else angle_size * DEG
@@ -412,7 +412,7 @@ def _sensitivity(m, sel, region, points, length_size, angle_size, exact, units, 
 
 
 def _tolerance(m, path, n_samples, region, resolution, units, seed, out, as_json):
-    from pkmkit.errors.tolerance import accuracy_map, read_tolerances
+    from pkmkit.geometric_errors.tolerance import accuracy_map, read_tolerances
 
     tol = read_tolerances(path, m)
     if not tol.active():

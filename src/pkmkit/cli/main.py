@@ -15,7 +15,7 @@ import click
 import numpy as np
 
 from pkmkit import __version__
-from pkmkit.errors import InputError, PkmError
+from pkmkit.exceptions import InputError, PkmError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
 from pkmkit.machines.registry import machines as builtin_ids

@@ -11,7 +11,7 @@ from pkmkit.dynamics.arms import Material, analyse_arm, seed_tables, size_arm
 from pkmkit.dynamics.masses import load_masses
 from pkmkit.dynamics.trajectory import simulate_path
 from pkmkit.dynamics.wrench import load_wrench_series
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.io.atomic import check_output_dir
 from pkmkit.io.table import TableWriter
 from pkmkit.model.parameters import length_scale

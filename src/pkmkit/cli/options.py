@@ -10,7 +10,7 @@ from typing import Any
 import click
 import numpy as np
 
-from pkmkit.errors import InputError, ParameterError, UnknownParameterError
+from pkmkit.exceptions import InputError, ParameterError, UnknownParameterError
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import load, machine, preset_path

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from pkmkit.analysis.workspace import Criteria
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import MAX_LENGTH
 
 #: Smallest prescribed square/cube side accepted by the sizing rules, m (below it the squares of

@@ -17,7 +17,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import leg_parameters, with_leg_values
 

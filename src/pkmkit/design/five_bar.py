@@ -22,7 +22,7 @@ from scipy.optimize import least_squares
 
 from pkmkit.analysis.workspace import Criteria, RegionCheck, check_region, useful_workspace
 from pkmkit.design.checks import degenerate_note, relaxed, require_side
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
 from pkmkit.numerics.arrays import real_pair

@@ -44,7 +44,7 @@ from scipy.optimize import brentq, minimize_scalar
 from pkmkit.analysis.workspace import Criteria, RegionCheck, check_region
 from pkmkit.design.checks import VERIFY_RTOL, degenerate_note, relaxed, require_side
 from pkmkit.design.metrics import Region, evaluate_metrics
-from pkmkit.errors import InputError, ParameterError
+from pkmkit.exceptions import InputError, ParameterError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
 from pkmkit.model.parameters import MAX_LENGTH

@@ -28,7 +28,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from pkmkit.analysis.grids import make_grid
 from pkmkit.analysis.workspace import Criteria, compute_workspace, evaluate_poses
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.rods import SLIDE
 

@@ -42,7 +42,7 @@ from pkmkit.design.design_space import (
     with_values,
 )
 from pkmkit.design.metrics import METRIC_QUANTITIES, METRICS, Region, metric_values
-from pkmkit.errors import InputError, ParameterError
+from pkmkit.exceptions import InputError, ParameterError
 from pkmkit.io.atomic import atomic_path, write_text_atomic
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.machines.machine import Machine

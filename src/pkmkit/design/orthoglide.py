@@ -39,7 +39,7 @@ from pkmkit.analysis.workspace import (
     region_grid,
 )
 from pkmkit.design.checks import degenerate_note, relaxed, require_side
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
 from pkmkit.numerics.arrays import real_pair

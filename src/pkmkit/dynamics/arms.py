@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.optimize import NonlinearConstraint, differential_evolution
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.numerics.arrays import real, real_pair
 
 

@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.dynamics.masses import MassProperties
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.rods import CRANK, SLIDE
 from pkmkit.numerics import small

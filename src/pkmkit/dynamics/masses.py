@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError, MachineFileError
+from pkmkit.exceptions import InputError, MachineFileError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.machine_file import parse_toml
 from pkmkit.model.parameters import is_plain_number, length_scale

@@ -17,7 +17,7 @@ from pkmkit.dynamics.defaults import default_masses
 from pkmkit.dynamics.inverse import ForceResult, inverse_dynamics
 from pkmkit.dynamics.masses import MassProperties
 from pkmkit.dynamics.wrench import WrenchSeries
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.motion.extrema import DEFAULT_RTOL, Extrema, continuous_extrema, first_excursion
 from pkmkit.motion.joints import JointTrajectory, Limits, joint_trajectory

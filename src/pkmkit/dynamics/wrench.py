@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.io.table import read_table
 
 COLUMNS = ("t", "fx", "fy", "fz")

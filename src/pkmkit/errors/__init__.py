@@ -1,191 +1,59 @@
-"""Typed errors raised by pkmkit.
+"""Deprecated alias of :mod:`pkmkit.exceptions` and :mod:`pkmkit.geometric_errors`.
 
-Every error pkmkit raises on bad input derives from :class:`PkmError`, so callers (and the CLI)
-can catch one type. Each subclass carries the structured facts a caller may want to inspect
-(which leg, which pose, which file line) besides a human-readable message that states what is
-wrong and where.
+``pkmkit.errors`` used to hold both the typed exceptions and the geometric-error algorithms.
+The exceptions now live in :mod:`pkmkit.exceptions` and the algorithms in
+:mod:`pkmkit.geometric_errors`. This alias keeps old imports working for one release:
+``from pkmkit.errors import InputError`` and ``from pkmkit.errors.model import defect_set`` both
+work and warn with a :class:`DeprecationWarning`. Nothing inside pkmkit imports it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+import importlib
+import importlib.abc
+import importlib.util
+import sys
+import warnings
+
+from pkmkit import exceptions as _exceptions
+
+_NEW_PACKAGE = "pkmkit.geometric_errors"
 
 
-class PkmError(Exception):
-    """Base class of every error pkmkit raises on purpose."""
+def __getattr__(name: str):
+    if hasattr(_exceptions, name):
+        warnings.warn(f"pkmkit.errors.{name} moved to pkmkit.exceptions.{name}",
+                      DeprecationWarning, stacklevel=2)
+        return getattr(_exceptions, name)
+    raise AttributeError(f"module 'pkmkit.errors' has no attribute {name!r}")
 
 
-class InputError(PkmError, ValueError):
-    """An array argument has the wrong shape, dtype or non-finite values."""
+class _AliasLoader(importlib.abc.Loader):
+    """Hands out the module of the new package under the old name (one module object)."""
+
+    def __init__(self, target: str):
+        self.target = target
+        self.spec = None
+
+    def create_module(self, spec):
+        module = importlib.import_module(self.target)
+        self.spec = module.__spec__
+        return module
+
+    def exec_module(self, module) -> None:
+        module.__spec__ = self.spec  # the import system wrote the alias's spec over it
 
 
-class UnknownMachineError(PkmError, KeyError):
-    """A machine id is not in the library."""
-
-    def __init__(self, name: str, valid: Iterable[str]):
-        self.name = name
-        self.valid = sorted(valid)
-        super().__init__(f"unknown machine {name!r}; valid ids: {', '.join(self.valid)}")
-
-    def __str__(self) -> str:  # KeyError would quote the whole message otherwise
-        return self.args[0]
-
-
-class ParameterError(PkmError, ValueError):
-    """A machine parameter is unknown, mis-shaped or outside its admissible domain.
-
-    Attributes:
-        parameter: the parameter's name (or dotted path in a machine file, e.g. ``legs.2.axis``)
-            when the error concerns one parameter, else ``None``.
-    """
-
-    def __init__(self, message: str, parameter: str | None = None):
-        self.parameter = parameter
-        super().__init__(message)
+class _AliasFinder(importlib.abc.MetaPathFinder):
+    def find_spec(self, fullname, path=None, target=None):
+        if not fullname.startswith(__name__ + "."):
+            return None
+        new = _NEW_PACKAGE + fullname[len(__name__):]
+        if importlib.util.find_spec(new) is None:
+            return None
+        warnings.warn(f"{fullname} moved to {new}", DeprecationWarning, stacklevel=2)
+        return importlib.util.spec_from_loader(fullname, _AliasLoader(new))
 
 
-class UnknownParameterError(ParameterError):
-    """A parameter name does not belong to the machine."""
-
-    def __init__(self, name: str, machine: str, valid: Iterable[str]):
-        self.name = name
-        self.valid = sorted(valid)
-        super().__init__(
-            f"unknown parameter {name!r} for machine {machine!r}; "
-            f"valid parameters: {', '.join(self.valid)}",
-            parameter=name,
-        )
-
-
-class MachineFileError(PkmError, ValueError):
-    """A machine file cannot be read, parsed or validated.
-
-    Attributes:
-        path: the file.
-        line: 1-based line of the offending entry when it is known, else ``None``.
-    """
-
-    def __init__(self, path: str, message: str, line: int | None = None):
-        self.path = str(path)
-        self.line = line
-        where = f"{self.path}:{line}" if line is not None else self.path
-        super().__init__(f"{where}: {message}")
-
-
-class UnreachablePoseError(PkmError, ValueError):
-    """A pose cannot be reached: a leg cannot close (inverse model).
-
-    Attributes:
-        leg: 0-based index of the first leg that cannot close.
-        leg_name: its name.
-        shortfall: by how much the leg is too short (or too long), in metres (> 0).
-        too_long: the leg's rod is too long rather than too short (a crank arm whose tip circle
-            passes too close to the platform joint).
-
-    ``detail`` replaces the default explanation (e.g. a full pose whose orientation a machine
-    with fewer than six actuators cannot take).
-    """
-
-    def __init__(self, leg: int, leg_name: str, shortfall: float, pose_index: int | None = None,
-                 *, too_long: bool = False, detail: str | None = None):
-        self.leg = leg
-        self.leg_name = leg_name
-        self.shortfall = float(shortfall)
-        self.pose_index = pose_index
-        self.too_long = too_long
-        where = f"pose {pose_index}: " if pose_index is not None else ""
-        how = "too long" if too_long else "too short"
-        super().__init__(
-            f"{where}pose unreachable: " + (detail if detail is not None else
-                                            f"{leg_name} (leg index {leg}) is {how} by "
-                                            f"{self.shortfall:.6g} m to reach it")
-        )
-
-
-class NoAssemblyError(PkmError, ValueError):
-    """Actuator coordinates admit no real assembly (direct model), or not the requested mode."""
-
-    def __init__(self, message: str, pose_index: int | None = None):
-        self.pose_index = pose_index
-        where = f"pose {pose_index}: " if pose_index is not None else ""
-        super().__init__(f"{where}{message}")
-
-
-class SingularConfigurationError(PkmError, ValueError):
-    """The requested quantity does not exist at a singular configuration."""
-
-
-class ConvergenceError(PkmError, RuntimeError):
-    """The least-squares engine did not converge for a single (non-batched) call."""
-
-
-class OutOfStrokeError(PkmError, ValueError):
-    """A joint value lies outside its stroke (joint-chain machines).
-
-    Attributes:
-        joint: the joint's name; value: its value; stroke: ``(min, max)`` (SI units, rad or m);
-        pose_index: the row, when the value came from a batch.
-    """
-
-    def __init__(self, message: str, joint: str, value: float, stroke: tuple[float, float],
-                 pose_index: int | None = None):
-        self.joint = joint
-        self.value = float(value)
-        self.stroke = (float(stroke[0]), float(stroke[1]))
-        self.pose_index = pose_index
-        where = f"pose {pose_index}: " if pose_index is not None else ""
-        super().__init__(f"{where}{message}")
-
-
-class ClosureMissError(NoAssemblyError):
-    """The legs of a joint-chain machine do not close on a common platform pose.
-
-    Attributes:
-        leg: 0-based index of the leg that misses the platform most; leg_name: its name.
-        translation: by how much it misses it at the least-squares point (m).
-        rotation: by which angle (rad).
-        residual: the largest closure residual (m; rotation rows × the characteristic length).
-    """
-
-    def __init__(self, message: str, leg: int, leg_name: str, translation: float,
-                 rotation: float, residual: float, pose_index: int | None = None):
-        self.leg = leg
-        self.leg_name = leg_name
-        self.translation = float(translation)
-        self.rotation = float(rotation)
-        self.residual = float(residual)
-        super().__init__(message, pose_index)
-
-
-class StrokeWarning(UserWarning):
-    """A single direct or inverse model computed a configuration beyond a joint's stroke."""
-class MeasurementError(InputError):
-    """A measurement type the machine cannot provide (or a setup it needs is missing).
-
-    Attributes:
-        kind: the measurement type asked for.
-    """
-
-    def __init__(self, message: str, kind: str | None = None):
-        self.kind = kind
-        super().__init__(message)
-
-
-class IdentifiabilityError(PkmError, ValueError):
-    """An identification problem that cannot be posed: fewer scalar measurements than
-    parameters, or (when full rank is required) a rank-deficient identification Jacobian.
-
-    Attributes:
-        rank: numerical rank found. n_parameters: parameters asked for. n_measurements: scalar
-            measurements (rows) available.
-    """
-
-    def __init__(self, message: str, *, rank: int, n_parameters: int, n_measurements: int):
-        self.rank = rank
-        self.n_parameters = n_parameters
-        self.n_measurements = n_measurements
-        super().__init__(message)
-
-
-class ToleranceFileError(MachineFileError):
-    """A tolerance file cannot be read or holds a bad entry (path and line in the message)."""
+if not any(isinstance(f, _AliasFinder) for f in sys.meta_path):
+    sys.meta_path.insert(0, _AliasFinder())

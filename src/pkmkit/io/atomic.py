@@ -13,7 +13,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 
 def check_output_file(path: str | Path) -> Path:

@@ -252,7 +252,7 @@ def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: st
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        from pkmkit.errors import InputError
+        from pkmkit.exceptions import InputError
 
         raise InputError(f"cannot create {out}: {exc.strerror or exc}") from None
     written = {}

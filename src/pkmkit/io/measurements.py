@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from pkmkit.calibration.measurement_set import KINDS, MeasurementSet
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 
 READINGS = {"point": ("x", "y", "z"), "pose": ("x", "y", "z", "rx", "ry", "rz"),

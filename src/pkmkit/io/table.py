@@ -36,7 +36,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.io.atomic import atomic_path, check_output_file
 
 #: Rows per chunk when none is given (about 100 MB of working memory for a kinematics batch).

@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import MachineFileError, ParameterError
+from pkmkit.exceptions import MachineFileError, ParameterError
 from pkmkit.machines.chain_checks import leg_misses, miss_message
 from pkmkit.machines.joint_chain import RANK_RCOND, JointChainMachine
 from pkmkit.model.chains import (

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.machines.machine import MachineKind
 from pkmkit.model.chains import ElementSpec, JointChainModel, build_chain_model
 from pkmkit.model.parameters import ParameterSpec

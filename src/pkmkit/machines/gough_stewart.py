@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.machines.machine import MachineKind
 from pkmkit.model.parameters import ParameterSpec
 from pkmkit.model.rods import LegSpec, RodModel, build_rod_model

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import (
+from pkmkit.exceptions import (
     ClosureMissError,
     ConvergenceError,
     InputError,
@@ -343,15 +343,15 @@ class JointChainMachine:
             strokes: joint values outside their strokes (the actuators given, the passive
                 joints found): ``"flag"`` (default) computes the configuration, marks the rows
                 (``out_of_stroke``, ``messages``) and, for a single row, warns
-                (:class:`~pkmkit.errors.StrokeWarning`) — the geometry is right, the machine
+                (:class:`~pkmkit.exceptions.StrokeWarning`) — the geometry is right, the machine
                 cannot go there; ``"refuse"`` makes those rows NaN with status OUT_OF_STROKE
-                (a single row raises :class:`~pkmkit.errors.OutOfStrokeError`); ``"ignore"``
+                (a single row raises :class:`~pkmkit.exceptions.OutOfStrokeError`); ``"ignore"``
                 does not look.
             check_singular: check the closure's Jacobian (platform and passive joints) at the
                 solution: rows where σ_min/σ_max falls below :data:`SINGULAR_TOL` (a parallel
                 singularity: the actuators do not determine the passive joints) get status
                 SINGULAR, values kept; a single row
-                raises :class:`~pkmkit.errors.SingularConfigurationError`. Default: on for a
+                raises :class:`~pkmkit.exceptions.SingularConfigurationError`. Default: on for a
                 single row, off for a batch (one SVD per row).
             max_misfit: largest closure residual (m) accepted as an assembly: default the
                 engine's tolerance for a nominal geometry, unbounded for one with defects
@@ -558,8 +558,8 @@ class JointChainMachine:
                 companion (see Returns).
             strokes: joints of the solution (actuators and passive joints) outside their
                 strokes: ``"flag"`` (default; a single row warns with
-                :class:`~pkmkit.errors.StrokeWarning`), ``"refuse"`` (NaN rows; a single row
-                raises :class:`~pkmkit.errors.OutOfStrokeError`) or ``"ignore"``; the direct
+                :class:`~pkmkit.exceptions.StrokeWarning`), ``"refuse"`` (NaN rows; a single row
+                raises :class:`~pkmkit.exceptions.OutOfStrokeError`) or ``"ignore"``; the direct
                 result of ``full_output`` carries the messages.
 
         Returns:

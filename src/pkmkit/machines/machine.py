@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import (
+from pkmkit.exceptions import (
     ConvergenceError,
     InputError,
     NoAssemblyError,

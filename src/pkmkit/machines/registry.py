@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import MachineFileError, ParameterError, UnknownMachineError
+from pkmkit.exceptions import MachineFileError, ParameterError, UnknownMachineError
 from pkmkit.machines import (
     crank_slider,
     delta_robot,

@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.machines import trimule_forms as forms
 from pkmkit.machines.machine import MachineKind
 from pkmkit.model.chain_layout import chain_from_layout, chains_from_layout

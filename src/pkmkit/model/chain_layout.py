@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.model.chains import FIXED, ElementSpec, invariant_frame
 
 #: Components closer than this to 0, 1 or −1 are snapped to them.

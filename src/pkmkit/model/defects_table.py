@@ -12,7 +12,8 @@ of the file describes (a calibrated machine, or a simulated "true" one).
     da13 = 0.012       # dimensionless (≈ rad), angles (spins, crank offsets) in degrees
     dJ62 = -0.0004
 
-Names are the machine's defect names (``pkmkit.errors.model.defect_set``: ``dA1x``, ``dL3``,
+Names are the machine's defect names (``pkmkit.geometric_errors.model.defect_set``: ``dA1x``,
+``dL3``,
 ``dq2`` for rod machines; ``dI21``, ``da13``, ``dS62`` for joint chains). The defects are applied
 exactly (:mod:`pkmkit.model.rod_defects`, :meth:`pkmkit.model.chains.JointChainModel.
 with_defects`) after any parameter override; a rod machine of a built-in kind keeps its id but no
@@ -27,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.model.parameters import is_plain_number
 
 

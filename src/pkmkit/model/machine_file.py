@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from pkmkit.errors import MachineFileError
+from pkmkit.exceptions import MachineFileError
 from pkmkit.model.text_files import MAX_NESTING, read_text, toml_nesting
 
 if TYPE_CHECKING:

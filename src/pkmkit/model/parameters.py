@@ -16,7 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from pkmkit.errors import ParameterError, UnknownParameterError
+from pkmkit.exceptions import ParameterError, UnknownParameterError
 
 #: Length units accepted at the boundaries, as metres per unit.
 LENGTH_UNITS: dict[str, float] = {"m": 1.0, "mm": 1e-3, "in": 0.0254}

@@ -32,7 +32,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.model.rods import CRANK, SLIDE, STRUT, RodModel, build_rod_model, leg_specs
 
 _AXES = "xyz"

@@ -30,7 +30,7 @@ from pathlib import Path as FilePath
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.model.text_files import number_problem, read_text
 from pkmkit.motion.paths import (
     ARC_ABS_TOL,

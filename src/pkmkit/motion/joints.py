@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
 from pkmkit.motion.timelaw import Trajectory
 from pkmkit.numerics import small

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.numerics.arrays import real
 
 #: Largest coordinate or length of a path, m (beyond: a unit mistake, and squares overflow).

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.motion.paths import Path
 from pkmkit.numerics.arrays import real
 

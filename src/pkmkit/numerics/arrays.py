@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 
 def as_batch(value: Any, width: int, name: str) -> tuple[np.ndarray, bool]:

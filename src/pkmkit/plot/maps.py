@@ -19,7 +19,7 @@ from pkmkit.analysis.workspace import (
     UsefulWorkspace,
     WorkspaceMap,
 )
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.plot.save import save_figure
 

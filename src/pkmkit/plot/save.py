@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.io.atomic import atomic_path
 
 

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.status import Status
 
 #: ``evaluate(u (n, k), rows (k,)) -> (r (m, k), J (m, n, k))`` for the given rows of the batch.
@@ -66,7 +66,7 @@ class BlockPattern:
     groups: tuple[tuple[tuple[int, ...], tuple[int, ...]], ...]
 
     def check(self, n_rows: int, n_cols: int) -> None:
-        """Raise :class:`~pkmkit.errors.InputError` when the pattern does not partition the
+        """Raise :class:`~pkmkit.exceptions.InputError` when the pattern does not partition the
         columns or its groups' rows overlap."""
         cols = list(self.shared) + [c for _, cs in self.groups for c in cs]
         if sorted(cols) != list(range(n_cols)):

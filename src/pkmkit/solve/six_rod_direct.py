@@ -36,7 +36,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.solve.least_squares import solve_least_squares
 from pkmkit.solve.six_rod_paths import EndKind, EndPoints, pair_distance, track_configurations
 from pkmkit.solve.six_rod_start import GENERIC_COUNT, load_start_system

@@ -20,7 +20,7 @@ weighs ``ℓ²``).
 The problem is well posed when H has rank ≥ 2 (three non-collinear points, or two distinct
 points and one direction not along them, or two non-parallel directions); otherwise the rotation
 about one axis is undetermined and the row is flagged (single problems raise
-:class:`~pkmkit.errors.InputError`).
+:class:`~pkmkit.exceptions.InputError`).
 
 Batched: every argument may carry leading batch dimensions ``(..., n, 3)`` (one registration
 per batch entry, all with the same numbers of points and directions).
@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 
 #: A registration is ill-posed when the second singular value of H is below this fraction of
 #: the first.

@@ -2,7 +2,7 @@
 the largest tool displacement over a region of the workspace for a given defect size.
 
 For each configuration of the region and each defect δ_j of size s_j, the first-order tool
-displacement is ``s_j ∂p/∂δ_j`` (:func:`pkmkit.errors.model.tool_sensitivity`, through the
+displacement is ``s_j ∂p/∂δ_j`` (:func:`pkmkit.geometric_errors.model.tool_sensitivity`, through the
 closure). The table keeps, per defect, the largest |dx|, |dy|, |dz|, the largest displacement
 norm and where it occurs, and the largest rotation of the tool frame. With ``exact=True`` the
 largest displacement is also computed on the exact model (the machine with that one defect of
@@ -21,12 +21,12 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
-from pkmkit.errors._blas import single_blas
-from pkmkit.errors.configurations import sample_configurations
-from pkmkit.errors.identifiability import ANGLE_UNITS, characteristic_length
-from pkmkit.errors.model import defect_set, tool_sensitivity, with_defects
-from pkmkit.errors.selection import select_defects
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.configurations import sample_configurations
+from pkmkit.geometric_errors.identifiability import ANGLE_UNITS, characteristic_length
+from pkmkit.geometric_errors.model import defect_set, tool_sensitivity, with_defects
+from pkmkit.geometric_errors.selection import select_defects
 
 #: Default length defect size (m).
 LENGTH_SIZE = 1e-5
@@ -94,7 +94,8 @@ def sensitivity_analysis(machine, *, region: Any = None, n_points: int = 200,
     """Largest tool displacement per defect over a region (module docstring).
 
     Args:
-        region: ``(lower, upper)`` in region coordinates (:mod:`pkmkit.errors.configurations`);
+        region: ``(lower, upper)`` in region coordinates
+        (:mod:`pkmkit.geometric_errors.configurations`);
             default the machine's default region.
         n_points: configurations drawn in the region (Halton points), unless ``q`` is given.
         q: ``(N, n)`` configurations instead of a region.
@@ -142,7 +143,7 @@ def sensitivity_analysis(machine, *, region: Any = None, n_points: int = 200,
 
 
 def _tool_points(machine, q: np.ndarray, tool_length: Any) -> np.ndarray:
-    from pkmkit.errors.measurements import measure
+    from pkmkit.geometric_errors.measurements import measure
 
     setup = {} if tool_length is None else {"tool_length": tool_length}
     return measure(machine, "point", q, setup)

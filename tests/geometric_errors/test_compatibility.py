@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import ParameterError
-from pkmkit.errors.compatibility import compatibility, projected_defects
-from pkmkit.errors.model import with_defects
+from pkmkit.exceptions import ParameterError
+from pkmkit.geometric_errors.compatibility import compatibility, projected_defects
+from pkmkit.geometric_errors.model import with_defects
 
 CRANK_FORCED = ("dI2", "dJ2", "dI3", "dJ3", "dJ4")
 TRIPTEOR_ORIENTATION_FORCED = ("dK21", "dK41", "dI51", "dK51", "dI13", "dK13", "dK23", "dK43",
@@ -190,7 +190,7 @@ def test_leg_2_defects_close_exactly_unlike_the_forced_ones(tripteor):
     res = with_defects(tripteor, {"dK21": 0.01}).fk(q, full_output=True)
     assert res.closure_residual.min() > 1e-4
     # and the left null space of the closure lives on legs 1 and 3 only
-    from pkmkit.errors.model import closure_linearisation
+    from pkmkit.geometric_errors.model import closure_linearisation
 
     cu = closure_linearisation(tripteor, q).unknowns
     u, _, _ = np.linalg.svd(cu)

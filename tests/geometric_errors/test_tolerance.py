@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import ParameterError, ToleranceFileError
-from pkmkit.errors.configurations import sample_configurations
-from pkmkit.errors.model import with_defects
-from pkmkit.errors.tolerance import (
+from pkmkit.exceptions import ParameterError, ToleranceFileError
+from pkmkit.geometric_errors.configurations import sample_configurations
+from pkmkit.geometric_errors.model import with_defects
+from pkmkit.geometric_errors.tolerance import (
     accuracy_map,
     exact_rod_points,
     first_order_error,
@@ -23,7 +23,7 @@ ROD_MACHINES = ["gough-stewart", "verne", "linear-delta", "orthoglide", "five-ba
 @pytest.mark.parametrize("name", ROD_MACHINES)
 def test_batched_exact_model_equals_the_defected_machines(name):
     m = pkmkit.machine(name)
-    kinds = {k: 2e-4 for k in set(pkmkit.errors.model.defect_set(m).kinds)}
+    kinds = {k: 2e-4 for k in set(pkmkit.geometric_errors.model.defect_set(m).kinds)}
     tol = tolerances(m, classes=kinds)
     q = sample_configurations(m, 4, seed=2).q
     samples = tol.sample(3, np.random.default_rng(1))

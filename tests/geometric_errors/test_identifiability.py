@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import IdentifiabilityError, MeasurementError, ParameterError
-from pkmkit.errors.compatibility import compatibility_configurations
-from pkmkit.errors.identifiability import (
+from pkmkit.exceptions import IdentifiabilityError, MeasurementError, ParameterError
+from pkmkit.geometric_errors.compatibility import compatibility_configurations
+from pkmkit.geometric_errors.identifiability import (
     identifiability,
     identification_jacobian,
     observability,
 )
-from pkmkit.errors.measurements import measure
-from pkmkit.errors.model import with_defects
+from pkmkit.geometric_errors.measurements import measure
+from pkmkit.geometric_errors.model import with_defects
 
 NOTES_UNSEEN = ("dJ21", "dJ41", "da51", "dJ12", "dK12", "dJ22", "dK22", "dJ32", "dK32", "dI42",
                 "dJ42", "dI52", "da52", "dJ23", "dJ43", "da53")
@@ -138,7 +138,7 @@ def test_bad_input_is_typed():
 def test_part_setup_measures_full_poses_of_a_six_actuator_machine():
     """Documented default: the machined points of a ``"part"`` measurement are the nominal tool
     poses for a six-actuator machine (position and orientation), tool points otherwise."""
-    from pkmkit.errors.identifiability import default_setup
+    from pkmkit.geometric_errors.identifiability import default_setup
 
     hexapod = pkmkit.machine("gough-stewart")
     q = hexapod.home_q + 0.01 * np.random.default_rng(3).standard_normal((4, 6))
@@ -155,7 +155,7 @@ def test_unidentifiable_columns_are_relative_to_the_jacobian(scale):
     """A column is "no effect" when its norm is below rtol × σ_max, whatever the units of the
     Jacobian: multiplying J by any factor changes neither the rank nor which columns are dead.
     Hand-built J: column 3 is 1e-13 of the others (dead), column 2 is 1e-3 (alive)."""
-    from pkmkit.errors.identifiability import analyse_jacobian
+    from pkmkit.geometric_errors.identifiability import analyse_jacobian
 
     rng = np.random.default_rng(5)
     base = rng.standard_normal((12, 2))

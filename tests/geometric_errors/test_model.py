@@ -6,8 +6,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import pkmkit
-from pkmkit.errors import InputError, ParameterError
-from pkmkit.errors.model import defect_set, tool_sensitivity, with_defects
+from pkmkit.exceptions import InputError, ParameterError
+from pkmkit.geometric_errors.model import defect_set, tool_sensitivity, with_defects
 
 MACHINES = ["linear-delta", "orthoglide", "five-bar", "delta", "gough-stewart", "verne",
             "tripteor-x7", "crank-slider"]
@@ -92,7 +92,7 @@ def test_applying_defects_is_exact_and_checked():
 
 @pytest.mark.parametrize("name", ["linear-delta", "verne", "gough-stewart"])
 def test_measurement_jacobians_against_finite_differences(name):
-    from pkmkit.errors.measurements import measure, measurement_jacobian
+    from pkmkit.geometric_errors.measurements import measure, measurement_jacobian
 
     rng = np.random.default_rng(5)
     m = pkmkit.machine(name)

@@ -1,6 +1,6 @@
 """Identifiability: which defects (or combinations of defects) a set of measurements can see.
 
-**Identification Jacobian.** For a machine, a measurement type (:mod:`pkmkit.errors.
+**Identification Jacobian.** For a machine, a measurement type (:mod:`pkmkit.geometric_errors.
 measurements`: tool point, full pose, ball-bar length, height, machined part) and N
 configurations, the rows are the scalar readings of every configuration and the columns the
 selected defects: ``J[(k, i), j] = ∂(reading i at configuration k)/∂δ_j``, computed
@@ -42,11 +42,11 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from pkmkit.errors import IdentifiabilityError, InputError
-from pkmkit.errors._blas import single_blas
-from pkmkit.errors.measurements import measurement_jacobian, measurement_rows
-from pkmkit.errors.model import _family, defect_set
-from pkmkit.errors.selection import select_defects
+from pkmkit.exceptions import IdentifiabilityError, InputError
+from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.measurements import measurement_jacobian, measurement_rows
+from pkmkit.geometric_errors.model import _family, defect_set
+from pkmkit.geometric_errors.selection import select_defects
 
 SCALINGS = ("length", "norm", "none")
 INDICES = ("O1", "O2", "O3", "O4", "O5")
@@ -76,7 +76,7 @@ def default_setup(machine, kind: str, q: np.ndarray, setup: dict | None = None) 
     """The measurement setup with defaults filled in: for ``"part"``, the machined points are
     the nominal tool points (poses of a six-actuator machine) at q; for ``"ballbar"``, the
     pivot defaults to 0.1 × L below the mean tool point."""
-    from pkmkit.errors.measurements import measure
+    from pkmkit.geometric_errors.measurements import measure
 
     out = dict(setup or {})
     if kind == "part" and "points" not in out:
@@ -179,11 +179,12 @@ def compatible_parameters(machine, parameters: Any = None, *, kinds: Any = None,
                           exclude: Any = None, scope: str = "all"
                           ) -> tuple[np.ndarray, tuple[str, ...], tuple[str, ...]]:
     """The selected defects restricted to the hyperstatic compatible subspace: the loop
-    defects become the compatible basis (:func:`pkmkit.errors.compatibility.compatibility`),
+    defects become the compatible basis
+    (:func:`pkmkit.geometric_errors.compatibility.compatibility`),
     each named after its free defect (the others follow it through the conditions); head
     defects stay as they are. Returns ``(transform (d, p), names, units)``."""
-    from pkmkit.errors.compatibility import compatibility
-    from pkmkit.errors.selection import loop_defects
+    from pkmkit.geometric_errors.compatibility import compatibility
+    from pkmkit.geometric_errors.selection import loop_defects
 
     ds = defect_set(machine)
     columns = select_defects(machine, parameters, kinds=kinds, exclude=exclude, scope=scope)
@@ -220,7 +221,7 @@ def combined_parameters(machine, groups: Mapping[str, Mapping[str, float]]
     Raises:
         ParameterError: an unknown defect, an empty or non-finite group, mixed units.
     """
-    from pkmkit.errors import ParameterError
+    from pkmkit.exceptions import ParameterError
 
     ds = defect_set(machine)
     if not groups:
@@ -445,7 +446,7 @@ def analyse_jacobian(j: np.ndarray, names: tuple[str, ...], column_scale: np.nda
         combos.append(Combination(base=names[b], terms=terms))
     # gauges, in SI coordinates, reduced; groups connected through them
     gauges_si = null * column_scale[:, None] if null.size else np.zeros((p, 0))
-    from pkmkit.errors.compatibility import _reduced_basis
+    from pkmkit.geometric_errors.compatibility import _reduced_basis
 
     gauges, _ = _reduced_basis(gauges_si)
     gauge_terms = []

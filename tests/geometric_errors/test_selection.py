@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import InputError, ParameterError
-from pkmkit.errors.configurations import check_region, halton, sample_configurations
-from pkmkit.errors.model import defect_set
-from pkmkit.errors.selection import select_defects
+from pkmkit.exceptions import InputError, ParameterError
+from pkmkit.geometric_errors.configurations import check_region, halton, sample_configurations
+from pkmkit.geometric_errors.model import defect_set
+from pkmkit.geometric_errors.selection import select_defects
 
 
 def test_selection_by_name_pattern_owner_kind_and_scope():

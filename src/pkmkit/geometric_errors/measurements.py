@@ -16,7 +16,8 @@ Measurement types (``kind``), each a function of (machine with its defects, q, s
   (the orientation, if any, follows the rods).
 
 :func:`measurement_jacobian` gives ``∂(reading)/∂(defects)`` analytically from
-:func:`pkmkit.errors.model.tool_sensitivity` (and, for ``"part"``, the closure's derivative in
+:func:`pkmkit.geometric_errors.model.tool_sensitivity` (and, for ``"part"``, the closure's
+derivative in
 q at a fixed tool point).
 """
 
@@ -26,9 +27,9 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError, MeasurementError
-from pkmkit.errors._blas import single_blas
-from pkmkit.errors.model import _family, _rod_index, tool_sensitivity
+from pkmkit.exceptions import InputError, MeasurementError
+from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.model import _family, _rod_index, tool_sensitivity
 
 MEASURES = ("point", "pose", "ballbar", "height", "part")
 #: Rows of each measurement type (``None``: the number of actuators).

@@ -1,9 +1,9 @@
-"""The typed errors of ``pkmkit.errors`` (its ``__init__``): the facts they carry and where
+"""The typed errors of ``pkmkit.exceptions``: the facts they carry and where
 their message says the problem is."""
 
 import pytest
 
-from pkmkit.errors import OutOfStrokeError, PkmError
+from pkmkit.exceptions import OutOfStrokeError, PkmError
 
 
 def test_out_of_stroke_names_the_batch_row_when_given():

@@ -36,10 +36,10 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError, ParameterError, ToleranceFileError
-from pkmkit.errors._blas import single_blas
-from pkmkit.errors.identifiability import ANGLE_UNITS
-from pkmkit.errors.model import _family, _rod_index, defect_set, tool_sensitivity
+from pkmkit.exceptions import InputError, ParameterError, ToleranceFileError
+from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.identifiability import ANGLE_UNITS
+from pkmkit.geometric_errors.model import _family, _rod_index, defect_set, tool_sensitivity
 
 DISTRIBUTIONS = ("uniform", "normal")
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
@@ -138,7 +138,7 @@ def read_tolerances(path: str, machine) -> Tolerances:
         ToleranceFileError: unreadable file, unknown key, unit, class or defect, negative or
             non-numeric width — with the file line.
     """
-    from pkmkit.errors import MachineFileError
+    from pkmkit.exceptions import MachineFileError
     from pkmkit.model.machine_file import read_machine_document
 
     try:
@@ -348,8 +348,8 @@ def exact_rod_points(machine, q: np.ndarray, samples: np.ndarray, *, tol: float 
 
 def _chain_samples(machine, q: np.ndarray, samples: np.ndarray, tool_length: Any
                    ) -> np.ndarray:
-    from pkmkit.errors.measurements import measure
-    from pkmkit.errors.model import with_defects
+    from pkmkit.geometric_errors.measurements import measure
+    from pkmkit.geometric_errors.model import with_defects
 
     setup = {} if tool_length is None else {"tool_length": tool_length}
     out = np.full((q.shape[0], samples.shape[0], 3), np.nan)
@@ -399,7 +399,7 @@ def accuracy_map(machine, tol: Tolerances, *, n_samples: int = 200, resolution: 
     Raises:
         InputError: bad axes, resolution or level; no reachable grid point.
     """
-    from pkmkit.errors.configurations import check_region, configurations_at, region_names
+    from pkmkit.geometric_errors.configurations import check_region, configurations_at, region_names
 
     lo, hi = check_region(machine, region)
     names = region_names(machine)

@@ -3,7 +3,8 @@ observability index of the identifiable (base) parameters, and report the gain o
 choices of the same size.
 
 **Method.** The identification Jacobian of every candidate is computed once; the base
-parameters are those of all candidates together (:mod:`pkmkit.errors.identifiability`). Each
+parameters are those of all candidates together (:mod:`pkmkit.geometric_errors.identifiability`).
+Each
 candidate c contributes its information ``A_c = J_cᵀ J_c`` (base columns) and a selection's
 singular values are the square roots of the eigenvalues of ``Σ A_c``. A greedy pass adds the
 candidate that most increases the index (``log det`` while the selection has fewer readings
@@ -19,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import IdentifiabilityError, InputError
-from pkmkit.errors._blas import single_blas
-from pkmkit.errors.configurations import sample_configurations
-from pkmkit.errors.identifiability import (
+from pkmkit.exceptions import IdentifiabilityError, InputError
+from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.configurations import sample_configurations
+from pkmkit.geometric_errors.identifiability import (
     INDICES,
     RTOL,
     analyse_jacobian,
@@ -108,7 +109,7 @@ def select_poses(machine, kind: str, n: int, *, candidates: Any = None,
 
     Args:
         machine, kind, setup, parameters, kinds, exclude, scope, scaling, rtol: as for
-            :func:`pkmkit.errors.identifiability.identifiability`.
+            :func:`pkmkit.geometric_errors.identifiability.identifiability`.
         n: poses to choose.
         candidates: ``(C, n_act)`` candidate configurations; default ``n_candidates``
             (max(20 n, 200)) Halton points of ``region``.
@@ -188,7 +189,7 @@ def select_poses(machine, kind: str, n: int, *, candidates: Any = None,
     chosen_arr = np.array(chosen)
     jb = blocks[chosen_arr].reshape(-1, b)
     sv = np.linalg.svd(jb, compute_uv=False)
-    from pkmkit.errors.identifiability import indices_from_singular_values
+    from pkmkit.geometric_errors.identifiability import indices_from_singular_values
 
     all_indices = indices_from_singular_values(sv, m_rows)
     median = float(np.median(random_values))

@@ -3,7 +3,7 @@
 Their linear algebra is many small or thin matrices (per-configuration closures, Jacobians of a
 few hundred rows): a multi-threaded BLAS gains nothing there and collapses when another process
 holds a core (a 720 × 30 SVD measured at 0.7 s instead of 0.4 ms on a loaded 2-core machine).
-Public entry points of :mod:`pkmkit.errors` run under :func:`single_blas`.
+Public entry points of :mod:`pkmkit.geometric_errors` run under :func:`single_blas`.
 """
 
 from __future__ import annotations

@@ -2,7 +2,8 @@
 by owner (the joint, rod or actuator a defect belongs to) and by where it sits (in the closed
 loops or in the serial head of a joint-chain machine).
 
-Every analysis of :mod:`pkmkit.errors` (compatibility, identifiability, sensitivity, tolerances)
+Every analysis of :mod:`pkmkit.geometric_errors` (compatibility, identifiability, sensitivity,
+tolerances)
 takes the same selection arguments and resolves them here, so that an unknown name is reported
 the same way everywhere.
 """
@@ -14,8 +15,8 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
-from pkmkit.errors.model import _family, defect_set
+from pkmkit.exceptions import ParameterError
+from pkmkit.geometric_errors.model import _family, defect_set
 
 SCOPES = ("all", "loops", "head")
 _WILDCARDS = set("*?[")

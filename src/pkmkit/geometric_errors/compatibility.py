@@ -33,11 +33,11 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
-from pkmkit.errors._blas import single_blas
-from pkmkit.errors.configurations import CHAIN_SPREAD, sample_configurations
-from pkmkit.errors.model import _family, closure_linearisation, defect_set
-from pkmkit.errors.selection import select_defects
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.configurations import CHAIN_SPREAD, sample_configurations
+from pkmkit.geometric_errors.model import _family, closure_linearisation, defect_set
+from pkmkit.geometric_errors.selection import select_defects
 
 #: Default relative tolerance on the scaled singular values of S.
 RTOL = 1e-8
@@ -151,7 +151,8 @@ class CompatibilityResult:
 def compatibility_configurations(machine, n: int = 40, *, seed: int | None = 0) -> np.ndarray:
     """``(n, n_act)`` configurations for the compatibility test. Compatibility is a property of
     the mechanism, not of its strokes: joint-chain loop actuators are spread over home ±
-    :data:`~pkmkit.errors.configurations.CHAIN_SPREAD` (strokes ignored), head actuators stay
+    :data:`~pkmkit.geometric_errors.configurations.CHAIN_SPREAD` (strokes ignored), head
+    actuators stay
     at home; rod machines use their default region."""
     if _family(machine) != "chain":
         return sample_configurations(machine, n, seed=seed).q
@@ -212,7 +213,7 @@ def compatibility(machine, parameters: Any = None, *, kinds: Any = None, exclude
     Args:
         machine: any machine (the test is meaningful for over-constrained ones).
         parameters, kinds, exclude: the defects analysed
-            (:func:`pkmkit.errors.selection.select_defects`); default every defect of the
+            (:func:`pkmkit.geometric_errors.selection.select_defects`); default every defect of the
             closed loops (a serial head's defects cannot be incompatible).
         orientation_only: analyse only the orientation defects (axis tilts; positions, spins
             held at zero) — the thesis's setting (its ``DeltaParamNul``).

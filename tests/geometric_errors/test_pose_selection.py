@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import IdentifiabilityError, InputError
-from pkmkit.errors.identifiability import identifiability
-from pkmkit.errors.pose_selection import select_poses
+from pkmkit.exceptions import IdentifiabilityError, InputError
+from pkmkit.geometric_errors.identifiability import identifiability
+from pkmkit.geometric_errors.pose_selection import select_poses
 
 
 @pytest.mark.parametrize("index", ["O1", "O3", "O5"])

@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError, ParameterError
-from pkmkit.errors._blas import single_blas
+from pkmkit.exceptions import InputError, ParameterError
+from pkmkit.geometric_errors._blas import single_blas
 
 
 @dataclass(frozen=True)

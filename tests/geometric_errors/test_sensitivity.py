@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import InputError
-from pkmkit.errors.sensitivity import sensitivity_analysis
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors.sensitivity import sensitivity_analysis
 
 
 @pytest.mark.parametrize("name", ["linear-delta", "gough-stewart", "five-bar"])

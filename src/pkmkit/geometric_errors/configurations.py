@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
-from pkmkit.errors.model import _family
+from pkmkit.exceptions import InputError
+from pkmkit.geometric_errors.model import _family
 
 #: Default half-range around home of a joint-chain actuator without stroke: prismatic (m,
 #: relative to |home|, at least 0.1 m) and revolute (rad).
