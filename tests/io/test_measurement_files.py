@@ -9,8 +9,8 @@ import pytest
 import pkmkit
 from pkmkit.calibration import simulate
 from pkmkit.exceptions import InputError
+from pkmkit.io.atomic import write_text_atomic as atomic_write_text
 from pkmkit.io.measurements import (
-    atomic_write_text,
     format_measurements,
     read_measurements,
     write_measurements,
@@ -101,13 +101,27 @@ def test_atomic_write_leaves_nothing_on_failure(tmp_path, monkeypatch):
         raise OSError("disk full")
 
     monkeypatch.setattr(os, "replace", broken)
-    with pytest.raises(OSError):
+    with pytest.raises(InputError, match="disk full"):  # a typed error, not a raw OSError
         atomic_write_text(target, "new content\n")
     assert target.read_text() == "old content\n"
     assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
     monkeypatch.undo()
     with pytest.raises(InputError, match="cannot write"):
         atomic_write_text(tmp_path / "missing" / "x.csv", "x")
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o002, 0o077])
+def test_written_files_follow_the_umask(tmp_path, umask):
+    """Every output (measurement files, machine files, reports) goes through one writer whose
+    files get the mode a new file gets under the umask, not 0600 (issue 18 §6)."""
+    import os
+
+    old = os.umask(umask)
+    try:
+        atomic_write_text(tmp_path / "out.csv", "x\n")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "out.csv").stat().st_mode & 0o777 == 0o666 & ~umask
     m = pkmkit.machine("linear-delta")
     data = simulate(m, m, "point", 3, np.random.default_rng(0), noise="none")
     assert format_measurements(data, m, units="mm").splitlines()[0] == "# units: mm"

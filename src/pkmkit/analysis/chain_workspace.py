@@ -22,18 +22,17 @@ import warnings
 
 import numpy as np
 
+from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.exceptions import StrokeWarning
 from pkmkit.status import Status
 
 
 def evaluate_chain_poses(machine, points: np.ndarray, criteria):
-    """:class:`~pkmkit.analysis.workspace.PoseEvaluation` of a joint-chain machine at poses
+    """:class:`~pkmkit.analysis.evaluation.PoseEvaluation` of a joint-chain machine at poses
     ``points (M, 6)`` (tool point in m, tool axis).
 
     ``criteria.q_limits`` (limits of the actuators alone) replace the actuator strokes when
     given; the passive joints keep their ranges."""
-    from pkmkit.analysis.workspace import PoseEvaluation
-
     points = np.atleast_2d(np.asarray(points, dtype=float))
     m, n = len(points), machine.n_actuators
     with warnings.catch_warnings():

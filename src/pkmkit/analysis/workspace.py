@@ -27,6 +27,8 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
+from pkmkit.analysis.chain_workspace import evaluate_chain_poses
+from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.analysis.grids import Grid, make_grid, pose_frame
 from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.inscribed import largest_box
@@ -94,28 +96,6 @@ class Criteria:
         return machine.model.q_min, machine.model.q_max
 
 
-@dataclass(frozen=True)
-class PoseEvaluation:
-    """Criteria evaluated at M poses (flat arrays).
-
-    Attributes:
-        q: ``(M, n)`` actuator coordinates (NaN where unreachable), m.
-        factors: ``(M, n)`` velocity transmission factors, decreasing.
-        condition: ``(M,)``.
-        masks: ``{name: (M,) bool}`` for every name of :data:`MASK_NAMES`.
-    """
-
-    q: np.ndarray
-    factors: np.ndarray
-    condition: np.ndarray
-    masks: dict[str, np.ndarray]
-
-    @property
-    def feasible(self) -> np.ndarray:
-        """``(M,)`` all masks true."""
-        return np.logical_and.reduce(list(self.masks.values()))
-
-
 #: Poses evaluated at once by :func:`evaluate_poses` / :func:`evaluate_grid` (bounds the
 #: temporaries of the inverse and velocity models to a few tens of MB).
 EVALUATION_CHUNK = 1 << 16
@@ -174,8 +154,6 @@ def is_joint_chain(machine: Any) -> bool:
 
 def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
     if is_joint_chain(machine):
-        from pkmkit.analysis.chain_workspace import evaluate_chain_poses
-
         return evaluate_chain_poses(machine, points, criteria)
     inv = machine.ik(points, full_output=True)
     q = inv.q

@@ -1,6 +1,6 @@
 """Calibration of a machine's geometry from measurements (seed 002, seed 003; docs/calibration.md).
 
-- :mod:`~pkmkit.calibration.measurement_set` — a set of measurements of one type, SI;
+- :mod:`~pkmkit.model.measurement_set` — a set of measurements of one type, SI;
 - :mod:`~pkmkit.calibration.registration` — rigid registration of an instrument frame;
 - :mod:`~pkmkit.calibration.simulate` — realistic defects, configurations and noisy readings;
 - :mod:`~pkmkit.calibration.models` — residual models of each measurement type with their
@@ -31,9 +31,9 @@ from pkmkit.calibration.identify import (
     check_measurements,
     identification_problem,
 )
-from pkmkit.calibration.measurement_set import KINDS, MeasurementSet
 from pkmkit.calibration.registration import Registration, register_points
 from pkmkit.calibration.simulate import default_configurations, random_defects, simulate
+from pkmkit.model.measurement_set import KINDS, MeasurementSet
 
 __all__ = [
     "KINDS",

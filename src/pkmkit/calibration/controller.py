@@ -24,14 +24,13 @@ import numpy as np
 
 from pkmkit.calibration.models import tool_state
 from pkmkit.exceptions import InputError
-from pkmkit.geometric_errors.model import _family
 from pkmkit.spatial.rotation import rotvec_to_matrix
 
 
 def target_width(machine) -> int:
     """Columns of a target: 6 for joint-chain machines (tool point and axis) and six-actuator
     machines (tool point and rotation vector of the platform), else 3 (tool point)."""
-    return 6 if _family(machine) == "chain" or _six_dof(machine) else 3
+    return 6 if machine.family == "chain" or _six_dof(machine) else 3
 
 
 def _six_dof(machine) -> bool:
@@ -68,7 +67,7 @@ def commanded_q(machine, targets: Any, tool_length: Any = None, *, iterations: i
     n = len(x)
     tl = np.zeros(n) if tool_length is None else np.broadcast_to(
         np.asarray(tool_length, dtype=float), (n,)).copy()
-    family = _family(machine)
+    family = machine.family
     with np.errstate(invalid="ignore"):
         if family == "chain":
             # a calibrated hyperstatic machine closes its legs in least squares (residuals of
@@ -109,7 +108,7 @@ def reached(machine, q: Any, tool_length: Any = None) -> np.ndarray:
     out = np.full((n, target_width(machine)), np.nan)
     if not ok.any():
         return out
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         with np.errstate(invalid="ignore"):
             out[ok] = machine.fk(q[ok], tool_length=None if tl is None else tl[ok])
         return out

@@ -48,12 +48,12 @@ from pkmkit.calibration.identifiability import (
     identifiable_parameters,
     prune_weak,
 )
-from pkmkit.calibration.measurement_set import MeasurementSet
 from pkmkit.calibration.models import ResidualModel, make_model
 from pkmkit.calibration.registration import Registration
 from pkmkit.exceptions import ConvergenceError, InputError, ParameterError
-from pkmkit.geometric_errors.model import _family, defect_set, tool_sensitivity
+from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
 from pkmkit.model.defects_table import apply_defect_vector
+from pkmkit.model.measurement_set import MeasurementSet
 from pkmkit.status import Status
 
 #: Default standard deviation of one reading per measurement type (m): a laser tracker
@@ -286,7 +286,7 @@ def check_measurements(machine, data: MeasurementSet) -> None:
         i = int(np.flatnonzero(~np.isfinite(q).all(axis=1))[0])
         raise InputError(f"{data.labels[i]}: actuator values are not finite")
     lo, hi = _strokes(machine)
-    angle = _angle_actuators(machine)
+    angle = machine.angular_actuators
     bad = []
     for k, name in enumerate(machine.actuator_names):
         rows = np.flatnonzero((q[:, k] < lo[k] - 1e-12) | (q[:, k] > hi[k] + 1e-12))
@@ -301,19 +301,10 @@ def check_measurements(machine, data: MeasurementSet) -> None:
 
 def _strokes(machine) -> tuple[np.ndarray, np.ndarray]:
     model = machine.model
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         act = np.flatnonzero(model.actuated)
         return model.q_min[act], model.q_max[act]
     return np.asarray(model.q_min, dtype=float), np.asarray(model.q_max, dtype=float)
-
-
-def _angle_actuators(machine) -> np.ndarray:
-    """``(n,)`` True for angular actuators (revolute joints, cranks)."""
-    if _family(machine) == "chain":
-        return np.array([quantity == "angle" for quantity in machine.actuator_quantities])
-    from pkmkit.model.rods import CRANK
-
-    return np.asarray(machine.model.actuator_kind) == CRANK
 
 
 @dataclass
@@ -715,7 +706,7 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
     unidentifiable: dict[str, str] = {}
     compat: CompatibleDirections | None = None
     basis = np.eye(d)[:, candidates]
-    if compatible and _family(machine) == "chain":
+    if compatible and machine.family == "chain":
         compat = _compatibility(machine, data, tol)
         basis = compat.basis
         free = [int(i) for i in compat.free if i in set(candidates)]

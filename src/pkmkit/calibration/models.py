@@ -40,10 +40,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pkmkit.calibration.measurement_set import MeasurementSet
 from pkmkit.calibration.registration import Registration
 from pkmkit.exceptions import InputError, PkmError
-from pkmkit.geometric_errors.model import _family, tool_sensitivity
+from pkmkit.geometric_errors.model import tool_sensitivity
+from pkmkit.model.measurement_set import MeasurementSet
 from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix, skew
 
 #: Spacing of the samples of a commanded path in Cartesian space (m).
@@ -91,7 +91,7 @@ def tool_state(machine, q: np.ndarray, tool_length: np.ndarray | None, *, jacobi
     ``ToolState.start`` of a previous call at the same q) for residual-only evaluations;
     ``closure_options``: engine options of those closures (e.g. a loose ``xtol`` to emulate an
     inexact inner solver)."""
-    family = _family(machine)
+    family = machine.family
     n = q.shape[0]
     tl = np.zeros(n) if tool_length is None else np.asarray(tool_length, dtype=float)
     try:
@@ -392,7 +392,7 @@ class PartModel(ResidualModel):
     """Seed 003's machined part: joint-space distance to the commanded path."""
 
     def __init__(self, machine, data, sigma):
-        if _family(machine) == "chain" or (machine.dims == 6 and not getattr(
+        if machine.family == "chain" or (machine.dims == 6 and not getattr(
                 machine, "position_controlled", False)):
             raise InputError(
                 f"machined-part identification needs a machine positioned by its tool point "
@@ -549,7 +549,7 @@ def make_model(machine, data: MeasurementSet, sigma: np.ndarray, *,
         return PointModel(machine, data, sigma, registration=registration,
                           identify_frame=identify_frame)
     if data.kind == "pose":
-        if _family(machine) == "translational":
+        if machine.family == "translational":
             raise InputError(f"{machine.id!r} only translates: full-pose measurements have "
                              "nothing to measure in its orientation; use point measurements")
         return PoseModel(machine, data, sigma, registration=registration,

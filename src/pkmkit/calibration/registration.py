@@ -189,7 +189,7 @@ def _unit(arr: np.ndarray, what: str) -> np.ndarray:
 
 def save_registration(path: str | Path, reg: Registration, *, units: str = "m") -> None:
     """Write a registration as JSON (lengths in ``units``), atomically."""
-    from pkmkit.io.measurements import atomic_write_text
+    from pkmkit.io.atomic import write_text_atomic as atomic_write_text
     from pkmkit.model.parameters import length_scale
 
     payload = {"units": units, **reg.to_dict(length_scale(units))}

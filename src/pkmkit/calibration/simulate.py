@@ -36,11 +36,11 @@ import numpy as np
 
 from pkmkit.calibration.controller import commanded_q, reached
 from pkmkit.calibration.identifiability import compatible_directions
-from pkmkit.calibration.measurement_set import KINDS, MeasurementSet
 from pkmkit.calibration.models import tool_state
 from pkmkit.calibration.registration import Registration
 from pkmkit.exceptions import InputError
-from pkmkit.geometric_errors.model import _family, defect_set, tool_sensitivity
+from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
+from pkmkit.model.measurement_set import KINDS, MeasurementSet
 from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
 
 #: Default magnitude of random defects by unit: ±0.1 mm, ±0.5° (direction components, angles).
@@ -65,7 +65,7 @@ def random_defects(machine, rng: np.random.Generator, *, magnitude: dict | None 
     scale = np.array([mag[u] for u in dset.units])
     size = np.exp(rng.uniform(np.log(0.01), 0.0, len(dset)))
     delta = rng.choice([-1.0, 1.0], len(dset)) * size * scale
-    if compatible and _family(machine) == "chain":
+    if compatible and machine.family == "chain":
         q = default_configurations(machine, 40, np.random.default_rng(0))
         sens = tool_sensitivity(machine, q)
         comp = compatible_directions(sens.closure_defect, dset.names, scale)
@@ -88,7 +88,7 @@ def default_configurations(machine, n: int, rng: np.random.Generator) -> np.ndar
     """
     if n < 1:
         raise InputError(f"the number of poses must be ≥ 1, got {n}")
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         lo, hi = _strokes(machine)
         lo = np.where(np.isfinite(lo), lo, machine.home_q - 0.01)
         hi = np.where(np.isfinite(hi), hi, machine.home_q + 0.01)
@@ -144,7 +144,7 @@ def _within(machine, q: np.ndarray) -> np.ndarray:
 
 def _tool_lengths(machine, n: int, tool_lengths) -> np.ndarray | None:
     if tool_lengths is None:
-        if _family(machine) == "chain":
+        if machine.family == "chain":
             tool_lengths = SEED_TOOLS
         else:
             return None

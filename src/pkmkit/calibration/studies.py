@@ -26,7 +26,6 @@ import numpy as np
 from pkmkit.calibration.compensation import check_compensation
 from pkmkit.calibration.controller import commanded_q, corrected_targets, reached
 from pkmkit.calibration.identify import CalibrationResult, calibrate, identification_problem
-from pkmkit.calibration.measurement_set import MeasurementSet
 from pkmkit.calibration.registration import Registration, register_points
 from pkmkit.calibration.simulate import (
     SEED_TOOLS,
@@ -36,6 +35,7 @@ from pkmkit.calibration.simulate import (
     simulate,
 )
 from pkmkit.model.defects_table import apply_defect_vector
+from pkmkit.model.measurement_set import MeasurementSet
 
 #: Seed 002's results (m): identification and validation residuals (L2003, L2015) and the
 #: baselines of Kang's data (neural network, Puchtler's model).

@@ -33,7 +33,6 @@ from pkmkit.plot.maps import (
 from .coordinates import (
     actuator_scales,
     actuator_units,
-    family,
     parse_numbers,
     pose_from_cli,
     pose_to_cli,
@@ -105,7 +104,7 @@ def parse_orientation(machine, text: str | None, convention: str) -> np.ndarray 
     values = np.asarray(_numbers(text, "--orientation"))
     if values.size != 3:
         raise InputError(f"--orientation needs 3 comma-separated values, got {text!r}")
-    if family(machine) == "full-pose" and not machine.position_controlled:
+    if machine.family == "full-pose" and not machine.position_controlled:
         from pkmkit.spatial.poses import pose_from_angles
 
         return pose_from_angles(np.zeros(3), values, convention, degrees=True)[3:]
@@ -241,7 +240,7 @@ def analyze(machine_name, assignments, pose, isotropy_tol, convention, units, as
     """All kinetostatic indices at a pose: transmission factors, conditioning, ellipsoid,
     distances to singularities."""
     m = resolve_machine(machine_name, assignments, units)
-    if family(m) == "chain":
+    if m.family == "chain":
         raise InputError(f"analyze reads rod machines' A and B matrices; for the joint-chain "
                          f"machine {m.id!r} run `pkmkit jacobian {machine_name} --pose "
                          "X,Y,Z,I,J,K` (or --q): its Jacobian, singular values, condition "
@@ -251,7 +250,7 @@ def analyze(machine_name, assignments, pose, isotropy_tol, convention, units, as
         raise InputError(f"--isotropy-tol must be a finite number >= 0, got {isotropy_tol}")
     if pose is None:
         x = m.home_pose
-    elif family(m) == "translational":
+    elif m.family == "translational":
         x = parse_vector(pose, m.dims, "--pose", units)
     else:
         x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
@@ -327,7 +326,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
     check_figure_path(out)
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
-    if family(m) == "chain" and index_name not in (*CHAIN_INDICES, "actuators"):
+    if m.family == "chain" and index_name not in (*CHAIN_INDICES, "actuators"):
         raise InputError(f"index {index_name!r} is not defined for a joint-chain machine; its "
                          f"indices: {', '.join(CHAIN_INDICES)}, actuators")
     frame = machine_frame(m, parse_orientation(m, orientation_text, convention))
@@ -395,7 +394,7 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
         "inscribed": None if box is None else {
             "side": box.side / scale, "center": box.center[:p] / scale,
             "lower": box.lower[:p] / scale,
-            "rtol": None if family(m) == "chain" else INSCRIBED_RTOL,
+            "rtol": None if m.family == "chain" else INSCRIBED_RTOL,
             "samples_per_edge": check_region_samples(len(grid.free))},
         "index_range": list(factor_box),
         "workspace_index_range": list(wmap.factor_range(wmap.feasible)),
@@ -518,7 +517,7 @@ def _region_center(frame: PoseFrame, text: str, slice_: tuple[int, float] | None
 def _orientation_fields(m, frame: PoseFrame, convention: str) -> dict:
     """JSON fields of the orientation a grid holds."""
     held = frame.base[frame.positions:]
-    if family(m) == "chain":
+    if m.family == "chain":
         return {"tool_axis": held}
     from pkmkit.spatial.poses import pose_to_angles
 

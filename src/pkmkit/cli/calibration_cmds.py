@@ -11,8 +11,8 @@ from pathlib import Path
 import click
 import numpy as np
 
-from pkmkit.calibration.measurement_set import KINDS
 from pkmkit.exceptions import InputError
+from pkmkit.model.measurement_set import KINDS
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 
 from .options import JSON_OPTION, emit_json, fmt, machine_document_path, resolve_machine
@@ -65,8 +65,9 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
     """Synthetic measurements of a machine with defects (for tests, studies and demos)."""
     from pkmkit.calibration.registration import load_registration
     from pkmkit.calibration.simulate import random_defects, simulate
+    from pkmkit.io.atomic import write_text_atomic as atomic_write_text
     from pkmkit.io.machine_defects import machine_text_with_defects
-    from pkmkit.io.measurements import atomic_write_text, format_measurements
+    from pkmkit.io.measurements import format_measurements
     from pkmkit.model.defects_table import apply_defect_vector
 
     unit = units or "m"
@@ -294,11 +295,11 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
     """Identify a machine's geometric defects from measurements, validate, report."""
     from pkmkit.calibration.identify import calibrate
     from pkmkit.calibration.registration import load_registration
-    from pkmkit.io.measurements import read_measurements
+    from pkmkit.io.measurements import file_unit, read_measurements
 
     machine = resolve_machine(machine_name, (), "m")
     data = read_measurements(measurements, machine, kind, units=units)
-    unit = units or _file_unit(measurements) or "m"
+    unit = units or file_unit(measurements) or "m"
     validation = (read_measurements(validation_file, machine, kind, units=units or unit)
                   if validation_file else None)
     frame = None
@@ -317,7 +318,7 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
                        compatible=not allow_incompatible, progress=not as_json)
     payload = result.to_json(unit)
     if out_dir:
-        from pkmkit.io.calibration_report import write_calibration_outputs
+        from pkmkit.plot.calibration_report import write_calibration_outputs
 
         sources = {"machine": machine_document_path(machine_name), "measurements": measurements}
         if validation_file:
@@ -351,22 +352,6 @@ def _tolerances(items, machine, unit: str) -> dict[str, float]:
         u = dset.units[k]
         out[name] = v * length_scale(unit) if u == "m" else (np.radians(v) if u == "rad" else v)
     return out
-
-
-def _file_unit(path: str) -> str | None:
-    from pkmkit.io.measurements import _UNIT_LINE
-
-    try:
-        with open(path, encoding="utf-8-sig") as handle:
-            for line in handle:
-                if not line.lstrip().startswith("#"):
-                    return None
-                match = _UNIT_LINE.match(line.strip())
-                if match:
-                    return match.group(1)
-    except OSError:
-        return None
-    return None
 
 
 def _print_calibration(result, payload: dict, unit: str) -> None:
@@ -434,8 +419,8 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
         correct_targets,
         grid_targets,
     )
+    from pkmkit.io.atomic import write_text_atomic as atomic_write_text
     from pkmkit.io.compensation_files import corrected_gcode, correction_table
-    from pkmkit.io.measurements import atomic_write_text
 
     given = [g for g in (gcode, grid_text, targets_file) if g]
     if len(given) != 1:
@@ -492,9 +477,8 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
         from pkmkit.calibration.controller import as_targets
 
         targets = as_targets(identified, targets)
-        from pkmkit.geometric_errors.model import _family
 
-        orientation = "axis" if _family(nominal) == "chain" else "rotvec"
+        orientation = "axis" if nominal.family == "chain" else "rotvec"
         text = correction_table(targets, fixed, units=unit, orientation=orientation, comment=(
             f"corrected targets for the nominal controller of {nominal.id} "
             f"(pkmkit compensate --calibrated {Path(calibrated).name})"))

@@ -23,30 +23,16 @@ ANGLE_NAMES = ("A", "B", "C")
 AXIS_NAMES = ("i", "j", "k")
 
 
-def family(m) -> str:
-    """``"translational"``, ``"full-pose"`` or ``"chain"``."""
-    name = type(m).__name__
-    return {"FullPoseMachine": "full-pose", "JointChainMachine": "chain"}.get(name,
-                                                                           "translational")
-
-
-def actuator_quantities(m) -> tuple[str, ...]:
-    """``"length"`` or ``"angle"`` per actuator."""
-    if family(m) == "chain":
-        return m.actuator_quantities
-    return m.model.actuator_quantities
-
-
 def actuator_scales(m, units: str) -> np.ndarray:
     """SI value of one CLI unit of each actuator ``(n,)``: the length unit, or one degree."""
     length = length_scale(units)
     return np.array([np.pi / 180.0 if q == "angle" else length
-                     for q in actuator_quantities(m)])
+                     for q in m.actuator_quantities])
 
 
 def actuator_units(m, units: str) -> list[str]:
     """The CLI unit of each actuator (``"mm"``, ``"deg"``)."""
-    return ["deg" if q == "angle" else units for q in actuator_quantities(m)]
+    return ["deg" if q == "angle" else units for q in m.actuator_quantities]
 
 
 def parse_numbers(text: str, what: str, sizes: tuple[int, ...]) -> np.ndarray:
@@ -70,7 +56,7 @@ def parse_actuators(text: str, m, units: str, what: str = "--q") -> np.ndarray:
 
 def pose_columns(m) -> list[str]:
     """Names of the pose columns of batch files and text output."""
-    kind = family(m)
+    kind = m.family
     if kind == "full-pose":
         return ["x", "y", "z", *ANGLE_NAMES]
     if kind == "chain":
@@ -80,7 +66,7 @@ def pose_columns(m) -> list[str]:
 
 def pose_widths(m) -> tuple[int, ...]:
     """Accepted numbers of pose values on the command line."""
-    kind = family(m)
+    kind = m.family
     if kind == "full-pose" and m.position_controlled:
         return (6, 3)
     return (6,) if kind != "translational" else (m.dims,)
@@ -91,7 +77,7 @@ def pose_from_cli(values: np.ndarray, m, units: str, convention: str) -> np.ndar
     position-controlled module given positions)."""
     values = np.atleast_2d(np.asarray(values, dtype=float))
     scale = length_scale(units)
-    kind = family(m)
+    kind = m.family
     if kind == "translational" or values.shape[1] == 3:
         return values * scale
     if kind == "chain":
@@ -112,7 +98,7 @@ def pose_to_cli(poses: np.ndarray, m, units: str, convention: str) -> np.ndarray
     """SI pose rows → CLI rows (positions in ``units``, angles in degrees or axis components)."""
     poses = np.atleast_2d(np.asarray(poses, dtype=float))
     scale = length_scale(units)
-    kind = family(m)
+    kind = m.family
     if kind == "translational":
         return poses / scale
     out = poses.copy()

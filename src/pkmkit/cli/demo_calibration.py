@@ -15,10 +15,10 @@ from typing import Any
 import click
 
 from pkmkit.calibration.studies import tripteor_laser_tracker, verne_part
-from pkmkit.io.calibration_report import write_calibration_outputs
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.io.measurements import write_measurements
 from pkmkit.machines.registry import preset_path
+from pkmkit.plot.calibration_report import write_calibration_outputs
 
 
 def run_calibration_demo(out_dir: str | Path, *, echo: bool = True) -> dict[str, Any]:

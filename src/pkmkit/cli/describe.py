@@ -12,7 +12,7 @@ from pkmkit.machines.machine import Machine
 from pkmkit.model.parameters import length_scale
 from pkmkit.model.rods import CRANK, LEG_KINDS, STRUT
 
-from .coordinates import actuator_scales, actuator_units, family, pose_columns, pose_to_cli
+from .coordinates import actuator_scales, actuator_units, pose_columns, pose_to_cli
 from .options import fmt
 
 _KIND_NAMES = {v: k for k, v in LEG_KINDS.items()}
@@ -33,7 +33,7 @@ def _parameters(m, units: str) -> list[dict[str, Any]]:
 
 def describe_machine(m: Machine, units: str = "m") -> dict[str, Any]:
     """JSON-ready description of ``m`` with lengths in ``units`` and angles in degrees."""
-    if family(m) == "chain":
+    if m.family == "chain":
         return describe_chain_machine(m, units)
     scale = length_scale(units)
     model = m.model

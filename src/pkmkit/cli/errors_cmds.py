@@ -24,17 +24,14 @@ DEG = math.pi / 180.0
 
 def _actuator_scales(machine, units: str) -> np.ndarray:
     """SI per CLI unit of each actuator coordinate (degrees for angles)."""
-    quantities = getattr(machine, "actuator_quantities", None)
-    if quantities is None:
-        quantities = machine.model.actuator_quantities
-    return np.array([DEG if k == "angle" else length_scale(units) for k in quantities])
+    return np.array([DEG if k == "angle" else length_scale(units)
+                     for k in machine.actuator_quantities])
 
 
 def _region_scales(machine, units: str) -> np.ndarray:
     from pkmkit.geometric_errors.configurations import region_names
-    from pkmkit.geometric_errors.model import _family
 
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         return _actuator_scales(machine, units)
     n = len(region_names(machine))
     return np.array([length_scale(units)] * 3 + [DEG] * (n - 3))

@@ -9,6 +9,7 @@ column of the output file).
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 
 import click
@@ -24,7 +25,7 @@ from pkmkit.spatial.rotation import resolve_convention
 from pkmkit.status import Status
 
 from .batch import batch_options, run_batch, status_names
-from .coordinates import actuator_scales, actuator_units, family, parse_actuators
+from .coordinates import actuator_scales, actuator_units, parse_actuators
 from .describe import describe_machine, print_description
 from .lazy import LazyGroup
 from .options import (
@@ -139,7 +140,7 @@ def ik(machine_name, assignments, pose, branches, q0_text, method, input_, outpu
     """
     _require_batch_pair(pose, input_, output, "--pose")
     m = resolve_machine(machine_name, assignments, units)
-    if family(m) != "translational":
+    if m.family != "translational":
         from .pose_cmds import ik as pose_ik
 
         pose_ik(m, pose, q0_text, input_, output, chunk_rows, units, resolve_convention(
@@ -204,7 +205,7 @@ def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, inpu
     """
     _require_batch_pair(q_text, input_, output, "--q")
     m = resolve_machine(machine_name, assignments, units)
-    if family(m) != "translational":
+    if m.family != "translational":
         from .pose_cmds import fk as pose_fk
 
         pose_fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units,
@@ -322,7 +323,7 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
     if not tol > 0:
         raise click.BadParameter("must be > 0", param_hint="--tol")
     m = resolve_machine(machine_name, assignments, units)
-    if family(m) != "translational":
+    if m.family != "translational":
         if input_ is not None:
             raise click.UsageError("batch Jacobians are available for translational machines; "
                                    "give --pose (or --q)")
@@ -402,8 +403,21 @@ def demo(out_dir: str, quick: bool) -> None:
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """Console-script entry point. SIGTERM ends the command as Ctrl-C does, through the normal
+    exits, so that no temporary or partial output file is left (:mod:`pkmkit.io.atomic`)."""
+    exit_on_sigterm()
     cli(prog_name="pkmkit")
+
+
+def exit_on_sigterm() -> None:
+    """Turn SIGTERM into ``SystemExit(143)`` in the main thread (cleanup handlers run)."""
+    import signal
+
+    def _terminate(signum, frame):
+        raise SystemExit(128 + signum)
+
+    with contextlib.suppress(ValueError):  # not in the main thread: leave the default
+        signal.signal(signal.SIGTERM, _terminate)
 
 
 if __name__ == "__main__":  # pragma: no cover

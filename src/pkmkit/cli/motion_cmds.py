@@ -21,7 +21,6 @@ from pkmkit.motion.paths import circle, helix, line, raster
 from pkmkit.motion.timelaw import DEFAULT_JERK_PER_ACCEL, PROFILES
 from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
 
-from .coordinates import family
 from .options import (
     EXIT_PARTIAL,
     JSON_OPTION,
@@ -141,10 +140,10 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     """Move along a tool path: duration, actuator strokes, speeds, accelerations, forces and
     powers, with a check of the actuator limits (exit status 3 when a limit is exceeded)."""
     m = resolve_machine(machine_name, assignments, units)
-    if family(m) != "translational":
+    if m.family != "translational":
         raise InputError(
             f"path follows tool paths with translational machines (position-only poses and "
-            f"their mass models); {m.id!r} is a {family(m)} machine: run its poses through "
+            f"their mass models); {m.id!r} is a {m.family} machine: run its poses through "
             f"`pkmkit ik {machine_name} --input poses.csv --output q.csv` instead")
     scale = length_scale(units)
     out = check_output_dir(out_dir) if out_dir else None

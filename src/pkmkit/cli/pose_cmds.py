@@ -18,7 +18,6 @@ from .batch import run_batch, status_names
 from .coordinates import (
     actuator_scales,
     actuator_units,
-    family,
     parse_actuators,
     parse_numbers,
     pose_columns,
@@ -48,7 +47,7 @@ def _q_text(m, q: np.ndarray, units: str) -> str:
 
 def _pose_payload(m, pose: np.ndarray, units: str, convention: str) -> dict[str, Any]:
     """JSON fields of a full pose: position, angles in the convention, rotation vector."""
-    if family(m) == "chain":
+    if m.family == "chain":
         # a frame of a joint-chain machine (tool frame, platform): position and rotation
         # vector, whereas its CLI pose rows are a tool point and axis
         from pkmkit.spatial.poses import pose_to_angles
@@ -73,7 +72,7 @@ def _pose_line(m, pose: np.ndarray, units: str, convention: str) -> str:
 def ik(m, pose, q0_text, input_, output, chunk_rows, units, convention, tool_length,
        as_json) -> None:
     """Inverse model of a full-pose or joint-chain machine (single pose or batch)."""
-    kind = family(m)
+    kind = m.family
     widths = pose_widths(m)
     scales = actuator_scales(m, units)
     lengths = None if tool_length is None else tool_length * length_scale(units)
@@ -154,7 +153,7 @@ def _passive(m, passive: np.ndarray) -> dict[str, float]:
 def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convention,
        tool_length, as_json) -> None:
     """Direct model of a full-pose or joint-chain machine."""
-    kind = family(m)
+    kind = m.family
     scales = actuator_scales(m, units)
     lengths = None if tool_length is None else tool_length * length_scale(units)
     columns = pose_columns(m)
@@ -260,7 +259,7 @@ def _passive_matrix(m, passive: np.ndarray) -> np.ndarray:
 # ------------------------------------------------------------------------------- jacobian
 def jacobian(m, pose, q_text, tol, units, convention, as_json) -> None:
     """Velocity model of a full-pose or joint-chain machine at one configuration."""
-    kind = family(m)
+    kind = m.family
     scales = actuator_scales(m, units)
     if kind == "chain":
         if q_text is None and pose is None:

@@ -36,7 +36,7 @@ import numpy as np
 from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors._blas import single_blas
 from pkmkit.geometric_errors.configurations import CHAIN_SPREAD, sample_configurations
-from pkmkit.geometric_errors.model import _family, closure_linearisation, defect_set
+from pkmkit.geometric_errors.model import closure_linearisation, defect_set
 from pkmkit.geometric_errors.selection import select_defects
 
 #: Default relative tolerance on the scaled singular values of S.
@@ -154,7 +154,7 @@ def compatibility_configurations(machine, n: int = 40, *, seed: int | None = 0) 
     :data:`~pkmkit.geometric_errors.configurations.CHAIN_SPREAD` (strokes ignored), head
     actuators stay
     at home; rod machines use their default region."""
-    if _family(machine) != "chain":
+    if machine.family != "chain":
         return sample_configurations(machine, n, seed=seed).q
     model = machine.model
     act = np.flatnonzero(model.actuated)

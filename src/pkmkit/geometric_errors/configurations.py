@@ -22,7 +22,6 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
-from pkmkit.geometric_errors.model import _family
 
 #: Default half-range around home of a joint-chain actuator without stroke: prismatic (m,
 #: relative to |home|, at least 0.1 m) and revolute (rad).
@@ -32,7 +31,7 @@ ROTATION_SPREAD = np.radians(10.0)
 
 
 def _six_dof(machine) -> bool:
-    return _family(machine) == "full-pose" and machine.n_actuators == 6
+    return machine.family == "full-pose" and machine.n_actuators == 6
 
 
 @dataclass(frozen=True)
@@ -57,16 +56,16 @@ class Configurations:
 
 def region_names(machine) -> tuple[str, ...]:
     """Names of the region coordinates of ``machine`` (module docstring)."""
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         return tuple(machine.actuator_names)
-    if _family(machine) == "full-pose":
+    if machine.family == "full-pose":
         return tuple(machine.pose_names[:6 if _six_dof(machine) else 3])
     return tuple(machine.pose_names)
 
 
 def default_region(machine) -> tuple[np.ndarray, np.ndarray]:
     """The default region (module docstring)."""
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         model = machine.model
         act = np.flatnonzero(model.actuated)
         home = machine.home_q
@@ -130,7 +129,7 @@ def check_region(machine, region: Any) -> tuple[np.ndarray, np.ndarray]:
 def configurations_at(machine, points: np.ndarray) -> np.ndarray:
     """Actuator coordinates ``(N, n)`` of region points ``(N, k)`` with the nominal geometry
     (NaN rows where unreachable)."""
-    family = _family(machine)
+    family = machine.family
     pts = np.atleast_2d(np.asarray(points, dtype=float))
     if family == "chain":
         q = pts.copy()

@@ -45,7 +45,7 @@ import scipy.linalg
 from pkmkit.exceptions import IdentifiabilityError, InputError
 from pkmkit.geometric_errors._blas import single_blas
 from pkmkit.geometric_errors.measurements import measurement_jacobian, measurement_rows
-from pkmkit.geometric_errors.model import _family, defect_set
+from pkmkit.geometric_errors.model import defect_set
 from pkmkit.geometric_errors.selection import select_defects
 
 SCALINGS = ("length", "norm", "none")
@@ -62,7 +62,7 @@ def characteristic_length(machine) -> float:
     """The length L (m) that turns angle-like defects and rotation readings into metres: the
     closure scale of a joint-chain machine, the homogenising length of a full-pose machine, the
     mean equivalent-leg length of a translational one."""
-    family = _family(machine)
+    family = machine.family
     if family == "chain":
         return float(machine.model.characteristic_length)
     if family == "full-pose":

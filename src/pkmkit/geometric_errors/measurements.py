@@ -29,7 +29,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError, MeasurementError
 from pkmkit.geometric_errors._blas import single_blas
-from pkmkit.geometric_errors.model import _family, _rod_index, tool_sensitivity
+from pkmkit.geometric_errors.model import _rod_index, tool_sensitivity
 
 MEASURES = ("point", "pose", "ballbar", "height", "part")
 #: Rows of each measurement type (``None``: the number of actuators).
@@ -40,11 +40,11 @@ def _check_kind(machine, kind: str) -> None:
     if kind not in MEASURES:
         raise MeasurementError(f"unknown measurement type {kind!r}; valid types: "
                                f"{', '.join(MEASURES)}", kind)
-    if kind == "part" and _family(machine) == "chain":
+    if kind == "part" and machine.family == "chain":
         raise MeasurementError("machined-part (joint-space) measurements are defined for rod "
                                "machines (seed 003); use point or pose measurements for a "
                                "joint-chain machine", kind)
-    if kind == "pose" and _family(machine) == "translational":
+    if kind == "pose" and machine.family == "translational":
         raise MeasurementError(f"{machine.id!r} only translates: a full-pose measurement has "
                                "nothing to measure in its orientation; use point measurements",
                                kind)
@@ -75,7 +75,7 @@ def measure(machine, kind: str, q: Any, setup: dict | None = None) -> np.ndarray
     n = qb.shape[0]
     if kind == "part":
         return _part_joints(machine, setup)
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         res = machine.fk(qb, tool_length=setup.get("tool_length"), full_output=True)
         point, rotvec = res.pose[:, :3], res.tool_frame[:, 3:]
     else:

@@ -79,18 +79,9 @@ class DefectSet:
         return arr
 
 
-def _family(machine) -> str:
-    name = type(machine).__name__
-    if name == "JointChainMachine":
-        return "chain"
-    if name == "FullPoseMachine":
-        return "full-pose"
-    return "translational"
-
-
 def defect_set(machine) -> DefectSet:
     """The defect set of ``machine`` (any family)."""
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         index = machine.model.defect_index
         owners = tuple(machine.model.elements[e].name for e in index.element)
         return DefectSet(index.names, index.units, index.kind, owners)
@@ -119,7 +110,7 @@ def with_defects(machine, values: Any):
     joint-chain machines solve their home closure again (in least squares if incompatible)."""
     dset = defect_set(machine)
     delta = dset.vector(values)
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         return machine.with_defects(delta)
     from pkmkit.model.rod_defects import apply_rod_defects
 
@@ -162,7 +153,7 @@ def tool_sensitivity(machine, q: Any, *, tool_length: Any = None) -> ToolSensiti
     Raises:
         InputError: mis-shaped q, or configurations where the direct model fails.
     """
-    family = _family(machine)
+    family = machine.family
     qb = np.atleast_2d(np.asarray(q, dtype=float))
     if qb.shape[1] != machine.n_actuators:
         raise InputError(f"q must have {machine.n_actuators} components per row, got "
@@ -205,7 +196,7 @@ def closure_linearisation(machine, q: Any, *, tool_length: Any = None) -> Closur
     if qb.ndim != 2 or qb.shape[1] != machine.n_actuators:
         raise InputError(f"q must have {machine.n_actuators} components per row, got "
                          f"{qb.shape[-1]}")
-    family = _family(machine)
+    family = machine.family
     if family == "chain":
         lin = _chain_linearisation(machine, qb, tool_length)
         return ClosureLinearisation(lin["cu"], lin["cd"], lin["direct"].pose)

@@ -16,7 +16,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from pkmkit.exceptions import ParameterError
-from pkmkit.geometric_errors.model import _family, defect_set
+from pkmkit.geometric_errors.model import defect_set
 
 SCOPES = ("all", "loops", "head")
 _WILDCARDS = set("*?[")
@@ -38,7 +38,7 @@ def loop_defects(machine) -> np.ndarray:
     """``(d,)`` bool: the defect belongs to a closed loop (every defect of a rod machine; the
     legs' elements of a joint-chain machine, not its head)."""
     ds = defect_set(machine)
-    if _family(machine) != "chain":
+    if machine.family != "chain":
         return np.ones(len(ds), dtype=bool)
     model = machine.model
     in_legs = {e for leg in model.legs for e in leg}
@@ -50,7 +50,7 @@ def reference_joint_defects(machine) -> np.ndarray:
     — the joint the thesis aligns the fixed frame with (D_ICS^L11 of the Tripteor, D_R0^L1 of
     the crank–slider) and keeps nominal. All False for a rod machine."""
     ds = defect_set(machine)
-    if _family(machine) != "chain":
+    if machine.family != "chain":
         return np.zeros(len(ds), dtype=bool)
     first = machine.model.legs[0][0]
     return np.asarray(machine.model.defect_index.element) == first

@@ -39,7 +39,7 @@ import numpy as np
 from pkmkit.exceptions import InputError, ParameterError, ToleranceFileError
 from pkmkit.geometric_errors._blas import single_blas
 from pkmkit.geometric_errors.identifiability import ANGLE_UNITS
-from pkmkit.geometric_errors.model import _family, _rod_index, defect_set, tool_sensitivity
+from pkmkit.geometric_errors.model import _rod_index, defect_set, tool_sensitivity
 
 DISTRIBUTIONS = ("uniform", "normal")
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
@@ -277,7 +277,7 @@ def monte_carlo(machine, q: Any, tol: Tolerances, n_samples: int, *, seed: int |
     sens = tool_sensitivity(machine, qb, tool_length=tool_length)
     nominal = sens.pose[:, :3]
     start = time.perf_counter()
-    if _family(machine) == "chain":
+    if machine.family == "chain":
         actual = _chain_samples(machine, qb, samples, tool_length)
     else:
         actual = exact_rod_points(machine, qb, samples)
@@ -316,7 +316,7 @@ def nominal_gains(machine, q: np.ndarray):
     a = a[:, 0]
     p_count = q.shape[0]
     position = np.zeros((p_count, 3))
-    if _family(machine) == "full-pose":
+    if machine.family == "full-pose":
         position[:] = x[:, :3]
         rot = rotvec_to_matrix(x[:, 3:6])
         w = np.einsum("pab,mb->pma", rot, geom.platform[0])
@@ -340,7 +340,7 @@ def exact_rod_points(machine, q: np.ndarray, samples: np.ndarray, *, tol: float 
     qb = np.atleast_2d(np.asarray(q, dtype=float))
     position, rot, gain = nominal_gains(machine, qb)
     geom = sampled_geometry(machine.model, _rod_index(machine), samples)
-    dims = 3 if _family(machine) == "full-pose" else machine.dims
+    dims = 3 if machine.family == "full-pose" else machine.dims
     out = solve_sampled_direct(geom, qb, position, rot, gain, dims=dims, tol=tol,
                                max_iter=max_iter)
     return out.position

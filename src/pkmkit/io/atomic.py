@@ -3,12 +3,19 @@
 Every file pkmkit writes goes first to a temporary file in the destination's directory, which
 replaces the destination (``os.replace``, atomic on POSIX and Windows) only once it is complete;
 a failed or interrupted run leaves the previous file, if any, untouched and no partial file.
+The file gets the permissions the umask gives any new file.
+
+Temporary files are named ``.<name>.pkmkit-<pid>.<random>.part<suffix>``: an exception or an
+interruption (Ctrl-C; SIGTERM, which the command line turns into an exit) removes them, and a
+process killed outright (SIGKILL, power loss) leaves one that the next write into the same
+directory removes once its process is gone.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import re
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -66,9 +73,11 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         InputError: the destination cannot be written (see :func:`check_output_file`).
     """
     target = check_output_file(path)
+    directory = target.parent if str(target.parent) else Path(".")
+    sweep_stale_temporaries(directory)
     try:
-        handle, temp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".part{target.suffix}",
-                                        dir=target.parent if str(target.parent) else ".")
+        handle, temp = tempfile.mkstemp(prefix=f".{target.name}.{TEMP_TAG}{os.getpid()}.",
+                                        suffix=f".part{target.suffix}", dir=directory)
     except OSError as exc:
         raise InputError(f"{path}: cannot write file: {exc.strerror or exc}") from None
     os.close(handle)
@@ -84,13 +93,56 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         raise
 
 
-def write_text_atomic(path: str | Path, text: str) -> None:
-    """Write ``text`` (UTF-8) to ``path`` atomically."""
+#: Marks pkmkit's temporary files (followed by the writing process's id).
+TEMP_TAG = "pkmkit-"
+_TEMP_NAME = re.compile(r"^\..+\." + TEMP_TAG + r"(\d+)\.[^.]+\.part")
+
+
+def sweep_stale_temporaries(directory: str | Path) -> list[Path]:
+    """Remove the temporary files left in ``directory`` by pkmkit processes that no longer run
+    (killed while writing); return them. Files of running processes are left alone."""
+    removed = []
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(directory):
+            match = _TEMP_NAME.match(entry.name)
+            if match and entry.is_file() and not _process_alive(int(match.group(1))):
+                with contextlib.suppress(OSError):
+                    os.unlink(entry.path)
+                    removed.append(Path(entry.path))
+    return removed
+
+
+def _process_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
     try:
-        with atomic_path(path) as temp:
-            temp.write_text(text, encoding="utf-8")
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True  # exists, owned by someone else
+    return True
+
+
+def write_bytes_atomic(path: str | Path, payload: bytes) -> None:
+    """Write ``payload`` to ``path`` atomically: a temporary file in the same directory, flushed
+    to disk, then renamed over ``path`` with the permissions the umask gives a new file.
+
+    Raises:
+        InputError: the destination cannot be written, or the disk is full (no file is left).
+    """
+    try:
+        with atomic_path(path) as temp, open(temp, "wb") as handle:
+            handle.write(payload)
+            handle.flush()
+            os.fsync(handle.fileno())
     except OSError as exc:
         raise InputError(f"{path}: cannot write file: {exc.strerror or exc}") from None
+
+
+def write_text_atomic(path: str | Path, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically (see :func:`write_bytes_atomic`)."""
+    write_bytes_atomic(path, text.encode("utf-8"))
 
 
 def _umask() -> int:

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from pkmkit.calibration.compensation import CorrectedPath
 from pkmkit.model.parameters import length_scale
+
+if TYPE_CHECKING:  # io depends on no algorithm: the type is only named here
+    from pkmkit.calibration.compensation import CorrectedPath
 
 _LETTERS = "XYZ"
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from pkmkit.exceptions import InputError
-from pkmkit.io.measurements import atomic_write_text
+from pkmkit.io.atomic import write_text_atomic as atomic_write_text
 from pkmkit.model.defects_table import defects_from_table, table_from_defects
 from pkmkit.model.machine_file import SUFFIXES, read_machine_document
 from pkmkit.model.parameters import length_scale

@@ -30,16 +30,15 @@ from __future__ import annotations
 
 import csv
 import io
-import os
 import re
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from pkmkit.calibration.measurement_set import KINDS, MeasurementSet
 from pkmkit.exceptions import InputError
+from pkmkit.io.atomic import write_text_atomic
+from pkmkit.model.measurement_set import KINDS, MeasurementSet
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 
 READINGS = {"point": ("x", "y", "z"), "pose": ("x", "y", "z", "rx", "ry", "rz"),
@@ -57,9 +56,7 @@ _COLUMN_UNIT = re.compile(r"^(.*?)\s*\[\s*([A-Za-z°]+)\s*\]\s*$")
 
 def actuator_columns(machine) -> tuple[tuple[str, ...], np.ndarray]:
     """The machine's actuator column names and which are angles (degrees in files)."""
-    from pkmkit.calibration.identify import _angle_actuators
-
-    return tuple(machine.actuator_names), _angle_actuators(machine)
+    return tuple(machine.actuator_names), machine.angular_actuators
 
 
 def expected_columns(machine, kind: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -302,37 +299,22 @@ def format_measurements(data: MeasurementSet, machine, *, units: str = "m",
 
 def write_measurements(path: str | Path, data: MeasurementSet, machine, *, units: str = "m",
                        comment: str | None = None) -> None:
-    """Write ``data`` as a measurement file, atomically (see :func:`atomic_write_text`)."""
-    atomic_write_text(path, format_measurements(data, machine, units=units, comment=comment))
+    """Write ``data`` as a measurement file, atomically
+    (:func:`pkmkit.io.atomic.write_text_atomic`)."""
+    write_text_atomic(path, format_measurements(data, machine, units=units, comment=comment))
 
 
-def atomic_write_text(path: str | Path, text: str) -> None:
-    """Write ``text`` to ``path`` so that the file appears complete or not at all: a temporary
-    file in the same directory, flushed, then renamed over ``path``.
-
-    Raises:
-        InputError: the directory does not exist or is not writable.
-    """
-    atomic_write_bytes(path, text.encode("utf-8"))
-
-
-def atomic_write_bytes(path: str | Path, payload: bytes) -> None:
-    """Bytes version of :func:`atomic_write_text`."""
-    target = Path(path)
-    directory = target.parent if str(target.parent) else Path(".")
+def file_unit(path: str | Path) -> str | None:
+    """The unit named by a ``# units: mm`` line among the comment lines heading a file, or
+    None (no such line, or the file cannot be read)."""
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot write: {exc.strerror or exc}") from None
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            handle.write(payload)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+        with open(path, encoding="utf-8-sig") as handle:
+            for line in handle:
+                if not line.lstrip().startswith("#"):
+                    return None
+                match = _UNIT_LINE.match(line.strip())
+                if match:
+                    return match.group(1)
+    except OSError:
+        return None
+    return None

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -45,6 +45,7 @@ from pkmkit.machines.machine import (
     _valid_rows,
 )
 from pkmkit.machines.modes import ModeNaming
+from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
     DirectResult,
     InverseResult,
@@ -110,7 +111,7 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class FullPoseMachine(ModeNaming):
+class FullPoseMachine(ModeNaming, MachineFace):
     """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
 
     Attributes:
@@ -123,6 +124,8 @@ class FullPoseMachine(ModeNaming):
         length_given: True when L was given rather than defaulted (it then survives
             :meth:`with_params`).
     """
+
+    family: ClassVar[str] = "full-pose"
 
     id: str
     name: str
@@ -208,6 +211,11 @@ class FullPoseMachine(ModeNaming):
     def pose_names(self) -> tuple[str, ...]:
         """``("x", "y", "z", "rx", "ry", "rz")``."""
         return self.model.pose_names
+
+    @property
+    def actuator_quantities(self) -> tuple[str, ...]:
+        """``"length"`` (m) or ``"angle"`` (rad) per actuator."""
+        return self.model.actuator_quantities
 
     @property
     def actuator_names(self) -> tuple[str, ...]:

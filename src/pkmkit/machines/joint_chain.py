@@ -18,7 +18,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -39,6 +39,7 @@ from pkmkit.machines.chain_checks import (
 )
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
+from pkmkit.machines.protocol import MachineFace
 from pkmkit.model.chains import FIXED, JointChainModel
 from pkmkit.numerics.arrays import restore_shape
 from pkmkit.solve.chains import (
@@ -156,7 +157,7 @@ class HyperstatismCount:
 
 
 @dataclass(frozen=True, eq=False)
-class JointChainMachine:
+class JointChainMachine(MachineFace):
     """A hyperstatic (or isostatic) machine of joint chains (see the module docstring).
 
     Attributes:
@@ -166,6 +167,8 @@ class JointChainMachine:
         model: the :class:`~pkmkit.model.chains.JointChainModel`.
         tool_length: default distance of the tool point along the tool frame's z axis (m).
     """
+
+    family: ClassVar[str] = "chain"
 
     id: str
     name: str

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -28,6 +28,7 @@ from pkmkit.exceptions import (
 )
 from pkmkit.machines.closed_form import RodClosedForm
 from pkmkit.machines.modes import ModeNaming
+from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
     AssemblyModes,
     DirectResult,
@@ -115,7 +116,7 @@ def _restore(result, single: bool, names: tuple[str, ...]):
 
 
 @dataclass(frozen=True, eq=False)
-class Machine(ModeNaming):
+class Machine(ModeNaming, MachineFace):
     """A parallel kinematic machine (translational rod-leg family).
 
     Attributes:
@@ -127,6 +128,8 @@ class Machine(ModeNaming):
         description, source: documentation strings.
         extra_poses: named sample poses in addition to ``home``.
     """
+
+    family: ClassVar[str] = "translational"
 
     id: str
     name: str
@@ -180,6 +183,11 @@ class Machine(ModeNaming):
     def pose_names(self) -> tuple[str, ...]:
         """Names of the pose coordinates."""
         return self.model.pose_names
+
+    @property
+    def actuator_quantities(self) -> tuple[str, ...]:
+        """``"length"`` (m) or ``"angle"`` (rad) per actuator."""
+        return self.model.actuator_quantities
 
     @property
     def actuator_names(self) -> tuple[str, ...]:

@@ -9,13 +9,15 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from pkmkit.plot.save import save_figure
+
 #: Colours of the nominal (before) and identified (after) machines.
 BEFORE, AFTER = "#d62728", "#1f77b4"
 
 
 def _save(fig: Figure, path: str | Path | None) -> Figure:
     if path is not None:
-        fig.savefig(path, dpi=100)
+        save_figure(fig, path, dpi=100)
     return fig
 
 

@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from pkmkit.plot.save import save_figure
+
 
 def plot_sensitivity(table, path: str | Path, *, top: int = 30, unit: str = "mm",
                      title: str = "") -> Path:
@@ -36,7 +38,7 @@ def plot_sensitivity(table, path: str | Path, *, top: int = 30, unit: str = "mm"
                  + " (SI)", fontsize=9)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -62,5 +64,5 @@ def plot_accuracy_map(amap, path: str | Path, *, unit: str = "mm", title: str = 
                  + (f" ({fixed})" if fixed else ""), fontsize=10)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     return path

@@ -18,9 +18,10 @@ from typing import Any
 import numpy as np
 
 from pkmkit import __version__
+from pkmkit.io.atomic import write_bytes_atomic as atomic_write_bytes
+from pkmkit.io.atomic import write_text_atomic as atomic_write_text
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.io.machine_defects import machine_text_with_defects
-from pkmkit.io.measurements import atomic_write_bytes, atomic_write_text
 from pkmkit.model.parameters import length_scale
 
 FIGURES = ("residuals", "histograms", "parameters", "identifiability")

@@ -1,0 +1,35 @@
+"""The part of the machine protocol that every family shares.
+
+Every machine class (:class:`~pkmkit.machines.machine.Machine`,
+:class:`~pkmkit.machines.full_pose.FullPoseMachine`,
+:class:`~pkmkit.machines.joint_chain.JointChainMachine`) derives from :class:`MachineFace`, so
+calling code asks the machine rather than testing its class: ``machine.family`` says which
+family it is where an algorithm's physics truly differs (a dispatch table, never a chain of
+class-name tests), ``machine.actuator_quantities`` whether each actuator is a length or an angle.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+#: The machine families: rod legs with a translational platform, rod legs with a full-pose
+#: (6-DOF) platform, joint chains (possibly hyperstatic) with heads.
+FAMILIES = ("translational", "full-pose", "chain")
+
+
+class MachineFace:
+    """Mixin of the family-independent protocol attributes.
+
+    Needs ``actuator_quantities`` (``"length"`` or ``"angle"`` per actuator) from the class.
+    """
+
+    #: One of :data:`FAMILIES`.
+    family: ClassVar[str]
+
+    @property
+    def angular_actuators(self) -> np.ndarray:
+        """``(n_actuators,)`` bool: True for angular actuators (cranks, revolute joints), whose
+        values are radians inside pkmkit and degrees in files and on the command line."""
+        return np.array([q == "angle" for q in self.actuator_quantities], dtype=bool)
