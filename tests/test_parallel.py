@@ -86,9 +86,9 @@ def client():
 
 
 def test_workspace_on_dask_is_identical(client, monkeypatch):
-    from pkmkit.analysis import workspace as ws
+    from pkmkit.analysis import criteria
 
-    monkeypatch.setattr(ws, "EVALUATION_CHUNK", 997)  # several tasks on a small grid
+    monkeypatch.setattr(criteria, "EVALUATION_CHUNK", 997)  # several tasks on a small grid
     m = pkmkit.machine("orthoglide")
     grid = make_grid(*m.default_box(), free=(0, 1, 2), base=m.home_pose,
                      names=m.pose_names, resolution=21)

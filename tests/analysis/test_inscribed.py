@@ -83,7 +83,7 @@ def test_refined_square_does_not_depend_on_the_grid_and_matches_a_fine_grid():
 def test_seed004_useful_workspace_squares_are_refined():
     """The issue's figures: the squares inscribed in seed 004's useful workspaces were 0.5–0.9 %
     small when only grown about the grid's centre."""
-    from pkmkit.analysis.workspace import useful_workspace
+    from pkmkit.analysis.joint_space import useful_workspace
 
     for name, before in (("five-bar-isotropic", 0.345952), ("five-bar-biglide", 0.134342)):
         useful = useful_workspace(pkmkit.machine(name), Criteria(bounds=(1 / 3, 3.0)),

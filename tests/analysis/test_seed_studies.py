@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.analysis.workspace import Criteria, check_region, feasible_interval, useful_workspace
+from pkmkit.analysis.joint_space import useful_workspace
+from pkmkit.analysis.workspace import Criteria, check_region, feasible_interval
 
 
 def test_orthoglide_reference_points_on_the_diagonal():

@@ -7,15 +7,13 @@ from scipy.optimize import brentq
 
 import pkmkit
 from pkmkit.analysis.grids import make_grid
+from pkmkit.analysis.joint_space import joint_grid, joint_space_map, useful_workspace
 from pkmkit.analysis.workspace import (
     Criteria,
     WorkspaceMap,
     check_region,
     compute_workspace,
-    joint_grid,
-    joint_space_map,
     largest_inscribed_box,
-    useful_workspace,
 )
 from pkmkit.exceptions import InputError
 
@@ -227,7 +225,7 @@ def test_no_warning_reaches_the_user_on_a_partly_unreachable_cube():
 
 
 def test_chunked_evaluation_matches_one_block(monkeypatch):
-    import pkmkit.analysis.workspace as ws
+    import pkmkit.analysis.criteria as ws
 
     m = pkmkit.machine("linear-delta")
     lo, hi = m.default_box()

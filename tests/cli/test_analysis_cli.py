@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.analysis.workspace import Criteria, useful_workspace
+from pkmkit.analysis.joint_space import useful_workspace
+from pkmkit.analysis.workspace import Criteria
 
 
 def test_analyze(run, as_json):

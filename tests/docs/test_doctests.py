@@ -21,7 +21,7 @@ WITH_EXAMPLES = [name for name in MODULES if _examples(name)]
 
 def test_the_public_api_has_examples():
     expected = {"pkmkit", "pkmkit.motion.timelaw", "pkmkit.motion.joints",
-                "pkmkit.dynamics.trajectory", "pkmkit.analysis.workspace",
+                "pkmkit.dynamics.trajectory", "pkmkit.analysis.region_check",
                 "pkmkit.io.table", "pkmkit.motion.extrema", "pkmkit.analysis.inscribed"}
     names = set(WITH_EXAMPLES) | ({"pkmkit"} if _examples("pkmkit") else set())
     assert expected <= names, expected - names

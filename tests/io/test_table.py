@@ -217,7 +217,7 @@ def _umask():
 
 
 def test_csv_formatted_in_parallel_slices_is_identical(tmp_path, monkeypatch):
-    import pkmkit.io.table as table
+    import pkmkit.io.table_writer as table
 
     rng = np.random.default_rng(5)
     columns = {"a": rng.normal(size=5000) * 10.0 ** rng.integers(-6, 6, 5000),

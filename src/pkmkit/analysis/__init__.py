@@ -9,21 +9,23 @@ from pkmkit.analysis.indices import (
     indices,
     scalar_index,
 )
+from pkmkit.analysis.joint_space import (
+    JointSpaceMap,
+    joint_box_factor_range,
+    joint_grid,
+    joint_space_map,
+    region_factor_range,
+    useful_workspace,
+)
 from pkmkit.analysis.workspace import (
     Criteria,
     InscribedBox,
-    JointSpaceMap,
     RegionCheck,
     WorkspaceMap,
     check_region,
     compute_workspace,
     feasible_interval,
-    joint_box_factor_range,
-    joint_grid,
-    joint_space_map,
     largest_inscribed_box,
-    region_factor_range,
-    useful_workspace,
 )
 
 __all__ = [

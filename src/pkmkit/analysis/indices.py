@@ -177,9 +177,7 @@ def index_values(machine: Machine, points: Any, name: str, *, scheduler: Any = N
 
 
 def _index_block(points: np.ndarray, machine: Machine, name: str) -> np.ndarray:
-    from pkmkit.analysis.workspace import is_joint_chain
-
-    if is_joint_chain(machine):
+    if machine.family == "chain":
         from pkmkit.analysis.chain_workspace import chain_index_values
 
         return chain_index_values(machine, points, name)

@@ -11,13 +11,13 @@ from pkmkit.analysis.chain_workspace import CHAIN_INDICES
 from pkmkit.analysis.grids import Grid, PoseFrame, make_grid, pose_frame
 from pkmkit.analysis.indices import SCALAR_INDICES, index_values, indices
 from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
+from pkmkit.analysis.joint_space import useful_workspace
 from pkmkit.analysis.workspace import (
     Criteria,
     WorkspaceMap,
     check_region,
     check_region_samples,
     compute_workspace,
-    useful_workspace,
 )
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import MAX_COORDINATE, Machine

@@ -20,13 +20,8 @@ import numpy as np
 
 from pkmkit.analysis.grids import make_grid
 from pkmkit.analysis.indices import indices, scalar_index
-from pkmkit.analysis.workspace import (
-    Criteria,
-    check_region,
-    compute_workspace,
-    feasible_interval,
-    useful_workspace,
-)
+from pkmkit.analysis.joint_space import useful_workspace
+from pkmkit.analysis.workspace import Criteria, check_region, compute_workspace, feasible_interval
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine
 from pkmkit.plot.maps import (

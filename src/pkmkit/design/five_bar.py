@@ -20,7 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from pkmkit.analysis.workspace import Criteria, RegionCheck, check_region, useful_workspace
+from pkmkit.analysis.joint_space import useful_workspace
+from pkmkit.analysis.workspace import Criteria, RegionCheck, check_region
 from pkmkit.design.checks import degenerate_note, relaxed, require_side
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine

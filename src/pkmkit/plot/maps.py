@@ -13,12 +13,8 @@ from matplotlib.patches import Ellipse, Rectangle
 from matplotlib.ticker import MaxNLocator
 
 from pkmkit.analysis.grids import Grid
-from pkmkit.analysis.workspace import (
-    InscribedBox,
-    JointSpaceMap,
-    UsefulWorkspace,
-    WorkspaceMap,
-)
+from pkmkit.analysis.joint_space import JointSpaceMap, UsefulWorkspace
+from pkmkit.analysis.workspace import InscribedBox, WorkspaceMap
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.plot.save import save_figure

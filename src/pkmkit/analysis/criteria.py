@@ -1,0 +1,162 @@
+"""Workspace criteria (reachability, strokes, transmission-factor bounds, conditioning, assembly
+mode) and their evaluation at poses or on a grid, in chunks, for any machine family."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pkmkit.analysis.chain_workspace import evaluate_chain_poses
+from pkmkit.analysis.evaluation import PoseEvaluation
+from pkmkit.analysis.grids import Grid
+from pkmkit.exceptions import InputError
+from pkmkit.machines.machine import SINGULARITY_TOL, Machine
+from pkmkit.numerics.arrays import real, real_pair
+from pkmkit.parallel import map_chunks
+from pkmkit.status import Status
+
+MASK_NAMES = ("reachable", "strokes", "bounds", "condition", "mode")
+
+
+#: Relative tolerance of the transmission-factor bounds (rounding at a bound is not a failure).
+FACTOR_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Criteria:
+    """What makes a pose (or an actuator vector) usable.
+
+    Attributes:
+        bounds: ``(lo, hi)`` bounds on every velocity transmission factor, or None.
+        kappa_max: largest admissible condition number, or None.
+        strokes: enforce the actuator strokes.
+        q_limits: ``(q_lo (n,), q_hi (n,))`` replacing the machine's strokes, or None.
+        connected: keep only the part connected to the home pose (no parallel singularity
+            crossed).
+        tol: singularity threshold.
+        rtol: relative tolerance of the bounds (rounding at a bound is not a failure).
+    """
+
+    bounds: tuple[float, float] | None = None
+    kappa_max: float | None = None
+    strokes: bool = True
+    q_limits: tuple[np.ndarray, np.ndarray] | None = None
+    connected: bool = True
+    tol: float = SINGULARITY_TOL
+    rtol: float = FACTOR_RTOL
+
+    def __post_init__(self) -> None:
+        if self.bounds is not None:
+            lo, hi = real_pair(self.bounds, "the transmission-factor bounds")
+            if not 0 < lo < hi:
+                raise InputError(
+                    f"transmission-factor bounds must satisfy 0 < lo < hi, got {self.bounds}"
+                )
+        if self.kappa_max is not None and not real(self.kappa_max, "kappa_max") >= 1:
+            raise InputError(f"kappa_max must be >= 1, got {self.kappa_max}")
+
+    def within_bounds(self, factors: np.ndarray) -> np.ndarray:
+        """Rows of transmission factors ``(M, n)`` (largest first) within the bounds, up to a
+        relative ``rtol`` (a design sized to touch a bound must pass): ``(M,)``."""
+        lo, hi = self.bounds
+        with np.errstate(invalid="ignore"):
+            return ((factors[:, -1] >= lo * (1 - self.rtol))
+                    & (factors[:, 0] <= hi * (1 + self.rtol)))
+
+    def limits(self, machine: Machine) -> tuple[np.ndarray, np.ndarray]:
+        """Actuator limits in force (±inf when strokes are not enforced)."""
+        if self.q_limits is not None:
+            return (np.asarray(self.q_limits[0], float), np.asarray(self.q_limits[1], float))
+        if not self.strokes:
+            n = machine.n_actuators
+            return np.full(n, -np.inf), np.full(n, np.inf)
+        return machine.model.q_min, machine.model.q_max
+
+
+#: Poses evaluated at once by :func:`evaluate_poses` / :func:`evaluate_grid` (bounds the
+#: temporaries of the inverse and velocity models to a few tens of MB).
+EVALUATION_CHUNK = 1 << 16
+
+
+def evaluate_poses(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
+    """Evaluate the criteria (without connectivity) at poses ``points (M, dims)``, in chunks of
+    :data:`EVALUATION_CHUNK` poses."""
+    points = np.asarray(points, dtype=float)
+    if len(points) <= EVALUATION_CHUNK:
+        return _evaluate_chunk(machine, points, criteria)
+    return _concatenate([_evaluate_chunk(machine, points[k:k + EVALUATION_CHUNK], criteria)
+                         for k in range(0, len(points), EVALUATION_CHUNK)])
+
+
+def evaluate_grid(machine: Machine, grid: Grid, criteria: Criteria, *,
+                  scheduler: Any = None) -> PoseEvaluation:
+    """:func:`evaluate_poses` over every point of ``grid`` (flat, C order), generating the
+    points chunk by chunk — in this process, or with ``scheduler`` (a Dask address, ``"local:N"``
+    or a client, see :mod:`pkmkit.parallel`) in tasks of :data:`TASK_CHUNKS` chunks, each
+    generating and evaluating its own points; the results are identical."""
+    if scheduler is None:
+        return _evaluate_range(0, grid.size, machine, grid, criteria)
+    parts = map_chunks(_evaluate_range, grid.size, chunk=TASK_CHUNKS * EVALUATION_CHUNK,
+                       scheduler=scheduler, args=(machine, grid, criteria))
+    return parts[0] if len(parts) == 1 else _concatenate(parts)
+
+
+#: Evaluation chunks per Dask task of :func:`evaluate_grid` (a task then takes ~0.1 s).
+TASK_CHUNKS = 4
+
+
+def _evaluate_range(start: int, stop: int, machine: Machine, grid: Grid,
+                    criteria: Criteria) -> PoseEvaluation:
+    """Grid points ``start:stop`` evaluated in chunks of :data:`EVALUATION_CHUNK`."""
+    parts = [_evaluate_chunk(machine, grid.points_between(k, min(k + EVALUATION_CHUNK, stop)),
+                             criteria)
+             for k in range(start, stop, EVALUATION_CHUNK)]
+    return parts[0] if len(parts) == 1 else _concatenate(parts)
+
+
+def _concatenate(parts: list[PoseEvaluation]) -> PoseEvaluation:
+    return PoseEvaluation(
+        q=np.concatenate([p.q for p in parts]),
+        factors=np.concatenate([p.factors for p in parts]),
+        condition=np.concatenate([p.condition for p in parts]),
+        masks={k: np.concatenate([p.masks[k] for p in parts]) for k in parts[0].masks})
+
+
+def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
+    if machine.family == "chain":
+        return evaluate_chain_poses(machine, points, criteria)
+    inv = machine.ik(points, full_output=True)
+    q = inv.q
+    reachable = inv.status == Status.OK
+    jac = machine.jacobian(points, q=q, tol=criteria.tol)
+    sv = jac.singular_values
+    lo_q, hi_q = criteria.limits(machine)
+    with np.errstate(invalid="ignore"):
+        strokes = reachable & ((q >= lo_q) & (q <= hi_q)).all(axis=1)
+        if criteria.bounds is None:
+            bounds = reachable.copy()
+        else:
+            bounds = reachable & criteria.within_bounds(sv)
+        condition = reachable.copy() if criteria.kappa_max is None else (
+            reachable & (jac.condition <= criteria.kappa_max))
+    mode = (reachable & (np.sign(jac.det_A) == machine.working_mode)
+            & (jac.parallel_measure >= criteria.tol))
+    masks = {"reachable": reachable, "strokes": strokes, "bounds": bounds,
+             "condition": condition, "mode": mode}
+    return PoseEvaluation(q=q, factors=sv, condition=jac.condition, masks=masks)
+
+
+def study_length(machine: Machine) -> float:
+    """A length (m) that sizes the machine: its longest leg or rod, else (struts whose length
+    is the actuator, a hexapod's) its longest finite stroke end, else 1 m. It scales the
+    length slacks of :func:`criteria_slack` and the search of :func:`feasible_interval`."""
+    leg = float(np.max(machine.model.leg_length, initial=0.0))
+    if leg > 0:
+        return leg
+    q_max = np.asarray(machine.model.q_max, dtype=float)
+    quantities = getattr(machine.model, "actuator_quantities", ("length",) * q_max.size)
+    ends = [abs(v) for v, kind in zip(q_max, quantities, strict=False)
+            if kind == "length" and np.isfinite(v)]
+    return max(ends, default=0.0) or 1.0

@@ -1,0 +1,360 @@
+"""Chunked sources of batch tables: CSV (pyarrow's parser, line-by-line diagnosis of bad
+chunks) and Parquet/Feather, yielding :class:`~pkmkit.io.table.TableChunk` values."""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Iterator, Sequence
+from typing import TYPE_CHECKING, Any, BinaryIO
+
+import numpy as np
+
+from pkmkit.exceptions import InputError
+from pkmkit.io.table_format import _COMMENT, _HAS_COMMENT, STDIO, TableChunk
+
+if TYPE_CHECKING:  # a source reads the options of the reader that owns it
+    from pkmkit.io.table import TableReader
+
+
+class CsvSource:
+    """CSV bytes cut at line ends into chunks of about ``chunk_rows`` lines."""
+
+    def __init__(self, reader: TableReader):
+        self.reader = reader
+        self.index: list[int] = []  # column positions of the wanted columns
+        self.width = 0  # columns of the header (or of the first row without one)
+
+    def _open(self) -> BinaryIO:
+        r = self.reader
+        if r.path == STDIO:
+            if r._stdin is not None:
+                return r._stdin
+            import sys
+
+            return sys.stdin.buffer
+        try:
+            handle = open(r.path, "rb")
+        except OSError as exc:
+            raise InputError(f"{r.path}: cannot read file: {exc.strerror or exc}") from None
+        try:
+            import os
+
+            r.total = os.fstat(handle.fileno()).st_size
+        except OSError:
+            r.total = None
+        return handle
+
+    def chunks(self) -> Iterator[TableChunk]:
+        r = self.reader
+        handle = self._open()
+        try:
+            yield from self._chunks(handle)
+        finally:
+            if handle is not r._stdin and r.path != STDIO:
+                handle.close()
+
+    def _read(self, handle: BinaryIO, size: int) -> bytes:
+        try:
+            data = handle.read(size)
+        except OSError as exc:
+            raise InputError(f"{self.reader.path}: cannot read file: {exc.strerror or exc}"
+                             ) from None
+        self.reader.progress += len(data)
+        if b"\x00" in data:
+            raise InputError(f"{self.reader.path}: not a text file (it holds NUL bytes); "
+                             "give a CSV file, or a .parquet/.feather table")
+        return data
+
+    def _chunks(self, handle: BinaryIO) -> Iterator[TableChunk]:
+        r = self.reader
+        buffer = self._read(handle, 1 << 16)
+        if buffer.startswith(b"\xef\xbb\xbf"):
+            buffer = buffer[3:]
+        line_no = 1  # file line of buffer[0]
+        eof = len(buffer) == 0
+        # the header: first line that is neither blank nor a comment
+        while True:
+            end = buffer.find(b"\n")
+            if end < 0 and not eof:
+                more = self._read(handle, 1 << 16)
+                eof = not more
+                buffer += more
+                continue
+            line = buffer if end < 0 else buffer[:end + 1]
+            if not line:
+                return  # no data at all: TableReader reports it
+            text = _decode(line, r.path, line_no).strip()
+            if text and not text.startswith("#") and text.strip(", \t"):
+                break
+            buffer = buffer[len(line):]
+            line_no += 1
+        try:
+            cells = next(csv.reader([text]))
+        except csv.Error as exc:
+            raise InputError(f"{r.path}:{line_no}: the header is not a CSV line (a stray "
+                             f"carriage return or line break inside it)") from exc
+        if _numeric(cells):
+            self.width = len(cells)
+            self.index = list(range(len(r.columns)))
+            if self.width < len(r.columns):
+                raise InputError(f"{r.path}:{line_no}: expected at least {len(r.columns)} "
+                                 f"columns ({', '.join(r.columns)}), got {self.width}")
+        else:
+            header = [c.strip() for c in cells]
+            missing = [c for c in r.columns if c not in header]
+            if missing:
+                raise InputError(f"{r.path}:{line_no}: missing column(s) {', '.join(missing)}; "
+                                 f"expected {', '.join(r.columns)} (header: "
+                                 f"{', '.join(header)})")
+            self.width = len(header)
+            self.index = [header.index(c) for c in r.columns]
+            buffer = buffer[len(line):]
+            line_no += 1
+        # data: chunks of about chunk_rows lines
+        first_row = 0
+        sample = buffer[:1 << 16]
+        line_bytes = max(len(sample) / max(sample.count(b"\n"), 1), 8.0)
+        target = max(int(line_bytes * r.chunk_rows), 1)
+        newlines = buffer.count(b"\n")
+        while True:
+            while not eof and newlines < r.chunk_rows:
+                more = self._read(handle, max(target - len(buffer), 1 << 16))
+                eof = not more
+                buffer += more
+                newlines += more.count(b"\n")
+            if not buffer:
+                break
+            cut = _nth_newline(buffer, r.chunk_rows, newlines)
+            if cut < 0:
+                if not eof:
+                    continue
+                cut = len(buffer)
+            piece, buffer = buffer[:cut], buffer[cut:]
+            chunk = self._parse(piece, line_no, first_row)
+            taken = piece.count(b"\n")
+            line_no += taken
+            newlines -= taken
+            if len(chunk):
+                first_row += len(chunk)
+                yield chunk
+            if eof and not buffer:
+                break
+
+    def _parse(self, piece: bytes, line_no: int, first_row: int) -> TableChunk:
+        """Fast path through pyarrow; the slow, line-naming path if it finds any problem."""
+        values = self._parse_fast(piece)
+        if values is not None:
+            return TableChunk(values=values, first_row=first_row,
+                              invalid=np.zeros(len(values), dtype=bool))
+        return self._parse_slow(piece, line_no, first_row)
+
+    def _parse_fast(self, piece: bytes) -> np.ndarray | None:
+        import pyarrow as pa
+        import pyarrow.csv as pcsv
+
+        data = _COMMENT.sub(b"", piece) if b"#" in piece and _HAS_COMMENT.search(piece) else piece
+        if not data.strip():
+            return np.empty((0, len(self.index)))
+        names = [f"c{i}" for i in range(self.width)]
+        wanted = [names[i] for i in self.index]
+        try:
+            table = pcsv.read_csv(
+                pa.BufferReader(data),
+                read_options=pcsv.ReadOptions(column_names=names, block_size=1 << 24),
+                convert_options=pcsv.ConvertOptions(
+                    include_columns=wanted, column_types=dict.fromkeys(wanted, pa.float64()),
+                    null_values=[], strings_can_be_null=False, quoted_strings_can_be_null=False),
+            )
+        except (pa.ArrowInvalid, pa.ArrowTypeError):
+            return None
+        values = np.empty((table.num_rows, len(wanted)))
+        for j, name in enumerate(wanted):
+            values[:, j] = table.column(name).to_numpy()
+        if not np.isfinite(values).all():
+            return None  # tell an overflow from a written nan/inf: the slow path
+        return values
+
+    def _parse_slow(self, piece: bytes, line_no: int, first_row: int) -> TableChunk:
+        r = self.reader
+        rows, lines = [], []
+        text = piece.decode("utf-8", errors="replace")
+        for offset, raw in enumerate(text.split("\n")):
+            stripped = raw.strip()
+            if not stripped or stripped.startswith("#") or not stripped.strip(", \t"):
+                continue
+            rows.append(raw.rstrip("\r"))
+            lines.append(line_no + offset)
+        values = np.empty((len(rows), len(self.index)))
+        invalid = np.zeros(len(rows), dtype=bool)
+        problems: list[str] = []
+        need = max(self.index) + 1
+        for k, (row, number) in enumerate(zip(rows, lines, strict=True)):
+            try:
+                cells = next(csv.reader([row]), [])
+            except csv.Error:  # e.g. a lone carriage return inside the line
+                problems.append(f"{r.path}:{number}: not a CSV line (a stray carriage return "
+                                "or line break inside it)")
+                values[k] = np.nan
+                invalid[k] = True
+                continue
+            if len(cells) < need:
+                problems.append(f"{r.path}:{number}: expected at least {need} columns, got "
+                                f"{len(cells)}")
+                values[k] = np.nan
+                invalid[k] = True
+                continue
+            for j, col in enumerate(self.index):
+                value, message = _cell(cells[col])
+                values[k, j] = value
+                if message:
+                    problems.append(f"{r.path}:{number}: column {r.columns[j]!r} {message}")
+                    invalid[k] = True
+        return TableChunk(values=values, first_row=first_row, invalid=invalid,
+                          problems=problems)
+
+
+def _nth_newline(buffer: bytes, n: int, count: int) -> int:
+    """Index just after the ``n``-th newline of ``buffer`` (which has ``count``), or after its
+    last one if it has fewer; -1 if it has none."""
+    if count <= n:
+        last = buffer.rfind(b"\n")
+        return last + 1 if last >= 0 else -1
+    ends = np.flatnonzero(np.frombuffer(buffer, dtype=np.uint8) == ord("\n"))
+    return int(ends[n - 1]) + 1
+
+
+def _decode(line: bytes, path: str, line_no: int) -> str:
+    try:
+        return line.decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(f"{path}:{line_no}: not a UTF-8 text line; give a CSV file, or a "
+                         ".parquet/.feather table") from None
+
+
+_SPECIAL = {"nan", "+nan", "-nan", "inf", "+inf", "-inf", "infinity", "+infinity", "-infinity"}
+
+
+def _cell(text: str) -> tuple[float, str]:
+    """A cell's value and, if it is unusable, what is wrong with it (else ``""``)."""
+    stripped = text.strip()
+    if not stripped:
+        return math.nan, "is empty"
+    try:
+        value = float(stripped)
+    except ValueError:
+        return math.nan, f"is not a number: {text!r}"
+    if math.isinf(value) and stripped.lower() not in _SPECIAL:
+        return math.nan, f"overflows a double: {text!r}"
+    return value, ""
+
+
+def _numeric(cells: Sequence[str]) -> bool:
+    try:
+        [float(c) for c in cells]
+    except ValueError:
+        return False
+    return True
+
+
+# ---------------------------------------------------------------------------- Parquet, Arrow
+
+
+class ArrowSource:
+    """Record batches of a Parquet or Arrow IPC (Feather v2) file."""
+
+    def __init__(self, reader: TableReader):
+        self.reader = reader
+
+    def _batches(self) -> Iterator[Any]:
+        import pyarrow as pa
+
+        r = self.reader
+        if r.path == STDIO:
+            raise InputError("standard input is read as CSV only")
+        kind = "a Parquet" if r.format == "parquet" else "an Arrow/Feather"
+        try:
+            if r.format == "parquet":
+                import pyarrow.parquet as pq
+
+                source = pq.ParquetFile(r.path)
+                names = source.schema_arrow.names
+                r.total = source.metadata.num_rows
+                self._check_columns(names)
+                yield from source.iter_batches(batch_size=r.chunk_rows, columns=r.columns)
+                return
+            try:
+                ipc = pa.ipc.open_file(r.path)
+                names = ipc.schema.names
+                self._check_columns(names)
+                r.total = sum(ipc.get_batch(i).num_rows for i in range(ipc.num_record_batches))
+                batches = (ipc.get_batch(i) for i in range(ipc.num_record_batches))
+            except pa.ArrowInvalid:
+                ipc = pa.ipc.open_stream(r.path)
+                self._check_columns(ipc.schema.names)
+                batches = iter(ipc)
+            yield from batches
+        except FileNotFoundError:
+            raise InputError(f"{r.path}: cannot read file: no such file") from None
+        except OSError as exc:
+            if isinstance(exc, pa.ArrowException):
+                raise InputError(f"{r.path}: not {kind} file ({exc})") from None
+            raise InputError(f"{r.path}: cannot read file: {exc.strerror or exc}") from None
+        except pa.ArrowException as exc:
+            raise InputError(f"{r.path}: not {kind} file ({exc})") from None
+
+    def _check_columns(self, names: Sequence[str]) -> None:
+        r = self.reader
+        missing = [c for c in r.columns if c not in names]
+        if missing:
+            raise InputError(f"{r.path}: missing column(s) {', '.join(missing)}; expected "
+                             f"{', '.join(r.columns)} (columns: {', '.join(names)})")
+
+    def chunks(self) -> Iterator[TableChunk]:
+        import pyarrow as pa
+
+        first_row = 0
+        pending: list[Any] = []
+        size = 0
+        n = self.reader.chunk_rows
+        for batch in self._batches():
+            pending.append(batch)
+            size += batch.num_rows
+            while size >= n:
+                table = pa.Table.from_batches(pending)  # zero-copy re-chunking
+                yield self._convert(table.slice(0, n), first_row)
+                first_row += n
+                rest = table.slice(n)
+                pending, size = rest.to_batches(), rest.num_rows
+        if size:
+            yield self._convert(pa.Table.from_batches(pending), first_row)
+
+    def _convert(self, table: Any, first_row: int) -> TableChunk:
+        import pyarrow as pa
+        import pyarrow.compute as pc
+
+        r = self.reader
+        n = table.num_rows
+        values = np.empty((n, len(r.columns)))
+        invalid = np.zeros(n, dtype=bool)
+        problems: list[str] = []
+        for j, name in enumerate(r.columns):
+            column = table.column(name)
+            try:
+                floats = pc.cast(column, pa.float64())
+            except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
+                raise InputError(f"{r.path}: column {name!r} is not numeric ({column.type})"
+                                 ) from None
+            values[:, j] = floats.to_numpy()
+            nulls = np.asarray(floats.is_null())
+            if nulls.any():
+                values[nulls, j] = np.nan
+                invalid |= nulls
+                problems.extend(f"{r.path}: row {first_row + k + 1}: column {name!r} is empty"
+                                for k in np.flatnonzero(nulls))
+        self.reader.progress = first_row + n
+        return TableChunk(values=values, first_row=first_row, invalid=invalid,
+                          problems=problems)
+
+
+# ------------------------------------------------------------------------------------ writer

@@ -1,0 +1,245 @@
+"""Writing batch tables chunk by chunk, atomically (CSV, Parquet, Feather)."""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, BinaryIO
+
+import numpy as np
+
+from pkmkit.exceptions import InputError
+from pkmkit.io.atomic import atomic_path, check_output_file
+from pkmkit.io.table_format import _STRUCTURAL, STDIO, table_format
+
+
+class TableWriter:
+    """Write a table chunk by chunk, atomically; the format follows the extension (``-``: CSV on
+    standard output).
+
+    Use as a context manager: the file appears (replacing any previous one) only when the block
+    ends without an exception. Columns are given to :meth:`write` as a mapping name → values:
+    float or integer arrays, or :class:`Labels` for text columns.
+
+    Raises:
+        InputError: an unknown extension or a destination that cannot be written — at
+            construction, before any work is done.
+
+    >>> import io
+    >>> out = io.BytesIO()
+    >>> with TableWriter("-", stdout=out) as writer:
+    ...     writer.write({"q": np.array([0.042444, 0.1 + 0.2]),
+    ...                   "status": Labels(np.array([0, 1]), ["ok", "unreachable"])})
+    >>> print(out.getvalue().decode(), end="")
+    q,status
+    0.042444,ok
+    0.30000000000000004,unreachable
+    """
+
+    def __init__(self, path: str | Path, *, stdout: BinaryIO | None = None):
+        self.path = str(path)
+        if self.path != STDIO:
+            check_output_file(path)
+        self.format = table_format(path)
+        self._stdout = stdout
+        self._writer: Any = None
+        self._schema: Any = None
+        self._atomic: Any = None
+        self._temp: Path | None = None
+        self._sink: Any = None  # CSV: the byte stream written
+        self._csv_options: Any = None  # CSV: pyarrow's write options
+        self._owned: Any = None  # ... when this writer opened it
+        self.rows = 0
+        if self.path != STDIO:
+            self._atomic = atomic_path(self.path)
+            self._temp = self._atomic.__enter__()
+
+    def __enter__(self) -> TableWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self.close(exc)
+
+    def close(self, exc: BaseException | None = None) -> None:
+        """Finish the file (or, after an exception, discard it)."""
+        try:
+            if self._writer is not None:
+                if self._writer is not _CSV_WRITER:
+                    self._writer.close()
+                self._writer = None
+            if self._owned is not None:
+                self._owned.close()
+                self._owned = None
+            elif self._sink is not None:
+                self._sink.flush()
+            if self._schema is None and exc is None and self.path != STDIO:
+                raise InputError(f"{self.path}: nothing to write")
+        except BaseException as error:
+            if self._atomic is not None:
+                atomic, self._atomic = self._atomic, None
+                atomic.__exit__(type(error), error, error.__traceback__)
+            raise
+        if self._atomic is not None:
+            atomic, self._atomic = self._atomic, None
+            if exc is None:
+                atomic.__exit__(None, None, None)
+            else:
+                atomic.__exit__(type(exc), exc, exc.__traceback__)
+
+    def write(self, columns: dict[str, Any]) -> None:
+        """Append rows: ``columns`` maps each column name to ``(n,)`` values (same n; the same
+        names in the same order at every call)."""
+        import pyarrow as pa
+
+        arrays = [_to_arrow(v) for v in columns.values()]
+        table = pa.table(arrays, names=list(columns))
+        if self._writer is None:
+            self._schema = table.schema
+            texts = [*columns, *(s for v in columns.values() if isinstance(v, Labels)
+                                 for s in v.names)]
+            self._writer = self._open(table.schema, any(_STRUCTURAL.search(str(t))
+                                                        for t in texts))
+        else:
+            table = table.cast(self._schema)
+        try:
+            if self._csv_options is not None:
+                self._write_csv(table)
+            else:
+                self._writer.write_table(table)
+        except pa.ArrowInvalid as exc:
+            raise InputError(f"{self.path}: cannot write these values as CSV: {exc}") from None
+        except OSError as exc:
+            raise InputError(f"{self.path}: cannot write: {exc.strerror or exc}") from None
+        self.rows += table.num_rows
+
+    def _write_csv(self, table: Any) -> None:
+        """Format the rows as CSV in slices on every core (pyarrow's formatting releases the
+        GIL; each row's text is the same whatever the slicing), then write them in order."""
+        import pyarrow as pa
+        import pyarrow.csv as pcsv
+
+        def encode(piece: Any) -> Any:
+            buffer = pa.BufferOutputStream()
+            pcsv.write_csv(piece, buffer, write_options=self._csv_options)
+            return buffer.getvalue()
+
+        workers = min(_cpu_count(), max(1, table.num_rows // PARALLEL_CSV_ROWS))
+        if workers == 1:
+            parts = [encode(table)]
+        else:
+            from concurrent.futures import ThreadPoolExecutor
+
+            step = -(-table.num_rows // workers)
+            slices = [table.slice(k, step) for k in range(0, table.num_rows, step)]
+            with ThreadPoolExecutor(workers) as pool:
+                parts = list(pool.map(encode, slices))
+        for part in parts:
+            self._sink.write(memoryview(part))
+
+    def _open(self, schema: Any, quote: bool) -> Any:
+        """The pyarrow writer; CSV texts are quoted only if some text needs it (pyarrow then
+        quotes every text)."""
+        import pyarrow as pa
+
+        if self.format == "csv":
+            import pyarrow.csv as pcsv
+
+            if self.path == STDIO:
+                if self._stdout is not None:
+                    self._sink = self._stdout
+                else:
+                    import sys
+
+                    self._sink = sys.stdout.buffer
+            else:
+                self._sink = self._owned = open(self._temp, "wb")
+            header = io.StringIO()
+            csv.writer(header, lineterminator="\n").writerow(schema.names)
+            self._sink.write(header.getvalue().encode("utf-8"))
+            self._csv_options = pcsv.WriteOptions(
+                include_header=False, quoting_style="needed" if quote else "none",
+                batch_size=1 << 16)
+            return _CSV_WRITER
+        if self.format == "parquet":
+            import pyarrow.parquet as pq
+
+            return pq.ParquetWriter(str(self._temp), schema)
+        return pa.ipc.new_file(str(self._temp), schema)
+
+
+#: Rows per thread below which a CSV chunk is formatted in one piece.
+PARALLEL_CSV_ROWS = 50_000
+#: Marks a CSV output (formatted by :meth:`TableWriter._write_csv`, no pyarrow writer object).
+_CSV_WRITER = object()
+
+
+def _cpu_count() -> int:
+    import os
+
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@dataclass(frozen=True)
+class Labels:
+    """A text column coded as integers: ``names[codes[k]]`` is row k's text.
+
+    Attributes:
+        codes: ``(n,)`` integer array (0 ≤ code < len(names)).
+        names: the distinct texts.
+    """
+
+    codes: np.ndarray
+    names: Sequence[str]
+
+
+def _to_arrow(values: Any) -> Any:
+    import pyarrow as pa
+
+    if isinstance(values, Labels):
+        names = [str(s) for s in values.names]
+        codes = np.asarray(values.codes, dtype=np.int32)
+        return pa.DictionaryArray.from_arrays(pa.array(codes), pa.array(names, pa.string()))
+    arr = np.asarray(values)
+    if arr.dtype.kind == "f":
+        return pa.array(np.ascontiguousarray(arr, dtype=np.float64))
+    if arr.dtype.kind in "iub":
+        return pa.array(np.ascontiguousarray(arr))
+    return pa.array([str(v) for v in arr], pa.string())
+
+
+def write_table(path: str | Path, header: Sequence[str], rows: Sequence[Sequence]) -> None:
+    """Write a small table given row by row (floats in shortest round-trip form), atomically.
+
+    Raises:
+        InputError: the file cannot be written (missing directory, permissions).
+    """
+    columns: dict[str, Any] = {}
+    data = list(rows)
+    for j, name in enumerate(header):
+        cells = [row[j] for row in data]
+        if all(isinstance(c, float | int | np.number) and not isinstance(c, bool)
+               for c in cells):
+            columns[name] = np.asarray(cells, dtype=float if any(
+                isinstance(c, float | np.floating) for c in cells) else np.int64)
+        else:
+            names = sorted({str(c) for c in cells})
+            lookup = {s: k for k, s in enumerate(names)}
+            columns[name] = Labels(np.array([lookup[str(c)] for c in cells], dtype=np.int32),
+                                   names)
+    with TableWriter(path) as writer:
+        writer.write(columns)
+
+
+def csv_text(columns: dict[str, Any]) -> str:
+    """The CSV text of a small table (as :class:`TableWriter` writes it)."""
+    buffer = io.BytesIO()
+    writer = TableWriter(STDIO, stdout=buffer)
+    writer.write(columns)
+    writer.close()
+    return buffer.getvalue().decode("utf-8")
