@@ -4,9 +4,8 @@ compensation.
 
 The identified machine reaches X when commanded ``q = IGM_identified(X)``; the nominal controller
 commands ``IGM_nominal(X')``, so the corrected target is ``X' = FGM_nominal(IGM_identified(X))``
-(:func:`pkmkit.calibration.controller.corrected_targets`). Paths are sampled at most ``step``
-apart (the correction varies along a move, so long moves become chains of short ones; arcs and
-helices become polylines), every sample corrected.
+(:func:`pkmkit.calibration.controller.corrected_targets`). Programs are corrected block by
+block in :mod:`pkmkit.calibration.corrected_program`.
 """
 
 from __future__ import annotations
@@ -21,30 +20,6 @@ from pkmkit.errors import InputError
 
 #: Targets per batch (progress bars advance per batch).
 CHUNK = 2000
-
-
-@dataclass(frozen=True)
-class CorrectedPath:
-    """A tool path sampled and corrected.
-
-    Attributes:
-        targets: ``(K, w)`` programmed points (m; with the tool axis for a 5-axis machine).
-        corrected: ``(K, w)`` what to send to the nominal controller.
-        rapid: ``(K,)`` the move ending at the point is a rapid (G0).
-        feed: ``(K,)`` programmed feed of that move (m/s, NaN for the default).
-        source: ``(K,)`` program line of the move.
-    """
-
-    targets: np.ndarray
-    corrected: np.ndarray
-    rapid: np.ndarray
-    feed: np.ndarray
-    source: np.ndarray
-
-    @property
-    def correction(self) -> np.ndarray:
-        """``(K,)`` size of the position correction (m)."""
-        return np.linalg.norm(self.corrected[:, :3] - self.targets[:, :3], axis=1)
 
 
 def _chunked(func, x: np.ndarray, progress: bool, label: str) -> np.ndarray:
@@ -74,37 +49,6 @@ def correct_targets(nominal, identified, targets: Any, *, tool_length: float | N
         raise InputError(f"{bad.size} target(s) out of reach of the calibrated machine (rows "
                          f"{rows}{' …' if bad.size > 10 else ''})")
     return out
-
-
-def sample_path(path, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Points of a :class:`~pkmkit.motion.paths.Path` at most ``step`` apart (each segment's
-    end included; the path's start first), with per-point rapid flag, feed and source line."""
-    if not (np.isfinite(step) and step > 0):
-        raise InputError(f"the sampling step must be > 0, got {step!r}")
-    segs = path.segments
-    points = [segs[0].start]
-    rapid, feed = [True], [np.nan]
-    source = [path.source[0] if path.source else 0]
-    for k, seg in enumerate(segs):
-        n = max(1, int(np.ceil(seg.length / step)))
-        s = np.linspace(0.0, seg.length, n + 1)[1:]
-        pts = seg.evaluate(s)[0] if seg.length > 0 else np.atleast_2d(seg.end)
-        points.extend(pts)
-        rapid += [bool(seg.rapid)] * len(pts)
-        feed += [np.nan if seg.feed is None else float(seg.feed)] * len(pts)
-        source += [path.source[k] if path.source else k + 1] * len(pts)
-    return (np.array(points), np.array(rapid), np.array(feed), np.array(source, dtype=int))
-
-
-def correct_path(nominal, identified, path, *, step: float = 1e-3,
-                 tool_length: float | None = None, progress: bool = False) -> CorrectedPath:
-    """Sample ``path`` every ``step`` (m) and correct every point."""
-    pts, rapid, feed, source = sample_path(path, step)
-    targets = as_targets(identified, pts)
-    corrected = correct_targets(nominal, identified, targets, tool_length=tool_length,
-                                progress=progress)
-    return CorrectedPath(targets=targets, corrected=corrected, rapid=rapid, feed=feed,
-                         source=source)
 
 
 def grid_targets(lower: Any, upper: Any, counts: Any) -> np.ndarray:

@@ -410,7 +410,16 @@ def _print_calibration(result, payload: dict, unit: str) -> None:
               help="G-code program to correct (3-axis moves; arcs become short lines).")
 @click.option("--origin", metavar="X,Y,Z", help="Work offset of the G-code program.")
 @click.option("--step", type=float,
-              help="Longest corrected move (length unit; default 1 mm).")
+              help="Spacing of the points where the correction of a feed move is checked "
+                   "(length unit; default 1 mm).")
+@click.option("--tolerance", type=float,
+              help="Largest deviation between the corrected points and the corrected move "
+                   "the controller interpolates; a feed move is subdivided only where it is "
+                   "exceeded (length unit; default 0.001 mm).")
+@click.option("--max-correction", type=float,
+              help="Largest correction accepted; a block needing more is refused with its "
+                   "G-code line and no program is written (length unit; default 1 % of the "
+                   "machine's characteristic length: 13 mm for the linear Delta).")
 @click.option("--grid", "grid_text", metavar="X0,Y0,Z0:X1,Y1,Z1:NX,NY,NZ",
               help="Correction table on a regular grid.")
 @click.option("--targets", "targets_file", type=click.Path(dir_okay=False),
@@ -424,15 +433,21 @@ def _print_calibration(result, payload: dict, unit: str) -> None:
               help="Corrected program (.nc) or correction table (.csv).")
 @CAL_UNITS_OPTION
 @JSON_OPTION
-def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, targets_file,
-                   tool_length, truth, out_file, units, as_json):
+def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max_correction,
+                   grid_text, targets_file, tool_length, truth, out_file, units, as_json):
     """Corrected commands for the nominal controller from a calibrated machine."""
     from pkmkit import load
     from pkmkit.calibration.compensation import (
         check_compensation,
-        correct_path,
         correct_targets,
         grid_targets,
+    )
+    from pkmkit.calibration.corrected_program import (
+        DEFAULT_STEP,
+        DEFAULT_TOLERANCE,
+        CorrectionRefused,
+        correct_path,
+        default_max_correction,
     )
     from pkmkit.io.compensation_files import corrected_gcode, correction_table
     from pkmkit.io.measurements import atomic_write_text
@@ -459,13 +474,22 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
         if shift.shape != (3,):
             raise InputError("--origin needs X,Y,Z")
         path = read_gcode(gcode, origin=shift)
-        corrected = correct_path(nominal, identified, path,
-                                 step=(step * scale if step else 1e-3), tool_length=tl,
-                                 progress=not as_json)
+        settings = {name: (default if value is None else value * scale)
+                    for name, value, default in (("step", step, DEFAULT_STEP),
+                                                 ("tolerance", tolerance, DEFAULT_TOLERANCE),
+                                                 ("max_correction", max_correction,
+                                                  default_max_correction(nominal)))}
+        try:
+            corrected = correct_path(nominal, identified, path, tool_length=tl,
+                                     progress=not as_json, **settings)
+        except CorrectionRefused as exc:
+            _refuse_blocks(exc, Path(gcode).name, settings["max_correction"], scale, unit,
+                           as_json)
         targets, fixed = corrected.targets, corrected.corrected
         text = corrected_gcode(corrected, origin=shift, header=(
             f"corrected by pkmkit compensate {nominal.id} --calibrated {Path(calibrated).name}"
-            f"\nfrom {Path(gcode).name}: {len(fixed) - 1} moves"))
+            f"\nfrom {Path(gcode).name}: {len(fixed)} moves for its {corrected.blocks} blocks"
+            f" (tolerance {corrected.tolerance / scale:g} {unit})"))
     else:
         if grid_text:
             parts = grid_text.split(":")
@@ -508,13 +532,52 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
                "targets": len(targets), "correction_mean": float(corr.mean()),
                "correction_max": float(corr.max()),
                "check": None if check is None else check.to_dict(scale)}
+    if gcode:
+        payload["program"] = {
+            "blocks": corrected.blocks, "moves": len(fixed),
+            "subdivided_blocks": corrected.subdivided,
+            "tolerance": corrected.tolerance / scale, "step": corrected.step / scale,
+            "max_correction": corrected.max_correction / scale,
+            "deviation_max": corrected.deviation / scale}
     if as_json:
         emit_json(payload)
         return
-    click.echo(f"{len(targets)} corrected targets → {out_file}; correction mean "
-               f"{corr.mean():.4g}, max {corr.max():.4g} {unit}")
+    if gcode:
+        click.echo(f"{corrected.blocks} blocks → {len(fixed)} corrected moves → {out_file} "
+                   f"({corrected.subdivided} block(s) subdivided for a tolerance of "
+                   f"{corrected.tolerance / scale:.4g} {unit}); correction mean "
+                   f"{corr.mean():.4g}, max {corr.max():.4g} {unit}")
+    else:
+        click.echo(f"{len(targets)} corrected targets → {out_file}; correction mean "
+                   f"{corr.mean():.4g}, max {corr.max():.4g} {unit}")
     if check is not None:
         c = check.to_dict(scale)
         click.echo(f"  error of the true machine at the targets: RMS {c['rms_before']:.4g} → "
                    f"{c['rms_after']:.4g}, max {c['max_before']:.4g} → {c['max_after']:.4g} "
                    f"{unit}")
+        click.echo(f"  with the workpiece set-up (a rigid motion) removed: mean "
+                   f"{c['mean_after_rigid']:.4g}, max {c['max_after_rigid']:.4g} {unit}")
+
+
+def _refuse_blocks(exc, program: str, bound: float, scale: float, unit: str,
+                   as_json: bool) -> None:
+    """Report the refused blocks of a program (``bound`` in m) and exit with status 3: nothing
+    is written."""
+    import sys
+
+    from pkmkit.calibration.corrected_program import refusal_reason
+
+    from .options import EXIT_PARTIAL
+
+    if as_json:
+        emit_json({"refused": [{"line": line, "block": text,
+                                "correction": None if not np.isfinite(c) else c / scale}
+                               for line, text, c in exc.blocks],
+                   "max_correction": bound / scale, "units": unit})
+    click.echo(f"Error: {len(exc.blocks)} block(s) of {program} refused (largest correction "
+               f"accepted: {bound / scale:g} {unit}, --max-correction); no program written",
+               err=True)
+    for line, text, c in exc.blocks:
+        click.echo(f"  {program}:{line}: {text}: {refusal_reason(c, bound, scale, unit)}",
+                   err=True)
+    sys.exit(EXIT_PARTIAL)

@@ -2,35 +2,55 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from pkmkit.calibration.compensation import CorrectedPath
 from pkmkit.model.parameters import length_scale
 
+if TYPE_CHECKING:
+    from pkmkit.calibration.corrected_program import CorrectedPath
+
 _LETTERS = "XYZ"
+#: Plane code and centre-offset letters of an arc by the axis of its normal.
+_PLANE_OF_AXIS = {2: (17, "IJ", (0, 1)), 1: (18, "IK", (0, 2)), 0: (19, "JK", (1, 2))}
 
 
 def corrected_gcode(path: CorrectedPath, *, origin=(0.0, 0.0, 0.0), header: str = "",
                     decimals: int = 4) -> str:
-    """A G-code program (G21, G90, millimetres) moving through the corrected points: G0 for
-    rapid moves, G1 with the programmed feed (mm/min) otherwise. Program coordinates are the
-    corrected machine coordinates minus ``origin`` (the work offset the program was read with).
+    """A G-code program (G21, G90, millimetres) of the corrected moves, one line each: G0 to
+    the corrected end of a rapid, G1 and G2/G3 (centre by I/J/K offsets, G17/G18/G19 as the
+    arc's plane) with the programmed feed (mm/min). Program coordinates are the corrected
+    machine coordinates minus ``origin`` (the work offset the program was read with).
     """
     offset = np.asarray(origin, dtype=float).reshape(3)
     lines = ["%"]
     for line in header.splitlines():
         lines.append("(" + line.replace("(", "[").replace(")", "]") + ")")
     lines.append("G21 G90 G17")
-    feed = None
+    feed, plane = None, 17
     fmt = f"{{:.{decimals}f}}"
-    for k in range(1, len(path.corrected)):
+    previous = np.zeros(3)  # an arc never comes first (correct_path refuses it)
+    for k in range(len(path.corrected)):
         p = (path.corrected[k, :3] - offset) * 1e3
-        words = ["G0" if path.rapid[k] else "G1"]
+        kind = str(path.kind[k])
+        words = [kind]
+        if kind in ("G2", "G3"):
+            axis = int(np.argmax(np.abs(path.normal[k])))
+            code, letters, columns = _PLANE_OF_AXIS[axis]
+            if code != plane:
+                words.insert(0, f"G{code}")
+                plane = code
         words += [f"{_LETTERS[i]}{fmt.format(p[i] + 0.0)}" for i in range(3)]
+        if kind in ("G2", "G3"):
+            centre = (path.center[k] - previous) * 1e3
+            words += [f"{letters[n]}{fmt.format(centre[c] + 0.0)}"
+                      for n, c in enumerate(columns)]
         if not path.rapid[k] and np.isfinite(path.feed[k]) and path.feed[k] != feed:
             feed = path.feed[k]
             words.append(f"F{feed * 60e3:.6g}")
         lines.append(" ".join(words))
+        previous = path.corrected[k, :3]
     lines.append("%")
     return "\n".join(lines) + "\n"
 
