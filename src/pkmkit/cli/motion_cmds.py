@@ -247,14 +247,14 @@ def _violation_line(v: dict, units: str) -> str:
     """One violated limit: the worst excess, where, and the excursions' spans and lines."""
     unit = {"stroke": units, "speed": f"{units}/s", "accel": f"{units}/s²",
             "force": "N"}.get(v["limit"], "")
-    where = f"line {v['line']} {v['block']!r}" if v["line"] else "the path"
+    where = f", line {v['line']} {v['block']!r}" if v["line"] else ""
     spans = ", ".join(f"{s['start']:.4f}–{s['end']:.4f} s (line {s['start_line']})"
                       if s["start_line"] else f"{s['start']:.4f}–{s['end']:.4f} s"
                       for s in v["spans"][:SHOWN_SPANS])
     more = f", … {len(v['spans']) - SHOWN_SPANS} more (--json)" \
         if len(v["spans"]) > SHOWN_SPANS else ""
     return (f"  LIMIT {v['limit']} {v['actuator']}: worst excess {v['excess']:.6g} {unit} "
-            f"({v['actuator']} = {v['value']:.6g} {unit} at t = {v['t_peak']:.4f} s, {where}, pose "
+            f"({v['actuator']} = {v['value']:.6g} {unit} at t = {v['t_peak']:.4f} s{where}, pose "
             f"{fmt(v['pose'])}); {v['excursions']} excursion(s): {spans}{more}")
 
 
