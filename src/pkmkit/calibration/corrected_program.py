@@ -15,7 +15,8 @@ The corrected program has the original's moves, in order, with their motion type
   is halved, recursively, into moves of the same type — subdivided only where the correction
   needs it;
 - a correction larger than ``max_correction`` anywhere along a block (or a point the
-  calibrated machine cannot reach) refuses that block: :class:`CorrectionRefused` names every
+  calibrated machine cannot reach, or one that commands an actuator beyond its stroke)
+  refuses that block: :class:`CorrectionRefused` names every
   such block by its G-code line and text, and no program is produced.
 
 The tool position before the first block is unknown (the machine is wherever it is): the
@@ -29,8 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.calibration.controller import corrected_targets
+from pkmkit.calibration.controller import commanded_q, reached
 from pkmkit.errors import InputError
+from pkmkit.motion.limits import stroke_excess
 from pkmkit.motion.paths import Arc, Line, Path
 
 #: Default largest deviation between the corrected points and the interpolated corrected move, m.
@@ -51,20 +53,26 @@ class CorrectionRefused(InputError):
     Attributes:
         blocks: ``[(line, text, correction)]`` one per refused block: its G-code line, its
             text and its largest correction (m; NaN: a point out of reach of the calibrated
-            machine).
+            machine; inf: an actuator out of stroke, listed in ``strokes``).
+        strokes: ``[(line, text, actuator, excess)]`` the blocks that command an actuator
+            beyond its stroke (excess in m or rad).
     """
 
-    def __init__(self, message: str, blocks: list[tuple[int, str, float]]):
+    def __init__(self, message: str, blocks: list[tuple[int, str, float]],
+                 strokes: list[tuple[int, str, str, float]] = ()):
         super().__init__(message)
         self.blocks = blocks
+        self.strokes = list(strokes)
 
 
 def refusal_reason(correction: float, bound: float, scale: float = 1.0,
                    unit: str = "m") -> str:
     """Why a block is refused: its ``correction`` (m, NaN: out of reach) against ``bound``
     (m), in ``unit`` (``scale`` m per unit)."""
-    if not np.isfinite(correction):
+    if np.isnan(correction):
         return "out of reach of the calibrated machine"
+    if np.isinf(correction):
+        return "an actuator out of stroke"
     return f"correction {correction / scale:.4g} {unit} > {bound / scale:g} {unit}"
 
 
@@ -258,19 +266,38 @@ def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
         owner.append(np.full(len(pts), k))
     x = np.concatenate(points)
     who = np.concatenate(owner)
-    fixed = _chunked(lambda part: corrected_targets(nominal, identified, part, tool_length),
-                     x, progress, "compensating")[:, :3]
+    n = identified.n_actuators
+
+    def command(part: np.ndarray) -> np.ndarray:
+        q = commanded_q(identified, part, tool_length)
+        return np.concatenate([reached(nominal, q, tool_length)[:, :3], q], axis=1)
+
+    both = _chunked(command, x, progress, "compensating")
+    fixed, q = both[:, :3], both[:, 3:3 + n]
     size = np.linalg.norm(fixed - x, axis=1)
+    outside = stroke_excess(identified, q)
     refused: list[tuple[int, str, float]] = []
-    for k in np.unique(who[~np.isfinite(size) | (size > max_correction)]):
-        worst = size[who == k]
+    stroke: list[tuple[int, str, str, float]] = []
+    for k in np.unique(who[~np.isfinite(size) | (size > max_correction)
+                           | (np.nan_to_num(outside) > 0).any(axis=1)]):
+        rows = who == k
+        worst = size[rows]
+        if np.isfinite(worst).all() and worst.max() <= max_correction:
+            over = outside[rows].max(axis=0)
+            a = int(np.argmax(over))
+            stroke.append((lines[k], texts[k], identified.actuator_names[a], float(over[a])))
+            continue
         refused.append((lines[k], texts[k],
                         float(worst.max()) if np.isfinite(worst).all() else np.nan))
-    if refused:
-        listed = "; ".join(f"line {ln} {text!r}: {refusal_reason(c, max_correction)}"
-                           for ln, text, c in refused[:10])
+    if refused or stroke:
+        listed = "; ".join([f"line {ln} {text!r}: {refusal_reason(c, max_correction)}"
+                            for ln, text, c in refused[:10]]
+                           + [f"line {ln} {text!r}: {name} out of stroke by {by:.4g}"
+                              for ln, text, name, by in stroke[:10]])
+        refused += [(ln, text, np.inf) for ln, text, _, _ in stroke]
         more = f" (and {len(refused) - 10} more)" if len(refused) > 10 else ""
-        raise CorrectionRefused(f"{len(refused)} block(s) refused: {listed}{more}", refused)
+        raise CorrectionRefused(f"{len(refused)} block(s) refused: {listed}{more}",
+                                sorted(refused), strokes=stroke)
     rows = []  # (target, corrected, kind, centre, normal, feed, k)
     deviation = 0.0
     nan3 = np.full(3, np.nan)

@@ -571,13 +571,19 @@ def _refuse_blocks(exc, program: str, bound: float, scale: float, unit: str,
 
     if as_json:
         emit_json({"refused": [{"line": line, "block": text,
-                                "correction": None if not np.isfinite(c) else c / scale}
+                                "correction": None if not np.isfinite(c) else c / scale,
+                                "reason": ("out-of-stroke" if np.isinf(c) else "out-of-reach"
+                                           if np.isnan(c) else "correction")}
                                for line, text, c in exc.blocks],
                    "max_correction": bound / scale, "units": unit})
     click.echo(f"Error: {len(exc.blocks)} block(s) of {program} refused (largest correction "
                f"accepted: {bound / scale:g} {unit}, --max-correction); no program written",
                err=True)
+    strokes = {line: (name, by) for line, _, name, by in exc.strokes}
     for line, text, c in exc.blocks:
-        click.echo(f"  {program}:{line}: {text}: {refusal_reason(c, bound, scale, unit)}",
-                   err=True)
+        reason = refusal_reason(c, bound, scale, unit)
+        if line in strokes:
+            name, by = strokes[line]
+            reason = f"{name} out of stroke by {by / scale:.4g} {unit}"
+        click.echo(f"  {program}:{line}: {text}: {reason}", err=True)
     sys.exit(EXIT_PARTIAL)
