@@ -51,6 +51,86 @@ def correct_targets(nominal, identified, targets: Any, *, tool_length: float | N
     return out
 
 
+@dataclass(frozen=True)
+class TargetFlags:
+    """Per-row verdicts of corrected targets.
+
+    Attributes:
+        status: ``(N,)`` ``"ok"``, ``"out-of-reach"`` (the calibrated machine cannot reach the
+            target), ``"correction"`` (larger than the bound) or ``"out-of-stroke"`` (the
+            commanded actuators leave their strokes).
+        correction: ``(N,)`` size of the position correction, m (NaN out of reach).
+        actuator: ``(N,)`` the actuator furthest out of stroke (empty when none).
+        excess: ``(N,)`` by how much, m or rad (0 when none).
+    """
+
+    status: np.ndarray
+    correction: np.ndarray
+    actuator: np.ndarray
+    excess: np.ndarray
+
+    @property
+    def flagged(self) -> np.ndarray:
+        """``(N,)`` rows not ``ok``."""
+        return self.status != "ok"
+
+    def describe(self, k: int, bound: float, scale: float = 1.0, unit: str = "m") -> str:
+        """Row ``k``'s verdict in words (lengths in ``unit``, ``scale`` m per unit)."""
+        status = self.status[k]
+        if status == "correction":
+            return (f"correction {self.correction[k] / scale:.4g} {unit} > "
+                    f"{bound / scale:g} {unit}")
+        if status == "out-of-stroke":
+            return f"out-of-stroke {self.actuator[k]} by {self.excess[k] / scale:.4g} {unit}"
+        return str(status)
+
+
+def correct_table(nominal, identified, targets: Any, *, max_correction: float,
+                  tool_length: float | None = None, progress: bool = False
+                  ) -> tuple[np.ndarray, TargetFlags]:
+    """Corrected targets ``(N, w)`` and their per-row verdicts: rows out of reach of the
+    calibrated machine, needing a correction above ``max_correction`` (m) or commanding an
+    actuator beyond its stroke are flagged (their corrected values NaN), the others kept.
+    """
+    from pkmkit.calibration.controller import commanded_q, reached
+    from pkmkit.motion.limits import stroke_excess
+
+    x = as_targets(identified, targets)
+    n = identified.n_actuators
+
+    def command(part: np.ndarray) -> np.ndarray:
+        q = commanded_q(identified, part, tool_length)
+        return np.concatenate([reached(nominal, q, tool_length), q], axis=1)
+
+    both = _chunked(command, x, progress, "compensating")
+    fixed, q = both[:, :x.shape[1]], both[:, x.shape[1]:x.shape[1] + n]
+    size = np.linalg.norm(fixed[:, :3] - x[:, :3], axis=1)
+    outside = np.nan_to_num(stroke_excess(identified, q))
+    worst = outside.argmax(axis=1)
+    excess = outside[np.arange(len(x)), worst]
+    status = np.full(len(x), "ok", dtype=object)
+    status[excess > 0] = "out-of-stroke"
+    status[size > max_correction] = "correction"
+    status[~np.isfinite(size) | ~np.isfinite(fixed).all(axis=1)] = "out-of-reach"
+    names = np.array(identified.actuator_names, dtype=object)
+    actuator = np.where(excess > 0, names[worst], "")
+    fixed[status != "ok"] = np.nan
+    return fixed, TargetFlags(status=status.astype(str), correction=size, actuator=actuator,
+                              excess=excess)
+
+
+def home_offset(nominal, identified, tool_length: float | None = None) -> float:
+    """Distance (m) between the tool points of ``identified`` and ``nominal`` at the nominal
+    machine's home actuator coordinates (inf where either does not assemble): a calibration
+    moves it by its defects, a machine of other dimensions by far more."""
+    from pkmkit.calibration.controller import reached
+
+    q = np.atleast_2d(np.asarray(nominal.home_q, dtype=float))
+    a, b = reached(nominal, q, tool_length)[0, :3], reached(identified, q, tool_length)[0, :3]
+    d = float(np.linalg.norm(a - b))
+    return d if np.isfinite(d) else float("inf")
+
+
 def grid_targets(lower: Any, upper: Any, counts: Any) -> np.ndarray:
     """Points of a regular grid ``(nx·ny·nz, 3)`` between ``lower`` and ``upper`` (m)."""
     lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)

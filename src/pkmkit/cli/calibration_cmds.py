@@ -439,8 +439,9 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
     from pkmkit import load
     from pkmkit.calibration.compensation import (
         check_compensation,
-        correct_targets,
+        correct_table,
         grid_targets,
+        home_offset,
     )
     from pkmkit.calibration.corrected_program import (
         DEFAULT_STEP,
@@ -455,13 +456,33 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
     given = [g for g in (gcode, grid_text, targets_file) if g]
     if len(given) != 1:
         raise click.UsageError("give exactly one of --gcode, --grid, --targets")
-    unit = units or "m"
+    table = None
+    if targets_file:
+        from pkmkit.io.measurements import read_csv_table
+
+        table = read_csv_table(targets_file, ("x", "y", "z"),
+                               ("i", "j", "k", "rx", "ry", "rz", "id"), units=units)
+    # a targets file's own '# units:' line sets the unit of the options and of the output
+    unit = units or (table.unit if table is not None else "m")
     scale = length_scale(unit)
     nominal = resolve_machine(machine_name, (), "m")
     identified = load(calibrated)
     if identified.n_actuators != nominal.n_actuators or type(identified) is not type(nominal):
         raise InputError(f"{calibrated} is not a calibration of {nominal.id!r}")
     tl = None if tool_length is None else tool_length * scale
+    for name, value in (("--step", step), ("--tolerance", tolerance),
+                        ("--max-correction", max_correction)):
+        if value is not None and not (np.isfinite(value) and value > 0
+                                      and np.isfinite(value * scale) and value * scale > 0):
+            raise InputError(f"{name} must be a finite number > 0, got {value:g} {unit}")
+    bound = default_max_correction(nominal) if max_correction is None else max_correction * scale
+    offset = home_offset(nominal, identified, tl)
+    if offset > bound:
+        raise InputError(
+            f"{calibrated} is not a calibration of {nominal.id!r}: at the nominal home actuator "
+            f"positions it places the tool {offset / scale:.4g} {unit} from the nominal machine's"
+            f" tool point, beyond the largest correction {bound / scale:g} {unit} (a machine of "
+            "other dimensions, or a file in another unit; --max-correction sets the bound)")
     if gcode:
         from pkmkit.calibration.controller import target_width
         from pkmkit.motion.gcode import read_gcode
@@ -477,8 +498,7 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
         settings = {name: (default if value is None else value * scale)
                     for name, value, default in (("step", step, DEFAULT_STEP),
                                                  ("tolerance", tolerance, DEFAULT_TOLERANCE),
-                                                 ("max_correction", max_correction,
-                                                  default_max_correction(nominal)))}
+                                                 ("max_correction", None, bound))}
         try:
             corrected = correct_path(nominal, identified, path, tool_length=tl,
                                      progress=not as_json, **settings)
@@ -501,37 +521,43 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
                 raise InputError("--grid counts must be integers")
             targets = grid_targets(lo, hi, counts)
         else:
-            from pkmkit.io.measurements import read_csv_table
-
-            t = read_csv_table(targets_file, ("x", "y", "z"),
-                               ("i", "j", "k", "rx", "ry", "rz", "id"), units=units)
+            t = table
             targets = np.column_stack([t.numbers[c] for c in "xyz"]) * t.scale
             if all(c in t.numbers for c in "ijk"):
                 targets = np.column_stack([targets] + [t.numbers[c] for c in "ijk"])
             elif all(c in t.numbers for c in ("rx", "ry", "rz")):
                 targets = np.column_stack([targets] + [np.radians(t.numbers[c])
                                                        for c in ("rx", "ry", "rz")])
-        fixed = correct_targets(nominal, identified, targets, tool_length=tl,
-                                progress=not as_json)
+        fixed, flags = correct_table(nominal, identified, targets, max_correction=bound,
+                                     tool_length=tl, progress=not as_json)
         from pkmkit.calibration.controller import as_targets
 
         targets = as_targets(identified, targets)
         from pkmkit.errors.model import _family
 
         orientation = "axis" if _family(nominal) == "chain" else "rotvec"
+        described = [flags.describe(k, bound, scale, unit) for k in range(len(targets))]
         text = correction_table(targets, fixed, units=unit, orientation=orientation, comment=(
             f"corrected targets for the nominal controller of {nominal.id} "
-            f"(pkmkit compensate --calibrated {Path(calibrated).name})"))
+            f"(pkmkit compensate --calibrated {Path(calibrated).name})"), status=described)
+    ok = np.isfinite(fixed).all(axis=1)
     check = None
-    if truth:
+    if truth and ok.any():
         true_machine = load(truth)
-        check = check_compensation(true_machine, nominal, identified, targets, tool_length=tl)
+        check = check_compensation(true_machine, nominal, identified, targets[ok],
+                                   tool_length=tl)
     atomic_write_text(out_file, text)
-    corr = np.linalg.norm(fixed[:, :3] - targets[:, :3], axis=1) / scale
+    corr = np.linalg.norm(fixed[ok, :3] - targets[ok, :3], axis=1) / scale
     payload = {"machine": nominal.id, "calibrated": calibrated, "out": out_file, "units": unit,
-               "targets": len(targets), "correction_mean": float(corr.mean()),
-               "correction_max": float(corr.max()),
+               "targets": len(targets), "correction_mean": float(np.mean(corr)) if ok.any()
+               else None, "correction_max": float(np.max(corr)) if ok.any() else None,
+               "max_correction": bound / scale,
                "check": None if check is None else check.to_dict(scale)}
+    if not gcode:
+        payload["flagged"] = [{"row": int(k) + 1,
+                               "line": table.lines[k] if table is not None else None,
+                               "status": str(flags.status[k]), "reason": described[k]}
+                              for k in np.flatnonzero(flags.flagged)]
     if gcode:
         payload["program"] = {
             "blocks": corrected.blocks, "moves": len(fixed),
@@ -539,17 +565,40 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
             "tolerance": corrected.tolerance / scale, "step": corrected.step / scale,
             "max_correction": corrected.max_correction / scale,
             "deviation_max": corrected.deviation / scale}
+    flagged = payload.get("flagged", [])
     if as_json:
         emit_json(payload)
-        return
-    if gcode:
+    else:
+        _print_compensation(payload, corrected if gcode else None, len(targets), out_file, corr,
+                            check, scale, unit, ok.any())
+    if flagged:
+        import sys
+
+        from .options import EXIT_PARTIAL
+
+        sys.exit(EXIT_PARTIAL)
+
+
+def _print_compensation(payload, corrected, count, out_file, corr, check, scale, unit,
+                        any_ok) -> None:
+    if corrected is not None:
+        fixed = corrected.corrected
         click.echo(f"{corrected.blocks} blocks → {len(fixed)} corrected moves → {out_file} "
                    f"({corrected.subdivided} block(s) subdivided for a tolerance of "
                    f"{corrected.tolerance / scale:.4g} {unit}); correction mean "
                    f"{corr.mean():.4g}, max {corr.max():.4g} {unit}")
-    else:
-        click.echo(f"{len(targets)} corrected targets → {out_file}; correction mean "
+    elif any_ok:
+        click.echo(f"{count} corrected targets → {out_file}; correction mean "
                    f"{corr.mean():.4g}, max {corr.max():.4g} {unit}")
+    flagged = payload.get("flagged", [])
+    if flagged:
+        click.echo(f"  {len(flagged)} of {count} target(s) flagged (no corrected values in "
+                   "the table):")
+        for f in flagged[:20]:
+            where = f["line"] or f"row {f['row']}"
+            click.echo(f"    {where}: {f['reason']}")
+        if len(flagged) > 20:
+            click.echo(f"    … {len(flagged) - 20} more (--json)")
     if check is not None:
         c = check.to_dict(scale)
         click.echo(f"  error of the true machine at the targets: RMS {c['rms_before']:.4g} → "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -56,11 +57,14 @@ def corrected_gcode(path: CorrectedPath, *, origin=(0.0, 0.0, 0.0), header: str 
 
 
 def correction_table(targets: np.ndarray, corrected: np.ndarray, *, units: str = "m",
-                     comment: str = "", orientation: str = "axis") -> str:
+                     comment: str = "", orientation: str = "axis",
+                     status: Sequence[str] | None = None) -> str:
     """CSV of targets, corrected targets and corrections (``dx = cx − x``…); for 6-column
     targets also the orientation: tool axes of a 5-axis machine (``orientation="axis"``:
     ``i, j, k``, ``ci, cj, ck``) or rotation vectors of a six-actuator machine
-    (``"rotvec"``: ``rx, ry, rz``, ``crx, cry, crz`` in degrees)."""
+    (``"rotvec"``: ``rx, ry, rz``, ``crx, cry, crz`` in degrees). ``status``: a last column
+    (``ok`` or why the row is flagged); the corrected columns of a flagged row are left
+    empty."""
     scale = length_scale(units)
     axes = targets.shape[1] == 6
     cols = ["x", "y", "z", "cx", "cy", "cz", "dx", "dy", "dz"]
@@ -68,10 +72,15 @@ def correction_table(targets: np.ndarray, corrected: np.ndarray, *, units: str =
     factor = 1.0 if orientation == "axis" else np.degrees(1.0)
     if axes:
         cols += [*names, *(f"c{n}" for n in names)]
+    if status is not None:
+        cols.append("status")
     lines = [f"# {c}" for c in comment.splitlines()] + [f"# units: {units}", ",".join(cols)]
-    for t, c in zip(targets, corrected, strict=True):
+    for k, (t, c) in enumerate(zip(targets, corrected, strict=True)):
         row = [*(t[:3] / scale), *(c[:3] / scale), *((c[:3] - t[:3]) / scale)]
         if axes:
             row += [*(t[3:] * factor), *(c[3:] * factor)]
-        lines.append(",".join(f"{v:.10g}" for v in row))
+        cells = ["" if not np.isfinite(v) else f"{v:.10g}" for v in row]
+        if status is not None:
+            cells.append(str(status[k]).replace(",", ";"))
+        lines.append(",".join(cells))
     return "\n".join(lines) + "\n"
