@@ -477,12 +477,13 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
             raise InputError(f"{name} must be a finite number > 0, got {value:g} {unit}")
     bound = default_max_correction(nominal) if max_correction is None else max_correction * scale
     offset = home_offset(nominal, identified, tl)
-    if offset > bound:
+    similar = max(bound, default_max_correction(nominal))
+    if offset > similar:
         raise InputError(
             f"{calibrated} is not a calibration of {nominal.id!r}: at the nominal home actuator "
             f"positions it places the tool {offset / scale:.4g} {unit} from the nominal machine's"
-            f" tool point, beyond the largest correction {bound / scale:g} {unit} (a machine of "
-            "other dimensions, or a file in another unit; --max-correction sets the bound)")
+            f" tool point, beyond the largest correction {similar / scale:g} {unit} (a machine "
+            "of other dimensions, or a file in another unit; --max-correction sets the bound)")
     if gcode:
         from pkmkit.calibration.controller import target_width
         from pkmkit.motion.gcode import read_gcode
