@@ -329,3 +329,23 @@ def test_compensate_targets_honour_units_and_flag_rows(run, as_json, delta_truth
     assert "t.csv:5: out-of-stroke" in res.output and "t.csv:6: out-of-reach" in res.output
     assert "with the workpiece set-up (a rigid motion) removed" in res.output
     assert " mm" in res.output.splitlines()[0]
+
+
+def test_an_identified_frame_is_written_as_a_reusable_registration(run, as_json, tmp_path):
+    """--frame identify: the frame found with the machine is written beside the report in
+    register's format, and reads back (before: only inside calibration.json)."""
+    from pkmkit.calibration.registration import load_registration
+
+    res = run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 20,
+              "--defects", "random", "--out", tmp_path / "m.csv")
+    assert res.exit_code == 0, res.output
+    out = as_json(run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+                      tmp_path / "m.csv", "--frame", "identify", "--out", tmp_path / "cal",
+                      "--json"))
+    assert out["files"]["frame.json"] == str(tmp_path / "cal" / "frame.json")
+    frame = load_registration(tmp_path / "cal" / "frame.json")
+    np.testing.assert_allclose(frame.rotation, out["frame"]["rotation"], atol=1e-15)
+    np.testing.assert_allclose(frame.translation, out["frame"]["translation"], atol=1e-15)
+    again = run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 5,
+                "--frame", tmp_path / "cal" / "frame.json", "--out", tmp_path / "n.csv")
+    assert again.exit_code == 0, again.output

@@ -293,7 +293,11 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
                   out_dir, units, as_json):
     """Identify a machine's geometric defects from measurements, validate, report."""
     from pkmkit.calibration.identify import calibrate
-    from pkmkit.calibration.registration import load_registration
+    from pkmkit.calibration.registration import (
+        Registration,
+        load_registration,
+        save_registration,
+    )
     from pkmkit.io.measurements import read_measurements
 
     machine = resolve_machine(machine_name, (), "m")
@@ -325,6 +329,11 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
         written = write_calibration_outputs(result, out_dir,
                                             machine_source=machine_document_path(machine_name),
                                             units=unit, sources=sources)
+        if result.frame is not None and frame is not None and not isinstance(frame, Registration):
+            # an identified or refined frame: reusable by --frame FILE (register's format)
+            target = Path(out_dir) / "frame.json"
+            save_registration(target, result.frame, units=unit)
+            written = {**written, "frame.json": str(target)}
         payload["files"] = written
     if as_json:
         emit_json(payload)
