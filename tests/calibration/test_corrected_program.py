@@ -178,7 +178,8 @@ def test_blocks_commanding_an_actuator_beyond_its_stroke_are_refused(machines):
         correct_path(nominal, true, read_gcode(POCKET, origin=(0.0, 0.0, -0.9)))
     strokes = info.value.strokes
     assert len(strokes) == len(info.value.blocks) == 11
-    line, text, actuator, by = strokes[0]
+    line, text, actuator, by, angular = strokes[0]
     assert (line, text) == (3, "G0 X-50 Y-40 Z5") and actuator in nominal.actuator_names
+    assert not angular
     q = true.ik(np.array([-0.05, -0.04, -0.895]))
     assert by == pytest.approx(0.7 - q.min(), abs=2e-3)

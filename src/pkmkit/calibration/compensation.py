@@ -62,12 +62,14 @@ class TargetFlags:
         correction: ``(N,)`` size of the position correction, m (NaN out of reach).
         actuator: ``(N,)`` the actuator furthest out of stroke (empty when none).
         excess: ``(N,)`` by how much, m or rad (0 when none).
+        angular: ``(N,)`` that actuator is revolute (its excess in rad).
     """
 
     status: np.ndarray
     correction: np.ndarray
     actuator: np.ndarray
     excess: np.ndarray
+    angular: np.ndarray
 
     @property
     def flagged(self) -> np.ndarray:
@@ -81,7 +83,9 @@ class TargetFlags:
             return (f"correction {self.correction[k] / scale:.4g} {unit} > "
                     f"{bound / scale:g} {unit}")
         if status == "out-of-stroke":
-            return f"out-of-stroke {self.actuator[k]} by {self.excess[k] / scale:.4g} {unit}"
+            by = (f"{np.degrees(self.excess[k]):.4g} deg" if self.angular[k]
+                  else f"{self.excess[k] / scale:.4g} {unit}")
+            return f"out-of-stroke {self.actuator[k]} by {by}"
         return str(status)
 
 
@@ -115,8 +119,11 @@ def correct_table(nominal, identified, targets: Any, *, max_correction: float,
     names = np.array(identified.actuator_names, dtype=object)
     actuator = np.where(excess > 0, names[worst], "")
     fixed[status != "ok"] = np.nan
+    from pkmkit.calibration.identify import _angle_actuators
+
+    angular = np.asarray(_angle_actuators(identified), dtype=bool)[worst]
     return fixed, TargetFlags(status=status.astype(str), correction=size, actuator=actuator,
-                              excess=excess)
+                              excess=excess, angular=angular & (excess > 0))
 
 
 def home_offset(nominal, identified, tool_length: float | None = None) -> float:

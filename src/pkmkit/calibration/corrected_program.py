@@ -54,12 +54,12 @@ class CorrectionRefused(InputError):
         blocks: ``[(line, text, correction)]`` one per refused block: its G-code line, its
             text and its largest correction (m; NaN: a point out of reach of the calibrated
             machine; inf: an actuator out of stroke, listed in ``strokes``).
-        strokes: ``[(line, text, actuator, excess)]`` the blocks that command an actuator
-            beyond its stroke (excess in m or rad).
+        strokes: ``[(line, text, actuator, excess, angular)]`` the blocks that command an
+            actuator beyond its stroke (excess in m, or rad when ``angular``).
     """
 
     def __init__(self, message: str, blocks: list[tuple[int, str, float]],
-                 strokes: list[tuple[int, str, str, float]] = ()):
+                 strokes: list[tuple[int, str, str, float, bool]] = ()):
         super().__init__(message)
         self.blocks = blocks
         self.strokes = list(strokes)
@@ -276,8 +276,11 @@ def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
     fixed, q = both[:, :3], both[:, 3:3 + n]
     size = np.linalg.norm(fixed - x, axis=1)
     outside = stroke_excess(identified, q)
+    from pkmkit.calibration.identify import _angle_actuators
+
+    angular = np.asarray(_angle_actuators(identified), dtype=bool)
     refused: list[tuple[int, str, float]] = []
-    stroke: list[tuple[int, str, str, float]] = []
+    stroke: list[tuple[int, str, str, float, bool]] = []
     for k in np.unique(who[~np.isfinite(size) | (size > max_correction)
                            | (np.nan_to_num(outside) > 0).any(axis=1)]):
         rows = who == k
@@ -285,16 +288,18 @@ def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
         if np.isfinite(worst).all() and worst.max() <= max_correction:
             over = outside[rows].max(axis=0)
             a = int(np.argmax(over))
-            stroke.append((lines[k], texts[k], identified.actuator_names[a], float(over[a])))
+            stroke.append((lines[k], texts[k], identified.actuator_names[a], float(over[a]),
+                           bool(angular[a])))
             continue
         refused.append((lines[k], texts[k],
                         float(worst.max()) if np.isfinite(worst).all() else np.nan))
     if refused or stroke:
         listed = "; ".join([f"line {ln} {text!r}: {refusal_reason(c, max_correction)}"
                             for ln, text, c in refused[:10]]
-                           + [f"line {ln} {text!r}: {name} out of stroke by {by:.4g}"
-                              for ln, text, name, by in stroke[:10]])
-        refused += [(ln, text, np.inf) for ln, text, _, _ in stroke]
+                           + [f"line {ln} {text!r}: {name} out of stroke by {by:.4g} "
+                              f"{'rad' if rad else 'm'}"
+                              for ln, text, name, by, rad in stroke[:10]])
+        refused += [(ln, text, np.inf) for ln, text, *_ in stroke]
         more = f" (and {len(refused) - 10} more)" if len(refused) > 10 else ""
         raise CorrectionRefused(f"{len(refused)} block(s) refused: {listed}{more}",
                                 sorted(refused), strokes=stroke)

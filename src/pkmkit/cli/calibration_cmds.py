@@ -635,14 +635,15 @@ def _refuse_blocks(exc, program: str, bound: float, scale: float, unit: str,
                                            if np.isnan(c) else "correction")}
                                for line, text, c in exc.blocks],
                    "max_correction": bound / scale, "units": unit})
-    click.echo(f"Error: {len(exc.blocks)} block(s) of {program} refused (largest correction "
+    click.echo(f"Refused: {len(exc.blocks)} block(s) of {program} (largest correction "
                f"accepted: {bound / scale:g} {unit}, --max-correction); no program written",
                err=True)
-    strokes = {line: (name, by) for line, _, name, by in exc.strokes}
+    strokes = {line: (name, by, rad) for line, _, name, by, rad in exc.strokes}
     for line, text, c in exc.blocks:
         reason = refusal_reason(c, bound, scale, unit)
         if line in strokes:
-            name, by = strokes[line]
-            reason = f"{name} out of stroke by {by / scale:.4g} {unit}"
+            name, by, rad = strokes[line]
+            amount = f"{np.degrees(by):.4g} deg" if rad else f"{by / scale:.4g} {unit}"
+            reason = f"{name} out of stroke by {amount}"
         click.echo(f"  {program}:{line}: {text}: {reason}", err=True)
     sys.exit(EXIT_PARTIAL)
