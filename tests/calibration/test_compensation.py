@@ -10,11 +10,11 @@ import pkmkit
 from pkmkit.calibration import random_defects
 from pkmkit.calibration.compensation import (
     check_compensation,
-    correct_path,
     correct_targets,
     grid_targets,
 )
 from pkmkit.calibration.controller import corrected_targets, executed
+from pkmkit.calibration.corrected_program import correct_path
 from pkmkit.exceptions import InputError
 from pkmkit.io.compensation_files import corrected_gcode, correction_table
 from pkmkit.model.defects_table import apply_defect_vector
@@ -49,12 +49,12 @@ def test_corrected_gcode_reads_back(tmp_path):
     program = "G21 G90\nG0 X0 Y0 Z50\nG1 X40 Y0 Z50 F600\nG2 X40 Y40 Z50 I0 J20\nG1 X0 Y40\n"
     path = read_gcode(program, origin=(0.0, 0.0, 0.0))
     fixed = correct_path(m, true, path, step=2e-3)
-    assert len(fixed.targets) > 40
-    assert fixed.rapid[1] and not fixed.rapid[-1]
+    assert len(fixed.targets) >= 4
+    assert fixed.rapid[0] and not fixed.rapid[1:].any()
     text = corrected_gcode(fixed, header="test")
-    back = read_gcode(text, start=fixed.corrected[0])
+    back = read_gcode(text)
     ends = np.array([seg.end for seg in back.segments])
-    np.testing.assert_allclose(ends, fixed.corrected[1:], atol=1e-7)
+    np.testing.assert_allclose(ends, fixed.corrected, atol=1e-7)
     assert "F600" in text
     assert (fixed.correction > 1e-6).all()
     table = correction_table(fixed.targets, fixed.corrected, units="mm")
@@ -73,23 +73,6 @@ def test_grid_and_unreachable_targets():
     m = pkmkit.machine("linear-delta")
     with pytest.raises(InputError, match=r"out of reach of the calibrated machine \(rows 2\)"):
         correct_targets(m, m, [[0, 0, 0.2], [9.0, 0, 0]])
-
-
-def test_sampled_path_keeps_a_zero_length_segment_as_its_end_point():
-    """Documented: each segment's end is included. A zero-length segment (a Path built
-    directly; G-code drops them) adds its end point once, not a 0/0 NaN."""
-    from pkmkit.calibration.compensation import sample_path
-    from pkmkit.motion.paths import Line, Path
-
-    a, b, c = np.array([0.0, 0.0, 0.0]), np.array([0.01, 0.0, 0.0]), np.array([0.01, 0.01, 0.0])
-    path = Path((Line(a, b), Line(b, b), Line(b, c)))
-    pts, rapid, _feed, source = sample_path(path, 0.004)
-    # 3 samples per 10 mm line at a 4 mm step (ceil(10/4)), the start, the zero segment's end
-    expected = np.vstack([a, [[0.01 / 3, 0, 0], [0.02 / 3, 0, 0], b], b,
-                          [[0.01, 0.01 / 3, 0], [0.01, 0.02 / 3, 0], c]])
-    np.testing.assert_allclose(pts, expected, atol=1e-15)
-    assert source.tolist() == [0, 1, 1, 1, 2, 3, 3, 3]
-    assert rapid.tolist() == [True] + [False] * 7  # the start: rapid, no feed
 
 
 def test_large_batches_show_a_compensating_progress_bar(capsys):

@@ -153,7 +153,8 @@ def test_compensate_grid_gcode_and_truth(run, as_json, delta_run, tmp_path):
     assert out["targets"] == 18
     assert out["check"]["rms_after"] < 0.2 * out["check"]["rms_before"]
     rows = (tmp_path / "grid.csv").read_text().splitlines()
-    assert rows[2] == "x,y,z,cx,cy,cz,dx,dy,dz"
+    assert rows[2] == "x,y,z,cx,cy,cz,dx,dy,dz,status"
+    assert all(r.endswith(",ok") for r in rows[3:])
     program = tmp_path / "part.nc"
     program.write_text("G21 G90\nG0 X0 Y0 Z100\nG1 X50 Y0 Z100 F300\nG2 X50 Y50 I0 J25\n")
     res = run("compensate", "linear-delta", "--calibrated", cal, "--gcode", program,
@@ -162,7 +163,7 @@ def test_compensate_grid_gcode_and_truth(run, as_json, delta_run, tmp_path):
     from pkmkit.motion.gcode import read_gcode
 
     fixed = read_gcode(tmp_path / "fixed.nc")
-    assert len(fixed.segments) > 15
+    assert len(fixed.segments) >= 3  # the three blocks, halved only where needed
     res = run("compensate", "tripteor-x7", "--calibrated", cal, "--grid", "0,0,0:1,1,1:1,1,1",
               "--out", tmp_path / "x.csv")
     assert res.exit_code == 1 and "not a calibration of" in res.output
@@ -221,3 +222,130 @@ def test_tolerances_and_correlations(run, as_json, delta_run):
     res = run("calibrate", "linear-delta", "--measure", "point", "--measurements",
               d / "ident.csv", "--tolerance", "dQ9=1")
     assert res.exit_code == 1 and "unknown defect 'dQ9'" in res.output
+
+
+@pytest.fixture(scope="module")
+def delta_truth(tmp_path_factory):
+    """A linear Delta with random defects (the simulated 'calibrated' machine file)."""
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    d = tmp_path_factory.mktemp("truth")
+    res = CliRunner().invoke(cli, ["simulate-measurements", "linear-delta", "--measure", "point",
+                                   "--poses", "10", "--defects", "random", "--out",
+                                   str(d / "m.csv")], catch_exceptions=False)
+    assert res.exit_code == 0, res.output
+    return d / "m.truth.toml"
+
+
+POCKET = "docs/examples/pocket.nc"
+
+
+def _pocket(tmp_path):
+    from pathlib import Path
+
+    source = Path(__file__).resolve().parents[2] / POCKET
+    target = tmp_path / "pocket.nc"
+    target.write_text(source.read_text())
+    return target
+
+
+def test_corrected_program_has_the_original_moves(run, as_json, delta_truth, tmp_path):
+    """The issue's case: the old program began with ~65 rapids from the work origin at cutting
+    height and cut every rapid into 1 mm pieces. Now: the original's moves, in order, with
+    their types; the first one is the original's first target, corrected."""
+    from pkmkit.calibration.controller import corrected_targets
+    from pkmkit.motion.gcode import read_gcode
+
+    program = _pocket(tmp_path)
+    out = as_json(run("compensate", "linear-delta", "--calibrated", delta_truth, "--gcode",
+                      program, "--units", "mm", "--tolerance", "0.05", "--out",
+                      tmp_path / "fixed.nc", "--json"))
+    original = read_gcode(program)
+    fixed = read_gcode(tmp_path / "fixed.nc")
+    assert out["program"] == {**out["program"], "blocks": 11, "moves": 11,
+                              "subdivided_blocks": 0}
+    assert len(fixed.segments) == len(original.segments)
+    assert [type(s).__name__ for s in fixed.segments] == \
+        [type(s).__name__ for s in original.segments]
+    assert [s.rapid for s in fixed.segments] == [s.rapid for s in original.segments]
+    nominal, true = pkmkit.machine("linear-delta"), pkmkit.load(delta_truth)
+    first = corrected_targets(nominal, true, original.segments[0].end)[0]
+    np.testing.assert_allclose(fixed.segments[0].end, first, atol=1e-7)  # 4 decimals in mm
+    text = (tmp_path / "fixed.nc").read_text().splitlines()
+    assert sum(line.startswith("G0") for line in text) == 2
+
+
+def test_compensate_refuses_blocks_beyond_the_bound_and_writes_nothing(run, delta_truth,
+                                                                       tmp_path):
+    program = _pocket(tmp_path)
+    res = run("compensate", "linear-delta", "--calibrated", delta_truth, "--gcode", program,
+              "--units", "mm", "--max-correction", "0.001", "--out", tmp_path / "fixed.nc")
+    assert res.exit_code == 3
+    assert "pocket.nc:3: G0 X-50 Y-40 Z5: correction" in res.output
+    assert "no program written" in res.output and res.output.startswith("Refused: ")
+    assert not (tmp_path / "fixed.nc").exists()
+
+
+@pytest.mark.parametrize("option", ["--step", "--tolerance", "--max-correction"])
+@pytest.mark.parametrize("value", ["0", "-1", "nan"])
+def test_compensate_refuses_a_zero_step(run, delta_truth, tmp_path, option, value):
+    """--step 0 fell back to the 1 mm default."""
+    res = run("compensate", "linear-delta", "--calibrated", delta_truth, "--gcode",
+              _pocket(tmp_path), "--units", "mm", option, value, "--out", tmp_path / "f.nc")
+    assert res.exit_code == 1 and f"{option} must be a finite number > 0" in res.output
+    assert not (tmp_path / "f.nc").exists()
+
+
+def test_compensate_refuses_a_machine_of_other_dimensions(run, tmp_path):
+    """A nominal Table IV.1 Delta (L = 1.04 m) passed as the calibration of the Ch. III one
+    (L = 1.3 m) was accepted and its huge 'corrections' written."""
+    other = tmp_path / "other.toml"
+    other.write_text('[machine]\nkind = "linear-delta"\nname = "other"\nunits = "m"\n'
+                     "[parameters]\nR = 0.7\nr = 0.15\nL = 1.04\n")
+    assert pkmkit.load(other).n_actuators == 3
+    res = run("compensate", "linear-delta", "--calibrated", other, "--grid",
+              "0,0,0:0.01,0.01,0:2,2,1", "--out", tmp_path / "t.csv")
+    assert res.exit_code == 1 and "is not a calibration of 'linear-delta'" in res.output
+    assert not (tmp_path / "t.csv").exists()
+
+
+def test_compensate_targets_honour_units_and_flag_rows(run, as_json, delta_truth, tmp_path):
+    """The file's '# units: mm' sets the output unit; a target out of stroke and one out of
+    reach are flagged on their own rows (exit 3), the others kept."""
+    targets = tmp_path / "t.csv"
+    targets.write_text("# units: mm\nx,y,z\n0,0,0\n10,0,0\n0,0,-900\n5000,0,0\n")
+    res = run("compensate", "linear-delta", "--calibrated", delta_truth, "--targets", targets,
+              "--truth", delta_truth, "--out", tmp_path / "o.csv")
+    assert res.exit_code == 3
+    rows = (tmp_path / "o.csv").read_text().splitlines()
+    assert "# units: mm" in rows
+    body = rows[rows.index("x,y,z,cx,cy,cz,dx,dy,dz,status") + 1:]
+    assert body[0].startswith("0,0,0,") and body[0].endswith(",ok")
+    assert abs(float(body[1].split(",")[3]) - 10) < 5  # mm, not 0.01
+    assert body[2].startswith("0,0,-900,,,") and "out-of-stroke q" in body[2]
+    assert body[3].endswith("out-of-reach")
+    assert "t.csv:5: out-of-stroke" in res.output and "t.csv:6: out-of-reach" in res.output
+    assert "with the workpiece set-up (a rigid motion) removed" in res.output
+    assert " mm" in res.output.splitlines()[0]
+
+
+def test_an_identified_frame_is_written_as_a_reusable_registration(run, as_json, tmp_path):
+    """--frame identify: the frame found with the machine is written beside the report in
+    register's format, and reads back (before: only inside calibration.json)."""
+    from pkmkit.calibration.registration import load_registration
+
+    res = run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 20,
+              "--defects", "random", "--out", tmp_path / "m.csv")
+    assert res.exit_code == 0, res.output
+    out = as_json(run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+                      tmp_path / "m.csv", "--frame", "identify", "--out", tmp_path / "cal",
+                      "--json"))
+    assert out["files"]["frame.json"] == str(tmp_path / "cal" / "frame.json")
+    frame = load_registration(tmp_path / "cal" / "frame.json")
+    np.testing.assert_allclose(frame.rotation, out["frame"]["rotation"], atol=1e-15)
+    np.testing.assert_allclose(frame.translation, out["frame"]["translation"], atol=1e-15)
+    again = run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 5,
+                "--frame", tmp_path / "cal" / "frame.json", "--out", tmp_path / "n.csv")
+    assert again.exit_code == 0, again.output

@@ -1,5 +1,6 @@
 """``pkmkit path`` and ``pkmkit arm-sizing`` end to end."""
 
+import json
 
 import numpy as np
 import pytest
@@ -27,7 +28,60 @@ def test_path_gcode_with_violations(run, tmp_path):
     result = run("path", "linear-delta-table-iv1", "--gcode", program, "--origin", "0,0,0.2",
                  "--feed", "0.05", "--accel", "2", "--jerk", "20", "--speed-limit", "0.01")
     assert result.exit_code == 3  # the limit is reported, the results written
-    assert "LIMIT speed" in result.output and "exceeds it from t =" in result.output
+    assert "LIMIT speed" in result.output and "worst excess" in result.output
+
+
+def test_path_reports_every_actuator_over_a_limit_with_spans_and_lines(run, as_json, tmp_path):
+    """The issue's case: with a 60 mm/s limit, q1 (−143 mm/s) and q3 (+192 mm/s) both exceed
+    it during the rapid of line 3; before, only q3's first excursion was reported. The figure
+    draws the limits and marks the violations."""
+    program = tmp_path / "start.nc"
+    program.write_text("G21 G90 G17\n(rapid first)\nG0 X-50 Y-40 Z5\nG1 Z0 F600\n")
+    args = ["path", "linear-delta-table-iv1", "--gcode", program, "--origin", "0,0,200",
+            "--units", "mm", "--accel", "3000", "--jerk", "30000", "--rapid-feed", "3000",
+            "--speed-limit", "60"]
+    text = run(*args, "--out", tmp_path / "out")
+    assert text.exit_code == 3
+    lines = [ln for ln in text.output.splitlines() if "LIMIT speed" in ln]
+    assert len(lines) == 2 and "q1" in lines[0] and "q3" in lines[1]
+    assert all("line 3 'G0 X-50 Y-40 Z5'" in ln and "1 excursion(s)" in ln for ln in lines)
+    assert "worst excess 83.02" in lines[0] and "mm/s" in lines[0]
+    res = run(*args, "--json")
+    assert res.exit_code == 3
+    data = json.loads(res.stdout)
+    speed = {v["actuator"]: v for v in data["violations"] if v["limit"] == "speed"}
+    assert set(speed) == {"q1", "q3"}
+    assert speed["q1"]["excess"] == pytest.approx(83.02, abs=0.01)
+    assert speed["q3"]["excess"] == pytest.approx(131.86, abs=0.01)
+    for v in speed.values():
+        assert v["line"] == 3 and v["upper"] == pytest.approx(60.0)
+        (span,) = v["spans"]
+        assert 0.05 < span["start"] < v["t_peak"] < span["end"] < 0.4
+    assert (tmp_path / "out" / "motion.png").stat().st_size > 1000
+
+
+def test_joint_figure_draws_limits_and_marks_violations():
+    import pkmkit
+    from pkmkit.dynamics.trajectory import simulate_path
+    from pkmkit.motion import Limits, circle
+    from pkmkit.motion.limits import limit_bounds
+    from pkmkit.plot.motion_figures import plot_joint_motion
+
+    m = pkmkit.machine("linear-delta-table-iv1")
+    limits = Limits(speed=0.05)
+    r = simulate_path(m, circle([0, 0, 0.2], 0.15), feed=0.12, accel=1.0, jerk=10.0,
+                      period=0.05, limits=limits)
+    fig = plot_joint_motion(r.motion, m.actuator_names, forces=r.forces.force,
+                            limits={k: (lo, hi) for k, _, lo, hi in limit_bounds(m, limits)},
+                            violations=r.violations)
+    speed_axis = fig.axes[1]
+    levels = {round(float(ln.get_ydata()[0]), 9) for ln in speed_axis.lines
+              if ln.get_linestyle() == "--"}
+    assert levels == {-0.05, 0.05}
+    shaded = [p for p in speed_axis.patches]
+    assert len(shaded) == sum(len(v.excursions) for v in r.violations) > 0
+    marks = [ln for ln in speed_axis.lines if ln.get_marker() == "x"]
+    assert len(marks) == len(m.actuator_names)
 
 
 def test_path_raster_and_wrench(run, as_json):

@@ -4,9 +4,8 @@ compensation.
 
 The identified machine reaches X when commanded ``q = IGM_identified(X)``; the nominal controller
 commands ``IGM_nominal(X')``, so the corrected target is ``X' = FGM_nominal(IGM_identified(X))``
-(:func:`pkmkit.calibration.controller.corrected_targets`). Paths are sampled at most ``step``
-apart (the correction varies along a move, so long moves become chains of short ones; arcs and
-helices become polylines), every sample corrected.
+(:func:`pkmkit.calibration.controller.corrected_targets`). Programs are corrected block by
+block in :mod:`pkmkit.calibration.corrected_program`.
 """
 
 from __future__ import annotations
@@ -21,30 +20,6 @@ from pkmkit.exceptions import InputError
 
 #: Targets per batch (progress bars advance per batch).
 CHUNK = 2000
-
-
-@dataclass(frozen=True)
-class CorrectedPath:
-    """A tool path sampled and corrected.
-
-    Attributes:
-        targets: ``(K, w)`` programmed points (m; with the tool axis for a 5-axis machine).
-        corrected: ``(K, w)`` what to send to the nominal controller.
-        rapid: ``(K,)`` the move ending at the point is a rapid (G0).
-        feed: ``(K,)`` programmed feed of that move (m/s, NaN for the default).
-        source: ``(K,)`` program line of the move.
-    """
-
-    targets: np.ndarray
-    corrected: np.ndarray
-    rapid: np.ndarray
-    feed: np.ndarray
-    source: np.ndarray
-
-    @property
-    def correction(self) -> np.ndarray:
-        """``(K,)`` size of the position correction (m)."""
-        return np.linalg.norm(self.corrected[:, :3] - self.targets[:, :3], axis=1)
 
 
 def _chunked(func, x: np.ndarray, progress: bool, label: str) -> np.ndarray:
@@ -76,35 +51,89 @@ def correct_targets(nominal, identified, targets: Any, *, tool_length: float | N
     return out
 
 
-def sample_path(path, step: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Points of a :class:`~pkmkit.motion.paths.Path` at most ``step`` apart (each segment's
-    end included; the path's start first), with per-point rapid flag, feed and source line."""
-    if not (np.isfinite(step) and step > 0):
-        raise InputError(f"the sampling step must be > 0, got {step!r}")
-    segs = path.segments
-    points = [segs[0].start]
-    rapid, feed = [True], [np.nan]
-    source = [path.source[0] if path.source else 0]
-    for k, seg in enumerate(segs):
-        n = max(1, int(np.ceil(seg.length / step)))
-        s = np.linspace(0.0, seg.length, n + 1)[1:]
-        pts = seg.evaluate(s)[0] if seg.length > 0 else np.atleast_2d(seg.end)
-        points.extend(pts)
-        rapid += [bool(seg.rapid)] * len(pts)
-        feed += [np.nan if seg.feed is None else float(seg.feed)] * len(pts)
-        source += [path.source[k] if path.source else k + 1] * len(pts)
-    return (np.array(points), np.array(rapid), np.array(feed), np.array(source, dtype=int))
+@dataclass(frozen=True)
+class TargetFlags:
+    """Per-row verdicts of corrected targets.
+
+    Attributes:
+        status: ``(N,)`` ``"ok"``, ``"out-of-reach"`` (the calibrated machine cannot reach the
+            target), ``"correction"`` (larger than the bound) or ``"out-of-stroke"`` (the
+            commanded actuators leave their strokes).
+        correction: ``(N,)`` size of the position correction, m (NaN out of reach).
+        actuator: ``(N,)`` the actuator furthest out of stroke (empty when none).
+        excess: ``(N,)`` by how much, m or rad (0 when none).
+        angular: ``(N,)`` that actuator is revolute (its excess in rad).
+    """
+
+    status: np.ndarray
+    correction: np.ndarray
+    actuator: np.ndarray
+    excess: np.ndarray
+    angular: np.ndarray
+
+    @property
+    def flagged(self) -> np.ndarray:
+        """``(N,)`` rows not ``ok``."""
+        return self.status != "ok"
+
+    def describe(self, k: int, bound: float, scale: float = 1.0, unit: str = "m") -> str:
+        """Row ``k``'s verdict in words (lengths in ``unit``, ``scale`` m per unit)."""
+        status = self.status[k]
+        if status == "correction":
+            return (f"correction {self.correction[k] / scale:.4g} {unit} > "
+                    f"{bound / scale:g} {unit}")
+        if status == "out-of-stroke":
+            by = (f"{np.degrees(self.excess[k]):.4g} deg" if self.angular[k]
+                  else f"{self.excess[k] / scale:.4g} {unit}")
+            return f"out-of-stroke {self.actuator[k]} by {by}"
+        return str(status)
 
 
-def correct_path(nominal, identified, path, *, step: float = 1e-3,
-                 tool_length: float | None = None, progress: bool = False) -> CorrectedPath:
-    """Sample ``path`` every ``step`` (m) and correct every point."""
-    pts, rapid, feed, source = sample_path(path, step)
-    targets = as_targets(identified, pts)
-    corrected = correct_targets(nominal, identified, targets, tool_length=tool_length,
-                                progress=progress)
-    return CorrectedPath(targets=targets, corrected=corrected, rapid=rapid, feed=feed,
-                         source=source)
+def correct_table(nominal, identified, targets: Any, *, max_correction: float,
+                  tool_length: float | None = None, progress: bool = False
+                  ) -> tuple[np.ndarray, TargetFlags]:
+    """Corrected targets ``(N, w)`` and their per-row verdicts: rows out of reach of the
+    calibrated machine, needing a correction above ``max_correction`` (m) or commanding an
+    actuator beyond its stroke are flagged (their corrected values NaN), the others kept.
+    """
+    from pkmkit.calibration.controller import commanded_q, reached
+    from pkmkit.motion.limits import stroke_excess
+
+    x = as_targets(identified, targets)
+    n = identified.n_actuators
+
+    def command(part: np.ndarray) -> np.ndarray:
+        q = commanded_q(identified, part, tool_length)
+        return np.concatenate([reached(nominal, q, tool_length), q], axis=1)
+
+    both = _chunked(command, x, progress, "compensating")
+    fixed, q = both[:, :x.shape[1]], both[:, x.shape[1]:x.shape[1] + n]
+    size = np.linalg.norm(fixed[:, :3] - x[:, :3], axis=1)
+    outside = np.nan_to_num(stroke_excess(identified, q))
+    worst = outside.argmax(axis=1)
+    excess = outside[np.arange(len(x)), worst]
+    status = np.full(len(x), "ok", dtype=object)
+    status[excess > 0] = "out-of-stroke"
+    status[size > max_correction] = "correction"
+    status[~np.isfinite(size) | ~np.isfinite(fixed).all(axis=1)] = "out-of-reach"
+    names = np.array(identified.actuator_names, dtype=object)
+    actuator = np.where(excess > 0, names[worst], "")
+    fixed[status != "ok"] = np.nan
+    angular = np.asarray(identified.angular_actuators, dtype=bool)[worst]
+    return fixed, TargetFlags(status=status.astype(str), correction=size, actuator=actuator,
+                              excess=excess, angular=angular & (excess > 0))
+
+
+def home_offset(nominal, identified, tool_length: float | None = None) -> float:
+    """Distance (m) between the tool points of ``identified`` and ``nominal`` at the nominal
+    machine's home actuator coordinates (inf where either does not assemble): a calibration
+    moves it by its defects, a machine of other dimensions by far more."""
+    from pkmkit.calibration.controller import reached
+
+    q = np.atleast_2d(np.asarray(nominal.home_q, dtype=float))
+    a, b = reached(nominal, q, tool_length)[0, :3], reached(identified, q, tool_length)[0, :3]
+    d = float(np.linalg.norm(a - b))
+    return d if np.isfinite(d) else float("inf")
 
 
 def grid_targets(lower: Any, upper: Any, counts: Any) -> np.ndarray:

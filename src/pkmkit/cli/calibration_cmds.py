@@ -294,7 +294,11 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
                   out_dir, units, as_json):
     """Identify a machine's geometric defects from measurements, validate, report."""
     from pkmkit.calibration.identify import calibrate
-    from pkmkit.calibration.registration import load_registration
+    from pkmkit.calibration.registration import (
+        Registration,
+        load_registration,
+        save_registration,
+    )
     from pkmkit.io.measurements import file_unit, read_measurements
 
     machine = resolve_machine(machine_name, (), "m")
@@ -326,6 +330,11 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
         written = write_calibration_outputs(result, out_dir,
                                             machine_source=machine_document_path(machine_name),
                                             units=unit, sources=sources)
+        if result.frame is not None and frame is not None and not isinstance(frame, Registration):
+            # an identified or refined frame: reusable by --frame FILE (register's format)
+            target = Path(out_dir) / "frame.json"
+            save_registration(target, result.frame, units=unit)
+            written = {**written, "frame.json": str(target)}
         payload["files"] = written
     if as_json:
         emit_json(payload)
@@ -395,7 +404,16 @@ def _print_calibration(result, payload: dict, unit: str) -> None:
               help="G-code program to correct (3-axis moves; arcs become short lines).")
 @click.option("--origin", metavar="X,Y,Z", help="Work offset of the G-code program.")
 @click.option("--step", type=float,
-              help="Longest corrected move (length unit; default 1 mm).")
+              help="Spacing of the points where the correction of a feed move is checked "
+                   "(length unit; default 1 mm).")
+@click.option("--tolerance", type=float,
+              help="Largest deviation between the corrected points and the corrected move "
+                   "the controller interpolates; a feed move is subdivided only where it is "
+                   "exceeded (length unit; default 0.001 mm).")
+@click.option("--max-correction", type=float,
+              help="Largest correction accepted; a block needing more is refused with its "
+                   "G-code line and no program is written (length unit; default 1 % of the "
+                   "machine's characteristic length: 13 mm for the linear Delta).")
 @click.option("--grid", "grid_text", metavar="X0,Y0,Z0:X1,Y1,Z1:NX,NY,NZ",
               help="Correction table on a regular grid.")
 @click.option("--targets", "targets_file", type=click.Path(dir_okay=False),
@@ -409,15 +427,22 @@ def _print_calibration(result, payload: dict, unit: str) -> None:
               help="Corrected program (.nc) or correction table (.csv).")
 @CAL_UNITS_OPTION
 @JSON_OPTION
-def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, targets_file,
-                   tool_length, truth, out_file, units, as_json):
+def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max_correction,
+                   grid_text, targets_file, tool_length, truth, out_file, units, as_json):
     """Corrected commands for the nominal controller from a calibrated machine."""
     from pkmkit import load
     from pkmkit.calibration.compensation import (
         check_compensation,
-        correct_path,
-        correct_targets,
+        correct_table,
         grid_targets,
+        home_offset,
+    )
+    from pkmkit.calibration.corrected_program import (
+        DEFAULT_STEP,
+        DEFAULT_TOLERANCE,
+        CorrectionRefused,
+        correct_path,
+        default_max_correction,
     )
     from pkmkit.io.atomic import write_text_atomic as atomic_write_text
     from pkmkit.io.compensation_files import corrected_gcode, correction_table
@@ -425,13 +450,34 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
     given = [g for g in (gcode, grid_text, targets_file) if g]
     if len(given) != 1:
         raise click.UsageError("give exactly one of --gcode, --grid, --targets")
-    unit = units or "m"
+    table = None
+    if targets_file:
+        from pkmkit.io.measurements import read_csv_table
+
+        table = read_csv_table(targets_file, ("x", "y", "z"),
+                               ("i", "j", "k", "rx", "ry", "rz", "id"), units=units)
+    # a targets file's own '# units:' line sets the unit of the options and of the output
+    unit = units or (table.unit if table is not None else "m")
     scale = length_scale(unit)
     nominal = resolve_machine(machine_name, (), "m")
     identified = load(calibrated)
     if identified.n_actuators != nominal.n_actuators or type(identified) is not type(nominal):
         raise InputError(f"{calibrated} is not a calibration of {nominal.id!r}")
     tl = None if tool_length is None else tool_length * scale
+    for name, value in (("--step", step), ("--tolerance", tolerance),
+                        ("--max-correction", max_correction)):
+        if value is not None and not (np.isfinite(value) and value > 0
+                                      and np.isfinite(value * scale) and value * scale > 0):
+            raise InputError(f"{name} must be a finite number > 0, got {value:g} {unit}")
+    bound = default_max_correction(nominal) if max_correction is None else max_correction * scale
+    offset = home_offset(nominal, identified, tl)
+    similar = max(bound, default_max_correction(nominal))
+    if offset > similar:
+        raise InputError(
+            f"{calibrated} is not a calibration of {nominal.id!r}: at the nominal home actuator "
+            f"positions it places the tool {offset / scale:.4g} {unit} from the nominal machine's"
+            f" tool point, beyond the largest correction {similar / scale:g} {unit} (a machine "
+            "of other dimensions, or a file in another unit; --max-correction sets the bound)")
     if gcode:
         from pkmkit.calibration.controller import target_width
         from pkmkit.motion.gcode import read_gcode
@@ -444,13 +490,21 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
         if shift.shape != (3,):
             raise InputError("--origin needs X,Y,Z")
         path = read_gcode(gcode, origin=shift)
-        corrected = correct_path(nominal, identified, path,
-                                 step=(step * scale if step else 1e-3), tool_length=tl,
-                                 progress=not as_json)
+        settings = {name: (default if value is None else value * scale)
+                    for name, value, default in (("step", step, DEFAULT_STEP),
+                                                 ("tolerance", tolerance, DEFAULT_TOLERANCE),
+                                                 ("max_correction", None, bound))}
+        try:
+            corrected = correct_path(nominal, identified, path, tool_length=tl,
+                                     progress=not as_json, **settings)
+        except CorrectionRefused as exc:
+            _refuse_blocks(exc, Path(gcode).name, settings["max_correction"], scale, unit,
+                           as_json)
         targets, fixed = corrected.targets, corrected.corrected
         text = corrected_gcode(corrected, origin=shift, header=(
             f"corrected by pkmkit compensate {nominal.id} --calibrated {Path(calibrated).name}"
-            f"\nfrom {Path(gcode).name}: {len(fixed) - 1} moves"))
+            f"\nfrom {Path(gcode).name}: {len(fixed)} moves for its {corrected.blocks} blocks"
+            f" (tolerance {corrected.tolerance / scale:g} {unit})"))
     else:
         if grid_text:
             parts = grid_text.split(":")
@@ -462,43 +516,118 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, grid_text, tar
                 raise InputError("--grid counts must be integers")
             targets = grid_targets(lo, hi, counts)
         else:
-            from pkmkit.io.measurements import read_csv_table
-
-            t = read_csv_table(targets_file, ("x", "y", "z"),
-                               ("i", "j", "k", "rx", "ry", "rz", "id"), units=units)
+            t = table
             targets = np.column_stack([t.numbers[c] for c in "xyz"]) * t.scale
             if all(c in t.numbers for c in "ijk"):
                 targets = np.column_stack([targets] + [t.numbers[c] for c in "ijk"])
             elif all(c in t.numbers for c in ("rx", "ry", "rz")):
                 targets = np.column_stack([targets] + [np.radians(t.numbers[c])
                                                        for c in ("rx", "ry", "rz")])
-        fixed = correct_targets(nominal, identified, targets, tool_length=tl,
-                                progress=not as_json)
+        fixed, flags = correct_table(nominal, identified, targets, max_correction=bound,
+                                     tool_length=tl, progress=not as_json)
         from pkmkit.calibration.controller import as_targets
 
         targets = as_targets(identified, targets)
 
         orientation = "axis" if nominal.family == "chain" else "rotvec"
+        described = [flags.describe(k, bound, scale, unit) for k in range(len(targets))]
         text = correction_table(targets, fixed, units=unit, orientation=orientation, comment=(
             f"corrected targets for the nominal controller of {nominal.id} "
-            f"(pkmkit compensate --calibrated {Path(calibrated).name})"))
+            f"(pkmkit compensate --calibrated {Path(calibrated).name})"), status=described)
+    ok = np.isfinite(fixed).all(axis=1)
     check = None
-    if truth:
+    if truth and ok.any():
         true_machine = load(truth)
-        check = check_compensation(true_machine, nominal, identified, targets, tool_length=tl)
+        check = check_compensation(true_machine, nominal, identified, targets[ok],
+                                   tool_length=tl)
     atomic_write_text(out_file, text)
-    corr = np.linalg.norm(fixed[:, :3] - targets[:, :3], axis=1) / scale
+    corr = np.linalg.norm(fixed[ok, :3] - targets[ok, :3], axis=1) / scale
     payload = {"machine": nominal.id, "calibrated": calibrated, "out": out_file, "units": unit,
-               "targets": len(targets), "correction_mean": float(corr.mean()),
-               "correction_max": float(corr.max()),
+               "targets": len(targets), "correction_mean": float(np.mean(corr)) if ok.any()
+               else None, "correction_max": float(np.max(corr)) if ok.any() else None,
+               "max_correction": bound / scale,
                "check": None if check is None else check.to_dict(scale)}
+    if not gcode:
+        payload["flagged"] = [{"row": int(k) + 1,
+                               "line": table.lines[k] if table is not None else None,
+                               "status": str(flags.status[k]), "reason": described[k]}
+                              for k in np.flatnonzero(flags.flagged)]
+    if gcode:
+        payload["program"] = {
+            "blocks": corrected.blocks, "moves": len(fixed),
+            "subdivided_blocks": corrected.subdivided,
+            "tolerance": corrected.tolerance / scale, "step": corrected.step / scale,
+            "max_correction": corrected.max_correction / scale,
+            "deviation_max": corrected.deviation / scale}
+    flagged = payload.get("flagged", [])
     if as_json:
         emit_json(payload)
-        return
-    click.echo(f"{len(targets)} corrected targets → {out_file}; correction mean "
-               f"{corr.mean():.4g}, max {corr.max():.4g} {unit}")
+    else:
+        _print_compensation(payload, corrected if gcode else None, len(targets), out_file, corr,
+                            check, scale, unit, ok.any())
+    if flagged:
+        import sys
+
+        from .options import EXIT_PARTIAL
+
+        sys.exit(EXIT_PARTIAL)
+
+
+def _print_compensation(payload, corrected, count, out_file, corr, check, scale, unit,
+                        any_ok) -> None:
+    if corrected is not None:
+        fixed = corrected.corrected
+        click.echo(f"{corrected.blocks} blocks → {len(fixed)} corrected moves → {out_file} "
+                   f"({corrected.subdivided} block(s) subdivided for a tolerance of "
+                   f"{corrected.tolerance / scale:.4g} {unit}); correction mean "
+                   f"{corr.mean():.4g}, max {corr.max():.4g} {unit}")
+    elif any_ok:
+        click.echo(f"{count} corrected targets → {out_file}; correction mean "
+                   f"{corr.mean():.4g}, max {corr.max():.4g} {unit}")
+    flagged = payload.get("flagged", [])
+    if flagged:
+        click.echo(f"  {len(flagged)} of {count} target(s) flagged (no corrected values in "
+                   "the table):")
+        for f in flagged[:20]:
+            where = f["line"] or f"row {f['row']}"
+            click.echo(f"    {where}: {f['reason']}")
+        if len(flagged) > 20:
+            click.echo(f"    … {len(flagged) - 20} more (--json)")
     if check is not None:
         c = check.to_dict(scale)
         click.echo(f"  error of the true machine at the targets: RMS {c['rms_before']:.4g} → "
                    f"{c['rms_after']:.4g}, max {c['max_before']:.4g} → {c['max_after']:.4g} "
                    f"{unit}")
+        click.echo(f"  with the workpiece set-up (a rigid motion) removed: mean "
+                   f"{c['mean_after_rigid']:.4g}, max {c['max_after_rigid']:.4g} {unit}")
+
+
+def _refuse_blocks(exc, program: str, bound: float, scale: float, unit: str,
+                   as_json: bool) -> None:
+    """Report the refused blocks of a program (``bound`` in m) and exit with status 3: nothing
+    is written."""
+    import sys
+
+    from pkmkit.calibration.corrected_program import refusal_reason
+
+    from .options import EXIT_PARTIAL
+
+    if as_json:
+        emit_json({"refused": [{"line": line, "block": text,
+                                "correction": None if not np.isfinite(c) else c / scale,
+                                "reason": ("out-of-stroke" if np.isinf(c) else "out-of-reach"
+                                           if np.isnan(c) else "correction")}
+                               for line, text, c in exc.blocks],
+                   "max_correction": bound / scale, "units": unit})
+    click.echo(f"Refused: {len(exc.blocks)} block(s) of {program} (largest correction "
+               f"accepted: {bound / scale:g} {unit}, --max-correction); no program written",
+               err=True)
+    strokes = {line: (name, by, rad) for line, _, name, by, rad in exc.strokes}
+    for line, text, c in exc.blocks:
+        reason = refusal_reason(c, bound, scale, unit)
+        if line in strokes:
+            name, by, rad = strokes[line]
+            amount = f"{np.degrees(by):.4g} deg" if rad else f"{by / scale:.4g} {unit}"
+            reason = f"{name} out of stroke by {amount}"
+        click.echo(f"  {program}:{line}: {text}: {reason}", err=True)
+    sys.exit(EXIT_PARTIAL)

@@ -17,6 +17,7 @@ from pkmkit.io.table import TableWriter
 from pkmkit.model.parameters import length_scale
 from pkmkit.motion.gcode import read_gcode
 from pkmkit.motion.joints import Limits
+from pkmkit.motion.limits import limit_bounds
 from pkmkit.motion.paths import circle, helix, line, raster
 from pkmkit.motion.timelaw import DEFAULT_JERK_PER_ACCEL, PROFILES
 from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
@@ -180,8 +181,11 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     summary["qd_range"] = [np.asarray(v) / scale for v in summary["qd_range"]]
     for v in summary["violations"]:
         if v["limit"] != "force":
-            v["value"] /= scale
-            v["excess"] /= scale
+            for item in (v, *v["spans"]):
+                item["value"] /= scale
+                item["excess"] /= scale
+            v["lower"] /= scale
+            v["upper"] /= scale
         v["pose"] = np.asarray(v["pose"]) / scale
     summary.update({"machine": m.id, "units": units, "profile": profile,
                     "actuators": list(m.actuator_names), "total_mass": result.masses.total_mass})
@@ -190,7 +194,9 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
         motion = result.motion
         plot_joint_motion(motion, m.actuator_names, forces=result.forces.force,
                           title=f"{m.name}: {summary['duration']:.3f} s", length_unit=units,
-                          path=out / "motion.png")
+                          limits={kind: (lo, hi) for kind, _, lo, hi
+                                  in limit_bounds(m, limits)},
+                          violations=result.violations, path=out / "motion.png")
         plot_tool_path(motion, title=m.name, length_unit=units, path=out / "path.png")
         names = m.actuator_names
         header = ["t", *m.pose_names, *names, *[f"{n}_dot" for n in names],
@@ -227,11 +233,28 @@ def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
                "`pkmkit arm-sizing --force`, divided among the leg's rods)")
     if summary["violations"]:
         for v in summary["violations"]:
-            click.echo(f"  LIMIT {v['limit']}: {v['actuator']} exceeds it from t = {v['t']:.4f} s,"
-                       f" by up to {v['excess']:.6g} ({v['actuator']} = {v['value']:.6g} at "
-                       f"t = {v['t_peak']:.4f} s, pose {fmt(v['pose'])})")
+            click.echo(_violation_line(v, units))
     else:
         click.echo("  every checked limit holds")
+
+
+#: Excursion spans printed per violation (all of them in --json).
+SHOWN_SPANS = 4
+
+
+def _violation_line(v: dict, units: str) -> str:
+    """One violated limit: the worst excess, where, and the excursions' spans and lines."""
+    unit = {"stroke": units, "speed": f"{units}/s", "accel": f"{units}/s²",
+            "force": "N"}.get(v["limit"], "")
+    where = f", line {v['line']} {v['block']!r}" if v["line"] else ""
+    spans = ", ".join(f"{s['start']:.4f}–{s['end']:.4f} s (line {s['start_line']})"
+                      if s["start_line"] else f"{s['start']:.4f}–{s['end']:.4f} s"
+                      for s in v["spans"][:SHOWN_SPANS])
+    more = f", … {len(v['spans']) - SHOWN_SPANS} more (--json)" \
+        if len(v["spans"]) > SHOWN_SPANS else ""
+    return (f"  LIMIT {v['limit']} {v['actuator']}: worst excess {v['excess']:.6g} {unit} "
+            f"({v['actuator']} = {v['value']:.6g} {unit} at t = {v['t_peak']:.4f} s{where}, pose "
+            f"{fmt(v['pose'])}); {v['excursions']} excursion(s): {spans}{more}")
 
 
 def _time_law_defaults(tool_path, scale: float, units: str, feed, accel, jerk, rapid_feed,

@@ -19,8 +19,9 @@ from pkmkit.dynamics.masses import MassProperties
 from pkmkit.dynamics.wrench import WrenchSeries
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
-from pkmkit.motion.extrema import DEFAULT_RTOL, Extrema, continuous_extrema, first_excursion
+from pkmkit.motion.extrema import DEFAULT_RTOL, Extrema, continuous_extrema
 from pkmkit.motion.joints import JointTrajectory, Limits, joint_trajectory
+from pkmkit.motion.limits import LimitViolation, limit_bounds, path_limit_violations
 from pkmkit.motion.paths import Path
 from pkmkit.motion.timelaw import Trajectory, plan
 
@@ -38,9 +39,12 @@ class PathResult:
         motion: actuator motion at the output samples.
         forces: actuator forces at the output samples.
         masses: the mass properties used.
-        limits: limit checks over continuous time (see :func:`check_limits_continuous`).
+        limits: limit checks over continuous time, per kind (see
+            :func:`check_limits_continuous`).
         extrema: extrema over continuous time of ``q``, ``qd``, ``qdd``, ``force``, ``power``,
             ``leg_axial``, ``tool_speed`` and ``tool_accel``.
+        violations: every limit exceeded, per kind and actuator, with all its excursions
+            (:class:`~pkmkit.motion.limits.LimitViolation`).
     """
 
     motion: JointTrajectory
@@ -48,14 +52,14 @@ class PathResult:
     masses: MassProperties
     limits: dict[str, Any]
     extrema: Extrema
+    violations: tuple[LimitViolation, ...] = ()
 
     def summary(self) -> dict[str, Any]:
         """Duration, length, actuator ranges and peaks, forces, powers and limit violations
         (SI units), over continuous time."""
         m = self.motion
         e = self.extrema
-        violations = [{"limit": kind, **entry["first"]} for kind, entry in self.limits.items()
-                      if entry["exceeded"]]
+        violations = [v.as_dict(m.trajectory, m.x.shape[1]) for v in self.violations]
         return {
             "duration": m.trajectory.duration, "length": m.trajectory.length,
             "cutting_length": m.trajectory.path.cutting_length, "samples": len(m.t),
@@ -102,42 +106,33 @@ def motion_quantities(machine: Machine, trajectory: Trajectory, masses: MassProp
 
 
 def check_limits_continuous(machine: Machine, trajectory: Trajectory, extrema: Extrema,
-                            limits: Limits) -> dict[str, Any]:
+                            limits: Limits) -> tuple[dict[str, Any], list[LimitViolation]]:
     """Compare the motion with the actuator limits over continuous time.
 
     Returns:
-        ``{kind: {"max": (n,), "limit": (n,), "exceeded": bool, "first": {...} | None}}`` for
-        each checked kind (``position``, ``speed``, ``accel``, ``force``); ``first`` says when
-        the limit is first exceeded (``t``), which actuator, and the peak of that excursion
-        (``t_peak``, ``value``, ``excess``, ``pose``).
+        ``(report, violations)``: ``violations`` lists every (kind, actuator) exceeded with all
+        its excursions (:func:`pkmkit.motion.limits.path_limit_violations`); ``report`` sums
+        it up per kind: ``{kind: {"max": (n,), "limit": (n,), "exceeded": bool, "first": {...}
+        | None}}`` for each checked kind (``position``, ``speed``, ``accel``, ``force``), where
+        ``first`` is the earliest excursion of any actuator (``t``, ``actuator``, and its
+        peak: ``t_peak``, ``value``, ``excess``, ``pose``).
     """
-    n = machine.n_actuators
+    violations = path_limit_violations(machine, trajectory, extrema, limits)
     report: dict[str, Any] = {}
-
-    def add(kind: str, name: str, lower: np.ndarray, upper: np.ndarray, peak: np.ndarray,
-            limit: Any) -> None:
+    for kind, name, lo, hi in limit_bounds(machine, limits):
+        mine = [v for v in violations if v.kind == kind]
         first = None
-        for a in range(n):
-            hit = first_excursion(extrema, name, a, float(lower[a]), float(upper[a]))
-            if hit is not None and (first is None or hit.t < first["t"]):
-                pose = trajectory.at(np.array([hit.t_peak])).x[0, :machine.dims]
-                first = {"t": hit.t, "t_peak": hit.t_peak, "actuator": machine.actuator_names[a],
-                         "value": hit.value, "excess": hit.excess, "pose": pose}
-        report[kind] = {"max": peak, "limit": limit, "exceeded": first is not None,
-                        "first": first}
-
-    if limits.strokes:
-        lo, hi = machine.model.q_min, machine.model.q_max
-        add("position", "q", lo, hi, extrema.high["q"], np.stack([lo, hi]))
-    for kind, name, limit in (("speed", "qd", limits.speed), ("accel", "qdd", limits.accel),
-                              ("force", "force", limits.force)):
-        if limit is None:
-            continue
-        lim = np.broadcast_to(np.asarray(limit, dtype=float), (n,))
-        if not (np.isfinite(lim).all() and (lim > 0).all()):
-            raise InputError(f"{kind} limits must be > 0, got {limit}")
-        add(kind, name, -lim, lim, extrema.abs_max(name), lim)
-    return report
+        if mine:
+            v = min(mine, key=lambda v: v.excursions[0].span.start)
+            span = v.excursions[0].span
+            pose = trajectory.at(np.array([span.t_peak])).x[0, :machine.dims]
+            first = {"t": span.start, "t_peak": span.t_peak, "actuator": v.joint,
+                     "value": span.value, "excess": span.excess, "pose": pose}
+        peak = extrema.high[name] if kind == "stroke" else extrema.abs_max(name)
+        report["position" if kind == "stroke" else kind] = {
+            "max": peak, "limit": np.stack([lo, hi]) if kind == "stroke" else hi,
+            "exceeded": bool(mine), "first": first}
+    return report, violations
 
 
 def simulate_path(machine: Machine, path: Path, *, feed: float, accel: float,
@@ -195,6 +190,7 @@ def simulate_path(machine: Machine, path: Path, *, feed: float, accel: float,
             raise InputError(
                 f"the {QUANTITY_NAMES[name]} along the path is not finite (a value overflows): "
                 "check the feed, acceleration and jerk limits, the masses and the wrench")
-    report = check_limits_continuous(machine, trajectory, extrema, limits or Limits())
+    report, violations = check_limits_continuous(machine, trajectory, extrema,
+                                                 limits or Limits())
     return PathResult(motion=motion, forces=forces, masses=masses, limits=report,
-                      extrema=extrema)
+                      extrema=extrema, violations=tuple(violations))

@@ -348,3 +348,115 @@ def _first_above(extrema: Extrema, name: str, column: int, sign: float,
     window += [(f, t) for t, f in events if t == t_event]
     value, t_peak = max(window)
     return Excursion(t=float(t_cross), t_peak=t_peak, value=sign * value, excess=value - level)
+
+
+@dataclass(frozen=True)
+class Span:
+    """One excursion of a quantity beyond a limit.
+
+    Attributes:
+        start, end: s, when it leaves and comes back within the limit (bisected between the
+            grid points; a breakpoint where the quantity jumps; the motion's end if it never
+            comes back).
+        t_peak: s, when the excess is largest.
+        value: the quantity there.
+        excess: the largest excess (> 0), in the quantity's unit.
+    """
+
+    start: float
+    end: float
+    t_peak: float
+    value: float
+    excess: float
+
+
+def all_excursions(extrema: Extrema, name: str, column: int, lower: float,
+                   upper: float) -> list[Span]:
+    """Every excursion of column ``column`` of ``name`` beyond ``[lower, upper]`` over
+    continuous time, in time order (see the module docstring): the runs of the refined grid
+    where the excess ``max(lower − v, v − upper)`` is positive, and peaks narrower than the
+    grid, each with its span and its worst excess (golden-section refined)."""
+    grid, evaluate = extrema.grid, extrema.evaluate
+    values = grid.values[name][:, column]
+    high, low = extrema.high[name][column], extrema.low[name][column]
+    floor = 1e-12 * max(abs(lower) if np.isfinite(lower) else 0.0,
+                        abs(upper) if np.isfinite(upper) else 0.0, 1.0)
+    if not (high - upper > floor or lower - low > floor):
+        return []
+
+    def excess_of(v: np.ndarray) -> np.ndarray:
+        with np.errstate(invalid="ignore"):
+            return np.maximum(lower - v, v - upper)
+
+    def excess_at(t: np.ndarray) -> np.ndarray:
+        return excess_of(_evaluate_chunked(evaluate, t)[name][:, column])
+
+    e = excess_of(values)
+    over = e > floor
+    # narrow peaks between grid points: refined local maxima of the excess that cross
+    peaks = _candidates(e, grid.piece, floor)
+    if peaks.size:
+        best, t_best, _ = _golden_max(evaluate, grid.t[peaks - 1], grid.t[peaks + 1],
+                                      lambda vals, rows: excess_of(vals[name][rows, column]))
+    else:
+        best, t_best = np.zeros(0), np.zeros(0)
+    narrow = [(float(t), float(b), int(k)) for t, b, k in zip(t_best, best, peaks, strict=True)
+              if b > floor]
+    for _, _, k in narrow:  # a peak between grid points joins (or makes) a run
+        over[k] = True
+    runs = _runs(over)
+    if not runs:
+        return []
+    # crossings, bisected in batch where the neighbour lies in the same piece
+    m = len(e)
+    starts = np.array([a for a, _ in runs])
+    ends = np.array([b for _, b in runs])
+    lo_in = (starts > 0) & (grid.piece[np.maximum(starts - 1, 0)] == grid.piece[starts])
+    hi_in = (ends < m - 1) & (grid.piece[np.minimum(ends + 1, m - 1)] == grid.piece[ends])
+    t_start = _bisect(excess_at, grid.t[np.maximum(starts - 1, 0)], grid.t[starts], lo_in,
+                      floor, rising=True)
+    t_end = _bisect(excess_at, grid.t[ends], grid.t[np.minimum(ends + 1, m - 1)], hi_in,
+                    floor, rising=False)
+    t_end = np.where(ends == m - 1, grid.t[-1], t_end)
+    out = []
+    for r, (a, b) in enumerate(runs):
+        k = a + int(np.argmax(e[a:b + 1]))
+        peak, t_peak = float(e[k]), float(grid.t[k])
+        for t, f, j in narrow:
+            if a <= j <= b and f > peak:
+                peak, t_peak = f, t
+        value = float(_evaluate_chunked(evaluate, np.array([t_peak]))[name][0, column])
+        out.append(Span(start=float(t_start[r]), end=float(t_end[r]), t_peak=t_peak,
+                        value=value, excess=peak))
+    return out
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """``[(first, last)]`` index ranges of the True runs of ``mask``."""
+    if not mask.any():
+        return []
+    padded = np.concatenate([[False], mask, [False]]).astype(np.int8)
+    edges = np.diff(padded)
+    return list(zip(np.flatnonzero(edges == 1).tolist(),
+                    (np.flatnonzero(edges == -1) - 1).tolist(), strict=True))
+
+
+def _bisect(excess_at: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray,
+            active: np.ndarray, floor: float, *, rising: bool) -> np.ndarray:
+    """Times where the excess crosses ``floor`` between ``lo`` and ``hi`` (batched bisection);
+    where not ``active``, ``hi`` for a rising crossing (the run starts at its first grid point)
+    and ``lo`` for a falling one."""
+    lo, hi = lo.astype(float).copy(), hi.astype(float).copy()
+    fixed = np.where(active, np.nan, hi if rising else lo)
+    if active.any():
+        a, b = lo[active], hi[active]
+        for _ in range(50):
+            mid = 0.5 * (a + b)
+            inside = excess_at(mid) > floor
+            # rising: over at mid → the crossing is before; falling: over at mid → after
+            if rising:
+                b, a = np.where(inside, mid, b), np.where(inside, a, mid)
+            else:
+                a, b = np.where(inside, mid, a), np.where(inside, b, mid)
+        fixed[active] = b if rising else a
+    return fixed

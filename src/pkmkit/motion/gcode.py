@@ -89,6 +89,7 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
     feed: float | None = None
     segments: list[Line | Arc] = []
     lines: list[int] = []
+    blocks: list[str] = []
 
     def error(number: int, message: str) -> InputError:
         return InputError(f"{label}:{number}: {message}")
@@ -181,10 +182,11 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
                         f"{MAX_SEGMENTS * SEGMENT_BYTES / 2**30:.1f} GiB of path before any "
                         "sampling); split the program")
         lines.append(number)
+        blocks.append(body)
         position = target
     if not segments:
         raise InputError(f"{label}: the program contains no motion")
-    return Path(tuple(segments), tuple(lines))
+    return Path(tuple(segments), tuple(lines), tuple(blocks))
 
 
 def _arc(start, end, values, plane, clockwise, scale, feed, error) -> Arc:

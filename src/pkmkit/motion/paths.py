@@ -152,10 +152,13 @@ Segment = Line | Arc
 
 @dataclass(frozen=True)
 class Path:
-    """A chain of segments; ``source`` lines (e.g. G-code line numbers) per segment."""
+    """A chain of segments; ``source`` lines (e.g. G-code line numbers) and ``blocks`` (the
+    text of those lines, without comments) per segment, when the path was read from a
+    program."""
 
     segments: tuple[Segment, ...]
     source: tuple[int, ...] = field(default=())
+    blocks: tuple[str, ...] = field(default=())
 
     def __post_init__(self) -> None:
         if not self.segments:
