@@ -183,3 +183,15 @@ def test_blocks_commanding_an_actuator_beyond_its_stroke_are_refused(machines):
     assert not angular
     q = true.ik(np.array([-0.05, -0.04, -0.895]))
     assert by == pytest.approx(0.7 - q.min(), abs=2e-3)
+
+
+def test_a_first_feed_move_is_corrected_at_its_end_only(machines):
+    """Its start is wherever the machine is, not the work origin the reader assumes: no point
+    on a line from the origin is ever sent."""
+    nominal, true = machines
+    path = read_gcode("G21 G90\nG1 X40 Y30 Z5 F600\nG1 X-40\n", origin=ORIGIN)
+    fixed = correct_path(nominal, true, path, tolerance=1e-8, step=5e-4)
+    assert fixed.source.tolist().count(2) == 1 and fixed.source.tolist().count(3) > 1
+    np.testing.assert_allclose(fixed.corrected[0],
+                               corrected_targets(nominal, true, [[0.04, 0.03, 0.005]])[0],
+                               atol=1e-12)

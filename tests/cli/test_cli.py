@@ -202,7 +202,9 @@ def check_demo(run, out, *extra):
     assert 70.5 < lo <= hi < 72.0
     lo, hi = motion["line"]["carriages_7.2kg_nacelle_1kg"]["force_range"]
     assert lo > 72.0
-    assert motion["line"]["stroke_violations_default_machine"][0]["limit"] == "position"
+    strokes = motion["line"]["stroke_violations_default_machine"]
+    assert [(v["limit"], v["actuator"]) for v in strokes] == [("stroke", "q1"), ("stroke", "q2"),
+                                                               ("stroke", "q3")]
     assert motion["facing"]["zigzag"]["duration"] < motion["facing"]["one-way"]["duration"]
     assert motion["arms"]["mass_error_g_max"] < 0.01 and motion["arms"]["sized_arm"]["feasible"]
     for name in circle["figures"]:

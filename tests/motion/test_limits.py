@@ -43,6 +43,14 @@ def test_an_excursion_running_to_the_end_and_one_narrower_than_the_grid():
     assert e.high["r"][1] == pytest.approx(2.0, abs=1e-9)  # found by the extrema
     spike = all_excursions(e, "r", 1, 0.0, 1.5)
     assert len(spike) == 1 and spike[0].excess == pytest.approx(0.5, abs=1e-6)
+    # a limit just under the peak: its excursion (0.4 ms) falls between the grid points
+    tip = all_excursions(e, "r", 1, 0.0, 1.99)
+    grid_t = e.grid.t
+    assert not ((grid_t > tip[0].start) & (grid_t < tip[0].end)).any()
+    near = 2e-3 * math.sqrt(-math.log(0.99))
+    assert len(tip) == 1 and tip[0].excess == pytest.approx(0.01, abs=1e-9)
+    assert tip[0].start == pytest.approx(3.3037 - near, abs=1e-9)
+    assert tip[0].end == pytest.approx(3.3037 + near, abs=1e-9)
     half = 2e-3 * math.sqrt(math.log(2.0))  # exp(-(d/w)²) = 1/2
     assert spike[0].start == pytest.approx(3.3037 - half, abs=1e-9)
     assert spike[0].end == pytest.approx(3.3037 + half, abs=1e-9)

@@ -21,7 +21,8 @@ The corrected program has the original's moves, in order, with their motion type
 
 The tool position before the first block is unknown (the machine is wherever it is): the
 corrected program starts, as the original does, with the first block's move to its (corrected)
-target.
+target, never subdivided (a first G1 is corrected at its end point only, like a rapid; a first
+arc is refused).
 """
 
 from __future__ import annotations
@@ -254,14 +255,16 @@ def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
         raise InputError(f"line {lines[0]} {texts[0]!r}: the program starts with an arc, whose "
                          "start is wherever the machine happens to be; begin with a G0 or G1 "
                          "move")
-    planned = sum(1 if seg.rapid else 2 * max(1, int(np.ceil(seg.length / (2 * step)))) + 1
-                  for seg in segs)
+    planned = sum(1 if seg.rapid or k == 0
+                  else 2 * max(1, int(np.ceil(seg.length / (2 * step)))) + 1
+                  for k, seg in enumerate(segs))
     if planned > MAX_CHECK_POINTS:
         raise InputError(f"checking the correction every {step:g} m needs {planned} points "
                          f"(limit {MAX_CHECK_POINTS}); increase the step")
     points, owner = [], []
     for k, seg in enumerate(segs):
-        pts = np.atleast_2d(seg.end) if seg.rapid else _samples(seg, step)
+        # the first block starts wherever the machine is: only its end point is known
+        pts = np.atleast_2d(seg.end) if seg.rapid or k == 0 else _samples(seg, step)
         points.append(pts)
         owner.append(np.full(len(pts), k))
     x = np.concatenate(points)
@@ -313,6 +316,9 @@ def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
             rows.append((prog[-1], corr[-1], "G0", nan3, nan3, np.nan, k))
             continue
         feed = np.nan if seg.feed is None else float(seg.feed)
+        if k == 0:  # a first G1 from an unknown start: its end point only
+            rows.append((prog[-1], corr[-1], "G1", nan3, nan3, feed, k))
+            continue
         kind = "G1" if isinstance(seg, Line) else ("G2" if seg.sweep < 0 else "G3")
         normal = seg.normal if isinstance(seg, Arc) else nan3
         for _, j, centre, dev in _pieces(corr, seg, tolerance):

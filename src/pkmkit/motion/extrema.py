@@ -413,9 +413,14 @@ def all_excursions(extrema: Extrema, name: str, column: int, lower: float,
     ends = np.array([b for _, b in runs])
     lo_in = (starts > 0) & (grid.piece[np.maximum(starts - 1, 0)] == grid.piece[starts])
     hi_in = (ends < m - 1) & (grid.piece[np.minimum(ends + 1, m - 1)] == grid.piece[ends])
-    t_start = _bisect(excess_at, grid.t[np.maximum(starts - 1, 0)], grid.t[starts], lo_in,
+    # a run's first (last) point over the limit: its grid point, or the refined peak of a
+    # narrow excursion whose grid point stays below
+    peak_at = {k: t for t, _, k in narrow}
+    first_over = np.array([grid.t[a] if e[a] > floor else peak_at[a] for a in starts])
+    last_over = np.array([grid.t[b] if e[b] > floor else peak_at[b] for b in ends])
+    t_start = _bisect(excess_at, grid.t[np.maximum(starts - 1, 0)], first_over, lo_in,
                       floor, rising=True)
-    t_end = _bisect(excess_at, grid.t[ends], grid.t[np.minimum(ends + 1, m - 1)], hi_in,
+    t_end = _bisect(excess_at, last_over, grid.t[np.minimum(ends + 1, m - 1)], hi_in,
                     floor, rising=False)
     t_end = np.where(ends == m - 1, grid.t[-1], t_end)
     out = []
