@@ -1,0 +1,40 @@
+"""``pkmkit machined-part``: the chain from G-code to identified parameters on the command line,
+and a user's CMM file with an error."""
+
+from __future__ import annotations
+
+import os
+
+from .conftest import parse_json
+
+
+def test_gcode_to_identified_parameters(run, tmp_path):
+    os.chdir(tmp_path)
+    out = run("machined-part", "program", "verne", "--out", "part.nc")
+    assert out.exit_code == 0 and "12 straight passes" in out.output
+    out = run("machined-part", "simulate", "verne", "--gcode", "part.nc", "--defects", "random",
+              "--seed", 2, "--sections", 100, "--out", "cmm.csv")
+    assert out.exit_code == 0, out.output
+    assert (tmp_path / "cmm.truth.toml").exists()
+    out = run("machined-part", "reconstruct", "cmm.csv", "--gcode", "part.nc", "--out",
+              "centres.csv", "--json")
+    assert out.exit_code == 0, out.output
+    info = parse_json(out)
+    assert info["units"] == "mm" and info["passes"] == 12
+    out = run("calibrate", "verne", "--measure", "part", "--measurements", "centres.csv",
+              "--json")
+    assert out.exit_code == 0, out.output
+    result = parse_json(out)
+    assert result["rms_after"] < 0.01 * result["rms_before"]
+    assert {"part_x", "part_y", "part_z", "part_phi"} == set(result["setup"])
+
+
+def test_a_bad_cmm_file_names_its_line(run, tmp_path):
+    os.chdir(tmp_path)
+    run("machined-part", "program", "verne", "--out", "part.nc")
+    (tmp_path / "cmm.csv").write_text("# units: mm\nsection,label,x,y,z,path,direction\n"
+                                      "1,Q,0,0,0,6,x\n1,K,0,10,5,6,x\n")
+    out = run("machined-part", "reconstruct", "cmm.csv", "--gcode", "part.nc", "--out", "c.csv")
+    assert out.exit_code == 1
+    assert "cmm.csv:4: column 'label': 'K' is not Q or M or N" in out.output
+    assert not (tmp_path / "c.csv").exists()
