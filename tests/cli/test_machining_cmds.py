@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import os
 
+import pytest
+
 from .conftest import parse_json
 
 
@@ -38,3 +40,18 @@ def test_a_bad_cmm_file_names_its_line(run, tmp_path):
     assert out.exit_code == 1
     assert "cmm.csv:4: column 'label': 'K' is not Q or M or N" in out.output
     assert not (tmp_path / "c.csv").exists()
+
+
+def test_demo_writes_the_chain(tmp_path, monkeypatch):
+    from pkmkit.cli import demo_machining
+    from pkmkit.machining import study
+
+    monkeypatch.setattr(demo_machining, "machined_part_study",
+                        lambda: study.machined_part_study(sections=60))
+    lines = []
+    summary = demo_machining.run_machining_demo(tmp_path, lines.append)
+    files = {p.name for p in (tmp_path / "calibration-verne-cmm").iterdir()}
+    assert {"part.nc", "cmm.csv", "centres.csv", "report.html"} <= files
+    assert "(seed 003, real Verne: < 20 and < 40 µm)" in lines[0]
+    assert "illustrative" in lines[0] and "illustrative" in summary["machine"]
+    assert summary["seed"] == pytest.approx({"along_x": 20.0, "along_y": 40.0})
