@@ -13,11 +13,11 @@ from typing import Any
 
 from pkmkit.io.calibration_report import write_calibration_outputs
 from pkmkit.io.measurements import atomic_write_text, format_measurements
+from pkmkit.machines.registry import preset_path
 from pkmkit.machining.cmm import format_cmm
 from pkmkit.machining.part import part_passes
 from pkmkit.machining.reconstruct import reconstruct, reconstructed_measurements
 from pkmkit.machining.study import machined_part_study
-from pkmkit.machines.registry import preset_path
 from pkmkit.motion.gcode import read_gcode
 
 
