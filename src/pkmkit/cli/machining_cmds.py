@@ -8,7 +8,9 @@
   or simulated) and the cutter radii, written as ``part`` measurements for ``pkmkit calibrate
   MACHINE --measure part``;
 - ``ballbar-plan MACHINE --out plan.csv``: seed 003's ball-bar protocol (324 points on a
-  hemisphere × 3 table positions × 2 tool lengths).
+  hemisphere × 3 table positions × 2 tool lengths), for ``pkmkit simulate-measurements MACHINE
+  --measure ballbar --poses plan.csv``; the seed's iteration is that command and ``pkmkit
+  calibrate`` repeated with the calibrated machine file as MACHINE.
 
 File formats: docs/calibration.md (§ Seed 003's chain).
 """
@@ -210,3 +212,88 @@ def _unit_of(path: str) -> str | None:
     from .calibration_cmds import _file_unit
 
     return _file_unit(path)
+
+
+@machined_part.command("ballbar-plan")
+@click.argument("machine_name", metavar="MACHINE")
+@click.option("--bar-length", type=float, help="Bar length (length unit; default 150 mm).")
+@click.option("--tool-lengths", metavar="L1,L2", help="Tool lengths (length unit; default 0,100 "
+                                                      "mm).")
+@click.option("--table-points", metavar="X,Y,Z;X,Y,Z;...",
+              help="Table points (length unit; default three under the default box).")
+@click.option("--points", type=int, default=324, show_default=True,
+              help="Points per hemisphere (seed 003: 324).")
+@click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
+              help="Output plan (CSV) for pkmkit simulate-measurements --measure ballbar "
+                   "--poses.")
+@CAL_UNITS_OPTION
+def ballbar_plan_cmd(machine_name, bar_length, tool_lengths, table_points, points, out_file,
+                     units):
+    """Seed 003's ball-bar protocol: hemisphere points × 3 table points × 2 tools."""
+    from pkmkit.io.measurements import atomic_write_text
+    from pkmkit.machining.ballbar_plan import BAR_LENGTH, TOOL_LENGTHS, ballbar_plan, format_plan
+
+    unit = units or "mm"
+    scale = length_scale(unit)
+    machine = resolve_machine(machine_name, (), "m")
+    tables = None
+    if table_points:
+        tables = [np.array(_numbers(t, "--table-points")) * scale
+                  for t in table_points.split(";")]
+        if any(len(t) != 3 for t in tables):
+            raise InputError(f"--table-points expects X,Y,Z;X,Y,Z;..., got {table_points!r}")
+    plan = ballbar_plan(machine, bar_length=BAR_LENGTH if bar_length is None
+                        else bar_length * scale, table_points=tables,
+                        tool_lengths=TOOL_LENGTHS if tool_lengths is None
+                        else np.array(_numbers(tool_lengths, "--tool-lengths")) * scale,
+                        points=points)
+    atomic_write_text(out_file, format_plan(
+        plan, units=unit, comment=f"pkmkit machined-part ballbar-plan {machine.id}: seed 003's "
+                                  "ball-bar protocol (pattern, table points, bar and tools are "
+                                  "pkmkit's choices)"))
+    n_tables = len(np.unique(plan.pivot, axis=0))
+    n_tools = len(set(plan.tool))
+    click.echo(f"{machine.name}: {points} points × {n_tables} table points × {n_tools} tools = "
+               f"{len(plan)} ball-bar readings ({n_tables * n_tools} acquisitions, bar "
+               f"{plan.bar_length / scale:g} {unit}) → {out_file}")
+
+
+@machined_part.command("check")
+@click.argument("machine_name", metavar="MACHINE")
+@click.option("--calibrated", required=True, type=click.Path(dir_okay=False),
+              help="The calibrated machine file (pkmkit calibrate --out).")
+@click.option("--truth", required=True, type=click.Path(dir_okay=False),
+              help="The true machine file (simulations: written by machined-part simulate "
+                   "--defects random).")
+@JSON_OPTION
+def check_cmd(machine_name, calibrated, truth, as_json):
+    """A validation part machined with the nominal and the compensated controller, beside
+    seed 003's figures (simulations)."""
+    from pkmkit import load
+    from pkmkit.calibration.studies import machined_errors
+    from pkmkit.machining.study import SEED_AFTER
+
+    nominal = resolve_machine(machine_name, (), "m")
+    errors = machined_errors(load(truth), nominal, load(calibrated))
+    payload = {"machine": f"{nominal.id} (illustrative dimensions)",
+               **{k: {kk: vv * 1e6 for kk, vv in v.items()} for k, v in errors.items()},
+               "seed": {k: v * 1e6 for k, v in SEED_AFTER.items()}, "units": "µm"}
+    worse = any(errors["compensated"][k] > errors["nominal"][k] for k in ("along_x", "along_y"))
+    payload["compensation_worse"] = worse
+    if as_json:
+        emit_json(payload)
+        if worse:
+            raise SystemExit(3)
+        return
+    click.echo(f"{nominal.name}: validation part (lines along x and y, three heights 40 mm "
+               "apart), largest deviation from the programmed lines (µm):")
+    click.echo("                          along x   along y")
+    for key, label in (("nominal", "nominal controller"), ("compensated", "compensated")):
+        click.echo(f"  {label:22s} {payload[key]['along_x']:8.1f}  {payload[key]['along_y']:8.1f}")
+    click.echo(f"  {'seed 003 (real Verne)':22s}     < 20      < 40")
+    click.echo("  (simulation: the geometric model only, illustrative machine; the seed's real "
+               "part also carries thermal, force, servo and tool errors)")
+    if worse:
+        click.echo("  the compensated controller machines worse than the nominal one: do not use "
+                   "this calibration", err=True)
+        raise SystemExit(3)
