@@ -55,3 +55,39 @@ def test_demo_writes_the_chain(tmp_path, monkeypatch):
     assert "(seed 003, real Verne: < 20 and < 40 µm)" in lines[0]
     assert "illustrative" in lines[0] and "illustrative" in summary["machine"]
     assert summary["seed"] == pytest.approx({"along_x": 20.0, "along_y": 40.0})
+
+
+def test_ballbar_plan_feeds_simulate_measurements(run, tmp_path):
+    os.chdir(tmp_path)
+    out = run("machined-part", "ballbar-plan", "verne", "--points", 40, "--out", "plan.csv")
+    assert out.exit_code == 0, out.output
+    assert "40 points × 3 table points × 2 tools = 240 ball-bar readings" in out.output
+    out = run("simulate-measurements", "verne", "--measure", "ballbar", "--poses", "plan.csv",
+              "--defects", "random", "--units", "mm", "--out", "bb.csv")
+    assert out.exit_code == 0, out.output
+    assert "240 ballbar measurements" in out.output
+    out = run("calibrate", "verne", "--measure", "ballbar", "--measurements", "bb.csv", "--out",
+              "cal", "--json")
+    assert out.exit_code == 0, out.output
+    out = run("machined-part", "check", "verne", "--calibrated", "cal/verne-calibrated.toml",
+              "--truth", "bb.truth.toml", "--json")
+    assert out.exit_code == 0, out.output
+    result = parse_json(out)
+    assert result["compensated"]["along_x"] < 20 and result["compensated"]["along_y"] < 40
+    assert result["nominal"]["along_x"] > 100 and not result["compensation_worse"]
+    # a machine without defects "compensated" by a wrong geometry: worse, exit status 3
+    from pkmkit.machines.registry import preset_path
+
+    out = run("machined-part", "check", "verne", "--calibrated", "bb.truth.toml", "--truth",
+              preset_path("verne"))
+    assert out.exit_code == 3
+    assert "seed 003 (real Verne)      < 20      < 40" in out.output
+    assert "do not use this calibration" in out.output
+
+
+def test_part_file_refuses_a_plan(run, tmp_path):
+    os.chdir(tmp_path)
+    run("machined-part", "ballbar-plan", "verne", "--points", 10, "--out", "plan.csv")
+    out = run("simulate-measurements", "verne", "--measure", "part", "--poses", "plan.csv",
+              "--out", "p.csv")
+    assert out.exit_code == 1 and "pkmkit machined-part simulate" in out.output
