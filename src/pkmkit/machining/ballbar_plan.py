@@ -128,9 +128,14 @@ def ballbar_plan(machine, *, bar_length: float = BAR_LENGTH, table_points: Any =
 
 
 def _within(machine, q: np.ndarray) -> np.ndarray:
-    from pkmkit.calibration.simulate import _within as within
-
-    return within(machine, np.nan_to_num(q, nan=np.inf))
+    """``(N,)`` True where every actuator of ``q`` ``(N, n)`` is within its stroke."""
+    model = machine.model
+    lo, hi = np.asarray(model.q_min, dtype=float), np.asarray(model.q_max, dtype=float)
+    if lo.shape[0] != q.shape[1]:  # a joint chain: the actuated joints' strokes
+        act = np.flatnonzero(model.actuated)
+        lo, hi = lo[act], hi[act]
+    q = np.nan_to_num(q, nan=np.inf)
+    return ((q >= lo) & (q <= hi)).all(axis=1)
 
 
 def measure_plan(true_machine, controller, plan: BallbarPlan, rng: np.random.Generator, *,

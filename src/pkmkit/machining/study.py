@@ -38,7 +38,9 @@ SUBSTITUTIONS = (
     "machine: pkmkit's Verne-type module, illustrative dimensions (the seed gives none)",
     "defects: random draws of realistic magnitude (0.1 mm, 0.5°), not the real Verne's",
     "part: pkmkit's layout and size (the seed gives none)",
-    "CMM: simulated, Gaussian σ per coordinate; cutter axis vertical (seed §4.3)",
+    "CMM: simulated, Gaussian σ per coordinate",
+    "cutter axis vertical (the seed's hypothesis, §4.3); the Verne-type model's platform tilts "
+    "by up to 4° with position and would tilt the walls",
     "nothing outside the geometric model: no thermal drift, cutting forces, servo errors, "
     "tool wear or serial table, all of which are in the seed's real part",
 )
