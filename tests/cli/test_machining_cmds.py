@@ -91,3 +91,20 @@ def test_part_file_refuses_a_plan(run, tmp_path):
     out = run("simulate-measurements", "verne", "--measure", "part", "--poses", "plan.csv",
               "--out", "p.csv")
     assert out.exit_code == 1 and "pkmkit machined-part simulate" in out.output
+
+
+def test_a_leaning_wall_flags_its_section(run, tmp_path):
+    """A cutter that was not vertical: that section is left out, named, and the exit status is
+    3; the others are written."""
+    os.chdir(tmp_path)
+    (tmp_path / "part.nc").write_text("G21 G90\nG0 X-60 Y-20 Z-50\nG1 X60 F1000\nM30\n")
+    rows = "".join(f"{k},Q,{x},-20,-58,3,x\n{k},M,{x},-10,-47,3,x\n{k},N,{x},-10,-43,3,x\n"
+                   for k, x in enumerate((0, 10, 20), start=1))
+    rows = rows.replace("2,N,10,-10,", "2,N,10,-9.9,")
+    (tmp_path / "cmm.csv").write_text("# units: mm\nsection,label,x,y,z,path,direction\n" + rows)
+    out = run("machined-part", "reconstruct", "cmm.csv", "--gcode", "part.nc", "--out", "c.csv")
+    assert out.exit_code == 3
+    assert "1 section(s) with a wall leaning by more than 5 mrad, the worst 25 mrad at " \
+           "cmm.csv:6" in out.output
+    assert "3 sections of 1 passes → 2 tool centres" in out.output
+    assert len((tmp_path / "c.csv").read_text().splitlines()) == 3 + 2

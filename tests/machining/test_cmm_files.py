@@ -111,3 +111,11 @@ def test_sections_must_name_a_pass_of_the_program(tmp_path):
 def test_wrong_cutter_is_caught(tmp_path):
     with pytest.raises(InputError, match="should be about 5 mm"):
         reconstruct(read_cmm(_write(tmp_path, GOOD)), Cutters(end_mill=0.005))
+
+
+def test_wall_lean_is_measured(tmp_path):
+    """M at 3 mm and N at 7 mm above the floor: N 0.1 mm farther from the slot than M is a wall
+    leaning outwards by atan(0.1 / 4)."""
+    rec = reconstruct(read_cmm(_write(tmp_path, GOOD.replace("1,N,0,-10,", "1,N,0,-9.9,"))))
+    np.testing.assert_allclose(rec.lean, [np.arctan(0.1 / 4), 0.0], atol=1e-12)
+    assert list(rec.leaning()) == [0]

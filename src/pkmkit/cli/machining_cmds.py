@@ -178,7 +178,11 @@ def reconstruct_cmd(cmm_file, gcode, origin, end_mill, ball_end, out_file, units
     from pkmkit.io.measurements import atomic_write_text, format_measurements
     from pkmkit.machining.cmm import read_cmm
     from pkmkit.machining.part import SEED_BALL_RADIUS, SEED_END_MILL_RADIUS, Cutters, part_passes
-    from pkmkit.machining.reconstruct import reconstruct, reconstructed_measurements
+    from pkmkit.machining.reconstruct import (
+        LEAN_LIMIT,
+        reconstruct,
+        reconstructed_measurements,
+    )
     from pkmkit.motion.gcode import read_gcode
 
     cmm = read_cmm(cmm_file, units=units)
@@ -189,6 +193,13 @@ def reconstruct_cmd(cmm_file, gcode, origin, end_mill, ball_end, out_file, units
     passes = part_passes(read_gcode(gcode, origin=_origin(origin, scale)))
     rec = reconstruct(cmm, cutters)
     data = reconstructed_measurements(rec, passes, program=str(gcode))
+    leaning = rec.leaning()
+    if leaning.size:  # flagged sections stay out of the file (as a batch's flagged rows)
+        if leaning.size == len(data):
+            raise InputError(f"{cmm_file}: every section's wall leans by more than "
+                             f"{LEAN_LIMIT * 1e3:g} mrad: the cutter was not vertical (seed "
+                             "003's hypothesis); no tool centre can be reconstructed")
+        data = data.subset(np.setdiff1d(np.arange(len(data)), leaning))
     text = format_measurements(data, None, units=unit,
                                comment=f"tool centres reconstructed from {Path(cmm_file).name} "
                                        f"(end mill Ø{2 * cutters.end_mill / scale:g}, ball-end "
@@ -196,16 +207,27 @@ def reconstruct_cmd(cmm_file, gcode, origin, end_mill, ball_end, out_file, units
                                        f"program {Path(gcode).name})")
     atomic_write_text(out_file, text)
     slopes = np.abs(rec.slopes).max(axis=0)
-    payload = {"sections": len(rec.section), "passes": len(set(rec.path)), "out": str(out_file),
+    lean = float(np.nanmax(np.abs(rec.lean), initial=0.0))
+    payload = {"sections": len(rec.section), "centres": len(data), "passes": len(set(rec.path)),
+               "out": str(out_file),
                "units": unit, "points": cmm.points_kind,
-               "largest_slopes": {"wall": float(slopes[0]), "slot": float(slopes[1])}}
+               "largest_slopes": {"wall": float(slopes[0]), "slot": float(slopes[1])},
+               "largest_wall_lean_mrad": lean * 1e3,
+               "leaning_sections": [rec.lines[i] for i in leaning]}
     if as_json:
         emit_json(payload)
-        return
-    click.echo(f"{cmm_file}: {len(rec.section)} sections of {len(set(rec.path))} passes → "
-               f"{len(rec.section)} tool centres (part frame) → {out_file} ({unit})")
-    click.echo(f"  largest slope across the sections: wall {slopes[0]:.3g}, slot bottom "
-               f"{slopes[1]:.3g}")
+    else:
+        click.echo(f"{cmm_file}: {len(rec.section)} sections of {len(set(rec.path))} passes → "
+                   f"{len(data)} tool centres (part frame) → {out_file} ({unit})")
+        click.echo(f"  largest slope across the sections: wall {slopes[0]:.3g}, slot bottom "
+                   f"{slopes[1]:.3g}; largest wall lean {lean * 1e3:.3g} mrad")
+    if leaning.size:
+        worst = leaning[np.argmax(np.abs(rec.lean[leaning]))]
+        click.echo(f"  {leaning.size} section(s) with a wall leaning by more than "
+                   f"{LEAN_LIMIT * 1e3:g} mrad, the worst {abs(rec.lean[worst]) * 1e3:.3g} mrad at "
+                   f"{rec.lines[worst]}: the cutter was not vertical (seed 003's hypothesis); "
+                   "those sections are left out", err=True)
+        raise SystemExit(3)
 
 
 def _unit_of(path: str) -> str | None:

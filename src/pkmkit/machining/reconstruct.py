@@ -35,6 +35,9 @@ from pkmkit.machining.part import Cutters, Pass
 
 #: Largest spread (m) of a section's points along its pass: they must lie in one plane.
 PLANE_TOL = 1e-4
+#: Wall lean (rad) beyond which a section is doubtful: 5 mrad, ten times the lean a 1.5 µm CMM
+#: noise gives between wall points 4 mm apart.
+LEAN_LIMIT = 5e-3
 #: Accepted ratio of the measured wall-to-slot distance to the end mill's radius.
 WALL_RATIO = (0.5, 1.5)
 
@@ -48,6 +51,8 @@ class Reconstruction:
         axis: ``(K,)`` 0 (pass along x) or 1 (along y). side: ``(K,)`` ±1, the wall's side.
         centre: ``(K, 3)`` tool centres. slopes: ``(K, 2)`` g and h (module docstring).
         lines: ``(K,)`` the section's first line (``file:line``). source: the CMM file.
+        lean: ``(K,)`` the wall's lean between M and N (rad, from the vertical; NaN when M and
+            N are at one height): a vertical cutter leaves 0 plus the CMM's noise.
     """
 
     section: tuple[str, ...]
@@ -58,6 +63,14 @@ class Reconstruction:
     slopes: np.ndarray
     lines: tuple[str, ...]
     source: str = ""
+    lean: np.ndarray | None = None
+
+    def leaning(self, limit: float = LEAN_LIMIT) -> np.ndarray:
+        """Indices of the sections whose wall leans by more than ``limit`` (rad): the cutter
+        was not vertical there (seed 003's hypothesis), and the centre is off by about the
+        probing height × the lean."""
+        lean = np.nan_to_num(np.abs(self.lean), nan=0.0) if self.lean is not None else []
+        return np.flatnonzero(np.asarray(lean) > limit)
 
 
 def _where(cmm: CmmPoints, row: int) -> str:
@@ -136,6 +149,9 @@ def reconstruct(cmm: CmmPoints, cutters: Cutters | None = None) -> Reconstructio
                     f"about {radii.end_mill * 1e3:.4g} mm (wrong cutter, labels or section)")
     side = np.sign(m_b - q_b)
     wall = (m_b + n_b) / 2
+    rise = pts[idx, 2, 2] - pts[idx, 1, 2]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lean = np.where(np.abs(rise) > 1e-4, np.arctan((n_b - m_b) * side / rise), np.nan)
     q_z = pts[idx, 0, 2]
     paths = [cmm.path[sections[n]["Q"]] for n in names]
     slopes = np.zeros((k, 2))
@@ -160,7 +176,8 @@ def reconstruct(cmm: CmmPoints, cutters: Cutters | None = None) -> Reconstructio
     centre[:, 2] = q_z + radii.ball * np.sqrt(1 + slopes[:, 1] ** 2)
     return Reconstruction(section=tuple(names), path=tuple(paths), axis=axis, side=side,
                           centre=centre, slopes=slopes,
-                          lines=tuple(_where(cmm, r) for r in rows[:, 0]), source=cmm.source)
+                          lines=tuple(_where(cmm, r) for r in rows[:, 0]), source=cmm.source,
+                          lean=lean)
 
 
 def reconstructed_measurements(rec: Reconstruction, passes: list[Pass], *,
