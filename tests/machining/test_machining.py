@@ -146,3 +146,26 @@ def test_reconstructed_measurements_tie_sections_to_their_passes(defected_part):
 def test_cutters_refuse_a_probe_tip_that_does_not_fit():
     with pytest.raises(pkmkit.errors.InputError, match="probe tip radius"):
         Cutters().reduced(0.009)
+
+
+def test_sections_near_a_crossing_pass_are_not_probed(verne):
+    """A y pass crossing the x pass at x = 0 at the same height hides ±20 mm of it; the same
+    pass 30 mm higher leaves the x pass's wall and slot alone."""
+    x_pass = "G1 X60 F1000"
+    for z, hidden in ((-50, True), (-20, False)):
+        prog = _program(x_pass, f"G0 X0 Y-40 Z{z}", "G1 Y40")
+        part = machine_part(verne, verne, part_passes(read_gcode(prog)), sections=60)
+        on_x = part.axis == 0
+        near = np.abs(part.s[on_x]) < 2 * R_E
+        assert near.any() != hidden
+        assert (np.abs(part.s[on_x]) > 2 * R_E).sum() > 10
+
+
+def test_unconverged_sections_are_an_error(verne, monkeypatch):
+    from pkmkit.machining import sweep
+
+    monkeypatch.setattr(sweep, "ITERATIONS", 0)
+    passes = part_passes(read_gcode(_program("G1 X60 F1000")))
+    with pytest.raises(pkmkit.errors.InputError, match=r"pass at line 3: the section planes' "
+                                                       r"intersections did not converge"):
+        machine_part(verne, verne, passes, placement=Placement(phi=0.05), sections=4)

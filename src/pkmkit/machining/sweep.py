@@ -49,8 +49,10 @@ TANGENT_STEP = 1e-4
 #: Passes closer than this in height (m) interfere where they cross (a wall 10 mm high, a slot
 #: 8 mm deep): sections near such a crossing are not probed.
 CROSSING_HEIGHT = 0.02
-#: Newton iterations of the section roots (each divides the error by ~10⁴).
+#: Newton iterations of the section roots (each divides the error by ~10⁴), and the largest
+#: distance (m) from its section plane a root may keep.
 ITERATIONS = 8
+ROOT_TOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -139,11 +141,16 @@ def _section_roots(curve: _CentrePath, s: np.ndarray, t0: np.ndarray, a: int, of
 
     for _ in range(ITERATIONS):
         point, dc = points(t)
-        step = (point[:, a] - target) / dc[:, a]
-        t = t - step
-        if np.abs(step).max() < 1e-14:
+        miss = point[:, a] - target
+        t = t - miss / dc[:, a]
+        if np.abs(miss).max() < 1e-14:  # metres: the rounding of FGM(IGM(x)) is ~1e-14
             break
     point, _ = points(t)
+    miss = np.abs(point[:, a] - target).max()
+    if not miss < ROOT_TOL:
+        raise InputError(f"pass at line {curve.p.path}: the section planes' intersections did "
+                         f"not converge in {ITERATIONS} iterations (off by {miss:.3g} m); is "
+                         "the pass folding back?")
     return [point[j * k:(j + 1) * k] for j in range(n)]
 
 
