@@ -186,7 +186,9 @@ def test_bad_input_exits_1_naming_the_line_and_writes_nothing(run, tmp_path):
     assert res.exit_code == 1 and "outside the stroke" in res.output and "bad.csv:2" in res.output
     res = run("simulate-measurements", "verne", "--measure", "ballbar", "--poses", bad,
               "--out", tmp_path / "b.csv")
-    assert res.exit_code == 1 and "--poses FILE" in res.output
+    # a ball-bar --poses FILE is a plan (pkmkit machined-part ballbar-plan), not actuators
+    assert res.exit_code == 1 and f"{bad}:1: missing column(s) px, py, pz" in res.output
+    assert "(a ball-bar plan)" in res.output
     assert not (tmp_path / "b.csv").exists()
     res = run("compensate", "linear-delta", "--calibrated", tmp_path / "none.toml", "--out",
               tmp_path / "c.csv")

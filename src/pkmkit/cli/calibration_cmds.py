@@ -41,7 +41,8 @@ def register(cli: click.Group) -> None:
 @MEASURE_OPTION
 @click.option("--poses", required=True, metavar="N|FILE",
               help="Number of rows to draw in the machine's default region (docs/calibration.md"
-                   "), or a CSV file of actuator coordinates (columns named as the actuators).")
+                   "), or a CSV file of actuator coordinates (columns named as the actuators), "
+                   "or for ballbar a plan (pkmkit machined-part ballbar-plan).")
 @click.option("--defects", "defects_spec", default=None, metavar="FILE|random",
               help="Defects of the simulated machine: 'random' (realistic magnitudes, compatible"
                    " for hyperstatic machines; the true machine file is written beside --out) "
@@ -83,16 +84,20 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
         true = apply_defect_vector(nominal, delta)
     elif defects_spec:
         true, delta = _defects_file(defects_spec, nominal, unit)
-    q = None
+    q = plan = None
     count = None
     if poses.strip().isdigit():
         count = int(poses)
         if count < 1:
             raise InputError("--poses must be ≥ 1")
+    elif kind == "ballbar":
+        plan = _read_plan(poses, units)
+        count = len(plan)
     else:
-        if kind in ("ballbar", "part"):
-            raise InputError(f"--poses FILE is for point, pose and height measurements; "
-                             f"{kind} measurements draw their own configurations: give a number")
+        if kind == "part":
+            raise InputError("--poses FILE is for point, pose and height measurements and "
+                             "ball-bar plans; part measurements draw their own sections: give "
+                             "a number (or use pkmkit machined-part simulate)")
         q = _read_configurations(poses, nominal, units)
         count = len(q)
     noise_spec = noise
@@ -104,8 +109,11 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
     if tool_lengths:
         tl = np.asarray(_numbers(tool_lengths, "--tool-lengths")) * scale
     frame = load_registration(frame_file) if frame_file else None
-    data = simulate(true, nominal, kind, count, rng, noise=noise_spec, q=q, tool_lengths=tl,
-                    frame=frame, source=str(out_file))
+    if plan is not None:
+        data = _simulate_plan(true, nominal, plan, rng, noise_spec, str(out_file))
+    else:
+        data = simulate(true, nominal, kind, count, rng, noise=noise_spec, q=q,
+                        tool_lengths=tl, frame=frame, source=str(out_file))
     note = (f"pkmkit simulate-measurements {nominal.id} --measure {kind} --seed {seed} "
             f"--noise {noise}")
     texts = {}
@@ -129,6 +137,23 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
     click.echo(f"{nominal.name}: {len(data)} {kind} measurements → {out_file} ({unit})")
     if truth_path is not None:
         click.echo(f"  true machine (random defects, seed {seed}) → {truth_path}")
+
+
+def _read_plan(path: str, units: str | None):
+    from pkmkit.machining.ballbar_plan import read_plan
+
+    return read_plan(path, units=units)
+
+
+def _simulate_plan(true, nominal, plan, rng, noise_spec, source: str):
+    """Ball-bar readings of a plan (pkmkit machined-part ballbar-plan): the nominal
+    controller commands its points, the table points are where they are to ±0.2 mm."""
+    from pkmkit.calibration.simulate import Noise
+    from pkmkit.machining.ballbar_plan import measure_plan, true_table_points
+
+    sigma = float(Noise.parse(noise_spec, "ballbar").position_sigma(np.zeros((1, 3)))[0])
+    return measure_plan(true, nominal, plan, rng, sigma=sigma,
+                        true_pivots=true_table_points(plan, rng), source=source)
 
 
 def _numbers(text: str, what: str) -> list[float]:

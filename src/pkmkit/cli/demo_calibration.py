@@ -72,4 +72,8 @@ def run_calibration_demo(out_dir: str | Path, *, echo: bool = True) -> dict[str,
     v = summary["verne_part"]["machined"]["compensated"]
     say(f"calibration, Verne machined part: compensated part within {v['along_x']:.4f} mm along"
         f" x and {v['along_y']:.4f} mm along y (seed 003: < 0.02 and < 0.04 mm)")
+
+    from pkmkit.cli.demo_machining import run_machining_demo
+
+    summary["verne_cmm"] = run_machining_demo(out, say)
     return to_jsonable(summary)

@@ -82,6 +82,9 @@ LAZY_COMMANDS: dict[str, LazyCommand] = {
     "compensate": LazyCommand(
         "pkmkit.cli.calibration_cmds", "compensate_cmd",
         "Corrected commands for the nominal controller from a calibrated machine."),
+    "machined-part": LazyCommand(
+        "pkmkit.cli.machining_cmds", "machined_part",
+        "Seed 003's machined part: G-code → machining → CMM → tool centres (then calibrate)."),
     "select-poses": LazyCommand(
         "pkmkit.cli.errors_cmds", "select_poses_cmd",
         "Choose N poses maximising an observability index; writes their actuator "

@@ -251,12 +251,13 @@ def _looks_numeric(cells: list[str]) -> bool:
 
 def format_measurements(data: MeasurementSet, machine, *, units: str = "m",
                         comment: str | None = None) -> str:
-    """CSV text of ``data`` in the file format of its type (lengths in ``units``)."""
+    """CSV text of ``data`` in the file format of its type (lengths in ``units``); a ``part``
+    file has no actuator columns (``machine`` may be None)."""
     scale = length_scale(units)
-    names, angle = actuator_columns(machine)
     cols: list[str] = []
     table: list[np.ndarray | list[str]] = []
     if data.kind != "part":
+        names, angle = actuator_columns(machine)
         for k, (n, a) in enumerate(zip(names, angle, strict=True)):
             cols.append(n)
             table.append(np.degrees(data.q[:, k]) if a else data.q[:, k] / scale)
