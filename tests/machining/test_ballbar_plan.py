@@ -7,7 +7,7 @@ import pytest
 
 import pkmkit
 from pkmkit.calibration.simulate import random_defects
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machining.ballbar_plan import (
     ballbar_iterations,
     ballbar_plan,

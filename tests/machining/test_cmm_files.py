@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machining.cmm import format_cmm, probe, read_cmm
 from pkmkit.machining.part import Cutters, Placement, part_passes
 from pkmkit.machining.reconstruct import reconstruct, reconstructed_measurements

@@ -113,7 +113,7 @@ def test_cmm_noise_reaches_the_centres_as_expected(defected_part):
 def test_chain_identifies_injected_defects_back(verne):
     """Defects injected in the parameters the part identifies come back within their
     uncertainty, the part's placement too, from simulated CMM points through reconstruction."""
-    from pkmkit.errors.model import defect_set
+    from pkmkit.geometric_errors.model import defect_set
     from pkmkit.machining.study import machined_part_study
 
     first = machined_part_study(seed=4, sections=100)
@@ -144,7 +144,7 @@ def test_reconstructed_measurements_tie_sections_to_their_passes(defected_part):
 
 
 def test_cutters_refuse_a_probe_tip_that_does_not_fit():
-    with pytest.raises(pkmkit.errors.InputError, match="probe tip radius"):
+    with pytest.raises(pkmkit.exceptions.InputError, match="probe tip radius"):
         Cutters().reduced(0.009)
 
 
@@ -166,6 +166,6 @@ def test_unconverged_sections_are_an_error(verne, monkeypatch):
 
     monkeypatch.setattr(sweep, "ITERATIONS", 0)
     passes = part_passes(read_gcode(_program("G1 X60 F1000")))
-    with pytest.raises(pkmkit.errors.InputError, match=r"pass at line 3: the section planes' "
+    with pytest.raises(pkmkit.exceptions.InputError, match=r"pass at line 3: the section planes' "
                                                        r"intersections did not converge"):
         machine_part(verne, verne, passes, placement=Placement(phi=0.05), sections=4)

@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from pkmkit.io.calibration_report import write_calibration_outputs
+from pkmkit.plot.calibration_report import write_calibration_outputs
 from pkmkit.io.measurements import atomic_write_text, format_measurements
 from pkmkit.machines.registry import preset_path
 from pkmkit.machining.cmm import format_cmm

@@ -22,7 +22,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
 
 from .calibration_cmds import CAL_UNITS_OPTION, _defects_file, _numbers

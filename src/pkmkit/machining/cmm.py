@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from pkmkit.calibration.simulate import NOISE_SIGMA
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machining.sweep import MachinedPart
 from pkmkit.model.parameters import length_scale
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.motion.paths import Line, Path
 
 #: Seed 003's cutters (m): Ø20 mm end mill (contours), Ø16 mm ball-end mill (slots).

@@ -28,8 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.calibration.measurement_set import MeasurementSet
-from pkmkit.errors import InputError
+from pkmkit.model.measurement_set import MeasurementSet
+from pkmkit.exceptions import InputError
 from pkmkit.machining.cmm import LABELS, CmmPoints
 from pkmkit.machining.part import Cutters, Pass
 

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkmkit.calibration.controller import commanded_q, reached
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.machining.part import Cutters, Pass, Placement
 
 #: Heights of the wall probe points M and N above the commanded tool centre (m).
