@@ -11,14 +11,15 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from pkmkit.plot.calibration_report import write_calibration_outputs
-from pkmkit.io.measurements import atomic_write_text, format_measurements
+from pkmkit.io.atomic import write_text_atomic as atomic_write_text
+from pkmkit.io.measurements import format_measurements
 from pkmkit.machines.registry import preset_path
 from pkmkit.machining.cmm import format_cmm
 from pkmkit.machining.part import part_passes
 from pkmkit.machining.reconstruct import reconstruct, reconstructed_measurements
 from pkmkit.machining.study import machined_part_study
 from pkmkit.motion.gcode import read_gcode
+from pkmkit.plot.calibration_report import write_calibration_outputs
 
 
 def run_machining_demo(out_dir: str | Path, say) -> dict[str, Any]:

@@ -62,7 +62,7 @@ def _origin(text: str | None, scale: float) -> np.ndarray:
               help="Output G-code file (mm).")
 def program_cmd(machine_name, levels, out_file):
     """Seed 003's test part as G-code, sized to MACHINE (illustrative)."""
-    from pkmkit.io.measurements import atomic_write_text
+    from pkmkit.io.atomic import write_text_atomic as atomic_write_text
     from pkmkit.machining.part import part_passes, seed_part_program
     from pkmkit.motion.gcode import read_gcode
 
@@ -102,8 +102,8 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
                  points, probe_radius, out_file, units, as_json):
     """Machine a part program with a machine with defects and probe it on a CMM."""
     from pkmkit.calibration.simulate import random_defects
+    from pkmkit.io.atomic import write_text_atomic as atomic_write_text
     from pkmkit.io.machine_defects import machine_text_with_defects
-    from pkmkit.io.measurements import atomic_write_text
     from pkmkit.machining.cmm import CMM_SIGMA, format_cmm
     from pkmkit.machining.part import Placement
     from pkmkit.machining.study import default_placement, simulate_cmm
@@ -175,7 +175,8 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
 @JSON_OPTION
 def reconstruct_cmd(cmm_file, gcode, origin, end_mill, ball_end, out_file, units, as_json):
     """Tool centres from a CMM file of the part and the cutter radii (seed 003 §4.2)."""
-    from pkmkit.io.measurements import atomic_write_text, format_measurements
+    from pkmkit.io.atomic import write_text_atomic as atomic_write_text
+    from pkmkit.io.measurements import format_measurements
     from pkmkit.machining.cmm import read_cmm
     from pkmkit.machining.part import SEED_BALL_RADIUS, SEED_END_MILL_RADIUS, Cutters, part_passes
     from pkmkit.machining.reconstruct import (
@@ -252,7 +253,7 @@ def _unit_of(path: str) -> str | None:
 def ballbar_plan_cmd(machine_name, bar_length, tool_lengths, table_points, points, out_file,
                      units):
     """Seed 003's ball-bar protocol: hemisphere points × 3 table points × 2 tools."""
-    from pkmkit.io.measurements import atomic_write_text
+    from pkmkit.io.atomic import write_text_atomic as atomic_write_text
     from pkmkit.machining.ballbar_plan import BAR_LENGTH, TOOL_LENGTHS, ballbar_plan, format_plan
 
     unit = units or "mm"

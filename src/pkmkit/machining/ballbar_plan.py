@@ -30,9 +30,9 @@ from typing import Any
 import numpy as np
 
 from pkmkit.calibration.controller import commanded_q
-from pkmkit.model.measurement_set import MeasurementSet
 from pkmkit.calibration.models import tool_state
 from pkmkit.exceptions import InputError
+from pkmkit.model.measurement_set import MeasurementSet
 
 #: Seed 003's protocol: points per hemisphere, table points, tool lengths.
 SEED_POINTS, SEED_TABLE_POINTS, SEED_TOOLS = 324, 3, 2

@@ -28,10 +28,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.model.measurement_set import MeasurementSet
 from pkmkit.exceptions import InputError
 from pkmkit.machining.cmm import LABELS, CmmPoints
 from pkmkit.machining.part import Cutters, Pass
+from pkmkit.model.measurement_set import MeasurementSet
 
 #: Largest spread (m) of a section's points along its pass: they must lie in one plane.
 PLANE_TOL = 1e-4
