@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from pkmkit.calibration import studies
 
@@ -51,3 +52,55 @@ def test_demo_study_writes_reports(tmp_path, monkeypatch):
                 "calibration.json"} <= files
     assert (tmp_path / "calibration-tripteor" / "frame.json").exists()
     assert np.isfinite(summary["verne_part"]["machined"]["compensated"]["along_x"])
+
+
+def test_tripteor_residual_scales_with_the_injected_tracker_noise():
+    """The synthetic Tripteor residuals are the injected noise: the same study (same defects,
+    poses and draws) without noise leaves a floor of a few µm (weakly identifiable defects
+    left at nominal), with twice the noise twice the residual, and at 1× the mean is that of
+    the 3-D noise vector, σ·sqrt(8/π) (docs/calibration.md §5.1). A residual that did not
+    follow the noise would mean the figures measure the model, not the simulated tracker."""
+    rows = studies.tripteor_noise_sweep(identification=40, validation=12)
+    assert [r["scale"] for r in rows] == [0.0, 1.0, 2.0]
+    none, once, twice = rows
+    assert once["sigma"] == pytest.approx(15e-6)
+    assert none["identification_mean"] < 0.1 * once["identification_mean"]
+    for key in ("identification_mean", "identification_max", "validation_mean",
+                "validation_max"):
+        assert twice[key] / once[key] == pytest.approx(2.0, rel=0.1)
+    alone = once["sigma"] * np.sqrt(8.0 / np.pi)
+    assert 0.75 * alone < once["identification_mean"] < 1.05 * alone
+    table = studies.noise_sweep_table(rows).splitlines()
+    assert len(table) == 4 and table[2].startswith("1×")
+
+
+def test_noise_scale_multiplies_every_sigma():
+    from pkmkit.calibration.simulate import Noise
+    from pkmkit.errors import InputError
+
+    pts = np.array([[0.0, 0.0, 1.0], [0.5, 0.0, 1.0]])
+    base, double = Noise("tracker"), Noise("tracker", scale=2.0)
+    np.testing.assert_allclose(double.position_sigma(pts), 2 * base.position_sigma(pts))
+    assert double.rotation_sigma() == 2 * base.rotation_sigma()
+    assert not Noise("cmm", scale=0.0).position_sigma(pts).any()
+    with pytest.raises(InputError, match="noise scale"):
+        Noise("tracker", scale=-1.0)
+
+
+def test_simulated_registration_follows_table_5_4_direction_convention():
+    """Table 5.4's i, j, k are short-tool tip minus long-tool tip (tip → spindle, as the CNC's
+    vectors; docs/tripteor-x7.md §4): the study's simulated registration readings follow it,
+    so turned into the machine frame they point against the tool axis (tip outwards)."""
+    import pkmkit
+
+    m = pkmkit.machine("tripteor-x7")
+    frame = studies.tracker_frame()
+    _, _, dm, dn = studies._registration_measurements(m, m, np.random.default_rng(0),
+                                                      frame, 0.0)
+    gap = 0.169889 - 0.110006
+    np.testing.assert_allclose(np.linalg.norm(dm, axis=1), gap, atol=1e-9)
+    # the same vector in both frames (noise-free, true = nominal machine)
+    np.testing.assert_allclose(frame.apply_directions(dm) / gap, dn, atol=1e-6)
+    # ... and it is minus the tool axis: at home (row 1) the axis of m.fk points tip outwards
+    axis = m.fk(m.home_q, tool_length=0.169889)[3:]
+    assert dn[0] @ axis == pytest.approx(-1.0, abs=1e-12)

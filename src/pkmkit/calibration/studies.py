@@ -30,6 +30,7 @@ from pkmkit.calibration.measurement_set import MeasurementSet
 from pkmkit.calibration.registration import Registration, register_points
 from pkmkit.calibration.simulate import (
     SEED_TOOLS,
+    Noise,
     default_configurations,
     part_paths,
     random_defects,
@@ -64,6 +65,9 @@ TABLE_5_5 = {
 TABLE_5_4_ROTATION = np.array([[-0.99143, -0.13046, 0.00611], [0.00438, 0.01358, 0.99990],
                                [-0.13053, 0.99136, -0.01289]])
 TABLE_5_4_TRANSLATION = np.array([0.799111, -0.007298, -2.643210])
+#: σ per coordinate of the studies' tracker readings (m): ±(15 µm + 6 µm/m × 2.5 m) read as a
+#: 2σ bound (``simulate``'s ``tracker`` noise).
+TRACKER_SIGMA = 15e-6
 
 
 def _orthonormal(rot: np.ndarray) -> np.ndarray:
@@ -126,7 +130,9 @@ def _registration_measurements(true_machine, nominal, rng, frame: Registration,
                                noise_sigma: float):
     """Four registration points as Table 5.4 (two pairs ~10 mm apart: the long tool's tip at
     two head orientations, and the spindle direction from the two tools) in the tracker frame
-    and in the controller's (nominal) frame."""
+    and in the controller's (nominal) frame. The directions follow Table 5.4's convention
+    (docs/tripteor-x7.md §4): short-tool tip minus long-tool tip in the tracker frame, the
+    tip-to-spindle unit vector (minus the tool axis) in the controller's frame."""
     home = nominal.home_q
     q = np.tile(home, (4, 1))
     q[1, 3], q[1, 4] = np.radians(-15.0), np.radians(55.0)
@@ -140,17 +146,19 @@ def _registration_measurements(true_machine, nominal, rng, frame: Registration,
     measured = inverse.apply(tip_true + rng.standard_normal((4, 3)) * noise_sigma)
     measured_short = inverse.apply(tip_short + rng.standard_normal((4, 3)) * noise_sigma)
     nominal_pose = nominal.fk(q, tool_length=long_)
-    return (measured, nominal_pose[:, :3], measured - measured_short, nominal_pose[:, 3:])
+    return (measured, nominal_pose[:, :3], measured_short - measured, -nominal_pose[:, 3:])
 
 
 def tripteor_laser_tracker(*, seed: int = 7, identification: int = 107, validation: int = 30,
                            thesis_set: bool = True, thesis_way: bool = False,
-                           machine=None) -> TripteorStudy:
+                           machine=None, noise_scale: float = 1.0) -> TripteorStudy:
     """Seed 002's laser-tracker protocol on synthetic data (module docstring).
 
     Args:
         seed: random seed (defects, poses, noise).
         identification, validation: numbers of poses (the seed: 107 and 30).
+        noise_scale: multiplies the tracker noise (σ = 15 µm per coordinate) of the readings
+            and of the registration points; the random draws are the same at every scale.
         thesis_set: also identify the thesis's Table 5.5 parameters (least-squares closure,
             pkmkit's identifiability analysis).
         thesis_way: also identify Table 5.5 the thesis's way: every parameter, finite
@@ -166,10 +174,12 @@ def tripteor_laser_tracker(*, seed: int = 7, identification: int = 107, validati
     n = identification + validation
     q = default_configurations(m, n, rng)
     order = rng.permutation(n)
-    data = simulate(true, m, "point", n, rng, q=q[order], noise="tracker", frame=frame)
+    data = simulate(true, m, "point", n, rng, q=q[order], noise=Noise("tracker", scale=noise_scale),
+                    frame=frame)
     ident, valid = data.subset(np.arange(identification)), data.subset(
         np.arange(identification, n))
-    measured, nominal, dm, dn = _registration_measurements(true, m, rng, frame, 8e-6)
+    measured, nominal, dm, dn = _registration_measurements(true, m, rng, frame,
+                                                           8e-6 * noise_scale)
     reg = register_points(measured, nominal, measured_directions=dm, nominal_directions=dn)
     result = calibrate(m, ident, validation=valid, frame=(reg, "identify"))
     targets = reached(true, valid.q, valid.tool_length)
@@ -184,6 +194,48 @@ def tripteor_laser_tracker(*, seed: int = 7, identification: int = 107, validati
     if thesis_way:
         study.thesis_way = thesis_way_identification(m, ident, names, reg)
     return study
+
+
+def tripteor_noise_sweep(scales: tuple[float, ...] = (0.0, 1.0, 2.0), **kwargs: Any
+                         ) -> list[dict[str, float]]:
+    """:func:`tripteor_laser_tracker` with its tracker noise multiplied by each of ``scales``
+    (same defects, poses and random draws): what the synthetic residuals are made of. The
+    identified model is the seed's whole model, so the residual is the noise that the fit
+    cannot absorb plus the few weakly identifiable defects left at nominal (the floor at
+    scale 0).
+
+    Args:
+        scales: noise multipliers (1 = σ 15 µm per coordinate).
+        kwargs: passed to :func:`tripteor_laser_tracker` (``seed``, ``identification``,
+            ``validation``, ``machine``).
+
+    Returns:
+        one row per scale (SI): ``scale``, ``sigma`` (m per coordinate), ``identified``
+        (parameters), ``identification_mean``, ``identification_max``, ``validation_mean``,
+        ``validation_max`` (tool-point errors after calibration, m).
+    """
+    rows = []
+    for scale in scales:
+        r = tripteor_laser_tracker(noise_scale=scale, thesis_set=False, **kwargs).result
+        rows.append({"scale": float(scale), "sigma": float(scale) * TRACKER_SIGMA,
+                     "identified": len(r.names),
+                     "identification_mean": r.after.mean, "identification_max": r.after.max,
+                     "validation_mean": r.validation.after.mean,
+                     "validation_max": r.validation.after.max})
+    return rows
+
+
+def noise_sweep_table(rows: list[dict[str, float]]) -> str:
+    """:func:`tripteor_noise_sweep`'s rows as a text table (µm), with the mean length of the
+    3-D noise vector alone, σ·sqrt(8/π), for comparison."""
+    lines = ["noise  σ (µm)  |noise| mean  identification mean / max  validation mean / max"]
+    for r in rows:
+        um = {k: v * 1e6 for k, v in r.items() if k not in ("scale", "identified")}
+        alone = um["sigma"] * np.sqrt(8.0 / np.pi)
+        lines.append(f"{r['scale']:.0f}×  {um['sigma']:6.1f}  {alone:11.1f}  "
+                     f"{um['identification_mean']:19.1f} / {um['identification_max']:5.1f}  "
+                     f"{um['validation_mean']:15.1f} / {um['validation_max']:5.1f}")
+    return "\n".join(lines)
 
 
 def thesis_way_identification(machine, data: MeasurementSet, names: list[str],
