@@ -238,42 +238,98 @@ def noise_sweep_table(rows: list[dict[str, float]]) -> str:
     return "\n".join(lines)
 
 
+def _gauss_newton(problem, u: np.ndarray, free: np.ndarray, iterations: int = 10
+                  ) -> np.ndarray:
+    """``u`` with its entries ``free`` fitted by Gauss–Newton steps with the analytic Jacobian
+    (minimum-norm steps: the columns may be rank deficient), kept while the cost decreases."""
+    u = u.copy()
+    r = problem.residual(u)
+    for _ in range(iterations):
+        step = np.linalg.lstsq(problem.jacobian(u)[:, free], -r, rcond=1e-9)[0]
+        trial = u.copy()
+        trial[free] += step
+        r_trial = problem.residual(trial)
+        if not np.isfinite(r_trial).all() or r_trial @ r_trial >= r @ r:
+            break
+        converged = r @ r - r_trial @ r_trial < 1e-10 * (r @ r)
+        u, r = trial, r_trial
+        if converged:
+            break
+    return u
+
+
+#: Table 5.5's direction defects whose tool-point columns are exactly zero at the nominal
+#: geometry: rotations that only move passive joints (notes §4.5).
+#: Relative size below which a singular value or a column norm is round-off (the ranks of
+#: :func:`thesis_way_identification`).
+ROUND_OFF = 1e-12
+THESIS_GAUGES = ("dJ21", "dJ41", "dJ12", "dK12", "dJ22", "dK22", "dJ32", "dK32", "dJ23", "dJ43")
+
+
 def thesis_way_identification(machine, data: MeasurementSet, names: list[str],
-                              registration: Registration) -> dict[str, Any]:
+                              registration: Registration, *, max_nfev: int = 60
+                              ) -> dict[str, Any]:
     """Identify ``names`` as seed 002 did: every parameter kept, the least-squares closure,
-    finite-difference Jacobians (``scipy.optimize.least_squares``, trust region), no
-    identifiability analysis. Returns the angles of the structurally unidentifiable
-    direction defects, the numerical rank and condition the finite differences suggest, and
-    what resetting those angles to zero changes in the residual."""
+    finite-difference Jacobians (``scipy.optimize.least_squares``, trust region, at most
+    ``max_nfev`` iterations), no identifiability analysis; then what that hides. Ranks
+    count the singular values above :data:`ROUND_OFF` times the largest.
+
+    Returns a JSON-ready dict: ``parameters``, ``evaluations`` (iterations used; equal to
+    ``max_nfev`` when the solver stopped at its limit), ``nominal_zero_columns`` (names whose
+    analytic column is zero to round-off, :data:`ROUND_OFF` of the largest, at the start: the
+    nominal geometry), ``nominal_rank`` (the analytic Jacobian's there), ``fd_rank`` and
+    ``fd_condition`` (the finite-difference Jacobian of the solver's last step), ``analytic_rank``
+    and ``analytic_condition`` (the analytic Jacobian at the solution), ``angles_deg`` (the
+    solution's :data:`THESIS_GAUGES`, degrees), ``rms`` (whitened residual RMS of the
+    solution, units of σ), ``rms_reset`` and ``residual_change_when_reset`` (the same with
+    the gauges set to zero and nothing else changed: RMS and largest change, σ), ``rms_refit``
+    (the gauges at zero and every other parameter fitted again with the analytic Jacobian:
+    what the data say without them).
+    """
     from scipy.optimize import least_squares
 
     from pkmkit.calibration.identify import single_threaded_blas
 
     problem = identification_problem(machine, data, parameters=names, frame=registration,
                                      compatible=False, rcond=1e-30, prune=False)
-    with single_threaded_blas():
-        sol = least_squares(problem.residual, problem.u0, jac="2-point", method="trf",
-                            xtol=1e-8, ftol=1e-8, max_nfev=60)
-        jac = sol.jac
+    gauges = [problem.names.index(g) for g in THESIS_GAUGES]
+    free = np.setdiff1d(np.arange(len(problem.names)), gauges)
+
+    def rank_condition(jac: np.ndarray) -> tuple[int, float]:
         sv = np.linalg.svd(jac, compute_uv=False)
-        analytic = np.linalg.svd(problem.jacobian(sol.x), compute_uv=False)
+        return int((sv > ROUND_OFF * sv[0]).sum()), float(sv[0] / sv[-1])
+
+    with single_threaded_blas():
+        start = problem.jacobian(problem.u0)
+        norms = np.linalg.norm(start, axis=0)
+        zero = [problem.names[k] for k in np.flatnonzero(norms <= ROUND_OFF * norms.max())]
+        nominal_rank, _ = rank_condition(start)
+        sol = least_squares(problem.residual, problem.u0, jac="2-point", method="trf",
+                            xtol=1e-8, ftol=1e-8, max_nfev=max_nfev)
+        fd_rank, fd_condition = rank_condition(sol.jac)
+        analytic_rank, analytic_condition = rank_condition(problem.jacobian(sol.x))
         values = dict(zip(problem.names, sol.x * problem.scale, strict=True))
-        gauges = ["dJ21", "dJ41", "dJ12", "dK12", "dJ22", "dK22", "dJ32", "dK32", "dJ23",
-                  "dJ43"]
         reset = sol.x.copy()
-        for g in gauges:
-            reset[problem.names.index(g)] = 0.0
+        reset[gauges] = 0.0
         r0, r1 = problem.residual(sol.x), problem.residual(reset)
+
+        refit = _gauss_newton(problem, reset, free)
+
+    def rms(r: np.ndarray) -> float:
+        return float(np.sqrt(np.mean(r**2)))
+
     return {
         "parameters": len(names),
         "evaluations": int(sol.nfev),
+        "nominal_zero_columns": zero,
+        "nominal_rank": nominal_rank,
+        "fd_rank": fd_rank, "fd_condition": fd_condition,
+        "analytic_rank": analytic_rank, "analytic_condition": analytic_condition,
         "angles_deg": {g: float(np.degrees(np.arcsin(np.clip(values[g], -1, 1))))
-                       for g in gauges},
-        "fd_rank": int((sv > 1e-12 * sv[0]).sum()), "fd_condition": float(sv[0] / sv[-1]),
-        "analytic_rank": int((analytic > 1e-9 * analytic[0]).sum()),
-        "analytic_condition": float(analytic[0] / analytic[-1]),
-        # whitened residual (units of σ): resetting the angles changes nothing measurable
+                       for g in THESIS_GAUGES},
+        "rms": rms(r0), "rms_reset": rms(r1),
         "residual_change_when_reset": float(np.abs(r1 - r0).max()),
+        "rms_refit": rms(problem.residual(refit)),
     }
 
 
