@@ -118,3 +118,44 @@ def test_verne_part_residual_scales_with_the_injected_cmm_noise():
     assert rms[0] < 0.1 * rms[1] and rms[2] / rms[1] == pytest.approx(2.0, rel=0.15)
     assert max(along_x[0], along_y[0]) < min(max(along_x[1], along_y[1]),
                                              max(along_x[2], along_y[2]))
+
+
+def _thesis_set_problem(poses: int):
+    from pkmkit.calibration.identify import identification_problem
+
+    study = studies.tripteor_laser_tracker(identification=poses, validation=12, thesis_set=False)
+    names = [v for v in studies.TABLE_5_5.values() if v is not None]
+    return study, names, identification_problem(
+        study.result.nominal, study.data, parameters=names, frame=study.registration,
+        compatible=False, rcond=1e-30, prune=False)
+
+
+def test_thesis_set_at_the_nominal_geometry_has_fourteen_zero_columns():
+    """Table 5.5's 43 minimal parameters, tool points, the thesis's poses (107): the ten
+    THESIS_GAUGES and da51, da52, da53, dI52 have columns zero to round-off at the nominal
+    geometry, and the analytic rank is 27 (docs/calibration.md §5.1, the "thesis way")."""
+    _, names, problem = _thesis_set_problem(107)
+    assert len(names) == 43
+    jac = problem.jacobian(problem.u0)
+    norms = np.linalg.norm(jac, axis=0)
+    zero = {problem.names[k] for k in np.flatnonzero(norms <= 1e-12 * norms.max())}
+    assert zero == set(studies.THESIS_GAUGES) | {"da51", "da52", "da53", "dI52"}
+    # the others are far above round-off (the smallest, db32, at 3e-7 of the largest)
+    assert np.sort(norms)[len(zero)] > 1e-8 * norms.max()
+    sv = np.linalg.svd(jac, compute_uv=False)
+    assert int((sv > studies.ROUND_OFF * sv[0]).sum()) == 27
+
+
+@pytest.mark.slow
+def test_thesis_way_finite_differences_hide_the_zero_columns():
+    """The thesis way, small (40 poses, 5 iterations): finite differences give all 43 columns
+    a rank while 14 are zero; the ten angles are then set by the differencing noise, and
+    setting them to zero and fitting the others again fits as well: they carry nothing."""
+    study, names, _ = _thesis_set_problem(40)
+    out = studies.thesis_way_identification(study.result.nominal, study.data, names,
+                                            study.registration, max_nfev=5)
+    assert out["fd_rank"] == 43 > out["nominal_rank"]
+    assert len(out["nominal_zero_columns"]) == 14
+    assert 0 < max(abs(a) for a in out["angles_deg"].values())
+    assert out["rms_refit"] <= out["rms"] * (1 + 1e-6)
+    assert out["rms_reset"] >= out["rms_refit"]

@@ -241,28 +241,36 @@ def noise_sweep_table(rows: list[dict[str, float]]) -> str:
     return "\n".join(lines)
 
 
-def _gauss_newton(problem, u: np.ndarray, free: np.ndarray, iterations: int = 10
-                  ) -> np.ndarray:
-    """``u`` with its entries ``free`` fitted by Gauss–Newton steps with the analytic Jacobian
-    (minimum-norm steps: the columns may be rank deficient), kept while the cost decreases."""
+def _refit(problem, u: np.ndarray, free: np.ndarray, iterations: int = 30) -> np.ndarray:
+    """``u`` with its entries ``free`` fitted again by Levenberg–Marquardt steps on the analytic
+    Jacobian (damping scaled by the column norms; minimum-norm steps, the columns may be rank
+    deficient), until the cost stops decreasing by more than 1e-10 of itself."""
     u = u.copy()
     r = problem.residual(u)
+    damping = 1e-3
     for _ in range(iterations):
-        step = np.linalg.lstsq(problem.jacobian(u)[:, free], -r, rcond=1e-9)[0]
-        trial = u.copy()
-        trial[free] += step
-        r_trial = problem.residual(trial)
-        if not np.isfinite(r_trial).all() or r_trial @ r_trial >= r @ r:
-            break
-        converged = r @ r - r_trial @ r_trial < 1e-10 * (r @ r)
-        u, r = trial, r_trial
-        if converged:
+        jac = problem.jacobian(u)[:, free]
+        norms = np.linalg.norm(jac, axis=0)
+        norms = np.where(norms > 0, norms, 1.0)
+        while damping < 1e12:
+            a = np.vstack([jac, np.sqrt(damping) * np.diag(norms)])
+            step = np.linalg.lstsq(a, np.concatenate([-r, np.zeros(free.size)]),
+                                   rcond=None)[0]
+            trial = u.copy()
+            trial[free] += step
+            r_trial = problem.residual(trial)
+            if np.isfinite(r_trial).all() and r_trial @ r_trial < r @ r:
+                break
+            damping *= 10.0
+        else:
+            return u
+        gain = r @ r - r_trial @ r_trial
+        u, r, damping = trial, r_trial, max(damping / 10.0, 1e-9)
+        if gain < 1e-10 * (r @ r):
             break
     return u
 
 
-#: Table 5.5's direction defects whose tool-point columns are exactly zero at the nominal
-#: geometry: rotations that only move passive joints (notes §4.5).
 #: Relative size below which a singular value or a column norm is round-off (the ranks of
 #: :func:`thesis_way_identification`).
 ROUND_OFF = 1e-12
@@ -316,7 +324,7 @@ def thesis_way_identification(machine, data: MeasurementSet, names: list[str],
         reset[gauges] = 0.0
         r0, r1 = problem.residual(sol.x), problem.residual(reset)
 
-        refit = _gauss_newton(problem, reset, free)
+        refit = _refit(problem, reset, free)
 
     def rms(r: np.ndarray) -> float:
         return float(np.sqrt(np.mean(r**2)))
