@@ -1,7 +1,7 @@
 """Figures and numbers of docs/calibration.md: ``python docs/make_calibration_figures.py``.
 
 Runs the seed reproductions of :mod:`pkmkit.calibration.studies` at full size (the Tripteor's
-"thesis way" identification takes about a minute), writes ``docs/figures/calibration-*.png``
+"thesis way" identification takes a few minutes), writes ``docs/figures/calibration-*.png``
 and ``docs/figures/calibration-summary.json`` (the numbers quoted in the docs).
 """
 
