@@ -1,7 +1,7 @@
 """Figures and numbers of docs/calibration.md: ``python docs/make_calibration_figures.py``.
 
 Runs the seed reproductions of :mod:`pkmkit.calibration.studies` at full size (the Tripteor's
-"thesis way" identification takes about a minute), writes ``docs/figures/calibration-*.png``
+"thesis way" identification takes a few minutes), writes ``docs/figures/calibration-*.png``
 and ``docs/figures/calibration-summary.json`` (the numbers quoted in the docs).
 """
 
@@ -23,10 +23,12 @@ FIGURES = Path(__file__).parent / "figures"
 
 
 def tripteor_comparison(summary: dict, path: Path) -> None:
-    """Mean and max residuals: pkmkit (identification, validation) vs seed 002 and baselines."""
-    rows = [("pkmkit: identification", summary["identification"]["mean"],
+    """Mean and max residuals: pkmkit on simulated readings (identification, validation; the
+    residual is the injected tracker noise) vs seed 002's real readings and baselines."""
+    rows = [("pkmkit, simulated readings: identification", summary["identification"]["mean"],
              summary["identification"]["max"]),
-            ("pkmkit: validation", summary["validation"]["mean"], summary["validation"]["max"])]
+            ("pkmkit, simulated readings: validation", summary["validation"]["mean"],
+             summary["validation"]["max"])]
     rows += [(k, v["mean"], v["max"]) for k, v in summary["thesis"].items()]
     fig = Figure(figsize=(8.0, 3.4), layout="constrained")
     ax = fig.add_subplot()

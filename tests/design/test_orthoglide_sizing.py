@@ -148,3 +148,27 @@ def test_largest_cube_of_the_workspace_search_is_the_sized_cube():
     r = ws.inscribed.side / float(np.max(hi_q - lo_q))
     assert r == pytest.approx(0.743, abs=0.002)
     assert r < size_orthoglide(0.2, (0.5, 2.0), samples=9).compactness - 0.03
+
+
+def test_seed_001_motor_and_tool_speeds_describe_different_quantities():
+    """Seed 001: tool speed 1 m/s (abstract), motors sized for 1.2 m/s at the isotropic
+    configuration (§4) — not a contradiction (docs/seed-errata.md, seed 001 #3). A tool speed v
+    in any direction needs at most max_i ‖row_i(J⁻¹)‖·v of a motor; over the prototype's cube
+    that factor reaches √(3/2) = 1.2247 (1 at the isotropic point), so 1.2 m/s motors give the
+    tool 0.98 m/s in every direction everywhere: the abstract's 1 m/s to 2 %. J⁻¹ here from the
+    closed-form inverse model ρ_i = p_i + √(L² − |p|² + p_i²), not from pkmkit's Jacobian."""
+    res = size_orthoglide(0.2, (0.5, 2.0))
+    g = np.linspace(0.0, 1.0, 41)
+    unit = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    p = res.Q1 + unit * (res.Q2 - res.Q1)
+    root = np.sqrt(res.L**2 - (p**2).sum(axis=1, keepdims=True) + p**2)  # (N, 3), per leg
+    # row i of J⁻¹ = ∂ρ_i/∂p = e_i + (p_i e_i − p) / root_i
+    rows = np.eye(3)[None] + (p[:, :, None] * np.eye(3)[None] - p[:, None, :]) / root[:, :, None]
+    factor = np.linalg.norm(rows, axis=2).max()
+    assert factor == pytest.approx(np.sqrt(1.5), rel=1e-9)
+    # the same from pkmkit's Jacobian, and 1 at the isotropic configuration (J = I)
+    inverse = np.linalg.inv(res.machine.jacobian(p).J)
+    assert np.linalg.norm(inverse, axis=2).max() == pytest.approx(factor, rel=1e-9)
+    iso = np.linalg.inv(res.machine.jacobian(np.zeros(3)).J)
+    np.testing.assert_allclose(np.linalg.norm(iso, axis=1), 1.0, atol=1e-12)
+    assert 1.2 / factor == pytest.approx(0.98, abs=0.001)

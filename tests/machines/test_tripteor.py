@@ -622,3 +622,26 @@ def test_printed_4_31_joint_53_axis_does_not_close(tripteor, wide):
     assert machine_with((0.0, 1.0, 0.0)).fk(q, full_output=True).closure_residual.max() < 1e-12
     with pytest.raises(ParameterError, match=r"do not close .*residual 0\.[1-9]"):
         machine_with((1.0, 0.0, 0.0))
+
+
+def test_annex_b_single_defects(tripteor):
+    """Seed 002 Annex B (docs/tripteor-x7.md §5): a 1 % rotation (0.01) of J21, J41, J23 or J43
+    moves exactly one passive angle (ψ1, θ1, ψ3, θ3) by asin 0.01 = 0.5730° and leaves the
+    platform where it was, at the median (home) position and at an offset one; K21, K41, I51,
+    K51 (CATIA's "Erreur" columns) close only in least squares and move the platform."""
+    names = list(tripteor.passive_names)
+    one = {"dJ21": "psi1", "dJ41": "theta1", "dJ23": "psi3", "dJ43": "theta3"}
+    for q in (tripteor.home_q, tripteor.home_q + np.array([0.02, -0.02, 0.02, 0.0, 0.0])):
+        nominal = tripteor.fk(q[None], full_output=True)
+        for name, joint in one.items():
+            r = tripteor.with_defects({name: 0.01}).fk(q[None], full_output=True)
+            d = r.passive[0] - nominal.passive[0]
+            k = names.index(joint)
+            assert abs(d[k]) == pytest.approx(np.arcsin(0.01), abs=1e-9)
+            assert np.abs(np.delete(d, k)).max() < 1e-9
+            np.testing.assert_allclose(r.platform, nominal.platform, atol=1e-10)
+            assert r.status[0] == 0
+        for name in ("dK21", "dK41", "dI51", "dK51"):
+            r = tripteor.with_defects({name: 0.01}).fk(q[None], full_output=True)
+            assert r.status[0] != 0 and r.closure_residual[0] > 1e-4
+            assert np.abs(r.platform[0, :3] - nominal.platform[0, :3]).max() > 1e-4

@@ -40,6 +40,27 @@ def test_seed_000_circle_and_helix(delta_b):
     assert hx.qd.max() == pytest.approx(0.0789, abs=2e-4)
 
 
+def test_seed_000_helix_speeds_with_the_chapter_iii_dimensions():
+    """Seed 000's helix motor speeds "entre 55 mm/s et 73 mm/s" (L1800; erratum 14): with the
+    Chapter III dimensions (Table III.2's set A, L = 1.3 m) a Ø300 mm, 20 mm pitch helix at
+    120 mm/s gives −54.0 … +59.1 mm/s (the 55 is that machine's negative peak), with Table
+    IV.1's machine (set B, L = 1.04 m, the other Chapter IV figures) −73.8 … +78.9 mm/s (the
+    73 is that one's): no single machine gives both printed bounds."""
+    path = plan(helix([0, 0, 0.0], 0.15, pitch=0.02, turns=10), feed=0.12, accel=1.0,
+                jerk=10.0, period=0.01)
+    a = joint_trajectory(pkmkit.machine("linear-delta-ch3"), path)
+    assert a.qd.min() == pytest.approx(-0.0540, abs=2e-4)
+    assert a.qd.max() == pytest.approx(0.0591, abs=2e-4)
+    b = joint_trajectory(pkmkit.machine("linear-delta-table-iv1"), path)
+    assert b.qd.min() == pytest.approx(-0.0738, abs=2e-4)
+    assert b.qd.max() == pytest.approx(0.0789, abs=2e-4)
+    # 55 and 73 are the two machines' negative peaks (to 1 mm/s); neither machine has both:
+    # set A never reaches 73 mm/s, both of set B's peaks are far above 55 mm/s
+    assert abs(a.qd.min() + 0.055) < 1.1e-3 and abs(b.qd.min() + 0.073) < 1.1e-3
+    assert np.abs(a.qd).max() < 0.073 - 0.01
+    assert min(-b.qd.min(), b.qd.max()) > 0.055 + 0.015
+
+
 def _reported_time(error: InputError) -> float:
     return float(re.search(r"first at t = ([0-9.e+-]+) s", str(error)).group(1))
 

@@ -155,10 +155,16 @@ def _tool_lengths(machine, n: int, tool_lengths) -> np.ndarray | None:
 @dataclass(frozen=True)
 class Noise:
     """A noise model: ``kind`` (``tracker``, ``cmm``, ``probe``, ``ballbar``, ``none`` or
-    ``sigma``) and its σ (m) for ``sigma``."""
+    ``sigma``) and its σ (m) for ``sigma``; ``scale`` multiplies every σ (noise studies: the
+    same draws at 0, 1, 2 times an instrument's noise)."""
 
     kind: str
     sigma: float = 0.0
+    scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.scale) and self.scale >= 0):
+            raise InputError(f"noise scale must be a finite number ≥ 0, got {self.scale!r}")
 
     @classmethod
     def parse(cls, spec: Any, measure: str) -> Noise:
@@ -176,6 +182,9 @@ class Noise:
 
     def position_sigma(self, points: np.ndarray) -> np.ndarray:
         """σ per point ``(N,)`` (m)."""
+        return self.scale * self._position_sigma(points)
+
+    def _position_sigma(self, points: np.ndarray) -> np.ndarray:
         n = len(points)
         if self.kind == "none":
             return np.zeros(n)
@@ -189,9 +198,9 @@ class Noise:
         return np.full(n, NOISE_SIGMA[self.kind])
 
     def rotation_sigma(self) -> float:
-        return {"none": 0.0, "tracker": TRACKER_ROTATION_SIGMA}.get(self.kind, self.sigma
-                                                                    if self.kind == "sigma"
-                                                                    else 1e-5)
+        base = {"none": 0.0, "tracker": TRACKER_ROTATION_SIGMA}.get(
+            self.kind, self.sigma if self.kind == "sigma" else 1e-5)
+        return self.scale * base
 
 
 def simulate(true_machine, nominal, kind: str, n: int, rng: np.random.Generator, *,
@@ -208,7 +217,8 @@ def simulate(true_machine, nominal, kind: str, n: int, rng: np.random.Generator,
         kind: point, pose, ballbar, height or part.
         n: number of rows (for ``part``: the approximate number of sections).
         rng: random generator (configurations, noise).
-        noise: noise model (:class:`Noise`): ``"realistic"`` picks the instrument of the type.
+        noise: noise model (a :class:`Noise`, or what :meth:`Noise.parse` reads):
+            ``"realistic"`` picks the instrument of the type.
         q: actuator coordinates to use instead of :func:`default_configurations` (point, pose,
             height).
         tool_lengths: tool lengths cycled over the rows (m); default seed 002's two tools for a
@@ -220,7 +230,7 @@ def simulate(true_machine, nominal, kind: str, n: int, rng: np.random.Generator,
     """
     if kind not in KINDS:
         raise InputError(f"unknown measurement type {kind!r}; valid types: {', '.join(KINDS)}")
-    model = Noise.parse(noise, kind)
+    model = noise if isinstance(noise, Noise) else Noise.parse(noise, kind)
     if kind == "part":
         return simulate_part(true_machine, nominal, rng, sections=n, noise=model,
                              source=source)

@@ -232,9 +232,9 @@ def reconstruct_cmd(cmm_file, gcode, origin, end_mill, ball_end, out_file, units
 
 
 def _unit_of(path: str) -> str | None:
-    from .calibration_cmds import _file_unit
+    from pkmkit.io.measurements import file_unit
 
-    return _file_unit(path)
+    return file_unit(path)
 
 
 @machined_part.command("ballbar-plan")
