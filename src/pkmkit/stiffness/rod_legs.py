@@ -1,0 +1,132 @@
+"""Elastostatics of rod-leg machines (Orthoglide, linear Delta, five-bar, Delta robot, hexapods,
+Verne-type module), batched.
+
+Each rod j (unit direction u_j, from its base-side joint to the platform) has spherical (or
+universal) joints at both ends and so carries only an axial force t_j. Its leg is a chain of two
+springs in series along that force: the rod's axial compliance c_r,j = ℓ_j/(EA) (zero for rigid
+rods) and the drive's compliance c_q,a = 1/k_a seen through the actuator. With the velocity model
+in unit rows, ``A_u ẋ = B_u q̇`` (``A_u`` rows ``(u_j, (R b_j) × u_j)`` or ``u_j`` for a
+translating platform, ``B_u = B / ℓ``):
+
+- statics: a wrench w on the platform (at its reference point) is balanced by the rod forces,
+  ``w = A_uᵀ t``; each actuator carries ``τ = B_uᵀ t`` (= Jᵀ w for square A_u);
+- complementary energy ``½ τᵀ C_q τ + ½ tᵀ C_r t`` gives, for square ``A_u`` (as many rods as
+  pose coordinates), ``C = J C_q Jᵀ + A_u⁻¹ C_r A_u⁻ᵀ`` (J = A_u⁻¹ B_u) and ``K = C⁻¹``; with
+  rigid rods ``K = J⁻ᵀ K_q J⁻¹``;
+- with more rods than pose coordinates (statically indeterminate) the displacement form
+  ``K = A_uᵀ (C_r + B_u C_q B_uᵀ)⁻¹ A_u`` (it needs compliant rods).
+
+A parallelogram is two rods in parallel: its equivalent leg has twice a rod's axial stiffness
+(translating platforms: the parallelograms hold the platform's orientation rigidly, their
+bending is not modelled). Units: SI; twists (δp, δθ) of the platform reference point.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from pkmkit.errors import InputError
+from pkmkit.machines.results import Singularity
+from pkmkit.status import Status
+from pkmkit.stiffness.data import StiffnessData
+
+
+def rod_compliance(a_u: np.ndarray, b_u: np.ndarray, c_q: np.ndarray,
+                   c_r: np.ndarray | None) -> np.ndarray:
+    """Platform compliance ``(N, d, d)`` of rod legs (module docstring).
+
+    Args:
+        a_u: ``(N, m, d)`` unit-row parallel Jacobian. b_u: ``(N, m, n)`` serial Jacobian over
+            the rod lengths. c_q: ``(n,)`` actuator compliances. c_r: ``(N, m)`` or ``(m,)`` rod
+            axial compliances (None: rigid rods).
+
+    Raises:
+        InputError: more rods than pose coordinates with rigid rods.
+    """
+    n_rows, m, d = a_u.shape
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        if m == d:
+            a_inv = np.linalg.inv(np.nan_to_num(a_u))
+            j = a_inv @ b_u
+            c = np.einsum("nia,a,nja->nij", j, c_q, j)
+            if c_r is not None:
+                cr = np.broadcast_to(c_r, (n_rows, m))
+                c = c + np.einsum("nij,nj,nkj->nik", a_inv, cr, a_inv)
+        else:
+            if c_r is None:
+                raise InputError(f"{m} rods hold {d} pose coordinates: with rigid rods the "
+                                 "stiffness is not determined; give the rods a section")
+            cr = np.broadcast_to(c_r, (n_rows, m))
+            leg = np.einsum("nia,a,nja->nij", b_u, c_q, b_u)
+            leg[:, np.arange(m), np.arange(m)] += cr
+            k = np.einsum("nji,njk,nkl->nil", a_u, np.linalg.inv(np.nan_to_num(leg)), a_u)
+            c = np.linalg.inv(k)
+    bad = ~np.isfinite(a_u).all(axis=(1, 2)) | ~np.isfinite(b_u).all(axis=(1, 2))
+    c[bad] = np.nan
+    return c
+
+
+def rod_leg_compliance(machine: Any, x: Any, data: StiffnessData
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """Compliance of a rod-leg machine at poses ``x`` at its platform reference point.
+
+    Args:
+        machine: a :class:`~pkmkit.machines.machine.Machine` or
+            :class:`~pkmkit.machines.full_pose.FullPoseMachine`.
+        x: pose ``(dims,)`` / ``(N, dims)`` (m, rad); positions ``(3,)`` / ``(N, 3)`` for a
+            machine with fewer than six actuators and a full pose.
+        data: the elastic data.
+
+    Returns:
+        compliance ``(N, d, d)``, status ``(N,)``, the full poses ``(N, dims)``, single.
+
+    Raises:
+        InputError, UnreachablePoseError: as the machine's inverse model, for a single pose.
+    """
+    model = machine.model
+    _check_count(data, machine.n_actuators)
+    full = model.full_pose
+    arr = np.asarray(x, dtype=float)
+    single = arr.ndim == 1
+    inv = machine.ik(x, full_output=True)
+    status = np.atleast_1d(np.asarray(inv.status, dtype=int)).copy()
+    poses = getattr(inv, "pose", None)
+    poses = np.atleast_2d(np.asarray(arr if poses is None else poses, dtype=float))
+    jac = machine.jacobian(poses, q=np.atleast_2d(inv.q))
+    a, b = np.asarray(jac.A), np.asarray(jac.B)
+    if a.ndim == 2:
+        a, b = a[None], b[None]
+    flags = np.atleast_1d(np.asarray(jac.singularity))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lengths = np.linalg.norm(a[:, :, :3] if full else a, axis=2)  # (N, m)
+        a_u = a / lengths[:, :, None]
+        b_u = b / lengths[:, :, None]
+    c_q = 1.0 / data.actuator_stiffness
+    c_r = None
+    if data.rod_section is not None:
+        c_r = _rod_compliances(machine, lengths, data)
+    c = rod_compliance(a_u, b_u, c_q, c_r)
+    singular = (np.asarray(flags) & int(Singularity.PARALLEL)).astype(bool)
+    status[(status == Status.OK) & singular] = Status.SINGULAR
+    c[status != Status.OK] = np.nan
+    return c, status, poses, single
+
+
+def _rod_compliances(machine: Any, lengths: np.ndarray, data: StiffnessData) -> np.ndarray:
+    """``(N, m)`` axial compliance ℓ/(EA) of each row of A at its current length ``lengths``
+    (m): a rod (full-pose machines) or an equivalent leg (translating platforms: its rods in
+    parallel)."""
+    model = machine.model
+    ea = data.rod_material.E * data.rod_section.area
+    if model.full_pose:
+        return lengths / ea
+    counts = np.bincount(model.rod_leg, minlength=model.n_legs)
+    return lengths / (ea * counts[None, :])
+
+
+def _check_count(data: StiffnessData, n: int) -> None:
+    if data.actuator_stiffness.shape != (n,):
+        raise InputError(f"actuator_stiffness has {data.actuator_stiffness.size} values for "
+                         f"{n} actuators")
