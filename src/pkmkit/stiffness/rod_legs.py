@@ -48,7 +48,7 @@ def rod_compliance(a_u: np.ndarray, b_u: np.ndarray, c_q: np.ndarray,
     n_rows, m, d = a_u.shape
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         if m == d:
-            a_inv = np.linalg.inv(np.nan_to_num(a_u))
+            a_inv = _inverse(a_u)
             j = a_inv @ b_u
             c = np.einsum("nia,a,nja->nij", j, c_q, j)
             if c_r is not None:
@@ -61,11 +61,21 @@ def rod_compliance(a_u: np.ndarray, b_u: np.ndarray, c_q: np.ndarray,
             cr = np.broadcast_to(c_r, (n_rows, m))
             leg = np.einsum("nia,a,nja->nij", b_u, c_q, b_u)
             leg[:, np.arange(m), np.arange(m)] += cr
-            k = np.einsum("nji,njk,nkl->nil", a_u, np.linalg.inv(np.nan_to_num(leg)), a_u)
-            c = np.linalg.inv(k)
+            k = np.einsum("nji,njk,nkl->nil", a_u, _inverse(leg), a_u)
+            c = _inverse(k)
     bad = ~np.isfinite(a_u).all(axis=(1, 2)) | ~np.isfinite(b_u).all(axis=(1, 2))
     c[bad] = np.nan
     return c
+
+
+def _inverse(mats: np.ndarray) -> np.ndarray:
+    """Batched inverse ``(N, d, d)``; NaN for rows that are not finite or are singular."""
+    out = np.full(mats.shape, np.nan)
+    ok = np.isfinite(mats).all(axis=(1, 2))
+    ok[ok] = np.abs(np.linalg.det(mats[ok])) > 0
+    if ok.any():
+        out[ok] = np.linalg.inv(mats[ok])
+    return out
 
 
 def rod_leg_compliance(machine: Any, x: Any, data: StiffnessData
