@@ -20,8 +20,10 @@ to σ_max): ``z = N (Nᵀ H N)⁻¹ Nᵀ Tᵀ w``, so the compliance is
     C = T N (Nᵀ H N)⁻¹ Nᵀ Tᵀ,        K = C⁻¹ where C is regular.
 
 Redundant constraints cost nothing here (they do not change the null space), rigid links are
-simply absent springs, and a configuration where some motion costs no energy (a mechanism:
-``Nᵀ H N`` singular) is flagged SINGULAR. ``tests/stiffness/test_joint_chains.py`` checks this
+simply absent springs; a motion that costs no energy (``Nᵀ H N`` singular) is a mechanism —
+the configuration is flagged SINGULAR — when it moves the tool, and is ignored (pseudo-inverse)
+when it does not (internal motions: two coaxial passive joints, a rod turning on itself).
+``tests/stiffness/test_joint_chains.py`` checks this
 against a Lagrange-multiplier (KKT) solution and against Pashkevich's per-leg aggregation
 ``K = Σ K_leg``.
 """
@@ -246,12 +248,19 @@ def null_space_compliance(g: np.ndarray, h: np.ndarray, t: np.ndarray,
     basis = np.swapaxes(vt[:, expected:, :], 1, 2)  # (k, nz, f)
     reduced = np.swapaxes(basis, 1, 2) @ h[ok] @ basis
     reduced = 0.5 * (reduced + np.swapaxes(reduced, 1, 2))
-    lam = np.linalg.eigvalsh(reduced)
-    regular = lam[:, 0] > MECHANISM_TOL * np.maximum(lam[:, -1], 0.0)
+    lam, modes = np.linalg.eigh(reduced)
+    free = lam <= MECHANISM_TOL * np.maximum(lam[:, -1:], 0.0)
+    tn = t[ok] @ basis @ modes  # the tool's motion in each energy mode
+    # a zero-energy mode that moves the tool is a mechanism; one that does not (a rod turning
+    # about its own axis, two coaxial passive joints) is internal and ignored
+    scale = np.abs(tn).max(axis=(1, 2), keepdims=True)
+    moving = (np.abs(tn).max(axis=1) > 1e-9 * scale[:, 0]) & free
+    regular = ~moving.any(axis=1)
     status[ok[~regular]] = Status.SINGULAR
-    ok, basis, reduced = ok[regular], basis[regular], reduced[regular]
-    tn = t[ok] @ basis
-    out[ok] = tn @ np.linalg.solve(reduced, np.swapaxes(tn, 1, 2))
+    with np.errstate(divide="ignore"):
+        inv_lam = np.where(free, 0.0, 1.0 / np.where(free, 1.0, lam))
+    c = np.einsum("nia,na,nja->nij", tn, inv_lam, tn)
+    out[ok[regular]] = c[regular]
     return out, status
 
 

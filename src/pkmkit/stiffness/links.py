@@ -3,7 +3,8 @@
 A *link* is the straight segment of a body between two consecutive elements of a chain: from
 the joint location of element j−1 (its frame origin before its own motion: a prismatic joint's
 moving part starts there) to the origin of element j. In a leg the links run from the first
-joint to the last joint (what lies before is the base, after is the platform: both rigid); in
+joint to the last joint (what lies before is the base, after is the platform: both rigid; but
+the sliding part of a last prismatic joint runs on to the next element); in
 the head, from its first element to the tool frame. Each link is a cantilever beam
 (:func:`pkmkit.stiffness.beam.beam_compliance`) whose distal end carries a 6-DOF virtual spring:
 its coordinates are the small displacement of the distal end along the beam's local axes —
@@ -56,6 +57,9 @@ def chain_links(model: JointChainModel, home_values: np.ndarray, home_platform: 
     for kind, index, chain in chains:
         joints = [j for j, e in enumerate(chain) if model.elements[e].type != FIXED]
         last = len(chain) - 1 if kind == "head" else (joints[-1] if joints else -1)
+        if kind == "leg" and joints and model.elements[chain[last]].type == PRISMATIC and (
+                last + 1 < len(chain)):
+            last += 1  # the sliding part of a last prismatic joint reaches the platform
         first = 1
         for j in range(first, last + 1):
             e = chain[j]
