@@ -29,6 +29,8 @@ class StiffnessResult:
         translational: ``(N, min(d, 3))`` eigenvalues of the translational stiffness
             ``(C_tt)⁻¹`` (N/m, ascending): the stiffness felt by a pure force at the reference
             point; ``[:, 0]`` the smallest.
+        rotational: ``(N, 3)`` eigenvalues of ``(C_rr)⁻¹`` (N·m/rad, ascending) — the
+            stiffness felt by a pure moment — or None for a translating platform.
         deflection: ``(N, d)`` C w under the wrench (m, rad), or None.
         rigid: ``(N,)`` number of rigid directions.
         status: ``(N,)`` :class:`~pkmkit.status.Status` codes.
@@ -41,6 +43,7 @@ class StiffnessResult:
     eigenvalues: np.ndarray
     directions: np.ndarray
     translational: np.ndarray
+    rotational: np.ndarray | None
     deflection: np.ndarray | None
     rigid: np.ndarray
     status: np.ndarray
@@ -51,7 +54,7 @@ class StiffnessResult:
         """The first row without its batch axis (for one configuration)."""
         fields = {k: getattr(self, k) for k in self.__dataclass_fields__}
         for k in ("compliance", "stiffness", "eigenvalues", "directions", "translational",
-                  "deflection", "rigid", "status"):
+                  "rotational", "deflection", "rigid", "status"):
             if fields[k] is not None:
                 fields[k] = fields[k][0]
         return StiffnessResult(**fields)
@@ -85,17 +88,26 @@ def summarize(compliance: np.ndarray, status: np.ndarray, coordinates: tuple[str
         if rows.size:
             inv = np.einsum("nij,nj,nkj->nik", v[full], 1.0 / lam[full], v[full])
             stiff[rows] = 0.5 * (inv + np.swapaxes(inv, 1, 2))
-        t = min(d, 3)
-        lam_t = np.linalg.eigvalsh(c[ok][:, :t, :t])
-        top_t = np.abs(lam_t[:, -1:])
-        with np.errstate(divide="ignore"):
-            trans[ok] = np.where(lam_t <= RIGID_TOL * top_t, np.inf,
-                                 1.0 / np.where(lam_t <= RIGID_TOL * top_t, 1.0, lam_t))[:, ::-1]
+        trans[ok] = _block_stiffness(c[ok][:, :3, :3])
+    rot = None
+    if d == 6:
+        rot = np.full((n, 3), np.nan)
+        if ok.any():
+            rot[ok] = _block_stiffness(c[ok][:, 3:, 3:])
     deflection = None
     if wrench is not None:
         w = np.broadcast_to(np.asarray(wrench, dtype=float), (n, d))
         deflection = np.einsum("nij,nj->ni", np.where(ok[:, None, None], c, np.nan), w)
     return StiffnessResult(compliance=np.where(ok[:, None, None], c, np.nan), stiffness=stiff,
-                           eigenvalues=eig, directions=vec, translational=trans,
+                           eigenvalues=eig, directions=vec, translational=trans, rotational=rot,
                            deflection=deflection, rigid=rigid, status=status,
                            coordinates=coordinates, reference=reference)
+
+
+def _block_stiffness(block: np.ndarray) -> np.ndarray:
+    """Ascending eigenvalues of the inverse of compliance blocks ``(N, b, b)`` (inf where a
+    block eigenvalue is rigid)."""
+    lam = np.linalg.eigvalsh(block)
+    rigid = lam <= RIGID_TOL * np.abs(lam[:, -1:])
+    with np.errstate(divide="ignore"):
+        return np.where(rigid, np.inf, 1.0 / np.where(rigid, 1.0, lam))[:, ::-1]
