@@ -82,3 +82,16 @@ def test_batch_flags_bad_rows_with_exit_3(run, tmp_path):
     m = machine("orthoglide")
     ref = stiffness(m, np.array([0.05, 0.0, 0.0]), wrench=[100.0, 0.0, 0.0])
     assert float(rows[2]["dx"]) == pytest.approx(ref.deflection[0] * 1e6, rel=1e-9)
+
+
+def test_machine_file_error_exits_1_with_the_line(run, tmp_path):
+    path = tmp_path / "m.toml"
+    path.write_text('[machine]\nkind = "orthoglide"\n[stiffness]\nactuator_stiffness = -3\n')
+    result = run("stiffness", path, "--pose", "0,0,0")
+    assert result.exit_code == 1
+    assert "m.toml:4:" in result.output and "actuator_stiffness" in result.output
+
+
+def test_show_says_which_values_are_assumed(run):
+    text = run("show", "orthoglide").output
+    assert "elastic data (pkmkit stiffness)" in text and "assumed" in text

@@ -107,11 +107,14 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     twists), rigid (rigid directions), the deflection under --wrench (dx.. in µm, rx.. in
     µrad), K11..Kdd (SI) and status.
     """
-    from pkmkit.stiffness import default_data, stiffness, twist_names, with_settings
+    from pkmkit.stiffness import stiffness, twist_names, with_settings
 
     machine_sets, elastic = split_settings(assignments)
+    from pkmkit.stiffness.file_data import machine_data
+
     m = resolve_machine(machine_name, machine_sets, units)
-    data = with_settings(default_data(m), elastic, m.n_actuators, length_scale(units))
+    data = with_settings(machine_data(machine_name, m), elastic, m.n_actuators,
+                         length_scale(units))
     convention = resolve_convention(convention)
     names = twist_names(m)
     d = len(names)

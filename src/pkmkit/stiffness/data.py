@@ -98,6 +98,10 @@ def default_data(machine: Any) -> StiffnessData:
         notes.append(f"rotary actuators {ASSUMED_ROTARY:.3g} N·m/rad (assumed: motor and "
                      "gearbox; the source gives none)")
     kind = machine.kind.kind if getattr(machine, "kind", None) is not None else None
+    from pkmkit.machines.registry import machines as presets
+
+    if machine.id not in presets():  # a user's file of that kind: its own rods
+        kind = None
     rod_section = rod_material = None
     from pkmkit.model.chains import JointChainModel
 

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.errors import InputError, ParameterError
 from pkmkit.machines.results import Singularity
 from pkmkit.status import Status
 from pkmkit.stiffness.data import StiffnessData
@@ -116,6 +116,10 @@ def rod_leg_compliance(machine: Any, x: Any, data: StiffnessData
     c_q = 1.0 / data.actuator_stiffness
     c_r = None
     if data.rod_section is not None:
+        shortest = float(model.rod_length[model.rod_kind != 1].min(initial=np.inf))
+        if data.rod_section.size > shortest:
+            raise ParameterError(f"rod section {data.rod_section.label} is larger than the "
+                                 f"shortest rod ({shortest:g} m)", "rod_section")
         c_r = _rod_compliances(machine, lengths, data)
     c = rod_compliance(a_u, b_u, c_q, c_r)
     singular = (np.asarray(flags) & int(Singularity.PARALLEL)).astype(bool)
