@@ -207,8 +207,13 @@ def _print(m, r, data, units, x, q, wrench, note, names) -> None:
         mat = np.where(np.abs(mat) < 1e-12 * np.abs(mat).max(), 0.0, mat)  # rounding noise
         for row in mat:
             click.echo("    " + "  ".join(f"{v:11.4g}" for v in row))
-    click.echo(f"  translational stiffness (pure force): {_micro(r.translational)} N/µm; "
-               f"smallest along {fmt(_weakest(r), 4)}")
+    kt = np.asarray(r.translational)
+    if kt.size > 1 and abs(kt[1] - kt[0]) <= 1e-9 * abs(kt[1]):
+        where = ("equal in every direction" if abs(kt[-1] - kt[0]) <= 1e-9 * abs(kt[-1])
+                 else "smallest in every direction of a plane")
+    else:
+        where = f"smallest along {fmt(_weakest(r), 4)}"
+    click.echo(f"  translational stiffness (pure force): {_micro(kt)} N/µm; {where}")
     if r.rotational is not None:
         click.echo(f"  rotational stiffness (pure moment): {_micro(r.rotational)} N·m/µrad")
     if wrench is not None:

@@ -72,7 +72,7 @@ def check_stiffness(values: np.ndarray, what: str) -> np.ndarray:
     for i, v in enumerate(arr):
         if not (math.isfinite(v) and v > 0):
             raise ParameterError(f"{what}[{i}] must be a finite stiffness > 0 (SI: N/m or "
-                                 f"N·m/rad), got {v!r}", what)
+                                 f"N·m/rad), got {float(v)!r}", what)
     arr.setflags(write=False)
     return arr
 
