@@ -28,7 +28,9 @@ from typing import Any
 import numpy as np
 
 from pkmkit.errors import InputError, ParameterError
-from pkmkit.machines.results import Singularity
+from pkmkit.machines.closed_form import RodClosedForm
+from pkmkit.machines.full_pose_forms import FullPoseForms
+from pkmkit.machines.machine import SINGULARITY_TOL
 from pkmkit.status import Status
 from pkmkit.stiffness.data import StiffnessData
 
@@ -68,6 +70,16 @@ def rod_compliance(a_u: np.ndarray, b_u: np.ndarray, c_q: np.ndarray,
     return c
 
 
+def _condition(mats: np.ndarray) -> np.ndarray:
+    """Frobenius condition number ``(N,)`` of square or tall ``(N, m, d)`` matrices (inf where
+    singular or not finite): ``‖M‖ ‖M⁺‖`` through the d×d normal matrix."""
+    normal = np.einsum("nki,nkj->nij", mats, mats)
+    inv = _inverse(normal)
+    with np.errstate(invalid="ignore"):
+        out = np.sqrt(np.einsum("nij,nij->n", mats, mats) * np.einsum("nii->n", inv))
+    return np.where(np.isfinite(out), out, np.inf)
+
+
 def _inverse(mats: np.ndarray) -> np.ndarray:
     """Batched inverse ``(N, d, d)``; NaN for rows that are not finite or are singular."""
     out = np.full(mats.shape, np.nan)
@@ -104,11 +116,14 @@ def rod_leg_compliance(machine: Any, x: Any, data: StiffnessData
     status = np.atleast_1d(np.asarray(inv.status, dtype=int)).copy()
     poses = getattr(inv, "pose", None)
     poses = np.atleast_2d(np.asarray(arr if poses is None else poses, dtype=float))
-    jac = machine.jacobian(poses, q=np.atleast_2d(inv.q))
-    a, b = np.asarray(jac.A), np.asarray(jac.B)
-    if a.ndim == 2:
-        a, b = a[None], b[None]
-    flags = np.atleast_1d(np.asarray(jac.singularity))
+    q = np.atleast_2d(np.asarray(inv.q, dtype=float))
+    ok = status == Status.OK
+    rows, width = poses.shape[0], model.n_rods if full else model.n_legs
+    a = np.full((rows, width, model.dims), np.nan)
+    b = np.full((rows, width, machine.n_actuators), np.nan)
+    if ok.any():  # the closed forms alone: no singular values, no Jacobian J
+        forms = FullPoseForms(model) if full else RodClosedForm(model)
+        a[ok], b[ok] = forms.jacobians(poses[ok], q[ok])
     with np.errstate(invalid="ignore", divide="ignore"):
         lengths = np.linalg.norm(a[:, :, :3] if full else a, axis=2)  # (N, m)
         a_u = a / lengths[:, :, None]
@@ -122,8 +137,13 @@ def rod_leg_compliance(machine: Any, x: Any, data: StiffnessData
                                  f"shortest rod ({shortest:g} m)", "rod_section")
         c_r = _rod_compliances(machine, lengths, data)
     c = rod_compliance(a_u, b_u, c_q, c_r)
-    singular = (np.asarray(flags) & int(Singularity.PARALLEL)).astype(bool)
-    status[(status == Status.OK) & singular] = Status.SINGULAR
+    # a parallel singularity: A_u (moments over the characteristic length) nearly singular
+    scaled = a_u.copy()
+    if full:
+        scaled[:, :, 3:] /= getattr(machine, "characteristic_length", 1.0)
+    singular = _condition(scaled) > 1.0 / SINGULARITY_TOL
+    status[(status == Status.OK) & (singular | ~np.isfinite(c).all(axis=(1, 2)))] = (
+        Status.SINGULAR)
     c[status != Status.OK] = np.nan
     return c, status, poses, single
 
