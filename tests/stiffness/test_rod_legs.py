@@ -236,3 +236,21 @@ def test_wrench_of_the_wrong_width_is_refused():
         stiffness(m, m.home_pose, wrench=[1.0, 2.0])
     with pytest.raises(InputError, match="reference"):
         stiffness(m, m.home_pose, reference=[0.0, 0.0, 0.1])
+
+
+def test_reference_point_moved_in_the_platform_frame():
+    """K about a point r (platform frame) is k Σ [u, (R b − R r) × u]ᵀ[u, (R b − R r) × u]."""
+    m = machine("gough-stewart")
+    k = 3e7
+    pose = m.home_pose + np.array([0.02, -0.01, 0.03, 0.05, -0.04, 0.1])
+    offset = np.array([0.05, -0.02, -0.2])
+    result = stiffness(m, pose, data=_data(m, k), reference=offset)
+    rot = Rotation.from_rotvec(pose[3:]).as_matrix()
+    rows = []
+    for j in range(6):
+        b = rot @ m.model.rod_platform[j]
+        d = pose[:3] + b - m.model.rod_base[j]
+        u = d / np.linalg.norm(d)
+        rows.append(np.concatenate([u, np.cross(b - rot @ offset, u)]))
+    a = np.array(rows)
+    np.testing.assert_allclose(result.stiffness, k * a.T @ a, rtol=1e-9, atol=1e-9 * k)
