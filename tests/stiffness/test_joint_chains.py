@@ -209,3 +209,12 @@ def test_internal_zero_energy_motion_is_not_a_mechanism():
     c2, status = null_space_compliance(g2, h2, t2, system.status)
     assert phi2 >= 0 and status[0] == 0
     np.testing.assert_allclose(c2, c, rtol=1e-8, atol=1e-10 * np.abs(c).max())
+
+
+def test_rigid_block_directions_are_infinite_not_rounding_noise():
+    """The crank–slider's piston is held rigidly in rotation by its slider: the rotational
+    stiffness is inf, not the inverse of a rounding-level compliance."""
+    m = machine("crank-slider")
+    r = stiffness(m, q=m.home_q)
+    assert np.isinf(r.rotational).all()
+    assert np.isfinite(r.translational[0]) and np.isinf(r.translational[1:]).all()

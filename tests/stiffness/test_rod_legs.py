@@ -254,3 +254,9 @@ def test_reference_point_moved_in_the_platform_frame():
         rows.append(np.concatenate([u, np.cross(b - rot @ offset, u)]))
     a = np.array(rows)
     np.testing.assert_allclose(result.stiffness, k * a.T @ a, rtol=1e-9, atol=1e-9 * k)
+
+
+@pytest.mark.parametrize("bad", [1e308, 1e-300])
+def test_absurd_actuator_stiffness_is_a_units_mistake(bad):
+    with pytest.raises(ParameterError, match="check the units"):
+        StiffnessData(actuator_stiffness=np.array([1e8, 1e8, bad]))

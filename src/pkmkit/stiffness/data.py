@@ -33,6 +33,8 @@ ASSUMED_LINEAR = 1e8
 #: Assumed torsional stiffness of a rotary actuator (motor and gearbox), N·m/rad.
 ASSUMED_ROTARY = 1e5
 
+#: Accepted range of a drive stiffness (SI); beyond it a value is a units mistake.
+STIFFNESS_RANGE = (1e-3, 1e15)
 #: Built-in kinds whose sources give a rod section: (section, material, source).
 _ROD_SECTIONS = {
     "linear-delta": (Section.circle(0.040), Material(),
@@ -73,6 +75,10 @@ def check_stiffness(values: np.ndarray, what: str) -> np.ndarray:
         if not (math.isfinite(v) and v > 0):
             raise ParameterError(f"{what}[{i}] must be a finite stiffness > 0 (SI: N/m or "
                                  f"N·m/rad), got {float(v)!r}", what)
+        if not STIFFNESS_RANGE[0] <= v <= STIFFNESS_RANGE[1]:
+            raise ParameterError(f"{what}[{i}] = {float(v):g} is outside [{STIFFNESS_RANGE[0]:g}, "
+                                 f"{STIFFNESS_RANGE[1]:g}] (SI: N/m or N·m/rad): check the units",
+                                 what)
     arr.setflags(write=False)
     return arr
 

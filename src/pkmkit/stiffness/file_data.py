@@ -28,7 +28,7 @@ from pkmkit.errors import ParameterError
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
 from pkmkit.model.parameters import length_scale
 from pkmkit.stiffness.beam import Material, parse_section
-from pkmkit.stiffness.data import StiffnessData, default_data
+from pkmkit.stiffness.data import STIFFNESS_RANGE, StiffnessData, default_data
 
 _KEYS = {"actuator_stiffness", "rod_section", "rod_material", "link_section", "link_material",
          "links"}
@@ -108,6 +108,9 @@ def _stiffness(doc: MachineDocument, values: list, where: tuple) -> np.ndarray:
         if not ok:
             raise doc.error(f"actuator_stiffness[{i}] must be a finite stiffness > 0 (N/m or "
                             f"N·m/rad), got {v!r}", where)
+        if not STIFFNESS_RANGE[0] <= v <= STIFFNESS_RANGE[1]:
+            raise doc.error(f"actuator_stiffness[{i}] = {v:g} is outside [{STIFFNESS_RANGE[0]:g}"
+                            f", {STIFFNESS_RANGE[1]:g}] (N/m or N·m/rad): check the units", where)
         out.append(float(v))
     return np.array(out)
 

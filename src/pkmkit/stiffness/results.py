@@ -88,12 +88,12 @@ def summarize(compliance: np.ndarray, status: np.ndarray, coordinates: tuple[str
         if rows.size:
             inv = np.einsum("nij,nj,nkj->nik", v[full], 1.0 / lam[full], v[full])
             stiff[rows] = 0.5 * (inv + np.swapaxes(inv, 1, 2))
-        trans[ok] = _block_stiffness(c[ok][:, :3, :3])
+        trans[ok] = _block_stiffness(c[ok][:, :3, :3], top)
     rot = None
     if d == 6:
         rot = np.full((n, 3), np.nan)
         if ok.any():
-            rot[ok] = _block_stiffness(c[ok][:, 3:, 3:])
+            rot[ok] = _block_stiffness(c[ok][:, 3:, 3:], top)
     deflection = None
     if wrench is not None:
         w = np.broadcast_to(np.asarray(wrench, dtype=float), (n, d))
@@ -104,10 +104,11 @@ def summarize(compliance: np.ndarray, status: np.ndarray, coordinates: tuple[str
                            coordinates=coordinates, reference=reference)
 
 
-def _block_stiffness(block: np.ndarray) -> np.ndarray:
+def _block_stiffness(block: np.ndarray, top: np.ndarray) -> np.ndarray:
     """Ascending eigenvalues of the inverse of compliance blocks ``(N, b, b)`` (inf where a
-    block eigenvalue is rigid)."""
+    block eigenvalue is rigid: below :data:`RIGID_TOL` × ``top (N, 1)``, the whole
+    compliance's largest eigenvalue)."""
     lam = np.linalg.eigvalsh(block)
-    rigid = lam <= RIGID_TOL * np.abs(lam[:, -1:])
+    rigid = lam <= RIGID_TOL * top
     with np.errstate(divide="ignore"):
         return np.where(rigid, np.inf, 1.0 / np.where(rigid, 1.0, lam))[:, ::-1]
