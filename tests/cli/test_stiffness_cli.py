@@ -95,3 +95,11 @@ def test_machine_file_error_exits_1_with_the_line(run, tmp_path):
 def test_show_says_which_values_are_assumed(run):
     text = run("show", "orthoglide").output
     assert "elastic data (pkmkit stiffness)" in text and "assumed" in text
+
+
+def test_a_section_for_the_other_family_is_refused(run):
+    result = run("stiffness", "orthoglide", "--pose", "0,0,0", "--set", "link_section=circle:0.02")
+    assert result.exit_code == 1 and "rod_section" in result.output
+    result = run("stiffness", "tripteor-x7", "--q", "0.983186,1.064076,0.988005,0,0", "--set",
+                 "rod_section=circle:0.02")
+    assert result.exit_code == 1 and "link_section" in result.output

@@ -63,6 +63,10 @@ def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = No
     names = twist_names(machine)
     d = len(names)
     chains = isinstance(machine.model, JointChainModel)
+    if chains and data.rod_section is not None:
+        raise InputError("a joint-chain machine has links, not rods: give link_section")
+    if not chains and (data.link_section is not None or data.link_sections):
+        raise InputError("a rod-leg machine has rods, not links: give rod_section")
     if chains:
         if (pose is None) == (q is None):
             raise InputError("give either a pose (tool point and axis) or q")
