@@ -95,6 +95,9 @@ def run_demo(out_dir: Path, quick: bool = False) -> dict[str, Any]:
 
     full_pose = run_full_pose_demo(out_dir, quick)
     chains = run_chain_demo(out_dir, quick)
+    from .demo_stiffness import run_stiffness_demo
+
+    stiffness = run_stiffness_demo(out_dir / "stiffness", quick)
     click.echo("\n== geometric errors (figures in errors/)")
     errors = error_summary(out_dir / "errors")
     _print_errors(errors)
@@ -105,11 +108,13 @@ def run_demo(out_dir: Path, quick: bool = False) -> dict[str, Any]:
                             "geometric errors and calibration",
              "units": "m", "quick": quick, "machines": summaries, "analysis": analysis,
              "design": design, "motion": motion, "full_pose": full_pose,
-             "joint_chains": chains, "errors": errors, "calibration": calibration}
+             "joint_chains": chains, "stiffness": stiffness, "errors": errors,
+             "calibration": calibration}
     write_text_atomic(out_dir / "summary.json", json.dumps(to_jsonable(total), indent=2))
     click.echo(f"\nwrote {out_dir}/summary.json, one JSON and one PNG per machine, and the "
                "figures of the studies in analysis/, design/, motion/, full-pose/, "
-               "joint-chains/, errors/ and calibration/ (each calibration with its report.html)")
+               "joint-chains/, stiffness/, errors/ and calibration/ (each calibration with its "
+               "report.html)")
     return total
 
 

@@ -87,6 +87,7 @@ def describe_machine(m: Machine, units: str = "m") -> dict[str, Any]:
             "instantaneous": asdict(mobility["instantaneous"]),
         },
         "warnings": warnings,
+        "elastic_data": _elastic(m),
         **({"characteristic_length": m.characteristic_length / scale,
             "characteristic_length_given": m.length_given}
            if hasattr(m, "characteristic_length") else {}),
@@ -129,7 +130,17 @@ def describe_chain_machine(m, units: str = "m") -> dict[str, Any]:
         "hyperstatism": asdict(count),
         "reference_configurations": {k: v / actuator_scales(m, units)
                                      for k, v in m.reference_poses().items()},
+        "elastic_data": _elastic(m),
     }
+
+
+def _elastic(m) -> dict[str, Any]:
+    """The machine's elastic data for ``pkmkit stiffness`` (SI), saying what is assumed."""
+    from pkmkit.stiffness import default_data
+
+    data = default_data(m)
+    return {"actuator_stiffness": data.actuator_stiffness, "notes": list(data.notes),
+            "assumed": data.assumed}
 
 
 def print_description(info: dict[str, Any]) -> None:
@@ -182,6 +193,11 @@ def print_description(info: dict[str, Any]) -> None:
         click.echo(f"warning: {text}")
     click.echo(f"reference poses ({u}, deg): " + "; ".join(
         f"{k} {fmt(v)}" for k, v in info["reference_poses"].items()))
+    _print_elastic(info)
+
+
+def _print_elastic(info: dict[str, Any]) -> None:
+    click.echo("elastic data (pkmkit stiffness): " + "; ".join(info["elastic_data"]["notes"]))
 
 
 def _print_chain(info: dict[str, Any]) -> None:
@@ -216,3 +232,4 @@ def _print_chain(info: dict[str, Any]) -> None:
     click.echo("  passive joints (deg or " + u + "): " + ", ".join(
         f"{k} = {v:.6g}" for k, v in home["passive"].items()))
     click.echo(f"defects: {info['defects']} (pkmkit errors {info['id']} lists them)")
+    _print_elastic(info)

@@ -61,6 +61,10 @@ LAZY_COMMANDS: dict[str, LazyCommand] = {
         "pkmkit.cli.motion_cmds", "arm_sizing",
         "Size (or analyse) a solid or hollow circular arm: stress, buckling, bending, mass, "
         "stiffness."),
+    "stiffness": LazyCommand(
+        "pkmkit.cli.stiffness_cmds", "stiffness_cmd",
+        "Stiffness of MACHINE at a pose: K and C at the tool point, eigen-stiffnesses, "
+        "deflection."),
     "errors": LazyCommand(
         "pkmkit.cli.errors_cmds", "errors_cmd",
         "Geometric error analyses of MACHINE: its defect set (default), hyperstatic "

@@ -68,7 +68,7 @@ from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
 from pkmkit.status import Status
 
 JOINT_CHAIN = "joint-chain"
-TOP_KEYS = {"machine", "elements", "legs", "head", "poses", "defects"}
+TOP_KEYS = {"machine", "elements", "legs", "head", "poses", "defects", "stiffness"}
 MACHINE_KEYS = {"kind", "id", "name", "description", "source", "units",
                 "characteristic_length", "tool_length"}
 ELEMENT_KEYS = {"name", "type", "axis", "point", "spin", "rotation", "label", "actuated",

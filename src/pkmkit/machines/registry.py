@@ -60,9 +60,9 @@ ALIASES = {"linear-delta": "linear-delta-ch3", "five-bar": "five-bar-isotropic"}
 
 _MACHINE_KEYS = {"kind", "id", "name", "description", "source", "units", "dims", "home",
                  "mode_names", "characteristic_length"}
-_TOP_KEYS = {"machine", "parameters", "legs", "poses", "defects"}
+_TOP_KEYS = {"machine", "parameters", "legs", "poses", "defects", "stiffness"}
 _LEG_KEYS = {"name", "actuator", "type", "base", "axis", "platform", "length", "branch",
-             "parallelogram", "stroke", "pivot"}
+             "parallelogram", "stroke", "pivot", "actuator_stiffness"}
 
 
 def _data_dir():

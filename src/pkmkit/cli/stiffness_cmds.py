@@ -1,0 +1,270 @@
+"""``pkmkit stiffness``: Cartesian stiffness, compliance and deflection of any machine.
+
+Values on the command line follow :mod:`pkmkit.cli.coordinates` (lengths in ``--units``, angles in
+degrees); the elastic data are always SI (N/m, N·m/rad, Pa), section dimensions in ``--units``.
+Text output shows stiffnesses in N/µm (translation) and N·m/µrad (rotation); ``--json`` gives
+every matrix in SI.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import click
+import numpy as np
+
+from pkmkit.errors import InputError
+from pkmkit.model.parameters import length_scale
+from pkmkit.spatial.rotation import resolve_convention
+
+from .batch import batch_options, run_batch, status_names
+from .coordinates import (
+    actuator_scales,
+    family,
+    parse_actuators,
+    parse_numbers,
+    pose_columns,
+    pose_from_cli,
+    pose_widths,
+)
+from .options import (
+    ANGLES_OPTION,
+    JSON_OPTION,
+    SET_OPTION,
+    TOOL_LENGTH_OPTION,
+    UNITS_OPTION,
+    emit_json,
+    fmt,
+    resolve_machine,
+)
+
+#: N/m in one N/µm; N·m/rad in one N·m/µrad.
+PER_MICRO = 1e6
+
+
+def register(cli: click.Group) -> None:
+    """Add the stiffness command to the ``pkmkit`` group."""
+    cli.add_command(stiffness_cmd)
+
+
+def split_settings(assignments) -> tuple[list[str], dict[str, str]]:
+    """``--set`` assignments: machine parameters, and the elastic settings by name."""
+    from pkmkit.stiffness.data import SET_KEYS
+
+    machine_sets, elastic = [], {}
+    for text in assignments:
+        key, sep, value = text.partition("=")
+        if sep and key.strip() in SET_KEYS:
+            elastic[key.strip()] = value
+        else:
+            machine_sets.append(text)
+    return machine_sets, elastic
+
+
+def _wrench(text: str | None, d: int) -> tuple[np.ndarray | None, str]:
+    if text is None:
+        return None, ""
+    values = parse_numbers(text, "--wrench", (d, 6) if d < 6 else (6,))
+    note = ""
+    if values.size == 6 and d < 6:
+        if np.any(values[3:]):
+            note = ("moments carried by the parallelograms, rigid in rotation in this model: "
+                    "they cause no deflection here")
+        values = values[:d]
+    return values, note
+
+
+@click.command("stiffness")
+@click.argument("machine_name", metavar="MACHINE")
+@SET_OPTION
+@click.option("--pose", help="Pose (see `pkmkit ik --help`); joint-chain machines: tool point "
+                             "and axis, or give --q.")
+@click.option("--q", "q_text", help="Actuator coordinates (joint-chain machines, instead of "
+                                    "--pose).")
+@click.option("--wrench", "wrench_text", metavar="FX,FY,FZ,MX,MY,MZ",
+              help="Load at the reference point: forces in N, moments in N·m (a translating "
+                   "platform: its force components, e.g. FX,FY,FZ). Prints the deflection.")
+@click.option("--reference", "reference_text", metavar="DX,DY,DZ",
+              help="Move the reference point by this offset (in --units) in the platform frame "
+                   "(full-pose machines) or the tool frame (joint-chain machines).")
+@batch_options
+@ANGLES_OPTION
+@TOOL_LENGTH_OPTION
+@UNITS_OPTION
+@JSON_OPTION
+def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, reference_text, input_,
+                  output, chunk_rows, convention, tool_length, units, as_json):
+    """Stiffness of MACHINE at a pose: K and C at the tool point, eigen-stiffnesses, deflection.
+
+    Virtual-joint model (docs/stiffness.md): actuator drives as springs (--set
+    actuator_stiffness=K or K1,...,Kn in N/m or N·m/rad), rods with an axial spring (--set
+    rod_section=circle:D | tube:D,d | rect:B,H in --units, rod_material=E,G in Pa), joint-chain
+    links as beams (link_section=..., link_material=...); passive joints ideal. The machine's
+    assumed values are listed in the output.
+
+    Batch input columns: the pose (as for `pkmkit ik`). Output columns: the pose, kt1..kt3
+    (translational eigen-stiffnesses, N/µm, ascending), kr1..kr3 (rotational, N·m/µrad; 6-D
+    twists), rigid (rigid directions), the deflection under --wrench (dx.. in µm, rx.. in
+    µrad), K11..Kdd (SI) and status.
+    """
+    from pkmkit.stiffness import stiffness, twist_names, with_settings
+
+    machine_sets, elastic = split_settings(assignments)
+    from pkmkit.stiffness.file_data import machine_data
+
+    m = resolve_machine(machine_name, machine_sets, units)
+    data = with_settings(machine_data(machine_name, m), elastic, m.n_actuators,
+                         length_scale(units))
+    convention = resolve_convention(convention)
+    names = twist_names(m)
+    d = len(names)
+    wrench, wrench_note = _wrench(wrench_text, d)
+    scale = length_scale(units)
+    reference = None
+    if reference_text is not None:
+        reference = parse_numbers(reference_text, "--reference", (3,)) * scale
+    tl = None if tool_length is None else tool_length * scale
+    kind = family(m)
+    if input_ is not None or output is not None:
+        if input_ is None or output is None:
+            raise click.UsageError("--input and --output go together")
+        if pose is not None or q_text is not None:
+            raise click.UsageError("--pose/--q and --input are exclusive")
+        _batch(m, data, input_, output, chunk_rows, units, convention, wrench, reference, tl)
+        return
+    q = None
+    x = None
+    if kind == "chain" and q_text is not None:
+        if pose is not None:
+            raise click.UsageError("--pose and --q are exclusive")
+        q = parse_actuators(q_text, m, units)
+    elif pose is None:
+        raise click.UsageError("give --pose" + (" or --q" if kind == "chain" else "")
+                               + " (or --input TABLE --output TABLE)")
+    else:
+        x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
+                          convention)[0]
+    if q is None and kind != "chain" and q_text is not None:
+        raise InputError("--q is for joint-chain machines; give --pose")
+    kwargs: dict[str, Any] = {"wrench": wrench, "data": data, "reference": reference}
+    if kind == "chain":
+        kwargs["tool_length"] = tl
+        result = stiffness(m, x, q=q, **kwargs)
+        if q is None:
+            q = np.asarray(m.ik(x, tool_length=tl))
+    else:
+        result = stiffness(m, x, **kwargs)
+    payload = _payload(m, result, data, units, x, q, wrench)
+    if as_json:
+        emit_json(payload)
+        return
+    _print(m, result, data, units, x, q, wrench, wrench_note, names)
+
+
+def _payload(m, r, data, units, x, q, wrench) -> dict[str, Any]:
+    out: dict[str, Any] = {"machine": m.id, "units": units}
+    if x is not None:
+        out["pose"] = np.asarray(x, dtype=float)
+    if q is not None:
+        out["q"] = np.asarray(q) / actuator_scales(m, units)
+    out.update({
+        "coordinates": list(r.coordinates), "reference": r.reference,
+        "stiffness": r.stiffness, "compliance": r.compliance, "eigenvalues": r.eigenvalues,
+        "directions": r.directions, "translational_eigenvalues": r.translational,
+        "rigid_directions": int(r.rigid),
+        "si_units": {"stiffness": "N/m, N/rad, N·m/rad", "compliance": "m/N, rad/N, rad/(N·m)",
+                     "pose": "m, rad (rotation vector)", "deflection": "m, rad"},
+        "elastic_data": {"actuator_stiffness": data.actuator_stiffness,
+                         "rod_section": data.rod_section.label if data.rod_section else None,
+                         "link_section": data.link_section.label if data.link_section else None,
+                         "notes": list(data.notes), "assumed": data.assumed},
+    })
+    if r.rotational is not None:
+        out["rotational_eigenvalues"] = r.rotational
+    if wrench is not None:
+        out["wrench"] = wrench
+        out["deflection"] = r.deflection
+    return out
+
+
+def _micro(values: np.ndarray) -> str:
+    return fmt(np.asarray(values) / PER_MICRO, 5)
+
+
+def _print(m, r, data, units, x, q, wrench, note, names) -> None:
+    d = len(names)
+    where = (f"pose {fmt(np.asarray(x)[:3] / length_scale(units))} {units}" if x is not None
+             else f"q {fmt(np.asarray(q) / actuator_scales(m, units))}")
+    click.echo(f"{m.name}: stiffness at {r.reference}, {where}")
+    click.echo(f"  elastic data: {'; '.join(data.notes)}")
+    if r.rigid:
+        click.echo(f"  rigid in {r.rigid} direction(s): the model holds them with rigid rods, "
+                   "links or constraints (give sections with --set to make them compliant)")
+    else:
+        label = "N/µm" if d < 6 else "SI: N/m | N/rad ; N | N·m/rad"
+        click.echo(f"  K ({label}) =")
+        mat = r.stiffness / PER_MICRO if d < 6 else r.stiffness.copy()
+        mat = np.where(np.abs(mat) < 1e-12 * np.abs(mat).max(), 0.0, mat)  # rounding noise
+        for row in mat:
+            click.echo("    " + "  ".join(f"{v:11.4g}" for v in row))
+    kt = np.asarray(r.translational)
+    if kt.size > 1 and abs(kt[1] - kt[0]) <= 1e-9 * abs(kt[1]):
+        where = ("equal in every direction" if abs(kt[-1] - kt[0]) <= 1e-9 * abs(kt[-1])
+                 else "smallest in every direction of a plane")
+    else:
+        where = f"smallest along {fmt(_weakest(r), 4)}"
+    click.echo(f"  translational stiffness (pure force): {_micro(kt)} N/µm; {where}")
+    if r.rotational is not None:
+        click.echo(f"  rotational stiffness (pure moment): {_micro(r.rotational)} N·m/µrad")
+    if wrench is not None:
+        defl = np.asarray(r.deflection) * PER_MICRO
+        text = f"{fmt(defl[:min(d, 3)], 5)} µm"
+        if d == 6:
+            text += f", rotation {fmt(defl[3:], 5)} µrad"
+        click.echo(f"  deflection under {fmt(wrench)} (N, N·m): {text}")
+        if note:
+            click.echo(f"  note: {note}")
+
+
+def _weakest(r) -> np.ndarray:
+    """Direction of the smallest translational stiffness (unit, sign: largest component > 0)."""
+    c = np.asarray(r.compliance)[:3, :3]
+    c = c[: len(r.translational), : len(r.translational)]
+    _, v = np.linalg.eigh(c)
+    u = v[:, -1]
+    return u if u[np.argmax(np.abs(u))] > 0 else -u
+
+
+def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, reference, tl):
+    from pkmkit.io.table import Labels
+    from pkmkit.stiffness import stiffness, twist_names
+
+    names = twist_names(m)
+    d = len(names)
+    columns = pose_columns(m)
+    kind = family(m)
+
+    def compute(values, chunk):
+        x = pose_from_cli(values, m, units, convention)
+        kwargs: dict[str, Any] = {"wrench": wrench, "data": data, "reference": reference}
+        if kind == "chain":
+            kwargs["tool_length"] = tl
+        r = stiffness(m, x, **kwargs)
+        out: dict[str, Any] = {name: values[:, j] for j, name in enumerate(columns)}
+        for j in range(r.translational.shape[1]):
+            out[f"kt{j + 1}"] = r.translational[:, j] / PER_MICRO
+        if r.rotational is not None:
+            for j in range(3):
+                out[f"kr{j + 1}"] = r.rotational[:, j] / PER_MICRO
+        out["rigid"] = r.rigid
+        if wrench is not None:
+            for j, name in enumerate(names):
+                out[name] = r.deflection[:, j] * PER_MICRO
+        flat = r.stiffness.reshape(len(x), d * d)
+        for i in range(d):
+            for j in range(d):
+                out[f"K{i + 1}{j + 1}"] = flat[:, i * d + j]
+        out["status"] = Labels(np.asarray(r.status), status_names())
+        return out, r.status
+
+    run_batch(input_, output, columns, compute, chunk_rows=chunk_rows)

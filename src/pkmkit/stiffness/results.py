@@ -1,0 +1,114 @@
+"""The result of a stiffness evaluation and its derived quantities (eigen-stiffnesses, the
+translational stiffness, deflections), computed from the compliance, batched."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkmkit.status import Status
+
+#: A compliance eigenvalue below this fraction of the largest is a rigid direction (the model's
+#: rigid rods, links or constraints hold it: infinite stiffness).
+RIGID_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class StiffnessResult:
+    """Elastostatic model at N configurations (d = 2, 3 or 6 twist coordinates: translation,
+    then rotation; base frame; reference point as in ``reference``).
+
+    Attributes:
+        compliance: ``(N, d, d)`` C (m/N, m/(N·m) = 1/N, rad/(N·m)); finite wherever the
+            configuration is regular.
+        stiffness: ``(N, d, d)`` K = C⁻¹ (N/m, N, N·m/rad); NaN rows where C is singular
+            (``rigid`` > 0) or the configuration failed.
+        eigenvalues: ``(N, d)`` eigen-stiffnesses, ascending (inf for rigid directions).
+        directions: ``(N, d, d)`` their unit directions (columns).
+        translational: ``(N, min(d, 3))`` eigenvalues of the translational stiffness
+            ``(C_tt)⁻¹`` (N/m, ascending): the stiffness felt by a pure force at the reference
+            point; ``[:, 0]`` the smallest.
+        rotational: ``(N, 3)`` eigenvalues of ``(C_rr)⁻¹`` (N·m/rad, ascending) — the
+            stiffness felt by a pure moment — or None for a translating platform.
+        deflection: ``(N, d)`` C w under the wrench (m, rad), or None.
+        rigid: ``(N,)`` number of rigid directions.
+        status: ``(N,)`` :class:`~pkmkit.status.Status` codes.
+        coordinates: names of the twist coordinates.
+        reference: where the twist's point is (text).
+    """
+
+    compliance: np.ndarray
+    stiffness: np.ndarray
+    eigenvalues: np.ndarray
+    directions: np.ndarray
+    translational: np.ndarray
+    rotational: np.ndarray | None
+    deflection: np.ndarray | None
+    rigid: np.ndarray
+    status: np.ndarray
+    coordinates: tuple[str, ...]
+    reference: str
+
+    def single(self) -> StiffnessResult:
+        """The first row without its batch axis (for one configuration)."""
+        fields = {k: getattr(self, k) for k in self.__dataclass_fields__}
+        for k in ("compliance", "stiffness", "eigenvalues", "directions", "translational",
+                  "rotational", "deflection", "rigid", "status"):
+            if fields[k] is not None:
+                fields[k] = fields[k][0]
+        return StiffnessResult(**fields)
+
+
+def summarize(compliance: np.ndarray, status: np.ndarray, coordinates: tuple[str, ...],
+              reference: str, wrench: np.ndarray | None = None) -> StiffnessResult:
+    """A :class:`StiffnessResult` from compliances ``(N, d, d)`` (NaN rows: failed
+    configurations with their ``status``) and an optional wrench ``(d,)`` or ``(N, d)``."""
+    c = 0.5 * (compliance + np.swapaxes(compliance, 1, 2))
+    n, d = c.shape[:2]
+    status = np.asarray(status, dtype=int).copy()
+    ok = (status == Status.OK) & np.isfinite(c).all(axis=(1, 2))
+    status[~ok & (status == Status.OK)] = Status.SINGULAR
+    eig = np.full((n, d), np.nan)
+    vec = np.full((n, d, d), np.nan)
+    stiff = np.full((n, d, d), np.nan)
+    rigid = np.zeros(n, dtype=int)
+    trans = np.full((n, min(d, 3)), np.nan)
+    if ok.any():
+        lam, v = np.linalg.eigh(c[ok])
+        top = np.abs(lam[:, -1:])
+        is_rigid = lam <= RIGID_TOL * top
+        rigid[ok] = is_rigid.sum(axis=1)
+        with np.errstate(divide="ignore"):
+            k_eig = np.where(is_rigid, np.inf, 1.0 / np.where(is_rigid, 1.0, lam))
+        eig[ok] = k_eig[:, ::-1]
+        vec[ok] = v[:, :, ::-1]
+        full = rigid[ok] == 0
+        rows = np.flatnonzero(ok)[full]
+        if rows.size:
+            inv = np.einsum("nij,nj,nkj->nik", v[full], 1.0 / lam[full], v[full])
+            stiff[rows] = 0.5 * (inv + np.swapaxes(inv, 1, 2))
+        trans[ok] = _block_stiffness(c[ok][:, :3, :3], top)
+    rot = None
+    if d == 6:
+        rot = np.full((n, 3), np.nan)
+        if ok.any():
+            rot[ok] = _block_stiffness(c[ok][:, 3:, 3:], top)
+    deflection = None
+    if wrench is not None:
+        w = np.broadcast_to(np.asarray(wrench, dtype=float), (n, d))
+        deflection = np.einsum("nij,nj->ni", np.where(ok[:, None, None], c, np.nan), w)
+    return StiffnessResult(compliance=np.where(ok[:, None, None], c, np.nan), stiffness=stiff,
+                           eigenvalues=eig, directions=vec, translational=trans, rotational=rot,
+                           deflection=deflection, rigid=rigid, status=status,
+                           coordinates=coordinates, reference=reference)
+
+
+def _block_stiffness(block: np.ndarray, top: np.ndarray) -> np.ndarray:
+    """Ascending eigenvalues of the inverse of compliance blocks ``(N, b, b)`` (inf where a
+    block eigenvalue is rigid: below :data:`RIGID_TOL` × ``top (N, 1)``, the whole
+    compliance's largest eigenvalue)."""
+    lam = np.linalg.eigvalsh(block)
+    rigid = lam <= RIGID_TOL * top
+    with np.errstate(divide="ignore"):
+        return np.where(rigid, np.inf, 1.0 / np.where(rigid, 1.0, lam))[:, ::-1]

@@ -1,0 +1,105 @@
+"""``pkmkit stiffness``: JSON keys, units, elastic settings, refusals, batches."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pkmkit.machines.registry import machine
+from pkmkit.stiffness import stiffness
+
+
+def test_orthoglide_json_at_home_is_ka_identity(run, as_json):
+    out = as_json(run("stiffness", "orthoglide", "--pose", "0,0,0", "--json",
+                      "--set", "actuator_stiffness=2e7"))
+    for key in ("stiffness", "compliance", "eigenvalues", "translational_eigenvalues"):
+        assert key in out
+    np.testing.assert_allclose(out["stiffness"], 2e7 * np.eye(3), atol=1e-3)
+    np.testing.assert_allclose(out["compliance"], np.eye(3) / 2e7, rtol=1e-10)
+    assert out["elastic_data"]["assumed"] is False or "given" in " ".join(
+        out["elastic_data"]["notes"])
+
+
+def test_default_values_are_said_to_be_assumed(run, as_json):
+    out = as_json(run("stiffness", "gough-stewart", "--pose", "0,0,0.8,0,0,0", "--json"))
+    assert out["elastic_data"]["assumed"] is True
+    text = run("stiffness", "gough-stewart", "--pose", "0,0,0.8,0,0,0").output
+    assert "assumed" in text
+
+
+def test_deflection_json_and_mm_units_agree_with_the_library(run, as_json):
+    m = machine("gough-stewart")
+    x = np.array([0.01, 0.0, 0.8, 0.0, 0.0, 0.0])
+    w = [10.0, -20.0, 300.0, 1.0, 2.0, -3.0]
+    out = as_json(run("stiffness", "gough-stewart", "--pose", "10,0,800,0,0,0", "--units", "mm",
+                      "--wrench", ",".join(map(str, w)), "--json"))
+    ref = stiffness(m, x, wrench=w)
+    np.testing.assert_allclose(out["deflection"], ref.deflection, rtol=1e-9)
+    np.testing.assert_allclose(out["stiffness"], ref.stiffness, rtol=1e-9)
+
+
+def test_joint_chain_with_link_sections(run, as_json):
+    q = "0.983186,1.064076,0.988005,0,0"
+    rigid = as_json(run("stiffness", "tripteor-x7", "--q", q, "--json"))
+    soft = as_json(run("stiffness", "tripteor-x7", "--q", "983.186,1064.076,988.005,0,0", "--json",
+                       "--set", "link_section=tube:80,60", "--units", "mm"))
+    assert rigid["rigid_directions"] == 1 and rigid["stiffness"][0][0] is None
+    assert soft["rigid_directions"] == 0
+    assert np.isfinite(np.array(soft["stiffness"], dtype=float)).all()
+
+
+@pytest.mark.parametrize("value", ["0", "-1e8", "inf", "nan", "1e8,1e8"])
+def test_bad_actuator_stiffness_exits_1(run, value):
+    result = run("stiffness", "orthoglide", "--pose", "0,0,0", "--set",
+                 f"actuator_stiffness={value}")
+    assert result.exit_code == 1
+    assert "actuator_stiffness" in result.output
+
+
+def test_bad_section_and_wrench_exit_1(run):
+    assert run("stiffness", "orthoglide", "--pose", "0,0,0", "--set",
+               "rod_section=hexagon:3").exit_code == 1
+    result = run("stiffness", "orthoglide", "--pose", "0,0,0", "--wrench", "1,2")
+    assert result.exit_code == 1 and "--wrench" in result.output
+
+
+def test_unreachable_single_pose_exits_1(run):
+    assert run("stiffness", "orthoglide", "--pose", "5,5,5").exit_code == 1
+
+
+def test_batch_flags_bad_rows_with_exit_3(run, tmp_path):
+    src = tmp_path / "poses.csv"
+    src.write_text("x,y,z\n0,0,0\n5,5,5\n0.05,0,0\n")
+    dst = tmp_path / "out.csv"
+    result = run("stiffness", "orthoglide", "--input", src, "--output", dst, "--wrench",
+                 "100,0,0")
+    assert result.exit_code == 3
+    import csv
+
+    rows = list(csv.DictReader(dst.open()))
+    assert [r["status"] for r in rows] == ["ok", "unreachable", "ok"]
+    assert float(rows[0]["kt1"]) == pytest.approx(100.0)
+    m = machine("orthoglide")
+    ref = stiffness(m, np.array([0.05, 0.0, 0.0]), wrench=[100.0, 0.0, 0.0])
+    assert float(rows[2]["dx"]) == pytest.approx(ref.deflection[0] * 1e6, rel=1e-9)
+
+
+def test_machine_file_error_exits_1_with_the_line(run, tmp_path):
+    path = tmp_path / "m.toml"
+    path.write_text('[machine]\nkind = "orthoglide"\n[stiffness]\nactuator_stiffness = -3\n')
+    result = run("stiffness", path, "--pose", "0,0,0")
+    assert result.exit_code == 1
+    assert "m.toml:4:" in result.output and "actuator_stiffness" in result.output
+
+
+def test_show_says_which_values_are_assumed(run):
+    text = run("show", "orthoglide").output
+    assert "elastic data (pkmkit stiffness)" in text and "assumed" in text
+
+
+def test_a_section_for_the_other_family_is_refused(run):
+    result = run("stiffness", "orthoglide", "--pose", "0,0,0", "--set", "link_section=circle:0.02")
+    assert result.exit_code == 1 and "rod_section" in result.output
+    result = run("stiffness", "tripteor-x7", "--q", "0.983186,1.064076,0.988005,0,0", "--set",
+                 "rod_section=circle:0.02")
+    assert result.exit_code == 1 and "link_section" in result.output
