@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.stiffness.beam import Material, Section, beam_compliance, parse_section
 from pkmkit.stiffness.frames import move_compliance, move_stiffness, shift_matrix
 

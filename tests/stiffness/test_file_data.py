@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pkmkit.errors import MachineFileError
+from pkmkit.exceptions import MachineFileError
 from pkmkit.machines.registry import load, machine
 from pkmkit.stiffness import default_data, stiffness
 from pkmkit.stiffness.file_data import file_data

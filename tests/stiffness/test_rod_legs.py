@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from pkmkit.errors import InputError, ParameterError
+from pkmkit.exceptions import InputError, ParameterError
 from pkmkit.machines.registry import machine
 from pkmkit.stiffness import Material, Section, default_data, stiffness
 from pkmkit.stiffness.data import StiffnessData

@@ -13,7 +13,7 @@ from typing import Any
 import click
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
 from pkmkit.spatial.rotation import resolve_convention
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.model.chains import JointChainModel
 from pkmkit.numerics.arrays import as_batch
 from pkmkit.status import Status
@@ -116,7 +116,7 @@ def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = No
     result = summarize(c, status, names, where, w)
     if single:
         if result.status[0] != Status.OK:
-            from pkmkit.errors import SingularConfigurationError
+            from pkmkit.exceptions import SingularConfigurationError
 
             raise SingularConfigurationError(
                 f"no stiffness at this configuration ({Status(int(result.status[0])).label}): "

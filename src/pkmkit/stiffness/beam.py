@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 
 
 def _positive(value: float, what: str) -> float:

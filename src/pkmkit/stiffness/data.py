@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.stiffness.beam import Material, Section, parse_section
 
 #: Assumed drive stiffness of a ball-screw slide or strut, N/m (order of magnitude of a

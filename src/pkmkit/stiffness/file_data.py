@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import ParameterError
+from pkmkit.exceptions import ParameterError
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
 from pkmkit.model.parameters import length_scale
 from pkmkit.stiffness.beam import Material, parse_section

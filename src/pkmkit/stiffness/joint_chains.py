@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError
+from pkmkit.exceptions import InputError
 from pkmkit.solve.chains import (
     chain_pose,
     closure,

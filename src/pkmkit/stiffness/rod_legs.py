@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.errors import InputError, ParameterError
+from pkmkit.exceptions import InputError, ParameterError
 from pkmkit.machines.closed_form import RodClosedForm
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.machine import SINGULARITY_TOL
