@@ -1,0 +1,131 @@
+"""What every exporter shares: the refusal error and the rod geometry a format writes out.
+
+An export writes a machine in another tool's terms (a controller's kinematics module, a firmware
+configuration, a simulator's model). A machine the format cannot express is refused with
+:class:`UnsupportedExportError` naming the format, the machine and the reason; an exporter never
+writes a file that would load but describe another machine.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkmkit.errors import PkmError
+from pkmkit.model.rods import CRANK, SLIDE, STRUT, RodModel
+
+
+class UnsupportedExportError(PkmError, ValueError):
+    """A machine that a format cannot express (or that pkmkit does not export to it yet).
+
+    Attributes:
+        format: the format (``"linuxcnc"``, ``"klipper"``, ``"mjcf"``).
+        machine: the machine's id.
+        reason: why, in words a user can act on.
+    """
+
+    def __init__(self, fmt: str, machine: str, reason: str):
+        self.format = fmt
+        self.machine = machine
+        self.reason = reason
+        super().__init__(f"cannot export {machine!r} to {fmt}: {reason}")
+
+
+@dataclass(frozen=True)
+class RodGeometry:
+    """One rod per actuator, as a controller closes it: ``|p + R b_j − a_j(q)| = ρ_j(q)``.
+
+    ``a_j(q) = base_j + q u_j`` for a slide (``ρ_j = length_j``), ``a_j = base_j`` and
+    ``ρ_j = length_j + q`` for a strut. For a translational machine the rods are its equivalent
+    legs (a parallelogram's midline, exact while the platform only translates) and R = I; for a
+    full-pose machine they are its real rods. Defects of a calibrated machine are already in
+    these numbers (:mod:`pkmkit.model.rod_defects` applies them exactly).
+
+    Attributes:
+        names: ``(n,)`` leg names (pkmkit's).
+        actuators: ``(n,)`` actuator names, rod j driven by actuator j.
+        kind: ``(n,)`` :data:`~pkmkit.model.rods.SLIDE` or :data:`~pkmkit.model.rods.STRUT`.
+        base: ``(n, 3)`` base-side joint centre at q = 0, m.
+        platform: ``(n, 3)`` platform joint centre in the platform frame, m.
+        axis: ``(n, 3)`` unit slide direction (zero for struts).
+        length: ``(n,)`` rod length (strut: length at q = 0), m.
+        branch: ``(n,)`` working branch of the inverse model (±1; slides only).
+        q_min, q_max: ``(n,)`` actuator strokes, m (±inf when unlimited).
+        full_pose: the platform also turns (pose x, y, z + orientation).
+    """
+
+    names: tuple[str, ...]
+    actuators: tuple[str, ...]
+    kind: np.ndarray
+    base: np.ndarray
+    platform: np.ndarray
+    axis: np.ndarray
+    length: np.ndarray
+    branch: np.ndarray
+    q_min: np.ndarray
+    q_max: np.ndarray
+    full_pose: bool
+
+    @property
+    def n(self) -> int:
+        """Number of rods (= actuators)."""
+        return len(self.names)
+
+
+def machine_family(machine) -> str:
+    """``"translational"``, ``"planar"``, ``"full-pose"`` or ``"chain"`` (joint chains)."""
+    model = getattr(machine, "model", None)
+    if not isinstance(model, RodModel):
+        return "chain"
+    if model.dims == 6:
+        return "full-pose"
+    return "planar" if model.dims == 2 else "translational"
+
+
+def rod_geometry(machine, fmt: str) -> RodGeometry:
+    """The one-rod-per-actuator geometry of a rod-leg machine of slides and struts.
+
+    Raises:
+        UnsupportedExportError: a joint-chain or planar machine, crank actuators, or a full-pose
+            machine that is not six rods on six actuators.
+    """
+    family = machine_family(machine)
+    if family == "chain":
+        raise UnsupportedExportError(
+            fmt, machine.id, "a joint-chain machine (serial R/P chains closed on the platform) "
+            "has no closed-form rod model; only rod-leg machines are exported to this format")
+    if family == "planar":
+        raise UnsupportedExportError(
+            fmt, machine.id, "a planar machine (2 actuators, x-y only) is not exported to this "
+            "format yet")
+    m: RodModel = machine.model
+    if (m.leg_kind == CRANK).any():
+        raise UnsupportedExportError(
+            fmt, machine.id, "crank (rotary) actuators are not exported to this format yet; "
+            "slides and struts are")
+    if family == "full-pose":
+        if m.n_actuators != 6 or m.n_rods != 6:
+            raise UnsupportedExportError(
+                fmt, machine.id, f"a full-pose machine with {m.n_actuators} actuators and "
+                f"{m.n_rods} rods: only six rods on six actuators (hexapods) are exported; with "
+                "fewer actuators the orientation follows the position and the inverse model is "
+                "iterative")
+        order = np.argsort(m.rod_actuator, kind="stable")
+        base, platform, length = m.rod_base[order], m.rod_platform[order], m.rod_length[order]
+        axis, kind = m.rod_axis[order], m.rod_kind[order]
+        legs = m.rod_leg[order]
+        branch = m.leg_branch[legs]
+        names = tuple(m.leg_names[i] for i in legs)
+    else:
+        base, platform, length = m.leg_base, m.leg_platform, m.leg_length
+        axis, kind, branch = m.leg_axis, m.leg_kind, m.leg_branch
+        names = m.leg_names
+    assert set(np.unique(kind)) <= {SLIDE, STRUT}
+    return RodGeometry(
+        names=tuple(names), actuators=tuple(m.actuator_names), kind=np.array(kind, dtype=int),
+        base=np.array(base, dtype=float), platform=np.array(platform, dtype=float),
+        axis=np.where((np.asarray(kind) == SLIDE)[:, None], axis, 0.0),
+        length=np.array(length, dtype=float), branch=np.array(branch, dtype=int),
+        q_min=np.array(m.q_min, dtype=float), q_max=np.array(m.q_max, dtype=float),
+        full_pose=family == "full-pose")

@@ -1,0 +1,281 @@
+"""The generated LinuxCNC kinematics module, compiled with the system C compiler against a stand-in
+for LinuxCNC's headers (``linuxcnc_stub/``) and called through ctypes, against pkmkit's own models:
+10⁶ random poses through the inverse model, 10⁴ actuator sets through the direct model, on every
+built-in machine the format supports, nominal and with calibrated defects."""
+
+from __future__ import annotations
+
+import ctypes
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import pkmkit
+from pkmkit.export.base import UnsupportedExportError
+from pkmkit.export.linuxcnc import linuxcnc_source, module_name
+from pkmkit.machines.registry import ALIASES
+from pkmkit.model.defects_table import apply_defect_vector, defect_index
+from pkmkit.status import Status
+
+STUB = Path(__file__).parent / "linuxcnc_stub"
+SUPPORTED = ["dietmaier-hexapod", "gough-stewart", "linear-delta-ch3", "linear-delta-table-iv1",
+             "orthoglide"]
+MM = 1e-3
+TOL = 1e-9  # m
+
+
+def _compiler() -> str:
+    cc = shutil.which("gcc") or shutil.which("cc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    return cc
+
+
+class Module:
+    """A compiled module: batch inverse/forward in SI (poses: pkmkit's; joints: m)."""
+
+    def __init__(self, machine, directory: Path, units: str = "mm"):
+        cc = _compiler()
+        self.machine = machine
+        self.full = machine.dims == 6
+        self.n = machine.n_actuators
+        self.scale = {"mm": MM, "m": 1.0, "in": 0.0254}[units]
+        name = module_name(machine.id)
+        source = directory / f"{name}.c"
+        source.write_text(linuxcnc_source(machine, units=units), encoding="utf-8")
+        lib = directory / f"{name}.so"
+        subprocess.run([cc, "-shared", "-fPIC", "-O2", "-Wall", "-Werror", f"-I{STUB}",
+                        str(source), str(STUB / "harness.c"), "-o", str(lib), "-lm"],
+                       check=True, capture_output=True)
+        self.lib = ctypes.CDLL(str(lib))
+        ptr = np.ctypeslib.ndpointer
+        self.lib.pkm_batch_inverse.argtypes = [ctypes.c_long, ctypes.c_int,
+                                               ptr(np.float64, flags="C"),
+                                               ptr(np.float64, flags="C"),
+                                               ptr(np.int32, flags="C")]
+        self.lib.pkm_batch_forward.argtypes = [ctypes.c_long, ctypes.c_int,
+                                               ptr(np.float64, flags="C"),
+                                               ptr(np.float64, flags="C"),
+                                               ptr(np.float64, flags="C"),
+                                               ptr(np.int32, flags="C")]
+        self.lib.pkm_home.argtypes = [ptr(np.float64, flags="C"), ptr(np.float64, flags="C")]
+
+    def world(self, x: np.ndarray) -> np.ndarray:
+        """pkmkit poses (N, dims) → LinuxCNC worlds (N, 6) in the module's units."""
+        out = np.zeros((x.shape[0], 6))
+        out[:, :3] = x[:, :3] / self.scale
+        if self.full:
+            out[:, 3:] = Rotation.from_rotvec(x[:, 3:]).as_euler("xyz", degrees=True)
+        return out
+
+    def pose(self, world: np.ndarray) -> np.ndarray:
+        """LinuxCNC worlds → pkmkit poses (independent conversion: scipy)."""
+        if not self.full:
+            return world[:, :3] * self.scale
+        rot = Rotation.from_euler("xyz", world[:, 3:], degrees=True).as_rotvec()
+        return np.concatenate([world[:, :3] * self.scale, rot], axis=1)
+
+    def inverse(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        world = np.ascontiguousarray(self.world(x))
+        q = np.full((x.shape[0], self.n), np.nan)
+        status = np.zeros(x.shape[0], dtype=np.int32)
+        self.lib.pkm_batch_inverse(x.shape[0], self.n, world, q, status)
+        return q * self.scale, status
+
+    def forward(self, q: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        joints = np.ascontiguousarray(q / self.scale)
+        world = np.zeros((q.shape[0], 6))
+        status = np.zeros(q.shape[0], dtype=np.int32)
+        self.lib.pkm_batch_forward(q.shape[0], self.n, joints,
+                                   np.ascontiguousarray(self.world(start)), world, status)
+        return self.pose(world), status
+
+
+def _calibrated(machine, seed: int):
+    """The machine with random defects of calibration size (0.2 mm, 1 mrad)."""
+    index = defect_index(machine)
+    rng = np.random.default_rng(seed)
+    delta = np.where(np.asarray(index.units) == "m", 2e-4, 1e-3) * rng.standard_normal(
+        len(index.names))
+    return apply_defect_vector(machine, delta)
+
+
+def _random_poses(machine, n: int, seed: int, spread: float = 1.6) -> np.ndarray:
+    """Poses around home, a fraction of them out of reach; orientations within ±15°."""
+    rng = np.random.default_rng(seed)
+    lo, hi = machine.default_box()
+    centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * spread
+    x = centre + rng.uniform(-1, 1, (n, 3)) * half
+    if machine.dims == 3:
+        return x
+    rot = Rotation.from_rotvec(rng.uniform(-1, 1, (n, 3)) * np.radians(15))
+    rot = rot * Rotation.from_rotvec(machine.home_pose[3:])
+    return np.concatenate([x, rot.as_rotvec()], axis=1)
+
+
+def _joint_points(machine, x: np.ndarray) -> np.ndarray:
+    """Platform joint centres (N, rods, 3) of poses: a metric for full poses (m)."""
+    if machine.dims == 3:
+        return x[:, None, :]
+    rot = Rotation.from_rotvec(x[:, 3:]).as_matrix()
+    return x[:, None, :3] + np.einsum("kab,jb->kja", rot, machine.model.rod_platform)
+
+
+@pytest.fixture(scope="module", params=[(m, c) for m in SUPPORTED for c in (False, True)],
+                ids=lambda p: p[0] + ("-calibrated" if p[1] else ""))
+def module(request, tmp_path_factory):
+    name, calibrated = request.param
+    machine = pkmkit.machine(name)
+    if calibrated:
+        machine = _calibrated(machine, seed=len(name))
+    return Module(machine, tmp_path_factory.mktemp(name))
+
+
+def test_the_supported_presets_are_exactly_these():
+    """Every preset is either exported or refused with the typed error (never anything else)."""
+    exported = []
+    for name in pkmkit.machines():
+        if name in ALIASES:
+            continue
+        try:
+            linuxcnc_source(pkmkit.machine(name))
+        except UnsupportedExportError as exc:
+            assert exc.format == "linuxcnc" and exc.reason
+            continue
+        exported.append(name)
+    assert exported == SUPPORTED
+
+
+def test_inverse_matches_pkmkit_on_a_million_poses(module):
+    m = module.machine
+    x = _random_poses(m, 1_000_000, seed=1)
+    q_c, status = module.inverse(x)
+    res = m.ik(x, full_output=True)
+    ok = np.asarray(res.status) == Status.OK
+    working = ok & (np.asarray(res.mode) == m.working_mode)
+    other = ok & (np.asarray(res.mode) == -m.working_mode)
+    # the draw must exercise every outcome (struts reach every pose: only slides refuse)
+    assert working.sum() > 100_000
+    assert (~ok).sum() > 1000 or (m.model.leg_kind == 1).all()
+    assert np.array_equal(status == 0, working)
+    assert np.array_equal(status == -1, np.asarray(res.status) == Status.UNREACHABLE)
+    assert np.array_equal(status == -3, other)
+    assert np.abs(q_c[working] - res.q[working]).max() <= TOL
+
+
+def test_forward_matches_pkmkit_from_the_previous_position(module):
+    m = module.machine
+    rng = np.random.default_rng(2)
+    x = _random_poses(m, 20_000, seed=3, spread=1.0)
+    res = m.ik(x, full_output=True)
+    keep = (np.asarray(res.status) == Status.OK) & (np.asarray(res.mode) == m.working_mode)
+    x, q = x[keep][:8000], res.q[keep][:8000]
+    # and 2000 actuator sets out of reach: a carriage moved three rod lengths away, or a strut
+    # given a negative length
+    bad = q[:2000].copy()
+    which = rng.integers(0, m.n_actuators, 2000)
+    strut = m.model.leg_kind[which] == 1
+    reach = float(np.abs(m.home_q).max() + m.model.rod_length.max())
+    bad[np.arange(2000), which] = np.where(
+        strut, -m.model.leg_length[which] - 0.1 * reach,
+        bad[np.arange(2000), which] + rng.choice([-1, 1], 2000) * 3 * reach)
+    q_all = np.concatenate([q, bad])
+    start = np.concatenate([x, x[:2000]])
+    start = start.copy()
+    start[:, :3] += rng.normal(0, 1e-3, (len(start), 3))  # the previous position, 1 mm off
+    if m.dims == 6:
+        start[:, 3:] = (Rotation.from_rotvec(rng.normal(0, np.radians(0.5), (len(start), 3)))
+                        * Rotation.from_rotvec(start[:, 3:])).as_rotvec()
+    pose_c, status = module.forward(q_all, start)
+    if m.dims == 6:
+        ref = m.fk(q_all, x0=start, full_output=True)
+        found = (np.asarray(ref.status) == Status.OK) & (np.asarray(ref.mode) == m.working_mode)
+    else:
+        ref = m.fk(q_all, full_output=True)
+        found = np.asarray(ref.status) == Status.OK
+    assert found[:8000].all() and not found[8000:].any()
+    assert np.array_equal(status == 0, found)
+    assert set(np.unique(status[~found])) <= {-1, -2, -3, -5}
+    gap = np.linalg.norm(_joint_points(m, pose_c[found]) - _joint_points(m, ref.pose[found]),
+                         axis=2).max()
+    assert gap <= TOL
+
+
+def test_forward_from_the_unset_position_finds_the_same_pose_or_refuses(module):
+    """From LinuxCNC's unset all-zero position the module starts from home. A translational
+    machine has two assembly modes told apart by det A: whatever the start, the module finds
+    pkmkit's working-mode pose or refuses, never another pose. A hexapod has up to 40: Newton
+    finds the one its start leads to (as genhexkins), so poses are drawn nearer home."""
+    m = module.machine
+    spread = 0.8 if m.dims == 3 else 0.3
+    x = _random_poses(m, 3000, seed=4, spread=spread)
+    res = m.ik(x, full_output=True)
+    keep = (np.asarray(res.status) == Status.OK) & (np.asarray(res.mode) == m.working_mode)
+    x, q = x[keep], res.q[keep]
+    start = np.zeros_like(x)
+    if m.dims == 3:  # any start: a far one too
+        start[len(x) // 2:] = m.home_pose + float(m.model.leg_length.max())
+    pose_c, status = module.forward(q, start)
+    assert (status == 0).mean() > 0.9
+    gap = np.linalg.norm(_joint_points(m, pose_c[status == 0]) - _joint_points(m, x[status == 0]),
+                         axis=2)
+    assert gap.max() <= TOL
+
+
+def test_home_and_type(module):
+    m = module.machine
+    world, joints = np.zeros(6), np.zeros(module.n)
+    assert module.lib.pkm_home(world, joints) == 0
+    assert module.lib.pkm_type() == 4  # KINEMATICS_BOTH
+    assert module.lib.pkm_app_main() == 0
+    assert np.abs(joints * module.scale - m.home_q).max() <= TOL
+    assert np.abs(module.pose(world[None])[0] - m.home_pose).max() <= TOL
+
+
+def test_invalid_inputs_are_refused(module):
+    m = module.machine
+    x = np.tile(m.home_pose, (3, 1))
+    x[0, 0], x[1, 1], x[2, 2] = np.nan, np.inf, 1e12
+    _, status = module.inverse(x)
+    assert (status == -4).all()
+    q = np.tile(m.home_q, (2, 1))
+    q[0, 0], q[1, -1] = np.nan, np.inf
+    _, status = module.forward(q, np.tile(m.home_pose, (2, 1)))
+    assert (status == -4).all()
+
+
+def test_the_module_carries_the_calibrated_geometry(tmp_path):
+    """A calibrated machine's module differs from the nominal one's and matches its own model
+    (the round trips above); here: the nominal module misses the calibrated machine by more
+    than the defects' size, so the defects did reach the file."""
+    nominal = pkmkit.machine("linear-delta-ch3")
+    calibrated = _calibrated(nominal, seed=7)
+    module = Module(nominal, tmp_path)
+    x = _random_poses(calibrated, 1000, seed=5, spread=0.5)
+    q_true = calibrated.ik(x)
+    q_c, status = module.inverse(x)
+    assert (status == 0).all()
+    assert np.abs(q_c - q_true).max() > 1e-5
+
+
+@pytest.mark.parametrize("name, words", [
+    ("tripteor-x7", "joint-chain"),
+    ("verne", "six rods on six actuators"),
+    ("delta", "crank"),
+    ("five-bar-isotropic", "planar"),
+])
+def test_unsupported_machines_are_refused_with_why(name, words):
+    with pytest.raises(UnsupportedExportError, match=words):
+        linuxcnc_source(pkmkit.machine(name))
+
+
+def test_the_source_names_pkmkit_parameters_and_the_build_line():
+    text = linuxcnc_source(pkmkit.machine("orthoglide"))
+    assert "halcompile --install orthoglidekins.c" in text
+    for word in ("kinematicsForward", "kinematicsInverse", "kinematicsType", "kinematicsHome",
+                 "legs[j].base", "rod_length", "MODULE_LICENSE"):
+        assert word in text
