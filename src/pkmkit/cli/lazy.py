@@ -82,6 +82,9 @@ LAZY_COMMANDS: dict[str, LazyCommand] = {
     "compensate": LazyCommand(
         "pkmkit.cli.calibration_cmds", "compensate_cmd",
         "Corrected commands for the nominal controller from a calibrated machine."),
+    "export": LazyCommand(
+        "pkmkit.cli.export_cmds", "export_cmd",
+        "Write MACHINE for a controller, a firmware or a simulator (--to FORMAT --out PATH)."),
     "select-poses": LazyCommand(
         "pkmkit.cli.errors_cmds", "select_poses_cmd",
         "Choose N poses maximising an observability index; writes their actuator "
