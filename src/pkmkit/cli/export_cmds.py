@@ -3,11 +3,12 @@ tool's terms — a LinuxCNC kinematics module, a Klipper delta configuration, a 
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import click
-import numpy as np
 
 from pkmkit.io.measurements import atomic_write_text
-from pkmkit.model.parameters import length_scale
 
 from .options import SET_OPTION, is_machine_file, parse_vector, resolve_machine
 
@@ -30,42 +31,53 @@ def register(cli: click.Group) -> None:
 @click.option("--units", type=click.Choice(["mm", "in", "m"]), default="mm", show_default=True,
               help="Length unit of --set values, --endstops and of the LinuxCNC module "
                    "(its LINEAR_UNITS). Klipper files are in mm, MuJoCo models in m.")
-@click.option("--name", "module", default=None,
-              help="LinuxCNC module name (default: the machine id + 'kins').")
 @click.option("--endstops", "endstops_text", metavar="Q1,Q2,Q3", default=None,
               help="Klipper: actuator coordinates at which the endstops trigger, in --units "
                    "(default: the tops of the strokes).")
-def export_cmd(machine_name, assignments, fmt, out_file, units, module, endstops_text):
+def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text):
     """Write MACHINE for a controller, a firmware or a simulator (--to FORMAT --out PATH).
 
+    linuxcnc: --out NAME.c, the module NAME (LinuxCNC loads it by that name).
+
     MACHINE is a built-in id or a machine file, nominal or calibrated (`pkmkit calibrate --out`
-    writes one: its defects go into the export). A machine the format cannot express is refused
+    writes one: its defects go into the export). The written file is read back and checked
+    against pkmkit's model before it is written. A machine the format cannot express is refused
     (exit status 1, nothing written) with what and why; docs/export.md lists which machine goes
     to which format.
     """
     m = resolve_machine(machine_name, assignments, units)
     source = machine_name if is_machine_file(machine_name) else ""
     if fmt == "linuxcnc":
-        from pkmkit.export.linuxcnc import linuxcnc_source, module_name
+        from pkmkit.export.linuxcnc import check_linuxcnc_source, linuxcnc_source
 
-        name = module or module_name(m.id)
+        name = Path(out_file).stem
+        if Path(out_file).suffix != ".c" or not re.fullmatch(r"[A-Za-z_]\w*", name):
+            raise click.BadParameter("LinuxCNC loads a kinematics module by its file name: give "
+                                     "NAME.c with NAME a C identifier (e.g. hexapodkins.c)",
+                                     param_hint="--out")
         text = linuxcnc_source(m, units=units, name=name, source=source)
+        check_linuxcnc_source(m, text, units)
         what = (f"LinuxCNC kinematics module {name} ({m.n_actuators} joints, {units}); "
                 f"build: halcompile --install {out_file}")
+        check = "its rods close at pkmkit's configurations (≤ 1e-9 m)"
     elif fmt == "klipper":
-        from pkmkit.export.klipper import klipper_config
+        from pkmkit.export.klipper import check_klipper_config, klipper_config
 
         endstops = (parse_vector(endstops_text, 3, "--endstops", units)
                     if endstops_text else None)
         text = klipper_config(m, endstops=endstops, source=source)
+        check_klipper_config(m, text, endstops)
         what = "Klipper delta configuration ([printer], [stepper_a/b/c]; mm)"
+        check = "Klipper's delta formulas move the carriages as pkmkit (≤ 1e-9 m)"
     else:
-        from pkmkit.export.mjcf import mjcf_model
+        from pkmkit.export.mjcf import check_mjcf_model, mjcf_model
 
         text = mjcf_model(m)
+        worst = check_mjcf_model(m, text)
         what = "MuJoCo model (MJCF; m, kg)"
+        check = ("not loaded (MuJoCo is not installed)" if worst is None else
+                 "loaded in MuJoCo, its home configuration assembled (≤ 1e-9 m)")
     atomic_write_text(out_file, text)
-    scale = length_scale(units)
     click.echo(f"{m.name}: {what}")
-    click.echo(f"  home pose {np.round(np.asarray(m.home_pose)[:3] / scale, 6).tolist()} "
-               f"{units} -> {out_file}")
+    click.echo(f"  check: {check}")
+    click.echo(f"  → {out_file}")

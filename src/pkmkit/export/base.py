@@ -129,3 +129,31 @@ def rod_geometry(machine, fmt: str) -> RodGeometry:
         length=np.array(length, dtype=float), branch=np.array(branch, dtype=int),
         q_min=np.array(m.q_min, dtype=float), q_max=np.array(m.q_max, dtype=float),
         full_pose=family == "full-pose")
+
+
+class ExportCheckError(PkmError, RuntimeError):
+    """A written export that does not reproduce pkmkit's model (a bug, never a user error): the
+    command that made it writes nothing."""
+
+
+def sample_poses(machine, n: int = 24, seed: int = 0) -> np.ndarray:
+    """Home, the machine's named poses and ``n`` random poses near home that pkmkit's inverse
+    model reaches, ``(k, dims)``: where an export's self-check compares the written model with
+    pkmkit's."""
+    rng = np.random.default_rng(seed)
+    named = np.array([np.asarray(p, dtype=float) for p in machine.reference_poses().values()])
+    named = named[[len(p) == machine.dims for p in named]]
+    lo, hi = machine.default_box()
+    centre, half = 0.5 * (lo + hi), 0.25 * (hi - lo)
+    x = centre + rng.uniform(-1, 1, (n, len(centre))) * half
+    if machine.dims == 6:
+        from pkmkit.spatial.rotation import compose_rotvec
+
+        turn = rng.uniform(-1, 1, (n, 3)) * np.radians(5)
+        x = np.concatenate([x, compose_rotvec(turn, np.broadcast_to(machine.home_pose[3:],
+                                                                    (n, 3)))], axis=1)
+    poses = np.concatenate([named, x]) if len(named) else x
+    with np.errstate(invalid="ignore"):
+        res = machine.ik(poses, full_output=True)
+    keep = (np.asarray(res.status) == 0) & (np.asarray(res.mode) == machine.working_mode)
+    return poses[keep]

@@ -23,7 +23,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from pkmkit.export.base import UnsupportedExportError, machine_family, rod_geometry
+from pkmkit.export.base import (
+    ExportCheckError,
+    UnsupportedExportError,
+    machine_family,
+    rod_geometry,
+    sample_poses,
+)
 from pkmkit.model.parameters import length_scale
 from pkmkit.model.rods import SLIDE
 
@@ -127,3 +133,34 @@ def klipper_config(machine, *, endstops: np.ndarray | None = None, source: str =
                   f"arm_length: {v['arm_length'][k] * mm:.12g}",
                   f"position_endstop: {v['position_endstop'][k] * mm:.12g}"]
     return "\n".join(lines) + "\n"
+
+
+def check_klipper_config(machine, text: str, endstops: np.ndarray | None = None) -> float:
+    """Read a written configuration back and move Klipper's carriages (its delta formulas) to
+    pkmkit's sample poses (:func:`~pkmkit.export.base.sample_poses`): the largest difference
+    (m) between Klipper's carriage travel from the endstop and pkmkit's ``q − endstop``.
+
+    Raises:
+        ExportCheckError: beyond 1e-9 m.
+    """
+    import configparser
+
+    cfg = configparser.ConfigParser()
+    cfg.read_string(text)
+    mm = length_scale("mm")
+    x = sample_poses(machine) / mm
+    q = np.asarray(machine.ik(x * mm))
+    ends = klipper_values(machine, endstops)["endstops"]
+    radius = cfg.getfloat("printer", "delta_radius")
+    worst = 0.0
+    for k, name in enumerate(STEPPERS):
+        angle = np.radians(cfg.getfloat(name, "angle"))
+        arm = cfg.getfloat(name, "arm_length")
+        tower = radius * np.array([np.cos(angle), np.sin(angle)])
+        height = x[:, 2] + np.sqrt(arm**2 - ((x[:, :2] - tower) ** 2).sum(axis=1))
+        travel = height - cfg.getfloat(name, "position_endstop") - np.sqrt(arm**2 - radius**2)
+        worst = max(worst, float(np.abs(travel * mm - (q[:, k] - ends[k])).max()))
+    if not worst <= 1e-9:
+        raise ExportCheckError(f"the Klipper configuration moves the carriages {worst:.3g} m "
+                               "away from pkmkit's: not written")
+    return worst

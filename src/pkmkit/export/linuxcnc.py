@@ -30,7 +30,13 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pkmkit.export.base import RodGeometry, UnsupportedExportError, rod_geometry
+from pkmkit.export.base import (
+    ExportCheckError,
+    RodGeometry,
+    UnsupportedExportError,
+    rod_geometry,
+    sample_poses,
+)
 from pkmkit.model.parameters import length_scale
 from pkmkit.model.rods import SLIDE
 
@@ -61,8 +67,26 @@ def module_name(machine_id: str) -> str:
 
 
 def _num(v: float) -> str:
-    text = f"{float(v):.17g}"
+    """The shortest text that reads back as the same double (a C literal)."""
+    text = repr(float(v))
     return text if any(c in text for c in ".eEn") else text + ".0"
+
+
+def _parameters_comment(machine, units: str, scale: float) -> str:
+    """The machine's named pkmkit parameters (built-in kinds), as a comment block."""
+    kind = getattr(machine, "kind", None)
+    if kind is None or not machine.params:
+        return (" * Geometry: given rod by rod (a machine file's legs, or a calibrated machine "
+                "whose\n * defects replaced the named parameters).\n")
+    rows = []
+    for spec in kind.parameters:
+        value = np.asarray(machine.params[spec.name], dtype=float)
+        factor = {"length": 1.0 / scale, "angle": 180.0 / np.pi}.get(spec.quantity, 1.0)
+        unit = {"length": " " + units, "angle": " deg"}.get(spec.quantity, "")
+        text = ", ".join(f"{v:.12g}" for v in np.ravel(value * factor))
+        rows.append(f" *   {spec.name} = {text}{unit}")
+    return (f" * pkmkit parameters (kind {kind.kind!r}), from which the rods below are built:\n"
+            + "\n".join(rows) + "\n")
 
 
 def _array(values: np.ndarray) -> str:
@@ -161,7 +185,7 @@ def _render(machine, geo: RodGeometry, name: str, units: str, scale: float, sour
  * ("{mode_name}", sign of det A = {machine.working_mode:+d}).
  * Return codes: 0 ok, -1 out of reach, -2 singular, -3 other assembly mode, -4 invalid input,
  * -5 direct model not converged.
- */
+{_parameters_comment(machine, units, scale)} */
 """
     body = f"""
 #include "rtapi_math.h"
@@ -546,3 +570,54 @@ EXPORT_SYMBOL(kinematicsHome);
 MODULE_LICENSE("GPL");
 """
     return header + body
+
+
+def _read_array(text: str, name: str, size: int) -> np.ndarray:
+    """The numbers of ``static const ... name[...] = {...};`` in C source (comments removed)."""
+    bare = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    found = re.search(rf"\b{name}\b(?:\[[^\]]*\])+\s*=\s*\{{(.*?)\}};", bare, flags=re.S)
+    if found is None:
+        raise ExportCheckError(f"the generated source has no {name} array")
+    words = re.findall(r"PKM_SLIDE|PKM_STRUT|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?",
+                       found.group(1))
+    values = np.array([{"PKM_SLIDE": 0.0, "PKM_STRUT": 1.0}[w] if w.startswith("PKM")
+                       else float(w) for w in words])
+    if values.shape != (size,):
+        raise ExportCheckError(f"the generated {name} holds {values.size} numbers, not {size}")
+    return values
+
+
+def check_linuxcnc_source(machine, text: str, units: str = "mm") -> float:
+    """Read the geometry back from a generated module and close its rods at pkmkit's
+    configurations (home, the named poses, random poses near home): the largest
+    ``| |p + R b_j − a_j(q_j)| − ρ_j(q_j) |`` (m), with q from pkmkit's inverse model.
+
+    Raises:
+        ExportCheckError: beyond 1e-9 m (the file's numbers are not pkmkit's machine).
+    """
+    scale = length_scale(units)
+    n = machine.n_actuators
+    kind = _read_array(text, "rod_kind", n)
+    base = _read_array(text, "rod_base", 3 * n).reshape(n, 3) * scale
+    platform = _read_array(text, "rod_platform", 3 * n).reshape(n, 3) * scale
+    axis = _read_array(text, "rod_axis", 3 * n).reshape(n, 3)
+    length = _read_array(text, "rod_length", n) * scale
+    home_q = _read_array(text, "home_joints", n) * scale
+    x = sample_poses(machine)
+    q = np.asarray(machine.ik(x))
+    if x.shape[1] == 6:
+        from pkmkit.spatial.rotation import rotvec_to_matrix
+
+        rot = rotvec_to_matrix(x[:, 3:])
+    else:
+        rot = np.broadcast_to(np.eye(3), (len(x), 3, 3))
+    slide = kind == 0
+    points = x[:, None, :3] + np.einsum("kab,jb->kja", rot, platform)
+    d = points - base[None] - np.where(slide, q, 0.0)[:, :, None] * axis[None]
+    rho = np.where(slide, length, length + q)
+    worst = float(np.abs(np.linalg.norm(d, axis=2) - rho).max())
+    worst = max(worst, float(np.abs(home_q - machine.home_q).max()))
+    if not worst <= 1e-9:
+        raise ExportCheckError(f"the generated module does not close pkmkit's configurations "
+                               f"(off by {worst:.3g} m): not written")
+    return worst
