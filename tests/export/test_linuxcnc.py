@@ -19,11 +19,12 @@ from pkmkit.export.base import UnsupportedExportError
 from pkmkit.export.linuxcnc import linuxcnc_source, module_name
 from pkmkit.machines.registry import ALIASES
 from pkmkit.model.defects_table import apply_defect_vector, defect_index
+from pkmkit.model.rods import CRANK, STRUT
 from pkmkit.status import Status
 
 STUB = Path(__file__).parent / "linuxcnc_stub"
-SUPPORTED = ["dietmaier-hexapod", "gough-stewart", "linear-delta-ch3", "linear-delta-table-iv1",
-             "orthoglide"]
+SUPPORTED = ["delta", "dietmaier-hexapod", "gough-stewart", "linear-delta-ch3",
+             "linear-delta-table-iv1", "orthoglide"]
 MM = 1e-3
 TOL = 1e-9  # m
 
@@ -36,7 +37,8 @@ def _compiler() -> str:
 
 
 class Module:
-    """A compiled module: batch inverse/forward in SI (poses: pkmkit's; joints: m)."""
+    """A compiled module: batch inverse/forward in SI (poses: pkmkit's; joints: m, or rad for
+    cranks, which LinuxCNC turns in degrees)."""
 
     def __init__(self, machine, directory: Path, units: str = "mm"):
         cc = _compiler()
@@ -44,6 +46,8 @@ class Module:
         self.full = machine.dims == 6
         self.n = machine.n_actuators
         self.scale = {"mm": MM, "m": 1.0, "in": 0.0254}[units]
+        crank = machine.model.actuator_kind == CRANK
+        self.joint_scale = np.where(crank, np.pi / 180.0, self.scale)
         name = module_name(machine.id)
         source = directory / f"{name}.c"
         source.write_text(linuxcnc_source(machine, units=units), encoding="utf-8")
@@ -84,10 +88,10 @@ class Module:
         q = np.full((x.shape[0], self.n), np.nan)
         status = np.zeros(x.shape[0], dtype=np.int32)
         self.lib.pkm_batch_inverse(x.shape[0], self.n, world, q, status)
-        return q * self.scale, status
+        return q * self.joint_scale, status
 
     def forward(self, q: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        joints = np.ascontiguousarray(q / self.scale)
+        joints = np.ascontiguousarray(q / self.joint_scale)
         world = np.zeros((q.shape[0], 6))
         status = np.zeros(q.shape[0], dtype=np.int32)
         self.lib.pkm_batch_forward(q.shape[0], self.n, joints,
@@ -182,18 +186,21 @@ def test_forward_matches_pkmkit_from_the_previous_position(module):
     res = m.ik(x, full_output=True)
     keep = (np.asarray(res.status) == Status.OK) & (np.asarray(res.mode) == m.working_mode)
     x, q = x[keep][:8000], res.q[keep][:8000]
-    # and 2000 actuator sets out of reach: a carriage moved three rod lengths away, or a strut
-    # given a negative length
-    bad = q[:2000].copy()
-    which = rng.integers(0, m.n_actuators, 2000)
-    strut = m.model.leg_kind[which] == 1
+    # and up to 2000 actuator sets without any assembly (pkmkit's direct model finds none):
+    # a carriage moved far, a strut given a negative length, cranks turned at random
+    kind = m.model.actuator_kind
     reach = float(np.abs(m.home_q).max() + m.model.rod_length.max())
-    bad[np.arange(2000), which] = np.where(
-        strut, -m.model.leg_length[which] - 0.1 * reach,
-        bad[np.arange(2000), which] + rng.choice([-1, 1], 2000) * 3 * reach)
+    cand = np.tile(q[:1], (20_000, 1)) + np.where(
+        kind == CRANK, rng.uniform(-np.pi, np.pi, (20_000, m.n_actuators)),
+        rng.uniform(-3, 3, (20_000, m.n_actuators)) * reach)
+    cand[:, kind == STRUT] = np.minimum(cand[:, kind == STRUT],
+                                        -m.model.leg_length[kind == STRUT] - 0.01 * reach)
+    none = (np.asarray(m.fk(cand, full_output=True).status) == Status.NO_ASSEMBLY
+            if m.dims == 3 else np.ones(len(cand), dtype=bool))
+    bad = cand[none][:2000]
+    assert len(bad) >= 500
     q_all = np.concatenate([q, bad])
-    start = np.concatenate([x, x[:2000]])
-    start = start.copy()
+    start = np.concatenate([x, x[:len(bad)]])
     start[:, :3] += rng.normal(0, 1e-3, (len(start), 3))  # the previous position, 1 mm off
     if m.dims == 6:
         start[:, 3:] = (Rotation.from_rotvec(rng.normal(0, np.radians(0.5), (len(start), 3)))
@@ -240,7 +247,7 @@ def test_home_and_type(module):
     assert module.lib.pkm_home(world, joints) == 0
     assert module.lib.pkm_type() == 4  # KINEMATICS_BOTH
     assert module.lib.pkm_app_main() == 0
-    assert np.abs(joints * module.scale - m.home_q).max() <= TOL
+    assert np.abs(joints * module.joint_scale - m.home_q).max() <= TOL
     assert np.abs(module.pose(world[None])[0] - m.home_pose).max() <= TOL
 
 
@@ -273,7 +280,7 @@ def test_the_module_carries_the_calibrated_geometry(tmp_path):
 @pytest.mark.parametrize("name, words", [
     ("tripteor-x7", "joint-chain"),
     ("verne", "six rods on six actuators"),
-    ("delta", "crank"),
+    ("crank-slider", "joint-chain"),
     ("five-bar-isotropic", "planar"),
 ])
 def test_unsupported_machines_are_refused_with_why(name, words):

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkmkit.errors import PkmError
-from pkmkit.model.rods import CRANK, SLIDE, STRUT, RodModel
+from pkmkit.model.rods import CRANK, STRUT, RodModel
 
 
 class UnsupportedExportError(PkmError, ValueError):
@@ -37,18 +37,23 @@ class RodGeometry:
     """One rod per actuator, as a controller closes it: ``|p + R b_j − a_j(q)| = ρ_j(q)``.
 
     ``a_j(q) = base_j + q u_j`` for a slide (``ρ_j = length_j``), ``a_j = base_j`` and
-    ``ρ_j = length_j + q`` for a strut. For a translational machine the rods are its equivalent
-    legs (a parallelogram's midline, exact while the platform only translates) and R = I; for a
-    full-pose machine they are its real rods. Defects of a calibrated machine are already in
+    ``ρ_j = length_j + q`` for a strut; for a crank turning by q (rad) about the axis ``u_j``
+    through ``pivot_j``, ``a_j(q) = pivot_j + h_j u_j + r_j (cos q e1_j + sin q e2_j)`` with the
+    arm ``base_j − pivot_j`` split along the axis (``h_j``) and across it (``r_j e1_j``),
+    ``e2_j = u_j × e1_j`` (:mod:`pkmkit.machines.closed_form`). For a translational machine the
+    rods are its equivalent legs (a parallelogram's midline, exact while the platform only
+    translates) and R = I; for a full-pose machine they are its real rods. Defects of a calibrated machine are already in
     these numbers (:mod:`pkmkit.model.rod_defects` applies them exactly).
 
     Attributes:
         names: ``(n,)`` leg names (pkmkit's).
         actuators: ``(n,)`` actuator names, rod j driven by actuator j.
-        kind: ``(n,)`` :data:`~pkmkit.model.rods.SLIDE` or :data:`~pkmkit.model.rods.STRUT`.
+        kind: ``(n,)`` :data:`~pkmkit.model.rods.SLIDE`, :data:`~pkmkit.model.rods.STRUT` or
+            :data:`~pkmkit.model.rods.CRANK`.
         base: ``(n, 3)`` base-side joint centre at q = 0, m.
         platform: ``(n, 3)`` platform joint centre in the platform frame, m.
-        axis: ``(n, 3)`` unit slide direction (zero for struts).
+        axis: ``(n, 3)`` unit slide direction or crank axis (zero for struts).
+        pivot: ``(n, 3)`` a point of a crank's axis (zero for other kinds), m.
         length: ``(n,)`` rod length (strut: length at q = 0), m.
         branch: ``(n,)`` working branch of the inverse model (±1; slides only).
         q_min, q_max: ``(n,)`` actuator strokes, m (±inf when unlimited).
@@ -66,6 +71,21 @@ class RodGeometry:
     q_min: np.ndarray
     q_max: np.ndarray
     full_pose: bool
+    pivot: np.ndarray | None = None
+
+    def crank_frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(e1 (n, 3), e2 (n, 3), r (n,), h (n,))`` of the cranks (zeros for other rods)."""
+        pivot = np.zeros_like(self.base) if self.pivot is None else self.pivot
+        crank = self.kind == CRANK
+        arm = self.base - pivot
+        along = np.einsum("jd,jd->j", arm, self.axis)
+        across = arm - along[:, None] * self.axis
+        radius = np.where(crank, np.linalg.norm(across, axis=1), 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            e1 = np.where(crank[:, None], across / np.where(radius > 0, radius, 1.0)[:, None],
+                          0.0)
+        e2 = np.cross(self.axis, e1)
+        return e1, e2, radius, np.where(crank, along, 0.0)
 
     @property
     def n(self) -> int:
@@ -83,12 +103,13 @@ def machine_family(machine) -> str:
     return "planar" if model.dims == 2 else "translational"
 
 
-def rod_geometry(machine, fmt: str) -> RodGeometry:
-    """The one-rod-per-actuator geometry of a rod-leg machine of slides and struts.
+def rod_geometry(machine, fmt: str, *, cranks: bool = False) -> RodGeometry:
+    """The one-rod-per-actuator geometry of a rod-leg machine of slides and struts (and cranks
+    when the format takes them).
 
     Raises:
-        UnsupportedExportError: a joint-chain or planar machine, crank actuators, or a full-pose
-            machine that is not six rods on six actuators.
+        UnsupportedExportError: a joint-chain or planar machine, crank actuators (unless
+            ``cranks``), or a full-pose machine that is not six rods on six actuators.
     """
     family = machine_family(machine)
     if family == "chain":
@@ -100,7 +121,7 @@ def rod_geometry(machine, fmt: str) -> RodGeometry:
             fmt, machine.id, "a planar machine (2 actuators, x-y only) is not exported to this "
             "format yet")
     m: RodModel = machine.model
-    if (m.leg_kind == CRANK).any():
+    if (m.leg_kind == CRANK).any() and not cranks:
         raise UnsupportedExportError(
             fmt, machine.id, "crank (rotary) actuators are not exported to this format yet; "
             "slides and struts are")
@@ -114,21 +135,23 @@ def rod_geometry(machine, fmt: str) -> RodGeometry:
         order = np.argsort(m.rod_actuator, kind="stable")
         base, platform, length = m.rod_base[order], m.rod_platform[order], m.rod_length[order]
         axis, kind = m.rod_axis[order], m.rod_kind[order]
+        pivot = m.rod_pivot[order]
         legs = m.rod_leg[order]
         branch = m.leg_branch[legs]
         names = tuple(m.leg_names[i] for i in legs)
     else:
         base, platform, length = m.leg_base, m.leg_platform, m.leg_length
         axis, kind, branch = m.leg_axis, m.leg_kind, m.leg_branch
+        pivot = m.leg_pivot
         names = m.leg_names
-    assert set(np.unique(kind)) <= {SLIDE, STRUT}
     return RodGeometry(
         names=tuple(names), actuators=tuple(m.actuator_names), kind=np.array(kind, dtype=int),
         base=np.array(base, dtype=float), platform=np.array(platform, dtype=float),
-        axis=np.where((np.asarray(kind) == SLIDE)[:, None], axis, 0.0),
+        axis=np.where((np.asarray(kind) != STRUT)[:, None], axis, 0.0),
         length=np.array(length, dtype=float), branch=np.array(branch, dtype=int),
         q_min=np.array(m.q_min, dtype=float), q_max=np.array(m.q_max, dtype=float),
-        full_pose=family == "full-pose")
+        full_pose=family == "full-pose",
+        pivot=np.where((np.asarray(kind) == CRANK)[:, None], pivot, 0.0))
 
 
 class ExportCheckError(PkmError, RuntimeError):

@@ -8,7 +8,8 @@ realtime module. Build it with ``halcompile --install NAME.c`` (the line is in i
 
 **Model.** One rod per actuator (:class:`~pkmkit.export.base.RodGeometry`):
 ``|p + R b_j − a_j(q_j)| = ρ_j(q_j)`` with ``a_j = base_j + q_j u_j``, ``ρ_j = length_j`` for a
-slide and ``a_j = base_j``, ``ρ_j = length_j + q_j`` for a strut — pkmkit's own equations, with
+slide, ``a_j = base_j``, ``ρ_j = length_j + q_j`` for a strut, the arm tip of a crank turned by
+q_j (a rotary joint, in degrees for LinuxCNC) — pkmkit's own equations, with
 its parameter names and its calibrated defects already applied to the numbers. A translational
 machine (linear Delta, Orthoglide) has R = I and world coordinates X Y Z; a hexapod has
 X Y Z A B C with ``R = Rz(C) Ry(B) Rx(A)`` (A, B, C in degrees about the fixed x, y, z axes:
@@ -38,9 +39,10 @@ from pkmkit.export.base import (
     sample_poses,
 )
 from pkmkit.model.parameters import length_scale
-from pkmkit.model.rods import SLIDE
+from pkmkit.model.rods import CRANK, STRUT
 
 FORMAT = "linuxcnc"
+_KIND_NAMES = {0: "PKM_SLIDE", 1: "PKM_STRUT", 2: "PKM_CRANK"}
 #: Iteration limit of the generated direct model (per start; two starts at most).
 FK_MAX_ITER = 40
 #: Relative rod-length tolerance of the generated direct model (× the machine's size).
@@ -103,8 +105,8 @@ def linuxcnc_source(machine, *, units: str = "mm", name: str | None = None,
     """The C source of a LinuxCNC kinematics module for ``machine``.
 
     Args:
-        machine: a rod-leg machine of slides or struts: a translational one (3 actuators, X Y Z)
-            or a six-strut/six-slide hexapod (X Y Z A B C).
+        machine: a rod-leg machine of slides, struts or cranks: a translational one (3
+            actuators, X Y Z) or a hexapod of six rods on six actuators (X Y Z A B C).
         units: LinuxCNC's length unit (``LINEAR_UNITS``: ``"mm"``, ``"in"`` or ``"m"``) for the
             world coordinates, the joints and the numbers in the file; angles in degrees.
         name: module name (default :func:`module_name` of the machine id).
@@ -115,9 +117,9 @@ def linuxcnc_source(machine, *, units: str = "mm", name: str | None = None,
 
     Raises:
         UnsupportedExportError: a machine this module cannot express (joint chains, planar
-            machines, cranks, full-pose machines other than six rods on six actuators).
+            machines, full-pose machines other than six rods on six actuators).
     """
-    geo = rod_geometry(machine, FORMAT)
+    geo = rod_geometry(machine, FORMAT, cranks=True)
     name = name or module_name(machine.id)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise UnsupportedExportError(FORMAT, machine.id,
@@ -145,20 +147,44 @@ def _render(machine, geo: RodGeometry, name: str, units: str, scale: float, sour
     length = geo.length / scale
     home_world = _home_world(machine, geo)
     home_world[:3] /= scale
-    home_q = np.asarray(machine.home_q, dtype=float) / scale
+    crank = geo.kind == CRANK
+    joint_scale = np.where(crank, np.pi / 180.0, scale)  # LinuxCNC: rotary joints in degrees
+    home_q = np.asarray(machine.home_q, dtype=float) / joint_scale
     size = 1.0 + float(max(np.abs(base).max(), np.abs(platform).max(), np.abs(length).max()))
-    rho_home = np.where(geo.kind == SLIDE, length, length + home_q)  # rod lengths at home
+    rho_home = np.where(geo.kind == STRUT, length + home_q, length)  # rod lengths at home
     coords = "XYZABC" if geo.full_pose else "XYZ"
-    kinds = ", ".join("PKM_SLIDE" if k == SLIDE else "PKM_STRUT" for k in geo.kind)
+    kinds = ", ".join(_KIND_NAMES[int(k)] for k in geo.kind)
     limits = []
     for j in range(n):
-        lo, hi = geo.q_min[j] / scale, geo.q_max[j] / scale
+        lo, hi = geo.q_min[j] / joint_scale[j], geo.q_max[j] / joint_scale[j]
+        unit = "deg" if crank[j] else units
         if np.isfinite(lo) and np.isfinite(hi):
             limits.append(f" *   [JOINT_{j}] MIN_LIMIT = {lo:.9g}  MAX_LIMIT = {hi:.9g}  "
-                          f"HOME = {home_q[j]:.9g}   ({geo.actuators[j]}, {geo.names[j]})")
+                          f"HOME = {home_q[j]:.9g}   ({geo.actuators[j]}, {geo.names[j]}; "
+                          f"{unit})")
         else:
             limits.append(f" *   [JOINT_{j}] HOME = {home_q[j]:.9g}   ({geo.actuators[j]}, "
-                          f"{geo.names[j]}; pkmkit gives no stroke)")
+                          f"{geo.names[j]}; {unit}; pkmkit gives no stroke)")
+    crank_arrays = ""
+    if crank.any():
+        e1, e2, radius, offset = geo.crank_frames()
+        crank_arrays = f"""/* cranks: a_j(q) = pivot_j + offset_j axis_j
+                   + radius_j (cos q e1_j + sin q e2_j), q in degrees;
+   pivot: a point of the crank axis (legs[j].pivot), e1: the arm's direction at q = 0
+   across the axis, e2 = axis x e1, radius and offset: the arm across and along the axis
+   (derived from legs[j].base, legs[j].pivot, legs[j].axis); zeros for other rods */
+static const double crank_pivot[N_RODS][3] = {{
+{_rows(geo.pivot / scale, geo.names)}
+}};
+static const double crank_e1[N_RODS][3] = {{
+{_rows(e1, geo.names)}
+}};
+static const double crank_e2[N_RODS][3] = {{
+{_rows(e2, geo.names)}
+}};
+static const double crank_radius[N_RODS] = {_array(radius / scale)};
+static const double crank_offset[N_RODS] = {_array(offset / scale)};
+"""
     kind_text = ("full-pose (hexapod): world X Y Z A B C, R = Rz(C) Ry(B) Rx(A), A B C in "
                  "degrees about the fixed x, y, z axes" if geo.full_pose else
                  "translational: world X Y Z, the platform does not turn (R = I)")
@@ -175,7 +201,8 @@ def _render(machine, geo: RodGeometry, name: str, units: str, scale: float, sour
  *
  * Model ({kind_text}): rod j joins a_j(q_j) to the platform joint p + R b_j,
  *     | p + R b_j - a_j(q_j) | = rho_j(q_j)
- * slide: a_j = base_j + q_j axis_j, rho_j = length_j;  strut: a_j = base_j, rho_j = length_j + q_j.
+ * slide: a_j = base_j + q_j axis_j, rho_j = length_j;  strut: a_j = base_j, rho_j = length_j + q_j;
+ * crank: the arm tip a_j turns by q_j (degrees) about axis_j, rho_j = length_j.
  * Joint j is pkmkit's actuator j; lengths in {units}. The numbers are pkmkit's rod end points and
  * lengths (legs[j].base, legs[j].platform, legs[j].length, legs[j].axis) with any calibrated
  * defects of the machine file already applied.
@@ -197,6 +224,8 @@ def _render(machine, geo: RodGeometry, name: str, units: str, scale: float, sour
 #define FULL_POSE {1 if geo.full_pose else 0}
 #define PKM_SLIDE 0
 #define PKM_STRUT 1
+#define PKM_CRANK 2
+#define HAS_CRANKS {1 if crank.any() else 0}
 #define PKM_UNREACHABLE (-1)
 #define PKM_SINGULAR (-2)
 #define PKM_OTHER_MODE (-3)
@@ -215,14 +244,15 @@ static const double rod_base[N_RODS][3] = {{
 static const double rod_platform[N_RODS][3] = {{
 {_rows(platform, geo.names)}
 }};
-/* unit slide direction (legs[j].axis; 0 for struts) */
+/* unit slide direction or crank axis (legs[j].axis; 0 for struts) */
 static const double rod_axis[N_RODS][3] = {{
 {_rows(geo.axis, geo.names)}
 }};
 /* rod length (strut: length at q = 0) (legs[j].length) */
 static const double rod_length[N_RODS] = {_array(length)};
-/* working branch of each slide's inverse model: q = s + branch * sqrt(...) */
+/* working branch of each slide's or crank's inverse model: q = s + branch * sqrt(...) */
 static const double rod_branch[N_RODS] = {_array(geo.branch)};
+{crank_arrays}
 /* home: world X Y Z A B C and joints (pkmkit's home configuration) */
 static const double home_world[6] = {_array(home_world)};
 static const double home_joints[N_RODS] = {_array(home_q)};
@@ -299,7 +329,15 @@ static void rod_vectors(const double P[N_RODS][3], const double *q, double d[N_R
         double move = rod_kind[j] == PKM_SLIDE ? q[j] : 0.0;
         for (k = 0; k < 3; k++)
             d[j][k] = P[j][k] - rod_base[j][k] - move * rod_axis[j][k];
-        rho[j] = rod_kind[j] == PKM_SLIDE ? rod_length[j] : rod_length[j] + q[j];
+#if HAS_CRANKS
+        if (rod_kind[j] == PKM_CRANK) {{
+            double c = cos(q[j] * DEG), s = sin(q[j] * DEG);
+            for (k = 0; k < 3; k++)
+                d[j][k] = P[j][k] - crank_pivot[j][k] - crank_offset[j] * rod_axis[j][k]
+                          - crank_radius[j] * (c * crank_e1[j][k] + s * crank_e2[j][k]);
+        }}
+#endif
+        rho[j] = rod_kind[j] == PKM_STRUT ? rod_length[j] + q[j] : rod_length[j];
     }}
 }}
 
@@ -385,6 +423,32 @@ static int inverse_model(const double p[3], const double R[3][3], double *q)
             q[j] = sqrt(ww) - rod_length[j];
             continue;
         }}
+#if HAS_CRANKS
+        if (rod_kind[j] == PKM_CRANK) {{
+            double v[3], vw, v1, v2, perp, g, amplitude, cosine, angle;
+            v[0] = P[j][0] - crank_pivot[j][0];
+            v[1] = P[j][1] - crank_pivot[j][1];
+            v[2] = P[j][2] - crank_pivot[j][2];
+            vw = v[0] * rod_axis[j][0] + v[1] * rod_axis[j][1] + v[2] * rod_axis[j][2]
+                 - crank_offset[j];
+            v1 = v[0] * crank_e1[j][0] + v[1] * crank_e1[j][1] + v[2] * crank_e1[j][2];
+            v2 = v[0] * crank_e2[j][0] + v[1] * crank_e2[j][1] + v[2] * crank_e2[j][2];
+            perp = sqrt(v1 * v1 + v2 * v2);
+            g = vw * vw + perp * perp + crank_radius[j] * crank_radius[j] - lsq;
+            amplitude = 2.0 * crank_radius[j] * perp;
+            cosine = g / amplitude;
+            if (!(fabs(cosine) <= 1.0)) {{
+                if (fabs(g) - amplitude <= boundary_tol * lsq && amplitude > 0.0)
+                    cosine = cosine > 0.0 ? 1.0 : -1.0;  /* rounding at the boundary */
+                else return PKM_UNREACHABLE;
+            }}
+            angle = atan2(v2, v1) + rod_branch[j] * acos(cosine);
+            angle = fmod(angle + 3.14159265358979323846, 2.0 * 3.14159265358979323846);
+            if (angle < 0.0) angle += 2.0 * 3.14159265358979323846;
+            q[j] = (angle - 3.14159265358979323846) / DEG;  /* [-180, 180) degrees */
+            continue;
+        }}
+#endif
         s = w[0] * rod_axis[j][0] + w[1] * rod_axis[j][1] + w[2] * rod_axis[j][2];
         radicand = lsq - (ww - s * s);
         if (radicand < 0.0) {{
@@ -578,9 +642,10 @@ def _read_array(text: str, name: str, size: int) -> np.ndarray:
     found = re.search(rf"\b{name}\b(?:\[[^\]]*\])+\s*=\s*\{{(.*?)\}};", bare, flags=re.S)
     if found is None:
         raise ExportCheckError(f"the generated source has no {name} array")
-    words = re.findall(r"PKM_SLIDE|PKM_STRUT|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?",
+    words = re.findall(r"PKM_[A-Z]+|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?",
                        found.group(1))
-    values = np.array([{"PKM_SLIDE": 0.0, "PKM_STRUT": 1.0}[w] if w.startswith("PKM")
+    codes = {v: float(k) for k, v in _KIND_NAMES.items()}
+    values = np.array([codes[w] if w.startswith("PKM")
                        else float(w) for w in words])
     if values.shape != (size,):
         raise ExportCheckError(f"the generated {name} holds {values.size} numbers, not {size}")
@@ -602,7 +667,9 @@ def check_linuxcnc_source(machine, text: str, units: str = "mm") -> float:
     platform = _read_array(text, "rod_platform", 3 * n).reshape(n, 3) * scale
     axis = _read_array(text, "rod_axis", 3 * n).reshape(n, 3)
     length = _read_array(text, "rod_length", n) * scale
-    home_q = _read_array(text, "home_joints", n) * scale
+    crank = kind == 2
+    joint_scale = np.where(crank, np.pi / 180.0, scale)
+    home_q = _read_array(text, "home_joints", n) * joint_scale
     x = sample_poses(machine)
     q = np.asarray(machine.ik(x))
     if x.shape[1] == 6:
@@ -614,7 +681,16 @@ def check_linuxcnc_source(machine, text: str, units: str = "mm") -> float:
     slide = kind == 0
     points = x[:, None, :3] + np.einsum("kab,jb->kja", rot, platform)
     d = points - base[None] - np.where(slide, q, 0.0)[:, :, None] * axis[None]
-    rho = np.where(slide, length, length + q)
+    if crank.any():
+        pivot = _read_array(text, "crank_pivot", 3 * n).reshape(n, 3) * scale
+        e1 = _read_array(text, "crank_e1", 3 * n).reshape(n, 3)
+        e2 = _read_array(text, "crank_e2", 3 * n).reshape(n, 3)
+        radius = _read_array(text, "crank_radius", n) * scale
+        offset = _read_array(text, "crank_offset", n) * scale
+        tip = (pivot + offset[:, None] * axis)[None] + radius[None, :, None] * (
+            np.cos(q)[:, :, None] * e1[None] + np.sin(q)[:, :, None] * e2[None])
+        d = np.where(crank[None, :, None], points - tip, d)
+    rho = np.where(kind == 1, length + q, length)
     worst = float(np.abs(np.linalg.norm(d, axis=2) - rho).max())
     worst = max(worst, float(np.abs(home_q - machine.home_q).max()))
     if not worst <= 1e-9:
