@@ -42,8 +42,9 @@ class RodGeometry:
     arm ``base_j − pivot_j`` split along the axis (``h_j``) and across it (``r_j e1_j``),
     ``e2_j = u_j × e1_j`` (:mod:`pkmkit.machines.closed_form`). For a translational machine the
     rods are its equivalent legs (a parallelogram's midline, exact while the platform only
-    translates) and R = I; for a full-pose machine they are its real rods. Defects of a calibrated machine are already in
-    these numbers (:mod:`pkmkit.model.rod_defects` applies them exactly).
+    translates) and R = I; for a full-pose machine they are its real rods. Defects of a
+    calibrated machine are already in these numbers (:mod:`pkmkit.model.rod_defects` applies
+    them exactly).
 
     Attributes:
         names: ``(n,)`` leg names (pkmkit's).
