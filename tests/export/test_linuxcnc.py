@@ -23,8 +23,8 @@ from pkmkit.model.rods import CRANK, STRUT
 from pkmkit.status import Status
 
 STUB = Path(__file__).parent / "linuxcnc_stub"
-SUPPORTED = ["delta", "dietmaier-hexapod", "gough-stewart", "linear-delta-ch3",
-             "linear-delta-table-iv1", "orthoglide"]
+SUPPORTED = ["delta", "dietmaier-hexapod", "five-bar-biglide", "five-bar-isotropic",
+             "gough-stewart", "linear-delta-ch3", "linear-delta-table-iv1", "orthoglide"]
 MM = 1e-3
 TOL = 1e-9  # m
 
@@ -71,7 +71,7 @@ class Module:
     def world(self, x: np.ndarray) -> np.ndarray:
         """pkmkit poses (N, dims) → LinuxCNC worlds (N, 6) in the module's units."""
         out = np.zeros((x.shape[0], 6))
-        out[:, :3] = x[:, :3] / self.scale
+        out[:, :min(3, self.machine.dims)] = x[:, :3] / self.scale
         if self.full:
             out[:, 3:] = Rotation.from_rotvec(x[:, 3:]).as_euler("xyz", degrees=True)
         return out
@@ -79,7 +79,7 @@ class Module:
     def pose(self, world: np.ndarray) -> np.ndarray:
         """LinuxCNC worlds → pkmkit poses (independent conversion: scipy)."""
         if not self.full:
-            return world[:, :3] * self.scale
+            return world[:, :self.machine.dims] * self.scale
         rot = Rotation.from_euler("xyz", world[:, 3:], degrees=True).as_rotvec()
         return np.concatenate([world[:, :3] * self.scale, rot], axis=1)
 
@@ -113,8 +113,10 @@ def _random_poses(machine, n: int, seed: int, spread: float = 1.6) -> np.ndarray
     rng = np.random.default_rng(seed)
     lo, hi = machine.default_box()
     centre, half = 0.5 * (lo + hi), 0.5 * (hi - lo) * spread
-    x = centre + rng.uniform(-1, 1, (n, 3)) * half
-    if machine.dims == 3:
+    if spread > 1:  # beyond the box, far enough for slide and crank rods to fall short
+        half = np.maximum(half, 1.2 * float(machine.model.leg_length.max()))
+    x = centre + rng.uniform(-1, 1, (n, len(centre))) * half
+    if machine.dims in (2, 3):
         return x
     rot = Rotation.from_rotvec(rng.uniform(-1, 1, (n, 3)) * np.radians(15))
     rot = rot * Rotation.from_rotvec(machine.home_pose[3:])
@@ -123,7 +125,7 @@ def _random_poses(machine, n: int, seed: int, spread: float = 1.6) -> np.ndarray
 
 def _joint_points(machine, x: np.ndarray) -> np.ndarray:
     """Platform joint centres (N, rods, 3) of poses: a metric for full poses (m)."""
-    if machine.dims == 3:
+    if machine.dims in (2, 3):
         return x[:, None, :]
     rot = Rotation.from_rotvec(x[:, 3:]).as_matrix()
     return x[:, None, :3] + np.einsum("kab,jb->kja", rot, machine.model.rod_platform)
@@ -161,7 +163,7 @@ def test_inverse_matches_pkmkit_on_a_million_poses(module):
     m = module.machine
     x = _random_poses(m, 1_000_000, seed=1)
     q_c, status = module.inverse(x)
-    n_modes = len(x) if m.dims == 3 else 100_000
+    n_modes = len(x) if m.dims != 6 else 100_000
     res = m.ik(x[:n_modes], full_output=True)
     ok = np.asarray(res.status) == Status.OK
     working = ok & (np.asarray(res.mode) == m.working_mode)
@@ -196,12 +198,12 @@ def test_forward_matches_pkmkit_from_the_previous_position(module):
     cand[:, kind == STRUT] = np.minimum(cand[:, kind == STRUT],
                                         -m.model.leg_length[kind == STRUT] - 0.01 * reach)
     none = (np.asarray(m.fk(cand, full_output=True).status) == Status.NO_ASSEMBLY
-            if m.dims == 3 else np.ones(len(cand), dtype=bool))
+            if m.dims != 6 else np.ones(len(cand), dtype=bool))
     bad = cand[none][:2000]
     assert len(bad) >= 500
     q_all = np.concatenate([q, bad])
     start = np.concatenate([x, x[:len(bad)]])
-    start[:, :3] += rng.normal(0, 1e-3, (len(start), 3))  # the previous position, 1 mm off
+    start[:, :3] += rng.normal(0, 1e-3, start[:, :3].shape)  # the previous position, 1 mm off
     if m.dims == 6:
         start[:, 3:] = (Rotation.from_rotvec(rng.normal(0, np.radians(0.5), (len(start), 3)))
                         * Rotation.from_rotvec(start[:, 3:])).as_rotvec()
@@ -226,13 +228,13 @@ def test_forward_from_the_unset_position_finds_the_same_pose_or_refuses(module):
     pkmkit's working-mode pose or refuses, never another pose. A hexapod has up to 40: Newton
     finds the one its start leads to (as genhexkins), so poses are drawn nearer home."""
     m = module.machine
-    spread = 0.8 if m.dims == 3 else 0.3
+    spread = 0.3 if m.dims == 6 else 0.8
     x = _random_poses(m, 3000, seed=4, spread=spread)
     res = m.ik(x, full_output=True)
     keep = (np.asarray(res.status) == Status.OK) & (np.asarray(res.mode) == m.working_mode)
     x, q = x[keep], res.q[keep]
     start = np.zeros_like(x)
-    if m.dims == 3:  # any start: a far one too
+    if m.dims != 6:  # any start: a far one too
         start[len(x) // 2:] = m.home_pose + float(m.model.leg_length.max())
     pose_c, status = module.forward(q, start)
     assert (status == 0).mean() > 0.9
@@ -254,7 +256,7 @@ def test_home_and_type(module):
 def test_invalid_inputs_are_refused(module):
     m = module.machine
     x = np.tile(m.home_pose, (3, 1))
-    x[0, 0], x[1, 1], x[2, 2] = np.nan, np.inf, 1e12
+    x[0, 0], x[1, 1], x[2, 1] = np.nan, np.inf, 1e12
     _, status = module.inverse(x)
     assert (status == -4).all()
     q = np.tile(m.home_q, (2, 1))
@@ -281,7 +283,6 @@ def test_the_module_carries_the_calibrated_geometry(tmp_path):
     ("tripteor-x7", "joint-chain"),
     ("verne", "six rods on six actuators"),
     ("crank-slider", "joint-chain"),
-    ("five-bar-isotropic", "planar"),
 ])
 def test_unsupported_machines_are_refused_with_why(name, words):
     with pytest.raises(UnsupportedExportError, match=words):

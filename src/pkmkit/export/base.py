@@ -104,20 +104,22 @@ def machine_family(machine) -> str:
     return "planar" if model.dims == 2 else "translational"
 
 
-def rod_geometry(machine, fmt: str, *, cranks: bool = False) -> RodGeometry:
+def rod_geometry(machine, fmt: str, *, cranks: bool = False, planar: bool = False
+                 ) -> RodGeometry:
     """The one-rod-per-actuator geometry of a rod-leg machine of slides and struts (and cranks
     when the format takes them).
 
     Raises:
-        UnsupportedExportError: a joint-chain or planar machine, crank actuators (unless
-            ``cranks``), or a full-pose machine that is not six rods on six actuators.
+        UnsupportedExportError: a joint-chain machine, a planar one (unless ``planar``: its
+            geometry is then 3-D with z = 0), crank actuators (unless ``cranks``), or a
+            full-pose machine that is not six rods on six actuators.
     """
     family = machine_family(machine)
     if family == "chain":
         raise UnsupportedExportError(
             fmt, machine.id, "a joint-chain machine (serial R/P chains closed on the platform) "
             "has no closed-form rod model; only rod-leg machines are exported to this format")
-    if family == "planar":
+    if family == "planar" and not planar:
         raise UnsupportedExportError(
             fmt, machine.id, "a planar machine (2 actuators, x-y only) is not exported to this "
             "format yet")

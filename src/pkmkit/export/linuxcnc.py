@@ -11,7 +11,8 @@ realtime module. Build it with ``halcompile --install NAME.c`` (the line is in i
 slide, ``a_j = base_j``, ``ρ_j = length_j + q_j`` for a strut, the arm tip of a crank turned by
 q_j (a rotary joint, in degrees for LinuxCNC) — pkmkit's own equations, with
 its parameter names and its calibrated defects already applied to the numbers. A translational
-machine (linear Delta, Orthoglide) has R = I and world coordinates X Y Z; a hexapod has
+machine (linear Delta, Orthoglide, Delta robot) has R = I and world coordinates X Y Z (a planar
+one, the five-bars, X Y); a hexapod has
 X Y Z A B C with ``R = Rz(C) Ry(B) Rx(A)`` (A, B, C in degrees about the fixed x, y, z axes:
 pkmkit's ``--angles xyz``, LinuxCNC's and ``genhexkins``' roll–pitch–yaw), the position being
 pkmkit's platform reference point.
@@ -106,7 +107,8 @@ def linuxcnc_source(machine, *, units: str = "mm", name: str | None = None,
 
     Args:
         machine: a rod-leg machine of slides, struts or cranks: a translational one (3
-            actuators, X Y Z) or a hexapod of six rods on six actuators (X Y Z A B C).
+            actuators, X Y Z), a planar one (2 actuators, X Y) or a hexapod of six rods on six
+            actuators (X Y Z A B C).
         units: LinuxCNC's length unit (``LINEAR_UNITS``: ``"mm"``, ``"in"`` or ``"m"``) for the
             world coordinates, the joints and the numbers in the file; angles in degrees.
         name: module name (default :func:`module_name` of the machine id).
@@ -116,10 +118,10 @@ def linuxcnc_source(machine, *, units: str = "mm", name: str | None = None,
         The source text (``NAME.c``).
 
     Raises:
-        UnsupportedExportError: a machine this module cannot express (joint chains, planar
-            machines, full-pose machines other than six rods on six actuators).
+        UnsupportedExportError: a machine this module cannot express (joint chains, full-pose
+            machines other than six rods on six actuators).
     """
-    geo = rod_geometry(machine, FORMAT, cranks=True)
+    geo = rod_geometry(machine, FORMAT, cranks=True, planar=True)
     name = name or module_name(machine.id)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise UnsupportedExportError(FORMAT, machine.id,
@@ -132,7 +134,7 @@ def _home_world(machine, geo: RodGeometry) -> np.ndarray:
     """Home pose as LinuxCNC world coordinates (SI lengths; A, B, C in degrees)."""
     home = np.asarray(machine.home_pose, dtype=float)
     if not geo.full_pose:
-        return np.concatenate([home, np.zeros(3)])
+        return np.concatenate([home, np.zeros(6 - len(home))])
     from pkmkit.spatial.rotation import angles_from_rotation, rotation_class
 
     abc = angles_from_rotation(rotation_class().from_rotvec(home[3:]), "xyz", degrees=True)
@@ -152,7 +154,8 @@ def _render(machine, geo: RodGeometry, name: str, units: str, scale: float, sour
     home_q = np.asarray(machine.home_q, dtype=float) / joint_scale
     size = 1.0 + float(max(np.abs(base).max(), np.abs(platform).max(), np.abs(length).max()))
     rho_home = np.where(geo.kind == STRUT, length + home_q, length)  # rod lengths at home
-    coords = "XYZABC" if geo.full_pose else "XYZ"
+    planar = machine.dims == 2
+    coords = "XYZABC" if geo.full_pose else ("XY" if planar else "XYZ")
     kinds = ", ".join(_KIND_NAMES[int(k)] for k in geo.kind)
     limits = []
     for j in range(n):
@@ -187,6 +190,7 @@ static const double crank_offset[N_RODS] = {_array(offset / scale)};
 """
     kind_text = ("full-pose (hexapod): world X Y Z A B C, R = Rz(C) Ry(B) Rx(A), A B C in "
                  "degrees about the fixed x, y, z axes" if geo.full_pose else
+                 "planar: world X Y, z = 0, the platform does not turn (R = I)" if planar else
                  "translational: world X Y Z, the platform does not turn (R = I)")
     mode_name = machine.mode_label(machine.working_mode)
     header = f"""/* {name}.c -- LinuxCNC kinematics of "{machine.name}"
@@ -222,6 +226,7 @@ static const double crank_offset[N_RODS] = {_array(offset / scale)};
 
 #define N_RODS {n}
 #define FULL_POSE {1 if geo.full_pose else 0}
+#define PLANAR {1 if planar else 0}
 #define PKM_SLIDE 0
 #define PKM_STRUT 1
 #define PKM_CRANK 2
@@ -343,6 +348,8 @@ static void rod_vectors(const double P[N_RODS][3], const double *q, double d[N_R
 
 #if FULL_POSE
 #define N_POSE 6
+#elif PLANAR
+#define N_POSE 2
 #else
 #define N_POSE 3
 #endif
@@ -353,7 +360,10 @@ static void parallel_rows(const double d[N_RODS][3], const double Rb[N_RODS][3],
 {{
     int j;
     for (j = 0; j < N_RODS; j++) {{
-        A[j][0] = d[j][0]; A[j][1] = d[j][1]; A[j][2] = d[j][2];
+        A[j][0] = d[j][0]; A[j][1] = d[j][1];
+#if !PLANAR
+        A[j][2] = d[j][2];
+#endif
 #if FULL_POSE
         A[j][3] = Rb[j][1] * d[j][2] - Rb[j][2] * d[j][1];
         A[j][4] = Rb[j][2] * d[j][0] - Rb[j][0] * d[j][2];
@@ -514,7 +524,11 @@ static int direct_model(const double *q, double p[3], double R[3][3])
         for (j = 0; j < N_POSE; j++) e[j] = -e[j];
         det = solve_linear(A, e);
         if (det == 0.0 || det != det) return PKM_SINGULAR;
+#if PLANAR
+        step = sqrt(e[0] * e[0] + e[1] * e[1]);
+#else
         step = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+#endif
         if (step > max_step) bound = max_step / step;
 #if FULL_POSE
         {{
@@ -524,7 +538,10 @@ static int direct_model(const double *q, double p[3], double R[3][3])
             turn(R, &e[3]);
         }}
 #endif
-        p[0] += bound * e[0]; p[1] += bound * e[1]; p[2] += bound * e[2];
+        p[0] += bound * e[0]; p[1] += bound * e[1];
+#if !PLANAR
+        p[2] += bound * e[2];
+#endif
     }}
     return PKM_NOT_CONVERGED;
 }}
@@ -544,7 +561,7 @@ int kinematicsInverse(const EmcPose *pos, double *joints, const KINEMATICS_INVER
     int j, status;
     (void)iflags;
     (void)fflags;
-    p[0] = pos->tran.x; p[1] = pos->tran.y; p[2] = pos->tran.z;
+    p[0] = pos->tran.x; p[1] = pos->tran.y; p[2] = PLANAR ? 0.0 : pos->tran.z;
 #if FULL_POSE
     abc[0] = pos->a; abc[1] = pos->b; abc[2] = pos->c;
 #endif
@@ -566,7 +583,7 @@ int kinematicsForward(const double *joints, EmcPose *pos, const KINEMATICS_FORWA
     if (!finite_inputs(joints, N_RODS)) return PKM_INVALID;
     /* start from the previous position (LinuxCNC passes it in *pos), then from home */
     status = PKM_NOT_CONVERGED;
-    p[0] = pos->tran.x; p[1] = pos->tran.y; p[2] = pos->tran.z;
+    p[0] = pos->tran.x; p[1] = pos->tran.y; p[2] = PLANAR ? 0.0 : pos->tran.z;
     start[0] = pos->a; start[1] = pos->b; start[2] = pos->c;
     if (!FULL_POSE) start[0] = start[1] = start[2] = 0.0;
     unset = p[0] == 0.0 && p[1] == 0.0 && p[2] == 0.0 && start[0] == 0.0 && start[1] == 0.0
@@ -672,6 +689,8 @@ def check_linuxcnc_source(machine, text: str, units: str = "mm") -> float:
     home_q = _read_array(text, "home_joints", n) * joint_scale
     x = sample_poses(machine)
     q = np.asarray(machine.ik(x))
+    if x.shape[1] == 2:
+        x = np.concatenate([x, np.zeros((len(x), 1))], axis=1)
     if x.shape[1] == 6:
         from pkmkit.spatial.rotation import rotvec_to_matrix
 
