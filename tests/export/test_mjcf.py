@@ -11,8 +11,8 @@ from scipy.spatial.transform import Rotation
 
 import pkmkit
 from pkmkit.dynamics.defaults import default_masses
-from pkmkit.export.base import UnsupportedExportError
-from pkmkit.export.mjcf import mjcf_layout, mjcf_model
+from pkmkit.export.base import ExportCheckError, UnsupportedExportError
+from pkmkit.export.mjcf import check_mjcf_model, mjcf_layout, mjcf_model
 from pkmkit.machines.registry import ALIASES
 from pkmkit.model.defects_table import apply_defect_vector, defect_index
 
@@ -139,3 +139,17 @@ def test_a_platform_on_three_single_rods_is_refused(tmp_path):
         f'\naxis = [0, 0, 1]\nplatform = [0, 0, 0]\nlength = 1.04\n' for a in angles))
     with pytest.raises(UnsupportedExportError, match="3 rods"):
         mjcf_model(pkmkit.load(path))
+
+
+def test_the_self_check_catches_a_model_off_pkmkit():
+    """:func:`check_mjcf_model` (what ``pkmkit export --to mjcf`` runs before writing): a rod tip
+    moved by 1 µm leaves the home configuration unassembled."""
+    m = pkmkit.machine("linear-delta-table-iv1")
+    xml = mjcf_model(m)
+    assert check_mjcf_model(m, xml) <= 1e-9
+    start = xml.index('<connect body1="rod0" body2="platform" anchor="') + len(
+        '<connect body1="rod0" body2="platform" anchor="')
+    first = xml[start:].split()[0]
+    wrong = xml[:start] + repr(float(first) + 1e-6) + xml[start + len(first):]
+    with pytest.raises(ExportCheckError, match="not written"):
+        check_mjcf_model(m, wrong)

@@ -76,7 +76,7 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text):
         worst = check_mjcf_model(m, text)
         what = "MuJoCo model (MJCF; m, kg)"
         check = ("not loaded (MuJoCo is not installed)" if worst is None else
-                 "loaded in MuJoCo, its home configuration assembled (≤ 1e-9 m)")
+                 "loaded in MuJoCo, its loops close at pkmkit's configurations (≤ 1e-9 m)")
     atomic_write_text(out_file, text)
     click.echo(f"{m.name}: {what}")
     click.echo(f"  check: {check}")

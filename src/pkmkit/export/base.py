@@ -162,17 +162,19 @@ class ExportCheckError(PkmError, RuntimeError):
     command that made it writes nothing."""
 
 
-def sample_poses(machine, n: int = 24, seed: int = 0) -> np.ndarray:
+def sample_poses(machine, n: int = 24, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Home, the machine's named poses and ``n`` random poses near home that pkmkit's inverse
-    model reaches, ``(k, dims)``: where an export's self-check compares the written model with
-    pkmkit's."""
+    model reaches in the working mode: ``(poses (k, dims), q (k, n_act))``, where an export's
+    self-check compares the written model with pkmkit's. (A position-controlled machine, the
+    Verne-type module, is sampled at positions and given the orientation its rods impose.)"""
     rng = np.random.default_rng(seed)
-    named = np.array([np.asarray(p, dtype=float) for p in machine.reference_poses().values()])
-    named = named[[len(p) == machine.dims for p in named]]
+    width = 3 if getattr(machine, "position_controlled", False) else machine.dims
+    named = [np.asarray(p, dtype=float) for p in machine.reference_poses().values()]
+    named = np.array([p[:width] for p in named if len(p) >= width])
     lo, hi = machine.default_box()
     centre, half = 0.5 * (lo + hi), 0.25 * (hi - lo)
     x = centre + rng.uniform(-1, 1, (n, len(centre))) * half
-    if machine.dims == 6:
+    if width == 6:
         from pkmkit.spatial.rotation import compose_rotvec
 
         turn = rng.uniform(-1, 1, (n, 3)) * np.radians(5)
@@ -182,4 +184,5 @@ def sample_poses(machine, n: int = 24, seed: int = 0) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         res = machine.ik(poses, full_output=True)
     keep = (np.asarray(res.status) == 0) & (np.asarray(res.mode) == machine.working_mode)
-    return poses[keep]
+    full = np.asarray(res.pose) if width != machine.dims else poses
+    return full[keep], np.asarray(res.q)[keep]

@@ -148,8 +148,8 @@ def check_klipper_config(machine, text: str, endstops: np.ndarray | None = None)
     cfg = configparser.ConfigParser()
     cfg.read_string(text)
     mm = length_scale("mm")
-    x = sample_poses(machine) / mm
-    q = np.asarray(machine.ik(x * mm))
+    x, q = sample_poses(machine)
+    x = x / mm
     ends = klipper_values(machine, endstops)["endstops"]
     radius = cfg.getfloat("printer", "delta_radius")
     worst = 0.0

@@ -687,8 +687,7 @@ def check_linuxcnc_source(machine, text: str, units: str = "mm") -> float:
     crank = kind == 2
     joint_scale = np.where(crank, np.pi / 180.0, scale)
     home_q = _read_array(text, "home_joints", n) * joint_scale
-    x = sample_poses(machine)
-    q = np.asarray(machine.ik(x))
+    x, q = sample_poses(machine)
     if x.shape[1] == 2:
         x = np.concatenate([x, np.zeros((len(x), 1))], axis=1)
     if x.shape[1] == 6:

@@ -32,7 +32,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pkmkit.export.base import ExportCheckError, UnsupportedExportError, machine_family
+from pkmkit.export.base import (
+    ExportCheckError,
+    UnsupportedExportError,
+    machine_family,
+    sample_poses,
+)
 from pkmkit.model.rods import CRANK, STRUT
 
 FORMAT = "mjcf"
@@ -233,13 +238,45 @@ def _quaternion(rot: np.ndarray) -> np.ndarray:
     return np.array([w, x, y, z])
 
 
+def set_configuration(model, data, machine, layout: MjcfLayout, x: np.ndarray,
+                      q: np.ndarray) -> None:
+    """Put a loaded model in pkmkit's configuration: actuated joints at ``q (n,)``, every rod's
+    ball joint turned onto its rod (the least rotation from its home direction), the platform at
+    the pose ``x`` (``(dims,)``: position, and rotation vector for a full pose)."""
+    from pkmkit.solve.rod_closure import rod_base_points
+    from pkmkit.spatial.rotation import rotation_class, rotvec_to_matrix
+
+    rod = machine.model
+    rotation = rotation_class()
+    p = rod.pad(np.asarray(x, dtype=float)[None])[0]
+    rot = (rotvec_to_matrix(np.asarray(x, dtype=float)[None, 3:])[0] if rod.full_pose
+           else np.eye(3))
+    for k in range(rod.n_actuators):
+        data.qpos[model.jnt_qposadr[model.joint(f"act{k}").id]] = q[k]
+    base = rod_base_points(rod, np.asarray(q, dtype=float)[:, None])[:, :, 0].T  # (m, 3)
+    for j, e0 in layout.rod_direction.items():
+        d = p + rot @ rod.rod_platform[j] - base[j]
+        e = d / np.linalg.norm(d)
+        axis = np.cross(e0, e)
+        sin = float(np.linalg.norm(axis))
+        turn = (rotation.from_rotvec(axis / sin * np.arctan2(sin, float(e0 @ e))) if sin > 1e-15
+                else rotation.identity())
+        qx, qy, qz, qw = turn.as_quat()
+        adr = model.jnt_qposadr[model.joint(f"ball{j}").id]
+        data.qpos[adr:adr + 4] = [qw, qx, qy, qz]
+    free = model.jnt_qposadr[model.body("platform").jntadr[0]]
+    data.qpos[free:free + 3] = p
+    data.qpos[free + 3:free + 7] = _quaternion(rot)
+
+
 def check_mjcf_model(machine, xml: str) -> float | None:
-    """Load a written model in MuJoCo (when installed) and check its reference configuration:
-    the closures hold, the actuated joints read pkmkit's home coordinates, the platform sits at
-    pkmkit's home pose. Returns the largest discrepancy (m), or None without MuJoCo.
+    """Load a written model in MuJoCo (when installed) and check it against pkmkit: at home and
+    at pkmkit's sample configurations (:func:`~pkmkit.export.base.sample_poses`, with their
+    inverse model), put in MuJoCo's joints, every closure holds. Returns the largest violation
+    (m), or None without MuJoCo.
 
     Raises:
-        ExportCheckError: MuJoCo refuses the model, or a discrepancy beyond 1e-9 m.
+        ExportCheckError: MuJoCo refuses the model, or a violation beyond 1e-9 m.
     """
     try:
         import mujoco
@@ -250,17 +287,15 @@ def check_mjcf_model(machine, xml: str) -> float | None:
     except ValueError as exc:
         raise ExportCheckError(f"MuJoCo refuses the generated model: {exc}") from None
     data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    n = machine.n_actuators
-    joints = [model.joint(f"act{k}").id for k in range(n)]
-    q = data.qpos[model.jnt_qposadr[joints]]
-    free = model.jnt_qposadr[model.body("platform").jntadr[0]]
-    position = data.qpos[free:free + 3]
-    home = np.asarray(machine.home_pose, dtype=float)
-    worst = max(float(np.abs(data.efc_pos[: data.nefc]).max()) if data.nefc else 0.0,
-                float(np.abs(q - machine.home_q).max()),
-                float(np.abs(position - home[:3]).max()))
+    layout = mjcf_layout(machine, require_held_platform=False)
+    poses, q = sample_poses(machine)
+    worst = 0.0
+    for x, qk in zip([machine.home_pose, *poses], [machine.home_q, *q], strict=True):
+        set_configuration(model, data, machine, layout, x, qk)
+        mujoco.mj_forward(model, data)
+        if data.nefc:
+            worst = max(worst, float(np.abs(data.efc_pos[: data.nefc]).max()))
     if not worst <= 1e-9:
-        raise ExportCheckError(f"the generated MuJoCo model is off pkmkit's home configuration "
-                               f"by {worst:.3g} m: not written")
+        raise ExportCheckError(f"the generated MuJoCo model does not close pkmkit's "
+                               f"configurations (off by {worst:.3g} m): not written")
     return worst
