@@ -5,6 +5,7 @@ pkmkit's model is caught by the command's own check."""
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -95,3 +96,22 @@ def test_the_command_checks_what_it_writes(run, tmp_path, monkeypatch, fmt, modu
     res = run("export", "linear-delta-table-iv1", "--to", fmt, "--out", tmp_path / out)
     assert res.exit_code == 1 and "not written" in res.output
     assert not (tmp_path / out).exists()
+
+
+def test_mjcf_with_a_masses_file(run, tmp_path):
+    """The masses file's steel arms (Ø40 mm, 7700 kg/m³, 1.04 m: 10.06 kg each) reach the model."""
+    mujoco = pytest.importorskip("mujoco")
+    out = tmp_path / "delta.xml"
+    res = run("export", "linear-delta-table-iv1", "--to", "mjcf", "--out", out, "--masses",
+              Path(__file__).parents[2] / "docs" / "examples" / "delta-masses.toml")
+    assert res.exit_code == 0, res.output
+    model = mujoco.MjModel.from_xml_path(str(out))
+    arm = 7700 * np.pi / 4 * 0.04**2 * 1.04
+    assert model.body("rod0").mass[0] == pytest.approx(arm, rel=1e-12)
+    assert model.body("platform").mass[0] == pytest.approx(15.0)
+
+
+def test_format_options_go_with_their_format(run, tmp_path):
+    res = run("export", "orthoglide", "--to", "linuxcnc", "--out", tmp_path / "okins.c",
+              "--endstops", "1,2,3")
+    assert res.exit_code == 2 and "--endstops goes with --to klipper" in res.output

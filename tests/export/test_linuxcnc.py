@@ -312,3 +312,17 @@ def test_a_hexapod_below_its_base_is_the_other_assembly_mode(tmp_path):
     assert list(res.mode) == [m.working_mode, -m.working_mode]
     _, status = module.inverse(x)
     assert list(status) == [0, -3]
+
+
+@pytest.mark.parametrize("units", ["in", "m"])
+def test_a_module_in_inches_or_metres(tmp_path, units):
+    """LINEAR_UNITS other than mm: the same joints and poses, in those units."""
+    m = pkmkit.machine("gough-stewart")
+    module = Module(m, tmp_path, units=units)
+    x = _random_poses(m, 10_000, seed=6, spread=0.5)
+    q_c, status = module.inverse(x)
+    assert (status == 0).all()
+    assert np.abs(q_c - m.ik(x)).max() <= TOL
+    pose, status = module.forward(q_c, x)
+    assert (status == 0).all()
+    assert np.abs(_joint_points(m, pose) - _joint_points(m, x)).max() <= TOL

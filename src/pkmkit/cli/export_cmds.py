@@ -34,7 +34,9 @@ def register(cli: click.Group) -> None:
 @click.option("--endstops", "endstops_text", metavar="Q1,Q2,Q3", default=None,
               help="Klipper: actuator coordinates at which the endstops trigger, in --units "
                    "(default: the tops of the strokes).")
-def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text):
+@click.option("--masses", "masses_file", type=click.Path(dir_okay=False), default=None,
+              help="mjcf: a masses file (docs/motion.md) instead of the illustrative masses.")
+def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, masses_file):
     """Write MACHINE for a controller, a firmware or a simulator (--to FORMAT --out PATH).
 
     linuxcnc: --out NAME.c, the module NAME (LinuxCNC loads it by that name).
@@ -46,6 +48,10 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text):
     to which format.
     """
     m = resolve_machine(machine_name, assignments, units)
+    if masses_file is not None and fmt != "mjcf":
+        raise click.UsageError("--masses goes with --to mjcf")
+    if endstops_text is not None and fmt != "klipper":
+        raise click.UsageError("--endstops goes with --to klipper")
     source = machine_name if is_machine_file(machine_name) else ""
     if fmt == "linuxcnc":
         from pkmkit.export.linuxcnc import check_linuxcnc_source, linuxcnc_source
@@ -72,7 +78,12 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text):
     else:
         from pkmkit.export.mjcf import check_mjcf_model, mjcf_model
 
-        text = mjcf_model(m)
+        masses = None
+        if masses_file is not None:
+            from pkmkit.dynamics.masses import load_masses
+
+            masses = load_masses(masses_file, m)[0]
+        text = mjcf_model(m, masses)
         worst = check_mjcf_model(m, text)
         what = "MuJoCo model (MJCF; m, kg)"
         check = ("not loaded (MuJoCo is not installed)" if worst is None else
