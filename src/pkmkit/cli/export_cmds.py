@@ -54,7 +54,8 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         raise click.UsageError("--endstops goes with --to klipper")
     source = machine_name if is_machine_file(machine_name) else ""
     if fmt == "linuxcnc":
-        from pkmkit.export.linuxcnc import check_linuxcnc_source, linuxcnc_source
+        from pkmkit.export.linuxcnc import linuxcnc_source
+        from pkmkit.export.linuxcnc_check import check_linuxcnc_source
 
         name = Path(out_file).stem
         if Path(out_file).suffix != ".c" or not re.fullmatch(r"[A-Za-z_]\w*", name):
