@@ -52,7 +52,8 @@ class Module:
         source = directory / f"{name}.c"
         source.write_text(linuxcnc_source(machine, units=units), encoding="utf-8")
         lib = directory / f"{name}.so"
-        subprocess.run([cc, "-shared", "-fPIC", "-O2", "-Wall", "-Werror", f"-I{STUB}",
+        subprocess.run([cc, "-shared", "-fPIC", "-O2", "-std=c99", "-pedantic", "-Wall", "-Wextra",
+                        "-Werror", f"-I{STUB}",
                         str(source), str(STUB / "harness.c"), "-o", str(lib), "-lm"],
                        check=True, capture_output=True)
         self.lib = ctypes.CDLL(str(lib))

@@ -286,7 +286,7 @@ static double unwrap_near(double angle, double ref)
 }}
 
 /* A, B, C (degrees) of R, A and C taken nearest to the previous a0, c0 */
-static void abc_from_rotation(const double R[3][3], double a0, double c0,
+static void abc_from_rotation(double R[3][3], double a0, double c0,
                               double *a, double *b, double *c)
 {{
     double cb = sqrt(R[0][0] * R[0][0] + R[1][0] * R[1][0]);
@@ -307,7 +307,7 @@ static void abc_from_rotation(const double R[3][3], double a0, double c0,
 #endif
 
 /* platform joint centres P_j = p + R b_j, and R b_j */
-static void platform_points(const double p[3], const double R[3][3], double P[N_RODS][3],
+static void platform_points(const double p[3], double R[3][3], double P[N_RODS][3],
                             double Rb[N_RODS][3])
 {{
     int j, k;
@@ -321,7 +321,7 @@ static void platform_points(const double p[3], const double R[3][3], double P[N_
 }}
 
 /* rod vectors d_j = P_j - a_j(q_j) and the rods' lengths rho_j(q_j) */
-static void rod_vectors(const double P[N_RODS][3], const double *q, double d[N_RODS][3],
+static void rod_vectors(double P[N_RODS][3], const double *q, double d[N_RODS][3],
                         double rho[N_RODS])
 {{
     int j, k;
@@ -350,7 +350,7 @@ static void rod_vectors(const double P[N_RODS][3], const double *q, double d[N_R
 #endif
 
 /* rows of A: (d_j, (R b_j) x d_j) (translational: d_j) */
-static void parallel_rows(const double d[N_RODS][3], const double Rb[N_RODS][3],
+static void parallel_rows(double d[N_RODS][3], double Rb[N_RODS][3],
                           double A[N_RODS][N_POSE])
 {{
     int j;
@@ -403,7 +403,7 @@ static double solve_linear(double M[N_POSE][N_POSE], double rhs[N_POSE])
 }}
 
 /* sign of det A at a configuration (0: singular) */
-static int mode_sign(const double d[N_RODS][3], const double Rb[N_RODS][3])
+static int mode_sign(double d[N_RODS][3], double Rb[N_RODS][3])
 {{
     double A[N_RODS][N_POSE], rhs[N_POSE] = {{0}};
     double det;
@@ -413,7 +413,7 @@ static int mode_sign(const double d[N_RODS][3], const double Rb[N_RODS][3])
 }}
 
 /* inverse model: joints q of the platform position p and rotation R */
-static int inverse_model(const double p[3], const double R[3][3], double *q)
+static int inverse_model(const double p[3], double R[3][3], double *q)
 {{
     double P[N_RODS][3], Rb[N_RODS][3], d[N_RODS][3], rho[N_RODS];
     int j, sign;
