@@ -327,3 +327,30 @@ def test_a_module_in_inches_or_metres(tmp_path, units):
     pose, status = module.forward(q_c, x)
     assert (status == 0).all()
     assert np.abs(_joint_points(m, pose) - _joint_points(m, x)).max() <= TOL
+
+
+def test_a_six_slide_hexapod(tmp_path):
+    """Full-pose slides (no built-in has them): inverse on 10⁵ poses, forward on 10³."""
+    from .six_slides import six_slide_machine
+
+    m = six_slide_machine(tmp_path)
+    module = Module(m, tmp_path)
+    x = _random_poses(m, 100_000, seed=8, spread=1.0)
+    q_c, status = module.inverse(x)
+    res = m.ik(x, full_output=True)
+    working = (np.asarray(res.status) == Status.OK) & (np.asarray(res.mode) == m.working_mode)
+    assert working.mean() > 0.1 and (np.asarray(res.status) == Status.UNREACHABLE).any()
+    assert np.array_equal(status == 0, working)
+    assert np.abs(q_c[working] - res.q[working]).max() <= TOL
+    x, q = x[working][:1000], res.q[working][:1000]
+    # away from parallel singularities, where two assemblies come within a millimetre
+    regular = m.jacobian(x, q=q).parallel_measure >= 1e-3
+    assert regular.mean() > 0.5
+    x, q = x[regular], q[regular]
+    rng = np.random.default_rng(9)
+    start = x.copy()
+    start[:, :3] += rng.normal(0, 1e-3, (len(x), 3))
+    pose, status = module.forward(q, start)
+    ref = m.fk(q, x0=start)
+    assert (status == 0).all()
+    assert np.abs(_joint_points(m, pose) - _joint_points(m, ref)).max() <= TOL

@@ -153,3 +153,15 @@ def test_the_self_check_catches_a_model_off_pkmkit():
     wrong = xml[:start] + repr(float(first) + 1e-6) + xml[start + len(first):]
     with pytest.raises(ExportCheckError, match="not written"):
         check_mjcf_model(m, wrong)
+
+
+def test_a_six_slide_hexapod_settles_where_pkmkit_puts_it(tmp_path):
+    from .six_slides import six_slide_machine
+
+    m = six_slide_machine(tmp_path)
+    sim = Simulation(m)
+    target = m.home_pose + np.array([0.02, -0.01, 0.015, 0.02, -0.01, 0.03])
+    q = m.ik(target)
+    q_settled, pose = sim.settle(q)
+    assert np.abs(q_settled - q).max() <= TOL
+    assert np.abs(_points(m, pose) - _points(m, target)).max() <= TOL
