@@ -19,7 +19,7 @@ def six_slide_machine(directory: Path):
     for i, (y, a) in enumerate(zip(ys, angles, strict=True)):
         base = np.array([-0.5 if i % 2 else 0.5, y, 0.0])
         platform = np.array([0.25 * np.cos(a), 0.25 * np.sin(a), 0.0])
-        length = float(np.linalg.norm(platform + [0, 0, -0.5] - base))
+        length = float(np.linalg.norm(platform + np.array([0.0, 0.0, -0.5]) - base))
         lines += ['[[legs]]', f'actuator = "q{i + 1}"', 'type = "slide"',
                   f'base = [{base[0]}, {base[1]}, 0]', 'axis = [1, 0, 0]',
                   f'platform = [{platform[0]:.6f}, {platform[1]:.6f}, 0]',
