@@ -1,14 +1,9 @@
 """Any translational rod-leg machine — slide legs and actuated struts — in MuJoCo, used only as an
 independent test oracle for pkmkit's inverse dynamics.
 
-Bodies, built at the machine's home configuration:
-
-- slide leg k: a carriage on a slide joint (motor) carrying one ball-jointed rod per rod of the
-  leg (uniform solid cylinders);
-- strut leg: a cylinder tube on a ball joint at the base, and a piston tube on a slide joint
-  (motor) along the strut inside it, both uniform solid cylinders of the rod's radius; the
-  carriage mass of a strut (the motor's translating inertia) is the slide joint's armature;
-- the platform on a free joint, joined to every rod tip by a ``connect`` equality.
+The model is pkmkit's MJCF export (:func:`pkmkit.export.mjcf.mjcf_layout`: carriages on slide
+joints, ball-jointed rods, struts as cylinder + piston, the platform on a free joint closed by
+``connect`` equalities); the dynamics are MuJoCo's own.
 
 :meth:`MujocoRodMachine.hard_constraint_forces` solves M q̈ + c = Sᵀτ + J_cᵀλ for the actuator
 forces τ with every joint acceleration given by the motion (closures enforced exactly).
@@ -19,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from pkmkit.export.mjcf import mjcf_layout
 from pkmkit.model.rods import STRUT
 
 mujoco = __import__("pytest").importorskip("mujoco")
@@ -32,74 +28,12 @@ def _rotation_between(a: np.ndarray, b: np.ndarray) -> Rotation:
     return Rotation.from_rotvec(axis / s * np.arctan2(s, float(np.dot(a, b))))
 
 
-def _f(v) -> str:
-    return " ".join(f"{float(c):.17g}" for c in np.atleast_1d(v))
-
-
 class MujocoRodMachine:
     def __init__(self, machine, masses):
         self.machine = machine
-        model = machine.model
-        q0, p0 = machine.home_q, model.pad(machine.home_pose[None])[0]
-        piston, cyl_len, pis_len = masses.strut_parts(model.n_rods)
-        self.rod_dir0 = {}
-        bodies, connects = [], []
-        for k in range(model.n_legs):
-            rods = np.flatnonzero(model.rod_leg == k)
-            if model.leg_kind[k] == STRUT:
-                (j,) = rods
-                base = model.rod_base[j]
-                tip = p0 + model.rod_platform[j] - base
-                s0 = np.linalg.norm(tip)
-                e0 = tip / s0
-                self.rod_dir0[j] = e0
-                radius = max(masses.rod_radius[j], 1e-4)
-                bodies.append(
-                    f'<body name="cyl{j}" pos="{_f(base)}"><joint name="ball{j}" type="ball"/>'
-                    f'<geom type="cylinder" fromto="0 0 0 {_f(cyl_len[j] * e0)}" '
-                    f'size="{radius:.17g}" mass="{masses.rod_mass[j]:.17g}"/>'
-                    f'<body name="piston{j}"><joint name="act{k}" type="slide" axis="{_f(e0)}" '
-                    f'ref="{q0[k]:.17g}" armature="{masses.carriage_mass[k]:.17g}"/>'
-                    f'<geom type="cylinder" fromto="{_f((s0 - pis_len[j]) * e0)} {_f(tip)}" '
-                    f'size="{radius:.17g}" mass="{piston[j]:.17g}"/></body></body>')
-                connects.append((f"piston{j}", tip))
-                continue
-            u = model.leg_axis[k]
-            carriage = model.leg_base[k] + q0[k] * u
-            children = []
-            for j in rods:
-                joint_pt = model.rod_base[j] + q0[k] * model.rod_axis[j]
-                tip = p0 + model.rod_platform[j] - joint_pt
-                self.rod_dir0[j] = tip / np.linalg.norm(tip)
-                children.append(
-                    f'<body name="rod{j}" pos="{_f(joint_pt - carriage)}">'
-                    f'<joint name="ball{j}" type="ball"/><geom type="cylinder" fromto="0 0 0 '
-                    f'{_f(tip)}" size="{max(masses.rod_radius[j], 1e-4):.17g}" '
-                    f'mass="{masses.rod_mass[j]:.17g}"/></body>')
-                connects.append((f"rod{j}", tip))
-            bodies.append(
-                f'<body name="carriage{k}" pos="{_f(carriage)}"><joint name="act{k}" '
-                f'type="slide" axis="{_f(u)}" ref="{q0[k]:.17g}"/><geom type="box" '
-                f'size="0.02 0.02 0.02" mass="{masses.carriage_mass[k]:.17g}"/>'
-                + "".join(children) + "</body>")
-        equality = "".join(f'<connect body1="{b}" body2="platform" anchor="{_f(t)}"/>'
-                           for b, t in connects)
-        actuators = "".join(f'<motor joint="act{k}" gear="1"/>' for k in range(model.n_legs))
-        xml = f"""
-<mujoco>
-  <option gravity="{_f(masses.gravity)}" timestep="0.0001" jacobian="dense">
-    <flag contact="disable"/>
-  </option>
-  <worldbody>
-    {''.join(bodies)}
-    <body name="platform" pos="{_f(p0)}"><freejoint/>
-      <inertial pos="0 0 0" mass="{masses.platform_mass:.17g}" diaginertia="0.05 0.05 0.05"/>
-    </body>
-  </worldbody>
-  <equality>{equality}</equality>
-  <actuator>{actuators}</actuator>
-</mujoco>"""
-        self.model = mujoco.MjModel.from_xml_string(xml)
+        layout = mjcf_layout(machine, masses, require_held_platform=False)
+        self.rod_dir0 = layout.rod_direction
+        self.model = mujoco.MjModel.from_xml_string(layout.xml)
         self.data = mujoco.MjData(self.model)
 
     def _dof(self, name: str) -> int:

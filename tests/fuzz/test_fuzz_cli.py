@@ -49,13 +49,15 @@ COMMANDS = {
     "design orthoglide": ["--cube", "--bounds", "--max-leg"],
     "design five-bar": ["--square", "--bounds", "--design"],
     "optimize": ["--vary", "--objective", "--region", "--constraint", "--bounds"],
+    "export": ["--to", "--set", "--units", "--endstops", "--masses"],
 }
 FLAGS = {"--all", "--no-strokes", "--anywhere"}
 CHOICES = {"--index": ["condition", "lambda_min", "actuators", "bogus"],
            "--scale": ["auto", "log", "x"], "--method": ["closed", "numeric", "de", "x"],
            "--profile": ["scurve", "trapezoid", "x"], "--section": ["solid", "hollow", "x"],
            "--design": ["isotropic", "biglide", "x"], "--units": ["m", "mm", "in", "x"],
-           "--mode": ["working", "other", "nacelle-above", "-1", "2"]}
+           "--mode": ["working", "other", "nacelle-above", "-1", "2"],
+           "--to": ["linuxcnc", "klipper", "mjcf", "x"]}
 NO_MACHINE = {"arm-sizing", "design orthoglide", "design five-bar"}
 #: keep the expensive commands cheap: small grids, few generations
 FIXED = {"map": ["--resolution", "15"], "workspace": ["--resolution", "9"],
@@ -82,6 +84,7 @@ BASE = {
     "design five-bar": (None, ["--square", "0.2", "--bounds", "0.34,3"]),
     "optimize": ("linear-delta", ["--vary", "R=0.45:1.0", "--objective", "max:compactness",
                                   "--region", "0.3@0,0,0.2"]),
+    "export": ("linear-delta", ["--to", "klipper"]),
 }
 
 
@@ -117,8 +120,9 @@ def command_lines(draw):
 def test_cli_commands(args):
     runner = CliRunner()
     with tempfile.TemporaryDirectory() as tmp:
-        if args[0] in ("map", "optimize"):
-            args = [*args, "--out", str(Path(tmp) / ("m.png" if args[0] == "map" else "o"))]
+        if args[0] in ("map", "optimize", "export"):
+            name = {"map": "m.png", "optimize": "o", "export": "fuzzkins.c"}[args[0]]
+            args = [*args, "--out", str(Path(tmp) / name)]
         with bounded(60.0):
             result = runner.invoke(cli, args, catch_exceptions=True)
     event(f"exit {result.exit_code}")

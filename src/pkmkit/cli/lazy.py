@@ -89,6 +89,9 @@ LAZY_COMMANDS: dict[str, LazyCommand] = {
     "machined-part": LazyCommand(
         "pkmkit.cli.machining_cmds", "machined_part",
         "Seed 003's machined part: G-code → machining → CMM → tool centres (then calibrate)."),
+    "export": LazyCommand(
+        "pkmkit.cli.export_cmds", "export_cmd",
+        "Write MACHINE for a controller, a firmware or a simulator (--to FORMAT --out PATH)."),
     "select-poses": LazyCommand(
         "pkmkit.cli.errors_cmds", "select_poses_cmd",
         "Choose N poses maximising an observability index; writes their actuator "

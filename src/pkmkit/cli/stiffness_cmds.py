@@ -20,7 +20,6 @@ from pkmkit.spatial.rotation import resolve_convention
 from .batch import batch_options, run_batch, status_names
 from .coordinates import (
     actuator_scales,
-    family,
     parse_actuators,
     parse_numbers,
     pose_columns,
@@ -124,7 +123,7 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     if reference_text is not None:
         reference = parse_numbers(reference_text, "--reference", (3,)) * scale
     tl = None if tool_length is None else tool_length * scale
-    kind = family(m)
+    kind = m.family
     if input_ is not None or output is not None:
         if input_ is None or output is None:
             raise click.UsageError("--input and --output go together")
@@ -242,7 +241,7 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
     names = twist_names(m)
     d = len(names)
     columns = pose_columns(m)
-    kind = family(m)
+    kind = m.family
 
     def compute(values, chunk):
         x = pose_from_cli(values, m, units, convention)

@@ -16,6 +16,8 @@ Gravity is (0, 0, −9.81) m/s² (z up) for all.
 
 from __future__ import annotations
 
+import numpy as np
+
 from pkmkit.dynamics.masses import MassProperties, mass_properties, rod_section_mass
 from pkmkit.machines.machine import Machine
 
@@ -27,12 +29,28 @@ _DEFAULTS = {
 _GENERIC = {"carriage": 5.0, "diameter": 0.020, "density": 2700.0, "platform": 5.0}
 
 
-def default_masses(machine: Machine) -> MassProperties:
-    """The illustrative mass properties of ``machine``'s kind (see the module docstring)."""
+def default_masses(machine: Machine, *, tubes_at_home: bool = False) -> MassProperties:
+    """The illustrative mass properties of ``machine``'s kind (see the module docstring).
+
+    Args:
+        tubes_at_home: size each strut's cylinder and piston on its length at the home
+            configuration instead of at q = 0 (for machines whose strut coordinate is the whole
+            strut length, ℓ0 = 0, whose tubes would otherwise have no length).
+    """
     from pkmkit.dynamics.inverse import require_linear_actuators
+    from pkmkit.dynamics.masses import STRUT_TUBE_FRACTION
+    from pkmkit.model.rods import STRUT
 
     require_linear_actuators(machine, "a mass model")
     spec = _DEFAULTS.get(machine.kind.kind if machine.kind else "", _GENERIC)
-    rod, radius, piston = rod_section_mass(machine, spec["diameter"], spec["density"])
+    tubes = None
+    if tubes_at_home:
+        model = machine.model
+        home = model.rod_length + np.where(model.rod_kind == STRUT,
+                                           machine.home_q[model.rod_actuator], 0.0)
+        tubes = STRUT_TUBE_FRACTION * home
+    rod, radius, piston = rod_section_mass(machine, spec["diameter"], spec["density"],
+                                           cylinder_length=tubes, piston_length=tubes)
     return mass_properties(machine, carriage=spec["carriage"], rod=rod, rod_radius=radius,
-                           platform=spec["platform"], piston=piston)
+                           platform=spec["platform"], piston=piston, cylinder_length=tubes,
+                           piston_length=tubes)

@@ -1,0 +1,301 @@
+"""A MuJoCo model (MJCF) of a rod-leg machine of slides and struts, nominal or calibrated.
+
+Bodies, built at the machine's home configuration (so MuJoCo's reference configuration ``qpos0``
+is an assembled one and every closure holds there):
+
+- **slide actuator** k: a carriage body on a slide joint ``act{k}`` along the slide, its
+  reference ``ref`` the home actuator coordinate (so ``qpos`` of ``act{k}`` *is* pkmkit's q_k),
+  carrying one ball-jointed rod per rod of the actuator (a parallelogram's two rods, a
+  Verne-type module's rods), uniform solid cylinders;
+- **strut** actuator k: a cylinder tube on a ball joint ``ball{j}`` at the base joint and a piston
+  tube on a slide joint ``act{k}`` along the strut inside it (``qpos`` = pkmkit's q_k), both
+  uniform solid cylinders of the rod's radius; the actuator's "carriage" mass (the motor's
+  translating inertia) is the slide joint's ``armature``;
+- the platform on a free joint, at pkmkit's home pose, joined to every rod tip by a ``connect``
+  equality constraint (the loop closures; stiff: ``solref`` 2 time steps);
+- a ``motor`` per actuator on ``act{k}`` (force in N, gear 1): pkmkit's actuator force.
+
+Masses and inertias come from :mod:`pkmkit.dynamics.masses` (default: the illustrative values of
+:func:`pkmkit.dynamics.defaults.default_masses`). The platform's inertia is the masses' (about
+its centre of mass); when they give none (translational machines never need it) a uniform
+sphere of the platform's mass and of the platform joints' radius is written, and the file says
+so. Gravity is the masses'. Contacts are off (the model is a kinematic chain, not a scene).
+
+Refused (:class:`~pkmkit.export.base.UnsupportedExportError`): joint chains, cranks, planar
+machines, and platforms held by fewer than six rods (a translational machine of three single
+rods: pkmkit assumes its platform cannot turn, MuJoCo would let it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pkmkit.export.base import (
+    ExportCheckError,
+    UnsupportedExportError,
+    machine_family,
+    sample_poses,
+)
+from pkmkit.model.rods import CRANK, STRUT
+
+FORMAT = "mjcf"
+#: Simulation time step written in the model (s); the closures' time constant is two steps.
+TIMESTEP = 1e-4
+
+
+@dataclass(frozen=True)
+class MjcfLayout:
+    """An MJCF text and the facts a user of the model needs to set states.
+
+    Attributes:
+        xml: the MJCF document.
+        rod_direction: ``{rod j: (3,)}`` unit direction of rod j (base joint → platform joint)
+            at home: a ball joint's identity orientation.
+        actuator_joints: ``(n,)`` names of the actuated slide joints (``act{k}``).
+        placeholder_inertia: True when the platform's inertia was made up (see module doc).
+    """
+
+    xml: str
+    rod_direction: dict[int, np.ndarray] = field(default_factory=dict)
+    actuator_joints: tuple[str, ...] = ()
+    placeholder_inertia: bool = False
+
+
+def _f(v) -> str:
+    return " ".join(f"{float(c):.17g}" for c in np.atleast_1d(v))
+
+
+def _check(machine, held: bool) -> None:
+    family = machine_family(machine)
+    why = None
+    if family == "chain":
+        why = ("a joint-chain machine: its hyperstatic chains (serial R/P joints closed in full "
+               "SE(3)) are not exported to MuJoCo yet; rod-leg machines are")
+    elif held and family == "planar":
+        why = ("a planar machine: pkmkit keeps its platform in the x-y plane, MuJoCo's free "
+               "platform would leave it")
+    elif (machine.model.leg_kind == CRANK).any():
+        why = "crank (rotary) actuators are not exported to MuJoCo yet; slides and struts are"
+    elif held and machine.model.n_rods < 6:
+        why = (f"the platform hangs on {machine.model.n_rods} rods: pkmkit takes it as "
+               "translating, MuJoCo would let it turn (six rods hold a platform; parallelograms "
+               "give two per leg)")
+    if why:
+        raise UnsupportedExportError(FORMAT, machine.id, why)
+    strut_actuators = machine.model.leg_actuator[machine.model.leg_kind == STRUT]
+    for k in np.unique(strut_actuators):
+        if (machine.model.rod_actuator == k).sum() != 1:
+            raise UnsupportedExportError(FORMAT, machine.id, f"strut actuator "
+                                         f"{machine.model.actuator_names[k]!r} drives several "
+                                         "rods")
+
+
+def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> MjcfLayout:
+    """The MJCF model of ``machine`` (see the module docstring) and its layout.
+
+    Args:
+        machine: a rod-leg machine of slides and struts (translational with parallelograms, or
+            full-pose), nominal or calibrated.
+        masses: :class:`~pkmkit.dynamics.masses.MassProperties` (default: the kind's
+            illustrative values).
+        require_held_platform: refuse a platform held by fewer than six rods (default). Only
+            analyses that set every state themselves (the test oracles of the dynamics) may
+            pass False: MuJoCo's platform could then turn where pkmkit's cannot.
+
+    Raises:
+        UnsupportedExportError: a machine MuJoCo would hold differently (module docstring).
+    """
+    _check(machine, require_held_platform)
+    model = machine.model
+    strut = model.rod_kind == STRUT
+    if masses is None:
+        from pkmkit.dynamics.defaults import default_masses
+
+        masses = default_masses(machine, tubes_at_home=bool((model.rod_length[strut] <= 0)
+                                                            .any()))
+    masses.check(machine)
+    _, cylinder, piston_length = masses.strut_parts(model.n_rods)
+    short = np.flatnonzero(strut & ((cylinder <= 0) | (piston_length <= 0)))
+    if short.size:
+        raise UnsupportedExportError(
+            FORMAT, machine.id, f"strut rod {int(short[0]) + 1} has a cylinder or piston of no "
+            "length: give cylinder_length and piston_length in the masses")
+    q0 = np.asarray(machine.home_q, dtype=float)
+    home = np.asarray(machine.home_pose, dtype=float)
+    p0 = model.pad(home[None])[0]
+    if model.full_pose:
+        from pkmkit.spatial.rotation import rotvec_to_matrix
+
+        rot0 = rotvec_to_matrix(home[None, 3:])[0]
+    else:
+        rot0 = np.eye(3)
+    tips = p0 + model.rod_platform @ rot0.T  # platform joint centres at home (m, 3)
+    piston, cyl_len, pis_len = masses.strut_parts(model.n_rods)
+    directions: dict[int, np.ndarray] = {}
+    bodies, connects = [], []
+    for k in range(model.n_actuators):
+        rods = np.flatnonzero(model.rod_actuator == k)
+        leg = int(np.flatnonzero(model.leg_actuator == k)[0])
+        name = model.actuator_names[k]
+        if model.leg_kind[leg] == STRUT:
+            (j,) = rods
+            base = model.rod_base[j]
+            tip = tips[j] - base
+            s0 = float(np.linalg.norm(tip))
+            e0 = tip / s0
+            directions[int(j)] = e0
+            radius = max(float(masses.rod_radius[j]), 1e-4)
+            bodies.append(
+                f'    <!-- actuator {name}: strut ({model.leg_names[leg]}) -->\n'
+                f'    <body name="cyl{j}" pos="{_f(base)}"><joint name="ball{j}" type="ball"/>'
+                f'<geom type="cylinder" fromto="0 0 0 {_f(cyl_len[j] * e0)}" '
+                f'size="{radius:.17g}" mass="{masses.rod_mass[j]:.17g}"/>'
+                f'<body name="piston{j}"><joint name="act{k}" type="slide" axis="{_f(e0)}" '
+                f'ref="{q0[k]:.17g}" armature="{masses.carriage_mass[k]:.17g}"/>'
+                f'<geom type="cylinder" fromto="{_f((s0 - pis_len[j]) * e0)} {_f(tip)}" '
+                f'size="{radius:.17g}" mass="{piston[j]:.17g}"/></body></body>')
+            connects.append((f"piston{j}", tip))
+            continue
+        u = model.leg_axis[leg]
+        carriage = model.leg_base[leg] + q0[k] * u
+        children = []
+        for j in rods:
+            joint_pt = model.rod_base[j] + q0[k] * model.rod_axis[j]
+            tip = tips[j] - joint_pt
+            directions[int(j)] = tip / np.linalg.norm(tip)
+            children.append(
+                f'<body name="rod{j}" pos="{_f(joint_pt - carriage)}">'
+                f'<joint name="ball{j}" type="ball"/><geom type="cylinder" fromto="0 0 0 '
+                f'{_f(tip)}" size="{max(float(masses.rod_radius[j]), 1e-4):.17g}" '
+                f'mass="{masses.rod_mass[j]:.17g}"/></body>')
+            connects.append((f"rod{j}", tip))
+        bodies.append(
+            f'    <!-- actuator {name}: slide ({model.leg_names[leg]}) -->\n'
+            f'    <body name="carriage{k}" pos="{_f(carriage)}"><joint name="act{k}" '
+            f'type="slide" axis="{_f(u)}" ref="{q0[k]:.17g}"/><geom type="box" '
+            f'size="0.02 0.02 0.02" mass="{masses.carriage_mass[k]:.17g}"/>'
+            + "".join(children) + "</body>")
+    inertia = np.asarray(masses.platform_inertia, dtype=float)
+    placeholder = not inertia.any()
+    if placeholder:
+        radius = float(np.linalg.norm(model.rod_platform, axis=1).max()) or 0.1
+        inertia = np.eye(3) * 0.4 * max(masses.platform_mass, 1e-6) * radius**2
+    full = inertia[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
+    quat = _quaternion(rot0)
+    equality = "\n".join(
+        f'    <connect body1="{b}" body2="platform" anchor="{_f(t)}" solref="{2 * TIMESTEP:g} 1" '
+        f'solimp="0.9999 0.9999 0.001"/>' for b, t in connects)
+    actuators = "\n".join(f'    <motor name="{model.actuator_names[k]}" joint="act{k}" gear="1"/>'
+                          for k in range(model.n_actuators))
+    note = (" (placeholder: a sphere of the platform's mass; pkmkit's masses give none)"
+            if placeholder else "")
+    xml = f"""<mujoco model="{_attr(machine.name)}">
+  <!-- pkmkit machine {_attr(machine.id)}: joints act{{k}} hold pkmkit's actuator coordinates
+       (m), the platform's free joint its pose at the platform reference point; SI units. -->
+  <compiler angle="radian"/>
+  <option gravity="{_f(masses.gravity)}" timestep="{TIMESTEP:g}" tolerance="1e-12"
+          iterations="200" jacobian="dense">
+    <flag contact="disable"/>
+  </option>
+  <worldbody>
+{chr(10).join(bodies)}
+    <body name="platform" pos="{_f(p0)}" quat="{_f(quat)}"><freejoint name="platform"/>
+      <!-- platform inertia{note} -->
+      <inertial pos="{_f(masses.platform_com)}" mass="{max(masses.platform_mass, 1e-6):.17g}"
+                fullinertia="{_f(full)}"/>
+    </body>
+  </worldbody>
+  <equality>
+{equality}
+  </equality>
+  <actuator>
+{actuators}
+  </actuator>
+</mujoco>
+"""
+    return MjcfLayout(xml=xml, rod_direction=directions,
+                      actuator_joints=tuple(f"act{k}" for k in range(model.n_actuators)),
+                      placeholder_inertia=placeholder)
+
+
+def mjcf_model(machine, masses=None) -> str:
+    """The MJCF text of ``machine`` (see :func:`mjcf_layout`)."""
+    return mjcf_layout(machine, masses).xml
+
+
+def _attr(text: str) -> str:
+    return (str(text).replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
+            .replace(">", "&gt;").replace("--", "- -"))
+
+
+def _quaternion(rot: np.ndarray) -> np.ndarray:
+    """MuJoCo's (w, x, y, z) of a rotation matrix."""
+    from pkmkit.spatial.rotation import rotation_class
+
+    x, y, z, w = rotation_class().from_matrix(rot).as_quat()
+    return np.array([w, x, y, z])
+
+
+def set_configuration(model, data, machine, layout: MjcfLayout, x: np.ndarray,
+                      q: np.ndarray) -> None:
+    """Put a loaded model in pkmkit's configuration: actuated joints at ``q (n,)``, every rod's
+    ball joint turned onto its rod (the least rotation from its home direction), the platform at
+    the pose ``x`` (``(dims,)``: position, and rotation vector for a full pose)."""
+    from pkmkit.solve.rod_closure import rod_base_points
+    from pkmkit.spatial.rotation import rotation_class, rotvec_to_matrix
+
+    rod = machine.model
+    rotation = rotation_class()
+    p = rod.pad(np.asarray(x, dtype=float)[None])[0]
+    rot = (rotvec_to_matrix(np.asarray(x, dtype=float)[None, 3:])[0] if rod.full_pose
+           else np.eye(3))
+    for k in range(rod.n_actuators):
+        data.qpos[model.jnt_qposadr[model.joint(f"act{k}").id]] = q[k]
+    base = rod_base_points(rod, np.asarray(q, dtype=float)[:, None])[:, :, 0].T  # (m, 3)
+    for j, e0 in layout.rod_direction.items():
+        d = p + rot @ rod.rod_platform[j] - base[j]
+        e = d / np.linalg.norm(d)
+        axis = np.cross(e0, e)
+        sin = float(np.linalg.norm(axis))
+        turn = (rotation.from_rotvec(axis / sin * np.arctan2(sin, float(e0 @ e))) if sin > 1e-15
+                else rotation.identity())
+        qx, qy, qz, qw = turn.as_quat()
+        adr = model.jnt_qposadr[model.joint(f"ball{j}").id]
+        data.qpos[adr:adr + 4] = [qw, qx, qy, qz]
+    free = model.jnt_qposadr[model.body("platform").jntadr[0]]
+    data.qpos[free:free + 3] = p
+    data.qpos[free + 3:free + 7] = _quaternion(rot)
+
+
+def check_mjcf_model(machine, xml: str) -> float | None:
+    """Load a written model in MuJoCo (when installed) and check it against pkmkit: at home and
+    at pkmkit's sample configurations (:func:`~pkmkit.export.base.sample_poses`, with their
+    inverse model), put in MuJoCo's joints, every closure holds. Returns the largest violation
+    (m), or None without MuJoCo.
+
+    Raises:
+        ExportCheckError: MuJoCo refuses the model, or a violation beyond 1e-9 m.
+    """
+    try:
+        import mujoco
+    except ImportError:
+        return None
+    try:
+        model = mujoco.MjModel.from_xml_string(xml)
+    except ValueError as exc:
+        raise ExportCheckError(f"MuJoCo refuses the generated model: {exc}") from None
+    data = mujoco.MjData(model)
+    layout = mjcf_layout(machine, require_held_platform=False)
+    poses, q = sample_poses(machine)
+    worst = 0.0
+    for x, qk in zip([machine.home_pose, *poses], [machine.home_q, *q], strict=True):
+        set_configuration(model, data, machine, layout, x, qk)
+        mujoco.mj_forward(model, data)
+        if data.nefc:
+            worst = max(worst, float(np.abs(data.efc_pos[: data.nefc]).max()))
+    if not worst <= 1e-9:
+        raise ExportCheckError(f"the generated MuJoCo model does not close pkmkit's "
+                               f"configurations (off by {worst:.3g} m): not written")
+    return worst

@@ -1,0 +1,2 @@
+/* Test stand-in for LinuxCNC's rtapi_math.h. */
+#include <math.h>

@@ -1,0 +1,167 @@
+"""The MJCF export loaded in MuJoCo: the actuators, driven to pkmkit's inverse model of a pose,
+settle the platform where pkmkit's direct model puts it (MuJoCo closing the loops itself, by its
+equality constraints); masses as the dynamics model gives them. The inverse dynamics through
+the same writer: tests/dynamics/test_mujoco_oracle.py."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import pkmkit
+from pkmkit.dynamics.defaults import default_masses
+from pkmkit.export.base import ExportCheckError, UnsupportedExportError
+from pkmkit.export.mjcf import check_mjcf_model, mjcf_layout, mjcf_model
+from pkmkit.machines.registry import ALIASES
+from pkmkit.model.defects_table import apply_defect_vector, defect_index
+
+mujoco = pytest.importorskip("mujoco")
+
+SUPPORTED = ["dietmaier-hexapod", "gough-stewart", "linear-delta-ch3", "linear-delta-table-iv1",
+             "orthoglide", "verne"]
+TOL = 1e-8  # m
+
+
+def _calibrated(machine, seed: int):
+    index = defect_index(machine)
+    rng = np.random.default_rng(seed)
+    delta = np.where(np.asarray(index.units) == "m", 2e-4, 1e-3) * rng.standard_normal(
+        len(index.names))
+    return apply_defect_vector(machine, delta)
+
+
+def _points(machine, pose: np.ndarray) -> np.ndarray:
+    """Platform joint centres (rods, 3) of a pose (m): one metric for every machine."""
+    rot = (Rotation.from_rotvec(pose[3:]).as_matrix() if len(pose) == 6 else np.eye(3))
+    return pose[:3] + machine.model.rod_platform @ rot.T
+
+
+class Simulation:
+    def __init__(self, machine):
+        self.machine = machine
+        self.layout = mjcf_layout(machine)
+        self.model = mujoco.MjModel.from_xml_string(self.layout.xml)
+        self.data = mujoco.MjData(self.model)
+        joints = [self.model.joint(j).id for j in self.layout.actuator_joints]
+        self.qadr = self.model.jnt_qposadr[joints]
+        self.dadr = self.model.jnt_dofadr[joints]
+        free = self.model.body("platform").jntadr[0]
+        self.padr = self.model.jnt_qposadr[free]
+
+    def settle(self, q: np.ndarray, steps: int = 20_000) -> tuple[np.ndarray, np.ndarray]:
+        """Drive the motors to q (a stiff PD loop), let everything settle, gravity off: the
+        settled actuator coordinates and platform pose (pkmkit's form)."""
+        self.model.opt.gravity[:] = 0.0
+        d = self.data
+        for _ in range(steps):
+            d.ctrl[:] = 2e5 * (q - d.qpos[self.qadr]) - 4e3 * d.qvel[self.dadr]
+            mujoco.mj_step(self.model, d)
+        a = self.padr
+        w, x, y, z = d.qpos[a + 3:a + 7]
+        pose = d.qpos[a:a + 3].copy()
+        if self.machine.dims == 6:
+            pose = np.concatenate([pose, Rotation.from_quat([x, y, z, w]).as_rotvec()])
+        return d.qpos[self.qadr].copy(), pose
+
+    def violation(self) -> float:
+        mujoco.mj_forward(self.model, self.data)
+        return float(np.abs(self.data.efc_pos[: self.data.nefc]).max())
+
+
+def test_the_supported_presets_are_exactly_these():
+    exported = []
+    for name in pkmkit.machines():
+        if name in ALIASES:
+            continue
+        try:
+            mjcf_model(pkmkit.machine(name))
+        except UnsupportedExportError as exc:
+            assert exc.format == "mjcf" and exc.reason
+            continue
+        exported.append(name)
+    assert exported == SUPPORTED
+
+
+@pytest.mark.parametrize("name", SUPPORTED)
+@pytest.mark.parametrize("calibrated", [False, True], ids=["nominal", "calibrated"])
+def test_driven_actuators_settle_the_platform_where_pkmkit_puts_it(name, calibrated):
+    m = pkmkit.machine(name)
+    if calibrated:
+        m = _calibrated(m, seed=len(name))
+    sim = Simulation(m)
+    assert sim.violation() < 1e-12  # the reference configuration is assembled
+    rng = np.random.default_rng(len(name))
+    target = m.home_pose[:3] + rng.uniform(-0.03, 0.03, 3)
+    if m.dims == 6 and not m.position_controlled:
+        turn = Rotation.from_rotvec(rng.uniform(-1, 1, 3) * np.radians(2))
+        target = np.concatenate([target, (turn * Rotation.from_rotvec(m.home_pose[3:]))
+                                 .as_rotvec()])
+    res = m.ik(target, full_output=True)
+    q = np.asarray(res.q)
+    q_settled, pose = sim.settle(q)
+    assert np.abs(q_settled - q).max() <= TOL
+    expected = (m.fk(q_settled) if m.dims == 3 else m.fk(q_settled, x0=pose))
+    assert np.abs(_points(m, pose) - _points(m, expected)).max() <= TOL
+    full = target if len(target) == m.dims else np.asarray(res.pose)
+    assert np.abs(_points(m, pose) - _points(m, full)).max() <= TOL
+    assert sim.violation() <= TOL
+
+
+@pytest.mark.parametrize("name", ["linear-delta-table-iv1", "gough-stewart"])
+def test_masses_are_the_dynamics_model(name):
+    m = pkmkit.machine(name)
+    masses = default_masses(m, tubes_at_home=name == "gough-stewart")
+    sim = Simulation(m)
+    model = sim.model
+    armature = masses.carriage_mass.sum() if name == "gough-stewart" else 0.0
+    assert model.body_mass.sum() == pytest.approx(masses.total_mass - armature, rel=1e-12)
+    assert model.body("platform").mass[0] == pytest.approx(masses.platform_mass, rel=1e-12)
+    if name == "gough-stewart":  # the motor's translating inertia is the piston joint's armature
+        dof = model.jnt_dofadr[model.joint("act0").id]
+        assert model.dof_armature[dof] == pytest.approx(masses.carriage_mass[0])
+    else:
+        assert model.body("carriage0").mass[0] == pytest.approx(masses.carriage_mass[0])
+
+
+@pytest.mark.parametrize("name, words", [
+    ("tripteor-x7", "joint-chain"), ("delta", "crank"), ("five-bar-isotropic", "planar")])
+def test_machines_mujoco_would_hold_differently_are_refused(name, words):
+    with pytest.raises(UnsupportedExportError, match=words):
+        mjcf_model(pkmkit.machine(name))
+
+
+def test_a_platform_on_three_single_rods_is_refused(tmp_path):
+    path = tmp_path / "tripod.toml"
+    angles = np.radians([0.0, 120.0, 240.0])
+    path.write_text('[machine]\nkind = "rod-legs"\nhome = [0, 0, 0]\n' + "".join(
+        f'[[legs]]\ntype = "slide"\nbase = [{0.55 * np.cos(a):.9f}, {0.55 * np.sin(a):.9f}, 0]'
+        f'\naxis = [0, 0, 1]\nplatform = [0, 0, 0]\nlength = 1.04\n' for a in angles))
+    with pytest.raises(UnsupportedExportError, match="3 rods"):
+        mjcf_model(pkmkit.load(path))
+
+
+def test_the_self_check_catches_a_model_off_pkmkit():
+    """:func:`check_mjcf_model` (what ``pkmkit export --to mjcf`` runs before writing): a rod tip
+    moved by 1 µm leaves the home configuration unassembled."""
+    m = pkmkit.machine("linear-delta-table-iv1")
+    xml = mjcf_model(m)
+    assert check_mjcf_model(m, xml) <= 1e-9
+    start = xml.index('<connect body1="rod0" body2="platform" anchor="') + len(
+        '<connect body1="rod0" body2="platform" anchor="')
+    first = xml[start:].split()[0]
+    wrong = xml[:start] + repr(float(first) + 1e-6) + xml[start + len(first):]
+    with pytest.raises(ExportCheckError, match="not written"):
+        check_mjcf_model(m, wrong)
+
+
+def test_a_six_slide_hexapod_settles_where_pkmkit_puts_it(tmp_path):
+    from .six_slides import six_slide_machine
+
+    m = six_slide_machine(tmp_path)
+    sim = Simulation(m)
+    target = m.home_pose + np.array([0.02, -0.01, 0.015, 0.02, -0.01, 0.03])
+    q = m.ik(target)
+    q_settled, pose = sim.settle(q)
+    assert np.abs(q_settled - q).max() <= TOL
+    assert np.abs(_points(m, pose) - _points(m, target)).max() <= TOL
