@@ -1,0 +1,201 @@
+"""Why a calibration failed: cheap alternative hypotheses tried on the measurements, and the
+verdict (:mod:`pkmkit.calibration.verdict`) that names the ones that explain the misfit.
+
+Hypotheses (each an :class:`~pkmkit.calibration.verdict.Alternative` with what it gives):
+
+- **frame** (point and pose readings taken without ``frame``): the best rigid motion of the
+  measured points onto the nominal machine's tool points (Kabsch, one SVD). If it leaves a
+  residual many times smaller than the identification did, the readings are in another frame.
+- **unit**: the readings (or the whole file: readings, pivots, commanded paths, tool lengths
+  and length actuators) multiplied by 10⁻³, 10³, 10⁻⁶, 10⁶, 25.4 or 1/25.4, the nominal
+  machine with its set-up fitted alone. If one factor fits many times better, the file is in
+  another unit.
+- **weak parameters**: when parameters were dropped as weakly identifiable, the calibration
+  run again keeping them (``prune=False``, the CLI's ``--keep-weak``): if its a-posteriori
+  noise matches the assumed one, the dropped parameters explain the residual.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from pkmkit.calibration.measurement_set import MeasurementSet
+from pkmkit.calibration.verdict import Alternative, Verdict, judge
+from pkmkit.errors import PkmError
+from pkmkit.model.parameters import LENGTH_UNITS, length_scale
+
+#: Unit factors tried by the unit hypothesis (true SI value = read SI value × factor).
+UNIT_FACTORS = (1e-3, 1e3, 1e-6, 1e6, 0.0254 / 1e-3, 1e-3 / 0.0254)
+
+
+def machine_size(machine) -> float:
+    """A machine's size (m): the largest of the distances from the origin to the corners of its
+    default region and of that region's diagonal."""
+    lo, hi = (np.asarray(v, dtype=float)[:3] for v in machine.default_box())
+    return float(max(np.linalg.norm(lo), np.linalg.norm(hi), np.linalg.norm(hi - lo)))
+
+
+def judge_calibration(machine, data: MeasurementSet, result, *,
+                      rerun: Callable[[], Any] | None = None,
+                      file_unit: str | None = None) -> Verdict:
+    """The verdict on ``result`` (a :class:`~pkmkit.calibration.identify.CalibrationResult`
+    of ``machine`` from ``data``), with the alternatives of the module docstring tried when it
+    fails.
+
+    Args:
+        rerun: a callable returning the same calibration with the weak parameters kept, or
+            None (the weak-parameter hypothesis is then not tried).
+        file_unit: the unit the measurement file was read in (for the unit hypothesis's
+            message), or None.
+    """
+    args = dict(chi2=result.chi2, dof=result.dof, sigma=result.sigma,
+                condition=result.condition, names=result.names, values=result.values,
+                units=result.units, tolerances=result.tolerance,
+                machine_size=machine_size(machine), rms=result.after.rms)
+    first = judge(**args)
+    if first.passed:
+        return first
+    alternatives = []
+    for test in (_frame_alternative, _unit_alternative):
+        try:
+            alt = test(machine, data, result, file_unit)
+        except (PkmError, np.linalg.LinAlgError, ValueError):
+            alt = None
+        if alt is not None:
+            alternatives.append(alt)
+    if rerun is not None and not first.checks[0].passed and any(
+            r.startswith("weakly identifiable") for r in result.unidentifiable.values()):
+        alt = _weak_alternative(result, rerun, file_unit or "m")
+        if alt is not None:
+            alternatives.append(alt)
+    return judge(**args, alternatives=alternatives)
+
+
+def _frame_alternative(machine, data, result, file_unit) -> Alternative | None:
+    from pkmkit.calibration.registration import register_points
+    from pkmkit.spatial.rotation import matrix_to_rotvec
+
+    if data.kind not in ("point", "pose") or result.frame is not None:
+        return None
+    if result.residuals_before is None:
+        return None
+    measured = data.values[:, :3]
+    predicted = measured + result.residuals_before[:, :3]
+    if not np.isfinite(predicted).all() or len(measured) < 3:
+        return None
+    reg = register_points(measured, predicted)
+    angle = float(np.degrees(np.linalg.norm(matrix_to_rotvec(reg.rotation))))
+    unit = file_unit or "m"
+    s = length_scale(unit)
+    return Alternative(
+        "frame",
+        f"the readings look like they are in another frame: a rigid motion alone (rotation "
+        f"{angle:.3g}°, translation {np.linalg.norm(reg.translation) / s:.4g} {unit}) brings "
+        f"them to RMS {reg.rms / s:.4g} {unit} of the nominal machine, against "
+        f"{result.after.rms / s:.4g} {unit} after identification. Register the frame "
+        "(pkmkit register) and calibrate with --frame FILE --identify-frame, or use "
+        "--frame identify when the frames are close",
+        rms=reg.rms)
+
+
+def _scaled(data: MeasurementSet, machine, factor: float, whole_file: bool) -> MeasurementSet:
+    from pkmkit.calibration.identify import _angle_actuators
+
+    values = data.values.copy()
+    values[:, :3 if data.kind in ("point", "pose", "part") else 1] *= factor
+    if not whole_file:
+        return replace(data, values=values)
+    q = data.q
+    if q is not None:
+        q = np.where(_angle_actuators(machine)[None, :], q, q * factor)
+
+    def times(a):
+        return None if a is None else a * factor
+
+    return replace(data, values=values, q=q, pivot=times(data.pivot),
+                   tool_length=times(data.tool_length), commanded=times(data.commanded))
+
+
+def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
+    from pkmkit.calibration.identify import (
+        _fit_setup,
+        _sigma_rows,
+        _stats,
+        check_measurements,
+    )
+    from pkmkit.calibration.models import make_model
+
+    best = None
+    identify_frame = bool(result.frame is not None and data.kind in ("point", "pose"))
+    for factor in UNIT_FACTORS:
+        for whole in (False, True):
+            scaled = _scaled(data, machine, factor, whole)
+            try:
+                if whole:
+                    check_measurements(machine, scaled)
+                model = make_model(machine, scaled, _sigma_rows(data.kind, machine,
+                                                                result.sigma),
+                                   registration=None, identify_frame=identify_frame)
+                r, _, _ = model.residuals(machine, model.setup.initial, jacobian=False)
+                if not np.isfinite(r).all():
+                    continue
+                setup = _fit_setup(machine, model)
+                r, _, _ = model.residuals(machine, setup, jacobian=False)
+            except (PkmError, np.linalg.LinAlgError, ValueError):
+                continue
+            if not np.isfinite(r).all():
+                continue
+            rms = _stats(model, r).rms
+            if best is None or rms < best[0]:
+                best = (rms, factor, whole)
+    if best is None:
+        return None
+    rms, factor, whole = best
+    unit = file_unit or "m"
+    true_unit = _unit_named(length_scale(unit) * factor)
+    what = "the file" if whole else "the readings"
+    guess = (f"{what} look like they are in {true_unit}, not {unit}" if true_unit else
+             f"{what} fit when multiplied by {factor:g}")
+    fix = ("fix the file's '# units:' line or give --units" if whole else
+           "convert the reading column(s) to the file's unit")
+    s = length_scale(unit)
+    return Alternative(
+        "unit",
+        f"wrong unit: {guess} — rescaled ×{factor:g}, the nominal machine fits them to RMS "
+        f"{rms / s:.4g} {unit} against {result.after.rms / s:.4g} {unit} after identification "
+        f"as read; {fix}",
+        rms=rms)
+
+
+#: Units named in the unit hypothesis's message (metres per unit).
+NAMED_UNITS = {**LENGTH_UNITS, "µm": 1e-6, "km": 1e3}
+
+
+def _unit_named(scale: float) -> str | None:
+    for name, value in NAMED_UNITS.items():
+        if np.isclose(value, scale, rtol=1e-9):
+            return name
+    return None
+
+
+def _weak_alternative(result, rerun, unit: str) -> Alternative | None:
+    weak = [n for n, r in result.unidentifiable.items() if r.startswith("weakly identifiable")]
+    try:
+        alt = rerun()
+    except PkmError:
+        return None
+    ratio = alt.sigma_posterior / result.sigma
+    more = ("; the readings are also more precise than the stated noise: give the "
+            "instrument's σ with --sigma" if ratio < 0.5 else "")
+    return Alternative(
+        "weak-parameters",
+        f"{len(weak)} parameter(s) dropped as weakly identifiable with the stated noise ("
+        + ", ".join(weak[:10]) + (" …" if len(weak) > 10 else "")
+        + f") explain the residual: identifying them (--keep-weak) gives RMS "
+        f"{alt.after.rms / length_scale(unit):.4g} {unit} and an a-posteriori noise {ratio:.3g}× the assumed one"
+        + more,
+        rms=alt.after.rms, sigma_posterior=alt.sigma_posterior)
