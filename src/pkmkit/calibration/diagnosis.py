@@ -53,7 +53,9 @@ def judge_calibration(machine, data: MeasurementSet, result, *,
             message), or None.
     """
     args = dict(chi2=result.chi2, dof=result.dof, sigma=result.sigma,
-                condition=result.condition, names=result.names, values=result.values,
+                condition=(result.condition_with_priors
+                           if np.isfinite(result.condition_with_priors) else result.condition),
+                names=result.names, values=result.values,
                 units=result.units, tolerances=result.tolerance,
                 machine_size=machine_size(machine), rms=result.after.rms)
     first = judge(**args)

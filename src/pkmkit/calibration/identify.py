@@ -146,6 +146,9 @@ class CalibrationResult:
         counts: parameter counts: ``candidates``, ``compatible``, ``identified``, ``gauges``,
             ``weak``, ``no_effect``, ``combinations``.
         verdict: the :class:`~pkmkit.calibration.verdict.Verdict` (None when not judged).
+        condition_with_priors: with ``prior=True``, the condition of the problem with its
+            prior rows (what determines the parameters; :attr:`condition` is that of the
+            measurement rows alone), else NaN.
     """
 
     machine: Any
@@ -187,6 +190,7 @@ class CalibrationResult:
     tool_uncertainty: np.ndarray = field(repr=False, default=None)
     counts: dict = field(default_factory=dict)
     verdict: Any = None
+    condition_with_priors: float = float("nan")
 
     def value(self, name: str) -> float:
         """An identified machine or set-up parameter by name (SI)."""
@@ -985,7 +989,13 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
         residuals=r_after, weights=problem.weights.copy(), singular_values=sv,
         tolerance=problem.scale[:p].copy(), chi2=float(meas @ meas), dof=int(dof),
         residuals_before=r_before, covariance=cov, counts=_counts(prep, unidentifiable),
+        condition_with_priors=_condition(jw) if problem.prior else float("nan"),
         **_tool_uncertainty(m_id, data, problem.basis, cov[:p, :p]))
+
+
+def _condition(jw: np.ndarray) -> float:
+    s = np.linalg.svd(jw, compute_uv=False)
+    return float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
 
 
 def _undetermined(jw: np.ndarray) -> np.ndarray:

@@ -28,8 +28,11 @@ Checks (each a :class:`Check` with its value, limit and reason):
 
 When a check fails, the alternatives that *explain* the misfit are the likely causes: an
 alternative explains when its own a-posteriori noise passes the noise check, or when it
-reduces the RMS residual at least :data:`EXPLAINS` times. Without one, the likely cause is
-a noise level stated too small or an error source the model lacks.
+reduces the RMS residual at least :data:`EXPLAINS` times to an error a machine can have
+(below :data:`SIZE_FRACTION` of its size); of those, the ones within :data:`EXPLAINS` times
+the best are listed, best first. Without one, the likely cause is a noise level stated too
+small or an error source the model lacks (noise check), undetermined parameters (condition
+check) or implausible readings (magnitude check).
 """
 
 from __future__ import annotations
@@ -286,8 +289,11 @@ def judge(*, chi2: float, dof: int, sigma: float, condition: float, names: Seque
     sigma_post = sigma * float(np.sqrt(max(chi2, 0.0) / max(int(dof), 1)))
     causes: list[Cause] = []
     if not all(c.passed for c in checks):
-        for alt in alternatives:
-            if explains(alt, rms=rms, sigma=sigma, dof=dof):
+        good = [a for a in alternatives if explains(a, rms=rms, sigma=sigma, dof=dof)
+                and a.rms <= SIZE_FRACTION * machine_size]
+        best = min((a.rms for a in good), default=np.inf)
+        for alt in sorted(good, key=lambda a: a.rms):
+            if alt.rms <= EXPLAINS * best:  # much worse than the best one: not the cause
                 causes.append(Cause(alt.cause, alt.description))
         if not causes and not noise.passed:
             causes.append(Cause(
