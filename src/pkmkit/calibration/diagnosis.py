@@ -57,7 +57,8 @@ def judge_calibration(machine, data: MeasurementSet, result, *,
                            if np.isfinite(result.condition_with_priors) else result.condition),
                 names=result.names, values=result.values,
                 units=result.units, tolerances=result.tolerance,
-                machine_size=machine_size(machine), rms=result.after.rms)
+                machine_size=machine_size(machine), rms=result.after.rms,
+                length_unit=file_unit or "m")
     first = judge(**args)
     if first.passed:
         return first
@@ -198,6 +199,7 @@ def _weak_alternative(result, rerun, unit: str) -> Alternative | None:
         f"{len(weak)} parameter(s) dropped as weakly identifiable with the stated noise ("
         + ", ".join(weak[:10]) + (" …" if len(weak) > 10 else "")
         + f") explain the residual: identifying them (--keep-weak) gives RMS "
-        f"{alt.after.rms / length_scale(unit):.4g} {unit} and an a-posteriori noise {ratio:.3g}× the assumed one"
+        f"{alt.after.rms / length_scale(unit):.4g} {unit} and an a-posteriori noise "
+        f"{ratio:.3g}× the assumed one"
         + more,
         rms=alt.after.rms, sigma_posterior=alt.sigma_posterior)

@@ -677,9 +677,9 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
     """
     # small dense problems: a multi-threaded BLAS only loses time, and collapses when another
     # process holds a core (docs/benchmarks.md)
-    from tqdm import tqdm
-
     from dataclasses import replace
+
+    from tqdm import tqdm
 
     from pkmkit.calibration.diagnosis import judge_calibration
 

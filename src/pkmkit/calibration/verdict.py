@@ -215,7 +215,7 @@ def condition_check(condition: float, *, limit: float = CONDITION_MAX) -> Check:
 def magnitude_check(names: Sequence[str], values: np.ndarray, units: Sequence[str],
                     tolerances: np.ndarray, machine_size: float, *,
                     fraction: float = SIZE_FRACTION, angle_max: float = ANGLE_MAX,
-                    factor: float = TOLERANCE_FACTOR) -> Check:
+                    factor: float = TOLERANCE_FACTOR, length_unit: str = "mm") -> Check:
     """Identified values against plausible bounds and their tolerances.
 
     Args:
@@ -223,6 +223,7 @@ def magnitude_check(names: Sequence[str], values: np.ndarray, units: Sequence[st
             ``"1"``).
         values, tolerances: ``(p,)`` SI.
         machine_size: the machine's size (m): lengths beyond ``fraction`` of it fail.
+        length_unit: unit of the lengths in the reason.
     """
     values = np.asarray(values, dtype=float)
     tolerances = np.asarray(tolerances, dtype=float)
@@ -237,9 +238,10 @@ def magnitude_check(names: Sequence[str], values: np.ndarray, units: Sequence[st
         bad = [names[i] for i in np.flatnonzero(rel > 1.0)]
         return Check("magnitude", False, float(rel[worst]), 1.0,
                      f"{len(bad)} identified value(s) beyond a plausible defect "
-                     f"({_show(values[worst], units[worst])} for {names[worst]}; bound "
-                     f"{_show(bound[worst], units[worst])}"
-                     + (f", {_show_size(machine_size)} machine" if units[worst] == "m" else "")
+                     f"({_show(values[worst], units[worst], length_unit)} for {names[worst]}; "
+                     f"bound {_show(bound[worst], units[worst], length_unit)}"
+                     + (f" for a machine of {_show(machine_size, 'm', length_unit)}"
+                        if units[worst] == "m" else "")
                      + "): " + ", ".join(bad[:8]) + (" …" if len(bad) > 8 else ""))
     with np.errstate(invalid="ignore", divide="ignore"):
         over = np.abs(values) / tolerances
@@ -254,22 +256,21 @@ def magnitude_check(names: Sequence[str], values: np.ndarray, units: Sequence[st
                  "identified values within plausible bounds")
 
 
-def _show(value: float, unit: str) -> str:
+def _show(value: float, unit: str, length_unit: str = "mm") -> str:
+    """A value in SI shown in ``length_unit`` (lengths) or degrees (``"rad"``)."""
+    from pkmkit.model.parameters import length_scale
+
     if unit == "m":
-        return f"{value * 1e3:.4g} mm"
+        return f"{value / length_scale(length_unit):.4g} {length_unit}"
     if unit == "rad":
         return f"{np.degrees(value):.4g}°"
     return f"{value:.4g}"
 
 
-def _show_size(size: float) -> str:
-    return f"{size:.3g} m"
-
-
 def judge(*, chi2: float, dof: int, sigma: float, condition: float, names: Sequence[str],
           values: np.ndarray, units: Sequence[str], tolerances: np.ndarray,
           machine_size: float, rms: float,
-          alternatives: Sequence[Alternative] = ()) -> Verdict:
+          alternatives: Sequence[Alternative] = (), length_unit: str = "mm") -> Verdict:
     """The verdict on a calibration (module docstring).
 
     Args:
@@ -282,10 +283,12 @@ def judge(*, chi2: float, dof: int, sigma: float, condition: float, names: Seque
         rms: RMS error of the observations after identification (m).
         alternatives: hypotheses tried by a diagnosis; those that explain the misfit become
             the likely causes of a failed verdict.
+        length_unit: unit of the lengths in the messages.
     """
     noise, p = noise_check(chi2, dof)
     checks = (noise, condition_check(condition),
-              magnitude_check(names, values, units, tolerances, machine_size))
+              magnitude_check(names, values, units, tolerances, machine_size,
+                              length_unit=length_unit))
     sigma_post = sigma * float(np.sqrt(max(chi2, 0.0) / max(int(dof), 1)))
     causes: list[Cause] = []
     if not all(c.passed for c in checks):
@@ -299,7 +302,8 @@ def judge(*, chi2: float, dof: int, sigma: float, condition: float, names: Seque
             causes.append(Cause(
                 "noise-or-model",
                 f"no simple alternative explains the residual: either the reading noise is "
-                f"larger than stated (the residual corresponds to σ ≈ {_show(sigma_post, 'm')}"
+                f"larger than stated (the residual corresponds to σ ≈ "
+                f"{_show(sigma_post, 'm', length_unit)}"
                 f", give it with --sigma if that is the instrument's) or the machine has "
                 "errors its model lacks (thermal drift, backlash, compliance, outliers: "
                 "try --robust)"))

@@ -31,13 +31,12 @@ WORST_ROWS = 10
 def figure_pngs(result, *, units: str = "mm") -> dict[str, bytes]:
     """The report's figures as PNG bytes, by name."""
     from pkmkit.plot.calibration_figures import (
+        plot_error_maps,
         plot_histograms,
         plot_identifiability,
         plot_parameters,
         plot_residuals,
     )
-
-    from pkmkit.plot.calibration_figures import plot_error_maps
 
     out = {}
     for name, func in (("residuals", plot_residuals), ("histograms", plot_histograms),
@@ -333,9 +332,9 @@ def _sha256(path) -> str:
 
 
 def _now() -> str:
-    from datetime import datetime, timezone
+    from datetime import UTC, datetime
 
-    return datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+    return datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
 
 
 def metadata(result, sources: dict[str, str] | None) -> dict[str, Any]:
