@@ -21,9 +21,9 @@ for the Tripteor X7, ``q1 q2 q3`` for a linear Delta):
             machine frame), ``x, y, z`` (the measured tool centre in the part frame)
 =========== ==============================================================================
 
-Every type accepts an optional ``id`` column (a label kept in reports; each id once). Anything else is
+Every type accepts an optional ``id`` column (a free label kept in reports). Anything else is
 an error: a missing or unknown column, a cell that is not a finite number, a short row, two
-identical rows.
+identical rows, an id used twice.
 """
 
 from __future__ import annotations
