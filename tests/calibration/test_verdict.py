@@ -26,6 +26,15 @@ def test_chi2_upper_tail_against_the_closed_form_for_two_degrees_of_freedom():
         assert p == pytest.approx(math.exp(-x / 2), rel=1e-12)
 
 
+def test_chi2_tails_agree_with_scipy_stats():
+    from scipy.stats import chi2
+
+    for x, dof in ((150.0, 100), (14_400.0, 10_000), (0.5, 50)):
+        check, p = noise_check(x, dof)
+        assert p == pytest.approx(chi2.sf(x, dof), rel=1e-10)
+        assert check.value == pytest.approx(math.sqrt(x / dof))
+
+
 def test_noise_at_the_assumed_level_passes():
     check, p = noise_check(100.0, 100)
     assert check.passed and not check.warning

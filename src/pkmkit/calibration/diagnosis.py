@@ -10,8 +10,8 @@ Hypotheses (each an :class:`~pkmkit.calibration.verdict.Alternative` with what i
   and length actuators) multiplied by 10⁻³, 10³, 10⁻⁶, 10⁶, 25.4 or 1/25.4, the nominal
   machine with its set-up fitted alone. If one factor fits many times better, the file is in
   another unit.
-- **weak parameters**: when parameters were dropped as weakly identifiable, the calibration
-  run again keeping them (``prune=False``, the CLI's ``--keep-weak``): if its a-posteriori
+- **weak parameters**: when parameters were dropped as weakly identifiable (and neither of
+  the above explains the misfit), the calibration run again keeping them (``prune=False``, the CLI's ``--keep-weak``): if its a-posteriori
   noise matches the assumed one, the dropped parameters explain the residual.
 """
 
@@ -70,7 +70,9 @@ def judge_calibration(machine, data: MeasurementSet, result, *,
             alt = None
         if alt is not None:
             alternatives.append(alt)
-    if rerun is not None and not first.checks[0].passed and any(
+    cheap = judge(**args, alternatives=alternatives)
+    explained = any(c.cause in ("frame", "unit") for c in cheap.causes)
+    if rerun is not None and not explained and not first.checks[0].passed and any(
             r.startswith("weakly identifiable") for r in result.unidentifiable.values()):
         alt = _weak_alternative(result, rerun, file_unit or "m")
         if alt is not None:
