@@ -152,3 +152,29 @@ def test_fallback_causes_name_noise_condition_and_magnitude():
     v = _judge(100.0, 100, values=(0.5,))
     assert v.headline() == "verdict: FAILED (magnitude)"
     assert [c.cause for c in v.causes] == ["implausible"]
+
+
+def test_largest_correlation_is_never_a_parameter_with_itself():
+    from pkmkit.calibration.identify import _max_correlation
+
+    # an undetermined parameter's row is 0 (NaN on the diagonal): the old |corr − I| took
+    # its diagonal, |0 − 1| = 1, and reported it against itself with +0.000
+    for diagonal in (0.0, np.nan):
+        corr = np.array([[1.0, 0.3, 0.0], [0.3, 1.0, 0.0], [0.0, 0.0, diagonal]])
+        out = _max_correlation(corr, ["a", "b", "c"])
+        assert out == {"pair": ["a", "b"], "value": pytest.approx(0.3)}
+    corr = np.array([[1.0, -0.9], [-0.9, 1.0]])
+    assert _max_correlation(corr, ["a", "b"])["value"] == pytest.approx(-0.9)
+
+
+def test_parameters_along_an_undetermined_direction_are_flagged():
+    from pkmkit.calibration.identify import _undetermined
+
+    rng = np.random.default_rng(0)
+    j = rng.normal(size=(30, 3))
+    assert not _undetermined(j).any()
+    j[:, 2] = j[:, 0] + j[:, 1]  # column 2 is a combination of 0 and 1: all three undetermined
+    assert _undetermined(j).all()
+    j = rng.normal(size=(30, 3))
+    j[:, 2] = 0.0  # a column with no effect: only that parameter
+    np.testing.assert_array_equal(_undetermined(j), [False, False, True])

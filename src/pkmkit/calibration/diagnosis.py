@@ -11,8 +11,9 @@ Hypotheses (each an :class:`~pkmkit.calibration.verdict.Alternative` with what i
   machine with its set-up fitted alone. If one factor fits many times better, the file is in
   another unit.
 - **weak parameters**: when parameters were dropped as weakly identifiable (and neither of
-  the above explains the misfit), the calibration run again keeping them (``prune=False``, the CLI's ``--keep-weak``): if its a-posteriori
-  noise matches the assumed one, the dropped parameters explain the residual.
+  the above explains the misfit), the calibration run again keeping them (``prune=False``,
+  the CLI's ``--keep-weak``): if its a-posteriori noise matches the assumed one, the dropped
+  parameters explain the residual.
 """
 
 from __future__ import annotations

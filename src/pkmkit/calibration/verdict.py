@@ -12,11 +12,12 @@ Checks (each a :class:`Check` with its value, limit and reason):
 - **noise** — the a-posteriori noise against the assumed one. With ``χ² = Σ (r_i/σ_i)²`` over
   the readings and ``ν = readings − identified parameters`` degrees of freedom, the
   a-posteriori noise is ``σ̂ = σ √(χ²/ν)`` (tails of the χ² distribution from
-  :func:`scipy.special.chdtrc`, the function behind ``scipy.stats.chi2.sf``). The check fails when **both** the χ² test rejects
-  the assumed noise (upper tail ``P(χ²_ν ≥ χ²) <`` :data:`ALPHA`) **and** ``σ̂/σ >``
-  :data:`RATIO_MAX`. The χ² test alone is too strict for a real machine: with hundreds of
-  readings it rejects a model error of 20 % of the noise, which is harmless; the ratio alone
-  is too lax with few readings, where a ratio of 2 happens by chance. A σ̂ far *below* the
+  :func:`scipy.special.chdtrc`, the function behind ``scipy.stats.chi2.sf``). The check
+  fails when **both** the χ² test rejects the assumed noise (upper tail
+  ``P(χ²_ν ≥ χ²) <`` :data:`ALPHA`) **and** ``σ̂/σ >`` :data:`RATIO_MAX`. The χ² test
+  alone is too strict for a real machine: with hundreds of readings it rejects a model error
+  of 20 % of the noise, which is harmless; the ratio alone is too lax with few readings,
+  where a ratio of 2 happens by chance. A σ̂ far *below* the
   assumed σ (lower tail below ALPHA and ratio below 1/RATIO_MAX) is a warning, not a failure:
   the machine is fine, but its uncertainties are overstated and parameters may have been
   dropped as "weakly identifiable" for nothing.
