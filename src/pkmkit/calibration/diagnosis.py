@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.calibration import identify
 from pkmkit.calibration.measurement_set import MeasurementSet
 from pkmkit.calibration.verdict import Alternative, Verdict, judge
 from pkmkit.errors import PkmError
@@ -31,6 +32,30 @@ from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 
 #: Unit factors tried by the unit hypothesis (true SI value = read SI value × factor).
 UNIT_FACTORS = (1e-3, 1e3, 1e-6, 1e6, 0.0254 / 1e-3, 1e-3 / 0.0254)
+
+
+def calibrate(machine, data: MeasurementSet, *, file_unit: str | None = None,
+              **options: Any):
+    """:func:`pkmkit.calibration.identify.calibrate` (same arguments) with its verdict as
+    ``result.verdict`` (:func:`judge_calibration`; the weak-parameter hypothesis reruns the
+    calibration with ``prune=False`` when it applies). This is
+    :func:`pkmkit.calibration.calibrate`.
+
+    Args:
+        file_unit: the length unit the measurement file was read in (messages of the
+            verdict's unit hypothesis), or None.
+    """
+    result = identify.calibrate(machine, data, **options)
+    prune = options.get("prune", True) and not options.get("prior", False)
+
+    def keep_weak():
+        return identify.calibrate(machine, data, **{**options, "prune": False,
+                                                    "validation": None, "progress": False})
+
+    with identify.single_threaded_blas():
+        verdict = judge_calibration(machine, data, result, rerun=keep_weak if prune else None,
+                                    file_unit=file_unit)
+    return replace(result, verdict=verdict)
 
 
 def machine_size(machine) -> float:
@@ -109,15 +134,13 @@ def _frame_alternative(machine, data, result, file_unit) -> Alternative | None:
 
 
 def _scaled(data: MeasurementSet, machine, factor: float, whole_file: bool) -> MeasurementSet:
-    from pkmkit.calibration.identify import _angle_actuators
-
     values = data.values.copy()
     values[:, :3 if data.kind in ("point", "pose", "part") else 1] *= factor
     if not whole_file:
         return replace(data, values=values)
     q = data.q
     if q is not None:
-        q = np.where(_angle_actuators(machine)[None, :], q, q * factor)
+        q = np.where(identify._angle_actuators(machine)[None, :], q, q * factor)
 
     def times(a):
         return None if a is None else a * factor
@@ -127,12 +150,6 @@ def _scaled(data: MeasurementSet, machine, factor: float, whole_file: bool) -> M
 
 
 def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
-    from pkmkit.calibration.identify import (
-        _fit_setup,
-        _sigma_rows,
-        _stats,
-        check_measurements,
-    )
     from pkmkit.calibration.models import make_model
 
     best = None
@@ -142,20 +159,20 @@ def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
             scaled = _scaled(data, machine, factor, whole)
             try:
                 if whole:
-                    check_measurements(machine, scaled)
-                model = make_model(machine, scaled, _sigma_rows(data.kind, machine,
+                    identify.check_measurements(machine, scaled)
+                model = make_model(machine, scaled, identify._sigma_rows(data.kind, machine,
                                                                 result.sigma),
                                    registration=None, identify_frame=identify_frame)
                 r, _, _ = model.residuals(machine, model.setup.initial, jacobian=False)
                 if not np.isfinite(r).all():
                     continue
-                setup = _fit_setup(machine, model)
+                setup = identify._fit_setup(machine, model)
                 r, _, _ = model.residuals(machine, setup, jacobian=False)
             except (PkmError, np.linalg.LinAlgError, ValueError):
                 continue
             if not np.isfinite(r).all():
                 continue
-            rms = _stats(model, r).rms
+            rms = identify._stats(model, r).rms
             if best is None or rms < best[0]:
                 best = (rms, factor, whole)
     if best is None:

@@ -145,7 +145,8 @@ class CalibrationResult:
             covariance: twice the largest standard deviation over directions (m), or None.
         counts: parameter counts: ``candidates``, ``compatible``, ``identified``, ``gauges``,
             ``weak``, ``no_effect``, ``combinations``.
-        verdict: the :class:`~pkmkit.calibration.verdict.Verdict` (None when not judged).
+        verdict: the :class:`~pkmkit.calibration.verdict.Verdict` (set by
+            :func:`pkmkit.calibration.calibrate`, the judged call; None from this module's).
         condition_with_priors: with ``prior=True``, the condition of the problem with its
             prior rows (what determines the parameters; :attr:`condition` is that of the
             measurement rows alone), else NaN.
@@ -641,8 +642,7 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
               robust: bool = False, prior: bool = False,
               tolerances: Mapping[str, float] | None = None, sigma: float | None = None,
               compatible: bool = True, rcond: float = RCOND, prune: bool = True,
-              max_iter: int = 60, progress: bool = False, judge: bool = True,
-              file_unit: str | None = None) -> CalibrationResult:
+              max_iter: int = 60, progress: bool = False) -> CalibrationResult:
     """Identify ``machine``'s defects from ``data`` (see the module docstring).
 
     Args:
@@ -664,10 +664,6 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
         prune: drop the parameters the noise determines worse than their tolerance.
         max_iter: iteration limit of each least-squares solve.
         progress: show a progress counter of model evaluations on stderr (terminals only).
-        judge: attach the verdict (:func:`pkmkit.calibration.diagnosis.judge_calibration`:
-            noise, condition, magnitudes; likely causes of a failure) as ``result.verdict``.
-        file_unit: the length unit the measurement file was read in (messages of the
-            verdict's unit hypothesis).
 
     Raises:
         InputError: measurements the machine cannot have produced (rows out of stroke, no
@@ -677,29 +673,14 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
     """
     # small dense problems: a multi-threaded BLAS only loses time, and collapses when another
     # process holds a core (docs/benchmarks.md)
-    from dataclasses import replace
-
     from tqdm import tqdm
 
-    from pkmkit.calibration.diagnosis import judge_calibration
-
-    options = dict(validation=validation, parameters=parameters, frame=frame, robust=robust,
-                   prior=prior, tolerances=tolerances, sigma=sigma, compatible=compatible,
-                   rcond=rcond, max_iter=max_iter)
     with single_threaded_blas(), tqdm(desc="identification", unit=" evaluations",
                                       disable=None if progress else True, leave=False) as bar:
-        result = _calibrate(machine, data, prune=prune, progress=bar if progress else None,
-                            **options)
-        if not judge:
-            return result
-
-        def keep_weak() -> CalibrationResult:
-            return _calibrate(machine, data, prune=False, **{**options, "validation": None})
-
-        verdict = judge_calibration(machine, data, result,
-                                    rerun=keep_weak if prune and not prior else None,
-                                    file_unit=file_unit)
-    return replace(result, verdict=verdict)
+        return _calibrate(machine, data, validation=validation, parameters=parameters,
+                          frame=frame, robust=robust, prior=prior, tolerances=tolerances,
+                          sigma=sigma, compatible=compatible, rcond=rcond, prune=prune,
+                          max_iter=max_iter, progress=bar if progress else None)
 
 
 def single_threaded_blas():

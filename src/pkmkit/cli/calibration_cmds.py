@@ -303,7 +303,7 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
     Every calibration is judged (a-posteriori against assumed noise, condition, identified
     values against the machine's size): a failed verdict names the likely cause, writes no
     calibrated machine file (unless --write-anyway) and exits with status 3."""
-    from pkmkit.calibration.identify import calibrate
+    from pkmkit.calibration.diagnosis import calibrate
     from pkmkit.calibration.registration import load_registration
     from pkmkit.io.measurements import read_measurements
 
