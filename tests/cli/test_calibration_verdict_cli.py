@@ -77,8 +77,9 @@ def test_write_anyway_writes_the_machine_file_and_still_exits_3(tracker):
     res = run("calibrate", "verne", "--measure", "point", "--measurements", d / "m.csv",
               "--parameters", "dL1,dL2", "--out", d / "forced", "--write-anyway")
     assert res.exit_code == 3
-    assert (d / "forced" / "verne-calibrated.toml").exists()
     assert "written anyway" in res.output
+    # the file says so: a later reader (compensate, a colleague) sees the failed verdict
+    assert "VERDICT FAILED (noise" in (d / "forced" / "verne-calibrated.toml").read_text()
     # a failed rerun into the same folder removes the earlier run's machine file
     res = run("calibrate", "verne", "--measure", "point", "--measurements", d / "m.csv",
               "--parameters", "dL1,dL2", "--out", d / "forced")
@@ -173,6 +174,15 @@ def test_repeated_ids_are_refused_with_their_line(run, tmp_path):
     assert res.exit_code == 1
     assert f"{f}:5: repeated id 'P1' (first on line 3)" in res.output
     assert not (tmp_path / "out").exists()
+
+
+def test_registration_files_refuse_repeated_ids(run, tmp_path):
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    a.write_text("x,y,z,id\n0,0,0,P1\n1,0,0,P2\n0,1,0,P3\n0,0,1,P2\n")
+    b.write_text("x,y,z,id\n0,0,0,P1\n1,0,0,P2\n0,1,0,P3\n")
+    res = run("register", "--measured", a, "--nominal", b)
+    assert res.exit_code == 1  # before: the second P2 was matched with the first silently
+    assert f"{a}:5: repeated id 'P2' (first on line 3)" in res.output
 
 
 def test_report_of_a_passed_calibration(run, tmp_path):

@@ -359,6 +359,9 @@ def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: st
     note = (f"identified by pkmkit {__version__} calibrate from {result.kind} measurements: "
             f"RMS {result.before.rms / length_scale(units):.6g} -> "
             f"{result.after.rms / length_scale(units):.6g} {units}")
+    if result.verdict is not None and not result.verdict.passed:
+        note += (" -- VERDICT FAILED (" + ", ".join(c.name for c in result.verdict.failed)
+                 + "), written on request (--write-anyway): see report.html")
     texts = {}
     if machine_file:
         texts[machine_name] = machine_text_with_defects(machine_source, result.nominal,
