@@ -104,9 +104,10 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
                     f"{esc(units)}")
     verdict += (f". The a-posteriori noise is {_num(result.sigma_posterior / scale)} {esc(units)}"
                 f" against {_num(result.sigma / scale)} {esc(units)} assumed"
-                + (" — the model explains the data to the noise level." if
+                + ("." if result.verdict is not None else  # the verdict above judges it
+                   " — the model explains the data to the noise level." if
                    result.sigma_posterior < 1.5 * result.sigma else
-                   " — larger than assumed: unmodelled errors or outliers remain.") + "")
+                   " — larger than assumed: unmodelled errors or outliers remain."))
     parts.append(f"<p class='summary'>{verdict}</p>")
     summary = [
         ["observations (identification)", str(result.after.per_pose.size)],

@@ -130,10 +130,11 @@ def plot_error_maps(result, *, units: str = "mm", path: str | Path | None = None
 
     scale = length_scale(units)
     pts = np.asarray(result.tool_points) / scale
-    panels = [("before", result.before.per_pose / scale),
-              ("after", result.after.per_pose / scale)]
+    panels = [("error, nominal machine", result.before.per_pose / scale),
+              ("error, identified machine", result.after.per_pose / scale)]
     if result.tool_uncertainty is not None:
-        panels.append(("uncertainty (k = 2)", np.asarray(result.tool_uncertainty) / scale))
+        panels.append(("tool-point uncertainty (k = 2)",
+                       np.asarray(result.tool_uncertainty) / scale))
     fig = Figure(figsize=(4.0 * len(panels), 3.6), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, len(panels)))
     for ax, (name, value) in zip(axes, panels, strict=True):
