@@ -7,9 +7,11 @@ Hypotheses (each an :class:`~pkmkit.calibration.verdict.Alternative` with what i
   measured points onto the nominal machine's tool points (Kabsch, one SVD). If it leaves a
   residual many times smaller than the identification did, the readings are in another frame.
 - **unit**: the readings (or the whole file: readings, pivots, commanded paths, tool lengths
-  and length actuators) multiplied by 10⁻³, 10³, 10⁻⁶, 10⁶, 25.4 or 1/25.4, the nominal
-  machine with its set-up fitted alone. If one factor fits many times better, the file is in
-  another unit.
+  and length actuators; a machined part's readings only) multiplied by 10⁻³, 10³, 10⁻⁶, 10⁶,
+  25.4 or 1/25.4, the nominal machine with its set-up fitted alone (for the two factors that
+  fit best before the set-up is fitted). The best factor counts only when it fits ten times
+  better than readings set to zero (readings shrunk to nothing are fitted by any bed plane);
+  if it fits many times better than the readings as read, the file is in another unit.
 - **weak parameters**: when parameters were dropped as weakly identifiable (and neither of
   the above explains the misfit), the calibration run again keeping them (``prune=False``,
   the CLI's ``--keep-weak``): if its a-posteriori noise matches the assumed one, the dropped
@@ -152,29 +154,53 @@ def _scaled(data: MeasurementSet, machine, factor: float, whole_file: bool) -> M
 def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
     from pkmkit.calibration.models import make_model
 
-    best = None
     identify_frame = bool(result.frame is not None and data.kind in ("point", "pose"))
-    for factor in UNIT_FACTORS:
-        for whole in (False, True):
-            scaled = _scaled(data, machine, factor, whole)
-            try:
-                if whole:
-                    identify.check_measurements(machine, scaled)
-                model = make_model(machine, scaled, identify._sigma_rows(data.kind, machine,
+
+    def model_of(factor: float, whole: bool):
+        scaled = _scaled(data, machine, factor, whole)
+        if whole:
+            identify.check_measurements(machine, scaled)
+        return make_model(machine, scaled, identify._sigma_rows(data.kind, machine,
                                                                 result.sigma),
-                                   registration=None, identify_frame=identify_frame)
-                r, _, _ = model.residuals(machine, model.setup.initial, jacobian=False)
-                if not np.isfinite(r).all():
-                    continue
-                setup = identify._fit_setup(machine, model)
-                r, _, _ = model.residuals(machine, setup, jacobian=False)
+                          registration=None, identify_frame=identify_frame)
+
+    def rms_of(model, setup) -> float:
+        r, _, _ = model.residuals(machine, setup, jacobian=False)
+        return identify._stats(model, r).rms if np.isfinite(r).all() else np.inf
+
+    # a machined part's commanded paths are the program's, sampled at a fixed step: scaled
+    # they would be sampled a million times finer; only its readings are tried
+    modes = (False,) if data.kind == "part" else (False, True)
+    screened = []
+    for factor in UNIT_FACTORS:
+        for whole in modes:
+            try:
+                model = model_of(factor, whole)
+                screened.append((rms_of(model, model.setup.initial), factor, whole, model))
             except (PkmError, np.linalg.LinAlgError, ValueError):
                 continue
-            if not np.isfinite(r).all():
-                continue
-            rms = identify._stats(model, r).rms
-            if best is None or rms < best[0]:
-                best = (rms, factor, whole)
+    # the set-up fitted for the two most promising factors only, and for readings set to zero:
+    # readings shrunk to nothing are "fitted" by any bed plane, so a rescale must fit them
+    # many times better than zeros do
+    best = None
+    for rms0, factor, whole, model in sorted(screened, key=lambda t: t[0])[:2]:
+        if not np.isfinite(rms0):
+            continue
+        try:
+            rms = rms_of(model, identify._fit_setup(machine, model))
+        except (PkmError, np.linalg.LinAlgError, ValueError):
+            continue
+        if best is None or rms < best[0]:
+            best = (rms, factor, whole)
+    if best is None:
+        return None
+    try:
+        zero = model_of(0.0, False)
+        rms_zero = rms_of(zero, identify._fit_setup(machine, zero))
+    except (PkmError, np.linalg.LinAlgError, ValueError):
+        rms_zero = np.inf
+    if not best[0] * 10.0 <= rms_zero:
+        return None
     if best is None:
         return None
     rms, factor, whole = best
