@@ -211,3 +211,18 @@ def test_report_of_a_passed_calibration(run, tmp_path):
     # the worst row of the table is the file line of the largest error after identification
     worst = int(np.argmax(out["residuals"]["after"]))
     assert f"<td>{out['residuals']['rows'][worst]}</td>" in page
+
+
+def test_noise_stated_too_small_is_named_as_such(run, tmp_path):
+    """Height readings judged against a noise 20× too small: no frame or unit explains the
+    residual (readings rescaled to nothing would fit any bed plane: not a unit error)."""
+    _ok(run("simulate-measurements", "linear-delta", "--measure", "height", "--poses", 40,
+            "--defects", "random", "--seed", 1, "--units", "mm", "--out", tmp_path / "h.csv"))
+    res = run("calibrate", "linear-delta", "--measure", "height", "--measurements",
+              tmp_path / "h.csv", "--sigma", "1e-4", "--json")
+    assert res.exit_code == 3, res.output
+    v = json.loads(res.stdout)["verdict"]
+    assert [c["cause"] for c in v["causes"]] == ["noise-or-model"]
+    assert "--sigma" in v["causes"][0]["message"]
+    assert _ok(run("calibrate", "linear-delta", "--measure", "height", "--measurements",
+                   tmp_path / "h.csv")).output.count("verdict: PASSED") == 1
