@@ -78,7 +78,7 @@ def test_report_content(delta_run):
     assert page.startswith("<!DOCTYPE html>")
     # self-contained: every figure embedded as a PNG data URI, no external resource
     images = re.findall(r"src='data:image/png;base64,([A-Za-z0-9+/=]+)'", page)
-    assert len(images) == 4
+    assert len(images) == 5  # residuals, histograms, parameters, identifiability, maps
     assert all(base64.b64decode(img)[:8] == b"\x89PNG\r\n\x1a\n" for img in images)
     assert "http://" not in page and "https://" not in page
     text = html.unescape(page)
@@ -99,10 +99,16 @@ def test_report_content(delta_run):
 def test_calibrate_text_output(run, delta_run):
     d, _ = delta_run
     res = run("calibrate", "linear-delta", "--measure", "point", "--measurements",
-              d / "ident.csv", "--robust", "--parameters", "dL1,dL2,dL3,dq1,dq2,dq3")
+              d / "ident.csv", "--robust")
     assert res.exit_code == 0, res.output
     assert "residual before" in res.output and "identified (value ± std)" in res.output
-    assert "dL1" in res.output
+    assert "verdict: PASSED" in res.output
+    # six of the defects cannot explain millimetre errors: a red verdict, exit status 3
+    res = run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+              d / "ident.csv", "--robust", "--parameters", "dL1,dL2,dL3,dq1,dq2,dq3")
+    assert res.exit_code == 3, res.output
+    assert "dL1" in res.output and "verdict: FAILED (noise)" in res.output
+    assert "likely cause (noise-or-model)" in res.output
 
 
 def test_register_reproduces_table_5_4_and_feeds_calibrate(run, as_json, tmp_path):
@@ -133,12 +139,17 @@ def test_register_reproduces_table_5_4_and_feeds_calibrate(run, as_json, tmp_pat
                "--defects", "random", "--frame", frame, "--out", meas).exit_code == 0
     good = as_json(run("calibrate", "verne", "--measure", "point", "--measurements", meas,
                        "--frame", frame, "--json"))
-    bad = as_json(run("calibrate", "verne", "--measure", "point", "--measurements", meas,
-                      "--parameters", "dL1,dL2", "--json"))
+    res = run("calibrate", "verne", "--measure", "point", "--measurements", meas,
+              "--parameters", "dL1,dL2", "--json")
+    assert res.exit_code == 3  # readings in the tracker frame, no --frame: a failed verdict
+    bad = json.loads(res.stdout)
     assert good["rms_after"] < 1e-4 < bad["rms_after"]
-    joint = as_json(run("calibrate", "verne", "--measure", "point", "--measurements", meas,
-                        "--frame", "identify", "--json", "--parameters",
-                        "dL1,dL2,dL3,dL4,dL5,dL6"))
+    assert good["verdict"]["passed"] and not bad["verdict"]["passed"]
+    assert [c["cause"] for c in bad["verdict"]["causes"]] == ["frame"]
+    res = run("calibrate", "verne", "--measure", "point", "--measurements", meas,
+              "--frame", "identify", "--json", "--parameters", "dL1,dL2,dL3,dL4,dL5,dL6")
+    assert res.exit_code == 3  # six rod lengths cannot explain the machine's defects
+    joint = json.loads(res.stdout)
     assert set(joint["setup"]) == {"frame_rx", "frame_ry", "frame_rz", "frame_x", "frame_y",
                                    "frame_z"}
 

@@ -8,8 +8,9 @@
 - :mod:`~pkmkit.calibration.identifiability` — compatible subspace of a hyperstatic machine and
   the identifiable parameters (a small interface meant to delegate to ``pkmkit.geometric_errors``'
   identifiability analysis once it exists);
-- :mod:`~pkmkit.calibration.identify` — :func:`calibrate`: identification, uncertainties,
-  validation;
+- :mod:`~pkmkit.calibration.identify` — identification, uncertainties, validation;
+- :mod:`~pkmkit.calibration.verdict`, :mod:`~pkmkit.calibration.diagnosis` — the verdict on a
+  calibration and its likely causes; :func:`calibrate` is the identification with its verdict;
 - :mod:`~pkmkit.calibration.controller`, :mod:`~pkmkit.calibration.compensation` — commands of a
   nominal controller and their compensation;
 - :mod:`~pkmkit.calibration.studies` — the seed reproductions and the demo's study.
@@ -21,13 +22,13 @@
 >>> rng = np.random.default_rng(0)
 >>> true = apply_defect_vector(m, random_defects(m, rng))
 >>> result = calibrate(m, simulate(true, m, "point", 60, rng))
->>> bool(result.after.rms < 3e-5 < result.before.rms)
-True
+>>> bool(result.after.rms < 3e-5 < result.before.rms), result.verdict.passed
+(True, True)
 """
 
+from pkmkit.calibration.diagnosis import calibrate
 from pkmkit.calibration.identify import (
     CalibrationResult,
-    calibrate,
     check_measurements,
     identification_problem,
 )

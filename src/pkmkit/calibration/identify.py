@@ -50,7 +50,7 @@ from pkmkit.calibration.identifiability import (
 )
 from pkmkit.calibration.models import ResidualModel, make_model
 from pkmkit.calibration.registration import Registration
-from pkmkit.exceptions import ConvergenceError, InputError, ParameterError
+from pkmkit.exceptions import ConvergenceError, InputError, ParameterError, PkmError
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
 from pkmkit.model.defects_table import apply_defect_vector
 from pkmkit.model.measurement_set import MeasurementSet
@@ -133,6 +133,23 @@ class CalibrationResult:
         singular_values: of the identified problem's whitened, tolerance-scaled Jacobian
             (measurement rows; the identifiability spectrum).
         tolerance: ``(p,)`` the tolerances (scales, priors) of the identified parameters.
+        chi2, dof: ``Σ (r_i/σ_i)²`` over the identification readings (robust weights
+            applied) and its degrees of freedom (readings − identified parameters).
+        residuals_before: ``(N, w)`` residual rows (SI) of the nominal machine, set-up fitted.
+        covariance: ``(p + s, p + s)`` covariance of the identified parameters (SI; machine
+            first, then set-up; ``inf`` on the diagonal of undetermined ones).
+        tool_points: ``(N, 3)`` nominal tool point at each measured configuration (m), or None
+            (machined parts).
+        tool_uncertainty: ``(N,)`` expanded uncertainty (k = 2) of the identified machine's
+            tool point at each measured configuration from the machine parameters'
+            covariance: twice the largest standard deviation over directions (m), or None.
+        counts: parameter counts: ``candidates``, ``compatible``, ``identified``, ``gauges``,
+            ``weak``, ``no_effect``, ``combinations``.
+        verdict: the :class:`~pkmkit.calibration.verdict.Verdict` (set by
+            :func:`pkmkit.calibration.calibrate`, the judged call; None from this module's).
+        condition_with_priors: with ``prior=True``, the condition of the problem with its
+            prior rows (what determines the parameters; :attr:`condition` is that of the
+            measurement rows alone), else NaN.
     """
 
     machine: Any
@@ -166,6 +183,15 @@ class CalibrationResult:
     weights: np.ndarray = field(repr=False, default=None)
     singular_values: np.ndarray = field(repr=False, default=None)
     tolerance: np.ndarray = field(repr=False, default=None)
+    chi2: float = float("nan")
+    dof: int = 0
+    residuals_before: np.ndarray = field(repr=False, default=None)
+    covariance: np.ndarray = field(repr=False, default=None)
+    tool_points: np.ndarray = field(repr=False, default=None)
+    tool_uncertainty: np.ndarray = field(repr=False, default=None)
+    counts: dict = field(default_factory=dict)
+    verdict: Any = None
+    condition_with_priors: float = float("nan")
 
     def value(self, name: str) -> float:
         """An identified machine or set-up parameter by name (SI)."""
@@ -234,6 +260,10 @@ class CalibrationResult:
             "correlation_max": _max_correlation(self.correlation, self.names + self.setup_names),
             "correlation": {"names": list(self.names + self.setup_names),
                             "matrix": np.round(self.correlation, 6).tolist()},
+            "verdict": None if self.verdict is None else self.verdict.to_dict(),
+            "counts": dict(self.counts),
+            "chi2": self.chi2,
+            "dof": self.dof,
             "residuals": {"rows": list(self.after.labels),
                           "before": (self.before.per_pose / scale).tolist(),
                           "after": (self.after.per_pose / scale).tolist()},
@@ -248,8 +278,9 @@ class CalibrationResult:
 def _max_correlation(corr: np.ndarray, names: Sequence[str]) -> dict[str, Any] | None:
     if corr.shape[0] < 2:
         return None
-    c = np.abs(corr - np.eye(corr.shape[0]))
-    i, j = np.unravel_index(int(np.nanargmax(c)), c.shape)
+    c = np.abs(np.nan_to_num(corr, nan=0.0))
+    np.fill_diagonal(c, -1.0)  # a parameter against itself is not a correlation
+    i, j = np.unravel_index(int(np.argmax(c)), c.shape)
     return {"pair": [names[i], names[j]], "value": float(corr[i, j])}
 
 
@@ -673,6 +704,7 @@ class _Prepared:
     registration: Registration | None
     identify_frame: bool
     t_start: float
+    n_candidates: int = 0
 
 
 def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances, sigma,
@@ -784,7 +816,8 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
                      cand_names=cand_names, mach_sel=mach_sel, setup_sel=setup_sel,
                      readings=readings, rank=ident.rank if prior else int(
                          mach_sel.size + setup_sel.size), sigma=sig, registration=registration,
-                     identify_frame=identify_frame, t_start=t_start)
+                     identify_frame=identify_frame, t_start=t_start,
+                     n_candidates=len(candidates))
 
 
 @dataclass(frozen=True)
@@ -882,9 +915,17 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
     cov_u = np.linalg.pinv(jtj) * factor
     cov = cov_u * np.outer(problem.scale, problem.scale)
     std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    # the pseudo-inverse drops the directions the data do not determine, which would give
+    # those parameters a standard deviation of 0: they are undetermined (inf)
+    undetermined = _undetermined(jw)
+    std[undetermined] = np.inf
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
     corr[~np.isfinite(corr)] = 0.0
+    np.fill_diagonal(corr, np.where(undetermined, np.nan, 1.0))
+    cov[undetermined, :] = np.nan
+    cov[:, undetermined] = np.nan
+    cov[undetermined, undetermined] = np.inf
     sv = np.linalg.svd(jw[:m_rows], compute_uv=False)
     condition = float(sv[0] / sv[-1]) if sv.size and sv[-1] > 0 else float("inf")
 
@@ -918,7 +959,61 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
         sigma_posterior=float(np.sqrt(factor)) * sig, frame=final_frame,
         iterations=iterations, seconds=time.perf_counter() - t_start,
         residuals=r_after, weights=problem.weights.copy(), singular_values=sv,
-        tolerance=problem.scale[:p].copy())
+        tolerance=problem.scale[:p].copy(), chi2=float(meas @ meas), dof=int(dof),
+        residuals_before=r_before, covariance=cov, counts=_counts(prep, unidentifiable),
+        condition_with_priors=_condition(jw) if problem.prior else float("nan"),
+        **_tool_uncertainty(m_id, data, problem.basis, cov[:p, :p]))
+
+
+def _condition(jw: np.ndarray) -> float:
+    s = np.linalg.svd(jw, compute_uv=False)
+    return float(s[0] / s[-1]) if s.size and s[-1] > 0 else float("inf")
+
+
+def _undetermined(jw: np.ndarray) -> np.ndarray:
+    """``(p,)`` True for the parameters with a component along a direction the data do not
+    determine (singular value of the whitened Jacobian below :data:`RCOND` of the largest)."""
+    if jw.size == 0:
+        return np.zeros(jw.shape[1], dtype=bool)
+    _, s, vt = np.linalg.svd(jw, full_matrices=False)
+    null = s < RCOND * s[0] if s[0] > 0 else np.ones(s.size, dtype=bool)
+    return (vt[null] ** 2).sum(axis=0) > 1e-6
+
+
+def _counts(prep, unidentifiable: Mapping[str, str]) -> dict[str, int]:
+    """Parameter counts of a calibration (see :class:`CalibrationResult`)."""
+    reasons = [r for n, r in unidentifiable.items() if n in set(prep.dset.names)]
+    return {"candidates": int(prep.n_candidates), "compatible": len(prep.cand_names),
+            "identified": int(prep.mach_sel.size),
+            "gauges": sum(r.startswith("gauge") for r in reasons),
+            "weak": sum(r.startswith("weakly") for r in reasons),
+            "no_effect": sum(r.startswith("no effect") for r in reasons),
+            "combinations": sum(r.startswith("a combination") for r in reasons)}
+
+
+def _tool_uncertainty(machine, data: MeasurementSet, basis: np.ndarray, cov: np.ndarray
+                      ) -> dict[str, Any]:
+    """Nominal tool points and the k = 2 uncertainty of the tool point at the measured
+    configurations (:class:`CalibrationResult`)."""
+    if data.q is None:
+        return {"tool_points": None, "tool_uncertainty": None}
+    try:
+        sens = tool_sensitivity(machine, data.q, tool_length=data.tool_length)
+    except (PkmError, np.linalg.LinAlgError):
+        return {"tool_points": None, "tool_uncertainty": None}
+    points = np.asarray(sens.pose)[:, :3]
+    if basis.shape[1] == 0:
+        return {"tool_points": points, "tool_uncertainty": np.zeros(len(points))}
+    j = sens.point @ basis                                   # (N, 3, p)
+    c = np.where(np.isfinite(cov), cov, 0.0)
+    tool = np.einsum("nip,pq,njq->nij", j, c, j)
+    lam = np.linalg.eigvalsh(tool)[:, -1]
+    u = 2.0 * np.sqrt(np.clip(lam, 0.0, None))
+    if not np.isfinite(np.diag(cov)).all():
+        bad = ~np.isfinite(np.diag(cov))
+        touched = np.abs(j[:, :, bad]).max(axis=(1, 2)) > 0
+        u = np.where(touched, np.inf, u)
+    return {"tool_points": points, "tool_uncertainty": u}
 
 
 def _quantity(value: float, unit: str) -> str:

@@ -26,7 +26,8 @@ import numpy as np
 
 from pkmkit.calibration.compensation import check_compensation
 from pkmkit.calibration.controller import commanded_q, corrected_targets, reached
-from pkmkit.calibration.identify import CalibrationResult, calibrate, identification_problem
+from pkmkit.calibration.diagnosis import calibrate
+from pkmkit.calibration.identify import CalibrationResult, identification_problem
 from pkmkit.calibration.registration import Registration, register_points
 from pkmkit.calibration.simulate import (
     NOISE_SIGMA,

@@ -6,6 +6,7 @@ Lengths are in metres unless ``--units`` or the files say otherwise; angles in d
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
@@ -309,16 +310,26 @@ def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
 @click.option("--allow-incompatible", is_flag=True,
               help="Hyperstatic machines: identify incompatible defects too (least-squares "
                    "closure, as seed 002).")
+@click.option("--keep-weak", is_flag=True,
+              help="Keep the parameters the stated noise would determine worse than their "
+                   "tolerance (default: left at nominal as 'weakly identifiable').")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False),
               help="Directory for the calibrated machine file, calibration.json, residuals.csv,"
                    " figures and report.html.")
+@click.option("--write-anyway", is_flag=True,
+              help="Write the calibrated machine file even when the verdict fails (the exit "
+                   "status is still 3).")
 @CAL_UNITS_OPTION
 @JSON_OPTION
 def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters, frame_spec,
                   identify_frame, robust, prior, tolerance_items, sigma, allow_incompatible,
-                  out_dir, units, as_json):
-    """Identify a machine's geometric defects from measurements, validate, report."""
-    from pkmkit.calibration.identify import calibrate
+                  keep_weak, out_dir, write_anyway, units, as_json):
+    """Identify a machine's geometric defects from measurements, validate, report.
+
+    Every calibration is judged (a-posteriori against assumed noise, condition, identified
+    values against the machine's size): a failed verdict names the likely cause, writes no
+    calibrated machine file (unless --write-anyway) and exits with status 3."""
+    from pkmkit.calibration.diagnosis import calibrate
     from pkmkit.calibration.registration import (
         Registration,
         load_registration,
@@ -344,8 +355,10 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
     result = calibrate(machine, data, validation=validation, parameters=parameters,
                        frame=frame, robust=robust, prior=prior, tolerances=tolerances,
                        sigma=None if sigma is None else sigma * length_scale(unit),
-                       compatible=not allow_incompatible, progress=not as_json)
+                       compatible=not allow_incompatible, progress=not as_json,
+                       prune=not keep_weak, file_unit=unit)
     payload = result.to_json(unit)
+    passed = result.verdict is None or result.verdict.passed
     if out_dir:
         from pkmkit.plot.calibration_report import write_calibration_outputs
 
@@ -354,7 +367,8 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
             sources["validation"] = validation_file
         written = write_calibration_outputs(result, out_dir,
                                             machine_source=machine_document_path(machine_name),
-                                            units=unit, sources=sources)
+                                            units=unit, sources=sources,
+                                            machine_file=passed or write_anyway)
         if result.frame is not None and frame is not None and not isinstance(frame, Registration):
             # an identified or refined frame: reusable by --frame FILE (register's format)
             target = Path(out_dir) / "frame.json"
@@ -363,8 +377,13 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
         payload["files"] = written
     if as_json:
         emit_json(payload)
-        return
-    _print_calibration(result, payload, unit)
+    else:
+        _print_calibration(result, payload, unit)
+        if not passed and out_dir:
+            click.echo("  no calibrated machine file written" if not write_anyway else
+                       "  calibrated machine file written anyway (--write-anyway)")
+    if not passed:
+        sys.exit(3)
 
 
 def _tolerances(items, machine, unit: str) -> dict[str, float]:
@@ -413,6 +432,9 @@ def _print_calibration(result, payload: dict, unit: str) -> None:
     for n in result.setup_names:
         click.echo(f"    {n:10s} {payload['setup'][n]:+.8g} ± {payload['setup_std'][n]:.2g}")
     click.echo(f"  left at nominal: {len(result.unidentifiable)} (see --json or report.html)")
+    if result.verdict is not None:
+        for line in result.verdict.lines():
+            click.echo("  " + line)
     if result.outliers:
         click.echo("  outliers: " + ", ".join(f"{lab} ({err / scale:.3g} {unit})"
                                               for lab, err, _ in result.outliers))

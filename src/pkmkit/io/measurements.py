@@ -23,7 +23,7 @@ for the Tripteor X7, ``q1 q2 q3`` for a linear Delta):
 
 Every type accepts an optional ``id`` column (a free label kept in reports). Anything else is
 an error: a missing or unknown column, a cell that is not a finite number, a short row, two
-identical rows.
+identical rows, an id used twice.
 """
 
 from __future__ import annotations
@@ -184,6 +184,13 @@ def read_csv_table(path: str | Path, required: tuple[str, ...], optional: tuple[
             values[i, k] = v
         for c in texts:
             texts[c].append(row[index[c]])
+    if "id" in texts:  # an id names one row: a repeated one is a copy or a mislabelled row
+        first: dict[str, int] = {}
+        for (line, _), ident in zip(data, texts["id"], strict=True):
+            if ident in first:
+                raise InputError(f"{label}:{line}: repeated id {ident!r} (first on line "
+                                 f"{first[ident]})")
+            first[ident] = line
     return CsvTable(numbers={c: values[:, k] for k, c in enumerate(numeric)}, texts=texts,
                     lines=tuple(f"{label}:{line}" for line, _ in data), unit=unit, scale=scale)
 

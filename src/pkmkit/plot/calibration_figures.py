@@ -122,3 +122,34 @@ def plot_identifiability(result, *, path: str | Path | None = None) -> Figure:
     ax2.set_title("correlations", fontsize=9)
     fig.colorbar(im, ax=ax2, shrink=0.8)
     return _save(fig, path)
+
+
+def plot_error_maps(result, *, units: str = "mm", path: str | Path | None = None) -> Figure:
+    """Over the workspace, seen from above (the measured configurations' nominal tool points,
+    x–y): the error of each observation before and after identification and the identified
+    machine's tool-point uncertainty (k = 2) from the parameters' covariance."""
+    from pkmkit.model.parameters import length_scale
+
+    scale = length_scale(units)
+    pts = np.asarray(result.tool_points) / scale
+    panels = [("error, nominal machine", result.before.per_pose / scale),
+              ("error, identified machine", result.after.per_pose / scale)]
+    if result.tool_uncertainty is not None:
+        panels.append(("tool-point uncertainty (k = 2)",
+                       np.asarray(result.tool_uncertainty) / scale))
+    fig = Figure(figsize=(4.0 * len(panels), 3.6), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, len(panels)))
+    for ax, (name, value) in zip(axes, panels, strict=True):
+        finite = np.isfinite(value)
+        sc = ax.scatter(pts[finite, 0], pts[finite, 1], c=value[finite], s=14, cmap="viridis")
+        if (~finite).any():
+            ax.scatter(pts[~finite, 0], pts[~finite, 1], marker="x", color="r", s=14,
+                       label="undetermined")
+            ax.legend(fontsize=7)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title(name, fontsize=9)
+        ax.set_xlabel(f"x [{units}]")
+        ax.set_ylabel(f"y [{units}]")
+        ax.grid(True, alpha=0.25)
+        fig.colorbar(sc, ax=ax, shrink=0.8, label=f"[{units}]")
+    return _save(fig, path)

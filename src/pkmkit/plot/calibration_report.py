@@ -24,12 +24,15 @@ from pkmkit.io.json_io import to_jsonable
 from pkmkit.io.machine_defects import machine_text_with_defects
 from pkmkit.model.parameters import length_scale
 
-FIGURES = ("residuals", "histograms", "parameters", "identifiability")
+FIGURES = ("residuals", "histograms", "parameters", "identifiability", "maps")
+#: Rows listed in the report's "worst observations" table.
+WORST_ROWS = 10
 
 
 def figure_pngs(result, *, units: str = "mm") -> dict[str, bytes]:
     """The report's figures as PNG bytes, by name."""
     from pkmkit.plot.calibration_figures import (
+        plot_error_maps,
         plot_histograms,
         plot_identifiability,
         plot_parameters,
@@ -39,7 +42,9 @@ def figure_pngs(result, *, units: str = "mm") -> dict[str, bytes]:
     out = {}
     for name, func in (("residuals", plot_residuals), ("histograms", plot_histograms),
                        ("parameters", plot_parameters),
-                       ("identifiability", plot_identifiability)):
+                       ("identifiability", plot_identifiability), ("maps", plot_error_maps)):
+        if name == "maps" and result.tool_points is None:
+            continue
         fig = func(result) if name == "identifiability" else func(result, units=units)
         buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=100)
@@ -81,9 +86,14 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
              "in degrees, direction components dimensionless (≈ rad)</p>"]
     if sources:
         parts.append("<p class='meta'>" + " · ".join(
-            f"{esc(k)}: <code>{esc(str(v))}</code>" for k, v in sources.items()) + "</p>")
+            f"{esc(k)}: <code>{esc(str(v))}</code>"
+            + (f" (sha256 {esc(_sha256(v)[:16])}…)" if _sha256(v) else "")
+            for k, v in sources.items()) + "</p>")
+    parts.append(f"<p class='meta'>calibrated {esc(_now())}</p>")
 
     # ---- verdict and summary
+    if result.verdict is not None:
+        parts.insert(1, _verdict_html(result.verdict))
     val = result.validation
     gain = result.before.rms / result.after.rms if result.after.rms > 0 else float("inf")
     verdict = (f"The identified machine reduces the RMS error of the {result.after.per_pose.size}"
@@ -95,10 +105,11 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
                     f"{esc(units)}")
     verdict += (f". The a-posteriori noise is {_num(result.sigma_posterior / scale)} {esc(units)}"
                 f" against {_num(result.sigma / scale)} {esc(units)} assumed"
-                + (" — the model explains the data to the noise level." if
+                + ("." if result.verdict is not None else  # the verdict above judges it
+                   " — the model explains the data to the noise level." if
                    result.sigma_posterior < 1.5 * result.sigma else
-                   " — larger than assumed: unmodelled errors or outliers remain.") + "")
-    parts.append(f"<p class='verdict'>{verdict}</p>")
+                   " — larger than assumed: unmodelled errors or outliers remain."))
+    parts.append(f"<p class='summary'>{verdict}</p>")
     summary = [
         ["observations (identification)", str(result.after.per_pose.size)],
         ["observations (validation)", str(val.after.per_pose.size) if val else "—"],
@@ -114,7 +125,19 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         cm = data["correlation_max"]
         summary.append(["largest correlation", f"{esc(cm['pair'][0])} / {esc(cm['pair'][1])}: "
                                                f"{cm['value']:+.3f}"])
+    if result.tool_uncertainty is not None and result.tool_uncertainty.size:
+        u = result.tool_uncertainty / scale
+        summary.append(["tool-point uncertainty (k = 2) at the measured configurations",
+                        f"RMS {_num(float(np.sqrt(np.mean(u**2))))}, max "
+                        f"{_num(float(np.max(u)))} {esc(units)}"])
     parts.append("<h2>Summary</h2>" + _table(["", ""], summary, "summary"))
+    if result.counts:
+        c = result.counts
+        parts.append("<h3>Parameter counts</h3>" + _table(
+            ["candidates", "compatible", "identified", "gauges", "weak", "no effect",
+             "combinations"],
+            [[str(c.get(k, "—")) for k in ("candidates", "compatible", "identified", "gauges",
+                                           "weak", "no_effect", "combinations")]], "counts"))
 
     stats = [["identification", _num(result.before.mean / scale), _num(result.before.rms / scale),
               _num(result.before.max / scale), _num(result.after.mean / scale),
@@ -131,8 +154,17 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
                  "(ball-bar), the height error (probe) or the joint-space distance to the "
                  "commanded path (machined part). <i>Before</i>: the nominal machine with the "
                  "set-up parameters fitted alone; <i>after</i>: the identified machine.</p>")
+    axes = _axis_rows(result, scale)
+    if axes:
+        parts.append("<h3>Residuals per axis (RMS)</h3>" + _table(
+            ["axis", "unit", "before", "after", "max |after|"], axes, "axes"))
+    parts.append(_worst_rows(result, scale, units))
     for name, caption in (("residuals", "Error of each observation (log scale)"),
-                          ("histograms", "Distribution of the errors")):
+                          ("histograms", "Distribution of the errors"),
+                          ("maps", "Over the workspace (measured configurations, seen from "
+                                   "above): error before and after, and the identified "
+                                   "machine's tool-point uncertainty (k = 2) from the "
+                                   "parameters' covariance")):
         if name in figures:
             parts.append(_figure(figures[name], caption, name))
 
@@ -144,7 +176,7 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         tol = result.tolerance[i] if result.tolerance is not None else np.nan
         tol_out = (tol / scale if result.units[i] == "m" else
                    np.degrees(tol) if result.units[i] == "rad" else tol)
-        ratio = abs(v) / s if s > 0 else float("inf")
+        ratio = abs(v) / s if s > 0 else float("nan")
         rows.append([f"<code>{esc(n)}</code>", _num(v, 5), _num(s, 3), esc(unit),
                      _num(tol_out, 3), _num(ratio, 3)])
     parts.append(f"<h2>Identified machine parameters ({len(result.names)})</h2>")
@@ -189,12 +221,75 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
              "td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
              "td:first-child,th:first-child{text-align:left}"
              "table.unidentifiable td{text-align:left}"
-             ".meta{color:#555;font-size:0.85em}.verdict{background:#eef5ee;padding:0.6em;"
-             "border-left:4px solid #4a4}figure{margin:1em 0}img{max-width:100%}"
+             ".meta{color:#555;font-size:0.85em}.summary{background:#f4f4f4;padding:0.6em}"
+             ".verdict{padding:0.6em;margin:0.8em 0}.verdict.passed{background:#eef5ee;"
+             "border-left:6px solid #4a4}.verdict.failed{background:#fbeaea;border-left:6px "
+             "solid #c22}.verdict h2{margin:0 0 0.3em 0}"
+             "figure{margin:1em 0}img{max-width:100%}"
              "figcaption{font-size:0.85em;color:#555}")
     return ("<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
             f"<title>{esc(title)}</title><style>{style}</style></head><body>\n"
             + "\n".join(parts) + "\n</body></html>\n")
+
+
+def _verdict_html(verdict) -> str:
+    """The verdict block (green or red) at the top of the report."""
+    esc = html.escape
+    cls = "passed" if verdict.passed else "failed"
+    title = ("Verdict: passed" if verdict.passed else
+             "Verdict: FAILED — do not use this calibration")
+    items = []
+    for c in verdict.checks:
+        mark = "✗" if not c.passed else ("!" if c.warning else "✓")
+        items.append(f"<li>{mark} <b>{esc(c.name)}</b>: {esc(c.reason)}</li>")
+    causes = "".join(f"<li><b>{esc(c.cause)}</b>: {esc(c.message)}</li>"
+                     for c in verdict.causes)
+    out = (f"<div class='verdict {cls}' id='verdict'><h2>{esc(title)}</h2><ul>"
+           + "".join(items) + "</ul>")
+    if causes:
+        out += f"<p>Likely cause:</p><ul>{causes}</ul>"
+    if not verdict.passed:
+        out += ("<p>No calibrated machine file is written for a failed verdict (pkmkit "
+                "calibrate --write-anyway writes it; the exit status is 3 either way).</p>")
+    return out + "</div>"
+
+
+#: Names of the residual rows of each measurement type (pose rotations in degrees).
+AXES = {"point": ("x", "y", "z"), "pose": ("x", "y", "z", "rx", "ry", "rz"),
+        "ballbar": ("length",), "height": ("z",)}
+
+
+def _axis_rows(result, scale: float) -> list[list[str]]:
+    if result.residuals is None or result.residuals_before is None:
+        return []
+    before, after = np.asarray(result.residuals_before), np.asarray(result.residuals)
+    names = AXES.get(result.kind) or tuple(result.nominal.actuator_names)
+    rows = []
+    for k, name in enumerate(names[:after.shape[1]]):
+        angle = result.kind == "pose" and k >= 3
+        f = np.degrees(1.0) if angle else 1.0 / scale
+        unit = "deg" if angle else ""
+        rows.append([esc_code(name), unit or "length",
+                     _num(float(np.sqrt(np.mean(before[:, k] ** 2))) * f),
+                     _num(float(np.sqrt(np.mean(after[:, k] ** 2))) * f),
+                     _num(float(np.max(np.abs(after[:, k]))) * f)])
+    return rows
+
+
+def esc_code(text: str) -> str:
+    return f"<code>{html.escape(text)}</code>"
+
+
+def _worst_rows(result, scale: float, units: str) -> str:
+    err = result.after.per_pose
+    if err.size == 0:
+        return ""
+    order = np.argsort(-err)[:WORST_ROWS]
+    rows = [[html.escape(result.after.labels[i]), _num(result.before.per_pose[i] / scale),
+             _num(err[i] / scale)] for i in order]
+    return (f"<h3>Worst observations after identification ({len(rows)})</h3>"
+            + _table(["row (file:line)", f"before [{units}]", f"after [{units}]"], rows,
+                     "worst"))
 
 
 def _vec(values) -> str:
@@ -228,11 +323,35 @@ def _csv_cell(text: str) -> str:
     return '"' + text.replace('"', '""') + '"' if ("," in text or '"' in text) else text
 
 
+def _sha256(path) -> str:
+    """SHA-256 of a file's bytes ('' when it cannot be read)."""
+    import hashlib
+
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError:
+        return ""
+
+
+def _now() -> str:
+    from datetime import UTC, datetime
+
+    return datetime.now(UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+
+
+def metadata(result, sources: dict[str, str] | None) -> dict[str, Any]:
+    """Machine, files with their SHA-256, date and pkmkit version of a calibration."""
+    return {"machine": result.nominal.id, "pkmkit": __version__, "date": _now(),
+            "files": {k: {"path": str(v), "sha256": _sha256(v)}
+                      for k, v in (sources or {}).items()}}
+
+
 def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: str | Path,
-                              units: str = "mm", sources: dict[str, str] | None = None
-                              ) -> dict[str, str]:
-    """Write the calibrated machine file, ``calibration.json``, ``residuals.csv``, the figures
-    and ``report.html`` into ``out_dir`` (created if needed). Returns name → path.
+                              units: str = "mm", sources: dict[str, str] | None = None,
+                              machine_file: bool = True) -> dict[str, str]:
+    """Write the calibrated machine file (unless ``machine_file`` is False: a failed
+    verdict), ``calibration.json``, ``residuals.csv``, the figures and ``report.html`` into
+    ``out_dir`` (created if needed). Returns name → path.
 
     Everything is rendered in memory first; each file is then written atomically.
     """
@@ -242,10 +361,17 @@ def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: st
     note = (f"identified by pkmkit {__version__} calibrate from {result.kind} measurements: "
             f"RMS {result.before.rms / length_scale(units):.6g} -> "
             f"{result.after.rms / length_scale(units):.6g} {units}")
-    texts = {machine_name: machine_text_with_defects(machine_source, result.nominal,
-                                                     result.defects, note=note)}
+    if result.verdict is not None and not result.verdict.passed:
+        note += (" -- VERDICT FAILED (" + ", ".join(c.name for c in result.verdict.failed)
+                 + "), written on request (--write-anyway): see report.html")
+    texts = {}
+    if machine_file:
+        texts[machine_name] = machine_text_with_defects(machine_source, result.nominal,
+                                                        result.defects, note=note)
     payload = result.to_json(units)
-    payload["files"] = {"machine": machine_name, "report": "report.html"}
+    payload["metadata"] = metadata(result, sources)
+    payload["files"] = {"machine": machine_name if machine_file else None,
+                        "report": "report.html"}
     texts["calibration.json"] = json.dumps(to_jsonable(payload), indent=2) + "\n"
     texts["residuals.csv"] = residuals_csv(result, units=units)
     figures = figure_pngs(result, units=units)
@@ -263,6 +389,10 @@ def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: st
     for name, text in texts.items():
         atomic_write_text(out / name, text)
         written[name] = str(out / name)
+    stale = out / machine_name
+    if not machine_file and stale.exists():  # an earlier run's file must not pass for this one
+        stale.unlink()
+        written["removed"] = str(stale)
     return written
 
 

@@ -1,0 +1,251 @@
+"""Why a calibration failed: cheap alternative hypotheses tried on the measurements, and the
+verdict (:mod:`pkmkit.calibration.verdict`) that names the ones that explain the misfit.
+
+Hypotheses (each an :class:`~pkmkit.calibration.verdict.Alternative` with what it gives):
+
+- **frame** (point and pose readings taken without ``frame``): the best rigid motion of the
+  measured points onto the nominal machine's tool points (Kabsch, one SVD). If it leaves a
+  residual many times smaller than the identification did, the readings are in another frame.
+- **unit**: the readings (or the whole file: readings, pivots, commanded paths, tool lengths
+  and length actuators; a machined part's readings only) multiplied by 10⁻³, 10³, 10⁻⁶, 10⁶,
+  25.4 or 1/25.4, the nominal machine with its set-up fitted alone (for the two factors that
+  fit best before the set-up is fitted). The best factor counts only when it fits ten times
+  better than readings set to zero (readings shrunk to nothing are fitted by any bed plane);
+  if it fits many times better than the readings as read, the file is in another unit.
+- **weak parameters**: when parameters were dropped as weakly identifiable (and neither of
+  the above explains the misfit), the calibration run again keeping them (``prune=False``,
+  the CLI's ``--keep-weak``): if its a-posteriori noise matches the assumed one, the dropped
+  parameters explain the residual.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from pkmkit.calibration import identify
+from pkmkit.calibration.verdict import Alternative, Verdict, judge
+from pkmkit.exceptions import PkmError
+from pkmkit.model.measurement_set import MeasurementSet
+from pkmkit.model.parameters import LENGTH_UNITS, length_scale
+
+#: Unit factors tried by the unit hypothesis (true SI value = read SI value × factor).
+UNIT_FACTORS = (1e-3, 1e3, 1e-6, 1e6, 0.0254 / 1e-3, 1e-3 / 0.0254)
+
+
+def calibrate(machine, data: MeasurementSet, *, file_unit: str | None = None,
+              **options: Any):
+    """:func:`pkmkit.calibration.identify.calibrate` (same arguments) with its verdict as
+    ``result.verdict`` (:func:`judge_calibration`; the weak-parameter hypothesis reruns the
+    calibration with ``prune=False`` when it applies). This is
+    :func:`pkmkit.calibration.calibrate`.
+
+    Args:
+        file_unit: the length unit the measurement file was read in (messages of the
+            verdict's unit hypothesis), or None.
+    """
+    result = identify.calibrate(machine, data, **options)
+    prune = options.get("prune", True) and not options.get("prior", False)
+
+    def keep_weak():
+        return identify.calibrate(machine, data, **{**options, "prune": False,
+                                                    "validation": None, "progress": False})
+
+    with identify.single_threaded_blas():
+        verdict = judge_calibration(machine, data, result, rerun=keep_weak if prune else None,
+                                    file_unit=file_unit)
+    return replace(result, verdict=verdict)
+
+
+def machine_size(machine) -> float:
+    """A machine's size (m): the largest of the distances from the origin to the corners of its
+    default region and of that region's diagonal."""
+    lo, hi = (np.asarray(v, dtype=float)[:3] for v in machine.default_box())
+    return float(max(np.linalg.norm(lo), np.linalg.norm(hi), np.linalg.norm(hi - lo)))
+
+
+def judge_calibration(machine, data: MeasurementSet, result, *,
+                      rerun: Callable[[], Any] | None = None,
+                      file_unit: str | None = None) -> Verdict:
+    """The verdict on ``result`` (a :class:`~pkmkit.calibration.identify.CalibrationResult`
+    of ``machine`` from ``data``), with the alternatives of the module docstring tried when it
+    fails.
+
+    Args:
+        rerun: a callable returning the same calibration with the weak parameters kept, or
+            None (the weak-parameter hypothesis is then not tried).
+        file_unit: the unit the measurement file was read in (for the unit hypothesis's
+            message), or None.
+    """
+    args = dict(chi2=result.chi2, dof=result.dof, sigma=result.sigma,
+                condition=(result.condition_with_priors
+                           if np.isfinite(result.condition_with_priors) else result.condition),
+                names=result.names, values=result.values,
+                units=result.units, tolerances=result.tolerance,
+                machine_size=machine_size(machine), rms=result.after.rms,
+                length_unit=file_unit or "m")
+    first = judge(**args)
+    if first.passed:
+        return first
+    alternatives = []
+    for test in (_frame_alternative, _unit_alternative):
+        try:
+            alt = test(machine, data, result, file_unit)
+        except (PkmError, np.linalg.LinAlgError, ValueError):
+            alt = None
+        if alt is not None:
+            alternatives.append(alt)
+    cheap = judge(**args, alternatives=alternatives)
+    explained = any(c.cause in ("frame", "unit") for c in cheap.causes)
+    if rerun is not None and not explained and not first.checks[0].passed and any(
+            r.startswith("weakly identifiable") for r in result.unidentifiable.values()):
+        alt = _weak_alternative(result, rerun, file_unit or "m")
+        if alt is not None:
+            alternatives.append(alt)
+    return judge(**args, alternatives=alternatives)
+
+
+def _frame_alternative(machine, data, result, file_unit) -> Alternative | None:
+    from pkmkit.calibration.registration import register_points
+    from pkmkit.spatial.rotation import matrix_to_rotvec
+
+    if data.kind not in ("point", "pose") or result.frame is not None:
+        return None
+    if result.residuals_before is None:
+        return None
+    measured = data.values[:, :3]
+    predicted = measured + result.residuals_before[:, :3]
+    if not np.isfinite(predicted).all() or len(measured) < 3:
+        return None
+    reg = register_points(measured, predicted)
+    angle = float(np.degrees(np.linalg.norm(matrix_to_rotvec(reg.rotation))))
+    unit = file_unit or "m"
+    s = length_scale(unit)
+    return Alternative(
+        "frame",
+        f"the readings look like they are in another frame: a rigid motion alone (rotation "
+        f"{angle:.3g}°, translation {np.linalg.norm(reg.translation) / s:.4g} {unit}) brings "
+        f"them to RMS {reg.rms / s:.4g} {unit} of the nominal machine, against "
+        f"{result.after.rms / s:.4g} {unit} after identification. Register the frame "
+        "(pkmkit register) and calibrate with --frame FILE --identify-frame, or use "
+        "--frame identify when the frames are close",
+        rms=reg.rms)
+
+
+def _scaled(data: MeasurementSet, machine, factor: float, whole_file: bool) -> MeasurementSet:
+    values = data.values.copy()
+    values[:, :3 if data.kind in ("point", "pose", "part") else 1] *= factor
+    if not whole_file:
+        return replace(data, values=values)
+    q = data.q
+    if q is not None:
+        q = np.where(machine.angular_actuators[None, :], q, q * factor)
+
+    def times(a):
+        return None if a is None else a * factor
+
+    return replace(data, values=values, q=q, pivot=times(data.pivot),
+                   tool_length=times(data.tool_length), commanded=times(data.commanded))
+
+
+def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
+    from pkmkit.calibration.models import make_model
+
+    identify_frame = bool(result.frame is not None and data.kind in ("point", "pose"))
+
+    def model_of(factor: float, whole: bool):
+        scaled = _scaled(data, machine, factor, whole)
+        if whole:
+            identify.check_measurements(machine, scaled)
+        return make_model(machine, scaled, identify._sigma_rows(data.kind, machine,
+                                                                result.sigma),
+                          registration=None, identify_frame=identify_frame)
+
+    def rms_of(model, setup) -> float:
+        r, _, _ = model.residuals(machine, setup, jacobian=False)
+        return identify._stats(model, r).rms if np.isfinite(r).all() else np.inf
+
+    # a machined part's commanded paths are the program's, sampled at a fixed step: scaled
+    # they would be sampled a million times finer; only its readings are tried
+    modes = (False,) if data.kind == "part" else (False, True)
+    screened = []
+    for factor in UNIT_FACTORS:
+        for whole in modes:
+            try:
+                model = model_of(factor, whole)
+                screened.append((rms_of(model, model.setup.initial), factor, whole, model))
+            except (PkmError, np.linalg.LinAlgError, ValueError):
+                continue
+    # the set-up fitted for the two most promising factors only, and for readings set to zero:
+    # readings shrunk to nothing are "fitted" by any bed plane, so a rescale must fit them
+    # many times better than zeros do
+    best = None
+    for rms0, factor, whole, model in sorted(screened, key=lambda t: t[0])[:2]:
+        if not np.isfinite(rms0):
+            continue
+        try:
+            rms = rms_of(model, identify._fit_setup(machine, model))
+        except (PkmError, np.linalg.LinAlgError, ValueError):
+            continue
+        if best is None or rms < best[0]:
+            best = (rms, factor, whole)
+    if best is None:
+        return None
+    try:
+        zero = model_of(0.0, False)
+        rms_zero = rms_of(zero, identify._fit_setup(machine, zero))
+    except (PkmError, np.linalg.LinAlgError, ValueError):
+        rms_zero = np.inf
+    if not best[0] * 10.0 <= rms_zero:
+        return None
+    if best is None:
+        return None
+    rms, factor, whole = best
+    unit = file_unit or "m"
+    true_unit = _unit_named(length_scale(unit) * factor)
+    what = "the file" if whole else "the readings"
+    guess = (f"{what} look like they are in {true_unit}, not {unit}" if true_unit else
+             f"{what} fit when multiplied by {factor:g}")
+    fix = ("fix the file's '# units:' line or give --units" if whole else
+           "convert the reading column(s) to the file's unit")
+    s = length_scale(unit)
+    return Alternative(
+        "unit",
+        f"wrong unit: {guess} — rescaled ×{factor:g}, the nominal machine fits them to RMS "
+        f"{rms / s:.4g} {unit} against {result.after.rms / s:.4g} {unit} after identification "
+        f"as read; {fix}",
+        rms=rms)
+
+
+#: Units named in the unit hypothesis's message (metres per unit).
+NAMED_UNITS = {**LENGTH_UNITS, "µm": 1e-6, "km": 1e3}
+
+
+def _unit_named(scale: float) -> str | None:
+    for name, value in NAMED_UNITS.items():
+        if np.isclose(value, scale, rtol=1e-9):
+            return name
+    return None
+
+
+def _weak_alternative(result, rerun, unit: str) -> Alternative | None:
+    weak = [n for n, r in result.unidentifiable.items() if r.startswith("weakly identifiable")]
+    try:
+        alt = rerun()
+    except PkmError:
+        return None
+    ratio = alt.sigma_posterior / result.sigma
+    more = ("; the readings are also more precise than the stated noise: give the "
+            "instrument's σ with --sigma" if ratio < 0.5 else "")
+    return Alternative(
+        "weak-parameters",
+        f"{len(weak)} parameter(s) dropped as weakly identifiable with the stated noise ("
+        + ", ".join(weak[:10]) + (" …" if len(weak) > 10 else "")
+        + f") explain the residual: identifying them (--keep-weak) gives RMS "
+        f"{alt.after.rms / length_scale(unit):.4g} {unit} and an a-posteriori noise "
+        f"{ratio:.3g}× the assumed one"
+        + more,
+        rms=alt.after.rms, sigma_posterior=alt.sigma_posterior)
