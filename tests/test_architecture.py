@@ -17,7 +17,7 @@ HOUSE = ROOT.parent / "shared" / "tools" / "house.py"
 PACKAGE = ROOT / "src" / "pkmkit"
 
 #: The target is no file over 700 lines; these are over it today and may only shrink.
-CEILINGS = {"calibration/identify.py": 1023, "machines/full_pose.py": 783,
+CEILINGS = {"machines/full_pose.py": 783,
             "machines/joint_chain.py": 778}
 LIMIT = 700
 

@@ -155,7 +155,7 @@ def test_fallback_causes_name_noise_condition_and_magnitude():
 
 
 def test_largest_correlation_is_never_a_parameter_with_itself():
-    from pkmkit.calibration.identify import _max_correlation
+    from pkmkit.calibration.results import _max_correlation
 
     # an undetermined parameter's row is 0 (NaN on the diagonal): the old |corr − I| took
     # its diagonal, |0 − 1| = 1, and reported it against itself with +0.000
