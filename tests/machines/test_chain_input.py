@@ -104,7 +104,7 @@ def test_passive_joint_beyond_its_limit_is_named(trimule):
     with pytest.warns(StrokeWarning):
         result = trimule.fk(q, full_output=True)
     assert result.status == Status.OK and result.out_of_stroke
-    assert result.messages == "psi1 = 35° is beyond its stroke [-30, 30]°"
+    assert result.messages == "psi1 = 35° is beyond its stroke [-30, 30]° by 5°"
     with pytest.raises(OutOfStrokeError, match="psi1"):
         trimule.fk(q, strokes="refuse")
 

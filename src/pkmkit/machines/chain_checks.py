@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pkmkit.machines.strokes import signed_excess
 from pkmkit.model.chains import REVOLUTE, JointChainModel
 from pkmkit.solve.chains import closure
 from pkmkit.spatial.rotation import rotvec_to_matrix
@@ -86,8 +87,7 @@ def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.
     variables = np.asarray(variables, dtype=int)
     sub = values[:, variables]
     lo, hi = model.q_min[variables], model.q_max[variables]
-    with np.errstate(invalid="ignore"):
-        outside = ((sub < lo) | (sub > hi)) & rows[:, None]
+    outside = (signed_excess(sub, lo, hi) != 0) & rows[:, None]
     bad = outside.any(axis=1)
     messages = [""] * n
     for i in np.flatnonzero(bad):
@@ -101,8 +101,10 @@ def stroke_message(model: JointChainModel, variable: int, value: float) -> str:
     scale, unit = _unit(model, variable)
     lo, hi = model.q_min[variable] * scale, model.q_max[variable] * scale
     side = "below" if value < model.q_min[variable] else "beyond"
+    over = float(signed_excess(np.array([[value]]), model.q_min[variable:variable + 1],
+                               model.q_max[variable:variable + 1])[0, 0])
     return (f"{model.variables[variable]} = {value * scale:.6g}{unit} is {side} its stroke "
-            f"[{lo:.6g}, {hi:.6g}]{unit}")
+            f"[{lo:.6g}, {hi:.6g}]{unit} by {abs(over) * scale:.6g}{unit}")
 
 
 def closure_conditioning(model: JointChainModel, values: np.ndarray, platform: np.ndarray,

@@ -39,6 +39,7 @@ from pkmkit.machines.chain_checks import (
 )
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
+from pkmkit.machines.strokes import signed_excess
 from pkmkit.model.chains import FIXED, JointChainModel
 from pkmkit.numerics.arrays import restore_shape
 from pkmkit.solve.chains import (
@@ -463,9 +464,10 @@ class JointChainMachine:
                 bad, texts = stroke_violations(model, values, variables, rows & ~out_of_stroke)
                 for i in np.flatnonzero(bad):
                     parts[i].append(texts[i])
-                    sub = values[i, variables]
-                    k = int(np.flatnonzero((sub < model.q_min[variables])
-                                           | (sub > model.q_max[variables]))[0])
+                    sub = values[i:i + 1, variables]
+                    k = int(np.flatnonzero(signed_excess(sub, model.q_min[variables],
+                                                         model.q_max[variables])[0])[0])
+                    sub = sub[0]
                     first_violation[int(i)] = (int(variables[k]), float(sub[k]))
                 out_of_stroke |= bad
             if strokes == "refuse":
@@ -610,8 +612,8 @@ class JointChainMachine:
         q[status != Status.OK] = np.nan
         if single and status[0] == Status.OUT_OF_STROKE:
             values = joint_values[0]
-            k = int(next(j for j in joints if not (self.model.q_min[j] <= values[j]
-                                                    <= self.model.q_max[j])))
+            k = int(joints[np.flatnonzero(signed_excess(
+                values[None, joints], self.model.q_min[joints], self.model.q_max[joints])[0])[0]])
             raise OutOfStrokeError(f"the inverse model of {xb[0].tolist()}: {texts[0]}",
                                    self.model.variables[k], values[k],
                                    (self.model.q_min[k], self.model.q_max[k]))
