@@ -285,11 +285,14 @@ def check_measurements(machine, data: MeasurementSet) -> None:
     if not np.isfinite(q).all():
         i = int(np.flatnonzero(~np.isfinite(q).all(axis=1))[0])
         raise InputError(f"{data.labels[i]}: actuator values are not finite")
+    from pkmkit.machines.strokes import signed_excess
+
     lo, hi = _strokes(machine)
     angle = _angle_actuators(machine)
+    excess = signed_excess(q, lo, hi)
     bad = []
     for k, name in enumerate(machine.actuator_names):
-        rows = np.flatnonzero((q[:, k] < lo[k] - 1e-12) | (q[:, k] > hi[k] + 1e-12))
+        rows = np.flatnonzero(excess[:, k] != 0)
         for i in rows:
             f = (np.degrees if angle[k] else (lambda v: v))
             bad.append(f"{data.labels[i]} column {name}: {f(q[i, k]):.6g} outside the stroke "

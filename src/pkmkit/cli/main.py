@@ -395,7 +395,7 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
         "parallel_measure": jac.parallel_measure, "serial_measure": jac.serial_measure,
         "status": jac.status, "tolerance": jac.tolerance,
     }
-    add_to_payload(payload, check, units)
+    add_to_payload(payload, check, units, set_status=False)
     if as_json:
         emit_json(payload)
         finish_single(check, units)

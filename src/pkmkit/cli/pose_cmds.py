@@ -333,7 +333,7 @@ def jacobian(m, pose, q_text, tol, units, convention, as_json) -> None:
                    "characteristic_length": jac.characteristic_length / length_scale(units),
                    "parallel_measure": jac.parallel_measure,
                    "serial_measure": jac.serial_measure, "status": jac.status}
-    add_to_payload(payload, check, units)
+    add_to_payload(payload, check, units, set_status=False)
     if as_json:
         emit_json(payload)
         finish_single(check, units)

@@ -47,10 +47,14 @@ def single_check(m, q: np.ndarray, units: str, passive: Any = None) -> StrokeChe
     return stroke_excess(m, q[None], pas)
 
 
-def add_to_payload(payload: dict[str, Any], check: StrokeCheck | None, units: str) -> None:
-    """``status`` → ``out-of-stroke`` and the ``out_of_stroke`` details when the row is out."""
+def add_to_payload(payload: dict[str, Any], check: StrokeCheck | None, units: str,
+                   set_status: bool = True) -> None:
+    """The ``out_of_stroke`` details when the row is out of stroke, and ``status`` →
+    ``out-of-stroke`` unless ``set_status`` is False (a Jacobian's status is its singularity
+    class, kept)."""
     if check is not None and check.out_of_stroke[0]:
-        payload["status"] = Status.OUT_OF_STROKE.label
+        if set_status:
+            payload["status"] = Status.OUT_OF_STROKE.label
         payload["out_of_stroke"] = check.details(0, units)
 
 

@@ -53,7 +53,7 @@ from pkmkit.machines.results import (
     PoseSolutions,
     Singularity,
 )
-from pkmkit.machines.strokes import check_mode, judge_rows
+from pkmkit.machines.strokes import check_mode, judge_rows, refuse_absurd_home
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, STRUT, RodModel
@@ -189,6 +189,7 @@ class FullPoseMachine(ModeNaming):
                 f"assemble: rods on one actuator disagree by {spread[0]:.6g}; give a home pose "
                 "that the rods reach (a machine with fewer than six actuators reaches only some "
                 "orientations)")
+        refuse_absurd_home(self, q_home[0])
         object.__setattr__(self, "_home_q", q_home[0])
         object.__setattr__(self, "_home_pose", home[0].copy())
         jac = self._jacobians(home, q_home, SINGULARITY_TOL)
@@ -424,7 +425,7 @@ class FullPoseMachine(ModeNaming):
                 f"the rods cannot close at position {pb[0].tolist()} (least-squares residual "
                 f"{float(result.residual[0]):.6g} m)"))
         check = judge_rows(self, q, status, strokes, single, f"position {pb[0].tolist()}",
-                           full_output)
+                           full_output, stacklevel=4)
         bad = status != Status.OK
         q[bad] = np.nan
         pose[bad] = np.nan

@@ -35,7 +35,7 @@ from pkmkit.machines.results import (
     JacobianRates,
     Jacobians,
 )
-from pkmkit.machines.strokes import check_mode, judge_rows
+from pkmkit.machines.strokes import check_mode, judge_rows, refuse_absurd_home
 from pkmkit.machines.velocity import LazyJacobians, VelocityEvaluation
 from pkmkit.model.chains import JointChainModel
 from pkmkit.model.mobility import grubler_count
@@ -150,6 +150,7 @@ class Machine(ModeNaming):
                 f"reach ({self.model.leg_names[leg]} too short by {short[leg]:.6g} m); "
                 "choose other dimensions"
             )
+        refuse_absurd_home(self, q_home[0])
         a, b = closed.jacobians(home, q_home)
         det_a = float(batched_det(a)[0])
         lengths = np.linalg.norm(a[0], axis=1)

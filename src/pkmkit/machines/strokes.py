@@ -248,7 +248,7 @@ def check_mode(strokes: Any) -> str:
 
 
 def judge_rows(machine, q: np.ndarray, status: np.ndarray, strokes: str, single: bool,
-               what: str, full_output: bool) -> StrokeCheck | None:
+               what: str, full_output: bool, stacklevel: int = 3) -> StrokeCheck | None:
     """Apply ``strokes`` (:data:`STROKE_MODES`) to the rows ``q (N, n)`` whose ``status`` is OK
     (rod-leg and full-pose machines): with ``"refuse"`` their status becomes OUT_OF_STROKE (in
     place) and a single row raises; with ``"flag"`` a single row warns. ``what`` starts the
@@ -272,5 +272,31 @@ def judge_rows(machine, q: np.ndarray, status: np.ndarray, strokes: str, single:
 
         from pkmkit.errors import StrokeWarning
 
-        warnings.warn(f"{what}: out of stroke: {check.message(0)}", StrokeWarning, stacklevel=3)
+        warnings.warn(f"{what}: out of stroke: {check.message(0)}", StrokeWarning,
+                      stacklevel=stacklevel)
     return check
+
+
+#: A home configuration this many times the stroke's largest end beyond it is a unit slip.
+MAGNITUDE_FACTOR = 100.0
+
+
+def refuse_absurd_home(machine, q_home: np.ndarray) -> None:
+    """A :class:`~pkmkit.errors.ParameterError` when the home configuration ``q_home (n,)``
+    puts a length actuator orders of magnitude (:data:`MAGNITUDE_FACTOR` × the stroke's
+    largest end) beyond its stroke — lengths in mm read as metres (a machine file without
+    ``units``, ``--set`` values in mm) —, naming the actuator and asking for the unit. A home
+    only a little outside a stroke is the designer's business and loads."""
+    check = stroke_excess(machine, np.asarray(q_home, dtype=float)[None])
+    for k in np.flatnonzero(check.excess[0] != 0):
+        if check.quantities[k] != "length":
+            continue
+        size = max(abs(check.lower[k]), abs(check.upper[k]))
+        if np.isfinite(size) and size > 0 and abs(check.excess[0, k]) >= MAGNITUDE_FACTOR * size:
+            from pkmkit.errors import ParameterError
+
+            raise ParameterError(
+                f"machine {machine.id!r}: at the home pose {check.joint_text(0, int(k))}, "
+                f"{abs(check.excess[0, k]) / size:.3g} times its size: are some lengths in mm "
+                "read as metres? (a machine file states `units = \"mm\"`; --set values follow "
+                "--units: did you mean --units mm?)")
