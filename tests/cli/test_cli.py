@@ -281,10 +281,13 @@ def test_modes_and_warm_starts_from_the_cli(run, as_json):
     warm = as_json(run("fk", "linear-delta", "--q", "1.2,1.2,1.2", "--method", "numeric",
                        "--x0", "0,0,0.1", "--json"))
     assert warm["mode"] == "nacelle-below"
-    branch = as_json(run("ik", "linear-delta", "--pose", "0.1,0,0", "--branches", "1,-1,1",
-                         "--method", "numeric", "--json"))
-    closed = as_json(run("ik", "linear-delta", "--pose", "0.1,0,0", "--branches", "1,-1,1",
-                         "--json"))
+    # leg 2 on its other branch puts its carriage below the 0.7 m stroke: printed, exit 3
+    results = [run("ik", "linear-delta", "--pose", "0.1,0,0", "--branches", "1,-1,1", *method,
+                   "--json") for method in (("--method", "numeric"), ())]
+    assert [r.exit_code for r in results] == [3, 3]
+    branch, closed = (json.loads(r.stdout) for r in results)
+    assert branch["status"] == closed["status"] == "out-of-stroke"
+    assert [d["joint"] for d in closed["out_of_stroke"]] == ["q2"]
     np.testing.assert_allclose(branch["q"], closed["q"], atol=1e-9)
     note = run("ik", "orthoglide", "--pose", "0.15,0.15,0.15").output
     assert "far-side" in note and "--mode far-side" in note
