@@ -53,7 +53,8 @@ def test_rod_families_flag_single_and_batch(ident):
     q_out, pose, excess = beyond(m)
     x = ik_target(m, pose)
     # single: a warning naming the joint, its leg and the excess; the values are kept
-    with pytest.warns(StrokeWarning, match=rf"{m.actuator_names[0]} \(leg 1.* = .* (beyond|below) its stroke"):
+    pattern = rf"{m.actuator_names[0]} \(leg 1.* = .* (beyond|below) its stroke"
+    with pytest.warns(StrokeWarning, match=pattern):
         q = m.ik(x)
     np.testing.assert_allclose(q, q_out, atol=1e-7)
     # refuse: the typed error
@@ -192,3 +193,23 @@ def test_machine_files_flag_beyond_their_strokes(tmp_path):
     res = hexapod.ik(np.array([hexapod.home_pose, pose]), full_output=True)
     assert res.out_of_stroke.tolist() == [False, True]
     assert res.stroke_excess[1, 0] == pytest.approx(excess, abs=1e-7)
+
+
+def test_a_chain_message_states_its_lengths_in_one_unit():
+    """The legs' misses, the closure residual and the stroke excess of one message: all mm
+    (the residual was in m and the stroke in m beside misses in mm)."""
+    import re
+
+    from pkmkit.errors import ClosureMissError
+
+    m = machine("tripteor-x7")
+    q = m.home_q.copy()
+    q[:2] = 3.0, 0.3
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", StrokeWarning)
+        with pytest.raises(ClosureMissError) as err:
+            m.fk(q)
+    text = str(err.value)
+    assert re.search(r"largest closure residual [\d.]+ mm", text)
+    assert "Q1 = 3000 mm is beyond its stroke [975, 995] mm by 2005 mm" in text
+    assert not re.search(r"\d m\b", text)

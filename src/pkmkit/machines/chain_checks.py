@@ -2,7 +2,8 @@
 joint is beyond its stroke, whether the closure is singular — batched, with one message per row.
 
 These turn the engine's per-row outcome into what a machine user needs to read: "leg 2 misses
-the platform by 12.4 mm and 0.31°", "Q1 = 1.2000 m is beyond its stroke [0.9750, 0.9950] m".
+the platform by 12.4 mm and 0.31°", "Q1 = 1200 mm is beyond its stroke [975, 995] mm by 205 mm"
+(lengths in mm, the unit of the misses, in every sentence).
 """
 
 from __future__ import annotations
@@ -63,10 +64,12 @@ def miss_message(model: JointChainModel, translation: np.ndarray, rotation: np.n
 
 
 def _unit(model: JointChainModel, variable: int) -> tuple[float, str]:
+    """Display scale and unit of a joint: degrees, or mm as the legs' misses (one unit for the
+    lengths of a message)."""
     e = int(np.flatnonzero(model.element_variable == variable)[0])
     if model.elements[e].type == REVOLUTE:
         return 180.0 / np.pi, "°"
-    return 1.0, " m"
+    return 1e3, " mm"
 
 
 def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.ndarray,
@@ -97,7 +100,8 @@ def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.
 
 
 def stroke_message(model: JointChainModel, variable: int, value: float) -> str:
-    """``"Q1 = 1.2 m is beyond its stroke [0.975, 0.995] m"`` (degrees for revolutes)."""
+    """``"Q1 = 1200 mm is beyond its stroke [975, 995] mm by 205 mm"`` (degrees for
+    revolutes)."""
     scale, unit = _unit(model, variable)
     lo, hi = model.q_min[variable] * scale, model.q_max[variable] * scale
     side = "below" if value < model.q_min[variable] else "beyond"

@@ -451,8 +451,9 @@ class JointChainMachine:
             for j, i in enumerate(failed):
                 leg, text = miss_message(model, trans[j], rot[j])
                 misses[int(i)] = (leg, trans[j, leg], rot[j, leg])
+                # one unit in one sentence: the misses are in mm, so is the residual
                 parts[i].append(f"the legs do not close: {text}; largest closure residual "
-                                f"{res.residual[i]:.3g} m")
+                                f"{res.residual[i] * 1e3:.3g} mm")
         for i in np.flatnonzero(status == Status.INVALID_INPUT):
             parts[i].append("an actuator value is not finite or beyond "
                             f"{MAX_COORDINATE:g}")
