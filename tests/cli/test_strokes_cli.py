@@ -114,3 +114,33 @@ def test_units_and_magnitude_hint(run):
 def test_jacobian_single_flags_the_stroke(run):
     result = run("jacobian", "gough-stewart", "--pose", "0,0,1.4,0,0,0")
     assert result.exit_code == 3 and "out of stroke: q1 (leg 1)" in result.output
+
+
+def test_select_measure_calibrate_pipeline_stays_within_strokes(run, tmp_path):
+    """docs/errors.md's select → simulate → calibrate: the linear Delta's default region
+    reaches beyond its 0.7–2 m slides; the selected poses are all within, so the calibration
+    runs (it refused 17 rows out of stroke)."""
+    from pkmkit.machines.strokes import stroke_excess
+
+    poses, meas = tmp_path / "poses.csv", tmp_path / "meas.csv"
+    assert run("select-poses", "linear-delta", "--measure", "point", "--n", "12", "--out",
+               poses).exit_code == 0
+    rows = np.loadtxt(poses, delimiter=",", skiprows=1, comments="#")
+    assert rows.shape == (12, 3)
+    assert not stroke_excess(machine("linear-delta"), rows).out_of_stroke.any()
+    assert run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", poses,
+               "--defects", "random", "--seed", "1", "--out", meas).exit_code == 0
+    result = run("calibrate", "linear-delta", "--measure", "point", "--measurements", meas,
+                 "--out", tmp_path / "cal")
+    assert "out of stroke" not in result.output and result.exit_code in (0, 3), result.output
+
+
+def test_simulate_measurements_refuses_given_configurations_beyond_strokes(run, tmp_path):
+    poses = tmp_path / "poses.csv"
+    poses.write_text("q1,q2,q3\n1.2,1.2,1.2\n2.5,1.2,1.2\n")
+    result = run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", poses,
+                 "--out", tmp_path / "m.csv")
+    assert result.exit_code == 1
+    assert "configuration 2: q1 (leg 1) = 2.5 m, 0.5 m beyond its stroke [0.7, 2] m" in (
+        result.output)
+    assert not (tmp_path / "m.csv").exists()

@@ -213,3 +213,22 @@ def test_a_chain_message_states_its_lengths_in_one_unit():
     assert re.search(r"largest closure residual [\d.]+ mm", text)
     assert "Q1 = 3000 mm is beyond its stroke [975, 995] mm by 2005 mm" in text
     assert not re.search(r"\d m\b", text)
+
+
+def test_pose_selection_keeps_to_the_strokes():
+    """Drawn candidates are within the strokes; given candidates beyond them are left out
+    and counted (the orthoglide's default region is 75 % beyond its strokes)."""
+    from pkmkit.errors.configurations import sample_configurations
+    from pkmkit.errors.pose_selection import select_poses
+
+    m = machine("orthoglide")
+    drawn = sample_configurations(m, 40, method="halton", within_strokes=True).q
+    assert not stroke_excess(m, drawn).out_of_stroke.any()
+    wild = sample_configurations(m, 40, method="halton").q
+    out = stroke_excess(m, wild).out_of_stroke
+    assert out.sum() >= 10
+    sel = select_poses(m, "point", 6, candidates=wild)
+    assert sel.beyond_strokes == int(out.sum()) and sel.n_candidates == int((~out).sum())
+    assert not stroke_excess(m, sel.q).out_of_stroke.any()
+    default = select_poses(m, "point", 6, n_candidates=60)
+    assert not stroke_excess(m, default.q).out_of_stroke.any()
