@@ -232,3 +232,20 @@ def test_pose_selection_keeps_to_the_strokes():
     assert not stroke_excess(m, sel.q).out_of_stroke.any()
     default = select_poses(m, "point", 6, n_candidates=60)
     assert not stroke_excess(m, default.q).out_of_stroke.any()
+
+
+def test_a_machine_file_in_mm_without_units_is_refused_with_a_hint(tmp_path):
+    """Strokes in m, home in mm, no ``units``: the struts at home ~1000 m long, 600× their
+    stroke — refused with the line and the hint (it loaded silently)."""
+    from pkmkit.errors import MachineFileError
+    from pkmkit.machines.registry import load, preset_path
+
+    text = open(preset_path("dietmaier-hexapod")).read().replace('units = "m"\n', "")
+    text = text.replace("length = 0\n", "length = 0\nstroke = [0.5, 1.6]\n")
+    text = text.replace("home = [0.636111780657885, 0.771451960366541, 0.0149557799822003,",
+                        "home = [636.111780657885, 771.451960366541, 14.9557799822003,")
+    path = tmp_path / "big.toml"
+    path.write_text(text)
+    with pytest.raises((MachineFileError, ParameterError),
+                       match=r"q1 \(leg 1\) = 1000 m, 998\.4 m beyond its stroke .*did you mean"):
+        load(path)

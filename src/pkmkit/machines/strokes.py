@@ -96,13 +96,22 @@ class StrokeCheck:
                 f"stroke [{self.lower[k] / scale:.6g}, {self.upper[k] / scale:.6g}] {unit}")
 
     def message(self, row: int, units: str = "m") -> str:
-        """Every joint of ``row`` outside its stroke, worst first (``""`` within strokes)."""
+        """Every joint of ``row`` outside its stroke, the worst in full, then the others'
+        excess (``""`` within strokes): ``"q1 (leg 1) = 578 mm, 122 mm below its stroke [700,
+        2000] mm; also q2 (leg 2) 122 mm below"``."""
         bad = np.flatnonzero(self.excess[row] != 0)
         if bad.size == 0:
             return ""
         worst = self.first(row)
-        order = [worst, *[int(k) for k in bad if k != worst]]
-        return "; ".join(self.joint_text(row, k, units) for k in order)
+        text = self.joint_text(row, worst, units)
+        others = []
+        for k in (int(k) for k in bad if k != worst):
+            scale, unit = _display(self.quantities[k], units)
+            over = self.excess[row, k] / scale
+            leg = f" ({self.legs[k]})" if self.legs[k] and self.legs[k] != self.joints[k] else ""
+            others.append(f"{self.joints[k]}{leg} {abs(over):.6g} {unit} "
+                          f"{'beyond' if over > 0 else 'below'}")
+        return text + (f"; also {', '.join(others)}" if others else "")
 
     def messages(self, units: str = "m") -> list[str]:
         """One :meth:`message` per row."""
