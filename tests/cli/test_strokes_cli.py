@@ -144,3 +144,25 @@ def test_simulate_measurements_refuses_given_configurations_beyond_strokes(run, 
     assert "configuration 2: q1 (leg 1) = 2.5 m, 0.5 m beyond its stroke [0.7, 2] m" in (
         result.output)
     assert not (tmp_path / "m.csv").exists()
+
+
+def test_passive_prismatic_joints_are_printed_in_the_units_asked(run, tmp_path):
+    """The TriMule's L4 and the crank-slider's x4 (passive prismatic joints) were printed in
+    metres under --units mm; single and batch now give the same physical value in m and mm."""
+    for ident, name in (("trimule-600", "L4"), ("crank-slider", "x4")):
+        m = machine(ident)
+        angle = np.array([qty == "angle" for qty in m.actuator_quantities])
+        home = np.where(angle, np.degrees(m.home_q), m.home_q)  # angles in degrees
+        q_m = ",".join(repr(float(v)) for v in home)
+        q_mm = ",".join(repr(float(v)) for v in np.where(angle, home, 1e3 * home))
+        in_m = json.loads(run("fk", ident, "--q", q_m, "--json").stdout)["passive"]
+        in_mm = json.loads(run("fk", ident, "--q", q_mm, "--units", "mm",
+                               "--json").stdout)["passive"]
+        assert in_mm[name] == pytest.approx(1e3 * in_m[name], rel=1e-9)
+        assert in_m[name] == pytest.approx(float(m.home_passive[m.passive_names.index(name)]))
+        table = tmp_path / "q.csv"
+        table.write_text(",".join(m.actuator_names) + "\n" + q_mm + "\n")
+        result = run("fk", ident, "--input", table, "--output", "-", "--units", "mm")
+        header, row = result.stdout.splitlines()[:2]
+        value = float(row.split(",")[header.split(",").index(f"passive_{name}")])
+        assert value == pytest.approx(in_mm[name], rel=1e-9)

@@ -32,6 +32,7 @@ from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.inscribed import largest_box
 from pkmkit.errors import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
+from pkmkit.machines.strokes import signed_excess
 from pkmkit.numerics.arrays import real, real_pair
 from pkmkit.parallel import map_chunks
 from pkmkit.status import Status
@@ -184,7 +185,7 @@ def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria) ->
     sv = jac.singular_values
     lo_q, hi_q = criteria.limits(machine)
     with np.errstate(invalid="ignore"):
-        strokes = reachable & ((q >= lo_q) & (q <= hi_q)).all(axis=1)
+        strokes = reachable & ~(signed_excess(q, lo_q, hi_q) != 0).any(axis=1)
         if criteria.bounds is None:
             bounds = reachable.copy()
         else:

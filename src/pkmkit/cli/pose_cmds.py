@@ -150,6 +150,14 @@ def ik(m, pose, q0_text, input_, output, chunk_rows, units, convention, tool_len
     finish_single(check, units)
 
 
+def _passive_units(m, units: str) -> str:
+    """``"deg"``, ``units`` or ``"deg or <units>"``: the units of the passive joints shown."""
+    types = {next(el for el in m.model.elements if el.name == name).type
+             for name in m.passive_names}
+    found = [u for t, u in (("R", "deg"), ("P", units)) if t in types]
+    return " or ".join(found) or "deg"
+
+
 def _passive(m, passive: np.ndarray, units: str) -> dict[str, float]:
     """Passive joint values in CLI units (degrees for revolutes, ``units`` for prismatic
     joints) by name."""
@@ -232,7 +240,7 @@ def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convent
             f"{v:.9g} {u}" for v, u in zip(q / scales, actuator_units(m, units), strict=True)))
         click.echo(f"  tool point {fmt(payload['pose'], 9)} {units}, tool axis "
                    f"{fmt(payload['tool_axis'], 9)}")
-        click.echo("  passive joints: " + ", ".join(
+        click.echo(f"  passive joints ({_passive_units(m, units)}): " + ", ".join(
             f"{k} = {v:.6g}" for k, v in payload["passive"].items()))
         click.echo(f"  closure residual {payload['closure_residual']:.3g} {units} "
                    f"({payload['status']})")
