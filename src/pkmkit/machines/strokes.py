@@ -19,7 +19,9 @@ status 3) and pose selection all call it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -46,23 +48,44 @@ class StrokeCheck:
     """Joint values of N configurations against their strokes.
 
     Attributes:
-        joints: names of the k joints checked (the actuators, then passive joints with ranges).
-        legs: the leg(s) each joint belongs to (``""`` when it is not in a leg: a head axis).
-        quantities: ``"length"`` (m) or ``"angle"`` (rad) per joint.
         lower, upper: ``(k,)`` strokes (±inf when unlimited).
         values: ``(N, k)`` the joint values (m, rad).
         excess: ``(N, k)`` signed excess (m, rad; see :func:`signed_excess`).
         n_actuators: the first ``n_actuators`` joints are the actuators.
+        joints: names of the k joints checked (the actuators, then passive joints with ranges).
+        legs: the leg(s) each joint belongs to (``""`` when it is not in a leg: a head axis).
+        quantities: ``"length"`` (m) or ``"angle"`` (rad) per joint.
+
+    ``joints``, ``legs`` and ``quantities`` are built when first read (they only serve the
+    messages), so that checking a pose stays cheap.
     """
 
-    joints: tuple[str, ...]
-    legs: tuple[str, ...]
-    quantities: tuple[str, ...]
     lower: np.ndarray
     upper: np.ndarray
     values: np.ndarray
     excess: np.ndarray
     n_actuators: int
+    layout: Callable[[], tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]] = field(
+        repr=False, compare=False)
+
+    @cached_property
+    def _names(self) -> tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...]]:
+        return self.layout()
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """Names of the joints checked."""
+        return self._names[0]
+
+    @property
+    def legs(self) -> tuple[str, ...]:
+        """The leg(s) of each joint checked."""
+        return self._names[1]
+
+    @property
+    def quantities(self) -> tuple[str, ...]:
+        """``"length"`` or ``"angle"`` per joint checked."""
+        return self._names[2]
 
     @property
     def out_of_stroke(self) -> np.ndarray:
@@ -83,7 +106,8 @@ class StrokeCheck:
         span = self.upper - self.lower
         rel = np.where(np.isfinite(span) & (span > 0), e / np.where(np.isfinite(span), span, 1),
                        e)
-        return int(np.argmax(rel))
+        # ties (to rounding) go to the first joint: equal excesses name q1, not q4
+        return int(np.flatnonzero(rel >= rel.max() * (1 - 1e-9))[0])
 
     def joint_text(self, row: int, k: int, units: str = "m") -> str:
         """``"q1 (leg 1) = 1830 mm, 730 mm beyond its stroke [650, 1100] mm"``."""
@@ -200,10 +224,9 @@ def stroke_excess(machine, q: Any, passive: Any = None) -> StrokeCheck:
     qb = np.atleast_2d(np.asarray(q, dtype=float))
     model = machine.model
     if not _is_chain(machine):
-        joints, legs, quantities = _rod_layout(model)
         lo, hi = stroke_limits(machine)
-        return StrokeCheck(joints, legs, quantities, lo, hi, qb,
-                           signed_excess(qb, lo, hi), qb.shape[1])
+        return StrokeCheck(lo, hi, qb, signed_excess(qb, lo, hi), qb.shape[1],
+                           lambda: _rod_layout(model))
     act = np.flatnonzero(model.actuated)
     pas = np.asarray(machine._passive, dtype=int)
     if passive is None:
@@ -222,11 +245,10 @@ def stroke_excess(machine, q: Any, passive: Any = None) -> StrokeCheck:
     pv = np.atleast_2d(np.asarray(passive, dtype=float))
     variables = np.concatenate([act, pas])
     values = np.concatenate([qb, pv], axis=1)
-    joints, legs, quantities = _chain_layout(model, variables)
     lo = np.asarray(model.q_min[variables], dtype=float)
     hi = np.asarray(model.q_max[variables], dtype=float)
-    return StrokeCheck(joints, legs, quantities, lo, hi, values,
-                       signed_excess(values, lo, hi), act.size)
+    return StrokeCheck(lo, hi, values, signed_excess(values, lo, hi), act.size,
+                       lambda: _chain_layout(model, variables))
 
 
 def magnitude_hint(excess: float, lower: float, upper: float, units: str = "m") -> str:
@@ -269,6 +291,8 @@ def judge_rows(machine, q: np.ndarray, status: np.ndarray, strokes: str, single:
     lo, hi = stroke_limits(machine)
     if not (np.isfinite(lo).any() or np.isfinite(hi).any()):
         return None
+    if not full_output and not ((q > hi + STROKE_TOL) | (q < lo - STROKE_TOL)).any():
+        return None  # the fast path of a pose within its strokes (NaN compares False)
     rows = np.where((status == Status.OK)[:, None], q, np.nan)
     check = stroke_excess(machine, rows)
     bad = check.out_of_stroke
