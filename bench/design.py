@@ -42,7 +42,8 @@ def per_pose_metrics(machine, region, criteria, names, samples):
     qs, factors, conditions, reached = [], [], [], 0
     for x in points:
         try:
-            jac = machine.jacobian(x)
+            # the sizing judges strokes itself (they are its output): no per-pose warning
+            jac = machine.jacobian(x, q=machine.ik(x, strokes="ignore"))
         except pkmkit.PkmError:
             continue
         if jac.mode != machine.working_mode or jac.parallel_measure < criteria.tol:

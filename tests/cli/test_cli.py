@@ -81,8 +81,14 @@ def test_jacobian(run, as_json):
     assert data["status"] == "regular" and data["condition"] == pytest.approx(1.0)
     text = run("jacobian", "five-bar", "--pose", "1,0").output
     assert "transmission factors" in text
-    singular = as_json(run("jacobian", "five-bar", "--pose", "0.6,0.5", "--json"))
+    # rho2 = 1.2 m there, beyond the five-bar's ±1 m strokes: the Jacobian is printed, its
+    # status kept (serial), the stroke excess named and the exit status is 3
+    result = run("jacobian", "five-bar", "--pose", "0.6,0.5", "--json")
+    assert result.exit_code == 3, result.output
+    singular = json.loads(result.stdout)
     assert singular["status"] == "serial" and singular["condition"] is None
+    assert [d["joint"] for d in singular["out_of_stroke"]] == ["rho2"]
+    assert singular["out_of_stroke"][0]["excess"] == pytest.approx(0.2)
 
 
 def test_batch_csv_with_bad_rows(run, tmp_path):
@@ -250,7 +256,10 @@ def test_jacobian_batch_statuses(run, tmp_path):
     result = run("jacobian", "five-bar", "--input", poses, "--output", out)
     assert result.exit_code == 3 and "1 singular rows" in result.output
     status = [line.rsplit(",", 1)[1] for line in out.read_text().splitlines()[1:]]
-    assert status == ["regular", "invalid-input", "unreachable", "serial"]
+    # (0.6, 0.5) is a serial singularity, but rho2 = 1.2 m there is beyond the ±1 m stroke
+    assert status == ["regular", "invalid-input", "unreachable", "out-of-stroke"]
+    assert "row 3: out of stroke: rho2 (leg 2) = 1.2 m, 0.2 m beyond its stroke [-1, 1] m" in (
+        result.output)
 
 
 def test_output_and_demo_paths_errors(run, tmp_path):
@@ -274,10 +283,13 @@ def test_modes_and_warm_starts_from_the_cli(run, as_json):
     warm = as_json(run("fk", "linear-delta", "--q", "1.2,1.2,1.2", "--method", "numeric",
                        "--x0", "0,0,0.1", "--json"))
     assert warm["mode"] == "nacelle-below"
-    branch = as_json(run("ik", "linear-delta", "--pose", "0.1,0,0", "--branches", "1,-1,1",
-                         "--method", "numeric", "--json"))
-    closed = as_json(run("ik", "linear-delta", "--pose", "0.1,0,0", "--branches", "1,-1,1",
-                         "--json"))
+    # leg 2 on its other branch puts its carriage below the 0.7 m stroke: printed, exit 3
+    results = [run("ik", "linear-delta", "--pose", "0.1,0,0", "--branches", "1,-1,1", *method,
+                   "--json") for method in (("--method", "numeric"), ())]
+    assert [r.exit_code for r in results] == [3, 3]
+    branch, closed = (json.loads(r.stdout) for r in results)
+    assert branch["status"] == closed["status"] == "out-of-stroke"
+    assert [d["joint"] for d in closed["out_of_stroke"]] == ["q2"]
     np.testing.assert_allclose(branch["q"], closed["q"], atol=1e-9)
     note = run("ik", "orthoglide", "--pose", "0.15,0.15,0.15").output
     assert "far-side" in note and "--mode far-side" in note

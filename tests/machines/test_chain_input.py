@@ -66,8 +66,8 @@ def folding(tmp_path):
 def test_actuator_beyond_its_stroke_is_flagged_by_default(trimule):
     beyond = np.r_[forms.actuators(trimule.params, 1.25, 0.0, 0.0)[0], 0.0, 0.0]
     assert beyond[0] > trimule.model.q_max[trimule.model.variables.index("Q1")]
-    with pytest.warns(StrokeWarning, match=r"Q1 = 1\.26219 m is beyond its stroke \[0\.785, "
-                      r"1\.24\] m"):
+    with pytest.warns(StrokeWarning, match=r"Q1 = 1262\.19 mm is beyond its stroke \[785, "
+                      r"1240\] mm by 22\.1906 mm"):
         pose = trimule.fk(beyond)
     # the geometry is still computed (the closed form agrees)
     expected = forms.direct(trimule.params, beyond, trimule.tool_length)[0]
@@ -104,7 +104,7 @@ def test_passive_joint_beyond_its_limit_is_named(trimule):
     with pytest.warns(StrokeWarning):
         result = trimule.fk(q, full_output=True)
     assert result.status == Status.OK and result.out_of_stroke
-    assert result.messages == "psi1 = 35° is beyond its stroke [-30, 30]°"
+    assert result.messages == "psi1 = 35° is beyond its stroke [-30, 30]° by 5°"
     with pytest.raises(OutOfStrokeError, match="psi1"):
         trimule.fk(q, strokes="refuse")
 

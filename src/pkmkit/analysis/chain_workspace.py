@@ -24,6 +24,7 @@ import numpy as np
 
 from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.exceptions import StrokeWarning
+from pkmkit.machines.strokes import signed_excess
 from pkmkit.status import Status
 
 
@@ -44,7 +45,7 @@ def evaluate_chain_poses(machine, points: np.ndarray, criteria):
     elif criteria.strokes:
         lo, hi = criteria.limits(machine)
         with np.errstate(invalid="ignore"):
-            strokes = reachable & ((q >= lo) & (q <= hi)).all(axis=1)
+            strokes = reachable & ~(signed_excess(q, lo, hi) != 0).any(axis=1)
     else:
         strokes = reachable.copy()
     factors = np.full((m, min(6, n)), np.nan)

@@ -13,6 +13,7 @@ from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.analysis.grids import Grid
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
+from pkmkit.machines.strokes import signed_excess
 from pkmkit.numerics.arrays import real, real_pair
 from pkmkit.parallel import map_chunks
 from pkmkit.status import Status
@@ -134,7 +135,7 @@ def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria) ->
     sv = jac.singular_values
     lo_q, hi_q = criteria.limits(machine)
     with np.errstate(invalid="ignore"):
-        strokes = reachable & ((q >= lo_q) & (q <= hi_q)).all(axis=1)
+        strokes = reachable & ~(signed_excess(q, lo_q, hi_q) != 0).any(axis=1)
         if criteria.bounds is None:
             bounds = reachable.copy()
         else:

@@ -23,6 +23,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from pkmkit.exceptions import InputError
+from pkmkit.machines.strokes import signed_excess
 from pkmkit.status import Status
 
 
@@ -112,8 +113,8 @@ def orientation_workspace(machine, position: Any, *, max_tilt: float = np.radian
     inv = machine.ik(poses, full_output=True)
     reachable = inv.status == Status.OK
     with np.errstate(invalid="ignore"):
-        strokes = reachable & ((inv.q >= machine.model.q_min)
-                               & (inv.q <= machine.model.q_max)).all(axis=1)
+        strokes = reachable & ~(signed_excess(inv.q, machine.model.q_min, machine.model.q_max)
+                                != 0).any(axis=1)
     jac = machine.jacobian(poses, q=inv.q)
     regular = reachable & (jac.singularity == 0) & (np.sign(jac.det_A) == machine.working_mode)
     feasible = strokes & regular

@@ -63,6 +63,7 @@ from pkmkit.calibration.solver import (
 )
 from pkmkit.exceptions import ConvergenceError, InputError, ParameterError, PkmError
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
+from pkmkit.machines.strokes import signed_excess, stroke_limits
 from pkmkit.model.measurement_set import MeasurementSet
 from pkmkit.status import Status
 
@@ -114,9 +115,10 @@ def check_measurements(machine, data: MeasurementSet) -> None:
         raise InputError(f"{data.labels[i]}: actuator values are not finite")
     lo, hi = _strokes(machine)
     angle = machine.angular_actuators
+    excess = signed_excess(q, lo, hi)
     bad = []
     for k, name in enumerate(machine.actuator_names):
-        rows = np.flatnonzero((q[:, k] < lo[k] - 1e-12) | (q[:, k] > hi[k] + 1e-12))
+        rows = np.flatnonzero(excess[:, k] != 0)
         for i in rows:
             f = (np.degrees if angle[k] else (lambda v: v))
             bad.append(f"{data.labels[i]} column {name}: {f(q[i, k]):.6g} outside the stroke "
@@ -127,11 +129,7 @@ def check_measurements(machine, data: MeasurementSet) -> None:
 
 
 def _strokes(machine) -> tuple[np.ndarray, np.ndarray]:
-    model = machine.model
-    if machine.family == "chain":
-        act = np.flatnonzero(model.actuated)
-        return model.q_min[act], model.q_max[act]
-    return np.asarray(model.q_min, dtype=float), np.asarray(model.q_max, dtype=float)
+    return stroke_limits(machine)
 
 
 def _stats(model: ResidualModel, r: np.ndarray) -> ResidualStats:

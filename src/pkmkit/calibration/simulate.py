@@ -98,10 +98,22 @@ def default_configurations(machine, n: int, rng: np.random.Generator) -> np.ndar
             platform = np.arange(n) < (n + 1) // 2
             q[np.ix_(platform, ~loop)] = np.clip(0.0, lo[~loop], hi[~loop])
             q[np.ix_(~platform, loop)] = (lo[loop] + hi[loop]) / 2
-        ok = np.isfinite(machine.fk(q)).all(axis=1)
+        ok = _within(machine, q)
+        for _ in range(50):
+            # rows that do not assemble or put a passive joint beyond its range: drawn again
+            # (the leg actuators only; the wrist-only rows keep their mid-stroke legs)
+            if ok.all():
+                break
+            bad = np.flatnonzero(~ok)
+            cols = loop if (~loop).any() and n > 1 else np.ones(len(lo), dtype=bool)
+            redraw = lo + (hi - lo) * rng.random((len(bad), len(lo)))
+            sub = q[bad]
+            sub[:, cols] = redraw[:, cols]
+            q[bad] = sub
+            ok[bad] = _within(machine, q[bad])
         if not ok.all():
             raise InputError(f"{(~ok).sum()} configurations of the default region do not "
-                             "assemble")
+                             "assemble within the joint strokes")
         return q
     return _random_configurations(machine, n, rng)
 
@@ -138,8 +150,36 @@ def _random_configurations(machine, n: int, rng: np.random.Generator) -> np.ndar
 
 
 def _within(machine, q: np.ndarray) -> np.ndarray:
-    lo, hi = _strokes(machine)
-    return ((q >= lo) & (q <= hi)).all(axis=1)
+    """``(N,)`` rows that assemble with every actuator and passive joint within its stroke
+    (:func:`pkmkit.machines.strokes.stroke_excess`; non-finite rows are not within)."""
+    from pkmkit.machines.strokes import stroke_excess
+
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    finite = np.isfinite(q).all(axis=1)
+    out = np.zeros(len(q), dtype=bool)
+    if finite.any():
+        check = stroke_excess(machine, q[finite])
+        assembled = np.isfinite(check.values).all(axis=1)
+        out[finite] = assembled & ~check.out_of_stroke
+    return out
+
+
+def _refuse_beyond_strokes(machine, q: np.ndarray) -> None:
+    """A typed error naming the given configurations (1-based) beyond the strokes: a machine
+    cannot be measured where it cannot go."""
+    from pkmkit.machines.strokes import stroke_excess
+
+    finite = np.isfinite(q).all(axis=1)
+    if not finite.all():
+        raise InputError(f"configuration {int(np.flatnonzero(~finite)[0]) + 1} of the given ones "
+                         "is not finite")
+    check = stroke_excess(machine, q)
+    bad = np.flatnonzero(check.out_of_stroke)
+    if bad.size:
+        more = f" (and {bad.size - 3} more)" if bad.size > 3 else ""
+        listed = "; ".join(f"configuration {i + 1}: {check.message(int(i))}" for i in bad[:3])
+        raise InputError(f"{bad.size} of the given configurations are out of stroke: "
+                         f"{listed}{more}")
 
 
 def _tool_lengths(machine, n: int, tool_lengths) -> np.ndarray | None:
@@ -243,6 +283,8 @@ def simulate(true_machine, nominal, kind: str, n: int, rng: np.random.Generator,
     if drawn:
         q = default_configurations(nominal, n, rng)
     q = np.atleast_2d(np.asarray(q, dtype=float)).copy()
+    if not drawn:
+        _refuse_beyond_strokes(nominal, q)
     tl = _tool_lengths(nominal, len(q), tool_lengths)
     state = tool_state(true_machine, q, tl, jacobian=False, rotation=kind == "pose")
     ok = np.isfinite(state.point).all(axis=1)
@@ -326,6 +368,8 @@ def _simulate_height(true_machine, nominal, n, rng, noise, q, source):
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     if q is None:
         q = bed_configurations(nominal, n, rng)
+    else:
+        _refuse_beyond_strokes(nominal, np.atleast_2d(np.asarray(q, dtype=float)))
     q = np.atleast_2d(np.asarray(q, dtype=float))
     point = tool_state(true_machine, q, None, jacobian=False).point
     bed_z = float(np.mean(point[:, 2])) - 1e-3  # the bed, 1 mm below the probing height

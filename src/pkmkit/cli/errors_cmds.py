@@ -332,6 +332,8 @@ def _define(cli: click.Group) -> None:
                    f"{summary['random_median']:.4g}, best {summary['random_best']:.4g} "
                    f"({summary['n_random']} draws); gain {result.gain:.3g}x")
         click.echo(f"  condition {result.indices['condition']:.4g}; wrote {out_file}")
+        if result.beyond_strokes:
+            click.echo(f"  {result.beyond_strokes} candidates beyond the strokes left out")
 
 
 def _defect_rows(m) -> list[dict]:

@@ -39,6 +39,7 @@ from .options import (
     parse_vector,
     resolve_machine,
 )
+from .stroke_flags import BatchFlags, add_to_payload, finish_single, hint, single_check
 
 
 class PkmGroup(LazyGroup):
@@ -150,23 +151,29 @@ def ik(machine_name, assignments, pose, branches, q0_text, method, input_, outpu
     qs = actuator_scales(m, units)
     br = _parse_branches(branches, m)
     if input_ is not None:
+        flags = BatchFlags(m, units)
+
         def compute(values, chunk):
-            res = m.ik(values * scale, method=method, branches=br, full_output=True)
+            res = m.ik(values * scale, method=method, branches=br, full_output=True,
+                       strokes="ignore")
+            status = flags(res.q, res.status, chunk)
             return {**_named(m.pose_names, values), **_named(m.actuator_names, res.q / qs),
-                    "mode": _mode_column(m, res.mode), "status": _status_column(res.status)
-                    }, res.status
+                    "mode": _mode_column(m, res.mode), "status": _status_column(status)
+                    }, status
 
         run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows)
         return
     x = parse_vector(pose, m.dims, "--pose", units)
     q0 = parse_actuators(q0_text, m, units, "--q0") if q0_text else None
-    res = m.ik(x, method=method, branches=br, q0=q0, full_output=True)
+    res = m.ik(x, method=method, branches=br, q0=q0, full_output=True, strokes="ignore")
     mode = m.mode_label(int(res.mode))
     payload = {"machine": m.id, "units": units, "pose": x / scale, "q": res.q / qs,
                "actuators": list(m.actuator_names),
                "actuator_units": actuator_units(m, units), "branches": res.branches,
                "mode": mode, "working_mode": int(res.mode) == m.working_mode,
                "method": method, "status": Status(int(res.status)).label}
+    check = single_check(m, res.q, units)
+    add_to_payload(payload, check, units)
     if as_json:
         emit_json(payload)
     else:
@@ -177,6 +184,7 @@ def ik(machine_name, assignments, pose, branches, q0_text, method, input_, outpu
         if int(res.mode) != m.working_mode:
             click.echo(f"  note: this configuration is in the {mode!r} assembly mode, not the "
                        f"working one ({m.mode_labels[0]!r}); fk returns it with --mode {mode}")
+    finish_single(check, units)
 
 
 @cli.command()
@@ -214,11 +222,18 @@ def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, inpu
     scale = length_scale(units)
     qs = actuator_scales(m, units)
     if input_ is not None:
-        _fk_batch(m, all_modes, mode, method, input_, output, scale, chunk_rows, qs)
+        _fk_batch(m, all_modes, mode, method, input_, output, scale, chunk_rows, qs, units)
         return
     q = parse_actuators(q_text, m, units)
     x0 = parse_vector(x0_text, m.dims, "--x0", units) if x0_text else None
-    res = m.fk(q, mode=mode, method=method, x0=x0, full_output=True)
+    check = single_check(m, q, units)
+    try:
+        res = m.fk(q, mode=mode, method=method, x0=x0, full_output=True, strokes="ignore")
+    except PkmError as exc:  # no assembly: say first that q is beyond the strokes
+        if check is not None and check.out_of_stroke[0]:
+            raise InputError(f"{exc}; out of stroke: {check.message(0, units)}"
+                             f"{hint(check, 0, units)}") from None
+        raise
     payload = {"machine": m.id, "units": units, "q": q / qs, "pose": res.pose / scale,
                "mode": res.mode_label, "mode_sign": res.mode, "branches": res.branches,
                "method": method, "status": Status(int(res.status)).label}
@@ -226,14 +241,17 @@ def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, inpu
         modes = m.fk_all(q)
         payload["poses"] = [modes.poses[k] / scale for k in range(2) if modes.valid[k]]
         payload["modes"] = [modes.labels[k] for k in range(2) if modes.valid[k]]
+    add_to_payload(payload, check, units)
     if as_json:
         emit_json(payload)
+        finish_single(check, units)
         return
     click.echo(f"{m.name}: q {fmt(q / qs)} {_units_text(m, units)}")
     click.echo(f"  pose {fmt(res.pose / scale, 9)} {units}  (mode {res.mode_label})")
     if all_modes:
         for label, p in zip(payload["modes"], payload["poses"], strict=True):
             click.echo(f"  mode {label}: {fmt(p, 9)} {units}")
+    finish_single(check, units)
 
 
 def _named(names, values: np.ndarray) -> dict[str, np.ndarray]:
@@ -263,12 +281,14 @@ def _units_text(m, units: str) -> str:
 
 
 def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_rows,
-              qs) -> None:
+              qs, units) -> None:
     from pkmkit.io.table import Labels
 
+    flags = BatchFlags(m, units)
     if all_modes:
         def compute(values, chunk):
             modes = m.fk_all(values * qs)
+            status = flags(values * qs, modes.status, chunk)
             valid = np.asarray(modes.valid)
             n = len(values)
             # one output row per real mode of each input row, one NaN row if it has none
@@ -284,18 +304,19 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
             labels = Labels(c_all + 1, ["", *modes.labels[:2]])
             return {"row": chunk.first_row + k_all, **_named(m.actuator_names, values[k_all]),
                     "mode": labels, **_named(m.pose_names, pose),
-                    "status": _status_column(np.asarray(modes.status)[k_all])
-                    }, np.asarray(modes.status)[:n], k_all
+                    "status": _status_column(status[k_all])
+                    }, status[:n], k_all
 
         run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
         return
 
     def compute(values, chunk):
-        res = m.fk(values * qs, mode=mode, method=method, full_output=True)
+        res = m.fk(values * qs, mode=mode, method=method, full_output=True, strokes="ignore")
         ok = np.asarray(res.status) == Status.OK
         label = Labels(ok.astype(np.int32), ["", res.mode_label])
+        status = flags(values * qs, res.status, chunk)
         return {**_named(m.actuator_names, values), **_named(m.pose_names, res.pose / scale),
-                "mode": label, "status": _status_column(res.status)}, res.status
+                "mode": label, "status": _status_column(status)}, status
 
     run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
 
@@ -341,14 +362,16 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
         n, d = m.n_actuators, m.dims
         singular = [0]
         sing_names = [Singularity(f).label for f in range(4)]
+        flags = BatchFlags(m, units)
 
         def compute(values, chunk):
             x = values * scale
-            inv = m.ik(x, full_output=True)
+            inv = m.ik(x, full_output=True, strokes="ignore")
             jac = m.jacobian(x, q=inv.q, tol=tol)
             ok = np.asarray(inv.status) == Status.OK
-            codes = np.where(ok, np.asarray(jac.singularity, dtype=np.int64),
-                             len(sing_names) + np.asarray(inv.status, dtype=np.int64))
+            status = flags(inv.q, inv.status, chunk)
+            codes = np.where(status == Status.OK, np.asarray(jac.singularity, dtype=np.int64),
+                             len(sing_names) + status)
             singular[0] += int(((np.asarray(jac.singularity) != 0) & ok).sum())
             jay = np.asarray(jac.J).reshape(len(x), d * n)
             return {**_named(m.pose_names, values), **_named(m.actuator_names, jac.q / qs),
@@ -356,13 +379,14 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
                     "condition": jac.condition, "det_A": jac.det_A / scale**n,
                     "det_B": jac.det_B / scale**n,
                     **_named([f"J{i + 1}{j + 1}" for i in range(d) for j in range(n)], jay),
-                    "status": Labels(codes, [*sing_names, *status_names()])}, inv.status
+                    "status": Labels(codes, [*sing_names, *status_names()])}, status
 
         run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows,
                   note=lambda: f" (and {singular[0]} singular rows computed)")
         return
     x = parse_vector(pose, m.dims, "--pose", units)
-    jac = m.jacobian(x, tol=tol)
+    jac = m.jacobian(x, q=m.ik(x, strokes="ignore"), tol=tol)
+    check = single_check(m, jac.q, units)
     n = m.n_actuators
     payload = {
         "machine": m.id, "units": units, "pose": x / scale, "q": jac.q / qs,
@@ -372,8 +396,10 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
         "parallel_measure": jac.parallel_measure, "serial_measure": jac.serial_measure,
         "status": jac.status, "tolerance": jac.tolerance,
     }
+    add_to_payload(payload, check, units, set_status=False)
     if as_json:
         emit_json(payload)
+        finish_single(check, units)
         return
     click.echo(f"{m.name}: pose {fmt(x / scale)} {units}, q {fmt(jac.q / qs)} "
                f"{_units_text(m, units)}")
@@ -384,6 +410,7 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
     click.echo(f"  transmission factors (singular values of J): {fmt(jac.singular_values)}")
     click.echo(f"  condition number: {fmt(jac.condition)}   status: {jac.status}"
                f" (tolerance {tol:g})")
+    finish_single(check, units)
 
 
 @cli.command()

@@ -26,6 +26,7 @@ from .coordinates import (
     pose_widths,
 )
 from .options import emit_json, fmt
+from .stroke_flags import BatchFlags, add_to_payload, finish_single, hint, single_check
 
 
 def _named(names, values: np.ndarray) -> dict[str, np.ndarray]:
@@ -80,16 +81,20 @@ def ik(m, pose, q0_text, input_, output, chunk_rows, units, convention, tool_len
     if input_ is not None:
         columns = pose_columns(m) if kind != "full-pose" or len(widths) == 1 else ["x", "y",
                                                                                    "z"]
+        flags = BatchFlags(m, units)
 
         def compute(values, chunk):
             x = pose_from_cli(values, m, units, convention)
             if kind == "chain":
-                q, _ = m.ik(x, full_output=True, **options)
+                q, direct = m.ik(x, full_output=True, strokes="ignore", **options)
                 q = np.atleast_2d(q)
                 status = np.where(np.isfinite(q).all(axis=1), Status.OK, Status.UNREACHABLE)
+                passive = (np.full((len(q), len(m.passive_names)), np.nan) if direct is None
+                           else np.atleast_2d(direct.passive))
+                status = flags(q, status, chunk, passive)
             else:
-                res = m.ik(x, full_output=True)
-                q, status = res.q, res.status
+                res = m.ik(x, full_output=True, strokes="ignore")
+                q, status = res.q, flags(res.q, res.status, chunk)
             out = {**_named(columns, values), **_named(m.actuator_names, q / scales)}
             if kind == "full-pose" and columns == ["x", "y", "z"]:
                 found = pose_to_cli(np.asarray(res.pose), m, units, convention)
@@ -104,12 +109,14 @@ def ik(m, pose, q0_text, input_, output, chunk_rows, units, convention, tool_len
     payload: dict[str, Any] = {"machine": m.id, "units": units, "actuators":
                                list(m.actuator_names), "actuator_units": actuator_units(m, units)}
     if kind == "chain":
-        q, direct = m.ik(x, q0=q0, full_output=True, **options)
+        q, direct = m.ik(x, q0=q0, full_output=True, strokes="ignore", **options)
         payload.update({"pose": values[:3], "tool_axis": x[3:], "q": q / scales,
-                        "passive": _passive(m, direct.passive), "status": "ok"})
+                        "passive": _passive(m, direct.passive, units), "status": "ok"})
+        check = single_check(m, q, units, direct.passive)
     else:
-        res = m.ik(x, full_output=True)
+        res = m.ik(x, full_output=True, strokes="ignore")
         q = res.q
+        check = single_check(m, q, units)
         full = x if len(x) == 6 else np.asarray(res.pose)
         payload.update({"q": q / scales, "status": Status(int(res.status)).label,
                         "pose": _pose_payload(m, full, units, convention)})
@@ -118,8 +125,10 @@ def ik(m, pose, q0_text, input_, output, chunk_rows, units, convention, tool_len
 
             c = coupled_orientation(m, x[None])
             payload["tilt"] = float(np.degrees(c.tilt[0]))
+    add_to_payload(payload, check, units)
     if as_json:
         emit_json(payload)
+        finish_single(check, units)
         return
     if kind == "chain":
         click.echo(f"{m.name}: tool point {fmt(values[:3], 9)} {units}, tool axis "
@@ -137,15 +146,25 @@ def ik(m, pose, q0_text, input_, output, chunk_rows, units, convention, tool_len
         click.echo("  passive joints: " + ", ".join(
             f"{k} = {v:.6g}" for k, v in payload["passive"].items()) + " (deg or "
             f"{units})")
+    finish_single(check, units)
 
 
-def _passive(m, passive: np.ndarray) -> dict[str, float]:
-    """Passive joint values in CLI units (degrees for revolutes) by name."""
+def _passive_units(m, units: str) -> str:
+    """``"deg"``, ``units`` or ``"deg or <units>"``: the units of the passive joints shown."""
+    types = {next(el for el in m.model.elements if el.name == name).type
+             for name in m.passive_names}
+    found = [u for t, u in (("R", "deg"), ("P", units)) if t in types]
+    return " or ".join(found) or "deg"
+
+
+def _passive(m, passive: np.ndarray, units: str) -> dict[str, float]:
+    """Passive joint values in CLI units (degrees for revolutes, ``units`` for prismatic
+    joints) by name."""
     out = {}
     for i, name in enumerate(m.passive_names):
         e = next(el for el in m.model.elements if el.name == name)
         value = float(passive[i])
-        out[name] = float(np.degrees(value)) if e.type == "R" else value
+        out[name] = float(np.degrees(value)) if e.type == "R" else value / length_scale(units)
     return out
 
 
@@ -158,6 +177,8 @@ def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convent
     lengths = None if tool_length is None else tool_length * length_scale(units)
     columns = pose_columns(m)
     if input_ is not None:
+        flags = BatchFlags(m, units)
+
         def compute(values, chunk):
             q = values * scales
             if all_modes and kind == "full-pose":
@@ -170,20 +191,21 @@ def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convent
                 labels = Labels(np.asarray([1 if c == modes.working[r] else 2
                                             for r, c in zip(rows, cols, strict=True)],
                                            dtype=np.int32), ["", "working", "other"])
+                status = flags(q, modes.status, chunk)
                 return {"row": chunk.first_row + rows, **_named(m.actuator_names, values[rows]),
                         "mode": labels, **_named(columns, poses),
-                        "status": _status_column(np.asarray(modes.status)[rows])
-                        }, np.asarray(modes.status), rows
+                        "status": _status_column(status[rows])
+                        }, status, rows
             if kind == "chain":
-                res = m.fk(q, tool_length=lengths, full_output=True)
-                status = res.status
+                res = m.fk(q, tool_length=lengths, full_output=True, strokes="ignore")
+                status = flags(q, res.status, chunk, res.passive)
                 poses = pose_to_cli(res.pose, m, units, convention)
                 extra = {**_named([f"passive_{n}" for n in m.passive_names],
-                                  _passive_matrix(m, res.passive)),
+                                  _passive_matrix(m, res.passive, units)),
                          "closure_residual": res.closure_residual / length_scale(units)}
             else:
-                res = m.fk(q, full_output=True)
-                status = res.status
+                res = m.fk(q, full_output=True, strokes="ignore")
+                status = flags(q, res.status, chunk)
                 poses = pose_to_cli(res.pose, m, units, convention)
                 extra = {}
             return {**_named(m.actuator_names, values), **_named(columns, poses), **extra,
@@ -198,31 +220,36 @@ def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convent
         x0 = None
         if x0_text:
             raise click.UsageError("--x0 is not available for joint-chain machines")
-        res = m.fk(q, tool_length=lengths, full_output=True, x0=x0)
+        res = _fk_or_stroke(m, q, units, tool_length=lengths, full_output=True, x0=x0)
+        check = single_check(m, q, units, res.passive)
         frame = res.tool_frame
         payload.update({
             "pose": res.pose[:3] / length_scale(units), "tool_axis": res.pose[3:],
             "tool_frame": _pose_payload(m, frame, units, convention),
             "platform": _pose_payload(m, res.platform, units, convention),
-            "passive": _passive(m, res.passive),
+            "passive": _passive(m, res.passive, units),
             "closure_residual": float(res.closure_residual) / length_scale(units),
             "status": Status(int(res.status)).label})
+        add_to_payload(payload, check, units)
         if as_json:
             emit_json(payload)
+            finish_single(check, units)
             return
         click.echo(f"{m.name}: q " + ", ".join(
             f"{v:.9g} {u}" for v, u in zip(q / scales, actuator_units(m, units), strict=True)))
         click.echo(f"  tool point {fmt(payload['pose'], 9)} {units}, tool axis "
                    f"{fmt(payload['tool_axis'], 9)}")
-        click.echo("  passive joints: " + ", ".join(
+        click.echo(f"  passive joints ({_passive_units(m, units)}): " + ", ".join(
             f"{k} = {v:.6g}" for k, v in payload["passive"].items()))
         click.echo(f"  closure residual {payload['closure_residual']:.3g} {units} "
                    f"({payload['status']})")
+        finish_single(check, units)
         return
     x0 = None
     if x0_text:
         x0 = pose_from_cli(parse_numbers(x0_text, "--x0", (6,)), m, units, convention)[0]
-    res = m.fk(q, x0=x0, full_output=True)
+    res = _fk_or_stroke(m, q, units, x0=x0, full_output=True)
+    check = single_check(m, q, units)
     payload.update({"pose": _pose_payload(m, res.pose, units, convention),
                     "mode_sign": int(res.mode), "status": Status(int(res.status)).label})
     if all_modes:
@@ -233,8 +260,10 @@ def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convent
         payload["mode_signs"] = modes.mode_sign[:int(modes.count)]
         payload["all_modes_status"] = Status(int(modes.status)).label
         payload["finite_solutions"] = int(modes.n_finite)
+    add_to_payload(payload, check, units)
     if as_json:
         emit_json(payload)
+        finish_single(check, units)
         return
     click.echo(f"{m.name}: q {fmt(q / scales, 9)}")
     click.echo(f"  pose {_pose_line(m, res.pose, units, convention)}")
@@ -246,13 +275,33 @@ def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convent
         for label, p in zip(payload["modes"], payload["poses"], strict=True):
             click.echo(f"    {label:<8} {fmt(p['position'], 6)} {units}, angles "
                        f"{fmt(p['angles'], 6)} deg")
+    finish_single(check, units)
 
 
-def _passive_matrix(m, passive: np.ndarray) -> np.ndarray:
+def _fk_or_stroke(m, q: np.ndarray, units: str, **options: Any):
+    """``m.fk(q, strokes="ignore", **options)``; an error of a q beyond the strokes (no
+    assembly, often a unit slip) also says by how much and hints at ``--units mm``."""
+    from pkmkit.exceptions import InputError, PkmError
+
+    try:
+        return m.fk(q, strokes="ignore", **options)
+    except PkmError as exc:
+        check = single_check(m, q, units) if m.family != "chain" else None
+        if check is not None and check.out_of_stroke[0]:
+            raise InputError(f"{exc}; out of stroke: {check.message(0, units)}"
+                             f"{hint(check, 0, units)}") from None
+        raise
+
+
+def _passive_matrix(m, passive: np.ndarray, units: str) -> np.ndarray:
+    """Passive joint values ``(N, n_p)`` in CLI units: degrees for revolutes, ``units`` for
+    prismatic joints."""
     out = np.array(passive, dtype=float)
     for i, name in enumerate(m.passive_names):
         if next(el for el in m.model.elements if el.name == name).type == "R":
             out[:, i] = np.degrees(out[:, i])
+        else:
+            out[:, i] = out[:, i] / length_scale(units)
     return out
 
 
@@ -265,8 +314,10 @@ def jacobian(m, pose, q_text, tol, units, convention, as_json) -> None:
         if q_text is None and pose is None:
             raise click.UsageError("give --q Q1,...,Qn or --pose X,Y,Z,I,J,K")
         q = (parse_actuators(q_text, m, units) if q_text is not None else
-             m.ik(pose_from_cli(parse_numbers(pose, "--pose", (6,)), m, units, convention)[0]))
+             m.ik(pose_from_cli(parse_numbers(pose, "--pose", (6,)), m, units, convention)[0],
+                  strokes="ignore"))
         jac = m.jacobian(q)
+        check = single_check(m, q, units)
         payload = {"machine": m.id, "units": units, "q": q / scales,
                    "J": jac.J / _row_scales(units)[:, None] * scales[None, :],
                    "singular_values": jac.singular_values, "condition": jac.condition,
@@ -278,7 +329,8 @@ def jacobian(m, pose, q_text, tol, units, convention, as_json) -> None:
             raise click.UsageError("give --pose")
         x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
                           convention)[0]
-        jac = m.jacobian(x, tol=tol)
+        jac = m.jacobian(x, q=m.ik(x, strokes="ignore"), tol=tol)
+        check = single_check(m, jac.q, units)
         payload = {"machine": m.id, "units": units, "q": jac.q / scales,
                    "J": jac.J / _row_scales(units)[:, None] * scales[None, :],
                    "J_homogeneous_singular_values": jac.singular_values,
@@ -288,8 +340,10 @@ def jacobian(m, pose, q_text, tol, units, convention, as_json) -> None:
                    "characteristic_length": jac.characteristic_length / length_scale(units),
                    "parallel_measure": jac.parallel_measure,
                    "serial_measure": jac.serial_measure, "status": jac.status}
+    add_to_payload(payload, check, units, set_status=False)
     if as_json:
         emit_json(payload)
+        finish_single(check, units)
         return
     click.echo(f"{m.name}: q {fmt(payload['q'], 9)}")
     click.echo(f"  J (rows: velocity in {units}/s, angular velocity in deg/s, per unit "
@@ -307,6 +361,7 @@ def jacobian(m, pose, q_text, tol, units, convention, as_json) -> None:
     else:
         click.echo(f"  closure rank {payload['closure_rank']} (at home "
                    f"{payload['expected_rank']})")
+    finish_single(check, units)
 
 
 def _row_scales(units: str) -> np.ndarray:

@@ -167,10 +167,13 @@ def halton(index: np.ndarray, dims: int) -> np.ndarray:
 
 
 def sample_configurations(machine, n: int, *, region: Any = None, seed: int | None = 0,
-                          method: str = "random") -> Configurations:
+                          method: str = "random", within_strokes: bool = False
+                          ) -> Configurations:
     """``n`` reachable configurations drawn in ``region`` (uniformly at random, or a randomly
     shifted Halton sequence with ``method="halton"``, which covers the box more evenly);
-    unreachable draws are replaced by new ones.
+    unreachable draws are replaced by new ones — and, with ``within_strokes``, draws whose
+    actuators or passive joints are beyond their strokes
+    (:func:`pkmkit.machines.strokes.stroke_excess`).
 
     Raises:
         InputError: n < 1, a bad region, or fewer than n reachable points after 50 n draws.
@@ -187,9 +190,10 @@ def sample_configurations(machine, n: int, *, region: Any = None, seed: int | No
     while sum(len(a) for a in found_q) < n:
         batch = max(2 * n, 16)
         if drawn > 50 * n:
+            within = " within the strokes" if within_strokes else ""
             raise InputError(f"only {sum(len(a) for a in found_q)} of {drawn} points drawn in "
-                             f"the region of {machine.id!r} are reachable; choose a region "
-                             "inside the workspace")
+                             f"the region of {machine.id!r} are reachable{within}; choose a "
+                             "region inside the workspace")
         if method == "halton":
             unit = (halton(drawn + np.arange(batch), lo.size) + shift) % 1.0
         else:
@@ -199,6 +203,10 @@ def sample_configurations(machine, n: int, *, region: Any = None, seed: int | No
         with np.errstate(invalid="ignore"):
             q = configurations_at(machine, pts)
         ok = np.isfinite(q).all(axis=1)
+        if within_strokes and ok.any():
+            from pkmkit.machines.strokes import stroke_excess
+
+            ok[ok] = ~stroke_excess(machine, q[ok]).out_of_stroke
         found_q.append(q[ok])
         found_p.append(pts[ok])
     q = np.concatenate(found_q)[:n]

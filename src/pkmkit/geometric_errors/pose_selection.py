@@ -44,7 +44,10 @@ class PoseSelection:
         greedy_value: the index after the greedy pass (before exchanges); passes: exchange
             passes run.
         base: the base parameters the indices are computed on; n_parameters: all parameters.
-        n_candidates: candidates considered.
+        n_candidates: candidates considered (within the strokes).
+        beyond_strokes: candidates given that were left out because an actuator or passive
+            joint of theirs lies beyond its stroke (:mod:`pkmkit.machines.strokes`): a selected
+            pose is always one the machine can take.
     """
 
     q: np.ndarray
@@ -60,6 +63,7 @@ class PoseSelection:
     n_parameters: int
     n_candidates: int
     candidates: np.ndarray = field(repr=False)
+    beyond_strokes: int = 0
 
     def summary(self) -> dict[str, Any]:
         """JSON-ready summary."""
@@ -70,7 +74,7 @@ class PoseSelection:
                 "greedy_value": self.greedy_value, "exchange_passes": self.passes,
                 "n_poses": len(self.chosen), "n_candidates": self.n_candidates,
                 "base_parameters": list(self.base), "n_parameters": self.n_parameters,
-                "chosen": self.chosen.tolist()}
+                "chosen": self.chosen.tolist(), "beyond_strokes": self.beyond_strokes}
 
 
 def _index_values(info: np.ndarray, m: int, index: str) -> np.ndarray:
@@ -111,8 +115,9 @@ def select_poses(machine, kind: str, n: int, *, candidates: Any = None,
         machine, kind, setup, parameters, kinds, exclude, scope, scaling, rtol: as for
             :func:`pkmkit.geometric_errors.identifiability.identifiability`.
         n: poses to choose.
-        candidates: ``(C, n_act)`` candidate configurations; default ``n_candidates``
-            (max(20 n, 200)) Halton points of ``region``.
+        candidates: ``(C, n_act)`` candidate configurations (those beyond the strokes are
+            left out and counted); default ``n_candidates`` (max(20 n, 200)) Halton points of
+            ``region`` within the strokes.
         index: ``"O1"`` … ``"O5"``.
         seed: for the candidates and the random baseline.
         n_random: random selections for the baseline.
@@ -126,14 +131,21 @@ def select_poses(machine, kind: str, n: int, *, candidates: Any = None,
     if int(n) < 1:
         raise InputError(f"the number of poses must be ≥ 1, got {n}")
     n = int(n)
+    beyond = 0
     if candidates is None:
         count = n_candidates if n_candidates is not None else max(20 * n, 200)
         cand = sample_configurations(machine, count, region=region, seed=seed,
-                                     method="halton").q
+                                     method="halton", within_strokes=True).q
     else:
+        from pkmkit.machines.strokes import stroke_excess
+
         cand = np.atleast_2d(np.asarray(candidates, dtype=float))
+        out = stroke_excess(machine, cand).out_of_stroke
+        beyond = int(out.sum())
+        cand = cand[~out]
     if len(cand) < n:
-        raise InputError(f"{len(cand)} candidates for {n} poses: give more candidates")
+        left = f" ({beyond} others are beyond the strokes)" if beyond else ""
+        raise InputError(f"{len(cand)} candidates{left} for {n} poses: give more candidates")
     ij = identification_jacobian(machine, kind, cand, setup, parameters=parameters,
                                  kinds=kinds, exclude=exclude, scope=scope, scaling=scaling)
     analysis = analyse_jacobian(ij.matrix, ij.names, ij.column_scale, rtol=rtol)
@@ -198,4 +210,4 @@ def select_poses(machine, kind: str, n: int, *, candidates: Any = None,
                          gain=value / median if median > 0 else float("inf"),
                          greedy_value=greedy_value, passes=passes,
                          base=tuple(analysis["base"]), n_parameters=len(ij.names),
-                         n_candidates=len(cand), candidates=cand)
+                         n_candidates=len(cand), candidates=cand, beyond_strokes=beyond)

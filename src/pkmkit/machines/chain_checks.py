@@ -2,13 +2,15 @@
 joint is beyond its stroke, whether the closure is singular — batched, with one message per row.
 
 These turn the engine's per-row outcome into what a machine user needs to read: "leg 2 misses
-the platform by 12.4 mm and 0.31°", "Q1 = 1.2000 m is beyond its stroke [0.9750, 0.9950] m".
+the platform by 12.4 mm and 0.31°", "Q1 = 1200 mm is beyond its stroke [975, 995] mm by 205 mm"
+(lengths in mm, the unit of the misses, in every sentence).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from pkmkit.machines.strokes import signed_excess
 from pkmkit.model.chains import REVOLUTE, JointChainModel
 from pkmkit.solve.chains import closure
 from pkmkit.spatial.rotation import rotvec_to_matrix
@@ -62,10 +64,12 @@ def miss_message(model: JointChainModel, translation: np.ndarray, rotation: np.n
 
 
 def _unit(model: JointChainModel, variable: int) -> tuple[float, str]:
+    """Display scale and unit of a joint: degrees, or mm as the legs' misses (one unit for the
+    lengths of a message)."""
     e = int(np.flatnonzero(model.element_variable == variable)[0])
     if model.elements[e].type == REVOLUTE:
         return 180.0 / np.pi, "°"
-    return 1.0, " m"
+    return 1e3, " mm"
 
 
 def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.ndarray,
@@ -86,8 +90,7 @@ def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.
     variables = np.asarray(variables, dtype=int)
     sub = values[:, variables]
     lo, hi = model.q_min[variables], model.q_max[variables]
-    with np.errstate(invalid="ignore"):
-        outside = ((sub < lo) | (sub > hi)) & rows[:, None]
+    outside = (signed_excess(sub, lo, hi) != 0) & rows[:, None]
     bad = outside.any(axis=1)
     messages = [""] * n
     for i in np.flatnonzero(bad):
@@ -97,12 +100,15 @@ def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.
 
 
 def stroke_message(model: JointChainModel, variable: int, value: float) -> str:
-    """``"Q1 = 1.2 m is beyond its stroke [0.975, 0.995] m"`` (degrees for revolutes)."""
+    """``"Q1 = 1200 mm is beyond its stroke [975, 995] mm by 205 mm"`` (degrees for
+    revolutes)."""
     scale, unit = _unit(model, variable)
     lo, hi = model.q_min[variable] * scale, model.q_max[variable] * scale
     side = "below" if value < model.q_min[variable] else "beyond"
+    over = float(signed_excess(np.array([[value]]), model.q_min[variable:variable + 1],
+                               model.q_max[variable:variable + 1])[0, 0])
     return (f"{model.variables[variable]} = {value * scale:.6g}{unit} is {side} its stroke "
-            f"[{lo:.6g}, {hi:.6g}]{unit}")
+            f"[{lo:.6g}, {hi:.6g}]{unit} by {abs(over) * scale:.6g}{unit}")
 
 
 def closure_conditioning(model: JointChainModel, values: np.ndarray, platform: np.ndarray,

@@ -54,6 +54,7 @@ from pkmkit.machines.results import (
     PoseSolutions,
     Singularity,
 )
+from pkmkit.machines.strokes import check_mode, judge_rows, refuse_absurd_home
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, STRUT, RodModel
@@ -98,6 +99,13 @@ class FullPoseJacobians(Jacobians):
     characteristic_length: float = 1.0
     translation_singular_values: np.ndarray = None
     rotation_singular_values: np.ndarray = None
+
+
+def _stroke_fields(check) -> dict[str, Any]:
+    """``out_of_stroke`` and ``stroke_excess`` of a result from a stroke check (or None)."""
+    if check is None:
+        return {"out_of_stroke": None, "stroke_excess": None}
+    return {"out_of_stroke": check.out_of_stroke, "stroke_excess": check.excess}
 
 
 def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
@@ -184,6 +192,7 @@ class FullPoseMachine(ModeNaming, MachineFace):
                 f"assemble: rods on one actuator disagree by {spread[0]:.6g}; give a home pose "
                 "that the rods reach (a machine with fewer than six actuators reaches only some "
                 "orientations)")
+        refuse_absurd_home(self, q_home[0])
         object.__setattr__(self, "_home_q", q_home[0])
         object.__setattr__(self, "_home_pose", home[0].copy())
         jac = self._jacobians(home, q_home, SINGULARITY_TOL)
@@ -313,6 +322,7 @@ class FullPoseMachine(ModeNaming, MachineFace):
         branches: Any = None,
         q0: Any = None,
         full_output: bool = False,
+        strokes: str = "flag",
         **engine_options: Any,
     ) -> np.ndarray | InverseResult:
         """Inverse kinematics.
@@ -325,6 +335,9 @@ class FullPoseMachine(ModeNaming, MachineFace):
             branches: per-leg inverse-model branches (±1); default: the working ones.
             q0: warm start for positions (``(n,)`` or ``(N, n)``).
             full_output: return an :class:`InverseResult`.
+            strokes: actuator values outside their strokes: ``"flag"`` (default),
+                ``"refuse"`` or ``"ignore"``, as for
+                :meth:`pkmkit.machines.machine.Machine.ik`.
             **engine_options: forwarded to the engine (positions only).
 
         Returns:
@@ -336,11 +349,13 @@ class FullPoseMachine(ModeNaming, MachineFace):
             UnreachablePoseError: a single pose out of reach (names the rod and by how much),
                 or a full pose that a machine with fewer than six actuators cannot take.
             ConvergenceError: a single position whose orientation the engine did not find.
+            OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
+        check_mode(strokes)
         arr = np.asarray(x, dtype=float) if not isinstance(x, np.ndarray) else x
         width = arr.shape[-1] if arr.ndim in (1, 2) else 6
         if width == 3 and self.position_controlled:
-            return self._ik_position(arr, q0, branches, full_output, engine_options)
+            return self._ik_position(arr, q0, branches, full_output, engine_options, strokes)
         xb, single = _checked_batch(x, 6, "pose")
         sigma = self._branches(branches)
         with np.errstate(invalid="ignore", over="ignore"):
@@ -354,14 +369,18 @@ class FullPoseMachine(ModeNaming, MachineFace):
         q[status != Status.OK] = np.nan
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], spread[0])
+        check = judge_rows(self, q, status, strokes, single, f"pose {xb[0].tolist()}",
+                           full_output)
+        q[status != Status.OK] = np.nan
         if not full_output:
             return restore_shape(q, single)
         result = InverseResult(q=q, status=status, branches=sigma.copy(),
                                shortfall=self._forms.shortfall(xb), method="closed",
-                               mode=self._mode_of(xb, q))
-        return _restore(result, single, ("q", "status", "shortfall", "mode"))
+                               mode=self._mode_of(xb, q), **_stroke_fields(check))
+        return _restore(result, single, ("q", "status", "shortfall", "mode", "out_of_stroke",
+                                         "stroke_excess"))
 
-    def _ik_position(self, arr, q0, branches, full_output, engine_options):
+    def _ik_position(self, arr, q0, branches, full_output, engine_options, strokes="flag"):
         pb, single = _checked_batch(arr, 3, "position")
         n = self.n_actuators
         if q0 is None:
@@ -413,6 +432,11 @@ class FullPoseMachine(ModeNaming, MachineFace):
             raise UnreachablePoseError(-1, "the rods", float(result.residual[0]), detail=(
                 f"the rods cannot close at position {pb[0].tolist()} (least-squares residual "
                 f"{float(result.residual[0]):.6g} m)"))
+        check = judge_rows(self, q, status, strokes, single, f"position {pb[0].tolist()}",
+                           full_output, stacklevel=4)
+        bad = status != Status.OK
+        q[bad] = np.nan
+        pose[bad] = np.nan
         if not full_output:
             return restore_shape(q, single)
         sigma = self._branches(branches)
@@ -420,9 +444,10 @@ class FullPoseMachine(ModeNaming, MachineFace):
         shortfall[~bad] = self._forms.shortfall(pose[~bad])  # at the orientation found
         out = InverseResult(q=q, status=status, branches=sigma, shortfall=shortfall,
                             method="numeric", mode=self._mode_of(pose, q),
-                            iterations=result.iterations, residual=result.residual, pose=pose)
+                            iterations=result.iterations, residual=result.residual, pose=pose,
+                            **_stroke_fields(check))
         return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
-                                      "residual", "pose"))
+                                      "residual", "pose", "out_of_stroke", "stroke_excess"))
 
     def _surely_unreachable(self, positions: np.ndarray) -> np.ndarray:
         """``(N,)`` positions no orientation can serve: a slide rod whose platform joint, at most
@@ -473,6 +498,7 @@ class FullPoseMachine(ModeNaming, MachineFace):
         *,
         x0: Any = None,
         full_output: bool = False,
+        strokes: str = "flag",
         **engine_options: Any,
     ) -> np.ndarray | DirectResult:
         """Direct kinematics by the least-squares engine over every rod, from ``x0`` (a warm
@@ -482,10 +508,15 @@ class FullPoseMachine(ModeNaming, MachineFace):
             poses ``(6,)`` / ``(N, 6)`` (NaN rows where the engine found no assembly), or a
             :class:`DirectResult`.
 
+        ``strokes`` (``"flag"``, ``"refuse"``, ``"ignore"``) treats given actuator values
+        outside their strokes as :meth:`ik` does.
+
         Raises:
             InputError: mis-shaped input or non-finite single q.
             NoAssemblyError: a single q with no assembly reached from the guess.
+            OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
+        check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
         guess = (self.first_order_pose(qb) if x0 is None
                  else _rows_like(x0, 6, "x0", qb.shape[0]))
@@ -497,6 +528,10 @@ class FullPoseMachine(ModeNaming, MachineFace):
         status = result.status.copy()
         status[status == Status.INCONSISTENT] = Status.NO_ASSEMBLY
         status[~_valid_rows(qb)] = Status.INVALID_INPUT
+        check = None
+        if not single or status[0] == Status.OK:
+            check = judge_rows(self, qb, status, strokes, single, f"q = {qb[0].tolist()}",
+                               full_output)
         ok = status == Status.OK
         pose[~ok] = np.nan
         if single and not ok[0]:
@@ -516,9 +551,9 @@ class FullPoseMachine(ModeNaming, MachineFace):
                            mode_label=self.mode_labels[0], branches=np.zeros(
                                (qb.shape[0], self.model.n_legs), dtype=int),
                            method="numeric", iterations=result.iterations,
-                           residual=result.residual)
+                           residual=result.residual, **_stroke_fields(check))
         return _restore(out, single, ("pose", "status", "mode", "branches", "iterations",
-                                      "residual"))
+                                      "residual", "out_of_stroke", "stroke_excess"))
 
     def fk_all(self, q: Any, *, tol: float = 1e-10) -> PoseSolutions:
         """Every real assembly mode of actuator coordinates ``q`` (a six-rod machine): the

@@ -40,6 +40,7 @@ from pkmkit.machines.chain_checks import (
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
 from pkmkit.machines.protocol import MachineFace
+from pkmkit.machines.strokes import signed_excess
 from pkmkit.model.chains import FIXED, JointChainModel
 from pkmkit.numerics.arrays import restore_shape
 from pkmkit.solve.chains import (
@@ -240,6 +241,12 @@ class JointChainMachine(MachineFace):
     def passive_names(self) -> tuple[str, ...]:
         """Names of the passive joints of the legs."""
         return tuple(self.model.variables[i] for i in self._passive)
+
+    @property
+    def passive_variables(self) -> np.ndarray:
+        """``(n_p,)`` indices (in ``model.variables``) of the passive joint variables solved by
+        the closure, in :attr:`passive_names` order."""
+        return self._passive
 
     @property
     def actuator_quantities(self) -> tuple[str, ...]:
@@ -453,8 +460,9 @@ class JointChainMachine(MachineFace):
             for j, i in enumerate(failed):
                 leg, text = miss_message(model, trans[j], rot[j])
                 misses[int(i)] = (leg, trans[j, leg], rot[j, leg])
+                # one unit in one sentence: the misses are in mm, so is the residual
                 parts[i].append(f"the legs do not close: {text}; largest closure residual "
-                                f"{res.residual[i]:.3g} m")
+                                f"{res.residual[i] * 1e3:.3g} mm")
         for i in np.flatnonzero(status == Status.INVALID_INPUT):
             parts[i].append("an actuator value is not finite or beyond "
                             f"{MAX_COORDINATE:g}")
@@ -466,9 +474,10 @@ class JointChainMachine(MachineFace):
                 bad, texts = stroke_violations(model, values, variables, rows & ~out_of_stroke)
                 for i in np.flatnonzero(bad):
                     parts[i].append(texts[i])
-                    sub = values[i, variables]
-                    k = int(np.flatnonzero((sub < model.q_min[variables])
-                                           | (sub > model.q_max[variables]))[0])
+                    sub = values[i:i + 1, variables]
+                    k = int(np.flatnonzero(signed_excess(sub, model.q_min[variables],
+                                                         model.q_max[variables])[0])[0])
+                    sub = sub[0]
                     first_violation[int(i)] = (int(variables[k]), float(sub[k]))
                 out_of_stroke |= bad
             if strokes == "refuse":
@@ -613,8 +622,8 @@ class JointChainMachine(MachineFace):
         q[status != Status.OK] = np.nan
         if single and status[0] == Status.OUT_OF_STROKE:
             values = joint_values[0]
-            k = int(next(j for j in joints if not (self.model.q_min[j] <= values[j]
-                                                    <= self.model.q_max[j])))
+            k = int(joints[np.flatnonzero(signed_excess(
+                values[None, joints], self.model.q_min[joints], self.model.q_max[joints])[0])[0]])
             raise OutOfStrokeError(f"the inverse model of {xb[0].tolist()}: {texts[0]}",
                                    self.model.variables[k], values[k],
                                    (self.model.q_min[k], self.model.q_max[k]))

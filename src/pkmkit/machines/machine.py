@@ -36,6 +36,7 @@ from pkmkit.machines.results import (
     JacobianRates,
     Jacobians,
 )
+from pkmkit.machines.strokes import check_mode, judge_rows, refuse_absurd_home
 from pkmkit.machines.velocity import LazyJacobians, VelocityEvaluation
 from pkmkit.model.chains import JointChainModel
 from pkmkit.model.mobility import grubler_count
@@ -152,6 +153,7 @@ class Machine(ModeNaming, MachineFace):
                 f"reach ({self.model.leg_names[leg]} too short by {short[leg]:.6g} m); "
                 "choose other dimensions"
             )
+        refuse_absurd_home(self, q_home[0])
         a, b = closed.jacobians(home, q_home)
         det_a = float(batched_det(a)[0])
         lengths = np.linalg.norm(a[0], axis=1)
@@ -278,6 +280,7 @@ class Machine(ModeNaming, MachineFace):
         branches: Any = None,
         q0: Any = None,
         full_output: bool = False,
+        strokes: str = "flag",
         **engine_options: Any,
     ) -> np.ndarray | InverseResult:
         """Inverse kinematics: actuator coordinates of platform poses.
@@ -289,6 +292,11 @@ class Machine(ModeNaming, MachineFace):
             q0: ``(n,)`` or ``(N, n)`` initial guesses for ``"numeric"`` (warm start); default:
                 first-order extrapolation from the home configuration.
             full_output: return an :class:`InverseResult` (status, shortfall, diagnostics).
+            strokes: actuator values outside their strokes (:mod:`pkmkit.machines.strokes`):
+                ``"flag"`` (default: ``out_of_stroke`` and ``stroke_excess`` in the result, a
+                :class:`~pkmkit.exceptions.StrokeWarning` for a single pose), ``"refuse"`` (NaN
+                rows with status OUT_OF_STROKE; a single pose raises
+                :class:`~pkmkit.exceptions.OutOfStrokeError`) or ``"ignore"``.
             **engine_options: forwarded to the engine (``max_iter``, ``residual_tol``, ...).
 
         Returns:
@@ -296,10 +304,13 @@ class Machine(ModeNaming, MachineFace):
             :class:`InverseResult`.
 
         Raises:
-            InputError: mis-shaped input, non-finite single pose, bad ``branches``.
+            InputError: mis-shaped input, non-finite single pose, bad ``branches`` or
+                ``strokes``.
             UnreachablePoseError: a single pose out of reach (names the leg and the shortfall).
             ConvergenceError: a single numeric solve that failed.
+            OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
+        check_mode(strokes)
         xb, single = _checked_batch(x, self.dims, "pose")
         br = self._branches(branches)
         iterations = residual = None
@@ -332,6 +343,10 @@ class Machine(ModeNaming, MachineFace):
             raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], iterations)
+        check = judge_rows(self, q, status, strokes, single, f"pose {xb[0].tolist()}",
+                           full_output)
+        if strokes == "refuse":
+            q[status != Status.OK] = np.nan
         if not full_output:
             return restore_shape(q, single)
         result = InverseResult(
@@ -343,8 +358,11 @@ class Machine(ModeNaming, MachineFace):
             mode=self._mode_of(xb, q),
             iterations=iterations,
             residual=residual,
+            out_of_stroke=None if check is None else check.out_of_stroke,
+            stroke_excess=None if check is None else check.excess,
         )
-        names = ("q", "status", "shortfall", "mode", "iterations", "residual")
+        names = ("q", "status", "shortfall", "mode", "iterations", "residual", "out_of_stroke",
+                 "stroke_excess")
         return _restore(result, single, names)
 
     def _mode_of(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -430,6 +448,7 @@ class Machine(ModeNaming, MachineFace):
         x0: Any = None,
         dof: str = "translation",
         full_output: bool = False,
+        strokes: str = "flag",
         **engine_options: Any,
     ) -> np.ndarray | DirectResult:
         """Direct kinematics in one assembly mode (default: the working mode).
@@ -443,6 +462,8 @@ class Machine(ModeNaming, MachineFace):
             dof: platform unknowns of the numeric solve, ``"translation"`` or ``"full"``
                 (also solves the platform rotation, which the rods must then fix).
             full_output: return a :class:`DirectResult`.
+            strokes: given actuator values outside their strokes: ``"flag"``, ``"refuse"`` or
+                ``"ignore"``, as for :meth:`ik`.
             **engine_options: forwarded to the engine.
 
         Returns:
@@ -454,7 +475,9 @@ class Machine(ModeNaming, MachineFace):
             NoAssemblyError: a single q with no real assembly in the requested mode.
             SingularConfigurationError: a single q whose sphere centres are aligned.
             ConvergenceError: a single numeric solve that failed or reached another mode.
+            OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
+        check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
         sign = self._mode_sign(mode)
         rotation = iterations = residual = None
@@ -510,6 +533,10 @@ class Machine(ModeNaming, MachineFace):
         status = np.asarray(status, dtype=int)
         bad = np.flatnonzero(status != Status.OK)
         status[bad[~_valid_rows(qb[bad])]] = Status.INVALID_INPUT
+        if single and status[0] != Status.OK:
+            self._raise_direct(qb[0], sign, status[0])
+        check = judge_rows(self, qb, status, strokes, single, f"q = {qb[0].tolist()}",
+                           full_output)
         ok = status == Status.OK
         if not ok.all():
             pose = np.where(ok[:, None], pose, np.nan)
@@ -531,8 +558,11 @@ class Machine(ModeNaming, MachineFace):
             rotation=rotation,
             iterations=iterations,
             residual=residual,
+            out_of_stroke=None if check is None else check.out_of_stroke,
+            stroke_excess=None if check is None else check.excess,
         )
-        names = ("pose", "status", "mode", "branches", "rotation", "iterations", "residual")
+        names = ("pose", "status", "mode", "branches", "rotation", "iterations", "residual",
+                 "out_of_stroke", "stroke_excess")
         return _restore(result, single, names)
 
     def _mode_guess_pose(self, q: np.ndarray, sign: int) -> np.ndarray:

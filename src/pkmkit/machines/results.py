@@ -49,6 +49,11 @@ class InverseResult:
         residual: ``(N,)`` largest rod closure residual (numeric method), m, else None.
         pose: ``(N, 6)`` full poses found with q when the input gave positions only (a
             full-pose machine with fewer than six actuators), else None.
+        out_of_stroke: ``(N,)`` bool, an actuator of the row lies outside its stroke
+            (:mod:`pkmkit.machines.strokes`; the status stays OK unless ``strokes="refuse"``);
+            None when the strokes were ignored or are unlimited.
+        stroke_excess: ``(N, n)`` signed excess of each actuator over its stroke (m, rad; > 0
+            beyond the upper end, < 0 below the lower end, 0 within), or None.
     """
 
     q: np.ndarray
@@ -60,6 +65,8 @@ class InverseResult:
     iterations: np.ndarray | None = None
     residual: np.ndarray | None = None
     pose: np.ndarray | None = None
+    out_of_stroke: np.ndarray | None = None
+    stroke_excess: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -76,6 +83,8 @@ class DirectResult:
         rotation: ``(N, 3)`` rotation vector of the platform (numeric method with
             ``dof="full"``), rad, else None.
         iterations, residual: engine diagnostics (numeric method), else None.
+        out_of_stroke, stroke_excess: the given actuator values against their strokes, as for
+            :class:`InverseResult`.
     """
 
     pose: np.ndarray
@@ -87,6 +96,8 @@ class DirectResult:
     rotation: np.ndarray | None = None
     iterations: np.ndarray | None = None
     residual: np.ndarray | None = None
+    out_of_stroke: np.ndarray | None = None
+    stroke_excess: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
+from pkmkit.machines.strokes import signed_excess, stroke_limits
 from pkmkit.motion.extrema import Extrema, Span, all_excursions
 from pkmkit.motion.timelaw import Trajectory
 
@@ -32,23 +33,16 @@ QUANTITY = {"stroke": "q", "speed": "qd", "accel": "qdd", "force": "force",
 
 
 def actuator_strokes(machine) -> tuple[np.ndarray, np.ndarray]:
-    """``(n,)`` lower and upper actuator strokes of ``machine`` (m or rad; ±inf where none)."""
-    model = machine.model
-    lo = np.asarray(model.q_min, dtype=float).reshape(-1)
-    hi = np.asarray(model.q_max, dtype=float).reshape(-1)
-    actuated = getattr(model, "actuated", None)
-    if actuated is not None and lo.size != machine.n_actuators:
-        lo, hi = lo[np.asarray(actuated)], hi[np.asarray(actuated)]
-    return lo, hi
+    """``(n,)`` lower and upper actuator strokes of ``machine`` (m or rad; ±inf where none):
+    :func:`pkmkit.machines.strokes.stroke_limits`, the one place strokes are read."""
+    return stroke_limits(machine)
 
 
 def stroke_excess(machine, q: np.ndarray) -> np.ndarray:
     """``(N, n)`` how far each actuator value of ``q (N, n)`` lies outside its stroke (0 inside,
-    NaN where q is NaN)."""
-    lo, hi = actuator_strokes(machine)
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    with np.errstate(invalid="ignore"):
-        return np.maximum(np.maximum(lo - q, q - hi), 0.0)
+    and where q is NaN), by the one stroke check (:mod:`pkmkit.machines.strokes`)."""
+    lo, hi = stroke_limits(machine)
+    return np.abs(signed_excess(np.atleast_2d(np.asarray(q, dtype=float)), lo, hi))
 
 
 @dataclass(frozen=True)
