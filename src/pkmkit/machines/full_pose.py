@@ -34,6 +34,8 @@ from pkmkit.exceptions import (
     UnreachablePoseError,
 )
 from pkmkit.machines.full_pose_forms import FullPoseForms
+from pkmkit.machines.full_pose_modes import FullPoseModes
+from pkmkit.machines.full_pose_rates import FullPoseRates
 from pkmkit.machines.machine import (
     HOME_TOL,
     MAX_COORDINATE,
@@ -49,9 +51,7 @@ from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
     DirectResult,
     InverseResult,
-    JacobianRates,
     Jacobians,
-    PoseSolutions,
     Singularity,
 )
 from pkmkit.machines.strokes import check_mode, judge_rows, refuse_absurd_home
@@ -119,7 +119,7 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class FullPoseMachine(ModeNaming, MachineFace):
+class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
     """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
 
     Attributes:
@@ -263,11 +263,10 @@ class FullPoseMachine(ModeNaming, MachineFace):
             raise ParameterError(
                 f"machine {self.id!r} is described leg by leg and has no named parameters; "
                 "edit its machine file instead")
-        from pkmkit.machines.machine import build_machine
-
         params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
-        rebuilt = build_machine(self.kind, params, id=self.id, name=self.name,
-                                description=self.description, source=self.source)
+        model = self.kind.build(params)
+        rebuilt = replace(self, params=dict(params), model=model,
+                          extra_poses=self.kind.reference_poses(params, model))
         extra = {k: v for k, v in self.extra_poses.items() if k not in rebuilt.extra_poses}
         kept = {"characteristic_length": self.characteristic_length} if self.length_given else {}
         return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra}, **kept)
@@ -555,67 +554,6 @@ class FullPoseMachine(ModeNaming, MachineFace):
         return _restore(out, single, ("pose", "status", "mode", "branches", "iterations",
                                       "residual", "out_of_stroke", "stroke_excess"))
 
-    def fk_all(self, q: Any, *, tol: float = 1e-10) -> PoseSolutions:
-        """Every real assembly mode of actuator coordinates ``q`` (a six-rod machine): the
-        all-solutions solver of :mod:`pkmkit.solve.six_rod_direct` (a certified parameter
-        homotopy over the 40 complex solutions of a general 6-6 platform), with the base joints
-        placed by the actuators (slides move them, cranks turn them).
-
-        Args:
-            q: ``(n,)`` or ``(N, n)`` actuator coordinates.
-            tol: rod-length tolerance of the refined solutions (m, relative to the size).
-
-        Returns:
-            :class:`~pkmkit.machines.results.PoseSolutions` (single q: leading axis dropped).
-
-        Raises:
-            InputError: mis-shaped q, or a machine that does not have exactly six rods.
-        """
-        from pkmkit.solve.rod_closure import rod_base_points
-        from pkmkit.solve.six_rod_direct import six_rod_direct_all
-
-        if self.model.n_rods != 6:
-            raise InputError(
-                f"every assembly mode is computed for six-rod platforms; {self.id!r} has "
-                f"{self.model.n_rods} rods (use fk with a guess for the others)")
-        qb, single = _checked_batch(q, self.n_actuators, "q")
-        finite = _valid_rows(qb)
-        base = rod_base_points(self.model, np.nan_to_num(qb).T).transpose(2, 1, 0)
-        lengths = self.model.rod_length[None] + np.where(
-            self.model.rod_kind[None] == STRUT, np.nan_to_num(qb)[:, self.model.rod_actuator],
-            0.0)
-        base[~finite] = np.nan
-        solutions = six_rod_direct_all(base, self.model.rod_platform, lengths, tol=tol)
-        poses = np.atleast_3d(solutions.poses).reshape(qb.shape[0], -1, 6)
-        count = np.atleast_1d(solutions.count)
-        # the working mode: the solution the engine reaches from home's first-order guess
-        working = np.full(qb.shape[0], -1)
-        engine = self.fk(qb, full_output=True) if finite.any() else None
-        if engine is not None:
-            gap = np.linalg.norm(poses[:, :, :3] - engine.pose[:, None, :3], axis=2)
-            with np.errstate(invalid="ignore"):
-                near = np.nanargmin(np.where(np.isnan(gap), np.inf, gap), axis=1)
-                close = np.take_along_axis(gap, near[:, None], 1)[:, 0] <= 1e-6 * (
-                    1.0 + float(self.model.rod_length.max()))
-            working[close] = near[close]
-        sign = np.zeros(poses.shape[:2], dtype=int)
-        valid = ~np.isnan(poses[..., 0])
-        if valid.any():
-            rows, cols = np.nonzero(valid)
-            a, _ = self._forms.jacobians(poses[rows, cols], qb[rows])
-            sign[rows, cols] = np.sign(np.linalg.det(a)).astype(int)
-        status = np.atleast_1d(solutions.status).copy()
-        status[~finite] = Status.INVALID_INPUT
-        out = PoseSolutions(
-            poses=poses, count=count, working=working, mode_sign=sign,
-            residual=np.atleast_2d(solutions.residual).reshape(qb.shape[0], -1),
-            condition=np.atleast_2d(solutions.condition).reshape(qb.shape[0], -1),
-            multiplicity=np.atleast_2d(solutions.multiplicity).reshape(qb.shape[0], -1),
-            n_finite=np.atleast_1d(solutions.n_finite), status=status)
-        if single:
-            return PoseSolutions(**{k: v[0] for k, v in out.__dict__.items()})
-        return out
-
     # ---------------------------------------------------------------- velocity
     def jacobian(self, x: Any, *, q: Any = None, branches: Any = None,
                  tol: float = SINGULARITY_TOL) -> FullPoseJacobians:
@@ -702,111 +640,6 @@ class FullPoseMachine(ModeNaming, MachineFace):
             tolerance=tol, q=qb, mode=np.sign(np.nan_to_num(det_a)).astype(int),
             J_homogeneous=j_h, characteristic_length=length,
             translation_singular_values=sv_t, rotation_singular_values=sv_r)
-
-    def jacobian_dot(self, x: Any, xd: Any, *, q: Any = None) -> JacobianRates:
-        """Time derivatives of the velocity model along a motion through poses ``x``.
-
-        Args:
-            x: ``(6,)`` / ``(N, 6)`` poses (positions ``(3,)`` / ``(N, 3)`` for a machine with
-                fewer than six actuators: the orientation its rods impose is found).
-            xd: the platform twists ``(6,)`` / ``(N, 6)`` = (v in m/s, ω in rad/s, both in the
-                base frame, v of the platform reference point); for a machine with fewer than
-                six actuators, also the velocities of the position ``(3,)`` / ``(N, 3)`` (its
-                twist then follows from its rods).
-            q: actuator coordinates at ``x`` (default: the inverse model).
-
-        Returns:
-            :class:`~pkmkit.machines.results.JacobianRates`: ``qd (N, n)`` the actuator rates,
-            ``A_dot (N, m, 6)``, ``B_dot (N, m, n)`` and ``J_dot (N, 6, n)`` with
-            ``J̇ = A⁻¹(Ḃ − ȦJ)`` (least squares ``A⁺`` beyond six rods), so that the platform's
-            acceleration twist is ``J q̈ + J̇ q̇``.
-
-        Raises:
-            InputError: mis-shaped or non-finite input, a twist a position-controlled machine
-                cannot follow (its rods do not allow it: the rates disagree by more than 1e-9
-                relative).
-        """
-        jac = self.jacobian(x, q=q) if q is not None else self.jacobian(x)
-        single = np.ndim(jac.condition) == 0
-        poses = np.atleast_2d(self._poses_of(x, jac))
-        j = np.atleast_3d(jac.J) if not single else jac.J[None]
-        a = jac.A[None] if single else jac.A
-        b = jac.B[None] if single else jac.B
-        qb = np.atleast_2d(jac.q)
-        size = poses.shape[0]
-        try:
-            xdb = np.asarray(xd, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"xd must be an array of numbers: {exc}") from None
-        xdb = xdb[None] if xdb.ndim == 1 else xdb
-        widths = (6, 3) if self.position_controlled else (6,)
-        if xdb.ndim != 2 or xdb.shape[1] not in widths or xdb.shape[0] != size:
-            raise InputError(f"xd must have shape ({size}, {' or '.join(map(str, widths))}) to "
-                             f"match x, got {np.shape(xd)}")
-        if not np.isfinite(xdb).all():
-            raise InputError("xd must be finite")
-        if (np.abs(xdb) > 1e9).any():
-            raise InputError("xd has a component beyond 1e9 (m/s or rad/s): check the units")
-        with np.errstate(invalid="ignore"):
-            if xdb.shape[1] == 3:
-                qd = np.full((size, self.n_actuators), np.nan)
-                ok = np.isfinite(j).all(axis=(1, 2))
-                qd[ok] = np.linalg.solve(j[ok, :3], xdb[ok][:, :, None])[:, :, 0]
-                twist = np.einsum("kij,kj->ki", j, qd)
-            else:
-                twist = xdb
-                qd = np.einsum("kij,kj->ki", np.linalg.pinv(b) @ a, twist)
-                if self.position_controlled:
-                    back = np.einsum("kij,kj->ki", j, qd)
-                    off = np.abs(back - twist).max(axis=1) > 1e-9 * (
-                        1 + np.abs(twist).max(axis=1))
-                    if (off & np.isfinite(back).all(axis=1)).any():
-                        k = int(np.flatnonzero(off)[0])
-                        raise InputError(f"twist row {k} is not one the rods of {self.id!r} "
-                                         "allow; give the velocity of the position (3 values)")
-        a_dot, b_dot = self._forms.jacobian_rates(poses, qb, twist, qd)
-        rhs = b_dot - np.einsum("kij,kjl->kil", a_dot, j)
-        j_dot = np.full((size, 6, self.n_actuators), np.nan)
-        ok = np.isfinite(a).all(axis=(1, 2)) & np.isfinite(rhs).all(axis=(1, 2))
-        if ok.any():
-            j_dot[ok] = self._solve_j(a[ok], rhs[ok])
-        rates = JacobianRates(qd=qd, A_dot=a_dot, B_dot=b_dot, J_dot=j_dot)
-        if single:
-            return JacobianRates(**{k: v[0] for k, v in rates.__dict__.items()})
-        return rates
-
-    def _poses_of(self, x: Any, jac: FullPoseJacobians) -> np.ndarray:
-        """The full poses a velocity model was taken at (positions completed by the inverse
-        model for a position-controlled machine)."""
-        arr = np.asarray(x, dtype=float)
-        if self.position_controlled and arr.shape[-1] == 3:
-            return np.asarray(self.ik(arr, full_output=True).pose)
-        return arr
-
-    @staticmethod
-    def _solve_j(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """J = A⁻¹B (six rods) or the least-squares A⁺B (more rods)."""
-        if a.shape[1] == 6:
-            return np.linalg.solve(a, b)
-        return np.linalg.pinv(a) @ b
-
-    @staticmethod
-    def _singular_values(mat: np.ndarray) -> np.ndarray:
-        k = min(mat.shape[1], mat.shape[2])
-        out = np.full((mat.shape[0], k), np.nan)
-        ok = np.isfinite(mat).all(axis=(1, 2))
-        if ok.any():
-            out[ok] = np.linalg.svd(mat[ok], compute_uv=False)
-        return out
-
-    def _base_joint_speeds(self, q: np.ndarray) -> np.ndarray:
-        """``|∂a_j/∂q|`` ``(N, m)`` (1 for struts, whose base joints do not move)."""
-        from pkmkit.solve.rod_closure import actuator_rates
-
-        rates = actuator_rates(self.model, np.nan_to_num(q).T)  # (3, m, N)
-        speed = np.linalg.norm(rates, axis=0).T
-        speed[:, self.model.rod_kind == STRUT] = 1.0
-        return speed
 
     # ---------------------------------------------------------------- structure
     def mobility(self) -> dict[str, Any]:

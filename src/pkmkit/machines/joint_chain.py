@@ -37,11 +37,18 @@ from pkmkit.machines.chain_checks import (
     miss_message,
     stroke_violations,
 )
+from pkmkit.machines.chain_jacobians import (  # noqa: F401  (re-exported)
+    RANK_RCOND,
+    SINGULAR_TOL,
+    ChainJacobians,
+    ChainVelocity,
+    HyperstatismCount,
+)
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.strokes import signed_excess
-from pkmkit.model.chains import FIXED, JointChainModel
+from pkmkit.model.chains import JointChainModel
 from pkmkit.numerics.arrays import restore_shape
 from pkmkit.solve.chains import (
     chain_pose,
@@ -58,12 +65,6 @@ from pkmkit.status import Status
 
 #: A closure is exact when its largest residual is below this (m).
 CLOSURE_TOL = 1e-9
-#: Relative threshold on singular values for ranks.
-RANK_RCOND = 1e-9
-#: A closure is singular where σ_min/σ_max of its Jacobian (platform and passive joints) falls
-#: below this: the engine converges only to ~sqrt(eps) of an exact singularity, where the ratio
-#: is ~1e-8; 0.002° from the crank-slider's folded configuration it is 1e-6.
-SINGULAR_TOL = 1e-6
 POSE_NAMES = ("x", "y", "z", "i", "j", "k")
 #: What the direct and inverse models do with joint values outside their strokes.
 STROKE_MODES = ("flag", "refuse", "ignore")
@@ -103,62 +104,12 @@ class ChainDirectResult:
     messages: tuple[str, ...] | str = ()
 
 
-@dataclass(frozen=True)
-class ChainJacobians:
-    """Velocity model of a joint-chain machine at N configurations.
-
-    Attributes:
-        J: ``(N, 6, n)`` tool twist per unit actuator rate: rows 0–2 the tool point's velocity
-            (m per m or per rad), rows 3–5 the tool frame's angular velocity.
-        J_homogeneous: ``(N, 6, n)`` angular rows times the characteristic length.
-        singular_values: ``(N, min(6, n))`` of ``J_homogeneous``; condition: ``(N,)``.
-        passive_rates: ``(N, n_p, n)`` passive joint rates per actuator rate.
-        closure_rank: ``(N,)`` rank of the closure Jacobian with respect to the platform and
-            passive joints (lower than at home: a parallel singularity).
-        expected_rank: that rank at home.
-        q: ``(N, n)`` actuator coordinates used.
-        status: ``(N,)`` OK, NO_ASSEMBLY (the legs do not close: NaN), SINGULAR (the closure
-            Jacobian is singular, :data:`SINGULAR_TOL`: the velocity model does not exist
-            there, NaN).
-    """
-
-    J: np.ndarray
-    J_homogeneous: np.ndarray
-    singular_values: np.ndarray
-    condition: np.ndarray
-    passive_rates: np.ndarray
-    closure_rank: np.ndarray
-    expected_rank: int
-    q: np.ndarray
-    status: np.ndarray | None = None
 
 
-@dataclass(frozen=True)
-class HyperstatismCount:
-    """Mobility and degree of hyperstatism of the parallel part (legs closed on the platform).
-
-    Attributes:
-        bodies: bodies of the parallel part, base and platform included.
-        joints: one-DOF joints (each shared joint once); joints_by_type ``{"R": …, "P": …}``.
-        loops: independent loops ν = joints − bodies + 1.
-        mobility: m, from the rank of the closure Jacobian at home (degrees of freedom).
-        hyperstatism: h = 6ν − Σ f + m (Fayet/Grübler).
-        grubler_mobility: 6(bodies − 1 − joints) + Σ f, the count blind to geometry.
-        rank_hyperstatism: closure equations − rank at home (the redundant equations).
-    """
-
-    bodies: int
-    joints: int
-    joints_by_type: dict[str, int]
-    loops: int
-    mobility: int
-    hyperstatism: int
-    grubler_mobility: int
-    rank_hyperstatism: int
 
 
 @dataclass(frozen=True, eq=False)
-class JointChainMachine(MachineFace):
+class JointChainMachine(ChainVelocity, MachineFace):
     """A hyperstatic (or isostatic) machine of joint chains (see the module docstring).
 
     Attributes:
@@ -307,12 +258,13 @@ class JointChainMachine(MachineFace):
         if self.kind is None:
             raise ParameterError(f"machine {self.id!r} is described element by element; edit "
                                  "its machine file or apply defects (with_defects)")
-        from pkmkit.machines.machine import build_machine
         from pkmkit.model.parameters import resolve_parameters
 
         params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
-        return build_machine(self.kind, params, id=self.id, name=self.name,
-                             description=self.description, source=self.source)
+        model = self.kind.build(params)
+        return replace(self, params=dict(params), model=model,
+                       extra_poses=self.kind.reference_poses(params, model),
+                       tool_length=float(params.get("tool_length", 0.0)))
 
     def with_defects(self, values: Any) -> JointChainMachine:
         """The same machine with geometric defects applied exactly (a mapping name → value in
@@ -643,134 +595,6 @@ class JointChainMachine(MachineFace):
                              lengths[0], full_output=True, strokes=strokes,
                              check_singular=False) if np.isfinite(q).any() else None
         return (restore_shape(q, single), direct)
-
-    # ---------------------------------------------------------------- velocity
-    def jacobian(self, q: Any) -> ChainJacobians:
-        """Velocity model at actuator coordinates ``q`` (the closure linearised:
-        ``dU = −C_U⁺ C_q dq`` for the platform and passive joints U, then the head).
-
-        Args:
-            q: ``(n,)`` or ``(N, n)`` actuator coordinates.
-
-        Rows without assembly or at a singular closure (σ_min/σ_max of the closure's Jacobian
-        below :data:`SINGULAR_TOL`) are NaN with their status.
-
-        Raises:
-            ClosureMissError: a single q whose legs do not close.
-            SingularConfigurationError: a single q at a singular closure.
-        """
-        qb, single = _checked_batch(q, self.n_actuators, "q")
-        direct = self.fk(qb, full_output=True, strokes="ignore", check_singular=False)
-        n = qb.shape[0]
-        values = self._full_values(np.nan_to_num(qb))
-        values[:, self._passive] = np.nan_to_num(direct.passive)  # failed rows: NaN at the end
-        rot = rotvec_to_matrix(np.nan_to_num(direct.platform[:, 3:])).transpose(1, 2, 0)
-        p_x = np.nan_to_num(direct.platform[:, :3]).T
-        c = closure(self.model, rot, p_x, values.T)
-        length = self.model.characteristic_length
-        loop_act = [i for i in self._actuated if self.model.loop_variables[i]]
-        head_act = [i for i in self._actuated if not self.model.loop_variables[i]]
-        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1).transpose(2, 0, 1)
-        cq = c.variables[:, loop_act].transpose(2, 0, 1)
-        closed = np.isfinite(direct.passive).all(axis=1)  # rows with an assembly
-        du = np.full((n, cu.shape[2], len(loop_act)), np.nan)
-        rank = np.zeros(n, dtype=int)
-        if closed.any():
-            du[closed] = -np.linalg.pinv(cu[closed], rcond=RANK_RCOND) @ cq[closed]
-            sv_c = np.linalg.svd(cu[closed], compute_uv=False)
-            rank[closed] = (sv_c > RANK_RCOND * sv_c[:, :1]).sum(axis=1)
-        expected = self._expected_rank()
-        ratio = np.full(n, np.nan)
-        if closed.any():
-            ratio[closed] = sv_c[:, expected - 1] / sv_c[:, 0]
-        tool = tool_frame(self.model, rot, p_x, values.T, twists=True)
-        # platform increments → tool twist, then loop actuators through them
-        plat = np.zeros((n, 6, 6))
-        plat[:, :3, :3] = np.eye(3)
-        plat[:, 3:, 3:] = np.eye(3)
-        from pkmkit.spatial.rotation import skew
-
-        plat[:, :3, 3:] = skew(p_x.T)
-        twist_q = np.zeros((n, 6, self.n_actuators))
-        order = {v: k for k, v in enumerate(self._actuated)}
-        loop_twist = plat @ du[:, :6, :]
-        for j, v in enumerate(loop_act):
-            twist_q[:, :, order[v]] = loop_twist[:, :, j]
-        for v in head_act:
-            twist_q[:, :, order[v]] = tool.variable_twists[:, v].T
-        # tool point velocity: v + ω × p_point
-        point = direct.pose[:, :3]
-        jac = twist_q.copy()
-        jac[:, :3] += np.cross(twist_q[:, 3:].transpose(0, 2, 1), point[:, None, :]
-                               ).transpose(0, 2, 1)
-        scale = np.array([1, 1, 1, length, length, length], dtype=float)
-        j_h = jac * scale[None, :, None]
-        ok = np.isfinite(j_h).all(axis=(1, 2))
-        sv = np.full((n, min(6, self.n_actuators)), np.nan)
-        if ok.any():
-            sv[ok] = np.linalg.svd(j_h[ok], compute_uv=False)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            condition = sv[:, 0] / sv[:, -1]
-        passive_rates = np.zeros((n, len(self._passive), self.n_actuators))
-        for j, v in enumerate(loop_act):
-            passive_rates[:, :, order[v]] = du[:, 6:, j]
-        status = direct.status.copy()
-        status[((status == Status.OK) | (status == Status.INCONSISTENT)) & closed
-               & (ratio < SINGULAR_TOL)] = Status.SINGULAR
-        bad = (status != Status.OK) & (status != Status.INCONSISTENT)
-        for arr in (jac, j_h, sv, condition, passive_rates):
-            arr[bad] = np.nan
-        if single and status[0] == Status.NO_ASSEMBLY:
-            self.fk(qb[0], strokes="ignore")  # raises the ClosureMissError naming the leg
-        if single and status[0] == Status.SINGULAR:
-            raise SingularConfigurationError(
-                f"q = {qb[0].tolist()}: singular closure (σ_min/σ_max of its Jacobian "
-                f"{ratio[0]:.2g} < {SINGULAR_TOL:g}): the velocity model does not exist there")
-        out = ChainJacobians(J=jac, J_homogeneous=j_h, singular_values=sv, condition=condition,
-                             passive_rates=passive_rates, closure_rank=rank,
-                             expected_rank=expected, q=qb, status=status)
-        if single:
-            return ChainJacobians(**{k: (v[0] if isinstance(v, np.ndarray) else v)
-                                     for k, v in out.__dict__.items()})
-        return out
-
-    def _expected_rank(self) -> int:
-        values = self._home["values"][:, None]
-        rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
-        c = closure(self.model, rot, self._home["platform"][:3, None], values)
-        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1)[:, :, 0]
-        sv = np.linalg.svd(cu, compute_uv=False)
-        return int((sv > RANK_RCOND * sv[0]).sum())
-
-    # ---------------------------------------------------------------- structure
-    def hyperstatism(self) -> HyperstatismCount:
-        """Bodies, joints, loops, mobility and degree of hyperstatism of the parallel part."""
-        model = self.model
-        loop_elements = {e for leg in model.legs for e in leg}
-        joints = sorted(e for e in loop_elements if model.elements[e].type != FIXED)
-        by_type = {"R": 0, "P": 0}
-        for e in joints:
-            by_type[model.elements[e].type] += 1
-        last_joints = set()
-        for leg in model.legs:
-            movers = [e for e in leg if model.elements[e].type != FIXED]
-            last_joints.add(movers[-1])
-        bodies = 2 + len(joints) - len(last_joints)
-        loops = len(joints) - bodies + 1
-        freedoms = len(joints)
-        values = self._home["values"][:, None]
-        rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
-        c = closure(model, rot, self._home["platform"][:3, None], values)
-        loop_vars = np.flatnonzero(model.loop_variables)
-        full = np.concatenate([c.platform, c.variables[:, loop_vars]], axis=1)[:, :, 0]
-        sv = np.linalg.svd(full, compute_uv=False)
-        rank = int((sv > RANK_RCOND * sv[0]).sum())
-        mobility = full.shape[1] - rank
-        return HyperstatismCount(
-            bodies=bodies, joints=len(joints), joints_by_type=by_type, loops=loops,
-            mobility=mobility, hyperstatism=6 * loops - freedoms + mobility,
-            grubler_mobility=6 * (bodies - 1 - len(joints)) + freedoms,
-            rank_hyperstatism=full.shape[0] - rank)
 
     def mobility(self) -> dict[str, Any]:
         """The same as :meth:`hyperstatism`, as a dict (for ``pkmkit show``)."""

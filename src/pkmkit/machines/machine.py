@@ -38,7 +38,6 @@ from pkmkit.machines.results import (
 )
 from pkmkit.machines.strokes import check_mode, judge_rows, refuse_absurd_home
 from pkmkit.machines.velocity import LazyJacobians, VelocityEvaluation
-from pkmkit.model.chains import JointChainModel
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import ParameterSpec, is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, RodModel
@@ -223,8 +222,9 @@ class Machine(ModeNaming, MachineFace):
                 "edit its machine file instead"
             )
         params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
-        rebuilt = build_machine(self.kind, params, id=self.id, name=self.name,
-                                description=self.description, source=self.source)
+        model = self.kind.build(params)
+        rebuilt = replace(self, params=dict(params), model=model,
+                          extra_poses=self.kind.reference_poses(params, model))
         extra = {k: v for k, v in self.extra_poses.items() if k not in rebuilt.extra_poses}
         return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra})
 
@@ -697,30 +697,3 @@ class Machine(ModeNaming, MachineFace):
                 self.model, self.model.home_pose, self._home_q
             ),
         }
-
-
-def build_machine(
-    kind: MachineKind,
-    params: Mapping[str, Any],
-    *,
-    id: str,
-    name: str = "",
-    description: str = "",
-    source: str = "",
-) -> Machine:
-    """Build a machine of ``kind`` from validated SI parameters: a :class:`Machine`, a
-    :class:`~pkmkit.machines.full_pose.FullPoseMachine` when the kind builds a full-pose rod
-    model, or a :class:`~pkmkit.machines.joint_chain.JointChainMachine` for a joint-chain one."""
-    model = kind.build(params)
-    common = dict(id=id, name=name or kind.title, kind=kind, params=dict(params), model=model,
-                  description=description, source=source or kind.source,
-                  extra_poses=kind.reference_poses(params, model))
-    if isinstance(model, JointChainModel):
-        from pkmkit.machines.joint_chain import JointChainMachine
-
-        return JointChainMachine(**common, tool_length=float(params.get("tool_length", 0.0)))
-    if model.full_pose:
-        from pkmkit.machines.full_pose import FullPoseMachine
-
-        return FullPoseMachine(**common)
-    return Machine(**common)

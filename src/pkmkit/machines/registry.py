@@ -44,8 +44,9 @@ from pkmkit.machines import (
     tripteor,
     verne,
 )
+from pkmkit.machines.build import build_machine
 from pkmkit.machines.chain_file import JOINT_CHAIN, chain_machine_from_document
-from pkmkit.machines.machine import Machine, MachineKind, build_machine
+from pkmkit.machines.machine import Machine, MachineKind
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
 from pkmkit.model.parameters import is_plain_number, length_scale, resolve_parameters
 from pkmkit.model.rods import LegSpec, build_rod_model, leg_specs
