@@ -408,7 +408,9 @@ def identifiability(machine, kind: str, q: Any, setup: dict | None = None, *,
 def analyse_jacobian(j: np.ndarray, names: tuple[str, ...], column_scale: np.ndarray, *,
                      rtol: float = RTOL) -> dict[str, Any]:
     """The rank analysis of a scaled Jacobian ``(M, p)`` (module docstring); ``column_scale``
-    maps scaled coordinates back to SI (``x = δ · column_scale``)."""
+    ``(p,)`` maps scaled coordinates x back to SI: ``j = raw · column_scale`` so
+    ``δ = x · column_scale``. Combinations and gauges are returned in SI, the same whatever
+    the scaling."""
     m, p = j.shape
     if m:
         _, sv_all, vt = np.linalg.svd(j, full_matrices=m < p)
@@ -440,8 +442,8 @@ def analyse_jacobian(j: np.ndarray, names: tuple[str, ...], column_scale: np.nda
         terms = {names[b]: 1.0}
         for k, o in enumerate(other):
             if beta[a, k] != 0.0 and not zero_col[o]:
-                # scaled x_b + β x_o with x = δ · scale → δ_b + β (scale_o / scale_b) δ_o
-                terms[names[o]] = float(beta[a, k] * column_scale[o] / column_scale[b])
+                # scaled x_b + β x_o with δ = x · scale → δ_b + β (scale_b / scale_o) δ_o
+                terms[names[o]] = float(beta[a, k] * column_scale[b] / column_scale[o])
         combos.append(Combination(base=names[b], terms=terms))
     # gauges, in SI coordinates, reduced; groups connected through them
     gauges_si = null * column_scale[:, None] if null.size else np.zeros((p, 0))
