@@ -11,7 +11,9 @@ analytically through the closure. **Scaling** (documented, chosen by ``scaling``
   and rotation readings as ``L·θ``; every column is then in metres of reading per metre of
   defect, so singular values and the observability indices are dimensionless and comparable;
 - ``"norm"``: every column divided by its Euclidean norm (unit columns; within √p of the best
-  diagonal scaling for the condition number, van der Sluis);
+  diagonal scaling for the condition number, van der Sluis); a column below ``RTOL`` of the
+  largest (a defect with no effect, round-off only) is divided by the largest norm instead, so
+  that it stays negligible rather than becoming a unit column;
 - ``"none"``: SI units as they are.
 
 **Rank, base parameters and gauges.** The numerical rank counts singular values above
@@ -165,8 +167,12 @@ def identification_jacobian(machine, kind: str, q: Any, setup: dict | None = Non
     if scaling == "length":
         col = np.array([1.0 / big_l if u in ANGLE_UNITS else 1.0 for u in units])
     elif scaling == "norm":
+        # a column with no effect (round-off only, below RTOL of the largest) is not blown up
+        # to a unit column: it keeps the largest column's scale and stays negligible
         norms = np.linalg.norm(rows_scaled, axis=0)
-        col = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+        top = norms.max() if norms.size else 0.0
+        alive = norms > RTOL * top
+        col = np.where(alive, 1.0 / np.where(alive, norms, 1.0), 1.0 / top if top > 0 else 1.0)
     else:
         col = np.ones(len(names))
         rows_scaled = raw
