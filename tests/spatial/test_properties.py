@@ -6,7 +6,7 @@ The oracle for rotations is Rodrigues' formula with an explicit cross-product ma
 for transforms, 4×4 homogeneous products."""
 
 import numpy as np
-from hypothesis import given
+from hypothesis import assume, given
 from hypothesis import strategies as st
 from scipy.linalg import expm
 
@@ -152,3 +152,21 @@ def test_registration_recovers_a_known_transform(p, n, seed):
     final = target @ u[:3, :3].T + u[:3, 3]
     both = rigid_registration(source, final)
     np.testing.assert_allclose(both.matrix, u @ t, atol=1e-9)
+
+
+@given(pose, vec3.filter(lambda v: np.linalg.norm(v) > 0.1), st.integers(3, 6))
+def test_collinear_points_leave_the_roll_free(p, direction, n):
+    """Points on a line in a general direction (so the second singular value of H is round-off,
+    not an exact zero) do not fix the rotation about that line: the registration is flagged
+    ill-posed whatever the transform, and a direction off the line fixes it."""
+    line = np.linspace(-0.5, 0.7, n)[:, None] * direction + [0.1, -0.2, 0.3]
+    across = np.cross(direction, [0.3, -0.7, 0.2])
+    assume(np.linalg.norm(across) > 0.05)
+    t = homogeneous(p)
+    target = line @ t[:3, :3].T + t[:3, 3]
+    batch = rigid_registration(np.stack([line, line]), np.stack([target, target]),
+                               source_directions=np.stack([[across], [direction]]),
+                               target_directions=np.stack([t[:3, :3] @ across,
+                                                           t[:3, :3] @ direction])[:, None])
+    assert batch.well_posed.tolist() == [True, False]
+    np.testing.assert_allclose(batch.rotation[0], t[:3, :3], atol=1e-8)
