@@ -127,11 +127,11 @@ def _int(node: ast.AST | None) -> int | None:
 
 def mutants_of_file(path: Path) -> list[Mutant]:
     """Every plausible mutant of one source file."""
-    source = path.read_text()
+    rel = str(path.relative_to(ROOT))
+    source = _original(rel)
     lines = source.splitlines()
     tree = ast.parse(source)
     skip = _skipped_lines(tree)
-    rel = str(path.relative_to(ROOT))
     out: list[Mutant] = []
 
     def add(node, replacement, operator):
@@ -256,10 +256,20 @@ def stratified_sample(mutants: list[Mutant], n: int, seed: int) -> list[Mutant]:
     return sorted(chosen, key=lambda m: m.name)
 
 
+#: The source each mutant was made from (read once: the working tree may change meanwhile).
+_ORIGINAL: dict[str, str] = {}
+
+
+def _original(path: str) -> str:
+    if path not in _ORIGINAL:
+        _ORIGINAL[path] = (ROOT / path).read_text()
+    return _ORIGINAL[path]
+
+
 def plant(mutant: Mutant, root: Path) -> None:
     """Write the mutated file under ``root`` (a copy of the repository's ``src``)."""
     path = root / mutant.path
-    lines = (ROOT / mutant.path).read_text().splitlines(keepends=True)
+    lines = _original(mutant.path).splitlines(keepends=True)
     line = lines[mutant.line - 1]
     assert line[mutant.col:mutant.end_col] == mutant.original, mutant
     lines[mutant.line - 1] = line[:mutant.col] + mutant.replacement + line[mutant.end_col:]
@@ -267,7 +277,7 @@ def plant(mutant: Mutant, root: Path) -> None:
 
 
 def restore(mutant: Mutant, root: Path) -> None:
-    shutil.copyfile(ROOT / mutant.path, root / mutant.path)
+    (root / mutant.path).write_text(_original(mutant.path))
 
 
 def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tuple[str, ...],
@@ -281,6 +291,8 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
         shutil.rmtree(workdir)
     shutil.copytree(ROOT / "src", workdir / "src",
                     ignore=shutil.ignore_patterns("*.nbi", "*.nbc"))
+    for path in {m.path for m in every}:  # the sources the mutants were made from
+        (workdir / path).write_text(_original(path))
     counts = {"killed": 0, "survived": 0, "timeout": 0, "error": 0}
     print(f"{package}: {len(every)} plausible mutants, testing {len(chosen)}", flush=True)
     env = {**os.environ, "PYTHONPATH": str(workdir / "src")}

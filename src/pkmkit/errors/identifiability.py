@@ -295,6 +295,14 @@ class Combination:
     base: str
     terms: dict[str, float]
 
+    def in_units(self, unit_value: Mapping[str, float]) -> Combination:
+        """The same combination with each defect counted in another unit: ``unit_value[name]``
+        is the SI value of one unit of that defect (1e-3 for a length in mm, π/180 for an
+        angle in degrees). ``δ_b + Σ c δ_o`` (SI) becomes ``x_b + Σ c (u_o / u_b) x_o``."""
+        ub = unit_value[self.base]
+        return Combination(base=self.base, terms={n: c * unit_value[n] / ub
+                                                  for n, c in self.terms.items()})
+
     def text(self, digits: int = 5) -> str:
         """``"dA1x − dB1x"`` style text."""
         out = [self.base]
