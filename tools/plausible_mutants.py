@@ -295,7 +295,8 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
         (workdir / path).write_text(_original(path))
     counts = {"killed": 0, "survived": 0, "timeout": 0, "error": 0}
     print(f"{package}: {len(every)} plausible mutants, testing {len(chosen)}", flush=True)
-    env = {**os.environ, "PYTHONPATH": str(workdir / "src")}
+    # the ordinary suite's examples (dev profile), without shrinking a failure
+    env = {**os.environ, "PYTHONPATH": str(workdir / "src"), "HYPOTHESIS_PROFILE": "mutation"}
     for m in chosen:
         plant(m, workdir)
         start = time.monotonic()
