@@ -123,6 +123,12 @@ def _plausible(args) -> int:
         args.target, [f"tests/{args.target.split('.')[-1]}"])
     operators = tuple(args.operators.split(",")) if args.operators \
         else plausible_mutants.OPERATORS
+    if args.report:
+        for row in plausible_mutants.report(Path(args.results)):
+            for line in row.pop("survivors"):
+                print(f"survived: {line}")
+            print(row)
+        return 0
     if args.list:
         every = [m for m in plausible_mutants.mutants_of_package(args.target)
                  if m.operator in operators]
@@ -131,7 +137,8 @@ def _plausible(args) -> int:
         return 0
     plausible_mutants.run(args.target, tests, sample=args.sample, seed=args.seed,
                           operators=operators, timeout=args.timeout,
-                          workdir=Path(args.workdir), results=Path(args.results))
+                          workdir=Path(args.workdir), results=Path(args.results),
+                          again=args.survivors)
     return 0
 
 

@@ -281,12 +281,15 @@ def restore(mutant: Mutant, root: Path) -> None:
 
 
 def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tuple[str, ...],
-        timeout: float, workdir: Path, results: Path) -> dict:
+        timeout: float, workdir: Path, results: Path, again: bool = False) -> dict:
     """Plant a sample of mutants one at a time in a copy of ``src`` and run ``tests`` on each
     (``pytest -x``, the ordinary suite's markers). Results are appended to ``results`` (JSON
-    lines) and summarised."""
+    lines) and summarised. With ``again``, only the survivors recorded in ``results``."""
     every = [m for m in mutants_of_package(package) if m.operator in operators]
     chosen = stratified_sample(every, sample, seed)
+    if again:
+        chosen = [m for m in survivors_again(results)
+                  if m.path.startswith("src/" + package.replace(".", "/"))]
     if workdir.exists():
         shutil.rmtree(workdir)
     shutil.copytree(ROOT / "src", workdir / "src",
@@ -327,3 +330,66 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
           f"{score:.1f} %", flush=True)
     return {"package": package, "mutants": len(every), "tested": len(chosen), **counts,
             "score": score}
+
+
+EQUIVALENT = ROOT / "tools" / "equivalent_plausible.txt"
+
+
+def equivalent() -> dict[str, str]:
+    """Mutant name → why it cannot change any result (``tools/equivalent_plausible.txt``)."""
+    out = {}
+    if EQUIVALENT.exists():
+        for line in EQUIVALENT.read_text().splitlines():
+            if line.strip() and not line.startswith("#"):
+                name, _, reason = line.partition(" ")
+                out[name] = reason.strip()
+    return out
+
+
+def report(results: Path) -> list[dict]:
+    """Scores per package from a results file (the last outcome of each mutant wins);
+    equivalent mutants are left out, timeouts count as killed."""
+    last: dict[str, dict] = {}
+    for line in results.read_text().splitlines():
+        record = json.loads(line)
+        last[record["name"] + record["replacement"]] = record
+    eq = equivalent()
+    rows = {}
+    for r in last.values():
+        row = rows.setdefault(r["package"], {"package": r["package"], "killed": 0,
+                                             "survived": 0, "equivalent": 0, "timeout": 0,
+                                             "error": 0, "survivors": []})
+        if r["name"] in eq:
+            row["equivalent"] += 1
+        else:
+            row[r["outcome"]] += 1
+            if r["outcome"] == "survived":
+                row["survivors"].append(f"{r['name']} {r['original']!r} -> "
+                                        f"{r['replacement']!r}")
+    for row in rows.values():
+        decided = row["killed"] + row["timeout"] + row["survived"]
+        row["score"] = 100.0 * (row["killed"] + row["timeout"]) / decided if decided \
+            else float("nan")
+    return sorted(rows.values(), key=lambda r: r["package"])
+
+
+def survivors_again(results: Path) -> list[Mutant]:
+    """The survivors of a results file as mutants of today's source (each found again by its
+    text at the same column, on the nearest line: the lines may have moved since)."""
+    out = []
+    eq = equivalent()
+    last: dict[str, dict] = {}
+    for line in results.read_text().splitlines():
+        record = json.loads(line)
+        last[record["name"] + record["replacement"]] = record
+    for r in last.values():
+        if r["outcome"] != "survived" or r["name"] in eq:
+            continue
+        lines = _original(r["path"]).splitlines()
+        hits = [i + 1 for i, text in enumerate(lines)
+                if text[r["col"]:r["end_col"]] == r["original"]]
+        if hits:
+            line = min(hits, key=lambda i: abs(i - r["line"]))
+            out.append(Mutant(r["path"], line, r["col"], r["end_col"], r["replacement"],
+                              r["operator"], r["original"]))
+    return out
