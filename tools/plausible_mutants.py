@@ -43,7 +43,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 OPERATORS = ("matmul-swap", "mul-swap", "cross-swap", "transpose", "factor-drop",
              "factor-invert", "half-swap", "index-shift")
-_ROTATION_TEXT = re.compile(r"(rot|\bR\b|\bR_|inv\(\)|Rotation|quat)", re.IGNORECASE)
+_ROTATION_TEXT = re.compile(r"((?i:rot|inv\(\)|quat)|\bR\b|\bR_)")
+#: An operand that is certainly a scipy Rotation or RigidTransform (composed with ``*``).
+_ROTATION_OBJECT = re.compile(r"(\.inv\(\)|from_rotvec|from_matrix|from_quat|from_euler"
+                              r"|to_transform\(|from_components)")
 _FACTOR_NAME = re.compile(r"(scale|factor|unit|length|big_l|per_|_to_m|to_si|MM|DEG)",
                           re.IGNORECASE)
 #: Indexing that locates things rather than computing (shapes, positions of bad rows, text).
@@ -150,8 +153,9 @@ def mutants_of_file(path: Path) -> list[Mutant]:
             if isinstance(node.op, ast.MatMult):
                 add(node, f"{rw} @ {lw}", "matmul-swap")
                 add(node, f"np.swapaxes({left}, -1, -2) @ {rw}", "transpose")
-            if isinstance(node.op, ast.Mult) and _ROTATION_TEXT.search(left) \
-                    and _ROTATION_TEXT.search(right):
+            if isinstance(node.op, ast.Mult) and (
+                    (_ROTATION_TEXT.search(left) and _ROTATION_TEXT.search(right))
+                    or _ROTATION_OBJECT.search(left + " " + right)):
                 add(node, f"{rw} * {lw}", "mul-swap")
             if isinstance(node.op, ast.Mult | ast.Div):
                 sym = "*" if isinstance(node.op, ast.Mult) else "/"
