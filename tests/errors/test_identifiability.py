@@ -214,3 +214,17 @@ def test_combinations_are_null_directions_whatever_the_scaling(tripteor, tripteo
     assert len(directions) >= 10
     for name, d in directions.items():
         assert _cancellation(r.jacobian.raw, d) < 1e-8, name
+
+
+def test_length_scaling_is_the_documented_one(tripteor, tripteor_q):
+    """``"length"`` scaling: angle-like columns (direction components, rad) divided by L (the
+    defect counted as L·δ metres), length columns unchanged, L the characteristic length
+    (0.5 m for the Tripteor); pose readings: rotation rows × L."""
+    for kind in ("point", "pose"):
+        ij = identification_jacobian(tripteor, kind, tripteor_q[:5])
+        assert ij.length == 0.5
+        angle = np.array([u in ("1", "rad") for u in ij.units])
+        assert angle.any() and (~angle).any()
+        rows = np.tile(np.r_[np.ones(3), np.full(ij.rows - 3, 0.5)], 5)
+        expected = ij.raw * rows[:, None] / np.where(angle, 0.5, 1.0)
+        np.testing.assert_allclose(ij.matrix, expected, rtol=1e-15, atol=0)
