@@ -73,10 +73,21 @@ class Mutant:
         return f"{self.path}:{self.line}:{self.col}:{self.operator}"
 
 
+def _chars(line: str, byte_col: int) -> int:
+    """Character column of a UTF-8 byte column (ast's offsets are in bytes)."""
+    return len(line.encode()[:byte_col].decode())
+
+
+def _span(lines: list[str], node: ast.AST) -> tuple[int, int]:
+    line = lines[node.lineno - 1]
+    return _chars(line, node.col_offset), _chars(line, node.end_col_offset)
+
+
 def _text(lines: list[str], node: ast.AST) -> str | None:
     if node.lineno != node.end_lineno:
         return None
-    return lines[node.lineno - 1][node.col_offset:node.end_col_offset]
+    col, end = _span(lines, node)
+    return lines[node.lineno - 1][col:end]
 
 
 def _wrap(text: str, node: ast.AST) -> str:
@@ -141,8 +152,8 @@ def mutants_of_file(path: Path) -> list[Mutant]:
         text = _text(lines, node)
         if text is None or node.lineno in skip or replacement == text:
             return
-        out.append(Mutant(rel, node.lineno, node.col_offset, node.end_col_offset, replacement,
-                          operator, text))
+        col, end = _span(lines, node)
+        out.append(Mutant(rel, node.lineno, col, end, replacement, operator, text))
 
     for node in ast.walk(tree):
         if isinstance(node, ast.BinOp) and node.lineno == node.end_lineno:
