@@ -1,6 +1,16 @@
-"""Shared fixtures: built-in machines and random poses inside their workspaces; Hypothesis
-settings profiles (``dev`` locally, ``ci`` — four times the examples — when ``CI`` is set, as in
-``.ci/run``; ``HYPOTHESIS_PROFILE=NAME`` chooses one explicitly)."""
+"""Shared fixtures: built-in machines and random poses inside their workspaces; the Hypothesis
+settings profiles, registered here once for the whole session and loaded here only:
+
+- ``dev`` (alias ``default``): 25 examples per property, the same on every run (``derandomize``);
+- ``ci`` (when ``CI`` is set, as in ``.ci/run``): 100 examples, the same on every run;
+- ``fuzz``: 400 examples, the same on every run (``.ci/run``'s gate of ``tests/fuzz``);
+- ``explore``: 400 new random examples on every run, to hunt for bugs by hand;
+- ``mutation``: ``dev``'s examples without shrinking failures (``tools/mutation.py
+  --plausible``).
+
+``HYPOTHESIS_PROFILE=NAME`` chooses one explicitly. No other conftest loads a profile (a load
+at collection would change the settings of every test collected after it).
+"""
 
 from __future__ import annotations
 
@@ -8,20 +18,28 @@ import os
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, settings
+from hypothesis import HealthCheck, Phase, settings
 
 import pkmkit
 from pkmkit.machines.registry import ALIASES
 from pkmkit.model.rods import CRANK
 
-settings.register_profile("dev", max_examples=25, deadline=None, derandomize=True,
-                          suppress_health_check=[HealthCheck.too_slow,
-                                                 HealthCheck.filter_too_much])
+_COMMON = {"deadline": None,
+           "suppress_health_check": [HealthCheck.too_slow, HealthCheck.filter_too_much,
+                                     HealthCheck.data_too_large]}
+#: The profiles that draw the same examples on every run (everything but ``explore``).
+DETERMINISTIC_PROFILES = ("dev", "default", "ci", "fuzz", "mutation")
+settings.register_profile("dev", max_examples=25, derandomize=True, **_COMMON)
+settings.register_profile("default", settings.get_profile("dev"))
 settings.register_profile("ci", settings.get_profile("dev"), max_examples=100)
-settings.register_profile("explore", settings.get_profile("ci"), derandomize=False)
+settings.register_profile("fuzz", settings.get_profile("dev"), max_examples=400)
+settings.register_profile("explore", settings.get_profile("fuzz"), derandomize=False)
+# the examples of dev without shrinking a failure (tools/mutation.py --plausible: a kill is a
+# kill, the smallest failing example is not needed)
+settings.register_profile("mutation", settings.get_profile("dev"),
+                          phases=[Phase.explicit, Phase.reuse, Phase.generate])
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE")
                       or ("ci" if os.environ.get("CI") else "dev"))
-
 
 
 ALL_PRESETS = [m for m in pkmkit.machines() if m not in ALIASES]

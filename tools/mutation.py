@@ -6,6 +6,16 @@ Usage (from the repository root, in the project's virtual environment with the `
     python tools/mutation.py pkmkit.machines --sample 120 --seed 15 --jobs 1
     python tools/mutation.py pkmkit.motion.gcode --report          # scores from the last runs only
     python tools/mutation.py pkmkit.machines --sample 120 --survivors  # the sample's survivors
+    python tools/mutation.py pkmkit.spatial --plausible            # plausible bugs (below)
+    python tools/mutation.py pkmkit.exceptions --plausible --sample 30 --seed 1
+
+``--plausible`` plants, instead of mutmut's operator and constant changes, the one-line bugs
+people make in geometric code (``tools/plausible_mutants.py``: operands of ``@``, of ``*`` on
+rotations and of ``np.cross`` swapped, rotation matrices transposed or a transpose dropped, unit
+and scale factors dropped or inverted, the wrong half of a 6-vector, slices and indices shifted
+by one), one at a time in a copy of ``src/``, and runs the package's tests (``--tests``, default
+:data:`PLAUSIBLE_TESTS`; never the documentation comparisons of ``tests/docs``, which check
+outputs recorded from the code itself). Results are appended to ``--results`` (JSON lines).
 
 mutmut's configuration is ``[tool.mutmut]`` in pyproject.toml. mutmut writes a mutated copy of the
 source and the tests to ``./mutants/`` (git-ignored); its first run also runs the whole suite once
@@ -93,6 +103,45 @@ def _report(names: list[str], codes: dict[str, int | None]) -> int:
     return 0
 
 
+#: The tests run on a plausible mutant of each package (its own tests and those of the
+#: layers that exercise it most directly); any other package: ``tests/<last name>``.
+PLAUSIBLE_TESTS = {
+    "pkmkit.spatial": ["tests/spatial", "tests/machines/test_full_pose.py",
+                       "tests/calibration/test_registration.py"],
+    "pkmkit.exceptions": ["tests/errors", "tests/calibration/test_identifiability.py"],
+    "pkmkit.calibration": ["tests/calibration"],
+    "pkmkit.model": ["tests/model", "tests/machines/test_chain_files.py",
+                     "tests/machines/test_tripteor.py", "tests/machines/test_trimule.py"],
+}
+
+
+def _plausible(args) -> int:
+    sys.path.insert(0, str(ROOT / "tools"))
+    import plausible_mutants
+
+    tests = args.tests or PLAUSIBLE_TESTS.get(
+        args.target, [f"tests/{args.target.split('.')[-1]}"])
+    operators = tuple(args.operators.split(",")) if args.operators \
+        else plausible_mutants.OPERATORS
+    if args.report:
+        for row in plausible_mutants.report(Path(args.results)):
+            for line in row.pop("survivors"):
+                print(f"survived: {line}")
+            print(row)
+        return 0
+    if args.list:
+        every = [m for m in plausible_mutants.mutants_of_package(args.target)
+                 if m.operator in operators]
+        for m in plausible_mutants.stratified_sample(every, args.sample, args.seed):
+            print(f"{m.name}  {m.original!r} -> {m.replacement!r}")
+        return 0
+    plausible_mutants.run(args.target, tests, sample=args.sample, seed=args.seed,
+                          operators=operators, timeout=args.timeout,
+                          workdir=Path(args.workdir), results=Path(args.results),
+                          again=args.survivors)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("target", help="package or module, e.g. pkmkit.motion.gcode")
@@ -102,7 +151,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--report", action="store_true", help="only report the last results")
     parser.add_argument("--survivors", action="store_true",
                         help="re-run only the mutants of the sample that survived last time")
+    parser.add_argument("--plausible", action="store_true",
+                        help="plant the plausible one-line bugs of tools/plausible_mutants.py")
+    parser.add_argument("--tests", nargs="*", help="(--plausible) test paths to run")
+    parser.add_argument("--operators", help="(--plausible) comma-separated operators")
+    parser.add_argument("--list", action="store_true",
+                        help="(--plausible) list the sample's mutants, run nothing")
+    parser.add_argument("--timeout", type=float, default=600.0,
+                        help="(--plausible) seconds per mutant")
+    parser.add_argument("--workdir", default="/tmp/pkmkit-plausible",
+                        help="(--plausible) where the mutated copy of src/ is written")
+    parser.add_argument("--results", default="mutants/plausible.jsonl",
+                        help="(--plausible) JSON-lines file the outcomes are appended to")
     args = parser.parse_args(argv)
+    if args.plausible:
+        return _plausible(args)
 
     _generate()
     codes = _mutants_of(args.target)

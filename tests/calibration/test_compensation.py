@@ -86,3 +86,18 @@ def test_large_batches_show_a_compensating_progress_bar(capsys):
     out = correct_targets(m, m, x, progress=True)
     np.testing.assert_allclose(out, x, atol=1e-12)
     assert "compensating" in capsys.readouterr().err
+
+
+def test_point_targets_of_a_tool_axis_machine_get_the_home_tool_axis():
+    """Targets given as points (N, 3) for a joint-chain machine (tool point + unit tool axis)
+    get the tool axis of the home configuration: a unit vector, the direct model's at home."""
+    from pkmkit.calibration.controller import as_targets
+
+    m = pkmkit.machine("tripteor-x7")
+    points = m.home_pose[:3] + np.array([[0.0, 0.0, 0.0], [0.01, -0.02, 0.03]])
+    targets = as_targets(m, points)
+    assert targets.shape == (2, 6)
+    np.testing.assert_array_equal(targets[:, :3], points)
+    axis = np.atleast_2d(m.fk(m.home_q))[0, 3:]
+    np.testing.assert_allclose(np.linalg.norm(axis), 1.0, atol=1e-12)
+    np.testing.assert_allclose(targets[:, 3:], np.tile(axis, (2, 1)), atol=1e-12)

@@ -191,3 +191,19 @@ def test_single_threaded_blas_limits_every_blas_pool_to_one_thread():
         inside = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
     assert inside and all(n == 1 for n in inside)
     assert [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"] == before
+
+
+def test_json_summary_in_m_and_mm_gives_the_same_physical_values(delta_case):
+    """Every length of the summary in mm is 1000 × the same in m (errors before and after,
+    parameters and their standard deviations); angles are in degrees either way."""
+    r = delta_case.result
+    si, mm = r.to_json("m"), r.to_json("mm")
+    for key in ("rms_before", "rms_after", "mean_before", "mean_after", "max_before",
+                "max_after"):
+        assert mm[key] == pytest.approx(1000 * si[key], rel=1e-12), key
+        assert si[key] > 0, key
+    assert si["max_after"] == pytest.approx(r.after.max, rel=1e-12)  # SI: metres
+    for name, unit in si["parameter_units"].items():
+        factor = 1000.0 if unit == "m" else 1.0
+        assert mm["parameters"][name] == pytest.approx(factor * si["parameters"][name],
+                                                       rel=1e-12, abs=1e-300), name

@@ -3,6 +3,7 @@
 import csv
 
 import numpy as np
+import pytest
 
 
 def test_compatibility_json(run, as_json):
@@ -82,3 +83,20 @@ def test_demo_summary(tmp_path):
     assert (tmp_path / "errors-hexapod-accuracy-map.png").stat().st_size > 0
     assert 1e-5 < amap["p95_min_m"] <= amap["p95_max_m"] < 1e-3
     assert observability(np.eye(3))["condition"] == 1.0
+
+
+def test_identifiable_combinations_in_the_requested_units(run):
+    """The Tripteor's tool-point combination ``daT + ℓ·dIT`` (ℓ the tool length, 0.169889 m;
+    daT a length, dIT a direction component) reads 0.16989 with ``--units m`` and 169.89 with
+    ``--units mm``: the same physical combination in each unit (it used to read 0.67956 —
+    ℓ / L², L = 0.5 m the characteristic length — whatever the unit)."""
+    import re
+
+    coefficient = {}
+    for unit in ("m", "mm"):
+        out = run("identifiability", "tripteor-x7", "--measure", "point", "--poses", "40",
+                  "--units", unit)
+        assert out.exit_code == 0, out.output
+        coefficient[unit] = float(re.search(r"daT \+ ([0-9.e+-]+)·dIT", out.output).group(1))
+    assert coefficient["m"] == pytest.approx(0.169889, rel=1e-4)
+    assert coefficient["mm"] == pytest.approx(1000 * coefficient["m"], rel=1e-4)

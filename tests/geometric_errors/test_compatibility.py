@@ -211,3 +211,34 @@ def test_bad_selections(tripteor):
         compatibility(tripteor, parameters="dQ*")
     with pytest.raises(ParameterError, match="unknown defect kind"):
         compatibility(tripteor, kinds="wobble")
+
+
+def test_every_compatible_direction_closes_on_the_exact_model(tripteor):
+    """Each basis vector of the compatible subspace (SI, defects of mixed units: direction
+    components and lengths, e.g. ``da11 + 1.0006·dI13 − da13 = 0``) is a defect the exact
+    nonlinear closure absorbs to second order (1e-6 steps: residual < 1e-10 m), at
+    configurations other than those analysed; a direction that breaks one of the conditions
+    leaves a first-order residual."""
+    r = compatibility(tripteor)
+    assert r.conditions  # mixed-unit conditions are present
+    q = np.tile(tripteor.home_q, (6, 1))
+    q[:, :3] += np.random.default_rng(11).uniform(-0.08, 0.08, (6, 3))
+    for j, name in enumerate(r.free):
+        step = 1e-6 * r.basis[:, j] / np.abs(r.basis[:, j]).max()
+        res = with_defects(tripteor, dict(zip(r.names, step, strict=True))).fk(
+            q, full_output=True)
+        assert res.closure_residual.max() < 1e-10, name
+    # breaking the first condition: move only its first defect
+    first = next(iter(r.conditions[0].terms))
+    res = with_defects(tripteor, {first: 1e-6}).fk(q, full_output=True)
+    assert res.closure_residual.max() > 1e-8
+
+
+def test_compatibility_from_a_single_configuration(tripteor):
+    """One configuration is a valid (weaker) input: its conditions are a subset of those of
+    many configurations, so its compatible subspace is at least as large."""
+    many = compatibility(tripteor, orientation_only=True)
+    one = compatibility(tripteor, orientation_only=True, q=many.q[:1])
+    assert one.configurations == 1
+    assert one.rank <= many.rank
+    assert set(one.forced_zero) <= set(many.forced_zero)

@@ -163,3 +163,68 @@ def test_unidentifiable_columns_are_relative_to_the_jacobian(scale):
     out = analyse_jacobian(scale * j, ("a", "b", "c"), np.ones(3))
     assert out["unidentifiable"] == ("c",)
     assert set(out["base"]) == {"a", "b"}
+
+
+def _combination_null_directions(result):
+    """For every parameter o outside the base with a coefficient: the SI defect direction
+    e_o − Σ_b c_b,o e_b, which changes none of the reported combinations δ_b + Σ c_b,o δ_o."""
+    names = list(result.names)
+    out = {}
+    for c in result.combinations:
+        for other, coef in list(c.terms.items())[1:]:
+            d = out.setdefault(other, np.eye(len(names))[names.index(other)])
+            d[names.index(c.base)] -= coef
+    return out
+
+
+def test_tripteor_combinations_are_invisible_on_the_exact_model(tripteor, tripteor_q):
+    """A combination mixing a direction defect and a length defect (``daT + 0.16989·dIT``:
+    the coefficient is the tool length, m) is what the tool points see: moving the defects
+    along the combination's null direction leaves the exact tool points still (second order,
+    < 1e-11 m for 1e-6 steps). The old coefficients were scaled by 1/L² (0.67956·dIT), which
+    moved the tool by 5e-7 m."""
+    q = tripteor_q[:8]
+    r = identifiability(tripteor, "point", tripteor_q)
+    terms = next(c.terms for c in r.combinations if c.base == "daT")
+    assert terms["dIT"] == pytest.approx(0.169889, rel=1e-4)  # the tool length
+    base = measure(tripteor, "point", q)
+    directions = _combination_null_directions(r)
+    assert len(directions) >= 10
+    for name, d in directions.items():
+        step = 1e-6 * d / np.abs(d).max()
+        moved = measure(with_defects(tripteor, dict(zip(r.names, step, strict=True))), "point", q)
+        assert np.abs(moved - base).max() < 1e-11, name
+
+
+def _cancellation(raw, d):
+    """|J d| relative to Σ |J_i| |d_i|: 0 when d is a null direction, whatever the units."""
+    return np.abs(raw @ d).max() / (np.abs(raw) @ np.abs(d)).max()
+
+
+@pytest.mark.parametrize("scaling", ["length", "norm", "none"])
+def test_combinations_are_null_directions_whatever_the_scaling(tripteor, tripteor_q, scaling):
+    """The combinations are reported in SI: whatever the column scaling, each one's null
+    direction cancels in the SI Jacobian (a units-free test: |J d| against Σ|J_i||d_i|)."""
+    r = identifiability(tripteor, "point", tripteor_q, scaling=scaling)
+    # the rank and the unseen defects do not depend on the scaling either ("norm" used to
+    # blow the round-off columns of unseen defects up to unit columns: rank 63 instead of 46)
+    assert (r.rank, r.rank_qr) == (46, 46)
+    assert r.unidentifiable == identifiability(tripteor, "point", tripteor_q).unidentifiable
+    directions = _combination_null_directions(r)
+    assert len(directions) >= 10
+    for name, d in directions.items():
+        assert _cancellation(r.jacobian.raw, d) < 1e-8, name
+
+
+def test_length_scaling_is_the_documented_one(tripteor, tripteor_q):
+    """``"length"`` scaling: angle-like columns (direction components, rad) divided by L (the
+    defect counted as L·δ metres), length columns unchanged, L the characteristic length
+    (0.5 m for the Tripteor); pose readings: rotation rows × L."""
+    for kind in ("point", "pose"):
+        ij = identification_jacobian(tripteor, kind, tripteor_q[:5])
+        assert ij.length == 0.5
+        angle = np.array([u in ("1", "rad") for u in ij.units])
+        assert angle.any() and (~angle).any()
+        rows = np.tile(np.r_[np.ones(3), np.full(ij.rows - 3, 0.5)], 5)
+        expected = ij.raw * rows[:, None] / np.where(angle, 0.5, 1.0)
+        np.testing.assert_allclose(ij.matrix, expected, rtol=1e-15, atol=0)

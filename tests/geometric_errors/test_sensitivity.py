@@ -36,3 +36,20 @@ def test_tripteor_table_orders_and_absorbs():
     assert tab.rows()[0]["max_displacement"] > 1e-5
     with pytest.raises(InputError, match="length_size"):
         sensitivity_analysis(m, length_size=-1.0)
+
+
+def test_default_angle_size_moves_a_point_at_the_characteristic_length_by_the_length_size():
+    """Documented default: angle-like defects get the size length_size / L (L the
+    characteristic length, 0.5 m for the Tripteor), i.e. the same metres at L as a length
+    defect; an explicit size is used as given."""
+    from pkmkit.geometric_errors.sensitivity import sensitivity_analysis
+
+    m = pkmkit.machine("tripteor-x7")
+    r = sensitivity_analysis(m, q=np.atleast_2d(m.home_q), length_size=2e-5)
+    angle = np.array([u in ("1", "rad") for u in r.units])
+    assert angle.any() and (~angle).any()
+    np.testing.assert_allclose(r.size[angle], 2e-5 / 0.5, rtol=1e-15)
+    np.testing.assert_allclose(r.size[~angle], 2e-5, rtol=1e-15)
+    given = sensitivity_analysis(m, q=np.atleast_2d(m.home_q), length_size=2e-5,
+                                 angle_size=1e-4)
+    np.testing.assert_allclose(given.size[angle], 1e-4, rtol=1e-15)

@@ -275,7 +275,11 @@ def _define(cli: click.Group) -> None:
         click.echo(f"  unidentifiable: {', '.join(result.unidentifiable) or '-'}")
         for group in result.together:
             click.echo(f"  seen only together: {', '.join(group)}")
-        combos = [c.text() for c in result.combinations if len(c.terms) > 1]
+        # coefficients in the units of the boundary: lengths in --units, angles in degrees
+        unit_value = {n: length_scale(units) if u == "m" else DEG if u == "rad" else 1.0
+                      for n, u in zip(result.names, result.jacobian.units, strict=True)}
+        combos = [c.in_units(unit_value).text() for c in result.combinations
+                  if len(c.terms) > 1]
         if combos:
             click.echo("  identifiable combinations:")
             for text in combos:

@@ -11,7 +11,9 @@ analytically through the closure. **Scaling** (documented, chosen by ``scaling``
   and rotation readings as ``L·θ``; every column is then in metres of reading per metre of
   defect, so singular values and the observability indices are dimensionless and comparable;
 - ``"norm"``: every column divided by its Euclidean norm (unit columns; within √p of the best
-  diagonal scaling for the condition number, van der Sluis);
+  diagonal scaling for the condition number, van der Sluis); a column below ``RTOL`` of the
+  largest (a defect with no effect, round-off only) is divided by the largest norm instead, so
+  that it stays negligible rather than becoming a unit column;
 - ``"none"``: SI units as they are.
 
 **Rank, base parameters and gauges.** The numerical rank counts singular values above
@@ -165,8 +167,12 @@ def identification_jacobian(machine, kind: str, q: Any, setup: dict | None = Non
     if scaling == "length":
         col = np.array([1.0 / big_l if u in ANGLE_UNITS else 1.0 for u in units])
     elif scaling == "norm":
+        # a column with no effect (round-off only, below RTOL of the largest) is not blown up
+        # to a unit column: it keeps the largest column's scale and stays negligible
         norms = np.linalg.norm(rows_scaled, axis=0)
-        col = np.where(norms > 0, 1.0 / np.where(norms > 0, norms, 1.0), 1.0)
+        top = norms.max() if norms.size else 0.0
+        alive = norms > RTOL * top
+        col = np.where(alive, 1.0 / np.where(alive, norms, 1.0), 1.0 / top if top > 0 else 1.0)
     else:
         col = np.ones(len(names))
         rows_scaled = raw
@@ -290,6 +296,14 @@ class Combination:
     base: str
     terms: dict[str, float]
 
+    def in_units(self, unit_value: Mapping[str, float]) -> Combination:
+        """The same combination with each defect counted in another unit: ``unit_value[name]``
+        is the SI value of one unit of that defect (1e-3 for a length in mm, π/180 for an
+        angle in degrees). ``δ_b + Σ c δ_o`` (SI) becomes ``x_b + Σ c (u_o / u_b) x_o``."""
+        ub = unit_value[self.base]
+        return Combination(base=self.base, terms={n: c * unit_value[n] / ub
+                                                  for n, c in self.terms.items()})
+
     def text(self, digits: int = 5) -> str:
         """``"dA1x − dB1x"`` style text."""
         out = [self.base]
@@ -409,7 +423,9 @@ def identifiability(machine, kind: str, q: Any, setup: dict | None = None, *,
 def analyse_jacobian(j: np.ndarray, names: tuple[str, ...], column_scale: np.ndarray, *,
                      rtol: float = RTOL) -> dict[str, Any]:
     """The rank analysis of a scaled Jacobian ``(M, p)`` (module docstring); ``column_scale``
-    maps scaled coordinates back to SI (``x = δ · column_scale``)."""
+    ``(p,)`` maps scaled coordinates x back to SI: ``j = raw · column_scale`` so
+    ``δ = x · column_scale``. Combinations and gauges are returned in SI, the same whatever
+    the scaling."""
     m, p = j.shape
     if m:
         _, sv_all, vt = np.linalg.svd(j, full_matrices=m < p)
@@ -441,8 +457,8 @@ def analyse_jacobian(j: np.ndarray, names: tuple[str, ...], column_scale: np.nda
         terms = {names[b]: 1.0}
         for k, o in enumerate(other):
             if beta[a, k] != 0.0 and not zero_col[o]:
-                # scaled x_b + β x_o with x = δ · scale → δ_b + β (scale_o / scale_b) δ_o
-                terms[names[o]] = float(beta[a, k] * column_scale[o] / column_scale[b])
+                # scaled x_b + β x_o with δ = x · scale → δ_b + β (scale_b / scale_o) δ_o
+                terms[names[o]] = float(beta[a, k] * column_scale[b] / column_scale[o])
         combos.append(Combination(base=names[b], terms=terms))
     # gauges, in SI coordinates, reduced; groups connected through them
     gauges_si = null * column_scale[:, None] if null.size else np.zeros((p, 0))
