@@ -189,3 +189,24 @@ class IdentifiabilityError(PkmError, ValueError):
 
 class ToleranceFileError(MachineFileError):
     """A tolerance file cannot be read or holds a bad entry (path and line in the message)."""
+
+
+class UnsupportedExportError(PkmError, ValueError):
+    """A machine that a format cannot express (or that pkmkit does not export to it yet).
+
+    Attributes:
+        format: the format (``"linuxcnc"``, ``"klipper"``, ``"mjcf"``).
+        machine: the machine's id.
+        reason: why, in words a user can act on.
+    """
+
+    def __init__(self, fmt: str, machine: str, reason: str):
+        self.format = fmt
+        self.machine = machine
+        self.reason = reason
+        super().__init__(f"cannot export {machine!r} to {fmt}: {reason}")
+
+
+class ExportCheckError(PkmError, RuntimeError):
+    """A written export that does not reproduce pkmkit's model (a bug, never a user error): the
+    command that made it writes nothing."""

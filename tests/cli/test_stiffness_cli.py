@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -103,3 +105,18 @@ def test_a_section_for_the_other_family_is_refused(run):
     result = run("stiffness", "tripteor-x7", "--q", "0.983186,1.064076,0.988005,0,0", "--set",
                  "rod_section=circle:0.02")
     assert result.exit_code == 1 and "link_section" in result.output
+
+
+@pytest.mark.parametrize(("machine", "pose"), [("gough-stewart", "0,0,3,0,0,0"),
+                                               ("linear-delta", "0,0,1.0")])
+def test_a_pose_beyond_the_strokes_is_flagged_with_exit_3(machine, pose):
+    """The one stroke check of every command (issue 18 §4): a stiffness at a pose the machine
+    cannot reach within its strokes is reported as such, with exit status 3."""
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    result = CliRunner().invoke(cli, ["stiffness", machine, "--pose", pose, "--json"])
+    assert result.exit_code == 3, result.output
+    payload = json.loads(result.stdout)
+    assert payload["out_of_stroke"], payload

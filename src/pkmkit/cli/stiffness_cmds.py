@@ -36,6 +36,7 @@ from .options import (
     fmt,
     resolve_machine,
 )
+from .stroke_flags import BatchFlags, add_to_payload, finish_single, single_check
 
 #: N/m in one N/µm; N·m/rad in one N·m/µrad.
 PER_MICRO = 1e6
@@ -150,14 +151,21 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
         kwargs["tool_length"] = tl
         result = stiffness(m, x, q=q, **kwargs)
         if q is None:
-            q = np.asarray(m.ik(x, tool_length=tl))
+            q = np.asarray(m.ik(x, tool_length=tl, strokes="ignore"))
+        stroke_q = q
     else:
         result = stiffness(m, x, **kwargs)
+        stroke_q = np.asarray(m.ik(x, strokes="ignore"))
+    # the one stroke check of every command: a configuration beyond a stroke is reported and
+    # exits with status 3 (a stiffness there is that of a machine that cannot be there)
+    check = single_check(m, stroke_q, units)
     payload = _payload(m, result, data, units, x, q, wrench)
+    add_to_payload(payload, check, units, set_status=False)
     if as_json:
         emit_json(payload)
-        return
-    _print(m, result, data, units, x, q, wrench, wrench_note, names)
+    else:
+        _print(m, result, data, units, x, q, wrench, wrench_note, names)
+    finish_single(check, units)
 
 
 def _payload(m, r, data, units, x, q, wrench) -> dict[str, Any]:
@@ -242,6 +250,7 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
     d = len(names)
     columns = pose_columns(m)
     kind = m.family
+    flags = BatchFlags(m, units)
 
     def compute(values, chunk):
         x = pose_from_cli(values, m, units, convention)
@@ -249,6 +258,10 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
         if kind == "chain":
             kwargs["tool_length"] = tl
         r = stiffness(m, x, **kwargs)
+        status = np.asarray(r.status)
+        if kind != "chain":  # the one stroke check (chains: their inverse flags it already)
+            inverse = m.ik(x, full_output=True, strokes="ignore")
+            status = flags(np.asarray(inverse.q), status, chunk)
         out: dict[str, Any] = {name: values[:, j] for j, name in enumerate(columns)}
         for j in range(r.translational.shape[1]):
             out[f"kt{j + 1}"] = r.translational[:, j] / PER_MICRO
@@ -263,7 +276,7 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
         for i in range(d):
             for j in range(d):
                 out[f"K{i + 1}{j + 1}"] = flat[:, i * d + j]
-        out["status"] = Labels(np.asarray(r.status), status_names())
-        return out, r.status
+        out["status"] = Labels(status, status_names())
+        return out, status
 
     run_batch(input_, output, columns, compute, chunk_rows=chunk_rows)

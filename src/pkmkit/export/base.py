@@ -12,24 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.exceptions import PkmError
+from pkmkit.exceptions import (  # noqa: F401  (re-exported: their first home)
+    ExportCheckError,
+    UnsupportedExportError,
+)
 from pkmkit.model.rods import CRANK, STRUT, RodModel
-
-
-class UnsupportedExportError(PkmError, ValueError):
-    """A machine that a format cannot express (or that pkmkit does not export to it yet).
-
-    Attributes:
-        format: the format (``"linuxcnc"``, ``"klipper"``, ``"mjcf"``).
-        machine: the machine's id.
-        reason: why, in words a user can act on.
-    """
-
-    def __init__(self, fmt: str, machine: str, reason: str):
-        self.format = fmt
-        self.machine = machine
-        self.reason = reason
-        super().__init__(f"cannot export {machine!r} to {fmt}: {reason}")
 
 
 @dataclass(frozen=True)
@@ -153,11 +140,6 @@ def rod_geometry(machine, fmt: str, *, cranks: bool = False, planar: bool = Fals
         q_min=np.array(m.q_min, dtype=float), q_max=np.array(m.q_max, dtype=float),
         full_pose=family == "full-pose",
         pivot=np.where((np.asarray(kind) == CRANK)[:, None], pivot, 0.0))
-
-
-class ExportCheckError(PkmError, RuntimeError):
-    """A written export that does not reproduce pkmkit's model (a bug, never a user error): the
-    command that made it writes nothing."""
 
 
 def sample_poses(machine, n: int = 24, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:

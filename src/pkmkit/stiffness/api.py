@@ -73,7 +73,7 @@ def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = No
         if q is None:
             xb, single = as_batch(pose, 6, "pose")
             q_arr, _ = machine.ik(xb[0] if single else xb, full_output=True,
-                                  tool_length=tool_length)
+                                  tool_length=tool_length, strokes="ignore")
             qb = np.atleast_2d(q_arr)
         else:
             qb, single = as_batch(q, machine.n_actuators, "q")
@@ -102,7 +102,7 @@ def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = No
             if poses.shape[1] == 6:
                 axes = rotvec_to_matrix(poses[:, 3:])
             else:  # positions of a position-controlled machine: its orientation from ik
-                inv = machine.ik(pose, full_output=True)
+                inv = machine.ik(pose, full_output=True, strokes="ignore")
                 axes = rotvec_to_matrix(np.atleast_2d(inv.pose)[:, 3:])
         world = np.einsum("nij,j->ni", np.nan_to_num(axes), offset)
         c = move_compliance(c, world)

@@ -112,7 +112,8 @@ def rod_leg_compliance(machine: Any, x: Any, data: StiffnessData
     full = model.full_pose
     arr = np.asarray(x, dtype=float)
     single = arr.ndim == 1
-    inv = machine.ik(x, full_output=True)
+    # strokes are judged by the caller (the command line flags them, exit 3)
+    inv = machine.ik(x, full_output=True, strokes="ignore")
     status = np.atleast_1d(np.asarray(inv.status, dtype=int)).copy()
     poses = getattr(inv, "pose", None)
     poses = np.atleast_2d(np.asarray(arr if poses is None else poses, dtype=float))
