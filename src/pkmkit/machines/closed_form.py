@@ -38,7 +38,10 @@ for a crank, 0 otherwise).
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -55,6 +58,8 @@ RESIDUAL_TOL = 1e-9
 #: the first rod's length² plus the squared centre offsets) get their direct-model solutions
 #: checked leg by leg; elsewhere the closed form is well conditioned.
 SUSPECT_GRAM = 1e-4
+#: A single pose with a coordinate beyond this (m) goes through the batch path, which refuses it.
+MAX_ABS = 1e9
 #: Rows per chunk in the inverse model: keeps temporaries in cache (~2× faster than one pass).
 CHUNK = 32768
 
@@ -178,6 +183,92 @@ class RodClosedForm:
                         np.sqrt(perp_sq, out=out[i, start:stop])
                         out[i, start:stop] -= self.model.leg_length[i]
         return out.T
+
+    def inverse_one(self, x: Any, branches: Sequence[float]) -> list[float] | None:
+        """The inverse model of one pose in plain Python floats: the same operations in the same
+        order as :meth:`inverse_numpy` (so the same bits), without array machinery — a few
+        microseconds where a batch call of one row costs a hundred.
+
+        Args:
+            x: ``dims`` finite numbers (a list, a tuple or a 1-D array), m.
+            branches: ±1 per leg.
+
+        Returns:
+            ``n`` actuator coordinates (m, rad for cranks), or None when the pose is not plain
+            finite numbers of the right length or a leg cannot close: the caller then takes
+            the batch path, which gives the same numbers and the typed errors.
+        """
+        rows = self._single_rows()
+        if isinstance(x, np.ndarray):
+            if x.ndim != 1 or x.dtype.kind not in "fi":
+                return None
+            x = x.tolist()
+        elif not isinstance(x, (list, tuple)):
+            return None
+        dims = self.model.dims
+        if len(x) != dims:
+            return None
+        for v in x:
+            if (not isinstance(v, (float, int)) or isinstance(v, bool)
+                    or not -MAX_ABS <= v <= MAX_ABS):
+                return None  # bools, strings, NaN, ±inf, absurd magnitudes: the batch path
+        x0, x1 = float(x[0]), float(x[1])
+        x2 = float(x[2]) if dims == 3 else 0.0
+        out = []
+        for kind, c0, c1, c2, o0, o1, o2, length_sq, length, radius, offset, branch in zip(
+                *rows, branches, strict=True):
+            if dims == 3:
+                y0 = c0[0] * x0 + c0[1] * x1 + c0[2] * x2 - o0
+                y1 = c1[0] * x0 + c1[1] * x1 + c1[2] * x2 - o1
+                y2 = c2[0] * x0 + c2[1] * x1 + c2[2] * x2 - o2
+                perp_sq = y1 * y1 + y2 * y2
+            else:
+                y0 = c0[0] * x0 + c0[1] * x1 - o0
+                y1 = c1[0] * x0 + c1[1] * x1 - o1
+                perp_sq = y1 * y1
+            if kind == SLIDE:
+                radicand = length_sq - perp_sq
+                if radicand < 0.0:
+                    if radicand <= -BOUNDARY_TOL * length_sq:
+                        return None
+                    radicand = 0.0
+                root = math.sqrt(radicand)
+                out.append(y0 - root if branch < 0 else y0 + root)
+            elif kind == CRANK:  # as _crank_angle: rows (w, e1, e2) of the crank frame
+                along = y0 - offset
+                g = along * along + perp_sq + radius * radius - length_sq
+                amplitude = 2.0 * radius * math.sqrt(perp_sq)
+                if amplitude == 0.0:
+                    return None
+                cosine = g / amplitude
+                if abs(g) - amplitude <= BOUNDARY_TOL * length_sq:
+                    cosine = min(max(cosine, -1.0), 1.0)
+                elif not -1.0 <= cosine <= 1.0:
+                    return None
+                q = math.atan2(y2, y1) + branch * math.acos(cosine)
+                out.append((q + math.pi) % (2.0 * math.pi) - math.pi)
+            else:  # strut
+                out.append(math.sqrt(perp_sq + y0 * y0) - length)
+        return out
+
+    def _single_rows(self):
+        """Per-leg constants of :meth:`inverse_one` as Python floats, computed once."""
+        cached = self.__dict__.get("_single")
+        if cached is None:
+            m = self.model
+            dims = m.dims
+            basis = self.basis.tolist()
+            offset = self.basis_offset.tolist()
+            zero = [0.0, 0.0, 0.0]
+            cached = (tuple(int(k) for k in m.leg_kind),
+                      tuple(b[0] for b in basis), tuple(b[1] for b in basis),
+                      tuple(b[2] if dims == 3 else zero for b in basis),
+                      tuple(o[0] for o in offset), tuple(o[1] for o in offset),
+                      tuple(o[2] if dims == 3 else 0.0 for o in offset),
+                      tuple(self.length_sq.tolist()), tuple(m.leg_length.tolist()),
+                      tuple(self.crank_radius.tolist()), tuple(self.crank_offset.tolist()))
+            object.__setattr__(self, "_single", cached)
+        return cached
 
     def _crank_terms(self, v_w, v_1, v_2, perp_sq, i):
         """``(K − ℓ², 2 r ρ⊥)`` of crank leg i (see the module docstring)."""

@@ -36,7 +36,13 @@ from pkmkit.machines.results import (
     JacobianRates,
     Jacobians,
 )
-from pkmkit.machines.strokes import check_mode, judge_rows, refuse_absurd_home
+from pkmkit.machines.strokes import (
+    STROKE_TOL,
+    check_mode,
+    judge_rows,
+    refuse_absurd_home,
+    stroke_limits,
+)
 from pkmkit.machines.velocity import LazyJacobians, VelocityEvaluation
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import ParameterSpec, is_plain_number, resolve_parameters
@@ -229,6 +235,24 @@ class Machine(ModeNaming, MachineFace):
         return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra})
 
     # ---------------------------------------------------------------- helpers
+    @property
+    def _default_branches(self) -> tuple[float, ...]:
+        cached = self.__dict__.get("_branch_tuple")
+        if cached is None:
+            cached = tuple(float(b) for b in self.model.leg_branch)
+            object.__setattr__(self, "_branch_tuple", cached)
+        return cached
+
+    def _within_strokes(self, q: list[float]) -> bool:
+        """Every value of one configuration within its stroke (as :func:`signed_excess`)."""
+        limits = self.__dict__.get("_stroke_tuples")
+        if limits is None:
+            lo, hi = stroke_limits(self)
+            limits = tuple(zip((lo - STROKE_TOL).tolist(), (hi + STROKE_TOL).tolist(),
+                               strict=True))
+            object.__setattr__(self, "_stroke_tuples", limits)
+        return all(lo <= v <= hi for v, (lo, hi) in zip(q, limits, strict=True))
+
     def _branches(self, branches: Any) -> np.ndarray:
         if branches is None:
             return self.model.leg_branch
@@ -310,6 +334,11 @@ class Machine(ModeNaming, MachineFace):
             ConvergenceError: a single numeric solve that failed.
             OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
+        if (method == "closed" and branches is None and q0 is None and not full_output
+                and not engine_options):  # one plain pose: the microsecond path, same numbers
+            q1 = self._closed.inverse_one(x, self._default_branches)
+            if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
+                return np.array(q1)
         check_mode(strokes)
         xb, single = _checked_batch(x, self.dims, "pose")
         br = self._branches(branches)

@@ -1,0 +1,69 @@
+"""One pose per call takes a plain-Python path (issue 22 §1): the same numbers as the batch path
+(bit for bit for slides and struts, which use only +, −, ×, √; to an ulp for cranks, whose
+arccos and arctan2 NumPy may vectorise differently from the C library), and the same refusals
+(which the batch path raises)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import pkmkit
+from pkmkit.exceptions import InputError, StrokeWarning, UnreachablePoseError
+
+TRANSLATIONAL = [name for name in pkmkit.machines()
+                 if pkmkit.machine(name).family == "translational"]
+
+
+def _poses(m, n=300, seed=0):
+    lo, hi = m.default_box()
+    rng = np.random.default_rng(seed)
+    return lo + (hi - lo) * rng.random((n, m.dims))
+
+
+@pytest.mark.parametrize("name", TRANSLATIONAL)
+def test_single_pose_equals_the_batch_reference_bit_for_bit(name):
+    m = pkmkit.machine(name)
+    x = _poses(m)
+    reference = m._closed.inverse_numpy(x, m.model.leg_branch)
+    compared = 0
+    for k in range(len(x)):
+        fast = m._closed.inverse_one(x[k], tuple(m.model.leg_branch.tolist()))
+        if fast is None:  # out of reach: the batch path gives NaN there
+            assert not np.isfinite(reference[k]).all()
+            continue
+        if m.angular_actuators.any():
+            np.testing.assert_allclose(fast, reference[k], rtol=0, atol=4 * np.spacing(np.pi))
+        else:
+            np.testing.assert_array_equal(fast, reference[k])
+        compared += 1
+    assert compared > 100
+
+
+@pytest.mark.parametrize("name", TRANSLATIONAL)
+def test_ik_of_one_pose_is_the_batch_row(name):
+    m = pkmkit.machine(name)
+    x = _poses(m, 50, seed=1)
+    batch = m.ik(x, strokes="ignore")
+    for k in np.flatnonzero(np.isfinite(batch).all(axis=1)):
+        for given in (x[k], x[k].tolist(), tuple(x[k].tolist())):
+            q = m.ik(given, strokes="ignore")
+            assert q.shape == (m.n_actuators,)
+            np.testing.assert_allclose(q, batch[k], rtol=0, atol=4 * np.spacing(np.pi))
+
+
+def test_refusals_are_those_of_the_batch_path():
+    m = pkmkit.machine("linear-delta")
+    with pytest.raises(UnreachablePoseError):
+        m.ik([2.0, 0.0, 0.0])
+    for bad in ([np.nan, 0.0, 0.0], [0.0, 0.0], [1e300, 0.0, 0.0], [0.0, np.inf, 0.0]):
+        with pytest.raises(InputError):
+            m.ik(bad)
+    with pytest.warns(StrokeWarning):
+        m.ik([0.0, 0.0, 1.0])  # reachable, beyond the slides' strokes
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        q = m.ik([0.0, 0.0, 1.0], strokes="ignore")
+    assert np.isfinite(q).all()
