@@ -109,3 +109,16 @@ def test_limit_report(delta_b):
     assert not report["accel"]["exceeded"] and not report["force"]["exceeded"]
     with pytest.raises(InputError, match="> 0"):
         check_limits(delta_b, jt, Limits(speed=-1.0))
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "verne", "tripteor-x7"])
+def test_other_families_are_refused_with_a_typed_error(name):
+    """Issue 19: joint trajectories along a tool path are written for translational machines;
+    the others get an InputError naming why (it was an AttributeError on a private field)."""
+    import pkmkit
+    from pkmkit.exceptions import InputError
+    from pkmkit.motion import circle, joint_trajectory, plan
+
+    traj = plan(circle([0, 0, 0.9], 0.05), feed=0.05, accel=1.0, jerk=10.0, period=0.01)
+    with pytest.raises(InputError, match="translational"):
+        joint_trajectory(pkmkit.machine(name), traj)

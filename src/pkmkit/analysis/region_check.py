@@ -251,7 +251,7 @@ def _worst(name: str, bad: np.ndarray, points: np.ndarray, ev: PoseEvaluation,
                 "a joint (actuator or passive) leaves its range")
         return f"at {_fmt(points[idx[0]])}: {what} ({len(idx)} samples)"
     if name == "reachable":
-        short = machine._closed.shortfall(points[idx])
+        short = machine.ik(points[idx], full_output=True, strokes="ignore").shortfall
         k = int(np.nanargmax(short.max(axis=1)))
         leg = int(np.nanargmax(short[k]))
         return (f"at {_fmt(points[idx[k]])}: {machine.model.leg_names[leg]} too short by "

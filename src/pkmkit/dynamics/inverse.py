@@ -45,6 +45,7 @@ import numpy as np
 from pkmkit.dynamics.masses import MassProperties
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
+from pkmkit.machines.protocol import require_translational
 from pkmkit.model.rods import CRANK, SLIDE
 from pkmkit.numerics import small
 
@@ -114,6 +115,7 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
     Raises:
         InputError: mismatched shapes, non-finite wrench, masses that do not fit the machine.
     """
+    require_translational(machine, "inverse dynamics along a path")
     require_linear_actuators(machine, "inverse dynamics")
     masses.check(machine)
     n_samples = x.shape[0]

@@ -14,6 +14,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from pkmkit.exceptions import InputError
+
 #: The machine families: rod legs with a translational platform, rod legs with a full-pose
 #: (6-DOF) platform, joint chains (possibly hyperstatic) with heads.
 FAMILIES = ("translational", "full-pose", "chain")
@@ -33,3 +35,17 @@ class MachineFace:
         """``(n_actuators,)`` bool: True for angular actuators (cranks, revolute joints), whose
         values are radians inside pkmkit and degrees in files and on the command line."""
         return np.array([q == "angle" for q in self.actuator_quantities], dtype=bool)
+
+
+def require_translational(machine, what: str) -> None:
+    """Refuse, with a typed error naming why, an algorithm written for translational rod-leg
+    machines (their closed forms in the batch-last layout) on a machine of another family.
+
+    Raises:
+        InputError: ``machine.family`` is not ``"translational"``.
+    """
+    if machine.family != "translational":
+        raise InputError(
+            f"{what} is computed for translational rod-leg machines (3-D or planar platforms "
+            f"that only translate); {machine.id!r} is a {machine.family} machine: run its poses "
+            "through ik/jacobian instead")

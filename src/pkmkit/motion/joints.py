@@ -13,6 +13,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
+from pkmkit.machines.protocol import require_translational
 from pkmkit.motion.timelaw import Trajectory
 from pkmkit.numerics import small
 
@@ -64,6 +65,7 @@ def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
     >>> [round(1000 * v, 3) for v in jt.stroke.tolist()]  # mm, over the samples only
     [190.844, 190.844, 190.844]
     """
+    require_translational(machine, "a joint trajectory along a tool path")
     dims = machine.dims
     if dims == 2 and np.abs(trajectory.x[:, 2]).max() > 1e-12:
         raise InputError("a planar machine needs a path in the plane z = 0")
