@@ -154,22 +154,23 @@ def _options(lines: list[str], fence: int) -> dict[str, str]:
     return options
 
 
-def expected_pattern(expected: list[str]) -> tuple[re.Pattern, list[str]]:
-    """A regex for the shown output and the number texts it captures, in order."""
-    parts: list[str] = []
-    numbers: list[str] = []
+def line_patterns(expected: list[str]) -> list[tuple[re.Pattern, list[str]] | None]:
+    """One pattern per shown line (None for a ``...`` line: any number of omitted lines), each
+    with the number texts it captures, in order."""
+    out: list[tuple[re.Pattern, list[str]] | None] = []
     for raw in expected:
         line = _ANNOTATION.sub("", raw.rstrip())
         if line.strip() == "...":
-            parts.append(r"(?:[^\n]*\n)*?")
+            out.append(None)
             continue
         pieces = []
+        numbers: list[str] = []
         position = 0
         for match in re.finditer(NUMBER + r"|\.\.\.|\s+", line):
             pieces.append(re.escape(line[position:match.start()]))
             token = match.group(0)
             if token == "...":
-                pieces.append(r"[^\n]*?")
+                pieces.append(r".*?")
             elif token.isspace():
                 pieces.append(r"[ \t]+" if match.start() > 0 else r"[ \t]*")
             else:
@@ -177,8 +178,45 @@ def expected_pattern(expected: list[str]) -> tuple[re.Pattern, list[str]]:
                 numbers.append(token)
             position = match.end()
         pieces.append(re.escape(line[position:]))
-        parts.append("".join(pieces) + r"[ \t]*\n")
-    return re.compile("".join(parts), re.DOTALL), numbers
+        out.append((re.compile("".join(pieces) + r"[ \t]*"), numbers))
+    return out
+
+
+def match_lines(patterns: list[tuple[re.Pattern, list[str]] | None], lines: list[str]
+                ) -> list[tuple[list[str], tuple[str, ...]]] | None:
+    """Align the shown lines with the actual ones: ``[(number texts, captured texts)]`` of the
+    matched lines in order, or None. A table over (shown line, actual line) — linear in the
+    product of the two lengths, never the exponential backtracking of one regex over the whole
+    output; a ``...`` line takes as few lines as it can (as a lazy regex would)."""
+    e, a = len(patterns), len(lines)
+    hits: dict[tuple[int, int], re.Match | None] = {}
+
+    def hit(i: int, j: int) -> re.Match | None:
+        if (i, j) not in hits:
+            hits[(i, j)] = patterns[i][0].fullmatch(lines[j])
+        return hits[(i, j)]
+
+    ok = [[False] * (a + 1) for _ in range(e + 1)]
+    ok[e][a] = True
+    for i in range(e - 1, -1, -1):
+        for j in range(a, -1, -1):
+            if patterns[i] is None:
+                ok[i][j] = ok[i + 1][j] or (j < a and ok[i][j + 1])
+            else:
+                ok[i][j] = j < a and ok[i + 1][j + 1] and hit(i, j) is not None
+    if not ok[0][0]:
+        return None
+    found, i, j = [], 0, 0
+    while i < e:
+        if patterns[i] is None:
+            if ok[i + 1][j]:
+                i += 1
+            else:
+                j += 1
+            continue
+        found.append((patterns[i][1], hit(i, j).groups()))
+        i, j = i + 1, j + 1
+    return found
 
 
 def last_digit_unit(text: str) -> float:
@@ -190,21 +228,21 @@ def last_digit_unit(text: str) -> float:
 
 def compare(expected: list[str], actual: str, *, numbers: bool = True) -> str | None:
     """None if ``actual`` shows ``expected`` (see the module docstring), else why not."""
-    pattern, texts = expected_pattern(expected)
     lines = [line.rstrip() for line in actual.replace("\r\n", "\n").split("\n")]
     while lines and not lines[-1]:
         lines.pop()
     text = "\n".join(lines) + "\n"
-    match = pattern.fullmatch(text)
-    if match is None:
+    found = match_lines(line_patterns(expected), lines)
+    if found is None:
         return ("the output does not have the shown form\n--- shown:\n" + "\n".join(expected)
                 + "\n--- actual:\n" + text)
     if not numbers:
         return None
-    for shown, got in zip(texts, match.groups(), strict=True):
-        value = float(got)
-        want = float(shown)
-        if math.isnan(value) or abs(value - want) > 1.0001 * last_digit_unit(shown):
-            return (f"number {shown} is now {got}\n--- shown:\n" + "\n".join(expected)
-                    + "\n--- actual:\n" + text)
+    for texts, groups in found:
+        for shown, got in zip(texts, groups, strict=True):
+            value = float(got)
+            want = float(shown)
+            if math.isnan(value) or abs(value - want) > 1.0001 * last_digit_unit(shown):
+                return (f"number {shown} is now {got}\n--- shown:\n" + "\n".join(expected)
+                        + "\n--- actual:\n" + text)
     return None

@@ -166,3 +166,19 @@ print(3.14159)
     done = subprocess.run([sys.executable, "-c", source], capture_output=True, text=True)
     assert compare(shown, done.stdout) is None
     assert compare(["3.1426"], done.stdout) is not None
+
+
+def test_a_mismatch_in_a_long_output_is_found_quickly():
+    """A long output that does not have the shown form, with many ``...`` lines, is rejected in
+    time linear in (shown lines × output lines): one regex over the whole text backtracked
+    exponentially there, and a changed demo output hung the suite."""
+    import time
+
+    shown = []
+    for k in range(40):
+        shown += ["...", f"== section {k}", "   value 1.5 m"]
+    actual = "\n".join(f"== section {k}\n   value 1.5 m\n   note" for k in range(40))
+    start = time.perf_counter()
+    assert compare(shown + ["== missing"], actual) is not None
+    assert compare([*shown, "..."], actual) is None
+    assert time.perf_counter() - start < 30  # a hang guard, not a benchmark
