@@ -262,9 +262,10 @@ class JointChainMachine(ChainVelocity, MachineFace):
 
         params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
         model = self.kind.build(params)
-        return replace(self, params=dict(params), model=model,
-                       extra_poses=self.kind.reference_poses(params, model),
-                       tool_length=float(params.get("tool_length", 0.0)))
+        return type(self)(id=self.id, name=self.name, kind=self.kind, params=dict(params),
+                          model=model, description=self.description, source=self.source,
+                          extra_poses=self.kind.reference_poses(params, model),
+                          tool_length=float(params.get("tool_length", 0.0)))
 
     def with_defects(self, values: Any) -> JointChainMachine:
         """The same machine with geometric defects applied exactly (a mapping name → value in

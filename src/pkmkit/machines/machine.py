@@ -172,8 +172,9 @@ class Machine(ModeNaming, MachineFace):
             )
         params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
         model = self.kind.build(params)
-        rebuilt = replace(self, params=dict(params), model=model,
-                          extra_poses=self.kind.reference_poses(params, model))
+        rebuilt = type(self)(id=self.id, name=self.name, kind=self.kind, params=dict(params),
+                             model=model, description=self.description, source=self.source,
+                             extra_poses=self.kind.reference_poses(params, model))
         extra = {k: v for k, v in self.extra_poses.items() if k not in rebuilt.extra_poses}
         return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra})
 
