@@ -179,6 +179,6 @@ def test_a_mismatch_in_a_long_output_is_found_quickly():
         shown += ["...", f"== section {k}", "   value 1.5 m"]
     actual = "\n".join(f"== section {k}\n   value 1.5 m\n   note" for k in range(40))
     start = time.perf_counter()
-    assert compare(shown + ["== missing"], actual) is not None
+    assert compare([*shown, "== missing"], actual) is not None
     assert compare([*shown, "..."], actual) is None
     assert time.perf_counter() - start < 30  # a hang guard, not a benchmark
