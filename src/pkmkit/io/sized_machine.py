@@ -30,6 +30,9 @@ from pkmkit.model.parameters import length_scale
 IK_TOL = 1e-12
 _PARAM_RTOL = 1e-12
 _FORMAT = "machine file"
+#: A written value may differ from the machine's by this relative amount (a few units in the last
+#: place) so that it reads as the shortest decimal.
+_SHORT_RTOL = 1e-15
 
 
 def _toml(value: Any) -> str:
@@ -46,12 +49,13 @@ def _factor(quantity: str, scale: float) -> float:
 
 
 def _in_file_units(value: float, factor: float) -> float:
-    """``value`` (SI) / ``factor`` as the shortest decimal that converts back to exactly
-    ``value`` (``120.0`` rather than ``119.99999999999999`` degrees), else the plain quotient."""
+    """``value`` (SI) / ``factor`` as the shortest decimal that converts back to ``value``
+    within :data:`_SHORT_RTOL` (``120.0`` rather than ``119.99999999999999`` degrees, ``700.0``
+    rather than ``699.9999999999999`` mm), else the plain quotient."""
     plain = value / factor
     for digits in range(16):
         short = round(plain, digits)
-        if short * factor == value:
+        if math.isclose(short * factor, value, rel_tol=_SHORT_RTOL, abs_tol=0.0):
             return short
     return plain
 
