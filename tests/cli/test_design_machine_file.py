@@ -92,7 +92,11 @@ def test_optimize_writes_best_machine_file(run, tmp_path, as_json):
 
 
 def test_optimize_pareto_writes_no_machine_file(run, tmp_path, as_json):
+    """A Pareto run has no single best design: no machine.toml, and one left in the folder by
+    an earlier run is removed (it would pass for this run's result)."""
     out = tmp_path / "pareto"
+    out.mkdir()
+    (out / "machine.toml").write_text("# an earlier run's best design\n")
     data = as_json(run("optimize", "linear-delta", "--vary", "R=0.5:1", "--vary", "L=0.9:1.6",
                        "--objective", "max:compactness", "--objective", "max:gci", "--pareto",
                        "--region", "0.5@0,0,0.25", "--bounds", "0.4,2.5", "--generations", "2",

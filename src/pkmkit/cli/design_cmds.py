@@ -401,14 +401,20 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
 def _write_best(result, region: Region, path, units: str) -> tuple[str | None, str]:
     """Write the best design of a single-objective run to ``path`` (``machine.toml``), checked
     at home and at the corners of the region: its path (None when nothing is written) and a
-    line saying what was done."""
+    line saying what was done. A ``machine.toml`` left by an earlier run in the folder is
+    removed when this run writes none, so that it is never taken for this run's result."""
     best = result.best
-    if best is None:
-        return None, ""
-    machine = result.problem.build(np.array([best[v.name] for v in result.problem.variables]))
+    machine = None if best is None else result.problem.build(
+        np.array([best[v.name] for v in result.problem.variables]))
     if machine is None or machine.kind is None:
+        stale = path.exists()
+        if stale:
+            path.unlink()
+        if best is None:
+            return None, ""
         return None, ("machine file: not written (only machines of a built-in kind are "
-                      "written as a machine file)")
+                      "written as a machine file)" + ("; the earlier machine.toml was removed"
+                                                      if stale else ""))
     corners = region.points(machine, 2)
     write_sized_machine(path, machine, np.vstack([machine.home_pose, corners]), units=units,
                         name=f"{machine.name} (optimised)",

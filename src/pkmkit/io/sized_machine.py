@@ -84,8 +84,9 @@ def sized_machine_text(machine: Any, units: str = "m", *, name: str | None = Non
     if kind is None:
         raise UnsupportedExportError(_FORMAT, machine.id, "only machines of a built-in kind "
                                      "are written as a sized machine file (this one is "
-                                     "described leg by leg or element by element)")
-    defects = getattr(machine, "defects", None)
+                                     "described leg by leg or element by element, or has "
+                                     "geometric defects)")
+    defects = getattr(machine.model, "defects", None)
     if defects is not None and np.any(np.asarray(defects, dtype=float) != 0):
         raise UnsupportedExportError(_FORMAT, machine.id, "the machine has geometric defects")
     scale = length_scale(units)
