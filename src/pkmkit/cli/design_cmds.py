@@ -28,6 +28,7 @@ from pkmkit.design.orthoglide import size_orthoglide
 from pkmkit.exceptions import InputError, PkmError
 from pkmkit.io.atomic import check_output_dir
 from pkmkit.io.json_io import to_jsonable
+from pkmkit.io.sized_machine import box_corners, check_destination, write_sized_machine
 from pkmkit.model.parameters import length_scale
 from pkmkit.plot.design_figures import plot_pareto
 
@@ -72,6 +73,24 @@ def _max_leg(value: float | None, scale: float) -> float | None:
     return value * scale
 
 
+MACHINE_OUT_OPTION = click.option(
+    "--out", "machine_out", type=click.Path(dir_okay=False), metavar="FILE.toml",
+    help="Also write the sized machine as a machine file (lengths in --units) that "
+         "`pkmkit.load` and every --machine option read back.")
+
+
+def _write_machine(path: str | None, machine, center, side: float, units: str,
+                   name: str, command: str) -> str | None:
+    """Write the sized ``machine`` to ``path`` (if given), checked at home and at the corners of
+    the sized region (``center``, ``side`` in m), with ``name`` and the ``command`` that sized
+    it as its source; the path written, or None."""
+    if path is None:
+        return None
+    poses = np.vstack([machine.home_pose, box_corners(center, side)])
+    write_sized_machine(path, machine, poses, units=units, name=name, source=command)
+    return path
+
+
 def _echo_notes(notes) -> None:
     for note in notes:
         click.echo(f"  note: {note}")
@@ -87,14 +106,21 @@ def design() -> None:
 @click.option("--cube", "cube", type=float, required=True, help="Prescribed cube side Lw.")
 @BOUNDS_OPTION
 @click.option("--max-leg", type=float, help="Largest admissible leg length.")
+@MACHINE_OUT_OPTION
 @UNITS_OPTION
 @JSON_OPTION
-def design_orthoglide(cube, bounds, max_leg, units, as_json):
+def design_orthoglide(cube, bounds, max_leg, machine_out, units, as_json):
     """Seed 001's rule: Q1, Q2 on the diagonal, leg length, slider positions and strokes,
     compactness — verified over the whole cube."""
     scale = length_scale(units)
     lo, hi = _required_bounds(bounds)
+    if machine_out is not None:
+        check_destination(machine_out)
     res = size_orthoglide(cube * scale, (lo, hi), max_leg=_max_leg(max_leg, scale))
+    written = _write_machine(
+        machine_out, res.machine, 0.5 * (res.Q1 + res.Q2), res.cube_side, units,
+        f"Orthoglide for a {cube:g} {units} cube",
+        f"pkmkit design orthoglide --cube {cube:g} --bounds {lo:g},{hi:g} --units {units}")
     payload = {
         "cube": cube, "bounds": [lo, hi], "units": units,
         "L": res.L / scale, "stroke": res.stroke / scale, "compactness": res.compactness,
@@ -102,6 +128,7 @@ def design_orthoglide(cube, bounds, max_leg, units, as_json):
         "q_min": res.q_min / scale, "q_max": res.q_max / scale,
         "verified": _verified(res.check),
         "notes": list(res.notes),
+        "machine_file": written,
     }
     if as_json:
         emit_json(payload)
@@ -116,6 +143,12 @@ def design_orthoglide(cube, bounds, max_leg, units, as_json):
     click.echo(f"  verified on {res.check.samples} poses of the cube: factors in "
                f"{fmt(res.check.factor_range)}")
     _echo_notes(res.notes)
+    _echo_written(written)
+
+
+def _echo_written(path: str | None) -> None:
+    if path is not None:
+        click.echo(f"  machine file: {path}")
 
 
 @design.command("five-bar")
@@ -123,15 +156,20 @@ def design_orthoglide(cube, bounds, max_leg, units, as_json):
 @BOUNDS_OPTION
 @click.option("--design", "design_name", type=click.Choice(["isotropic", "biglide", "both"]),
               default="both", show_default=True)
+@MACHINE_OUT_OPTION
 @UNITS_OPTION
 @JSON_OPTION
-def design_five_bar(square, bounds, design_name, units, as_json):
+def design_five_bar(square, bounds, design_name, machine_out, units, as_json):
     """Seed 004's isotropic design (slide orientations from J⁻¹ = I) sized for a square
     workspace, compared with the biglide of the same size."""
     scale = length_scale(units)
     lo, hi = _required_bounds(bounds)
+    if machine_out is not None and design_name == "both":
+        raise InputError("--out writes one machine: choose --design isotropic or biglide")
+    if machine_out is not None:
+        check_destination(machine_out)
     names = ["isotropic", "biglide"] if design_name == "both" else [design_name]
-    results, failed = {}, {}
+    results, failed, written = {}, {}, None
     for name in names:
         try:
             res = size_five_bar(square * scale, (lo, hi), design=name)
@@ -140,6 +178,11 @@ def design_five_bar(square, bounds, design_name, units, as_json):
                 raise
             failed[name] = str(exc)
             continue
+        written = _write_machine(
+            machine_out, res.machine, res.square_center, square * scale, units,
+            f"{name} five-bar for a {square:g} {units} square",
+            f"pkmkit design five-bar --square {square:g} --bounds {lo:g},{hi:g} "
+            f"--design {name} --units {units}")
         results[name] = {
             "feasible": True,
             "L": res.L / scale, "A": res.A / scale, "B": res.B / scale,
@@ -153,7 +196,8 @@ def design_five_bar(square, bounds, design_name, units, as_json):
         raise InputError("; ".join(f"{k}: {v}" for k, v in failed.items()))
     designs = {**results, **{k: {"feasible": False, "reason": v} for k, v in failed.items()}}
     payload = {"square": square, "bounds": [lo, hi], "units": units, "angle_unit": "deg",
-               "isotropic_orientations_deg": isotropic_orientations(), "designs": designs}
+               "isotropic_orientations_deg": isotropic_orientations(), "designs": designs,
+               "machine_file": written}
     if as_json:
         emit_json(payload)
         return
@@ -170,6 +214,7 @@ def design_five_bar(square, bounds, design_name, units, as_json):
         _echo_notes(r["notes"])
     for name, reason in failed.items():
         click.echo(f"  {name}: infeasible — {reason}")
+    _echo_written(written)
 
 
 @design.command("linear-delta")
@@ -184,9 +229,11 @@ def design_five_bar(square, bounds, design_name, units, as_json):
               show_default=True,
               help="size: shortest arms; compactness: largest Lw/stroke with L <= --max-leg.")
 @click.option("--max-leg", type=float, help="Largest admissible arm length.")
+@MACHINE_OUT_OPTION
 @UNITS_OPTION
 @JSON_OPTION
-def design_linear_delta(cube, center_text, bounds, nacelle, objective, max_leg, units, as_json):
+def design_linear_delta(cube, center_text, bounds, nacelle, objective, max_leg, machine_out,
+                        units, as_json):
     """R, r, L and the slider strokes of a vertical-slide linear Delta for a prescribed cube
     with bounds on the transmission factors — verified by brute force over the cube."""
     scale = length_scale(units)
@@ -195,9 +242,17 @@ def design_linear_delta(cube, center_text, bounds, nacelle, objective, max_leg, 
               else None)
     if nacelle is not None and not (np.isfinite(nacelle) and nacelle > 0):
         raise InputError(f"--r must be a positive length, got {nacelle:g}")
+    if machine_out is not None:
+        check_destination(machine_out)
     res = size_linear_delta(cube * scale, (lo, hi), center=center,
                             r=None if nacelle is None else nacelle * scale,
                             objective=objective, max_leg=_max_leg(max_leg, scale))
+    written = _write_machine(
+        machine_out, res.machine, res.center, cube * scale, units,
+        f"linear Delta for a {cube:g} {units} cube",
+        f"pkmkit design linear-delta --cube {cube:g} --bounds {lo:g},{hi:g} "
+        f"--center {','.join(f'{v:g}' for v in res.center / scale)} "
+        f"--objective {objective} --units {units}")
     payload = {
         "cube": cube, "center": res.center / scale, "bounds": [lo, hi], "units": units,
         "objective": objective, "R": res.R / scale, "r": res.r / scale, "L": res.L / scale,
@@ -206,6 +261,7 @@ def design_linear_delta(cube, center_text, bounds, nacelle, objective, max_leg, 
         "index_range": list(res.index_range),
         "verified": _verified(res.check),
         "notes": list(res.notes),
+        "machine_file": written,
     }
     if as_json:
         emit_json(payload)
@@ -221,6 +277,7 @@ def design_linear_delta(cube, center_text, bounds, nacelle, objective, max_leg, 
     click.echo(f"  verified on {res.check.samples} poses of the cube: factors in "
                f"{fmt(res.check.factor_range)}")
     _echo_notes(res.notes)
+    _echo_written(written)
 
 
 def _parse_vary(text: str, scale: float, machine) -> Variable:
@@ -319,6 +376,8 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
     except OSError as exc:
         raise InputError(f"cannot write into {out_dir}: {exc.strerror or exc}") from None
     summary = result.summary(units)
+    summary["machine_file"], machine_note = _write_best(result, region, out / "machine.toml",
+                                                        units)
     if as_json:
         click.echo(json.dumps(to_jsonable(summary), indent=2))
         if summary["infeasibility"]:
@@ -331,11 +390,36 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
         click.echo("best: " + ", ".join(_shown(result, k, v, units)
                                         for k, v in summary["best"].items()
                                         if k != "feasible" and isinstance(v, float)))
+        click.echo(machine_note)
     elif len(objs) >= 2:
         click.echo(f"Pareto front: {len(result.pareto)} designs (pareto.csv, pareto.png)")
     else:
         raise InputError(f"{result.infeasibility(units)}; relax the constraints or widen the "
                          f"variables (all {len(result.records)} designs are in {out_dir}/)")
+
+
+def _write_best(result, region: Region, path, units: str) -> tuple[str | None, str]:
+    """Write the best design of a single-objective run to ``path`` (``machine.toml``), checked
+    at home and at the corners of the region: its path (None when nothing is written) and a
+    line saying what was done. A ``machine.toml`` left by an earlier run in the folder is
+    removed when this run writes none, so that it is never taken for this run's result."""
+    best = result.best
+    machine = None if best is None else result.problem.build(
+        np.array([best[v.name] for v in result.problem.variables]))
+    if machine is None or machine.kind is None:
+        stale = path.exists()
+        if stale:
+            path.unlink()
+        if best is None:
+            return None, ""
+        return None, ("machine file: not written (only machines of a built-in kind are "
+                      "written as a machine file)" + ("; the earlier machine.toml was removed"
+                                                      if stale else ""))
+    corners = region.points(machine, 2)
+    write_sized_machine(path, machine, np.vstack([machine.home_pose, corners]), units=units,
+                        name=f"{machine.name} (optimised)",
+                        source=f"pkmkit optimize, best design ({result.method})")
+    return str(path), f"machine file: {path}"
 
 
 def _shown(result, name: str, value: float, units: str) -> str:
