@@ -62,6 +62,7 @@ from pkmkit.calibration.solver import (
     problem_rows,
 )
 from pkmkit.exceptions import ConvergenceError, InputError, ParameterError, PkmError
+from pkmkit.geometric_errors.blas_threads import one_blas_thread
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
 from pkmkit.machines.strokes import signed_excess, stroke_limits
 from pkmkit.model.measurement_set import MeasurementSet
@@ -183,10 +184,9 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
 
 
 def single_threaded_blas():
-    """A context in which BLAS/LAPACK run on one thread (threadpoolctl)."""
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(limits=1, user_api="blas")
+    """A context in which BLAS/LAPACK run on one thread (the one limiter,
+    :func:`pkmkit.geometric_errors.blas_threads.one_blas_thread`)."""
+    return one_blas_thread()
 
 
 @dataclass

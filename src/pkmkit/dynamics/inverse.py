@@ -159,7 +159,7 @@ def _forces_block(machine: Machine, masses: MassProperties, x: np.ndarray, xd: n
     model = machine.model
     g = masses.gravity
     # batch-last layout: vectors are (3, ..., N) with contiguous components
-    a_leg, b_leg = machine._closed.jacobians_t(x, q)  # A (n, dims, N), diag B (n, N)
+    a_leg, b_leg = machine.closed_form.jacobians_t(x, q)  # A (n, dims, N), diag B (n, N)
     cof = small.cofactors(a_leg)
     with np.errstate(divide="ignore", invalid="ignore"):
         inv_det = 1.0 / small.det(a_leg, cof)

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
-from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.blas_threads import single_blas
 from pkmkit.geometric_errors.configurations import CHAIN_SPREAD, sample_configurations
 from pkmkit.geometric_errors.model import closure_linearisation, defect_set
 from pkmkit.geometric_errors.selection import select_defects

@@ -45,7 +45,7 @@ import numpy as np
 import scipy.linalg
 
 from pkmkit.exceptions import IdentifiabilityError, InputError
-from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.blas_threads import single_blas
 from pkmkit.geometric_errors.measurements import measurement_jacobian, measurement_rows
 from pkmkit.geometric_errors.model import defect_set
 from pkmkit.geometric_errors.selection import select_defects

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError, MeasurementError
-from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.blas_threads import single_blas
 from pkmkit.geometric_errors.model import _rod_index, tool_sensitivity
 
 MEASURES = ("point", "pose", "ballbar", "height", "part")

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError, ParameterError
-from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.blas_threads import single_blas
 
 
 @dataclass(frozen=True)

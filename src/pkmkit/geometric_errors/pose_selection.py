@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import IdentifiabilityError, InputError
-from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.blas_threads import single_blas
 from pkmkit.geometric_errors.configurations import sample_configurations
 from pkmkit.geometric_errors.identifiability import (
     INDICES,

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
-from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.blas_threads import single_blas
 from pkmkit.geometric_errors.configurations import sample_configurations
 from pkmkit.geometric_errors.identifiability import ANGLE_UNITS, characteristic_length
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity, with_defects

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError, ParameterError, ToleranceFileError
-from pkmkit.geometric_errors._blas import single_blas
+from pkmkit.geometric_errors.blas_threads import single_blas
 from pkmkit.geometric_errors.identifiability import ANGLE_UNITS
 from pkmkit.geometric_errors.model import _rod_index, defect_set, tool_sensitivity
 

@@ -420,8 +420,8 @@ def _check_mobility(reader: _Reader, machine: JointChainMachine,
             f"actuated joint(s) ({names}): the direct model needs exactly one actuator per "
             "degree of freedom", where)
     passive = np.flatnonzero(~model.actuated & model.loop_variables)
-    values = machine._home["values"][:, None]
-    platform = machine._home["platform"]
+    values = machine.home_values[:, None]
+    platform = machine.home_platform
     rot = rotvec_to_matrix(platform[3:]).transpose(1, 2, 0)
     c = closure(model, rot, platform[:3, None], values)
     cu = np.concatenate([c.platform, c.variables[:, passive]], axis=1)[:, :, 0]
@@ -472,7 +472,7 @@ def machine_file_text(machine: JointChainMachine, units: str = "m") -> str:
     q += [f'units = "{units}"',
           f"characteristic_length = {_toml_value(model.characteristic_length / scale)}",
           f"tool_length = {_toml_value(machine.tool_length / scale)}"]
-    home = dict(zip(model.variables, machine._home["values"], strict=True))
+    home = dict(zip(model.variables, machine.home_values, strict=True))
     for spec in model.elements:
         q += ["", "[[elements]]", f"name = {_toml_value(spec.name)}",
               f'type = "{spec.type}"']

@@ -194,6 +194,17 @@ class JointChainMachine(ChainVelocity, MachineFace):
         return tuple(self.model.variables[i] for i in self._passive)
 
     @property
+    def home_values(self) -> np.ndarray:
+        """``(n_variables,)`` every joint variable at home (actuated and passive; m, rad), in
+        ``model.variables`` order."""
+        return self._home["values"].copy()
+
+    @property
+    def home_platform(self) -> np.ndarray:
+        """``(6,)`` the platform pose at home (position m, rotation vector rad)."""
+        return self._home["platform"].copy()
+
+    @property
     def passive_variables(self) -> np.ndarray:
         """``(n_p,)`` indices (in ``model.variables``) of the passive joint variables solved by
         the closure, in :attr:`passive_names` order."""

@@ -135,6 +135,12 @@ class Machine(ModeNaming, MachineFace):
         return self.model.pose_names
 
     @property
+    def closed_form(self) -> RodClosedForm:
+        """The machine's closed-form kernels (:class:`~pkmkit.machines.closed_form.
+        RodClosedForm`: inverse, shortfall, batch-last Jacobians), built once."""
+        return self._closed
+
+    @property
     def actuator_quantities(self) -> tuple[str, ...]:
         """``"length"`` (m) or ``"angle"`` (rad) per actuator."""
         return self.model.actuator_quantities

@@ -72,7 +72,7 @@ def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
     x = np.ascontiguousarray(trajectory.x[:, :dims])
     xd = np.ascontiguousarray(trajectory.xd[:, :dims])
     xdd = np.ascontiguousarray(trajectory.xdd[:, :dims])
-    closed = machine._closed
+    closed = machine.closed_form
     q = closed.inverse(x, machine.model.leg_branch)
     unreachable = ~np.isfinite(q).all(axis=1)
     a, b = closed.jacobians_t(x, q)  # (n, dims, N), (n, N); NaN where unreachable

@@ -26,12 +26,17 @@ def _controller():
     return _CONTROLLER
 
 
+def one_blas_thread():
+    """A context in which BLAS/LAPACK run on one thread (restored afterwards)."""
+    return _controller().limit(limits=1, user_api="blas")
+
+
 def single_blas(func: F) -> F:
-    """Run ``func`` with the BLAS limited to one thread (restored afterwards)."""
+    """Run ``func`` with the BLAS limited to one thread (:func:`one_blas_thread`)."""
 
     @wraps(func)
     def wrapper(*args, **kwargs):
-        with _controller().limit(limits=1, user_api="blas"):
+        with one_blas_thread():
             return func(*args, **kwargs)
 
     return wrapper  # type: ignore[return-value]
