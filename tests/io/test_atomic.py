@@ -76,3 +76,34 @@ def test_sigterm_during_a_write_leaves_no_temporary(tmp_path):
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, timeout=120)
     assert proc.returncode == 143, proc.stderr.decode()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_output_set_is_written_whole_or_not_at_all(tmp_path, monkeypatch):
+    """A failure while staging the third file leaves neither the first two nor a temporary,
+    and the previous outputs stay as they were (issue 18 §6: no machine file without its report)."""
+    from pkmkit.io import atomic
+
+    (tmp_path / "machine.toml").write_text("old machine")
+    real_fsync = os.fsync
+    calls = {"n": 0}
+
+    def failing_fsync(fd):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise OSError(28, "No space left on device")
+        real_fsync(fd)
+
+    monkeypatch.setattr(atomic.os, "fsync", failing_fsync)
+    files = {tmp_path / "machine.toml": "new machine", tmp_path / "fig.png": b"\x89PNG",
+             tmp_path / "report.html": "<html>"}
+    with pytest.raises(InputError, match="none of the output set was written"):
+        atomic.write_files_atomic(files)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["machine.toml"]
+    assert (tmp_path / "machine.toml").read_text() == "old machine"
+    monkeypatch.setattr(atomic.os, "fsync", real_fsync)
+    written = atomic.write_files_atomic(files)
+    assert [p.name for p in written] == ["machine.toml", "fig.png", "report.html"]
+    assert (tmp_path / "machine.toml").read_text() == "new machine"
+    assert (tmp_path / "report.html").read_text() == "<html>"
+    mode = (tmp_path / "report.html").stat().st_mode & 0o777
+    assert mode == 0o666 & ~atomic._umask()

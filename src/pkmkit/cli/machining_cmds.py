@@ -102,7 +102,7 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
                  points, probe_radius, out_file, units, as_json):
     """Machine a part program with a machine with defects and probe it on a CMM."""
     from pkmkit.calibration.simulate import random_defects
-    from pkmkit.io.atomic import write_text_atomic as atomic_write_text
+    from pkmkit.io.atomic import write_files_atomic
     from pkmkit.io.machine_defects import machine_text_with_defects
     from pkmkit.machining.cmm import CMM_SIGMA, format_cmm
     from pkmkit.machining.part import Placement
@@ -145,8 +145,7 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
                                          f"{seed})")
         note += f"\ntrue machine: {truth_path.name}"
     texts[Path(out_file)] = format_cmm(cmm, units=unit, comment=note)
-    for path, text in texts.items():
-        atomic_write_text(path, text)
+    write_files_atomic(texts)  # the CMM file and its true machine together or not at all
     payload = {"machine": nominal.id, "sections": len(part.s), "points": len(cmm.label),
                "passes": len(set(part.path)), "out": str(out_file), "units": unit,
                "truth": None if truth_path is None else str(truth_path),

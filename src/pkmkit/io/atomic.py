@@ -149,3 +149,43 @@ def _umask() -> int:
     current = os.umask(0)
     os.umask(current)
     return current
+
+
+def write_files_atomic(files: dict[str | Path, bytes | str]) -> list[Path]:
+    """Write a set of files that belong together (a report and the machine file it describes)
+    so that a failure leaves none of them: every file is first written in full to its
+    temporary file (text as UTF-8), and only when all are complete are they renamed into
+    place, in the given order. Returns the destinations.
+
+    A failure while staging (full disk, read-only folder, an interruption) removes every
+    temporary file and leaves the previous outputs, if any, untouched.
+
+    Raises:
+        InputError: a destination cannot be written, or the disk is full.
+    """
+    staged: list[tuple[Path, Path]] = []
+    try:
+        for path, payload in files.items():
+            target = check_output_file(path)
+            directory = target.parent if str(target.parent) else Path(".")
+            sweep_stale_temporaries(directory)
+            handle, temp = tempfile.mkstemp(prefix=f".{target.name}.{TEMP_TAG}{os.getpid()}.",
+                                            suffix=f".part{target.suffix}", dir=directory)
+            staged.append((Path(temp), target))
+            data = payload.encode("utf-8") if isinstance(payload, str) else payload
+            with os.fdopen(handle, "wb") as stream:
+                stream.write(data)
+                stream.flush()
+                os.fsync(stream.fileno())
+            os.chmod(temp, 0o666 & ~_umask())
+    except BaseException as exc:
+        for temp, _ in staged:
+            with contextlib.suppress(OSError):
+                temp.unlink()
+        if isinstance(exc, OSError):
+            raise InputError(f"{path}: cannot write file: {exc.strerror or exc}; "
+                             "none of the output set was written") from None
+        raise
+    for temp, target in staged:
+        os.replace(temp, target)
+    return [target for _, target in staged]

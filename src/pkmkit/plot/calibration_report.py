@@ -18,8 +18,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit import __version__
-from pkmkit.io.atomic import write_bytes_atomic as atomic_write_bytes
-from pkmkit.io.atomic import write_text_atomic as atomic_write_text
+from pkmkit.io.atomic import write_files_atomic
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.io.machine_defects import machine_text_with_defects
 from pkmkit.model.parameters import length_scale
@@ -382,13 +381,10 @@ def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: st
         from pkmkit.exceptions import InputError
 
         raise InputError(f"cannot create {out}: {exc.strerror or exc}") from None
-    written = {}
-    for name, png in figures.items():
-        atomic_write_bytes(out / f"{name}.png", png)
-        written[f"{name}.png"] = str(out / f"{name}.png")
-    for name, text in texts.items():
-        atomic_write_text(out / name, text)
-        written[name] = str(out / name)
+    files: dict[Path, bytes | str] = {out / f"{name}.png": png for name, png in figures.items()}
+    files.update({out / name: text for name, text in texts.items()})
+    write_files_atomic(files)  # all or none: a failure leaves no machine file without its report
+    written = {path.name: str(path) for path in files}
     stale = out / machine_name
     if not machine_file and stale.exists():  # an earlier run's file must not pass for this one
         stale.unlink()
