@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
+from pkmkit.progress import tracked
 
 #: Default rows per task for pose-level work: large enough that the per-task overhead of Dask
 #: (a few ms) is small against the batched call, small enough to spread over the workers.
@@ -62,9 +63,11 @@ class SerialExecutor:
     description = "serial (this process)"
     workers = 1
 
-    def map(self, func: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
-        """``[func(item) for item in items]``."""
-        return [func(item) for item in items]
+    def map(self, func: Callable[[Any], Any], items: Sequence[Any], *,
+            label: str = "") -> list[Any]:
+        """``[func(item) for item in items]`` (with a progress bar in a
+        :func:`pkmkit.progress.progress_display` scope)."""
+        return [func(item) for item in tracked(items, total=len(items), label=label)]
 
 
 class DaskExecutor:
@@ -86,7 +89,8 @@ class DaskExecutor:
         threads = sum(w.get("nthreads", 0) for w in workers.values())
         return f"dask {info.get('address', '?')} ({len(workers)} workers, {threads} threads)"
 
-    def map(self, func: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
+    def map(self, func: Callable[[Any], Any], items: Sequence[Any], *,
+            label: str = "") -> list[Any]:
         """Every ``func(item)`` as one task; results in the order of ``items``. An exception
         raised by a task is raised here (the first one, with its type)."""
         if not items:
@@ -96,6 +100,9 @@ class DaskExecutor:
             # data blocks go to the workers directly, not inside the task graph
             items = self.client.scatter(items)
         futures = self.client.map(func, items, pure=False)
+        distributed = _require_distributed()
+        for _ in tracked(distributed.as_completed(futures), total=len(futures), label=label):
+            pass
         return self.client.gather(futures)
 
 
@@ -181,7 +188,7 @@ class _RangeTask:
 
 
 def map_chunks(func: Callable[..., Any], size: int, *, chunk: int = DEFAULT_CHUNK,
-               scheduler: Any = None, args: tuple = ()) -> list[Any]:
+               scheduler: Any = None, args: tuple = (), label: str = "") -> list[Any]:
     """Results of ``func(start, stop, *args)`` for consecutive index ranges of ``range(size)``,
     one task per range, in order.
 
@@ -193,9 +200,10 @@ def map_chunks(func: Callable[..., Any], size: int, *, chunk: int = DEFAULT_CHUN
         chunk: rows per task.
         scheduler: where to run (see the module documentation).
         args: extra arguments passed to every task (sent once per task).
+        label: what the progress bar says (see :mod:`pkmkit.progress`).
     """
     with executor(scheduler) as ex:
-        return ex.map(_RangeTask(func, args), chunk_ranges(size, chunk))
+        return ex.map(_RangeTask(func, args), chunk_ranges(size, chunk), label=label)
 
 
 class _RowsTask:
@@ -207,14 +215,14 @@ class _RowsTask:
 
 
 def map_rows(func: Callable[..., Any], rows: Any, *, chunk: int = DEFAULT_CHUNK,
-             scheduler: Any = None, args: tuple = ()) -> Any:
+             scheduler: Any = None, args: tuple = (), label: str = "") -> Any:
     """``func(rows[start:stop], *args)`` for consecutive row blocks of ``rows``, joined back
     along the first axis with :func:`concatenate` — for work that is row by row, the same
     answer as ``func(rows, *args)``."""
     rows = np.asarray(rows)
     blocks = [rows[a:b] for a, b in chunk_ranges(len(rows), chunk)]
     with executor(scheduler) as ex:
-        return concatenate(ex.map(_RowsTask(func, args), blocks))
+        return concatenate(ex.map(_RowsTask(func, args), blocks, label=label))
 
 
 def concatenate(parts: Sequence[Any]) -> Any:

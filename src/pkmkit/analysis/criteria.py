@@ -16,6 +16,7 @@ from pkmkit.machines.machine import SINGULARITY_TOL, Machine
 from pkmkit.machines.strokes import signed_excess
 from pkmkit.numerics.arrays import real, real_pair
 from pkmkit.parallel import map_chunks
+from pkmkit.progress import tracked
 from pkmkit.status import Status
 
 MASK_NAMES = ("reachable", "strokes", "bounds", "condition", "mode")
@@ -87,8 +88,10 @@ def evaluate_poses(machine: Machine, points: np.ndarray, criteria: Criteria) -> 
     points = np.asarray(points, dtype=float)
     if len(points) <= EVALUATION_CHUNK:
         return _evaluate_chunk(machine, points, criteria)
+    starts = range(0, len(points), EVALUATION_CHUNK)
+    label = f"{machine.id}: {len(points):,} poses"
     return _concatenate([_evaluate_chunk(machine, points[k:k + EVALUATION_CHUNK], criteria)
-                         for k in range(0, len(points), EVALUATION_CHUNK)])
+                         for k in tracked(starts, total=len(starts), label=label)])
 
 
 def evaluate_grid(machine: Machine, grid: Grid, criteria: Criteria, *,
@@ -100,7 +103,8 @@ def evaluate_grid(machine: Machine, grid: Grid, criteria: Criteria, *,
     if scheduler is None:
         return _evaluate_range(0, grid.size, machine, grid, criteria)
     parts = map_chunks(_evaluate_range, grid.size, chunk=TASK_CHUNKS * EVALUATION_CHUNK,
-                       scheduler=scheduler, args=(machine, grid, criteria))
+                       scheduler=scheduler, args=(machine, grid, criteria),
+                       label=f"{machine.id}: {grid.size:,} poses")
     return parts[0] if len(parts) == 1 else _concatenate(parts)
 
 
@@ -110,10 +114,14 @@ TASK_CHUNKS = 4
 
 def _evaluate_range(start: int, stop: int, machine: Machine, grid: Grid,
                     criteria: Criteria) -> PoseEvaluation:
-    """Grid points ``start:stop`` evaluated in chunks of :data:`EVALUATION_CHUNK`."""
-    parts = [_evaluate_chunk(machine, grid.points_between(k, min(k + EVALUATION_CHUNK, stop)),
-                             criteria)
-             for k in range(start, stop, EVALUATION_CHUNK)]
+    """Grid points ``start:stop`` evaluated in chunks of at most :data:`EVALUATION_CHUNK`
+    (about 50 of them on a large grid, so that a progress bar moves; every pose is evaluated
+    on its own, so the chunking does not change a result)."""
+    chunk = int(np.clip((stop - start) // 50, 2048, EVALUATION_CHUNK))
+    starts = range(start, stop, chunk)
+    parts = [_evaluate_chunk(machine, grid.points_between(k, min(k + chunk, stop)), criteria)
+             for k in tracked(starts, total=len(starts),
+                              label=f"{machine.id}: {stop - start:,} poses")]
     return parts[0] if len(parts) == 1 else _concatenate(parts)
 
 

@@ -431,9 +431,16 @@ def demo(out_dir: str, quick: bool) -> None:
 
 def main() -> None:
     """Console-script entry point. SIGTERM ends the command as Ctrl-C does, through the normal
-    exits, so that no temporary or partial output file is left (:mod:`pkmkit.io.atomic`)."""
+    exits, so that no temporary or partial output file is left (:mod:`pkmkit.io.atomic`).
+    Warnings are shown as one-line notes (:mod:`pkmkit.cli.notes`), and work that runs past
+    two seconds shows a progress bar on a terminal (:mod:`pkmkit.progress`)."""
+    from pkmkit.cli.notes import install_warning_notes
+    from pkmkit.progress import progress_display
+
     exit_on_sigterm()
-    cli(prog_name="pkmkit")
+    install_warning_notes()
+    with progress_display():
+        cli(prog_name="pkmkit")
 
 
 def exit_on_sigterm() -> None:
