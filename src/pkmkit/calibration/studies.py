@@ -40,6 +40,7 @@ from pkmkit.calibration.simulate import (
 )
 from pkmkit.model.defects_table import apply_defect_vector
 from pkmkit.model.measurement_set import MeasurementSet
+from pkmkit.progress import tracked
 
 #: Seed 002's results (m): identification and validation residuals (L2003, L2015) and the
 #: baselines of Kang's data (neural network, Puchtler's model).
@@ -219,7 +220,7 @@ def tripteor_noise_sweep(scales: tuple[float, ...] = (0.0, 1.0, 2.0), **kwargs: 
         ``validation_max`` (tool-point errors after calibration, m).
     """
     rows = []
-    for scale in scales:
+    for scale in tracked(scales, total=len(scales), label="noise sweep", unit="level"):
         r = tripteor_laser_tracker(noise_scale=scale, thesis_set=False, **kwargs).result
         rows.append({"scale": float(scale), "sigma": float(scale) * TRACKER_SIGMA,
                      "identified": len(r.names),
