@@ -41,7 +41,7 @@ def assembly_modes() -> None:
 
 def analysis() -> None:
     """The analysis figures of docs/analysis.md (the same studies as ``pkmkit demo``)."""
-    from pkmkit.cli.demo_analysis import (
+    from pkmkit.demos.analysis import (
         delta_actuator_maps,
         five_bar_comparison,
         machine_analysis,
@@ -55,7 +55,7 @@ def analysis() -> None:
 
 def design() -> None:
     """The design figures of docs/design.md (the same studies as ``pkmkit demo``)."""
-    from pkmkit.cli.demo_design import delta_pareto, orthoglide_sizing
+    from pkmkit.demos.design import delta_pareto, orthoglide_sizing
 
     orthoglide_sizing(OUT)
     delta_pareto(OUT, generations=40)
@@ -63,7 +63,7 @@ def design() -> None:
 
 def motion() -> None:
     """The trajectory figures of docs/motion.md (the same studies as ``pkmkit demo``)."""
-    from pkmkit.cli.demo_motion import facing, seed_circle, seed_helix, seed_line
+    from pkmkit.demos.motion import facing, seed_circle, seed_helix, seed_line
 
     seed_circle(OUT)
     seed_helix(OUT)
@@ -73,7 +73,7 @@ def motion() -> None:
 
 def errors() -> None:
     """The figures of docs/errors.md."""
-    from pkmkit.cli.demo_errors import hexapod_accuracy_map
+    from pkmkit.demos.errors import hexapod_accuracy_map
     from pkmkit.geometric_errors.compatibility import compatibility
     from pkmkit.geometric_errors.sensitivity import sensitivity_analysis
     from pkmkit.plot.error_figures import plot_sensitivity
@@ -118,8 +118,8 @@ def full_pose() -> None:
     from click.testing import CliRunner
 
     from pkmkit.analysis.orientation import coupled_orientation, orientation_workspace
-    from pkmkit.cli.demo_machines import _plot_modes, _plot_tilt, _plot_tilt_map
     from pkmkit.cli.main import cli
+    from pkmkit.demos.machines import _plot_modes, _plot_tilt, _plot_tilt_map
 
     hexapod = pkmkit.machine("gough-stewart")
     draw_machine(hexapod, hexapod.reference_poses()["tilted"], path=OUT / "gough-stewart.png")

@@ -32,7 +32,7 @@ def test_delta_height_probe_trap_and_flatness():
 
 def test_demo_study_writes_reports(tmp_path, monkeypatch):
     """The demo entry point, with the studies made small."""
-    from pkmkit.cli import demo_calibration
+    from pkmkit.demos import calibration as demo_calibration
 
     monkeypatch.setattr(demo_calibration, "tripteor_laser_tracker",
                         lambda: studies.tripteor_laser_tracker(identification=40, validation=12,

@@ -70,7 +70,7 @@ def test_identifiability_and_pose_selection(run, as_json, tmp_path):
 
 def test_demo_summary(tmp_path):
     from pkmkit.calibration.identifiability import observability
-    from pkmkit.cli.demo_errors import error_summary
+    from pkmkit.demos.errors import error_summary
 
     s = error_summary(tmp_path)
     comp = s["tripteor_compatibility"]

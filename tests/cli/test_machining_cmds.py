@@ -43,7 +43,7 @@ def test_a_bad_cmm_file_names_its_line(run, tmp_path):
 
 
 def test_demo_writes_the_chain(tmp_path, monkeypatch):
-    from pkmkit.cli import demo_machining
+    from pkmkit.demos import machining as demo_machining
     from pkmkit.machining import study
 
     monkeypatch.setattr(demo_machining, "machined_part_study",

@@ -10,7 +10,7 @@ import json
 import numpy as np
 import pytest
 
-from pkmkit.cli.coordinates import pose_columns, pose_to_cli
+from pkmkit.boundary.coordinates import pose_columns, pose_to_cli
 from pkmkit.machines.registry import machine
 from tests.machines.test_strokes import (
     _crank_slider_with_strokes,
@@ -71,7 +71,7 @@ def test_single_ik_and_fk_beyond_a_stroke_exit_3(run, tmp_path, ident):
 
 
 def _q_cli(m, q):
-    from pkmkit.cli.coordinates import actuator_scales
+    from pkmkit.boundary.coordinates import actuator_scales
 
     return np.asarray(q) / actuator_scales(m, "m")
 

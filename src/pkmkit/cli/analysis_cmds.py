@@ -19,6 +19,14 @@ from pkmkit.analysis.workspace import (
     check_region_samples,
     compute_workspace,
 )
+from pkmkit.boundary.coordinates import (
+    actuator_scales,
+    actuator_units,
+    parse_numbers,
+    pose_from_cli,
+    pose_to_cli,
+    pose_widths,
+)
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import MAX_COORDINATE, Machine
 from pkmkit.model.parameters import length_scale
@@ -30,14 +38,6 @@ from pkmkit.plot.maps import (
     plot_workspace,
 )
 
-from .coordinates import (
-    actuator_scales,
-    actuator_units,
-    parse_numbers,
-    pose_from_cli,
-    pose_to_cli,
-    pose_widths,
-)
 from .options import (
     ANGLES_OPTION,
     JSON_OPTION,

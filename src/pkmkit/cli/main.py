@@ -16,6 +16,7 @@ import click
 import numpy as np
 
 from pkmkit import __version__
+from pkmkit.boundary.coordinates import actuator_scales, actuator_units, parse_actuators
 from pkmkit.exceptions import InputError, PkmError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.registry import machine as builtin_machine
@@ -25,7 +26,6 @@ from pkmkit.spatial.rotation import resolve_convention
 from pkmkit.status import Status
 
 from .batch import batch_options, run_batch, status_names
-from .coordinates import actuator_scales, actuator_units, parse_actuators
 from .describe import describe_machine, print_description
 from .lazy import LazyGroup
 from .options import (
@@ -421,7 +421,7 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
                    "search: every study runs, faster, with less refined numbers and figures.")
 def demo(out_dir: str, quick: bool) -> None:
     """Kinematic summary and analysis of every built-in machine (text, JSON and figures)."""
-    from .demo import run_demo
+    from pkmkit.demos.run import run_demo
 
     try:
         run_demo(Path(out_dir), quick=quick)

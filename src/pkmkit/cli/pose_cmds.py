@@ -1,7 +1,7 @@
 """``ik``, ``fk`` and ``jacobian`` for full-pose (6-DOF) and joint-chain machines.
 
 The translational machines' commands live in :mod:`pkmkit.cli.main`, which dispatches here for
-the other families. Coordinates on the command line follow :mod:`pkmkit.cli.coordinates`.
+the other families. Coordinates on the command line follow :mod:`pkmkit.boundary.coordinates`.
 """
 
 from __future__ import annotations
@@ -11,11 +11,7 @@ from typing import Any
 import click
 import numpy as np
 
-from pkmkit.model.parameters import length_scale
-from pkmkit.status import Status
-
-from .batch import run_batch, status_names
-from .coordinates import (
+from pkmkit.boundary.coordinates import (
     actuator_scales,
     actuator_units,
     parse_actuators,
@@ -25,6 +21,10 @@ from .coordinates import (
     pose_to_cli,
     pose_widths,
 )
+from pkmkit.model.parameters import length_scale
+from pkmkit.status import Status
+
+from .batch import run_batch, status_names
 from .options import emit_json, fmt
 from .stroke_flags import BatchFlags, add_to_payload, finish_single, hint, single_check
 

@@ -1,9 +1,9 @@
 """``pkmkit stiffness``: Cartesian stiffness, compliance and deflection of any machine.
 
-Values on the command line follow :mod:`pkmkit.cli.coordinates` (lengths in ``--units``, angles in
-degrees); the elastic data are always SI (N/m, N·m/rad, Pa), section dimensions in ``--units``.
-Text output shows stiffnesses in N/µm (translation) and N·m/µrad (rotation); ``--json`` gives
-every matrix in SI.
+Values on the command line follow :mod:`pkmkit.boundary.coordinates` (lengths in ``--units``,
+angles in degrees); the elastic data are always SI (N/m, N·m/rad, Pa), section dimensions in
+``--units``. Text output shows stiffnesses in N/µm (translation) and N·m/µrad (rotation);
+``--json`` gives every matrix in SI.
 """
 
 from __future__ import annotations
@@ -13,12 +13,7 @@ from typing import Any
 import click
 import numpy as np
 
-from pkmkit.exceptions import InputError
-from pkmkit.model.parameters import length_scale
-from pkmkit.spatial.rotation import resolve_convention
-
-from .batch import batch_options, run_batch, status_names
-from .coordinates import (
+from pkmkit.boundary.coordinates import (
     actuator_scales,
     parse_actuators,
     parse_numbers,
@@ -26,6 +21,11 @@ from .coordinates import (
     pose_from_cli,
     pose_widths,
 )
+from pkmkit.exceptions import InputError
+from pkmkit.model.parameters import length_scale
+from pkmkit.spatial.rotation import resolve_convention
+
+from .batch import batch_options, run_batch, status_names
 from .options import (
     ANGLES_OPTION,
     JSON_OPTION,

@@ -1,4 +1,4 @@
-"""Seed 003's machined-part chain in ``pkmkit demo`` (called by :mod:`pkmkit.cli.demo_calibration`):
+"""Seed 003's machined-part chain in ``pkmkit demo`` (called by :mod:`pkmkit.demos.calibration`):
 the test part's G-code machined by the Verne-type module (illustrative dimensions) with random
 defects, probed on a simulated CMM, the tool centres reconstructed, the machine identified,
 compensated, and the validation part's deviations printed beside the seed's figures. Writes

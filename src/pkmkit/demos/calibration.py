@@ -1,4 +1,4 @@
-"""Calibration part of ``pkmkit demo`` (to be called by :mod:`pkmkit.cli.demo`): a full
+"""Calibration part of ``pkmkit demo`` (to be called by :mod:`pkmkit.demos.run`): a full
 calibration study on synthetic data — the Tripteor X7 with seed 002's laser-tracker protocol and
 the Verne-type module with seed 003's machined part — each written as a calibration directory
 (measurements, calibrated machine file, figures, ``report.html``).
@@ -74,7 +74,7 @@ def run_calibration_demo(out_dir: str | Path, *, echo: bool = True) -> dict[str,
     say(f"calibration, Verne machined part: compensated part within {v['along_x']:.4f} mm along"
         f" x and {v['along_y']:.4f} mm along y (seed 003: < 0.02 and < 0.04 mm)")
 
-    from pkmkit.cli.demo_machining import run_machining_demo
+    from pkmkit.demos.machining import run_machining_demo
 
     summary["verne_cmm"] = run_machining_demo(out, say)
     return to_jsonable(summary)

@@ -4,9 +4,9 @@ For each built-in preset and each of its reference poses: inverse model, direct 
 assembly mode (and every real mode), J, velocity transmission factors, conditioning and the
 singularity class, plus the machine's mobility. Printed as text, written as JSON
 (``summary.json`` and one file per machine), with a drawing of each machine (PNG). Then the
-analysis studies of :mod:`pkmkit.cli.demo_analysis` (workspaces, maps, the seed studies), the
-design studies of :mod:`pkmkit.cli.demo_design` and the trajectories with actuator forces of
-:mod:`pkmkit.cli.demo_motion`.
+analysis studies of :mod:`pkmkit.demos.analysis` (workspaces, maps, the seed studies), the
+design studies of :mod:`pkmkit.demos.design` and the trajectories with actuator forces of
+:mod:`pkmkit.demos.motion`.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from typing import Any
 import click
 import numpy as np
 
+from pkmkit.boundary.describe import describe_machine
 from pkmkit.io.atomic import check_output_dir, write_text_atomic
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.machines.machine import Machine
@@ -25,10 +26,9 @@ from pkmkit.machines.registry import ALIASES, machine, machines
 from pkmkit.plot.drawing import draw_machine
 from pkmkit.status import Status
 
-from .demo_analysis import run_analysis_demo
-from .demo_design import run_design_demo
-from .demo_motion import run_motion_demo
-from .describe import describe_machine
+from .analysis import run_analysis_demo
+from .design import run_design_demo
+from .motion import run_motion_demo
 
 
 def pose_summary(m: Machine, name: str, pose: np.ndarray) -> dict[str, Any]:
@@ -89,13 +89,13 @@ def run_demo(out_dir: Path, quick: bool = False) -> dict[str, Any]:
     analysis = run_analysis_demo(out_dir, list(summaries), quick)
     design = run_design_demo(out_dir, quick)
     motion = run_motion_demo(out_dir)
-    from .demo_calibration import run_calibration_demo
-    from .demo_errors import error_summary
-    from .demo_machines import run_chain_demo, run_full_pose_demo
+    from .calibration import run_calibration_demo
+    from .errors import error_summary
+    from .machines import run_chain_demo, run_full_pose_demo
 
     full_pose = run_full_pose_demo(out_dir, quick)
     chains = run_chain_demo(out_dir, quick)
-    from .demo_stiffness import run_stiffness_demo
+    from .stiffness import run_stiffness_demo
 
     stiffness = run_stiffness_demo(out_dir / "stiffness", quick)
     click.echo("\n== geometric errors (figures in errors/)")
