@@ -33,6 +33,8 @@ def orthoglide_sizing(out: Path) -> dict[str, Any]:
                      "compactness": r.compactness, "side_over_L": r.side_over_L})
     plot_sizing_sweep(rows, x="psi_max", ys=("compactness", "side_over_L"),
                       xlabel="ψmax (ψmin = 1/ψmax)",
+                      labels={"compactness": "compactness Lw/stroke",
+                              "side_over_L": "cube side / leg length Lw/L"},
                       title="Orthoglide for a 200 mm cube: Lw/stroke and Lw/L vs the bounds",
                       path=out / "orthoglide-sizing-sweep.png")
     return {"prototype": {"L": proto.L, "stroke": proto.stroke, "compactness": proto.compactness,

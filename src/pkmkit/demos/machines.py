@@ -14,6 +14,7 @@ Writes figures into ``OUT/full-pose/`` and ``OUT/joint-chains/`` and returns JSO
 
 from __future__ import annotations
 
+import re
 import time
 from pathlib import Path
 from typing import Any
@@ -134,6 +135,16 @@ def _span(values) -> str:
     return f"{values[0] * 1000:.1f}..{values[1] * 1000:.1f}"
 
 
+_LINE_STYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1, 1, 1)))
+_MARKERS = ("o", "s", "^", "v", "D")
+
+
+def _symbol_and_leg(label: str) -> tuple[str, str]:
+    """``("θ", "2")`` for ``"θ2"``: a joint's symbol and its leg number (``""`` without)."""
+    match = re.fullmatch(r"(.*?)(\d+)", label)
+    return (match.group(1), match.group(2)) if match else (label, "")
+
+
 def _passive_move(m, name: str, path: Path) -> dict[str, Any]:
     """The passive joints while actuator ``name`` sweeps its stroke (or ±5 % around home)."""
     k = m.actuator_names.index(name)
@@ -146,20 +157,31 @@ def _passive_move(m, name: str, path: Path) -> dict[str, Any]:
     q = np.tile(home, (len(values), 1))
     q[:, k] = values
     res = m.fk(q, full_output=True, strokes="ignore")
-    fig = Figure(figsize=(7.5, 4.6), layout="constrained")
+    fig = Figure(figsize=(8.2, 4.6), layout="constrained")
     ax = fig.add_subplot()
     ranges = {}
+    legs: dict[str, int] = {}
+    kinds: dict[str, int] = {}
     for i, joint in enumerate(m.passive_names):
         element = next(e for e in m.model.elements if e.name == joint)
         if element.type != "R":
             continue
         deg = np.degrees(res.passive[:, i])
         ranges[joint] = (float(np.nanmin(deg)), float(np.nanmax(deg)))
-        ax.plot(values * 1000, deg - deg[len(deg) // 2], label=element.display or joint)
+        label = element.display or joint
+        # one colour per leg (the label's number), one line style and marker per joint symbol
+        kind, leg = _symbol_and_leg(label)
+        colour = f"C{legs.setdefault(leg, len(legs)) % 10}"
+        style = kinds.setdefault(kind, len(kinds))
+        ax.plot(values * 1000, deg - deg[len(deg) // 2], label=label, color=colour,
+                linestyle=_LINE_STYLES[style % len(_LINE_STYLES)],
+                marker=_MARKERS[style % len(_MARKERS)], markevery=(style, 8), markersize=4)
     ax.set_xlabel(f"{name} [mm]")
     ax.set_ylabel("passive joint − its value at mid-stroke [deg]")
-    ax.set_title(f"{m.name}: passive joints while {name} moves (others at home)", fontsize=9)
-    ax.legend(fontsize=7, ncol=2)
+    ax.set_title(f"{m.name}: passive joints while {name} moves (others at home);\n"
+                 "colour: leg, line and marker: joint", fontsize=9)
+    ax.legend(fontsize=7, ncol=1 if len(ranges) <= 12 else 2, loc="center left",
+              bbox_to_anchor=(1.01, 0.5))
     ax.grid(alpha=0.3)
     save_figure(fig, path, dpi=120)
     return {"move": f"{name} from {lo * 1000:.1f} to {hi * 1000:.1f} mm", "ranges_deg": ranges,
@@ -245,6 +267,9 @@ def _plot_modes(m, modes, path: Path) -> None:
     ax.scatter(*p[w], color="crimson", marker="*", s=150, label="working mode")
     ax.set_title(f"Dietmaier's general hexapod: its {count} real assembly modes\n(platform "
                  "origins, m) for one set of strut lengths", fontsize=8)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
     ax.legend(fontsize=7)
     save_figure(fig, path, dpi=120)
 

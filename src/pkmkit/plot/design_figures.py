@@ -61,13 +61,16 @@ def plot_pareto(result: OptimizationResult, *,
 
 
 def plot_sizing_sweep(rows: Sequence[dict[str, float]], *, x: str, ys: Sequence[str],
-                      xlabel: str, title: str = "", path: str | Path | None = None) -> Figure:
-    """Curves of several sizing results (``ys``) against a swept input ``x``."""
+                      xlabel: str, title: str = "", labels: dict[str, str] | None = None,
+                      path: str | Path | None = None) -> Figure:
+    """Curves of several sizing results (``ys``) against a swept input ``x``; ``labels`` maps
+    a result's key to the words of its legend entry (default: the key)."""
     fig = Figure(figsize=(6.4, 4.6), layout="constrained")
     ax = fig.add_subplot()
     xs = [r[x] for r in rows]
+    labels = labels or {}
     for name in ys:
-        ax.plot(xs, [r[name] for r in rows], "o-", label=name)
+        ax.plot(xs, [r[name] for r in rows], "o-", label=labels.get(name, name))
     ax.set_xlabel(xlabel)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)

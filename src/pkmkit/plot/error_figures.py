@@ -42,24 +42,30 @@ def plot_sensitivity(table, path: str | Path, *, top: int = 30, unit: str = "mm"
     return path
 
 
-def plot_accuracy_map(amap, path: str | Path, *, unit: str = "mm", title: str = "") -> Path:
-    """Two panels: exact Monte Carlo and first-order percentile of the tool-point error."""
+def plot_accuracy_map(amap, path: str | Path, *, unit: str = "mm", title: str = "",
+                      position_unit: str = "mm") -> Path:
+    """Two panels: exact Monte Carlo and first-order percentile of the tool-point error.
+
+    ``unit`` ("mm" or "µm") is the unit of the errors (the colour scale); the positions are
+    drawn in ``position_unit`` ("mm" or "m"), so that the axes of a workspace hundreds of mm
+    wide keep readable ticks when the errors are in µm."""
     scale, label = (1e3, "mm") if unit == "mm" else (1e6, "µm")
+    pscale, plabel = (1.0, "m") if position_unit == "m" else (1e3, "mm")
     fig = Figure(figsize=(10, 4.2))
     vmax = np.nanmax([np.nanmax(amap.exact), np.nanmax(amap.first_order)]) * scale
     vmin = np.nanmin([np.nanmin(amap.exact), np.nanmin(amap.first_order)]) * scale
     for k, (data, name) in enumerate(((amap.exact, "exact model (Monte Carlo)"),
                                       (amap.first_order, "first order, same samples"))):
         ax = fig.add_subplot(1, 2, k + 1)
-        mesh = ax.pcolormesh(amap.x * scale, amap.y * scale, data * scale, shading="nearest",
+        mesh = ax.pcolormesh(amap.x * pscale, amap.y * pscale, data * scale, shading="nearest",
                              vmin=vmin, vmax=vmax, cmap="viridis")
-        ax.set_xlabel(f"{amap.axes[0]} ({label})")
-        ax.set_ylabel(f"{amap.axes[1]} ({label})")
+        ax.set_xlabel(f"{amap.axes[0]} ({plabel})")
+        ax.set_ylabel(f"{amap.axes[1]} ({plabel})")
         ax.set_aspect("equal")
         ax.set_title(name, fontsize=9)
         fig.colorbar(mesh, ax=ax, label=f"{amap.level:g}th percentile of |error| ({label})")
     fixed = ", ".join(f"{n} = {np.degrees(v):.4g}°" if n in ("rx", "ry", "rz") else
-                      f"{n} = {v * scale:.4g} {label}" for n, v in amap.fixed.items())
+                      f"{n} = {v * pscale:.4g} {plabel}" for n, v in amap.fixed.items())
     fig.suptitle(title or f"tool-point error, {amap.n_samples} samples per point"
                  + (f" ({fixed})" if fixed else ""), fontsize=10)
     fig.tight_layout()

@@ -332,7 +332,8 @@ def plot_ellipses(machine: Machine, poses: np.ndarray, *, free: tuple[int, int] 
     ax.set_ylabel(f"{names[j]} [m]")
     ax.set_aspect("equal", adjustable="datalim")
     ax.autoscale_view()
-    ax.set_title(title or f"velocity ellipses (scale {scale:.3g} m per m/s)", fontsize=9)
+    ax.set_title(title or f"{machine.name}: velocity ellipses {{J q̇ : ‖q̇‖ ≤ 1}} "
+                          f"(scale {scale:.3g} m per m/s)", fontsize=9)
     return _save(fig, path)
 
 
