@@ -237,7 +237,9 @@ def _rod_sensitivity(machine, q: np.ndarray, family: str) -> ToolSensitivity:
     return ToolSensitivity(point=point, rotation=np.zeros((n, 3, d)), pose=pose)
 
 
-def _chain_linearisation(machine, q: np.ndarray, tool_length: Any) -> dict:
+def _chain_linearisation(machine, q: np.ndarray, tool_length: Any, columns=None) -> dict:
+    """(``columns``: a model with the machine's frames whose defect columns to use instead,
+    :func:`pkmkit.solve.chains.with_column_twists`.)"""
     from pkmkit.solve.chains import closure
     from pkmkit.spatial.rotation import rotvec_to_matrix
 
@@ -254,17 +256,18 @@ def _chain_linearisation(machine, q: np.ndarray, tool_length: Any) -> dict:
     values[:, passive] = direct.passive
     rot = rotvec_to_matrix(direct.platform[:, 3:]).transpose(1, 2, 0)
     p_x = direct.platform[:, :3].T
-    c = closure(model, rot, p_x, values.T, defects=True)
+    c = closure(columns if columns is not None else model, rot, p_x, values.T, defects=True)
     cu = np.concatenate([c.platform, c.variables[:, passive]], axis=1).transpose(2, 0, 1)
     cd = c.defects.transpose(2, 0, 1)
     return {"direct": direct, "cu": cu, "cd": cd, "values": values, "rot": rot, "p_x": p_x}
 
 
-def _chain_sensitivity(machine, q: np.ndarray, tool_length: Any) -> ToolSensitivity:
+def _chain_sensitivity(machine, q: np.ndarray, tool_length: Any, columns=None
+                       ) -> ToolSensitivity:
     from pkmkit.solve.chains import tool_frame
     from pkmkit.spatial.rotation import skew
 
-    lin = _chain_linearisation(machine, q, tool_length)
+    lin = _chain_linearisation(machine, q, tool_length, columns)
     direct, cu, cd = lin["direct"], lin["cu"], lin["cd"]
     rot, p_x, values = lin["rot"], lin["p_x"], lin["values"]
     n = q.shape[0]
@@ -272,7 +275,8 @@ def _chain_sensitivity(machine, q: np.ndarray, tool_length: Any) -> ToolSensitiv
     du = -pinv @ cd  # (N, 6 + n_p, d)
     # the part of C_δ no motion absorbs: (I − C_U C_U⁺) C_δ
     incompatible = cd + cu @ du
-    tool = tool_frame(machine.model, rot, p_x, values.T, defects=True)
+    tool = tool_frame(columns if columns is not None else machine.model, rot, p_x, values.T,
+                      defects=True)
     plat = np.zeros((n, 6, 6))
     plat[:, :3, :3] = np.eye(3)
     plat[:, 3:, 3:] = np.eye(3)

@@ -197,6 +197,33 @@ def _rebuilt_rods(model, index: ParameterIndex, values: np.ndarray):
                              g["pivot"])
 
 
+def _element_spec(spec, frame: np.ndarray, values: np.ndarray):
+    """The element ``spec`` with its invariants ``values`` (I, J, K, A, B, C[, S]); a joint
+    given by a full rotation has that rotation tilted onto the new axis (``frame``: its
+    current nominal frame)."""
+    from pkmkit.model.chains import FIXED, minimal_rotation
+
+    if spec.rotation is None or spec.type == FIXED:
+        spin = float(values[6]) if spec.type == FIXED else spec.spin
+        return replace(spec, axis=tuple(values[:3]), point=tuple(values[3:6]), spin=spin,
+                       rotation=None)
+    z = values[:3] / np.linalg.norm(values[:3])
+    rot = minimal_rotation(frame[:3, 2], z) @ frame[:3, :3]
+    return replace(spec, rotation=rot, point=tuple(values[3:6]))
+
+
+def element_frame(spec, frame: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The nominal frame ``(4, 4)`` of an element with invariants ``values`` (as
+    :func:`machine_with_parameters` builds it; ``frame``: its current nominal frame)."""
+    from pkmkit.model.chains import invariant_frame
+
+    new = _element_spec(spec, frame, np.asarray(values, dtype=float))
+    out = invariant_frame(new.axis, new.point, new.spin)
+    if new.rotation is not None:
+        out[:3, :3] = np.asarray(new.rotation, dtype=float)
+    return out
+
+
 def _rebuilt_chain(model, values: np.ndarray):
     from pkmkit.model.chains import FIXED, build_chain_model
 
@@ -207,21 +234,8 @@ def _rebuilt_chain(model, values: np.ndarray):
         mine = values[at:at + count]
         unchanged = np.array_equal(mine, current[at:at + count])
         at += count
-        frame = model.nominal_frames[e]
-        if unchanged:
-            specs.append(spec)
-            continue
-        if spec.rotation is None or spec.type == FIXED:
-            spin = float(mine[6]) if spec.type == FIXED else spec.spin
-            specs.append(replace(spec, axis=tuple(mine[:3]), point=tuple(mine[3:6]), spin=spin,
-                                 rotation=None))
-        else:  # a joint given by a full rotation: tilt that rotation onto the new axis
-            from pkmkit.model.chains import minimal_rotation
-
-
-            z = np.asarray(mine[:3]) / np.linalg.norm(mine[:3])
-            rot = minimal_rotation(frame[:3, 2], z) @ frame[:3, :3]
-            specs.append(replace(spec, rotation=rot, point=tuple(mine[3:6])))
+        specs.append(spec if unchanged else
+                     _element_spec(spec, model.nominal_frames[e], np.asarray(mine)))
     names = [s.name for s in model.elements]
     return build_chain_model(specs, [[names[e] for e in leg] for leg in model.legs],
                              leg_names=model.leg_names, head=[names[e] for e in model.head],
