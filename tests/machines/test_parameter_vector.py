@@ -126,3 +126,22 @@ def test_a_set_up_block_joins_a_machine_vector():
     assert both.role("set-up").names == ("frame_rx", "frame_x")
     with pytest.raises(ParameterError, match="repeated"):
         _ = setup + setup
+
+
+def test_machine_files_keep_their_naming_schemes():
+    hexapod = pkmkit.load(str(EXAMPLES / "hexapod-6-6.toml"))
+    v = hexapod.parameters()
+    i = v.index.position("L3")
+    assert (v.index.sources[i], v.index.owners[i], v.index.units[i]) == ("rods.2.length",
+                                                                          "rod 3", "m")
+    np.testing.assert_allclose(v["L3"], hexapod.model.rod_length[2])
+    np.testing.assert_allclose([v["A2x"], v["A2y"], v["A2z"]], hexapod.model.rod_base[1])
+    planar = pkmkit.load(str(EXAMPLES / "planar-3rpr.toml"))
+    w = planar.parameters()
+    nominal = w.role("nominal")
+    assert nominal.names == planar.model.parameter_names()
+    np.testing.assert_allclose(nominal.values, planar.model.parameter_values(), atol=1e-15)
+    delta = pkmkit.machine("linear-delta").parameters()
+    assert [delta.index.sources[delta.index.position(f"angles[{k}]")] for k in range(3)] == [
+        "angles"] * 3
+    assert delta.index.units[delta.index.position("angles[1]")] == "rad"

@@ -163,6 +163,7 @@ def _chain_element_columns(machine, vector, positions, q) -> dict:
     """Nominal invariants of an element-described chain: each moves one element frame by a
     twist (central differences of the frame alone), composed with the closure sensitivity."""
     from pkmkit.machines.parameter_vector import element_frame
+    from pkmkit.model.chains import FIXED
     from pkmkit.solve.chains import with_column_twists
     from pkmkit.spatial.rotation import matrix_to_rotvec
 
@@ -176,7 +177,7 @@ def _chain_element_columns(machine, vector, positions, q) -> dict:
     for i in positions:
         e = by_element[owners[i]]
         start = first[owners[i]]
-        values = vector.values[start:start + (7 if model.elements[e].type == "F" else 6)]
+        values = vector.values[start:start + (7 if model.elements[e].type == FIXED else 6)]
         h = GEOMETRY_STEP
         frames = []
         for s in (1.0, -1.0):
