@@ -17,10 +17,9 @@
 
 >>> import numpy as np, pkmkit
 >>> from pkmkit.calibration import calibrate, random_defects, simulate
->>> from pkmkit.model.defects_table import apply_defect_vector
 >>> m = pkmkit.machine("linear-delta")
 >>> rng = np.random.default_rng(0)
->>> true = apply_defect_vector(m, random_defects(m, rng))
+>>> true = m.with_defects(random_defects(m, rng))
 >>> result = calibrate(m, simulate(true, m, "point", 60, rng))
 >>> bool(result.after.rms < 3e-5 < result.before.rms), result.verdict.passed
 (True, True)

@@ -11,7 +11,7 @@ import numpy as np
 from pkmkit.calibration.models import ResidualModel
 from pkmkit.exceptions import ConvergenceError, ParameterError
 from pkmkit.geometric_errors.model import defect_set
-from pkmkit.model.defects_table import apply_defect_vector
+from pkmkit.model.defect_rule import add_defects
 from pkmkit.status import Status
 
 
@@ -42,12 +42,12 @@ class _Problem:
         return self.basis @ theta[:self.n_machine], setup
 
     def machine_at(self, delta: np.ndarray):
-        """The machine with ``delta`` applied (the last one is cached: a Jacobian is often
-        evaluated where the last residual was)."""
+        """The machine with ``delta`` added to its own defects (the last one is cached: a
+        Jacobian is often evaluated where the last residual was)."""
         key = delta.tobytes()
         if self._last is not None and self._last[0] == key:
             return self._last[1]
-        machine = apply_defect_vector(self.machine, delta)
+        machine = add_defects(self.machine, delta)
         self._last = (key, machine)
         return machine
 

@@ -38,7 +38,7 @@ from pkmkit.calibration.simulate import (
     random_defects,
     simulate,
 )
-from pkmkit.model.defects_table import apply_defect_vector
+from pkmkit.model.defect_rule import add_defects
 from pkmkit.model.measurement_set import MeasurementSet
 from pkmkit.progress import tracked
 
@@ -174,7 +174,7 @@ def tripteor_laser_tracker(*, seed: int = 7, identification: int = 107, validati
     m = machine if machine is not None else pkmkit.machine("tripteor-x7")
     rng = np.random.default_rng(seed)
     delta = random_defects(m, rng)
-    true = apply_defect_vector(m, delta)
+    true = add_defects(m, delta)
     frame = tracker_frame()
     n = identification + validation
     q = default_configurations(m, n, rng)
@@ -403,7 +403,7 @@ def verne_part(*, seed: int = 1, sections: int = 240, machine=None,
 
     m = machine if machine is not None else pkmkit.machine("verne")
     rng = np.random.default_rng(seed)
-    true = apply_defect_vector(m, random_defects(m, rng))
+    true = add_defects(m, random_defects(m, rng))
     cmm = Noise("cmm", scale=noise_scale)
     part = simulate(true, m, "part", sections, rng, noise=cmm)
     check = simulate(true, m, "part", sections // 2, rng, noise=cmm)
@@ -434,7 +434,7 @@ def verne_ballbar(*, seed: int = 1, readings: int = 240, machine=None) -> PartSt
 
     m = machine if machine is not None else pkmkit.machine("verne")
     rng = np.random.default_rng(seed)
-    true = apply_defect_vector(m, random_defects(m, rng))
+    true = add_defects(m, random_defects(m, rng))
     tools = (0.0, 0.1)
     data = simulate(true, m, "ballbar", readings, rng, tool_lengths=tools)
     check = simulate(true, m, "ballbar", readings // 2, rng, tool_lengths=tools)
@@ -496,7 +496,7 @@ def delta_height_probe(*, seed: int = 2, points: int = 60, machine=None) -> Heig
 
     m = machine if machine is not None else pkmkit.machine("linear-delta")
     rng = np.random.default_rng(seed)
-    true = apply_defect_vector(m, random_defects(m, rng))
+    true = add_defects(m, random_defects(m, rng))
     q = bed_configurations(m, points, rng)
     data = simulate(true, m, "height", points, rng, q=q)
     check = simulate(true, m, "height", points // 2, rng, q=bed_configurations(m, points // 2,

@@ -70,7 +70,7 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
     from pkmkit.io.atomic import write_text_atomic as atomic_write_text
     from pkmkit.io.machine_defects import machine_text_with_defects
     from pkmkit.io.measurements import format_measurements
-    from pkmkit.model.defects_table import apply_defect_vector
+    from pkmkit.model.defect_rule import add_defects
 
     unit = units or "m"
     scale = length_scale(unit)
@@ -82,7 +82,7 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
     true = nominal
     if defects_spec == "random":
         delta = random_defects(nominal, rng)
-        true = apply_defect_vector(nominal, delta)
+        true = add_defects(nominal, delta)
     elif defects_spec:
         true, delta = _defects_file(defects_spec, nominal, unit)
     q = plan = None
@@ -174,7 +174,8 @@ def _defects_file(path: str, machine, units: str):
     top of MACHINE."""
     from pkmkit import load
     from pkmkit.exceptions import ParameterError
-    from pkmkit.model.defects_table import apply_defect_vector, defects_from_table
+    from pkmkit.model.defect_rule import add_defects
+    from pkmkit.model.defects_table import defects_from_table
     from pkmkit.model.machine_file import read_machine_document
 
     doc = read_machine_document(path)
@@ -193,7 +194,7 @@ def _defects_file(path: str, machine, units: str):
     except ParameterError as exc:
         raise doc.error(str(exc), ("defects", exc.parameter) if exc.parameter else
                         ("defects",)) from None
-    return apply_defect_vector(machine, delta), delta
+    return add_defects(machine, delta), delta
 
 
 def _read_configurations(path: str, machine, units: str | None) -> np.ndarray:

@@ -107,7 +107,7 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
     from pkmkit.machining.cmm import CMM_SIGMA, format_cmm
     from pkmkit.machining.part import Placement
     from pkmkit.machining.study import default_placement, simulate_cmm
-    from pkmkit.model.defects_table import apply_defect_vector
+    from pkmkit.model.defect_rule import add_defects
 
     unit = units or "mm"
     scale = length_scale(unit)
@@ -116,7 +116,7 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
     true, delta = nominal, None
     if defects_spec == "random":
         delta = random_defects(nominal, rng)
-        true = apply_defect_vector(nominal, delta)
+        true = add_defects(nominal, delta)
     elif defects_spec:
         true, _ = _defects_file(defects_spec, nominal, unit)
     if placement:

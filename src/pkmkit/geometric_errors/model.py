@@ -23,7 +23,7 @@ dimensionless direction components), displacements in m.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -81,41 +81,32 @@ class DefectSet:
 
 def defect_set(machine) -> DefectSet:
     """The defect set of ``machine`` (any family)."""
-    if machine.family == "chain":
-        index = machine.model.defect_index
-        owners = tuple(machine.model.elements[e].name for e in index.element)
-        return DefectSet(index.names, index.units, index.kind, owners)
-    index = _rod_index(machine)
-    level = index.level
-    owners = tuple(f"rod {t + 1}" if level == "rods" else machine.model.leg_names[t]
-                   if k in ("base", "platform", "length") else machine.actuator_names[t]
-                   for k, t in zip(index.kind, index.target, strict=True))
-    return DefectSet(index.names, index.units, index.kind, owners)
+    from pkmkit.model.defect_rule import defect_index, defect_owners
+
+    index = defect_index(machine)
+    return DefectSet(index.names, index.units, tuple(index.kind), defect_owners(machine))
 
 
 def _rod_index(machine):
-    from pkmkit.model.rod_defects import rod_defect_index
+    from pkmkit.model.defect_rule import defect_index
 
-    cached = machine.__dict__.get("_rod_defect_index")
-    if cached is None:
-        cached = rod_defect_index(machine.model)
-        object.__setattr__(machine, "_rod_defect_index", cached)
-    return cached
+    return defect_index(machine)
 
 
 def with_defects(machine, values: Any):
-    """``machine`` with the defects ``values`` (mapping name → SI value, or a full vector)
-    applied exactly: a new machine (the original is unchanged). Rod machines keep their
-    identity but lose their kind's named parameters (their geometry is no longer the kind's);
-    joint-chain machines solve their home closure again (in least squares if incompatible)."""
-    dset = defect_set(machine)
-    delta = dset.vector(values)
-    if machine.family == "chain":
-        return machine.with_defects(delta)
-    from pkmkit.model.rod_defects import apply_rod_defects
+    """``machine``'s nominal geometry with the defects ``values`` (mapping name → SI value,
+    or a full vector) applied exactly, **replacing** any it carried (the one rule,
+    :mod:`pkmkit.model.defect_rule`): a new machine (the original is unchanged). Rod machines
+    keep their identity but lose their kind's named parameters (their geometry is no longer the
+    kind's); joint-chain machines solve their home closure again (in least squares if
+    incompatible).
 
-    model = apply_rod_defects(machine.model, _rod_index(machine), delta)
-    return replace(machine, model=model, kind=None, params={})
+    Raises:
+        ParameterError: an unknown name. InputError: a vector of the wrong length.
+    """
+    from pkmkit.model.defect_rule import with_defects as apply
+
+    return apply(machine, defect_set(machine).vector(values))
 
 
 @dataclass(frozen=True)
@@ -246,7 +237,9 @@ def _rod_sensitivity(machine, q: np.ndarray, family: str) -> ToolSensitivity:
     return ToolSensitivity(point=point, rotation=np.zeros((n, 3, d)), pose=pose)
 
 
-def _chain_linearisation(machine, q: np.ndarray, tool_length: Any) -> dict:
+def _chain_linearisation(machine, q: np.ndarray, tool_length: Any, columns=None) -> dict:
+    """(``columns``: a model with the machine's frames whose defect columns to use instead,
+    :func:`pkmkit.solve.chains.with_column_twists`.)"""
     from pkmkit.solve.chains import closure
     from pkmkit.spatial.rotation import rotvec_to_matrix
 
@@ -263,17 +256,18 @@ def _chain_linearisation(machine, q: np.ndarray, tool_length: Any) -> dict:
     values[:, passive] = direct.passive
     rot = rotvec_to_matrix(direct.platform[:, 3:]).transpose(1, 2, 0)
     p_x = direct.platform[:, :3].T
-    c = closure(model, rot, p_x, values.T, defects=True)
+    c = closure(columns if columns is not None else model, rot, p_x, values.T, defects=True)
     cu = np.concatenate([c.platform, c.variables[:, passive]], axis=1).transpose(2, 0, 1)
     cd = c.defects.transpose(2, 0, 1)
     return {"direct": direct, "cu": cu, "cd": cd, "values": values, "rot": rot, "p_x": p_x}
 
 
-def _chain_sensitivity(machine, q: np.ndarray, tool_length: Any) -> ToolSensitivity:
+def _chain_sensitivity(machine, q: np.ndarray, tool_length: Any, columns=None
+                       ) -> ToolSensitivity:
     from pkmkit.solve.chains import tool_frame
     from pkmkit.spatial.rotation import skew
 
-    lin = _chain_linearisation(machine, q, tool_length)
+    lin = _chain_linearisation(machine, q, tool_length, columns)
     direct, cu, cd = lin["direct"], lin["cu"], lin["cd"]
     rot, p_x, values = lin["rot"], lin["p_x"], lin["values"]
     n = q.shape[0]
@@ -281,7 +275,8 @@ def _chain_sensitivity(machine, q: np.ndarray, tool_length: Any) -> ToolSensitiv
     du = -pinv @ cd  # (N, 6 + n_p, d)
     # the part of C_δ no motion absorbs: (I − C_U C_U⁺) C_δ
     incompatible = cd + cu @ du
-    tool = tool_frame(machine.model, rot, p_x, values.T, defects=True)
+    tool = tool_frame(columns if columns is not None else machine.model, rot, p_x, values.T,
+                      defects=True)
     plat = np.zeros((n, 6, 6))
     plat[:, :3, :3] = np.eye(3)
     plat[:, 3:, 3:] = np.eye(3)

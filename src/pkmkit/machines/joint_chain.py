@@ -278,12 +278,6 @@ class JointChainMachine(ChainVelocity, MachineFace):
                           extra_poses=self.kind.reference_poses(params, model),
                           tool_length=float(params.get("tool_length", 0.0)))
 
-    def with_defects(self, values: Any) -> JointChainMachine:
-        """The same machine with geometric defects applied exactly (a mapping name → value in
-        SI units, or a vector in ``model.defect_index`` order). The home closure is solved
-        again — in least squares if the defects are incompatible."""
-        return replace(self, model=self.model.with_defects(values))
-
     # ---------------------------------------------------------------- helpers
     def _full_values(self, q: np.ndarray) -> np.ndarray:
         values = np.tile(self._home["values"], (q.shape[0], 1))

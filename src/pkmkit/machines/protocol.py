@@ -10,7 +10,7 @@ class-name tests), ``machine.actuator_quantities`` whether each actuator is a le
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -35,6 +35,45 @@ class MachineFace:
         """``(n_actuators,)`` bool: True for angular actuators (cranks, revolute joints), whose
         values are radians inside pkmkit and degrees in files and on the command line."""
         return np.array([q == "angle" for q in self.actuator_quantities], dtype=bool)
+
+    def parameters(self):
+        """The machine's one parameter vector (:class:`pkmkit.model.parameter_vector.
+        ParameterVector`): its nominal parameters, then its defects
+        (:mod:`pkmkit.machines.parameter_vector`)."""
+        from pkmkit.machines.parameter_vector import machine_parameters
+
+        return machine_parameters(self)
+
+    def with_parameters(self, vector: Any):
+        """The machine rebuilt from a changed :meth:`parameters` vector (or its values).
+
+        Raises:
+            InputError: a vector of another machine. ParameterError: values the machine cannot
+                be built from.
+        """
+        from pkmkit.machines.parameter_vector import machine_with_parameters
+
+        return machine_with_parameters(self, vector)
+
+    def defects(self) -> np.ndarray:
+        """``(d,)`` the machine's geometric defects (SI; zeros when nominal), in the order of
+        :func:`pkmkit.geometric_errors.model.defect_set`."""
+        from pkmkit.model.defect_rule import defects
+
+        return defects(self)
+
+    def with_defects(self, values: Any):
+        """The machine's nominal geometry with ``values`` (mapping name → SI value, absent
+        names 0, or a full vector) applied exactly, **replacing** its defects — the one rule of
+        :mod:`pkmkit.model.defect_rule` (joint chains solve their home closure again, in least
+        squares if the defects are incompatible).
+
+        Raises:
+            ParameterError: an unknown name, a mis-shaped vector, defects too large to apply.
+        """
+        from pkmkit.model.defect_rule import with_defects
+
+        return with_defects(self, values)
 
 
 def require_translational(machine, what: str) -> None:

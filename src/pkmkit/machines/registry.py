@@ -210,11 +210,12 @@ def _with_length(doc: MachineDocument, machine: Machine, value: Any, scale: floa
 
 
 def _with_defects_table(doc: MachineDocument, machine: Machine, scale: float) -> Machine:
-    from pkmkit.model.defects_table import apply_defect_vector, defects_from_table
+    from pkmkit.model.defect_rule import with_defects
+    from pkmkit.model.defects_table import defects_from_table
 
     table = _table(doc, "defects", required=False)
     try:
-        return apply_defect_vector(machine, defects_from_table(machine, table, scale))
+        return with_defects(machine, defects_from_table(machine, table, scale))
     except ParameterError as exc:
         raise doc.error(str(exc), ("defects", exc.parameter) if exc.parameter else ("defects",)
                         ) from None

@@ -28,7 +28,7 @@ from pkmkit.machining.cmm import CMM_SIGMA, CmmPoints, probe
 from pkmkit.machining.part import Placement, part_passes, seed_part_program
 from pkmkit.machining.reconstruct import reconstruct, reconstructed_measurements
 from pkmkit.machining.sweep import machine_part
-from pkmkit.model.defects_table import apply_defect_vector
+from pkmkit.model.defect_rule import add_defects
 from pkmkit.motion.gcode import read_gcode
 
 #: Seed 003's result: machined dimensions after identification, along x and y (m).
@@ -119,7 +119,7 @@ def machined_part_study(*, seed: int = 1, sections: int = 240, sigma: float = CM
     m = machine if machine is not None else pkmkit.machine("verne")
     rng = np.random.default_rng(seed)
     delta = random_defects(m, rng) if defects is None else np.asarray(defects, dtype=float)
-    true = apply_defect_vector(m, delta)
+    true = add_defects(m, delta)
     program = seed_part_program(m)
     placement = default_placement(m)
     cmm, part = simulate_cmm(true, m, program, rng, placement=placement, sections=sections,

@@ -404,6 +404,11 @@ def apply_defects(nominal: np.ndarray, index: DefectIndex, delta: np.ndarray) ->
     return frames
 
 
+def minimal_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotation ``(3, 3)`` of least angle taking unit vector a to unit vector b."""
+    return _minimal_rotation(a, b)
+
+
 def _minimal_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The rotation of least angle taking unit vector a to unit vector b."""
     axis = np.cross(a, b)

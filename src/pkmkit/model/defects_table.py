@@ -22,8 +22,8 @@ longer has named parameters (its geometry is no longer the kind's).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -33,13 +33,10 @@ from pkmkit.model.parameters import is_plain_number
 
 
 def defect_index(machine):
-    """The defect index of ``machine``'s model: names, units (``"m"``, ``"1"``, ``"rad"``)."""
-    model = machine.model
-    if hasattr(model, "defect_index"):
-        return model.defect_index
-    from pkmkit.model.rod_defects import rod_defect_index
+    """The defect index of ``machine``: names, units (``"m"``, ``"1"``, ``"rad"``)."""
+    from pkmkit.model.defect_rule import defect_index as index
 
-    return rod_defect_index(model)
+    return index(machine)
 
 
 def defects_from_table(machine, table: Mapping[str, Any], scale: float) -> np.ndarray:
@@ -79,13 +76,13 @@ def table_from_defects(machine, delta: np.ndarray, scale: float, *, digits: int 
 
 
 def apply_defect_vector(machine, delta: np.ndarray):
-    """``machine`` with the SI defect vector ``delta`` applied exactly (joint chains: replacing
-    their defects; rod machines: on their current geometry)."""
-    if not np.any(delta):
-        return machine
-    if hasattr(machine.model, "defect_index"):
-        return machine.with_defects(np.asarray(machine.model.defects) + delta)
-    from pkmkit.model.rod_defects import apply_rod_defects, rod_defect_index
+    """Deprecated: ``machine.with_defects(delta)`` (:func:`pkmkit.model.defect_rule.
+    with_defects`, which **replaces** the machine's defects; it used to add them on joint
+    chains). For defects on top of the machine's own use
+    :func:`pkmkit.model.defect_rule.add_defects`."""
+    warnings.warn("apply_defect_vector is deprecated: use machine.with_defects(delta) (replaces "
+                  "the machine's defects) or pkmkit.model.defect_rule.add_defects (adds to "
+                  "them)", DeprecationWarning, stacklevel=2)
+    from pkmkit.model.defect_rule import with_defects
 
-    model = apply_rod_defects(machine.model, rod_defect_index(machine.model), delta)
-    return replace(machine, model=model, kind=None, params={})
+    return with_defects(machine, delta)

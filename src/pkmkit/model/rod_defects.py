@@ -79,6 +79,17 @@ def _rod_table(model: RodModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
     return model.leg_base, model.leg_platform, model.leg_length, model.leg_actuator, "legs"
 
 
+def rod_geometry(model: RodModel) -> dict[str, np.ndarray | str]:
+    """The geometry the defects act on, as copies: ``base``, ``platform`` ``(m, 3)``,
+    ``length`` ``(m,)`` of the defect level's rods (m), the per-leg ``axis`` and ``pivot``
+    ``(n, 3)``, and the ``level`` (``"legs"`` or ``"rods"``)."""
+    base, platform, length, _, level = _rod_table(model)
+    return {"base": np.array(base, dtype=float), "platform": np.array(platform, dtype=float),
+            "length": np.array(length, dtype=float),
+            "axis": np.array(model.leg_axis, dtype=float),
+            "pivot": np.array(model.leg_pivot, dtype=float), "level": level}
+
+
 def direction_components(u: np.ndarray, space: int) -> list[int]:
     """The components of a unit direction that parametrise its defects: those other than the
     largest, within the machine's space (x, y for a planar machine)."""
@@ -150,7 +161,7 @@ def apply_rod_defects(model: RodModel, index: RodDefectIndex, delta: np.ndarray)
     delta = np.asarray(delta, dtype=float).reshape(-1)
     if delta.shape != (len(index),) or not np.isfinite(delta).all():
         raise ParameterError(f"defects must be {len(index)} finite values, got {delta.shape}")
-    base, platform, length, actuator, level = (np.array(a, dtype=float) if i < 3 else a
+    base, platform, length, actuator, _ = (np.array(a, dtype=float) if i < 3 else a
                                                for i, a in enumerate(_rod_table(model)))
     axis = np.array(model.leg_axis, dtype=float)
     pivot = np.array(model.leg_pivot, dtype=float)
@@ -189,6 +200,16 @@ def apply_rod_defects(model: RodModel, index: RodDefectIndex, delta: np.ndarray)
             length[j] += offsets[k]
     if np.any(length <= 0) and not (model.leg_kind == STRUT).all():
         raise ParameterError("a length defect makes a rod length non-positive")
+    return with_rod_geometry(model, base, platform, length, axis, pivot)
+
+
+def with_rod_geometry(model: RodModel, base: np.ndarray, platform: np.ndarray,
+                      length: np.ndarray, axis: np.ndarray, pivot: np.ndarray) -> RodModel:
+    """A new model with the defect level's rods (equivalent legs of a translational machine,
+    real rods of a full-pose one) given: ``base``, ``platform`` ``(m, 3)``, ``length`` ``(m,)``
+    (m), and the per-leg actuator ``axis`` (unit) and crank ``pivot`` ``(n, 3)``. Everything
+    else (strokes, branches, home pose, names) is kept."""
+    level = _rod_table(model)[4]
     if level == "legs":
         specs = leg_specs(model)
         legs = [replace(s, base=base[i], platform=platform[i], length=float(length[i]),

@@ -133,6 +133,14 @@ class RodModel:
         rod_length: ``(m,)`` m.
         home_pose: ``(dims,)`` m, the reference (home / isotropic) configuration.
         mode_names: names of the two assembly modes, for det(A) < 0 and det(A) > 0.
+        nominal: the model without geometric defects, or None when this model is nominal
+            (set by :func:`pkmkit.model.defect_rule.with_defects`).
+        defects: ``(d,)`` the defects (SI, :func:`~pkmkit.model.rod_defects.rod_defect_index`
+            order of :attr:`nominal`) that turn :attr:`nominal` into this model; None when
+            nominal.
+        nominal_kind: ``(kind, params)`` the nominal model was built from when the machine was
+            of a built-in kind before its defects (its parameter vector keeps the kind's
+            names), else None.
     """
 
     dims: int
@@ -156,6 +164,9 @@ class RodModel:
     home_pose: np.ndarray
     mode_names: tuple[str, str] = field(default=("det(A)<0", "det(A)>0"))
     leg_pivot: np.ndarray | None = None
+    nominal: RodModel | None = field(default=None, repr=False)
+    defects: np.ndarray | None = field(default=None, repr=False)
+    nominal_kind: tuple | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if self.leg_pivot is None:

@@ -135,6 +135,27 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
                      a[0] * b[1] - a[1] * b[0]])
 
 
+def with_column_twists(model: JointChainModel, elements: np.ndarray, twists: np.ndarray
+                       ) -> JointChainModel:
+    """``model`` (same frames) whose "defect" columns are the given element twists: row i moves
+    element ``elements[i]`` by the twist ``twists[i]`` ``(6,)`` (linear part first, previous
+    frame, as :func:`pkmkit.model.chains.defect_twists`) — so that :func:`closure` and
+    :func:`tool_frame` with ``defects=True`` differentiate with respect to other parameters
+    (a nominal parameter moving an element's frame)."""
+    from dataclasses import replace
+
+    from pkmkit.model.chains import DefectIndex
+
+    elements = np.asarray(elements, dtype=int)
+    count = len(elements)
+    index = DefectIndex(names=tuple(f"column {i}" for i in range(count)), units=("1",) * count,
+                        element=elements, kind=("twist",) * count,
+                        component=np.full(count, -1))
+    out = replace(model, defect_index=index, defects=np.zeros(count))
+    object.__setattr__(out, "_local_defect_twists", np.asarray(twists, dtype=float))
+    return out
+
+
 def _local_defect_twists(model: JointChainModel) -> np.ndarray:
     """:func:`defect_twists` of the model's frames, computed once per (immutable) model."""
     cached = model.__dict__.get("_local_defect_twists")
