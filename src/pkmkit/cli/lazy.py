@@ -53,6 +53,11 @@ LAZY_COMMANDS: dict[str, LazyCommand] = {
         "pkmkit.cli.design_cmds", "optimize_cmd",
         "Optimise parameters of any machine for a prescribed region (one or several "
         "objectives)."),
+    "view": LazyCommand(
+        "pkmkit.cli.view_cmds", "view_cmd",
+        "Write a 3-D view of MACHINE: one HTML page a browser opens without a network, a "
+        "slider per actuator moving the machine through pkmkit's direct model, and on request "
+        "its workspace, a tool path and a calibration's error vectors."),
     "path": LazyCommand(
         "pkmkit.cli.motion_cmds", "path_cmd",
         "Move along a tool path: duration, actuator strokes, speeds, accelerations, forces and "

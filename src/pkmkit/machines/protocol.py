@@ -75,6 +75,17 @@ class MachineFace:
 
         return with_defects(self, values)
 
+    def skeleton(self, q: Any = None):
+        """The polylines a drawing or a 3-D view shows at actuator values ``q (n,)`` (SI;
+        default home), the same for every family: see :mod:`pkmkit.machines.skeleton`.
+
+        Raises:
+            NoAssemblyError: no assembly at ``q``.
+        """
+        from pkmkit.machines.skeleton import skeleton
+
+        return skeleton(self, q)
+
 
 def require_translational(machine, what: str) -> None:
     """Refuse, with a typed error naming why, an algorithm written for translational rod-leg
