@@ -44,7 +44,13 @@ from pkmkit.calibration.registration import Registration
 from pkmkit.exceptions import InputError, PkmError
 from pkmkit.geometric_errors.model import tool_sensitivity
 from pkmkit.model.measurement_set import MeasurementSet
-from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix, skew
+from pkmkit.spatial.rotation import (
+    inverse_left_jacobian,
+    left_jacobian,
+    matrix_to_rotvec,
+    rotvec_to_matrix,
+    skew,
+)
 
 #: Spacing of the samples of a commanded path in Cartesian space (m).
 PATH_SPACING = 5e-4
@@ -240,7 +246,7 @@ class _FramedModel(ResidualModel):
         y = (self.y0 - self.centre) @ rot.T + self.centre + setup[3:6]
         dy = np.zeros((len(y), 3, 6))
         # exp(ρ + dρ) ≈ exp(J_l(ρ) dρ) exp(ρ): d(exp(ρ) v) = −[exp(ρ) v]× J_l(ρ) dρ
-        dy[:, :, :3] = -skew(y - self.centre - setup[3:6]) @ _left_jacobian(setup[:3])
+        dy[:, :, :3] = -skew(y - self.centre - setup[3:6]) @ left_jacobian(setup[:3])
         dy[:, :, 3:] = np.eye(3)
         return y, dy, rot
 
@@ -276,38 +282,17 @@ class PoseModel(_FramedModel):
         if not jacobian:
             return r, None, None
         # log(exp(ω) M) = r + J_l⁻¹(r) ω, log(M exp(−δ)) = r − J_r⁻¹(r) δ (first order in ω, δ)
-        jl_inv = _inverse_left_jacobian(np.nan_to_num(r_rot))
+        jl_inv = inverse_left_jacobian(np.nan_to_num(r_rot))
         jd = np.concatenate([state.dpoint, jl_inv @ state.drotation], axis=1)
         js = np.zeros((len(r), 6, len(self.setup)))
         if self.identify_frame:
             js[:, :3] = -dy
-            js[:, 3:, :3] = -_inverse_left_jacobian(-np.nan_to_num(r_rot)) @ _left_jacobian(
+            js[:, 3:, :3] = -inverse_left_jacobian(-np.nan_to_num(r_rot)) @ left_jacobian(
                 setup[:3])
         return r, jd, js
 
     def errors(self, r):
         return np.linalg.norm(r[:, :3], axis=1)
-
-
-def _left_jacobian(phi: np.ndarray) -> np.ndarray:
-    """``J_l(φ)`` ``(3, 3)`` of SO(3): ``exp(φ + dφ) ≈ exp(J_l(φ) dφ) exp(φ)``."""
-    theta = float(np.linalg.norm(phi))
-    k = skew(phi)
-    if theta < 1e-6:
-        return np.eye(3) + 0.5 * k + (k @ k) / 6.0
-    return (np.eye(3) + (1.0 - np.cos(theta)) / theta**2 * k
-            + (theta - np.sin(theta)) / theta**3 * (k @ k))
-
-
-def _inverse_left_jacobian(phi: np.ndarray) -> np.ndarray:
-    """``J_l⁻¹(φ)`` ``(N, 3, 3)`` of SO(3) for rotation vectors ``(N, 3)``."""
-    theta = np.linalg.norm(phi, axis=1)
-    k = skew(phi)
-    small = theta < 1e-6
-    safe = np.where(small, 1.0, theta)
-    coef = np.where(small, 1.0 / 12.0,
-                    1.0 / safe**2 - (1.0 + np.cos(safe)) / (2.0 * safe * np.sin(safe)))
-    return np.eye(3)[None] - 0.5 * k + coef[:, None, None] * (k @ k)
 
 
 class BallbarModel(ResidualModel):

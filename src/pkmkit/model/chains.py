@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pkmkit.exceptions import ParameterError
-from pkmkit.spatial.rotation import axis_rotation, skew
+from pkmkit.spatial.rotation import axis_rotation, left_jacobian, skew
 
 REVOLUTE = "R"
 PRISMATIC = "P"
@@ -353,21 +353,11 @@ def defect_twists(frames: np.ndarray, index: DefectIndex, nominal: np.ndarray | 
                            if index.kind[j] == "spin")
                 if spin:
                     # R = exp(σ[z]×) M N: ω = J_l(σ z) σ dz + exp(σ[z]×) ω_M
-                    omega = (_left_jacobian(spin * z) @ (spin * dz)
+                    omega = (left_jacobian(spin * z) @ (spin * dz)
                              + axis_rotation(z, np.asarray(spin)) @ omega)
         out[i, 3:] = omega
         out[i, :3] = np.cross(o, omega)  # rotation about the frame's point o
     return out
-
-
-def _left_jacobian(phi: np.ndarray) -> np.ndarray:
-    """``J_l(φ)`` of SO(3): ``exp(φ + dφ) ≈ exp(J_l(φ) dφ) exp(φ)``."""
-    theta = float(np.linalg.norm(phi))
-    k = skew(phi)
-    if theta < 1e-8:
-        return np.eye(3) + 0.5 * k
-    return (np.eye(3) + (1.0 - np.cos(theta)) / theta**2 * k
-            + (theta - np.sin(theta)) / theta**3 * (k @ k))
 
 
 def apply_defects(nominal: np.ndarray, index: DefectIndex, delta: np.ndarray) -> np.ndarray:

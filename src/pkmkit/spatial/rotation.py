@@ -114,6 +114,47 @@ def compose_rotvec(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     return (d * p).as_rotvec()
 
 
+def left_jacobian(phi: np.ndarray) -> np.ndarray:
+    """``J_l(φ)`` of SO(3): ``exp(φ + dφ) ≈ exp(J_l(φ) dφ) exp(φ)`` to first order in dφ.
+
+    Args:
+        phi: ``(3,)`` or ``(N, 3)`` rotation vectors (rad).
+
+    Returns:
+        ``(3, 3)`` or ``(N, 3, 3)``. Below 1e-3 rad the coefficients' series (to θ², exact to
+        1e-15) replace the closed forms, whose ``(1 − cos θ)/θ²`` loses its digits to
+        cancellation there.
+    """
+    phi = np.asarray(phi, dtype=float)
+    theta = np.linalg.norm(phi, axis=-1)[..., None, None]
+    k = skew(phi)
+    small = theta < 1e-3
+    safe = np.where(small, 1.0, theta)
+    t2 = theta**2
+    a = np.where(small, 0.5 - t2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
+    b = np.where(small, 1.0 / 6.0 - t2 / 120.0, (safe - np.sin(safe)) / safe**3)
+    return np.eye(3) + a * k + b * (k @ k)
+
+
+def inverse_left_jacobian(phi: np.ndarray) -> np.ndarray:
+    """``J_l⁻¹(φ)`` of SO(3) (the inverse of :func:`left_jacobian`).
+
+    Args:
+        phi: ``(3,)`` or ``(N, 3)`` rotation vectors (rad), norms below π.
+
+    Returns:
+        ``(3, 3)`` or ``(N, 3, 3)``.
+    """
+    phi = np.asarray(phi, dtype=float)
+    theta = np.linalg.norm(phi, axis=-1)[..., None, None]
+    k = skew(phi)
+    small = theta < 1e-3          # series to θ² (exact to 1e-16): the closed form cancels
+    safe = np.where(small, 1.0, theta)
+    coef = np.where(small, 1.0 / 12.0 + theta**2 / 720.0,
+                    1.0 / safe**2 - (1.0 + np.cos(safe)) / (2.0 * safe * np.sin(safe)))
+    return np.eye(3) - 0.5 * k + coef * (k @ k)
+
+
 def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Rotation matrices about unit axes by angles (Rodrigues), batched.
 
