@@ -19,8 +19,12 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
-from pkmkit.stiffness.api import stiffness, twist_names
-from pkmkit.stiffness.data import StiffnessData
+from pkmkit.status import Status
+from pkmkit.stiffness.api import check_data, stiffness, twist_names
+from pkmkit.stiffness.data import StiffnessData, default_data
+from pkmkit.stiffness.joint_chains import chain_compliance
+from pkmkit.stiffness.results import RIGID_TOL
+from pkmkit.stiffness.rod_legs import rod_leg_compliance
 
 #: Names and descriptions of the stiffness indices (map, workspace, design metrics).
 STIFFNESS_INDICES = {
@@ -93,15 +97,51 @@ def stiffness_figures(machine: Any, points: Any = None, *, q: Any = None,
     index = np.flatnonzero(ok)
     for start in range(0, index.size, CHUNK):
         take = index[start:start + CHUNK]
-        if chains and q is not None:
-            r = stiffness(machine, q=rows[take], data=data, wrench=w)
-        else:
+        if chains and q is None:  # tool poses: through the inverse model of stiffness()
             r = stiffness(machine, rows[take], data=data, wrench=w)
-        smallest[take] = r.translational[:, 0]
+            smallest[take] = r.translational[:, 0]
+            if vectors is not None:
+                vectors[take] = r.deflection
+            continue
+        c = _compliance(machine, rows[take], data, chains)
+        smallest[take] = _smallest(c, d)
         if vectors is not None:
-            vectors[take] = r.deflection
+            vectors[take] = np.einsum("nij,j->ni", c, w)
     deflection = None if vectors is None else np.linalg.norm(vectors[:, :min(d, 3)], axis=1)
     return StiffnessFigures(smallest=smallest, deflection=deflection, vectors=vectors)
+
+
+def _compliance(machine: Any, rows: np.ndarray, data: StiffnessData | None,
+                chains: bool) -> np.ndarray:
+    """``(k, d, d)`` compliance at poses (rod legs) or actuator coordinates (joint chains),
+    NaN where the configuration fails — the compliance of :func:`stiffness` without its
+    summary (eigen-decomposition, inverse), which the indices do not need."""
+    data = data or default_data(machine)
+    check_data(machine, data)
+    if chains:
+        c, status, _ = chain_compliance(machine, rows, data)
+    else:
+        c, status, _, _ = rod_leg_compliance(machine, rows, data)
+    c = 0.5 * (c + np.swapaxes(c, 1, 2))
+    c[(status != Status.OK) | ~np.isfinite(c).all(axis=(1, 2))] = np.nan
+    return c
+
+
+def _smallest(c: np.ndarray, d: int) -> np.ndarray:
+    """``(k,)`` smallest translational stiffness 1/λ_max(C_tt) (inf where the translational
+    block is rigid, as :func:`~pkmkit.stiffness.results.summarize` judges it; NaN rows stay
+    NaN)."""
+    out = np.full(len(c), np.nan)
+    ok = np.isfinite(c).all(axis=(1, 2))
+    if not ok.any():
+        return out
+    t = min(d, 3)
+    lam = np.linalg.eigvalsh(c[ok][:, :t, :t])[:, -1]
+    top = lam if d <= 3 else np.abs(np.linalg.eigvalsh(c[ok])[:, -1])
+    rigid = lam <= RIGID_TOL * top
+    with np.errstate(divide="ignore"):
+        out[ok] = np.where(rigid, np.inf, 1.0 / np.where(rigid, 1.0, lam))
+    return out
 
 
 def stiffness_index(machine: Any, points: Any, name: str, *, data: StiffnessData | None = None,
