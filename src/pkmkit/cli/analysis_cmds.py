@@ -256,8 +256,9 @@ def register(cli: click.Group) -> None:
 def analyze(machine_name, assignments, pose, isotropy_tol, with_stiffness, wrench_text,
             convention, units, as_json):
     """All kinetostatic indices at a pose: transmission factors, conditioning, ellipsoid,
-    distances to singularities; with --stiffness (or --wrench) the stiffness and the
-    deflection."""
+    distances to singularities.
+
+    With --stiffness (or --wrench), the stiffness and the deflection."""
     m, data = machine_and_data(machine_name, assignments, units)
     if m.family == "chain":
         raise InputError(f"analyze reads rod machines' A and B matrices; for the joint-chain "
@@ -477,8 +478,10 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
               as_json):
     """Workspace over a box or a plane: area/volume, largest inscribed square/cube, transmission
     factors inside it, global conditioning index, and (with --cube/--center) whether a
-    prescribed one is feasible (in the --slice plane when one is given). With --min-stiffness,
-    --max-deflection or --wrench, stiffness is a criterion or a figure (docs/stiffness.md)."""
+    prescribed one is feasible (in the --slice plane when one is given).
+
+    With --min-stiffness, --max-deflection or --wrench, stiffness is a criterion or a figure
+    (docs/stiffness.md)."""
     if out is not None:
         check_figure_path(out)
     m, data = machine_and_data(machine_name, assignments, units)

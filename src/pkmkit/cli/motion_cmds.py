@@ -148,8 +148,9 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
              wrench_file, speed_limit, accel_limit, force_limit, with_deflection,
              max_deflection, out_dir, units, as_json):
     """Move along a tool path: duration, actuator strokes, speeds, accelerations, forces and
-    powers, with a check of the actuator limits (exit status 3 when a limit is exceeded); with
-    --deflection the tool-point deflection under gravity and the tool force."""
+    powers, with a check of the actuator limits (exit status 3 when a limit is exceeded).
+
+    With --deflection, the tool-point deflection under gravity and the tool force."""
     m, elastic = machine_and_data(machine_name, assignments, units)
     if m.family != "translational":
         raise InputError(
