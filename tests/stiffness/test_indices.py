@@ -148,3 +148,16 @@ def test_min_stiffness_metric_is_the_least_over_the_region():
     stiff = dataclasses.replace(default_data(m), actuator_stiffness=np.full(3, 2 * KA))
     doubled = evaluate_metrics(m, region, Criteria(stiffness_data=stiff), ("min_stiffness",), 5)
     assert doubled["min_stiffness"] == pytest.approx(2 * metrics["min_stiffness"], rel=1e-12)
+
+
+def test_joint_chain_criterion_is_the_vjm_at_the_solved_configurations():
+    m = machine("tripteor-x7")
+    q = m.home_q + np.array([[0.0] * 5, [0.006, -0.005, 0.004, 0.1, 0.05],
+                             [-0.005, 0.005, -0.008, -0.08, 0.1]])  # within the strokes
+    points = np.array([m.fk(row) for row in q])
+    direct = np.array([stiffness(m, q=row).translational[0] for row in q])
+    bound = float(np.median(direct))
+    ev = evaluate_poses(m, points, Criteria(min_stiffness=bound))
+    np.testing.assert_allclose(ev.q, q, atol=1e-9)
+    np.testing.assert_allclose(ev.stiffness, direct, rtol=1e-7)
+    np.testing.assert_array_equal(ev.masks["stiffness"], direct >= bound * (1 - 1e-9))
