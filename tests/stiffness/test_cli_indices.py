@@ -52,6 +52,10 @@ def test_map_deflection_needs_a_wrench(tmp_path):
     result = CliRunner().invoke(cli, ["map", "orthoglide", "--index", "deflection", "--slice",
                                       "z=0", "--out", str(tmp_path / "d.png")])
     assert result.exit_code != 0 and "--wrench" in result.output
+    result = CliRunner().invoke(cli, ["map", "orthoglide", "--index", "condition", "--slice",
+                                      "z=0", "--wrench", "0,0,-100", "--out",
+                                      str(tmp_path / "c.png")])
+    assert result.exit_code != 0 and "go together" in result.output
 
 
 def test_analyze_stiffness_and_deflection_agree_with_the_library():

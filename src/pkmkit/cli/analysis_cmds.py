@@ -357,8 +357,8 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
     m, data = machine_and_data(machine_name, assignments, units)
     scale = length_scale(units)
     wrench, _ = parse_wrench(wrench_text, m)
-    if index_name == "deflection" and wrench is None:
-        raise InputError("--index deflection needs --wrench FX,FY,FZ[,MX,MY,MZ] (N, N·m)")
+    if (index_name == "deflection") != (wrench is not None):
+        raise InputError("--index deflection and --wrench FX,FY,FZ[,MX,MY,MZ] go together")
     if m.family == "chain" and index_name not in (*CHAIN_INDICES, *STIFFNESS_INDICES,
                                                   "actuators"):
         raise InputError(f"index {index_name!r} is not defined for a joint-chain machine; its "
