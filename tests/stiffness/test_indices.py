@@ -135,6 +135,14 @@ def test_refined_workspace_box_meets_the_stiffness_criterion():
                         free=grid.free).feasible
     feasible = wmap.stiffness[wmap.feasible]
     assert feasible.min() >= 50e6 * (1 - 1e-9)
+    # the workspace figure names the points that fail the stiffness criterion alone
+    from pkmkit.plot.maps import classify
+
+    classes = classify(wmap)
+    others = np.logical_and.reduce([v for k, v in wmap.masks.items() if k != "stiffness"])
+    only_stiffness = others & ~wmap.masks["stiffness"]
+    assert only_stiffness.any()
+    assert (classes[only_stiffness] == 5).all() and (classes[~only_stiffness] != 5).all()
 
 
 def test_min_stiffness_metric_is_the_least_over_the_region():
