@@ -1,5 +1,9 @@
 """Workspace criteria (reachability, strokes, transmission-factor bounds, conditioning, assembly
-mode) and their evaluation at poses or on a grid, in chunks, for any machine family."""
+mode, stiffness) and their evaluation at poses or on a grid, in chunks, for any machine family.
+
+The stiffness criterion (``min_stiffness`` on the smallest translational stiffness, N/m, and
+``max_deflection`` on the deflection under ``wrench``, m; :mod:`pkmkit.stiffness.indices`) adds
+the mask ``"stiffness"`` only when one of them is given."""
 
 from __future__ import annotations
 
@@ -18,8 +22,11 @@ from pkmkit.numerics.arrays import real, real_pair
 from pkmkit.parallel import map_chunks
 from pkmkit.progress import tracked
 from pkmkit.status import Status
+from pkmkit.stiffness.indices import stiffness_figures
 
 MASK_NAMES = ("reachable", "strokes", "bounds", "condition", "mode")
+#: The mask of the stiffness criterion (present only when :attr:`Criteria.stiffness_bounded`).
+STIFFNESS_MASK = "stiffness"
 
 
 #: Relative tolerance of the transmission-factor bounds (rounding at a bound is not a failure).
@@ -39,6 +46,13 @@ class Criteria:
             crossed).
         tol: singularity threshold.
         rtol: relative tolerance of the bounds (rounding at a bound is not a failure).
+        min_stiffness: smallest admissible translational stiffness (N/m), or None.
+        max_deflection: largest admissible deflection of the reference point under
+            ``wrench`` (m), or None.
+        wrench: ``(d,)`` load at the reference point (N, N·m) for ``max_deflection`` (and the
+            deflection figures), or None.
+        stiffness_data: the elastic data (:class:`~pkmkit.stiffness.data.StiffnessData`;
+            None: the machine's own).
     """
 
     bounds: tuple[float, float] | None = None
@@ -48,8 +62,24 @@ class Criteria:
     connected: bool = True
     tol: float = SINGULARITY_TOL
     rtol: float = FACTOR_RTOL
+    min_stiffness: float | None = None
+    max_deflection: float | None = None
+    wrench: tuple[float, ...] | None = None
+    stiffness_data: Any = None
 
     def __post_init__(self) -> None:
+        for name in ("min_stiffness", "max_deflection"):
+            value = getattr(self, name)
+            if value is not None and not real(value, name) > 0:
+                raise InputError(f"{name} must be a finite number > 0 (SI), got {value}")
+        if self.max_deflection is not None and self.wrench is None:
+            raise InputError("max_deflection needs the wrench that causes the deflection")
+        if self.wrench is not None:
+            w = np.asarray(self.wrench, dtype=float).reshape(-1)
+            if w.size not in (2, 3, 6) or not np.isfinite(w).all():
+                raise InputError(f"the wrench must be 2, 3 or 6 finite numbers (N, N·m), got "
+                                 f"{self.wrench!r}")
+            object.__setattr__(self, "wrench", tuple(float(v) for v in w))
         if self.bounds is not None:
             lo, hi = real_pair(self.bounds, "the transmission-factor bounds")
             if not 0 < lo < hi:
@@ -66,6 +96,22 @@ class Criteria:
         with np.errstate(invalid="ignore"):
             return ((factors[:, -1] >= lo * (1 - self.rtol))
                     & (factors[:, 0] <= hi * (1 + self.rtol)))
+
+    @property
+    def stiffness_bounded(self) -> bool:
+        """A stiffness criterion is asked (``min_stiffness`` or ``max_deflection``)."""
+        return self.min_stiffness is not None or self.max_deflection is not None
+
+    def stiffness_ok(self, smallest: np.ndarray, deflection: np.ndarray | None) -> np.ndarray:
+        """``(M,)`` the stiffness criterion holds (NaN figures fail), the bounds up to the
+        relative ``rtol``."""
+        ok = np.ones(len(smallest), dtype=bool)
+        with np.errstate(invalid="ignore"):
+            if self.min_stiffness is not None:
+                ok &= smallest >= self.min_stiffness * (1 - self.rtol)
+            if self.max_deflection is not None:
+                ok &= deflection <= self.max_deflection * (1 + self.rtol)
+        return ok
 
     def limits(self, machine: Machine) -> tuple[np.ndarray, np.ndarray]:
         """Actuator limits in force (±inf when strokes are not enforced)."""
@@ -126,16 +172,55 @@ def _evaluate_range(start: int, stop: int, machine: Machine, grid: Grid,
 
 
 def _concatenate(parts: list[PoseEvaluation]) -> PoseEvaluation:
+    def joined(name: str) -> np.ndarray | None:
+        values = [getattr(p, name) for p in parts]
+        return None if values[0] is None else np.concatenate(values)
+
     return PoseEvaluation(
         q=np.concatenate([p.q for p in parts]),
         factors=np.concatenate([p.factors for p in parts]),
         condition=np.concatenate([p.condition for p in parts]),
-        masks={k: np.concatenate([p.masks[k] for p in parts]) for k in parts[0].masks})
+        masks={k: np.concatenate([p.masks[k] for p in parts]) for k in parts[0].masks},
+        stiffness=joined("stiffness"), deflection=joined("deflection"))
 
 
 def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
     if machine.family == "chain":
-        return evaluate_chain_poses(machine, points, criteria)
+        ev = evaluate_chain_poses(machine, points, criteria)
+    else:
+        ev = _evaluate_rod_chunk(machine, points, criteria)
+    if not (criteria.stiffness_bounded or criteria.wrench is not None):
+        return ev
+    return _with_stiffness(machine, points, ev, criteria)
+
+
+def _with_stiffness(machine: Machine, points: np.ndarray, ev: PoseEvaluation,
+                    criteria: Criteria) -> PoseEvaluation:
+    """``ev`` with the stiffness figures at its reachable poses (one batched evaluation:
+    :func:`pkmkit.stiffness.indices.stiffness_figures`) and, with a stiffness criterion, the
+    ``"stiffness"`` mask."""
+    reach = ev.masks["reachable"]
+    smallest = np.full(len(points), np.nan)
+    deflection = None if criteria.wrench is None else np.full(len(points), np.nan)
+    if reach.any():
+        if machine.family == "chain":
+            fig = stiffness_figures(machine, q=ev.q[reach], data=criteria.stiffness_data,
+                                    wrench=criteria.wrench)
+        else:
+            fig = stiffness_figures(machine, points[reach], data=criteria.stiffness_data,
+                                    wrench=criteria.wrench)
+        smallest[reach] = fig.smallest
+        if deflection is not None:
+            deflection[reach] = fig.deflection
+    masks = dict(ev.masks)
+    if criteria.stiffness_bounded:
+        masks[STIFFNESS_MASK] = reach & criteria.stiffness_ok(smallest, deflection)
+    return PoseEvaluation(q=ev.q, factors=ev.factors, condition=ev.condition, masks=masks,
+                          stiffness=smallest, deflection=deflection)
+
+
+def _evaluate_rod_chunk(machine: Machine, points: np.ndarray, criteria: Criteria
+                        ) -> PoseEvaluation:
     inv = machine.ik(points, full_output=True)
     q = inv.q
     reachable = inv.status == Status.OK

@@ -15,13 +15,19 @@ class PoseEvaluation:
         q: ``(M, n)`` actuator coordinates (NaN where unreachable), m.
         factors: ``(M, n)`` velocity transmission factors, decreasing.
         condition: ``(M,)``.
-        masks: ``{name: (M,) bool}`` for every name of :data:`MASK_NAMES`.
+        masks: ``{name: (M,) bool}`` for every name of :data:`MASK_NAMES` (and
+            ``"stiffness"`` with a stiffness criterion).
+        stiffness: ``(M,)`` smallest translational stiffness (N/m, NaN where unreachable or
+            singular) when the criteria ask for stiffness, else None.
+        deflection: ``(M,)`` norm of the deflection under the criteria's wrench (m), or None.
     """
 
     q: np.ndarray
     factors: np.ndarray
     condition: np.ndarray
     masks: dict[str, np.ndarray]
+    stiffness: np.ndarray | None = None
+    deflection: np.ndarray | None = None
 
     @property
     def feasible(self) -> np.ndarray:

@@ -10,13 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.analysis.criteria import MASK_NAMES, Criteria, evaluate_poses, study_length
+from pkmkit.analysis.criteria import STIFFNESS_MASK, Criteria, evaluate_poses, study_length
 from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.analysis.grids import Grid, make_grid
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.numerics.arrays import real
 from pkmkit.status import Status
+from pkmkit.stiffness.indices import stiffness_figures
 
 
 def _surface_offsets(d: int, per_edge: int) -> np.ndarray:
@@ -65,6 +66,8 @@ def criteria_slack(machine: Machine, points: np.ndarray, criteria: Criteria,
             parts.append(1.0 - sv[:, 0] / hi)
         if criteria.kappa_max is not None:
             parts.append(1.0 - jac.condition / criteria.kappa_max)
+        if criteria.stiffness_bounded:
+            parts.extend(_stiffness_slack(machine, points, criteria))
         side = np.sign(jac.det_A) * machine.working_mode
         parts.append(np.where(side > 0, jac.parallel_measure, -jac.parallel_measure)
                      - criteria.tol)
@@ -73,6 +76,19 @@ def criteria_slack(machine: Machine, points: np.ndarray, criteria: Criteria,
     unreachable = inv.status != Status.OK
     out[unreachable] = np.minimum(reach[unreachable], -1e-12)
     return np.where(np.isnan(out), -1.0, out)
+
+
+def _stiffness_slack(machine: Machine, points: np.ndarray, criteria: Criteria
+                     ) -> list[np.ndarray]:
+    """Relative slacks of the stiffness criterion (NaN where there is no stiffness)."""
+    fig = stiffness_figures(machine, points, data=criteria.stiffness_data,
+                            wrench=criteria.wrench)
+    out = []
+    if criteria.min_stiffness is not None:
+        out.append(fig.smallest / criteria.min_stiffness - 1.0)
+    if criteria.max_deflection is not None:
+        out.append(1.0 - fig.deflection / criteria.max_deflection)
+    return out
 
 
 def check_region_samples(free_axes: int) -> int:
@@ -148,7 +164,7 @@ def check_region(machine: Machine, center: Any, side: float, criteria: Criteria 
     failures: dict[str, int] = {}
     worst: dict[str, str] = {}
     names = machine.actuator_names
-    for name in MASK_NAMES:
+    for name in ev.masks:  # MASK_NAMES, and "stiffness" with a stiffness criterion
         bad = ~ev.masks[name]
         if name != "reachable":
             bad &= ev.masks["reachable"]
@@ -270,6 +286,8 @@ def _worst(name: str, bad: np.ndarray, points: np.ndarray, ev: PoseEvaluation,
         f = ev.factors[idx[k]]
         which = f"λ_min = {f[-1]:.6g} < {lo:g}" if f[-1] < lo else f"λ_max = {f[0]:.6g} > {hi:g}"
         return f"at {_fmt(points[idx[k]])}: {which}"
+    if name == STIFFNESS_MASK:
+        return _worst_stiffness(idx, points, ev, criteria)
     if name == "condition":
         k = int(np.nanargmax(ev.condition[idx]))
         return (f"at {_fmt(points[idx[k]])}: condition {ev.condition[idx[k]]:.6g} > "
@@ -277,6 +295,28 @@ def _worst(name: str, bad: np.ndarray, points: np.ndarray, ev: PoseEvaluation,
     k = 0
     return (f"at {_fmt(points[idx[k]])}: other assembly mode or parallel singularity "
             f"({len(idx)} samples)")
+
+
+def _worst_stiffness(idx: np.ndarray, points: np.ndarray, ev: PoseEvaluation,
+                     criteria: Criteria) -> str:
+    """Where the stiffness criterion fails worst (relative shortfall), in SI units."""
+    parts = []
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if criteria.min_stiffness is not None:
+            parts.append(criteria.min_stiffness / ev.stiffness[idx] - 1.0)
+        if criteria.max_deflection is not None:
+            parts.append(ev.deflection[idx] / criteria.max_deflection - 1.0)
+    shortfall = np.nan_to_num(np.max(parts, axis=0), nan=np.inf)
+    k = int(np.argmax(shortfall))
+    i = idx[k]
+    if not np.isfinite(ev.stiffness[i]):
+        return f"at {_fmt(points[i])}: no stiffness (singular configuration)"
+    text = f"smallest translational stiffness {ev.stiffness[i]:.6g} N/m"
+    if criteria.min_stiffness is not None:
+        text += f" (min {criteria.min_stiffness:g})"
+    if criteria.max_deflection is not None:
+        text += f", deflection {ev.deflection[i]:.6g} m (max {criteria.max_deflection:g})"
+    return f"at {_fmt(points[i])}: {text}"
 
 
 def feasible_interval(machine: Machine, point: Any, direction: Any, criteria: Criteria,

@@ -159,6 +159,9 @@ class WorkspaceMap:
         inscribed: largest inscribed square/cube, or None.
         inscribed_check: dense verification of the inscribed box (its transmission-factor and
             actuator ranges), or None.
+        stiffness: ``grid.shape`` smallest translational stiffness (N/m) when the criteria ask
+            for stiffness (:attr:`Criteria.stiffness_bounded` or a wrench), else None.
+        deflection: ``grid.shape`` deflection under the criteria's wrench (m), or None.
     """
 
     grid: Grid
@@ -171,6 +174,8 @@ class WorkspaceMap:
     criteria: Criteria
     inscribed: InscribedBox | None = field(default=None)
     inscribed_check: RegionCheck | None = field(default=None)
+    stiffness: np.ndarray | None = field(default=None)
+    deflection: np.ndarray | None = field(default=None)
 
     @property
     def measure(self) -> float:
@@ -266,6 +271,9 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
         q=evaluation.q.reshape((*shape, -1)), factors=evaluation.factors.reshape((*shape, -1)),
         condition=evaluation.condition.reshape(shape), reference=reference, criteria=criteria,
         inscribed=box, inscribed_check=box_check,
+        stiffness=None if evaluation.stiffness is None else evaluation.stiffness.reshape(shape),
+        deflection=(None if evaluation.deflection is None
+                    else evaluation.deflection.reshape(shape)),
     )
 
 

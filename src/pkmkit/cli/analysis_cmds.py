@@ -37,6 +37,7 @@ from pkmkit.plot.maps import (
     plot_useful_workspace,
     plot_workspace,
 )
+from pkmkit.stiffness.indices import STIFFNESS_INDICES
 
 from .options import (
     ANGLES_OPTION,
@@ -49,6 +50,18 @@ from .options import (
     resolve_machine,
 )
 from .scheduler import SCHEDULER_OPTION
+from .stiffness_cmds import machine_and_data, parse_wrench
+from .stiffness_options import (
+    MAX_DEFLECTION_OPTION,
+    MIN_STIFFNESS_OPTION,
+    WRENCH_OPTION,
+    analyze_stiffness,
+    criteria_fields,
+    print_workspace_stiffness,
+    stiffness_criteria,
+    stiffness_map_values,
+    workspace_stiffness,
+)
 
 BOUNDS_OPTION = click.option(
     "--bounds", metavar="LO,HI",
@@ -233,13 +246,20 @@ def register(cli: click.Group) -> None:
               "(angles in degrees, --angles convention; default: the home pose).")
 @click.option("--isotropy-tol", type=float, default=1e-9, show_default=True,
               help="The pose counts as isotropic when κ ≤ 1 + this tolerance.")
+@click.option("--stiffness", "with_stiffness", is_flag=True,
+              help="Add the translational eigen-stiffnesses (N/µm; --set "
+                   "actuator_stiffness=... as for `pkmkit stiffness`).")
+@WRENCH_OPTION
 @ANGLES_OPTION
 @UNITS_OPTION
 @JSON_OPTION
-def analyze(machine_name, assignments, pose, isotropy_tol, convention, units, as_json):
+def analyze(machine_name, assignments, pose, isotropy_tol, with_stiffness, wrench_text,
+            convention, units, as_json):
     """All kinetostatic indices at a pose: transmission factors, conditioning, ellipsoid,
-    distances to singularities."""
-    m = resolve_machine(machine_name, assignments, units)
+    distances to singularities.
+
+    With --stiffness (or --wrench), the stiffness and the deflection."""
+    m, data = machine_and_data(machine_name, assignments, units)
     if m.family == "chain":
         raise InputError(f"analyze reads rod machines' A and B matrices; for the joint-chain "
                          f"machine {m.id!r} run `pkmkit jacobian {machine_name} --pose "
@@ -271,6 +291,11 @@ def analyze(machine_name, assignments, pose, isotropy_tol, convention, units, as
         "det_A": jac.det_A / scale ** m.n_actuators, "det_B": jac.det_B / scale ** m.n_actuators,
         "status": jac.status,
     }
+    lines: list[str] = []
+    if with_stiffness or wrench_text is not None:
+        wrench, note = parse_wrench(wrench_text, m)
+        payload["stiffness"] = analyze_stiffness(m, data, x, wrench)
+        lines = payload["stiffness"].pop("lines") + ([f"  note: {note}"] if note else [])
     if as_json:
         emit_json(payload)
         return
@@ -289,6 +314,8 @@ def analyze(machine_name, assignments, pose, isotropy_tol, convention, units, as
     for k in range(len(ind.ellipsoid_axes)):
         click.echo(f"  ellipsoid axis {k + 1}: {ind.ellipsoid_axes[k]:.6g} along "
                    f"{fmt(ind.ellipsoid_directions[:, k])}")
+    for line in lines:
+        click.echo(line)
 
 
 def _condition_text(kappa: float) -> str:
@@ -303,8 +330,10 @@ def _condition_text(kappa: float) -> str:
 @click.argument("machine_name", metavar="MACHINE")
 @SET_OPTION
 @click.option("--index", "index_name", required=True,
-              type=click.Choice([*SCALAR_INDICES, "actuators"]),
-              help="Index to map ('actuators' maps every actuator coordinate).")
+              type=click.Choice([*SCALAR_INDICES, *STIFFNESS_INDICES, "actuators"]),
+              help="Index to map ('actuators' maps every actuator coordinate; 'stiffness' the "
+                   "smallest translational stiffness in N/µm, 'deflection' the deflection "
+                   "under --wrench in µm).")
 @click.option("--slice", "slice_text", help="Plane of a spatial machine, e.g. z=0.2.")
 @click.option("--range", "range_text", metavar="AMIN,AMAX,BMIN,BMAX",
               help="Extent of the two free coordinates (default: the machine's box).")
@@ -317,16 +346,21 @@ def _condition_text(kappa: float) -> str:
               "values far above the 95th percentile (near a singularity) take the top colour.")
 @click.option("--out", "out", required=True, type=click.Path(dir_okay=False),
               help="Figure file (.png, .svg, .pdf).")
+@WRENCH_OPTION
 @SCHEDULER_OPTION
 @UNITS_OPTION
 @JSON_OPTION
 def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orientation_text,
-            convention, resolution, color_scale, out, scheduler, units, as_json):
+            convention, resolution, color_scale, out, wrench_text, scheduler, units, as_json):
     """Iso-contours of an index (or actuator coordinates) over a plane."""
     check_figure_path(out)
-    m = resolve_machine(machine_name, assignments, units)
+    m, data = machine_and_data(machine_name, assignments, units)
     scale = length_scale(units)
-    if m.family == "chain" and index_name not in (*CHAIN_INDICES, "actuators"):
+    wrench, _ = parse_wrench(wrench_text, m)
+    if (index_name == "deflection") != (wrench is not None):
+        raise InputError("--index deflection and --wrench FX,FY,FZ[,MX,MY,MZ] go together")
+    if m.family == "chain" and index_name not in (*CHAIN_INDICES, *STIFFNESS_INDICES,
+                                                  "actuators"):
         raise InputError(f"index {index_name!r} is not defined for a joint-chain machine; its "
                          f"indices: {', '.join(CHAIN_INDICES)}, actuators")
     frame = machine_frame(m, parse_orientation(m, orientation_text, convention))
@@ -349,13 +383,17 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
         summary["min"] = np.nanmin(q, axis=0) / scale
         summary["max"] = np.nanmax(q, axis=0) / scale
     else:
-        values = index_values(m, points, index_name, scheduler=scheduler)
+        if index_name in STIFFNESS_INDICES:
+            values, label, title = stiffness_map_values(m, points, index_name, data, wrench,
+                                                        summary)
+        else:
+            values = index_values(m, points, index_name, scheduler=scheduler)
+            label, title = index_name, SCALAR_INDICES[index_name]
         finite = np.isfinite(values)
         if not finite.any():
             raise InputError(f"{index_name} is undefined on every reachable point of the plane")
-        plot_scalar_map(grid, values.reshape(grid.shape), title=f"{m.name}: "
-                        f"{SCALAR_INDICES[index_name]}", label=index_name, scale=color_scale,
-                        path=out)
+        plot_scalar_map(grid, values.reshape(grid.shape), title=f"{m.name}: {title}",
+                        label=label, scale=color_scale, path=out)
         k_min, k_max = np.nanargmin(values), np.nanargmax(values)
         summary.update({"min": float(values[k_min]), "at_min": points[k_min] / scale,
                         "max": float(values[k_max]), "at_max": points[k_max] / scale})
@@ -364,8 +402,10 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
         return
     click.echo(f"{m.name}: {index_name} over {'-'.join(grid.free_names)} "
                f"({summary['reachable_points']}/{grid.size} points reachable)")
-    click.echo(f"  min {fmt(summary['min'])}, max {fmt(summary['max'])} over the grid points "
-               f"(step {summary['step']:.4g} {units}: not between them); figure {out}")
+    unit = f" {summary['index_unit']}" if "index_unit" in summary else ""
+    click.echo(f"  min {fmt(summary['min'])}{unit}, max {fmt(summary['max'])}{unit} over the "
+               f"grid points (step {summary['step']:.4g} {units}: not between them); figure "
+               f"{out}")
 
 
 def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) -> dict:
@@ -422,22 +462,32 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
 @click.option("--cube", "cube", type=float, metavar="SIDE",
               help="Check a prescribed square/cube of this side (needs --center).")
 @click.option("--center", "center_text", help="Centre X,Y[,Z] of the prescribed square/cube.")
+@MIN_STIFFNESS_OPTION
+@MAX_DEFLECTION_OPTION
+@WRENCH_OPTION
+@click.option("--stiffness", "with_stiffness", is_flag=True,
+              help="Report the smallest translational stiffness over the workspace (N/µm).")
 @RESOLUTION_OPTION
 @click.option("--out", "out", type=click.Path(dir_okay=False), help="Figure file.")
 @SCHEDULER_OPTION
 @UNITS_OPTION
 @JSON_OPTION
 def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text,
-              orientation_text, convention, no_strokes, cube, center_text, resolution, out,
-              scheduler, units, as_json):
+              orientation_text, convention, no_strokes, cube, center_text, min_stiffness,
+              max_deflection, wrench_text, with_stiffness, resolution, out, scheduler, units,
+              as_json):
     """Workspace over a box or a plane: area/volume, largest inscribed square/cube, transmission
     factors inside it, global conditioning index, and (with --cube/--center) whether a
-    prescribed one is feasible (in the --slice plane when one is given)."""
+    prescribed one is feasible (in the --slice plane when one is given).
+
+    With --min-stiffness, --max-deflection or --wrench, stiffness is a criterion or a figure
+    (docs/stiffness.md)."""
     if out is not None:
         check_figure_path(out)
-    m = resolve_machine(machine_name, assignments, units)
+    m, data = machine_and_data(machine_name, assignments, units)
     scale = length_scale(units)
-    criteria = _criteria(bounds, kappa_max, no_strokes)
+    elastic, _ = stiffness_criteria(m, data, min_stiffness, max_deflection, wrench_text)
+    criteria = replace(_criteria(bounds, kappa_max, no_strokes), **elastic)
     frame = machine_frame(m, parse_orientation(m, orientation_text, convention))
     slice_ = parse_slice(frame, slice_text, scale)
     grid = build_grid(frame, box_text, slice_, scale, resolution)
@@ -462,6 +512,9 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
                          f"{counts} of {grid.size})")
     summary = workspace_summary(m, wmap, scale, units)
     summary["grid"]["default_box_widened"] = widened
+    summary["criteria"].update(criteria_fields(criteria))
+    if with_stiffness or elastic:
+        summary["stiffness"] = workspace_stiffness(m, wmap, data, scale)
     if frame.positions < len(frame.base):
         summary["orientation"] = _orientation_fields(m, frame, convention)
     if center is not None:
@@ -570,6 +623,8 @@ def _print_workspace(m: Machine, s: dict, units: str) -> None:
                    f"{c['spacing']:.4g} {units}; factors {fmt(c['index_range'])})")
         for name, text in c["worst"].items():
             click.echo(f"    {name}: {c['failures'][name]} samples fail; worst {text}")
+    if "stiffness" in s:
+        print_workspace_stiffness(s["stiffness"], units, s["criteria"])
     if "figure" in s:
         click.echo(f"  figure {s['figure']}")
 

@@ -40,9 +40,9 @@ from .options import (
     emit_json,
     fmt,
     parse_vector,
-    resolve_machine,
 )
 from .scheduler import SCHEDULER_OPTION
+from .stiffness_cmds import machine_and_data
 
 
 def _verified(check) -> dict:
@@ -349,8 +349,10 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
     """Optimise parameters of any machine for a prescribed region (one or several objectives).
 
     Lengths (variables, constraints, region, outputs) are in --units, angles in degrees; the
-    outputs name their units."""
-    m = resolve_machine(machine_name, assignments, units)
+    outputs name their units. The metric min_stiffness (smallest translational stiffness over
+    the region, N/µm) takes the elastic data of `pkmkit stiffness` (--set
+    actuator_stiffness=...)."""
+    m, elastic = machine_and_data(machine_name, assignments, units)
     scale = length_scale(units)
     region = _parse_region(region_text, scale)
     objs = [Objective.parse(t) for t in objectives]
@@ -361,7 +363,8 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
     problem = DesignProblem(
         base=m, variables=[_parse_vary(t, scale, m) for t in vary], objectives=objs,
         constraints=[_parse_constraint(t, scale) for t in constraints], region=region,
-        criteria=Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max), samples=samples,
+        criteria=Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max,
+                          stiffness_data=elastic), samples=samples,
     )
     out = check_output_dir(out_dir)
     result = optimize(problem, method=method, seed=seed, generations=generations,

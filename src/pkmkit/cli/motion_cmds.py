@@ -20,7 +20,9 @@ from pkmkit.motion.joints import Limits
 from pkmkit.motion.limits import limit_bounds
 from pkmkit.motion.paths import circle, helix, line, raster
 from pkmkit.motion.timelaw import DEFAULT_JERK_PER_ACCEL, PROFILES
+from pkmkit.plot.deflection_figures import plot_path_deflection
 from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
+from pkmkit.stiffness.along_path import path_deflection
 
 from .options import (
     EXIT_PARTIAL,
@@ -29,8 +31,9 @@ from .options import (
     UNITS_OPTION,
     emit_json,
     fmt,
-    resolve_machine,
 )
+from .path_deflection import deflection_columns, deflection_summary, print_deflection
+from .stiffness_cmds import machine_and_data
 
 
 def register(cli: click.Group) -> None:
@@ -131,16 +134,24 @@ def build_path(machine, scale: float, gcode, origin, line_text, circle_text, hel
 @click.option("--speed-limit", type=float, help="Actuator speed limit.")
 @click.option("--accel-limit", type=float, help="Actuator acceleration limit.")
 @click.option("--force-limit", type=float, help="Actuator force limit, N.")
+@click.option("--deflection", "with_deflection", is_flag=True,
+              help="Tool-point deflection under the weight of the moving parts and the tool "
+                   "force, per block (µm; elastic data as for `pkmkit stiffness`).")
+@click.option("--max-deflection", type=float, metavar="µm",
+              help="Deflection limit (implies --deflection; exit status 3 when exceeded).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False),
-              help="Directory for motion.png, path.png and trajectory.csv.")
+              help="Directory for motion.png, path.png and trajectory.csv (and deflection.png).")
 @UNITS_OPTION
 @JSON_OPTION
 def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, helix_text,
              raster_text, feed, rapid_feed, accel, jerk, profile, period, masses, wrench,
-             wrench_file, speed_limit, accel_limit, force_limit, out_dir, units, as_json):
+             wrench_file, speed_limit, accel_limit, force_limit, with_deflection,
+             max_deflection, out_dir, units, as_json):
     """Move along a tool path: duration, actuator strokes, speeds, accelerations, forces and
-    powers, with a check of the actuator limits (exit status 3 when a limit is exceeded)."""
-    m = resolve_machine(machine_name, assignments, units)
+    powers, with a check of the actuator limits (exit status 3 when a limit is exceeded).
+
+    With --deflection, the tool-point deflection under gravity and the tool force."""
+    m, elastic = machine_and_data(machine_name, assignments, units)
     if m.family != "translational":
         raise InputError(
             f"path follows tool paths with translational machines (position-only poses and "
@@ -164,7 +175,8 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                               ("--jerk", jerk, scale), ("--rapid-feed", rapid_feed, scale),
                               ("--speed-limit", speed_limit, scale),
                               ("--accel-limit", accel_limit, scale),
-                              ("--force-limit", force_limit, 1.0), ("--period", period, 1.0)):
+                              ("--force-limit", force_limit, 1.0), ("--period", period, 1.0),
+                              ("--max-deflection", max_deflection, 1e-6)):
         _check_positive(name, value, unit, units)
     limits = Limits(speed=None if speed_limit is None else speed_limit * scale,
                     accel=None if accel_limit is None else accel_limit * scale,
@@ -190,6 +202,11 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     summary.update({"machine": m.id, "units": units, "profile": profile,
                     "actuators": list(m.actuator_names), "total_mass": result.masses.total_mass})
     summary["defaults"] = defaults
+    bent = None
+    if with_deflection or max_deflection is not None:
+        bent = path_deflection(m, result.motion.trajectory, result.masses, force=force,
+                               data=elastic)
+        summary["deflection"] = deflection_summary(bent, elastic, scale, max_deflection)
     if out is not None:
         motion = result.motion
         plot_joint_motion(motion, m.actuator_names, forces=result.forces.force,
@@ -203,17 +220,25 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                   *[f"{n}_ddot" for n in names], *[f"f_{n}" for n in names]]
         rows = np.column_stack([motion.t, motion.x / scale, motion.q / scale, motion.qd / scale,
                                 motion.qdd / scale, result.forces.force])
-        with TableWriter(out / "trajectory.csv") as writer:
-            writer.write({name: rows[:, j] for j, name in enumerate(header)})
+        columns = {name: rows[:, j] for j, name in enumerate(header)}
         summary["files"] = ["motion.png", "path.png", "trajectory.csv"]
+        if bent is not None:
+            columns.update(deflection_columns(bent, m.pose_names))
+            plot_path_deflection(motion, m.actuator_names, bent, length_unit=units,
+                                 title=f"{m.name}: tool deflection", path=out / "deflection.png")
+            summary["files"].append("deflection.png")
+        with TableWriter(out / "trajectory.csv") as writer:
+            writer.write(columns)
     if as_json:
         emit_json(summary)
     else:
         _print_path_summary(m, summary, profile, units)
+        if bent is not None:
+            print_deflection(summary["deflection"], units)
         for note in defaults:
             click.echo(f"  default {note['option']} {note['value']:.6g} {note['unit']} "
                        f"({note['rule']})")
-    if summary["violations"]:
+    if summary["violations"] or summary.get("deflection", {}).get("exceeded"):
         sys.exit(EXIT_PARTIAL)
 
 

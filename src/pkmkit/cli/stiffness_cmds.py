@@ -61,6 +61,27 @@ def split_settings(assignments) -> tuple[list[str], dict[str, str]]:
     return machine_sets, elastic
 
 
+def machine_and_data(machine_name: str, assignments, units: str):
+    """The machine named on the command line and its elastic data, ``--set`` split between the
+    two (elastic keys: :data:`pkmkit.stiffness.data.SET_KEYS`): ``(machine, StiffnessData)``."""
+    from pkmkit.stiffness import with_settings
+    from pkmkit.stiffness.file_data import machine_data
+
+    machine_sets, elastic = split_settings(assignments)
+    m = resolve_machine(machine_name, machine_sets, units)
+    data = with_settings(machine_data(machine_name, m), elastic, m.n_actuators,
+                         length_scale(units))
+    return m, data
+
+
+def parse_wrench(text: str | None, machine) -> tuple[np.ndarray | None, str]:
+    """``--wrench FX,FY,FZ[,MX,MY,MZ]`` (N, N·m) for ``machine``'s twist width, and a note
+    when moments are dropped (a translating platform)."""
+    from pkmkit.stiffness import twist_names
+
+    return _wrench(text, len(twist_names(machine)))
+
+
 def _wrench(text: str | None, d: int) -> tuple[np.ndarray | None, str]:
     if text is None:
         return None, ""
@@ -107,14 +128,9 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     twists), rigid (rigid directions), the deflection under --wrench (dx.. in µm, rx.. in
     µrad), K11..Kdd (SI) and status.
     """
-    from pkmkit.stiffness import stiffness, twist_names, with_settings
+    from pkmkit.stiffness import stiffness, twist_names
 
-    machine_sets, elastic = split_settings(assignments)
-    from pkmkit.stiffness.file_data import machine_data
-
-    m = resolve_machine(machine_name, machine_sets, units)
-    data = with_settings(machine_data(machine_name, m), elastic, m.n_actuators,
-                         length_scale(units))
+    m, data = machine_and_data(machine_name, assignments, units)
     convention = resolve_convention(convention)
     names = twist_names(m)
     d = len(names)

@@ -113,12 +113,12 @@ def with_values(machine: Machine, values: Mapping[str, float]) -> Machine:
 
 def boundary_factor(quantity: str, length_scale: float) -> float:
     """SI value per boundary unit (lengths in the unit of ``length_scale`` m, areas in its
-    square, angles in degrees)."""
+    square, angles in degrees, stiffnesses in N/µm)."""
     return {"length": length_scale, "area": length_scale**2, "angle": math.pi / 180.0,
-            "number": 1.0}[quantity]
+            "stiffness": 1e6, "number": 1.0}[quantity]
 
 
 def boundary_unit(quantity: str, length_unit: str) -> str:
     """Unit symbol of a quantity at the boundary (``""`` for a number)."""
     return {"length": length_unit, "area": f"{length_unit}^2", "angle": "deg",
-            "number": ""}[quantity]
+            "stiffness": "N/µm", "number": ""}[quantity]

@@ -15,7 +15,11 @@ axis-aligned square (planar machines) or cube, given by its side and centre.
 - ``footprint``: area of the convex hull, in the x-y plane, of the carriage joints over the
   region, m²;
 - ``inscribed_side``: side of the largest square/cube satisfying the criteria in the machine's
-  default box (a workspace computation: slower).
+  default box (a workspace computation: slower);
+- ``min_stiffness``: smallest translational stiffness over the region, N/m (N/µm at the
+  command line) — the least, over the region's poses, of the smallest eigenvalue of
+  ``(C_tt)⁻¹`` (:mod:`pkmkit.stiffness.indices`), with the criteria's elastic data
+  (``Criteria.stiffness_data``, default the machine's); NaN when a pose has no stiffness.
 """
 
 from __future__ import annotations
@@ -31,12 +35,17 @@ from pkmkit.analysis.workspace import Criteria, compute_workspace, evaluate_pose
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.rods import SLIDE
+from pkmkit.stiffness.indices import stiffness_figures
 
 METRICS = ("violation", "stroke", "compactness", "lambda_min", "lambda_max", "worst_condition",
-           "gci", "footprint", "inscribed_side")
-#: Quantity of each metric (``"length"`` m, ``"area"`` m², ``"number"`` dimensionless).
+           "gci", "footprint", "inscribed_side", "min_stiffness")
+#: Metrics computed only when asked (slower): not part of the inert-variable check otherwise.
+ON_REQUEST = ("inscribed_side", "min_stiffness")
+#: Quantity of each metric (``"length"`` m, ``"area"`` m², ``"stiffness"`` N/m, ``"number"``
+#: dimensionless).
 METRIC_QUANTITIES = {name: "number" for name in METRICS} | {
-    "stroke": "length", "footprint": "area", "inscribed_side": "length"}
+    "stroke": "length", "footprint": "area", "inscribed_side": "length",
+    "min_stiffness": "stiffness"}
 
 
 @dataclass(frozen=True)
@@ -105,6 +114,11 @@ def evaluate_metrics(machine: Machine, region: Region, criteria: Criteria,
         out["gci"] = float(np.mean(1.0 / ev.condition[reach])) if sv.size else nan
     if "footprint" in names:
         out["footprint"] = _footprint(machine, q)
+    if "min_stiffness" in names:
+        smallest = stiffness_figures(machine, points[reach],
+                                     data=criteria.stiffness_data).smallest if reach.any() else []
+        out["min_stiffness"] = (float(np.min(smallest)) if len(smallest)
+                                and np.isfinite(smallest).all() else nan)
     if "inscribed_side" in names:
         lower, upper = machine.default_box()
         grid = make_grid(lower, upper, free=tuple(range(machine.dims)), base=machine.home_pose,

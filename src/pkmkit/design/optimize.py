@@ -41,7 +41,13 @@ from pkmkit.design.design_space import (
     check_names,
     with_values,
 )
-from pkmkit.design.metrics import METRIC_QUANTITIES, METRICS, Region, metric_values
+from pkmkit.design.metrics import (
+    METRIC_QUANTITIES,
+    METRICS,
+    ON_REQUEST,
+    Region,
+    metric_values,
+)
 from pkmkit.exceptions import InputError, ParameterError
 from pkmkit.io.atomic import atomic_path, write_text_atomic
 from pkmkit.io.json_io import to_jsonable
@@ -206,13 +212,14 @@ class DesignProblem:
         Each variable is set to its lower bound, its upper bound and a point at 30 % of its
         range (not the middle, so that a range symmetric about a symmetric design cannot give
         equal values by symmetry), the others at mid-range, and every metric of
-        :data:`~pkmkit.design.metrics.METRICS` (``inscribed_side`` only when requested) and
-        every user metric is computed; a variable is inert when all of them are bit-identical
-        at the three points — e.g. a stroke limit or the parallelogram width, which the metrics
-        (closed-form kinematics over the region) do not see. A variable whose points cannot be
-        evaluated (no machine, region unreachable) is not reported.
+        :data:`~pkmkit.design.metrics.METRICS` (``inscribed_side`` and ``min_stiffness`` only
+        when requested) and every user metric is computed; a variable is inert when all of
+        them are bit-identical at the three points — e.g. a stroke limit or the parallelogram
+        width, which the metrics (closed-form kinematics over the region) do not see. A
+        variable whose points cannot be evaluated (no machine, region unreachable) is not
+        reported.
         """
-        names = tuple(n for n in METRICS if n != "inscribed_side" or n in self.metric_names)
+        names = tuple(n for n in METRICS if n not in ON_REQUEST or n in self.metric_names)
         mid = self.bounds.mean(axis=1)
         inert = []
         for k, var in enumerate(self.variables):
@@ -286,7 +293,8 @@ class OptimizationResult:
         for ``units``."""
         quantity = self.problem.quantity(column)
         if units is None:
-            return {"length": "m", "area": "m^2", "angle": "rad", "number": ""}[quantity]
+            return {"length": "m", "area": "m^2", "angle": "rad", "stiffness": "N/m",
+                    "number": ""}[quantity]
         length_scale(units)  # validates the unit
         return boundary_unit(quantity, units)
 

@@ -26,6 +26,7 @@ _CLASSES = (
     ("mode", "#bcbddc"),
     ("bounds", "#fcbba1"),
     ("condition", "#fc9272"),
+    ("stiffness", "#9ecae1"),
     ("disconnected", "#c7e9c0"),
     ("workspace", "#41ab5d"),
 )
@@ -180,9 +181,11 @@ def classify(wmap: WorkspaceMap) -> np.ndarray:
     """Integer class per grid point: index into the workspace classes (first failing criterion,
     "disconnected", or "workspace")."""
     out = np.full(wmap.grid.shape, len(_CLASSES) - 2)  # disconnected by default
-    order = ("reachable", "strokes", "mode", "bounds", "condition")
+    order = ("reachable", "strokes", "mode", "bounds", "condition", "stiffness")
     assigned = np.zeros(wmap.grid.shape, bool)
     for k, name in enumerate(order):
+        if name not in wmap.masks:  # no stiffness criterion
+            continue
         fail = ~wmap.masks[name] & ~assigned
         out[fail] = k
         assigned |= fail

@@ -32,6 +32,16 @@ def twist_names(machine: Any) -> tuple[str, ...]:
     return TWIST_NAMES[: machine.dims]
 
 
+def check_data(machine: Any, data: StiffnessData) -> None:
+    """Refuse elastic data of the other family (rods on a joint-chain machine, links on a
+    rod-leg machine) with an :class:`InputError`."""
+    chains = isinstance(machine.model, JointChainModel)
+    if chains and data.rod_section is not None:
+        raise InputError("a joint-chain machine has links, not rods: give link_section")
+    if not chains and (data.link_section is not None or data.link_sections):
+        raise InputError("a rod-leg machine has rods, not links: give rod_section")
+
+
 def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = None,
               data: StiffnessData | None = None, reference: Any = None,
               tool_length: float | None = None) -> StiffnessResult:
@@ -63,10 +73,7 @@ def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = No
     names = twist_names(machine)
     d = len(names)
     chains = isinstance(machine.model, JointChainModel)
-    if chains and data.rod_section is not None:
-        raise InputError("a joint-chain machine has links, not rods: give link_section")
-    if not chains and (data.link_section is not None or data.link_sections):
-        raise InputError("a rod-leg machine has rods, not links: give rod_section")
+    check_data(machine, data)
     if chains:
         if (pose is None) == (q is None):
             raise InputError("give either a pose (tool point and axis) or q")

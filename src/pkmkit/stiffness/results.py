@@ -88,7 +88,8 @@ def summarize(compliance: np.ndarray, status: np.ndarray, coordinates: tuple[str
         if rows.size:
             inv = np.einsum("nij,nj,nkj->nik", v[full], 1.0 / lam[full], v[full])
             stiff[rows] = 0.5 * (inv + np.swapaxes(inv, 1, 2))
-        trans[ok] = _block_stiffness(c[ok][:, :3, :3], top)
+        # a translating platform's compliance is its translational block: its eigenvalues
+        trans[ok] = eig[ok] if d <= 3 else _block_stiffness(c[ok][:, :3, :3], top)
     rot = None
     if d == 6:
         rot = np.full((n, 3), np.nan)

@@ -31,6 +31,7 @@ from pkmkit.exceptions import InputError, ParameterError
 from pkmkit.machines.closed_form import RodClosedForm
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.machine import SINGULARITY_TOL
+from pkmkit.numerics import small
 from pkmkit.status import Status
 from pkmkit.stiffness.data import StiffnessData
 
@@ -81,9 +82,20 @@ def _condition(mats: np.ndarray) -> np.ndarray:
 
 
 def _inverse(mats: np.ndarray) -> np.ndarray:
-    """Batched inverse ``(N, d, d)``; NaN for rows that are not finite or are singular."""
+    """Batched inverse ``(N, d, d)``; NaN for rows that are not finite or are singular
+    (2×2 and 3×3: the adjugate over the determinant, no LAPACK call per row)."""
     out = np.full(mats.shape, np.nan)
     ok = np.isfinite(mats).all(axis=(1, 2))
+    if mats.shape[1] in (2, 3) and ok.any():
+        m = np.ascontiguousarray(mats[ok].transpose(1, 2, 0))  # batch-last
+        cof = small.cofactors(m)
+        det = small.det(m, cof)
+        good = np.abs(det) > 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = cof.transpose(2, 1, 0) / det[:, None, None]  # adj = cofactorsᵀ
+        inv[~good] = np.nan
+        out[ok] = inv
+        return out
     ok[ok] = np.abs(np.linalg.det(mats[ok])) > 0
     if ok.any():
         out[ok] = np.linalg.inv(mats[ok])
