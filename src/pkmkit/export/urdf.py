@@ -50,7 +50,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.export.base import UnsupportedExportError, machine_family
+from pkmkit.export.base import UnsupportedExportError, machine_family, platform_points
 from pkmkit.model.rods import CRANK, SLIDE, STRUT
 
 FORMAT = "urdf"
@@ -139,26 +139,6 @@ def _check(machine) -> None:
                                          f"{model.actuator_names[k]!r} drives several rods")
 
 
-def home_state(machine) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(q0 (n,), p0 (3,), rot0 (3, 3), tips (m, 3))``: pkmkit's home actuator values, platform
-    position, orientation and platform joint centres (m, base frame)."""
-    q0 = np.asarray(machine.home_q, dtype=float)
-    home = np.asarray(machine.home_pose, dtype=float)
-    return q0, *platform_points(machine, home)
-
-
-def platform_points(machine, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(p (3,), rot (3, 3), tips (m, 3))`` of a pose ``x (dims,)``: the platform reference
-    point, orientation (identity for a translational machine) and joint centres (m)."""
-    from pkmkit.spatial.rotation import rotvec_to_matrix
-
-    model = machine.model
-    x = np.asarray(x, dtype=float)
-    p = model.pad(x[None])[0][:3]
-    rot = rotvec_to_matrix(x[None, 3:6])[0] if len(x) == 6 else np.eye(3)
-    return p, rot, p + model.rod_platform @ rot.T
-
-
 def _inertial(mass: float, com, inertia: np.ndarray) -> str:
     i = np.asarray(inertia, dtype=float)
     return (f'<inertial><origin xyz="{_f(com)}" rpy="0 0 0"/><mass value="{mass:.17g}"/>'
@@ -219,7 +199,8 @@ def urdf_export(machine, masses=None, *, name: str = "machine") -> UrdfExport:
     _check(machine)
     model = machine.model
     masses = _masses(machine, masses)
-    q0, p0, rot0, tips = home_state(machine)
+    q0 = np.asarray(machine.home_q, dtype=float)
+    _, rot0, tips = platform_points(machine, machine.home_pose)
     from pkmkit.solve.rod_closure import rod_base_points
     from pkmkit.spatial.rotation import axis_rotation
 
@@ -379,7 +360,7 @@ def _closures_text(machine, layout: UrdfExport, values: dict, name: str, masses)
     model = machine.model
     pairs = "\n".join(f"  - [{a}, {b}]  # rod {i + 2} ({model.leg_names[model.rod_leg[i + 1]]})"
                       for i, (a, b) in enumerate(layout.closure_frames))
-    actuators = [j.name for j in layout.joints if j.role == "actuator"]
+    actuators = model.actuator_names
     strut = model.leg_kind[model.leg_actuator.argsort()] == STRUT
     armature = ""
     if masses is not None and strut.any():
@@ -422,7 +403,7 @@ def configuration(machine, layout: UrdfExport, x, q) -> dict[str, float]:
 
     model = machine.model
     q = np.asarray(q, dtype=float).reshape(-1)
-    p, rot, tips = platform_points(machine, np.asarray(x, dtype=float).reshape(-1))
+    _, rot, tips = platform_points(machine, np.asarray(x, dtype=float).reshape(-1))
     bases = rod_base_points(model, q[:, None])[:, :, 0].T
     out: dict[str, float] = {}
     rods = np.zeros((model.n_rods, 3, 3))

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
-from pkmkit.export.base import ExportCheckError, sample_poses
-from pkmkit.export.urdf import UrdfExport, configuration, platform_points
+from pkmkit.export.base import ExportCheckError, platform_points, sample_poses
+from pkmkit.export.urdf import UrdfExport, configuration
 
 #: Largest closure residual and platform error a written export may have (m).
 TOLERANCE = 1e-9
