@@ -201,3 +201,12 @@ def test_the_command_writes_the_tree_and_its_closures(tmp_path):
                                    str(tmp_path / "t.urdf")])
     assert res.exit_code == 1 and not (tmp_path / "t.urdf").exists()
     assert not (tmp_path / "t.closures.yaml").exists()
+
+
+def test_a_six_slide_hexapod_closes_its_loops(tmp_path):
+    from .six_slides import six_slide_machine
+
+    m = six_slide_machine(tmp_path)
+    export = urdf_export(m)
+    assert "carriage6" in export.urdf
+    assert check_urdf_export(m, export, use_pinocchio=True)[0] <= TOL

@@ -94,7 +94,8 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         atomic_write_text(closures, export.closures)
         n_loops, n_joints = len(export.closure_frames), len(export.joints)
         what = (f"URDF tree ({n_joints} joints, {m.n_actuators} actuated; m, kg"
-                + ("" if export.inertial else "; no inertias: cranks") + f") and "
+                + ("" if export.inertial else "; no masses: pkmkit has none of cranks")
+                + f") and "
                 f"{n_loops} loop closures (3D) → {closures}")
         check = (f"read back with {'Pinocchio' if reader == 'pinocchio' else 'a URDF parser'},"
                  f" its loops close at pkmkit's configurations (≤ 1e-9 m)")

@@ -358,8 +358,7 @@ def _urdf_text(machine, links, joints, inertial: bool) -> str:
 
 def _closures_text(machine, layout: UrdfExport, values: dict, name: str, masses) -> str:
     model = machine.model
-    pairs = "\n".join(f"  - [{a}, {b}]  # rod {i + 2} ({model.leg_names[model.rod_leg[i + 1]]})"
-                      for i, (a, b) in enumerate(layout.closure_frames))
+    pairs = "\n".join(f"  - [{a}, {b}]" for a, b in layout.closure_frames)
     actuators = model.actuator_names
     strut = model.leg_kind[model.leg_actuator.argsort()] == STRUT
     armature = ""
