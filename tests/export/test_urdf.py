@@ -210,3 +210,31 @@ def test_a_six_slide_hexapod_closes_its_loops(tmp_path):
     export = urdf_export(m)
     assert "carriage6" in export.urdf
     assert check_urdf_export(m, export, use_pinocchio=True)[0] <= TOL
+
+
+def test_a_platform_turned_at_home_is_carried_turned(tmp_path):
+    """The spherical joint's zero is the platform's home orientation (here turned 0.05 rad
+    about z and 0.03 about x)."""
+    from .six_slides import six_slide_machine
+
+    six_slide_machine(tmp_path)
+    path = tmp_path / "six-slides.toml"
+    path.write_text(path.read_text().replace("home = [0, 0, -0.5, 0, 0, 0]",
+                                             "home = [0, 0, -0.5, 0.03, 0, 0.05]"))
+    m = pkmkit.load(path)
+    assert np.abs(m.home_pose[3:] - [0.03, 0, 0.05]).max() == 0
+    export = urdf_export(m)
+    assert yaml.safe_load(export.closures)["home"]["rod1_sz"] == pytest.approx(0.0, abs=1e-12)
+    assert check_urdf_export(m, export, use_pinocchio=True)[0] <= TOL
+
+
+def test_masses_for_cranks_and_a_wrong_suffix_are_refused(tmp_path):
+    from pkmkit.cli.main import cli
+
+    m = pkmkit.machine("linear-delta-table-iv1")
+    with pytest.raises(UnsupportedExportError, match="no mass model of crank"):
+        urdf_export(pkmkit.machine("delta"), default_masses(m))
+    res = CliRunner().invoke(cli, ["export", "orthoglide", "--to", "urdf", "--out",
+                                   str(tmp_path / "o.xml")])
+    assert res.exit_code == 2 and "NAME.urdf" in res.output
+    assert not list(tmp_path.iterdir())

@@ -1,5 +1,6 @@
 """``pkmkit export``: a machine (built-in, machine file, calibrated machine file) in another
-tool's terms — a LinuxCNC kinematics module, a Klipper delta configuration, a MuJoCo model."""
+tool's terms — a LinuxCNC kinematics module, a Klipper delta configuration, a MuJoCo model, a
+URDF tree and its loop closures."""
 
 from __future__ import annotations
 
@@ -42,6 +43,7 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
     """Write MACHINE for a controller, a firmware or a simulator (--to FORMAT --out PATH).
 
     linuxcnc: --out NAME.c, the module NAME (LinuxCNC loads it by that name).
+    urdf: --out NAME.urdf, and the loop closures in NAME.closures.yaml beside it.
 
     MACHINE is a built-in id or a machine file, nominal or calibrated (`pkmkit calibrate --out`
     writes one: its defects go into the export). The written file is read back and checked
@@ -89,16 +91,15 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         closures = str(Path(out_file).with_suffix(".closures.yaml"))
         export = urdf_export(m, masses_file and load_masses(masses_file, m)[0],
                              name=Path(out_file).stem)
-        worst, reader = check_urdf_export(m, export)
+        _, reader = check_urdf_export(m, export)
         text = export.urdf
         atomic_write_text(closures, export.closures)
-        n_loops, n_joints = len(export.closure_frames), len(export.joints)
-        what = (f"URDF tree ({n_joints} joints, {m.n_actuators} actuated; m, kg"
-                + ("" if export.inertial else "; no masses: pkmkit has none of cranks")
-                + f") and "
-                f"{n_loops} loop closures (3D) → {closures}")
+        masses_note = "" if export.inertial else "; no masses: pkmkit has none of cranks"
+        what = (f"URDF tree ({len(export.joints)} joints, {m.n_actuators} actuated; m, kg"
+                f"{masses_note}) and {len(export.closure_frames)} loop closures (3D) → "
+                f"{closures}")
         check = (f"read back with {'Pinocchio' if reader == 'pinocchio' else 'a URDF parser'},"
-                 f" its loops close at pkmkit's configurations (≤ 1e-9 m)")
+                 " its loops close at pkmkit's configurations (≤ 1e-9 m)")
     else:
         from pkmkit.export.mjcf import check_mjcf_model, mjcf_model
 

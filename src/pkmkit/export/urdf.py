@@ -41,7 +41,10 @@ Joint limits are pkmkit's strokes; an unlimited stroke, and the effort and veloc
 requires but pkmkit does not give, are written as :data:`UNLIMITED`.
 
 Refused (:class:`~pkmkit.export.base.UnsupportedExportError`): joint chains, planar machines,
-a strut actuator driving several rods.
+a strut actuator driving several rods, masses given for a machine with cranks, and a
+translational machine whose rods do not close at its home (a calibration that tilts a crank's
+axis: pkmkit keeps such a platform translating on its legs' midlines, its parallelogram rods
+would not).
 """
 
 from __future__ import annotations
@@ -173,6 +176,11 @@ def _joint(name: str, kind: str, parent: str, child: str, xyz=(0, 0, 0), rpy=(0,
 def _masses(machine, masses):
     model = machine.model
     if (model.leg_kind == CRANK).any():
+        if masses is not None:
+            raise UnsupportedExportError(
+                FORMAT, machine.id, "masses were given, but pkmkit has no mass model of crank "
+                "actuators (the arms' inertia): export this machine without masses (a "
+                "kinematic URDF)")
         return None
     if masses is None:
         from pkmkit.dynamics.defaults import default_masses
