@@ -238,3 +238,52 @@ def test_masses_for_cranks_and_a_wrong_suffix_are_refused(tmp_path):
                                    str(tmp_path / "o.xml")])
     assert res.exit_code == 2 and "NAME.urdf" in res.output
     assert not list(tmp_path.iterdir())
+
+
+def _pinocchio_forces(model, frames, machine, export, x, q, qd, qdd) -> np.ndarray:
+    """Actuator forces (n,) of the tree and its closures at pkmkit's configuration, speeds and
+    accelerations: the passive joints' rates from the closures (J v = 0, J a + γ = 0), RNEA on
+    the tree, then τ = S f + Jᵀ λ solved for (f, λ)."""
+    data = model.createData()
+    world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    q_pin = _q(model, configuration(machine, export, x, q))
+    act = [model.joints[model.getJointId(a)].idx_v for a in machine.model.actuator_names]
+    passive = np.setdiff1d(np.arange(model.nv), act)
+    pin.computeJointJacobians(model, data, q_pin)
+    pin.updateFramePlacements(model, data)
+    jac = np.vstack([pin.getFrameJacobian(model, data, a, world)[:3]
+                     - pin.getFrameJacobian(model, data, b, world)[:3] for a, b in frames])
+    v, a = np.zeros(model.nv), np.zeros(model.nv)
+    v[act], a[act] = qd, qdd
+    v[passive] = np.linalg.solve(jac[:, passive], -jac[:, act] @ qd)
+    pin.forwardKinematics(model, data, q_pin, v, np.zeros(model.nv))
+    pin.updateFramePlacements(model, data)
+    gamma = np.concatenate([pin.getFrameClassicalAcceleration(model, data, f1, world).linear
+                            - pin.getFrameClassicalAcceleration(model, data, f2, world).linear
+                            for f1, f2 in frames])
+    a[passive] = np.linalg.solve(jac[:, passive], -jac[:, act] @ qdd - gamma)
+    tau = pin.rnea(model, data, q_pin, v, a)
+    select = np.zeros((model.nv, len(act)))
+    select[act, np.arange(len(act))] = 1.0
+    return np.linalg.solve(np.hstack([select, jac.T]), tau)[:len(act)]
+
+
+@pytest.mark.parametrize("name", ["linear-delta-table-iv1", "orthoglide"])
+def test_pinocchio_inverse_dynamics_is_pkmkits(name):
+    """The written masses and inertias are the dynamics model's: Pinocchio's inverse dynamics of
+    the tree, its closures enforced, gives pkmkit's actuator forces along a circle (gravity
+    included)."""
+    from pkmkit.dynamics import inverse_dynamics
+    from pkmkit.motion import circle, joint_trajectory, plan
+
+    m = pkmkit.machine(name)
+    masses = default_masses(m)
+    export = urdf_export(m, masses)
+    model, frames = _load(export)
+    radius = 0.05 if name == "orthoglide" else 0.15
+    jt = joint_trajectory(m, plan(circle(m.home_pose, radius), feed=0.3, accel=2.0, jerk=20.0,
+                                  period=0.01))
+    res = inverse_dynamics(m, masses, jt.x, jt.xd, jt.xdd, jt.q, jt.qd, jt.qdd)
+    for k in range(0, len(jt.t), 25):
+        f = _pinocchio_forces(model, frames, m, export, jt.x[k], jt.q[k], jt.qd[k], jt.qdd[k])
+        np.testing.assert_allclose(f, res.force[k], rtol=1e-9, atol=1e-9)

@@ -33,8 +33,9 @@ home).
 
 Masses and inertias come from :mod:`pkmkit.dynamics.masses` (default: the illustrative values of
 :func:`pkmkit.dynamics.defaults.default_masses`): carriages as 40 mm cubes of their mass (as the
-MJCF export), rods, cylinders and pistons as uniform solid cylinders, the platform with the
-masses' centre of mass and inertia (a point mass when they give none). A strut's "carriage"
+MJCF export), rods, cylinders and pistons as uniform solid cylinders (without their inertia
+about their own axis: :func:`_tube`), the platform with the masses' centre of mass and inertia
+(a point mass when they give none). A strut's "carriage"
 mass (the motor's translating inertia) has no URDF field: it is the YAML's ``armature``.
 Machines with cranks have no mass model in pkmkit: their URDF is kinematic (no ``inertial``).
 Joint limits are pkmkit's strokes; an unlimited stroke, and the effort and velocity URDF
@@ -150,9 +151,12 @@ def _inertial(mass: float, com, inertia: np.ndarray) -> str:
 
 
 def _tube(mass: float, radius: float, start: float, length: float) -> str:
-    """A uniform solid cylinder along z from ``start`` over ``length`` (m)."""
+    """A uniform solid cylinder along z from ``start`` over ``length`` (m), its inertia about
+    its own axis left out (0): a rod between ball joints spins idly, so that inertia never loads
+    the machine; in the tree the universal joint drives the spin, and 0 keeps the dynamics the
+    ball-jointed rod's (pkmkit's)."""
     across = mass * (3 * radius**2 + length**2) / 12
-    inertia = np.diag([across, across, 0.5 * mass * radius**2])
+    inertia = np.diag([across, across, 0.0])
     return _inertial(mass, [0.0, 0.0, start + 0.5 * length], inertia)
 
 
