@@ -287,3 +287,22 @@ def test_pinocchio_inverse_dynamics_is_pkmkits(name):
     for k in range(0, len(jt.t), 25):
         f = _pinocchio_forces(model, frames, m, export, jt.x[k], jt.q[k], jt.qd[k], jt.qdd[k])
         np.testing.assert_allclose(f, res.force[k], rtol=1e-9, atol=1e-9)
+
+
+def test_a_calibrated_machine_file_carries_its_defects(tmp_path):
+    from pkmkit.cli.main import cli
+    from pkmkit.io.machine_defects import write_machine_with_defects
+    from pkmkit.machines.registry import preset_path
+
+    nominal = pkmkit.machine("gough-stewart")
+    delta = dict.fromkeys(defect_index(nominal).names, 0.0) | {"dA1x": 2e-4}
+    path = tmp_path / "hexapod-calibrated.toml"
+    write_machine_with_defects(path, preset_path("gough-stewart"), nominal,
+                               np.array(list(delta.values())))
+    res = CliRunner().invoke(cli, ["export", str(path), "--to", "urdf", "--out",
+                                   str(tmp_path / "cal.urdf")])
+    assert res.exit_code == 0, res.output
+    model = pin.buildModelFromUrdf(str(tmp_path / "cal.urdf"))
+    joint = model.getJointId("rod1_ux")
+    np.testing.assert_allclose(model.jointPlacements[joint].translation,
+                               nominal.model.rod_base[0] + [2e-4, 0, 0], atol=1e-15)
