@@ -1,5 +1,6 @@
 """``pkmkit export``: a machine (built-in, machine file, calibrated machine file) in another
-tool's terms — a LinuxCNC kinematics module, a Klipper delta configuration, a MuJoCo model."""
+tool's terms — a LinuxCNC kinematics module, a Klipper delta configuration, a MuJoCo model, a
+URDF tree and its loop closures."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from pkmkit.io.atomic import write_text_atomic as atomic_write_text
 
 from .options import SET_OPTION, is_machine_file, parse_vector, resolve_machine
 
-FORMATS = ("linuxcnc", "klipper", "mjcf")
+FORMATS = ("linuxcnc", "klipper", "mjcf", "urdf")
 
 
 def register(cli: click.Group) -> None:
@@ -25,7 +26,8 @@ def register(cli: click.Group) -> None:
 @SET_OPTION
 @click.option("--to", "fmt", type=click.Choice(FORMATS), required=True,
               help="linuxcnc: a kinematics module (C source for halcompile); klipper: a delta "
-                   "printer's [printer]/[stepper_*] values; mjcf: a MuJoCo model.")
+                   "printer's [printer]/[stepper_*] values; mjcf: a MuJoCo model; urdf: "
+                   "a URDF tree and its loop closures (NAME.closures.yaml beside it).")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
               help="File to write (written whole or not at all).")
 @click.option("--units", type=click.Choice(["mm", "in", "m"]), default="mm", show_default=True,
@@ -35,11 +37,13 @@ def register(cli: click.Group) -> None:
               help="Klipper: actuator coordinates at which the endstops trigger, in --units "
                    "(default: the tops of the strokes).")
 @click.option("--masses", "masses_file", type=click.Path(dir_okay=False), default=None,
-              help="mjcf: a masses file (docs/motion.md) instead of the illustrative masses.")
+              help="mjcf, urdf: a masses file (docs/motion.md) instead of the illustrative "
+                   "masses.")
 def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, masses_file):
     """Write MACHINE for a controller, a firmware or a simulator (--to FORMAT --out PATH).
 
     linuxcnc: --out NAME.c, the module NAME (LinuxCNC loads it by that name).
+    urdf: --out NAME.urdf, and the loop closures in NAME.closures.yaml beside it.
 
     MACHINE is a built-in id or a machine file, nominal or calibrated (`pkmkit calibrate --out`
     writes one: its defects go into the export). The written file is read back and checked
@@ -48,8 +52,8 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
     to which format.
     """
     m = resolve_machine(machine_name, assignments, units)
-    if masses_file is not None and fmt != "mjcf":
-        raise click.UsageError("--masses goes with --to mjcf")
+    if masses_file is not None and fmt not in ("mjcf", "urdf"):
+        raise click.UsageError("--masses goes with --to mjcf or --to urdf")
     if endstops_text is not None and fmt != "klipper":
         raise click.UsageError("--endstops goes with --to klipper")
     source = machine_name if is_machine_file(machine_name) else ""
@@ -76,6 +80,26 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         check_klipper_config(m, text, endstops)
         what = "Klipper delta configuration ([printer], [stepper_a/b/c]; mm)"
         check = "Klipper's delta formulas move the carriages as pkmkit (≤ 1e-9 m)"
+    elif fmt == "urdf":
+        from pkmkit.dynamics.masses import load_masses
+        from pkmkit.export.urdf import urdf_export
+        from pkmkit.export.urdf_check import check_urdf_export
+
+        if Path(out_file).suffix != ".urdf":
+            raise click.BadParameter("give NAME.urdf (the closures go to NAME.closures.yaml)",
+                                     param_hint="--out")
+        closures = str(Path(out_file).with_suffix(".closures.yaml"))
+        export = urdf_export(m, masses_file and load_masses(masses_file, m)[0],
+                             name=Path(out_file).stem)
+        _, reader = check_urdf_export(m, export)
+        text = export.urdf
+        atomic_write_text(closures, export.closures)
+        masses_note = "" if export.inertial else "; no masses: pkmkit has none of cranks"
+        what = (f"URDF tree ({len(export.joints)} joints, {m.n_actuators} actuated; m, kg"
+                f"{masses_note}) and {len(export.closure_frames)} loop closures (3D) → "
+                f"{closures}")
+        check = (f"read back with {'Pinocchio' if reader == 'pinocchio' else 'a URDF parser'},"
+                 " its loops close at pkmkit's configurations (≤ 1e-9 m)")
     else:
         from pkmkit.export.mjcf import check_mjcf_model, mjcf_model
 

@@ -142,6 +142,19 @@ def rod_geometry(machine, fmt: str, *, cranks: bool = False, planar: bool = Fals
         pivot=np.where((np.asarray(kind) == CRANK)[:, None], pivot, 0.0))
 
 
+def platform_points(machine, x) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(p (3,), rot (3, 3), points (m, 3))`` of a rod-leg machine's pose ``x (dims,)`` (SI):
+    the platform reference point, its orientation (identity for a translational machine) and
+    its rods' platform joint centres, m, base frame (z = 0 for a planar machine)."""
+    from pkmkit.spatial.rotation import rotvec_to_matrix
+
+    model = machine.model
+    x = np.asarray(x, dtype=float).reshape(-1)
+    p = model.pad(x[None])[0][:3]
+    rot = rotvec_to_matrix(x[None, 3:6])[0] if model.full_pose else np.eye(3)
+    return p, rot, p + model.rod_platform @ rot.T
+
+
 def sample_poses(machine, n: int = 24, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Home, the machine's named poses and ``n`` random poses near home that pkmkit's inverse
     model reaches in the working mode: ``(poses (k, dims), q (k, n_act))``, where an export's

@@ -36,6 +36,7 @@ from pkmkit.export.base import (
     ExportCheckError,
     UnsupportedExportError,
     machine_family,
+    platform_points,
     sample_poses,
 )
 from pkmkit.model.rods import CRANK, STRUT
@@ -123,15 +124,7 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
             FORMAT, machine.id, f"strut rod {int(short[0]) + 1} has a cylinder or piston of no "
             "length: give cylinder_length and piston_length in the masses")
     q0 = np.asarray(machine.home_q, dtype=float)
-    home = np.asarray(machine.home_pose, dtype=float)
-    p0 = model.pad(home[None])[0]
-    if model.full_pose:
-        from pkmkit.spatial.rotation import rotvec_to_matrix
-
-        rot0 = rotvec_to_matrix(home[None, 3:])[0]
-    else:
-        rot0 = np.eye(3)
-    tips = p0 + model.rod_platform @ rot0.T  # platform joint centres at home (m, 3)
+    p0, rot0, tips = platform_points(machine, machine.home_pose)  # tips: joint centres (m, 3)
     piston, cyl_len, pis_len = masses.strut_parts(model.n_rods)
     directions: dict[int, np.ndarray] = {}
     bodies, connects = [], []
@@ -244,13 +237,11 @@ def set_configuration(model, data, machine, layout: MjcfLayout, x: np.ndarray,
     ball joint turned onto its rod (the least rotation from its home direction), the platform at
     the pose ``x`` (``(dims,)``: position, and rotation vector for a full pose)."""
     from pkmkit.solve.rod_closure import rod_base_points
-    from pkmkit.spatial.rotation import rotation_class, rotvec_to_matrix
+    from pkmkit.spatial.rotation import rotation_class
 
     rod = machine.model
     rotation = rotation_class()
-    p = rod.pad(np.asarray(x, dtype=float)[None])[0]
-    rot = (rotvec_to_matrix(np.asarray(x, dtype=float)[None, 3:])[0] if rod.full_pose
-           else np.eye(3))
+    p, rot, _ = platform_points(machine, x)
     for k in range(rod.n_actuators):
         data.qpos[model.jnt_qposadr[model.joint(f"act{k}").id]] = q[k]
     base = rod_base_points(rod, np.asarray(q, dtype=float)[:, None])[:, :, 0].T  # (m, 3)
