@@ -45,7 +45,6 @@ from .options import (
     UNITS_OPTION,
     emit_json,
     fmt,
-    parse_vector,
     resolve_machine,
 )
 from .scheduler import SCHEDULER_OPTION
@@ -61,6 +60,18 @@ ORIENTATION_OPTION = click.option(
 RESOLUTION_OPTION = click.option(
     "--resolution", type=click.IntRange(5, 2001), default=None,
     help="Grid points along the longest side (default 201 in 2-D, 61 in 3-D).")
+
+# The family dispatch tables of these commands (the rest reads the machine protocol).
+#: ``analyze`` reads rod machines' A and B matrices: the families it refuses, and why.
+_ANALYZE_REFUSED = {
+    "chain": ("analyze reads rod machines' A and B matrices; for the joint-chain machine "
+              "{id!r} run `pkmkit jacobian {name} --pose X,Y,Z,I,J,K` (or --q): its Jacobian, "
+              "singular values, condition number and closure rank")}
+#: ``map``: the indices of the families that do not have them all.
+_MAP_INDICES = {"chain": (*CHAIN_INDICES, "actuators")}
+#: ``workspace``: the inscribed box's relative tolerance where it is not refined (joint chains:
+#: no smooth slack, the grid box only).
+_INSCRIBED_RTOLS = {"chain": None}
 
 
 def _numbers(text: str, what: str) -> list[float]:
@@ -104,7 +115,7 @@ def parse_orientation(machine, text: str | None, convention: str) -> np.ndarray 
     values = np.asarray(_numbers(text, "--orientation"))
     if values.size != 3:
         raise InputError(f"--orientation needs 3 comma-separated values, got {text!r}")
-    if machine.family == "full-pose" and not machine.position_controlled:
+    if machine.pose_orientation == "rotvec" and not machine.position_controlled:
         from pkmkit.spatial.poses import pose_from_angles
 
         return pose_from_angles(np.zeros(3), values, convention, degrees=True)[3:]
@@ -240,18 +251,14 @@ def analyze(machine_name, assignments, pose, isotropy_tol, convention, units, as
     """All kinetostatic indices at a pose: transmission factors, conditioning, ellipsoid,
     distances to singularities."""
     m = resolve_machine(machine_name, assignments, units)
-    if m.family == "chain":
-        raise InputError(f"analyze reads rod machines' A and B matrices; for the joint-chain "
-                         f"machine {m.id!r} run `pkmkit jacobian {machine_name} --pose "
-                         "X,Y,Z,I,J,K` (or --q): its Jacobian, singular values, condition "
-                         "number and closure rank")
+    refusal = _ANALYZE_REFUSED.get(m.family)
+    if refusal is not None:
+        raise InputError(refusal.format(id=m.id, name=machine_name))
     scale = length_scale(units)
     if not (np.isfinite(isotropy_tol) and isotropy_tol >= 0):
         raise InputError(f"--isotropy-tol must be a finite number >= 0, got {isotropy_tol}")
     if pose is None:
         x = m.home_pose
-    elif m.family == "translational":
-        x = parse_vector(pose, m.dims, "--pose", units)
     else:
         x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
                           convention)[0]
@@ -326,9 +333,10 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
     check_figure_path(out)
     m = resolve_machine(machine_name, assignments, units)
     scale = length_scale(units)
-    if m.family == "chain" and index_name not in (*CHAIN_INDICES, "actuators"):
+    allowed = _MAP_INDICES.get(m.family)
+    if allowed is not None and index_name not in allowed:
         raise InputError(f"index {index_name!r} is not defined for a joint-chain machine; its "
-                         f"indices: {', '.join(CHAIN_INDICES)}, actuators")
+                         f"indices: {', '.join(allowed)}")
     frame = machine_frame(m, parse_orientation(m, orientation_text, convention))
     if frame.positions == 3 and slice_text is None:
         raise InputError("a spatial machine needs --slice NAME=VALUE (e.g. --slice z=0)")
@@ -394,7 +402,7 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
         "inscribed": None if box is None else {
             "side": box.side / scale, "center": box.center[:p] / scale,
             "lower": box.lower[:p] / scale,
-            "rtol": None if m.family == "chain" else INSCRIBED_RTOL,
+            "rtol": _INSCRIBED_RTOLS.get(m.family, INSCRIBED_RTOL),
             "samples_per_edge": check_region_samples(len(grid.free))},
         "index_range": list(factor_box),
         "workspace_index_range": list(wmap.factor_range(wmap.feasible)),
@@ -517,7 +525,7 @@ def _region_center(frame: PoseFrame, text: str, slice_: tuple[int, float] | None
 def _orientation_fields(m, frame: PoseFrame, convention: str) -> dict:
     """JSON fields of the orientation a grid holds."""
     held = frame.base[frame.positions:]
-    if m.family == "chain":
+    if m.pose_orientation == "axis":
         return {"tool_axis": held}
     from pkmkit.spatial.poses import pose_to_angles
 

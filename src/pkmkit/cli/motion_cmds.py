@@ -141,7 +141,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     """Move along a tool path: duration, actuator strokes, speeds, accelerations, forces and
     powers, with a check of the actuator limits (exit status 3 when a limit is exceeded)."""
     m = resolve_machine(machine_name, assignments, units)
-    if m.family != "translational":
+    if m.pose_orientation is not None:  # poses with an orientation
         raise InputError(
             f"path follows tool paths with translational machines (position-only poses and "
             f"their mass models); {m.id!r} is a {m.family} machine: run its poses through "
