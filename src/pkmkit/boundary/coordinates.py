@@ -44,8 +44,10 @@ def parse_numbers(text: str, what: str, sizes: tuple[int, ...]) -> np.ndarray:
     if len(values) not in sizes:
         need = " or ".join(str(s) for s in sizes)
         raise InputError(f"{what} needs {need} comma-separated values, got {len(values)}")
-    if not np.isfinite(values).all():
-        raise InputError(f"{what}: every value must be finite, got {text!r}")
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise InputError(f"{what}: value {bad[0] + 1} is not finite ({values[bad[0]]}), got "
+                         f"{text!r}")
     return values
 
 
@@ -56,20 +58,18 @@ def parse_actuators(text: str, m, units: str, what: str = "--q") -> np.ndarray:
 
 def pose_columns(m) -> list[str]:
     """Names of the pose columns of batch files and text output."""
-    kind = m.family
-    if kind == "full-pose":
-        return ["x", "y", "z", *ANGLE_NAMES]
-    if kind == "chain":
-        return ["x", "y", "z", *AXIS_NAMES]
-    return list(m.pose_names)
+    return list(_ORIENTATION_COLUMNS.get(m.pose_orientation, m.pose_names))
+
+
+#: The pose columns of each orientation form (position-only poses use the machine's names).
+_ORIENTATION_COLUMNS = {"rotvec": ("x", "y", "z", *ANGLE_NAMES),
+                        "axis": ("x", "y", "z", *AXIS_NAMES)}
 
 
 def pose_widths(m) -> tuple[int, ...]:
     """Accepted numbers of pose values on the command line."""
-    kind = m.family
-    if kind == "full-pose" and m.position_controlled:
-        return (6, 3)
-    return (6,) if kind != "translational" else (m.dims,)
+    width = len(pose_columns(m))
+    return (width, 3) if m.position_controlled else (width,)
 
 
 def pose_from_cli(values: np.ndarray, m, units: str, convention: str) -> np.ndarray:
@@ -77,13 +77,18 @@ def pose_from_cli(values: np.ndarray, m, units: str, convention: str) -> np.ndar
     position-controlled module given positions)."""
     values = np.atleast_2d(np.asarray(values, dtype=float))
     scale = length_scale(units)
-    kind = m.family
-    if kind == "translational" or values.shape[1] == 3:
+    if m.pose_orientation is None or values.shape[1] == 3:
         return values * scale
-    if kind == "chain":
-        out = values.copy()
-        out[:, :3] *= scale
-        return out
+    return _FROM_CLI[m.pose_orientation](values, scale, convention)
+
+
+def _axis_from_cli(values: np.ndarray, scale: float, convention: str) -> np.ndarray:
+    out = values.copy()
+    out[:, :3] *= scale
+    return out
+
+
+def _angles_from_cli(values: np.ndarray, scale: float, convention: str) -> np.ndarray:
     from pkmkit.spatial.poses import pose_from_angles
 
     out = np.full((len(values), 6), np.nan)
@@ -98,12 +103,11 @@ def pose_to_cli(poses: np.ndarray, m, units: str, convention: str) -> np.ndarray
     """SI pose rows → CLI rows (positions in ``units``, angles in degrees or axis components)."""
     poses = np.atleast_2d(np.asarray(poses, dtype=float))
     scale = length_scale(units)
-    kind = m.family
-    if kind == "translational":
+    if m.pose_orientation is None:
         return poses / scale
     out = poses.copy()
     out[:, :3] /= scale
-    if kind == "full-pose":
+    if m.pose_orientation == "rotvec":
         from pkmkit.spatial.poses import pose_to_angles
 
         finite = np.isfinite(poses).all(axis=1)
@@ -112,3 +116,7 @@ def pose_to_cli(poses: np.ndarray, m, units: str, convention: str) -> np.ndarray
             out[finite, 3:] = np.atleast_2d(pose_to_angles(poses[finite], convention,
                                                           degrees=True)[1])
     return out
+
+
+#: SI rows from CLI rows, per orientation form.
+_FROM_CLI = {"axis": _axis_from_cli, "rotvec": _angles_from_cli}

@@ -32,8 +32,12 @@ def _parameters(m, units: str) -> list[dict[str, Any]]:
 
 def describe_machine(m: Machine, units: str = "m") -> dict[str, Any]:
     """JSON-ready description of ``m`` with lengths in ``units`` and angles in degrees."""
-    if m.family == "chain":
-        return describe_chain_machine(m, units)
+    return _DESCRIBERS[m.family](m, units)
+
+
+def describe_rod_machine(m: Machine, units: str = "m") -> dict[str, Any]:
+    """JSON-ready description of a rod-leg machine (translational or full-pose; lengths in
+    ``units``, angles in degrees): parameters, legs, home, assembly modes, mobility."""
     scale = length_scale(units)
     model = m.model
     parameters = _parameters(m, units)
@@ -87,10 +91,18 @@ def describe_machine(m: Machine, units: str = "m") -> dict[str, Any]:
         },
         "warnings": warnings,
         "elastic_data": _elastic(m),
-        **({"characteristic_length": m.characteristic_length / scale,
-            "characteristic_length_given": m.length_given}
-           if hasattr(m, "characteristic_length") else {}),
+        **_FAMILY_FIELDS.get(m.family, _no_fields)(m, scale),
     }
+
+
+def _no_fields(m, scale: float) -> dict[str, Any]:
+    return {}
+
+
+def _characteristic_length(m, scale: float) -> dict[str, Any]:
+    """A full-pose machine's characteristic length (homogenised Jacobian)."""
+    return {"characteristic_length": m.characteristic_length / scale,
+            "characteristic_length_given": m.length_given}
 
 
 def describe_chain_machine(m, units: str = "m") -> dict[str, Any]:
@@ -140,3 +152,10 @@ def _elastic(m) -> dict[str, Any]:
     data = default_data(m)
     return {"actuator_stiffness": data.actuator_stiffness, "notes": list(data.notes),
             "assumed": data.assumed}
+
+
+#: The description of each family (one dispatch table).
+_DESCRIBERS = {"translational": describe_rod_machine, "full-pose": describe_rod_machine,
+               "chain": describe_chain_machine}
+#: Fields only one family has.
+_FAMILY_FIELDS = {"full-pose": _characteristic_length}

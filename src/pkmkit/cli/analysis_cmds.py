@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from pkmkit.analysis.chain_workspace import CHAIN_INDICES
-from pkmkit.analysis.grids import Grid, PoseFrame, make_grid, pose_frame
+from pkmkit.analysis.grids import PoseFrame
 from pkmkit.analysis.indices import SCALAR_INDICES, index_values, indices
 from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.joint_space import useful_workspace
@@ -28,7 +28,7 @@ from pkmkit.boundary.coordinates import (
     pose_widths,
 )
 from pkmkit.exceptions import InputError
-from pkmkit.machines.machine import MAX_COORDINATE, Machine
+from pkmkit.machines.machine import Machine
 from pkmkit.model.parameters import length_scale
 from pkmkit.plot.maps import (
     check_figure_path,
@@ -39,6 +39,15 @@ from pkmkit.plot.maps import (
 )
 from pkmkit.stiffness.indices import STIFFNESS_INDICES
 
+from .grid_options import (
+    _coordinates,
+    build_grid,
+    enclosing_frame,
+    machine_frame,
+    parse_bounds,
+    parse_orientation,
+    parse_slice,
+)
 from .options import (
     ANGLES_OPTION,
     JSON_OPTION,
@@ -46,7 +55,6 @@ from .options import (
     UNITS_OPTION,
     emit_json,
     fmt,
-    parse_vector,
     resolve_machine,
 )
 from .scheduler import SCHEDULER_OPTION
@@ -75,154 +83,17 @@ RESOLUTION_OPTION = click.option(
     "--resolution", type=click.IntRange(5, 2001), default=None,
     help="Grid points along the longest side (default 201 in 2-D, 61 in 3-D).")
 
-
-def _numbers(text: str, what: str) -> list[float]:
-    """Comma-separated finite numbers (no magnitude check)."""
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        raise InputError(f"{what}: cannot read {text!r} as comma-separated numbers") from None
-    if not np.isfinite(values).all():
-        raise InputError(f"{what}: every value must be finite, got {text!r}")
-    return values
-
-
-def _coordinates(text: str, what: str, scale: float) -> np.ndarray:
-    """Comma-separated lengths in CLI units → m, each within ±MAX_COORDINATE."""
-    values = np.asarray(_numbers(text, what)) * scale
-    if (np.abs(values) > MAX_COORDINATE).any():
-        raise InputError(f"{what}: coordinates beyond {MAX_COORDINATE:g} m are not supported, "
-                         f"got {text!r}")
-    return values
-
-
-def parse_bounds(text: str | None) -> tuple[float, float] | None:
-    """``"LO,HI"`` → (lo, hi), validated by :class:`Criteria`."""
-    if text is None:
-        return None
-    values = _numbers(text, "--bounds")
-    if len(values) != 2:
-        raise InputError(f"--bounds needs LO,HI, got {text!r}")
-    if not values[0] < values[1]:
-        raise InputError(f"--bounds: LO = {values[0]:g} must be below HI = {values[1]:g}")
-    return values[0], values[1]
-
-
-def parse_orientation(machine, text: str | None, convention: str) -> np.ndarray | None:
-    """``--orientation``: the orientation a workspace grid holds — angles ``A,B,C`` in degrees
-    (``--angles`` convention) for a full-pose machine, a tool axis ``I,J,K`` for a joint-chain
-    machine — as a rotation vector / unit axis; None for the home orientation."""
-    if text is None:
-        return None
-    values = np.asarray(_numbers(text, "--orientation"))
-    if values.size != 3:
-        raise InputError(f"--orientation needs 3 comma-separated values, got {text!r}")
-    if machine.family == "full-pose" and not machine.position_controlled:
-        from pkmkit.spatial.poses import pose_from_angles
-
-        return pose_from_angles(np.zeros(3), values, convention, degrees=True)[3:]
-    return values
-
-
-def machine_frame(machine, orientation: np.ndarray | None = None) -> PoseFrame:
-    """:func:`pose_frame` of a machine, refusing a family without pose-space workspaces."""
-    return pose_frame(machine, orientation)
-
-
-def parse_slice(frame: PoseFrame, text: str | None, scale: float) -> tuple[int, float] | None:
-    """``"z=0.2"`` → (coordinate index, value in m) of one of the frame's positions."""
-    if text is None:
-        return None
-    if frame.positions == 2:
-        raise InputError("--slice is for spatial machines; a planar machine is its own plane")
-    names = frame.names[:frame.positions]
-    name, sep, value = text.partition("=")
-    name = name.strip()
-    if not sep or name not in names:
-        raise InputError(f"--slice expects NAME=VALUE with NAME in {', '.join(names)} (the "
-                         f"orientation is held with --orientation), got {text!r}")
-    values = _coordinates(value, "--slice", scale)
-    if values.size != 1:
-        raise InputError(f"--slice expects one value after {name}=, got {value!r}")
-    return names.index(name), float(values[0])
-
-
-def build_grid(frame: PoseFrame, box_text: str | None, slice_: tuple[int, float] | None,
-               scale: float, resolution: int | None) -> Grid:
-    """Grid over ``--box``/``--range`` (or the machine's default box) of the frame's
-    positions, optionally a slice; the orientation is the frame's."""
-    lower, upper = frame.lower, frame.upper
-    free = list(range(frame.positions))
-    base = frame.base.copy()
-    names = frame.names
-    if slice_ is not None:
-        axis, value = slice_
-        free.remove(axis)
-        base[axis] = value
-    if box_text is not None:
-        values = _coordinates(box_text, "--box/--range", scale)
-        if values.size == 2 * frame.positions and slice_ is not None:
-            # a full box with a slice: the plane must cut the box
-            axis, value = slice_
-            a_lo, a_hi = values.reshape(-1, 2)[axis]
-            name = names[axis]
-            if not a_lo <= value <= a_hi:
-                raise InputError(f"--slice {name} = {value / scale:g} lies outside the box's "
-                                 f"{name} range [{a_lo / scale:g}, {a_hi / scale:g}]")
-            values = values.reshape(-1, 2)[free].ravel()
-        if values.size != 2 * len(free):
-            text = ",".join(f"{names[k].upper()}MIN,{names[k].upper()}MAX" for k in free)
-            raise InputError(f"the box needs {2 * len(free)} values: {text}")
-        pairs = values.reshape(-1, 2)
-        lower, upper = lower.copy(), upper.copy()
-        lower[free], upper[free] = pairs[:, 0], pairs[:, 1]
-    resolution = resolution or (201 if len(free) == 2 else 61)
-    return make_grid(lower[free], upper[free], free=free, base=base, names=names,
-                     resolution=resolution)
-
-
-#: Times the default box may be widened to hold the workspace (each time by half its extent
-#: on every face the workspace reaches).
-MAX_WIDENINGS = 4
-
-
-def enclosing_frame(m, frame: PoseFrame, criteria: Criteria,
-                    slice_: tuple[int, float] | None, scale: float, scheduler=None,
-                    resolution: int | None = None) -> tuple[PoseFrame, int]:
-    """The frame with its default box widened until the workspace (on a coarse grid) touches
-    none of its faces, at most :data:`MAX_WIDENINGS` times, then moved out by one coarse step
-    where the workspace comes within a step of a face: ``(frame, times widened)``. A
-    machine's default box is a region of study; a workspace study wants all of the
-    workspace. The coarse grid has 25 points along the longest side in 3-D, 61 in 2-D (fewer
-    if ``resolution`` asks for fewer)."""
-    coarse = 25 if frame.positions == 3 and slice_ is None else 61
-    coarse = min(coarse, resolution or coarse)
-    for widened in range(MAX_WIDENINGS + 1):
-        grid = build_grid(frame, None, slice_, scale, coarse)
-        found = compute_workspace(m, grid, criteria, scheduler=scheduler)
-        faces = found.faces_reached()
-        if not faces or widened == MAX_WIDENINGS:
-            break
-        frame = _moved_faces(frame, faces, (frame.upper - frame.lower) / 2)
-    # the workspace within one coarse step of a face may cross it between samples: one step more
-    near = [face for face in found.faces_reached(2) if face not in faces]
-    steps = np.full(len(frame.names), float(grid.step))
-    if not near:
-        return frame, widened
-    return _moved_faces(frame, near, steps), widened + 1
-
-
-def _moved_faces(frame: PoseFrame, faces: list[str], by: np.ndarray) -> PoseFrame:
-    """``frame`` with each face of ``faces`` (``"x-"``, ``"z+"``…) moved out by ``by`` (per
-    axis, SI units), within ±:data:`MAX_COORDINATE`."""
-    lower, upper = frame.lower.copy(), frame.upper.copy()
-    for face in faces:
-        k = frame.names.index(face[:-1])
-        if face.endswith("-"):
-            lower[k] = max(lower[k] - by[k], -MAX_COORDINATE)
-        else:
-            upper[k] = min(upper[k] + by[k], MAX_COORDINATE)
-    return replace(frame, lower=lower, upper=upper)
+# The family dispatch tables of these commands (the rest reads the machine protocol).
+#: ``analyze`` reads rod machines' A and B matrices: the families it refuses, and why.
+_ANALYZE_REFUSED = {
+    "chain": ("analyze reads rod machines' A and B matrices; for the joint-chain machine "
+              "{id!r} run `pkmkit jacobian {name} --pose X,Y,Z,I,J,K` (or --q): its Jacobian, "
+              "singular values, condition number and closure rank")}
+#: ``map``: the indices of the families that do not have them all.
+_MAP_INDICES = {"chain": (*CHAIN_INDICES, *STIFFNESS_INDICES, "actuators")}
+#: ``workspace``: the inscribed box's relative tolerance where it is not refined (joint chains:
+#: no smooth slack, the grid box only).
+_INSCRIBED_RTOLS = {"chain": None}
 
 
 def _criteria(bounds, kappa_max, no_strokes) -> Criteria:
@@ -260,18 +131,14 @@ def analyze(machine_name, assignments, pose, isotropy_tol, with_stiffness, wrenc
 
     With --stiffness (or --wrench), the stiffness and the deflection."""
     m, data = machine_and_data(machine_name, assignments, units)
-    if m.family == "chain":
-        raise InputError(f"analyze reads rod machines' A and B matrices; for the joint-chain "
-                         f"machine {m.id!r} run `pkmkit jacobian {machine_name} --pose "
-                         "X,Y,Z,I,J,K` (or --q): its Jacobian, singular values, condition "
-                         "number and closure rank")
+    refusal = _ANALYZE_REFUSED.get(m.family)
+    if refusal is not None:
+        raise InputError(refusal.format(id=m.id, name=machine_name))
     scale = length_scale(units)
     if not (np.isfinite(isotropy_tol) and isotropy_tol >= 0):
         raise InputError(f"--isotropy-tol must be a finite number >= 0, got {isotropy_tol}")
     if pose is None:
         x = m.home_pose
-    elif m.family == "translational":
-        x = parse_vector(pose, m.dims, "--pose", units)
     else:
         x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
                           convention)[0]
@@ -359,10 +226,10 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
     wrench, _ = parse_wrench(wrench_text, m)
     if (index_name == "deflection") != (wrench is not None):
         raise InputError("--index deflection and --wrench FX,FY,FZ[,MX,MY,MZ] go together")
-    if m.family == "chain" and index_name not in (*CHAIN_INDICES, *STIFFNESS_INDICES,
-                                                  "actuators"):
+    allowed = _MAP_INDICES.get(m.family)
+    if allowed is not None and index_name not in allowed:
         raise InputError(f"index {index_name!r} is not defined for a joint-chain machine; its "
-                         f"indices: {', '.join(CHAIN_INDICES)}, actuators")
+                         f"indices: {', '.join(allowed)}")
     frame = machine_frame(m, parse_orientation(m, orientation_text, convention))
     if frame.positions == 3 and slice_text is None:
         raise InputError("a spatial machine needs --slice NAME=VALUE (e.g. --slice z=0)")
@@ -434,7 +301,7 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
         "inscribed": None if box is None else {
             "side": box.side / scale, "center": box.center[:p] / scale,
             "lower": box.lower[:p] / scale,
-            "rtol": None if m.family == "chain" else INSCRIBED_RTOL,
+            "rtol": _INSCRIBED_RTOLS.get(m.family, INSCRIBED_RTOL),
             "samples_per_edge": check_region_samples(len(grid.free))},
         "index_range": list(factor_box),
         "workspace_index_range": list(wmap.factor_range(wmap.feasible)),
@@ -570,7 +437,7 @@ def _region_center(frame: PoseFrame, text: str, slice_: tuple[int, float] | None
 def _orientation_fields(m, frame: PoseFrame, convention: str) -> dict:
     """JSON fields of the orientation a grid holds."""
     held = frame.base[frame.positions:]
-    if m.family == "chain":
+    if m.pose_orientation == "axis":
         return {"tool_axis": held}
     from pkmkit.spatial.poses import pose_to_angles
 

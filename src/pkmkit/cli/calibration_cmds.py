@@ -577,7 +577,7 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
 
         targets = as_targets(identified, targets)
 
-        orientation = "axis" if nominal.family == "chain" else "rotvec"
+        orientation = nominal.pose_orientation or "rotvec"
         described = [flags.describe(k, bound, scale, unit) for k in range(len(targets))]
         text = correction_table(targets, fixed, units=unit, orientation=orientation, comment=(
             f"corrected targets for the nominal controller of {nominal.id} "

@@ -13,6 +13,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from pkmkit.boundary.coordinates import actuator_scales
 from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors.measurements import MEASURES
 from pkmkit.model.parameters import length_scale
@@ -22,17 +23,11 @@ from .options import JSON_OPTION, SET_OPTION, UNITS_OPTION, emit_json, fmt, reso
 DEG = math.pi / 180.0
 
 
-def _actuator_scales(machine, units: str) -> np.ndarray:
-    """SI per CLI unit of each actuator coordinate (degrees for angles)."""
-    return np.array([DEG if k == "angle" else length_scale(units)
-                     for k in machine.actuator_quantities])
-
-
 def _region_scales(machine, units: str) -> np.ndarray:
     from pkmkit.geometric_errors.configurations import region_names
 
-    if machine.family == "chain":
-        return _actuator_scales(machine, units)
+    if tuple(region_names(machine)) == tuple(machine.actuator_names):  # of actuator values
+        return actuator_scales(machine, units)
     n = len(region_names(machine))
     return np.array([length_scale(units)] * 3 + [DEG] * (n - 3))
 
@@ -72,7 +67,7 @@ def _read_poses(machine, path: str, units: str) -> np.ndarray:
     from pkmkit.io.csv_io import read_table
 
     problems: list[str] = []
-    table = read_table(path, machine.actuator_names, problems) * _actuator_scales(machine, units)
+    table = read_table(path, machine.actuator_names, problems) * actuator_scales(machine, units)
     for message in problems:
         click.echo(f"warning: {message} (row left out)", err=True)
     good = np.isfinite(table).all(axis=1)
@@ -323,7 +318,7 @@ def _define(cli: click.Group) -> None:
         result = select_poses(m, kind, n_poses, candidates=cand, region=region_si,
                               setup=_setup(m, kind, pivot, tool_length, units), index=index,
                               seed=seed, **_selection(parameters, exclude, kinds))
-        scales = _actuator_scales(m, units)
+        scales = actuator_scales(m, units)
         write_table(out_file, m.actuator_names, (result.q / scales).tolist())
         summary = result.summary()
         summary["out"] = out_file

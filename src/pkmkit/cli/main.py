@@ -26,7 +26,9 @@ from pkmkit.spatial.rotation import resolve_convention
 from pkmkit.status import Status
 
 from .batch import batch_options, run_batch, status_names
+from .columns import named, require_batch_pair, status_column
 from .describe import describe_machine, print_description
+from .ik_cmd import ik
 from .lazy import LazyGroup
 from .options import (
     ANGLES_OPTION,
@@ -39,6 +41,7 @@ from .options import (
     parse_vector,
     resolve_machine,
 )
+from .pose_cmds import fk_chain, fk_full_pose, jacobian_chain, jacobian_full_pose
 from .stroke_flags import BatchFlags, add_to_payload, finish_single, hint, single_check
 
 
@@ -60,27 +63,6 @@ def cli() -> None:
     MACHINE is a built-in id (see `pkmkit machines`) or a machine file (.toml, .yaml).
     `ik`, `fk` and `jacobian` also run over tables (--input/--output, see their --help).
     """
-
-
-def _require_batch_pair(single: str | None, input_: str | None, output: str | None,
-                        flag: str) -> None:
-    if input_ is None and single is None:
-        raise click.UsageError(f"give {flag} or --input TABLE --output TABLE")
-    if input_ is not None and single is not None:
-        raise click.UsageError(f"{flag} and --input are exclusive")
-    if input_ is not None and output is None:
-        raise click.UsageError("--input needs --output TABLE (- for standard output)")
-    if input_ is None and output is not None:
-        raise click.UsageError("--output goes with --input TABLE")
-
-
-def _parse_branches(text: str | None, m: Machine):
-    if text is None:
-        return None
-    try:
-        return [int(v) for v in text.split(",")]
-    except ValueError:
-        raise InputError(f"--branches expects comma-separated +1/-1 values, got {text!r}") from None
 
 
 @cli.command("machines")
@@ -116,75 +98,7 @@ def show(machine_name: str, assignments, units: str, as_json: bool) -> None:
         print_description(info)
 
 
-@cli.command()
-@click.argument("machine_name", metavar="MACHINE")
-@SET_OPTION
-@click.option("--pose", help="Pose: X,Y[,Z] (translational machines), X,Y,Z,A,B,C (6-DOF; "
-                             "X,Y,Z for a Verne-type module), X,Y,Z,I,J,K (tool point and axis "
-                             "of a joint-chain machine).")
-@click.option("--branches", help="Inverse-model branch per leg, e.g. 1,1,-1 (default: working).")
-@click.option("--q0", "q0_text", help="Initial actuator coordinates for --method numeric.")
-@click.option("--method", type=click.Choice(["closed", "numeric"]), default="closed",
-              show_default=True, help="Closed form or the least-squares engine.")
-@batch_options
-@ANGLES_OPTION
-@TOOL_LENGTH_OPTION
-@UNITS_OPTION
-@JSON_OPTION
-def ik(machine_name, assignments, pose, branches, q0_text, method, input_, output, chunk_rows,
-       convention, tool_length, units, as_json):
-    """Inverse kinematics: actuator coordinates of a pose (or of every row of --input).
-
-    Batch input columns: the pose, named x,y (planar machines) or x,y,z, in --units. Output
-    columns: x,y[,z], the actuators (q1,q2[,q3]; `pkmkit show` names them), mode (the
-    assembly mode of the solution) and status (ok, unreachable, invalid-input, ...).
-    """
-    _require_batch_pair(pose, input_, output, "--pose")
-    m = resolve_machine(machine_name, assignments, units)
-    if m.family != "translational":
-        from .pose_cmds import ik as pose_ik
-
-        pose_ik(m, pose, q0_text, input_, output, chunk_rows, units, resolve_convention(
-            convention), tool_length, as_json)
-        return
-    scale = length_scale(units)
-    qs = actuator_scales(m, units)
-    br = _parse_branches(branches, m)
-    if input_ is not None:
-        flags = BatchFlags(m, units)
-
-        def compute(values, chunk):
-            res = m.ik(values * scale, method=method, branches=br, full_output=True,
-                       strokes="ignore")
-            status = flags(res.q, res.status, chunk)
-            return {**_named(m.pose_names, values), **_named(m.actuator_names, res.q / qs),
-                    "mode": _mode_column(m, res.mode), "status": _status_column(status)
-                    }, status
-
-        run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows)
-        return
-    x = parse_vector(pose, m.dims, "--pose", units)
-    q0 = parse_actuators(q0_text, m, units, "--q0") if q0_text else None
-    res = m.ik(x, method=method, branches=br, q0=q0, full_output=True, strokes="ignore")
-    mode = m.mode_label(int(res.mode))
-    payload = {"machine": m.id, "units": units, "pose": x / scale, "q": res.q / qs,
-               "actuators": list(m.actuator_names),
-               "actuator_units": actuator_units(m, units), "branches": res.branches,
-               "mode": mode, "working_mode": int(res.mode) == m.working_mode,
-               "method": method, "status": Status(int(res.status)).label}
-    check = single_check(m, res.q, units)
-    add_to_payload(payload, check, units)
-    if as_json:
-        emit_json(payload)
-    else:
-        click.echo(f"{m.name}: pose {fmt(x / scale)} {units}")
-        for name, value, unit in zip(m.actuator_names, res.q / qs, actuator_units(m, units),
-                                     strict=True):
-            click.echo(f"  {name} = {value:.9g} {unit}")
-        if int(res.mode) != m.working_mode:
-            click.echo(f"  note: this configuration is in the {mode!r} assembly mode, not the "
-                       f"working one ({m.mode_labels[0]!r}); fk returns it with --mode {mode}")
-    finish_single(check, units)
+cli.add_command(ik)
 
 
 @cli.command()
@@ -211,13 +125,12 @@ def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, inpu
     Output columns: the actuators, x,y[,z], mode and status; with --all, one row per real
     assembly mode, led by `row`, the 0-based input row.
     """
-    _require_batch_pair(q_text, input_, output, "--q")
+    require_batch_pair(q_text, input_, output, "--q")
     m = resolve_machine(machine_name, assignments, units)
-    if m.family != "translational":
-        from .pose_cmds import fk as pose_fk
-
-        pose_fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units,
-                resolve_convention(convention), tool_length, as_json)
+    other = _FK_OF_FAMILY.get(m.family)
+    if other is not None:
+        other(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units,
+              resolve_convention(convention), tool_length, as_json)
         return
     scale = length_scale(units)
     qs = actuator_scales(m, units)
@@ -254,26 +167,6 @@ def fk(machine_name, assignments, q_text, all_modes, mode, x0_text, method, inpu
     finish_single(check, units)
 
 
-def _named(names, values: np.ndarray) -> dict[str, np.ndarray]:
-    """Columns ``names`` of a ``(N, k)`` array."""
-    return {name: values[:, j] for j, name in enumerate(names)}
-
-
-def _status_column(status: np.ndarray):
-    from pkmkit.io.table import Labels
-
-    return Labels(np.asarray(status), status_names())
-
-
-def _mode_column(m: Machine, sign: np.ndarray):
-    """Assembly-mode names of det A signs (empty where 0: no configuration)."""
-    from pkmkit.io.table import Labels
-
-    sign = np.nan_to_num(np.asarray(sign, dtype=float))
-    codes = np.where(sign < 0, 1, np.where(sign > 0, 2, 0))
-    return Labels(codes, ["", m.mode_label(-1), m.mode_label(1)])
-
-
 def _units_text(m, units: str) -> str:
     """The actuators' CLI unit, or units when they differ."""
     found = actuator_units(m, units)
@@ -302,9 +195,9 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
             has = c_all >= 0
             pose[has] = modes.poses[k_all[has], c_all[has]] / scale
             labels = Labels(c_all + 1, ["", *modes.labels[:2]])
-            return {"row": chunk.first_row + k_all, **_named(m.actuator_names, values[k_all]),
-                    "mode": labels, **_named(m.pose_names, pose),
-                    "status": _status_column(status[k_all])
+            return {"row": chunk.first_row + k_all, **named(m.actuator_names, values[k_all]),
+                    "mode": labels, **named(m.pose_names, pose),
+                    "status": status_column(status[k_all])
                     }, status[:n], k_all
 
         run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
@@ -315,8 +208,8 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
         ok = np.asarray(res.status) == Status.OK
         label = Labels(ok.astype(np.int32), ["", res.mode_label])
         status = flags(values * qs, res.status, chunk)
-        return {**_named(m.actuator_names, values), **_named(m.pose_names, res.pose / scale),
-                "mode": label, "status": _status_column(status)}, status
+        return {**named(m.actuator_names, values), **named(m.pose_names, res.pose / scale),
+                "mode": label, "status": status_column(status)}, status
 
     run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
 
@@ -344,15 +237,14 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
     if not tol > 0:
         raise click.BadParameter("must be > 0", param_hint="--tol")
     m = resolve_machine(machine_name, assignments, units)
-    if m.family != "translational":
+    other = _JACOBIAN_OF_FAMILY.get(m.family)
+    if other is not None:
         if input_ is not None:
             raise click.UsageError("batch Jacobians are available for translational machines; "
                                    "give --pose (or --q)")
-        from .pose_cmds import jacobian as pose_jacobian
-
-        pose_jacobian(m, pose, q_text, tol, units, resolve_convention(convention), as_json)
+        other(m, pose, q_text, tol, units, resolve_convention(convention), as_json)
         return
-    _require_batch_pair(pose, input_, output, "--pose")
+    require_batch_pair(pose, input_, output, "--pose")
     scale = length_scale(units)
     qs = actuator_scales(m, units)
     if input_ is not None:
@@ -374,11 +266,11 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
                              len(sing_names) + status)
             singular[0] += int(((np.asarray(jac.singularity) != 0) & ok).sum())
             jay = np.asarray(jac.J).reshape(len(x), d * n)
-            return {**_named(m.pose_names, values), **_named(m.actuator_names, jac.q / qs),
-                    **_named([f"sv{i + 1}" for i in range(n)], jac.singular_values),
+            return {**named(m.pose_names, values), **named(m.actuator_names, jac.q / qs),
+                    **named([f"sv{i + 1}" for i in range(n)], jac.singular_values),
                     "condition": jac.condition, "det_A": jac.det_A / scale**n,
                     "det_B": jac.det_B / scale**n,
-                    **_named([f"J{i + 1}{j + 1}" for i in range(d) for j in range(n)], jay),
+                    **named([f"J{i + 1}{j + 1}" for i in range(d) for j in range(n)], jay),
                     "status": Labels(codes, [*sing_names, *status_names()])}, status
 
         run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows,
@@ -427,6 +319,12 @@ def demo(out_dir: str, quick: bool) -> None:
         run_demo(Path(out_dir), quick=quick)
     except OSError as exc:
         raise click.ClickException(f"cannot write into {out_dir}: {exc.strerror or exc}") from None
+
+
+#: ``fk`` and ``jacobian`` of the families other than translational (one table per command;
+#: ``ik`` is one code path for every family, :mod:`pkmkit.cli.ik_cmd`).
+_FK_OF_FAMILY = {"full-pose": fk_full_pose, "chain": fk_chain}
+_JACOBIAN_OF_FAMILY = {"full-pose": jacobian_full_pose, "chain": jacobian_chain}
 
 
 def main() -> None:

@@ -152,7 +152,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
 
     With --deflection, the tool-point deflection under gravity and the tool force."""
     m, elastic = machine_and_data(machine_name, assignments, units)
-    if m.family != "translational":
+    if m.pose_orientation is not None:  # poses with an orientation
         raise InputError(
             f"path follows tool paths with translational machines (position-only poses and "
             f"their mass models); {m.id!r} is a {m.family} machine: run its poses through "

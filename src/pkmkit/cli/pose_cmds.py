@@ -1,7 +1,10 @@
-"""``ik``, ``fk`` and ``jacobian`` for full-pose (6-DOF) and joint-chain machines.
+"""``fk`` and ``jacobian`` for full-pose (6-DOF) and joint-chain machines, and the pose fields
+every family's reports share.
 
-The translational machines' commands live in :mod:`pkmkit.cli.main`, which dispatches here for
-the other families. Coordinates on the command line follow :mod:`pkmkit.boundary.coordinates`.
+The translational machines' ``fk`` and ``jacobian`` live in :mod:`pkmkit.cli.main`, which
+dispatches here for the other families (one table per command); ``ik`` is one code path for
+every family (:mod:`pkmkit.cli.ik_cmd`). Coordinates on the command line follow
+:mod:`pkmkit.boundary.coordinates`.
 """
 
 from __future__ import annotations
@@ -24,31 +27,16 @@ from pkmkit.boundary.coordinates import (
 from pkmkit.model.parameters import length_scale
 from pkmkit.status import Status
 
-from .batch import run_batch, status_names
+from .batch import run_batch
+from .columns import named, status_column
 from .options import emit_json, fmt
 from .stroke_flags import BatchFlags, add_to_payload, finish_single, hint, single_check
 
 
-def _named(names, values: np.ndarray) -> dict[str, np.ndarray]:
-    return {name: values[:, j] for j, name in enumerate(names)}
-
-
-def _status_column(status: np.ndarray):
-    from pkmkit.io.table import Labels
-
-    return Labels(np.asarray(status), status_names())
-
-
-def _q_text(m, q: np.ndarray, units: str) -> str:
-    values = q / actuator_scales(m, units)
-    parts = [f"{name} = {v:.9g} {u}" for name, v, u in
-             zip(m.actuator_names, values, actuator_units(m, units), strict=True)]
-    return "\n".join(f"  {p}" for p in parts)
-
-
-def _pose_payload(m, pose: np.ndarray, units: str, convention: str) -> dict[str, Any]:
-    """JSON fields of a full pose: position, angles in the convention, rotation vector."""
-    if m.family == "chain":
+def pose_payload(m, pose: np.ndarray, units: str, convention: str) -> dict[str, Any]:
+    """JSON fields of a full pose ``(6,)`` (position, rotation vector; SI): position, angles
+    in the convention, rotation vector."""
+    if m.pose_orientation != "rotvec":
         # a frame of a joint-chain machine (tool frame, platform): position and rotation
         # vector, whereas its CLI pose rows are a tool point and axis
         from pkmkit.spatial.poses import pose_to_angles
@@ -63,90 +51,10 @@ def _pose_payload(m, pose: np.ndarray, units: str, convention: str) -> dict[str,
             "rotation_vector": np.asarray(pose)[3:]}
 
 
-def _pose_line(m, pose: np.ndarray, units: str, convention: str) -> str:
+def pose_line(m, pose: np.ndarray, units: str, convention: str) -> str:
     cli = pose_to_cli(pose, m, units, convention)[0]
     return (f"position {fmt(cli[:3], 9)} {units}, angles ({convention}) {fmt(cli[3:], 9)} deg, "
             f"rotation vector {fmt(np.asarray(pose)[3:], 9)} rad")
-
-
-# ------------------------------------------------------------------------------------- ik
-def ik(m, pose, q0_text, input_, output, chunk_rows, units, convention, tool_length,
-       as_json) -> None:
-    """Inverse model of a full-pose or joint-chain machine (single pose or batch)."""
-    kind = m.family
-    widths = pose_widths(m)
-    scales = actuator_scales(m, units)
-    lengths = None if tool_length is None else tool_length * length_scale(units)
-    options = {} if kind != "chain" else {"tool_length": lengths}
-    if input_ is not None:
-        columns = pose_columns(m) if kind != "full-pose" or len(widths) == 1 else ["x", "y",
-                                                                                   "z"]
-        flags = BatchFlags(m, units)
-
-        def compute(values, chunk):
-            x = pose_from_cli(values, m, units, convention)
-            if kind == "chain":
-                q, direct = m.ik(x, full_output=True, strokes="ignore", **options)
-                q = np.atleast_2d(q)
-                status = np.where(np.isfinite(q).all(axis=1), Status.OK, Status.UNREACHABLE)
-                passive = (np.full((len(q), len(m.passive_names)), np.nan) if direct is None
-                           else np.atleast_2d(direct.passive))
-                status = flags(q, status, chunk, passive)
-            else:
-                res = m.ik(x, full_output=True, strokes="ignore")
-                q, status = res.q, flags(res.q, res.status, chunk)
-            out = {**_named(columns, values), **_named(m.actuator_names, q / scales)}
-            if kind == "full-pose" and columns == ["x", "y", "z"]:
-                found = pose_to_cli(np.asarray(res.pose), m, units, convention)
-                out.update(_named(["A", "B", "C"], found[:, 3:]))
-            return {**out, "status": _status_column(status)}, status
-
-        run_batch(input_, output, columns, compute, chunk_rows=chunk_rows)
-        return
-    values = parse_numbers(pose, "--pose", widths)
-    x = pose_from_cli(values, m, units, convention)[0]
-    q0 = parse_actuators(q0_text, m, units, "--q0") if q0_text else None
-    payload: dict[str, Any] = {"machine": m.id, "units": units, "actuators":
-                               list(m.actuator_names), "actuator_units": actuator_units(m, units)}
-    if kind == "chain":
-        q, direct = m.ik(x, q0=q0, full_output=True, strokes="ignore", **options)
-        payload.update({"pose": values[:3], "tool_axis": x[3:], "q": q / scales,
-                        "passive": _passive(m, direct.passive, units), "status": "ok"})
-        check = single_check(m, q, units, direct.passive)
-    else:
-        res = m.ik(x, full_output=True, strokes="ignore")
-        q = res.q
-        check = single_check(m, q, units)
-        full = x if len(x) == 6 else np.asarray(res.pose)
-        payload.update({"q": q / scales, "status": Status(int(res.status)).label,
-                        "pose": _pose_payload(m, full, units, convention)})
-        if len(x) == 3:
-            from pkmkit.analysis.orientation import coupled_orientation
-
-            c = coupled_orientation(m, x[None])
-            payload["tilt"] = float(np.degrees(c.tilt[0]))
-    add_to_payload(payload, check, units)
-    if as_json:
-        emit_json(payload)
-        finish_single(check, units)
-        return
-    if kind == "chain":
-        click.echo(f"{m.name}: tool point {fmt(values[:3], 9)} {units}, tool axis "
-                   f"{fmt(x[3:], 9)}")
-    elif len(x) == 3:
-        found = payload["pose"]
-        click.echo(f"{m.name}: position {fmt(values, 9)} {units}")
-        click.echo(f"  orientation the rods impose: angles ({convention}) "
-                   f"{fmt(found['angles'], 9)} deg, rotation vector "
-                   f"{fmt(found['rotation_vector'], 9)} rad; tilt {payload['tilt']:.6g} deg")
-    else:
-        click.echo(f"{m.name}: pose {_pose_line(m, x, units, convention)}")
-    click.echo(_q_text(m, q, units))
-    if kind == "chain":
-        click.echo("  passive joints: " + ", ".join(
-            f"{k} = {v:.6g}" for k, v in payload["passive"].items()) + " (deg or "
-            f"{units})")
-    finish_single(check, units)
 
 
 def _passive_units(m, units: str) -> str:
@@ -157,7 +65,7 @@ def _passive_units(m, units: str) -> str:
     return " or ".join(found) or "deg"
 
 
-def _passive(m, passive: np.ndarray, units: str) -> dict[str, float]:
+def passive_by_name(m, passive: np.ndarray, units: str) -> dict[str, float]:
     """Passive joint values in CLI units (degrees for revolutes, ``units`` for prismatic
     joints) by name."""
     out = {}
@@ -169,92 +77,26 @@ def _passive(m, passive: np.ndarray, units: str) -> dict[str, float]:
 
 
 # ------------------------------------------------------------------------------------- fk
-def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convention,
-       tool_length, as_json) -> None:
-    """Direct model of a full-pose or joint-chain machine."""
-    kind = m.family
+def fk_full_pose(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convention,
+                 tool_length, as_json) -> None:
+    """Direct model of a full-pose machine (single q or batch; every real mode with --all)."""
     scales = actuator_scales(m, units)
-    lengths = None if tool_length is None else tool_length * length_scale(units)
-    columns = pose_columns(m)
     if input_ is not None:
-        flags = BatchFlags(m, units)
-
-        def compute(values, chunk):
-            q = values * scales
-            if all_modes and kind == "full-pose":
-                modes = m.fk_all(q)
-                rows, cols = np.nonzero(modes.valid)
-                poses = pose_to_cli(modes.poses[rows, cols], m, units, convention) if len(
-                    rows) else np.zeros((0, 6))
-                from pkmkit.io.table import Labels
-
-                labels = Labels(np.asarray([1 if c == modes.working[r] else 2
-                                            for r, c in zip(rows, cols, strict=True)],
-                                           dtype=np.int32), ["", "working", "other"])
-                status = flags(q, modes.status, chunk)
-                return {"row": chunk.first_row + rows, **_named(m.actuator_names, values[rows]),
-                        "mode": labels, **_named(columns, poses),
-                        "status": _status_column(status[rows])
-                        }, status, rows
-            if kind == "chain":
-                res = m.fk(q, tool_length=lengths, full_output=True, strokes="ignore")
-                status = flags(q, res.status, chunk, res.passive)
-                poses = pose_to_cli(res.pose, m, units, convention)
-                extra = {**_named([f"passive_{n}" for n in m.passive_names],
-                                  _passive_matrix(m, res.passive, units)),
-                         "closure_residual": res.closure_residual / length_scale(units)}
-            else:
-                res = m.fk(q, full_output=True, strokes="ignore")
-                status = flags(q, res.status, chunk)
-                poses = pose_to_cli(res.pose, m, units, convention)
-                extra = {}
-            return {**_named(m.actuator_names, values), **_named(columns, poses), **extra,
-                    "status": _status_column(status)}, status
-
-        run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+        _fk_full_pose_batch(m, all_modes, input_, output, chunk_rows, units, convention)
         return
     q = parse_actuators(q_text, m, units)
     payload: dict[str, Any] = {"machine": m.id, "units": units, "q": q / scales,
                                "actuators": list(m.actuator_names)}
-    if kind == "chain":
-        x0 = None
-        if x0_text:
-            raise click.UsageError("--x0 is not available for joint-chain machines")
-        res = _fk_or_stroke(m, q, units, tool_length=lengths, full_output=True, x0=x0)
-        check = single_check(m, q, units, res.passive)
-        frame = res.tool_frame
-        payload.update({
-            "pose": res.pose[:3] / length_scale(units), "tool_axis": res.pose[3:],
-            "tool_frame": _pose_payload(m, frame, units, convention),
-            "platform": _pose_payload(m, res.platform, units, convention),
-            "passive": _passive(m, res.passive, units),
-            "closure_residual": float(res.closure_residual) / length_scale(units),
-            "status": Status(int(res.status)).label})
-        add_to_payload(payload, check, units)
-        if as_json:
-            emit_json(payload)
-            finish_single(check, units)
-            return
-        click.echo(f"{m.name}: q " + ", ".join(
-            f"{v:.9g} {u}" for v, u in zip(q / scales, actuator_units(m, units), strict=True)))
-        click.echo(f"  tool point {fmt(payload['pose'], 9)} {units}, tool axis "
-                   f"{fmt(payload['tool_axis'], 9)}")
-        click.echo(f"  passive joints ({_passive_units(m, units)}): " + ", ".join(
-            f"{k} = {v:.6g}" for k, v in payload["passive"].items()))
-        click.echo(f"  closure residual {payload['closure_residual']:.3g} {units} "
-                   f"({payload['status']})")
-        finish_single(check, units)
-        return
     x0 = None
     if x0_text:
         x0 = pose_from_cli(parse_numbers(x0_text, "--x0", (6,)), m, units, convention)[0]
-    res = _fk_or_stroke(m, q, units, x0=x0, full_output=True)
     check = single_check(m, q, units)
-    payload.update({"pose": _pose_payload(m, res.pose, units, convention),
+    res = _fk_or_stroke(m, q, units, check, x0=x0, full_output=True)
+    payload.update({"pose": pose_payload(m, res.pose, units, convention),
                     "mode_sign": int(res.mode), "status": Status(int(res.status)).label})
     if all_modes:
         modes = m.fk_all(q)
-        payload["poses"] = [_pose_payload(m, modes.poses[k], units, convention)
+        payload["poses"] = [pose_payload(m, modes.poses[k], units, convention)
                             for k in range(int(modes.count))]
         payload["modes"] = modes.labels
         payload["mode_signs"] = modes.mode_sign[:int(modes.count)]
@@ -266,7 +108,7 @@ def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convent
         finish_single(check, units)
         return
     click.echo(f"{m.name}: q {fmt(q / scales, 9)}")
-    click.echo(f"  pose {_pose_line(m, res.pose, units, convention)}")
+    click.echo(f"  pose {pose_line(m, res.pose, units, convention)}")
     if all_modes:
         complete = {"ok": "complete", "no-assembly": "complete"}.get(
             payload["all_modes_status"], f"not certified complete: {payload['all_modes_status']}")
@@ -278,15 +120,105 @@ def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convent
     finish_single(check, units)
 
 
-def _fk_or_stroke(m, q: np.ndarray, units: str, **options: Any):
-    """``m.fk(q, strokes="ignore", **options)``; an error of a q beyond the strokes (no
-    assembly, often a unit slip) also says by how much and hints at ``--units mm``."""
+def _fk_full_pose_batch(m, all_modes, input_, output, chunk_rows, units, convention) -> None:
+    scales = actuator_scales(m, units)
+    columns = pose_columns(m)
+    flags = BatchFlags(m, units)
+
+    def compute(values, chunk):
+        q = values * scales
+        if all_modes:
+            modes = m.fk_all(q)
+            rows, cols = np.nonzero(modes.valid)
+            poses = pose_to_cli(modes.poses[rows, cols], m, units, convention) if len(
+                rows) else np.zeros((0, 6))
+            from pkmkit.io.table import Labels
+
+            labels = Labels(np.asarray([1 if c == modes.working[r] else 2
+                                        for r, c in zip(rows, cols, strict=True)],
+                                       dtype=np.int32), ["", "working", "other"])
+            status = flags(q, modes.status, chunk)
+            return {"row": chunk.first_row + rows, **named(m.actuator_names, values[rows]),
+                    "mode": labels, **named(columns, poses),
+                    "status": status_column(status[rows])
+                    }, status, rows
+        res = m.fk(q, full_output=True, strokes="ignore")
+        status = flags(q, res.status, chunk)
+        poses = pose_to_cli(res.pose, m, units, convention)
+        return {**named(m.actuator_names, values), **named(columns, poses),
+                "status": status_column(status)}, status
+
+    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+
+
+def fk_chain(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convention,
+             tool_length, as_json) -> None:
+    """Direct model of a joint-chain machine: tool point and axis, tool frame, platform,
+    passive joints, closure residual (single q or batch)."""
+    scales = actuator_scales(m, units)
+    lengths = None if tool_length is None else tool_length * length_scale(units)
+    if input_ is not None:
+        _fk_chain_batch(m, lengths, input_, output, chunk_rows, units, convention)
+        return
+    q = parse_actuators(q_text, m, units)
+    payload: dict[str, Any] = {"machine": m.id, "units": units, "q": q / scales,
+                               "actuators": list(m.actuator_names)}
+    if x0_text:
+        raise click.UsageError("--x0 is not available for joint-chain machines")
+    # the stroke check of a chain needs its passive joints: judged after the closure
+    res = _fk_or_stroke(m, q, units, None, tool_length=lengths, full_output=True, x0=None)
+    check = single_check(m, q, units, res.passive)
+    frame = res.tool_frame
+    payload.update({
+        "pose": res.pose[:3] / length_scale(units), "tool_axis": res.pose[3:],
+        "tool_frame": pose_payload(m, frame, units, convention),
+        "platform": pose_payload(m, res.platform, units, convention),
+        "passive": passive_by_name(m, res.passive, units),
+        "closure_residual": float(res.closure_residual) / length_scale(units),
+        "status": Status(int(res.status)).label})
+    add_to_payload(payload, check, units)
+    if as_json:
+        emit_json(payload)
+        finish_single(check, units)
+        return
+    click.echo(f"{m.name}: q " + ", ".join(
+        f"{v:.9g} {u}" for v, u in zip(q / scales, actuator_units(m, units), strict=True)))
+    click.echo(f"  tool point {fmt(payload['pose'], 9)} {units}, tool axis "
+               f"{fmt(payload['tool_axis'], 9)}")
+    click.echo(f"  passive joints ({_passive_units(m, units)}): " + ", ".join(
+        f"{k} = {v:.6g}" for k, v in payload["passive"].items()))
+    click.echo(f"  closure residual {payload['closure_residual']:.3g} {units} "
+               f"({payload['status']})")
+    finish_single(check, units)
+
+
+def _fk_chain_batch(m, lengths, input_, output, chunk_rows, units, convention) -> None:
+    scales = actuator_scales(m, units)
+    columns = pose_columns(m)
+    flags = BatchFlags(m, units)
+
+    def compute(values, chunk):
+        q = values * scales
+        res = m.fk(q, tool_length=lengths, full_output=True, strokes="ignore")
+        status = flags(q, res.status, chunk, res.passive)
+        poses = pose_to_cli(res.pose, m, units, convention)
+        extra = {**named([f"passive_{n}" for n in m.passive_names],
+                         _passive_matrix(m, res.passive, units)),
+                 "closure_residual": res.closure_residual / length_scale(units)}
+        return {**named(m.actuator_names, values), **named(columns, poses), **extra,
+                "status": status_column(status)}, status
+
+    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+
+
+def _fk_or_stroke(m, q: np.ndarray, units: str, check, **options: Any):
+    """``m.fk(q, strokes="ignore", **options)``; an error of a q beyond the strokes (``check``,
+    None when not judged first) also says by how much and hints at ``--units mm``."""
     from pkmkit.exceptions import InputError, PkmError
 
     try:
         return m.fk(q, strokes="ignore", **options)
     except PkmError as exc:
-        check = single_check(m, q, units) if m.family != "chain" else None
         if check is not None and check.out_of_stroke[0]:
             raise InputError(f"{exc}; out of stroke: {check.message(0, units)}"
                              f"{hint(check, 0, units)}") from None
@@ -306,40 +238,53 @@ def _passive_matrix(m, passive: np.ndarray, units: str) -> np.ndarray:
 
 
 # ------------------------------------------------------------------------------- jacobian
-def jacobian(m, pose, q_text, tol, units, convention, as_json) -> None:
-    """Velocity model of a full-pose or joint-chain machine at one configuration."""
-    kind = m.family
+def jacobian_full_pose(m, pose, q_text, tol, units, convention, as_json) -> None:
+    """Velocity model of a full-pose machine at one pose."""
     scales = actuator_scales(m, units)
-    if kind == "chain":
-        if q_text is None and pose is None:
-            raise click.UsageError("give --q Q1,...,Qn or --pose X,Y,Z,I,J,K")
-        q = (parse_actuators(q_text, m, units) if q_text is not None else
-             m.ik(pose_from_cli(parse_numbers(pose, "--pose", (6,)), m, units, convention)[0],
-                  strokes="ignore"))
-        jac = m.jacobian(q)
-        check = single_check(m, q, units)
-        payload = {"machine": m.id, "units": units, "q": q / scales,
-                   "J": jac.J / _row_scales(units)[:, None] * scales[None, :],
-                   "singular_values": jac.singular_values, "condition": jac.condition,
-                   "closure_rank": int(jac.closure_rank), "expected_rank": jac.expected_rank,
-                   "characteristic_length": m.model.characteristic_length / length_scale(
-                       units)}
-    else:
-        if pose is None:
-            raise click.UsageError("give --pose")
-        x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
-                          convention)[0]
-        jac = m.jacobian(x, q=m.ik(x, strokes="ignore"), tol=tol)
-        check = single_check(m, jac.q, units)
-        payload = {"machine": m.id, "units": units, "q": jac.q / scales,
-                   "J": jac.J / _row_scales(units)[:, None] * scales[None, :],
-                   "J_homogeneous_singular_values": jac.singular_values,
-                   "condition": jac.condition,
-                   "translation_singular_values": jac.translation_singular_values,
-                   "rotation_singular_values": jac.rotation_singular_values,
-                   "characteristic_length": jac.characteristic_length / length_scale(units),
-                   "parallel_measure": jac.parallel_measure,
-                   "serial_measure": jac.serial_measure, "status": jac.status}
+    if pose is None:
+        raise click.UsageError("give --pose")
+    x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units, convention)[0]
+    jac = m.jacobian(x, q=m.ik(x, strokes="ignore"), tol=tol)
+    check = single_check(m, jac.q, units)
+    payload = {"machine": m.id, "units": units, "q": jac.q / scales,
+               "J": jac.J / _row_scales(units)[:, None] * scales[None, :],
+               "J_homogeneous_singular_values": jac.singular_values,
+               "condition": jac.condition,
+               "translation_singular_values": jac.translation_singular_values,
+               "rotation_singular_values": jac.rotation_singular_values,
+               "characteristic_length": jac.characteristic_length / length_scale(units),
+               "parallel_measure": jac.parallel_measure,
+               "serial_measure": jac.serial_measure, "status": jac.status}
+    last = (f"  translation factors {fmt(payload['translation_singular_values'])}, "
+            f"rotation factors {fmt(payload['rotation_singular_values'])} rad per unit; "
+            f"status: {payload['status']} (tolerance {tol:g})")
+    _report_jacobian(m, payload, check, units, as_json, last)
+
+
+def jacobian_chain(m, pose, q_text, tol, units, convention, as_json) -> None:
+    """Velocity model of a joint-chain machine at actuator values (given, or those of a tool
+    point and axis)."""
+    scales = actuator_scales(m, units)
+    if q_text is None and pose is None:
+        raise click.UsageError("give --q Q1,...,Qn or --pose X,Y,Z,I,J,K")
+    q = (parse_actuators(q_text, m, units) if q_text is not None else
+         m.ik(pose_from_cli(parse_numbers(pose, "--pose", (6,)), m, units, convention)[0],
+              strokes="ignore"))
+    jac = m.jacobian(q)
+    check = single_check(m, q, units)
+    payload = {"machine": m.id, "units": units, "q": q / scales,
+               "J": jac.J / _row_scales(units)[:, None] * scales[None, :],
+               "singular_values": jac.singular_values, "condition": jac.condition,
+               "closure_rank": int(jac.closure_rank), "expected_rank": jac.expected_rank,
+               "characteristic_length": m.model.characteristic_length / length_scale(units)}
+    last = (f"  closure rank {payload['closure_rank']} (at home "
+            f"{payload['expected_rank']})")
+    _report_jacobian(m, payload, check, units, as_json, last)
+
+
+def _report_jacobian(m, payload: dict[str, Any], check, units: str, as_json: bool,
+                     last: str) -> None:
+    """JSON or text of a 6-row Jacobian's report (``last``: the family's closing line)."""
     add_to_payload(payload, check, units, set_status=False)
     if as_json:
         emit_json(payload)
@@ -354,13 +299,7 @@ def jacobian(m, pose, q_text, tol, units, convention, as_json) -> None:
     click.echo(f"  singular values of the homogenised J (L = "
                f"{payload['characteristic_length']:.6g} {units}): {fmt(sv)}")
     click.echo(f"  condition number: {float(payload['condition']):.6g}")
-    if kind != "chain":
-        click.echo(f"  translation factors {fmt(payload['translation_singular_values'])}, "
-                   f"rotation factors {fmt(payload['rotation_singular_values'])} rad per unit; "
-                   f"status: {payload['status']} (tolerance {tol:g})")
-    else:
-        click.echo(f"  closure rank {payload['closure_rank']} (at home "
-                   f"{payload['expected_rank']})")
+    click.echo(last)
     finish_single(check, units)
 
 

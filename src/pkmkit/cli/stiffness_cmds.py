@@ -8,7 +8,7 @@ angles in degrees); the elastic data are always SI (N/m, N·m/rad, Pa), section 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import click
 import numpy as np
@@ -21,6 +21,7 @@ from pkmkit.boundary.coordinates import (
     pose_from_cli,
     pose_widths,
 )
+from pkmkit.boundary.kinematics import inverse_options
 from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
 from pkmkit.spatial.rotation import resolve_convention
@@ -140,7 +141,7 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     if reference_text is not None:
         reference = parse_numbers(reference_text, "--reference", (3,)) * scale
     tl = None if tool_length is None else tool_length * scale
-    kind = m.family
+    face = _FACES.get(m.family, _RODS)
     if input_ is not None or output is not None:
         if input_ is None or output is None:
             raise click.UsageError("--input and --output go together")
@@ -150,24 +151,24 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
         return
     q = None
     x = None
-    if kind == "chain" and q_text is not None:
+    if face.takes_q and q_text is not None:
         if pose is not None:
             raise click.UsageError("--pose and --q are exclusive")
         q = parse_actuators(q_text, m, units)
     elif pose is None:
-        raise click.UsageError("give --pose" + (" or --q" if kind == "chain" else "")
+        raise click.UsageError("give --pose" + (" or --q" if face.takes_q else "")
                                + " (or --input TABLE --output TABLE)")
     else:
         x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
                           convention)[0]
-    if q is None and kind != "chain" and q_text is not None:
+    if q is None and not face.takes_q and q_text is not None:
         raise InputError("--q is for joint-chain machines; give --pose")
-    kwargs: dict[str, Any] = {"wrench": wrench, "data": data, "reference": reference}
-    if kind == "chain":
-        kwargs["tool_length"] = tl
+    tool = inverse_options(m, tool_length=tl)
+    kwargs: dict[str, Any] = {"wrench": wrench, "data": data, "reference": reference, **tool}
+    if face.takes_q:
         result = stiffness(m, x, q=q, **kwargs)
         if q is None:
-            q = np.asarray(m.ik(x, tool_length=tl, strokes="ignore"))
+            q = np.asarray(m.ik(x, strokes="ignore", **tool))
         stroke_q = q
     else:
         result = stiffness(m, x, **kwargs)
@@ -265,17 +266,16 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
     names = twist_names(m)
     d = len(names)
     columns = pose_columns(m)
-    kind = m.family
+    face = _FACES.get(m.family, _RODS)
+    tool = inverse_options(m, tool_length=tl)
     flags = BatchFlags(m, units)
 
     def compute(values, chunk):
         x = pose_from_cli(values, m, units, convention)
         kwargs: dict[str, Any] = {"wrench": wrench, "data": data, "reference": reference}
-        if kind == "chain":
-            kwargs["tool_length"] = tl
-        r = stiffness(m, x, **kwargs)
+        r = stiffness(m, x, **kwargs, **tool)
         status = np.asarray(r.status)
-        if kind != "chain":  # the one stroke check (chains: their inverse flags it already)
+        if not face.inverse_flags_strokes:  # the one stroke check
             inverse = m.ik(x, full_output=True, strokes="ignore")
             status = flags(np.asarray(inverse.q), status, chunk)
         out: dict[str, Any] = {name: values[:, j] for j, name in enumerate(columns)}
@@ -296,3 +296,17 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
         return out, status
 
     run_batch(input_, output, columns, compute, chunk_rows=chunk_rows)
+
+
+class _Face(NamedTuple):
+    """What ``stiffness`` does differently for a family: whether a configuration may be given
+    by its actuator values (``--q``), and whether the stiffness's own inverse already flags
+    the rows beyond the strokes in a batch."""
+
+    takes_q: bool
+    inverse_flags_strokes: bool
+
+
+_RODS = _Face(takes_q=False, inverse_flags_strokes=False)
+#: The one family dispatch table of ``pkmkit stiffness`` (rod legs by default).
+_FACES = {"chain": _Face(takes_q=True, inverse_flags_strokes=True)}

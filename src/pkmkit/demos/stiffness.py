@@ -24,11 +24,11 @@ def _home_row(m) -> dict[str, Any]:
     from pkmkit.stiffness import default_data, stiffness
 
     data = default_data(m)
-    chains = hasattr(m, "passive_names")
+    chains = m.family == "chain"  # joint chains: configured by q, links as beams
     if chains:
         r = stiffness(m, q=m.home_q, data=data)
     else:
-        pose = m.home_pose[:3] if getattr(m, "position_controlled", False) else m.home_pose
+        pose = m.home_pose[:3] if m.position_controlled else m.home_pose
         r = stiffness(m, pose, data=data)
     row = {"smallest_translational_N_per_um": float(r.translational[0]) / 1e6,
            "rigid_directions": int(r.rigid), "notes": list(data.notes)}

@@ -20,6 +20,9 @@ from pkmkit.exceptions import InputError
 #: (6-DOF) platform, joint chains (possibly hyperstatic) with heads.
 FAMILIES = ("translational", "full-pose", "chain")
 
+#: How each family writes the orientation part of a pose row (:attr:`MachineFace.pose_orientation`).
+POSE_ORIENTATIONS = {"translational": None, "full-pose": "rotvec", "chain": "axis"}
+
 
 class MachineFace:
     """Mixin of the family-independent protocol attributes.
@@ -85,6 +88,19 @@ class MachineFace:
         from pkmkit.machines.skeleton import skeleton
 
         return skeleton(self, q)
+
+    @property
+    def pose_orientation(self) -> str | None:
+        """The orientation part of a pose row: None (position only, ``dims`` values),
+        ``"rotvec"`` (position then rotation vector, 6 values) or ``"axis"`` (tool point then
+        unit tool axis, 6 values)."""
+        return POSE_ORIENTATIONS[self.family]
+
+    @property
+    def position_controlled(self) -> bool:
+        """True when a position alone ``(3,)`` is a pose (the rods impose the orientation, as on
+        a Verne-type module); False unless a family says otherwise."""
+        return False
 
 
 def require_translational(machine, what: str) -> None:

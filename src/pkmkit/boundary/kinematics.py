@@ -1,0 +1,93 @@
+"""One inverse-kinematics call for every machine family, in SI, for the command line.
+
+:func:`inverse` asks ``machine.ik`` for its full output and returns one result type,
+:class:`InverseRows`, whatever the family; :func:`inverse_options` keeps the options a machine's
+``ik`` takes and refuses, with a typed error, those it does not. ``pkmkit ik`` (single pose and
+batch alike) is written over these two.
+
+The families' ``ik(full_output=True)`` still differ (an :class:`~pkmkit.machines.results.
+InverseResult` for rod legs, a ``(q, direct result)`` pair for joint chains; issue 19): the one
+dispatch table below reads each into :class:`InverseRows`, and goes when the protocol returns one
+result type.
+"""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pkmkit.exceptions import InputError
+from pkmkit.status import Status
+
+
+@dataclass(frozen=True)
+class InverseRows:
+    """Inverse kinematics of N poses, the same fields for every family (SI).
+
+    Attributes:
+        q: ``(N, n)`` actuator values (m, rad; NaN where there is none).
+        status: ``(N,)`` :class:`~pkmkit.status.Status` codes (strokes not judged here).
+        mode: ``(N,)`` assembly-mode sign (det A) of each configuration, or None (joint chains).
+        branches: ``(n,)`` inverse-model branch of each leg (±1), or None.
+        pose: ``(N, 6)`` full poses found from positions (a position-controlled machine given
+            positions), else None.
+        passive: ``(N, n_p)`` passive joint values (rad, m) of joint chains, else None.
+    """
+
+    q: np.ndarray
+    status: np.ndarray
+    mode: np.ndarray | None = None
+    branches: np.ndarray | None = None
+    pose: np.ndarray | None = None
+    passive: np.ndarray | None = None
+
+
+def inverse_options(machine, **given: Any) -> dict[str, Any]:
+    """The options of ``given`` that were given (not None) and that ``machine.ik`` takes.
+
+    Raises:
+        InputError: an option was given that ``machine.ik`` does not take (named with the
+            machine and its family).
+    """
+    accepted = inspect.signature(machine.ik).parameters
+    out = {}
+    for name, value in given.items():
+        if value is None:
+            continue
+        if name not in accepted:
+            raise InputError(f"the inverse model of {machine.id!r} ({machine.family} machine) "
+                             f"takes no {name.replace('_', ' ')}")
+        out[name] = value
+    return out
+
+
+def inverse(machine, x: Any, **options: Any) -> InverseRows:
+    """``machine.ik(x, full_output=True, strokes="ignore", **options)`` as :class:`InverseRows`
+    (rows ``(N, …)`` also for one pose ``x (dims,)``, whose errors — unreachable, no
+    convergence — are raised as ``ik`` raises them)."""
+    found = machine.ik(x, full_output=True, strokes="ignore", **options)
+    return _READERS.get(machine.family, _rod_rows)(machine, found)
+
+
+def _rod_rows(machine, res) -> InverseRows:
+    """An :class:`~pkmkit.machines.results.InverseResult` (rod-leg machines)."""
+    pose = None if res.pose is None else np.atleast_2d(res.pose)
+    return InverseRows(q=np.atleast_2d(res.q), status=np.atleast_1d(res.status),
+                       mode=np.atleast_1d(res.mode), branches=res.branches, pose=pose)
+
+
+def _chain_rows(machine, found) -> InverseRows:
+    """A joint chain's ``(q, direct result or None)``: a row is OK where q is finite."""
+    q, direct = found
+    q = np.atleast_2d(q)
+    status = np.where(np.isfinite(q).all(axis=1), Status.OK, Status.UNREACHABLE)
+    passive = (np.full((len(q), len(machine.passive_names)), np.nan) if direct is None
+               else np.atleast_2d(direct.passive))
+    return InverseRows(q=q, status=status, passive=passive)
+
+
+#: How each family's ``ik(full_output=True)`` is read (rod legs by default).
+_READERS = {"chain": _chain_rows}
