@@ -52,7 +52,7 @@ def evaluate_chain_poses(machine, points: np.ndarray, criteria):
     condition = np.full(m, np.nan)
     regular = np.zeros(m, dtype=bool)
     if reachable.any():
-        jac = machine.jacobian(q[reachable])
+        jac = machine.jacobian(q=q[reachable])
         factors[reachable] = jac.singular_values
         condition[reachable] = jac.condition
         regular[reachable] = ((np.asarray(jac.status) == Status.OK)
@@ -92,7 +92,7 @@ def chain_index_values(machine, points: np.ndarray, name: str) -> np.ndarray:
     ok = np.isfinite(q).all(axis=1)
     if not ok.any():
         return out
-    jac = machine.jacobian(q[ok])
+    jac = machine.jacobian(q=q[ok])
     sv = jac.singular_values
     with np.errstate(divide="ignore", invalid="ignore"):
         values = {"lambda_min": sv[:, -1], "lambda_max": sv[:, 0], "condition": jac.condition,

@@ -3,15 +3,19 @@ degree of hyperstatism from their ranks."""
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from pkmkit.exceptions import (
+    InputError,
     SingularConfigurationError,
+    UnsupportedOperationError,
 )
-from pkmkit.machines.machine import _checked_batch
+from pkmkit.machines.common import _checked_batch
+from pkmkit.machines.results import VelocityModel
 from pkmkit.model.chains import FIXED
 from pkmkit.solve.chains import (
     closure,
@@ -29,7 +33,7 @@ SINGULAR_TOL = 1e-6
 
 
 @dataclass(frozen=True)
-class ChainJacobians:
+class ChainJacobians(VelocityModel):
     """Velocity model of a joint-chain machine at N configurations.
 
     Attributes:
@@ -86,20 +90,79 @@ class ChainVelocity:
     """Mixin of :class:`~pkmkit.machines.joint_chain.JointChainMachine`: its velocity model."""
 
     # ---------------------------------------------------------------- velocity
-    def jacobian(self, q: Any) -> ChainJacobians:
-        """Velocity model at actuator coordinates ``q`` (the closure linearised:
-        ``dU = −C_U⁺ C_q dq`` for the platform and passive joints U, then the head).
+    def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
+                 tol: float = SINGULAR_TOL) -> ChainJacobians:
+        """Velocity model at tool poses ``x`` or at actuator coordinates ``q`` (the closure
+        linearised: ``dU = −C_U⁺ C_q dq`` for the platform and passive joints U, then the
+        head), with the argument conventions of every machine.
 
         Args:
-            q: ``(n,)`` or ``(N, n)`` actuator coordinates.
+            x: ``(6,)`` or ``(N, 6)`` tool points and axes; their actuator coordinates come from
+                the inverse model unless ``q`` is given. The former call ``jacobian(q)`` (one
+                positional array of actuator values) still works, with a DeprecationWarning.
+            q: ``(n,)`` or ``(N, n)`` actuator coordinates (then ``x`` may be omitted).
+            branches: must be None (a joint chain has no leg branches; reach other solutions
+                with ``ik(x, q0=...)`` and pass ``q``).
+            tol: threshold on σ_min/σ_max of the closure's Jacobian below which a row is a
+                singular closure.
 
-        Rows without assembly or at a singular closure (σ_min/σ_max of the closure's Jacobian
-        below :data:`SINGULAR_TOL`) are NaN with their status.
+        Rows without assembly or at a singular closure are NaN with their status.
 
         Raises:
+            InputError: neither x nor q, a ``branches`` value, mis-shaped input.
+            ConvergenceError: a single x the inverse model cannot reach.
             ClosureMissError: a single q whose legs do not close.
             SingularConfigurationError: a single q at a singular closure.
         """
+        if branches is not None:
+            raise InputError("a joint-chain machine has no leg branches: reach another "
+                             "solution with ik(x, q0=...) and pass its q")
+        if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
+            raise InputError(f"tol must be a positive number, got {tol!r}")
+        if q is None:
+            if x is None:
+                raise InputError("jacobian needs the poses x or the actuator coordinates q")
+            if self._is_actuator_array(x):
+                warnings.warn("jacobian(q) of a joint-chain machine: pass the actuator values "
+                              "as jacobian(q=q) (a positional argument is a pose, as for every "
+                              "machine)", DeprecationWarning, stacklevel=2)
+                q = x
+            else:
+                xb, single = _checked_batch(x, 6, "pose")
+                q = self.ik(xb[0] if single else xb, strokes="ignore")
+        return self._velocity(q, float(tol))
+
+    def _is_actuator_array(self, x: Any) -> bool:
+        """The former positional form: one array as wide as the actuator vector (when that is
+        six wide, as wide as a pose, the former meaning is kept)."""
+        shape = np.shape(x)
+        return len(shape) in (1, 2) and shape[-1] == self.n_actuators
+
+    def jacobian_dot(self, x: Any, xd: Any, *, q: Any = None) -> None:
+        """Refused: the time derivative of a joint-chain machine's velocity model is not
+        computed (its closure's second derivatives are not implemented).
+
+        Raises:
+            UnsupportedOperationError: always.
+        """
+        raise UnsupportedOperationError(
+            "jacobian_dot", self.id, self.family,
+            "the time derivative of a joint-chain closure's velocity model (its second "
+            "derivatives) is not implemented; difference jacobian(q=...) along the motion")
+
+    def fk_all(self, q: Any, **options: Any) -> None:
+        """Refused: the assembly modes of a joint-chain machine are not enumerated.
+
+        Raises:
+            UnsupportedOperationError: always.
+        """
+        raise UnsupportedOperationError(
+            "fk_all", self.id, self.family,
+            "the assembly modes of a (hyperstatic) joint-chain closure are not enumerated; "
+            "fk(q, x0=...) reaches the mode nearest a start")
+
+    def _velocity(self, q: Any, tol: float) -> ChainJacobians:
+        """The velocity model at actuator coordinates ``q`` (see :meth:`jacobian`)."""
         qb, single = _checked_batch(q, self.n_actuators, "q")
         direct = self.fk(qb, full_output=True, strokes="ignore", check_singular=False)
         n = qb.shape[0]
@@ -157,7 +220,7 @@ class ChainVelocity:
             passive_rates[:, :, order[v]] = du[:, 6:, j]
         status = direct.status.copy()
         status[((status == Status.OK) | (status == Status.INCONSISTENT)) & closed
-               & (ratio < SINGULAR_TOL)] = Status.SINGULAR
+               & (ratio < tol)] = Status.SINGULAR
         bad = (status != Status.OK) & (status != Status.INCONSISTENT)
         for arr in (jac, j_h, sv, condition, passive_rates):
             arr[bad] = np.nan
@@ -166,7 +229,7 @@ class ChainVelocity:
         if single and status[0] == Status.SINGULAR:
             raise SingularConfigurationError(
                 f"q = {qb[0].tolist()}: singular closure (σ_min/σ_max of its Jacobian "
-                f"{ratio[0]:.2g} < {SINGULAR_TOL:g}): the velocity model does not exist there")
+                f"{ratio[0]:.2g} < {tol:g}): the velocity model does not exist there")
         out = ChainJacobians(J=jac, J_homogeneous=j_h, singular_values=sv, condition=condition,
                              passive_rates=passive_rates, closure_rank=rank,
                              expected_rank=expected, q=qb, status=status)

@@ -556,19 +556,23 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
                                       "residual", "out_of_stroke", "stroke_excess"))
 
     # ---------------------------------------------------------------- velocity
-    def jacobian(self, x: Any, *, q: Any = None, branches: Any = None,
+    def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
                  tol: float = SINGULARITY_TOL) -> FullPoseJacobians:
         """Velocity model at full poses (see :class:`FullPoseJacobians`).
 
         Args:
             x: ``(6,)`` or ``(N, 6)`` poses (or positions ``(3,)``/``(N, 3)`` for a machine
-                with fewer than six actuators).
+                with fewer than six actuators); default: the direct model of ``q``.
             q: actuator coordinates at those poses (default: the inverse model).
             branches: inverse-model branches when q is not given.
             tol: threshold of the singularity measures.
         """
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be a positive number, got {tol!r}")
+        if x is None:
+            if q is None:
+                raise InputError("jacobian needs the poses x or the actuator coordinates q")
+            x = self.fk(q, strokes="ignore")
         arr = np.asarray(x, dtype=float)
         if self.position_controlled and arr.ndim in (1, 2) and arr.shape[-1] == 3:
             inv = self.ik(arr, branches=branches, full_output=True)

@@ -585,12 +585,14 @@ class Machine(ModeNaming, MachineFace):
 
     # ---------------------------------------------------------------- velocity
     def jacobian(
-        self, x: Any, *, q: Any = None, branches: Any = None, tol: float = SINGULARITY_TOL
+        self, x: Any = None, *, q: Any = None, branches: Any = None,
+        tol: float = SINGULARITY_TOL
     ) -> Jacobians:
         """Velocity model at poses: A, B, J, singular values, conditioning, singularities.
 
         Args:
-            x: ``(dims,)`` or ``(N, dims)`` poses, m.
+            x: ``(dims,)`` or ``(N, dims)`` poses, m; default: the working-mode direct model of
+                ``q``.
             q: actuator coordinates at those poses; default: the inverse model (``branches``).
             branches: inverse-model branches used when ``q`` is not given.
             tol: threshold on the dimensionless singularity measures (see :class:`Jacobians`).
@@ -605,8 +607,17 @@ class Machine(ModeNaming, MachineFace):
         """
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be a positive number, got {tol!r}")
+        if x is None:
+            x = self._poses_of_q(q)
         xb, qb, single = self._poses_and_q(x, q, branches)
         return self._jacobians(xb, qb, tol, single)
+
+    def _poses_of_q(self, q: Any) -> np.ndarray:
+        """The poses of actuator coordinates ``q`` for a velocity model asked at ``q`` alone
+        (working-mode direct model; a batch keeps its NaN rows)."""
+        if q is None:
+            raise InputError("jacobian needs the poses x or the actuator coordinates q")
+        return self.fk(q, strokes="ignore")
 
     def _poses_and_q(self, x: Any, q: Any, branches: Any) -> tuple[np.ndarray, np.ndarray, bool]:
         xb, single = _checked_batch(x, self.dims, "pose")

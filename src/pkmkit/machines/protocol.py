@@ -14,7 +14,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from pkmkit.exceptions import InputError
+from pkmkit.exceptions import UnsupportedOperationError
 
 #: The machine families: rod legs with a translational platform, rod legs with a full-pose
 #: (6-DOF) platform, joint chains (possibly hyperstatic) with heads.
@@ -31,6 +31,13 @@ class MachineFace:
     family: ClassVar[str]
 
     @property
+    def position_controlled(self) -> bool:
+        """True when the machine's orientation follows its position (a full-pose machine with
+        fewer than six actuators): ``ik``/``jacobian`` also take positions ``(N, 3)``. False
+        for every other machine."""
+        return False
+
+    @property
     def angular_actuators(self) -> np.ndarray:
         """``(n_actuators,)`` bool: True for angular actuators (cranks, revolute joints), whose
         values are radians inside pkmkit and degrees in files and on the command line."""
@@ -42,10 +49,11 @@ def require_translational(machine, what: str) -> None:
     machines (their closed forms in the batch-last layout) on a machine of another family.
 
     Raises:
-        InputError: ``machine.family`` is not ``"translational"``.
+        UnsupportedOperationError: ``machine.family`` is not ``"translational"`` (an
+            :class:`~pkmkit.exceptions.InputError`).
     """
     if machine.family != "translational":
-        raise InputError(
-            f"{what} is computed for translational rod-leg machines (3-D or planar platforms "
-            f"that only translate); {machine.id!r} is a {machine.family} machine: run its poses "
-            "through ik/jacobian instead")
+        raise UnsupportedOperationError(
+            what, machine.id, machine.family,
+            "it is computed for translational rod-leg machines (3-D or planar platforms that "
+            "only translate); run its poses through ik/jacobian instead")
