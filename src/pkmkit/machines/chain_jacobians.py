@@ -150,6 +150,18 @@ class ChainVelocity:
             "the time derivative of a joint-chain closure's velocity model (its second "
             "derivatives) is not implemented; difference jacobian(q=...) along the motion")
 
+    def joint_motion(self, x: Any, xd: Any, xdd: Any, **options: Any) -> None:
+        """Refused: actuator accelerations need :meth:`jacobian_dot`, not computed for a
+        joint-chain machine.
+
+        Raises:
+            UnsupportedOperationError: always.
+        """
+        raise UnsupportedOperationError(
+            "a joint trajectory along a tool path", self.id, self.family,
+            "actuator accelerations need the time derivative of the closure's velocity model, "
+            "which is not implemented for joint chains; follow the path pose by pose with ik")
+
     def fk_all(self, q: Any, **options: Any) -> None:
         """Refused: the assembly modes of a joint-chain machine are not enumerated.
 

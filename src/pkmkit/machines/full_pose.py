@@ -36,6 +36,7 @@ from pkmkit.exceptions import (
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_rates import FullPoseRates
+from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
 from pkmkit.machines.machine import (
     HOME_TOL,
     MAX_COORDINATE,
@@ -645,6 +646,25 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             tolerance=tol, q=qb, mode=np.sign(np.nan_to_num(det_a)).astype(int),
             J_homogeneous=j_h, characteristic_length=length,
             translation_singular_values=sv_t, rotation_singular_values=sv_r)
+
+    def joint_motion(self, x: Any, xd: Any, xdd: Any, *, tol: float = SINGULARITY_TOL,
+                     orientation: Any = None) -> JointMotion:
+        """Actuator motion of the platform point along positions, velocities, accelerations
+        ``(N, 3)`` at a held orientation (rotation vector ``(3,)``, default the home one; a
+        position-controlled machine takes the one its rods impose:
+        :func:`~pkmkit.machines.joint_motion.full_pose_joint_motion`).
+
+        Raises:
+            InputError: an orientation given to a position-controlled machine, or not 3
+                finite values.
+        """
+        if orientation is not None:
+            if self.position_controlled:
+                raise InputError(f"{self.id!r} has {self.n_actuators} actuators: its rods set "
+                                 "its orientation, which cannot be held; give no orientation")
+            orientation, _ = _checked_batch(orientation, 3, "orientation")
+            orientation = orientation[0]
+        return full_pose_joint_motion(self, x, xd, xdd, tol, orientation)
 
     # ---------------------------------------------------------------- structure
     def mobility(self) -> dict[str, Any]:

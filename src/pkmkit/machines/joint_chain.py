@@ -37,17 +37,17 @@ from pkmkit.machines.chain_checks import (
     miss_message,
     stroke_violations,
 )
-from pkmkit.machines.chain_results import (  # noqa: F401  (re-exported)
-    ChainDirectResult,
-    ChainInverseResult,
-    single_row,
-)
 from pkmkit.machines.chain_jacobians import (  # noqa: F401  (re-exported)
     RANK_RCOND,
     SINGULAR_TOL,
     ChainJacobians,
     ChainVelocity,
     HyperstatismCount,
+)
+from pkmkit.machines.chain_results import (
+    ChainDirectResult,
+    ChainInverseResult,
+    single_row,
 )
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows

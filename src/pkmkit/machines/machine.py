@@ -38,6 +38,7 @@ from pkmkit.machines.common import (
     _rows_like,
     _valid_rows,
 )
+from pkmkit.machines.joint_motion import JointMotion, rod_joint_motion
 from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
@@ -677,6 +678,14 @@ class Machine(ModeNaming, MachineFace):
         j_dot[ok] = np.linalg.solve(jac.A[ok], rhs[ok])
         rates = JacobianRates(qd=qd, A_dot=a_dot, B_dot=b_dot, J_dot=j_dot)
         return _restore(rates, single, ("qd", "A_dot", "B_dot", "J_dot"))
+
+    def joint_motion(self, x: Any, xd: Any, xdd: Any, *, tol: float = SINGULARITY_TOL,
+                     orientation: Any = None) -> JointMotion:
+        """Actuator motion along poses, velocities, accelerations ``(N, dims)``
+        (:func:`~pkmkit.machines.joint_motion.rod_joint_motion`; ``orientation`` must be None)."""
+        if orientation is not None:
+            raise InputError("a translating platform has no orientation to hold")
+        return rod_joint_motion(self, x, xd, xdd, tol)
 
     # ---------------------------------------------------------------- structure
     def mobility(self) -> dict[str, Any]:

@@ -44,7 +44,8 @@ class MachineFace:
         return np.array([q == "angle" for q in self.actuator_quantities], dtype=bool)
 
 
-def require_translational(machine, what: str) -> None:
+def require_translational(machine, what: str,
+                          instead: str = "run its poses through ik/jacobian instead") -> None:
     """Refuse, with a typed error naming why, an algorithm written for translational rod-leg
     machines (their closed forms in the batch-last layout) on a machine of another family.
 
@@ -56,4 +57,4 @@ def require_translational(machine, what: str) -> None:
         raise UnsupportedOperationError(
             what, machine.id, machine.family,
             "it is computed for translational rod-leg machines (3-D or planar platforms that "
-            "only translate); run its poses through ik/jacobian instead")
+            f"only translate); {instead}")
