@@ -392,8 +392,7 @@ class PartModel(ResidualModel):
     """Seed 003's machined part: joint-space distance to the commanded path."""
 
     def __init__(self, machine, data, sigma):
-        if machine.family == "chain" or (machine.dims == 6 and not getattr(
-                machine, "position_controlled", False)):
+        if machine.dims == 6 and not machine.position_controlled:
             raise InputError(
                 f"machined-part identification needs a machine positioned by its tool point "
                 f"(translational or position-controlled); {machine.id!r} is not one")

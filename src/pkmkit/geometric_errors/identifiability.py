@@ -82,7 +82,7 @@ def default_setup(machine, kind: str, q: np.ndarray, setup: dict | None = None) 
 
     out = dict(setup or {})
     if kind == "part" and "points" not in out:
-        six = machine.dims == 6 and not getattr(machine, "position_controlled", True)
+        six = machine.six_dof
         out["points"] = measure(machine, "pose" if six else "point", q)
     if kind == "ballbar" and "pivot" not in out:
         points = measure(machine, "point", q, out)

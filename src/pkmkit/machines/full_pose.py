@@ -249,6 +249,12 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
         position (a Verne-type module), and :meth:`ik` also accepts positions ``(N, 3)``."""
         return self.n_actuators < 6
 
+    @property
+    def six_dof(self) -> bool:
+        """True with six actuators or more (the whole pose is commanded); see
+        :attr:`~pkmkit.machines.protocol.MachineFace.six_dof`."""
+        return not self.position_controlled
+
     def default_box(self) -> tuple[np.ndarray, np.ndarray]:
         """Position region ``(lower (3,), upper (3,))`` (m) for workspace studies: the kind's
         choice, else home ± 0.4 × the shortest rod."""

@@ -129,6 +129,17 @@ class JointChainMachine(ChainVelocity, MachineFace):
         return {"values": values, "platform": res.u[0, :6].copy(),
                 "residual": float(res.residual[0])}
 
+    #: The inverse model is the engine's (from a start), not a closed form.
+    closed_form_inverse: ClassVar[bool] = False
+    #: Defects may be incompatible with the (hyperstatic) closure.
+    incompatible_defects: ClassVar[bool] = True
+
+    @property
+    def characteristic_length(self) -> float:
+        """L (m) of the model, which homogenises J's angular rows and the closure's rotation
+        rows."""
+        return float(self.model.characteristic_length)
+
     @property
     def home_closure_residual(self) -> float:
         """Largest closure residual at home (m): ~0 for a compatible geometry."""

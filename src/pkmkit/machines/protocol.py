@@ -38,6 +38,35 @@ class MachineFace:
         return False
 
     @property
+    def six_dof(self) -> bool:
+        """True when the machine commands all six coordinates of its platform pose (position
+        and rotation vector): a full-pose machine with six actuators or more. False for
+        translating platforms, position-controlled full-pose machines and joint chains (whose
+        pose is a tool point and axis, five degrees of freedom)."""
+        return False
+
+    @property
+    def characteristic_length(self) -> float:
+        """L (m) that homogenises the angular rows of J (conditioning and transmission indices
+        mix translation and rotation through it): 1 m for a translating platform, whose J has
+        no angular rows; a full-pose machine's own (a field) or a joint chain's model's."""
+        return 1.0
+
+    @property
+    def incompatible_defects(self) -> bool:
+        """True when geometric defects may be incompatible with the closure (a hyperstatic
+        joint-chain machine assembles them only in least squares; the compatible ones span a
+        subspace, :mod:`pkmkit.geometric_errors.compatibility`); False for rod legs, whose
+        every rod closes whatever its defects."""
+        return False
+
+    @property
+    def closed_form_inverse(self) -> bool:
+        """True when the inverse model of a pose is a closed form (rod by rod), smooth in the
+        pose; False when it is solved numerically from a start (joint chains)."""
+        return True
+
+    @property
     def angular_actuators(self) -> np.ndarray:
         """``(n_actuators,)`` bool: True for angular actuators (cranks, revolute joints), whose
         values are radians inside pkmkit and degrees in files and on the command line."""
