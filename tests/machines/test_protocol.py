@@ -76,8 +76,7 @@ PROTOCOL_METHODS = ("ik", "fk", "fk_all", "jacobian", "jacobian_dot", "joint_mot
 PROTOCOL_PROPERTIES = ("home_pose", "home_q", "pose_names", "actuator_names",
                        "actuator_quantities", "angular_actuators", "dims", "n_actuators",
                        "family", "position_controlled", "six_dof", "closed_form_inverse",
-                       "incompatible_defects", "characteristic_length", "kind", "id", "name",
-                       "model")
+                       "incompatible_defects", "kind", "id", "name", "model")
 
 
 def test_every_machine_answers_the_same_method_set(machine):
@@ -89,7 +88,6 @@ def test_every_machine_answers_the_same_method_set(machine):
     for flag in ("six_dof", "closed_form_inverse", "incompatible_defects"):
         assert isinstance(getattr(machine, flag), bool), flag
     assert not (machine.six_dof and machine.position_controlled)
-    assert machine.characteristic_length > 0
 
 
 def _home_input(machine):
@@ -179,3 +177,17 @@ def test_joint_chain_former_call_forms_still_work_with_a_deprecation_warning():
     np.testing.assert_array_equal(old.J, m.jacobian(q=m.home_q).J)
     with pytest.raises(InputError, match="branches"):
         m.jacobian(m.home_pose, branches=[1, 1, 1])
+
+
+def test_joint_chain_jacobian_refuses_q_that_does_not_fit_the_pose():
+    """As for a rod machine: q given with x must put the tool at x (single: InputError; batch:
+    that row NaN with status INVALID_INPUT, the others kept)."""
+    from pkmkit.status import Status
+
+    m = pkmkit.machine("tripteor-x7")
+    q_off = m.home_q + 0.01
+    with pytest.raises(InputError, match="does not fit"):
+        m.jacobian(m.home_pose, q=q_off)
+    jac = m.jacobian(np.vstack([m.home_pose] * 2), q=np.vstack([m.home_q, q_off]))
+    assert np.isfinite(jac.J[0]).all() and np.isnan(jac.J[1]).all()
+    assert list(jac.status) == [Status.OK, Status.INVALID_INPUT]

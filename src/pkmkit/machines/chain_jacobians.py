@@ -17,6 +17,7 @@ from pkmkit.exceptions import (
 from pkmkit.machines.common import _checked_batch
 from pkmkit.machines.results import VelocityModel
 from pkmkit.model.chains import FIXED
+from pkmkit.numerics.arrays import as_batch
 from pkmkit.solve.chains import (
     closure,
     tool_frame,
@@ -119,6 +120,7 @@ class ChainVelocity:
                              "solution with ik(x, q0=...) and pass its q")
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be a positive number, got {tol!r}")
+        given = None
         if q is None:
             if x is None:
                 raise InputError("jacobian needs the poses x or the actuator coordinates q")
@@ -130,13 +132,33 @@ class ChainVelocity:
             else:
                 xb, single = _checked_batch(x, 6, "pose")
                 q = self.ik(xb[0] if single else xb, strokes="ignore")
-        return self._velocity(q, float(tol))
+        elif x is not None:
+            given = x
+        return self._velocity(q, float(tol), given)
 
     def _is_actuator_array(self, x: Any) -> bool:
         """The former positional form: one array as wide as the actuator vector (when that is
         six wide, as wide as a pose, the former meaning is kept)."""
         shape = np.shape(x)
         return len(shape) in (1, 2) and shape[-1] == self.n_actuators
+
+    def _refuse_misfit(self, x: Any, qb: np.ndarray, pose: np.ndarray, status: np.ndarray,
+                       single: bool) -> None:
+        """q must put the tool at the poses x given with it (tool point within 1e-9 m relative,
+        axis within 1e-9): a single misfit raises, batched misfits get status INVALID_INPUT."""
+        xb, _ = _checked_batch(x, 6, "pose") if single else as_batch(x, 6, "pose")
+        if xb.shape[0] != qb.shape[0]:
+            raise InputError(f"x has {xb.shape[0]} rows but q has {qb.shape[0]}")
+        with np.errstate(invalid="ignore", divide="ignore"):
+            axis = xb[:, 3:] / np.linalg.norm(xb[:, 3:], axis=1, keepdims=True)
+            miss = np.maximum(np.abs(pose[:, :3] - xb[:, :3]).max(axis=1)
+                              / (1.0 + np.abs(xb[:, :3]).max(axis=1)),
+                              np.abs(pose[:, 3:] - axis).max(axis=1))
+        off = miss > 1e-9
+        if single and off[0]:
+            raise InputError(f"q = {qb[0].tolist()} does not fit pose {xb[0].tolist()}: its tool "
+                             f"point and axis miss it by {miss[0]:.3g}")
+        status[off] = Status.INVALID_INPUT
 
     def jacobian_dot(self, x: Any, xd: Any, *, q: Any = None) -> None:
         """Refused: the time derivative of a joint-chain machine's velocity model is not
@@ -173,7 +195,7 @@ class ChainVelocity:
             "the assembly modes of a (hyperstatic) joint-chain closure are not enumerated; "
             "fk(q, x0=...) reaches the mode nearest a start")
 
-    def _velocity(self, q: Any, tol: float) -> ChainJacobians:
+    def _velocity(self, q: Any, tol: float, x: Any = None) -> ChainJacobians:
         """The velocity model at actuator coordinates ``q`` (see :meth:`jacobian`)."""
         qb, single = _checked_batch(q, self.n_actuators, "q")
         direct = self.fk(qb, full_output=True, strokes="ignore", check_singular=False)
@@ -231,6 +253,8 @@ class ChainVelocity:
         for j, v in enumerate(loop_act):
             passive_rates[:, :, order[v]] = du[:, 6:, j]
         status = direct.status.copy()
+        if x is not None:
+            self._refuse_misfit(x, qb, direct.pose, status, single)
         status[((status == Status.OK) | (status == Status.INCONSISTENT)) & closed
                & (ratio < tol)] = Status.SINGULAR
         bad = (status != Status.OK) & (status != Status.INCONSISTENT)

@@ -135,12 +135,6 @@ class JointChainMachine(ChainVelocity, MachineFace):
     incompatible_defects: ClassVar[bool] = True
 
     @property
-    def characteristic_length(self) -> float:
-        """L (m) of the model, which homogenises J's angular rows and the closure's rotation
-        rows."""
-        return float(self.model.characteristic_length)
-
-    @property
     def home_closure_residual(self) -> float:
         """Largest closure residual at home (m): ~0 for a compatible geometry."""
         return self._home["residual"]

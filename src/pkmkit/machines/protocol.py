@@ -46,13 +46,6 @@ class MachineFace:
         return False
 
     @property
-    def characteristic_length(self) -> float:
-        """L (m) that homogenises the angular rows of J (conditioning and transmission indices
-        mix translation and rotation through it): 1 m for a translating platform, whose J has
-        no angular rows; a full-pose machine's own (a field) or a joint chain's model's."""
-        return 1.0
-
-    @property
     def incompatible_defects(self) -> bool:
         """True when geometric defects may be incompatible with the closure (a hyperstatic
         joint-chain machine assembles them only in least squares; the compatible ones span a
