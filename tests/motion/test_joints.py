@@ -176,3 +176,34 @@ def test_full_pose_path_out_of_reach_names_the_sample():
         joint_trajectory(m, traj)
     with pytest.raises(InputError, match="cannot be held"):
         joint_trajectory(m, traj, orientation=[0, 0, 0])
+
+
+def _every_builtin():
+    import pkmkit
+
+    return pkmkit.machines()
+
+
+@pytest.mark.parametrize("name", _every_builtin())
+def test_every_builtin_follows_a_small_circle_or_refuses_with_a_typed_error(name):
+    """Issue 19: joint_trajectory works on every built-in machine whose velocity model has a
+    time derivative (rod legs, translating or full-pose) and refuses the others with an
+    UnsupportedOperationError — never an AttributeError. The circle is centred at home."""
+    import pkmkit
+    from pkmkit.exceptions import UnsupportedOperationError
+    from pkmkit.motion import circle, joint_trajectory, plan
+
+    m = pkmkit.machine(name)
+    centre = np.zeros(3)
+    centre[:min(3, m.dims)] = m.home_pose[:min(3, m.dims)]
+    traj = plan(circle(centre, 0.002), feed=0.01, accel=0.5, jerk=5.0, period=0.01)
+    if m.family == "chain":
+        with pytest.raises(UnsupportedOperationError, match="not implemented"):
+            joint_trajectory(m, traj)
+        return
+    jt = joint_trajectory(m, traj)
+    assert jt.q.shape == (traj.t.size, m.n_actuators)
+    assert np.isfinite(jt.q).all() and np.isfinite(jt.qdd).all()
+    held = None if m.position_controlled or m.dims < 6 else m.home_pose[3:]
+    x = jt.x if held is None else np.hstack([jt.x, np.broadcast_to(held, jt.x.shape)])
+    np.testing.assert_allclose(jt.q, m.ik(x), atol=1e-12)

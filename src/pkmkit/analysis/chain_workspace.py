@@ -38,7 +38,8 @@ def evaluate_chain_poses(machine, points: np.ndarray, criteria):
     m, n = len(points), machine.n_actuators
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", StrokeWarning)
-        q, direct = machine.ik(points, full_output=True, strokes="flag")
+        inverse = machine.ik(points, full_output=True, strokes="flag")
+    q, direct = np.atleast_2d(inverse.q), inverse.direct
     reachable = np.isfinite(q).all(axis=1)
     if criteria.strokes and criteria.q_limits is None and direct is not None:
         strokes = reachable & ~np.asarray(direct.out_of_stroke, dtype=bool)
