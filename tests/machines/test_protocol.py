@@ -191,3 +191,19 @@ def test_joint_chain_jacobian_refuses_q_that_does_not_fit_the_pose():
     jac = m.jacobian(np.vstack([m.home_pose] * 2), q=np.vstack([m.home_q, q_off]))
     assert np.isfinite(jac.J[0]).all() and np.isnan(jac.J[1]).all()
     assert list(jac.status) == [Status.OK, Status.INVALID_INPUT]
+
+
+def test_the_shared_keywords_mean_the_same_on_every_family(machine):
+    """ik(x, full_output=, strokes=), fk(q, full_output=, strokes=), jacobian(x, q=, tol=):
+    the same keywords on every family, the same typed error for a bad value."""
+    x, q = machine.home_pose, machine.home_q
+    for mode in ("flag", "refuse", "ignore"):
+        np.testing.assert_allclose(machine.ik(x, strokes=mode), q, atol=1e-7)
+        np.testing.assert_allclose(machine.fk(q, strokes=mode), x, atol=1e-7)
+    with pytest.raises(InputError):
+        machine.ik(x, strokes="sometimes")
+    with pytest.raises(InputError):
+        machine.fk(q, strokes="sometimes")
+    for tol in (0.0, -1.0, float("nan")):
+        with pytest.raises(InputError):
+            machine.jacobian(x, q=q, tol=tol)

@@ -288,7 +288,8 @@ class Machine(ModeNaming, MachineFace):
         if (method == "closed" and branches is None and q0 is None and not full_output
                 and not engine_options):  # one plain pose: the microsecond path, same numbers
             q1 = self._closed.inverse_one(x, self._default_branches)
-            if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
+            if q1 is not None and (strokes == "ignore" or (
+                    strokes in ("flag", "refuse") and self._within_strokes(q1))):
                 return np.array(q1)
         check_mode(strokes)
         xb, single = _checked_batch(x, self.dims, "pose")
