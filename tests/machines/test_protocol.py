@@ -72,7 +72,8 @@ def test_machine_files_of_each_family(file, family):
 
 # ---------------------------------------------------------------- one method set, one result type
 PROTOCOL_METHODS = ("ik", "fk", "fk_all", "jacobian", "jacobian_dot", "joint_motion",
-                    "with_params", "mobility", "default_box", "reference_poses")
+                    "in_working_mode", "with_params", "mobility", "default_box",
+                    "reference_poses")
 PROTOCOL_PROPERTIES = ("home_pose", "home_q", "pose_names", "actuator_names",
                        "actuator_quantities", "angular_actuators", "dims", "n_actuators",
                        "family", "position_controlled", "six_dof", "closed_form_inverse",
@@ -124,6 +125,8 @@ def test_full_output_records_are_the_same_types(machine):
     jacs = machine.jacobian(q=np.vstack([machine.home_q] * 3))
     assert isinstance(jacs, VelocityModel) and jacs.J.shape[0] == 3
     assert jacs.exists.shape == (3,)
+    # home lies in the working mode, away from parallel singularities, for every family
+    np.testing.assert_array_equal(machine.in_working_mode(jacs, 1e-6), [True] * 3)
 
 
 def test_unsupported_operations_are_typed_errors_naming_why(machine):
@@ -179,18 +182,17 @@ def test_joint_chain_former_call_forms_still_work_with_a_deprecation_warning():
         m.jacobian(m.home_pose, branches=[1, 1, 1])
 
 
-def test_joint_chain_jacobian_refuses_q_that_does_not_fit_the_pose():
-    """As for a rod machine: q given with x must put the tool at x (single: InputError; batch:
-    that row NaN with status INVALID_INPUT, the others kept)."""
-    from pkmkit.status import Status
-
-    m = pkmkit.machine("tripteor-x7")
-    q_off = m.home_q + 0.01
+def test_jacobian_refuses_q_that_does_not_fit_the_pose(machine):
+    """On every family, q given with x must be x's configuration (single: InputError naming
+    the misfit; batch: that row NaN, the others kept) — the full-pose and joint-chain
+    machines computed a velocity model of no configuration."""
+    q_off = machine.home_q + 0.01
     with pytest.raises(InputError, match="does not fit"):
-        m.jacobian(m.home_pose, q=q_off)
-    jac = m.jacobian(np.vstack([m.home_pose] * 2), q=np.vstack([m.home_q, q_off]))
+        machine.jacobian(machine.home_pose, q=q_off)
+    jac = machine.jacobian(np.vstack([machine.home_pose] * 2),
+                           q=np.vstack([machine.home_q, q_off]))
     assert np.isfinite(jac.J[0]).all() and np.isnan(jac.J[1]).all()
-    assert list(jac.status) == [Status.OK, Status.INVALID_INPUT]
+    assert list(np.asarray(jac.exists)) == [True, False]
 
 
 def test_the_shared_keywords_mean_the_same_on_every_family(machine):

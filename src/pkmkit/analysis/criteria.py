@@ -3,17 +3,17 @@ mode) and their evaluation at poses or on a grid, in chunks, for any machine fam
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from pkmkit.analysis.chain_workspace import evaluate_chain_poses
 from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.analysis.grids import Grid
-from pkmkit.exceptions import InputError
+from pkmkit.exceptions import InputError, StrokeWarning
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
-from pkmkit.machines.strokes import signed_excess
+from pkmkit.machines.strokes import signed_excess, stroke_limits
 from pkmkit.numerics.arrays import real, real_pair
 from pkmkit.parallel import map_chunks
 from pkmkit.status import Status
@@ -73,7 +73,7 @@ class Criteria:
         if not self.strokes:
             n = machine.n_actuators
             return np.full(n, -np.inf), np.full(n, np.inf)
-        return machine.model.q_min, machine.model.q_max
+        return stroke_limits(machine)
 
 
 #: Poses evaluated at once by :func:`evaluate_poses` / :func:`evaluate_grid` (bounds the
@@ -126,24 +126,30 @@ def _concatenate(parts: list[PoseEvaluation]) -> PoseEvaluation:
 
 
 def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
-    if machine.family == "chain":
-        return evaluate_chain_poses(machine, points, criteria)
-    inv = machine.ik(points, full_output=True)
-    q = inv.q
-    reachable = inv.status == Status.OK
+    """The criteria at poses ``points (M, dims)`` through the machine protocol: ``ik``
+    (reachable; joints beyond their strokes — a joint chain's passive joints too), ``jacobian``
+    (transmission factors, conditioning) and ``in_working_mode`` (the assembly mode, away from
+    parallel singularities)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", StrokeWarning)
+        inv = machine.ik(points, full_output=True)
+    q = np.atleast_2d(inv.q)
+    reachable = np.atleast_1d(inv.status == Status.OK)
     jac = machine.jacobian(points, q=q, tol=criteria.tol)
     sv = jac.singular_values
-    lo_q, hi_q = criteria.limits(machine)
     with np.errstate(invalid="ignore"):
-        strokes = reachable & ~(signed_excess(q, lo_q, hi_q) != 0).any(axis=1)
+        if criteria.strokes and criteria.q_limits is None and inv.out_of_stroke is not None:
+            strokes = reachable & ~np.asarray(inv.out_of_stroke, dtype=bool)
+        else:
+            lo_q, hi_q = criteria.limits(machine)
+            strokes = reachable & ~(signed_excess(q, lo_q, hi_q) != 0).any(axis=1)
         if criteria.bounds is None:
             bounds = reachable.copy()
         else:
             bounds = reachable & criteria.within_bounds(sv)
         condition = reachable.copy() if criteria.kappa_max is None else (
             reachable & (jac.condition <= criteria.kappa_max))
-    mode = (reachable & (np.sign(jac.det_A) == machine.working_mode)
-            & (jac.parallel_measure >= criteria.tol))
+    mode = reachable & machine.in_working_mode(jac, criteria.tol)
     masks = {"reachable": reachable, "strokes": strokes, "bounds": bounds,
              "condition": condition, "mode": mode}
     return PoseEvaluation(q=q, factors=sv, condition=jac.condition, masks=masks)

@@ -136,6 +136,14 @@ class ChainVelocity:
             given = x
         return self._velocity(q, float(tol), given)
 
+    def in_working_mode(self, jacobians: ChainJacobians, tol: float) -> np.ndarray:
+        """``(N,)`` bool: the closure of each configuration of ``jacobians`` is regular (status
+        OK: not singular within the ``tol`` its Jacobian was computed with) and keeps its home
+        rank — no parallel singularity (the protocol's question; rod machines also check the
+        sign of det A)."""
+        return ((np.asarray(jacobians.status) == Status.OK)
+                & (np.asarray(jacobians.closure_rank) == jacobians.expected_rank))
+
     def _is_actuator_array(self, x: Any) -> bool:
         """The former positional form: one array as wide as the actuator vector (when that is
         six wide, as wide as a pose, the former meaning is kept)."""

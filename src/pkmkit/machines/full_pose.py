@@ -593,6 +593,7 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
                 qb, _ = as_batch(q, self.n_actuators, "q")
                 if qb.shape[0] != xb.shape[0]:
                     raise InputError(f"x has {xb.shape[0]} rows but q has {qb.shape[0]}")
+                qb = self._fitting_q(xb, qb, single)
         jac = self._jacobians(xb, qb, float(tol))
         names = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
                  "parallel_measure", "serial_measure", "singularity", "q", "mode",

@@ -580,10 +580,21 @@ class JointChainMachine(ChainVelocity, MachineFace):
         out = ChainInverseResult(
             q=q, status=status, branches=None, shortfall=None, method="numeric",
             mode=np.zeros(n, dtype=int), iterations=res.iterations, residual=res.residual,
-            pose=pose, out_of_stroke=None if strokes == "ignore" else bad,
+            pose=pose, out_of_stroke=self._inverse_out_of_stroke(strokes, bad, direct),
             stroke_excess=signed_excess(q, self.model.q_min[act], self.model.q_max[act]),
             direct=direct)
         return single_row(out) if single else out
+
+    @staticmethod
+    def _inverse_out_of_stroke(strokes: str, bad: np.ndarray, direct) -> np.ndarray | None:
+        """``(N,)`` rows of an inverse model with a joint beyond its stroke: with ``"flag"``
+        the direct model's check at the solution (actuators and passive joints), with
+        ``"refuse"`` the rows refused; None with ``"ignore"``."""
+        if strokes == "ignore":
+            return None
+        if strokes == "refuse" or direct is None:
+            return bad
+        return np.atleast_1d(np.asarray(direct.out_of_stroke, dtype=bool))
 
     def mobility(self) -> dict[str, Any]:
         """The same as :meth:`hyperstatism`, as a dict (for ``pkmkit show``)."""
