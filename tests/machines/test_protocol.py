@@ -77,6 +77,7 @@ PROTOCOL_METHODS = ("ik", "fk", "fk_all", "jacobian", "jacobian_dot", "joint_mot
 PROTOCOL_PROPERTIES = ("home_pose", "home_q", "pose_names", "actuator_names",
                        "actuator_quantities", "angular_actuators", "dims", "n_actuators",
                        "family", "position_controlled", "six_dof", "closed_form_inverse",
+                       "orientation_fixed",
                        "incompatible_defects", "kind", "id", "name", "model")
 
 
@@ -86,7 +87,8 @@ def test_every_machine_answers_the_same_method_set(machine):
     for name in PROTOCOL_PROPERTIES:
         getattr(machine, name)  # no AttributeError, for every family
     assert isinstance(machine.position_controlled, bool)
-    for flag in ("six_dof", "closed_form_inverse", "incompatible_defects"):
+    assert machine.orientation_fixed == (machine.dims < 6)
+    for flag in ("six_dof", "closed_form_inverse", "incompatible_defects", "orientation_fixed"):
         assert isinstance(getattr(machine, flag), bool), flag
     assert not (machine.six_dof and machine.position_controlled)
 

@@ -548,7 +548,7 @@ def make_model(machine, data: MeasurementSet, sigma: np.ndarray, *,
         return PointModel(machine, data, sigma, registration=registration,
                           identify_frame=identify_frame)
     if data.kind == "pose":
-        if machine.family == "translational":
+        if machine.orientation_fixed:
             raise InputError(f"{machine.id!r} only translates: full-pose measurements have "
                              "nothing to measure in its orientation; use point measurements")
         return PoseModel(machine, data, sigma, registration=registration,

@@ -38,6 +38,12 @@ class MachineFace:
         return False
 
     @property
+    def orientation_fixed(self) -> bool:
+        """True when the platform only translates (its orientation never changes: nothing to
+        measure or command in it); False for full-pose platforms and joint chains."""
+        return self.family == "translational"
+
+    @property
     def six_dof(self) -> bool:
         """True when the machine commands all six coordinates of its platform pose (position
         and rotation vector): a full-pose machine with six actuators or more. False for
