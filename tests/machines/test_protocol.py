@@ -77,7 +77,7 @@ PROTOCOL_METHODS = ("ik", "fk", "fk_all", "jacobian", "jacobian_dot", "joint_mot
 PROTOCOL_PROPERTIES = ("home_pose", "home_q", "pose_names", "actuator_names",
                        "actuator_quantities", "angular_actuators", "dims", "n_actuators",
                        "family", "position_controlled", "six_dof", "closed_form_inverse",
-                       "orientation_fixed",
+                       "orientation_fixed", "length_scale",
                        "incompatible_defects", "kind", "id", "name", "model")
 
 
@@ -88,6 +88,7 @@ def test_every_machine_answers_the_same_method_set(machine):
         getattr(machine, name)  # no AttributeError, for every family
     assert isinstance(machine.position_controlled, bool)
     assert machine.orientation_fixed == (machine.dims < 6)
+    assert np.isfinite(machine.length_scale) and machine.length_scale > 0
     for flag in ("six_dof", "closed_form_inverse", "incompatible_defects", "orientation_fixed"):
         assert isinstance(getattr(machine, flag), bool), flag
     assert not (machine.six_dof and machine.position_controlled)

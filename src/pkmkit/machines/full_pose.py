@@ -250,6 +250,11 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
         return self.n_actuators < 6
 
     @property
+    def length_scale(self) -> float:
+        """L (m): the characteristic length (see the protocol's ``length_scale``)."""
+        return float(self.characteristic_length)
+
+    @property
     def six_dof(self) -> bool:
         """True with six actuators or more (the whole pose is commanded); see
         :attr:`~pkmkit.machines.protocol.MachineFace.six_dof`."""

@@ -135,6 +135,11 @@ class JointChainMachine(ChainVelocity, MachineFace):
     incompatible_defects: ClassVar[bool] = True
 
     @property
+    def length_scale(self) -> float:
+        """L (m): the model's closure scale (see the protocol's ``length_scale``)."""
+        return float(self.model.characteristic_length)
+
+    @property
     def home_closure_residual(self) -> float:
         """Largest closure residual at home (m): ~0 for a compatible geometry."""
         return self._home["residual"]

@@ -38,6 +38,15 @@ class MachineFace:
         return False
 
     @property
+    def length_scale(self) -> float:
+        """The length L (m) that turns angles into metres when errors, readings and
+        identifiability mix them: a full-pose machine's characteristic length, a joint chain's
+        closure scale, the mean equivalent-leg length of a translational machine."""
+        from pkmkit.model.rod_defects import rod_set
+
+        return float(np.mean(rod_set(self.model).length))
+
+    @property
     def orientation_fixed(self) -> bool:
         """True when the platform only translates (its orientation never changes: nothing to
         measure or command in it); False for full-pose platforms and joint chains."""
