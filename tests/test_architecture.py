@@ -65,3 +65,27 @@ def test_nothing_inside_pkmkit_imports_the_alias():
                  if p.parent.name != "errors"
                  and re.search(r"^\s*(from|import) pkmkit\.errors\b", p.read_text(), re.M)]
     assert offenders == []
+
+
+#: What docs/architecture.md counts as a family branch (reads of ``.family``, class tests,
+#: attribute probes on a machine), outside machines/ and cli/.
+FAMILY_BRANCH = re.compile(
+    r'[^f]\.family\b|isinstance\([^)]*(Machine|Jacobians)\b'
+    r'|hasattr\((machine|m|machine\.model|model),|getattr\((machine|m|machine\.model), "')
+
+
+def test_family_branches_do_not_grow_beyond_the_recorded_count():
+    """Issue 19 §1: algorithms ask the machine protocol rather than test the family; the count
+    recorded in docs/architecture.md may fall, never rise."""
+    recorded = re.search(r"family branches outside machines/ and cli/: (\d+)",
+                         (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8"))
+    assert recorded is not None
+    found = []
+    for path in PACKAGE.rglob("*.py"):
+        rel = path.relative_to(PACKAGE).as_posix()
+        if rel.split("/")[0] in ("machines", "cli", "errors"):
+            continue
+        found += [f"{rel}:{k + 1}" for k, line in
+                  enumerate(path.read_text(encoding="utf-8").splitlines())
+                  if FAMILY_BRANCH.search(line)]
+    assert len(found) <= int(recorded.group(1)), found

@@ -210,3 +210,23 @@ class UnsupportedExportError(PkmError, ValueError):
 class ExportCheckError(PkmError, RuntimeError):
     """A written export that does not reproduce pkmkit's model (a bug, never a user error): the
     command that made it writes nothing."""
+
+
+class UnsupportedOperationError(InputError):
+    """An operation of the machine protocol that a machine (family) does not provide, with the
+    reason (e.g. the direct model's every assembly mode of a joint-chain machine, or the inverse
+    dynamics of a full-pose platform). A subclass of :class:`InputError`: the call cannot be
+    served for this machine whatever its arguments.
+
+    Attributes:
+        operation: what was asked (``"fk_all"``, ``"jacobian_dot"``, ``"inverse dynamics"``).
+        machine: the machine's id. family: its family. reason: why, in words a user can act on.
+    """
+
+    def __init__(self, operation: str, machine: str, family: str, reason: str):
+        self.operation = operation
+        self.machine = machine
+        self.family = family
+        self.reason = reason
+        super().__init__(f"{operation} is not available for {machine!r} (a {family} machine): "
+                         f"{reason}")

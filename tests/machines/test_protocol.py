@@ -68,3 +68,147 @@ def test_non_finite_input_is_a_typed_error(machine):
 @pytest.mark.parametrize(("file", "family"), FILES.items())
 def test_machine_files_of_each_family(file, family):
     assert pkmkit.load(EXAMPLES + file).family == family
+
+
+# ---------------------------------------------------------------- one method set, one result type
+PROTOCOL_METHODS = ("ik", "fk", "fk_all", "jacobian", "jacobian_dot", "joint_motion",
+                    "in_working_mode", "with_params", "mobility", "default_box",
+                    "reference_poses")
+PROTOCOL_PROPERTIES = ("home_pose", "home_q", "pose_names", "actuator_names",
+                       "actuator_quantities", "angular_actuators", "dims", "n_actuators",
+                       "family", "position_controlled", "six_dof", "closed_form_inverse",
+                       "orientation_fixed", "length_scale",
+                       "incompatible_defects", "kind", "id", "name", "model")
+
+
+def test_every_machine_answers_the_same_method_set(machine):
+    for name in PROTOCOL_METHODS:
+        assert callable(getattr(machine, name)), name
+    for name in PROTOCOL_PROPERTIES:
+        getattr(machine, name)  # no AttributeError, for every family
+    assert isinstance(machine.position_controlled, bool)
+    assert machine.orientation_fixed == (machine.dims < 6)
+    assert np.isfinite(machine.length_scale) and machine.length_scale > 0
+    for flag in ("six_dof", "closed_form_inverse", "incompatible_defects", "orientation_fixed"):
+        assert isinstance(getattr(machine, flag), bool), flag
+    assert not (machine.six_dof and machine.position_controlled)
+
+
+def _home_input(machine):
+    """A pose every family's ik takes at home: the full home pose."""
+    return machine.home_pose
+
+
+def test_full_output_records_are_the_same_types(machine):
+    """ik → InverseResult, fk → DirectResult, jacobian → VelocityModel, single and batched,
+    whatever the family (the joint chains' were a tuple and a record of their own)."""
+    from pkmkit.machines.results import DirectResult, InverseResult, VelocityModel
+
+    n = machine.n_actuators
+    inv = machine.ik(_home_input(machine), full_output=True)
+    assert isinstance(inv, InverseResult)
+    np.testing.assert_allclose(inv.q, machine.home_q, atol=1e-7)
+    assert int(inv.status) == 0
+    batch = machine.ik(np.vstack([_home_input(machine)] * 2), full_output=True)
+    assert isinstance(batch, InverseResult) and batch.q.shape == (2, n)
+    assert batch.status.shape == (2,)
+    direct = machine.fk(machine.home_q, full_output=True)
+    assert isinstance(direct, DirectResult)
+    assert direct.pose.shape == machine.home_pose.shape and int(direct.status) == 0
+    assert isinstance(machine.fk(np.vstack([machine.home_q] * 2), full_output=True),
+                      DirectResult)
+    for jac in (machine.jacobian(machine.home_pose), machine.jacobian(q=machine.home_q),
+                machine.jacobian(machine.home_pose, q=machine.home_q)):
+        assert isinstance(jac, VelocityModel)
+        assert jac.J.shape[-1] == n and np.ndim(jac.condition) == 0
+        assert bool(jac.exists)
+        np.testing.assert_allclose(jac.q, machine.home_q, atol=1e-7)
+    by_pose, by_q = machine.jacobian(machine.home_pose), machine.jacobian(q=machine.home_q)
+    np.testing.assert_allclose(by_pose.J, by_q.J, rtol=1e-6, atol=1e-9)
+    jacs = machine.jacobian(q=np.vstack([machine.home_q] * 3))
+    assert isinstance(jacs, VelocityModel) and jacs.J.shape[0] == 3
+    assert jacs.exists.shape == (3,)
+    # home lies in the working mode, away from parallel singularities, for every family
+    np.testing.assert_array_equal(machine.in_working_mode(jacs, 1e-6), [True] * 3)
+
+
+def test_unsupported_operations_are_typed_errors_naming_why(machine):
+    """fk_all, jacobian_dot and joint_motion either answer or raise UnsupportedOperationError
+    (an InputError) naming the operation, the machine and why — never AttributeError."""
+    from pkmkit.exceptions import UnsupportedOperationError
+    from pkmkit.machines.results import JacobianRates
+
+    calls = {
+        "fk_all": lambda: machine.fk_all(machine.home_q),
+        "jacobian_dot": lambda: machine.jacobian_dot(
+            machine.home_pose, np.zeros(machine.home_pose.shape)),
+        "joint_motion": lambda: machine.joint_motion(
+            machine.home_pose[None, :min(3, machine.dims)],
+            np.zeros((1, min(3, machine.dims))), np.zeros((1, min(3, machine.dims)))),
+    }
+    for name, call in calls.items():
+        try:
+            out = call()
+        except UnsupportedOperationError as exc:
+            assert isinstance(exc, InputError)
+            assert exc.machine == machine.id and exc.family == machine.family
+            assert exc.reason and machine.family == "chain", name
+            continue
+        assert machine.family != "chain", name
+        if name == "jacobian_dot":
+            assert isinstance(out, JacobianRates)
+            assert np.asarray(out.J_dot).shape[-1] == machine.n_actuators
+        if name == "joint_motion":
+            assert out.failed is None
+            np.testing.assert_allclose(out.q[0], machine.home_q, atol=1e-7)
+            np.testing.assert_allclose(out.qd, 0.0, atol=1e-12)
+
+
+def test_jacobian_without_pose_or_q_is_a_typed_error(machine):
+    with pytest.raises(InputError):
+        machine.jacobian()
+
+
+def test_joint_chain_former_call_forms_still_work_with_a_deprecation_warning():
+    """The chain machine's former ik tuple and positional jacobian(q) keep their meaning."""
+    m = pkmkit.machine("tripteor-x7")
+    inv = m.ik(m.home_pose, full_output=True)
+    with pytest.warns(DeprecationWarning, match="ChainInverseResult"):
+        q, direct = inv
+    np.testing.assert_array_equal(q, inv.q)
+    assert direct is inv.direct
+    np.testing.assert_allclose(direct.pose, m.home_pose, atol=1e-9)
+    with pytest.warns(DeprecationWarning, match=r"jacobian\(q=q\)"):
+        old = m.jacobian(m.home_q)
+    np.testing.assert_array_equal(old.J, m.jacobian(q=m.home_q).J)
+    with pytest.raises(InputError, match="branches"):
+        m.jacobian(m.home_pose, branches=[1, 1, 1])
+
+
+def test_jacobian_refuses_q_that_does_not_fit_the_pose(machine):
+    """On every family, q given with x must be x's configuration (single: InputError naming
+    the misfit; batch: that row NaN, the others kept) — the full-pose and joint-chain
+    machines computed a velocity model of no configuration."""
+    q_off = machine.home_q + 0.01
+    with pytest.raises(InputError, match="does not fit"):
+        machine.jacobian(machine.home_pose, q=q_off)
+    jac = machine.jacobian(np.vstack([machine.home_pose] * 2),
+                           q=np.vstack([machine.home_q, q_off]))
+    assert np.isfinite(jac.J[0]).all() and np.isnan(jac.J[1]).all()
+    assert list(np.asarray(jac.exists)) == [True, False]
+
+
+def test_the_shared_keywords_mean_the_same_on_every_family(machine):
+    """ik(x, full_output=, strokes=), fk(q, full_output=, strokes=), jacobian(x, q=, tol=):
+    the same keywords on every family, the same typed error for a bad value."""
+    x, q = machine.home_pose, machine.home_q
+    for mode in ("flag", "refuse", "ignore"):
+        np.testing.assert_allclose(machine.ik(x, strokes=mode), q, atol=1e-7)
+        np.testing.assert_allclose(machine.fk(q, strokes=mode), x, atol=1e-7)
+    with pytest.raises(InputError):
+        machine.ik(x, strokes="sometimes")
+    with pytest.raises(InputError):
+        machine.fk(q, strokes="sometimes")
+    for tol in (0.0, -1.0, float("nan")):
+        with pytest.raises(InputError):
+            machine.jacobian(x, q=q, tol=tol)

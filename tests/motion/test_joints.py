@@ -111,14 +111,99 @@ def test_limit_report(delta_b):
         check_limits(delta_b, jt, Limits(speed=-1.0))
 
 
-@pytest.mark.parametrize("name", ["gough-stewart", "verne", "tripteor-x7"])
-def test_other_families_are_refused_with_a_typed_error(name):
-    """Issue 19: joint trajectories along a tool path are written for translational machines;
-    the others get an InputError naming why (it was an AttributeError on a private field)."""
+@pytest.mark.parametrize("name", ["tripteor-x7", "trimule-600", "crank-slider"])
+def test_joint_chains_are_refused_with_a_typed_error(name):
+    """Issue 19: joint trajectories need J̇, which joint chains do not have: an
+    UnsupportedOperationError (an InputError) naming why (it was an AttributeError on a private
+    field)."""
     import pkmkit
-    from pkmkit.exceptions import InputError
+    from pkmkit.exceptions import UnsupportedOperationError
     from pkmkit.motion import circle, joint_trajectory, plan
 
     traj = plan(circle([0, 0, 0.9], 0.05), feed=0.05, accel=1.0, jerk=10.0, period=0.01)
-    with pytest.raises(InputError, match="translational"):
+    with pytest.raises(UnsupportedOperationError, match="time derivative") as info:
         joint_trajectory(pkmkit.machine(name), traj)
+    assert info.value.family == "chain" and isinstance(info.value, InputError)
+
+
+def _local_quadratic_oracle(m, x, xd, xdd, rotation):
+    """q̇ and q̈ from the inverse model along x(s) = x + ẋ s + ẍ s²/2 by central differences
+    (step 1e-4 s): an oracle independent of the velocity model."""
+    h = 1e-4
+
+    def q_at(s):
+        p = x + xd * s + 0.5 * xdd * s * s
+        if rotation is not None:
+            p = np.hstack([p, np.broadcast_to(rotation, p.shape)])
+        return m.ik(p)
+
+    qp, q0, qm = q_at(h), q_at(0.0), q_at(-h)
+    return q0, (qp - qm) / (2 * h), (qp - 2 * q0 + qm) / h ** 2
+
+
+@pytest.mark.parametrize(("name", "held"), [("gough-stewart", None),
+                                            ("gough-stewart", [0.02, -0.01, 0.03]),
+                                            ("verne", None)])
+def test_full_pose_machines_follow_a_path_at_a_held_orientation(name, held):
+    """Issue 19: a full-pose machine follows a tool path at a held orientation (the home one by
+    default; a Verne-type module at the orientation its rods impose); q̇, q̈ from the analytic
+    velocity model agree with differences of the inverse model along the local motion."""
+    import pkmkit
+    from pkmkit.motion import circle, joint_trajectory, plan
+
+    m = pkmkit.machine(name)
+    traj = plan(circle(m.home_pose[:3], 0.02), feed=0.05, accel=1.0, jerk=10.0, period=0.01)
+    jt = joint_trajectory(m, traj, orientation=held)
+    assert jt.q.shape == jt.qd.shape == jt.qdd.shape == (traj.t.size, m.n_actuators)
+    rotation = None if m.position_controlled else (m.home_pose[3:] if held is None else held)
+    rows = np.linspace(0, traj.t.size - 1, 9).astype(int)
+    q, qd, qdd = _local_quadratic_oracle(m, jt.x[rows], jt.xd[rows], jt.xdd[rows], rotation)
+    np.testing.assert_allclose(jt.q[rows], q, atol=1e-12)
+    np.testing.assert_allclose(jt.qd[rows], qd, atol=1e-8)
+    np.testing.assert_allclose(jt.qdd[rows], qdd, atol=1e-6)
+    assert np.abs(jt.qdd[rows]).max() > 1e-2  # the oracle compares something
+
+
+def test_full_pose_path_out_of_reach_names_the_sample():
+    import pkmkit
+    from pkmkit.motion import joint_trajectory, line, plan
+
+    m = pkmkit.machine("verne")
+    start = m.home_pose[:3]
+    traj = plan(line(start, np.add(start, [5.0, 0.0, 0.0])), feed=1.0, accel=10.0, jerk=100.0,
+                period=0.01)
+    with pytest.raises(InputError, match=r"the path leaves the workspace .*first at t = "):
+        joint_trajectory(m, traj)
+    with pytest.raises(InputError, match="cannot be held"):
+        joint_trajectory(m, traj, orientation=[0, 0, 0])
+
+
+def _every_builtin():
+    import pkmkit
+
+    return pkmkit.machines()
+
+
+@pytest.mark.parametrize("name", _every_builtin())
+def test_every_builtin_follows_a_small_circle_or_refuses_with_a_typed_error(name):
+    """Issue 19: joint_trajectory works on every built-in machine whose velocity model has a
+    time derivative (rod legs, translating or full-pose) and refuses the others with an
+    UnsupportedOperationError — never an AttributeError. The circle is centred at home."""
+    import pkmkit
+    from pkmkit.exceptions import UnsupportedOperationError
+    from pkmkit.motion import circle, joint_trajectory, plan
+
+    m = pkmkit.machine(name)
+    centre = np.zeros(3)
+    centre[:min(3, m.dims)] = m.home_pose[:min(3, m.dims)]
+    traj = plan(circle(centre, 0.002), feed=0.01, accel=0.5, jerk=5.0, period=0.01)
+    if m.family == "chain":
+        with pytest.raises(UnsupportedOperationError, match="not implemented"):
+            joint_trajectory(m, traj)
+        return
+    jt = joint_trajectory(m, traj)
+    assert jt.q.shape == (traj.t.size, m.n_actuators)
+    assert np.isfinite(jt.q).all() and np.isfinite(jt.qdd).all()
+    held = None if m.position_controlled or m.dims < 6 else m.home_pose[3:]
+    x = jt.x if held is None else np.hstack([jt.x, np.broadcast_to(held, jt.x.shape)])
+    np.testing.assert_allclose(jt.q, m.ik(x), atol=1e-12)

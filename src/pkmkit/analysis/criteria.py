@@ -7,17 +7,17 @@ the mask ``"stiffness"`` only when one of them is given."""
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from pkmkit.analysis.chain_workspace import evaluate_chain_poses
 from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.analysis.grids import Grid
-from pkmkit.exceptions import InputError
+from pkmkit.exceptions import InputError, StrokeWarning
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
-from pkmkit.machines.strokes import signed_excess
+from pkmkit.machines.strokes import signed_excess, stroke_limits
 from pkmkit.numerics.arrays import real, real_pair
 from pkmkit.parallel import map_chunks
 from pkmkit.progress import tracked
@@ -120,7 +120,7 @@ class Criteria:
         if not self.strokes:
             n = machine.n_actuators
             return np.full(n, -np.inf), np.full(n, np.inf)
-        return machine.model.q_min, machine.model.q_max
+        return stroke_limits(machine)
 
 
 #: Poses evaluated at once by :func:`evaluate_poses` / :func:`evaluate_grid` (bounds the
@@ -185,10 +185,7 @@ def _concatenate(parts: list[PoseEvaluation]) -> PoseEvaluation:
 
 
 def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
-    if machine.family == "chain":
-        ev = evaluate_chain_poses(machine, points, criteria)
-    else:
-        ev = _evaluate_rod_chunk(machine, points, criteria)
+    ev = _evaluate_kinematics(machine, points, criteria)
     if not (criteria.stiffness_bounded or criteria.wrench is not None):
         return ev
     return _with_stiffness(machine, points, ev, criteria)
@@ -203,12 +200,8 @@ def _with_stiffness(machine: Machine, points: np.ndarray, ev: PoseEvaluation,
     smallest = np.full(len(points), np.nan)
     deflection = None if criteria.wrench is None else np.full(len(points), np.nan)
     if reach.any():
-        if machine.family == "chain":
-            fig = stiffness_figures(machine, q=ev.q[reach], data=criteria.stiffness_data,
-                                    wrench=criteria.wrench)
-        else:
-            fig = stiffness_figures(machine, points[reach], data=criteria.stiffness_data,
-                                    wrench=criteria.wrench)
+        fig = stiffness_figures(machine, points[reach], q=ev.q[reach],
+                                data=criteria.stiffness_data, wrench=criteria.wrench)
         smallest[reach] = fig.smallest
         if deflection is not None:
             deflection[reach] = fig.deflection
@@ -219,24 +212,32 @@ def _with_stiffness(machine: Machine, points: np.ndarray, ev: PoseEvaluation,
                           stiffness=smallest, deflection=deflection)
 
 
-def _evaluate_rod_chunk(machine: Machine, points: np.ndarray, criteria: Criteria
-                        ) -> PoseEvaluation:
-    inv = machine.ik(points, full_output=True)
-    q = inv.q
-    reachable = inv.status == Status.OK
+def _evaluate_kinematics(machine: Machine, points: np.ndarray, criteria: Criteria
+                         ) -> PoseEvaluation:
+    """The criteria at poses ``points (M, dims)`` through the machine protocol: ``ik``
+    (reachable; joints beyond their strokes — a joint chain's passive joints too), ``jacobian``
+    (transmission factors, conditioning) and ``in_working_mode`` (the assembly mode, away from
+    parallel singularities)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", StrokeWarning)
+        inv = machine.ik(points, full_output=True)
+    q = np.atleast_2d(inv.q)
+    reachable = np.atleast_1d(inv.status == Status.OK)
     jac = machine.jacobian(points, q=q, tol=criteria.tol)
     sv = jac.singular_values
-    lo_q, hi_q = criteria.limits(machine)
     with np.errstate(invalid="ignore"):
-        strokes = reachable & ~(signed_excess(q, lo_q, hi_q) != 0).any(axis=1)
+        if criteria.strokes and criteria.q_limits is None and inv.out_of_stroke is not None:
+            strokes = reachable & ~np.asarray(inv.out_of_stroke, dtype=bool)
+        else:
+            lo_q, hi_q = criteria.limits(machine)
+            strokes = reachable & ~(signed_excess(q, lo_q, hi_q) != 0).any(axis=1)
         if criteria.bounds is None:
             bounds = reachable.copy()
         else:
             bounds = reachable & criteria.within_bounds(sv)
         condition = reachable.copy() if criteria.kappa_max is None else (
             reachable & (jac.condition <= criteria.kappa_max))
-    mode = (reachable & (np.sign(jac.det_A) == machine.working_mode)
-            & (jac.parallel_measure >= criteria.tol))
+    mode = reachable & machine.in_working_mode(jac, criteria.tol)
     masks = {"reachable": reachable, "strokes": strokes, "bounds": bounds,
              "condition": condition, "mode": mode}
     return PoseEvaluation(q=q, factors=sv, condition=jac.condition, masks=masks)

@@ -244,7 +244,7 @@ def pose_frame(machine, orientation: Sequence[float] | None = None) -> PoseFrame
     home = np.asarray(machine.home_pose, dtype=float)
     lower, upper = (np.asarray(v, dtype=float) for v in machine.default_box())
     p = len(lower)
-    if p == len(home) or getattr(machine, "position_controlled", False):
+    if p == len(home) or machine.position_controlled:
         if orientation is not None:
             what = ("its rods impose its orientation" if p != len(home)
                     else "it only translates")

@@ -96,7 +96,7 @@ def orientation_workspace(machine, position: Any, *, max_tilt: float = np.radian
     Raises:
         InputError: a machine that does not control its orientation, bad arguments.
     """
-    if getattr(machine, "dims", None) != 6 or getattr(machine, "position_controlled", True):
+    if not machine.six_dof:
         raise InputError("an orientation workspace needs a machine that controls its platform's "
                          "orientation (six actuators); for a Verne-type module use "
                          "coupled_orientation")
@@ -164,7 +164,7 @@ def coupled_orientation(machine, positions: Any) -> CoupledOrientation:
     Raises:
         InputError: a machine that controls its orientation (six actuators), bad positions.
     """
-    if not getattr(machine, "position_controlled", False):
+    if not machine.position_controlled:
         raise InputError("the coupled orientation is that of a machine with fewer than six "
                          "actuators, whose rods impose the platform's orientation")
     pts = np.atleast_2d(np.asarray(positions, dtype=float))

@@ -122,7 +122,7 @@ def region_grid(machine: Machine, center: Any, side: float, free: tuple[int, ...
     """Grid of ``samples`` points per edge over the square/cube of ``side`` centred at
     ``center``; ``free`` defaults to every pose coordinate."""
     # a machine that takes positions alone (a Verne-type module) may be given a position
-    widths = {machine.dims} | ({3} if getattr(machine, "position_controlled", False) else set())
+    widths = {machine.dims} | ({3} if machine.position_controlled else set())
     expected = " or ".join(str(w) for w in sorted(widths))
     try:
         center = np.asarray(center, dtype=float).reshape(-1)

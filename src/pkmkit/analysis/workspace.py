@@ -260,8 +260,8 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     if criteria.connected:
         feasible, reference = _connected_part(feasible, grid, machine.home_pose)
     box = largest_inscribed_box(feasible, grid)
-    # a joint-chain machine's criteria have no smooth slack (numerical inverse): grid box only
-    if refine and box is not None and box.side > 0 and not machine.family == "chain":
+    # criteria through a numerical inverse (joint chains) have no smooth slack: grid box only
+    if refine and box is not None and box.side > 0 and machine.closed_form_inverse:
         box = refine_box(machine, box, criteria, grid)
     box_check = None
     if box is not None and box.side > 0:

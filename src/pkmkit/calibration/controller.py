@@ -30,11 +30,7 @@ from pkmkit.spatial.rotation import rotvec_to_matrix
 def target_width(machine) -> int:
     """Columns of a target: 6 for joint-chain machines (tool point and axis) and six-actuator
     machines (tool point and rotation vector of the platform), else 3 (tool point)."""
-    return 6 if machine.family == "chain" or _six_dof(machine) else 3
-
-
-def _six_dof(machine) -> bool:
-    return machine.dims == 6 and not getattr(machine, "position_controlled", True)
+    return 6 if machine.dims == 6 and not machine.position_controlled else 3
 
 
 def as_targets(machine, targets: Any) -> np.ndarray:
@@ -78,7 +74,7 @@ def commanded_q(machine, targets: Any, tool_length: Any = None, *, iterations: i
             p = x.copy()
             p[:, 2] += tl
             return np.atleast_2d(machine.ik(p[:, :machine.dims]))
-        if getattr(machine, "position_controlled", False):
+        if machine.position_controlled:
             p = x.copy()
             if not np.any(tl):
                 return np.atleast_2d(machine.ik(p))
@@ -112,7 +108,7 @@ def reached(machine, q: Any, tool_length: Any = None) -> np.ndarray:
         with np.errstate(invalid="ignore"):
             out[ok] = machine.fk(q[ok], tool_length=None if tl is None else tl[ok])
         return out
-    six = _six_dof(machine)
+    six = machine.six_dof
     state = tool_state(machine, q[ok], None if tl is None else tl[ok], jacobian=False,
                        rotation=six)
     out[ok, :3] = state.point

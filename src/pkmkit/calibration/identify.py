@@ -246,7 +246,7 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
     unidentifiable: dict[str, str] = {}
     compat: CompatibleDirections | None = None
     basis = np.eye(d)[:, candidates]
-    if compatible and machine.family == "chain":
+    if compatible and machine.incompatible_defects:
         compat = _compatibility(machine, data, tol)
         basis = compat.basis
         free = [int(i) for i in compat.free if i in set(candidates)]

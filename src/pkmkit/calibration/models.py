@@ -377,8 +377,7 @@ class PartModel(ResidualModel):
     """Seed 003's machined part: joint-space distance to the commanded path."""
 
     def __init__(self, machine, data, sigma):
-        if machine.family == "chain" or (machine.dims == 6 and not getattr(
-                machine, "position_controlled", False)):
+        if machine.dims == 6 and not machine.position_controlled:
             raise InputError(
                 f"machined-part identification needs a machine positioned by its tool point "
                 f"(translational or position-controlled); {machine.id!r} is not one")
@@ -534,7 +533,7 @@ def make_model(machine, data: MeasurementSet, sigma: np.ndarray, *,
         return PointModel(machine, data, sigma, registration=registration,
                           identify_frame=identify_frame)
     if data.kind == "pose":
-        if machine.family == "translational":
+        if machine.orientation_fixed:
             raise InputError(f"{machine.id!r} only translates: full-pose measurements have "
                              "nothing to measure in its orientation; use point measurements")
         return PoseModel(machine, data, sigma, registration=registration,

@@ -65,7 +65,7 @@ def random_defects(machine, rng: np.random.Generator, *, magnitude: dict | None 
     scale = np.array([mag[u] for u in dset.units])
     size = np.exp(rng.uniform(np.log(0.01), 0.0, len(dset)))
     delta = rng.choice([-1.0, 1.0], len(dset)) * size * scale
-    if compatible and machine.family == "chain":
+    if compatible and machine.incompatible_defects:
         q = default_configurations(machine, 40, np.random.default_rng(0))
         sens = tool_sensitivity(machine, q)
         comp = compatible_directions(sens.closure_defect, dset.names, scale)
@@ -125,7 +125,7 @@ TILT = np.radians(5.0)
 def _random_configurations(machine, n: int, rng: np.random.Generator) -> np.ndarray:
     lo, hi = machine.default_box()
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    full = machine.dims == 6 and not getattr(machine, "position_controlled", False)
+    full = machine.dims == 6 and not machine.position_controlled
     out = []
     for _ in range(50):
         p = lo + (hi - lo) * rng.random((4 * n, len(lo)))

@@ -115,7 +115,8 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
     Raises:
         InputError: mismatched shapes, non-finite wrench, masses that do not fit the machine.
     """
-    require_translational(machine, "inverse dynamics along a path")
+    require_translational(machine, "inverse dynamics along a path",
+                          "motion.joint_trajectory gives its actuator motion (q, q̇, q̈)")
     require_linear_actuators(machine, "inverse dynamics")
     masses.check(machine)
     n_samples = x.shape[0]

@@ -161,7 +161,7 @@ def sample_poses(machine, n: int = 24, seed: int = 0) -> tuple[np.ndarray, np.nd
     self-check compares the written model with pkmkit's. (A position-controlled machine, the
     Verne-type module, is sampled at positions and given the orientation its rods impose.)"""
     rng = np.random.default_rng(seed)
-    width = 3 if getattr(machine, "position_controlled", False) else machine.dims
+    width = 3 if machine.position_controlled else machine.dims
     named = [np.asarray(p, dtype=float) for p in machine.reference_poses().values()]
     named = np.array([p[:width] for p in named if len(p) >= width])
     lo, hi = machine.default_box()

@@ -72,7 +72,7 @@ def _num(v: float) -> str:
 
 def _parameters_comment(machine, units: str, scale: float) -> str:
     """The machine's named pkmkit parameters (built-in kinds), as a comment block."""
-    kind = getattr(machine, "kind", None)
+    kind = machine.kind
     if kind is None or not machine.params:
         return (" * Geometry: given rod by rod (a machine file's legs, or a calibrated machine "
                 "whose\n * defects replaced the named parameters).\n")

@@ -63,15 +63,8 @@ ANGLE_UNITS = ("1", "rad")
 def characteristic_length(machine) -> float:
     """The length L (m) that turns angle-like defects and rotation readings into metres: the
     closure scale of a joint-chain machine, the homogenising length of a full-pose machine, the
-    mean equivalent-leg length of a translational one."""
-    family = machine.family
-    if family == "chain":
-        return float(machine.model.characteristic_length)
-    if family == "full-pose":
-        return float(machine.characteristic_length)
-    from pkmkit.model.rod_defects import rod_set
-
-    return float(np.mean(rod_set(machine.model).length))
+    mean equivalent-leg length of a translational one (``machine.length_scale``)."""
+    return machine.length_scale
 
 
 def default_setup(machine, kind: str, q: np.ndarray, setup: dict | None = None) -> dict:
@@ -82,7 +75,7 @@ def default_setup(machine, kind: str, q: np.ndarray, setup: dict | None = None) 
 
     out = dict(setup or {})
     if kind == "part" and "points" not in out:
-        six = machine.dims == 6 and not getattr(machine, "position_controlled", True)
+        six = machine.six_dof
         out["points"] = measure(machine, "pose" if six else "point", q)
     if kind == "ballbar" and "pivot" not in out:
         points = measure(machine, "point", q, out)

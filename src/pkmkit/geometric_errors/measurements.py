@@ -44,7 +44,7 @@ def _check_kind(machine, kind: str) -> None:
         raise MeasurementError("machined-part (joint-space) measurements are defined for rod "
                                "machines (seed 003); use point or pose measurements for a "
                                "joint-chain machine", kind)
-    if kind == "pose" and machine.family == "translational":
+    if kind == "pose" and machine.orientation_fixed:
         raise MeasurementError(f"{machine.id!r} only translates: a full-pose measurement has "
                                "nothing to measure in its orientation; use point measurements",
                                kind)

@@ -316,7 +316,7 @@ def nominal_gains(machine, q: np.ndarray):
     a = a[:, 0]
     p_count = q.shape[0]
     position = np.zeros((p_count, 3))
-    if machine.family == "full-pose":
+    if machine.model.full_pose:  # the rod model's platform turns (a full-pose machine)
         position[:] = x[:, :3]
         rot = rotvec_to_matrix(x[:, 3:6])
         w = np.einsum("pab,mb->pma", rot, geom.platform[0])
@@ -340,7 +340,7 @@ def exact_rod_points(machine, q: np.ndarray, samples: np.ndarray, *, tol: float 
     qb = np.atleast_2d(np.asarray(q, dtype=float))
     position, rot, gain = nominal_gains(machine, qb)
     geom = sampled_geometry(machine.model, _rod_index(machine), samples)
-    dims = 3 if machine.family == "full-pose" else machine.dims
+    dims = 3 if machine.model.full_pose else machine.dims
     out = solve_sampled_direct(geom, qb, position, rot, gain, dims=dims, tol=tol,
                                max_iter=max_iter)
     return out.position

@@ -3,16 +3,21 @@ degree of hyperstatism from their ranks."""
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from pkmkit.exceptions import (
+    InputError,
     SingularConfigurationError,
+    UnsupportedOperationError,
 )
-from pkmkit.machines.machine import _checked_batch
+from pkmkit.machines.common import _checked_batch
+from pkmkit.machines.results import VelocityModel
 from pkmkit.model.chains import FIXED
+from pkmkit.numerics.arrays import as_batch
 from pkmkit.solve.chains import (
     closure,
     tool_frame,
@@ -29,7 +34,7 @@ SINGULAR_TOL = 1e-6
 
 
 @dataclass(frozen=True)
-class ChainJacobians:
+class ChainJacobians(VelocityModel):
     """Velocity model of a joint-chain machine at N configurations.
 
     Attributes:
@@ -86,20 +91,120 @@ class ChainVelocity:
     """Mixin of :class:`~pkmkit.machines.joint_chain.JointChainMachine`: its velocity model."""
 
     # ---------------------------------------------------------------- velocity
-    def jacobian(self, q: Any) -> ChainJacobians:
-        """Velocity model at actuator coordinates ``q`` (the closure linearised:
-        ``dU = −C_U⁺ C_q dq`` for the platform and passive joints U, then the head).
+    def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
+                 tol: float = SINGULAR_TOL) -> ChainJacobians:
+        """Velocity model at tool poses ``x`` or at actuator coordinates ``q`` (the closure
+        linearised: ``dU = −C_U⁺ C_q dq`` for the platform and passive joints U, then the
+        head), with the argument conventions of every machine.
 
         Args:
-            q: ``(n,)`` or ``(N, n)`` actuator coordinates.
+            x: ``(6,)`` or ``(N, 6)`` tool points and axes; their actuator coordinates come from
+                the inverse model unless ``q`` is given. The former call ``jacobian(q)`` (one
+                positional array of actuator values) still works, with a DeprecationWarning.
+            q: ``(n,)`` or ``(N, n)`` actuator coordinates (then ``x`` may be omitted).
+            branches: must be None (a joint chain has no leg branches; reach other solutions
+                with ``ik(x, q0=...)`` and pass ``q``).
+            tol: threshold on σ_min/σ_max of the closure's Jacobian below which a row is a
+                singular closure.
 
-        Rows without assembly or at a singular closure (σ_min/σ_max of the closure's Jacobian
-        below :data:`SINGULAR_TOL`) are NaN with their status.
+        Rows without assembly or at a singular closure are NaN with their status.
 
         Raises:
+            InputError: neither x nor q, a ``branches`` value, mis-shaped input.
+            ConvergenceError: a single x the inverse model cannot reach.
             ClosureMissError: a single q whose legs do not close.
             SingularConfigurationError: a single q at a singular closure.
         """
+        if branches is not None:
+            raise InputError("a joint-chain machine has no leg branches: reach another "
+                             "solution with ik(x, q0=...) and pass its q")
+        if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
+            raise InputError(f"tol must be a positive number, got {tol!r}")
+        given = None
+        if q is None:
+            if x is None:
+                raise InputError("jacobian needs the poses x or the actuator coordinates q")
+            if self._is_actuator_array(x):
+                warnings.warn("jacobian(q) of a joint-chain machine: pass the actuator values "
+                              "as jacobian(q=q) (a positional argument is a pose, as for every "
+                              "machine)", DeprecationWarning, stacklevel=2)
+                q = x
+            else:
+                xb, single = _checked_batch(x, 6, "pose")
+                q = self.ik(xb[0] if single else xb, strokes="ignore")
+        elif x is not None:
+            given = x
+        return self._velocity(q, float(tol), given)
+
+    def in_working_mode(self, jacobians: ChainJacobians, tol: float) -> np.ndarray:
+        """``(N,)`` bool: the closure of each configuration of ``jacobians`` is regular (status
+        OK: not singular within the ``tol`` its Jacobian was computed with) and keeps its home
+        rank — no parallel singularity (the protocol's question; rod machines also check the
+        sign of det A)."""
+        return ((np.asarray(jacobians.status) == Status.OK)
+                & (np.asarray(jacobians.closure_rank) == jacobians.expected_rank))
+
+    def _is_actuator_array(self, x: Any) -> bool:
+        """The former positional form: one array as wide as the actuator vector (when that is
+        six wide, as wide as a pose, the former meaning is kept)."""
+        shape = np.shape(x)
+        return len(shape) in (1, 2) and shape[-1] == self.n_actuators
+
+    def _refuse_misfit(self, x: Any, qb: np.ndarray, pose: np.ndarray, status: np.ndarray,
+                       single: bool) -> None:
+        """q must put the tool at the poses x given with it (tool point within 1e-9 m relative,
+        axis within 1e-9): a single misfit raises, batched misfits get status INVALID_INPUT."""
+        xb, _ = _checked_batch(x, 6, "pose") if single else as_batch(x, 6, "pose")
+        if xb.shape[0] != qb.shape[0]:
+            raise InputError(f"x has {xb.shape[0]} rows but q has {qb.shape[0]}")
+        with np.errstate(invalid="ignore", divide="ignore"):
+            axis = xb[:, 3:] / np.linalg.norm(xb[:, 3:], axis=1, keepdims=True)
+            miss = np.maximum(np.abs(pose[:, :3] - xb[:, :3]).max(axis=1)
+                              / (1.0 + np.abs(xb[:, :3]).max(axis=1)),
+                              np.abs(pose[:, 3:] - axis).max(axis=1))
+        off = miss > 1e-9
+        if single and off[0]:
+            raise InputError(f"q = {qb[0].tolist()} does not fit pose {xb[0].tolist()}: its tool "
+                             f"point and axis miss it by {miss[0]:.3g}")
+        status[off] = Status.INVALID_INPUT
+
+    def jacobian_dot(self, x: Any, xd: Any, *, q: Any = None) -> None:
+        """Refused: the time derivative of a joint-chain machine's velocity model is not
+        computed (its closure's second derivatives are not implemented).
+
+        Raises:
+            UnsupportedOperationError: always.
+        """
+        raise UnsupportedOperationError(
+            "jacobian_dot", self.id, self.family,
+            "the time derivative of a joint-chain closure's velocity model (its second "
+            "derivatives) is not implemented; difference jacobian(q=...) along the motion")
+
+    def joint_motion(self, x: Any, xd: Any, xdd: Any, **options: Any) -> None:
+        """Refused: actuator accelerations need :meth:`jacobian_dot`, not computed for a
+        joint-chain machine.
+
+        Raises:
+            UnsupportedOperationError: always.
+        """
+        raise UnsupportedOperationError(
+            "a joint trajectory along a tool path", self.id, self.family,
+            "actuator accelerations need the time derivative of the closure's velocity model, "
+            "which is not implemented for joint chains; follow the path pose by pose with ik")
+
+    def fk_all(self, q: Any, **options: Any) -> None:
+        """Refused: the assembly modes of a joint-chain machine are not enumerated.
+
+        Raises:
+            UnsupportedOperationError: always.
+        """
+        raise UnsupportedOperationError(
+            "fk_all", self.id, self.family,
+            "the assembly modes of a (hyperstatic) joint-chain closure are not enumerated; "
+            "fk(q, x0=...) reaches the mode nearest a start")
+
+    def _velocity(self, q: Any, tol: float, x: Any = None) -> ChainJacobians:
+        """The velocity model at actuator coordinates ``q`` (see :meth:`jacobian`)."""
         qb, single = _checked_batch(q, self.n_actuators, "q")
         direct = self.fk(qb, full_output=True, strokes="ignore", check_singular=False)
         n = qb.shape[0]
@@ -156,8 +261,10 @@ class ChainVelocity:
         for j, v in enumerate(loop_act):
             passive_rates[:, :, order[v]] = du[:, 6:, j]
         status = direct.status.copy()
+        if x is not None:
+            self._refuse_misfit(x, qb, direct.pose, status, single)
         status[((status == Status.OK) | (status == Status.INCONSISTENT)) & closed
-               & (ratio < SINGULAR_TOL)] = Status.SINGULAR
+               & (ratio < tol)] = Status.SINGULAR
         bad = (status != Status.OK) & (status != Status.INCONSISTENT)
         for arr in (jac, j_h, sv, condition, passive_rates):
             arr[bad] = np.nan
@@ -166,7 +273,7 @@ class ChainVelocity:
         if single and status[0] == Status.SINGULAR:
             raise SingularConfigurationError(
                 f"q = {qb[0].tolist()}: singular closure (σ_min/σ_max of its Jacobian "
-                f"{ratio[0]:.2g} < {SINGULAR_TOL:g}): the velocity model does not exist there")
+                f"{ratio[0]:.2g} < {tol:g}): the velocity model does not exist there")
         out = ChainJacobians(J=jac, J_homogeneous=j_h, singular_values=sv, condition=condition,
                              passive_rates=passive_rates, closure_rank=rank,
                              expected_rank=expected, q=qb, status=status)

@@ -36,6 +36,7 @@ from pkmkit.exceptions import (
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_rates import FullPoseRates
+from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
 from pkmkit.machines.machine import (
     HOME_TOL,
     MAX_COORDINATE,
@@ -247,6 +248,17 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
         """True when the machine has fewer than six actuators: its orientation follows its
         position (a Verne-type module), and :meth:`ik` also accepts positions ``(N, 3)``."""
         return self.n_actuators < 6
+
+    @property
+    def length_scale(self) -> float:
+        """L (m): the characteristic length (see the protocol's ``length_scale``)."""
+        return float(self.characteristic_length)
+
+    @property
+    def six_dof(self) -> bool:
+        """True with six actuators or more (the whole pose is commanded); see
+        :attr:`~pkmkit.machines.protocol.MachineFace.six_dof`."""
+        return not self.position_controlled
 
     def default_box(self) -> tuple[np.ndarray, np.ndarray]:
         """Position region ``(lower (3,), upper (3,))`` (m) for workspace studies: the kind's
@@ -556,19 +568,23 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
                                       "residual", "out_of_stroke", "stroke_excess"))
 
     # ---------------------------------------------------------------- velocity
-    def jacobian(self, x: Any, *, q: Any = None, branches: Any = None,
+    def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
                  tol: float = SINGULARITY_TOL) -> FullPoseJacobians:
         """Velocity model at full poses (see :class:`FullPoseJacobians`).
 
         Args:
             x: ``(6,)`` or ``(N, 6)`` poses (or positions ``(3,)``/``(N, 3)`` for a machine
-                with fewer than six actuators).
+                with fewer than six actuators); default: the direct model of ``q``.
             q: actuator coordinates at those poses (default: the inverse model).
             branches: inverse-model branches when q is not given.
             tol: threshold of the singularity measures.
         """
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be a positive number, got {tol!r}")
+        if x is None:
+            if q is None:
+                raise InputError("jacobian needs the poses x or the actuator coordinates q")
+            x = self.fk(q, strokes="ignore")
         arr = np.asarray(x, dtype=float)
         if self.position_controlled and arr.ndim in (1, 2) and arr.shape[-1] == 3:
             inv = self.ik(arr, branches=branches, full_output=True)
@@ -582,6 +598,7 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
                 qb, _ = as_batch(q, self.n_actuators, "q")
                 if qb.shape[0] != xb.shape[0]:
                     raise InputError(f"x has {xb.shape[0]} rows but q has {qb.shape[0]}")
+                qb = self._fitting_q(xb, qb, single)
         jac = self._jacobians(xb, qb, float(tol))
         names = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
                  "parallel_measure", "serial_measure", "singularity", "q", "mode",
@@ -641,6 +658,25 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             tolerance=tol, q=qb, mode=np.sign(np.nan_to_num(det_a)).astype(int),
             J_homogeneous=j_h, characteristic_length=length,
             translation_singular_values=sv_t, rotation_singular_values=sv_r)
+
+    def joint_motion(self, x: Any, xd: Any, xdd: Any, *, tol: float = SINGULARITY_TOL,
+                     orientation: Any = None) -> JointMotion:
+        """Actuator motion of the platform point along positions, velocities, accelerations
+        ``(N, 3)`` at a held orientation (rotation vector ``(3,)``, default the home one; a
+        position-controlled machine takes the one its rods impose:
+        :func:`~pkmkit.machines.joint_motion.full_pose_joint_motion`).
+
+        Raises:
+            InputError: an orientation given to a position-controlled machine, or not 3
+                finite values.
+        """
+        if orientation is not None:
+            if self.position_controlled:
+                raise InputError(f"{self.id!r} has {self.n_actuators} actuators: its rods set "
+                                 "its orientation, which cannot be held; give no orientation")
+            orientation, _ = _checked_batch(orientation, 3, "orientation")
+            orientation = orientation[0]
+        return full_pose_joint_motion(self, x, xd, xdd, tol, orientation)
 
     # ---------------------------------------------------------------- structure
     def mobility(self) -> dict[str, Any]:

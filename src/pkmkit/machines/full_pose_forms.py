@@ -78,6 +78,15 @@ class FullPoseForms:
         """Rod vectors ``d_j = P_j − a_j(q)`` ``(N, m, 3)``."""
         return self.platform_points(x) - rod_base_points(self.model, q.T).transpose(2, 1, 0)
 
+    def closure_errors(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``(N, m)`` how far each rod misses its length at poses ``x (N, 6)`` with actuator
+        coordinates ``q (N, n)``: ``| |P_j − a_j(q)| − ℓ_j(q) |`` (m; NaN rows stay NaN)."""
+        from pkmkit.solve.rod_closure import rod_vectors
+
+        rot = rotvec_to_matrix(x[:, 3:6]).transpose(1, 2, 0)
+        v = rod_vectors(self.model, x[:, :3].T, q.T, rot)
+        return np.abs(v.dist - v.length).T
+
     # ------------------------------------------------------------------ inverse
     def rod_coordinates(self, x: np.ndarray, branches: np.ndarray | None = None) -> np.ndarray:
         """The actuator coordinate each rod's closure implies ``(N, m)`` (NaN where the rod

@@ -102,6 +102,24 @@ class FullPoseRates:
             return np.asarray(self.ik(arr, full_output=True).pose)
         return arr
 
+    def _fitting_q(self, xb: np.ndarray, qb: np.ndarray, single: bool) -> np.ndarray:
+        """``qb`` with NaN rows where it does not close every rod at ``xb`` within 1e-9 m
+        relative (as rod machines check q given with poses); a single misfit raises
+        :class:`~pkmkit.exceptions.InputError` naming the rod."""
+        with np.errstate(invalid="ignore", over="ignore"):
+            error = self._forms.closure_errors(xb, qb)
+        bad = ~(error <= 1e-9 * (1.0 + float(self.model.rod_length.max()))).all(axis=1)
+        bad &= np.isfinite(qb).all(axis=1) & np.isfinite(xb).all(axis=1)
+        if not bad.any():
+            return qb
+        if single:
+            rod = int(np.nanargmax(np.where(np.isfinite(error[0]), error[0], np.inf)))
+            raise InputError(f"q = {qb[0].tolist()} does not fit pose {xb[0].tolist()}: "
+                             f"{self._rod_name(rod)} misses its length by {error[0, rod]:.6g} m")
+        qb = qb.copy()
+        qb[bad] = np.nan
+        return qb
+
     @staticmethod
     def _solve_j(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """J = A⁻¹B (six rods) or the least-squares A⁺B (more rods)."""

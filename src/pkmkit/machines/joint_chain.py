@@ -44,6 +44,11 @@ from pkmkit.machines.chain_jacobians import (  # noqa: F401  (re-exported)
     ChainVelocity,
     HyperstatismCount,
 )
+from pkmkit.machines.chain_results import (
+    ChainDirectResult,
+    ChainInverseResult,
+    single_row,
+)
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
 from pkmkit.machines.protocol import MachineFace
@@ -68,44 +73,6 @@ CLOSURE_TOL = 1e-9
 POSE_NAMES = ("x", "y", "z", "i", "j", "k")
 #: What the direct and inverse models do with joint values outside their strokes.
 STROKE_MODES = ("flag", "refuse", "ignore")
-
-
-@dataclass(frozen=True)
-class ChainDirectResult:
-    """Direct model of a joint-chain machine at N actuator vectors.
-
-    Attributes:
-        pose: ``(N, 6)`` tool point (m) and unit tool axis (NaN rows where it failed).
-        tool_frame: ``(N, 6)`` tool frame origin (m) and rotation vector (rad).
-        platform: ``(N, 6)`` platform frame (the legs' common end) position and rotation vector.
-        passive: ``(N, n_p)`` passive joint values (rad or m), in :attr:`passive_names` order.
-        passive_names: names of the passive joints.
-        closure_residual: ``(N,)`` largest closure residual (m; rotation rows × L): ~1e-15 for a
-            compatible geometry, the least-squares misfit for an incompatible one.
-        status: ``(N,)`` status codes (OK, or NO_ASSEMBLY when the closure failed, or
-            INCONSISTENT when it converged to a non-zero residual: incompatible defects;
-            OUT_OF_STROKE, SINGULAR: see :meth:`JointChainMachine.fk`).
-        iterations: ``(N,)`` engine iterations.
-        out_of_stroke: ``(N,)`` bool, a joint (actuator given or passive joint found) lies
-            outside its stroke.
-        messages: one sentence per row saying what is wrong (``""`` for a good row): which
-            leg misses the platform and by how much, which joint is beyond its stroke.
-    """
-
-    pose: np.ndarray
-    tool_frame: np.ndarray
-    platform: np.ndarray
-    passive: np.ndarray
-    passive_names: tuple[str, ...]
-    closure_residual: np.ndarray
-    status: np.ndarray
-    iterations: np.ndarray
-    out_of_stroke: np.ndarray | None = None
-    messages: tuple[str, ...] | str = ()
-
-
-
-
 
 
 @dataclass(frozen=True, eq=False)
@@ -161,6 +128,16 @@ class JointChainMachine(ChainVelocity, MachineFace):
         values[self._passive] = res.u[0, 6:]
         return {"values": values, "platform": res.u[0, :6].copy(),
                 "residual": float(res.residual[0])}
+
+    #: The inverse model is the engine's (from a start), not a closed form.
+    closed_form_inverse: ClassVar[bool] = False
+    #: Defects may be incompatible with the (hyperstatic) closure.
+    incompatible_defects: ClassVar[bool] = True
+
+    @property
+    def length_scale(self) -> float:
+        """L (m): the model's closure scale (see the protocol's ``length_scale``)."""
+        return float(self.model.characteristic_length)
 
     @property
     def home_closure_residual(self) -> float:
@@ -396,13 +373,9 @@ class JointChainMachine(ChainVelocity, MachineFace):
                                 closure_residual=res.residual, status=status,
                                 iterations=res.iterations,
                                 out_of_stroke=report["out_of_stroke"],
-                                messages=tuple(report["messages"]))
-        if single:
-            fields = {k: (v[0] if isinstance(v, np.ndarray) else v)
-                      for k, v in out.__dict__.items()}
-            fields["messages"] = out.messages[0]
-            return ChainDirectResult(**fields)
-        return out
+                                messages=tuple(report["messages"]),
+                                mode=np.zeros(n, dtype=int))
+        return single_row(out) if single else out
 
     def _direct_report(self, values: np.ndarray, res, status: np.ndarray, valid: np.ndarray,
                        strokes: str, check_singular: bool) -> dict[str, Any]:
@@ -516,7 +489,7 @@ class JointChainMachine(ChainVelocity, MachineFace):
 
     # ---------------------------------------------------------------- inverse
     def ik(self, x: Any, *, q0: Any = None, tool_length: Any = None, full_output: bool = False,
-           strokes: str = "flag", **engine_options: Any) -> np.ndarray | ChainDirectResult:
+           strokes: str = "flag", **engine_options: Any) -> np.ndarray | ChainInverseResult:
         """Inverse model: actuator coordinates that put the tool point and axis at ``x``.
 
         Args:
@@ -524,8 +497,8 @@ class JointChainMachine(ChainVelocity, MachineFace):
             q0: warm start for the actuators (default: home); other branches of the head are
                 reached from other starts.
             tool_length: tool length(s) (m); default the machine's.
-            full_output: return a :class:`ChainDirectResult` with ``q`` added as ``pose``'s
-                companion (see Returns).
+            full_output: return a :class:`ChainInverseResult` (its ``direct`` the direct
+                model at the solution).
             strokes: joints of the solution (actuators and passive joints) outside their
                 strokes: ``"flag"`` (default; a single row warns with
                 :class:`~pkmkit.exceptions.StrokeWarning`), ``"refuse"`` (NaN rows; a single row
@@ -533,7 +506,8 @@ class JointChainMachine(ChainVelocity, MachineFace):
                 result of ``full_output`` carries the messages.
 
         Returns:
-            q ``(n,)`` / ``(N, n)``; with ``full_output`` a tuple ``(q, ChainDirectResult)``.
+            q ``(n,)`` / ``(N, n)``; with ``full_output`` a :class:`ChainInverseResult` (which
+            still unpacks as the former tuple ``(q, direct)``, with a DeprecationWarning).
 
         Raises:
             InputError: mis-shaped input, an axis of zero length, an unknown ``strokes`` mode.
@@ -600,7 +574,26 @@ class JointChainMachine(ChainVelocity, MachineFace):
             direct = self.fk(q if not single else q[0], tool_length=lengths if not single else
                              lengths[0], full_output=True, strokes=strokes,
                              check_singular=False) if np.isfinite(q).any() else None
-        return (restore_shape(q, single), direct)
+        pose = np.full((n, 6), np.nan) if direct is None else np.atleast_2d(direct.pose)
+        act = self._actuated
+        out = ChainInverseResult(
+            q=q, status=status, branches=None, shortfall=None, method="numeric",
+            mode=np.zeros(n, dtype=int), iterations=res.iterations, residual=res.residual,
+            pose=pose, out_of_stroke=self._inverse_out_of_stroke(strokes, bad, direct),
+            stroke_excess=signed_excess(q, self.model.q_min[act], self.model.q_max[act]),
+            direct=direct)
+        return single_row(out) if single else out
+
+    @staticmethod
+    def _inverse_out_of_stroke(strokes: str, bad: np.ndarray, direct) -> np.ndarray | None:
+        """``(N,)`` rows of an inverse model with a joint beyond its stroke: with ``"flag"``
+        the direct model's check at the solution (actuators and passive joints), with
+        ``"refuse"`` the rows refused; None with ``"ignore"``."""
+        if strokes == "ignore":
+            return None
+        if strokes == "refuse" or direct is None:
+            return bad
+        return np.atleast_1d(np.asarray(direct.out_of_stroke, dtype=bool))
 
     def mobility(self) -> dict[str, Any]:
         """The same as :meth:`hyperstatism`, as a dict (for ``pkmkit show``)."""

@@ -38,6 +38,7 @@ from pkmkit.machines.common import (
     _rows_like,
     _valid_rows,
 )
+from pkmkit.machines.joint_motion import JointMotion, rod_joint_motion
 from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
@@ -287,7 +288,8 @@ class Machine(ModeNaming, MachineFace):
         if (method == "closed" and branches is None and q0 is None and not full_output
                 and not engine_options):  # one plain pose: the microsecond path, same numbers
             q1 = self._closed.inverse_one(x, self._default_branches)
-            if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
+            if q1 is not None and (strokes == "ignore" or (
+                    strokes in ("flag", "refuse") and self._within_strokes(q1))):
                 return np.array(q1)
         check_mode(strokes)
         xb, single = _checked_batch(x, self.dims, "pose")
@@ -585,12 +587,14 @@ class Machine(ModeNaming, MachineFace):
 
     # ---------------------------------------------------------------- velocity
     def jacobian(
-        self, x: Any, *, q: Any = None, branches: Any = None, tol: float = SINGULARITY_TOL
+        self, x: Any = None, *, q: Any = None, branches: Any = None,
+        tol: float = SINGULARITY_TOL
     ) -> Jacobians:
         """Velocity model at poses: A, B, J, singular values, conditioning, singularities.
 
         Args:
-            x: ``(dims,)`` or ``(N, dims)`` poses, m.
+            x: ``(dims,)`` or ``(N, dims)`` poses, m; default: the working-mode direct model of
+                ``q``.
             q: actuator coordinates at those poses; default: the inverse model (``branches``).
             branches: inverse-model branches used when ``q`` is not given.
             tol: threshold on the dimensionless singularity measures (see :class:`Jacobians`).
@@ -605,8 +609,17 @@ class Machine(ModeNaming, MachineFace):
         """
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be a positive number, got {tol!r}")
+        if x is None:
+            x = self._poses_of_q(q)
         xb, qb, single = self._poses_and_q(x, q, branches)
         return self._jacobians(xb, qb, tol, single)
+
+    def _poses_of_q(self, q: Any) -> np.ndarray:
+        """The poses of actuator coordinates ``q`` for a velocity model asked at ``q`` alone
+        (working-mode direct model; a batch keeps its NaN rows)."""
+        if q is None:
+            raise InputError("jacobian needs the poses x or the actuator coordinates q")
+        return self.fk(q, strokes="ignore")
 
     def _poses_and_q(self, x: Any, q: Any, branches: Any) -> tuple[np.ndarray, np.ndarray, bool]:
         xb, single = _checked_batch(x, self.dims, "pose")
@@ -666,6 +679,14 @@ class Machine(ModeNaming, MachineFace):
         j_dot[ok] = np.linalg.solve(jac.A[ok], rhs[ok])
         rates = JacobianRates(qd=qd, A_dot=a_dot, B_dot=b_dot, J_dot=j_dot)
         return _restore(rates, single, ("qd", "A_dot", "B_dot", "J_dot"))
+
+    def joint_motion(self, x: Any, xd: Any, xdd: Any, *, tol: float = SINGULARITY_TOL,
+                     orientation: Any = None) -> JointMotion:
+        """Actuator motion along poses, velocities, accelerations ``(N, dims)``
+        (:func:`~pkmkit.machines.joint_motion.rod_joint_motion`; ``orientation`` must be None)."""
+        if orientation is not None:
+            raise InputError("a translating platform has no orientation to hold")
+        return rod_joint_motion(self, x, xd, xdd, tol)
 
     # ---------------------------------------------------------------- structure
     def mobility(self) -> dict[str, Any]:

@@ -29,6 +29,14 @@ class ModeNaming:
         """Name of the assembly mode with det A of sign ``sign`` (±1)."""
         return self.model.mode_names[0 if sign < 0 else 1]
 
+    def in_working_mode(self, jacobians, tol: float) -> np.ndarray:
+        """``(N,)`` bool: the configurations of a velocity model (``jacobian(...)``) lie in the
+        working assembly mode (sign of det A) at least ``tol`` from a parallel singularity
+        (``parallel_measure``). Every machine answers it (a joint chain from its closure)."""
+        with np.errstate(invalid="ignore"):
+            return ((np.sign(jacobians.det_A) == self.working_mode)
+                    & (jacobians.parallel_measure >= tol))
+
     def reference_poses(self) -> dict[str, np.ndarray]:
         """Named sample poses, ``home`` first, each ``(dims,)`` (m, and rad for rotations)."""
         poses = {"home": self.home_pose}

@@ -14,7 +14,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from pkmkit.exceptions import InputError
+from pkmkit.exceptions import UnsupportedOperationError
 
 #: The machine families: rod legs with a translational platform, rod legs with a full-pose
 #: (6-DOF) platform, joint chains (possibly hyperstatic) with heads.
@@ -32,6 +32,50 @@ class MachineFace:
 
     #: One of :data:`FAMILIES`.
     family: ClassVar[str]
+
+    @property
+    def position_controlled(self) -> bool:
+        """True when the machine's orientation follows its position (a full-pose machine with
+        fewer than six actuators): ``ik``/``jacobian`` also take positions ``(N, 3)``. False
+        for every other machine."""
+        return False
+
+    @property
+    def length_scale(self) -> float:
+        """The length L (m) that turns angles into metres when errors, readings and
+        identifiability mix them: a full-pose machine's characteristic length, a joint chain's
+        closure scale, the mean equivalent-leg length of a translational machine."""
+        from pkmkit.model.rod_defects import rod_set
+
+        return float(np.mean(rod_set(self.model).length))
+
+    @property
+    def orientation_fixed(self) -> bool:
+        """True when the platform only translates (its orientation never changes: nothing to
+        measure or command in it); False for full-pose platforms and joint chains."""
+        return self.family == "translational"
+
+    @property
+    def six_dof(self) -> bool:
+        """True when the machine commands all six coordinates of its platform pose (position
+        and rotation vector): a full-pose machine with six actuators or more. False for
+        translating platforms, position-controlled full-pose machines and joint chains (whose
+        pose is a tool point and axis, five degrees of freedom)."""
+        return False
+
+    @property
+    def incompatible_defects(self) -> bool:
+        """True when geometric defects may be incompatible with the closure (a hyperstatic
+        joint-chain machine assembles them only in least squares; the compatible ones span a
+        subspace, :mod:`pkmkit.geometric_errors.compatibility`); False for rod legs, whose
+        every rod closes whatever its defects."""
+        return False
+
+    @property
+    def closed_form_inverse(self) -> bool:
+        """True when the inverse model of a pose is a closed form (rod by rod), smooth in the
+        pose; False when it is solved numerically from a start (joint chains)."""
+        return True
 
     @property
     def angular_actuators(self) -> np.ndarray:
@@ -96,22 +140,18 @@ class MachineFace:
         unit tool axis, 6 values)."""
         return POSE_ORIENTATIONS[self.family]
 
-    @property
-    def position_controlled(self) -> bool:
-        """True when a position alone ``(3,)`` is a pose (the rods impose the orientation, as on
-        a Verne-type module); False unless a family says otherwise."""
-        return False
 
-
-def require_translational(machine, what: str) -> None:
+def require_translational(machine, what: str,
+                          instead: str = "run its poses through ik/jacobian instead") -> None:
     """Refuse, with a typed error naming why, an algorithm written for translational rod-leg
     machines (their closed forms in the batch-last layout) on a machine of another family.
 
     Raises:
-        InputError: ``machine.family`` is not ``"translational"``.
+        UnsupportedOperationError: ``machine.family`` is not ``"translational"`` (an
+            :class:`~pkmkit.exceptions.InputError`).
     """
     if machine.family != "translational":
-        raise InputError(
-            f"{what} is computed for translational rod-leg machines (3-D or planar platforms "
-            f"that only translate); {machine.id!r} is a {machine.family} machine: run its poses "
-            "through ik/jacobian instead")
+        raise UnsupportedOperationError(
+            what, machine.id, machine.family,
+            "it is computed for translational rod-leg machines (3-D or planar platforms that "
+            f"only translate); {instead}")

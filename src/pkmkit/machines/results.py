@@ -1,7 +1,13 @@
-"""Result records returned by :class:`pkmkit.machines.machine.Machine` methods.
+"""Result records returned by the machines' protocol methods (every family).
 
 Shapes: N poses, n actuators, ``dims`` pose coordinates. A single-pose call returns the same
 records with the leading N axis removed.
+
+One record type per question, whatever the family: ``ik(..., full_output=True)`` gives an
+:class:`InverseResult` (a joint-chain machine's adds its direct model), ``fk(...,
+full_output=True)`` a :class:`DirectResult`, ``jacobian`` a :class:`VelocityModel`
+(:class:`Jacobians` for rod legs, a joint-chain machine's ``ChainJacobians``), ``jacobian_dot``
+a :class:`JacobianRates`.
 """
 
 from __future__ import annotations
@@ -128,8 +134,27 @@ class AssemblyModes:
         return self.valid.sum(axis=-1)
 
 
+class VelocityModel:
+    """What every velocity-model record shares (``machine.jacobian(...)`` of any family).
+
+    Attributes (fields of the concrete records):
+        J: ``(N, t, n)`` tool (platform) velocity per unit actuator rate: t = dims for a
+            translating platform, 6 (linear rows first, then angular) otherwise; NaN rows where
+            the velocity model does not exist (out of reach, no assembly, parallel singularity).
+        singular_values: ``(N, k)`` singular values of J (of the homogenised J where it mixes
+            translation and rotation), decreasing.
+        condition: ``(N,)`` σ_max/σ_min of the same matrix.
+        q: ``(N, n)`` actuator coordinates the model was taken at.
+    """
+
+    @property
+    def exists(self) -> np.ndarray | bool:
+        """``(N,)`` bool (one bool for a single pose): the velocity model exists (J is finite)."""
+        return np.isfinite(np.asarray(self.J)).all(axis=(-2, -1))
+
+
 @dataclass(frozen=True)
-class Jacobians:
+class Jacobians(VelocityModel):
     """Velocity model ``A ẋ = B q̇``, ``ẋ = J q̇`` at N poses.
 
     Attributes:

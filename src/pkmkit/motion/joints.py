@@ -13,9 +13,8 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import SINGULARITY_TOL, Machine
-from pkmkit.machines.protocol import require_translational
+from pkmkit.machines.strokes import stroke_limits
 from pkmkit.motion.timelaw import Trajectory
-from pkmkit.numerics import small
 
 
 @dataclass(frozen=True)
@@ -45,17 +44,22 @@ class JointTrajectory:
 
 
 def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
-                     tol: float = SINGULARITY_TOL) -> JointTrajectory:
+                     tol: float = SINGULARITY_TOL, orientation: Any = None) -> JointTrajectory:
     """Actuator positions, speeds and accelerations along ``trajectory``.
 
-    Batched over the samples in the batch-last layout of the closed forms: A and the diagonal
-    of B once, then q̇ = B⁻¹A ẋ, Ȧ (rows ẋ − q̇_i u_i), Ḃ and q̈.
+    Any machine through its protocol method ``joint_motion``
+    (:mod:`pkmkit.machines.joint_motion`): a translating platform batched in the closed forms'
+    layout; a full-pose platform at the held rotation vector ``orientation`` (rad, default its
+    home orientation; a machine with fewer than six actuators at the orientation its rods
+    impose). ``x``, ``xd``, ``xdd`` of the result are the path's (the platform point's).
 
     Raises:
         InputError: the path leaves the workspace (the first failing sample: time, pose, the leg
             and by how much), enters the other assembly mode or comes within ``tol`` of a
             singularity (|cos| between a leg and its slide, or |det| of the unit leg
             directions) — the machine cannot follow it.
+        UnsupportedOperationError: a joint-chain machine (its velocity model has no time
+            derivative yet), naming why.
 
     >>> import pkmkit
     >>> from pkmkit.motion import circle, joint_trajectory, plan
@@ -65,61 +69,26 @@ def joint_trajectory(machine: Machine, trajectory: Trajectory, *,
     >>> [round(1000 * v, 3) for v in jt.stroke.tolist()]  # mm, over the samples only
     [190.844, 190.844, 190.844]
     """
-    require_translational(machine, "a joint trajectory along a tool path")
-    dims = machine.dims
+    dims = min(machine.dims, 3)
     if dims == 2 and np.abs(trajectory.x[:, 2]).max() > 1e-12:
         raise InputError("a planar machine needs a path in the plane z = 0")
     x = np.ascontiguousarray(trajectory.x[:, :dims])
     xd = np.ascontiguousarray(trajectory.xd[:, :dims])
     xdd = np.ascontiguousarray(trajectory.xdd[:, :dims])
-    closed = machine.closed_form
-    q = closed.inverse(x, machine.model.leg_branch)
-    unreachable = ~np.isfinite(q).all(axis=1)
-    a, b = closed.jacobians_t(x, q)  # (n, dims, N), (n, N); NaN where unreachable
-    lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
-    det = small.det(a)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        det_unit = det / np.prod(lengths, axis=0)
-        serial = np.min(np.abs(b) / lengths, axis=0)
-    wrong = ~unreachable & ((np.sign(det) != machine.working_mode) | (np.abs(det_unit) < tol)
-                            | (serial < tol))
-    failing = np.flatnonzero(unreachable | wrong)
-    if failing.size:
-        k = int(failing[0])
-        if unreachable[k]:
-            short = closed.shortfall(x[k:k + 1])[0]
-            leg = int(np.nanargmax(short))
-            what = (f"leaves the workspace ({machine.model.leg_names[leg]} too short by "
-                    f"{short[leg]:.6g} m)")
-        elif serial[k] < tol:
-            what = "meets a serial singularity (a leg perpendicular to its slide)"
-        elif abs(det_unit[k]) < tol:
-            what = "meets a parallel singularity"
-        else:
-            mode = machine.mode_label(int(np.sign(det[k])))
-            what = (f"starts in the other assembly mode ({mode!r})" if k == 0 else
-                    f"crosses a parallel singularity into the other assembly mode ({mode!r})")
-        raise InputError(f"the path {what}: first at t = {trajectory.t[k]:.6g} s, pose "
-                         f"{np.round(x[k], 9).tolist()} m{_stroke_note(machine, trajectory, q, k)}")
-    xd_t, xdd_t = xd.T, xdd.T
-    qd = np.einsum("ikn,kn->in", a, xd_t) / b
-    # ∂c/∂q (n, dims, N): slide axis, crank-tip velocity per radian, zero for struts
-    rates = closed.carriage_rates(q).transpose(1, 2, 0)
-    a_dot = xd_t[None] - qd[:, None, :] * rates
-    b_dot = np.einsum("ikn,ikn->in", a_dot, rates) + closed.strut[:, None] * qd
-    for i in np.flatnonzero(closed.crank):  # the crank tip's velocity turns with the arm
-        radial = np.cross(machine.model.leg_axis[i][:, None], rates[i], axis=0)
-        b_dot[i] += np.einsum("kn,kn->n", a[i], radial) * qd[i]
-    qdd = (np.einsum("ikn,kn->in", a, xdd_t) + np.einsum("ikn,kn->in", a_dot, xd_t)
-           - b_dot * qd) / b
-    return JointTrajectory(t=trajectory.t, x=x, xd=xd, xdd=xdd, q=q, qd=qd.T, qdd=qdd.T,
-                           trajectory=trajectory)
+    motion = machine.joint_motion(x, xd, xdd, tol=tol, orientation=orientation)
+    if motion.failed is not None:
+        k = motion.failed
+        raise InputError(f"the path {motion.reason}: first at t = {trajectory.t[k]:.6g} s, pose "
+                         f"{np.round(x[k], 9).tolist()} m"
+                         f"{_stroke_note(machine, trajectory, motion.q_partial, k)}")
+    return JointTrajectory(t=trajectory.t, x=x, xd=xd, xdd=xdd, q=motion.q, qd=motion.qd,
+                           qdd=motion.qdd, trajectory=trajectory)
 
 
 def _stroke_note(machine: Machine, trajectory: Trajectory, q: np.ndarray, k: int) -> str:
     """Mention a stroke limit already exceeded before sample ``k`` (empty string if none)."""
-    model = machine.model
-    outside = (q[:k] < model.q_min) | (q[:k] > model.q_max)
+    q_min, q_max = stroke_limits(machine)
+    outside = (q[:k] < q_min) | (q[:k] > q_max)
     if not outside.any():
         return ""
     first = int(np.flatnonzero(outside.any(axis=1))[0])
@@ -170,7 +139,7 @@ def check_limits(machine: Machine, motion: JointTrajectory, limits: Limits,
         report[kind] = entry
 
     if limits.strokes:
-        lo, hi = machine.model.q_min, machine.model.q_max
+        lo, hi = stroke_limits(machine)
         add("position", motion.q, lo, hi, motion.q.max(axis=0))
     for kind, values, limit in (("speed", motion.qd, limits.speed),
                                 ("accel", motion.qdd, limits.accel),

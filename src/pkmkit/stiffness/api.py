@@ -79,9 +79,8 @@ def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = No
             raise InputError("give either a pose (tool point and axis) or q")
         if q is None:
             xb, single = as_batch(pose, 6, "pose")
-            q_arr, _ = machine.ik(xb[0] if single else xb, full_output=True,
-                                  tool_length=tool_length, strokes="ignore")
-            qb = np.atleast_2d(q_arr)
+            qb = np.atleast_2d(machine.ik(xb[0] if single else xb, tool_length=tool_length,
+                                          strokes="ignore"))
         else:
             qb, single = as_batch(q, machine.n_actuators, "q")
             if single:

@@ -84,10 +84,7 @@ def check_stiffness(values: np.ndarray, what: str) -> np.ndarray:
 
 
 def _quantities(machine: Any) -> tuple[str, ...]:
-    quantities = getattr(machine, "actuator_quantities", None)
-    if quantities is None:
-        quantities = machine.model.actuator_quantities
-    return tuple(quantities)
+    return tuple(machine.actuator_quantities)
 
 
 def default_data(machine: Any) -> StiffnessData:
@@ -103,7 +100,7 @@ def default_data(machine: Any) -> StiffnessData:
     if any(q == "angle" for q in quantities):
         notes.append(f"rotary actuators {ASSUMED_ROTARY:.3g} N·m/rad (assumed: motor and "
                      "gearbox; the source gives none)")
-    kind = machine.kind.kind if getattr(machine, "kind", None) is not None else None
+    kind = machine.kind.kind if machine.kind is not None else None
     from pkmkit.machines.registry import machines as presets
 
     if machine.id not in presets():  # a user's file of that kind: its own rods

@@ -79,7 +79,9 @@ def stiffness_figures(machine: Any, points: Any = None, *, q: Any = None,
     Args:
         machine: any pkmkit machine.
         points: ``(M, dims)`` poses (joint-chain machines: tool point and axis), or give ``q``.
-        q: ``(M, n)`` actuator coordinates (joint-chain machines; NaN rows are skipped).
+        q: ``(M, n)`` actuator coordinates (joint-chain machines; NaN rows are skipped); a
+            joint chain given both uses ``q`` (its configuration, no inverse model to solve),
+            a rod-leg machine uses ``points``.
         data: the elastic data (default: the machine's).
         wrench: ``(d,)`` load at the reference point (N, N·m) for the deflection, or None.
 
@@ -88,6 +90,10 @@ def stiffness_figures(machine: Any, points: Any = None, *, q: Any = None,
     """
     w = check_wrench(machine, wrench)
     chains = machine.family == "chain"
+    if points is not None and not chains:
+        q = None  # rod legs: the compliance is computed at the poses (q follows from them)
+    if q is None and points is None:
+        raise InputError("stiffness_figures needs poses or actuator coordinates")
     rows = np.atleast_2d(np.asarray(q if q is not None else points, dtype=float))
     m = len(rows)
     d = len(twist_names(machine))

@@ -153,7 +153,7 @@ def rod_leg_compliance(machine: Any, x: Any, data: StiffnessData
     # a parallel singularity: A_u (moments over the characteristic length) nearly singular
     scaled = a_u.copy()
     if full:
-        scaled[:, :, 3:] /= getattr(machine, "characteristic_length", 1.0)
+        scaled[:, :, 3:] /= machine.characteristic_length
     singular = _condition(scaled) > 1.0 / SINGULARITY_TOL
     status[(status == Status.OK) & (singular | ~np.isfinite(c).all(axis=(1, 2)))] = (
         Status.SINGULAR)
