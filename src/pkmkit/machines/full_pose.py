@@ -33,11 +33,13 @@ from pkmkit.exceptions import (
     ParameterError,
     UnreachablePoseError,
 )
+from pkmkit.machines import full_pose_direct as direct
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_rates import FullPoseRates
 from pkmkit.machines.machine import (
     HOME_TOL,
+    Machine,
     MAX_COORDINATE,
     SINGULARITY_TOL,
     MachineKind,
@@ -516,16 +518,25 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             NoAssemblyError: a single q with no assembly reached from the guess.
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
+        if x0 is None and not full_output and not engine_options:
+            fast = direct.direct_one(self, q, strokes)  # one plain configuration: µs
+            if fast is not None:
+                return fast
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
-        guess = (self.first_order_pose(qb) if x0 is None
-                 else _rows_like(x0, 6, "x0", qb.shape[0]))
-        guess[~_valid_rows(qb)] = np.nan
-        engine_options.setdefault("compute_rank", False)
-        with np.errstate(invalid="ignore", over="ignore"):
-            result = solve_direct(self.model, qb, guess, dof="full", **engine_options)
-        pose = result.u.copy()
-        status = result.status.copy()
+        if direct.usable(engine_options):  # the compiled per-pose solve, same rules
+            pose, status, iterations, residual = self._direct_kernel().solve(
+                qb, None if x0 is None else _rows_like(x0, 6, "x0", qb.shape[0]),
+                engine_options)
+        else:
+            guess = (self.first_order_pose(qb) if x0 is None
+                     else _rows_like(x0, 6, "x0", qb.shape[0]))
+            guess[~_valid_rows(qb)] = np.nan
+            engine_options.setdefault("compute_rank", False)
+            with np.errstate(invalid="ignore", over="ignore"):
+                result = solve_direct(self.model, qb, guess, dof="full", **engine_options)
+            pose, status = result.u.copy(), result.status.copy()
+            iterations, residual = result.iterations, result.residual
         status[status == Status.INCONSISTENT] = Status.NO_ASSEMBLY
         status[~_valid_rows(qb)] = Status.INVALID_INPUT
         check = None
@@ -541,7 +552,7 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             if status[0] == Status.NO_ASSEMBLY:
                 raise NoAssemblyError(
                     f"q = {qb[0].tolist()}: no assembly found from the guess (closure residual "
-                    f"{result.residual[0]:.3g} m); the rods may not meet, or pass x0")
+                    f"{residual[0]:.3g} m); the rods may not meet, or pass x0")
             raise ConvergenceError(f"the direct model did not converge "
                                    f"({Status(int(status[0])).label})")
         if not full_output:
@@ -550,10 +561,20 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
         out = DirectResult(pose=pose, status=status, mode=mode,
                            mode_label=self.mode_labels[0], branches=np.zeros(
                                (qb.shape[0], self.model.n_legs), dtype=int),
-                           method="numeric", iterations=result.iterations,
-                           residual=result.residual, **_stroke_fields(check))
+                           method="numeric", iterations=iterations,
+                           residual=residual, **_stroke_fields(check))
         return _restore(out, single, ("pose", "status", "mode", "branches", "iterations",
                                       "residual", "out_of_stroke", "stroke_excess"))
+
+    _within_strokes = Machine._within_strokes
+
+    def _direct_kernel(self) -> direct.DirectKernel:
+        kernel = self.__dict__.get("_direct")
+        if kernel is None:
+            kernel = direct.DirectKernel.of(self.model, self._home_pose, self._home_q,
+                                            self._home_jacobian)
+            object.__setattr__(self, "_direct", kernel)
+        return kernel
 
     # ---------------------------------------------------------------- velocity
     def jacobian(self, x: Any, *, q: Any = None, branches: Any = None,

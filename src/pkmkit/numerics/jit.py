@@ -38,6 +38,14 @@ def numba_available() -> bool:
     return _available
 
 
+def use_compiled_solver() -> bool:
+    """Whether the compiled per-pose solvers run (every batch size, one pose included): an
+    iterative solve costs hundreds of microseconds per call through the NumPy engine and a few
+    through its compiled kernel, which repays Numba's import within the first calls. Only
+    ``PKMKIT_COMPILED=0`` (or Numba missing) selects the NumPy engine."""
+    return mode() != "0" and numba_available()
+
+
 def use_compiled(rows: int) -> bool:
     """Whether a batch of ``rows`` rows should run the compiled kernels (the caller imports
     its kernel module lazily, e.g. :mod:`pkmkit.machines.kernels`)."""
