@@ -39,9 +39,9 @@ from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_rates import FullPoseRates
 from pkmkit.machines.machine import (
     HOME_TOL,
-    Machine,
     MAX_COORDINATE,
     SINGULARITY_TOL,
+    Machine,
     MachineKind,
     _checked_batch,
     _restore,
