@@ -36,6 +36,7 @@ from pkmkit.exceptions import (
 from pkmkit.machines import full_pose_direct as direct
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
+from pkmkit.machines.full_pose_one import OnePoseInverse
 from pkmkit.machines.full_pose_rates import FullPoseRates
 from pkmkit.machines.machine import (
     HOME_TOL,
@@ -56,7 +57,7 @@ from pkmkit.machines.results import (
     Jacobians,
     Singularity,
 )
-from pkmkit.machines.strokes import check_mode, judge_rows, refuse_absurd_home
+from pkmkit.machines.strokes import STROKE_MODES, check_mode, judge_rows, refuse_absurd_home
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, STRUT, RodModel
@@ -353,6 +354,11 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             ConvergenceError: a single position whose orientation the engine did not find.
             OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
+        if (branches is None and q0 is None and not full_output and not engine_options
+                and strokes in STROKE_MODES):  # one plain pose: microseconds, same numbers
+            q1 = self._one_pose_inverse()(x)
+            if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
+                return np.array(q1)
         check_mode(strokes)
         arr = np.asarray(x, dtype=float) if not isinstance(x, np.ndarray) else x
         width = arr.shape[-1] if arr.ndim in (1, 2) else 6
@@ -518,7 +524,7 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             NoAssemblyError: a single q with no assembly reached from the guess.
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
-        if x0 is None and not full_output and not engine_options:
+        if x0 is None and not full_output and not engine_options and strokes in STROKE_MODES:
             fast = direct.direct_one(self, q, strokes)  # one plain configuration: µs
             if fast is not None:
                 return fast
@@ -567,6 +573,13 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
                                       "residual", "out_of_stroke", "stroke_excess"))
 
     _within_strokes = Machine._within_strokes
+
+    def _one_pose_inverse(self) -> OnePoseInverse:
+        inverse = self.__dict__.get("_one_inverse")
+        if inverse is None:
+            inverse = OnePoseInverse(self._forms, self._consistency_tol())
+            object.__setattr__(self, "_one_inverse", inverse)
+        return inverse
 
     def _direct_kernel(self) -> direct.DirectKernel:
         kernel = self.__dict__.get("_direct")

@@ -48,6 +48,7 @@ from pkmkit.machines.results import (
     Jacobians,
 )
 from pkmkit.machines.strokes import (
+    STROKE_MODES,
     STROKE_TOL,
     check_mode,
     judge_rows,
@@ -285,7 +286,7 @@ class Machine(ModeNaming, MachineFace):
             OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
         if (method == "closed" and branches is None and q0 is None and not full_output
-                and not engine_options):  # one plain pose: the microsecond path, same numbers
+                and not engine_options and strokes in STROKE_MODES):  # one plain pose: µs
             q1 = self._closed.inverse_one(x, self._default_branches)
             if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
                 return np.array(q1)
