@@ -10,6 +10,7 @@ import pytest
 
 import pkmkit
 from pkmkit.exceptions import InputError, OutOfStrokeError, StrokeWarning, UnreachablePoseError
+from pkmkit.model.rods import STRUT
 from pkmkit.spatial import pose_from_angles
 from tests.machines.test_full_pose import _full_pose_delta
 
@@ -93,3 +94,29 @@ def test_an_unknown_stroke_mode_is_refused_also_for_a_plain_pose(name):
         m.ik(m.home_pose, strokes="flagg")
     with pytest.raises(InputError, match="strokes"):
         m.fk(m.home_q, strokes="Ignore")
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_fused_compiled_inverse_is_the_numpy_path(name, threads, monkeypatch):
+    """The one-pass compiled inverse (statuses included) against the NumPy reference path on
+    poses in reach, out of reach, with orientations the rods do not impose, and invalid rows;
+    on one thread and on two (chunks of 2¹⁶ rows)."""
+    from pkmkit.numerics import jit
+
+    m = _machine(name)
+    x = _poses(m, 400, seed=2)
+    rng = np.random.default_rng(3)
+    x = np.resize(x, (2 * jit.THREAD_ROWS + 999, 6))
+    x[::7, :3] += rng.uniform(-1.0, 1.0, (len(x[::7]), 3))  # some out of reach
+    x[5], x[6, 2], x[8, 4] = np.nan, 2e9, np.inf
+    monkeypatch.setenv("PKMKIT_COMPILED", "0")
+    reference = m.ik(x, full_output=True, strokes="ignore")
+    monkeypatch.setenv("PKMKIT_COMPILED", "1")
+    monkeypatch.setenv("PKMKIT_THREADS", threads)
+    q, status = m._forms.inverse_compiled(x, m._branches(None), m._consistency_tol())
+    np.testing.assert_array_equal(status, reference.status)
+    assert set(status.tolist()) >= {0, 4}
+    assert (status == 1).any() == (m.model.rod_kind != STRUT).any()  # struts always reach
+    np.testing.assert_allclose(q, reference.q, rtol=0, atol=1e-12, equal_nan=True)
+    np.testing.assert_array_equal(np.asarray(m.ik(x, strokes="ignore")), q)

@@ -61,6 +61,7 @@ from pkmkit.machines.strokes import STROKE_MODES, check_mode, judge_rows, refuse
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, STRUT, RodModel
+from pkmkit.numerics import jit
 from pkmkit.numerics.arrays import as_batch, restore_shape
 from pkmkit.solve.rod_closure import (
     instantaneous_mobility,
@@ -366,15 +367,18 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             return self._ik_position(arr, q0, branches, full_output, engine_options, strokes)
         xb, single = _checked_batch(x, 6, "pose")
         sigma = self._branches(branches)
-        with np.errstate(invalid="ignore", over="ignore"):
-            q_rod = self._forms.rod_coordinates(xb, sigma)
-            q, spread = self._forms.combine(q_rod)
-        status = np.full(xb.shape[0], int(Status.OK))
-        unreachable = ~np.isfinite(q_rod).all(axis=1)
-        inconsistent = ~unreachable & ~(spread <= self._consistency_tol())
-        status[unreachable | inconsistent] = Status.UNREACHABLE
-        status[~_valid_rows(xb)] = Status.INVALID_INPUT
-        q[status != Status.OK] = np.nan
+        if not single and jit.use_compiled(xb.shape[0]):  # one fused pass
+            q, status = self._forms.inverse_compiled(xb, sigma, self._consistency_tol())
+        else:
+            with np.errstate(invalid="ignore", over="ignore"):
+                q_rod = self._forms.rod_coordinates(xb, sigma)
+                q, spread = self._forms.combine(q_rod)
+            status = np.full(xb.shape[0], int(Status.OK))
+            unreachable = ~np.isfinite(q_rod).all(axis=1)
+            inconsistent = ~unreachable & ~(spread <= self._consistency_tol())
+            status[unreachable | inconsistent] = Status.UNREACHABLE
+            status[~_valid_rows(xb)] = Status.INVALID_INPUT
+            q[status != Status.OK] = np.nan
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], spread[0])
         check = judge_rows(self, q, status, strokes, single, f"pose {xb[0].tolist()}",

@@ -86,8 +86,13 @@ class DirectKernel:
         guess = (np.empty((q.shape[0], 6)) if x0 is None
                  else np.ascontiguousarray(x0, dtype=float))
         out = np.empty((q.shape[0], 9))
-        kernel.solve_rows(q, guess, x0 is not None, self.geom, self.home,
-                          self.options(options), out)
+        opts = self.options(options)
+
+        def work(start: int, stop: int) -> None:
+            kernel.solve_rows(q[start:stop], guess[start:stop], x0 is not None, self.geom,
+                              self.home, opts, out[start:stop])
+
+        jit.run_chunks(work, q.shape[0])
         return (out[:, :6].copy(), out[:, 6].astype(int), out[:, 7].astype(int),
                 out[:, 8].copy())
 

@@ -11,17 +11,30 @@ afterwards).
 Environment: ``PKMKIT_COMPILED=0`` forces the NumPy paths everywhere (``=1`` forces the
 compiled ones for every batch size, which the tests use). Without Numba installed the NumPy
 paths are used silently.
+
+Threads: the compiled kernels release the GIL, and :func:`run_chunks` spreads a large batch
+over :func:`thread_count` threads in chunks taken from a shared queue (a thread slowed by a
+competing process simply takes fewer chunks). ``PKMKIT_THREADS=N`` sets the count; by default
+it is the number of cores this process may use, or 1 where ``OMP_NUM_THREADS=1`` (Dask
+workers, and anyone who bounded the threads of their numerical libraries). The rows are
+independent, so the results do not depend on the count.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import os
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 #: Smallest batch for which the compiled kernels are used (below: NumPy).
 MIN_ROWS = 4096
 
+#: Smallest batch spread over several threads, and rows per chunk.
+THREAD_ROWS = 1 << 16
+
 _available: bool | None = None
+_pool: ThreadPoolExecutor | None = None
 
 
 def mode() -> str:
@@ -53,3 +66,32 @@ def use_compiled(rows: int) -> bool:
     if choice == "0" or (choice == "auto" and rows < MIN_ROWS):
         return False
     return numba_available()
+
+
+def thread_count() -> int:
+    """Threads for large compiled batches (module docstring)."""
+    value = os.environ.get("PKMKIT_THREADS", "").strip()
+    if value.isdigit() and int(value) > 0:
+        return int(value)
+    if os.environ.get("OMP_NUM_THREADS", "").strip() == "1":
+        return 1
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def run_chunks(work: Callable[[int, int], None], rows: int) -> None:
+    """``work(start, stop)`` over ``range(rows)`` in chunks of :data:`THREAD_ROWS`, on
+    :func:`thread_count` threads when the batch has at least two chunks (``work`` must release
+    the GIL to gain anything: the compiled kernels do), else in this thread."""
+    threads = thread_count()
+    if threads == 1 or rows < 2 * THREAD_ROWS:
+        work(0, rows)
+        return
+    global _pool
+    if _pool is None or _pool._max_workers != threads:
+        _pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="pkmkit")
+    starts = range(0, rows, THREAD_ROWS)
+    for future in [_pool.submit(work, s, min(s + THREAD_ROWS, rows)) for s in starts]:
+        future.result()
