@@ -27,6 +27,7 @@ from pkmkit.exceptions import (
     UnreachablePoseError,
 )
 from pkmkit.machines.closed_form import RodClosedForm
+from pkmkit.machines.closed_form_one import direct_one
 from pkmkit.machines.common import (
     HOME_TOL,
     MAX_COORDINATE,
@@ -457,6 +458,13 @@ class Machine(ModeNaming, MachineFace):
             ConvergenceError: a single numeric solve that failed or reached another mode.
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
+        if (method == "closed" and x0 is None and not full_output and not engine_options
+                and strokes in STROKE_MODES):  # one plain configuration: microseconds
+            sign = self._working_mode if mode == "working" else self._mode_sign(mode)
+            p1 = direct_one(self._closed, q, sign)
+            if p1 is not None and (strokes == "ignore" or self._within_strokes(
+                    q.tolist() if isinstance(q, np.ndarray) else q)):
+                return np.array(p1)
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
         sign = self._mode_sign(mode)
