@@ -460,7 +460,8 @@ class Machine(ModeNaming, MachineFace):
         """
         if (method == "closed" and x0 is None and not full_output and not engine_options
                 and strokes in STROKE_MODES):  # one plain configuration: microseconds
-            sign = self._working_mode if mode == "working" else self._mode_sign(mode)
+            working = isinstance(mode, str) and mode == "working"
+            sign = self._working_mode if working else self._mode_sign(mode)
             p1 = direct_one(self._closed, q, sign)
             if p1 is not None and (strokes == "ignore" or self._within_strokes(
                     q.tolist() if isinstance(q, np.ndarray) else q)):
