@@ -125,3 +125,26 @@ def test_kernel_start_is_the_first_order_guess():
     pose, status, iterations, _ = kernel.solve(q, None, {"max_iter": 0})
     assert (status == Status.NOT_CONVERGED).all() and (iterations == 0).all()
     np.testing.assert_allclose(pose, m.first_order_pose(q), rtol=0, atol=1e-15)
+
+
+def test_a_one_shot_call_does_not_import_numba():
+    """The first single fk of a fresh process takes the NumPy engine (no Numba import, which
+    costs ≈ 0.4 s: the command line makes one call); the second imports Numba and runs the
+    compiled solve; both give the same pose."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import sys, numpy as np, pkmkit\n"
+            "m = pkmkit.machine('gough-stewart')\n"
+            "q = m.home_q + 0.01\n"
+            "a = m.fk(q)\n"
+            "first = 'numba' in sys.modules\n"
+            "b = m.fk(q)\n"
+            "print(first, 'numba' in sys.modules, float(np.abs(a - b).max()))\n")
+    src = str(Path(pkmkit.__file__).resolve().parents[1])
+    env = {"PYTHONPATH": src, "PATH": "/usr/bin:/bin"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, check=True).stdout.split()
+    assert out[:2] == ["False", "True"]
+    assert float(out[2]) <= 1e-12

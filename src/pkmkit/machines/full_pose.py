@@ -534,7 +534,7 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
                 return fast
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
-        if direct.usable(engine_options):  # the compiled per-pose solve, same rules
+        if direct.usable(engine_options, qb.shape[0]):  # compiled per-pose solve, same rules
             pose, status, iterations, residual = self._direct_kernel().solve(
                 qb, None if x0 is None else _rows_like(x0, 6, "x0", qb.shape[0]),
                 engine_options)

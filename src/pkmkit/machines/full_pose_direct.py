@@ -4,7 +4,10 @@
 :mod:`pkmkit.machines.full_pose_direct_kernel` (built once per machine) and runs its per-pose
 Levenberg–Marquardt solve on a batch (:meth:`DirectKernel.solve`) or on one configuration
 (:meth:`DirectKernel.solve_one`, a few microseconds from Python). Both are the same compiled
-function, so a single configuration and the same row of a batch give the same bits. The
+function, so a single configuration and the same row of a batch give the same bits. Numba's
+import (≈ 0.4 s of CPU) is paid by batches of :data:`~pkmkit.numerics.jit.SOLVER_ROWS` rows
+or more and by the second single call of a machine, not by a one-shot call (the command line),
+which takes the NumPy engine (≈ 2 ms). The
 reference is the batched NumPy engine (:func:`pkmkit.solve.rod_closure.solve_direct` with
 ``dof="full"``), with the same options, stopping rules and status codes; it is still used when
 Numba is missing, ``PKMKIT_COMPILED=0``, or an option only the engine knows is passed.
@@ -27,13 +30,14 @@ DEFAULTS = {"max_iter": 60, "xtol": 1e-14, "atol": 1e-14, "gtol": 1e-12, "stall"
             "residual_tol": 1e-9, "damping": 1e-4}
 
 
-def usable(options: Mapping[str, Any]) -> bool:
-    """Whether the compiled solve serves a call with these engine ``options`` (only the
-    options of :data:`DEFAULTS`, ``compute_rank`` off; Numba present and not disabled)."""
+def usable(options: Mapping[str, Any], rows: int) -> bool:
+    """Whether the compiled solve serves a call on ``rows`` rows with these engine ``options``
+    (only the options of :data:`DEFAULTS`, ``compute_rank`` off; and
+    :func:`pkmkit.numerics.jit.use_compiled_solver`)."""
     if options and (options.get("compute_rank", False)
                     or not set(options) <= {*DEFAULTS, "compute_rank"}):
         return False
-    return jit.use_compiled_solver()
+    return jit.use_compiled_solver(rows)
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,16 +112,26 @@ class DirectKernel:
 def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
     """The pose ``(6,)`` of one plain configuration of a full-pose ``machine`` by the compiled
     solve (the batch path's own function, so the same bits), or None — not one plain finite
-    row, no assembly reached, a stroke to flag or refuse, no compiled solve: the caller then
-    takes the batch path (the same numbers, typed errors and warnings)."""
+    row, no assembly reached, a stroke to flag or refuse, no compiled solve, or the machine's
+    first single call while Numba is not imported: the caller then takes the batch path (the
+    same numbers, typed errors and warnings)."""
     if isinstance(q, (list, tuple)):
         if not all(type(v) in (float, int) for v in q):
             return None
         q = np.array(q, dtype=float)
     elif not (isinstance(q, np.ndarray) and q.dtype == np.float64):
         return None
-    if q.shape != (machine.n_actuators,) or not jit.use_compiled_solver():
+    if q.shape != (machine.n_actuators,):
         return None
+    if not jit.use_compiled_solver(1):
+        # Numba not imported yet: this call takes the batch path (the NumPy engine, ≈ 2 ms),
+        # so that a one-shot call (the command line) does not pay Numba's import; the next
+        # single call of this machine imports it and runs compiled
+        if not jit.use_compiled_solver(jit.SOLVER_ROWS):
+            return None  # no Numba, or PKMKIT_COMPILED=0
+        if not machine.__dict__.get("_direct_warm"):
+            object.__setattr__(machine, "_direct_warm", True)
+            return None
     out = machine._direct_kernel().solve_one(q)
     if out[6] != 0.0 or not (strokes == "ignore" or machine._within_strokes(q.tolist())):
         return None  # not OK (Status.OK is 0), or a stroke to judge

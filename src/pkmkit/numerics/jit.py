@@ -24,12 +24,15 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import sys
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
 #: Smallest batch for which the compiled kernels are used (below: NumPy).
 MIN_ROWS = 4096
 
+#: Smallest batch for which the compiled solvers are used before Numba is imported.
+SOLVER_ROWS = 64
 #: Smallest batch spread over several threads, and rows per chunk.
 THREAD_ROWS = 1 << 16
 
@@ -51,12 +54,16 @@ def numba_available() -> bool:
     return _available
 
 
-def use_compiled_solver() -> bool:
-    """Whether the compiled per-pose solvers run (every batch size, one pose included): an
-    iterative solve costs hundreds of microseconds per call through the NumPy engine and a few
-    through its compiled kernel, which repays Numba's import within the first calls. Only
-    ``PKMKIT_COMPILED=0`` (or Numba missing) selects the NumPy engine."""
-    return mode() != "0" and numba_available()
+def use_compiled_solver(rows: int) -> bool:
+    """Whether the compiled per-pose solvers run on a batch of ``rows`` rows: an iterative solve
+    costs hundreds of microseconds per pose through the NumPy engine and a few through its
+    compiled kernel, so they run from :data:`SOLVER_ROWS` rows, or at any size once Numba is
+    imported in the process (its import, ≈ 0.4 s of CPU with the on-disk cache, is then paid);
+    ``PKMKIT_COMPILED=1`` forces them, ``=0`` (or Numba missing) never."""
+    choice = mode()
+    if choice == "0" or not numba_available():
+        return False
+    return choice == "1" or rows >= SOLVER_ROWS or "numba" in sys.modules
 
 
 def use_compiled(rows: int) -> bool:
