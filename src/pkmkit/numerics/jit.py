@@ -37,7 +37,7 @@ SOLVER_ROWS = 64
 THREAD_ROWS = 1 << 16
 
 _available: bool | None = None
-_pool: ThreadPoolExecutor | None = None
+_pool: tuple[int, ThreadPoolExecutor] | None = None
 
 
 def mode() -> str:
@@ -97,8 +97,9 @@ def run_chunks(work: Callable[[int, int], None], rows: int) -> None:
         work(0, rows)
         return
     global _pool
-    if _pool is None or _pool._max_workers != threads:
-        _pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="pkmkit")
+    if _pool is None or _pool[0] != threads:
+        _pool = (threads, ThreadPoolExecutor(max_workers=threads, thread_name_prefix="pkmkit"))
+    pool = _pool[1]
     starts = range(0, rows, THREAD_ROWS)
-    for future in [_pool.submit(work, s, min(s + THREAD_ROWS, rows)) for s in starts]:
+    for future in [pool.submit(work, s, min(s + THREAD_ROWS, rows)) for s in starts]:
         future.result()
