@@ -148,3 +148,18 @@ def test_a_one_shot_call_does_not_import_numba():
                          env=env, check=True).stdout.split()
     assert out[:2] == ["False", "True"]
     assert float(out[2]) <= 1e-12
+
+
+@pytest.mark.parametrize("options", [{"max_iter": 2}, {"atol": 1e-3}, {"gtol": 0.5},
+                                     {"xtol": 1e-6, "damping": 1.0}, {"stall": 0.9}])
+def test_engine_options_mean_the_same_to_the_kernel(options, monkeypatch):
+    """Iteration limit, tolerances, damping and the crawl test change the kernel's answers as
+    they change the engine's: the same statuses, iterations and poses."""
+    m = pkmkit.machine("verne")
+    q = _configurations(m, 200, seed=4)
+    engine, kernel = _both(m, q, monkeypatch, **options)
+    np.testing.assert_array_equal(kernel.status, engine.status)
+    ok = engine.status == Status.OK
+    np.testing.assert_array_equal(kernel.iterations[ok], engine.iterations[ok])
+    np.testing.assert_allclose(kernel.pose[ok], engine.pose[ok], rtol=0, atol=1e-12)
+    assert len(set(kernel.status.tolist())) >= 2
