@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import platform
 import statistics
 import sys
@@ -41,6 +42,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from load import conditions
 
 import pkmkit
+from pkmkit.numerics import jit
 from pkmkit.spatial import pose_from_angles
 
 
@@ -79,27 +81,56 @@ def python_ik(model, poses: np.ndarray) -> list[list[float]]:
     return out
 
 
+def _cpu_median(fun, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        start = time.process_time()
+        fun()
+        times.append(time.process_time() - start)
+    return statistics.median(times)
+
+
 def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
     m.ik(poses[:5000])  # compile / warm up
     sample = poses[:20000]
-    t_api, t_copy, t_loop = [], [], []
+    t_api, t_one, t_copy, t_loop, c_api = [], [], [], [], []
     for _ in range(repeat):
         t_api.append(_median(lambda: m.ik(poses), 1))
+        c_api.append(_cpu_median(lambda: m.ik(poses), 1))
+        os.environ["PKMKIT_THREADS"] = "1"
+        t_one.append(_median(lambda: m.ik(poses), 1))
+        del os.environ["PKMKIT_THREADS"]
         t_copy.append(_median(lambda: poses.copy(), 1))
         t_loop.append(_median(lambda: python_ik(m.model, sample), 1) * len(poses) / len(sample))
-    api, copy, loop = (statistics.median(t) for t in (t_api, t_copy, t_loop))
+    api, one, copy, loop, cpu = (statistics.median(t) for t in (t_api, t_one, t_copy, t_loop,
+                                                                  c_api))
     first_rods = [int(np.flatnonzero(m.model.rod_actuator == k)[0])
                   for k in range(m.n_actuators)]
     loop_q = np.array(python_ik(m.model, sample[:2000]))[:, first_rods]
     check = np.abs(loop_q - m.ik(sample[:2000])).max()
-    print(f"  IK {label:<14} {len(poses) / api / 1e6:6.2f} Mposes/s   ×loop {loop / api:6.0f}   "
-          f"time / copy {api / copy:5.1f}   (largest difference to the loop {check:.1e} m)")
+    print(f"  IK {label:<14} {len(poses) / api / 1e6:6.2f} Mposes/s ({jit.thread_count()} threads;"
+          f" one thread {len(poses) / one / 1e6:.2f}; {len(poses) / cpu / 1e6:.2f} per CPU "
+          f"second)   ×loop {loop / api:6.0f}   time / copy {api / copy:5.1f}   (largest "
+          f"difference to the loop {check:.1e} m)")
 
 
 def engine_rows(m, q: np.ndarray, repeat: int) -> None:
     model = m.model
     guesses = np.array(m.fk(q, full_output=True).pose)  # reference answers
     t_api = _median(lambda: m.fk(q), repeat)
+    c_api = _cpu_median(lambda: m.fk(q), repeat)
+    os.environ["PKMKIT_THREADS"] = "1"
+    t_single = _median(lambda: m.fk(q), repeat)
+    del os.environ["PKMKIT_THREADS"]
+    os.environ["PKMKIT_COMPILED"] = "0"
+    t_numpy = _median(lambda: m.fk(q), repeat)
+    numpy_poses = m.fk(q)
+    del os.environ["PKMKIT_COMPILED"]
+    gap_numpy = np.nanmax(np.abs(numpy_poses - guesses))
+    print(f"  FK hexapod (one mode, compiled per-pose LM) {t_api / len(q) * 1e6:5.2f} µs per pose "
+          f"({jit.thread_count()} threads; one thread {t_single / len(q) * 1e6:.2f} µs; "
+          f"{c_api / len(q) * 1e6:.2f} µs of CPU); NumPy engine {t_numpy / len(q) * 1e6:.2f} µs "
+          f"(×{t_numpy / t_api:.0f}; largest difference {gap_numpy:.1e})")
     sample = q[:300]
     start = m.first_order_pose(sample)
 
@@ -126,7 +157,7 @@ def engine_rows(m, q: np.ndarray, repeat: int) -> None:
     t_scipy = _median(scipy_all, max(1, repeat // 2)) * len(q) / len(sample)
     found = scipy_all()
     gap = np.abs(found[:, :3] - guesses[:300, :3]).max()
-    print(f"  engine FK hexapod {len(q) / t_api / 1e3:8.1f} kconfigs/s   ×scipy "
+    print(f"  FK hexapod {len(q) / t_api / 1e3:8.1f} kconfigs/s   ×scipy "
           f"{t_scipy / t_api:6.0f}   (largest position difference to scipy {gap:.1e} m)")
 
 
@@ -163,6 +194,7 @@ def main() -> None:
     parser.add_argument("--configurations", type=int, default=10_000)
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--load", choices=("none", "busy", "both"), default="both")
+    parser.add_argument("--no-modes", action="store_true", help="skip the every-mode rows")
     args = parser.parse_args()
     print(f"pkmkit {pkmkit.__version__}, numpy {np.__version__}, scipy {scipy.__version__}, "
           f"Python {platform.python_version()}, {platform.machine()}")
@@ -176,12 +208,13 @@ def main() -> None:
     verne_poses = np.ascontiguousarray(np.resize(reached, (args.poses, 6)))
     q = hexapod.ik(poses[:args.configurations])
     for label, context in conditions(args.load):
-        print(f"{label}:")
+        print(f"{label} (load average {os.getloadavg()[0]:.2f} before):")
         with context():
             inverse_rows("hexapod", hexapod, poses, args.repeat)
             inverse_rows("Verne (poses)", verne, verne_poses, args.repeat)
             engine_rows(hexapod, q, args.repeat)
-            all_modes_rows(args.repeat)
+            if not args.no_modes:
+                all_modes_rows(args.repeat)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 """Benchmark: one pose per call (issue 22 §1), quiet and with a competing process.
 
-For each translational built-in machine, the cost of one call ``m.ik(x)`` from Python (the
-plain-Python single-pose path), against, in the same process and on the same poses:
+For each translational built-in machine, the cost of one call ``m.ik(x)`` and ``m.fk(q)`` from
+Python (the plain-Python single-pose paths), against, in the same process and on the same
+poses:
 
 - the batch path with one row, ``m.ik(x[None])`` — what every single call cost before;
 - the formula in plain Python for one pose, leg constants precomputed (slide legs) — the floor
@@ -10,7 +11,16 @@ plain-Python single-pose path), against, in the same process and on the same pos
   (:func:`pkmkit.machines.kernels.inverse`, slides and struts only) — what a user's Numba or C
   kernel costs per call.
 
-Medians of interleaved repeats (each method sees the same load). Pinocchio is not a dependency
+For the six-axis machines (hexapod, Verne module's full poses, Dietmaier's general platform):
+``m.ik(x)`` (plain Python), ``m.fk(q)`` (the compiled per-pose solve) and ``m.jacobian(x)`` (no
+fast path yet) against the batch path with one row — for ``fk`` the NumPy engine
+(``PKMKIT_COMPILED=0``), what a single call cost before — and the compiled solve called
+directly on one preallocated row.
+
+Medians of interleaved repeats (each method sees the same load); each figure is the wall time
+per call and, in brackets, the CPU time of the process per call (what the call costs when the
+2 cores are shared); the load average is printed before each condition. Pinocchio is not a
+dependency
 and is not installed here, so its 2.2 µs per forward-kinematics call (the issue's figure) is not
 re-measured.
 
@@ -24,6 +34,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import statistics
 import sys
 import time
@@ -41,15 +52,17 @@ from pkmkit.machines.closed_form import BOUNDARY_TOL
 from pkmkit.model.rods import CRANK, SLIDE
 
 
-def per_call(fun, poses, repeats: int = 5) -> float:
-    """Median over ``repeats`` of the mean time (µs) of ``fun(pose)`` over ``poses``."""
-    times = []
+def per_call(fun, poses, repeats: int = 5) -> tuple[float, float]:
+    """Medians over ``repeats`` of the mean wall and CPU times (µs) of ``fun(pose)`` over
+    ``poses``."""
+    times, cpu = [], []
     for _ in range(repeats):
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.process_time()
         for p in poses:
             fun(p)
         times.append((time.perf_counter() - start) / len(poses) * 1e6)
-    return statistics.median(times)
+        cpu.append((time.process_time() - start_cpu) / len(poses) * 1e6)
+    return statistics.median(times), statistics.median(cpu)
 
 
 def plain_formula(m):
@@ -86,20 +99,59 @@ def machine_rows(name: str, calls: int) -> dict:
     out = np.empty((m.model.n_legs, 1))
     slide = m.model.leg_kind == SLIDE
     has_crank = bool((m.model.leg_kind == CRANK).any())
+    qs = [q for q in m.ik(poses, strokes="ignore")]
+    q_ones = [q[None] for q in qs]
     m.ik(rows[0], strokes="ignore")
-    figures = {"poses": len(rows)}
+    figures: dict = {"poses": len(rows)}
     for _ in range(2):  # interleaved: every method twice, the second round kept
         figures["ik one pose"] = per_call(lambda p: m.ik(p, strokes="ignore"), rows)
-        figures["batch of one (before)"] = per_call(lambda p: m.ik(p, strokes="ignore"), ones)
+        figures["ik batch of one (before)"] = per_call(lambda p: m.ik(p, strokes="ignore"), ones)
+        figures["fk one"] = per_call(lambda q: m.fk(q, strokes="ignore"), qs)
+        figures["fk batch of one (before)"] = per_call(lambda q: m.fk(q, strokes="ignore"),
+                                                       q_ones)
         if (m.model.leg_kind == SLIDE).all():
             plain = plain_formula(m)
             lists = [p.tolist() for p in rows]
-            figures["plain-Python formula"] = per_call(plain, lists)
+            figures["ik plain-Python formula"] = per_call(plain, lists)
         if not has_crank:
-            figures["compiled kernel, one row"] = per_call(
+            figures["ik compiled kernel, one row"] = per_call(
                 lambda p: kernels.inverse(p, closed.basis, closed.basis_offset,
                                           m.model.leg_length, slide, branch, BOUNDARY_TOL, out),
                 ones)
+    return figures
+
+
+def six_axis_rows(name: str, calls: int) -> dict:
+    """``ik``, ``fk``, ``jacobian`` of one full pose, against the batch path of one row."""
+    m = pkmkit.machine(name)
+    rng = np.random.default_rng(1)
+    if m.position_controlled:
+        positions = m.home_pose[:3] + rng.uniform(-0.1, 0.1, (calls, 3))
+        poses = m.ik(positions, full_output=True, strokes="ignore").pose
+    else:
+        poses = np.tile(m.home_pose, (calls, 1))
+        poses[:, :3] += rng.uniform(-0.05, 0.05, (calls, 3))
+        poses[:, 3:] += rng.uniform(-0.05, 0.05, (calls, 3))
+    q = m.ik(poses, strokes="ignore")
+    good = np.isfinite(q).all(axis=1) & np.isfinite(poses).all(axis=1)
+    rows, qs = list(poses[good]), list(q[good])
+    ones, q_ones = [p[None] for p in rows], [v[None] for v in qs]
+    kernel = m._direct_kernel()
+    m.fk(qs[0])
+    figures = {"poses": len(rows)}
+    jac_rows = rows[: max(1, len(rows) // 20)]
+    for _ in range(2):
+        figures["ik one pose"] = per_call(lambda p: m.ik(p, strokes="ignore"), rows)
+        figures["ik batch of one (before)"] = per_call(lambda p: m.ik(p, strokes="ignore"), ones)
+        figures["fk one"] = per_call(lambda v: m.fk(v, strokes="ignore"), qs)
+        os.environ["PKMKIT_COMPILED"] = "0"
+        try:
+            figures["fk batch of one, NumPy engine (before)"] = per_call(
+                lambda v: m.fk(v, strokes="ignore"), q_ones[: len(q_ones) // 10])
+        finally:
+            os.environ.pop("PKMKIT_COMPILED")
+        figures["fk compiled solve, one row"] = per_call(kernel.solve_one, qs)
+        figures["jacobian one pose (no fast path)"] = per_call(m.jacobian, jac_rows)
     return figures
 
 
@@ -110,16 +162,24 @@ def main() -> None:
     parser.add_argument("--json")
     args = parser.parse_args()
     names = [n for n in ("orthoglide", "linear-delta", "five-bar", "delta")]
+    six = ("gough-stewart", "verne", "dietmaier-hexapod")
     report = {}
     for label, context in conditions(args.load):
         with context():
+            load = os.getloadavg()[0]
             report[label] = {n: machine_rows(n, args.calls) for n in names}
-        print(f"== {label}")
+            report[label].update({n: six_axis_rows(n, args.calls // 4) for n in six})
+        print(f"== {label} (load average {load:.2f} before)")
         for n, f in report[label].items():
-            base = f["batch of one (before)"]
-            parts = [f"{k} {v:7.2f} µs" for k, v in f.items() if k != "poses"]
-            print(f"  {n:14s} " + "; ".join(parts)
-                  + f"; speed-up {base / f['ik one pose']:.0f}×")
+            print(f"  {n}")
+            for k, v in f.items():
+                if k != "poses":
+                    print(f"    {k:38s} {v[0]:8.2f} µs  (CPU {v[1]:7.2f} µs)")
+            ik_before = f["ik batch of one (before)"][0]
+            fk_before = f.get("fk batch of one (before)",
+                              f.get("fk batch of one, NumPy engine (before)"))[0]
+            print(f"    speed-up (wall): ik {ik_before / f['ik one pose'][0]:.0f}×, "
+                  f"fk {fk_before / f['fk one'][0]:.0f}×")
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=2))
 

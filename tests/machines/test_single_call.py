@@ -67,3 +67,58 @@ def test_refusals_are_those_of_the_batch_path():
         warnings.simplefilter("error")
         q = m.ik([0.0, 0.0, 1.0], strokes="ignore")
     assert np.isfinite(q).all()
+
+
+@pytest.mark.parametrize("name", TRANSLATIONAL)
+@pytest.mark.parametrize("mode", ["working", "other"])
+def test_fk_of_one_configuration_is_the_batch_row(name, mode):
+    """The plain-Python direct model (closed_form_one) against the batch path's row, in both
+    assembly modes, on configurations of random poses and beyond (no assembly)."""
+    m = pkmkit.machine(name)
+    q = m.ik(_poses(m, 300, seed=2), strokes="ignore")
+    q = q[np.isfinite(q).all(axis=1)]
+    q[::9] *= 1.7  # some near the boundary of the assembly region, or beyond
+    if not m.angular_actuators.any():  # one slide or strut far away: no assembly
+        q[::11, 0] += 10.0 * m.model.leg_length.max()
+    batch = m.fk(q, mode=mode, full_output=True, strokes="ignore")
+    compared = 0
+    for k in range(len(q)):
+        for given in (q[k], q[k].tolist()):
+            if batch.status[k] != 0:
+                with pytest.raises(Exception) as raised:
+                    m.fk(given, mode=mode, strokes="ignore")
+                assert raised.type.__name__ in ("NoAssemblyError", "SingularConfigurationError")
+                continue
+            one = m.fk(given, mode=mode, strokes="ignore")
+            assert one.shape == (m.dims,)
+            np.testing.assert_allclose(one, batch.pose[k], rtol=0, atol=1e-12)
+            compared += 1
+    assert compared > 300
+    assert (batch.status != 0).any() or m.angular_actuators.any()  # cranks: angles wrap
+
+
+def test_fk_of_one_configuration_refusals_are_those_of_the_batch_path():
+    from pkmkit.exceptions import NoAssemblyError, OutOfStrokeError, SingularConfigurationError
+
+    m = pkmkit.machine("linear-delta")
+    far = m.home_q + np.array([10.0, 0.0, 0.0])  # one carriage far up: the rods cannot meet
+    with pytest.raises(NoAssemblyError):
+        m.fk(far, strokes="ignore")
+    for bad in ([np.nan, 0.0, 0.0], [0.0, 0.0], [1e300, 0.0, 0.0]):
+        with pytest.raises(InputError):
+            m.fk(bad)
+    with pytest.raises(InputError, match="mode"):
+        m.fk(m.home_q, mode="sideways")
+    five = pkmkit.machine("five-bar")
+    c = five.closed_form.centres(five.home_q[None])[0][0]
+    if np.allclose(c[0], c[1]):  # coincident circle centres: no isolated solution
+        with pytest.raises(SingularConfigurationError):
+            five.fk(five.home_q)
+    beyond = m.ik([0.0, 0.0, 1.0], strokes="ignore")  # assembles, beyond the slides' strokes
+    with pytest.warns(StrokeWarning):
+        m.fk(beyond)
+    with pytest.raises(OutOfStrokeError):
+        m.fk(beyond, strokes="refuse")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_allclose(m.fk(beyond, strokes="ignore"), [0.0, 0.0, 1.0], atol=1e-12)

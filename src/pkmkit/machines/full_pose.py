@@ -33,14 +33,17 @@ from pkmkit.exceptions import (
     ParameterError,
     UnreachablePoseError,
 )
+from pkmkit.machines import full_pose_direct as direct
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
+from pkmkit.machines.full_pose_one import OnePoseInverse
 from pkmkit.machines.full_pose_rates import FullPoseRates
 from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
 from pkmkit.machines.machine import (
     HOME_TOL,
     MAX_COORDINATE,
     SINGULARITY_TOL,
+    Machine,
     MachineKind,
     _checked_batch,
     _restore,
@@ -55,10 +58,11 @@ from pkmkit.machines.results import (
     Jacobians,
     Singularity,
 )
-from pkmkit.machines.strokes import check_mode, judge_rows, refuse_absurd_home
+from pkmkit.machines.strokes import STROKE_MODES, check_mode, judge_rows, refuse_absurd_home
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, STRUT, RodModel
+from pkmkit.numerics import jit
 from pkmkit.numerics.arrays import as_batch, restore_shape
 from pkmkit.solve.rod_closure import (
     instantaneous_mobility,
@@ -363,6 +367,11 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             ConvergenceError: a single position whose orientation the engine did not find.
             OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
+        if (branches is None and q0 is None and not full_output and not engine_options
+                and strokes in STROKE_MODES):  # one plain pose: microseconds, same numbers
+            q1 = self._one_pose_inverse()(x)
+            if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
+                return np.array(q1)
         check_mode(strokes)
         arr = np.asarray(x, dtype=float) if not isinstance(x, np.ndarray) else x
         width = arr.shape[-1] if arr.ndim in (1, 2) else 6
@@ -370,15 +379,18 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             return self._ik_position(arr, q0, branches, full_output, engine_options, strokes)
         xb, single = _checked_batch(x, 6, "pose")
         sigma = self._branches(branches)
-        with np.errstate(invalid="ignore", over="ignore"):
-            q_rod = self._forms.rod_coordinates(xb, sigma)
-            q, spread = self._forms.combine(q_rod)
-        status = np.full(xb.shape[0], int(Status.OK))
-        unreachable = ~np.isfinite(q_rod).all(axis=1)
-        inconsistent = ~unreachable & ~(spread <= self._consistency_tol())
-        status[unreachable | inconsistent] = Status.UNREACHABLE
-        status[~_valid_rows(xb)] = Status.INVALID_INPUT
-        q[status != Status.OK] = np.nan
+        if not single and jit.use_compiled(xb.shape[0]):  # one fused pass
+            q, status = self._forms.inverse_compiled(xb, sigma, self._consistency_tol())
+        else:
+            with np.errstate(invalid="ignore", over="ignore"):
+                q_rod = self._forms.rod_coordinates(xb, sigma)
+                q, spread = self._forms.combine(q_rod)
+            status = np.full(xb.shape[0], int(Status.OK))
+            unreachable = ~np.isfinite(q_rod).all(axis=1)
+            inconsistent = ~unreachable & ~(spread <= self._consistency_tol())
+            status[unreachable | inconsistent] = Status.UNREACHABLE
+            status[~_valid_rows(xb)] = Status.INVALID_INPUT
+            q[status != Status.OK] = np.nan
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], spread[0])
         check = judge_rows(self, q, status, strokes, single, f"pose {xb[0].tolist()}",
@@ -528,16 +540,25 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             NoAssemblyError: a single q with no assembly reached from the guess.
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
+        if x0 is None and not full_output and not engine_options and strokes in STROKE_MODES:
+            fast = direct.direct_one(self, q, strokes)  # one plain configuration: µs
+            if fast is not None:
+                return fast
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
-        guess = (self.first_order_pose(qb) if x0 is None
-                 else _rows_like(x0, 6, "x0", qb.shape[0]))
-        guess[~_valid_rows(qb)] = np.nan
-        engine_options.setdefault("compute_rank", False)
-        with np.errstate(invalid="ignore", over="ignore"):
-            result = solve_direct(self.model, qb, guess, dof="full", **engine_options)
-        pose = result.u.copy()
-        status = result.status.copy()
+        if direct.usable(engine_options, qb.shape[0]):  # compiled per-pose solve, same rules
+            pose, status, iterations, residual = self._direct_kernel().solve(
+                qb, None if x0 is None else _rows_like(x0, 6, "x0", qb.shape[0]),
+                engine_options)
+        else:
+            guess = (self.first_order_pose(qb) if x0 is None
+                     else _rows_like(x0, 6, "x0", qb.shape[0]))
+            guess[~_valid_rows(qb)] = np.nan
+            engine_options.setdefault("compute_rank", False)
+            with np.errstate(invalid="ignore", over="ignore"):
+                result = solve_direct(self.model, qb, guess, dof="full", **engine_options)
+            pose, status = result.u.copy(), result.status.copy()
+            iterations, residual = result.iterations, result.residual
         status[status == Status.INCONSISTENT] = Status.NO_ASSEMBLY
         status[~_valid_rows(qb)] = Status.INVALID_INPUT
         check = None
@@ -553,7 +574,7 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
             if status[0] == Status.NO_ASSEMBLY:
                 raise NoAssemblyError(
                     f"q = {qb[0].tolist()}: no assembly found from the guess (closure residual "
-                    f"{result.residual[0]:.3g} m); the rods may not meet, or pass x0")
+                    f"{residual[0]:.3g} m); the rods may not meet, or pass x0")
             raise ConvergenceError(f"the direct model did not converge "
                                    f"({Status(int(status[0])).label})")
         if not full_output:
@@ -562,10 +583,27 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
         out = DirectResult(pose=pose, status=status, mode=mode,
                            mode_label=self.mode_labels[0], branches=np.zeros(
                                (qb.shape[0], self.model.n_legs), dtype=int),
-                           method="numeric", iterations=result.iterations,
-                           residual=result.residual, **_stroke_fields(check))
+                           method="numeric", iterations=iterations,
+                           residual=residual, **_stroke_fields(check))
         return _restore(out, single, ("pose", "status", "mode", "branches", "iterations",
                                       "residual", "out_of_stroke", "stroke_excess"))
+
+    _within_strokes = Machine._within_strokes
+
+    def _one_pose_inverse(self) -> OnePoseInverse:
+        inverse = self.__dict__.get("_one_inverse")
+        if inverse is None:
+            inverse = OnePoseInverse(self._forms, self._consistency_tol())
+            object.__setattr__(self, "_one_inverse", inverse)
+        return inverse
+
+    def _direct_kernel(self) -> direct.DirectKernel:
+        kernel = self.__dict__.get("_direct")
+        if kernel is None:
+            kernel = direct.DirectKernel.of(self.model, self._home_pose, self._home_q,
+                                            self._home_jacobian)
+            object.__setattr__(self, "_direct", kernel)
+        return kernel
 
     # ---------------------------------------------------------------- velocity
     def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,

@@ -109,6 +109,37 @@ class FullPoseForms:
             return out.T
         return self.rod_coordinates_numpy(x, sigma)
 
+    def inverse_compiled(self, x: np.ndarray, sigma: np.ndarray,
+                         consistency_tol: float) -> tuple[np.ndarray, np.ndarray]:
+        """The inverse model of pose rows ``x (N, 6)`` in one compiled pass
+        (:func:`pkmkit.machines.full_pose_kernels.inverse_poses`): ``q (N, n_act)`` (NaN rows
+        where not OK) and ``status (N,)`` — OK, UNREACHABLE (a rod cannot close, or the rods
+        of one actuator disagree by more than ``consistency_tol``) or INVALID_INPUT; the same
+        as :meth:`rod_coordinates` then :meth:`combine` and the machine's checks."""
+        from pkmkit.machines import full_pose_kernels
+
+        m = self.model
+        act = m.rod_actuator
+        counts = np.bincount(act, minlength=m.n_actuators)
+        groups = np.zeros((m.n_actuators, int(counts.max())), dtype=np.int64)
+        for k in range(m.n_actuators):
+            groups[k, :counts[k]] = np.flatnonzero(act == k)
+        angular = np.array([m.rod_kind[groups[k, 0]] == CRANK for k in range(m.n_actuators)])
+        q = np.empty((x.shape[0], m.n_actuators))
+        status = np.empty(x.shape[0], dtype=np.int64)
+        x = np.ascontiguousarray(x, dtype=float)
+        rods = (m.rod_kind.astype(np.int64), m.rod_base, m.rod_platform, m.rod_axis,
+                m.rod_pivot, self.crank_e1, self.crank_e2, self.length_sq, m.rod_length,
+                self.crank_radius, self.crank_offset, np.asarray(sigma, dtype=float),
+                BOUNDARY_TOL, groups, counts.astype(np.int64), angular, float(consistency_tol))
+
+        def work(start: int, stop: int) -> None:
+            full_pose_kernels.inverse_poses(x[start:stop], *rods, q[start:stop],
+                                            status[start:stop])
+
+        jit.run_chunks(work, x.shape[0])
+        return q, status
+
     def rod_coordinates_numpy(self, x: np.ndarray, sigma: np.ndarray) -> np.ndarray:
         """The NumPy reference of :meth:`rod_coordinates` (cache-sized chunks)."""
         out = np.empty((x.shape[0], self.model.n_rods))

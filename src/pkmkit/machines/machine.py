@@ -27,6 +27,7 @@ from pkmkit.exceptions import (
     UnreachablePoseError,
 )
 from pkmkit.machines.closed_form import RodClosedForm
+from pkmkit.machines.closed_form_one import direct_one
 from pkmkit.machines.common import (
     HOME_TOL,
     MAX_COORDINATE,
@@ -49,6 +50,7 @@ from pkmkit.machines.results import (
     Jacobians,
 )
 from pkmkit.machines.strokes import (
+    STROKE_MODES,
     STROKE_TOL,
     check_mode,
     judge_rows,
@@ -286,7 +288,7 @@ class Machine(ModeNaming, MachineFace):
             OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
         if (method == "closed" and branches is None and q0 is None and not full_output
-                and not engine_options):  # one plain pose: the microsecond path, same numbers
+                and not engine_options and strokes in STROKE_MODES):  # one plain pose: µs
             q1 = self._closed.inverse_one(x, self._default_branches)
             if q1 is not None and (strokes == "ignore" or (
                     strokes in ("flag", "refuse") and self._within_strokes(q1))):
@@ -458,6 +460,14 @@ class Machine(ModeNaming, MachineFace):
             ConvergenceError: a single numeric solve that failed or reached another mode.
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
+        if (method == "closed" and x0 is None and not full_output and not engine_options
+                and strokes in STROKE_MODES):  # one plain configuration: microseconds
+            working = isinstance(mode, str) and mode == "working"
+            sign = self._working_mode if working else self._mode_sign(mode)
+            p1 = direct_one(self._closed, q, sign)
+            if p1 is not None and (strokes == "ignore" or self._within_strokes(
+                    q.tolist() if isinstance(q, np.ndarray) else q)):
+                return np.array(p1)
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
         sign = self._mode_sign(mode)

@@ -11,17 +11,33 @@ afterwards).
 Environment: ``PKMKIT_COMPILED=0`` forces the NumPy paths everywhere (``=1`` forces the
 compiled ones for every batch size, which the tests use). Without Numba installed the NumPy
 paths are used silently.
+
+Threads: the compiled kernels release the GIL, and :func:`run_chunks` spreads a large batch
+over :func:`thread_count` threads in chunks taken from a shared queue (a thread slowed by a
+competing process simply takes fewer chunks). ``PKMKIT_THREADS=N`` sets the count; by default
+it is the number of cores this process may use, or 1 where ``OMP_NUM_THREADS=1`` (Dask
+workers, and anyone who bounded the threads of their numerical libraries). The rows are
+independent, so the results do not depend on the count.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import os
+import sys
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 #: Smallest batch for which the compiled kernels are used (below: NumPy).
 MIN_ROWS = 4096
 
+#: Smallest batch for which the compiled solvers are used before Numba is imported.
+SOLVER_ROWS = 64
+#: Smallest batch spread over several threads, and rows per chunk.
+THREAD_ROWS = 1 << 16
+
 _available: bool | None = None
+_pool: tuple[int, ThreadPoolExecutor] | None = None
 
 
 def mode() -> str:
@@ -38,6 +54,18 @@ def numba_available() -> bool:
     return _available
 
 
+def use_compiled_solver(rows: int) -> bool:
+    """Whether the compiled per-pose solvers run on a batch of ``rows`` rows: an iterative solve
+    costs hundreds of microseconds per pose through the NumPy engine and a few through its
+    compiled kernel, so they run from :data:`SOLVER_ROWS` rows, or at any size once Numba is
+    imported in the process (its import, ≈ 0.4 s of CPU with the on-disk cache, is then paid);
+    ``PKMKIT_COMPILED=1`` forces them, ``=0`` (or Numba missing) never."""
+    choice = mode()
+    if choice == "0" or not numba_available():
+        return False
+    return choice == "1" or rows >= SOLVER_ROWS or "numba" in sys.modules
+
+
 def use_compiled(rows: int) -> bool:
     """Whether a batch of ``rows`` rows should run the compiled kernels (the caller imports
     its kernel module lazily, e.g. :mod:`pkmkit.machines.kernels`)."""
@@ -45,3 +73,33 @@ def use_compiled(rows: int) -> bool:
     if choice == "0" or (choice == "auto" and rows < MIN_ROWS):
         return False
     return numba_available()
+
+
+def thread_count() -> int:
+    """Threads for large compiled batches (module docstring)."""
+    value = os.environ.get("PKMKIT_THREADS", "").strip()
+    if value.isdigit() and int(value) > 0:
+        return int(value)
+    if os.environ.get("OMP_NUM_THREADS", "").strip() == "1":
+        return 1
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def run_chunks(work: Callable[[int, int], None], rows: int) -> None:
+    """``work(start, stop)`` over ``range(rows)`` in chunks of :data:`THREAD_ROWS`, on
+    :func:`thread_count` threads when the batch has at least two chunks (``work`` must release
+    the GIL to gain anything: the compiled kernels do), else in this thread."""
+    threads = thread_count()
+    if threads == 1 or rows < 2 * THREAD_ROWS:
+        work(0, rows)
+        return
+    global _pool
+    if _pool is None or _pool[0] != threads:
+        _pool = (threads, ThreadPoolExecutor(max_workers=threads, thread_name_prefix="pkmkit"))
+    pool = _pool[1]
+    starts = range(0, rows, THREAD_ROWS)
+    for future in [pool.submit(work, s, min(s + THREAD_ROWS, rows)) for s in starts]:
+        future.result()
