@@ -21,16 +21,13 @@ import numpy as np
 from pkmkit.exceptions import (
     ConvergenceError,
     InputError,
-    NoAssemblyError,
     ParameterError,
-    SingularConfigurationError,
-    UnreachablePoseError,
 )
 from pkmkit.machines.closed_form import RodClosedForm
 from pkmkit.machines.closed_form_one import direct_one
 from pkmkit.machines.common import (
     HOME_TOL,
-    MAX_COORDINATE,
+    MAX_COORDINATE,  # noqa: F401  (re-exported: pkmkit.machines.machine.MAX_COORDINATE)
     SINGULARITY_TOL,
     TURNED_TOL,
     MachineKind,
@@ -49,6 +46,7 @@ from pkmkit.machines.results import (
     JacobianRates,
     Jacobians,
 )
+from pkmkit.machines.rod_refusals import RodRefusals
 from pkmkit.machines.strokes import (
     STROKE_MODES,
     STROKE_TOL,
@@ -68,7 +66,7 @@ from pkmkit.status import Status
 
 
 @dataclass(frozen=True, eq=False)
-class Machine(ModeNaming, MachineFace):
+class Machine(RodRefusals, ModeNaming, MachineFace):
     """A parallel kinematic machine (translational rod-leg family).
 
     Attributes:
@@ -368,25 +366,6 @@ class Machine(ModeNaming, MachineFace):
             guess[:, flip] = 2.0 * along[:, flip] - guess[:, flip]
         return guess
 
-    def _raise_inverse(self, xb: np.ndarray, status: int, iterations) -> None:
-        if status == Status.INVALID_INPUT:
-            raise InputError(f"pose {xb[0].tolist()} has a coordinate beyond "
-                             f"{MAX_COORDINATE:g} m")
-        short = self._closed.shortfall(xb)[0]
-        if status == Status.UNREACHABLE or (short > 0).any():
-            leg = int(np.argmax(short))
-            raise UnreachablePoseError(leg, self.model.leg_names[leg], short[leg],
-                                       too_long=bool(self._closed.too_long(xb)[0, leg]))
-        if status == Status.WRONG_MODE:
-            raise ConvergenceError(
-                "the numeric inverse model converged to another branch than requested; "
-                "pass q0 closer to the wanted solution"
-            )
-        raise ConvergenceError(
-            f"the numeric inverse model did not converge ({Status(status).label}) "
-            f"after {int(iterations[0])} iterations"
-        )
-
     # ---------------------------------------------------------------- direct
     def fk_all(self, q: Any) -> AssemblyModes:
         """Every real assembly mode of actuator coordinates (closed form).
@@ -572,28 +551,6 @@ class Machine(ModeNaming, MachineFace):
             normal /= np.linalg.norm(normal, axis=1, keepdims=True)
             depth = np.einsum("kd,kd->k", guess - c[:, 0], normal)
             return guess - 2.0 * depth[:, None] * normal
-
-    def _raise_direct(self, q: np.ndarray, sign: int, status: int) -> None:
-        label = self.mode_label(sign)
-        if status == Status.INVALID_INPUT:
-            raise InputError(f"q = {q.tolist()} has a coordinate beyond {MAX_COORDINATE:g} m")
-        if status == Status.SINGULAR:
-            raise SingularConfigurationError(
-                f"q = {q.tolist()}: the leg sphere centres are aligned or nearly so (a parallel "
-                "singularity): the direct model has no isolated solution, or none that rounding "
-                "lets it resolve to 1e-9 m"
-            )
-        if status == Status.NO_ASSEMBLY:
-            raise NoAssemblyError(
-                f"q = {q.tolist()} admits no real assembly in mode {label!r}: the legs cannot "
-                "meet at a common platform point"
-            )
-        if status == Status.WRONG_MODE:
-            raise ConvergenceError(
-                f"the numeric direct model converged to the other assembly mode than {label!r}; "
-                "pass x0 closer to the wanted solution"
-            )
-        raise ConvergenceError(f"the numeric direct model failed ({Status(status).label})")
 
     # ---------------------------------------------------------------- velocity
     def jacobian(

@@ -1,0 +1,128 @@
+"""The inverse model of a full-pose machine commanded by its position alone (fewer than six
+actuators, the orientation imposed by the rods: the Verne-type module): a mixin of
+:class:`~pkmkit.machines.full_pose.FullPoseMachine`."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from pkmkit.exceptions import ConvergenceError, InputError, UnreachablePoseError
+from pkmkit.machines.common import (
+    MAX_COORDINATE,
+    _checked_batch,
+    _restore,
+    _rows_like,
+    _valid_rows,
+)
+from pkmkit.machines.results import InverseResult
+from pkmkit.machines.strokes import judge_rows
+from pkmkit.model.rods import SLIDE
+from pkmkit.numerics.arrays import restore_shape
+from pkmkit.solve.rod_closure import solve_position_inverse
+from pkmkit.status import Status
+
+#: Iteration limit of the position inverse (fewer actuators than six) from its first-order
+#: guess; rows still short of a solution after it are NOT_CONVERGED.
+POSITION_MAX_ITER = 30
+
+
+def _stroke_fields(check) -> dict[str, Any]:
+    """``out_of_stroke`` and ``stroke_excess`` of a result from a stroke check (or None)."""
+    if check is None:
+        return {"out_of_stroke": None, "stroke_excess": None}
+    return {"out_of_stroke": check.out_of_stroke, "stroke_excess": check.excess}
+
+
+class PositionInverse:
+    """``ik`` of positions ``(N, 3)`` for a full-pose machine whose rods impose the
+    orientation (its ``_ik_position``), and the positions no orientation can serve."""
+
+    def _ik_position(self, arr, q0, branches, full_output, engine_options, strokes="flag"):
+        pb, single = _checked_batch(arr, 3, "position")
+        n = self.n_actuators
+        if q0 is None:
+            # first order from home: the position rows of J(home) are square (n = 3)
+            j_t = self._home_jacobian[:3]
+            dq = np.linalg.lstsq(j_t, (pb - self._home_pose[:3]).T, rcond=None)[0].T
+            guess_q = self._home_q + dq
+        else:
+            guess_q = _rows_like(q0, n, "q0", pb.shape[0])
+        guess_pose = self.first_order_pose(guess_q)
+        u0 = np.concatenate([guess_q, guess_pose[:, 3:]], axis=1)
+        hopeless = self._surely_unreachable(pb)
+        u0[~_valid_rows(pb) | hopeless] = np.nan
+        engine_options.setdefault("compute_rank", False)
+        if q0 is None:
+            # from the first-order guess a reachable position converges in ≤ 11 iterations
+            # (10⁵ random positions of the Verne module); the rows still crawling after
+            # POSITION_MAX_ITER are beyond reach
+            engine_options.setdefault("max_iter", POSITION_MAX_ITER)
+        with np.errstate(invalid="ignore", over="ignore"):
+            result = solve_position_inverse(self.model, pb, u0, **engine_options)
+        q = result.u[:, :n].copy()
+        pose = np.concatenate([pb, result.u[:, n:]], axis=1)
+        status = result.status.copy()
+        status[status == Status.INCONSISTENT] = Status.UNREACHABLE
+        ok = status == Status.OK
+        if branches is not None or ok.any():
+            # the engine may land on another branch or assembly mode: say so
+            sigma = self._branches(branches)
+            expected = np.full(pb.shape[0], False)
+            with np.errstate(invalid="ignore", over="ignore"):
+                q_rod = self._forms.rod_coordinates(pose[ok], sigma)
+                back, _ = self._forms.combine(q_rod)
+            expected[ok] = np.abs(back - q[ok]).max(axis=1) <= 1e-7
+            status[ok & ~expected] = Status.WRONG_MODE
+        status[hopeless] = Status.UNREACHABLE
+        status[~_valid_rows(pb)] = Status.INVALID_INPUT
+        bad = status != Status.OK
+        q[bad] = np.nan
+        pose[bad] = np.nan
+        if single and bad[0]:
+            if status[0] == Status.INVALID_INPUT:
+                raise InputError(f"position {pb[0].tolist()} has a coordinate beyond "
+                                 f"{MAX_COORDINATE:g} m")
+            if status[0] == Status.WRONG_MODE:
+                raise ConvergenceError(
+                    "the inverse model converged to another branch or assembly mode than the "
+                    "working one; pass q0 closer to the wanted solution")
+            raise UnreachablePoseError(-1, "the rods", float(result.residual[0]), detail=(
+                f"the rods cannot close at position {pb[0].tolist()} (least-squares residual "
+                f"{float(result.residual[0]):.6g} m)"))
+        check = judge_rows(self, q, status, strokes, single, f"position {pb[0].tolist()}",
+                           full_output, stacklevel=4)
+        bad = status != Status.OK
+        q[bad] = np.nan
+        pose[bad] = np.nan
+        if not full_output:
+            return restore_shape(q, single)
+        sigma = self._branches(branches)
+        shortfall = np.full((pb.shape[0], self.model.n_rods), np.nan)
+        shortfall[~bad] = self._forms.shortfall(pose[~bad])  # at the orientation found
+        out = InverseResult(q=q, status=status, branches=sigma, shortfall=shortfall,
+                            method="numeric", mode=self._mode_of(pose, q),
+                            iterations=result.iterations, residual=result.residual, pose=pose,
+                            **_stroke_fields(check))
+        return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
+                                      "residual", "pose", "out_of_stroke", "stroke_excess"))
+
+    def _surely_unreachable(self, positions: np.ndarray) -> np.ndarray:
+        """``(N,)`` positions no orientation can serve: a slide rod whose platform joint, at most
+        ``|b|`` from the platform point whatever the rotation, stays farther than the rod's
+        length from its slide's line (``dist(p, line) − |b| > L``). A sufficient test only: it
+        spares the iterative solve the hopeless rows of a workspace grid."""
+        m = self.model
+        slides = np.flatnonzero(m.rod_kind == SLIDE)
+        out = np.zeros(positions.shape[0], dtype=bool)
+        if slides.size == 0:
+            return out
+        with np.errstate(invalid="ignore"):
+            rel = positions[:, None, :] - m.rod_base[slides][None]
+            along = np.einsum("nsk,sk->ns", rel, m.rod_axis[slides])
+            perp = rel - along[..., None] * m.rod_axis[slides][None]
+            dist = np.linalg.norm(perp, axis=2)
+            reach = np.linalg.norm(m.rod_platform[slides], axis=1) + m.rod_length[slides]
+            out = (dist > reach[None] * (1 + 1e-9)).any(axis=1)
+        return out & _valid_rows(positions)
