@@ -93,9 +93,8 @@ def workspace_stiffness(m, wmap, data, scale: float) -> dict[str, Any]:
         smallest = wmap.stiffness.reshape(-1)[feasible]
         deflection = None if wmap.deflection is None else wmap.deflection.reshape(-1)[feasible]
     else:
-        q = wmap.q.reshape(-1, wmap.q.shape[-1])[feasible] if m.family == "chain" else None
-        fig = stiffness_figures(m, None if q is not None else points, q=q, data=data,
-                                wrench=wmap.criteria.wrench)
+        q = wmap.q.reshape(-1, wmap.q.shape[-1])[feasible]
+        fig = stiffness_figures(m, points, q=q, data=data, wrench=wmap.criteria.wrench)
         smallest, deflection = fig.smallest, fig.deflection
     if not np.isfinite(smallest).any():
         raise InputError("no feasible pose has a stiffness (every one is singular)")

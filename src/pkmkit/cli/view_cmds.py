@@ -98,9 +98,10 @@ def view_cmd(machine_name, assignments, q_text, workspace, resolution, gcode, or
     if calibration is not None:
         target = calibrated_machine_path(calibration)
         calibrated = resolve_machine(str(target), (), units)
-        if calibrated.family != m.family or calibrated.n_actuators != m.n_actuators:
+        if (tuple(calibrated.actuator_names) != tuple(m.actuator_names)
+                or tuple(calibrated.pose_names) != tuple(m.pose_names)):
             raise InputError(f"--calibration {calibration}: {calibrated.id!r} is not a "
-                             f"calibration of {m.id!r} (another family or actuator count)")
+                             f"calibration of {m.id!r} (other actuators or pose coordinates)")
     if Path(out_file).suffix.lower() not in (".html", ".htm"):
         raise click.BadParameter("the view is an HTML page: give NAME.html", param_hint="--out")
     html, content = view_html(m, q=q, workspace=workspace, gcode=gcode, origin=origin_m,
