@@ -305,7 +305,7 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
     def first_order_pose(self, q: np.ndarray) -> np.ndarray:
         """First-order guess ``(N, 6)`` of the pose of actuator coordinates ``q (N, n)``: the
         twist J(home)(q − q_home) applied to the home pose (the engine's default start)."""
-        bad = ~np.isfinite(q).all(axis=1)
+        bad = ~_valid_rows(q)  # non-finite or beyond MAX_COORDINATE: no guess, the row alone
         twist = (np.where(bad[:, None], self._home_q, q) - self._home_q) @ self._home_jacobian.T
         guess = np.empty((q.shape[0], 6))
         guess[:, :3] = self._home_pose[:3] + twist[:, :3]
@@ -385,8 +385,11 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
         n = self.n_actuators
         if q0 is None:
             # first order from home: the position rows of J(home) are square (n = 3)
+            # (a row that is not finite or beyond MAX_COORDINATE enters as home: LAPACK scales
+            # the right-hand sides together, so one inf row would make every guess NaN)
             j_t = self._home_jacobian[:3]
-            dq = np.linalg.lstsq(j_t, (pb - self._home_pose[:3]).T, rcond=None)[0].T
+            offset = np.where(_valid_rows(pb)[:, None], pb - self._home_pose[:3], 0.0)
+            dq = np.linalg.lstsq(j_t, offset.T, rcond=None)[0].T
             guess_q = self._home_q + dq
         else:
             guess_q = _rows_like(q0, n, "q0", pb.shape[0])
