@@ -24,6 +24,9 @@ def _poses(tmp_path):
 
 
 def _table(result_bytes: bytes) -> pa.Table:
+    """A CSV output of a batch (its first line the ``# units:`` line) as a table."""
+    units, _, result_bytes = result_bytes.partition(b"\n")
+    assert units.startswith(b"# units: "), units
     return pcsv.read_csv(io.BytesIO(result_bytes),
                          convert_options=pcsv.ConvertOptions(null_values=[""],
                                                              strings_can_be_null=True))
@@ -116,7 +119,9 @@ def test_batch_inputs_echo_exactly_and_floats_are_shortest(run, tmp_path):
     src.write_text("x,y,z\n0.042444,0.1,0\n")
     out = tmp_path / "q.csv"
     assert run("ik", "linear-delta", "--input", src, "--output", out).exit_code == 0
-    line = out.read_text().splitlines()[1].split(",")
+    units, header, row = out.read_text().splitlines()
+    assert units == "# units: m" and header.startswith("x,y,z,")
+    line = row.split(",")
     assert line[:3] == ["0.042444", "0.1", "0"]
     q = pkmkit.machine("linear-delta").ik([0.042444, 0.1, 0.0])
     assert [float(v) for v in line[3:6]] == q.tolist()

@@ -161,7 +161,8 @@ def ik(machine_name, assignments, pose, branches, q0_text, method, input_, outpu
                     "mode": _mode_column(m, res.mode), "status": _status_column(status)
                     }, status
 
-        run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows)
+        run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows,
+                  units=units, column_units=[units] * m.dims)
         return
     x = parse_vector(pose, m.dims, "--pose", units)
     q0 = parse_actuators(q0_text, m, units, "--q0") if q0_text else None
@@ -307,7 +308,8 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
                     "status": _status_column(status[k_all])
                     }, status[:n], k_all
 
-        run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+        run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows,
+                  units=units, column_units=actuator_units(m, units))
         return
 
     def compute(values, chunk):
@@ -318,7 +320,8 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
         return {**_named(m.actuator_names, values), **_named(m.pose_names, res.pose / scale),
                 "mode": label, "status": _status_column(status)}, status
 
-    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows,
+              units=units, column_units=actuator_units(m, units))
 
 
 @cli.command()
@@ -382,7 +385,8 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
                     "status": Labels(codes, [*sing_names, *status_names()])}, status
 
         run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows,
-                  note=lambda: f" (and {singular[0]} singular rows computed)")
+                  note=lambda: f" (and {singular[0]} singular rows computed)", units=units,
+                  column_units=[units] * m.dims)
         return
     x = parse_vector(pose, m.dims, "--pose", units)
     jac = m.jacobian(x, q=m.ik(x, strokes="ignore"), tol=tol)

@@ -23,6 +23,7 @@ from .coordinates import (
     pose_columns,
     pose_from_cli,
     pose_to_cli,
+    pose_units,
     pose_widths,
 )
 from .options import emit_json, fmt
@@ -101,7 +102,8 @@ def ik(m, pose, q0_text, input_, output, chunk_rows, units, convention, tool_len
                 out.update(_named(["A", "B", "C"], found[:, 3:]))
             return {**out, "status": _status_column(status)}, status
 
-        run_batch(input_, output, columns, compute, chunk_rows=chunk_rows)
+        run_batch(input_, output, columns, compute, chunk_rows=chunk_rows, units=units,
+                  column_units=pose_units(m, units, len(columns)))
         return
     values = parse_numbers(pose, "--pose", widths)
     x = pose_from_cli(values, m, units, convention)[0]
@@ -211,7 +213,8 @@ def fk(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convent
             return {**_named(m.actuator_names, values), **_named(columns, poses), **extra,
                     "status": _status_column(status)}, status
 
-        run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+        run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows,
+                  units=units, column_units=actuator_units(m, units))
         return
     q = parse_actuators(q_text, m, units)
     payload: dict[str, Any] = {"machine": m.id, "units": units, "q": q / scales,

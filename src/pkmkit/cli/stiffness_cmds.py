@@ -24,6 +24,7 @@ from .coordinates import (
     parse_numbers,
     pose_columns,
     pose_from_cli,
+    pose_units,
     pose_widths,
 )
 from .options import (
@@ -279,4 +280,5 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
         out["status"] = Labels(status, status_names())
         return out, status
 
-    run_batch(input_, output, columns, compute, chunk_rows=chunk_rows)
+    run_batch(input_, output, columns, compute, chunk_rows=chunk_rows, units=units,
+              column_units=pose_units(m, units))

@@ -37,6 +37,7 @@ from pkmkit.io.table_format import (
     FORMATS,
     STDIO,
     TableChunk,
+    check_units,
     table_format,
 )
 from pkmkit.io.table_sources import ArrowSource, CsvSource
@@ -57,18 +58,32 @@ class TableReader:
         columns: wanted column names (in this order).
         chunk_rows: rows per chunk (≥ 1).
         stdin: the binary stream read for ``-`` (default: the process's standard input).
+        units: the unit the caller reads each column in (a length unit such as ``"mm"``,
+            ``"deg"`` for angles, None for numbers without unit), or None to accept any unit
+            the file states (see :func:`~pkmkit.io.table_format.check_units`).
+
+    Attributes:
+        file_unit: the length unit the file states (``# units:`` line, ``units`` schema
+            metadata), or None; known once the header is read.
 
     Raises:
         InputError: a missing or unreadable file, a file that is not text (CSV), not Parquet or
-            not Arrow, missing columns (with the header's line), or no data rows.
+            not Arrow, missing or ambiguous columns (with the header's line), a column in
+            another unit than ``units`` says, or no data rows.
     """
 
     def __init__(self, path: str | Path, columns: Sequence[str], *,
-                 chunk_rows: int = DEFAULT_CHUNK_ROWS, stdin: BinaryIO | None = None):
+                 chunk_rows: int = DEFAULT_CHUNK_ROWS, stdin: BinaryIO | None = None,
+                 units: Sequence[str | None] | None = None):
         if int(chunk_rows) < 1:
             raise InputError(f"chunk size must be at least 1 row, got {chunk_rows}")
         self.path = str(path)
         self.columns = list(columns)
+        if units is not None and len(units) != len(self.columns):
+            raise InputError(f"{len(units)} units for {len(self.columns)} columns")
+        self.units = None if units is None else list(units)
+        self.file_unit: str | None = None
+        self._unit_where = ""
         self.chunk_rows = int(chunk_rows)
         self.format = table_format(path)
         self.progress = 0
@@ -78,6 +93,20 @@ class TableReader:
             self._source = CsvSource(self)
         else:
             self._source = ArrowSource(self)
+
+    def declare_file_unit(self, unit: str, where: str) -> None:
+        """Record the file's length unit (a source found it where ``where`` says)."""
+        if self.file_unit is not None and unit != self.file_unit:
+            raise InputError(f"{where}: the file says {unit} but also {self.file_unit} "
+                             f"({self._unit_where})")
+        self.file_unit, self._unit_where = unit, where
+
+    def check_units(self, stated: Sequence[str | None], where: str) -> None:
+        """Check the units the header states (``stated``: each wanted column's ``[unit]``)
+        against those of the caller; nothing to check without them."""
+        if self.units is not None:
+            check_units(self.columns, stated, self.units, self.file_unit, where,
+                        self._unit_where)
 
     def __iter__(self) -> Iterator[TableChunk]:
         rows = 0
