@@ -43,13 +43,16 @@ from .stroke_flags import BatchFlags, add_to_payload, finish_single, hint, singl
 
 
 class PkmGroup(LazyGroup):
-    """Turns pkmkit's typed errors into a one-line message and exit status 1."""
+    """Turns pkmkit's typed errors into a one-line message (its lengths in ``--units``) and
+    exit status 1."""
 
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
         except PkmError as exc:
-            raise click.ClickException(str(exc)) from None
+            from .unit_text import in_units
+
+            raise click.ClickException(in_units(str(exc), ctx.meta)) from None
 
 
 @click.group(cls=PkmGroup, context_settings={"help_option_names": ["-h", "--help"]})

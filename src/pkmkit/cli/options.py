@@ -18,11 +18,20 @@ from pkmkit.model.machine_file import SUFFIXES
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 from pkmkit.spatial.rotation import DEFAULT_CONVENTION
 
+from .unit_text import MACHINE_KEY, UNITS_KEY, remember
+
+
+def _remember_units(ctx: click.Context, param: click.Parameter, value: str) -> str:
+    ctx.meta[UNITS_KEY] = value  # error messages in these units (cli.unit_text)
+    return value
+
+
 UNITS_OPTION = click.option(
     "--units",
     type=click.Choice(sorted(LENGTH_UNITS)),
     default="m",
     show_default=True,
+    callback=_remember_units,
     help="Length unit of every value on the command line and in the output "
     "(angles are always in degrees).",
 )
@@ -59,6 +68,7 @@ def resolve_machine(name: str, assignments: Sequence[str], units: str) -> Machin
     """A machine from a built-in id or a machine-file path, with ``--set`` overrides given in
     CLI units (lengths in ``units``, angles in degrees)."""
     base = load(name) if is_machine_file(name) else machine(name)
+    remember(MACHINE_KEY, base)
     if not assignments:
         return base
     if base.kind is None:
@@ -75,7 +85,9 @@ def resolve_machine(name: str, assignments: Sequence[str], units: str) -> Machin
         if key not in specs:
             raise UnknownParameterError(key, base.id, specs)
         overrides[key] = specs[key].parse_text(value, units, base.id)
-    return base.with_params(**overrides)
+    built = base.with_params(**overrides)
+    remember(MACHINE_KEY, built)
+    return built
 
 
 def machine_document_path(name: str) -> str:
