@@ -17,6 +17,7 @@ from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors.measurements import MEASURES
 from pkmkit.model.parameters import length_scale
 
+from .limits import MAX_SAMPLED, check_count, check_tool_length
 from .options import JSON_OPTION, SET_OPTION, UNITS_OPTION, emit_json, fmt, resolve_machine
 
 DEG = math.pi / 180.0
@@ -205,6 +206,10 @@ def _define(cli: click.Group) -> None:
         payload: dict = {"machine": m.id}
         if n_samples is not None and tolerance_file is None:
             raise click.UsageError("--monte-carlo needs --tolerance FILE")
+        if n_samples is not None:
+            check_count(n_samples * resolution ** 2, MAX_SAMPLED,
+                        f"sampled machines ({n_samples} --monte-carlo samples at each of "
+                        f"{resolution}² map points)", "lower --monte-carlo or --resolution")
         if not (compatibility or sensitivity or tolerance_file):
             payload["defects"] = _defect_rows(m)
             if as_json:
@@ -238,7 +243,8 @@ def _define(cli: click.Group) -> None:
     @click.option("--region", metavar="MIN,MAX,...", help="Region for --poses N.")
     @click.option("--pivot", metavar="X,Y,Z", help="Ball-bar pivot (default 0.1 L below the "
                   "mean tool point).")
-    @click.option("--tool-length", type=float, help="Tool length (joint-chain machines).")
+    @click.option("--tool-length", type=float, help="Tool length (joint-chain machines).",
+                  callback=check_tool_length)
     @click.option("--scaling", type=click.Choice(["length", "norm", "none"]), default="length",
                   show_default=True, help="Column scaling of the identification Jacobian.")
     @click.option("--rtol", type=float, default=1e-9, show_default=True,
@@ -299,7 +305,7 @@ def _define(cli: click.Group) -> None:
                   "(default max(20 n, 200)).")
     @click.option("--region", metavar="MIN,MAX,...")
     @click.option("--pivot", metavar="X,Y,Z")
-    @click.option("--tool-length", type=float)
+    @click.option("--tool-length", type=float, callback=check_tool_length)
     @click.option("--out", "out_file", type=click.Path(dir_okay=False), required=True,
                   help="CSV of the chosen actuator coordinates.")
     @click.option("--seed", type=int, default=0, show_default=True)

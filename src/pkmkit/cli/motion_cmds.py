@@ -22,6 +22,7 @@ from pkmkit.motion.paths import circle, helix, line, raster
 from pkmkit.motion.timelaw import DEFAULT_JERK_PER_ACCEL, PROFILES
 from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
 
+from .limits import check_wrench
 from .options import (
     EXIT_PARTIAL,
     JSON_OPTION,
@@ -157,7 +158,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     if wrench and wrench_file:
         raise click.UsageError("--wrench and --wrench-file are exclusive")
     if wrench:
-        force = np.asarray(_numbers(wrench, (3,), "--wrench"))
+        force = check_wrench(np.asarray(_numbers(wrench, (3,), "--wrench")))
     if wrench_file:
         force = load_wrench_series(wrench_file)
     for name, value, unit in (("--feed", feed, scale), ("--accel", accel, scale),

@@ -18,6 +18,7 @@ from pkmkit.model.machine_file import SUFFIXES
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 from pkmkit.spatial.rotation import DEFAULT_CONVENTION
 
+from .limits import check_tool_length
 from .unit_text import MACHINE_KEY, UNITS_KEY, remember
 
 
@@ -31,6 +32,7 @@ UNITS_OPTION = click.option(
     type=click.Choice(sorted(LENGTH_UNITS)),
     default="m",
     show_default=True,
+    is_eager=True,  # read first: other options' checks state their values in these units
     callback=_remember_units,
     help="Length unit of every value on the command line and in the output "
     "(angles are always in degrees).",
@@ -50,7 +52,7 @@ ANGLES_OPTION = click.option(
          "(R = Rz(C) Ry(B) Rx(A)); upper case for moving axes (ZYX, ZYZ, ...), or rpy, ypr, "
          "euler-zyz, ...")
 TOOL_LENGTH_OPTION = click.option(
-    "--tool-length", type=float, default=None,
+    "--tool-length", type=float, default=None, callback=check_tool_length,
     help="Tool length along the tool axis (joint-chain machines), in --units; default the "
          "machine's.")
 

@@ -27,6 +27,7 @@ from .coordinates import (
     pose_units,
     pose_widths,
 )
+from .limits import check_wrench
 from .options import (
     ANGLES_OPTION,
     JSON_OPTION,
@@ -65,7 +66,7 @@ def split_settings(assignments) -> tuple[list[str], dict[str, str]]:
 def _wrench(text: str | None, d: int) -> tuple[np.ndarray | None, str]:
     if text is None:
         return None, ""
-    values = parse_numbers(text, "--wrench", (d, 6) if d < 6 else (6,))
+    values = check_wrench(parse_numbers(text, "--wrench", (d, 6) if d < 6 else (6,)))
     note = ""
     if values.size == 6 and d < 6:
         if np.any(values[3:]):
