@@ -163,3 +163,21 @@ def test_help_documents_the_batch_columns(run):
     assert ".parquet" in text and "- for CSV on standard input" in text
     assert "row" in run("fk", "--help").output
     assert "sv1..svn" in run("jacobian", "--help").output
+
+
+@pytest.mark.parametrize("command, machine, rows", [
+    ("ik", "verne", ["0,0,0", "inf,0,0", "0.01,0,0"]),  # a position-controlled module
+    ("fk", "gough-stewart", ["0.9,0.9,0.9,0.9,0.9,0.9", "0.9,0.9,0.9,0.9,0.9,1e300",
+                             "0.91,0.9,0.9,0.9,0.9,0.9"]),
+])
+def test_one_bad_row_flags_that_row_only(run, tmp_path, command, machine, rows):
+    """Issue 18 §5: an infinite row of a Verne batch made every row invalid-input; a full-pose
+    row beyond 1e9 raised from the first-order guess and lost the whole batch."""
+    m = pkmkit.machine(machine)
+    names = ["x", "y", "z"] if command == "ik" else list(m.actuator_names)
+    src = tmp_path / "in.csv"
+    src.write_text(",".join(names) + "\n" + "\n".join(rows) + "\n")
+    result = run(command, machine, "--input", src, "--output", "-")
+    assert result.exit_code == 3, result.output
+    lines = [line for line in result.stdout.splitlines() if not line.startswith("#")]
+    assert [line.rsplit(",", 1)[1] for line in lines[1:]] == ["ok", "invalid-input", "ok"]

@@ -73,7 +73,9 @@ def _read_poses(machine, path: str, units: str) -> np.ndarray:
     from pkmkit.io.csv_io import read_table
 
     problems: list[str] = []
-    table = read_table(path, machine.actuator_names, problems) * _actuator_scales(machine, units)
+    stated = ["deg" if k == "angle" else units for k in machine.actuator_quantities]
+    table = read_table(path, machine.actuator_names, problems, units=stated) * _actuator_scales(
+        machine, units)
     for message in problems:
         click.echo(f"warning: {message} (row left out)", err=True)
     good = np.isfinite(table).all(axis=1)
@@ -330,7 +332,7 @@ def _define(cli: click.Group) -> None:
                               setup=_setup(m, kind, pivot, tool_length, units), index=index,
                               seed=seed, **_selection(parameters, exclude, kinds))
         scales = _actuator_scales(m, units)
-        write_table(out_file, m.actuator_names, (result.q / scales).tolist())
+        write_table(out_file, m.actuator_names, (result.q / scales).tolist(), units=units)
         summary = result.summary()
         summary["out"] = out_file
         if as_json:
@@ -403,7 +405,8 @@ def _sensitivity(m, sel, region, points, length_size, angle_size, exact, units, 
 
         keys = ["name", "unit", "kind", "owner", "size", "max_dx", "max_dy", "max_dz",
                 "max_displacement", "max_rotation_deg"]
-        write_table(out / "sensitivity.csv", keys, [[r[k] for k in keys] for r in rows])
+        write_table(out / "sensitivity.csv", keys, [[r[k] for k in keys] for r in rows],
+                    units=units)
         plot_sensitivity(table, out / "sensitivity.png", unit="um")
     if not as_json:
         click.echo(f"{m.name}: largest tool displacement over {len(table.q)} configurations "

@@ -204,7 +204,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                   *[f"{n}_ddot" for n in names], *[f"f_{n}" for n in names]]
         rows = np.column_stack([motion.t, motion.x / scale, motion.q / scale, motion.qd / scale,
                                 motion.qdd / scale, result.forces.force])
-        with TableWriter(out / "trajectory.csv") as writer:
+        with TableWriter(out / "trajectory.csv", units=units) as writer:
             writer.write({name: rows[:, j] for j, name in enumerate(header)})
         summary["files"] = ["motion.png", "path.png", "trajectory.csv"]
     if as_json:

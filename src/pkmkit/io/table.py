@@ -125,7 +125,8 @@ class TableReader:
 
 
 def read_table(path: str | Path, columns: Sequence[str],
-               problems: list[str] | None = None) -> np.ndarray:
+               problems: list[str] | None = None, *,
+               units: Sequence[str | None] | None = None) -> np.ndarray:
     """Read the columns ``columns`` of a table into a ``(N, len(columns))`` float array.
 
     Args:
@@ -133,10 +134,12 @@ def read_table(path: str | Path, columns: Sequence[str],
         columns: wanted columns.
         problems: if given, a bad cell or a short row becomes NaN (the batch call flags that
             row) and its message is appended here instead of raising.
+        units: the unit each column is read in (see :class:`TableReader`); None accepts the
+            values in whatever unit the file states.
 
     Raises:
-        InputError: unreadable file, missing columns, no data rows, or (without ``problems``)
-            a bad cell, with its line.
+        InputError: unreadable file, missing columns, no data rows, a column in another unit
+            than ``units``, or (without ``problems``) a bad cell, with its line.
 
     >>> import tempfile, pathlib
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "poses.csv"
@@ -147,7 +150,7 @@ def read_table(path: str | Path, columns: Sequence[str],
     >>> problems[0].endswith("poses.csv:4: column 'x' is not a number: 'abc'")
     True
     """
-    chunk = TableReader(path, columns).read_all()
+    chunk = TableReader(path, columns, units=units).read_all()
     if chunk.problems and problems is None:
         raise InputError(chunk.problems[0])
     if problems is not None:
