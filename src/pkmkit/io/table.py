@@ -12,6 +12,15 @@ number, an empty cell, a short row or a number that overflows a double (``1e400`
 the row is flagged, the others are kept — with a message naming the file line (the row for
 Parquet/Feather) and the column.
 
+**Units.** A table states the length unit of its length columns by a ``# units: mm`` comment
+line before a CSV header, a ``units`` key in a Parquet/Feather schema's metadata, or per column
+as measurement files do (``x [mm]``, ``q4 [deg]``; a ``[unit]`` must agree with the file's
+unit); angles are in degrees. A wanted column matches a header cell of the same name without
+its ``[unit]``, or failing that the one cell whose name differs only in case (``X``); two
+candidates are refused as ambiguous. A reader given ``units`` (the unit the caller reads each
+column in) refuses a column stated in another unit, naming it; :class:`TableWriter` given
+``units`` records them.
+
 Reading is streamed: :class:`TableReader` yields :class:`TableChunk` objects of at most
 ``chunk_rows`` rows, so a file larger than memory is processed piece by piece, and the values are
 the same whatever the chunk size (each row is parsed on its own). CSV chunks go through pyarrow's
