@@ -75,3 +75,17 @@ def test_monte_carlo_and_compensation_sizes_are_refused_before_work(run, tmp_pat
                  "--gcode", program, "--step", "1e-9", "--units", "mm", "--out", out)
     assert result.exit_code == 1 and not out.exists()
     assert "pieces of 1e-09 mm (--step) over the program's 150 mm" in result.output
+
+
+@pytest.mark.parametrize("text, message", [
+    ("[classes]\nlength = 1e300\n", "tol.toml:2: classes.length: a half-width of 1e+300 m is "
+                                    "beyond 0.1 m, the largest tolerance of a length-like"),
+    ("[classes]\nlength = 10\n", 'did you mean units = "mm"?'),
+])
+def test_absurd_tolerances_are_refused(run, tmp_path, text, message):
+    """A tolerance of 1e300 m gave a NaN accuracy map with exit status 0."""
+    tol = tmp_path / "tol.toml"
+    tol.write_text(text)
+    result = run("errors", "gough-stewart", "--tolerance", tol, "--monte-carlo", "5",
+                 "--resolution", "3")
+    assert result.exit_code == 1 and message in result.output
