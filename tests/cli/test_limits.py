@@ -89,3 +89,21 @@ def test_absurd_tolerances_are_refused(run, tmp_path, text, message):
     result = run("errors", "gough-stewart", "--tolerance", tol, "--monte-carlo", "5",
                  "--resolution", "3")
     assert result.exit_code == 1 and message in result.output
+
+
+def test_a_machine_file_in_mm_without_units_is_refused(run, tmp_path):
+    """Every length of docs/examples/my-machine.toml in mm, strokes included, without
+    `units = "mm"`: a consistent machine 1000× too large, which loaded and answered."""
+    from pathlib import Path
+
+    source = Path(__file__).parents[2] / "docs" / "examples" / "my-machine.toml"
+    text = source.read_text()
+    assert 'units = "mm"' in text
+    path = tmp_path / "no-units.toml"
+    path.write_text(text.replace('units = "mm"\n', ""))
+    result = run("ik", path, "--pose", "0,0,0")
+    assert result.exit_code == 1
+    assert "no-units.toml: at its home the machine reaches 882.7 m from its origin" in (
+        result.output)
+    assert 'without `units = "mm"`' in result.output
+    assert run("ik", source, "--pose", "0,0,0").exit_code == 0

@@ -71,6 +71,8 @@ def resolve_machine(name: str, assignments: Sequence[str], units: str) -> Machin
     CLI units (lengths in ``units``, angles in degrees)."""
     base = load(name) if is_machine_file(name) else machine(name)
     remember(MACHINE_KEY, base)
+    if is_machine_file(name):
+        refuse_giant(base, name)
     if not assignments:
         return base
     if base.kind is None:
@@ -90,6 +92,25 @@ def resolve_machine(name: str, assignments: Sequence[str], units: str) -> Machin
     built = base.with_params(**overrides)
     remember(MACHINE_KEY, built)
     return built
+
+
+#: A machine whose home tool point or length actuators lie farther than this (m) from its
+#: origin is a file in millimetres read as metres: machine tools are metres across.
+MAX_MACHINE_SIZE = 100.0
+
+
+def refuse_giant(m: Machine, name: str) -> None:
+    """A :class:`ParameterError` when machine file ``name`` builds a machine hundreds of metres
+    across (lengths in mm with no ``units = "mm"``: consistent, so nothing else notices)."""
+    q = np.asarray(m.home_q, dtype=float)
+    lengths = np.asarray(m.actuator_quantities) == "length"
+    size = max(float(np.abs(np.asarray(m.home_pose, dtype=float)[:3]).max()),
+               float(np.abs(q[lengths]).max()) if lengths.any() else 0.0)
+    if size > MAX_MACHINE_SIZE:
+        raise ParameterError(
+            f"{name}: at its home the machine reaches {size:.4g} m from its origin, beyond "
+            f"{MAX_MACHINE_SIZE:g} m: are its lengths in mm without `units = \"mm\"` in the "
+            "file? (a machine file without units is read in metres)")
 
 
 def machine_document_path(name: str) -> str:
