@@ -34,10 +34,12 @@ def batch_options(func):
                         help="Rows per chunk in batch mode (memory bound; default 500000).")(func)
     func = click.option("--output", "output", type=click.Path(dir_okay=False, allow_dash=True),
                         help="Output table (batch mode): .csv, .parquet, .feather, or - for "
-                             "CSV on standard output.")(func)
+                             "CSV on standard output; it records --units (a '# units:' line, "
+                             "'units' schema metadata).")(func)
     func = click.option("--input", "input_", type=click.Path(dir_okay=False, allow_dash=True),
                         help="Input table, one row per case (batch mode): .csv, .parquet, "
-                             ".feather, or - for CSV on standard input.")(func)
+                             ".feather, or - for CSV on standard input. A unit it states ('# "
+                             "units: mm', 'x [mm]' headers) must be --units.")(func)
     return func
 
 
