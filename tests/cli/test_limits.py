@@ -107,3 +107,15 @@ def test_a_machine_file_in_mm_without_units_is_refused(run, tmp_path):
         result.output)
     assert 'without `units = "mm"`' in result.output
     assert run("ik", source, "--pose", "0,0,0").exit_code == 0
+
+
+def test_an_absurd_feed_the_path_never_reaches_is_refused(run):
+    """--feed 120 meant in mm/s, read as 120 m/s: the run went at a few cm/s, exit 0."""
+    result = run("path", "orthoglide", "--line", "0,0,0,0.1,0,0", "--feed", "120", "--accel",
+                 "1")
+    assert result.exit_code == 1
+    assert "--feed 120 m/s is never reached: the tool peaks at" in result.output
+    assert "did you mean --units mm?" in result.output
+    ok = run("path", "orthoglide", "--line", "0,0,0,50,0,0", "--feed", "120", "--accel", "1000",
+             "--units", "mm")
+    assert ok.exit_code == 0, ok.output

@@ -11,6 +11,7 @@ gigabytes of memory or hours is refused before any work, naming the limit:
 ``--poses N`` (simulated)       N ≤ :data:`MAX_SIMULATED` (1e6 rows)
 ``--monte-carlo``               samples × map points ≤ :data:`MAX_SAMPLED` (5e7)
 ``compensate --step``           path length / step ≤ :data:`MAX_PIECES` (2e6)
+``path --feed``                 beyond :data:`MAX_FEED` (10 m/s) it must be reached
 =============================== ==================================================
 
 When a length read in metres would be a sensible value in millimetres, the message asks "did
@@ -41,6 +42,8 @@ MAX_SIMULATED = 1_000_000
 MAX_SAMPLED = 50_000_000
 #: Most pieces a compensated program may be cut into (as many as a path holds segments).
 MAX_PIECES = 2_000_000
+#: Fastest plausible machining feed (m/s); a faster one the path never reaches is a unit slip.
+MAX_FEED = 10.0
 
 
 def _hint(value_m: float, limit_m: float, units: str) -> str:
@@ -108,3 +111,14 @@ def check_count(count: float, limit: float, what: str, lower: str) -> None:
     if not count <= limit:
         raise InputError(f"{count:.3g} {what}, above the limit of {limit:.3g} (memory and "
                          f"time); {lower}")
+
+
+def check_feed_reached(feed_si: float, peak_si: float, units: str) -> None:
+    """Refuse a feed beyond :data:`MAX_FEED` that the path never approaches (its tool speed
+    peaks below half of it): ``--feed 120`` meant in mm/s ran at a few cm/s without a word."""
+    if feed_si > MAX_FEED and not peak_si >= 0.5 * feed_si:
+        scale = length_scale(units)
+        raise InputError(f"--feed {feed_si / scale:g} {units}/s is never reached: the tool peaks "
+                         f"at {peak_si / scale:.4g} {units}/s on this path (accelerations, "
+                         f"curvature), and no machining feed exceeds {MAX_FEED / scale:g} "
+                         f"{units}/s{_hint(feed_si, MAX_FEED, units)}")

@@ -22,7 +22,7 @@ from pkmkit.motion.paths import circle, helix, line, raster
 from pkmkit.motion.timelaw import DEFAULT_JERK_PER_ACCEL, PROFILES
 from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
 
-from .limits import check_wrench
+from .limits import check_feed_reached, check_wrench
 from .options import (
     EXIT_PARTIAL,
     JSON_OPTION,
@@ -175,6 +175,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                            rapid_feed=None if rapid_feed is None else rapid_feed * scale,
                            period=period, masses=props, wrench=force, limits=limits)
     summary = result.summary()
+    check_feed_reached(feed * scale, summary["tool_speed_max"], units)
     lengths = ("length", "cutting_length", "q_min", "q_max", "stroke", "qd_max", "qdd_max",
                "tool_speed_max", "tool_accel_max")
     for key in lengths:
