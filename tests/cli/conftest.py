@@ -28,3 +28,10 @@ def parse_json(result):
 @pytest.fixture
 def as_json():
     return parse_json
+
+
+def table_lines(text: str, units: str = "m") -> list[str]:
+    """The lines of a CSV table written by a command, after its ``# units:`` line (checked)."""
+    first, *lines = text.splitlines()
+    assert first == f"# units: {units}", first
+    return lines

@@ -24,6 +24,9 @@ def _poses(tmp_path):
 
 
 def _table(result_bytes: bytes) -> pa.Table:
+    """A CSV output of a batch (its first line the ``# units:`` line) as a table."""
+    units, _, result_bytes = result_bytes.partition(b"\n")
+    assert units.startswith(b"# units: "), units
     return pcsv.read_csv(io.BytesIO(result_bytes),
                          convert_options=pcsv.ConvertOptions(null_values=[""],
                                                              strings_can_be_null=True))
@@ -116,7 +119,9 @@ def test_batch_inputs_echo_exactly_and_floats_are_shortest(run, tmp_path):
     src.write_text("x,y,z\n0.042444,0.1,0\n")
     out = tmp_path / "q.csv"
     assert run("ik", "linear-delta", "--input", src, "--output", out).exit_code == 0
-    line = out.read_text().splitlines()[1].split(",")
+    units, header, row = out.read_text().splitlines()
+    assert units == "# units: m" and header.startswith("x,y,z,")
+    line = row.split(",")
     assert line[:3] == ["0.042444", "0.1", "0"]
     q = pkmkit.machine("linear-delta").ik([0.042444, 0.1, 0.0])
     assert [float(v) for v in line[3:6]] == q.tolist()
@@ -158,3 +163,21 @@ def test_help_documents_the_batch_columns(run):
     assert ".parquet" in text and "- for CSV on standard input" in text
     assert "row" in run("fk", "--help").output
     assert "sv1..svn" in run("jacobian", "--help").output
+
+
+@pytest.mark.parametrize("command, machine, rows", [
+    ("ik", "verne", ["0,0,0", "inf,0,0", "0.01,0,0"]),  # a position-controlled module
+    ("fk", "gough-stewart", ["0.9,0.9,0.9,0.9,0.9,0.9", "0.9,0.9,0.9,0.9,0.9,1e300",
+                             "0.91,0.9,0.9,0.9,0.9,0.9"]),
+])
+def test_one_bad_row_flags_that_row_only(run, tmp_path, command, machine, rows):
+    """Issue 18 §5: an infinite row of a Verne batch made every row invalid-input; a full-pose
+    row beyond 1e9 raised from the first-order guess and lost the whole batch."""
+    m = pkmkit.machine(machine)
+    names = ["x", "y", "z"] if command == "ik" else list(m.actuator_names)
+    src = tmp_path / "in.csv"
+    src.write_text(",".join(names) + "\n" + "\n".join(rows) + "\n")
+    result = run(command, machine, "--input", src, "--output", "-")
+    assert result.exit_code == 3, result.output
+    lines = [line for line in result.stdout.splitlines() if not line.startswith("#")]
+    assert [line.rsplit(",", 1)[1] for line in lines[1:]] == ["ok", "invalid-input", "ok"]

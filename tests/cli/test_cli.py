@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import pkmkit
+from tests.cli.conftest import table_lines
 
 
 @pytest.mark.parametrize("command", [[], ["machines"], ["show"], ["ik"], ["fk"], ["jacobian"],
@@ -97,7 +98,7 @@ def test_batch_csv_with_bad_rows(run, tmp_path):
     out = tmp_path / "q.csv"
     result = run("ik", "linear-delta", "--input", poses, "--output", out)
     assert result.exit_code == 3 and "2 flagged" in result.output
-    lines = out.read_text().splitlines()
+    lines = table_lines(out.read_text())
     assert lines[0] == "x,y,z,q1,q2,q3,mode,status"
     assert lines[1].endswith(",ok") and lines[2].endswith(",unreachable")
     assert lines[3].endswith(",invalid-input") and lines[4].endswith(",ok")
@@ -108,18 +109,18 @@ def test_batch_csv_with_bad_rows(run, tmp_path):
                     + "\n")
     result = run("fk", "linear-delta", "--input", good, "--output", tmp_path / "x.csv")
     assert result.exit_code == 0
-    back = (tmp_path / "x.csv").read_text().splitlines()
+    back = table_lines((tmp_path / "x.csv").read_text())
     assert back[0] == "q1,q2,q3,x,y,z,mode,status"
     values = [float(v) for v in back[1].split(",")[3:6]]
     np.testing.assert_allclose(values, [0.25, 0.25, 0.0], atol=1e-12)
 
     result = run("fk", "linear-delta", "--all", "--input", good, "--output", tmp_path / "a.csv")
     assert result.exit_code == 0
-    assert len((tmp_path / "a.csv").read_text().splitlines()) == 1 + 4  # two modes per row
+    assert len(table_lines((tmp_path / "a.csv").read_text())) == 1 + 4  # two modes per row
 
     result = run("jacobian", "linear-delta", "--input", poses, "--output", tmp_path / "j.csv")
     assert result.exit_code == 3
-    header = (tmp_path / "j.csv").read_text().splitlines()[0].split(",")
+    header = table_lines((tmp_path / "j.csv").read_text())[0].split(",")
     assert header[:6] == ["x", "y", "z", "q1", "q2", "q3"] and "J33" in header
 
 
@@ -245,7 +246,7 @@ def test_batch_keeps_good_rows_when_a_cell_is_bad(run, tmp_path):
     out = tmp_path / "q.csv"
     result = run("ik", "linear-delta", "--input", poses, "--output", out)
     assert result.exit_code == 3 and "poses.csv:3" in result.output
-    lines = out.read_text().splitlines()
+    lines = table_lines(out.read_text())
     assert lines[1].endswith(",ok") and lines[2].endswith(",invalid-input")
 
 
@@ -255,7 +256,7 @@ def test_jacobian_batch_statuses(run, tmp_path):
     out = tmp_path / "j.csv"
     result = run("jacobian", "five-bar", "--input", poses, "--output", out)
     assert result.exit_code == 3 and "1 singular rows" in result.output
-    status = [line.rsplit(",", 1)[1] for line in out.read_text().splitlines()[1:]]
+    status = [line.rsplit(",", 1)[1] for line in table_lines(out.read_text())[1:]]
     # (0.6, 0.5) is a serial singularity, but rho2 = 1.2 m there is beyond the ±1 m stroke
     assert status == ["regular", "invalid-input", "unreachable", "out-of-stroke"]
     assert "row 3: out of stroke: rho2 (leg 2) = 1.2 m, 0.2 m beyond its stroke [-1, 1] m" in (
@@ -305,7 +306,7 @@ def test_batch_header_with_spaces_bom_and_mixed_order(run, tmp_path):
     out = tmp_path / "q.csv"
     result = run("ik", "linear-delta", "--input", path, "--output", out)
     assert result.exit_code == 0, result.output
-    lines = out.read_text().splitlines()
+    lines = table_lines(out.read_text())
     assert lines[0].split(",")[:3] == ["x", "y", "z"]
     q = np.array([[float(v) for v in line.split(",")[3:6]] for line in lines[1:]])
     np.testing.assert_allclose(q, pkmkit.machine("linear-delta").ik(poses), rtol=0, atol=1e-15)

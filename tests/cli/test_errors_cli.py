@@ -56,12 +56,17 @@ def test_identifiability_and_pose_selection(run, as_json, tmp_path):
                       "--json"))
     assert sel["gain"] > 1
     with open(poses) as handle:
+        assert next(handle) == "# units: mm\n"
         rows = list(csv.reader(handle))
     assert rows[0] == ["q1", "q2", "q3"] and len(rows) == 13
     assert 500 < float(rows[1][0]) < 3000  # mm
     again = as_json(run("identifiability", "linear-delta", "--measure", "height", "--poses",
                         poses, "--units", "mm", "--parameters", "dL*,dq*,du*", "--json"))
     assert np.isclose(again["indices"]["O1"], sel["value"], rtol=1e-6)
+    in_m = run("identifiability", "linear-delta", "--measure", "height", "--poses", poses)
+    assert in_m.exit_code == 1  # the file says mm: read in metres it is refused
+    assert "column 'q1' is in mm but the command reads m (--units m); give --units mm" in (
+        in_m.output)
     few = run("identifiability", "linear-delta", "--measure", "height", "--poses", "4")
     assert few.exit_code == 1 and "4 scalar measurements for 30 parameters" in few.output
     wrong = run("identifiability", "tripteor-x7", "--measure", "part", "--poses", "3")

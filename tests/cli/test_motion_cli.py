@@ -18,7 +18,8 @@ def test_path_circle_summary_and_files(run, tmp_path, as_json):
     assert data["violations"] == [] and data["duration"] > np.pi * 300 / 120
     for name in ("motion.png", "path.png", "trajectory.csv"):
         assert (out / name).stat().st_size > 1000
-    header = (out / "trajectory.csv").read_text().splitlines()[0]
+    units, header = (out / "trajectory.csv").read_text().splitlines()[:2]
+    assert units == "# units: mm"
     assert header.startswith("t,x,y,z,q1,q2,q3,q1_dot")
 
 

@@ -12,6 +12,7 @@ import pytest
 
 from pkmkit.boundary.coordinates import pose_columns, pose_to_cli
 from pkmkit.machines.registry import machine
+from tests.cli.conftest import table_lines
 from tests.machines.test_strokes import (
     _crank_slider_with_strokes,
     _dietmaier_with_strokes,
@@ -86,7 +87,7 @@ def test_batch_ik_and_fk_flag_the_row_beyond_a_stroke(run, tmp_path, ident):
     out = tmp_path / "q.csv"
     result = run("ik", name, "--input", poses, "--output", out)
     assert result.exit_code == 3, result.output
-    lines = out.read_text().splitlines()
+    lines = table_lines(out.read_text())
     assert lines[1].endswith(",ok") and lines[2].endswith(",out-of-stroke")
     assert "nan" not in lines[2]  # the values are kept
     assert "row 1: out of stroke: " in result.output
@@ -95,7 +96,7 @@ def test_batch_ik_and_fk_flag_the_row_beyond_a_stroke(run, tmp_path, ident):
         _text(_q_cli(m, v)) for v in (m.home_q, q)) + "\n")
     result = run("fk", name, "--input", qs, "--output", out)
     assert result.exit_code == 3, result.output
-    lines = out.read_text().splitlines()
+    lines = table_lines(out.read_text())
     assert lines[1].endswith(",ok") and lines[2].endswith(",out-of-stroke")
 
 
@@ -125,7 +126,7 @@ def test_select_measure_calibrate_pipeline_stays_within_strokes(run, tmp_path):
     poses, meas = tmp_path / "poses.csv", tmp_path / "meas.csv"
     assert run("select-poses", "linear-delta", "--measure", "point", "--n", "12", "--out",
                poses).exit_code == 0
-    rows = np.loadtxt(poses, delimiter=",", skiprows=1, comments="#")
+    rows = np.loadtxt(poses, delimiter=",", skiprows=2)  # the units line, the header
     assert rows.shape == (12, 3)
     assert not stroke_excess(machine("linear-delta"), rows).out_of_stroke.any()
     assert run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", poses,
@@ -163,6 +164,6 @@ def test_passive_prismatic_joints_are_printed_in_the_units_asked(run, tmp_path):
         table = tmp_path / "q.csv"
         table.write_text(",".join(m.actuator_names) + "\n" + q_mm + "\n")
         result = run("fk", ident, "--input", table, "--output", "-", "--units", "mm")
-        header, row = result.stdout.splitlines()[:2]
+        header, row = table_lines(result.stdout, "mm")[:2]
         value = float(row.split(",")[header.split(",").index(f"passive_{name}")])
         assert value == pytest.approx(in_mm[name], rel=1e-9)

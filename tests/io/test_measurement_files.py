@@ -125,3 +125,16 @@ def test_written_files_follow_the_umask(tmp_path, umask):
     m = pkmkit.machine("linear-delta")
     data = simulate(m, m, "point", 3, np.random.default_rng(0), noise="none")
     assert format_measurements(data, m, units="mm").splitlines()[0] == "# units: mm"
+
+
+def test_column_names_in_another_case(tmp_path):
+    """As batch tables: a CMM export's X, Y, Z [mm] columns are x, y, z; x and X both are
+    refused as a repeated column."""
+    path = tmp_path / "f.csv"
+    path.write_text("Q1,Q2,Q3,X [mm],Y [mm],Z [mm],ID\n1000,1000,1000,1,2,3,a\n")
+    data = read_measurements(path, pkmkit.machine("linear-delta"), "point")
+    np.testing.assert_allclose(data.values[0], [0.001, 0.002, 0.003])
+    np.testing.assert_allclose(data.q[0], [1.0, 1.0, 1.0])
+    path.write_text("q1,q2,q3,x,X,y,z\n1,1,1,0,0,0,0\n")
+    with pytest.raises(InputError, match=r"f\.csv:1: repeated column"):
+        read_measurements(path, pkmkit.machine("linear-delta"), "point")

@@ -66,6 +66,16 @@ _ORIENTATION_COLUMNS = {"rotvec": ("x", "y", "z", *ANGLE_NAMES),
                         "axis": ("x", "y", "z", *AXIS_NAMES)}
 
 
+def pose_units(m, units: str, width: int | None = None) -> list[str | None]:
+    """The unit of each pose column (:func:`pose_columns`, or its first ``width``): ``units``
+    for positions, ``"deg"`` for angles, None for the components of a unit tool axis."""
+    out: list[str | None] = [units if name in ("x", "y", "z") else
+                             "deg" if name in ANGLE_NAMES else None for name in pose_columns(m)]
+    if m.pose_orientation is None:  # position-only poses: every column a length
+        out = [units] * len(out)
+    return out[:width] if width is not None else out
+
+
 def pose_widths(m) -> tuple[int, ...]:
     """Accepted numbers of pose values on the command line."""
     width = len(pose_columns(m))

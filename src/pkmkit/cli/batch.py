@@ -11,7 +11,7 @@ destination checked before any work starts.
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import click
@@ -34,10 +34,12 @@ def batch_options(func):
                         help="Rows per chunk in batch mode (memory bound; default 500000).")(func)
     func = click.option("--output", "output", type=click.Path(dir_okay=False, allow_dash=True),
                         help="Output table (batch mode): .csv, .parquet, .feather, or - for "
-                             "CSV on standard output.")(func)
+                             "CSV on standard output; it records --units (a '# units:' line, "
+                             "'units' schema metadata).")(func)
     func = click.option("--input", "input_", type=click.Path(dir_okay=False, allow_dash=True),
                         help="Input table, one row per case (batch mode): .csv, .parquet, "
-                             ".feather, or - for CSV on standard input.")(func)
+                             ".feather, or - for CSV on standard input. A unit it states ('# "
+                             "units: mm', 'x [mm]' headers) must be --units.")(func)
     return func
 
 
@@ -47,21 +49,29 @@ def status_names() -> list[str]:
 
 
 def run_batch(input_: str, output: str, columns: list[str], compute: Compute, *,
-              chunk_rows: int | None = None, note: Callable[[], str] | None = None) -> None:
+              chunk_rows: int | None = None, note: Callable[[], str] | None = None,
+              units: str | None = None, column_units: Sequence[str | None] | None = None
+              ) -> None:
     """Read ``columns`` of ``input_`` chunk by chunk, write what ``compute`` returns to
     ``output`` and report on standard error; exit with status 3 if some rows were flagged.
 
-    ``compute(values, chunk)`` gets the chunk's values in file units and returns the output
-    columns (name → array or :class:`~pkmkit.io.table.Labels`) and the ``(n,)`` status of the
-    chunk's input rows.
+    ``compute(values, chunk)`` gets the chunk's values in the command's units and returns the
+    output columns (name → array or :class:`~pkmkit.io.table.Labels`) and the ``(n,)`` status
+    of the chunk's input rows.
+
+    ``units`` (``--units``) is recorded in the output (``# units:`` line, ``units`` schema
+    metadata); ``column_units`` gives the unit each input column is read in (``--units``,
+    ``"deg"``, None), and a table stating another one (``x [mm]``, ``# units: mm``) is refused
+    naming the column before any work is done.
     """
     from pkmkit.io.table import DEFAULT_CHUNK_ROWS, TableReader, TableWriter
 
-    reader = TableReader(input_, columns, chunk_rows=chunk_rows or DEFAULT_CHUNK_ROWS)
+    reader = TableReader(input_, columns, chunk_rows=chunk_rows or DEFAULT_CHUNK_ROWS,
+                         units=column_units)
     counts = np.zeros(max(Status) + 1, dtype=np.int64)
     warned = 0
     rows = 0
-    with TableWriter(output) as writer, _progress(reader) as bar:
+    with TableWriter(output, units=units) as writer, _progress(reader) as bar:
         for chunk in reader:
             for message in chunk.problems:
                 if warned < MAX_WARNINGS:

@@ -16,6 +16,7 @@ from pkmkit.exceptions import InputError
 from pkmkit.model.measurement_set import KINDS
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 
+from .limits import MAX_PIECES, MAX_SIMULATED, check_count, check_noise, check_tool_lengths
 from .options import JSON_OPTION, emit_json, fmt, machine_document_path, resolve_machine
 
 #: ``--units`` of the calibration commands: None when not given (a file's own unit is then used
@@ -91,6 +92,8 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
         count = int(poses)
         if count < 1:
             raise InputError("--poses must be ≥ 1")
+        check_count(count, MAX_SIMULATED, "simulated measurements (--poses)",
+                    "simulate in several files")
     elif kind == "ballbar":
         plan = _read_plan(poses, units)
         count = len(plan)
@@ -106,9 +109,12 @@ def simulate_cmd(machine_name, kind, poses, defects_spec, noise, seed, tool_leng
         noise_spec = float(noise) * scale
     except ValueError:
         pass
+    else:
+        check_noise(noise_spec, unit)
     tl = None
     if tool_lengths:
-        tl = np.asarray(_numbers(tool_lengths, "--tool-lengths")) * scale
+        tl = check_tool_lengths(np.asarray(_numbers(tool_lengths, "--tool-lengths")) * scale,
+                                unit)
     frame = load_registration(frame_file) if frame_file else None
     if plan is not None:
         data = _simulate_plan(true, nominal, plan, rng, noise_spec, str(out_file))
@@ -542,6 +548,9 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
                     for name, value, default in (("step", step, DEFAULT_STEP),
                                                  ("tolerance", tolerance, DEFAULT_TOLERANCE),
                                                  ("max_correction", None, bound))}
+        check_count(path.length / settings["step"], MAX_PIECES,
+                    f"pieces of {settings['step'] / scale:g} {unit} (--step) over the "
+                    f"program's {path.length / scale:.6g} {unit}", "give a longer --step")
         try:
             corrected = correct_path(nominal, identified, path, tool_length=tl,
                                      progress=not as_json, **settings)

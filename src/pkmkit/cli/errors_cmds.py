@@ -18,6 +18,7 @@ from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors.measurements import MEASURES
 from pkmkit.model.parameters import length_scale
 
+from .limits import MAX_SAMPLED, check_count, check_tool_length
 from .options import JSON_OPTION, SET_OPTION, UNITS_OPTION, emit_json, fmt, resolve_machine
 
 DEG = math.pi / 180.0
@@ -67,7 +68,9 @@ def _read_poses(machine, path: str, units: str) -> np.ndarray:
     from pkmkit.io.csv_io import read_table
 
     problems: list[str] = []
-    table = read_table(path, machine.actuator_names, problems) * actuator_scales(machine, units)
+    stated = ["deg" if k == "angle" else units for k in machine.actuator_quantities]
+    table = read_table(path, machine.actuator_names, problems, units=stated) * actuator_scales(
+        machine, units)
     for message in problems:
         click.echo(f"warning: {message} (row left out)", err=True)
     good = np.isfinite(table).all(axis=1)
@@ -200,6 +203,10 @@ def _define(cli: click.Group) -> None:
         payload: dict = {"machine": m.id}
         if n_samples is not None and tolerance_file is None:
             raise click.UsageError("--monte-carlo needs --tolerance FILE")
+        if n_samples is not None:
+            check_count(n_samples * resolution ** 2, MAX_SAMPLED,
+                        f"sampled machines ({n_samples} --monte-carlo samples at each of "
+                        f"{resolution}² map points)", "lower --monte-carlo or --resolution")
         if not (compatibility or sensitivity or tolerance_file):
             payload["defects"] = _defect_rows(m)
             if as_json:
@@ -233,7 +240,8 @@ def _define(cli: click.Group) -> None:
     @click.option("--region", metavar="MIN,MAX,...", help="Region for --poses N.")
     @click.option("--pivot", metavar="X,Y,Z", help="Ball-bar pivot (default 0.1 L below the "
                   "mean tool point).")
-    @click.option("--tool-length", type=float, help="Tool length (joint-chain machines).")
+    @click.option("--tool-length", type=float, help="Tool length (joint-chain machines).",
+                  callback=check_tool_length)
     @click.option("--scaling", type=click.Choice(["length", "norm", "none"]), default="length",
                   show_default=True, help="Column scaling of the identification Jacobian.")
     @click.option("--rtol", type=float, default=1e-9, show_default=True,
@@ -294,7 +302,7 @@ def _define(cli: click.Group) -> None:
                   "(default max(20 n, 200)).")
     @click.option("--region", metavar="MIN,MAX,...")
     @click.option("--pivot", metavar="X,Y,Z")
-    @click.option("--tool-length", type=float)
+    @click.option("--tool-length", type=float, callback=check_tool_length)
     @click.option("--out", "out_file", type=click.Path(dir_okay=False), required=True,
                   help="CSV of the chosen actuator coordinates.")
     @click.option("--seed", type=int, default=0, show_default=True)
@@ -319,7 +327,7 @@ def _define(cli: click.Group) -> None:
                               setup=_setup(m, kind, pivot, tool_length, units), index=index,
                               seed=seed, **_selection(parameters, exclude, kinds))
         scales = actuator_scales(m, units)
-        write_table(out_file, m.actuator_names, (result.q / scales).tolist())
+        write_table(out_file, m.actuator_names, (result.q / scales).tolist(), units=units)
         summary = result.summary()
         summary["out"] = out_file
         if as_json:
@@ -392,7 +400,8 @@ def _sensitivity(m, sel, region, points, length_size, angle_size, exact, units, 
 
         keys = ["name", "unit", "kind", "owner", "size", "max_dx", "max_dy", "max_dz",
                 "max_displacement", "max_rotation_deg"]
-        write_table(out / "sensitivity.csv", keys, [[r[k] for k in keys] for r in rows])
+        write_table(out / "sensitivity.csv", keys, [[r[k] for k in keys] for r in rows],
+                    units=units)
         plot_sensitivity(table, out / "sensitivity.png", unit="um")
     if not as_json:
         click.echo(f"{m.name}: largest tool displacement over {len(table.q)} configurations "

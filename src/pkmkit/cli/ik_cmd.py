@@ -21,6 +21,7 @@ from pkmkit.boundary.coordinates import (
     pose_columns,
     pose_from_cli,
     pose_to_cli,
+    pose_units,
     pose_widths,
 )
 from pkmkit.boundary.kinematics import InverseRows, inverse, inverse_options
@@ -136,7 +137,8 @@ def _batch(m, face: Face, options: dict[str, Any], input_: str, output: str,
             out["mode"] = mode_column(m, sol.mode)
         return {**out, "status": status_column(status)}, status
 
-    run_batch(input_, output, columns, compute, chunk_rows=chunk_rows)
+    run_batch(input_, output, columns, compute, chunk_rows=chunk_rows, units=units,
+              column_units=pose_units(m, units, len(columns)))
 
 
 # --- what each family shows of one pose ------------------------------------------------------

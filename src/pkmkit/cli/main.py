@@ -46,13 +46,16 @@ from .stroke_flags import BatchFlags, add_to_payload, finish_single, hint, singl
 
 
 class PkmGroup(LazyGroup):
-    """Turns pkmkit's typed errors into a one-line message and exit status 1."""
+    """Turns pkmkit's typed errors into a one-line message (its lengths in ``--units``) and
+    exit status 1."""
 
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
         except PkmError as exc:
-            raise click.ClickException(str(exc)) from None
+            from .unit_text import in_units
+
+            raise click.ClickException(in_units(str(exc), ctx.meta)) from None
 
 
 @click.group(cls=PkmGroup, context_settings={"help_option_names": ["-h", "--help"]})
@@ -200,7 +203,8 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
                     "status": status_column(status[k_all])
                     }, status[:n], k_all
 
-        run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+        run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows,
+                  units=units, column_units=actuator_units(m, units))
         return
 
     def compute(values, chunk):
@@ -211,7 +215,8 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
         return {**named(m.actuator_names, values), **named(m.pose_names, res.pose / scale),
                 "mode": label, "status": status_column(status)}, status
 
-    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows,
+              units=units, column_units=actuator_units(m, units))
 
 
 @cli.command()
@@ -274,7 +279,8 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
                     "status": Labels(codes, [*sing_names, *status_names()])}, status
 
         run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows,
-                  note=lambda: f" (and {singular[0]} singular rows computed)")
+                  note=lambda: f" (and {singular[0]} singular rows computed)", units=units,
+                  column_units=[units] * m.dims)
         return
     x = parse_vector(pose, m.dims, "--pose", units)
     jac = m.jacobian(x, q=m.ik(x, strokes="ignore"), tol=tol)

@@ -24,6 +24,7 @@ from pkmkit.plot.deflection_figures import plot_path_deflection
 from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
 from pkmkit.stiffness.along_path import path_deflection
 
+from .limits import check_feed_reached, check_wrench
 from .options import (
     EXIT_PARTIAL,
     JSON_OPTION,
@@ -168,7 +169,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     if wrench and wrench_file:
         raise click.UsageError("--wrench and --wrench-file are exclusive")
     if wrench:
-        force = np.asarray(_numbers(wrench, (3,), "--wrench"))
+        force = check_wrench(np.asarray(_numbers(wrench, (3,), "--wrench")))
     if wrench_file:
         force = load_wrench_series(wrench_file)
     for name, value, unit in (("--feed", feed, scale), ("--accel", accel, scale),
@@ -186,6 +187,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                            rapid_feed=None if rapid_feed is None else rapid_feed * scale,
                            period=period, masses=props, wrench=force, limits=limits)
     summary = result.summary()
+    check_feed_reached(feed * scale, summary["tool_speed_max"], units)
     lengths = ("length", "cutting_length", "q_min", "q_max", "stroke", "qd_max", "qdd_max",
                "tool_speed_max", "tool_accel_max")
     for key in lengths:
@@ -227,7 +229,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
             plot_path_deflection(motion, m.actuator_names, bent, length_unit=units,
                                  title=f"{m.name}: tool deflection", path=out / "deflection.png")
             summary["files"].append("deflection.png")
-        with TableWriter(out / "trajectory.csv") as writer:
+        with TableWriter(out / "trajectory.csv", units=units) as writer:
             writer.write(columns)
     if as_json:
         emit_json(summary)

@@ -18,11 +18,22 @@ from pkmkit.model.machine_file import SUFFIXES
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 from pkmkit.spatial.rotation import DEFAULT_CONVENTION
 
+from .limits import check_tool_length
+from .unit_text import MACHINE_KEY, UNITS_KEY, remember
+
+
+def _remember_units(ctx: click.Context, param: click.Parameter, value: str) -> str:
+    ctx.meta[UNITS_KEY] = value  # error messages in these units (cli.unit_text)
+    return value
+
+
 UNITS_OPTION = click.option(
     "--units",
     type=click.Choice(sorted(LENGTH_UNITS)),
     default="m",
     show_default=True,
+    is_eager=True,  # read first: other options' checks state their values in these units
+    callback=_remember_units,
     help="Length unit of every value on the command line and in the output "
     "(angles are always in degrees).",
 )
@@ -41,7 +52,7 @@ ANGLES_OPTION = click.option(
          "(R = Rz(C) Ry(B) Rx(A)); upper case for moving axes (ZYX, ZYZ, ...), or rpy, ypr, "
          "euler-zyz, ...")
 TOOL_LENGTH_OPTION = click.option(
-    "--tool-length", type=float, default=None,
+    "--tool-length", type=float, default=None, callback=check_tool_length,
     help="Tool length along the tool axis (joint-chain machines), in --units; default the "
          "machine's.")
 
@@ -59,6 +70,9 @@ def resolve_machine(name: str, assignments: Sequence[str], units: str) -> Machin
     """A machine from a built-in id or a machine-file path, with ``--set`` overrides given in
     CLI units (lengths in ``units``, angles in degrees)."""
     base = load(name) if is_machine_file(name) else machine(name)
+    remember(MACHINE_KEY, base)
+    if is_machine_file(name):
+        refuse_giant(base, name)
     if not assignments:
         return base
     if base.kind is None:
@@ -75,7 +89,28 @@ def resolve_machine(name: str, assignments: Sequence[str], units: str) -> Machin
         if key not in specs:
             raise UnknownParameterError(key, base.id, specs)
         overrides[key] = specs[key].parse_text(value, units, base.id)
-    return base.with_params(**overrides)
+    built = base.with_params(**overrides)
+    remember(MACHINE_KEY, built)
+    return built
+
+
+#: A machine whose home tool point or length actuators lie farther than this (m) from its
+#: origin is a file in millimetres read as metres: machine tools are metres across.
+MAX_MACHINE_SIZE = 100.0
+
+
+def refuse_giant(m: Machine, name: str) -> None:
+    """A :class:`ParameterError` when machine file ``name`` builds a machine hundreds of metres
+    across (lengths in mm with no ``units = "mm"``: consistent, so nothing else notices)."""
+    q = np.asarray(m.home_q, dtype=float)
+    lengths = np.asarray(m.actuator_quantities) == "length"
+    size = max(float(np.abs(np.asarray(m.home_pose, dtype=float)[:3]).max()),
+               float(np.abs(q[lengths]).max()) if lengths.any() else 0.0)
+    if size > MAX_MACHINE_SIZE:
+        raise ParameterError(
+            f"{name}: at its home the machine reaches {size:.4g} m from its origin, beyond "
+            f"{MAX_MACHINE_SIZE:g} m: are its lengths in mm without `units = \"mm\"` in the "
+            "file? (a machine file without units is read in metres)")
 
 
 def machine_document_path(name: str) -> str:

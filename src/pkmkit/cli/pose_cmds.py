@@ -148,7 +148,8 @@ def _fk_full_pose_batch(m, all_modes, input_, output, chunk_rows, units, convent
         return {**named(m.actuator_names, values), **named(columns, poses),
                 "status": status_column(status)}, status
 
-    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows,
+              units=units, column_units=actuator_units(m, units))
 
 
 def fk_chain(m, q_text, all_modes, x0_text, input_, output, chunk_rows, units, convention,
@@ -208,7 +209,8 @@ def _fk_chain_batch(m, lengths, input_, output, chunk_rows, units, convention) -
         return {**named(m.actuator_names, values), **named(columns, poses), **extra,
                 "status": status_column(status)}, status
 
-    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows)
+    run_batch(input_, output, list(m.actuator_names), compute, chunk_rows=chunk_rows,
+              units=units, column_units=actuator_units(m, units))
 
 
 def _fk_or_stroke(m, q: np.ndarray, units: str, check, **options: Any):

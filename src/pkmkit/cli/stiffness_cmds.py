@@ -19,6 +19,7 @@ from pkmkit.boundary.coordinates import (
     parse_numbers,
     pose_columns,
     pose_from_cli,
+    pose_units,
     pose_widths,
 )
 from pkmkit.boundary.kinematics import inverse_options
@@ -27,6 +28,7 @@ from pkmkit.model.parameters import length_scale
 from pkmkit.spatial.rotation import resolve_convention
 
 from .batch import batch_options, run_batch, status_names
+from .limits import check_wrench
 from .options import (
     ANGLES_OPTION,
     JSON_OPTION,
@@ -86,7 +88,7 @@ def parse_wrench(text: str | None, machine) -> tuple[np.ndarray | None, str]:
 def _wrench(text: str | None, d: int) -> tuple[np.ndarray | None, str]:
     if text is None:
         return None, ""
-    values = parse_numbers(text, "--wrench", (d, 6) if d < 6 else (6,))
+    values = check_wrench(parse_numbers(text, "--wrench", (d, 6) if d < 6 else (6,)))
     note = ""
     if values.size == 6 and d < 6:
         if np.any(values[3:]):
@@ -295,7 +297,8 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
         out["status"] = Labels(status, status_names())
         return out, status
 
-    run_batch(input_, output, columns, compute, chunk_rows=chunk_rows)
+    run_batch(input_, output, columns, compute, chunk_rows=chunk_rows, units=units,
+              column_units=pose_units(m, units))
 
 
 class _Face(NamedTuple):

@@ -45,6 +45,10 @@ DISTRIBUTIONS = ("uniform", "normal")
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
 ANGLE_SCALES = {"rad": 1.0, "mrad": 1e-3, "urad": 1e-6, "µrad": 1e-6, "deg": np.pi / 180.0}
 PERCENTILES = (50.0, 95.0, 99.0, 100.0)
+#: Largest tolerance half-width of a length-like defect (m) and of an angle-like one (rad):
+#: defects are small displacements; beyond these the file is in another unit than it says.
+MAX_LENGTH_TOLERANCE = 0.1
+MAX_ANGLE_TOLERANCE = 0.1
 
 
 @dataclass(frozen=True)
@@ -198,8 +202,26 @@ def read_tolerances(path: str, machine) -> Tolerances:
                     raise fail(str(exc), where) from None
             for i in hit:
                 width[i] = to_si(ds.units[i], float(value))
+                _check_size(width[i], ds.units[i] in ANGLE_UNITS, units, angle_units, fail,
+                            where, value)
     return Tolerances(names=ds.names, half_width=width, distribution=distribution,
                       source=str(path))
+
+
+def _check_size(si: float, angle: bool, units: str, angle_units: str, fail, where: tuple,
+                value: float) -> None:
+    """Refuse a half-width beyond :data:`MAX_LENGTH_TOLERANCE` / :data:`MAX_ANGLE_TOLERANCE`
+    (a file in another unit than it states: 1e300, or millimetres read as metres)."""
+    limit = MAX_ANGLE_TOLERANCE if angle else MAX_LENGTH_TOLERANCE
+    if si <= limit:
+        return
+    unit = angle_units if angle else units
+    shown = limit / (ANGLE_SCALES[unit] if angle else LENGTH_UNITS[unit])
+    hint = ('; did you mean units = "mm"?' if not angle and units == "m"
+            and si * 1e-3 <= limit else "")
+    raise fail(f"{'.'.join(where)}: a half-width of {value!r} {unit} is beyond {shown:g} {unit}, "
+               f"the largest tolerance of {'an angle' if angle else 'a length'}-like defect "
+               f"(defects are small displacements){hint}", where)
 
 
 @dataclass(frozen=True)

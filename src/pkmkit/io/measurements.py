@@ -4,7 +4,9 @@ name the file line and column, written atomically.
 A file is a CSV table with a header row naming its columns; ``#`` lines are comments. The
 length unit is given by a comment line ``# units: mm`` (or ``m``) before the header, or by
 ``[mm]`` after a column name (``x [mm]``), or by the caller (``--units``); when two of these are
-given they must agree. Angles (revolute actuators, rotation vectors) are always in degrees.
+given they must agree. Column names may differ in case (``X`` for ``x``); a column given twice
+(``x`` and ``X``) is refused. Batch tables (:mod:`pkmkit.io.table`) follow the same
+conventions. Angles (revolute actuators, rotation vectors) are always in degrees.
 
 Columns by type (the actuator columns are named as the machine's actuators, e.g. ``Q1 … Q5``
 for the Tripteor X7, ``q1 q2 q3`` for a linear Delta):
@@ -132,6 +134,8 @@ def read_csv_table(path: str | Path, required: tuple[str, ...], optional: tuple[
         if not name:
             raise InputError(f"{label}:{header_line}: column {k + 1} has no name")
         columns.append(name)
+    known = {c.casefold(): c for c in (*required, *optional)}
+    columns = [c if c in known.values() else known.get(c.casefold(), c) for c in columns]
     if _looks_numeric(columns):
         raise InputError(f"{label}:{header_line}: the first row must be a header naming the "
                          f"columns: {', '.join(required)}")

@@ -11,7 +11,14 @@ from typing import TYPE_CHECKING, Any, BinaryIO
 import numpy as np
 
 from pkmkit.exceptions import InputError
-from pkmkit.io.table_format import _COMMENT, _HAS_COMMENT, STDIO, TableChunk
+from pkmkit.io.table_format import (
+    _COMMENT,
+    _HAS_COMMENT,
+    STDIO,
+    UNIT_LINE,
+    TableChunk,
+    match_columns,
+)
 
 if TYPE_CHECKING:  # a source reads the options of the reader that owns it
     from pkmkit.io.table import TableReader
@@ -87,6 +94,9 @@ class CsvSource:
             text = _decode(line, r.path, line_no).strip()
             if text and not text.startswith("#") and text.strip(", \t"):
                 break
+            unit = UNIT_LINE.match(text.strip(' ,"'))
+            if unit:  # a "# units: mm" line before the header
+                r.declare_file_unit(unit.group(1), f"{r.path}:{line_no}")
             buffer = buffer[len(line):]
             line_no += 1
         try:
@@ -100,15 +110,12 @@ class CsvSource:
             if self.width < len(r.columns):
                 raise InputError(f"{r.path}:{line_no}: expected at least {len(r.columns)} "
                                  f"columns ({', '.join(r.columns)}), got {self.width}")
+            r.check_units([None] * len(r.columns), f"{r.path}:{line_no}")
         else:
             header = [c.strip() for c in cells]
-            missing = [c for c in r.columns if c not in header]
-            if missing:
-                raise InputError(f"{r.path}:{line_no}: missing column(s) {', '.join(missing)}; "
-                                 f"expected {', '.join(r.columns)} (header: "
-                                 f"{', '.join(header)})")
+            self.index, stated = match_columns(header, r.columns, f"{r.path}:{line_no}")
+            r.check_units(stated, f"{r.path}:{line_no}")
             self.width = len(header)
-            self.index = [header.index(c) for c in r.columns]
             buffer = buffer[len(line):]
             line_no += 1
         # data: chunks of about chunk_rows lines
@@ -265,6 +272,7 @@ class ArrowSource:
 
     def __init__(self, reader: TableReader):
         self.reader = reader
+        self.names: list[str] = []  # the wanted columns' names in the file
 
     def _batches(self) -> Iterator[Any]:
         import pyarrow as pa
@@ -278,20 +286,18 @@ class ArrowSource:
                 import pyarrow.parquet as pq
 
                 source = pq.ParquetFile(r.path)
-                names = source.schema_arrow.names
                 r.total = source.metadata.num_rows
-                self._check_columns(names)
-                yield from source.iter_batches(batch_size=r.chunk_rows, columns=r.columns)
+                self._check_columns(source.schema_arrow)
+                yield from source.iter_batches(batch_size=r.chunk_rows, columns=self.names)
                 return
             try:
                 ipc = pa.ipc.open_file(r.path)
-                names = ipc.schema.names
-                self._check_columns(names)
+                self._check_columns(ipc.schema)
                 r.total = sum(ipc.get_batch(i).num_rows for i in range(ipc.num_record_batches))
                 batches = (ipc.get_batch(i) for i in range(ipc.num_record_batches))
             except pa.ArrowInvalid:
                 ipc = pa.ipc.open_stream(r.path)
-                self._check_columns(ipc.schema.names)
+                self._check_columns(ipc.schema)
                 batches = iter(ipc)
             yield from batches
         except FileNotFoundError:
@@ -303,12 +309,18 @@ class ArrowSource:
         except pa.ArrowException as exc:
             raise InputError(f"{r.path}: not {kind} file ({exc})") from None
 
-    def _check_columns(self, names: Sequence[str]) -> None:
+    def _check_columns(self, schema: Any) -> None:
+        """Find the wanted columns (``self.names``: their names in the file) and check their
+        units against the schema's ``units`` metadata and their ``[unit]`` suffixes."""
         r = self.reader
-        missing = [c for c in r.columns if c not in names]
-        if missing:
-            raise InputError(f"{r.path}: missing column(s) {', '.join(missing)}; expected "
-                             f"{', '.join(r.columns)} (columns: {', '.join(names)})")
+        names = list(schema.names)
+        index, stated = match_columns(names, r.columns, r.path)
+        self.names = [names[k] for k in index]
+        unit = (schema.metadata or {}).get(b"units")
+        if unit is not None:
+            r.declare_file_unit(unit.decode("utf-8", errors="replace"),
+                                f"{r.path}: schema metadata 'units'")
+        r.check_units(stated, r.path)
 
     def chunks(self) -> Iterator[TableChunk]:
         import pyarrow as pa
@@ -338,8 +350,8 @@ class ArrowSource:
         values = np.empty((n, len(r.columns)))
         invalid = np.zeros(n, dtype=bool)
         problems: list[str] = []
-        for j, name in enumerate(r.columns):
-            column = table.column(name)
+        for j, (name, actual) in enumerate(zip(r.columns, self.names, strict=True)):
+            column = table.column(actual)
             try:
                 floats = pc.cast(column, pa.float64())
             except (pa.ArrowInvalid, pa.ArrowNotImplementedError):

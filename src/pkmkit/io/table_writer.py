@@ -24,6 +24,11 @@ class TableWriter:
     ends without an exception. Columns are given to :meth:`write` as a mapping name → values:
     float or integer arrays, or :class:`Labels` for text columns.
 
+    ``units`` (a length unit) records the unit of the table's length columns: a
+    ``# units: mm`` line before a CSV header, a ``units`` key in the schema metadata of a
+    Parquet or Feather file (angles are in degrees) — what :class:`~pkmkit.io.table.TableReader`
+    reads back.
+
     Raises:
         InputError: an unknown extension or a destination that cannot be written — at
             construction, before any work is done.
@@ -39,8 +44,10 @@ class TableWriter:
     0.30000000000000004,unreachable
     """
 
-    def __init__(self, path: str | Path, *, stdout: BinaryIO | None = None):
+    def __init__(self, path: str | Path, *, stdout: BinaryIO | None = None,
+                 units: str | None = None):
         self.path = str(path)
+        self.units = units
         if self.path != STDIO:
             check_output_file(path)
         self.format = table_format(path)
@@ -97,6 +104,8 @@ class TableWriter:
         arrays = [_to_arrow(v) for v in columns.values()]
         table = pa.table(arrays, names=list(columns))
         if self._writer is None:
+            if self.units is not None:
+                table = table.replace_schema_metadata({"units": self.units})
             self._schema = table.schema
             texts = [*columns, *(s for v in columns.values() if isinstance(v, Labels)
                                  for s in v.names)]
@@ -157,6 +166,8 @@ class TableWriter:
             else:
                 self._sink = self._owned = open(self._temp, "wb")
             header = io.StringIO()
+            if self.units is not None:
+                header.write(f"# units: {self.units}\n")
             csv.writer(header, lineterminator="\n").writerow(schema.names)
             self._sink.write(header.getvalue().encode("utf-8"))
             self._csv_options = pcsv.WriteOptions(
@@ -213,8 +224,10 @@ def _to_arrow(values: Any) -> Any:
     return pa.array([str(v) for v in arr], pa.string())
 
 
-def write_table(path: str | Path, header: Sequence[str], rows: Sequence[Sequence]) -> None:
-    """Write a small table given row by row (floats in shortest round-trip form), atomically.
+def write_table(path: str | Path, header: Sequence[str], rows: Sequence[Sequence], *,
+                units: str | None = None) -> None:
+    """Write a small table given row by row (floats in shortest round-trip form), atomically;
+    ``units`` is recorded as :class:`TableWriter` does.
 
     Raises:
         InputError: the file cannot be written (missing directory, permissions).
@@ -232,14 +245,14 @@ def write_table(path: str | Path, header: Sequence[str], rows: Sequence[Sequence
             lookup = {s: k for k, s in enumerate(names)}
             columns[name] = Labels(np.array([lookup[str(c)] for c in cells], dtype=np.int32),
                                    names)
-    with TableWriter(path) as writer:
+    with TableWriter(path, units=units) as writer:
         writer.write(columns)
 
 
-def csv_text(columns: dict[str, Any]) -> str:
+def csv_text(columns: dict[str, Any], units: str | None = None) -> str:
     """The CSV text of a small table (as :class:`TableWriter` writes it)."""
     buffer = io.BytesIO()
-    writer = TableWriter(STDIO, stdout=buffer)
+    writer = TableWriter(STDIO, stdout=buffer, units=units)
     writer.write(columns)
     writer.close()
     return buffer.getvalue().decode("utf-8")

@@ -312,7 +312,7 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
     def first_order_pose(self, q: np.ndarray) -> np.ndarray:
         """First-order guess ``(N, 6)`` of the pose of actuator coordinates ``q (N, n)``: the
         twist J(home)(q − q_home) applied to the home pose (the engine's default start)."""
-        bad = ~np.isfinite(q).all(axis=1)
+        bad = ~_valid_rows(q)  # non-finite or beyond MAX_COORDINATE: no guess, the row alone
         twist = (np.where(bad[:, None], self._home_q, q) - self._home_q) @ self._home_jacobian.T
         guess = np.empty((q.shape[0], 6))
         guess[:, :3] = self._home_pose[:3] + twist[:, :3]

@@ -44,8 +44,11 @@ class PositionInverse:
         n = self.n_actuators
         if q0 is None:
             # first order from home: the position rows of J(home) are square (n = 3)
+            # (a row that is not finite or beyond MAX_COORDINATE enters as home: LAPACK scales
+            # the right-hand sides together, so one inf row would make every guess NaN)
             j_t = self._home_jacobian[:3]
-            dq = np.linalg.lstsq(j_t, (pb - self._home_pose[:3]).T, rcond=None)[0].T
+            offset = np.where(_valid_rows(pb)[:, None], pb - self._home_pose[:3], 0.0)
+            dq = np.linalg.lstsq(j_t, offset.T, rcond=None)[0].T
             guess_q = self._home_q + dq
         else:
             guess_q = _rows_like(q0, n, "q0", pb.shape[0])

@@ -303,6 +303,10 @@ class Machine(RodRefusals, ModeNaming, MachineFace):
                 status[bad] = np.where(_valid_rows(xb[bad]), Status.UNREACHABLE,
                                        Status.INVALID_INPUT)
                 q[bad] = np.nan
+            huge = ~_valid_rows(xb)  # finite q of a pose beyond MAX_COORDINATE (a vertical
+            if huge.any():  # slide follows any height): refused as the single call does
+                status[huge] = Status.INVALID_INPUT
+                q[huge] = np.nan
         elif method == "numeric":
             if q0 is None:
                 guess = self._branch_guess_q(xb, br)
@@ -501,8 +505,9 @@ class Machine(RodRefusals, ModeNaming, MachineFace):
         else:
             raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
         status = np.asarray(status, dtype=int)
-        bad = np.flatnonzero(status != Status.OK)
-        status[bad[~_valid_rows(qb[bad])]] = Status.INVALID_INPUT
+        # every row beyond MAX_COORDINATE, also those a periodic crank angle makes solvable:
+        # refused as the single call does
+        status[~_valid_rows(qb)] = Status.INVALID_INPUT
         if single and status[0] != Status.OK:
             self._raise_direct(qb[0], sign, status[0])
         check = judge_rows(self, qb, status, strokes, single, f"q = {qb[0].tolist()}",
