@@ -63,7 +63,8 @@ def _smallest(machine: Any, poses: np.ndarray, data: StiffnessData,
         section = Section(ea, 1.0, 1.0, 1.0, 1e-9, f"EA = {ea:.6g} N")
         trial = dataclasses.replace(data, rod_section=section,
                                     rod_material=BeamMaterial(1.0, 1.0))
-    return stiffness_figures(machine, poses, data=trial).smallest
+    smallest = stiffness_figures(machine, poses, data=trial).smallest
+    return np.where(np.isfinite(smallest), smallest, -np.inf)  # a failed pose meets no bound
 
 
 def required_axial_rigidity(machine: Any, poses: Any, bound: float, *,
@@ -98,6 +99,8 @@ def required_axial_rigidity(machine: Any, poses: Any, bound: float, *,
         return RodRequirement(math.inf, bound, rigid_min, x[np.argmin(rigid[reachable])], False)
     lo, hi = 1.0, 1e3
     while np.min(_smallest(machine, x, data, hi)) < bound:
+        if hi > 1e30:  # cannot happen for a bound below the drives' (the limit of large EA)
+            raise InputError(f"no axial rigidity up to {hi:g} N meets {bound:g} N/m")
         lo, hi = hi, hi * 1e3
     while hi - lo > EA_RTOL * hi:
         mid = math.sqrt(lo * hi)
