@@ -104,6 +104,16 @@ def test_arm_sizing(run, as_json):
         7700 * np.pi / 4 * 0.04**2 * 1.04)
 
 
+def test_arm_sizing_for_a_machine_stiffness(run, as_json):
+    """The Orthoglide about its isotropic point (a 1 mm cube): 50 N/µm needs EA ≈ 1.55e7 N
+    (by hand at the point, test_arm_stiffness.py), the sized arm at least EA/ℓ."""
+    data = as_json(run("arm-sizing", "--length", "310", "--units", "mm", "--machine",
+                       "orthoglide", "--machine-stiffness", "50", "--region", "1", "--json"))
+    need = data["machine_stiffness"]
+    assert need["axial_rigidity"] == pytest.approx(1.55e7, rel=0.02)
+    assert data["feasible"] and data["axial_stiffness"] >= need["axial_rigidity"] / 0.31 * 0.999999
+
+
 @pytest.mark.parametrize(
     "args, message",
     [
@@ -123,6 +133,9 @@ def test_arm_sizing(run, as_json):
           "--jerk", "10"], "spatial machine"),
         (["arm-sizing", "--force", "1e7", "--length", "1.0"], "buckling"),
         (["arm-sizing"], "--length"),
+        (["arm-sizing", "--length", "1", "--machine", "linear-delta", "--machine-stiffness",
+          "40", "--region", "0.15"], "no arm meets"),
+        (["arm-sizing", "--length", "1", "--machine", "linear-delta"], "go together"),
     ],
 )
 def test_bad_input(run, args, message):

@@ -120,3 +120,24 @@ def test_a_pose_beyond_the_strokes_is_flagged_with_exit_3(machine, pose):
     assert result.exit_code == 3, result.output
     payload = json.loads(result.stdout)
     assert payload["out_of_stroke"], payload
+
+
+def test_gravity_deflection_of_a_joint_chain_machine(run, as_json):
+    """--gravity prints the library's chain_gravity_deflection (JSON: m, rad) and the masses'
+    note; rod-leg machines and batches are refused."""
+    import numpy as np
+
+    from pkmkit.machines.registry import machine
+    from pkmkit.stiffness.chain_gravity import chain_gravity_deflection
+
+    m = machine("tripteor-x7")
+    q = "983.186,1064.076,988.005,0,0"
+    data = as_json(run("stiffness", "tripteor-x7", "--q", q, "--units", "mm", "--gravity",
+                       "--json"))
+    expected, _ = chain_gravity_deflection(m, np.array([0.983186, 1.064076, 0.988005, 0, 0]))
+    np.testing.assert_allclose(data["gravity_deflection"], expected[0], rtol=1e-12)
+    assert "illustrative masses" in data["masses"]
+    text = run("stiffness", "tripteor-x7", "--q", q, "--units", "mm", "--gravity").output
+    assert "deflection under its own weight: [16.833, 9.2813, -7.681] µm" in text
+    refused = run("stiffness", "orthoglide", "--pose", "0,0,0", "--gravity")
+    assert refused.exit_code == 1 and "joint-chain machines" in refused.output

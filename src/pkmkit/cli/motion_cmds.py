@@ -306,6 +306,31 @@ def _time_law_defaults(tool_path, scale: float, units: str, feed, accel, jerk, r
     return feed, jerk, notes
 
 
+def _machine_requirement(name, bound, side, units):
+    """The rods' axial rigidity a machine needs for ``bound`` N/µm over a square/cube of
+    ``side`` (``units``) about its home pose (:mod:`pkmkit.dynamics.arm_stiffness`)."""
+    if name is None and bound is None and side is None:
+        return None
+    if name is None or bound is None or side is None:
+        raise click.UsageError("--machine, --machine-stiffness and --region go together")
+    from pkmkit.design.metrics import Region
+    from pkmkit.dynamics.arm_stiffness import required_axial_rigidity
+
+    from .stiffness_cmds import machine_and_data
+
+    m, data = machine_and_data(name, (), units)
+    points = Region(side * length_scale(units)).points(m, 9)
+    requirement = required_axial_rigidity(m, points, bound * 1e6, data=data)
+    if not requirement.feasible:
+        raise InputError(f"{name}: its drives alone give {requirement.rigid_stiffness / 1e6:.6g} "
+                         f"N/µm at the region's weakest pose: no arm meets {bound:g} N/µm")
+    return requirement
+
+
+def _fmt_pose(values) -> str:
+    return "[" + ", ".join(f"{v:.6g}" for v in values) + "]"
+
+
 @click.command("arm-sizing")
 @click.option("--force", "force", type=float, default=1000.0, show_default=True,
               help="Design axial force, N (|F|, tension and compression).")
@@ -325,13 +350,19 @@ def _time_law_defaults(tool_path, scale: float, units: str, feed, accel, jerk, r
 @click.option("--young", type=float, default=210e9, show_default=True, help="E, Pa.")
 @click.option("--yield", "yield_strength", type=float, default=620e6, show_default=True,
               help="Yield strength, Pa.")
+@click.option("--machine", "machine_name", help="A rod-leg machine whose smallest translational "
+              "stiffness over --region must meet --machine-stiffness (its rods get the arm).")
+@click.option("--machine-stiffness", type=float, help="Bound on the machine's smallest "
+              "translational stiffness over the region, N/µm.")
+@click.option("--region", "region_side", type=float, help="Side of the square/cube about the "
+              "machine's home pose (length unit) for --machine-stiffness.")
 @click.option("--seed-tables", "reproduce", is_flag=True,
               help="Reproduce seed 000 Tables IV.2 and IV.3 (masses at 1000 kg/m³).")
 @UNITS_OPTION
 @JSON_OPTION
 def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_safety,
                buckling_safety, transverse, diameter_range, density, young, yield_strength,
-               reproduce, units, as_json):
+               machine_name, machine_stiffness, region_side, reproduce, units, as_json):
     """Size (or analyse) a solid or hollow circular arm: stress, buckling, bending, mass,
     stiffness."""
     scale = length_scale(units)
@@ -350,6 +381,9 @@ def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_sa
         raise click.UsageError("--length is required (or --seed-tables)")
     material = Material(E=young, density=density, yield_strength=yield_strength)
     bore = None if inner is None else inner * scale
+    requirement = _machine_requirement(machine_name, machine_stiffness, region_side, units)
+    if requirement is not None:
+        min_stiffness = max(min_stiffness, requirement.arm_stiffness(length * scale))
     if diameter is not None:
         result = analyse_arm(length * scale, diameter * scale, bore or 0.0,
                              axial_force=-abs(force), transverse_accel=transverse,
@@ -367,11 +401,24 @@ def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_sa
                           material=material)
         payload = {"mode": "sizing", "feasible": design.feasible, "message": design.message,
                    "margins": design.constraints, **design.analysis.as_dict()}
+    if requirement is not None:
+        payload["machine_stiffness"] = {
+            "machine": machine_name, "bound": requirement.bound,
+            "rigid_rods": requirement.rigid_stiffness,
+            "axial_rigidity": requirement.axial_rigidity,
+            "worst_pose": requirement.worst_pose, "arm_stiffness": min_stiffness}
     if as_json:
         emit_json(payload)
         if payload.get("feasible") is False:
             raise InputError(payload["message"])
         return
+    if requirement is not None:
+        click.echo(f"  {machine_name}: smallest translational stiffness ≥ "
+                   f"{requirement.bound / 1e6:.6g} N/µm over the region (rigid rods: "
+                   f"{requirement.rigid_stiffness / 1e6:.6g} N/µm) needs rods of EA ≥ "
+                   f"{requirement.axial_rigidity:.6g} N, binding at "
+                   f"{_fmt_pose(requirement.worst_pose / scale)} {units}: arm axial stiffness ≥ "
+                   f"{min_stiffness:.6g} N/m")
     for key in ("length", "outer_diameter", "inner_diameter"):
         click.echo(f"  {key} = {payload[key] / scale:.6g} {units}")
     click.echo(f"  mass {payload['mass']:.6g} kg, axial stiffness {payload['axial_stiffness']:.4g}"

@@ -111,13 +111,16 @@ def _wrench(text: str | None, d: int) -> tuple[np.ndarray | None, str]:
 @click.option("--reference", "reference_text", metavar="DX,DY,DZ",
               help="Move the reference point by this offset (in --units) in the platform frame "
                    "(full-pose machines) or the tool frame (joint-chain machines).")
+@click.option("--gravity", is_flag=True,
+              help="Joint-chain machines: also the tool point's deflection under the weight of "
+                   "the moving parts (illustrative masses, docs/stiffness.md).")
 @batch_options
 @ANGLES_OPTION
 @TOOL_LENGTH_OPTION
 @UNITS_OPTION
 @JSON_OPTION
-def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, reference_text, input_,
-                  output, chunk_rows, convention, tool_length, units, as_json):
+def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, reference_text, gravity,
+                  input_, output, chunk_rows, convention, tool_length, units, as_json):
     """Stiffness of MACHINE at a pose: K and C at the tool point, eigen-stiffnesses, deflection.
 
     Virtual-joint model (docs/stiffness.md): actuator drives as springs (--set
@@ -144,7 +147,12 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
         reference = parse_numbers(reference_text, "--reference", (3,)) * scale
     tl = None if tool_length is None else tool_length * scale
     face = _FACES.get(m.family, _RODS)
+    if gravity and not face.takes_q:
+        raise InputError("--gravity is for joint-chain machines (a translating platform's "
+                         "weight deflection: `pkmkit path --deflection`)")
     if input_ is not None or output is not None:
+        if gravity:
+            raise click.UsageError("--gravity takes one configuration (--pose or --q)")
         if input_ is None or output is None:
             raise click.UsageError("--input and --output go together")
         if pose is not None or q_text is not None:
@@ -179,12 +187,33 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     # exits with status 3 (a stiffness there is that of a machine that cannot be there)
     check = single_check(m, stroke_q, units)
     payload = _payload(m, result, data, units, x, q, wrench)
+    weight = _gravity(m, q, data, tl) if gravity else None
+    if weight is not None:
+        payload["gravity_deflection"], payload["masses"] = weight
     add_to_payload(payload, check, units, set_status=False)
     if as_json:
         emit_json(payload)
     else:
         _print(m, result, data, units, x, q, wrench, wrench_note, names)
+        if weight is not None:
+            defl = weight[0] * PER_MICRO
+            click.echo(f"  deflection under its own weight: {fmt(defl[:3], 5)} µm, rotation "
+                       f"{fmt(defl[3:], 5)} µrad ({weight[1]})")
     finish_single(check, units)
+
+
+def _gravity(m, q, data, tool_length) -> tuple[np.ndarray, str]:
+    """The tool point's deflection ``(6,)`` (m, rad) under the moving parts' weight and the
+    masses' note (:mod:`pkmkit.stiffness.chain_gravity`); a singular configuration raises."""
+    from pkmkit.exceptions import SingularConfigurationError
+    from pkmkit.stiffness.chain_gravity import chain_gravity_deflection, illustrative_masses
+
+    masses = illustrative_masses(m)
+    defl, status = chain_gravity_deflection(m, q, masses, data=data, tool_length=tool_length)
+    if status[0] != 0:
+        raise SingularConfigurationError("no weight deflection at this configuration (singular "
+                                         "or a mechanism)")
+    return defl[0], masses.note
 
 
 def _payload(m, r, data, units, x, q, wrench) -> dict[str, Any]:
