@@ -106,7 +106,7 @@ def test_arm_sizing(run, as_json):
 
 def test_arm_sizing_for_a_machine_stiffness(run, as_json):
     """The Orthoglide about its isotropic point (a 1 mm cube): 50 N/µm needs EA ≈ 1.55e7 N
-    (by hand at the point, test_arm_stiffness.py), the sized arm at least EA/ℓ."""
+    (by hand at the point, test_arm_sizing.py), the sized arm at least EA/ℓ."""
     data = as_json(run("arm-sizing", "--length", "310", "--units", "mm", "--machine",
                        "orthoglide", "--machine-stiffness", "50", "--region", "1", "--json"))
     need = data["machine_stiffness"]

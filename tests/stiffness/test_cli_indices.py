@@ -111,6 +111,7 @@ def test_path_deflection_is_the_library_figure(tmp_path):
     assert len(d["blocks"]) == len(ref.blocks)
     assert "deflection.png" in out["files"] and (tmp_path / "run" / "deflection.png").exists()
     with open(tmp_path / "run" / "trajectory.csv") as f:
+        assert f.readline().strip() == "# units: mm"      # the outputs record their unit
         rows = list(csv.DictReader(f))
     norms = np.array([float(r["defl"]) for r in rows])
     np.testing.assert_allclose(norms, np.linalg.norm(ref.total, axis=1) * 1e6, rtol=1e-9)

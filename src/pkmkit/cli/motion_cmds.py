@@ -308,13 +308,13 @@ def _time_law_defaults(tool_path, scale: float, units: str, feed, accel, jerk, r
 
 def _machine_requirement(name, bound, side, units):
     """The rods' axial rigidity a machine needs for ``bound`` N/µm over a square/cube of
-    ``side`` (``units``) about its home pose (:mod:`pkmkit.dynamics.arm_stiffness`)."""
+    ``side`` (``units``) about its home pose (:mod:`pkmkit.stiffness.arm_sizing`)."""
     if name is None and bound is None and side is None:
         return None
     if name is None or bound is None or side is None:
         raise click.UsageError("--machine, --machine-stiffness and --region go together")
     from pkmkit.design.metrics import Region
-    from pkmkit.dynamics.arm_stiffness import required_axial_rigidity
+    from pkmkit.stiffness.arm_sizing import required_axial_rigidity
 
     from .stiffness_cmds import machine_and_data
 

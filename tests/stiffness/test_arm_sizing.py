@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from pkmkit.design.metrics import Region
-from pkmkit.dynamics.arm_stiffness import required_axial_rigidity
 from pkmkit.dynamics.arms import size_arm
 from pkmkit.exceptions import InputError
 from pkmkit.machines.registry import machine
 from pkmkit.stiffness import Section, default_data, stiffness
+from pkmkit.stiffness.arm_sizing import required_axial_rigidity
 
 
 def test_orthoglide_isotropic_point_by_hand():
