@@ -52,6 +52,16 @@ def test_demo_study_writes_reports(tmp_path, monkeypatch):
         assert {"report.html", "measurements.csv", "validation.csv",
                 "calibration.json"} <= files
     assert (tmp_path / "calibration-tripteor" / "frame.json").exists()
+    # the report's tool-point uncertainty (k = 2) is of the residuals' scale: at most
+    # 2 σ̂ √(unknowns / observations) in RMS (linear least squares; the frame is identified,
+    # so the free rigid motion is removed). The machine-parameter covariance alone gave ~1.6 mm
+    # against a 0.024 mm residual.
+    cal = json.loads((tmp_path / "calibration-tripteor" / "calibration.json").read_text())
+    band = cal["tool_uncertainty_k2"]
+    unknowns = len(cal["parameters"]) + len(cal["setup"])
+    assert band["rigid_motion_removed"]
+    assert 0.1 * cal["sigma_posterior"] < band["rms"] <= 2.0 * cal["sigma_posterior"] * np.sqrt(
+        unknowns / cal["poses"]) * 1.01
     assert np.isfinite(summary["verne_part"]["machined"]["compensated"]["along_x"])
 
 

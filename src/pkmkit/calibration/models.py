@@ -204,6 +204,14 @@ class ResidualModel:
         than to the instrument station (carried over)."""
         return False
 
+    @property
+    def rigid_motion_free(self) -> bool:
+        """Whether a rigid motion of the whole machine leaves these measurements unchanged
+        once the set-up parameters are refitted (an identified instrument frame, identified
+        ball-bar pivots, a bed plane): the tool points are then determined only up to that
+        free rigid motion (a gauge)."""
+        return False
+
 
 class _FramedModel(ResidualModel):
     """Point and pose models: readings in an instrument frame."""
@@ -223,6 +231,10 @@ class _FramedModel(ResidualModel):
                 names=("frame_rx", "frame_ry", "frame_rz", "frame_x", "frame_y", "frame_z"),
                 units=("rad", "rad", "rad", "m", "m", "m"),
                 scale=np.array([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3]), initial=np.zeros(6))
+
+    @property
+    def rigid_motion_free(self) -> bool:
+        return bool(self.identify_frame)
 
     def frame(self, setup: np.ndarray) -> Registration:
         """The full measurement-to-machine transform for set-up values ``setup``."""
@@ -331,6 +343,10 @@ class BallbarModel(ResidualModel):
     def refit_setup_for_validation(self) -> bool:
         return True
 
+    @property
+    def rigid_motion_free(self) -> bool:
+        return bool(self.identify_pivots)
+
     def pivots(self, setup):
         return setup.reshape(-1, 3) if self.identify_pivots else self.pivots0
 
@@ -369,6 +385,12 @@ class HeightModel(ResidualModel):
                                      initial=np.array([z0, 0.0, 0.0]))
 
     def refit_setup_for_validation(self) -> bool:
+        return True
+
+    @property
+    def rigid_motion_free(self) -> bool:
+        # the bed's height and slopes absorb z and the tilts; x, y and the spin about z
+        # do not change a height above a flat bed
         return True
 
     def residuals(self, machine, setup, *, jacobian):

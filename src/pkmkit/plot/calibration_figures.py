@@ -127,7 +127,8 @@ def plot_identifiability(result, *, path: str | Path | None = None) -> Figure:
 def plot_error_maps(result, *, units: str = "mm", path: str | Path | None = None) -> Figure:
     """Over the workspace, seen from above (the measured configurations' nominal tool points,
     x–y): the error of each observation before and after identification and the identified
-    machine's tool-point uncertainty (k = 2) from the parameters' covariance."""
+    machine's tool-point uncertainty (k = 2) from the parameters' covariance (with the free
+    rigid motion removed when the set-up absorbs it: :mod:`pkmkit.calibration.uncertainty`)."""
     from pkmkit.model.parameters import length_scale
 
     scale = length_scale(units)
@@ -135,7 +136,9 @@ def plot_error_maps(result, *, units: str = "mm", path: str | Path | None = None
     panels = [("error, nominal machine", result.before.per_pose / scale),
               ("error, identified machine", result.after.per_pose / scale)]
     if result.tool_uncertainty is not None:
-        panels.append(("tool-point uncertainty (k = 2)",
+        rigid = getattr(result, "tool_uncertainty_rigid_removed", False)
+        panels.append(("tool-point uncertainty (k = 2)"
+                       + (",\nfree rigid motion removed" if rigid else ""),
                        np.asarray(result.tool_uncertainty) / scale))
     fig = Figure(figsize=(4.0 * len(panels), 3.6), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, len(panels)))

@@ -127,7 +127,9 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
                                                f"{cm['value']:+.3f}"])
     if result.tool_uncertainty is not None and result.tool_uncertainty.size:
         u = result.tool_uncertainty / scale
-        summary.append(["tool-point uncertainty (k = 2) at the measured configurations",
+        summary.append(["tool-point uncertainty (k = 2) at the measured configurations"
+                        + (", free rigid motion removed" if
+                           result.tool_uncertainty_rigid_removed else ""),
                         f"RMS {_num(float(np.sqrt(np.mean(u**2))))}, max "
                         f"{_num(float(np.max(u)))} {esc(units)}"])
     parts.append("<h2>Summary</h2>" + _table(["", ""], summary, "summary"))
@@ -164,7 +166,11 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
                           ("maps", "Over the workspace (measured configurations, seen from "
                                    "above): error before and after, and the identified "
                                    "machine's tool-point uncertainty (k = 2) from the "
-                                   "parameters' covariance")):
+                                   "joint covariance of the machine and set-up parameters"
+                                   + ("; the rigid motion the set-up absorbs (frame, "
+                                      "pivots, bed) is removed, as the workpiece set-up "
+                                      "does" if result.tool_uncertainty_rigid_removed
+                                      else ""))):
         if name in figures:
             parts.append(_figure(figures[name], caption, name))
 
