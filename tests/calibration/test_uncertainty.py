@@ -15,6 +15,7 @@ from pkmkit.calibration import random_defects, simulate
 from pkmkit.calibration.identify import calibrate
 from pkmkit.calibration.registration import Registration
 from pkmkit.calibration.uncertainty import (
+    over_workspace,
     rigid_motion_basis,
     tool_point_uncertainty,
     without_rigid_motion,
@@ -158,3 +159,19 @@ def test_undetermined_directions():
     bulging = tool_point_uncertainty(pts, jac, cov, rigid_motion_free=True,
                                      null=np.array([[0.0, 1.0]]))
     assert np.isinf(bulging).all()  # the bulge is not rigid: every point shares its removal
+
+
+def test_uncertainty_over_the_workspace(tracker_setup):
+    """The map over the workspace is the same propagation: at the measured configurations it
+    gives the result's own band; over configurations drawn across the workspace (the region
+    the measurements were drawn from) it is of the same size."""
+    m, readings, rough, _ = tracker_setup
+    res = calibrate(m, readings(7), frame=(rough, "identify"))
+    again = over_workspace(res.machine, res.propagation, q=readings(7).q)
+    np.testing.assert_allclose(again["uncertainty"], res.tool_uncertainty, rtol=1e-9)
+    np.testing.assert_allclose(again["points"], res.tool_points, atol=1e-12)
+    ws = res.workspace_uncertainty(n=60)
+    assert ws["points"].shape == (60, 3) and np.isfinite(ws["uncertainty"]).all()
+    rms = np.sqrt(np.mean(ws["uncertainty"] ** 2))
+    measured = np.sqrt(np.mean(res.tool_uncertainty**2))
+    assert measured / 3 < rms < 3 * measured

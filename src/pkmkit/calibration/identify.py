@@ -61,7 +61,7 @@ from pkmkit.calibration.solver import (
     _solve,
     problem_rows,
 )
-from pkmkit.calibration.uncertainty import tool_point_uncertainty
+from pkmkit.calibration.uncertainty import Propagation, tool_point_uncertainty
 from pkmkit.exceptions import ConvergenceError, InputError, ParameterError, PkmError
 from pkmkit.geometric_errors.blas_threads import one_blas_thread
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
@@ -515,24 +515,28 @@ def _counts(prep, unidentifiable: Mapping[str, str]) -> dict[str, int]:
 
 
 def _tool_uncertainty(machine, data: MeasurementSet, basis: np.ndarray, cov: np.ndarray,
-                      null: np.ndarray, rigid_motion_free: bool) -> dict[str, Any]:
+                      null: np.ndarray, rigid_motion_free: Any) -> dict[str, Any]:
     """Nominal tool points and the k = 2 uncertainty of the identified machine's tool point
     at the measured configurations (:mod:`pkmkit.calibration.uncertainty`): ``cov (p, p)`` the
     machine block of the joint covariance (finite), ``null (k, p)`` undetermined directions
-    (SI), ``basis (d, p)`` identified parameters → defect vector."""
+    (SI), ``basis (d, p)`` identified parameters → defect vector, ``rigid_motion_free`` the
+    free rigid motions (bool or ``(6,)`` mask)."""
+    tl = None if data.tool_length is None else float(np.asarray(data.tool_length).flat[0])
+    removed = bool(np.any(rigid_motion_free))
+    out = {"tool_points": None, "tool_uncertainty": None,
+           "tool_uncertainty_rigid_removed": removed,
+           "propagation": Propagation(basis=basis, cov=np.array(cov), null=null,
+                                      rigid_motion_free=rigid_motion_free, tool_length=tl)}
     if data.q is None:
-        return {"tool_points": None, "tool_uncertainty": None,
-                "tool_uncertainty_rigid_removed": False}
+        return out
     try:
         sens = tool_sensitivity(machine, data.q, tool_length=data.tool_length)
     except (PkmError, np.linalg.LinAlgError):
-        return {"tool_points": None, "tool_uncertainty": None,
-                "tool_uncertainty_rigid_removed": False}
+        return out
     points = np.asarray(sens.pose)[:, :3]
     u = tool_point_uncertainty(points, sens.point @ basis, cov,
                                rigid_motion_free=rigid_motion_free, null=null)
-    return {"tool_points": points, "tool_uncertainty": u,
-            "tool_uncertainty_rigid_removed": bool(rigid_motion_free)}
+    return {**out, "tool_points": points, "tool_uncertainty": u}
 
 
 def _quantity(value: float, unit: str) -> str:

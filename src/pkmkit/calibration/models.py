@@ -37,6 +37,7 @@ The Jacobians with respect to the defects come from
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -205,11 +206,12 @@ class ResidualModel:
         return False
 
     @property
-    def rigid_motion_free(self) -> bool:
+    def rigid_motion_free(self) -> Any:
         """Whether a rigid motion of the whole machine leaves these measurements unchanged
         once the set-up parameters are refitted (an identified instrument frame, identified
         ball-bar pivots, a bed plane): the tool points are then determined only up to that
-        free rigid motion (a gauge)."""
+        free rigid motion (a gauge). A ``(6,)`` mask (translations x, y, z, rotations about
+        x, y, z) where only some of them are free."""
         return False
 
 
@@ -429,6 +431,12 @@ class PartModel(ResidualModel):
 
     def refit_setup_for_validation(self) -> bool:
         return True
+
+    @property
+    def rigid_motion_free(self) -> np.ndarray:
+        """The placement absorbs the translations and the turn about z (a mask in
+        :func:`~pkmkit.calibration.uncertainty.rigid_motion_basis`'s order)."""
+        return np.array([True, True, True, False, False, True])
 
     @staticmethod
     def _command_paths(machine, data) -> dict[str, np.ndarray]:

@@ -90,6 +90,8 @@ class CalibrationResult:
         tool_uncertainty_rigid_removed: whether that uncertainty is taken with the free rigid
             motion of the whole machine removed (the set-up absorbs it: identified frame,
             pivots, bed plane).
+        propagation: a :class:`~pkmkit.calibration.uncertainty.Propagation` (what maps the
+            uncertainty elsewhere: :meth:`workspace_uncertainty`), or None.
         counts: parameter counts: ``candidates``, ``compatible``, ``identified``, ``gauges``,
             ``weak``, ``no_effect``, ``combinations``.
         verdict: the :class:`~pkmkit.calibration.verdict.Verdict` (set by
@@ -137,6 +139,7 @@ class CalibrationResult:
     tool_points: np.ndarray = field(repr=False, default=None)
     tool_uncertainty: np.ndarray = field(repr=False, default=None)
     tool_uncertainty_rigid_removed: bool = False
+    propagation: Any = field(repr=False, default=None)
     counts: dict = field(default_factory=dict)
     verdict: Any = None
     condition_with_priors: float = float("nan")
@@ -148,6 +151,18 @@ class CalibrationResult:
         if name in self.setup_names:
             return float(self.setup_values[self.setup_names.index(name)])
         raise ParameterError(f"{name!r} was not identified", name)
+
+    def workspace_uncertainty(self, n: int | None = None, seed: int = 0
+                              ) -> dict[str, Any] | None:
+        """The identified machine's tool-point uncertainty (k = 2) over its workspace:
+        :func:`pkmkit.calibration.uncertainty.over_workspace` (``n`` configurations, default
+        :data:`~pkmkit.calibration.uncertainty.WORKSPACE_SAMPLE`), or None."""
+        from pkmkit.calibration.uncertainty import WORKSPACE_SAMPLE, over_workspace
+
+        if self.propagation is None:
+            return None
+        return over_workspace(self.machine, self.propagation, n=n or WORKSPACE_SAMPLE,
+                              seed=seed)
 
     def to_json(self, units: str = "m") -> dict[str, Any]:
         """JSON-ready summary: lengths in ``units``, ``"rad"`` parameters in degrees,
