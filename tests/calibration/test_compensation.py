@@ -101,3 +101,31 @@ def test_point_targets_of_a_tool_axis_machine_get_the_home_tool_axis():
     axis = np.atleast_2d(m.fk(m.home_q))[0, 3:]
     np.testing.assert_allclose(np.linalg.norm(axis), 1.0, atol=1e-12)
     np.testing.assert_allclose(targets[:, 3:], np.tile(axis, (2, 1)), atol=1e-12)
+
+
+def test_home_offset_is_the_tool_displacement_at_home():
+    """The tool-point distance at the home actuators between a machine with small defects
+    and the nominal one: zero for the nominal itself, the first-order displacement J δ
+    otherwise (the sensitivity is an independent formula), on a rod machine and a
+    full-pose one."""
+    from pkmkit.calibration.compensation import home_offset
+    from pkmkit.geometric_errors.model import tool_sensitivity
+
+    for name in ("linear-delta", "gough-stewart"):
+        m = pkmkit.machine(name)
+        assert home_offset(m, m) == 0.0
+        delta = 1e-3 * random_defects(m, np.random.default_rng(2), magnitude={
+            "m": 1e-4, "1": 1e-3, "rad": 1e-3})
+        moved = apply_defect_vector(m, delta)
+        sens = tool_sensitivity(m, np.atleast_2d(m.home_q))
+        first_order = float(np.linalg.norm(np.asarray(sens.point)[0] @ delta))
+        assert first_order > 1e-9
+        assert home_offset(m, moved) == pytest.approx(first_order, rel=1e-3)
+
+
+def test_refusal_reason_in_the_output_unit():
+    from pkmkit.calibration.corrected_program import refusal_reason
+
+    assert refusal_reason(2e-3, 1e-3, 1e-3, "mm") == "correction 2 mm > 1 mm"
+    assert refusal_reason(float("nan"), 1e-3) == "out of reach of the calibrated machine"
+    assert refusal_reason(float("inf"), 1e-3) == "an actuator out of stroke"

@@ -34,11 +34,30 @@ def test_demo_study_writes_reports(tmp_path, monkeypatch):
     """The demo entry point, with the studies made small."""
     from pkmkit.demos import calibration as demo_calibration
 
-    monkeypatch.setattr(demo_calibration, "tripteor_laser_tracker",
-                        lambda: studies.tripteor_laser_tracker(identification=40, validation=12,
-                                                               thesis_set=False))
-    monkeypatch.setattr(demo_calibration, "verne_part", lambda: studies.verne_part(sections=60))
+    made = {}
+
+    def small_tripteor():
+        made["tripteor"] = studies.tripteor_laser_tracker(identification=40, validation=12,
+                                                          thesis_set=False)
+        return made["tripteor"]
+
+    def small_part():
+        made["part"] = studies.verne_part(sections=60)
+        return made["part"]
+
+    monkeypatch.setattr(demo_calibration, "tripteor_laser_tracker", small_tripteor)
+    monkeypatch.setattr(demo_calibration, "verne_part", small_part)
     summary = demo_calibration.run_calibration_demo(tmp_path, echo=False)
+    # the summaries' lengths: in mm by default, the same physical values in m
+    for study in made.values():
+        _same_lengths(study.summary(), study.summary(scale=1.0), 1e3)
+    r = made["tripteor"].result
+    assert summary["tripteor"]["identification"]["max"] == pytest.approx(r.after.max * 1e3)
+    assert summary["tripteor"]["registration_rms_table_5_4"] == pytest.approx(0.085)
+    p = made["part"].result
+    assert summary["verne_part"]["identification"]["rms"] == pytest.approx(p.after.rms * 1e3)
+    assert summary["verne_part"]["seed_targets"] == {"x": pytest.approx(0.02),
+                                                     "y": pytest.approx(0.04)}
     json.dumps(summary)
     trip = summary["tripteor"]
     assert trip["poses"] == {"identification": 40, "validation": 12}
@@ -52,7 +71,34 @@ def test_demo_study_writes_reports(tmp_path, monkeypatch):
         assert {"report.html", "measurements.csv", "validation.csv",
                 "calibration.json"} <= files
     assert (tmp_path / "calibration-tripteor" / "frame.json").exists()
+    # the report's tool-point uncertainty (k = 2) is of the residuals' scale: at most
+    # 2 σ̂ √(unknowns / observations) in RMS (linear least squares; the frame is identified,
+    # so the free rigid motion is removed). The machine-parameter covariance alone gave ~1.6 mm
+    # against a 0.024 mm residual.
+    cal = json.loads((tmp_path / "calibration-tripteor" / "calibration.json").read_text())
+    band = cal["tool_uncertainty_k2"]
+    unknowns = len(cal["parameters"]) + len(cal["setup"])
+    assert band["rigid_motion_removed"]
+    assert 0.1 * cal["sigma_posterior"] < band["rms"] <= 2.0 * cal["sigma_posterior"] * np.sqrt(
+        unknowns / cal["poses"]) * 1.01
     assert np.isfinite(summary["verne_part"]["machined"]["compensated"]["along_x"])
+
+
+#: Summary entries that are not lengths (counts, ratios, times, names).
+NOT_LENGTHS = {"poses", "identified", "rank", "condition", "seconds", "unidentifiable_no_effect",
+               "candidates", "J41", "report"}
+
+
+def _same_lengths(mm: dict, m: dict, factor: float, path: str = "") -> None:
+    """Every numeric leaf of ``mm`` is ``factor`` times that of ``m`` (lengths)."""
+    assert mm.keys() == m.keys(), path
+    for key, value in mm.items():
+        if key in NOT_LENGTHS:
+            continue
+        if isinstance(value, dict):
+            _same_lengths(value, m[key], factor, f"{path}.{key}")
+        elif isinstance(value, float | int) and not isinstance(value, bool):
+            assert value == pytest.approx(factor * m[key], rel=1e-12), f"{path}.{key}"
 
 
 def test_tripteor_residual_scales_with_the_injected_tracker_noise():

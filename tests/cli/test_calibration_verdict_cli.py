@@ -206,8 +206,11 @@ def test_report_of_a_passed_calibration(run, tmp_path):
     assert saved["metadata"]["files"]["measurements"]["sha256"] == digest
     assert saved["metadata"]["pkmkit"] and saved["metadata"]["date"]
     for title in ("Parameter counts", "Residuals per axis", "Worst observations",
-                  "tool-point uncertainty (k = 2)"):
+                  "tool-point uncertainty (k = 2)", "over the workspace", "fig-maps"):
         assert title in page
+    band = saved["tool_uncertainty_k2"]
+    assert band["workspace"]["configurations"] > 50
+    assert 0 < band["rms"] < 2 * saved["sigma_posterior"]  # of the residuals' scale (mm)
     # the worst row of the table is the file line of the largest error after identification
     worst = int(np.argmax(out["residuals"]["after"]))
     assert f"<td>{out['residuals']['rows'][worst]}</td>" in page

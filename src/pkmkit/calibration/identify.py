@@ -61,6 +61,7 @@ from pkmkit.calibration.solver import (
     _solve,
     problem_rows,
 )
+from pkmkit.calibration.uncertainty import Propagation, tool_point_uncertainty
 from pkmkit.exceptions import ConvergenceError, InputError, ParameterError, PkmError
 from pkmkit.geometric_errors.blas_threads import one_blas_thread
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
@@ -425,7 +426,10 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
     std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     # the pseudo-inverse drops the directions the data do not determine, which would give
     # those parameters a standard deviation of 0: they are undetermined (inf)
-    undetermined = _undetermined(jw)
+    undetermined, null = _undetermined(jw), _null_directions(jw) * problem.scale[None, :]
+    uncertainty = _tool_uncertainty(m_id, data,
+                                    problem.basis, cov[:mach_sel.size, :mach_sel.size],
+                                    null[:, :mach_sel.size], model.rigid_motion_free)
     std[undetermined] = np.inf
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(std, std)
@@ -470,7 +474,7 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
         tolerance=problem.scale[:p].copy(), chi2=float(meas @ meas), dof=int(dof),
         residuals_before=r_before, covariance=cov, counts=_counts(prep, unidentifiable),
         condition_with_priors=_condition(jw) if problem.prior else float("nan"),
-        **_tool_uncertainty(m_id, data, problem.basis, cov[:p, :p]))
+        **uncertainty)
 
 
 def _condition(jw: np.ndarray) -> float:
@@ -483,9 +487,20 @@ def _undetermined(jw: np.ndarray) -> np.ndarray:
     determine (singular value of the whitened Jacobian below :data:`RCOND` of the largest)."""
     if jw.size == 0:
         return np.zeros(jw.shape[1], dtype=bool)
-    _, s, vt = np.linalg.svd(jw, full_matrices=False)
-    null = s < RCOND * s[0] if s[0] > 0 else np.ones(s.size, dtype=bool)
-    return (vt[null] ** 2).sum(axis=0) > 1e-6
+    return (_null_directions(jw) ** 2).sum(axis=0) > 1e-6
+
+
+def _null_directions(jw: np.ndarray) -> np.ndarray:
+    """``(k, p)`` unit directions (in the scaled unknowns) that ``jw (M, p)`` does not
+    determine: right singular vectors of singular values below :data:`RCOND` of the largest,
+    and those beyond its rank."""
+    p = jw.shape[1]
+    if jw.size == 0:
+        return np.eye(p)
+    _, s, vt = np.linalg.svd(jw, full_matrices=True)
+    small = np.ones(p, dtype=bool)
+    small[:s.size] = s < RCOND * s[0] if s[0] > 0 else True
+    return vt[small]
 
 
 def _counts(prep, unidentifiable: Mapping[str, str]) -> dict[str, int]:
@@ -499,29 +514,29 @@ def _counts(prep, unidentifiable: Mapping[str, str]) -> dict[str, int]:
             "combinations": sum(r.startswith("a combination") for r in reasons)}
 
 
-def _tool_uncertainty(machine, data: MeasurementSet, basis: np.ndarray, cov: np.ndarray
-                      ) -> dict[str, Any]:
-    """Nominal tool points and the k = 2 uncertainty of the tool point at the measured
-    configurations (:class:`CalibrationResult`)."""
+def _tool_uncertainty(machine, data: MeasurementSet, basis: np.ndarray, cov: np.ndarray,
+                      null: np.ndarray, rigid_motion_free: Any) -> dict[str, Any]:
+    """Nominal tool points and the k = 2 uncertainty of the identified machine's tool point
+    at the measured configurations (:mod:`pkmkit.calibration.uncertainty`): ``cov (p, p)`` the
+    machine block of the joint covariance (finite), ``null (k, p)`` undetermined directions
+    (SI), ``basis (d, p)`` identified parameters → defect vector, ``rigid_motion_free`` the
+    free rigid motions (bool or ``(6,)`` mask)."""
+    tl = None if data.tool_length is None else float(np.asarray(data.tool_length).flat[0])
+    removed = bool(np.any(rigid_motion_free))
+    out = {"tool_points": None, "tool_uncertainty": None,
+           "tool_uncertainty_rigid_removed": removed,
+           "propagation": Propagation(basis=basis, cov=np.array(cov), null=null,
+                                      rigid_motion_free=rigid_motion_free, tool_length=tl)}
     if data.q is None:
-        return {"tool_points": None, "tool_uncertainty": None}
+        return out
     try:
         sens = tool_sensitivity(machine, data.q, tool_length=data.tool_length)
     except (PkmError, np.linalg.LinAlgError):
-        return {"tool_points": None, "tool_uncertainty": None}
+        return out
     points = np.asarray(sens.pose)[:, :3]
-    if basis.shape[1] == 0:
-        return {"tool_points": points, "tool_uncertainty": np.zeros(len(points))}
-    j = sens.point @ basis                                   # (N, 3, p)
-    c = np.where(np.isfinite(cov), cov, 0.0)
-    tool = np.einsum("nip,pq,njq->nij", j, c, j)
-    lam = np.linalg.eigvalsh(tool)[:, -1]
-    u = 2.0 * np.sqrt(np.clip(lam, 0.0, None))
-    if not np.isfinite(np.diag(cov)).all():
-        bad = ~np.isfinite(np.diag(cov))
-        touched = np.abs(j[:, :, bad]).max(axis=(1, 2)) > 0
-        u = np.where(touched, np.inf, u)
-    return {"tool_points": points, "tool_uncertainty": u}
+    u = tool_point_uncertainty(points, sens.point @ basis, cov,
+                               rigid_motion_free=rigid_motion_free, null=null)
+    return {**out, "tool_points": points, "tool_uncertainty": u}
 
 
 def _quantity(value: float, unit: str) -> str:

@@ -37,6 +37,7 @@ The Jacobians with respect to the defects come from
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -210,6 +211,15 @@ class ResidualModel:
         than to the instrument station (carried over)."""
         return False
 
+    @property
+    def rigid_motion_free(self) -> Any:
+        """Whether a rigid motion of the whole machine leaves these measurements unchanged
+        once the set-up parameters are refitted (an identified instrument frame, identified
+        ball-bar pivots, a bed plane): the tool points are then determined only up to that
+        free rigid motion (a gauge). A ``(6,)`` mask (translations x, y, z, rotations about
+        x, y, z) where only some of them are free."""
+        return False
+
 
 class _FramedModel(ResidualModel):
     """Point and pose models: readings in an instrument frame."""
@@ -229,6 +239,10 @@ class _FramedModel(ResidualModel):
                 names=("frame_rx", "frame_ry", "frame_rz", "frame_x", "frame_y", "frame_z"),
                 units=("rad", "rad", "rad", "m", "m", "m"),
                 scale=np.array([1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 1e-3]), initial=np.zeros(6))
+
+    @property
+    def rigid_motion_free(self) -> bool:
+        return bool(self.identify_frame)
 
     def frame(self, setup: np.ndarray) -> Registration:
         """The full measurement-to-machine transform for set-up values ``setup``."""
@@ -316,6 +330,10 @@ class BallbarModel(ResidualModel):
     def refit_setup_for_validation(self) -> bool:
         return True
 
+    @property
+    def rigid_motion_free(self) -> bool:
+        return bool(self.identify_pivots)
+
     def pivots(self, setup):
         return setup.reshape(-1, 3) if self.identify_pivots else self.pivots0
 
@@ -356,6 +374,12 @@ class HeightModel(ResidualModel):
     def refit_setup_for_validation(self) -> bool:
         return True
 
+    @property
+    def rigid_motion_free(self) -> bool:
+        # the bed's height and slopes absorb z and the tilts; x, y and the spin about z
+        # do not change a height above a flat bed
+        return True
+
     def residuals(self, machine, setup, *, jacobian):
         state = self._tool(machine, jacobian=jacobian)
         p = state.point
@@ -391,6 +415,12 @@ class PartModel(ResidualModel):
 
     def refit_setup_for_validation(self) -> bool:
         return True
+
+    @property
+    def rigid_motion_free(self) -> np.ndarray:
+        """The placement absorbs the translations and the turn about z (a mask in
+        :func:`~pkmkit.calibration.uncertainty.rigid_motion_basis`'s order)."""
+        return np.array([True, True, True, False, False, True])
 
     @staticmethod
     def _command_paths(machine, data) -> dict[str, np.ndarray]:

@@ -84,8 +84,14 @@ class CalibrationResult:
         tool_points: ``(N, 3)`` nominal tool point at each measured configuration (m), or None
             (machined parts).
         tool_uncertainty: ``(N,)`` expanded uncertainty (k = 2) of the identified machine's
-            tool point at each measured configuration from the machine parameters'
-            covariance: twice the largest standard deviation over directions (m), or None.
+            tool point at each measured configuration, the joint covariance of the machine
+            and set-up parameters propagated (:mod:`pkmkit.calibration.uncertainty`): twice
+            the largest standard deviation over directions (m), or None.
+        tool_uncertainty_rigid_removed: whether that uncertainty is taken with the free rigid
+            motion of the whole machine removed (the set-up absorbs it: identified frame,
+            pivots, bed plane).
+        propagation: a :class:`~pkmkit.calibration.uncertainty.Propagation` (what maps the
+            uncertainty elsewhere: :meth:`workspace_uncertainty`), or None.
         counts: parameter counts: ``candidates``, ``compatible``, ``identified``, ``gauges``,
             ``weak``, ``no_effect``, ``combinations``.
         verdict: the :class:`~pkmkit.calibration.verdict.Verdict` (set by
@@ -132,6 +138,8 @@ class CalibrationResult:
     covariance: np.ndarray = field(repr=False, default=None)
     tool_points: np.ndarray = field(repr=False, default=None)
     tool_uncertainty: np.ndarray = field(repr=False, default=None)
+    tool_uncertainty_rigid_removed: bool = False
+    propagation: Any = field(repr=False, default=None)
     counts: dict = field(default_factory=dict)
     verdict: Any = None
     condition_with_priors: float = float("nan")
@@ -143,6 +151,18 @@ class CalibrationResult:
         if name in self.setup_names:
             return float(self.setup_values[self.setup_names.index(name)])
         raise ParameterError(f"{name!r} was not identified", name)
+
+    def workspace_uncertainty(self, n: int | None = None, seed: int = 0
+                              ) -> dict[str, Any] | None:
+        """The identified machine's tool-point uncertainty (k = 2) over its workspace:
+        :func:`pkmkit.calibration.uncertainty.over_workspace` (``n`` configurations, default
+        :data:`~pkmkit.calibration.uncertainty.WORKSPACE_SAMPLE`), or None."""
+        from pkmkit.calibration.uncertainty import WORKSPACE_SAMPLE, over_workspace
+
+        if self.propagation is None:
+            return None
+        return over_workspace(self.machine, self.propagation, n=n or WORKSPACE_SAMPLE,
+                              seed=seed)
 
     def to_json(self, units: str = "m") -> dict[str, Any]:
         """JSON-ready summary: lengths in ``units``, ``"rad"`` parameters in degrees,
@@ -205,6 +225,7 @@ class CalibrationResult:
                             "matrix": np.round(self.correlation, 6).tolist()},
             "verdict": None if self.verdict is None else self.verdict.to_dict(),
             "counts": dict(self.counts),
+            "tool_uncertainty_k2": _tool_uncertainty_json(self, scale),
             "chi2": self.chi2,
             "dof": self.dof,
             "residuals": {"rows": list(self.after.labels),
@@ -216,6 +237,17 @@ class CalibrationResult:
                             if not k.startswith("point") and k not in ("rms", "max")
                             and not k.startswith("direction")}
         return out
+
+
+def _tool_uncertainty_json(result: CalibrationResult, scale: float) -> dict[str, Any] | None:
+    """RMS and max of the tool-point uncertainty (k = 2) over the measured configurations in
+    the output unit, and whether the free rigid motion is removed."""
+    u = result.tool_uncertainty
+    if u is None or not np.size(u):
+        return None
+    u = np.asarray(u, dtype=float) / scale
+    return {"rms": float(np.sqrt(np.mean(u**2))), "max": float(np.max(u)),
+            "rigid_motion_removed": bool(result.tool_uncertainty_rigid_removed)}
 
 
 def _max_correlation(corr: np.ndarray, names: Sequence[str]) -> dict[str, Any] | None:

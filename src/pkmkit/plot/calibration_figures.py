@@ -124,22 +124,35 @@ def plot_identifiability(result, *, path: str | Path | None = None) -> Figure:
     return _save(fig, path)
 
 
-def plot_error_maps(result, *, units: str = "mm", path: str | Path | None = None) -> Figure:
-    """Over the workspace, seen from above (the measured configurations' nominal tool points,
-    x–y): the error of each observation before and after identification and the identified
-    machine's tool-point uncertainty (k = 2) from the parameters' covariance."""
+def plot_error_maps(result, *, units: str = "mm", path: str | Path | None = None,
+                    workspace: dict | None = None) -> Figure:
+    """Over the workspace, seen from above (x–y): at the measured configurations' tool points,
+    the error of each observation before and after identification and the identified
+    machine's tool-point uncertainty (k = 2) from the parameters' covariance; with
+    ``workspace`` (:meth:`~pkmkit.calibration.results.CalibrationResult.workspace_uncertainty`)
+    that uncertainty at configurations drawn over the machine's workspace. The free rigid
+    motion is removed when the set-up absorbs it (:mod:`pkmkit.calibration.uncertainty`)."""
     from pkmkit.model.parameters import length_scale
 
     scale = length_scale(units)
-    pts = np.asarray(result.tool_points) / scale
-    panels = [("error, nominal machine", result.before.per_pose / scale),
-              ("error, identified machine", result.after.per_pose / scale)]
-    if result.tool_uncertainty is not None:
-        panels.append(("tool-point uncertainty (k = 2)",
-                       np.asarray(result.tool_uncertainty) / scale))
-    fig = Figure(figsize=(4.0 * len(panels), 3.6), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(1, len(panels)))
-    for ax, (name, value) in zip(axes, panels, strict=True):
+    rigid = getattr(result, "tool_uncertainty_rigid_removed", False)
+    note = ",\nfree rigid motion removed" if rigid else ""
+    panels = []
+    if result.tool_points is not None:
+        pts = np.asarray(result.tool_points) / scale
+        panels += [("error, nominal machine", pts, result.before.per_pose / scale),
+                   ("error, identified machine", pts, result.after.per_pose / scale)]
+        if result.tool_uncertainty is not None:
+            panels.append((f"tool-point uncertainty (k = 2){note}", pts,
+                           np.asarray(result.tool_uncertainty) / scale))
+    if workspace is not None:
+        panels.append((f"uncertainty (k = 2) over the workspace\n"
+                       f"({len(workspace['points'])} configurations){note.replace(chr(10), ' ')}",
+                       np.asarray(workspace["points"]) / scale,
+                       np.asarray(workspace["uncertainty"]) / scale))
+    fig = Figure(figsize=(4.0 * max(len(panels), 1), 3.6), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(1, max(len(panels), 1)))
+    for ax, (name, pts, value) in zip(axes, panels, strict=False):
         finite = np.isfinite(value)
         sc = ax.scatter(pts[finite, 0], pts[finite, 1], c=value[finite], s=14, cmap="viridis")
         if (~finite).any():

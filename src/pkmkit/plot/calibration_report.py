@@ -28,8 +28,11 @@ FIGURES = ("residuals", "histograms", "parameters", "identifiability", "maps")
 WORST_ROWS = 10
 
 
-def figure_pngs(result, *, units: str = "mm") -> dict[str, bytes]:
-    """The report's figures as PNG bytes, by name."""
+def figure_pngs(result, *, units: str = "mm", workspace: dict | None = None
+                ) -> dict[str, bytes]:
+    """The report's figures as PNG bytes, by name (``workspace``: the uncertainty over the
+    workspace, :meth:`~pkmkit.calibration.results.CalibrationResult.workspace_uncertainty`,
+    drawn in the maps)."""
     from pkmkit.plot.calibration_figures import (
         plot_error_maps,
         plot_histograms,
@@ -42,9 +45,11 @@ def figure_pngs(result, *, units: str = "mm") -> dict[str, bytes]:
     for name, func in (("residuals", plot_residuals), ("histograms", plot_histograms),
                        ("parameters", plot_parameters),
                        ("identifiability", plot_identifiability), ("maps", plot_error_maps)):
-        if name == "maps" and result.tool_points is None:
+        if name == "maps" and result.tool_points is None and workspace is None:
             continue
-        fig = func(result) if name == "identifiability" else func(result, units=units)
+        fig = (func(result) if name == "identifiability" else
+               func(result, units=units, workspace=workspace) if name == "maps" else
+               func(result, units=units))
         buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=100)
         out[name] = buf.getvalue()
@@ -64,7 +69,8 @@ def _table(header: list[str], rows: list[list[str]], cls: str = "") -> str:
 
 
 def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None = None,
-                sources: dict[str, str] | None = None, title: str | None = None) -> str:
+                sources: dict[str, str] | None = None, title: str | None = None,
+                workspace: dict | None = None) -> str:
     """The HTML report of a :class:`~pkmkit.calibration.identify.CalibrationResult`.
 
     Args:
@@ -73,8 +79,12 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         figures: PNGs by name (default: :func:`figure_pngs`).
         sources: labels → file names shown in the header (measurements, validation, …).
         title: page title.
+        workspace: the tool-point uncertainty over the workspace (default: computed,
+            :meth:`~pkmkit.calibration.results.CalibrationResult.workspace_uncertainty`).
     """
-    figures = figure_pngs(result, units=units) if figures is None else figures
+    workspace = result.workspace_uncertainty() if workspace is None else workspace
+    figures = (figure_pngs(result, units=units, workspace=workspace) if figures is None
+               else figures)
     scale = length_scale(units)
     data = result.to_json(units)
     esc = html.escape
@@ -126,7 +136,15 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
                                                f"{cm['value']:+.3f}"])
     if result.tool_uncertainty is not None and result.tool_uncertainty.size:
         u = result.tool_uncertainty / scale
-        summary.append(["tool-point uncertainty (k = 2) at the measured configurations",
+        summary.append(["tool-point uncertainty (k = 2) at the measured configurations"
+                        + (", free rigid motion removed" if
+                           result.tool_uncertainty_rigid_removed else ""),
+                        f"RMS {_num(float(np.sqrt(np.mean(u**2))))}, max "
+                        f"{_num(float(np.max(u)))} {esc(units)}"])
+    if workspace is not None:
+        u = np.asarray(workspace["uncertainty"]) / scale
+        summary.append([f"tool-point uncertainty (k = 2) over the workspace "
+                        f"({u.size} configurations)",
                         f"RMS {_num(float(np.sqrt(np.mean(u**2))))}, max "
                         f"{_num(float(np.max(u)))} {esc(units)}"])
     parts.append("<h2>Summary</h2>" + _table(["", ""], summary, "summary"))
@@ -160,10 +178,17 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
     parts.append(_worst_rows(result, scale, units))
     for name, caption in (("residuals", "Error of each observation (log scale)"),
                           ("histograms", "Distribution of the errors"),
-                          ("maps", "Over the workspace (measured configurations, seen from "
-                                   "above): error before and after, and the identified "
+                          ("maps", "Over the workspace (seen from above): error before and "
+                                   "after at the measured configurations, and the identified "
                                    "machine's tool-point uncertainty (k = 2) from the "
-                                   "parameters' covariance")):
+                                   "joint covariance of the machine and set-up parameters"
+                                   " there and at configurations drawn over the machine's "
+                                   "workspace"
+                                   + ("; the rigid motion the set-up absorbs (frame, "
+                                      "pivots, bed, part placement) is removed, as the "
+                                      "workpiece set-up "
+                                      "does" if result.tool_uncertainty_rigid_removed
+                                      else ""))):
         if name in figures:
             parts.append(_figure(figures[name], caption, name))
 
@@ -369,12 +394,19 @@ def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: st
                                                         result.defects, note=note)
     payload = result.to_json(units)
     payload["metadata"] = metadata(result, sources)
+    workspace = result.workspace_uncertainty()
+    if workspace is not None and payload.get("tool_uncertainty_k2") is not None:
+        u = np.asarray(workspace["uncertainty"]) / length_scale(units)
+        payload["tool_uncertainty_k2"]["workspace"] = {
+            "configurations": int(u.size), "rms": float(np.sqrt(np.mean(u**2))),
+            "max": float(np.max(u))}
     payload["files"] = {"machine": machine_name if machine_file else None,
                         "report": "report.html"}
     texts["calibration.json"] = json.dumps(to_jsonable(payload), indent=2) + "\n"
     texts["residuals.csv"] = residuals_csv(result, units=units)
-    figures = figure_pngs(result, units=units)
-    texts["report.html"] = report_html(result, units=units, figures=figures, sources=sources)
+    figures = figure_pngs(result, units=units, workspace=workspace)
+    texts["report.html"] = report_html(result, units=units, figures=figures, sources=sources,
+                                       workspace=workspace)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -1,0 +1,44 @@
+"""The verdict's unit hypothesis on readings in another unit than the file says (values, not
+the code against itself: the readings are rescaled by a known factor and the diagnosis must
+name the true unit)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+import pkmkit
+from pkmkit.calibration import calibrate, random_defects, simulate
+from pkmkit.model.defects_table import apply_defect_vector
+
+
+def _readings():
+    m = pkmkit.machine("linear-delta")
+    rng = np.random.default_rng(5)
+    # defects of a well-built machine (tool errors of a few 0.1 mm): a rescale must explain
+    # the residual by far more than the defects do
+    true = apply_defect_vector(m, random_defects(m, rng, magnitude={"m": 2e-5, "1": 2e-4,
+                                                                    "rad": 2e-4}))
+    return m, simulate(true, m, "point", 30, rng, noise=1e-5)
+
+
+def test_readings_in_inches_in_a_millimetre_file_are_named():
+    """Tracker readings written in inches in a file that says mm: read as mm they are 25.4×
+    too small; the likely cause names inches."""
+    m, data = _readings()
+    read = replace(data, values=data.values * (1e-3 / 0.0254))
+    res = calibrate(m, read, file_unit="mm")
+    assert not res.verdict.passed
+    causes = [c for c in res.verdict.causes if c.cause == "unit"]
+    assert causes, [c.message for c in res.verdict.causes]
+    assert "look like they are in in, not mm" in causes[0].message
+    assert "×25.4" in causes[0].message
+
+
+def test_readings_in_millimetres_in_a_metre_file_are_named():
+    m, data = _readings()
+    res = calibrate(m, replace(data, values=data.values * 1e3), file_unit="m")
+    assert not res.verdict.passed
+    unit = [c for c in res.verdict.causes if c.cause == "unit"]
+    assert unit and "look like they are in mm, not m" in unit[0].message
