@@ -7,10 +7,10 @@ import pytest
 
 import pkmkit
 from pkmkit.calibration import default_configurations, random_defects, simulate
-from pkmkit.calibration.identify import _strokes
 from pkmkit.calibration.simulate import Noise
 from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors.model import tool_sensitivity
+from pkmkit.machines.strokes import stroke_limits as _strokes
 from pkmkit.model.defects_table import apply_defect_vector
 
 

@@ -115,7 +115,7 @@ def check_measurements(machine, data: MeasurementSet) -> None:
     if not np.isfinite(q).all():
         i = int(np.flatnonzero(~np.isfinite(q).all(axis=1))[0])
         raise InputError(f"{data.labels[i]}: actuator values are not finite")
-    lo, hi = _strokes(machine)
+    lo, hi = stroke_limits(machine)
     angle = machine.angular_actuators
     excess = signed_excess(q, lo, hi)
     bad = []
@@ -128,10 +128,6 @@ def check_measurements(machine, data: MeasurementSet) -> None:
     if bad:
         more = f" (and {len(bad) - 10} more)" if len(bad) > 10 else ""
         raise InputError("rows out of stroke: " + "; ".join(bad[:10]) + more)
-
-
-def _strokes(machine) -> tuple[np.ndarray, np.ndarray]:
-    return stroke_limits(machine)
 
 
 def _stats(model: ResidualModel, r: np.ndarray) -> ResidualStats:

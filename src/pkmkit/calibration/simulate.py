@@ -40,6 +40,7 @@ from pkmkit.calibration.models import tool_state
 from pkmkit.calibration.registration import Registration
 from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
+from pkmkit.machines.strokes import stroke_limits
 from pkmkit.model.measurement_set import KINDS, MeasurementSet
 from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
 
@@ -73,12 +74,6 @@ def random_defects(machine, rng: np.random.Generator, *, magnitude: dict | None 
     return delta
 
 
-def _strokes(machine):
-    from pkmkit.calibration.identify import _strokes as strokes
-
-    return strokes(machine)
-
-
 def default_configurations(machine, n: int, rng: np.random.Generator) -> np.ndarray:
     """``n`` actuator vectors ``(n, n_act)`` in the machine's default region (module
     docstring).
@@ -89,7 +84,7 @@ def default_configurations(machine, n: int, rng: np.random.Generator) -> np.ndar
     if n < 1:
         raise InputError(f"the number of poses must be ≥ 1, got {n}")
     if machine.family == "chain":
-        lo, hi = _strokes(machine)
+        lo, hi = stroke_limits(machine)
         lo = np.where(np.isfinite(lo), lo, machine.home_q - 0.01)
         hi = np.where(np.isfinite(hi), hi, machine.home_q + 0.01)
         loop = machine.model.loop_variables[np.flatnonzero(machine.model.actuated)]
