@@ -62,28 +62,60 @@ def _call_fields(record: Any) -> frozenset[str]:
     return names
 
 
-def join(parts: list[Any]) -> Any:
-    """One result from the results of consecutive chunks: arrays and per-row tuples joined
-    along the rows, result records field by field (the fields that describe the call taken
-    from the first chunk)."""
-    first = parts[0]
-    if first is None:
-        if any(p is not None for p in parts):
+class _Rows:
+    """An array of the joined result, allocated once and filled chunk by chunk."""
+
+    def __init__(self, values: np.ndarray):
+        self.values = values
+
+
+def _allocate(part: Any, rows: int, size: int) -> Any:
+    """Storage for the joined result of ``rows`` rows, shaped after the first chunk's result
+    ``part`` (of ``size`` rows): per-row arrays allocated once, per-row tuples as lists,
+    records as dicts of their fields (the fields that describe the call left out), anything
+    else kept as the first chunk has it."""
+    if isinstance(part, np.ndarray) and part.ndim and part.shape[0] == size:
+        return _Rows(np.empty((rows, *part.shape[1:]), dtype=part.dtype))
+    if isinstance(part, tuple) and len(part) == size:
+        return []
+    if dataclasses.is_dataclass(part):
+        fixed = _call_fields(part)
+        return {f.name: _allocate(getattr(part, f.name), rows, size)
+                for f in dataclasses.fields(part) if f.init and f.name not in fixed}
+    return part
+
+
+def _put(store: Any, part: Any, start: int, stop: int) -> None:
+    """Copy the result ``part`` of the chunk ``start:stop`` into the storage (raise
+    :class:`_Whole` if it does not have the first chunk's layout)."""
+    if isinstance(store, _Rows):
+        if not (isinstance(part, np.ndarray) and part.dtype == store.values.dtype
+                and part.shape == (stop - start, *store.values.shape[1:])):
             raise _Whole
-        return None
-    if isinstance(first, np.ndarray):
-        return np.concatenate(parts, axis=0)
-    if isinstance(first, tuple):
-        return tuple(item for p in parts for item in p)
-    if dataclasses.is_dataclass(first):
-        if any(p is None or type(p) is not type(first) for p in parts):
+        store.values[start:stop] = part
+    elif isinstance(store, list):
+        if not (isinstance(part, tuple) and len(part) == stop - start):
             raise _Whole
-        fixed = _call_fields(first)
-        values = {f.name: (getattr(first, f.name) if f.name in fixed
-                           else join([getattr(p, f.name) for p in parts]))
-                  for f in dataclasses.fields(first) if f.init}
-        return dataclasses.replace(first, **values)
-    return first
+        store.extend(part)
+    elif isinstance(store, dict):
+        if part is None:
+            raise _Whole
+        for name, value in store.items():
+            _put(value, getattr(part, name), start, stop)
+    elif (store is None) != (part is None):  # e.g. a record in one chunk, None in another
+        raise _Whole
+
+
+def _build(store: Any, first: Any) -> Any:
+    """The joined result from its storage (``first``: the first chunk's result)."""
+    if isinstance(store, _Rows):
+        return store.values
+    if isinstance(store, list):
+        return tuple(store)
+    if isinstance(store, dict):
+        return dataclasses.replace(first, **{name: _build(value, getattr(first, name))
+                                             for name, value in store.items()})
+    return store
 
 
 def _row_arguments(kwargs: dict[str, Any], rows: int) -> list[str] | None:
@@ -107,27 +139,31 @@ def chunked(method: Callable[..., Any]) -> Callable[..., Any]:
     """Decorate a batch method ``method(self, x, **kwargs)`` of the protocol (``ik``, ``fk``)
     so that a batch of more than :data:`CHUNK_ROWS` rows runs chunk by chunk."""
 
-    first = list(inspect.signature(method).parameters)[1]  # x or q
+    leading = list(inspect.signature(method).parameters)[1]  # x or q
 
     @functools.wraps(method)
     def call(self, *args: Any, **kwargs: Any) -> Any:
         size = CHUNK_ROWS
-        x = args[0] if len(args) == 1 else kwargs.get(first) if not args else None
+        x = args[0] if len(args) == 1 else kwargs.get(leading) if not args else None
         if not (isinstance(x, np.ndarray) and x.ndim == 2 and x.shape[0] > size):
             return method(self, *args, **kwargs)
-        kwargs.pop(first, None)
+        kwargs.pop(leading, None)
         rows = x.shape[0]
         cut = _row_arguments(kwargs, rows)
         if cut is None:
             return method(self, x, **kwargs)
-        parts = []
-        for start, stop in chunk_bounds(rows, size):
-            part = {**kwargs, **{name: kwargs[name][start:stop] for name in cut}}
-            parts.append(method(self, x[start:stop], **part))
+        first = store = None
         try:
-            return join(parts)
+            for start, stop in chunk_bounds(rows, size):
+                part = method(self, x[start:stop],
+                              **{**kwargs, **{name: kwargs[name][start:stop] for name in cut}})
+                if start == 0:
+                    first, store = part, _allocate(part, rows, stop)
+                _put(store, part, start, stop)
+                del part
         except _Whole:  # e.g. a chunk without any solved row has no direct record
-            del parts
+            del first, store
             return method(self, x, **kwargs)
+        return _build(store, first)
 
     return call
