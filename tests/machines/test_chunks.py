@@ -137,3 +137,23 @@ def test_a_list_and_a_single_pose_are_passed_whole(monkeypatch):
     monkeypatch.setattr(chunks, "CHUNK_ROWS", 3)
     same(m.ik(x.tolist()), m.ik(x))
     same(m.ik(m.home_pose), np.asarray(m.home_q))
+
+
+def test_a_translational_batch_runs_chunk_by_chunk(monkeypatch):
+    """ik and fk of a translational machine see chunks (fails if nothing is chunked)."""
+    machine_module = importlib.import_module("pkmkit.machines.machine")
+    checked = machine_module._checked_batch
+    seen = []
+
+    def spy(x, width, what):
+        seen.append(np.shape(x)[0])
+        return checked(x, width, what)
+
+    m = pkmkit.machine("linear-delta")
+    x = poses(m, 25)
+    q = m.ik(x, strokes="ignore")
+    monkeypatch.setattr(machine_module, "_checked_batch", spy)
+    monkeypatch.setattr(chunks, "CHUNK_ROWS", 10)
+    m.ik(x, full_output=True)
+    m.fk(q, full_output=True)
+    assert seen == [8, 8, 9, 8, 8, 9]
