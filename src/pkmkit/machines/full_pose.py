@@ -34,6 +34,7 @@ from pkmkit.exceptions import (
     UnreachablePoseError,
 )
 from pkmkit.machines import full_pose_direct as direct
+from pkmkit.machines.chunks import chunked
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse
@@ -322,6 +323,7 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
         return guess
 
     # ---------------------------------------------------------------- inverse
+    @chunked
     def ik(
         self,
         x: Any,
@@ -419,6 +421,7 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
         return out
 
     # ---------------------------------------------------------------- direct
+    @chunked
     def fk(
         self,
         q: Any,

@@ -23,6 +23,7 @@ from pkmkit.exceptions import (
     InputError,
     ParameterError,
 )
+from pkmkit.machines.chunks import chunked
 from pkmkit.machines.closed_form import RodClosedForm
 from pkmkit.machines.closed_form_one import direct_one
 from pkmkit.machines.common import (
@@ -247,6 +248,7 @@ class Machine(RodRefusals, ModeNaming, MachineFace):
                                                 self._home_jacobian)
 
     # ---------------------------------------------------------------- inverse
+    @chunked
     def ik(
         self,
         x: Any,
@@ -405,6 +407,7 @@ class Machine(RodRefusals, ModeNaming, MachineFace):
         )
         return _restore(modes, single, ("poses", "valid", "branches", "status"))
 
+    @chunked
     def fk(
         self,
         q: Any,

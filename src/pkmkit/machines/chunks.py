@@ -1,0 +1,169 @@
+"""Batch calls of the machine protocol in chunks of rows: memory bounded by the data.
+
+A batch call builds several temporaries per row (per-rod coordinates, shortfalls, Jacobians for
+the assembly modes, stroke excesses, ...): on 10⁷ poses those reach tens of times the input. The
+protocol's ``ik`` and ``fk`` therefore run a batch of more than :data:`CHUNK_ROWS` rows chunk by
+chunk and join the results, so that the peak memory stays within about twice the input plus the
+output. Every row is computed independently of the others (closed forms, per-row engine solves),
+so the chunked result is the unchunked one, bit for bit: the chunks are of nearly equal sizes (all
+at least half of :data:`CHUNK_ROWS`, far above the batch size from which the compiled kernels run,
+so that every chunk takes the same path as the whole batch would).
+
+Only a NumPy array ``(N, d)`` input is chunked (a single pose or a list is passed on as it is);
+row-aligned keyword arguments (``q0``, ``x0``, ``q``, ``tool_length``) with N rows are cut with
+it, and a call whose row-aligned arguments do not have N rows (or one) is left whole so that it
+raises its own error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import inspect
+import itertools
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from pkmkit.machines.results import DirectResult, InverseResult
+
+#: Rows per chunk of a batch call (the chunks of a larger batch have nearly equal sizes, each
+#: between half and all of this).
+CHUNK_ROWS = 1 << 16
+
+#: keyword arguments with one row per input row
+ROW_ARGUMENTS = ("q0", "x0", "q", "tool_length")
+
+#: fields of the result records that describe the call, not a row (taken from the first chunk)
+_CALL_FIELDS: dict[type, frozenset[str]] = {
+    InverseResult: frozenset({"branches", "method"}),
+    DirectResult: frozenset({"mode_label", "method", "passive_names"}),
+}
+
+
+class _Whole(Exception):
+    """The chunks' results cannot be joined: run the call on the whole batch."""
+
+
+def chunk_bounds(rows: int, size: int | None = None) -> list[tuple[int, int]]:
+    """Start and stop of the chunks of a batch of ``rows`` rows: nearly equal chunks of at most
+    ``size`` rows (default :data:`CHUNK_ROWS`)."""
+    size = CHUNK_ROWS if size is None else size
+    count = max(1, -(-rows // size))
+    edges = [rows * k // count for k in range(count + 1)]
+    return list(itertools.pairwise(edges))
+
+
+def _call_fields(record: Any) -> frozenset[str]:
+    names: frozenset[str] = frozenset()
+    for cls in type(record).__mro__:
+        names |= _CALL_FIELDS.get(cls, frozenset())
+    return names
+
+
+class _Rows:
+    """An array of the joined result, allocated once and filled chunk by chunk."""
+
+    def __init__(self, values: np.ndarray):
+        self.values = values
+
+
+def _allocate(part: Any, rows: int, size: int) -> Any:
+    """Storage for the joined result of ``rows`` rows, shaped after the first chunk's result
+    ``part`` (of ``size`` rows): per-row arrays allocated once, per-row tuples as lists,
+    records as dicts of their fields (the fields that describe the call left out), anything
+    else kept as the first chunk has it."""
+    if isinstance(part, np.ndarray) and part.ndim and part.shape[0] == size:
+        return _Rows(np.empty((rows, *part.shape[1:]), dtype=part.dtype))
+    if isinstance(part, tuple) and len(part) == size:
+        return []
+    if dataclasses.is_dataclass(part):
+        fixed = _call_fields(part)
+        return {f.name: _allocate(getattr(part, f.name), rows, size)
+                for f in dataclasses.fields(part) if f.init and f.name not in fixed}
+    return part
+
+
+def _put(store: Any, part: Any, start: int, stop: int) -> None:
+    """Copy the result ``part`` of the chunk ``start:stop`` into the storage (raise
+    :class:`_Whole` if it does not have the first chunk's layout)."""
+    if isinstance(store, _Rows):
+        if not (isinstance(part, np.ndarray) and part.dtype == store.values.dtype
+                and part.shape == (stop - start, *store.values.shape[1:])):
+            raise _Whole
+        store.values[start:stop] = part
+    elif isinstance(store, list):
+        if not (isinstance(part, tuple) and len(part) == stop - start):
+            raise _Whole
+        store.extend(part)
+    elif isinstance(store, dict):
+        if part is None:
+            raise _Whole
+        for name, value in store.items():
+            _put(value, getattr(part, name), start, stop)
+    elif (store is None) != (part is None):  # e.g. a record in one chunk, None in another
+        raise _Whole
+
+
+def _build(store: Any, first: Any) -> Any:
+    """The joined result from its storage (``first``: the first chunk's result)."""
+    if isinstance(store, _Rows):
+        return store.values
+    if isinstance(store, list):
+        return tuple(store)
+    if isinstance(store, dict):
+        return dataclasses.replace(first, **{name: _build(value, getattr(first, name))
+                                             for name, value in store.items()})
+    return store
+
+
+def _row_arguments(kwargs: dict[str, Any], rows: int) -> list[str] | None:
+    """Names of the row-aligned keyword arguments to cut; None if one has neither ``rows`` rows
+    nor one (the call is then left whole)."""
+    cut = []
+    for name in ROW_ARGUMENTS:
+        value = kwargs.get(name)
+        if value is None:
+            continue
+        arr = np.asarray(value)
+        if arr.ndim >= 1 and arr.shape[0] == rows:
+            kwargs[name] = arr
+            cut.append(name)
+        elif arr.ndim == 2 or (arr.ndim == 1 and name == "tool_length"):
+            return None
+    return cut
+
+
+def chunked(method: Callable[..., Any]) -> Callable[..., Any]:
+    """Decorate a batch method ``method(self, x, **kwargs)`` of the protocol (``ik``, ``fk``)
+    so that a batch of more than :data:`CHUNK_ROWS` rows runs chunk by chunk."""
+
+    leading = list(inspect.signature(method).parameters)[1]  # x or q
+
+    @functools.wraps(method)
+    def call(self, *args: Any, **kwargs: Any) -> Any:
+        size = CHUNK_ROWS
+        x = args[0] if len(args) == 1 else kwargs.get(leading) if not args else None
+        if not (isinstance(x, np.ndarray) and x.ndim == 2 and x.shape[0] > size):
+            return method(self, *args, **kwargs)
+        kwargs.pop(leading, None)
+        rows = x.shape[0]
+        cut = _row_arguments(kwargs, rows)
+        if cut is None:
+            return method(self, x, **kwargs)
+        first = store = None
+        try:
+            for start, stop in chunk_bounds(rows, size):
+                part = method(self, x[start:stop],
+                              **{**kwargs, **{name: kwargs[name][start:stop] for name in cut}})
+                if start == 0:
+                    first, store = part, _allocate(part, rows, stop)
+                _put(store, part, start, stop)
+                del part
+        except _Whole:  # e.g. a chunk without any solved row has no direct record
+            del first, store
+            return method(self, x, **kwargs)
+        return _build(store, first)
+
+    return call
