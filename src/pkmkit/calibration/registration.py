@@ -210,8 +210,13 @@ def load_registration(path: str | Path) -> Registration:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
         raise InputError(f"{path}: cannot read file: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not a UTF-8 text file (byte {exc.start}): not a registration "
+                         "JSON") from None
     except json.JSONDecodeError as exc:
         raise InputError(f"{path}:{exc.lineno}: not JSON: {exc.msg}") from None
+    except RecursionError:
+        raise InputError(f"{path}: not a registration JSON (nested too deeply)") from None
     try:
         scale = length_scale(data.get("units", "m"))
         rot = np.asarray(data["rotation"], dtype=float)
