@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from tests.fuzz.file_cases import classify, corpus, draw_case  # noqa: E402
+from tests.fuzz.file_cases import classify, corpus, draw_case
 
 RUN = "import sys; from pkmkit.cli.main import cli; cli(prog_name='pkmkit')"
 

@@ -106,12 +106,15 @@ def test_registration_file_round_trip(tmp_path):
 
 
 def test_registration_file_that_is_not_text_or_too_deep(tmp_path):
-    """Binary garbage and deeply nested JSON as --frame (issue 18 §7 fuzz: UnicodeDecodeError,
-    RecursionError)."""
+    """Binary garbage, deeply nested JSON and a 5000-digit number as --frame (issue 18 §7 fuzz:
+    UnicodeDecodeError, RecursionError, ValueError)."""
     path = tmp_path / "frame.json"
     path.write_bytes(b"\xff\xfe{\x00")
     with pytest.raises(InputError, match=r"frame\.json: not a UTF-8 text file \(byte 0\)"):
         load_registration(path)
     path.write_text("[" * 100_000 + "]" * 100_000)
     with pytest.raises(InputError, match="nested too deeply"):
+        load_registration(path)
+    path.write_text('{"units": "m", "translation": [' + "7" * 5000 + ', 0, 0]}')
+    with pytest.raises(InputError, match="not a registration JSON: Exceeds the limit"):
         load_registration(path)

@@ -211,7 +211,7 @@ def _mutation(rng: random.Random, text: str) -> str:
     cells = lines[k].split(sep)
     if kind == "cell":
         i = rng.randrange(len(cells))
-        cells[i] = rng.choice(TOKENS + ["", "1e9", "-1e9", "abc", "1,5", "0.0", "T1"])
+        cells[i] = rng.choice([*TOKENS, "", "1e9", "-1e9", "abc", "1,5", "0.0", "T1"])
     elif kind == "cells+":
         cells.insert(rng.randrange(len(cells) + 1), rng.choice(["0", "", "x", "1e3"]))
     elif kind == "cells-" and len(cells) > 1:

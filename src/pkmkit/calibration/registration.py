@@ -217,6 +217,8 @@ def load_registration(path: str | Path) -> Registration:
         raise InputError(f"{path}:{exc.lineno}: not JSON: {exc.msg}") from None
     except RecursionError:
         raise InputError(f"{path}: not a registration JSON (nested too deeply)") from None
+    except ValueError as exc:  # an integer of more than 4300 digits
+        raise InputError(f"{path}: not a registration JSON: {exc}") from None
     try:
         scale = length_scale(data.get("units", "m"))
         rot = np.asarray(data["rotation"], dtype=float)
