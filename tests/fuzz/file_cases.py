@@ -178,21 +178,22 @@ TOKENS = ["nan", "NaN", "inf", "-inf", "1e999", "-1e308", "1e308", "1e-320", "5e
           "G2", "G3", "F0", "M30", "%", "1_0", "0x10", "&a", "*a", "!!python/object:x"]
 
 
-def mutate_text(rng: random.Random, text: str) -> bytes:
+def mutate_text(rng: random.Random, text: str, *, big: bool = True) -> bytes:
     """``text`` with one to four mutations (cell, row, column, token, span, truncation,
-    encoding), or binary garbage, an empty file or an oversized field."""
+    encoding), or binary garbage, an empty file or an oversized field (up to 2 MB, 100 kB
+    unless ``big``)."""
     roll = rng.random()
     if roll < 0.04:
         return bytes(rng.randrange(256) for _ in range(rng.randrange(1, 400)))
     if roll < 0.06:
         return b"" if rng.random() < 0.5 else b"\n\n# nothing\n"
     for _ in range(rng.randint(1, 4)):
-        text = _mutation(rng, text)
+        text = _mutation(rng, text, big)
     encoding = rng.choice(["utf-8"] * 8 + ["utf-16", "latin-1"])
     return text.encode(encoding, "replace")
 
 
-def _mutation(rng: random.Random, text: str) -> str:
+def _mutation(rng: random.Random, text: str, big: bool) -> str:
     lines = text.split("\n")
     data = [k for k, line in enumerate(lines) if line and not line.startswith("#")]
     kind = rng.choice(["cell", "cell", "cell", "row-dup", "row-drop", "cells+", "cells-",
@@ -220,7 +221,8 @@ def _mutation(rng: random.Random, text: str) -> str:
         cells[rng.randrange(len(cells))] = rng.choice(["x", "id", "q1", "", "X", "x [mm]",
                                                        "x [km]", "tool_length", "z"])
     elif kind == "oversize":
-        cells[rng.randrange(len(cells))] = "7" * rng.choice([1000, 100000, 2_000_000])
+        size = rng.choice([1000, 100000, 2_000_000 if big else 5000])
+        cells[rng.randrange(len(cells))] = "7" * size
     elif kind == "row-dup":
         lines.insert(k + 1, lines[k])
         return "\n".join(lines)

@@ -61,7 +61,7 @@ PLAN = ("# units: mm\nx,y,z,px,py,pz,tool_length,tool,id\n"
 
 def hostile_file(text: str) -> st.SearchStrategy[bytes]:
     """``text`` mutated by :func:`file_cases.mutate_text` (cells, rows, tokens, encodings…)."""
-    return st.randoms(use_true_random=False).map(lambda rng: mutate_text(rng, text))
+    return st.randoms(use_true_random=False).map(lambda rng: mutate_text(rng, text, big=False))
 
 
 def file_lines(labels, path) -> list[int]:
