@@ -118,3 +118,14 @@ def test_registration_file_that_is_not_text_or_too_deep(tmp_path):
     path.write_text('{"units": "m", "translation": [' + "7" * 5000 + ', 0, 0]}')
     with pytest.raises(InputError, match="not a registration JSON: Exceeds the limit"):
         load_registration(path)
+
+
+def test_a_direction_lever_arm_beyond_1000_km_is_a_unit_mistake():
+    """--direction-weight 1e300 (issue 18 §7 fuzz: OverflowError squaring it)."""
+    for lever in (1e300, 2e6):
+        with pytest.raises(InputError, match=r"direction_weight = .* beyond 1e\+06 m"):
+            register_points(LTS / 1e3, BCS / 1e3, measured_directions=LTS_DIR,
+                            nominal_directions=BCS_DIR, direction_weight=lever)
+    reg = register_points(LTS / 1e3, BCS / 1e3, measured_directions=LTS_DIR,
+                          nominal_directions=BCS_DIR, direction_weight=1e6)
+    assert np.isfinite(reg.rotation).all()

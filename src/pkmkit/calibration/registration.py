@@ -105,6 +105,10 @@ class Registration:
         }
 
 
+#: Largest lever arm of a direction, m (1000 km: beyond, a unit mistake).
+MAX_LEVER = 1e6
+
+
 def register_points(measured: Any, nominal: Any, *, measured_directions: Any = None,
                     nominal_directions: Any = None, direction_weight: float | None = None,
                     weights: Any = None) -> Registration:
@@ -152,6 +156,9 @@ def register_points(measured: Any, nominal: Any, *, measured_directions: Any = N
         lever = direction_weight if direction_weight is not None else max(spread, 1e-3)
         if not (np.isfinite(lever) and lever > 0):
             raise InputError("direction_weight must be a positive length")
+        if lever > MAX_LEVER:  # its square would overflow long before: a unit mistake
+            raise InputError(f"direction_weight = {lever:g} m is beyond {MAX_LEVER:g} m: check "
+                             "the units")
         h = h + w.mean() * lever**2 * (dm.T @ dn)
     u, s, vt = np.linalg.svd(h)
     if s[1] <= 1e-12 * max(s[0], 1e-300):
