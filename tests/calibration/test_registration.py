@@ -99,6 +99,11 @@ def test_registration_file_round_trip(tmp_path):
     path.write_text('{"rotation": [[1, 0, 0], [0, 1, 0], [0, 0, 2]], "translation": [0, 0, 0]}')
     with pytest.raises(InputError, match="not a rotation"):
         load_registration(path)
+    # an entry of 1e308: R^T R overflowed with a RuntimeWarning (issue 18 §7 fuzz)
+    path.write_text('{"rotation": [[0, -1, 0], [1, 0, 0], [0, -1e308, 1]], '
+                    '"translation": [0, 0, 0]}')
+    with pytest.raises(InputError, match="not a rotation"):
+        load_registration(path)
     path.write_text("{")
     with pytest.raises(InputError, match="not JSON"):
         load_registration(path)

@@ -238,6 +238,8 @@ def load_registration(path: str | Path) -> Registration:
     if rot.shape != (3, 3) or t.shape != (3,) or not (np.isfinite(rot).all()
                                                       and np.isfinite(t).all()):
         raise InputError(f"{path}: rotation must be 3×3 and translation 3 finite numbers")
-    if not np.allclose(rot.T @ rot, np.eye(3), atol=1e-6) or np.linalg.det(rot) < 0:
+    if (np.abs(rot).max() > 1.0 + 1e-6  # entries of a rotation lie in [-1, 1] (and R^T R
+            or not np.allclose(rot.T @ rot, np.eye(3), atol=1e-6)  # overflows beyond)
+            or np.linalg.det(rot) < 0):
         raise InputError(f"{path}: 'rotation' is not a rotation matrix")
     return Registration(rot, t, np.zeros((0, 3)), np.zeros(0))
