@@ -186,6 +186,8 @@ def _parse_yaml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
         raise MachineFileError(path, f"YAML syntax error: {problem}", line) from None
     except yaml.YAMLError as exc:
         raise MachineFileError(path, f"YAML error: {exc}") from None
+    except MachineFileError:  # (a ValueError too) anchors and aliases refused
+        raise
     except ValueError:  # an integer of more than 4300 digits (Python's conversion limit)
         raise _too_long_number(text, path) from None
     lines: dict[KeyPath, int] = {}
