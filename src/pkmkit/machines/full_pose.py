@@ -305,7 +305,7 @@ class FullPoseMachine(FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
     def first_order_pose(self, q: np.ndarray) -> np.ndarray:
         """First-order guess ``(N, 6)`` of the pose of actuator coordinates ``q (N, n)``: the
         twist J(home)(q − q_home) applied to the home pose (the engine's default start)."""
-        bad = ~np.isfinite(q).all(axis=1)
+        bad = ~_valid_rows(q)  # 1e308 is finite, but its twist overflows to a NaN rotation
         twist = (np.where(bad[:, None], self._home_q, q) - self._home_q) @ self._home_jacobian.T
         guess = np.empty((q.shape[0], 6))
         guess[:, :3] = self._home_pose[:3] + twist[:, :3]
