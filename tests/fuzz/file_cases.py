@@ -78,9 +78,10 @@ CORPUS_COPIES = {
 @dataclass(frozen=True)
 class Template:
     """A command line reading ``target`` (the file the fuzzer mutates, a corpus name);
-    ``{f}`` is the mutated file, ``{d}`` the corpus, ``{o}`` the output directory. ``outputs``
-    are the files (in ``{o}``) a machine or a user would act on: none may exist after a
-    failed run (exit 1 or 2); after exit 3, none of ``acted_on`` may."""
+    ``{f}`` is the mutated file, ``{d}`` the corpus, ``{o}`` the output directory. Outputs
+    are written in ``{o}``: none may exist after a failed run (exit 1 or 2); after exit 3
+    (some rows or a verdict flagged), none of ``acted_on`` may (a calibrated machine file, a
+    corrected program, an export); a correction table with its rows flagged may."""
 
     name: str
     args: str
@@ -111,13 +112,12 @@ TEMPLATES = [
              "--out {o}/frame.json", "bcs-points.csv", ("--units",)),
     Template("compensate --targets", "compensate linear-delta --calibrated "
              "{d}/point.truth.toml --targets {f} --out {o}/table.csv", "targets.csv",
-             ("--max-correction", "--units"), ("table.csv",)),
+             ("--max-correction", "--units")),
     Template("compensate six-axis --targets", "compensate gough-stewart --calibrated "
              "{d}/pose.truth.toml --targets {f} --out {o}/table.csv", "hexapod-targets.csv",
-             ("--max-correction",), ("table.csv",)),
+             ("--max-correction",)),
     Template("compensate --calibrated", "compensate linear-delta --calibrated {f} "
-             "--targets {d}/targets.csv --out {o}/table.csv", "point.truth.toml", (),
-             ("table.csv",)),
+             "--targets {d}/targets.csv --out {o}/table.csv", "point.truth.toml"),
     Template("compensate --gcode", "compensate linear-delta --calibrated {d}/point.truth.toml "
              "--gcode {f} --units mm --out {o}/fixed.nc", "pocket.nc",
              ("--step", "--tolerance", "--max-correction", "--origin"), ("fixed.nc",)),
