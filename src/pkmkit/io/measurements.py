@@ -50,9 +50,10 @@ OPTIONAL = {"point": ("tool_length", "tool", "id"), "pose": ("tool_length", "too
 TEXT_COLUMNS = ("tool", "path", "id")
 #: Columns in degrees.
 ANGLE_COLUMNS = ("rx", "ry", "rz")
-#: Largest magnitude of a number in a measurement-like file (file unit or degrees): beyond, a
-#: unit mistake (and squares in distances overflow).
-MAX_CELL = 1e9
+#: Largest magnitude of a number in a measurement-like file, m (angles: degrees times the
+#: file's metres per unit): beyond, a unit mistake (and squares in distances overflow). In
+#: metres, so that a file written back in another unit reads the same.
+MAX_CELL = 1e6
 _UNIT_LINE = re.compile(r"^#\s*units?\s*[:=]\s*([A-Za-z]+)\s*$")
 _COLUMN_UNIT = re.compile(r"^(.*?)\s*\[\s*([A-Za-z°]+)\s*\]\s*$")
 
@@ -184,9 +185,9 @@ def read_csv_table(path: str | Path, required: tuple[str, ...], optional: tuple[
             if not np.isfinite(v):
                 raise InputError(f"{label}:{line}: column {c!r}: {_short(cell)} is not a "
                                  "finite number")
-            if abs(v) > MAX_CELL:  # squared in distances and norms: overflow, a unit mistake
-                raise InputError(f"{label}:{line}: column {c!r}: {v:g} is beyond "
-                                 f"{MAX_CELL:g} (in the file's unit or degrees): check the units")
+            if abs(v) * scale > MAX_CELL:  # squared in distances: overflow, a unit mistake
+                raise InputError(f"{label}:{line}: column {c!r}: {v:g} {unit} is beyond "
+                                 f"{MAX_CELL:g} m (or degrees): check the units")
             values[i, k] = v
         for c in texts:
             texts[c].append(row[index[c]])
