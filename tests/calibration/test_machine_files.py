@@ -68,3 +68,14 @@ def test_bad_defects_tables_name_the_line(tmp_path):
     path.write_text(base + "\n[defects]\ndA1x = \"x\"\n")
     with pytest.raises(MachineFileError, match="must be a finite number"):
         pkmkit.load(path)
+
+
+def test_a_defect_too_large_for_a_float_names_its_line(tmp_path):
+    """A 400-digit integer in [defects] (issue 18 §7 fuzz: a TypeError from np.isfinite)."""
+    path = tmp_path / "huge.toml"
+    base = open(preset_path("linear-delta")).read()
+    path.write_text(base + "\n[defects]\ndA1x = 0.1\ndL1 = " + "9" * 400 + "\n")
+    with pytest.raises(MachineFileError, match=r"huge\.toml:\d+: defect 'dL1' must be a finite "
+                                               "number") as err:
+        pkmkit.load(path)
+    assert err.value.line == len(base.splitlines()) + 4

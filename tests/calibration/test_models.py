@@ -100,3 +100,20 @@ def test_frames_and_kinds_are_checked():
                     np.random.default_rng(0), noise="none")
     with pytest.raises(InputError, match="machined-part identification"):
         make_model(chain, part, np.ones(5))
+
+
+def test_pose_rows_the_machine_does_not_assemble_give_nan_residuals():
+    """A pose reading the machine cannot assemble (here actuator values of 1 mm) made the
+    rotation residual of a zero matrix: SciPy's 'non-positive determinant' ended the whole
+    calibration (issue 18 §7 fuzz: a pose file with a reading of -1e9 mm, the identification
+    stepping where no row assembles)."""
+    from dataclasses import replace
+
+    m = pkmkit.machine("gough-stewart")
+    data = simulate(m, m, "pose", 4, np.random.default_rng(2), noise="none")
+    q = data.q.copy()
+    q[1] = 1e-3
+    model = make_model(m, replace(data, q=q), np.ones(6))
+    r, _, _ = model.residuals(m, model.setup.initial, jacobian=False)
+    assert np.isnan(r[1]).all()
+    np.testing.assert_allclose(r[[0, 2, 3]], 0.0, atol=1e-9)

@@ -99,7 +99,38 @@ def test_registration_file_round_trip(tmp_path):
     path.write_text('{"rotation": [[1, 0, 0], [0, 1, 0], [0, 0, 2]], "translation": [0, 0, 0]}')
     with pytest.raises(InputError, match="not a rotation"):
         load_registration(path)
+    # an entry of 1e308: R^T R overflowed with a RuntimeWarning (issue 18 §7 fuzz)
+    path.write_text('{"rotation": [[0, -1, 0], [1, 0, 0], [0, -1e308, 1]], '
+                    '"translation": [0, 0, 0]}')
+    with pytest.raises(InputError, match="not a rotation"):
+        load_registration(path)
     path.write_text("{")
     with pytest.raises(InputError, match="not JSON"):
         load_registration(path)
     assert Registration.identity().rms == 0.0
+
+
+def test_registration_file_that_is_not_text_or_too_deep(tmp_path):
+    """Binary garbage, deeply nested JSON and a 5000-digit number as --frame (issue 18 §7 fuzz:
+    UnicodeDecodeError, RecursionError, ValueError)."""
+    path = tmp_path / "frame.json"
+    path.write_bytes(b"\xff\xfe{\x00")
+    with pytest.raises(InputError, match=r"frame\.json: not a UTF-8 text file \(byte 0\)"):
+        load_registration(path)
+    path.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(InputError, match="nested too deeply"):
+        load_registration(path)
+    path.write_text('{"units": "m", "translation": [' + "7" * 5000 + ', 0, 0]}')
+    with pytest.raises(InputError, match="not a registration JSON: Exceeds the limit"):
+        load_registration(path)
+
+
+def test_a_direction_lever_arm_beyond_1000_km_is_a_unit_mistake():
+    """--direction-weight 1e300 (issue 18 §7 fuzz: OverflowError squaring it)."""
+    for lever in (1e300, 2e6):
+        with pytest.raises(InputError, match=r"direction_weight = .* beyond 1e\+06 m"):
+            register_points(LTS / 1e3, BCS / 1e3, measured_directions=LTS_DIR,
+                            nominal_directions=BCS_DIR, direction_weight=lever)
+    reg = register_points(LTS / 1e3, BCS / 1e3, measured_directions=LTS_DIR,
+                          nominal_directions=BCS_DIR, direction_weight=1e6)
+    assert np.isfinite(reg.rotation).all()

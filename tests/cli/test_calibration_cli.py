@@ -311,6 +311,17 @@ def test_compensate_refuses_a_zero_step(run, delta_truth, tmp_path, option, valu
     assert not (tmp_path / "f.nc").exists()
 
 
+@pytest.mark.parametrize("value", ["nan", "-1", "inf"])
+def test_compensate_refuses_a_tool_length_that_is_not_a_length(run, delta_truth, tmp_path,
+                                                                value):
+    """--tool-length nan was blamed on the calibrated file ('places the tool inf m from the
+    nominal machine's tool point', issue 18 §7 fuzz)."""
+    res = run("compensate", "linear-delta", "--calibrated", delta_truth, "--grid",
+              "0,0,0.1:0.01,0.01,0.1:2,2,1", "--tool-length", value, "--out", tmp_path / "t.csv")
+    assert res.exit_code == 1 and "--tool-length must be a finite number ≥ 0" in res.output
+    assert "not a calibration" not in res.output and not (tmp_path / "t.csv").exists()
+
+
 def test_compensate_refuses_a_machine_of_other_dimensions(run, tmp_path):
     """A nominal Table IV.1 Delta (L = 1.04 m) passed as the calibration of the Ch. III one
     (L = 1.3 m) was accepted and its huge 'corrections' written."""

@@ -165,3 +165,22 @@ def test_a_six_slide_hexapod_settles_where_pkmkit_puts_it(tmp_path):
     q_settled, pose = sim.settle(q)
     assert np.abs(q_settled - q).max() <= TOL
     assert np.abs(_points(m, pose) - _points(m, target)).max() <= TOL
+
+
+def test_mujocos_refusal_is_one_line(tmp_path):
+    """A masses file whose platform inertia breaks the triangle inequality: MuJoCo's two-line
+    message ended the output without 'Error:' on its last line (issue 18 §7 fuzz)."""
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    masses = tmp_path / "m.toml"
+    masses.write_text("[masses]\ncarriage = [1, 2, 3]\nrod = 0.5\nplatform = 3\n"
+                      "platform_inertia = [[10, 0, 0], [0, 1, 0], [0, 0, 1]]\n")
+    out = tmp_path / "model.xml"
+    res = CliRunner().invoke(cli, ["export", "linear-delta", "--to", "mjcf", "--masses",
+                                   str(masses), "--out", str(out)])
+    assert res.exit_code == 1 and not out.exists()
+    lines = res.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("Error: MuJoCo refuses the generated model")
+    assert "A + B >= C" in lines[0] and "Element name 'platform'" in lines[0]

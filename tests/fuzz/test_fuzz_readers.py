@@ -35,7 +35,9 @@ legs:
 """
 SEEDS = {
     ".toml": [p.read_text() for p in sorted(DATA.glob("*.toml"))]
-    + [(EXAMPLES / "strut-tripod.toml").read_text()],
+    + [(EXAMPLES / name).read_text() for name in (
+        "strut-tripod.toml", "hexapod-6-6.toml", "planar-3rpr.toml", "crank-slider.toml",
+        "orthoglide-stiffness.toml", "my-machine.toml")],
     ".yaml": [YAML_FIVE_BAR],
     ".nc": [(EXAMPLES / "pocket.nc").read_text(),
             "G21 G90 G94 G54\nM3 S1000\nG0 X0 Y0 Z5\nG1 Z-1 F300\nG2 X10 Y10 R10\n"

@@ -65,6 +65,8 @@ def test_tolerance_file(tmp_path):
         ('units = "mm"\n[classes]\nwobble = 0.1\n', "unknown defect class 'wobble'", 3),
         ('units = "furlong"\n', "unknown length unit", 1),
         ('[classes]\nlength = "tight"\n', "must be a number", 2),
+        # 400 digits: np.isfinite raised TypeError on the Python int (issue 18 §7 fuzz)
+        ('\n[classes]\nlength = ' + "7" * 400 + '\n', "must be ≥ 0", 3),
     ]:
         path.write_text(text)
         with pytest.raises(ToleranceFileError, match=message) as info:

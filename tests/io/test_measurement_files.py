@@ -68,6 +68,15 @@ BAD = {
     "column units": ("# units: mm\nq1,q2,q3,x [m],y,z\n1,1,1,0,0,0\n",
                      r"f\.csv:2: column 'x' is in m but the file says mm \(line 1\)"),
     "bad unit": ("q1,q2,q3,x [inch],y,z\n1,1,1,0,0,0\n", r"unknown unit 'inch'"),
+    # issue 18 §7 fuzz: 1e308 overflowed in the norms of a ball-bar plan (RuntimeWarning); a
+    # 100 000-character cell filled the error message
+    "huge": ("q1,q2,q3,x,y,z\n1,1,1,0,-1e308,0\n",
+             r"f\.csv:2: column 'y': -1e\+308 m is beyond 1e\+06 m .* check the units"),
+    # the bound is in metres: 2e9 mm (2e6 m) is refused as 2e6 m is, 1e9 mm (1e6 m) is not
+    "huge mm": ("# units: mm\nq1,q2,q3,x,y,z\n1,1,1,0,2e9,0\n",
+                r"f\.csv:3: column 'y': 2e\+09 mm is beyond 1e\+06 m"),
+    "oversized": ("q1,q2,q3,x,y,z\n1,1,1,0," + "7" * 100_000 + "x,0\n",
+                  r"f\.csv:2: column 'y': '7{36}… is not a number$"),
 }
 
 

@@ -243,3 +243,26 @@ def test_a_stray_carriage_return_flags_its_row(tmp_path):
     np.testing.assert_array_equal(values[[0, 2]], [[0, 0, 0], [0, 0.1, 0]])
     assert problems == [f"{path}:3: not a CSV line (a stray carriage return or line break "
                         "inside it)"]
+
+
+def test_a_first_line_of_megabytes_reads_in_bounded_pieces(tmp_path, monkeypatch):
+    """A 2 MB first data line (no newline in the 64 kB sample) made the chunk estimate
+    64 kB × 500 000 rows = 32 GB, asked of read() at once: MemoryError (issue 18 §7 fuzz). The
+    reads stay ≤ 64 MiB, the long row is flagged, the other kept."""
+    from pkmkit.io.table_sources import CsvSource
+
+    sizes = []
+    original = CsvSource._read
+
+    def recording(self, handle, size):
+        sizes.append(size)
+        return original(self, handle, size)
+
+    monkeypatch.setattr(CsvSource, "_read", recording)
+    path = tmp_path / "long.csv"
+    path.write_text("x,y,z\n" + "7" * 200_000 + ",0,0\n0.1,0.2,0.3\n")
+    problems: list[str] = []
+    table = read_table(path, ("x", "y", "z"), problems)
+    assert max(sizes) <= 1 << 26
+    assert np.isnan(table[0]).all() and table[1].tolist() == [0.1, 0.2, 0.3]
+    assert len(problems) == 1 and "long.csv:2" in problems[0]

@@ -222,6 +222,20 @@ def test_actuators_that_leave_the_legs_free(tmp_path):
     ([("crank-90 = [90]", "crank-90 = [90, 0]")], "", "crank-90", r"one value per actuator"),
     ([], "\n[tools]\nlength = 3\n", "[tools]", "unknown key 'tools'"),
     ([], "\n[head]\nelements = [\"theta1\"]\n", "[\"theta1\"]", "is in a leg and in the head"),
+    # issue 18 §7 fuzz: 400-digit literals (TypeError, OverflowError), 1e308 (overflow
+    # warnings in the closure; a zero axis), a rotation entry of 1e308 (overflow in R^T R)
+    ([("home = 30", "home = " + "7" * 400)], "", "home = 777", "must be a finite number"),
+    ([("point = [100, 0, 0]", "point = [100, 0, " + "7" * 400 + "]")], "", "point = [100, 0, 7",
+     "must be 3 numbers"),
+    ([("characteristic_length = 300", "characteristic_length = " + "7" * 400)], "",
+     "characteristic_length = 777", "must be a finite number"),
+    ([("point = [100, 0, 0]", "point = [1e308, 0, 0]")], "", "point = [1e308",
+     "magnitude beyond 1e.06"),
+    ([("axis = [0, -1, 0]", "axis = [0, -1e308, 1e308]")], "", "axis = [0, -1e308",
+     "magnitude beyond 1e.06"),
+    ([("home = 30", "home = 1e308")], "", "home = 1e308", "magnitude beyond 1e.06"),
+    ([("rotation = [[1, 0, 0], [0, 0, 1], [0, -1, 0]]",
+       "rotation = [[1, 0, 0], [0, 0, 1], [0, -1e308, 0]]")], "", "[0, -1e308", "rotation matrix"),
 ])
 def test_malformed_files(tmp_path, replacements, append, needle, match):
     needle, occurrence = needle if isinstance(needle, tuple) else (needle, 1)

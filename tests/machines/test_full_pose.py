@@ -413,3 +413,16 @@ def test_jacobian_dot_refuses_bad_twists_with_typed_errors():
     for bad in (["a"] * 6, [np.inf] + [0.0] * 5, [1e300] + [0.0] * 5, np.zeros(5)):
         with pytest.raises(pkmkit.exceptions.InputError, match="xd"):
             m.jacobian_dot(x, bad)
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "verne"])
+def test_fk_batch_flags_a_row_of_1e308_and_keeps_the_others(name):
+    """A finite but absurd row (1e308) made the first-order guess a NaN rotation and SciPy
+    raised 'zero norm quaternions' for the whole batch (issue 18 §7 fuzz)."""
+    m = pkmkit.machine(name)
+    q_home = m.ik(m.home_pose)
+    bad = np.zeros_like(q_home)
+    bad[0] = 1e308
+    res = m.fk(np.stack([q_home, bad]), full_output=True)
+    assert res.status.tolist() == [Status.OK, Status.INVALID_INPUT]
+    np.testing.assert_allclose(res.pose[0], m.home_pose, atol=1e-9)

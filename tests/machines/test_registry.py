@@ -159,6 +159,14 @@ BAD_FILES = [
     (ROD.replace("\n\n", '\nmode_names = ["a"]\n', 1), 3, "mode_names"),
     ('[machine]\nkind = "linear-delta"\ndescription = """\n[parameters]\nL = 1\n"""\n'
      "[parameters]\nR = 0.7\nL = -1\n", 9, "must be > 0"),
+    # issue 18 §7 fuzz: magnitudes of 1e307 gave overflow warnings and an error at line 2
+    # ('does not assemble', 'a parallel singularity'); strokes of 1e308 loaded silently
+    (ROD.replace("base = [0.5, 0, 0]", "base = [1e308, 0, 0]"), 5, "legs.0.base: magnitude "
+     "beyond 1e.06"),
+    (ROD.replace("platform = [0, 0, 0]", "platform = [0, 0, 1e307]"), 6, "magnitude beyond"),
+    (ROD + "stroke = [0, 1e308]\n", 9, "legs.0.stroke: magnitude beyond"),
+    (ROD.replace("length = 1", "length = 1e308"), 7, "legs.0.length: magnitude beyond"),
+    (ROD.replace("\n\n", "\nhome = [0, 0, 1e300]\n", 1), 3, "machine.home: magnitude beyond"),
 ]
 
 

@@ -63,3 +63,16 @@ def test_syntax_errors_report_the_line(tmp_path, name, text, line, message):
 def test_missing_file(tmp_path):
     with pytest.raises(MachineFileError, match="cannot read file"):
         read_machine_document(tmp_path / "absent.toml")
+
+
+@pytest.mark.parametrize("name", ["m.toml", "m.yaml"])
+def test_a_number_beyond_pythons_digit_limit_names_its_line(tmp_path, name):
+    """5000 digits (issue 18 §7 fuzz: tomllib's and PyYAML's int() raised ValueError)."""
+    path = tmp_path / name
+    value = "7" * 5000
+    path.write_text(f"[machine]\nkind = 'linear-delta'\n\n[parameters]\nR = {value}\n"
+                    if name.endswith("toml") else f"machine:\n  kind: linear-delta\n"
+                    f"parameters:\n  R: {value}\n")
+    with pytest.raises(MachineFileError, match="more than 4300 digits") as err:
+        read_machine_document(path)
+    assert err.value.line == (5 if name.endswith("toml") else 4)

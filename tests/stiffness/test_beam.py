@@ -63,6 +63,10 @@ def test_section_errors():
         Material(E=-1.0)
     with pytest.raises(ParameterError, match="shape"):
         parse_section("hexagon:3")
+    # 1e308 m: OverflowError raising d⁴ (issue 18 §7 fuzz, --set rod_section=circle:1e308)
+    for text in ("circle:1e308", "tube:1e308,1", "rect:1,1e200"):
+        with pytest.raises(ParameterError, match=r"beyond 1e\+06 m: check the units"):
+            parse_section(text)
     assert parse_section("tube:50,40", 1e-3).area == pytest.approx(
         np.pi * (0.05**2 - 0.04**2) / 4)
 

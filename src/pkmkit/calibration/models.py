@@ -288,10 +288,15 @@ class PoseModel(_FramedModel):
         state = self._tool(machine, jacobian=jacobian, rotation=True)
         y, dy, rot = self._mapped(setup)
         measured = self.rot0 if rot is None else rot[None] @ self.rot0
+        # rows the machine did not assemble: identity there (a zero matrix, as nan_to_num gave,
+        # made SciPy raise 'non-positive determinant' for the whole run), NaN residuals after
+        lost = ~(np.isfinite(state.rotation).all(axis=(1, 2))
+                 & np.isfinite(state.point).all(axis=1))
         with np.errstate(invalid="ignore"):
-            diff = np.nan_to_num(state.rotation) @ measured.transpose(0, 2, 1)
+            diff = np.where(lost[:, None, None], np.eye(3), state.rotation) @ measured.transpose(
+                0, 2, 1)
             r_rot = matrix_to_rotvec(diff)
-        r_rot[~np.isfinite(state.point).all(axis=1)] = np.nan
+        r_rot[lost] = np.nan
         r = np.concatenate([state.point - y, r_rot], axis=1)
         if not jacobian:
             return r, None, None

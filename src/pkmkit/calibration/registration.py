@@ -105,6 +105,10 @@ class Registration:
         }
 
 
+#: Largest lever arm of a direction, m (1000 km: beyond, a unit mistake).
+MAX_LEVER = 1e6
+
+
 def register_points(measured: Any, nominal: Any, *, measured_directions: Any = None,
                     nominal_directions: Any = None, direction_weight: float | None = None,
                     weights: Any = None) -> Registration:
@@ -152,6 +156,9 @@ def register_points(measured: Any, nominal: Any, *, measured_directions: Any = N
         lever = direction_weight if direction_weight is not None else max(spread, 1e-3)
         if not (np.isfinite(lever) and lever > 0):
             raise InputError("direction_weight must be a positive length")
+        if lever > MAX_LEVER:  # its square would overflow long before: a unit mistake
+            raise InputError(f"direction_weight = {lever:g} m is beyond {MAX_LEVER:g} m: check "
+                             "the units")
         h = h + w.mean() * lever**2 * (dm.T @ dn)
     u, s, vt = np.linalg.svd(h)
     if s[1] <= 1e-12 * max(s[0], 1e-300):
@@ -210,8 +217,15 @@ def load_registration(path: str | Path) -> Registration:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
     except OSError as exc:
         raise InputError(f"{path}: cannot read file: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not a UTF-8 text file (byte {exc.start}): not a registration "
+                         "JSON") from None
     except json.JSONDecodeError as exc:
         raise InputError(f"{path}:{exc.lineno}: not JSON: {exc.msg}") from None
+    except RecursionError:
+        raise InputError(f"{path}: not a registration JSON (nested too deeply)") from None
+    except ValueError as exc:  # an integer of more than 4300 digits
+        raise InputError(f"{path}: not a registration JSON: {exc}") from None
     try:
         scale = length_scale(data.get("units", "m"))
         rot = np.asarray(data["rotation"], dtype=float)
@@ -224,6 +238,8 @@ def load_registration(path: str | Path) -> Registration:
     if rot.shape != (3, 3) or t.shape != (3,) or not (np.isfinite(rot).all()
                                                       and np.isfinite(t).all()):
         raise InputError(f"{path}: rotation must be 3×3 and translation 3 finite numbers")
-    if not np.allclose(rot.T @ rot, np.eye(3), atol=1e-6) or np.linalg.det(rot) < 0:
+    if (np.abs(rot).max() > 1.0 + 1e-6  # entries of a rotation lie in [-1, 1] (and R^T R
+            or not np.allclose(rot.T @ rot, np.eye(3), atol=1e-6)  # overflows beyond)
+            or np.linalg.det(rot) < 0):
         raise InputError(f"{path}: 'rotation' is not a rotation matrix")
     return Registration(rot, t, np.zeros((0, 3)), np.zeros(0))

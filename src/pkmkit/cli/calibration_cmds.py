@@ -518,6 +518,8 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
     if identified.n_actuators != nominal.n_actuators or type(identified) is not type(nominal):
         raise InputError(f"{calibrated} is not a calibration of {nominal.id!r}")
     tl = None if tool_length is None else tool_length * scale
+    if tl is not None and not (np.isfinite(tl) and tl >= 0):
+        raise InputError(f"--tool-length must be a finite number ≥ 0, got {tool_length:g} {unit}")
     for name, value in (("--step", step), ("--tolerance", tolerance),
                         ("--max-correction", max_correction)):
         if value is not None and not (np.isfinite(value) and value > 0

@@ -276,7 +276,8 @@ def check_mjcf_model(machine, xml: str) -> float | None:
     try:
         model = mujoco.MjModel.from_xml_string(xml)
     except ValueError as exc:
-        raise ExportCheckError(f"MuJoCo refuses the generated model: {exc}") from None
+        detail = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+        raise ExportCheckError(f"MuJoCo refuses the generated model: {detail}") from None
     data = mujoco.MjData(model)
     layout = mjcf_layout(machine, require_held_platform=False)
     poses, q = sample_poses(machine)

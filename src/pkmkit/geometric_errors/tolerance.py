@@ -187,7 +187,11 @@ def read_tolerances(path: str, machine) -> Tolerances:
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise fail(f"{section}.{key}: the tolerance must be a number, got {value!r}",
                            where)
-            if not np.isfinite(value) or value < 0:
+            try:  # an integer too large for a float (400 digits) is not finite
+                number = float(value)
+            except OverflowError:
+                number = np.inf
+            if not np.isfinite(number) or number < 0:
                 raise fail(f"{section}.{key}: the tolerance is a half-width and must be ≥ 0, "
                            f"got {value!r}", where)
             if section == "classes":
@@ -201,7 +205,7 @@ def read_tolerances(path: str, machine) -> Tolerances:
                 except ParameterError as exc:
                     raise fail(str(exc), where) from None
             for i in hit:
-                width[i] = to_si(ds.units[i], float(value))
+                width[i] = to_si(ds.units[i], number)
                 _check_size(width[i], ds.units[i] in ANGLE_UNITS, units, angle_units, fail,
                             where, value)
     return Tolerances(names=ds.names, half_width=width, distribution=distribution,

@@ -52,6 +52,10 @@ OPTIONAL = {"point": ("tool_length", "tool", "id"), "pose": ("tool_length", "too
 TEXT_COLUMNS = ("tool", "path", "id")
 #: Columns in degrees.
 ANGLE_COLUMNS = ("rx", "ry", "rz")
+#: Largest magnitude of a number in a measurement-like file, m (angles: degrees times the
+#: file's metres per unit): beyond, a unit mistake (and squares in distances overflow). In
+#: metres, so that a file written back in another unit reads the same.
+MAX_CELL = 1e6
 _UNIT_LINE = re.compile(r"^#\s*units?\s*[:=]\s*([A-Za-z]+)\s*$")
 _COLUMN_UNIT = re.compile(r"^(.*?)\s*\[\s*([A-Za-z°]+)\s*\]\s*$")
 
@@ -180,11 +184,14 @@ def read_csv_table(path: str | Path, required: tuple[str, ...], optional: tuple[
             try:
                 v = float(cell)
             except ValueError:
-                raise InputError(f"{label}:{line}: column {c!r}: {cell!r} is not a number"
-                                 ) from None
+                raise InputError(f"{label}:{line}: column {c!r}: {_short(cell)} is not a "
+                                 "number") from None
             if not np.isfinite(v):
-                raise InputError(f"{label}:{line}: column {c!r}: {cell!r} is not a finite "
-                                 "number")
+                raise InputError(f"{label}:{line}: column {c!r}: {_short(cell)} is not a "
+                                 "finite number")
+            if abs(v) * scale > MAX_CELL:  # squared in distances: overflow, a unit mistake
+                raise InputError(f"{label}:{line}: column {c!r}: {v:g} {unit} is beyond "
+                                 f"{MAX_CELL:g} m (or degrees): check the units")
             values[i, k] = v
         for c in texts:
             texts[c].append(row[index[c]])
@@ -250,6 +257,12 @@ def read_measurements(path: str | Path, machine, kind: str, *, units: str | None
                           tool=tuple(texts["tool"]) if "tool" in texts else None,
                           pivot=pivot, path=tuple(texts["path"]) if "path" in texts else None,
                           commanded=commanded, labels=lines, source=label)
+
+
+def _short(cell: str) -> str:
+    """``repr(cell)`` cut to 40 characters (an oversized field in an error message)."""
+    text = repr(cell)
+    return text if len(text) <= 40 else f"{text[:37]}…"
 
 
 def _looks_numeric(cells: list[str]) -> bool:

@@ -126,7 +126,9 @@ class CsvSource:
         newlines = buffer.count(b"\n")
         while True:
             while not eof and newlines < r.chunk_rows:
-                more = self._read(handle, max(target - len(buffer), 1 << 16))
+                # at most 64 MiB a read: a first line of megabytes made the estimate of a
+                # chunk's size terabytes, and read() allocates it up front (MemoryError)
+                more = self._read(handle, min(max(target - len(buffer), 1 << 16), 1 << 26))
                 eof = not more
                 buffer += more
                 newlines += more.count(b"\n")

@@ -62,7 +62,7 @@ from pkmkit.model.chains import (
     build_chain_model,
 )
 from pkmkit.model.machine_file import KeyPath, MachineDocument
-from pkmkit.model.parameters import is_plain_number, length_scale
+from pkmkit.model.parameters import MAX_LENGTH, length_scale, plain_floats
 from pkmkit.solve.chains import chain_pose, closure, solve_closure
 from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
 from pkmkit.status import Status
@@ -106,16 +106,26 @@ class _Reader:
             raise self.fail(f"[{key}] must be a table of key = value entries", (key,))
         return value
 
+    def bounded(self, si: np.ndarray, path: KeyPath, what: str) -> None:
+        """Refuse magnitudes beyond :data:`MAX_LENGTH` (m, rad or direction components):
+        a unit mistake, whose squares overflow in the closure."""
+        if (np.abs(si) > MAX_LENGTH).any():
+            raise self.fail(f"{what}: magnitude beyond {MAX_LENGTH:g} (m, rad or direction "
+                            "components): check the units", path)
+
     def number(self, value: Any, path: KeyPath, what: str, scale: float = 1.0) -> float:
-        if not is_plain_number(value) or np.ndim(value) != 0 or not np.isfinite(value):
-            raise self.fail(f"{what} must be a finite number, got {value!r}", path)
-        return float(value) * scale
+        number = plain_floats(value)
+        if number is None or number.ndim != 0 or not np.isfinite(number):
+            raise self.fail(f"{what} must be a finite number, got {_short(value)}", path)
+        self.bounded(number * scale, path, what)
+        return float(number) * scale
 
     def vector(self, value: Any, size: int, path: KeyPath, what: str,
                scale: float = 1.0) -> np.ndarray:
-        if not is_plain_number(value) or np.shape(value) != (size,):
-            raise self.fail(f"{what} must be {size} numbers, got {value!r}", path)
-        arr = np.asarray(value, dtype=float)
+        arr = plain_floats(value)
+        if arr is None or arr.shape != (size,):
+            raise self.fail(f"{what} must be {size} numbers, got {_short(value)}", path)
+        self.bounded(arr * scale, path, what)
         if not np.isfinite(arr).all():
             raise self.fail(f"{what} must be {size} finite numbers, got {value!r}", path)
         return arr * scale
@@ -240,11 +250,13 @@ def _element(reader: _Reader, entry: Mapping[str, Any], path: KeyPath, name: str
             raise reader.fail(f"{what}: give either 'axis' (and 'spin') or 'rotation', not "
                               "both", (*path, "rotation"))
         rows = entry["rotation"]
-        if not is_plain_number(rows) or np.shape(rows) != (3, 3):
+        rot = plain_floats(rows)
+        if rot is None or rot.shape != (3, 3):
             raise reader.fail(f"{what}: rotation must be 3 rows of 3 numbers",
                               (*path, "rotation"))
-        rot = np.asarray(rows, dtype=float)
-        if (not np.isfinite(rot).all() or np.abs(rot.T @ rot - np.eye(3)).max() > 1e-6
+        # entries of a rotation lie in [-1, 1] (beyond, R^T R may overflow)
+        if (not np.isfinite(rot).all() or np.abs(rot).max() > 1.0 + 1e-6
+                or np.abs(rot.T @ rot - np.eye(3)).max() > 1e-6
                 or np.linalg.det(rot) < 0):
             raise reader.fail(f"{what}: rotation must be a rotation matrix (orthonormal, "
                               "det +1)", (*path, "rotation"))
@@ -445,6 +457,12 @@ def _poses(reader: _Reader, machine: JointChainMachine) -> dict[str, np.ndarray]
                             f"{', '.join(machine.actuator_names)})")
         out[name] = arr * scales
     return out
+
+
+def _short(value: Any) -> str:
+    """``repr(value)``, cut to 60 characters (a 400-digit literal in an error message)."""
+    text = repr(value)
+    return text if len(text) <= 60 else f"{text[:57]}…"
 
 
 def _toml_value(value: Any) -> str:

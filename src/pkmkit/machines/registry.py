@@ -48,7 +48,12 @@ from pkmkit.machines.build import build_machine
 from pkmkit.machines.chain_file import JOINT_CHAIN, chain_machine_from_document
 from pkmkit.machines.machine import Machine, MachineKind
 from pkmkit.model.machine_file import MachineDocument, read_machine_document
-from pkmkit.model.parameters import is_plain_number, length_scale, resolve_parameters
+from pkmkit.model.parameters import (
+    MAX_LENGTH,
+    is_plain_number,
+    length_scale,
+    resolve_parameters,
+)
 from pkmkit.model.rods import LegSpec, build_rod_model, leg_specs
 
 #: Built-in machine kinds by name.
@@ -255,7 +260,16 @@ def _vector(value: Any, size: int, what: str, scale: float = 1.0) -> np.ndarray:
                              what) from None
     if arr.shape != (size,) or not np.isfinite(arr).all():
         raise ParameterError(f"{what} must be {size} finite numbers, got {value!r}", what)
+    _bounded(arr * scale, what)
     return arr * scale
+
+
+def _bounded(si: Any, what: str) -> None:
+    """Refuse magnitudes beyond MAX_LENGTH (m, rad, direction components): a unit mistake,
+    whose squares overflow in the closures (issue 18 §7)."""
+    if (np.abs(si) > MAX_LENGTH).any():
+        raise ParameterError(f"{what}: magnitude beyond {MAX_LENGTH:g} (m, rad or direction "
+                             "components): check the units", what)
 
 
 def _number(value: Any, what: str, scale: float = 1.0) -> float:
@@ -265,6 +279,7 @@ def _number(value: Any, what: str, scale: float = 1.0) -> float:
         finite = False
     if not finite:
         raise ParameterError(f"{what} must be a finite number, got {value!r}", what)
+    _bounded(float(value) * scale, what)
     return float(value) * scale
 
 

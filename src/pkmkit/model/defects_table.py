@@ -54,7 +54,11 @@ def defects_from_table(machine, table: Mapping[str, Any], scale: float) -> np.nd
             preview = ", ".join(index.names[:12]) + (", …" if len(index.names) > 12 else "")
             raise ParameterError(f"unknown defect {name!r} for this machine; its defects are "
                                  f"named like {preview}", name)
-        if not is_plain_number(value) or np.ndim(value) != 0 or not np.isfinite(value):
+        try:  # an integer too large for a float (a TOML literal of 400 digits) is not finite
+            finite = is_plain_number(value) and np.ndim(value) == 0 and np.isfinite(float(value))
+        except OverflowError:
+            finite = False
+        if not finite:
             raise ParameterError(f"defect {name!r} must be a finite number, got {value!r}", name)
         unit = index.units[index.names.index(name)]
         factor = scale if unit == "m" else (np.pi / 180.0 if unit == "rad" else 1.0)

@@ -107,7 +107,16 @@ def _parse_toml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
         line = int(match.group(1)) if match else None
         message = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
         raise MachineFileError(path, f"TOML syntax error: {message}", line) from None
+    except ValueError:  # an integer of more than 4300 digits (Python's conversion limit)
+        raise _too_long_number(text, path) from None
     return data, _toml_lines(text)
+
+
+def _too_long_number(text: str, path: str) -> MachineFileError:
+    """The error for a number too long to convert, at the line of its first long digit run."""
+    line = next((k for k, raw in enumerate(text.splitlines(), start=1)
+                 if re.search(r"\d{4300}", raw)), None)
+    return MachineFileError(path, "a number of more than 4300 digits", line)
 
 
 def _split_key(key: str) -> tuple[str, ...]:
@@ -177,6 +186,10 @@ def _parse_yaml(text: str, path: str) -> tuple[Any, dict[KeyPath, int]]:
         raise MachineFileError(path, f"YAML syntax error: {problem}", line) from None
     except yaml.YAMLError as exc:
         raise MachineFileError(path, f"YAML error: {exc}") from None
+    except MachineFileError:  # (a ValueError too) anchors and aliases refused
+        raise
+    except ValueError:  # an integer of more than 4300 digits (Python's conversion limit)
+        raise _too_long_number(text, path) from None
     lines: dict[KeyPath, int] = {}
     if node is not None:
         _yaml_lines(node, (), lines, path)

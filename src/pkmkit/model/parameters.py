@@ -36,6 +36,18 @@ def is_plain_number(value: Any) -> bool:
         return all(is_plain_number(v) for v in value)
     return isinstance(value, int | float | np.integer | np.floating)
 
+def plain_floats(value: Any) -> np.ndarray | None:
+    """``value`` (plain numbers, :func:`is_plain_number`) as a float array, or None when it is
+    not plain numbers, is ragged, or holds an integer too large for a double (a 400-digit
+    literal in a file: NumPy raises ``OverflowError`` or keeps it as an object)."""
+    if not is_plain_number(value):
+        return None
+    try:
+        return np.asarray(value, dtype=float)
+    except (OverflowError, ValueError):
+        return None
+
+
 Quantity = Literal["length", "angle", "number"]
 
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkmkit.exceptions import ParameterError
+from pkmkit.model.parameters import MAX_LENGTH
 
 
 def _positive(value: float, what: str) -> float:
@@ -30,6 +31,16 @@ def _positive(value: float, what: str) -> float:
         raise ParameterError(f"{what} must be a number, got {value!r}", what) from None
     if not (math.isfinite(number) and number > 0):
         raise ParameterError(f"{what} must be a finite number > 0, got {value!r}", what)
+    return number
+
+
+def _dimension(value: float, what: str) -> float:
+    """A section dimension: > 0 and at most MAX_LENGTH (beyond, its fourth power overflows:
+    a unit mistake)."""
+    number = _positive(value, what)
+    if number > MAX_LENGTH:
+        raise ParameterError(f"{what} = {number:g} m is beyond {MAX_LENGTH:g} m: check the units",
+                             what)
     return number
 
 
@@ -65,14 +76,14 @@ class Section:
     @classmethod
     def circle(cls, diameter: float) -> Section:
         """Solid circular section of ``diameter`` (m)."""
-        d = _positive(diameter, "section diameter")
+        d = _dimension(diameter, "section diameter")
         i = math.pi * d**4 / 64.0
         return cls(math.pi * d * d / 4.0, i, i, 2.0 * i, d, f"circle D={d:g} m")
 
     @classmethod
     def tube(cls, outer: float, inner: float) -> Section:
         """Hollow circular section (m); ``inner`` < ``outer``."""
-        d_o = _positive(outer, "tube outer diameter")
+        d_o = _dimension(outer, "tube outer diameter")
         d_i = float(inner)
         if not (math.isfinite(d_i) and 0.0 <= d_i < d_o):
             raise ParameterError(f"tube inner diameter must be in [0, {d_o:g}) m, got {inner!r}",
@@ -86,8 +97,8 @@ class Section:
         """Solid rectangle (m): ``width`` along local y, ``height`` along local z; torsion
         constant by the usual series approximation J ≈ a b³ (1/3 − 0.21 (b/a)(1 − b⁴/(12a⁴)))
         with a ≥ b."""
-        b_y = _positive(width, "section width")
-        h_z = _positive(height, "section height")
+        b_y = _dimension(width, "section width")
+        h_z = _dimension(height, "section height")
         a, b = max(b_y, h_z), min(b_y, h_z)
         torsion = a * b**3 * (1.0 / 3.0 - 0.21 * (b / a) * (1.0 - b**4 / (12.0 * a**4)))
         return cls(b_y * h_z, b_y * h_z**3 / 12.0, h_z * b_y**3 / 12.0, torsion, max(b_y, h_z),
