@@ -28,7 +28,6 @@ from threadpoolctl import threadpool_limits
 import pkmkit
 from pkmkit.calibration.identify import calibrate, identification_problem
 from pkmkit.calibration.simulate import default_configurations, random_defects, simulate
-from pkmkit.model.defects_table import apply_defect_vector
 
 #: The seed's run time (MATLAB lsqnonlin, 52 parameters, 107 poses): 266.72 min.
 SEED_SECONDS = 266.72 * 60
@@ -37,7 +36,7 @@ SEED_SECONDS = 266.72 * 60
 def tripteor_data(seed: int = 7):
     m = pkmkit.machine("tripteor-x7")
     rng = np.random.default_rng(seed)
-    true = apply_defect_vector(m, random_defects(m, rng))
+    true = m.with_defects(random_defects(m, rng))
     q = default_configurations(m, 107, rng)
     return m, simulate(true, m, "point", len(q), rng, q=q, noise="tracker")
 
@@ -45,7 +44,7 @@ def tripteor_data(seed: int = 7):
 def hexapod_data(seed: int = 3):
     m = pkmkit.machine("gough-stewart")
     rng = np.random.default_rng(seed)
-    true = apply_defect_vector(m, random_defects(m, rng))
+    true = m.with_defects(random_defects(m, rng))
     return m, simulate(true, m, "pose", 50, rng)
 
 

@@ -39,8 +39,7 @@ def test_a_disabled_scope_and_a_pipe_show_nothing(monkeypatch):
 
 
 def test_the_workspace_grid_reports_its_chunks_and_keeps_its_result():
-    """The grid is cut in about 50 chunks for the bar; the evaluation is the same as in one
-    piece (each pose is evaluated on its own)."""
+    """The bar counts the grid's chunks; the evaluation is the same as in one piece."""
     import pkmkit
     from pkmkit.analysis.criteria import Criteria, _evaluate_chunk, _evaluate_range
     from pkmkit.analysis.grids import make_grid
@@ -48,7 +47,7 @@ def test_the_workspace_grid_reports_its_chunks_and_keeps_its_result():
     machine = pkmkit.machine("orthoglide")
     h = machine.home_pose
     grid = make_grid(h - 0.3, h + 0.3, free=(0, 1, 2), base=h, names=machine.pose_names,
-                     resolution=60)                 # 216,000 poses: 50 chunks of 4,320
+                     resolution=60)                 # 216,000 poses: 4 chunks
     stream = io.StringIO()
     with progress_display(True, delay=0.0, stream=stream):
         chunked = _evaluate_range(0, grid.size, machine, grid, Criteria())

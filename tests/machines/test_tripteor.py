@@ -132,7 +132,7 @@ def median_plane(machine, q, symmetric=False):
         q[:, 2] = q[:, 0]
     for _ in range(12):
         res = machine.fk(q, full_output=True)
-        rate = machine.jacobian(q).passive_rates[:, 0, 1]  # dψ1/dQ2
+        rate = machine.jacobian(q=q).passive_rates[:, 0, 1]  # dψ1/dQ2
         q[:, 1] -= res.passive[:, 0] / rate
     res = machine.fk(q, full_output=True)
     assert np.abs(res.passive[:, 0]).max() < 1e-14
@@ -374,7 +374,8 @@ def test_inverse_then_direct_from_tool_point_and_axis(tripteor):
     target[:, :3] += rng.uniform(-0.002, 0.002, (100, 3))
     tilt = Rotation.from_rotvec(rng.uniform(-1, 1, (100, 3)) * np.radians(2.0) / np.sqrt(3))
     target[:, 3:] = tilt.apply(pose[:, 3:]) * rng.uniform(0.5, 3.0, (100, 1))
-    q, direct = tripteor.ik(target, full_output=True)
+    res = tripteor.ik(target, full_output=True)
+    q, direct = res.q, res.direct
     assert np.isfinite(q).all()
     assert np.abs(direct.pose[:, :3] - target[:, :3]).max() < 1e-10
     unit = target[:, 3:] / np.linalg.norm(target[:, 3:], axis=1)[:, None]
@@ -396,7 +397,7 @@ def test_velocity_model_against_finite_differences(tripteor):
     joint rates, against central differences of the direct model."""
     rng = np.random.default_rng(23)
     q = random_q(rng, 8)
-    jac = tripteor.jacobian(q)
+    jac = tripteor.jacobian(q=q)
     h = 1e-6
     for j in range(5):
         step = np.zeros(5)

@@ -160,12 +160,14 @@ TASK_CHUNKS = 4
 
 def _evaluate_range(start: int, stop: int, machine: Machine, grid: Grid,
                     criteria: Criteria) -> PoseEvaluation:
-    """Grid points ``start:stop`` evaluated in chunks of at most :data:`EVALUATION_CHUNK`
-    (about 50 of them on a large grid, so that a progress bar moves; every pose is evaluated
-    on its own, so the chunking does not change a result)."""
-    chunk = int(np.clip((stop - start) // 50, 2048, EVALUATION_CHUNK))
-    starts = range(start, stop, chunk)
-    parts = [_evaluate_chunk(machine, grid.points_between(k, min(k + chunk, stop)), criteria)
+    """Grid points ``start:stop`` evaluated in chunks of :data:`EVALUATION_CHUNK` (a progress
+    bar counts them)."""
+    starts = range(start, stop, EVALUATION_CHUNK)
+    # chunk boundaries at multiples of EVALUATION_CHUNK whatever the range, so that a grid
+    # evaluated here and in Dask tasks (ranges of TASK_CHUNKS chunks) is cut the same way and
+    # gives the same bits
+    parts = [_evaluate_chunk(machine, grid.points_between(k, min(k + EVALUATION_CHUNK, stop)),
+                             criteria)
              for k in tracked(starts, total=len(starts),
                               label=f"{machine.id}: {stop - start:,} poses")]
     return parts[0] if len(parts) == 1 else _concatenate(parts)

@@ -272,7 +272,7 @@ def jacobian_chain(m, pose, q_text, tol, units, convention, as_json) -> None:
     q = (parse_actuators(q_text, m, units) if q_text is not None else
          m.ik(pose_from_cli(parse_numbers(pose, "--pose", (6,)), m, units, convention)[0],
               strokes="ignore"))
-    jac = m.jacobian(q)
+    jac = m.jacobian(q=q)
     check = single_check(m, q, units)
     payload = {"machine": m.id, "units": units, "q": q / scales,
                "J": jac.J / _row_scales(units)[:, None] * scales[None, :],

@@ -219,7 +219,7 @@ def _chain_difference(machine, vector, i, q):
 def _actuator_columns(machine, q, pose, point, rotation) -> np.ndarray:
     """``−J⁺ ∂x/∂p``: the actuator change that keeps the tool where it was."""
     if machine.family == "chain":
-        jac = np.atleast_3d(machine.jacobian(q).J)
+        jac = np.atleast_3d(machine.jacobian(q=q).J)
         axis = pose[:, 3:6] / np.linalg.norm(pose[:, 3:6], axis=1)[:, None]
         proj = np.zeros((len(q), 6, 6))
         proj[:, :3, :3] = np.eye(3)
