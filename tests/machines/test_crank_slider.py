@@ -91,7 +91,7 @@ def test_mobility_and_hyperstatism(crank):
 
 def test_velocity_model_against_finite_differences(crank):
     theta1 = crank.home_q[0] + np.radians(np.linspace(-60.0, 60.0, 7))
-    jac = crank.jacobian(theta1[:, None])
+    jac = crank.jacobian(q=theta1[:, None])
     h = 1e-6
     plus = crank.fk((theta1 + h)[:, None], full_output=True)
     minus = crank.fk((theta1 - h)[:, None], full_output=True)
