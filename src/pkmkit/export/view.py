@@ -319,9 +319,10 @@ function pkmkitReport(name) {
   document.body.setAttribute('data-frame', name || '');
 }
 var pkmkitStart = decodeURIComponent(window.location.hash.slice(1));
-gd.on('plotly_animated', function () { pkmkitReport(gd._pkmkitFrame); });
+var pkmkitFrame = pkmkitStart;
+gd.on('plotly_sliderchange', function (e) { pkmkitFrame = e.step.args[0][0]; });
+gd.on('plotly_animated', function () { pkmkitReport(pkmkitFrame); });
 if (pkmkitStart) {
-  gd._pkmkitFrame = pkmkitStart;
   Plotly.animate(gd, [pkmkitStart], {mode: 'immediate', frame: {duration: 0, redraw: true},
                                      transition: {duration: 0}})
     .then(function () { pkmkitReport(pkmkitStart); });
