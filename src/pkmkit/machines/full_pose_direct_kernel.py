@@ -27,6 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
+from pkmkit.machines.full_pose_kernels import rotation_entries
+
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 
 OK, NOT_CONVERGED, INVALID_INPUT, INCONSISTENT = 0, 3, 4, 7
@@ -97,22 +99,7 @@ def _evaluate(u, geom, base, length, r, jac):  # pragma: no cover
     """Residuals ``r (m,)`` and Jacobian ``jac (m, 6)`` at pose ``u (6,)``; returns the cost
     ½|r|² (NaN or inf when not finite, the Jacobian included)."""
     wx, wy, wz = u[3], u[4], u[5]
-    theta = math.sqrt(wx * wx + wy * wy + wz * wz)
-    if theta < 1e-8:
-        a = 1.0 - theta * theta / 6.0
-        b = 0.5 - theta * theta / 24.0
-    else:
-        a = math.sin(theta) / theta
-        b = (1.0 - math.cos(theta)) / (theta * theta)
-    r00 = 1.0 - b * (wy * wy + wz * wz)
-    r11 = 1.0 - b * (wx * wx + wz * wz)
-    r22 = 1.0 - b * (wx * wx + wy * wy)
-    r01 = b * wx * wy - a * wz
-    r10 = b * wx * wy + a * wz
-    r02 = b * wx * wz + a * wy
-    r20 = b * wx * wz - a * wy
-    r12 = b * wy * wz - a * wx
-    r21 = b * wy * wz + a * wx
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(wx, wy, wz)
     cost = 0.0
     check = 0.0
     for j in range(geom.shape[0]):

@@ -31,15 +31,11 @@ def rod_coordinates(x, kind, base, platform, axis, pivot, e1, e2, length_sq, len
 
 
 @njit(inline="always", **_OPTIONS)
-def _pose_rods(x, k, kind, base, platform, axis, pivot, e1, e2, length_sq, length,
-               crank_radius, crank_offset, sigma, boundary_tol, out, col):  # pragma: no cover
-    """Every rod's actuator coordinate of pose row ``x[k]`` into ``out[:, col]``."""
-    m = kind.shape[0]
-    two_pi = 2.0 * math.pi
-    px, py, pz = x[k, 0], x[k, 1], x[k, 2]
-    wx, wy, wz = x[k, 3], x[k, 4], x[k, 5]
+def rotation_entries(wx, wy, wz):  # pragma: no cover
+    """The nine entries ``r00, r01, …, r22`` of the rotation of rotation vector (wx, wy, wz)
+    (Rodrigues; the series R = I + [w] + [w]²/2 below 1e-8 rad)."""
     theta = math.sqrt(wx * wx + wy * wy + wz * wz)
-    if theta < 1e-8:  # series: R = I + [w] + [w]²/2
+    if theta < 1e-8:
         a = 1.0 - theta * theta / 6.0
         b = 0.5 - theta * theta / 24.0
     else:
@@ -54,6 +50,18 @@ def _pose_rods(x, k, kind, base, platform, axis, pivot, e1, e2, length_sq, lengt
     r20 = b * wx * wz - a * wy
     r12 = b * wy * wz - a * wx
     r21 = b * wy * wz + a * wx
+    return r00, r01, r02, r10, r11, r12, r20, r21, r22
+
+
+@njit(inline="always", **_OPTIONS)
+def _pose_rods(x, k, kind, base, platform, axis, pivot, e1, e2, length_sq, length,
+               crank_radius, crank_offset, sigma, boundary_tol, out, col):  # pragma: no cover
+    """Every rod's actuator coordinate of pose row ``x[k]`` into ``out[:, col]``."""
+    m = kind.shape[0]
+    two_pi = 2.0 * math.pi
+    px, py, pz = x[k, 0], x[k, 1], x[k, 2]
+    wx, wy, wz = x[k, 3], x[k, 4], x[k, 5]
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(wx, wy, wz)
     for j in range(m):
         bx, by, bz = platform[j, 0], platform[j, 1], platform[j, 2]
         qx = px + r00 * bx + r01 * by + r02 * bz
