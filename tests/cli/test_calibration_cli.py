@@ -7,6 +7,8 @@ import base64
 import html
 import json
 import re
+import shutil
+import subprocess
 
 import numpy as np
 import pytest
@@ -80,7 +82,11 @@ def test_report_content(delta_run):
     images = re.findall(r"src='data:image/png;base64,([A-Za-z0-9+/=]+)'", page)
     assert len(images) == 5  # residuals, histograms, parameters, identifiability, maps
     assert all(base64.b64decode(img)[:8] == b"\x89PNG\r\n\x1a\n" for img in images)
-    assert "http://" not in page and "https://" not in page
+    # nothing fetched: no script, image or style sheet from elsewhere (the inlined Plotly
+    # library of the 3-D view names web addresses in its own code, never loaded)
+    assert not re.search(r"<script[^>]+src=", page)
+    markup = re.sub(r"<script[^>]*>.*?</script>", "", page, flags=re.S)
+    assert "http://" not in markup and "https://" not in markup
     text = html.unescape(page)
     for name in payload["parameters"]:
         assert f"<code>{name}</code>" in text
@@ -94,6 +100,62 @@ def test_report_content(delta_run):
     residuals = (d / "cal" / "residuals.csv").read_text().splitlines()
     assert residuals[1] == "row,set,before,after,weight"
     assert len(residuals) == 2 + 60 + 25
+
+
+def test_report_embeds_the_3d_view_of_the_correction(delta_run):
+    """Issue 23 §5: report.html embeds the 3-D view (``pkmkit view --calibration``): the
+    machine with a slider per actuator, and the tool error of the identified machine against
+    the nominal one as vectors, whose largest value is the view's own computation."""
+    from pkmkit.export.view import view_figure
+    from pkmkit.plot.calibration_report import REPORT_VIEW_STEPS
+
+    d, _ = delta_run
+    page = (d / "cal" / "report.html").read_text()
+    assert "<h2 id='view'>3-D view</h2>" in page and "id=\"pkmkit-view\"" in page
+    assert "pkmkitReport" in page and page.count("Plotly.newPlot") == 1
+    calibrated = pkmkit.load(d / "cal" / "linear-delta-calibrated.toml")
+    nominal = pkmkit.machine("linear-delta")
+    _, content = view_figure(nominal, calibrated=calibrated, steps=REPORT_VIEW_STEPS)
+    shown = re.search(r"(\d+) vectors\. Largest tool error shown: ([0-9.e+-]+) mm", page)
+    assert int(shown.group(1)) == content.error_vectors > 0
+    assert float(shown.group(2)) == pytest.approx(content.error_max * 1e3, rel=1e-3)
+    # the error the calibration corrects is what the identified machine moves the tool by
+    q = nominal.ik(np.array([[0.0, 0.0, 0.2], [0.1, 0.05, 0.25]]))
+    moved = np.linalg.norm(calibrated.fk(q) - nominal.fk(q), axis=1).max()
+    assert 0.2 * content.error_max < moved < 2 * content.error_max
+
+
+@pytest.mark.skipif(not (shutil.which("chromium") or shutil.which("chromium-browser")),
+                    reason="headless Chromium is not installed")
+def test_report_with_its_view_loads_in_a_browser(delta_run):
+    """The report opens in headless Chromium without script errors and its view is drawn:
+    the page script reports the tool point shown (the nominal machine at home, mm)."""
+    d, _ = delta_run
+    page = d / "cal" / "report.html"
+    done = subprocess.run(
+        [shutil.which("chromium") or shutil.which("chromium-browser"), "--headless",
+         "--no-sandbox", "--disable-gpu", "--enable-logging=stderr",
+         "--virtual-time-budget=8000", "--dump-dom", f"file://{page}"],
+        capture_output=True, text=True, timeout=120)
+    assert "Uncaught" not in done.stderr and "ReferenceError" not in done.stderr
+    shown = np.array(json.loads(re.search(r'data-tool="([^"]*)"', done.stdout).group(1)))
+    m = pkmkit.machine("linear-delta")
+    np.testing.assert_allclose(shown, np.asarray(m.fk(m.home_q)) * 1000, atol=1e-6)
+
+
+def test_report_without_the_view(tmp_path, delta_run):
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    d, _ = delta_run
+    done = CliRunner().invoke(cli, ["calibrate", "linear-delta", "--measure", "point",
+                                    "--measurements", str(d / "ident.csv"), "--no-view",
+                                    "--out", str(tmp_path / "cal")])
+    assert done.exit_code == 0, done.output
+    page = (tmp_path / "cal" / "report.html").read_text()
+    assert "pkmkit-view" not in page and "Plotly" not in page
+    assert len(page) < 0.5 * len((d / "cal" / "report.html").read_text())
 
 
 def test_calibrate_text_output(run, delta_run):

@@ -323,6 +323,8 @@ def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
 @click.option("--out", "out_dir", type=click.Path(file_okay=False),
               help="Directory for the calibrated machine file, calibration.json, residuals.csv,"
                    " figures and report.html.")
+@click.option("--view/--no-view", default=True,
+              help="Embed the 3-D view (machine, sliders, corrected tool error) in report.html.")
 @click.option("--write-anyway", is_flag=True,
               help="Write the calibrated machine file even when the verdict fails (the exit "
                    "status is still 3).")
@@ -330,7 +332,7 @@ def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
 @JSON_OPTION
 def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters, frame_spec,
                   identify_frame, robust, prior, tolerance_items, sigma, allow_incompatible,
-                  keep_weak, out_dir, write_anyway, units, as_json):
+                  keep_weak, out_dir, view, write_anyway, units, as_json):
     """Identify a machine's geometric defects from measurements, validate, report.
 
     Every calibration is judged (a-posteriori against assumed noise, condition, identified
@@ -375,7 +377,8 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
         written = write_calibration_outputs(result, out_dir,
                                             machine_source=machine_document_path(machine_name),
                                             units=unit, sources=sources,
-                                            machine_file=passed or write_anyway)
+                                            machine_file=passed or write_anyway,
+                                            view=view)
         if result.frame is not None and frame is not None and not isinstance(frame, Registration):
             # an identified or refined frame: reusable by --frame FILE (register's format)
             target = Path(out_dir) / "frame.json"

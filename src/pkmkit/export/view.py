@@ -332,6 +332,17 @@ if (pkmkitStart) {
 """
 
 
+def view_fragment(machine, **options: Any) -> tuple[str, ViewContent]:
+    """The view as an HTML fragment (a ``<div>`` with the Plotly library and the page script
+    inlined) to embed in another self-contained page, such as a calibration's
+    ``report.html``; ``options`` as :func:`view_figure`."""
+    fig, content = view_figure(machine, **options)
+    html = fig.to_html(include_plotlyjs=True, full_html=False, div_id="pkmkit-view",
+                       config={"displaylogo": False, "responsive": True},
+                       post_script=_PAGE_SCRIPT, auto_play=False)
+    return html, content
+
+
 def view_html(machine, **options: Any) -> tuple[str, ViewContent]:
     """The view as one self-contained HTML page (the Plotly library inlined) and what it
     shows; ``options`` as :func:`view_figure`."""

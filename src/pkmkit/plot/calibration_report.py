@@ -70,7 +70,7 @@ def _table(header: list[str], rows: list[list[str]], cls: str = "") -> str:
 
 def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None = None,
                 sources: dict[str, str] | None = None, title: str | None = None,
-                workspace: dict | None = None) -> str:
+                workspace: dict | None = None, view: bool = False) -> str:
     """The HTML report of a :class:`~pkmkit.calibration.identify.CalibrationResult`.
 
     Args:
@@ -81,6 +81,9 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         title: page title.
         workspace: the tool-point uncertainty over the workspace (default: computed,
             :meth:`~pkmkit.calibration.results.CalibrationResult.workspace_uncertainty`).
+        view: embed the 3-D view of the machine with the tool error the calibration corrects
+            as vectors (``pkmkit view --calibration``; the page grows by the Plotly library,
+            ~4.7 MB, and stays self-contained).
     """
     workspace = result.workspace_uncertainty() if workspace is None else workspace
     figures = (figure_pngs(result, units=units, workspace=workspace) if figures is None
@@ -240,6 +243,8 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         parts.append(f"<h2>Outliers ({len(rows)})</h2><p>Observations beyond 3 robust standard "
                      "deviations, down-weighted by the robust loss.</p>"
                      + _table(["row", f"error [{units}]", "weight"], rows, "outliers"))
+    if view:
+        parts.append(_view_section(result, units))
     style = ("body{font-family:sans-serif;max-width:980px;margin:1.5em auto;color:#222}"
              "table{border-collapse:collapse;margin:0.6em 0;font-size:0.9em}"
              "td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
@@ -254,6 +259,32 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
     return ("<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
             f"<title>{esc(title)}</title><style>{style}</style></head><body>\n"
             + "\n".join(parts) + "\n</body></html>\n")
+
+
+def _view_section(result, units: str) -> str:
+    """The report's 3-D view: the nominal machine with one slider per actuator and the tool
+    error of the identified machine against it as vectors over the workspace."""
+    from pkmkit.exceptions import PkmError
+    from pkmkit.export.view import view_fragment
+
+    head = ("<h2 id='view'>3-D view</h2><p>The machine drawn from its geometry, a slider per "
+            "actuator moving it through pkmkit's model; the arrows are the tool error the "
+            "calibration corrects (identified machine − nominal, magnified) over the middle "
+            "of the workspace.</p>")
+    try:
+        fragment, content = view_fragment(result.nominal, calibrated=result.machine,
+                                          steps=REPORT_VIEW_STEPS)
+    except PkmError as exc:
+        return head + f"<p class='meta'>Not drawn: {html.escape(str(exc))}</p>"
+    largest = ("" if content.error_max is None else
+               f" Largest tool error shown: {_num(content.error_max / length_scale(units))} "
+               f"{html.escape(units)}.")
+    return head + fragment + f"<p class='meta'>{content.error_vectors} vectors.{largest}</p>"
+
+
+#: Slider positions per actuator in the report's 3-D view (fewer than ``pkmkit view``'s: the
+#: report is written by every calibration).
+REPORT_VIEW_STEPS = 11
 
 
 def _verdict_html(verdict) -> str:
@@ -372,10 +403,11 @@ def metadata(result, sources: dict[str, str] | None) -> dict[str, Any]:
 
 def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: str | Path,
                               units: str = "mm", sources: dict[str, str] | None = None,
-                              machine_file: bool = True) -> dict[str, str]:
+                              machine_file: bool = True, view: bool = True) -> dict[str, str]:
     """Write the calibrated machine file (unless ``machine_file`` is False: a failed
     verdict), ``calibration.json``, ``residuals.csv``, the figures and ``report.html`` into
-    ``out_dir`` (created if needed). Returns name → path.
+    ``out_dir`` (created if needed). Returns name → path. ``view``: embed the 3-D view in the
+    report (:func:`report_html`).
 
     Everything is rendered in memory first; each file is then written atomically.
     """
@@ -406,7 +438,7 @@ def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: st
     texts["residuals.csv"] = residuals_csv(result, units=units)
     figures = figure_pngs(result, units=units, workspace=workspace)
     texts["report.html"] = report_html(result, units=units, figures=figures, sources=sources,
-                                       workspace=workspace)
+                                       workspace=workspace, view=view)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
