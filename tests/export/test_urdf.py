@@ -197,7 +197,7 @@ def test_the_command_writes_the_tree_and_its_closures(tmp_path):
     assert len(closures["closed_loop"]) == 5 and closures["type"] == ["3D"] * 5
     model = pin.buildModelFromUrdf(str(out))
     assert model.nq == 6 + 2 * (6 * 2 + 3)  # 6 prismatic, 15 continuous (cos, sin)
-    res = CliRunner().invoke(cli, ["export", "tripteor-x7", "--to", "urdf", "--out",
+    res = CliRunner().invoke(cli, ["export", "five-bar-isotropic", "--to", "urdf", "--out",
                                    str(tmp_path / "t.urdf")])
     assert res.exit_code == 1 and not (tmp_path / "t.urdf").exists()
     assert not (tmp_path / "t.closures.yaml").exists()

@@ -82,22 +82,22 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         check = "Klipper's delta formulas move the carriages as pkmkit (≤ 1e-9 m)"
     elif fmt == "urdf":
         from pkmkit.dynamics.masses import load_masses
-        from pkmkit.export.urdf import urdf_export
-        from pkmkit.export.urdf_check import check_urdf_export
+        from pkmkit.export.urdf_writer import check_urdf, write_urdf
 
         if Path(out_file).suffix != ".urdf":
             raise click.BadParameter("give NAME.urdf (the closures go to NAME.closures.yaml)",
                                      param_hint="--out")
         closures = str(Path(out_file).with_suffix(".closures.yaml"))
-        export = urdf_export(m, masses_file and load_masses(masses_file, m)[0],
-                             name=Path(out_file).stem)
-        _, reader = check_urdf_export(m, export)
+        export = write_urdf(m, masses_file and load_masses(masses_file, m)[0],
+                            name=Path(out_file).stem)
+        _, reader = check_urdf(m, export)
         text = export.urdf
         atomic_write_text(closures, export.closures)
-        masses_note = "" if export.inertial else "; no masses: pkmkit has none of cranks"
+        masses_note = ("" if export.inertial
+                       else f"; no masses: pkmkit has none of {export.massless}")
         what = (f"URDF tree ({len(export.joints)} joints, {m.n_actuators} actuated; m, kg"
-                f"{masses_note}) and {len(export.closure_frames)} loop closures (3D) → "
-                f"{closures}")
+                f"{masses_note}) and {len(export.closure_frames)} loop closures "
+                f"({export.closure_kind}) → {closures}")
         check = (f"read back with {'Pinocchio' if reader == 'pinocchio' else 'a URDF parser'},"
                  " its loops close at pkmkit's configurations (≤ 1e-9 m)")
     else:

@@ -41,6 +41,9 @@ Machines with cranks have no mass model in pkmkit: their URDF is kinematic (no `
 Joint limits are pkmkit's strokes; an unlimited stroke, and the effort and velocity URDF
 requires but pkmkit does not give, are written as :data:`UNLIMITED`.
 
+Joint-chain machines are written by :mod:`pkmkit.export.urdf_chains`
+(:func:`pkmkit.export.urdf_writer.write_urdf` picks the writer).
+
 Refused (:class:`~pkmkit.export.base.UnsupportedExportError`): joint chains, planar machines,
 a strut actuator driving several rods, masses given for a machine with cranks, and a
 translational machine whose rods do not close at its home (a calibration that tilts a crank's
@@ -89,6 +92,7 @@ class UrdfExport:
             zero angles; ``parent_spin``: per rod, the actuator turning its parent (crank) or -1.
         ball_offset: ``(3, 3)`` rod 1's frame to the spherical joint's zero frame.
         inertial: the URDF has inertias (False for cranks: pkmkit has no mass model of them).
+        closure_kind: ``"3D"`` (cut ball joints); ``massless``: what pkmkit has no masses of.
     """
 
     urdf: str
@@ -99,6 +103,8 @@ class UrdfExport:
     parent_spin: np.ndarray
     ball_offset: np.ndarray
     inertial: bool
+    closure_kind: str = "3D"
+    massless: str = "cranks"
 
 
 def _f(v) -> str:
@@ -129,8 +135,8 @@ def _check(machine) -> None:
     family = machine_family(machine)
     why = None
     if family == "chain":
-        why = ("a joint-chain machine (serial R/P chains closed in full SE(3)) is not exported to "
-               "URDF yet; rod-leg machines are")
+        why = ("a joint-chain machine is written by pkmkit.export.urdf_chains (or "
+               "pkmkit.export.urdf_writer.write_urdf for any machine), not by the rod-leg writer")
     elif family == "planar":
         why = ("a planar machine is not exported to URDF yet (its closures would constrain "
                "directions out of its plane); spatial rod-leg machines are")

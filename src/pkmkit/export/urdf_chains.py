@@ -1,0 +1,319 @@
+"""A URDF spanning tree of a joint-chain machine (Tripteor X7, TriMule 600, crank–slider,
+joint-chain machine files) and its loop closures, and the check that reads it back.
+
+A joint-chain machine is already a set of serial chains of one-DOF joints (docs/joint-chains.md):
+every element places a frame in the previous one (its invariant, the defects applied), and a
+joint then turns about or slides along that frame's z by its variable. The tree written here:
+
+- ``base``, pkmkit's base frame (SI units);
+- every leg from the base, element by element: a joint element is a URDF ``revolute`` joint
+  (``continuous`` when pkmkit gives no stroke) or ``prismatic`` joint **named as pkmkit's
+  variable** (``psi1``, ``Q1`` …: its value *is* pkmkit's joint value, rad or m), its origin the
+  element's frame (``xyz``/``rpy``), its axis z; a fixed element is a ``fixed`` joint. Each joint
+  carries the link ``<name>_body``. An element shared by several legs (the TriMule's ψ1) is
+  written once: the legs branch after it;
+- the first leg ends on the link ``platform`` (pkmkit's platform frame); the head, if any,
+  continues from it to the link ``tool`` (the tool frame) and ``tool_point`` (``tool_length``
+  along the tool frame's z).
+
+The **closures** (``NAME.closures.yaml``): every other leg's last link is welded to
+``platform`` — the two frames coincide (type ``6D``: position and orientation, constrained
+``[x, y, z, rx, ry, rz]``). In Pinocchio each pair is a
+``RigidConstraintModel(ContactType.CONTACT_6D, …, ReferenceFrame.LOCAL)``. The YAML also holds the
+actuated joints (``name_mot``), the tool length and an assembled configuration (pkmkit's home).
+
+The URDF is kinematic: pkmkit has no mass model of joint-chain machines (no ``inertial``).
+A machine with defects closes its legs in least squares (docs/joint-chains.md): defects that
+are compatible at first order (what a calibration identifies) leave a second-order misfit
+(4·10⁻⁸ m for 2 mrad on the Tripteor), which the welds then carry. Refused
+(:class:`~pkmkit.export.base.UnsupportedExportError`): a misfit beyond :data:`MISFIT`
+(incompatible defects of a hyperstatic machine: a tree with exact closures would be another
+machine), and an element shared by legs other than as a common first part.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import yaml
+
+from pkmkit.export.base import ExportCheckError, UnsupportedExportError
+from pkmkit.export.urdf import FORMAT, UNLIMITED, UrdfJoint, _attr, _joint, _link, _rpy
+from pkmkit.export.urdf_check import link_placements, read_urdf
+
+#: Largest closure residual and tool-frame error a written export may have beyond pkmkit's own
+#: closure misfit (m; rotations × the machine's characteristic length).
+TOLERANCE = 1e-9
+#: Largest closure misfit (m) of pkmkit's model a URDF with exact welds may stand for: defects
+#: compatible at first order (calibrated ones) leave a second-order misfit, ~1e-8 m for 1 mrad;
+#: an incompatible defect leaves ~ its own size.
+MISFIT = 1e-7
+
+
+@dataclass(frozen=True)
+class ChainUrdfExport:
+    """The texts of a joint-chain URDF export and their layout.
+
+    Attributes:
+        urdf: the URDF document.
+        closures: the closures YAML.
+        joints: the movable joints, each with its pkmkit variable index (``role``
+            ``"actuator"`` or ``"passive"``).
+        closure_frames: ``(link, "platform")`` pairs welded by the closures.
+        inertial: always False (pkmkit has no masses of joint chains).
+        closure_kind: ``"6D"``; ``massless``: what pkmkit has no masses of.
+    """
+
+    urdf: str
+    closures: str
+    joints: tuple[UrdfJoint, ...]
+    closure_frames: tuple[tuple[str, str], ...]
+    inertial: bool = False
+    closure_kind: str = "6D"
+    massless: str = "joint chains"
+
+
+def _element_joint(model, e: int, parent: str) -> tuple[str, str, UrdfJoint | None]:
+    """The URDF joint text of element ``e`` hung from ``parent``, its child link and the
+    movable joint record (None for a fixed element)."""
+    spec = model.elements[e]
+    frame = model.frames[e]
+    child = f"{spec.name}_body"
+    xyz, rpy = frame[:3, 3], _rpy(frame[:3, :3])
+    if spec.type == "F":
+        return _joint(spec.name, "fixed", parent, child, xyz, rpy), child, None
+    v = int(model.element_variable[e])
+    limits = (float(model.q_min[v]), float(model.q_max[v]))
+    finite = bool(np.isfinite(limits).all())
+    if spec.type == "R":
+        kind = "revolute" if finite else "continuous"
+    else:
+        kind = "prismatic"
+        limits = tuple(float(np.sign(x) * UNLIMITED) if not np.isfinite(x) else x
+                       for x in limits)
+        finite = True
+    text = _joint(spec.name, kind, parent, child, xyz, rpy, axis=(0, 0, 1),
+                  limits=limits if finite else None)
+    role = "actuator" if model.actuated[v] else "passive"
+    return text, child, UrdfJoint(spec.name, kind, role, v)
+
+
+def _require_exact_closure(machine) -> None:
+    res = machine.fk(machine.home_q, full_output=True, strokes="ignore")
+    residual = float(np.max(res.closure_residual))
+    if not residual <= MISFIT:
+        raise UnsupportedExportError(
+            FORMAT, machine.id, f"its legs close only in least squares at home (misfit "
+            f"{residual:.3g} m > {MISFIT:g} m: incompatible defects of a hyperstatic machine); "
+            "a URDF whose closures hold exactly would describe another machine — keep the "
+            "compatible defects (pkmkit errors MACHINE --compatibility)")
+
+
+def chain_urdf_export(machine, *, name: str = "machine") -> ChainUrdfExport:
+    """The URDF tree and closures YAML of a joint-chain machine (module docstring).
+
+    Raises:
+        UnsupportedExportError: legs closing only in least squares, or an element shared by
+            legs other than as their common first part.
+    """
+    _require_exact_closure(machine)
+    model = machine.model
+    links, joints, movable = [_link("base")], [], []
+    placed: dict[int, str] = {}
+    ends = []
+    for leg_name, leg in zip(model.leg_names, model.legs, strict=True):
+        parent, prefix = "base", True
+        for e in leg:
+            if e in placed:
+                if not prefix:
+                    raise UnsupportedExportError(
+                        FORMAT, machine.id, f"element {model.elements[e].name!r} of {leg_name} "
+                        "is shared with another leg after elements of its own: not a tree")
+                parent = placed[e]
+                continue
+            prefix = False
+            text, parent, record = _element_joint(model, e, parent)
+            joints.append(text)
+            links.append(_link(parent))
+            placed[e] = parent
+            if record is not None:
+                movable.append(record)
+        ends.append(parent)
+    joints.append(_joint("platform_frame", "fixed", ends[0], "platform"))
+    links.append(_link("platform"))
+    parent = "platform"
+    for e in model.head:
+        text, parent, record = _element_joint(model, e, parent)
+        joints.append(text)
+        links.append(_link(parent))
+        if record is not None:
+            movable.append(record)
+    joints.append(_joint("tool_frame", "fixed", parent, "tool"))
+    joints.append(_joint("tool_point_frame", "fixed", "tool", "tool_point",
+                         (0.0, 0.0, float(machine.tool_length))))
+    links += [_link("tool"), _link("tool_point")]
+    pairs = tuple((end, "platform") for end in ends[1:])
+    values = joint_values(machine, machine.home_q)
+    urdf = f"""<?xml version="1.0"?>
+<robot name="{_attr(machine.id)}">
+  <!-- pkmkit machine {_attr(machine.id)} ({_attr(machine.name)}): the spanning tree of its
+       joint chains; every other leg's end is welded to the platform in the closures YAML
+       beside this file. SI units (m, rad). Joints are named as pkmkit's joint variables and
+       hold their values. Kinematic: pkmkit has no masses of joint chains. Limits
+       {UNLIMITED:g} mean none. -->
+{chr(10).join(links)}
+{chr(10).join(joints)}
+</robot>
+"""
+    home = "\n".join(f"  {k}: {v:.17g}" for k, v in values.items())
+    closures = f"""# Loop closures of {name}.urdf: pkmkit machine {machine.id!r} ({machine.name}).
+# The URDF is a spanning tree; each closure below welds a leg's last frame to the platform
+# frame: the two frames coincide (type 6D: position and orientation). In Pinocchio, per pair:
+#   RigidConstraintModel(ContactType.CONTACT_6D, model, f1.parentJoint, f1.placement,
+#                        f2.parentJoint, f2.placement, ReferenceFrame.LOCAL)
+# with f1, f2 = model.frames[model.getFrameId(name)]. SI units (m, rad).
+closed_loop:
+{chr(10).join(f"  - [{a}, {b}]" for a, b in pairs)}
+type: [{", ".join("6D" for _ in pairs)}]
+constrained: [{", ".join("[x, y, z, rx, ry, rz]" for _ in pairs)}]
+# Actuated joints (pkmkit's actuators, in its order).
+name_mot: [{", ".join(model.actuator_names)}]
+joint_name: []
+joint_type: []
+# The tool point lies tool_length (m) along the tool frame's z (link tool_point).
+tool_length: {float(machine.tool_length):.17g}
+# An assembled configuration, pkmkit's home: joint name -> value (m or rad).
+home:
+{home}
+"""
+    return ChainUrdfExport(urdf=urdf, closures=closures, joints=tuple(movable),
+                           closure_frames=pairs)
+
+
+def joint_values(machine, q) -> dict[str, float]:
+    """Every joint variable's value (rad or m) at actuator values ``q (n,)``: the actuators
+    and the passive joints of pkmkit's direct model, by variable name.
+
+    Raises:
+        ExportCheckError: pkmkit's direct model finds no assembly at ``q``.
+    """
+    model = machine.model
+    res = machine.fk(np.asarray(q, dtype=float), full_output=True, strokes="ignore")
+    if not np.isfinite(res.passive).all():
+        raise ExportCheckError(f"no assembly of {machine.id} at q = {np.asarray(q).tolist()}")
+    out = dict(zip(res.passive_names, (float(v) for v in np.ravel(res.passive)), strict=True))
+    out.update(zip(model.actuator_names, (float(v) for v in np.ravel(q)), strict=True))
+    return {name: out[name] for name in model.variables}
+
+
+def sample_configurations(machine, n: int = 12, seed: int = 0) -> np.ndarray:
+    """``(n + 1, n_act)`` actuator vectors: home, then uniform draws within the strokes (home
+    ± 0.05 where a stroke is unbounded) that pkmkit's direct model assembles."""
+    rng = np.random.default_rng(seed)
+    model = machine.model
+    lo = np.asarray(model.q_min)[model.actuated]
+    hi = np.asarray(model.q_max)[model.actuated]
+    home = np.asarray(machine.home_q, dtype=float)
+    lo = np.where(np.isfinite(lo), lo, home - 0.05)
+    hi = np.where(np.isfinite(hi), hi, home + 0.05)
+    draws = rng.uniform(lo, hi, (4 * n, home.size))
+    res = machine.fk(draws, full_output=True, strokes="ignore")
+    good = draws[np.isfinite(res.passive).all(axis=1) & (res.closure_residual <= MISFIT)]
+    return np.vstack([home, good[:n]])
+
+
+def _pinocchio_reader(export: ChainUrdfExport, pin):
+    try:
+        model = pin.buildModelFromXML(export.urdf)
+    except (RuntimeError, ValueError) as exc:
+        raise ExportCheckError(f"Pinocchio refuses the generated URDF: {exc}") from None
+    data = model.createData()
+    pairs = [(model.getFrameId(a), model.getFrameId(b)) for a, b in _pairs(export)]
+    tool = model.getFrameId("tool")
+
+    def evaluate(values: dict[str, float]) -> tuple[list[np.ndarray], np.ndarray]:
+        q = pin.neutral(model)
+        for jid in range(1, model.njoints):
+            joint, value = model.joints[jid], values[model.names[jid]]
+            if joint.nq == 2:  # continuous: (cos, sin)
+                q[joint.idx_q:joint.idx_q + 2] = np.cos(value), np.sin(value)
+            else:
+                q[joint.idx_q] = value
+        pin.forwardKinematics(model, data, q)
+        pin.updateFramePlacements(model, data)
+        gaps = [np.linalg.inv(data.oMf[a].homogeneous) @ data.oMf[b].homogeneous
+                for a, b in pairs]
+        return gaps, data.oMf[tool].homogeneous
+
+    return evaluate
+
+
+def _python_reader(export: ChainUrdfExport):
+    joints = read_urdf(export.urdf)
+
+    def evaluate(values: dict[str, float]) -> tuple[list[np.ndarray], np.ndarray]:
+        placed = link_placements(joints, values)
+        gaps = [np.linalg.inv(placed[a]) @ placed[b] for a, b in _pairs(export)]
+        return gaps, placed["tool"]
+
+    return evaluate
+
+
+def _pairs(export: ChainUrdfExport) -> list[tuple[str, str]]:
+    data = yaml.safe_load(export.closures)
+    if list(data.get("type", [])) != ["6D"] * len(data["closed_loop"]):
+        raise ExportCheckError("the closures YAML holds a closure other than 6D")
+    return [tuple(p) for p in data["closed_loop"]]
+
+
+def _frame_error(transform: np.ndarray, length: float) -> float:
+    """Distance of a ``(4, 4)`` relative transform from the identity (m; its rotation angle
+    × ``length``)."""
+    cos = np.clip((np.trace(transform[:3, :3]) - 1.0) / 2.0, -1.0, 1.0)
+    angle = float(np.arccos(cos)) if cos < 1 - 1e-12 else float(
+        np.linalg.norm(transform[:3, :3] - transform[:3, :3].T) / np.sqrt(8))
+    return max(float(np.linalg.norm(transform[:3, 3])), angle * length)
+
+
+def check_chain_urdf_export(machine, export: ChainUrdfExport, *, use_pinocchio: bool | None = None
+                            ) -> tuple[float, str]:
+    """Read the tree back and put it in pkmkit's configurations (home and
+    :func:`sample_configurations`, every joint at pkmkit's direct model): every closure's two
+    frames must coincide and the tool frame sit where pkmkit puts it, to :data:`TOLERANCE`
+    beyond pkmkit's own closure misfit r there (welds within 2r: the tree's platform is leg
+    1's end, pkmkit's the least-squares one; the tool within 2r). Returns ``(largest error (m),
+    reader)``.
+
+    Raises:
+        ExportCheckError: a closure or the tool frame off by more than that.
+    """
+    from pkmkit.spatial.rotation import rotation_class
+
+    pin = None
+    if use_pinocchio is not False:
+        try:
+            import pinocchio as pin
+        except ImportError:
+            if use_pinocchio:
+                raise
+    evaluate = _pinocchio_reader(export, pin) if pin is not None else _python_reader(export)
+    length = max(float(machine.model.characteristic_length), 1e-3)
+    worst = 0.0
+    for q in sample_configurations(machine):
+        gaps, tool = evaluate(joint_values(machine, q))
+        res = machine.fk(q, full_output=True, strokes="ignore")
+        expected = np.eye(4)
+        frame = np.ravel(res.tool_frame)
+        expected[:3, :3] = rotation_class().from_rotvec(frame[3:]).as_matrix()
+        expected[:3, 3] = frame[:3]
+        errors = [_frame_error(g, length) for g in gaps]
+        errors.append(_frame_error(np.linalg.inv(expected) @ tool, length))
+        misfit = 2 * float(np.max(res.closure_residual))
+        if not max(errors) <= misfit + TOLERANCE:
+            raise ExportCheckError(
+                f"the generated URDF does not close pkmkit's configurations (off by "
+                f"{max(errors):.3g} m where pkmkit's own misfit allows {misfit:.3g} m): not "
+                "written")
+        worst = max(worst, *errors)
+    return worst, "pinocchio" if pin is not None else "python"

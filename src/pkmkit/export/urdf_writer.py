@@ -1,0 +1,45 @@
+"""The URDF export of any machine: the writer of its structure (rod legs:
+:mod:`pkmkit.export.urdf`; joint chains: :mod:`pkmkit.export.urdf_chains`) and the matching
+read-back check. What ``pkmkit export --to urdf`` calls."""
+
+from __future__ import annotations
+
+from pkmkit.export.base import machine_family
+from pkmkit.export.urdf import UrdfExport, urdf_export
+from pkmkit.export.urdf_chains import (
+    ChainUrdfExport,
+    chain_urdf_export,
+    check_chain_urdf_export,
+)
+from pkmkit.export.urdf_check import check_urdf_export
+
+
+def write_urdf(machine, masses=None, *, name: str = "machine") -> UrdfExport | ChainUrdfExport:
+    """The URDF tree and closures YAML of ``machine``: joint chains welded 6D at the platform,
+    rod legs with cut ball joints (3D). ``masses`` applies to rod-leg machines; a joint-chain
+    machine has no mass model and refuses them.
+
+    Raises:
+        UnsupportedExportError: what the format or the writer cannot express.
+    """
+    if machine_family(machine) == "chain":  # the format's own table: chains vs rod legs
+        if masses is not None:
+            from pkmkit.export.base import UnsupportedExportError
+
+            raise UnsupportedExportError("urdf", machine.id, "masses were given, but pkmkit has "
+                                         "no mass model of joint-chain machines: export it "
+                                         "without --masses (a kinematic URDF)")
+        return chain_urdf_export(machine, name=name)
+    return urdf_export(machine, masses, name=name)
+
+
+def check_urdf(machine, export: UrdfExport | ChainUrdfExport) -> tuple[float, str]:
+    """Read ``export`` back (Pinocchio when installed) and check it at pkmkit's
+    configurations: ``(largest error (m), reader)``.
+
+    Raises:
+        ExportCheckError: the written tree does not close or misplaces the platform or tool.
+    """
+    if isinstance(export, ChainUrdfExport):
+        return check_chain_urdf_export(machine, export)
+    return check_urdf_export(machine, export)
