@@ -18,7 +18,9 @@ Measurement types (``kind``), each a function of (machine with its defects, q, s
 :func:`measurement_jacobian` gives ``∂(reading)/∂(defects)`` analytically from
 :func:`pkmkit.geometric_errors.model.tool_sensitivity` (and, for ``"part"``, the closure's
 derivative in
-q at a fixed tool point).
+q at a fixed tool point). The machine gives its tool readings (``machine.tool_frames``) and
+says whether it has machined-part readings (``machine.measures_machined_parts``):
+:mod:`pkmkit.machines.tool_readings`.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ def _check_kind(machine, kind: str) -> None:
     if kind not in MEASURES:
         raise MeasurementError(f"unknown measurement type {kind!r}; valid types: "
                                f"{', '.join(MEASURES)}", kind)
-    if kind == "part" and machine.family == "chain":
+    if kind == "part" and not machine.measures_machined_parts:
         raise MeasurementError("machined-part (joint-space) measurements are defined for rod "
                                "machines (seed 003); use point or pose measurements for a "
                                "joint-chain machine", kind)
@@ -75,14 +77,7 @@ def measure(machine, kind: str, q: Any, setup: dict | None = None) -> np.ndarray
     n = qb.shape[0]
     if kind == "part":
         return _part_joints(machine, setup)
-    if machine.family == "chain":
-        res = machine.fk(qb, tool_length=setup.get("tool_length"), full_output=True)
-        point, rotvec = res.pose[:, :3], res.tool_frame[:, 3:]
-    else:
-        x = np.atleast_2d(machine.fk(qb))
-        point = np.zeros((n, 3))
-        point[:, :min(machine.dims, 3)] = x[:, :min(machine.dims, 3)]
-        rotvec = x[:, 3:6] if machine.dims == 6 else np.zeros((n, 3))
+    point, rotvec = machine.tool_frames(qb, tool_length=setup.get("tool_length"))
     if kind == "point":
         return point
     if kind == "pose":
