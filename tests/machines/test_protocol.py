@@ -84,7 +84,8 @@ PROTOCOL_PROPERTIES = ("home_pose", "home_q", "pose_names", "actuator_names",
 ERROR_METHODS = ("closure_linearisation", "tool_sensitivity", "nominal_sensitivity",
                  "held_tool_actuators", "region_names", "region_sizes", "default_region",
                  "configurations_at", "mechanism_configurations", "loop_defect_mask",
-                 "reference_joint_defect_mask", "sampled_tool_points", "tool_frames")
+                 "reference_joint_defect_mask", "sampled_tool_points", "tool_frames",
+                 "part_actuators", "part_sensitivity")
 
 
 def test_every_machine_answers_the_same_method_set(machine):
@@ -139,6 +140,16 @@ def test_the_geometric_error_calls_give_the_same_result_types(machine):
     assert machine.configurations_at(((lo + hi) / 2)[None]).shape == (1, n)
     drawn = machine.mechanism_configurations(3, seed=0)
     assert drawn.shape == (3, n) and np.isfinite(drawn).all()
+    measured = np.concatenate([point, rotation], axis=1) if machine.six_dof else point
+    if not machine.measures_machined_parts:
+        from pkmkit.exceptions import UnsupportedOperationError
+
+        for call in (machine.part_actuators, machine.part_sensitivity):
+            with pytest.raises(UnsupportedOperationError):
+                call(measured)
+        return
+    np.testing.assert_allclose(machine.part_actuators(measured), q, atol=1e-7)
+    assert machine.part_sensitivity(measured).shape == (1, n, d)
 
 
 def _home_input(machine):

@@ -11,7 +11,7 @@
   ``reference_joint_defect_mask()``;
 - :mod:`~pkmkit.machines.defect_samples`: ``sampled_tool_points(q, samples, tool_length=)``;
 - :mod:`~pkmkit.machines.tool_readings`: ``tool_frames(q, tool_length=)``,
-  ``measures_machined_parts``.
+  ``measures_machined_parts``, ``part_actuators(points)``, ``part_sensitivity(points)``.
 """
 
 from __future__ import annotations
