@@ -89,3 +89,13 @@ def test_family_branches_do_not_grow_beyond_the_recorded_count():
                   enumerate(path.read_text(encoding="utf-8").splitlines())
                   if FAMILY_BRANCH.search(line)]
     assert len(found) <= int(recorded.group(1)), found
+
+
+def test_the_geometric_error_analyses_ask_the_machine():
+    """Issue 19 §1: geometric_errors tests no family (it had 15 branches: defect
+    linearisations, regions, masks, samples, readings, parameter columns); each is a protocol
+    method of the machine (machines/error_faces.py)."""
+    found = [f"{path.name}:{k + 1}" for path in (PACKAGE / "geometric_errors").rglob("*.py")
+             for k, line in enumerate(path.read_text(encoding="utf-8").splitlines())
+             if FAMILY_BRANCH.search(line) or re.search(r"\bis_chain\(", line)]
+    assert found == []

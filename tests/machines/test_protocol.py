@@ -78,20 +78,78 @@ PROTOCOL_PROPERTIES = ("home_pose", "home_q", "pose_names", "actuator_names",
                        "actuator_quantities", "angular_actuators", "dims", "n_actuators",
                        "family", "position_controlled", "six_dof", "closed_form_inverse",
                        "orientation_fixed", "length_scale",
-                       "incompatible_defects", "kind", "id", "name", "model")
+                       "incompatible_defects", "kind", "id", "name", "model",
+                       "measures_machined_parts")
+#: What the geometric error analyses ask a machine (machines/error_faces.py, issue 19 §1).
+ERROR_METHODS = ("closure_linearisation", "tool_sensitivity", "nominal_sensitivity",
+                 "held_tool_actuators", "region_names", "region_sizes", "default_region",
+                 "configurations_at", "mechanism_configurations", "loop_defect_mask",
+                 "reference_joint_defect_mask", "sampled_tool_points", "tool_frames",
+                 "part_actuators", "part_sensitivity")
 
 
 def test_every_machine_answers_the_same_method_set(machine):
-    for name in PROTOCOL_METHODS:
+    for name in PROTOCOL_METHODS + ERROR_METHODS:
         assert callable(getattr(machine, name)), name
     for name in PROTOCOL_PROPERTIES:
         getattr(machine, name)  # no AttributeError, for every family
     assert isinstance(machine.position_controlled, bool)
     assert machine.orientation_fixed == (machine.dims < 6)
     assert np.isfinite(machine.length_scale) and machine.length_scale > 0
-    for flag in ("six_dof", "closed_form_inverse", "incompatible_defects", "orientation_fixed"):
+    for flag in ("six_dof", "closed_form_inverse", "incompatible_defects", "orientation_fixed",
+                 "measures_machined_parts"):
         assert isinstance(getattr(machine, flag), bool), flag
     assert not (machine.six_dof and machine.position_controlled)
+
+
+def test_the_geometric_error_calls_give_the_same_result_types(machine):
+    """The calls geometric_errors makes instead of testing the family: the same records and
+    shapes on every family, consistent with one another at home."""
+    from pkmkit.machines.defect_linearisation import ClosureLinearisation, ToolSensitivity
+
+    n, d = machine.n_actuators, len(machine.defects())
+    q = machine.home_q[None]
+    sens = machine.tool_sensitivity(q)
+    assert isinstance(sens, ToolSensitivity)
+    assert sens.point.shape == sens.rotation.shape == (1, 3, d) and sens.pose.shape == (1, 6)
+    lin = machine.closure_linearisation(machine.home_q)
+    assert isinstance(lin, ClosureLinearisation)
+    assert lin.defects.shape[::2] == (1, d) and lin.unknowns.shape[:2] == lin.defects.shape[:2]
+    np.testing.assert_array_equal(lin.pose, sens.pose)
+    point, rotation = machine.tool_frames(q)
+    assert point.shape == rotation.shape == (1, 3)
+    np.testing.assert_allclose(point, sens.pose[:, :3], atol=1e-9)
+    exact = machine.sampled_tool_points(q, np.zeros((2, d)))
+    assert exact.shape == (1, 2, 3)
+    np.testing.assert_allclose(exact[0], np.vstack([point] * 2), atol=1e-9)
+    for mask in (machine.loop_defect_mask(), machine.reference_joint_defect_mask()):
+        assert mask.dtype == bool and mask.shape == (d,)
+    vector = machine.parameters()
+    first = [int(vector.index.select("nominal")[0])]
+    cols = machine.nominal_sensitivity(vector, first, q, sens)
+    assert list(cols) == first
+    col_point, col_rotation, method = cols[first[0]]
+    assert col_point.shape == col_rotation.shape == (1, 3)
+    assert method in ("composition", "central-difference", "undefined")
+    held = machine.held_tool_actuators(q, sens.pose, sens.point, sens.rotation)
+    assert held.shape == (1, n, d)
+    names = machine.region_names()
+    assert all(isinstance(name, str) for name in names) and len(names) in machine.region_sizes()
+    lo, hi = machine.default_region()
+    assert lo.shape == hi.shape == (len(names),) and (lo <= hi).all()
+    assert machine.configurations_at(((lo + hi) / 2)[None]).shape == (1, n)
+    drawn = machine.mechanism_configurations(3, seed=0)
+    assert drawn.shape == (3, n) and np.isfinite(drawn).all()
+    measured = np.concatenate([point, rotation], axis=1) if machine.six_dof else point
+    if not machine.measures_machined_parts:
+        from pkmkit.exceptions import UnsupportedOperationError
+
+        for call in (machine.part_actuators, machine.part_sensitivity):
+            with pytest.raises(UnsupportedOperationError):
+                call(measured)
+        return
+    np.testing.assert_allclose(machine.part_actuators(measured), q, atol=1e-7)
+    assert machine.part_sensitivity(measured).shape == (1, n, d)
 
 
 def _home_input(machine):

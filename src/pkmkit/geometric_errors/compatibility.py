@@ -35,7 +35,6 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors.blas_threads import single_blas
-from pkmkit.geometric_errors.configurations import CHAIN_SPREAD, sample_configurations
 from pkmkit.geometric_errors.model import closure_linearisation, defect_set
 from pkmkit.geometric_errors.selection import select_defects
 
@@ -153,37 +152,9 @@ def compatibility_configurations(machine, n: int = 40, *, seed: int | None = 0) 
     the mechanism, not of its strokes: joint-chain loop actuators are spread over home ±
     :data:`~pkmkit.geometric_errors.configurations.CHAIN_SPREAD` (strokes ignored), head
     actuators stay
-    at home; rod machines use their default region."""
-    if machine.family != "chain":
-        return sample_configurations(machine, n, seed=seed).q
-    model = machine.model
-    act = np.flatnonzero(model.actuated)
-    home = machine.home_q
-    lo, hi = home.copy(), home.copy()
-    for k, v in enumerate(act):
-        if not model.loop_variables[v]:
-            continue
-        element = int(np.flatnonzero(model.element_variable == v)[0])
-        if model.elements[element].type == "R":
-            half = CHAIN_SPREAD["R"]
-        else:
-            half = max(CHAIN_SPREAD["P"] * abs(home[k]), 0.1)
-        lo[k], hi[k] = home[k] - half, home[k] + half
-    moving = hi > lo
-    region = (lo[moving], hi[moving])
-    rng = np.random.default_rng(seed)
-    found, drawn = [], 0
-    while sum(len(f) for f in found) < n:
-        if drawn > 50 * n:
-            raise InputError(f"{machine.id!r}: too few configurations close around home for a "
-                             "compatibility test; pass q explicitly")
-        q = np.tile(home, (2 * n, 1))
-        q[:, moving] = region[0] + rng.random((2 * n, int(moving.sum()))) * (region[1]
-                                                                            - region[0])
-        drawn += 2 * n
-        res = machine.fk(q, full_output=True)
-        found.append(q[np.isfinite(res.pose).all(axis=1) & (res.status == 0)])
-    return np.concatenate(found)[:n]
+    at home; rod machines use their default region (the machine's own draw,
+    ``machine.mechanism_configurations``: :mod:`pkmkit.machines.error_regions`)."""
+    return machine.mechanism_configurations(n, seed=seed)
 
 
 def projected_defects(machine, q: np.ndarray, columns: np.ndarray

@@ -1,7 +1,9 @@
 """Configurations for error analyses: actuator coordinates spread over a region of a machine's
 workspace, reachable with the nominal geometry.
 
-A **region** is a box ``(lower, upper)`` in the machine's *region coordinates*:
+A **region** is a box ``(lower, upper)`` in the machine's *region coordinates*, which each
+family defines (``machine.region_names()``, ``machine.default_region()``,
+``machine.configurations_at(points)``: :mod:`pkmkit.machines.error_regions`):
 
 - rod machines: tool positions (``dims`` coordinates for a translational machine; x, y, z for a
   full-pose machine with fewer than six actuators, whose orientation follows); for a
@@ -22,16 +24,11 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
+from pkmkit.machines.error_regions import CHAIN_SPREAD, ROTATION_SPREAD, draw_reachable, halton
 
-#: Default half-range around home of a joint-chain actuator without stroke: prismatic (m,
-#: relative to |home|, at least 0.1 m) and revolute (rad).
-CHAIN_SPREAD = {"P": 0.15, "R": np.radians(60.0)}
-#: Default half-range of the rotation-vector components of a six-actuator machine (rad).
-ROTATION_SPREAD = np.radians(10.0)
-
-
-def _six_dof(machine) -> bool:
-    return machine.family == "full-pose" and machine.n_actuators == 6
+__all__ = ["CHAIN_SPREAD", "ROTATION_SPREAD", "Configurations", "check_region",
+           "configurations_at", "default_region", "halton", "region_names",
+           "sample_configurations"]
 
 
 @dataclass(frozen=True)
@@ -56,40 +53,12 @@ class Configurations:
 
 def region_names(machine) -> tuple[str, ...]:
     """Names of the region coordinates of ``machine`` (module docstring)."""
-    if machine.family == "chain":
-        return tuple(machine.actuator_names)
-    if machine.family == "full-pose":
-        return tuple(machine.pose_names[:6 if _six_dof(machine) else 3])
-    return tuple(machine.pose_names)
+    return machine.region_names()
 
 
 def default_region(machine) -> tuple[np.ndarray, np.ndarray]:
     """The default region (module docstring)."""
-    if machine.family == "chain":
-        model = machine.model
-        act = np.flatnonzero(model.actuated)
-        home = machine.home_q
-        lo, hi = model.q_min[act].copy(), model.q_max[act].copy()
-        for k, v in enumerate(act):
-            kind = "R" if _joint_type(model, v) == "R" else "P"
-            half = CHAIN_SPREAD[kind] if kind == "R" else max(CHAIN_SPREAD["P"] * abs(home[k]),
-                                                              0.1)
-            if not np.isfinite(lo[k]):
-                lo[k] = home[k] - half
-            if not np.isfinite(hi[k]):
-                hi[k] = home[k] + half
-        return lo, hi
-    lo, hi = (np.asarray(v, dtype=float)[:3] for v in machine.default_box())
-    if _six_dof(machine):
-        rot = np.asarray(machine.home_pose, dtype=float)[3:6]
-        lo = np.concatenate([lo, rot - ROTATION_SPREAD])
-        hi = np.concatenate([hi, rot + ROTATION_SPREAD])
-    return lo, hi
-
-
-def _joint_type(model, variable: int) -> str:
-    element = int(np.flatnonzero(model.element_variable == variable)[0])
-    return model.elements[element].type
+    return machine.default_region()
 
 
 def check_region(machine, region: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -110,10 +79,7 @@ def check_region(machine, region: Any) -> tuple[np.ndarray, np.ndarray]:
         if flat.size % 2:
             raise InputError(f"a region needs pairs MIN,MAX; got {flat.size} values")
         lo, hi = flat[0::2], flat[1::2]
-    allowed = {len(names)}
-    if _six_dof(machine):
-        allowed.add(3)
-    if lo.shape != hi.shape or lo.size not in allowed:
+    if lo.shape != hi.shape or lo.size not in machine.region_sizes():
         raise InputError(f"the region of {machine.id!r} needs MIN,MAX for each of "
                          f"{', '.join(names)} ({len(names)} pairs), got {lo.size}")
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
@@ -129,41 +95,7 @@ def check_region(machine, region: Any) -> tuple[np.ndarray, np.ndarray]:
 def configurations_at(machine, points: np.ndarray) -> np.ndarray:
     """Actuator coordinates ``(N, n)`` of region points ``(N, k)`` with the nominal geometry
     (NaN rows where unreachable)."""
-    family = machine.family
-    pts = np.atleast_2d(np.asarray(points, dtype=float))
-    if family == "chain":
-        q = pts.copy()
-        res = machine.fk(q, full_output=True)
-        q[~np.isfinite(res.pose).all(axis=1)] = np.nan
-        return q
-    if family == "full-pose":
-        if machine.position_controlled and pts.shape[1] == 3:
-            return np.atleast_2d(machine.ik(pts))
-        if pts.shape[1] == 3:
-            pts = np.concatenate([pts, np.tile(machine.home_pose[3:], (len(pts), 1))], axis=1)
-        return np.atleast_2d(machine.ik(pts))
-    return np.atleast_2d(machine.ik(pts))
-
-
-_PRIMES = (2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37)
-
-
-def halton(index: np.ndarray, dims: int) -> np.ndarray:
-    """Points ``(k, dims)`` in [0, 1) of the Halton sequence at integer ``index`` (k,) ≥ 0
-    (radical inverses in the first primes; skip 0 by passing index + 1)."""
-    if dims > len(_PRIMES):
-        raise InputError(f"Halton points in at most {len(_PRIMES)} dimensions")
-    idx = np.asarray(index, dtype=np.int64) + 1
-    out = np.zeros((idx.size, dims))
-    for d in range(dims):
-        base = _PRIMES[d]
-        i = idx.copy()
-        f = 1.0
-        while np.any(i > 0):
-            f /= base
-            out[:, d] += f * (i % base)
-            i //= base
-    return out
+    return machine.configurations_at(points)
 
 
 def sample_configurations(machine, n: int, *, region: Any = None, seed: int | None = 0,
@@ -182,34 +114,7 @@ def sample_configurations(machine, n: int, *, region: Any = None, seed: int | No
         raise InputError(f"the number of configurations must be ≥ 1, got {n}")
     n = int(n)
     lo, hi = check_region(machine, region)
-    rng = np.random.default_rng(seed)
-    if method not in ("random", "halton"):
-        raise InputError(f"unknown sampling method {method!r}; use 'random' or 'halton'")
-    shift = rng.random(lo.size)
-    found_q, found_p, drawn = [], [], 0
-    while sum(len(a) for a in found_q) < n:
-        batch = max(2 * n, 16)
-        if drawn > 50 * n:
-            within = " within the strokes" if within_strokes else ""
-            raise InputError(f"only {sum(len(a) for a in found_q)} of {drawn} points drawn in "
-                             f"the region of {machine.id!r} are reachable{within}; choose a "
-                             "region inside the workspace")
-        if method == "halton":
-            unit = (halton(drawn + np.arange(batch), lo.size) + shift) % 1.0
-        else:
-            unit = rng.random((batch, lo.size))
-        pts = lo + unit * (hi - lo)
-        drawn += batch
-        with np.errstate(invalid="ignore"):
-            q = configurations_at(machine, pts)
-        ok = np.isfinite(q).all(axis=1)
-        if within_strokes and ok.any():
-            from pkmkit.machines.strokes import stroke_excess
-
-            ok[ok] = ~stroke_excess(machine, q[ok]).out_of_stroke
-        found_q.append(q[ok])
-        found_p.append(pts[ok])
-    q = np.concatenate(found_q)[:n]
-    pts = np.concatenate(found_p)[:n]
+    q, pts, drawn = draw_reachable(machine, lo, hi, n, seed=seed, method=method,
+                                   within_strokes=within_strokes)
     names = region_names(machine)[:pts.shape[1]]
     return Configurations(q=q, points=pts, region=(lo, hi), names=names, drawn=drawn)

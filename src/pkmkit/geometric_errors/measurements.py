@@ -18,7 +18,9 @@ Measurement types (``kind``), each a function of (machine with its defects, q, s
 :func:`measurement_jacobian` gives ``∂(reading)/∂(defects)`` analytically from
 :func:`pkmkit.geometric_errors.model.tool_sensitivity` (and, for ``"part"``, the closure's
 derivative in
-q at a fixed tool point).
+q at a fixed tool point). The machine gives its tool readings (``machine.tool_frames``) and
+says whether it has machined-part readings (``machine.measures_machined_parts``):
+:mod:`pkmkit.machines.tool_readings`.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError, MeasurementError
 from pkmkit.geometric_errors.blas_threads import single_blas
-from pkmkit.geometric_errors.model import _rod_index, tool_sensitivity
+from pkmkit.geometric_errors.model import tool_sensitivity
 
 MEASURES = ("point", "pose", "ballbar", "height", "part")
 #: Rows of each measurement type (``None``: the number of actuators).
@@ -40,7 +42,7 @@ def _check_kind(machine, kind: str) -> None:
     if kind not in MEASURES:
         raise MeasurementError(f"unknown measurement type {kind!r}; valid types: "
                                f"{', '.join(MEASURES)}", kind)
-    if kind == "part" and machine.family == "chain":
+    if kind == "part" and not machine.measures_machined_parts:
         raise MeasurementError("machined-part (joint-space) measurements are defined for rod "
                                "machines (seed 003); use point or pose measurements for a "
                                "joint-chain machine", kind)
@@ -75,14 +77,7 @@ def measure(machine, kind: str, q: Any, setup: dict | None = None) -> np.ndarray
     n = qb.shape[0]
     if kind == "part":
         return _part_joints(machine, setup)
-    if machine.family == "chain":
-        res = machine.fk(qb, tool_length=setup.get("tool_length"), full_output=True)
-        point, rotvec = res.pose[:, :3], res.tool_frame[:, 3:]
-    else:
-        x = np.atleast_2d(machine.fk(qb))
-        point = np.zeros((n, 3))
-        point[:, :min(machine.dims, 3)] = x[:, :min(machine.dims, 3)]
-        rotvec = x[:, 3:6] if machine.dims == 6 else np.zeros((n, 3))
+    point, rotvec = machine.tool_frames(qb, tool_length=setup.get("tool_length"))
     if kind == "point":
         return point
     if kind == "pose":
@@ -96,16 +91,13 @@ def _part_joints(machine, setup: dict) -> np.ndarray:
     if "points" not in setup:
         raise InputError("a machined-part measurement needs setup['points'] (measured tool "
                          "points, (N, 3) m)")
-    points = _part_points(machine, setup)
-    if machine.dims == 6:
-        return np.atleast_2d(machine.ik(points))
-    return np.atleast_2d(machine.ik(points[:, :machine.dims]))
+    return machine.part_actuators(_part_points(machine, setup))
 
 
 def _part_points(machine, setup: dict) -> np.ndarray:
     """The measured points (positions; full poses for a six-actuator machine)."""
     points = np.atleast_2d(np.asarray(setup["points"], dtype=float))
-    width = 6 if machine.dims == 6 and not machine.position_controlled else 3
+    width = 6 if machine.six_dof else 3
     if points.shape[1] != width and not (width == 3 and points.shape[1] >= machine.dims):
         what = "full poses (N, 6)" if width == 6 else "points (N, 3)"
         raise InputError(f"machined-part measurements of {machine.id!r} need measured {what}")
@@ -134,35 +126,5 @@ def measurement_jacobian(machine, kind: str, q: Any, setup: dict | None = None) 
 
 
 def _part_jacobian(machine, setup: dict) -> np.ndarray:
-    """``∂q/∂δ`` at fixed tool points: ``−(∂r/∂u)⁺ ∂r/∂δ`` with u the actuators (and the
-    platform rotation of a full-pose machine, which the rods fix)."""
-    from pkmkit.solve.rod_closure import defect_columns
-
-    index = _rod_index(machine)
-    points = _part_points(machine, setup)
-    n = points.shape[0]
-    if machine.dims == 6:
-        inv = machine.ik(points, full_output=True)
-        pose = points if points.shape[1] == 6 else np.atleast_2d(inv.pose)
-        q = np.atleast_2d(inv.q)
-        from pkmkit.machines.full_pose_forms import FullPoseForms
-        from pkmkit.spatial.rotation import rotvec_to_matrix
-
-        rot = rotvec_to_matrix(pose[:, 3:])
-        _, cols = defect_columns(machine.model, index, pose[:, :3], rot, q)
-        a, b = FullPoseForms(machine.model).jacobians(pose, q)
-        dist = np.linalg.norm(a[:, :, :3], axis=2)[:, :, None]
-        # residual r = |d| − ℓ: ∂r/∂q = −B/|d|, ∂r/∂ω = A_ω/|d|
-        unknowns = -b / dist
-        if points.shape[1] == 3:  # the orientation follows the rods: it is an unknown too
-            unknowns = np.concatenate([unknowns, a[:, :, 3:] / dist], axis=2)
-        du = -np.linalg.pinv(unknowns) @ cols
-        return du[:, :machine.n_actuators]
-    position = np.zeros((n, 3))
-    position[:, :machine.dims] = points[:, :machine.dims]
-    q = np.atleast_2d(machine.ik(points[:, :machine.dims]))
-    _, cols = defect_columns(machine.model, index, position, None, q)
-    jac = machine.jacobian(points[:, :machine.dims], q=q)
-    dist = np.linalg.norm(jac.A, axis=2)
-    dr_dq = -np.diagonal(jac.B, axis1=1, axis2=2) / dist  # (N, n)
-    return -cols / dr_dq[:, :, None]
+    """``∂q/∂δ`` at fixed tool points (the machine's ``part_sensitivity``)."""
+    return machine.part_sensitivity(_part_points(machine, setup))

@@ -36,24 +36,17 @@ def _as_list(value: str | Iterable[str] | None) -> list[str]:
 
 def loop_defects(machine) -> np.ndarray:
     """``(d,)`` bool: the defect belongs to a closed loop (every defect of a rod machine; the
-    legs' elements of a joint-chain machine, not its head)."""
-    ds = defect_set(machine)
-    if machine.family != "chain":
-        return np.ones(len(ds), dtype=bool)
-    model = machine.model
-    in_legs = {e for leg in model.legs for e in leg}
-    return np.array([e in in_legs for e in model.defect_index.element], dtype=bool)
+    legs' elements of a joint-chain machine, not its head): the machine's
+    ``loop_defect_mask`` (:mod:`pkmkit.machines.defect_masks`)."""
+    return machine.loop_defect_mask()
 
 
 def reference_joint_defects(machine) -> np.ndarray:
     """``(d,)`` bool: the defects of the first element of the first leg of a joint-chain machine
     — the joint the thesis aligns the fixed frame with (D_ICS^L11 of the Tripteor, D_R0^L1 of
-    the crank–slider) and keeps nominal. All False for a rod machine."""
-    ds = defect_set(machine)
-    if machine.family != "chain":
-        return np.zeros(len(ds), dtype=bool)
-    first = machine.model.legs[0][0]
-    return np.asarray(machine.model.defect_index.element) == first
+    the crank–slider) and keeps nominal. All False for a rod machine. The machine's
+    ``reference_joint_defect_mask`` (:mod:`pkmkit.machines.defect_masks`)."""
+    return machine.reference_joint_defect_mask()
 
 
 def _match(names: Sequence[str], owners: Sequence[str], token: str, what: str) -> np.ndarray:

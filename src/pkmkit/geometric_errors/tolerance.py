@@ -39,7 +39,12 @@ import numpy as np
 from pkmkit.exceptions import InputError, ParameterError, ToleranceFileError
 from pkmkit.geometric_errors.blas_threads import single_blas
 from pkmkit.geometric_errors.identifiability import ANGLE_UNITS
-from pkmkit.geometric_errors.model import _rod_index, defect_set, tool_sensitivity
+from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
+from pkmkit.machines.defect_samples import exact_rod_points, nominal_gains
+
+__all__ = ["AccuracyMap", "FirstOrderError", "MonteCarloResult", "Tolerances", "accuracy_map",
+           "exact_rod_points", "first_order_error", "monte_carlo", "nominal_gains",
+           "read_tolerances", "tolerances"]
 
 DISTRIBUTIONS = ("uniform", "normal")
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
@@ -303,10 +308,7 @@ def monte_carlo(machine, q: Any, tol: Tolerances, n_samples: int, *, seed: int |
     sens = tool_sensitivity(machine, qb, tool_length=tool_length)
     nominal = sens.pose[:, :3]
     start = time.perf_counter()
-    if machine.family == "chain":
-        actual = _chain_samples(machine, qb, samples, tool_length)
-    else:
-        actual = exact_rod_points(machine, qb, samples)
+    actual = machine.sampled_tool_points(qb, samples, tool_length=tool_length)
     elapsed = time.perf_counter() - start
     error = actual - nominal[:, None, :]
     linear = np.einsum("nad,sd->nsa", sens.point, samples)
@@ -323,69 +325,6 @@ def monte_carlo(machine, q: Any, tol: Tolerances, n_samples: int, *, seed: int |
                             nonlinearity=nonlin, failed=failed,
                             rate=qb.shape[0] * samples.shape[0] / max(elapsed, 1e-12),
                             samples=samples)
-
-
-def nominal_gains(machine, q: np.ndarray):
-    """Nominal platform poses at q and the pseudo-inverse of the closure Jacobian used by the
-    chord iteration: ``(position (P, 3), rotation (P, 3, 3) or None, gain (P, k, m))``."""
-    from pkmkit.solve.rod_samples import carriages, sampled_geometry
-    from pkmkit.spatial.rotation import rotvec_to_matrix
-
-    index = _rod_index(machine)
-    geom = sampled_geometry(machine.model, index, np.zeros((1, len(index))))
-    x = np.atleast_2d(machine.fk(q))
-    if not np.isfinite(x).all():
-        bad = int(np.flatnonzero(~np.isfinite(x).all(axis=1))[0])
-        raise InputError(f"configuration {bad}: the nominal machine does not assemble at q = "
-                         f"{q[bad].tolist()}")
-    a, _ = carriages(geom, q)  # (P, 1, m, 3)
-    a = a[:, 0]
-    p_count = q.shape[0]
-    position = np.zeros((p_count, 3))
-    if machine.model.full_pose:  # the rod model's platform turns (a full-pose machine)
-        position[:] = x[:, :3]
-        rot = rotvec_to_matrix(x[:, 3:6])
-        w = np.einsum("pab,mb->pma", rot, geom.platform[0])
-        d = position[:, None, :] + w - a
-        unit = d / np.linalg.norm(d, axis=2, keepdims=True)
-        jac = np.concatenate([unit, np.cross(w, unit)], axis=2)  # (P, m, 6)
-        return position, rot, np.linalg.pinv(jac)
-    dims = machine.dims
-    position[:, :dims] = x[:, :dims]
-    d = position[:, None, :] + geom.platform[0][None] - a
-    unit = d / np.linalg.norm(d, axis=2, keepdims=True)
-    return position, None, np.linalg.pinv(unit[:, :, :dims])
-
-
-def exact_rod_points(machine, q: np.ndarray, samples: np.ndarray, *, tol: float = 1e-12,
-                     max_iter: int = 30) -> np.ndarray:
-    """Exact tool points ``(P, S, 3)`` of a rod machine with each defect sample of ``samples``
-    ``(S, d)`` at actuator coordinates ``q (P, n)`` (NaN where it does not assemble)."""
-    from pkmkit.solve.rod_samples import sampled_geometry, solve_sampled_direct
-
-    qb = np.atleast_2d(np.asarray(q, dtype=float))
-    position, rot, gain = nominal_gains(machine, qb)
-    geom = sampled_geometry(machine.model, _rod_index(machine), samples)
-    dims = 3 if machine.model.full_pose else machine.dims
-    out = solve_sampled_direct(geom, qb, position, rot, gain, dims=dims, tol=tol,
-                               max_iter=max_iter)
-    return out.position
-
-
-def _chain_samples(machine, q: np.ndarray, samples: np.ndarray, tool_length: Any
-                   ) -> np.ndarray:
-    from pkmkit.geometric_errors.measurements import measure
-    from pkmkit.geometric_errors.model import with_defects
-
-    setup = {} if tool_length is None else {"tool_length": tool_length}
-    out = np.full((q.shape[0], samples.shape[0], 3), np.nan)
-    for s, delta in enumerate(samples):
-        try:
-            moved = with_defects(machine, delta)
-        except ParameterError:
-            continue  # does not even close at home: every pose of the sample fails
-        out[:, s] = measure(moved, "point", q, setup)
-    return out
 
 
 @dataclass(frozen=True)

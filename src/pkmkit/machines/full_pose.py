@@ -35,6 +35,7 @@ from pkmkit.exceptions import (
 )
 from pkmkit.machines import full_pose_direct as direct
 from pkmkit.machines.chunks import chunked
+from pkmkit.machines.error_faces import FullPoseErrors
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse
@@ -116,7 +117,8 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
+class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming, FullPoseErrors,
+                      MachineFace):
     """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
 
     Attributes:

@@ -49,6 +49,7 @@ from pkmkit.machines.chain_results import (
     ChainInverseResult,
     single_row,
 )
+from pkmkit.machines.error_faces import ChainErrors
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
 from pkmkit.machines.protocol import MachineFace
@@ -76,7 +77,7 @@ STROKE_MODES = ("flag", "refuse", "ignore")
 
 
 @dataclass(frozen=True, eq=False)
-class JointChainMachine(ChainVelocity, MachineFace):
+class JointChainMachine(ChainVelocity, ChainErrors, MachineFace):
     """A hyperstatic (or isostatic) machine of joint chains (see the module docstring).
 
     Attributes:

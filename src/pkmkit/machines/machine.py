@@ -37,6 +37,7 @@ from pkmkit.machines.common import (
     _rows_like,
     _valid_rows,
 )
+from pkmkit.machines.error_faces import TranslationalErrors
 from pkmkit.machines.joint_motion import JointMotion, rod_joint_motion
 from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.protocol import MachineFace
@@ -67,7 +68,7 @@ from pkmkit.status import Status
 
 
 @dataclass(frozen=True, eq=False)
-class Machine(RodRefusals, ModeNaming, MachineFace):
+class Machine(RodRefusals, ModeNaming, TranslationalErrors, MachineFace):
     """A parallel kinematic machine (translational rod-leg family).
 
     Attributes:
