@@ -32,12 +32,12 @@ class RodStiffness:
     """Compiled results at N poses (NaN rows where ``status`` is not OK).
 
     Attributes:
-        compliance: ``(N, d, d)`` m/N, rad/(N·m). status: ``(N,)``.
+        compliance: ``(N, d, d)`` m/N, rad/(N·m) (None when not asked for). status: ``(N,)``.
         smallest: ``(N,)`` smallest translational stiffness (N/m) of a translating platform,
             else None. stiffness: ``(N, 6, 6)`` of a six-rod platform, else None.
     """
 
-    compliance: np.ndarray
+    compliance: np.ndarray | None
     status: np.ndarray
     smallest: np.ndarray | None = None
     stiffness: np.ndarray | None = None
@@ -57,11 +57,13 @@ def rod_kernel(machine: Any) -> str | None:
     return "six-rods" if one_each and np.isin(model.rod_kind, (SLIDE, STRUT)).all() else None
 
 
-def rod_stiffness(machine: Any, x: np.ndarray, data: StiffnessData) -> RodStiffness | None:
+def rod_stiffness(machine: Any, x: np.ndarray, data: StiffnessData, *,
+                  compliance: bool = True) -> RodStiffness | None:
     """The compliance of a rod-leg machine at poses ``x (N, dims)`` by the compiled kernels,
     or None where they do not apply (a small batch, no Numba, a machine they do not cover).
     The elastic data are checked by the caller (:func:`pkmkit.stiffness.rod_legs.
-    rod_leg_compliance`)."""
+    rod_leg_compliance`). ``compliance=False``: a six-rod platform's stiffness alone (its
+    ``compliance`` is then None)."""
     which = rod_kernel(machine)
     if which is None or x.ndim != 2 or not jit.use_compiled(x.shape[0]):
         return None
@@ -78,8 +80,8 @@ def rod_stiffness(machine: Any, x: np.ndarray, data: StiffnessData) -> RodStiffn
     c_q = 1.0 / data.actuator_stiffness
     limit = 1.0 / SINGULARITY_TOL
     n, d = x.shape
-    compliance = np.empty((n, d, d))
     if which == "translational":
+        out_c = np.empty((n, d, d))
         from pkmkit.machines.closed_form import RodClosedForm
 
         forms = RodClosedForm(model)
@@ -95,15 +97,16 @@ def rod_stiffness(machine: Any, x: np.ndarray, data: StiffnessData) -> RodStiffn
         def work(start: int, stop: int) -> None:
             kernels.translational(x[start:stop], q[start:stop], centre0, axis, strut,
                                   model.leg_length, c_q, c_r, limit,
-                                  compliance[start:stop], smallest[start:stop],
+                                  out_c[start:stop], smallest[start:stop],
                                   status[start:stop])
 
         jit.run_chunks(work, n)
-        return RodStiffness(compliance, status, smallest=smallest)
+        return RodStiffness(out_c, status, smallest=smallest)
     c_r = np.zeros(6)
     if data.rod_section is not None:
         c_r[:] = 1.0 / (data.rod_material.E * data.rod_section.area)
     stiffness = np.empty((n, 6, 6))
+    out_c = np.empty((n if compliance else 0, 6, 6))
     strut = np.ascontiguousarray(model.rod_kind == STRUT)
     actuator = np.ascontiguousarray(model.rod_actuator, dtype=np.int64)
     arrays = [np.ascontiguousarray(a, dtype=float)
@@ -112,10 +115,11 @@ def rod_stiffness(machine: Any, x: np.ndarray, data: StiffnessData) -> RodStiffn
     def work6(start: int, stop: int) -> None:
         kernels.six_rods(x[start:stop], q[start:stop], *arrays[:3], strut, arrays[3], actuator,
                          c_q, c_r, float(machine.characteristic_length), limit,
-                         compliance[start:stop], stiffness[start:stop], status[start:stop])
+                         out_c[start:stop] if compliance else out_c, stiffness[start:stop],
+                         status[start:stop])
 
     jit.run_chunks(work6, n)
-    return RodStiffness(compliance, status, stiffness=stiffness)
+    return RodStiffness(out_c if compliance else None, status, stiffness=stiffness)
 
 
 def chain_reduced_compliance(g: np.ndarray, t: np.ndarray, columns: dict, c_s: np.ndarray,

@@ -28,39 +28,72 @@ _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache"
 OK, SINGULAR = 0, 3
 
 
-@njit(**_OPTIONS)
-def _largest_symmetric_eigenvalue(a, d):  # pragma: no cover
-    """Largest eigenvalue of the symmetric ``d × d`` matrix ``a`` (d ≤ 3; overwritten) by the
-    cyclic Jacobi method (converges quadratically; accurate to rounding)."""
-    if d == 1:
-        return a[0, 0]
+@njit(inline="always", **_OPTIONS)
+def _largest_symmetric_eigenvalue(a00, a01, a02, a11, a12, a22, d):  # pragma: no cover
+    """Largest eigenvalue of a symmetric 2×2 (d = 2, upper entries a00, a01, a11) or 3×3
+    matrix: the closed form of the 2×2; for the 3×3 the trigonometric solution of the
+    characteristic cubic (Smith 1961), λ = m + 2 p cos(φ/3) with m the mean of the diagonal —
+    accurate to a few ε of the largest eigenvalue (its error is ε times the matrix norm, which
+    for a positive matrix is that eigenvalue) except near a double root, where acos loses half
+    the digits: there the Jacobi method (:func:`_jacobi_largest`)."""
     if d == 2:
-        mean = 0.5 * (a[0, 0] + a[1, 1])
-        half = 0.5 * (a[0, 0] - a[1, 1])
-        return mean + math.sqrt(half * half + a[0, 1] * a[0, 1])
+        mean = 0.5 * (a00 + a11)
+        half = 0.5 * (a00 - a11)
+        return mean + math.sqrt(half * half + a01 * a01)
+    off = a01 * a01 + a02 * a02 + a12 * a12
+    m = (a00 + a11 + a22) / 3.0
+    b00, b11, b22 = a00 - m, a11 - m, a22 - m
+    p = math.sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * off) / 6.0)
+    if p == 0.0:
+        return m
+    det = (b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02)
+           + a02 * (a01 * a12 - b11 * a02))
+    r = det / (2.0 * p * p * p)
+    if abs(r) > 1.0 - 1e-3:  # a double root: acos would lose half the digits
+        return _jacobi_largest(a00, a01, a02, a11, a12, a22)
+    return m + 2.0 * p * math.cos(math.acos(r) / 3.0)
+
+
+@njit(**_OPTIONS)
+def _jacobi_largest(a00, a01, a02, a11, a12, a22):  # pragma: no cover
+    """Largest eigenvalue of a symmetric 3×3 matrix by the cyclic Jacobi method (accurate to
+    rounding whatever the multiplicities; converges quadratically)."""
+    a = np.empty((3, 3))
+    a[0, 0], a[0, 1], a[0, 2] = a00, a01, a02
+    a[1, 0], a[1, 1], a[1, 2] = a01, a11, a12
+    a[2, 0], a[2, 1], a[2, 2] = a02, a12, a22
     for _ in range(64):
         off = a[0, 1] * a[0, 1] + a[0, 2] * a[0, 2] + a[1, 2] * a[1, 2]
         diag = a[0, 0] * a[0, 0] + a[1, 1] * a[1, 1] + a[2, 2] * a[2, 2]
-        if off <= 1e-36 * diag or off == 0.0:
+        if off <= 1e-36 * diag:
             break
-        for p, r in ((0, 1), (0, 2), (1, 2)):
-            apq = a[p, r]
-            if apq == 0.0:
-                continue
-            theta = (a[r, r] - a[p, p]) / (2.0 * apq)
-            t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
-            if theta < 0.0:
-                t = -t
-            c = 1.0 / math.sqrt(t * t + 1.0)
-            s = t * c
-            a[p, p] -= t * apq
-            a[r, r] += t * apq
-            a[p, r] = a[r, p] = 0.0
-            o = 3 - p - r
-            aop, aor = a[o, p], a[o, r]
-            a[o, p] = a[p, o] = c * aop - s * aor
-            a[o, r] = a[r, o] = s * aop + c * aor
+        _rotate(a, 0, 1, 2)
+        _rotate(a, 0, 2, 1)
+        _rotate(a, 1, 2, 0)
     return max(a[0, 0], a[1, 1], a[2, 2])
+
+
+@njit(inline="always", **_OPTIONS)
+def _rotate(a, p, r, o):  # pragma: no cover
+    """One Jacobi rotation zeroing ``a[p, r]`` of a symmetric 3×3 (o the third index)."""
+    apq = a[p, r]
+    if apq == 0.0:
+        return
+    theta = (a[r, r] - a[p, p]) / (2.0 * apq)
+    t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
+    if theta < 0.0:
+        t = -t
+    c = 1.0 / math.sqrt(t * t + 1.0)
+    s = t * c
+    a[p, p] -= t * apq
+    a[r, r] += t * apq
+    a[p, r] = 0.0
+    a[r, p] = 0.0
+    aop, aor = a[o, p], a[o, r]
+    a[o, p] = c * aop - s * aor
+    a[p, o] = a[o, p]
+    a[o, r] = s * aop + c * aor
+    a[r, o] = a[o, r]
 
 
 @njit(**_OPTIONS)
@@ -152,7 +185,7 @@ def translational(x, q, centre0, axis, strut, leg_length, c_q, c_r, singular_lim
     n, d = x.shape
     a = np.empty((3, 3))
     inv = np.empty((3, 3))
-    cc = np.empty((3, 3))
+    cc = np.zeros((3, 3))
     dd = np.empty(3)
     for k in range(n):
         if status[k] != OK:
@@ -199,7 +232,8 @@ def translational(x, q, centre0, axis, strut, leg_length, c_q, c_r, singular_lim
                 compliance[k, j, i] = s
                 cc[i, j] = s
                 cc[j, i] = s
-        top = _largest_symmetric_eigenvalue(cc, d)
+        top = _largest_symmetric_eigenvalue(cc[0, 0], cc[0, 1], cc[0, 2], cc[1, 1], cc[1, 2],
+                                            cc[2, 2], d)
         smallest[k] = math.inf if top <= 0.0 else 1.0 / top
 
 
@@ -214,15 +248,18 @@ def six_rods(x, q, base, platform, axis, strut, length, actuator, c_q, c_r, char
     (6,)``, ``length (6,)``, ``actuator (6,)`` each rod's actuator, ``c_q (6,)`` drive
     compliances by actuator, ``c_r (6,)`` rod axial compliance per metre (0: rigid),
     ``char_length`` (m) scaling the moment columns for the singularity test (Frobenius
-    condition above ``singular_limit``); ``status`` as in :func:`translational`."""
+    condition above ``singular_limit``); ``status`` as in :func:`translational`. A
+    ``compliance`` with no rows (``(0, 6, 6)``) is not computed (the stiffness alone)."""
     n = x.shape[0]
+    with_c = compliance.shape[0] == n
     a = np.empty((6, 6))
     inv = np.empty((6, 6))
     work = np.empty((6, 6))
     dd = np.empty(6)
     for k in range(n):
         if status[k] != OK:
-            _fill_nan(compliance, k)
+            if with_c:
+                _fill_nan(compliance, k)
             _fill_nan(stiffness, k)
             continue
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(x[k, 3], x[k, 4],
@@ -261,18 +298,25 @@ def six_rods(x, q, base, platform, axis, strut, length, actuator, c_q, c_r, char
             regular = math.isfinite(condition) and condition <= singular_limit
         if not regular:
             status[k] = SINGULAR
-            _fill_nan(compliance, k)
+            if with_c:
+                _fill_nan(compliance, k)
             _fill_nan(stiffness, k)
             continue
+        for m in range(6):
+            dd[m] = 1.0 / dd[m] if not with_c else dd[m]
         for i in range(6):
             for j in range(i, 6):
-                s = 0.0
                 t = 0.0
-                for m in range(6):
-                    s += inv[i, m] * dd[m] * inv[j, m]
-                    t += a[m, i] * a[m, j] / dd[m]
-                compliance[k, i, j] = s
-                compliance[k, j, i] = s
+                if with_c:
+                    s = 0.0
+                    for m in range(6):
+                        s += inv[i, m] * dd[m] * inv[j, m]
+                        t += a[m, i] * a[m, j] / dd[m]
+                    compliance[k, i, j] = s
+                    compliance[k, j, i] = s
+                else:
+                    for m in range(6):
+                        t += a[m, i] * a[m, j] * dd[m]
                 stiffness[k, i, j] = t
                 stiffness[k, j, i] = t
 

@@ -192,13 +192,15 @@ def check_rod_data(machine: Any, data: StiffnessData) -> None:
                                  f"shortest rod ({shortest:g} m)", "rod_section")
 
 
-def rod_leg_stiffness(machine: Any, x: Any, data: StiffnessData | None = None
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def rod_leg_stiffness(machine: Any, x: Any, data: StiffnessData | None = None, *,
+                      compliance: bool = True
+                      ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
     """Stiffness and compliance ``(N, d, d)`` and status ``(N,)`` of a rod-leg machine at
     poses ``x (N, dims)``, without the eigen-analysis of :func:`pkmkit.stiffness.stiffness`:
     a large batch of a hexapod gets ``K = A_uᵀ D⁻¹ A_u`` from the compiled kernel
     (:mod:`pkmkit.stiffness.kernels`), other cases the inverse of the compliance. NaN rows
-    where the pose is unreachable or singular.
+    where the pose is unreachable or singular. ``compliance=False`` may skip the compliance
+    (returned as None where it was not computed: the memory of a large batch).
 
     Raises:
         InputError, ParameterError: elastic data that do not fit the machine.
@@ -208,7 +210,7 @@ def rod_leg_stiffness(machine: Any, x: Any, data: StiffnessData | None = None
     data = data or default_data(machine)
     check_rod_data(machine, data)
     arr = np.atleast_2d(np.asarray(x, dtype=float))
-    fast = rod_stiffness(machine, arr, data)
+    fast = rod_stiffness(machine, arr, data, compliance=compliance)
     if fast is not None and fast.stiffness is not None:
         return fast.stiffness, fast.compliance, fast.status
     if fast is not None:
