@@ -9,14 +9,15 @@ the same run on the same inputs:
   seconds for the whole map, against the per-pose Python baseline (``pkmkit.stiffness.stiffness``
   called pose by pose, on a sample, scaled) and against the NumPy batch path
   (``PKMKIT_COMPILED=0``, on a sample, scaled);
-- **hexapod 6×6 stiffness** — ``rod_leg_stiffness(gough_stewart, P, compliance=False)`` (K at the platform
-  reference point) on ``--poses`` full poses: poses/s, the same two baselines;
+- **hexapod 6×6 stiffness** — ``rod_leg_stiffness(gough_stewart, P, compliance=False)`` (K at
+  the platform reference point) on ``--poses`` full poses: poses/s, the same two baselines;
 - **Tripteor VJM** — ``chain_compliance(tripteor, Q)`` (forward model for the passive joints,
   closure assembly, null-space compliance) on ``--configurations`` actuator configurations:
   configurations/s, the per-configuration ``stiffness(tripteor, q=q)`` and the SVD-only batch
   path (``PKMKIT_COMPILED=0``); and the compliance of the already assembled closures alone.
 
-Each row prints the largest difference to its baseline (relative, Frobenius norm per matrix).
+Each row prints the largest difference to its baseline (relative, Frobenius norm per matrix)
+and the CPU time per pose (all threads: what a loaded machine does not inflate as much).
 
     python bench/stiffness.py [--poses 1000000] [--configurations 20000] [--repeat 3]
                               [--load none|busy|both]
@@ -58,6 +59,12 @@ def _time(fun, repeat: int) -> float:
     return statistics.median(times)
 
 
+def _cpu(fun) -> float:
+    start = time.process_time()
+    fun()
+    return time.process_time() - start
+
+
 def _numpy_path(fun):
     os.environ["PKMKIT_COMPILED"] = "0"
     try:
@@ -78,6 +85,7 @@ def map_rows(m, x: np.ndarray, repeat: int) -> None:
     stiffness_figures(m, x[:5000])  # compile / warm up
     sample = x[:LOOP_SAMPLE]
     t_api = _time(lambda: stiffness_figures(m, x), repeat)
+    cpu = _cpu(lambda: stiffness_figures(m, x)) / len(x)
     start = time.perf_counter()
     loop = np.array([stiffness(m, p).translational[0] for p in sample])
     t_loop = (time.perf_counter() - start) * len(x) / len(sample)
@@ -88,7 +96,7 @@ def map_rows(m, x: np.ndarray, repeat: int) -> None:
     gap = np.nanmax(np.abs(fast - ref) / ref)
     gap_loop = np.max(np.abs(fast[:LOOP_SAMPLE] - loop) / loop)
     print(f"  map {m.id:<12} {len(x):,} poses in {t_api:6.3f} s ({len(x) / t_api / 1e6:5.2f} "
-          f"Mposes/s, {jit.thread_count()} threads)   ×per-pose {t_loop / t_api:7.0f}   "
+          f"Mposes/s, {jit.thread_count()} threads, {cpu * 1e9:.0f} ns CPU per pose)   ×per-pose {t_loop / t_api:7.0f}   "
           f"×NumPy batch {t_numpy / t_api:5.1f}   (largest relative difference {gap_loop:.1e} "
           f"per-pose, {gap:.1e} NumPy)")
 
@@ -97,6 +105,7 @@ def hexapod_rows(m, x: np.ndarray, repeat: int) -> None:
     rod_leg_stiffness(m, x[:5000])
     sample = x[:LOOP_SAMPLE]
     t_api = _time(lambda: rod_leg_stiffness(m, x, compliance=False), repeat)
+    cpu = _cpu(lambda: rod_leg_stiffness(m, x, compliance=False)) / len(x)
     start = time.perf_counter()
     loop = np.array([stiffness(m, p).stiffness for p in sample])
     t_loop = (time.perf_counter() - start) * len(x) / len(sample)
@@ -104,7 +113,8 @@ def hexapod_rows(m, x: np.ndarray, repeat: int) -> None:
     t_numpy, ref = _numpy_path(lambda: rod_leg_stiffness(m, big)[1])
     t_numpy *= len(x) / len(big)
     k, c, _ = rod_leg_stiffness(m, big)
-    print(f"  6×6 {m.id:<12} {len(x) / t_api / 1e6:5.2f} Mposes/s ({jit.thread_count()} threads)"
+    print(f"  6×6 {m.id:<12} {len(x) / t_api / 1e6:5.2f} Mposes/s ({jit.thread_count()} threads, "
+          f"{cpu * 1e9:.0f} ns CPU per pose)"
           f"   ×per-pose {t_loop / t_api:7.0f}   ×NumPy batch {t_numpy / t_api:5.1f}   (largest "
           f"relative difference: K {_gap(k[:LOOP_SAMPLE], loop):.1e} per-pose (its K from C's "
           f"eigenvectors), C {_gap(c, ref):.1e} NumPy)")
@@ -115,6 +125,7 @@ def chain_rows(m, q: np.ndarray, repeat: int) -> None:
     chain_compliance(m, q[:200], data)
     sample = q[:200]
     t_api = _time(lambda: chain_compliance(m, q, data), repeat)
+    cpu = _cpu(lambda: chain_compliance(m, q, data)) / len(q)
     start = time.perf_counter()
     loop = np.array([stiffness(m, q=row).compliance for row in sample])
     t_loop = (time.perf_counter() - start) * len(q) / len(sample)
@@ -124,7 +135,8 @@ def chain_rows(m, q: np.ndarray, repeat: int) -> None:
             1.0 / data.actuator_stiffness)
     t_solve = _time(lambda: system_compliance(*args), repeat)
     t_asm = _time(lambda: assemble(m, q, data), 1)
-    print(f"  VJM {m.id:<12} {len(q) / t_api / 1e3:6.1f} kconfigurations/s   ×per-pose "
+    print(f"  VJM {m.id:<12} {len(q) / t_api / 1e3:6.1f} kconfigurations/s ({cpu * 1e6:.0f} µs "
+          f"CPU each)   ×per-pose "
           f"{t_loop / t_api:5.0f}   ×SVD batch {t_numpy / t_api:4.1f}   (of which forward model "
           f"and assembly {t_asm / t_api:.0%}; the compliance of assembled closures alone "
           f"{len(q) / t_solve / 1e3:.0f} k/s; largest relative difference "
