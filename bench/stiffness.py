@@ -96,7 +96,8 @@ def map_rows(m, x: np.ndarray, repeat: int) -> None:
     gap = np.nanmax(np.abs(fast - ref) / ref)
     gap_loop = np.max(np.abs(fast[:LOOP_SAMPLE] - loop) / loop)
     print(f"  map {m.id:<12} {len(x):,} poses in {t_api:6.3f} s ({len(x) / t_api / 1e6:5.2f} "
-          f"Mposes/s, {jit.thread_count()} threads, {cpu * 1e9:.0f} ns CPU per pose)   ×per-pose {t_loop / t_api:7.0f}   "
+          f"Mposes/s, {jit.thread_count()} threads, {cpu * 1e9:.0f} ns CPU per pose)   "
+          f"×per-pose {t_loop / t_api:7.0f}   "
           f"×NumPy batch {t_numpy / t_api:5.1f}   (largest relative difference {gap_loop:.1e} "
           f"per-pose, {gap:.1e} NumPy)")
 
