@@ -90,7 +90,7 @@ def stiffness_figures(machine: Any, points: Any = None, *, q: Any = None,
         :class:`StiffnessFigures`; NaN where a pose is unreachable or singular.
     """
     w = check_wrench(machine, wrench)
-    chains = machine.family == "chain"
+    chains = machine.stiffness_from_actuators
     if points is not None and not chains:
         q = None  # rod legs: the compliance is computed at the poses (q follows from them)
     if q is None and points is None:
