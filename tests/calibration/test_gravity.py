@@ -76,7 +76,7 @@ def test_the_loaded_tool_point_of_the_compensated_machine_hits_the_target(monkey
 
 
 def test_the_tool_axis_of_a_joint_chain_is_aimed_too():
-    nominal, identified = _machines("tripteor-x7")
+    _, identified = _machines("tripteor-x7")
     targets = reached(identified, identified.home_q[None, :])
     aimed, sag = aim_loaded(identified, targets)
     turn = np.cross(sag.deflection[0, 3:], targets[0, 3:])
