@@ -375,7 +375,7 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
             sources["validation"] = validation_file
         written = write_calibration_outputs(result, out_dir,
                                             machine_source=machine_document_path(machine_name),
-                                            units=unit, sources=sources,
+                                            units=unit, sources=sources, measurements=data,
                                             machine_file=passed or write_anyway)
         if result.frame is not None and frame is not None and not isinstance(frame, Registration):
             # an identified or refined frame: reusable by --frame FILE (register's format)
