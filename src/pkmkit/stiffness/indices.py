@@ -102,9 +102,13 @@ def stiffness_figures(machine: Any, points: Any = None, *, q: Any = None,
     vectors = None if w is None else np.full((m, d), np.nan)
     ok = np.isfinite(rows).all(axis=1)
     index = np.flatnonzero(ok)
-    fast = None if chains else _compiled(machine, rows[index], data)
+    every = index.size == m  # no row to skip: no copies
+    fast = None if chains else _compiled(machine, rows if every else rows[index], data)
     if fast is not None:  # the whole batch in one compiled pass (no large temporaries)
-        smallest[index] = fast.smallest
+        if every:
+            smallest = fast.smallest
+        else:
+            smallest[index] = fast.smallest
         if vectors is not None:
             vectors[index] = np.einsum("nij,j->ni", fast.compliance, w)
         index = index[:0]
