@@ -28,7 +28,8 @@ from typing import Any
 import numpy as np
 
 from pkmkit.calibration.controller import as_targets, commanded_q
-from pkmkit.exceptions import PkmError, UnsupportedOperationError
+from pkmkit.exceptions import PkmError
+from pkmkit.machines.protocol import require_translational
 
 
 @dataclass(frozen=True)
@@ -61,10 +62,8 @@ def gravity_deflection(machine: Any, q: Any, *, tool_length: float | None = None
         masses = illustrative_masses(machine)
         defl, _ = chain_gravity_deflection(machine, q, masses, tool_length=tool_length)
         return GravityDeflection(defl, masses.note)
-    if not machine.orientation_fixed:
-        raise UnsupportedOperationError(
-            "gravity deflection", machine.id, machine.family,
-            "no gravity model of a turning platform's rods and struts yet")
+    require_translational(machine, "gravity deflection",
+                          "no gravity model of a turning platform's rods and struts yet")
     from pkmkit.dynamics.defaults import default_masses
     from pkmkit.stiffness.loads import load_deflection
 

@@ -136,7 +136,7 @@ def chain_reduced_compliance(g: np.ndarray, t: np.ndarray, columns: dict, c_s: n
         c_s: ``(n_a,)`` drive compliances. status: ``(k,)``. rank_tol: the SVD path's.
     """
     links = columns["links"]
-    if links.stop > links.start or not jit.use_compiled_solver(g.shape[0]):
+    if links.stop > links.start or not jit.use_compiled(g.shape[0]):  # by size alone
         return None
     from pkmkit.stiffness import kernels
 
