@@ -16,6 +16,7 @@ from pkmkit.exceptions import InputError
 from pkmkit.model.measurement_set import KINDS
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 
+from .gravity_option import GRAVITY_OPTION, aimed_targets
 from .limits import MAX_PIECES, MAX_SIMULATED, check_count, check_noise, check_tool_lengths
 from .options import JSON_OPTION, emit_json, fmt, machine_document_path, resolve_machine
 
@@ -374,11 +375,9 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
         sources = {"machine": machine_document_path(machine_name), "measurements": measurements}
         if validation_file:
             sources["validation"] = validation_file
-        written = write_calibration_outputs(result, out_dir,
-                                            machine_source=machine_document_path(machine_name),
-                                            units=unit, sources=sources,
-                                            machine_file=passed or write_anyway,
-                                            view=view)
+        written = write_calibration_outputs(
+            result, out_dir, machine_source=machine_document_path(machine_name), units=unit,
+            sources=sources, measurements=data, machine_file=passed or write_anyway, view=view)
         if result.frame is not None and frame is not None and not isinstance(frame, Registration):
             # an identified or refined frame: reusable by --frame FILE (register's format)
             target = Path(out_dir) / "frame.json"
@@ -482,10 +481,11 @@ def _print_calibration(result, payload: dict, unit: str) -> None:
                    "compensation at the targets.")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
               help="Corrected program (.nc) or correction table (.csv).")
+@GRAVITY_OPTION
 @CAL_UNITS_OPTION
 @JSON_OPTION
 def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max_correction,
-                   grid_text, targets_file, tool_length, truth, out_file, units, as_json):
+                   grid_text, targets_file, tool_length, truth, out_file, gravity, units, as_json):
     """Corrected commands for the nominal controller from a calibrated machine."""
     from pkmkit import load
     from pkmkit.calibration.compensation import (
@@ -541,6 +541,8 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
         from pkmkit.calibration.controller import target_width
         from pkmkit.motion.gcode import read_gcode
 
+        if gravity:
+            raise click.UsageError("--gravity corrects tables (--grid, --targets), not G-code")
         if target_width(nominal) != 3:
             raise InputError("G-code correction is for machines whose commands are tool "
                              "points; a 5-axis or six-actuator machine's correction includes "
@@ -585,7 +587,8 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
             elif all(c in t.numbers for c in ("rx", "ry", "rz")):
                 targets = np.column_stack([targets] + [np.radians(t.numbers[c])
                                                        for c in ("rx", "ry", "rz")])
-        fixed, flags = correct_table(nominal, identified, targets, max_correction=bound,
+        aimed, sag = aimed_targets(identified, targets, tl, gravity, scale, unit, as_json)
+        fixed, flags = correct_table(nominal, identified, aimed, max_correction=bound,
                                      tool_length=tl, progress=not as_json)
         from pkmkit.calibration.controller import as_targets
 
@@ -610,6 +613,7 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
                "max_correction": bound / scale,
                "check": None if check is None else check.to_dict(scale)}
     if not gcode:
+        payload["gravity"] = sag
         payload["flagged"] = [{"row": int(k) + 1,
                                "line": table.lines[k] if table is not None else None,
                                "status": str(flags.status[k]), "reason": described[k]}

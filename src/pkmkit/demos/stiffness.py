@@ -24,7 +24,7 @@ def _home_row(m) -> dict[str, Any]:
     from pkmkit.stiffness import default_data, stiffness
 
     data = default_data(m)
-    chains = m.family == "chain"  # joint chains: configured by q, links as beams
+    chains = m.stiffness_from_actuators  # joint chains: configured by q, links as beams
     if chains:
         r = stiffness(m, q=m.home_q, data=data)
     else:

@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pkmkit.exceptions import UnsupportedOperationError
+from pkmkit.machines.stiffness_model import StiffnessModel
 
 #: The machine families: rod legs with a translational platform, rod legs with a full-pose
 #: (6-DOF) platform, joint chains (possibly hyperstatic) with heads.
@@ -24,7 +25,7 @@ FAMILIES = ("translational", "full-pose", "chain")
 POSE_ORIENTATIONS = {"translational": None, "full-pose": "rotvec", "chain": "axis"}
 
 
-class MachineFace:
+class MachineFace(StiffnessModel):
     """Mixin of the family-independent protocol attributes.
 
     Needs ``actuator_quantities`` (``"length"`` or ``"angle"`` per actuator) from the class.

@@ -22,6 +22,7 @@ from pkmkit.io.atomic import write_files_atomic
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.io.machine_defects import machine_text_with_defects
 from pkmkit.model.parameters import length_scale
+from pkmkit.plot.gravity_section import gravity_html, gravity_json
 
 FIGURES = ("residuals", "histograms", "parameters", "identifiability", "maps")
 #: Rows listed in the report's "worst observations" table.
@@ -70,7 +71,8 @@ def _table(header: list[str], rows: list[list[str]], cls: str = "") -> str:
 
 def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None = None,
                 sources: dict[str, str] | None = None, title: str | None = None,
-                workspace: dict | None = None, view: bool = False) -> str:
+                workspace: dict | None = None, gravity: dict | None = None,
+                view: bool = False) -> str:
     """The HTML report of a :class:`~pkmkit.calibration.identify.CalibrationResult`.
 
     Args:
@@ -81,6 +83,8 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         title: page title.
         workspace: the tool-point uncertainty over the workspace (default: computed,
             :meth:`~pkmkit.calibration.results.CalibrationResult.workspace_uncertainty`).
+        gravity: the gravity deflection at the measured configurations
+            (:func:`pkmkit.calibration.gravity.gravity_beside_residual`), or None.
         view: embed the 3-D view of the machine with the tool error the calibration corrects
             as vectors (``pkmkit view --calibration``; the page grows by the Plotly library,
             ~4.7 MB, and stays self-contained).
@@ -174,6 +178,8 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
                  "(ball-bar), the height error (probe) or the joint-space distance to the "
                  "commanded path (machined part). <i>Before</i>: the nominal machine with the "
                  "set-up parameters fitted alone; <i>after</i>: the identified machine.</p>")
+    if gravity is not None:
+        parts.append(gravity_html(gravity, scale, units))
     axes = _axis_rows(result, scale)
     if axes:
         parts.append("<h3>Residuals per axis (RMS)</h3>" + _table(
@@ -403,11 +409,15 @@ def metadata(result, sources: dict[str, str] | None) -> dict[str, Any]:
 
 def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: str | Path,
                               units: str = "mm", sources: dict[str, str] | None = None,
-                              machine_file: bool = True, view: bool = True) -> dict[str, str]:
+                              machine_file: bool = True, measurements=None,
+                              view: bool = True) -> dict[str, str]:
     """Write the calibrated machine file (unless ``machine_file`` is False: a failed
     verdict), ``calibration.json``, ``residuals.csv``, the figures and ``report.html`` into
-    ``out_dir`` (created if needed). Returns name → path. ``view``: embed the 3-D view in the
-    report (:func:`report_html`).
+    ``out_dir`` (created if needed). Returns name → path. With the ``measurements``
+    (a :class:`~pkmkit.model.measurement_set.MeasurementSet`), the gravity deflection predicted
+    at their configurations is shown beside the residual
+    (:func:`pkmkit.calibration.gravity.gravity_beside_residual`; JSON key ``gravity``).
+    ``view``: embed the 3-D view in the report (:func:`report_html`).
 
     Everything is rendered in memory first; each file is then written atomically.
     """
@@ -434,11 +444,16 @@ def write_calibration_outputs(result, out_dir: str | Path, *, machine_source: st
             "max": float(np.max(u))}
     payload["files"] = {"machine": machine_name if machine_file else None,
                         "report": "report.html"}
+    from pkmkit.calibration.gravity import gravity_beside_residual
+
+    gravity = gravity_beside_residual(result, measurements)
+    if gravity is not None:
+        payload["gravity"] = gravity_json(gravity, length_scale(units))
     texts["calibration.json"] = json.dumps(to_jsonable(payload), indent=2) + "\n"
     texts["residuals.csv"] = residuals_csv(result, units=units)
     figures = figure_pngs(result, units=units, workspace=workspace)
     texts["report.html"] = report_html(result, units=units, figures=figures, sources=sources,
-                                       workspace=workspace, view=view)
+                                       workspace=workspace, gravity=gravity, view=view)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -5,7 +5,9 @@ translation then rotation, base frame, at a named reference point (the platform 
 of rod-leg machines, the tool point of joint-chain machines); SI units (N/m, N, N·m/rad).
 
 - :func:`stiffness` — one call for every machine family (:mod:`pkmkit.stiffness.api`);
-- :mod:`~pkmkit.stiffness.rod_legs` — rods with an actuator and an axial spring in series;
+- :mod:`~pkmkit.stiffness.rod_legs` — rods with an actuator and an axial spring in series
+  (:func:`rod_leg_stiffness`: K and C of many poses, compiled for large batches,
+  :mod:`~pkmkit.stiffness.compiled`);
 - :mod:`~pkmkit.stiffness.joint_chains` — joint chains, hyperstatic closures included;
 - :mod:`~pkmkit.stiffness.beam` — Euler–Bernoulli link compliance from section and material;
 - :mod:`~pkmkit.stiffness.frames` — moving the reference point;
@@ -16,6 +18,7 @@ from pkmkit.stiffness.api import stiffness, twist_names
 from pkmkit.stiffness.beam import Material, Section, beam_compliance
 from pkmkit.stiffness.data import StiffnessData, default_data, with_settings
 from pkmkit.stiffness.results import StiffnessResult
+from pkmkit.stiffness.rod_legs import rod_leg_stiffness
 
 __all__ = ["Material", "Section", "StiffnessData", "StiffnessResult", "beam_compliance",
-           "default_data", "stiffness", "twist_names", "with_settings"]
+           "default_data", "rod_leg_stiffness", "stiffness", "twist_names", "with_settings"]

@@ -12,7 +12,6 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
-from pkmkit.model.chains import JointChainModel
 from pkmkit.numerics.arrays import as_batch
 from pkmkit.status import Status
 from pkmkit.stiffness.data import StiffnessData, default_data
@@ -21,21 +20,17 @@ from pkmkit.stiffness.joint_chains import chain_compliance
 from pkmkit.stiffness.results import StiffnessResult, summarize
 from pkmkit.stiffness.rod_legs import rod_leg_compliance
 
-TWIST_NAMES = ("dx", "dy", "dz", "rx", "ry", "rz")
-
 
 def twist_names(machine: Any) -> tuple[str, ...]:
     """Names of the twist coordinates of a machine's stiffness: ``dx, dy[, dz]`` for a
-    translating platform, ``dx, dy, dz, rx, ry, rz`` otherwise."""
-    if isinstance(machine.model, JointChainModel) or machine.model.full_pose:
-        return TWIST_NAMES
-    return TWIST_NAMES[: machine.dims]
+    translating platform, ``dx, dy, dz, rx, ry, rz`` otherwise (``machine.twist_names``)."""
+    return machine.twist_names
 
 
 def check_data(machine: Any, data: StiffnessData) -> None:
     """Refuse elastic data of the other family (rods on a joint-chain machine, links on a
     rod-leg machine) with an :class:`InputError`."""
-    chains = isinstance(machine.model, JointChainModel)
+    chains = machine.elastic_members == "links"
     if chains and data.rod_section is not None:
         raise InputError("a joint-chain machine has links, not rods: give link_section")
     if not chains and (data.link_section is not None or data.link_sections):
@@ -72,7 +67,7 @@ def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = No
     data = data or default_data(machine)
     names = twist_names(machine)
     d = len(names)
-    chains = isinstance(machine.model, JointChainModel)
+    chains = machine.stiffness_from_actuators
     check_data(machine, data)
     if chains:
         if (pose is None) == (q is None):
@@ -92,7 +87,7 @@ def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = No
         if q is not None:
             raise InputError("rod-leg machines take a pose, not q")
         c, status, _, single = rod_leg_compliance(machine, pose, data)
-        where = "the platform reference point" if machine.model.full_pose else "the platform"
+        where = "the platform" if machine.orientation_fixed else "the platform reference point"
         axes = None
     if reference is not None:
         offset = np.asarray(reference, dtype=float).reshape(-1)

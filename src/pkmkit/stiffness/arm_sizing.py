@@ -82,7 +82,7 @@ def required_axial_rigidity(machine: Any, poses: Any, bound: float, *,
     Raises:
         InputError: a joint-chain machine, a bound not > 0, a region with no reachable pose.
     """
-    if machine.family == "chain":
+    if machine.elastic_members != "rods":
         raise InputError(f"{machine.id!r} has links, not rods: arm sizing for a stiffness "
                          "bound needs a rod-leg machine")
     if not (math.isfinite(bound) and bound > 0):

@@ -106,9 +106,7 @@ def default_data(machine: Any) -> StiffnessData:
     if machine.id not in presets():  # a user's file of that kind: its own rods
         kind = None
     rod_section = rod_material = None
-    from pkmkit.model.chains import JointChainModel
-
-    chains = isinstance(machine.model, JointChainModel)
+    chains = machine.elastic_members == "links"
     if kind in _ROD_SECTIONS:
         rod_section, rod_material, text = _ROD_SECTIONS[kind]
         notes.append(text)

@@ -87,8 +87,8 @@ def file_data(path: str, machine: Any) -> StiffnessData:
         if not isinstance(links, dict):
             raise doc.error("[stiffness.links] must map element names to sections",
                             ("stiffness", "links"))
-        names = set(machine.model.element_names()) if hasattr(machine.model,
-                                                               "element_names") else set()
+        names = (set(machine.model.element_names()) if machine.elastic_members == "links"
+                 else set())
         sections = {}
         for name, text in links.items():
             path = ("stiffness", "links", name)

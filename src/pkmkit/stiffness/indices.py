@@ -21,10 +21,11 @@ import numpy as np
 from pkmkit.exceptions import InputError
 from pkmkit.status import Status
 from pkmkit.stiffness.api import check_data, stiffness, twist_names
+from pkmkit.stiffness.compiled import rod_stiffness
 from pkmkit.stiffness.data import StiffnessData, default_data
 from pkmkit.stiffness.joint_chains import chain_compliance
 from pkmkit.stiffness.results import RIGID_TOL
-from pkmkit.stiffness.rod_legs import rod_leg_compliance
+from pkmkit.stiffness.rod_legs import check_rod_data, rod_leg_compliance
 
 #: Names and descriptions of the stiffness indices (map, workspace, design metrics).
 STIFFNESS_INDICES = {
@@ -89,7 +90,7 @@ def stiffness_figures(machine: Any, points: Any = None, *, q: Any = None,
         :class:`StiffnessFigures`; NaN where a pose is unreachable or singular.
     """
     w = check_wrench(machine, wrench)
-    chains = machine.family == "chain"
+    chains = machine.stiffness_from_actuators
     if points is not None and not chains:
         q = None  # rod legs: the compliance is computed at the poses (q follows from them)
     if q is None and points is None:
@@ -101,6 +102,16 @@ def stiffness_figures(machine: Any, points: Any = None, *, q: Any = None,
     vectors = None if w is None else np.full((m, d), np.nan)
     ok = np.isfinite(rows).all(axis=1)
     index = np.flatnonzero(ok)
+    every = index.size == m  # no row to skip: no copies
+    fast = None if chains else _compiled(machine, rows if every else rows[index], data)
+    if fast is not None:  # the whole batch in one compiled pass (no large temporaries)
+        if every:
+            smallest = fast.smallest
+        else:
+            smallest[index] = fast.smallest
+        if vectors is not None:
+            vectors[index] = np.einsum("nij,j->ni", fast.compliance, w)
+        index = index[:0]
     for start in range(0, index.size, CHUNK):
         take = index[start:start + CHUNK]
         if chains and q is None:  # tool poses: through the inverse model of stiffness()
@@ -115,6 +126,17 @@ def stiffness_figures(machine: Any, points: Any = None, *, q: Any = None,
             vectors[take] = np.einsum("nij,j->ni", c, w)
     deflection = None if vectors is None else np.linalg.norm(vectors[:, :min(d, 3)], axis=1)
     return StiffnessFigures(smallest=smallest, deflection=deflection, vectors=vectors)
+
+
+def _compiled(machine: Any, rows: np.ndarray, data: StiffnessData | None):
+    """The compiled translating-platform result (compliance and smallest stiffness) at
+    poses ``rows``, or None where it does not apply (:mod:`pkmkit.stiffness.compiled`)."""
+    if not machine.orientation_fixed:
+        return None
+    data = data or default_data(machine)
+    check_data(machine, data)
+    check_rod_data(machine, data)
+    return rod_stiffness(machine, rows, data)
 
 
 def _compliance(machine: Any, rows: np.ndarray, data: StiffnessData | None,

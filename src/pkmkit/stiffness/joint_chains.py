@@ -47,6 +47,7 @@ from pkmkit.solve.chains import (
 from pkmkit.spatial.rotation import skew
 from pkmkit.status import Status
 from pkmkit.stiffness.beam import beam_compliance
+from pkmkit.stiffness.compiled import chain_reduced_compliance
 from pkmkit.stiffness.data import StiffnessData
 from pkmkit.stiffness.links import Link, chain_links, link_geometry, spring_twists
 
@@ -233,18 +234,30 @@ def null_space_compliance(g: np.ndarray, h: np.ndarray, t: np.ndarray,
         g: ``(k, r, nz)`` constraints. h: ``(k, nz, nz)``. t: ``(k, 6, nz)``.
         status: ``(k,)`` status of the configurations (non-OK rows stay NaN).
     """
+    out, status, _ = _null_space(g, h, t, status)
+    return out, status
+
+
+def _null_space(g: np.ndarray, h: np.ndarray, t: np.ndarray, status: np.ndarray,
+                known: tuple[int, int] = (0, 0)) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`null_space_compliance` and the batch's most common rank of G, counting
+    ``known = (rank, count)`` configurations solved elsewhere (-1: no configuration)."""
     k = g.shape[0]
     status = status.copy()
     out = np.full((k, t.shape[1], t.shape[1]), np.nan)
     ok = np.flatnonzero(status == Status.OK)
     if not ok.size:
-        return out, status
+        return out, status, known[0] if known[1] else -1
     _, sv, vt = np.linalg.svd(g[ok], full_matrices=True)
     rank = (sv > RANK_TOL * sv[:, :1]).sum(axis=1)
-    expected = np.bincount(rank).argmax()
+    counts = np.bincount(rank, minlength=known[0] + 1)
+    counts[known[0]] += known[1]
+    expected = int(counts.argmax())
     same = rank == expected
     status[ok[~same]] = Status.SINGULAR
     ok, vt = ok[same], vt[same]
+    if not ok.size:
+        return out, status, expected
     basis = np.swapaxes(vt[:, expected:, :], 1, 2)  # (k, nz, f)
     reduced = np.swapaxes(basis, 1, 2) @ h[ok] @ basis
     reduced = 0.5 * (reduced + np.swapaxes(reduced, 1, 2))
@@ -261,7 +274,7 @@ def null_space_compliance(g: np.ndarray, h: np.ndarray, t: np.ndarray,
         inv_lam = np.where(free, 0.0, 1.0 / np.where(free, 1.0, lam))
     c = np.einsum("nia,na,nja->nij", tn, inv_lam, tn)
     out[ok[regular]] = c[regular]
-    return out, status
+    return out, status, expected
 
 
 def chain_compliance(machine: Any, q: np.ndarray, data: StiffnessData, *,
@@ -270,5 +283,30 @@ def chain_compliance(machine: Any, q: np.ndarray, data: StiffnessData, *,
     """Tool-point compliance ``(k, 6, 6)`` of a joint-chain machine at actuator coordinates
     ``q (k, n)``, the status ``(k,)`` and the assembled system."""
     system = assemble(machine, q, data, tool_length=tool_length)
-    c, status = null_space_compliance(system.G, system.H, system.T, system.status)
+    c, status = system_compliance(system.G, system.H, system.T, system.status, system.columns,
+                                  1.0 / data.actuator_stiffness)
     return c, status, system
+
+
+def system_compliance(g: np.ndarray, h: np.ndarray, t: np.ndarray, status: np.ndarray,
+                      columns: dict, c_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`null_space_compliance`, the rows the compiled kernel can take solved there
+    (:func:`pkmkit.stiffness.compiled.chain_reduced_compliance`, same numbers), the others by
+    the SVD; the batch's most common rank is counted over both, as the SVD alone counts it.
+    ``columns``: the system's column ranges; ``c_s (n_a,)`` the drive compliances."""
+    fast = chain_reduced_compliance(g, t, columns, c_s, status, RANK_TOL)
+    if fast is None:
+        return null_space_compliance(g, h, t, status)
+    c_fast, done = fast
+    rest = ~done
+    n_free = 6 + columns["passive"].stop - columns["passive"].start
+    c, rest_status, expected = _null_space(g[rest], h[rest], t[rest], status[rest],
+                                           known=(n_free, int(done.sum())))
+    out = np.where(done[:, None, None], c_fast, np.nan)
+    out[rest] = c
+    status = status.copy()
+    status[rest] = rest_status
+    if expected != n_free:  # most configurations have another rank: these are singular
+        status[done] = Status.SINGULAR
+        out[done] = np.nan
+    return out, status

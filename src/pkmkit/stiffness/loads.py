@@ -64,9 +64,9 @@ def gravity_loads(machine: Any, masses: MassProperties) -> tuple[np.ndarray, np.
             with mass: their arms' weight is not modelled), masses that do not fit it.
     """
     model = machine.model
-    if machine.family != "translational":
-        raise InputError(f"gravity deflection needs a translating platform; {machine.id!r} is a "
-                         f"{machine.family} machine")
+    if not machine.orientation_fixed:
+        raise InputError(f"gravity deflection needs a translating platform; the platform of "
+                         f"{machine.id!r} also turns")
     masses.check(machine)
     if (model.leg_kind != SLIDE).any():
         raise InputError(f"gravity deflection of {machine.id!r}: its actuators are not all "

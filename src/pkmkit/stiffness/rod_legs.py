@@ -33,6 +33,7 @@ from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.machine import SINGULARITY_TOL
 from pkmkit.numerics import small
 from pkmkit.status import Status
+from pkmkit.stiffness.compiled import rod_stiffness
 from pkmkit.stiffness.data import StiffnessData
 
 
@@ -120,10 +121,13 @@ def rod_leg_compliance(machine: Any, x: Any, data: StiffnessData
         InputError, UnreachablePoseError: as the machine's inverse model, for a single pose.
     """
     model = machine.model
-    _check_count(data, machine.n_actuators)
+    check_rod_data(machine, data)
     full = model.full_pose
     arr = np.asarray(x, dtype=float)
     single = arr.ndim == 1
+    fast = None if single else rod_stiffness(machine, arr, data)
+    if fast is not None:  # a large batch: the compiled kernels (same numbers and statuses)
+        return fast.compliance, fast.status, arr, False
     # strokes are judged by the caller (the command line flags them, exit 3)
     inv = machine.ik(x, full_output=True, strokes="ignore")
     status = np.atleast_1d(np.asarray(inv.status, dtype=int)).copy()
@@ -144,10 +148,6 @@ def rod_leg_compliance(machine: Any, x: Any, data: StiffnessData
     c_q = 1.0 / data.actuator_stiffness
     c_r = None
     if data.rod_section is not None:
-        shortest = float(model.rod_length[model.rod_kind != 1].min(initial=np.inf))
-        if data.rod_section.size > shortest:
-            raise ParameterError(f"rod section {data.rod_section.label} is larger than the "
-                                 f"shortest rod ({shortest:g} m)", "rod_section")
         c_r = _rod_compliances(machine, lengths, data)
     c = rod_compliance(a_u, b_u, c_q, c_r)
     # a parallel singularity: A_u (moments over the characteristic length) nearly singular
@@ -173,7 +173,48 @@ def _rod_compliances(machine: Any, lengths: np.ndarray, data: StiffnessData) -> 
     return lengths / (ea * counts[None, :])
 
 
-def _check_count(data: StiffnessData, n: int) -> None:
+def check_rod_data(machine: Any, data: StiffnessData) -> None:
+    """Refuse elastic data that do not fit a rod-leg machine: an actuator stiffness per
+    actuator, a rod section no larger than the shortest rod.
+
+    Raises:
+        InputError: a wrong count. ParameterError: a section larger than a rod.
+    """
+    model = machine.model
+    n = machine.n_actuators
     if data.actuator_stiffness.shape != (n,):
         raise InputError(f"actuator_stiffness has {data.actuator_stiffness.size} values for "
                          f"{n} actuators")
+    if data.rod_section is not None:
+        shortest = float(model.rod_length[model.rod_kind != 1].min(initial=np.inf))
+        if data.rod_section.size > shortest:
+            raise ParameterError(f"rod section {data.rod_section.label} is larger than the "
+                                 f"shortest rod ({shortest:g} m)", "rod_section")
+
+
+def rod_leg_stiffness(machine: Any, x: Any, data: StiffnessData | None = None, *,
+                      compliance: bool = True
+                      ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """Stiffness and compliance ``(N, d, d)`` and status ``(N,)`` of a rod-leg machine at
+    poses ``x (N, dims)``, without the eigen-analysis of :func:`pkmkit.stiffness.stiffness`:
+    a large batch of a hexapod gets ``K = A_uᵀ D⁻¹ A_u`` from the compiled kernel
+    (:mod:`pkmkit.stiffness.kernels`), other cases the inverse of the compliance. NaN rows
+    where the pose is unreachable or singular. ``compliance=False`` may skip the compliance
+    (returned as None where it was not computed: the memory of a large batch).
+
+    Raises:
+        InputError, ParameterError: elastic data that do not fit the machine.
+    """
+    from pkmkit.stiffness.data import default_data
+
+    data = data or default_data(machine)
+    check_rod_data(machine, data)
+    arr = np.atleast_2d(np.asarray(x, dtype=float))
+    fast = rod_stiffness(machine, arr, data, compliance=compliance)
+    if fast is not None and fast.stiffness is not None:
+        return fast.stiffness, fast.compliance, fast.status
+    if fast is not None:
+        c, status = fast.compliance, fast.status
+    else:
+        c, status, _, _ = rod_leg_compliance(machine, arr, data)
+    return _inverse(c), c, status
