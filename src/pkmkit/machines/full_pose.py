@@ -35,6 +35,7 @@ from pkmkit.exceptions import (
 )
 from pkmkit.machines import full_pose_direct as direct
 from pkmkit.machines.chunks import chunked
+from pkmkit.machines.export_layouts import FullPoseLayout
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse
@@ -52,6 +53,7 @@ from pkmkit.machines.machine import (
     _rows_like,
     _valid_rows,
 )
+from pkmkit.machines.measurement_models import FullPoseMeasurement
 from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
@@ -61,6 +63,7 @@ from pkmkit.machines.results import (
     Singularity,
 )
 from pkmkit.machines.strokes import STROKE_MODES, check_mode, judge_rows, refuse_absurd_home
+from pkmkit.machines.workspace_reports import RodReports
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import STRUT, RodModel
@@ -116,7 +119,8 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming, MachineFace):
+class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
+                      FullPoseMeasurement, FullPoseLayout, RodReports, MachineFace):
     """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
 
     Attributes:

@@ -49,10 +49,13 @@ from pkmkit.machines.chain_results import (
     ChainInverseResult,
     single_row,
 )
+from pkmkit.machines.export_layouts import ChainLayout
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
+from pkmkit.machines.measurement_models import ChainMeasurement
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.strokes import signed_excess
+from pkmkit.machines.workspace_reports import ChainReports
 from pkmkit.model.chains import JointChainModel
 from pkmkit.numerics.arrays import restore_shape
 from pkmkit.solve.chains import (
@@ -76,7 +79,7 @@ STROKE_MODES = ("flag", "refuse", "ignore")
 
 
 @dataclass(frozen=True, eq=False)
-class JointChainMachine(ChainVelocity, MachineFace):
+class JointChainMachine(ChainVelocity, ChainMeasurement, ChainLayout, ChainReports, MachineFace):
     """A hyperstatic (or isostatic) machine of joint chains (see the module docstring).
 
     Attributes:
