@@ -235,7 +235,7 @@ class ChainMeasurement:
         Raises:
             PkmError: as :meth:`fk`.
         """
-        direct = self.fk(q, tool_length=tool_length, x0=start, full_output=True,
+        direct = self.fk(q, tool_length=tool_length, start=start, full_output=True,
                          **engine_options)
         found = np.concatenate([direct.platform, direct.passive], axis=1)
         rot = self._rotation(q, tool_length) if rotation else None
