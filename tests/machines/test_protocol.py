@@ -75,7 +75,7 @@ PROTOCOL_METHODS = ("ik", "fk", "fk_all", "jacobian", "jacobian_dot", "joint_mot
                     "in_working_mode", "with_params", "mobility", "default_box",
                     "reference_poses", "tool_frames", "tool_frames_linearised", "tool_inverse",
                     "tool_targets", "measurement_configurations", "unreachable_reason",
-                    "out_of_stroke_reason")
+                    "out_of_stroke_reason", "inverse_rows")
 PROTOCOL_PROPERTIES = ("home_pose", "home_q", "pose_names", "actuator_names",
                        "actuator_quantities", "angular_actuators", "dims", "n_actuators",
                        "family", "position_controlled", "six_dof", "closed_form_inverse",
@@ -283,6 +283,24 @@ def test_the_linearised_tool_is_the_tool_with_its_defect_jacobians(machine):
     np.testing.assert_allclose(lin.rotation, plain.rotation, atol=1e-9)
     d = len(defect_set(machine))
     assert lin.dpoint.shape == lin.drotation.shape == (1, 3, d)
+
+
+def test_every_machine_reads_its_inverse_result_into_the_shared_rows(machine):
+    """``inverse_rows`` gives the fields of boundary.kinematics.InverseRows, rows (N, …) for
+    one pose as for many, status OK at home."""
+    from dataclasses import fields
+
+    from pkmkit.boundary.kinematics import InverseRows
+
+    for x in (machine.home_pose, np.vstack([machine.home_pose] * 2)):
+        rows = machine.inverse_rows(machine.ik(x, full_output=True, strokes="ignore"))
+        assert set(rows) <= {f.name for f in fields(InverseRows)}
+        assert rows["q"].shape == (np.atleast_2d(x).shape[0], machine.n_actuators)
+        assert list(rows["status"]) == [0] * len(rows["q"])
+        np.testing.assert_allclose(rows["q"], np.broadcast_to(machine.home_q, rows["q"].shape),
+                                   atol=1e-7)
+        passive = rows.get("passive")
+        assert (passive is not None) is (machine.family == "chain")
 
 
 def test_measurement_configurations_and_rejection_reasons(machine):

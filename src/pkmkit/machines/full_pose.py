@@ -41,6 +41,7 @@ from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse
 from pkmkit.machines.full_pose_position import PositionInverse, _stroke_fields
 from pkmkit.machines.full_pose_rates import FullPoseRates
+from pkmkit.machines.inverse_rows import RodInverseRows
 from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
 from pkmkit.machines.machine import (
     HOME_TOL,
@@ -120,7 +121,7 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
-                      FullPoseMeasurement, FullPoseLayout, RodReports, MachineFace):
+                      FullPoseMeasurement, FullPoseLayout, RodReports, RodInverseRows, MachineFace):
     """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
 
     Attributes:

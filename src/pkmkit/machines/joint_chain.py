@@ -50,6 +50,7 @@ from pkmkit.machines.chain_results import (
     single_row,
 )
 from pkmkit.machines.export_layouts import ChainLayout
+from pkmkit.machines.inverse_rows import ChainInverseRows
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
 from pkmkit.machines.measurement_models import ChainMeasurement
@@ -81,7 +82,7 @@ STROKE_MODES = ("flag", "refuse", "ignore")
 
 @dataclass(frozen=True, eq=False)
 class JointChainMachine(ChainVelocity, ChainMeasurement, ChainLayout, ChainReports,
-                        ChainWarmStart, MachineFace):
+                        ChainWarmStart, ChainInverseRows, MachineFace):
     """A hyperstatic (or isostatic) machine of joint chains (see the module docstring).
 
     Attributes:

@@ -38,6 +38,7 @@ from pkmkit.machines.common import (
     _valid_rows,
 )
 from pkmkit.machines.export_layouts import TranslationalLayout
+from pkmkit.machines.inverse_rows import RodInverseRows
 from pkmkit.machines.joint_motion import JointMotion, rod_joint_motion
 from pkmkit.machines.measurement_models import TranslationalMeasurement
 from pkmkit.machines.modes import ModeNaming
@@ -71,7 +72,7 @@ from pkmkit.status import Status
 
 @dataclass(frozen=True, eq=False)
 class Machine(RodRefusals, ModeNaming, TranslationalMeasurement, TranslationalLayout,
-              RodReports, MachineFace):
+              RodReports, RodInverseRows, MachineFace):
     """A parallel kinematic machine (translational rod-leg family).
 
     Attributes:
