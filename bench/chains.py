@@ -182,11 +182,12 @@ def main() -> None:
     # along a path, each sample warm-started from the solution at the previous one
     along = path(args.configs)
     first = m.fk(along, full_output=True)
-    x0 = np.concatenate([first.platform, first.passive], axis=1)
-    x0 = np.vstack([x0[:1], x0[:-1]])
-    warm = m.fk(along, x0=x0, full_output=True)
+    start = np.concatenate([first.platform, first.passive], axis=1)
+    start = np.vstack([start[:1], start[:-1]])
+    warm = m.fk(along, start=start, full_output=True)
     t_cold = statistics.median(timed(lambda: m.fk(along)) for _ in range(args.repeat))
-    t_warm = statistics.median(timed(lambda: m.fk(along, x0=x0)) for _ in range(args.repeat))
+    t_warm = statistics.median(timed(lambda: m.fk(along, start=start))
+                               for _ in range(args.repeat))
     result["path"] = {
         "cold_us_per_config_median": t_cold / args.configs * 1e6,
         "warm_us_per_config_median": t_warm / args.configs * 1e6,

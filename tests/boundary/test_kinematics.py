@@ -57,3 +57,15 @@ def test_options_the_machine_does_not_take_are_refused_not_ignored():
         inverse_options(pkmkit.machine("orthoglide"), tool_length=0.1)
     assert inverse_options(pkmkit.machine("tripteor-x7"), tool_length=0.1) == {
         "tool_length": 0.1}
+
+
+def test_a_joint_chains_rows_are_read_without_its_deprecated_tuple_form():
+    """The machine reads its own result (``inverse_rows``): ``pkmkit ik`` on a joint chain no
+    longer unpacks the deprecated ``(q, direct)`` tuple, which warned on every call."""
+    import warnings
+
+    m = pkmkit.machine("tripteor-x7")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        rows = inverse(m, m.home_pose)
+    np.testing.assert_allclose(rows.passive[0], m.home_passive, atol=1e-7)

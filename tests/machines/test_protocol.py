@@ -73,18 +73,21 @@ def test_machine_files_of_each_family(file, family):
 # ---------------------------------------------------------------- one method set, one result type
 PROTOCOL_METHODS = ("ik", "fk", "fk_all", "jacobian", "jacobian_dot", "joint_motion",
                     "in_working_mode", "with_params", "mobility", "default_box",
-                    "reference_poses")
+                    "reference_poses", "tool_frames", "tool_frames_linearised", "tool_inverse",
+                    "tool_targets", "measurement_configurations", "unreachable_reason",
+                    "out_of_stroke_reason", "inverse_rows")
 PROTOCOL_PROPERTIES = ("home_pose", "home_q", "pose_names", "actuator_names",
                        "actuator_quantities", "angular_actuators", "dims", "n_actuators",
                        "family", "position_controlled", "six_dof", "closed_form_inverse",
                        "orientation_fixed", "length_scale",
-                       "incompatible_defects", "kind", "id", "name", "model",
-                       "measures_machined_parts")
+                       "incompatible_defects", "kind", "id", "name", "model", "description",
+                       "source", "tool_length", "default_tool_lengths", "export_layout",
+                       "velocity_split", "measures_machined_parts")
 #: What the geometric error analyses ask a machine (machines/error_faces.py, issue 19 §1).
 ERROR_METHODS = ("closure_linearisation", "tool_sensitivity", "nominal_sensitivity",
                  "held_tool_actuators", "region_names", "region_sizes", "default_region",
                  "configurations_at", "mechanism_configurations", "loop_defect_mask",
-                 "reference_joint_defect_mask", "sampled_tool_points", "tool_frames",
+                 "reference_joint_defect_mask", "sampled_tool_points", "tool_readings",
                  "part_actuators", "part_sensitivity")
 
 
@@ -100,6 +103,14 @@ def test_every_machine_answers_the_same_method_set(machine):
                  "measures_machined_parts"):
         assert isinstance(getattr(machine, flag), bool), flag
     assert not (machine.six_dof and machine.position_controlled)
+    from pkmkit.machines.export_layouts import EXPORT_LAYOUTS
+
+    assert machine.export_layout in EXPORT_LAYOUTS
+    assert isinstance(machine.velocity_split, bool)
+    assert isinstance(machine.tool_length, float) and machine.tool_length >= 0
+    assert machine.default_tool_lengths is None or all(
+        length > 0 for length in machine.default_tool_lengths)
+    assert isinstance(machine.description, str) and isinstance(machine.source, str)
 
 
 def test_the_geometric_error_calls_give_the_same_result_types(machine):
@@ -116,7 +127,7 @@ def test_the_geometric_error_calls_give_the_same_result_types(machine):
     assert isinstance(lin, ClosureLinearisation)
     assert lin.defects.shape[::2] == (1, d) and lin.unknowns.shape[:2] == lin.defects.shape[:2]
     np.testing.assert_array_equal(lin.pose, sens.pose)
-    point, rotation = machine.tool_frames(q)
+    point, rotation = machine.tool_readings(q)
     assert point.shape == rotation.shape == (1, 3)
     np.testing.assert_allclose(point, sens.pose[:, :3], atol=1e-9)
     exact = machine.sampled_tool_points(q, np.zeros((2, d)))
@@ -270,3 +281,119 @@ def test_the_shared_keywords_mean_the_same_on_every_family(machine):
     for tol in (0.0, -1.0, float("nan")):
         with pytest.raises(InputError):
             machine.jacobian(x, q=q, tol=tol)
+
+
+# ---------------------------------------------------------------- what the families declared
+def test_declared_attributes_say_what_the_family_tests_said(machine):
+    """The attributes that replaced family tests outside machines/ answer as those tests did
+    (export layouts, the split velocity model, measurement tools)."""
+    chain = machine.family == "chain"
+    planar = machine.family == "translational" and machine.dims == 2
+    assert machine.export_layout == ("planar" if planar else machine.family)
+    assert machine.velocity_split is (not chain)
+    assert (machine.default_tool_lengths is not None) is chain
+    assert machine.incompatible_defects is chain
+
+
+# ---------------------------------------------------------------- the tool, on every family
+def _target_width(machine) -> int:
+    return 6 if machine.dims == 6 and not machine.position_controlled else 3
+
+
+def test_the_tool_has_the_same_keywords_and_meaning_on_every_family(machine):
+    """tool_targets / tool_inverse / tool_frames take tool_length (m, along the tool axis) on
+    every family: they invert each other, the tip moves by exactly that length, the frames
+    agree with the targets, and a rod machine's closed form refuses a closure start."""
+    from pkmkit.exceptions import UnsupportedOperationError
+
+    q = machine.home_q[None]
+    for length in (None, 0.05):
+        tl = None if length is None else np.array([length])
+        x = machine.tool_targets(q, tl)
+        assert x.shape == (1, _target_width(machine))
+        np.testing.assert_allclose(machine.tool_inverse(x, tl), q, atol=1e-7)
+        frames = machine.tool_frames(q, tl, rotation=True)
+        np.testing.assert_allclose(frames.point, x[:, :3], atol=1e-12)
+        r = frames.rotation[0]
+        np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-12)
+    bare = machine.tool_frames(q, np.array([0.0])).point
+    tip = machine.tool_frames(q, np.array([0.05])).point
+    assert np.linalg.norm(tip - bare) == pytest.approx(0.05, abs=1e-12)
+    start = machine.tool_frames(q).start
+    if machine.family == "chain":
+        again = machine.tool_frames(q, start=start)
+        np.testing.assert_allclose(again.point, machine.tool_frames(q).point, atol=1e-12)
+    else:
+        assert start is None
+        with pytest.raises(UnsupportedOperationError, match="closed form"):
+            machine.tool_frames(q, start=np.zeros((1, machine.dims)))
+
+
+def test_the_linearised_tool_is_the_tool_with_its_defect_jacobians(machine):
+    from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
+
+    q, tl = machine.home_q[None], np.array([0.05])
+    sens = tool_sensitivity(machine, q, tool_length=tl)
+    lin = machine.tool_frames_linearised(q, sens, tl, rotation=True)
+    plain = machine.tool_frames(q, tl, rotation=True)
+    np.testing.assert_allclose(lin.point, plain.point, atol=1e-9)
+    np.testing.assert_allclose(lin.rotation, plain.rotation, atol=1e-9)
+    d = len(defect_set(machine))
+    assert lin.dpoint.shape == lin.drotation.shape == (1, 3, d)
+
+
+def test_every_machine_reads_its_inverse_result_into_the_shared_rows(machine):
+    """``inverse_rows`` gives the fields of boundary.kinematics.InverseRows, rows (N, …) for
+    one pose as for many, status OK at home."""
+    from dataclasses import fields
+
+    from pkmkit.boundary.kinematics import InverseRows
+
+    for x in (machine.home_pose, np.vstack([machine.home_pose] * 2)):
+        rows = machine.inverse_rows(machine.ik(x, full_output=True, strokes="ignore"))
+        assert set(rows) <= {f.name for f in fields(InverseRows)}
+        assert rows["q"].shape == (np.atleast_2d(x).shape[0], machine.n_actuators)
+        assert list(rows["status"]) == [0] * len(rows["q"])
+        np.testing.assert_allclose(rows["q"], np.broadcast_to(machine.home_q, rows["q"].shape),
+                                   atol=1e-7)
+        passive = rows.get("passive")
+        assert (passive is not None) is (machine.family == "chain")
+
+
+def test_measurement_configurations_and_rejection_reasons(machine):
+    """Every family draws its default measurement region and says why a sample is rejected."""
+    from pkmkit.machines.measurement_models import within_strokes
+
+    q = machine.measurement_configurations(3, np.random.default_rng(1))
+    assert q.shape == (3, machine.n_actuators) and within_strokes(machine, q).all()
+    far = machine.home_pose + np.r_[[10.0] * min(machine.dims, 3), [0.0] * (machine.dims - 3)]
+    k, why = machine.unreachable_reason(far[None])
+    assert k == 0 and isinstance(why, str) and why
+    lo, hi = machine.home_q - 1.0, machine.home_q - 0.5
+    k, why = machine.out_of_stroke_reason(machine.home_q[None], lo, hi, machine.actuator_names)
+    assert k == 0 and isinstance(why, str) and why
+
+
+# ---------------------------------------------------------------- one meaning of fk's x0
+def test_a_joint_chain_takes_its_closure_start_as_start_and_x0_is_a_pose():
+    """x0 is a warm-start pose on every machine; a joint chain's closure starts from its
+    platform pose and passive joints, now ``start`` (x0 of that width: deprecated alias, the
+    same result); a pose x0 is refused with a typed error naming why."""
+    from pkmkit.exceptions import UnsupportedOperationError
+
+    m = pkmkit.machine("tripteor-x7")
+    q = m.home_q + 0.001
+    home = m.fk(m.home_q, full_output=True)
+    u = np.concatenate([np.ravel(home.platform), np.ravel(home.passive)])
+    assert u.size == 6 + len(m.passive_names)
+    by_start = m.fk(q, start=u, full_output=True)
+    with pytest.warns(DeprecationWarning, match="start="):
+        by_x0 = m.fk(q, x0=u, full_output=True)
+    np.testing.assert_array_equal(by_start.pose, by_x0.pose)
+    np.testing.assert_allclose(by_start.pose, m.fk(q), atol=1e-9)
+    with pytest.raises(UnsupportedOperationError, match="platform pose and the passive"):
+        m.fk(q, x0=m.home_pose)
+    with pytest.raises(InputError, match="alone"):
+        m.fk(q, x0=u, start=u)
+    with pytest.raises(InputError, match="start"):
+        m.fk(q, start=u[:-1])

@@ -253,7 +253,7 @@ def study_length(machine: Machine) -> float:
     if leg > 0:
         return leg
     q_max = np.asarray(machine.model.q_max, dtype=float)
-    quantities = getattr(machine.model, "actuator_quantities", ("length",) * q_max.size)
+    quantities = machine.actuator_quantities
     ends = [abs(v) for v, kind in zip(q_max, quantities, strict=False)
             if kind == "length" and np.isfinite(v)]
     return max(ends, default=0.0) or 1.0

@@ -177,7 +177,7 @@ def index_values(machine: Machine, points: Any, name: str, *, scheduler: Any = N
 
 
 def _index_block(points: np.ndarray, machine: Machine, name: str) -> np.ndarray:
-    if machine.family == "chain":
+    if not machine.velocity_split:  # J from a closure: the indices of J alone
         from pkmkit.analysis.chain_workspace import chain_index_values
 
         return chain_index_values(machine, points, name)

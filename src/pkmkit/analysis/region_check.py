@@ -262,23 +262,13 @@ def _fmt(p: np.ndarray) -> str:
 def _worst(name: str, bad: np.ndarray, points: np.ndarray, ev: PoseEvaluation,
            criteria: Criteria, machine: Machine, names) -> str:
     idx = np.flatnonzero(bad)
-    if machine.family == "chain" and name in ("reachable", "strokes"):
-        what = ("the inverse model closes no loop there" if name == "reachable" else
-                "a joint (actuator or passive) leaves its range")
-        return f"at {_fmt(points[idx[0]])}: {what} ({len(idx)} samples)"
     if name == "reachable":
-        short = machine.ik(points[idx], full_output=True, strokes="ignore").shortfall
-        k = int(np.nanargmax(short.max(axis=1)))
-        leg = int(np.nanargmax(short[k]))
-        return (f"at {_fmt(points[idx[k]])}: {machine.model.leg_names[leg]} too short by "
-                f"{short[k, leg]:.6g} m")
+        k, why = machine.unreachable_reason(points[idx])
+        return f"at {_fmt(points[idx[k]])}: {why}"
     if name == "strokes":
         lo, hi = criteria.limits(machine)
-        excess = np.maximum(lo - ev.q[idx], ev.q[idx] - hi)
-        k, a = np.unravel_index(int(np.nanargmax(excess)), excess.shape)
-        side = "below q_min" if ev.q[idx[k], a] < lo[a] else "above q_max"
-        return (f"at {_fmt(points[idx[k]])}: {names[a]} = {ev.q[idx[k], a]:.6g} m is {side} "
-                f"by {excess[k, a]:.6g} m")
+        k, why = machine.out_of_stroke_reason(ev.q[idx], lo, hi, names)
+        return f"at {_fmt(points[idx[k]])}: {why}"
     if name == "bounds":
         lo, hi = criteria.bounds
         ratio = np.maximum(lo / ev.factors[idx, -1], ev.factors[idx, 0] / hi)

@@ -5,10 +5,11 @@
 ``ik`` takes and refuses, with a typed error, those it does not. ``pkmkit ik`` (single pose and
 batch alike) is written over these two.
 
-The families' ``ik(full_output=True)`` still differ (an :class:`~pkmkit.machines.results.
-InverseResult` for rod legs, a ``(q, direct result)`` pair for joint chains; issue 19): the one
-dispatch table below reads each into :class:`InverseRows`, and goes when the protocol returns one
-result type.
+The families' ``ik(full_output=True)`` records still differ in what they carry (a joint
+chain's :class:`~pkmkit.machines.chain_results.ChainInverseResult` adds its direct model, whose
+passive joints the command line shows; its status is judged from q): each machine reads its own
+into the shared fields (``machine.inverse_rows``, :mod:`pkmkit.machines.inverse_rows`), so
+nothing here looks the family up.
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
-from pkmkit.status import Status
 
 
 @dataclass(frozen=True)
@@ -67,27 +67,7 @@ def inverse_options(machine, **given: Any) -> dict[str, Any]:
 def inverse(machine, x: Any, **options: Any) -> InverseRows:
     """``machine.ik(x, full_output=True, strokes="ignore", **options)`` as :class:`InverseRows`
     (rows ``(N, …)`` also for one pose ``x (dims,)``, whose errors — unreachable, no
-    convergence — are raised as ``ik`` raises them)."""
+    convergence — are raised as ``ik`` raises them), read by the machine's own
+    ``inverse_rows`` (:mod:`pkmkit.machines.inverse_rows`)."""
     found = machine.ik(x, full_output=True, strokes="ignore", **options)
-    return _READERS.get(machine.family, _rod_rows)(machine, found)
-
-
-def _rod_rows(machine, res) -> InverseRows:
-    """An :class:`~pkmkit.machines.results.InverseResult` (rod-leg machines)."""
-    pose = None if res.pose is None else np.atleast_2d(res.pose)
-    return InverseRows(q=np.atleast_2d(res.q), status=np.atleast_1d(res.status),
-                       mode=np.atleast_1d(res.mode), branches=res.branches, pose=pose)
-
-
-def _chain_rows(machine, found) -> InverseRows:
-    """A joint chain's ``(q, direct result or None)``: a row is OK where q is finite."""
-    q, direct = found
-    q = np.atleast_2d(q)
-    status = np.where(np.isfinite(q).all(axis=1), Status.OK, Status.UNREACHABLE)
-    passive = (np.full((len(q), len(machine.passive_names)), np.nan) if direct is None
-               else np.atleast_2d(direct.passive))
-    return InverseRows(q=q, status=status, passive=passive)
-
-
-#: How each family's ``ik(full_output=True)`` is read (rod legs by default).
-_READERS = {"chain": _chain_rows}
+    return InverseRows(**machine.inverse_rows(found))

@@ -22,9 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.calibration.models import tool_state
 from pkmkit.exceptions import InputError
-from pkmkit.spatial.rotation import rotvec_to_matrix
+from pkmkit.machines.measurement_models import CHAIN_IK_TOL  # noqa: F401  (re-exported)
 
 
 def target_width(machine) -> int:
@@ -46,56 +45,28 @@ def as_targets(machine, targets: Any) -> np.ndarray:
     return x
 
 
-#: Largest residual (m) of a joint-chain machine's inverse model accepted as reached.
-CHAIN_IK_TOL = 1e-6
-
-
 def commanded_q(machine, targets: Any, tool_length: Any = None, *, iterations: int = 20
                 ) -> np.ndarray:
     """Actuator coordinates ``(N, n)`` that ``machine``'s model gives for tool targets (its
-    inverse model with the tool offset); NaN rows out of reach.
+    inverse model with the tool offset, :meth:`tool_inverse` of
+    :mod:`pkmkit.machines.measurement_models`); NaN rows out of reach.
 
     For a position-controlled full-pose machine (its platform tilts with its position) the
     tool offset depends on the tilt: the platform position is found by fixed-point iteration
-    (at most ``iterations`` passes; the tilt changes by micro-radians per millimetre).
+    (at most ``iterations`` passes; the tilt changes by micro-radians per millimetre). A
+    joint-chain machine accepts least-squares closures up to :data:`CHAIN_IK_TOL`.
     """
     x = as_targets(machine, targets)
-    n = len(x)
-    tl = np.zeros(n) if tool_length is None else np.broadcast_to(
-        np.asarray(tool_length, dtype=float), (n,)).copy()
-    family = machine.family
+    tl = None if tool_length is None else np.broadcast_to(
+        np.asarray(tool_length, dtype=float), (len(x),)).copy()
     with np.errstate(invalid="ignore"):
-        if family == "chain":
-            # a calibrated hyperstatic machine closes its legs in least squares (residuals of
-            # 1e-8 m for second-order incompatible defects): accept those, not unreachability
-            return np.atleast_2d(machine.ik(x, tool_length=tl if tool_length is not None
-                                            else None, residual_tol=CHAIN_IK_TOL))
-        if family == "translational":
-            p = x.copy()
-            p[:, 2] += tl
-            return np.atleast_2d(machine.ik(p[:, :machine.dims]))
-        if machine.position_controlled:
-            p = x.copy()
-            if not np.any(tl):
-                return np.atleast_2d(machine.ik(p))
-            for _ in range(iterations):
-                inv = machine.ik(p, full_output=True)
-                rot = rotvec_to_matrix(np.nan_to_num(np.atleast_2d(inv.pose)[:, 3:]))
-                new = x + tl[:, None] * rot[:, :, 2]
-                converged = np.nanmax(np.abs(new - p), initial=0.0) < 1e-13
-                p = new
-                if converged:
-                    break
-            return np.atleast_2d(machine.ik(p))
-        # a six-actuator machine: the target's orientation
-        rot = rotvec_to_matrix(x[:, 3:6])
-        p = x[:, :3] + tl[:, None] * rot[:, :, 2]
-        return np.atleast_2d(machine.ik(np.concatenate([p, x[:, 3:6]], axis=1)))
+        return machine.tool_inverse(x, tl, iterations=iterations)
 
 
 def reached(machine, q: Any, tool_length: Any = None) -> np.ndarray:
     """Tool targets ``(N, w)`` that ``machine`` reaches at ``q`` (tool point, and tool axis for
-    a joint-chain machine); NaN rows where it does not assemble."""
+    a joint-chain machine, platform rotation vector for a six-actuator machine); NaN rows where
+    it does not assemble."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
     n = len(q)
     tl = None if tool_length is None else np.broadcast_to(np.asarray(tool_length, dtype=float),
@@ -104,18 +75,7 @@ def reached(machine, q: Any, tool_length: Any = None) -> np.ndarray:
     out = np.full((n, target_width(machine)), np.nan)
     if not ok.any():
         return out
-    if machine.family == "chain":
-        with np.errstate(invalid="ignore"):
-            out[ok] = machine.fk(q[ok], tool_length=None if tl is None else tl[ok])
-        return out
-    six = machine.six_dof
-    state = tool_state(machine, q[ok], None if tl is None else tl[ok], jacobian=False,
-                       rotation=six)
-    out[ok, :3] = state.point
-    if six:
-        from pkmkit.spatial.rotation import matrix_to_rotvec
-
-        out[ok, 3:] = matrix_to_rotvec(state.rotation)
+    out[ok] = machine.tool_targets(q[ok], None if tl is None else tl[ok])
     return out
 
 

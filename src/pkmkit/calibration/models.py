@@ -44,6 +44,7 @@ import numpy as np
 from pkmkit.calibration.registration import Registration
 from pkmkit.exceptions import InputError, PkmError
 from pkmkit.geometric_errors.model import tool_sensitivity
+from pkmkit.machines.measurement_models import ToolFrames
 from pkmkit.model.measurement_set import MeasurementSet
 from pkmkit.spatial.rotation import (
     inverse_left_jacobian,
@@ -76,78 +77,34 @@ class SetupParameters:
         return len(self.names)
 
 
-@dataclass(frozen=True)
-class ToolState:
-    """The tool at N configurations: point ``(N, 3)``, rotation ``(N, 3, 3)`` (or None), their
-    defect Jacobians ``(N, 3, d)`` (or None)."""
-
-    point: np.ndarray
-    rotation: np.ndarray | None
-    dpoint: np.ndarray | None
-    drotation: np.ndarray | None
-    start: np.ndarray | None = None
+#: The tool at N configurations (:class:`pkmkit.machines.measurement_models.ToolFrames`):
+#: point ``(N, 3)``, rotation ``(N, 3, 3)`` (or None), their defect Jacobians ``(N, 3, d)``
+#: (or None), the closure's warm start (or None).
+ToolState = ToolFrames
 
 
 def tool_state(machine, q: np.ndarray, tool_length: np.ndarray | None, *, jacobian: bool,
                rotation: bool = False, x0: np.ndarray | None = None,
                closure_options: dict | None = None) -> ToolState:
     """Tool point (and rotation) of ``machine`` at ``q`` ``(N, n)``, with defect Jacobians on
-    request. Rows where the machine does not assemble are NaN (never an exception).
+    request (the machine's :meth:`tool_frames` / :meth:`tool_frames_linearised`,
+    :mod:`pkmkit.machines.measurement_models`). With ``jacobian``, rows where the machine does
+    not assemble are NaN (never an exception).
 
     ``x0``: a warm start of a joint-chain machine's closure (platform pose and passive joints,
     ``ToolState.start`` of a previous call at the same q) for residual-only evaluations;
     ``closure_options``: engine options of those closures (e.g. a loose ``xtol`` to emulate an
     inexact inner solver)."""
-    family = machine.family
-    n = q.shape[0]
-    tl = np.zeros(n) if tool_length is None else np.asarray(tool_length, dtype=float)
     try:
-        if family == "chain":
-            lengths = tool_length
-            start = None
-            if jacobian:
-                sens = tool_sensitivity(machine, q, tool_length=lengths)
-                point, dpoint, drot = sens.pose[:, :3], sens.point, sens.rotation
-            else:
-                direct = machine.fk(q, tool_length=lengths, x0=x0, full_output=True,
-                                    **(closure_options or {}))
-                point = direct.pose[:, :3]
-                dpoint = drot = None
-                start = np.concatenate([direct.platform, direct.passive], axis=1)
-                if not np.isfinite(start).all():
-                    start = None
-            rot = None
-            if rotation:
-                frame = machine.fk(q, tool_length=lengths, full_output=True).tool_frame
-                rot = rotvec_to_matrix(np.nan_to_num(frame[:, 3:]))
-                rot[~np.isfinite(frame).all(axis=1)] = np.nan
-            return ToolState(point, rot, dpoint, drot, start)
         if jacobian:
-            sens = tool_sensitivity(machine, q)
-            x, dpoint, drot = sens.pose, sens.point.copy(), sens.rotation
-        else:
-            x = np.atleast_2d(machine.fk(q))
-            dpoint = drot = None
+            sens = tool_sensitivity(machine, q, tool_length=tool_length)
+            return machine.tool_frames_linearised(q, sens, tool_length, rotation=rotation)
+        return machine.tool_frames(q, tool_length, rotation=rotation, start=x0,
+                                   **(closure_options or {}))
     except PkmError:
         if not jacobian:
             raise
         return _nan_state(machine, q, rotation)
-    if family == "full-pose":
-        rot = rotvec_to_matrix(np.nan_to_num(x[:, 3:6]))
-        offset = -tl[:, None] * rot[:, :, 2]
-        point = x[:, :3] + offset
-        if dpoint is not None:
-            dpoint = dpoint + np.cross(drot.transpose(0, 2, 1), offset[:, None, :]
-                                       ).transpose(0, 2, 1)
-        bad = ~np.isfinite(x).all(axis=1)
-        point[bad] = np.nan
-        rot[bad] = np.nan
-        return ToolState(point, rot if rotation else None, dpoint, drot)
-    point = np.zeros((n, 3))
-    dims = min(machine.dims, 3)
-    point[:, :dims] = x[:, :dims]
-    point[:, 2] -= tl
-    return ToolState(point, np.tile(np.eye(3), (n, 1, 1)) if rotation else None, dpoint, drot)
 
 
 def _nan_state(machine, q, rotation) -> ToolState:

@@ -40,7 +40,11 @@ from pkmkit.calibration.models import tool_state
 from pkmkit.calibration.registration import Registration
 from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
-from pkmkit.machines.strokes import stroke_limits
+from pkmkit.machines.measurement_models import (  # noqa: F401  (SEED_TOOLS, TILT re-exported)
+    SEED_TOOLS,
+    TILT,
+    within_strokes,
+)
 from pkmkit.model.measurement_set import KINDS, MeasurementSet
 from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
 
@@ -54,8 +58,6 @@ TRACKER_ROTATION_SIGMA = 2e-5
 #: Instrument of each measurement type for ``noise="realistic"``.
 REALISTIC = {"point": "tracker", "pose": "tracker", "ballbar": "ballbar", "height": "probe",
              "part": "cmm"}
-#: Seed 002's two tool lengths (m).
-SEED_TOOLS = (0.169889, 0.110006)
 
 
 def random_defects(machine, rng: np.random.Generator, *, magnitude: dict | None = None,
@@ -83,80 +85,13 @@ def default_configurations(machine, n: int, rng: np.random.Generator) -> np.ndar
     """
     if n < 1:
         raise InputError(f"the number of poses must be ≥ 1, got {n}")
-    if machine.family == "chain":
-        lo, hi = stroke_limits(machine)
-        lo = np.where(np.isfinite(lo), lo, machine.home_q - 0.01)
-        hi = np.where(np.isfinite(hi), hi, machine.home_q + 0.01)
-        loop = machine.model.loop_variables[np.flatnonzero(machine.model.actuated)]
-        q = lo + (hi - lo) * rng.random((n, len(lo)))
-        if (~loop).any() and n > 1:
-            platform = np.arange(n) < (n + 1) // 2
-            q[np.ix_(platform, ~loop)] = np.clip(0.0, lo[~loop], hi[~loop])
-            q[np.ix_(~platform, loop)] = (lo[loop] + hi[loop]) / 2
-        ok = _within(machine, q)
-        for _ in range(50):
-            # rows that do not assemble or put a passive joint beyond its range: drawn again
-            # (the leg actuators only; the wrist-only rows keep their mid-stroke legs)
-            if ok.all():
-                break
-            bad = np.flatnonzero(~ok)
-            cols = loop if (~loop).any() and n > 1 else np.ones(len(lo), dtype=bool)
-            redraw = lo + (hi - lo) * rng.random((len(bad), len(lo)))
-            sub = q[bad]
-            sub[:, cols] = redraw[:, cols]
-            q[bad] = sub
-            ok[bad] = _within(machine, q[bad])
-        if not ok.all():
-            raise InputError(f"{(~ok).sum()} configurations of the default region do not "
-                             "assemble within the joint strokes")
-        return q
-    return _random_configurations(machine, n, rng)
-
-
-#: Orientation range of random full poses about the home orientation (rad, per axis).
-TILT = np.radians(5.0)
-
-
-def _random_configurations(machine, n: int, rng: np.random.Generator) -> np.ndarray:
-    lo, hi = machine.default_box()
-    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
-    full = machine.dims == 6 and not machine.position_controlled
-    out = []
-    for _ in range(50):
-        p = lo + (hi - lo) * rng.random((4 * n, len(lo)))
-        if full:
-            from pkmkit.spatial.rotation import compose_rotvec
-
-            tilt = rng.uniform(-TILT, TILT, (len(p), 3))
-            home = np.tile(machine.home_pose[3:], (len(p), 1))
-            with np.errstate(invalid="ignore"):
-                q = np.atleast_2d(machine.ik(np.concatenate([p, compose_rotvec(tilt, home)],
-                                                            axis=1)))
-        else:
-            pts = np.zeros((len(p), 3))
-            pts[:, :p.shape[1]] = p
-            q = commanded_q(machine, pts)
-        ok = np.isfinite(q).all(axis=1) & _within(machine, np.nan_to_num(q, nan=np.inf))
-        out.extend(q[ok])
-        if len(out) >= n:
-            return np.array(out[:n])
-    raise InputError(f"fewer than {n} reachable configurations in the default box of "
-                     f"{machine.id!r}")
+    return machine.measurement_configurations(n, rng)
 
 
 def _within(machine, q: np.ndarray) -> np.ndarray:
     """``(N,)`` rows that assemble with every actuator and passive joint within its stroke
-    (:func:`pkmkit.machines.strokes.stroke_excess`; non-finite rows are not within)."""
-    from pkmkit.machines.strokes import stroke_excess
-
-    q = np.atleast_2d(np.asarray(q, dtype=float))
-    finite = np.isfinite(q).all(axis=1)
-    out = np.zeros(len(q), dtype=bool)
-    if finite.any():
-        check = stroke_excess(machine, q[finite])
-        assembled = np.isfinite(check.values).all(axis=1)
-        out[finite] = assembled & ~check.out_of_stroke
-    return out
+    (:func:`pkmkit.machines.measurement_models.within_strokes`)."""
+    return within_strokes(machine, q)
 
 
 def _refuse_beyond_strokes(machine, q: np.ndarray) -> None:
@@ -179,9 +114,8 @@ def _refuse_beyond_strokes(machine, q: np.ndarray) -> None:
 
 def _tool_lengths(machine, n: int, tool_lengths) -> np.ndarray | None:
     if tool_lengths is None:
-        if machine.family == "chain":
-            tool_lengths = SEED_TOOLS
-        else:
+        tool_lengths = machine.default_tool_lengths
+        if tool_lengths is None:
             return None
     tl = np.asarray(tool_lengths, dtype=float).reshape(-1)
     return tl[np.arange(n) % len(tl)]

@@ -82,11 +82,10 @@ class RodGeometry:
 
 
 def machine_family(machine) -> str:
-    """The machine's family (``machine.family``), with planar translational machines told
-    apart: ``"translational"``, ``"planar"``, ``"full-pose"`` or ``"chain"``."""
-    if machine.family == "translational" and machine.dims == 2:
-        return "planar"
-    return machine.family
+    """The layout the machine declares to the export formats (``machine.export_layout``,
+    :mod:`pkmkit.machines.export_layouts`): ``"translational"``, ``"planar"``, ``"full-pose"``
+    or ``"chain"``."""
+    return machine.export_layout
 
 
 def rod_geometry(machine, fmt: str, *, cranks: bool = False, planar: bool = False

@@ -18,7 +18,7 @@ Measurement types (``kind``), each a function of (machine with its defects, q, s
 :func:`measurement_jacobian` gives ``∂(reading)/∂(defects)`` analytically from
 :func:`pkmkit.geometric_errors.model.tool_sensitivity` (and, for ``"part"``, the closure's
 derivative in
-q at a fixed tool point). The machine gives its tool readings (``machine.tool_frames``) and
+q at a fixed tool point). The machine gives its tool readings (``machine.tool_readings``) and
 says whether it has machined-part readings (``machine.measures_machined_parts``):
 :mod:`pkmkit.machines.tool_readings`.
 """
@@ -77,7 +77,7 @@ def measure(machine, kind: str, q: Any, setup: dict | None = None) -> np.ndarray
     n = qb.shape[0]
     if kind == "part":
         return _part_joints(machine, setup)
-    point, rotvec = machine.tool_frames(qb, tool_length=setup.get("tool_length"))
+    point, rotvec = machine.tool_readings(qb, tool_length=setup.get("tool_length"))
     if kind == "point":
         return point
     if kind == "pose":

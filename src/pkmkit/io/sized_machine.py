@@ -80,19 +80,19 @@ def sized_machine_text(machine: Any, units: str = "m", *, name: str | None = Non
         UnsupportedExportError: ``machine`` has no built-in kind (a ``rod-legs`` or
             ``joint-chain`` machine), or has defects.
     """
-    kind = getattr(machine, "kind", None)
+    kind = machine.kind
     if kind is None:
         raise UnsupportedExportError(_FORMAT, machine.id, "only machines of a built-in kind "
                                      "are written as a sized machine file (this one is "
                                      "described leg by leg or element by element, or has "
                                      "geometric defects)")
-    defects = getattr(machine.model, "defects", None)
+    defects = machine.model.defects
     if defects is not None and np.any(np.asarray(defects, dtype=float) != 0):
         raise UnsupportedExportError(_FORMAT, machine.id, "the machine has geometric defects")
     scale = length_scale(units)
     text = {"name": machine.name if name is None else name,
-            "description": getattr(machine, "description", ""),
-            "source": getattr(machine, "source", "") if source is None else source}
+            "description": machine.description,
+            "source": machine.source if source is None else source}
     lines = ["[machine]", f"kind = {_toml(kind.kind)}"]
     lines += [f"{key} = {_toml(value)}" for key, value in text.items() if value]
     lines += [f"units = {_toml(units)}", "", "[parameters]"]

@@ -201,7 +201,7 @@ class ChainVelocity:
         raise UnsupportedOperationError(
             "fk_all", self.id, self.family,
             "the assembly modes of a (hyperstatic) joint-chain closure are not enumerated; "
-            "fk(q, x0=...) reaches the mode nearest a start")
+            "fk(q, start=...) reaches the mode nearest a start")
 
     def _velocity(self, q: Any, tol: float, x: Any = None) -> ChainJacobians:
         """The velocity model at actuator coordinates ``q`` (see :meth:`jacobian`)."""

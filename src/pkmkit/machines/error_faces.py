@@ -10,7 +10,7 @@
 - :mod:`~pkmkit.machines.defect_masks`: ``loop_defect_mask()``,
   ``reference_joint_defect_mask()``;
 - :mod:`~pkmkit.machines.defect_samples`: ``sampled_tool_points(q, samples, tool_length=)``;
-- :mod:`~pkmkit.machines.tool_readings`: ``tool_frames(q, tool_length=)``,
+- :mod:`~pkmkit.machines.tool_readings`: ``tool_readings(q, tool_length=)``,
   ``measures_machined_parts``, ``part_actuators(points)``, ``part_sensitivity(points)``.
 """
 

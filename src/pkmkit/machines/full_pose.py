@@ -36,11 +36,13 @@ from pkmkit.exceptions import (
 from pkmkit.machines import full_pose_direct as direct
 from pkmkit.machines.chunks import chunked
 from pkmkit.machines.error_faces import FullPoseErrors
+from pkmkit.machines.export_layouts import FullPoseLayout
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse
 from pkmkit.machines.full_pose_position import PositionInverse, _stroke_fields
 from pkmkit.machines.full_pose_rates import FullPoseRates
+from pkmkit.machines.inverse_rows import RodInverseRows
 from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
 from pkmkit.machines.machine import (
     HOME_TOL,
@@ -53,6 +55,7 @@ from pkmkit.machines.machine import (
     _rows_like,
     _valid_rows,
 )
+from pkmkit.machines.measurement_models import FullPoseMeasurement
 from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
@@ -62,6 +65,7 @@ from pkmkit.machines.results import (
     Singularity,
 )
 from pkmkit.machines.strokes import STROKE_MODES, check_mode, judge_rows, refuse_absurd_home
+from pkmkit.machines.workspace_reports import RodReports
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import STRUT, RodModel
@@ -118,7 +122,7 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming, FullPoseErrors,
-                      MachineFace):
+                      FullPoseMeasurement, FullPoseLayout, RodReports, RodInverseRows, MachineFace):
     """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
 
     Attributes:

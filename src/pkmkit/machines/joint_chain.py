@@ -50,10 +50,15 @@ from pkmkit.machines.chain_results import (
     single_row,
 )
 from pkmkit.machines.error_faces import ChainErrors
+from pkmkit.machines.export_layouts import ChainLayout
+from pkmkit.machines.inverse_rows import ChainInverseRows
 from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
 from pkmkit.machines.machine import _valid_rows as valid_rows
+from pkmkit.machines.measurement_models import ChainMeasurement
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.strokes import signed_excess
+from pkmkit.machines.warm_starts import ChainWarmStart
+from pkmkit.machines.workspace_reports import ChainReports
 from pkmkit.model.chains import JointChainModel
 from pkmkit.numerics.arrays import restore_shape
 from pkmkit.solve.chains import (
@@ -77,7 +82,8 @@ STROKE_MODES = ("flag", "refuse", "ignore")
 
 
 @dataclass(frozen=True, eq=False)
-class JointChainMachine(ChainVelocity, ChainErrors, MachineFace):
+class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayout, ChainReports,
+                        ChainWarmStart, ChainInverseRows, MachineFace):
     """A hyperstatic (or isostatic) machine of joint chains (see the module docstring).
 
     Attributes:
@@ -273,17 +279,20 @@ class JointChainMachine(ChainVelocity, ChainErrors, MachineFace):
         return arr
 
     # ---------------------------------------------------------------- direct
-    def fk(self, q: Any, *, x0: Any = None, tool_length: Any = None, full_output: bool = False,
-           strokes: str = "flag", check_singular: bool | None = None,
+    def fk(self, q: Any, *, x0: Any = None, start: Any = None, tool_length: Any = None,
+           full_output: bool = False, strokes: str = "flag", check_singular: bool | None = None,
            max_misfit: float | None = None,
            **engine_options: Any) -> np.ndarray | ChainDirectResult:
         """Direct model: the legs' closure (platform pose and passive joints) then the head.
 
         Args:
             q: ``(n,)`` or ``(N, n)`` actuator coordinates (legs then head).
-            x0: warm start: ``(6 + n_p,)`` or ``(N, 6 + n_p)`` platform position, rotation
-                vector and passive joints (e.g. the previous solution along a path); default
-                the home configuration.
+            x0: a warm-start pose, as on every machine: a joint chain's closure cannot start
+                from one (UnsupportedOperationError); ``(6 + n_p)`` values per row are the
+                deprecated name of ``start`` (:mod:`pkmkit.machines.warm_starts`).
+            start: warm start of the closure: ``(6 + n_p,)`` or ``(N, 6 + n_p)`` platform
+                position, rotation vector and passive joints (e.g. the previous solution along
+                a path); default the home configuration.
             tool_length: tool length(s) along the tool axis (m); default the machine's.
             full_output: return a :class:`ChainDirectResult`.
             strokes: joint values outside their strokes (the actuators given, the passive
@@ -326,10 +335,11 @@ class JointChainMachine(ChainVelocity, ChainErrors, MachineFace):
         qb, single = _checked_batch(q, self.n_actuators, "q")
         n = qb.shape[0]
         values = self._full_values(qb)
-        if x0 is None:
+        given, keyword = self._closure_start(x0, start)
+        if given is None:
             u0 = self._default_start(qb, values)
         else:
-            u0 = _rows_like(x0, 6 + len(self._passive), "x0", n)
+            u0 = _rows_like(given, 6 + len(self._passive), keyword, n)
         valid = valid_rows(qb)
         u0[~valid] = np.nan
         engine_options.setdefault("compute_rank", False)

@@ -38,7 +38,10 @@ from pkmkit.machines.common import (
     _valid_rows,
 )
 from pkmkit.machines.error_faces import TranslationalErrors
+from pkmkit.machines.export_layouts import TranslationalLayout
+from pkmkit.machines.inverse_rows import RodInverseRows
 from pkmkit.machines.joint_motion import JointMotion, rod_joint_motion
+from pkmkit.machines.measurement_models import TranslationalMeasurement
 from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
@@ -58,6 +61,7 @@ from pkmkit.machines.strokes import (
     stroke_limits,
 )
 from pkmkit.machines.velocity import LazyJacobians, VelocityEvaluation
+from pkmkit.machines.workspace_reports import RodReports
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, RodModel
@@ -68,7 +72,8 @@ from pkmkit.status import Status
 
 
 @dataclass(frozen=True, eq=False)
-class Machine(RodRefusals, ModeNaming, TranslationalErrors, MachineFace):
+class Machine(RodRefusals, ModeNaming, TranslationalErrors, TranslationalMeasurement,
+              TranslationalLayout, RodReports, RodInverseRows, MachineFace):
     """A parallel kinematic machine (translational rod-leg family).
 
     Attributes:

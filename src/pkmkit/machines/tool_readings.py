@@ -2,7 +2,7 @@
 coordinates q (:mod:`pkmkit.geometric_errors.measurements` asks the machine rather than test
 its family).
 
-- ``machine.tool_frames(q, tool_length=)`` — ``(point (N, 3), rotation (N, 3))``: the tool
+- ``machine.tool_readings(q, tool_length=)`` — ``(point (N, 3), rotation (N, 3))``: the tool
   point (m) and the tool frame's rotation vector in the fixed frame (rad), NaN rows where the
   machine does not assemble. A translating platform's point is padded with zeros to 3-D and
   its rotation is zero; a joint chain's tool sits ``tool_length`` (m, default the machine's)
@@ -32,7 +32,7 @@ class TranslationalReadings:
 
     measures_machined_parts = True
 
-    def tool_frames(self, q: Any, *, tool_length: Any = None
+    def tool_readings(self, q: Any, *, tool_length: Any = None
                     ) -> tuple[np.ndarray, np.ndarray]:
         """``(point (N, 3), rotation (N, 3))`` at ``q (n,)``/``(N, n)`` (module docstring;
         ``tool_length`` is a joint chain's and is ignored here)."""
@@ -70,7 +70,7 @@ class FullPoseReadings:
 
     measures_machined_parts = True
 
-    def tool_frames(self, q: Any, *, tool_length: Any = None
+    def tool_readings(self, q: Any, *, tool_length: Any = None
                     ) -> tuple[np.ndarray, np.ndarray]:
         """``(point (N, 3), rotation (N, 3))`` at ``q (n,)``/``(N, n)`` (module docstring;
         ``tool_length`` is ignored here)."""
@@ -113,7 +113,7 @@ class ChainReadings:
 
     measures_machined_parts = False
 
-    def tool_frames(self, q: Any, *, tool_length: Any = None
+    def tool_readings(self, q: Any, *, tool_length: Any = None
                     ) -> tuple[np.ndarray, np.ndarray]:
         """``(point (N, 3), rotation (N, 3))`` at ``q (n,)``/``(N, n)`` with the tool
         ``tool_length`` (m) along the tool axis (module docstring)."""

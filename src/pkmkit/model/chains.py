@@ -40,6 +40,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -177,6 +178,9 @@ class JointChainModel:
         characteristic_length: m, scales the rotation residuals of the closures.
         defect_index: names and kinds of the defect coordinates.
     """
+
+    #: The model indexes its own defects (:attr:`defect_index`, on its elements' invariants).
+    owns_defect_index: ClassVar[bool] = True
 
     elements: tuple[ElementSpec, ...]
     frames: np.ndarray

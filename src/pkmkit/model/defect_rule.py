@@ -35,8 +35,9 @@ from pkmkit.exceptions import ParameterError
 
 
 def is_chain(machine) -> bool:
-    """True for a joint-chain machine (its model indexes its own defects)."""
-    return hasattr(machine.model, "defect_index")
+    """True for a joint-chain machine: its model indexes its own defects (the model's declared
+    ``owns_defect_index``)."""
+    return machine.model.owns_defect_index
 
 
 def nominal_model(machine):

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -142,6 +143,10 @@ class RodModel:
             of a built-in kind before its defects (its parameter vector keeps the kind's
             names), else None.
     """
+
+    #: The model does not index its own defects: their index is derived from its nominal
+    #: geometry (:func:`pkmkit.model.rod_defects.rod_defect_index`).
+    owns_defect_index: ClassVar[bool] = False
 
     dims: int
     pose_names: tuple[str, ...]
