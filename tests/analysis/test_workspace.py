@@ -420,3 +420,19 @@ def test_faces_reached_counts_the_layers_next_to_each_face():
     feasible[0, 0, 5] = True
     assert WorkspaceMap.faces_reached(view) == ["x-", "y-", "z+"]
     assert WorkspaceMap.faces_reached(view, 2) == ["x-", "y-", "y+", "z+"]
+
+
+def test_feasible_set_alone_skips_the_inscribed_box_and_keeps_every_mask():
+    """``inscribed=False`` (the command sizing its box) gives the same masks and feasible set
+    as the full map, without the inscribed box and its dense check."""
+    m = pkmkit.machine("orthoglide")
+    grid = make_grid([-0.25] * 3, [0.2] * 3, free=(0, 1, 2), base=np.zeros(3),
+                     names=("x", "y", "z"), resolution=9)
+    full = compute_workspace(m, grid, Criteria(bounds=(0.5, 2.0)))
+    alone = compute_workspace(m, grid, Criteria(bounds=(0.5, 2.0)), inscribed=False)
+    assert full.inscribed is not None and full.inscribed_check is not None
+    assert alone.inscribed is None and alone.inscribed_check is None
+    assert np.array_equal(alone.feasible, full.feasible) and alone.feasible.any()
+    for name, mask in full.masks.items():
+        assert np.array_equal(alone.masks[name], mask)
+    assert alone.faces_reached(2) == full.faces_reached(2)
