@@ -564,7 +564,7 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
             unit = a / dist[:, :, None]
             unit[:, :, 3:] /= length
             sv_a = np.full((size, 6), np.nan)
-            sv_a[ok] = np.linalg.svd(unit[ok], compute_uv=False)[:, :6]
+            sv_a[ok] = self._singular_values(unit[ok])[:, :6]
             parallel = sv_a[:, -1] / sv_a[:, 0]
             speed = self._base_joint_speeds(qb)
             strut = self.model.rod_kind == STRUT

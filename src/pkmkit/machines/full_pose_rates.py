@@ -14,6 +14,7 @@ from pkmkit.machines.results import (
     JacobianRates,
 )
 from pkmkit.model.rods import STRUT
+from pkmkit.numerics.linalg import small_singular_values
 
 if TYPE_CHECKING:
     from pkmkit.machines.full_pose import FullPoseJacobians
@@ -129,12 +130,9 @@ class FullPoseRates:
 
     @staticmethod
     def _singular_values(mat: np.ndarray) -> np.ndarray:
-        k = min(mat.shape[1], mat.shape[2])
-        out = np.full((mat.shape[0], k), np.nan)
-        ok = np.isfinite(mat).all(axis=(1, 2))
-        if ok.any():
-            out[ok] = np.linalg.svd(mat[ok], compute_uv=False)
-        return out
+        """``(N, min(r, c))`` singular values of ``mat (N, r, c)`` (NaN rows where it holds NaN):
+        :func:`~pkmkit.numerics.linalg.small_singular_values`."""
+        return small_singular_values(mat)
 
     def _base_joint_speeds(self, q: np.ndarray) -> np.ndarray:
         """``|∂a_j/∂q|`` ``(N, m)`` (1 for struts, whose base joints do not move)."""
