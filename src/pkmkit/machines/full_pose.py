@@ -39,7 +39,7 @@ from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse
 from pkmkit.machines.full_pose_position import PositionInverse, _stroke_fields
-from pkmkit.machines.full_pose_rates import FullPoseRates
+from pkmkit.machines.full_pose_rates import FullPoseRates, rod_b_pinv
 from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
 from pkmkit.machines.machine import (
     HOME_TOL,
@@ -592,7 +592,7 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
             j_inv = np.full((size, n, 6), np.nan)
             good = ok & ~at_parallel
             if good.any():
-                j_inv[good] = np.linalg.pinv(b[good]) @ a[good]
+                j_inv[good] = rod_b_pinv(b[good]) @ a[good]
         det_b = np.full(size, np.nan)
         if m == n and ok.any():
             det_b[ok] = np.linalg.det(b[ok])
