@@ -252,9 +252,9 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     map's ``inscribed`` and ``inscribed_check`` are None), e.g. to size the region studied
     from where the workspace reaches. With ``refine=True`` the inscribed box found on the grid
     is refined in its centre and side to 10⁻⁴ of the side (:func:`refine_box`), which removes
-    the grid's under-estimate (up to two
-    steps) and its centring on grid points. ``scheduler``: evaluate the grid on Dask (see
-    :func:`evaluate_grid`); the rest runs here."""
+    the grid's under-estimate (up to two steps) and its centring on grid points.
+    ``scheduler``: evaluate the grid on Dask (see :func:`evaluate_grid`); the rest runs
+    here."""
     criteria = criteria or Criteria()
     evaluation = evaluate_grid(machine, grid, criteria, scheduler=scheduler)
     shape = grid.shape

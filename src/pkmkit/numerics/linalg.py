@@ -64,9 +64,9 @@ def small_singular_values(m: np.ndarray) -> np.ndarray:
     Jacobians…): ``(N, min(r, c))``, NaN rows for matrices holding NaN or inf.
 
     Large stacks (:func:`pkmkit.numerics.jit.use_compiled`) go through the compiled one-sided
-    Jacobi kernel of :mod:`pkmkit.numerics.svd_kernel` (an order of magnitude faster than
-    LAPACK on tiny matrices, spread over threads), small ones through LAPACK; both agree to a
-    few units of the last place."""
+    Jacobi kernel of :mod:`pkmkit.numerics.svd_kernel` (≈ 2× faster than LAPACK on 6×6
+    matrices, 5× on 3×6, spread over threads), small ones through LAPACK; both agree to
+    ~1e-15 of the largest singular value."""
     from pkmkit.numerics import jit
 
     m = np.asarray(m, dtype=float)
