@@ -420,3 +420,50 @@ def test_faces_reached_counts_the_layers_next_to_each_face():
     feasible[0, 0, 5] = True
     assert WorkspaceMap.faces_reached(view) == ["x-", "y-", "z+"]
     assert WorkspaceMap.faces_reached(view, 2) == ["x-", "y-", "y+", "z+"]
+
+
+def test_feasible_set_alone_skips_the_inscribed_box_and_keeps_every_mask():
+    """``inscribed=False`` (the command sizing its box) gives the same masks and feasible set
+    as the full map, without the inscribed box and its dense check."""
+    m = pkmkit.machine("orthoglide")
+    grid = make_grid([-0.25] * 3, [0.2] * 3, free=(0, 1, 2), base=np.zeros(3),
+                     names=("x", "y", "z"), resolution=9)
+    full = compute_workspace(m, grid, Criteria(bounds=(0.5, 2.0)))
+    alone = compute_workspace(m, grid, Criteria(bounds=(0.5, 2.0)), inscribed=False)
+    assert full.inscribed is not None and full.inscribed_check is not None
+    assert alone.inscribed is None and alone.inscribed_check is None
+    assert np.array_equal(alone.feasible, full.feasible) and alone.feasible.any()
+    for name, mask in full.masks.items():
+        assert np.array_equal(alone.masks[name], mask)
+    assert alone.faces_reached(2) == full.faces_reached(2)
+
+
+def test_position_controlled_module_solves_its_inverse_once_per_evaluation(monkeypatch):
+    """A Verne-type module's velocity model is taken at the complete poses its inverse model
+    found: evaluating criteria solves the (iterative) inverse model once, not again inside
+    the velocity model, with the same masks and factors as the velocity model of the
+    positions."""
+    from pkmkit.analysis.criteria import evaluate_poses
+    from pkmkit.analysis.region_check import criteria_slack
+    from pkmkit.machines.full_pose import FullPoseMachine
+
+    m = pkmkit.machine("verne")
+    points = np.random.default_rng(4).uniform(-0.6, 0.6, size=(300, 3))
+    calls = []
+    solve = FullPoseMachine._ik_position
+
+    def counted(self, arr, *args, **kwargs):
+        calls.append(len(arr))
+        return solve(self, arr, *args, **kwargs)
+
+    monkeypatch.setattr(FullPoseMachine, "_ik_position", counted)
+    ev = evaluate_poses(m, points, Criteria(bounds=(0.3, 3.0)))
+    assert calls == [300]
+    calls.clear()
+    criteria_slack(m, points, Criteria(bounds=(0.3, 3.0)), 1.0)
+    assert calls == [300]
+    jac = m.jacobian(points)
+    reach = ev.masks["reachable"]
+    assert 0 < reach.sum() < len(points)
+    np.testing.assert_array_equal(ev.factors[reach], jac.singular_values[reach])
+    np.testing.assert_array_equal(ev.condition[reach], jac.condition[reach])

@@ -426,3 +426,24 @@ def test_fk_batch_flags_a_row_of_1e308_and_keeps_the_others(name):
     res = m.fk(np.stack([q_home, bad]), full_output=True)
     assert res.status.tolist() == [Status.OK, Status.INVALID_INPUT]
     np.testing.assert_allclose(res.pose[0], m.home_pose, atol=1e-9)
+
+
+def test_pseudo_inverse_of_rod_b_matches_lapack_with_its_cutoff():
+    """B⁺ of a rod machine's B (one entry per row, in its actuator's column) in closed form is
+    np.linalg.pinv's, a column of zeros (an actuator whose rods are all at a serial
+    singularity) included; and the velocity model's J⁻¹ = B⁺A with it."""
+    from pkmkit.machines.full_pose_rates import rod_b_pinv
+
+    rng = np.random.default_rng(11)
+    for name, rods, actuators in (("gough-stewart", 6, 6), ("verne", 6, 3)):
+        m = pkmkit.machine(name)
+        b = np.zeros((40, rods, actuators))
+        b[:, np.arange(rods), m.model.rod_actuator] = rng.normal(size=(40, rods))
+        b[3, :, 0] = 0.0
+        b[5, m.model.rod_actuator == 1, 1] = 1e-17  # below the cutoff: treated as zero
+        np.testing.assert_allclose(rod_b_pinv(b), np.linalg.pinv(b), rtol=1e-13, atol=1e-15)
+        assert not rod_b_pinv(b)[3, 0].any() and not rod_b_pinv(b)[5, 1].any()
+        x = m.home_pose if name == "gough-stewart" else m.home_pose[:3]
+        jac = m.jacobian(np.array([x, x]))
+        np.testing.assert_allclose(jac.J_inv, np.linalg.pinv(jac.B) @ jac.A, rtol=1e-13,
+                                   atol=1e-15)

@@ -249,3 +249,32 @@ def test_a_machine_file_in_mm_without_units_is_refused_with_a_hint(tmp_path):
     with pytest.raises((MachineFileError, ParameterError),
                        match=r"q1 \(leg 1\) = 1000 m, 998\.4 m beyond its stroke .*did you mean"):
         load(path)
+
+
+def test_chain_stroke_violations_name_the_first_joint_of_each_row_as_the_one_row_message():
+    """The batched messages of a joint chain (one pass over the bad rows) are the one-joint
+    message of each row's first offending joint, below or beyond, degrees or mm."""
+    from pkmkit.machines.chain_checks import stroke_message, stroke_violations
+
+    m = machine("tripteor-x7")
+    model = m.model
+    joints = np.flatnonzero(model.loop_variables | model.actuated)
+    rng = np.random.default_rng(5)
+    lo, hi = model.q_min[joints], model.q_max[joints]
+    finite = (np.abs(lo) < 1e3) & (np.abs(hi) < 1e3)
+    span = np.where(finite, np.clip(hi, -1e3, 1e3) - np.clip(lo, -1e3, 1e3), 1.0)
+    mid = np.where(finite, 0.5 * (np.clip(lo, -1e3, 1e3) + np.clip(hi, -1e3, 1e3)), 0.0)
+    values = np.tile(m.home_values, (60, 1))
+    values[:, joints] = mid + span * rng.uniform(-0.8, 0.8, size=(60, joints.size))
+    rows = np.ones(60, dtype=bool)
+    rows[:5] = False
+    bad, texts = stroke_violations(model, values, joints, rows)
+    assert 10 < bad.sum() < 55 and not bad[:5].any()
+    assert any("below" in t for t in texts) and any("beyond" in t for t in texts)
+    for i in range(60):
+        if not bad[i]:
+            assert texts[i] == ""
+            continue
+        excess = signed_excess(values[i:i + 1, joints], lo, hi)[0]
+        k = int(np.flatnonzero(excess)[0])
+        assert texts[i] == stroke_message(model, int(joints[k]), float(values[i, joints[k]]))

@@ -225,7 +225,7 @@ def _evaluate_kinematics(machine: Machine, points: np.ndarray, criteria: Criteri
         inv = machine.ik(points, full_output=True)
     q = np.atleast_2d(inv.q)
     reachable = np.atleast_1d(inv.status == Status.OK)
-    jac = machine.jacobian(points, q=q, tol=criteria.tol)
+    jac = machine.jacobian(solved_poses(points, inv), q=q, tol=criteria.tol)
     sv = jac.singular_values
     with np.errstate(invalid="ignore"):
         if criteria.strokes and criteria.q_limits is None and inv.out_of_stroke is not None:
@@ -243,6 +243,17 @@ def _evaluate_kinematics(machine: Machine, points: np.ndarray, criteria: Criteri
     masks = {"reachable": reachable, "strokes": strokes, "bounds": bounds,
              "condition": condition, "mode": mode}
     return PoseEvaluation(q=q, factors=sv, condition=jac.condition, masks=masks)
+
+
+def solved_poses(points: np.ndarray, inv: Any) -> np.ndarray:
+    """The poses to take a velocity model at after the inverse model ``inv`` of ``points``:
+    the complete poses it found where ``points`` are positions of a machine whose rods set its
+    orientation (a Verne-type module: the velocity model would otherwise solve the inverse
+    model again), else ``points``."""
+    pose = getattr(inv, "pose", None)
+    if pose is not None and np.ndim(pose) == 2 and np.shape(pose)[1] != np.shape(points)[-1]:
+        return np.asarray(pose)
+    return points
 
 
 def study_length(machine: Machine) -> float:

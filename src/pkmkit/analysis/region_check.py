@@ -10,7 +10,13 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.analysis.criteria import STIFFNESS_MASK, Criteria, evaluate_poses, study_length
+from pkmkit.analysis.criteria import (
+    STIFFNESS_MASK,
+    Criteria,
+    evaluate_poses,
+    solved_poses,
+    study_length,
+)
 from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.analysis.grids import Grid, make_grid
 from pkmkit.exceptions import InputError
@@ -51,7 +57,7 @@ def criteria_slack(machine: Machine, points: np.ndarray, criteria: Criteria,
     inv = machine.ik(points, full_output=True)
     q = inv.q
     reach = -np.max(inv.shortfall, axis=1) / length
-    jac = machine.jacobian(points, q=q, tol=criteria.tol)
+    jac = machine.jacobian(solved_poses(points, inv), q=q, tol=criteria.tol)
     parts = [reach]
     lo_q, hi_q = criteria.limits(machine)
     with np.errstate(invalid="ignore"):

@@ -244,13 +244,17 @@ class WorkspaceMap:
 
 
 def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = None, *,
-                      refine: bool = False, scheduler: Any = None) -> WorkspaceMap:
+                      refine: bool = False, scheduler: Any = None,
+                      inscribed: bool = True) -> WorkspaceMap:
     """Masks, feasible set and largest inscribed square/cube of ``machine`` over ``grid``.
 
-    With ``refine=True`` the inscribed box found on the grid is refined in its centre and side
-    to 10⁻⁴ of the side (:func:`refine_box`), which removes the grid's under-estimate (up to two
-    steps) and its centring on grid points. ``scheduler``: evaluate the grid on Dask (see
-    :func:`evaluate_grid`); the rest runs here."""
+    ``inscribed=False`` stops at the feasible set (no inscribed box, no dense check of it: the
+    map's ``inscribed`` and ``inscribed_check`` are None), e.g. to size the region studied
+    from where the workspace reaches. With ``refine=True`` the inscribed box found on the grid
+    is refined in its centre and side to 10⁻⁴ of the side (:func:`refine_box`), which removes
+    the grid's under-estimate (up to two steps) and its centring on grid points.
+    ``scheduler``: evaluate the grid on Dask (see :func:`evaluate_grid`); the rest runs
+    here."""
     criteria = criteria or Criteria()
     evaluation = evaluate_grid(machine, grid, criteria, scheduler=scheduler)
     shape = grid.shape
@@ -259,7 +263,7 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     reference = "all parts"
     if criteria.connected:
         feasible, reference = _connected_part(feasible, grid, machine.home_pose)
-    box = largest_inscribed_box(feasible, grid)
+    box = largest_inscribed_box(feasible, grid) if inscribed else None
     # criteria through a numerical inverse (joint chains) have no smooth slack: grid box only
     if refine and box is not None and box.side > 0 and machine.closed_form_inverse:
         box = refine_box(machine, box, criteria, grid)

@@ -93,20 +93,35 @@ def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.
     outside = (signed_excess(sub, lo, hi) != 0) & rows[:, None]
     bad = outside.any(axis=1)
     messages = [""] * n
-    for i in np.flatnonzero(bad):
-        k = int(np.flatnonzero(outside[i])[0])
-        messages[i] = stroke_message(model, int(variables[k]), float(sub[i, k]))
+    rows_bad = np.flatnonzero(bad)
+    if not rows_bad.size:
+        return bad, messages
+    # the first offending joint of each bad row, its value and excess, in one pass
+    first = np.argmax(outside[rows_bad], axis=1)
+    found = sub[rows_bad, first]
+    excess = signed_excess(sub[rows_bad], lo, hi)[np.arange(rows_bad.size), first]
+    units = {int(v): _unit(model, int(v)) for v in np.unique(variables[first])}
+    for i, k, value, over in zip(rows_bad.tolist(), first.tolist(), found.tolist(),
+                                 excess.tolist(), strict=True):
+        variable = int(variables[k])
+        messages[i] = _stroke_text(model, variable, value, over, units[variable])
     return bad, messages
 
 
 def stroke_message(model: JointChainModel, variable: int, value: float) -> str:
     """``"Q1 = 1200 mm is beyond its stroke [975, 995] mm by 205 mm"`` (degrees for
     revolutes)."""
-    scale, unit = _unit(model, variable)
-    lo, hi = model.q_min[variable] * scale, model.q_max[variable] * scale
-    side = "below" if value < model.q_min[variable] else "beyond"
     over = float(signed_excess(np.array([[value]]), model.q_min[variable:variable + 1],
                                model.q_max[variable:variable + 1])[0, 0])
+    return _stroke_text(model, variable, value, over, _unit(model, variable))
+
+
+def _stroke_text(model: JointChainModel, variable: int, value: float, over: float,
+                 unit_of: tuple[float, str]) -> str:
+    """:func:`stroke_message` from the joint's excess ``over`` and display unit."""
+    scale, unit = unit_of
+    lo, hi = model.q_min[variable] * scale, model.q_max[variable] * scale
+    side = "below" if value < model.q_min[variable] else "beyond"
     return (f"{model.variables[variable]} = {value * scale:.6g}{unit} is {side} its stroke "
             f"[{lo:.6g}, {hi:.6g}]{unit} by {abs(over) * scale:.6g}{unit}")
 

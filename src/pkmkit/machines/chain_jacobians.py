@@ -18,6 +18,7 @@ from pkmkit.machines.common import _checked_batch
 from pkmkit.machines.results import VelocityModel
 from pkmkit.model.chains import FIXED
 from pkmkit.numerics.arrays import as_batch
+from pkmkit.numerics.linalg import small_singular_values
 from pkmkit.solve.chains import (
     closure,
     tool_frame,
@@ -222,8 +223,8 @@ class ChainVelocity:
         du = np.full((n, cu.shape[2], len(loop_act)), np.nan)
         rank = np.zeros(n, dtype=int)
         if closed.any():
-            du[closed] = -np.linalg.pinv(cu[closed], rcond=RANK_RCOND) @ cq[closed]
-            sv_c = np.linalg.svd(cu[closed], compute_uv=False)
+            pinv, sv_c = _pinv_and_singular_values(cu[closed], RANK_RCOND)
+            du[closed] = -pinv @ cq[closed]
             rank[closed] = (sv_c > RANK_RCOND * sv_c[:, :1]).sum(axis=1)
         expected = self._expected_rank()
         ratio = np.full(n, np.nan)
@@ -251,10 +252,7 @@ class ChainVelocity:
                                ).transpose(0, 2, 1)
         scale = np.array([1, 1, 1, length, length, length], dtype=float)
         j_h = jac * scale[None, :, None]
-        ok = np.isfinite(j_h).all(axis=(1, 2))
-        sv = np.full((n, min(6, self.n_actuators)), np.nan)
-        if ok.any():
-            sv[ok] = np.linalg.svd(j_h[ok], compute_uv=False)
+        sv = small_singular_values(j_h)  # NaN rows where j_h is not finite
         with np.errstate(divide="ignore", invalid="ignore"):
             condition = sv[:, 0] / sv[:, -1]
         passive_rates = np.zeros((n, len(self._passive), self.n_actuators))
@@ -319,3 +317,18 @@ class ChainVelocity:
             mobility=mobility, hyperstatism=6 * loops - freedoms + mobility,
             grubler_mobility=6 * (bodies - 1 - len(joints)) + freedoms,
             rank_hyperstatism=full.shape[0] - rank)
+
+
+def _pinv_and_singular_values(a: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray]:
+    """``np.linalg.pinv(a, rcond=rcond)`` of a stack ``a (N, r, c)`` (the same arithmetic, so
+    the same bits) and the singular values ``(N, min(r, c))`` of its one SVD, which the rank
+    and the singularity measure of a closure need too (a second SVD of the same matrices
+    cost as much)."""
+    u, s, vt = np.linalg.svd(a, full_matrices=False)
+    cutoff = rcond * np.amax(s, axis=-1, keepdims=True)
+    large = s > cutoff
+    inverse = np.divide(1, s, where=large, out=s.copy())
+    inverse[~large] = 0
+    pinv = np.matmul(np.swapaxes(vt, -1, -2), np.multiply(inverse[..., None],
+                                                        np.swapaxes(u, -1, -2)))
+    return pinv, s

@@ -41,7 +41,7 @@ from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse
 from pkmkit.machines.full_pose_position import PositionInverse, _stroke_fields
-from pkmkit.machines.full_pose_rates import FullPoseRates
+from pkmkit.machines.full_pose_rates import FullPoseRates, rod_b_pinv
 from pkmkit.machines.inverse_rows import RodInverseRows
 from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
 from pkmkit.machines.machine import (
@@ -570,7 +570,7 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
             unit = a / dist[:, :, None]
             unit[:, :, 3:] /= length
             sv_a = np.full((size, 6), np.nan)
-            sv_a[ok] = np.linalg.svd(unit[ok], compute_uv=False)[:, :6]
+            sv_a[ok] = self._singular_values(unit[ok])[:, :6]
             parallel = sv_a[:, -1] / sv_a[:, 0]
             speed = self._base_joint_speeds(qb)
             strut = self.model.rod_kind == STRUT
@@ -598,7 +598,7 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
             j_inv = np.full((size, n, 6), np.nan)
             good = ok & ~at_parallel
             if good.any():
-                j_inv[good] = np.linalg.pinv(b[good]) @ a[good]
+                j_inv[good] = rod_b_pinv(b[good]) @ a[good]
         det_b = np.full(size, np.nan)
         if m == n and ok.any():
             det_b[ok] = np.linalg.det(b[ok])

@@ -14,6 +14,7 @@ from pkmkit.machines.results import (
     JacobianRates,
 )
 from pkmkit.model.rods import STRUT
+from pkmkit.numerics.linalg import small_singular_values
 
 if TYPE_CHECKING:
     from pkmkit.machines.full_pose import FullPoseJacobians
@@ -129,12 +130,9 @@ class FullPoseRates:
 
     @staticmethod
     def _singular_values(mat: np.ndarray) -> np.ndarray:
-        k = min(mat.shape[1], mat.shape[2])
-        out = np.full((mat.shape[0], k), np.nan)
-        ok = np.isfinite(mat).all(axis=(1, 2))
-        if ok.any():
-            out[ok] = np.linalg.svd(mat[ok], compute_uv=False)
-        return out
+        """``(N, min(r, c))`` singular values of ``mat (N, r, c)`` (NaN rows where it holds NaN):
+        :func:`~pkmkit.numerics.linalg.small_singular_values`."""
+        return small_singular_values(mat)
 
     def _base_joint_speeds(self, q: np.ndarray) -> np.ndarray:
         """``|∂a_j/∂q|`` ``(N, m)`` (1 for struts, whose base joints do not move)."""
@@ -144,3 +142,17 @@ class FullPoseRates:
         speed = np.linalg.norm(rates, axis=0).T
         speed[:, self.model.rod_kind == STRUT] = 1.0
         return speed
+
+
+def rod_b_pinv(b: np.ndarray) -> np.ndarray:
+    """``B⁺ (N, n, m)`` of a rod machine's ``B (N, m, n)``, whose row j has one entry, in
+    the column of rod j's actuator: the columns have disjoint supports, so BᵀB is diagonal,
+    the singular values of B are its column norms and ``B⁺ = (BᵀB)⁺Bᵀ`` — entry (a, j) is
+    ``B[j, a] / |B[:, a]|²``, 0 for a column below ``np.linalg.pinv``'s cutoff (1e-15 of the
+    largest column norm: an actuator whose rods are all at a serial singularity). The same
+    matrix as ``np.linalg.pinv(b)`` to rounding, without an SVD per row."""
+    squares = np.einsum("kja,kja->ka", b, b)
+    norms = np.sqrt(squares)
+    large = norms > 1e-15 * norms.max(axis=1, keepdims=True)
+    inverse = np.divide(1.0, squares, where=large, out=np.zeros_like(squares))
+    return (b * inverse[:, None, :]).transpose(0, 2, 1)

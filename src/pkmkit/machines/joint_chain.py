@@ -414,13 +414,15 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         if strokes != "ignore":
             for variables, rows in ((self._actuated, valid), (self._passive, usable)):
                 bad, texts = stroke_violations(model, values, variables, rows & ~out_of_stroke)
-                for i in np.flatnonzero(bad):
+                rows_bad = np.flatnonzero(bad)
+                sub = values[rows_bad][:, variables]
+                first = np.argmax(signed_excess(sub, model.q_min[variables],
+                                                model.q_max[variables]) != 0, axis=1)
+                for i, k, value in zip(rows_bad.tolist(), first.tolist(),
+                                       sub[np.arange(rows_bad.size), first].tolist(),
+                                       strict=True):
                     parts[i].append(texts[i])
-                    sub = values[i:i + 1, variables]
-                    k = int(np.flatnonzero(signed_excess(sub, model.q_min[variables],
-                                                         model.q_max[variables])[0])[0])
-                    sub = sub[0]
-                    first_violation[int(i)] = (int(variables[k]), float(sub[k]))
+                    first_violation[i] = (int(variables[k]), value)
                 out_of_stroke |= bad
             if strokes == "refuse":
                 status[out_of_stroke] = Status.OUT_OF_STROKE

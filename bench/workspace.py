@@ -1,0 +1,89 @@
+"""Where a default workspace study spends its time (issue 22 §3): ``pkmkit workspace MACHINE``
+run in this process, with the CPU time of each stage and the rows sent to the inverse and
+velocity models by each.
+
+Stages: ``enclosing_frame`` (the default box widened on coarse grids until the workspace fits),
+``evaluate_grid`` (the criteria on the study grid), ``refine_box`` (the inscribed cube refined
+beyond the grid: SLSQP on a 25³ lattice, finite-difference gradients), ``check_region`` (the
+refined cube checked densely, with its actuator extremes refined by ``_q_extremes``).
+
+Run: ``python bench/workspace.py gough-stewart verne tripteor-x7`` (each study once: they take
+seconds to minutes; the machine is shared, so compare CPU seconds, not wall time). The
+command's own output is printed last, to compare with the documented figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import os
+import time
+from collections.abc import Callable
+from typing import Any
+
+from click.testing import CliRunner
+
+import pkmkit
+import pkmkit.analysis.region_check as region_check
+import pkmkit.analysis.workspace as workspace
+import pkmkit.cli.analysis_cmds as analysis_cmds
+from pkmkit.cli.main import cli
+
+STAGES = ("enclosing_frame", "evaluate_grid", "refine_box", "check_region", "_q_extremes")
+
+
+def _timed(module: Any, name: str, seconds: collections.Counter, calls: collections.Counter,
+           label: str) -> None:
+    """Replace ``module.name`` by a wrapper adding its CPU time to ``seconds[label]``."""
+    function: Callable = getattr(module, name)
+
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        start = time.process_time()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            seconds[label] += time.process_time() - start
+            calls[label] += 1
+
+    setattr(module, name, wrapper)
+
+
+SECONDS: collections.Counter = collections.Counter()
+CALLS: collections.Counter = collections.Counter()
+
+
+def study(machine: str, extra: list[str]) -> None:
+    """One ``pkmkit workspace`` study, its CPU time per stage printed."""
+    SECONDS.clear()
+    CALLS.clear()
+    start, wall = time.process_time(), time.perf_counter()
+    result = CliRunner().invoke(cli, ["workspace", machine, *extra])
+    total, elapsed = time.process_time() - start, time.perf_counter() - wall
+    print(f"{machine}: {total:.2f} s of CPU ({elapsed:.1f} s wall), load average "
+          f"{os.getloadavg()[0]:.2f}")
+    for name in STAGES:
+        if CALLS[name]:
+            print(f"  {name:16s} {SECONDS[name]:7.2f} s  ({CALLS[name]} calls)")
+    print("  " + result.output.replace("\n", "\n  ").rstrip())
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("machines", nargs="*", default=["gough-stewart"])
+    parser.add_argument("--args", default="", help="extra workspace arguments, e.g. "
+                        "'--no-strokes --resolution 31'")
+    options = parser.parse_args()
+    print(f"pkmkit {pkmkit.__version__} (stages nest: check_region holds _q_extremes, "
+          "refine_box and enclosing_frame hold grid evaluations)")
+    for module, name in ((analysis_cmds, "enclosing_frame"), (workspace, "evaluate_grid"),
+                         (workspace, "refine_box"), (workspace, "check_region"),
+                         (analysis_cmds, "check_region"), (region_check, "_q_extremes")):
+        _timed(module, name, SECONDS, CALLS, name)
+    for machine in options.machines:
+        study(machine, options.args.split())
+
+
+if __name__ == "__main__":
+    main()
