@@ -160,13 +160,13 @@ def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
         scaled = _scaled(data, machine, factor, whole)
         if whole:
             identify.check_measurements(machine, scaled)
-        return make_model(machine, scaled, identify._sigma_rows(data.kind, machine,
+        return make_model(machine, scaled, identify.sigma_rows(data.kind, machine,
                                                                 result.sigma),
                           registration=None, identify_frame=identify_frame)
 
     def rms_of(model, setup) -> float:
         r, _, _ = model.residuals(machine, setup, jacobian=False)
-        return identify._stats(model, r).rms if np.isfinite(r).all() else np.inf
+        return identify.residual_stats(model, r).rms if np.isfinite(r).all() else np.inf
 
     # a machined part's commanded paths are the program's, sampled at a fixed step: scaled
     # they would be sampled a million times finer; only its readings are tried
@@ -187,7 +187,7 @@ def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
         if not np.isfinite(rms0):
             continue
         try:
-            rms = rms_of(model, identify._fit_setup(machine, model))
+            rms = rms_of(model, identify.fit_setup(machine, model))
         except (PkmError, np.linalg.LinAlgError, ValueError):
             continue
         if best is None or rms < best[0]:
@@ -196,7 +196,7 @@ def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
         return None
     try:
         zero = model_of(0.0, False)
-        rms_zero = rms_of(zero, identify._fit_setup(machine, zero))
+        rms_zero = rms_of(zero, identify.fit_setup(machine, zero))
     except (PkmError, np.linalg.LinAlgError, ValueError):
         rms_zero = np.inf
     if not best[0] * 10.0 <= rms_zero:
