@@ -178,3 +178,20 @@ def test_parameters_along_an_undetermined_direction_are_flagged():
     j = rng.normal(size=(30, 3))
     j[:, 2] = 0.0  # a column with no effect: only that parameter
     np.testing.assert_array_equal(_undetermined(j), [False, False, True])
+
+
+def test_an_identification_that_did_not_converge_fails_with_its_reason():
+    """The convergence check appears only when the identification did not converge, and
+    always fails; without an alternative that explains, the likely cause is named
+    ``diverged`` (not the noise: the residual is the nominal machine's)."""
+    assert [c.name for c in _judge(100.0, 100).checks] == ["noise", "condition", "magnitude"]
+    v = judge(chi2=1e9, dof=100, sigma=1e-5, condition=100.0, names=(), values=np.zeros(0),
+              units=(), tolerances=np.zeros(0), machine_size=1.0, rms=0.3,
+              convergence="the identification did not converge (why)")
+    assert v.headline() == "verdict: FAILED (noise, convergence)"
+    assert v.checks[-1].name == "convergence" and "(why)" in v.checks[-1].reason
+    assert [c.cause for c in v.causes] == ["diverged"]
+    v = judge(chi2=100.0, dof=100, sigma=1e-5, condition=100.0, names=(), values=np.zeros(0),
+              units=(), tolerances=np.zeros(0), machine_size=1.0, rms=0.3,
+              convergence="why", alternatives=[Alternative("unit", "inches", rms=1e-3)])
+    assert not v.passed and [c.cause for c in v.causes] == ["unit"]

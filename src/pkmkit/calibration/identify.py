@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.calibration.divergence import divergence_message, unconverged_result
 from pkmkit.calibration.identifiability import (
     RCOND,
     CompatibleDirections,
@@ -52,8 +53,8 @@ from pkmkit.calibration.models import ResidualModel, make_model
 from pkmkit.calibration.registration import Registration
 from pkmkit.calibration.results import (
     CalibrationResult,
-    ResidualStats,
     Validation,
+    residual_stats,
 )
 from pkmkit.calibration.solver import (
     ScaledProblem,
@@ -62,7 +63,12 @@ from pkmkit.calibration.solver import (
     solve_scaled,
 )
 from pkmkit.calibration.uncertainty import Propagation, tool_point_uncertainty
-from pkmkit.exceptions import ConvergenceError, InputError, ParameterError, PkmError
+from pkmkit.exceptions import (
+    IdentificationDivergedError,
+    InputError,
+    ParameterError,
+    PkmError,
+)
 from pkmkit.geometric_errors.blas_threads import one_blas_thread
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
 from pkmkit.machines.strokes import signed_excess, stroke_limits
@@ -130,12 +136,6 @@ def check_measurements(machine, data: MeasurementSet) -> None:
         raise InputError("rows out of stroke: " + "; ".join(bad[:10]) + more)
 
 
-def residual_stats(model: ResidualModel, r: np.ndarray) -> ResidualStats:
-    """The error magnitudes of ``model``'s observations from its residual rows ``r (N, w)``
-    (SI), labelled by the measurement file's rows."""
-    return ResidualStats(model.errors(r), tuple(model.data.labels))
-
-
 def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | None = None,
               parameters: str | Sequence[str] = "auto", frame: Any = None,
               robust: bool = False, prior: bool = False,
@@ -168,7 +168,10 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
         InputError: measurements the machine cannot have produced (rows out of stroke, no
             assembly), too few independent measurements, mismatched kinds.
         ParameterError: unknown parameter names or tolerances.
-        ConvergenceError: the identification diverged.
+        IdentificationDivergedError: the identification did not converge (a
+            :class:`~pkmkit.exceptions.ConvergenceError`); its ``result`` is the nominal
+            machine's fit, which :func:`pkmkit.calibration.calibrate` still judges
+            (:mod:`pkmkit.calibration.divergence`).
     """
     # small dense problems: a multi-threaded BLAS only loses time, and collapses when another
     # process holds a core (docs/benchmarks.md)
@@ -394,12 +397,10 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
         sol = solve_scaled(problem, u, max_iter, start)
         iterations += sol.iterations
         if sol.status not in (Status.OK, Status.INCONSISTENT):
-            if sol.r is not None and not np.isfinite(sol.r).all():
-                _raise_unassembled(model, sol.r, "the machine being identified")
-            raise ConvergenceError(
-                f"the identification diverged ({Status(sol.status).label} after "
-                f"{sol.iterations} iterations); the measurements may not come from this "
-                "machine, or its defects are too large for the starting geometry")
+            message = divergence_message(prep, sol, iterations)
+            raise IdentificationDivergedError(message, result=unconverged_result(
+                prep, machine, data, message, iterations,
+                counts={**_counts(prep, prep.unidentifiable), "identified": 0}))
         u = sol.u
         if not robust:
             break

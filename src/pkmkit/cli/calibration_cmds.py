@@ -375,7 +375,8 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
         written = write_calibration_outputs(result, out_dir,
                                             machine_source=machine_document_path(machine_name),
                                             units=unit, sources=sources,
-                                            machine_file=passed or write_anyway)
+                                            machine_file=(passed or write_anyway)
+                                            and result.converged)
         if result.frame is not None and frame is not None and not isinstance(frame, Registration):
             # an identified or refined frame: reusable by --frame FILE (register's format)
             target = Path(out_dir) / "frame.json"
@@ -387,8 +388,12 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
     else:
         _print_calibration(result, payload, unit)
         if not passed and out_dir:
-            click.echo("  no calibrated machine file written" if not write_anyway else
-                       "  calibrated machine file written anyway (--write-anyway)")
+            click.echo("  calibrated machine file written anyway (--write-anyway)"
+                       if write_anyway and result.converged else
+                       "  no calibrated machine file written" + (
+                           "" if result.converged or not write_anyway else
+                           " (not even with --write-anyway: the identification did not "
+                           "converge)"))
     if not passed:
         sys.exit(3)
 
@@ -432,7 +437,11 @@ def _print_calibration(result, payload: dict, unit: str) -> None:
     click.echo(f"  σ assumed {result.sigma / scale:.3g}, a posteriori "
                f"{result.sigma_posterior / scale:.3g} {unit}; {result.iterations} iterations, "
                f"{result.seconds:.2f} s")
-    click.echo("  identified (value ± std):")
+    if not result.converged:
+        click.echo("  identification did not converge: nothing identified, the residuals "
+                   "are the nominal machine's (set-up fitted)")
+    elif result.names or result.setup_names:
+        click.echo("  identified (value ± std):")
     for n in result.names:
         click.echo(f"    {n:10s} {payload['parameters'][n]:+.6g} ± {payload['std'][n]:.2g} "
                    f"{payload['parameter_units'][n]}")
