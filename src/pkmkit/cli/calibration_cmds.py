@@ -388,12 +388,9 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
     else:
         _print_calibration(result, payload, unit)
         if not passed and out_dir:
-            click.echo("  calibrated machine file written anyway (--write-anyway)"
-                       if write_anyway and result.converged else
-                       "  no calibrated machine file written" + (
-                           "" if result.converged or not write_anyway else
-                           " (not even with --write-anyway: the identification did not "
-                           "converge)"))
+            click.echo("  calibrated machine file written anyway (--write-anyway)" if write_anyway
+                       and result.converged else "  no calibrated machine file written" + (
+                           " (not even with --write-anyway: no convergence)" * write_anyway))
     if not passed:
         sys.exit(3)
 
