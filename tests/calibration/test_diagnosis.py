@@ -57,6 +57,8 @@ def test_an_identification_that_does_not_converge_is_still_judged():
     assert isinstance(info.value, IdentificationDivergedError)
     res = calibrate(m, read, file_unit="mm")
     assert not res.converged and "did not converge" in res.convergence
+    # stopped once the defects went beyond any built machine's (not at the iteration limit)
+    assert "times their tolerance" in res.convergence
     assert res.names == () and not np.any(res.defects) and res.machine is m
     assert res.after.rms == res.before.rms > 0.1  # the nominal machine: 0.5 m off
     failed = [c.name for c in res.verdict.failed]
@@ -64,3 +66,24 @@ def test_an_identification_that_does_not_converge_is_still_judged():
     assert [c.cause for c in res.verdict.causes] == ["unit"]
     payload = res.to_json("mm")
     assert payload["converged"] is False and payload["verdict"]["passed"] is False
+
+
+def test_a_set_up_that_cannot_be_fitted_is_still_judged(monkeypatch):
+    """When even the set-up (here a ball-bar's pivots) cannot be fitted on the nominal
+    machine, the judged call still returns a failed verdict (a ConvergenceError before)."""
+    m = pkmkit.machine("linear-delta")
+    rng = np.random.default_rng(2)
+    data = simulate(m, m, "ballbar", 30, rng)
+
+    def fails(machine, model, max_iter=50):
+        raise ConvergenceError("the ballbar set-up parameters could not be fitted on the "
+                               "machine (not-converged)")
+
+    monkeypatch.setattr(identify, "fit_setup", fails)
+    with pytest.raises(IdentificationDivergedError, match="could not be fitted"):
+        identify.calibrate(m, data)
+    res = calibrate(m, data)
+    assert not res.converged and "could not be fitted" in res.convergence
+    assert res.names == () and res.after.per_pose.shape == (30,)
+    assert "convergence" in [c.name for c in res.verdict.failed]
+    assert res.verdict.causes  # a named likely cause, never an empty red verdict

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.calibration import identify
+from pkmkit.calibration.divergence import machine_size
 from pkmkit.calibration.results import residual_stats
 from pkmkit.calibration.verdict import Alternative, Verdict, judge
 from pkmkit.exceptions import IdentificationDivergedError, PkmError
@@ -67,13 +68,6 @@ def calibrate(machine, data: MeasurementSet, *, file_unit: str | None = None,
         verdict = judge_calibration(machine, data, result, rerun=keep_weak if prune else None,
                                     file_unit=file_unit)
     return replace(result, verdict=verdict)
-
-
-def machine_size(machine) -> float:
-    """A machine's size (m): the largest of the distances from the origin to the corners of its
-    default region and of that region's diagonal."""
-    lo, hi = (np.asarray(v, dtype=float)[:3] for v in machine.default_box())
-    return float(max(np.linalg.norm(lo), np.linalg.norm(hi), np.linalg.norm(hi - lo)))
 
 
 def judge_calibration(machine, data: MeasurementSet, result, *,

@@ -41,7 +41,12 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.calibration.divergence import divergence_message, unconverged_result
+from pkmkit.calibration.divergence import (
+    divergence_bounds,
+    divergence_message,
+    setup_failure_result,
+    unconverged_result,
+)
 from pkmkit.calibration.identifiability import (
     RCOND,
     CompatibleDirections,
@@ -64,6 +69,7 @@ from pkmkit.calibration.solver import (
 )
 from pkmkit.calibration.uncertainty import Propagation, tool_point_uncertainty
 from pkmkit.exceptions import (
+    ConvergenceError,
     IdentificationDivergedError,
     InputError,
     ParameterError,
@@ -240,7 +246,12 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
     # ---- before: the nominal machine, set-up fitted alone
     r_nom, _, _ = model.residuals(machine, model.setup.initial, jacobian=False)
     _raise_unassembled(model, r_nom, "the nominal machine")
-    setup0 = fit_setup(machine, model)
+    try:
+        setup0 = fit_setup(machine, model)
+    except ConvergenceError as exc:  # readings no placement of the set-up fits: judged too
+        raise IdentificationDivergedError(str(exc), result=setup_failure_result(
+            machine, data, model, str(exc), sigma=sig, frame=registration,
+            candidates=len(candidates), t_start=t_start)) from None
     r_before, jd0, js0 = model.residuals(machine, setup0, jacobian=True)
     _raise_unassembled(model, r_before, "the nominal machine")
 
@@ -317,7 +328,9 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
     problem = ScaledProblem(machine=machine, model=model, basis=basis[:, mach_sel],
                        setup_index=setup_sel, setup_base=setup0.copy(),
                        scale=np.concatenate([cand_tol[mach_sel], model.setup.scale[setup_sel]]),
-                       prior=prior, weights=np.ones(len(data)))
+                       prior=prior, weights=np.ones(len(data)),
+                       bound=divergence_bounds(machine, [dset.units[dset.names.index(
+                           cand_names[i])] for i in mach_sel]))
     u = np.concatenate([np.zeros(mach_sel.size), setup0[setup_sel] / model.setup.scale[
         setup_sel]])
     return _Prepared(problem=problem, u0=u, start=problem.assemble(u, r_before, jd0, js0),

@@ -30,6 +30,9 @@ class ScaledProblem:
     evaluations: int = 0
     _last: tuple | None = None
     progress: Any = None       # a tqdm counter of model evaluations, or None
+    #: (p,) |θ| of each machine unknown (SI) beyond which the identification has diverged
+    #: (an accepted iterate there stops the solve, :class:`Diverged`), or None
+    bound: np.ndarray | None = None
 
     @property
     def n_machine(self) -> int:
@@ -58,6 +61,9 @@ class ScaledProblem:
         self.evaluations += 1
         if self.progress is not None:
             self.progress.update(1)
+        if jacobian and self.bound is not None and np.any(
+                np.abs(u[:self.n_machine] * self.scale[:self.n_machine]) > self.bound):
+            raise Diverged(np.array(u, dtype=float))  # an accepted iterate: linearised here
         delta, setup = self.unpack(u)
         try:
             m = self.machine_at(delta)
@@ -137,7 +143,27 @@ def solve_scaled(problem: ScaledProblem, u0: np.ndarray, max_iter: int,
     2. if the gradient cosines ``|Jᵀr|_j / (‖J_j‖ ‖r‖)`` are not all below
        :data:`COSINE_TOL` (ill-conditioned or exact-fit problems, where a frozen Jacobian
        crawls), :func:`_solve_lm` takes over from there.
+
+    An accepted iterate beyond ``problem.bound`` (defects no built machine has) stops both:
+    status NOT_CONVERGED at that iterate, no residual.
     """
+    try:
+        return _solve_stages(problem, u0, max_iter, start)
+    except Diverged as exc:
+        return Solution(exc.u, problem.evaluations, int(Status.NOT_CONVERGED), None, None, None)
+
+
+class Diverged(Exception):
+    """An accepted iterate (where a Jacobian is evaluated) beyond the problem's bound: the
+    identification walks the defects away (readings no plausible machine fits)."""
+
+    def __init__(self, u: np.ndarray):
+        self.u = u
+        super().__init__("the identification diverged")
+
+
+def _solve_stages(problem: ScaledProblem, u0: np.ndarray, max_iter: int,
+                  start: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> Solution:
     sol = _solve_chord(problem, u0, start, max_iter)
     if sol.status != Status.OK:
         if sol.rw is None:
