@@ -25,11 +25,12 @@ from pkmkit.model.measurement_set import MeasurementSet
 from pkmkit.status import Status
 
 #: An identification has diverged once an accepted iterate holds a length defect beyond this
-#: fraction of the machine's size, or a direction component or angle beyond this many rad
-#: (20 and 10 times the verdict's plausibility bounds: no calibration passing its verdict
-#: goes there).
-DIVERGED_SIZE = 1.0
-DIVERGED_ANGLE = 1.0
+#: many times the machine's size, or a direction component or angle beyond this many rad (a
+#: half-turn). Far beyond the verdict's plausibility bounds (5 % of the size, 0.1 rad) on
+#: purpose: a fit that settles on absurd defects (readings in another frame: metres) still
+#: converges and is judged as such; one that keeps walking them away is stopped.
+DIVERGED_SIZE = 10.0
+DIVERGED_ANGLE = np.pi
 
 
 def machine_size(machine) -> float:
