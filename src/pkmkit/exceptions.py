@@ -119,6 +119,21 @@ class ConvergenceError(PkmError, RuntimeError):
     """The least-squares engine did not converge for a single (non-batched) call."""
 
 
+class IdentificationDivergedError(ConvergenceError):
+    """A calibration's identification did not converge.
+
+    Attributes:
+        result: what is known without it — a calibration result of the nominal machine with its
+            set-up fitted alone, nothing identified, ``converged`` False
+            (:class:`pkmkit.calibration.results.CalibrationResult`) — from which the judged
+            call (:func:`pkmkit.calibration.calibrate`) still gives a verdict; or None.
+    """
+
+    def __init__(self, message: str, result=None):
+        self.result = result
+        super().__init__(message)
+
+
 class OutOfStrokeError(PkmError, ValueError):
     """A joint value lies outside its stroke (joint-chain machines).
 

@@ -70,13 +70,13 @@ def test_exact_readings_have_zero_residual_on_the_true_machine():
         model = make_model(m, data, np.ones(1))
         setup = model.setup.initial
         if kind == "ballbar":  # the true pivots are not the nominal ones: refit
-            from pkmkit.calibration.identify import _fit_setup
+            from pkmkit.calibration.identify import fit_setup
 
-            setup = _fit_setup(true, model)
+            setup = fit_setup(true, model)
         if kind == "height":
-            from pkmkit.calibration.identify import _fit_setup
+            from pkmkit.calibration.identify import fit_setup
 
-            setup = _fit_setup(true, model)
+            setup = fit_setup(true, model)
         r, _, _ = model.residuals(true, setup, jacobian=False)
         assert np.abs(r).max() < 1e-9, kind
         r_nominal, _, _ = model.residuals(m, setup, jacobian=False)

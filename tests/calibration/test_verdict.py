@@ -178,3 +178,50 @@ def test_parameters_along_an_undetermined_direction_are_flagged():
     j = rng.normal(size=(30, 3))
     j[:, 2] = 0.0  # a column with no effect: only that parameter
     np.testing.assert_array_equal(_undetermined(j), [False, False, True])
+
+
+def test_an_identification_that_did_not_converge_fails_with_its_reason():
+    """The convergence check appears only when the identification did not converge, and
+    always fails; without an alternative that explains, the likely cause is named
+    ``diverged`` (not the noise: the residual is the nominal machine's)."""
+    assert [c.name for c in _judge(100.0, 100).checks] == ["noise", "condition", "magnitude"]
+    v = judge(chi2=1e9, dof=100, sigma=1e-5, condition=100.0, names=(), values=np.zeros(0),
+              units=(), tolerances=np.zeros(0), machine_size=1.0, rms=0.3,
+              convergence="the identification did not converge (why)")
+    assert v.headline() == "verdict: FAILED (noise, convergence)"
+    assert v.checks[-1].name == "convergence" and "(why)" in v.checks[-1].reason
+    assert [c.cause for c in v.causes] == ["diverged"]
+    v = judge(chi2=100.0, dof=100, sigma=1e-5, condition=100.0, names=(), values=np.zeros(0),
+              units=(), tolerances=np.zeros(0), machine_size=1.0, rms=0.3,
+              convergence="why", alternatives=[Alternative("unit", "inches", rms=1e-3)])
+    assert not v.passed and [c.cause for c in v.causes] == ["unit"]
+
+
+def test_an_accepted_iterate_beyond_the_bound_stops_the_solve():
+    """The identification's divergence guard: a Jacobian asked beyond ``bound`` (an accepted
+    iterate with defects no built machine has) ends the solve as NOT_CONVERGED there."""
+    from pkmkit.calibration.solver import Diverged, ScaledProblem, solve_scaled
+    from pkmkit.status import Status
+
+    class Line:  # r = θ − 5 (one reading), the optimum beyond a bound of 1
+        sigma = np.array([1.0])
+        data = (0,)
+
+        def residuals(self, machine, setup, *, jacobian):
+            theta = machine
+            return (np.array([[theta - 5.0]]), np.ones((1, 1, 1)) if jacobian else None,
+                    np.zeros((1, 1, 0)) if jacobian else None)
+
+    problem = ScaledProblem(machine=None, model=Line(), basis=np.eye(1),
+                            setup_index=np.zeros(0, dtype=int), setup_base=np.zeros(0),
+                            scale=np.ones(1), prior=False, weights=np.ones(1),
+                            bound=np.array([1.0]))
+    problem.machine_at = lambda delta: float(delta[0])
+    with pytest.raises(Diverged):
+        problem.evaluate(np.array([2.0]), jacobian=True)
+    assert problem.evaluate(np.array([2.0]), jacobian=False)[0] is not None
+    sol = solve_scaled(problem, np.zeros(1), 60)
+    assert sol.status == Status.NOT_CONVERGED and abs(sol.u[0]) > 1.0
+    problem.bound = np.array([10.0])
+    sol = solve_scaled(problem, np.zeros(1), 60)
+    assert sol.status == Status.OK and sol.u[0] == pytest.approx(5.0)

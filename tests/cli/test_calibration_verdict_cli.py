@@ -229,3 +229,34 @@ def test_noise_stated_too_small_is_named_as_such(run, tmp_path):
     assert "--sigma" in v["causes"][0]["message"]
     assert _ok(run("calibrate", "linear-delta", "--measure", "height", "--measurements",
                    tmp_path / "h.csv")).output.count("verdict: PASSED") == 1
+
+
+def test_a_file_in_inches_that_says_mm_is_judged_even_when_nothing_converges(tmp_path):
+    """Readings written in inches in a millimetre file: no plausible machine fits them, the
+    identification does not converge (exit 1 and a traceback-free error before, no verdict);
+    now a red verdict naming inches, exit 3, and no machine file even with --write-anyway."""
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    def run(*args):
+        return CliRunner().invoke(cli, [str(a) for a in args], catch_exceptions=False)
+
+    _ok(run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 30,
+            "--defects", "random", "--seed", 5, "--units", "mm", "--out", tmp_path / "m.csv"))
+    lines = (tmp_path / "m.csv").read_text().splitlines()
+    rows = [line.split(",") for line in lines if line[:1].isdigit() or line[:1] == "-"]
+    assert len(rows) == 30
+    inches = [line for line in lines if not (line[:1].isdigit() or line[:1] == "-")] + [
+        ",".join(r[:3] + [repr(float(v) / 25.4) for v in r[3:6]]) for r in rows]
+    (tmp_path / "in.csv").write_text("\n".join(inches) + "\n")
+    res = run("calibrate", "linear-delta", "--measure", "point", "--measurements",
+              tmp_path / "in.csv", "--out", tmp_path / "cal", "--write-anyway")
+    assert res.exit_code == 3, res.output
+    assert "verdict: FAILED (noise, convergence)" in res.output
+    assert "likely cause (unit)" in res.output and "in in, not mm" in res.output
+    assert "not even with --write-anyway" in res.output
+    assert not (tmp_path / "cal" / "linear-delta-calibrated.toml").exists()
+    saved = json.loads((tmp_path / "cal" / "calibration.json").read_text())
+    assert saved["converged"] is False and saved["files"]["machine"] is None
+    assert "did not converge" in html.unescape((tmp_path / "cal" / "report.html").read_text())

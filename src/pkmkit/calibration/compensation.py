@@ -22,7 +22,9 @@ from pkmkit.exceptions import InputError
 CHUNK = 2000
 
 
-def _chunked(func, x: np.ndarray, progress: bool, label: str) -> np.ndarray:
+def chunked(func, x: np.ndarray, progress: bool, label: str) -> np.ndarray:
+    """``func`` applied to ``x (N, k)`` in chunks of :data:`CHUNK` rows (a progress bar named
+    ``label`` when ``progress`` and more than one chunk), the results concatenated."""
     from tqdm import tqdm
 
     parts = []
@@ -41,7 +43,7 @@ def correct_targets(nominal, identified, targets: Any, *, tool_length: float | N
         InputError: targets the identified machine cannot reach (their rows named).
     """
     x = as_targets(identified, targets)
-    out = _chunked(lambda part: corrected_targets(nominal, identified, part, tool_length), x,
+    out = chunked(lambda part: corrected_targets(nominal, identified, part, tool_length), x,
                    progress, "compensating")
     bad = np.flatnonzero(~np.isfinite(out).all(axis=1))
     if bad.size:
@@ -106,7 +108,7 @@ def correct_table(nominal, identified, targets: Any, *, max_correction: float,
         q = commanded_q(identified, part, tool_length)
         return np.concatenate([reached(nominal, q, tool_length), q], axis=1)
 
-    both = _chunked(command, x, progress, "compensating")
+    both = chunked(command, x, progress, "compensating")
     fixed, q = both[:, :x.shape[1]], both[:, x.shape[1]:x.shape[1] + n]
     size = np.linalg.norm(fixed[:, :3] - x[:, :3], axis=1)
     outside = np.nan_to_num(stroke_excess(identified, q))

@@ -241,7 +241,7 @@ def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
         CorrectionRefused: blocks whose correction exceeds ``max_correction`` or that the
             calibrated machine cannot reach (each with its line and text).
     """
-    from pkmkit.calibration.compensation import _chunked
+    from pkmkit.calibration.compensation import chunked
 
     step = _check_positive(step, "the checking step")
     tolerance = _check_positive(tolerance, "the tolerance")
@@ -275,7 +275,7 @@ def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
         q = commanded_q(identified, part, tool_length)
         return np.concatenate([reached(nominal, q, tool_length)[:, :3], q], axis=1)
 
-    both = _chunked(command, x, progress, "compensating")
+    both = chunked(command, x, progress, "compensating")
     fixed, q = both[:, :3], both[:, 3:3 + n]
     size = np.linalg.norm(fixed - x, axis=1)
     outside = stroke_excess(identified, q)

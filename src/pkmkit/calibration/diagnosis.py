@@ -27,8 +27,10 @@ from typing import Any
 import numpy as np
 
 from pkmkit.calibration import identify
+from pkmkit.calibration.divergence import machine_size
+from pkmkit.calibration.results import residual_stats
 from pkmkit.calibration.verdict import Alternative, Verdict, judge
-from pkmkit.exceptions import PkmError
+from pkmkit.exceptions import IdentificationDivergedError, PkmError
 from pkmkit.model.measurement_set import MeasurementSet
 from pkmkit.model.parameters import LENGTH_UNITS, length_scale
 
@@ -41,14 +43,22 @@ def calibrate(machine, data: MeasurementSet, *, file_unit: str | None = None,
     """:func:`pkmkit.calibration.identify.calibrate` (same arguments) with its verdict as
     ``result.verdict`` (:func:`judge_calibration`; the weak-parameter hypothesis reruns the
     calibration with ``prune=False`` when it applies). This is
-    :func:`pkmkit.calibration.calibrate`.
+    :func:`pkmkit.calibration.calibrate`. An identification that does not converge is judged
+    too (:mod:`pkmkit.calibration.divergence`): the result then has ``converged`` False, the
+    nominal machine's fit and a failed verdict naming the likely cause.
 
     Args:
         file_unit: the length unit the measurement file was read in (messages of the
             verdict's unit hypothesis), or None.
     """
-    result = identify.calibrate(machine, data, **options)
-    prune = options.get("prune", True) and not options.get("prior", False)
+    try:
+        result = identify.calibrate(machine, data, **options)
+    except IdentificationDivergedError as exc:  # judged all the same: never a hidden verdict
+        if exc.result is None:
+            raise
+        result = exc.result
+    prune = (options.get("prune", True) and not options.get("prior", False)
+             and result.converged)
 
     def keep_weak():
         return identify.calibrate(machine, data, **{**options, "prune": False,
@@ -58,13 +68,6 @@ def calibrate(machine, data: MeasurementSet, *, file_unit: str | None = None,
         verdict = judge_calibration(machine, data, result, rerun=keep_weak if prune else None,
                                     file_unit=file_unit)
     return replace(result, verdict=verdict)
-
-
-def machine_size(machine) -> float:
-    """A machine's size (m): the largest of the distances from the origin to the corners of its
-    default region and of that region's diagonal."""
-    lo, hi = (np.asarray(v, dtype=float)[:3] for v in machine.default_box())
-    return float(max(np.linalg.norm(lo), np.linalg.norm(hi), np.linalg.norm(hi - lo)))
 
 
 def judge_calibration(machine, data: MeasurementSet, result, *,
@@ -86,7 +89,8 @@ def judge_calibration(machine, data: MeasurementSet, result, *,
                 names=result.names, values=result.values,
                 units=result.units, tolerances=result.tolerance,
                 machine_size=machine_size(machine), rms=result.after.rms,
-                length_unit=file_unit or "m")
+                length_unit=file_unit or "m",
+                convergence=None if result.converged else result.convergence)
     first = judge(**args)
     if first.passed:
         return first
@@ -129,7 +133,7 @@ def _frame_alternative(machine, data, result, file_unit) -> Alternative | None:
         f"the readings look like they are in another frame: a rigid motion alone (rotation "
         f"{angle:.3g}°, translation {np.linalg.norm(reg.translation) / s:.4g} {unit}) brings "
         f"them to RMS {reg.rms / s:.4g} {unit} of the nominal machine, against "
-        f"{result.after.rms / s:.4g} {unit} after identification. Register the frame "
+        f"{result.after.rms / s:.4g} {unit} {_after(result)}. Register the frame "
         "(pkmkit register) and calibrate with --frame FILE --identify-frame, or use "
         "--frame identify when the frames are close",
         rms=reg.rms)
@@ -160,13 +164,13 @@ def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
         scaled = _scaled(data, machine, factor, whole)
         if whole:
             identify.check_measurements(machine, scaled)
-        return make_model(machine, scaled, identify._sigma_rows(data.kind, machine,
+        return make_model(machine, scaled, identify.sigma_rows(data.kind, machine,
                                                                 result.sigma),
                           registration=None, identify_frame=identify_frame)
 
     def rms_of(model, setup) -> float:
         r, _, _ = model.residuals(machine, setup, jacobian=False)
-        return identify._stats(model, r).rms if np.isfinite(r).all() else np.inf
+        return residual_stats(model, r).rms if np.isfinite(r).all() else np.inf
 
     # a machined part's commanded paths are the program's, sampled at a fixed step: scaled
     # they would be sampled a million times finer; only its readings are tried
@@ -187,7 +191,7 @@ def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
         if not np.isfinite(rms0):
             continue
         try:
-            rms = rms_of(model, identify._fit_setup(machine, model))
+            rms = rms_of(model, identify.fit_setup(machine, model))
         except (PkmError, np.linalg.LinAlgError, ValueError):
             continue
         if best is None or rms < best[0]:
@@ -196,7 +200,7 @@ def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
         return None
     try:
         zero = model_of(0.0, False)
-        rms_zero = rms_of(zero, identify._fit_setup(machine, zero))
+        rms_zero = rms_of(zero, identify.fit_setup(machine, zero))
     except (PkmError, np.linalg.LinAlgError, ValueError):
         rms_zero = np.inf
     if not best[0] * 10.0 <= rms_zero:
@@ -215,9 +219,15 @@ def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
     return Alternative(
         "unit",
         f"wrong unit: {guess} — rescaled ×{factor:g}, the nominal machine fits them to RMS "
-        f"{rms / s:.4g} {unit} against {result.after.rms / s:.4g} {unit} after identification "
+        f"{rms / s:.4g} {unit} against {result.after.rms / s:.4g} {unit} {_after(result)} "
         f"as read; {fix}",
         rms=rms)
+
+
+def _after(result) -> str:
+    """What the result's residual is: after identification, or the nominal machine's."""
+    return ("after identification" if result.converged else
+            "with the nominal machine (the identification did not converge)")
 
 
 #: Units named in the unit hypothesis's message (metres per unit).

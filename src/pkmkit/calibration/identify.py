@@ -20,7 +20,7 @@ the identifiable parameters, with analytic Jacobians, validation and uncertainti
    Jacobians of the residual models, the machine with defects rebuilt exactly at every step
    (inner closures included): a chord stage (the batched engine's Levenberg–Marquardt on a
    Jacobian frozen for a few iterations), then MINPACK's Levenberg–Marquardt (SciPy) if the
-   gradient is not yet orthogonal to every column (:func:`_solve`); with ``robust=True`` the
+   gradient is not yet orthogonal to every column (:func:`solve_scaled`); with ``robust=True`` the
    weights w_i follow Huber's loss on each observation's normalised error (iteratively
    reweighted) and the observations beyond 3 robust standard deviations are reported;
 6. reports the identified values with standard deviations (``σ̂² (JᵀJ)⁻¹``, σ̂² the a-posteriori
@@ -41,6 +41,12 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.calibration.divergence import (
+    divergence_bounds,
+    divergence_message,
+    setup_failure_result,
+    unconverged_result,
+)
 from pkmkit.calibration.identifiability import (
     RCOND,
     CompatibleDirections,
@@ -52,17 +58,23 @@ from pkmkit.calibration.models import ResidualModel, make_model
 from pkmkit.calibration.registration import Registration
 from pkmkit.calibration.results import (
     CalibrationResult,
-    ResidualStats,
     Validation,
+    residual_stats,
 )
 from pkmkit.calibration.solver import (
-    _fit_setup,
-    _Problem,
-    _solve,
+    ScaledProblem,
+    fit_setup,
     problem_rows,
+    solve_scaled,
 )
 from pkmkit.calibration.uncertainty import Propagation, tool_point_uncertainty
-from pkmkit.exceptions import ConvergenceError, InputError, ParameterError, PkmError
+from pkmkit.exceptions import (
+    ConvergenceError,
+    IdentificationDivergedError,
+    InputError,
+    ParameterError,
+    PkmError,
+)
 from pkmkit.geometric_errors.blas_threads import one_blas_thread
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
 from pkmkit.machines.strokes import signed_excess, stroke_limits
@@ -130,10 +142,6 @@ def check_measurements(machine, data: MeasurementSet) -> None:
         raise InputError("rows out of stroke: " + "; ".join(bad[:10]) + more)
 
 
-def _stats(model: ResidualModel, r: np.ndarray) -> ResidualStats:
-    return ResidualStats(model.errors(r), tuple(model.data.labels))
-
-
 def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | None = None,
               parameters: str | Sequence[str] = "auto", frame: Any = None,
               robust: bool = False, prior: bool = False,
@@ -166,7 +174,10 @@ def calibrate(machine, data: MeasurementSet, *, validation: MeasurementSet | Non
         InputError: measurements the machine cannot have produced (rows out of stroke, no
             assembly), too few independent measurements, mismatched kinds.
         ParameterError: unknown parameter names or tolerances.
-        ConvergenceError: the identification diverged.
+        IdentificationDivergedError: the identification did not converge (a
+            :class:`~pkmkit.exceptions.ConvergenceError`); its ``result`` is the nominal
+            machine's fit, which :func:`pkmkit.calibration.calibrate` still judges
+            (:mod:`pkmkit.calibration.divergence`).
     """
     # small dense problems: a multi-threaded BLAS only loses time, and collapses when another
     # process holds a core (docs/benchmarks.md)
@@ -191,7 +202,7 @@ class _Prepared:
     """Everything :func:`calibrate` sets up before solving (see :func:`identification_problem`
     for the public face)."""
 
-    problem: _Problem
+    problem: ScaledProblem
     u0: np.ndarray
     start: tuple
     model: ResidualModel
@@ -225,7 +236,7 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
     if not (np.isfinite(sig) and sig > 0):
         raise InputError(f"sigma must be a positive length, got {sigma!r}")
     registration, identify_frame = _frame_option(frame)
-    model = make_model(machine, data, _sigma_rows(data.kind, machine, sig),
+    model = make_model(machine, data, sigma_rows(data.kind, machine, sig),
                        registration=registration, identify_frame=identify_frame)
     dset = defect_set(machine)
     d = len(dset)
@@ -235,7 +246,12 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
     # ---- before: the nominal machine, set-up fitted alone
     r_nom, _, _ = model.residuals(machine, model.setup.initial, jacobian=False)
     _raise_unassembled(model, r_nom, "the nominal machine")
-    setup0 = _fit_setup(machine, model)
+    try:
+        setup0 = fit_setup(machine, model)
+    except ConvergenceError as exc:  # readings no placement of the set-up fits: judged too
+        raise IdentificationDivergedError(str(exc), result=setup_failure_result(
+            machine, data, model, str(exc), sigma=sig, frame=registration,
+            candidates=len(candidates), t_start=t_start)) from None
     r_before, jd0, js0 = model.residuals(machine, setup0, jacobian=True)
     _raise_unassembled(model, r_before, "the nominal machine")
 
@@ -309,10 +325,12 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
                          "add measurements")
 
     # ---- nonlinear least squares (robust: iteratively reweighted)
-    problem = _Problem(machine=machine, model=model, basis=basis[:, mach_sel],
+    problem = ScaledProblem(machine=machine, model=model, basis=basis[:, mach_sel],
                        setup_index=setup_sel, setup_base=setup0.copy(),
                        scale=np.concatenate([cand_tol[mach_sel], model.setup.scale[setup_sel]]),
-                       prior=prior, weights=np.ones(len(data)))
+                       prior=prior, weights=np.ones(len(data)),
+                       bound=divergence_bounds(machine, [dset.units[dset.names.index(
+                           cand_names[i])] for i in mach_sel]))
     u = np.concatenate([np.zeros(mach_sel.size), setup0[setup_sel] / model.setup.scale[
         setup_sel]])
     return _Prepared(problem=problem, u0=u, start=problem.assemble(u, r_before, jd0, js0),
@@ -389,15 +407,13 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
     iterations = 0
     start = prep.start
     for _ in range(8 if robust else 1):
-        sol = _solve(problem, u, max_iter, start)
+        sol = solve_scaled(problem, u, max_iter, start)
         iterations += sol.iterations
         if sol.status not in (Status.OK, Status.INCONSISTENT):
-            if sol.r is not None and not np.isfinite(sol.r).all():
-                _raise_unassembled(model, sol.r, "the machine being identified")
-            raise ConvergenceError(
-                f"the identification diverged ({Status(sol.status).label} after "
-                f"{sol.iterations} iterations); the measurements may not come from this "
-                "machine, or its defects are too large for the starting geometry")
+            message = divergence_message(prep, sol, iterations)
+            raise IdentificationDivergedError(message, result=unconverged_result(
+                prep, machine, data, message, iterations,
+                counts={**_counts(prep, prep.unidentifiable), "identified": 0}))
         u = sol.u
         if not robust:
             break
@@ -461,7 +477,8 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
         setup_units=tuple(model.setup.units[i] for i in setup_sel),
         setup_values=setup[setup_sel], setup_std=std[p:], correlation=corr,
         defects=delta, defect_names=dset.names,
-        before=_stats(model, r_before), after=_stats(model, r_after), validation=val,
+        before=residual_stats(model, r_before), after=residual_stats(model, r_after),
+        validation=val,
         rank=prep.rank, condition=condition, candidates=len(cand_names),
         unidentifiable=unidentifiable, outliers=outliers, sigma=sig,
         sigma_posterior=float(np.sqrt(factor)) * sig, frame=final_frame,
@@ -557,7 +574,10 @@ def _frame_option(frame: Any) -> tuple[Registration | None, bool]:
     raise InputError(f"frame must be None, a Registration or 'identify', got {frame!r}")
 
 
-def _sigma_rows(kind: str, machine, sigma: float) -> np.ndarray:
+def sigma_rows(kind: str, machine, sigma: float) -> np.ndarray:
+    """``(w,)`` the standard deviation of each component of one observation of ``kind``
+    (m; rad for a pose's rotation, scaled with ``sigma`` from :data:`DEFAULT_SIGMA_ROTATION`)
+    for a reading noise ``sigma`` (m)."""
     if kind == "pose":
         return np.array([sigma] * 3 + [DEFAULT_SIGMA_ROTATION * sigma / DEFAULT_SIGMA["pose"]] * 3)
     if kind == "part":
@@ -628,10 +648,10 @@ def _validate(nominal, identified, data: MeasurementSet,
     machine."""
     out = []
     for m, frame in zip((nominal, identified), frames, strict=True):
-        vm = make_model(nominal, data, _sigma_rows(data.kind, nominal, sigma),
+        vm = make_model(nominal, data, sigma_rows(data.kind, nominal, sigma),
                         registration=frame)
-        setup = _fit_setup(m, vm) if vm.refit_setup_for_validation() else vm.setup.initial
+        setup = fit_setup(m, vm) if vm.refit_setup_for_validation() else vm.setup.initial
         r, _, _ = vm.residuals(m, setup, jacobian=False)
         _raise_unassembled(vm, r, "the validation set")
-        out.append(_stats(vm, r))
+        out.append(residual_stats(vm, r))
     return Validation(before=out[0], after=out[1])

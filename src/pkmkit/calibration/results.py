@@ -36,6 +36,13 @@ class ResidualStats:
         return {"mean": self.mean / scale, "rms": self.rms / scale, "max": self.max / scale}
 
 
+def residual_stats(model: Any, r: np.ndarray) -> ResidualStats:
+    """The error magnitudes of a residual model's observations
+    (:class:`~pkmkit.calibration.models.ResidualModel`) from its residual rows ``r (N, w)``
+    (SI), labelled by the measurement file's rows."""
+    return ResidualStats(model.errors(r), tuple(model.data.labels))
+
+
 @dataclass(frozen=True)
 class Validation:
     """Residuals of a held-out set before (nominal machine) and after (identified machine)."""
@@ -99,6 +106,11 @@ class CalibrationResult:
         condition_with_priors: with ``prior=True``, the condition of the problem with its
             prior rows (what determines the parameters; :attr:`condition` is that of the
             measurement rows alone), else NaN.
+        converged: False when the identification did not converge: nothing is identified,
+            :attr:`machine` is the nominal machine and :attr:`after` its residuals (set-up
+            fitted), :attr:`condition` that of the problem at the nominal machine; such a
+            result is never written as a calibrated machine file.
+        convergence: why it did not converge (one sentence), else "".
     """
 
     machine: Any
@@ -143,6 +155,8 @@ class CalibrationResult:
     counts: dict = field(default_factory=dict)
     verdict: Any = None
     condition_with_priors: float = float("nan")
+    converged: bool = True
+    convergence: str = ""
 
     def value(self, name: str) -> float:
         """An identified machine or set-up parameter by name (SI)."""
@@ -224,6 +238,7 @@ class CalibrationResult:
             "correlation": {"names": list(self.names + self.setup_names),
                             "matrix": np.round(self.correlation, 6).tolist()},
             "verdict": None if self.verdict is None else self.verdict.to_dict(),
+            "converged": self.converged,
             "counts": dict(self.counts),
             "tool_uncertainty_k2": _tool_uncertainty_json(self, scale),
             "chi2": self.chi2,

@@ -16,7 +16,7 @@ from pkmkit.status import Status
 
 
 @dataclass
-class _Problem:
+class ScaledProblem:
     """The least-squares problem in scaled unknowns u = θ / scale."""
 
     machine: Any
@@ -30,6 +30,9 @@ class _Problem:
     evaluations: int = 0
     _last: tuple | None = None
     progress: Any = None       # a tqdm counter of model evaluations, or None
+    #: (p,) |θ| of each machine unknown (SI) beyond which the identification has diverged
+    #: (an accepted iterate there stops the solve, :class:`Diverged`), or None
+    bound: np.ndarray | None = None
 
     @property
     def n_machine(self) -> int:
@@ -58,6 +61,9 @@ class _Problem:
         self.evaluations += 1
         if self.progress is not None:
             self.progress.update(1)
+        if jacobian and self.bound is not None and np.any(
+                np.abs(u[:self.n_machine] * self.scale[:self.n_machine]) > self.bound):
+            raise Diverged(np.array(u, dtype=float))  # an accepted iterate: linearised here
         delta, setup = self.unpack(u)
         try:
             m = self.machine_at(delta)
@@ -96,7 +102,11 @@ UNASSEMBLED = 1e8
 
 
 @dataclass
-class _Solution:
+class Solution:
+    """What :func:`solve_scaled` found: the scaled unknowns ``u``, iterations, a
+    :class:`~pkmkit.status.Status` code, and the whitened residual, Jacobian and raw residual
+    rows at ``u`` (None where not evaluated)."""
+
     u: np.ndarray
     iterations: int
     status: int
@@ -109,7 +119,7 @@ def _finite(*arrays) -> bool:
     return all(a is not None and np.isfinite(a).all() for a in arrays)
 
 
-#: Rounds of the chord stage of :func:`_solve`, iterations per round, and its convergence
+#: Rounds of the chord stage of :func:`solve_scaled`, iterations per round, and its convergence
 #: test on the gradient cosines.
 CHORD_ROUNDS = 4
 ROUND_ITER = 3
@@ -122,8 +132,8 @@ def _cosines(rw: np.ndarray, jw: np.ndarray) -> np.ndarray:
     return np.nan_to_num(c, nan=0.0)
 
 
-def _solve(problem: _Problem, u0: np.ndarray, max_iter: int,
-           start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> _Solution:
+def solve_scaled(problem: ScaledProblem, u0: np.ndarray, max_iter: int,
+                 start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> Solution:
     """Least squares in two stages: a fast chord stage, then Levenberg–Marquardt if needed.
 
     1. :func:`_solve_chord` — the batched engine's Levenberg–Marquardt with the Jacobian
@@ -133,25 +143,45 @@ def _solve(problem: _Problem, u0: np.ndarray, max_iter: int,
     2. if the gradient cosines ``|Jᵀr|_j / (‖J_j‖ ‖r‖)`` are not all below
        :data:`COSINE_TOL` (ill-conditioned or exact-fit problems, where a frozen Jacobian
        crawls), :func:`_solve_lm` takes over from there.
+
+    An accepted iterate beyond ``problem.bound`` (defects no built machine has) stops both:
+    status NOT_CONVERGED at that iterate, no residual.
     """
+    try:
+        return _solve_stages(problem, u0, max_iter, start)
+    except Diverged as exc:
+        return Solution(exc.u, problem.evaluations, int(Status.NOT_CONVERGED), None, None, None)
+
+
+class Diverged(Exception):
+    """An accepted iterate (where a Jacobian is evaluated) beyond the problem's bound: the
+    identification walks the defects away (readings no plausible machine fits)."""
+
+    def __init__(self, u: np.ndarray):
+        self.u = u
+        super().__init__("the identification diverged")
+
+
+def _solve_stages(problem: ScaledProblem, u0: np.ndarray, max_iter: int,
+                  start: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> Solution:
     sol = _solve_chord(problem, u0, start, max_iter)
     if sol.status != Status.OK:
         if sol.rw is None:
             return sol
-        sol = _Solution(u0, sol.iterations, int(Status.OK), *(start or problem.evaluate(
+        sol = Solution(u0, sol.iterations, int(Status.OK), *(start or problem.evaluate(
             u0, jacobian=True)))
     if float(sol.rw @ sol.rw) <= EXACT**2 or not (_cosines(sol.rw, sol.jw) > COSINE_TOL).any():
         return sol
     if sol.iterations >= max_iter:
-        return _Solution(sol.u, sol.iterations, int(Status.NOT_CONVERGED), sol.rw, sol.jw,
+        return Solution(sol.u, sol.iterations, int(Status.NOT_CONVERGED), sol.rw, sol.jw,
                          sol.r)
     out = _solve_lm(problem, sol.u, max_iter - sol.iterations, (sol.rw, sol.jw, sol.r))
-    return _Solution(out.u, out.iterations + sol.iterations, out.status, out.rw, out.jw, out.r)
+    return Solution(out.u, out.iterations + sol.iterations, out.status, out.rw, out.jw, out.r)
 
 
-def _solve_chord(problem: _Problem, u0: np.ndarray,
+def _solve_chord(problem: ScaledProblem, u0: np.ndarray,
                  start: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
-                 max_iter: int) -> _Solution:
+                 max_iter: int) -> Solution:
     """Rounds of :data:`ROUND_ITER` engine iterations on residual-only evaluations with the
     Jacobian of the round's start."""
     from pkmkit.solve.least_squares import solve_least_squares
@@ -159,7 +189,7 @@ def _solve_chord(problem: _Problem, u0: np.ndarray,
     u = np.array(u0, dtype=float)
     rw, jw, r = start if start is not None else problem.evaluate(u, jacobian=True)
     if not _finite(rw, jw):
-        return _Solution(u, 0, int(Status.INVALID_INPUT), None, None, r)
+        return Solution(u, 0, int(Status.INVALID_INPUT), None, None, r)
     total, m = 0, len(rw)
     for _ in range(CHORD_ROUNDS):
         if float(rw @ rw) <= EXACT**2 or not (_cosines(rw, jw) > COSINE_TOL).any():
@@ -188,11 +218,11 @@ def _solve_chord(problem: _Problem, u0: np.ndarray,
         u, (rw, jw, r) = res.u[0], new
         if step <= 1e-10 * (1.0 + float(np.linalg.norm(u))):
             break
-    return _Solution(u, total, int(Status.OK), rw, jw, r)
+    return Solution(u, total, int(Status.OK), rw, jw, r)
 
 
-def _solve_lm(problem: _Problem, u0: np.ndarray, max_iter: int,
-              start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> _Solution:
+def _solve_lm(problem: ScaledProblem, u0: np.ndarray, max_iter: int,
+              start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> Solution:
     """Levenberg–Marquardt (MINPACK, via :func:`scipy.optimize.least_squares`) on the whitened
     residual with its analytic Jacobian: residuals at trial points, the Jacobian at accepted
     points only. (The batched engine of :mod:`pkmkit.solve` is built for many small problems;
@@ -207,9 +237,9 @@ def _solve_lm(problem: _Problem, u0: np.ndarray, max_iter: int,
     u0 = np.array(u0, dtype=float)
     rw0, jw0, r0 = start if start is not None else problem.evaluate(u0, jacobian=True)
     if not _finite(rw0, jw0):
-        return _Solution(u0, 0, int(Status.INVALID_INPUT), rw0, jw0, r0)
+        return Solution(u0, 0, int(Status.INVALID_INPUT), rw0, jw0, r0)
     if u0.size == 0:
-        return _Solution(u0, 0, int(Status.OK), rw0, jw0, r0)
+        return Solution(u0, 0, int(Status.OK), rw0, jw0, r0)
     m = len(rw0)
     cache = {u0.tobytes(): (rw0, jw0, r0)}
 
@@ -235,7 +265,7 @@ def _solve_lm(problem: _Problem, u0: np.ndarray, max_iter: int,
         return jw
 
     if m < u0.size:  # MINPACK needs at least as many rows as unknowns
-        return _Solution(u0, 0, int(Status.INVALID_INPUT), rw0, jw0, r0)
+        return Solution(u0, 0, int(Status.INVALID_INPUT), rw0, jw0, r0)
     # MINPACK's tests are relative; a residual with a floor (an exact fit down to the inner
     # closures' accuracy) would crawl: stop when the best cost has not dropped by a
     # statistically meaningful amount (NEGLIGIBLE per row) over STALL evaluations
@@ -258,14 +288,14 @@ def _solve_lm(problem: _Problem, u0: np.ndarray, max_iter: int,
                             gtol=1e-10, max_nfev=max_iter * 10)
         u, status, iterations = sol.x, sol.status, int(sol.njev or sol.nfev)
     except _Unassembled as exc:
-        return _Solution(u0, 0, int(Status.NO_ASSEMBLY), None, None, exc.residuals)
+        return Solution(u0, 0, int(Status.NO_ASSEMBLY), None, None, exc.residuals)
     except _Stalled:
         u, status, iterations = history["u"], 1, STALL
     rw, jw, r = problem.evaluate(u, jacobian=True)
     if status <= 0 or not _finite(rw, jw):
         status = Status.NOT_CONVERGED if _finite(rw, jw) else Status.NO_ASSEMBLY
-        return _Solution(u, iterations, int(status), rw, jw, r)
-    return _Solution(u, iterations, int(Status.OK), rw, jw, r)
+        return Solution(u, iterations, int(status), rw, jw, r)
+    return Solution(u, iterations, int(Status.OK), rw, jw, r)
 
 
 class _Stalled(Exception):
@@ -278,23 +308,24 @@ class _Unassembled(Exception):
         super().__init__("the machine does not assemble")
 
 
-def problem_rows(problem: _Problem) -> int:
+def problem_rows(problem: ScaledProblem) -> int:
+    """Rows of ``problem``'s whitened residual (readings, then prior rows)."""
     m = len(problem.model.data) * problem.model.width
     return m + (problem.n_machine if problem.prior else 0)
 
 
-def _fit_setup(machine, model: ResidualModel, max_iter: int = 50) -> np.ndarray:
+def fit_setup(machine, model: ResidualModel, max_iter: int = 50) -> np.ndarray:
     """The set-up parameters fitted alone on ``machine`` (the machine fixed)."""
     s = len(model.setup)
     if s == 0:
         return np.zeros(0)
-    problem = _Problem(machine=machine, model=model, basis=np.zeros((0, 0)),
+    problem = ScaledProblem(machine=machine, model=model, basis=np.zeros((0, 0)),
                        setup_index=np.arange(s), setup_base=model.setup.initial.copy(),
                        scale=model.setup.scale.copy(), prior=False,
                        weights=np.ones(len(model.data)))
     problem.basis = np.zeros((len(defect_set(machine)), 0))
     u0 = model.setup.initial / model.setup.scale
-    sol = _solve(problem, u0, max_iter)
+    sol = solve_scaled(problem, u0, max_iter)
     if sol.status not in (Status.OK, Status.INCONSISTENT):
         raise ConvergenceError(f"the {model.data.kind} set-up parameters could not be fitted on "
                                f"the machine ({Status(sol.status).label})")

@@ -27,6 +27,9 @@ Checks (each a :class:`Check` with its value, limit and reason):
 - **magnitude** — every identified length defect within :data:`SIZE_FRACTION` of the machine's
   size, every direction component or angle within :data:`ANGLE_MAX` rad. Values beyond
   :data:`TOLERANCE_FACTOR` times their tolerance but within those bounds give a warning.
+- **convergence** (only when the identification did not converge,
+  :mod:`pkmkit.calibration.divergence`) — always fails: nothing was identified, the other
+  checks judge the nominal machine's fit.
 
 When a check fails, the alternatives that *explain* the misfit are the likely causes: an
 alternative explains when its own a-posteriori noise passes the noise check, or when it
@@ -34,7 +37,8 @@ reduces the RMS residual at least :data:`EXPLAINS` times to an error a machine c
 (below :data:`SIZE_FRACTION` of its size); of those, the ones within :data:`EXPLAINS` times
 the best are listed, best first. Without one, the likely cause is a noise level stated too
 small or an error source the model lacks (noise check), undetermined parameters (condition
-check) or implausible readings (magnitude check).
+check), implausible readings (magnitude check) or readings no plausible machine fits
+(convergence check).
 """
 
 from __future__ import annotations
@@ -67,7 +71,7 @@ class Check:
     """One test of the verdict.
 
     Attributes:
-        name: ``"noise"``, ``"condition"`` or ``"magnitude"``.
+        name: ``"noise"``, ``"condition"``, ``"magnitude"`` or ``"convergence"``.
         passed: False when the check fails the verdict.
         value, limit: what was measured and its bound (the check's own units: a ratio, a
             condition number, a fraction of the bound).
@@ -123,7 +127,8 @@ class Verdict:
     """The verdict: checks and, when it fails, the likely causes.
 
     Attributes:
-        checks: every check, in the order noise, condition, magnitude.
+        checks: every check, in the order noise, condition, magnitude (and convergence when
+            the identification did not converge).
         causes: likely causes (empty when the verdict passes).
         chi2, dof, p_value: the χ² statistic, its degrees of freedom and the upper-tail
             probability ``P(χ²_ν ≥ χ²)``.
@@ -272,7 +277,8 @@ def _show(value: float, unit: str, length_unit: str = "mm") -> str:
 def judge(*, chi2: float, dof: int, sigma: float, condition: float, names: Sequence[str],
           values: np.ndarray, units: Sequence[str], tolerances: np.ndarray,
           machine_size: float, rms: float,
-          alternatives: Sequence[Alternative] = (), length_unit: str = "mm") -> Verdict:
+          alternatives: Sequence[Alternative] = (), length_unit: str = "mm",
+          convergence: str | None = None) -> Verdict:
     """The verdict on a calibration (module docstring).
 
     Args:
@@ -286,11 +292,17 @@ def judge(*, chi2: float, dof: int, sigma: float, condition: float, names: Seque
         alternatives: hypotheses tried by a diagnosis; those that explain the misfit become
             the likely causes of a failed verdict.
         length_unit: unit of the lengths in the messages.
+        convergence: why the identification did not converge (the other arguments then
+            describe the nominal machine's fit), or None when it converged.
     """
     noise, p = noise_check(chi2, dof)
     checks = (noise, condition_check(condition),
               magnitude_check(names, values, units, tolerances, machine_size,
                               length_unit=length_unit))
+    if convergence is not None:
+        checks += (Check("convergence", False, float("nan"), float("nan"),
+                         f"{convergence}; nothing identified, the other checks judge the "
+                         "nominal machine"),)
     sigma_post = sigma * float(np.sqrt(max(chi2, 0.0) / max(int(dof), 1)))
     causes: list[Cause] = []
     if not all(c.passed for c in checks):
@@ -300,6 +312,10 @@ def judge(*, chi2: float, dof: int, sigma: float, condition: float, names: Seque
         for alt in sorted(good, key=lambda a: a.rms):
             if alt.rms <= EXPLAINS * best:  # much worse than the best one: not the cause
                 causes.append(Cause(alt.cause, alt.description))
+        if not causes and convergence is not None:
+            causes.append(Cause(
+                "diverged", "no plausible defects fit these readings: check that they come "
+                "from this machine, in its frame (--frame) and in the file's unit (--units)"))
         if not causes and not noise.passed:
             causes.append(Cause(
                 "noise-or-model",

@@ -128,14 +128,59 @@ def rod_defect_index(model: RodModel) -> RodDefectIndex:
         component=np.array([r[4] for r in rows], dtype=int), level=level)
 
 
-def direction_increment(u: np.ndarray, component: int) -> np.ndarray:
+def direction_increment(u: np.ndarray, component: int, major: int | None = None
+                        ) -> np.ndarray:
     """``∂u/∂δ`` for the defect perturbing component ``component`` of the unit direction u:
-    ``e_c − (u_c / u_m) e_m`` (m the largest component) — orthogonal to u."""
-    major = int(np.argmax(np.abs(u)))
+    ``e_c − (u_c / u_m) e_m`` — orthogonal to u. ``m`` is the component that follows from the
+    unit norm: ``major`` when given (the largest component of the *nominal* direction, which
+    :func:`apply_rod_defects` keeps however far the defects tilt it), else u's largest."""
+    if major is None:
+        major = int(np.argmax(np.abs(u)))
     out = np.zeros(3)
     out[component] = 1.0
     out[major] -= u[component] / u[major]
     return out
+
+
+def axis_majors(index: RodDefectIndex, n_actuators: int) -> np.ndarray:
+    """``(n_actuators,)`` the component of each actuator's direction that follows from the unit
+    norm in ``index``'s parametrisation (the one its ``du``/``dw`` defects leave out: the
+    nominal direction's largest), −1 for an actuator without direction defects (strut)."""
+    out = np.full(n_actuators, -1, dtype=int)
+    axis = np.array([k == "axis" for k in index.kind], dtype=bool)
+    for k in range(n_actuators):
+        comps = {int(c) for c in index.component[axis & (index.target == k)]}
+        if comps:
+            out[k] = min(set(range(len(comps) + 1)) - comps)
+    return out
+
+
+def before_offsets(model: RodModel, index: RodDefectIndex) -> tuple[RodSet, np.ndarray]:
+    """The rods of ``model`` as :func:`apply_rod_defects` builds them **before** the actuator
+    offsets, and the offset of each rod's actuator ``(m,)`` (m, or rad for a crank; zeros for a
+    nominal model): base joints moved back along the slide / turned back about the crank axis,
+    strut lengths shortened. With ``q + offset`` for ``q`` they give the same rods; their
+    derivatives are those of the defect rule (defects applied to the nominal geometry)."""
+    rods = rod_set(model)
+    offsets = np.zeros(model.n_actuators)
+    if model.defects is not None and len(model.defects) == len(index):
+        is_offset = np.array([k == "offset" for k in index.kind], dtype=bool)
+        offsets[index.target[is_offset]] = np.asarray(model.defects)[is_offset]
+    per_rod = offsets[rods.actuator]
+    if not per_rod.any():
+        return rods, per_rod
+    base = np.array(rods.base, dtype=float)
+    length = np.array(rods.length, dtype=float)
+    for j, dq in enumerate(per_rod):
+        if dq == 0.0:
+            continue
+        if rods.kind[j] == SLIDE:
+            base[j] -= dq * rods.axis[j]
+        elif rods.kind[j] == CRANK:
+            base[j] = rods.pivot[j] + _rodrigues(rods.axis[j], -dq, base[j] - rods.pivot[j])
+        else:
+            length[j] -= dq
+    return replace(rods, base=base, length=length), per_rod
 
 
 def _tilted(u: np.ndarray, deltas: dict[int, float]) -> np.ndarray:

@@ -115,11 +115,15 @@ def plot_identifiability(result, *, path: str | Path | None = None) -> Figure:
     ax1.set_title(f"rank {result.rank}, condition {result.condition:.3g}", fontsize=9)
     ax1.grid(True, which="both", alpha=0.25)
     names = result.names + result.setup_names
+    ax2.set_title("correlations", fontsize=9)
+    if not names:  # nothing identified (an identification that did not converge)
+        ax2.set_axis_off()
+        ax2.text(0.5, 0.5, "nothing identified", ha="center", va="center")
+        return _save(fig, path)
     im = ax2.imshow(result.correlation, vmin=-1, vmax=1, cmap="RdBu_r")
     if len(names) <= 40:
         ax2.set_xticks(range(len(names)), names, rotation=90, fontsize=6)
         ax2.set_yticks(range(len(names)), names, fontsize=6)
-    ax2.set_title("correlations", fontsize=9)
     fig.colorbar(im, ax=ax2, shrink=0.8)
     return _save(fig, path)
 

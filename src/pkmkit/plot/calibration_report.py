@@ -309,7 +309,10 @@ def _verdict_html(verdict) -> str:
            + "".join(items) + "</ul>")
     if causes:
         out += f"<p>Likely cause:</p><ul>{causes}</ul>"
-    if not verdict.passed:
+    if any(c.name == "convergence" for c in verdict.failed):
+        out += ("<p>The identification did not converge: no calibrated machine file is "
+                "written (not even with --write-anyway; the exit status is 3).</p>")
+    elif not verdict.passed:
         out += ("<p>No calibrated machine file is written for a failed verdict (pkmkit "
                 "calibrate --write-anyway writes it; the exit status is 3 either way).</p>")
     return out + "</div>"

@@ -338,27 +338,40 @@ def defect_columns(model: RodModel, index, position: np.ndarray, rotation: np.nd
     """Closure residuals and their derivatives with respect to the rod defects.
 
     The residual of rod j of the defect level (:func:`pkmkit.model.rod_defects.rod_set`) is
-    ``r_j = |p + R b_j − a_j(q)| − ℓ_j(q)``; its derivatives (d̂ the unit rod vector, Rot the
-    crank rotation by q, c = a0 − P):
+    ``r_j = |p + R b_j − a_j(q)| − ℓ_j(q)``. The derivatives are those of the defect rule
+    (:func:`pkmkit.model.rod_defects.apply_rod_defects` on the *nominal* geometry), also for a
+    model that carries defects: the rods are taken before their actuator offsets dq
+    (:func:`~pkmkit.model.rod_defects.before_offsets`: ``a0`` = nominal base + base defect),
+    driven by ``q̃ = q + dq``, and a direction keeps the nominal's parametrisation (the
+    component that follows from the unit norm is the nominal's largest,
+    :func:`~pkmkit.model.rod_defects.axis_majors`). With d̂ the unit rod vector, Rot the crank
+    rotation by q̃, c = a0 − P:
 
     - base ``∂r/∂a0 = −d̂`` (slide, strut), ``−Rotᵀ d̂`` (crank); platform ``Rᵀ d̂``; length −1;
-    - slide direction ``−q d̂·∂u``; crank axis ``−d̂·((∂w × c) sin q + (∂w (w·c) + w (∂w·c))
-      (1 − cos q))``; crank pivot ``−d̂·(I − Rot)``; offset ``∂r/∂q``.
+    - slide direction ``−q̃ d̂·∂u``; crank axis ``−d̂·((∂w × c) sin q̃ + (∂w (w·c) + w (∂w·c))
+      (1 − cos q̃))``; crank pivot ``−d̂·(I − Rot)``; offset ``∂r/∂q``.
+
+    (Linearising on the current rods instead — ``q`` for ``q̃``, the current largest
+    component — drops the terms in dq and switches the direction parametrisation once a tilt
+    passes 45°: an identification far from the nominal geometry then steps along a wrong
+    Jacobian and crawls.)
 
     Args:
-        model: the rod model.
-        index: its :class:`~pkmkit.model.rod_defects.RodDefectIndex`.
+        model: the rod model (nominal, or carrying the defects ``model.defects`` in ``index``
+            order).
+        index: the :class:`~pkmkit.model.rod_defects.RodDefectIndex` of its nominal model.
         position: ``(N, 3)`` platform positions; rotation: ``(N, 3, 3)`` (None: identity).
         q: ``(N, n_act)`` actuator coordinates.
 
     Returns:
         ``(residual (N, m), columns (N, m, d))``.
     """
-    from pkmkit.model.rod_defects import direction_increment, rod_set
+    from pkmkit.model.rod_defects import axis_majors, before_offsets, direction_increment
 
-    rods = rod_set(model)
+    rods, offset = before_offsets(model, index)
+    majors = axis_majors(index, model.n_actuators)
     n, m = position.shape[0], len(rods.length)
-    qr = q[:, rods.actuator]  # (N, m)
+    qr = q[:, rods.actuator] + offset[None]  # (N, m) q̃
     rel = rods.base - rods.pivot  # (m, 3)
     w = rods.axis
     c, s = np.cos(qr)[:, :, None], np.sin(qr)[:, :, None]
@@ -409,10 +422,10 @@ def defect_columns(model: RodModel, index, position: np.ndarray, rotation: np.nd
                         1.0 - c[:, j])
                     cols[:, j, i] = -np.einsum("kd,kd->k", unit[:, j], e[None] - moved)
                 elif rods.kind[j] == SLIDE:  # slide direction
-                    du = direction_increment(w[j], int(comp))
+                    du = direction_increment(w[j], int(comp), int(majors[t]))
                     cols[:, j, i] = -qr[:, j] * (unit[:, j] @ du)
                 else:  # crank axis
-                    dw = direction_increment(w[j], int(comp))
+                    dw = direction_increment(w[j], int(comp), int(majors[t]))
                     cr = rel[j]
                     moved = (np.cross(dw, cr)[None] * s[:, j]
                              + (dw * (w[j] @ cr) + w[j] * (dw @ cr))[None] * (1.0 - c[:, j]))
