@@ -8,6 +8,7 @@ angles in degrees); the elastic data are always SI (N/m, N·m/rad, Pa), section 
 
 from __future__ import annotations
 
+import sys
 from typing import Any, NamedTuple
 
 import click
@@ -191,6 +192,9 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     if weight is not None:
         payload["gravity_deflection"], payload["masses"] = weight
     add_to_payload(payload, check, units, set_status=False)
+    too_far = _linear_range(m, result, units) if wrench is not None else ""
+    if too_far:
+        payload["beyond_linear_range"] = too_far
     if as_json:
         emit_json(payload)
     else:
@@ -199,7 +203,26 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
             defl = weight[0] * PER_MICRO
             click.echo(f"  deflection under its own weight: {fmt(defl[:3], 5)} µm, rotation "
                        f"{fmt(defl[3:], 5)} µrad ({weight[1]})")
+    if too_far:
+        click.echo(f"doubtful: {too_far}", err=True)
+        if check is None or not check.out_of_stroke[0]:
+            sys.exit(3)
     finish_single(check, units)
+
+
+def _linear_range(m, result, units: str) -> str:
+    """Why the deflection under --wrench is beyond the linear model's range, or ``""``."""
+    from pkmkit.stiffness.results import SMALL_ROTATION, SMALL_TRANSLATION, beyond_linear_range
+
+    size = m.length_scale
+    if not beyond_linear_range(result.deflection, size)[0]:
+        return ""
+    scale = length_scale(units)
+    return (f"the deflection is beyond the range of the linear (small-displacement) model "
+            f"(a translation beyond {SMALL_TRANSLATION * size / scale:.4g} {units}, "
+            f"{SMALL_TRANSLATION:.0%} of the machine's size, or a rotation beyond "
+            f"{SMALL_ROTATION:g} rad): under this load the machine would bend, yield or break "
+            "long before; the figure is not a prediction")
 
 
 def _gravity(m, q, data, tool_length) -> tuple[np.ndarray, str]:
