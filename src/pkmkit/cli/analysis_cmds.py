@@ -246,7 +246,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
                "plane": list(grid.free_names), "reachable_points": int(reachable.sum()),
                "points": grid.size, "step": grid.step / scale}
     if index_name == "actuators":
-        plot_actuator_maps(m, grid, path=out)
+        plot_actuator_maps(m, grid, unit=units, path=out)
         summary["min"] = np.nanmin(q, axis=0) / scale
         summary["max"] = np.nanmax(q, axis=0) / scale
     else:
@@ -260,7 +260,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
         if not finite.any():
             raise InputError(f"{index_name} is undefined on every reachable point of the plane")
         plot_scalar_map(grid, values.reshape(grid.shape), title=f"{m.name}: {title}",
-                        label=label, scale=color_scale, path=out)
+                        label=label, scale=color_scale, unit=units, path=out)
         k_min, k_max = np.nanargmin(values), np.nanargmax(values)
         summary.update({"min": float(values[k_min]), "at_min": points[k_min] / scale,
                         "max": float(values[k_max]), "at_max": points[k_max] / scale})
@@ -393,7 +393,7 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
                             "worst": check.worst, "index_range": list(check.factor_range),
                             "q_min": check.q_range[0] / scale, "q_max": check.q_range[1] / scale}
     if out is not None:
-        plot_workspace(wmap, m, path=out)
+        plot_workspace(wmap, m, unit=units, path=out)
         summary["figure"] = out
     if as_json:
         emit_json(summary)
@@ -546,7 +546,7 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
         "global_conditioning_index": useful.workspace.global_conditioning_index(),
     }
     if out is not None:
-        plot_useful_workspace(useful, m, path=out)
+        plot_useful_workspace(useful, m, unit=units, path=out)
         summary["figure"] = out
     if as_json:
         emit_json(summary)

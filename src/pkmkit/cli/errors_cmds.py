@@ -446,8 +446,8 @@ def _tolerance(m, path, n_samples, region, resolution, units, seed, out, as_json
     if out is not None:
         from pkmkit.plot.error_figures import plot_accuracy_map
 
-        plot_accuracy_map(amap, out / "accuracy-map.png", unit="um" if units == "m" else "mm",
-                          position_unit="m" if units == "m" else "mm")
+        plot_accuracy_map(amap, out / "accuracy-map.png", unit="µm" if units == "m" else units,
+                          position_unit=units)
         payload["figure"] = str(out / "accuracy-map.png")
     if not as_json:
         click.echo(f"{m.name}: tolerance analysis ({tol.distribution}, "
