@@ -69,7 +69,7 @@ def test_workspace_in_units(monkeypatch, tmp_path, units, low, high):
     assert low < _span(ax, "x") < high
     assert f"{units}²" in ax.get_title() and "inscribed side" in ax.get_title()
     side = float(ax.get_title().split("inscribed side ")[1].split()[0])
-    home = [line for line in ax.get_lines() if line.get_label() == "home"][0]
+    home = next(line for line in ax.get_lines() if line.get_label() == "home")
     # the square and the home star are drawn in the same unit as the grid
     x0, x1 = ax.get_xlim()
     assert x0 <= home.get_xdata()[0] <= x1 and 0 < side < x1 - x0
@@ -98,6 +98,6 @@ def test_accuracy_map_positions_in_units(monkeypatch, tmp_path, units, error_uni
     assert (ax.get_xlabel(), ax.get_ylabel()) == (f"x ({units})", f"y ({units})")
     span = {"in": (2, 40), "m": (0.05, 1.0), "mm": (50, 1000)}[units]
     assert span[0] < _span(ax, "x") < span[1]
-    bar = [a.get_ylabel() for a in fig.axes if "percentile" in a.get_ylabel()][0]
+    bar = next(a.get_ylabel() for a in fig.axes if "percentile" in a.get_ylabel())
     assert bar.endswith(f"({error_unit})")
     assert np.isfinite(_span(ax, "y"))
