@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from dataclasses import replace
 
 import click
@@ -161,10 +162,12 @@ def analyze(machine_name, assignments, pose, isotropy_tol, with_stiffness, wrenc
     lines: list[str] = []
     if with_stiffness or wrench_text is not None:
         wrench, note = parse_wrench(wrench_text, m)
-        payload["stiffness"] = analyze_stiffness(m, data, x, wrench)
+        payload["stiffness"] = analyze_stiffness(m, data, x, wrench, units)
         lines = payload["stiffness"].pop("lines") + ([f"  note: {note}"] if note else [])
+    doubtful = payload.get("stiffness", {}).get("beyond_linear_range")
     if as_json:
         emit_json(payload)
+        _doubtful(doubtful)
         return
     angles = f" (angles {convention}, deg)" if len(shown) == 6 else ""
     q_text = (f"{fmt(payload['q'])} {q_units[0]}" if len(set(q_units)) == 1 else
@@ -183,6 +186,14 @@ def analyze(machine_name, assignments, pose, isotropy_tol, with_stiffness, wrenc
                    f"{fmt(ind.ellipsoid_directions[:, k])}")
     for line in lines:
         click.echo(line)
+    _doubtful(doubtful)
+
+
+def _doubtful(problem: str | None) -> None:
+    """Exit with status 3 after the output when the deflection is doubtful."""
+    if problem:
+        click.echo(f"doubtful: {problem}", err=True)
+        sys.exit(3)
 
 
 def _condition_text(kappa: float) -> str:

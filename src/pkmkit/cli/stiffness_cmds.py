@@ -27,6 +27,7 @@ from pkmkit.boundary.kinematics import inverse_options
 from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
 from pkmkit.spatial.rotation import resolve_convention
+from pkmkit.stiffness.results import linear_range_problem
 
 from .batch import batch_options, run_batch, status_names
 from .limits import check_wrench
@@ -192,7 +193,8 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     if weight is not None:
         payload["gravity_deflection"], payload["masses"] = weight
     add_to_payload(payload, check, units, set_status=False)
-    too_far = _linear_range(m, result, units) if wrench is not None else ""
+    too_far = ("" if wrench is None else
+               linear_range_problem(result.deflection, m.length_scale, units))
     if too_far:
         payload["beyond_linear_range"] = too_far
     if as_json:
@@ -208,21 +210,6 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
         if check is None or not check.out_of_stroke[0]:
             sys.exit(3)
     finish_single(check, units)
-
-
-def _linear_range(m, result, units: str) -> str:
-    """Why the deflection under --wrench is beyond the linear model's range, or ``""``."""
-    from pkmkit.stiffness.results import SMALL_ROTATION, SMALL_TRANSLATION, beyond_linear_range
-
-    size = m.length_scale
-    if not beyond_linear_range(result.deflection, size)[0]:
-        return ""
-    scale = length_scale(units)
-    return (f"the deflection is beyond the range of the linear (small-displacement) model "
-            f"(a translation beyond {SMALL_TRANSLATION * size / scale:.4g} {units}, "
-            f"{SMALL_TRANSLATION:.0%} of the machine's size, or a rotation beyond "
-            f"{SMALL_ROTATION:g} rad): under this load the machine would bend, yield or break "
-            "long before; the figure is not a prediction")
 
 
 def _gravity(m, q, data, tool_length) -> tuple[np.ndarray, str]:

@@ -134,3 +134,19 @@ def beyond_linear_range(deflection: np.ndarray, length: float) -> np.ndarray:
     t = np.linalg.norm(d[:, :min(d.shape[1], 3)], axis=1)
     r = np.linalg.norm(d[:, 3:], axis=1) if d.shape[1] > 3 else np.zeros(len(d))
     return (t > SMALL_TRANSLATION * length) | (r > SMALL_ROTATION)
+
+
+def linear_range_problem(deflection: np.ndarray, length: float, units: str = "m") -> str:
+    """Why the deflection ``(d,)`` (m, rad) of a machine of size ``length`` (m) is beyond the
+    linear model's range (:func:`beyond_linear_range`), in words with lengths in ``units``;
+    ``""`` when it is within."""
+    from pkmkit.model.parameters import length_scale
+
+    if not beyond_linear_range(deflection, length)[0]:
+        return ""
+    scale = length_scale(units)
+    return (f"the deflection is beyond the range of the linear (small-displacement) model "
+            f"(a translation beyond {SMALL_TRANSLATION * length / scale:.4g} {units}, "
+            f"{SMALL_TRANSLATION:.0%} of the machine's size, or a rotation beyond "
+            f"{SMALL_ROTATION:g} rad): under this load the machine would bend, yield or break "
+            "long before; the figure is not a prediction")
