@@ -33,6 +33,14 @@ import pytest
      "material yield_strength = 1e+300 Pa"),
     (["arm-sizing", "--length", "1", "--force", "100", "--stress-safety", "1e-300"],
      "the stress safety = 1e-300 is below 1"),
+    # defect sizes of a first-order sensitivity: 1e300 printed inf displacements, 1e-300 an
+    # exact model rounded to 0, both with exit 0
+    (["errors", "linear-delta", "--sensitivity", "--length-size", "1e300", "--points", "5"],
+     "--length-size 1e+300 m is outside [1e-09, 0.13] m"),
+    (["errors", "linear-delta", "--sensitivity", "--length-size", "1e-300", "--points", "5",
+      "--units", "mm"], "--length-size 1e-300 mm is outside [1e-06, 130] mm"),
+    (["errors", "linear-delta", "--sensitivity", "--angle-size", "1e300", "--points", "5"],
+     "--angle-size 1e+300° is outside"),
 ])
 def test_extreme_values_are_refused(run, tmp_path, monkeypatch, args, words):
     monkeypatch.chdir(tmp_path)

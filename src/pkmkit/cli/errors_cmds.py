@@ -379,12 +379,38 @@ def _compatibility(m, sel, orientation_only, thesis, configurations, rtol, seed,
     return summary
 
 
+#: Defect sizes a first-order sensitivity means something for: lengths from 1 nm to a tenth of
+#: the machine's size, angles from 1e-7° to 10° (beyond, 1e300 gave inf displacements and
+#: 1e-300 an exact model that rounds them to 0, with exit status 0).
+LENGTH_SIZE_RANGE = (1e-9, 0.1)  # m, fraction of the machine's size
+ANGLE_SIZE_RANGE = (1e-7, 10.0)  # degrees
+
+
+def _check_defect_sizes(m, length_size: float | None, angle_size: float | None,
+                        units: str) -> None:
+    """Refuse --length-size / --angle-size outside :data:`LENGTH_SIZE_RANGE` /
+    :data:`ANGLE_SIZE_RANGE` (values in ``units`` and degrees)."""
+    scale = length_scale(units)
+    if length_size is not None:
+        lo, hi = LENGTH_SIZE_RANGE[0], LENGTH_SIZE_RANGE[1] * m.length_scale
+        if not lo <= length_size * scale <= hi:
+            raise InputError(f"--length-size {length_size:g} {units} is outside "
+                             f"[{lo / scale:g}, {hi / scale:.4g}] {units} (1 nm to a tenth of "
+                             "the machine's size): a first-order sensitivity needs small "
+                             "defects that the exact model still resolves")
+    if angle_size is not None and not ANGLE_SIZE_RANGE[0] <= angle_size <= ANGLE_SIZE_RANGE[1]:
+        raise InputError(f"--angle-size {angle_size:g}° is outside [{ANGLE_SIZE_RANGE[0]:g}, "
+                         f"{ANGLE_SIZE_RANGE[1]:g}]°: a first-order sensitivity needs small "
+                         "defects that the exact model still resolves")
+
+
 def _sensitivity(m, sel, region, points, length_size, angle_size, exact, units, seed, out,
                  as_json):
     from pkmkit.geometric_errors.sensitivity import LENGTH_SIZE, sensitivity_analysis
 
     size = LENGTH_SIZE if length_size is None else length_size * length_scale(units)
     angle = None if angle_size is None else angle_size * DEG
+    _check_defect_sizes(m, length_size, angle_size, units)
     table = sensitivity_analysis(m, region=region, n_points=points, length_size=size,
                                  angle_size=angle, exact=exact, seed=seed, **sel)
     rows = table.rows()
