@@ -41,6 +41,19 @@ import pytest
       "--units", "mm"], "--length-size 1e-300 mm is outside [1e-06, 130] mm"),
     (["errors", "linear-delta", "--sensitivity", "--angle-size", "1e300", "--points", "5"],
      "--angle-size 1e+300° is outside"),
+    # a rank tolerance below double precision: "rank 30 of 30" at a condition of 1.8e18,
+    # every defect called identifiable (with the default 1e-9: rank 24, six combinations)
+    (["identifiability", "orthoglide", "--measure", "point", "--poses", "20", "--rtol",
+      "1e-300"], "--rtol 1e-300 is outside [1e-14, 1)"),
+    (["errors", "gough-stewart", "--compatibility", "--rtol", "1e-300"], "--rtol 1e-300"),
+    # a billion sampled configurations hung (killed after 120 s); a pivot of 1e300 m
+    # overflowed into an error blaming the rank
+    (["identifiability", "orthoglide", "--measure", "point", "--poses", "1000000000"],
+     "1e+09 configurations to sample (--poses/--candidates N), above the limit of 1e+05"),
+    (["select-poses", "orthoglide", "--measure", "point", "--n", "5", "--candidates",
+      "1000000000", "--out", "sel.csv"], "above the limit of 1e+05"),
+    (["identifiability", "orthoglide", "--measure", "ballbar", "--poses", "20", "--pivot",
+      "1e300,0,0"], "--pivot 1e300,0,0: beyond 1e+06 m from the origin"),
 ])
 def test_extreme_values_are_refused(run, tmp_path, monkeypatch, args, words):
     monkeypatch.chdir(tmp_path)
