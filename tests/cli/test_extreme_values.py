@@ -76,3 +76,14 @@ def test_analyze_deflection_beyond_the_linear_model_exits_3(run):
     assert "small-displacement" in out["stiffness"]["beyond_linear_range"]
     fine = run("analyze", "orthoglide", "--stiffness", "--wrench", "100,0,0")
     assert fine.exit_code == 0 and "doubtful" not in fine.output
+
+
+def test_map_of_deflections_beyond_the_linear_model_exits_3(run, tmp_path):
+    """A map of 0.86 km deflections under 1e9 N was drawn with exit 0."""
+    args = ["map", "orthoglide", "--index", "deflection", "--slice", "z=0", "--resolution",
+            "11", "--units", "mm"]
+    result = run(*args, "--wrench", "1e9,0,0", "--out", tmp_path / "d.png")
+    assert result.exit_code == 3, result.output
+    assert "doubtful: the deflection is beyond the range of the linear" in result.stderr
+    fine = run(*args, "--wrench", "100,0,0", "--out", tmp_path / "e.png")
+    assert fine.exit_code == 0 and "doubtful" not in fine.output

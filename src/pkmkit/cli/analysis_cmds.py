@@ -39,6 +39,7 @@ from pkmkit.plot.maps import (
     plot_workspace,
 )
 from pkmkit.stiffness.indices import STIFFNESS_INDICES
+from pkmkit.stiffness.results import linear_range_problem
 
 from .grid_options import (
     _coordinates,
@@ -59,7 +60,7 @@ from .options import (
     resolve_machine,
 )
 from .scheduler import SCHEDULER_OPTION
-from .stiffness_cmds import machine_and_data, parse_wrench
+from .stiffness_cmds import PER_MICRO, machine_and_data, parse_wrench
 from .stiffness_options import (
     MAX_DEFLECTION_OPTION,
     MIN_STIFFNESS_OPTION,
@@ -275,8 +276,16 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
         k_min, k_max = np.nanargmin(values), np.nanargmax(values)
         summary.update({"min": float(values[k_min]), "at_min": points[k_min] / scale,
                         "max": float(values[k_max]), "at_max": points[k_max] / scale})
+    doubtful = ""
+    if index_name == "deflection":  # µm: the largest against the linear model's range
+        worst = np.zeros(len(wrench))
+        worst[0] = summary["max"] / PER_MICRO
+        doubtful = linear_range_problem(worst, m.length_scale, units)
+        if doubtful:
+            summary["beyond_linear_range"] = doubtful
     if as_json:
         emit_json(summary)
+        _doubtful(doubtful)
         return
     click.echo(f"{m.name}: {index_name} over {'-'.join(grid.free_names)} "
                f"({summary['reachable_points']}/{grid.size} points reachable)")
@@ -284,6 +293,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
     click.echo(f"  min {fmt(summary['min'])}{unit}, max {fmt(summary['max'])}{unit} over the "
                f"grid points (step {summary['step']:.4g} {units}: not between them); figure "
                f"{out}")
+    _doubtful(doubtful)
 
 
 def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) -> dict:
