@@ -151,6 +151,8 @@ def test_masses_file_and_errors(tmp_path, delta_b):
      "m.toml:2: platform_inertia 1"),
     ("[masses]\nplatform_inertia = [[nan, 0, 0], [0, 1, 0], [0, 0, 1]]\n",
      "platform_inertia 1 must be a finite number, got nan"),
+    # ragged (a ValueError from NumPy escaped the line check: found by the fuzz profile)
+    ("[masses]\nplatform_inertia = [[1, 0], [0]]\n", r"m.toml: setting an array element"),
     ("[masses]\nrod = 1\n[wrench]\nforce = [0, 0, 1]\nmoment = [0, 1e200, 0]\n",
      r"m.toml:5: \[wrench\] moment component 2 = 1e\+200 N·m is beyond 1e\+09"),
 ])

@@ -303,7 +303,11 @@ def load_masses(path: str | Path, machine: Machine) -> tuple[MassProperties, np.
     for key, limit, unit in bounds:
         if key in table and is_plain_number(table[key]):
             try:
-                refuse_beyond(key, np.asarray(table[key], dtype=float), limit, unit)
+                values = np.asarray(table[key], dtype=float)
+            except ValueError:  # ragged: refused below with the shape it should have
+                continue
+            try:
+                refuse_beyond(key, values, limit, unit)
             except InputError as exc:
                 raise error(str(exc), lines.get(("masses", key))) from None
     try:
