@@ -115,3 +115,14 @@ def test_format_options_go_with_their_format(run, tmp_path):
     res = run("export", "orthoglide", "--to", "linuxcnc", "--out", tmp_path / "okins.c",
               "--endstops", "1,2,3")
     assert res.exit_code == 2 and "--endstops goes with --to klipper" in res.output
+
+
+@pytest.mark.parametrize("extra", [["--endstops", "1e300,1e300,1e300"],
+                                   ["--endstops", "1650,5,1650"],
+                                   ["--set", "q_max=2e5,2e5,2e5", "--units", "m"]])
+def test_klipper_endstops_beyond_the_machine_write_nothing(run, tmp_path, extra):
+    out = tmp_path / "printer.cfg"
+    res = run("export", "linear-delta-table-iv1", "--to", "klipper", "--out", out, *extra)
+    assert res.exit_code == 1, res.output
+    assert res.output.startswith("Error:") and "endstop" in res.output
+    assert not out.exists()

@@ -65,6 +65,24 @@ def test_bad_section_and_wrench_exit_1(run):
     assert result.exit_code == 1 and "--wrench" in result.output
 
 
+@pytest.mark.parametrize("args, exceeded", [
+    (["linear-delta", "--pose", "0,0,0", "--units", "mm", "--wrench", "1e9,1e9,1e9"], True),
+    (["gough-stewart", "--pose", "0,0,0.8,0,0,0", "--wrench", "0,0,0,1e6,0,0"], True),
+    (["linear-delta", "--pose", "0,0,0", "--wrench", "1000,1000,1000"], False),
+])
+def test_a_deflection_beyond_the_linear_model_exits_3(run, args, exceeded):
+    """1e9 N on a linear Delta printed a 40 m deflection, 1e6 N·m on the hexapod a 0.046 rad
+    rotation, with exit 0: the linear model does not hold there (exit 3, said on stderr)."""
+    result = run("stiffness", *args)
+    assert result.exit_code == (3 if exceeded else 0), result.output
+    assert ("beyond the range of the linear (small-displacement) model" in result.stderr) \
+        == exceeded
+    if exceeded:
+        assert "deflection under" in result.stdout
+        out = json.loads(run("stiffness", *args, "--json").stdout)
+        assert "small-displacement" in out["beyond_linear_range"]
+
+
 def test_unreachable_single_pose_exits_1(run):
     assert run("stiffness", "orthoglide", "--pose", "5,5,5").exit_code == 1
 

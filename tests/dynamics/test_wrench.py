@@ -44,6 +44,7 @@ def test_time_series_drives_the_forces(tmp_path):
     ("t,fx,fy,fz\n0,1,2,3\n0,1,2,3\n", "row 2 has t = 0 after 0"),
     ("t,fx,fy,fz\n0,1,2,3\n1,x,2,3\n", r"w.csv:3"),
     ("t,fx,fy,fz\n0,1,nan,3\n", "non-finite"),
+    ("t,fx,fy,fz\n0,1,2,3\n1,1,-1e300,3\n", r"row 2 has a force of 1e\+300 N, beyond 1e\+09"),
 ])
 def test_bad_wrench_files(tmp_path, text, message):
     path = tmp_path / "w.csv"

@@ -90,3 +90,29 @@ def test_what_klipper_cannot_hold_is_refused(defects, words):
 def test_other_machines_are_refused(name):
     with pytest.raises(UnsupportedExportError, match="klipper"):
         klipper_config(pkmkit.machine(name))
+
+
+@pytest.mark.parametrize("endstops, words", [
+    ([1e300, 1e300, 1e300], r"endstop of q1 at 1e\+303 mm lies outside its stroke \[700, 2000\]"),
+    ([1.9, 0.005, 1.8], r"endstop of q2 at 5 mm lies outside its stroke \[700, 2000\] mm"),
+    ([1.9, 1.9, 2.5], "endstop of q3 at 2500 mm lies outside"),
+    ([1.9, -0.0, np.nan], "3 finite actuator coordinates"),
+])
+def test_endstops_outside_the_strokes_are_refused(endstops, words):
+    """An endstop no carriage can reach (1e300, a value in mm read as m) was written as
+    position_endstop: 1e+303 with a passing check."""
+    from pkmkit.exceptions import InputError
+
+    with pytest.raises(InputError, match=words):
+        klipper_config(pkmkit.machine("linear-delta-ch3"), endstops=np.array(endstops))
+
+
+def test_strokes_or_rods_of_a_stadium_are_refused():
+    """Stroke tops of 200 km (the default endstops) or 150 m arms are unit slips: refused with
+    the value, instead of a configuration (or a failed self-check blaming rounding)."""
+    m = pkmkit.machine("linear-delta-ch3")
+    with pytest.raises(UnsupportedExportError, match="endstop 200000 m is beyond 100 m"):
+        klipper_config(m.with_params(q_max=np.full(3, 2e5)), units="m")
+    with pytest.raises(UnsupportedExportError, match="arm_length 150000 mm is beyond"):
+        klipper_config(m.with_params(L=150.0, R=100.0, q_min=np.full(3, 100.0),
+                                     q_max=np.full(3, 120.0)))

@@ -93,6 +93,26 @@ def test_parquet_columns_with_units_and_conflicting_metadata(tmp_path):
     np.testing.assert_array_equal(_read(path, ["x", "y"], ["mm", "mm"])[0], [[1.0, 2.0]])
 
 
+@pytest.mark.parametrize("suffix", [".csv", ".parquet", ".feather"])
+def test_a_header_that_repeats_a_column_is_refused_with_its_line(tmp_path, suffix):
+    """``x,y,z,x``: which x is meant cannot be guessed (issue 18 §5): refused, naming the
+    column and the header's line (CSV) or the file (Parquet/Feather, which allow duplicate
+    field names)."""
+    import pyarrow.feather as pf
+
+    path = tmp_path / f"poses{suffix}"
+    if suffix == ".csv":
+        path.write_text("# units: m\nx,y,z,x\n0,0,0,0.1\n")
+        where = r"poses\.csv:2"
+    else:
+        table = pa.table([pa.array([0.0])] * 3 + [pa.array([0.1])], names=["x", "y", "z", "x"])
+        (pq.write_table if suffix == ".parquet" else pf.write_feather)(table, path)
+        where = rf"poses\{suffix}"
+    with pytest.raises(InputError, match=rf"{where}: column 'x' is ambiguous: the header has "
+                                         r"'x', 'x'; keep one"):
+        _read(path, ["x", "y", "z"])
+
+
 def test_header_helpers():
     assert split_unit(" x [ mm ] ") == ("x", "mm")
     assert split_unit("A [°]") == ("A", "deg")

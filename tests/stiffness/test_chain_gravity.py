@@ -129,3 +129,12 @@ def test_bad_masses_are_refused():
         chain_gravity_deflection(m, m.home_q, ChainMasses(1.0, 1.0, np.zeros(2), G))
     with pytest.raises(InputError, match="head mass"):
         chain_gravity_deflection(m, m.home_q, ChainMasses(1.0, -1.0, np.zeros(3), G))
+    # finite but absurd: 1e308 kg gave inf/nan deflections with overflow warnings
+    with pytest.raises(InputError, match=r"platform mass = 1e\+308 kg is beyond 1e\+06 kg"):
+        chain_gravity_deflection(m, m.home_q, ChainMasses(1e308, 1.0, np.zeros(3), G))
+    with pytest.raises(InputError, match=r"leg mass 2 = 1e\+200 kg"):
+        chain_gravity_deflection(m, m.home_q, ChainMasses(1.0, 1.0, np.array([0, 1e200, 0]),
+                                                          G))
+    with pytest.raises(InputError, match="gravity component 3"):
+        chain_gravity_deflection(m, m.home_q, ChainMasses(1.0, 1.0, np.zeros(3),
+                                                          np.array([0.0, 0.0, -1e300])))

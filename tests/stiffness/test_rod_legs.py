@@ -238,6 +238,30 @@ def test_wrench_of_the_wrong_width_is_refused():
         stiffness(m, m.home_pose, reference=[0.0, 0.0, 0.1])
 
 
+def test_a_wrench_beyond_1e9_is_refused_with_its_row_and_component():
+    """A finite wrench of 1e308 N gave deflections of 4e300 m (exit 0 in a script)."""
+    m = machine("linear-delta")
+    with pytest.raises(InputError, match=r"wrench component 1 \(dx\) = 1e\+308 is beyond 1e\+09"):
+        stiffness(m, [0.0, 0.0, 0.0], wrench=[1e308, 1e308, 0.0])
+    with pytest.raises(InputError, match=r"wrench row 1, component 3 \(dz\) = -2e\+09"):
+        stiffness(m, [[0.0, 0.0, 0.0], [0.0, 0.0, 0.1]], wrench=[[1.0, 0, 0], [0, 0, -2e9]])
+
+
+def test_a_deflection_that_overflows_flags_its_row():
+    """C w overflowing (a compliance of 1e300 m/N: a mechanism in all but name) gave an inf
+    deflection on a row said to be OK; now that row is SINGULAR and NaN, the other kept."""
+    from pkmkit.status import Status
+    from pkmkit.stiffness.results import summarize
+
+    c = np.array([np.eye(3) * 1e300, np.eye(3) * 1e-8])
+    with np.errstate(all="raise"):
+        r = summarize(c, np.zeros(2, dtype=int), ("dx", "dy", "dz"), "p",
+                      np.array([1e9, 0.0, 0.0]))
+    assert r.status.tolist() == [Status.SINGULAR, Status.OK]
+    assert np.isnan(r.deflection[0]).all() and np.isnan(r.compliance[0]).all()
+    np.testing.assert_allclose(r.deflection[1], [10.0, 0.0, 0.0])
+
+
 def test_reference_point_moved_in_the_platform_frame():
     """K about a point r (platform frame) is k Σ [u, (R b − R r) × u]ᵀ[u, (R b − R r) × u]."""
     m = machine("gough-stewart")

@@ -25,6 +25,8 @@ from pkmkit.numerics.arrays import real
 from pkmkit.status import Status
 from pkmkit.stiffness.indices import stiffness_figures
 
+#: Smallest side (m) of a checked square or cube (a smaller one is a unit slip).
+MIN_SIDE = 1e-9
 
 def _surface_offsets(d: int, per_edge: int) -> np.ndarray:
     """Points of the faces of ``[-1, 1]^d``, ``per_edge`` per edge (duplicates removed)."""
@@ -138,6 +140,9 @@ def region_grid(machine: Machine, center: Any, side: float, free: tuple[int, ...
     if center.shape[0] not in widths or not np.isfinite(center).all():
         raise InputError(f"the centre must be {expected} finite coordinates")
     side = real(side, "the side", positive=True, limit=1e6)
+    if side < MIN_SIDE:
+        raise InputError(f"the side = {side:g} m is below {MIN_SIDE:g} m (1 nm): its samples "
+                         "cannot be told apart from the centre; check the units")
     free = tuple(range(len(center))) if free is None else free
     samples = samples or check_region_samples(len(free))
     lower = [center[k] - side / 2 for k in free]

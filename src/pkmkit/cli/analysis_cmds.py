@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from dataclasses import replace
 
 import click
@@ -38,6 +39,7 @@ from pkmkit.plot.maps import (
     plot_workspace,
 )
 from pkmkit.stiffness.indices import STIFFNESS_INDICES
+from pkmkit.stiffness.results import linear_range_problem
 
 from .grid_options import (
     _coordinates,
@@ -58,7 +60,7 @@ from .options import (
     resolve_machine,
 )
 from .scheduler import SCHEDULER_OPTION
-from .stiffness_cmds import machine_and_data, parse_wrench
+from .stiffness_cmds import PER_MICRO, machine_and_data, parse_wrench
 from .stiffness_options import (
     MAX_DEFLECTION_OPTION,
     MIN_STIFFNESS_OPTION,
@@ -161,10 +163,12 @@ def analyze(machine_name, assignments, pose, isotropy_tol, with_stiffness, wrenc
     lines: list[str] = []
     if with_stiffness or wrench_text is not None:
         wrench, note = parse_wrench(wrench_text, m)
-        payload["stiffness"] = analyze_stiffness(m, data, x, wrench)
+        payload["stiffness"] = analyze_stiffness(m, data, x, wrench, units)
         lines = payload["stiffness"].pop("lines") + ([f"  note: {note}"] if note else [])
+    doubtful = payload.get("stiffness", {}).get("beyond_linear_range")
     if as_json:
         emit_json(payload)
+        _doubtful(doubtful)
         return
     angles = f" (angles {convention}, deg)" if len(shown) == 6 else ""
     q_text = (f"{fmt(payload['q'])} {q_units[0]}" if len(set(q_units)) == 1 else
@@ -183,6 +187,14 @@ def analyze(machine_name, assignments, pose, isotropy_tol, with_stiffness, wrenc
                    f"{fmt(ind.ellipsoid_directions[:, k])}")
     for line in lines:
         click.echo(line)
+    _doubtful(doubtful)
+
+
+def _doubtful(problem: str | None) -> None:
+    """Exit with status 3 after the output when the deflection is doubtful."""
+    if problem:
+        click.echo(f"doubtful: {problem}", err=True)
+        sys.exit(3)
 
 
 def _condition_text(kappa: float) -> str:
@@ -246,7 +258,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
                "plane": list(grid.free_names), "reachable_points": int(reachable.sum()),
                "points": grid.size, "step": grid.step / scale}
     if index_name == "actuators":
-        plot_actuator_maps(m, grid, path=out)
+        plot_actuator_maps(m, grid, unit=units, path=out)
         summary["min"] = np.nanmin(q, axis=0) / scale
         summary["max"] = np.nanmax(q, axis=0) / scale
     else:
@@ -260,12 +272,20 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
         if not finite.any():
             raise InputError(f"{index_name} is undefined on every reachable point of the plane")
         plot_scalar_map(grid, values.reshape(grid.shape), title=f"{m.name}: {title}",
-                        label=label, scale=color_scale, path=out)
+                        label=label, scale=color_scale, unit=units, path=out)
         k_min, k_max = np.nanargmin(values), np.nanargmax(values)
         summary.update({"min": float(values[k_min]), "at_min": points[k_min] / scale,
                         "max": float(values[k_max]), "at_max": points[k_max] / scale})
+    doubtful = ""
+    if index_name == "deflection":  # µm: the largest against the linear model's range
+        worst = np.zeros(len(wrench))
+        worst[0] = summary["max"] / PER_MICRO
+        doubtful = linear_range_problem(worst, m.length_scale, units)
+        if doubtful:
+            summary["beyond_linear_range"] = doubtful
     if as_json:
         emit_json(summary)
+        _doubtful(doubtful)
         return
     click.echo(f"{m.name}: {index_name} over {'-'.join(grid.free_names)} "
                f"({summary['reachable_points']}/{grid.size} points reachable)")
@@ -273,6 +293,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
     click.echo(f"  min {fmt(summary['min'])}{unit}, max {fmt(summary['max'])}{unit} over the "
                f"grid points (step {summary['step']:.4g} {units}: not between them); figure "
                f"{out}")
+    _doubtful(doubtful)
 
 
 def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) -> dict:
@@ -393,7 +414,7 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
                             "worst": check.worst, "index_range": list(check.factor_range),
                             "q_min": check.q_range[0] / scale, "q_max": check.q_range[1] / scale}
     if out is not None:
-        plot_workspace(wmap, m, path=out)
+        plot_workspace(wmap, m, unit=units, path=out)
         summary["figure"] = out
     if as_json:
         emit_json(summary)
@@ -546,7 +567,7 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
         "global_conditioning_index": useful.workspace.global_conditioning_index(),
     }
     if out is not None:
-        plot_useful_workspace(useful, m, path=out)
+        plot_useful_workspace(useful, m, unit=units, path=out)
         summary["figure"] = out
     if as_json:
         emit_json(summary)

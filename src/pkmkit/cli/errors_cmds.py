@@ -16,7 +16,7 @@ import numpy as np
 from pkmkit.boundary.coordinates import actuator_scales
 from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors.measurements import MEASURES
-from pkmkit.model.parameters import length_scale
+from pkmkit.model.parameters import MAX_LENGTH, length_scale
 
 from .limits import MAX_SAMPLED, check_count, check_tool_length
 from .options import JSON_OPTION, SET_OPTION, UNITS_OPTION, emit_json, fmt, resolve_machine
@@ -94,6 +94,21 @@ def _reachable(machine, q: np.ndarray, what: str) -> np.ndarray:
     return q[ok]
 
 
+#: Most configurations a study samples (--poses N, --candidates N): a billion hung for hours.
+MAX_STUDY_POSES = 100_000
+#: Smallest relative rank tolerance: below a few ulps of double precision every singular value
+#: passes and rank-deficient problems are reported full-rank (rank 30 of 30 at κ = 1.8e18).
+MIN_RTOL = 1e-14
+
+
+def check_rtol(rtol: float | None) -> float | None:
+    """``--rtol`` in [:data:`MIN_RTOL`, 1) (None: the analysis's default)."""
+    if rtol is not None and not MIN_RTOL <= rtol < 1:
+        raise InputError(f"--rtol {rtol:g} is outside [{MIN_RTOL:g}, 1): below, rounding "
+                         "errors of double precision pass for independent directions")
+    return rtol
+
+
 def _poses(machine, poses: str, units: str, region, seed: int) -> np.ndarray:
     """``--poses FILE|N``."""
     from pkmkit.geometric_errors.configurations import sample_configurations
@@ -102,6 +117,8 @@ def _poses(machine, poses: str, units: str, region, seed: int) -> np.ndarray:
         n = int(poses)
         if n < 1:
             raise InputError("--poses N needs N ≥ 1")
+        check_count(n, MAX_STUDY_POSES, "configurations to sample (--poses/--candidates N)",
+                    "give fewer (a few hundred poses identify what a study can)")
         return sample_configurations(machine, n, region=region, seed=seed, method="halton").q
     if not Path(poses).exists():
         raise InputError(f"--poses: {poses!r} is neither a number of poses nor an existing file")
@@ -115,6 +132,9 @@ def _setup(machine, measure: str, pivot: str | None, tool_length: float | None,
         values = _numbers(pivot, "--pivot")
         if values.size != 3:
             raise InputError("--pivot needs X,Y,Z")
+        if (np.abs(values * length_scale(units)) > MAX_LENGTH).any():
+            raise InputError(f"--pivot {pivot}: beyond {MAX_LENGTH:g} m from the origin, check "
+                             "the units")
         setup["pivot"] = values * length_scale(units)
     if tool_length is not None:
         setup["tool_length"] = tool_length * length_scale(units)
@@ -261,6 +281,7 @@ def _define(cli: click.Group) -> None:
         combinations, gauges, observability indices."""
         from pkmkit.geometric_errors.identifiability import identifiability
 
+        check_rtol(rtol)
         m = resolve_machine(machine_name, assignments, units)
         q = _poses(m, poses, units, _region(m, region, units), seed)
         result = identifiability(m, kind, q, _setup(m, kind, pivot, tool_length, units),
@@ -354,6 +375,7 @@ def _defect_rows(m) -> list[dict]:
 def _compatibility(m, sel, orientation_only, thesis, configurations, rtol, seed, as_json):
     from pkmkit.geometric_errors.compatibility import RTOL, compatibility
 
+    check_rtol(rtol)
     result = compatibility(m, orientation_only=orientation_only, reference_nominal=thesis,
                            n_configurations=configurations, seed=seed,
                            rtol=rtol if rtol is not None else RTOL, **sel)
@@ -379,12 +401,38 @@ def _compatibility(m, sel, orientation_only, thesis, configurations, rtol, seed,
     return summary
 
 
+#: Defect sizes a first-order sensitivity means something for: lengths from 1 nm to a tenth of
+#: the machine's size, angles from 1e-7° to 10° (beyond, 1e300 gave inf displacements and
+#: 1e-300 an exact model that rounds them to 0, with exit status 0).
+LENGTH_SIZE_RANGE = (1e-9, 0.1)  # m, fraction of the machine's size
+ANGLE_SIZE_RANGE = (1e-7, 10.0)  # degrees
+
+
+def _check_defect_sizes(m, length_size: float | None, angle_size: float | None,
+                        units: str) -> None:
+    """Refuse --length-size / --angle-size outside :data:`LENGTH_SIZE_RANGE` /
+    :data:`ANGLE_SIZE_RANGE` (values in ``units`` and degrees)."""
+    scale = length_scale(units)
+    if length_size is not None:
+        lo, hi = LENGTH_SIZE_RANGE[0], LENGTH_SIZE_RANGE[1] * m.length_scale
+        if not lo <= length_size * scale <= hi:
+            raise InputError(f"--length-size {length_size:g} {units} is outside "
+                             f"[{lo / scale:g}, {hi / scale:.4g}] {units} (1 nm to a tenth of "
+                             "the machine's size): a first-order sensitivity needs small "
+                             "defects that the exact model still resolves")
+    if angle_size is not None and not ANGLE_SIZE_RANGE[0] <= angle_size <= ANGLE_SIZE_RANGE[1]:
+        raise InputError(f"--angle-size {angle_size:g}° is outside [{ANGLE_SIZE_RANGE[0]:g}, "
+                         f"{ANGLE_SIZE_RANGE[1]:g}]°: a first-order sensitivity needs small "
+                         "defects that the exact model still resolves")
+
+
 def _sensitivity(m, sel, region, points, length_size, angle_size, exact, units, seed, out,
                  as_json):
     from pkmkit.geometric_errors.sensitivity import LENGTH_SIZE, sensitivity_analysis
 
     size = LENGTH_SIZE if length_size is None else length_size * length_scale(units)
     angle = None if angle_size is None else angle_size * DEG
+    _check_defect_sizes(m, length_size, angle_size, units)
     table = sensitivity_analysis(m, region=region, n_points=points, length_size=size,
                                  angle_size=angle, exact=exact, seed=seed, **sel)
     rows = table.rows()
@@ -446,8 +494,8 @@ def _tolerance(m, path, n_samples, region, resolution, units, seed, out, as_json
     if out is not None:
         from pkmkit.plot.error_figures import plot_accuracy_map
 
-        plot_accuracy_map(amap, out / "accuracy-map.png", unit="um" if units == "m" else "mm",
-                          position_unit="m" if units == "m" else "mm")
+        plot_accuracy_map(amap, out / "accuracy-map.png", unit="µm" if units == "m" else units,
+                          position_unit=units)
         payload["figure"] = str(out / "accuracy-map.png")
     if not as_json:
         click.echo(f"{m.name}: tolerance analysis ({tol.distribution}, "

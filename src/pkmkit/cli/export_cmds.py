@@ -76,7 +76,7 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
 
         endstops = (parse_vector(endstops_text, 3, "--endstops", units)
                     if endstops_text else None)
-        text = klipper_config(m, endstops=endstops, source=source)
+        text = klipper_config(m, endstops=endstops, source=source, units=units)
         check_klipper_config(m, text, endstops)
         what = "Klipper delta configuration ([printer], [stepper_a/b/c]; mm)"
         check = "Klipper's delta formulas move the carriages as pkmkit (≤ 1e-9 m)"

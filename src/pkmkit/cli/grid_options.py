@@ -15,6 +15,10 @@ from pkmkit.analysis.workspace import (
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import MAX_COORDINATE
 
+#: Narrowest side (m) of a studied box: below it the cells' areas and volumes underflow and
+#: the grid cannot be a machine tool's workspace (a unit slip).
+MIN_EXTENT = 1e-9
+
 
 def _numbers(text: str, what: str) -> list[float]:
     """Comma-separated finite numbers (no magnitude check)."""
@@ -114,6 +118,11 @@ def build_grid(frame: PoseFrame, box_text: str | None, slice_: tuple[int, float]
             text = ",".join(f"{names[k].upper()}MIN,{names[k].upper()}MAX" for k in free)
             raise InputError(f"the box needs {2 * len(free)} values: {text}")
         pairs = values.reshape(-1, 2)
+        for k, (lo, hi) in zip(free, pairs, strict=True):
+            if 0 < hi - lo < MIN_EXTENT:
+                raise InputError(f"--box/--range: the {names[k]} range [{lo / scale:g}, "
+                                 f"{hi / scale:g}] (--units) is narrower than 1 nm: check "
+                                 "the units")
         lower, upper = lower.copy(), upper.copy()
         lower[free], upper[free] = pairs[:, 0], pairs[:, 1]
     resolution = resolution or (201 if len(free) == 2 else 61)

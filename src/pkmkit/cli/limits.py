@@ -27,13 +27,12 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
+from pkmkit.numerics.magnitudes import MAX_FORCE
 
 from .unit_text import UNITS_KEY
 
 #: Longest tool (m): the tools of the seed machines are 0.1–0.2 m long.
 MAX_TOOL_LENGTH = 100.0
-#: Largest force (N) or moment (N·m) of a wrench: about 100,000 tonnes-force.
-MAX_FORCE = 1e9
 #: Largest standard deviation of a reading noise (m).
 MAX_NOISE = 1.0
 #: Most simulated measurement rows (a few hundred bytes each, and Jacobians when calibrated).

@@ -226,7 +226,7 @@ def _fk_batch(m: Machine, all_modes, mode, method, input_, output, scale, chunk_
 @click.option("--q", "q_text", help="Actuator coordinates (joint-chain machines, instead of "
                                     "--pose).")
 @click.option("--tol", type=float, default=1e-6, show_default=True,
-              help="Threshold on the singularity measures.")
+              help="Threshold on the singularity measures (ratios in [0, 1]), in (0, 1).")
 @batch_options
 @ANGLES_OPTION
 @UNITS_OPTION
@@ -239,8 +239,9 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
     sv1..svn (singular values of J), condition, det_A, det_B, J11..Jdn (row-major) and status
     (regular, serial, parallel, serial+parallel, or why the pose has no Jacobian).
     """
-    if not tol > 0:
-        raise click.BadParameter("must be > 0", param_hint="--tol")
+    if not 0 < tol < 1:  # the measures are ratios in [0, 1]: tol ≥ 1 calls every pose singular
+        raise click.BadParameter(f"must lie in (0, 1), got {tol:g}: the singularity measures "
+                                 "are ratios between 0 (singular) and 1", param_hint="--tol")
     m = resolve_machine(machine_name, assignments, units)
     other = _JACOBIAN_OF_FAMILY.get(m.family)
     if other is not None:

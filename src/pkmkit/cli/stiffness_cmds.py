@@ -8,6 +8,7 @@ angles in degrees); the elastic data are always SI (N/m, N·m/rad, Pa), section 
 
 from __future__ import annotations
 
+import sys
 from typing import Any, NamedTuple
 
 import click
@@ -26,6 +27,7 @@ from pkmkit.boundary.kinematics import inverse_options
 from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
 from pkmkit.spatial.rotation import resolve_convention
+from pkmkit.stiffness.results import linear_range_problem
 
 from .batch import batch_options, run_batch, status_names
 from .limits import check_wrench
@@ -191,6 +193,10 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     if weight is not None:
         payload["gravity_deflection"], payload["masses"] = weight
     add_to_payload(payload, check, units, set_status=False)
+    too_far = ("" if wrench is None else
+               linear_range_problem(result.deflection, m.length_scale, units))
+    if too_far:
+        payload["beyond_linear_range"] = too_far
     if as_json:
         emit_json(payload)
     else:
@@ -199,6 +205,10 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
             defl = weight[0] * PER_MICRO
             click.echo(f"  deflection under its own weight: {fmt(defl[:3], 5)} µm, rotation "
                        f"{fmt(defl[3:], 5)} µrad ({weight[1]})")
+    if too_far:
+        click.echo(f"doubtful: {too_far}", err=True)
+        if check is None or not check.out_of_stroke[0]:
+            sys.exit(3)
     finish_single(check, units)
 
 

@@ -128,10 +128,13 @@ def print_workspace_stiffness(s: dict[str, Any], units: str, criteria: dict[str,
     click.echo(f"  elastic data: {'; '.join(s['elastic_data'])}")
 
 
-def analyze_stiffness(m, data, x: np.ndarray, wrench: np.ndarray | None) -> dict[str, Any]:
+def analyze_stiffness(m, data, x: np.ndarray, wrench: np.ndarray | None, units: str = "m"
+                      ) -> dict[str, Any]:
     """Stiffness fields of ``pkmkit analyze`` at pose ``x`` (SI inside the dict, with the
-    text lines under ``"lines"``)."""
+    text lines under ``"lines"``; ``"beyond_linear_range"``: why the deflection is beyond the
+    linear model, in ``units``, or ``""``)."""
     from pkmkit.stiffness import stiffness
+    from pkmkit.stiffness.results import linear_range_problem
 
     r = stiffness(m, x, data=data, wrench=wrench)
     kt = np.asarray(r.translational)
@@ -155,6 +158,7 @@ def analyze_stiffness(m, data, x: np.ndarray, wrench: np.ndarray | None) -> dict
         if defl.size == 6:
             text += f", rotation {fmt(defl[3:] * PER_MICRO, 5)} µrad"
         lines.append(f"  deflection under {fmt(wrench)} (N, N·m): {text}")
+        out["beyond_linear_range"] = linear_range_problem(defl, m.length_scale, units)
     lines.append(f"  elastic data: {'; '.join(data.notes)}")
     out["lines"] = lines
     return out

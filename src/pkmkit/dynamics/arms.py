@@ -29,6 +29,13 @@ from scipy.optimize import NonlinearConstraint, differential_evolution
 
 from pkmkit.exceptions import InputError
 from pkmkit.numerics.arrays import real, real_pair
+from pkmkit.numerics.magnitudes import MAX_DENSITY
+
+#: Admissible (lowest, highest, unit) of each material property: from soft polymers and foams
+#: to diamond, osmium and the strongest fibres; outside, a value is a unit slip (a density of
+#: 1e300 kg/m³ crashed the optimiser, one of 1e-300 sized an arm of 5e-305 kg).
+MATERIAL_RANGES = {"E": (1e6, 1e13, "Pa"), "density": (1.0, MAX_DENSITY, "kg/m³"),
+                   "yield_strength": (1e5, 1e11, "Pa")}
 
 
 @dataclass(frozen=True)
@@ -45,6 +52,11 @@ class Material:
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise InputError(f"material {name} must be > 0, got {value}")
+            lo, hi, unit = MATERIAL_RANGES[name]
+            if not lo <= value <= hi:
+                raise InputError(f"material {name} = {value:g} {unit} is outside [{lo:g}, "
+                                 f"{hi:g}] {unit}, the range of engineering materials: check "
+                                 "the units")
 
 
 @dataclass(frozen=True)
@@ -156,6 +168,10 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
     for name, value in (("stress safety", stress_safety), ("buckling safety", buckling_safety),
                         ("minimum wall", min_wall)):
         real(value, f"the {name}", positive=True, limit=1e6)
+    for name, value in (("stress safety", stress_safety), ("buckling safety", buckling_safety)):
+        if value < 1:
+            raise InputError(f"the {name} = {value:g} is below 1: it would size an arm that "
+                             "yields or buckles under the design load")
     if not (isinstance(max_deflection, int | float) and max_deflection > 0):
         raise InputError(f"the maximum deflection must be > 0, got {max_deflection!r}")
     real(min_stiffness, "the minimum stiffness", nonnegative=True)

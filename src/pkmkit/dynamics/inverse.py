@@ -42,12 +42,13 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.dynamics.masses import MassProperties
+from pkmkit.dynamics.masses import MassProperties, refuse_beyond
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.protocol import require_translational
 from pkmkit.model.rods import CRANK, SLIDE
 from pkmkit.numerics import small
+from pkmkit.numerics.magnitudes import MAX_FORCE
 
 
 @dataclass(frozen=True)
@@ -137,6 +138,7 @@ def inverse_dynamics(machine: Machine, masses: MassProperties, x: np.ndarray, xd
             raise InputError(f"the wrench must be (3,), (6,), (N, 3) or (N, 6); got {w.shape}")
         if not np.isfinite(w).all():
             raise InputError("the wrench must be finite")
+        refuse_beyond("a wrench component", w, MAX_FORCE, "N (or N·m)")
         force_ext[:, : min(3, w.shape[1])] = w[:, :3] if w.shape[1] >= 3 else w
     force = np.empty((machine.n_actuators, n_samples))
     parts = {name: np.empty_like(force) for name in PARTS}

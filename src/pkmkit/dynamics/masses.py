@@ -32,9 +32,16 @@ import numpy as np
 from pkmkit.exceptions import InputError, MachineFileError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.machine_file import parse_toml
-from pkmkit.model.parameters import is_plain_number, length_scale
+from pkmkit.model.parameters import MAX_LENGTH, is_plain_number, length_scale
 from pkmkit.model.rods import STRUT
 from pkmkit.model.text_files import number_problem, read_text
+from pkmkit.numerics.magnitudes import (
+    MAX_DENSITY,
+    MAX_FORCE,
+    MAX_GRAVITY,
+    MAX_INERTIA,
+    MAX_MASS,
+)
 
 
 @dataclass(frozen=True)
@@ -86,9 +93,20 @@ class MassProperties:
                                  [self.platform_mass], *parts])
         if not np.isfinite(values).all() or (values < 0).any():
             raise InputError("masses, radii and lengths must be finite and >= 0")
-        if not np.isfinite(self.gravity).all():
-            raise InputError("gravity must be finite")
         piston, cylinder_length, piston_length = parts
+        for what, arr, limit, unit in (
+                ("carriage mass", self.carriage_mass, MAX_MASS, "kg"),
+                ("rod mass", self.rod_mass, MAX_MASS, "kg"),
+                ("piston mass", piston, MAX_MASS, "kg"),
+                ("platform mass", np.array([self.platform_mass]), MAX_MASS, "kg"),
+                ("rod radius", self.rod_radius, MAX_LENGTH, "m"),
+                ("cylinder length", cylinder_length, MAX_LENGTH, "m"),
+                ("piston length", piston_length, MAX_LENGTH, "m"),
+                ("platform_com component", np.asarray(self.platform_com), MAX_LENGTH, "m"),
+                ("platform_inertia entry", np.ravel(self.platform_inertia), MAX_INERTIA,
+                 "kg·m²"),
+                ("gravity component", np.asarray(self.gravity), MAX_GRAVITY, "m/s²")):
+            refuse_beyond(what, np.asarray(arr, dtype=float), limit, unit)
         strut = machine.model.rod_kind == STRUT
         if (piston[~strut] > 0).any():
             raise InputError("piston masses apply to strut legs only")
@@ -102,6 +120,20 @@ class MassProperties:
         piston = 0.0 if self.piston_mass is None else float(self.piston_mass.sum())
         return float(self.carriage_mass.sum() + self.rod_mass.sum() + self.platform_mass
                      + piston)
+
+
+def refuse_beyond(what: str, values: np.ndarray, limit: float, unit: str) -> None:
+    """An :class:`InputError` naming the first of ``values`` (``(k,)``, SI) that is not finite or
+    is beyond ``limit`` in magnitude: ``"rod mass 2 = 1e+308 kg is beyond 1e+06 kg …"``."""
+    values = np.ravel(np.asarray(values, dtype=float))
+    big = np.flatnonzero(~(np.abs(values) <= limit))
+    if big.size:
+        k = int(big[0])
+        which = f" {k + 1}" if values.size > 1 else ""
+        if not math.isfinite(values[k]):
+            raise InputError(f"{what}{which} must be a finite number, got {values[k]:g}")
+        raise InputError(f"{what}{which} = {values[k]:g} {unit} is beyond {limit:g} {unit}, the "
+                         "largest pkmkit accepts: check the units")
 
 
 #: Default length of a strut's cylinder and of its piston, as a fraction of the strut's length at
@@ -145,6 +177,8 @@ def rod_section_mass(machine: Machine, diameter: float, density: float,
     """
     if not (diameter > 0 and density > 0 and 0 <= inner_diameter < diameter):
         raise InputError("rod section: need diameter > 0, density > 0, 0 <= inner < diameter")
+    refuse_beyond("rod_diameter", np.array([diameter]), MAX_LENGTH, "m")
+    refuse_beyond("rod_density", np.array([density]), MAX_DENSITY, "kg/m³")
     model = machine.model
     area = math.pi / 4 * (diameter**2 - inner_diameter**2)
     cylinder, piston = strut_tube_lengths(machine, cylinder_length, piston_length)
@@ -166,6 +200,9 @@ def _inertia(value: Any) -> np.ndarray:
     if not is_plain_number(value) or np.shape(value) not in ((3, 3), (9,)):
         raise InputError(f"platform_inertia must be a 3 × 3 matrix (kg·m²), got {value!r}")
     inertia = np.asarray(value, dtype=float).reshape(3, 3)
+    if not np.isfinite(inertia).all():
+        raise InputError(f"platform_inertia must be finite, got {inertia.ravel().tolist()}")
+    refuse_beyond("platform_inertia entry", inertia, MAX_INERTIA, "kg·m²")
     if not np.allclose(inertia, inertia.T):
         raise InputError("platform_inertia must be symmetric")
     return inertia
@@ -217,6 +254,15 @@ _KEYS = {"carriage", "rod", "rod_diameter", "rod_inner_diameter", "rod_density",
          "cylinder_length", "piston_length"}
 
 
+#: Bounds of the [masses] keys that are not lengths (checked with their file line).
+_BOUNDS = (("carriage", MAX_MASS, "kg"), ("rod", MAX_MASS, "kg"), ("piston", MAX_MASS, "kg"),
+           ("platform", MAX_MASS, "kg"), ("rod_density", MAX_DENSITY, "kg/m³"),
+           ("gravity", MAX_GRAVITY, "m/s²"), ("platform_inertia", MAX_INERTIA, "kg·m²"))
+#: The [masses] keys that are lengths (in the file's ``units``).
+_LENGTH_KEYS = ("rod_diameter", "rod_inner_diameter", "rod_radius", "platform_com",
+                "cylinder_length", "piston_length")
+
+
 def load_masses(path: str | Path, machine: Machine) -> tuple[MassProperties, np.ndarray | None]:
     """Read a masses file (see the module docstring): ``(mass properties, wrench or None)``.
 
@@ -252,6 +298,18 @@ def load_masses(path: str | Path, machine: Machine) -> tuple[MassProperties, np.
         scale = length_scale(table.get("units", "m"))
     except Exception as exc:  # ParameterError
         raise InputError(f"{path}: {exc}") from None
+    unit_name = table.get("units", "m")
+    bounds = (*_BOUNDS, *((key, MAX_LENGTH / scale, unit_name) for key in _LENGTH_KEYS))
+    for key, limit, unit in bounds:
+        if key in table and is_plain_number(table[key]):
+            try:
+                values = np.asarray(table[key], dtype=float)
+            except ValueError:  # ragged: refused below with the shape it should have
+                continue
+            try:
+                refuse_beyond(key, values, limit, unit)
+            except InputError as exc:
+                raise error(str(exc), lines.get(("masses", key))) from None
     try:
         rod, radius = table.get("rod", 0.0), table.get("rod_radius", 0.0)
         piston = table.get("piston", 0.0)
@@ -287,4 +345,9 @@ def load_masses(path: str | Path, machine: Machine) -> tuple[MassProperties, np.
                                  np.asarray(w.get("moment", [0, 0, 0]), dtype=float)])
         if wrench.shape != (6,) or not np.isfinite(wrench).all():
             raise InputError(f"{path}: [wrench] force and moment need 3 finite numbers each")
+        for key, part, unit in (("force", wrench[:3], "N"), ("moment", wrench[3:], "N·m")):
+            try:
+                refuse_beyond(f"[wrench] {key} component", part, MAX_FORCE, unit)
+            except InputError as exc:
+                raise error(str(exc), lines.get(("wrench", key))) from None
     return props, wrench

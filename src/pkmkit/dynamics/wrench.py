@@ -15,6 +15,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.io.table import read_table
+from pkmkit.numerics.magnitudes import MAX_FORCE
 
 COLUMNS = ("t", "fx", "fy", "fz")
 
@@ -39,6 +40,12 @@ class WrenchSeries:
         if not (np.isfinite(t).all() and np.isfinite(f).all()):
             bad = int(np.flatnonzero(~(np.isfinite(t) & np.isfinite(f).all(axis=1)))[0])
             raise InputError(f"the wrench series has a non-finite value in row {bad + 1}")
+        big = np.flatnonzero(~(np.abs(f) <= MAX_FORCE).all(axis=1))
+        if big.size:
+            k = int(big[0])
+            raise InputError(f"the wrench series' row {k + 1} has a force of "
+                             f"{np.abs(f[k]).max():g} N, beyond {MAX_FORCE:g} N, the largest "
+                             "pkmkit accepts: check the units")
         if (np.diff(t) <= 0).any():
             bad = int(np.flatnonzero(np.diff(t) <= 0)[0])
             raise InputError(f"the wrench series' times must increase: row {bad + 2} has "

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pkmkit.exceptions import InputError
 from pkmkit.export.base import (
     ExportCheckError,
     UnsupportedExportError,
@@ -38,21 +39,30 @@ FORMAT = "klipper"
 #: slide tilt × reach): beyond it the export is refused.
 MODEL_TOL = 1e-9
 STEPPERS = ("stepper_a", "stepper_b", "stepper_c")
+#: Largest length (m) written to a configuration (radius, arms, endstops): no delta printer is
+#: 100 m tall, and a value beyond is a unit slip (its 12 printed digits in mm would also no
+#: longer hold :data:`MODEL_TOL`).
+MAX_LENGTH = 100.0
+#: Slack (m) of the test "an endstop lies within its actuator's stroke".
+STROKE_TOL = 1e-9
 
 
-def klipper_values(machine, endstops: np.ndarray | None = None) -> dict:
+def klipper_values(machine, endstops: np.ndarray | None = None, *, units: str = "mm") -> dict:
     """Klipper's delta parameters of a linear Delta (SI: m, angles in degrees).
 
     Args:
         machine: a translational machine of three slides (a linear Delta).
         endstops: ``(3,)`` actuator coordinates (m) at which the homing endstops trigger
-            (default: the tops of the strokes, ``q_max``).
+            (default: the tops of the strokes, ``q_max``); each within its actuator's stroke.
+        units: length unit of the numbers in error messages.
 
     Returns:
         ``{"delta_radius": R, "angle": (3,), "arm_length": (3,), "position_endstop": (3,)}``.
 
     Raises:
-        UnsupportedExportError: a machine Klipper's delta model cannot express (names what).
+        UnsupportedExportError: a machine Klipper's delta model cannot express (names what),
+            lengths beyond :data:`MAX_LENGTH`.
+        InputError: endstops that are not 3 finite numbers or lie outside their strokes.
     """
     if machine_family(machine) != "translational":
         raise UnsupportedExportError(FORMAT, machine.id, "Klipper's delta kinematics is a "
@@ -82,6 +92,9 @@ def klipper_values(machine, endstops: np.ndarray | None = None) -> dict:
     if not (geo.length > radius).all():
         raise UnsupportedExportError(FORMAT, machine.id, "Klipper needs arm_length > "
                                      "delta_radius")
+    scale = length_scale(units)
+    for what, values in (("delta_radius", [radius]), ("arm_length", geo.length)):
+        _refuse_beyond(machine, what, np.asarray(values), units)
     if endstops is None:
         endstops = geo.q_max
         if not np.isfinite(endstops).all():
@@ -90,27 +103,52 @@ def klipper_values(machine, endstops: np.ndarray | None = None) -> dict:
                 "give the actuator coordinates of the endstops (--endstops)")
     endstops = np.asarray(endstops, dtype=float).reshape(-1)
     if endstops.shape != (3,) or not np.isfinite(endstops).all():
-        raise UnsupportedExportError(FORMAT, machine.id, "the endstops must be 3 finite "
-                                     "actuator coordinates")
+        raise InputError(f"the endstops must be 3 finite actuator coordinates, got "
+                         f"{(endstops / scale).tolist()} {units}")
+    outside = np.flatnonzero(~((endstops >= geo.q_min - STROKE_TOL)
+                               & (endstops <= geo.q_max + STROKE_TOL)))
+    if outside.size:
+        j = int(outside[0])
+        raise InputError(
+            f"the endstop of {geo.actuators[j]} at {endstops[j] / scale:.6g} {units} lies "
+            f"outside its stroke [{geo.q_min[j] / scale:.6g}, {geo.q_max[j] / scale:.6g}] "
+            f"{units}: a carriage cannot trigger it (check the units)")
+    _refuse_beyond(machine, "endstop", endstops, units)
     angle = np.degrees(np.arctan2(centre[:, 1], centre[:, 0]))
     position = endstops + centre[:, 2] - np.sqrt(geo.length**2 - radius**2)
+    _refuse_beyond(machine, "position_endstop", position, units)
     return {"delta_radius": radius, "angle": angle, "arm_length": geo.length.copy(),
             "position_endstop": position, "endstops": endstops, "steppers": geo.actuators}
 
 
-def klipper_config(machine, *, endstops: np.ndarray | None = None, source: str = "") -> str:
+def _refuse_beyond(machine, what: str, values_m: np.ndarray, units: str) -> None:
+    """An :class:`UnsupportedExportError` if a length ``values_m`` (m) is beyond
+    :data:`MAX_LENGTH` (named ``what``, in ``units``)."""
+    big = np.flatnonzero(~(np.abs(values_m) <= MAX_LENGTH))
+    if big.size:
+        scale = length_scale(units)
+        raise UnsupportedExportError(
+            FORMAT, machine.id, f"{what} {values_m[big[0]] / scale:.6g} {units} is beyond "
+            f"{MAX_LENGTH / scale:g} {units}: no delta printer is that large (check the units "
+            "of the machine, --set and --endstops)")
+
+
+def klipper_config(machine, *, endstops: np.ndarray | None = None, source: str = "",
+                   units: str = "mm") -> str:
     """The Klipper configuration text (mm, degrees) of a linear Delta; see the module docstring.
 
     The file holds the kinematic values only: ``[include]`` it after the printer's own
     configuration (pins, currents, ``max_velocity``, ``max_accel``), whose ``[printer]`` and
     ``[stepper_*]`` sections Klipper merges with these.
 
+    ``units`` is the length unit of error messages (the file is in mm whatever it is).
+
     Raises:
-        UnsupportedExportError: see :func:`klipper_values`.
+        UnsupportedExportError, InputError: see :func:`klipper_values`.
     """
     from pkmkit import __version__
 
-    v = klipper_values(machine, endstops)
+    v = klipper_values(machine, endstops, units=units)
     mm = 1.0 / length_scale("mm")
     lines = [
         f"# Klipper delta kinematics of \"{machine.name}\" (pkmkit machine {machine.id!r})",

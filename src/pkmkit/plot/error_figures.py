@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from pkmkit.model.parameters import length_scale
 from pkmkit.plot.save import save_figure
 
 
@@ -42,15 +43,22 @@ def plot_sensitivity(table, path: str | Path, *, top: int = 30, unit: str = "mm"
     return path
 
 
+def _per_metre(unit: str) -> tuple[float, str]:
+    """(numbers per metre, label) of a length unit, ``"µm"`` (or ``"um"``) included."""
+    if unit in ("µm", "um"):
+        return 1e6, "µm"
+    return 1.0 / length_scale(unit), unit
+
+
 def plot_accuracy_map(amap, path: str | Path, *, unit: str = "mm", title: str = "",
                       position_unit: str = "mm") -> Path:
     """Two panels: exact Monte Carlo and first-order percentile of the tool-point error.
 
-    ``unit`` ("mm" or "µm") is the unit of the errors (the colour scale); the positions are
-    drawn in ``position_unit`` ("mm" or "m"), so that the axes of a workspace hundreds of mm
-    wide keep readable ticks when the errors are in µm."""
-    scale, label = (1e3, "mm") if unit == "mm" else (1e6, "µm")
-    pscale, plabel = (1.0, "m") if position_unit == "m" else (1e3, "mm")
+    ``unit`` ("µm" or a length unit: "mm", "m", "in") is the unit of the errors (the colour
+    scale); the positions are drawn in ``position_unit`` (a length unit), so that the axes of
+    a workspace hundreds of mm wide keep readable ticks when the errors are in µm."""
+    scale, label = _per_metre(unit)
+    pscale, plabel = _per_metre(position_unit)
     fig = Figure(figsize=(10, 4.2))
     vmax = np.nanmax([np.nanmax(amap.exact), np.nanmax(amap.first_order)]) * scale
     vmin = np.nanmin([np.nanmin(amap.exact), np.nanmin(amap.first_order)]) * scale

@@ -1,8 +1,14 @@
 """Figures of the analysis layer: index maps, workspace maps with the inscribed square/cube,
-joint-space maps, velocity ellipses and actuator-coordinate maps (matplotlib, pyplot-free)."""
+joint-space maps, velocity ellipses and actuator-coordinate maps (matplotlib, pyplot-free).
+
+The analyses are in SI; a figure draws its positions (and linear actuator values) in the
+length ``unit`` it is given (``"m"``, ``"mm"``, ``"in"``: a command's ``--units``), its axis
+labels, titles and colour bars saying so; angular actuators are drawn in degrees.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +23,7 @@ from pkmkit.analysis.joint_space import JointSpaceMap, UsefulWorkspace
 from pkmkit.analysis.workspace import InscribedBox, WorkspaceMap
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
+from pkmkit.model.parameters import length_scale
 from pkmkit.plot.save import save_figure
 
 #: Colours of the workspace classes: first failing criterion, then feasible.
@@ -68,6 +75,20 @@ def _extent(grid: Grid) -> list[float]:
     (ax0, ax1) = grid.axes
     h = 0.5 * grid.step
     return [ax0[0] - h, ax0[-1] + h, ax1[0] - h, ax1[-1] + h]
+
+
+def _per_unit(unit: str) -> float:
+    """SI value (m, or rad for ``"deg"``) of one ``unit``."""
+    return float(np.radians(1.0)) if unit == "deg" else length_scale(unit)
+
+
+def _shown(grid: Grid, unit: str) -> Grid:
+    """``grid`` with its coordinates in ``unit`` instead of SI (what a figure draws)."""
+    s = _per_unit(unit)
+    return dataclasses.replace(
+        grid, axes=tuple(np.asarray(a) / s for a in grid.axes),
+        base=np.asarray(grid.base, dtype=float) / s, step=grid.step / s,
+        upper=None if grid.upper is None else np.asarray(grid.upper) / s)
 
 
 def _labels(ax, grid: Grid, unit: str) -> None:
@@ -132,7 +153,8 @@ def _log_levels(low: float, top: float, count: int, clipped: bool) -> np.ndarray
 def plot_scalar_map(grid: Grid, values: np.ndarray, *, ax=None, title: str = "",
                     label: str = "", levels: int | np.ndarray = 12, unit: str = "m",
                     scale: str = "auto", path: str | Path | None = None) -> Figure:
-    """Filled iso-contours of ``values`` (shape ``grid.shape``, 2 free axes; NaN = blank).
+    """Filled iso-contours of ``values`` (shape ``grid.shape``, 2 free axes; NaN = blank), the
+    grid (m) drawn in ``unit``.
 
     ``scale``: colour levels, see :func:`color_levels` (ignored when ``levels`` is an array).
     Near a singularity (κ → ∞) the levels stop at the 95th percentile and the colour bar is
@@ -144,7 +166,7 @@ def plot_scalar_map(grid: Grid, values: np.ndarray, *, ax=None, title: str = "",
         fig = Figure(figsize=(6.0, 5.0), layout="constrained")
         ax = fig.add_subplot()
     fig = ax.figure
-    x, y = np.meshgrid(*grid.axes, indexing="ij")
+    x, y = np.meshgrid(*_shown(grid, unit).axes, indexing="ij")
     data = np.ma.masked_invalid(values)
     if data.count() == 0:
         raise ValueError("nothing to draw: the index is undefined everywhere on the slice")
@@ -169,12 +191,14 @@ def plot_scalar_map(grid: Grid, values: np.ndarray, *, ax=None, title: str = "",
     return _save(fig, path)
 
 
-def _draw_box(ax, box: InscribedBox | None, free: tuple[int, ...], **style) -> None:
+def _draw_box(ax, box: InscribedBox | None, free: tuple[int, ...], unit: str = "m",
+              **style) -> None:
     if box is None:
         return
     i, j = free[:2]
-    ax.add_patch(Rectangle((box.lower[i], box.lower[j]), box.side, box.side, fill=False,
-                           **{"edgecolor": "k", "linewidth": 1.6, **style}))
+    s = _per_unit(unit)
+    ax.add_patch(Rectangle((box.lower[i] / s, box.lower[j] / s), box.side / s, box.side / s,
+                           fill=False, **{"edgecolor": "k", "linewidth": 1.6, **style}))
 
 
 def classify(wmap: WorkspaceMap) -> np.ndarray:
@@ -203,22 +227,23 @@ def _plot_classes(ax, classes: np.ndarray, grid: Grid) -> None:
             ax.plot([], [], "s", color=colour, label=name)
 
 
-def plot_workspace(wmap: WorkspaceMap, machine: Machine, *, title: str = "",
+def plot_workspace(wmap: WorkspaceMap, machine: Machine, *, title: str = "", unit: str = "m",
                    path: str | Path | None = None) -> Figure:
     """Workspace classes on a 2-D grid (or three slices through the inscribed cube of a 3-D
-    grid), with the largest inscribed square/cube and the home pose."""
+    grid), with the largest inscribed square/cube and the home pose, drawn in ``unit``."""
     grid = wmap.grid
+    s = length_scale(unit)
     classes = classify(wmap)
     if len(grid.free) == 2:
         fig = Figure(figsize=(6.4, 5.6), layout="constrained")
         ax = fig.add_subplot()
-        _plot_classes(ax, classes, grid)
-        _draw_box(ax, wmap.inscribed, grid.free, label="inscribed square")
-        home = machine.home_pose
+        _plot_classes(ax, classes, _shown(grid, unit))
+        _draw_box(ax, wmap.inscribed, grid.free, unit, label="inscribed square")
+        home = np.asarray(machine.home_pose, dtype=float) / s
         ax.plot(home[grid.free[0]], home[grid.free[1]], "r*", ms=10, label="home")
-        _labels(ax, grid, "m")
+        _labels(ax, grid, unit)
         ax.legend(fontsize=7, loc="upper right", framealpha=0.8)
-        ax.set_title(title or _workspace_title(wmap), fontsize=9)
+        ax.set_title(title or _workspace_title(wmap, unit), fontsize=9)
         return _save(fig, path)
     fig = Figure(figsize=(15, 5.2), layout="constrained")
     center = wmap.inscribed.center if wmap.inscribed is not None else machine.home_pose
@@ -230,29 +255,33 @@ def plot_workspace(wmap: WorkspaceMap, machine: Machine, *, title: str = "",
         cut[other] = index[other]
         sub = Grid(axes=(grid.axes[a], grid.axes[b]), free=(grid.free[a], grid.free[b]),
                    base=grid.base, step=grid.step, names=grid.names)
-        _plot_classes(ax, classes[tuple(cut)], sub)
-        _draw_box(ax, wmap.inscribed, sub.free, label="inscribed cube")
-        _labels(ax, sub, "m")
+        _plot_classes(ax, classes[tuple(cut)], _shown(sub, unit))
+        _draw_box(ax, wmap.inscribed, sub.free, unit, label="inscribed cube")
+        _labels(ax, sub, unit)
         name = grid.names[grid.free[other]]
-        ax.set_title(f"slice {name} = {grid.axes[other][index[other]]:.4g} m", fontsize=9)
+        ax.set_title(f"slice {name} = {grid.axes[other][index[other]] / s:.4g} {unit}",
+                     fontsize=9)
         if panel == 0:
             ax.legend(fontsize=7, loc="upper right", framealpha=0.8)
-    fig.suptitle(title or _workspace_title(wmap), fontsize=10)
+    fig.suptitle(title or _workspace_title(wmap, unit), fontsize=10)
     return _save(fig, path)
 
 
-def _workspace_title(wmap: WorkspaceMap) -> str:
-    what = "area" if len(wmap.grid.free) == 2 else "volume"
-    unit = "m²" if len(wmap.grid.free) == 2 else "m³"
-    text = f"{what} {wmap.measure:.4g} {unit}"
+def _workspace_title(wmap: WorkspaceMap, unit: str = "m") -> str:
+    d = len(wmap.grid.free)
+    what = "area" if d == 2 else "volume"
+    s = length_scale(unit)
+    text = f"{what} {wmap.measure / s**d:.4g} {unit}{'²' if d == 2 else '³'}"
     if wmap.inscribed is not None:
-        text += f", inscribed side {wmap.inscribed.side:.4g} m"
+        text += f", inscribed side {wmap.inscribed.side / s:.4g} {unit}"
     return text
 
 
 def plot_joint_space(jmap: JointSpaceMap, *, square: InscribedBox | None = None, ax=None,
-                     title: str = "", path: str | Path | None = None) -> Figure:
-    """Feasible actuator vectors (2 actuators) with a square of actuator values."""
+                     title: str = "", unit: str = "m", path: str | Path | None = None
+                     ) -> Figure:
+    """Feasible actuator vectors (2 actuators, drawn in ``unit``: a length unit, or ``"deg"``
+    for angular actuators) with a square of actuator values."""
     if ax is None:
         fig = Figure(figsize=(6.0, 5.4), layout="constrained")
         ax = fig.add_subplot()
@@ -260,31 +289,36 @@ def plot_joint_space(jmap: JointSpaceMap, *, square: InscribedBox | None = None,
     grid = jmap.grid
     classes = np.where(jmap.feasible, 2, np.where(jmap.masks["assembly"], 1, 0))
     cmap = ListedColormap(["#d9d9d9", "#fcbba1", "#41ab5d"])
-    ax.imshow(classes.T, origin="lower", extent=_extent(grid), cmap=cmap, vmin=-0.5, vmax=2.5,
-              interpolation="nearest")
+    ax.imshow(classes.T, origin="lower", extent=_extent(_shown(grid, unit)), cmap=cmap,
+              vmin=-0.5, vmax=2.5, interpolation="nearest")
     for k, name in enumerate(("no assembly", "criteria fail", "feasible")):
         ax.plot([], [], "s", color=cmap(k), label=name)
-    _draw_box(ax, square if square is not None else jmap.inscribed, grid.free,
+    _draw_box(ax, square if square is not None else jmap.inscribed, grid.free, unit,
               label="useful zone")
-    _labels(ax, grid, "m")
+    _labels(ax, grid, unit)
     ax.legend(fontsize=7, loc="upper right", framealpha=0.8)
     ax.set_title(title, fontsize=9)
     return _save(fig, path)
 
 
 def plot_useful_workspace(useful: UsefulWorkspace, machine: Machine, *, title: str = "",
-                          path: str | Path | None = None) -> Figure:
+                          unit: str = "m", path: str | Path | None = None) -> Figure:
     """Seed 004's pair of figures: joint space with the useful zone, and the useful workspace
-    (its image) with the inscribed square and iso-contours of λ_min and λ_max."""
+    (its image) with the inscribed square and iso-contours of λ_min and λ_max, lengths drawn
+    in ``unit``."""
+    s = length_scale(unit)
+    joint_unit = "deg" if np.asarray(machine.angular_actuators).any() else unit
     fig = Figure(figsize=(12.5, 5.4), layout="constrained")
     plot_joint_space(useful.joint, square=useful.joint_square, ax=fig.add_subplot(1, 2, 1),
-                     title=f"joint space: useful zone of side {useful.joint_square.side:.4g} m")
+                     unit=joint_unit, title=f"joint space: useful zone of side "
+                     f"{useful.joint_square.side / _per_unit(joint_unit):.4g} {joint_unit}")
     ax = fig.add_subplot(1, 2, 2)
     ws = useful.workspace
     grid = ws.grid
-    ax.imshow(np.where(ws.feasible, 1.0, np.nan).T, origin="lower", extent=_extent(grid),
+    shown = _shown(grid, unit)
+    ax.imshow(np.where(ws.feasible, 1.0, np.nan).T, origin="lower", extent=_extent(shown),
               cmap=ListedColormap(["#c7e9c0"]), interpolation="nearest")
-    x, y = np.meshgrid(*grid.axes, indexing="ij")
+    x, y = np.meshgrid(*shown.axes, indexing="ij")
     for k, colour in ((0, "tab:red"), (-1, "tab:blue")):
         values = np.where(ws.feasible, ws.factors[..., k], np.nan)
         if np.isfinite(values).any():
@@ -293,15 +327,15 @@ def plot_useful_workspace(useful: UsefulWorkspace, machine: Machine, *, title: s
             ax.clabel(lines, fmt="%.2f", fontsize=6)
     ax.plot([], [], color="tab:red", label="λ_max iso-lines")
     ax.plot([], [], color="tab:blue", label="λ_min iso-lines")
-    _draw_box(ax, useful.inscribed, grid.free, label="inscribed square")
-    home = machine.home_pose
+    _draw_box(ax, useful.inscribed, grid.free, unit, label="inscribed square")
+    home = np.asarray(machine.home_pose, dtype=float) / s
     ax.plot(home[0], home[1], "r*", ms=10, label="home")
-    _labels(ax, grid, "m")
+    _labels(ax, grid, unit)
     ax.legend(fontsize=7, loc="upper right", framealpha=0.8)
     lo, hi = useful.factor_range
     side = useful.inscribed.side if useful.inscribed is not None else float("nan")
-    ax.set_title(f"useful workspace: λ in [{lo:.2f}, {hi:.2f}], inscribed side {side:.4g} m",
-                 fontsize=9)
+    ax.set_title(f"useful workspace: λ in [{lo:.2f}, {hi:.2f}], inscribed side "
+                 f"{side / s:.4g} {unit}", fontsize=9)
     fig.suptitle(title or machine.name, fontsize=10)
     return _save(fig, path)
 
@@ -340,17 +374,22 @@ def plot_ellipses(machine: Machine, poses: np.ndarray, *, free: tuple[int, int] 
     return _save(fig, path)
 
 
-def plot_actuator_maps(machine: Machine, grid: Grid, *, title: str = "",
+def plot_actuator_maps(machine: Machine, grid: Grid, *, title: str = "", unit: str = "m",
                        path: str | Path | None = None) -> Figure:
-    """Actuator coordinates over a plane (one panel per actuator), as seed 000 Figs 3.9–3.11."""
+    """Actuator coordinates over a plane (one panel per actuator), as seed 000 Figs 3.9–3.11:
+    positions and linear actuators in ``unit``, angular actuators in degrees."""
     q = machine.ik(grid.points).reshape((*grid.shape, machine.n_actuators))
     n = machine.n_actuators
+    angular = np.asarray(machine.angular_actuators, dtype=bool)
     fig = Figure(figsize=(5.2 * n, 4.6), layout="constrained")
     for k in range(n):
         ax = fig.add_subplot(1, n, k + 1)
-        values = q[..., k]
-        plot_scalar_map(grid, values, ax=ax, label=f"{machine.actuator_names[k]} [m]",
-                        title=f"{machine.actuator_names[k]}: {np.nanmin(values):.4f} … "
-                              f"{np.nanmax(values):.4f} m")
+        shown, what = ((np.degrees(q[..., k]), "deg") if angular[k]
+                       else (q[..., k] / length_scale(unit), unit))
+        name = machine.actuator_names[k]
+        digits = 4 if what == "m" else 2
+        plot_scalar_map(grid, shown, ax=ax, label=f"{name} [{what}]", unit=unit,
+                        title=f"{name}: {np.nanmin(shown):.{digits}f} … "
+                              f"{np.nanmax(shown):.{digits}f} {what}")
     fig.suptitle(title or machine.name, fontsize=10)
     return _save(fig, path)

@@ -13,6 +13,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.numerics.arrays import as_batch
+from pkmkit.numerics.magnitudes import MAX_FORCE
 from pkmkit.status import Status
 from pkmkit.stiffness.data import StiffnessData, default_data
 from pkmkit.stiffness.frames import move_compliance
@@ -114,6 +115,13 @@ def stiffness(machine: Any, pose: Any = None, *, q: Any = None, wrench: Any = No
         if w.shape[-1] != d or w.ndim > 2 or not np.isfinite(w).all():
             raise InputError(f"wrench must have {d} finite components ({', '.join(names)} "
                              f"forces then moments), got shape {w.shape}")
+        big = np.argwhere(~(np.abs(np.atleast_2d(w)) <= MAX_FORCE))
+        if big.size:
+            row, k = (int(i) for i in big[0])
+            where = f"row {row}, " if w.ndim == 2 else ""
+            raise InputError(f"wrench {where}component {k + 1} ({names[k]}) = "
+                             f"{np.atleast_2d(w)[row, k]:g} is beyond {MAX_FORCE:g} N (or N·m), "
+                             "the largest load pkmkit accepts: check the units")
     result = summarize(c, status, names, where, w)
     if single:
         if result.status[0] != Status.OK:

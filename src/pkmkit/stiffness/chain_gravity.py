@@ -35,7 +35,9 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.dynamics.masses import refuse_beyond
 from pkmkit.exceptions import InputError
+from pkmkit.numerics.magnitudes import MAX_GRAVITY, MAX_MASS
 from pkmkit.status import Status
 from pkmkit.stiffness.data import StiffnessData, default_data
 from pkmkit.stiffness.joint_chains import assemble, null_space_compliance
@@ -82,6 +84,11 @@ class ChainMasses:
         g = np.asarray(self.gravity, dtype=float)
         if g.shape != (3,) or not np.isfinite(g).all():
             raise InputError(f"gravity must be 3 finite numbers (m/s²), got {self.gravity!r}")
+        for what, values, limit, unit in (
+                ("platform mass", [self.platform], MAX_MASS, "kg"),
+                ("head mass", [self.head], MAX_MASS, "kg"), ("leg mass", legs, MAX_MASS, "kg"),
+                ("gravity component", g, MAX_GRAVITY, "m/s²")):
+            refuse_beyond(what, np.asarray(values, dtype=float), limit, unit)
 
 
 def illustrative_masses(machine: Any, gravity: Any = (0.0, 0.0, -9.81)) -> ChainMasses:

@@ -9,6 +9,13 @@ import numpy as np
 
 from pkmkit.status import Status
 
+#: Largest deflection the linear (small-displacement) model describes: a translation of this
+#: fraction of the machine's size, a rotation of this many radians. Beyond, the load would
+#: deform the machine far outside what a constant compliance predicts (second-order terms
+#: ~1e-4 of the first at these bounds).
+SMALL_TRANSLATION = 0.01
+SMALL_ROTATION = 0.01  # rad
+
 #: A compliance eigenvalue below this fraction of the largest is a rigid direction (the model's
 #: rigid rods, links or constraints hold it: infinite stiffness).
 RIGID_TOL = 1e-12
@@ -68,6 +75,14 @@ def summarize(compliance: np.ndarray, status: np.ndarray, coordinates: tuple[str
     n, d = c.shape[:2]
     status = np.asarray(status, dtype=int).copy()
     ok = (status == Status.OK) & np.isfinite(c).all(axis=(1, 2))
+    deflection = None
+    if wrench is not None:
+        w = np.broadcast_to(np.asarray(wrench, dtype=float), (n, d))
+        with np.errstate(over="ignore", invalid="ignore"):
+            deflection = np.einsum("nij,nj->ni", np.where(ok[:, None, None], c, np.nan), w)
+        # a compliance so large that C w overflows is a mechanism in all but name: flagged
+        ok &= np.isfinite(deflection).all(axis=1)
+        deflection[~ok] = np.nan
     status[~ok & (status == Status.OK)] = Status.SINGULAR
     eig = np.full((n, d), np.nan)
     vec = np.full((n, d, d), np.nan)
@@ -95,10 +110,6 @@ def summarize(compliance: np.ndarray, status: np.ndarray, coordinates: tuple[str
         rot = np.full((n, 3), np.nan)
         if ok.any():
             rot[ok] = _block_stiffness(c[ok][:, 3:, 3:], top)
-    deflection = None
-    if wrench is not None:
-        w = np.broadcast_to(np.asarray(wrench, dtype=float), (n, d))
-        deflection = np.einsum("nij,nj->ni", np.where(ok[:, None, None], c, np.nan), w)
     return StiffnessResult(compliance=np.where(ok[:, None, None], c, np.nan), stiffness=stiff,
                            eigenvalues=eig, directions=vec, translational=trans, rotational=rot,
                            deflection=deflection, rigid=rigid, status=status,
@@ -113,3 +124,29 @@ def _block_stiffness(block: np.ndarray, top: np.ndarray) -> np.ndarray:
     rigid = lam <= RIGID_TOL * top
     with np.errstate(divide="ignore"):
         return np.where(rigid, np.inf, 1.0 / np.where(rigid, 1.0, lam))[:, ::-1]
+
+
+def beyond_linear_range(deflection: np.ndarray, length: float) -> np.ndarray:
+    """Rows of ``deflection`` ``(N, d)`` (m, then rad when d = 6) beyond the linear model's
+    range: a translation above :data:`SMALL_TRANSLATION` × ``length`` (m, the machine's size)
+    or a rotation above :data:`SMALL_ROTATION`. Returns ``(N,)`` bool (False on NaN rows)."""
+    d = np.atleast_2d(np.asarray(deflection, dtype=float))
+    t = np.linalg.norm(d[:, :min(d.shape[1], 3)], axis=1)
+    r = np.linalg.norm(d[:, 3:], axis=1) if d.shape[1] > 3 else np.zeros(len(d))
+    return (t > SMALL_TRANSLATION * length) | (r > SMALL_ROTATION)
+
+
+def linear_range_problem(deflection: np.ndarray, length: float, units: str = "m") -> str:
+    """Why the deflection ``(d,)`` (m, rad) of a machine of size ``length`` (m) is beyond the
+    linear model's range (:func:`beyond_linear_range`), in words with lengths in ``units``;
+    ``""`` when it is within."""
+    from pkmkit.model.parameters import length_scale
+
+    if not beyond_linear_range(deflection, length)[0]:
+        return ""
+    scale = length_scale(units)
+    return (f"the deflection is beyond the range of the linear (small-displacement) model "
+            f"(a translation beyond {SMALL_TRANSLATION * length / scale:.4g} {units}, "
+            f"{SMALL_TRANSLATION:.0%} of the machine's size, or a rotation beyond "
+            f"{SMALL_ROTATION:g} rad): under this load the machine would bend, yield or break "
+            "long before; the figure is not a prediction")
