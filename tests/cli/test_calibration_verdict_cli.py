@@ -260,3 +260,25 @@ def test_a_file_in_inches_that_says_mm_is_judged_even_when_nothing_converges(tmp
     saved = json.loads((tmp_path / "cal" / "calibration.json").read_text())
     assert saved["converged"] is False and saved["files"]["machine"] is None
     assert "did not converge" in html.unescape((tmp_path / "cal" / "report.html").read_text())
+
+
+@pytest.mark.parametrize("sigma, words", [("1e300", "largest reading noise"),
+                                          ("1e-300", "below"), ("nan", "finite")])
+def test_absurd_sigma_is_refused_before_the_identification(tmp_path, sigma, words):
+    """``--sigma`` of 1e300 or 1e-300 used to run and end with a puzzling red verdict
+    ("residual not finite"): refused up front, naming the option, nothing written."""
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    runner = CliRunner()
+    data = tmp_path / "m.csv"
+    done = runner.invoke(cli, ["simulate-measurements", "linear-delta", "--measure", "point",
+                               "--poses", "20", "--seed", "1", "--units", "mm",
+                               "--out", str(data)])
+    assert done.exit_code == 0, done.output
+    done = runner.invoke(cli, ["calibrate", "linear-delta", "--measure", "point",
+                               "--measurements", str(data), "--sigma", sigma,
+                               "--out", str(tmp_path / "cal")])
+    assert done.exit_code == 1 and "--sigma" in done.output and words in done.output
+    assert not (tmp_path / "cal").exists()

@@ -21,6 +21,9 @@ from .limits import MAX_PIECES, MAX_SIMULATED, check_count, check_noise, check_t
 from .options import JSON_OPTION, emit_json, machine_document_path, resolve_machine
 from .register_cmd import register_cmd
 
+#: Smallest reading noise ``calibrate --sigma`` accepts (m).
+MIN_SIGMA = 1e-12
+
 
 def register(cli: click.Group) -> None:
     """Add the calibration commands to the ``pkmkit`` group."""
@@ -279,9 +282,15 @@ def calibrate_cmd(machine_name, kind, measurements, validation_file, parameters,
     elif identify_frame:
         frame = "identify"
     tolerances = _tolerances(tolerance_items, machine, unit)
+    if sigma is not None:
+        sigma = check_noise(sigma * length_scale(unit), unit, "--sigma")
+        if not sigma >= MIN_SIGMA:
+            raise InputError(f"--sigma {sigma / length_scale(unit):g} {unit}: a reading noise "
+                             f"below {MIN_SIGMA / length_scale(unit):g} {unit} (1 pm) weights "
+                             "the readings beyond floating-point precision")
     result = calibrate(machine, data, validation=validation, parameters=parameters,
                        frame=frame, robust=robust, prior=prior, tolerances=tolerances,
-                       sigma=None if sigma is None else sigma * length_scale(unit),
+                       sigma=sigma,
                        compatible=not allow_incompatible, progress=not as_json,
                        prune=not keep_weak, file_unit=unit)
     payload = result.to_json(unit)
