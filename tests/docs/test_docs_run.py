@@ -1,8 +1,10 @@
 """The documentation runs: every console and Python block of README.md and docs/*.md is
 executed in a temporary folder (one per file, with ``docs/examples``, ``bench``, ``tests`` and
 ``pyproject.toml`` beside it) and what it prints is compared with what the documentation shows
-(see ``docs_blocks``). Blocks marked ``ci`` run only in CI (``.ci/run`` sets
-``PKMKIT_DOCS_CI``)."""
+(see ``docs_blocks``). Blocks marked ``ci`` (long examples) carry the pytest marker ``ci``: the
+ordinary run leaves them out, ``.ci/run`` runs them (``python -m pytest -m "slow or ci"``). The
+blocks of one file share its folder and run in order, so under pytest-xdist they go to one
+worker (``xdist_group``, with ``--dist loadgroup``)."""
 
 import os
 import shutil
@@ -17,16 +19,19 @@ from .docs_blocks import blocks, compare
 ROOT = Path(__file__).resolve().parents[2]
 FILES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 ALL_BLOCKS = [b for path in FILES for b in blocks(path)]
-IN_CI = bool(os.environ.get("CI") or os.environ.get("PKMKIT_DOCS_CI"))
 TIMEOUT = 900
 
 
 @pytest.fixture(scope="module")
 def folders(tmp_path_factory):
-    """One working folder per documentation file, shared by its blocks in order."""
+    """One working folder per documentation file, shared by its blocks in order. A block whose
+    page has earlier ordinary blocks that did not run in this session (a ``-m ci`` run leaves
+    them out) gets them run first, unchecked, for the files they write."""
     made: dict[Path, Path] = {}
+    ran: set[tuple[Path, int]] = set()
 
-    def folder(path: Path) -> Path:
+    def folder(block) -> Path:
+        path = block.path
         if path not in made:
             work = tmp_path_factory.mktemp(path.stem)
             shutil.copytree(ROOT / "docs" / "examples", work / "docs" / "examples")
@@ -35,6 +40,14 @@ def folders(tmp_path_factory):
             (work / "tests").symlink_to(ROOT / "tests")
             (work / "pyproject.toml").symlink_to(ROOT / "pyproject.toml")
             made[path] = work
+        for earlier in blocks(path):
+            if earlier.line >= block.line:
+                break
+            if ((path, earlier.line) not in ran and "skip" not in earlier.options
+                    and "ci" not in earlier.options):
+                _run(earlier, made[path], check=False)
+                ran.add((path, earlier.line))
+        ran.add((path, block.line))
         return made[path]
 
     return folder
@@ -51,23 +64,30 @@ def _environment() -> dict[str, str]:
 def _params():
     params = []
     for block in ALL_BLOCKS:
-        marks = []
+        marks = [pytest.mark.xdist_group(block.path.name)]
         if "skip" in block.options:
             marks.append(pytest.mark.skip(reason=block.options["skip"]))
-        elif "ci" in block.options and not IN_CI:
-            marks.append(pytest.mark.skip(reason="long example: run in CI (PKMKIT_DOCS_CI=1)"))
+        elif "ci" in block.options:
+            marks.append(pytest.mark.ci)
         params.append(pytest.param(block, id=block.name, marks=marks))
     return params
 
 
 @pytest.mark.parametrize("block", _params())
 def test_block_runs_as_shown(block, folders):
-    work = folders(block.path)
+    _run(block, folders(block), check=True)
+
+
+def _run(block, work: Path, check: bool) -> None:
+    """Run one block in ``work``; with ``check``, compare its exit statuses and output with
+    what the page shows."""
     env = _environment()
     if block.lang == "python":
         program, expected = block.program()
         done = subprocess.run([sys.executable, "-c", program], cwd=work, env=env,
                               capture_output=True, text=True, timeout=TIMEOUT)
+        if not check:
+            return
         assert done.returncode == 0, f"{block.name}: {done.stderr}"
         if expected:
             problem = compare(expected, done.stdout, numbers="any-numbers" not in block.options)
@@ -77,6 +97,8 @@ def test_block_runs_as_shown(block, folders):
         done = subprocess.run(["bash", "-c", command.text], cwd=work, env=env,
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                               timeout=TIMEOUT)
+        if not check:
+            continue
         where = f"{block.path.name}:{command.line}: $ {command.text}"
         shows_error = bool(command.expected) and command.expected[0].startswith("Error:")
         if shows_error:
