@@ -22,35 +22,42 @@ ALL_BLOCKS = [b for path in FILES for b in blocks(path)]
 TIMEOUT = 900
 
 
-@pytest.fixture(scope="module")
-def folders(tmp_path_factory):
+class PageFolders:
     """One working folder per documentation file, shared by its blocks in order. A block whose
-    page has earlier ordinary blocks that did not run in this session (a ``-m ci`` run leaves
-    them out) gets them run first, unchecked, for the files they write."""
-    made: dict[Path, Path] = {}
-    ran: set[tuple[Path, int]] = set()
+    page has earlier ordinary blocks that did not run in this session (a ``-m ci`` run, or a
+    ``-k`` selection, leaves them out) gets them run first, unchecked, for the files they
+    write; blocks marked ``ci`` or ``skip`` are never run that way."""
 
-    def folder(block) -> Path:
+    def __init__(self, tmp_path_factory):
+        self._factory = tmp_path_factory
+        self._made: dict[Path, Path] = {}
+        self._ran: set[tuple[Path, int]] = set()
+
+    def __call__(self, block) -> Path:
         path = block.path
-        if path not in made:
-            work = tmp_path_factory.mktemp(path.stem)
+        if path not in self._made:
+            work = self._factory.mktemp(path.stem)
             shutil.copytree(ROOT / "docs" / "examples", work / "docs" / "examples")
             (work / "bench").symlink_to(ROOT / "bench")
             # the documentation's test commands run the repository's tests and configuration
             (work / "tests").symlink_to(ROOT / "tests")
             (work / "pyproject.toml").symlink_to(ROOT / "pyproject.toml")
-            made[path] = work
+            self._made[path] = work
+        work = self._made[path]
         for earlier in blocks(path):
             if earlier.line >= block.line:
                 break
-            if ((path, earlier.line) not in ran and "skip" not in earlier.options
+            if ((path, earlier.line) not in self._ran and "skip" not in earlier.options
                     and "ci" not in earlier.options):
-                _run(earlier, made[path], check=False)
-                ran.add((path, earlier.line))
-        ran.add((path, block.line))
-        return made[path]
+                _run(earlier, work, check=False)
+                self._ran.add((path, earlier.line))
+        self._ran.add((path, block.line))
+        return work
 
-    return folder
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory):
+    return PageFolders(tmp_path_factory)
 
 
 def _environment() -> dict[str, str]:
@@ -204,3 +211,30 @@ def test_a_mismatch_in_a_long_output_is_found_quickly():
     assert compare([*shown, "== missing"], actual) is not None
     assert compare([*shown, "..."], actual) is None
     assert time.perf_counter() - start < 30  # a hang guard, not a benchmark
+
+
+def test_a_block_run_alone_first_gets_the_files_of_the_earlier_blocks(tmp_path_factory):
+    """A ``ci`` block whose page's ordinary blocks ran in another session (``.ci/run``'s
+    ``-m "slow or ci"``) finds the files they write; an earlier ``ci`` block is not replayed."""
+    page = tmp_path_factory.mktemp("page") / "page.md"
+    page.write_text("""```console
+$ echo 1.5 > value.txt
+```
+
+<!-- docs-test: ci -->
+```console
+$ echo 2.5 > other.txt
+```
+
+<!-- docs-test: ci -->
+```console
+$ cat value.txt
+1.5
+$ test -e other.txt || echo absent
+absent
+```
+""")
+    first, _, last = blocks(page)
+    folders = PageFolders(tmp_path_factory)
+    _run(last, folders(last), check=True)
+    assert (folders(first) / "value.txt").read_text() == "1.5\n"
