@@ -301,7 +301,6 @@ def test_useful_workspace_on_a_coarse_grid():
         useful_workspace(m, Criteria(bounds=(1.5, 3.0)), resolution=11)
 
 
-@pytest.mark.ci
 def test_useful_workspace_with_three_actuators():
     """The same procedure with cubes for the Orthoglide, independent of the grid."""
     m = pkmkit.machine("orthoglide")
