@@ -298,7 +298,8 @@ def restore(mutant: Mutant, root: Path) -> None:
 def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tuple[str, ...],
         timeout: float, workdir: Path, results: Path, again: bool = False) -> dict:
     """Plant a sample of mutants one at a time in a copy of ``src`` and run ``tests`` on each
-    (``pytest -x``, the ordinary suite's markers). Results are appended to ``results`` (JSON
+    (``pytest -x -m "not slow"``: the ordinary suite and the heavy checks marked ``ci``, as
+    mutmut's selection in pyproject.toml). Results are appended to ``results`` (JSON
     lines) and summarised. With ``again``, only the survivors recorded in ``results``."""
     every = [m for m in mutants_of_package(package) if m.operator in operators]
     chosen = stratified_sample(every, sample, seed)
@@ -320,7 +321,8 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
         start = time.monotonic()
         try:
             proc = subprocess.run(
-                [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *tests],
+                [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
+                 "-m", "not slow", *tests],
                 cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
             code = proc.returncode
             # 1: a test failed; 2–4: collection or a conftest failed (the mutant breaks an

@@ -44,6 +44,7 @@ def test_workspace_json_summary(run, tmp_path, as_json):
     assert "area" in planar and planar["inscribed"]["side"] > 0
 
 
+@pytest.mark.ci
 def test_workspace_prescribed_cube(run, as_json):
     center = "-0.0267442,-0.0267442,-0.0267442"
     ok = as_json(run("workspace", "orthoglide", "--bounds", "0.5,2", "--resolution", "21",
@@ -72,6 +73,7 @@ def test_useful_workspace(run, tmp_path, as_json):
     assert (tmp_path / "u.png").exists()
 
 
+@pytest.mark.ci
 def test_useful_workspace_coarse_grid_and_three_actuators(run, as_json):
     """``--resolution 11`` used to say "criteria fail there" at home, where λ = 1."""
     coarse = as_json(run("useful-workspace", "five-bar", "--bounds", "0.5,2", "--resolution",

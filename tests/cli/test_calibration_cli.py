@@ -417,6 +417,7 @@ def test_compensate_targets_honour_units_and_flag_rows(run, as_json, delta_truth
     assert " mm" in res.output.splitlines()[0]
 
 
+@pytest.mark.ci
 def test_an_identified_frame_is_written_as_a_reusable_registration(run, as_json, tmp_path):
     """--frame identify: the frame found with the machine is written beside the report in
     register's format, and reads back (before: only inside calibration.json)."""

@@ -41,6 +41,7 @@ def tracker(tmp_path_factory):
     return d, run
 
 
+@pytest.mark.ci
 def test_tracker_frame_without_frame_fails_and_names_the_frame(tracker):
     d, run = tracker
     res = run("calibrate", "verne", "--measure", "point", "--measurements", d / "m.csv",
@@ -72,6 +73,7 @@ def test_tracker_frame_without_frame_fails_and_names_the_frame(tracker):
     assert (d / "good" / "verne-calibrated.toml").exists()
 
 
+@pytest.mark.ci
 def test_write_anyway_writes_the_machine_file_and_still_exits_3(tracker):
     d, run = tracker
     res = run("calibrate", "verne", "--measure", "point", "--measurements", d / "m.csv",
@@ -87,6 +89,7 @@ def test_write_anyway_writes_the_machine_file_and_still_exits_3(tracker):
     assert not (d / "forced" / "verne-calibrated.toml").exists()
 
 
+@pytest.mark.ci
 def test_undetermined_std_and_correlation_of_a_parameter_with_itself(tracker):
     """The report showed ``± 0`` for undetermined parameters and a parameter's correlation
     with itself (+0.000) as the largest one."""
@@ -123,6 +126,7 @@ def _ballbar_in_wrong_unit(run, d: Path) -> Path:
     return bad
 
 
+@pytest.mark.ci
 def test_ballbar_file_in_the_wrong_unit_fails_and_names_the_unit(run, tmp_path):
     bad = _ballbar_in_wrong_unit(run, tmp_path)
     res = run("calibrate", "verne", "--measure", "ballbar", "--measurements", bad, "--out",
@@ -137,6 +141,7 @@ def test_ballbar_file_in_the_wrong_unit_fails_and_names_the_unit(run, tmp_path):
     assert good.exit_code == 0 and json.loads(good.stdout)["verdict"]["passed"]
 
 
+@pytest.mark.ci
 def test_weak_parameters_the_data_need_fail_and_keep_weak_fixes_it(run, tmp_path):
     """A hexapod with millimetre deviations and the default noise: parameters dropped as
     weakly identifiable leave an a-posteriori noise 7× the assumed one."""
@@ -185,6 +190,7 @@ def test_registration_files_refuse_repeated_ids(run, tmp_path):
     assert f"{a}:5: repeated id 'P2' (first on line 3)" in res.output
 
 
+@pytest.mark.ci
 def test_report_of_a_passed_calibration(run, tmp_path):
     _ok(run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 40,
             "--defects", "random", "--seed", 3, "--units", "mm", "--out", tmp_path / "m.csv"))

@@ -223,6 +223,7 @@ def check_demo(run, out, *extra):
     return summary
 
 
+@pytest.mark.ci
 def test_demo_quick_writes_json_and_pngs(run, tmp_path):
     """The demo's quick mode (coarser grids, shorter Pareto search): every study runs and
     writes its files, with the numbers that do not depend on the grids."""

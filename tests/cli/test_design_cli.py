@@ -210,6 +210,7 @@ def test_design_five_bar_both_reports_the_isotropic_design(run, as_json):
     assert biglide["feasible"] is False and "[0.7071, 0.7071]" in biglide["reason"]
 
 
+@pytest.mark.ci
 def test_design_linear_delta(run, as_json):
     """An off-axis cube in mm with a given nacelle radius: every length in the output is in mm,
     R = r + d, the stroke is the largest slider range, and the factors are verified; the

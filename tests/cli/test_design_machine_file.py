@@ -56,6 +56,7 @@ def test_design_orthoglide_writes_machine_file(run, tmp_path, as_json):
     np.testing.assert_allclose(loaded.model.q_max - loaded.model.q_min, ref.stroke, atol=1e-12)
 
 
+@pytest.mark.ci
 def test_design_linear_delta_writes_machine_file(run, tmp_path):
     path = tmp_path / "delta.toml"
     result = run("design", "linear-delta", "--cube", "200", "--bounds", "0.5,2", "--units", "mm",

@@ -42,6 +42,7 @@ def test_a_bad_cmm_file_names_its_line(run, tmp_path):
     assert not (tmp_path / "c.csv").exists()
 
 
+@pytest.mark.ci
 def test_demo_writes_the_chain(tmp_path, monkeypatch):
     from pkmkit.demos import machining as demo_machining
     from pkmkit.machining import study
@@ -57,6 +58,7 @@ def test_demo_writes_the_chain(tmp_path, monkeypatch):
     assert summary["seed"] == pytest.approx({"along_x": 20.0, "along_y": 40.0})
 
 
+@pytest.mark.ci
 def test_ballbar_plan_feeds_simulate_measurements(run, tmp_path):
     os.chdir(tmp_path)
     out = run("machined-part", "ballbar-plan", "verne", "--points", 40, "--out", "plan.csv")

@@ -204,6 +204,7 @@ def test_cli_stroke_independent_of_period(run, as_json):
     assert "LIMIT speed" in text and "every checked limit holds" not in text
 
 
+@pytest.mark.ci
 def test_gcode_feeds_and_default_jerk(run, as_json, tmp_path):
     """A G-code program with F words runs with no --feed and no --jerk; the defaults used
     are printed and reported in JSON, and match giving them explicitly."""

@@ -117,6 +117,7 @@ def test_jacobian_single_flags_the_stroke(run):
     assert result.exit_code == 3 and "out of stroke: q1 (leg 1)" in result.output
 
 
+@pytest.mark.ci
 def test_select_measure_calibrate_pipeline_stays_within_strokes(run, tmp_path):
     """docs/errors.md's select → simulate → calibrate: the linear Delta's default region
     reaches beyond its 0.7–2 m slides; the selected poses are all within, so the calibration

@@ -48,6 +48,7 @@ def test_default_box_is_widened_until_the_workspace_fits(run, as_json):
     assert (np.array(data["grid"]["upper"]) >= hi - 1e-12).all()
 
 
+@pytest.mark.ci
 def test_verne_workspace_over_positions(run, as_json):
     data = as_json(run("workspace", "verne", "--box", "-300,300,-300,300", "--slice", "z=-300",
                        "--units", "mm", "--resolution", "9", "--json"))

@@ -49,6 +49,7 @@ def shortest():
     return size_linear_delta(0.5, (0.4, 2.5))
 
 
+@pytest.mark.ci
 def test_shortest_arms_for_the_seed_cube(shortest):
     """x, y in ±0.25 m, z in [0, 0.5] m (Table III.2), λ in [0.4, 2.5]."""
     res = shortest

@@ -44,6 +44,7 @@ def test_metrics_against_direct_computation():
     assert tight["violation"] == pytest.approx(0.6 / sv[:, -1].min() - 1)
 
 
+@pytest.mark.ci
 def test_single_objective_matches_a_brute_force_scan():
     """Maximise compactness: differential evolution against a fine grid over (R, L)."""
     problem = delta_problem([Objective("compactness", "max")])

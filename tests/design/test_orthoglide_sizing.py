@@ -132,6 +132,7 @@ def test_out_of_range_inputs(side, kwargs, message):
         size_orthoglide(side, (0.5, 2.0), **kwargs)
 
 
+@pytest.mark.ci
 def test_largest_cube_of_the_workspace_search_is_the_sized_cube():
     """Seed 001 errata #4, evidence independent of Q1/Q2: for the machine sized with
     [1/3, 3], the workspace search (grid over a box around the cube, largest inscribed cube,

@@ -7,7 +7,8 @@ shows, as in the interpreter). A block may be preceded by a marker comment
 ``<!-- docs-test: ... -->`` with any of:
 
 - ``skip (reason)``: not run;
-- ``ci``: run only in CI (long examples): when ``CI`` or ``PKMKIT_DOCS_CI`` is set;
+- ``ci``: a long example, with the pytest marker ``ci``: the ordinary run leaves it out,
+  ``.ci/run`` runs it;
 - ``any-numbers``: the numbers printed are not compared (timings);
 - ``command="..."``: a ``text`` block is the output of this command;
 - ``output``: a ``text`` block is what the ``python`` program right above it prints.

@@ -1,8 +1,10 @@
 """The documentation runs: every console and Python block of README.md and docs/*.md is
 executed in a temporary folder (one per file, with ``docs/examples``, ``bench``, ``tests`` and
 ``pyproject.toml`` beside it) and what it prints is compared with what the documentation shows
-(see ``docs_blocks``). Blocks marked ``ci`` run only in CI (``.ci/run`` sets
-``PKMKIT_DOCS_CI``)."""
+(see ``docs_blocks``). Blocks marked ``ci`` (long examples) carry the pytest marker ``ci``: the
+ordinary run leaves them out, ``.ci/run`` runs them (``python -m pytest -m "slow or ci"``). The
+blocks of one file share its folder and run in order, so under pytest-xdist they go to one
+worker (``xdist_group``, with ``--dist loadgroup``)."""
 
 import os
 import shutil
@@ -17,27 +19,45 @@ from .docs_blocks import blocks, compare
 ROOT = Path(__file__).resolve().parents[2]
 FILES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 ALL_BLOCKS = [b for path in FILES for b in blocks(path)]
-IN_CI = bool(os.environ.get("CI") or os.environ.get("PKMKIT_DOCS_CI"))
 TIMEOUT = 900
 
 
-@pytest.fixture(scope="module")
-def folders(tmp_path_factory):
-    """One working folder per documentation file, shared by its blocks in order."""
-    made: dict[Path, Path] = {}
+class PageFolders:
+    """One working folder per documentation file, shared by its blocks in order. A block whose
+    page has earlier ordinary blocks that did not run in this session (a ``-m ci`` run, or a
+    ``-k`` selection, leaves them out) gets them run first, unchecked, for the files they
+    write; blocks marked ``ci`` or ``skip`` are never run that way."""
 
-    def folder(path: Path) -> Path:
-        if path not in made:
-            work = tmp_path_factory.mktemp(path.stem)
+    def __init__(self, tmp_path_factory):
+        self._factory = tmp_path_factory
+        self._made: dict[Path, Path] = {}
+        self._ran: set[tuple[Path, int]] = set()
+
+    def __call__(self, block) -> Path:
+        path = block.path
+        if path not in self._made:
+            work = self._factory.mktemp(path.stem)
             shutil.copytree(ROOT / "docs" / "examples", work / "docs" / "examples")
             (work / "bench").symlink_to(ROOT / "bench")
             # the documentation's test commands run the repository's tests and configuration
             (work / "tests").symlink_to(ROOT / "tests")
             (work / "pyproject.toml").symlink_to(ROOT / "pyproject.toml")
-            made[path] = work
-        return made[path]
+            self._made[path] = work
+        work = self._made[path]
+        for earlier in blocks(path):
+            if earlier.line >= block.line:
+                break
+            if ((path, earlier.line) not in self._ran and "skip" not in earlier.options
+                    and "ci" not in earlier.options):
+                _run(earlier, work, check=False)
+                self._ran.add((path, earlier.line))
+        self._ran.add((path, block.line))
+        return work
 
-    return folder
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory):
+    return PageFolders(tmp_path_factory)
 
 
 def _environment() -> dict[str, str]:
@@ -51,23 +71,30 @@ def _environment() -> dict[str, str]:
 def _params():
     params = []
     for block in ALL_BLOCKS:
-        marks = []
+        marks = [pytest.mark.xdist_group(block.path.name)]
         if "skip" in block.options:
             marks.append(pytest.mark.skip(reason=block.options["skip"]))
-        elif "ci" in block.options and not IN_CI:
-            marks.append(pytest.mark.skip(reason="long example: run in CI (PKMKIT_DOCS_CI=1)"))
+        elif "ci" in block.options:
+            marks.append(pytest.mark.ci)
         params.append(pytest.param(block, id=block.name, marks=marks))
     return params
 
 
 @pytest.mark.parametrize("block", _params())
 def test_block_runs_as_shown(block, folders):
-    work = folders(block.path)
+    _run(block, folders(block), check=True)
+
+
+def _run(block, work: Path, check: bool) -> None:
+    """Run one block in ``work``; with ``check``, compare its exit statuses and output with
+    what the page shows."""
     env = _environment()
     if block.lang == "python":
         program, expected = block.program()
         done = subprocess.run([sys.executable, "-c", program], cwd=work, env=env,
                               capture_output=True, text=True, timeout=TIMEOUT)
+        if not check:
+            return
         assert done.returncode == 0, f"{block.name}: {done.stderr}"
         if expected:
             problem = compare(expected, done.stdout, numbers="any-numbers" not in block.options)
@@ -77,6 +104,8 @@ def test_block_runs_as_shown(block, folders):
         done = subprocess.run(["bash", "-c", command.text], cwd=work, env=env,
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                               timeout=TIMEOUT)
+        if not check:
+            continue
         where = f"{block.path.name}:{command.line}: $ {command.text}"
         shows_error = bool(command.expected) and command.expected[0].startswith("Error:")
         if shows_error:
@@ -182,3 +211,30 @@ def test_a_mismatch_in_a_long_output_is_found_quickly():
     assert compare([*shown, "== missing"], actual) is not None
     assert compare([*shown, "..."], actual) is None
     assert time.perf_counter() - start < 30  # a hang guard, not a benchmark
+
+
+def test_a_block_run_alone_first_gets_the_files_of_the_earlier_blocks(tmp_path_factory):
+    """A ``ci`` block whose page's ordinary blocks ran in another session (``.ci/run``'s
+    ``-m "slow or ci"``) finds the files they write; an earlier ``ci`` block is not replayed."""
+    page = tmp_path_factory.mktemp("page") / "page.md"
+    page.write_text("""```console
+$ echo 1.5 > value.txt
+```
+
+<!-- docs-test: ci -->
+```console
+$ echo 2.5 > other.txt
+```
+
+<!-- docs-test: ci -->
+```console
+$ cat value.txt
+1.5
+$ test -e other.txt || echo absent
+absent
+```
+""")
+    first, _, last = blocks(page)
+    folders = PageFolders(tmp_path_factory)
+    _run(last, folders(last), check=True)
+    assert (folders(first) / "value.txt").read_text() == "1.5\n"

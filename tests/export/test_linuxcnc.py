@@ -159,6 +159,7 @@ def test_the_supported_presets_are_exactly_these():
     assert exported == SUPPORTED
 
 
+@pytest.mark.ci
 def test_inverse_matches_pkmkit_on_a_million_poses(module):
     """Same joints (1e-9 m) and same refusals: out of reach, and poses of the other assembly
     mode (pkmkit's ``mode``, the sign of det A). A hexapod's modes come from pkmkit's full

@@ -7,6 +7,7 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 from hypothesis import event, given
 from hypothesis import strategies as st
@@ -116,6 +117,7 @@ def command_lines(draw):
     return args
 
 
+@pytest.mark.ci
 @given(command_lines())
 def test_cli_commands(args):
     runner = CliRunner()

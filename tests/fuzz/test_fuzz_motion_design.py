@@ -5,6 +5,7 @@ within their limits, joint trajectories closing every leg, forces finite, design
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -109,6 +110,7 @@ def test_joint_trajectory_and_dynamics(data):
         assert forces.force.shape == motion.q.shape
 
 
+@pytest.mark.ci
 @slow_examples
 @given(anything, anything, anything, anything)
 def test_arms(length, diameter, inner, force):

@@ -110,6 +110,7 @@ def test_cmm_noise_reaches_the_centres_as_expected(defected_part):
         assert abs(np.mean(values)) < 4 * expected / np.sqrt(n)
 
 
+@pytest.mark.ci
 def test_chain_identifies_injected_defects_back(verne):
     """Defects injected in the parameters the part identifies come back within their
     uncertainty, the part's placement too, from simulated CMM points through reconstruction."""

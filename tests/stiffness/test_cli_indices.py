@@ -96,6 +96,7 @@ def test_workspace_refuses_a_deflection_bound_without_a_wrench():
     assert result.exit_code != 0 and "--wrench" in result.output
 
 
+@pytest.mark.ci
 def test_path_deflection_is_the_library_figure(tmp_path):
     out = as_json(run("path", "linear-delta-table-iv1", "--gcode", POCKET, "--origin",
                       "0,0,200", "--units", "mm", "--feed", "20", "--accel", "1000", "--jerk",
