@@ -66,3 +66,4 @@ def test_correction_table_orientation_columns():
     assert head[9:] == ["rx", "ry", "rz", "crx", "cry", "crz", "status"]
     np.testing.assert_allclose(rv[0, 9:15], np.array([0.0, 0.6, 0.8, 0.0, 0.8, 0.6])
                                * 180.0 / np.pi, rtol=1e-9)
+
