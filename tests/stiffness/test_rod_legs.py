@@ -260,3 +260,23 @@ def test_reference_point_moved_in_the_platform_frame():
 def test_absurd_actuator_stiffness_is_a_units_mistake(bad):
     with pytest.raises(ParameterError, match="check the units"):
         StiffnessData(actuator_stiffness=np.array([1e8, 1e8, bad]))
+
+
+def test_reference_point_of_a_machine_given_positions_turns_with_its_platform():
+    """The Verne module is driven by positions, but its platform tilts (orientation from ik):
+    the compliance about a point r of the platform is that about the platform origin carried
+    to p = R r (a wrench [f, m] at p is [f, m + p × f] at the origin; the point moves by
+    v + ω × p), R from the rotation vector ik reports."""
+    m = machine("verne")
+    x = np.array([0.02, -0.01, 0.01])
+    offset = np.array([0.01, 0.02, -0.05])
+    c0 = stiffness(m, x).compliance
+    moved = stiffness(m, x, reference=offset).compliance
+    rotvec = np.atleast_2d(m.ik(x, full_output=True, strokes="ignore").pose)[0, 3:]
+    assert np.linalg.norm(rotvec) > 1e-3  # the platform is tilted there
+    p = Rotation.from_rotvec(rotvec).apply(offset)
+    oracle = np.zeros((6, 6))
+    for i, w in enumerate(np.eye(6)):
+        t = c0 @ np.concatenate([w[:3], w[3:] + np.cross(p, w[:3])])
+        oracle[:, i] = np.concatenate([t[:3] + np.cross(t[3:], p), t[3:]])
+    np.testing.assert_allclose(moved, oracle, rtol=1e-9, atol=1e-9 * np.abs(oracle).max())
