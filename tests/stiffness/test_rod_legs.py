@@ -29,6 +29,30 @@ def test_cubic_hexapod_about_its_centre():
     np.testing.assert_allclose(result.stiffness, expected, rtol=1e-12, atol=1e-9 * k)
 
 
+@pytest.mark.parametrize("scale", [1e-3, 1e3])
+def test_cubic_hexapod_of_any_size_is_regular_with_the_scaled_stiffness(scale):
+    """The cubic hexapod 1000 times smaller or larger: still regular at home (the singularity
+    test scales the moment rows by the characteristic length, so it does not depend on the
+    unit or size), forces 2k, moments k a²/2, 2k a² with a the scaled side (rtol 1e-6: the
+    diagonal spans 10⁷ at 1e-3, the round-off of the compliance's inverse)."""
+    a, k = 0.5 * scale, 2e7
+    m = cubic_hexapod(scale=scale)
+    result = stiffness(m, m.home_pose, data=_data(m, k))
+    assert result.status == 0
+    np.testing.assert_allclose(np.diag(result.stiffness),
+                               k * np.array([2, 2, 2, a * a / 2, a * a / 2, 2 * a * a]),
+                               rtol=1e-6)
+
+
+def test_singularity_flag_does_not_depend_on_the_size():
+    """The singularity test is a condition number of A with its moment columns divided by
+    the characteristic length: the cubic hexapod at home is regular at every size, from 10⁻⁶
+    to 10⁶ times its own (a size-dependent test flags the small ones)."""
+    for scale in (1e-6, 1e-3, 1.0, 1e3, 1e6):
+        m = cubic_hexapod(scale=scale)
+        assert stiffness(m, m.home_pose[None]).status.tolist() == [0], scale
+
+
 def test_hexapod_is_k_atransposed_a_with_unit_rows():
     m = machine("gough-stewart")
     k = 3e7
