@@ -5,6 +5,7 @@ of the drawing."""
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+import pkmkit
 from pkmkit.model.chain_layout import chain_from_layout
 from pkmkit.model.chains import FIXED, ElementSpec, invariant_frame
 
@@ -43,3 +44,21 @@ def test_walking_the_relative_elements_gives_back_the_layout():
     walked = start @ _local(out[0]) @ _local(out[1]) @ _local(out[2])
     drawn = invariant_frame(axis_f, (0.2, 0.1, 0.0), 0.3)
     np.testing.assert_allclose(walked, drawn, atol=1e-12)
+
+
+def test_parameter_values_read_back_the_invariants_of_the_elements():
+    """The Tripteor X7's parameter vector read back from its frames: each element's unit axis
+    (I, J, K), its point (A, B, C, m) and, for fixed frames, the spin (S, rad), as the
+    elements state them."""
+    model = pkmkit.machine("tripteor-x7").model
+    values = dict(zip(model.parameter_names(), model.parameter_values(), strict=True))
+    for spec in model.elements:
+        if spec.rotation is not None:
+            continue
+        label = spec.label or spec.name
+        axis = np.asarray(spec.axis) / np.linalg.norm(spec.axis)
+        np.testing.assert_allclose([values[f"{c}{label}"] for c in "IJK"], axis, atol=1e-12)
+        np.testing.assert_allclose([values[f"{c}{label}"] for c in "ABC"], spec.point,
+                                   atol=1e-12)
+        if spec.type == FIXED:
+            assert abs(values[f"S{label}"] - spec.spin) < 1e-12
