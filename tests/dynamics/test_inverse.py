@@ -108,6 +108,8 @@ def test_mass_properties_keep_what_they_are_given(delta_b):
     np.testing.assert_array_equal(masses.platform_com, [0.0, 0.0, 0.1])
     with pytest.raises(InputError, match="gravity"):
         mass_properties(delta_b, gravity=(0.0, -9.81))
+    with pytest.raises(InputError, match="symmetric"):  # an inertia tensor is symmetric
+        mass_properties(delta_b, platform_inertia=inertia + np.triu(np.full((3, 3), 0.05), 1))
 
 
 @pytest.mark.parametrize("which", ["xd", "xdd", "q", "qd", "qdd"])
