@@ -125,8 +125,10 @@ def test_mis_shaped_motion_names_the_argument(delta_b, which):
 def test_masses_file_and_errors(tmp_path, delta_b):
     path = tmp_path / "m.toml"
     path.write_text("[masses]\nunits = 'mm'\ncarriage = [8, 8, 9]\nrod_diameter = 40\n"
-                    "rod_density = 1000\nplatform = 15\n[wrench]\nforce = [0, 0, 100]\n")
+                    "rod_density = 1000\nplatform = 15\nplatform_com = [0, 0, 50]\n"
+                    "[wrench]\nforce = [0, 0, 100]\n")
     masses, wrench = load_masses(path, delta_b)
+    np.testing.assert_allclose(masses.platform_com, [0.0, 0.0, 0.05])  # mm in the file
     assert masses.carriage_mass.tolist() == [8, 8, 9]
     np.testing.assert_allclose(masses.rod_mass, 1000 * np.pi / 4 * 0.04**2 * 1.04)
     assert wrench.tolist() == [0, 0, 100, 0, 0, 0]
