@@ -335,3 +335,21 @@ def test_leg_axial_force_against_newton_euler_statics(tmp_path):
     r_a = -(-10.0 * g / 2 + lam[:, None] * unit) - 10.0 * g
     actuator = -(6.0 * g[2]) + r_a[:, 2]
     np.testing.assert_allclose(res.force[0], actuator, rtol=1e-10)
+
+
+def test_first_speed_excursion_is_the_earliest_along_the_path():
+    """Seed 000's circle with a 70 mm/s speed limit (the slides peak at 76.3 mm/s, twice
+    each): the reported first excursion starts between the last sample (10 ms apart) under the
+    limit and the first over it, and names that actuator."""
+    from pkmkit.dynamics.trajectory import simulate_path
+    from pkmkit.motion.joints import Limits
+
+    m = pkmkit.machine("linear-delta-table-iv1")
+    r = simulate_path(m, circle([0, 0, 0.2], 0.15), feed=0.12, accel=1.0, jerk=10.0,
+                      period=0.01, limits=Limits(speed=0.07))
+    first = r.limits["speed"]["first"]
+    over = np.abs(r.motion.qd) > 0.07
+    k = np.flatnonzero(over.any(axis=1))[0]
+    assert r.motion.t[k - 1] <= first["t"] <= r.motion.t[k]
+    assert first["actuator"] == m.actuator_names[np.flatnonzero(over[k])[0]]
+    assert 0.07 < first["value"] < 0.0764
