@@ -11,11 +11,14 @@ those, one at a time, on a copy of ``src/`` (the working tree is never touched):
 - ``mul-swap``: ``a * b`` → ``b * a`` where an operand looks like a rotation (its text names
   ``rot``/``R``/``inv()``/``Rotation``: scipy rotations compose with ``*``);
 - ``cross-swap``: ``np.cross(a, b)`` → ``np.cross(b, a)``;
-- ``transpose``: the left operand of ``@`` transposed (``np.swapaxes(a, -1, -2)``), and an
-  existing transpose dropped (``a.T`` → ``a``, ``np.swapaxes(a, -1, -2)`` → ``a``);
+- ``transpose``: the left operand of ``@`` transposed (``np.swapaxes(a, -1, -2)``), an
+  existing transpose dropped (``a.T`` → ``a``, ``np.swapaxes(a, -1, -2)`` → ``a``), a scipy
+  rotation's inverse dropped (``r.inv()`` → ``r``), and a batched matrix transposed inside
+  ``np.einsum`` (its last two subscripts swapped: ``"kij,kj->ki"`` → ``"kji,kj->ki"``);
 - ``factor-drop`` / ``factor-invert``: in ``a * f`` or ``a / f`` where f is a unit or scale
   factor (a literal 1000, 1e-3, 1e6, 1e-6, 180, π, or a name with ``scale``, ``factor``,
-  ``unit``, ``length``, ``big_l``, ``per_``): the factor dropped, or ``*`` ↔ ``/``;
+  ``unit``, ``length``, ``big_l``, ``per_``): the factor dropped, or ``*`` ↔ ``/``; an angle
+  conversion (``np.deg2rad``, ``np.radians``, …) dropped, or turned the other way;
 - ``half-swap``: ``x[..., :3]`` ↔ ``x[..., 3:]`` (the wrong half of a 6-vector);
 - ``index-shift``: a slice with literal bounds shifted by one (``[1:4]`` → ``[2:5]``), or a
   literal index ``[k]`` → ``[k + 1]`` on the last axis of a small vector (k in 0..4).
@@ -125,6 +128,26 @@ def _skipped_lines(tree: ast.AST) -> set[int]:
     return out
 
 
+#: Angle conversions (a unit factor written as a call): dropped, or turned the other way.
+_UNIT_CALLS = {"deg2rad": "rad2deg", "rad2deg": "deg2rad", "radians": "degrees",
+               "degrees": "radians"}
+
+
+def _einsum_transposed(spec: str) -> list[str]:
+    """The subscripts of ``np.einsum`` with one batched-matrix operand transposed (its last two
+    letters swapped), one spec per such operand (``"kij,kj->ki"`` → ``"kji,kj->ki"``)."""
+    inputs, arrow, output = spec.partition("->")
+    terms = inputs.split(",")
+    out = []
+    for i, term in enumerate(terms):
+        letters = term.replace("...", "").strip()
+        if (len(letters) >= 3 or (term.startswith("...") and len(letters) >= 2)) \
+                and letters[-1] != letters[-2] and term.endswith(letters[-2:]):
+            swapped = term[:-2] + term[-1] + term[-2]
+            out.append(",".join([*terms[:i], swapped, *terms[i + 1:]]) + arrow + output)
+    return out
+
+
 def _slice_bounds(node: ast.AST) -> ast.Slice | None:
     """The last-axis slice of a subscript (``x[..., a:b]`` or ``x[a:b]``)."""
     sl = node.slice
@@ -190,6 +213,22 @@ def mutants_of_file(path: Path) -> list[Mutant]:
                 add(node, args[0], "transpose")
             if func.endswith("transpose") and len(args) == 1:
                 add(node, args[0], "transpose")
+            if func.endswith("einsum") and args and isinstance(node.args[0], ast.Constant) \
+                    and isinstance(node.args[0].value, str):
+                call = _text(lines, node)
+                for spec in _einsum_transposed(node.args[0].value):
+                    add(node, call.replace(args[0], args[0][0] + spec + args[0][-1], 1),
+                        "transpose")
+            name = func.rsplit(".", 1)[-1]
+            if name in _UNIT_CALLS and len(args) == 1 and not node.keywords:
+                add(node, args[0], "factor-drop")
+                add(node, f"{func[:len(func) - len(name)]}{_UNIT_CALLS[name]}({args[0]})",
+                    "factor-invert")
+            if isinstance(node.func, ast.Attribute) and node.func.attr == "inv" \
+                    and not args and not node.keywords:
+                inner = _text(lines, node.func.value)
+                if inner is not None:
+                    add(node, inner, "transpose")
         elif isinstance(node, ast.Attribute) and node.attr == "T" \
                 and node.lineno == node.end_lineno:
             inner = _text(lines, node.value)

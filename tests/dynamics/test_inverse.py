@@ -108,6 +108,8 @@ def test_mass_properties_keep_what_they_are_given(delta_b):
     np.testing.assert_array_equal(masses.platform_com, [0.0, 0.0, 0.1])
     with pytest.raises(InputError, match="gravity"):
         mass_properties(delta_b, gravity=(0.0, -9.81))
+    with pytest.raises(InputError, match="symmetric"):  # an inertia tensor is symmetric
+        mass_properties(delta_b, platform_inertia=inertia + np.triu(np.full((3, 3), 0.05), 1))
 
 
 @pytest.mark.parametrize("which", ["xd", "xdd", "q", "qd", "qdd"])
@@ -123,8 +125,10 @@ def test_mis_shaped_motion_names_the_argument(delta_b, which):
 def test_masses_file_and_errors(tmp_path, delta_b):
     path = tmp_path / "m.toml"
     path.write_text("[masses]\nunits = 'mm'\ncarriage = [8, 8, 9]\nrod_diameter = 40\n"
-                    "rod_density = 1000\nplatform = 15\n[wrench]\nforce = [0, 0, 100]\n")
+                    "rod_density = 1000\nplatform = 15\nplatform_com = [0, 0, 50]\n"
+                    "[wrench]\nforce = [0, 0, 100]\n")
     masses, wrench = load_masses(path, delta_b)
+    np.testing.assert_allclose(masses.platform_com, [0.0, 0.0, 0.05])  # mm in the file
     assert masses.carriage_mass.tolist() == [8, 8, 9]
     np.testing.assert_allclose(masses.rod_mass, 1000 * np.pi / 4 * 0.04**2 * 1.04)
     assert wrench.tolist() == [0, 0, 100, 0, 0, 0]
@@ -377,3 +381,21 @@ def test_leg_axial_force_against_newton_euler_statics(tmp_path):
     r_a = -(-10.0 * g / 2 + lam[:, None] * unit) - 10.0 * g
     actuator = -(6.0 * g[2]) + r_a[:, 2]
     np.testing.assert_allclose(res.force[0], actuator, rtol=1e-10)
+
+
+def test_first_speed_excursion_is_the_earliest_along_the_path():
+    """Seed 000's circle with a 70 mm/s speed limit (the slides peak at 76.3 mm/s, twice
+    each): the reported first excursion starts between the last sample (10 ms apart) under the
+    limit and the first over it, and names that actuator."""
+    from pkmkit.dynamics.trajectory import simulate_path
+    from pkmkit.motion.joints import Limits
+
+    m = pkmkit.machine("linear-delta-table-iv1")
+    r = simulate_path(m, circle([0, 0, 0.2], 0.15), feed=0.12, accel=1.0, jerk=10.0,
+                      period=0.01, limits=Limits(speed=0.07))
+    first = r.limits["speed"]["first"]
+    over = np.abs(r.motion.qd) > 0.07
+    k = np.flatnonzero(over.any(axis=1))[0]
+    assert r.motion.t[k - 1] <= first["t"] <= r.motion.t[k]
+    assert first["actuator"] == m.actuator_names[np.flatnonzero(over[k])[0]]
+    assert 0.07 < first["value"] < 0.0764

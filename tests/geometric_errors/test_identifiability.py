@@ -165,6 +165,24 @@ def test_unidentifiable_columns_are_relative_to_the_jacobian(scale):
     assert set(out["base"]) == {"a", "b"}
 
 
+def test_rank_threshold_is_relative_to_the_largest_singular_value():
+    """Singular values 1, 1e-4 and 1e-11 (rtol 1e-9): the rank is 2 and the third column is
+    dead (1e-11 < 1e-9 × 1); a threshold taken from the second singular value (1e-13) would
+    keep it. A rank-one Jacobian (one singular value, the others exactly 0) has rank 1."""
+    from pkmkit.geometric_errors.identifiability import analyse_jacobian
+
+    one = analyse_jacobian(np.outer([1.0, 2.0, 2.0], [0.0, 3.0, 0.0]), ("a", "b", "c"),
+                           np.ones(3))
+    assert one["rank"] == 1 and one["base"] == ("b",) and one["unidentifiable"] == ("a", "c")
+
+    j = np.zeros((5, 3))
+    j[0, 0], j[1, 1], j[2, 2] = 1.0, 1e-4, 1e-11
+    out = analyse_jacobian(j, ("a", "b", "c"), np.ones(3), rtol=1e-9)
+    assert out["rank"] == 2
+    assert out["unidentifiable"] == ("c",)
+    np.testing.assert_allclose(out["singular_values"], [1.0, 1e-4, 1e-11])
+
+
 def _combination_null_directions(result):
     """For every parameter o outside the base with a coefficient: the SI defect direction
     e_o − Σ_b c_b,o e_b, which changes none of the reported combinations δ_b + Σ c_b,o δ_o."""

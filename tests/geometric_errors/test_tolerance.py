@@ -74,3 +74,19 @@ def test_tolerance_file(tmp_path):
         assert info.value.line == line
     with pytest.raises(ParameterError, match="≥ 0"):
         tolerances(m, classes={"length": -1.0})
+
+
+@pytest.mark.parametrize(("units", "angle_units", "length", "axis"), [
+    ("m", "rad", 2e-5, 3e-4), ("mm", "mrad", 0.02, 0.3), ("um", "urad", 20.0, 300.0),
+    ("µm", "deg", 20.0, float(np.degrees(3e-4)))])
+def test_tolerance_file_units_give_the_same_physical_half_widths(tmp_path, units, angle_units,
+                                                                length, axis):
+    """The same tolerances (20 µm, 0.3 mrad) written in every length and angle unit."""
+    m = pkmkit.machine("linear-delta")
+    path = tmp_path / "tol.toml"
+    path.write_text(f'units = "{units}"\nangle_units = "{angle_units}"\n'
+                    f'[classes]\nlength = {length!r}\naxis = {axis!r}\n')
+    tol = read_tolerances(str(path), m)
+    width = dict(zip(tol.names, tol.half_width, strict=True))
+    assert width["dL2"] == pytest.approx(2e-5, rel=1e-12)
+    assert width["du1x"] == pytest.approx(3e-4, rel=1e-12)

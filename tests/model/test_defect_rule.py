@@ -94,3 +94,17 @@ def test_a_written_calibrated_file_reloads_to_the_fitted_machine(name, tmp_path)
     reloaded = pkmkit.load(str(written))
     np.testing.assert_allclose(reloaded.defects(), start.defects() + step, rtol=0, atol=1e-12)
     np.testing.assert_allclose(_geometry(reloaded), _geometry(fitted), rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize("name", ["delta", "linear-delta"])
+def test_actuator_offset_is_a_shift_of_the_actuator_coordinate(name):
+    """An actuator offset dq_k (a crank's angle, a slide's travel) moves the actuator's zero:
+    the machine with it reaches x at q − dq_k e_k when the nominal one needs q."""
+    m = pkmkit.machine(name)
+    offset = 0.01 if name == "delta" else 2e-3
+    k = 1
+    shifted = with_defects(m, {"dq2": offset})
+    x = np.atleast_2d(m.fk(m.home_q, strokes="ignore"))[0]
+    expected = np.asarray(m.ik(x, strokes="ignore"), dtype=float).copy()
+    expected[k] -= offset
+    np.testing.assert_allclose(shifted.ik(x, strokes="ignore"), expected, atol=1e-12)

@@ -220,3 +220,13 @@ def test_path_options_at_the_extremes_name_the_option(token, option):
                                       "0,0,0.2,0.15", *flat])
     assert result.exit_code == 1, result.output
     assert option in result.output and "Traceback" not in result.output
+
+
+def test_read_text_strips_exactly_the_byte_order_mark(tmp_path):
+    """A UTF-8 BOM (3 bytes) is dropped and nothing else; kept on request."""
+    from pkmkit.model.text_files import read_text
+
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf[machine]\nname = \"\xc3\xa9\"\n")
+    assert read_text(path, ValueError) == '[machine]\nname = "é"\n'
+    assert read_text(path, ValueError, strip_bom=False) == '\ufeff[machine]\nname = "é"\n'

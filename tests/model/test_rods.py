@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+import pkmkit
 from pkmkit.exceptions import ParameterError
 from pkmkit.model.rods import SLIDE, STRUT, LegSpec, build_rod_model
 
@@ -72,3 +73,12 @@ def test_strut_has_no_axis():
             for i in range(3)]
     model = build_rod_model(legs, dims=3, actuator_names=("a", "b", "c"), home_pose=(0, 0, 0))
     assert (model.leg_kind == STRUT).all() and not model.leg_axis.any()
+
+
+def test_pad_gives_the_platform_position_of_every_kind_of_pose():
+    """Positions (N, 3): a full pose's first three coordinates, a planar pose with z = 0."""
+    full = pkmkit.machine("gough-stewart").model
+    np.testing.assert_array_equal(full.pad(np.array([[1.0, 2.0, 3.0, 0.1, 0.2, 0.3]])),
+                                  [[1.0, 2.0, 3.0]])
+    planar = pkmkit.machine("five-bar").model
+    np.testing.assert_array_equal(planar.pad(np.array([[1.0, 2.0]])), [[1.0, 2.0, 0.0]])

@@ -111,3 +111,26 @@ def test_inverse_with_a_rotated_platform():
             length = model.rod_length[j] + (q[k, i] if model.rod_kind[j] != 0 else 0.0)
             tip = pose[k] + rot[k] @ model.rod_platform[j]
             assert np.linalg.norm(tip - a) == pytest.approx(length, abs=1e-12)
+
+
+@pytest.mark.parametrize("name", ["delta", "linear-delta"])
+def test_defect_columns_match_central_differences_of_the_exact_model(name):
+    """∂r/∂δ of every rod defect (base points, crank pivots and axes, slide directions,
+    offsets, lengths) against central differences of the residual of the machine with the
+    defect applied exactly, at poses away from home."""
+    from pkmkit.geometric_errors.model import _rod_index, with_defects
+    from pkmkit.solve.rod_closure import defect_columns
+
+    m = pkmkit.machine(name)
+    index = _rod_index(m)
+    x = np.atleast_2d(m.home_pose)[:, :3] + np.array([[0.02, -0.03, 0.01], [-0.01, 0.02, 0.03]])
+    q = np.asarray(m.ik(x, strokes="ignore"))
+    _, cols = defect_columns(m.model, index, x, None, q)
+    h = 1e-6
+    for i in range(len(index)):
+        step = np.zeros(len(index))
+        step[i] = h
+        plus = defect_columns(with_defects(m, step).model, index, x, None, q)[0]
+        minus = defect_columns(with_defects(m, -step).model, index, x, None, q)[0]
+        np.testing.assert_allclose(cols[:, :, i], (plus - minus) / (2 * h), atol=1e-8,
+                                   err_msg=index.names[i])

@@ -138,3 +138,17 @@ def test_bad_masses_are_refused():
     with pytest.raises(InputError, match="gravity component 3"):
         chain_gravity_deflection(m, m.home_q, ChainMasses(1.0, 1.0, np.zeros(3),
                                                           np.array([0.0, 0.0, -1e300])))
+
+
+def test_illustrative_leg_masses_are_the_tube_mass_per_metre_times_the_leg_length():
+    """Ø 120/100 mm steel tube: 7850 kg/m³ × π/4 × (0.12² − 0.10²) m² = 27.128 kg/m (by
+    hand); each leg weighs that times the length of its links at home."""
+    from pkmkit.stiffness.joint_chains import _links
+
+    m = machine("tripteor-x7")
+    lengths = np.zeros(len(m.model.legs))
+    for link in _links(m):
+        if link.chain == "leg":
+            lengths[link.index] += link.home_length
+    assert (lengths > 0.1).all()
+    np.testing.assert_allclose(illustrative_masses(m).legs, 27.1276 * lengths, rtol=1e-5)

@@ -218,3 +218,24 @@ def test_rigid_block_directions_are_infinite_not_rounding_noise():
     r = stiffness(m, q=m.home_q)
     assert np.isinf(r.rotational).all()
     assert np.isfinite(r.translational[0]) and np.isinf(r.translational[1:]).all()
+
+
+def test_spring_rotations_and_twists_at_a_point_leave_their_pivot_still():
+    """A rotation about an axis through a point P moves P by nothing: the spring twists'
+    rotation columns (v, ω) satisfy v + ω × P = 0, and a twist about the origin seen as the
+    small displacement of P (``_at_point``: v + ω × P) has no translation there — in the
+    (6, k) and the (6, c, k) layouts."""
+    from pkmkit.stiffness.joint_chains import _at_point
+
+    rng = np.random.default_rng(3)
+    point = rng.normal(size=(3, 4))
+    axes = np.stack([np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(4)], axis=2)
+    tw = spring_twists(point, axes)
+    for k in range(4):
+        for c in range(3, 6):
+            v, w = tw[:3, c, k], tw[3:, c, k]
+            np.testing.assert_allclose(v + np.cross(w, point[:, k]), 0.0, atol=1e-14)
+            np.testing.assert_allclose(w, axes[:, c - 3, k])
+    moved = _at_point(tw, point)
+    np.testing.assert_allclose(moved[:3, 3:], 0.0, atol=1e-14)
+    np.testing.assert_allclose(_at_point(tw[:, 4], point)[:3], 0.0, atol=1e-14)

@@ -29,6 +29,30 @@ def test_cubic_hexapod_about_its_centre():
     np.testing.assert_allclose(result.stiffness, expected, rtol=1e-12, atol=1e-9 * k)
 
 
+@pytest.mark.parametrize("scale", [1e-3, 1e3])
+def test_cubic_hexapod_of_any_size_is_regular_with_the_scaled_stiffness(scale):
+    """The cubic hexapod 1000 times smaller or larger: still regular at home (the singularity
+    test scales the moment rows by the characteristic length, so it does not depend on the
+    unit or size), forces 2k, moments k a²/2, 2k a² with a the scaled side (rtol 1e-6: the
+    diagonal spans 10⁷ at 1e-3, the round-off of the compliance's inverse)."""
+    a, k = 0.5 * scale, 2e7
+    m = cubic_hexapod(scale=scale)
+    result = stiffness(m, m.home_pose, data=_data(m, k))
+    assert result.status == 0
+    np.testing.assert_allclose(np.diag(result.stiffness),
+                               k * np.array([2, 2, 2, a * a / 2, a * a / 2, 2 * a * a]),
+                               rtol=1e-6)
+
+
+def test_singularity_flag_does_not_depend_on_the_size():
+    """The singularity test is a condition number of A with its moment columns divided by
+    the characteristic length: the cubic hexapod at home is regular at every size, from 10⁻⁶
+    to 10⁶ times its own (a size-dependent test flags the small ones)."""
+    for scale in (1e-6, 1e-3, 1.0, 1e3, 1e6):
+        m = cubic_hexapod(scale=scale)
+        assert stiffness(m, m.home_pose[None]).status.tolist() == [0], scale
+
+
 def test_hexapod_is_k_atransposed_a_with_unit_rows():
     m = machine("gough-stewart")
     k = 3e7
@@ -284,3 +308,23 @@ def test_reference_point_moved_in_the_platform_frame():
 def test_absurd_actuator_stiffness_is_a_units_mistake(bad):
     with pytest.raises(ParameterError, match="check the units"):
         StiffnessData(actuator_stiffness=np.array([1e8, 1e8, bad]))
+
+
+def test_reference_point_of_a_machine_given_positions_turns_with_its_platform():
+    """The Verne module is driven by positions, but its platform tilts (orientation from ik):
+    the compliance about a point r of the platform is that about the platform origin carried
+    to p = R r (a wrench [f, m] at p is [f, m + p × f] at the origin; the point moves by
+    v + ω × p), R from the rotation vector ik reports."""
+    m = machine("verne")
+    x = np.array([0.02, -0.01, 0.01])
+    offset = np.array([0.01, 0.02, -0.05])
+    c0 = stiffness(m, x).compliance
+    moved = stiffness(m, x, reference=offset).compliance
+    rotvec = np.atleast_2d(m.ik(x, full_output=True, strokes="ignore").pose)[0, 3:]
+    assert np.linalg.norm(rotvec) > 1e-3  # the platform is tilted there
+    p = Rotation.from_rotvec(rotvec).apply(offset)
+    oracle = np.zeros((6, 6))
+    for i, w in enumerate(np.eye(6)):
+        t = c0 @ np.concatenate([w[:3], w[3:] + np.cross(p, w[:3])])
+        oracle[:, i] = np.concatenate([t[:3] + np.cross(t[3:], p), t[3:]])
+    np.testing.assert_allclose(moved, oracle, rtol=1e-9, atol=1e-9 * np.abs(oracle).max())
