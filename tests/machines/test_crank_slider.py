@@ -39,12 +39,12 @@ def test_closure_reproduces_4_8_over_the_full_crank_turn(crank):
     previous one, as along any path), the closure's passive joints satisfy (4.8) to 1e-12 and
     agree with the elementary solution θ3 = asin(L1 sinθ1 / L2) of the same branch."""
     theta1 = np.radians(np.arange(0.0, 361.0, 2.0)) + crank.home_q[0]
-    x0 = None
+    start = None
     passive = []
     for t in theta1:
-        res = crank.fk([t], x0=x0, full_output=True)
+        res = crank.fk([t], start=start, full_output=True)
         assert res.status == Status.OK and res.closure_residual < 1e-13
-        x0 = np.concatenate([res.platform, res.passive])
+        start = np.concatenate([res.platform, res.passive])
         passive.append(res.passive)
     theta2, theta3, x4 = np.array(passive).T
     assert np.abs(eq_4_8(theta1, theta2, theta3, x4)).max() < 1e-12
