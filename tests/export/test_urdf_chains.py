@@ -21,6 +21,7 @@ from pkmkit.export.urdf_chains import (
     joint_values,
     sample_configurations,
 )
+from pkmkit.export.urdf_check import pinocchio_configuration
 from pkmkit.export.urdf_writer import check_urdf, write_urdf
 from pkmkit.geometric_errors.compatibility import compatibility
 
@@ -28,14 +29,7 @@ CHAINS = ["tripteor-x7", "trimule-600", "crank-slider"]
 
 
 def _pinocchio_q(pin, model, values):
-    q = pin.neutral(model)
-    for jid in range(1, model.njoints):
-        joint, value = model.joints[jid], values[model.names[jid]]
-        if joint.nq == 2:
-            q[joint.idx_q:joint.idx_q + 2] = np.cos(value), np.sin(value)
-        else:
-            q[joint.idx_q] = value
-    return q
+    return pinocchio_configuration(pin, model, values)
 
 
 @pytest.mark.parametrize("ident", CHAINS)

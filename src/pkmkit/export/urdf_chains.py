@@ -40,7 +40,7 @@ import yaml
 
 from pkmkit.export.base import ExportCheckError, UnsupportedExportError
 from pkmkit.export.urdf import FORMAT, UNLIMITED, UrdfJoint, _attr, _joint, _link, _rpy
-from pkmkit.export.urdf_check import link_placements, read_urdf
+from pkmkit.export.urdf_check import link_placements, pinocchio_configuration, read_urdf
 
 #: Largest closure residual and tool-frame error a written export may have beyond pkmkit's own
 #: closure misfit (m; rotations × the machine's characteristic length).
@@ -233,14 +233,7 @@ def _pinocchio_reader(export: ChainUrdfExport, pin):
     tool = model.getFrameId("tool")
 
     def evaluate(values: dict[str, float]) -> tuple[list[np.ndarray], np.ndarray]:
-        q = pin.neutral(model)
-        for jid in range(1, model.njoints):
-            joint, value = model.joints[jid], values[model.names[jid]]
-            if joint.nq == 2:  # continuous: (cos, sin)
-                q[joint.idx_q:joint.idx_q + 2] = np.cos(value), np.sin(value)
-            else:
-                q[joint.idx_q] = value
-        pin.forwardKinematics(model, data, q)
+        pin.forwardKinematics(model, data, pinocchio_configuration(pin, model, values))
         pin.updateFramePlacements(model, data)
         gaps = [np.linalg.inv(data.oMf[a].homogeneous) @ data.oMf[b].homogeneous
                 for a, b in pairs]

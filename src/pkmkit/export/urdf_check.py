@@ -122,6 +122,19 @@ def _pairs(export: UrdfExport) -> list[tuple[str, str]]:
     return [tuple(p) for p in data["closed_loop"]]
 
 
+def pinocchio_configuration(pin, model, values: dict[str, float]) -> np.ndarray:
+    """Pinocchio's configuration vector of a URDF tree from joint ``values`` by name (m or
+    rad; a continuous joint takes (cos, sin))."""
+    q = pin.neutral(model)
+    for jid in range(1, model.njoints):
+        joint, value = model.joints[jid], values[model.names[jid]]
+        if joint.nq == 2:  # continuous: (cos, sin)
+            q[joint.idx_q:joint.idx_q + 2] = np.cos(value), np.sin(value)
+        else:
+            q[joint.idx_q] = value
+    return q
+
+
 def _pinocchio_reader(export: UrdfExport, pin):
     try:
         model = pin.buildModelFromXML(export.urdf)
@@ -137,14 +150,7 @@ def _pinocchio_reader(export: UrdfExport, pin):
     platform = model.getFrameId("platform")
 
     def evaluate(values: dict[str, float]) -> tuple[list[float], np.ndarray]:
-        q = pin.neutral(model)
-        for jid in range(1, model.njoints):
-            joint, value = model.joints[jid], values[model.names[jid]]
-            if joint.nq == 2:  # continuous: (cos, sin)
-                q[joint.idx_q:joint.idx_q + 2] = np.cos(value), np.sin(value)
-            else:
-                q[joint.idx_q] = value
-        pin.forwardKinematics(model, data, q)
+        pin.forwardKinematics(model, data, pinocchio_configuration(pin, model, values))
         pin.updateFramePlacements(model, data)
         gaps = [float(np.linalg.norm((data.oMi[c.joint1_id] * c.joint1_placement).translation
                                      - (data.oMi[c.joint2_id] * c.joint2_placement).translation))
