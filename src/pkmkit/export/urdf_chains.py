@@ -36,11 +36,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import yaml
 
 from pkmkit.export.base import ExportCheckError, UnsupportedExportError
 from pkmkit.export.urdf import FORMAT, UNLIMITED, UrdfJoint, _attr, _joint, _link, _rpy
-from pkmkit.export.urdf_check import link_placements, pinocchio_configuration, read_urdf
+from pkmkit.export.urdf_check import (
+    closure_pairs,
+    link_placements,
+    pinocchio_configuration,
+    read_urdf,
+)
 
 #: Largest closure residual and tool-frame error a written export may have beyond pkmkit's own
 #: closure misfit (m; rotations × the machine's characteristic length).
@@ -254,10 +258,7 @@ def _python_reader(export: ChainUrdfExport):
 
 
 def _pairs(export: ChainUrdfExport) -> list[tuple[str, str]]:
-    data = yaml.safe_load(export.closures)
-    if list(data.get("type", [])) != ["6D"] * len(data["closed_loop"]):
-        raise ExportCheckError("the closures YAML holds a closure other than 6D")
-    return [tuple(p) for p in data["closed_loop"]]
+    return closure_pairs(export.closures, "6D")
 
 
 def _frame_error(transform: np.ndarray, length: float) -> float:

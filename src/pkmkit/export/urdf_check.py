@@ -115,11 +115,21 @@ def _python_reader(export: UrdfExport):
     return evaluate
 
 
-def _pairs(export: UrdfExport) -> list[tuple[str, str]]:
-    data = yaml.safe_load(export.closures)
-    if list(data.get("type", [])) != ["3D"] * len(data["closed_loop"]):
-        raise ExportCheckError("the closures YAML holds a closure other than 3D")
+def closure_pairs(closures: str, kind: str) -> list[tuple[str, str]]:
+    """The ``(frame, frame)`` pairs of a closures YAML, every one of type ``kind`` (``"3D"``,
+    ``"6D"``).
+
+    Raises:
+        ExportCheckError: a closure of another type.
+    """
+    data = yaml.safe_load(closures)
+    if list(data.get("type", [])) != [kind] * len(data["closed_loop"]):
+        raise ExportCheckError(f"the closures YAML holds a closure other than {kind}")
     return [tuple(p) for p in data["closed_loop"]]
+
+
+def _pairs(export: UrdfExport) -> list[tuple[str, str]]:
+    return closure_pairs(export.closures, "3D")
 
 
 def pinocchio_configuration(pin, model, values: dict[str, float]) -> np.ndarray:
