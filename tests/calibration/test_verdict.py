@@ -191,6 +191,9 @@ def test_an_identification_that_did_not_converge_fails_with_its_reason():
     assert v.headline() == "verdict: FAILED (noise, convergence)"
     assert v.checks[-1].name == "convergence" and "(why)" in v.checks[-1].reason
     assert [c.cause for c in v.causes] == ["diverged"]
+    # nothing was identified: the noise check judges the nominal model, and says so
+    assert "the nominal model does not explain" in v.checks[0].reason
+    assert "identified model" in _judge(1e9, 100).checks[0].reason
     v = judge(chi2=100.0, dof=100, sigma=1e-5, condition=100.0, names=(), values=np.zeros(0),
               units=(), tolerances=np.zeros(0), machine_size=1.0, rms=0.3,
               convergence="why", alternatives=[Alternative("unit", "inches", rms=1e-3)])

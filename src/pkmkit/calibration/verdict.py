@@ -184,9 +184,10 @@ class Verdict:
 
 
 def noise_check(chi2: float, dof: int, *, alpha: float = ALPHA,
-                ratio_max: float = RATIO_MAX) -> tuple[Check, float]:
+                ratio_max: float = RATIO_MAX, model: str = "identified") -> tuple[Check, float]:
     """The noise check and the upper-tail probability of ``chi2`` with ``dof`` degrees of
-    freedom (module docstring)."""
+    freedom (module docstring); ``model`` names the machine judged (``"identified"``, or
+    ``"nominal"`` when nothing was identified)."""
     dof = max(int(dof), 1)
     if not np.isfinite(chi2):
         return Check("noise", False, float("inf"), ratio_max,
@@ -197,7 +198,7 @@ def noise_check(chi2: float, dof: int, *, alpha: float = ALPHA,
     if upper < alpha and ratio > ratio_max:
         return Check("noise", False, ratio, ratio_max,
                      f"a-posteriori noise {ratio:.3g}× the assumed one (χ² = {chi2:.4g} for "
-                     f"{dof} degrees of freedom, P = {upper:.2g} < {alpha:g}): the identified "
+                     f"{dof} degrees of freedom, P = {upper:.2g} < {alpha:g}): the {model} "
                      "model does not explain the readings"), upper
     if lower < alpha and ratio < 1.0 / ratio_max:
         return Check("noise", True, ratio, ratio_max,
@@ -295,7 +296,8 @@ def judge(*, chi2: float, dof: int, sigma: float, condition: float, names: Seque
         convergence: why the identification did not converge (the other arguments then
             describe the nominal machine's fit), or None when it converged.
     """
-    noise, p = noise_check(chi2, dof)
+    noise, p = noise_check(chi2, dof,
+                           model="identified" if convergence is None else "nominal")
     checks = (noise, condition_check(condition),
               magnitude_check(names, values, units, tolerances, machine_size,
                               length_unit=length_unit))
