@@ -3,15 +3,13 @@ and a user's CMM file with an error."""
 
 from __future__ import annotations
 
-import os
-
 import pytest
 
 from .conftest import parse_json
 
 
-def test_gcode_to_identified_parameters(run, tmp_path):
-    os.chdir(tmp_path)
+def test_gcode_to_identified_parameters(run, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     out = run("machined-part", "program", "verne", "--out", "part.nc")
     assert out.exit_code == 0 and "12 straight passes" in out.output
     out = run("machined-part", "simulate", "verne", "--gcode", "part.nc", "--defects", "random",
@@ -31,8 +29,8 @@ def test_gcode_to_identified_parameters(run, tmp_path):
     assert {"part_x", "part_y", "part_z", "part_phi"} == set(result["setup"])
 
 
-def test_a_bad_cmm_file_names_its_line(run, tmp_path):
-    os.chdir(tmp_path)
+def test_a_bad_cmm_file_names_its_line(run, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     run("machined-part", "program", "verne", "--out", "part.nc")
     (tmp_path / "cmm.csv").write_text("# units: mm\nsection,label,x,y,z,path,direction\n"
                                       "1,Q,0,0,0,6,x\n1,K,0,10,5,6,x\n")
@@ -59,8 +57,8 @@ def test_demo_writes_the_chain(tmp_path, monkeypatch):
 
 
 @pytest.mark.ci
-def test_ballbar_plan_feeds_simulate_measurements(run, tmp_path):
-    os.chdir(tmp_path)
+def test_ballbar_plan_feeds_simulate_measurements(run, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     out = run("machined-part", "ballbar-plan", "verne", "--points", 40, "--out", "plan.csv")
     assert out.exit_code == 0, out.output
     assert "40 points × 3 table points × 2 tools = 240 ball-bar readings" in out.output
@@ -87,18 +85,18 @@ def test_ballbar_plan_feeds_simulate_measurements(run, tmp_path):
     assert "do not use this calibration" in out.output
 
 
-def test_part_file_refuses_a_plan(run, tmp_path):
-    os.chdir(tmp_path)
+def test_part_file_refuses_a_plan(run, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     run("machined-part", "ballbar-plan", "verne", "--points", 10, "--out", "plan.csv")
     out = run("simulate-measurements", "verne", "--measure", "part", "--poses", "plan.csv",
               "--out", "p.csv")
     assert out.exit_code == 1 and "pkmkit machined-part simulate" in out.output
 
 
-def test_a_leaning_wall_flags_its_section(run, tmp_path):
+def test_a_leaning_wall_flags_its_section(run, tmp_path, monkeypatch):
     """A cutter that was not vertical: that section is left out, named, and the exit status is
     3; the others are written."""
-    os.chdir(tmp_path)
+    monkeypatch.chdir(tmp_path)
     (tmp_path / "part.nc").write_text("G21 G90\nG0 X-60 Y-20 Z-50\nG1 X60 F1000\nM30\n")
     rows = "".join(f"{k},Q,{x},-20,-58,3,x\n{k},M,{x},-10,-47,3,x\n{k},N,{x},-10,-43,3,x\n"
                    for k, x in enumerate((0, 10, 20), start=1))
