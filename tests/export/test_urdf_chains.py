@@ -97,7 +97,7 @@ def test_planted_errors_are_caught():
         with pytest.raises(ExportCheckError, match="does not close"):
             check_chain_urdf_export(m, type(export)(**{**export.__dict__, "urdf": moved}),
                                     use_pinocchio=reader)
-    # a weld dropped from the YAML is a closure other than the written set
+    # the YAML: 6D welds, pkmkit's actuators and tool, the home configuration
     data = yaml.safe_load(export.closures)
     assert data["type"] == ["6D", "6D"] and data["name_mot"] == list(m.actuator_names)
     assert data["tool_length"] == pytest.approx(m.tool_length)
@@ -137,4 +137,6 @@ def test_command_line(tmp_path):
     masses.write_text("[masses]\nplatform = 1.0\n")
     done = runner.invoke(cli, ["export", "tripteor-x7", "--to", "urdf", "--masses", str(masses),
                                "--out", str(tmp_path / "t2.urdf")])
-    assert done.exit_code != 0 and not (tmp_path / "t2.urdf").exists()
+    assert done.exit_code == 1 and not (tmp_path / "t2.urdf").exists()
+    assert "rod-leg mass model" in done.output and "joint-chain" in done.output
+    assert done.exception is None or isinstance(done.exception, SystemExit)  # no traceback

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.exceptions import InputError, MachineFileError
+from pkmkit.exceptions import InputError, MachineFileError, UnsupportedOperationError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.machine_file import parse_toml
 from pkmkit.model.parameters import MAX_LENGTH, is_plain_number, length_scale
@@ -217,7 +217,16 @@ def mass_properties(machine: Machine, *, carriage: Any = 0.0, rod: Any = 0.0,
 
     For strut legs, ``rod`` is the cylinder (hinged at the base joint) and ``piston`` the part
     hinged at the platform joint; their tube lengths default to :func:`strut_tube_lengths`.
-    Values given for slide rods in ``piston`` must be 0."""
+    Values given for slide rods in ``piston`` must be 0.
+
+    Raises:
+        UnsupportedOperationError: a joint-chain machine (its members are links, not rods).
+    """
+    if machine.elastic_members != "rods":
+        raise UnsupportedOperationError(
+            "a rod-leg mass model", machine.id, machine.family,
+            "pkmkit's masses (carriages, rods, platform) describe rod-leg machines; a "
+            "joint-chain machine's members are links")
     n, m = machine.n_actuators, machine.model.n_rods
 
     def vec(value: Any, size: int, what: str) -> np.ndarray:

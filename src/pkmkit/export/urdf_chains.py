@@ -43,6 +43,7 @@ from pkmkit.export.urdf_check import (
     closure_pairs,
     link_placements,
     pinocchio_configuration,
+    pinocchio_module,
     read_urdf,
 )
 
@@ -202,13 +203,18 @@ def joint_values(machine, q) -> dict[str, float]:
     Raises:
         ExportCheckError: pkmkit's direct model finds no assembly at ``q``.
     """
+    return _assembly(machine, q)[0]
+
+
+def _assembly(machine, q):
+    """:func:`joint_values` and the direct model's full result at ``q`` (one solve)."""
     model = machine.model
     res = machine.fk(np.asarray(q, dtype=float), full_output=True, strokes="ignore")
     if not np.isfinite(res.passive).all():
         raise ExportCheckError(f"no assembly of {machine.id} at q = {np.asarray(q).tolist()}")
     out = dict(zip(res.passive_names, (float(v) for v in np.ravel(res.passive)), strict=True))
     out.update(zip(model.actuator_names, (float(v) for v in np.ravel(q)), strict=True))
-    return {name: out[name] for name in model.variables}
+    return {name: out[name] for name in model.variables}, res
 
 
 def sample_configurations(machine, n: int = 12, seed: int = 0) -> np.ndarray:
@@ -284,19 +290,13 @@ def check_chain_urdf_export(machine, export: ChainUrdfExport, *, use_pinocchio: 
     """
     from pkmkit.spatial.rotation import rotation_class
 
-    pin = None
-    if use_pinocchio is not False:
-        try:
-            import pinocchio as pin
-        except ImportError:
-            if use_pinocchio:
-                raise
+    pin = pinocchio_module(use_pinocchio)
     evaluate = _pinocchio_reader(export, pin) if pin is not None else _python_reader(export)
     length = max(float(machine.model.characteristic_length), 1e-3)
     worst = 0.0
     for q in sample_configurations(machine):
-        gaps, tool = evaluate(joint_values(machine, q))
-        res = machine.fk(q, full_output=True, strokes="ignore")
+        values, res = _assembly(machine, q)
+        gaps, tool = evaluate(values)
         expected = np.eye(4)
         frame = np.ravel(res.tool_frame)
         expected[:3, :3] = rotation_class().from_rotvec(frame[3:]).as_matrix()

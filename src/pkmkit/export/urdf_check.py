@@ -132,6 +132,24 @@ def _pairs(export: UrdfExport) -> list[tuple[str, str]]:
     return closure_pairs(export.closures, "3D")
 
 
+def pinocchio_module(use_pinocchio: bool | None):
+    """The ``pinocchio`` module for a read-back check, or None for the pure-Python reader.
+
+    Args:
+        use_pinocchio: None: Pinocchio when installed; True: require it (ImportError if
+            missing); False: never.
+    """
+    if use_pinocchio is False:
+        return None
+    try:
+        import pinocchio
+    except ImportError:
+        if use_pinocchio:
+            raise
+        return None
+    return pinocchio
+
+
 def pinocchio_configuration(pin, model, values: dict[str, float]) -> np.ndarray:
     """Pinocchio's configuration vector of a URDF tree from joint ``values`` by name (m or
     rad; a continuous joint takes (cos, sin))."""
@@ -186,13 +204,7 @@ def check_urdf_export(machine, export: UrdfExport, *, use_pinocchio: bool | None
         ExportCheckError: a closure or the platform off by more than :data:`TOLERANCE`, or a
             file a reader refuses.
     """
-    pin = None
-    if use_pinocchio is not False:
-        try:
-            import pinocchio as pin
-        except ImportError:
-            if use_pinocchio:
-                raise
+    pin = pinocchio_module(use_pinocchio)
     evaluate = _pinocchio_reader(export, pin) if pin is not None else _python_reader(export)
     poses, q = sample_poses(machine)
     home = yaml.safe_load(export.closures)["home"]
