@@ -224,7 +224,7 @@ def mass_properties(machine: Machine, *, carriage: Any = 0.0, rod: Any = 0.0,
     """
     if machine.elastic_members != "rods":
         raise UnsupportedOperationError(
-            "a rod-leg mass model", machine.id, machine.family,
+            "a rod-leg mass model", machine.id, "joint-chain",
             "pkmkit's masses (carriages, rods, platform) describe rod-leg machines; a "
             "joint-chain machine's members are links")
     n, m = machine.n_actuators, machine.model.n_rods
