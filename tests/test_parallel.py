@@ -76,11 +76,38 @@ def test_bad_schedulers():
         pass
 
 
+def test_local_cluster_is_silent_when_port_8787_is_busy():
+    """distributed starts the scheduler's HTTP server on 8787 even without a dashboard and
+    warns when that port is taken (a documentation example's output failed CI so):
+    ``local_cluster`` takes a free port instead."""
+    import socket
+    import warnings
+
+    distributed = pytest.importorskip("distributed")
+    from pkmkit.parallel import local_cluster
+
+    holder = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    try:
+        holder.bind(("", 8787))
+        holder.listen(1)
+    except OSError:
+        pass                        # someone else holds it already: just as busy
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            with local_cluster(1) as cluster, distributed.Client(cluster) as c:
+                assert c.submit(int, "7").result() == 7
+    finally:
+        holder.close()
+    assert not [w for w in caught if "8787" in str(w.message)], [str(w.message) for w in caught]
+
+
 @pytest.fixture(scope="module")
 def client():
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, \
+                                  dashboard_address=None,
+                                  scheduler_kwargs={"dashboard_address": ":0"}) as cluster, \
             distributed.Client(cluster) as c:
         yield c
 

@@ -164,9 +164,14 @@ def local_cluster(workers: int, **options: Any):
     import dask
 
     distributed = _require_distributed()
+    # No dashboard, and the scheduler's HTTP server (health and metrics routes, which
+    # distributed starts even without a dashboard) on a free port rather than 8787: with
+    # 8787 busy, distributed would print a warning into every command's output.
+    scheduler_options = {"dashboard_address": ":0", **options.pop("scheduler_kwargs", {})}
     with dask.config.set({"distributed.nanny.pre-spawn-environ": WORKER_ENVIRON}):
         return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
-                                        processes=True, dashboard_address=None, **options)
+                                        processes=True, dashboard_address=None,
+                                        scheduler_kwargs=scheduler_options, **options)
 
 
 def chunk_ranges(size: int, chunk: int) -> list[tuple[int, int]]:
