@@ -94,8 +94,35 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
                else figures)
     scale = length_scale(units)
     data = result.to_json(units)
-    esc = html.escape
     title = title or f"Calibration of {result.nominal.name}"
+    parts = _header_parts(result, units, sources, title)
+    parts += _summary_parts(result, data, scale, units, workspace)
+    parts += _residual_parts(result, figures, scale, units, gravity)
+    parts += _parameter_parts(result, data, figures, scale, units)
+    parts += _identifiability_parts(result, figures, scale, units)
+    if view:
+        parts.append(_view_section(result, units))
+    return ("<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
+            f"<title>{html.escape(title)}</title><style>{_STYLE}</style></head><body>\n"
+            + "\n".join(parts) + "\n</body></html>\n")
+
+
+_STYLE = ("body{font-family:sans-serif;max-width:980px;margin:1.5em auto;color:#222}"
+          "table{border-collapse:collapse;margin:0.6em 0;font-size:0.9em}"
+          "td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
+          "td:first-child,th:first-child{text-align:left}"
+          "table.unidentifiable td{text-align:left}"
+          ".meta{color:#555;font-size:0.85em}.summary{background:#f4f4f4;padding:0.6em}"
+          ".verdict{padding:0.6em;margin:0.8em 0}.verdict.passed{background:#eef5ee;"
+          "border-left:6px solid #4a4}.verdict.failed{background:#fbeaea;border-left:6px "
+          "solid #c22}.verdict h2{margin:0 0 0.3em 0}"
+          "figure{margin:1em 0}img{max-width:100%}"
+          "figcaption{font-size:0.85em;color:#555}")
+
+
+def _header_parts(result, units: str, sources: dict[str, str] | None, title: str) -> list[str]:
+    """The title, the verdict (when judged) and the metadata lines."""
+    esc = html.escape
     parts = [f"<h1>{esc(title)}</h1>",
              f"<p class='meta'>pkmkit {esc(__version__)} · machine <b>{esc(result.nominal.id)}"
              f"</b> · measurement <b>{esc(result.kind)}</b> · lengths in {esc(units)}, angles "
@@ -106,10 +133,14 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
             + (f" (sha256 {esc(_sha256(v)[:16])}…)" if _sha256(v) else "")
             for k, v in sources.items()) + "</p>")
     parts.append(f"<p class='meta'>calibrated {esc(_now())}</p>")
-
-    # ---- verdict and summary
     if result.verdict is not None:
         parts.insert(1, _verdict_html(result.verdict))
+    return parts
+
+
+def _summary_sentence(result, scale: float, units: str) -> str:
+    """The RMS before → after, validation and a-posteriori noise in one paragraph."""
+    esc = html.escape
     val = result.validation
     gain = result.before.rms / result.after.rms if result.after.rms > 0 else float("inf")
     verdict = (f"The identified machine reduces the RMS error of the {result.after.per_pose.size}"
@@ -125,7 +156,14 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
                    " — the model explains the data to the noise level." if
                    result.sigma_posterior < 1.5 * result.sigma else
                    " — larger than assumed: unmodelled errors or outliers remain."))
-    parts.append(f"<p class='summary'>{verdict}</p>")
+    return f"<p class='summary'>{verdict}</p>"
+
+
+def _summary_parts(result, data: dict, scale: float, units: str,
+                   workspace: dict | None) -> list[str]:
+    """The summary paragraph, the summary table and the parameter counts."""
+    esc = html.escape
+    val = result.validation
     summary = [
         ["observations (identification)", str(result.after.per_pose.size)],
         ["observations (validation)", str(val.after.per_pose.size) if val else "—"],
@@ -141,20 +179,9 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         cm = data["correlation_max"]
         summary.append(["largest correlation", f"{esc(cm['pair'][0])} / {esc(cm['pair'][1])}: "
                                                f"{cm['value']:+.3f}"])
-    if result.tool_uncertainty is not None and result.tool_uncertainty.size:
-        u = result.tool_uncertainty / scale
-        summary.append(["tool-point uncertainty (k = 2) at the measured configurations"
-                        + (", free rigid motion removed" if
-                           result.tool_uncertainty_rigid_removed else ""),
-                        f"RMS {_num(float(np.sqrt(np.mean(u**2))))}, max "
-                        f"{_num(float(np.max(u)))} {esc(units)}"])
-    if workspace is not None:
-        u = np.asarray(workspace["uncertainty"]) / scale
-        summary.append([f"tool-point uncertainty (k = 2) over the workspace "
-                        f"({u.size} configurations)",
-                        f"RMS {_num(float(np.sqrt(np.mean(u**2))))}, max "
-                        f"{_num(float(np.max(u)))} {esc(units)}"])
-    parts.append("<h2>Summary</h2>" + _table(["", ""], summary, "summary"))
+    summary += _uncertainty_rows(result, scale, units, workspace)
+    parts = [_summary_sentence(result, scale, units),
+             "<h2>Summary</h2>" + _table(["", ""], summary, "summary")]
     if result.counts:
         c = result.counts
         parts.append("<h3>Parameter counts</h3>" + _table(
@@ -162,17 +189,46 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
              "combinations"],
             [[str(c.get(k, "—")) for k in ("candidates", "compatible", "identified", "gauges",
                                            "weak", "no_effect", "combinations")]], "counts"))
+    return parts
 
-    stats = [["identification", _num(result.before.mean / scale), _num(result.before.rms / scale),
-              _num(result.before.max / scale), _num(result.after.mean / scale),
-              _num(result.after.rms / scale), _num(result.after.max / scale)]]
-    if val is not None:
-        stats.append(["validation", _num(val.before.mean / scale), _num(val.before.rms / scale),
-                      _num(val.before.max / scale), _num(val.after.mean / scale),
-                      _num(val.after.rms / scale), _num(val.after.max / scale)])
-    parts.append(f"<h2>Residuals [{esc(units)}]</h2>" + _table(
+
+def _uncertainty_rows(result, scale: float, units: str,
+                      workspace: dict | None) -> list[list[str]]:
+    """Summary rows of the tool-point uncertainty (k = 2), measured and over the workspace."""
+    rows = []
+    if result.tool_uncertainty is not None and result.tool_uncertainty.size:
+        u = result.tool_uncertainty / scale
+        rows.append(["tool-point uncertainty (k = 2) at the measured configurations"
+                     + (", free rigid motion removed" if
+                        result.tool_uncertainty_rigid_removed else ""),
+                     f"RMS {_num(float(np.sqrt(np.mean(u**2))))}, max "
+                     f"{_num(float(np.max(u)))} {html.escape(units)}"])
+    if workspace is not None:
+        u = np.asarray(workspace["uncertainty"]) / scale
+        rows.append([f"tool-point uncertainty (k = 2) over the workspace "
+                     f"({u.size} configurations)",
+                     f"RMS {_num(float(np.sqrt(np.mean(u**2))))}, max "
+                     f"{_num(float(np.max(u)))} {html.escape(units)}"])
+    return rows
+
+
+def _residual_stats(summary, scale: float) -> list[str]:
+    """Mean, RMS and max before and after of one set (identification or validation)."""
+    return [_num(summary.before.mean / scale), _num(summary.before.rms / scale),
+            _num(summary.before.max / scale), _num(summary.after.mean / scale),
+            _num(summary.after.rms / scale), _num(summary.after.max / scale)]
+
+
+def _residual_parts(result, figures: dict, scale: float, units: str,
+                    gravity: dict | None) -> list[str]:
+    """Residual statistics, the gravity deflection beside them, per axis, the worst rows and
+    the residual figures."""
+    stats = [["identification", *_residual_stats(result, scale)]]
+    if result.validation is not None:
+        stats.append(["validation", *_residual_stats(result.validation, scale)])
+    parts = [f"<h2>Residuals [{html.escape(units)}]</h2>" + _table(
         ["set", "mean before", "RMS before", "max before", "mean after", "RMS after",
-         "max after"], stats, "stats"))
+         "max after"], stats, "stats")]
     parts.append("<p>Error of one observation: the distance between the measured and the "
                  "predicted tool point (point and pose measurements), the bar-length error "
                  "(ball-bar), the height error (probe) or the joint-space distance to the "
@@ -185,23 +241,32 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         parts.append("<h3>Residuals per axis (RMS)</h3>" + _table(
             ["axis", "unit", "before", "after", "max |after|"], axes, "axes"))
     parts.append(_worst_rows(result, scale, units))
-    for name, caption in (("residuals", "Error of each observation (log scale)"),
-                          ("histograms", "Distribution of the errors"),
-                          ("maps", "Over the workspace (seen from above): error before and "
-                                   "after at the measured configurations, and the identified "
-                                   "machine's tool-point uncertainty (k = 2) from the "
-                                   "joint covariance of the machine and set-up parameters"
-                                   " there and at configurations drawn over the machine's "
-                                   "workspace"
-                                   + ("; the rigid motion the set-up absorbs (frame, "
-                                      "pivots, bed, part placement) is removed, as the "
-                                      "workpiece set-up "
-                                      "does" if result.tool_uncertainty_rigid_removed
-                                      else ""))):
+    for name, caption in _residual_captions(result):
         if name in figures:
             parts.append(_figure(figures[name], caption, name))
+    return parts
 
-    # ---- parameters
+
+def _residual_captions(result) -> tuple[tuple[str, str], ...]:
+    """(figure name, caption) of the residual figures, in page order."""
+    return (("residuals", "Error of each observation (log scale)"),
+            ("histograms", "Distribution of the errors"),
+            ("maps", "Over the workspace (seen from above): error before and "
+                     "after at the measured configurations, and the identified "
+                     "machine's tool-point uncertainty (k = 2) from the "
+                     "joint covariance of the machine and set-up parameters"
+                     " there and at configurations drawn over the machine's "
+                     "workspace"
+                     + ("; the rigid motion the set-up absorbs (frame, "
+                        "pivots, bed, part placement) is removed, as the "
+                        "workpiece set-up "
+                        "does" if result.tool_uncertainty_rigid_removed
+                        else "")))
+
+
+def _parameter_rows(result, data: dict, scale: float) -> list[list[str]]:
+    """One row per identified machine parameter: value, σ, unit, tolerance, |value|/σ."""
+    esc = html.escape
     rows = []
     for i, n in enumerate(result.names):
         unit = data["parameter_units"][n]
@@ -212,14 +277,21 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         ratio = abs(v) / s if s > 0 else float("nan")
         rows.append([f"<code>{esc(n)}</code>", _num(v, 5), _num(s, 3), esc(unit),
                      _num(tol_out, 3), _num(ratio, 3)])
-    parts.append(f"<h2>Identified machine parameters ({len(result.names)})</h2>")
-    parts.append(_table(["parameter", "value", "std (1σ)", "unit", "tolerance", "|value|/σ"],
-                        rows, "params"))
+    return rows
+
+
+def _parameter_parts(result, data: dict, figures: dict, scale: float,
+                     units: str) -> list[str]:
+    """The identified machine parameters, the set-up parameters and the measurement frame."""
+    esc = html.escape
+    parts = [f"<h2>Identified machine parameters ({len(result.names)})</h2>",
+             _table(["parameter", "value", "std (1σ)", "unit", "tolerance", "|value|/σ"],
+                    _parameter_rows(result, data, scale), "params")]
     if "parameters" in figures:
         parts.append(_figure(figures["parameters"], "Identified parameters ± 2σ", "parameters"))
     if result.setup_names:
-        rows = [[f"<code>{esc(n)}</code>", _num(data["setup"][n], 7), _num(data["setup_std"][n],
-                                                                       3),
+        rows = [[f"<code>{esc(n)}</code>", _num(data["setup"][n], 7),
+                 _num(data["setup_std"][n], 3),
                  esc(units if u == "m" else ("deg" if u == "rad" else "1"))]
                 for n, u in zip(result.setup_names, result.setup_units, strict=True)]
         parts.append("<h2>Set-up parameters</h2>" + _table(["parameter", "value", "std", "unit"],
@@ -229,14 +301,18 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         parts.append("<h3>Measurement frame → machine frame</h3>"
                      f"<p>rotation vector {esc(_vec(fr['rotation_vector_deg']))} deg, "
                      f"translation {esc(_vec(fr['translation']))} {esc(units)}</p>")
+    return parts
 
-    # ---- identifiability
-    parts.append("<h2>Identifiability</h2>")
-    parts.append(f"<p>{result.rank} parameters identified out of {result.candidates} "
-                 "candidates. The singular values below are those of the identified problem "
-                 "with each column scaled by its tolerance and each row divided by its noise σ: "
-                 "a value of 1 means that a tolerance-sized change of that combination moves "
-                 "the readings by one σ.</p>")
+
+def _identifiability_parts(result, figures: dict, scale: float, units: str) -> list[str]:
+    """The identifiability section (singular values, parameters left nominal) and outliers."""
+    esc = html.escape
+    parts = ["<h2>Identifiability</h2>",
+             f"<p>{result.rank} parameters identified out of {result.candidates} "
+             "candidates. The singular values below are those of the identified problem "
+             "with each column scaled by its tolerance and each row divided by its noise σ: "
+             "a value of 1 means that a tolerance-sized change of that combination moves "
+             "the readings by one σ.</p>"]
     if "identifiability" in figures:
         parts.append(_figure(figures["identifiability"], "Singular values and correlations",
                              "identifiability"))
@@ -249,23 +325,7 @@ def report_html(result, *, units: str = "mm", figures: dict[str, bytes] | None =
         parts.append(f"<h2>Outliers ({len(rows)})</h2><p>Observations beyond 3 robust standard "
                      "deviations, down-weighted by the robust loss.</p>"
                      + _table(["row", f"error [{units}]", "weight"], rows, "outliers"))
-    if view:
-        parts.append(_view_section(result, units))
-    style = ("body{font-family:sans-serif;max-width:980px;margin:1.5em auto;color:#222}"
-             "table{border-collapse:collapse;margin:0.6em 0;font-size:0.9em}"
-             "td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
-             "td:first-child,th:first-child{text-align:left}"
-             "table.unidentifiable td{text-align:left}"
-             ".meta{color:#555;font-size:0.85em}.summary{background:#f4f4f4;padding:0.6em}"
-             ".verdict{padding:0.6em;margin:0.8em 0}.verdict.passed{background:#eef5ee;"
-             "border-left:6px solid #4a4}.verdict.failed{background:#fbeaea;border-left:6px "
-             "solid #c22}.verdict h2{margin:0 0 0.3em 0}"
-             "figure{margin:1em 0}img{max-width:100%}"
-             "figcaption{font-size:0.85em;color:#555}")
-    return ("<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
-            f"<title>{esc(title)}</title><style>{style}</style></head><body>\n"
-            + "\n".join(parts) + "\n</body></html>\n")
-
+    return parts
 
 def _view_section(result, units: str) -> str:
     """The report's 3-D view: the nominal machine with one slider per actuator and the tool
