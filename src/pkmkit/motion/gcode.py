@@ -84,27 +84,52 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
             f"{label}:{line}: {message}" if line else f"{label}: {message}"))
     offset = np.asarray(origin, dtype=float).reshape(3)
     position = offset.copy() if start is None else np.asarray(start, dtype=float).reshape(3)
-    scale, plane, absolute = _UNITS[21], 17, True
-    motion: int | None = None
-    feed: float | None = None
-    segments: list[Line | Arc] = []
-    lines: list[int] = []
-    blocks: list[str] = []
-
-    def error(number: int, message: str) -> InputError:
-        return InputError(f"{label}:{number}: {message}")
-
-    ended = False
+    program = _Interpreter(label, offset, position)
     for number, raw in enumerate(text.splitlines(), start=1):
-        if ended:
-            break
         body = _strip(raw)
-        if not body or body == "%":
-            continue
+        if body and body != "%":
+            program.block(number, body)
+        if program.ended:
+            break
+    if not program.segments:
+        raise InputError(f"{label}: the program contains no motion")
+    return Path(tuple(program.segments), tuple(program.lines), tuple(program.blocks))
+
+
+class _Interpreter:
+    """The modal state of a G-code program (units, plane, distance mode, motion, feed,
+    position) and the moves read so far; :meth:`block` reads one block."""
+
+    def __init__(self, label: str, offset: np.ndarray, position: np.ndarray) -> None:
+        self.label, self.offset, self.position = label, offset, position
+        self.scale, self.plane, self.absolute = _UNITS[21], 17, True
+        self.motion: int | None = None
+        self.feed: float | None = None
+        self.ended = False
+        self.segments: list[Line | Arc] = []
+        self.lines: list[int] = []
+        self.blocks: list[str] = []
+
+    def error(self, number: int, message: str) -> InputError:
+        return InputError(f"{self.label}:{number}: {message}")
+
+    def block(self, number: int, body: str) -> None:
+        """Read one non-empty block (``body`` without comments) at file line ``number``."""
+        values, g_codes = self._words(number, body)
+        self._modes(number, g_codes)
+        if "F" in values:
+            if not values["F"] > 0:
+                raise self.error(number, f"the feed must be > 0, got F{values['F']:g}")
+            self.feed = values["F"] * self.scale / 60.0
+        if any(k in values for k in "XYZIJKR"):
+            self._move(number, values, body)
+
+    def _words(self, number: int, body: str) -> tuple[dict[str, float], list[int]]:
+        """The block's X Y Z I J K R F values and its G codes (M2/M30 set :attr:`ended`)."""
         words = _WORD.findall(body)
         leftover = _WORD.sub("", body).strip()
         if leftover:
-            raise error(number, f"cannot read {leftover!r}")
+            raise self.error(number, f"cannot read {leftover!r}")
         values: dict[str, float] = {}
         g_codes = []
         for letter, number_text in words:
@@ -112,82 +137,92 @@ def read_gcode(source: str | FilePath, *, origin=(0.0, 0.0, 0.0), start=None,
             value = float(number_text)
             problem = number_problem(number_text)
             if problem:
-                raise error(number, f"{letter} word: {problem}")
+                raise self.error(number, f"{letter} word: {problem}")
             if letter == "G":
-                if value == int(value) and int(value) in _IGNORED_G:
-                    continue
-                if value != int(value) or int(value) not in _ALLOWED_G:
-                    raise error(number, f"unsupported G code G{number_text}; supported: "
-                                + ", ".join(f"G{g}" for g in sorted(_ALLOWED_G))
-                                + " (and, ignored, "
-                                + ", ".join(f"G{g}" for g in sorted(_IGNORED_G)) + ")")
-                g_codes.append(int(value))
+                g = self._g_code(number, value, number_text)
+                if g is not None:
+                    g_codes.append(g)
             elif letter == "M" and value in _PROGRAM_END:
-                ended = True
+                self.ended = True
             elif letter == "N" or letter in _IGNORED_WORDS:
                 continue
             elif letter in "XYZIJKRF":
                 if letter in values:
-                    raise error(number, f"{letter} appears twice")
+                    raise self.error(number, f"{letter} appears twice")
                 values[letter] = value
             else:
-                raise error(number, f"unsupported word {letter}{number_text} (only G0-G3, "
-                            "G17-G21, G90, G91, X Y Z I J K R F and N are read; O S T M are "
-                            "ignored)")
-        for group, what in ((set(_UNITS), "unit"), (set(_PLANES), "plane"), ({90, 91}, "distance"),
-                            ({0, 1, 2, 3}, "motion")):
+                raise self.error(number, f"unsupported word {letter}{number_text} (only G0-G3, "
+                                 "G17-G21, G90, G91, X Y Z I J K R F and N are read; O S T M "
+                                 "are ignored)")
+        return values, g_codes
+
+    def _g_code(self, number: int, value: float, number_text: str) -> int | None:
+        """The G code as an int, None for an ignored one; unsupported ones raise."""
+        if value == int(value) and int(value) in _IGNORED_G:
+            return None
+        if value != int(value) or int(value) not in _ALLOWED_G:
+            raise self.error(number, f"unsupported G code G{number_text}; supported: "
+                             + ", ".join(f"G{g}" for g in sorted(_ALLOWED_G))
+                             + " (and, ignored, "
+                             + ", ".join(f"G{g}" for g in sorted(_IGNORED_G)) + ")")
+        return int(value)
+
+    def _modes(self, number: int, g_codes: list[int]) -> None:
+        """Apply the block's modal G codes (one per group)."""
+        for group, what in ((set(_UNITS), "unit"), (set(_PLANES), "plane"),
+                            ({90, 91}, "distance"), ({0, 1, 2, 3}, "motion")):
             clash = [g for g in g_codes if g in group]
             if len(clash) > 1:
-                raise error(number, f"two {what} codes on one line: "
-                            + " ".join(f"G{g}" for g in clash))
+                raise self.error(number, f"two {what} codes on one line: "
+                                 + " ".join(f"G{g}" for g in clash))
         for g in g_codes:
             if g in _UNITS:
-                scale = _UNITS[g]
+                self.scale = _UNITS[g]
             elif g in _PLANES:
-                plane = g
+                self.plane = g
             elif g in (90, 91):
-                absolute = g == 90
+                self.absolute = g == 90
             else:
-                motion = g
-        if "F" in values:
-            if not values["F"] > 0:
-                raise error(number, f"the feed must be > 0, got F{values['F']:g}")
-            feed = values["F"] * scale / 60.0
-        coords = {k: values[k] for k in "XYZ" if k in values}
-        if not coords and not any(k in values for k in "IJKR"):
-            continue
-        if motion is None:
-            raise error(number, "coordinates without a motion mode (G0, G1, G2 or G3)")
-        target = position.copy()
+                self.motion = g
+
+    def _target(self, values: dict[str, float]) -> np.ndarray:
+        """The block's end point (m, machine coordinates) in the current distance mode."""
+        target = self.position.copy()
         for axis, letter in enumerate("XYZ"):
-            if letter in coords:
-                v = coords[letter] * scale
-                target[axis] = v + offset[axis] if absolute else position[axis] + v
-        if motion in (1, 2, 3) and feed is None:
-            raise error(number, "a feed move needs a feed rate F first")
+            if letter in values:
+                v = values[letter] * self.scale
+                target[axis] = (v + self.offset[axis] if self.absolute
+                                else self.position[axis] + v)
+        return target
+
+    def _move(self, number: int, values: dict[str, float], body: str) -> None:
+        """Append the block's line or arc (a zero-length line is skipped)."""
+        motion = self.motion
+        if motion is None:
+            raise self.error(number, "coordinates without a motion mode (G0, G1, G2 or G3)")
+        target = self._target(values)
+        if motion in (1, 2, 3) and self.feed is None:
+            raise self.error(number, "a feed move needs a feed rate F first")
         if motion in (0, 1):
             if any(k in values for k in "IJKR"):
-                raise error(number, f"I/J/K/R make no sense with G{motion}")
-            if np.linalg.norm(target - position) == 0:
-                continue
-            segments.append(Line(position, target, rapid=motion == 0,
-                                 feed=None if motion == 0 else feed))
+                raise self.error(number, f"I/J/K/R make no sense with G{motion}")
+            if np.linalg.norm(target - self.position) == 0:
+                return
+            self.segments.append(Line(self.position, target, rapid=motion == 0,
+                                      feed=None if motion == 0 else self.feed))
         else:
-            segments.append(_arc(position, target, values, plane, motion == 2, scale, feed,
-                                 lambda m, n=number: error(n, m)))
-        if not np.isfinite(target).all() or not np.isfinite(segments[-1].length):
-            raise error(number, "the move's coordinates overflow (a length beyond 1e308 m)")
-        if len(segments) > MAX_SEGMENTS:
-            raise error(number, f"more than {MAX_SEGMENTS} moves (about "
-                        f"{MAX_SEGMENTS * SEGMENT_BYTES / 2**30:.1f} GiB of path before any "
-                        "sampling); split the program")
-        lines.append(number)
-        blocks.append(body)
-        position = target
-    if not segments:
-        raise InputError(f"{label}: the program contains no motion")
-    return Path(tuple(segments), tuple(lines), tuple(blocks))
-
+            self.segments.append(_arc(self.position, target, values, self.plane, motion == 2,
+                                      self.scale, self.feed,
+                                      lambda m, n=number: self.error(n, m)))
+        if not np.isfinite(target).all() or not np.isfinite(self.segments[-1].length):
+            raise self.error(number, "the move's coordinates overflow (a length beyond 1e308 m)")
+        if len(self.segments) > MAX_SEGMENTS:
+            raise self.error(number, f"more than {MAX_SEGMENTS} moves (about "
+                             f"{MAX_SEGMENTS * SEGMENT_BYTES / 2**30:.1f} GiB of path before any "
+                             "sampling); split the program")
+        self.lines.append(number)
+        self.blocks.append(body)
+        self.position = target
 
 def _arc(start, end, values, plane, clockwise, scale, feed, error) -> Arc:
     normal, letters = _PLANES[plane]
