@@ -264,86 +264,13 @@ def build_rod_model(
     if dims not in (2, 3, 6):
         raise ParameterError(f"dims must be 2, 3 or 6, got {dims}", "dims")
     n_act = len(actuator_names)
-    if dims in (2, 3):
-        if len(legs) != n_act:
-            raise ParameterError(
-                f"each actuator needs exactly one leg: {n_act} actuators, {len(legs)} legs",
-                "legs")
-        if n_act != dims:
-            raise ParameterError(
-                f"a {dims}-D translational rod-leg machine needs {dims} actuators, got {n_act}",
-                "legs",
-            )
-        if [leg.actuator for leg in legs] != list(range(n_act)):
-            raise ParameterError(
-                "each actuator must drive exactly one leg, leg i driving actuator i", "legs"
-            )
-    else:
-        used = sorted({leg.actuator for leg in legs})
-        if used != list(range(n_act)):
-            missing = sorted(set(range(n_act)) - set(used))
-            what = (f"actuator {actuator_names[missing[0]]!r} drives no leg" if missing else
-                    f"legs name actuators {used} but there are {n_act}")
-            raise ParameterError(f"each actuator must drive at least one leg: {what}", "legs")
-        if n_act > 6:
-            raise ParameterError(f"a full-pose machine has at most 6 actuators, got {n_act}",
-                                 "legs")
-
+    _check_leg_actuators(legs, dims, actuator_names)
     leg_rows = []
     rod_rows = []
     for i, leg in enumerate(legs):
-        where = f"legs.{i}"
-        if leg.kind not in LEG_KINDS:
-            raise ParameterError(
-                f"{where}.kind must be one of {sorted(LEG_KINDS)}, got {leg.kind!r}",
-                f"{where}.kind",
-            )
-        kind = LEG_KINDS[leg.kind]
-        base = _point(leg.base, f"{where}.base")
-        platform = _point(leg.platform, f"{where}.platform")
-        axis = _unit(leg.axis, f"{where}.axis") if kind != STRUT else np.zeros(3)
-        pivot = _point(leg.pivot, f"{where}.pivot") if kind == CRANK else np.zeros(3)
-        if kind == CRANK:
-            arm = base - pivot
-            if np.linalg.norm(arm - (arm @ axis) * axis) <= 1e-12 * (1.0 + np.linalg.norm(arm)):
-                raise ParameterError(
-                    f"{where}: the crank arm (from the pivot to the base joint) has no length "
-                    "across the rotation axis", f"{where}.pivot")
-        length = float(leg.length)
-        # a strut's length at q = 0 may be 0 (q is then the strut length itself)
-        if not np.isfinite(length) or length < 0 or (length == 0 and kind != STRUT):
-            what = ">= 0 for a strut" if kind == STRUT else "> 0"
-            raise ParameterError(f"{where}.length must be {what}, got {leg.length}",
-                                 f"{where}.length")
-        lo, hi = (float(v) for v in leg.stroke)
-        if np.isnan(lo) or np.isnan(hi) or not lo < hi:
-            raise ParameterError(
-                f"{where}.stroke must be (min, max) with min < max, got {leg.stroke}",
-                f"{where}.stroke",
-            )
-        if leg.branch not in (1, -1):
-            raise ParameterError(f"{where}.branch must be +1 or -1, got {leg.branch}", where)
-        if dims == 2 and (base[2] != 0 or platform[2] != 0 or axis[2] != 0):
-            raise ParameterError(f"{where}: a planar machine needs z = 0 geometry", where)
-        if dims == 2 and kind == CRANK:
-            raise ParameterError(f"{where}: crank legs are spatial (dims 3 or 6)", where)
-        leg_rows.append((leg.actuator, kind, leg.branch, base, axis, platform, length, lo, hi,
-                         pivot))
-
-        width = float(leg.parallelogram_width)
-        if not np.isfinite(width) or width < 0:
-            raise ParameterError(
-                f"{where}.parallelogram width must be >= 0, got {width}", f"{where}.parallelogram"
-            )
-        if width == 0:
-            rod_rows.append((i, base, axis, platform, length))
-            continue
-        offset = 0.5 * width * _unit(leg.parallelogram_direction, f"{where}.parallelogram")
-        if dims == 2 and offset[2] != 0:
-            raise ParameterError(f"{where}: a planar parallelogram must lie in the plane", where)
-        for sign in (-1.0, 1.0):
-            rod_rows.append((i, base + sign * offset, axis, platform + sign * offset, length))
-
+        row = _leg_row(f"legs.{i}", leg, dims)
+        leg_rows.append(row)
+        rod_rows += _rod_rows(i, f"legs.{i}", leg, dims, row)
     _check_shared_actuators(leg_rows, actuator_names)
     home = np.asarray(home_pose, dtype=float).reshape(-1)
     if home.shape != (dims,) or not np.isfinite(home).all():
@@ -381,6 +308,94 @@ def build_rod_model(
         leg_pivot=column(leg_rows, 9),
     )
 
+
+def _check_leg_actuators(legs: Sequence[LegSpec], dims: int,
+                         actuator_names: Sequence[str]) -> None:
+    """Translational machines: one leg per actuator, leg i driving actuator i; full-pose
+    machines: every actuator drives at least one leg, at most 6 actuators."""
+    n_act = len(actuator_names)
+    if dims in (2, 3):
+        if len(legs) != n_act:
+            raise ParameterError(
+                f"each actuator needs exactly one leg: {n_act} actuators, {len(legs)} legs",
+                "legs")
+        if n_act != dims:
+            raise ParameterError(
+                f"a {dims}-D translational rod-leg machine needs {dims} actuators, got {n_act}",
+                "legs",
+            )
+        if [leg.actuator for leg in legs] != list(range(n_act)):
+            raise ParameterError(
+                "each actuator must drive exactly one leg, leg i driving actuator i", "legs"
+            )
+        return
+    used = sorted({leg.actuator for leg in legs})
+    if used != list(range(n_act)):
+        missing = sorted(set(range(n_act)) - set(used))
+        what = (f"actuator {actuator_names[missing[0]]!r} drives no leg" if missing else
+                f"legs name actuators {used} but there are {n_act}")
+        raise ParameterError(f"each actuator must drive at least one leg: {what}", "legs")
+    if n_act > 6:
+        raise ParameterError(f"a full-pose machine has at most 6 actuators, got {n_act}",
+                             "legs")
+
+
+def _leg_row(where: str, leg: LegSpec, dims: int) -> tuple:
+    """One leg checked: ``(actuator, kind, branch, base, axis, platform, length, q_min, q_max,
+    pivot)``, points in m, ``axis`` a unit vector (zeros for a strut)."""
+    if leg.kind not in LEG_KINDS:
+        raise ParameterError(
+            f"{where}.kind must be one of {sorted(LEG_KINDS)}, got {leg.kind!r}",
+            f"{where}.kind",
+        )
+    kind = LEG_KINDS[leg.kind]
+    base = _point(leg.base, f"{where}.base")
+    platform = _point(leg.platform, f"{where}.platform")
+    axis = _unit(leg.axis, f"{where}.axis") if kind != STRUT else np.zeros(3)
+    pivot = _point(leg.pivot, f"{where}.pivot") if kind == CRANK else np.zeros(3)
+    if kind == CRANK:
+        arm = base - pivot
+        if np.linalg.norm(arm - (arm @ axis) * axis) <= 1e-12 * (1.0 + np.linalg.norm(arm)):
+            raise ParameterError(
+                f"{where}: the crank arm (from the pivot to the base joint) has no length "
+                "across the rotation axis", f"{where}.pivot")
+    length = float(leg.length)
+    # a strut's length at q = 0 may be 0 (q is then the strut length itself)
+    if not np.isfinite(length) or length < 0 or (length == 0 and kind != STRUT):
+        what = ">= 0 for a strut" if kind == STRUT else "> 0"
+        raise ParameterError(f"{where}.length must be {what}, got {leg.length}",
+                             f"{where}.length")
+    lo, hi = (float(v) for v in leg.stroke)
+    if np.isnan(lo) or np.isnan(hi) or not lo < hi:
+        raise ParameterError(
+            f"{where}.stroke must be (min, max) with min < max, got {leg.stroke}",
+            f"{where}.stroke",
+        )
+    if leg.branch not in (1, -1):
+        raise ParameterError(f"{where}.branch must be +1 or -1, got {leg.branch}", where)
+    if dims == 2 and (base[2] != 0 or platform[2] != 0 or axis[2] != 0):
+        raise ParameterError(f"{where}: a planar machine needs z = 0 geometry", where)
+    if dims == 2 and kind == CRANK:
+        raise ParameterError(f"{where}: crank legs are spatial (dims 3 or 6)", where)
+    return (leg.actuator, kind, leg.branch, base, axis, platform, length, lo, hi, pivot)
+
+
+def _rod_rows(i: int, where: str, leg: LegSpec, dims: int, row: tuple) -> list[tuple]:
+    """The rods of leg ``i``: ``(leg, base, axis, platform, length)``, one rod, or the two
+    rods of a parallelogram of ``leg.parallelogram_width`` (m)."""
+    _, _, _, base, axis, platform, length, _, _, _ = row
+    width = float(leg.parallelogram_width)
+    if not np.isfinite(width) or width < 0:
+        raise ParameterError(
+            f"{where}.parallelogram width must be >= 0, got {width}", f"{where}.parallelogram"
+        )
+    if width == 0:
+        return [(i, base, axis, platform, length)]
+    offset = 0.5 * width * _unit(leg.parallelogram_direction, f"{where}.parallelogram")
+    if dims == 2 and offset[2] != 0:
+        raise ParameterError(f"{where}: a planar parallelogram must lie in the plane", where)
+    return [(i, base + sign * offset, axis, platform + sign * offset, length)
+            for sign in (-1.0, 1.0)]
 
 def _check_shared_actuators(leg_rows: list, actuator_names: Sequence[str]) -> None:
     """Legs driven by one actuator must agree on its kind, axis, pivot and stroke."""
