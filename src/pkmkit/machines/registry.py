@@ -293,89 +293,13 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
     if not isinstance(legs_raw, list) or not legs_raw:
         raise doc.error("a rod-legs machine needs [[legs]] entries", ("legs",))
     space = 3 if dims == 6 else dims  # coordinates of points and directions
-
-    def pad(v: np.ndarray) -> np.ndarray:
-        return np.append(v, 0.0) if space == 2 else v
-
     legs = []
     actuators: list[str] = []
     for i, raw in enumerate(legs_raw):
-        where = f"legs.{i}"
-        if not isinstance(raw, dict):
-            raise doc.error(f"legs entry {i} must be a table", ("legs", i))
-        _check_keys(doc, raw, _LEG_KEYS, ("legs", i), f"legs entry {i}")
-        for key in ("base", "platform", "length"):
-            if key not in raw:
-                raise ParameterError(f"{where} needs {key!r}", f"{where}")
-        kind = raw.get("type", "slide")
-        if kind not in ("slide", "strut", "crank"):
-            raise ParameterError(
-                f"{where}.type must be 'slide', 'strut' or 'crank', got {kind!r}", f"{where}.type")
-        actuator = raw.get("actuator", f"q{i + 1}")
-        if not isinstance(actuator, str) or not actuator:
-            raise ParameterError(f"{where}.actuator must be a name, got {actuator!r}",
-                                 f"{where}.actuator")
-        if actuator in actuators and dims != 6:
-            raise ParameterError(
-                f"{where}: actuator {actuator!r} already drives another leg (only full-pose "
-                "machines, dims = 6, may hang several legs on one actuator)", f"{where}.actuator")
-        if actuator not in actuators:
-            actuators.append(actuator)
-        axis = pivot = None
-        if kind in ("slide", "crank"):
-            if "axis" not in raw:
-                raise ParameterError(f"{where}: a {kind} leg needs 'axis'", where)
-            axis = pad(_vector(raw["axis"], space, f"{where}.axis"))
-        if kind == "crank":
-            if "pivot" not in raw:
-                raise ParameterError(f"{where}: a crank leg needs 'pivot' (a point of its "
-                                     "rotation axis)", where)
-            pivot = pad(_vector(raw["pivot"], space, f"{where}.pivot", scale))
-        para = raw.get("parallelogram", {})
-        if not isinstance(para, dict) or set(para) - {"width", "direction"}:
-            raise ParameterError(
-                f"{where}.parallelogram must be a table with 'width' and 'direction'",
-                f"{where}.parallelogram",
-            )
-        width = _number(para.get("width", 0.0), f"{where}.parallelogram.width", scale)
-        direction = None
-        if width > 0:
-            if "direction" not in para:
-                raise ParameterError(f"{where}.parallelogram needs a 'direction'",
-                                     f"{where}.parallelogram")
-            direction = pad(_vector(para["direction"], space,
-                                    f"{where}.parallelogram.direction"))
-        branch = raw.get("branch", 1)
-        if isinstance(branch, bool) or branch not in (1, -1):
-            raise ParameterError(f"{where}.branch must be 1 or -1, got {branch!r}",
-                                 f"{where}.branch")
-        stroke_scale = np.pi / 180.0 if kind == "crank" else scale  # crank strokes in degrees
-        stroke = (_vector(raw["stroke"], 2, f"{where}.stroke", stroke_scale) if "stroke" in raw
-                  else (-np.inf, np.inf))
-        legs.append(
-            LegSpec(
-                name=str(raw.get("name", f"leg {i + 1}")),
-                actuator=actuators.index(actuator),
-                kind=kind,
-                base=pad(_vector(raw["base"], space, f"{where}.base", scale)),
-                platform=pad(_vector(raw["platform"], space, f"{where}.platform", scale)),
-                length=_number(raw["length"], f"{where}.length", scale),
-                axis=axis,
-                branch=int(branch),
-                parallelogram_width=width,
-                parallelogram_direction=direction,
-                stroke=tuple(stroke),
-                pivot=pivot,
-            )
-        )
+        legs.append(_file_leg(doc, i, raw, dims, scale, actuators))
     home = _vector(head.get("home", [0.0] * dims), dims, "machine.home")
     home[:space] *= scale  # a full pose's rotation vector stays in radians
-    mode_names = head.get("mode_names", ["det(A)<0", "det(A)>0"])
-    if not (isinstance(mode_names, list) and len(mode_names) == 2
-            and all(isinstance(n, str) and n for n in mode_names)
-            and mode_names[0] != mode_names[1]):
-        raise ParameterError("[machine] mode_names must be a list of two different names",
-                             "machine.mode_names")
+    mode_names = _mode_names(head)
     model = build_rod_model(
         legs, dims=dims, actuator_names=actuators, home_pose=home,
         mode_names=(mode_names[0], mode_names[1]),
@@ -388,6 +312,110 @@ def _rod_legs_machine(doc, head: Mapping[str, Any], scale: float, ident: str,
     return cls(id=ident, name=text["name"] or ident, kind=None, params={}, model=model,
                description=text["description"], source=text["source"])
 
+
+def _mode_names(head: Mapping[str, Any]) -> list[str]:
+    """``[machine] mode_names``: two different non-empty names (default det(A)<0, det(A)>0)."""
+    mode_names = head.get("mode_names", ["det(A)<0", "det(A)>0"])
+    if not (isinstance(mode_names, list) and len(mode_names) == 2
+            and all(isinstance(n, str) and n for n in mode_names)
+            and mode_names[0] != mode_names[1]):
+        raise ParameterError("[machine] mode_names must be a list of two different names",
+                             "machine.mode_names")
+    return mode_names
+
+
+def _padder(space: int):
+    """Points and directions of a planar file (2 numbers) padded with z = 0."""
+    def pad(v: np.ndarray) -> np.ndarray:
+        return np.append(v, 0.0) if space == 2 else v
+    return pad
+
+
+def _leg_actuator(i: int, raw: dict, dims: int, actuators: list[str]) -> int:
+    """The index of leg ``i``'s actuator, appended to ``actuators`` when new."""
+    where = f"legs.{i}"
+    actuator = raw.get("actuator", f"q{i + 1}")
+    if not isinstance(actuator, str) or not actuator:
+        raise ParameterError(f"{where}.actuator must be a name, got {actuator!r}",
+                             f"{where}.actuator")
+    if actuator in actuators and dims != 6:
+        raise ParameterError(
+            f"{where}: actuator {actuator!r} already drives another leg (only full-pose "
+            "machines, dims = 6, may hang several legs on one actuator)", f"{where}.actuator")
+    if actuator not in actuators:
+        actuators.append(actuator)
+    return actuators.index(actuator)
+
+
+def _leg_parallelogram(where: str, raw: dict, space: int, scale: float):
+    """``(width m, direction or None)`` of a leg's ``parallelogram`` table."""
+    para = raw.get("parallelogram", {})
+    if not isinstance(para, dict) or set(para) - {"width", "direction"}:
+        raise ParameterError(
+            f"{where}.parallelogram must be a table with 'width' and 'direction'",
+            f"{where}.parallelogram",
+        )
+    width = _number(para.get("width", 0.0), f"{where}.parallelogram.width", scale)
+    direction = None
+    if width > 0:
+        if "direction" not in para:
+            raise ParameterError(f"{where}.parallelogram needs a 'direction'",
+                                 f"{where}.parallelogram")
+        direction = _padder(space)(_vector(para["direction"], space,
+                                           f"{where}.parallelogram.direction"))
+    return width, direction
+
+
+def _file_leg(doc, i: int, raw: Any, dims: int, scale: float,
+              actuators: list[str]) -> LegSpec:
+    """``[[legs]]`` entry ``i`` of a rod-legs file as a :class:`LegSpec` (SI; crank strokes
+    read in degrees); its actuator is added to ``actuators`` when new."""
+    where = f"legs.{i}"
+    space = 3 if dims == 6 else dims
+    pad = _padder(space)
+    if not isinstance(raw, dict):
+        raise doc.error(f"legs entry {i} must be a table", ("legs", i))
+    _check_keys(doc, raw, _LEG_KEYS, ("legs", i), f"legs entry {i}")
+    for key in ("base", "platform", "length"):
+        if key not in raw:
+            raise ParameterError(f"{where} needs {key!r}", f"{where}")
+    kind = raw.get("type", "slide")
+    if kind not in ("slide", "strut", "crank"):
+        raise ParameterError(
+            f"{where}.type must be 'slide', 'strut' or 'crank', got {kind!r}", f"{where}.type")
+    actuator = _leg_actuator(i, raw, dims, actuators)
+    axis = pivot = None
+    if kind in ("slide", "crank"):
+        if "axis" not in raw:
+            raise ParameterError(f"{where}: a {kind} leg needs 'axis'", where)
+        axis = pad(_vector(raw["axis"], space, f"{where}.axis"))
+    if kind == "crank":
+        if "pivot" not in raw:
+            raise ParameterError(f"{where}: a crank leg needs 'pivot' (a point of its "
+                                 "rotation axis)", where)
+        pivot = pad(_vector(raw["pivot"], space, f"{where}.pivot", scale))
+    width, direction = _leg_parallelogram(where, raw, space, scale)
+    branch = raw.get("branch", 1)
+    if isinstance(branch, bool) or branch not in (1, -1):
+        raise ParameterError(f"{where}.branch must be 1 or -1, got {branch!r}",
+                             f"{where}.branch")
+    stroke_scale = np.pi / 180.0 if kind == "crank" else scale  # crank strokes in degrees
+    stroke = (_vector(raw["stroke"], 2, f"{where}.stroke", stroke_scale) if "stroke" in raw
+              else (-np.inf, np.inf))
+    return LegSpec(
+        name=str(raw.get("name", f"leg {i + 1}")),
+        actuator=actuator,
+        kind=kind,
+        base=pad(_vector(raw["base"], space, f"{where}.base", scale)),
+        platform=pad(_vector(raw["platform"], space, f"{where}.platform", scale)),
+        length=_number(raw["length"], f"{where}.length", scale),
+        axis=axis,
+        branch=int(branch),
+        parallelogram_width=width,
+        parallelogram_direction=direction,
+        stroke=tuple(stroke),
+        pivot=pivot,
+    )
 
 def _poses(doc: MachineDocument, scale: float) -> dict[str, np.ndarray]:
     table = _table(doc, "poses", required=False)
