@@ -131,21 +131,7 @@ def select_poses(machine, kind: str, n: int, *, candidates: Any = None,
     if int(n) < 1:
         raise InputError(f"the number of poses must be ≥ 1, got {n}")
     n = int(n)
-    beyond = 0
-    if candidates is None:
-        count = n_candidates if n_candidates is not None else max(20 * n, 200)
-        cand = sample_configurations(machine, count, region=region, seed=seed,
-                                     method="halton", within_strokes=True).q
-    else:
-        from pkmkit.machines.strokes import stroke_excess
-
-        cand = np.atleast_2d(np.asarray(candidates, dtype=float))
-        out = stroke_excess(machine, cand).out_of_stroke
-        beyond = int(out.sum())
-        cand = cand[~out]
-    if len(cand) < n:
-        left = f" ({beyond} others are beyond the strokes)" if beyond else ""
-        raise InputError(f"{len(cand)} candidates{left} for {n} poses: give more candidates")
+    cand, beyond = _candidates(machine, n, candidates, n_candidates, region, seed)
     ij = identification_jacobian(machine, kind, cand, setup, parameters=parameters,
                                  kinds=kinds, exclude=exclude, scope=scope, scaling=scaling)
     analysis = analyse_jacobian(ij.matrix, ij.names, ij.column_scale, rtol=rtol)
@@ -160,41 +146,11 @@ def select_poses(machine, kind: str, n: int, *, candidates: Any = None,
             n_parameters=len(ij.names), n_measurements=n * rows)
     blocks = ij.matrix.reshape(len(cand), rows, -1)[:, :, base_cols]
     info = np.einsum("cri,crj->cij", blocks, blocks)
-    eps = 1e-12 * float(np.trace(info.mean(axis=0))) / max(b, 1)
-    chosen: list[int] = []
-    total = np.zeros((b, b))
-    available = np.ones(len(cand), dtype=bool)
-    for k in range(n):
-        trial = total[None] + info
-        m_rows = (k + 1) * rows
-        score = _log_det(trial, eps) if m_rows < b else _index_values(trial, m_rows, index)
-        if m_rows >= b and not np.any(score[available] > 0):
-            score = _log_det(trial, eps)
-        score = np.where(available, score, -np.inf)
-        best = int(np.argmax(score))
-        chosen.append(best)
-        available[best] = False
-        total = total + info[best]
+    chosen, available, total = _greedy(info, n, rows, index)
     m_rows = n * rows
-    value = float(_index_values(total[None], m_rows, index)[0])
-    greedy_value = value
-    passes = 0
-    for passes in range(1, max_passes + 1):  # noqa: B007 - the count is reported
-        improved = False
-        for slot in range(n):
-            without = total - info[chosen[slot]]
-            trial = without[None] + info
-            score = np.where(available, _index_values(trial, m_rows, index), -np.inf)
-            best = int(np.argmax(score))
-            if score[best] > value * (1 + 1e-9) + 1e-300:
-                available[chosen[slot]] = True
-                available[best] = False
-                chosen[slot] = best
-                total = without + info[best]
-                value = float(score[best])
-                improved = True
-        if not improved:
-            break
+    greedy_value = float(_index_values(total[None], m_rows, index)[0])
+    value, passes = _exchange(info, chosen, available, total, m_rows, index, greedy_value,
+                              max_passes)
     rng = np.random.default_rng(None if seed is None else seed + 1)
     picks = np.array([rng.choice(len(cand), n, replace=False) for _ in range(n_random)])
     random_values = _index_values(info[picks].sum(axis=1), m_rows, index)
@@ -211,3 +167,74 @@ def select_poses(machine, kind: str, n: int, *, candidates: Any = None,
                          greedy_value=greedy_value, passes=passes,
                          base=tuple(analysis["base"]), n_parameters=len(ij.names),
                          n_candidates=len(cand), candidates=cand, beyond_strokes=beyond)
+
+
+def _candidates(machine, n: int, candidates: Any, n_candidates: int | None, region: Any,
+                seed: int | None) -> tuple[np.ndarray, int]:
+    """``(C, n_act)`` candidate configurations within the strokes and how many given ones
+    were left out beyond them; fewer than ``n`` raises :class:`InputError`."""
+    beyond = 0
+    if candidates is None:
+        count = n_candidates if n_candidates is not None else max(20 * n, 200)
+        cand = sample_configurations(machine, count, region=region, seed=seed,
+                                     method="halton", within_strokes=True).q
+    else:
+        from pkmkit.machines.strokes import stroke_excess
+
+        cand = np.atleast_2d(np.asarray(candidates, dtype=float))
+        out = stroke_excess(machine, cand).out_of_stroke
+        beyond = int(out.sum())
+        cand = cand[~out]
+    if len(cand) < n:
+        left = f" ({beyond} others are beyond the strokes)" if beyond else ""
+        raise InputError(f"{len(cand)} candidates{left} for {n} poses: give more candidates")
+    return cand, beyond
+
+
+def _greedy(info: np.ndarray, n: int, rows: int,
+            index: str) -> tuple[list[int], np.ndarray, np.ndarray]:
+    """Greedy choice of ``n`` candidates from their information matrices ``info (C, b, b)``:
+    log det while the readings are fewer than ``b``, then ``index``. Returns the chosen
+    indices, the mask of candidates still available and the chosen information ``(b, b)``."""
+    b = info.shape[1]
+    eps = 1e-12 * float(np.trace(info.mean(axis=0))) / max(b, 1)
+    chosen: list[int] = []
+    total = np.zeros((b, b))
+    available = np.ones(len(info), dtype=bool)
+    for k in range(n):
+        trial = total[None] + info
+        m_rows = (k + 1) * rows
+        score = _log_det(trial, eps) if m_rows < b else _index_values(trial, m_rows, index)
+        if m_rows >= b and not np.any(score[available] > 0):
+            score = _log_det(trial, eps)
+        score = np.where(available, score, -np.inf)
+        best = int(np.argmax(score))
+        chosen.append(best)
+        available[best] = False
+        total = total + info[best]
+    return chosen, available, total
+
+
+def _exchange(info: np.ndarray, chosen: list[int], available: np.ndarray, total: np.ndarray,
+              m_rows: int, index: str, value: float, max_passes: int) -> tuple[float, int]:
+    """Exchange passes (Fedorov): replace one chosen pose by the best available one while
+    ``index`` improves; ``chosen`` and ``available`` are updated in place. Returns the final
+    value and the number of passes."""
+    passes = 0
+    for passes in range(1, max_passes + 1):  # noqa: B007 - the count is reported
+        improved = False
+        for slot in range(len(chosen)):
+            without = total - info[chosen[slot]]
+            trial = without[None] + info
+            score = np.where(available, _index_values(trial, m_rows, index), -np.inf)
+            best = int(np.argmax(score))
+            if score[best] > value * (1 + 1e-9) + 1e-300:
+                available[chosen[slot]] = True
+                available[best] = False
+                chosen[slot] = best
+                total = without + info[best]
+                value = float(score[best])
+                improved = True
+        if not improved:
+            break
+    return value, passes
