@@ -296,6 +296,19 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
         seg = segs[k]
         return rapid_feed if seg.rapid else (seg.feed or feed)
 
+    blocks = [_block(segs, group, speed_of(group[0]), accel, jerk, profile)
+              for group in _groups(segs, moving, speed_of, corner_tol, jerk)]
+    total = sum(b.profile.duration for b in blocks)
+    if total / period + 1 > max_samples:
+        raise InputError(f"{total:.6g} s at a {period:g} s period needs more than "
+                         f"{max_samples} samples; increase the period")
+    return _sample(path, tuple(blocks), period)
+
+
+def _groups(segs, moving: list[int], speed_of, corner_tol: float,
+            jerk: float | None) -> list[list[int]]:
+    """Consecutive moving segments joined into blocks without a stop: same motion type and
+    speed, no corner, and (S-curve) no curvature jump."""
     groups: list[list[int]] = [[moving[0]]]
     for k in moving[1:]:
         prev = segs[groups[-1][-1]]
@@ -305,44 +318,50 @@ def plan(path: Path, *, feed: float, accel: float, jerk: float | None = None,
             groups.append([k])
         else:
             groups[-1].append(k)
-    blocks = []
-    for group in groups:
-        lengths = np.array([segs[k].length for k in group])
-        kappa = max(segs[k].curvature for k in group)
-        tau = max(segs[k].torsion for k in group)
-        if kappa > 1e9 or tau > 1e9:
-            raise InputError(f"segment {group[0] + 1} curves with a radius below 1 nm; check "
-                             "the units")
-        v = speed_of(group[0])
-        a_t = accel * (math.sqrt(3) / 2 if kappa > 0 else 1.0)
-        j_t = None if jerk is None else jerk / (3.0 if kappa > 0 else 1.0)
-        if kappa > 0:
-            v = min(v, math.sqrt(accel / 2 / kappa))
-            if jerk is not None:
-                # jerk on a helix: (ȧ_t − v³κ²) T + 3 v a_t κ N + v³ κ τ B; each of
-                # |ȧ_t|, v³κ², 3 v a_t κ and v³κτ ≤ J/3 keeps |jerk| ≤ √(6)/3 J < J
-                v = min(v, (jerk / 3 / kappa**2) ** (1 / 3), jerk / 9 / (a_t * kappa))
-                if tau > 0:
-                    v = min(v, (jerk / 3 / (kappa * tau)) ** (1 / 3))
-        try:
-            with np.errstate(over="raise", invalid="raise", divide="raise"):
-                prof = (trapezoid(float(lengths.sum()), v, a_t) if profile == "trapezoid"
-                        else scurve(float(lengths.sum()), v, a_t, j_t))
-        except (OverflowError, ZeroDivisionError, FloatingPointError):
-            prof = None
-        if prof is None or not (np.isfinite(prof.durations).all() and prof.duration > 0
-                                and np.isfinite(prof.peak_speed)):
-            raise InputError(
-                f"the time law of a {float(lengths.sum()):.6g} m block is not finite with feed "
-                f"{v:g} m/s, acceleration {a_t:g} m/s² and jerk "
-                f"{'-' if j_t is None else f'{j_t:g}'} m/s³: the limits are too far apart")
-        blocks.append(Block(tuple(group), lengths, prof, segs[group[0]].rapid, v))
-    total = sum(b.profile.duration for b in blocks)
-    if total / period + 1 > max_samples:
-        raise InputError(f"{total:.6g} s at a {period:g} s period needs more than "
-                         f"{max_samples} samples; increase the period")
-    return _sample(path, tuple(blocks), period)
+    return groups
 
+
+def _block_speed(v: float, accel: float, a_t: float, jerk: float | None, kappa: float,
+                 tau: float) -> float:
+    """The block's speed ``v`` (m/s) lowered so that the centripetal acceleration and, for an
+    S-curve, the jerk of a helix of curvature ``kappa`` and torsion ``tau`` (1/m) stay within
+    the limits."""
+    if kappa > 0:
+        v = min(v, math.sqrt(accel / 2 / kappa))
+        if jerk is not None:
+            # jerk on a helix: (ȧ_t − v³κ²) T + 3 v a_t κ N + v³ κ τ B; each of
+            # |ȧ_t|, v³κ², 3 v a_t κ and v³κτ ≤ J/3 keeps |jerk| ≤ √(6)/3 J < J
+            v = min(v, (jerk / 3 / kappa**2) ** (1 / 3), jerk / 9 / (a_t * kappa))
+            if tau > 0:
+                v = min(v, (jerk / 3 / (kappa * tau)) ** (1 / 3))
+    return v
+
+
+def _block(segs, group: list[int], v: float, accel: float, jerk: float | None,
+           profile: str) -> Block:
+    """The time law of one block of segments ``group`` at programmed speed ``v`` (m/s)."""
+    lengths = np.array([segs[k].length for k in group])
+    kappa = max(segs[k].curvature for k in group)
+    tau = max(segs[k].torsion for k in group)
+    if kappa > 1e9 or tau > 1e9:
+        raise InputError(f"segment {group[0] + 1} curves with a radius below 1 nm; check "
+                         "the units")
+    a_t = accel * (math.sqrt(3) / 2 if kappa > 0 else 1.0)
+    j_t = None if jerk is None else jerk / (3.0 if kappa > 0 else 1.0)
+    v = _block_speed(v, accel, a_t, jerk, kappa, tau)
+    try:
+        with np.errstate(over="raise", invalid="raise", divide="raise"):
+            prof = (trapezoid(float(lengths.sum()), v, a_t) if profile == "trapezoid"
+                    else scurve(float(lengths.sum()), v, a_t, j_t))
+    except (OverflowError, ZeroDivisionError, FloatingPointError):
+        prof = None
+    if prof is None or not (np.isfinite(prof.durations).all() and prof.duration > 0
+                            and np.isfinite(prof.peak_speed)):
+        raise InputError(
+            f"the time law of a {float(lengths.sum()):.6g} m block is not finite with feed "
+            f"{v:g} m/s, acceleration {a_t:g} m/s² and jerk "
+            f"{'-' if j_t is None else f'{j_t:g}'} m/s³: the limits are too far apart")
+    return Block(tuple(group), lengths, prof, segs[group[0]].rapid, v)
 
 def _sample(path: Path, blocks: tuple[Block, ...], period: float) -> Trajectory:
     starts = np.concatenate([[0.0], np.cumsum([b.profile.duration for b in blocks])])
