@@ -165,6 +165,50 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
     lo_d, hi_d = real_pair(diameter_range, "the diameter range")
     if not 0 < lo_d < hi_d <= 1e2:
         raise InputError(f"empty diameter range {diameter_range}")
+    _check_safeties(stress_safety, buckling_safety, min_wall, max_deflection, min_stiffness)
+    axial_force = real(axial_force, "the axial force", limit=1e12)
+    length = real(length, "the arm length", positive=True, limit=1e3)
+    transverse_accel = real(transverse_accel, "the transverse acceleration", limit=1e7)
+    lo_l = hi_l = length
+    if length_range is not None:
+        lo_l, hi_l = real_pair(length_range, "the length range")
+        if not 0 < lo_l < hi_l <= 1e3:
+            raise InputError(f"empty length range {length_range}")
+    if hollow and inner_diameter is not None:
+        if not 0 <= inner_diameter < hi_d - 2 * min_wall:
+            raise InputError("the inner diameter leaves no wall within the diameter range")
+        lo_d = max(lo_d, inner_diameter + 2 * min_wall)
+    problem = _ArmSizing(lo_d, hi_d, lo_l, hi_l, hollow, inner_diameter, min_wall, length,
+                         length_range, abs(float(axial_force)), transverse_accel, material,
+                         stress_safety, buckling_safety, min_stiffness, max_deflection)
+    x0, bounds = problem.start()
+    names = ("stress", "buckling", "stiffness", "deflection")
+    # margins capped: only their sign matters, and a vanishing load gives infinite ones
+    feasible_set = NonlinearConstraint(
+        lambda v: np.minimum([problem.margins(v)[k] for k in names], 1e6), 0.0, np.inf)
+    with warnings.catch_warnings():  # SciPy's notes on the polish step are not for the user
+        warnings.simplefilter("ignore")
+        res = differential_evolution(problem.mass, bounds, constraints=(feasible_set,), seed=0,
+                                     tol=1e-10, maxiter=300, polish=True, x0=np.array(x0))
+    v = res.x
+    final = problem.margins(v)
+    feasible = all(val >= -1e-6 for val in final.values())
+    big, small, ell = problem.unpack(v)
+    analysis = analyse_arm(ell, big, small, axial_force=-problem.load,
+                           transverse_accel=transverse_accel, material=material)
+    if feasible:
+        message = "ok"
+    else:
+        worst = min(final, key=final.get)
+        message = (f"no rod within the bounds meets the {worst} requirement (best margin "
+                   f"{final[worst]:+.3g}); widen the diameter range or relax it")
+    return ArmDesign(analysis=analysis, constraints=final, feasible=feasible, message=message)
+
+
+def _check_safeties(stress_safety: float, buckling_safety: float, min_wall: float,
+                    max_deflection: float, min_stiffness: float) -> None:
+    """Safety factors ≥ 1 (and finite), a positive wall and deflection bound, a stiffness
+    bound ≥ 0."""
     for name, value in (("stress safety", stress_safety), ("buckling safety", buckling_safety),
                         ("minimum wall", min_wall)):
         real(value, f"the {name}", positive=True, limit=1e6)
@@ -175,83 +219,76 @@ def size_arm(*, axial_force: float, length: float, transverse_accel: float = 9.8
     if not (isinstance(max_deflection, int | float) and max_deflection > 0):
         raise InputError(f"the maximum deflection must be > 0, got {max_deflection!r}")
     real(min_stiffness, "the minimum stiffness", nonnegative=True)
-    axial_force = real(axial_force, "the axial force", limit=1e12)
-    length = real(length, "the arm length", positive=True, limit=1e3)
-    transverse_accel = real(transverse_accel, "the transverse acceleration", limit=1e7)
-    lo_l = hi_l = length
-    if length_range is not None:
-        lo_l, hi_l = real_pair(length_range, "the length range")
-        if not 0 < lo_l < hi_l <= 1e3:
-            raise InputError(f"empty length range {length_range}")
-    load = abs(float(axial_force))
-    free_bore = hollow and inner_diameter is None
-    if hollow and inner_diameter is not None:
-        if not 0 <= inner_diameter < hi_d - 2 * min_wall:
-            raise InputError("the inner diameter leaves no wall within the diameter range")
-        lo_d = max(lo_d, inner_diameter + 2 * min_wall)
 
-    def unpack(v: np.ndarray) -> tuple[float, float, float]:
+
+@dataclass(frozen=True)
+class _ArmSizing:
+    """The arm-sizing problem of :func:`size_arm`: the design vector is ``(outer diameter,
+    [wall when the bore is free], [length when it is free])``, m."""
+
+    lo_d: float
+    hi_d: float
+    lo_l: float
+    hi_l: float
+    hollow: bool
+    inner_diameter: float | None
+    min_wall: float
+    length: float
+    length_range: tuple[float, float] | None
+    load: float
+    transverse_accel: float
+    material: Material
+    stress_safety: float
+    buckling_safety: float
+    min_stiffness: float
+    max_deflection: float
+
+    def start(self) -> tuple[list[float], list[tuple[float, float]]]:
+        """The optimiser's start and bounds."""
+        x0 = [self.hi_d]
+        bounds = [(self.lo_d, self.hi_d)]
+        if self.hollow and self.inner_diameter is None:
+            x0.append(0.5 * self.hi_d)
+            bounds.append((self.min_wall, self.hi_d / 2))
+        if self.length_range is not None:
+            x0.append(0.5 * sum(self.length_range))
+            bounds.append(tuple(self.length_range))
+        return x0, bounds
+
+    def unpack(self, v: np.ndarray) -> tuple[float, float, float]:
         """(outer, inner, length); a free bore is parameterised by the wall thickness."""
-        big = min(max(float(v[0]), lo_d), hi_d)  # the polish step may leave the bounds
-        if not hollow:
+        big = min(max(float(v[0]), self.lo_d), self.hi_d)  # the polish step may leave them
+        if not self.hollow:
             small = 0.0
-        elif inner_diameter is not None:
-            small = float(inner_diameter)
+        elif self.inner_diameter is not None:
+            small = float(self.inner_diameter)
         else:  # the wall, kept within [min_wall, big/2] even where the optimiser steps outside
-            small = max(big - 2 * min(max(float(v[1]), min_wall), big / 2), 0.0)
-        ell = (min(max(float(v[-1]), lo_l), hi_l) if length_range is not None
-               else float(length))
+            small = max(big - 2 * min(max(float(v[1]), self.min_wall), big / 2), 0.0)
+        ell = (min(max(float(v[-1]), self.lo_l), self.hi_l) if self.length_range is not None
+               else float(self.length))
         return big, small, ell
 
-    def margins(v: np.ndarray) -> dict[str, float]:
-        big, small, ell = unpack(v)
-        a = analyse_arm(ell, big, small, axial_force=-load, transverse_accel=transverse_accel,
-                        material=material)
-        tension = analyse_arm(ell, big, small, axial_force=load,
-                              transverse_accel=transverse_accel, material=material)
+    def margins(self, v: np.ndarray) -> dict[str, float]:
+        """Relative margin of each requirement (≥ 0 met), compression and tension."""
+        big, small, ell = self.unpack(v)
+        a = analyse_arm(ell, big, small, axial_force=-self.load,
+                        transverse_accel=self.transverse_accel, material=self.material)
+        tension = analyse_arm(ell, big, small, axial_force=self.load,
+                              transverse_accel=self.transverse_accel, material=self.material)
         return {
-            "stress": min(a.stress_safety, tension.stress_safety) / stress_safety - 1.0,
-            "buckling": a.buckling_safety / buckling_safety - 1.0 if load > 0 else 1.0,
-            "stiffness": (a.axial_stiffness / min_stiffness - 1.0) if min_stiffness > 0 else 1.0,
-            "deflection": (1.0 - a.deflection / max_deflection) if np.isfinite(max_deflection)
+            "stress": min(a.stress_safety, tension.stress_safety) / self.stress_safety - 1.0,
+            "buckling": a.buckling_safety / self.buckling_safety - 1.0 if self.load > 0
             else 1.0,
+            "stiffness": (a.axial_stiffness / self.min_stiffness - 1.0)
+            if self.min_stiffness > 0 else 1.0,
+            "deflection": (1.0 - a.deflection / self.max_deflection)
+            if np.isfinite(self.max_deflection) else 1.0,
         }
 
-    x0 = [hi_d]
-    bounds = [(lo_d, hi_d)]
-    if free_bore:
-        x0.append(0.5 * hi_d)
-        bounds.append((min_wall, hi_d / 2))
-    if length_range is not None:
-        x0.append(0.5 * sum(length_range))
-        bounds.append(tuple(length_range))
-
-    def mass(v: np.ndarray) -> float:
-        big, small, ell = unpack(v)
-        return material.density * math.pi / 4 * (big**2 - small**2) * ell
-
-    names = ("stress", "buckling", "stiffness", "deflection")
-    # margins capped: only their sign matters, and a vanishing load gives infinite ones
-    feasible_set = NonlinearConstraint(
-        lambda v: np.minimum([margins(v)[k] for k in names], 1e6), 0.0, np.inf)
-    with warnings.catch_warnings():  # SciPy's notes on the polish step are not for the user
-        warnings.simplefilter("ignore")
-        res = differential_evolution(mass, bounds, constraints=(feasible_set,), seed=0,
-                                     tol=1e-10, maxiter=300, polish=True, x0=np.array(x0))
-    v = res.x
-    final = margins(v)
-    feasible = all(val >= -1e-6 for val in final.values())
-    big, small, ell = unpack(v)
-    analysis = analyse_arm(ell, big, small, axial_force=-load, transverse_accel=transverse_accel,
-                           material=material)
-    if feasible:
-        message = "ok"
-    else:
-        worst = min(final, key=final.get)
-        message = (f"no rod within the bounds meets the {worst} requirement (best margin "
-                   f"{final[worst]:+.3g}); widen the diameter range or relax it")
-    return ArmDesign(analysis=analysis, constraints=final, feasible=feasible, message=message)
-
+    def mass(self, v: np.ndarray) -> float:
+        """The rod's mass, kg."""
+        big, small, ell = self.unpack(v)
+        return self.material.density * math.pi / 4 * (big**2 - small**2) * ell
 
 #: Seed 000 Tables IV.2 (solid) and IV.3 (hollow, bore 25 mm): (label, L mm, D mm, mass g,
 #: stress Pa) as printed.
