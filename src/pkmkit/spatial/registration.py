@@ -117,6 +117,30 @@ def _weights(value: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
     return arr
 
 
+def _direction_terms(source_directions: Any, target_directions: Any, direction_weights: Any,
+                     batch: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Unit directions ``d, e (..., m, 3)`` in both frames and their term
+    ``Σ v_j e_j d_jᵀ (..., 3, 3)`` of the cross-covariance (None without directions)."""
+    if (source_directions is None) != (target_directions is None):
+        raise InputError("give both source_directions and target_directions, or neither")
+    if source_directions is None:
+        d = e = np.zeros((*batch, 0, 3))
+        return d, e, None
+    d = _vectors(source_directions, "source_directions")
+    e = _vectors(target_directions, "target_directions")
+    if d.shape != e.shape or d.shape[:-2] != batch:
+        raise InputError(f"directions must have shape {(*batch, 'm', 3)} in both frames, got "
+                         f"{d.shape} and {e.shape}")
+    norms_d = np.linalg.norm(d, axis=-1)
+    norms_e = np.linalg.norm(e, axis=-1)
+    if not ((norms_d > 0).all() and (norms_e > 0).all()):
+        raise InputError("directions must not have zero length")
+    d = d / norms_d[..., None]
+    e = e / norms_e[..., None]
+    v = _weights(direction_weights, d.shape[:-1], "direction_weights")
+    return d, e, np.einsum("...m,...mi,...mj->...ij", v, e, d)
+
+
 def rigid_registration(
     source: Any,
     target: Any,
@@ -167,24 +191,10 @@ def rigid_registration(
     centre_b = np.einsum("...n,...ni->...i", w, b) / total[..., None]
     da, db = a - centre_a[..., None, :], b - centre_b[..., None, :]
     h = np.einsum("...n,...ni,...nj->...ij", w, db, da)
-    if (source_directions is None) != (target_directions is None):
-        raise InputError("give both source_directions and target_directions, or neither")
-    if source_directions is not None:
-        d = _vectors(source_directions, "source_directions")
-        e = _vectors(target_directions, "target_directions")
-        if d.shape != e.shape or d.shape[:-2] != batch:
-            raise InputError(f"directions must have shape {(*batch, 'm', 3)} in both frames, got "
-                             f"{d.shape} and {e.shape}")
-        norms_d = np.linalg.norm(d, axis=-1)
-        norms_e = np.linalg.norm(e, axis=-1)
-        if not ((norms_d > 0).all() and (norms_e > 0).all()):
-            raise InputError("directions must not have zero length")
-        d = d / norms_d[..., None]
-        e = e / norms_e[..., None]
-        v = _weights(direction_weights, d.shape[:-1], "direction_weights")
-        h = h + np.einsum("...m,...mi,...mj->...ij", v, e, d)
-    else:
-        d = e = np.zeros((*batch, 0, 3))
+    d, e, h_directions = _direction_terms(source_directions, target_directions,
+                                         direction_weights, batch)
+    if h_directions is not None:
+        h = h + h_directions
     u, s, vt = np.linalg.svd(h)
     well_posed = s[..., 1] > RANK_RCOND * s[..., 0]
     if not batch and not well_posed:
