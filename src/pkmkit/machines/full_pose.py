@@ -35,6 +35,16 @@ from pkmkit.exceptions import (
 )
 from pkmkit.machines import full_pose_direct as direct
 from pkmkit.machines.chunks import chunked
+from pkmkit.machines.common import (
+    HOME_TOL,
+    MAX_COORDINATE,
+    SINGULARITY_TOL,
+    MachineKind,
+    _checked_batch,
+    _restore,
+    _rows_like,
+    _valid_rows,
+)
 from pkmkit.machines.error_faces import FullPoseErrors
 from pkmkit.machines.export_layouts import FullPoseLayout
 from pkmkit.machines.full_pose_forms import FullPoseForms
@@ -44,17 +54,7 @@ from pkmkit.machines.full_pose_position import PositionInverse, _stroke_fields
 from pkmkit.machines.full_pose_rates import FullPoseRates, rod_b_pinv
 from pkmkit.machines.inverse_rows import RodInverseRows
 from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
-from pkmkit.machines.machine import (
-    HOME_TOL,
-    MAX_COORDINATE,
-    SINGULARITY_TOL,
-    Machine,
-    MachineKind,
-    _checked_batch,
-    _restore,
-    _rows_like,
-    _valid_rows,
-)
+from pkmkit.machines.machine import Machine
 from pkmkit.machines.measurement_models import FullPoseMeasurement
 from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.protocol import MachineFace

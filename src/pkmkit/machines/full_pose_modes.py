@@ -10,7 +10,7 @@ import numpy as np
 from pkmkit.exceptions import (
     InputError,
 )
-from pkmkit.machines.machine import (
+from pkmkit.machines.common import (
     _checked_batch,
     _valid_rows,
 )

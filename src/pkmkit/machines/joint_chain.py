@@ -49,11 +49,16 @@ from pkmkit.machines.chain_results import (
     ChainInverseResult,
     single_row,
 )
+from pkmkit.machines.common import (
+    MAX_COORDINATE,
+    MachineKind,
+    _checked_batch,
+    _rows_like,
+)
+from pkmkit.machines.common import _valid_rows as valid_rows
 from pkmkit.machines.error_faces import ChainErrors
 from pkmkit.machines.export_layouts import ChainLayout
 from pkmkit.machines.inverse_rows import ChainInverseRows
-from pkmkit.machines.machine import MAX_COORDINATE, MachineKind, _checked_batch, _rows_like
-from pkmkit.machines.machine import _valid_rows as valid_rows
 from pkmkit.machines.measurement_models import ChainMeasurement
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.strokes import signed_excess

@@ -19,7 +19,6 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pkmkit.exceptions import (
-    ConvergenceError,
     InputError,
     ParameterError,
 )
@@ -30,11 +29,9 @@ from pkmkit.machines.common import (
     HOME_TOL,
     MAX_COORDINATE,  # noqa: F401  (re-exported: pkmkit.machines.machine.MAX_COORDINATE)
     SINGULARITY_TOL,
-    TURNED_TOL,
     MachineKind,
     _checked_batch,
     _restore,
-    _rows_like,
     _valid_rows,
 )
 from pkmkit.machines.error_faces import TranslationalErrors
@@ -52,6 +49,7 @@ from pkmkit.machines.results import (
     Jacobians,
 )
 from pkmkit.machines.rod_refusals import RodRefusals
+from pkmkit.machines.rod_solves import RodSolveRows
 from pkmkit.machines.strokes import (
     STROKE_MODES,
     STROKE_TOL,
@@ -67,13 +65,14 @@ from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, RodModel
 from pkmkit.numerics.arrays import as_batch, restore_shape
 from pkmkit.numerics.linalg import batched_det
-from pkmkit.solve.rod_closure import instantaneous_mobility, solve_direct, solve_inverse
+from pkmkit.solve.rod_closure import instantaneous_mobility
 from pkmkit.status import Status
 
 
 @dataclass(frozen=True, eq=False)
-class Machine(RodRefusals, ModeNaming, TranslationalErrors, TranslationalMeasurement,
-              TranslationalLayout, RodReports, RodInverseRows, MachineFace):
+class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
+              TranslationalMeasurement, TranslationalLayout, RodReports, RodInverseRows,
+              MachineFace):
     """A parallel kinematic machine (translational rod-leg family).
 
     Attributes:
@@ -302,38 +301,8 @@ class Machine(RodRefusals, ModeNaming, TranslationalErrors, TranslationalMeasure
         check_mode(strokes)
         xb, single = _checked_batch(x, self.dims, "pose")
         br = self._branches(branches)
-        iterations = residual = None
-        if method == "closed":
-            q, n_bad = self._closed.inverse_counted(xb, br)
-            status = np.zeros(xb.shape[0], dtype=int)
-            if n_bad:  # rows with NaN (unreachable) or non-finite input
-                bad = np.flatnonzero(~np.isfinite(q).all(axis=1))
-                status[bad] = np.where(_valid_rows(xb[bad]), Status.UNREACHABLE,
-                                       Status.INVALID_INPUT)
-                q[bad] = np.nan
-            huge = ~_valid_rows(xb)  # finite q of a pose beyond MAX_COORDINATE (a vertical
-            if huge.any():  # slide follows any height): refused as the single call does
-                status[huge] = Status.INVALID_INPUT
-                q[huge] = np.nan
-        elif method == "numeric":
-            if q0 is None:
-                guess = self._branch_guess_q(xb, br)
-            else:
-                guess = _rows_like(q0, self.n_actuators, "q0", xb.shape[0])
-            guess[~_valid_rows(xb)] = np.nan  # the engine skips (and flags) these rows
-            engine_options.setdefault("compute_rank", False)
-            result = solve_inverse(self.model, xb, guess, **engine_options)
-            q, status = result.u, result.status.copy()
-            status[status == Status.INCONSISTENT] = Status.UNREACHABLE
-            ok = status == Status.OK
-            wrong = ok.copy()
-            wrong[ok] = (self._closed.branch_signs(xb[ok], q[ok]) != br).any(axis=1)
-            status[wrong] = Status.WRONG_MODE
-            q = np.where((status == Status.OK)[:, None], q, np.nan)
-            status[~_valid_rows(xb)] = Status.INVALID_INPUT
-            iterations, residual = result.iterations, result.residual
-        else:
-            raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
+        q, status, iterations, residual = self._inverse_rows(xb, br, method, q0,
+                                                             engine_options)
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], iterations)
         check = judge_rows(self, q, status, strokes, single, f"pose {xb[0].tolist()}",
@@ -463,56 +432,8 @@ class Machine(RodRefusals, ModeNaming, TranslationalErrors, TranslationalMeasure
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
         sign = self._mode_sign(mode)
-        rotation = iterations = residual = None
-        if method == "closed":
-            poses, degenerate = self._closed.direct_all(qb)
-            pose = poses[:, 0 if sign < 0 else 1]
-            # a NaN row sum flags rows without a real solution (or with non-finite input)
-            with np.errstate(invalid="ignore", over="ignore"):
-                row_sum = sum(pose[:, d] for d in range(self.dims))
-            status = np.where(np.isfinite(row_sum), Status.OK, Status.NO_ASSEMBLY)
-            status[degenerate] = Status.SINGULAR
-        elif method == "numeric":
-            if dof not in ("translation", "full"):
-                raise InputError(f"dof must be 'translation' or 'full', got {dof!r}")
-            if x0 is None:
-                guess = self._mode_guess_pose(qb, sign)
-            else:
-                guess = _rows_like(x0, self.dims, "x0", qb.shape[0])
-            guess[~_valid_rows(qb)] = np.nan  # the engine skips (and flags) these rows
-            if dof == "full":
-                extra = 3 if self.dims == 3 else 1
-                guess = np.concatenate([guess, np.zeros((qb.shape[0], extra))], axis=1)
-            engine_options.setdefault("compute_rank", False)
-            with np.errstate(invalid="ignore", over="ignore"):
-                result = solve_direct(self.model, qb, np.array(guess), dof=dof, **engine_options)
-            pose = result.u[:, : self.dims].copy()
-            status = result.status.copy()
-            status[status == Status.INCONSISTENT] = Status.NO_ASSEMBLY
-            if dof == "full":
-                rotation = np.zeros((qb.shape[0], 3))
-                if self.dims == 3:
-                    rotation[:] = result.u[:, 3:6]
-                else:
-                    rotation[:, 2] = result.u[:, 2]
-                # the rods closed with the platform turned: not a mode of this translating
-                # platform (the engine went there from a poor start)
-                with np.errstate(invalid="ignore"):
-                    turned = np.linalg.norm(rotation, axis=1) > TURNED_TOL
-                status[turned & (status == Status.OK)] = Status.WRONG_MODE
-                if single and turned[0] and status[0] == Status.WRONG_MODE:
-                    raise ConvergenceError(
-                        f"the numeric direct model (dof='full') closed the rods with the platform "
-                        f"turned by {np.linalg.norm(rotation[0]):.3g} rad: not an assembly mode of "
-                        "this translating platform; pass x0 closer to the wanted solution")
-            ok = status == Status.OK
-            a, _ = self._closed.jacobians(pose[ok], qb[ok])
-            wrong = ok.copy()
-            wrong[ok] = np.sign(batched_det(a)) != sign
-            status[wrong] = Status.WRONG_MODE
-            iterations, residual = result.iterations, result.residual
-        else:
-            raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
+        pose, status, rotation, iterations, residual = self._direct_rows(
+            qb, sign, method, x0, dof, single, engine_options)
         status = np.asarray(status, dtype=int)
         # every row beyond MAX_COORDINATE, also those a periodic crank angle makes solvable:
         # refused as the single call does
