@@ -339,6 +339,34 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             raise InputError(f"strokes must be one of {', '.join(STROKE_MODES)}, got {strokes!r}")
         qb, single = _checked_batch(q, self.n_actuators, "q")
         n = qb.shape[0]
+        values, res, status, valid = self._closure_rows(qb, x0, start, max_misfit,
+                                                        engine_options)
+        report = self._direct_report(values, res, status, valid, strokes,
+                                     single if check_singular is None else check_singular)
+        usable = report["usable"]
+        pose, frame = self._tool_rows(res, values, tool_length, usable)
+        if single:
+            self._raise_single(qb[0], status[0], report, res.residual[0])
+        if not full_output:
+            return restore_shape(pose, single)
+        platform = res.u[:, :6].copy()
+        passive = res.u[:, 6:].copy()
+        platform[~usable] = np.nan
+        passive[~usable] = np.nan
+        out = ChainDirectResult(pose=pose, tool_frame=frame, platform=platform, passive=passive,
+                                passive_names=self.passive_names,
+                                closure_residual=res.residual, status=status,
+                                iterations=res.iterations,
+                                out_of_stroke=report["out_of_stroke"],
+                                messages=tuple(report["messages"]),
+                                mode=np.zeros(n, dtype=int))
+        return single_row(out) if single else out
+
+    def _closure_rows(self, qb: np.ndarray, x0: Any, start: Any, max_misfit: float | None,
+                      engine_options: dict) -> tuple:
+        """The legs' closure of every row: ``(values (N, n_joints), engine result,
+        status (N,), valid (N,))``, the passive joints found written into ``values``."""
+        n = qb.shape[0]
         values = self._full_values(qb)
         given, keyword = self._closure_start(x0, start)
         if given is None:
@@ -365,33 +393,21 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             Status.NO_ASSEMBLY)
         status[~valid] = Status.INVALID_INPUT
         values[:, self._passive] = res.u[:, 6:]
-        report = self._direct_report(values, res, status, valid, strokes,
-                                     single if check_singular is None else check_singular)
-        usable = report["usable"]
+        return values, res, status, valid
+
+    def _tool_rows(self, res, values: np.ndarray, tool_length: Any,
+                   usable: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``pose (N, 6)`` (tool point and axis at ``tool_length``) and ``frame (N, 6)``
+        (spindle nose point and rotation vector) of closed rows, NaN where not usable."""
         rot = rotvec_to_matrix(np.nan_to_num(res.u[:, 3:6])).transpose(1, 2, 0)
         tool = tool_frame(self.model, rot, np.nan_to_num(res.u[:, :3]).T, values.T)
-        lengths = self._tool_lengths(tool_length, n)
+        lengths = self._tool_lengths(tool_length, res.u.shape[0])
         axis = tool.R[:, 2].T
         pose = np.concatenate([tool.p.T + lengths[:, None] * axis, axis], axis=1)
         frame = np.concatenate([tool.p.T, matrix_to_rotvec(tool.R.transpose(2, 0, 1))], axis=1)
         for arr in (pose, frame):
             arr[~usable] = np.nan
-        if single:
-            self._raise_single(qb[0], status[0], report, res.residual[0])
-        if not full_output:
-            return restore_shape(pose, single)
-        platform = res.u[:, :6].copy()
-        passive = res.u[:, 6:].copy()
-        platform[~usable] = np.nan
-        passive[~usable] = np.nan
-        out = ChainDirectResult(pose=pose, tool_frame=frame, platform=platform, passive=passive,
-                                passive_names=self.passive_names,
-                                closure_residual=res.residual, status=status,
-                                iterations=res.iterations,
-                                out_of_stroke=report["out_of_stroke"],
-                                messages=tuple(report["messages"]),
-                                mode=np.zeros(n, dtype=int))
-        return single_row(out) if single else out
+        return pose, frame
 
     def _direct_report(self, values: np.ndarray, res, status: np.ndarray, valid: np.ndarray,
                        strokes: str, check_singular: bool) -> dict[str, Any]:
@@ -536,6 +552,40 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         if strokes not in STROKE_MODES:
             raise InputError(f"strokes must be one of {', '.join(STROKE_MODES)}, got {strokes!r}")
         xb, single = _checked_batch(x, 6, "pose")
+        n = xb.shape[0]
+        res, status, q, joint_values, lengths = self._inverse_solve(xb, single, q0, tool_length,
+                                                                    engine_options)
+        joints = np.flatnonzero(self.model.loop_variables | self.model.actuated)
+        bad, texts = (stroke_violations(self.model, joint_values, joints, status == Status.OK)
+                      if strokes != "ignore" else (np.zeros(n, dtype=bool), [""] * n))
+        if strokes == "refuse":
+            status[bad] = Status.OUT_OF_STROKE
+        q[status != Status.OK] = np.nan
+        if single:
+            self._judge_single_inverse(xb[0], status[0], res.residual[0], joint_values[0],
+                                       joints, texts[0], bad[0])
+        if not full_output:
+            return restore_shape(q, single)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", StrokeWarning)
+            direct = self.fk(q if not single else q[0], tool_length=lengths if not single else
+                             lengths[0], full_output=True, strokes=strokes,
+                             check_singular=False) if np.isfinite(q).any() else None
+        pose = np.full((n, 6), np.nan) if direct is None else np.atleast_2d(direct.pose)
+        act = self._actuated
+        out = ChainInverseResult(
+            q=q, status=status, branches=None, shortfall=None, method="numeric",
+            mode=np.zeros(n, dtype=int), iterations=res.iterations, residual=res.residual,
+            pose=pose, out_of_stroke=self._inverse_out_of_stroke(strokes, bad, direct),
+            stroke_excess=signed_excess(q, self.model.q_min[act], self.model.q_max[act]),
+            direct=direct)
+        return single_row(out) if single else out
+
+    def _inverse_solve(self, xb: np.ndarray, single: bool, q0: Any, tool_length: Any,
+                       engine_options: dict) -> tuple:
+        """The engine's inverse of every row: ``(result, status (N,), q (N, n),
+        joint values (N, n_joints), tool lengths (N,))``, revolute actuators on the turn
+        nearest their start."""
         norms = np.linalg.norm(xb[:, 3:], axis=1)
         bad_axis = ~(norms > 0)
         if single and bad_axis[0]:
@@ -564,43 +614,27 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         q[:, turn] = start + np.angle(np.exp(1j * (q[:, turn] - start)))
         joint_values = res.u[:, 6:].copy()
         joint_values[:, self._actuated] = q
-        joints = np.flatnonzero(self.model.loop_variables | self.model.actuated)
-        bad, texts = (stroke_violations(self.model, joint_values, joints, status == Status.OK)
-                      if strokes != "ignore" else (np.zeros(n, dtype=bool), [""] * n))
-        if strokes == "refuse":
-            status[bad] = Status.OUT_OF_STROKE
-        q[status != Status.OK] = np.nan
-        if single and status[0] == Status.OUT_OF_STROKE:
-            values = joint_values[0]
+        return res, status, q, joint_values, lengths
+
+    def _judge_single_inverse(self, x: np.ndarray, status: int, residual: float,
+                              values: np.ndarray, joints: np.ndarray, text: str,
+                              beyond: bool) -> None:
+        """A single target: refused beyond a stroke (OutOfStrokeError naming the joint),
+        not reached (ConvergenceError), or reached beyond a stroke (StrokeWarning)."""
+        if status == Status.OUT_OF_STROKE:
             k = int(joints[np.flatnonzero(signed_excess(
                 values[None, joints], self.model.q_min[joints], self.model.q_max[joints])[0])[0]])
-            raise OutOfStrokeError(f"the inverse model of {xb[0].tolist()}: {texts[0]}",
+            raise OutOfStrokeError(f"the inverse model of {x.tolist()}: {text}",
                                    self.model.variables[k], values[k],
                                    (self.model.q_min[k], self.model.q_max[k]))
-        if single and status[0] != Status.OK:
+        if status != Status.OK:
             raise ConvergenceError(
-                f"the inverse model did not reach the tool point and axis {xb[0].tolist()} "
-                f"(residual {res.residual[0]:.3g} m, {Status(int(status[0])).label}): the target "
+                f"the inverse model did not reach the tool point and axis {x.tolist()} "
+                f"(residual {residual:.3g} m, {Status(int(status)).label}): the target "
                 "may be out of the workspace; pass q0 near the wanted branch")
-        if single and bad[0]:
-            warnings.warn(f"the inverse model of {xb[0].tolist()}: {texts[0]}", StrokeWarning,
-                          stacklevel=2)
-        if not full_output:
-            return restore_shape(q, single)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", StrokeWarning)
-            direct = self.fk(q if not single else q[0], tool_length=lengths if not single else
-                             lengths[0], full_output=True, strokes=strokes,
-                             check_singular=False) if np.isfinite(q).any() else None
-        pose = np.full((n, 6), np.nan) if direct is None else np.atleast_2d(direct.pose)
-        act = self._actuated
-        out = ChainInverseResult(
-            q=q, status=status, branches=None, shortfall=None, method="numeric",
-            mode=np.zeros(n, dtype=int), iterations=res.iterations, residual=res.residual,
-            pose=pose, out_of_stroke=self._inverse_out_of_stroke(strokes, bad, direct),
-            stroke_excess=signed_excess(q, self.model.q_min[act], self.model.q_max[act]),
-            direct=direct)
-        return single_row(out) if single else out
+        if beyond:
+            warnings.warn(f"the inverse model of {x.tolist()}: {text}", StrokeWarning,
+                          stacklevel=3)
 
     @staticmethod
     def _inverse_out_of_stroke(strokes: str, bad: np.ndarray, direct) -> np.ndarray | None:
