@@ -251,38 +251,51 @@ def jacobian(machine_name, assignments, pose, q_text, tol, input_, output, chunk
         other(m, pose, q_text, tol, units, resolve_convention(convention), as_json)
         return
     require_batch_pair(pose, input_, output, "--pose")
+    if input_ is not None:
+        _jacobian_batch(m, input_, output, chunk_rows, tol, units)
+    else:
+        _jacobian_single(m, pose, tol, units, as_json)
+
+
+def _jacobian_batch(m, input_: str, output: str, chunk_rows: int, tol: float,
+                    units: str) -> None:
+    """``pkmkit jacobian --input --output`` of a translational machine."""
+    from pkmkit.io.table import Labels
+    from pkmkit.machines.results import Singularity
+
     scale = length_scale(units)
     qs = actuator_scales(m, units)
-    if input_ is not None:
-        from pkmkit.io.table import Labels
-        from pkmkit.machines.results import Singularity
+    n, d = m.n_actuators, m.dims
+    singular = [0]
+    sing_names = [Singularity(f).label for f in range(4)]
+    flags = BatchFlags(m, units)
 
-        n, d = m.n_actuators, m.dims
-        singular = [0]
-        sing_names = [Singularity(f).label for f in range(4)]
-        flags = BatchFlags(m, units)
+    def compute(values, chunk):
+        x = values * scale
+        inv = m.ik(x, full_output=True, strokes="ignore")
+        jac = m.jacobian(x, q=inv.q, tol=tol)
+        ok = np.asarray(inv.status) == Status.OK
+        status = flags(inv.q, inv.status, chunk)
+        codes = np.where(status == Status.OK, np.asarray(jac.singularity, dtype=np.int64),
+                         len(sing_names) + status)
+        singular[0] += int(((np.asarray(jac.singularity) != 0) & ok).sum())
+        jay = np.asarray(jac.J).reshape(len(x), d * n)
+        return {**named(m.pose_names, values), **named(m.actuator_names, jac.q / qs),
+                **named([f"sv{i + 1}" for i in range(n)], jac.singular_values),
+                "condition": jac.condition, "det_A": jac.det_A / scale**n,
+                "det_B": jac.det_B / scale**n,
+                **named([f"J{i + 1}{j + 1}" for i in range(d) for j in range(n)], jay),
+                "status": Labels(codes, [*sing_names, *status_names()])}, status
 
-        def compute(values, chunk):
-            x = values * scale
-            inv = m.ik(x, full_output=True, strokes="ignore")
-            jac = m.jacobian(x, q=inv.q, tol=tol)
-            ok = np.asarray(inv.status) == Status.OK
-            status = flags(inv.q, inv.status, chunk)
-            codes = np.where(status == Status.OK, np.asarray(jac.singularity, dtype=np.int64),
-                             len(sing_names) + status)
-            singular[0] += int(((np.asarray(jac.singularity) != 0) & ok).sum())
-            jay = np.asarray(jac.J).reshape(len(x), d * n)
-            return {**named(m.pose_names, values), **named(m.actuator_names, jac.q / qs),
-                    **named([f"sv{i + 1}" for i in range(n)], jac.singular_values),
-                    "condition": jac.condition, "det_A": jac.det_A / scale**n,
-                    "det_B": jac.det_B / scale**n,
-                    **named([f"J{i + 1}{j + 1}" for i in range(d) for j in range(n)], jay),
-                    "status": Labels(codes, [*sing_names, *status_names()])}, status
+    run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows,
+              note=lambda: f" (and {singular[0]} singular rows computed)", units=units,
+              column_units=[units] * m.dims)
 
-        run_batch(input_, output, list(m.pose_names), compute, chunk_rows=chunk_rows,
-                  note=lambda: f" (and {singular[0]} singular rows computed)", units=units,
-                  column_units=[units] * m.dims)
-        return
+
+def _jacobian_single(m, pose: str, tol: float, units: str, as_json: bool) -> None:
+    """``pkmkit jacobian --pose`` of a translational machine: A, B, J and its measures."""
+    scale = length_scale(units)
+    qs = actuator_scales(m, units)
     x = parse_vector(pose, m.dims, "--pose", units)
     jac = m.jacobian(x, q=m.ik(x, strokes="ignore"), tol=tol)
     check = single_check(m, jac.q, units)
