@@ -189,6 +189,67 @@ class _Search:
         return float(best_d), length
 
 
+def _factor_bounds(bounds: Any) -> tuple[float, float]:
+    """The transmission-factor bounds ``(lo, hi)``, which must contain 1/√3."""
+    lo, hi = real_pair(bounds, "the transmission-factor bounds")
+    Criteria(bounds=(lo, hi))  # validates 0 < lo < hi
+    if not lo <= VERTICAL_FACTOR <= hi:
+        raise InputError(
+            f"bounds [{lo:g}, {hi:g}] exclude 1/√3 = {VERTICAL_FACTOR:.6f}, the transmission "
+            "factor of a pure vertical motion (q̇ = ż (1, 1, 1)) at every pose of every "
+            "vertical-slide linear Delta: no design can satisfy them")
+    return lo, hi
+
+
+def _check_objective(objective: str, max_leg: float | None) -> None:
+    """A known objective; ``max_leg`` within (0, MAX_LENGTH] m, required by compactness."""
+    if objective not in OBJECTIVES:
+        raise InputError(f"unknown objective {objective!r}; use {' or '.join(OBJECTIVES)}")
+    if max_leg is not None and not (np.isfinite(max_leg) and 0 < max_leg <= MAX_LENGTH):
+        raise InputError(f"the largest admissible arm length must be in (0, {MAX_LENGTH:g}] m, "
+                         f"got {max_leg}")
+    if objective == "compactness" and max_leg is None:
+        raise InputError("objective 'compactness' needs a largest arm length (max_leg): the "
+                         "compactness keeps growing slowly with the size of the machine, so "
+                         "without a limit the optimum is an infinitely large machine")
+
+
+def _verified_design(base, region, center: np.ndarray, r: float,
+                     bounds: tuple[float, float], criteria,
+                     lower: float, objective: str, max_leg: float | None, samples: int,
+                     search_samples: int) -> tuple:
+    """``(d, L, sized machine, check)``: the search on a coarse grid, verified on a dense one;
+    where the dense grid finds a factor beyond a bound between the search samples, the
+    search bounds are tightened and the search repeated (at most 6 times)."""
+    lo, hi = bounds
+    cube_side = region.side
+    search_bounds = (lo, hi)
+    guess = None
+    for _ in range(6):
+        search = _Search(base, region, r, search_bounds, search_samples)
+        if objective == "size":
+            d, length = search.smallest(lower, max_leg, guess)
+            guess = length
+        else:
+            d, length = search.most_compact(max_leg)
+        sized = base.with_params(R=d + r, r=r, L=length)
+        check = check_region(sized, center, cube_side, relaxed(criteria), samples=samples)
+        if check.feasible:
+            return d, length, sized, check
+        if set(check.failures) - {"bounds"}:
+            raise InputError(f"the sized cube fails the brute-force check: {check.worst}")
+        # the dense grid found a factor beyond a bound between the search samples: tighten
+        coarse = search.metrics(d, length, ("lambda_min", "lambda_max"))
+        f_lo, f_hi = check.factor_range
+        s_lo, s_hi = search_bounds
+        if f_lo < lo * (1.0 - VERIFY_RTOL):
+            s_lo *= coarse["lambda_min"] / f_lo * (1.0 + 1e-4)
+        if f_hi > hi * (1.0 + VERIFY_RTOL):
+            s_hi *= coarse["lambda_max"] / f_hi / (1.0 + 1e-4)
+        search_bounds = (s_lo, s_hi)
+    raise InputError(f"the sized cube fails the brute-force check: {check.worst}")
+
+
 def size_linear_delta(cube_side: float, bounds: tuple[float, float], *,
                       center: Any = None, r: float | None = None, objective: str = "size",
                       max_leg: float | None = None, samples: int = 25,
@@ -213,22 +274,8 @@ def size_linear_delta(cube_side: float, bounds: tuple[float, float], *,
             a missing or too short ``max_leg``, or no design passing the verification.
     """
     cube_side = require_side(cube_side, "cube side")
-    lo, hi = real_pair(bounds, "the transmission-factor bounds")
-    Criteria(bounds=(lo, hi))  # validates 0 < lo < hi
-    if not lo <= VERTICAL_FACTOR <= hi:
-        raise InputError(
-            f"bounds [{lo:g}, {hi:g}] exclude 1/√3 = {VERTICAL_FACTOR:.6f}, the transmission "
-            "factor of a pure vertical motion (q̇ = ż (1, 1, 1)) at every pose of every "
-            "vertical-slide linear Delta: no design can satisfy them")
-    if objective not in OBJECTIVES:
-        raise InputError(f"unknown objective {objective!r}; use {' or '.join(OBJECTIVES)}")
-    if max_leg is not None and not (np.isfinite(max_leg) and 0 < max_leg <= MAX_LENGTH):
-        raise InputError(f"the largest admissible arm length must be in (0, {MAX_LENGTH:g}] m, "
-                         f"got {max_leg}")
-    if objective == "compactness" and max_leg is None:
-        raise InputError("objective 'compactness' needs a largest arm length (max_leg): the "
-                         "compactness keeps growing slowly with the size of the machine, so "
-                         "without a limit the optimum is an infinitely large machine")
+    lo, hi = _factor_bounds(bounds)
+    _check_objective(objective, max_leg)
     center = (np.array([0.0, 0.0, 0.5 * cube_side]) if center is None
               else np.asarray(center, dtype=float).reshape(-1))
     if center.shape != (3,) or not np.isfinite(center).all():
@@ -241,33 +288,10 @@ def size_linear_delta(cube_side: float, bounds: tuple[float, float], *,
     # every column must reach the farthest corner: L > the square's half-diagonal (+ offset)
     lower = math.hypot(*(abs(center[:2]) + 0.5 * cube_side))
     criteria = Criteria(bounds=(lo, hi), strokes=False)
-    search_bounds = (lo, hi)
+    d, length, sized, check = _verified_design(base, region, center, r, (lo, hi), criteria,
+                                               lower, objective, max_leg, samples,
+                                               search_samples)
     notes: list[str] = []
-    guess = None
-    for _ in range(6):
-        search = _Search(base, region, r, search_bounds, search_samples)
-        if objective == "size":
-            d, length = search.smallest(lower, max_leg, guess)
-            guess = length
-        else:
-            d, length = search.most_compact(max_leg)
-        sized = base.with_params(R=d + r, r=r, L=length)
-        check = check_region(sized, center, cube_side, relaxed(criteria), samples=samples)
-        if check.feasible:
-            break
-        if set(check.failures) - {"bounds"}:
-            raise InputError(f"the sized cube fails the brute-force check: {check.worst}")
-        # the dense grid found a factor beyond a bound between the search samples: tighten
-        coarse = search.metrics(d, length, ("lambda_min", "lambda_max"))
-        f_lo, f_hi = check.factor_range
-        s_lo, s_hi = search_bounds
-        if f_lo < lo * (1.0 - VERIFY_RTOL):
-            s_lo *= coarse["lambda_min"] / f_lo * (1.0 + 1e-4)
-        if f_hi > hi * (1.0 + VERIFY_RTOL):
-            s_hi *= coarse["lambda_max"] / f_hi / (1.0 + 1e-4)
-        search_bounds = (s_lo, s_hi)
-    else:
-        raise InputError(f"the sized cube fails the brute-force check: {check.worst}")
     note = degenerate_note(length, cube_side, (lo, hi))
     if note:
         notes.append(note)

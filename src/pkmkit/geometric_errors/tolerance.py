@@ -140,6 +140,42 @@ def _matches(names: tuple[str, ...], pattern: str) -> np.ndarray:
     return hit
 
 
+def _tolerance_header(data: dict, fail) -> tuple[str, str, str]:
+    """``(units, angle_units, distribution)`` of a tolerance file; unknown keys raise."""
+    allowed = {"units", "angle_units", "distribution", "classes", "parameters"}
+    for key in data:
+        if key not in allowed:
+            raise fail(f"unknown key {key!r}; valid keys: {', '.join(sorted(allowed))}", (key,))
+    units = data.get("units", "m")
+    if units not in LENGTH_UNITS:
+        raise fail(f"unknown length unit {units!r}; valid: {', '.join(LENGTH_UNITS)}",
+                   ("units",))
+    angle_units = data.get("angle_units", "rad")
+    if angle_units not in ANGLE_SCALES:
+        raise fail(f"unknown angle unit {angle_units!r}; valid: {', '.join(ANGLE_SCALES)}",
+                   ("angle_units",))
+    distribution = data.get("distribution", "uniform")
+    if distribution not in DISTRIBUTIONS:
+        raise fail(f"unknown distribution {distribution!r}; valid: "
+                   f"{', '.join(DISTRIBUTIONS)}", ("distribution",))
+    return units, angle_units, distribution
+
+
+def _half_width(section: str, key: str, value: Any, fail) -> float:
+    """One tolerance value: a finite number ≥ 0 (in the file's units)."""
+    where = (section, key)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise fail(f"{section}.{key}: the tolerance must be a number, got {value!r}", where)
+    try:  # an integer too large for a float (400 digits) is not finite
+        number = float(value)
+    except OverflowError:
+        number = np.inf
+    if not np.isfinite(number) or number < 0:
+        raise fail(f"{section}.{key}: the tolerance is a half-width and must be ≥ 0, "
+                   f"got {value!r}", where)
+    return number
+
+
 def read_tolerances(path: str, machine) -> Tolerances:
     """Tolerances from a file (module docstring).
 
@@ -159,22 +195,7 @@ def read_tolerances(path: str, machine) -> Tolerances:
         return ToleranceFileError(str(path), message, doc.line_of(key))
 
     data = doc.data
-    allowed = {"units", "angle_units", "distribution", "classes", "parameters"}
-    for key in data:
-        if key not in allowed:
-            raise fail(f"unknown key {key!r}; valid keys: {', '.join(sorted(allowed))}", (key,))
-    units = data.get("units", "m")
-    if units not in LENGTH_UNITS:
-        raise fail(f"unknown length unit {units!r}; valid: {', '.join(LENGTH_UNITS)}",
-                   ("units",))
-    angle_units = data.get("angle_units", "rad")
-    if angle_units not in ANGLE_SCALES:
-        raise fail(f"unknown angle unit {angle_units!r}; valid: {', '.join(ANGLE_SCALES)}",
-                   ("angle_units",))
-    distribution = data.get("distribution", "uniform")
-    if distribution not in DISTRIBUTIONS:
-        raise fail(f"unknown distribution {distribution!r}; valid: "
-                   f"{', '.join(DISTRIBUTIONS)}", ("distribution",))
+    units, angle_units, distribution = _tolerance_header(data, fail)
     ds = defect_set(machine)
     scale_len, scale_ang = LENGTH_UNITS[units], ANGLE_SCALES[angle_units]
 
@@ -189,16 +210,7 @@ def read_tolerances(path: str, machine) -> Tolerances:
             raise fail(f"[{section}] must be a table of name = half-width", (section,))
         for key, value in table.items():
             where = (section, key)
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise fail(f"{section}.{key}: the tolerance must be a number, got {value!r}",
-                           where)
-            try:  # an integer too large for a float (400 digits) is not finite
-                number = float(value)
-            except OverflowError:
-                number = np.inf
-            if not np.isfinite(number) or number < 0:
-                raise fail(f"{section}.{key}: the tolerance is a half-width and must be ≥ 0, "
-                           f"got {value!r}", where)
+            number = _half_width(section, key, value, fail)
             if section == "classes":
                 if key not in set(ds.kinds):
                     raise fail(f"unknown defect class {key!r} for {machine.id!r}; classes: "

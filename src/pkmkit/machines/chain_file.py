@@ -243,24 +243,7 @@ def _element(reader: _Reader, entry: Mapping[str, Any], path: KeyPath, name: str
                           (*path, "type"))
     fields: dict[str, Any] = {"name": name, "type": kind}
     if "rotation" in entry:
-        if kind != FIXED:
-            raise reader.fail(f"{what}: 'rotation' places fixed frames (type F); a joint is "
-                              "placed by its axis", (*path, "rotation"))
-        if "axis" in entry or "spin" in entry:
-            raise reader.fail(f"{what}: give either 'axis' (and 'spin') or 'rotation', not "
-                              "both", (*path, "rotation"))
-        rows = entry["rotation"]
-        rot = plain_floats(rows)
-        if rot is None or rot.shape != (3, 3):
-            raise reader.fail(f"{what}: rotation must be 3 rows of 3 numbers",
-                              (*path, "rotation"))
-        # entries of a rotation lie in [-1, 1] (beyond, R^T R may overflow)
-        if (not np.isfinite(rot).all() or np.abs(rot).max() > 1.0 + 1e-6
-                or np.abs(rot.T @ rot - np.eye(3)).max() > 1e-6
-                or np.linalg.det(rot) < 0):
-            raise reader.fail(f"{what}: rotation must be a rotation matrix (orthonormal, "
-                              "det +1)", (*path, "rotation"))
-        fields["rotation"] = tuple(map(tuple, rot))
+        fields["rotation"] = _element_rotation(reader, entry, path, what, kind)
     if "axis" in entry:
         axis = reader.vector(entry["axis"], 3, (*path, "axis"), f"{what}: axis")
         if not np.linalg.norm(axis) > 1e-12:
@@ -285,6 +268,37 @@ def _element(reader: _Reader, entry: Mapping[str, Any], path: KeyPath, name: str
         if entry["actuated"] and kind == FIXED:
             raise reader.fail(f"{what}: a fixed frame cannot be actuated", (*path, "actuated"))
         fields["actuated"] = entry["actuated"]
+    fields.update(_element_range(reader, entry, path, what, kind))
+    return ElementSpec(**fields)
+
+
+def _element_rotation(reader: _Reader, entry: Mapping[str, Any], path: KeyPath, what: str,
+                      kind: str) -> tuple:
+    """A fixed frame's ``rotation``: 3 rows of 3 numbers forming a rotation matrix."""
+    if kind != FIXED:
+        raise reader.fail(f"{what}: 'rotation' places fixed frames (type F); a joint is "
+                          "placed by its axis", (*path, "rotation"))
+    if "axis" in entry or "spin" in entry:
+        raise reader.fail(f"{what}: give either 'axis' (and 'spin') or 'rotation', not "
+                          "both", (*path, "rotation"))
+    rot = plain_floats(entry["rotation"])
+    if rot is None or rot.shape != (3, 3):
+        raise reader.fail(f"{what}: rotation must be 3 rows of 3 numbers",
+                          (*path, "rotation"))
+    # entries of a rotation lie in [-1, 1] (beyond, R^T R may overflow)
+    if (not np.isfinite(rot).all() or np.abs(rot).max() > 1.0 + 1e-6
+            or np.abs(rot.T @ rot - np.eye(3)).max() > 1e-6
+            or np.linalg.det(rot) < 0):
+        raise reader.fail(f"{what}: rotation must be a rotation matrix (orthonormal, "
+                          "det +1)", (*path, "rotation"))
+    return tuple(map(tuple, rot))
+
+
+def _element_range(reader: _Reader, entry: Mapping[str, Any], path: KeyPath, what: str,
+                   kind: str) -> dict[str, Any]:
+    """A joint's ``home`` and ``stroke`` (degrees for revolute joints, the file's length
+    unit for prismatic ones), the home within the stroke; a fixed frame has neither."""
+    fields: dict[str, Any] = {}
     joint_scale = math.pi / 180.0 if kind == REVOLUTE else reader.scale
     for key in ("home", "stroke"):
         if key in entry and kind == FIXED:
@@ -302,7 +316,7 @@ def _element(reader: _Reader, entry: Mapping[str, Any], path: KeyPath, name: str
         if "home" in fields and not lo <= fields["home"] <= hi:
             raise reader.fail(f"{what}: home {entry['home']} lies outside the stroke "
                               f"{entry['stroke']}", (*path, "home"))
-    return ElementSpec(**fields)
+    return fields
 
 
 def _legs(reader: _Reader, by_name: Mapping[str, int]) -> tuple[list[str], list[list[str]]]:

@@ -414,6 +414,61 @@ def _minimal_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.eye(3) + s * k + (1.0 - c) * (k @ k)
 
 
+def _element_frame(spec: ElementSpec) -> np.ndarray:
+    """The nominal ``(4, 4)`` invariant frame of one element, its type and stroke checked."""
+    if spec.type not in ELEMENT_TYPES:
+        raise ParameterError(f"element {spec.name!r}: type must be one of "
+                             f"{', '.join(ELEMENT_TYPES)}, got {spec.type!r}", spec.name)
+    try:
+        frame = invariant_frame(spec.axis, spec.point, spec.spin)
+    except ParameterError as exc:
+        raise ParameterError(f"element {spec.name!r}: {exc}", spec.name) from None
+    if spec.rotation is not None:
+        from pkmkit.spatial.rotation import as_rotation_matrices
+
+        frame[:3, :3] = as_rotation_matrices(spec.rotation, f"element {spec.name!r} "
+                                             "rotation")[0]
+    lo, hi = (float(v) for v in spec.stroke)
+    if np.isnan(lo) or np.isnan(hi) or not lo < hi:
+        raise ParameterError(f"element {spec.name!r}: stroke must be (min, max) with "
+                             f"min < max, got {spec.stroke}", spec.name)
+    return frame
+
+
+def _chain_indices(by_name: dict[str, int], legs: Sequence[Sequence[str]],
+                   leg_names: list[str], head: Sequence[str]) -> tuple[list[tuple], tuple]:
+    """Element indices of each leg and of the head; unknown names and empty legs raise."""
+    if len(leg_names) != len(legs):
+        raise ParameterError(f"{len(legs)} legs but {len(leg_names)} leg names")
+    chains = []
+    for leg, chain in zip(leg_names, legs, strict=True):
+        if not chain:
+            raise ParameterError(f"{leg} has no element", leg)
+        for name in chain:
+            if name not in by_name:
+                raise ParameterError(f"{leg}: unknown element {name!r}", leg)
+        chains.append(tuple(by_name[n] for n in chain))
+    for name in head:
+        if name not in by_name:
+            raise ParameterError(f"head: unknown element {name!r}", "head")
+    return chains, tuple(by_name[n] for n in head)
+
+
+def _defect_index(elements: Sequence[ElementSpec], nominal: np.ndarray) -> DefectIndex:
+    """The defects of every element (:func:`defect_layout`) as one :class:`DefectIndex`."""
+    rows = []
+    for e, spec in enumerate(elements):
+        rows += [(name, kind, k, e) for name, kind, k in defect_layout(spec, nominal[e])]
+    return DefectIndex(
+        names=tuple(r[0] for r in rows),
+        units=tuple("m" if r[1] == "position" else ("rad" if r[1] == "spin" else "1")
+                    for r in rows),
+        element=_frozen(np.array([r[3] for r in rows], dtype=int)),
+        kind=tuple(r[1] for r in rows),
+        component=_frozen(np.array([r[2] for r in rows], dtype=int)),
+    )
+
+
 def build_chain_model(
     elements: Sequence[ElementSpec],
     legs: Sequence[Sequence[str]],
@@ -441,41 +496,10 @@ def build_chain_model(
         dup = sorted({n for n in names if names.count(n) > 1})
         raise ParameterError(f"element names must be unique; repeated: {', '.join(dup)}")
     by_name = {n: i for i, n in enumerate(names)}
-    frames = []
-    for spec in elements:
-        if spec.type not in ELEMENT_TYPES:
-            raise ParameterError(f"element {spec.name!r}: type must be one of "
-                                 f"{', '.join(ELEMENT_TYPES)}, got {spec.type!r}", spec.name)
-        try:
-            frame = invariant_frame(spec.axis, spec.point, spec.spin)
-        except ParameterError as exc:
-            raise ParameterError(f"element {spec.name!r}: {exc}", spec.name) from None
-        if spec.rotation is not None:
-            from pkmkit.spatial.rotation import as_rotation_matrices
-
-            frame[:3, :3] = as_rotation_matrices(spec.rotation, f"element {spec.name!r} "
-                                                 "rotation")[0]
-        lo, hi = (float(v) for v in spec.stroke)
-        if np.isnan(lo) or np.isnan(hi) or not lo < hi:
-            raise ParameterError(f"element {spec.name!r}: stroke must be (min, max) with "
-                                 f"min < max, got {spec.stroke}", spec.name)
-        frames.append(frame)
-    chains = []
+    frames = [_element_frame(spec) for spec in elements]
     leg_names = list(leg_names) if leg_names is not None else [f"leg {i + 1}"
                                                                for i in range(len(legs))]
-    if len(leg_names) != len(legs):
-        raise ParameterError(f"{len(legs)} legs but {len(leg_names)} leg names")
-    for leg, chain in zip(leg_names, legs, strict=True):
-        if not chain:
-            raise ParameterError(f"{leg} has no element", leg)
-        for name in chain:
-            if name not in by_name:
-                raise ParameterError(f"{leg}: unknown element {name!r}", leg)
-        chains.append(tuple(by_name[n] for n in chain))
-    for name in head:
-        if name not in by_name:
-            raise ParameterError(f"head: unknown element {name!r}", "head")
-    head_idx = tuple(by_name[n] for n in head)
+    chains, head_idx = _chain_indices(by_name, legs, leg_names, head)
     used = {e for c in chains for e in c} | set(head_idx)
     unused = [names[e] for e in range(len(elements)) if e not in used]
     if unused:
@@ -490,17 +514,7 @@ def build_chain_model(
     if not (np.isfinite(characteristic_length) and characteristic_length > 0):
         raise ParameterError("characteristic_length must be > 0", "characteristic_length")
     nominal = np.array(frames)
-    rows = []
-    for e, spec in enumerate(elements):
-        rows += [(name, kind, k, e) for name, kind, k in defect_layout(spec, nominal[e])]
-    index = DefectIndex(
-        names=tuple(r[0] for r in rows),
-        units=tuple("m" if r[1] == "position" else ("rad" if r[1] == "spin" else "1")
-                    for r in rows),
-        element=_frozen(np.array([r[3] for r in rows], dtype=int)),
-        kind=tuple(r[1] for r in rows),
-        component=_frozen(np.array([r[2] for r in rows], dtype=int)),
-    )
+    index = _defect_index(elements, nominal)
     if len(set(index.names)) != len(index.names):
         raise ParameterError("defect names collide: give elements distinct labels")
     return JointChainModel(
