@@ -32,7 +32,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pkmkit.export.base import RodGeometry, UnsupportedExportError, rod_geometry
+from pkmkit.export.base import RodGeometry, UnsupportedExportError, machine_family, rod_geometry
+from pkmkit.export.linuxcnc_chains import chain_linuxcnc_source
 from pkmkit.model.parameters import length_scale
 from pkmkit.model.rods import CRANK, STRUT
 
@@ -116,12 +117,14 @@ def linuxcnc_source(machine, *, units: str = "mm", name: str | None = None,
         UnsupportedExportError: a machine this module cannot express (joint chains, full-pose
             machines other than six rods on six actuators).
     """
-    geo = rod_geometry(machine, FORMAT, cranks=True, planar=True)
     name = name or module_name(machine.id)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise UnsupportedExportError(FORMAT, machine.id,
                                      f"module name {name!r} is not a C identifier")
     scale = length_scale(units)
+    if machine_family(machine) == "chain":
+        return chain_linuxcnc_source(machine, name, units, scale, source)
+    geo = rod_geometry(machine, FORMAT, cranks=True, planar=True)
     return _render(machine, geo, name, units, scale, source)
 
 
