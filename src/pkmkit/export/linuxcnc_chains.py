@@ -140,7 +140,7 @@ static const double tool_length = {_num(t.tool_length / scale)};
    input bound */
 static const double exact_tol = {_num(1e-15 * size)};
 static const double residual_tol = {_num(RESIDUAL_TOL / scale)};
-static const double step_tol = 1e-15;
+static const double step_tol = 1e-12;
 static const double max_step = {_num(MAX_STEP * t.closure_length / scale)};
 static const double max_turn = {_num(MAX_TURN)};
 static const double max_coordinate = {_num(MAX_COORDINATE / scale)};
