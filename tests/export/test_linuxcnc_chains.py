@@ -249,7 +249,6 @@ def test_the_read_back_catches_a_wrong_number(planted):
 
 def test_command_line_exports_the_calibrated_tripteor(tmp_path):
     from pkmkit.cli.main import cli
-
     from pkmkit.io.machine_defects import write_machine_with_defects
     from pkmkit.machines.registry import preset_path
 
