@@ -74,9 +74,25 @@ def _element_rows(t, scale: float) -> tuple[str, str]:
     return "\n".join(rot), "\n".join(pos)
 
 
+def _sizes(t, inverse: list[int]) -> str:
+    """The defines: sizes of the tables and of the solvers' arrays."""
+    return f"""#define N_ELEMENTS {len(t.element_names)}
+#define N_VARIABLES {len(t.variables)}
+#define N_ACTUATORS {len(t.actuated)}
+#define N_PASSIVE {len(t.passive)}
+#define N_INVERSE {len(inverse)}
+#define N_LEGS {len(t.legs)}
+#define N_HEAD {len(t.head)}
+#define MAX_CHAIN {max([len(leg) for leg in t.legs] + [len(t.head), 1])}
+#define MAX_ROWS {6 * len(t.legs) + 6}
+#define MAX_UNKNOWNS {6 + len(inverse)}
+#define CHAIN_MAX_ITER {CHAIN_MAX_ITER}
+#define DAMPING 1e-12
+"""
+
+
 def _tables(t, scale: float) -> str:
     """The machine's numbers as C tables (pkmkit's names in comments)."""
-    n_var = len(t.variables)
     joint_scale = np.where(t.revolute, 1.0, scale)
     code = {"R": "JOINT_R", "P": "JOINT_P", "F": "JOINT_F"}
     leg_first = np.concatenate([[0], np.cumsum([len(leg) for leg in t.legs])])
@@ -89,19 +105,7 @@ def _tables(t, scale: float) -> str:
     from pkmkit.spatial.rotation import rotvec_to_matrix
 
     home_rot = rotvec_to_matrix(t.home_platform[None, 3:])[0]
-    return f"""#define N_ELEMENTS {len(t.element_names)}
-#define N_VARIABLES {n_var}
-#define N_ACTUATORS {len(t.actuated)}
-#define N_PASSIVE {len(t.passive)}
-#define N_INVERSE {len(inverse)}
-#define N_LEGS {len(t.legs)}
-#define N_HEAD {len(t.head)}
-#define MAX_CHAIN {max([len(leg) for leg in t.legs] + [len(t.head), 1])}
-#define MAX_ROWS {6 * len(t.legs) + 6}
-#define MAX_UNKNOWNS {6 + len(inverse)}
-#define CHAIN_MAX_ITER {CHAIN_MAX_ITER}
-#define DAMPING 1e-12
-
+    return _sizes(t, inverse) + f"""
 /* ---- parameters: pkmkit's element frames D_e (model.frames, defects applied) ---- */
 /* rotation of each element's frame in the previous frame (rows) */
 static const double element_rotation[N_ELEMENTS][3][3] = {{
