@@ -49,16 +49,22 @@ def check_linuxcnc_source(machine, text: str, units: str = "mm") -> float:
     if machine.export_layout == "chain":
         return check_chain_linuxcnc_source(machine, text, units)
     scale = length_scale(units)
-    n = machine.n_actuators
+    rods = re.search(r"#define N_RODS (\d+)", text)
+    if rods is None:
+        raise ExportCheckError("the generated source has no N_RODS")
+    n = int(rods.group(1))
+    joint = _read_array(text, "rod_joint", n).astype(int)
     kind = _read_array(text, "rod_kind", n)
     base = _read_array(text, "rod_base", 3 * n).reshape(n, 3) * scale
     platform = _read_array(text, "rod_platform", 3 * n).reshape(n, 3) * scale
     axis = _read_array(text, "rod_axis", 3 * n).reshape(n, 3)
     length = _read_array(text, "rod_length", n) * scale
     crank = kind == 2
-    joint_scale = np.where(crank, np.pi / 180.0, scale)
-    home_q = _read_array(text, "home_joints", n) * joint_scale
+    first = np.array([np.flatnonzero(joint == j)[0] for j in range(machine.n_actuators)])
+    joint_scale = np.where(crank[first], np.pi / 180.0, scale)
+    home_q = _read_array(text, "home_joints", machine.n_actuators) * joint_scale
     x, q = sample_poses(machine)
+    q = q[:, joint]  # per rod
     if x.shape[1] == 2:
         x = np.concatenate([x, np.zeros((len(x), 1))], axis=1)
     if x.shape[1] == 6:

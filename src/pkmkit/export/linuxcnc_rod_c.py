@@ -17,7 +17,7 @@ static void rotation_from_abc(double a, double b, double c, double R[3][3])
     R[2][0] = -sb;     R[2][1] = cb * sa;                R[2][2] = cb * ca;
 }
 
-#if FULL_POSE
+#if FULL_POSE && !POSITION_CONTROLLED
 /* the angle + k 360 nearest to ref */
 static double unwrap_near(double angle, double ref)
 {
@@ -67,18 +67,18 @@ static void rod_vectors(double P[N_RODS][3], const double *q, double d[N_RODS][3
 {
     int j, k;
     for (j = 0; j < N_RODS; j++) {
-        double move = rod_kind[j] == PKM_SLIDE ? q[j] : 0.0;
+        double move = rod_kind[j] == PKM_SLIDE ? q[rod_joint[j]] : 0.0;
         for (k = 0; k < 3; k++)
             d[j][k] = P[j][k] - rod_base[j][k] - move * rod_axis[j][k];
 #if HAS_CRANKS
         if (rod_kind[j] == PKM_CRANK) {
-            double c = cos(q[j] * DEG), s = sin(q[j] * DEG);
+            double c = cos(q[rod_joint[j]] * DEG), s = sin(q[rod_joint[j]] * DEG);
             for (k = 0; k < 3; k++)
                 d[j][k] = P[j][k] - crank_pivot[j][k] - crank_offset[j] * rod_axis[j][k]
                           - crank_radius[j] * (c * crank_e1[j][k] + s * crank_e2[j][k]);
         }
 #endif
-        rho[j] = rod_kind[j] == PKM_STRUT ? rod_length[j] + q[j] : rod_length[j];
+        rho[j] = rod_kind[j] == PKM_STRUT ? rod_length[j] + q[rod_joint[j]] : rod_length[j];
     }
 }
 
@@ -153,6 +153,7 @@ static int mode_sign(double d[N_RODS][3], double Rb[N_RODS][3])
     return det > 0.0 ? 1 : (det < 0.0 ? -1 : 0);
 }
 
+#if !POSITION_CONTROLLED
 /* inverse model: joints q of the platform position p and rotation R */
 static int inverse_model(const double p[3], double R[3][3], double *q)
 {
@@ -209,6 +210,7 @@ static int inverse_model(const double p[3], double R[3][3], double *q)
     if (sign != working_mode) return PKM_OTHER_MODE;
     return 0;
 }
+#endif
 
 #if FULL_POSE
 /* R <- exp([w]x) R (Rodrigues) */
@@ -230,6 +232,122 @@ static void turn(double R[3][3], const double w[3])
             T[r][i] = E[r][0] * R[0][i] + E[r][1] * R[1][i] + E[r][2] * R[2][i];
     for (r = 0; r < 3; r++)
         for (i = 0; i < 3; i++) R[r][i] = T[r][i];
+}
+#endif
+
+#if POSITION_CONTROLLED
+/* inverse model of a machine whose orientation follows its position (the Verne-type module:
+   two rods per slide): Newton on the rod lengths |d_j| - rho_j = 0 for the rotation R and the
+   joints q, the position p given, from (R, q), each step bounded; then the working branch of
+   every rod (q = s + branch sqrt(...), pkmkit's check) and the working assembly mode */
+static int position_inverse(const double p[3], double R[3][3], double *q)
+{
+    double P[N_RODS][3], Rb[N_RODS][3], d[N_RODS][3], rho[N_RODS];
+    double A[N_POSE][N_POSE], e[N_POSE];
+    int it, j, k;
+    for (it = 0; it <= FK_MAX_ITER; it++) {
+        double worst = 0.0, step = 0.0, angle, bound = 1.0;
+        platform_points(p, R, P, Rb);
+        rod_vectors(P, q, d, rho);
+        for (j = 0; j < N_RODS; j++) {
+            double len = sqrt(d[j][0] * d[j][0] + d[j][1] * d[j][1] + d[j][2] * d[j][2]);
+            if (!(len > 0.0)) return PKM_SINGULAR;
+            e[j] = len - rho[j];
+            if (!(fabs(e[j]) <= worst)) worst = e[j] != e[j] ? 1e300 : fabs(e[j]);
+            for (k = 0; k < 3; k++) d[j][k] /= len;
+            /* d e_j = (R b_j x u_j) . w - (u_j . axis_j) dq */
+            A[j][0] = Rb[j][1] * d[j][2] - Rb[j][2] * d[j][1];
+            A[j][1] = Rb[j][2] * d[j][0] - Rb[j][0] * d[j][2];
+            A[j][2] = Rb[j][0] * d[j][1] - Rb[j][1] * d[j][0];
+            A[j][3] = A[j][4] = A[j][5] = 0.0;
+            A[j][3 + rod_joint[j]] = -(d[j][0] * rod_axis[j][0] + d[j][1] * rod_axis[j][1]
+                                       + d[j][2] * rod_axis[j][2]);
+        }
+        if (worst <= fk_tol) break;
+        if (it == FK_MAX_ITER || !(worst < max_coordinate)) return PKM_NOT_CONVERGED;
+        for (j = 0; j < N_POSE; j++) e[j] = -e[j];
+        if (solve_linear(A, e) == 0.0) return PKM_SINGULAR;
+        angle = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        for (j = 0; j < N_JOINTS; j++) if (fabs(e[3 + j]) > step) step = fabs(e[3 + j]);
+        if (!(angle == angle) || !(step == step)) return PKM_NOT_CONVERGED;
+        if (step > max_step) bound = max_step / step;
+        if (angle * bound > 0.25) bound = 0.25 / angle;
+        for (j = 0; j < 3; j++) e[j] *= bound;
+        turn(R, e);
+        for (j = 0; j < N_JOINTS; j++) q[j] += bound * e[3 + j];
+    }
+    platform_points(p, R, P, Rb);
+    for (j = 0; j < N_RODS; j++) {  /* the working branch: pkmkit's closed form gives q back */
+        double w[3], ww, s, radicand, lsq = rod_length[j] * rod_length[j];
+        for (k = 0; k < 3; k++) w[k] = P[j][k] - rod_base[j][k];
+        ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+        s = w[0] * rod_axis[j][0] + w[1] * rod_axis[j][1] + w[2] * rod_axis[j][2];
+        radicand = lsq - (ww - s * s);
+        if (radicand < 0.0) radicand = 0.0;
+        if (!(fabs(s + rod_branch[j] * sqrt(radicand) - q[rod_joint[j]]) <= branch_tol))
+            return PKM_OTHER_MODE;
+    }
+    rod_vectors(P, q, d, rho);
+    j = mode_sign(d, Rb);
+    if (j == 0) return PKM_SINGULAR;
+    return j == working_mode ? 0 : PKM_OTHER_MODE;
+}
+
+/* the last rotation and joints solved (the next inverse starts there; kinematicsHome resets) */
+static double last_R[3][3];
+static double last_q[N_JOINTS];
+static int last_set = 0;
+
+static void remember(double R[3][3], const double *q)
+{
+    int i, k;
+    for (i = 0; i < 3; i++)
+        for (k = 0; k < 3; k++) last_R[i][k] = R[i][k];
+    for (i = 0; i < N_JOINTS; i++) last_q[i] = q[i];
+    last_set = 1;
+}
+
+/* a start for position_inverse: each joint the mean of its rods' closed forms on their working
+   branches with the rotation R held (q unchanged where a rod cannot close) */
+static void branch_start(const double p[3], double R[3][3], double *q)
+{
+    double P[N_RODS][3], Rb[N_RODS][3], sum[N_JOINTS], count[N_JOINTS];
+    int j, k;
+    platform_points(p, R, P, Rb);
+    for (j = 0; j < N_JOINTS; j++) sum[j] = count[j] = 0.0;
+    for (j = 0; j < N_RODS; j++) {
+        double w[3], ww, s, radicand, lsq = rod_length[j] * rod_length[j];
+        for (k = 0; k < 3; k++) w[k] = P[j][k] - rod_base[j][k];
+        ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+        s = w[0] * rod_axis[j][0] + w[1] * rod_axis[j][1] + w[2] * rod_axis[j][2];
+        radicand = lsq - (ww - s * s);
+        if (!(radicand >= 0.0)) return;
+        sum[rod_joint[j]] += s + rod_branch[j] * sqrt(radicand);
+        count[rod_joint[j]] += 1.0;
+    }
+    for (j = 0; j < N_JOINTS; j++) q[j] = sum[j] / count[j];
+}
+
+/* position_inverse from the last solution, then from home */
+static int position_inverse_from_last(const double p[3], double *q)
+{
+    double R[3][3];
+    int j, i, status = PKM_NOT_CONVERGED;
+    if (last_set) {
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) R[i][j] = last_R[i][j];
+        for (j = 0; j < N_JOINTS; j++) q[j] = last_q[j];
+        branch_start(p, R, q);
+        status = position_inverse(p, R, q);
+    }
+    if (status != 0) {
+        rotation_from_abc(home_world[3], home_world[4], home_world[5], R);
+        for (j = 0; j < N_JOINTS; j++) q[j] = home_joints[j];
+        branch_start(p, R, q);
+        status = position_inverse(p, R, q);
+    }
+    if (status == 0) remember(R, q);
+    return status;
 }
 #endif
 
@@ -293,19 +411,23 @@ static int finite_inputs(const double *v, int n)
 int kinematicsInverse(const EmcPose *pos, double *joints, const KINEMATICS_INVERSE_FLAGS *iflags,
                       KINEMATICS_FORWARD_FLAGS *fflags)
 {
-    double p[3], R[3][3], q[N_RODS], abc[3] = {0.0, 0.0, 0.0};
+    double p[3], R[3][3], q[N_RODS], abc[3] = {0.0, 0.0, 0.0};  /* q: N_JOINTS used */
     int j, status;
     (void)iflags;
     (void)fflags;
     p[0] = pos->tran.x; p[1] = pos->tran.y; p[2] = PLANAR ? 0.0 : pos->tran.z;
-#if FULL_POSE
+#if FULL_POSE && !POSITION_CONTROLLED
     abc[0] = pos->a; abc[1] = pos->b; abc[2] = pos->c;
 #endif
     if (!finite_inputs(p, 3) || !finite_inputs(abc, 3)) return PKM_INVALID;
     rotation_from_abc(abc[0], abc[1], abc[2], R);
+#if POSITION_CONTROLLED
+    status = position_inverse_from_last(p, q);
+#else
     status = inverse_model(p, R, q);
+#endif
     if (status != 0) return status;
-    for (j = 0; j < N_RODS; j++) joints[j] = q[j];
+    for (j = 0; j < N_JOINTS; j++) joints[j] = q[j];
     return 0;
 }
 
@@ -316,7 +438,7 @@ int kinematicsForward(const double *joints, EmcPose *pos, const KINEMATICS_FORWA
     int status, unset;
     (void)fflags;
     (void)iflags;
-    if (!finite_inputs(joints, N_RODS)) return PKM_INVALID;
+    if (!finite_inputs(joints, N_JOINTS)) return PKM_INVALID;
     /* start from the previous position (LinuxCNC passes it in *pos), then from home */
     status = PKM_NOT_CONVERGED;
     p[0] = pos->tran.x; p[1] = pos->tran.y; p[2] = PLANAR ? 0.0 : pos->tran.z;
@@ -337,7 +459,10 @@ int kinematicsForward(const double *joints, EmcPose *pos, const KINEMATICS_FORWA
         if (status != 0) return status;
     }
     pos->tran.x = p[0]; pos->tran.y = p[1]; pos->tran.z = p[2];
-#if FULL_POSE
+#if POSITION_CONTROLLED
+    remember(R, joints);
+    pos->a = 0.0; pos->b = 0.0; pos->c = 0.0;  /* world X Y Z: the tilt follows */
+#elif FULL_POSE
     abc_from_rotation(R, start[0], start[2], &pos->a, &pos->b, &pos->c);
 #else
     pos->a = 0.0; pos->b = 0.0; pos->c = 0.0;
@@ -353,7 +478,10 @@ int kinematicsHome(EmcPose *world, double *joint, KINEMATICS_FORWARD_FLAGS *ffla
     world->tran.x = home_world[0]; world->tran.y = home_world[1]; world->tran.z = home_world[2];
     world->a = home_world[3]; world->b = home_world[4]; world->c = home_world[5];
     world->u = 0.0; world->v = 0.0; world->w = 0.0;
-    for (j = 0; j < N_RODS; j++) joint[j] = home_joints[j];
+    for (j = 0; j < N_JOINTS; j++) joint[j] = home_joints[j];
+#if POSITION_CONTROLLED
+    last_set = 0;  /* the next inverse starts from home */
+#endif
     *fflags = 0;
     *iflags = 0;
     return 0;
