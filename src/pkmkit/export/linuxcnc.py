@@ -208,13 +208,16 @@ def _rod_header(machine, geo: RodGeometry, name: str, units: str, scale: float, 
     planar = machine.dims == 2
     verne = machine.n_actuators < n
     coords = "XYZABC" if geo.full_pose and not verne else ("XY" if planar else "XYZ")
-    kind_text = ("full-pose, the orientation following the position (six rods on three "
-                 "slides): world X Y Z, the inverse model solves R by Newton" if verne else
+    kind_text = ("six rods on three slides, the orientation R following the position:\n"
+                 " * world X Y Z" if verne else
                  "full-pose (hexapod): world X Y Z A B C, R = Rz(C) Ry(B) Rx(A), A B C in "
                  "degrees about the fixed x, y, z axes" if geo.full_pose else
                  "planar: world X Y, z = 0, the platform does not turn (R = I)" if planar else
                  "translational: world X Y Z, the platform does not turn (R = I)")
     mode_name = machine.mode_label(machine.working_mode)
+    inverse_text = ("Newton on the rod lengths for R and the joints, the position given, from "
+                    "the last\n * solution (kinematicsHome resets it), then home; every rod on "
+                    "its working branch.\n *" if verne else "closed form per rod.")
     return f"""/* {name}.c -- LinuxCNC kinematics of "{machine.name}"
  * (pkmkit machine {machine.id!r})
  *
@@ -232,7 +235,7 @@ def _rod_header(machine, geo: RodGeometry, name: str, units: str, scale: float, 
  * Joint j is pkmkit's actuator j; lengths in {units}. The numbers are pkmkit's rod end points and
  * lengths (legs[j].base, legs[j].platform, legs[j].length, legs[j].axis) with any calibrated
  * defects of the machine file already applied.
- * Inverse: closed form per rod. Forward: Newton iteration from the previous position (at most
+ * Inverse: {inverse_text} Forward: Newton iteration from the previous position (at most
  * {FK_MAX_ITER} steps, each bounded), retried from home (and started there when the previous
  * position is LinuxCNC's unset all-zero one); the result must lie in the working assembly mode
  * ("{mode_name}", sign of det A = {machine.working_mode:+d}).
