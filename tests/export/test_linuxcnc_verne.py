@@ -104,3 +104,19 @@ def test_home_and_invalid_inputs(verne):
     p = np.zeros((2, 3))
     p[0, 0], p[1, 2] = np.nan, 1e12
     assert (_inverse(verne, p, from_home=True)[1] == -4).all()
+
+
+def test_the_read_back_catches_a_rod_on_the_wrong_carriage():
+    """The export's self-check reads which carriage drives each rod: a rod moved to another
+    carriage in the text is caught."""
+    from pkmkit.exceptions import ExportCheckError
+    from pkmkit.export.linuxcnc import linuxcnc_source
+    from pkmkit.export.linuxcnc_check import check_linuxcnc_source
+
+    m = pkmkit.machine("verne")
+    text = linuxcnc_source(m)
+    assert check_linuxcnc_source(m, text) <= TOL
+    line = "rod_joint[N_RODS] = {0, 0, 1, 1, 2, 2};"
+    assert line in text
+    with pytest.raises(ExportCheckError):
+        check_linuxcnc_source(m, text.replace(line, "rod_joint[N_RODS] = {0, 1, 0, 1, 2, 2};"))

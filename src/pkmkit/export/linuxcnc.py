@@ -1,4 +1,5 @@
-"""A LinuxCNC kinematics module (C source) for a rod-leg machine, nominal or calibrated.
+"""A LinuxCNC kinematics module (C source) for a machine, nominal or calibrated: rod-leg
+machines here, joint-chain machines in :mod:`pkmkit.export.linuxcnc_chains`.
 
 The generated file implements LinuxCNC's kinematics API (``kinematics.h``):
 ``kinematicsInverse`` (closed form, rod by rod), ``kinematicsForward`` (a bounded Newton
@@ -6,7 +7,9 @@ iteration from the previous position, as ``genhexkins`` does, retried from home)
 (``KINEMATICS_BOTH``) and ``kinematicsHome``, with the ``rtapi_app_main`` / ``hal_init`` glue of a
 realtime module. Build it with ``halcompile --install NAME.c`` (the line is in its header).
 
-**Model.** One rod per actuator (:class:`~pkmkit.export.base.RodGeometry`):
+**Model.** One rod per actuator (:class:`~pkmkit.export.base.RodGeometry`; the Verne-type
+module: six rods on three slides, its inverse model a Newton iteration for the rotation and
+the joints, the position given):
 ``|p + R b_j − a_j(q_j)| = ρ_j(q_j)`` with ``a_j = base_j + q_j u_j``, ``ρ_j = length_j`` for a
 slide, ``a_j = base_j``, ``ρ_j = length_j + q_j`` for a strut, the arm tip of a crank turned by
 q_j (a rotary joint, in degrees for LinuxCNC) — pkmkit's own equations, with
