@@ -225,10 +225,22 @@ def test_the_module_carries_the_calibrated_geometry(tmp_path):
     assert np.abs(q - bent.ik(x)).max() > 1e-5
 
 
-def test_incompatible_defects_are_refused():
-    m = pkmkit.machine("tripteor-x7").with_defects({"dK21": 1e-3})
+def test_incompatible_defects_are_refused(tmp_path):
+    """A defect the hyperstatic legs absorb only in least squares: refused, nothing written."""
+    from pkmkit.cli.main import cli
+    from pkmkit.io.machine_defects import write_machine_with_defects
+    from pkmkit.machines.registry import preset_path
+
+    nominal = pkmkit.machine("tripteor-x7")
+    m = nominal.with_defects({"dK21": 1e-3})
     with pytest.raises(UnsupportedExportError, match="least squares"):
         linuxcnc_source(m)
+    path = tmp_path / "bent.toml"
+    write_machine_with_defects(path, preset_path("tripteor-x7"), nominal, m.model.defects)
+    out = tmp_path / "bentkins.c"
+    result = CliRunner().invoke(cli, ["export", str(path), "--to", "linuxcnc", "--out", str(out)])
+    assert result.exit_code == 1 and "least squares" in result.output
+    assert not out.exists()
 
 
 @pytest.mark.parametrize("planted", ["element_position", "home_values", "tool_length"])
