@@ -57,7 +57,7 @@ def test_klipper_and_mjcf(run, tmp_path):
 
 
 @pytest.mark.parametrize("name, fmt, words", [
-    ("tripteor-x7", "linuxcnc", "joint-chain"),
+    ("tripteor-x7", "klipper", "three vertical slides"),  # linuxcnc: test_linuxcnc_chains
     ("orthoglide", "klipper", "not vertical"),
     ("delta", "mjcf", "crank"),
 ])

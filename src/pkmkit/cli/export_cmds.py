@@ -59,7 +59,7 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
     source = machine_name if is_machine_file(machine_name) else ""
     if fmt == "linuxcnc":
         from pkmkit.export.linuxcnc import linuxcnc_source
-        from pkmkit.export.linuxcnc_check import check_linuxcnc_source
+        from pkmkit.export.linuxcnc_check import check_linuxcnc_source, check_sentence
 
         name = Path(out_file).stem
         if Path(out_file).suffix != ".c" or not re.fullmatch(r"[A-Za-z_]\w*", name):
@@ -70,7 +70,7 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         check_linuxcnc_source(m, text, units)
         what = (f"LinuxCNC kinematics module {name} ({m.n_actuators} joints, {units}); "
                 f"build: halcompile --install {out_file}")
-        check = "its rods close at pkmkit's configurations (≤ 1e-9 m)"
+        check = check_sentence(m)
     elif fmt == "klipper":
         from pkmkit.export.klipper import check_klipper_config, klipper_config
 

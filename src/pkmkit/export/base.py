@@ -46,6 +46,8 @@ class RodGeometry:
         branch: ``(n,)`` working branch of the inverse model (±1; slides only).
         q_min, q_max: ``(n,)`` actuator strokes, m (±inf when unlimited).
         full_pose: the platform also turns (pose x, y, z + orientation).
+        joint: ``(n,)`` the actuator driving each rod (default: rod j by actuator j; the
+            Verne-type module: two rods per slide).
     """
 
     names: tuple[str, ...]
@@ -60,6 +62,7 @@ class RodGeometry:
     q_max: np.ndarray
     full_pose: bool
     pivot: np.ndarray | None = None
+    joint: np.ndarray | None = None
 
     def crank_frames(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(e1 (n, 3), e2 (n, 3), r (n,), h (n,))`` of the cranks (zeros for other rods)."""
@@ -88,15 +91,17 @@ def machine_family(machine) -> str:
     return machine.export_layout
 
 
-def rod_geometry(machine, fmt: str, *, cranks: bool = False, planar: bool = False
-                 ) -> RodGeometry:
+def rod_geometry(machine, fmt: str, *, cranks: bool = False, planar: bool = False,
+                 position_controlled: bool = False) -> RodGeometry:
     """The one-rod-per-actuator geometry of a rod-leg machine of slides and struts (and cranks
     when the format takes them).
 
     Raises:
         UnsupportedExportError: a joint-chain machine, a planar one (unless ``planar``: its
             geometry is then 3-D with z = 0), crank actuators (unless ``cranks``), or a
-            full-pose machine that is not six rods on six actuators.
+            full-pose machine that is not six rods on six actuators (or, with
+            ``position_controlled``, six rods on the three actuators of a machine whose
+            orientation follows its position: the Verne-type module).
     """
     family = machine_family(machine)
     if family == "chain":
@@ -113,7 +118,8 @@ def rod_geometry(machine, fmt: str, *, cranks: bool = False, planar: bool = Fals
             fmt, machine.id, "crank (rotary) actuators are not exported to this format yet; "
             "slides and struts are")
     if family == "full-pose":
-        if m.n_actuators != 6 or m.n_rods != 6:
+        verne = position_controlled and machine.position_controlled and m.n_actuators == 3
+        if m.n_rods != 6 or (m.n_actuators != 6 and not verne):
             raise UnsupportedExportError(
                 fmt, machine.id, f"a full-pose machine with {m.n_actuators} actuators and "
                 f"{m.n_rods} rods: only six rods on six actuators (hexapods) are exported; with "
@@ -126,18 +132,21 @@ def rod_geometry(machine, fmt: str, *, cranks: bool = False, planar: bool = Fals
         legs = m.rod_leg[order]
         branch = m.leg_branch[legs]
         names = tuple(m.leg_names[i] for i in legs)
+        joint = np.asarray(m.rod_actuator)[order]
     else:
         base, platform, length = m.leg_base, m.leg_platform, m.leg_length
         axis, kind, branch = m.leg_axis, m.leg_kind, m.leg_branch
         pivot = m.leg_pivot
         names = m.leg_names
+        joint = np.arange(len(names))
     return RodGeometry(
-        names=tuple(names), actuators=tuple(m.actuator_names), kind=np.array(kind, dtype=int),
+        names=tuple(names), actuators=tuple(m.actuator_names[int(k)] for k in joint),
+        kind=np.array(kind, dtype=int),
         base=np.array(base, dtype=float), platform=np.array(platform, dtype=float),
         axis=np.where((np.asarray(kind) != STRUT)[:, None], axis, 0.0),
         length=np.array(length, dtype=float), branch=np.array(branch, dtype=int),
-        q_min=np.array(m.q_min, dtype=float), q_max=np.array(m.q_max, dtype=float),
-        full_pose=family == "full-pose",
+        q_min=np.array(m.q_min, dtype=float)[joint], q_max=np.array(m.q_max, dtype=float)[joint],
+        full_pose=family == "full-pose", joint=np.array(joint, dtype=int),
         pivot=np.where((np.asarray(kind) == CRANK)[:, None], pivot, 0.0))
 
 

@@ -1,4 +1,5 @@
-"""A LinuxCNC kinematics module (C source) for a rod-leg machine, nominal or calibrated.
+"""A LinuxCNC kinematics module (C source) for a machine, nominal or calibrated: rod-leg
+machines here, joint-chain machines in :mod:`pkmkit.export.linuxcnc_chains`.
 
 The generated file implements LinuxCNC's kinematics API (``kinematics.h``):
 ``kinematicsInverse`` (closed form, rod by rod), ``kinematicsForward`` (a bounded Newton
@@ -6,7 +7,9 @@ iteration from the previous position, as ``genhexkins`` does, retried from home)
 (``KINEMATICS_BOTH``) and ``kinematicsHome``, with the ``rtapi_app_main`` / ``hal_init`` glue of a
 realtime module. Build it with ``halcompile --install NAME.c`` (the line is in its header).
 
-**Model.** One rod per actuator (:class:`~pkmkit.export.base.RodGeometry`):
+**Model.** One rod per actuator (:class:`~pkmkit.export.base.RodGeometry`; the Verne-type
+module: six rods on three slides, its inverse model a Newton iteration for the rotation and
+the joints, the position given):
 ``|p + R b_j − a_j(q_j)| = ρ_j(q_j)`` with ``a_j = base_j + q_j u_j``, ``ρ_j = length_j`` for a
 slide, ``a_j = base_j``, ``ρ_j = length_j + q_j`` for a strut, the arm tip of a crank turned by
 q_j (a rotary joint, in degrees for LinuxCNC) — pkmkit's own equations, with
@@ -32,7 +35,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from pkmkit.export.base import RodGeometry, UnsupportedExportError, rod_geometry
+from pkmkit.export.base import RodGeometry, UnsupportedExportError, machine_family, rod_geometry
+from pkmkit.export.linuxcnc_chain_c import MODULE_GLUE_C
+from pkmkit.export.linuxcnc_chains import chain_linuxcnc_source
+from pkmkit.export.linuxcnc_rod_c import ROD_MODEL_C
 from pkmkit.model.parameters import length_scale
 from pkmkit.model.rods import CRANK, STRUT
 
@@ -116,12 +122,14 @@ def linuxcnc_source(machine, *, units: str = "mm", name: str | None = None,
         UnsupportedExportError: a machine this module cannot express (joint chains, full-pose
             machines other than six rods on six actuators).
     """
-    geo = rod_geometry(machine, FORMAT, cranks=True, planar=True)
     name = name or module_name(machine.id)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise UnsupportedExportError(FORMAT, machine.id,
                                      f"module name {name!r} is not a C identifier")
     scale = length_scale(units)
+    if machine_family(machine) == "chain":
+        return chain_linuxcnc_source(machine, name, units, scale, source)
+    geo = rod_geometry(machine, FORMAT, cranks=True, planar=True, position_controlled=True)
     return _render(machine, geo, name, units, scale, source)
 
 
@@ -137,32 +145,40 @@ def _home_world(machine, geo: RodGeometry) -> np.ndarray:
 
 
 def _render(machine, geo: RodGeometry, name: str, units: str, scale: float, source: str) -> str:
-    from pkmkit import __version__
-
-    n = geo.n
-    base, platform = geo.base / scale, geo.platform / scale
-    length = geo.length / scale
-    home_world = _home_world(machine, geo)
-    home_world[:3] /= scale
-    crank = geo.kind == CRANK
+    """The module's text: the header comment, the defines, the tables, then the fixed C of the
+    rod models (:data:`~pkmkit.export.linuxcnc_rod_c.ROD_MODEL_C`)."""
+    first = np.array([np.flatnonzero(geo.joint == j)[0] for j in range(machine.n_actuators)])
+    crank = geo.kind[first] == CRANK
     joint_scale = np.where(crank, np.pi / 180.0, scale)  # LinuxCNC: rotary joints in degrees
     home_q = np.asarray(machine.home_q, dtype=float) / joint_scale
-    size = 1.0 + float(max(np.abs(base).max(), np.abs(platform).max(), np.abs(length).max()))
-    rho_home = np.where(geo.kind == STRUT, length + home_q, length)  # rod lengths at home
-    planar = machine.dims == 2
-    coords = "XYZABC" if geo.full_pose else ("XY" if planar else "XYZ")
-    kinds = ", ".join(KIND_NAMES[int(k)] for k in geo.kind)
+    limits = _joint_limits(geo, home_q, joint_scale, units)
+    return (_rod_header(machine, geo, name, units, scale, source, limits)
+            + _rod_defines(machine, geo) + _rod_tables(machine, geo, units, scale, home_q)
+            + "static int comp_id;\n\n" + ROD_MODEL_C + MODULE_GLUE_C.replace("@NAME@", name))
+
+
+def _joint_limits(geo: RodGeometry, home_q: np.ndarray, joint_scale: np.ndarray,
+                  units: str) -> list[str]:
+    """The INI lines of the joints (strokes and home, in LinuxCNC's units), as comment rows."""
+    crank = geo.kind == CRANK
     limits = []
-    for j in range(n):
-        lo, hi = geo.q_min[j] / joint_scale[j], geo.q_max[j] / joint_scale[j]
-        unit = "deg" if crank[j] else units
+    for j in range(len(home_q)):
+        r = int(np.flatnonzero(geo.joint == j)[0])  # a rod of joint j
+        lo, hi = geo.q_min[r] / joint_scale[j], geo.q_max[r] / joint_scale[j]
+        unit = "deg" if crank[r] else units
         if np.isfinite(lo) and np.isfinite(hi):
             limits.append(f" *   [JOINT_{j}] MIN_LIMIT = {lo:.9g}  MAX_LIMIT = {hi:.9g}  "
-                          f"HOME = {home_q[j]:.9g}   ({geo.actuators[j]}, {geo.names[j]}; "
+                          f"HOME = {home_q[j]:.9g}   ({geo.actuators[r]}, {geo.names[r]}; "
                           f"{unit})")
         else:
-            limits.append(f" *   [JOINT_{j}] HOME = {home_q[j]:.9g}   ({geo.actuators[j]}, "
-                          f"{geo.names[j]}; {unit}; pkmkit gives no stroke)")
+            limits.append(f" *   [JOINT_{j}] HOME = {home_q[j]:.9g}   ({geo.actuators[r]}, "
+                          f"{geo.names[r]}; {unit}; pkmkit gives no stroke)")
+    return limits
+
+
+def _crank_arrays(geo: RodGeometry, scale: float) -> str:
+    """The cranks' tables (empty without cranks)."""
+    crank = geo.kind == CRANK
     crank_arrays = ""
     if crank.any():
         e1, e2, radius, offset = geo.crank_frames()
@@ -183,18 +199,35 @@ static const double crank_e2[N_RODS][3] = {{
 static const double crank_radius[N_RODS] = {_array(radius / scale)};
 static const double crank_offset[N_RODS] = {_array(offset / scale)};
 """
-    kind_text = ("full-pose (hexapod): world X Y Z A B C, R = Rz(C) Ry(B) Rx(A), A B C in "
+    return crank_arrays
+
+
+def _rod_header(machine, geo: RodGeometry, name: str, units: str, scale: float, source: str,
+                limits: list[str]) -> str:
+    """The header comment: build line, INI lines, the model, pkmkit's parameters."""
+    from pkmkit import __version__
+
+    n = geo.n
+    planar = machine.dims == 2
+    verne = machine.n_actuators < n
+    coords = "XYZABC" if geo.full_pose and not verne else ("XY" if planar else "XYZ")
+    kind_text = ("six rods on three slides, the orientation R following the position:\n"
+                 " * world X Y Z" if verne else
+                 "full-pose (hexapod): world X Y Z A B C, R = Rz(C) Ry(B) Rx(A), A B C in "
                  "degrees about the fixed x, y, z axes" if geo.full_pose else
                  "planar: world X Y, z = 0, the platform does not turn (R = I)" if planar else
                  "translational: world X Y Z, the platform does not turn (R = I)")
     mode_name = machine.mode_label(machine.working_mode)
-    header = f"""/* {name}.c -- LinuxCNC kinematics of "{machine.name}"
+    inverse_text = ("Newton on the rod lengths for R and the joints, the position given, from "
+                    "the last\n * solution (kinematicsHome resets it), then home; every rod on "
+                    "its working branch.\n *" if verne else "closed form per rod.")
+    return f"""/* {name}.c -- LinuxCNC kinematics of "{machine.name}"
  * (pkmkit machine {machine.id!r})
  *
  * Generated by pkmkit {__version__} (`pkmkit export {machine.id} --to linuxcnc`); do not edit:
  * regenerate from the machine file{f' ({source})' if source else ''}.
  * Build and install:   halcompile --install {name}.c
- * INI:   [KINS] KINEMATICS = {name}   JOINTS = {n}
+ * INI:   [KINS] KINEMATICS = {name}   JOINTS = {machine.n_actuators}
  *        [TRAJ] COORDINATES = {coords}   LINEAR_UNITS = {units}   ANGULAR_UNITS = degree
 {chr(10).join(limits)}
  *
@@ -205,7 +238,7 @@ static const double crank_offset[N_RODS] = {_array(offset / scale)};
  * Joint j is pkmkit's actuator j; lengths in {units}. The numbers are pkmkit's rod end points and
  * lengths (legs[j].base, legs[j].platform, legs[j].length, legs[j].axis) with any calibrated
  * defects of the machine file already applied.
- * Inverse: closed form per rod. Forward: Newton iteration from the previous position (at most
+ * Inverse: {inverse_text} Forward: Newton iteration from the previous position (at most
  * {FK_MAX_ITER} steps, each bounded), retried from home (and started there when the previous
  * position is LinuxCNC's unset all-zero one); the result must lie in the working assembly mode
  * ("{mode_name}", sign of det A = {machine.working_mode:+d}).
@@ -213,13 +246,22 @@ static const double crank_offset[N_RODS] = {_array(offset / scale)};
  * -5 direct model not converged.
 {_parameters_comment(machine, units, scale)} */
 """
-    body = f"""
+
+
+def _rod_defines(machine, geo: RodGeometry) -> str:
+    """The includes and the defines (sizes, kinds, return codes)."""
+    n = geo.n
+    planar = machine.dims == 2
+    crank = geo.kind == CRANK
+    return f"""
 #include "rtapi_math.h"
 #include "rtapi_app.h"
 #include "hal.h"
 #include "kinematics.h"
 
 #define N_RODS {n}
+#define N_JOINTS {machine.n_actuators}
+#define POSITION_CONTROLLED {1 if machine.n_actuators < n else 0}
 #define FULL_POSE {1 if geo.full_pose else 0}
 #define PLANAR {1 if planar else 0}
 #define PKM_SLIDE 0
@@ -234,7 +276,20 @@ static const double crank_offset[N_RODS] = {_array(offset / scale)};
 #define FK_MAX_ITER {FK_MAX_ITER}
 #define DEG (3.14159265358979323846 / 180.0)
 
-/* ---- parameters (pkmkit names; {units}) ---- */
+"""
+
+
+def _rod_tables(machine, geo: RodGeometry, units: str, scale: float, home_q: np.ndarray) -> str:
+    """The numbers: rods, cranks, home, working mode, tolerances (pkmkit's names)."""
+    base, platform = geo.base / scale, geo.platform / scale
+    length = geo.length / scale
+    home_world = _home_world(machine, geo)
+    home_world[:3] /= scale
+    size = 1.0 + float(max(np.abs(base).max(), np.abs(platform).max(), np.abs(length).max()))
+    rho_home = np.where(geo.kind == STRUT, length + home_q[geo.joint], length)  # at home
+    kinds = ", ".join(KIND_NAMES[int(k)] for k in geo.kind)
+    crank_arrays = _crank_arrays(geo, scale)
+    return f"""/* ---- parameters (pkmkit names; {units}) ---- */
 static const int rod_kind[N_RODS] = {{{kinds}}};
 /* base-side joint centre at q = 0 (legs[j].base) */
 static const double rod_base[N_RODS][3] = {{
@@ -255,395 +310,21 @@ static const double rod_branch[N_RODS] = {_array(geo.branch)};
 {crank_arrays}
 /* home: world X Y Z A B C and joints (pkmkit's home configuration) */
 static const double home_world[6] = {_array(home_world)};
-static const double home_joints[N_RODS] = {_array(home_q)};
+static const double home_joints[N_JOINTS] = {_array(home_q)};
+/* the joint driving each rod (pkmkit's actuator) */
+static const int rod_joint[N_RODS] = {{{", ".join(str(int(k)) for k in geo.joint)}}};
 /* sign of det A in the working assembly mode */
 static const int working_mode = {machine.working_mode:d};
 /* tolerances: rod-length convergence, boundary rounding (relative to length^2), input bound */
 static const double fk_tol = {_num(FK_TOL * size)};
+#if !POSITION_CONTROLLED
 static const double boundary_tol = {_num(BOUNDARY_TOL)};
+#endif
 static const double max_coordinate = {_num(MAX_COORDINATE / scale)};
 static const double max_step = {_num(0.25 * float(np.min(rho_home)))};
-
-static int comp_id;
-
-/* R = Rz(c) Ry(b) Rx(a), angles in degrees */
-static void rotation_from_abc(double a, double b, double c, double R[3][3])
-{{
-    double ca = cos(a * DEG), sa = sin(a * DEG), cb = cos(b * DEG), sb = sin(b * DEG);
-    double cc = cos(c * DEG), sc = sin(c * DEG);
-    R[0][0] = cc * cb; R[0][1] = cc * sb * sa - sc * ca; R[0][2] = cc * sb * ca + sc * sa;
-    R[1][0] = sc * cb; R[1][1] = sc * sb * sa + cc * ca; R[1][2] = sc * sb * ca - cc * sa;
-    R[2][0] = -sb;     R[2][1] = cb * sa;                R[2][2] = cb * ca;
-}}
-
-#if FULL_POSE
-/* the angle + k 360 nearest to ref */
-static double unwrap_near(double angle, double ref)
-{{
-    while (angle - ref > 180.0) angle -= 360.0;
-    while (angle - ref < -180.0) angle += 360.0;
-    return angle;
-}}
-
-/* A, B, C (degrees) of R, A and C taken nearest to the previous a0, c0 */
-static void abc_from_rotation(double R[3][3], double a0, double c0,
-                              double *a, double *b, double *c)
-{{
-    double cb = sqrt(R[0][0] * R[0][0] + R[1][0] * R[1][0]);
-    *b = atan2(-R[2][0], cb) / DEG;
-    if (cb > 1e-9) {{
-        *a = atan2(R[2][1], R[2][2]) / DEG;
-        *c = atan2(R[1][0], R[0][0]) / DEG;
-    }} else if (R[2][0] < 0.0) {{        /* B = +90: only A - C is defined */
-        *a = a0;
-        *c = a0 - atan2(R[0][1], R[1][1]) / DEG;
-    }} else {{                            /* B = -90: only A + C is defined */
-        *a = a0;
-        *c = atan2(-R[0][1], R[1][1]) / DEG - a0;
-    }}
-    *a = unwrap_near(*a, a0);
-    *c = unwrap_near(*c, c0);
-}}
+#if POSITION_CONTROLLED
+/* a rod's joint off its working branch's closed form by more than this: another branch */
+static const double branch_tol = {_num(1e-7 / scale)};
 #endif
 
-/* platform joint centres P_j = p + R b_j, and R b_j */
-static void platform_points(const double p[3], double R[3][3], double P[N_RODS][3],
-                            double Rb[N_RODS][3])
-{{
-    int j, k;
-    for (j = 0; j < N_RODS; j++) {{
-        for (k = 0; k < 3; k++) {{
-            Rb[j][k] = R[k][0] * rod_platform[j][0] + R[k][1] * rod_platform[j][1]
-                       + R[k][2] * rod_platform[j][2];
-            P[j][k] = p[k] + Rb[j][k];
-        }}
-    }}
-}}
-
-/* rod vectors d_j = P_j - a_j(q_j) and the rods' lengths rho_j(q_j) */
-static void rod_vectors(double P[N_RODS][3], const double *q, double d[N_RODS][3],
-                        double rho[N_RODS])
-{{
-    int j, k;
-    for (j = 0; j < N_RODS; j++) {{
-        double move = rod_kind[j] == PKM_SLIDE ? q[j] : 0.0;
-        for (k = 0; k < 3; k++)
-            d[j][k] = P[j][k] - rod_base[j][k] - move * rod_axis[j][k];
-#if HAS_CRANKS
-        if (rod_kind[j] == PKM_CRANK) {{
-            double c = cos(q[j] * DEG), s = sin(q[j] * DEG);
-            for (k = 0; k < 3; k++)
-                d[j][k] = P[j][k] - crank_pivot[j][k] - crank_offset[j] * rod_axis[j][k]
-                          - crank_radius[j] * (c * crank_e1[j][k] + s * crank_e2[j][k]);
-        }}
-#endif
-        rho[j] = rod_kind[j] == PKM_STRUT ? rod_length[j] + q[j] : rod_length[j];
-    }}
-}}
-
-#if FULL_POSE
-#define N_POSE 6
-#elif PLANAR
-#define N_POSE 2
-#else
-#define N_POSE 3
-#endif
-
-/* rows of A: (d_j, (R b_j) x d_j) (translational: d_j) */
-static void parallel_rows(double d[N_RODS][3], double Rb[N_RODS][3],
-                          double A[N_RODS][N_POSE])
-{{
-    int j;
-    for (j = 0; j < N_RODS; j++) {{
-        A[j][0] = d[j][0]; A[j][1] = d[j][1];
-#if !PLANAR
-        A[j][2] = d[j][2];
-#endif
-#if FULL_POSE
-        A[j][3] = Rb[j][1] * d[j][2] - Rb[j][2] * d[j][1];
-        A[j][4] = Rb[j][2] * d[j][0] - Rb[j][0] * d[j][2];
-        A[j][5] = Rb[j][0] * d[j][1] - Rb[j][1] * d[j][0];
-#else
-        (void)Rb;
-#endif
-    }}
-}}
-
-/* Gaussian elimination with partial pivoting: solves M x = rhs in place (rhs -> x) and returns
-   det M (0 when a pivot vanishes: singular) */
-static double solve_linear(double M[N_POSE][N_POSE], double rhs[N_POSE])
-{{
-    int i, k, r, piv;
-    double det = 1.0;
-    for (k = 0; k < N_POSE; k++) {{
-        double best = fabs(M[k][k]);
-        piv = k;
-        for (r = k + 1; r < N_POSE; r++)
-            if (fabs(M[r][k]) > best) {{ best = fabs(M[r][k]); piv = r; }}
-        if (!(best > 0.0)) return 0.0;
-        if (piv != k) {{
-            for (i = 0; i < N_POSE; i++) {{
-                double t = M[k][i]; M[k][i] = M[piv][i]; M[piv][i] = t;
-            }}
-            {{ double t = rhs[k]; rhs[k] = rhs[piv]; rhs[piv] = t; }}
-            det = -det;
-        }}
-        det *= M[k][k];
-        for (r = k + 1; r < N_POSE; r++) {{
-            double f = M[r][k] / M[k][k];
-            for (i = k; i < N_POSE; i++) M[r][i] -= f * M[k][i];
-            rhs[r] -= f * rhs[k];
-        }}
-    }}
-    for (k = N_POSE - 1; k >= 0; k--) {{
-        for (i = k + 1; i < N_POSE; i++) rhs[k] -= M[k][i] * rhs[i];
-        rhs[k] /= M[k][k];
-    }}
-    return det;
-}}
-
-/* sign of det A at a configuration (0: singular) */
-static int mode_sign(double d[N_RODS][3], double Rb[N_RODS][3])
-{{
-    double A[N_RODS][N_POSE], rhs[N_POSE] = {{0}};
-    double det;
-    parallel_rows(d, Rb, A);
-    det = solve_linear(A, rhs);
-    return det > 0.0 ? 1 : (det < 0.0 ? -1 : 0);
-}}
-
-/* inverse model: joints q of the platform position p and rotation R */
-static int inverse_model(const double p[3], double R[3][3], double *q)
-{{
-    double P[N_RODS][3], Rb[N_RODS][3], d[N_RODS][3], rho[N_RODS];
-    int j, sign;
-    platform_points(p, R, P, Rb);
-    for (j = 0; j < N_RODS; j++) {{
-        double w[3], ww, s, radicand, lsq = rod_length[j] * rod_length[j];
-        w[0] = P[j][0] - rod_base[j][0];
-        w[1] = P[j][1] - rod_base[j][1];
-        w[2] = P[j][2] - rod_base[j][2];
-        ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-        if (rod_kind[j] == PKM_STRUT) {{
-            q[j] = sqrt(ww) - rod_length[j];
-            continue;
-        }}
-#if HAS_CRANKS
-        if (rod_kind[j] == PKM_CRANK) {{
-            double v[3], vw, v1, v2, perp, g, amplitude, cosine, angle;
-            v[0] = P[j][0] - crank_pivot[j][0];
-            v[1] = P[j][1] - crank_pivot[j][1];
-            v[2] = P[j][2] - crank_pivot[j][2];
-            vw = v[0] * rod_axis[j][0] + v[1] * rod_axis[j][1] + v[2] * rod_axis[j][2]
-                 - crank_offset[j];
-            v1 = v[0] * crank_e1[j][0] + v[1] * crank_e1[j][1] + v[2] * crank_e1[j][2];
-            v2 = v[0] * crank_e2[j][0] + v[1] * crank_e2[j][1] + v[2] * crank_e2[j][2];
-            perp = sqrt(v1 * v1 + v2 * v2);
-            g = vw * vw + perp * perp + crank_radius[j] * crank_radius[j] - lsq;
-            amplitude = 2.0 * crank_radius[j] * perp;
-            cosine = g / amplitude;
-            if (!(fabs(cosine) <= 1.0)) {{
-                if (fabs(g) - amplitude <= boundary_tol * lsq && amplitude > 0.0)
-                    cosine = cosine > 0.0 ? 1.0 : -1.0;  /* rounding at the boundary */
-                else return PKM_UNREACHABLE;
-            }}
-            angle = atan2(v2, v1) + rod_branch[j] * acos(cosine);
-            angle = fmod(angle + 3.14159265358979323846, 2.0 * 3.14159265358979323846);
-            if (angle < 0.0) angle += 2.0 * 3.14159265358979323846;
-            q[j] = (angle - 3.14159265358979323846) / DEG;  /* [-180, 180) degrees */
-            continue;
-        }}
-#endif
-        s = w[0] * rod_axis[j][0] + w[1] * rod_axis[j][1] + w[2] * rod_axis[j][2];
-        radicand = lsq - (ww - s * s);
-        if (radicand < 0.0) {{
-            if (radicand > -boundary_tol * lsq) radicand = 0.0;  /* rounding at the boundary */
-            else return PKM_UNREACHABLE;
-        }}
-        q[j] = s + rod_branch[j] * sqrt(radicand);
-    }}
-    rod_vectors(P, q, d, rho);
-    sign = mode_sign(d, Rb);
-    if (sign == 0) return PKM_SINGULAR;
-    if (sign != working_mode) return PKM_OTHER_MODE;
-    return 0;
-}}
-
-#if FULL_POSE
-/* R <- exp([w]x) R (Rodrigues) */
-static void turn(double R[3][3], const double w[3])
-{{
-    double angle = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-    double E[3][3], T[3][3], k[3], c, s, v;
-    int i, r;
-    if (angle == 0.0) return;
-    k[0] = w[0] / angle; k[1] = w[1] / angle; k[2] = w[2] / angle;
-    c = cos(angle); s = sin(angle); v = 1.0 - c;
-    E[0][0] = c + k[0] * k[0] * v;        E[0][1] = k[0] * k[1] * v - k[2] * s;
-    E[0][2] = k[0] * k[2] * v + k[1] * s; E[1][0] = k[1] * k[0] * v + k[2] * s;
-    E[1][1] = c + k[1] * k[1] * v;        E[1][2] = k[1] * k[2] * v - k[0] * s;
-    E[2][0] = k[2] * k[0] * v - k[1] * s; E[2][1] = k[2] * k[1] * v + k[0] * s;
-    E[2][2] = c + k[2] * k[2] * v;
-    for (r = 0; r < 3; r++)
-        for (i = 0; i < 3; i++)
-            T[r][i] = E[r][0] * R[0][i] + E[r][1] * R[1][i] + E[r][2] * R[2][i];
-    for (r = 0; r < 3; r++)
-        for (i = 0; i < 3; i++) R[r][i] = T[r][i];
-}}
-#endif
-
-/* direct model: Newton on the rod lengths |d_j| - rho_j = 0 from (p, R), each step bounded */
-static int direct_model(const double *q, double p[3], double R[3][3])
-{{
-    double P[N_RODS][3], Rb[N_RODS][3], d[N_RODS][3], rho[N_RODS];
-    double A[N_RODS][N_POSE], e[N_POSE];
-    int it, j, k;
-    for (it = 0; it <= FK_MAX_ITER; it++) {{
-        double worst = 0.0, step, bound = 1.0, det;
-        platform_points(p, R, P, Rb);
-        rod_vectors(P, q, d, rho);
-        for (j = 0; j < N_RODS; j++) {{
-            double len = sqrt(d[j][0] * d[j][0] + d[j][1] * d[j][1] + d[j][2] * d[j][2]);
-            if (!(len > 0.0)) return PKM_SINGULAR;
-            e[j] = len - rho[j];
-            if (fabs(e[j]) > worst || e[j] != e[j]) worst = e[j] != e[j] ? 1e300 : fabs(e[j]);
-            for (k = 0; k < 3; k++) d[j][k] /= len;  /* unit rods: rows of d|d|/d(p, w) */
-        }}
-        if (worst <= fk_tol) {{
-            int sign = mode_sign(d, Rb);
-            if (sign == 0) return PKM_SINGULAR;
-            return sign == working_mode ? 0 : PKM_OTHER_MODE;
-        }}
-        if (it == FK_MAX_ITER || !(worst < max_coordinate)) break;
-        parallel_rows(d, Rb, A);
-        for (j = 0; j < N_POSE; j++) e[j] = -e[j];
-        det = solve_linear(A, e);
-        if (det == 0.0 || det != det) return PKM_SINGULAR;
-#if PLANAR
-        step = sqrt(e[0] * e[0] + e[1] * e[1]);
-#else
-        step = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-#endif
-        if (step > max_step) bound = max_step / step;
-#if FULL_POSE
-        {{
-            double angle = sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]);
-            if (angle * bound > 0.25) bound = 0.25 / angle;
-            e[3] *= bound; e[4] *= bound; e[5] *= bound;
-            turn(R, &e[3]);
-        }}
-#endif
-        p[0] += bound * e[0]; p[1] += bound * e[1];
-#if !PLANAR
-        p[2] += bound * e[2];
-#endif
-    }}
-    return PKM_NOT_CONVERGED;
-}}
-
-static int finite_inputs(const double *v, int n)
-{{
-    int i;
-    for (i = 0; i < n; i++)
-        if (!(fabs(v[i]) <= max_coordinate)) return 0;
-    return 1;
-}}
-
-int kinematicsInverse(const EmcPose *pos, double *joints, const KINEMATICS_INVERSE_FLAGS *iflags,
-                      KINEMATICS_FORWARD_FLAGS *fflags)
-{{
-    double p[3], R[3][3], q[N_RODS], abc[3] = {{0.0, 0.0, 0.0}};
-    int j, status;
-    (void)iflags;
-    (void)fflags;
-    p[0] = pos->tran.x; p[1] = pos->tran.y; p[2] = PLANAR ? 0.0 : pos->tran.z;
-#if FULL_POSE
-    abc[0] = pos->a; abc[1] = pos->b; abc[2] = pos->c;
-#endif
-    if (!finite_inputs(p, 3) || !finite_inputs(abc, 3)) return PKM_INVALID;
-    rotation_from_abc(abc[0], abc[1], abc[2], R);
-    status = inverse_model(p, R, q);
-    if (status != 0) return status;
-    for (j = 0; j < N_RODS; j++) joints[j] = q[j];
-    return 0;
-}}
-
-int kinematicsForward(const double *joints, EmcPose *pos, const KINEMATICS_FORWARD_FLAGS *fflags,
-                      KINEMATICS_INVERSE_FLAGS *iflags)
-{{
-    double p[3], R[3][3], start[3];
-    int status, unset;
-    (void)fflags;
-    (void)iflags;
-    if (!finite_inputs(joints, N_RODS)) return PKM_INVALID;
-    /* start from the previous position (LinuxCNC passes it in *pos), then from home */
-    status = PKM_NOT_CONVERGED;
-    p[0] = pos->tran.x; p[1] = pos->tran.y; p[2] = PLANAR ? 0.0 : pos->tran.z;
-    start[0] = pos->a; start[1] = pos->b; start[2] = pos->c;
-    if (!FULL_POSE) start[0] = start[1] = start[2] = 0.0;
-    unset = p[0] == 0.0 && p[1] == 0.0 && p[2] == 0.0 && start[0] == 0.0 && start[1] == 0.0
-            && start[2] == 0.0;  /* LinuxCNC's initial, unset position: start from home */
-    if (!unset && finite_inputs(p, 3) && finite_inputs(start, 3)) {{
-        rotation_from_abc(start[0], start[1], start[2], R);
-        status = direct_model(joints, p, R);
-    }} else {{
-        start[0] = home_world[3]; start[2] = home_world[5];
-    }}
-    if (status != 0) {{
-        p[0] = home_world[0]; p[1] = home_world[1]; p[2] = home_world[2];
-        rotation_from_abc(home_world[3], home_world[4], home_world[5], R);
-        status = direct_model(joints, p, R);
-        if (status != 0) return status;
-    }}
-    pos->tran.x = p[0]; pos->tran.y = p[1]; pos->tran.z = p[2];
-#if FULL_POSE
-    abc_from_rotation(R, start[0], start[2], &pos->a, &pos->b, &pos->c);
-#else
-    pos->a = 0.0; pos->b = 0.0; pos->c = 0.0;
-#endif
-    pos->u = 0.0; pos->v = 0.0; pos->w = 0.0;
-    return 0;
-}}
-
-int kinematicsHome(EmcPose *world, double *joint, KINEMATICS_FORWARD_FLAGS *fflags,
-                   KINEMATICS_INVERSE_FLAGS *iflags)
-{{
-    int j;
-    world->tran.x = home_world[0]; world->tran.y = home_world[1]; world->tran.z = home_world[2];
-    world->a = home_world[3]; world->b = home_world[4]; world->c = home_world[5];
-    world->u = 0.0; world->v = 0.0; world->w = 0.0;
-    for (j = 0; j < N_RODS; j++) joint[j] = home_joints[j];
-    *fflags = 0;
-    *iflags = 0;
-    return 0;
-}}
-
-KINEMATICS_TYPE kinematicsType(void)
-{{
-    return KINEMATICS_BOTH;
-}}
-
-int rtapi_app_main(void)
-{{
-    comp_id = hal_init("{name}");
-    if (comp_id < 0) return comp_id;
-    hal_ready(comp_id);
-    return 0;
-}}
-
-void rtapi_app_exit(void)
-{{
-    hal_exit(comp_id);
-}}
-
-#ifdef KINS_NOT_SWITCHABLE
-KINS_NOT_SWITCHABLE
-#endif
-EXPORT_SYMBOL(kinematicsType);
-EXPORT_SYMBOL(kinematicsForward);
-EXPORT_SYMBOL(kinematicsInverse);
-EXPORT_SYMBOL(kinematicsHome);
-MODULE_LICENSE("GPL");
 """
-    return header + body
-

@@ -45,3 +45,28 @@ int pkm_home(double *world, double *joints)
 int pkm_type(void) { return (int)kinematicsType(); }
 extern int rtapi_app_main(void);
 int pkm_app_main(void) { return rtapi_app_main(); }
+
+/* as pkm_batch_inverse, each pose after kinematicsHome (the module starts from home) */
+void pkm_batch_inverse_from_home(long n, int n_joints, const double *world, double *joints,
+                                 int *status)
+{
+    long i;
+    double home_world[6], home_joints[64];
+    for (i = 0; i < n; i++) {
+        pkm_home(home_world, home_joints);
+        pkm_batch_inverse(1, n_joints, world + 6 * i, joints + (long)n_joints * i, status + i);
+    }
+}
+
+/* as pkm_batch_forward, each actuator set after kinematicsHome */
+void pkm_batch_forward_from_home(long n, int n_joints, const double *joints, const double *start,
+                                 double *world, int *status)
+{
+    long i;
+    double home_world[6], home_joints[64];
+    for (i = 0; i < n; i++) {
+        pkm_home(home_world, home_joints);
+        pkm_batch_forward(1, n_joints, joints + (long)n_joints * i, start + 6 * i, world + 6 * i,
+                          status + i);
+    }
+}
