@@ -72,8 +72,9 @@ def _check(machine, held: bool) -> None:
     family = machine_family(machine)
     why = None
     if family == "chain":
-        why = ("a joint-chain machine: its hyperstatic chains (serial R/P joints closed in full "
-               "SE(3)) are not exported to MuJoCo yet; rod-leg machines are")
+        why = ("a joint-chain machine is written by pkmkit.export.mjcf_chains (or "
+               "pkmkit.export.mjcf_writer.write_mjcf for any machine), not by the rod-leg "
+               "writer")
     elif held and family == "planar":
         why = ("a planar machine: pkmkit keeps its platform in the x-y plane, MuJoCo's free "
                "platform would leave it")
@@ -269,16 +270,10 @@ def check_mjcf_model(machine, xml: str) -> float | None:
     Raises:
         ExportCheckError: MuJoCo refuses the model, or a violation beyond 1e-9 m.
     """
-    try:
-        import mujoco
-    except ImportError:
+    loaded = load_mjcf(xml)
+    if loaded is None:
         return None
-    try:
-        model = mujoco.MjModel.from_xml_string(xml)
-    except ValueError as exc:
-        detail = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
-        raise ExportCheckError(f"MuJoCo refuses the generated model: {detail}") from None
-    data = mujoco.MjData(model)
+    mujoco, model, data = loaded
     layout = mjcf_layout(machine, require_held_platform=False)
     poses, q = sample_poses(machine)
     worst = 0.0
@@ -291,3 +286,22 @@ def check_mjcf_model(machine, xml: str) -> float | None:
         raise ExportCheckError(f"the generated MuJoCo model does not close pkmkit's "
                                f"configurations (off by {worst:.3g} m): not written")
     return worst
+
+
+def load_mjcf(xml: str):
+    """``(mujoco module, MjModel, MjData)`` of an MJCF text, or None when MuJoCo is not
+    installed.
+
+    Raises:
+        ExportCheckError: MuJoCo refuses the model (its message on one line).
+    """
+    try:
+        import mujoco
+    except ImportError:
+        return None
+    try:
+        model = mujoco.MjModel.from_xml_string(xml)
+    except ValueError as exc:
+        detail = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+        raise ExportCheckError(f"MuJoCo refuses the generated model: {detail}") from None
+    return mujoco, model, mujoco.MjData(model)
