@@ -48,6 +48,7 @@ from pkmkit.export.urdf_chains import (
     expected_tool,
     frame_error,
     joint_assembly,
+    joint_values,
     require_exact_closure,
     sample_configurations,
 )
@@ -94,10 +95,10 @@ def _sphere(mass: float, radius: float, pos=(0.0, 0.0, 0.0)) -> str:
             f'diaginertia="{inertia:.17g} {inertia:.17g} {inertia:.17g}"/>')
 
 
-def _body_open(machine, node: ChainNode) -> str:
+def _body_open(machine, node: ChainNode, home_values: dict[str, float]) -> str:
     model = machine.model
     v = node.variable
-    home = float(model.home[v]) if v >= 0 else 0.0
+    home = home_values[node.name] if v >= 0 else 0.0
     placed = _home_placement(node, home)
     text = (f'<body name="{_attr(node.child)}" pos="{_f(placed[:3, 3])}" '
             f'quat="{_f(_quaternion(placed[:3, :3]))}">')
@@ -117,6 +118,7 @@ def _bodies(machine, tree, masses) -> str:
     for node in (*tree.legs, *tree.head):
         children.setdefault(node.parent, []).append(node)
     lumped = masses.platform + 0.5 * float(np.sum(masses.legs))
+    home = joint_values(machine, machine.home_q)  # pkmkit's home, assembled
     tool_sites = (f'<site name="tool"/><site name="tool_point" '
                   f'pos="0 0 {float(machine.tool_length):.17g}"/>')
 
@@ -136,7 +138,7 @@ def _bodies(machine, tree, masses) -> str:
                         + _sphere(masses.head, 0.1) + tool_sites)
             else:
                 body = _sphere(LINK_MASS, LINK_RADIUS)
-            parts.append(f"{pad}{_body_open(machine, node)}{body}\n"
+            parts.append(f"{pad}{_body_open(machine, node, home)}{body}\n"
                          + inside(node.child, depth + 1) + f"{pad}</body>\n")
         return "".join(parts)
 
