@@ -21,6 +21,8 @@ mujoco = pytest.importorskip("mujoco")
 
 SUPPORTED = ["dietmaier-hexapod", "gough-stewart", "linear-delta-ch3", "linear-delta-table-iv1",
              "orthoglide", "verne"]
+#: Planar machines (tests/export/test_mjcf_planar.py).
+PLANAR = ["five-bar-biglide", "five-bar-isotropic"]
 #: Written by export/mjcf_chains.py (tests/export/test_mjcf_chains.py).
 CHAINS = ["crank-slider", "trimule-600", "tripteor-x7"]
 TOL = 1e-8  # m
@@ -83,7 +85,7 @@ def test_the_supported_presets_are_exactly_these():
             assert exc.format == "mjcf" and exc.reason
             continue
         exported.append(name)
-    assert exported == sorted(SUPPORTED + CHAINS)
+    assert exported == sorted(SUPPORTED + CHAINS + PLANAR)
 
 
 @pytest.mark.parametrize("name", SUPPORTED)
@@ -128,7 +130,7 @@ def test_masses_are_the_dynamics_model(name):
 
 
 @pytest.mark.parametrize("name, words", [
-    ("delta", "crank"), ("five-bar-isotropic", "planar")])
+    ("delta", "crank")])
 def test_machines_mujoco_would_hold_differently_are_refused(name, words):
     with pytest.raises(UnsupportedExportError, match=words):
         mjcf_model(pkmkit.machine(name))

@@ -75,12 +75,15 @@ def _check(machine, held: bool) -> None:
         why = ("a joint-chain machine is written by pkmkit.export.mjcf_chains (or "
                "pkmkit.export.mjcf_writer.write_mjcf for any machine), not by the rod-leg "
                "writer")
-    elif held and family == "planar":
-        why = ("a planar machine: pkmkit keeps its platform in the x-y plane, MuJoCo's free "
-               "platform would leave it")
+    elif held and family == "planar" and machine.model.n_rods < 3:
+        why = (f"a planar platform on {machine.model.n_rods} rods: pkmkit takes it as "
+               "translating, MuJoCo would let it turn (three rods hold a platform in the plane; "
+               "parallelograms give two per leg)")
+    elif held and family == "planar" and (machine.model.leg_kind == STRUT).any():
+        why = "a planar machine with struts is not exported to MuJoCo yet; slides are"
     elif (machine.model.leg_kind == CRANK).any():
         why = "crank (rotary) actuators are not exported to MuJoCo yet; slides and struts are"
-    elif held and machine.model.n_rods < 6:
+    elif held and family != "planar" and machine.model.n_rods < 6:
         why = (f"the platform hangs on {machine.model.n_rods} rods: pkmkit takes it as "
                "translating, MuJoCo would let it turn (six rods hold a platform; parallelograms "
                "give two per leg)")
@@ -129,6 +132,11 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
     piston, cyl_len, pis_len = masses.strut_parts(model.n_rods)
     directions: dict[int, np.ndarray] = {}
     bodies, connects = [], []
+    # a planar machine on hinges and a planar joint (the oracles of the dynamics, which set
+    # every state themselves, keep the spatial joints)
+    planar = require_held_platform and machine_family(machine) == "planar"
+    rod_joint = ('<joint name="hinge{j}" type="hinge" axis="0 0 1"/>' if planar
+                 else '<joint name="ball{j}" type="ball"/>')
     for k in range(model.n_actuators):
         rods = np.flatnonzero(model.rod_actuator == k)
         leg = int(np.flatnonzero(model.leg_actuator == k)[0])
@@ -161,7 +169,7 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
             directions[int(j)] = tip / np.linalg.norm(tip)
             children.append(
                 f'<body name="rod{j}" pos="{_f(joint_pt - carriage)}">'
-                f'<joint name="ball{j}" type="ball"/><geom type="cylinder" fromto="0 0 0 '
+                f'{rod_joint.format(j=j)}<geom type="cylinder" fromto="0 0 0 '
                 f'{_f(tip)}" size="{max(float(masses.rod_radius[j]), 1e-4):.17g}" '
                 f'mass="{masses.rod_mass[j]:.17g}"/></body>')
             connects.append((f"rod{j}", tip))
@@ -185,9 +193,11 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
                           for k in range(model.n_actuators))
     note = (" (placeholder: a sphere of the platform's mass; pkmkit's masses give none)"
             if placeholder else "")
+    platform_joint = "planar joint (platform_x, _y, _rz)" if planar else "free joint"
     xml = f"""<mujoco model="{_attr(machine.name)}">
   <!-- pkmkit machine {_attr(machine.id)}: joints act{{k}} hold pkmkit's actuator coordinates
-       (m), the platform's free joint its pose at the platform reference point; SI units. -->
+       (m), the platform's {platform_joint} its pose at the platform
+       reference point; SI units. -->
   <compiler angle="radian"/>
   <option gravity="{_f(masses.gravity)}" timestep="{TIMESTEP:g}" tolerance="1e-12"
           iterations="200" jacobian="dense">
@@ -195,7 +205,7 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
   </option>
   <worldbody>
 {chr(10).join(bodies)}
-    <body name="platform" pos="{_f(p0)}" quat="{_f(quat)}"><freejoint name="platform"/>
+    <body name="platform" pos="{_f(p0)}" quat="{_f(quat)}">{_platform_joints(planar, p0)}
       <!-- platform inertia{note} -->
       <inertial pos="{_f(masses.platform_com)}" mass="{max(masses.platform_mass, 1e-6):.17g}"
                 fullinertia="{_f(full)}"/>
@@ -212,6 +222,17 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
     return MjcfLayout(xml=xml, rod_direction=directions,
                       actuator_joints=tuple(f"act{k}" for k in range(model.n_actuators)),
                       placeholder_inertia=placeholder)
+
+
+def _platform_joints(planar: bool, p0: np.ndarray) -> str:
+    """A free joint, or for a planar machine the planar joint: slides ``platform_x``,
+    ``platform_y`` (their qpos pkmkit's x, y) and a hinge ``platform_rz`` about z (0 at
+    home)."""
+    if not planar:
+        return '<freejoint name="platform"/>'
+    return (f'<joint name="platform_x" type="slide" axis="1 0 0" ref="{p0[0]:.17g}"/>'
+            f'<joint name="platform_y" type="slide" axis="0 1 0" ref="{p0[1]:.17g}"/>'
+            '<joint name="platform_rz" type="hinge" axis="0 0 1"/>')
 
 
 def mjcf_model(machine, masses=None) -> str:
@@ -242,6 +263,7 @@ def set_configuration(model, data, machine, layout: MjcfLayout, x: np.ndarray,
 
     rod = machine.model
     rotation = rotation_class()
+    planar = _has_joint(model, "platform_rz")  # the planar layout (hinges, planar joint)
     p, rot, _ = platform_points(machine, x)
     for k in range(rod.n_actuators):
         data.qpos[model.jnt_qposadr[model.joint(f"act{k}").id]] = q[k]
@@ -253,9 +275,17 @@ def set_configuration(model, data, machine, layout: MjcfLayout, x: np.ndarray,
         sin = float(np.linalg.norm(axis))
         turn = (rotation.from_rotvec(axis / sin * np.arctan2(sin, float(e0 @ e))) if sin > 1e-15
                 else rotation.identity())
+        if planar:  # a hinge about z: the turn's z component: the turn's z component
+            data.qpos[model.jnt_qposadr[model.joint(f"hinge{j}").id]] = turn.as_rotvec()[2]
+            continue
         qx, qy, qz, qw = turn.as_quat()
         adr = model.jnt_qposadr[model.joint(f"ball{j}").id]
         data.qpos[adr:adr + 4] = [qw, qx, qy, qz]
+    if planar:
+        for axis, value in zip("xy", p[:2], strict=True):
+            data.qpos[model.jnt_qposadr[model.joint(f"platform_{axis}").id]] = value
+        data.qpos[model.jnt_qposadr[model.joint("platform_rz").id]] = 0.0
+        return
     free = model.jnt_qposadr[model.body("platform").jntadr[0]]
     data.qpos[free:free + 3] = p
     data.qpos[free + 3:free + 7] = _quaternion(rot)
@@ -305,3 +335,11 @@ def load_mjcf(xml: str):
         detail = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
         raise ExportCheckError(f"MuJoCo refuses the generated model: {detail}") from None
     return mujoco, model, mujoco.MjData(model)
+
+
+def _has_joint(model, name: str) -> bool:
+    try:
+        model.joint(name)
+    except KeyError:
+        return False
+    return True
