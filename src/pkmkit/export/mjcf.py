@@ -13,6 +13,11 @@ is an assembled one and every closure holds there):
   translating inertia) is the slide joint's ``armature``;
 - the platform on a free joint, at pkmkit's home pose, joined to every rod tip by a ``connect``
   equality constraint (the loop closures; stiff: ``solref`` 2 time steps);
+- a **planar** machine (the five-bars: x-y poses) stays in its plane: each rod on a hinge
+  ``hinge{j}`` about z instead of a ball joint, the platform on a planar joint — slides
+  ``platform_x``, ``platform_y`` (their ``ref`` the home pose, so their qpos is pkmkit's x, y)
+  and a hinge ``platform_rz`` about z, which the parallelograms hold at 0 (the ``connect``
+  constraints' z rows are then satisfied identically);
 - a ``motor`` per actuator on ``act{k}`` (force in N, gear 1): pkmkit's actuator force.
 
 Masses and inertias come from :mod:`pkmkit.dynamics.masses` (default: the illustrative values of
@@ -21,8 +26,9 @@ its centre of mass); when they give none (translational machines never need it) 
 sphere of the platform's mass and of the platform joints' radius is written, and the file says
 so. Gravity is the masses'. Contacts are off (the model is a kinematic chain, not a scene).
 
-Refused (:class:`~pkmkit.export.base.UnsupportedExportError`): joint chains, cranks, planar
-machines, and platforms held by fewer than six rods (a translational machine of three single
+Refused (:class:`~pkmkit.export.base.UnsupportedExportError`): joint chains (written by
+:mod:`pkmkit.export.mjcf_chains`), cranks, planar machines with struts or fewer than three rods,
+and spatial platforms held by fewer than six rods (a translational machine of three single
 rods: pkmkit assumes its platform cannot turn, MuJoCo would let it).
 """
 
