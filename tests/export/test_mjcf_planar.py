@@ -11,6 +11,7 @@ import pytest
 import pkmkit
 from pkmkit.export.base import ExportCheckError
 from pkmkit.export.mjcf import check_mjcf_model, mjcf_layout, mjcf_model
+from pkmkit.model.defect_rule import defect_index
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -22,9 +23,21 @@ def _qpos(model, data, joint: str) -> float:
     return float(data.qpos[model.jnt_qposadr[model.joint(joint).id]])
 
 
+def _calibrated(machine, seed: int):
+    """Random calibration-sized defects (0.2 mm, 1 mrad)."""
+    index = defect_index(machine)
+    rng = np.random.default_rng(seed)
+    delta = np.where(np.asarray(index.units) == "m", 2e-4, 1e-3) * rng.standard_normal(
+        len(index.names))
+    return machine.with_defects(delta)
+
+
 @pytest.mark.parametrize("name", PLANAR)
-def test_driven_actuators_settle_the_platform_where_pkmkit_puts_it(name):
+@pytest.mark.parametrize("calibrated", [False, True], ids=["nominal", "calibrated"])
+def test_driven_actuators_settle_the_platform_where_pkmkit_puts_it(name, calibrated):
     m = pkmkit.machine(name)
+    if calibrated:
+        m = _calibrated(m, seed=len(name))
     layout = mjcf_layout(m)
     assert check_mjcf_model(m, layout.xml) < 1e-12
     model = mujoco.MjModel.from_xml_string(layout.xml)
@@ -33,7 +46,7 @@ def test_driven_actuators_settle_the_platform_where_pkmkit_puts_it(name):
     mujoco.mj_forward(model, data)
     assert np.abs(data.efc_pos[: data.nefc]).max() < 1e-12  # home is assembled
     assert (_qpos(model, data, "platform_x"), _qpos(model, data, "platform_y")) == tuple(
-        m.home_pose)
+        m.model.pad(m.home_pose[None])[0][:2])
     joints = [model.joint(j).id for j in layout.actuator_joints]
     qadr, dadr = model.jnt_qposadr[joints], model.jnt_dofadr[joints]
     target = m.home_pose + np.array([0.03, -0.02])
