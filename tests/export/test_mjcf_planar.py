@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.export.base import ExportCheckError
+from pkmkit.export.base import ExportCheckError, UnsupportedExportError
 from pkmkit.export.mjcf import check_mjcf_model, mjcf_layout, mjcf_model
 from pkmkit.model.defect_rule import defect_index
+
+from .planar_files import TWO_RODS
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -71,3 +73,13 @@ def test_the_self_check_catches_a_rod_off_pkmkit():
     wrong = xml[:start] + repr(float(first) + 1e-6) + xml[start + len(first):]
     with pytest.raises(ExportCheckError, match="not written"):
         check_mjcf_model(m, wrong)
+
+
+def test_a_planar_platform_on_two_rods_is_refused(tmp_path):
+    """Two single rods leave MuJoCo's platform free to turn (pkmkit takes it as translating)."""
+    path = tmp_path / "five.toml"
+    path.write_text(TWO_RODS)
+    m = pkmkit.load(path)
+    assert m.export_layout == "planar" and m.model.n_rods == 2
+    with pytest.raises(UnsupportedExportError, match="planar platform on 2 rods"):
+        mjcf_model(m)

@@ -21,6 +21,8 @@ from pkmkit.export.urdf_planar import planar_urdf_export
 from pkmkit.export.urdf_writer import write_urdf
 from pkmkit.model.defect_rule import defect_index
 
+from .planar_files import TWO_RODS
+
 pin = pytest.importorskip("pinocchio")
 
 PLANAR = ["five-bar-biglide", "five-bar-isotropic"]
@@ -125,3 +127,10 @@ def test_the_command(tmp_path):
     assert res.exit_code == 0, res.output
     assert "3 loop closures (3D)" in res.output and "Pinocchio" in res.output
     assert (tmp_path / "five-bar.closures.yaml").exists()
+
+
+def test_a_planar_platform_on_two_rods_is_refused(tmp_path):
+    path = tmp_path / "five.toml"
+    path.write_text(TWO_RODS)
+    with pytest.raises(UnsupportedExportError, match="planar platform on 2 rods"):
+        write_urdf(pkmkit.load(path))
