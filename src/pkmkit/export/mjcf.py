@@ -45,7 +45,8 @@ from pkmkit.export.base import (
     platform_points,
     sample_poses,
 )
-from pkmkit.model.rods import CRANK, STRUT
+from pkmkit.export.mjcf_cranks import crank_body, crank_masses, masses_note, parent_turn
+from pkmkit.model.rods import CRANK, SLIDE, STRUT
 
 FORMAT = "mjcf"
 #: Simulation time step written in the model (s); the closures' time constant is two steps.
@@ -85,10 +86,8 @@ def _check(machine, held: bool) -> None:
         why = (f"a planar platform on {machine.model.n_rods} rods: pkmkit takes it as "
                "translating, MuJoCo would let it turn (three rods hold a platform in the plane; "
                "parallelograms give two per leg)")
-    elif held and family == "planar" and (machine.model.leg_kind == STRUT).any():
-        why = "a planar machine with struts is not exported to MuJoCo yet; slides are"
-    elif (machine.model.leg_kind == CRANK).any():
-        why = "crank (rotary) actuators are not exported to MuJoCo yet; slides and struts are"
+    elif held and family == "planar" and (machine.model.leg_kind != SLIDE).any():
+        why = "a planar machine with struts or cranks is not exported to MuJoCo yet; slides are"
     elif held and family != "planar" and machine.model.n_rods < 6:
         why = (f"the platform hangs on {machine.model.n_rods} rods: pkmkit takes it as "
                "translating, MuJoCo would let it turn (six rods hold a platform; parallelograms "
@@ -121,12 +120,7 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
     _check(machine, require_held_platform)
     model = machine.model
     strut = model.rod_kind == STRUT
-    if masses is None:
-        from pkmkit.dynamics.defaults import default_masses
-
-        masses = default_masses(machine, tubes_at_home=bool((model.rod_length[strut] <= 0)
-                                                            .any()))
-    masses.check(machine)
+    masses = _masses(machine, masses)
     _, cylinder, piston_length = masses.strut_parts(model.n_rods)
     short = np.flatnonzero(strut & ((cylinder <= 0) | (piston_length <= 0)))
     if short.size:
@@ -166,6 +160,10 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
                 f'size="{radius:.17g}" mass="{piston[j]:.17g}"/></body></body>')
             connects.append((f"piston{j}", tip))
             continue
+        if model.leg_kind[leg] == CRANK:
+            bodies.append(crank_body(machine, k, q0, tips, masses, rod_joint, directions,
+                                     connects))
+            continue
         u = model.leg_axis[leg]
         carriage = model.leg_base[leg] + q0[k] * u
         children = []
@@ -199,11 +197,13 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
                           for k in range(model.n_actuators))
     note = (" (placeholder: a sphere of the platform's mass; pkmkit's masses give none)"
             if placeholder else "")
+    cranks = bool((model.leg_kind == CRANK).any())
+    crank_note = f"\n       Masses: {masses_note()}." if cranks else ""
     platform_joint = "planar joint (platform_x, _y, _rz)" if planar else "free joint"
     xml = f"""<mujoco model="{_attr(machine.name)}">
   <!-- pkmkit machine {_attr(machine.id)}: joints act{{k}} hold pkmkit's actuator coordinates
-       (m), the platform's {platform_joint} its pose at the platform
-       reference point; SI units. -->
+       (m, or rad for a crank), the platform's {platform_joint} its pose at the platform
+       reference point; SI units.{crank_note} -->
   <compiler angle="radian"/>
   <option gravity="{_f(masses.gravity)}" timestep="{TIMESTEP:g}" tolerance="1e-12"
           iterations="200" jacobian="dense">
@@ -228,6 +228,34 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
     return MjcfLayout(xml=xml, rod_direction=directions,
                       actuator_joints=tuple(f"act{k}" for k in range(model.n_actuators)),
                       placeholder_inertia=placeholder)
+
+
+def _masses(machine, masses):
+    """The masses the model takes (module docstring), checked; a machine with cranks takes the
+    illustrative ones of :mod:`pkmkit.export.mjcf_cranks` and refuses given masses."""
+    model = machine.model
+    if (model.leg_kind == CRANK).any():
+        if masses is not None:
+            raise UnsupportedExportError(
+                FORMAT, machine.id, "masses were given, but pkmkit has no mass model of crank "
+                "actuators (the arms' inertia): export it without --masses (illustrative "
+                "masses)")
+        from pkmkit.export.urdf import require_closed_rods
+        from pkmkit.solve.rod_closure import rod_base_points
+
+        q0 = np.asarray(machine.home_q, dtype=float)
+        bases = rod_base_points(model, q0[:, None])[:, :, 0].T
+        require_closed_rods(machine, q0, bases, platform_points(machine, machine.home_pose)[2],
+                            FORMAT)
+        masses = crank_masses(machine)
+    elif masses is None:
+        from pkmkit.dynamics.defaults import default_masses
+
+        strut = model.rod_kind == STRUT
+        masses = default_masses(machine, tubes_at_home=bool((model.rod_length[strut] <= 0)
+                                                            .any()))
+    masses.check(machine)
+    return masses
 
 
 def _platform_joints(planar: bool, p0: np.ndarray) -> str:
@@ -276,7 +304,7 @@ def set_configuration(model, data, machine, layout: MjcfLayout, x: np.ndarray,
     base = rod_base_points(rod, np.asarray(q, dtype=float)[:, None])[:, :, 0].T  # (m, 3)
     for j, e0 in layout.rod_direction.items():
         d = p + rot @ rod.rod_platform[j] - base[j]
-        e = d / np.linalg.norm(d)
+        e = parent_turn(machine, j, np.asarray(q, dtype=float)).T @ (d / np.linalg.norm(d))
         axis = np.cross(e0, e)
         sin = float(np.linalg.norm(axis))
         turn = (rotation.from_rotvec(axis / sin * np.arctan2(sin, float(e0 @ e))) if sin > 1e-15

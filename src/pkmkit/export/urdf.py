@@ -223,7 +223,7 @@ def urdf_export(machine, masses=None, *, name: str = "machine") -> UrdfExport:
     from pkmkit.spatial.rotation import axis_rotation
 
     bases = rod_base_points(model, q0[:, None])[:, :, 0].T  # (m, 3) at home
-    _require_closed_rods(machine, q0, bases, tips)
+    require_closed_rods(machine, q0, bases, tips)
     links, joints, movable = [_link("base")], [], []
     frame0 = np.zeros((model.n_rods, 3, 3))
     spin = -np.ones(model.n_rods, dtype=int)
@@ -332,7 +332,8 @@ def urdf_export(machine, masses=None, *, name: str = "machine") -> UrdfExport:
                       inertial=masses is not None)
 
 
-def _require_closed_rods(machine, q0: np.ndarray, bases: np.ndarray, tips: np.ndarray) -> None:
+def require_closed_rods(machine, q0: np.ndarray, bases: np.ndarray, tips: np.ndarray,
+                        fmt: str = FORMAT) -> None:
     """Refuse a machine whose rods do not close at its own home configuration: a translational
     machine is modelled by its legs' midlines, and defects that tilt a crank's axis make its
     parallelogram's two rods miss their lengths (pkmkit keeps the platform translating; a
@@ -343,10 +344,10 @@ def _require_closed_rods(machine, q0: np.ndarray, bases: np.ndarray, tips: np.nd
     j = int(np.argmax(miss))
     if miss[j] > 1e-12 * max(1.0, float(length.max())):
         raise UnsupportedExportError(
-            FORMAT, machine.id, f"rod {j + 1} misses its length by {miss[j]:.3g} m at home: "
+            fmt, machine.id, f"rod {j + 1} misses its length by {miss[j]:.3g} m at home: "
             "pkmkit models this translational machine by its legs' midlines, and its defects "
             "(e.g. a tilted crank axis) leave a parallelogram's rods unable to close with the "
-            "platform translating; a URDF of its rods would describe another machine")
+            "platform translating; a model of its rods would describe another machine")
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
