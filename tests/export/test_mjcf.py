@@ -219,3 +219,15 @@ def test_mujocos_refusal_is_one_line(tmp_path):
     lines = res.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("Error: MuJoCo refuses the generated model")
     assert "A + B >= C" in lines[0] and "Element name 'platform'" in lines[0]
+
+
+def test_the_command_says_the_delta_masses_are_illustrative(tmp_path):
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    out = tmp_path / "delta.xml"
+    res = CliRunner().invoke(cli, ["export", "delta", "--to", "mjcf", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "illustrative masses: pkmkit has no mass model of crank actuators" in res.output
+    assert "loaded in MuJoCo" in res.output and out.exists()

@@ -111,10 +111,8 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         export = write_mjcf(m, masses)
         worst = check_mjcf(m, export)
         text = export.xml
-        note = getattr(export, "masses_note", "")
         what = "MuJoCo model (MJCF; m, kg" + (
-            "; illustrative lumped masses: pkmkit has no dynamics masses of joint chains)"
-            if note else ")")
+            f"; {export.illustrative})" if export.illustrative else ")")
         check = ("not loaded (MuJoCo is not installed)" if worst is None else
                  "loaded in MuJoCo, its loops close at pkmkit's configurations (≤ 1e-9 m)")
     atomic_write_text(out_file, text)

@@ -63,12 +63,15 @@ class MjcfLayout:
             at home: a ball joint's identity orientation.
         actuator_joints: ``(n,)`` names of the actuated slide joints (``act{k}``).
         placeholder_inertia: True when the platform's inertia was made up (see module doc).
+        illustrative: what the masses are when pkmkit's dynamics model gives none ("" when it
+            does).
     """
 
     xml: str
     rod_direction: dict[int, np.ndarray] = field(default_factory=dict)
     actuator_joints: tuple[str, ...] = ()
     placeholder_inertia: bool = False
+    illustrative: str = ""
 
 
 def _f(v) -> str:
@@ -227,7 +230,9 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
 """
     return MjcfLayout(xml=xml, rod_direction=directions,
                       actuator_joints=tuple(f"act{k}" for k in range(model.n_actuators)),
-                      placeholder_inertia=placeholder)
+                      placeholder_inertia=placeholder,
+                      illustrative=("illustrative masses: pkmkit has no mass model of crank "
+                                    "actuators" if cranks else ""))
 
 
 def _masses(machine, masses):

@@ -69,6 +69,7 @@ class ChainMjcf:
         actuator_joints: the actuated joints, in pkmkit's actuator order.
         welds: ``(leg end body, "platform")`` pairs of the weld constraints.
         masses_note: where the masses come from.
+        illustrative: what the masses are (the command's words).
     """
 
     xml: str
@@ -76,6 +77,8 @@ class ChainMjcf:
     actuator_joints: tuple[str, ...]
     welds: tuple[tuple[str, str], ...]
     masses_note: str
+    illustrative: str = ("illustrative lumped masses: pkmkit has no dynamics masses of joint "
+                         "chains")
 
 
 def _home_placement(node: ChainNode, value: float) -> np.ndarray:
