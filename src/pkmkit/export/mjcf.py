@@ -1,4 +1,5 @@
-"""A MuJoCo model (MJCF) of a rod-leg machine of slides and struts, nominal or calibrated.
+"""A MuJoCo model (MJCF) of a rod-leg machine of slides, struts and cranks, nominal or
+calibrated.
 
 Bodies, built at the machine's home configuration (so MuJoCo's reference configuration ``qpos0``
 is an assembled one and every closure holds there):
@@ -11,6 +12,9 @@ is an assembled one and every closure holds there):
   tube on a slide joint ``act{k}`` along the strut inside it (``qpos`` = pkmkit's q_k), both
   uniform solid cylinders of the rod's radius; the actuator's "carriage" mass (the motor's
   translating inertia) is the slide joint's ``armature``;
+- **crank** actuator k: an arm on a hinge joint ``act{k}`` (``qpos`` = pkmkit's crank angle)
+  carrying its rods (:mod:`pkmkit.export.mjcf_cranks`, with the illustrative masses the model
+  then takes: pkmkit has no mass model of cranks);
 - the platform on a free joint, at pkmkit's home pose, joined to every rod tip by a ``connect``
   equality constraint (the loop closures; stiff: ``solref`` 2 time steps);
 - a **planar** machine (the five-bars: x-y poses) stays in its plane: each rod on a hinge
@@ -27,7 +31,8 @@ sphere of the platform's mass and of the platform joints' radius is written, and
 so. Gravity is the masses'. Contacts are off (the model is a kinematic chain, not a scene).
 
 Refused (:class:`~pkmkit.export.base.UnsupportedExportError`): joint chains (written by
-:mod:`pkmkit.export.mjcf_chains`), cranks, planar machines with struts or fewer than three rods,
+:mod:`pkmkit.export.mjcf_chains`), masses given for cranks, a crank machine whose rods do not
+close at home (a tilted crank axis), planar machines with struts, cranks or fewer than three rods,
 and spatial platforms held by fewer than six rods (a translational machine of three single
 rods: pkmkit assumes its platform cannot turn, MuJoCo would let it).
 """
@@ -109,8 +114,8 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
     """The MJCF model of ``machine`` (see the module docstring) and its layout.
 
     Args:
-        machine: a rod-leg machine of slides and struts (translational with parallelograms, or
-            full-pose), nominal or calibrated.
+        machine: a rod-leg machine of slides, struts and cranks (translational with
+            parallelograms, planar, or full-pose), nominal or calibrated.
         masses: :class:`~pkmkit.dynamics.masses.MassProperties` (default: the kind's
             illustrative values).
         require_held_platform: refuse a platform held by fewer than six rods (default). Only
