@@ -137,7 +137,6 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
             "length: give cylinder_length and piston_length in the masses")
     q0 = np.asarray(machine.home_q, dtype=float)
     p0, rot0, tips = platform_points(machine, machine.home_pose)  # tips: joint centres (m, 3)
-    piston, cyl_len, pis_len = masses.strut_parts(model.n_rods)
     directions: dict[int, np.ndarray] = {}
     bodies, connects = [], []
     # a planar machine on hinges and a planar joint (the oracles of the dynamics, which set
@@ -146,51 +145,9 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
     rod_joint = ('<joint name="hinge{j}" type="hinge" axis="0 0 1"/>' if planar
                  else '<joint name="ball{j}" type="ball"/>')
     for k in range(model.n_actuators):
-        rods = np.flatnonzero(model.rod_actuator == k)
         leg = int(np.flatnonzero(model.leg_actuator == k)[0])
-        name = model.actuator_names[k]
-        if model.leg_kind[leg] == STRUT:
-            (j,) = rods
-            base = model.rod_base[j]
-            tip = tips[j] - base
-            s0 = float(np.linalg.norm(tip))
-            e0 = tip / s0
-            directions[int(j)] = e0
-            radius = max(float(masses.rod_radius[j]), 1e-4)
-            bodies.append(
-                f'    <!-- actuator {name}: strut ({model.leg_names[leg]}) -->\n'
-                f'    <body name="cyl{j}" pos="{_f(base)}"><joint name="ball{j}" type="ball"/>'
-                f'<geom type="cylinder" fromto="0 0 0 {_f(cyl_len[j] * e0)}" '
-                f'size="{radius:.17g}" mass="{masses.rod_mass[j]:.17g}"/>'
-                f'<body name="piston{j}"><joint name="act{k}" type="slide" axis="{_f(e0)}" '
-                f'ref="{q0[k]:.17g}" armature="{masses.carriage_mass[k]:.17g}"/>'
-                f'<geom type="cylinder" fromto="{_f((s0 - pis_len[j]) * e0)} {_f(tip)}" '
-                f'size="{radius:.17g}" mass="{piston[j]:.17g}"/></body></body>')
-            connects.append((f"piston{j}", tip))
-            continue
-        if model.leg_kind[leg] == CRANK:
-            bodies.append(crank_body(machine, k, q0, tips, masses, rod_joint, directions,
-                                     connects))
-            continue
-        u = model.leg_axis[leg]
-        carriage = model.leg_base[leg] + q0[k] * u
-        children = []
-        for j in rods:
-            joint_pt = model.rod_base[j] + q0[k] * model.rod_axis[j]
-            tip = tips[j] - joint_pt
-            directions[int(j)] = tip / np.linalg.norm(tip)
-            children.append(
-                f'<body name="rod{j}" pos="{_f(joint_pt - carriage)}">'
-                f'{rod_joint.format(j=j)}<geom type="cylinder" fromto="0 0 0 '
-                f'{_f(tip)}" size="{max(float(masses.rod_radius[j]), 1e-4):.17g}" '
-                f'mass="{masses.rod_mass[j]:.17g}"/></body>')
-            connects.append((f"rod{j}", tip))
-        bodies.append(
-            f'    <!-- actuator {name}: slide ({model.leg_names[leg]}) -->\n'
-            f'    <body name="carriage{k}" pos="{_f(carriage)}"><joint name="act{k}" '
-            f'type="slide" axis="{_f(u)}" ref="{q0[k]:.17g}"/><geom type="box" '
-            f'size="0.02 0.02 0.02" mass="{masses.carriage_mass[k]:.17g}"/>'
-            + "".join(children) + "</body>")
+        body = {STRUT: _strut_body, CRANK: crank_body}.get(int(model.leg_kind[leg]), _slide_body)
+        bodies.append(body(machine, k, q0, tips, masses, rod_joint, directions, connects))
     inertia = np.asarray(masses.platform_inertia, dtype=float)
     placeholder = not inertia.any()
     if placeholder:
@@ -238,6 +195,58 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
                       placeholder_inertia=placeholder,
                       illustrative=("illustrative masses: pkmkit has no mass model of crank "
                                     "actuators" if cranks else ""))
+
+
+def _strut_body(machine, k: int, q0: np.ndarray, tips: np.ndarray, masses, rod_joint: str,
+                directions: dict, connects: list) -> str:
+    """The MJCF bodies of strut k at home (cylinder on a ball joint, piston on the slide
+    ``act{k}``); records its rod's home direction and ``connect`` anchor (``rod_joint``
+    unused: a strut's base joint is a ball joint)."""
+    model = machine.model
+    leg = int(np.flatnonzero(model.leg_actuator == k)[0])
+    (j,) = np.flatnonzero(model.rod_actuator == k)
+    piston, cyl_len, pis_len = masses.strut_parts(model.n_rods)
+    base = model.rod_base[j]
+    tip = tips[j] - base
+    s0 = float(np.linalg.norm(tip))
+    e0 = tip / s0
+    directions[int(j)] = e0
+    radius = max(float(masses.rod_radius[j]), 1e-4)
+    connects.append((f"piston{j}", tip))
+    return (f'    <!-- actuator {model.actuator_names[k]}: strut ({model.leg_names[leg]}) -->\n'
+            f'    <body name="cyl{j}" pos="{_f(base)}"><joint name="ball{j}" type="ball"/>'
+            f'<geom type="cylinder" fromto="0 0 0 {_f(cyl_len[j] * e0)}" '
+            f'size="{radius:.17g}" mass="{masses.rod_mass[j]:.17g}"/>'
+            f'<body name="piston{j}"><joint name="act{k}" type="slide" axis="{_f(e0)}" '
+            f'ref="{q0[k]:.17g}" armature="{masses.carriage_mass[k]:.17g}"/>'
+            f'<geom type="cylinder" fromto="{_f((s0 - pis_len[j]) * e0)} {_f(tip)}" '
+            f'size="{radius:.17g}" mass="{piston[j]:.17g}"/></body></body>')
+
+
+def _slide_body(machine, k: int, q0: np.ndarray, tips: np.ndarray, masses, rod_joint: str,
+                directions: dict, connects: list) -> str:
+    """The MJCF body of slide k at home (carriage on the slide ``act{k}``, its rods on
+    ``rod_joint``s); records each rod's home direction and ``connect`` anchor."""
+    model = machine.model
+    leg = int(np.flatnonzero(model.leg_actuator == k)[0])
+    u = model.leg_axis[leg]
+    carriage = model.leg_base[leg] + q0[k] * u
+    children = []
+    for j in np.flatnonzero(model.rod_actuator == k):
+        joint_pt = model.rod_base[j] + q0[k] * model.rod_axis[j]
+        tip = tips[j] - joint_pt
+        directions[int(j)] = tip / np.linalg.norm(tip)
+        children.append(
+            f'<body name="rod{j}" pos="{_f(joint_pt - carriage)}">'
+            f'{rod_joint.format(j=j)}<geom type="cylinder" fromto="0 0 0 '
+            f'{_f(tip)}" size="{max(float(masses.rod_radius[j]), 1e-4):.17g}" '
+            f'mass="{masses.rod_mass[j]:.17g}"/></body>')
+        connects.append((f"rod{j}", tip))
+    return (f'    <!-- actuator {model.actuator_names[k]}: slide ({model.leg_names[leg]}) -->\n'
+            f'    <body name="carriage{k}" pos="{_f(carriage)}"><joint name="act{k}" '
+            f'type="slide" axis="{_f(u)}" ref="{q0[k]:.17g}"/><geom type="box" '
+            f'size="0.02 0.02 0.02" mass="{masses.carriage_mass[k]:.17g}"/>'
+            + "".join(children) + "</body>")
 
 
 def _masses(machine, masses):
