@@ -191,6 +191,15 @@ def test_compatible_defects_are_exported_incompatible_ones_refused():
     export = chain_mjcf(bent)
     assert export.xml != chain_mjcf(m).xml
     assert check_chain_mjcf(bent, export) <= 2 * misfit + 1e-9
+    # driven, the soft welds share pkmkit's misfit: the tool settles within 2 × misfit + 1e-8 m
+    sim = Settle(bent, "tripteor-x7")
+    q = _within_strokes(bent, sample_configurations(bent, 6, seed=1)[1:])[0]
+    settled = sim.run(q)
+    assert np.abs(settled - q).max() <= TOL
+    _, res = joint_assembly(bent, q)
+    local = 2 * float(np.max(res.closure_residual))
+    error = frame_error(np.linalg.inv(expected_tool(res)) @ tool_transform(sim.data), 1.0)
+    assert error <= local + TOL
     with pytest.raises(UnsupportedExportError, match="least squares"):
         chain_mjcf(m.with_defects({"dK21": 1e-3}))
 
