@@ -134,3 +134,58 @@ def test_a_planar_platform_on_two_rods_is_refused(tmp_path):
     path.write_text(TWO_RODS)
     with pytest.raises(UnsupportedExportError, match="planar platform on 2 rods"):
         write_urdf(pkmkit.load(path))
+
+
+def _in_plane_forces(model, export, machine, x, q, qd, qdd) -> np.ndarray:
+    """Actuator forces (n,) of the tree and its closures (their x, y rows) at pkmkit's
+    configuration, speeds and accelerations: the passive joints' rates from the closures
+    (J v = 0, J a + γ = 0, consistent least squares), RNEA on the tree, then τ = S f + Jᵀ λ
+    (λ not unique: the parallelograms are redundant in rotation; f is)."""
+    data = model.createData()
+    world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    frames = [(model.getFrameId(a), model.getFrameId(b)) for a, b in export.closure_frames]
+    q_pin = pinocchio_configuration(pin, model, configuration(machine, export, x, q))
+    act = [model.joints[model.getJointId(a)].idx_v for a in machine.model.actuator_names]
+    passive = np.setdiff1d(np.arange(model.nv), act)
+    pin.computeJointJacobians(model, data, q_pin)
+    pin.updateFramePlacements(model, data)
+    jac = np.vstack([pin.getFrameJacobian(model, data, a, world)[:2]
+                     - pin.getFrameJacobian(model, data, b, world)[:2] for a, b in frames])
+    v, a = np.zeros(model.nv), np.zeros(model.nv)
+    v[act], a[act] = qd, qdd
+    v[passive] = np.linalg.lstsq(jac[:, passive], -jac[:, act] @ qd, rcond=None)[0]
+    pin.forwardKinematics(model, data, q_pin, v, np.zeros(model.nv))
+    pin.updateFramePlacements(model, data)
+    gamma = np.concatenate([pin.getFrameClassicalAcceleration(model, data, f1, world).linear[:2]
+                            - pin.getFrameClassicalAcceleration(model, data, f2, world).linear[:2]
+                            for f1, f2 in frames])
+    a[passive] = np.linalg.lstsq(jac[:, passive], -jac[:, act] @ qdd - gamma, rcond=None)[0]
+    assert np.abs(jac @ a + gamma).max() < 1e-9  # the closures hold in acceleration
+    tau = pin.rnea(model, data, q_pin, v, a)
+    select = np.zeros((model.nv, len(act)))
+    select[act, np.arange(len(act))] = 1.0
+    system = np.hstack([select, jac.T])
+    solution = np.linalg.lstsq(system, tau, rcond=None)[0]
+    assert np.abs(system @ solution - tau).max() < 1e-9 * max(1.0, np.abs(tau).max())
+    return solution[:len(act)]
+
+
+@pytest.mark.parametrize("name", PLANAR)
+def test_pinocchio_inverse_dynamics_is_pkmkits(name):
+    """The written masses and inertias are the dynamics model's: Pinocchio's inverse dynamics of
+    the planar tree, its closures enforced, gives pkmkit's actuator forces along a circle."""
+    from pkmkit.dynamics import inverse_dynamics
+    from pkmkit.dynamics.defaults import default_masses
+    from pkmkit.motion import circle, joint_trajectory, plan
+
+    m = pkmkit.machine(name)
+    masses = default_masses(m)
+    export = planar_urdf_export(m, masses)
+    model = pin.buildModelFromXML(export.urdf)
+    jt = joint_trajectory(m, plan(circle(m.home_pose, 0.1), feed=0.3, accel=2.0, jerk=20.0,
+                                  period=0.01))
+    res = inverse_dynamics(m, masses, jt.x, jt.xd, jt.xdd, jt.q, jt.qd, jt.qdd)
+    assert np.abs(res.force).max() > 0.5  # the move loads the actuators
+    for k in range(0, len(jt.t), 25):
+        f = _in_plane_forces(model, export, m, jt.x[k], jt.q[k], jt.qd[k], jt.qdd[k])
+        np.testing.assert_allclose(f, res.force[k], rtol=1e-9, atol=1e-9)
