@@ -239,3 +239,43 @@ def test_command_line(tmp_path):
                                "--out", str(tmp_path / "t2.xml")])
     assert done.exit_code == 1 and not (tmp_path / "t2.xml").exists()
     assert "joint-chain" in done.output
+
+
+@pytest.mark.parametrize("ident", CHAINS)
+def test_the_weights_are_the_gravity_models(ident, monkeypatch):
+    """MuJoCo's static actuator forces — at rest at pkmkit's configuration, its generalized
+    gravity (``qfrc_bias``) = S τ + Jᵀ λ over the weld rows — are the virtual work of pkmkit's
+    lumped masses (platform with half the legs at the platform frame, head at the tool frame,
+    central differences of pkmkit's direct model), with the placeholder links made negligible
+    (1e-9 kg) and gravity in a direction that loads every actuator."""
+    monkeypatch.setattr("pkmkit.export.mjcf_chains.LINK_MASS", 1e-9)
+    m = pkmkit.machine(ident)
+    model = mujoco.MjModel.from_xml_string(chain_mjcf(m).xml)
+    gravity = np.array([3.0, -4.0, -9.81])
+    model.opt.gravity[:] = gravity
+    data = mujoco.MjData(model)
+    lumped = illustrative_masses(m)
+    platform, head = lumped.platform + 0.5 * lumped.legs.sum(), lumped.head
+
+    def potential(q: np.ndarray) -> float:
+        res = m.fk(q, full_output=True, strokes="ignore")
+        return -gravity @ (platform * np.ravel(res.platform)[:3]
+                           + head * np.ravel(res.tool_frame)[:3])
+
+    act = [model.jnt_dofadr[model.joint(a).id] for a in m.actuator_names]
+    select = np.zeros((model.nv, len(act)))
+    select[act, np.arange(len(act))] = 1.0
+    for q in _within_strokes(m, sample_configurations(m, 6, seed=4)[1:])[:2]:
+        set_joint_values(model, data, joint_values(m, q))
+        mujoco.mj_forward(model, data)
+        welds = data.efc_type[: data.nefc] == mujoco.mjtConstraint.mjCNSTR_EQUALITY
+        assert welds.all()  # no joint range active
+        system = np.hstack([select, data.efc_J.reshape(data.nefc, model.nv).T])
+        solution = np.linalg.lstsq(system, data.qfrc_bias, rcond=None)[0]
+        assert np.abs(system @ solution - data.qfrc_bias).max() < 1e-9
+        h = 1e-6
+        expected = np.array([(potential(q + h * e) - potential(q - h * e)) / (2 * h)
+                             for e in np.eye(len(q))])
+        assert np.abs(expected).max() > 10.0  # the weights load the actuators
+        np.testing.assert_allclose(solution[:len(act)], expected,
+                                   atol=1e-8 * np.abs(expected).max(), rtol=0)
