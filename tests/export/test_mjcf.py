@@ -13,21 +13,31 @@ import pkmkit
 from pkmkit.dynamics.defaults import default_masses
 from pkmkit.export.base import ExportCheckError, UnsupportedExportError
 from pkmkit.export.mjcf import check_mjcf_model, mjcf_layout, mjcf_model
+from pkmkit.export.mjcf_writer import write_mjcf
 from pkmkit.machines.registry import ALIASES
 from pkmkit.model.defects_table import apply_defect_vector, defect_index
+from pkmkit.model.rods import CRANK
 
 mujoco = pytest.importorskip("mujoco")
 
-SUPPORTED = ["dietmaier-hexapod", "gough-stewart", "linear-delta-ch3", "linear-delta-table-iv1",
-             "orthoglide", "verne"]
+SUPPORTED = ["delta", "dietmaier-hexapod", "gough-stewart", "linear-delta-ch3",
+             "linear-delta-table-iv1", "orthoglide", "verne"]
+#: Planar machines (tests/export/test_mjcf_planar.py).
+PLANAR = ["five-bar-biglide", "five-bar-isotropic"]
+#: Written by export/mjcf_chains.py (tests/export/test_mjcf_chains.py).
+CHAINS = ["crank-slider", "trimule-600", "tripteor-x7"]
 TOL = 1e-8  # m
 
 
 def _calibrated(machine, seed: int):
+    """Random calibration-sized defects (0.2 mm, 1 mrad); a crank's axis kept (a tilted one is
+    refused: :func:`test_a_tilted_crank_axis_is_refused`)."""
     index = defect_index(machine)
     rng = np.random.default_rng(seed)
     delta = np.where(np.asarray(index.units) == "m", 2e-4, 1e-3) * rng.standard_normal(
         len(index.names))
+    if (machine.model.leg_kind == CRANK).any():
+        delta = np.where(np.asarray(index.kind) == "axis", 0.0, delta)
     return apply_defect_vector(machine, delta)
 
 
@@ -75,12 +85,12 @@ def test_the_supported_presets_are_exactly_these():
         if name in ALIASES:
             continue
         try:
-            mjcf_model(pkmkit.machine(name))
+            write_mjcf(pkmkit.machine(name))
         except UnsupportedExportError as exc:
             assert exc.format == "mjcf" and exc.reason
             continue
         exported.append(name)
-    assert exported == SUPPORTED
+    assert exported == sorted(SUPPORTED + CHAINS + PLANAR)
 
 
 @pytest.mark.parametrize("name", SUPPORTED)
@@ -124,11 +134,36 @@ def test_masses_are_the_dynamics_model(name):
         assert model.body("carriage0").mass[0] == pytest.approx(masses.carriage_mass[0])
 
 
-@pytest.mark.parametrize("name, words", [
-    ("tripteor-x7", "joint-chain"), ("delta", "crank"), ("five-bar-isotropic", "planar")])
-def test_machines_mujoco_would_hold_differently_are_refused(name, words):
-    with pytest.raises(UnsupportedExportError, match=words):
-        mjcf_model(pkmkit.machine(name))
+def test_the_delta_robot_has_arms_with_illustrative_masses():
+    """The cranks are arm bodies on hinges (qpos pkmkit's crank angle); the masses are the
+    illustrative ones of export/mjcf_cranks.py, and the file says so."""
+    from pkmkit.export.mjcf_cranks import DENSITY, DIAMETER, PLATFORM_KG, arm_length
+
+    m = pkmkit.machine("delta")
+    xml = mjcf_model(m)
+    assert "illustrative masses" in xml and "no mass model of crank" in xml
+    assert check_mjcf_model(m, xml) < 1e-12  # rods closed with the arms turned (samples)
+    model = mujoco.MjModel.from_xml_string(xml)
+    area = np.pi / 4 * DIAMETER**2
+    for k in range(3):
+        assert model.joint(f"act{k}").type[0] == mujoco.mjtJoint.mjJNT_HINGE
+        arm = model.body(f"arm{k}")
+        assert arm.mass[0] == pytest.approx(DENSITY * area * arm_length(m, k), rel=1e-12)
+        assert model.qpos0[model.jnt_qposadr[model.joint(f"act{k}").id]] == m.home_q[k]
+    rods = DENSITY * area * m.model.rod_length.sum()
+    assert model.body_mass.sum() == pytest.approx(
+        rods + PLATFORM_KG + sum(model.body(f"arm{k}").mass[0] for k in range(3)), rel=1e-12)
+
+
+def test_the_delta_robot_refuses_masses_and_a_tilted_crank_axis(tmp_path):
+    from pkmkit.dynamics.masses import mass_properties
+
+    m = pkmkit.machine("delta")
+    masses = mass_properties(m, carriage=1.0, rod=0.5, rod_radius=0.01, platform=2.0)
+    with pytest.raises(UnsupportedExportError, match="no mass model of crank"):
+        mjcf_model(m, masses)
+    with pytest.raises(UnsupportedExportError, match="misses its length"):
+        mjcf_model(m.with_defects({"dw1y": 1e-3}))
 
 
 def test_a_platform_on_three_single_rods_is_refused(tmp_path):
@@ -184,3 +219,15 @@ def test_mujocos_refusal_is_one_line(tmp_path):
     lines = res.output.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("Error: MuJoCo refuses the generated model")
     assert "A + B >= C" in lines[0] and "Element name 'platform'" in lines[0]
+
+
+def test_the_command_says_the_delta_masses_are_illustrative(tmp_path):
+    from click.testing import CliRunner
+
+    from pkmkit.cli.main import cli
+
+    out = tmp_path / "delta.xml"
+    res = CliRunner().invoke(cli, ["export", "delta", "--to", "mjcf", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "illustrative masses: pkmkit has no mass model of crank actuators" in res.output
+    assert "loaded in MuJoCo" in res.output and out.exists()

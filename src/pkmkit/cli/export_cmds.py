@@ -101,16 +101,18 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         check = (f"read back with {'Pinocchio' if reader == 'pinocchio' else 'a URDF parser'},"
                  " its loops close at pkmkit's configurations (≤ 1e-9 m)")
     else:
-        from pkmkit.export.mjcf import check_mjcf_model, mjcf_model
+        from pkmkit.export.mjcf_writer import check_mjcf, write_mjcf
 
         masses = None
         if masses_file is not None:
             from pkmkit.dynamics.masses import load_masses
 
             masses = load_masses(masses_file, m)[0]
-        text = mjcf_model(m, masses)
-        worst = check_mjcf_model(m, text)
-        what = "MuJoCo model (MJCF; m, kg)"
+        export = write_mjcf(m, masses)
+        worst = check_mjcf(m, export)
+        text = export.xml
+        what = "MuJoCo model (MJCF; m, kg" + (
+            f"; {export.illustrative})" if export.illustrative else ")")
         check = ("not loaded (MuJoCo is not installed)" if worst is None else
                  "loaded in MuJoCo, its loops close at pkmkit's configurations (≤ 1e-9 m)")
     atomic_write_text(out_file, text)

@@ -138,8 +138,8 @@ def _check(machine) -> None:
         why = ("a joint-chain machine is written by pkmkit.export.urdf_chains (or "
                "pkmkit.export.urdf_writer.write_urdf for any machine), not by the rod-leg writer")
     elif family == "planar":
-        why = ("a planar machine is not exported to URDF yet (its closures would constrain "
-               "directions out of its plane); spatial rod-leg machines are")
+        why = ("a planar machine is written by pkmkit.export.urdf_planar (or "
+               "pkmkit.export.urdf_writer.write_urdf for any machine), not by the spatial writer")
     if why:
         raise UnsupportedExportError(FORMAT, machine.id, why)
     model = machine.model
@@ -223,7 +223,7 @@ def urdf_export(machine, masses=None, *, name: str = "machine") -> UrdfExport:
     from pkmkit.spatial.rotation import axis_rotation
 
     bases = rod_base_points(model, q0[:, None])[:, :, 0].T  # (m, 3) at home
-    _require_closed_rods(machine, q0, bases, tips)
+    require_closed_rods(machine, q0, bases, tips)
     links, joints, movable = [_link("base")], [], []
     frame0 = np.zeros((model.n_rods, 3, 3))
     spin = -np.ones(model.n_rods, dtype=int)
@@ -332,7 +332,8 @@ def urdf_export(machine, masses=None, *, name: str = "machine") -> UrdfExport:
                       inertial=masses is not None)
 
 
-def _require_closed_rods(machine, q0: np.ndarray, bases: np.ndarray, tips: np.ndarray) -> None:
+def require_closed_rods(machine, q0: np.ndarray, bases: np.ndarray, tips: np.ndarray,
+                        fmt: str = FORMAT) -> None:
     """Refuse a machine whose rods do not close at its own home configuration: a translational
     machine is modelled by its legs' midlines, and defects that tilt a crank's axis make its
     parallelogram's two rods miss their lengths (pkmkit keeps the platform translating; a
@@ -343,10 +344,10 @@ def _require_closed_rods(machine, q0: np.ndarray, bases: np.ndarray, tips: np.nd
     j = int(np.argmax(miss))
     if miss[j] > 1e-12 * max(1.0, float(length.max())):
         raise UnsupportedExportError(
-            FORMAT, machine.id, f"rod {j + 1} misses its length by {miss[j]:.3g} m at home: "
+            fmt, machine.id, f"rod {j + 1} misses its length by {miss[j]:.3g} m at home: "
             "pkmkit models this translational machine by its legs' midlines, and its defects "
             "(e.g. a tilted crank axis) leave a parallelogram's rods unable to close with the "
-            "platform translating; a URDF of its rods would describe another machine")
+            "platform translating; a model of its rods would describe another machine")
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -374,7 +375,8 @@ def _urdf_text(machine, links, joints, inertial: bool) -> str:
 """
 
 
-def _closures_text(machine, layout: UrdfExport, values: dict, name: str, masses) -> str:
+def _closures_text(machine, layout: UrdfExport, values: dict, name: str, masses,
+                   note: str = "") -> str:
     model = machine.model
     pairs = "\n".join(f"  - [{a}, {b}]" for a, b in layout.closure_frames)
     actuators = model.actuator_names
@@ -394,7 +396,7 @@ def _closures_text(machine, layout: UrdfExport, values: dict, name: str, masses)
 # first frame; the relative rotation is free). In Pinocchio, for each pair:
 #   RigidConstraintModel(ContactType.CONTACT_3D, model, f1.parentJoint, f1.placement,
 #                        f2.parentJoint, f2.placement, ReferenceFrame.LOCAL)
-# with f1, f2 = model.frames[model.getFrameId(name)]. SI units (m, rad, kg).
+# with f1, f2 = model.frames[model.getFrameId(name)]. SI units (m, rad, kg).{note}
 closed_loop:
 {pairs}
 type: [{", ".join("3D" for _ in layout.closure_frames)}]
@@ -439,7 +441,16 @@ def configuration(machine, layout: UrdfExport, x, q) -> dict[str, float]:
             rx = axis_rotation(np.array([[1.0, 0, 0]]), np.array([a]))[0]
             ry = axis_rotation(np.array([[0, 1.0, 0]]), np.array([b]))[0]
             rods[j] = zero @ rx @ ry
+        elif joint.role == "rz":  # a planar rod's hinge about z (pkmkit.export.urdf_planar)
+            j = joint.index
+            v = layout.frame0[j].T @ _unit(tips[j] - bases[j])
+            a = float(np.arctan2(v[1], v[0]))
+            out[joint.name] = a
+            rods[j] = layout.frame0[j] @ axis_rotation(np.array([[0, 0, 1.0]]), np.array([a]))[0]
     relative = (rods[0] @ layout.ball_offset).T @ rot
+    if any(joint.role == "pz" for joint in layout.joints):  # the planar platform's hinge
+        out["rod1_pz"] = float(np.arctan2(relative[1, 0], relative[0, 0]))
+        return out
     angles = rotation_class().from_matrix(relative).as_euler("XYZ")
     for role, value in zip(("sx", "sy", "sz"), angles, strict=True):
         out[f"rod1_{role}"] = float(value)

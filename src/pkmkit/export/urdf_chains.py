@@ -79,54 +79,64 @@ class ChainUrdfExport:
     massless: str = "joint chains"
 
 
-def _element_joint(model, e: int, parent: str) -> tuple[str, str, UrdfJoint | None]:
-    """The URDF joint text of element ``e`` hung from ``parent``, its child link and the
-    movable joint record (None for a fixed element)."""
+@dataclass(frozen=True)
+class ChainNode:
+    """One element of a joint-chain machine's spanning tree.
+
+    Attributes:
+        name: the element's name (the joint's: pkmkit's variable name for a joint element).
+        parent: the link it hangs from (``base``, ``platform`` or another node's ``child``).
+        child: the link it carries, ``<name>_body``.
+        frame: ``(4, 4)`` the element's frame in the parent link (defects applied); the joint
+            then turns about or slides along this frame's z by its variable.
+        type: ``"F"`` (fixed), ``"R"`` (revolute) or ``"P"`` (prismatic).
+        variable: pkmkit's variable index (-1 for a fixed element).
+    """
+
+    name: str
+    parent: str
+    child: str
+    frame: np.ndarray
+    type: str
+    variable: int
+
+
+@dataclass(frozen=True)
+class ChainTree:
+    """The spanning tree every joint-chain export writes (URDF here, MJCF in
+    :mod:`pkmkit.export.mjcf_chains`).
+
+    Attributes:
+        legs: the legs' nodes from ``base``, leg by leg, an element shared by several legs
+            (their common first part) once.
+        head: the head's nodes from ``platform`` to the tool frame.
+        ends: ``(L,)`` every leg's last link; the first carries ``platform`` (identity), the
+            others are welded to it.
+        tool: the link that is the tool frame (the head's last link, or ``platform``).
+    """
+
+    legs: tuple[ChainNode, ...]
+    head: tuple[ChainNode, ...]
+    ends: tuple[str, ...]
+    tool: str
+
+
+def _node(model, e: int, parent: str) -> ChainNode:
     spec = model.elements[e]
-    frame = model.frames[e]
-    child = f"{spec.name}_body"
-    xyz, rpy = frame[:3, 3], _rpy(frame[:3, :3])
-    if spec.type == "F":
-        return _joint(spec.name, "fixed", parent, child, xyz, rpy), child, None
-    v = int(model.element_variable[e])
-    limits = (float(model.q_min[v]), float(model.q_max[v]))
-    finite = bool(np.isfinite(limits).all())
-    if spec.type == "R":
-        kind = "revolute" if finite else "continuous"
-    else:
-        kind = "prismatic"
-        limits = tuple(float(np.sign(x) * UNLIMITED) if not np.isfinite(x) else x
-                       for x in limits)
-        finite = True
-    text = _joint(spec.name, kind, parent, child, xyz, rpy, axis=(0, 0, 1),
-                  limits=limits if finite else None)
-    role = "actuator" if model.actuated[v] else "passive"
-    return text, child, UrdfJoint(spec.name, kind, role, v)
+    return ChainNode(spec.name, parent, f"{spec.name}_body", np.asarray(model.frames[e]),
+                     spec.type, int(model.element_variable[e]) if spec.type != "F" else -1)
 
 
-def _require_exact_closure(machine) -> None:
-    res = machine.fk(machine.home_q, full_output=True, strokes="ignore")
-    residual = float(np.max(res.closure_residual))
-    if not residual <= MISFIT:
-        raise UnsupportedExportError(
-            FORMAT, machine.id, f"its legs close only in least squares at home (misfit "
-            f"{residual:.3g} m > {MISFIT:g} m: incompatible defects of a hyperstatic machine); "
-            "a URDF whose closures hold exactly would describe another machine — keep the "
-            "compatible defects (pkmkit errors MACHINE --compatibility)")
-
-
-def chain_urdf_export(machine, *, name: str = "machine") -> ChainUrdfExport:
-    """The URDF tree and closures YAML of a joint-chain machine (module docstring).
+def chain_tree(machine) -> ChainTree:
+    """The spanning tree of a joint-chain machine's legs and head (:class:`ChainTree`).
 
     Raises:
-        UnsupportedExportError: legs closing only in least squares, or an element shared by
-            legs other than as their common first part.
+        UnsupportedExportError: an element shared by legs other than as their common first
+            part (not a tree).
     """
-    _require_exact_closure(machine)
     model = machine.model
-    links, joints, movable = [_link("base")], [], []
     placed: dict[int, str] = {}
-    ends = []
+    nodes, ends = [], []
     for leg_name, leg in zip(model.leg_names, model.legs, strict=True):
         parent, prefix = "base", True
         for e in leg:
@@ -138,22 +148,78 @@ def chain_urdf_export(machine, *, name: str = "machine") -> ChainUrdfExport:
                 parent = placed[e]
                 continue
             prefix = False
-            text, parent, record = _element_joint(model, e, parent)
+            nodes.append(_node(model, e, parent))
+            parent = placed[e] = nodes[-1].child
+        ends.append(parent)
+    head, parent = [], "platform"
+    for e in model.head:
+        head.append(_node(model, e, parent))
+        parent = head[-1].child
+    return ChainTree(legs=tuple(nodes), head=tuple(head), ends=tuple(ends), tool=parent)
+
+
+def _element_joint(model, node: ChainNode) -> tuple[str, UrdfJoint | None]:
+    """The URDF joint text of a tree node and its movable joint record (None for a fixed
+    element)."""
+    frame, parent, child = node.frame, node.parent, node.child
+    xyz, rpy = frame[:3, 3], _rpy(frame[:3, :3])
+    if node.type == "F":
+        return _joint(node.name, "fixed", parent, child, xyz, rpy), None
+    v = node.variable
+    limits = (float(model.q_min[v]), float(model.q_max[v]))
+    finite = bool(np.isfinite(limits).all())
+    if node.type == "R":
+        kind = "revolute" if finite else "continuous"
+    else:
+        kind = "prismatic"
+        limits = tuple(float(np.sign(x) * UNLIMITED) if not np.isfinite(x) else x
+                       for x in limits)
+        finite = True
+    text = _joint(node.name, kind, parent, child, xyz, rpy, axis=(0, 0, 1),
+                  limits=limits if finite else None)
+    role = "actuator" if model.actuated[v] else "passive"
+    return text, UrdfJoint(node.name, kind, role, v)
+
+
+def require_exact_closure(machine, fmt: str = FORMAT) -> None:
+    """Refuse (for the format ``fmt``) a machine whose legs close at home only in least squares
+    beyond :data:`MISFIT` (incompatible defects)."""
+    res = machine.fk(machine.home_q, full_output=True, strokes="ignore")
+    residual = float(np.max(res.closure_residual))
+    if not residual <= MISFIT:
+        raise UnsupportedExportError(
+            fmt, machine.id, f"its legs close only in least squares at home (misfit "
+            f"{residual:.3g} m > {MISFIT:g} m: incompatible defects of a hyperstatic machine); "
+            f"a {fmt.upper()} model whose closures hold exactly would describe another machine "
+            "— keep the compatible defects (pkmkit errors MACHINE --compatibility)")
+
+
+def chain_urdf_export(machine, *, name: str = "machine") -> ChainUrdfExport:
+    """The URDF tree and closures YAML of a joint-chain machine (module docstring).
+
+    Raises:
+        UnsupportedExportError: legs closing only in least squares, or an element shared by
+            legs other than as their common first part.
+    """
+    require_exact_closure(machine)
+    model = machine.model
+    tree = chain_tree(machine)
+    links, joints, movable = [_link("base")], [], []
+
+    def add(nodes) -> None:
+        for node in nodes:
+            text, record = _element_joint(model, node)
             joints.append(text)
-            links.append(_link(parent))
-            placed[e] = parent
+            links.append(_link(node.child))
             if record is not None:
                 movable.append(record)
-        ends.append(parent)
+
+    add(tree.legs)
+    ends = tree.ends
     joints.append(_joint("platform_frame", "fixed", ends[0], "platform"))
     links.append(_link("platform"))
-    parent = "platform"
-    for e in model.head:
-        text, parent, record = _element_joint(model, e, parent)
-        joints.append(text)
-        links.append(_link(parent))
-        if record is not None:
-            movable.append(record)
+    add(tree.head)
+    parent = tree.tool
     joints.append(_joint("tool_frame", "fixed", parent, "tool"))
     joints.append(_joint("tool_point_frame", "fixed", "tool", "tool_point",
                          (0.0, 0.0, float(machine.tool_length))))
@@ -203,10 +269,10 @@ def joint_values(machine, q) -> dict[str, float]:
     Raises:
         ExportCheckError: pkmkit's direct model finds no assembly at ``q``.
     """
-    return _assembly(machine, q)[0]
+    return joint_assembly(machine, q)[0]
 
 
-def _assembly(machine, q):
+def joint_assembly(machine, q):
     """:func:`joint_values` and the direct model's full result at ``q`` (one solve)."""
     model = machine.model
     res = machine.fk(np.asarray(q, dtype=float), full_output=True, strokes="ignore")
@@ -267,7 +333,7 @@ def _pairs(export: ChainUrdfExport) -> list[tuple[str, str]]:
     return closure_pairs(export.closures, "6D")
 
 
-def _frame_error(transform: np.ndarray, length: float) -> float:
+def frame_error(transform: np.ndarray, length: float) -> float:
     """Distance of a ``(4, 4)`` relative transform from the identity (m; its rotation angle
     × ``length``)."""
     cos = np.clip((np.trace(transform[:3, :3]) - 1.0) / 2.0, -1.0, 1.0)
@@ -288,21 +354,16 @@ def check_chain_urdf_export(machine, export: ChainUrdfExport, *, use_pinocchio: 
     Raises:
         ExportCheckError: a closure or the tool frame off by more than that.
     """
-    from pkmkit.spatial.rotation import rotation_class
-
     pin = pinocchio_module(use_pinocchio)
     evaluate = _pinocchio_reader(export, pin) if pin is not None else _python_reader(export)
     length = max(float(machine.model.characteristic_length), 1e-3)
     worst = 0.0
     for q in sample_configurations(machine):
-        values, res = _assembly(machine, q)
+        values, res = joint_assembly(machine, q)
         gaps, tool = evaluate(values)
-        expected = np.eye(4)
-        frame = np.ravel(res.tool_frame)
-        expected[:3, :3] = rotation_class().from_rotvec(frame[3:]).as_matrix()
-        expected[:3, 3] = frame[:3]
-        errors = [_frame_error(g, length) for g in gaps]
-        errors.append(_frame_error(np.linalg.inv(expected) @ tool, length))
+        expected = expected_tool(res)
+        errors = [frame_error(g, length) for g in gaps]
+        errors.append(frame_error(np.linalg.inv(expected) @ tool, length))
         misfit = 2 * float(np.max(res.closure_residual))
         if not max(errors) <= misfit + TOLERANCE:
             raise ExportCheckError(
@@ -311,3 +372,14 @@ def check_chain_urdf_export(machine, export: ChainUrdfExport, *, use_pinocchio: 
                 "written")
         worst = max(worst, *errors)
     return worst, "pinocchio" if pin is not None else "python"
+
+
+def expected_tool(res) -> np.ndarray:
+    """``(4, 4)`` the tool frame of pkmkit's direct-model result ``res`` (one configuration)."""
+    from pkmkit.spatial.rotation import rotation_class
+
+    frame = np.ravel(res.tool_frame)
+    out = np.eye(4)
+    out[:3, :3] = rotation_class().from_rotvec(frame[3:]).as_matrix()
+    out[:3, 3] = frame[:3]
+    return out

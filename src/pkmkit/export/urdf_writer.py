@@ -1,5 +1,6 @@
-"""The URDF export of any machine: the writer of its structure (rod legs:
-:mod:`pkmkit.export.urdf`; joint chains: :mod:`pkmkit.export.urdf_chains`) and the matching
+"""The URDF export of any machine: the writer of its structure (spatial rod legs:
+:mod:`pkmkit.export.urdf`; planar ones: :mod:`pkmkit.export.urdf_planar`; joint chains:
+:mod:`pkmkit.export.urdf_chains`) and the matching
 read-back check. What ``pkmkit export --to urdf`` calls."""
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from pkmkit.export.urdf_chains import (
     check_chain_urdf_export,
 )
 from pkmkit.export.urdf_check import check_urdf_export
+from pkmkit.export.urdf_planar import planar_urdf_export
 
 
 def write_urdf(machine, masses=None, *, name: str = "machine") -> UrdfExport | ChainUrdfExport:
@@ -30,6 +32,8 @@ def write_urdf(machine, masses=None, *, name: str = "machine") -> UrdfExport | C
                                          "no mass model of joint-chain machines: export it "
                                          "without --masses (a kinematic URDF)")
         return chain_urdf_export(machine, name=name)
+    if machine_family(machine) == "planar":  # a tree that stays in the plane
+        return planar_urdf_export(machine, masses, name=name)
     return urdf_export(machine, masses, name=name)
 
 
