@@ -10,7 +10,10 @@ no source gives the masses, and every figure says so:
   :func:`pkmkit.stiffness.chain_gravity.illustrative_masses`;
 - translating rod-leg machines on slides: :func:`pkmkit.stiffness.loads.load_deflection` under
   :func:`pkmkit.dynamics.defaults.default_masses`;
-- other machines: :class:`~pkmkit.exceptions.UnsupportedOperationError`.
+- full-pose rod machines (hexapods, Verne-type module): the platform's weight at its centre of
+  mass and its rods' and struts' shares, :mod:`pkmkit.stiffness.platform_gravity`, under
+  :func:`pkmkit.stiffness.platform_gravity.platform_masses`, at the tool tip;
+- other machines (cranks): :class:`~pkmkit.exceptions.InputError`.
 
 Aiming. Commanded ``q``, the machine's loaded tool point is ``x(q) + δ(q)``. For a target X,
 the aimed target ``X_g = X − δ(q_X)`` (``q_X`` the inverse model of X; a tool axis a turns by
@@ -52,8 +55,7 @@ def gravity_deflection(machine: Any, q: Any, *, tool_length: float | None = None
     (module docstring for the models and masses).
 
     Raises:
-        UnsupportedOperationError: a machine with no gravity deflection model (a full-pose
-            platform). InputError: as the models (a translating machine not on slides).
+        InputError: as the models (cranks: no weight model).
     """
     q = np.atleast_2d(np.asarray(q, dtype=float))
     if machine.stiffness_from_actuators:
@@ -62,8 +64,10 @@ def gravity_deflection(machine: Any, q: Any, *, tool_length: float | None = None
         masses = illustrative_masses(machine)
         defl, _ = chain_gravity_deflection(machine, q, masses, tool_length=tool_length)
         return GravityDeflection(defl, masses.note)
+    if not machine.orientation_fixed:
+        return _platform_gravity(machine, q, tool_length)
     require_translational(machine, "gravity deflection",
-                          "no gravity model of a turning platform's rods and struts yet")
+                          "its platform neither translates nor is a full-pose rod platform")
     from pkmkit.dynamics.defaults import default_masses
     from pkmkit.stiffness.loads import load_deflection
 
@@ -78,6 +82,28 @@ def gravity_deflection(machine: Any, q: Any, *, tool_length: float | None = None
         out[rows, machine.dims:] = 0.0
     note = ("illustrative masses of pkmkit.dynamics.defaults (no source gives them): carriages "
             f"{float(np.max(masses.carriage_mass)):g} kg, platform {masses.platform_mass:g} kg")
+    return GravityDeflection(out, note)
+
+
+def _platform_gravity(machine: Any, q: np.ndarray, tool_length: float | None
+                      ) -> GravityDeflection:
+    """A full-pose rod machine: :mod:`pkmkit.stiffness.platform_gravity` at the tool tip
+    ``tool_length`` below the platform frame's origin."""
+    from pkmkit.stiffness.platform_gravity import platform_gravity_deflection, platform_masses
+
+    masses = platform_masses(machine)
+    out = np.full((len(q), 6), np.nan)
+    ok = np.isfinite(q).all(axis=1)
+    if ok.any():
+        poses = np.atleast_2d(machine.fk(q[ok], strokes="ignore"))
+        good = np.isfinite(poses).all(axis=1)
+        rows = np.flatnonzero(ok)[good]
+        tip = [0.0, 0.0, -(tool_length or 0.0)]
+        out[rows] = platform_gravity_deflection(machine, poses[good], masses, point=tip)[0]
+    note = ("illustrative masses of pkmkit.dynamics.defaults (no source gives them): platform "
+            f"{masses.platform_mass:g} kg at its frame origin, rods "
+            f"{float(np.max(masses.rod_mass + masses.strut_parts(machine.model.n_rods)[0])):.3g}"
+            " kg each")
     return GravityDeflection(out, note)
 
 
@@ -101,6 +127,10 @@ def aim_loaded(machine: Any, targets: Any, *, tool_length: float | None = None
     if x.shape[1] == 6 and machine.pose_orientation == "axis":
         axis = x[ok, 3:6] - np.cross(d[ok, 3:6], x[ok, 3:6])
         aimed[ok, 3:6] = axis / np.linalg.norm(axis, axis=1, keepdims=True)
+    elif x.shape[1] == 6:  # a platform rotation vector: turned back by the sag's rotation
+        from pkmkit.spatial.rotation import compose_rotvec
+
+        aimed[ok, 3:6] = compose_rotvec(-d[ok, 3:6], x[ok, 3:6])
     return aimed, sag
 
 
