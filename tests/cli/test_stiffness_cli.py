@@ -142,7 +142,7 @@ def test_a_pose_beyond_the_strokes_is_flagged_with_exit_3(machine, pose):
 
 def test_gravity_deflection_of_a_joint_chain_machine(run, as_json):
     """--gravity prints the library's chain_gravity_deflection (JSON: m, rad) and the masses'
-    note; rod-leg machines and batches are refused."""
+    note."""
     import numpy as np
 
     from pkmkit.machines.registry import machine
@@ -157,5 +157,30 @@ def test_gravity_deflection_of_a_joint_chain_machine(run, as_json):
     assert "illustrative masses" in data["masses"]
     text = run("stiffness", "tripteor-x7", "--q", q, "--units", "mm", "--gravity").output
     assert "deflection under its own weight: [16.833, 9.2813, -7.681] µm" in text
-    refused = run("stiffness", "orthoglide", "--pose", "0,0,0", "--gravity")
-    assert refused.exit_code == 1 and "joint-chain machines" in refused.output
+
+
+def test_gravity_deflection_of_rod_machines(run, as_json):
+    """--gravity on a hexapod (at a moved reference point: the tool tip) and a translating
+    machine prints the library's weight deflections; a batch is refused."""
+    from pkmkit.dynamics.defaults import default_masses
+    from pkmkit.stiffness.loads import load_deflection
+    from pkmkit.stiffness.platform_gravity import platform_gravity_deflection
+
+    m = machine("dietmaier-hexapod")
+    pose = m.home_pose + np.array([0.01, 0.0, 0.02, 0.0, 0.05, 0.0])
+    from scipy.spatial.transform import Rotation
+
+    angles = Rotation.from_rotvec(pose[3:]).as_euler("xyz", degrees=True)  # --angles xyz
+    text = ",".join(f"{v:.17g}" for v in np.concatenate([pose[:3], angles]))
+    data = as_json(run("stiffness", "dietmaier-hexapod", "--pose", text, "--gravity",
+                       "--reference", "0,0,-0.15", "--units", "m", "--json"))
+    expected, _ = platform_gravity_deflection(m, pose[None], point=[0, 0, -0.15])
+    np.testing.assert_allclose(data["gravity_deflection"], expected[0], rtol=1e-9)
+    assert np.abs(expected[0, 3:]).max() > 0 and "illustrative masses" in data["masses"]
+    o = machine("orthoglide")
+    data = as_json(run("stiffness", "orthoglide", "--pose", "0.02,0,0", "--gravity", "--units",
+                       "m", "--json"))
+    sag = load_deflection(o, np.array([[0.02, 0.0, 0.0]]), default_masses(o)).gravity[0]
+    np.testing.assert_allclose(data["gravity_deflection"], sag, rtol=1e-12)
+    assert "rotation" not in run("stiffness", "orthoglide", "--pose", "0,0,0",
+                                 "--gravity").output

@@ -134,6 +134,38 @@ def aim_loaded(machine: Any, targets: Any, *, tool_length: float | None = None
     return aimed, sag
 
 
+class LoadedAim:
+    """The gravity aim of :func:`aim_loaded` as a correction field ``(k, 3) → (k, 3)`` for
+    :func:`pkmkit.calibration.corrected_program.correct_path` (tool-point targets), keeping the
+    deflections it met (``sizes``, m) and the masses' ``note``. A point the machine reaches but
+    whose deflection is undefined (a singular configuration) is NaN: its block is refused rather
+    than left uncorrected."""
+
+    def __init__(self, machine: Any, tool_length: float | None = None):
+        self.machine = machine
+        self.tool_length = tool_length
+        self.sizes: list[np.ndarray] = []
+        self.note = ""
+
+    def __call__(self, targets: np.ndarray) -> np.ndarray:
+        aimed, sag = aim_loaded(self.machine, targets, tool_length=self.tool_length)
+        size = np.linalg.norm(sag.deflection[:, :3], axis=1)
+        self.sizes.append(size[np.isfinite(size)])
+        self.note = sag.note
+        aimed = np.array(aimed, dtype=float)
+        aimed[~np.isfinite(size)] = np.nan
+        return aimed
+
+    def summary(self, scale: float = 1.0) -> dict[str, Any]:
+        """``deflection_rms``, ``deflection_max`` (in units of ``scale`` m; None if none) and
+        ``masses`` (the note)."""
+        size = np.concatenate(self.sizes) if self.sizes else np.zeros(0)
+        return {"deflection_rms": float(np.sqrt(np.mean(size**2))) / scale if size.size
+                else None,
+                "deflection_max": float(size.max()) / scale if size.size else None,
+                "masses": self.note}
+
+
 def gravity_beside_residual(result: Any, measurements: Any) -> dict[str, Any] | None:
     """The gravity deflection of the identified machine predicted at the measured
     configurations, beside the calibration's residual: whether elasticity could explain it.

@@ -1,5 +1,6 @@
 """``pkmkit compensate --gravity``: aim the calibrated machine's loaded tool point at the
-targets (:func:`pkmkit.calibration.gravity.aim_loaded`); parsing and printing only."""
+targets or the program (:func:`pkmkit.calibration.gravity.aim_loaded`,
+:class:`~pkmkit.calibration.gravity.LoadedAim`); parsing and printing only."""
 
 from __future__ import annotations
 
@@ -11,8 +12,8 @@ import numpy as np
 GRAVITY_OPTION = click.option(
     "--gravity", is_flag=True,
     help="Include the calibrated machine's deflection under its own weight: the corrected "
-         "targets aim its loaded tool point at the targets (illustrative masses; joint-chain "
-         "and translating slide machines; --grid and --targets).")
+         "targets (or the G-code program's points) aim its loaded tool point at the targets "
+         "(illustrative masses; joint chains, rod machines on slides or struts).")
 
 
 def aimed_targets(identified, targets: Any, tool_length: float | None, gravity: bool,
@@ -30,7 +31,15 @@ def aimed_targets(identified, targets: Any, tool_length: float | None, gravity: 
             "deflection_max": float(size.max()) / scale if size.size else None,
             "masses": sag.note}
     if not quiet and size.size:
-        click.echo(f"gravity: targets moved against the calibrated machine's sag, RMS "
-                   f"{info['deflection_rms']:.4g} {unit}, max {info['deflection_max']:.4g} {unit}"
-                   f" ({sag.note})")
+        gravity_line(info, unit, "targets")
     return aimed, info
+
+
+def gravity_line(info: dict, unit: str, what: str) -> None:
+    """Print the sag the ``what`` (targets, program points) were moved against (``info``:
+    ``deflection_rms``, ``deflection_max`` in ``unit``, ``masses``)."""
+    if info["deflection_max"] is None:
+        return
+    click.echo(f"gravity: {what} moved against the calibrated machine's sag, RMS "
+               f"{info['deflection_rms']:.4g} {unit}, max {info['deflection_max']:.4g} {unit}"
+               f" ({info['masses']})")

@@ -114,8 +114,9 @@ def _wrench(text: str | None, d: int) -> tuple[np.ndarray | None, str]:
               help="Move the reference point by this offset (in --units) in the platform frame "
                    "(full-pose machines) or the tool frame (joint-chain machines).")
 @click.option("--gravity", is_flag=True,
-              help="Joint-chain machines: also the tool point's deflection under the weight of "
-                   "the moving parts (illustrative masses, docs/stiffness.md).")
+              help="Also the deflection of the reference point under the weight of the moving "
+                   "parts (illustrative masses, docs/stiffness.md): joint chains, rod machines "
+                   "on slides or struts.")
 @batch_options
 @ANGLES_OPTION
 @TOOL_LENGTH_OPTION
@@ -149,9 +150,6 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
         reference = parse_numbers(reference_text, "--reference", (3,)) * scale
     tl = None if tool_length is None else tool_length * scale
     face = _FACES.get(m.family, _RODS)
-    if gravity and not face.takes_q:
-        raise InputError("--gravity is for joint-chain machines (a translating platform's "
-                         "weight deflection: `pkmkit path --deflection`)")
     if input_ is not None or output is not None:
         if gravity:
             raise click.UsageError("--gravity takes one configuration (--pose or --q)")
@@ -189,7 +187,10 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     # exits with status 3 (a stiffness there is that of a machine that cannot be there)
     check = single_check(m, stroke_q, units)
     payload = _payload(m, result, data, units, x, q, wrench)
-    weight = _gravity(m, q, data, tl) if gravity else None
+    weight = None
+    if gravity:
+        weight = (_gravity(m, q, data, tl) if face.takes_q
+                  else _rod_gravity(m, x, data, reference))
     if weight is not None:
         payload["gravity_deflection"], payload["masses"] = weight
     add_to_payload(payload, check, units, set_status=False)
@@ -203,8 +204,9 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
         _print(m, result, data, units, x, q, wrench, wrench_note, names)
         if weight is not None:
             defl = weight[0] * PER_MICRO
-            click.echo(f"  deflection under its own weight: {fmt(defl[:3], 5)} µm, rotation "
-                       f"{fmt(defl[3:], 5)} µrad ({weight[1]})")
+            turn = f", rotation {fmt(defl[3:], 5)} µrad" if defl.size == 6 else ""
+            click.echo(f"  deflection under its own weight: {fmt(defl[:3], 5)} µm{turn} "
+                       f"({weight[1]})")
     if too_far:
         click.echo(f"doubtful: {too_far}", err=True)
         if check is None or not check.out_of_stroke[0]:
@@ -224,6 +226,37 @@ def _gravity(m, q, data, tool_length) -> tuple[np.ndarray, str]:
         raise SingularConfigurationError("no weight deflection at this configuration (singular "
                                          "or a mechanism)")
     return defl[0], masses.note
+
+
+def _rod_gravity(m, x, data, reference) -> tuple[np.ndarray, str]:
+    """A rod machine's deflection under its own weight at pose ``x``: ``(d,)`` for a translating
+    platform (:mod:`pkmkit.stiffness.loads`), ``(6,)`` at the reference point for a turning one
+    (:mod:`pkmkit.stiffness.platform_gravity`), and the masses' note."""
+    from pkmkit.exceptions import SingularConfigurationError
+
+    if m.orientation_fixed:
+        from pkmkit.dynamics.defaults import default_masses
+        from pkmkit.stiffness.loads import load_deflection
+
+        masses = default_masses(m)
+        defl = load_deflection(m, np.atleast_2d(x), masses, data=data).gravity
+        what = ""
+    else:
+        from pkmkit.stiffness.platform_gravity import platform_gravity_deflection, platform_masses
+
+        masses = platform_masses(m)
+        defl, _ = platform_gravity_deflection(m, np.atleast_2d(x), masses, data=data,
+                                              point=reference)
+        what = " at its frame origin"
+    if not np.isfinite(defl).all():
+        raise SingularConfigurationError("no weight deflection at this configuration")
+    rods = masses.rod_mass + masses.strut_parts(m.model.n_rods)[0]
+    slides = bool((m.model.rod_kind == 0).any())
+    note = (f"illustrative masses of pkmkit.dynamics.defaults, no source gives them: platform "
+            f"{masses.platform_mass:g} kg{what}"
+            + (f", carriages {float(np.max(masses.carriage_mass)):g} kg" if slides else "")
+            + f", rods or struts up to {float(np.max(rods)):.3g} kg")
+    return defl[0], note
 
 
 def _payload(m, r, data, units, x, q, wrench) -> dict[str, Any]:
