@@ -184,3 +184,44 @@ def test_gravity_deflection_of_rod_machines(run, as_json):
     np.testing.assert_allclose(data["gravity_deflection"], sag, rtol=1e-12)
     assert "rotation" not in run("stiffness", "orthoglide", "--pose", "0,0,0",
                                  "--gravity").output
+
+
+def test_loaded_equilibrium_beside_the_linear_deflection(run, as_json):
+    """--wrench on a rod machine: the library's loaded equilibrium, its difference from the
+    linear deflection and the geometric-stiffness share (JSON, SI); text lines in µm."""
+    from pkmkit.stiffness.equilibrium import loaded_equilibrium
+
+    m = machine("gough-stewart")
+    args = ("stiffness", "gough-stewart", "--pose", "0,0,0.8,0,0,0", "--units", "m",
+            "--wrench", "500,0,-1000,0,0,0", "--reference", "0,0,-0.15")
+    out = as_json(run(*args, "--json"))
+    lib = loaded_equilibrium(m, np.array([0, 0, 0.8, 0, 0, 0]),
+                             np.array([500.0, 0, -1000, 0, 0, 0]), reference=[0, 0, -0.15])
+    np.testing.assert_allclose(out["deflection_loaded"], lib.loaded, rtol=1e-12)
+    np.testing.assert_allclose(out["deflection_difference"], lib.difference, rtol=1e-12)
+    assert out["geometric_stiffness_share"] == pytest.approx(lib.share, rel=1e-12)
+    assert out["loaded_status"] == "ok" and 0 < lib.share < 1e-3
+    assert np.abs(lib.difference).max() > 0
+    text = run(*args).output
+    assert "loaded equilibrium: [13.882, 0, -1.9537] µm" in text
+    assert "geometric-stiffness share: 2.82e-05" in text
+
+
+def test_no_loaded_equilibrium_is_doubtful(run, monkeypatch):
+    """An equilibrium Newton does not find: said on standard error, exit status 3."""
+    import dataclasses
+
+    import pkmkit.stiffness.equilibrium as equilibrium
+    from pkmkit.status import Status
+
+    real = equilibrium.loaded_equilibrium
+
+    def failing(*args, **kwargs):
+        got = real(*args, **kwargs)
+        return dataclasses.replace(got, loaded=got.loaded * np.nan,
+                                   status=np.asarray(Status.NOT_CONVERGED))
+
+    monkeypatch.setattr(equilibrium, "loaded_equilibrium", failing)
+    res = run("stiffness", "orthoglide", "--pose", "0,0,0", "--wrench", "0,0,-500")
+    assert res.exit_code == 3
+    assert "not found" in res.output and "no loaded equilibrium found" in res.output

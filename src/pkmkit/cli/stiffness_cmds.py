@@ -193,15 +193,25 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
                   else _rod_gravity(m, x, data, reference))
     if weight is not None:
         payload["gravity_deflection"], payload["masses"] = weight
+    loaded = None
+    if wrench is not None and not face.takes_q:
+        loaded = _loaded(m, x, wrench, data, reference)
+        payload.update(_loaded_payload(loaded))
     add_to_payload(payload, check, units, set_status=False)
     too_far = ("" if wrench is None else
                linear_range_problem(result.deflection, m.length_scale, units))
+    if not too_far and loaded is not None and not isinstance(loaded, str) and loaded.status:
+        too_far = ("no loaded equilibrium found from the linear deflection (Newton on the "
+                   "exact rod geometry did not converge): the load is beyond the "
+                   "small-displacement range or the pose is near a singularity")
     if too_far:
         payload["beyond_linear_range"] = too_far
     if as_json:
         emit_json(payload)
     else:
         _print(m, result, data, units, x, q, wrench, wrench_note, names)
+        if loaded is not None:
+            _print_loaded(loaded, len(names))
         if weight is not None:
             defl = weight[0] * PER_MICRO
             turn = f", rotation {fmt(defl[3:], 5)} µrad" if defl.size == 6 else ""
@@ -226,6 +236,44 @@ def _gravity(m, q, data, tool_length) -> tuple[np.ndarray, str]:
         raise SingularConfigurationError("no weight deflection at this configuration (singular "
                                          "or a mechanism)")
     return defl[0], masses.note
+
+
+def _loaded(m, x, wrench, data, reference):
+    """The loaded equilibrium beside the linear deflection
+    (:func:`pkmkit.stiffness.equilibrium.loaded_equilibrium`), or why there is none (text)."""
+    from pkmkit.stiffness.equilibrium import loaded_equilibrium
+
+    try:
+        return loaded_equilibrium(m, x, wrench, data=data, reference=reference)
+    except InputError as exc:  # cranks: no model of their exact geometry under load
+        return str(exc)
+
+
+def _loaded_payload(loaded) -> dict[str, Any]:
+    if isinstance(loaded, str):
+        return {"deflection_loaded": None, "loaded_note": loaded}
+    ok = loaded.status == 0
+    return {"deflection_loaded": loaded.loaded if ok else None,
+            "deflection_difference": loaded.difference if ok else None,
+            "geometric_stiffness_share": float(loaded.share) if ok else None,
+            "loaded_status": "ok" if ok else "not-converged"}
+
+
+def _print_loaded(loaded, d) -> None:
+    if isinstance(loaded, str):
+        click.echo(f"  loaded equilibrium: none ({loaded})")
+        return
+    if loaded.status != 0:
+        click.echo("  loaded equilibrium: not found (see below)")
+        return
+    for label, values in (("loaded equilibrium", loaded.loaded),
+                          ("difference (geometric stiffness)", loaded.difference)):
+        defl = np.asarray(values) * PER_MICRO
+        text = f"{fmt(defl[:min(d, 3)], 5)} µm"
+        if d == 6:
+            text += f", rotation {fmt(defl[3:], 5)} µrad"
+        click.echo(f"  {label}: {text}")
+    click.echo(f"  geometric-stiffness share: {loaded.share:.3g} of the loaded deflection")
 
 
 def _rod_gravity(m, x, data, reference) -> tuple[np.ndarray, str]:

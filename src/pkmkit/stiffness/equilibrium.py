@@ -50,6 +50,9 @@ MAX_ITERATIONS = 30
 #: :data:`FLOOR` times the machine's size (the rounding of its rod lengths).
 STEP_TOL = 1e-9
 FLOOR = 1e-15
+#: Components of the loaded deflection and of the difference below this many machine sizes (m)
+#: or radians are zero: under the rounding of the rod lengths the residuals are computed with.
+RESOLUTION = 1e-13
 
 
 @dataclass(frozen=True)
@@ -59,7 +62,8 @@ class LoadedDeflection:
     Attributes:
         linear: ``(N, d)`` C w (m, rad).
         loaded: ``(N, d)`` the equilibrium of the exact geometry (m, rad).
-        difference: ``(N, d)`` loaded − linear.
+        difference: ``(N, d)`` loaded − linear (components below :data:`RESOLUTION` times
+            the machine's size, or radians, are zero in both).
         share: ``(N,)`` ‖difference‖ / ‖loaded‖ (rotations times ``length``).
         iterations: ``(N,)`` Newton steps taken.
         status: ``(N,)`` :class:`~pkmkit.status.Status` (``NOT_CONVERGED``: no equilibrium
@@ -168,7 +172,11 @@ def loaded_equilibrium(machine: Any, pose: Any, wrench: Any, *, data: StiffnessD
         loaded[rows[conv]] = got[conv]
         steps[rows] = its
         status[rows[~conv]] = Status.NOT_CONVERGED
+    # below the solver's resolution (the rounding of the rod lengths): zero
+    loaded[np.abs(loaded) < RESOLUTION * np.where(np.arange(loaded.shape[1]) < 3, length,
+                                                  1.0)] = 0.0
     diff = loaded - linear
+    diff[np.abs(diff) < RESOLUTION * np.where(np.arange(diff.shape[1]) < 3, length, 1.0)] = 0.0
     scale = np.ones(linear.shape[1])
     scale[3:] = length
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -190,7 +198,7 @@ def _solve(rods: _Rods, x0: np.ndarray, q0: np.ndarray, w: np.ndarray, linear: n
     p0 = np.zeros((n_rows, 3))
     p0[:, :min(rods.dims, 3)] = x0[:, :min(rods.dims, 3)]
     r0 = rotvec_to_matrix(x0[:, 3:6]) if full else np.tile(np.eye(3), (n_rows, 1, 1))
-    arm0, vec0, _ = rods.ends(p0, r0, q0)
+    _, vec0, _ = rods.ends(p0, r0, q0)
     rest0 = np.linalg.norm(vec0, axis=2)                         # unloaded lengths (N, m)
     if rods.ea is None:
         comp = np.zeros_like(rest0)
@@ -273,7 +281,7 @@ def _solve(rods: _Rods, x0: np.ndarray, q0: np.ndarray, w: np.ndarray, linear: n
     converged = done & np.isfinite(z).all(axis=1)
     u, _, _ = unpack(z)
     if full:
-        p, rot = geometry(u)
+        _, rot = geometry(u)
         u[:, :3] += np.einsum("nij,j->ni", rot, r) - lever  # the reference point's move
     u[~converged] = np.nan
     return u, converged, steps
