@@ -47,7 +47,7 @@ def test_gravity_moves_the_corrected_targets_by_the_sag(run, as_json, truth, tmp
     from pkmkit.calibration.compensation import grid_targets
 
     targets = grid_targets([-0.1, -0.1, 0.1], [0.1, 0.1, 0.2], [2, 2, 2])
-    aimed, sag = aim_loaded(identified, targets)
+    aimed, sag = aim_loaded(identified, targets, masses_of=nominal)
     expected, _ = correct_table(nominal, identified, aimed, max_correction=1.0)
     got = _corrected(tmp_path / "loaded.csv")
     assert np.allclose(got, expected, atol=1e-10, rtol=0)  # the file keeps 10 digits
@@ -68,10 +68,12 @@ def test_gravity_corrects_a_gcode_program(run, as_json, truth, tmp_path):
     out = as_json(run("compensate", "linear-delta", "--calibrated", truth, "--gcode", program,
                       "--gravity", "--units", "mm", "--out", tmp_path / "fixed.nc", "--json"))
     assert 1e-4 < out["gravity"]["deflection_max"] < 1e-2  # mm
-    assert "illustrative" in out["gravity"]["masses"]
+    # the linear Delta's masses, though the calibrated file has no kind of its own
+    assert "carriages 8 kg, platform 15 kg" in out["gravity"]["masses"]
     nominal, identified = pkmkit.machine("linear-delta"), pkmkit.load(truth)
     path = read_gcode(program.read_text())
-    expected = correct_path(nominal, identified, path, aim=LoadedAim(identified))
+    expected = correct_path(nominal, identified, path,
+                            aim=LoadedAim(identified, masses_of=nominal))
     back = read_gcode((tmp_path / "fixed.nc").read_text())
     assert [s.rapid for s in back.segments] == expected.rapid.tolist()
     ends = np.array([s.end for s in back.segments])

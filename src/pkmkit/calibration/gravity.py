@@ -49,10 +49,13 @@ class GravityDeflection:
     note: str
 
 
-def gravity_deflection(machine: Any, q: Any, *, tool_length: float | None = None
+def gravity_deflection(machine: Any, q: Any, *, tool_length: float | None = None,
+                       masses_of: Any = None
                        ) -> GravityDeflection:
     """Tool deflection of ``machine`` under its own weight at actuator values ``q (N, n)``
-    (module docstring for the models and masses).
+    (module docstring for the models and masses). ``masses_of``: the machine whose illustrative
+    masses apply (the nominal built-in of a calibrated machine file, which has no kind of its
+    own; default ``machine``).
 
     Raises:
         InputError: as the models (cranks: no weight model).
@@ -65,13 +68,13 @@ def gravity_deflection(machine: Any, q: Any, *, tool_length: float | None = None
         defl, _ = chain_gravity_deflection(machine, q, masses, tool_length=tool_length)
         return GravityDeflection(defl, masses.note)
     if not machine.orientation_fixed:
-        return _platform_gravity(machine, q, tool_length)
+        return _platform_gravity(machine, q, tool_length, masses_of or machine)
     require_translational(machine, "gravity deflection",
                           "its platform neither translates nor is a full-pose rod platform")
     from pkmkit.dynamics.defaults import default_masses
     from pkmkit.stiffness.loads import load_deflection
 
-    masses = default_masses(machine)
+    masses = default_masses(masses_of or machine)
     out = np.full((len(q), 6), np.nan)
     ok = np.isfinite(q).all(axis=1)
     if ok.any():
@@ -85,13 +88,13 @@ def gravity_deflection(machine: Any, q: Any, *, tool_length: float | None = None
     return GravityDeflection(out, note)
 
 
-def _platform_gravity(machine: Any, q: np.ndarray, tool_length: float | None
-                      ) -> GravityDeflection:
+def _platform_gravity(machine: Any, q: np.ndarray, tool_length: float | None,
+                      masses_of: Any) -> GravityDeflection:
     """A full-pose rod machine: :mod:`pkmkit.stiffness.platform_gravity` at the tool tip
     ``tool_length`` below the platform frame's origin."""
     from pkmkit.stiffness.platform_gravity import platform_gravity_deflection, platform_masses
 
-    masses = platform_masses(machine)
+    masses = platform_masses(masses_of)
     out = np.full((len(q), 6), np.nan)
     ok = np.isfinite(q).all(axis=1)
     if ok.any():
@@ -107,7 +110,8 @@ def _platform_gravity(machine: Any, q: np.ndarray, tool_length: float | None
     return GravityDeflection(out, note)
 
 
-def aim_loaded(machine: Any, targets: Any, *, tool_length: float | None = None
+def aim_loaded(machine: Any, targets: Any, *, tool_length: float | None = None,
+               masses_of: Any = None
                ) -> tuple[np.ndarray, GravityDeflection]:
     """Targets ``(N, w)`` (:func:`~pkmkit.calibration.controller.as_targets`) moved against
     ``machine``'s gravity deflection so that its loaded tool point reaches ``targets`` to second
@@ -119,7 +123,7 @@ def aim_loaded(machine: Any, targets: Any, *, tool_length: float | None = None
     """
     x = as_targets(machine, targets)
     q = commanded_q(machine, x, tool_length)
-    sag = gravity_deflection(machine, q, tool_length=tool_length)
+    sag = gravity_deflection(machine, q, tool_length=tool_length, masses_of=masses_of)
     d = sag.deflection
     ok = np.isfinite(d).all(axis=1)
     aimed = x.copy()
@@ -141,14 +145,16 @@ class LoadedAim:
     whose deflection is undefined (a singular configuration) is NaN: its block is refused rather
     than left uncorrected."""
 
-    def __init__(self, machine: Any, tool_length: float | None = None):
+    def __init__(self, machine: Any, tool_length: float | None = None, masses_of: Any = None):
         self.machine = machine
+        self.masses_of = masses_of
         self.tool_length = tool_length
         self.sizes: list[np.ndarray] = []
         self.note = ""
 
     def __call__(self, targets: np.ndarray) -> np.ndarray:
-        aimed, sag = aim_loaded(self.machine, targets, tool_length=self.tool_length)
+        aimed, sag = aim_loaded(self.machine, targets, tool_length=self.tool_length,
+                                masses_of=self.masses_of)
         size = np.linalg.norm(sag.deflection[:, :3], axis=1)
         self.sizes.append(size[np.isfinite(size)])
         self.note = sag.note

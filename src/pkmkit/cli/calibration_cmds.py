@@ -492,7 +492,7 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
         if gravity:
             from pkmkit.calibration.gravity import LoadedAim
 
-            aim = LoadedAim(identified, tl)
+            aim = LoadedAim(identified, tl, masses_of=nominal)
         try:
             corrected = correct_path(nominal, identified, path, tool_length=tl,
                                      progress=not as_json, aim=aim, **settings)
@@ -526,7 +526,8 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
             elif all(c in t.numbers for c in ("rx", "ry", "rz")):
                 targets = np.column_stack([targets] + [np.radians(t.numbers[c])
                                                        for c in ("rx", "ry", "rz")])
-        aimed, sag = aimed_targets(identified, targets, tl, gravity, scale, unit, as_json)
+        aimed, sag = aimed_targets(identified, targets, tl, gravity, scale, unit, as_json,
+                                   nominal)
         fixed, flags = correct_table(nominal, identified, aimed, max_correction=bound,
                                      tool_length=tl, progress=not as_json)
         from pkmkit.calibration.controller import as_targets

@@ -17,14 +17,16 @@ GRAVITY_OPTION = click.option(
 
 
 def aimed_targets(identified, targets: Any, tool_length: float | None, gravity: bool,
-                  scale: float, unit: str, quiet: bool) -> tuple[np.ndarray, dict | None]:
-    """The targets to correct (moved against the gravity deflection with ``gravity``) and the
-    JSON summary of that move (None without ``gravity``); prints one line unless ``quiet``."""
+                  scale: float, unit: str, quiet: bool, nominal: Any = None
+                  ) -> tuple[np.ndarray, dict | None]:
+    """The targets to correct (moved against the gravity deflection with ``gravity``, the
+    illustrative masses of ``nominal``'s kind) and the JSON summary of that move (None without
+    ``gravity``); prints one line unless ``quiet``."""
     if not gravity:
         return targets, None
     from pkmkit.calibration.gravity import aim_loaded
 
-    aimed, sag = aim_loaded(identified, targets, tool_length=tool_length)
+    aimed, sag = aim_loaded(identified, targets, tool_length=tool_length, masses_of=nominal)
     size = np.linalg.norm(sag.deflection[:, :3], axis=1)
     size = size[np.isfinite(size)]
     info = {"deflection_rms": float(np.sqrt(np.mean(size**2))) / scale if size.size else None,
