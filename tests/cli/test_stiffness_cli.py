@@ -102,6 +102,13 @@ def test_batch_flags_bad_rows_with_exit_3(run, tmp_path):
     m = machine("orthoglide")
     ref = stiffness(m, np.array([0.05, 0.0, 0.0]), wrench=[100.0, 0.0, 0.0])
     assert float(rows[2]["dx"]) == pytest.approx(ref.deflection[0] * 1e6, rel=1e-9)
+    # the loaded equilibrium beside it (the library's), empty where the pose is unreachable
+    from pkmkit.stiffness.equilibrium import loaded_equilibrium
+
+    lib = loaded_equilibrium(m, np.array([0.05, 0.0, 0.0]), np.array([100.0, 0.0, 0.0]))
+    assert float(rows[2]["dx_loaded"]) == pytest.approx(lib.loaded[0] * 1e6, rel=1e-12)
+    assert float(rows[2]["geometric_share"]) == pytest.approx(lib.share, rel=1e-9)
+    assert rows[1]["dx_loaded"] in ("", "nan", "NaN")
 
 
 def test_machine_file_error_exits_1_with_the_line(run, tmp_path):

@@ -139,3 +139,17 @@ def test_joint_chains_and_cranks_are_refused():
     with pytest.raises(InputError, match="crank"):
         m = machine("delta")
         loaded_equilibrium(m, m.home_pose, np.zeros(3))
+
+
+def test_rows_converging_at_different_steps_match_single_calls():
+    """A batch whose rows need different numbers of Newton steps (a zero load is done at once):
+    each row is its single-pose equilibrium."""
+    m, data, _ = _hexapod()
+    poses = np.array([X0, X0 * 0.5, X0])
+    loads = np.array([WRENCH * 0.0, WRENCH, WRENCH * 50.0])
+    batch = loaded_equilibrium(m, poses, loads, data=data)
+    assert len(set(batch.iterations.tolist())) > 1
+    for k in range(3):
+        one = loaded_equilibrium(m, poses[k], loads[k], data=data)
+        np.testing.assert_allclose(batch.loaded[k], one.loaded, rtol=1e-12, atol=0)
+    np.testing.assert_array_equal(batch.loaded[0], 0.0)

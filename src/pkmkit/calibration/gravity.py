@@ -103,10 +103,12 @@ def _platform_gravity(machine: Any, q: np.ndarray, tool_length: float | None,
         rows = np.flatnonzero(ok)[good]
         tip = [0.0, 0.0, -(tool_length or 0.0)]
         out[rows] = platform_gravity_deflection(machine, poses[good], masses, point=tip)[0]
+    rods = masses.rod_mass + masses.strut_parts(machine.model.n_rods)[0]
+    slides = bool((machine.model.rod_kind == 0).any())
     note = ("illustrative masses of pkmkit.dynamics.defaults (no source gives them): platform "
-            f"{masses.platform_mass:g} kg at its frame origin, rods "
-            f"{float(np.max(masses.rod_mass + masses.strut_parts(machine.model.n_rods)[0])):.3g}"
-            " kg each")
+            f"{masses.platform_mass:g} kg at its frame origin"
+            + (f", carriages {float(np.max(masses.carriage_mass)):g} kg" if slides else "")
+            + f", rods or struts up to {float(np.max(rods)):.3g} kg")
     return GravityDeflection(out, note)
 
 

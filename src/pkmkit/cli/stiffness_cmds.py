@@ -135,7 +135,9 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     Batch input columns: the pose (as for `pkmkit ik`). Output columns: the pose, kt1..kt3
     (translational eigen-stiffnesses, N/µm, ascending), kr1..kr3 (rotational, N·m/µrad; 6-D
     twists), rigid (rigid directions), the deflection under --wrench (dx.. in µm, rx.. in
-    µrad), K11..Kdd (SI) and status.
+    µrad; rod machines on slides or struts also the loaded equilibrium dx_loaded.. and the
+    geometric-stiffness share geometric_share), K11..Kdd (SI) and status (not-converged: no
+    loaded equilibrium).
     """
     from pkmkit.stiffness import stiffness, twist_names
 
@@ -410,6 +412,13 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
         if wrench is not None:
             for j, name in enumerate(names):
                 out[name] = r.deflection[:, j] * PER_MICRO
+            loaded = None if face.takes_q else _loaded(m, x, wrench, data, reference)
+            if loaded is not None and not isinstance(loaded, str):
+                for j, name in enumerate(names):
+                    out[f"{name}_loaded"] = loaded.loaded[:, j] * PER_MICRO
+                out["geometric_share"] = loaded.share
+                late = (status == 0) & (loaded.status != 0)
+                status = np.where(late, loaded.status, status)
         flat = r.stiffness.reshape(len(x), d * d)
         for i in range(d):
             for j in range(d):

@@ -46,6 +46,8 @@ from pkmkit.stiffness.data import StiffnessData, default_data
 
 #: Most Newton steps.
 MAX_ITERATIONS = 30
+#: Poses solved together (the finite-difference Jacobians take (d + n + m)² numbers each).
+BLOCK = 4096
 #: Newton stops when its step (scaled unknowns, m) is below this fraction of the unknowns plus
 #: :data:`FLOOR` times the machine's size (the rounding of its rod lengths).
 STEP_TOL = 1e-9
@@ -166,9 +168,11 @@ def loaded_equilibrium(machine: Any, pose: Any, wrench: Any, *, data: StiffnessD
     ok = (status == Status.OK) & np.isfinite(linear).all(axis=1)
     loaded = np.full(linear.shape, np.nan)
     steps = np.zeros(len(linear), dtype=int)
-    if ok.any():
-        got, conv, its = _solve(rods, full[ok], q0[ok], w[ok], linear[ok], data, r, length)
-        rows = np.flatnonzero(ok)
+    good = np.flatnonzero(ok)
+    for start in range(0, good.size, BLOCK):  # blocks: the Jacobians' memory
+        rows = good[start:start + BLOCK]
+        got, conv, its = _solve(rods, full[rows], q0[rows], w[rows], linear[rows], data, r,
+                                length)
         loaded[rows[conv]] = got[conv]
         steps[rows] = its
         status[rows[~conv]] = Status.NOT_CONVERGED
@@ -217,32 +221,33 @@ def _solve(rods: _Rods, x0: np.ndarray, q0: np.ndarray, w: np.ndarray, linear: n
             u[:, 3:] /= length
         return u, z[:, d:d + rods.n], z[:, d + rods.n:] * k_ref
 
-    def geometry(u):
-        p = p0.copy()
+    def geometry(u, idx):
+        p = p0[idx].copy()
         p[:, :min(d, 3)] += u[:, :min(d, 3)]
-        rot = rotvec_to_matrix(u[:, 3:6]) @ r0 if full else r0
+        rot = rotvec_to_matrix(u[:, 3:6]) @ r0[idx] if full else r0[idx]
         return p, rot
 
-    def residual(z):
+    def residual(z, idx):
+        """Scaled residuals ``(k, nu)`` at unknowns ``z (k, nu)`` of the rows ``idx (k,)``."""
         u, dq, t = unpack(z)
-        p, rot = geometry(u)
-        arm, vec, _ = rods.ends(p, rot, q0 + dq)
+        p, rot = geometry(u, idx)
+        arm, vec, _ = rods.ends(p, rot, q0[idx] + dq)
         lengths = np.linalg.norm(vec, axis=2)
         e = vec / lengths[:, :, None]
-        rest = rest0 + np.where(strut, dq[:, rods.actuator], 0.0)
+        rest = rest0[idx] + np.where(strut, dq[:, rods.actuator], 0.0)
         pull = t[:, :, None] * e
         out = np.empty((len(z), nu))
-        out[:, :min(d, 3)] = (force - pull.sum(axis=1))[:, :min(d, 3)] / k_ref
+        out[:, :min(d, 3)] = (force[idx] - pull.sum(axis=1))[:, :min(d, 3)] / k_ref
         if full:
             tip = np.einsum("nij,j->ni", rot, r)
-            out[:, 3:6] = (moment + np.cross(tip, force)
+            out[:, 3:6] = (moment[idx] + np.cross(tip, force[idx])
                            - np.cross(arm, pull).sum(axis=1)) / (k_ref * length)
         # ∂ε/∂q_a: −e·u_j for a slide, −1 for a strut
         de = np.where(strut, -1.0, -np.einsum("nmi,mi->nm", e, rods.axis))
         drive = rods.k_a * dq
         np.add.at(drive.T, rods.actuator, (t * de).T)
         out[:, d:d + rods.n] = drive / k_ref
-        out[:, d + rods.n:] = (lengths - rest) - comp * t
+        out[:, d + rods.n:] = (lengths - rest) - comp[idx] * t
         return out
 
     z = np.zeros((n_rows, nu))
@@ -259,12 +264,12 @@ def _solve(rods: _Rods, x0: np.ndarray, q0: np.ndarray, w: np.ndarray, linear: n
         if not act.size:
             break
         za = z[act]
-        f0 = residual(za)
+        f0 = residual(za, act)
         jac = np.empty((len(act), nu, nu))
         for k in range(nu):
             dz = np.zeros(nu)
             dz[k] = h
-            jac[:, :, k] = (residual(za + dz) - residual(za - dz)) / (2 * h)
+            jac[:, :, k] = (residual(za + dz, act) - residual(za - dz, act)) / (2 * h)
         with np.errstate(invalid="ignore"):
             good = np.isfinite(jac).all(axis=(1, 2)) & (np.abs(np.linalg.det(
                 jac / np.abs(jac).max(axis=(1, 2), keepdims=True))) > 1e-14)
@@ -281,7 +286,7 @@ def _solve(rods: _Rods, x0: np.ndarray, q0: np.ndarray, w: np.ndarray, linear: n
     converged = done & np.isfinite(z).all(axis=1)
     u, _, _ = unpack(z)
     if full:
-        _, rot = geometry(u)
+        _, rot = geometry(u, np.arange(n_rows))
         u[:, :3] += np.einsum("nij,j->ni", rot, r) - lever  # the reference point's move
     u[~converged] = np.nan
     return u, converged, steps
