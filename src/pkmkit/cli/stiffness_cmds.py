@@ -266,7 +266,8 @@ def _print_loaded(loaded, d) -> None:
         click.echo(f"  loaded equilibrium: none ({loaded})")
         return
     if loaded.status != 0:
-        click.echo("  loaded equilibrium: not found (see below)")
+        click.echo("  loaded equilibrium: not found (Newton on the exact geometry did not "
+                   "converge from the linear deflection)")
         return
     for label, values in (("loaded equilibrium", loaded.loaded),
                           ("difference (geometric stiffness)", loaded.difference)):

@@ -275,7 +275,7 @@ def _solve(rods: _Rods, x0: np.ndarray, q0: np.ndarray, w: np.ndarray, linear: n
                 jac / np.abs(jac).max(axis=(1, 2), keepdims=True))) > 1e-14)
         step = np.full((len(act), nu), np.nan)
         if good.any():
-            step[good] = -np.linalg.solve(jac[good], f0[good][:, :, None])[:, :, 0]
+            step[good] = _steps(jac[good], f0[good])
         z[act] = za + step
         steps[act] += 1
         small = (np.abs(step).max(axis=1)
@@ -290,3 +290,19 @@ def _solve(rods: _Rods, x0: np.ndarray, q0: np.ndarray, w: np.ndarray, linear: n
         u[:, :3] += np.einsum("nij,j->ni", rot, r) - lever  # the reference point's move
     u[~converged] = np.nan
     return u, converged, steps
+
+
+def _steps(jac: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Newton steps ``−J⁻¹ f`` ``(k, nu)`` of ``jac (k, nu, nu)``; NaN rows where a Jacobian
+    is singular to working precision."""
+    with np.errstate(all="ignore"):
+        try:
+            return -np.linalg.solve(jac, f[:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:
+            out = np.full(f.shape, np.nan)
+            for k in range(len(jac)):  # the rare batch holding a singular row: row by row
+                try:
+                    out[k] = -np.linalg.solve(jac[k], f[k])
+                except np.linalg.LinAlgError:
+                    pass
+            return out
