@@ -162,6 +162,9 @@ def test_gravity_deflection_of_a_joint_chain_machine(run, as_json):
     expected, _ = chain_gravity_deflection(m, np.array([0.983186, 1.064076, 0.988005, 0, 0]))
     np.testing.assert_allclose(data["gravity_deflection"], expected[0], rtol=1e-12)
     assert "illustrative masses" in data["masses"]
+    loaded = as_json(run("stiffness", "tripteor-x7", "--q", q, "--units", "mm", "--wrench",
+                         "0,0,-1000,0,0,0", "--json"))
+    assert loaded["deflection_loaded"] is None and "linear" in loaded["loaded_note"]
     text = run("stiffness", "tripteor-x7", "--q", q, "--units", "mm", "--gravity").output
     assert "deflection under its own weight: [16.833, 9.2813, -7.681] µm" in text
 

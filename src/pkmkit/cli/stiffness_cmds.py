@@ -199,6 +199,8 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     if wrench is not None and not face.takes_q:
         loaded = _loaded(m, x, wrench, data, reference)
         payload.update(_loaded_payload(loaded))
+    elif wrench is not None:
+        payload.update(_loaded_payload("joint-chain machines: the linear deflection only"))
     add_to_payload(payload, check, units, set_status=False)
     too_far = ("" if wrench is None else
                linear_range_problem(result.deflection, m.length_scale, units))
