@@ -229,7 +229,7 @@ def test_no_loaded_equilibrium_is_doubtful(run, monkeypatch):
     def failing(*args, **kwargs):
         got = real(*args, **kwargs)
         return dataclasses.replace(got, loaded=got.loaded * np.nan,
-                                   status=np.asarray(Status.NOT_CONVERGED))
+                                   status=np.full(len(got.status), Status.NOT_CONVERGED))
 
     monkeypatch.setattr(equilibrium, "loaded_equilibrium", failing)
     res = run("stiffness", "orthoglide", "--pose", "0,0,0", "--wrench", "0,0,-500")

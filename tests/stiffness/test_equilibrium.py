@@ -11,7 +11,7 @@ import pytest
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
-from pkmkit.exceptions import InputError
+from pkmkit.exceptions import ConvergenceError, InputError
 from pkmkit.machines.registry import machine
 from pkmkit.status import Status
 from pkmkit.stiffness import Section, default_data
@@ -130,6 +130,8 @@ def test_no_equilibrium_is_flagged_not_converged():
     got = loaded_equilibrium(m, np.array([X0, X0]), np.array([WRENCH, WRENCH * 1e6]), data=data)
     assert got.status.tolist() == [Status.OK, Status.NOT_CONVERGED]
     assert np.isnan(got.loaded[1]).all() and np.isfinite(got.linear[1]).all()
+    with pytest.raises(ConvergenceError, match="no loaded equilibrium"):
+        loaded_equilibrium(m, X0, WRENCH * 1e6, data=data)  # one pose: a typed error
 
 
 def test_joint_chains_and_cranks_are_refused():

@@ -198,6 +198,7 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     loaded = None
     if wrench is not None and not face.takes_q:
         loaded = _loaded(m, x, wrench, data, reference)
+        loaded = loaded if isinstance(loaded, str) else loaded.single()
         payload.update(_loaded_payload(loaded))
     elif wrench is not None:
         payload.update(_loaded_payload("joint-chain machines: the linear deflection only"))
@@ -247,8 +248,9 @@ def _loaded(m, x, wrench, data, reference):
     (:func:`pkmkit.stiffness.equilibrium.loaded_equilibrium`), or why there is none (text)."""
     from pkmkit.stiffness.equilibrium import loaded_equilibrium
 
-    try:
-        return loaded_equilibrium(m, x, wrench, data=data, reference=reference)
+    try:  # a batch (of one pose): a row without equilibrium is flagged, not raised
+        return loaded_equilibrium(m, np.atleast_2d(x), np.atleast_2d(wrench), data=data,
+                                  reference=reference)
     except InputError as exc:  # cranks: no model of their exact geometry under load
         return str(exc)
 

@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.exceptions import InputError
+from pkmkit.exceptions import ConvergenceError, InputError
 from pkmkit.model.rods import CRANK, SLIDE, STRUT
 from pkmkit.spatial.rotation import rotvec_to_matrix
 from pkmkit.status import Status
@@ -144,6 +144,8 @@ def loaded_equilibrium(machine: Any, pose: Any, wrench: Any, *, data: StiffnessD
     Raises:
         InputError: a machine with cranks or joint chains, a wrench of the wrong width, data
             that do not fit; for a single pose the typed errors of :func:`stiffness`.
+        ConvergenceError: a single pose whose equilibrium is not found (a batch flags the row
+            ``NOT_CONVERGED``).
     """
     from pkmkit.stiffness.api import stiffness
 
@@ -188,7 +190,14 @@ def loaded_equilibrium(machine: Any, pose: Any, wrench: Any, *, data: StiffnessD
     share = np.where(np.linalg.norm(loaded, axis=1) > 0, share, 0.0)
     share[~np.isfinite(loaded).all(axis=1)] = np.nan
     out = LoadedDeflection(linear, loaded, diff, share, steps, status, length)
-    return out.single() if single else out
+    if not single:
+        return out
+    if status[0] == Status.NOT_CONVERGED:
+        raise ConvergenceError(
+            f"no loaded equilibrium of {machine.id!r} found from the linear deflection in "
+            f"{MAX_ITERATIONS} Newton steps: the load is beyond the small-displacement range or "
+            "the pose is near a singularity")
+    return out.single()
 
 
 def _solve(rods: _Rods, x0: np.ndarray, q0: np.ndarray, w: np.ndarray, linear: np.ndarray,
