@@ -111,3 +111,21 @@ def test_a_point_without_a_sag_is_refused_not_left_uncorrected(machines, monkeyp
     with pytest.raises(CorrectionRefused) as info:
         correct_path(nominal, true, path, aim=LoadedAim(true))
     assert info.value.blocks and all(np.isnan(b[2]) for b in info.value.blocks)
+
+
+def test_a_turning_platform_program_lands_its_loaded_tool_on_the_end_points():
+    """The Verne module (a platform that turns as it moves, struts of slides and rods): the
+    sag of its tool tip 0.1 m below the platform, rotation included, is aimed away."""
+    nominal = pkmkit.machine("verne")
+    true = nominal.with_defects(0.2 * random_defects(nominal, np.random.default_rng(1)))
+    path = read_gcode("G21 G90\nG0 X0 Y0 Z5\nG1 X20 Y0 Z5 F300\nG1 X20 Y20 Z0\n",
+                      origin=(0.0, 0.0, -0.1))
+    tl = 0.1
+    aim = LoadedAim(true, tl)
+    fixed = correct_path(nominal, true, path, aim=aim, tool_length=tl, max_correction=0.02)
+    assert fixed.kind.tolist()[:1] == ["G0"] and set(fixed.kind[1:]) == {"G1"}
+    assert aim.summary()["deflection_max"] > 1e-7
+    q = commanded_q(nominal, fixed.corrected, tl)
+    landed = reached(true, q, tl)[:, :3] + gravity_deflection(true, q,
+                                                              tool_length=tl).deflection[:, :3]
+    np.testing.assert_allclose(landed, fixed.targets, atol=1e-10)
