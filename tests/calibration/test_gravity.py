@@ -15,7 +15,7 @@ from pkmkit.calibration.compensation import correct_table
 from pkmkit.calibration.controller import commanded_q, reached
 from pkmkit.calibration.gravity import aim_loaded, gravity_beside_residual, gravity_deflection
 from pkmkit.calibration.simulate import random_defects
-from pkmkit.exceptions import UnsupportedOperationError
+from pkmkit.exceptions import InputError
 
 
 def _machines(name):
@@ -46,10 +46,11 @@ def _scale_gravity(monkeypatch, factor):
     g = np.array([0.0, 0.0, -9.81 * factor])
     monkeypatch.setattr(chain_gravity, "illustrative_masses", lambda m: chain(m, gravity=g))
     monkeypatch.setattr(defaults, "default_masses",
-                        lambda m: dataclasses.replace(rods(m), gravity=g))
+                        lambda m, **kw: dataclasses.replace(rods(m, **kw), gravity=g))
 
 
-@pytest.mark.parametrize("name, tl", [("tripteor-x7", 0.15), ("orthoglide", None)])
+@pytest.mark.parametrize("name, tl", [("tripteor-x7", 0.15), ("orthoglide", None),
+                                      ("dietmaier-hexapod", 0.15), ("verne", 0.1)])
 def test_the_loaded_tool_point_of_the_compensated_machine_hits_the_target(monkeypatch, name,
                                                                           tl):
     """The error left is of second order in the deflection: a tenth of the weight leaves a
@@ -85,9 +86,24 @@ def test_the_tool_axis_of_a_joint_chain_is_aimed_too():
     assert np.allclose(aimed[0, 3:], expected / np.linalg.norm(expected), atol=1e-15)
 
 
-def test_a_turning_platform_has_no_gravity_model_yet():
-    m = pkmkit.machine("gough-stewart")
-    with pytest.raises(UnsupportedOperationError, match="gravity deflection"):
+def test_the_platform_rotation_of_a_hexapod_is_aimed_too():
+    """A six-actuator target's rotation vector is turned back by the sag's rotation:
+    exp(−δθ) R."""
+    from scipy.spatial.transform import Rotation
+
+    _, identified = _machines("dietmaier-hexapod")
+    targets = reached(identified, identified.home_q[None, :], 0.1)
+    aimed, sag = aim_loaded(identified, targets, tool_length=0.1)
+    turn = sag.deflection[0, 3:]
+    assert np.linalg.norm(turn) > 1e-9
+    expected = (Rotation.from_rotvec(-turn) * Rotation.from_rotvec(targets[0, 3:])).as_rotvec()
+    np.testing.assert_allclose(aimed[0, 3:], expected, atol=1e-15)
+    np.testing.assert_allclose(aimed[0, :3], targets[0, :3] - sag.deflection[0, :3], atol=1e-15)
+
+
+def test_cranks_have_no_gravity_model():
+    m = pkmkit.machine("delta")
+    with pytest.raises(InputError, match="crank"):
         gravity_deflection(m, m.home_q)
 
 
@@ -117,5 +133,11 @@ def test_the_report_figure_is_the_deflection_at_the_measured_configurations():
     assert "illustrative" in out["note"]
     assert gravity_beside_residual(_Result(m, 1e-6), _Measurements(None)) is None
     hexapod = pkmkit.machine("gough-stewart")
-    refused = gravity_beside_residual(_Result(hexapod, 1e-6), _Measurements(hexapod.home_q[None]))
-    assert refused["available"] is False and "turning platform" in refused["reason"]
+    q = hexapod.home_q + np.random.default_rng(5).uniform(-0.01, 0.01, (6, 6))
+    out = gravity_beside_residual(_Result(hexapod, 1e-6), _Measurements(q))
+    d = gravity_deflection(hexapod, q).deflection[:, :3]
+    assert out["available"] and out["configurations"] == 6
+    assert out["rms"] == pytest.approx(np.sqrt(np.mean(np.sum(d**2, axis=1))), rel=1e-12)
+    delta = pkmkit.machine("delta")
+    refused = gravity_beside_residual(_Result(delta, 1e-6), _Measurements(delta.home_q[None]))
+    assert refused["available"] is False and "crank" in refused["reason"]

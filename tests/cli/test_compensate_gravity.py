@@ -1,5 +1,5 @@
 """``pkmkit compensate --gravity``: the corrected table aims the calibrated machine's loaded
-tool point at the targets (:mod:`pkmkit.calibration.gravity`); G-code is refused."""
+tool point at the targets (:mod:`pkmkit.calibration.gravity`), the G-code program too."""
 
 from __future__ import annotations
 
@@ -47,7 +47,7 @@ def test_gravity_moves_the_corrected_targets_by_the_sag(run, as_json, truth, tmp
     from pkmkit.calibration.compensation import grid_targets
 
     targets = grid_targets([-0.1, -0.1, 0.1], [0.1, 0.1, 0.2], [2, 2, 2])
-    aimed, sag = aim_loaded(identified, targets)
+    aimed, sag = aim_loaded(identified, targets, masses_of=nominal)
     expected, _ = correct_table(nominal, identified, aimed, max_correction=1.0)
     got = _corrected(tmp_path / "loaded.csv")
     assert np.allclose(got, expected, atol=1e-10, rtol=0)  # the file keeps 10 digits
@@ -56,10 +56,32 @@ def test_gravity_moves_the_corrected_targets_by_the_sag(run, as_json, truth, tmp
                                                                      axis=1), rtol=0.05)
 
 
-def test_gravity_is_refused_on_gcode(run, truth, tmp_path):
+def test_gravity_corrects_a_gcode_program(run, as_json, truth, tmp_path):
+    """The program's corrected end points are the library's (correct_path with LoadedAim), the
+    JSON says how large the sag was; a bound below the sag refuses blocks by their line."""
+    from pkmkit.calibration.corrected_program import correct_path
+    from pkmkit.calibration.gravity import LoadedAim
+    from pkmkit.motion.gcode import read_gcode
+
     program = tmp_path / "p.nc"
-    program.write_text("G21 G90\nG0 X0 Y0 Z100\nG1 X10 Y0 Z100 F300\n")
-    res = run("compensate", "linear-delta", "--calibrated", truth, "--gcode", program,
-              "--gravity", "--out", tmp_path / "fixed.nc")
-    assert res.exit_code == 2 and "--gravity corrects tables" in res.output
-    assert not (tmp_path / "fixed.nc").exists()
+    program.write_text("G21 G90\nG0 X0 Y0 Z100\nG1 X10 Y0 Z100 F300\nG1 X10 Y10 Z100\n")
+    out = as_json(run("compensate", "linear-delta", "--calibrated", truth, "--gcode", program,
+                      "--gravity", "--units", "mm", "--out", tmp_path / "fixed.nc", "--json"))
+    assert 1e-4 < out["gravity"]["deflection_max"] < 1e-2  # mm
+    # the linear Delta's masses, though the calibrated file has no kind of its own
+    assert "carriages 8 kg, platform 15 kg" in out["gravity"]["masses"]
+    nominal, identified = pkmkit.machine("linear-delta"), pkmkit.load(truth)
+    path = read_gcode(program.read_text())
+    expected = correct_path(nominal, identified, path,
+                            aim=LoadedAim(identified, masses_of=nominal))
+    back = read_gcode((tmp_path / "fixed.nc").read_text())
+    assert [s.rapid for s in back.segments] == expected.rapid.tolist()
+    ends = np.array([s.end for s in back.segments])
+    np.testing.assert_allclose(ends, expected.corrected, atol=6e-8)  # 4 decimals in mm
+    plain = correct_path(nominal, identified, path)
+    assert np.linalg.norm(ends - plain.corrected, axis=1).min() > 1e-7  # moved by the sag
+    refused = run("compensate", "linear-delta", "--calibrated", truth, "--gcode", program,
+                  "--gravity", "--units", "mm",
+                  "--max-correction", "1e-4", "--out", tmp_path / "no.nc")
+    assert refused.exit_code == 3 and "p.nc:2:" in refused.output
+    assert not (tmp_path / "no.nc").exists()

@@ -102,6 +102,13 @@ def test_batch_flags_bad_rows_with_exit_3(run, tmp_path):
     m = machine("orthoglide")
     ref = stiffness(m, np.array([0.05, 0.0, 0.0]), wrench=[100.0, 0.0, 0.0])
     assert float(rows[2]["dx"]) == pytest.approx(ref.deflection[0] * 1e6, rel=1e-9)
+    # the loaded equilibrium beside it (the library's), empty where the pose is unreachable
+    from pkmkit.stiffness.equilibrium import loaded_equilibrium
+
+    lib = loaded_equilibrium(m, np.array([0.05, 0.0, 0.0]), np.array([100.0, 0.0, 0.0]))
+    assert float(rows[2]["dx_loaded"]) == pytest.approx(lib.loaded[0] * 1e6, rel=1e-12)
+    assert float(rows[2]["geometric_share"]) == pytest.approx(lib.share, rel=1e-9)
+    assert rows[1]["dx_loaded"] in ("", "nan", "NaN")
 
 
 def test_machine_file_error_exits_1_with_the_line(run, tmp_path):
@@ -142,7 +149,7 @@ def test_a_pose_beyond_the_strokes_is_flagged_with_exit_3(machine, pose):
 
 def test_gravity_deflection_of_a_joint_chain_machine(run, as_json):
     """--gravity prints the library's chain_gravity_deflection (JSON: m, rad) and the masses'
-    note; rod-leg machines and batches are refused."""
+    note."""
     import numpy as np
 
     from pkmkit.machines.registry import machine
@@ -155,7 +162,76 @@ def test_gravity_deflection_of_a_joint_chain_machine(run, as_json):
     expected, _ = chain_gravity_deflection(m, np.array([0.983186, 1.064076, 0.988005, 0, 0]))
     np.testing.assert_allclose(data["gravity_deflection"], expected[0], rtol=1e-12)
     assert "illustrative masses" in data["masses"]
+    loaded = as_json(run("stiffness", "tripteor-x7", "--q", q, "--units", "mm", "--wrench",
+                         "0,0,-1000,0,0,0", "--json"))
+    assert loaded["deflection_loaded"] is None and "linear" in loaded["loaded_note"]
     text = run("stiffness", "tripteor-x7", "--q", q, "--units", "mm", "--gravity").output
     assert "deflection under its own weight: [16.833, 9.2813, -7.681] µm" in text
-    refused = run("stiffness", "orthoglide", "--pose", "0,0,0", "--gravity")
-    assert refused.exit_code == 1 and "joint-chain machines" in refused.output
+
+
+def test_gravity_deflection_of_rod_machines(run, as_json):
+    """--gravity on a hexapod (at a moved reference point: the tool tip) and a translating
+    machine prints the library's weight deflections; a batch is refused."""
+    from pkmkit.dynamics.defaults import default_masses
+    from pkmkit.stiffness.loads import load_deflection
+    from pkmkit.stiffness.platform_gravity import platform_gravity_deflection
+
+    m = machine("dietmaier-hexapod")
+    pose = m.home_pose + np.array([0.01, 0.0, 0.02, 0.0, 0.05, 0.0])
+    from scipy.spatial.transform import Rotation
+
+    angles = Rotation.from_rotvec(pose[3:]).as_euler("xyz", degrees=True)  # --angles xyz
+    text = ",".join(f"{v:.17g}" for v in np.concatenate([pose[:3], angles]))
+    data = as_json(run("stiffness", "dietmaier-hexapod", "--pose", text, "--gravity",
+                       "--reference", "0,0,-0.15", "--units", "m", "--json"))
+    expected, _ = platform_gravity_deflection(m, pose[None], point=[0, 0, -0.15])
+    np.testing.assert_allclose(data["gravity_deflection"], expected[0], rtol=1e-9)
+    assert np.abs(expected[0, 3:]).max() > 0 and "illustrative masses" in data["masses"]
+    o = machine("orthoglide")
+    data = as_json(run("stiffness", "orthoglide", "--pose", "0.02,0,0", "--gravity", "--units",
+                       "m", "--json"))
+    sag = load_deflection(o, np.array([[0.02, 0.0, 0.0]]), default_masses(o)).gravity[0]
+    np.testing.assert_allclose(data["gravity_deflection"], sag, rtol=1e-12)
+    assert "rotation" not in run("stiffness", "orthoglide", "--pose", "0,0,0",
+                                 "--gravity").output
+
+
+def test_loaded_equilibrium_beside_the_linear_deflection(run, as_json):
+    """--wrench on a rod machine: the library's loaded equilibrium, its difference from the
+    linear deflection and the geometric-stiffness share (JSON, SI); text lines in µm."""
+    from pkmkit.stiffness.equilibrium import loaded_equilibrium
+
+    m = machine("gough-stewart")
+    args = ("stiffness", "gough-stewart", "--pose", "0,0,0.8,0,0,0", "--units", "m",
+            "--wrench", "500,0,-1000,0,0,0", "--reference", "0,0,-0.15")
+    out = as_json(run(*args, "--json"))
+    lib = loaded_equilibrium(m, np.array([0, 0, 0.8, 0, 0, 0]),
+                             np.array([500.0, 0, -1000, 0, 0, 0]), reference=[0, 0, -0.15])
+    np.testing.assert_allclose(out["deflection_loaded"], lib.loaded, rtol=1e-12)
+    np.testing.assert_allclose(out["deflection_difference"], lib.difference, rtol=1e-12)
+    assert out["geometric_stiffness_share"] == pytest.approx(lib.share, rel=1e-12)
+    assert out["loaded_status"] == "ok" and 0 < lib.share < 1e-3
+    assert np.abs(lib.difference).max() > 0
+    text = run(*args).output
+    assert "loaded equilibrium: [13.882, 0, -1.9537] µm" in text
+    assert "geometric-stiffness share: 2.82e-05" in text
+
+
+def test_no_loaded_equilibrium_is_doubtful(run, monkeypatch):
+    """An equilibrium Newton does not find: said on standard error, exit status 3."""
+    import dataclasses
+
+    import pkmkit.stiffness.equilibrium as equilibrium
+    from pkmkit.status import Status
+
+    real = equilibrium.loaded_equilibrium
+
+    def failing(*args, **kwargs):
+        got = real(*args, **kwargs)
+        return dataclasses.replace(got, loaded=got.loaded * np.nan,
+                                   status=np.full(len(got.status), Status.NOT_CONVERGED))
+
+    monkeypatch.setattr(equilibrium, "loaded_equilibrium", failing)
+    res = run("stiffness", "orthoglide", "--pose", "0,0,0", "--wrench", "0,0,-500")
+    assert res.exit_code == 3
+    assert "not found" in res.output and "no loaded equilibrium found" in res.output

@@ -9,6 +9,7 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from pkmkit.stiffness import Section, default_data, stiffness
+from pkmkit.stiffness.equilibrium import loaded_equilibrium
 
 from .helpers import cubic_hexapod
 
@@ -63,5 +64,9 @@ def test_linear_deflection_is_the_small_load_limit_of_the_equilibrium():
         exact = _equilibrium(m, x0, q0, k_a, k_r, w)
         np.testing.assert_allclose(exact, linear, rtol=1e-3, atol=1e-4 * np.abs(linear).max())
         gaps.append(np.abs(exact - linear).max())
+        # pkmkit's own loaded equilibrium is this one, to a millionth of the gap
+        loaded = loaded_equilibrium(m, x0, w, data=data)
+        np.testing.assert_allclose(loaded.loaded, exact, rtol=0, atol=1e-5 * gaps[-1])
+        np.testing.assert_allclose(loaded.linear, linear, rtol=1e-12)
     # the gap is the second-order (geometric stiffness) term: four times larger at twice the load
     assert 3.5 < gaps[1] / gaps[0] < 4.5

@@ -14,6 +14,8 @@ The corrected program has the original's moves, in order, with their motion type
   the controller will interpolate between the corrected end points. Where they do not, the move
   is halved, recursively, into moves of the same type — subdivided only where the correction
   needs it;
+- a further correction field (``aim``: the calibrated machine's gravity sag, ``X → X − δ(q_X)``)
+  is applied to every programmed point before the calibration's, under the same rules;
 - a correction larger than ``max_correction`` anywhere along a block (or a point the
   calibrated machine cannot reach, or one that commands an actuator beyond its stroke)
   refuses that block: :class:`CorrectionRefused` names every
@@ -27,6 +29,7 @@ arc is refused).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -221,7 +224,8 @@ def _pieces(c: np.ndarray, seg, tolerance: float) -> list[tuple[int, int, np.nda
 def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
                  tolerance: float = DEFAULT_TOLERANCE,
                  max_correction: float | None = None,
-                 tool_length: float | None = None, progress: bool = False) -> CorrectedPath:
+                 tool_length: float | None = None, progress: bool = False,
+                 aim: Callable[[np.ndarray], np.ndarray] | None = None) -> CorrectedPath:
     """The corrected moves of a parsed G-code program (module docstring).
 
     Args:
@@ -234,6 +238,10 @@ def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
             :func:`default_max_correction` of ``nominal``).
         tool_length: for machines with a tool length.
         progress: show a progress bar.
+        aim: a further correction field applied to every programmed point before the
+            calibration's, ``(k, 3) → (k, 3)`` m (NaN rows: no aim there, the block is refused),
+            e.g. :class:`pkmkit.calibration.gravity.LoadedAim`: the loaded tool point aimed at
+            the program (``X → X − δ(q_X)``).
 
     Raises:
         InputError: ``step``, ``tolerance`` or ``max_correction`` not finite and > 0, or more
@@ -272,7 +280,7 @@ def correct_path(nominal, identified, path: Path, *, step: float = DEFAULT_STEP,
     n = identified.n_actuators
 
     def command(part: np.ndarray) -> np.ndarray:
-        q = commanded_q(identified, part, tool_length)
+        q = commanded_q(identified, part if aim is None else aim(part), tool_length)
         return np.concatenate([reached(nominal, q, tool_length)[:, :3], q], axis=1)
 
     both = chunked(command, x, progress, "compensating")

@@ -16,7 +16,7 @@ from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
 
 from .calibration_options import CAL_UNITS_OPTION, MEASURE_OPTION
-from .gravity_option import GRAVITY_OPTION, aimed_targets
+from .gravity_option import GRAVITY_OPTION, aimed_targets, gravity_line
 from .limits import MAX_PIECES, MAX_SIMULATED, check_count, check_noise, check_tool_lengths
 from .options import JSON_OPTION, emit_json, machine_document_path, resolve_machine
 from .register_cmd import register_cmd
@@ -473,8 +473,6 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
         from pkmkit.calibration.controller import target_width
         from pkmkit.motion.gcode import read_gcode
 
-        if gravity:
-            raise click.UsageError("--gravity corrects tables (--grid, --targets), not G-code")
         if target_width(nominal) != 3:
             raise InputError("G-code correction is for machines whose commands are tool "
                              "points; a 5-axis or six-actuator machine's correction includes "
@@ -490,16 +488,25 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
         check_count(path.length / settings["step"], MAX_PIECES,
                     f"pieces of {settings['step'] / scale:g} {unit} (--step) over the "
                     f"program's {path.length / scale:.6g} {unit}", "give a longer --step")
+        aim = None
+        if gravity:
+            from pkmkit.calibration.gravity import LoadedAim
+
+            aim = LoadedAim(identified, tl, masses_of=nominal)
         try:
             corrected = correct_path(nominal, identified, path, tool_length=tl,
-                                     progress=not as_json, **settings)
+                                     progress=not as_json, aim=aim, **settings)
         except CorrectionRefused as exc:
             _refuse_blocks(exc, Path(gcode).name, settings["max_correction"], scale, unit,
                            as_json)
         targets, fixed = corrected.targets, corrected.corrected
+        sag = None if aim is None else aim.summary(scale)
+        if sag is not None and not as_json:
+            gravity_line(sag, unit, "program points")
         text = corrected_gcode(corrected, origin=shift, header=(
             f"corrected by pkmkit compensate {nominal.id} --calibrated {Path(calibrated).name}"
-            f"\nfrom {Path(gcode).name}: {len(fixed)} moves for its {corrected.blocks} blocks"
+            + (" --gravity (the loaded tool point aimed at the program)" if gravity else "")
+            + f"\nfrom {Path(gcode).name}: {len(fixed)} moves for its {corrected.blocks} blocks"
             f" (tolerance {corrected.tolerance / scale:g} {unit})"))
     else:
         if grid_text:
@@ -519,7 +526,8 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
             elif all(c in t.numbers for c in ("rx", "ry", "rz")):
                 targets = np.column_stack([targets] + [np.radians(t.numbers[c])
                                                        for c in ("rx", "ry", "rz")])
-        aimed, sag = aimed_targets(identified, targets, tl, gravity, scale, unit, as_json)
+        aimed, sag = aimed_targets(identified, targets, tl, gravity, scale, unit, as_json,
+                                   nominal)
         fixed, flags = correct_table(nominal, identified, aimed, max_correction=bound,
                                      tool_length=tl, progress=not as_json)
         from pkmkit.calibration.controller import as_targets
@@ -544,8 +552,8 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
                else None, "correction_max": float(np.max(corr)) if ok.any() else None,
                "max_correction": bound / scale,
                "check": None if check is None else check.to_dict(scale)}
+    payload["gravity"] = sag
     if not gcode:
-        payload["gravity"] = sag
         payload["flagged"] = [{"row": int(k) + 1,
                                "line": table.lines[k] if table is not None else None,
                                "status": str(flags.status[k]), "reason": described[k]}

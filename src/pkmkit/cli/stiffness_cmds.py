@@ -114,8 +114,9 @@ def _wrench(text: str | None, d: int) -> tuple[np.ndarray | None, str]:
               help="Move the reference point by this offset (in --units) in the platform frame "
                    "(full-pose machines) or the tool frame (joint-chain machines).")
 @click.option("--gravity", is_flag=True,
-              help="Joint-chain machines: also the tool point's deflection under the weight of "
-                   "the moving parts (illustrative masses, docs/stiffness.md).")
+              help="Also the deflection of the reference point under the weight of the moving "
+                   "parts (illustrative masses, docs/stiffness.md): joint chains, rod machines "
+                   "on slides or struts.")
 @batch_options
 @ANGLES_OPTION
 @TOOL_LENGTH_OPTION
@@ -134,7 +135,9 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     Batch input columns: the pose (as for `pkmkit ik`). Output columns: the pose, kt1..kt3
     (translational eigen-stiffnesses, N/µm, ascending), kr1..kr3 (rotational, N·m/µrad; 6-D
     twists), rigid (rigid directions), the deflection under --wrench (dx.. in µm, rx.. in
-    µrad), K11..Kdd (SI) and status.
+    µrad; rod machines on slides or struts also the loaded equilibrium dx_loaded.. and the
+    geometric-stiffness share geometric_share), K11..Kdd (SI) and status (not-converged: no
+    loaded equilibrium).
     """
     from pkmkit.stiffness import stiffness, twist_names
 
@@ -149,9 +152,6 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
         reference = parse_numbers(reference_text, "--reference", (3,)) * scale
     tl = None if tool_length is None else tool_length * scale
     face = _FACES.get(m.family, _RODS)
-    if gravity and not face.takes_q:
-        raise InputError("--gravity is for joint-chain machines (a translating platform's "
-                         "weight deflection: `pkmkit path --deflection`)")
     if input_ is not None or output is not None:
         if gravity:
             raise click.UsageError("--gravity takes one configuration (--pose or --q)")
@@ -189,22 +189,39 @@ def stiffness_cmd(machine_name, assignments, pose, q_text, wrench_text, referenc
     # exits with status 3 (a stiffness there is that of a machine that cannot be there)
     check = single_check(m, stroke_q, units)
     payload = _payload(m, result, data, units, x, q, wrench)
-    weight = _gravity(m, q, data, tl) if gravity else None
+    weight = None
+    if gravity:
+        weight = (_gravity(m, q, data, tl) if face.takes_q
+                  else _rod_gravity(m, x, data, reference))
     if weight is not None:
         payload["gravity_deflection"], payload["masses"] = weight
+    loaded = None
+    if wrench is not None and not face.takes_q:
+        loaded = _loaded(m, x, wrench, data, reference)
+        loaded = loaded if isinstance(loaded, str) else loaded.single()
+        payload.update(_loaded_payload(loaded))
+    elif wrench is not None:
+        payload.update(_loaded_payload("joint-chain machines: the linear deflection only"))
     add_to_payload(payload, check, units, set_status=False)
     too_far = ("" if wrench is None else
                linear_range_problem(result.deflection, m.length_scale, units))
+    if not too_far and loaded is not None and not isinstance(loaded, str) and loaded.status:
+        too_far = ("no loaded equilibrium found from the linear deflection (Newton on the "
+                   "exact rod geometry did not converge): the load is beyond the "
+                   "small-displacement range or the pose is near a singularity")
     if too_far:
         payload["beyond_linear_range"] = too_far
     if as_json:
         emit_json(payload)
     else:
         _print(m, result, data, units, x, q, wrench, wrench_note, names)
+        if loaded is not None:
+            _print_loaded(loaded, len(names))
         if weight is not None:
             defl = weight[0] * PER_MICRO
-            click.echo(f"  deflection under its own weight: {fmt(defl[:3], 5)} µm, rotation "
-                       f"{fmt(defl[3:], 5)} µrad ({weight[1]})")
+            turn = f", rotation {fmt(defl[3:], 5)} µrad" if defl.size == 6 else ""
+            click.echo(f"  deflection under its own weight: {fmt(defl[:3], 5)} µm{turn} "
+                       f"({weight[1]})")
     if too_far:
         click.echo(f"doubtful: {too_far}", err=True)
         if check is None or not check.out_of_stroke[0]:
@@ -224,6 +241,77 @@ def _gravity(m, q, data, tool_length) -> tuple[np.ndarray, str]:
         raise SingularConfigurationError("no weight deflection at this configuration (singular "
                                          "or a mechanism)")
     return defl[0], masses.note
+
+
+def _loaded(m, x, wrench, data, reference):
+    """The loaded equilibrium beside the linear deflection
+    (:func:`pkmkit.stiffness.equilibrium.loaded_equilibrium`), or why there is none (text)."""
+    from pkmkit.stiffness.equilibrium import loaded_equilibrium
+
+    try:  # a batch (of one pose): a row without equilibrium is flagged, not raised
+        return loaded_equilibrium(m, np.atleast_2d(x), np.atleast_2d(wrench), data=data,
+                                  reference=reference)
+    except InputError as exc:  # cranks: no model of their exact geometry under load
+        return str(exc)
+
+
+def _loaded_payload(loaded) -> dict[str, Any]:
+    if isinstance(loaded, str):
+        return {"deflection_loaded": None, "loaded_note": loaded}
+    ok = loaded.status == 0
+    return {"deflection_loaded": loaded.loaded if ok else None,
+            "deflection_difference": loaded.difference if ok else None,
+            "geometric_stiffness_share": float(loaded.share) if ok else None,
+            "loaded_status": "ok" if ok else "not-converged"}
+
+
+def _print_loaded(loaded, d) -> None:
+    if isinstance(loaded, str):
+        click.echo(f"  loaded equilibrium: none ({loaded})")
+        return
+    if loaded.status != 0:
+        click.echo("  loaded equilibrium: not found (Newton on the exact geometry did not "
+                   "converge from the linear deflection)")
+        return
+    for label, values in (("loaded equilibrium", loaded.loaded),
+                          ("difference (geometric stiffness)", loaded.difference)):
+        defl = np.asarray(values) * PER_MICRO
+        text = f"{fmt(defl[:min(d, 3)], 5)} µm"
+        if d == 6:
+            text += f", rotation {fmt(defl[3:], 5)} µrad"
+        click.echo(f"  {label}: {text}")
+    click.echo(f"  geometric-stiffness share: {loaded.share:.3g} of the loaded deflection")
+
+
+def _rod_gravity(m, x, data, reference) -> tuple[np.ndarray, str]:
+    """A rod machine's deflection under its own weight at pose ``x``: ``(d,)`` for a translating
+    platform (:mod:`pkmkit.stiffness.loads`), ``(6,)`` at the reference point for a turning one
+    (:mod:`pkmkit.stiffness.platform_gravity`), and the masses' note."""
+    from pkmkit.exceptions import SingularConfigurationError
+
+    if m.orientation_fixed:
+        from pkmkit.dynamics.defaults import default_masses
+        from pkmkit.stiffness.loads import load_deflection
+
+        masses = default_masses(m)
+        defl = load_deflection(m, np.atleast_2d(x), masses, data=data).gravity
+        what = ""
+    else:
+        from pkmkit.stiffness.platform_gravity import platform_gravity_deflection, platform_masses
+
+        masses = platform_masses(m)
+        defl, _ = platform_gravity_deflection(m, np.atleast_2d(x), masses, data=data,
+                                              point=reference)
+        what = " at its frame origin"
+    if not np.isfinite(defl).all():
+        raise SingularConfigurationError("no weight deflection at this configuration")
+    rods = masses.rod_mass + masses.strut_parts(m.model.n_rods)[0]
+    slides = bool((m.model.rod_kind == 0).any())
+    note = (f"illustrative masses of pkmkit.dynamics.defaults, no source gives them: platform "
+            f"{masses.platform_mass:g} kg{what}"
+            + (f", carriages {float(np.max(masses.carriage_mass)):g} kg" if slides else "")
+            + f", rods or struts up to {float(np.max(rods)):.3g} kg")
+    return defl[0], note
 
 
 def _payload(m, r, data, units, x, q, wrench) -> dict[str, Any]:
@@ -329,6 +417,13 @@ def _batch(m, data, input_, output, chunk_rows, units, convention, wrench, refer
         if wrench is not None:
             for j, name in enumerate(names):
                 out[name] = r.deflection[:, j] * PER_MICRO
+            loaded = None if face.takes_q else _loaded(m, x, wrench, data, reference)
+            if loaded is not None and not isinstance(loaded, str):
+                for j, name in enumerate(names):
+                    out[f"{name}_loaded"] = loaded.loaded[:, j] * PER_MICRO
+                out["geometric_share"] = loaded.share
+                late = (status == 0) & (loaded.status != 0)
+                status = np.where(late, loaded.status, status)
         flat = r.stiffness.reshape(len(x), d * d)
         for i in range(d):
             for j in range(d):
