@@ -474,6 +474,28 @@ def optimize(problem: DesignProblem, *, method: str | None = None, seed: int = 0
             that changes none of the metrics (:meth:`DesignProblem.inert_variables`).
     """
     n_obj = len(problem.objectives)
+    method = _checked_method(problem, method, generations, population)
+    runner = {"de": _run_de, "cmaes": _run_cmaes, "nsga2": _run_nsga2}[method]
+    bar = _progress(generations, progress, f"{method} on {problem.base.id}")
+    with parallel.executor(scheduler) as ex:
+        evaluate = _CachedEvaluation(problem, ex)
+        try:
+            runner(problem, evaluate, seed, generations, population, bar)
+        finally:
+            if bar is not None:
+                bar.close()
+    records = evaluate.records
+    feasible = [r for r in records if r["feasible"]]
+    best = min(feasible, key=lambda r: r["_objectives"][0]) if (n_obj == 1 and feasible) else None
+    return OptimizationResult(problem=problem, method=method, records=records, best=best,
+                              pareto=pareto_front(records) if n_obj > 1 else [])
+
+
+def _checked_method(problem: DesignProblem, method: str | None, generations: int,
+                    population: int) -> str:
+    """The optimiser (default DE for one objective, NSGA-II for several), checked against the
+    number of objectives, the sizes and the problem's inert variables."""
+    n_obj = len(problem.objectives)
     method = method or ("de" if n_obj == 1 else "nsga2")
     if generations < 1 or population < 4:
         raise InputError("generations must be >= 1 and population >= 4")
@@ -488,39 +510,30 @@ def optimize(problem: DesignProblem, *, method: str | None = None, seed: int = 0
             f"design variable(s) {', '.join(inert)} change none of the metrics (every metric is "
             "identical across the range): the metrics use the kinematics over the region, which "
             "ignore e.g. the stroke limits and the parallelogram width; remove them")
-    records: list[dict[str, Any]] = []
-    cache: dict[bytes, dict[str, Any]] = {}
+    return method
 
-    bar = _progress(generations, progress, f"{method} on {problem.base.id}")
-    with parallel.executor(scheduler) as ex:
 
-        def evaluate(xs: list[np.ndarray]) -> list[dict[str, Any]]:
-            """Records of a population, each candidate evaluated once (cached)."""
-            keys = [np.asarray(x, dtype=float).tobytes() for x in xs]
-            todo = {}
-            for key, x in zip(keys, xs, strict=True):
-                if key not in cache and key not in todo:
-                    todo[key] = np.asarray(x, dtype=float)
-            for key, record in zip(todo, evaluate_designs(problem, list(todo.values()),
-                                                          executor=ex), strict=True):
-                cache[key] = record
-                records.append(record)
-            return [cache[key] for key in keys]
+class _CachedEvaluation:
+    """Evaluates populations of design vectors, each distinct candidate once
+    (:func:`evaluate_designs` on ``executor``); :attr:`records` in evaluation order."""
 
-        try:
-            if method == "de":
-                _run_de(problem, evaluate, seed, generations, population, bar)
-            elif method == "cmaes":
-                _run_cmaes(problem, evaluate, seed, generations, population, bar)
-            else:
-                _run_nsga2(problem, evaluate, seed, generations, population, bar)
-        finally:
-            if bar is not None:
-                bar.close()
-    feasible = [r for r in records if r["feasible"]]
-    best = min(feasible, key=lambda r: r["_objectives"][0]) if (n_obj == 1 and feasible) else None
-    return OptimizationResult(problem=problem, method=method, records=records, best=best,
-                              pareto=pareto_front(records) if n_obj > 1 else [])
+    def __init__(self, problem: DesignProblem, executor: Any) -> None:
+        self.problem, self.executor = problem, executor
+        self.records: list[dict[str, Any]] = []
+        self.cache: dict[bytes, dict[str, Any]] = {}
+
+    def __call__(self, xs: list[np.ndarray]) -> list[dict[str, Any]]:
+        """Records of a population, each candidate evaluated once (cached)."""
+        keys = [np.asarray(x, dtype=float).tobytes() for x in xs]
+        todo = {}
+        for key, x in zip(keys, xs, strict=True):
+            if key not in self.cache and key not in todo:
+                todo[key] = np.asarray(x, dtype=float)
+        for key, record in zip(todo, evaluate_designs(self.problem, list(todo.values()),
+                                                      executor=self.executor), strict=True):
+            self.cache[key] = record
+            self.records.append(record)
+        return [self.cache[key] for key in keys]
 
 
 def _penalised(record: dict[str, Any]) -> float:

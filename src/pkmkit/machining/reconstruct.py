@@ -124,16 +124,45 @@ def reconstruct(cmm: CmmPoints, cutters: Cutters | None = None) -> Reconstructio
     idx = np.arange(k)
     along = pts[idx, :, axis]  # (K, 3)
     spread = along.max(axis=1) - along.min(axis=1)
+    _check_planes(cmm, names, rows, axis, along, spread)
+    s = along.mean(axis=1)
+    b = 1 - axis
+    q_b, m_b, n_b = pts[idx, 0, b], pts[idx, 1, b], pts[idx, 2, b]
+    _check_walls(cmm, names, rows, b, q_b, m_b, n_b, cutters, radii)
+    side = np.sign(m_b - q_b)
+    wall = (m_b + n_b) / 2
+    rise = pts[idx, 2, 2] - pts[idx, 1, 2]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lean = np.where(np.abs(rise) > 1e-4, np.arctan((n_b - m_b) * side / rise), np.nan)
+    q_z = pts[idx, 0, 2]
+    paths = [cmm.path[sections[n]["Q"]] for n in names]
+    slopes = _pass_slopes(cmm, names, rows, paths, axis, s, wall, q_z)
+    centre = np.empty((k, 3))
+    centre[idx, axis] = s
+    centre[idx, b] = wall - side * radii.end_mill * np.sqrt(1 + slopes[:, 0] ** 2)
+    centre[:, 2] = q_z + radii.ball * np.sqrt(1 + slopes[:, 1] ** 2)
+    return Reconstruction(section=tuple(names), path=tuple(paths), axis=axis, side=side,
+                          centre=centre, slopes=slopes,
+                          lines=tuple(_where(cmm, r) for r in rows[:, 0]), source=cmm.source,
+                          lean=lean)
+
+
+def _check_planes(cmm: CmmPoints, names: list, rows: np.ndarray, axis: np.ndarray,
+                  along: np.ndarray, spread: np.ndarray) -> None:
+    """Each section's three points in one plane across its pass (within PLANE_TOL)."""
     for i in np.flatnonzero(spread > PLANE_TOL):
         col = "xy"[axis[i]]
         worst = rows[i, np.argmax(np.abs(along[i] - np.median(along[i])))]
         raise InputError(f"{_where(cmm, worst)}: column {col!r}: section {names[i]}'s points "
                          f"are not in one section plane {col} = const (they spread over "
                          f"{spread[i] * 1e3:.3g} mm; at most {PLANE_TOL * 1e3:g} mm)")
-    s = along.mean(axis=1)
-    b = 1 - axis
-    q_b, m_b, n_b = pts[idx, 0, b], pts[idx, 1, b], pts[idx, 2, b]
-    for i in range(k):
+
+
+def _check_walls(cmm: CmmPoints, names: list, rows: np.ndarray, b: np.ndarray,
+                 q_b: np.ndarray, m_b: np.ndarray, n_b: np.ndarray, cutters: Cutters,
+                 radii: Cutters) -> None:
+    """M and N on one side of the slot bottom Q, at about the end mill's radius from it."""
+    for i in range(len(names)):
         dm, dn = m_b[i] - q_b[i], n_b[i] - q_b[i]
         if np.sign(dm) != np.sign(dn):
             raise InputError(f"{_where(cmm, rows[i, 2])}: column {'xy'[b[i]]!r}: section "
@@ -147,13 +176,15 @@ def reconstruct(cmm: CmmPoints, cutters: Cutters | None = None) -> Reconstructio
                     f"wall point {LABELS[j]} is {abs(d) * 1e3:.4g} mm from the slot bottom; "
                     f"with an end mill of radius {cutters.end_mill * 1e3:g} mm it should be "
                     f"about {radii.end_mill * 1e3:.4g} mm (wrong cutter, labels or section)")
-    side = np.sign(m_b - q_b)
-    wall = (m_b + n_b) / 2
-    rise = pts[idx, 2, 2] - pts[idx, 1, 2]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        lean = np.where(np.abs(rise) > 1e-4, np.arctan((n_b - m_b) * side / rise), np.nan)
-    q_z = pts[idx, 0, 2]
-    paths = [cmm.path[sections[n]["Q"]] for n in names]
+
+
+def _pass_slopes(cmm: CmmPoints, names: list, rows: np.ndarray, paths: list,
+                 axis: np.ndarray, s: np.ndarray, wall: np.ndarray,
+                 q_z: np.ndarray) -> np.ndarray:
+    """``(K, 2)`` slopes of the wall and of the slot bottom along each pass, from a
+    polynomial fit (degree ≤ 3) of its sections; a pass must run along one axis and have
+    sections at two positions at least."""
+    k = len(names)
     slopes = np.zeros((k, 2))
     for p in dict.fromkeys(paths):
         sel = np.array([i for i in range(k) if paths[i] == p])
@@ -170,14 +201,7 @@ def reconstruct(cmm: CmmPoints, cutters: Cutters | None = None) -> Reconstructio
         for c, values in enumerate((wall[sel], q_z[sel])):
             fit = np.polynomial.Polynomial.fit(s[sel], values, deg)
             slopes[sel, c] = fit.deriv()(s[sel])
-    centre = np.empty((k, 3))
-    centre[idx, axis] = s
-    centre[idx, b] = wall - side * radii.end_mill * np.sqrt(1 + slopes[:, 0] ** 2)
-    centre[:, 2] = q_z + radii.ball * np.sqrt(1 + slopes[:, 1] ** 2)
-    return Reconstruction(section=tuple(names), path=tuple(paths), axis=axis, side=side,
-                          centre=centre, slopes=slopes,
-                          lines=tuple(_where(cmm, r) for r in rows[:, 0]), source=cmm.source,
-                          lean=lean)
+    return slopes
 
 
 def reconstructed_measurements(rec: Reconstruction, passes: list[Pass], *,

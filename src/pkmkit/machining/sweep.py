@@ -189,20 +189,11 @@ def machine_part(true_machine, nominal, passes, *, placement: Placement | None =
     out: dict[str, list] = {k: [] for k in ("path", "axis", "s", "side", "centre", "wall",
                                             "slot", "heights", "tip_wall", "tip_slot")}
     for i, p in enumerate(passes):
-        a = p.axis
-        length = float(np.linalg.norm(p.end - p.start))
-        margin = max(0.05, 2 * cutters.end_mill / length)
-        t0 = np.linspace(margin, 1 - margin, per_pass)
-        nominal_pts = placement.to_part(p.at(t0))
-        keep = np.ones(len(t0), dtype=bool)
-        for j, (e0, e1) in enumerate(ends):
-            near_height = abs((e0[2] + e1[2]) / 2 - nominal_pts[:, 2].mean()) < CROSSING_HEIGHT
-            if j != i and near_height:
-                keep &= (_distance_to_segment(nominal_pts[:, :2], e0[:2], e1[:2])
-                         > 2 * cutters.end_mill)
-        if not keep.any():
+        kept = _pass_sections(p, i, ends, placement, cutters, per_pass)
+        if kept is None:
             continue
-        t0, nominal_pts = t0[keep], nominal_pts[keep]
+        t0, nominal_pts = kept
+        a = p.axis
         s = nominal_pts[:, a]
         curve = _CentrePath(true_machine, nominal, p, placement)
         centre, wall, slot, tip_wall, tip_slot = _section_roots(curve, s, t0, a, [
@@ -229,6 +220,26 @@ def machine_part(true_machine, nominal, passes, *, placement: Placement | None =
     cat = {k: np.concatenate(v) for k, v in out.items() if k != "path"}
     return MachinedPart(passes=passes, placement=placement, cutters=cutters,
                         path=tuple(out["path"]), probe_radius=float(probe_radius), **cat)
+
+
+def _pass_sections(p, i: int, ends: list, placement: Placement, cutters: Cutters,
+                   per_pass: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """Pass ``i``'s section parameters ``t (k,)`` and nominal points ``(k, 3)`` in the part
+    frame, spread between end margins, less those within two end-mill radii of another pass
+    at the same height (None when none is left)."""
+    length = float(np.linalg.norm(p.end - p.start))
+    margin = max(0.05, 2 * cutters.end_mill / length)
+    t0 = np.linspace(margin, 1 - margin, per_pass)
+    nominal_pts = placement.to_part(p.at(t0))
+    keep = np.ones(len(t0), dtype=bool)
+    for j, (e0, e1) in enumerate(ends):
+        near_height = abs((e0[2] + e1[2]) / 2 - nominal_pts[:, 2].mean()) < CROSSING_HEIGHT
+        if j != i and near_height:
+            keep &= (_distance_to_segment(nominal_pts[:, :2], e0[:2], e1[:2])
+                     > 2 * cutters.end_mill)
+    if not keep.any():
+        return None
+    return t0[keep], nominal_pts[keep]
 
 
 def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -42,6 +42,61 @@ def machine_geometry(machine: Machine, pose: np.ndarray, q: np.ndarray) -> dict[
     return {"carriage": carriage, "platform": platform, "rails": rails, "tool": p}
 
 
+def _draw_parts(ax, machine: Machine, geo: dict, coords: slice) -> None:
+    """Guides (slides, crank arms), rods coloured by leg, joints and the tool point."""
+    def line(points: np.ndarray, **style) -> None:
+        ax.plot(*points[:, coords].T, **style)
+
+    guide_names = {SLIDE: "slides", CRANK: "crank arms"}
+    for i, rail in enumerate(geo["rails"]):
+        kind = int(machine.model.leg_kind[i])
+        first = kind in guide_names and i == int(
+            np.flatnonzero(machine.model.leg_kind == kind)[0])
+        line(rail, color="0.6", lw=4, solid_capstyle="butt",
+             label=guide_names[kind] if first else None)
+    for j in range(machine.model.n_rods):
+        leg = int(machine.model.rod_leg[j])
+        colour = _LEG_COLOURS[leg % len(_LEG_COLOURS)]
+        line(np.stack([geo["carriage"][j], geo["platform"][j]]), color=colour, lw=1.8,
+             label=machine.model.leg_names[leg] if j == np.flatnonzero(
+                 machine.model.rod_leg == leg)[0] else None)
+    ax.scatter(*geo["carriage"][:, coords].T, color="k", s=14, zorder=3)
+    ax.scatter(*geo["platform"][:, coords].T, color="k", s=10, zorder=3)
+    ax.scatter(*geo["tool"][coords], color="crimson", marker="*", s=120, zorder=4,
+               label="tool point")
+
+
+def _frame_axes(ax, geo: dict, spatial: bool) -> None:
+    """Axis labels (m); a cube around the machine in 3-D, equal aspect and a grid in 2-D."""
+    units = "m"
+    ax.set_xlabel(f"x [{units}]")
+    ax.set_ylabel(f"y [{units}]")
+    if spatial:
+        ax.set_zlabel(f"z [{units}]")
+        points = np.concatenate([geo["carriage"], geo["platform"], geo["rails"].reshape(-1, 3)])
+        centre = 0.5 * (points.max(axis=0) + points.min(axis=0))
+        half = 0.5 * (points.max(axis=0) - points.min(axis=0)).max()
+        ax.set_xlim(centre[0] - half, centre[0] + half)
+        ax.set_ylim(centre[1] - half, centre[1] + half)
+        ax.set_zlim(centre[2] - half, centre[2] + half)
+    else:
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True, alpha=0.3)
+
+
+def _pose_and_q_text(machine: Machine, pose: np.ndarray, q: np.ndarray) -> str:
+    """``pose (…)   q (…)`` for the default title: m, rotation vector in rad, crank angles in
+    degrees."""
+    pose_txt = ", ".join(f"{v:.3f}" for v in pose[:3])
+    if machine.model.full_pose:
+        pose_txt += " m, rotation vector " + ", ".join(f"{v:.3f}" for v in pose[3:]) + " rad"
+    else:
+        pose_txt += " m"
+    q_txt = ", ".join(f"{np.degrees(v):.1f}°" if quantity == "angle" else f"{v:.3f} m"
+                      for v, quantity in zip(q, machine.model.actuator_quantities, strict=True))
+    return f"pose ({pose_txt})   q ({q_txt})"
+
+
 def draw_machine(machine: Machine, pose=None, *, q=None, ax=None, title: str | None = None,
                  path: str | Path | None = None) -> Figure:
     """Draw ``machine`` at ``pose`` (default: home): slides, carriages, rods, platform, tool.
@@ -67,50 +122,10 @@ def draw_machine(machine: Machine, pose=None, *, q=None, ax=None, title: str | N
         ax = fig.add_subplot(projection="3d" if spatial else None)
     fig = ax.figure
     coords = slice(0, 3 if spatial else 2)
-
-    def line(points: np.ndarray, **style) -> None:
-        ax.plot(*points[:, coords].T, **style)
-
-    guide_names = {SLIDE: "slides", CRANK: "crank arms"}
-    for i, rail in enumerate(geo["rails"]):
-        kind = int(machine.model.leg_kind[i])
-        first = kind in guide_names and i == int(
-            np.flatnonzero(machine.model.leg_kind == kind)[0])
-        line(rail, color="0.6", lw=4, solid_capstyle="butt",
-             label=guide_names[kind] if first else None)
-    for j in range(machine.model.n_rods):
-        leg = int(machine.model.rod_leg[j])
-        colour = _LEG_COLOURS[leg % len(_LEG_COLOURS)]
-        line(np.stack([geo["carriage"][j], geo["platform"][j]]), color=colour, lw=1.8,
-             label=machine.model.leg_names[leg] if j == np.flatnonzero(
-                 machine.model.rod_leg == leg)[0] else None)
-    ax.scatter(*geo["carriage"][:, coords].T, color="k", s=14, zorder=3)
-    ax.scatter(*geo["platform"][:, coords].T, color="k", s=10, zorder=3)
-    ax.scatter(*geo["tool"][coords], color="crimson", marker="*", s=120, zorder=4,
-               label="tool point")
-    units = "m"
-    ax.set_xlabel(f"x [{units}]")
-    ax.set_ylabel(f"y [{units}]")
-    if spatial:
-        ax.set_zlabel(f"z [{units}]")
-        points = np.concatenate([geo["carriage"], geo["platform"], geo["rails"].reshape(-1, 3)])
-        centre = 0.5 * (points.max(axis=0) + points.min(axis=0))
-        half = 0.5 * (points.max(axis=0) - points.min(axis=0)).max()
-        ax.set_xlim(centre[0] - half, centre[0] + half)
-        ax.set_ylim(centre[1] - half, centre[1] + half)
-        ax.set_zlim(centre[2] - half, centre[2] + half)
-    else:
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.grid(True, alpha=0.3)
-    pose_txt = ", ".join(f"{v:.3f}" for v in pose[:3])
-    if machine.model.full_pose:
-        pose_txt += " m, rotation vector " + ", ".join(f"{v:.3f}" for v in pose[3:]) + " rad"
-    else:
-        pose_txt += " m"
-    q_txt = ", ".join(f"{np.degrees(v):.1f}°" if quantity == "angle" else f"{v:.3f} m"
-                      for v, quantity in zip(q, machine.model.actuator_quantities, strict=True))
+    _draw_parts(ax, machine, geo, coords)
+    _frame_axes(ax, geo, spatial)
     if title is None:
-        title = f"{machine.name}\npose ({pose_txt})   q ({q_txt})"
+        title = f"{machine.name}\n{_pose_and_q_text(machine, pose, q)}"
     ax.set_title(title, fontsize=9)
     ax.legend(loc="upper left", fontsize=7)
     if path is not None:
