@@ -106,13 +106,23 @@ class _RodLinearisation:
         _, unknowns, cols, pose = self._rod_linearisation(_checked_q(self, q))
         return ClosureLinearisation(unknowns, cols, pose)
 
-    def tool_sensitivity(self, q: Any, *, tool_length: Any = None) -> ToolSensitivity:
+    def tool_sensitivity(self, q: Any, *, tool_length: Any = None, start: Any = None,
+                         **engine_options: Any) -> ToolSensitivity:
         """First-order effect of every defect on the tool at actuator coordinates ``q``
-        ``(n,)`` or ``(N, n)`` (module docstring; ``tool_length`` is ignored here).
+        ``(n,)`` or ``(N, n)`` (module docstring; ``tool_length``, ``start`` and
+        ``engine_options`` tune a joint chain's closure and are ignored here: a rod machine's
+        direct model is a closed form).
 
         Raises:
             InputError: mis-shaped q, or configurations where the direct model fails.
+            UnsupportedOperationError: a ``start`` (there is no closure to start).
         """
+        if start is not None:
+            from pkmkit.exceptions import UnsupportedOperationError
+
+            raise UnsupportedOperationError(
+                "a direct-model start", self.id, self.family,
+                "its direct model is a closed form: there is no closure to start")
         return self._rod_sensitivity(_checked_q(self, q))
 
 
@@ -181,24 +191,31 @@ class ChainLinearisation:
         lin = self._chain_closure(_checked_q(self, q), tool_length)
         return ClosureLinearisation(lin["cu"], lin["cd"], lin["direct"].pose)
 
-    def tool_sensitivity(self, q: Any, *, tool_length: Any = None) -> ToolSensitivity:
+    def tool_sensitivity(self, q: Any, *, tool_length: Any = None, start: Any = None,
+                         **engine_options: Any) -> ToolSensitivity:
         """First-order effect of every defect on the tool at actuator coordinates ``q``
-        ``(n,)`` or ``(N, n)`` (module docstring), with the tool ``tool_length`` (m).
+        ``(n,)`` or ``(N, n)`` (module docstring), with the tool ``tool_length`` (m); the
+        closure solved from ``start`` (as :meth:`fk`'s, e.g. the solution of a previous call
+        at the same q) with ``engine_options`` (:meth:`fk`'s, e.g. ``compiled=True``).
 
         Raises:
             InputError: mis-shaped q, or configurations where the legs do not close.
         """
-        return self._chain_tool_sensitivity(_checked_q(self, q), tool_length)
+        return self._chain_tool_sensitivity(_checked_q(self, q), tool_length, start=start,
+                                            **engine_options)
 
-    def _chain_closure(self, q: np.ndarray, tool_length: Any, columns=None) -> dict:
+    def _chain_closure(self, q: np.ndarray, tool_length: Any, columns=None, *,
+                       start: Any = None, **engine_options: Any) -> dict:
         """The closure at ``q (N, n)``: ``{"direct", "cu", "cd", "values", "rot", "p_x"}``
         (``columns``: a model with the machine's frames whose defect columns to use instead,
-        :func:`pkmkit.solve.chains.with_column_twists`)."""
+        :func:`pkmkit.solve.chains.with_column_twists`; ``start``, ``engine_options``: as
+        :meth:`fk`'s)."""
         from pkmkit.solve.chains import closure
         from pkmkit.spatial.rotation import rotvec_to_matrix
 
         model = self.model
-        direct = self.fk(q, tool_length=tool_length, full_output=True)
+        direct = self.fk(q, tool_length=tool_length, full_output=True, start=start,
+                         **engine_options)
         if not np.isfinite(direct.pose).all():
             bad = int(np.flatnonzero(~np.isfinite(direct.pose).all(axis=1))[0])
             raise InputError(f"configuration {bad}: the legs do not close at q = "
@@ -216,14 +233,14 @@ class ChainLinearisation:
         cd = c.defects.transpose(2, 0, 1)
         return {"direct": direct, "cu": cu, "cd": cd, "values": values, "rot": rot, "p_x": p_x}
 
-    def _chain_tool_sensitivity(self, q: np.ndarray, tool_length: Any, columns=None
-                          ) -> ToolSensitivity:
+    def _chain_tool_sensitivity(self, q: np.ndarray, tool_length: Any, columns=None, *,
+                                start: Any = None, **engine_options: Any) -> ToolSensitivity:
         """:meth:`tool_sensitivity` at ``q (N, n)``, of the defect columns of ``columns``
         (a model of :func:`pkmkit.solve.chains.with_column_twists`) when given."""
         from pkmkit.solve.chains import tool_frame
         from pkmkit.spatial.rotation import skew
 
-        lin = self._chain_closure(q, tool_length, columns)
+        lin = self._chain_closure(q, tool_length, columns, start=start, **engine_options)
         direct, cu, cd = lin["direct"], lin["cu"], lin["cd"]
         rot, p_x, values = lin["rot"], lin["p_x"], lin["values"]
         n = q.shape[0]

@@ -61,6 +61,7 @@ from pkmkit.machines.warm_starts import ChainWarmStart
 from pkmkit.machines.workspace_reports import ChainReports
 from pkmkit.model.chains import JointChainModel
 from pkmkit.numerics.arrays import restore_shape
+from pkmkit.numerics.jit import use_compiled_solver
 from pkmkit.solve.chains import (
     chain_pose,
     closure,
@@ -123,8 +124,10 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         start = chain_pose(model, model.legs[0], values[:, None])
         u0 = np.concatenate([start.p[:, 0], matrix_to_rotvec(start.R[:, :, 0])[0],
                              values[self._passive]])[None]
+        # the compiled closure once Numba is loaded (an identification rebuilds the machine at
+        # every step); never imported for this one row
         res = solve_closure(model, values[None], u0, unknown_variables=self._passive,
-                            compute_rank=False)
+                            compute_rank=False, compiled=use_compiled_solver(1))
         converged = res.status[0] == Status.OK or (
             res.status[0] == Status.INCONSISTENT and model.defects.any())
         if not converged:
