@@ -207,10 +207,11 @@ class ChainLinearisation:
     def _chain_closure(self, q: np.ndarray, tool_length: Any, columns=None, *,
                        start: Any = None, **engine_options: Any) -> dict:
         """The closure at ``q (N, n)``: ``{"direct", "cu", "cd", "values", "rot", "p_x"}``
+        (and ``"tool_twists" (N, 6, d)`` from the compiled kernel with ``compiled=True``)
         (``columns``: a model with the machine's frames whose defect columns to use instead,
         :func:`pkmkit.solve.chains.with_column_twists`; ``start``, ``engine_options``: as
         :meth:`fk`'s)."""
-        from pkmkit.solve.chains import closure
+        from pkmkit.solve.chains import closure, compiled_closure_available
         from pkmkit.spatial.rotation import rotvec_to_matrix
 
         model = self.model
@@ -226,9 +227,17 @@ class ChainLinearisation:
         passive = np.flatnonzero(~model.actuated & model.loop_variables)
         values[:, act] = q
         values[:, passive] = direct.passive
-        rot = rotvec_to_matrix(direct.platform[:, 3:]).transpose(1, 2, 0)
         p_x = direct.platform[:, :3].T
-        c = closure(columns if columns is not None else model, rot, p_x, values.T, defects=True)
+        source = columns if columns is not None else model
+        rot = rotvec_to_matrix(direct.platform[:, 3:]).transpose(1, 2, 0)
+        if engine_options.get("compiled") and compiled_closure_available():
+            from pkmkit.solve import chain_kernel
+
+            cu, cd, _, _, tool = chain_kernel.linearise(source, values, direct.platform,
+                                                        passive)
+            return {"direct": direct, "cu": cu, "cd": cd, "values": values, "rot": rot,
+                    "p_x": p_x, "tool_twists": tool}
+        c = closure(source, rot, p_x, values.T, defects=True)
         cu = np.concatenate([c.platform, c.variables[:, passive]], axis=1).transpose(2, 0, 1)
         cd = c.defects.transpose(2, 0, 1)
         return {"direct": direct, "cu": cu, "cd": cd, "values": values, "rot": rot, "p_x": p_x}
@@ -248,13 +257,15 @@ class ChainLinearisation:
         du = -pinv @ cd  # (N, 6 + n_p, d)
         # the part of C_δ no motion absorbs: (I − C_U C_U⁺) C_δ
         incompatible = cd + cu @ du
-        tool = tool_frame(columns if columns is not None else self.model, rot, p_x, values.T,
-                          defects=True)
+        tool_twists = lin.get("tool_twists")
+        if tool_twists is None:
+            tool_twists = tool_frame(columns if columns is not None else self.model, rot, p_x,
+                                     values.T, defects=True).defect_twists.transpose(2, 0, 1)
         plat = np.zeros((n, 6, 6))
         plat[:, :3, :3] = np.eye(3)
         plat[:, 3:, 3:] = np.eye(3)
         plat[:, :3, 3:] = skew(p_x.T)
-        twist = plat @ du[:, :6, :] + tool.defect_twists.transpose(2, 0, 1)
+        twist = plat @ du[:, :6, :] + tool_twists
         point = direct.pose[:, :3]
         dp = twist[:, :3] + np.cross(twist[:, 3:].transpose(0, 2, 1), point[:, None, :]
                                      ).transpose(0, 2, 1)

@@ -361,3 +361,139 @@ def _evaluate(frames, types, evar, elements, offsets, position, values, u, lengt
             jac[base + 2, col] = tw[a, 2] + w0 * pos[1] - w1 * pos[0]
             for i in range(3):
                 jac[base + 3 + i, col] = rows[i, 0] * w0 + rows[i, 1] * w1 + rows[i, 2] * w2
+
+
+def linearise(model: JointChainModel, values: np.ndarray, platform: np.ndarray,
+              unknown_variables: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The closure linearised at solved configurations, compiled: ``values (N, n_var)`` every
+    joint variable, ``platform (N, 6)`` position and rotation vector. Returns ``C_U (N, 6L,
+    6 + n_u)`` (platform increments, then ``unknown_variables``), ``C_δ (N, 6L, d)`` (the
+    model's defect columns, :func:`pkmkit.solve.chains.closure` with ``defects=True``), and
+    the tool frame (:func:`pkmkit.solve.chains.tool_frame` with ``defects=True``): rotations
+    ``(N, 3, 3)``, positions ``(N, 3)``, defect twists ``(N, 6, d)``."""
+    from pkmkit.solve.chains import _local_defect_twists
+
+    frames, types, evar, elements, offsets, position = model_arrays(model, unknown_variables)
+    local = np.ascontiguousarray(_local_defect_twists(model), dtype=float)
+    owner = np.asarray(model.defect_index.element, dtype=np.int64)
+    order = np.argsort(owner, kind="stable").astype(np.int64)
+    counts = np.bincount(owner, minlength=len(model.elements))
+    starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    head = np.array(model.head, dtype=np.int64)
+    n, m, d = values.shape[0], 6 * len(model.legs), len(owner)
+    cu = np.empty((n, m, 6 + len(unknown_variables)))
+    cd = np.zeros((n, m, d))
+    tool_r, tool_p, tool_tw = np.empty((n, 3, 3)), np.empty((n, 3)), np.zeros((n, 6, d))
+    u = np.zeros((n, 6 + len(unknown_variables)))
+    u[:, :6] = platform
+    u[:, 6:] = values[:, np.asarray(unknown_variables, dtype=int)]
+    _linearise_rows(frames, types, evar, elements, offsets, position, local, order, starts,
+                    head, np.ascontiguousarray(values, dtype=float), u,
+                    float(model.characteristic_length), cu, cd, tool_r, tool_p, tool_tw)
+    return cu, cd, tool_r, tool_p, tool_tw
+
+
+@njit(**_OPTIONS)
+def _defect_twists(e, rot, pos, local, order, starts, twists, ids, count):  # pragma: no cover
+    """Spatial twists of element ``e``'s defects at the frame ``(rot, pos)`` before it, appended
+    to ``twists``/``ids`` from ``count``; returns the new count."""
+    for s in range(starts[e], starts[e + 1]):
+        j = order[s]
+        w0 = rot[0, 0] * local[j, 3] + rot[0, 1] * local[j, 4] + rot[0, 2] * local[j, 5]
+        w1 = rot[1, 0] * local[j, 3] + rot[1, 1] * local[j, 4] + rot[1, 2] * local[j, 5]
+        w2 = rot[2, 0] * local[j, 3] + rot[2, 1] * local[j, 4] + rot[2, 2] * local[j, 5]
+        v0 = rot[0, 0] * local[j, 0] + rot[0, 1] * local[j, 1] + rot[0, 2] * local[j, 2]
+        v1 = rot[1, 0] * local[j, 0] + rot[1, 1] * local[j, 1] + rot[1, 2] * local[j, 2]
+        v2 = rot[2, 0] * local[j, 0] + rot[2, 1] * local[j, 1] + rot[2, 2] * local[j, 2]
+        twists[count, 0] = v0 + (pos[1] * w2 - pos[2] * w1)
+        twists[count, 1] = v1 + (pos[2] * w0 - pos[0] * w2)
+        twists[count, 2] = v2 + (pos[0] * w1 - pos[1] * w0)
+        twists[count, 3], twists[count, 4], twists[count, 5] = w0, w1, w2
+        ids[count] = j
+        count += 1
+    return count
+
+
+@njit(**_OPTIONS)
+def _walk(frames, types, evar, values, chain, rot, pos, local, order, starts, twists,
+          ids):  # pragma: no cover
+    """Move ``(rot, pos)`` along the elements ``chain`` (as :func:`pkmkit.solve.chains.
+    chain_pose`), collecting the defects' spatial twists; returns their count."""
+    tmp = np.empty((3, 3))
+    count = 0
+    for idx in range(chain.shape[0]):
+        e = chain[idx]
+        count = _defect_twists(e, rot, pos, local, order, starts, twists, ids, count)
+        f = frames[e]
+        for i in range(3):
+            pos[i] += rot[i, 0] * f[0, 3] + rot[i, 1] * f[1, 3] + rot[i, 2] * f[2, 3]
+        for i in range(3):
+            for j in range(3):
+                tmp[i, j] = rot[i, 0] * f[0, j] + rot[i, 1] * f[1, j] + rot[i, 2] * f[2, j]
+        rot[:, :] = tmp
+        t = types[e]
+        if t == 0:
+            continue
+        q = values[evar[e]]
+        if t == 1:
+            c, s = math.cos(q), math.sin(q)
+            for i in range(3):
+                x, y = rot[i, 0], rot[i, 1]
+                rot[i, 0] = c * x + s * y
+                rot[i, 1] = c * y - s * x
+        else:
+            for i in range(3):
+                pos[i] += q * rot[i, 2]
+    return count
+
+
+@njit(**_OPTIONS)
+def _linearise_rows(frames, types, evar, elements, offsets, position, local, order, starts,
+                    head, values, u, length, cu, cd, tool_r, tool_p,
+                    tool_tw):  # pragma: no cover
+    m = cu.shape[1]
+    r = np.empty(m)
+    rx = np.empty((3, 3))
+    rot, mm, rows = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
+    pos = np.empty(3)
+    twists = np.empty((local.shape[0], 6))
+    ids = np.empty(local.shape[0], dtype=np.int64)
+    row_values = np.empty(values.shape[1])
+    for k in range(values.shape[0]):
+        row_values[:] = values[k]
+        _evaluate(frames, types, evar, elements, offsets, position, row_values, u[k], length,
+                  r, cu[k])
+        _rotvec_matrix(u[k, 3], u[k, 4], u[k, 5], rx)
+        for leg in range(offsets.shape[0] - 1):
+            base = 6 * leg
+            for i in range(3):
+                pos[i] = 0.0
+                for j in range(3):
+                    rot[i, j] = 1.0 if i == j else 0.0
+            count = _walk(frames, types, evar, row_values, elements[offsets[leg]:offsets[leg + 1]],
+                          rot, pos, local, order, starts, twists, ids)
+            for i in range(3):
+                for j in range(3):
+                    mm[i, j] = (rot[i, 0] * rx[j, 0] + rot[i, 1] * rx[j, 1]
+                                + rot[i, 2] * rx[j, 2])
+            _rotation_rows(mm, length, 1.0, rows)
+            for a in range(count):
+                col = ids[a]
+                w0, w1, w2 = twists[a, 3], twists[a, 4], twists[a, 5]
+                cd[k, base + 0, col] = twists[a, 0] + (w1 * pos[2] - w2 * pos[1])
+                cd[k, base + 1, col] = twists[a, 1] + (w2 * pos[0] - w0 * pos[2])
+                cd[k, base + 2, col] = twists[a, 2] + (w0 * pos[1] - w1 * pos[0])
+                for i in range(3):
+                    cd[k, base + 3 + i, col] = (rows[i, 0] * w0 + rows[i, 1] * w1
+                                                + rows[i, 2] * w2)
+        # the tool frame: the head from the platform frame
+        rot[:, :] = rx
+        for i in range(3):
+            pos[i] = u[k, i]
+        count = _walk(frames, types, evar, row_values, head, rot, pos, local, order, starts,
+                      twists, ids)
+        tool_r[k] = rot
+        tool_p[k] = pos
+        for a in range(count):
+            for i in range(6):
+                tool_tw[k, i, ids[a]] = twists[a, i]

@@ -511,12 +511,18 @@ def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
     return solve_least_squares(evaluate, u0, retract=_retract_pose_first(), **options)
 
 
-def _compiled_closure_applies(rows: int, options: dict) -> bool:
-    """Whether ``solve_closure(..., compiled=True)`` runs the compiled kernel."""
+def compiled_closure_available() -> bool:
+    """Whether the compiled closure kernels (:mod:`pkmkit.solve.chain_kernel`) can run: Numba
+    installed and not disabled (``PKMKIT_COMPILED=0``)."""
     from pkmkit.numerics import jit
 
+    return jit.mode() != "0" and jit.numba_available()
+
+
+def _compiled_closure_applies(rows: int, options: dict) -> bool:
+    """Whether ``solve_closure(..., compiled=True)`` runs the compiled kernel."""
     return (set(options) <= COMPILED_OPTIONS and not options.get("compute_rank", False)
-            and jit.mode() != "0" and jit.numba_available() and rows > 0)
+            and rows > 0 and compiled_closure_available())
 
 
 def tool_frame(model: JointChainModel, rot_x: np.ndarray, p_x: np.ndarray, values: np.ndarray,
