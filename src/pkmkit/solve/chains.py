@@ -474,7 +474,8 @@ def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
             the direct model).
         compiled: solve every row in the compiled kernel of :mod:`pkmkit.solve.chain_kernel`
             (the same algorithm, to rounding) when Numba is available and the options are
-            among :data:`COMPILED_OPTIONS` (``compute_rank`` False); else the NumPy engine.
+            among :data:`COMPILED_OPTIONS` with ``compute_rank=False`` (the kernel reports no rank:
+            ``rank`` is −1); else the NumPy engine.
         **options: forwarded to :func:`pkmkit.solve.least_squares.solve_least_squares`.
 
     Returns:
@@ -521,7 +522,7 @@ def compiled_closure_available() -> bool:
 
 def _compiled_closure_applies(rows: int, options: dict) -> bool:
     """Whether ``solve_closure(..., compiled=True)`` runs the compiled kernel."""
-    return (set(options) <= COMPILED_OPTIONS and not options.get("compute_rank", False)
+    return (set(options) <= COMPILED_OPTIONS and not options.get("compute_rank", True)
             and rows > 0 and compiled_closure_available())
 
 
