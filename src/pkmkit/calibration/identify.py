@@ -260,7 +260,7 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
     compat: CompatibleDirections | None = None
     basis = np.eye(d)[:, candidates]
     if compatible and machine.incompatible_defects:
-        compat = _compatibility(machine, data, tol)
+        compat = _compatibility(machine, data, tol, model.sensitivity(machine))
         basis = compat.basis
         free = [int(i) for i in compat.free if i in set(candidates)]
         dependents = [int(k) for k in compat.dependent]
@@ -611,15 +611,23 @@ def _candidates(dset, parameters) -> list[int]:
     return sorted(set(out))
 
 
-def _compatibility(machine, data: MeasurementSet, tol: np.ndarray) -> CompatibleDirections:
-    q = data.q
-    _, first = np.unique(np.round(q, 12), axis=0, return_index=True)
-    q = q[np.sort(first)]
-    if len(q) > 60:
-        q = q[np.linspace(0, len(q) - 1, 60).astype(int)]
+def _compatibility(machine, data: MeasurementSet, tol: np.ndarray,
+                   known: Any = None) -> CompatibleDirections:
+    """The compatible directions seen at (up to 60 distinct) measured configurations and the
+    machine's reference ones; ``known``: the machine's sensitivity at ``data.q`` if already
+    computed (its closure rows do not depend on the tool)."""
+    _, first = np.unique(np.round(data.q, 12), axis=0, return_index=True)
+    rows = np.sort(first)
+    if len(rows) > 60:
+        rows = rows[np.linspace(0, len(rows) - 1, 60).astype(int)]
     extra = np.array(list(machine.reference_poses().values()), dtype=float)
-    sens = tool_sensitivity(machine, np.concatenate([q, extra]), compiled=True)
-    return compatible_directions(sens.closure_defect, defect_set(machine).names, tol)
+    if known is not None and known.closure_defect is not None:
+        closure = np.concatenate([known.closure_defect[rows], tool_sensitivity(
+            machine, extra, compiled=True).closure_defect])
+    else:
+        closure = tool_sensitivity(machine, np.concatenate([data.q[rows], extra]),
+                                   compiled=True).closure_defect
+    return compatible_directions(closure, defect_set(machine).names, tol)
 
 
 def _raise_unassembled(model: ResidualModel, r: np.ndarray, what: str) -> None:

@@ -253,10 +253,18 @@ class ChainLinearisation:
         direct, cu, cd = lin["direct"], lin["cu"], lin["cd"]
         rot, p_x, values = lin["rot"], lin["p_x"], lin["values"]
         n = q.shape[0]
-        pinv = np.linalg.pinv(cu, rcond=1e-9)
-        du = -pinv @ cd  # (N, 6 + n_p, d)
-        # the part of C_δ no motion absorbs: (I − C_U C_U⁺) C_δ
-        incompatible = cd + cu @ du
+        # dU = −C_U⁺ C_δ (N, 6 + n_p, d) and the part of C_δ no motion absorbs, (I − C_U C_U⁺) C_δ
+        if "tool_twists" in lin:  # compiled: normal equations, the pseudo-inverse where singular
+            from pkmkit.solve.chain_kernel import absorb
+
+            du, incompatible, ok = absorb(cu, cd)
+        else:
+            ok = np.zeros(n, dtype=bool)
+            du, incompatible = np.empty((n, cu.shape[2], cd.shape[2])), np.empty_like(cd)
+        if not ok.all():
+            bad = np.flatnonzero(~ok)
+            du[bad] = -np.linalg.pinv(cu[bad], rcond=1e-9) @ cd[bad]
+            incompatible[bad] = cd[bad] + cu[bad] @ du[bad]
         tool_twists = lin.get("tool_twists")
         if tool_twists is None:
             tool_twists = tool_frame(columns if columns is not None else self.model, rot, p_x,

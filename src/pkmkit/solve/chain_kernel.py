@@ -497,3 +497,87 @@ def _linearise_rows(frames, types, evar, elements, offsets, position, local, ord
         for a in range(count):
             for i in range(6):
                 tool_tw[k, i, ids[a]] = twists[a, i]
+
+
+#: A closure Jacobian C_U whose Cholesky pivots of C_Uᵀ C_U fall below this fraction of its
+#: largest diagonal entry is treated as rank-deficient (left to the pseudo-inverse).
+RANK_PIVOT = 1e-10
+
+
+def absorb(cu: np.ndarray, cd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``dU = −C_U⁺ C_δ (N, u, d)`` and the part no motion absorbs, ``C_δ + C_U dU (N, r, d)``,
+    for closure Jacobians ``cu (N, r, u)`` of full column rank, by the normal equations
+    (Cholesky of ``C_Uᵀ C_U``, compiled); ``ok (N,)`` False for the rows whose ``C_U`` is
+    (nearly) rank-deficient (pivot below :data:`RANK_PIVOT`), whose outputs are NaN: the
+    caller takes the pseudo-inverse there."""
+    n, r, u = cu.shape
+    du = np.empty((n, u, cd.shape[2]))
+    rest = np.empty((n, r, cd.shape[2]))
+    ok = np.empty(n, dtype=np.bool_)
+    _absorb_rows(np.ascontiguousarray(cu), np.ascontiguousarray(cd), du, rest, ok)
+    return du, rest, ok
+
+
+@njit(**_OPTIONS)
+def _absorb_rows(cu, cd, du, rest, ok):  # pragma: no cover
+    n, r, u = cu.shape
+    d = cd.shape[2]
+    h = np.empty((u, u))
+    low = np.empty((u, u))
+    g = np.empty((u, d))
+    for k in range(n):
+        c_u, c_d, x = cu[k], cd[k], du[k]
+        h[:, :] = 0.0
+        g[:, :] = 0.0
+        for i in range(r):  # H = C_Uᵀ C_U, G = −C_Uᵀ C_δ (rows of C_U streamed once)
+            for a in range(u):
+                v = c_u[i, a]
+                for c in range(a + 1):
+                    h[a, c] += v * c_u[i, c]
+                for col in range(d):
+                    g[a, col] -= v * c_d[i, col]
+        biggest = 0.0
+        for a in range(u):
+            biggest = max(biggest, h[a, a])
+        good = biggest > 0.0
+        for j in range(u):
+            s = h[j, j]
+            for p in range(j):
+                s -= low[j, p] * low[j, p]
+            if not s > RANK_PIVOT * biggest:
+                good = False
+                break
+            low[j, j] = math.sqrt(s)
+            for i in range(j + 1, u):
+                t = h[i, j]
+                for p in range(j):
+                    t -= low[i, p] * low[j, p]
+                low[i, j] = t / low[j, j]
+        ok[k] = good
+        if not good:
+            x[:, :] = math.nan
+            rest[k] = math.nan
+            continue
+        for i in range(u):  # L Y = G
+            for p in range(i):
+                f = low[i, p]
+                for col in range(d):
+                    g[i, col] -= f * g[p, col]
+            f = 1.0 / low[i, i]
+            for col in range(d):
+                g[i, col] *= f
+        for i in range(u - 1, -1, -1):  # Lᵀ X = Y
+            for p in range(i + 1, u):
+                f = low[p, i]
+                for col in range(d):
+                    g[i, col] -= f * x[p, col]
+            f = 1.0 / low[i, i]
+            for col in range(d):
+                x[i, col] = g[i, col] * f
+        for i in range(r):  # C_δ + C_U dU
+            for col in range(d):
+                rest[k, i, col] = c_d[i, col]
+            for a in range(u):
+                v = c_u[i, a]
+                for col in range(d):
+                    rest[k, i, col] += v * x[a, col]
