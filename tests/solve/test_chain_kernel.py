@@ -135,3 +135,43 @@ def test_compiled_warm_started_sensitivity_is_the_numpy_one():
     for name in ("point", "rotation", "pose", "closure_defect"):
         a, b = getattr(ref, name), getattr(out, name)
         np.testing.assert_allclose(b, a, rtol=0, atol=1e-12 * max(1.0, np.abs(a).max()))
+
+
+def test_absorb_is_the_pseudo_inverse_and_flags_rank_deficient_rows():
+    rng = np.random.default_rng(8)
+    cu, cd = rng.normal(size=(5, 18, 16)), rng.normal(size=(5, 18, 30))
+    cu[2, :, 7] = cu[2, :, 3] * 2.0  # a row whose C_U lost a rank
+    du, rest, ok = chain_kernel.absorb(cu, cd)
+    assert ok.tolist() == [True, True, False, True, True]
+    assert np.isnan(du[2]).all() and np.isnan(rest[2]).all()
+    good = np.flatnonzero(ok)
+    ref = -np.linalg.pinv(cu[good]) @ cd[good]
+    np.testing.assert_allclose(du[good], ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    np.testing.assert_allclose(rest[good], cd[good] + cu[good] @ ref, rtol=0, atol=1e-12)
+
+
+def test_rank_deficient_closure_rows_take_the_pseudo_inverse(monkeypatch):
+    """Rows the compiled normal equations refuse get the pseudo-inverse (as without kernels)."""
+    m = pkmkit.machine("tripteor-x7")
+    q = m.measurement_configurations(6, np.random.default_rng(9))
+    ref = tool_sensitivity(m, q)
+    absorb = chain_kernel.absorb
+
+    def refusing(cu, cd):
+        du, rest, ok = absorb(cu, cd)
+        ok[::2] = False
+        return du, rest, ok
+
+    monkeypatch.setattr(chain_kernel, "absorb", refusing)
+    out = tool_sensitivity(m, q, compiled=True)
+    assert np.isfinite(out.point).all()
+    np.testing.assert_allclose(out.point, ref.point, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(out.closure_defect, ref.closure_defect, rtol=0, atol=1e-12)
+
+
+def test_a_rod_machine_refuses_a_closure_start():
+    from pkmkit.exceptions import UnsupportedOperationError
+
+    m = pkmkit.machine("gough-stewart")
+    with pytest.raises(UnsupportedOperationError):
+        tool_sensitivity(m, m.home_q, start=np.zeros(6))
