@@ -81,6 +81,7 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
     r_new, j_new = np.empty(m), np.empty((m, n))
     u_new, step, grad = np.empty(n), np.empty(n), np.empty(n)
     h, low = np.empty((n, n)), np.empty((n, n))
+    scratch = _scratch(elements.shape[0])
     for k in range(u.shape[0]):
         finite = True
         for i in range(n):
@@ -90,7 +91,7 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
             continue
         values[:] = known[k]
         _evaluate(frames, types, evar, elements, offsets, position, values, u[k], length, r,
-                  jac)
+                  jac, scratch)
         cost = 0.5 * np.dot(r, r)
         if not (math.isfinite(cost) and np.isfinite(jac).all()):
             status[k] = _INVALID
@@ -132,7 +133,7 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
             _cholesky_solve(h, grad, low, step)
             _retract(u[k], step, u_new)
             _evaluate(frames, types, evar, elements, offsets, position, values, u_new, length,
-                      r_new, j_new)
+                      r_new, j_new, scratch)
             cost_new = 0.5 * np.dot(r_new, r_new)
             accept = math.isfinite(cost_new) and cost_new <= cost * (1.0 + 1e-13)
             count += 1
@@ -271,22 +272,23 @@ def _rotation_rows(mm, length, sign, out):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
+def _scratch(n_elements):  # pragma: no cover
+    """Work arrays of :func:`_evaluate` (allocated once per kernel call)."""
+    return (np.empty((5, 3, 3)), np.empty(3), np.empty((n_elements, 6)),
+            np.empty(n_elements, dtype=np.int64))
+
+
+@njit(**_OPTIONS)
 def _evaluate(frames, types, evar, elements, offsets, position, values, u, length, r,
-              jac):  # pragma: no cover
+              jac, scratch):  # pragma: no cover
     """Residual ``r (6L,)`` and Jacobian ``jac (6L, n)`` of the closure at ``u`` (module
-    docstring of :mod:`pkmkit.solve.chains`)."""
+    docstring of :mod:`pkmkit.solve.chains`; ``scratch`` from :func:`_scratch`)."""
     _fill_unknowns(values, position, u)
-    rx = np.empty((3, 3))
+    mats, pos, tw, tw_col = scratch
+    rx, rot, tmp, mm, rows = mats[0], mats[1], mats[2], mats[3], mats[4]
     _rotvec_matrix(u[3], u[4], u[5], rx)
-    rot = np.empty((3, 3))
-    tmp = np.empty((3, 3))
-    mm = np.empty((3, 3))
-    rows = np.empty((3, 3))
-    pos = np.empty(3)
     jac[:, :] = 0.0
     n_twist = 0
-    tw = np.empty((elements.shape[0], 6))
-    tw_col = np.empty(elements.shape[0], dtype=np.int64)
     for leg in range(offsets.shape[0] - 1):
         base = 6 * leg
         for i in range(3):
@@ -459,10 +461,11 @@ def _linearise_rows(frames, types, evar, elements, offsets, position, local, ord
     twists = np.empty((local.shape[0], 6))
     ids = np.empty(local.shape[0], dtype=np.int64)
     row_values = np.empty(values.shape[1])
+    scratch = _scratch(elements.shape[0])
     for k in range(values.shape[0]):
         row_values[:] = values[k]
         _evaluate(frames, types, evar, elements, offsets, position, row_values, u[k], length,
-                  r, cu[k])
+                  r, cu[k], scratch)
         _rotvec_matrix(u[k, 3], u[k, 4], u[k, 5], rx)
         for leg in range(offsets.shape[0] - 1):
             base = 6 * leg
