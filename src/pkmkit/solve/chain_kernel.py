@@ -38,15 +38,19 @@ _NOT_CONVERGED, _INVALID = int(Status.NOT_CONVERGED), int(Status.INVALID_INPUT)
 def model_arrays(model: JointChainModel, unknown_variables: np.ndarray) -> tuple:
     """The kernel's view of ``model``: ``(frames (E, 4, 4), types (E,), element variable (E,),
     leg elements (flattened), leg offsets (L + 1,), position of every variable in u (−1 for a
-    known one))``."""
-    types = np.array([_TYPE_CODE[e.type] for e in model.elements], dtype=np.int64)
-    evar = np.asarray(model.element_variable, dtype=np.int64)
-    elements = np.array([e for leg in model.legs for e in leg], dtype=np.int64)
-    offsets = np.cumsum([0] + [len(leg) for leg in model.legs]).astype(np.int64)
+    known one))``; all but the positions computed once per (immutable) model."""
+    cached = model.__dict__.get("_kernel_arrays")
+    if cached is None:
+        types = np.array([_TYPE_CODE[e.type] for e in model.elements], dtype=np.int64)
+        evar = np.asarray(model.element_variable, dtype=np.int64)
+        elements = np.array([e for leg in model.legs for e in leg], dtype=np.int64)
+        offsets = np.cumsum([0] + [len(leg) for leg in model.legs]).astype(np.int64)
+        cached = (np.ascontiguousarray(model.frames, dtype=float), types, evar, elements,
+                  offsets)
+        object.__setattr__(model, "_kernel_arrays", cached)
     position = np.full(model.n_variables, -1, dtype=np.int64)
     position[np.asarray(unknown_variables, dtype=int)] = 6 + np.arange(len(unknown_variables))
-    return (np.ascontiguousarray(model.frames, dtype=float), types, evar, elements, offsets,
-            position)
+    return (*cached, position)
 
 
 def solve(model: JointChainModel, known: np.ndarray, u0: np.ndarray,
