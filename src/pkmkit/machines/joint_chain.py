@@ -245,8 +245,10 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(loop))
         q = np.tile(home, (len(grid), 1))
         q[:, loop] = grid
+        # compiled once Numba is loaded (an identification's divergence bound); not imported
+        # for this alone
         points = self.fk(q, full_output=True, strokes="ignore", check_singular=False,
-                         compiled=use_compiled_solver(len(q))).pose[:, :3]
+                         compiled=use_compiled_solver(1)).pose[:, :3]
         points = np.vstack([points[np.isfinite(points).all(axis=1)], self.home_pose[:3]])
         lower, upper = points.min(axis=0), points.max(axis=0)
         pad = np.maximum(0.1 * (upper - lower), 0.01)
