@@ -241,8 +241,6 @@ def test_steps_that_raise_the_cost_are_refused():
 def test_normal_matrix_of_few_large_problems_is_the_entrywise_one():
     """Few problems with many unknowns take matrix products (one per problem); many small ones
     the entry-by-entry passes over the batch: the same JᵀJ."""
-    from pkmkit.solve.least_squares import normal_matrix
-
     rng = np.random.default_rng(0)
     for n, k in ((20, 3), (53, 1), (6, 500), (20, 40)):
         jac = rng.normal(size=(30, n, k))
