@@ -11,11 +11,17 @@ length, stall every ten iterations, damping beyond 1e12) and statuses. It differ
 engine only in the linear algebra of each step (a dense Cholesky factorisation of the damped
 normal equations instead of the engine's block elimination): the same iterates to rounding.
 
+Also compiled here, for the identification's Jacobians: :func:`linearise` (the closure's
+Jacobians C_U and C_δ and the tool frame's defect twists at solved configurations, as
+:func:`pkmkit.solve.chains.closure` and :func:`~pkmkit.solve.chains.tool_frame` with
+``defects=True``) and :func:`absorb` (``dU = −C_U⁺ C_δ`` by the normal equations).
+
 Why: the engine runs each iteration as a few hundred NumPy calls over the batch; a residual of
-the Tripteor's identification (107 configurations, ten iterations) cost 25–50 ms of such calls,
-the kernel a fraction of a millisecond. Imported lazily (Numba's import costs ≈ 0.3 s), used when
-the caller asks (``solve_closure(..., compiled=True)``) and Numba is available
-(:func:`pkmkit.numerics.jit.use_compiled_solver`); the NumPy engine is the reference it is
+the Tripteor's identification (107 configurations, 10–15 iterations) cost 25–58 ms of such
+calls, the kernel about a millisecond (12 µs per configuration). Imported lazily (Numba's import
+costs ≈ 0.3 s), used when the caller asks (``solve_closure(..., compiled=True)``,
+``tool_sensitivity(..., compiled=True)``) and Numba is available and not disabled
+(:func:`pkmkit.solve.chains.compiled_closure_available`); the NumPy code is the reference it is
 tested against (``tests/solve/test_chain_kernel.py``).
 """
 
