@@ -236,3 +236,13 @@ def test_steps_that_raise_the_cost_are_refused():
 
     res = solve_least_squares(evaluate, np.full((1, 1), 1.5))
     assert res.status[0] == Status.OK and abs(res.u[0, 0]) < 1e-9
+
+
+def test_normal_matrix_of_few_large_problems_is_the_entrywise_one():
+    """Few problems with many unknowns take matrix products (one per problem); many small ones
+    the entry-by-entry passes over the batch: the same JᵀJ."""
+    rng = np.random.default_rng(0)
+    for n, k in ((20, 3), (53, 1), (6, 500), (20, 40)):
+        jac = rng.normal(size=(30, n, k))
+        expected = np.einsum("mik,mjk->ijk", jac, jac)
+        np.testing.assert_allclose(normal_matrix(jac), expected, rtol=1e-12, atol=1e-12)

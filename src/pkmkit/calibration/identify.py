@@ -260,7 +260,7 @@ def _prepare(machine, data, *, validation, parameters, frame, prior, tolerances,
     compat: CompatibleDirections | None = None
     basis = np.eye(d)[:, candidates]
     if compatible and machine.incompatible_defects:
-        compat = _compatibility(machine, data, tol)
+        compat = _compatibility(machine, data, tol, model.sensitivity(machine))
         basis = compat.basis
         free = [int(i) for i in compat.free if i in set(candidates)]
         dependents = [int(k) for k in compat.dependent]
@@ -438,8 +438,10 @@ def _calibrate(machine, data, *, validation, parameters, frame, robust, prior, t
     std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     # the pseudo-inverse drops the directions the data do not determine, which would give
     # those parameters a standard deviation of 0: they are undetermined (inf)
-    undetermined, null = _undetermined(jw), _null_directions(jw) * problem.scale[None, :]
-    uncertainty = _tool_uncertainty(m_id, data,
+    null_scaled = _null_directions(jw)
+    undetermined = (null_scaled ** 2).sum(axis=0) > 1e-6
+    null = null_scaled * problem.scale[None, :]
+    uncertainty = _tool_uncertainty(m_id, data, model.sensitivity(m_id),
                                     problem.basis, cov[:mach_sel.size, :mach_sel.size],
                                     null[:, :mach_sel.size], model.rigid_motion_free)
     std[undetermined] = np.inf
@@ -510,7 +512,8 @@ def _null_directions(jw: np.ndarray) -> np.ndarray:
     p = jw.shape[1]
     if jw.size == 0:
         return np.eye(p)
-    _, s, vt = np.linalg.svd(jw, full_matrices=True)
+    # every right singular vector; the left ones are not needed beyond the first p
+    _, s, vt = np.linalg.svd(jw, full_matrices=jw.shape[0] < p)
     small = np.ones(p, dtype=bool)
     small[:s.size] = s < RCOND * s[0] if s[0] > 0 else True
     return vt[small]
@@ -527,13 +530,15 @@ def _counts(prep, unidentifiable: Mapping[str, str]) -> dict[str, int]:
             "combinations": sum(r.startswith("a combination") for r in reasons)}
 
 
-def _tool_uncertainty(machine, data: MeasurementSet, basis: np.ndarray, cov: np.ndarray,
-                      null: np.ndarray, rigid_motion_free: Any) -> dict[str, Any]:
+def _tool_uncertainty(machine, data: MeasurementSet, sens: Any, basis: np.ndarray,
+                      cov: np.ndarray, null: np.ndarray, rigid_motion_free: Any
+                      ) -> dict[str, Any]:
     """Nominal tool points and the k = 2 uncertainty of the identified machine's tool point
     at the measured configurations (:mod:`pkmkit.calibration.uncertainty`): ``cov (p, p)`` the
     machine block of the joint covariance (finite), ``null (k, p)`` undetermined directions
     (SI), ``basis (d, p)`` identified parameters → defect vector, ``rigid_motion_free`` the
-    free rigid motions (bool or ``(6,)`` mask)."""
+    free rigid motions (bool or ``(6,)`` mask), ``sens`` the tool sensitivity of ``machine``
+    at ``data.q`` if already computed (the identification's last Jacobian), else None."""
     tl = None if data.tool_length is None else float(np.asarray(data.tool_length).flat[0])
     removed = bool(np.any(rigid_motion_free))
     out = {"tool_points": None, "tool_uncertainty": None,
@@ -543,7 +548,9 @@ def _tool_uncertainty(machine, data: MeasurementSet, basis: np.ndarray, cov: np.
     if data.q is None:
         return out
     try:
-        sens = tool_sensitivity(machine, data.q, tool_length=data.tool_length)
+        if sens is None:
+            sens = tool_sensitivity(machine, data.q, tool_length=data.tool_length,
+                                    compiled=True)
     except (PkmError, np.linalg.LinAlgError):
         return out
     points = np.asarray(sens.pose)[:, :3]
@@ -604,15 +611,23 @@ def _candidates(dset, parameters) -> list[int]:
     return sorted(set(out))
 
 
-def _compatibility(machine, data: MeasurementSet, tol: np.ndarray) -> CompatibleDirections:
-    q = data.q
-    _, first = np.unique(np.round(q, 12), axis=0, return_index=True)
-    q = q[np.sort(first)]
-    if len(q) > 60:
-        q = q[np.linspace(0, len(q) - 1, 60).astype(int)]
+def _compatibility(machine, data: MeasurementSet, tol: np.ndarray,
+                   known: Any = None) -> CompatibleDirections:
+    """The compatible directions seen at (up to 60 distinct) measured configurations and the
+    machine's reference ones; ``known``: the machine's sensitivity at ``data.q`` if already
+    computed (its closure rows do not depend on the tool)."""
+    _, first = np.unique(np.round(data.q, 12), axis=0, return_index=True)
+    rows = np.sort(first)
+    if len(rows) > 60:
+        rows = rows[np.linspace(0, len(rows) - 1, 60).astype(int)]
     extra = np.array(list(machine.reference_poses().values()), dtype=float)
-    sens = tool_sensitivity(machine, np.concatenate([q, extra]))
-    return compatible_directions(sens.closure_defect, defect_set(machine).names, tol)
+    if known is not None and known.closure_defect is not None:
+        closure = np.concatenate([known.closure_defect[rows], tool_sensitivity(
+            machine, extra, compiled=True).closure_defect])
+    else:
+        closure = tool_sensitivity(machine, np.concatenate([data.q[rows], extra]),
+                                   compiled=True).closure_defect
+    return compatible_directions(closure, defect_set(machine).names, tol)
 
 
 def _raise_unassembled(model: ResidualModel, r: np.ndarray, what: str) -> None:

@@ -54,6 +54,8 @@ from pkmkit.spatial.rotation import (
     skew,
 )
 
+#: How the residual models close a joint chain's legs (:meth:`fk` options).
+CLOSURE = {"compiled": True, "strokes": "ignore"}
 #: Spacing of the samples of a commanded path in Cartesian space (m).
 PATH_SPACING = 5e-4
 
@@ -85,7 +87,7 @@ ToolState = ToolFrames
 
 def tool_state(machine, q: np.ndarray, tool_length: np.ndarray | None, *, jacobian: bool,
                rotation: bool = False, x0: np.ndarray | None = None,
-               closure_options: dict | None = None) -> ToolState:
+               closure_options: dict | None = None, keep: dict | None = None) -> ToolState:
     """Tool point (and rotation) of ``machine`` at ``q`` ``(N, n)``, with defect Jacobians on
     request (the machine's :meth:`tool_frames` / :meth:`tool_frames_linearised`,
     :mod:`pkmkit.machines.measurement_models`). With ``jacobian``, rows where the machine does
@@ -94,13 +96,20 @@ def tool_state(machine, q: np.ndarray, tool_length: np.ndarray | None, *, jacobi
     ``x0``: a warm start of a joint-chain machine's closure (platform pose and passive joints,
     ``ToolState.start`` of a previous call at the same q) for residual-only evaluations;
     ``closure_options``: engine options of those closures (e.g. a loose ``xtol`` to emulate an
-    inexact inner solver)."""
+    inexact inner solver); ``keep``: a dict that receives the defect sensitivity
+    (``keep["sensitivity"]``, :func:`pkmkit.geometric_errors.model.tool_sensitivity`) of a
+    ``jacobian`` evaluation."""
+    # a joint chain's closures run in the compiled kernel (pkmkit.solve.chain_kernel), from
+    # the last solution, the Jacobian's as well (with the engine's default options); the
+    # strokes were checked once (identify.check_measurements): flags would change nothing
+    options = {**CLOSURE, **(closure_options or {})}
     try:
         if jacobian:
-            sens = tool_sensitivity(machine, q, tool_length=tool_length)
+            sens = tool_sensitivity(machine, q, tool_length=tool_length, start=x0, **CLOSURE)
+            if keep is not None:
+                keep["sensitivity"] = sens
             return machine.tool_frames_linearised(q, sens, tool_length, rotation=rotation)
-        return machine.tool_frames(q, tool_length, rotation=rotation, start=x0,
-                                   **(closure_options or {}))
+        return machine.tool_frames(q, tool_length, rotation=rotation, start=x0, **options)
     except PkmError:
         if not jacobian:
             raise
@@ -134,6 +143,7 @@ class ResidualModel:
                                      (len(data), self.width)).copy()
         self.setup = SetupParameters()
         self._cache: tuple | None = None
+        self._sensitivity: tuple | None = None
         self._warm: np.ndarray | None = None
         #: engine options of a joint-chain machine's residual-only closures
         self.closure_options: dict = {}
@@ -145,13 +155,22 @@ class ResidualModel:
         if c is not None and c[0] is machine and (c[1] or not jacobian) and (c[2] or not
                                                                             rotation):
             return c[3]
+        keep: dict = {}
         state = tool_state(machine, self.data.q, self.data.tool_length, jacobian=jacobian,
                            rotation=rotation, x0=self._warm,
-                           closure_options=self.closure_options)
+                           closure_options=self.closure_options, keep=keep)
         self._cache = (machine, jacobian, rotation, state)
+        if "sensitivity" in keep:
+            self._sensitivity = (machine, keep["sensitivity"])
         if state.start is not None:
             self._warm = state.start
         return state
+
+    def sensitivity(self, machine) -> Any:
+        """The defect sensitivity at the measured configurations of the last Jacobian
+        evaluation, if it was of ``machine`` (the same object), else None."""
+        s = self._sensitivity
+        return s[1] if s is not None and s[0] is machine else None
 
     def residuals(self, machine, setup: np.ndarray, *, jacobian: bool
                   ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:

@@ -114,16 +114,18 @@ def with_defects(machine, values: Any):
 
 
 @single_blas
-def tool_sensitivity(machine, q: Any, *, tool_length: Any = None) -> ToolSensitivity:
+def tool_sensitivity(machine, q: Any, *, tool_length: Any = None,
+                     **closure: Any) -> ToolSensitivity:
     """Analytic first-order effect of every defect on the tool point and rotation at
     actuator coordinates ``q`` ``(n,)`` or ``(N, n)`` (see the module docstring): the
     machine's own linearisation, ``machine.tool_sensitivity``
-    (:mod:`pkmkit.machines.defect_linearisation`).
+    (:mod:`pkmkit.machines.defect_linearisation`); ``closure``: a joint chain's closure
+    ``start`` and engine options (e.g. ``compiled=True``).
 
     Raises:
         InputError: mis-shaped q, or configurations where the direct model fails.
     """
-    return machine.tool_sensitivity(q, tool_length=tool_length)
+    return machine.tool_sensitivity(q, tool_length=tool_length, **closure)
 
 
 @single_blas

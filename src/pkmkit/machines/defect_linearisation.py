@@ -106,13 +106,23 @@ class _RodLinearisation:
         _, unknowns, cols, pose = self._rod_linearisation(_checked_q(self, q))
         return ClosureLinearisation(unknowns, cols, pose)
 
-    def tool_sensitivity(self, q: Any, *, tool_length: Any = None) -> ToolSensitivity:
+    def tool_sensitivity(self, q: Any, *, tool_length: Any = None, start: Any = None,
+                         **engine_options: Any) -> ToolSensitivity:
         """First-order effect of every defect on the tool at actuator coordinates ``q``
-        ``(n,)`` or ``(N, n)`` (module docstring; ``tool_length`` is ignored here).
+        ``(n,)`` or ``(N, n)`` (module docstring; ``tool_length``, ``start`` and
+        ``engine_options`` tune a joint chain's closure and are ignored here: a rod machine's
+        direct model is a closed form).
 
         Raises:
             InputError: mis-shaped q, or configurations where the direct model fails.
+            UnsupportedOperationError: a ``start`` (there is no closure to start).
         """
+        if start is not None:
+            from pkmkit.exceptions import UnsupportedOperationError
+
+            raise UnsupportedOperationError(
+                "a direct-model start", self.id, self.family,
+                "its direct model is a closed form: there is no closure to start")
         return self._rod_sensitivity(_checked_q(self, q))
 
 
@@ -181,24 +191,32 @@ class ChainLinearisation:
         lin = self._chain_closure(_checked_q(self, q), tool_length)
         return ClosureLinearisation(lin["cu"], lin["cd"], lin["direct"].pose)
 
-    def tool_sensitivity(self, q: Any, *, tool_length: Any = None) -> ToolSensitivity:
+    def tool_sensitivity(self, q: Any, *, tool_length: Any = None, start: Any = None,
+                         **engine_options: Any) -> ToolSensitivity:
         """First-order effect of every defect on the tool at actuator coordinates ``q``
-        ``(n,)`` or ``(N, n)`` (module docstring), with the tool ``tool_length`` (m).
+        ``(n,)`` or ``(N, n)`` (module docstring), with the tool ``tool_length`` (m); the
+        closure solved from ``start`` (as :meth:`fk`'s, e.g. the solution of a previous call
+        at the same q) with ``engine_options`` (:meth:`fk`'s, e.g. ``compiled=True``).
 
         Raises:
             InputError: mis-shaped q, or configurations where the legs do not close.
         """
-        return self._chain_tool_sensitivity(_checked_q(self, q), tool_length)
+        return self._chain_tool_sensitivity(_checked_q(self, q), tool_length, start=start,
+                                            **engine_options)
 
-    def _chain_closure(self, q: np.ndarray, tool_length: Any, columns=None) -> dict:
+    def _chain_closure(self, q: np.ndarray, tool_length: Any, columns=None, *,
+                       start: Any = None, **engine_options: Any) -> dict:
         """The closure at ``q (N, n)``: ``{"direct", "cu", "cd", "values", "rot", "p_x"}``
+        (and ``"tool_twists" (N, 6, d)`` from the compiled kernel with ``compiled=True``)
         (``columns``: a model with the machine's frames whose defect columns to use instead,
-        :func:`pkmkit.solve.chains.with_column_twists`)."""
-        from pkmkit.solve.chains import closure
+        :func:`pkmkit.solve.chains.with_column_twists`; ``start``, ``engine_options``: as
+        :meth:`fk`'s)."""
+        from pkmkit.solve.chains import closure, compiled_closure_available
         from pkmkit.spatial.rotation import rotvec_to_matrix
 
         model = self.model
-        direct = self.fk(q, tool_length=tool_length, full_output=True)
+        direct = self.fk(q, tool_length=tool_length, full_output=True, start=start,
+                         **engine_options)
         if not np.isfinite(direct.pose).all():
             bad = int(np.flatnonzero(~np.isfinite(direct.pose).all(axis=1))[0])
             raise InputError(f"configuration {bad}: the legs do not close at q = "
@@ -209,35 +227,53 @@ class ChainLinearisation:
         passive = np.flatnonzero(~model.actuated & model.loop_variables)
         values[:, act] = q
         values[:, passive] = direct.passive
-        rot = rotvec_to_matrix(direct.platform[:, 3:]).transpose(1, 2, 0)
         p_x = direct.platform[:, :3].T
-        c = closure(columns if columns is not None else model, rot, p_x, values.T, defects=True)
+        source = columns if columns is not None else model
+        rot = rotvec_to_matrix(direct.platform[:, 3:]).transpose(1, 2, 0)
+        if engine_options.get("compiled") and compiled_closure_available():
+            from pkmkit.solve import chain_kernel
+
+            cu, cd, _, _, tool = chain_kernel.linearise(source, values, direct.platform,
+                                                        passive)
+            return {"direct": direct, "cu": cu, "cd": cd, "values": values, "rot": rot,
+                    "p_x": p_x, "tool_twists": tool}
+        c = closure(source, rot, p_x, values.T, defects=True)
         cu = np.concatenate([c.platform, c.variables[:, passive]], axis=1).transpose(2, 0, 1)
         cd = c.defects.transpose(2, 0, 1)
         return {"direct": direct, "cu": cu, "cd": cd, "values": values, "rot": rot, "p_x": p_x}
 
-    def _chain_tool_sensitivity(self, q: np.ndarray, tool_length: Any, columns=None
-                          ) -> ToolSensitivity:
+    def _chain_tool_sensitivity(self, q: np.ndarray, tool_length: Any, columns=None, *,
+                                start: Any = None, **engine_options: Any) -> ToolSensitivity:
         """:meth:`tool_sensitivity` at ``q (N, n)``, of the defect columns of ``columns``
         (a model of :func:`pkmkit.solve.chains.with_column_twists`) when given."""
         from pkmkit.solve.chains import tool_frame
         from pkmkit.spatial.rotation import skew
 
-        lin = self._chain_closure(q, tool_length, columns)
+        lin = self._chain_closure(q, tool_length, columns, start=start, **engine_options)
         direct, cu, cd = lin["direct"], lin["cu"], lin["cd"]
         rot, p_x, values = lin["rot"], lin["p_x"], lin["values"]
         n = q.shape[0]
-        pinv = np.linalg.pinv(cu, rcond=1e-9)
-        du = -pinv @ cd  # (N, 6 + n_p, d)
-        # the part of C_δ no motion absorbs: (I − C_U C_U⁺) C_δ
-        incompatible = cd + cu @ du
-        tool = tool_frame(columns if columns is not None else self.model, rot, p_x, values.T,
-                          defects=True)
+        # dU = −C_U⁺ C_δ (N, 6 + n_p, d) and the part of C_δ no motion absorbs, (I − C_U C_U⁺) C_δ
+        if "tool_twists" in lin:  # compiled: normal equations, the pseudo-inverse where singular
+            from pkmkit.solve.chain_kernel import absorb
+
+            du, incompatible, ok = absorb(cu, cd)
+        else:
+            ok = np.zeros(n, dtype=bool)
+            du, incompatible = np.empty((n, cu.shape[2], cd.shape[2])), np.empty_like(cd)
+        if not ok.all():
+            bad = np.flatnonzero(~ok)
+            du[bad] = -np.linalg.pinv(cu[bad], rcond=1e-9) @ cd[bad]
+            incompatible[bad] = cd[bad] + cu[bad] @ du[bad]
+        tool_twists = lin.get("tool_twists")
+        if tool_twists is None:
+            tool_twists = tool_frame(columns if columns is not None else self.model, rot, p_x,
+                                     values.T, defects=True).defect_twists.transpose(2, 0, 1)
         plat = np.zeros((n, 6, 6))
         plat[:, :3, :3] = np.eye(3)
         plat[:, 3:, 3:] = np.eye(3)
         plat[:, :3, 3:] = skew(p_x.T)
-        twist = plat @ du[:, :6, :] + tool.defect_twists.transpose(2, 0, 1)
+        twist = plat @ du[:, :6, :] + tool_twists
         point = direct.pose[:, :3]
         dp = twist[:, :3] + np.cross(twist[:, 3:].transpose(0, 2, 1), point[:, None, :]
                                      ).transpose(0, 2, 1)

@@ -66,6 +66,7 @@ from pkmkit.machines.warm_starts import ChainWarmStart
 from pkmkit.machines.workspace_reports import ChainReports
 from pkmkit.model.chains import JointChainModel
 from pkmkit.numerics.arrays import restore_shape
+from pkmkit.numerics.jit import use_compiled_solver
 from pkmkit.solve.chains import (
     chain_pose,
     closure,
@@ -128,8 +129,10 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         start = chain_pose(model, model.legs[0], values[:, None])
         u0 = np.concatenate([start.p[:, 0], matrix_to_rotvec(start.R[:, :, 0])[0],
                              values[self._passive]])[None]
+        # the compiled closure once Numba is loaded (an identification rebuilds the machine at
+        # every step); never imported for this one row
         res = solve_closure(model, values[None], u0, unknown_variables=self._passive,
-                            compute_rank=False)
+                            compute_rank=False, compiled=use_compiled_solver(1))
         converged = res.status[0] == Status.OK or (
             res.status[0] == Status.INCONSISTENT and model.defects.any())
         if not converged:
@@ -247,7 +250,10 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(loop))
         q = np.tile(home, (len(grid), 1))
         q[:, loop] = grid
-        points = self.fk(q, full_output=True, strokes="ignore", check_singular=False).pose[:, :3]
+        # compiled once Numba is loaded (an identification's divergence bound); not imported
+        # for this alone
+        points = self.fk(q, full_output=True, strokes="ignore", check_singular=False,
+                         compiled=use_compiled_solver(1)).pose[:, :3]
         points = np.vstack([points[np.isfinite(points).all(axis=1)], self.home_pose[:3]])
         lower, upper = points.min(axis=0), points.max(axis=0)
         pad = np.maximum(0.1 * (upper - lower), 0.01)

@@ -214,6 +214,14 @@ class FullPoseMeasurement(RodMeasurement):
         return np.atleast_2d(self.ik(np.concatenate([p, x[:, 3:6]], axis=1)))
 
 
+def _frame_rotation(frame: np.ndarray) -> np.ndarray:
+    """Rotations ``(N, 3, 3)`` of tool frames ``(N, 6)`` (position, rotation vector); NaN rows
+    where the frame is not finite."""
+    rot = rotvec_to_matrix(np.nan_to_num(frame[:, 3:]))
+    rot[~np.isfinite(frame).all(axis=1)] = np.nan
+    return rot
+
+
 class ChainMeasurement:
     """Joint chains: the tool length enters the closure (``fk``, ``ik``, sensitivities)."""
 
@@ -221,10 +229,7 @@ class ChainMeasurement:
     default_tool_lengths: ClassVar[tuple[float, ...] | None] = SEED_TOOLS
 
     def _rotation(self, q: np.ndarray, tool_length: Any) -> np.ndarray:
-        frame = self.fk(q, tool_length=tool_length, full_output=True).tool_frame
-        rot = rotvec_to_matrix(np.nan_to_num(frame[:, 3:]))
-        rot[~np.isfinite(frame).all(axis=1)] = np.nan
-        return rot
+        return _frame_rotation(self.fk(q, tool_length=tool_length, full_output=True).tool_frame)
 
     def tool_frames(self, q: np.ndarray, tool_length: Any = None, *, rotation: bool = False,
                     start: Any = None, **engine_options: Any) -> ToolFrames:
@@ -238,7 +243,7 @@ class ChainMeasurement:
         direct = self.fk(q, tool_length=tool_length, start=start, full_output=True,
                          **engine_options)
         found = np.concatenate([direct.platform, direct.passive], axis=1)
-        rot = self._rotation(q, tool_length) if rotation else None
+        rot = _frame_rotation(direct.tool_frame) if rotation else None
         return ToolFrames(direct.pose[:, :3], rot, None, None,
                           found if np.isfinite(found).all() else None)
 

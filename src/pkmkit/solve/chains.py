@@ -455,8 +455,14 @@ def _closure_into(model: JointChainModel, rot: np.ndarray, p_x: np.ndarray, valu
             jac[rows, positions[i]] = twist_rows(end.variable_twists, end.p, m, length)
 
 
+#: Engine options the compiled closure (:mod:`pkmkit.solve.chain_kernel`) implements.
+COMPILED_OPTIONS = frozenset({"max_iter", "xtol", "atol", "gtol", "stall", "residual_tol",
+                              "damping", "compute_rank"})
+
+
 def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
-                  unknown_variables: np.ndarray, **options) -> SolveResult:
+                  unknown_variables: np.ndarray, compiled: bool = False,
+                  **options) -> SolveResult:
     """Solve the closure for the platform pose and some joint variables, the others known.
 
     Args:
@@ -466,11 +472,24 @@ def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
             unknown variables in the order of ``unknown_variables``.
         unknown_variables: indices of the variables solved for (the passive loop variables for
             the direct model).
+        compiled: solve every row in the compiled kernel of :mod:`pkmkit.solve.chain_kernel`
+            (the same algorithm, to rounding) when Numba is available and the options are
+            among :data:`COMPILED_OPTIONS` with ``compute_rank=False`` (the kernel reports no rank:
+            ``rank`` is −1); else the NumPy engine.
         **options: forwarded to :func:`pkmkit.solve.least_squares.solve_least_squares`.
 
     Returns:
         :class:`SolveResult` whose ``u`` holds (p_X, φ_X, unknown variables).
     """
+    if compiled and _compiled_closure_applies(len(u0), options):
+        from pkmkit.solve import chain_kernel
+
+        options.pop("compute_rank", None)
+        options.setdefault("damping", CLOSURE_DAMPING)
+        u, status, residual, iterations = chain_kernel.solve(
+            model, known, u0, np.asarray(unknown_variables, dtype=int), **options)
+        return SolveResult(u=u, status=status, residual=residual, iterations=iterations,
+                           rank=np.full(len(u), -1))
     known_t = np.ascontiguousarray(known.T)
     free = np.asarray(unknown_variables, dtype=int)
     pattern, positions, members = closure_pattern(model, free)
@@ -491,6 +510,20 @@ def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
     # tenfold on every rejected step where it is not)
     options.setdefault("damping", CLOSURE_DAMPING)
     return solve_least_squares(evaluate, u0, retract=_retract_pose_first(), **options)
+
+
+def compiled_closure_available() -> bool:
+    """Whether the compiled closure kernels (:mod:`pkmkit.solve.chain_kernel`) can run: Numba
+    installed and not disabled (``PKMKIT_COMPILED=0``)."""
+    from pkmkit.numerics import jit
+
+    return jit.mode() != "0" and jit.numba_available()
+
+
+def _compiled_closure_applies(rows: int, options: dict) -> bool:
+    """Whether ``solve_closure(..., compiled=True)`` runs the compiled kernel."""
+    return (set(options) <= COMPILED_OPTIONS and not options.get("compute_rank", True)
+            and rows > 0 and compiled_closure_available())
 
 
 def tool_frame(model: JointChainModel, rot_x: np.ndarray, p_x: np.ndarray, values: np.ndarray,

@@ -179,8 +179,13 @@ class SolveResult:
 
 
 def normal_matrix(jac: np.ndarray) -> np.ndarray:
-    """``JᵀJ`` for batch-last Jacobians ``(m, n, k)`` → ``(n, n, k)``."""
+    """``JᵀJ`` for batch-last Jacobians ``(m, n, k)`` → ``(n, n, k)`` (one pass over the batch
+    per entry; a few large problems, where that is n²/2 passes over a short batch, by matrix
+    products instead)."""
     n = jac.shape[1]
+    if n > 2 * SMALL and jac.shape[2] <= n:
+        stacked = np.ascontiguousarray(jac.transpose(2, 0, 1))  # (k, m, n)
+        return np.ascontiguousarray((stacked.transpose(0, 2, 1) @ stacked).transpose(1, 2, 0))
     out = np.empty((n, n, jac.shape[2]))
     for i in range(n):
         for j in range(i + 1):
