@@ -326,6 +326,17 @@ def axis_increment(z: np.ndarray, component: int) -> np.ndarray:
     return out
 
 
+def cached_defect_twists(model: JointChainModel) -> np.ndarray:
+    """:func:`defect_twists` of the model's frames ``(6, d)``, computed once per (immutable)
+    model and kept on it."""
+    cached = model.__dict__.get("_local_defect_twists")
+    if cached is None:
+        cached = defect_twists(model.frames, model.defect_index, model.nominal_frames,
+                               model.defects)
+        object.__setattr__(model, "_local_defect_twists", cached)
+    return cached
+
+
 def defect_twists(frames: np.ndarray, index: DefectIndex, nominal: np.ndarray | None = None,
                   delta: np.ndarray | None = None) -> np.ndarray:
     """First-order effect of each defect ``(d, 6)``: the twist (v, ω) in the previous frame by

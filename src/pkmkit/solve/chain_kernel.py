@@ -383,10 +383,10 @@ def linearise(model: JointChainModel, values: np.ndarray, platform: np.ndarray,
     model's defect columns, :func:`pkmkit.solve.chains.closure` with ``defects=True``), and
     the tool frame (:func:`pkmkit.solve.chains.tool_frame` with ``defects=True``): rotations
     ``(N, 3, 3)``, positions ``(N, 3)``, defect twists ``(N, 6, d)``."""
-    from pkmkit.solve.chains import _local_defect_twists
+    from pkmkit.model.chains import cached_defect_twists
 
     frames, types, evar, elements, offsets, position = model_arrays(model, unknown_variables)
-    local = np.ascontiguousarray(_local_defect_twists(model), dtype=float)
+    local = np.ascontiguousarray(cached_defect_twists(model), dtype=float)
     owner = np.asarray(model.defect_index.element, dtype=np.int64)
     order = np.argsort(owner, kind="stable").astype(np.int64)
     counts = np.bincount(owner, minlength=len(model.elements))

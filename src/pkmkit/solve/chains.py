@@ -39,7 +39,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pkmkit.model.chains import FIXED, PRISMATIC, REVOLUTE, JointChainModel, defect_twists
+from pkmkit.model.chains import (
+    FIXED,
+    PRISMATIC,
+    REVOLUTE,
+    JointChainModel,
+    cached_defect_twists,
+)
 from pkmkit.solve.least_squares import BlockPattern, SolveResult, solve_least_squares
 from pkmkit.spatial.rotation import skew
 
@@ -96,7 +102,7 @@ def chain_pose(model: JointChainModel, chain: tuple[int, ...], values: np.ndarra
     def_tw = None
     if defects:
         def_tw = np.zeros((6, len(model.defect_index), k))
-        local = _local_defect_twists(model)
+        local = cached_defect_twists(model)
     for e in chain:
         frame = model.frames[e]
         if defects:
@@ -154,16 +160,6 @@ def with_column_twists(model: JointChainModel, elements: np.ndarray, twists: np.
     out = replace(model, defect_index=index, defects=np.zeros(count))
     object.__setattr__(out, "_local_defect_twists", np.asarray(twists, dtype=float))
     return out
-
-
-def _local_defect_twists(model: JointChainModel) -> np.ndarray:
-    """:func:`defect_twists` of the model's frames, computed once per (immutable) model."""
-    cached = model.__dict__.get("_local_defect_twists")
-    if cached is None:
-        cached = defect_twists(model.frames, model.defect_index, model.nominal_frames,
-                               model.defects)
-        object.__setattr__(model, "_local_defect_twists", cached)
-    return cached
 
 
 def _rotate(rot: np.ndarray, vector: np.ndarray) -> np.ndarray:
