@@ -24,6 +24,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
+from pkmkit.numerics.magnitudes import check_plausible
 
 from .calibration_cmds import CAL_UNITS_OPTION, _defects_file, _numbers
 from .options import JSON_OPTION, emit_json, machine_document_path, resolve_machine
@@ -111,6 +112,7 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
 
     unit = units or "mm"
     scale = length_scale(unit)
+    check_plausible("--sigma", sigma, "noise", scale=scale, unit=unit)
     nominal = resolve_machine(machine_name, (), "m")
     rng = np.random.default_rng(seed)
     true, delta = nominal, None
