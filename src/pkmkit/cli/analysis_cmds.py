@@ -550,7 +550,8 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
         raise InputError("--out draws joint-space squares: it needs 2 actuators (planar "
                          "machines); drop --out for a 3-actuator machine")
     scale = length_scale(units)
-    criteria = Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max)
+    criteria = Criteria(bounds=parse_bounds(bounds),
+                        kappa_max=check_plausible("--kappa-max", kappa_max, "condition"))
     useful = useful_workspace(m, criteria, centred=not anywhere,
                               resolution=resolution or (301 if n == 2 else 41))
     sq, box = useful.joint_square, useful.inscribed

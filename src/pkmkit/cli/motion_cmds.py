@@ -385,6 +385,7 @@ def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_sa
         return
     if length is None:
         raise click.UsageError("--length is required (or --seed-tables)")
+    check_plausible("--young", young, "modulus")
     material = Material(E=young, density=density, yield_strength=yield_strength)
     if inner is not None and section != "hollow" and diameter is None:
         raise click.UsageError("--inner is the bore of a hollow arm: give --section hollow "
@@ -393,6 +394,11 @@ def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_sa
         raise InputError(f"--inner {inner:g} {units} must be a bore between 0 and "
                          f"{100 / scale:g} {units}")
     bore = None if inner is None else inner * scale
+    check_plausible("--region", region_side, "length", scale=scale, unit=units)
+    check_plausible("--machine-stiffness", machine_stiffness, "stiffness", scale=1e6,
+                    unit="N/µm")
+    if min_stiffness != 0:  # 0: no stiffness requirement
+        check_plausible("--min-stiffness", min_stiffness, "stiffness")
     requirement = _machine_requirement(machine_name, machine_stiffness, region_side, units)
     if requirement is not None:
         min_stiffness = max(min_stiffness, requirement.arm_stiffness(length * scale))

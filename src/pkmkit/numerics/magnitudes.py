@@ -35,6 +35,11 @@ PLAUSIBLE = {
     "noise": (0.0, 1.0, "m"),               # standard deviation of a reading
     "condition": (1.0, 1e15, ""),           # beyond, a Jacobian is singular in doubles
     "ratio": (0.0, 1.0, ""),
+    "length": (1e-9, 1e3, "m"),             # a dimension, region side or path step
+    "correction": (1e-9, 1.0, "m"),         # a geometric correction or interpolation error
+    "cutter": (1e-6, 1.0, "m"),             # a milling cutter's diameter
+    "probe": (0.0, 0.1, "m"),               # a CMM probe tip's radius (0: a point)
+    "modulus": (1e6, 1e13, "Pa"),           # Young's modulus of engineering materials
 }
 
 #: The kinds of :data:`PLAUSIBLE` that bound a result (leaving the option out: no bound).
