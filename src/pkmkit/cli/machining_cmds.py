@@ -126,6 +126,10 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
         v = _numbers(placement, "--placement")
         if len(v) != 4:
             raise InputError(f"--placement expects DX,DY,DZ,PHI, got {placement!r}")
+        for value in v[:3]:
+            check_plausible("--placement", value, "offset", scale=scale, unit=unit)
+        if not abs(v[3]) <= 360:
+            raise InputError(f"--placement: PHI = {v[3]:g}° is outside [-360, 360]°")
         place = Placement(v[0] * scale, v[1] * scale, v[2] * scale, float(np.radians(v[3])))
     else:
         place = default_placement(nominal)

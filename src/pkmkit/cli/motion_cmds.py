@@ -77,6 +77,8 @@ def build_path(machine, scale: float, gcode, origin, line_text, circle_text, hel
     if len(given) != 1:
         raise click.UsageError("give exactly one of --gcode, --line, --circle, --helix, --raster")
     dims = machine.dims
+    if origin and not gcode:
+        raise click.UsageError("--origin is the work offset of a G-code program (--gcode)")
     if gcode:
         shift = (np.asarray(_numbers(origin, (dims,), "--origin")) * scale if origin
                  else np.zeros(dims))

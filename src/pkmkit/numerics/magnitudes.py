@@ -40,6 +40,8 @@ PLAUSIBLE = {
     "cutter": (1e-6, 1.0, "m"),             # a milling cutter's diameter
     "probe": (0.0, 0.1, "m"),               # a CMM probe tip's radius (0: a point)
     "modulus": (1e6, 1e13, "Pa"),           # Young's modulus of engineering materials
+    "offset": (-1e3, 1e3, "m"),             # a signed position or offset on a machine
+    "factor": (1e-6, 1e6, ""),              # a velocity transmission factor
 }
 
 #: The kinds of :data:`PLAUSIBLE` that bound a result (leaving the option out: no bound).
