@@ -67,6 +67,10 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "docs" / "examples"
       "cmm.csv", "--placement", "0,0,0,1e300"], "--placement: PHI = 1e+300° is outside"),
     (["machined-part", "simulate", "verne", "--gcode", EXAMPLES / "pocket.nc", "--out",
       "cmm.csv", "--placement", "1e300,0,0,0"], "--placement 1e+300 mm is outside the plausible"),
+    (["machined-part", "ballbar-plan", "verne", "--out", "plan.csv", "--table-points",
+      "1e300,0,0"], "--table-points 1e+300 mm is outside the plausible range"),
+    (["machined-part", "ballbar-plan", "verne", "--out", "plan.csv", "--tool-lengths",
+      "0,1e300"], "--tool-lengths: 1e+300 mm is beyond"),
     (["useful-workspace", "orthoglide", "--bounds", "1e-300,1e300"],
      "--bounds 1e-300 is outside the plausible range [1e-06, 1e+06]"),
 ])

@@ -27,6 +27,7 @@ from pkmkit.model.parameters import length_scale
 from pkmkit.numerics.magnitudes import check_plausible
 
 from .calibration_cmds import CAL_UNITS_OPTION, _defects_file, _numbers
+from .limits import check_tool_lengths
 from .options import JSON_OPTION, emit_json, machine_document_path, resolve_machine
 
 GCODE_OPTION = click.option("--gcode", required=True, type=click.Path(dir_okay=False),
@@ -274,6 +275,10 @@ def ballbar_plan_cmd(machine_name, bar_length, tool_lengths, table_points, point
                   for t in table_points.split(";")]
         if any(len(t) != 3 for t in tables):
             raise InputError(f"--table-points expects X,Y,Z;X,Y,Z;..., got {table_points!r}")
+        for value in np.concatenate(tables):
+            check_plausible("--table-points", value / scale, "offset", scale=scale, unit=unit)
+    if tool_lengths:
+        check_tool_lengths(np.array(_numbers(tool_lengths, "--tool-lengths")) * scale, unit)
     plan = ballbar_plan(machine, bar_length=BAR_LENGTH if bar_length is None
                         else bar_length * scale, table_points=tables,
                         tool_lengths=TOOL_LENGTHS if tool_lengths is None
