@@ -5,8 +5,11 @@ a one-line error naming the option and the value, or judged doubtful (exit 3).""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "docs" / "examples"
 
 
 @pytest.mark.parametrize("args, words", [
@@ -28,7 +31,8 @@ import pytest
      "material density = 1e+300 kg/m³ is outside [1, 100000]"),
     (["arm-sizing", "--length", "1", "--force", "100", "--density", "1e-300"],
      "material density = 1e-300"),
-    (["arm-sizing", "--length", "1", "--force", "100", "--young", "1e300"], "material E = 1e+300"),
+    (["arm-sizing", "--length", "1", "--force", "100", "--young", "1e300"],
+     "--young 1e+300 Pa is outside the plausible range [1e+06, 1e+13] Pa"),
     (["arm-sizing", "--length", "1", "--force", "100", "--yield", "1e300"],
      "material yield_strength = 1e+300 Pa"),
     (["arm-sizing", "--length", "1", "--force", "100", "--stress-safety", "1e-300"],
@@ -54,6 +58,21 @@ import pytest
       "1000000000", "--out", "sel.csv"], "above the limit of 1e+05"),
     (["identifiability", "orthoglide", "--measure", "ballbar", "--poses", "20", "--pivot",
       "1e300,0,0"], "--pivot 1e300,0,0: beyond 1e+06 m from the origin"),
+    # numbers inside text options (issue 18 §5, second pass): a work offset ignored without a
+    # program, a part turned by 1e300°, transmission-factor bounds of [1e-300, 1e300] (no
+    # bound) were accepted with exit 0
+    (["path", "orthoglide", "--line", "0,0,0:0.05,0,0", "--feed", "0.05", "--accel", "1",
+      "--origin", "1e300,0,0"], "--origin is the work offset of a G-code program"),
+    (["machined-part", "simulate", "verne", "--gcode", EXAMPLES / "pocket.nc", "--out",
+      "cmm.csv", "--placement", "0,0,0,1e300"], "--placement: PHI = 1e+300° is outside"),
+    (["machined-part", "simulate", "verne", "--gcode", EXAMPLES / "pocket.nc", "--out",
+      "cmm.csv", "--placement", "1e300,0,0,0"], "--placement 1e+300 mm is outside the plausible"),
+    (["machined-part", "ballbar-plan", "verne", "--out", "plan.csv", "--table-points",
+      "1e300,0,0"], "--table-points 1e+300 mm is outside the plausible range"),
+    (["machined-part", "ballbar-plan", "verne", "--out", "plan.csv", "--tool-lengths",
+      "0,1e300"], "--tool-lengths: 1e+300 mm is beyond"),
+    (["useful-workspace", "orthoglide", "--bounds", "1e-300,1e300"],
+     "--bounds 1e-300 is outside the plausible range [1e-06, 1e+06]"),
 ])
 def test_extreme_values_are_refused(run, tmp_path, monkeypatch, args, words):
     monkeypatch.chdir(tmp_path)

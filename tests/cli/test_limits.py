@@ -72,9 +72,14 @@ def test_monte_carlo_and_compensation_sizes_are_refused_before_work(run, tmp_pat
     program.write_text("G21 G90\nG0 X0 Y0 Z100\nG1 X50 Y0 Z100 F300\n")
     out = tmp_path / "fixed.nc"
     result = run("compensate", "linear-delta", "--calibrated", preset_path("linear-delta"),
-                 "--gcode", program, "--step", "1e-9", "--units", "mm", "--out", out)
+                 "--gcode", program, "--step", "1e-5", "--units", "mm", "--out", out)
     assert result.exit_code == 1 and not out.exists()
-    assert "pieces of 1e-09 mm (--step) over the program's 150 mm" in result.output
+    assert "pieces of 1e-05 mm (--step) over the program's 150 mm" in result.output
+    # below 1 nm the step is refused as a unit slip before counting (the sweep's range)
+    result = run("compensate", "linear-delta", "--calibrated", preset_path("linear-delta"),
+                 "--gcode", program, "--step", "1e-9", "--units", "mm", "--out", out)
+    assert result.exit_code == 1
+    assert "--step 1e-09 mm is outside the plausible range" in result.output
 
 
 @pytest.mark.parametrize("text, message", [

@@ -131,6 +131,24 @@ def _centred_box(mask: np.ndarray, grid: Grid, center: np.ndarray) -> InscribedB
                         points_per_side=2 * radius + 1)
 
 
+def _part_next_to(labels: np.ndarray, grid: Grid, home: np.ndarray,
+                  index: tuple[int, ...] | None) -> int:
+    """The label of the feasible grid point nearest to ``home`` among the grid points of the
+    cell around its nearest one (one step along each free axis), or 0: a home at the edge of
+    the workspace (an actuator at its stroke end) rounds to a grid point just outside."""
+    if index is None:
+        return 0
+    window = tuple(slice(max(i - 1, 0), i + 2) for i in index)
+    offsets = np.argwhere(labels[window] > 0)
+    if not offsets.size:
+        return 0
+    corners = offsets + np.array([w.start for w in window])
+    coords = np.column_stack([np.asarray(axis)[corners[:, j]]
+                              for j, axis in enumerate(grid.axes)])
+    gap = np.linalg.norm(coords - np.asarray(home, dtype=float)[list(grid.free)], axis=1)
+    return int(labels[tuple(corners[int(np.argmin(gap))])])
+
+
 def _connected_part(feasible: np.ndarray, grid: Grid, home: np.ndarray) -> tuple[np.ndarray, str]:
     if not feasible.any():
         return feasible, "empty"
@@ -139,6 +157,9 @@ def _connected_part(feasible: np.ndarray, grid: Grid, home: np.ndarray) -> tuple
     index = grid.nearest_index(home)
     if index is not None and labels[index] > 0:
         return labels == labels[index], "home"
+    near = _part_next_to(labels, grid, home, index)
+    if near:  # home at the edge of a part (a stroke end): its nearest grid point just outside
+        return labels == near, "home (within one grid step of it)"
     sizes = ndimage.sum_labels(feasible, labels, index=np.arange(1, count + 1))
     return labels == (1 + int(np.argmax(sizes))), "largest connected part (home not in it)"
 

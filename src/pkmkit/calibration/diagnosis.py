@@ -12,6 +12,12 @@ Hypotheses (each an :class:`~pkmkit.calibration.verdict.Alternative` with what i
   fit best before the set-up is fitted). The best factor counts only when it fits ten times
   better than readings set to zero (readings shrunk to nothing are fitted by any bed plane);
   if it fits many times better than the readings as read, the file is in another unit.
+- **noise stated in another unit's terms** (a passed verdict whose a-posteriori noise is many
+  times *below* the assumed one): readings in inches in a millimetre file shrink the errors
+  and their noise 25.4 times alike, and a machine fits them "too well". When a unit factor
+  brings the ratio back to about 1 and the calibration of the rescaled readings confirms it,
+  the verdict fails with a ``unit`` check naming the unit (or a noise stated that many times
+  too large).
 - **weak parameters**: when parameters were dropped as weakly identifiable (and neither of
   the above explains the misfit), the calibration run again keeping them (``prune=False``,
   the CLI's ``--keep-weak``): if its a-posteriori noise matches the assumed one, the dropped
@@ -20,6 +26,7 @@ Hypotheses (each an :class:`~pkmkit.calibration.verdict.Alternative` with what i
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
@@ -27,15 +34,22 @@ from typing import Any
 import numpy as np
 
 from pkmkit.calibration import identify
-from pkmkit.calibration.divergence import machine_size
+from pkmkit.calibration.divergence import machine_size, setup_failure_result
 from pkmkit.calibration.results import residual_stats
-from pkmkit.calibration.verdict import Alternative, Verdict, judge
-from pkmkit.exceptions import IdentificationDivergedError, PkmError
+from pkmkit.calibration.unit_screen import (
+    NAMED_UNITS,
+    UNIT_FACTORS,
+    scaled_readings,
+    screen_units,
+    unit_guess,
+    unit_named,
+)
+from pkmkit.calibration.verdict import RATIO_MAX, Alternative, Cause, Check, Verdict, judge
+from pkmkit.exceptions import IdentificationDivergedError, InputError, PkmError
 from pkmkit.model.measurement_set import MeasurementSet
-from pkmkit.model.parameters import LENGTH_UNITS, length_scale
+from pkmkit.model.parameters import length_scale
 
-#: Unit factors tried by the unit hypothesis (true SI value = read SI value × factor).
-UNIT_FACTORS = (1e-3, 1e3, 1e-6, 1e6, 0.0254 / 1e-3, 1e-3 / 0.0254)
+__all__ = ["NAMED_UNITS", "UNIT_FACTORS", "calibrate", "judge_calibration"]
 
 
 def calibrate(machine, data: MeasurementSet, *, file_unit: str | None = None,
@@ -47,10 +61,24 @@ def calibrate(machine, data: MeasurementSet, *, file_unit: str | None = None,
     too (:mod:`pkmkit.calibration.divergence`): the result then has ``converged`` False, the
     nominal machine's fit and a failed verdict naming the likely cause.
 
+    Readings in another unit are checked first (:func:`pkmkit.calibration.unit_screen.\
+screen_units`): when the nominal machine does not assemble at most rows as read but does
+    rescaled, an :class:`~pkmkit.exceptions.InputError` names the unit; when it misses them
+    by more than any built machine errs and a rescale fits them, the identification is skipped
+    and the result is the nominal machine's, with a failed verdict naming the unit.
+
     Args:
         file_unit: the length unit the measurement file was read in (messages of the
             verdict's unit hypothesis), or None.
+
+    Raises:
+        InputError: as :func:`pkmkit.calibration.identify.calibrate`, and readings the
+            nominal machine cannot reach as read but can in another unit (the message names
+            it).
     """
+    skipped = _screened(machine, data, file_unit, options)
+    if skipped is not None:
+        return skipped
     try:
         result = identify.calibrate(machine, data, **options)
     except IdentificationDivergedError as exc:  # judged all the same: never a hidden verdict
@@ -64,15 +92,59 @@ def calibrate(machine, data: MeasurementSet, *, file_unit: str | None = None,
         return identify.calibrate(machine, data, **{**options, "prune": False,
                                                     "validation": None, "progress": False})
 
+    def rescaled(scaled: MeasurementSet):
+        return identify.calibrate(machine, scaled, **{**options, "validation": None,
+                                                       "progress": False})
+
     with identify.single_threaded_blas():
         verdict = judge_calibration(machine, data, result, rerun=keep_weak if prune else None,
-                                    file_unit=file_unit)
+                                    file_unit=file_unit, recalibrate=rescaled)
     return replace(result, verdict=verdict)
+
+
+def _screened(machine, data: MeasurementSet, file_unit: str | None, options: dict):
+    """The unit screen before the identification (:func:`calibrate`): None to go on, a
+    judged nominal result when the readings are in another unit; raises when the nominal
+    machine does not assemble at most rows as read."""
+    if options.get("frame") is not None:
+        return None  # readings in an instrument frame: the frame's registration first
+    sigma = options.get("sigma")
+    sigma = identify.DEFAULT_SIGMA[data.kind] if sigma is None else float(sigma)
+    if not (np.isfinite(sigma) and sigma > 0):
+        return None  # refused with its message by the identification
+    identify.check_measurements(machine, data)
+    rows = identify.sigma_rows(data.kind, machine, sigma)
+    suspect = screen_units(machine, data, rows, file_unit=file_unit)
+    if suspect is None:
+        return None
+    if not np.isfinite(suspect.rms_read):
+        raise InputError(f"{data.source}: the nominal machine does not assemble (or cannot "
+                         f"reach the measured point) at most rows; {suspect.hint()}")
+    from pkmkit.calibration.models import make_model
+    from pkmkit.geometric_errors.model import defect_set
+
+    parameters = options.get("parameters", "auto")
+    candidates = (len(defect_set(machine)) if isinstance(parameters, str)
+                  else len(parameters))
+    model = make_model(machine, data, rows, registration=None, identify_frame=False)
+    result = setup_failure_result(
+        machine, data, model, "identification not run (it cannot converge to a plausible "
+        "machine): the nominal machine misses the readings by more than any built machine "
+        "errs, and they fit in another unit",
+        sigma=sigma, frame=None, candidates=candidates, t_start=time.perf_counter())
+    if not result.singular_values.size:  # no set-up parameter: nothing to condition
+        result = replace(result, condition=1.0)
+    alt = Alternative("unit", suspect.hint(), rms=suspect.rms_scaled)
+    return replace(result, verdict=judge_calibration(machine, data, result,
+                                                     file_unit=file_unit,
+                                                     alternatives=[alt]))
 
 
 def judge_calibration(machine, data: MeasurementSet, result, *,
                       rerun: Callable[[], Any] | None = None,
-                      file_unit: str | None = None) -> Verdict:
+                      file_unit: str | None = None,
+                      alternatives: list[Alternative] | None = None,
+                      recalibrate: Callable[[MeasurementSet], Any] | None = None) -> Verdict:
     """The verdict on ``result`` (a :class:`~pkmkit.calibration.identify.CalibrationResult`
     of ``machine`` from ``data``), with the alternatives of the module docstring tried when it
     fails.
@@ -82,6 +154,10 @@ def judge_calibration(machine, data: MeasurementSet, result, *,
             None (the weak-parameter hypothesis is then not tried).
         file_unit: the unit the measurement file was read in (for the unit hypothesis's
             message), or None.
+        alternatives: hypotheses already tried (the unit screen's): the others are then
+            not tried.
+        recalibrate: a callable returning the same calibration of other measurements (the
+            readings rescaled), or None (a passed verdict is then not questioned).
     """
     args = dict(chi2=result.chi2, dof=result.dof, sigma=result.sigma,
                 condition=(result.condition_with_priors
@@ -93,7 +169,9 @@ def judge_calibration(machine, data: MeasurementSet, result, *,
                 convergence=None if result.converged else result.convergence)
     first = judge(**args)
     if first.passed:
-        return first
+        return _noise_in_another_unit(data, result, first, recalibrate, file_unit)
+    if alternatives is not None:
+        return judge(**args, alternatives=alternatives)
     alternatives = []
     for test in (_frame_alternative, _unit_alternative):
         try:
@@ -110,6 +188,42 @@ def judge_calibration(machine, data: MeasurementSet, result, *,
         if alt is not None:
             alternatives.append(alt)
     return judge(**args, alternatives=alternatives)
+
+
+def _noise_in_another_unit(data: MeasurementSet, result, verdict: Verdict,
+                           recalibrate: Callable[[MeasurementSet], Any] | None,
+                           file_unit: str | None) -> Verdict:
+    """A passed ``verdict`` whose a-posteriori noise is far below the assumed one, questioned
+    (module docstring): failed with a ``unit`` check when a unit factor f > 1 brings the noise
+    ratio within [1/RATIO_MAX, RATIO_MAX] and the calibration of the readings rescaled by f
+    (``recalibrate``) converges with a noise ratio in that range too."""
+    noise = verdict.checks[0]
+    ratio = noise.value
+    if recalibrate is None or not (noise.warning and 0 < ratio < 1.0 / RATIO_MAX):
+        return verdict
+    for factor in sorted(f for f in UNIT_FACTORS if f > 1.0):
+        if not 1.0 / RATIO_MAX <= ratio * factor <= RATIO_MAX:
+            continue
+        try:
+            alt = recalibrate(scaled_readings(data, factor))
+        except PkmError:
+            continue
+        alt_ratio = alt.sigma_posterior / alt.sigma
+        if not (alt.converged and 1.0 / RATIO_MAX <= alt_ratio <= RATIO_MAX):
+            continue
+        unit = file_unit or "m"
+        message = (f"wrong unit: {unit_guess(factor, unit)}: as read, the a-posteriori "
+                   f"noise is {ratio:.3g}× the assumed one; "
+                   f"rescaled ×{factor:g} the calibration gives {alt_ratio:.3g}× (RMS "
+                   f"{alt.after.rms / length_scale(unit):.4g} {unit}). Fix the file's "
+                   "'# units:' line or give --units (or, if the file is right, the stated "
+                   f"noise is {factor:.4g}× too large: give the instrument's σ with --sigma)")
+        check = Check("unit", False, factor, 1.0,
+                      f"a-posteriori noise {ratio:.3g}× the assumed one, about 1/{factor:.4g}: "
+                      f"the readings rescaled ×{factor:g} give {alt_ratio:.3g}×")
+        return replace(verdict, checks=(*verdict.checks, check),
+                       causes=(Cause("unit", message),))
+    return verdict
 
 
 def _frame_alternative(machine, data, result, file_unit) -> Alternative | None:
@@ -209,7 +323,7 @@ def _unit_alternative(machine, data, result, file_unit) -> Alternative | None:
         return None
     rms, factor, whole = best
     unit = file_unit or "m"
-    true_unit = _unit_named(length_scale(unit) * factor)
+    true_unit = unit_named(length_scale(unit) * factor)
     what = "the file" if whole else "the readings"
     guess = (f"{what} look like they are in {true_unit}, not {unit}" if true_unit else
              f"{what} fit when multiplied by {factor:g}")
@@ -228,17 +342,6 @@ def _after(result) -> str:
     """What the result's residual is: after identification, or the nominal machine's."""
     return ("after identification" if result.converged else
             "with the nominal machine (the identification did not converge)")
-
-
-#: Units named in the unit hypothesis's message (metres per unit).
-NAMED_UNITS = {**LENGTH_UNITS, "µm": 1e-6, "km": 1e3}
-
-
-def _unit_named(scale: float) -> str | None:
-    for name, value in NAMED_UNITS.items():
-        if np.isclose(value, scale, rtol=1e-9):
-            return name
-    return None
 
 
 def _weak_alternative(result, rerun, unit: str) -> Alternative | None:

@@ -31,6 +31,7 @@ from pkmkit.boundary.coordinates import (
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.parameters import length_scale
+from pkmkit.numerics.magnitudes import check_plausible
 from pkmkit.plot.maps import (
     check_figure_path,
     plot_actuator_maps,
@@ -101,6 +102,7 @@ _INSCRIBED_RTOLS = {"chain": None}
 def _criteria(bounds, kappa_max, no_strokes) -> Criteria:
     if kappa_max is not None and not (np.isfinite(kappa_max) and kappa_max >= 1):
         raise InputError(f"--kappa-max must be a condition number >= 1, got {kappa_max:g}")
+    check_plausible("--kappa-max", kappa_max, "condition")
     return Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max, strokes=not no_strokes)
 
 
@@ -139,6 +141,7 @@ def analyze(machine_name, assignments, pose, isotropy_tol, with_stiffness, wrenc
     scale = length_scale(units)
     if not (np.isfinite(isotropy_tol) and isotropy_tol >= 0):
         raise InputError(f"--isotropy-tol must be a finite number >= 0, got {isotropy_tol}")
+    check_plausible("--isotropy-tol", isotropy_tol, "ratio")
     if pose is None:
         x = m.home_pose
     else:
@@ -547,7 +550,8 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
         raise InputError("--out draws joint-space squares: it needs 2 actuators (planar "
                          "machines); drop --out for a 3-actuator machine")
     scale = length_scale(units)
-    criteria = Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max)
+    criteria = Criteria(bounds=parse_bounds(bounds),
+                        kappa_max=check_plausible("--kappa-max", kappa_max, "condition"))
     useful = useful_workspace(m, criteria, centred=not anywhere,
                               resolution=resolution or (301 if n == 2 else 41))
     sq, box = useful.joint_square, useful.inscribed

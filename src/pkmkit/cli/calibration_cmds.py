@@ -14,6 +14,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
+from pkmkit.numerics.magnitudes import check_plausible
 
 from .calibration_options import CAL_UNITS_OPTION, MEASURE_OPTION
 from .gravity_option import GRAVITY_OPTION, aimed_targets, gravity_line
@@ -455,11 +456,18 @@ def compensate_cmd(machine_name, calibrated, gcode, origin, step, tolerance, max
     tl = None if tool_length is None else tool_length * scale
     if tl is not None and not (np.isfinite(tl) and tl >= 0):
         raise InputError(f"--tool-length must be a finite number ≥ 0, got {tool_length:g} {unit}")
+    if tl is not None:
+        check_tool_lengths(np.array([tl]), unit, "--tool-length")
     for name, value in (("--step", step), ("--tolerance", tolerance),
                         ("--max-correction", max_correction)):
         if value is not None and not (np.isfinite(value) and value > 0
                                       and np.isfinite(value * scale) and value * scale > 0):
             raise InputError(f"{name} must be a finite number > 0, got {value:g} {unit}")
+    check_plausible("--step", step, "length", scale=scale, unit=unit)
+    check_plausible("--tolerance", tolerance, "correction", scale=scale, unit=unit)
+    check_plausible("--max-correction", max_correction, "correction", scale=scale, unit=unit)
+    if not gcode and (step is not None or tolerance is not None):
+        raise click.UsageError("--step and --tolerance apply to a corrected program (--gcode)")
     bound = default_max_correction(nominal) if max_correction is None else max_correction * scale
     offset = home_offset(nominal, identified, tl)
     similar = max(bound, default_max_correction(nominal))

@@ -30,6 +30,7 @@ from pkmkit.io.atomic import check_output_dir
 from pkmkit.io.json_io import to_jsonable
 from pkmkit.io.sized_machine import box_corners, check_destination, write_sized_machine
 from pkmkit.model.parameters import length_scale
+from pkmkit.numerics.magnitudes import check_plausible
 from pkmkit.plot.design_figures import plot_pareto
 
 from .analysis_cmds import BOUNDS_OPTION, KAPPA_OPTION, parse_bounds
@@ -64,12 +65,13 @@ def _required_bounds(text: str | None) -> tuple[float, float]:
     return bounds
 
 
-def _max_leg(value: float | None, scale: float) -> float | None:
+def _max_leg(value: float | None, scale: float, units: str) -> float | None:
     """``--max-leg`` in m (None when not given); must be a positive finite number."""
     if value is None:
         return None
     if not (np.isfinite(value) and value > 0):
         raise InputError(f"--max-leg must be a positive length, got {value:g}")
+    check_plausible("--max-leg", value, "length", scale=scale, unit=units)
     return value * scale
 
 
@@ -116,7 +118,7 @@ def design_orthoglide(cube, bounds, max_leg, machine_out, units, as_json):
     lo, hi = _required_bounds(bounds)
     if machine_out is not None:
         check_destination(machine_out)
-    res = size_orthoglide(cube * scale, (lo, hi), max_leg=_max_leg(max_leg, scale))
+    res = size_orthoglide(cube * scale, (lo, hi), max_leg=_max_leg(max_leg, scale, units))
     written = _write_machine(
         machine_out, res.machine, 0.5 * (res.Q1 + res.Q2), res.cube_side, units,
         f"Orthoglide for a {cube:g} {units} cube",
@@ -246,7 +248,7 @@ def design_linear_delta(cube, center_text, bounds, nacelle, objective, max_leg, 
         check_destination(machine_out)
     res = size_linear_delta(cube * scale, (lo, hi), center=center,
                             r=None if nacelle is None else nacelle * scale,
-                            objective=objective, max_leg=_max_leg(max_leg, scale))
+                            objective=objective, max_leg=_max_leg(max_leg, scale, units))
     written = _write_machine(
         machine_out, res.machine, res.center, cube * scale, units,
         f"linear Delta for a {cube:g} {units} cube",
@@ -363,7 +365,8 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
     problem = DesignProblem(
         base=m, variables=[_parse_vary(t, scale, m) for t in vary], objectives=objs,
         constraints=[_parse_constraint(t, scale) for t in constraints], region=region,
-        criteria=Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max,
+        criteria=Criteria(bounds=parse_bounds(bounds),
+                          kappa_max=check_plausible("--kappa-max", kappa_max, "condition"),
                           stiffness_data=elastic), samples=samples,
     )
     out = check_output_dir(out_dir)

@@ -220,6 +220,9 @@ def errors_cmd(machine_name, compatibility, orientation_only, thesis, configurat
     payload: dict = {"machine": m.id}
     if n_samples is not None and tolerance_file is None:
         raise click.UsageError("--monte-carlo needs --tolerance FILE")
+    if rtol is not None and not compatibility:
+        raise click.UsageError("--rtol is the rank tolerance of --compatibility")
+    check_rtol(rtol)
     if n_samples is not None:
         check_count(n_samples * resolution ** 2, MAX_SAMPLED,
                     f"sampled machines ({n_samples} --monte-carlo samples at each of "

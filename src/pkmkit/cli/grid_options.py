@@ -14,6 +14,7 @@ from pkmkit.analysis.workspace import (
 )
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import MAX_COORDINATE
+from pkmkit.numerics.magnitudes import check_plausible
 
 #: Narrowest side (m) of a studied box: below it the cells' areas and volumes underflow and
 #: the grid cannot be a machine tool's workspace (a unit slip).
@@ -49,6 +50,8 @@ def parse_bounds(text: str | None) -> tuple[float, float] | None:
         raise InputError(f"--bounds needs LO,HI, got {text!r}")
     if not values[0] < values[1]:
         raise InputError(f"--bounds: LO = {values[0]:g} must be below HI = {values[1]:g}")
+    for value in values:  # transmission factors: a bound of 1e300 is no bound (leave it out)
+        check_plausible("--bounds", value, "factor")
     return values[0], values[1]
 
 

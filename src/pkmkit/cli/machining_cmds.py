@@ -24,8 +24,10 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
+from pkmkit.numerics.magnitudes import check_plausible
 
 from .calibration_cmds import CAL_UNITS_OPTION, _defects_file, _numbers
+from .limits import check_tool_lengths
 from .options import JSON_OPTION, emit_json, machine_document_path, resolve_machine
 
 GCODE_OPTION = click.option("--gcode", required=True, type=click.Path(dir_okay=False),
@@ -56,7 +58,7 @@ def _origin(text: str | None, scale: float) -> np.ndarray:
 
 @machined_part.command("program")
 @click.argument("machine_name", metavar="MACHINE")
-@click.option("--levels", type=int, default=2, show_default=True,
+@click.option("--levels", type=click.IntRange(1, 100), default=2, show_default=True,
               help="Heights of passes (30 mm apart).")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
               help="Output G-code file (mm).")
@@ -83,7 +85,7 @@ def program_cmd(machine_name, levels, out_file):
               help="Defects of the machine that cuts the part: 'random' (the true machine file "
                    "is written beside --out) or a file with a [defects] table. Default: none.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Random seed.")
-@click.option("--sections", type=int, default=240, show_default=True,
+@click.option("--sections", type=click.IntRange(1, 100_000), default=240, show_default=True,
               help="CMM sections laid out over the passes (those near a crossing dropped).")
 @click.option("--sigma", type=float,
               help="CMM noise σ per coordinate (length unit; default 1.5 µm).")
@@ -111,6 +113,8 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
 
     unit = units or "mm"
     scale = length_scale(unit)
+    check_plausible("--sigma", sigma, "noise", scale=scale, unit=unit)
+    check_plausible("--probe-radius", probe_radius, "probe", scale=scale, unit=unit)
     nominal = resolve_machine(machine_name, (), "m")
     rng = np.random.default_rng(seed)
     true, delta = nominal, None
@@ -123,6 +127,10 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
         v = _numbers(placement, "--placement")
         if len(v) != 4:
             raise InputError(f"--placement expects DX,DY,DZ,PHI, got {placement!r}")
+        for value in v[:3]:
+            check_plausible("--placement", value, "offset", scale=scale, unit=unit)
+        if not abs(v[3]) <= 360:
+            raise InputError(f"--placement: PHI = {v[3]:g}° is outside [-360, 360]°")
         place = Placement(v[0] * scale, v[1] * scale, v[2] * scale, float(np.radians(v[3])))
     else:
         place = default_placement(nominal)
@@ -188,6 +196,8 @@ def reconstruct_cmd(cmm_file, gcode, origin, end_mill, ball_end, out_file, units
     cmm = read_cmm(cmm_file, units=units)
     unit = units or _unit_of(cmm_file) or "m"
     scale = length_scale(unit)
+    check_plausible("--end-mill", end_mill, "cutter", scale=scale, unit=unit)
+    check_plausible("--ball-end", ball_end, "cutter", scale=scale, unit=unit)
     cutters = Cutters(SEED_END_MILL_RADIUS if end_mill is None else end_mill * scale / 2,
                       SEED_BALL_RADIUS if ball_end is None else ball_end * scale / 2)
     passes = part_passes(read_gcode(gcode, origin=_origin(origin, scale)))
@@ -243,7 +253,7 @@ def _unit_of(path: str) -> str | None:
                                                       "mm).")
 @click.option("--table-points", metavar="X,Y,Z;X,Y,Z;...",
               help="Table points (length unit; default three under the default box).")
-@click.option("--points", type=int, default=324, show_default=True,
+@click.option("--points", type=click.IntRange(1, 100_000), default=324, show_default=True,
               help="Points per hemisphere (seed 003: 324).")
 @click.option("--out", "out_file", required=True, type=click.Path(dir_okay=False),
               help="Output plan (CSV) for pkmkit simulate-measurements --measure ballbar "
@@ -257,6 +267,7 @@ def ballbar_plan_cmd(machine_name, bar_length, tool_lengths, table_points, point
 
     unit = units or "mm"
     scale = length_scale(unit)
+    check_plausible("--bar-length", bar_length, "length", scale=scale, unit=unit)
     machine = resolve_machine(machine_name, (), "m")
     tables = None
     if table_points:
@@ -264,6 +275,10 @@ def ballbar_plan_cmd(machine_name, bar_length, tool_lengths, table_points, point
                   for t in table_points.split(";")]
         if any(len(t) != 3 for t in tables):
             raise InputError(f"--table-points expects X,Y,Z;X,Y,Z;..., got {table_points!r}")
+        for value in np.concatenate(tables):
+            check_plausible("--table-points", value / scale, "offset", scale=scale, unit=unit)
+    if tool_lengths:
+        check_tool_lengths(np.array(_numbers(tool_lengths, "--tool-lengths")) * scale, unit)
     plan = ballbar_plan(machine, bar_length=BAR_LENGTH if bar_length is None
                         else bar_length * scale, table_points=tables,
                         tool_lengths=TOOL_LENGTHS if tool_lengths is None

@@ -20,6 +20,7 @@ from pkmkit.motion.joints import Limits
 from pkmkit.motion.limits import limit_bounds
 from pkmkit.motion.paths import circle, helix, line, raster
 from pkmkit.motion.timelaw import DEFAULT_JERK_PER_ACCEL, PROFILES
+from pkmkit.numerics.magnitudes import check_plausible
 from pkmkit.plot.deflection_figures import plot_path_deflection
 from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
 from pkmkit.stiffness.along_path import path_deflection
@@ -76,6 +77,8 @@ def build_path(machine, scale: float, gcode, origin, line_text, circle_text, hel
     if len(given) != 1:
         raise click.UsageError("give exactly one of --gcode, --line, --circle, --helix, --raster")
     dims = machine.dims
+    if origin and not gcode:
+        raise click.UsageError("--origin is the work offset of a G-code program (--gcode)")
     if gcode:
         shift = (np.asarray(_numbers(origin, (dims,), "--origin")) * scale if origin
                  else np.zeros(dims))
@@ -179,6 +182,11 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                               ("--force-limit", force_limit, 1.0), ("--period", period, 1.0),
                               ("--max-deflection", max_deflection, 1e-6)):
         _check_positive(name, value, unit, units)
+    check_plausible("--speed-limit", speed_limit, "speed", scale=scale, unit=f"{units}/s")
+    check_plausible("--accel-limit", accel_limit, "acceleration", scale=scale,
+                    unit=f"{units}/s²")
+    check_plausible("--force-limit", force_limit, "force")
+    check_plausible("--max-deflection", max_deflection, "deflection", scale=1e-6, unit="µm")
     limits = Limits(speed=None if speed_limit is None else speed_limit * scale,
                     accel=None if accel_limit is None else accel_limit * scale,
                     force=force_limit)
@@ -379,8 +387,20 @@ def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_sa
         return
     if length is None:
         raise click.UsageError("--length is required (or --seed-tables)")
+    check_plausible("--young", young, "modulus")
     material = Material(E=young, density=density, yield_strength=yield_strength)
+    if inner is not None and section != "hollow" and diameter is None:
+        raise click.UsageError("--inner is the bore of a hollow arm: give --section hollow "
+                               "(or an outer --diameter to analyse)")
+    if inner is not None and not (np.isfinite(inner) and 0 <= inner * scale <= 100):
+        raise InputError(f"--inner {inner:g} {units} must be a bore between 0 and "
+                         f"{100 / scale:g} {units}")
     bore = None if inner is None else inner * scale
+    check_plausible("--region", region_side, "length", scale=scale, unit=units)
+    check_plausible("--machine-stiffness", machine_stiffness, "stiffness", scale=1e6,
+                    unit="N/µm")
+    if min_stiffness != 0:  # 0: no stiffness requirement
+        check_plausible("--min-stiffness", min_stiffness, "stiffness")
     requirement = _machine_requirement(machine_name, machine_stiffness, region_side, units)
     if requirement is not None:
         min_stiffness = max(min_stiffness, requirement.arm_stiffness(length * scale))

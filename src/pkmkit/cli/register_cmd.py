@@ -7,6 +7,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
+from pkmkit.numerics.magnitudes import check_plausible
 
 from .calibration_options import CAL_UNITS_OPTION
 from .options import JSON_OPTION, emit_json, fmt
@@ -38,6 +39,8 @@ def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
         raise InputError(f"measurement units mismatch: {measured} is in {a.unit}, {nominal} in "
                          f"{b.unit}; convert one or give --units")
     unit = units or a.unit
+    check_plausible("--direction-weight", direction_weight, "length",
+                    scale=length_scale(unit), unit=unit)
     pa, pb = (np.column_stack([t.numbers[c] for c in "xyz"]) * t.scale for t in (a, b))
     order_b = np.arange(len(pb))
     if "id" in a.texts and "id" in b.texts:
@@ -52,6 +55,9 @@ def register_cmd(measured, nominal, direction_weight, out_file, units, as_json):
     dirs = [all(c in t.numbers for c in "ijk") for t in (a, b)]
     if dirs[0] != dirs[1]:
         raise InputError("give directions (i, j, k) in both files or in neither")
+    if direction_weight is not None and not dirs[0]:
+        raise click.UsageError("--direction-weight weighs directions: the files have none "
+                               "(columns i, j, k)")
     da = db = None
     if dirs[0]:
         da = np.column_stack([a.numbers[c] for c in "ijk"])

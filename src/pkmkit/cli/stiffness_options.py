@@ -13,6 +13,7 @@ import click
 import numpy as np
 
 from pkmkit.exceptions import InputError
+from pkmkit.numerics.magnitudes import check_plausible
 from pkmkit.stiffness.indices import (
     DISPLAY_FACTOR,
     DISPLAY_UNIT,
@@ -48,6 +49,10 @@ def stiffness_criteria(m, data, min_stiffness: float | None, max_deflection: flo
     options (SI), and a note on a wrench's dropped moments."""
     _positive("--min-stiffness", min_stiffness)
     _positive("--max-deflection", max_deflection)
+    check_plausible("--min-stiffness", min_stiffness, "stiffness", scale=PER_MICRO,
+                    unit="N/µm")
+    check_plausible("--max-deflection", max_deflection, "deflection", scale=1 / PER_MICRO,
+                    unit="µm")
     wrench, note = parse_wrench(wrench_text, m)
     if max_deflection is not None and wrench is None:
         raise InputError("--max-deflection needs --wrench (the load that causes it)")

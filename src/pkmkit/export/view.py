@@ -49,6 +49,7 @@ class ViewContent:
     path_first_refused: int | None = None
     error_vectors: int | None = None
     error_max: float | None = None
+    error_max_with_rigid: float | None = None
 
 
 def _line_style(line) -> tuple[str, int]:
@@ -180,10 +181,15 @@ def _path_traces(machine, gcode: str | Path, origin, spacing: float, go
     return traces, len(points), int(refused.sum()), first
 
 
-def _error_traces(nominal, calibrated, resolution: int, go
-                  ) -> tuple[list[Any], int, float]:
+def _error_traces(nominal, calibrated, resolution: int, go, rigid_free: bool = False
+                  ) -> tuple[list[Any], int, float, float | None]:
     """Where the calibrated machine's tool goes when the nominal model's actuator values are
-    commanded: the error the calibration corrects, as vectors on a grid of the workspace."""
+    commanded: the error the calibration corrects, as vectors on a grid of the workspace.
+    With ``rigid_free`` (measurements that cannot see a rigid motion of the whole machine: a
+    part's placement, ball-bar pivots, an identified frame) the best rigid motion of the
+    vectors is removed first, as the set-up removes it (its size is a gauge, not an error):
+    the vectors, their count, their largest length and (``rigid_free``) the largest before
+    the removal."""
     from pkmkit.analysis.grids import make_grid, pose_frame
 
     frame = pose_frame(nominal)
@@ -204,6 +210,12 @@ def _error_traces(nominal, calibrated, resolution: int, go
     good = np.isfinite(error).all(axis=1)
     if not good.any():
         raise InputError("the calibrated machine reaches none of the nominal grid's poses")
+    raw = None
+    if rigid_free and good.sum() >= 3:
+        from pkmkit.calibration.uncertainty import without_rigid_motion
+
+        raw = float(np.linalg.norm(error[good], axis=1).max())
+        error[good] = without_rigid_motion(start[good], error[good][:, :, None])[:, :, 0]
     length = np.linalg.norm(error[good], axis=1)
     worst = float(length.max())
     span = float(np.max(hi - lo))
@@ -216,7 +228,7 @@ def _error_traces(nominal, calibrated, resolution: int, go
                          line={"color": "#ae3ec9", "width": 3},
                          name=f"calibration: tool error ×{gain:.3g} (max {worst * 1e6:.1f} µm)",
                          hoverinfo="skip")
-    return [trace], int(good.sum()), worst
+    return [trace], int(good.sum()), worst, raw
 
 
 def _three(poses: np.ndarray) -> np.ndarray:
@@ -228,7 +240,8 @@ def _three(poses: np.ndarray) -> np.ndarray:
 
 def view_figure(machine, *, q: Any = None, workspace: bool = False, gcode: str | Path | None = None,
                 origin=(0.0, 0.0, 0.0), calibrated=None, steps: int = SLIDER_STEPS,
-                resolution: int = 15, path_spacing: float = 0.002) -> tuple[Any, ViewContent]:
+                resolution: int = 15, path_spacing: float = 0.002,
+                rigid_free: bool = False) -> tuple[Any, ViewContent]:
     """The Plotly figure of the view and what it shows.
 
     Args:
@@ -240,6 +253,8 @@ def view_figure(machine, *, q: Any = None, workspace: bool = False, gcode: str |
             with the points out of reach or stroke marked. ``origin``: work offset (m).
         calibrated: the calibrated machine (same family as ``machine``): draw its tool error
             over the middle of the workspace as vectors.
+        rigid_free: with ``calibrated``, remove the vectors' best rigid motion (measurements
+            whose set-up absorbs one: :func:`_error_traces`).
         steps: slider positions per actuator.
 
     Raises:
@@ -262,8 +277,9 @@ def view_figure(machine, *, q: Any = None, workspace: bool = False, gcode: str |
             _path_traces(machine, gcode, origin, path_spacing, go))
         extras.extend(path_traces)
     if calibrated is not None:
-        error_traces, content.error_vectors, content.error_max = _error_traces(
-            machine, calibrated, max(5, resolution // 2), go)
+        (error_traces, content.error_vectors, content.error_max,
+         content.error_max_with_rigid) = _error_traces(machine, calibrated,
+                                                       max(5, resolution // 2), go, rigid_free)
         extras.extend(error_traces)
     frames, sliders = [], []
     names = list(machine.actuator_names)

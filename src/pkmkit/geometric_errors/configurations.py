@@ -25,6 +25,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.machines.error_regions import CHAIN_SPREAD, ROTATION_SPREAD, draw_reachable, halton
+from pkmkit.numerics.magnitudes import MAX_CONFIGURATIONS, check_count
 
 __all__ = ["CHAIN_SPREAD", "ROTATION_SPREAD", "Configurations", "check_region",
            "configurations_at", "default_region", "halton", "region_names",
@@ -110,9 +111,7 @@ def sample_configurations(machine, n: int, *, region: Any = None, seed: int | No
     Raises:
         InputError: n < 1, a bad region, or fewer than n reachable points after 50 n draws.
     """
-    if int(n) < 1:
-        raise InputError(f"the number of configurations must be ≥ 1, got {n}")
-    n = int(n)
+    n = check_count(n, "the number of configurations", MAX_CONFIGURATIONS)
     lo, hi = check_region(machine, region)
     q, pts, drawn = draw_reachable(machine, lo, hi, n, seed=seed, method=method,
                                    within_strokes=within_strokes)

@@ -27,9 +27,13 @@ from pkmkit.geometric_errors.configurations import sample_configurations
 from pkmkit.geometric_errors.identifiability import ANGLE_UNITS, characteristic_length
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity, with_defects
 from pkmkit.geometric_errors.selection import select_defects
+from pkmkit.numerics.magnitudes import MAX_CONFIGURATIONS, check_count
 
 #: Default length defect size (m).
 LENGTH_SIZE = 1e-5
+#: Most (configuration, defect) pairs of one analysis: each holds a 6-vector of the tool
+#: sensitivity (and its rotation part), 2e7 of them ≈ 1 GB.
+MAX_SENSITIVITY_ENTRIES = 20_000_000
 
 
 @dataclass(frozen=True)
@@ -106,7 +110,10 @@ def sensitivity_analysis(machine, *, region: Any = None, n_points: int = 200,
         tool_length: joint-chain machines: tool length (m).
 
     Raises:
-        InputError: non-positive sizes, a bad region.
+        InputError: non-positive sizes, a bad region; ``n_points`` (or the rows of ``q``)
+            not a whole number in [1, :data:`~pkmkit.numerics.magnitudes.MAX_CONFIGURATIONS`]
+            or configurations × defects beyond :data:`MAX_SENSITIVITY_ENTRIES`, refused
+            before any work.
     """
     if not (np.isfinite(length_size) and length_size > 0):
         raise InputError(f"length_size must be > 0, got {length_size}")
@@ -115,8 +122,18 @@ def sensitivity_analysis(machine, *, region: Any = None, n_points: int = 200,
         angle_size = length_size / big_l
     if not (np.isfinite(angle_size) and angle_size > 0):
         raise InputError(f"angle_size must be > 0, got {angle_size}")
+    defects = len(defect_set(machine))
     if q is None:
-        conf = sample_configurations(machine, n_points, region=region, seed=seed,
+        n = check_count(n_points, "n_points", MAX_CONFIGURATIONS,
+                        lower="lower n_points or give the configurations (q)")
+    else:
+        q = np.asarray(q, dtype=float)
+        n = check_count(q.size // max(machine.n_actuators, 1) if q.ndim else 1,
+                        "the number of configurations (rows of q)", MAX_CONFIGURATIONS)
+    check_count(n * defects, "configurations × defects", MAX_SENSITIVITY_ENTRIES,
+                lower=f"lower n_points: {defects} defects, {n} configurations")
+    if q is None:
+        conf = sample_configurations(machine, n, region=region, seed=seed,
                                      method="halton")
         qb, points, point_names = conf.q, conf.points, conf.names
     else:

@@ -41,6 +41,7 @@ from pkmkit.geometric_errors.blas_threads import single_blas
 from pkmkit.geometric_errors.identifiability import ANGLE_UNITS
 from pkmkit.geometric_errors.model import defect_set, tool_sensitivity
 from pkmkit.machines.defect_samples import exact_rod_points, nominal_gains
+from pkmkit.numerics.magnitudes import MAX_SAMPLED, check_count
 
 __all__ = ["AccuracyMap", "FirstOrderError", "MonteCarloResult", "Tolerances", "accuracy_map",
            "exact_rod_points", "first_order_error", "monte_carlo", "nominal_gains",
@@ -312,9 +313,10 @@ def monte_carlo(machine, q: Any, tol: Tolerances, n_samples: int, *, seed: int |
     """
     import time
 
-    if int(n_samples) < 1:
-        raise InputError(f"the number of Monte Carlo samples must be ≥ 1, got {n_samples}")
     qb = np.atleast_2d(np.asarray(q, dtype=float))
+    n_samples = check_count(n_samples, "n_samples", max(MAX_SAMPLED // max(len(qb), 1), 1),
+                            lower=f"{len(qb)} configurations × n_samples must not exceed "
+                                  f"{MAX_SAMPLED:.3g} sampled machines")
     rng = np.random.default_rng(seed)
     samples = tol.sample(int(n_samples), rng)
     sens = tool_sensitivity(machine, qb, tool_length=tool_length)
@@ -383,8 +385,11 @@ def accuracy_map(machine, tol: Tolerances, *, n_samples: int = 200, resolution: 
     if len(set(axes)) != 2 or not all(0 <= a < lo.size for a in axes):
         raise InputError(f"axes must be two distinct indices among {lo.size} region "
                          f"coordinates ({', '.join(names)})")
-    if not 2 <= int(resolution) <= 501:
+    if not 2 <= check_count(resolution, "resolution", 501):
         raise InputError(f"resolution must be in [2, 501], got {resolution}")
+    check_count(n_samples, "n_samples", max(MAX_SAMPLED // int(resolution) ** 2, 1),
+                lower=f"n_samples × resolution² must not exceed {MAX_SAMPLED:.3g} sampled "
+                      "machines")
     if not 0 < level <= 100:
         raise InputError(f"level must be in (0, 100], got {level}")
     xs = np.linspace(lo[axes[0]], hi[axes[0]], int(resolution))

@@ -339,13 +339,42 @@ def _view_section(result, units: str) -> str:
             "of the workspace.</p>")
     try:
         fragment, content = view_fragment(result.nominal, calibrated=result.machine,
-                                          steps=REPORT_VIEW_STEPS)
+                                          steps=REPORT_VIEW_STEPS,
+                                          rigid_free=result.tool_uncertainty_rigid_removed)
     except PkmError as exc:
         return head + f"<p class='meta'>Not drawn: {html.escape(str(exc))}</p>"
-    largest = ("" if content.error_max is None else
-               f" Largest tool error shown: {_num(content.error_max / length_scale(units))} "
-               f"{html.escape(units)}.")
-    return head + fragment + f"<p class='meta'>{content.error_vectors} vectors.{largest}</p>"
+    return head + fragment + f"<p class='meta'>{_view_note(result, content, units)}</p>"
+
+
+def _view_note(result, content, units: str) -> str:
+    """The view's figures judged: the largest tool error shown (with the free rigid motion
+    removed when the set-up absorbs one, the size of that gauge motion stated) against the
+    verdict's bound on a plausible error (:data:`~pkmkit.calibration.verdict.SIZE_FRACTION`
+    of the machine's size) and the largest error measured."""
+    from pkmkit.calibration.divergence import machine_size
+    from pkmkit.calibration.verdict import SIZE_FRACTION
+
+    s = length_scale(units)
+    u = html.escape(units)
+    note = f"{content.error_vectors} vectors."
+    if content.error_max is None:
+        return note
+    note += f" Largest tool error shown: {_num(content.error_max / s)} {u}"
+    if content.error_max_with_rigid is not None:
+        note += (f" (the best rigid motion of the vectors removed, as the set-up removes it: "
+                 f"with it {_num(content.error_max_with_rigid / s)} {u}, a motion these "
+                 "measurements do not see)")
+    note += "."
+    bound = SIZE_FRACTION * machine_size(result.nominal)
+    measured = result.before.max
+    if content.error_max > bound:
+        note += (f" <b>Beyond a plausible error</b> ({_num(bound / s)} {u}, the verdict's "
+                 "bound): the identified machine is not a built machine's geometry there.")
+    elif np.isfinite(measured) and content.error_max > 3 * measured:
+        note += (f" <b>More than 3× the largest error measured</b> ({_num(measured / s)} {u}): "
+                 "the identified machine extrapolates beyond the measured configurations "
+                 "(see the tool-point uncertainty over the workspace).")
+    return note
 
 
 #: Slider positions per actuator in the report's 3-D view (fewer than ``pkmkit view``'s: the

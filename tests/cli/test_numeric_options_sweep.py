@@ -1,0 +1,139 @@
+"""Every numeric option of every command, given an absurd value (issue 18 §5): 1e300, ±inf,
+NaN and -1e300 (a trillion for a count) must give a one-line error naming the option, never a
+run with exit 0, a traceback or a hang (``path
+--force-limit 1e300`` and ``--speed-limit``, ``--accel-limit``, ``--max-deflection``,
+``workspace --kappa-max 1e300``, ``--min-stiffness``, ``analyze --isotropy-tol 1e300``,
+``machined-part simulate --sigma 1e300``, ``reconstruct --ball-end 1e300``, ``arm-sizing
+--inner`` and ``--region``, ``design orthoglide --max-leg``, ``optimize`` and
+``useful-workspace --kappa-max 1e300``, ``compensate --step``/``--tolerance``/
+``--max-correction 1e300`` and ``errors --sensitivity --rtol`` anything were accepted with exit
+0; ``machined-part program --levels 10**12`` hung, ``simulate --sections`` and ``ballbar-plan
+--points 10**12`` raised ``MemoryError``).
+
+The options are found by walking the command tree (every option of type float or int): a
+command added later without a base line here fails :func:`test_every_numeric_option_is_swept`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import pytest
+
+from pkmkit.cli.main import cli
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "docs" / "examples"
+
+#: A valid command line per command (files made by the ``files`` fixture: ``{d}``).
+BASE = {
+    "analyze": ["analyze", "orthoglide"],
+    "arm-sizing": ["arm-sizing", "--length", "1", "--force", "100", "--section", "hollow"],
+    "calibrate": ["calibrate", "linear-delta", "--measure", "height", "--measurements",
+                  "{d}/h.csv"],
+    "compensate": ["compensate", "linear-delta", "--calibrated", "{d}/h.truth.toml",
+                   "--targets", "{d}/targets.csv", "--out", "table.csv"],
+    "design five-bar": ["design", "five-bar", "--square", "0.2", "--bounds", "0.3333333,3"],
+    "design linear-delta": ["design", "linear-delta", "--cube", "0.5", "--bounds", "0.4,2.5"],
+    "design orthoglide": ["design", "orthoglide", "--cube", "0.2", "--bounds", "0.5,2"],
+    "errors": ["errors", "linear-delta", "--sensitivity", "--points", "5"],
+    "fk": ["fk", "orthoglide", "--q", "0.31,0.31,0.31"],
+    "identifiability": ["identifiability", "orthoglide", "--measure", "point", "--poses",
+                        "20"],
+    "ik": ["ik", "orthoglide", "--pose", "0,0,0"],
+    "jacobian": ["jacobian", "orthoglide", "--pose", "0,0,0"],
+    "machined-part ballbar-plan": ["machined-part", "ballbar-plan", "verne", "--out",
+                                   "plan.csv"],
+    "machined-part program": ["machined-part", "program", "verne", "--out", "p.nc"],
+    "machined-part reconstruct": ["machined-part", "reconstruct", "{d}/cmm.csv", "--gcode",
+                                  str(EXAMPLES / "pocket.nc"), "--out", "rec.csv"],
+    "machined-part simulate": ["machined-part", "simulate", "verne", "--gcode",
+                               str(EXAMPLES / "pocket.nc"), "--out", "cmm.csv"],
+    "map": ["map", "orthoglide", "--index", "condition", "--slice", "z=0", "--out", "m.png"],
+    "optimize": ["optimize", "linear-delta", "--vary", "R=0.45:1.0", "--objective",
+                 "max:gci", "--region", "0.5@0,0,0.25", "--bounds", "0.4,2.5",
+                 "--generations", "1", "--population", "4", "--out", "opt", "--no-progress"],
+    "path": ["path", "orthoglide", "--line", "0,0,0:0.05,0,0", "--feed", "0.05", "--accel",
+             "1"],
+    "register": ["register", "--measured", str(EXAMPLES / "lts-points.csv"), "--nominal",
+                 str(EXAMPLES / "bcs-points.csv")],
+    "select-poses": ["select-poses", "orthoglide", "--measure", "point", "--n", "20", "--out",
+                     "sel.csv"],
+    "simulate-measurements": ["simulate-measurements", "orthoglide", "--measure", "point",
+                              "--poses", "5", "--out", "s.csv"],
+    "stiffness": ["stiffness", "orthoglide", "--pose", "0,0,0"],
+    "useful-workspace": ["useful-workspace", "orthoglide", "--bounds", "0.5,2"],
+    "view": ["view", "orthoglide", "--out", "v.html"],
+    "workspace": ["workspace", "orthoglide", "--resolution", "9"],
+}
+
+#: Options whose value is not a physical magnitude: any integer is a valid random seed, and a
+#: chunk size larger than the batch is one chunk.
+NOT_MAGNITUDES = {"--seed", "--chunk-rows"}
+
+#: Options that need a companion to mean anything (given with it here).
+COMPANIONS = {
+    ("arm-sizing", "--machine-stiffness"): ["--machine", "orthoglide", "--region", "0.1"],
+    ("arm-sizing", "--region"): ["--machine", "orthoglide", "--machine-stiffness", "1"],
+    ("workspace", "--max-deflection"): ["--wrench", "100,0,0"],
+    ("register", "--direction-weight"): [],
+}
+
+
+def _numeric_options():
+    def walk(cmd, path):
+        if isinstance(cmd, click.Group):
+            ctx = click.Context(cmd)
+            for name in cmd.list_commands(ctx):
+                yield from walk(cmd.get_command(ctx, name), [*path, name])
+            return
+        for p in cmd.params:
+            if (isinstance(p, click.Option) and p.opts[0] not in NOT_MAGNITUDES
+                    and isinstance(p.type, (click.types.FloatParamType,
+                                            click.types.IntParamType))):
+                yield " ".join(path), p.opts[0], isinstance(p.type, click.types.FloatParamType)
+
+    return sorted(walk(cli, []))
+
+
+OPTIONS = _numeric_options()
+
+
+def test_every_numeric_option_is_swept():
+    missing = sorted({cmd for cmd, _, _ in OPTIONS} - set(BASE))
+    assert not missing, f"add a valid command line to BASE for {missing}"
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    from click.testing import CliRunner
+
+    d = tmp_path_factory.mktemp("sweep")
+    runner = CliRunner()
+    for args in (["simulate-measurements", "linear-delta", "--measure", "height", "--poses",
+                  "30", "--defects", "random", "--units", "mm", "--out", d / "h.csv"],
+                 ["machined-part", "simulate", "verne", "--gcode", EXAMPLES / "pocket.nc",
+                  "--out", d / "cmm.csv"]):
+        res = runner.invoke(cli, [str(a) for a in args], catch_exceptions=False)
+        assert res.exit_code == 0, res.output
+    (d / "targets.csv").write_text("x,y,z\n0,0,-0.4\n0.05,0,-0.4\n")
+    return d
+
+
+@pytest.mark.parametrize("command, option, is_float", OPTIONS,
+                         ids=[f"{c}{o}" for c, o, _ in OPTIONS])
+def test_absurd_values_of_every_numeric_option_are_refused(run, files, tmp_path,
+                                                           monkeypatch, command, option,
+                                                           is_float):
+    monkeypatch.chdir(tmp_path)
+    base = [a.format(d=files) for a in BASE[command]]
+    extra = COMPANIONS.get((command, option), [])
+    values = ("1e300", "-1e300", "inf", "nan") if is_float else ("1000000000000",)
+    for value in values:
+        result = run(*base, *extra, option, value)
+        assert result.exit_code in (1, 2), (value, result.output)
+        last = result.output.strip().splitlines()[-1]
+        assert last.startswith("Error:"), (value, result.output)
+        # the option, or its words ("--buckling-safety": "the buckling safety = 1e+300 …")
+        words = option.lstrip("-")
+        assert any(w in last for w in (option, words, words.replace("-", " "))), (value, last)
