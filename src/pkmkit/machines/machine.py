@@ -211,7 +211,10 @@ class Machine(RodRefusals, ModeNaming, TranslationalErrors, TranslationalMeasure
             limits = tuple(zip((lo - STROKE_TOL).tolist(), (hi + STROKE_TOL).tolist(),
                                strict=True))
             object.__setattr__(self, "_stroke_tuples", limits)
-        return all(lo <= v <= hi for v, (lo, hi) in zip(q, limits, strict=True))
+        for v, (lo, hi) in zip(q, limits, strict=True):  # a loop: no generator per call
+            if not lo <= v <= hi:
+                return False
+        return True
 
     def _branches(self, branches: Any) -> np.ndarray:
         if branches is None:
