@@ -186,6 +186,8 @@ class OnePoseVelocity:
     def _compute(self) -> dict:
         a, b = rows(self.closed, self.x, self.q)
         n = len(b)
+        if n == 3:
+            return self._compute3(a, b)
         for v in (*b, *a[0], *a[1], *a[-1]):
             if not -math.inf < v < math.inf:
                 raise _Unusual
@@ -223,6 +225,54 @@ class OnePoseVelocity:
         return {"a": a, "b": b, "j": j, "sv": sv, "condition": condition, "det_A": det_a,
                 "det_B": det_b, "parallel": parallel, "serial": serial, "flags": flags,
                 "q": self.q, "tol": self.tol}
+
+
+    def _compute3(self, a: list[list[float]], b: list[float]) -> dict:
+        """:meth:`_compute` written out for 3 × 3 matrices (the same operations)."""
+        (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
+        b0, b1, b2 = b
+        for v in (a00, a01, a02, a10, a11, a12, a20, a21, a22, b0, b1, b2):
+            if not -math.inf < v < math.inf:
+                raise _Unusual
+        c00, c01, c02 = a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20
+        c10, c11, c12 = a21 * a02 - a22 * a01, a22 * a00 - a20 * a02, a20 * a01 - a21 * a00
+        c20, c21, c22 = a01 * a12 - a02 * a11, a02 * a10 - a00 * a12, a00 * a11 - a01 * a10
+        det_a = a00 * c00 + a01 * c01 + a02 * c02
+        l0 = math.sqrt(a00 * a00 + a01 * a01 + a02 * a02)
+        l1 = math.sqrt(a10 * a10 + a11 * a11 + a12 * a12)
+        l2 = math.sqrt(a20 * a20 + a21 * a21 + a22 * a22)
+        sv_unit = singular_values([[a00 / l0, a01 / l0, a02 / l0], [a10 / l1, a11 / l1, a12 / l1],
+                                   [a20 / l2, a21 / l2, a22 / l2]])
+        parallel = sv_unit[-1] / sv_unit[0]
+        serial = min(abs(b0) / l0, abs(b1) / l1, abs(b2) / l2)
+        tol = self.tol
+        flags = _SERIAL if serial < tol else 0
+        inv_det = 1.0 / det_a if det_a != 0.0 else math.inf
+        if parallel < tol or det_a == 0.0:
+            flags |= _PARALLEL
+            j = _NAN3
+            sv = [_NAN] * 3
+            condition = _NAN
+        elif -math.inf < inv_det < math.inf:
+            s0, s1, s2 = b0 * inv_det, b1 * inv_det, b2 * inv_det
+            j = [[c00 * s0, c10 * s1, c20 * s2], [c01 * s0, c11 * s1, c21 * s2],
+                 [c02 * s0, c12 * s1, c22 * s2]]
+            for row in j:
+                for v in row:
+                    if not -math.inf < v < math.inf:
+                        raise _Unusual
+            if parallel < NEAR_PARALLEL and parallel < serial:
+                raise _Unusual  # the batch path takes these singular values from J⁻¹
+            sv = singular_values(j)
+            condition = math.inf if sv[-1] == 0.0 else sv[0] / sv[-1]
+        else:
+            raise _Unusual
+        return {"a": a, "b": b, "j": j, "sv": sv, "condition": condition, "det_A": det_a,
+                "det_B": b0 * b1 * b2, "parallel": parallel, "serial": serial,
+                "flags": flags, "q": self.q, "tol": tol}
+
+
+_NAN3 = [[_NAN] * 3 for _ in range(3)]
 
 
 def _diagonal(b: list[float]) -> np.ndarray:
