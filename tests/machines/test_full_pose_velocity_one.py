@@ -8,6 +8,7 @@ and the batch path's refusals for anything else."""
 from __future__ import annotations
 
 import dataclasses
+import pickle
 import warnings
 
 import numpy as np
@@ -16,6 +17,7 @@ import pytest
 import pkmkit
 from pkmkit.exceptions import InputError, StrokeWarning, UnreachablePoseError
 from pkmkit.machines import full_pose_velocity_kernel as kernel
+from pkmkit.machines.full_pose import FullPoseJacobians
 from pkmkit.machines.full_pose_velocity_one import FIELDS, OnePoseFullVelocity
 
 pytest.importorskip("numba")
@@ -192,3 +194,14 @@ def test_at_and_beside_parallel_singularities(name):
             _assert_same(fast, want, f"{name} {pose}", kappa=float(np.linalg.cond(unit)))
             parallel += bool(fast.singularity & 2)
     assert parallel > 0
+
+
+def test_pickles_as_the_plain_record():
+    """A single-pose model crosses process boundaries (Dask, multiprocessing) as the plain
+    record with every field (its evaluation holds a closure over the machine)."""
+    m = pkmkit.machine("verne")
+    m.jacobian(m.home_pose)
+    jac = m.jacobian(m.home_pose)
+    back = pickle.loads(pickle.dumps(jac))
+    assert type(back) is FullPoseJacobians
+    _assert_same(back, {name: getattr(jac, name) for name in FIELDS})

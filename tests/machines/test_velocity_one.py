@@ -6,6 +6,7 @@ the batch path's row — at random poses, near serial and parallel singularities
 from __future__ import annotations
 
 import dataclasses
+import pickle
 import warnings
 
 import numpy as np
@@ -174,3 +175,9 @@ def test_replace_and_repr_of_a_one_pose_model():
     assert changed.condition == 7.0
     np.testing.assert_array_equal(changed.J, jac.J)
     assert "1 pose" in repr(jac)
+
+
+def test_pickles():
+    m = pkmkit.machine("linear-delta")
+    jac = m.jacobian(m.home_pose + 0.01)
+    _assert_same(pickle.loads(pickle.dumps(jac)), jac)

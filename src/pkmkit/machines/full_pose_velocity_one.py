@@ -147,8 +147,11 @@ def one_pose_class(base: type) -> type:
         return (f"{base.__name__}(1 pose, {len(self.q)} actuators, tolerance "
                 f"{self.tolerance:g}; fields computed when read)")
 
+    def __reduce__(self):  # pickled as the plain record, every field computed
+        return base, tuple(getattr(self, name) for name in FIELDS)
+
     namespace = {"__init__": __init__, "_get": _get, "__eq__": __eq__,
-                 "__hash__": object.__hash__, "__repr__": __repr__,
+                 "__hash__": object.__hash__, "__repr__": __repr__, "__reduce__": __reduce__,
                  "__doc__": "A single-pose velocity model computed when read (module doc)."}
     namespace.update({name: _field_property(name) for name in FIELDS})
     return type(f"OnePose{base.__name__}", (base,), namespace)
