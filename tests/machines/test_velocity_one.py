@@ -61,7 +61,13 @@ def _poses(m, n, seed):
 
 
 @pytest.mark.parametrize("name", TRANSLATIONAL)
-def test_one_pose_is_the_batch_row(name):
+@pytest.mark.parametrize("compiled", ["auto", "1"])
+def test_one_pose_is_the_batch_row(name, compiled, monkeypatch):
+    """Against the batch row of the NumPy path and of the compiled one (``PKMKIT_COMPILED=1``:
+    the velocity kernel, whose hard rows go to the NumPy path)."""
+    if compiled == "1":
+        pytest.importorskip("numba")
+    monkeypatch.setenv("PKMKIT_COMPILED", compiled)
     m = pkmkit.machine(name)
     x = _poses(m, 400, seed=3)
     q = m.ik(x, strokes="ignore")
