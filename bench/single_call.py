@@ -161,14 +161,26 @@ def six_axis_rows(name: str, calls: int) -> dict:
 
 def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None) -> None:
     """``m.jacobian(x)`` of one pose: the call (the model computed when read), the call and
-    reading ``J``, the call and reading ``condition``, against the batch path of one row
-    (``m.jacobian(x[None])`` and reading ``J``, what a single call cost before)."""
+    reading ``J``, the call and reading ``condition`` (spatial 3-DOF machines: the compiled
+    one-pose kernel, since this process has imported Numba; and the plain-Python path a process
+    without Numba takes), against the batch path of one row (``m.jacobian(x[None])`` and
+    reading ``J``, what a single call cost before)."""
     within = [p for p in rows if type(m.jacobian(p)).__name__.startswith("OnePose")]
     figures["jacobian one pose (fast path)"] = (len(within), len(rows))
     figures["jacobian one pose, call"] = per_call(m.jacobian, within)
     figures["jacobian one pose, call + J"] = per_call(lambda p: m.jacobian(p).J, within)
     figures["jacobian one pose, call + condition"] = per_call(lambda p: m.jacobian(p).condition,
                                                               within)
+    if m.family == "translational" and m.dims == 3:  # this process has imported Numba
+        from pkmkit.machines import velocity_one
+
+        compiled_now = velocity_one._compiled_now
+        velocity_one._compiled_now = lambda closed: False
+        try:
+            figures["jacobian one pose, call + J, plain Python"] = per_call(
+                lambda p: m.jacobian(p).J, within)
+        finally:
+            velocity_one._compiled_now = compiled_now
     before = (before_rows or within)[: max(1, len(within) // 10)]
     figures["jacobian batch of one + J (before)"] = per_call(lambda p: m.jacobian(p[None]).J,
                                                              before)

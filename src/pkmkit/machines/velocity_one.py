@@ -15,6 +15,7 @@ values (LAPACK there), a zero rod, overflow.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -24,6 +25,7 @@ from pkmkit.machines.closed_form import RodClosedForm
 from pkmkit.machines.results import Singularity
 from pkmkit.machines.velocity import NEAR_PARALLEL, LazyJacobians, VelocityEvaluation
 from pkmkit.model.rods import CRANK, SLIDE
+from pkmkit.numerics import jit
 
 _SERIAL = int(Singularity.SERIAL)
 _PARALLEL = int(Singularity.PARALLEL)
@@ -56,6 +58,27 @@ def _legs(closed: RodClosedForm) -> tuple:
                          tuple(m.leg_platform[i, :dims].tolist())))
         cached = tuple(legs)
         object.__setattr__(closed, "_one_velocity", cached)
+    return cached
+
+
+def _compiled_now(closed: RodClosedForm) -> bool:
+    """Whether the compiled one-pose kernel runs: a spatial machine of three legs, in a
+    process that has already imported Numba (a one-shot call does not pay its import), unless
+    ``PKMKIT_COMPILED=0``."""
+    return ("numba" in sys.modules and closed.model.dims == 3 and closed.model.n_legs == 3
+            and jit.mode() != "0")
+
+
+def _kernel_legs(closed: RodClosedForm) -> np.ndarray:
+    """The legs ``(3, 21)`` of :mod:`pkmkit.machines.velocity_one_kernel`, built once."""
+    cached = closed.__dict__.get("_one_velocity_kernel")
+    if cached is None:
+        kinds = {SLIDE: 0.0, CRANK: 2.0}
+        cached = np.array([[kinds.get(kind, 1.0), *centre0, *axis, length, *tip0, *e1, *e2,
+                            radius, *platform]
+                           for kind, centre0, axis, length, tip0, e1, e2, radius, platform
+                           in _legs(closed)])
+        object.__setattr__(closed, "_one_velocity_kernel", cached)
     return cached
 
 
@@ -167,10 +190,12 @@ class OnePoseVelocity:
         """The value of field ``name`` of the single-pose :class:`Jacobians`."""
         fields = self._fields
         if fields is None:
-            try:
-                fields = self._compute()
-            except (_Unusual, ZeroDivisionError, OverflowError, ValueError):
-                fields = {"batch": self.batch()}
+            fields = self._compiled() if _compiled_now(self.closed) else None
+            if fields is None:
+                try:
+                    fields = self._compute()
+                except (_Unusual, ZeroDivisionError, OverflowError, ValueError):
+                    fields = {"batch": self.batch()}
             self._fields = fields
         batch = fields.get("batch")
         if batch is not None:
@@ -182,6 +207,21 @@ class OnePoseVelocity:
         x = np.array([self.x])
         q = np.array([self.q])
         return LazyJacobians(VelocityEvaluation(self.closed, x, q, self.tol), True)
+
+    def _compiled(self) -> dict | None:
+        """The fields by :func:`pkmkit.machines.velocity_one_kernel.velocity_one3`, or None
+        where it leaves the pose to :meth:`_compute`."""
+        from pkmkit.machines import velocity_one_kernel
+
+        out = np.empty(30)
+        if velocity_one_kernel.velocity_one3(np.array(self.x), np.array(self.q),
+                                             _kernel_legs(self.closed), self.tol, out):
+            return None
+        condition, det_a, det_b, parallel, serial, flags = out[24:30].tolist()
+        return {"a": out[0:9].reshape(3, 3), "b": out[9:12], "j": out[12:21].reshape(3, 3),
+                "sv": out[21:24], "condition": condition, "det_A": det_a, "det_B": det_b,
+                "parallel": parallel, "serial": serial, "flags": int(flags), "q": self.q,
+                "tol": self.tol}
 
     def _compute(self) -> dict:
         a, b = rows(self.closed, self.x, self.q)
