@@ -18,10 +18,9 @@ import math
 import numpy as np
 from numba import njit
 
-_OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
+from pkmkit.machines.velocity import NEAR_PARALLEL
 
-#: :data:`pkmkit.machines.velocity.NEAR_PARALLEL`, :class:`Singularity` SERIAL and PARALLEL.
-NEAR_PARALLEL = 1e-2
+_OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 
 
 @njit(inline="always", **_OPTIONS)
@@ -67,7 +66,8 @@ def _sv3(m00, m01, m02, m10, m11, m12, m20, m21, m22, out, at):  # pragma: no co
 
 @njit(**_OPTIONS)
 def velocity_one3(x, q, legs, tol, out):  # pragma: no cover
-    """The velocity model of pose ``x (3,)`` at ``q (3,)`` into ``out`` (module docstring)."""
+    """The velocity model of pose ``x (3,)`` at ``q (3,)`` into ``out`` (module docstring);
+    flags 1 (serial) and 2 (parallel) as :class:`~pkmkit.machines.results.Singularity`."""
     for i in range(3):
         kind = legs[i, 0]
         qi = q[i]
