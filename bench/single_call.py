@@ -11,9 +11,13 @@ poses:
   (:func:`pkmkit.machines.kernels.inverse`, slides and struts only) — what a user's Numba or C
   kernel costs per call.
 
+``m.jacobian(x)`` of one pose (every machine): the call alone (the velocity model is computed
+when a field is first read), the call and reading ``J``, the call and reading ``condition``,
+against the batch path of one row and reading ``J``.
+
 For the six-axis machines (hexapod, Verne module's full poses, Dietmaier's general platform):
-``m.ik(x)`` (plain Python), ``m.fk(q)`` (the compiled per-pose solve) and ``m.jacobian(x)`` (no
-fast path yet) against the batch path with one row — for ``fk`` the NumPy engine
+``m.ik(x)`` (plain Python), ``m.fk(q)`` (the compiled per-pose solve) and ``m.jacobian(x)`` (the
+compiled single-pose kernel) against the batch path with one row — for ``fk`` the NumPy engine
 (``PKMKIT_COMPILED=0``), what a single call cost before — and the compiled solve called
 directly on one preallocated row.
 
@@ -109,6 +113,7 @@ def machine_rows(name: str, calls: int) -> dict:
         figures["fk one"] = per_call(lambda q: m.fk(q, strokes="ignore"), qs)
         figures["fk batch of one (before)"] = per_call(lambda q: m.fk(q, strokes="ignore"),
                                                        q_ones)
+        jacobian_rows(m, figures, rows)
         if (m.model.leg_kind == SLIDE).all():
             plain = plain_formula(m)
             lists = [p.tolist() for p in rows]
@@ -139,7 +144,6 @@ def six_axis_rows(name: str, calls: int) -> dict:
     kernel = m._direct_kernel()
     m.fk(qs[0])
     figures = {"poses": len(rows)}
-    jac_rows = rows[: max(1, len(rows) // 20)]
     for _ in range(2):
         figures["ik one pose"] = per_call(lambda p: m.ik(p, strokes="ignore"), rows)
         figures["ik batch of one (before)"] = per_call(lambda p: m.ik(p, strokes="ignore"), ones)
@@ -151,8 +155,35 @@ def six_axis_rows(name: str, calls: int) -> dict:
         finally:
             os.environ.pop("PKMKIT_COMPILED")
         figures["fk compiled solve, one row"] = per_call(kernel.solve_one, qs)
-        figures["jacobian one pose (no fast path)"] = per_call(m.jacobian, jac_rows)
+        jacobian_rows(m, figures, rows)
     return figures
+
+
+def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None) -> None:
+    """``m.jacobian(x)`` of one pose: the call (the model computed when read), the call and
+    reading ``J``, the call and reading ``condition`` (spatial 3-DOF machines: the compiled
+    one-pose kernel, since this process has imported Numba; and the plain-Python path a process
+    without Numba takes), against the batch path of one row (``m.jacobian(x[None])`` and
+    reading ``J``, what a single call cost before)."""
+    within = [p for p in rows if type(m.jacobian(p)).__name__.startswith("OnePose")]
+    figures["jacobian one pose (fast path)"] = (len(within), len(rows))
+    figures["jacobian one pose, call"] = per_call(m.jacobian, within)
+    figures["jacobian one pose, call + J"] = per_call(lambda p: m.jacobian(p).J, within)
+    figures["jacobian one pose, call + condition"] = per_call(lambda p: m.jacobian(p).condition,
+                                                              within)
+    if m.family == "translational" and m.dims == 3:  # this process has imported Numba
+        from pkmkit.machines import velocity_one
+
+        compiled_now = velocity_one._compiled_now
+        velocity_one._compiled_now = lambda closed: False
+        try:
+            figures["jacobian one pose, call + J, plain Python"] = per_call(
+                lambda p: m.jacobian(p).J, within)
+        finally:
+            velocity_one._compiled_now = compiled_now
+    before = (before_rows or within)[: max(1, len(within) // 10)]
+    figures["jacobian batch of one + J (before)"] = per_call(lambda p: m.jacobian(p[None]).J,
+                                                             before)
 
 
 def main() -> None:
@@ -173,13 +204,17 @@ def main() -> None:
         for n, f in report[label].items():
             print(f"  {n}")
             for k, v in f.items():
-                if k != "poses":
+                if k == "jacobian one pose (fast path)":
+                    print(f"    {k:38s} {v[0]} of {v[1]} poses (the others beyond a stroke)")
+                elif k != "poses":
                     print(f"    {k:38s} {v[0]:8.2f} µs  (CPU {v[1]:7.2f} µs)")
             ik_before = f["ik batch of one (before)"][0]
             fk_before = f.get("fk batch of one (before)",
                               f.get("fk batch of one, NumPy engine (before)"))[0]
+            jac_before = f["jacobian batch of one + J (before)"][1]
             print(f"    speed-up (wall): ik {ik_before / f['ik one pose'][0]:.0f}×, "
-                  f"fk {fk_before / f['fk one'][0]:.0f}×")
+                  f"fk {fk_before / f['fk one'][0]:.0f}×; (CPU) jacobian + J "
+                  f"{jac_before / f['jacobian one pose, call + J'][1]:.0f}×")
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=2))
 

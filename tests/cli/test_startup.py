@@ -99,3 +99,26 @@ def test_help_lists_every_command(run):
     for name in [*LAZY_COMMANDS, "ik", "fk", "jacobian", "machines", "show", "demo"]:
         assert f"  {name} " in text
     assert set(LAZY_COMMANDS) <= set(cli.list_commands(click.Context(cli)))
+
+
+@pytest.mark.parametrize("args", [
+    ["--help"],
+    ["ik", "linear-delta", "--pose", "0.25,0.25,0"],
+    ["jacobian", "linear-delta", "--pose", "0,0,0"],
+    ["jacobian", "gough-stewart", "--pose", "0,0,800,0,0,0"],
+])
+def test_one_shot_commands_import_no_compiler(args):
+    """A one-pose command never imports Numba (≈ 0.3 s of CPU, and its first compiled call
+    loads SciPy's linear algebra: ≈ 0.6 s in all); ``--help`` and the translational ones not
+    even a thread pool (``concurrent.futures``, imported by ``numerics.jit`` when a batch is
+    spread over threads)."""
+    modules = _modules_after(f"""
+        from pkmkit.cli.main import cli
+        try:
+            cli({args!r}, standalone_mode=False)
+        except SystemExit:
+            pass
+    """)
+    assert "numba" not in modules
+    if "gough-stewart" not in args:
+        assert "concurrent" not in modules

@@ -41,6 +41,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from math import acos, atan2, pi, sqrt
 from typing import Any
 
 import numpy as np
@@ -60,6 +61,7 @@ RESIDUAL_TOL = 1e-9
 SUSPECT_GRAM = 1e-4
 #: A single pose with a coordinate beyond this (m) goes through the batch path, which refuses it.
 MAX_ABS = 1e9
+_TWO_PI = 2.0 * math.pi
 #: Rows per chunk in the inverse model: keeps temporaries in cache (~2× faster than one pass).
 CHUNK = 32768
 
@@ -198,7 +200,7 @@ class RodClosedForm:
             finite numbers of the right length or a leg cannot close: the caller then takes
             the batch path, which gives the same numbers and the typed errors.
         """
-        rows = self._single_rows()
+        legs = self._single_legs(branches)
         if isinstance(x, np.ndarray):
             if x.ndim != 1 or x.dtype.kind not in "fi":
                 return None
@@ -215,16 +217,16 @@ class RodClosedForm:
         x0, x1 = float(x[0]), float(x[1])
         x2 = float(x[2]) if dims == 3 else 0.0
         out = []
-        for kind, c0, c1, c2, o0, o1, o2, length_sq, length, radius, offset, branch in zip(
-                *rows, branches, strict=True):
+        for (kind, a0, a1, a2, b0, b1, b2, d0, d1, d2, o0, o1, o2, length_sq, length, radius,
+             offset, branch) in legs:
             if dims == 3:
-                y0 = c0[0] * x0 + c0[1] * x1 + c0[2] * x2 - o0
-                y1 = c1[0] * x0 + c1[1] * x1 + c1[2] * x2 - o1
-                y2 = c2[0] * x0 + c2[1] * x1 + c2[2] * x2 - o2
+                y0 = a0 * x0 + a1 * x1 + a2 * x2 - o0
+                y1 = b0 * x0 + b1 * x1 + b2 * x2 - o1
+                y2 = d0 * x0 + d1 * x1 + d2 * x2 - o2
                 perp_sq = y1 * y1 + y2 * y2
             else:
-                y0 = c0[0] * x0 + c0[1] * x1 - o0
-                y1 = c1[0] * x0 + c1[1] * x1 - o1
+                y0 = a0 * x0 + a1 * x1 - o0
+                y1 = b0 * x0 + b1 * x1 - o1
                 perp_sq = y1 * y1
             if kind == SLIDE:
                 radicand = length_sq - perp_sq
@@ -232,12 +234,12 @@ class RodClosedForm:
                     if radicand <= -BOUNDARY_TOL * length_sq:
                         return None
                     radicand = 0.0
-                root = math.sqrt(radicand)
+                root = sqrt(radicand)
                 out.append(y0 - root if branch < 0 else y0 + root)
             elif kind == CRANK:  # as _crank_angle: rows (w, e1, e2) of the crank frame
                 along = y0 - offset
                 g = along * along + perp_sq + radius * radius - length_sq
-                amplitude = 2.0 * radius * math.sqrt(perp_sq)
+                amplitude = 2.0 * radius * sqrt(perp_sq)
                 if amplitude == 0.0:
                     return None
                 cosine = g / amplitude
@@ -245,30 +247,32 @@ class RodClosedForm:
                     cosine = min(max(cosine, -1.0), 1.0)
                 elif not -1.0 <= cosine <= 1.0:
                     return None
-                q = math.atan2(y2, y1) + branch * math.acos(cosine)
-                out.append((q + math.pi) % (2.0 * math.pi) - math.pi)
+                q = atan2(y2, y1) + branch * acos(cosine)
+                out.append((q + pi) % _TWO_PI - pi)
             else:  # strut
-                out.append(math.sqrt(perp_sq + y0 * y0) - length)
+                out.append(sqrt(perp_sq + y0 * y0) - length)
         return out
 
-    def _single_rows(self):
-        """Per-leg constants of :meth:`inverse_one` as Python floats, computed once."""
-        cached = self.__dict__.get("_single")
-        if cached is None:
+    def _single_legs(self, branches: Sequence[float]) -> tuple:
+        """Per-leg constants of :meth:`inverse_one` as flat tuples of Python floats (basis rows,
+        offsets, ℓ², ℓ, crank radius and offset, branch), computed once per branch choice."""
+        cache = self.__dict__.get("_single")
+        if cache is None:
+            cache = {}
+            object.__setattr__(self, "_single", cache)
+        key = tuple(branches)
+        legs = cache.get(key)
+        if legs is None:
             m = self.model
-            dims = m.dims
-            basis = self.basis.tolist()
-            offset = self.basis_offset.tolist()
-            zero = [0.0, 0.0, 0.0]
-            cached = (tuple(int(k) for k in m.leg_kind),
-                      tuple(b[0] for b in basis), tuple(b[1] for b in basis),
-                      tuple(b[2] if dims == 3 else zero for b in basis),
-                      tuple(o[0] for o in offset), tuple(o[1] for o in offset),
-                      tuple(o[2] if dims == 3 else 0.0 for o in offset),
-                      tuple(self.length_sq.tolist()), tuple(m.leg_length.tolist()),
-                      tuple(self.crank_radius.tolist()), tuple(self.crank_offset.tolist()))
-            object.__setattr__(self, "_single", cached)
-        return cached
+            basis = [[[*row, 0.0][:3] for row in leg] + [[0.0] * 3] * (3 - m.dims)
+                     for leg in self.basis.tolist()]  # rows padded to 3 × 3 in the plane
+            offset = [[*o, 0.0][:3] for o in self.basis_offset.tolist()]
+            legs = tuple((int(m.leg_kind[i]), *basis[i][0], *basis[i][1], *basis[i][2],
+                          *offset[i], float(self.length_sq[i]), float(m.leg_length[i]),
+                          float(self.crank_radius[i]), float(self.crank_offset[i]),
+                          float(b)) for i, b in enumerate(key))
+            cache[key] = legs
+        return legs
 
     def _crank_terms(self, v_w, v_1, v_2, perp_sq, i):
         """``(K − ℓ², 2 r ρ⊥)`` of crank leg i (see the module docstring)."""

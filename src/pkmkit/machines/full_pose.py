@@ -34,6 +34,7 @@ from pkmkit.exceptions import (
     UnreachablePoseError,
 )
 from pkmkit.machines import full_pose_direct as direct
+from pkmkit.machines import full_pose_velocity_one as velocity_one
 from pkmkit.machines.chunks import chunked
 from pkmkit.machines.common import (
     HOME_TOL,
@@ -108,6 +109,13 @@ class FullPoseJacobians(Jacobians):
     characteristic_length: float = 1.0
     translation_singular_values: np.ndarray = None
     rotation_singular_values: np.ndarray = None
+
+
+#: The fields of a velocity model with a batch axis.
+_JACOBIAN_FIELDS = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
+                    "parallel_measure", "serial_measure", "singularity", "q", "mode",
+                    "J_homogeneous", "translation_singular_values", "rotation_singular_values")
+_ONE_POSE_JACOBIANS = velocity_one.one_pose_class(FullPoseJacobians)
 
 
 def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
@@ -529,6 +537,10 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
             branches: inverse-model branches when q is not given.
             tol: threshold of the singularity measures.
         """
+        if q is None and branches is None and type(tol) is float and 0.0 < tol < np.inf:
+            fast = self._jacobian_one(x, tol)  # one plain pose: µs, same numbers
+            if fast is not None:
+                return fast
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be a positive number, got {tol!r}")
         if x is None:
@@ -549,11 +561,23 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
                 if qb.shape[0] != xb.shape[0]:
                     raise InputError(f"x has {xb.shape[0]} rows but q has {qb.shape[0]}")
                 qb = self._fitting_q(xb, qb, single)
-        jac = self._jacobians(xb, qb, float(tol))
-        names = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
-                 "parallel_measure", "serial_measure", "singularity", "q", "mode",
-                 "J_homogeneous", "translation_singular_values", "rotation_singular_values")
-        return _restore(jac, single, names)
+        return _restore(self._jacobians(xb, qb, float(tol)), single, _JACOBIAN_FIELDS)
+
+    def _jacobian_one(self, x: Any, tol: float) -> FullPoseJacobians | None:
+        """The compiled velocity model of one plain full pose within the strokes, computed
+        when read (:mod:`pkmkit.machines.full_pose_velocity_one`), or None."""
+        q1 = None if x is None else self._one_pose_inverse()(x)
+        if q1 is None or not self._within_strokes(q1) or not velocity_one.usable(self):
+            return None
+        xb, qb = np.array([x], dtype=float), np.array([q1])
+
+        def batch() -> FullPoseJacobians:
+            return _restore(self._jacobians(xb, qb, tol), True, _JACOBIAN_FIELDS)
+
+        evaluation = velocity_one.OnePoseFullVelocity(
+            self._direct_kernel().geom, self.n_actuators, float(self.characteristic_length),
+            xb[0], qb[0], tol, batch)
+        return _ONE_POSE_JACOBIANS(evaluation)
 
     def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> FullPoseJacobians:
         n, size = self.n_actuators, xb.shape[0]
@@ -578,16 +602,15 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
                          ) / (dist * speed)
             cos[:, strut] = 1.0
             serial = cos.min(axis=1)
-        j = np.full((size, 6, n), np.nan)
-        if ok.any():
-            j[ok] = self._solve_j(a[ok], b[ok])
         det_a = np.full(size, np.nan)
         if m == 6 and ok.any():
             det_a[ok] = np.linalg.det(a[ok])
         flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
         flags |= np.where(parallel < tol, int(Singularity.PARALLEL), 0)
         at_parallel = (flags & Singularity.PARALLEL).astype(bool)
-        j[at_parallel] = np.nan
+        j = np.full((size, 6, n), np.nan)  # no J at a parallel singularity (where an exactly
+        if (ok & ~at_parallel).any():  # singular A made np.linalg.solve raise LinAlgError)
+            j[ok & ~at_parallel] = self._solve_j(a[ok & ~at_parallel], b[ok & ~at_parallel])
         scale = np.array([1.0, 1.0, 1.0, length, length, length])
         j_h = j * scale[None, :, None]
         sv = self._singular_values(j_h)

@@ -12,6 +12,7 @@ and a per-row status (``full_output=True``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
@@ -59,6 +60,7 @@ from pkmkit.machines.strokes import (
     stroke_limits,
 )
 from pkmkit.machines.velocity import LazyJacobians, VelocityEvaluation
+from pkmkit.machines.velocity_one import jacobian_one
 from pkmkit.machines.workspace_reports import RodReports
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
@@ -208,7 +210,10 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             limits = tuple(zip((lo - STROKE_TOL).tolist(), (hi + STROKE_TOL).tolist(),
                                strict=True))
             object.__setattr__(self, "_stroke_tuples", limits)
-        return all(lo <= v <= hi for v, (lo, hi) in zip(q, limits, strict=True))
+        for v, (lo, hi) in zip(q, limits, strict=True):  # a loop: no generator per call
+            if not lo <= v <= hi:
+                return False
+        return True
 
     def _branches(self, branches: Any) -> np.ndarray:
         if branches is None:
@@ -509,6 +514,11 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             InputError, UnreachablePoseError: as for :meth:`ik` (single pose); q that does not
                 fit x (single pose; batched rows become NaN); a tolerance that is not > 0.
         """
+        if q is None and branches is None and type(tol) is float and 0.0 < tol < math.inf:
+            fast = jacobian_one(self._closed, x, tol, self._default_branches,
+                                self._within_strokes)  # one plain pose: µs, same numbers
+            if fast is not None:
+                return fast
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be a positive number, got {tol!r}")
         if x is None:

@@ -1,0 +1,171 @@
+"""The velocity model of one full pose of a rod machine, compiled (issue 22 §1).
+
+:meth:`FullPoseMachine.jacobian` of one plain pose row ``(x, y, z, rx, ry, rz)`` whose inverse
+model (:class:`~pkmkit.machines.full_pose_one.OnePoseInverse`) lies within the strokes returns
+a :class:`OnePoseFullJacobians`: a :class:`~pkmkit.machines.full_pose.FullPoseJacobians` with
+the batch path's fields, shapes and types for one pose, computed when first read by one call of
+the compiled kernel :func:`pkmkit.machines.full_pose_velocity_kernel.velocity_one` (tens of
+microseconds where the batch path of one row costs 0.6–0.8 ms). The kernel agrees with the
+batch path to rounding: the same formulas; J by LAPACK's solve (Numba's) where the batch path
+calls NumPy's; singular values by one-sided Jacobi where the batch path calls LAPACK (1e-15 of
+σ_max). A row the kernel refuses (not finite, a singular A) is handed to the batch path.
+
+As for the direct model (:func:`pkmkit.machines.full_pose_direct.direct_one`), a one-shot
+call does not pay Numba's import: until Numba is imported the machine's first single call
+takes the batch path and the next one imports it; ``PKMKIT_COMPILED=0`` (or no Numba) keeps
+the batch path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from pkmkit.numerics import jit
+
+#: Fields of a :class:`FullPoseJacobians`, in its order.
+FIELDS = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
+          "parallel_measure", "serial_measure", "singularity", "tolerance", "q", "mode",
+          "J_homogeneous", "characteristic_length", "translation_singular_values",
+          "rotation_singular_values")
+
+_kernel_module = None
+
+
+def _kernel():
+    global _kernel_module
+    if _kernel_module is None:
+        from pkmkit.machines import full_pose_velocity_kernel
+
+        _kernel_module = full_pose_velocity_kernel
+    return _kernel_module
+
+
+class OnePoseFullVelocity:
+    """The velocity model of one full pose, computed by the compiled kernel when first read.
+
+    Args:
+        geom: the rods (:class:`~pkmkit.machines.full_pose_direct.DirectKernel` ``geom``).
+        n: actuators. length: the characteristic length L (m).
+        x: the pose ``(6,)``. q: its actuator coordinates ``(n,)``. tol: singularity threshold.
+        batch: the batch path's single-pose model of the same pose (called if the kernel
+            refuses the row).
+    """
+
+    __slots__ = ("_batch", "_out", "_spot", "batch", "geom", "length", "n", "q", "tol", "x")
+
+    def __init__(self, geom: np.ndarray, n: int, length: float, x: np.ndarray, q: np.ndarray,
+                 tol: float, batch: Callable[[], Any]):
+        self.geom, self.n, self.length, self.x, self.q, self.tol = geom, n, length, x, q, tol
+        self.batch = batch
+        self._out: np.ndarray | None = None
+        self._batch = None
+
+    def field(self, name: str):
+        """The value of field ``name`` of the single-pose model."""
+        if self._out is None and self._batch is None:
+            kernel = _kernel()
+            self._spot = spot = kernel.layout(self.geom.shape[0], self.n)
+            out = np.empty(spot["flags"][1])
+            try:
+                refused = kernel.velocity_one(self.x, self.q, self.geom, self.n, self.length,
+                                              self.tol, out)
+            except np.linalg.LinAlgError:  # an exactly singular A: the batch path decides
+                refused = 1
+            if refused:
+                self._batch = self.batch()
+            else:
+                self._out = out
+        if self._batch is not None:
+            return getattr(self._batch, name)
+        return self._build(name)
+
+    def _build(self, name: str):
+        out, m, n, spot = self._out, self.geom.shape[0], self.n, self._spot
+
+        def part(key: str) -> np.ndarray:
+            start, stop = spot[key]
+            return out[start:stop]
+
+        if name == "A":
+            return part("A").reshape(m, 6).copy()
+        if name == "B":
+            return part("B").reshape(m, n).copy()
+        if name in ("J", "J_homogeneous"):
+            j = part("J").reshape(6, n).copy()
+            if name == "J_homogeneous":
+                j[3:] *= self.length
+            return j
+        if name == "J_inv":
+            return part("J_inv").reshape(n, 6).copy()
+        if name in ("singular_values", "translation_singular_values",
+                    "rotation_singular_values"):
+            key = {"singular_values": "sv", "translation_singular_values": "sv_t"}.get(
+                name, "sv_r")
+            return part(key).copy()
+        if name == "singularity":
+            return np.int64(part("flags")[0])
+        if name == "mode":
+            det_a = part("det_A")[0]
+            return np.int64(np.sign(det_a)) if det_a == det_a else np.int64(0)
+        if name == "q":
+            return self.q.copy()
+        if name == "tolerance":
+            return self.tol
+        if name == "characteristic_length":
+            return self.length
+        key = {"parallel_measure": "parallel", "serial_measure": "serial"}.get(name, name)
+        return np.float64(part(key)[0])
+
+
+def _field_property(name: str) -> property:
+    return property(lambda self: self._get(name), doc=f"``{name}`` (computed when read)")
+
+
+def one_pose_class(base: type) -> type:
+    """The lazy single-pose subclass of the record class ``base`` (a
+    :class:`FullPoseJacobians`): every field a property read from an
+    :class:`OnePoseFullVelocity`; built with all fields (``dataclasses.replace``) it is a
+    plain record."""
+
+    def __init__(self, evaluation: OnePoseFullVelocity | None = None, **fields):
+        object.__setattr__(self, "_evaluation", evaluation)
+        object.__setattr__(self, "_cache", dict(fields))
+
+    def _get(self, name: str):
+        cache = self._cache
+        if name not in cache:
+            cache[name] = self._evaluation.field(name)
+        return cache[name]
+
+    def __eq__(self, other: object) -> bool:
+        return self is other
+
+    def __repr__(self) -> str:
+        return (f"{base.__name__}(1 pose, {len(self.q)} actuators, tolerance "
+                f"{self.tolerance:g}; fields computed when read)")
+
+    def __reduce__(self):  # pickled as the plain record, every field computed
+        return base, tuple(getattr(self, name) for name in FIELDS)
+
+    namespace = {"__init__": __init__, "_get": _get, "__eq__": __eq__,
+                 "__hash__": object.__hash__, "__repr__": __repr__, "__reduce__": __reduce__,
+                 "__doc__": "A single-pose velocity model computed when read (module doc)."}
+    namespace.update({name: _field_property(name) for name in FIELDS})
+    return type(f"OnePose{base.__name__}", (base,), namespace)
+
+
+def usable(machine: Any) -> bool:
+    """Whether a single pose of ``machine`` takes the compiled path now (the rule of
+    :func:`pkmkit.machines.full_pose_direct.direct_one`: a one-shot call does not import
+    Numba; the machine's next single call does)."""
+    if jit.use_compiled_solver(1):
+        return True
+    if not jit.use_compiled_solver(jit.SOLVER_ROWS):
+        return False  # no Numba, or PKMKIT_COMPILED=0
+    if machine.__dict__.get("_velocity_warm"):
+        return True
+    object.__setattr__(machine, "_velocity_warm", True)
+    return False

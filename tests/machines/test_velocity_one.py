@@ -1,0 +1,217 @@
+"""The velocity model of one plain pose of a translational machine (issue 22 §1,
+:mod:`pkmkit.machines.velocity_one`): the same fields, shapes, types and numbers (to 1e-12) as
+the batch path's row — at random poses, near serial and parallel singularities, with the flags
+— and the batch path's refusals for anything else."""
+
+from __future__ import annotations
+
+import dataclasses
+import pickle
+import warnings
+
+import numpy as np
+import pytest
+
+import pkmkit
+from pkmkit.exceptions import InputError, StrokeWarning, UnreachablePoseError
+from pkmkit.machines import velocity_one
+from pkmkit.machines.velocity_one import OnePoseJacobians, OnePoseVelocity
+
+TRANSLATIONAL = [name for name in pkmkit.machines()
+                 if pkmkit.machine(name).family == "translational"]
+FIELDS = ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
+          "parallel_measure", "serial_measure", "singularity", "tolerance", "q", "mode",
+          "exists", "reachable", "status")
+
+
+@pytest.fixture(params=["python", "compiled"])
+def path(request, monkeypatch):
+    """The plain-Python one-pose model, or the compiled one (spatial machines of three legs,
+    once Numba is imported)."""
+    if request.param == "compiled":
+        pytest.importorskip("numba")
+    else:
+        monkeypatch.setattr(velocity_one, "_compiled_now", lambda closed: False)
+    return request.param
+
+
+def _machine(name, path):
+    m = pkmkit.machine(name)
+    if path == "compiled" and m.dims != 3:
+        pytest.skip("the compiled one-pose kernel is for spatial machines")
+    return m
+
+
+def _compiled_rows(jac) -> bool:
+    """Whether the one-pose model's fields came from the compiled kernel."""
+    fields = jac._evaluation._fields
+    return fields is not None and isinstance(fields.get("a"), np.ndarray)
+
+
+def _assert_same(fast, batch, where=""):
+    for name in FIELDS:
+        got, want = getattr(fast, name), getattr(batch, name)
+        if name == "status":
+            assert got == want, where
+            continue
+        assert type(got) is type(want) or (isinstance(got, np.ndarray)
+                                           and isinstance(want, np.ndarray)), (name, where)
+        got, want = np.asarray(got, dtype=float), np.asarray(want, dtype=float)
+        assert got.shape == want.shape, (name, where)
+        np.testing.assert_array_equal(np.isnan(got), np.isnan(want), err_msg=f"{name} {where}")
+        finite = np.abs(want[np.isfinite(want)])
+        scale = max(1.0, float(finite.max(initial=0.0)))
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * scale,
+                                   err_msg=f"{name} {where}")
+
+
+def _batch_row(m, x, q=None, tol=1e-6):
+    """The batch path's velocity model of one row (fields of a single pose)."""
+    jac = m.jacobian(np.asarray([x]), q=None if q is None else np.asarray([q]), tol=tol)
+    return dataclasses.replace(jac, **{f.name: getattr(jac, f.name)[0] if np.ndim(
+        getattr(jac, f.name)) else getattr(jac, f.name) for f in dataclasses.fields(jac)})
+
+
+def _one(m, x, tol):
+    """The one-pose model of pose x (whatever its strokes), and its configuration."""
+    q = m._closed.inverse_one(list(x), tuple(m.model.leg_branch.tolist()))
+    if q is None:
+        return None, None
+    return OnePoseJacobians(OnePoseVelocity(m._closed, list(map(float, x)), q, tol), True), q
+
+
+def _poses(m, n, seed):
+    lo, hi = m.default_box()
+    return lo + (hi - lo) * np.random.default_rng(seed).random((n, m.dims))
+
+
+@pytest.mark.parametrize("name", TRANSLATIONAL)
+@pytest.mark.parametrize("compiled", ["auto", "1"])
+def test_one_pose_is_the_batch_row(name, compiled, monkeypatch, path):
+    """Against the batch row of the NumPy path and of the compiled one (``PKMKIT_COMPILED=1``:
+    the velocity kernel, whose hard rows go to the NumPy path)."""
+    if compiled == "1":
+        pytest.importorskip("numba")
+    monkeypatch.setenv("PKMKIT_COMPILED", compiled)
+    m = _machine(name, path)
+    x = _poses(m, 400, seed=3)
+    q = m.ik(x, strokes="ignore")
+    within = np.flatnonzero(np.isfinite(q).all(axis=1) & ~m.ik(
+        x, full_output=True, strokes="flag").out_of_stroke)
+    assert within.size >= 5
+    compiled_rows = 0
+    for k in within[:40]:
+        fast = m.jacobian(x[k])
+        assert isinstance(fast, OnePoseJacobians)  # the fast path answered
+        _assert_same(fast, _batch_row(m, x[k]), f"{name} pose {k}")
+        compiled_rows += _compiled_rows(fast)
+        for given in (x[k].tolist(), tuple(x[k].tolist())):
+            _assert_same(m.jacobian(given, tol=0.3), _batch_row(m, x[k], tol=0.3))
+    assert (compiled_rows > 0) == (path == "compiled")
+
+
+@pytest.mark.parametrize("name", TRANSLATIONAL)
+@pytest.mark.parametrize("tol", [1e-6, 0.05, 0.4])
+def test_every_reachable_pose_and_the_flags(name, tol, path):
+    """Every reachable pose of the box (out of stroke too), with tolerances that flag some."""
+    m = _machine(name, path)
+    x = _poses(m, 150, seed=4)
+    flagged = 0
+    for k in range(len(x)):
+        fast, q = _one(m, x[k], tol)
+        if fast is None:
+            continue
+        _assert_same(fast, _batch_row(m, x[k], q, tol), f"{name} pose {k}")
+        flagged += int(fast.singularity) != 0
+    if tol == 0.4:
+        assert flagged > 0
+
+
+def _bisect(inside, a, b, steps=60):
+    """The end of [a, b] (``inside(a)`` true, ``inside(b)`` false) reached by bisection."""
+    for _ in range(steps):
+        mid = 0.5 * (a + b)
+        a, b = (mid, b) if inside(mid) else (a, mid)
+    return a
+
+
+@pytest.mark.parametrize("name", TRANSLATIONAL)
+def test_near_serial_and_parallel_singularities(name, path):
+    """Poses bisected onto the boundary of reach (a leg perpendicular to its slide: serial) and
+    onto a change of sign of det A (parallel), and poses just beside them: the one-pose model
+    (or the batch path it hands them to) is the batch row, flags included."""
+    m = _machine(name, path)
+    home = m.home_pose
+    rng = np.random.default_rng(5)
+    closed, branches = m._closed, tuple(m.model.leg_branch.tolist())
+    near = []
+    for _ in range(30):
+        far = home + rng.normal(size=m.dims) * float(m.model.leg_length.max()) * 2
+
+        def reach(t, far=far):
+            return closed.inverse_one((home + t * (far - home)).tolist(), branches) is not None
+
+        if not reach(1.0):
+            t = _bisect(reach, 0.0, 1.0)
+            near.append(home + t * (far - home))
+    x = _poses(m, 300, seed=6)
+    q = m.ik(x, strokes="ignore")
+    det = m.jacobian(x, q=q, tol=1e-9).det_A
+    for k in range(0, len(x) - 1):
+        if np.isfinite(det[k:k + 2]).all() and det[k] * det[k + 1] < 0:
+            a, b, sign = x[k], x[k + 1], np.sign(det[k])
+
+            def same_sign(t, a=a, b=b, sign=sign):
+                p = a + t * (b - a)
+                qq = closed.inverse_one(p.tolist(), branches)
+                return qq is not None and np.sign(m.jacobian(p[None], q=np.array([qq])).det_A[
+                    0]) == sign
+
+            t = _bisect(same_sign, 0.0, 1.0)
+            near.append(a + t * (b - a))
+    assert len(near) >= 10
+    serial = parallel = 0
+    for p in near:
+        for shift in (0.0, 1e-7, 1e-4):
+            fast, qq = _one(m, p - shift * (p - home), 1e-3)
+            if fast is None:
+                continue
+            _assert_same(fast, _batch_row(m, p - shift * (p - home), qq, 1e-3), f"{name} {p}")
+            serial += bool(fast.singularity & 1)
+            parallel += bool(fast.singularity & 2)
+    assert serial > 0
+
+
+def test_refusals_are_those_of_the_batch_path():
+    m = pkmkit.machine("linear-delta")
+    with pytest.raises(UnreachablePoseError):
+        m.jacobian([2.0, 0.0, 0.0])
+    for bad in ([np.nan, 0.0, 0.0], [0.0, 0.0], [1e300, 0.0, 0.0], [0.0, np.inf, 0.0],
+                ["a", 0.0, 0.0]):
+        with pytest.raises(InputError):
+            m.jacobian(bad)
+    for tol in (-1.0, 0.0, float("nan"), float("inf"), "0.1"):
+        with pytest.raises(InputError, match="tol"):
+            m.jacobian(m.home_pose, tol=tol)
+    with pytest.warns(StrokeWarning):  # beyond the strokes: the batch path, which warns
+        jac = m.jacobian([0.0, 0.0, 1.0])
+    assert not isinstance(jac, OnePoseJacobians)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert isinstance(m.jacobian(m.home_pose), OnePoseJacobians)
+
+
+def test_replace_and_repr_of_a_one_pose_model():
+    """``dataclasses.replace`` (analysis.indices uses it) keeps the other fields."""
+    m = pkmkit.machine("orthoglide")
+    jac = m.jacobian(m.home_pose + 0.01)
+    changed = dataclasses.replace(jac, condition=np.float64(7.0))
+    assert changed.condition == 7.0
+    np.testing.assert_array_equal(changed.J, jac.J)
+    assert "1 pose" in repr(jac)
+
+
+def test_pickles():
+    m = pkmkit.machine("linear-delta")
+    jac = m.jacobian(m.home_pose + 0.01)
+    _assert_same(pickle.loads(pickle.dumps(jac)), jac)
