@@ -58,3 +58,17 @@ def test_a_machine_without_continuation_is_solved_at_once():
     g = make_grid(lo, hi, free=(0, 1, 2), base=m.home_pose, names=m.pose_names, resolution=6)
     inv = inverse_of_chunk(m, g.points, g.size // g.shape[0])
     np.testing.assert_array_equal(inv.q, m.ik(g.points, full_output=True).q)
+
+
+def test_chunks_cut_across_slabs_continue_the_same(grid_and_machine, monkeypatch):
+    """Chunks of 100 points cut the 42-point slabs anywhere (the last piece of a chunk is
+    shorter): point i still starts from point i − slab of its chunk."""
+    import pkmkit.analysis.criteria as criteria
+
+    m, g = grid_and_machine
+    whole = evaluate_grid(m, g, Criteria())
+    monkeypatch.setattr(criteria, "EVALUATION_CHUNK", 100)
+    cut = evaluate_grid(m, g, Criteria())
+    for name in whole.masks:
+        np.testing.assert_array_equal(cut.masks[name], whole.masks[name], err_msg=name)
+    np.testing.assert_allclose(cut.q, whole.q, rtol=0, atol=1e-12)
