@@ -29,7 +29,7 @@ def grid_and_machine():
 
 def test_continuation_gives_the_criteria_of_the_start_from_home(grid_and_machine):
     m, g = grid_and_machine
-    crit = Criteria(bounds=(0.2, 5.0), kappa_max=30.0)
+    crit = Criteria(bounds=(0.2, 5.0), kappa_max=30.0, continuation=True)
     home = evaluate_poses(m, g.points, crit)  # every point from home, in one batch
     cont = evaluate_grid(m, g, crit)  # slab by slab
     for name in home.masks:
@@ -66,9 +66,22 @@ def test_chunks_cut_across_slabs_continue_the_same(grid_and_machine, monkeypatch
     import pkmkit.analysis.criteria as criteria
 
     m, g = grid_and_machine
-    whole = evaluate_grid(m, g, Criteria())
+    whole = evaluate_grid(m, g, Criteria(continuation=True))
     monkeypatch.setattr(criteria, "EVALUATION_CHUNK", 100)
-    cut = evaluate_grid(m, g, Criteria())
+    cut = evaluate_grid(m, g, Criteria(continuation=True))
     for name in whole.masks:
         np.testing.assert_array_equal(cut.masks[name], whole.masks[name], err_msg=name)
     np.testing.assert_allclose(cut.q, whole.q, rtol=0, atol=1e-12)
+
+
+def test_continuation_is_asked_for(grid_and_machine, monkeypatch):
+    """Off by default: the grid is solved at once, every point from home."""
+    import pkmkit.analysis.criteria as criteria
+
+    seen = []
+    monkeypatch.setattr(criteria, "inverse_of_chunk",
+                        lambda m, p, slab: seen.append(slab) or m.ik(p, full_output=True))
+    m, g = grid_and_machine
+    evaluate_grid(m, g, Criteria())
+    evaluate_grid(m, g, Criteria(continuation=True))
+    assert seen == [None, g.size // g.shape[0]]
