@@ -93,7 +93,7 @@ class ChainVelocity:
 
     # ---------------------------------------------------------------- velocity
     def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
-                 tol: float = SINGULAR_TOL) -> ChainJacobians:
+                 tol: float = SINGULAR_TOL, start: Any = None) -> ChainJacobians:
         """Velocity model at tool poses ``x`` or at actuator coordinates ``q`` (the closure
         linearised: ``dU = −C_U⁺ C_q dq`` for the platform and passive joints U, then the
         head), with the argument conventions of every machine.
@@ -107,6 +107,9 @@ class ChainVelocity:
                 with ``ik(x, q0=...)`` and pass ``q``).
             tol: threshold on σ_min/σ_max of the closure's Jacobian below which a row is a
                 singular closure.
+            start: warm start of the closure at ``q``, as :meth:`fk`'s (e.g. an inverse
+                result's ``closure_start``: the direct model then converges at once, on the
+                assembly the inverse found); default home.
 
         Rows without assembly or at a singular closure are NaN with their status.
 
@@ -135,7 +138,7 @@ class ChainVelocity:
                 q = self.ik(xb[0] if single else xb, strokes="ignore")
         elif x is not None:
             given = x
-        return self._velocity(q, float(tol), given)
+        return self._velocity(q, float(tol), given, start)
 
     def in_working_mode(self, jacobians: ChainJacobians, tol: float) -> np.ndarray:
         """``(N,)`` bool: the closure of each configuration of ``jacobians`` is regular (status
@@ -204,10 +207,12 @@ class ChainVelocity:
             "the assembly modes of a (hyperstatic) joint-chain closure are not enumerated; "
             "fk(q, start=...) reaches the mode nearest a start")
 
-    def _velocity(self, q: Any, tol: float, x: Any = None) -> ChainJacobians:
+    def _velocity(self, q: Any, tol: float, x: Any = None, start: Any = None
+                  ) -> ChainJacobians:
         """The velocity model at actuator coordinates ``q`` (see :meth:`jacobian`)."""
         qb, single = _checked_batch(q, self.n_actuators, "q")
-        direct = self.fk(qb, full_output=True, strokes="ignore", check_singular=False)
+        direct = self.fk(qb, start=start, full_output=True, strokes="ignore",
+                         check_singular=False)
         n = qb.shape[0]
         values = self._full_values(np.nan_to_num(qb))
         values[:, self._passive] = np.nan_to_num(direct.passive)  # failed rows: NaN at the end

@@ -66,11 +66,25 @@ class ChainInverseResult(InverseResult):
         pose: ``(N, 6)`` the tool point and axis reached (NaN where it failed).
         direct: the direct model at ``q`` (:class:`ChainDirectResult`: platform, passive
             joints, messages), None when no row was solved.
+        solution: ``(N, 6 + n_var)`` the engine's complete solution — platform position,
+            rotation vector, every joint variable in the model's order (NaN where it failed):
+            the ``start`` of a next inverse model nearby (continuation).
         branches, shortfall, mode: no leg branches, shortfalls or sign of det A for a joint
             chain: ``(0,)``, ``(N, 0)`` and zeros.
     """
 
     direct: ChainDirectResult | None = None
+    solution: np.ndarray | None = None
+
+    @property
+    def closure_start(self) -> np.ndarray | None:
+        """``(N, 6 + n_p)`` the closure found with ``q`` — platform position (m), rotation
+        vector (rad), passive joints — as the ``start`` of the velocity model or of ``fk`` at
+        ``q`` (NaN rows start from home); None when no row was solved."""
+        if self.direct is None:
+            return None
+        return np.concatenate([np.atleast_2d(self.direct.platform),
+                               np.atleast_2d(self.direct.passive)], axis=1)
 
     def _as_tuple(self) -> tuple[Any, Any]:
         warnings.warn("a joint-chain machine's ik(full_output=True) returns a "

@@ -146,6 +146,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
 
     #: The inverse model is the engine's (from a start), not a closed form.
     closed_form_inverse: ClassVar[bool] = False
+    #: ``ik(x, start=...)`` continues from a neighbouring point's complete solution.
+    inverse_continues: ClassVar[bool] = True
     #: Defects may be incompatible with the (hyperstatic) closure.
     incompatible_defects: ClassVar[bool] = True
 
@@ -303,7 +305,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                 deprecated name of ``start`` (:mod:`pkmkit.machines.warm_starts`).
             start: warm start of the closure: ``(6 + n_p,)`` or ``(N, 6 + n_p)`` platform
                 position, rotation vector and passive joints (e.g. the previous solution along
-                a path); default the home configuration.
+                a path); default (and rows of ``start`` that are not finite) the home
+                configuration.
             tool_length: tool length(s) along the tool axis (m); default the machine's.
             full_output: return a :class:`ChainDirectResult`.
             strokes: joint values outside their strokes (the actuators given, the passive
@@ -378,7 +381,10 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         if given is None:
             u0 = self._default_start(qb, values)
         else:
-            u0 = _rows_like(given, 6 + len(self._passive), keyword, n)
+            u0 = _rows_like(given, 6 + len(self._passive), keyword, n).copy()
+            unset = ~np.isfinite(u0).all(axis=1)
+            if unset.any():  # rows without a start begin where a missing one does
+                u0[unset] = self._default_start(qb[unset], values[unset])
         valid = valid_rows(qb)
         u0[~valid] = np.nan
         engine_options.setdefault("compute_rank", False)
@@ -529,7 +535,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
 
     # ---------------------------------------------------------------- inverse
     def ik(self, x: Any, *, q0: Any = None, tool_length: Any = None, full_output: bool = False,
-           strokes: str = "flag", **engine_options: Any) -> np.ndarray | ChainInverseResult:
+           strokes: str = "flag", start: Any = None,
+           **engine_options: Any) -> np.ndarray | ChainInverseResult:
         """Inverse model: actuator coordinates that put the tool point and axis at ``x``.
 
         Args:
@@ -544,6 +551,11 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                 :class:`~pkmkit.exceptions.StrokeWarning`), ``"refuse"`` (NaN rows; a single row
                 raises :class:`~pkmkit.exceptions.OutOfStrokeError`) or ``"ignore"``; the direct
                 result of ``full_output`` carries the messages.
+            start: ``(6 + n_var,)`` or ``(N, 6 + n_var)`` warm start of every unknown —
+                platform position, rotation vector, every joint variable in the model's order:
+                a previous result's ``solution`` (e.g. at a neighbouring point: continuation).
+                Rows not finite start from home (or ``q0``), so do rows that do not converge
+                from their start; revolute actuators stay on the turn nearest ``q0`` (home).
 
         Returns:
             q ``(n,)`` / ``(N, n)``; with ``full_output`` a :class:`ChainInverseResult` (which
@@ -560,7 +572,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         xb, single = _checked_batch(x, 6, "pose")
         n = xb.shape[0]
         res, status, q, joint_values, lengths = self._inverse_solve(xb, single, q0, tool_length,
-                                                                    engine_options)
+                                                                    engine_options, start)
         joints = np.flatnonzero(self.model.loop_variables | self.model.actuated)
         bad, texts = (stroke_violations(self.model, joint_values, joints, status == Status.OK)
                       if strokes != "ignore" else (np.zeros(n, dtype=bool), [""] * n))
@@ -574,8 +586,12 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             return restore_shape(q, single)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", StrokeWarning)
+            # the direct model at q starts from the closure the inverse found (it converges
+            # at once, on that assembly)
+            start = np.concatenate([res.u[:, :6], res.u[:, 6:][:, self._passive]], axis=1)
             direct = self.fk(q if not single else q[0], tool_length=lengths if not single else
-                             lengths[0], full_output=True, strokes=strokes,
+                             lengths[0], start=start if not single else start[0],
+                             full_output=True, strokes=strokes,
                              check_singular=False) if np.isfinite(q).any() else None
         pose = np.full((n, 6), np.nan) if direct is None else np.atleast_2d(direct.pose)
         act = self._actuated
@@ -584,11 +600,11 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             mode=np.zeros(n, dtype=int), iterations=res.iterations, residual=res.residual,
             pose=pose, out_of_stroke=self._inverse_out_of_stroke(strokes, bad, direct),
             stroke_excess=signed_excess(q, self.model.q_min[act], self.model.q_max[act]),
-            direct=direct)
+            direct=direct, solution=np.where((res.status == Status.OK)[:, None], res.u, np.nan))
         return single_row(out) if single else out
 
     def _inverse_solve(self, xb: np.ndarray, single: bool, q0: Any, tool_length: Any,
-                       engine_options: dict) -> tuple:
+                       engine_options: dict, start: Any = None) -> tuple:
         """The engine's inverse of every row: ``(result, status (N,), q (N, n),
         joint values (N, n_joints), tool lengths (N,))``, revolute actuators on the turn
         nearest their start."""
@@ -603,13 +619,19 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         values = np.tile(self._home["values"], (n, 1))
         if q0 is not None:
             values[:, self._actuated] = _rows_like(q0, self.n_actuators, "q0", n)
-        u0 = np.concatenate([np.tile(self._home["platform"], (n, 1)), values], axis=1)
-        u0[~valid_rows(xb) | bad_axis] = np.nan
+        u_home = np.concatenate([np.tile(self._home["platform"], (n, 1)), values], axis=1)
+        u0, started = self._inverse_starts(start, u_home)
+        for u in (u0, u_home):
+            u[~valid_rows(xb) | bad_axis] = np.nan
         lengths = self._tool_lengths(tool_length, n)
         engine_options.setdefault("compute_rank", False)
-        with np.errstate(invalid="ignore", over="ignore"):
-            res = solve_machine_inverse(self.model, targets, u0, tool_length=lengths,
-                                        **engine_options)
+
+        def solve(t: np.ndarray, u: np.ndarray, tool: np.ndarray):
+            with np.errstate(invalid="ignore", over="ignore"):
+                return solve_machine_inverse(self.model, t, u, tool_length=tool,
+                                             **engine_options)
+
+        res = self._solve_inverse_from(solve, targets, u0, u_home, started, lengths)
         status = res.status.copy()
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
         status[~valid_rows(xb) | bad_axis] = Status.INVALID_INPUT

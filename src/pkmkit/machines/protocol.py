@@ -79,6 +79,13 @@ class MachineFace(StiffnessModel):
         return True
 
     @property
+    def inverse_continues(self) -> bool:
+        """True when ``ik(x, full_output=True)`` returns its complete ``solution`` and
+        ``ik(x, start=...)`` starts from one (a neighbouring point's: continuation over a grid,
+        :mod:`pkmkit.analysis.continuation`); False for closed-form inverses."""
+        return False
+
+    @property
     def angular_actuators(self) -> np.ndarray:
         """``(n_actuators,)`` bool: True for angular actuators (cranks, revolute joints), whose
         values are radians inside pkmkit and degrees in files and on the command line."""

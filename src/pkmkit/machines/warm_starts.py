@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError, UnsupportedOperationError
+from pkmkit.status import Status
 
 
 class ChainWarmStart:
@@ -46,3 +47,36 @@ class ChainWarmStart:
                       "passive joints as start= (x0 is a warm-start pose on every machine)",
                       DeprecationWarning, stacklevel=3)
         return x0, "x0"
+
+    def _inverse_starts(self, start: Any, u_home: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(u0 (N, 6 + n_var), started (N,))`` of the inverse model: the rows of ``start``
+        (platform position, rotation vector, every joint variable in the model's order — a
+        previous inverse result's ``solution``) where they are finite, ``u_home`` (home, or the
+        ``q0`` given) elsewhere; ``started`` marks the rows taken from ``start``.
+
+        Raises:
+            InputError: ``start`` not ``(6 + n_var,)`` or one such row per target.
+        """
+        if start is None:
+            return u_home, np.zeros(len(u_home), dtype=bool)
+        from pkmkit.machines.common import _rows_like
+
+        u0 = _rows_like(start, u_home.shape[1], "start", len(u_home)).copy()
+        started = np.isfinite(u0).all(axis=1)
+        u0[~started] = u_home[~started]
+        return u0, started
+
+    def _solve_inverse_from(self, solve: Any, targets: np.ndarray, u0: np.ndarray,
+                            u_home: np.ndarray, started: np.ndarray,
+                            lengths: np.ndarray) -> Any:
+        """``solve(targets, u0, lengths)`` (the engine's inverse), then the rows started from a
+        warm start that did not converge solved again from ``u_home``: a warm start may only
+        speed a row up, never lose one the start from home reaches (a retried row reports
+        the retry's iterations)."""
+        res = solve(targets, u0, lengths)
+        retry = np.flatnonzero(started & (res.status != Status.OK))
+        if retry.size:
+            again = solve(targets[retry], u_home[retry], lengths[retry])
+            for name in ("u", "status", "residual", "iterations", "rank"):
+                getattr(res, name)[retry] = getattr(again, name)
+        return res

@@ -1,0 +1,69 @@
+"""The inverse model of a chunk of grid points by continuation (issue 22 §3): on a machine whose
+numerical inverse starts from any complete solution (``machine.inverse_continues``: a joint
+chain's platform, passive joints and actuators), the chunk is solved slab by slab, each slab
+from the solution of the one before — point ``i`` of a C-order grid starts from point
+``i − slab``, its neighbour one step back along the first axis — instead of every point from
+home. A point whose neighbour failed starts from home, and so does again a point that does
+not converge from its neighbour (:meth:`~pkmkit.machines.joint_chain.JointChainMachine.ik`),
+so continuation loses no point the start from home reaches; revolute actuators stay on the
+turn nearest home.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pkmkit.exceptions import StrokeWarning
+
+
+@dataclass(frozen=True)
+class ContinuedInverse:
+    """What the criteria read of the inverse model of a chunk solved slab by slab.
+
+    Attributes:
+        q: ``(M, n)`` actuator coordinates (NaN where not reached).
+        status: ``(M,)`` Status codes.
+        out_of_stroke: ``(M,)`` bool, a joint (actuator or passive) beyond its stroke.
+        closure_start: ``(M, 6 + n_p)`` platform and passive joints found (the velocity model's
+            start).
+        iterations: ``(M,)`` the engine's iterations per point.
+        pose: None (the points are complete poses).
+    """
+
+    q: np.ndarray
+    status: np.ndarray
+    out_of_stroke: np.ndarray
+    closure_start: np.ndarray
+    iterations: np.ndarray
+    pose: None = None
+
+
+def inverse_of_chunk(machine: Any, points: np.ndarray, slab: int | None) -> Any:
+    """The inverse model (``full_output``, strokes flagged) at ``points (M, dims)``: at once,
+    or — with ``slab`` (points per slab of the grid they come from, C order) on a machine
+    whose inverse continues — slab by slab from the neighbouring slab's solution."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", StrokeWarning)
+        if not (slab and machine.inverse_continues and len(points) > slab):
+            return machine.ik(points, full_output=True)
+        parts, start = [], None
+        for k in range(0, len(points), slab):
+            piece = points[k:k + slab]
+            inv = (machine.ik(piece, full_output=True) if start is None else
+                   machine.ik(piece, full_output=True, start=start[:len(piece)]))
+            parts.append(inv)
+            start = inv.solution
+    width = 6 + len(machine.passive_names)
+    return ContinuedInverse(
+        q=np.concatenate([np.atleast_2d(p.q) for p in parts]),
+        status=np.concatenate([p.status for p in parts]),
+        out_of_stroke=np.concatenate([np.asarray(p.out_of_stroke, dtype=bool)
+                                      for p in parts]),
+        closure_start=np.concatenate([np.full((len(p.q), width), np.nan)
+                                      if p.closure_start is None else p.closure_start
+                                      for p in parts]),
+        iterations=np.concatenate([p.iterations for p in parts]))
