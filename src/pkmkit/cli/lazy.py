@@ -89,7 +89,7 @@ LAZY_COMMANDS: dict[str, LazyCommand] = {
         "pkmkit.cli.calibration_cmds", "calibrate_cmd",
         "Identify a machine's geometric defects from measurements, validate, report."),
     "compensate": LazyCommand(
-        "pkmkit.cli.calibration_cmds", "compensate_cmd",
+        "pkmkit.cli.compensate_cmd", "compensate_cmd",
         "Corrected commands for the nominal controller from a calibrated machine."),
     "machined-part": LazyCommand(
         "pkmkit.cli.machining_cmds", "machined_part",
