@@ -168,13 +168,54 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     feed, jerk, defaults = _time_law_defaults(tool_path, scale, units, feed, accel, jerk,
                                               rapid_feed, profile, bool(gcode))
     props, file_wrench = load_masses(masses, m) if masses else (None, None)
-    force = file_wrench
+    force = _path_wrench(file_wrench, wrench, wrench_file)
+    limits = _path_limits(units, scale, feed, accel, jerk, rapid_feed, speed_limit,
+                          accel_limit, force_limit, period, max_deflection)
+    result = simulate_path(m, tool_path, feed=feed * scale, accel=accel * scale,
+                           jerk=None if jerk is None else jerk * scale, profile=profile,
+                           rapid_feed=None if rapid_feed is None else rapid_feed * scale,
+                           period=period, masses=props, wrench=force, limits=limits)
+    summary = result.summary()
+    check_feed_reached(feed * scale, summary["tool_speed_max"], units)
+    _summary_in_units(summary, m, result, scale, units, profile)
+    summary["defaults"] = defaults
+    bent = None
+    if with_deflection or max_deflection is not None:
+        bent = path_deflection(m, result.motion.trajectory, result.masses, force=force,
+                               data=elastic)
+        summary["deflection"] = deflection_summary(bent, elastic, scale, max_deflection)
+    if out is not None:
+        summary["files"] = _write_path_outputs(m, result, limits, bent, summary, out, scale,
+                                               units)
+    if as_json:
+        emit_json(summary)
+    else:
+        _print_path_summary(m, summary, profile, units)
+        if bent is not None:
+            print_deflection(summary["deflection"], units)
+        for note in defaults:
+            click.echo(f"  default {note['option']} {note['value']:.6g} {note['unit']} "
+                       f"({note['rule']})")
+    if summary["violations"] or summary.get("deflection", {}).get("exceeded"):
+        sys.exit(EXIT_PARTIAL)
+
+
+def _path_wrench(file_wrench, wrench: str | None, wrench_file: str | None):
+    """The tool wrench of ``path``: ``--wrench FX,FY,FZ`` (N), a ``--wrench-file`` series, or
+    the masses file's; the two options are exclusive."""
     if wrench and wrench_file:
         raise click.UsageError("--wrench and --wrench-file are exclusive")
     if wrench:
-        force = check_wrench(np.asarray(_numbers(wrench, (3,), "--wrench")))
+        return check_wrench(np.asarray(_numbers(wrench, (3,), "--wrench")))
     if wrench_file:
-        force = load_wrench_series(wrench_file)
+        return load_wrench_series(wrench_file)
+    return file_wrench
+
+
+def _path_limits(units: str, scale: float, feed, accel, jerk, rapid_feed, speed_limit,
+                 accel_limit, force_limit, period, max_deflection) -> Limits:
+    """The time-law and limit options checked (finite, > 0, plausible) and the actuator
+    :class:`Limits` in SI."""
     for name, value, unit in (("--feed", feed, scale), ("--accel", accel, scale),
                               ("--jerk", jerk, scale), ("--rapid-feed", rapid_feed, scale),
                               ("--speed-limit", speed_limit, scale),
@@ -187,15 +228,15 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
                     unit=f"{units}/s²")
     check_plausible("--force-limit", force_limit, "force")
     check_plausible("--max-deflection", max_deflection, "deflection", scale=1e-6, unit="µm")
-    limits = Limits(speed=None if speed_limit is None else speed_limit * scale,
-                    accel=None if accel_limit is None else accel_limit * scale,
-                    force=force_limit)
-    result = simulate_path(m, tool_path, feed=feed * scale, accel=accel * scale,
-                           jerk=None if jerk is None else jerk * scale, profile=profile,
-                           rapid_feed=None if rapid_feed is None else rapid_feed * scale,
-                           period=period, masses=props, wrench=force, limits=limits)
-    summary = result.summary()
-    check_feed_reached(feed * scale, summary["tool_speed_max"], units)
+    return Limits(speed=None if speed_limit is None else speed_limit * scale,
+                  accel=None if accel_limit is None else accel_limit * scale,
+                  force=force_limit)
+
+
+def _summary_in_units(summary: dict, m, result, scale: float, units: str,
+                      profile: str) -> None:
+    """The path simulation's summary with its lengths in ``units`` (forces stay in N), in
+    place, and the machine, units, profile, actuators and moving mass added."""
     lengths = ("length", "cutting_length", "q_min", "q_max", "stroke", "qd_max", "qdd_max",
                "tool_speed_max", "tool_accel_max")
     for key in lengths:
@@ -211,45 +252,33 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
         v["pose"] = np.asarray(v["pose"]) / scale
     summary.update({"machine": m.id, "units": units, "profile": profile,
                     "actuators": list(m.actuator_names), "total_mass": result.masses.total_mass})
-    summary["defaults"] = defaults
-    bent = None
-    if with_deflection or max_deflection is not None:
-        bent = path_deflection(m, result.motion.trajectory, result.masses, force=force,
-                               data=elastic)
-        summary["deflection"] = deflection_summary(bent, elastic, scale, max_deflection)
-    if out is not None:
-        motion = result.motion
-        plot_joint_motion(motion, m.actuator_names, forces=result.forces.force,
-                          title=f"{m.name}: {summary['duration']:.3f} s", length_unit=units,
-                          limits={kind: (lo, hi) for kind, _, lo, hi
-                                  in limit_bounds(m, limits)},
-                          violations=result.violations, path=out / "motion.png")
-        plot_tool_path(motion, title=m.name, length_unit=units, path=out / "path.png")
-        names = m.actuator_names
-        header = ["t", *m.pose_names, *names, *[f"{n}_dot" for n in names],
-                  *[f"{n}_ddot" for n in names], *[f"f_{n}" for n in names]]
-        rows = np.column_stack([motion.t, motion.x / scale, motion.q / scale, motion.qd / scale,
-                                motion.qdd / scale, result.forces.force])
-        columns = {name: rows[:, j] for j, name in enumerate(header)}
-        summary["files"] = ["motion.png", "path.png", "trajectory.csv"]
-        if bent is not None:
-            columns.update(deflection_columns(bent, m.pose_names))
-            plot_path_deflection(motion, m.actuator_names, bent, length_unit=units,
-                                 title=f"{m.name}: tool deflection", path=out / "deflection.png")
-            summary["files"].append("deflection.png")
-        with TableWriter(out / "trajectory.csv", units=units) as writer:
-            writer.write(columns)
-    if as_json:
-        emit_json(summary)
-    else:
-        _print_path_summary(m, summary, profile, units)
-        if bent is not None:
-            print_deflection(summary["deflection"], units)
-        for note in defaults:
-            click.echo(f"  default {note['option']} {note['value']:.6g} {note['unit']} "
-                       f"({note['rule']})")
-    if summary["violations"] or summary.get("deflection", {}).get("exceeded"):
-        sys.exit(EXIT_PARTIAL)
+
+
+def _write_path_outputs(m, result, limits: Limits, bent, summary: dict, out, scale: float,
+                        units: str) -> list[str]:
+    """``motion.png``, ``path.png``, ``trajectory.csv`` (and ``deflection.png``) in ``out``;
+    returns the names written."""
+    motion = result.motion
+    plot_joint_motion(motion, m.actuator_names, forces=result.forces.force,
+                      title=f"{m.name}: {summary['duration']:.3f} s", length_unit=units,
+                      limits={kind: (lo, hi) for kind, _, lo, hi in limit_bounds(m, limits)},
+                      violations=result.violations, path=out / "motion.png")
+    plot_tool_path(motion, title=m.name, length_unit=units, path=out / "path.png")
+    names = m.actuator_names
+    header = ["t", *m.pose_names, *names, *[f"{n}_dot" for n in names],
+              *[f"{n}_ddot" for n in names], *[f"f_{n}" for n in names]]
+    rows = np.column_stack([motion.t, motion.x / scale, motion.q / scale, motion.qd / scale,
+                            motion.qdd / scale, result.forces.force])
+    columns = {name: rows[:, j] for j, name in enumerate(header)}
+    files = ["motion.png", "path.png", "trajectory.csv"]
+    if bent is not None:
+        columns.update(deflection_columns(bent, m.pose_names))
+        plot_path_deflection(motion, m.actuator_names, bent, length_unit=units,
+                             title=f"{m.name}: tool deflection", path=out / "deflection.png")
+        files.append("deflection.png")
+    with TableWriter(out / "trajectory.csv", units=units) as writer:
+        writer.write(columns)
+    return files
 
 
 def _print_path_summary(m, summary: dict, profile: str, units: str) -> None:
