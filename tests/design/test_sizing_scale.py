@@ -19,3 +19,13 @@ def test_linear_delta_sized_for_a_cube_a_thousand_times_smaller_is_a_thousand_ti
     np.testing.assert_allclose(small.q_max, 1e-3 * big.q_max, rtol=1e-9)
     np.testing.assert_allclose(small.index_range, big.index_range, rtol=1e-9)
     np.testing.assert_allclose(small.compactness, big.compactness, rtol=1e-9)
+
+
+def test_most_compact_linear_delta_for_a_cube_1000_times_smaller_is_1000_times_smaller():
+    kw = {"objective": "compactness", "samples": 9, "search_samples": 5}
+    big = size_linear_delta(0.5, (0.4, 1.2), max_leg=1.5, **kw)
+    small = size_linear_delta(0.5e-3, (0.4, 1.2), max_leg=1.5e-3, **kw)
+    for name in ("L", "d", "stroke"):
+        np.testing.assert_allclose(getattr(small, name), 1e-3 * getattr(big, name), rtol=1e-9,
+                                   err_msg=name)
+    np.testing.assert_allclose(small.compactness, big.compactness, rtol=1e-9)
