@@ -8,6 +8,7 @@ Usage (from the repository root, in the project's virtual environment with the `
     python tools/mutation.py pkmkit.machines --sample 120 --survivors  # the sample's survivors
     python tools/mutation.py pkmkit.spatial --plausible            # plausible bugs (below)
     python tools/mutation.py pkmkit.exceptions --plausible --sample 30 --seed 1
+    python tools/mutation.py pkmkit.machines --plausible --sample 20 --resume  # continue a run
 
 ``--plausible`` plants, instead of mutmut's operator and constant changes, the one-line bugs
 people make in geometric code (``tools/plausible_mutants.py``: operands of ``@``, of ``*`` on
@@ -138,7 +139,7 @@ def _plausible(args) -> int:
     plausible_mutants.run(args.target, tests, sample=args.sample, seed=args.seed,
                           operators=operators, timeout=args.timeout,
                           workdir=Path(args.workdir), results=Path(args.results),
-                          again=args.survivors)
+                          again=args.survivors, resume=args.resume)
     return 0
 
 
@@ -151,6 +152,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--report", action="store_true", help="only report the last results")
     parser.add_argument("--survivors", action="store_true",
                         help="re-run only the mutants of the sample that survived last time")
+    parser.add_argument("--resume", action="store_true",
+                        help="(--plausible) skip the sample's mutants --results already has")
     parser.add_argument("--plausible", action="store_true",
                         help="plant the plausible one-line bugs of tools/plausible_mutants.py")
     parser.add_argument("--tests", nargs="*", help="(--plausible) test paths to run")
