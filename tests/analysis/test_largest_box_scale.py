@@ -10,7 +10,7 @@ import pytest
 from pkmkit.analysis.inscribed import largest_box
 
 
-@pytest.mark.parametrize("rho", [1e-3, 1.0, 1e3])
+@pytest.mark.parametrize("rho", [1e-6, 1e-3, 1.0, 1e3])
 def test_largest_square_in_a_disc_of_any_size(rho):
     center, half = largest_box(lambda p: 1 - np.hypot(p[:, 0], p[:, 1]) / rho,
                                lambda c, h, u: c + h * u, rho * np.array([0.3, 0.2]),
