@@ -9,6 +9,7 @@ Usage (from the repository root, in the project's virtual environment with the `
     python tools/mutation.py pkmkit.spatial --plausible            # plausible bugs (below)
     python tools/mutation.py pkmkit.exceptions --plausible --sample 30 --seed 1
     python tools/mutation.py pkmkit.machines --plausible --sample 20 --resume  # continue a run
+    python tools/mutation.py pkmkit.cli --plausible --sample 20 --tests-for cli  # per command
 
 ``--plausible`` plants, instead of mutmut's operator and constant changes, the one-line bugs
 people make in geometric code (``tools/plausible_mutants.py``: operands of ``@``, of ``*`` on
