@@ -8,6 +8,8 @@ Usage (from the repository root, in the project's virtual environment with the `
     python tools/mutation.py pkmkit.machines --sample 120 --survivors  # the sample's survivors
     python tools/mutation.py pkmkit.spatial --plausible            # plausible bugs (below)
     python tools/mutation.py pkmkit.exceptions --plausible --sample 30 --seed 1
+    python tools/mutation.py pkmkit.machines --plausible --sample 20 --resume  # continue a run
+    python tools/mutation.py pkmkit.cli --plausible --sample 20 --tests-for cli  # per command
 
 ``--plausible`` plants, instead of mutmut's operator and constant changes, the one-line bugs
 people make in geometric code (``tools/plausible_mutants.py``: operands of ``@``, of ``*`` on
@@ -115,6 +117,35 @@ PLAUSIBLE_TESTS = {
 }
 
 
+#: ``--tests-for cli``: the test files that run each command module's code (the whole of
+#: ``tests/cli`` takes longer than the time limit per mutant on a loaded 2-core machine).
+TESTS_FOR = {
+    "cli": {
+        "analysis_cmds.py": ["tests/cli/test_analysis_cli.py",
+                             "tests/cli/test_workspace_families_cli.py"],
+        "grid_options.py": ["tests/cli/test_analysis_cli.py",
+                            "tests/cli/test_workspace_families_cli.py"],
+        "calibration_cmds.py": ["tests/cli/test_calibration_cli.py"],
+        "errors_cmds.py": ["tests/cli/test_errors_cli.py", "tests/cli/test_error_units.py"],
+        "ik_cmd.py": ["tests/cli/test_cli.py", "tests/cli/test_ik_one_path.py",
+                      "tests/cli/test_batch.py", "tests/cli/test_batch_units.py"],
+        "machining_cmds.py": ["tests/cli/test_machining_cmds.py"],
+        "main.py": ["tests/cli/test_cli.py", "tests/cli/test_strokes_cli.py"],
+        "motion_cmds.py": ["tests/cli/test_motion_cli.py", "tests/cli/test_limits.py"],
+        "pose_cmds.py": ["tests/cli/test_cli.py", "tests/cli/test_chain_cli.py"],
+        "stiffness_cmds.py": ["tests/cli/test_stiffness_cli.py"],
+        "unit_text.py": ["tests/cli/test_cli.py", "tests/cli/test_batch_units.py",
+                         "tests/cli/test_error_units.py"],
+    },
+}
+
+
+def _tests_for(name: str | None) -> dict[str, list[str]] | None:
+    if name is None:
+        return None
+    return TESTS_FOR[name]
+
+
 def _plausible(args) -> int:
     sys.path.insert(0, str(ROOT / "tools"))
     import plausible_mutants
@@ -138,7 +169,8 @@ def _plausible(args) -> int:
     plausible_mutants.run(args.target, tests, sample=args.sample, seed=args.seed,
                           operators=operators, timeout=args.timeout,
                           workdir=Path(args.workdir), results=Path(args.results),
-                          again=args.survivors)
+                          again=args.survivors, resume=args.resume,
+                          tests_for=_tests_for(args.tests_for))
     return 0
 
 
@@ -151,6 +183,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--report", action="store_true", help="only report the last results")
     parser.add_argument("--survivors", action="store_true",
                         help="re-run only the mutants of the sample that survived last time")
+    parser.add_argument("--tests-for", choices=sorted(TESTS_FOR),
+                        help="(--plausible) per source file, the tests of TESTS_FOR (others: "
+                             "--tests or the default)")
+    parser.add_argument("--resume", action="store_true",
+                        help="(--plausible) skip the sample's mutants --results already has")
     parser.add_argument("--plausible", action="store_true",
                         help="plant the plausible one-line bugs of tools/plausible_mutants.py")
     parser.add_argument("--tests", nargs="*", help="(--plausible) test paths to run")
