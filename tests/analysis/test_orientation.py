@@ -31,6 +31,7 @@ def test_tilt_and_torsion_round_trip_and_meaning():
                                atol=1e-15)
 
 
+@pytest.mark.slow  # 15-40 s: .ci/run runs it (-m "slow or ci")
 def test_hexapod_orientation_workspace_has_its_symmetry_and_a_true_boundary():
     m = pkmkit.machine("gough-stewart")
     ws = orientation_workspace(m, m.home_pose[:3], max_tilt=np.radians(85), azimuths=36,

@@ -48,6 +48,7 @@ def _same(new, old):
     np.testing.assert_allclose(new.tool_uncertainty, old.tool_uncertainty, rtol=1e-6)
 
 
+@pytest.mark.slow  # 15-40 s: .ci/run runs it (-m "slow or ci")
 @pytest.mark.skipif(not compiled_closure_available(), reason="needs Numba")
 def test_tripteor_identification_is_the_numpy_paths(tripteor_data, monkeypatch):
     m, data = tripteor_data

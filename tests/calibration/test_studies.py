@@ -30,6 +30,7 @@ def test_delta_height_probe_trap_and_flatness():
     assert study.flatness["compensated"] < 20e-6
 
 
+@pytest.mark.slow  # 15-40 s: .ci/run runs it (-m "slow or ci")
 def test_demo_study_writes_reports(tmp_path, monkeypatch):
     """The demo entry point, with the studies made small."""
     from pkmkit.demos import calibration as demo_calibration
