@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import logging
 import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
@@ -168,6 +169,9 @@ def local_cluster(workers: int, **options: Any):
     # distributed starts even without a dashboard) on a free port rather than 8787: with
     # 8787 busy, distributed would print a warning into every command's output.
     scheduler_options = {"dashboard_address": ":0", **options.pop("scheduler_kwargs", {})}
+    # workers log at CRITICAL only: a worker whose heartbeat races the cluster's shutdown logs
+    # a traceback (an ERROR) into the command's output; task errors still raise in the caller
+    options.setdefault("silence_logs", logging.CRITICAL)
     with dask.config.set({"distributed.nanny.pre-spawn-environ": WORKER_ENVIRON}):
         return distributed.LocalCluster(n_workers=workers, threads_per_worker=1,
                                         processes=True, dashboard_address=None,
