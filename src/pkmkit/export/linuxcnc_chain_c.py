@@ -9,6 +9,8 @@ in radians inside (degrees at LinuxCNC's interface).
 
 from __future__ import annotations
 
+from pkmkit.export.linuxcnc_rod_c import TURN_C
+
 #: Functions of the chain models: frames, closure rows, tool rows, the solver.
 CHAIN_MODEL_C = r"""
 /* ---- small 3-D helpers ---- */
@@ -19,27 +21,7 @@ static void cross3(const double a[3], const double b[3], double out[3])
     out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
-/* R <- exp([w]x) R (Rodrigues) */
-static void turn(double R[3][3], const double w[3])
-{
-    double angle = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-    double E[3][3], T[3][3], k[3], c, s, v;
-    int i, r;
-    if (angle == 0.0) return;
-    k[0] = w[0] / angle; k[1] = w[1] / angle; k[2] = w[2] / angle;
-    c = cos(angle); s = sin(angle); v = 1.0 - c;
-    E[0][0] = c + k[0] * k[0] * v;        E[0][1] = k[0] * k[1] * v - k[2] * s;
-    E[0][2] = k[0] * k[2] * v + k[1] * s; E[1][0] = k[1] * k[0] * v + k[2] * s;
-    E[1][1] = c + k[1] * k[1] * v;        E[1][2] = k[1] * k[2] * v - k[0] * s;
-    E[2][0] = k[2] * k[0] * v - k[1] * s; E[2][1] = k[2] * k[1] * v + k[0] * s;
-    E[2][2] = c + k[2] * k[2] * v;
-    for (r = 0; r < 3; r++)
-        for (i = 0; i < 3; i++)
-            T[r][i] = E[r][0] * R[0][i] + E[r][1] * R[1][i] + E[r][2] * R[2][i];
-    for (r = 0; r < 3; r++)
-        for (i = 0; i < 3; i++) R[r][i] = T[r][i];
-}
-
+""" + TURN_C + r"""
 /* ---- the chain product T = D_1 M_1(q_1) D_2 M_2(q_2) ... (pkmkit's chain_pose) ---- */
 typedef struct {
     double R[3][3], p[3];          /* the end frame */

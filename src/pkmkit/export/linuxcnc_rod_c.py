@@ -7,6 +7,29 @@ LinuxCNC's four kinematics functions. Lengths in the module's unit, crank joints
 from __future__ import annotations
 
 #: Everything after the tables, up to the realtime module's glue.
+#: ``turn``: R <- exp([w]x) R (Rodrigues), the rotation update both modules' Newton steps use.
+TURN_C = r"""/* R <- exp([w]x) R (Rodrigues) */
+static void turn(double R[3][3], const double w[3])
+{
+    double angle = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    double E[3][3], T[3][3], k[3], c, s, v;
+    int i, r;
+    if (angle == 0.0) return;
+    k[0] = w[0] / angle; k[1] = w[1] / angle; k[2] = w[2] / angle;
+    c = cos(angle); s = sin(angle); v = 1.0 - c;
+    E[0][0] = c + k[0] * k[0] * v;        E[0][1] = k[0] * k[1] * v - k[2] * s;
+    E[0][2] = k[0] * k[2] * v + k[1] * s; E[1][0] = k[1] * k[0] * v + k[2] * s;
+    E[1][1] = c + k[1] * k[1] * v;        E[1][2] = k[1] * k[2] * v - k[0] * s;
+    E[2][0] = k[2] * k[0] * v - k[1] * s; E[2][1] = k[2] * k[1] * v + k[0] * s;
+    E[2][2] = c + k[2] * k[2] * v;
+    for (r = 0; r < 3; r++)
+        for (i = 0; i < 3; i++)
+            T[r][i] = E[r][0] * R[0][i] + E[r][1] * R[1][i] + E[r][2] * R[2][i];
+    for (r = 0; r < 3; r++)
+        for (i = 0; i < 3; i++) R[r][i] = T[r][i];
+}
+"""
+
 ROD_MODEL_C = r"""/* R = Rz(c) Ry(b) Rx(a), angles in degrees */
 static void rotation_from_abc(double a, double b, double c, double R[3][3])
 {
@@ -213,27 +236,7 @@ static int inverse_model(const double p[3], double R[3][3], double *q)
 #endif
 
 #if FULL_POSE
-/* R <- exp([w]x) R (Rodrigues) */
-static void turn(double R[3][3], const double w[3])
-{
-    double angle = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-    double E[3][3], T[3][3], k[3], c, s, v;
-    int i, r;
-    if (angle == 0.0) return;
-    k[0] = w[0] / angle; k[1] = w[1] / angle; k[2] = w[2] / angle;
-    c = cos(angle); s = sin(angle); v = 1.0 - c;
-    E[0][0] = c + k[0] * k[0] * v;        E[0][1] = k[0] * k[1] * v - k[2] * s;
-    E[0][2] = k[0] * k[2] * v + k[1] * s; E[1][0] = k[1] * k[0] * v + k[2] * s;
-    E[1][1] = c + k[1] * k[1] * v;        E[1][2] = k[1] * k[2] * v - k[0] * s;
-    E[2][0] = k[2] * k[0] * v - k[1] * s; E[2][1] = k[2] * k[1] * v + k[0] * s;
-    E[2][2] = c + k[2] * k[2] * v;
-    for (r = 0; r < 3; r++)
-        for (i = 0; i < 3; i++)
-            T[r][i] = E[r][0] * R[0][i] + E[r][1] * R[1][i] + E[r][2] * R[2][i];
-    for (r = 0; r < 3; r++)
-        for (i = 0; i < 3; i++) R[r][i] = T[r][i];
-}
-#endif
+""" + TURN_C + r"""#endif
 
 #if POSITION_CONTROLLED
 /* inverse model of a machine whose orientation follows its position (the Verne-type module:

@@ -281,6 +281,18 @@ def _rotation_rows(mm, length, sign, out):  # pragma: no cover
             out[i, j] = s * f1 + v[i] * v[j] * f2
 
 
+@njit(inline="always", **_OPTIONS)
+def _apply_frame(rot, pos, f, tmp):  # pragma: no cover
+    """``(rot, pos) <- (rot, pos) · f`` for an element's invariant frame ``f (4, 4)``:
+    ``pos += rot f[:3, 3]``, ``rot <- rot f[:3, :3]`` (``tmp (3, 3)`` scratch)."""
+    for i in range(3):
+        pos[i] += rot[i, 0] * f[0, 3] + rot[i, 1] * f[1, 3] + rot[i, 2] * f[2, 3]
+    for i in range(3):
+        for j in range(3):
+            tmp[i, j] = rot[i, 0] * f[0, j] + rot[i, 1] * f[1, j] + rot[i, 2] * f[2, j]
+    rot[:, :] = tmp
+
+
 @njit(**_OPTIONS)
 def _scratch(n_elements):  # pragma: no cover
     """Work arrays of :func:`_evaluate` (allocated once per kernel call)."""
@@ -308,13 +320,7 @@ def _evaluate(frames, types, evar, elements, offsets, position, values, u, lengt
         n_twist = 0
         for idx in range(offsets[leg], offsets[leg + 1]):
             e = elements[idx]
-            f = frames[e]
-            for i in range(3):
-                pos[i] += rot[i, 0] * f[0, 3] + rot[i, 1] * f[1, 3] + rot[i, 2] * f[2, 3]
-            for i in range(3):
-                for j in range(3):
-                    tmp[i, j] = rot[i, 0] * f[0, j] + rot[i, 1] * f[1, j] + rot[i, 2] * f[2, j]
-            rot[:, :] = tmp
+            _apply_frame(rot, pos, frames[e], tmp)
             t = types[e]
             if t == 0:
                 continue
@@ -436,13 +442,7 @@ def _walk(frames, types, evar, values, chain, rot, pos, local, order, starts, tw
     for idx in range(chain.shape[0]):
         e = chain[idx]
         count = _defect_twists(e, rot, pos, local, order, starts, twists, ids, count)
-        f = frames[e]
-        for i in range(3):
-            pos[i] += rot[i, 0] * f[0, 3] + rot[i, 1] * f[1, 3] + rot[i, 2] * f[2, 3]
-        for i in range(3):
-            for j in range(3):
-                tmp[i, j] = rot[i, 0] * f[0, j] + rot[i, 1] * f[1, j] + rot[i, 2] * f[2, j]
-        rot[:, :] = tmp
+        _apply_frame(rot, pos, frames[e], tmp)
         t = types[e]
         if t == 0:
             continue
