@@ -215,6 +215,12 @@ static void tool_rows(const double *values, double RX[3][3], const double pX[3],
     }
 }
 
+/* x mod m in [0, m) */
+static double fmod_positive(double x, double m)
+{
+    return x - m * floor(x / m);
+}
+
 /* Gaussian elimination with partial pivoting: solves M x = rhs (size n) in place; 0 when a
    pivot vanishes (singular) */
 static int solve_square(int n, double M[MAX_UNKNOWNS][MAX_UNKNOWNS], double *rhs)
@@ -341,16 +347,39 @@ static int direct_model(Configuration *s, const double *q)
     return status != 0 ? status : within_strokes(s->values);
 }
 
+/* an angle (rad) wrapped to (-pi, pi] (pkmkit's head_branches.wrapped) */
+static double wrapped(double a)
+{
+    return PI - fmod_positive(PI - a, 2.0 * PI);
+}
+
+/* a two-branch head (turn a, tilt c: (a, c) and (a + pi, -c) give the same tool axis): the
+   solution s solved again with its head flipped, and the flipped one taken when it is exact and
+   its turn strictly nearer the start's turn `reference` (pkmkit's nearest_head_branch) */
+static void nearest_head_branch(Configuration *s, const double target[6], double reference)
+{
+    Configuration other = *s;
+    if (head_flip_turn < 0) return;
+    other.values[head_flip_turn] += PI;
+    other.values[head_flip_tilt] = -other.values[head_flip_tilt];
+    if (solve_closure(&other, target, inverse_variable, N_INVERSE) == 0
+        && fabs(wrapped(other.values[head_flip_turn] - reference))
+           < fabs(wrapped(s->values[head_flip_turn] - reference)))
+        *s = other;
+}
+
 /* inverse model: every joint and the platform such that the legs close and the tool reaches
-   target (tool point, unit tool axis), from the configuration s; revolute actuators are
-   taken on the turn nearest the start */
+   target (tool point, unit tool axis), from the configuration s; a two-branch head on the
+   branch whose turn is nearest the start's; revolute actuators are taken on the turn nearest
+   the start */
 static int inverse_model(Configuration *s, const double target[6])
 {
-    double start[N_ACTUATORS];
+    double start[N_ACTUATORS], reference = head_flip_turn < 0 ? 0.0 : s->values[head_flip_turn];
     int j, status;
     for (j = 0; j < N_ACTUATORS; j++) start[j] = s->values[actuated_variable[j]];
     status = solve_closure(s, target, inverse_variable, N_INVERSE);
     if (status != 0) return status;
+    nearest_head_branch(s, target, reference);
     for (j = 0; j < N_ACTUATORS; j++) {
         int v = actuated_variable[j];
         if (variable_revolute[v])

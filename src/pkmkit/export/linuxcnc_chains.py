@@ -105,6 +105,7 @@ def _tables(t, scale: float) -> str:
     from pkmkit.spatial.rotation import rotvec_to_matrix
 
     home_rot = rotvec_to_matrix(t.home_platform[None, 3:])[0]
+    flip = t.head_flip or (-1, -1)
     return _sizes(t, inverse) + f"""
 /* ---- parameters: pkmkit's element frames D_e (model.frames, defects applied) ---- */
 /* rotation of each element's frame in the previous frame (rows) */
@@ -133,6 +134,9 @@ static const int variable_revolute[N_VARIABLES] = {_ints(t.revolute)};
 static const double variable_min[N_VARIABLES] = {_stroke(t.q_min, joint_scale)};
 static const double variable_max[N_VARIABLES] = {_stroke(t.q_max, joint_scale)};
 static const int variable_checked[N_VARIABLES] = {_ints(t.checked)};
+/* a two-branch head (-1: none): its turn and tilt variables; the inverse model takes the
+   branch whose turn is nearest the start's (pkmkit's rule) */
+static const int head_flip_turn = {flip[0]}, head_flip_tilt = {flip[1]};
 /* home: every joint, the platform position and rotation (pkmkit's home configuration) */
 static const double home_values[N_VARIABLES] = {_doubles(t.home_values / joint_scale)};
 static const double home_platform_position[3] = {_doubles(t.home_platform[:3] / scale)};

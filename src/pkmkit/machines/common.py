@@ -38,6 +38,8 @@ class MachineKind:
         source: where the model comes from (seed, section).
         default_box: ``(params, model) -> (lower (dims,), upper (dims,))``, a sensible region for
             workspace studies (None: around home, see :meth:`Machine.default_box`).
+        head_flip: names ``(turn, tilt)`` of a joint-chain head with two branches ``(a, c)`` and
+            ``(a ± π, −c)`` (:mod:`pkmkit.machines.head_branches`), or None.
     """
 
     kind: str
@@ -48,6 +50,7 @@ class MachineKind:
     source: str = ""
     default_box: Callable[[Mapping[str, Any], RodModel], tuple[np.ndarray, np.ndarray]] | None = (
         None)
+    head_flip: tuple[str, str] | None = None
 
 
 def _valid_rows(arr: np.ndarray) -> np.ndarray:

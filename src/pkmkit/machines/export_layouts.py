@@ -14,6 +14,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from pkmkit.machines.head_branches import head_flip_variables
+
 #: Every machine's ``export_layout`` is one of these.
 EXPORT_LAYOUTS = ("translational", "planar", "full-pose", "chain")
 
@@ -58,6 +60,8 @@ class ChainTables:
         closure_length: the closures' characteristic length L (m); tool_length: m.
         home_misfit: the legs' least-squares closure residual at home (m; ~0 when the defects
             are compatible).
+        head_flip: ``(turn, tilt)`` variable indices of a two-branch head (the inverse model's
+            branch rule, :mod:`pkmkit.machines.head_branches`), or None.
     """
 
     element_names: tuple[str, ...]
@@ -80,6 +84,7 @@ class ChainTables:
     closure_length: float
     tool_length: float
     home_misfit: float
+    head_flip: tuple[int, int] | None = None
 
 
 class ChainLayout:
@@ -105,4 +110,5 @@ class ChainLayout:
             checked=np.asarray(model.loop_variables | model.actuated, dtype=bool),
             home_values=self.home_values, home_platform=self.home_platform,
             closure_length=float(model.characteristic_length),
-            tool_length=float(self.tool_length), home_misfit=float(self.home_closure_residual))
+            tool_length=float(self.tool_length), home_misfit=float(self.home_closure_residual),
+            head_flip=head_flip_variables(self.kind, tuple(model.variables)))

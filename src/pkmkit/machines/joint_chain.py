@@ -58,6 +58,7 @@ from pkmkit.machines.common import (
 from pkmkit.machines.common import _valid_rows as valid_rows
 from pkmkit.machines.error_faces import ChainErrors
 from pkmkit.machines.export_layouts import ChainLayout
+from pkmkit.machines.head_branches import head_flip_variables, nearest_head_branch
 from pkmkit.machines.inverse_rows import ChainInverseRows
 from pkmkit.machines.measurement_models import ChainMeasurement
 from pkmkit.machines.protocol import MachineFace
@@ -632,6 +633,9 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                                              **engine_options)
 
         res = self._solve_inverse_from(solve, targets, u0, u_home, started, lengths)
+        flip = head_flip_variables(self.kind, self.model.variables)
+        if flip is not None:  # a two-branch head: the branch nearest the start's turn
+            res = nearest_head_branch(solve, targets, lengths, res, u0[:, 6 + flip[0]], flip)
         status = res.status.copy()
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
         status[~valid_rows(xb) | bad_axis] = Status.INVALID_INPUT

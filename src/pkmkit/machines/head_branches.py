@@ -1,0 +1,62 @@
+"""The branch rule of a head with two branches: an A/C head whose turn ``a`` and tilt ``c``
+put the tool axis in the same direction at ``(a, c)`` and ``(a ± π, −c)`` (the TriMule 600's
+Q4, Q5). From a start, the inverse model may reach either; the rule makes it one:
+
+    **the branch whose turn joint is nearest the start's** (wrapped to (−π, π]; the branch the
+    solver reached is kept unless the other one is strictly nearer).
+
+Along a path (a start at the previous configuration) it keeps the branch followed; from home
+(turn 0) it takes |a| ≤ π/2. It matters most near the tool axis along the turn axis (c = 0,
+the "vertical" tool axis at home), where the turn leaves the axis unchanged and a solver's
+first steps pick a branch by the tool point alone. The generated LinuxCNC module applies the
+same rule (:mod:`pkmkit.export.linuxcnc_chain_c`), so both give the same joints there.
+
+A kind declares its head's pair by name (``MachineKind.head_flip = ("Q4", "Q5")``); machines
+without one (every other kind, element-by-element machine files) take no second solve.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from pkmkit.status import Status
+
+
+def head_flip_variables(kind, variables: tuple[str, ...]) -> tuple[int, int] | None:
+    """``(turn, tilt)`` variable indices of the kind's two-branch head, or None."""
+    names = getattr(kind, "head_flip", None)
+    if not names:
+        return None
+    return variables.index(names[0]), variables.index(names[1])
+
+
+def wrapped(angle: np.ndarray) -> np.ndarray:
+    """``angle`` (rad) wrapped to (−π, π]."""
+    return np.pi - np.mod(np.pi - angle, 2.0 * np.pi)
+
+
+def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarray, res,
+                        reference: np.ndarray, flip: tuple[int, int]):
+    """Apply the rule to an inverse result ``res`` (a
+    :class:`~pkmkit.solve.least_squares.SolveResult` whose ``u (N, 6 + V)`` holds the platform
+    then every joint variable): the rows solved exactly are solved again by ``solve(targets,
+    u0, lengths)`` from their solution with the head flipped (turn + π, −tilt), and the flipped
+    solution replaces theirs where it is exact and its turn is strictly nearer ``reference
+    (N,)`` (rad; the start's turn). ``res`` is updated in place and returned."""
+    turn, tilt = 6 + flip[0], 6 + flip[1]
+    rows = np.flatnonzero((res.status == Status.OK) & np.isfinite(reference))
+    if not rows.size:
+        return res
+    u0 = res.u[rows].copy()
+    u0[:, turn] += np.pi
+    u0[:, tilt] *= -1.0
+    other = solve(targets[rows], u0, lengths[rows])
+    ref = reference[rows]
+    nearer = (other.status == Status.OK) & (
+        np.abs(wrapped(other.u[:, turn] - ref)) < np.abs(wrapped(res.u[rows, turn] - ref)))
+    take = rows[nearer]
+    for name in ("u", "status", "residual", "iterations", "rank"):
+        getattr(res, name)[take] = getattr(other, name)[nearer]
+    return res
