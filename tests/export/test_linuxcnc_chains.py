@@ -272,24 +272,3 @@ def test_command_line_exports_the_calibrated_tripteor(tmp_path):
     for word in ("kinematicsForward", "kinematicsInverse", "kinematicsType", "kinematicsHome",
                  "psi1", "COORDINATES = XYZAB", "MIN_LIMIT = 975"):
         assert word in text
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("name", CHAINS)
-def test_many_poses(name, tmp_path):
-    """3·10⁴ actuator sets through the direct model and 10⁴ poses through the inverse."""
-    m = pkmkit.machine(name)
-    module = ChainModule(m, tmp_path)
-    q = actuator_draw(m, 30_000, seed=7)
-    ref = m.fk(q, full_output=True, strokes="refuse")
-    ok = np.asarray(ref.status) == Status.OK
-    pose, status = module.forward(q)
-    assert np.array_equal(status == 0, ok) and np.abs(pose[ok] - ref.pose[ok]).max() <= TOL
-    x = _poses(m, 8_000, seed=8)
-    q, status = module.inverse(x)
-    reached = m.fk(q[status == 0], strokes="refuse")
-    assert np.abs(reached - x[status == 0]).max() <= TOL
-    if name != "trimule-600":
-        ref = m.ik(x, full_output=True, strokes="refuse")
-        ok = np.asarray(ref.status) == Status.OK
-        assert np.array_equal(status == 0, ok) and np.abs(q[ok] - ref.q[ok]).max() <= TOL

@@ -294,10 +294,11 @@ static int solve_closure(Configuration *s, const double *target, const int *unkn
         for (i = 0; i < n_u; i++) {
             g[i] = 0.0;
             for (m = 0; m < rows; m++) g[i] -= J[m][i] * r[m];
-            for (k = 0; k < n_u; k++) {
+            for (k = 0; k <= i; k++) {
                 double sum = 0.0;
                 for (m = 0; m < rows; m++) sum += J[m][i] * J[m][k];
                 N[i][k] = sum;
+                N[k][i] = sum;
             }
         }
         for (i = 0; i < n_u; i++) N[i][i] *= 1.0 + DAMPING;
@@ -409,7 +410,7 @@ CHAIN_INTERFACE_C = r"""
 /* the last configuration the module solved (LinuxCNC calls it along the motion): the next
    call starts from it; kinematicsHome resets it */
 static Configuration last;
-static int last_set = 0;
+static int last_set = 0, last_is_home = 0;
 
 static int finite_inputs(const double *v, int n)
 {
@@ -434,7 +435,7 @@ static void ab_from_axis(const double axis[3], double *a, double *b)
     *b = atan2(axis[0], axis[2]) / DEG;
 }
 
-/* solve from the last configuration, then (if that fails) from home */
+/* solve from the last configuration, then (if that fails and it was not home) from home */
 static int solve_from_last(Configuration *s, const double *q, const double *target)
 {
     int status = PKM_NOT_CONVERGED;
@@ -442,11 +443,11 @@ static int solve_from_last(Configuration *s, const double *q, const double *targ
         *s = last;
         status = q ? direct_model(s, q) : inverse_model(s, target);
     }
-    if (status != 0) {
+    if (status != 0 && !(last_set && last_is_home)) {
         home_configuration(s);
         status = q ? direct_model(s, q) : inverse_model(s, target);
     }
-    if (status == 0) { last = *s; last_set = 1; }
+    if (status == 0) { last = *s; last_set = 1; last_is_home = 0; }
     return status;
 }
 
@@ -503,6 +504,7 @@ int kinematicsHome(EmcPose *world, double *joint, KINEMATICS_FORWARD_FLAGS *ffla
     int j;
     home_configuration(&last);
     last_set = 1;
+    last_is_home = 1;
     tool_end(last.values, last.R, last.p, &end);
     tool_point_axis(&end, point, axis);
     world->tran.x = point[0]; world->tran.y = point[1]; world->tran.z = point[2];

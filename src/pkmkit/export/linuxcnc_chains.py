@@ -10,10 +10,13 @@ head from the platform to the tool frame, the tool point ``tool_length`` along i
 
 - **Forward** (``kinematicsForward``): the actuators given, Gauss–Newton on the legs' closure
   for the platform pose and the passive joints, from the last configuration the module solved
-  (LinuxCNC calls it along the motion), retried from home; then the head.
+  (LinuxCNC calls it along the motion), retried from home unless it was home; then the head.
 - **Inverse** (``kinematicsInverse``): the tool point and axis given, Gauss–Newton on the
   closure plus the tool rows ``(p_tool − p, L (a_tool − a))`` for the platform and every joint,
-  from the last configuration, retried from home (the inverse model pkmkit solves from home).
+  from the last configuration, retried from home (the inverse model pkmkit solves from home);
+  a two-branch head (the TriMule's (Q4, Q5) and (Q4 ± π, −Q5)) solved again flipped and the
+  branch whose turn is nearest the start's taken, pkmkit's rule
+  (:mod:`pkmkit.machines.head_branches`).
 - Each step is bounded (:data:`MAX_STEP` × L, :data:`MAX_TURN` rad), at most
   :data:`CHAIN_MAX_ITER` steps per start.
 - **World**: X Y Z the tool point, A B the tool axis ``a = Ry(B) Rx(A) (0, 0, 1)`` in degrees
@@ -169,6 +172,12 @@ def _header(machine, t, name: str, units: str, scale: float, source: str) -> str
                      for n, leg in zip(t.leg_names, t.legs, strict=True))
     head = (" ".join(t.element_names[e] for e in t.head)
             or "(none: the tool frame is the platform's)")
+    flip_note = ("" if t.head_flip is None else
+                 f"\n * Head branches: ({t.variables[t.head_flip[0]]}, "
+                 f"{t.variables[t.head_flip[1]]}) and ({t.variables[t.head_flip[0]]} +- 180 deg, "
+                 f"-{t.variables[t.head_flip[1]]}) give the same tool axis:\n * the inverse "
+                 f"takes the one whose {t.variables[t.head_flip[0]]} is nearest the start's "
+                 "(pkmkit's rule).")
     return f"""/* {name}.c -- LinuxCNC kinematics of "{machine.name}"
  * (pkmkit machine {machine.id!r}, joint chains)
  *
@@ -190,7 +199,7 @@ def _header(machine, t, name: str, units: str, scale: float, source: str) -> str
  * Forward: Gauss-Newton on the legs' closure (platform pose, passive joints), inverse:
  * Gauss-Newton on the closure and the tool rows (platform pose, every joint); both start from
  * the last configuration solved (kinematicsHome resets it to home), then from home; at most
- * {CHAIN_MAX_ITER} steps per start, each bounded.
+ * {CHAIN_MAX_ITER} steps per start, each bounded.{flip_note}
  * Return codes: 0 ok, -1 out of reach (least-squares residual > 1e-9 m), -2 singular,
  * -4 invalid input, -5 not converged, -6 a joint beyond its stroke.
  */
