@@ -155,13 +155,21 @@ def test_the_delta_robot_has_arms_with_illustrative_masses():
         rods + PLATFORM_KG + sum(model.body(f"arm{k}").mass[0] for k in range(3)), rel=1e-12)
 
 
-def test_the_delta_robot_refuses_masses_and_a_tilted_crank_axis(tmp_path):
+def test_the_delta_robot_takes_given_masses_and_refuses_a_tilted_crank_axis(tmp_path):
+    """Given masses (a masses file's): the arms weigh its carriage masses, the rods and the
+    platform its own, and the file says what was assumed of the arms."""
     from pkmkit.dynamics.masses import mass_properties
 
     m = pkmkit.machine("delta")
-    masses = mass_properties(m, carriage=1.0, rod=0.5, rod_radius=0.01, platform=2.0)
-    with pytest.raises(UnsupportedExportError, match="no mass model of crank"):
-        mjcf_model(m, masses)
+    masses = mass_properties(m, carriage=[1.0, 1.5, 2.0], rod=0.5, rod_radius=0.01,
+                             platform=2.0)
+    xml = mjcf_model(m, masses)
+    assert "masses of the masses file" in xml and "illustrative masses" not in xml
+    model = mujoco.MjModel.from_xml_string(xml)
+    assert [model.body(f"arm{k}").mass[0] for k in range(3)] == pytest.approx([1.0, 1.5, 2.0])
+    assert [model.body(f"rod{j}").mass[0] for j in range(6)] == pytest.approx([0.5] * 6)
+    assert model.body("platform").mass[0] == pytest.approx(2.0)
+    assert check_mjcf_model(m, xml) < 1e-12
     with pytest.raises(UnsupportedExportError, match="misses its length"):
         mjcf_model(m.with_defects({"dw1y": 1e-3}))
 

@@ -101,14 +101,9 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         check = (f"read back with {'Pinocchio' if reader == 'pinocchio' else 'a URDF parser'},"
                  " its loops close at pkmkit's configurations (≤ 1e-9 m)")
     else:
-        from pkmkit.export.mjcf_writer import check_mjcf, write_mjcf
+        from pkmkit.export.mjcf_writer import check_mjcf, read_masses, write_mjcf
 
-        masses = None
-        if masses_file is not None:
-            from pkmkit.dynamics.masses import load_masses
-
-            masses = load_masses(masses_file, m)[0]
-        export = write_mjcf(m, masses)
+        export = write_mjcf(m, None if masses_file is None else read_masses(masses_file, m))
         worst = check_mjcf(m, export)
         text = export.xml
         what = "MuJoCo model (MJCF; m, kg" + (

@@ -13,8 +13,9 @@ is an assembled one and every closure holds there):
   uniform solid cylinders of the rod's radius; the actuator's "carriage" mass (the motor's
   translating inertia) is the slide joint's ``armature``;
 - **crank** actuator k: an arm on a hinge joint ``act{k}`` (``qpos`` = pkmkit's crank angle)
-  carrying its rods (:mod:`pkmkit.export.mjcf_cranks`, with the illustrative masses the model
-  then takes: pkmkit has no mass model of cranks);
+  carrying its rods (:mod:`pkmkit.export.mjcf_cranks`: pkmkit has no mass model of cranks, so
+  the model takes illustrative masses, or a masses file's with its carriage masses as the
+  arms', and says which);
 - the platform on a free joint, at pkmkit's home pose, joined to every rod tip by a ``connect``
   equality constraint (the loop closures; stiff: ``solref`` 2 time steps);
 - a **planar** machine (the five-bars: x-y poses) stays in its plane: each rod on a hinge
@@ -31,7 +32,7 @@ sphere of the platform's mass and of the platform joints' radius is written, and
 so. Gravity is the masses'. Contacts are off (the model is a kinematic chain, not a scene).
 
 Refused (:class:`~pkmkit.export.base.UnsupportedExportError`): joint chains (written by
-:mod:`pkmkit.export.mjcf_chains`), masses given for cranks, a crank machine whose rods do not
+:mod:`pkmkit.export.mjcf_chains`), a crank machine whose rods do not
 close at home (a tilted crank axis), planar machines with struts, cranks or fewer than three rods,
 and spatial platforms held by fewer than six rods (a translational machine of three single
 rods: pkmkit assumes its platform cannot turn, MuJoCo would let it).
@@ -128,6 +129,7 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
     _check(machine, require_held_platform)
     model = machine.model
     strut = model.rod_kind == STRUT
+    given = masses is not None
     masses = _masses(machine, masses)
     _, cylinder, piston_length = masses.strut_parts(model.n_rods)
     short = np.flatnonzero(strut & ((cylinder <= 0) | (piston_length <= 0)))
@@ -163,7 +165,7 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
     note = (" (placeholder: a sphere of the platform's mass; pkmkit's masses give none)"
             if placeholder else "")
     cranks = bool((model.leg_kind == CRANK).any())
-    crank_note = f"\n       Masses: {masses_note()}." if cranks else ""
+    crank_note = f"\n       Masses: {masses_note(given)}." if cranks else ""
     platform_joint = "planar joint (platform_x, _y, _rz)" if planar else "free joint"
     xml = f"""<mujoco model="{_attr(machine.name)}">
   <!-- pkmkit machine {_attr(machine.id)}: joints act{{k}} hold pkmkit's actuator coordinates
@@ -193,7 +195,8 @@ def mjcf_layout(machine, masses=None, *, require_held_platform: bool = True) -> 
     return MjcfLayout(xml=xml, rod_direction=directions,
                       actuator_joints=tuple(f"act{k}" for k in range(model.n_actuators)),
                       placeholder_inertia=placeholder,
-                      illustrative=("illustrative masses: pkmkit has no mass model of crank "
+                      illustrative=(masses_note(given) if cranks and given else
+                                    "illustrative masses: pkmkit has no mass model of crank "
                                     "actuators" if cranks else ""))
 
 
@@ -251,14 +254,10 @@ def _slide_body(machine, k: int, q0: np.ndarray, tips: np.ndarray, masses, rod_j
 
 def _masses(machine, masses):
     """The masses the model takes (module docstring), checked; a machine with cranks takes the
-    illustrative ones of :mod:`pkmkit.export.mjcf_cranks` and refuses given masses."""
+    illustrative ones of :mod:`pkmkit.export.mjcf_cranks` unless masses are given (their
+    carriage masses are then the arms')."""
     model = machine.model
     if (model.leg_kind == CRANK).any():
-        if masses is not None:
-            raise UnsupportedExportError(
-                FORMAT, machine.id, "masses were given, but pkmkit has no mass model of crank "
-                "actuators (the arms' inertia): export it without --masses (illustrative "
-                "masses)")
         from pkmkit.export.urdf import require_closed_rods
         from pkmkit.solve.rod_closure import rod_base_points
 
@@ -266,7 +265,7 @@ def _masses(machine, masses):
         bases = rod_base_points(model, q0[:, None])[:, :, 0].T
         require_closed_rods(machine, q0, bases, platform_points(machine, machine.home_pose)[2],
                             FORMAT)
-        masses = crank_masses(machine)
+        masses = crank_masses(machine) if masses is None else masses
     elif masses is None:
         from pkmkit.dynamics.defaults import default_masses
 

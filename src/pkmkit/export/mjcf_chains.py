@@ -35,7 +35,7 @@ misfit the welds carry (as in the URDF export); a misfit beyond
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -98,6 +98,41 @@ def _sphere(mass: float, radius: float, pos=(0.0, 0.0, 0.0)) -> str:
             f'diaginertia="{inertia:.17g} {inertia:.17g} {inertia:.17g}"/>')
 
 
+def _inertial(body) -> str:
+    """A :class:`~pkmkit.export.chain_masses.BodyMass` as MJCF (full inertia about its
+    centre of mass, body frame)."""
+    full = body.inertia[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
+    return (f'<inertial pos="{_f(body.com)}" mass="{body.mass:.17g}" '
+            f'fullinertia="{_f(full)}"/>')
+
+
+def _file_bodies(machine, tree, masses) -> str:
+    """The nested bodies with the masses of a masses file (:mod:`pkmkit.export.chain_masses`),
+    the tool sites on the tool body."""
+    children: dict[str, list[ChainNode]] = {}
+    for node in (*tree.legs, *tree.head):
+        children.setdefault(node.parent, []).append(node)
+    home = joint_values(machine, machine.home_q)
+    tool_sites = (f'<site name="tool"/><site name="tool_point" '
+                  f'pos="0 0 {float(machine.tool_length):.17g}"/>')
+
+    def inside(link: str, depth: int) -> str:
+        pad = "  " * depth
+        parts = []
+        if link == tree.ends[0]:
+            parts.append(f'{pad}<body name="platform">{_inertial(masses.body("platform"))}'
+                         + (tool_sites if tree.tool == "platform" else "") + "\n"
+                         + inside("platform", depth + 1) + f"{pad}</body>\n")
+        for node in children.get(link, []):
+            body = _inertial(masses.body(node.name)) + (
+                tool_sites if node.child == tree.tool else "")
+            parts.append(f"{pad}{_body_open(machine, node, home)}{body}\n"
+                         + inside(node.child, depth + 1) + f"{pad}</body>\n")
+        return "".join(parts)
+
+    return inside("base", 2)
+
+
 def _body_open(machine, node: ChainNode, home_values: dict[str, float]) -> str:
     model = machine.model
     v = node.variable
@@ -153,20 +188,23 @@ def chain_mjcf(machine, masses=None) -> ChainMjcf:
 
     Args:
         machine: a joint-chain machine, nominal or calibrated.
-        masses: must be None: pkmkit has no dynamics masses of joint chains (the model takes
-            the illustrative lumped masses of the gravity-deflection model).
+        masses: the bodies' masses of a masses file
+            (:class:`~pkmkit.export.chain_masses.ChainBodyMasses`), or None: the illustrative
+            lumped masses of the gravity-deflection model (pkmkit's dynamics model has no
+            masses of joint chains).
 
     Raises:
-        UnsupportedExportError: masses given, legs closing only in least squares beyond
+        UnsupportedExportError: rod-leg masses given, legs closing only in least squares beyond
             :data:`~pkmkit.export.urdf_chains.MISFIT`, or legs that are not a tree.
     """
-    if masses is not None:
-        raise UnsupportedExportError(FORMAT, machine.id, "masses were given, but pkmkit has "
-                                     "no mass model of joint-chain machines: export it without "
-                                     "--masses (illustrative lumped masses)")
     require_exact_closure(machine, FORMAT)
+    from pkmkit.export.chain_masses import ChainBodyMasses
     from pkmkit.stiffness.chain_gravity import illustrative_masses
 
+    if masses is not None and not isinstance(masses, ChainBodyMasses):
+        raise UnsupportedExportError(FORMAT, machine.id, "rod-leg masses (carriages, rods) "
+                                     "were given; a joint-chain machine takes its bodies' "
+                                     "masses (pkmkit.export.chain_masses)")
     lumped = illustrative_masses(machine)
     tree = chain_tree(machine)
     model = machine.model
@@ -177,19 +215,24 @@ def chain_mjcf(machine, masses=None) -> ChainMjcf:
     actuators = "\n".join(f'    <motor name="{_attr(n)}" joint="{_attr(n)}" gear="1"/>'
                           for n in model.actuator_names)
     note = (f"{lumped.note}; every other body a {LINK_MASS:g} kg sphere of {LINK_RADIUS:g} m "
-            "(placeholder)")
+            "(placeholder). pkmkit has no dynamics masses of joint chains")
+    bodies, gravity = _bodies(machine, tree, lumped), lumped.gravity
+    if masses is not None:
+        names = ["platform", *(n.name for n in (*tree.legs, *tree.head))]
+        note = masses.note(names)
+        bodies, gravity = _file_bodies(machine, tree, masses), masses.gravity
     xml = f"""<mujoco model="{_attr(machine.name)}">
   <!-- pkmkit machine {_attr(machine.id)}: the spanning tree of its joint chains, every other
        leg welded to the platform (equality). Joints are named as pkmkit's joint variables and
        their qpos is pkmkit's value (rad or m); built at pkmkit's home. SI units.
-       Masses: {_attr(note)}. pkmkit has no dynamics masses of joint chains. -->
+       Masses: {_attr(note)}. -->
   <compiler angle="radian"/>
-  <option gravity="{_f(lumped.gravity)}" timestep="{TIMESTEP:g}" tolerance="1e-12"
+  <option gravity="{_f(gravity)}" timestep="{TIMESTEP:g}" tolerance="1e-12"
           iterations="200" jacobian="dense">
     <flag contact="disable"/>
   </option>
   <worldbody>
-{_bodies(machine, tree, lumped)}  </worldbody>
+{bodies}  </worldbody>
   <equality>
 {equality}
   </equality>
@@ -198,8 +241,9 @@ def chain_mjcf(machine, masses=None) -> ChainMjcf:
   </actuator>
 </mujoco>
 """
-    return ChainMjcf(xml=xml, joints=tuple(model.variables),
-                     actuator_joints=tuple(model.actuator_names), welds=welds, masses_note=note)
+    out = ChainMjcf(xml=xml, joints=tuple(model.variables),
+                    actuator_joints=tuple(model.actuator_names), welds=welds, masses_note=note)
+    return out if masses is None else replace(out, illustrative=masses.note(names, short=True))
 
 
 def set_joint_values(model, data, values: dict[str, float]) -> None:

@@ -50,8 +50,14 @@ def crank_masses(machine):
                            platform=PLATFORM_KG)
 
 
-def masses_note() -> str:
-    """What the file says of the illustrative crank masses."""
+def masses_note(given: bool = False) -> str:
+    """What the file says of the crank machine's masses: the illustrative ones, or a masses
+    file's (``given``: its carriage masses are the arms', as Ø :data:`DIAMETER` uniform
+    cylinders from the pivot to the elbow)."""
+    if given:
+        return (f"masses of the masses file; the arms (pkmkit has no mass model of crank "
+                f"actuators): its carriage masses, uniform Ø {DIAMETER * 1e3:g} mm cylinders "
+                "from the pivot to the elbow (assumed)")
     return (f"illustrative masses (no source gives them; pkmkit has no mass model of crank "
             f"actuators): arms and rods solid Ø {DIAMETER * 1e3:g} mm aluminium cylinders "
             f"({DENSITY:g} kg/m³), platform {PLATFORM_KG:g} kg")
