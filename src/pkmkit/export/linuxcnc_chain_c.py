@@ -354,13 +354,17 @@ static double wrapped(double a)
     return PI - fmod_positive(PI - a, 2.0 * PI);
 }
 
-/* a two-branch head (turn a, tilt c: (a, c) and (a + pi, -c) give the same tool axis): the
-   solution s solved again with its head flipped, and the flipped one taken when it is exact and
-   its turn strictly nearer the start's turn `reference` (pkmkit's nearest_head_branch) */
+/* a two-branch head (turn a, tilt c: (a, c) and (a + pi, -c) give the same tool axis): a
+   solution s whose turn is more than pi/2 - flip_margin from the start's turn `reference`
+   solved again with its head flipped, and the flipped one taken when it is exact and its turn
+   strictly nearer (pkmkit's nearest_head_branch) */
 static void nearest_head_branch(Configuration *s, const double target[6], double reference)
 {
-    Configuration other = *s;
-    if (head_flip_turn < 0) return;
+    Configuration other;
+    if (head_flip_turn < 0
+        || !(fabs(wrapped(s->values[head_flip_turn] - reference)) > PI / 2 - flip_margin))
+        return;
+    other = *s;
     other.values[head_flip_turn] += PI;
     other.values[head_flip_tilt] = -other.values[head_flip_tilt];
     if (solve_closure(&other, target, inverse_variable, N_INVERSE) == 0

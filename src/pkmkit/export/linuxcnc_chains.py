@@ -33,6 +33,7 @@ import numpy as np
 
 from pkmkit.export.base import UnsupportedExportError
 from pkmkit.export.linuxcnc_chain_c import CHAIN_INTERFACE_C, CHAIN_MODEL_C, MODULE_GLUE_C
+from pkmkit.machines.head_branches import FLIP_MARGIN
 
 FORMAT = "linuxcnc"
 #: Iteration limit of the generated solvers, per start (pkmkit's engine: 60).
@@ -140,6 +141,7 @@ static const int variable_checked[N_VARIABLES] = {_ints(t.checked)};
 /* a two-branch head (-1: none): its turn and tilt variables; the inverse model takes the
    branch whose turn is nearest the start's (pkmkit's rule) */
 static const int head_flip_turn = {flip[0]}, head_flip_tilt = {flip[1]};
+static const double flip_margin = {_num(FLIP_MARGIN)};
 /* home: every joint, the platform position and rotation (pkmkit's home configuration) */
 static const double home_values[N_VARIABLES] = {_doubles(t.home_values / joint_scale)};
 static const double home_platform_position[3] = {_doubles(t.home_platform[:3] / scale)};

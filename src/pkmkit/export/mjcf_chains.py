@@ -20,7 +20,9 @@ welds of the URDF closures; stiff: time constant two steps, as the rod-leg expor
 hinge.
 
 **Masses** (pkmkit's dynamics model has none of joint chains, :mod:`pkmkit.dynamics.masses`
-refuses them): the *illustrative* lumped masses of pkmkit's gravity-deflection model
+refuses them): a masses file's, body by body (:mod:`pkmkit.export.chain_masses`: mass, centre
+of mass and inertia of the bodies it names, placeholders elsewhere, the file says which), or
+else the *illustrative* lumped masses of pkmkit's gravity-deflection model
 (:func:`pkmkit.stiffness.chain_gravity.illustrative_masses`: a 50 kg platform with half of every
 leg's tube at the platform frame origin, an 80 kg head at the spindle nose, the tool frame's
 origin) as small spheres; every other body is a :data:`LINK_MASS` kg sphere of
