@@ -22,8 +22,8 @@ from pkmkit.status import Status
 from .test_linuxcnc_chains import REFUSED, TOL, ChainModule, actuator_draw
 
 #: Poses per machine: 10⁶; the TriMule's module costs ≈ 0.2 ms per forward and 0.6 ms per
-#: inverse call from home (22 and 27 unknowns, two solves for its head's branch rule), and
-#: pkmkit's inverse model ≈ 0.9 ms: 10⁵ of them keep the run to minutes.
+#: inverse call from home (22 and 27 unknowns), pkmkit's inverse model ≈ 0.9 ms, and its draws
+#: on the head's far branch (|Q4| > π/2, 29 %) go to pkmkit's inverse: 10⁵ keep it to minutes.
 COUNTS = {"tripteor-x7": 1_000_000, "crank-slider": 1_000_000, "trimule-600": 100_000}
 CHUNK = 50_000
 
@@ -39,10 +39,11 @@ def _direct(m, q: np.ndarray, strokes: str) -> tuple[np.ndarray, np.ndarray]:
 
 def _inverse(m, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """pkmkit's inverse model from home, refusing strokes: ``(q (N, n), status (N,))``."""
-    if not len(x):
-        return np.zeros((0, m.n_actuators)), np.zeros(0, dtype=int)
-    res = m.ik(x, full_output=True, strokes="refuse")
-    return res.q, np.asarray(res.status)
+    q, status = np.zeros((len(x), m.n_actuators)), np.zeros(len(x), dtype=int)
+    for i in range(0, len(x), CHUNK // 5):  # the engine's Jacobians: ≈ 8 kB a pose
+        res = m.ik(x[i:i + CHUNK // 5], full_output=True, strokes="refuse")
+        q[i:i + CHUNK // 5], status[i:i + CHUNK // 5] = res.q, np.asarray(res.status)
+    return q, status
 
 
 def _agree(m, x: np.ndarray, q_c: np.ndarray, status_c: np.ndarray) -> int:
