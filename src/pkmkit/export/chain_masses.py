@@ -170,13 +170,16 @@ def load_chain_masses(path: str | Path, machine) -> ChainBodyMasses:
         mass = table["mass"]
         if not is_plain_number(mass) or np.ndim(mass) != 0 or not 0 < float(mass):
             raise error(f"[bodies.{name}] mass must be one number > 0 (kg), got {mass!r}", line)
+        key = "mass"
         try:
             refuse_beyond(f"[bodies.{name}] mass", np.array([float(mass)]), MAX_MASS, "kg")
+            key = "com"
             com = _vector(table.get("com", [0.0, 0.0, 0.0]), f"[bodies.{name}] com")
             com = com * scale
             refuse_beyond(f"[bodies.{name}] com component", com, MAX_LENGTH, "m")
+            key = "inertia"
             inertia = _inertia(table.get("inertia"), float(mass), f"[bodies.{name}]")
         except InputError as exc:
-            raise error(str(exc.args[0]), line) from None
+            raise error(str(exc.args[0]), lines.get(("bodies", name, key), line)) from None
         bodies[name] = BodyMass(float(mass), com, inertia)
     return ChainBodyMasses(bodies, gravity, str(path))
