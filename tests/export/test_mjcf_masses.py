@@ -1,5 +1,6 @@
 """Masses of a masses file in the MuJoCo models of joint-chain machines (body by body,
-:mod:`pkmkit.export.chain_masses`) and of the Delta robot's cranks (its carriage masses)."""
+:mod:`pkmkit.export.chain_masses`) and of the Delta robot's cranks (its carriage masses), and
+in the joint chains' URDF."""
 
 from __future__ import annotations
 
@@ -10,9 +11,9 @@ from click.testing import CliRunner
 import pkmkit
 from pkmkit.cli.main import cli
 from pkmkit.exceptions import InputError, UnsupportedExportError
-from pkmkit.export.chain_masses import PLACEHOLDER_KG, load_chain_masses
+from pkmkit.export.chain_masses import PLACEHOLDER_KG, load_chain_masses, read_masses
 from pkmkit.export.mjcf_chains import chain_mjcf
-from pkmkit.export.mjcf_writer import check_mjcf, read_masses
+from pkmkit.export.mjcf_writer import check_mjcf
 from pkmkit.export.urdf_chains import joint_values, sample_configurations
 from pkmkit.spatial.rotation import rotvec_to_matrix
 
@@ -150,3 +151,42 @@ def test_command_line_chain_and_crank_masses(tmp_path):
                                "--out", str(tmp_path / "d.xml")])
     assert done.exit_code == 0, done.output
     assert "masses of the masses file" in done.output and "carriage masses" in done.output
+
+
+@pytest.mark.parametrize("ident", ["tripteor-x7", "trimule-600"])
+def test_pinocchio_and_mujoco_weigh_the_same_bodies(ident, tmp_path, monkeypatch):
+    """The same masses file through both exports: Pinocchio's generalized gravity of the URDF
+    tree equals MuJoCo's of the MJCF tree, joint by joint, at pkmkit's configurations (the
+    MJCF's placeholders made negligible; the URDF's unnamed links carry nothing)."""
+    pin = pytest.importorskip("pinocchio")
+    from pkmkit.export.urdf_check import pinocchio_configuration
+    from pkmkit.export.urdf_writer import write_urdf
+
+    monkeypatch.setattr("pkmkit.export.chain_masses.PLACEHOLDER_KG", 1e-9)
+    m = pkmkit.machine(ident)
+    names = {"tripteor-x7": ("Q1", "Q2", "Q5"), "trimule-600": ("Q1", "theta4", "Q5")}[ident]
+    text = TRIPTEOR.split("[bodies.Q1]")[0] + "".join(
+        f"[bodies.{n}]\nmass = {10 + k}\ncom = [{k * 10}, -20, 150]\n"
+        f"inertia = [[0.5, 0.01, 0.0], [0.01, 0.6, 0.02], [0.0, 0.02, 0.3]]\n"
+        for k, n in enumerate(names))
+    masses = read_masses(_file(tmp_path, text), m)
+    export = write_urdf(m, masses)
+    assert export.inertial and "masses from masses.toml (4 bodies" in export.urdf
+    robot = pin.buildModelFromXML(export.urdf)
+    robot.gravity.linear[:] = masses.gravity
+    pin_data = robot.createData()
+    model = mujoco.MjModel.from_xml_string(chain_mjcf(m, masses).xml)
+    data = mujoco.MjData(model)
+    assert sum(robot.inertias[i].mass for i in range(robot.njoints)) == pytest.approx(
+        60 + 10 + 11 + 12)
+    for q in sample_configurations(m, 4, seed=2):
+        values = joint_values(m, q)
+        g_pin = pin.computeGeneralizedGravity(robot, pin_data,
+                                              pinocchio_configuration(pin, robot, values))
+        set_joint_values(model, data, values)
+        mujoco.mj_forward(model, data)
+        for jid in range(1, robot.njoints):
+            name = robot.names[jid]
+            dof = model.jnt_dofadr[model.joint(name).id]
+            assert g_pin[robot.joints[jid].idx_v] == pytest.approx(
+                data.qfrc_bias[dof], abs=1e-9 * np.abs(g_pin).max())

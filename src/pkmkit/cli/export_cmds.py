@@ -81,19 +81,20 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         what = "Klipper delta configuration ([printer], [stepper_a/b/c]; mm)"
         check = "Klipper's delta formulas move the carriages as pkmkit (≤ 1e-9 m)"
     elif fmt == "urdf":
-        from pkmkit.dynamics.masses import load_masses
+        from pkmkit.export.chain_masses import read_masses
         from pkmkit.export.urdf_writer import check_urdf, write_urdf
 
         if Path(out_file).suffix != ".urdf":
             raise click.BadParameter("give NAME.urdf (the closures go to NAME.closures.yaml)",
                                      param_hint="--out")
         closures = str(Path(out_file).with_suffix(".closures.yaml"))
-        export = write_urdf(m, masses_file and load_masses(masses_file, m)[0],
+        export = write_urdf(m, masses_file and read_masses(masses_file, m),
                             name=Path(out_file).stem)
         _, reader = check_urdf(m, export)
         text = export.urdf
         atomic_write_text(closures, export.closures)
-        masses_note = ("" if export.inertial
+        masses_note = (f"; {export.masses_note}" if getattr(export, "masses_note", "")
+                       else "" if export.inertial
                        else f"; no masses: pkmkit has none of {export.massless}")
         what = (f"URDF tree ({len(export.joints)} joints, {m.n_actuators} actuated; m, kg"
                 f"{masses_note}) and {len(export.closure_frames)} loop closures "
@@ -101,7 +102,8 @@ def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, m
         check = (f"read back with {'Pinocchio' if reader == 'pinocchio' else 'a URDF parser'},"
                  " its loops close at pkmkit's configurations (≤ 1e-9 m)")
     else:
-        from pkmkit.export.mjcf_writer import check_mjcf, read_masses, write_mjcf
+        from pkmkit.export.chain_masses import read_masses
+        from pkmkit.export.mjcf_writer import check_mjcf, write_mjcf
 
         export = write_mjcf(m, None if masses_file is None else read_masses(masses_file, m))
         worst = check_mjcf(m, export)

@@ -183,3 +183,20 @@ def load_chain_masses(path: str | Path, machine) -> ChainBodyMasses:
             raise error(str(exc.args[0]), lines.get(("bodies", name, key), line)) from None
         bodies[name] = BodyMass(float(mass), com, inertia)
     return ChainBodyMasses(bodies, gravity, str(path))
+
+
+def read_masses(path: str | Path, machine):
+    """The masses file ``path`` for ``machine``'s MJCF or URDF: a joint-chain machine's bodies
+    (:func:`load_chain_masses`), a rod-leg machine's carriages (a crank's arm), rods and
+    platform (:func:`pkmkit.dynamics.masses.load_masses`).
+
+    Raises:
+        InputError: the file does not fit the machine (with its line).
+    """
+    from pkmkit.export.base import machine_family
+
+    if machine_family(machine) == "chain":  # the formats' own table: chains vs rod legs
+        return load_chain_masses(path, machine)
+    from pkmkit.dynamics.masses import load_masses
+
+    return load_masses(path, machine)[0]

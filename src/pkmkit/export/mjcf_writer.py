@@ -34,19 +34,3 @@ def check_mjcf(machine, export: MjcfLayout | ChainMjcf) -> float | None:
         return check_chain_mjcf(machine, export)
     return check_mjcf_model(machine, export.xml)
 
-
-def read_masses(path, machine):
-    """The masses file ``path`` for ``machine``'s MuJoCo model: a joint-chain machine's
-    bodies (:func:`pkmkit.export.chain_masses.load_chain_masses`), a rod-leg machine's
-    carriages (a crank's arm), rods and platform (:func:`pkmkit.dynamics.masses.load_masses`).
-
-    Raises:
-        InputError: the file does not fit the machine (with its line).
-    """
-    if machine_family(machine) == "chain":  # the format's own table: chains vs rod legs
-        from pkmkit.export.chain_masses import load_chain_masses
-
-        return load_chain_masses(path, machine)
-    from pkmkit.dynamics.masses import load_masses
-
-    return load_masses(path, machine)[0]

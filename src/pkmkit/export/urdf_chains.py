@@ -22,7 +22,9 @@ The **closures** (``NAME.closures.yaml``): every other leg's last link is welded
 ``RigidConstraintModel(ContactType.CONTACT_6D, …, ReferenceFrame.LOCAL)``. The YAML also holds the
 actuated joints (``name_mot``), the tool length and an assembled configuration (pkmkit's home).
 
-The URDF is kinematic: pkmkit has no mass model of joint-chain machines (no ``inertial``).
+The URDF is kinematic — pkmkit has no mass model of joint-chain machines — unless a masses file
+gives the bodies' masses (:mod:`pkmkit.export.chain_masses`): the links it names then carry
+them (``inertial``), the others none.
 A machine with defects closes its legs in least squares (docs/joint-chains.md): defects that
 are compatible at first order (what a calibration identifies) leave a second-order misfit
 (4·10⁻⁸ m for 2 mrad on the Tripteor), which the welds then carry. Refused
@@ -38,7 +40,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkmkit.export.base import ExportCheckError, UnsupportedExportError
-from pkmkit.export.urdf import FORMAT, UNLIMITED, UrdfJoint, _attr, _joint, _link, _rpy
+from pkmkit.export.urdf import (
+    FORMAT,
+    UNLIMITED,
+    UrdfJoint,
+    _attr,
+    _inertial,
+    _joint,
+    _link,
+    _rpy,
+)
 from pkmkit.export.urdf_check import (
     closure_pairs,
     link_placements,
@@ -66,8 +77,10 @@ class ChainUrdfExport:
         joints: the movable joints, each with its pkmkit variable index (``role``
             ``"actuator"`` or ``"passive"``).
         closure_frames: ``(link, "platform")`` pairs welded by the closures.
-        inertial: always False (pkmkit has no masses of joint chains).
+        inertial: whether links carry masses (a masses file's; pkmkit's dynamics model has
+            none of joint chains).
         closure_kind: ``"6D"``; ``massless``: what pkmkit has no masses of.
+        masses_note: where the masses come from ("" without).
     """
 
     urdf: str
@@ -77,6 +90,7 @@ class ChainUrdfExport:
     inertial: bool = False
     closure_kind: str = "6D"
     massless: str = "joint chains"
+    masses_note: str = ""
 
 
 @dataclass(frozen=True)
@@ -194,8 +208,13 @@ def require_exact_closure(machine, fmt: str = FORMAT) -> None:
             "— keep the compatible defects (pkmkit errors MACHINE --compatibility)")
 
 
-def chain_urdf_export(machine, *, name: str = "machine") -> ChainUrdfExport:
+def chain_urdf_export(machine, *, name: str = "machine", masses=None) -> ChainUrdfExport:
     """The URDF tree and closures YAML of a joint-chain machine (module docstring).
+
+    Args:
+        masses: the bodies' masses of a masses file
+            (:class:`~pkmkit.export.chain_masses.ChainBodyMasses`; the links it names carry
+            them, the others none), or None: a kinematic URDF.
 
     Raises:
         UnsupportedExportError: legs closing only in least squares, or an element shared by
@@ -206,18 +225,24 @@ def chain_urdf_export(machine, *, name: str = "machine") -> ChainUrdfExport:
     tree = chain_tree(machine)
     links, joints, movable = [_link("base")], [], []
 
+    def inertial(body: str) -> str:
+        if masses is None or body not in masses.bodies:
+            return ""
+        b = masses.bodies[body]
+        return _inertial(b.mass, b.com, b.inertia)
+
     def add(nodes) -> None:
         for node in nodes:
             text, record = _element_joint(model, node)
             joints.append(text)
-            links.append(_link(node.child))
+            links.append(_link(node.child, inertial(node.name)))
             if record is not None:
                 movable.append(record)
 
     add(tree.legs)
     ends = tree.ends
     joints.append(_joint("platform_frame", "fixed", ends[0], "platform"))
-    links.append(_link("platform"))
+    links.append(_link("platform", inertial("platform")))
     add(tree.head)
     parent = tree.tool
     joints.append(_joint("tool_frame", "fixed", parent, "tool"))
@@ -226,12 +251,14 @@ def chain_urdf_export(machine, *, name: str = "machine") -> ChainUrdfExport:
     links += [_link("tool"), _link("tool_point")]
     pairs = tuple((end, "platform") for end in ends[1:])
     values = joint_values(machine, machine.home_q)
+    note = ("Kinematic: pkmkit has no masses of joint chains" if masses is None else
+            masses.note([], short=True) + "; the links it does not name carry none")
     urdf = f"""<?xml version="1.0"?>
 <robot name="{_attr(machine.id)}">
   <!-- pkmkit machine {_attr(machine.id)} ({_attr(machine.name)}): the spanning tree of its
        joint chains; every other leg's end is welded to the platform in the closures YAML
        beside this file. SI units (m, rad). Joints are named as pkmkit's joint variables and
-       hold their values. Kinematic: pkmkit has no masses of joint chains. Limits
+       hold their values. {_attr(note)}. Limits
        {UNLIMITED:g} mean none. -->
 {chr(10).join(links)}
 {chr(10).join(joints)}
@@ -259,7 +286,8 @@ home:
 {home}
 """
     return ChainUrdfExport(urdf=urdf, closures=closures, joints=tuple(movable),
-                           closure_frames=pairs)
+                           closure_frames=pairs, inertial=masses is not None,
+                           masses_note="" if masses is None else note)
 
 
 def joint_values(machine, q) -> dict[str, float]:

@@ -18,20 +18,23 @@ from pkmkit.export.urdf_planar import planar_urdf_export
 
 def write_urdf(machine, masses=None, *, name: str = "machine") -> UrdfExport | ChainUrdfExport:
     """The URDF tree and closures YAML of ``machine``: joint chains welded 6D at the platform,
-    rod legs with cut ball joints (3D). ``masses`` applies to rod-leg machines; a joint-chain
-    machine has no mass model and refuses them.
+    rod legs with cut ball joints (3D). ``masses``: a rod-leg machine's
+    :class:`~pkmkit.dynamics.masses.MassProperties`, a joint-chain machine's bodies'
+    (:class:`~pkmkit.export.chain_masses.ChainBodyMasses`, :func:`read_masses`).
 
     Raises:
         UnsupportedExportError: what the format or the writer cannot express.
     """
     if machine_family(machine) == "chain":  # the format's own table: chains vs rod legs
-        if masses is not None:
+        from pkmkit.export.chain_masses import ChainBodyMasses
+
+        if masses is not None and not isinstance(masses, ChainBodyMasses):
             from pkmkit.export.base import UnsupportedExportError
 
-            raise UnsupportedExportError("urdf", machine.id, "masses were given, but pkmkit has "
-                                         "no mass model of joint-chain machines: export it "
-                                         "without --masses (a kinematic URDF)")
-        return chain_urdf_export(machine, name=name)
+            raise UnsupportedExportError("urdf", machine.id, "rod-leg masses (carriages, rods) "
+                                         "were given; a joint-chain machine takes its bodies' "
+                                         "masses (pkmkit.export.chain_masses)")
+        return chain_urdf_export(machine, name=name, masses=masses)
     if machine_family(machine) == "planar":  # a tree that stays in the plane
         return planar_urdf_export(machine, masses, name=name)
     return urdf_export(machine, masses, name=name)
