@@ -37,8 +37,8 @@ def register(cli: click.Group) -> None:
               help="Klipper: actuator coordinates at which the endstops trigger, in --units "
                    "(default: the tops of the strokes).")
 @click.option("--masses", "masses_file", type=click.Path(dir_okay=False), default=None,
-              help="mjcf, urdf: a masses file (docs/motion.md) instead of the illustrative "
-                   "masses.")
+              help="mjcf, urdf: a masses file (docs/motion.md; a joint-chain machine's "
+                   "bodies: docs/export.md) instead of the illustrative masses.")
 def export_cmd(machine_name, assignments, fmt, out_file, units, endstops_text, masses_file):
     """Write MACHINE for a controller, a firmware or a simulator (--to FORMAT --out PATH).
 
