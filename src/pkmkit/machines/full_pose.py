@@ -49,6 +49,7 @@ from pkmkit.machines.common import (
 )
 from pkmkit.machines.error_faces import FullPoseErrors
 from pkmkit.machines.export_layouts import FullPoseLayout
+from pkmkit.machines.full_pose_criteria_rates import FullPoseCriteriaRates
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse
@@ -130,8 +131,9 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming, FullPoseErrors,
-                      FullPoseMeasurement, FullPoseLayout, RodReports, RodInverseRows, MachineFace):
+class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, FullPoseRates,
+                      ModeNaming, FullPoseErrors, FullPoseMeasurement, FullPoseLayout, RodReports,
+                      RodInverseRows, MachineFace):
     """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
 
     Attributes:

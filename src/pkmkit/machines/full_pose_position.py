@@ -16,10 +16,12 @@ from pkmkit.machines.common import (
     _rows_like,
     _valid_rows,
 )
+from pkmkit.machines.full_pose_direct import usable
 from pkmkit.machines.results import InverseResult
 from pkmkit.machines.strokes import judge_rows
 from pkmkit.model.rods import SLIDE
 from pkmkit.numerics.arrays import restore_shape
+from pkmkit.solve.least_squares import SolveResult
 from pkmkit.solve.rod_closure import solve_position_inverse
 from pkmkit.status import Status
 
@@ -62,8 +64,7 @@ class PositionInverse:
             # (10⁵ random positions of the Verne module); the rows still crawling after
             # POSITION_MAX_ITER are beyond reach
             engine_options.setdefault("max_iter", POSITION_MAX_ITER)
-        with np.errstate(invalid="ignore", over="ignore"):
-            result = solve_position_inverse(self.model, pb, u0, **engine_options)
+        result = self._solve_positions(pb, u0, engine_options)
         q = result.u[:, :n].copy()
         pose = np.concatenate([pb, result.u[:, n:]], axis=1)
         status = result.status.copy()
@@ -110,6 +111,22 @@ class PositionInverse:
                             **_stroke_fields(check))
         return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
                                       "residual", "pose", "out_of_stroke", "stroke_excess"))
+
+    def _solve_positions(self, pb: np.ndarray, u0: np.ndarray,
+                         engine_options: dict[str, Any]) -> SolveResult:
+        """The engine's position inverse of ``pb (N, 3)`` from ``u0 (N, n + 3)``: compiled per
+        row (:mod:`pkmkit.machines.full_pose_position_kernel`, the engine's rules, ≈ 10× faster)
+        for three actuators with the engine's own options, else the batched NumPy engine."""
+        if self.n_actuators == 3 and usable(engine_options, pb.shape[0]):
+            from pkmkit.machines import full_pose_position_kernel as kernel
+
+            kernel_data = self._direct_kernel()
+            u, status, iterations, residual = kernel.solve(
+                kernel_data.geom, pb, u0, kernel_data.options(engine_options))
+            return SolveResult(u=u, status=status, residual=residual, iterations=iterations,
+                               rank=np.full(pb.shape[0], -1))
+        with np.errstate(invalid="ignore", over="ignore"):
+            return solve_position_inverse(self.model, pb, u0, **engine_options)
 
     def _surely_unreachable(self, positions: np.ndarray) -> np.ndarray:
         """``(N,)`` positions no orientation can serve: a slide rod whose platform joint, at most
