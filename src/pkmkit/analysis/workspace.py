@@ -47,6 +47,7 @@ from pkmkit.analysis.region_check import (  # noqa: F401  (re-exported: their ol
     feasible_interval,
     region_grid,
 )
+from pkmkit.analysis.slack import slack_and_gradient
 from pkmkit.machines.machine import Machine
 
 
@@ -310,7 +311,9 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     cube, edges and corners included) whose points move with the centre and the side; each
     criterion has a signed slack at each point (:func:`criteria_slack`), and the side is
     maximised under "every slack ≥ 0" and "inside the grid's box" by SLSQP
-    (:func:`pkmkit.analysis.inscribed.largest_box`). The optimum is then checked with the
+    (:func:`pkmkit.analysis.inscribed.largest_box`), with the slack's analytic gradient where
+    the machine gives its rates (:func:`pkmkit.analysis.slack.slack_and_gradient`: full-pose
+    machines along position axes), else finite differences. The optimum is then checked with the
     boolean criteria and, if rounding left a point failing, shrunk about its centre by
     bisection — as it is if its faces fail on a lattice ten times denser (the region's boundary
     can bulge in between lattice points); the side is known to ``rtol`` (relative). The box
@@ -328,6 +331,13 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     def slack(points: np.ndarray) -> np.ndarray:
         return criteria_slack(machine, points, criteria, length)
 
+    def slack_gradient(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return slack_and_gradient(machine, points, criteria, length, grid.free)
+
+    analytic = slack_and_gradient(machine, full_points(box.center[free], 0.5 * box.side,
+                                                       np.zeros((1, len(free)))),
+                                  criteria, length, grid.free) is not None
+
     def feasible(c: np.ndarray, half: float) -> bool:
         if half <= 0:
             return True
@@ -337,7 +347,7 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
 
     center, half = largest_box(slack, full_points, box.center[free], 0.5 * box.side,
                                grid.lower_bounds, grid.upper_bounds, samples=samples,
-                               rtol=rtol)
+                               rtol=rtol, slack_gradient=slack_gradient if analytic else None)
     start = (box.center[free], 0.5 * box.side)
     if not feasible(center, half):  # rounding at the optimum: shrink about its centre
         for cut in (1e-10, 1e-8, 1e-6, 1e-5):

@@ -31,6 +31,7 @@ import numpy as np
 
 from pkmkit.machines.full_pose_rates import rod_b_pinv
 from pkmkit.model.rods import CRANK, SLIDE
+from pkmkit.numerics.linalg import singular_value_rates
 
 
 @dataclass(frozen=True)
@@ -53,18 +54,13 @@ class CriteriaRates:
     singular_values: np.ndarray | None = None
 
 
-def _singular_rates(mat: np.ndarray, rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The singular values ``(N, r)`` (decreasing) of ``mat (N, a, b)`` and their rates
-    ``(N, r, d)`` along ``rates (N, a, b, d)``: ``u_iᵀ Ṁ v_i``; NaN rows where ``mat`` is not
-    finite."""
-    size, r = mat.shape[0], min(mat.shape[1:])
-    sigma = np.full((size, r), np.nan)
-    out = np.full((size, r, rates.shape[-1]), np.nan)
-    ok = np.isfinite(mat).all(axis=(1, 2))
-    if ok.any():
-        u, sigma[ok], vt = np.linalg.svd(mat[ok], full_matrices=False)
-        out[ok] = np.einsum("kai,kabd,kib->kid", u, rates[ok], vt)
-    return sigma, out
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products along the last axis (3) of two arrays of the same shape."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
 
 
 class FullPoseCriteriaRates:
@@ -93,12 +89,13 @@ class FullPoseCriteriaRates:
         poses = np.asarray(inverse.pose) if (getattr(inverse, "pose", None) is not None
                                             and points.shape[1] == 3) else points
         q = np.asarray(jacobians.q)
-        a, b, j = jacobians.A, jacobians.B, jacobians.J
+        a, b = jacobians.A, jacobians.B  # J (a solve per row) read only where needed
         size, d = poses.shape[0], len(axes)
         unit = np.zeros((3, d))
         unit[list(axes), np.arange(d)] = 1.0
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             if points.shape[1] == 3 and self.position_controlled:
+                j = jacobians.J
                 q_rate = np.full((size, self.n_actuators, d), np.nan)
                 ok = np.isfinite(j).all(axis=(1, 2))
                 if ok.any():
@@ -108,19 +105,40 @@ class FullPoseCriteriaRates:
             else:
                 twist = np.zeros((size, 6, d))
                 twist[:, :3] = unit
-                q_rate = np.einsum("kaj,kjd->kad", rod_b_pinv(b) @ a, twist)
-            a_dot = np.empty((*a.shape, d))
-            b_dot = np.empty((*b.shape, d))
-            for i in range(d):
-                a_dot[..., i], b_dot[..., i] = self._forms.jacobian_rates(
-                    poses, q, twist[:, :, i], q_rate[:, :, i])
+                q_rate = (rod_b_pinv(b) @ a)[:, :, list(axes)]
+            a_dot = self._a_rates(poses, q, a, twist, q_rate)
             parallel = self._parallel_rate(a, a_dot)
             shortfall = self._shortfall_rates(poses, twist)
             sv_rate = None
             if factors:
-                sv_rate = self._factor_rates(a, a_dot, b_dot, j)
+                b_dot = np.empty((*b.shape, d))
+                for i in range(d):
+                    b_dot[..., i] = self._forms.jacobian_rates(
+                        poses, q, twist[:, :, i], q_rate[:, :, i])[1]
+                sv_rate = self._factor_rates(a, a_dot, b_dot, jacobians.J)
         return CriteriaRates(q=q_rate, shortfall=shortfall, parallel_measure=parallel,
                              singular_values=sv_rate)
+
+    def _a_rates(self, poses: np.ndarray, q: np.ndarray, a: np.ndarray, twist: np.ndarray,
+                 q_rate: np.ndarray) -> np.ndarray:
+        """``Ȧ (N, m, 6, d)`` along each twist ``(N, 6, d)`` with actuator rates
+        ``(N, n, d)``: rows ``(ḋ, ṙ × d + r × ḋ)`` with ``r = R b``, ``ṙ = ω × r``,
+        ``ḋ = v + ṙ − ∂a/∂q q̇`` (as :meth:`FullPoseForms.jacobian_rates`)."""
+        from pkmkit.solve.rod_closure import actuator_rates
+
+        model = self.model
+        rod = self._forms.platform_points(poses) - poses[:, None, :3]  # r = R b (N, m, 3)
+        vec = a[:, :, :3]  # d
+        moving = actuator_rates(model, np.nan_to_num(q).T).transpose(2, 1, 0)  # ∂a/∂q
+        moving = np.where(np.isfinite(q).all(axis=1)[:, None, None], moving, np.nan)
+        out = np.empty((*a.shape, twist.shape[-1]))
+        for i in range(twist.shape[-1]):
+            v, w = twist[:, None, :3, i], twist[:, None, 3:, i]
+            rod_dot = _cross(np.broadcast_to(w, rod.shape), rod)
+            vec_dot = v + rod_dot - moving * q_rate[:, model.rod_actuator, i][:, :, None]
+            out[:, :, :3, i] = vec_dot
+            out[:, :, 3:, i] = _cross(rod_dot, vec) + _cross(rod, vec_dot)
+        return out
 
     def _parallel_rate(self, a: np.ndarray, a_dot: np.ndarray) -> np.ndarray:
         """``(N, d)`` rate of σ_min/σ_max of A with unit rows (moments over L)."""
@@ -131,7 +149,7 @@ class FullPoseCriteriaRates:
         unit_dot = a_dot / dist[..., None] - a[..., None] * (along / dist**3)[:, :, None, :]
         unit[:, :, 3:] /= length
         unit_dot[:, :, 3:] /= length
-        sigma, rates = _singular_rates(unit, unit_dot)
+        sigma, rates = singular_value_rates(unit, unit_dot)
         largest, smallest = sigma[:, :1], sigma[:, 5:6]
         return (rates[:, 5] * largest - smallest * rates[:, 0]) / largest**2
 
@@ -146,18 +164,20 @@ class FullPoseCriteriaRates:
             for i in range(rhs.shape[-1]):
                 j_dot[ok, :, :, i] = self._solve_j(a[ok], rhs[ok, :, :, i])
         scale = np.array([1.0, 1.0, 1.0, length, length, length])
-        return _singular_rates(j * scale[None, :, None], j_dot * scale[None, :, None, None])[1]
+        return singular_value_rates(j * scale[None, :, None], j_dot * scale[None, :, None, None])[1]
 
     def _shortfall_rates(self, poses: np.ndarray, twist: np.ndarray) -> np.ndarray:
         """``(N, m, d)`` rates of each rod's shortfall (:meth:`FullPoseForms.shortfall`)."""
         m, forms = self.model, self._forms
+        out = np.zeros((poses.shape[0], m.n_rods, twist.shape[-1]))
+        if not np.isin(m.rod_kind, (SLIDE, CRANK)).any():
+            return out  # struts reach everywhere
         points = forms.platform_points(poses)  # (N, m, 3)
         offsets = points - poses[:, None, :3]
         # Ṗ_j = v + ω × R b_j  (N, m, 3, d)
         speed = twist[:, None, :3, :] + np.cross(
             np.moveaxis(twist[:, 3:, :], 1, 2)[:, None, :, :], offsets[:, :, None, :]
         ).transpose(0, 1, 3, 2)
-        out = np.zeros((poses.shape[0], m.n_rods, twist.shape[-1]))
         for jj in range(m.n_rods):
             kind, p_dot = m.rod_kind[jj], speed[:, jj]
             if kind == SLIDE:
