@@ -267,7 +267,7 @@ class WorkspaceMap:
 
 def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = None, *,
                       refine: bool = False, scheduler: Any = None,
-                      inscribed: bool = True) -> WorkspaceMap:
+                      inscribed: bool = True, factors: bool = True) -> WorkspaceMap:
     """Masks, feasible set and largest inscribed square/cube of ``machine`` over ``grid``.
 
     ``inscribed=False`` stops at the feasible set (no inscribed box, no dense check of it: the
@@ -276,9 +276,10 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     is refined in its centre and side to 10⁻⁴ of the side (:func:`refine_box`), which removes
     the grid's under-estimate (up to two steps) and its centring on grid points.
     ``scheduler``: evaluate the grid on Dask (see :func:`evaluate_grid`); the rest runs
-    here."""
+    here. ``factors=False``: the map's transmission factors and condition numbers are NaN
+    unless a criterion reads them (:func:`evaluate_poses`), e.g. to size the region."""
     criteria = criteria or Criteria()
-    evaluation = evaluate_grid(machine, grid, criteria, scheduler=scheduler)
+    evaluation = evaluate_grid(machine, grid, criteria, scheduler=scheduler, factors=factors)
     shape = grid.shape
     masks = {k: v.reshape(shape) for k, v in evaluation.masks.items()}
     feasible = evaluation.feasible.reshape(shape)
@@ -343,7 +344,8 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
             return True
         lattice = region_grid(machine, _full(box.center, free, c), 2.0 * half, grid.free,
                               samples)
-        return bool(evaluate_poses(machine, lattice.points, criteria).feasible.all())
+        return bool(evaluate_poses(machine, lattice.points, criteria,
+                                   factors=False).feasible.all())
 
     center, half = largest_box(slack, full_points, box.center[free], 0.5 * box.side,
                                grid.lower_bounds, grid.upper_bounds, samples=samples,
@@ -368,7 +370,7 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     def faces_ok(c: np.ndarray, h: float) -> bool:
         points = np.tile(box.center, (len(surface), 1))
         points[:, free] = c + h * surface
-        return bool(evaluate_poses(machine, points, criteria).feasible.all())
+        return bool(evaluate_poses(machine, points, criteria, factors=False).feasible.all())
 
     if not faces_ok(center, half):
         good, bad = 0.0, half
