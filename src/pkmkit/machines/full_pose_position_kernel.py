@@ -9,8 +9,9 @@ the actuator coordinates, then the rotation (left increment ``R ← exp(δ) R``)
 ``p`` is given. Per rod ``r_j = |p + R b_j − a_j(q)| − ℓ_j(q)``, ``∂r_j/∂q_k = −(d̂_j·∂a_j/∂q_k +
 κt_j)`` in the column of the rod's actuator, ``∂r_j/∂δ = (R b_j × d̂_j)ᵀ``. The iteration and
 its stopping rules are :func:`pkmkit.machines.full_pose_direct_kernel.solve_row`'s (the
-engine's), only the unknowns differ. Geometry ``geom (m, 16)`` and options ``opts (7,)`` as
-there. No temporaries per iteration, no BLAS, single-threaded.
+engine's), only the unknowns differ, and the engine's ``crawl`` limit: options ``opts (9,)``
+are the direct kernel's seven, then ``crawl = (k, ρ)`` (k = 0: none). Geometry ``geom (m, 16)``
+as there. No temporaries per iteration, no BLAS, single-threaded.
 """
 
 from __future__ import annotations
@@ -103,6 +104,7 @@ def solve_row(p, u0, geom, opts, out, work):  # pragma: no cover
         return
     max_iter, xtol, atol, gtol = int(opts[0]), opts[1], opts[2], opts[3]
     stall, residual_tol, lam = opts[4], opts[5], opts[6]
+    crawl_iter, crawl_residual = int(opts[7]), opts[8]
     cost = _evaluate(u, p, geom, base, length, r, jac)
     if not (cost == cost and cost < math.inf):
         return
@@ -144,6 +146,12 @@ def solve_row(p, u0, geom, opts, out, work):  # pragma: no cover
         if done:
             stopped = True
             break
+        if iterations == crawl_iter:  # far from any solution: NOT_CONVERGED now
+            far = 0.0
+            for j in range(m):
+                far = max(far, abs(r[j]))
+            if far > crawl_residual:
+                break
     largest = 0.0
     for j in range(m):
         largest = max(largest, abs(r[j]))
@@ -160,27 +168,71 @@ def solve_row(p, u0, geom, opts, out, work):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
-def solve_rows(p, u0, geom, opts, out):  # pragma: no cover
-    """:func:`solve_row` for every row: ``p (N, 3)``, ``u0 (N, 6)``, ``out (N, 9)``."""
+def first_order(p, home, jt_inv, u0):  # pragma: no cover
+    """The engine's default start ``u0 (6,)`` for position ``p (3,)``: q = q_home + J_p⁻¹
+    (p − p_home) (J_p the linear rows of J(home), ``jt_inv`` its inverse), then the rotation
+    of the twist J(home)(q − q_home) composed with home's (the first-order pose)."""
+    n = 3
+    dq = np.empty(3)
+    for i in range(3):
+        acc = 0.0
+        for k in range(3):
+            acc += jt_inv[i, k] * (p[k] - home[k])
+        dq[i] = acc
+    for i in range(3):
+        u0[i] = home[6 + i] + dq[i]
+    w = np.empty(3)
+    for i in range(3):
+        acc = 0.0
+        for k in range(n):
+            acc += (u0[k] - home[6 + k]) * home[6 + n + (3 + i) * n + k]
+        w[i] = acc
+    compose(w[0], w[1], w[2], home[3], home[4], home[5], u0, 3)
+
+
+@njit(**_OPTIONS)
+def solve_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out):  # pragma: no cover
+    """:func:`solve_row` for every row: ``p (N, 3)``, ``u0 (N, 6)`` (read when ``has_guess``,
+    else :func:`first_order` from ``home``, the direct kernel's home vector), ``skip (N,)``
+    rows left INVALID_INPUT (NaN start), ``out (N, 9)``."""
     work = scratch(geom.shape[0])
+    start = np.empty(6)
     for k in range(p.shape[0]):
-        solve_row(p[k], u0[k], geom, opts, out[k], work)
+        if has_guess:
+            for i in range(6):
+                start[i] = u0[k, i]
+        elif skip[k]:
+            for i in range(6):
+                start[i] = math.nan
+        else:
+            first_order(p[k], home, jt_inv, start)
+        solve_row(p[k], start, geom, opts, out[k], work)
 
 
-def solve(geom: np.ndarray, positions: np.ndarray, u0: np.ndarray, opts: np.ndarray
+def solve(geom: np.ndarray, positions: np.ndarray, u0: np.ndarray | None, opts: np.ndarray,
+          *, skip: np.ndarray | None = None, home: np.ndarray | None = None,
+          jt_inv: np.ndarray | None = None
           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The position inverse of ``positions (N, 3)`` from ``u0 (N, 6)`` (rows with a non-finite
-    start are INVALID_INPUT), in chunks over the threads of
+    start are INVALID_INPUT) or, with ``u0`` None, from the first-order start of
+    :func:`first_order` (``home``: the direct kernel's home vector, ``jt_inv (3, 3)``; rows of
+    ``skip`` left INVALID_INPUT), in chunks over the threads of
     :func:`pkmkit.numerics.jit.run_chunks`: ``(u (N, 6), status (N,), iterations (N,),
     residual (N,))`` as :func:`pkmkit.solve.rod_closure.solve_position_inverse`'s result."""
     from pkmkit.numerics import jit
 
     positions = np.ascontiguousarray(positions, dtype=float)
-    u0 = np.ascontiguousarray(u0, dtype=float)
-    out = np.empty((positions.shape[0], 9))
+    size = positions.shape[0]
+    has_guess = u0 is not None
+    u0 = np.ascontiguousarray(u0, dtype=float) if has_guess else np.empty((size, 6))
+    skip = np.zeros(size, dtype=np.bool_) if skip is None else np.ascontiguousarray(skip)
+    home = np.zeros(6 + 3 + 18) if home is None else home
+    jt_inv = np.eye(3) if jt_inv is None else np.ascontiguousarray(jt_inv)
+    out = np.empty((size, 9))
 
     def work(start: int, stop: int) -> None:
-        solve_rows(positions[start:stop], u0[start:stop], geom, opts, out[start:stop])
+        solve_rows(positions[start:stop], u0[start:stop], has_guess, skip[start:stop], geom,
+                   home, jt_inv, opts, out[start:stop])
 
-    jit.run_chunks(work, positions.shape[0])
+    jit.run_chunks(work, size)
     return out[:, :6].copy(), out[:, 6].astype(int), out[:, 7].astype(int), out[:, 8].copy()
