@@ -37,9 +37,13 @@ def _models(m, points):
     return inv, m.jacobian(solved_poses(points, inv), q=inv.q)
 
 
+@pytest.mark.parametrize("compiled", ["0", "1"])
 @pytest.mark.parametrize("name,spread", [("gough-stewart", 0.25), ("verne", 0.3),
                                          ("delta6", 0.1)])
-def test_rates_match_central_differences(name, spread):
+def test_rates_match_central_differences(name, spread, compiled, monkeypatch):
+    """Both paths: LAPACK's SVD with vectors and the compiled Jacobi kernel with rates
+    (:mod:`pkmkit.numerics.svd_rates_kernel`, large batches; forced here)."""
+    monkeypatch.setenv("PKMKIT_COMPILED", compiled)
     m = _machine(name)
     points = _points(m, 120, 3, spread)
     inv, jac = _models(m, points)

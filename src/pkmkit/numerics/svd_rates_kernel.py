@@ -4,7 +4,7 @@ given derivatives of the matrices (issue 22 §3: analytic gradients of a workspa
 For a simple singular value σ_i of M with singular vectors (u_i, v_i), ``σ̇_i = u_iᵀ Ṁ v_i``.
 One-sided Jacobi (Hestenes, as :mod:`pkmkit.numerics.svd_kernel`) rotates the columns of M
 until they are orthogonal, accumulating the rotations in V: then ``M V = U Σ``, so the rotated
-column ``w_i = σ_i u_i`` and ``σ̇_i = w_iᵀ (Ṁ v_i) / σ_i²`` — no separate U, no LAPACK, one
+column ``w_i = σ_i u_i`` and ``σ̇_i = w_iᵀ (Ṁ v_i) / σ_i`` — no separate U, no LAPACK, one
 matrix at a time in small buffers. LAPACK's SVD with vectors is the reference it is tested
 against (tests/numerics/test_svd_rates_kernel.py); imported lazily, only for large batches
 (:func:`pkmkit.numerics.linalg.singular_value_rates`).
@@ -113,4 +113,4 @@ def singular_rates(mats, rates, sigma, out):  # pragma: no cover
                     for s in range(c):
                         mv += rates[m, t, s, e] * vmat[i, s]
                     acc += work[i, t] * mv
-                out[m, slot, e] = acc / norms[i] if norms[i] > 0.0 else np.nan
+                out[m, slot, e] = acc / sigma[m, slot] if norms[i] > 0.0 else np.nan
