@@ -59,21 +59,11 @@ def _slack(machine: Machine, points: np.ndarray, criteria: Criteria, length: flo
         rates = machine.criteria_rates(points, inv, jac, free, factors=factors)
         if rates is None:
             return np.empty(0), None
-    parts, grads = [reach], []
+    parts = [reach]
     lo_q, hi_q = criteria.limits(machine)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        if rates is not None:
-            rod = np.argmax(np.nan_to_num(inv.shortfall, nan=-np.inf), axis=1)
-            grads.append(-np.take_along_axis(rates.shortfall, rod[:, None, None], 1)[:, 0]
-                         / length)
-        ends = np.concatenate([q - lo_q[None], hi_q[None] - q], axis=1)
+    with np.errstate(invalid="ignore"):
         stroke = np.minimum((q - lo_q[None]).min(axis=1), (hi_q[None] - q).min(axis=1))
         parts.append(np.minimum(stroke / length, 1e3))
-        if rates is not None:
-            end = np.argmin(np.nan_to_num(ends, nan=np.inf), axis=1)
-            ends_rate = np.concatenate([rates.q, -rates.q], axis=1)
-            g = np.take_along_axis(ends_rate, end[:, None, None], 1)[:, 0] / length
-            grads.append(np.where((stroke / length < 1e3)[:, None], g, 0.0))
         if criteria.bounds is not None:
             lo, hi = criteria.bounds
             sv = jac.singular_values
@@ -81,37 +71,63 @@ def _slack(machine: Machine, points: np.ndarray, criteria: Criteria, length: flo
             # bound stays within it
             parts.append(sv[:, -1] / lo - 1.0)
             parts.append(1.0 - sv[:, 0] / hi)
-            if rates is not None:
-                grads.append(rates.singular_values[:, -1] / lo)
-                grads.append(-rates.singular_values[:, 0] / hi)
         if criteria.kappa_max is not None:
             parts.append(1.0 - jac.condition / criteria.kappa_max)
-            if rates is not None:
-                sv, rate = jac.singular_values, rates.singular_values
-                kappa_rate = (rate[:, 0] * sv[:, -1:] - sv[:, :1] * rate[:, -1]) / sv[:, -1:] ** 2
-                grads.append(-kappa_rate / criteria.kappa_max)
         if criteria.stiffness_bounded:
             parts.extend(_stiffness_slack(machine, points, criteria))
         side = np.sign(jac.det_A) * machine.working_mode
         parts.append(np.where(side > 0, jac.parallel_measure, -jac.parallel_measure)
                      - criteria.tol)
-        if rates is not None:
-            grads.append(np.where((side > 0)[:, None], rates.parallel_measure,
-                                  -rates.parallel_measure))
     table = np.column_stack(parts)
     out = np.min(table, axis=1)
     # where the pose is unreachable the other criteria are NaN: the reach slack decides
     unreachable = inv.status != Status.OK
     out[unreachable] = np.minimum(reach[unreachable], -1e-12)
-    if rates is None:
-        return np.where(np.isnan(out), -1.0, out), None
+    grad = None
+    if rates is not None:
+        grads = _part_gradients(inv, jac, rates, criteria, length, (lo_q, hi_q), side)
+        grad = _limiting_gradient(table, grads, reach, unreachable)
+        grad[np.isnan(out)] = 0.0
+    return np.where(np.isnan(out), -1.0, out), grad
+
+
+def _part_gradients(inv, jac, rates, criteria: Criteria, length: float,
+                    limits: tuple[np.ndarray, np.ndarray], side: np.ndarray
+                    ) -> list[np.ndarray]:
+    """``(M, d)`` gradients of the slack's parts, in :func:`_slack`'s order (the stiffness
+    criterion has none: :func:`slack_and_gradient` refuses it)."""
+    q, (lo_q, hi_q) = inv.q, limits
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rod = np.argmax(np.nan_to_num(inv.shortfall, nan=-np.inf), axis=1)
+        grads = [-np.take_along_axis(rates.shortfall, rod[:, None, None], 1)[:, 0] / length]
+        ends = np.concatenate([q - lo_q[None], hi_q[None] - q], axis=1)
+        end = np.argmin(np.nan_to_num(ends, nan=np.inf), axis=1)
+        ends_rate = np.concatenate([rates.q, -rates.q], axis=1)
+        g = np.take_along_axis(ends_rate, end[:, None, None], 1)[:, 0] / length
+        stroke = np.take_along_axis(ends, end[:, None], 1)[:, 0]
+        grads.append(np.where((stroke / length < 1e3)[:, None], g, 0.0))  # not capped
+        if criteria.bounds is not None:
+            lo, hi = criteria.bounds
+            grads.append(rates.singular_values[:, -1] / lo)
+            grads.append(-rates.singular_values[:, 0] / hi)
+        if criteria.kappa_max is not None:
+            sv, rate = jac.singular_values, rates.singular_values
+            kappa_rate = (rate[:, 0] * sv[:, -1:] - sv[:, :1] * rate[:, -1]) / sv[:, -1:] ** 2
+            grads.append(-kappa_rate / criteria.kappa_max)
+        grads.append(np.where((side > 0)[:, None], rates.parallel_measure,
+                              -rates.parallel_measure))
+    return grads
+
+
+def _limiting_gradient(table: np.ndarray, grads: list[np.ndarray], reach: np.ndarray,
+                       unreachable: np.ndarray) -> np.ndarray:
+    """The gradient of the smallest part of each row of ``table (M, parts)`` (the reach
+    part's on unreachable rows below −1e-12, else 0), non-finite entries 0."""
     limiting = np.argmin(np.nan_to_num(table, nan=np.inf), axis=1)
     grad = np.take_along_axis(np.stack(grads, axis=1), limiting[:, None, None], 1)[:, 0]
     grad[unreachable] = np.where((reach[unreachable] < -1e-12)[:, None], grads[0][unreachable],
                                  0.0)
-    grad[np.isnan(out)] = 0.0
-    return np.where(np.isnan(out), -1.0, out), np.nan_to_num(grad, nan=0.0, posinf=0.0,
-                                                               neginf=0.0)
+    return np.nan_to_num(grad, nan=0.0, posinf=0.0, neginf=0.0)
 
 
 def _stiffness_slack(machine: Machine, points: np.ndarray, criteria: Criteria

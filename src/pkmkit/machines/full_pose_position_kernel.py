@@ -82,15 +82,9 @@ def _evaluate(u, p, geom, base, length, r, jac):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
-def solve_row(p, u0, geom, opts, out, work):  # pragma: no cover
-    """One position ``p (3,)`` from ``u0 (6,)`` = (q, rotation vector): ``out (9,)`` = u (6),
-    status, iterations, largest |residual| (NaN when the start is invalid); ``work`` from
-    :func:`pkmkit.machines.full_pose_direct_kernel.scratch`."""
-    m = geom.shape[0]
-    base, rows, jacs, vecs, h = work
-    length, r, r_new = rows[0], rows[1], rows[2]
-    jac, jac_new = jacs[0], jacs[1]
-    u, u_new, step = vecs[0], vecs[1], vecs[2]
+def _start(u0, u, out):  # pragma: no cover
+    """Copy the start ``u0`` into ``u`` and ``out``; False (``out`` INVALID_INPUT) when it is
+    not finite."""
     out[6] = INVALID_INPUT
     out[7] = 0.0
     out[8] = math.nan
@@ -100,7 +94,66 @@ def solve_row(p, u0, geom, opts, out, work):  # pragma: no cover
         out[i] = u0[i]
         if not u0[i] == u0[i] or abs(u0[i]) == math.inf:
             valid = False
-    if not valid:
+    return valid
+
+
+@njit(**_OPTIONS)
+def _take(u, u_new, r, r_new, jac, jac_new):  # pragma: no cover
+    """The accepted iterate: ``u, r, jac`` ← ``u_new, r_new, jac_new``."""
+    for i in range(6):
+        u[i] = u_new[i]
+    for j in range(r.shape[0]):
+        r[j] = r_new[j]
+        for i in range(6):
+            jac[j, i] = jac_new[j, i]
+
+
+@njit(**_OPTIONS)
+def _short(step, u, xtol):  # pragma: no cover
+    """The engine's small-step test ``|δ| ≤ xtol (1 + |u|)``."""
+    step_norm = 0.0
+    u_norm = 0.0
+    for i in range(6):
+        step_norm += step[i] * step[i]
+        u_norm += u[i] * u[i]
+    return math.sqrt(step_norm) <= xtol * (1.0 + math.sqrt(u_norm))
+
+
+@njit(**_OPTIONS)
+def _largest(r):  # pragma: no cover
+    """max |r_j|."""
+    largest = 0.0
+    for j in range(r.shape[0]):
+        largest = max(largest, abs(r[j]))
+    return largest
+
+
+@njit(**_OPTIONS)
+def _finish(u, r, iterations, stopped, residual_tol, out):  # pragma: no cover
+    """``out (9,)`` of a finished row: u, status (the engine's), iterations, largest |r|."""
+    largest = _largest(r)
+    for i in range(6):
+        out[i] = u[i]
+    out[7] = iterations
+    out[8] = largest
+    if not stopped:
+        out[6] = NOT_CONVERGED
+    elif largest <= residual_tol:
+        out[6] = OK
+    else:
+        out[6] = INCONSISTENT
+
+
+@njit(**_OPTIONS)
+def solve_row(p, u0, geom, opts, out, work):  # pragma: no cover
+    """One position ``p (3,)`` from ``u0 (6,)`` = (q, rotation vector): ``out (9,)`` = u (6),
+    status, iterations, largest |residual| (NaN when the start is invalid); ``work`` from
+    :func:`pkmkit.machines.full_pose_direct_kernel.scratch`."""
+    base, rows, jacs, vecs, h = work
+    length, r, r_new = rows[0], rows[1], rows[2]
+    jac, jac_new = jacs[0], jacs[1]
+    u, u_new, step = vecs[0], vecs[1], vecs[2]
+    if not _start(u0, u, out):
         return
     max_iter, xtol, atol, gtol = int(opts[0]), opts[1], opts[2], opts[3]
     stall, residual_tol, lam = opts[4], opts[5], opts[6]
@@ -123,22 +176,12 @@ def solve_row(p, u0, geom, opts, out, work):  # pragma: no cover
         accept = cost_new == cost_new and cost_new < math.inf and cost_new <= cost * (1.0 + 1e-13)
         iterations += 1
         if accept:
-            for i in range(6):
-                u[i] = u_new[i]
-            for j in range(m):
-                r[j] = r_new[j]
-                for i in range(6):
-                    jac[j, i] = jac_new[j, i]
+            _take(u, u_new, r, r_new, jac, jac_new)
             cost = cost_new
             lam = max(lam * 0.1, 1e-12)
         else:
             lam *= 10.0
-        step_norm = 0.0
-        u_norm = 0.0
-        for i in range(6):
-            step_norm += step[i] * step[i]
-            u_norm += u[i] * u[i]
-        done = (accept and math.sqrt(step_norm) <= xtol * (1.0 + math.sqrt(u_norm))) or lam > 1e12
+        done = (accept and _short(step, u, xtol)) or lam > 1e12
         if iterations % 10 == 0:
             if cost > (1.0 - stall) * checkpoint and cost > 0.5 * residual_tol * residual_tol:
                 done = True
@@ -146,25 +189,9 @@ def solve_row(p, u0, geom, opts, out, work):  # pragma: no cover
         if done:
             stopped = True
             break
-        if iterations == crawl_iter:  # far from any solution: NOT_CONVERGED now
-            far = 0.0
-            for j in range(m):
-                far = max(far, abs(r[j]))
-            if far > crawl_residual:
-                break
-    largest = 0.0
-    for j in range(m):
-        largest = max(largest, abs(r[j]))
-    for i in range(6):
-        out[i] = u[i]
-    out[7] = iterations
-    out[8] = largest
-    if not stopped:
-        out[6] = NOT_CONVERGED
-    elif largest <= residual_tol:
-        out[6] = OK
-    else:
-        out[6] = INCONSISTENT
+        if iterations == crawl_iter and _largest(r) > crawl_residual:
+            break  # far from any solution: NOT_CONVERGED now
+    _finish(u, r, iterations, stopped, residual_tol, out)
 
 
 @njit(**_OPTIONS)

@@ -24,6 +24,76 @@ MAX_SWEEPS = 60
 
 
 @njit(**_OPTIONS)
+def _sweeps(work, vmat, norms, tol):  # pragma: no cover
+    """One-sided Jacobi on the columns ``work (c, r)`` (rows = columns of M) until they are
+    orthogonal, each rotation applied to ``vmat (c, c)`` (rows = columns of V) too."""
+    c, r = work.shape
+    for _ in range(MAX_SWEEPS):
+        for i in range(c):
+            s = 0.0
+            for t in range(r):
+                s += work[i, t] * work[i, t]
+            norms[i] = s
+        rotated = False
+        for i in range(c - 1):
+            for j in range(i + 1, c):
+                alpha = norms[i]
+                beta = norms[j]
+                gamma = 0.0
+                for t in range(r):
+                    gamma += work[i, t] * work[j, t]
+                if gamma == 0.0 or abs(gamma) <= tol * math.sqrt(alpha) * math.sqrt(beta):
+                    continue
+                rotated = True
+                zeta = (beta - alpha) / (2.0 * gamma)
+                tan = math.copysign(1.0, zeta) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                cos = 1.0 / math.sqrt(1.0 + tan * tan)
+                sin = cos * tan
+                for t in range(r):
+                    a = work[i, t]
+                    b = work[j, t]
+                    work[i, t] = cos * a - sin * b
+                    work[j, t] = sin * a + cos * b
+                for t in range(c):
+                    a = vmat[i, t]
+                    b = vmat[j, t]
+                    vmat[i, t] = cos * a - sin * b
+                    vmat[j, t] = sin * a + cos * b
+                norms[i] = alpha - tan * gamma
+                norms[j] = beta + tan * gamma
+        if not rotated:
+            break
+
+
+@njit(**_OPTIONS)
+def _load(mat, rates, work):  # pragma: no cover
+    """``work (c, r)`` ← the columns of ``mat (r, c)``; False when ``mat`` or its ``rates
+    (r, c, d)`` hold a non-finite entry."""
+    finite = True
+    for i in range(mat.shape[0]):
+        for j in range(mat.shape[1]):
+            if not math.isfinite(mat[i, j]):
+                finite = False
+            work[j, i] = mat[i, j]
+            for e in range(rates.shape[2]):
+                if not math.isfinite(rates[i, j, e]):
+                    finite = False
+    return finite
+
+
+@njit(**_OPTIONS)
+def _quadratic(w, dm, v):  # pragma: no cover
+    """``wᵀ Ṁ v`` for ``w (r,)``, ``dm (r, c)``, ``v (c,)``."""
+    acc = 0.0
+    for t in range(w.shape[0]):
+        mv = 0.0
+        for s in range(v.shape[0]):
+            mv += dm[t, s] * v[s]
+        acc += w[t] * mv
+    return acc
+
+
+@njit(**_OPTIONS)
 def singular_rates(mats, rates, sigma, out):  # pragma: no cover
     """Singular values ``sigma (N, c)``, decreasing, of tall ``mats (N, r, c)`` (r ≥ c) and
     their rates ``out (N, c, d)`` along ``rates (N, r, c, d)``; a matrix or derivative with a
@@ -36,17 +106,7 @@ def singular_rates(mats, rates, sigma, out):  # pragma: no cover
     order = np.empty(c, dtype=np.int64)
     tol = r * 2.220446049250313e-16
     for m in range(n):
-        finite = True
-        for i in range(r):
-            for j in range(c):
-                v = mats[m, i, j]
-                if not math.isfinite(v):
-                    finite = False
-                work[j, i] = v
-                for e in range(d):
-                    if not math.isfinite(rates[m, i, j, e]):
-                        finite = False
-        if not finite:
+        if not _load(mats[m], rates[m], work):
             for i in range(c):
                 sigma[m, i] = np.nan
                 for e in range(d):
@@ -55,41 +115,7 @@ def singular_rates(mats, rates, sigma, out):  # pragma: no cover
         for i in range(c):
             for j in range(c):
                 vmat[i, j] = 1.0 if i == j else 0.0
-        for _ in range(MAX_SWEEPS):
-            for i in range(c):
-                s = 0.0
-                for t in range(r):
-                    s += work[i, t] * work[i, t]
-                norms[i] = s
-            rotated = False
-            for i in range(c - 1):
-                for j in range(i + 1, c):
-                    alpha = norms[i]
-                    beta = norms[j]
-                    gamma = 0.0
-                    for t in range(r):
-                        gamma += work[i, t] * work[j, t]
-                    if gamma == 0.0 or abs(gamma) <= tol * math.sqrt(alpha) * math.sqrt(beta):
-                        continue
-                    rotated = True
-                    zeta = (beta - alpha) / (2.0 * gamma)
-                    tan = math.copysign(1.0, zeta) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
-                    cos = 1.0 / math.sqrt(1.0 + tan * tan)
-                    sin = cos * tan
-                    for t in range(r):
-                        a = work[i, t]
-                        b = work[j, t]
-                        work[i, t] = cos * a - sin * b
-                        work[j, t] = sin * a + cos * b
-                    for t in range(c):
-                        a = vmat[i, t]
-                        b = vmat[j, t]
-                        vmat[i, t] = cos * a - sin * b
-                        vmat[j, t] = sin * a + cos * b
-                    norms[i] = alpha - tan * gamma
-                    norms[j] = beta + tan * gamma
-            if not rotated:
-                break
+        _sweeps(work, vmat, norms, tol)
         for i in range(c):
             s = 0.0
             for t in range(r):
@@ -106,11 +132,6 @@ def singular_rates(mats, rates, sigma, out):  # pragma: no cover
         for slot in range(c):
             i = order[slot]
             sigma[m, slot] = math.sqrt(norms[i])
-            for e in range(d):
-                acc = 0.0
-                for t in range(r):
-                    mv = 0.0
-                    for s in range(c):
-                        mv += rates[m, t, s, e] * vmat[i, s]
-                    acc += work[i, t] * mv
-                out[m, slot, e] = acc / sigma[m, slot] if norms[i] > 0.0 else np.nan
+            for e in range(d):  # σ̇ = w_i·(Ṁ v_i)/σ_i
+                out[m, slot, e] = (_quadratic(work[i], rates[m, :, :, e], vmat[i])
+                                   / sigma[m, slot] if norms[i] > 0.0 else np.nan)
