@@ -85,10 +85,12 @@ def test_the_early_stop_loses_no_reachable_position(monkeypatch):
     grid = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
     positions = np.concatenate([grid, _positions(m, 6000, 3, 1.0)])
     limited = m.ik(positions, full_output=True, strokes="ignore")
-    monkeypatch.setattr(position, "POSITION_CRAWL", (0, np.inf))
+    explicit = m.ik(positions, full_output=True, strokes="ignore", max_iter=30)  # a caller's
+    monkeypatch.setattr(position, "POSITION_CRAWL", (0, np.inf))  # limit: no early stop
     free = m.ik(positions, full_output=True, strokes="ignore")
     ok = free.status == Status.OK
     assert ok.sum() > 5000 and (~ok).sum() > 5000
     np.testing.assert_array_equal(limited.status == Status.OK, ok)
     np.testing.assert_array_equal(limited.q[ok], free.q[ok])
     assert limited.iterations.sum() < 0.8 * free.iterations.sum()
+    np.testing.assert_array_equal(explicit.iterations, free.iterations)

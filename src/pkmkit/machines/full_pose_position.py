@@ -54,11 +54,12 @@ class PositionInverse:
         hopeless = self._surely_unreachable(pb)
         skip = ~_valid_rows(pb) | hopeless
         engine_options.setdefault("compute_rank", False)
-        if q0 is None:
+        if q0 is None and "max_iter" not in engine_options:
             # from the first-order guess a reachable position converges in ≤ 11 iterations
             # (10⁵ random positions of the Verne module); the rows still crawling after
-            # POSITION_MAX_ITER are beyond reach
-            engine_options.setdefault("max_iter", POSITION_MAX_ITER)
+            # POSITION_MAX_ITER, or still far from closing after POSITION_CRAWL[0], are beyond
+            # reach (a caller's own max_iter keeps its every iteration)
+            engine_options["max_iter"] = POSITION_MAX_ITER
             engine_options.setdefault("crawl", (POSITION_CRAWL[0], POSITION_CRAWL[1] * (
                 1.0 + float(self.model.rod_length.max()))))
         if q0 is None and self._compiled_positions(engine_options, pb.shape[0]):
