@@ -4,7 +4,8 @@ velocity models by each.
 
 Stages: ``enclosing_frame`` (the default box widened on coarse grids until the workspace fits),
 ``evaluate_grid`` (the criteria on the study grid), ``refine_box`` (the inscribed cube refined
-beyond the grid: SLSQP on a 25³ lattice, finite-difference gradients), ``check_region`` (the
+beyond the grid: SLSQP on a 25³ lattice; analytic slack gradients for full-pose machines,
+finite differences otherwise), ``check_region`` (the
 refined cube checked densely, with its actuator extremes refined by ``_q_extremes``).
 
 Run: ``python bench/workspace.py gough-stewart verne tripteor-x7`` (each study once: they take

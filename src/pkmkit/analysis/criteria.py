@@ -134,28 +134,33 @@ class Criteria:
 EVALUATION_CHUNK = 1 << 16
 
 
-def evaluate_poses(machine: Machine, points: np.ndarray, criteria: Criteria) -> PoseEvaluation:
+def evaluate_poses(machine: Machine, points: np.ndarray, criteria: Criteria, *,
+                   factors: bool = True) -> PoseEvaluation:
     """Evaluate the criteria (without connectivity) at poses ``points (M, dims)``, in chunks of
-    :data:`EVALUATION_CHUNK` poses."""
+    :data:`EVALUATION_CHUNK` poses. ``factors=False``: the masks alone — the transmission
+    factors and condition numbers are NaN unless a criterion reads them (no singular values
+    of J are computed for the assembly mode, strokes and reach)."""
     points = np.asarray(points, dtype=float)
     if len(points) <= EVALUATION_CHUNK:
-        return _evaluate_chunk(machine, points, criteria)
+        return _evaluate_chunk(machine, points, criteria, factors=factors)
     starts = range(0, len(points), EVALUATION_CHUNK)
     label = f"{machine.id}: {len(points):,} poses"
-    return _concatenate([_evaluate_chunk(machine, points[k:k + EVALUATION_CHUNK], criteria)
+    return _concatenate([_evaluate_chunk(machine, points[k:k + EVALUATION_CHUNK], criteria,
+                                         factors=factors)
                          for k in tracked(starts, total=len(starts), label=label)])
 
 
 def evaluate_grid(machine: Machine, grid: Grid, criteria: Criteria, *,
-                  scheduler: Any = None) -> PoseEvaluation:
+                  scheduler: Any = None, factors: bool = True) -> PoseEvaluation:
     """:func:`evaluate_poses` over every point of ``grid`` (flat, C order), generating the
     points chunk by chunk — in this process, or with ``scheduler`` (a Dask address, ``"local:N"``
     or a client, see :mod:`pkmkit.parallel`) in tasks of :data:`TASK_CHUNKS` chunks, each
-    generating and evaluating its own points; the results are identical."""
+    generating and evaluating its own points; the results are identical. ``factors``: as for
+    :func:`evaluate_poses`."""
     if scheduler is None:
-        return _evaluate_range(0, grid.size, machine, grid, criteria)
+        return _evaluate_range(0, grid.size, machine, grid, criteria, factors)
     parts = map_chunks(_evaluate_range, grid.size, chunk=TASK_CHUNKS * EVALUATION_CHUNK,
-                       scheduler=scheduler, args=(machine, grid, criteria),
+                       scheduler=scheduler, args=(machine, grid, criteria, factors),
                        label=f"{machine.id}: {grid.size:,} poses")
     return parts[0] if len(parts) == 1 else _concatenate(parts)
 
@@ -165,7 +170,7 @@ TASK_CHUNKS = 4
 
 
 def _evaluate_range(start: int, stop: int, machine: Machine, grid: Grid,
-                    criteria: Criteria) -> PoseEvaluation:
+                    criteria: Criteria, factors: bool = True) -> PoseEvaluation:
     """Grid points ``start:stop`` evaluated in chunks of :data:`EVALUATION_CHUNK` (a progress
     bar counts them)."""
     starts = range(start, stop, EVALUATION_CHUNK)
@@ -174,7 +179,7 @@ def _evaluate_range(start: int, stop: int, machine: Machine, grid: Grid,
     # gives the same bits
     slab = grid.size // grid.shape[0] if criteria.continuation and grid.shape else None
     parts = [_evaluate_chunk(machine, grid.points_between(k, min(k + EVALUATION_CHUNK, stop)),
-                             criteria, slab)
+                             criteria, slab, factors=factors)
              for k in tracked(starts, total=len(starts),
                               label=f"{machine.id}: {stop - start:,} poses")]
     return parts[0] if len(parts) == 1 else _concatenate(parts)
@@ -194,10 +199,10 @@ def _concatenate(parts: list[PoseEvaluation]) -> PoseEvaluation:
 
 
 def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria,
-                    slab: int | None = None) -> PoseEvaluation:
+                    slab: int | None = None, *, factors: bool = True) -> PoseEvaluation:
     """The criteria at ``points`` (``slab``: points per slab of the grid they come from, for
     the inverse model's continuation, :mod:`pkmkit.analysis.continuation`)."""
-    ev = _evaluate_kinematics(machine, points, criteria, slab)
+    ev = _evaluate_kinematics(machine, points, criteria, slab, factors=factors)
     if not (criteria.stiffness_bounded or criteria.wrench is not None):
         return ev
     return _with_stiffness(machine, points, ev, criteria)
@@ -225,7 +230,7 @@ def _with_stiffness(machine: Machine, points: np.ndarray, ev: PoseEvaluation,
 
 
 def _evaluate_kinematics(machine: Machine, points: np.ndarray, criteria: Criteria,
-                         slab: int | None = None) -> PoseEvaluation:
+                         slab: int | None = None, *, factors: bool = True) -> PoseEvaluation:
     """The criteria at poses ``points (M, dims)`` through the machine protocol: ``ik``
     (reachable; joints beyond their strokes — a joint chain's passive joints too), ``jacobian``
     (transmission factors, conditioning) and ``in_working_mode`` (the assembly mode, away from
@@ -235,7 +240,10 @@ def _evaluate_kinematics(machine: Machine, points: np.ndarray, criteria: Criteri
     reachable = np.atleast_1d(inv.status == Status.OK)
     jac = machine.jacobian(solved_poses(points, inv), q=q, tol=criteria.tol,
                            **closure_start(inv))
-    sv = jac.singular_values
+    read = factors or criteria.bounds is not None or criteria.kappa_max is not None
+    # a full-pose velocity model computes J's singular values only when read
+    sv = jac.singular_values if read else np.full(q.shape, np.nan)
+    kappa = jac.condition if read else np.full(len(q), np.nan)
     with np.errstate(invalid="ignore"):
         if criteria.strokes and criteria.q_limits is None and inv.out_of_stroke is not None:
             strokes = reachable & ~np.asarray(inv.out_of_stroke, dtype=bool)
@@ -247,11 +255,11 @@ def _evaluate_kinematics(machine: Machine, points: np.ndarray, criteria: Criteri
         else:
             bounds = reachable & criteria.within_bounds(sv)
         condition = reachable.copy() if criteria.kappa_max is None else (
-            reachable & (jac.condition <= criteria.kappa_max))
+            reachable & (kappa <= criteria.kappa_max))
     mode = reachable & machine.in_working_mode(jac, criteria.tol)
     masks = {"reachable": reachable, "strokes": strokes, "bounds": bounds,
              "condition": condition, "mode": mode}
-    return PoseEvaluation(q=q, factors=sv, condition=jac.condition, masks=masks)
+    return PoseEvaluation(q=q, factors=sv, condition=kappa, masks=masks)
 
 
 def solved_poses(points: np.ndarray, inv: Any) -> np.ndarray:

@@ -6,9 +6,10 @@ centred on grid points. :func:`largest_box` takes it from there without a grid: 
 lattice of points ``c + h·u`` (``u`` on a fixed lattice of ``[-1, 1]^d``, edges and corners
 included) that moves with its centre ``c`` and half-side ``h``; every point carries the signed
 slack of the region's criteria (≥ 0 inside), and ``h`` is maximised subject to "every slack ≥ 0"
-and "inside the bounds" by SLSQP, with the constraint gradients by finite differences along
-each axis (one evaluation of the lattice per axis; ∂/∂h follows by the chain rule,
-Σᵢ uᵢ ∂/∂xᵢ). The box slides and grows together, so a square held by a slanted boundary at one
+and "inside the bounds" by SLSQP, with the constraint gradients analytic where the caller
+gives them (``slack_gradient``), else by finite differences along each axis (one evaluation of
+the lattice per axis); ∂/∂h follows by the chain rule, Σᵢ uᵢ ∂/∂xᵢ.
+The box slides and grows together, so a square held by a slanted boundary at one
 corner and by another side elsewhere still reaches the optimum, where it touches the region at
 the points that hold it in place.
 """
@@ -24,6 +25,8 @@ DEFAULT_RTOL = 1e-4
 
 #: ``slack(points (K, dims)) -> (K,)``: ≥ 0 where a point satisfies the region's criteria.
 Slack = Callable[[np.ndarray], np.ndarray]
+#: ``slack_gradient(points (K, dims)) -> (slack (K,), gradient (K, d))`` along the box's axes.
+SlackGradient = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 #: ``points_of(center (d,), half, offsets (K, d)) -> (K, dims)`` full points of the lattice.
 PointsOf = Callable[[np.ndarray, float, np.ndarray], np.ndarray]
 
@@ -36,7 +39,8 @@ def lattice_offsets(d: int, samples: int) -> np.ndarray:
 
 def largest_box(slack: Slack, points_of: PointsOf, center: np.ndarray, half: float,
                 lower: np.ndarray, upper: np.ndarray, *, samples: int,
-                rtol: float = DEFAULT_RTOL, max_iter: int = 100) -> tuple[np.ndarray, float]:
+                rtol: float = DEFAULT_RTOL, max_iter: int = 100,
+                slack_gradient: SlackGradient | None = None) -> tuple[np.ndarray, float]:
     """Largest box ``center ± half`` whose lattice satisfies ``slack ≥ 0``, from a start near
     it (see the module docstring).
 
@@ -48,6 +52,9 @@ def largest_box(slack: Slack, points_of: PointsOf, center: np.ndarray, half: flo
         samples: lattice points per edge.
         rtol: relative tolerance of the half-side.
         max_iter: SLSQP iterations.
+        slack_gradient: the slack at points with its gradient along the box's axes, in one
+            evaluation (:func:`pkmkit.analysis.slack.slack_and_gradient`): one lattice per
+            iterate instead of one per axis more; None: finite differences.
 
     Returns:
         ``(center, half)``; the start if the optimiser does not improve on it.
@@ -79,11 +86,18 @@ def largest_box(slack: Slack, points_of: PointsOf, center: np.ndarray, half: flo
         key = z.tobytes()
         if "v" not in memo or memo["v"][0] != key:
             c, h = unpack(z)
-            memo["v"] = (key, slack(points_of(c, h, offsets)))
+            if slack_gradient is None:
+                memo["v"] = (key, slack(points_of(c, h, offsets)))
+            else:
+                value, grad = slack_gradient(points_of(c, h, offsets))
+                memo["v"], memo["g"] = (key, value), (key, grad)
         return memo["v"][1]
 
     def gradient(z: np.ndarray) -> np.ndarray:
         key = z.tobytes()
+        if slack_gradient is not None:
+            values(z)
+            return memo["g"][1]
         if "g" not in memo or memo["g"][0] != key:
             c, h = unpack(z)
             base = values(z)

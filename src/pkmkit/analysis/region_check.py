@@ -14,16 +14,14 @@ from pkmkit.analysis.criteria import (
     STIFFNESS_MASK,
     Criteria,
     evaluate_poses,
-    solved_poses,
     study_length,
 )
 from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.analysis.grids import Grid, make_grid
+from pkmkit.analysis.slack import criteria_slack  # noqa: F401  (re-exported: its old home)
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.numerics.arrays import real
-from pkmkit.status import Status
-from pkmkit.stiffness.indices import stiffness_figures
 
 #: Smallest side (m) of a checked square or cube (a smaller one is a unit slip).
 MIN_SIDE = 1e-9
@@ -44,58 +42,6 @@ def _surface_offsets(d: int, per_edge: int) -> np.ndarray:
 def _full(base: np.ndarray, free: list[int], values: np.ndarray) -> np.ndarray:
     out = np.array(base, dtype=float)
     out[free] = values
-    return out
-
-
-def criteria_slack(machine: Machine, points: np.ndarray, criteria: Criteria,
-                   length: float) -> np.ndarray:
-    """``(M,)`` smallest signed slack of the criteria at poses ``points (M, dims)``: ≥ 0 where
-    :func:`evaluate_poses` finds every criterion met (connectivity aside; the factor bounds
-    without their rounding allowance ``criteria.rtol``), < 0 elsewhere,
-    varying smoothly with the pose between changes of the limiting criterion. Lengths
-    (reachability shortfall, strokes) are divided by ``length``; factor bounds and the
-    condition number are relative; the assembly mode is the signed parallel measure minus its
-    threshold."""
-    inv = machine.ik(points, full_output=True)
-    q = inv.q
-    reach = -np.max(inv.shortfall, axis=1) / length
-    jac = machine.jacobian(solved_poses(points, inv), q=q, tol=criteria.tol)
-    parts = [reach]
-    lo_q, hi_q = criteria.limits(machine)
-    with np.errstate(invalid="ignore"):
-        stroke = np.minimum((q - lo_q[None]).min(axis=1), (hi_q[None] - q).min(axis=1))
-        parts.append(np.minimum(stroke / length, 1e3))
-        if criteria.bounds is not None:
-            lo, hi = criteria.bounds
-            sv = jac.singular_values
-            # the bounds themselves, not their rounding allowance: a refined box touching a
-            # bound stays within it
-            parts.append(sv[:, -1] / lo - 1.0)
-            parts.append(1.0 - sv[:, 0] / hi)
-        if criteria.kappa_max is not None:
-            parts.append(1.0 - jac.condition / criteria.kappa_max)
-        if criteria.stiffness_bounded:
-            parts.extend(_stiffness_slack(machine, points, criteria))
-        side = np.sign(jac.det_A) * machine.working_mode
-        parts.append(np.where(side > 0, jac.parallel_measure, -jac.parallel_measure)
-                     - criteria.tol)
-    out = np.min(np.column_stack(parts), axis=1)
-    # where the pose is unreachable the other criteria are NaN: the reach slack decides
-    unreachable = inv.status != Status.OK
-    out[unreachable] = np.minimum(reach[unreachable], -1e-12)
-    return np.where(np.isnan(out), -1.0, out)
-
-
-def _stiffness_slack(machine: Machine, points: np.ndarray, criteria: Criteria
-                     ) -> list[np.ndarray]:
-    """Relative slacks of the stiffness criterion (NaN where there is no stiffness)."""
-    fig = stiffness_figures(machine, points, data=criteria.stiffness_data,
-                            wrench=criteria.wrench)
-    out = []
-    if criteria.min_stiffness is not None:
-        out.append(fig.smallest / criteria.min_stiffness - 1.0)
-    if criteria.max_deflection is not None:
-        out.append(1.0 - fig.deflection / criteria.max_deflection)
     return out
 
 

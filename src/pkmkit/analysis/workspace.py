@@ -47,6 +47,7 @@ from pkmkit.analysis.region_check import (  # noqa: F401  (re-exported: their ol
     feasible_interval,
     region_grid,
 )
+from pkmkit.analysis.slack import slack_and_gradient
 from pkmkit.machines.machine import Machine
 
 
@@ -266,7 +267,7 @@ class WorkspaceMap:
 
 def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = None, *,
                       refine: bool = False, scheduler: Any = None,
-                      inscribed: bool = True) -> WorkspaceMap:
+                      inscribed: bool = True, factors: bool = True) -> WorkspaceMap:
     """Masks, feasible set and largest inscribed square/cube of ``machine`` over ``grid``.
 
     ``inscribed=False`` stops at the feasible set (no inscribed box, no dense check of it: the
@@ -275,9 +276,10 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     is refined in its centre and side to 10⁻⁴ of the side (:func:`refine_box`), which removes
     the grid's under-estimate (up to two steps) and its centring on grid points.
     ``scheduler``: evaluate the grid on Dask (see :func:`evaluate_grid`); the rest runs
-    here."""
+    here. ``factors=False``: the map's transmission factors and condition numbers are NaN
+    unless a criterion reads them (:func:`evaluate_poses`), e.g. to size the region."""
     criteria = criteria or Criteria()
-    evaluation = evaluate_grid(machine, grid, criteria, scheduler=scheduler)
+    evaluation = evaluate_grid(machine, grid, criteria, scheduler=scheduler, factors=factors)
     shape = grid.shape
     masks = {k: v.reshape(shape) for k, v in evaluation.masks.items()}
     feasible = evaluation.feasible.reshape(shape)
@@ -310,7 +312,9 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     cube, edges and corners included) whose points move with the centre and the side; each
     criterion has a signed slack at each point (:func:`criteria_slack`), and the side is
     maximised under "every slack ≥ 0" and "inside the grid's box" by SLSQP
-    (:func:`pkmkit.analysis.inscribed.largest_box`). The optimum is then checked with the
+    (:func:`pkmkit.analysis.inscribed.largest_box`), with the slack's analytic gradient where
+    the machine gives its rates (:func:`pkmkit.analysis.slack.slack_and_gradient`: full-pose
+    machines along position axes), else finite differences. The optimum is then checked with the
     boolean criteria and, if rounding left a point failing, shrunk about its centre by
     bisection — as it is if its faces fail on a lattice ten times denser (the region's boundary
     can bulge in between lattice points); the side is known to ``rtol`` (relative). The box
@@ -328,16 +332,24 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     def slack(points: np.ndarray) -> np.ndarray:
         return criteria_slack(machine, points, criteria, length)
 
+    def slack_gradient(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return slack_and_gradient(machine, points, criteria, length, grid.free)
+
+    analytic = slack_and_gradient(machine, full_points(box.center[free], 0.5 * box.side,
+                                                       np.zeros((1, len(free)))),
+                                  criteria, length, grid.free) is not None
+
     def feasible(c: np.ndarray, half: float) -> bool:
         if half <= 0:
             return True
         lattice = region_grid(machine, _full(box.center, free, c), 2.0 * half, grid.free,
                               samples)
-        return bool(evaluate_poses(machine, lattice.points, criteria).feasible.all())
+        return bool(evaluate_poses(machine, lattice.points, criteria,
+                                   factors=False).feasible.all())
 
     center, half = largest_box(slack, full_points, box.center[free], 0.5 * box.side,
                                grid.lower_bounds, grid.upper_bounds, samples=samples,
-                               rtol=rtol)
+                               rtol=rtol, slack_gradient=slack_gradient if analytic else None)
     start = (box.center[free], 0.5 * box.side)
     if not feasible(center, half):  # rounding at the optimum: shrink about its centre
         for cut in (1e-10, 1e-8, 1e-6, 1e-5):
@@ -358,7 +370,7 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
     def faces_ok(c: np.ndarray, h: float) -> bool:
         points = np.tile(box.center, (len(surface), 1))
         points[:, free] = c + h * surface
-        return bool(evaluate_poses(machine, points, criteria).feasible.all())
+        return bool(evaluate_poses(machine, points, criteria, factors=False).feasible.all())
 
     if not faces_ok(center, half):
         good, bad = 0.0, half

@@ -151,7 +151,8 @@ def enclosing_frame(m, frame: PoseFrame, criteria: Criteria,
     coarse = min(coarse, resolution or coarse)
     for widened in range(MAX_WIDENINGS + 1):
         grid = build_grid(frame, None, slice_, scale, coarse)
-        found = compute_workspace(m, grid, criteria, scheduler=scheduler, inscribed=False)
+        found = compute_workspace(m, grid, criteria, scheduler=scheduler, inscribed=False,
+                                  factors=False)
         faces = found.faces_reached()
         if not faces or widened == MAX_WIDENINGS:
             break

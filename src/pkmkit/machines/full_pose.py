@@ -34,6 +34,7 @@ from pkmkit.exceptions import (
     UnreachablePoseError,
 )
 from pkmkit.machines import full_pose_direct as direct
+from pkmkit.machines import full_pose_velocity_batch as velocity_batch
 from pkmkit.machines import full_pose_velocity_one as velocity_one
 from pkmkit.machines.chunks import chunked
 from pkmkit.machines.common import (
@@ -48,11 +49,12 @@ from pkmkit.machines.common import (
 )
 from pkmkit.machines.error_faces import FullPoseErrors
 from pkmkit.machines.export_layouts import FullPoseLayout
+from pkmkit.machines.full_pose_criteria_rates import FullPoseCriteriaRates
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse
 from pkmkit.machines.full_pose_position import PositionInverse, _stroke_fields
-from pkmkit.machines.full_pose_rates import FullPoseRates, rod_b_pinv
+from pkmkit.machines.full_pose_rates import FullPoseRates
 from pkmkit.machines.inverse_rows import RodInverseRows
 from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
 from pkmkit.machines.machine import Machine
@@ -63,13 +65,12 @@ from pkmkit.machines.results import (
     DirectResult,
     InverseResult,
     Jacobians,
-    Singularity,
 )
 from pkmkit.machines.strokes import STROKE_MODES, check_mode, judge_rows, refuse_absurd_home
 from pkmkit.machines.workspace_reports import RodReports
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
-from pkmkit.model.rods import STRUT, RodModel
+from pkmkit.model.rods import RodModel
 from pkmkit.numerics import jit
 from pkmkit.numerics.arrays import as_batch, restore_shape
 from pkmkit.solve.rod_closure import (
@@ -116,6 +117,7 @@ _JACOBIAN_FIELDS = ("A", "B", "J", "J_inv", "singular_values", "condition", "det
                     "parallel_measure", "serial_measure", "singularity", "q", "mode",
                     "J_homogeneous", "translation_singular_values", "rotation_singular_values")
 _ONE_POSE_JACOBIANS = velocity_one.one_pose_class(FullPoseJacobians)
+_LAZY_JACOBIANS = velocity_batch.lazy_class(FullPoseJacobians)
 
 
 def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
@@ -129,8 +131,9 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming, FullPoseErrors,
-                      FullPoseMeasurement, FullPoseLayout, RodReports, RodInverseRows, MachineFace):
+class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, FullPoseRates,
+                      ModeNaming, FullPoseErrors, FullPoseMeasurement, FullPoseLayout, RodReports,
+                      RodInverseRows, MachineFace):
     """A rod-leg machine whose platform has a full SE(3) pose (``dims = 6``).
 
     Attributes:
@@ -561,7 +564,8 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
                 if qb.shape[0] != xb.shape[0]:
                     raise InputError(f"x has {xb.shape[0]} rows but q has {qb.shape[0]}")
                 qb = self._fitting_q(xb, qb, single)
-        return _restore(self._jacobians(xb, qb, float(tol)), single, _JACOBIAN_FIELDS)
+        jac = self._jacobians(xb, qb, float(tol))
+        return _restore(jac, True, _JACOBIAN_FIELDS) if single else jac
 
     def _jacobian_one(self, x: Any, tol: float) -> FullPoseJacobians | None:
         """The compiled velocity model of one plain full pose within the strokes, computed
@@ -580,57 +584,9 @@ class FullPoseMachine(PositionInverse, FullPoseModes, FullPoseRates, ModeNaming,
         return _ONE_POSE_JACOBIANS(evaluation)
 
     def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> FullPoseJacobians:
-        n, size = self.n_actuators, xb.shape[0]
-        length = float(self.characteristic_length)
-        ok = np.isfinite(qb).all(axis=1) & np.isfinite(xb).all(axis=1)
-        m = self.model.n_rods
-        a = np.full((size, m, 6), np.nan)
-        b = np.full((size, m, n), np.nan)
-        if ok.any():
-            a[ok], b[ok] = self._forms.jacobians(xb[ok], qb[ok])
-        # singularity measures: unit rows, moments over L; base-joint motion vs rod direction
-        with np.errstate(invalid="ignore", divide="ignore"):
-            dist = np.linalg.norm(a[:, :, :3], axis=2)
-            unit = a / dist[:, :, None]
-            unit[:, :, 3:] /= length
-            sv_a = np.full((size, 6), np.nan)
-            sv_a[ok] = self._singular_values(unit[ok])[:, :6]
-            parallel = sv_a[:, -1] / sv_a[:, 0]
-            speed = self._base_joint_speeds(qb)
-            strut = self.model.rod_kind == STRUT
-            cos = np.abs(np.take_along_axis(b, self.model.rod_actuator[None, :, None], 2)[:, :, 0]
-                         ) / (dist * speed)
-            cos[:, strut] = 1.0
-            serial = cos.min(axis=1)
-        det_a = np.full(size, np.nan)
-        if m == 6 and ok.any():
-            det_a[ok] = np.linalg.det(a[ok])
-        flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
-        flags |= np.where(parallel < tol, int(Singularity.PARALLEL), 0)
-        at_parallel = (flags & Singularity.PARALLEL).astype(bool)
-        j = np.full((size, 6, n), np.nan)  # no J at a parallel singularity (where an exactly
-        if (ok & ~at_parallel).any():  # singular A made np.linalg.solve raise LinAlgError)
-            j[ok & ~at_parallel] = self._solve_j(a[ok & ~at_parallel], b[ok & ~at_parallel])
-        scale = np.array([1.0, 1.0, 1.0, length, length, length])
-        j_h = j * scale[None, :, None]
-        sv = self._singular_values(j_h)
-        sv_t = self._singular_values(j[:, :3])
-        sv_r = self._singular_values(j[:, 3:])
-        with np.errstate(invalid="ignore", divide="ignore"):
-            condition = sv[:, 0] / sv[:, -1]
-            j_inv = np.full((size, n, 6), np.nan)
-            good = ok & ~at_parallel
-            if good.any():
-                j_inv[good] = rod_b_pinv(b[good]) @ a[good]
-        det_b = np.full(size, np.nan)
-        if m == n and ok.any():
-            det_b[ok] = np.linalg.det(b[ok])
-        return FullPoseJacobians(
-            A=a, B=b, J=j, J_inv=j_inv, singular_values=sv, condition=condition, det_A=det_a,
-            det_B=det_b, parallel_measure=parallel, serial_measure=serial, singularity=flags,
-            tolerance=tol, q=qb, mode=np.sign(np.nan_to_num(det_a)).astype(int),
-            J_homogeneous=j_h, characteristic_length=length,
-            translation_singular_values=sv_t, rotation_singular_values=sv_r)
+        """The velocity model of pose rows ``xb`` at ``qb``, its costly fields (J, its singular
+        values, J⁻¹) computed when read (:mod:`pkmkit.machines.full_pose_velocity_batch`)."""
+        return velocity_batch.velocity_model(self, _LAZY_JACOBIANS, xb, qb, tol)
 
     def joint_motion(self, x: Any, xd: Any, xdd: Any, *, tol: float = SINGULARITY_TOL,
                      orientation: Any = None) -> JointMotion:

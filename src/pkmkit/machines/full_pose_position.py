@@ -16,16 +16,25 @@ from pkmkit.machines.common import (
     _rows_like,
     _valid_rows,
 )
+from pkmkit.machines.full_pose_direct import usable
 from pkmkit.machines.results import InverseResult
 from pkmkit.machines.strokes import judge_rows
 from pkmkit.model.rods import SLIDE
 from pkmkit.numerics.arrays import restore_shape
+from pkmkit.solve.least_squares import SolveResult
 from pkmkit.solve.rod_closure import solve_position_inverse
 from pkmkit.status import Status
 
 #: Iteration limit of the position inverse (fewer actuators than six) from its first-order
 #: guess; rows still short of a solution after it are NOT_CONVERGED.
 POSITION_MAX_ITER = 30
+#: Earlier limit of the same solve for rows nowhere near a solution: a row whose largest rod
+#: residual after ``POSITION_CRAWL[0]`` iterations is above ``POSITION_CRAWL[1]`` × (1 + the
+#: longest rod) is NOT_CONVERGED then (the engine's ``crawl``). From the first-order guess the
+#: Verne module's reachable positions converge in ≤ 8 iterations (198,189 positions of its
+#: workspace study's grid); the rows that ran to POSITION_MAX_ITER were 57 % of the solve's
+#: row-iterations there (issue 22 §3).
+POSITION_CRAWL = (12, 1e-6)
 
 
 def _stroke_fields(check) -> dict[str, Any]:
@@ -42,28 +51,35 @@ class PositionInverse:
     def _ik_position(self, arr, q0, branches, full_output, engine_options, strokes="flag"):
         pb, single = _checked_batch(arr, 3, "position")
         n = self.n_actuators
-        if q0 is None:
-            # first order from home: the position rows of J(home) are square (n = 3)
-            # (a row that is not finite or beyond MAX_COORDINATE enters as home: LAPACK scales
-            # the right-hand sides together, so one inf row would make every guess NaN)
-            j_t = self._home_jacobian[:3]
-            offset = np.where(_valid_rows(pb)[:, None], pb - self._home_pose[:3], 0.0)
-            dq = np.linalg.lstsq(j_t, offset.T, rcond=None)[0].T
-            guess_q = self._home_q + dq
-        else:
-            guess_q = _rows_like(q0, n, "q0", pb.shape[0])
-        guess_pose = self.first_order_pose(guess_q)
-        u0 = np.concatenate([guess_q, guess_pose[:, 3:]], axis=1)
         hopeless = self._surely_unreachable(pb)
-        u0[~_valid_rows(pb) | hopeless] = np.nan
+        skip = ~_valid_rows(pb) | hopeless
         engine_options.setdefault("compute_rank", False)
-        if q0 is None:
+        if q0 is None and "max_iter" not in engine_options:
             # from the first-order guess a reachable position converges in ≤ 11 iterations
             # (10⁵ random positions of the Verne module); the rows still crawling after
-            # POSITION_MAX_ITER are beyond reach
-            engine_options.setdefault("max_iter", POSITION_MAX_ITER)
-        with np.errstate(invalid="ignore", over="ignore"):
-            result = solve_position_inverse(self.model, pb, u0, **engine_options)
+            # POSITION_MAX_ITER, or still far from closing after POSITION_CRAWL[0], are beyond
+            # reach (a caller's own max_iter keeps its every iteration)
+            engine_options["max_iter"] = POSITION_MAX_ITER
+            engine_options.setdefault("crawl", (POSITION_CRAWL[0], POSITION_CRAWL[1] * (
+                1.0 + float(self.model.rod_length.max()))))
+        if q0 is None and self._compiled_positions(engine_options, pb.shape[0]):
+            result = self._solve_positions(pb, None, engine_options, skip)  # guess compiled too
+        else:
+            if q0 is None:
+                # first order from home: the position rows of J(home) are square (n = 3)
+                # (a row that is not finite or beyond MAX_COORDINATE enters as home: LAPACK
+                # scales the right-hand sides together, so one inf row would make every guess
+                # NaN)
+                j_t = self._home_jacobian[:3]
+                offset = np.where(_valid_rows(pb)[:, None], pb - self._home_pose[:3], 0.0)
+                dq = np.linalg.lstsq(j_t, offset.T, rcond=None)[0].T
+                guess_q = self._home_q + dq
+            else:
+                guess_q = _rows_like(q0, n, "q0", pb.shape[0])
+            guess_pose = self.first_order_pose(guess_q)
+            u0 = np.concatenate([guess_q, guess_pose[:, 3:]], axis=1)
+            u0[skip] = np.nan
+            result = self._solve_positions(pb, u0, engine_options)
         q = result.u[:, :n].copy()
         pose = np.concatenate([pb, result.u[:, n:]], axis=1)
         status = result.status.copy()
@@ -110,6 +126,37 @@ class PositionInverse:
                             **_stroke_fields(check))
         return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
                                       "residual", "pose", "out_of_stroke", "stroke_excess"))
+
+    def _compiled_positions(self, engine_options: dict[str, Any], rows: int) -> bool:
+        """Whether the compiled position inverse serves ``rows`` rows with these options
+        (three actuators, the engine's own options: :func:`full_pose_direct.usable`)."""
+        plain = {k: v for k, v in engine_options.items() if k != "crawl"}
+        return self.n_actuators == 3 and usable(plain, rows)
+
+    def _solve_positions(self, pb: np.ndarray, u0: np.ndarray | None,
+                         engine_options: dict[str, Any],
+                         skip: np.ndarray | None = None) -> SolveResult:
+        """The engine's position inverse of ``pb (N, 3)`` from ``u0 (N, n + 3)`` (None: the
+        first-order start from home, computed in the kernel; ``skip`` rows not solved):
+        compiled per row (:mod:`pkmkit.machines.full_pose_position_kernel`, the engine's rules,
+        ≈ 10× faster) for three actuators with the engine's own options, else the batched
+        NumPy engine."""
+        if self._compiled_positions(engine_options, pb.shape[0]):
+            from pkmkit.machines import full_pose_position_kernel as kernel
+
+            data = self._direct_kernel()
+            jt_inv = self.__dict__.get("_position_jt_inv")
+            if jt_inv is None:
+                jt_inv = np.linalg.inv(self._home_jacobian[:3])
+                object.__setattr__(self, "_position_jt_inv", jt_inv)
+            crawl = engine_options.get("crawl") or (0, np.inf)
+            opts = np.concatenate([data.options(engine_options), [crawl[0], crawl[1]]])
+            u, status, iterations, residual = kernel.solve(
+                data.geom, pb, u0, opts, skip=skip, home=data.home, jt_inv=jt_inv)
+            return SolveResult(u=u, status=status, residual=residual, iterations=iterations,
+                               rank=np.full(pb.shape[0], -1))
+        with np.errstate(invalid="ignore", over="ignore"):
+            return solve_position_inverse(self.model, pb, u0, **engine_options)
 
     def _surely_unreachable(self, positions: np.ndarray) -> np.ndarray:
         """``(N,)`` positions no orientation can serve: a slide rod whose platform joint, at most

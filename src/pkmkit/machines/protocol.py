@@ -85,6 +85,15 @@ class MachineFace(StiffnessModel):
         :mod:`pkmkit.analysis.continuation`); False for closed-form inverses."""
         return False
 
+    def criteria_rates(self, points: np.ndarray, inverse: Any, jacobians: Any,
+                       axes: tuple[int, ...], *, factors: bool = False) -> Any:
+        """Derivatives of what the workspace criteria read (actuator coordinates, rod
+        shortfalls, parallel measure, transmission factors) along the pose coordinates
+        ``axes`` at ``points``, given their inverse and velocity models, or None: no analytic
+        derivatives (callers then difference). Full-pose machines answer
+        (:mod:`pkmkit.machines.full_pose_criteria_rates`)."""
+        return None
+
     @property
     def angular_actuators(self) -> np.ndarray:
         """``(n_actuators,)`` bool: True for angular actuators (cranks, revolute joints), whose

@@ -86,3 +86,39 @@ def small_singular_values(m: np.ndarray) -> np.ndarray:
     if ok.any():
         out[ok] = np.linalg.svd(m[ok], compute_uv=False)
     return out
+
+
+def singular_value_rates(m: np.ndarray, rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Singular values ``(N, k)``, decreasing, of a stack of small matrices ``m (N, r, c)``
+    and their rates ``(N, k, d)`` along ``rates (N, r, c, d)`` (d derivatives of each matrix):
+    ``σ̇_i = u_iᵀ Ṁ v_i`` for simple singular values (k = min(r, c)). NaN rows where ``m`` or
+    ``rates`` is not finite.
+
+    Large stacks go through the compiled one-sided Jacobi kernel of
+    :mod:`pkmkit.numerics.svd_rates_kernel`, small ones through LAPACK's SVD with vectors;
+    they agree to rounding (of σ_max), except where singular values are repeated (their
+    vectors, hence their rates, are not unique)."""
+    from pkmkit.numerics import jit
+
+    m = np.asarray(m, dtype=float)
+    rates = np.asarray(rates, dtype=float)
+    if m.shape[1] < m.shape[2]:  # wide: the transposes have the same singular values
+        m, rates = m.transpose(0, 2, 1), rates.transpose(0, 2, 1, 3)
+    rows, c = m.shape[0], m.shape[2]
+    sigma = np.full((rows, c), np.nan)
+    out = np.full((rows, c, rates.shape[-1]), np.nan)
+    if rows and jit.use_compiled(rows):
+        from pkmkit.numerics.svd_rates_kernel import singular_rates as kernel
+
+        mats, derivs = np.ascontiguousarray(m), np.ascontiguousarray(rates)
+
+        def work(start: int, stop: int) -> None:
+            kernel(mats[start:stop], derivs[start:stop], sigma[start:stop], out[start:stop])
+
+        jit.run_chunks(work, rows)
+        return sigma, out
+    ok = np.isfinite(m).all(axis=(1, 2)) & np.isfinite(rates).all(axis=(1, 2, 3))
+    if ok.any():
+        u, sigma[ok], vt = np.linalg.svd(m[ok], full_matrices=False)
+        out[ok] = np.einsum("kai,kabd,kib->kid", u, rates[ok], vt)
+    return sigma, out

@@ -271,6 +271,7 @@ def solve_least_squares(
     rcond: float = 1e-10,
     compute_rank: bool = True,
     pattern: BlockPattern | None = None,
+    crawl: tuple[int, float] | None = None,
 ) -> SolveResult:
     """Solve N independent nonlinear least-squares problems ``min ½‖r(u)‖²`` in one batch.
 
@@ -295,6 +296,10 @@ def solve_least_squares(
             with False, ``rank`` is −1.
         pattern: the Jacobian's block structure, if any (:class:`BlockPattern`): the normal
             equations are then formed and solved block by block (module docstring).
+        crawl: ``(k, ρ)``: a row whose largest |residual| after k iterations is still above ρ
+            leaves then as ``NOT_CONVERGED`` — an earlier iteration limit for rows nowhere near
+            a solution (Newton near a regular solution has long converged), e.g. the positions
+            beyond a machine's reach of a workspace grid; None: no such limit.
 
     Returns:
         :class:`SolveResult` (batch axis first).
@@ -402,6 +407,11 @@ def solve_least_squares(
             checkpoint[rows] = cost[rows]
         stopped[idx[done]] = True
         active[idx[done]] = False
+        if crawl is not None:
+            at_limit = (iterations[idx] == crawl[0]) & ~done
+            if at_limit.any():  # far from any solution after k iterations: NOT_CONVERGED
+                rows = idx[at_limit]
+                active[rows[np.abs(r[:, rows]).max(axis=0) > crawl[1]]] = False
 
     live = rows_all[valid]
     residual[live] = np.abs(r[:, live]).max(axis=0)

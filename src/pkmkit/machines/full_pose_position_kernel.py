@@ -1,0 +1,265 @@
+"""Compiled (Numba) inverse model of a full-pose machine commanded by its position alone (three
+actuators, the rods setting the orientation: the Verne-type module): one Levenberg–Marquardt
+solve per position, fused, with the batched engine's rules (issue 22 §3).
+
+:func:`pkmkit.solve.rod_closure.solve_position_inverse` over
+:func:`pkmkit.solve.least_squares.solve_least_squares` is the reference this kernel is tested
+against (tests/machines/test_full_pose_position_kernel.py). Unknowns ``u = (q_0, q_1, q_2, δ)``:
+the actuator coordinates, then the rotation (left increment ``R ← exp(δ) R``); the position
+``p`` is given. Per rod ``r_j = |p + R b_j − a_j(q)| − ℓ_j(q)``, ``∂r_j/∂q_k = −(d̂_j·∂a_j/∂q_k +
+κt_j)`` in the column of the rod's actuator, ``∂r_j/∂δ = (R b_j × d̂_j)ᵀ``. The iteration and
+its stopping rules are :func:`pkmkit.machines.full_pose_direct_kernel.solve_row`'s (the
+engine's), only the unknowns differ, and the engine's ``crawl`` limit: options ``opts (9,)``
+are the direct kernel's seven, then ``crawl = (k, ρ)`` (k = 0: none). Geometry ``geom (m, 16)``
+as there. No temporaries per iteration, no BLAS, single-threaded.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from pkmkit.machines.full_pose_direct_kernel import (
+    INVALID_INPUT,
+    NOT_CONVERGED,
+    OK,
+    _rods,
+    _stationary,
+    _step,
+    compose,
+    scratch,
+)
+from pkmkit.machines.full_pose_kernels import rotation_entries
+
+_OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
+
+INCONSISTENT = 7
+#: Actuators of the machines this kernel serves (3 actuators + 3 rotation unknowns = 6).
+N_ACTUATORS = 3
+
+
+@njit(**_OPTIONS)
+def _evaluate(u, p, geom, base, length, r, jac):  # pragma: no cover
+    """Residuals ``r (m,)`` and Jacobian ``jac (m, 6)`` at unknowns ``u (6,)`` = (q, rotation
+    vector) for position ``p (3,)``; returns the cost ½|r|² (NaN or inf when not finite, the
+    Jacobian included). ``base``, ``length``: scratch for the base joints and rod lengths."""
+    _rods(u[:3], geom, base, length)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(u[3], u[4], u[5])
+    cost = 0.0
+    check = 0.0
+    for j in range(geom.shape[0]):
+        bx, by, bz = geom[j, 3], geom[j, 4], geom[j, 5]
+        sx = r00 * bx + r01 * by + r02 * bz
+        sy = r10 * bx + r11 * by + r12 * bz
+        sz = r20 * bx + r21 * by + r22 * bz
+        dx = p[0] + sx - base[j, 0]
+        dy = p[1] + sy - base[j, 1]
+        dz = p[2] + sz - base[j, 2]
+        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+        r[j] = dist - length[j]
+        cost += r[j] * r[j]
+        ux, uy, uz = dx / dist, dy / dist, dz / dist
+        kind = geom[j, 13]
+        if kind == 0.0:  # slide: ∂a/∂q = its axis
+            along = ux * geom[j, 6] + uy * geom[j, 7] + uz * geom[j, 8]
+        elif kind == 1.0:  # strut: ∂ℓ/∂q = 1
+            along = 1.0
+        else:  # crank: ∂a/∂q = w × (a − pivot)
+            wx, wy, wz = geom[j, 6], geom[j, 7], geom[j, 8]
+            ax, ay, az = base[j, 0] - geom[j, 9], base[j, 1] - geom[j, 10], base[j, 2] - geom[j, 11]
+            along = (ux * (wy * az - wz * ay) + uy * (wz * ax - wx * az)
+                     + uz * (wx * ay - wy * ax))
+        for k in range(3):
+            jac[j, k] = 0.0
+        jac[j, int(geom[j, 14])] = -along
+        jac[j, 3] = sy * uz - sz * uy
+        jac[j, 4] = sz * ux - sx * uz
+        jac[j, 5] = sx * uy - sy * ux
+        check += jac[j, 3] + jac[j, 4] + jac[j, 5] + along
+    return 0.5 * cost + 0.0 * check  # NaN when any Jacobian entry is not finite
+
+
+@njit(**_OPTIONS)
+def _start(u0, u, out):  # pragma: no cover
+    """Copy the start ``u0`` into ``u`` and ``out``; False (``out`` INVALID_INPUT) when it is
+    not finite."""
+    out[6] = INVALID_INPUT
+    out[7] = 0.0
+    out[8] = math.nan
+    valid = True
+    for i in range(6):
+        u[i] = u0[i]
+        out[i] = u0[i]
+        if not u0[i] == u0[i] or abs(u0[i]) == math.inf:
+            valid = False
+    return valid
+
+
+@njit(**_OPTIONS)
+def _take(u, u_new, r, r_new, jac, jac_new):  # pragma: no cover
+    """The accepted iterate: ``u, r, jac`` ← ``u_new, r_new, jac_new``."""
+    for i in range(6):
+        u[i] = u_new[i]
+    for j in range(r.shape[0]):
+        r[j] = r_new[j]
+        for i in range(6):
+            jac[j, i] = jac_new[j, i]
+
+
+@njit(**_OPTIONS)
+def _short(step, u, xtol):  # pragma: no cover
+    """The engine's small-step test ``|δ| ≤ xtol (1 + |u|)``."""
+    step_norm = 0.0
+    u_norm = 0.0
+    for i in range(6):
+        step_norm += step[i] * step[i]
+        u_norm += u[i] * u[i]
+    return math.sqrt(step_norm) <= xtol * (1.0 + math.sqrt(u_norm))
+
+
+@njit(**_OPTIONS)
+def _largest(r):  # pragma: no cover
+    """max |r_j|."""
+    largest = 0.0
+    for j in range(r.shape[0]):
+        largest = max(largest, abs(r[j]))
+    return largest
+
+
+@njit(**_OPTIONS)
+def _finish(u, r, iterations, stopped, residual_tol, out):  # pragma: no cover
+    """``out (9,)`` of a finished row: u, status (the engine's), iterations, largest |r|."""
+    largest = _largest(r)
+    for i in range(6):
+        out[i] = u[i]
+    out[7] = iterations
+    out[8] = largest
+    if not stopped:
+        out[6] = NOT_CONVERGED
+    elif largest <= residual_tol:
+        out[6] = OK
+    else:
+        out[6] = INCONSISTENT
+
+
+@njit(**_OPTIONS)
+def solve_row(p, u0, geom, opts, out, work):  # pragma: no cover
+    """One position ``p (3,)`` from ``u0 (6,)`` = (q, rotation vector): ``out (9,)`` = u (6),
+    status, iterations, largest |residual| (NaN when the start is invalid); ``work`` from
+    :func:`pkmkit.machines.full_pose_direct_kernel.scratch`."""
+    base, rows, jacs, vecs, h = work
+    length, r, r_new = rows[0], rows[1], rows[2]
+    jac, jac_new = jacs[0], jacs[1]
+    u, u_new, step = vecs[0], vecs[1], vecs[2]
+    if not _start(u0, u, out):
+        return
+    max_iter, xtol, atol, gtol = int(opts[0]), opts[1], opts[2], opts[3]
+    stall, residual_tol, lam = opts[4], opts[5], opts[6]
+    crawl_iter, crawl_residual = int(opts[7]), opts[8]
+    cost = _evaluate(u, p, geom, base, length, r, jac)
+    if not (cost == cost and cost < math.inf):
+        return
+    checkpoint = cost
+    stopped = False
+    iterations = 0
+    for _ in range(max_iter):
+        if cost <= 0.5 * atol * atol or _stationary(jac, r, cost, gtol):
+            stopped = True
+            break
+        _step(jac, r, lam, step, h)
+        for i in range(3):
+            u_new[i] = u[i] + step[i]
+        compose(step[3], step[4], step[5], u[3], u[4], u[5], u_new, 3)
+        cost_new = _evaluate(u_new, p, geom, base, length, r_new, jac_new)
+        accept = cost_new == cost_new and cost_new < math.inf and cost_new <= cost * (1.0 + 1e-13)
+        iterations += 1
+        if accept:
+            _take(u, u_new, r, r_new, jac, jac_new)
+            cost = cost_new
+            lam = max(lam * 0.1, 1e-12)
+        else:
+            lam *= 10.0
+        done = (accept and _short(step, u, xtol)) or lam > 1e12
+        if iterations % 10 == 0:
+            if cost > (1.0 - stall) * checkpoint and cost > 0.5 * residual_tol * residual_tol:
+                done = True
+            checkpoint = cost
+        if done:
+            stopped = True
+            break
+        if iterations == crawl_iter and _largest(r) > crawl_residual:
+            break  # far from any solution: NOT_CONVERGED now
+    _finish(u, r, iterations, stopped, residual_tol, out)
+
+
+@njit(**_OPTIONS)
+def first_order(p, home, jt_inv, u0):  # pragma: no cover
+    """The engine's default start ``u0 (6,)`` for position ``p (3,)``: q = q_home + J_p⁻¹
+    (p − p_home) (J_p the linear rows of J(home), ``jt_inv`` its inverse), then the rotation
+    of the twist J(home)(q − q_home) composed with home's (the first-order pose)."""
+    n = 3
+    dq = np.empty(3)
+    for i in range(3):
+        acc = 0.0
+        for k in range(3):
+            acc += jt_inv[i, k] * (p[k] - home[k])
+        dq[i] = acc
+    for i in range(3):
+        u0[i] = home[6 + i] + dq[i]
+    w = np.empty(3)
+    for i in range(3):
+        acc = 0.0
+        for k in range(n):
+            acc += (u0[k] - home[6 + k]) * home[6 + n + (3 + i) * n + k]
+        w[i] = acc
+    compose(w[0], w[1], w[2], home[3], home[4], home[5], u0, 3)
+
+
+@njit(**_OPTIONS)
+def solve_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out):  # pragma: no cover
+    """:func:`solve_row` for every row: ``p (N, 3)``, ``u0 (N, 6)`` (read when ``has_guess``,
+    else :func:`first_order` from ``home``, the direct kernel's home vector), ``skip (N,)``
+    rows left INVALID_INPUT (NaN start), ``out (N, 9)``."""
+    work = scratch(geom.shape[0])
+    start = np.empty(6)
+    for k in range(p.shape[0]):
+        if has_guess:
+            for i in range(6):
+                start[i] = u0[k, i]
+        elif skip[k]:
+            for i in range(6):
+                start[i] = math.nan
+        else:
+            first_order(p[k], home, jt_inv, start)
+        solve_row(p[k], start, geom, opts, out[k], work)
+
+
+def solve(geom: np.ndarray, positions: np.ndarray, u0: np.ndarray | None, opts: np.ndarray,
+          *, skip: np.ndarray | None = None, home: np.ndarray | None = None,
+          jt_inv: np.ndarray | None = None
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The position inverse of ``positions (N, 3)`` from ``u0 (N, 6)`` (rows with a non-finite
+    start are INVALID_INPUT) or, with ``u0`` None, from the first-order start of
+    :func:`first_order` (``home``: the direct kernel's home vector, ``jt_inv (3, 3)``; rows of
+    ``skip`` left INVALID_INPUT), in chunks over the threads of
+    :func:`pkmkit.numerics.jit.run_chunks`: ``(u (N, 6), status (N,), iterations (N,),
+    residual (N,))`` as :func:`pkmkit.solve.rod_closure.solve_position_inverse`'s result."""
+    from pkmkit.numerics import jit
+
+    positions = np.ascontiguousarray(positions, dtype=float)
+    size = positions.shape[0]
+    has_guess = u0 is not None
+    u0 = np.ascontiguousarray(u0, dtype=float) if has_guess else np.empty((size, 6))
+    skip = np.zeros(size, dtype=np.bool_) if skip is None else np.ascontiguousarray(skip)
+    home = np.zeros(6 + 3 + 18) if home is None else home
+    jt_inv = np.eye(3) if jt_inv is None else np.ascontiguousarray(jt_inv)
+    out = np.empty((size, 9))
+
+    def work(start: int, stop: int) -> None:
+        solve_rows(positions[start:stop], u0[start:stop], has_guess, skip[start:stop], geom,
+                   home, jt_inv, opts, out[start:stop])
+
+    jit.run_chunks(work, size)
+    return out[:, :6].copy(), out[:, 6].astype(int), out[:, 7].astype(int), out[:, 8].copy()

@@ -1,0 +1,168 @@
+"""The batched velocity model of a full-pose rod machine, its costly fields computed when read
+(issue 22 §3).
+
+:meth:`FullPoseMachine.jacobian` of a batch returns a
+:class:`~pkmkit.machines.full_pose.FullPoseJacobians` whose cheap fields — ``A``, ``B``, the
+singularity measures and flags, ``det_A``, ``mode`` — are computed at once, and whose costly
+ones — ``J`` (a 6×6 solve per row), ``J_homogeneous``, ``singular_values`` and ``condition``
+(an SVD per row), ``translation_singular_values`` and ``rotation_singular_values`` (two more),
+``J_inv`` and ``det_B`` — when first read, with the same formulas on the same arrays, hence the
+same bits. A workspace's criteria read the assembly mode (``det_A``, ``parallel_measure``) and,
+with factor bounds or a condition bound, the singular values of J: the two SVDs of J's linear
+and angular rows and J⁻¹ are never computed for them.
+
+A record built with every field (``dataclasses.replace``, pickling, a single pose's
+``_restore``) is a plain record.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from pkmkit.machines.full_pose_rates import rod_b_pinv
+from pkmkit.machines.results import Singularity
+from pkmkit.model.rods import STRUT
+
+#: The fields computed when first read.
+LAZY_FIELDS = ("J", "J_homogeneous", "singular_values", "condition", "J_inv", "det_B",
+               "translation_singular_values", "rotation_singular_values")
+
+
+class BatchFullVelocity:
+    """The costly fields of a batched full-pose velocity model, computed when read.
+
+    Args:
+        machine: the :class:`~pkmkit.machines.full_pose.FullPoseMachine` (its ``_solve_j``
+            and ``_singular_values``).
+        a: ``(N, m, 6)`` A. b: ``(N, m, n)`` B. ok: ``(N,)`` rows with finite x and q.
+        at_parallel: ``(N,)`` rows classified as a parallel singularity (no J there).
+        length: the characteristic length L (m).
+    """
+
+    __slots__ = ("_values", "a", "at_parallel", "b", "length", "machine", "ok")
+
+    def __init__(self, machine: Any, a: np.ndarray, b: np.ndarray, ok: np.ndarray,
+                 at_parallel: np.ndarray, length: float):
+        self.machine, self.a, self.b, self.ok = machine, a, b, ok
+        self.at_parallel, self.length = at_parallel, length
+        self._values: dict[str, Any] = {}
+
+    def field(self, name: str) -> Any:
+        """The value of field ``name`` (one of :data:`LAZY_FIELDS`)."""
+        values = self._values
+        if name in values:
+            return values[name]
+        a, b, ok, machine = self.a, self.b, self.ok, self.machine
+        size, n = b.shape[0], b.shape[2]
+        if name == "J":
+            j = np.full((size, 6, n), np.nan)  # no J at a parallel singularity (where an
+            good = ok & ~self.at_parallel  # exactly singular A made np.linalg.solve raise)
+            if good.any():
+                j[good] = machine._solve_j(a[good], b[good])
+            values[name] = j
+        elif name == "J_homogeneous":
+            scale = np.array([1.0, 1.0, 1.0, self.length, self.length, self.length])
+            values[name] = self.field("J") * scale[None, :, None]
+        elif name == "singular_values":
+            values[name] = machine._singular_values(self.field("J_homogeneous"))
+        elif name == "condition":
+            sv = self.field("singular_values")
+            with np.errstate(invalid="ignore", divide="ignore"):
+                values[name] = sv[:, 0] / sv[:, -1]
+        elif name == "translation_singular_values":
+            values[name] = machine._singular_values(self.field("J")[:, :3])
+        elif name == "rotation_singular_values":
+            values[name] = machine._singular_values(self.field("J")[:, 3:])
+        elif name == "J_inv":
+            j_inv = np.full((size, n, 6), np.nan)
+            good = ok & ~self.at_parallel
+            if good.any():
+                j_inv[good] = rod_b_pinv(b[good]) @ a[good]
+            values[name] = j_inv
+        elif name == "det_B":
+            det_b = np.full(size, np.nan)
+            if b.shape[1] == n and ok.any():
+                det_b[ok] = np.linalg.det(b[ok])
+            values[name] = det_b
+        else:
+            raise AttributeError(name)
+        return values[name]
+
+
+def velocity_model(machine: Any, record: type, xb: np.ndarray, qb: np.ndarray,
+                   tol: float) -> Any:
+    """The velocity model of pose rows ``xb (N, 6)`` with actuator coordinates ``qb (N, n)``
+    as a lazy ``record`` (:func:`lazy_class` of
+    :class:`~pkmkit.machines.full_pose.FullPoseJacobians`): the cheap fields now, the costly
+    ones (:data:`LAZY_FIELDS`) when read."""
+    n, size = machine.n_actuators, xb.shape[0]
+    length = float(machine.characteristic_length)
+    ok = np.isfinite(qb).all(axis=1) & np.isfinite(xb).all(axis=1)
+    m = machine.model.n_rods
+    a = np.full((size, m, 6), np.nan)
+    b = np.full((size, m, n), np.nan)
+    if ok.any():
+        a[ok], b[ok] = machine._forms.jacobians(xb[ok], qb[ok])
+    # singularity measures: unit rows, moments over L; base-joint motion vs rod direction
+    with np.errstate(invalid="ignore", divide="ignore"):
+        dist = np.linalg.norm(a[:, :, :3], axis=2)
+        unit = a / dist[:, :, None]
+        unit[:, :, 3:] /= length
+        sv_a = np.full((size, 6), np.nan)
+        sv_a[ok] = machine._singular_values(unit[ok])[:, :6]
+        parallel = sv_a[:, -1] / sv_a[:, 0]
+        speed = machine._base_joint_speeds(qb)
+        strut = machine.model.rod_kind == STRUT
+        cos = np.abs(np.take_along_axis(b, machine.model.rod_actuator[None, :, None], 2)[:, :, 0]
+                     ) / (dist * speed)
+        cos[:, strut] = 1.0
+        serial = cos.min(axis=1)
+    det_a = np.full(size, np.nan)
+    if m == 6 and ok.any():
+        det_a[ok] = np.linalg.det(a[ok])
+    flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
+    flags |= np.where(parallel < tol, int(Singularity.PARALLEL), 0)
+    at_parallel = (flags & Singularity.PARALLEL).astype(bool)
+    evaluation = BatchFullVelocity(machine, a, b, ok, at_parallel, length)
+    return record(evaluation, A=a, B=b, det_A=det_a, parallel_measure=parallel,
+                  serial_measure=serial, singularity=flags, tolerance=tol, q=qb,
+                  mode=np.sign(np.nan_to_num(det_a)).astype(int), characteristic_length=length)
+
+
+def lazy_class(base: type) -> type:
+    """The subclass of the record class ``base`` (a ``FullPoseJacobians``) whose
+    :data:`LAZY_FIELDS` are properties read from a :class:`BatchFullVelocity` (the others are
+    given); built with every field (``dataclasses.replace``) it is a plain record."""
+    names = tuple(base.__dataclass_fields__)
+
+    def __init__(self, evaluation: BatchFullVelocity | None = None, **fields: Any) -> None:
+        object.__setattr__(self, "_evaluation", evaluation)
+        object.__setattr__(self, "_cache", dict(fields))
+
+    def _get(self, name: str) -> Any:
+        cache = self._cache
+        if name not in cache:
+            cache[name] = self._evaluation.field(name)
+        return cache[name]
+
+    def __eq__(self, other: object) -> bool:
+        return self is other
+
+    def __repr__(self) -> str:
+        return (f"{base.__name__}({len(self.q)} poses, {self.q.shape[1]} actuators, tolerance "
+                f"{self.tolerance:g}; J and its singular values computed when read)")
+
+    def __reduce__(self):  # pickled as the plain record, every field computed
+        return base, tuple(getattr(self, name) for name in names)
+
+    def prop(name: str) -> property:
+        return property(lambda self: self._get(name), doc=f"``{name}``")
+
+    namespace = {"__init__": __init__, "_get": _get, "__eq__": __eq__,
+                 "__hash__": object.__hash__, "__repr__": __repr__, "__reduce__": __reduce__,
+                 "__doc__": "A batched velocity model, its costly fields computed when read "
+                            "(module doc)."}
+    namespace.update({name: prop(name) for name in names})
+    return type(f"Lazy{base.__name__}", (base,), namespace)
