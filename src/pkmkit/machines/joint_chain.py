@@ -388,6 +388,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         valid = valid_rows(qb)
         u0[~valid] = np.nan
         engine_options.setdefault("compute_rank", False)
+        engine_options.setdefault("compiled", use_compiled_solver(n))
         with np.errstate(invalid="ignore", over="ignore"):
             res = solve_closure(self.model, values, u0, unknown_variables=self._passive,
                                 **engine_options)
@@ -625,6 +626,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             u[~valid_rows(xb) | bad_axis] = np.nan
         lengths = self._tool_lengths(tool_length, n)
         engine_options.setdefault("compute_rank", False)
+        engine_options.setdefault("compiled", use_compiled_solver(n))
 
         def solve(t: np.ndarray, u: np.ndarray, tool: np.ndarray):
             with np.errstate(invalid="ignore", over="ignore"):

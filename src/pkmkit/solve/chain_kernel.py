@@ -76,22 +76,137 @@ def solve(model: JointChainModel, known: np.ndarray, u0: np.ndarray,
     _solve_rows(frames, types, evar, elements, offsets, position, known, u,
                 float(model.characteristic_length), int(max_iter), float(xtol), float(atol),
                 float(gtol), float(stall), float(residual_tol), float(damping), status,
-                residual, iterations)
+                residual, iterations, _NO_HEAD, _NO_TARGETS, _NO_TARGETS[:, 0], False)
     return u, status, residual, iterations
+
+
+_NO_HEAD = np.zeros(0, dtype=np.int64)
+_NO_TARGETS = np.zeros((1, 6))
+
+
+def solve_inverse(model: JointChainModel, targets: np.ndarray, u0: np.ndarray,
+                  tool_length: np.ndarray, *, max_iter: int = 60, xtol: float = 1e-14,
+                  atol: float = 1e-14, gtol: float = 1e-12, stall: float = 0.01,
+                  residual_tol: float = 1e-9, damping: float = 1e-4) -> tuple[np.ndarray, ...]:
+    """The inverse model of a complete machine, compiled: the problem of
+    :func:`pkmkit.solve.chains.solve_machine_inverse` (the legs' closure rows, then the tool
+    rows ``(p_tool − p_target, L (a_tool − a_target))``; unknowns the platform pose and every
+    joint variable) for ``targets (N, 6)`` (tool point m, unit axis), ``u0 (N, 6 + n_var)``
+    and ``tool_length (N,)`` (m), with :func:`solve`'s algorithm. Returns ``(u, status,
+    residual, iterations)`` as :func:`solve`."""
+    every = np.arange(model.n_variables)
+    frames, types, evar, elements, offsets, position = model_arrays(model, every)
+    head = np.array(model.head, dtype=np.int64)
+    u = np.array(u0, dtype=float, order="C", copy=True)
+    n_rows = u.shape[0]
+    status = np.empty(n_rows, dtype=np.int64)
+    residual = np.full(n_rows, np.nan)
+    iterations = np.zeros(n_rows, dtype=np.int64)
+    _solve_rows(frames, types, evar, elements, offsets, position,
+                np.zeros((1, model.n_variables)), u, float(model.characteristic_length),
+                int(max_iter), float(xtol), float(atol), float(gtol), float(stall),
+                float(residual_tol), float(damping), status, residual, iterations, head,
+                np.ascontiguousarray(targets, dtype=float),
+                np.ascontiguousarray(tool_length, dtype=float).reshape(-1), True)
+    return u, status, residual, iterations
+
+
+@njit(**_OPTIONS)
+def _evaluate_any(frames, types, evar, elements, offsets, position, values, u, length, r, jac,
+                  scratch, head, target, tool, inverse):  # pragma: no cover
+    """The closure (``inverse`` False) or the machine inverse's residual and Jacobian."""
+    _evaluate(frames, types, evar, elements, offsets, position, values, u, length, r, jac,
+              scratch)
+    if inverse:
+        _tool_rows(frames, types, evar, head, position, values, u, length, target, tool,
+                   6 * (offsets.shape[0] - 1), r, jac, scratch)
+
+
+@njit(**_OPTIONS)
+def _tool_rows(frames, types, evar, head, position, values, u, length, target, tool, base, r,
+               jac, scratch):  # pragma: no cover
+    """The tool rows of the inverse model at rows ``base:base + 6`` (``_evaluate`` has filled
+    ``values`` from ``u`` and zeroed ``jac``): the head walked from the platform frame, the
+    tool point ``tool`` along its z axis; columns: the platform increments (a rigid motion of
+    the tool frame) and the head's unknown variables (their spatial twists)."""
+    mats, pos, tw, tw_col = scratch
+    rot, tmp = mats[1], mats[2]
+    _rotvec_matrix(u[3], u[4], u[5], rot)
+    for i in range(3):
+        pos[i] = u[i]
+    n_twist = 0
+    for idx in range(head.shape[0]):
+        e = head[idx]
+        _apply_frame(rot, pos, frames[e], tmp)
+        t = types[e]
+        if t == 0:
+            continue
+        var = evar[e]
+        col = position[var]
+        q = values[var]
+        z0, z1, z2 = rot[0, 2], rot[1, 2], rot[2, 2]
+        if t == 1:
+            if col >= 0:
+                tw[n_twist, 0] = pos[1] * z2 - pos[2] * z1
+                tw[n_twist, 1] = pos[2] * z0 - pos[0] * z2
+                tw[n_twist, 2] = pos[0] * z1 - pos[1] * z0
+                tw[n_twist, 3], tw[n_twist, 4], tw[n_twist, 5] = z0, z1, z2
+                tw_col[n_twist] = col
+                n_twist += 1
+            c, s = math.cos(q), math.sin(q)
+            for i in range(3):
+                x, y = rot[i, 0], rot[i, 1]
+                rot[i, 0] = c * x + s * y
+                rot[i, 1] = c * y - s * x
+        else:
+            if col >= 0:
+                tw[n_twist, 0], tw[n_twist, 1], tw[n_twist, 2] = z0, z1, z2
+                tw[n_twist, 3] = tw[n_twist, 4] = tw[n_twist, 5] = 0.0
+                tw_col[n_twist] = col
+                n_twist += 1
+            pos[0] += q * z0
+            pos[1] += q * z1
+            pos[2] += q * z2
+    a0, a1, a2 = rot[0, 2], rot[1, 2], rot[2, 2]
+    p0, p1, p2 = pos[0] + tool * a0, pos[1] + tool * a1, pos[2] + tool * a2
+    r[base + 0], r[base + 1], r[base + 2] = p0 - target[0], p1 - target[1], p2 - target[2]
+    r[base + 3] = length * (a0 - target[3])
+    r[base + 4] = length * (a1 - target[4])
+    r[base + 5] = length * (a2 - target[5])
+    # platform columns: δp_X moves the point; δω_X (about p_X) moves the point by
+    # δω × (point − p_X) and the axis by δω × axis
+    d0, d1, d2 = p0 - u[0], p1 - u[1], p2 - u[2]
+    for i in range(3):
+        jac[base + i, i] = 1.0
+    jac[base + 0, 4], jac[base + 0, 5] = d2, -d1
+    jac[base + 1, 3], jac[base + 1, 5] = -d2, d0
+    jac[base + 2, 3], jac[base + 2, 4] = d1, -d0
+    jac[base + 3, 4], jac[base + 3, 5] = length * a2, -length * a1
+    jac[base + 4, 3], jac[base + 4, 5] = -length * a2, length * a0
+    jac[base + 5, 3], jac[base + 5, 4] = length * a1, -length * a0
+    for k in range(n_twist):
+        col = tw_col[k]
+        w0, w1, w2 = tw[k, 3], tw[k, 4], tw[k, 5]
+        jac[base + 0, col] = tw[k, 0] + w1 * p2 - w2 * p1
+        jac[base + 1, col] = tw[k, 1] + w2 * p0 - w0 * p2
+        jac[base + 2, col] = tw[k, 2] + w0 * p1 - w1 * p0
+        jac[base + 3, col] = length * (w1 * a2 - w2 * a1)
+        jac[base + 4, col] = length * (w2 * a0 - w0 * a2)
+        jac[base + 5, col] = length * (w0 * a1 - w1 * a0)
 
 
 @njit(**_OPTIONS)
 def _solve_rows(frames, types, evar, elements, offsets, position, known, u, length, max_iter,
                 xtol, atol, gtol, stall, residual_tol, damping, status, residual,
-                iterations):  # pragma: no cover
+                iterations, head, targets, tools, inverse):  # pragma: no cover
     n = u.shape[1]
-    m = 6 * (offsets.shape[0] - 1)
+    m = 6 * (offsets.shape[0] - 1) + (6 if inverse else 0)
     values = np.empty(known.shape[1])
     r, jac = np.empty(m), np.empty((m, n))
     r_new, j_new = np.empty(m), np.empty((m, n))
     u_new, step, grad = np.empty(n), np.empty(n), np.empty(n)
     h, low = np.empty((n, n)), np.empty((n, n))
-    scratch = _scratch(elements.shape[0])
+    scratch = _scratch(elements.shape[0] + head.shape[0])
     for k in range(u.shape[0]):
         finite = True
         for i in range(n):
@@ -99,9 +214,11 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
         if not finite:
             status[k] = _INVALID
             continue
-        values[:] = known[k]
-        _evaluate(frames, types, evar, elements, offsets, position, values, u[k], length, r,
-                  jac, scratch)
+        values[:] = known[k if known.shape[0] > 1 else 0]
+        row = k if inverse else 0
+        target, tool = targets[row], tools[row]
+        _evaluate_any(frames, types, evar, elements, offsets, position, values, u[k], length,
+                      r, jac, scratch, head, target, tool, inverse)
         cost = 0.5 * np.dot(r, r)
         if not (math.isfinite(cost) and np.isfinite(jac).all()):
             status[k] = _INVALID
@@ -142,8 +259,8 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
                 h[a, a] += lam * (h[a, a] + floor)
             _cholesky_solve(h, grad, low, step)
             _retract(u[k], step, u_new)
-            _evaluate(frames, types, evar, elements, offsets, position, values, u_new, length,
-                      r_new, j_new, scratch)
+            _evaluate_any(frames, types, evar, elements, offsets, position, values, u_new,
+                          length, r_new, j_new, scratch, head, target, tool, inverse)
             cost_new = 0.5 * np.dot(r_new, r_new)
             accept = math.isfinite(cost_new) and cost_new <= cost * (1.0 + 1e-13)
             count += 1
@@ -594,3 +711,210 @@ def _absorb_rows(cu, cd, du, rest, ok):  # pragma: no cover
                 v = c_u[i, a]
                 for col in range(d):
                     rest[k, i, col] += v * x[a, col]
+
+
+
+def closure_rates(cu: np.ndarray, cq: np.ndarray, rcond: float, tol: float, expected: int
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(dU (N, c, k), rank (N,), ratio (N,))`` of tall closure Jacobians ``cu (N, r, c)``
+    (r ≥ c) and ``cq (N, r, k)``, compiled: ``dU = −C_U⁺ C_q`` (``np.linalg.pinv``'s cutoff
+    ``rcond · σ_max``), the rank of C_U (singular values above that cutoff) and
+    ``ratio = σ_expected / σ_max`` (``expected``: the rank at home).
+
+    A row first gets a Householder QR ``C_U = Q R``: ``1 / (‖R‖_F ‖R⁻¹‖_F)`` is a lower bound
+    of ``σ_min / σ_max``; where it clears ``max(tol, rcond)`` and ``expected = c`` the rank is
+    ``c``, ``dU = −R⁻¹ Qᵀ C_q`` (the least-squares solution the pseudo-inverse gives, to
+    rounding) and ``ratio`` is that bound (it clears ``tol``). Other rows — near a singular
+    closure, or a machine rank-deficient at home — take the exact path: a one-sided Jacobi SVD
+    (``C_U V = U Σ``, V accumulated; :mod:`pkmkit.numerics.svd_kernel`'s iteration) and
+    ``C_U⁺ = V Σ⁻¹ Uᵀ``. Rows holding a non-finite entry give NaN (rank 0)."""
+    n, r, c = cu.shape
+    du = np.empty((n, c, cq.shape[2]))
+    rank = np.zeros(n, dtype=np.int64)
+    ratio = np.empty(n)
+    _closure_rates_rows(np.ascontiguousarray(cu, dtype=float),
+                        np.ascontiguousarray(cq, dtype=float), float(rcond), float(tol),
+                        int(expected), du, rank, ratio)
+    return du, rank, ratio
+
+
+#: Sweeps of :func:`_jacobi_rates` over every column pair before giving up.
+_MAX_SWEEPS = 60
+
+
+@njit(**_OPTIONS)
+def _qr_rates(a, b, rinv, du_m, threshold):  # pragma: no cover
+    """Householder QR of ``a (r, c)`` (overwritten: R above the diagonal) applied to ``b
+    (r, k)``; when ``1 / (‖R‖_F ‖R⁻¹‖_F) > threshold`` writes ``du_m = −R⁻¹ (Qᵀ b)[:c]`` and
+    returns that bound, else returns −1."""
+    r, c = a.shape
+    k = b.shape[1]
+    for j in range(c):
+        norm = 0.0
+        for i in range(j, r):
+            norm += a[i, j] * a[i, j]
+        norm = math.sqrt(norm)
+        if norm == 0.0:
+            return -1.0
+        alpha = -norm if a[j, j] >= 0 else norm
+        v0 = a[j, j] - alpha
+        # v = (v0, a[j+1:, j]); H = I − 2 v vᵀ / vᵀv
+        vtv = v0 * v0
+        for i in range(j + 1, r):
+            vtv += a[i, j] * a[i, j]
+        a[j, j] = v0
+        for col in range(j + 1, c):
+            s = 0.0
+            for i in range(j, r):
+                s += a[i, j] * a[i, col]
+            s *= 2.0 / vtv
+            for i in range(j, r):
+                a[i, col] -= s * a[i, j]
+        for col in range(k):
+            s = 0.0
+            for i in range(j, r):
+                s += a[i, j] * b[i, col]
+            s *= 2.0 / vtv
+            for i in range(j, r):
+                b[i, col] -= s * a[i, j]
+        a[j, j] = alpha
+    frob, frob_inv = 0.0, 0.0
+    for i in range(c):
+        for j in range(i, c):
+            frob += a[i, j] * a[i, j]
+    for j in range(c):  # columns of R⁻¹ (upper triangular) by back substitution
+        for i in range(c - 1, -1, -1):
+            t = 1.0 if i == j else 0.0
+            if i > j:
+                rinv[i, j] = 0.0
+                continue
+            for p in range(i + 1, j + 1):
+                t -= a[i, p] * rinv[p, j]
+            rinv[i, j] = t / a[i, i]
+            frob_inv += rinv[i, j] * rinv[i, j]
+    bound = 1.0 / math.sqrt(frob * frob_inv)
+    if not bound > threshold:
+        return -1.0
+    for i in range(c):
+        for col in range(k):
+            s = 0.0
+            for p in range(i, c):
+                s += rinv[i, p] * b[p, col]
+            du_m[i, col] = -s
+    return bound
+
+
+@njit(**_OPTIONS)
+def _closure_rates_rows(cu, cq, rcond, tol, expected, du, rank, ratio):  # pragma: no cover
+    n, r, c = cu.shape
+    k = cq.shape[2]
+    a, b, rinv = np.empty((r, c)), np.empty((r, k)), np.empty((c, c))
+    work = np.empty((c, r))  # columns of C_U V
+    vmat = np.empty((c, c))  # columns of V
+    norms = np.empty(c)
+    sv = np.empty(c)
+    threshold = max(tol, rcond)
+    for m in range(n):
+        finite = True
+        for i in range(r):
+            for j in range(c):
+                finite = finite and math.isfinite(cu[m, i, j])
+            for j in range(k):
+                finite = finite and math.isfinite(cq[m, i, j])
+        if not finite:
+            du[m] = math.nan
+            ratio[m] = math.nan
+            rank[m] = 0
+            continue
+        if expected == c:
+            a[:, :] = cu[m]
+            b[:, :] = cq[m]
+            bound = _qr_rates(a, b, rinv, du[m], threshold)
+            if bound > 0.0:
+                rank[m] = c
+                ratio[m] = bound
+                continue
+        _jacobi_rates(cu[m], cq[m], rcond, work, vmat, norms, sv, du[m])
+        count = 0
+        for i in range(c):
+            if sv[i] > rcond * sv[0]:
+                count += 1
+        rank[m] = count
+        ratio[m] = sv[expected - 1] / sv[0]
+
+
+@njit(**_OPTIONS)
+def _jacobi_rates(cu_m, cq_m, rcond, work, vmat, norms, sv, du_m):  # pragma: no cover
+    """One row of :func:`closure_rates` by one-sided Jacobi: singular values ``sv``
+    (decreasing) and ``du_m = −C_U⁺ C_q``."""
+    r, c = cu_m.shape
+    k = cq_m.shape[1]
+    tol = r * 2.220446049250313e-16
+    for i in range(r):
+        for j in range(c):
+            work[j, i] = cu_m[i, j]
+    for i in range(c):
+        for j in range(c):
+            vmat[i, j] = 1.0 if i == j else 0.0
+    for _ in range(_MAX_SWEEPS):
+        for i in range(c):
+            s = 0.0
+            for t in range(r):
+                s += work[i, t] * work[i, t]
+            norms[i] = s
+        rotated = False
+        for i in range(c - 1):
+            for j in range(i + 1, c):
+                alpha, beta = norms[i], norms[j]
+                gamma = 0.0
+                for t in range(r):
+                    gamma += work[i, t] * work[j, t]
+                if gamma == 0.0 or abs(gamma) <= tol * math.sqrt(alpha) * math.sqrt(beta):
+                    continue
+                rotated = True
+                zeta = (beta - alpha) / (2.0 * gamma)
+                tan = math.copysign(1.0, zeta) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                cos = 1.0 / math.sqrt(1.0 + tan * tan)
+                sin = cos * tan
+                for t in range(r):
+                    a, b = work[i, t], work[j, t]
+                    work[i, t] = cos * a - sin * b
+                    work[j, t] = sin * a + cos * b
+                for t in range(c):  # V's columns i and j rotate alike
+                    a, b = vmat[t, i], vmat[t, j]
+                    vmat[t, i] = cos * a - sin * b
+                    vmat[t, j] = sin * a + cos * b
+                norms[i] = alpha - tan * gamma
+                norms[j] = beta + tan * gamma
+        if not rotated:
+            break
+    biggest = 0.0
+    for i in range(c):
+        s = 0.0
+        for t in range(r):
+            s += work[i, t] * work[i, t]
+        norms[i] = math.sqrt(s)
+        biggest = max(biggest, norms[i])
+        sv[i] = norms[i]
+    for i in range(1, c):  # decreasing
+        v = sv[i]
+        j = i - 1
+        while j >= 0 and sv[j] < v:
+            sv[j + 1] = sv[j]
+            j -= 1
+        sv[j + 1] = v
+    # dU = −V Σ⁻² (C_U V)ᵀ C_q over the singular values above the cutoff
+    du_m[:, :] = 0.0
+    cutoff = rcond * biggest
+    for a in range(c):
+        s_a = norms[a]
+        if not s_a > cutoff:
+            continue
+        f = -1.0 / (s_a * s_a)
+        for col in range(k):
+            g = 0.0
+            for t in range(r):
+                g += work[a, t] * cq_m[t, col]
+            g *= f
+            for i in range(c):
+                du_m[i, col] += vmat[i, a] * g
