@@ -4,6 +4,8 @@ iterations; a machine whose inverse does not continue is evaluated at once as be
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -74,8 +76,8 @@ def test_chunks_cut_across_slabs_continue_the_same(grid_and_machine, monkeypatch
     np.testing.assert_allclose(cut.q, whole.q, rtol=0, atol=1e-12)
 
 
-def test_continuation_is_asked_for(grid_and_machine, monkeypatch):
-    """Off by default: the grid is solved at once, every point from home."""
+def test_continuation_is_the_default(grid_and_machine, monkeypatch):
+    """On by default (slab by slab); ``continuation=False`` solves the grid at once."""
     import pkmkit.analysis.criteria as criteria
 
     seen = []
@@ -83,5 +85,67 @@ def test_continuation_is_asked_for(grid_and_machine, monkeypatch):
                         lambda m, p, slab: seen.append(slab) or m.ik(p, full_output=True))
     m, g = grid_and_machine
     evaluate_grid(m, g, Criteria())
-    evaluate_grid(m, g, Criteria(continuation=True))
-    assert seen == [None, g.size // g.shape[0]]
+    evaluate_grid(m, g, Criteria(continuation=False))
+    assert seen == [g.size // g.shape[0], None]
+
+
+@pytest.fixture(scope="module")
+def wrist_grid():
+    """A 15 × 5 × 5 grid crossing the Tripteor's wrist singularity (Q5 = 0: the tool axis along
+    Q4's, where the head's two branches meet): its first axis tilts the tool axis (the i
+    component from −0.1 to 0.25, Q5 from about −2° to 19°), the others move the tool point over
+    10 × 10 cm of the default box's middle."""
+    m = pkmkit.machine("tripteor-x7")
+    lo, hi = m.default_box()
+    c = (lo + hi) / 2
+    g = make_grid(np.array([-0.1, c[0] - 0.05, c[1] - 0.05]),
+                  np.array([0.25, c[0] + 0.05, c[1] + 0.05]), free=(3, 0, 1),
+                  base=np.array([*c, *m.home_pose[3:]]), names=m.pose_names, resolution=15)
+    assert g.shape == (15, 5, 5)
+    return m, g
+
+
+def _same_evaluations(a, b):
+    for name in a.masks:
+        np.testing.assert_array_equal(a.masks[name], b.masks[name], err_msg=name)
+    np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.factors, b.factors, rtol=1e-10, atol=0)
+
+
+def test_across_the_wrist_singularity_continuation_keeps_the_home_branch(wrist_grid):
+    """Every mask, q and factor of the start from home, on a grid crossing the wrist
+    singularity without strokes (every reachable point counts, both branches are within the
+    passive joints' ranges) — while most points beyond 10° of it did continue from their
+    neighbours."""
+    m, g = wrist_grid
+    crit = Criteria(strokes=False, bounds=(0.2, 5.0))
+    home = evaluate_grid(m, g, replace(crit, continuation=False))
+    cont = evaluate_grid(m, g, crit)
+    _same_evaluations(cont, home)
+    inv = m.ik(g.points, full_output=True)
+    assert home.masks["reachable"].all()
+    q5 = np.degrees(inv.q[:, 4])
+    assert q5.min() < 0 < 15 < q5.max()
+    near = ~m.continues_from(inv.solution)
+    assert 0.5 * g.size < near.sum() < 0.9 * g.size
+    slab = g.size // g.shape[0]
+    sol = inverse_of_chunk(m, g.points, slab)
+    far = np.flatnonzero(~near[slab:]) + slab
+    assert sol.iterations[far].mean() < 0.8 * inv.iterations[far].mean()
+
+
+def test_without_the_rule_continuation_changes_branches(wrist_grid, monkeypatch):
+    """The same grid, neighbours next to the singularity used as starts: points end on the
+    head's other branch (Q4 + π), and the factors move — what the rule prevents."""
+    import importlib
+
+    warm_starts = importlib.import_module("pkmkit.machines.warm_starts")
+    m, g = wrist_grid
+    crit = Criteria(strokes=False)
+    home = evaluate_grid(m, g, replace(crit, continuation=False))
+    monkeypatch.setattr(warm_starts, "WRIST_SINGULAR_ANGLE", 0.0)
+    cont = evaluate_grid(m, g, crit)
+    both = home.masks["reachable"] & cont.masks["reachable"]
+    turned = np.abs(np.abs(cont.q[both, 3] - home.q[both, 3]) - np.pi) < 0.2
+    assert turned.sum() > 0
+    assert np.abs(cont.factors[both] - home.factors[both]).max() > 1e-3

@@ -6,7 +6,9 @@ from the solution of the one before — point ``i`` of a C-order grid starts fro
 home. A point whose neighbour failed starts from home, and so does again a point that does
 not converge from its neighbour (:meth:`~pkmkit.machines.joint_chain.JointChainMachine.ik`),
 so continuation loses no point the start from home reaches; revolute actuators stay on the
-turn nearest home.
+turn nearest home. A neighbour next to a joint-chain head's wrist singularity, where the
+head's two branches meet, is not a start (``machine.continues_from``,
+:mod:`pkmkit.machines.warm_starts`): the grid reports the branch the start from home reaches.
 """
 
 from __future__ import annotations
@@ -56,7 +58,8 @@ def inverse_of_chunk(machine: Any, points: np.ndarray, slab: int | None) -> Any:
             inv = (machine.ik(piece, full_output=True) if start is None else
                    machine.ik(piece, full_output=True, start=start[:len(piece)]))
             parts.append(inv)
-            start = inv.solution
+            start = np.where(machine.continues_from(inv.solution)[:, None], inv.solution,
+                             np.nan)
     width = 6 + len(machine.passive_names)
     return ContinuedInverse(
         q=np.concatenate([np.atleast_2d(p.q) for p in parts]),

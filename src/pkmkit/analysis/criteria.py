@@ -55,9 +55,9 @@ class Criteria:
             None: the machine's own).
         continuation: solve a grid's inverse model slab by slab from the neighbouring slab's
             solution where the machine's inverse continues (joint chains:
-            :mod:`pkmkit.analysis.continuation`; ~40 % fewer iterations). Off by default: next
-            to a joint-chain head's singularity it may end on the head's other branch (the same
-            tool pose) where the start from home does not, which moves the factors.
+            :mod:`pkmkit.analysis.continuation`; ~40 % fewer iterations away from a head's
+            wrist singularity, the same results: next to it the points start from home, whose
+            branch of the head the grid reports). On by default.
     """
 
     bounds: tuple[float, float] | None = None
@@ -71,7 +71,7 @@ class Criteria:
     max_deflection: float | None = None
     wrench: tuple[float, ...] | None = None
     stiffness_data: Any = None
-    continuation: bool = False
+    continuation: bool = True
 
     def __post_init__(self) -> None:
         for name in ("min_stiffness", "max_deflection"):

@@ -19,6 +19,10 @@ import numpy as np
 from pkmkit.exceptions import InputError, UnsupportedOperationError
 from pkmkit.status import Status
 
+#: A neighbour's solution whose tool axis lies within this angle (rad) of its head's first
+#: revolute axis (the wrist singularity) is not used as a continuation start.
+WRIST_SINGULAR_ANGLE = np.radians(10.0)
+
 
 class ChainWarmStart:
     """The joint chains' ``start`` and their deprecated ``x0``."""
@@ -80,3 +84,28 @@ class ChainWarmStart:
             for name in ("u", "status", "residual", "iterations", "rank"):
                 getattr(res, name)[retry] = getattr(again, name)
         return res
+
+    def continues_from(self, solution: np.ndarray) -> np.ndarray:
+        """``(N,)`` bool: rows of inverse solutions ``solution (N, 6 + n_var)`` (an inverse
+        result's ``solution``) from which a neighbouring point may start — finite, and (on a
+        machine whose head has two revolute actuators) with the tool axis farther than
+        :data:`WRIST_SINGULAR_ANGLE` from the axis of the head's first revolute actuator
+        (module docstring)."""
+        from pkmkit.solve.chains import chain_pose, rotvec_matrices
+
+        solution = np.atleast_2d(np.asarray(solution, dtype=float))
+        ok = np.isfinite(solution).all(axis=1)
+        model = self.model
+        wrist = [i for i, e in enumerate(model.head) if model.elements[e].type == "R"
+                 and model.element_variable[e] >= 0
+                 and model.actuated[model.element_variable[e]]]
+        if len(wrist) < 2 or not ok.any():
+            return ok
+        u = solution[ok].T
+        start = (rotvec_matrices(u[3:6]), u[:3])
+        values = u[6:]
+        first = chain_pose(model, tuple(model.head[:wrist[0] + 1]), values, start=start)
+        tool = chain_pose(model, tuple(model.head), values, start=start)
+        sine = np.linalg.norm(np.cross(first.R[:, 2].T, tool.R[:, 2].T), axis=1)
+        ok[ok] = sine > np.sin(WRIST_SINGULAR_ANGLE)
+        return ok

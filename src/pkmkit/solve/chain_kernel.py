@@ -728,7 +728,7 @@ def closure_rates(cu: np.ndarray, cq: np.ndarray, rcond: float, tol: float, expe
     closure, or a machine rank-deficient at home — take the exact path: a one-sided Jacobi SVD
     (``C_U V = U Σ``, V accumulated; :mod:`pkmkit.numerics.svd_kernel`'s iteration) and
     ``C_U⁺ = V Σ⁻¹ Uᵀ``. Rows holding a non-finite entry give NaN (rank 0)."""
-    n, r, c = cu.shape
+    n, _, c = cu.shape
     du = np.empty((n, c, cq.shape[2]))
     rank = np.zeros(n, dtype=np.int64)
     ratio = np.empty(n)
