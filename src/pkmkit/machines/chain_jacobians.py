@@ -335,7 +335,7 @@ def _closure_rates(cu: np.ndarray, cq: np.ndarray, tol: float, expected: int, si
 
     if not single and cu.shape[1] >= cu.shape[2] and use_compiled_solver(len(cu)) \
             and compiled_closure_available():
-        from pkmkit.solve.chain_kernel import closure_rates
+        from pkmkit.solve.chain_linalg import closure_rates
 
         return closure_rates(cu, cq, RANK_RCOND, tol, expected)
     pinv, sv = _pinv_and_singular_values(cu, RANK_RCOND)
