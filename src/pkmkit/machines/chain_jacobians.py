@@ -218,12 +218,10 @@ class ChainVelocity:
         values[:, self._passive] = np.nan_to_num(direct.passive)  # failed rows: NaN at the end
         rot = rotvec_to_matrix(np.nan_to_num(direct.platform[:, 3:])).transpose(1, 2, 0)
         p_x = np.nan_to_num(direct.platform[:, :3]).T
-        c = closure(self.model, rot, p_x, values.T)
         length = self.model.characteristic_length
         loop_act = [i for i in self._actuated if self.model.loop_variables[i]]
         head_act = [i for i in self._actuated if not self.model.loop_variables[i]]
-        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1).transpose(2, 0, 1)
-        cq = c.variables[:, loop_act].transpose(2, 0, 1)
+        cu, cq = self._closure_columns(values, direct.platform, loop_act, rot, p_x)
         closed = np.isfinite(direct.passive).all(axis=1)  # rows with an assembly
         du = np.full((n, cu.shape[2], len(loop_act)), np.nan)
         rank = np.zeros(n, dtype=int)
@@ -281,6 +279,28 @@ class ChainVelocity:
             return ChainJacobians(**{k: (v[0] if isinstance(v, np.ndarray) else v)
                                      for k, v in out.__dict__.items()})
         return out
+
+    def _closure_columns(self, values: np.ndarray, platform: np.ndarray, loop_act: list,
+                         rot: np.ndarray, p_x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(C_U (N, 6L, 6 + n_p), C_q (N, 6L, n_loop))``: the closure's Jacobian at
+        ``values (N, n_var)`` and ``platform (N, 6)`` (``rot (3, 3, N)``, ``p_x (3, N)`` its
+        rotation and position) for the platform and passive joints, and for the legs'
+        actuators — compiled (:func:`pkmkit.solve.chain_kernel.closure_jacobian`) in a batch
+        the compiled solvers take, else :func:`pkmkit.solve.chains.closure`."""
+        from pkmkit.numerics.jit import use_compiled_solver
+        from pkmkit.solve.chains import compiled_closure_available
+
+        n_u = 6 + len(self._passive)
+        if len(values) > 1 and use_compiled_solver(len(values)) \
+                and compiled_closure_available():
+            from pkmkit.solve.chain_kernel import closure_jacobian
+
+            full = closure_jacobian(self.model, values, np.nan_to_num(platform),
+                                    np.concatenate([self._passive, loop_act]).astype(int))
+            return full[:, :, :n_u], full[:, :, n_u:]
+        c = closure(self.model, rot, p_x, values.T)
+        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1)
+        return cu.transpose(2, 0, 1), c.variables[:, loop_act].transpose(2, 0, 1)
 
     def _expected_rank(self) -> int:
         values = self._home["values"][:, None]

@@ -116,6 +116,36 @@ def solve_inverse(model: JointChainModel, targets: np.ndarray, u0: np.ndarray,
     return u, status, residual, iterations
 
 
+def closure_jacobian(model: JointChainModel, values: np.ndarray, platform: np.ndarray,
+                     variables: np.ndarray) -> np.ndarray:
+    """``(N, 6L, 6 + len(variables))`` the closure's Jacobian at configurations ``values
+    (N, n_var)`` (every joint variable) and ``platform (N, 6)`` (position, rotation vector):
+    columns the platform increments, then ``variables`` — :func:`pkmkit.solve.chains.closure`'s
+    ``platform`` and ``variables[:, variables]`` side by side, compiled."""
+    variables = np.asarray(variables, dtype=int)
+    frames, types, evar, elements, offsets, position = model_arrays(model, variables)
+    values = np.ascontiguousarray(values, dtype=float)
+    u = np.empty((len(values), 6 + len(variables)))
+    u[:, :6] = platform
+    u[:, 6:] = values[:, variables]
+    out = np.empty((len(values), 6 * len(model.legs), u.shape[1]))
+    _jacobian_rows(frames, types, evar, elements, offsets, position, values, u,
+                   float(model.characteristic_length), out)
+    return out
+
+
+@njit(**_OPTIONS)
+def _jacobian_rows(frames, types, evar, elements, offsets, position, values, u, length,
+                   out):  # pragma: no cover
+    r = np.empty(out.shape[1])
+    row = np.empty(values.shape[1])
+    scratch = _scratch(elements.shape[0])
+    for k in range(u.shape[0]):
+        row[:] = values[k]
+        _evaluate(frames, types, evar, elements, offsets, position, row, u[k], length, r,
+                  out[k], scratch)
+
+
 @njit(**_OPTIONS)
 def _evaluate_any(frames, types, evar, elements, offsets, position, values, u, length, r, jac,
                   scratch, head, target, tool, inverse):  # pragma: no cover
@@ -211,6 +241,7 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
     r_new, j_new = np.empty(m), np.empty((m, n))
     u_new, step, grad = np.empty(n), np.empty(n), np.empty(n)
     h, low = np.empty((n, n)), np.empty((n, n))
+    nz = np.empty(n, dtype=np.int64)
     scratch = _scratch(elements.shape[0] + head.shape[0])
     for k in range(u.shape[0]):
         finite = True
@@ -249,14 +280,24 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
                 stopped = True
                 break
             # damped normal equations (JᵀJ + λ (D + floor)) δ = −Jᵀr
+            # JᵀJ row by row over each row's non-zero columns (a leg's rows see the platform
+            # and its own joints): the same sums in the same order, the zero terms skipped
+            h[:, :] = 0.0
+            for i in range(m):
+                count_nz = 0
+                for a in range(n):
+                    if jac[i, a] != 0.0:
+                        nz[count_nz] = a
+                        count_nz += 1
+                for p in range(count_nz):
+                    a = nz[p]
+                    v = jac[i, a]
+                    for t in range(p + 1):
+                        h[a, nz[t]] += v * jac[i, nz[t]]
             dmax = 0.0
             for a in range(n):
-                for b in range(a + 1):
-                    s = 0.0
-                    for i in range(m):
-                        s += jac[i, a] * jac[i, b]
-                    h[a, b] = s
-                    h[b, a] = s
+                for b in range(a):
+                    h[b, a] = h[a, b]
                 if h[a, a] > dmax:
                     dmax = h[a, a]
             floor = 1e-9 * dmax + 1e-300
