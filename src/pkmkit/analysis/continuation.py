@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import StrokeWarning
+from pkmkit.progress import tracked
 
 
 @dataclass(frozen=True)
@@ -53,7 +54,9 @@ def inverse_of_chunk(machine: Any, points: np.ndarray, slab: int | None) -> Any:
         if not (slab and machine.inverse_continues and len(points) > slab):
             return machine.ik(points, full_output=True)
         parts, start = [], None
-        for k in range(0, len(points), slab):
+        slabs = range(0, len(points), slab)
+        for k in tracked(slabs, total=len(slabs), unit="slab",
+                         label=f"{machine.id}: inverse model of {len(points):,} poses"):
             piece = points[k:k + slab]
             inv = (machine.ik(piece, full_output=True) if start is None else
                    machine.ik(piece, full_output=True, start=start[:len(piece)]))

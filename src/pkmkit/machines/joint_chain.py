@@ -575,7 +575,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         res, status, q, joint_values, lengths = self._inverse_solve(xb, single, q0, tool_length,
                                                                     engine_options, start)
         joints = np.flatnonzero(self.model.loop_variables | self.model.actuated)
-        bad, texts = (stroke_violations(self.model, joint_values, joints, status == Status.OK)
+        bad, texts = (stroke_violations(self.model, joint_values, joints, status == Status.OK,
+                                        messages=single)
                       if strokes != "ignore" else (np.zeros(n, dtype=bool), [""] * n))
         if strokes == "refuse":
             status[bad] = Status.OUT_OF_STROKE
