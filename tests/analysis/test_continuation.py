@@ -91,17 +91,17 @@ def test_continuation_is_the_default(grid_and_machine, monkeypatch):
 
 @pytest.fixture(scope="module")
 def wrist_grid():
-    """A 15 × 5 × 5 grid crossing the Tripteor's wrist singularity (Q5 = 0: the tool axis along
+    """A 25 × 4 × 4 grid crossing the Tripteor's wrist singularity (Q5 = 0: the tool axis along
     Q4's, where the head's two branches meet): its first axis tilts the tool axis (the i
-    component from −0.1 to 0.25, Q5 from about −2° to 19°), the others move the tool point over
+    component from −0.1 to 0.6, Q5 from about −1° to 39°), the others move the tool point over
     10 × 10 cm of the default box's middle."""
     m = pkmkit.machine("tripteor-x7")
     lo, hi = m.default_box()
     c = (lo + hi) / 2
     g = make_grid(np.array([-0.1, c[0] - 0.05, c[1] - 0.05]),
-                  np.array([0.25, c[0] + 0.05, c[1] + 0.05]), free=(3, 0, 1),
-                  base=np.array([*c, *m.home_pose[3:]]), names=m.pose_names, resolution=15)
-    assert g.shape == (15, 5, 5)
+                  np.array([0.6, c[0] + 0.05, c[1] + 0.05]), free=(3, 0, 1),
+                  base=np.array([*c, *m.home_pose[3:]]), names=m.pose_names, resolution=25)
+    assert g.shape == (25, 4, 4)
     return m, g
 
 
@@ -115,8 +115,8 @@ def _same_evaluations(a, b):
 def test_across_the_wrist_singularity_continuation_keeps_the_home_branch(wrist_grid):
     """Every mask, q and factor of the start from home, on a grid crossing the wrist
     singularity without strokes (every reachable point counts, both branches are within the
-    passive joints' ranges) — while most points beyond 10° of it did continue from their
-    neighbours."""
+    passive joints' ranges) — while the points beyond 20° of it did continue from their
+    neighbours, in fewer iterations."""
     m, g = wrist_grid
     crit = Criteria(strokes=False, bounds=(0.2, 5.0))
     home = evaluate_grid(m, g, replace(crit, continuation=False))
@@ -125,9 +125,9 @@ def test_across_the_wrist_singularity_continuation_keeps_the_home_branch(wrist_g
     inv = m.ik(g.points, full_output=True)
     assert home.masks["reachable"].all()
     q5 = np.degrees(inv.q[:, 4])
-    assert q5.min() < 0 < 15 < q5.max()
+    assert q5.min() < 0 < 30 < q5.max()
     near = ~m.continues_from(inv.solution)
-    assert 0.5 * g.size < near.sum() < 0.9 * g.size
+    assert 0.3 * g.size < near.sum() < 0.7 * g.size
     slab = g.size // g.shape[0]
     sol = inverse_of_chunk(m, g.points, slab)
     far = np.flatnonzero(~near[slab:]) + slab

@@ -7,6 +7,23 @@ joints, which a tool pose (point and axis) does not give: a joint chain takes th
 ``passive`` side by side) and refuses a pose ``x0`` with
 :class:`~pkmkit.exceptions.UnsupportedOperationError`. Its former ``x0`` of ``6 + n_passive``
 values still works for one release, with a :class:`DeprecationWarning`.
+
+**Where a neighbour's solution is not a start** (issue 22 §3). A two-axis head (the Tripteor's
+and the TriMule's Q4, Q5) reaches a tool pose on two branches, ``(Q4 + π, −Q5)`` with the
+platform moved accordingly (the Tripteor's: ``−Q5 − 2.7°`` or so, its platform tilts). Next
+to the wrist singularity — the tool axis along the first head joint's axis, where Q4 turns the
+tool about itself — the branches meet, and which one the inverse model ends on depends on its
+start: from home, one (near the singularity the branch whose Q5 is nearer home's, farther
+away the one whose Q4 is); from a neighbouring point's solution (continuation), the other as
+often as not (137 of 4,096 points of the Tripteor's default box at home's tool axis), which
+moves the transmission factors. The rule stated: **a grid's inverse model reports the branch
+the start from home reaches.** Continuation keeps it by not starting from a neighbour within
+:data:`WRIST_SINGULAR_ANGLE` of that singularity (:meth:`ChainWarmStart.continues_from`):
+those points start from home. 10° was not enough — a neighbour at Q5 = −10.4° on one branch
+continued where home reaches Q5 = 7.4° on the other (docs/joint-chains.md's ``--no-strokes``
+box); at 20° the continued grids agree with the start from home point by point (masks, q and
+factors: tests/analysis/test_continuation.py, that box and the default studies' outputs). It
+is a margin checked on these grids, not a proof: the home start's branch has no closed rule.
 """
 
 from __future__ import annotations
@@ -21,7 +38,7 @@ from pkmkit.status import Status
 
 #: A neighbour's solution whose tool axis lies within this angle (rad) of its head's first
 #: revolute axis (the wrist singularity) is not used as a continuation start.
-WRIST_SINGULAR_ANGLE = np.radians(10.0)
+WRIST_SINGULAR_ANGLE = np.radians(20.0)
 
 
 class ChainWarmStart:
