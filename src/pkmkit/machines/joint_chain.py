@@ -635,6 +635,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                                              **engine_options)
 
         res = self._solve_inverse_from(solve, targets, u0, u_home, started, lengths)
+        if q0 is None:  # the default start's branch of the head, whatever the start
+            self._nearest_branch(solve, targets, res, lengths)
         status = res.status.copy()
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
         status[~valid_rows(xb) | bad_axis] = Status.INVALID_INPUT

@@ -8,22 +8,24 @@ joints, which a tool pose (point and axis) does not give: a joint chain takes th
 :class:`~pkmkit.exceptions.UnsupportedOperationError`. Its former ``x0`` of ``6 + n_passive``
 values still works for one release, with a :class:`DeprecationWarning`.
 
-**Where a neighbour's solution is not a start** (issue 22 §3). A two-axis head (the Tripteor's
-and the TriMule's Q4, Q5) reaches a tool pose on two branches, ``(Q4 + π, −Q5)`` with the
-platform moved accordingly (the Tripteor's: ``−Q5 − 2.7°`` or so, its platform tilts). Next
-to the wrist singularity — the tool axis along the first head joint's axis, where Q4 turns the
-tool about itself — the branches meet, and which one the inverse model ends on depends on its
-start: from home, one (near the singularity the branch whose Q5 is nearer home's, farther
-away the one whose Q4 is); from a neighbouring point's solution (continuation), the other as
-often as not (137 of 4,096 points of the Tripteor's default box at home's tool axis), which
-moves the transmission factors. The rule stated: **a grid's inverse model reports the branch
-the start from home reaches.** Continuation keeps it by not starting from a neighbour within
-:data:`WRIST_SINGULAR_ANGLE` of that singularity (:meth:`ChainWarmStart.continues_from`):
-those points start from home. 10° was not enough — a neighbour at Q5 = −10.4° on one branch
-continued where home reaches Q5 = 7.4° on the other (docs/joint-chains.md's ``--no-strokes``
-box); at 20° the continued grids agree with the start from home point by point (masks, q and
-factors: tests/analysis/test_continuation.py, that box and the default studies' outputs). It
-is a margin checked on these grids, not a proof: the home start's branch has no closed rule.
+**The head's branch** (issue 22 §3). A two-axis head (the Tripteor's and the TriMule's Q4, Q5)
+reaches a tool pose on two branches, ``(Q4 + π, −Q5)`` with the platform moved accordingly
+(the Tripteor's ``−Q5 − 2.7°`` or so: its platform tilts). Which one the engine ends on
+depends on its start: from home mostly the branch whose Q4 is nearer home's, but not always
+(next to the wrist singularity — the tool axis along Q4's, where Q4 turns the tool about
+itself — and wherever Q4 is near ±90°, adjacent grid points from home split between the
+branches); from a neighbouring point's solution (continuation) whichever branch the
+neighbour was on (137 of 4,096 points of the Tripteor's default box at home's tool axis
+differed), which moved the transmission factors. The rule stated: **the inverse model from
+its default start (no** ``q0`` **) reports the branch whose first wrist actuator (Q4) is
+nearer its home value** (:meth:`ChainWarmStart._nearest_branch`: a solution farther than a
+quarter turn less :data:`BRANCH_BAND` from home has its mirror solved from ``(Q4 + π,
+2·Q5_home − Q5)`` and the nearer one is kept), whatever the start — home or a neighbour —
+so a grid solved by continuation and the same grid solved from home agree point by point.
+Right at the singularity Q4 is undetermined and the mirror may not come out nearer (then
+either is reported): continuation does not start from a neighbour within
+:data:`WRIST_SINGULAR_ANGLE` of it (:meth:`ChainWarmStart.continues_from`), those points start
+from home. With ``q0`` the caller chooses the branch and nothing is changed.
 """
 
 from __future__ import annotations
@@ -38,7 +40,10 @@ from pkmkit.status import Status
 
 #: A neighbour's solution whose tool axis lies within this angle (rad) of its head's first
 #: revolute axis (the wrist singularity) is not used as a continuation start.
-WRIST_SINGULAR_ANGLE = np.radians(20.0)
+WRIST_SINGULAR_ANGLE = np.radians(5.0)
+#: A solution whose head's first revolute actuator lies farther than a quarter turn less this
+#: (rad) from home has its mirror branch solved too (:meth:`ChainWarmStart._nearest_branch`).
+BRANCH_BAND = np.radians(15.0)
 
 
 class ChainWarmStart:
@@ -126,3 +131,41 @@ class ChainWarmStart:
         sine = np.linalg.norm(np.cross(first.R[:, 2].T, tool.R[:, 2].T), axis=1)
         ok[ok] = sine > np.sin(WRIST_SINGULAR_ANGLE)
         return ok
+
+    def _nearest_branch(self, solve: Any, targets: np.ndarray, res: Any,
+                        lengths: np.ndarray) -> None:
+        """The head's branch of the default start (module docstring): rows of ``res`` (updated
+        in place) whose head's first revolute actuator lies farther than a quarter turn less
+        :data:`BRANCH_BAND` from home get the mirror branch solved (from ``Q4 + π``,
+        ``2 Q5_home − Q5``), which replaces them where it converges nearer home."""
+        pair = self._wrist_pair()
+        if pair is None:
+            return
+        a, b = pair
+        home = self._home["values"]
+
+        def distance(u: np.ndarray) -> np.ndarray:
+            with np.errstate(invalid="ignore"):
+                return np.abs(np.angle(np.exp(1j * (u[:, 6 + a] - home[a]))))
+
+        rows = np.flatnonzero((res.status == Status.OK)
+                              & (distance(res.u) > 0.5 * np.pi - BRANCH_BAND))
+        if not rows.size:
+            return
+        u0 = res.u[rows].copy()
+        u0[:, 6 + a] += np.pi
+        u0[:, 6 + b] = 2.0 * home[b] - u0[:, 6 + b]
+        again = solve(targets[rows], u0, lengths[rows])
+        with np.errstate(invalid="ignore"):
+            nearer = (again.status == Status.OK) & (distance(again.u) < distance(res.u[rows]))
+        res.iterations[rows] += again.iterations
+        for name in ("u", "status", "residual", "rank"):
+            getattr(res, name)[rows[nearer]] = getattr(again, name)[nearer]
+
+    def _wrist_pair(self) -> tuple[int, int] | None:
+        """``(Q4, Q5)``: the variables of the head's first two revolute actuators, or None."""
+        model = self.model
+        wrist = [int(model.element_variable[e]) for e in model.head
+                 if model.elements[e].type == "R" and model.element_variable[e] >= 0
+                 and model.actuated[model.element_variable[e]]]
+        return (wrist[0], wrist[1]) if len(wrist) >= 2 else None
