@@ -56,8 +56,8 @@ class Criteria:
         continuation: solve a grid's inverse model slab by slab from the neighbouring slab's
             solution where the machine's inverse continues (joint chains:
             :mod:`pkmkit.analysis.continuation`; ~40 % fewer iterations away from a head's
-            wrist singularity, the same results: next to it the points start from home, whose
-            branch of the head the grid reports). On by default.
+            wrist singularity). On by default: the results are those of the start from home
+            (the head's branch is stated, :mod:`pkmkit.machines.warm_starts`).
     """
 
     bounds: tuple[float, float] | None = None
