@@ -76,8 +76,9 @@ def test_chunks_cut_across_slabs_continue_the_same(grid_and_machine, monkeypatch
     np.testing.assert_allclose(cut.q, whole.q, rtol=0, atol=1e-12)
 
 
-def test_continuation_is_the_default(grid_and_machine, monkeypatch):
-    """On by default (slab by slab); ``continuation=False`` solves the grid at once."""
+def test_continuation_is_asked_for(grid_and_machine, monkeypatch):
+    """Off by default (the grid at once, every point from home); ``continuation=True`` solves
+    it slab by slab."""
     import pkmkit.analysis.criteria as criteria
 
     seen = []
@@ -85,8 +86,8 @@ def test_continuation_is_the_default(grid_and_machine, monkeypatch):
                         lambda m, p, slab: seen.append(slab) or m.ik(p, full_output=True))
     m, g = grid_and_machine
     evaluate_grid(m, g, Criteria())
-    evaluate_grid(m, g, Criteria(continuation=False))
-    assert seen == [g.size // g.shape[0], None]
+    evaluate_grid(m, g, Criteria(continuation=True))
+    assert seen == [None, g.size // g.shape[0]]
 
 
 @pytest.fixture(scope="module")
@@ -119,8 +120,8 @@ def test_across_the_wrist_singularity_continuation_keeps_the_home_branch(wrist_g
     neighbours, in fewer iterations."""
     m, g = wrist_grid
     crit = Criteria(strokes=False, bounds=(0.2, 5.0))
-    home = evaluate_grid(m, g, replace(crit, continuation=False))
-    cont = evaluate_grid(m, g, crit)
+    home = evaluate_grid(m, g, crit)
+    cont = evaluate_grid(m, g, replace(crit, continuation=True))
     _same_evaluations(cont, home)
     inv = m.ik(g.points, full_output=True)
     assert home.masks["reachable"].all()
@@ -144,7 +145,7 @@ def test_without_the_rule_continuation_changes_branches(wrist_grid, monkeypatch)
 
     warm_starts = importlib.import_module("pkmkit.machines.warm_starts")
     m, g = wrist_grid
-    crit = Criteria(strokes=False)
+    crit = Criteria(strokes=False, continuation=True)
     home = evaluate_grid(m, g, replace(crit, continuation=False))
     monkeypatch.setattr(warm_starts, "WRIST_SINGULAR_ANGLE", 0.0)
     monkeypatch.setattr(JointChainMachine, "_nearest_branch", lambda *args: None)

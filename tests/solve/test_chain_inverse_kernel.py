@@ -79,7 +79,7 @@ def test_compiled_closure_rates_are_the_pseudo_inverse(grid):
 
 
 def test_workspace_criteria_compiled_and_numpy_agree(grid, monkeypatch):
-    """The criteria of a grid (continuation on) with the compiled kernels and through the NumPy
+    """The criteria of a grid with the compiled kernels and through the NumPy
     engine and LAPACK (``PKMKIT_COMPILED=0``): the same masks, q to 1e-10, factors to 1e-10."""
     m, g = grid
     fast = evaluate_grid(m, g, Criteria(bounds=(0.2, 5.0)))

@@ -18,9 +18,10 @@ branches); from a neighbouring point's solution (continuation) whichever branch 
 neighbour was on (137 of 4,096 points of the Tripteor's default box at home's tool axis
 differed), which moved the transmission factors. The rule stated: **the inverse model from
 its default start (no** ``q0`` **) reports the branch whose first wrist actuator (Q4) is
-nearer its home value** (:meth:`ChainWarmStart._nearest_branch`: a solution farther than a
-quarter turn less :data:`BRANCH_BAND` from home has its mirror solved from ``(Q4 + π,
-2·Q5_home − Q5)`` and the nearer one is kept), whatever the start — home or a neighbour —
+nearer its home value**, unless only the other one has every joint within its stroke
+(:meth:`ChainWarmStart._nearest_branch`: a solution farther than a quarter turn less
+:data:`BRANCH_BAND` from home has its mirror solved from ``(Q4 + π, 2·Q5_home − Q5)``; the one
+within the strokes is kept, else the nearer), whatever the start — home or a neighbour —
 so a grid solved by continuation and the same grid solved from home agree point by point.
 Right at the singularity Q4 is undetermined and the mirror may not come out nearer (then
 either is reported): continuation does not start from a neighbour within
@@ -137,7 +138,8 @@ class ChainWarmStart:
         """The head's branch of the default start (module docstring): rows of ``res`` (updated
         in place) whose head's first revolute actuator lies farther than a quarter turn less
         :data:`BRANCH_BAND` from home get the mirror branch solved (from ``Q4 + π``,
-        ``2 Q5_home − Q5``), which replaces them where it converges nearer home."""
+        ``2 Q5_home − Q5``), which replaces them where it converges within the strokes and
+        they are not, or where both are (or neither is) and it is nearer home."""
         pair = self._wrist_pair()
         if pair is None:
             return
@@ -156,11 +158,29 @@ class ChainWarmStart:
         u0[:, 6 + a] += np.pi
         u0[:, 6 + b] = 2.0 * home[b] - u0[:, 6 + b]
         again = solve(targets[rows], u0, lengths[rows])
+        inside, inside_again = self._within_strokes(res.u[rows]), self._within_strokes(again.u)
         with np.errstate(invalid="ignore"):
-            nearer = (again.status == Status.OK) & (distance(again.u) < distance(res.u[rows]))
+            nearer = (again.status == Status.OK) & (
+                (inside_again & ~inside)
+                | ((inside_again == inside) & (distance(again.u) < distance(res.u[rows]))))
         res.iterations[rows] += again.iterations
         for name in ("u", "status", "residual", "rank"):
             getattr(res, name)[rows[nearer]] = getattr(again, name)[nearer]
+
+    def _within_strokes(self, u: np.ndarray) -> np.ndarray:
+        """``(N,)`` bool: every joint (actuators, revolute ones on the turn nearest home, and
+        the legs' passive joints) of the solutions ``u (N, 6 + n_var)`` within its stroke."""
+        from pkmkit.machines.strokes import signed_excess
+
+        model = self.model
+        values = u[:, 6:].copy()
+        turn = [int(v) for v in self._actuated if self._element_of(int(v)).type == "R"]
+        home = self._home["values"][turn]
+        with np.errstate(invalid="ignore"):
+            values[:, turn] = home + np.angle(np.exp(1j * (values[:, turn] - home)))
+            joints = np.flatnonzero(model.loop_variables | model.actuated)
+            excess = signed_excess(values[:, joints], model.q_min[joints], model.q_max[joints])
+        return ~(excess != 0).any(axis=1)
 
     def _wrist_pair(self) -> tuple[int, int] | None:
         """``(Q4, Q5)``: the variables of the head's first two revolute actuators, or None."""
