@@ -169,3 +169,18 @@ def test_the_default_start_reports_the_branch_nearest_home():
     near = m.ik(x, start=far.solution, strokes="ignore")
     assert abs(np.degrees(near[3]) - 10.0) < 1e-6 and abs(np.degrees(near[4]) - 30.0) < 1e-6
     np.testing.assert_allclose(near, m.ik(x, strokes="ignore"), rtol=0, atol=1e-12)
+
+
+def test_the_trimule_reports_the_near_branch_within_its_strokes():
+    """A TriMule tool pose whose start from home ended on the head's far branch (Q4 ≈ −164°,
+    a joint beyond its stroke: the point was lost to its workspace): the stated branch is the
+    near one (Q4 ≈ 15°), within every stroke."""
+    m = pkmkit.machine("trimule-600")
+    x = np.array([-0.5849, -0.1391, 1.215, 0.0, 0.0, 1.0])
+    near = m.ik(x, full_output=True)
+    assert abs(np.degrees(near.q[3])) < 90 and not near.out_of_stroke
+    q0 = np.array(near.q) + np.array([0, 0, 0, np.pi, 0])
+    q0[4] = -q0[4]
+    far = m.ik(x, q0=q0, full_output=True, strokes="ignore")
+    assert abs(np.degrees(far.q[3])) > 90
+    assert m.ik(x[None], q0=far.q[None], full_output=True).out_of_stroke[0]
