@@ -158,12 +158,10 @@ def _evaluate_any(frames, types, evar, elements, offsets, position, values, u, l
 
 
 @njit(**_OPTIONS)
-def _tool_rows(frames, types, evar, head, position, values, u, length, target, tool, base, r,
-               jac, scratch):  # pragma: no cover
-    """The tool rows of the inverse model at rows ``base:base + 6`` (``_evaluate`` has filled
-    ``values`` from ``u`` and zeroed ``jac``): the head walked from the platform frame, the
-    tool point ``tool`` along its z axis; columns: the platform increments (a rigid motion of
-    the tool frame) and the head's unknown variables (their spatial twists)."""
+def _head_walk(frames, types, evar, head, position, values, u, scratch):  # pragma: no cover
+    """The tool frame into ``scratch``'s rotation and position, walked along the head from the
+    platform pose ``u[:6]``; the spatial twists of the head's unknown variables into its twist
+    rows. Returns their count."""
     mats, pos, tw, tw_col = scratch
     rot, tmp = mats[1], mats[2]
     _rotvec_matrix(u[3], u[4], u[5], rot)
@@ -202,6 +200,19 @@ def _tool_rows(frames, types, evar, head, position, values, u, length, target, t
             pos[0] += q * z0
             pos[1] += q * z1
             pos[2] += q * z2
+    return n_twist
+
+
+@njit(**_OPTIONS)
+def _tool_rows(frames, types, evar, head, position, values, u, length, target, tool, base, r,
+               jac, scratch):  # pragma: no cover
+    """The tool rows of the inverse model at rows ``base:base + 6`` (``_evaluate`` has filled
+    ``values`` from ``u`` and zeroed ``jac``): the head walked from the platform frame, the
+    tool point ``tool`` along its z axis; columns: the platform increments (a rigid motion of
+    the tool frame) and the head's unknown variables (their spatial twists)."""
+    mats, pos, tw, tw_col = scratch
+    rot = mats[1]
+    n_twist = _head_walk(frames, types, evar, head, position, values, u, scratch)
     a0, a1, a2 = rot[0, 2], rot[1, 2], rot[2, 2]
     p0, p1, p2 = pos[0] + tool * a0, pos[1] + tool * a1, pos[2] + tool * a2
     r[base + 0], r[base + 1], r[base + 2] = p0 - target[0], p1 - target[1], p2 - target[2]

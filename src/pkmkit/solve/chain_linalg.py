@@ -130,10 +130,10 @@ _MAX_SWEEPS = 60
 
 
 @njit(**_OPTIONS)
-def _qr_rates(a, b, rinv, du_m, threshold):  # pragma: no cover
-    """Householder QR of ``a (r, c)`` (overwritten: R above the diagonal) applied to ``b
-    (r, k)``; when ``1 / (‖R‖_F ‖R⁻¹‖_F) > threshold`` writes ``du_m = −R⁻¹ (Qᵀ b)[:c]`` and
-    returns that bound, else returns −1."""
+def _householder(a, b):  # pragma: no cover
+    """Householder QR of ``a (r, c)`` in place (R on and above the diagonal, the reflectors
+    below, their leading entries lost), the reflections applied to ``b (r, k)``; False where a
+    column is zero (no R)."""
     r, c = a.shape
     k = b.shape[1]
     for j in range(c):
@@ -142,7 +142,7 @@ def _qr_rates(a, b, rinv, du_m, threshold):  # pragma: no cover
             norm += a[i, j] * a[i, j]
         norm = math.sqrt(norm)
         if norm == 0.0:
-            return -1.0
+            return False
         alpha = -norm if a[j, j] >= 0 else norm
         v0 = a[j, j] - alpha
         # v = (v0, a[j+1:, j]); H = I − 2 v vᵀ / vᵀv
@@ -165,6 +165,18 @@ def _qr_rates(a, b, rinv, du_m, threshold):  # pragma: no cover
             for i in range(j, r):
                 b[i, col] -= s * a[i, j]
         a[j, j] = alpha
+    return True
+
+
+@njit(**_OPTIONS)
+def _qr_rates(a, b, rinv, du_m, threshold):  # pragma: no cover
+    """Householder QR of ``a (r, c)`` (overwritten: R above the diagonal) applied to ``b
+    (r, k)``; when ``1 / (‖R‖_F ‖R⁻¹‖_F) > threshold`` writes ``du_m = −R⁻¹ (Qᵀ b)[:c]`` and
+    returns that bound, else returns −1."""
+    c = a.shape[1]
+    k = b.shape[1]
+    if not _householder(a, b):
+        return -1.0
     frob, frob_inv = 0.0, 0.0
     for i in range(c):
         for j in range(i, c):
@@ -231,18 +243,10 @@ def _closure_rates_rows(cu, cq, rcond, tol, expected, du, rank, ratio):  # pragm
 
 
 @njit(**_OPTIONS)
-def _jacobi_rates(cu_m, cq_m, rcond, work, vmat, norms, sv, du_m):  # pragma: no cover
-    """One row of :func:`closure_rates` by one-sided Jacobi: singular values ``sv``
-    (decreasing) and ``du_m = −C_U⁺ C_q``."""
-    r, c = cu_m.shape
-    k = cq_m.shape[1]
-    tol = r * 2.220446049250313e-16
-    for i in range(r):
-        for j in range(c):
-            work[j, i] = cu_m[i, j]
-    for i in range(c):
-        for j in range(c):
-            vmat[i, j] = 1.0 if i == j else 0.0
+def _jacobi_sweeps(work, vmat, norms, tol):  # pragma: no cover
+    """One-sided Jacobi: rotate pairs of the rows of ``work (c, r)`` (columns of C_U V) until
+    they are orthogonal within ``tol``, the columns of ``vmat (c, c)`` alike."""
+    c, r = work.shape
     for _ in range(_MAX_SWEEPS):
         for i in range(c):
             s = 0.0
@@ -275,6 +279,22 @@ def _jacobi_rates(cu_m, cq_m, rcond, work, vmat, norms, sv, du_m):  # pragma: no
                 norms[j] = beta + tan * gamma
         if not rotated:
             break
+
+
+@njit(**_OPTIONS)
+def _jacobi_rates(cu_m, cq_m, rcond, work, vmat, norms, sv, du_m):  # pragma: no cover
+    """One row of :func:`closure_rates` by one-sided Jacobi: singular values ``sv``
+    (decreasing) and ``du_m = −C_U⁺ C_q``."""
+    r, c = cu_m.shape
+    k = cq_m.shape[1]
+    tol = r * 2.220446049250313e-16
+    for i in range(r):
+        for j in range(c):
+            work[j, i] = cu_m[i, j]
+    for i in range(c):
+        for j in range(c):
+            vmat[i, j] = 1.0 if i == j else 0.0
+    _jacobi_sweeps(work, vmat, norms, tol)
     biggest = 0.0
     for i in range(c):
         s = 0.0
