@@ -4,6 +4,8 @@ iterations; a machine whose inverse does not continue is evaluated at once as be
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -75,7 +77,8 @@ def test_chunks_cut_across_slabs_continue_the_same(grid_and_machine, monkeypatch
 
 
 def test_continuation_is_asked_for(grid_and_machine, monkeypatch):
-    """Off by default: the grid is solved at once, every point from home."""
+    """Off by default (the grid at once, every point from home); ``continuation=True`` solves
+    it slab by slab."""
     import pkmkit.analysis.criteria as criteria
 
     seen = []
@@ -85,3 +88,99 @@ def test_continuation_is_asked_for(grid_and_machine, monkeypatch):
     evaluate_grid(m, g, Criteria())
     evaluate_grid(m, g, Criteria(continuation=True))
     assert seen == [None, g.size // g.shape[0]]
+
+
+@pytest.fixture(scope="module")
+def wrist_grid():
+    """A 25 × 4 × 4 grid crossing the Tripteor's wrist singularity (Q5 = 0: the tool axis along
+    Q4's, where the head's two branches meet): its first axis tilts the tool axis (the i
+    component from −0.1 to 0.6, Q5 from about −1° to 39°), the others move the tool point over
+    10 × 10 cm of the default box's middle."""
+    m = pkmkit.machine("tripteor-x7")
+    lo, hi = m.default_box()
+    c = (lo + hi) / 2
+    g = make_grid(np.array([-0.1, c[0] - 0.05, c[1] - 0.05]),
+                  np.array([0.6, c[0] + 0.05, c[1] + 0.05]), free=(3, 0, 1),
+                  base=np.array([*c, *m.home_pose[3:]]), names=m.pose_names, resolution=25)
+    assert g.shape == (25, 4, 4)
+    return m, g
+
+
+def _same_evaluations(a, b):
+    for name in a.masks:
+        np.testing.assert_array_equal(a.masks[name], b.masks[name], err_msg=name)
+    np.testing.assert_allclose(a.q, b.q, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a.factors, b.factors, rtol=1e-10, atol=0)
+
+
+def test_across_the_wrist_singularity_continuation_keeps_the_home_branch(wrist_grid):
+    """Every mask, q and factor of the start from home, on a grid crossing the wrist
+    singularity without strokes (every reachable point counts, both branches are within the
+    passive joints' ranges) — while the points beyond 5° of it did continue from their
+    neighbours, in fewer iterations."""
+    m, g = wrist_grid
+    crit = Criteria(strokes=False, bounds=(0.2, 5.0))
+    home = evaluate_grid(m, g, crit)
+    cont = evaluate_grid(m, g, replace(crit, continuation=True))
+    _same_evaluations(cont, home)
+    inv = m.ik(g.points, full_output=True)
+    assert home.masks["reachable"].all()
+    q5 = np.degrees(inv.q[:, 4])
+    assert q5.min() < 0 < 30 < q5.max()
+    near = ~m.continues_from(inv.solution)
+    assert 0.05 * g.size < near.sum() < 0.5 * g.size
+    slab = g.size // g.shape[0]
+    sol = inverse_of_chunk(m, g.points, slab)
+    far = np.flatnonzero(~near[slab:]) + slab
+    assert sol.iterations[far].mean() < 0.8 * inv.iterations[far].mean()
+
+
+def test_without_the_rule_continuation_changes_branches(wrist_grid, monkeypatch):
+    """The same grid, neighbours next to the singularity used as starts and no branch rule:
+    points end on the head's other branch (Q4 + π), and the factors move — what the rule
+    prevents."""
+    import importlib
+
+    from pkmkit.machines.joint_chain import JointChainMachine
+
+    warm_starts = importlib.import_module("pkmkit.machines.warm_starts")
+    m, g = wrist_grid
+    crit = Criteria(strokes=False, continuation=True)
+    home = evaluate_grid(m, g, replace(crit, continuation=False))
+    monkeypatch.setattr(warm_starts, "WRIST_SINGULAR_ANGLE", 0.0)
+    monkeypatch.setattr(JointChainMachine, "_nearest_branch", lambda *args: None)
+    cont = evaluate_grid(m, g, crit)
+    both = home.masks["reachable"] & cont.masks["reachable"]
+    turned = np.abs(np.abs(cont.q[both, 3] - home.q[both, 3]) - np.pi) < 0.2
+    assert turned.sum() > 0
+    assert np.abs(cont.factors[both] - home.factors[both]).max() > 1e-3
+
+
+def test_the_default_start_reports_the_branch_nearest_home():
+    """A tool pose reached on the head's far branch (Q4 near 180° from home, from ``q0``): the
+    inverse model started from that very solution (``start``, no ``q0``) reports the near
+    branch, Q4 within a quarter turn of home, as the start from home does; with ``q0`` the
+    caller's branch is kept."""
+    m = pkmkit.machine("tripteor-x7")
+    x = m.fk(np.array([*m.home_q[:3], np.radians(10.0), np.radians(30.0)]))
+    far = m.ik(x, q0=[*m.home_q[:3], np.radians(190.0), np.radians(-30.0)], full_output=True,
+               strokes="ignore")
+    assert abs(np.degrees(far.q[3])) > 160
+    near = m.ik(x, start=far.solution, strokes="ignore")
+    assert abs(np.degrees(near[3]) - 10.0) < 1e-6 and abs(np.degrees(near[4]) - 30.0) < 1e-6
+    np.testing.assert_allclose(near, m.ik(x, strokes="ignore"), rtol=0, atol=1e-12)
+
+
+def test_the_trimule_reports_the_near_branch_within_its_strokes():
+    """A TriMule tool pose whose start from home ended on the head's far branch (Q4 ≈ −164°,
+    a joint beyond its stroke: the point was lost to its workspace): the stated branch is the
+    near one (Q4 ≈ 15°), within every stroke."""
+    m = pkmkit.machine("trimule-600")
+    x = np.array([-0.5849, -0.1391, 1.215, 0.0, 0.0, 1.0])
+    near = m.ik(x, full_output=True)
+    assert abs(np.degrees(near.q[3])) < 90 and not near.out_of_stroke
+    q0 = np.array(near.q) + np.array([0, 0, 0, np.pi, 0])
+    q0[4] = -q0[4]
+    far = m.ik(x, q0=q0, full_output=True, strokes="ignore")
+    assert abs(np.degrees(far.q[3])) > 90
+    assert m.ik(x[None], q0=far.q[None], full_output=True).out_of_stroke[0]

@@ -6,7 +6,9 @@ from the solution of the one before — point ``i`` of a C-order grid starts fro
 home. A point whose neighbour failed starts from home, and so does again a point that does
 not converge from its neighbour (:meth:`~pkmkit.machines.joint_chain.JointChainMachine.ik`),
 so continuation loses no point the start from home reaches; revolute actuators stay on the
-turn nearest home.
+turn nearest home. A neighbour next to a joint-chain head's wrist singularity, where the
+head's two branches meet, is not a start (``machine.continues_from``,
+:mod:`pkmkit.machines.warm_starts`): the grid reports the branch the start from home reaches.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import StrokeWarning
+from pkmkit.progress import tracked
 
 
 @dataclass(frozen=True)
@@ -51,12 +54,15 @@ def inverse_of_chunk(machine: Any, points: np.ndarray, slab: int | None) -> Any:
         if not (slab and machine.inverse_continues and len(points) > slab):
             return machine.ik(points, full_output=True)
         parts, start = [], None
-        for k in range(0, len(points), slab):
+        slabs = range(0, len(points), slab)
+        for k in tracked(slabs, total=len(slabs), unit="slab",
+                         label=f"{machine.id}: inverse model of {len(points):,} poses"):
             piece = points[k:k + slab]
             inv = (machine.ik(piece, full_output=True) if start is None else
                    machine.ik(piece, full_output=True, start=start[:len(piece)]))
             parts.append(inv)
-            start = inv.solution
+            start = np.where(machine.continues_from(inv.solution)[:, None], inv.solution,
+                             np.nan)
     width = 6 + len(machine.passive_names)
     return ContinuedInverse(
         q=np.concatenate([np.atleast_2d(p.q) for p in parts]),

@@ -55,9 +55,12 @@ class Criteria:
             None: the machine's own).
         continuation: solve a grid's inverse model slab by slab from the neighbouring slab's
             solution where the machine's inverse continues (joint chains:
-            :mod:`pkmkit.analysis.continuation`; ~40 % fewer iterations). Off by default: next
-            to a joint-chain head's singularity it may end on the head's other branch (the same
-            tool pose) where the start from home does not, which moves the factors.
+            :mod:`pkmkit.analysis.continuation`; ~40 % fewer iterations away from a head's
+            wrist singularity). The Tripteor's grids then equal the start from home point by
+            point (the head's branch is stated, :mod:`pkmkit.machines.warm_starts`); the
+            TriMule's do not (a neighbour's start reaches other assembly modes of its legs:
+            24 of 13,950 points of its default study change their strokes mask), so it stays
+            off by default.
     """
 
     bounds: tuple[float, float] | None = None

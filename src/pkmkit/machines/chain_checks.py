@@ -73,7 +73,8 @@ def _unit(model: JointChainModel, variable: int) -> tuple[float, str]:
 
 
 def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.ndarray,
-                      rows: np.ndarray | None = None) -> tuple[np.ndarray, list[str]]:
+                      rows: np.ndarray | None = None, *,
+                      messages: bool = True) -> tuple[np.ndarray, list[str]]:
     """Rows whose joint values lie outside their strokes, with a message naming the first
     offending joint of each.
 
@@ -81,6 +82,8 @@ def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.
         values: ``(N, n_var)`` joint values.
         variables: indices of the variables to check.
         rows: ``(N,)`` bool, the rows to check (default all).
+        messages: write the messages (False: every message ``""``, for callers that only
+            need ``bad``).
 
     Returns:
         ``bad (N,)`` bool and ``messages`` (N strings, ``""`` for rows within strokes).
@@ -92,10 +95,10 @@ def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.
     lo, hi = model.q_min[variables], model.q_max[variables]
     outside = (signed_excess(sub, lo, hi) != 0) & rows[:, None]
     bad = outside.any(axis=1)
-    messages = [""] * n
+    texts = [""] * n
     rows_bad = np.flatnonzero(bad)
-    if not rows_bad.size:
-        return bad, messages
+    if not (rows_bad.size and messages):
+        return bad, texts
     # the first offending joint of each bad row, its value and excess, in one pass
     first = np.argmax(outside[rows_bad], axis=1)
     found = sub[rows_bad, first]
@@ -104,8 +107,8 @@ def stroke_violations(model: JointChainModel, values: np.ndarray, variables: np.
     for i, k, value, over in zip(rows_bad.tolist(), first.tolist(), found.tolist(),
                                  excess.tolist(), strict=True):
         variable = int(variables[k])
-        messages[i] = _stroke_text(model, variable, value, over, units[variable])
-    return bad, messages
+        texts[i] = _stroke_text(model, variable, value, over, units[variable])
+    return bad, texts
 
 
 def stroke_message(model: JointChainModel, variable: int, value: float) -> str:

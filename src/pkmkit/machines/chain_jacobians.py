@@ -218,23 +218,18 @@ class ChainVelocity:
         values[:, self._passive] = np.nan_to_num(direct.passive)  # failed rows: NaN at the end
         rot = rotvec_to_matrix(np.nan_to_num(direct.platform[:, 3:])).transpose(1, 2, 0)
         p_x = np.nan_to_num(direct.platform[:, :3]).T
-        c = closure(self.model, rot, p_x, values.T)
         length = self.model.characteristic_length
         loop_act = [i for i in self._actuated if self.model.loop_variables[i]]
         head_act = [i for i in self._actuated if not self.model.loop_variables[i]]
-        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1).transpose(2, 0, 1)
-        cq = c.variables[:, loop_act].transpose(2, 0, 1)
+        cu, cq = self._closure_columns(values, direct.platform, loop_act, rot, p_x)
         closed = np.isfinite(direct.passive).all(axis=1)  # rows with an assembly
         du = np.full((n, cu.shape[2], len(loop_act)), np.nan)
         rank = np.zeros(n, dtype=int)
-        if closed.any():
-            pinv, sv_c = _pinv_and_singular_values(cu[closed], RANK_RCOND)
-            du[closed] = -pinv @ cq[closed]
-            rank[closed] = (sv_c > RANK_RCOND * sv_c[:, :1]).sum(axis=1)
         expected = self._expected_rank()
         ratio = np.full(n, np.nan)
         if closed.any():
-            ratio[closed] = sv_c[:, expected - 1] / sv_c[:, 0]
+            du[closed], rank[closed], ratio[closed] = _closure_rates(
+                cu[closed], cq[closed], tol, expected, single)
         tool = tool_frame(self.model, rot, p_x, values.T, twists=True)
         # platform increments → tool twist, then loop actuators through them
         plat = np.zeros((n, 6, 6))
@@ -285,6 +280,28 @@ class ChainVelocity:
                                      for k, v in out.__dict__.items()})
         return out
 
+    def _closure_columns(self, values: np.ndarray, platform: np.ndarray, loop_act: list,
+                         rot: np.ndarray, p_x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(C_U (N, 6L, 6 + n_p), C_q (N, 6L, n_loop))``: the closure's Jacobian at
+        ``values (N, n_var)`` and ``platform (N, 6)`` (``rot (3, 3, N)``, ``p_x (3, N)`` its
+        rotation and position) for the platform and passive joints, and for the legs'
+        actuators — compiled (:func:`pkmkit.solve.chain_kernel.closure_jacobian`) in a batch
+        the compiled solvers take, else :func:`pkmkit.solve.chains.closure`."""
+        from pkmkit.numerics.jit import use_compiled_solver
+        from pkmkit.solve.chains import compiled_closure_available
+
+        n_u = 6 + len(self._passive)
+        if len(values) > 1 and use_compiled_solver(len(values)) \
+                and compiled_closure_available():
+            from pkmkit.solve.chain_kernel import closure_jacobian
+
+            full = closure_jacobian(self.model, values, np.nan_to_num(platform),
+                                    np.concatenate([self._passive, loop_act]).astype(int))
+            return full[:, :, :n_u], full[:, :, n_u:]
+        c = closure(self.model, rot, p_x, values.T)
+        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1)
+        return cu.transpose(2, 0, 1), c.variables[:, loop_act].transpose(2, 0, 1)
+
     def _expected_rank(self) -> int:
         values = self._home["values"][:, None]
         rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
@@ -322,6 +339,28 @@ class ChainVelocity:
             mobility=mobility, hyperstatism=6 * loops - freedoms + mobility,
             grubler_mobility=6 * (bodies - 1 - len(joints)) + freedoms,
             rank_hyperstatism=full.shape[0] - rank)
+
+
+def _closure_rates(cu: np.ndarray, cq: np.ndarray, tol: float, expected: int, single: bool
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(−C_U⁺ C_q (N, c, k), rank of C_U (N,), σ_expected / σ_max (N,))`` of closure
+    Jacobians ``cu (N, r, c)`` and ``cq (N, r, k)`` (pseudo-inverse and rank cutoff
+    :data:`RANK_RCOND`). A batch the compiled solvers take, with a tall C_U, goes through
+    :func:`pkmkit.solve.chain_kernel.closure_rates` (a QR where the closure is certainly
+    regular — ``ratio`` is then a lower bound above ``tol`` — else a one-sided Jacobi SVD;
+    equal to LAPACK's pseudo-inverse to rounding); a single row (whose error message quotes
+    the ratio) and the rest through LAPACK."""
+    from pkmkit.numerics.jit import use_compiled_solver
+    from pkmkit.solve.chains import compiled_closure_available
+
+    if not single and cu.shape[1] >= cu.shape[2] and use_compiled_solver(len(cu)) \
+            and compiled_closure_available():
+        from pkmkit.solve.chain_linalg import closure_rates
+
+        return closure_rates(cu, cq, RANK_RCOND, tol, expected)
+    pinv, sv = _pinv_and_singular_values(cu, RANK_RCOND)
+    return (-pinv @ cq, (sv > RANK_RCOND * sv[:, :1]).sum(axis=1),
+            sv[:, expected - 1] / sv[:, 0])
 
 
 def _pinv_and_singular_values(a: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray]:

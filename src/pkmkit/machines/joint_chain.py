@@ -389,6 +389,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         valid = valid_rows(qb)
         u0[~valid] = np.nan
         engine_options.setdefault("compute_rank", False)
+        engine_options.setdefault("compiled", use_compiled_solver(n))
         with np.errstate(invalid="ignore", over="ignore"):
             res = solve_closure(self.model, values, u0, unknown_variables=self._passive,
                                 **engine_options)
@@ -575,7 +576,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         res, status, q, joint_values, lengths = self._inverse_solve(xb, single, q0, tool_length,
                                                                     engine_options, start)
         joints = np.flatnonzero(self.model.loop_variables | self.model.actuated)
-        bad, texts = (stroke_violations(self.model, joint_values, joints, status == Status.OK)
+        bad, texts = (stroke_violations(self.model, joint_values, joints, status == Status.OK,
+                                        messages=single)
                       if strokes != "ignore" else (np.zeros(n, dtype=bool), [""] * n))
         if strokes == "refuse":
             status[bad] = Status.OUT_OF_STROKE
@@ -626,6 +628,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             u[~valid_rows(xb) | bad_axis] = np.nan
         lengths = self._tool_lengths(tool_length, n)
         engine_options.setdefault("compute_rank", False)
+        engine_options.setdefault("compiled", use_compiled_solver(n))
 
         def solve(t: np.ndarray, u: np.ndarray, tool: np.ndarray):
             with np.errstate(invalid="ignore", over="ignore"):
@@ -633,9 +636,12 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                                              **engine_options)
 
         res = self._solve_inverse_from(solve, targets, u0, u_home, started, lengths)
-        flip = head_flip_variables(self.kind, self.model.variables)
-        if flip is not None:  # a two-branch head: the branch nearest the start's turn
-            res = nearest_head_branch(solve, targets, lengths, res, u0[:, 6 + flip[0]], flip)
+        if q0 is None:  # the default start's branch of the head, whatever the start
+            self._nearest_branch(solve, targets, res, lengths)
+        else:  # a caller's start: a two-branch head keeps the branch nearest the start's turn
+            flip = head_flip_variables(self.kind, self.model.variables)
+            if flip is not None:
+                res = nearest_head_branch(solve, targets, lengths, res, u0[:, 6 + flip[0]], flip)
         status = res.status.copy()
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
         status[~valid_rows(xb) | bad_axis] = Status.INVALID_INPUT

@@ -7,6 +7,26 @@ joints, which a tool pose (point and axis) does not give: a joint chain takes th
 ``passive`` side by side) and refuses a pose ``x0`` with
 :class:`~pkmkit.exceptions.UnsupportedOperationError`. Its former ``x0`` of ``6 + n_passive``
 values still works for one release, with a :class:`DeprecationWarning`.
+
+**The head's branch** (issue 22 §3). A two-axis head (the Tripteor's and the TriMule's Q4, Q5)
+reaches a tool pose on two branches, ``(Q4 + π, −Q5)`` with the platform moved accordingly
+(the Tripteor's ``−Q5 − 2.7°`` or so: its platform tilts). Which one the engine ends on
+depends on its start: from home mostly the branch whose Q4 is nearer home's, but not always
+(next to the wrist singularity — the tool axis along Q4's, where Q4 turns the tool about
+itself — and wherever Q4 is near ±90°, adjacent grid points from home split between the
+branches); from a neighbouring point's solution (continuation) whichever branch the
+neighbour was on (137 of 4,096 points of the Tripteor's default box at home's tool axis
+differed), which moved the transmission factors. The rule stated: **the inverse model from
+its default start (no** ``q0`` **) reports the branch whose first wrist actuator (Q4) is
+nearer its home value**, unless only the other one has every joint within its stroke
+(:meth:`ChainWarmStart._nearest_branch`: a solution farther than a quarter turn less
+:data:`BRANCH_BAND` from home has its mirror solved from ``(Q4 + π, 2·Q5_home − Q5)``; the one
+within the strokes is kept, else the nearer), whatever the start — home or a neighbour —
+so a grid solved by continuation and the same grid solved from home agree point by point.
+Right at the singularity Q4 is undetermined and the mirror may not come out nearer (then
+either is reported): continuation does not start from a neighbour within
+:data:`WRIST_SINGULAR_ANGLE` of it (:meth:`ChainWarmStart.continues_from`), those points start
+from home. With ``q0`` the caller chooses the branch and nothing is changed.
 """
 
 from __future__ import annotations
@@ -18,6 +38,13 @@ import numpy as np
 
 from pkmkit.exceptions import InputError, UnsupportedOperationError
 from pkmkit.status import Status
+
+#: A neighbour's solution whose tool axis lies within this angle (rad) of its head's first
+#: revolute axis (the wrist singularity) is not used as a continuation start.
+WRIST_SINGULAR_ANGLE = np.radians(5.0)
+#: A solution whose head's first revolute actuator lies farther than a quarter turn less this
+#: (rad) from home has its mirror branch solved too (:meth:`ChainWarmStart._nearest_branch`).
+BRANCH_BAND = np.radians(15.0)
 
 
 class ChainWarmStart:
@@ -80,3 +107,85 @@ class ChainWarmStart:
             for name in ("u", "status", "residual", "iterations", "rank"):
                 getattr(res, name)[retry] = getattr(again, name)
         return res
+
+    def continues_from(self, solution: np.ndarray) -> np.ndarray:
+        """``(N,)`` bool: rows of inverse solutions ``solution (N, 6 + n_var)`` (an inverse
+        result's ``solution``) from which a neighbouring point may start — finite, and (on a
+        machine whose head has two revolute actuators) with the tool axis farther than
+        :data:`WRIST_SINGULAR_ANGLE` from the axis of the head's first revolute actuator
+        (module docstring)."""
+        from pkmkit.solve.chains import chain_pose, rotvec_matrices
+
+        solution = np.atleast_2d(np.asarray(solution, dtype=float))
+        ok = np.isfinite(solution).all(axis=1)
+        model = self.model
+        wrist = [i for i, e in enumerate(model.head) if model.elements[e].type == "R"
+                 and model.element_variable[e] >= 0
+                 and model.actuated[model.element_variable[e]]]
+        if len(wrist) < 2 or not ok.any():
+            return ok
+        u = solution[ok].T
+        start = (rotvec_matrices(u[3:6]), u[:3])
+        values = u[6:]
+        first = chain_pose(model, tuple(model.head[:wrist[0] + 1]), values, start=start)
+        tool = chain_pose(model, tuple(model.head), values, start=start)
+        sine = np.linalg.norm(np.cross(first.R[:, 2].T, tool.R[:, 2].T), axis=1)
+        ok[ok] = sine > np.sin(WRIST_SINGULAR_ANGLE)
+        return ok
+
+    def _nearest_branch(self, solve: Any, targets: np.ndarray, res: Any,
+                        lengths: np.ndarray) -> None:
+        """The head's branch of the default start (module docstring): rows of ``res`` (updated
+        in place) whose head's first revolute actuator lies farther than a quarter turn less
+        :data:`BRANCH_BAND` from home get the mirror branch solved (from ``Q4 + π``,
+        ``2 Q5_home − Q5``), which replaces them where it converges within the strokes and
+        they are not, or where both are (or neither is) and it is nearer home."""
+        pair = self._wrist_pair()
+        if pair is None:
+            return
+        a, b = pair
+        home = self._home["values"]
+
+        def distance(u: np.ndarray) -> np.ndarray:
+            with np.errstate(invalid="ignore"):
+                return np.abs(np.angle(np.exp(1j * (u[:, 6 + a] - home[a]))))
+
+        rows = np.flatnonzero((res.status == Status.OK)
+                              & (distance(res.u) > 0.5 * np.pi - BRANCH_BAND))
+        if not rows.size:
+            return
+        u0 = res.u[rows].copy()
+        u0[:, 6 + a] += np.pi
+        u0[:, 6 + b] = 2.0 * home[b] - u0[:, 6 + b]
+        again = solve(targets[rows], u0, lengths[rows])
+        inside, inside_again = self._within_strokes(res.u[rows]), self._within_strokes(again.u)
+        with np.errstate(invalid="ignore"):
+            nearer = (again.status == Status.OK) & (
+                (inside_again & ~inside)
+                | ((inside_again == inside) & (distance(again.u) < distance(res.u[rows]))))
+        res.iterations[rows] += again.iterations
+        for name in ("u", "status", "residual", "rank"):
+            getattr(res, name)[rows[nearer]] = getattr(again, name)[nearer]
+
+    def _within_strokes(self, u: np.ndarray) -> np.ndarray:
+        """``(N,)`` bool: every joint (actuators, revolute ones on the turn nearest home, and
+        the legs' passive joints) of the solutions ``u (N, 6 + n_var)`` within its stroke."""
+        from pkmkit.machines.strokes import signed_excess
+
+        model = self.model
+        values = u[:, 6:].copy()
+        turn = [int(v) for v in self._actuated if self._element_of(int(v)).type == "R"]
+        home = self._home["values"][turn]
+        with np.errstate(invalid="ignore"):
+            values[:, turn] = home + np.angle(np.exp(1j * (values[:, turn] - home)))
+            joints = np.flatnonzero(model.loop_variables | model.actuated)
+            excess = signed_excess(values[:, joints], model.q_min[joints], model.q_max[joints])
+        return ~(excess != 0).any(axis=1)
+
+    def _wrist_pair(self) -> tuple[int, int] | None:
+        """``(Q4, Q5)``: the variables of the head's first two revolute actuators, or None."""
+        model = self.model
+        wrist = [int(model.element_variable[e]) for e in model.head
+                 if model.elements[e].type == "R" and model.element_variable[e] >= 0
+                 and model.actuated[model.element_variable[e]]]
+        return (wrist[0], wrist[1]) if len(wrist) >= 2 else None

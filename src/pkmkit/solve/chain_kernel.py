@@ -11,10 +11,12 @@ length, stall every ten iterations, damping beyond 1e12) and statuses. It differ
 engine only in the linear algebra of each step (a dense Cholesky factorisation of the damped
 normal equations instead of the engine's block elimination): the same iterates to rounding.
 
-Also compiled here, for the identification's Jacobians: :func:`linearise` (the closure's
-Jacobians C_U and C_δ and the tool frame's defect twists at solved configurations, as
-:func:`pkmkit.solve.chains.closure` and :func:`~pkmkit.solve.chains.tool_frame` with
-``defects=True``) and :func:`absorb` (``dU = −C_U⁺ C_δ`` by the normal equations).
+Also compiled here: the inverse model of a complete machine (:func:`solve_inverse`: the same
+loop with the tool rows added, for workspace grids), and for the identification's Jacobians
+:func:`linearise` (the closure's Jacobians C_U and C_δ and the tool frame's defect twists at
+solved configurations, as :func:`pkmkit.solve.chains.closure` and
+:func:`~pkmkit.solve.chains.tool_frame` with ``defects=True``); :func:`absorb` (``dU = −C_U⁺
+C_δ`` by the normal equations) is in :mod:`pkmkit.solve.chain_linalg`.
 
 Why: the engine runs each iteration as a few hundred NumPy calls over the batch; a residual of
 the Tripteor's identification (107 configurations, 10–15 iterations) cost 25–58 ms of such
@@ -33,6 +35,9 @@ import numpy as np
 from numba import njit
 
 from pkmkit.model.chains import FIXED, PRISMATIC, REVOLUTE, JointChainModel
+
+# the closure Jacobians' linear algebra (dU = −C_U⁺ C_δ, −C_U⁺ C_q), re-exported
+from pkmkit.solve.chain_linalg import RANK_PIVOT, absorb, closure_rates  # noqa: F401
 from pkmkit.status import Status
 
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
@@ -76,22 +81,179 @@ def solve(model: JointChainModel, known: np.ndarray, u0: np.ndarray,
     _solve_rows(frames, types, evar, elements, offsets, position, known, u,
                 float(model.characteristic_length), int(max_iter), float(xtol), float(atol),
                 float(gtol), float(stall), float(residual_tol), float(damping), status,
-                residual, iterations)
+                residual, iterations, _NO_HEAD, _NO_TARGETS, _NO_TARGETS[:, 0], False)
     return u, status, residual, iterations
+
+
+_NO_HEAD = np.zeros(0, dtype=np.int64)
+_NO_TARGETS = np.zeros((1, 6))
+
+
+def solve_inverse(model: JointChainModel, targets: np.ndarray, u0: np.ndarray,
+                  tool_length: np.ndarray, *, max_iter: int = 60, xtol: float = 1e-14,
+                  atol: float = 1e-14, gtol: float = 1e-12, stall: float = 0.01,
+                  residual_tol: float = 1e-9, damping: float = 1e-4) -> tuple[np.ndarray, ...]:
+    """The inverse model of a complete machine, compiled: the problem of
+    :func:`pkmkit.solve.chains.solve_machine_inverse` (the legs' closure rows, then the tool
+    rows ``(p_tool − p_target, L (a_tool − a_target))``; unknowns the platform pose and every
+    joint variable) for ``targets (N, 6)`` (tool point m, unit axis), ``u0 (N, 6 + n_var)``
+    and ``tool_length (N,)`` (m), with :func:`solve`'s algorithm. Returns ``(u, status,
+    residual, iterations)`` as :func:`solve`."""
+    every = np.arange(model.n_variables)
+    frames, types, evar, elements, offsets, position = model_arrays(model, every)
+    head = np.array(model.head, dtype=np.int64)
+    u = np.array(u0, dtype=float, order="C", copy=True)
+    n_rows = u.shape[0]
+    status = np.empty(n_rows, dtype=np.int64)
+    residual = np.full(n_rows, np.nan)
+    iterations = np.zeros(n_rows, dtype=np.int64)
+    _solve_rows(frames, types, evar, elements, offsets, position,
+                np.zeros((1, model.n_variables)), u, float(model.characteristic_length),
+                int(max_iter), float(xtol), float(atol), float(gtol), float(stall),
+                float(residual_tol), float(damping), status, residual, iterations, head,
+                np.ascontiguousarray(targets, dtype=float),
+                np.ascontiguousarray(tool_length, dtype=float).reshape(-1), True)
+    return u, status, residual, iterations
+
+
+def closure_jacobian(model: JointChainModel, values: np.ndarray, platform: np.ndarray,
+                     variables: np.ndarray) -> np.ndarray:
+    """``(N, 6L, 6 + len(variables))`` the closure's Jacobian at configurations ``values
+    (N, n_var)`` (every joint variable) and ``platform (N, 6)`` (position, rotation vector):
+    columns the platform increments, then ``variables`` — :func:`pkmkit.solve.chains.closure`'s
+    ``platform`` and ``variables[:, variables]`` side by side, compiled."""
+    variables = np.asarray(variables, dtype=int)
+    frames, types, evar, elements, offsets, position = model_arrays(model, variables)
+    values = np.ascontiguousarray(values, dtype=float)
+    u = np.empty((len(values), 6 + len(variables)))
+    u[:, :6] = platform
+    u[:, 6:] = values[:, variables]
+    out = np.empty((len(values), 6 * len(model.legs), u.shape[1]))
+    _jacobian_rows(frames, types, evar, elements, offsets, position, values, u,
+                   float(model.characteristic_length), out)
+    return out
+
+
+@njit(**_OPTIONS)
+def _jacobian_rows(frames, types, evar, elements, offsets, position, values, u, length,
+                   out):  # pragma: no cover
+    r = np.empty(out.shape[1])
+    row = np.empty(values.shape[1])
+    scratch = _scratch(elements.shape[0])
+    for k in range(u.shape[0]):
+        row[:] = values[k]
+        _evaluate(frames, types, evar, elements, offsets, position, row, u[k], length, r,
+                  out[k], scratch)
+
+
+@njit(**_OPTIONS)
+def _evaluate_any(frames, types, evar, elements, offsets, position, values, u, length, r, jac,
+                  scratch, head, target, tool, inverse):  # pragma: no cover
+    """The closure (``inverse`` False) or the machine inverse's residual and Jacobian."""
+    _evaluate(frames, types, evar, elements, offsets, position, values, u, length, r, jac,
+              scratch)
+    if inverse:
+        _tool_rows(frames, types, evar, head, position, values, u, length, target, tool,
+                   6 * (offsets.shape[0] - 1), r, jac, scratch)
+
+
+@njit(**_OPTIONS)
+def _head_walk(frames, types, evar, head, position, values, u, scratch):  # pragma: no cover
+    """The tool frame into ``scratch``'s rotation and position, walked along the head from the
+    platform pose ``u[:6]``; the spatial twists of the head's unknown variables into its twist
+    rows. Returns their count."""
+    mats, pos, tw, tw_col = scratch
+    rot, tmp = mats[1], mats[2]
+    _rotvec_matrix(u[3], u[4], u[5], rot)
+    for i in range(3):
+        pos[i] = u[i]
+    n_twist = 0
+    for idx in range(head.shape[0]):
+        e = head[idx]
+        _apply_frame(rot, pos, frames[e], tmp)
+        t = types[e]
+        if t == 0:
+            continue
+        var = evar[e]
+        col = position[var]
+        q = values[var]
+        z0, z1, z2 = rot[0, 2], rot[1, 2], rot[2, 2]
+        if t == 1:
+            if col >= 0:
+                tw[n_twist, 0] = pos[1] * z2 - pos[2] * z1
+                tw[n_twist, 1] = pos[2] * z0 - pos[0] * z2
+                tw[n_twist, 2] = pos[0] * z1 - pos[1] * z0
+                tw[n_twist, 3], tw[n_twist, 4], tw[n_twist, 5] = z0, z1, z2
+                tw_col[n_twist] = col
+                n_twist += 1
+            c, s = math.cos(q), math.sin(q)
+            for i in range(3):
+                x, y = rot[i, 0], rot[i, 1]
+                rot[i, 0] = c * x + s * y
+                rot[i, 1] = c * y - s * x
+        else:
+            if col >= 0:
+                tw[n_twist, 0], tw[n_twist, 1], tw[n_twist, 2] = z0, z1, z2
+                tw[n_twist, 3] = tw[n_twist, 4] = tw[n_twist, 5] = 0.0
+                tw_col[n_twist] = col
+                n_twist += 1
+            pos[0] += q * z0
+            pos[1] += q * z1
+            pos[2] += q * z2
+    return n_twist
+
+
+@njit(**_OPTIONS)
+def _tool_rows(frames, types, evar, head, position, values, u, length, target, tool, base, r,
+               jac, scratch):  # pragma: no cover
+    """The tool rows of the inverse model at rows ``base:base + 6`` (``_evaluate`` has filled
+    ``values`` from ``u`` and zeroed ``jac``): the head walked from the platform frame, the
+    tool point ``tool`` along its z axis; columns: the platform increments (a rigid motion of
+    the tool frame) and the head's unknown variables (their spatial twists)."""
+    mats, pos, tw, tw_col = scratch
+    rot = mats[1]
+    n_twist = _head_walk(frames, types, evar, head, position, values, u, scratch)
+    a0, a1, a2 = rot[0, 2], rot[1, 2], rot[2, 2]
+    p0, p1, p2 = pos[0] + tool * a0, pos[1] + tool * a1, pos[2] + tool * a2
+    r[base + 0], r[base + 1], r[base + 2] = p0 - target[0], p1 - target[1], p2 - target[2]
+    r[base + 3] = length * (a0 - target[3])
+    r[base + 4] = length * (a1 - target[4])
+    r[base + 5] = length * (a2 - target[5])
+    # platform columns: δp_X moves the point; δω_X (about p_X) moves the point by
+    # δω × (point − p_X) and the axis by δω × axis
+    d0, d1, d2 = p0 - u[0], p1 - u[1], p2 - u[2]
+    for i in range(3):
+        jac[base + i, i] = 1.0
+    jac[base + 0, 4], jac[base + 0, 5] = d2, -d1
+    jac[base + 1, 3], jac[base + 1, 5] = -d2, d0
+    jac[base + 2, 3], jac[base + 2, 4] = d1, -d0
+    jac[base + 3, 4], jac[base + 3, 5] = length * a2, -length * a1
+    jac[base + 4, 3], jac[base + 4, 5] = -length * a2, length * a0
+    jac[base + 5, 3], jac[base + 5, 4] = length * a1, -length * a0
+    for k in range(n_twist):
+        col = tw_col[k]
+        w0, w1, w2 = tw[k, 3], tw[k, 4], tw[k, 5]
+        jac[base + 0, col] = tw[k, 0] + w1 * p2 - w2 * p1
+        jac[base + 1, col] = tw[k, 1] + w2 * p0 - w0 * p2
+        jac[base + 2, col] = tw[k, 2] + w0 * p1 - w1 * p0
+        jac[base + 3, col] = length * (w1 * a2 - w2 * a1)
+        jac[base + 4, col] = length * (w2 * a0 - w0 * a2)
+        jac[base + 5, col] = length * (w0 * a1 - w1 * a0)
 
 
 @njit(**_OPTIONS)
 def _solve_rows(frames, types, evar, elements, offsets, position, known, u, length, max_iter,
                 xtol, atol, gtol, stall, residual_tol, damping, status, residual,
-                iterations):  # pragma: no cover
+                iterations, head, targets, tools, inverse):  # pragma: no cover
     n = u.shape[1]
-    m = 6 * (offsets.shape[0] - 1)
+    m = 6 * (offsets.shape[0] - 1) + (6 if inverse else 0)
     values = np.empty(known.shape[1])
     r, jac = np.empty(m), np.empty((m, n))
     r_new, j_new = np.empty(m), np.empty((m, n))
     u_new, step, grad = np.empty(n), np.empty(n), np.empty(n)
     h, low = np.empty((n, n)), np.empty((n, n))
-    scratch = _scratch(elements.shape[0])
+    nz = np.empty(n, dtype=np.int64)
+    scratch = _scratch(elements.shape[0] + head.shape[0])
     for k in range(u.shape[0]):
         finite = True
         for i in range(n):
@@ -99,9 +261,11 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
         if not finite:
             status[k] = _INVALID
             continue
-        values[:] = known[k]
-        _evaluate(frames, types, evar, elements, offsets, position, values, u[k], length, r,
-                  jac, scratch)
+        values[:] = known[k if known.shape[0] > 1 else 0]
+        row = k if inverse else 0
+        target, tool = targets[row], tools[row]
+        _evaluate_any(frames, types, evar, elements, offsets, position, values, u[k], length,
+                      r, jac, scratch, head, target, tool, inverse)
         cost = 0.5 * np.dot(r, r)
         if not (math.isfinite(cost) and np.isfinite(jac).all()):
             status[k] = _INVALID
@@ -127,14 +291,24 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
                 stopped = True
                 break
             # damped normal equations (JᵀJ + λ (D + floor)) δ = −Jᵀr
+            # JᵀJ row by row over each row's non-zero columns (a leg's rows see the platform
+            # and its own joints): the same sums in the same order, the zero terms skipped
+            h[:, :] = 0.0
+            for i in range(m):
+                count_nz = 0
+                for a in range(n):
+                    if jac[i, a] != 0.0:
+                        nz[count_nz] = a
+                        count_nz += 1
+                for p in range(count_nz):
+                    a = nz[p]
+                    v = jac[i, a]
+                    for t in range(p + 1):
+                        h[a, nz[t]] += v * jac[i, nz[t]]
             dmax = 0.0
             for a in range(n):
-                for b in range(a + 1):
-                    s = 0.0
-                    for i in range(m):
-                        s += jac[i, a] * jac[i, b]
-                    h[a, b] = s
-                    h[b, a] = s
+                for b in range(a):
+                    h[b, a] = h[a, b]
                 if h[a, a] > dmax:
                     dmax = h[a, a]
             floor = 1e-9 * dmax + 1e-300
@@ -142,8 +316,8 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
                 h[a, a] += lam * (h[a, a] + floor)
             _cholesky_solve(h, grad, low, step)
             _retract(u[k], step, u_new)
-            _evaluate(frames, types, evar, elements, offsets, position, values, u_new, length,
-                      r_new, j_new, scratch)
+            _evaluate_any(frames, types, evar, elements, offsets, position, values, u_new,
+                          length, r_new, j_new, scratch, head, target, tool, inverse)
             cost_new = 0.5 * np.dot(r_new, r_new)
             accept = math.isfinite(cost_new) and cost_new <= cost * (1.0 + 1e-13)
             count += 1
@@ -511,86 +685,3 @@ def _linearise_rows(frames, types, evar, elements, offsets, position, local, ord
             for i in range(6):
                 tool_tw[k, i, ids[a]] = twists[a, i]
 
-
-#: A closure Jacobian C_U whose Cholesky pivots of C_Uᵀ C_U fall below this fraction of its
-#: largest diagonal entry is treated as rank-deficient (left to the pseudo-inverse).
-RANK_PIVOT = 1e-10
-
-
-def absorb(cu: np.ndarray, cd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``dU = −C_U⁺ C_δ (N, u, d)`` and the part no motion absorbs, ``C_δ + C_U dU (N, r, d)``,
-    for closure Jacobians ``cu (N, r, u)`` of full column rank, by the normal equations
-    (Cholesky of ``C_Uᵀ C_U``, compiled); ``ok (N,)`` False for the rows whose ``C_U`` is
-    (nearly) rank-deficient (pivot below :data:`RANK_PIVOT`), whose outputs are NaN: the
-    caller takes the pseudo-inverse there."""
-    n, r, u = cu.shape
-    du = np.empty((n, u, cd.shape[2]))
-    rest = np.empty((n, r, cd.shape[2]))
-    ok = np.empty(n, dtype=np.bool_)
-    _absorb_rows(np.ascontiguousarray(cu), np.ascontiguousarray(cd), du, rest, ok)
-    return du, rest, ok
-
-
-@njit(**_OPTIONS)
-def _absorb_rows(cu, cd, du, rest, ok):  # pragma: no cover
-    n, r, u = cu.shape
-    d = cd.shape[2]
-    h = np.empty((u, u))
-    low = np.empty((u, u))
-    g = np.empty((u, d))
-    for k in range(n):
-        c_u, c_d, x = cu[k], cd[k], du[k]
-        h[:, :] = 0.0
-        g[:, :] = 0.0
-        for i in range(r):  # H = C_Uᵀ C_U, G = −C_Uᵀ C_δ (rows of C_U streamed once)
-            for a in range(u):
-                v = c_u[i, a]
-                for c in range(a + 1):
-                    h[a, c] += v * c_u[i, c]
-                for col in range(d):
-                    g[a, col] -= v * c_d[i, col]
-        biggest = 0.0
-        for a in range(u):
-            biggest = max(biggest, h[a, a])
-        good = biggest > 0.0
-        for j in range(u):
-            s = h[j, j]
-            for p in range(j):
-                s -= low[j, p] * low[j, p]
-            if not s > RANK_PIVOT * biggest:
-                good = False
-                break
-            low[j, j] = math.sqrt(s)
-            for i in range(j + 1, u):
-                t = h[i, j]
-                for p in range(j):
-                    t -= low[i, p] * low[j, p]
-                low[i, j] = t / low[j, j]
-        ok[k] = good
-        if not good:
-            x[:, :] = math.nan
-            rest[k] = math.nan
-            continue
-        for i in range(u):  # L Y = G
-            for p in range(i):
-                f = low[i, p]
-                for col in range(d):
-                    g[i, col] -= f * g[p, col]
-            f = 1.0 / low[i, i]
-            for col in range(d):
-                g[i, col] *= f
-        for i in range(u - 1, -1, -1):  # Lᵀ X = Y
-            for p in range(i + 1, u):
-                f = low[p, i]
-                for col in range(d):
-                    g[i, col] -= f * x[p, col]
-            f = 1.0 / low[i, i]
-            for col in range(d):
-                x[i, col] = g[i, col] * f
-        for i in range(r):  # C_δ + C_U dU
-            for col in range(d):
-                rest[k, i, col] = c_d[i, col]
-            for a in range(u):
-                v = c_u[i, a]
-                for col in range(d):
-                    rest[k, i, col] += v * x[a, col]

@@ -541,7 +541,8 @@ def tool_rows(tw: np.ndarray, point: np.ndarray, axis: np.ndarray, length: float
 
 
 def solve_machine_inverse(model: JointChainModel, targets: np.ndarray, u0: np.ndarray, *,
-                          tool_length: np.ndarray, **options) -> SolveResult:
+                          tool_length: np.ndarray, compiled: bool = False,
+                          **options) -> SolveResult:
     """Inverse model of a complete machine (legs, platform, head): every joint variable and the
     platform pose such that the legs close and the tool point and tool axis reach ``targets``.
 
@@ -552,7 +553,18 @@ def solve_machine_inverse(model: JointChainModel, targets: np.ndarray, u0: np.nd
         targets: ``(N, 6)`` tool point (m) and unit tool axis.
         u0: ``(N, 6 + n_var)`` initial platform position, rotation vector, every variable.
         tool_length: ``(N,)`` m.
+        compiled: solve every row in the compiled kernel
+            (:func:`pkmkit.solve.chain_kernel.solve_inverse`, the same algorithm to rounding)
+            under the conditions of :func:`solve_closure`'s ``compiled``; else the NumPy engine.
     """
+    if compiled and _compiled_closure_applies(len(u0), options):
+        from pkmkit.solve import chain_kernel
+
+        options.pop("compute_rank", None)
+        u, status, residual, iterations = chain_kernel.solve_inverse(
+            model, targets, u0, np.asarray(tool_length, dtype=float).reshape(-1), **options)
+        return SolveResult(u=u, status=status, residual=residual, iterations=iterations,
+                           rank=np.full(len(u), -1))
     length = model.characteristic_length
     targets_t = np.ascontiguousarray(targets.T)
     tool_t = np.ascontiguousarray(np.asarray(tool_length, dtype=float).reshape(-1))
