@@ -11,9 +11,9 @@ poses:
   (:func:`pkmkit.machines.kernels.inverse`, slides and struts only) — what a user's Numba or C
   kernel costs per call.
 
-``m.jacobian(x)`` of one pose (every machine): the call alone (the velocity model is computed
-when a field is first read), the call and reading ``J``, the call and reading ``condition``,
-against the batch path of one row and reading ``J``.
+``m.jacobian(x)`` of one pose (every machine): the call alone (each field is computed when
+first read, from only the pieces it needs), the call and reading ``J``, ``condition`` or
+``singularity``, against the batch path of one row and reading ``J``.
 
 For the six-axis machines (hexapod, Verne module's full poses, Dietmaier's general platform):
 ``m.ik(x)`` (plain Python), ``m.fk(q)`` (the compiled per-pose solve) and ``m.jacobian(x)`` (the
@@ -25,8 +25,8 @@ Medians of interleaved repeats (each method sees the same load); each figure is 
 per call and, in brackets, the CPU time of the process per call (what the call costs when the
 2 cores are shared); the load average is printed before each condition. Pinocchio is not a
 dependency
-and is not installed here, so its 2.2 µs per forward-kinematics call (the issue's figure) is not
-re-measured.
+and is not installed here (``import pinocchio`` fails), so its 2.2 µs per forward-kinematics
+call (the issue's figure) is not re-measured.
 
 Usage::
 
@@ -42,6 +42,7 @@ import os
 import statistics
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +52,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from load import conditions
 
 import pkmkit
+from pkmkit.exceptions import StrokeWarning
 from pkmkit.machines import kernels
 from pkmkit.machines.closed_form import BOUNDARY_TOL
 from pkmkit.model.rods import CRANK, SLIDE
@@ -160,27 +162,18 @@ def six_axis_rows(name: str, calls: int) -> dict:
 
 
 def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None) -> None:
-    """``m.jacobian(x)`` of one pose: the call (the model computed when read), the call and
-    reading ``J``, the call and reading ``condition`` (spatial 3-DOF machines: the compiled
-    one-pose kernel, since this process has imported Numba; and the plain-Python path a process
-    without Numba takes), against the batch path of one row (``m.jacobian(x[None])`` and
-    reading ``J``, what a single call cost before)."""
+    """``m.jacobian(x)`` of one pose: the call (the fields are computed when read, each from
+    only the pieces it needs), the call and reading ``J``, ``condition`` or ``singularity``,
+    against the batch path of one row (``m.jacobian(x[None])`` and reading ``J``, what a
+    single call cost before)."""
     within = [p for p in rows if type(m.jacobian(p)).__name__.startswith("OnePose")]
     figures["jacobian one pose (fast path)"] = (len(within), len(rows))
     figures["jacobian one pose, call"] = per_call(m.jacobian, within)
     figures["jacobian one pose, call + J"] = per_call(lambda p: m.jacobian(p).J, within)
     figures["jacobian one pose, call + condition"] = per_call(lambda p: m.jacobian(p).condition,
                                                               within)
-    if m.family == "translational" and m.dims == 3:  # this process has imported Numba
-        from pkmkit.machines import velocity_one
-
-        compiled_now = velocity_one._compiled_now
-        velocity_one._compiled_now = lambda closed: False
-        try:
-            figures["jacobian one pose, call + J, plain Python"] = per_call(
-                lambda p: m.jacobian(p).J, within)
-        finally:
-            velocity_one._compiled_now = compiled_now
+    figures["jacobian one pose, call + singularity"] = per_call(
+        lambda p: m.jacobian(p).singularity, within)
     before = (before_rows or within)[: max(1, len(within) // 10)]
     figures["jacobian batch of one + J (before)"] = per_call(lambda p: m.jacobian(p[None]).J,
                                                              before)
@@ -192,6 +185,7 @@ def main() -> None:
     parser.add_argument("--load", default="both", choices=("none", "busy", "both"))
     parser.add_argument("--json")
     args = parser.parse_args()
+    warnings.simplefilter("ignore", StrokeWarning)  # the batch path's, beyond a stroke
     names = [n for n in ("orthoglide", "linear-delta", "five-bar", "delta")]
     six = ("gough-stewart", "verne", "dietmaier-hexapod")
     report = {}

@@ -205,3 +205,53 @@ def test_pickles_as_the_plain_record():
     back = pickle.loads(pickle.dumps(jac))
     assert type(back) is FullPoseJacobians
     _assert_same(back, {name: getattr(jac, name) for name in FIELDS})
+
+
+def _bits(got, want, where):
+    assert type(got) is type(want), where
+    got, want = np.asarray(got), np.asarray(want)
+    assert got.shape == want.shape and np.array_equal(got, want, equal_nan=True), where
+
+
+@pytest.mark.parametrize("name", FULL_POSE)
+def test_a_field_read_alone_runs_only_the_matrices_kernel_with_the_same_bits(name):
+    """J, A, B, J⁻¹, the determinants and the flags of a fresh record come from
+    ``velocity_matrices`` (no singular values computed), bit for bit what the full kernel
+    gives; the singular values, condition and parallel measure run the full kernel."""
+    m = pkmkit.machine(name)
+    for k, p in enumerate(_poses(m, 12, seed=21)):
+        full = m.jacobian(p)
+        assert np.isfinite(full.condition)  # the full kernel
+        assert full._evaluation._full
+        for field in FIELDS:
+            jac = m.jacobian(p)
+            got = getattr(jac, field)
+            _bits(got, getattr(full, field), f"{name} pose {k} {field}")
+            ev = jac._evaluation
+            assert (ev._out is None) or ev._full == (field in (
+                "singular_values", "translation_singular_values", "rotation_singular_values",
+                "condition", "parallel_measure")), field
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "dietmaier-hexapod"])
+def test_flags_with_the_tolerance_at_the_parallel_measure(name):
+    """A tolerance equal to a pose's parallel measure does not flag it, the next float up
+    does: the matrices kernel decides by the measure itself where its bound cannot."""
+    m = pkmkit.machine(name)
+    for p in _poses(m, 8, seed=22):
+        measure = float(m.jacobian(p).parallel_measure)
+        for tol in (measure, float(np.nextafter(measure, np.inf))):
+            jac = m.jacobian(p, tol=tol)
+            assert bool(jac.singularity & 2) == (tol > measure)
+            assert not jac._evaluation._full
+            assert np.isnan(jac.J).all() == (tol > measure)
+
+
+def test_the_six_by_six_parallel_bound_holds():
+    """σ_min/σ_max ≥ |det U| / (‖U‖²_F / 3)³ (the bound ``velocity_matrices`` uses)."""
+    rng = np.random.default_rng(23)
+    u = rng.normal(size=(20000, 6, 6)) * rng.uniform(1e-2, 1, (20000, 6, 1)) ** 3
+    u[1::2, 0] = u[1::2, 1] + 1e-5 * u[1::2, 0]  # nearly singular ones too
+    sv = np.linalg.svd(u, compute_uv=False)
+    bound = np.abs(np.linalg.det(u)) / ((u * u).sum(axis=(1, 2)) / 3) ** 3
+    assert (sv[:, -1] / sv[:, 0] >= bound * (1 - 1e-9) - 1e-15).all()

@@ -200,26 +200,31 @@ class RodClosedForm:
             finite numbers of the right length or a leg cannot close: the caller then takes
             the batch path, which gives the same numbers and the typed errors.
         """
-        legs = self._single_legs(branches)
-        if isinstance(x, np.ndarray):
-            if x.ndim != 1 or x.dtype.kind not in "fi":
+        last = self.__dict__.get("_single_last")  # (branches, legs) of the previous call
+        legs = last[1] if last is not None and last[0] is branches else self._single_legs(
+            branches)
+        if type(x) is not list:
+            if isinstance(x, np.ndarray):
+                if x.ndim != 1 or x.dtype.kind not in "fi":
+                    return None
+                x = x.tolist()
+            elif not isinstance(x, (list, tuple)):
                 return None
-            x = x.tolist()
-        elif not isinstance(x, (list, tuple)):
-            return None
-        dims = self.model.dims
-        if len(x) != dims:
+        if len(x) != self.model.dims:
             return None
         for v in x:
-            if (not isinstance(v, (float, int)) or isinstance(v, bool)
-                    or not -MAX_ABS <= v <= MAX_ABS):
-                return None  # bools, strings, NaN, ±inf, absurd magnitudes: the batch path
-        x0, x1 = float(x[0]), float(x[1])
-        x2 = float(x[2]) if dims == 3 else 0.0
+            if type(v) is not float and (not isinstance(v, (float, int)) or isinstance(v, bool)):
+                return None  # bools, strings: the batch path
+            if not -MAX_ABS <= v <= MAX_ABS:
+                return None  # NaN, ±inf, absurd magnitudes: the batch path
+        if len(x) == 3:
+            x0, x1, x2 = float(x[0]), float(x[1]), float(x[2])
+        else:
+            x0, x1, x2 = float(x[0]), float(x[1]), None
         out = []
-        for (kind, a0, a1, a2, b0, b1, b2, d0, d1, d2, o0, o1, o2, length_sq, length, radius,
-             offset, branch) in legs:
-            if dims == 3:
+        for (kind, a0, a1, a2, b0, b1, b2, d0, d1, d2, o0, o1, o2, length_sq, length, limit,
+             radius_sq, diameter, offset, branch) in legs:
+            if x2 is not None:
                 y0 = a0 * x0 + a1 * x1 + a2 * x2 - o0
                 y1 = b0 * x0 + b1 * x1 + b2 * x2 - o1
                 y2 = d0 * x0 + d1 * x1 + d2 * x2 - o2
@@ -227,26 +232,27 @@ class RodClosedForm:
             else:
                 y0 = a0 * x0 + a1 * x1 - o0
                 y1 = b0 * x0 + b1 * x1 - o1
+                y2 = 0.0
                 perp_sq = y1 * y1
             if kind == SLIDE:
                 radicand = length_sq - perp_sq
                 if radicand < 0.0:
-                    if radicand <= -BOUNDARY_TOL * length_sq:
+                    if radicand <= -limit:
                         return None
                     radicand = 0.0
                 root = sqrt(radicand)
                 out.append(y0 - root if branch < 0 else y0 + root)
             elif kind == CRANK:  # as _crank_angle: rows (w, e1, e2) of the crank frame
                 along = y0 - offset
-                g = along * along + perp_sq + radius * radius - length_sq
-                amplitude = 2.0 * radius * sqrt(perp_sq)
+                g = along * along + perp_sq + radius_sq - length_sq
+                amplitude = diameter * sqrt(perp_sq)
                 if amplitude == 0.0:
                     return None
                 cosine = g / amplitude
-                if abs(g) - amplitude <= BOUNDARY_TOL * length_sq:
-                    cosine = min(max(cosine, -1.0), 1.0)
-                elif not -1.0 <= cosine <= 1.0:
-                    return None
+                if not -1.0 <= cosine <= 1.0:
+                    if abs(g) - amplitude > limit:
+                        return None
+                    cosine = -1.0 if cosine < 0.0 else 1.0  # a boundary pose rounded beyond ±1
                 q = atan2(y2, y1) + branch * acos(cosine)
                 out.append((q + pi) % _TWO_PI - pi)
             else:  # strut
@@ -255,7 +261,9 @@ class RodClosedForm:
 
     def _single_legs(self, branches: Sequence[float]) -> tuple:
         """Per-leg constants of :meth:`inverse_one` as flat tuples of Python floats (basis rows,
-        offsets, ℓ², ℓ, crank radius and offset, branch), computed once per branch choice."""
+        offsets, ℓ², ℓ, the boundary tolerance ``BOUNDARY_TOL ℓ²``, crank r² and 2r (the
+        products the batch path forms first: the same bits), crank offset, branch), computed once
+        per branch choice."""
         cache = self.__dict__.get("_single")
         if cache is None:
             cache = {}
@@ -267,11 +275,14 @@ class RodClosedForm:
             basis = [[[*row, 0.0][:3] for row in leg] + [[0.0] * 3] * (3 - m.dims)
                      for leg in self.basis.tolist()]  # rows padded to 3 × 3 in the plane
             offset = [[*o, 0.0][:3] for o in self.basis_offset.tolist()]
+            radius = self.crank_radius.tolist()
             legs = tuple((int(m.leg_kind[i]), *basis[i][0], *basis[i][1], *basis[i][2],
                           *offset[i], float(self.length_sq[i]), float(m.leg_length[i]),
-                          float(self.crank_radius[i]), float(self.crank_offset[i]),
+                          float(BOUNDARY_TOL * self.length_sq[i]), radius[i] * radius[i],
+                          2.0 * radius[i], float(self.crank_offset[i]),
                           float(b)) for i, b in enumerate(key))
             cache[key] = legs
+        object.__setattr__(self, "_single_last", (branches, legs))
         return legs
 
     def _crank_terms(self, v_w, v_1, v_2, perp_sq, i):

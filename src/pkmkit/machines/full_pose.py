@@ -573,15 +573,19 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         q1 = None if x is None else self._one_pose_inverse()(x)
         if q1 is None or not self._within_strokes(q1) or not velocity_one.usable(self):
             return None
-        xb, qb = np.array([x], dtype=float), np.array([q1])
+        x1 = x.tolist() if isinstance(x, np.ndarray) else [float(v) for v in x]
 
         def batch() -> FullPoseJacobians:
+            xb, qb = np.array([x1], dtype=float), np.array([q1])
             return _restore(self._jacobians(xb, qb, tol), True, _JACOBIAN_FIELDS)
 
-        evaluation = velocity_one.OnePoseFullVelocity(
-            self._direct_kernel().geom, self.n_actuators, float(self.characteristic_length),
-            xb[0], qb[0], tol, batch)
-        return _ONE_POSE_JACOBIANS(evaluation)
+        constants = self.__dict__.get("_velocity_one_constants")
+        if constants is None:  # once per machine
+            constants = (self._direct_kernel().geom, self.n_actuators,
+                         float(self.characteristic_length))
+            object.__setattr__(self, "_velocity_one_constants", constants)
+        return _ONE_POSE_JACOBIANS(velocity_one.OnePoseFullVelocity(*constants, x1, q1, tol,
+                                                                    batch))
 
     def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> FullPoseJacobians:
         """The velocity model of pose rows ``xb`` at ``qb``, its costly fields (J, its singular

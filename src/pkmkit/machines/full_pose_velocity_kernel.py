@@ -9,6 +9,10 @@ between a rod and its base joint's motion), ``J = A⁻¹B`` (LAPACK; ``A⁺B`` b
 angular rows (one-sided Jacobi, :mod:`pkmkit.numerics.svd_kernel`). Rods are given as in
 :mod:`pkmkit.machines.full_pose_direct_kernel` (``geom (m, 16)``).
 
+:func:`velocity_matrices` computes the same minus the singular values of J (what J, A, B, J⁻¹,
+the determinants and the flags need; the parallel measure only where its lower bound cannot
+settle the flags): the same operations, so the same bits for the fields both give.
+
 Output ``out`` (flat): A (6m), B (mn), J (6n), J⁻¹ (6n), σ(J_h) (min(6, n)), σ(J[:3])
 (min(3, n)), σ(J[3:]) (min(3, n)), then condition, det A, det B, parallel, serial, flags —
 :func:`layout` gives the offsets. Returns 0, or 1 when the row is not finite (the caller then
@@ -54,9 +58,11 @@ def _values(mat, out, at):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
-def velocity_one(x, q, geom, n, length_l, tol, out):  # pragma: no cover
-    """The velocity model of pose ``x (6,)`` at actuator coordinates ``q (n,)`` into ``out``
-    (module docstring); returns 0, or 1 for a row that is not finite."""
+def _fill(x, q, geom, n, length_l, tol, out, exact):  # pragma: no cover
+    """A, B, J, J⁻¹, det A, det B, the serial measure and the flags of pose ``x (6,)`` at
+    ``q (n,)`` into ``out`` (module docstring); the parallel measure too when ``exact`` or
+    when its lower bound cannot tell it from ``tol`` (NaN otherwise). Returns 0, or 1 for a
+    row that is not finite."""
     m = geom.shape[0]
     base = np.empty((m, 3))
     length = np.empty(m)
@@ -105,9 +111,11 @@ def velocity_one(x, q, geom, n, length_l, tol, out):  # pragma: no cover
     if not math.isfinite(serial):
         return 1
     spot = layout_offsets(m, n)
-    sv_a = np.empty(6)
-    _values(unit, sv_a, 0)
-    parallel = sv_a[5] / sv_a[0]
+    parallel = np.nan
+    if exact or m != 6 or not _surely_above(unit, tol):
+        sv_a = np.empty(6)
+        _values(unit, sv_a, 0)
+        parallel = sv_a[5] / sv_a[0]
     flags = (1 if serial < tol else 0) | (2 if parallel < tol else 0)
     det_a = np.linalg.det(a) if m == 6 else np.nan
     if flags & 2:  # no J at a parallel singularity (A may be exactly singular there)
@@ -145,6 +153,46 @@ def velocity_one(x, q, geom, n, length_l, tol, out):  # pragma: no cover
                 for j in range(m):
                     s += b[j, c] / squares[c] * a[j, i]
             out[at + 6 * c + i] = np.nan if flags & 2 else s
+    out[spot[8]] = det_a
+    out[spot[9]] = np.linalg.det(b) if m == n else np.nan
+    out[spot[10]] = parallel
+    out[spot[11]] = serial
+    out[spot[12]] = flags
+    return 0
+
+
+@njit(**_OPTIONS)
+def _surely_above(unit, tol):  # pragma: no cover
+    """Whether σ_min/σ_max of the square ``unit (6, 6)`` is ≥ ``tol`` (with margin), from its
+    lower bound |det U| / (‖U‖²_F / 3)³ (AM–GM on σ1², σ1², σ2², …, σ5²); the factor 2 and the
+    1e-12 absorb the rounding of the determinant and of the singular values."""
+    frobenius = 0.0
+    for j in range(6):
+        for i in range(6):
+            frobenius += unit[j, i] * unit[j, i]
+    det_u = np.linalg.det(unit)
+    return abs(det_u) > (4.0 * tol + 2e-12) * (frobenius / 3.0) ** 3
+
+
+@njit(**_OPTIONS)
+def velocity_matrices(x, q, geom, n, length_l, tol, out):  # pragma: no cover
+    """:func:`velocity_one` without the singular values of J (and without the parallel
+    measure where its bound settles the flags: NaN there): what J, A, B, J⁻¹, the
+    determinants and the flags need. Returns 0, or 1 for a row that is not finite."""
+    return _fill(x, q, geom, n, length_l, tol, out, False)
+
+
+@njit(**_OPTIONS)
+def velocity_one(x, q, geom, n, length_l, tol, out):  # pragma: no cover
+    """The velocity model of pose ``x (6,)`` at actuator coordinates ``q (n,)`` into ``out``
+    (module docstring); returns 0, or 1 for a row that is not finite."""
+    if _fill(x, q, geom, n, length_l, tol, out, True):
+        return 1
+    spot = layout_offsets(geom.shape[0], n)
+    j_mat = np.empty((6, n))
+    for r in range(6):
+        for c in range(n):
+            j_mat[r, c] = out[spot[2] + n * r + c]
     j_h = j_mat.copy()
     for r in range(3, 6):
         for c in range(n):
@@ -153,11 +201,6 @@ def velocity_one(x, q, geom, n, length_l, tol, out):  # pragma: no cover
     _values(np.ascontiguousarray(j_mat[:3]), out, spot[5])
     _values(np.ascontiguousarray(j_mat[3:]), out, spot[6])
     out[spot[7]] = out[spot[4]] / out[spot[4] + min(6, n) - 1]
-    out[spot[8]] = det_a
-    out[spot[9]] = np.linalg.det(b) if m == n else np.nan
-    out[spot[10]] = parallel
-    out[spot[11]] = serial
-    out[spot[12]] = flags
     return 0
 
 

@@ -18,6 +18,8 @@ the batch path.
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -43,44 +45,69 @@ def _kernel():
     return _kernel_module
 
 
+#: Fields that need the singular values of J (the full kernel); the others take
+#: :func:`~pkmkit.machines.full_pose_velocity_kernel.velocity_matrices`.
+_SINGULAR = frozenset(("singular_values", "translation_singular_values",
+                       "rotation_singular_values", "condition", "parallel_measure"))
+
+
 class OnePoseFullVelocity:
-    """The velocity model of one full pose, computed by the compiled kernel when first read.
+    """The velocity model of one full pose, computed by the compiled kernel when first read:
+    ``J``, ``A``, ``B``, ``J_inv``, the determinants and the flags by
+    :func:`~pkmkit.machines.full_pose_velocity_kernel.velocity_matrices` (no singular values;
+    the parallel measure only where its bound cannot settle the flags), the singular values,
+    condition and parallel measure by ``velocity_one`` (the same matrices, the same bits).
 
     Args:
         geom: the rods (:class:`~pkmkit.machines.full_pose_direct.DirectKernel` ``geom``).
         n: actuators. length: the characteristic length L (m).
-        x: the pose ``(6,)``. q: its actuator coordinates ``(n,)``. tol: singularity threshold.
+        x: the pose (6 floats). q: its actuator coordinates (``n`` floats). tol: singularity
+            threshold.
         batch: the batch path's single-pose model of the same pose (called if the kernel
             refuses the row).
     """
 
-    __slots__ = ("_batch", "_out", "_spot", "batch", "geom", "length", "n", "q", "tol", "x")
+    __slots__ = ("_batch", "_full", "_out", "_spot", "batch", "geom", "length", "n", "q",
+                 "tol", "x")
 
-    def __init__(self, geom: np.ndarray, n: int, length: float, x: np.ndarray, q: np.ndarray,
-                 tol: float, batch: Callable[[], Any]):
+    def __init__(self, geom: np.ndarray, n: int, length: float, x: list[float],
+                 q: list[float], tol: float, batch: Callable[[], Any]):
         self.geom, self.n, self.length, self.x, self.q, self.tol = geom, n, length, x, q, tol
         self.batch = batch
         self._out: np.ndarray | None = None
         self._batch = None
+        self._full = False
 
     def field(self, name: str):
         """The value of field ``name`` of the single-pose model."""
-        if self._out is None and self._batch is None:
-            kernel = _kernel()
-            self._spot = spot = kernel.layout(self.geom.shape[0], self.n)
-            out = np.empty(spot["flags"][1])
-            try:
-                refused = kernel.velocity_one(self.x, self.q, self.geom, self.n, self.length,
-                                              self.tol, out)
-            except np.linalg.LinAlgError:  # an exactly singular A: the batch path decides
-                refused = 1
-            if refused:
-                self._batch = self.batch()
-            else:
-                self._out = out
+        if name == "q":
+            return np.array(self.q)
+        if name == "tolerance":
+            return self.tol
+        if name == "characteristic_length":
+            return self.length
+        full = name in _SINGULAR
+        if self._batch is None and (self._out is None or (full and not self._full)):
+            self._run(full)
         if self._batch is not None:
             return getattr(self._batch, name)
         return self._build(name)
+
+    def _run(self, full: bool) -> None:
+        kernel = _kernel()
+        geom = self.geom
+        self._spot = spot = kernel.layout(geom.shape[0], self.n)
+        out = np.empty(spot["flags"][1])
+        run = kernel.velocity_one if full else kernel.velocity_matrices
+        try:
+            refused = run(np.array(self.x, dtype=float), np.array(self.q, dtype=float), geom,
+                          self.n, self.length, self.tol, out)
+        except np.linalg.LinAlgError:  # an exactly singular A: the batch path decides
+            refused = 1
+        if refused:
+            self._batch = self.batch()
+        else:
+            self._out, self._full = out, full
 
     def _build(self, name: str):
         out, m, n, spot = self._out, self.geom.shape[0], self.n, self._spot
@@ -110,12 +137,6 @@ class OnePoseFullVelocity:
         if name == "mode":
             det_a = part("det_A")[0]
             return np.int64(np.sign(det_a)) if det_a == det_a else np.int64(0)
-        if name == "q":
-            return self.q.copy()
-        if name == "tolerance":
-            return self.tol
-        if name == "characteristic_length":
-            return self.length
         key = {"parallel_measure": "parallel", "serial_measure": "serial"}.get(name, name)
         return np.float64(part(key)[0])
 
@@ -161,6 +182,8 @@ def usable(machine: Any) -> bool:
     """Whether a single pose of ``machine`` takes the compiled path now (the rule of
     :func:`pkmkit.machines.full_pose_direct.direct_one`: a one-shot call does not import
     Numba; the machine's next single call does)."""
+    if "numba" in sys.modules and "PKMKIT_COMPILED" not in os.environ:
+        return jit.numba_available()  # the common case, without reading the mode
     if jit.use_compiled_solver(1):
         return True
     if not jit.use_compiled_solver(jit.SOLVER_ROWS):

@@ -13,6 +13,7 @@ and a per-row status (``full_output=True``).
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
@@ -69,6 +70,8 @@ from pkmkit.numerics.arrays import as_batch, restore_shape
 from pkmkit.numerics.linalg import batched_det
 from pkmkit.solve.rod_closure import instantaneous_mobility
 from pkmkit.status import Status
+
+_LE = operator.le
 
 
 @dataclass(frozen=True, eq=False)
@@ -207,13 +210,12 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         limits = self.__dict__.get("_stroke_tuples")
         if limits is None:
             lo, hi = stroke_limits(self)
-            limits = tuple(zip((lo - STROKE_TOL).tolist(), (hi + STROKE_TOL).tolist(),
-                               strict=True))
+            limits = ((lo - STROKE_TOL).tolist(), (hi + STROKE_TOL).tolist())
             object.__setattr__(self, "_stroke_tuples", limits)
-        for v, (lo, hi) in zip(q, limits, strict=True):  # a loop: no generator per call
-            if not lo <= v <= hi:
-                return False
-        return True
+        if len(q) != len(limits[0]):
+            raise ValueError(f"{len(q)} actuator values for {len(limits[0])} strokes")
+        # comparisons looped in C (NaN compares false: outside)
+        return all(map(_LE, limits[0], q)) and all(map(_LE, q, limits[1]))
 
     def _branches(self, branches: Any) -> np.ndarray:
         if branches is None:

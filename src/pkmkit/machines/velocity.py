@@ -48,7 +48,7 @@ def velocity_chunk(a: np.ndarray, b: np.ndarray):
         inv_det = 1.0 / det_a
         # J = A⁻¹ B = adj(A) B / det A with adj = cofactorsᵀ: J[k, j] = C[j, k] b_j / det A
         j = cof.transpose(1, 0, 2) * (b * inv_det)[None, :, :]
-        lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
+        lengths = small.row_norms(a)
         sv_unit = small.singular_values(a / lengths[:, None, :])
         parallel = sv_unit[-1] / sv_unit[0]
         serial = np.min(np.abs(b) / lengths, axis=0)
@@ -184,7 +184,7 @@ class VelocityEvaluation:
             part = rows[start:start + CHUNK]
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                 a, _ = self.closed.jacobians_t(self.x[part], self.q[part])
-                lengths = np.sqrt(np.einsum("ikn,ikn->in", a, a))
+                lengths = small.row_norms(a)
                 sv_unit = small.singular_values(a / lengths[:, None, :])
                 out[part] = sv_unit[-1] / sv_unit[0]
         return out

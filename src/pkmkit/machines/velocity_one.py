@@ -5,17 +5,27 @@
 :class:`~pkmkit.machines.velocity.LazyJacobians` (same fields, same shapes and types as the
 batch path's single row) whose fields come from :class:`OnePoseVelocity` — the formulas of
 :func:`pkmkit.machines.velocity.velocity_chunk` and :mod:`pkmkit.numerics.small` written out in
-scalars for one pose (n = dims = 2 or 3), computed when a field is first read. Whatever the
-batch path treats specially is handed to it (a :class:`LazyJacobians` of one row, the same
-numbers): a configuration near a parallel singularity where the batch path takes the singular
-values from J⁻¹ (:data:`~pkmkit.machines.velocity.NEAR_PARALLEL`), nearly equal singular
-values (LAPACK there), a zero rod, overflow.
+scalars for one pose (n = dims = 2 or 3), the same operations in the same order, so **the same
+bits** as the batch path's row. Each field computes only the pieces it needs, once per record:
+
+- ``A``, ``B``, ``J_inv``, ``det_B``: the rows ``p − c_i`` and the diagonal of B;
+- ``J``, ``det_A``, ``mode``: those, the cofactors of A and one division (J = adj(A) B / det A),
+  and whether the pose is a parallel singularity (J is NaN there);
+- ``singular_values``, ``condition``: those and one closed-form singular-value computation of J;
+- ``parallel_measure``: one of A with unit rows; ``serial_measure``: the row lengths;
+  ``singularity``: both measures' tests.
+
+Whether σ_min/σ_max of A with unit rows is below a threshold t is decided without computing it
+where :func:`_surely_above` proves it is not (its lower bound |det A| / (2 ∏|a_i|)); only near a
+parallel singularity is the measure itself computed. Whatever the batch path treats specially is
+handed to it (a :class:`LazyJacobians` of one row, the same numbers): a zero row, overflow, a
+determinant whose reciprocal overflows. The machine-constant parts (per-leg tuples of Python
+floats) are built once per machine.
 """
 
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -25,119 +35,100 @@ from pkmkit.machines.closed_form import RodClosedForm
 from pkmkit.machines.results import Singularity
 from pkmkit.machines.velocity import NEAR_PARALLEL, LazyJacobians, VelocityEvaluation
 from pkmkit.model.rods import CRANK, SLIDE
-from pkmkit.numerics import jit
 
 _SERIAL = int(Singularity.SERIAL)
 _PARALLEL = int(Singularity.PARALLEL)
 _NAN = float("nan")
+_sqrt, _cos, _sin = math.sqrt, math.cos, math.sin
+# NumPy's arccos and hypot, not math's: the batch path's bits (they differ in the last place
+# for about one argument in ten, resp. one in two hundred, on this machine)
+_arccos, _hypot = np.arccos, np.hypot
+_float64, _int64 = np.float64, np.int64
 
 
 class _Unusual(Exception):
     """A case the batch path treats specially: hand the pose to it."""
 
 
+#: What makes a one-pose field hand its pose to the batch path.
+_HANDED_OVER = (_Unusual, ZeroDivisionError, OverflowError, ValueError)
+
+
 def _legs(closed: RodClosedForm) -> tuple:
-    """Per-leg constants as Python floats, computed once per machine:
-    ``(kind, centre0, axis, length, tip0, e1, e2, radius, platform)`` with ``tip0`` the
-    centre of a crank arm's circle, ``e1``, ``e2`` the arm directions, ``radius`` its length and
-    ``platform`` the rod's platform joint (the terms of :meth:`RodClosedForm.centres`, in its
-    order of operations)."""
+    """Per-leg constants as Python floats, computed once per machine: ``(kind, terms)`` with
+    terms ``(centre0 (3), axis (3))`` for a slide, ``(tip0 (3), e1 (3), e2 (3), radius,
+    platform (3))`` for a crank (``tip0`` the centre of the arm's circle, ``e1``, ``e2`` the arm
+    directions, ``radius`` its length, ``platform`` the rod's platform joint: the terms of
+    :meth:`RodClosedForm.centres`, in its order of operations), ``(centre0 (3), length)`` for a
+    strut; a plane machine's vectors padded with 0."""
     cached = closed.__dict__.get("_one_velocity")
     if cached is None:
         m = closed.model
         dims = m.dims
+
+        def padded(v: np.ndarray) -> list[float]:
+            return [*np.asarray(v, dtype=float)[:dims].tolist(), 0.0, 0.0][:3]
+
         legs = []
         for i in range(m.n_legs):
-            tip0 = (m.leg_pivot[i] + closed.crank_offset[i] * m.leg_axis[i])[:dims]
-            legs.append((int(m.leg_kind[i]), tuple(closed.centre0[i].tolist()),
-                         tuple(closed.axis[i].tolist()), float(m.leg_length[i]),
-                         tuple(tip0.tolist()),
-                         tuple(closed.crank_e1[i, :dims].tolist()),
-                         tuple(closed.crank_e2[i, :dims].tolist()),
-                         float(closed.crank_radius[i]),
-                         tuple(m.leg_platform[i, :dims].tolist())))
+            kind = int(m.leg_kind[i])
+            if kind == SLIDE:
+                terms = (*padded(closed.centre0[i]), *padded(closed.axis[i]))
+            elif kind == CRANK:
+                terms = (*padded(m.leg_pivot[i] + closed.crank_offset[i] * m.leg_axis[i]),
+                         *padded(closed.crank_e1[i]), *padded(closed.crank_e2[i]),
+                         float(closed.crank_radius[i]), *padded(m.leg_platform[i]))
+            else:
+                terms = (*padded(closed.centre0[i]), float(m.leg_length[i]))
+            legs.append((kind, terms))
         cached = tuple(legs)
         object.__setattr__(closed, "_one_velocity", cached)
     return cached
 
 
-def _compiled_now(closed: RodClosedForm) -> bool:
-    """Whether the compiled one-pose kernel runs: a spatial machine of three legs, in a
-    process that has already imported Numba (a one-shot call does not pay its import), unless
-    ``PKMKIT_COMPILED=0``."""
-    return ("numba" in sys.modules and closed.model.dims == 3 and closed.model.n_legs == 3
-            and jit.mode() != "0")
-
-
-def _kernel_legs(closed: RodClosedForm) -> np.ndarray:
-    """The legs ``(3, 21)`` of :mod:`pkmkit.machines.velocity_one_kernel`, built once."""
-    cached = closed.__dict__.get("_one_velocity_kernel")
-    if cached is None:
-        kinds = {SLIDE: 0.0, CRANK: 2.0}
-        cached = np.array([[kinds.get(kind, 1.0), *centre0, *axis, length, *tip0, *e1, *e2,
-                            radius, *platform]
-                           for kind, centre0, axis, length, tip0, e1, e2, radius, platform
-                           in _legs(closed)])
-        object.__setattr__(closed, "_one_velocity_kernel", cached)
-    return cached
-
-
 def rows(closed: RodClosedForm, x: Sequence[float], q: Sequence[float]
-         ) -> tuple[list[list[float]], list[float]]:
-    """A (rows ``p − c_i``) and the diagonal of B of one pose, as
-    :meth:`RodClosedForm.jacobians_t` computes them."""
-    a, b = [], []
-    for (kind, centre0, axis, length, tip0, e1, e2, radius, platform), qi in zip(
-            _legs(closed), q, strict=True):
+         ) -> tuple[list[float], list[float]]:
+    """A row-major (``n × dims`` floats: rows ``p − c_i``) and the diagonal of B of one pose,
+    as :meth:`RodClosedForm.jacobians_t` computes them (the same operations, the same bits)."""
+    plane = len(x) == 2
+    x0, x1 = x[0], x[1]
+    x2 = 0.0 if plane else x[2]
+    a: list[float] = []
+    b: list[float] = []
+    for (kind, terms), qi in zip(_legs(closed), q, strict=True):
         if kind == SLIDE:
-            row = [xk - (ck + qi * uk) for xk, ck, uk in zip(x, centre0, axis, strict=True)]
-            bi = 0.0
-            for ak, uk in zip(row, axis, strict=True):
-                if uk:
-                    bi += ak * uk
-        elif kind == CRANK:
-            cos, sin = math.cos(qi), math.sin(qi)
-            # centres(): pivot + h w + r (cos q e1 + sin q e2) − b; rates r (cos q e2 − sin q e1)
-            row = [xk - ((tk + radius * (cos * f1 + sin * f2)) - bk)
-                   for xk, tk, f1, f2, bk in zip(x, tip0, e1, e2, platform, strict=True)]
-            bi = 0.0
-            for ak, f1, f2 in zip(row, e1, e2, strict=True):
-                bi += ak * (radius * (cos * f2 - sin * f1))
+            c0, c1, c2, u0, u1, u2 = terms
+            a0, a1, a2 = x0 - (c0 + qi * u0), x1 - (c1 + qi * u1), x2 - (c2 + qi * u2)
+            bi = 0.0  # the batch path adds a term per non-zero axis component
+            if u0:
+                bi += a0 * u0
+            if u1:
+                bi += a1 * u1
+            if u2:
+                bi += a2 * u2
+        elif kind == CRANK:  # centres(): tip0 + r (cos e1 + sin e2) − b; rate r (cos e2 − sin e1)
+            t0, t1, t2, e0, e1, e2, f0, f1, f2, radius, p0, p1, p2 = terms
+            cos, sin = _cos(qi), _sin(qi)
+            a0 = x0 - ((t0 + radius * (cos * e0 + sin * f0)) - p0)
+            a1 = x1 - ((t1 + radius * (cos * e1 + sin * f1)) - p1)
+            a2 = x2 - ((t2 + radius * (cos * e2 + sin * f2)) - p2)
+            bi = (0.0 + a0 * (radius * (cos * f0 - sin * e0))
+                  + a1 * (radius * (cos * f1 - sin * e1)) + a2 * (radius * (cos * f2 - sin * e2)))
         else:  # strut
-            row = [xk - ck for xk, ck in zip(x, centre0, strict=True)]
+            c0, c1, c2, length = terms
+            a0, a1, a2 = x0 - c0, x1 - c1, x2 - c2
             bi = length + qi
-        a.append(row)
+        if plane:
+            a += (a0, a1)
+        else:
+            a += (a0, a1, a2)
         b.append(bi)
     return a, b
 
 
-def _cofactors(m: list[list[float]]) -> list[list[float]]:
-    if len(m) == 2:
-        return [[m[1][1], -m[1][0]], [-m[0][1], m[0][0]]]
-    out = [[0.0] * 3 for _ in range(3)]
-    for i in range(3):
-        i1, i2 = (i + 1) % 3, (i + 2) % 3
-        for j in range(3):
-            j1, j2 = (j + 1) % 3, (j + 2) % 3
-            out[i][j] = m[i1][j1] * m[i2][j2] - m[i1][j2] * m[i2][j1]
-    return out
-
-
-def _det(m: list[list[float]], c: list[list[float]]) -> float:
-    if len(m) == 2:
-        return m[0][0] * m[1][1] - m[0][1] * m[1][0]
-    return m[0][0] * c[0][0] + m[0][1] * c[0][1] + m[0][2] * c[0][2]
-
-
-def singular_values(m: list[list[float]]) -> list[float]:
-    """Singular values, decreasing, of one finite 2×2 or 3×3 matrix: the closed forms of
-    :func:`pkmkit.numerics.small.singular_values` in scalars; where those hand the matrix to
-    LAPACK (nearly equal singular values), LAPACK too."""
-    if len(m) == 2:
-        (a, b), (c, d) = m
-        s1 = 0.5 * (math.hypot(a + d, c - b) + math.hypot(a - d, b + c))
-        return [s1, abs(a * d - b * c) / s1 if s1 > 0 else 0.0]
-    (m00, m01, m02), (m10, m11, m12), (m20, m21, m22) = m
+def _singular_values3(m00: float, m01: float, m02: float, m10: float, m11: float, m12: float,
+                      m20: float, m21: float, m22: float) -> list[float]:
+    """:func:`pkmkit.numerics.small.singular_values` of one finite 3×3 matrix, in scalars."""
     g00 = m00 * m00 + m10 * m10 + m20 * m20
     g11 = m01 * m01 + m11 * m11 + m21 * m21
     g22 = m02 * m02 + m12 * m12 + m22 * m22
@@ -145,16 +136,17 @@ def singular_values(m: list[list[float]]) -> list[float]:
     g02 = m00 * m02 + m10 * m12 + m20 * m22
     g12 = m01 * m02 + m11 * m12 + m21 * m22
     mean = (g00 + g11 + g22) / 3.0
-    spread = math.sqrt(((g00 - mean) ** 2 + (g11 - mean) ** 2 + (g22 - mean) ** 2
-                        + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12)) / 6.0)
+    d0, d1, d2 = g00 - mean, g11 - mean, g22 - mean
+    spread = _sqrt((d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12))
+                   / 6.0)
     scale = 1.0 / spread if spread > 0 else 0.0
-    s00, s11, s22 = (g00 - mean) * scale, (g11 - mean) * scale, (g22 - mean) * scale
+    s00, s11, s22 = d0 * scale, d1 * scale, d2 * scale
     s01, s02, s12 = g01 * scale, g02 * scale, g12 * scale
     sym_det = (s00 * (s11 * s22 - s12 * s12) - s01 * (s01 * s22 - s12 * s02)
                + s02 * (s01 * s12 - s11 * s02))
     half_det = min(max(0.5 * sym_det, -1.0), 1.0)
-    lam1 = mean + 2.0 * spread * math.cos(math.acos(half_det) / 3.0)
-    s1 = math.sqrt(lam1) if lam1 > 0 else 0.0
+    lam1 = mean + 2.0 * spread * _cos(_arccos(half_det) / 3.0)
+    s1 = _sqrt(lam1) if lam1 > 0 else 0.0
     c00, c01, c02 = m11 * m22 - m12 * m21, m12 * m20 - m10 * m22, m10 * m21 - m11 * m20
     c10, c11, c12 = m21 * m02 - m22 * m01, m22 * m00 - m20 * m02, m20 * m01 - m21 * m00
     c20, c21, c22 = m01 * m12 - m02 * m11, m02 * m10 - m00 * m12, m00 * m11 - m01 * m10
@@ -164,155 +156,193 @@ def singular_values(m: list[list[float]]) -> list[float]:
     pair = d / s1 if s1 > 0 else 0.0
     rest = (e2 - pair * pair) / lam1 if lam1 > 0 else 0.0
     if spread > 0 and (abs(half_det) > 1.0 - 1e-6 or rest - 2 * pair < 1e-6 * rest):
-        return np.linalg.svd(np.array(m), compute_uv=False).tolist()
-    s2 = 0.5 * (math.sqrt(max(rest + 2 * pair, 0.0)) + math.sqrt(max(rest - 2 * pair, 0.0)))
+        # nearly equal singular values: LAPACK, as the batch path (the same bits)
+        return np.linalg.svd(np.array([[m00, m01, m02], [m10, m11, m12], [m20, m21, m22]]),
+                             compute_uv=False).tolist()
+    s2 = 0.5 * (_sqrt(max(rest + 2 * pair, 0.0)) + _sqrt(max(rest - 2 * pair, 0.0)))
     s3 = pair / s2 if s2 > 0 else 0.0
     if s2 > s1:
         s2 = s1
     return [s1, s2, s3 if s3 < s2 else s2]
 
 
+def singular_values(m: Sequence[float]) -> list[float]:
+    """Singular values, decreasing, of one finite 2×2 or 3×3 matrix given row-major (4 or 9
+    floats): the closed forms of :func:`pkmkit.numerics.small.singular_values` in scalars,
+    the same bits; where those hand the matrix to LAPACK (nearly equal singular values),
+    LAPACK too."""
+    if len(m) == 4:
+        a, b, c, d = m
+        s1 = 0.5 * float(_hypot(a + d, c - b) + _hypot(a - d, b + c))
+        return [s1, abs(a * d - b * c) / s1 if s1 > 0 else 0.0]
+    return _singular_values3(*m)
+
+
+def _surely_above(det_a: float, lengths: list[float], t: float) -> bool:
+    """Whether σ_min/σ_max of A with unit rows is ≥ ``t`` (with margin), from its lower bound
+    |det U| / 2 (rows of unit length: σ1²σ2 ≤ 2 in 3-D, σ1² ≤ 2 in the plane). The factor 2
+    and the 1e-12 absorb the rounding of det A and of the singular values (relative 1e-10 at
+    worst, where the closed forms are closest to their LAPACK switch)."""
+    product = lengths[0] * lengths[1] * (lengths[2] if len(lengths) == 3 else 1.0)
+    return abs(det_a) > (4.0 * t + 2e-12) * product
+
+
 class OnePoseVelocity:
-    """The velocity model of one pose, evaluated when a field is first read.
+    """The velocity model of one pose, each piece computed when a field first needs it.
 
     Args:
         closed: the machine's closed forms. x: the pose (``dims`` floats, m). q: its actuator
             coordinates (``n`` floats). tol: threshold of the singularity measures.
     """
 
-    __slots__ = ("_fields", "closed", "q", "tol", "x")
+    # the pieces, computed when first needed (class-level None: a record sets only its inputs)
+    _ab = _adj = _lengths = _parallel = _flags = _j = _sv = _batch = None
 
     def __init__(self, closed: RodClosedForm, x: list[float], q: list[float], tol: float):
         self.closed, self.x, self.q, self.tol = closed, x, q, tol
-        self._fields: dict | None = None
 
     def field(self, name: str):
         """The value of field ``name`` of the single-pose :class:`Jacobians`."""
-        fields = self._fields
-        if fields is None:
-            fields = self._compiled() if _compiled_now(self.closed) else None
-            if fields is None:
-                try:
-                    fields = self._compute()
-                except (_Unusual, ZeroDivisionError, OverflowError, ValueError):
-                    fields = {"batch": self.batch()}
-            self._fields = fields
-        batch = fields.get("batch")
-        if batch is not None:
-            return getattr(batch, name)
-        return _BUILD[name](fields)
+        if self._batch is None:
+            try:
+                return _BUILD[name](self)
+            except _HANDED_OVER:
+                pass
+        return self.from_batch(name)
 
-    def batch(self) -> LazyJacobians:
-        """The batch path's velocity model of this pose (one row, single)."""
-        x = np.array([self.x])
-        q = np.array([self.q])
-        return LazyJacobians(VelocityEvaluation(self.closed, x, q, self.tol), True)
+    def from_batch(self, name: str):
+        """Field ``name`` of the batch path's velocity model of this pose."""
+        if self._batch is None:
+            x, q = np.array([self.x]), np.array([self.q])
+            self._batch = LazyJacobians(VelocityEvaluation(self.closed, x, q, self.tol), True)
+        return getattr(self._batch, name)
 
-    def _compiled(self) -> dict | None:
-        """The fields by :func:`pkmkit.machines.velocity_one_kernel.velocity_one3`, or None
-        where it leaves the pose to :meth:`_compute`."""
-        from pkmkit.machines import velocity_one_kernel
-
-        out = np.empty(30)
-        if velocity_one_kernel.velocity_one3(np.array(self.x), np.array(self.q),
-                                             _kernel_legs(self.closed), self.tol, out):
-            return None
-        condition, det_a, det_b, parallel, serial, flags = out[24:30].tolist()
-        return {"a": out[0:9].reshape(3, 3), "b": out[9:12], "j": out[12:21].reshape(3, 3),
-                "sv": out[21:24], "condition": condition, "det_A": det_a, "det_B": det_b,
-                "parallel": parallel, "serial": serial, "flags": int(flags), "q": self.q,
-                "tol": self.tol}
-
-    def _compute(self) -> dict:
-        a, b = rows(self.closed, self.x, self.q)
-        n = len(b)
-        if n == 3:
-            return self._compute3(a, b)
-        for v in (*b, *a[0], *a[1], *a[-1]):
-            if not -math.inf < v < math.inf:
+    # ------------------------------------------------------------------ pieces
+    def ab(self) -> tuple[list[float], list[float]]:
+        """A row-major and diag B (:func:`rows`); not finite: the batch path."""
+        ab = self._ab
+        if ab is None:
+            a, b = rows(self.closed, self.x, self.q)
+            if not -math.inf < sum(a) + sum(b) < math.inf:  # NaN, ±inf (or a sum overflowing)
                 raise _Unusual
-        cof = _cofactors(a)
-        det_a = _det(a, cof)
-        lengths = [math.sqrt(r[0] * r[0] + r[1] * r[1] + (r[2] * r[2] if n == 3 else 0.0))
-                   for r in a]
-        sv_unit = singular_values([[v / length for v in r] for r, length in
-                                   zip(a, lengths, strict=True)])
-        parallel = sv_unit[-1] / sv_unit[0]
-        serial = min([abs(bi) / length for bi, length in zip(b, lengths, strict=True)])
-        inv_det = 1.0 / det_a if det_a != 0.0 else math.inf
-        if -math.inf < inv_det < math.inf:
-            j = [[cof[c][r] * (b[c] * inv_det) for c in range(n)] for r in range(n)]
-            for v in (*j[0], *j[1], *j[-1]):
+            ab = self._ab = (a, b)
+        return ab
+
+    def adj(self) -> tuple[list[float], float]:
+        """The cofactors ``C`` of A (row-major) and det A, as :mod:`pkmkit.numerics.small`."""
+        adj = self._adj
+        if adj is None:
+            a = self.ab()[0]
+            if len(a) == 4:
+                cof = [a[3], -a[2], -a[1], a[0]]
+                det_a = a[0] * a[3] - a[1] * a[2]
+            else:
+                a00, a01, a02, a10, a11, a12, a20, a21, a22 = a
+                cof = [a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20,
+                       a21 * a02 - a22 * a01, a22 * a00 - a20 * a02, a20 * a01 - a21 * a00,
+                       a01 * a12 - a02 * a11, a02 * a10 - a00 * a12, a00 * a11 - a01 * a10]
+                det_a = a00 * cof[0] + a01 * cof[1] + a02 * cof[2]
+            adj = self._adj = (cof, det_a)
+        return adj
+
+    def lengths(self) -> list[float]:
+        """|a_i| (sums in the batch path's order)."""
+        lengths = self._lengths
+        if lengths is None:
+            a = self.ab()[0]
+            if len(a) == 4:
+                a00, a01, a10, a11 = a
+                lengths = [_sqrt(a00 * a00 + a01 * a01), _sqrt(a10 * a10 + a11 * a11)]
+            else:
+                a00, a01, a02, a10, a11, a12, a20, a21, a22 = a
+                lengths = [_sqrt(a00 * a00 + a01 * a01 + a02 * a02),
+                           _sqrt(a10 * a10 + a11 * a11 + a12 * a12),
+                           _sqrt(a20 * a20 + a21 * a21 + a22 * a22)]
+            if not (lengths[0] > 0 and lengths[1] > 0 and lengths[-1] > 0):
+                raise _Unusual  # a zero row: NaN measures in the batch path
+            self._lengths = lengths
+        return lengths
+
+    def parallel(self) -> float:
+        """σ_min/σ_max of A with unit rows (one singular-value computation)."""
+        parallel = self._parallel
+        if parallel is None:
+            a, lengths = self.ab()[0], self.lengths()
+            n = len(lengths)
+            unit = [a[k] / lengths[k // n] for k in range(n * n)]
+            sv = singular_values(unit)
+            parallel = self._parallel = sv[-1] / sv[0]
+        return parallel
+
+    def at_parallel(self) -> bool:
+        """Whether the batch path flags a parallel singularity (measure < tol or det A = 0)."""
+        det_a = self.adj()[1]
+        if _surely_above(det_a, self.lengths(), self.tol):
+            return False
+        return self.parallel() < self.tol or det_a == 0.0
+
+    def serial(self) -> float:
+        b, lengths = self.ab()[1], self.lengths()
+        return min([abs(bi) / li for bi, li in zip(b, lengths, strict=True)])
+
+    def j(self) -> list[float] | None:
+        """J = adj(A) B / det A row-major, or None at a parallel singularity."""
+        j = self._j
+        if j is None:
+            if self.at_parallel():
+                return None
+            cof, det_a = self.adj()
+            inv_det = 1.0 / det_a
+            if not -math.inf < inv_det < math.inf:
+                raise _Unusual
+            b = self.ab()[1]
+            if len(b) == 2:
+                s0, s1 = b[0] * inv_det, b[1] * inv_det
+                j = [cof[0] * s0, cof[2] * s1, cof[1] * s0, cof[3] * s1]
+            else:
+                s0, s1, s2 = b[0] * inv_det, b[1] * inv_det, b[2] * inv_det
+                c00, c01, c02, c10, c11, c12, c20, c21, c22 = cof
+                j = [c00 * s0, c10 * s1, c20 * s2, c01 * s0, c11 * s1, c21 * s2,
+                     c02 * s0, c12 * s1, c22 * s2]
+            for v in j:
                 if not -math.inf < v < math.inf:
                     raise _Unusual
-            if parallel < NEAR_PARALLEL and parallel < serial:
-                raise _Unusual  # the batch path takes these singular values from J⁻¹
-            sv = singular_values(j)
-        else:
-            j = [[_NAN] * n for _ in range(n)]
-            sv = [_NAN] * n
-        flags = _SERIAL if serial < self.tol else 0
-        if parallel < self.tol or det_a == 0.0:
-            flags |= _PARALLEL
-            j = [[_NAN] * n for _ in range(n)]
-            sv = [_NAN] * n
-            condition = _NAN
-        else:
-            condition = math.inf if sv[-1] == 0.0 else sv[0] / sv[-1]
-        det_b = b[0]
-        for bi in b[1:]:
-            det_b *= bi
-        return {"a": a, "b": b, "j": j, "sv": sv, "condition": condition, "det_A": det_a,
-                "det_B": det_b, "parallel": parallel, "serial": serial, "flags": flags,
-                "q": self.q, "tol": self.tol}
+            self._j = j
+        return j
+
+    def sv(self) -> list[float] | None:
+        """Singular values of J (from J⁻¹ near a parallel singularity, as the batch path), or
+        None at a parallel singularity."""
+        sv = self._sv
+        if sv is None:
+            j = self.j()
+            if j is None:
+                return None
+            det_a = self.adj()[1]
+            if not _surely_above(det_a, self.lengths(), NEAR_PARALLEL) and (
+                    self.parallel() < NEAR_PARALLEL and self.parallel() < self.serial()):
+                a, b = self.ab()
+                n = len(b)
+                inverse = singular_values([a[k] / b[k // n] for k in range(n * n)])
+                sv = [1.0 / s for s in reversed(inverse)]
+            else:
+                sv = singular_values(j)
+            self._sv = sv
+        return sv
+
+    def flags(self) -> int:
+        flags = self._flags
+        if flags is None:
+            flags = _SERIAL if self.serial() < self.tol else 0
+            if self.at_parallel():
+                flags |= _PARALLEL
+            self._flags = flags
+        return flags
 
 
-    def _compute3(self, a: list[list[float]], b: list[float]) -> dict:
-        """:meth:`_compute` written out for 3 × 3 matrices (the same operations)."""
-        (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = a
-        b0, b1, b2 = b
-        for v in (a00, a01, a02, a10, a11, a12, a20, a21, a22, b0, b1, b2):
-            if not -math.inf < v < math.inf:
-                raise _Unusual
-        c00, c01, c02 = a11 * a22 - a12 * a21, a12 * a20 - a10 * a22, a10 * a21 - a11 * a20
-        c10, c11, c12 = a21 * a02 - a22 * a01, a22 * a00 - a20 * a02, a20 * a01 - a21 * a00
-        c20, c21, c22 = a01 * a12 - a02 * a11, a02 * a10 - a00 * a12, a00 * a11 - a01 * a10
-        det_a = a00 * c00 + a01 * c01 + a02 * c02
-        l0 = math.sqrt(a00 * a00 + a01 * a01 + a02 * a02)
-        l1 = math.sqrt(a10 * a10 + a11 * a11 + a12 * a12)
-        l2 = math.sqrt(a20 * a20 + a21 * a21 + a22 * a22)
-        sv_unit = singular_values([[a00 / l0, a01 / l0, a02 / l0], [a10 / l1, a11 / l1, a12 / l1],
-                                   [a20 / l2, a21 / l2, a22 / l2]])
-        parallel = sv_unit[-1] / sv_unit[0]
-        serial = min(abs(b0) / l0, abs(b1) / l1, abs(b2) / l2)
-        tol = self.tol
-        flags = _SERIAL if serial < tol else 0
-        inv_det = 1.0 / det_a if det_a != 0.0 else math.inf
-        if parallel < tol or det_a == 0.0:
-            flags |= _PARALLEL
-            j = _NAN3
-            sv = [_NAN] * 3
-            condition = _NAN
-        elif -math.inf < inv_det < math.inf:
-            s0, s1, s2 = b0 * inv_det, b1 * inv_det, b2 * inv_det
-            j = [[c00 * s0, c10 * s1, c20 * s2], [c01 * s0, c11 * s1, c21 * s2],
-                 [c02 * s0, c12 * s1, c22 * s2]]
-            for row in j:
-                for v in row:
-                    if not -math.inf < v < math.inf:
-                        raise _Unusual
-            if parallel < NEAR_PARALLEL and parallel < serial:
-                raise _Unusual  # the batch path takes these singular values from J⁻¹
-            sv = singular_values(j)
-            condition = math.inf if sv[-1] == 0.0 else sv[0] / sv[-1]
-        else:
-            raise _Unusual
-        return {"a": a, "b": b, "j": j, "sv": sv, "condition": condition, "det_A": det_a,
-                "det_B": b0 * b1 * b2, "parallel": parallel, "serial": serial,
-                "flags": flags, "q": self.q, "tol": tol}
-
-
-_NAN3 = [[_NAN] * 3 for _ in range(3)]
+def _square(values: list[float]) -> np.ndarray:
+    n = 3 if len(values) == 9 else 2
+    return np.array(values).reshape(n, n)
 
 
 def _diagonal(b: list[float]) -> np.ndarray:
@@ -321,41 +351,85 @@ def _diagonal(b: list[float]) -> np.ndarray:
     return out
 
 
-def _j_inv(f: dict) -> np.ndarray:
+def _j(e: OnePoseVelocity) -> np.ndarray:
+    j = e.j()
+    n = len(e.q)
+    return np.full((n, n), _NAN) if j is None else _square(j)
+
+
+def _j_inv(e: OnePoseVelocity) -> np.ndarray:
+    a, b = e.ab()
+    n = len(b)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.array(f["a"]) / np.array(f["b"])[:, None]
+        return _square(a) / np.array(b)[:, None] if 0.0 in b else _square(
+            [a[k] / b[k // n] for k in range(n * n)])
 
 
-_BUILD = {
-    "A": lambda f: np.array(f["a"]),
-    "B": lambda f: _diagonal(f["b"]),
-    "J": lambda f: np.array(f["j"]),
+def _singular_values(e: OnePoseVelocity) -> np.ndarray:
+    sv = e.sv()
+    return np.full(len(e.q), _NAN) if sv is None else np.array(sv)
+
+
+def _condition(e: OnePoseVelocity) -> np.float64:
+    sv = e.sv()
+    if sv is None:
+        return _float64(_NAN)
+    return _float64(math.inf if sv[-1] == 0.0 else sv[0] / sv[-1])
+
+
+def _det_b(e: OnePoseVelocity) -> np.float64:
+    b = e.ab()[1]
+    det_b = b[0] * b[1]
+    return _float64(det_b * b[2] if len(b) == 3 else det_b)
+
+
+def _mode(e: OnePoseVelocity) -> np.int64:
+    det_a = e.adj()[1]
+    return _int64((det_a > 0) - (det_a < 0))
+
+
+_BUILD: dict[str, Callable[[OnePoseVelocity], Any]] = {
+    "A": lambda e: _square(e.ab()[0]),
+    "B": lambda e: _diagonal(e.ab()[1]),
+    "J": _j,
     "J_inv": _j_inv,
-    "singular_values": lambda f: np.array(f["sv"]),
-    "condition": lambda f: np.float64(f["condition"]),
-    "det_A": lambda f: np.float64(f["det_A"]),
-    "det_B": lambda f: np.float64(f["det_B"]),
-    "parallel_measure": lambda f: np.float64(f["parallel"]),
-    "serial_measure": lambda f: np.float64(f["serial"]),
-    "singularity": lambda f: np.int64(f["flags"]),
-    "tolerance": lambda f: f["tol"],
-    "q": lambda f: np.array(f["q"]),
-    "mode": lambda f: np.int64((f["det_A"] > 0) - (f["det_A"] < 0)),
+    "singular_values": _singular_values,
+    "condition": _condition,
+    "det_A": lambda e: _float64(e.adj()[1]),
+    "det_B": _det_b,
+    "parallel_measure": lambda e: _float64(e.parallel()),
+    "serial_measure": lambda e: _float64(e.serial()),
+    "singularity": lambda e: _int64(e.flags()),
+    "tolerance": lambda e: e.tol,
+    "q": lambda e: np.array(e.q),
+    "mode": _mode,
 }
+
+
+def _one_field(name: str) -> property:
+    build = _BUILD[name]
+
+    def get(self):
+        cache = self._cache
+        if name in cache:
+            return cache[name]
+        evaluation = self._evaluation
+        try:
+            value = build(evaluation) if evaluation._batch is None else None
+        except _HANDED_OVER:
+            value = None
+        if value is None:
+            value = evaluation.from_batch(name)
+        cache[name] = value
+        return value
+
+    return property(get, doc=f"``{name}`` of the single pose (computed when first read)")
 
 
 class OnePoseJacobians(LazyJacobians):
     """The :class:`~pkmkit.machines.velocity.LazyJacobians` of one pose (fields without the
-    batch axis), its fields built from a :class:`OnePoseVelocity` when first read."""
-
-    def _get(self, name: str, compute):
-        cache = self._cache
-        if name not in cache:
-            evaluation = self._evaluation
-            if evaluation is None:  # built by dataclasses.replace: every field given
-                return super()._get(name, compute)
-            cache[name] = evaluation.field(name)
-        return cache[name]
+    batch axis), each field computed from an :class:`OnePoseVelocity` when first read. Built
+    with every field (``dataclasses.replace``) it is a plain record."""
 
     def __repr__(self) -> str:
         ev = self._evaluation
@@ -363,6 +437,18 @@ class OnePoseJacobians(LazyJacobians):
             return f"LazyJacobians(condition={self.condition!r})"
         return (f"LazyJacobians(1 pose, {len(ev.q)} actuators, tolerance {ev.tol:g}; "
                 "fields computed when read)")
+
+
+for _name in _BUILD:  # each field a property reading the record's cache, else the evaluation
+    setattr(OnePoseJacobians, _name, _one_field(_name))
+
+
+def _record(evaluation: OnePoseVelocity) -> OnePoseJacobians:
+    """An :class:`OnePoseJacobians` without the generic constructor's work."""
+    record = object.__new__(OnePoseJacobians)
+    state = record.__dict__
+    state["_evaluation"], state["_single"], state["_cache"] = evaluation, True, {}
+    return record
 
 
 def jacobian_one(closed: RodClosedForm, x: Any, tol: float, branches: Sequence[float],
@@ -373,10 +459,15 @@ def jacobian_one(closed: RodClosedForm, x: Any, tol: float, branches: Sequence[f
     if isinstance(x, np.ndarray):
         if x.ndim != 1 or x.dtype.kind != "f":
             return None
-        x = x.tolist()
-    elif not isinstance(x, list | tuple):
+        x = x.tolist()  # floats
+        q = closed.inverse_one(x, branches)
+    elif isinstance(x, list | tuple):
+        q = closed.inverse_one(x, branches)  # checks the entries are plain finite numbers
+        if q is None:
+            return None
+        x = [float(v) for v in x]
+    else:
         return None
-    q = closed.inverse_one(x, branches)
     if q is None or not within_strokes(q):
         return None
-    return OnePoseJacobians(OnePoseVelocity(closed, [float(v) for v in x], q, tol), True)
+    return _record(OnePoseVelocity(closed, x, q, tol))

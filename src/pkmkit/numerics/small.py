@@ -26,6 +26,32 @@ def det(m: np.ndarray, cof: np.ndarray | None = None) -> np.ndarray:
     return m[0, 0] * c[0, 0] + m[0, 1] * c[0, 1] + m[0, 2] * c[0, 2]
 
 
+def gram(m: np.ndarray) -> np.ndarray:
+    """``MᵀM (n, n, N)`` of ``m (n, n, N)``, each entry summed in index order: the same bits
+    for every batch size and layout (``np.einsum`` sums a contiguous batch of one with SIMD
+    partial sums, which round differently), so a row of any batch is the one-pose value of
+    :mod:`pkmkit.machines.velocity_one`."""
+    n = m.shape[0]
+    g = np.empty((n, n, m.shape[2]))
+    for i in range(n):
+        for j in range(i, n):
+            np.multiply(m[0, i], m[0, j], out=g[i, j])
+            for k in range(1, n):
+                g[i, j] += m[k, i] * m[k, j]
+            if j > i:
+                g[j, i] = g[i, j]
+    return g
+
+
+def row_norms(m: np.ndarray) -> np.ndarray:
+    """``|m_i| (n, N)`` of the rows of ``m (n, d, N)``, squares summed in index order (the same
+    bits for every batch size, see :func:`gram`)."""
+    sq = m[:, 0] * m[:, 0]
+    for k in range(1, m.shape[1]):
+        sq += m[:, k] * m[:, k]
+    return np.sqrt(sq)
+
+
 def _symmetric_det3(s: np.ndarray) -> np.ndarray:
     return (s[0, 0] * (s[1, 1] * s[2, 2] - s[1, 2] ** 2)
             - s[0, 1] * (s[0, 1] * s[2, 2] - s[1, 2] * s[0, 2])
@@ -62,7 +88,7 @@ def singular_values(m: np.ndarray, cof: np.ndarray | None = None) -> np.ndarray:
         return out
     if m.shape[0] != 3:
         raise ValueError(f"closed-form singular values need 2x2 or 3x3 matrices, got {m.shape}")
-    g = np.einsum("kin,kjn->ijn", m, m)  # MᵀM
+    g = gram(m)  # MᵀM
     mean = (g[0, 0] + g[1, 1] + g[2, 2]) / 3.0
     off = g[0, 1] ** 2 + g[0, 2] ** 2 + g[1, 2] ** 2
     spread_sq = ((g[0, 0] - mean) ** 2 + (g[1, 1] - mean) ** 2 + (g[2, 2] - mean) ** 2
@@ -77,7 +103,9 @@ def singular_values(m: np.ndarray, cof: np.ndarray | None = None) -> np.ndarray:
         s1 = np.sqrt(np.maximum(lam1, 0.0))
         c = cofactors(m) if cof is None else cof
         d = np.abs(det(m, c))
-        e2 = np.einsum("ijn,ijn->n", c, c)
+        e2 = c[0, 0] * c[0, 0]  # Σ C_ij², summed in order (see gram)
+        for i, j in ((0, 1), (0, 2), (1, 0), (1, 1), (1, 2), (2, 0), (2, 1), (2, 2)):
+            e2 += c[i, j] * c[i, j]
         pair = np.where(s1 > 0, d / s1, 0.0)  # σ2 σ3
         rest = np.where(lam1 > 0, (e2 - pair**2) / lam1, 0.0)  # σ2² + σ3²
         s2 = 0.5 * (np.sqrt(np.maximum(rest + 2 * pair, 0.0))
