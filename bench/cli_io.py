@@ -18,7 +18,10 @@ machine they estimate the wall time of a quiet one.
 compared with the library's read + write in ``rest/lib``.
 
 Start-up: ``pkmkit --help`` and a one-pose ``pkmkit ik`` against ``python -c pass`` and
-``python -c "import numpy"`` (the floor any NumPy program pays).
+``python -c "import numpy"`` (the floor any NumPy program pays); then the CPU time of a fresh
+process's first batch call (5,000 poses) over ``import pkmkit``, by default and with the
+compiled kernels forced (``PKMKIT_COMPILED=1``). ``m.ik(X)`` against ``m.ik(X,
+full_output=True)`` (statuses, modes, shortfalls, strokes) is timed in the bench's process.
 
 Memory: with ``--big-rows N`` (e.g. 10⁷), the peak resident memory of ``pkmkit ik`` on an
 N-row CSV → Parquet run, beside that of the ``--rows`` run (bounded by the chunk size, it should
@@ -29,6 +32,7 @@ not grow with N).
 Usage::
 
     python bench/cli_io.py [--rows 1000000] [--repeat 5] [--big-rows 10000000] [--load]
+                           [--commands ik] [--old-rows 0]
 """
 
 from __future__ import annotations
@@ -66,7 +70,7 @@ def wall(cmd: list[str], repeat: int) -> float:
     return run_times(cmd, repeat)[0]
 
 
-def run_times(cmd: list[str], repeat: int) -> tuple[float, float]:
+def run_times(cmd: list[str], repeat: int, env: dict | None = None) -> tuple[float, float]:
     """Median wall time and median CPU time (user + system, s) of ``cmd`` over ``repeat`` runs.
     On a loaded machine the CPU time estimates the wall time of a quiet one (an upper bound
     where pyarrow uses both cores)."""
@@ -74,7 +78,7 @@ def run_times(cmd: list[str], repeat: int) -> tuple[float, float]:
     for _ in range(repeat):
         before = resource.getrusage(resource.RUSAGE_CHILDREN)
         start = time.perf_counter()
-        done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
         walls.append(time.perf_counter() - start)
         after = resource.getrusage(resource.RUSAGE_CHILDREN)
         cpus.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
@@ -133,7 +137,9 @@ def library_read_write(src: Path, produced: Path, repeat: int, cpu: bool = False
     """pyarrow reading ``src`` and writing the table held in ``produced`` (same format): median
     wall time, or CPU time with ``cpu``."""
     if src.suffix == ".csv":
-        out_table = pcsv.read_csv(produced)
+        with open(produced, "rb") as handle:  # the command's "# units: m" line
+            skip = 1 if handle.readline().startswith(b"#") else 0
+        out_table = pcsv.read_csv(produced, read_options=pcsv.ReadOptions(skip_rows=skip))
 
         def run():
             pcsv.read_csv(src)
@@ -188,7 +194,10 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
         "fk": lambda: m.fk(q, full_output=True),
         "jacobian": lambda: m.jacobian(x, q=m.ik(x, full_output=True).q),
     }
+    statuses_at_kernel_cost(m, x, args.repeat)
     for command, src_name in (("ik", "poses"), ("fk", "q"), ("jacobian", "poses")):
+        if command not in args.commands:
+            continue
         solve = median_in_process(solves[command], args.repeat)
         solve_cpu = cpu_in_process(solves[command], args.repeat)
         for fmt in ("csv", "parquet"):
@@ -202,13 +211,14 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
                   f"{solve:8.3f} {(t - solve) / lib:8.2f} {cpu:6.3f} {lib_cpu:7.3f} "
                   f"{solve_cpu:9.3f}")
     old_rows = min(args.old_rows, args.rows)
-    start = time.perf_counter()
-    old_implementation(paths["poses.csv"], folder / "old.csv", old_rows, ["x", "y", "z"])
-    old = (time.perf_counter() - start) * args.rows / old_rows
-    t_ik = wall([*cmd, "ik", "linear-delta", "--input", str(paths["poses.csv"]), "--output",
-                 str(folder / "out-ik.csv")], args.repeat)
-    print(f"former CSV path (csv module, .17g), ik on {old_rows} rows scaled to {args.rows}: "
-          f"{old:.2f} s; pkmkit ik now {t_ik:.3f} s, xold {old / t_ik:.1f}")
+    if old_rows:
+        start = time.perf_counter()
+        old_implementation(paths["poses.csv"], folder / "old.csv", old_rows, ["x", "y", "z"])
+        old = (time.perf_counter() - start) * args.rows / old_rows
+        t_ik = wall([*cmd, "ik", "linear-delta", "--input", str(paths["poses.csv"]),
+                     "--output", str(folder / "out-ik.csv")], args.repeat)
+        print(f"former CSV path (csv module, .17g), ik on {old_rows} rows scaled to "
+              f"{args.rows}: {old:.2f} s; pkmkit ik now {t_ik:.3f} s, xold {old / t_ik:.1f}")
     print(f"{'start-up':<34} {'s':>7} {'x python':>9} {'x numpy':>8} {'cpu s':>6}")
     t_pass = wall([sys.executable, "-c", "pass"], args.repeat)
     t_numpy = wall([sys.executable, "-c", "import numpy"], args.repeat)
@@ -217,6 +227,48 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
                         ("pkmkit path --help", ["path", "--help"])):
         t, cpu = run_times([*cmd, *extra], args.repeat)
         print(f"{name:<34} {t:7.3f} {t / t_pass:9.1f} {t / t_numpy:8.2f} {cpu:6.3f}")
+    first_calls(args.repeat)
+
+
+def statuses_at_kernel_cost(m, x: np.ndarray, repeat: int) -> None:
+    """CPU time of ``m.ik(X)`` and ``m.ik(X, full_output=True)`` in this process, on the
+    NumPy path (Numba not imported yet) and then on the compiled one."""
+    for label in ("NumPy path (Numba not imported)", "compiled (Numba imported)"):
+        if label.startswith("compiled"):
+            if "numba" not in sys.modules:
+                try:
+                    import numba  # noqa: F401
+                except ImportError:
+                    return
+                m.ik(x[:5000], full_output=True)  # load the cached kernels
+        elif "numba" in sys.modules:
+            continue
+        bare = cpu_in_process(lambda: m.ik(x), repeat)
+        full = cpu_in_process(lambda: m.ik(x, full_output=True), repeat)
+        print(f"{label:<34} m.ik(X) {bare:.3f} s CPU, m.ik(X, full_output=True) {full:.3f} s "
+              f"CPU, x{full / bare:.1f}")
+
+
+#: A fresh process's first batch call (5,000 poses, above jit.MIN_ROWS), after ``import pkmkit``.
+FIRST_CALL = ("import numpy as np, pkmkit; m = pkmkit.machine({name!r}); "
+              "x = m.home_pose + np.random.default_rng(0).uniform(-0.05, 0.05, (5000, m.dims))")
+
+
+def first_calls(repeat: int) -> None:
+    """CPU time of a fresh process's first batch call, over ``import pkmkit`` in the same
+    run: the default path, and the compiled one forced (``PKMKIT_COMPILED=1``: Numba's import,
+    its NumPy support loaded on the first call, the cached kernel)."""
+    base = run_times([sys.executable, "-c", "import pkmkit"], repeat)[1]
+    print(f"{'first batch call (5000 poses)':<44} {'cpu s':>6} {'- import pkmkit':>16}")
+    print(f"{'import pkmkit':<44} {base:6.3f}")
+    for name, call in (("linear-delta", "m.ik(x)"), ("linear-delta", "m.ik(x, full_output=True)"),
+                       ("gough-stewart", "m.ik(x)")):
+        for forced in (False, True):
+            env = {**os.environ, "PKMKIT_COMPILED": "1"} if forced else None
+            code = FIRST_CALL.format(name=name) + "; " + call
+            cpu = run_times([sys.executable, "-c", code], repeat, env=env)[1]
+            label = f"{name} {call}{' compiled' if forced else ''}"
+            print(f"{label:<44} {cpu:6.3f} {cpu - base:16.3f}")
 
 
 def main() -> None:
@@ -226,7 +278,10 @@ def main() -> None:
     parser.add_argument("--old-rows", type=int, default=100_000)
     parser.add_argument("--big-rows", type=int, default=0)
     parser.add_argument("--load", action="store_true", help="also run beside a busy process")
+    parser.add_argument("--commands", default="ik,fk,jacobian",
+                        help="batch commands to time, comma-separated (default: all three)")
     args = parser.parse_args()
+    args.commands = args.commands.split(",")
     print(f"pkmkit {pkmkit.__version__}, numpy {np.__version__}, pyarrow {pa.__version__}, "
           f"Python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores")
     print(f"{args.rows} rows, median of {args.repeat} runs (wall time of a fresh process)")

@@ -71,8 +71,9 @@ def test_inverse_kernel_matches_reference(machine, monkeypatch):
     np.testing.assert_array_equal(np.isnan(q), np.isnan(ref))
     assert bad == np.count_nonzero(~np.isfinite(ref))
     assert 0 < bad < q.size  # both reachable and unreachable rows were exercised
-    ok = np.isfinite(ref)
-    np.testing.assert_allclose(q[ok], ref[ok], rtol=1e-13, atol=1e-13)
+    # the same operations in the same order: the same bits (a strut's length was summed in
+    # another order by the kernel, which changed the last bit of some rows)
+    np.testing.assert_array_equal(q, ref)
 
 
 def test_inverse_kernel_other_branches(machine, monkeypatch):
@@ -82,6 +83,55 @@ def test_inverse_kernel_other_branches(machine, monkeypatch):
     monkeypatch.setenv("PKMKIT_COMPILED", "1")
     q = machine._closed.inverse(x, flipped)
     np.testing.assert_allclose(q, ref, rtol=1e-13, atol=1e-13)
+
+
+def test_numba_is_imported_for_the_inverse_only_when_it_pays(monkeypatch):
+    """The closed-form inverse of rod legs runs on NumPy until Numba is imported (its import
+    and first call cost tens of millions of poses of the difference); ``=1`` still forces it."""
+    import sys
+
+    monkeypatch.setenv("PKMKIT_COMPILED", "auto")
+    monkeypatch.delitem(sys.modules, "numba", raising=False)
+    assert not jit.use_compiled(10**8, imports=False)
+    assert jit.use_compiled(10**8)
+    monkeypatch.setenv("PKMKIT_COMPILED", "1")
+    assert jit.use_compiled(1, imports=False)
+
+
+@pytest.mark.parametrize("compiled", ["0", "1"])
+def test_inverse_full_is_the_separate_calls_bit_for_bit(machine, monkeypatch, compiled):
+    """q, the shortfalls and det A in one pass: the numbers of ``inverse_counted``,
+    ``shortfall`` and ``batched_det`` of ``jacobians``' A, on both paths and both branches."""
+    from pkmkit.numerics.linalg import batched_det
+
+    closed = machine._closed
+    if not closed.fuses:
+        assert closed.crank.any()  # the Delta robot's cranks: ik takes the separate calls
+        return
+    x = hostile_poses(machine, 5000, seed=8)
+    monkeypatch.setenv("PKMKIT_COMPILED", compiled)
+    for branches in (machine.model.leg_branch, -machine.model.leg_branch):
+        q, bad, short, det = closed.inverse_full(x, branches)
+        ref_q, ref_bad = closed.inverse_counted(x, branches)
+        np.testing.assert_array_equal(q, ref_q)
+        assert bad == ref_bad
+        np.testing.assert_array_equal(short, closed.shortfall(x))
+        ok = np.isfinite(q).all(axis=1)
+        np.testing.assert_array_equal(det[ok], batched_det(closed.jacobians(x[ok], q[ok])[0]))
+
+
+@pytest.mark.parametrize("strokes", ["flag", "refuse", "ignore"])
+def test_ik_full_output_modes_and_shortfalls_as_before(machine, monkeypatch, strokes):
+    """``ik(full_output=True)`` takes its modes and shortfalls from the inverse's pass: the
+    same as the sign of det A at (x, q) and ``shortfall(x)`` computed apart."""
+    x = np.concatenate([hostile_poses(machine, 3000, seed=9),
+                        near_parallel_poses(machine, 3000, seed=10)])
+    for compiled in ("0", "1"):
+        res = with_mode(monkeypatch, compiled, lambda: machine.ik(x, full_output=True,
+                                                                  strokes=strokes))
+        np.testing.assert_array_equal(res.mode, machine._mode_of(x, res.q))
+        np.testing.assert_array_equal(res.shortfall, machine._closed.shortfall(x))
+        assert (res.mode == 0).any() and (res.mode != 0).any()  # failed and solved rows
 
 
 def test_ik_status_same_both_ways(machine, monkeypatch):

@@ -75,7 +75,10 @@ def _allocate(part: Any, rows: int, size: int) -> Any:
     records as dicts of their fields (the fields that describe the call left out), anything
     else kept as the first chunk has it."""
     if isinstance(part, np.ndarray) and part.ndim and part.shape[0] == size:
-        return _Rows(np.empty((rows, *part.shape[1:]), dtype=part.dtype))
+        # in the chunk's memory order: a (N, n) result the kernels write column by column
+        # (a transposed view) is copied column by column, not transposed on every chunk
+        order = "F" if part.ndim == 2 and not part.flags.c_contiguous else "C"
+        return _Rows(np.empty((rows, *part.shape[1:]), dtype=part.dtype, order=order))
     if isinstance(part, tuple) and len(part) == size:
         return []
     if dataclasses.is_dataclass(part):

@@ -139,23 +139,61 @@ class RodClosedForm:
     def inverse_counted(self, x: np.ndarray, branches: np.ndarray) -> tuple[np.ndarray, int]:
         """:meth:`inverse` and the number of non-finite coordinates in the result (0: every
         pose reached; callers then skip looking for failed rows)."""
-        if jit.use_compiled(x.shape[0]) and not self.crank.any():  # kernels: slides, struts
+        q, bad, _, _ = self._inverse_pass(x, branches, False)
+        return q, bad
+
+    @property
+    def fuses(self) -> bool:
+        """Whether :meth:`inverse_full` gives the shortfalls and det A in the inverse's pass
+        (square machines of slides and struts; cranks take :meth:`shortfall` and
+        :meth:`jacobians`)."""
+        m = self.model
+        return not self.crank.any() and m.n_legs == m.dims and m.dims in (2, 3)
+
+    def inverse_full(self, x: np.ndarray, branches: np.ndarray
+                     ) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
+        """:meth:`inverse_counted`, :meth:`shortfall` and det A in one pass over ``x (N, dims)``
+        (only where :attr:`fuses`): ``(q (N, n), bad, shortfall (N, n), det_a (N,))``, each
+        bit for bit what the separate calls give — det A as
+        :func:`~pkmkit.numerics.linalg.batched_det` of :meth:`jacobians`' A at ``(x, q)``
+        (meaningless on rows with a non-finite q)."""
+        if not self.fuses:
+            raise ValueError("inverse_full needs a square machine of slides and struts")
+        q, bad, short, det = self._inverse_pass(x, branches, True)
+        return q, bad, short.T, det
+
+    def _inverse_pass(self, x: np.ndarray, branches: np.ndarray, full: bool) -> tuple:
+        """``(q (N, n), bad, shortfall (n, N) | None, det (N,) | None)``: the compiled kernel
+        for large batches once Numba is imported, else the NumPy reference."""
+        n, rows = self.model.n_legs, x.shape[0]
+        short = np.empty((n, rows)) if full else None
+        det = np.empty(rows) if full else None
+        if jit.use_compiled(rows, imports=False) and not self.crank.any():  # slides, struts
             from pkmkit.machines import kernels
 
-            out = np.empty((self.model.n_legs, x.shape[0]))
-            bad = kernels.inverse(np.ascontiguousarray(x, dtype=float), self.basis,
-                                  self.basis_offset, self.model.leg_length,
-                                  self.model.leg_kind == SLIDE,
-                                  np.asarray(branches, dtype=float), BOUNDARY_TOL, out)
-            return out.T, int(bad)
-        q = self.inverse_numpy(x, branches)
-        return q, int(np.count_nonzero(~np.isfinite(q)))
+            x = np.ascontiguousarray(x, dtype=float)
+            out = np.empty((n, rows))
+            slide = self.model.leg_kind == SLIDE
+            bad = kernels.inverse(x, self.basis, self.basis_offset, self.model.leg_length,
+                                  slide, np.asarray(branches, dtype=float), BOUNDARY_TOL, out)
+            if full:
+                kernels.reach_and_det(x, out, self.basis, self.basis_offset, self.centre0,
+                                      self.axis, self.model.leg_length, slide, short, det)
+            return out.T, int(bad), short, det
+        q = self._inverse_numpy(x, branches, short, det)
+        return q, int(np.count_nonzero(~np.isfinite(q))), short, det
 
     def inverse_numpy(self, x: np.ndarray, branches: np.ndarray) -> np.ndarray:
         """The NumPy reference of :meth:`inverse`: cache-sized chunks in a transposed layout
         (one contiguous row per projection), projections written out (no BLAS: a
         multi-threaded BLAS on tiny inner dimensions collapses when another process holds a
         core)."""
+        return self._inverse_numpy(x, branches, None, None)
+
+    def _inverse_numpy(self, x: np.ndarray, branches: np.ndarray, short: np.ndarray | None,
+                       det: np.ndarray | None) -> np.ndarray:
+        """:meth:`inverse_numpy`, also filling ``short (n, N)`` (:meth:`shortfall`, from the
+        same projections) and ``det (N,)`` (det A) when given."""
         n, dims = self.model.n_legs, self.model.dims
         out = np.empty((n, x.shape[0]))
         kinds = self.model.leg_kind
@@ -168,6 +206,12 @@ class RodClosedForm:
                     perp_sq = y[1] * y[1]
                     if dims == 3:
                         perp_sq += y[2] * y[2]
+                    if short is not None:  # as _reach, from the same projections
+                        if kinds[i] == STRUT:
+                            short[i, start:stop] = -np.inf
+                        else:
+                            np.sqrt(perp_sq, out=short[i, start:stop])
+                            short[i, start:stop] -= self.model.leg_length[i]
                     if kinds[i] == SLIDE:
                         np.subtract(self.length_sq[i], perp_sq, out=perp_sq)
                         # a boundary pose's radicand may round slightly below 0: clamp it
@@ -184,7 +228,22 @@ class RodClosedForm:
                         perp_sq += y[0] * y[0]
                         np.sqrt(perp_sq, out=out[i, start:stop])
                         out[i, start:stop] -= self.model.leg_length[i]
+                if det is not None:
+                    det[start:stop] = self._det_rows(xt, out[:, start:stop])
         return out.T
+
+    def _det_rows(self, xt: np.ndarray, qt: np.ndarray) -> np.ndarray:
+        """det A of the columns of ``xt (dims, k)``, ``qt (n, k)`` (slides and struts): the
+        operations of :meth:`rod_vectors` and :func:`~pkmkit.numerics.linalg.batched_det`,
+        in their order (so the same bits)."""
+        dims = self.model.dims
+        a = [[xt[d] - (self.centre0[i, d] + (qt[i] if self.slide[i] > 0 else 0.0)
+                       * self.axis[i, d]) for d in range(dims)] for i in range(dims)]
+        if dims == 2:
+            return a[0][0] * a[1][1] - a[0][1] * a[1][0]
+        return (a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+                - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+                + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]))
 
     def inverse_one(self, x: Any, branches: Sequence[float]) -> list[float] | None:
         """The inverse model of one pose in plain Python floats: the same operations in the same

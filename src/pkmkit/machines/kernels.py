@@ -85,10 +85,73 @@ def inverse(x, basis, offset, length, slide, branch, boundary_tol, out):  # prag
                     s = u0 * c0[k] + u1 * c1[k] + u2 * c2[k] - o0
                     p = v0 * c0[k] + v1 * c1[k] + v2 * c2[k] - o1
                     r = w0 * c0[k] + w1 * c1[k] + w2 * c2[k] - o2
-                    value = np.sqrt(s * s + p * p + r * r) - rod
+                    value = np.sqrt((p * p + r * r) + s * s) - rod  # the reference's order
                     row[k] = value
                     bad += 0 if value - value == 0.0 else 1
     return bad
+
+
+@njit(**_OPTIONS)
+def reach_and_det(x, q, basis, offset, centre, axis, length, slide, short_out,
+                  det_out):  # pragma: no cover
+    """The other outputs of the inverse model of a square machine of slides and struts
+    (n = dims = 2 or 3), from its result ``q (n, N)``: ``short_out (n, N)`` as
+    :meth:`RodClosedForm.shortfall` (−inf for struts) and ``det_out (N,)`` det A, A rows
+    ``p − (centre_i + q_i axis_i)`` (slides; ``centre_i`` for struts), expanded as
+    :func:`~pkmkit.numerics.linalg.batched_det` — the same operations in the same order as the
+    NumPy reference, so the same bits. ``basis``, ``offset``, ``length``, ``slide`` as for
+    :func:`inverse`; ``centre``, ``axis (n, dims)``. Blocks of poses in a structure-of-arrays
+    layout, as :func:`inverse`, so that the loops vectorise."""
+    size, dims = x.shape
+    n = basis.shape[0]
+    c = np.zeros((3, _BLOCK))
+    a = np.zeros((3, 3, _BLOCK))
+    for start in range(0, size, _BLOCK):
+        m = min(size - start, _BLOCK)
+        for d in range(dims):
+            for k in range(m):
+                c[d, k] = x[start + k, d]
+        for i in range(n):
+            v0, v1, v2 = basis[i, 1, 0], basis[i, 1, 1], 0.0
+            w0 = w1 = w2 = o2 = 0.0
+            if dims == 3:
+                v2 = basis[i, 1, 2]
+                w0, w1, w2 = basis[i, 2, 0], basis[i, 2, 1], basis[i, 2, 2]
+                o2 = offset[i, 2]
+            o1 = offset[i, 1]
+            rod = length[i]
+            short = short_out[i, start:start + m]
+            if not slide[i]:
+                for k in range(m):
+                    short[k] = -np.inf
+            elif dims == 2:
+                for k in range(m):
+                    p = v0 * c[0, k] + v1 * c[1, k] - o1
+                    short[k] = np.sqrt(p * p) - rod
+            else:
+                for k in range(m):
+                    p = v0 * c[0, k] + v1 * c[1, k] + v2 * c[2, k] - o1
+                    r = w0 * c[0, k] + w1 * c[1, k] + w2 * c[2, k] - o2
+                    short[k] = np.sqrt(p * p + r * r) - rod
+            qi = q[i, start:start + m]
+            for d in range(dims):
+                centre_d, axis_d = centre[i, d], axis[i, d]
+                row = a[i, d]
+                if slide[i]:
+                    for k in range(m):
+                        row[k] = c[d, k] - (centre_d + qi[k] * axis_d)
+                else:
+                    for k in range(m):
+                        row[k] = c[d, k] - (centre_d + 0.0 * axis_d)
+        det = det_out[start:start + m]
+        if dims == 2:
+            for k in range(m):
+                det[k] = a[0, 0, k] * a[1, 1, k] - a[0, 1, k] * a[1, 0, k]
+        else:
+            for k in range(m):
+                det[k] = (a[0, 0, k] * (a[1, 1, k] * a[2, 2, k] - a[1, 2, k] * a[2, 1, k])
+                          - a[0, 1, k] * (a[1, 0, k] * a[2, 2, k] - a[1, 2, k] * a[2, 0, k])
+                          + a[0, 2, k] * (a[1, 0, k] * a[2, 1, k] - a[1, 1, k] * a[2, 0, k]))
 
 
 @njit(inline="always")

@@ -308,8 +308,13 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         check_mode(strokes)
         xb, single = _checked_batch(x, self.dims, "pose")
         br = self._branches(branches)
-        q, status, iterations, residual = self._inverse_rows(xb, br, method, q0,
-                                                             engine_options)
+        fused = full_output and method == "closed" and self._closed.fuses
+        if fused:  # statuses, shortfalls and modes in the inverse's pass
+            q, status, shortfall, mode = self._inverse_closed_full(xb, br)
+            iterations = residual = None
+        else:
+            q, status, iterations, residual = self._inverse_rows(xb, br, method, q0,
+                                                                 engine_options)
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], iterations)
         check = judge_rows(self, q, status, strokes, single, f"pose {xb[0].tolist()}",
@@ -318,13 +323,15 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             q[status != Status.OK] = np.nan
         if not full_output:
             return restore_shape(q, single)
+        if fused and strokes == "refuse":
+            mode[status != Status.OK] = 0  # their q is NaN now
         result = InverseResult(
             q=q,
             status=status,
             branches=br.copy(),
-            shortfall=self._closed.shortfall(xb),
+            shortfall=shortfall if fused else self._closed.shortfall(xb),
             method=method,
-            mode=self._mode_of(xb, q),
+            mode=mode if fused else self._mode_of(xb, q),
             iterations=iterations,
             residual=residual,
             out_of_stroke=None if check is None else check.out_of_stroke,

@@ -37,7 +37,23 @@ class RodSolveRows:
                              br: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The closed-form inverse: unreachable rows and non-finite input flagged, poses
         beyond MAX_COORDINATE refused (a vertical slide follows any height)."""
-        q, n_bad = self._closed.inverse_counted(xb, br)
+        return self._closed_rows(xb, *self._closed.inverse_counted(xb, br))
+
+    def _inverse_closed_full(self, xb: np.ndarray, br: np.ndarray
+                             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, status, shortfall (N, n), mode (N,))`` of the closed form in one pass
+        (:meth:`RodClosedForm.inverse_full`; the machine's closed form must ``fuse``): the
+        mode is the sign of det A on rows with a finite q, else 0."""
+        q, n_bad, shortfall, det_a = self._closed.inverse_full(xb, br)
+        q, status = self._closed_rows(xb, q, n_bad)
+        # the rows not OK are exactly those whose q is not finite (NaN now): mode 0
+        mode = np.where(status == Status.OK, np.sign(det_a), 0.0).astype(int)
+        return q, status, shortfall, mode
+
+    def _closed_rows(self, xb: np.ndarray, q: np.ndarray,
+                     n_bad: int) -> tuple[np.ndarray, np.ndarray]:
+        """Statuses of the closed form's ``q`` (``n_bad`` non-finite coordinates); failed and
+        refused rows set to NaN."""
         status = np.zeros(xb.shape[0], dtype=int)
         if n_bad:  # rows with NaN (unreachable) or non-finite input
             bad = np.flatnonzero(~np.isfinite(q).all(axis=1))

@@ -4,9 +4,11 @@ The hot paths (closed-form inverse model, velocity model of many poses) have two
 implementations: a vectorised NumPy one — the reference, used for small batches and compared
 with the compiled one in the tests — and a fused per-pose loop compiled by Numba, which keeps
 every intermediate in registers (no temporaries, no BLAS, one pass over memory). The compiled
-path is used only for batches of at least :data:`MIN_ROWS` rows, so that single-pose calls and
-the command line never pay Numba's import (≈ 0.3 s) or its first compilation (cached on disk
-afterwards).
+path is used only for batches of at least :data:`MIN_ROWS` rows, so that single-pose calls never
+pay Numba's import (≈ 0.3 s), the loading of its NumPy support on the first compiled call
+(≈ 0.3–0.6 s: it imports ``scipy.linalg``) or a first compilation (cached on disk afterwards);
+kernels whose NumPy path is nearly as fast run compiled only once Numba is imported
+(:func:`use_compiled` with ``imports=False``).
 
 Environment: ``PKMKIT_COMPILED=0`` forces the NumPy paths everywhere (``=1`` forces the
 compiled ones for every batch size, which the tests use). Without Numba installed the NumPy
@@ -69,11 +71,20 @@ def use_compiled_solver(rows: int) -> bool:
     return choice == "1" or rows >= SOLVER_ROWS or "numba" in sys.modules
 
 
-def use_compiled(rows: int) -> bool:
+def use_compiled(rows: int, *, imports: bool = True) -> bool:
     """Whether a batch of ``rows`` rows should run the compiled kernels (the caller imports
-    its kernel module lazily, e.g. :mod:`pkmkit.machines.kernels`)."""
+    its kernel module lazily, e.g. :mod:`pkmkit.machines.kernels`).
+
+    ``imports=False`` is for kernels whose NumPy path is within a few times the compiled one
+    (the closed-form inverse of rod legs: ≈ 35 against 11 ms per 10⁶ poses): they run
+    compiled only once Numba is imported in the process, because importing it and loading a
+    cached kernel costs ≈ 0.6–0.9 s of CPU, which the compiled path repays only after tens of
+    millions of poses — a one-shot command (``pkmkit ik --input``) stays on NumPy.
+    ``PKMKIT_COMPILED=1`` still forces them."""
     choice = mode()
     if choice == "0" or (choice == "auto" and rows < MIN_ROWS):
+        return False
+    if choice == "auto" and not imports and "numba" not in sys.modules:
         return False
     return numba_available()
 
