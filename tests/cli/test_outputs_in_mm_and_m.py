@@ -96,3 +96,32 @@ def test_ballbar_plan_tool_lengths_in_mm_and_m(run, tmp_path, monkeypatch):
         for k in range(header.index("id")):
             if header[k] != "tool":
                 assert float(a[k]) == pytest.approx(1000 * float(b[k]), rel=1e-8, abs=1e-9)
+
+
+def _cmm(path: Path) -> tuple[list[str], list[list[str]]]:
+    return _plan(path)
+
+
+def test_machined_part_origin_in_mm_and_m(run, tmp_path, monkeypatch):
+    """``--origin`` is in the command's unit: 10 mm or 0.01 m cut and probe the same part (the
+    same machine: random defects of seed 0), and the part moves by 10 mm along x against the
+    program run without an offset (to 0.5 mm: the machine's defects differ 10 mm away, by
+    up to 0.1 mm on this part)."""
+    monkeypatch.chdir(tmp_path)
+    gcode = EXAMPLES / "pocket.nc"
+    for args, name in ((["--origin", "10,0,0"], "mm.csv"),
+                       (["--origin", "0.01,0,0", "--units", "m"], "m.csv"),
+                       ([], "none.csv")):
+        res = run("machined-part", "simulate", "verne", "--gcode", gcode, "--defects",
+                  "random", "--out", name, *args)
+        assert res.exit_code == 0, res.output
+    header, mm = _cmm(Path("mm.csv"))
+    _, m = _cmm(Path("m.csv"))
+    _, none = _cmm(Path("none.csv"))
+    xyz = [header.index(c) for c in ("x", "y", "z")]
+    assert len(mm) == len(m) == len(none) > 100
+    for a, b, c in zip(mm, m, none, strict=True):
+        assert [float(a[k]) for k in xyz] == pytest.approx(
+            [1000 * float(b[k]) for k in xyz], abs=1e-6)
+        assert [float(a[k]) for k in xyz] == pytest.approx(
+            [float(c[xyz[0]]) + 10, float(c[xyz[1]]), float(c[xyz[2]])], abs=0.5)
