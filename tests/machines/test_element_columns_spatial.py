@@ -9,8 +9,8 @@ import numpy as np
 
 import pkmkit
 from pkmkit.exceptions import PkmError
-from pkmkit.machines.chain_file import machine_file_text
 from pkmkit.geometric_errors.parameter_sensitivity import parameter_sensitivity
+from pkmkit.machines.chain_file import machine_file_text
 from pkmkit.spatial.rotation import matrix_to_rotvec, rotvec_to_matrix
 
 H = 1e-6

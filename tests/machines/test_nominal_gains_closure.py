@@ -32,6 +32,7 @@ def test_gain_inverts_the_closure_jacobian_of_a_tilted_pose(name):
     assert np.isfinite(q).all()
     position, rot, gain = nominal_gains(m, q)
     np.testing.assert_allclose(position[0], pose[:3], atol=1e-9)
+    np.testing.assert_allclose(rot[0], Rotation.from_rotvec(pose[3:]).as_matrix(), atol=1e-9)
     eps = 1e-6
     fd = np.column_stack([(m.ik(_moved(pose, k, eps)[None], strokes="ignore")[0]
                            - m.ik(_moved(pose, k, -eps)[None], strokes="ignore")[0]) / (2 * eps)
