@@ -68,7 +68,7 @@ def test_optimize_single_and_pareto(run, tmp_path, as_json):
         (["optimize", "linear-delta", "--vary", "R=0.5:1", "--objective", "max:gci",
           "--region", "0.5@1,2", "--out", "o"], "needs 3 coordinates"),
         (["optimize", "linear-delta", "--vary", "R=0.5:1", "--objective", "max:gci",
-          "--region", "0.5@nan,0,0", "--out", "o"], "must be finite"),
+          "--region", "0.5@nan,0,0", "--out", "o"], "--region centre X nan m is outside"),
         (["optimize", "linear-delta", "--vary", "R=0.5:1", "--objective", "max:gci",
           "--constraint", "gci>=1e", "--region", "0.5", "--out", "o"], "not a finite number"),
         (["optimize", "linear-delta", "--vary", "R=0.5:1", "--objective", "max:gci",

@@ -137,3 +137,92 @@ def test_absurd_values_of_every_numeric_option_are_refused(run, files, tmp_path,
         # the option, or its words ("--buckling-safety": "the buckling safety = 1e+300 …")
         words = option.lstrip("-")
         assert any(w in last for w in (option, words, words.replace("-", " "))), (value, last)
+
+
+#: Options of several numbers (a region, a centre, a box, a point): one coordinate absurd. The
+#: refusal names the option as written (``--region``), not only a word of it: ``optimize
+#: --region 1e300`` ran and reported "no evaluated design satisfies", ``--region 0.5@0,0,1e300``
+#: said "box bounds for z", ``errors --region 0,1e300,…`` "only 0 of 256 points … reachable",
+#: ``design linear-delta --center 1e300,0,0`` spoke of arms of 1e6 m, ``-1e6`` in z was sized,
+#: ``path --circle``/``--helix``/``--raster`` named "the radius"/"the pitch"/"the rectangle",
+#: ``path``/``machined-part`` ``--origin`` a G-code line, ``arm-sizing --diameter-range
+#: 0.01,1e300`` called the range empty.
+TUPLES = [
+    (["errors", "linear-delta", "--sensitivity", "--points", "5"], "--region",
+     "-0.1,0.1,-0.1,0.1,-0.5,{v}"),
+    (["errors", "linear-delta", "--sensitivity", "--points", "5"], "--region",
+     "{v},0.1,-0.1,0.1,-0.5,-0.3"),
+    (BASE["identifiability"], "--region", "-0.1,0.1,-0.1,0.1,-0.1,{v}"),
+    (BASE["identifiability"], "--pivot", "0,0,{v}"),
+    (BASE["select-poses"], "--region", "-0.1,0.1,-0.1,0.1,-0.1,{v}"),
+    ([a for a in BASE["optimize"] if a not in ("--region", "0.5@0,0,0.25")], "--region",
+     "{v}@0,0,0.25"),
+    ([a for a in BASE["optimize"] if a not in ("--region", "0.5@0,0,0.25")], "--region",
+     "0.5@0,0,{v}"),
+    (BASE["design linear-delta"], "--center", "{v},0,0"),
+    (BASE["design linear-delta"], "--center", "0,0,{v}"),
+    ([a for a in BASE["design orthoglide"] if a not in ("--bounds", "0.5,2")], "--bounds",
+     "0.5,{v}"),
+    (BASE["workspace"], "--box", "-0.1,0.1,-0.1,0.1,-0.1,{v}"),
+    ([*BASE["workspace"], "--cube", "0.05"], "--center", "0,0,{v}"),
+    (BASE["map"], "--range", "-0.1,0.1,-0.1,{v}"),
+    (BASE["analyze"], "--wrench", "0,0,{v}"),
+    (BASE["jacobian"][:2], "--pose", "0,0,{v}"),
+    (BASE["stiffness"], "--wrench", "0,0,{v},0,0,0"),
+    (BASE["path"][:2] + BASE["path"][4:], "--line", "0,0,0:0.05,0,{v}"),
+    (BASE["path"][:2] + BASE["path"][4:], "--circle", "0,0,0,{v}"),
+    (BASE["path"][:2] + BASE["path"][4:], "--helix", "0,0,0,0.05,{v},1"),
+    (BASE["path"][:2] + BASE["path"][4:], "--raster", "0,0,0,0.05,{v},3"),
+    (BASE["path"][:2] + BASE["path"][4:] + ["--gcode", str(EXAMPLES / "pocket.nc")],
+     "--origin", "0,0,{v}"),
+    (BASE["machined-part simulate"], "--origin", "0,0,{v}"),
+    (BASE["machined-part simulate"], "--placement", "0,0,0,{v}"),
+    (BASE["machined-part ballbar-plan"], "--tool-lengths", "0,{v}"),
+    (BASE["simulate-measurements"], "--tool-lengths", "0,{v}"),
+    (BASE["arm-sizing"], "--diameter-range", "0.01,{v}"),
+]
+
+
+@pytest.mark.parametrize("base, option, template", TUPLES,
+                         ids=[f"{b[0]}{o}={t}" for b, o, t in TUPLES])
+def test_absurd_coordinates_of_tuple_options_are_refused_naming_the_option(
+        run, tmp_path, monkeypatch, base, option, template):
+    monkeypatch.chdir(tmp_path)
+    for value in ("1e300", "-1e300", "inf", "nan"):
+        result = run(*base, option, template.format(v=value))
+        assert result.exit_code in (1, 2), (value, result.output)
+        last = result.output.strip().splitlines()[-1]
+        assert last.startswith("Error:") and option in last, (value, result.output)
+
+
+@pytest.mark.parametrize("args, option, range_text", [
+    ([*TUPLES[5][0], "--units", "mm", "--region", "1e300@0,0,250"], "--region side",
+     "[1e-06, 1e+06] mm"),
+    ([*TUPLES[6][0], "--region", "0.5@0,0,1e300"], "--region centre Z", "[-1000, 1000] m"),
+    ([*TUPLES[0][0], "--region", "-0.1,1e300,-0.1,0.1,-0.5,-0.3"], "--region x MAX",
+     "[-1000, 1000] m"),
+    ([*TUPLES[0][0], "--units", "mm", "--region", "-100,100,-100,100,-500,-2e6"],
+     "--region z MAX", "[-1e+06, 1e+06] mm"),
+    ([*BASE["design linear-delta"], "--center", "0,0,-1e6"], "--center Z", "[-1000, 1000] m"),
+    ([*BASE["design linear-delta"], "--units", "mm", "--center", "1e300,0,0"], "--center X",
+     "[-1e+06, 1e+06] mm"),
+])
+def test_region_and_centre_refusals_name_the_coordinate_and_its_plausible_range(
+        run, tmp_path, monkeypatch, args, option, range_text):
+    """``optimize --region``, ``errors --region`` and ``design --center``: one line naming the
+    option and coordinate, the value and the plausible range in the command's unit (a
+    centre 1000 km below the slides was sized before)."""
+    monkeypatch.chdir(tmp_path)
+    result = run(*args)
+    assert result.exit_code == 1, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1, result.output
+    assert lines[0].startswith(f"Error: {option} "), lines[0]
+    assert f"plausible range {range_text}" in lines[0], lines[0]
+
+
+def test_region_with_min_not_below_max_names_the_option(run):
+    result = run(*TUPLES[0][0], "--region", "0.1,0,-0.1,0.1,-0.5,-0.3")
+    assert result.exit_code == 1
+    assert result.output.strip().splitlines()[-1] == \
+        "Error: --region x: MIN 0.1 is not below MAX 0"

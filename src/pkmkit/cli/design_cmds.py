@@ -38,6 +38,7 @@ from .options import (
     JSON_OPTION,
     SET_OPTION,
     UNITS_OPTION,
+    check_each,
     emit_json,
     fmt,
     parse_vector,
@@ -305,15 +306,21 @@ def _parse_constraint(text: str, scale: float) -> Constraint:
     return Constraint(c.metric, c.op, c.value * factor)
 
 
-def _parse_region(text: str, scale: float) -> Region:
+def _parse_region(text: str, scale: float, units: str) -> Region:
+    """``--region SIDE[@X,Y[,Z]]`` in ``units`` (``scale`` m per unit) → SI; the side and
+    each centre coordinate finite and within their plausible ranges."""
     side_text, _, center_text = text.partition("@")
     try:
-        side = float(side_text) * scale
-        center = (tuple(float(v) * scale for v in center_text.split(",")) if center_text
-                  else None)
+        side = float(side_text)
+        center = [float(v) for v in center_text.split(",")] if center_text else None
     except ValueError:
         raise InputError(f"--region expects SIDE[@X,Y[,Z]], got {text!r}") from None
-    return Region(side, center)
+    check_plausible("--region side", side, "length", scale=scale, unit=units)
+    if center is not None:
+        check_each("--region centre", center, [scale] * len(center), [units] * len(center),
+                   labels="XYZ"[:len(center)] if len(center) <= 3 else None)
+        center = tuple(v * scale for v in center)
+    return Region(side * scale, center)
 
 
 @click.command("optimize")
@@ -356,7 +363,7 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
     actuator_stiffness=...)."""
     m, elastic = machine_and_data(machine_name, assignments, units)
     scale = length_scale(units)
-    region = _parse_region(region_text, scale)
+    region = _parse_region(region_text, scale, units)
     objs = [Objective.parse(t) for t in objectives]
     if pareto and len(objs) < 2:
         raise InputError("--pareto needs at least two objectives")

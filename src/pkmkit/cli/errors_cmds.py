@@ -13,13 +13,21 @@ from pathlib import Path
 import click
 import numpy as np
 
-from pkmkit.boundary.coordinates import actuator_scales
+from pkmkit.boundary.coordinates import actuator_scales, actuator_units
 from pkmkit.exceptions import InputError
 from pkmkit.geometric_errors.measurements import MEASURES
 from pkmkit.model.parameters import MAX_LENGTH, length_scale
 
 from .limits import MAX_SAMPLED, check_count, check_tool_length
-from .options import JSON_OPTION, SET_OPTION, UNITS_OPTION, emit_json, fmt, resolve_machine
+from .options import (
+    JSON_OPTION,
+    SET_OPTION,
+    UNITS_OPTION,
+    check_each,
+    emit_json,
+    fmt,
+    resolve_machine,
+)
 
 DEG = math.pi / 180.0
 
@@ -31,6 +39,15 @@ def _region_scales(machine, units: str) -> np.ndarray:
         return actuator_scales(machine, units)
     n = len(region_names(machine))
     return np.array([length_scale(units)] * 3 + [DEG] * (n - 3))
+
+
+def _region_units(machine, units: str) -> list[str]:
+    """The CLI unit of each region coordinate (as :func:`_region_scales`)."""
+    from pkmkit.geometric_errors.configurations import region_names
+
+    if tuple(region_names(machine)) == tuple(machine.actuator_names):
+        return actuator_units(machine, units)
+    return [units] * 3 + ["deg"] * (len(region_names(machine)) - 3)
 
 
 def _numbers(text: str, what: str) -> np.ndarray:
@@ -54,7 +71,16 @@ def _region(machine, text: str | None, units: str):
     if values.size != 2 * len(names) and not (len(names) == 6 and values.size == 6):
         raise InputError(f"--region needs MIN,MAX for each of {', '.join(names)} "
                          f"({2 * len(names)} values), got {values.size}")
-    scales = _region_scales(machine, units)[:values.size // 2]
+    k = values.size // 2
+    scales = _region_scales(machine, units)[:k]
+    check_each("--region", values, np.repeat(scales, 2),
+               np.repeat(_region_units(machine, units)[:k], 2),
+               labels=[f"{name} {end}" for name in names[:k] for end in ("MIN", "MAX")])
+    bad = np.flatnonzero(~(values[0::2] < values[1::2]))
+    if bad.size:
+        i = int(bad[0])
+        raise InputError(f"--region {names[i]}: MIN {values[2 * i]:g} is not below MAX "
+                         f"{values[2 * i + 1]:g}")
     return check_region(machine, (values[0::2] * scales, values[1::2] * scales))
 
 

@@ -28,7 +28,13 @@ from pkmkit.numerics.magnitudes import check_plausible
 
 from .calibration_cmds import CAL_UNITS_OPTION, _defects_file, _numbers
 from .limits import check_tool_lengths
-from .options import JSON_OPTION, emit_json, machine_document_path, resolve_machine
+from .options import (
+    JSON_OPTION,
+    check_each,
+    emit_json,
+    machine_document_path,
+    resolve_machine,
+)
 
 GCODE_OPTION = click.option("--gcode", required=True, type=click.Path(dir_okay=False),
                             help="The part program (G-code; its straight G1 passes along x or "
@@ -47,12 +53,15 @@ def machined_part():
     """Seed 003's machined part: G-code → machining → CMM → tool centres (then calibrate)."""
 
 
-def _origin(text: str | None, scale: float) -> np.ndarray:
+def _origin(text: str | None, scale: float, unit: str) -> np.ndarray:
+    """``--origin X,Y,Z`` in ``unit`` (``scale`` m each) → SI ``(3,)``, each coordinate within
+    the plausible range of a position."""
     if not text:
         return np.zeros(3)
     values = _numbers(text, "--origin")
     if len(values) != 3:
         raise InputError(f"--origin expects X,Y,Z, got {text!r}")
+    check_each("--origin", values, [scale] * 3, [unit] * 3, labels="XYZ")
     return np.array(values) * scale
 
 
@@ -138,7 +147,7 @@ def simulate_cmd(machine_name, gcode, origin, defects_spec, seed, sections, sigm
         true, nominal, gcode, rng, placement=place, sections=sections,
         sigma=CMM_SIGMA if sigma is None else sigma * scale, points=points,
         probe_radius=0.001 if probe_radius is None else probe_radius * scale,
-        origin=_origin(origin, scale))
+        origin=_origin(origin, scale, unit))
     note = (f"pkmkit machined-part simulate {nominal.id} --gcode {Path(gcode).name} "
             f"--seed {seed}\nCMM sections of seed 003's part (simulated; {nominal.id}: "
             "illustrative dimensions)")
@@ -200,7 +209,7 @@ def reconstruct_cmd(cmm_file, gcode, origin, end_mill, ball_end, out_file, units
     check_plausible("--ball-end", ball_end, "cutter", scale=scale, unit=unit)
     cutters = Cutters(SEED_END_MILL_RADIUS if end_mill is None else end_mill * scale / 2,
                       SEED_BALL_RADIUS if ball_end is None else ball_end * scale / 2)
-    passes = part_passes(read_gcode(gcode, origin=_origin(origin, scale)))
+    passes = part_passes(read_gcode(gcode, origin=_origin(origin, scale, unit)))
     rec = reconstruct(cmm, cutters)
     data = reconstructed_measurements(rec, passes, program=str(gcode))
     leaning = rec.leaning()

@@ -31,6 +31,7 @@ from .options import (
     JSON_OPTION,
     SET_OPTION,
     UNITS_OPTION,
+    check_each,
     emit_json,
     fmt,
 )
@@ -71,28 +72,56 @@ def _check_positive(name: str, value: float | None, unit: float, units: str) -> 
 
 
 def build_path(machine, scale: float, gcode, origin, line_text, circle_text, helix_text,
-               raster_text):
-    """The tool path from exactly one of the path options (lengths in CLI units)."""
+               raster_text, units: str = "m"):
+    """The tool path from exactly one of the path options (lengths in CLI units ``units``,
+    ``scale`` m each): positions within the plausible range of a position, and every refusal
+    of the path's shape naming its option."""
     given = [t for t in (gcode, line_text, circle_text, helix_text, raster_text) if t]
     if len(given) != 1:
         raise click.UsageError("give exactly one of --gcode, --line, --circle, --helix, --raster")
     dims = machine.dims
     if origin and not gcode:
         raise click.UsageError("--origin is the work offset of a G-code program (--gcode)")
+    names = "XYZ"[:dims]
+
+    def positions(option: str, values, labels) -> None:
+        check_each(option, values, [scale] * len(values), [units] * len(values), labels=labels)
+
     if gcode:
-        shift = (np.asarray(_numbers(origin, (dims,), "--origin")) * scale if origin
-                 else np.zeros(dims))
+        shift = np.zeros(dims)
+        if origin:
+            values = _numbers(origin, (dims,), "--origin")
+            positions("--origin", values, names)
+            shift = np.asarray(values) * scale
         return read_gcode(gcode, origin=np.pad(shift, (0, 3 - dims)))
+    option = next(o for o, t in (("--line", line_text), ("--circle", circle_text),
+                                 ("--helix", helix_text), ("--raster", raster_text)) if t)
+    try:
+        return _shape(option, dims, scale, positions, line_text, circle_text, helix_text,
+                      raster_text)
+    except InputError as exc:
+        if str(exc).startswith(option):
+            raise
+        raise InputError(f"{option}: {exc}") from None
+
+
+def _shape(option, dims, scale, positions, line_text, circle_text, helix_text, raster_text):
+    """The path of ``--line``, ``--circle``, ``--helix`` or ``--raster`` (``option``)."""
+    names = "XYZ"[:dims]
     if line_text:
-        v = np.asarray(_numbers(line_text, (2 * dims,), "--line")) * scale
+        values = _numbers(line_text, (2 * dims,), "--line")
+        positions("--line", values, [f"{e} {n}" for e in ("start", "end") for n in names])
+        v = np.asarray(values) * scale
         return line(v[:dims], v[dims:])
     if circle_text:
         v = _numbers(circle_text, (dims + 1,), "--circle")
+        positions("--circle", v[:dims], [f"centre {n}" for n in names])
         return circle(np.asarray(v[:dims]) * scale, v[dims] * scale)
     if helix_text:
         v = _numbers(helix_text, (6,), "--helix")
         if dims != 3:
             raise InputError("a helix needs a spatial machine")
+        positions("--helix", v[:3], [f"centre {n}" for n in names])
         return helix(np.asarray(v[:3]) * scale, v[3] * scale, pitch=v[4] * scale, turns=v[5])
     parts = raster_text.split(",")
     strategy = "zigzag"
@@ -103,6 +132,7 @@ def build_path(machine, scale: float, gcode, origin, line_text, circle_text, hel
         raise InputError(f"--raster: the number of passes must be an integer, got {v[5]:g}")
     if dims != 3:
         raise InputError("raster facing needs a spatial machine (it retracts along z)")
+    positions("--raster", v[:3], ["X0", "Y0", "Z"])
     return raster(np.asarray(v[:3]) * scale, v[3] * scale, v[4] * scale, int(v[5]),
                   strategy=strategy)
 
@@ -164,7 +194,7 @@ def path_cmd(machine_name, assignments, gcode, origin, line_text, circle_text, h
     scale = length_scale(units)
     out = check_output_dir(out_dir) if out_dir else None
     tool_path = build_path(m, scale, gcode, origin, line_text, circle_text, helix_text,
-                           raster_text)
+                           raster_text, units)
     feed, jerk, defaults = _time_law_defaults(tool_path, scale, units, feed, accel, jerk,
                                               rapid_feed, profile, bool(gcode))
     props, file_wrench = load_masses(masses, m) if masses else (None, None)
@@ -442,6 +472,8 @@ def arm_sizing(force, length, section, inner, diameter, min_stiffness, stress_sa
         bounds = (0.005, 0.1)
         if diameter_range:
             lo, hi = _numbers(diameter_range, (2,), "--diameter-range")
+            check_each("--diameter-range", (lo, hi), (scale, scale), (units, units),
+                       labels=("LO", "HI"), kind="length")
             bounds = (lo * scale, hi * scale)
         design = size_arm(axial_force=force, length=length * scale, diameter_range=bounds,
                           transverse_accel=transverse, hollow=section == "hollow",

@@ -119,14 +119,33 @@ def machine_document_path(name: str) -> str:
 
 
 def parse_vector(text: str, size: int, what: str, units: str) -> np.ndarray:
-    """Comma-separated numbers in CLI units → SI array ``(size,)``."""
+    """Comma-separated positions in CLI units → SI array ``(size,)``; each finite and within
+    the plausible range of a position (:func:`check_each`)."""
     try:
         values = [float(v) for v in text.split(",")]
     except ValueError:
         raise InputError(f"{what}: cannot read {text!r} as comma-separated numbers") from None
     if len(values) != size:
         raise InputError(f"{what} needs {size} comma-separated values, got {len(values)}")
-    return np.asarray(values) * length_scale(units)
+    scale = length_scale(units)
+    check_each(what, values, [scale] * size, [units] * size,
+               labels="XYZ"[:size] if size <= 3 else None)
+    return np.asarray(values) * scale
+
+
+def check_each(option: str, values: Sequence[float], scales: Sequence[float],
+               units: Sequence[str], *, labels: Sequence[str] | None = None,
+               kind: str = "offset") -> None:
+    """Every coordinate of a tuple option (``values`` in the option's units, ``scales`` SI per
+    unit, ``units`` their names: a length unit or ``"deg"``) finite and within the plausible
+    range of ``kind`` (lengths; :data:`~pkmkit.numerics.magnitudes.PLAUSIBLE`) or of an angle,
+    else :class:`InputError` naming the option, the coordinate (``labels``), the value and the
+    range in the option's unit."""
+    from pkmkit.numerics.magnitudes import check_plausible
+
+    for k, (v, scale, unit) in enumerate(zip(values, scales, units, strict=True)):
+        name = f"{option} {labels[k]}" if labels is not None else option
+        check_plausible(name, v, "angle" if unit == "deg" else kind, scale=scale, unit=unit)
 
 
 def emit_json(payload: dict) -> None:

@@ -41,6 +41,7 @@ PLAUSIBLE = {
     "probe": (0.0, 0.1, "m"),               # a CMM probe tip's radius (0: a point)
     "modulus": (1e6, 1e13, "Pa"),           # Young's modulus of engineering materials
     "offset": (-1e3, 1e3, "m"),             # a signed position or offset on a machine
+    "angle": (-4 * math.pi, 4 * math.pi, "rad"),  # two turns either way (a region, a pose)
     "factor": (1e-6, 1e6, ""),              # a velocity transmission factor
 }
 
