@@ -354,22 +354,47 @@ static double wrapped(double a)
     return PI - fmod_positive(PI - a, 2.0 * PI);
 }
 
+/* 1 when every joint of s is within its stroke, its revolute actuators taken on the turn
+   nearest start (pkmkit's ChainWarmStart._within_strokes) */
+static int inside_from(const Configuration *s, const double *start)
+{
+    Configuration t = *s;
+    int j;
+    for (j = 0; j < N_ACTUATORS; j++) {
+        int v = actuated_variable[j];
+        if (variable_revolute[v]) {
+            double d = t.values[v] - start[j];
+            t.values[v] = start[j] + d - 2.0 * PI * floor((d + PI) / (2.0 * PI));
+        }
+    }
+    return within_strokes(t.values) == 0;
+}
+
 /* a two-branch head (turn a, tilt c: (a, c) and (a + pi, -c) give the same tool axis): a
-   solution s whose turn is more than pi/2 - flip_margin from the start's turn `reference`
-   solved again with its head flipped, and the flipped one taken when it is exact and its turn
-   strictly nearer (pkmkit's nearest_head_branch) */
-static void nearest_head_branch(Configuration *s, const double target[6], double reference)
+   solution s whose turn is more than pi/2 - flip_margin from the start's turn `reference`, or
+   with a joint beyond its stroke, solved again with its head flipped, and the flipped one
+   taken when it is exact and it alone
+   is within the strokes, or both (or neither) are and its turn is strictly nearer (pkmkit's
+   nearest_head_branch) */
+static void nearest_head_branch(Configuration *s, const double target[6], double reference,
+                                const double *start)
 {
     Configuration other;
-    if (head_flip_turn < 0
-        || !(fabs(wrapped(s->values[head_flip_turn] - reference)) > PI / 2 - flip_margin))
+    int kept, flipped;
+    if (head_flip_turn < 0)
         return;
+    kept = inside_from(s, start);
+    if (kept && !(fabs(wrapped(s->values[head_flip_turn] - reference)) > PI / 2 - flip_margin))
+        return; /* near the start and within the strokes: kept */
     other = *s;
     other.values[head_flip_turn] += PI;
     other.values[head_flip_tilt] = -other.values[head_flip_tilt];
-    if (solve_closure(&other, target, inverse_variable, N_INVERSE) == 0
-        && fabs(wrapped(other.values[head_flip_turn] - reference))
-           < fabs(wrapped(s->values[head_flip_turn] - reference)))
+    if (solve_closure(&other, target, inverse_variable, N_INVERSE) != 0) return;
+    flipped = inside_from(&other, start);
+    if ((flipped && !kept)
+        || (flipped == kept
+            && fabs(wrapped(other.values[head_flip_turn] - reference))
+               < fabs(wrapped(s->values[head_flip_turn] - reference))))
         *s = other;
 }
 
@@ -384,7 +409,7 @@ static int inverse_model(Configuration *s, const double target[6])
     for (j = 0; j < N_ACTUATORS; j++) start[j] = s->values[actuated_variable[j]];
     status = solve_closure(s, target, inverse_variable, N_INVERSE);
     if (status != 0) return status;
-    nearest_head_branch(s, target, reference);
+    nearest_head_branch(s, target, reference, start);
     for (j = 0; j < N_ACTUATORS; j++) {
         int v = actuated_variable[j];
         if (variable_revolute[v])

@@ -30,7 +30,7 @@ from pkmkit.status import Status
 
 #: Margin (rad) below π/2 within which a solution's turn keeps its branch without solving the
 #: other (module docstring).
-FLIP_MARGIN = 0.25
+FLIP_MARGIN = float(np.radians(15.0))
 
 
 def head_flip_variables(kind, variables: tuple[str, ...]) -> tuple[int, int] | None:
@@ -47,18 +47,26 @@ def wrapped(angle: np.ndarray) -> np.ndarray:
 
 
 def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarray, res,
-                        reference: np.ndarray, flip: tuple[int, int]):
+                        reference: np.ndarray, flip: tuple[int, int],
+                        inside: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None):
     """Apply the rule to an inverse result ``res`` (a
     :class:`~pkmkit.solve.least_squares.SolveResult` whose ``u (N, 6 + V)`` holds the platform
     then every joint variable): the rows solved exactly whose turn is more than π/2 −
     :data:`FLIP_MARGIN` from ``reference`` are solved again by ``solve(targets, u0, lengths)``
     from their solution with the head flipped (turn + π, −tilt), and the flipped
     solution replaces theirs where it is exact and its turn is strictly nearer ``reference
-    (N,)`` (rad; the start's turn). ``res`` is updated in place and returned."""
+    (N,)`` (rad; the start's turn) — or, given ``inside(u, rows) -> (len(rows),) bool`` (every
+    joint of the solutions ``u`` of those rows within its stroke), where it alone is within
+    the strokes (as :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` from
+    home, and the generated LinuxCNC module). ``res`` is updated in place and returned."""
     turn, tilt = 6 + flip[0], 6 + flip[1]
     with np.errstate(invalid="ignore"):
         far = np.abs(wrapped(res.u[:, turn] - reference)) > np.pi / 2 - FLIP_MARGIN
-    rows = np.flatnonzero((res.status == Status.OK) & np.isfinite(reference) & far)
+    rows = np.flatnonzero((res.status == Status.OK) & np.isfinite(reference))
+    if inside is not None:  # far from the start, or beyond a stroke
+        rows = rows[far[rows] | ~inside(res.u[rows], rows)]
+    else:
+        rows = rows[far[rows]]
     if not rows.size:
         return res
     u0 = res.u[rows].copy()
@@ -66,8 +74,12 @@ def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarra
     u0[:, tilt] *= -1.0
     other = solve(targets[rows], u0, lengths[rows])
     ref = reference[rows]
-    nearer = (other.status == Status.OK) & (
-        np.abs(wrapped(other.u[:, turn] - ref)) < np.abs(wrapped(res.u[rows, turn] - ref)))
+    with np.errstate(invalid="ignore"):
+        closer = np.abs(wrapped(other.u[:, turn] - ref)) < np.abs(wrapped(res.u[rows, turn] - ref))
+    if inside is not None:
+        kept, flipped = inside(res.u[rows], rows), inside(other.u, rows)
+        closer = (flipped & ~kept) | ((flipped == kept) & closer)
+    nearer = (other.status == Status.OK) & closer
     take = rows[nearer]
     for name in ("u", "status", "residual", "iterations", "rank"):
         getattr(res, name)[take] = getattr(other, name)[nearer]

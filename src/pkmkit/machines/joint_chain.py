@@ -639,9 +639,9 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         if q0 is None:  # the default start's branch of the head, whatever the start
             self._nearest_branch(solve, targets, res, lengths)
         else:  # a caller's start: a two-branch head keeps the branch nearest the start's turn
-            flip = head_flip_variables(self.kind, self.model.variables)
-            if flip is not None:
-                res = nearest_head_branch(solve, targets, lengths, res, u0[:, 6 + flip[0]], flip)
+            if (flip := head_flip_variables(self.kind, self.model.variables)) is not None:
+                res = nearest_head_branch(solve, targets, lengths, res, u0[:, 6 + flip[0]], flip,
+                                          lambda u, r: self._within_strokes(u, u0[r, 6:]))
         status = res.status.copy()
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
         status[~valid_rows(xb) | bad_axis] = Status.INVALID_INPUT

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError, UnsupportedOperationError
+from pkmkit.machines.head_branches import FLIP_MARGIN
 from pkmkit.status import Status
 
 #: A neighbour's solution whose tool axis lies within this angle (rad) of its head's first
@@ -44,7 +45,7 @@ from pkmkit.status import Status
 WRIST_SINGULAR_ANGLE = np.radians(5.0)
 #: A solution whose head's first revolute actuator lies farther than a quarter turn less this
 #: (rad) from home has its mirror branch solved too (:meth:`ChainWarmStart._nearest_branch`).
-BRANCH_BAND = np.radians(15.0)
+BRANCH_BAND = FLIP_MARGIN
 
 
 class ChainWarmStart:
@@ -137,7 +138,8 @@ class ChainWarmStart:
                         lengths: np.ndarray) -> None:
         """The head's branch of the default start (module docstring): rows of ``res`` (updated
         in place) whose head's first revolute actuator lies farther than a quarter turn less
-        :data:`BRANCH_BAND` from home get the mirror branch solved (from ``Q4 + π``,
+        :data:`BRANCH_BAND` from home, or with a joint beyond its stroke, get the mirror
+        branch solved (from ``Q4 + π``,
         ``2 Q5_home − Q5``), which replaces them where it converges within the strokes and
         they are not, or where both are (or neither is) and it is nearer home."""
         pair = self._wrist_pair()
@@ -150,8 +152,9 @@ class ChainWarmStart:
             with np.errstate(invalid="ignore"):
                 return np.abs(np.angle(np.exp(1j * (u[:, 6 + a] - home[a]))))
 
-        rows = np.flatnonzero((res.status == Status.OK)
-                              & (distance(res.u) > 0.5 * np.pi - BRANCH_BAND))
+        ok = np.flatnonzero(res.status == Status.OK)  # far from home, or beyond a stroke
+        rows = ok[(distance(res.u[ok]) > 0.5 * np.pi - BRANCH_BAND)
+                  | ~self._within_strokes(res.u[ok])]
         if not rows.size:
             return
         u0 = res.u[rows].copy()
@@ -167,15 +170,16 @@ class ChainWarmStart:
         for name in ("u", "status", "residual", "rank"):
             getattr(res, name)[rows[nearer]] = getattr(again, name)[nearer]
 
-    def _within_strokes(self, u: np.ndarray) -> np.ndarray:
-        """``(N,)`` bool: every joint (actuators, revolute ones on the turn nearest home, and
-        the legs' passive joints) of the solutions ``u (N, 6 + n_var)`` within its stroke."""
+    def _within_strokes(self, u: np.ndarray, around: np.ndarray | None = None) -> np.ndarray:
+        """``(N,)`` bool: every joint (actuators, revolute ones on the turn nearest home — or
+        nearest ``around (N, n_var)``, a start's joint values — and the legs' passive joints)
+        of the solutions ``u (N, 6 + n_var)`` within its stroke."""
         from pkmkit.machines.strokes import signed_excess
 
         model = self.model
         values = u[:, 6:].copy()
         turn = [int(v) for v in self._actuated if self._element_of(int(v)).type == "R"]
-        home = self._home["values"][turn]
+        home = self._home["values"][turn] if around is None else around[:, turn]
         with np.errstate(invalid="ignore"):
             values[:, turn] = home + np.angle(np.exp(1j * (values[:, turn] - home)))
             joints = np.flatnonzero(model.loop_variables | model.actuated)
