@@ -24,9 +24,10 @@ MAX_SWEEPS = 60
 
 
 @njit(**_OPTIONS)
-def _sweeps(work, vmat, norms, tol):  # pragma: no cover
+def jacobi_sweeps(work, vmat, norms, tol):  # pragma: no cover
     """One-sided Jacobi on the columns ``work (c, r)`` (rows = columns of M) until they are
-    orthogonal, each rotation applied to ``vmat (c, c)`` (rows = columns of V) too."""
+    orthogonal, each rotation applied to ``vmat (c, c)`` (rows = columns of V) too (a caller
+    holding V by columns passes its transpose)."""
     c, r = work.shape
     for _ in range(MAX_SWEEPS):
         for i in range(c):
@@ -115,7 +116,7 @@ def singular_rates(mats, rates, sigma, out):  # pragma: no cover
         for i in range(c):
             for j in range(c):
                 vmat[i, j] = 1.0 if i == j else 0.0
-        _sweeps(work, vmat, norms, tol)
+        jacobi_sweeps(work, vmat, norms, tol)
         for i in range(c):
             s = 0.0
             for t in range(r):

@@ -13,6 +13,8 @@ import math
 import numpy as np
 from numba import njit
 
+from pkmkit.numerics.svd_rates_kernel import jacobi_sweeps
+
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 
 
@@ -123,10 +125,6 @@ def closure_rates(cu: np.ndarray, cq: np.ndarray, rcond: float, tol: float, expe
                         np.ascontiguousarray(cq, dtype=float), float(rcond), float(tol),
                         int(expected), du, rank, ratio)
     return du, rank, ratio
-
-
-#: Sweeps of :func:`_jacobi_rates` over every column pair before giving up.
-_MAX_SWEEPS = 60
 
 
 @njit(**_OPTIONS)
@@ -243,45 +241,6 @@ def _closure_rates_rows(cu, cq, rcond, tol, expected, du, rank, ratio):  # pragm
 
 
 @njit(**_OPTIONS)
-def _jacobi_sweeps(work, vmat, norms, tol):  # pragma: no cover
-    """One-sided Jacobi: rotate pairs of the rows of ``work (c, r)`` (columns of C_U V) until
-    they are orthogonal within ``tol``, the columns of ``vmat (c, c)`` alike."""
-    c, r = work.shape
-    for _ in range(_MAX_SWEEPS):
-        for i in range(c):
-            s = 0.0
-            for t in range(r):
-                s += work[i, t] * work[i, t]
-            norms[i] = s
-        rotated = False
-        for i in range(c - 1):
-            for j in range(i + 1, c):
-                alpha, beta = norms[i], norms[j]
-                gamma = 0.0
-                for t in range(r):
-                    gamma += work[i, t] * work[j, t]
-                if gamma == 0.0 or abs(gamma) <= tol * math.sqrt(alpha) * math.sqrt(beta):
-                    continue
-                rotated = True
-                zeta = (beta - alpha) / (2.0 * gamma)
-                tan = math.copysign(1.0, zeta) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
-                cos = 1.0 / math.sqrt(1.0 + tan * tan)
-                sin = cos * tan
-                for t in range(r):
-                    a, b = work[i, t], work[j, t]
-                    work[i, t] = cos * a - sin * b
-                    work[j, t] = sin * a + cos * b
-                for t in range(c):  # V's columns i and j rotate alike
-                    a, b = vmat[t, i], vmat[t, j]
-                    vmat[t, i] = cos * a - sin * b
-                    vmat[t, j] = sin * a + cos * b
-                norms[i] = alpha - tan * gamma
-                norms[j] = beta + tan * gamma
-        if not rotated:
-            break
-
-
-@njit(**_OPTIONS)
 def _jacobi_rates(cu_m, cq_m, rcond, work, vmat, norms, sv, du_m):  # pragma: no cover
     """One row of :func:`closure_rates` by one-sided Jacobi: singular values ``sv``
     (decreasing) and ``du_m = −C_U⁺ C_q``."""
@@ -294,7 +253,7 @@ def _jacobi_rates(cu_m, cq_m, rcond, work, vmat, norms, sv, du_m):  # pragma: no
     for i in range(c):
         for j in range(c):
             vmat[i, j] = 1.0 if i == j else 0.0
-    _jacobi_sweeps(work, vmat, norms, tol)
+    jacobi_sweeps(work, vmat.T, norms, tol)  # V held by columns
     biggest = 0.0
     for i in range(c):
         s = 0.0
