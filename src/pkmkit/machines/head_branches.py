@@ -48,17 +48,20 @@ def wrapped(angle: np.ndarray) -> np.ndarray:
 
 def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarray, res,
                         reference: np.ndarray, flip: tuple[int, int],
-                        inside: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None):
+                        inside: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+                        tilt_centre: float = 0.0):
     """Apply the rule to an inverse result ``res`` (a
     :class:`~pkmkit.solve.least_squares.SolveResult` whose ``u (N, 6 + V)`` holds the platform
     then every joint variable): the rows solved exactly whose turn is more than π/2 −
     :data:`FLIP_MARGIN` from ``reference`` are solved again by ``solve(targets, u0, lengths)``
-    from their solution with the head flipped (turn + π, −tilt), and the flipped
+    from their solution with the head flipped (turn + π, tilt mirrored about ``tilt_centre``:
+    the tilt's value where the two branches meet, 0 on the TriMule), and the flipped
     solution replaces theirs where it is exact and its turn is strictly nearer ``reference
     (N,)`` (rad; the start's turn) — or, given ``inside(u, rows) -> (len(rows),) bool`` (every
     joint of the solutions ``u`` of those rows within its stroke), where it alone is within
-    the strokes (as :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` from
-    home, and the generated LinuxCNC module). ``res`` is updated in place and returned."""
+    the strokes (also solved where the kept one is beyond a stroke; the generated LinuxCNC
+    module does the same). ``res`` is updated in place (the re-solved rows' iterations added)
+    and returned."""
     turn, tilt = 6 + flip[0], 6 + flip[1]
     with np.errstate(invalid="ignore"):
         far = np.abs(wrapped(res.u[:, turn] - reference)) > np.pi / 2 - FLIP_MARGIN
@@ -71,7 +74,7 @@ def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarra
         return res
     u0 = res.u[rows].copy()
     u0[:, turn] += np.pi
-    u0[:, tilt] *= -1.0
+    u0[:, tilt] = 2.0 * tilt_centre - u0[:, tilt]
     other = solve(targets[rows], u0, lengths[rows])
     ref = reference[rows]
     with np.errstate(invalid="ignore"):
@@ -81,6 +84,7 @@ def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarra
         closer = (flipped & ~kept) | ((flipped == kept) & closer)
     nearer = (other.status == Status.OK) & closer
     take = rows[nearer]
-    for name in ("u", "status", "residual", "iterations", "rank"):
+    res.iterations[rows] += other.iterations
+    for name in ("u", "status", "residual", "rank"):
         getattr(res, name)[take] = getattr(other, name)[nearer]
     return res

@@ -20,7 +20,8 @@ differed), which moved the transmission factors. The rule stated: **the inverse 
 its default start (no** ``q0`` **) reports the branch whose first wrist actuator (Q4) is
 nearer its home value**, unless only the other one has every joint within its stroke
 (:meth:`ChainWarmStart._nearest_branch`: a solution farther than a quarter turn less
-:data:`BRANCH_BAND` from home has its mirror solved from ``(Q4 + π, 2·Q5_home − Q5)``; the one
+:data:`~pkmkit.machines.head_branches.FLIP_MARGIN` from home, or beyond a stroke, has its
+mirror solved from ``(Q4 + π, 2·Q5_home − Q5)``; the one
 within the strokes is kept, else the nearer), whatever the start — home or a neighbour —
 so a grid solved by continuation and the same grid solved from home agree point by point.
 Right at the singularity Q4 is undetermined and the mirror may not come out nearer (then
@@ -37,15 +38,12 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError, UnsupportedOperationError
-from pkmkit.machines.head_branches import FLIP_MARGIN
+from pkmkit.machines.head_branches import nearest_head_branch
 from pkmkit.status import Status
 
 #: A neighbour's solution whose tool axis lies within this angle (rad) of its head's first
 #: revolute axis (the wrist singularity) is not used as a continuation start.
 WRIST_SINGULAR_ANGLE = np.radians(5.0)
-#: A solution whose head's first revolute actuator lies farther than a quarter turn less this
-#: (rad) from home has its mirror branch solved too (:meth:`ChainWarmStart._nearest_branch`).
-BRANCH_BAND = FLIP_MARGIN
 
 
 class ChainWarmStart:
@@ -136,39 +134,15 @@ class ChainWarmStart:
 
     def _nearest_branch(self, solve: Any, targets: np.ndarray, res: Any,
                         lengths: np.ndarray) -> None:
-        """The head's branch of the default start (module docstring): rows of ``res`` (updated
-        in place) whose head's first revolute actuator lies farther than a quarter turn less
-        :data:`BRANCH_BAND` from home, or with a joint beyond its stroke, get the mirror
-        branch solved (from ``Q4 + π``,
-        ``2 Q5_home − Q5``), which replaces them where it converges within the strokes and
-        they are not, or where both are (or neither is) and it is nearer home."""
+        """The head's branch of the default start (module docstring):
+        :func:`~pkmkit.machines.head_branches.nearest_head_branch` on the wrist pair with home
+        as the reference, the strokes judged around home; ``res`` updated in place."""
         pair = self._wrist_pair()
         if pair is None:
             return
-        a, b = pair
         home = self._home["values"]
-
-        def distance(u: np.ndarray) -> np.ndarray:
-            with np.errstate(invalid="ignore"):
-                return np.abs(np.angle(np.exp(1j * (u[:, 6 + a] - home[a]))))
-
-        ok = np.flatnonzero(res.status == Status.OK)  # far from home, or beyond a stroke
-        rows = ok[(distance(res.u[ok]) > 0.5 * np.pi - BRANCH_BAND)
-                  | ~self._within_strokes(res.u[ok])]
-        if not rows.size:
-            return
-        u0 = res.u[rows].copy()
-        u0[:, 6 + a] += np.pi
-        u0[:, 6 + b] = 2.0 * home[b] - u0[:, 6 + b]
-        again = solve(targets[rows], u0, lengths[rows])
-        inside, inside_again = self._within_strokes(res.u[rows]), self._within_strokes(again.u)
-        with np.errstate(invalid="ignore"):
-            nearer = (again.status == Status.OK) & (
-                (inside_again & ~inside)
-                | ((inside_again == inside) & (distance(again.u) < distance(res.u[rows]))))
-        res.iterations[rows] += again.iterations
-        for name in ("u", "status", "residual", "rank"):
-            getattr(res, name)[rows[nearer]] = getattr(again, name)[nearer]
+        nearest_head_branch(solve, targets, lengths, res, np.full(len(res.status), home[pair[0]]),
+                            pair, lambda u, rows: self._within_strokes(u), home[pair[1]])
 
     def _within_strokes(self, u: np.ndarray, around: np.ndarray | None = None) -> np.ndarray:
         """``(N,)`` bool: every joint (actuators, revolute ones on the turn nearest home — or
