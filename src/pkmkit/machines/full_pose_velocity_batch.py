@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.machines.full_pose_rates import rod_b_pinv
+from pkmkit.machines.lazy_records import lazy_record_class
 from pkmkit.machines.results import Singularity
 from pkmkit.model.rods import STRUT
 
@@ -132,37 +133,11 @@ def velocity_model(machine: Any, record: type, xb: np.ndarray, qb: np.ndarray,
 
 
 def lazy_class(base: type) -> type:
-    """The subclass of the record class ``base`` (a ``FullPoseJacobians``) whose
-    :data:`LAZY_FIELDS` are properties read from a :class:`BatchFullVelocity` (the others are
-    given); built with every field (``dataclasses.replace``) it is a plain record."""
-    names = tuple(base.__dataclass_fields__)
-
-    def __init__(self, evaluation: BatchFullVelocity | None = None, **fields: Any) -> None:
-        object.__setattr__(self, "_evaluation", evaluation)
-        object.__setattr__(self, "_cache", dict(fields))
-
-    def _get(self, name: str) -> Any:
-        cache = self._cache
-        if name not in cache:
-            cache[name] = self._evaluation.field(name)
-        return cache[name]
-
-    def __eq__(self, other: object) -> bool:
-        return self is other
-
-    def __repr__(self) -> str:
-        return (f"{base.__name__}({len(self.q)} poses, {self.q.shape[1]} actuators, tolerance "
-                f"{self.tolerance:g}; J and its singular values computed when read)")
-
-    def __reduce__(self):  # pickled as the plain record, every field computed
-        return base, tuple(getattr(self, name) for name in names)
-
-    def prop(name: str) -> property:
-        return property(lambda self: self._get(name), doc=f"``{name}``")
-
-    namespace = {"__init__": __init__, "_get": _get, "__eq__": __eq__,
-                 "__hash__": object.__hash__, "__repr__": __repr__, "__reduce__": __reduce__,
-                 "__doc__": "A batched velocity model, its costly fields computed when read "
-                            "(module doc)."}
-    namespace.update({name: prop(name) for name in names})
-    return type(f"Lazy{base.__name__}", (base,), namespace)
+    """The subclass of the record class ``base`` (a ``FullPoseJacobians``) whose fields are
+    read from a :class:`BatchFullVelocity` when not given
+    (:func:`~pkmkit.machines.lazy_records.lazy_record_class`)."""
+    return lazy_record_class(
+        base, "Lazy",
+        lambda r: (f"{len(r.q)} poses, {r.q.shape[1]} actuators, tolerance {r.tolerance:g}; "
+                   "J and its singular values computed when read"),
+        "A batched velocity model, its costly fields computed when read (module doc).")

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.machines.lazy_records import lazy_record_class
 from pkmkit.numerics import jit
 
 #: Fields of a :class:`FullPoseJacobians`, in its order.
@@ -141,41 +142,15 @@ class OnePoseFullVelocity:
         return np.float64(part(key)[0])
 
 
-def _field_property(name: str) -> property:
-    return property(lambda self: self._get(name), doc=f"``{name}`` (computed when read)")
-
-
 def one_pose_class(base: type) -> type:
     """The lazy single-pose subclass of the record class ``base`` (a
-    :class:`FullPoseJacobians`): every field a property read from an
-    :class:`OnePoseFullVelocity`; built with all fields (``dataclasses.replace``) it is a
-    plain record."""
-
-    def __init__(self, evaluation: OnePoseFullVelocity | None = None, **fields):
-        object.__setattr__(self, "_evaluation", evaluation)
-        object.__setattr__(self, "_cache", dict(fields))
-
-    def _get(self, name: str):
-        cache = self._cache
-        if name not in cache:
-            cache[name] = self._evaluation.field(name)
-        return cache[name]
-
-    def __eq__(self, other: object) -> bool:
-        return self is other
-
-    def __repr__(self) -> str:
-        return (f"{base.__name__}(1 pose, {len(self.q)} actuators, tolerance "
-                f"{self.tolerance:g}; fields computed when read)")
-
-    def __reduce__(self):  # pickled as the plain record, every field computed
-        return base, tuple(getattr(self, name) for name in FIELDS)
-
-    namespace = {"__init__": __init__, "_get": _get, "__eq__": __eq__,
-                 "__hash__": object.__hash__, "__repr__": __repr__, "__reduce__": __reduce__,
-                 "__doc__": "A single-pose velocity model computed when read (module doc)."}
-    namespace.update({name: _field_property(name) for name in FIELDS})
-    return type(f"OnePose{base.__name__}", (base,), namespace)
+    :class:`FullPoseJacobians`): every field read from an :class:`OnePoseFullVelocity` when
+    not given (:func:`~pkmkit.machines.lazy_records.lazy_record_class`)."""
+    return lazy_record_class(
+        base, "OnePose",
+        lambda r: f"1 pose, {len(r.q)} actuators, tolerance {r.tolerance:g}; fields computed "
+                  "when read",
+        "A single-pose velocity model computed when read (module doc).")
 
 
 def usable(machine: Any) -> bool:

@@ -1,0 +1,48 @@
+"""Record classes whose fields are computed when read: the lazy subclass of a frozen record
+dataclass, each field a property served from an *evaluation* object (``evaluation.field(name)``,
+cached per record); fields given at construction are served as given. Used by the full-pose
+velocity models of one pose and of a batch (:mod:`pkmkit.machines.full_pose_velocity_one`,
+:mod:`pkmkit.machines.full_pose_velocity_batch`)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+
+def lazy_record_class(base: type, prefix: str, describe: Callable[[Any], str],
+                      doc: str) -> type:
+    """The subclass ``{prefix}{base.__name__}`` of the record dataclass ``base`` whose every
+    field is a property read from the evaluation given to its constructor
+    (``cls(evaluation, **given_fields)``); ``describe(record)`` is the text inside its repr.
+    Equality is identity (comparing would compute every field); pickled, it becomes the plain
+    ``base`` record with every field computed."""
+    names = tuple(base.__dataclass_fields__)
+
+    def __init__(self, evaluation: Any = None, **fields: Any) -> None:
+        object.__setattr__(self, "_evaluation", evaluation)
+        object.__setattr__(self, "_cache", dict(fields))
+
+    def _get(self, name: str) -> Any:
+        cache = self._cache
+        if name not in cache:
+            cache[name] = self._evaluation.field(name)
+        return cache[name]
+
+    def __eq__(self, other: object) -> bool:
+        return self is other
+
+    def __repr__(self) -> str:
+        return f"{base.__name__}({describe(self)})"
+
+    def __reduce__(self):  # pickled as the plain record, every field computed
+        return base, tuple(getattr(self, name) for name in names)
+
+    def prop(name: str) -> property:
+        return property(lambda self: self._get(name), doc=f"``{name}`` (computed when read)")
+
+    namespace = {"__init__": __init__, "_get": _get, "__eq__": __eq__,
+                 "__hash__": object.__hash__, "__repr__": __repr__, "__reduce__": __reduce__,
+                 "__doc__": doc}
+    namespace.update({name: prop(name) for name in names})
+    return type(f"{prefix}{base.__name__}", (base,), namespace)
