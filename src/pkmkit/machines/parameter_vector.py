@@ -205,11 +205,27 @@ def _element_spec(spec, frame: np.ndarray, values: np.ndarray):
 
     if spec.rotation is None or spec.type == FIXED:
         spin = float(values[6]) if spec.type == FIXED else spec.spin
+        if not np.array_equal(values[:3], frame[:3, 2]):
+            # the axis moves: keep the frame continuous (the current frame tilted by the
+            # minimal rotation, as the defects and the element columns do), where (4.6) alone
+            # would spin it by up to 180° when the axis leaves the previous z
+            turn = spin - _spin_about_axis(frame[:3, 2], frame[:3, :3]) if spec.type == FIXED else 0.0
+            tilted = minimal_rotation(frame[:3, 2], values[:3] / np.linalg.norm(values[:3]))
+            spin = _spin_about_axis(values[:3], tilted @ frame[:3, :3]) + turn
         return replace(spec, axis=tuple(values[:3]), point=tuple(values[3:6]), spin=spin,
                        rotation=None)
     z = values[:3] / np.linalg.norm(values[:3])
     rot = minimal_rotation(frame[:3, 2], z) @ frame[:3, :3]
     return replace(spec, rotation=rot, point=tuple(values[3:6]))
+
+
+def _spin_about_axis(axis: np.ndarray, rotation: np.ndarray) -> float:
+    """The spin (rad) that turns the (4.6) frame of ``axis`` into ``rotation`` ``(3, 3)``,
+    whose z is that axis."""
+    from pkmkit.model.chains import invariant_frame
+
+    base = invariant_frame(axis, (0.0, 0.0, 0.0))[:3, :3]
+    return float(np.arctan2(base[:, 1] @ rotation[:, 0], base[:, 0] @ rotation[:, 0]))
 
 
 def element_frame(spec, frame: np.ndarray, values: np.ndarray) -> np.ndarray:
