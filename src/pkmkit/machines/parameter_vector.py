@@ -209,7 +209,9 @@ def _element_spec(spec, frame: np.ndarray, values: np.ndarray):
             # the axis moves: keep the frame continuous (the current frame tilted by the
             # minimal rotation, as the defects and the element columns do), where (4.6) alone
             # would spin it by up to 180° when the axis leaves the previous z
-            turn = spin - _spin_about_axis(frame[:3, 2], frame[:3, :3]) if spec.type == FIXED else 0.0
+            turn = 0.0
+            if spec.type == FIXED:  # a changed spin S turns the frame on top
+                turn = spin - _spin_about_axis(frame[:3, 2], frame[:3, :3])
             tilted = minimal_rotation(frame[:3, 2], values[:3] / np.linalg.norm(values[:3]))
             spin = _spin_about_axis(values[:3], tilted @ frame[:3, :3]) + turn
         return replace(spec, axis=tuple(values[:3]), point=tuple(values[3:6]), spin=spin,
