@@ -226,3 +226,33 @@ def test_region_with_min_not_below_max_names_the_option(run):
     assert result.exit_code == 1
     assert result.output.strip().splitlines()[-1] == \
         "Error: --region x: MIN 0.1 is not below MAX 0"
+
+
+@pytest.mark.parametrize("args, line", [
+    (["ik", "linear-delta", "--pose", "1e12,0,0"],
+     "Error: --pose x 1e+12 m is outside the plausible range [-1000, 1000] m"),
+    (["ik", "linear-delta", "--units", "mm", "--pose", "0,0,-2e6"],
+     "Error: --pose z -2e+06 mm is outside the plausible range [-1e+06, 1e+06] mm"),
+    (["analyze", "orthoglide", "--pose", "0,1e5,0"],
+     "Error: --pose y 100000 m is outside the plausible range [-1000, 1000] m"),
+    (["ik", "gough-stewart", "--pose", "0,0,0.9,0,800,0"],
+     "Error: --pose B 800 deg is outside the plausible range [-720, 720] deg"),
+    (["ik", "tripteor-x7", "--pose", "0,0,0,0,0,1e9"],
+     "Error: --pose k 1e+09 is outside the plausible range [-1000, 1000]"),
+    (["jacobian", "tripteor-x7", "--pose", "0,0,0,0,-1e300,1"],
+     "Error: --pose j -1e+300 is outside the plausible range [-1000, 1000]"),
+    (["fk", "linear-delta", "--q", "1e12,1,1"],
+     "Error: --q q1 1e+12 m is outside the plausible range [-1000, 1000] m"),
+    (["fk", "delta", "--q", "0,1e6,0"],
+     "Error: --q q2 1e+06 deg is outside the plausible range [-720, 720] deg"),
+])
+def test_pose_and_actuator_refusals_name_the_option_and_column(run, args, line):
+    """``--pose`` and ``--q``: one line naming the option and the column, in the command's
+    unit, with the plausible range of a position (±1 km), an angle (±720°) or a tool-axis
+    component (before: "pose [...] has a coordinate beyond 1e+09 m", in metres whatever
+    ``--units``, without the option, and a crank at 10⁶° ran into the stroke test)."""
+    result = run(*args)
+    assert result.exit_code == 1, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1, result.output
+    assert lines[0].startswith(line), lines[0]

@@ -18,6 +18,7 @@ import numpy as np
 
 from pkmkit.exceptions import InputError
 from pkmkit.model.parameters import length_scale
+from pkmkit.numerics.magnitudes import check_plausible
 
 ANGLE_NAMES = ("A", "B", "C")
 AXIS_NAMES = ("i", "j", "k")
@@ -52,8 +53,32 @@ def parse_numbers(text: str, what: str, sizes: tuple[int, ...]) -> np.ndarray:
 
 
 def parse_actuators(text: str, m, units: str, what: str = "--q") -> np.ndarray:
-    """Actuator values from the command line (CLI units) → SI ``(n,)``."""
-    return parse_numbers(text, what, (m.n_actuators,)) * actuator_scales(m, units)
+    """Actuator values from the command line (CLI units) → SI ``(n,)``, each within the
+    plausible range of a position (±1 km) or an angle (±720°), else :class:`InputError`
+    naming the option and the actuator."""
+    values = parse_numbers(text, what, (m.n_actuators,))
+    scales = actuator_scales(m, units)
+    for k, (unit, v, scale) in enumerate(zip(actuator_units(m, units), values, scales,
+                                             strict=True)):
+        check_plausible(f"{what} q{k + 1}", v, "angle" if unit == "deg" else "offset",
+                        scale=scale, unit=unit)
+    return values * scales
+
+
+def parse_pose(text: str, m, what: str = "--pose", units: str = "m") -> np.ndarray:
+    """Pose values from the command line ``(w,)`` in CLI units (:func:`pose_widths` values),
+    each within the plausible range of its column — a position ±1 km, an angle ±720°, a tool
+    axis component ±1000 — else :class:`InputError` naming the option and the column."""
+    values = parse_numbers(text, what, pose_widths(m))
+    names = pose_columns(m)
+    for name, unit, v in zip(names, pose_units(m, units, len(values)), values, strict=False):
+        if unit == "deg":
+            check_plausible(f"{what} {name}", v, "angle", scale=np.pi / 180.0, unit=unit)
+        elif unit is None:
+            check_plausible(f"{what} {name}", v, "offset", unit="")
+        else:
+            check_plausible(f"{what} {name}", v, "offset", scale=length_scale(unit), unit=unit)
+    return values
 
 
 def pose_columns(m) -> list[str]:

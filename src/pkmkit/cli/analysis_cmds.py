@@ -23,10 +23,9 @@ from pkmkit.analysis.workspace import (
 from pkmkit.boundary.coordinates import (
     actuator_scales,
     actuator_units,
-    parse_numbers,
+    parse_pose,
     pose_from_cli,
     pose_to_cli,
-    pose_widths,
 )
 from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
@@ -145,7 +144,7 @@ def analyze(machine_name, assignments, pose, isotropy_tol, with_stiffness, wrenc
     if pose is None:
         x = m.home_pose
     else:
-        x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units,
+        x = pose_from_cli(parse_pose(pose, m, "--pose", units), m, units,
                           convention)[0]
     shown = x / scale if x.size <= 3 else pose_to_cli(x, m, units, convention)[0]
     ind = indices(m, x, ellipsoids=True, isotropy_tol=isotropy_tol)

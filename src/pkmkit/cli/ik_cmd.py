@@ -17,12 +17,11 @@ from pkmkit.boundary.coordinates import (
     actuator_scales,
     actuator_units,
     parse_actuators,
-    parse_numbers,
+    parse_pose,
     pose_columns,
     pose_from_cli,
     pose_to_cli,
     pose_units,
-    pose_widths,
 )
 from pkmkit.boundary.kinematics import InverseRows, inverse, inverse_options
 from pkmkit.exceptions import InputError
@@ -87,7 +86,7 @@ def ik(machine_name, assignments, pose, branches, q0_text, method, input_, outpu
     if input_ is not None:
         _batch(m, face, options, input_, output, chunk_rows, units, convention)
         return
-    values = parse_numbers(pose, "--pose", pose_widths(m))
+    values = parse_pose(pose, m, "--pose", units)
     given = Pose(values, pose_from_cli(values, m, units, convention)[0])
     sol = inverse(m, given.x, **options)
     passive = None if sol.passive is None else sol.passive[0]

@@ -19,10 +19,10 @@ from pkmkit.boundary.coordinates import (
     actuator_units,
     parse_actuators,
     parse_numbers,
+    parse_pose,
     pose_columns,
     pose_from_cli,
     pose_to_cli,
-    pose_widths,
 )
 from pkmkit.model.parameters import length_scale
 from pkmkit.status import Status
@@ -245,7 +245,7 @@ def jacobian_full_pose(m, pose, q_text, tol, units, convention, as_json) -> None
     scales = actuator_scales(m, units)
     if pose is None:
         raise click.UsageError("give --pose")
-    x = pose_from_cli(parse_numbers(pose, "--pose", pose_widths(m)), m, units, convention)[0]
+    x = pose_from_cli(parse_pose(pose, m, "--pose", units), m, units, convention)[0]
     jac = m.jacobian(x, q=m.ik(x, strokes="ignore"), tol=tol)
     check = single_check(m, jac.q, units)
     payload = {"machine": m.id, "units": units, "q": jac.q / scales,
@@ -270,7 +270,7 @@ def jacobian_chain(m, pose, q_text, tol, units, convention, as_json) -> None:
     if q_text is None and pose is None:
         raise click.UsageError("give --q Q1,...,Qn or --pose X,Y,Z,I,J,K")
     q = (parse_actuators(q_text, m, units) if q_text is not None else
-         m.ik(pose_from_cli(parse_numbers(pose, "--pose", (6,)), m, units, convention)[0],
+         m.ik(pose_from_cli(parse_pose(pose, m, "--pose", units), m, units, convention)[0],
               strokes="ignore"))
     jac = m.jacobian(q=q)
     check = single_check(m, q, units)
