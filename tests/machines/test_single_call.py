@@ -122,3 +122,18 @@ def test_fk_of_one_configuration_refusals_are_those_of_the_batch_path():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         np.testing.assert_allclose(m.fk(beyond, strokes="ignore"), [0.0, 0.0, 1.0], atol=1e-12)
+
+
+def test_inverse_one_follows_branches_changed_in_place():
+    """The previous call's leg constants are reused only for the same immutable tuple: a list
+    of branches changed in place between two calls gives the new branches' answer."""
+    m = pkmkit.machine("linear-delta")
+    closed = m._closed
+    x = [0.01, -0.02, 0.05]
+    branches = [float(b) for b in m.model.leg_branch]
+    first = closed.inverse_one(x, branches)
+    branches[0] = -branches[0]
+    flipped = closed.inverse_one(x, branches)
+    reference = m.ik(np.array([x]), branches=np.array(branches), strokes="ignore")[0]
+    np.testing.assert_array_equal(flipped, reference)
+    assert flipped[0] != first[0] and flipped[1:] == first[1:]

@@ -260,8 +260,10 @@ class RodClosedForm:
             the batch path, which gives the same numbers and the typed errors.
         """
         last = self.__dict__.get("_single_last")  # (branches, legs) of the previous call
-        legs = last[1] if last is not None and last[0] is branches else self._single_legs(
-            branches)
+        # the previous call's constants only for the same tuple (immutable: the machine's
+        # default branches); a list or an array may have been changed in place since
+        legs = (last[1] if last is not None and last[0] is branches and type(branches) is tuple
+                else self._single_legs(branches))
         if type(x) is not list:
             if isinstance(x, np.ndarray):
                 if x.ndim != 1 or x.dtype.kind not in "fi":
