@@ -67,24 +67,31 @@ def test_tripteor_identification_is_the_numpy_paths(tripteor_data, monkeypatch):
     _same(new, old)
 
 
-def test_hexapod_identification_is_the_one_before_the_kernels():
+def test_hexapod_identification_is_the_one_before_the_kernels(monkeypatch):
     """bench/calibration.py's hexapod problem (50 full poses), against the figures of the code
     before issue 22 §7 (commit e97186d; its JᵀJ, SVDs and Jacobian evaluations were changed).
-    (Not against ``PKMKIT_COMPILED=0``: that also switches the hexapod's direct model, and the
-    selection then breaks the tie between a rod length and its actuator offset otherwise.)"""
+    A rod length and its actuator offset tie (the same column): the selection takes the one
+    named first, ``dL``, for every leg and along both paths (``PKMKIT_COMPILED=0`` also switches
+    the hexapod's direct model; before ``numerics.pivoted_qr``, LAPACK's pivoting took ``dq5``
+    on one path and ``dL5`` on the other, by the last bits of the norms)."""
     m = pkmkit.machine("gough-stewart")
     rng = np.random.default_rng(3)
     data = simulate(m.with_defects(random_defects(m, rng)), m, "pose", 50, rng)
     res = calibrate(m, data, prune=False)
     assert len(res.names) == 42 and res.iterations == 4
+    assert [n for n in res.names if n[:2] in ("dL", "dq")] == [f"dL{k}" for k in range(1, 7)]
     assert res.before.rms == pytest.approx(1.1772867330442493e-04, rel=1e-9)
     assert res.after.rms == pytest.approx(2.146875688694596e-05, rel=1e-9)
     assert res.sigma_posterior == pytest.approx(1.143797558403951e-05, rel=1e-9)
     for name, value, std in (("dA1x", 2.23181e-04, 1.183e-04), ("dA2x", 1.35292e-04, 1.263e-04),
-                             ("dL3", -8.67129e-05, 2.133e-04), ("dq5", 1.45524e-04, 2.554e-04)):
+                             ("dL3", -8.67129e-05, 2.133e-04), ("dL5", 1.45524e-04, 2.554e-04)):
         i = res.names.index(name)
         assert res.values[i] == pytest.approx(value, rel=1e-5)
         assert res.std[i] == pytest.approx(std, rel=1e-3)
+    monkeypatch.setenv("PKMKIT_COMPILED", "0")
+    numpy_path = calibrate(m, data, prune=False)
+    assert numpy_path.names == res.names
+    np.testing.assert_allclose(numpy_path.values, res.values, rtol=1e-7, atol=1e-12)
 
 
 @pytest.mark.parametrize("case", ["tripteor", "hexapod"])

@@ -31,9 +31,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
 
 from pkmkit.exceptions import InputError
+from pkmkit.numerics.pivoted_qr import pivoted_qr
 
 #: Default relative rank threshold on the pivoted-QR diagonal of tolerance-scaled columns.
 RCOND = 1e-7
@@ -110,7 +110,7 @@ def _compatible_directions(closure_defect, names, scale, rcond) -> CompatibleDir
     # an orthonormal row basis of the conditions, then pivoted QR picks one defect per condition
     _, _, vt = np.linalg.svd(cs, full_matrices=False)
     rows = vt[:rank]
-    _, _, piv = scipy.linalg.qr(rows, pivoting=True, mode="economic")
+    _, _, piv = pivoted_qr(rows)
     dependent = np.sort(piv[:rank])
     free = np.setdiff1d(np.arange(d), dependent)
     # rows @ δ_scaled = 0  →  δ_D = −rows_D⁻¹ rows_F δ_F (scaled units)
@@ -218,7 +218,7 @@ def _identifiable_parameters(jacobian, names, scale, groups, rcond, group_labels
         proj = a[:, cols] - q_basis @ (q_basis.T @ a[:, cols])
         if proj.size == 0 or top == 0.0:
             continue
-        qr_q, qr_r, piv = scipy.linalg.qr(proj, pivoting=True, mode="economic")
+        qr_q, qr_r, piv = pivoted_qr(proj)
         diag = np.abs(np.diag(qr_r))
         keep = int((diag > rcond * top).sum())
         # pivoted QR diagonals decrease: the first `keep` pivots are independent

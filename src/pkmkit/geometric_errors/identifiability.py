@@ -49,6 +49,7 @@ from pkmkit.geometric_errors.blas_threads import single_blas
 from pkmkit.geometric_errors.measurements import measurement_jacobian, measurement_rows
 from pkmkit.geometric_errors.model import defect_set
 from pkmkit.geometric_errors.selection import select_defects
+from pkmkit.numerics.pivoted_qr import pivoted_qr
 
 SCALINGS = ("length", "norm", "none")
 INDICES = ("O1", "O2", "O3", "O4", "O5")
@@ -431,7 +432,7 @@ def analyse_jacobian(j: np.ndarray, names: tuple[str, ...], column_scale: np.nda
     null = vt[rank:].T  # scaled coordinates (p, p − rank)
     # QR with column pivoting: the base parameters
     if m:
-        _, r, perm = scipy.linalg.qr(j, mode="economic", pivoting=True)
+        _, r, perm = pivoted_qr(j)
         diag = np.abs(np.diag(r))
         rank_qr = int((diag > rtol * diag[0]).sum()) if diag.size and diag[0] > 0 else 0
     else:
