@@ -15,7 +15,7 @@ def test_the_factorisation_is_lapacks_where_nothing_ties(shape):
     rng = np.random.default_rng(sum(shape))
     a = rng.normal(size=shape) * rng.uniform(0.1, 10.0, size=shape[1])
     q, r, piv = pivoted_qr(a)
-    q_ref, r_ref, piv_ref = scipy.linalg.qr(a, pivoting=True, mode="economic")
+    _, r_ref, piv_ref = scipy.linalg.qr(a, pivoting=True, mode="economic")
     k = min(shape)
     assert q.shape == (shape[0], k) and r.shape == (k, shape[1])
     np.testing.assert_allclose(q @ r, a[:, piv], atol=1e-12 * np.abs(a).max())
