@@ -60,7 +60,7 @@ NATIVE_TWINS = {
 }
 
 _available: bool | None = None
-_native: ModuleType | None | bool = False  # False: not looked for yet
+_native: ModuleType | bool | None = False  # False: not looked for yet
 _pool: tuple[int, ThreadPoolExecutor] | None = None
 
 
