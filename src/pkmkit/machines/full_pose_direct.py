@@ -16,7 +16,7 @@ Numba is missing, ``PKMKIT_COMPILED=0``, or an option only the engine knows is p
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -104,12 +104,14 @@ class DirectKernel:
         return (out[:, :6].copy(), out[:, 6].astype(int), out[:, 7].astype(int),
                 out[:, 8].copy())
 
-    def solve_one(self, q: np.ndarray) -> np.ndarray:
+    def solve_one(self, q: np.ndarray, function: Callable[..., Any] | None = None) -> np.ndarray:
         """One configuration ``q (n,)`` (float array) from the first-order guess, default
-        options: ``(9,)`` pose, status, iterations, residual (as :meth:`solve`'s row)."""
+        options: ``(9,)`` pose, status, iterations, residual (as :meth:`solve`'s row);
+        ``function``: the kernel's ``solve_one`` when the caller has chosen it already."""
         out = np.empty(9)
-        jit.kernel(KERNELS, "solve_one")(np.ascontiguousarray(q), _EMPTY6, False, self.geom,
-                                         self.home, _DEFAULT_OPTIONS, out)
+        solve_one = function or jit.kernel(KERNELS, "solve_one")
+        solve_one(np.ascontiguousarray(q), _EMPTY6, False, self.geom, self.home,
+                  _DEFAULT_OPTIONS, out)
         return out
 
 
@@ -127,16 +129,19 @@ def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
         return None
     if q.shape != (machine.n_actuators,):
         return None
-    if not jit.use_compiled_solver(1, native=True):
-        # no C twin and Numba not imported yet: this call takes the batch path (the NumPy
-        # engine, ≈ 2 ms), so that a one-shot call (the command line) does not pay Numba's
-        # import; the next single call of this machine imports it and runs compiled
-        if not jit.use_compiled_solver(jit.SOLVER_ROWS):
-            return None  # no Numba, or PKMKIT_COMPILED=0
-        if not machine.__dict__.get("_direct_warm"):
-            object.__setattr__(machine, "_direct_warm", True)
-            return None
-    out = machine._direct_kernel().solve_one(q)
+    solve_one = jit.native_kernel(KERNELS, "solve_one")  # the C twin: no import to pay
+    if solve_one is None:
+        if not jit.use_compiled_solver(1):
+            # Numba not imported yet: this call takes the batch path (the NumPy engine,
+            # ≈ 2 ms), so that a one-shot call (the command line) does not pay Numba's
+            # import; the next single call of this machine imports it and runs compiled
+            if not jit.use_compiled_solver(jit.SOLVER_ROWS):
+                return None  # no Numba, or PKMKIT_COMPILED=0
+            if not machine.__dict__.get("_direct_warm"):
+                object.__setattr__(machine, "_direct_warm", True)
+                return None
+        solve_one = _numba_solve_one()
+    out = machine._direct_kernel().solve_one(q, solve_one)
     if out[6] != 0.0 or not (strokes == "ignore" or machine._within_strokes(q.tolist())):
         return None  # not OK (Status.OK is 0), or a stroke to judge
     return out[:6]
@@ -144,3 +149,14 @@ def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
 
 _EMPTY6 = np.zeros(6)
 _DEFAULT_OPTIONS = DirectKernel.options({})
+_numba: Callable[..., Any] | None = None
+
+
+def _numba_solve_one() -> Callable[..., Any]:
+    """The Numba ``solve_one`` (its module imported once)."""
+    global _numba
+    if _numba is None:
+        from pkmkit.machines.full_pose_direct_kernel import solve_one
+
+        _numba = solve_one
+    return _numba

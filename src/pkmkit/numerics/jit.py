@@ -94,13 +94,20 @@ def native_kernels() -> ModuleType | None:
     return _native
 
 
+def native_kernel(module: str, name: str) -> Callable[..., Any] | None:
+    """The C twin of the Numba kernel ``module.name`` (:data:`NATIVE_TWINS`) when
+    :func:`native_kernels` has it, else None."""
+    if name not in NATIVE_TWINS.get(module, ()):
+        return None
+    native = native_kernels()
+    return None if native is None else getattr(native, name)
+
+
 def kernel(module: str, name: str) -> Callable[..., Any]:
-    """The compiled kernel ``module.name`` to run: its C twin (:data:`NATIVE_TWINS`) when
-    :func:`native_kernels` has it, else the Numba function (``module`` imported now)."""
-    native = native_kernels() if name in NATIVE_TWINS.get(module, ()) else None
-    if native is not None:
-        return getattr(native, name)
-    return getattr(importlib.import_module(module), name)
+    """The compiled kernel ``module.name`` to run: its C twin (:func:`native_kernel`), else
+    the Numba function (``module`` imported now)."""
+    native = native_kernel(module, name)
+    return native if native is not None else getattr(importlib.import_module(module), name)
 
 
 def use_compiled_solver(rows: int, *, native: bool = False) -> bool:
