@@ -2,7 +2,8 @@
 package is in pyproject.toml).
 
 The extension holds ahead-of-time twins of the full-pose Numba kernels, so that a fresh
-process's first large batch does not pay Numba's import (docs/install.md, "Compiled kernels").
+process's first large batch does not pay Numba's import (docs/architecture.md, "Compiled
+kernels: Numba and the optional C extension").
 It is optional: without a C compiler or the Python headers the build prints a warning and the
 package installs without it (the Numba kernels are then used). Plain C, the CPython API and the
 buffer protocol only (no NumPy headers); -O3 in ISO C mode without fast-math and with no
