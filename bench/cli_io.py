@@ -19,8 +19,10 @@ compared with the library's read + write in ``rest/lib``.
 
 Start-up: ``pkmkit --help`` and a one-pose ``pkmkit ik`` against ``python -c pass`` and
 ``python -c "import numpy"`` (the floor any NumPy program pays); then the CPU time of a fresh
-process's first batch call (5,000 poses) over ``import pkmkit``, by default and with the
-compiled kernels forced (``PKMKIT_COMPILED=1``). ``m.ik(X)`` against ``m.ik(X,
+process's first batch call (5,000 poses; 200 configurations for the direct models) over
+``import pkmkit``, by default (the C kernels of ``pkmkit.native`` where built), with the Numba
+kernels (``PKMKIT_NATIVE=0``) and with the compiled kernels forced (``PKMKIT_COMPILED=1``);
+``--first-calls-only`` prints that table alone. ``m.ik(X)`` against ``m.ik(X,
 full_output=True)`` (statuses, modes, shortfalls, strokes) is timed in the bench's process.
 
 Memory: with ``--big-rows N`` (e.g. 10⁷), the peak resident memory of ``pkmkit ik`` on an
@@ -32,7 +34,7 @@ not grow with N).
 Usage::
 
     python bench/cli_io.py [--rows 1000000] [--repeat 5] [--big-rows 10000000] [--load]
-                           [--commands ik] [--old-rows 0]
+                           [--commands ik] [--old-rows 0] [--first-calls-only]
 """
 
 from __future__ import annotations
@@ -252,23 +254,42 @@ def statuses_at_kernel_cost(m, x: np.ndarray, repeat: int) -> None:
 #: A fresh process's first batch call (5,000 poses, above jit.MIN_ROWS), after ``import pkmkit``.
 FIRST_CALL = ("import numpy as np, pkmkit; m = pkmkit.machine({name!r}); "
               "x = m.home_pose + np.random.default_rng(0).uniform(-0.05, 0.05, (5000, m.dims))")
+#: A fresh process's first direct-model batch (200 configurations, above jit.SOLVER_ROWS).
+FIRST_FK = ("import numpy as np, pkmkit; m = pkmkit.machine({name!r}); "
+            "q = m.home_q + np.random.default_rng(0).uniform(-0.02, 0.02, (200, m.n_actuators))")
+#: (machine, call, set-up, whether the C kernels of pkmkit.native serve it)
+FIRST_CASES = (("linear-delta", "m.ik(x)", FIRST_CALL, False),
+               ("linear-delta", "m.ik(x, full_output=True)", FIRST_CALL, False),
+               ("gough-stewart", "m.ik(x)", FIRST_CALL, True),
+               ("gough-stewart", "m.ik(x, full_output=True)", FIRST_CALL, True),
+               ("gough-stewart", "m.fk(q)", FIRST_FK, True),
+               ("verne", "m.fk(q)", FIRST_FK, True))
 
 
 def first_calls(repeat: int) -> None:
-    """CPU time of a fresh process's first batch call, over ``import pkmkit`` in the same
-    run: the default path, and the compiled one forced (``PKMKIT_COMPILED=1``: Numba's import,
-    its NumPy support loaded on the first call, the cached kernel)."""
+    """CPU time of a fresh process's first batch call, over ``import pkmkit`` and over its
+    set-up (``import pkmkit``, the machine built, the input drawn: run alone in the same way)
+    in the same run: the default path (the C kernels where ``pkmkit.native`` was built), the
+    Numba kernels (``PKMKIT_NATIVE=0``: Numba's import, its NumPy support loaded on the first
+    call, the cached kernel) and the compiled path forced (``PKMKIT_COMPILED=1``)."""
     base = run_times([sys.executable, "-c", "import pkmkit"], repeat)[1]
-    print(f"{'first batch call (5000 poses)':<44} {'cpu s':>6} {'- import pkmkit':>16}")
-    print(f"{'import pkmkit':<44} {base:6.3f}")
-    for name, call in (("linear-delta", "m.ik(x)"), ("linear-delta", "m.ik(x, full_output=True)"),
-                       ("gough-stewart", "m.ik(x)")):
-        for forced in (False, True):
-            env = {**os.environ, "PKMKIT_COMPILED": "1"} if forced else None
-            code = FIRST_CALL.format(name=name) + "; " + call
-            cpu = run_times([sys.executable, "-c", code], repeat, env=env)[1]
-            label = f"{name} {call}{' compiled' if forced else ''}"
-            print(f"{label:<44} {cpu:6.3f} {cpu - base:16.3f}")
+    print(f"{'first batch call':<58} {'cpu s':>6} {'- import pkmkit':>16} {'- set-up':>9}")
+    print(f"{'import pkmkit':<58} {base:6.3f}")
+    setups: dict[str, float] = {}
+    for name, call, setup, native in FIRST_CASES:
+        code = setup.format(name=name)
+        if code not in setups:
+            setups[code] = run_times([sys.executable, "-c", code], repeat)[1]
+            print(f"{name + ' set-up (machine, input)':<58} {setups[code]:6.3f} "
+                  f"{setups[code] - base:16.3f}")
+        variants = [("", {}), (" compiled", {"PKMKIT_COMPILED": "1"})]
+        if native:
+            variants.append((" Numba (PKMKIT_NATIVE=0)", {"PKMKIT_NATIVE": "0"}))
+        for suffix, extra in variants:
+            cpu = run_times([sys.executable, "-c", code + "; " + call], repeat,
+                            env={**os.environ, **extra})[1]
+            label = f"{name} {call}{suffix}"
+            print(f"{label:<58} {cpu:6.3f} {cpu - base:16.3f} {cpu - setups[code]:9.3f}")
 
 
 def main() -> None:
@@ -280,8 +301,13 @@ def main() -> None:
     parser.add_argument("--load", action="store_true", help="also run beside a busy process")
     parser.add_argument("--commands", default="ik,fk,jacobian",
                         help="batch commands to time, comma-separated (default: all three)")
+    parser.add_argument("--first-calls-only", action="store_true",
+                        help="only the table of a fresh process's first batch call")
     args = parser.parse_args()
     args.commands = args.commands.split(",")
+    if args.first_calls_only:
+        first_calls(args.repeat)
+        return
     print(f"pkmkit {pkmkit.__version__}, numpy {np.__version__}, pyarrow {pa.__version__}, "
           f"Python {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores")
     print(f"{args.rows} rows, median of {args.repeat} runs (wall time of a fresh process)")

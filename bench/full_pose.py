@@ -14,11 +14,14 @@ For each condition (``quiet``; ``loaded`` with one process keeping a core and th
   ``scipy.optimize.least_squares(method="lm")`` per configuration with the analytic Jacobian of
   the same residual from the same guesses (on a 300-configuration sample); the largest
   disagreement is printed;
+- **C against Numba** (``--backends``, only these rows) — the same ``m.ik`` and ``m.fk`` on one
+  thread by the C kernels of :mod:`pkmkit.native` and by the Numba ones (``PKMKIT_NATIVE=0``)
+  in this process, warm: CPU time;
 - **every assembly mode** — ``m.fk_all(q)`` of Dietmaier's general hexapod (40 real modes) and of
   random general 6-6 configurations: seconds per configuration, count, worst residual.
 
     python bench/full_pose.py [--poses 1000000] [--configurations 10000] [--repeat 5]
-                              [--load none|busy|both]
+                              [--load none|busy|both] [--backends]
 """
 
 from __future__ import annotations
@@ -161,6 +164,39 @@ def engine_rows(m, q: np.ndarray, repeat: int) -> None:
           f"{t_scipy / t_api:6.0f}   (largest position difference to scipy {gap:.1e} m)")
 
 
+def backend_rows(label: str, m, poses: np.ndarray, q: np.ndarray, repeat: int) -> None:
+    """Steady state (machine loaded, kernels warm) in this process, one thread: CPU time of
+    ``m.ik(poses)`` and ``m.fk(q)`` by the C kernels of ``pkmkit.native`` and by the Numba
+    kernels (``PKMKIT_NATIVE=0``), interleaved, median of ``repeat``."""
+    saved = {k: os.environ.get(k) for k in ("PKMKIT_THREADS", "PKMKIT_NATIVE")}
+    backends = {"C": "1", "Numba": "0"}
+    cpu = {(b, call): [] for b in backends for call in ("ik", "fk")}
+    os.environ["PKMKIT_THREADS"] = "1"
+    try:
+        for _ in range(repeat + 1):  # the first round compiles / warms up, not counted
+            for backend, value in backends.items():
+                os.environ["PKMKIT_NATIVE"] = value
+                cpu[backend, "ik"].append(_cpu_median(lambda: m.ik(poses, strokes="ignore"), 1))
+                cpu[backend, "fk"].append(_cpu_median(lambda: m.fk(q, strokes="ignore"), 1))
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+    med = {key: statistics.median(v[1:]) for key, v in cpu.items()}
+    if jit.native_kernels() is None:
+        print(f"  {label}: pkmkit.native._kernels not built, no C row")
+        return
+    print(f"  {label} one thread, CPU: IK ({len(poses)} poses) C "
+          f"{len(poses) / med['C', 'ik'] / 1e6:.2f} Mposes/s, Numba "
+          f"{len(poses) / med['Numba', 'ik'] / 1e6:.2f} (C/Numba time "
+          f"{med['C', 'ik'] / med['Numba', 'ik']:.2f}); FK ({len(q)} configurations) C "
+          f"{med['C', 'fk'] / len(q) * 1e6:.2f} µs per pose, Numba "
+          f"{med['Numba', 'fk'] / len(q) * 1e6:.2f} µs (C/Numba time "
+          f"{med['C', 'fk'] / med['Numba', 'fk']:.2f})")
+
+
 def all_modes_rows(repeat: int) -> None:
     general = pkmkit.machine("dietmaier-hexapod")
     start = time.perf_counter()
@@ -195,6 +231,8 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--load", choices=("none", "busy", "both"), default="both")
     parser.add_argument("--no-modes", action="store_true", help="skip the every-mode rows")
+    parser.add_argument("--backends", action="store_true",
+                        help="only the C against Numba kernel rows (steady state, one thread)")
     args = parser.parse_args()
     print(f"pkmkit {pkmkit.__version__}, numpy {np.__version__}, scipy {scipy.__version__}, "
           f"Python {platform.python_version()}, {platform.machine()}")
@@ -207,6 +245,14 @@ def main() -> None:
     reached = verne.ik(positions, full_output=True).pose
     verne_poses = np.ascontiguousarray(np.resize(reached, (args.poses, 6)))
     q = hexapod.ik(poses[:args.configurations])
+    if args.backends:
+        verne_q = verne.ik(verne_poses[:args.configurations], strokes="ignore")
+        for label, context in conditions(args.load):
+            print(f"{label} (load average {os.getloadavg()[0]:.2f} before):")
+            with context():
+                backend_rows("hexapod", hexapod, poses, q, args.repeat)
+                backend_rows("Verne", verne, verne_poses, verne_q, args.repeat)
+        return
     for label, context in conditions(args.load):
         print(f"{label} (load average {os.getloadavg()[0]:.2f} before):")
         with context():

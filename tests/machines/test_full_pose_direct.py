@@ -128,9 +128,10 @@ def test_kernel_start_is_the_first_order_guess():
 
 
 def test_a_one_shot_call_does_not_import_numba():
-    """The first single fk of a fresh process takes the NumPy engine (no Numba import, which
-    costs ≈ 0.4 s: the command line makes one call); the second imports Numba and runs the
-    compiled solve; both give the same pose."""
+    """Without the C extension (``PKMKIT_NATIVE=0``), the first single fk of a fresh process
+    takes the NumPy engine (no Numba import, which costs ≈ 0.4 s: the command line makes one
+    call); the second imports Numba and runs the compiled solve; both give the same pose
+    (with the extension neither imports Numba: tests/native)."""
     import subprocess
     import sys
     from pathlib import Path
@@ -143,7 +144,7 @@ def test_a_one_shot_call_does_not_import_numba():
             "b = m.fk(q)\n"
             "print(first, 'numba' in sys.modules, float(np.abs(a - b).max()))\n")
     src = str(Path(pkmkit.__file__).resolve().parents[1])
-    env = {"PYTHONPATH": src, "PATH": "/usr/bin:/bin"}
+    env = {"PYTHONPATH": src, "PATH": "/usr/bin:/bin", "PKMKIT_NATIVE": "0"}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=env, check=True).stdout.split()
     assert out[:2] == ["False", "True"]

@@ -389,7 +389,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             return self._ik_position(arr, q0, branches, full_output, engine_options, strokes)
         xb, single = _checked_batch(x, 6, "pose")
         sigma = self._branches(branches)
-        if not single and jit.use_compiled(xb.shape[0]):  # one fused pass
+        if not single and jit.use_compiled(xb.shape[0], native=True):  # one fused pass
             q, status = self._forms.inverse_compiled(xb, sigma, self._consistency_tol())
         else:
             with np.errstate(invalid="ignore", over="ignore"):
@@ -469,7 +469,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
                 return fast
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
-        if direct.usable(engine_options, qb.shape[0]):  # compiled per-pose solve, same rules
+        if direct.usable(engine_options, qb.shape[0], native=True):  # compiled per-pose solve
             pose, status, iterations, residual = self._direct_kernel().solve(
                 qb, None if x0 is None else _rows_like(x0, 6, "x0", qb.shape[0]),
                 engine_options)

@@ -4,10 +4,11 @@
 :mod:`pkmkit.machines.full_pose_direct_kernel` (built once per machine) and runs its per-pose
 Levenberg–Marquardt solve on a batch (:meth:`DirectKernel.solve`) or on one configuration
 (:meth:`DirectKernel.solve_one`, a few microseconds from Python). Both are the same compiled
-function, so a single configuration and the same row of a batch give the same bits. Numba's
-import (≈ 0.4 s of CPU) is paid by batches of :data:`~pkmkit.numerics.jit.SOLVER_ROWS` rows
-or more and by the second single call of a machine, not by a one-shot call (the command line),
-which takes the NumPy engine (≈ 2 ms). The
+function, so a single configuration and the same row of a batch give the same bits. That
+function is the C twin in :mod:`pkmkit.native` when the extension was built (no import cost:
+every call runs it), else the Numba one, whose import (≈ 0.4 s of CPU) is paid by batches of
+:data:`~pkmkit.numerics.jit.SOLVER_ROWS` rows or more and by the second single call of a
+machine, not by a one-shot call (the command line), which takes the NumPy engine (≈ 2 ms). The
 reference is the batched NumPy engine (:func:`pkmkit.solve.rod_closure.solve_direct` with
 ``dof="full"``), with the same options, stopping rules and status codes; it is still used when
 Numba is missing, ``PKMKIT_COMPILED=0``, or an option only the engine knows is passed.
@@ -15,7 +16,7 @@ Numba is missing, ``PKMKIT_COMPILED=0``, or an option only the engine knows is p
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -24,20 +25,24 @@ import numpy as np
 from pkmkit.model.rods import RodModel
 from pkmkit.numerics import jit
 
+#: The Numba kernels' module (:func:`pkmkit.numerics.jit.kernel` may run their C twins).
+KERNELS = "pkmkit.machines.full_pose_direct_kernel"
+
 #: The engine's defaults (:func:`pkmkit.solve.least_squares.solve_least_squares`), in the
 #: order of the kernel's option vector.
 DEFAULTS = {"max_iter": 60, "xtol": 1e-14, "atol": 1e-14, "gtol": 1e-12, "stall": 0.01,
             "residual_tol": 1e-9, "damping": 1e-4}
 
 
-def usable(options: Mapping[str, Any], rows: int) -> bool:
+def usable(options: Mapping[str, Any], rows: int, *, native: bool = False) -> bool:
     """Whether the compiled solve serves a call on ``rows`` rows with these engine ``options``
     (only the options of :data:`DEFAULTS`, ``compute_rank`` off; and
-    :func:`pkmkit.numerics.jit.use_compiled_solver`)."""
+    :func:`pkmkit.numerics.jit.use_compiled_solver`, with ``native`` for this module's
+    :class:`DirectKernel`, which has a C twin)."""
     if options and (options.get("compute_rank", False)
                     or not set(options) <= {*DEFAULTS, "compute_rank"}):
         return False
-    return jit.use_compiled_solver(rows)
+    return jit.use_compiled_solver(rows, native=native)
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,8 +89,7 @@ class DirectKernel:
             engine's :class:`~pkmkit.solve.least_squares.SolveResult` (``u``, ``status``,
             ``iterations``, ``residual``; m).
         """
-        from pkmkit.machines import full_pose_direct_kernel as kernel
-
+        solve_rows = jit.kernel(KERNELS, "solve_rows")
         q = np.ascontiguousarray(q, dtype=float)
         guess = (np.empty((q.shape[0], 6)) if x0 is None
                  else np.ascontiguousarray(x0, dtype=float))
@@ -93,19 +97,21 @@ class DirectKernel:
         opts = self.options(options)
 
         def work(start: int, stop: int) -> None:
-            kernel.solve_rows(q[start:stop], guess[start:stop], x0 is not None, self.geom,
-                              self.home, opts, out[start:stop])
+            solve_rows(q[start:stop], guess[start:stop], x0 is not None, self.geom, self.home,
+                       opts, out[start:stop])
 
         jit.run_chunks(work, q.shape[0])
         return (out[:, :6].copy(), out[:, 6].astype(int), out[:, 7].astype(int),
                 out[:, 8].copy())
 
-    def solve_one(self, q: np.ndarray) -> np.ndarray:
+    def solve_one(self, q: np.ndarray, function: Callable[..., Any] | None = None) -> np.ndarray:
         """One configuration ``q (n,)`` (float array) from the first-order guess, default
-        options: ``(9,)`` pose, status, iterations, residual (as :meth:`solve`'s row)."""
-        kernel = _kernel()
+        options: ``(9,)`` pose, status, iterations, residual (as :meth:`solve`'s row);
+        ``function``: the kernel's ``solve_one`` when the caller has chosen it already."""
         out = np.empty(9)
-        kernel.solve_one(q, _EMPTY6, False, self.geom, self.home, _DEFAULT_OPTIONS, out)
+        solve_one = function or jit.kernel(KERNELS, "solve_one")
+        solve_one(np.ascontiguousarray(q), _EMPTY6, False, self.geom, self.home,
+                  _DEFAULT_OPTIONS, out)
         return out
 
 
@@ -123,16 +129,19 @@ def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
         return None
     if q.shape != (machine.n_actuators,):
         return None
-    if not jit.use_compiled_solver(1):
-        # Numba not imported yet: this call takes the batch path (the NumPy engine, ≈ 2 ms),
-        # so that a one-shot call (the command line) does not pay Numba's import; the next
-        # single call of this machine imports it and runs compiled
-        if not jit.use_compiled_solver(jit.SOLVER_ROWS):
-            return None  # no Numba, or PKMKIT_COMPILED=0
-        if not machine.__dict__.get("_direct_warm"):
-            object.__setattr__(machine, "_direct_warm", True)
-            return None
-    out = machine._direct_kernel().solve_one(q)
+    solve_one = jit.native_kernel(KERNELS, "solve_one")  # the C twin: no import to pay
+    if solve_one is None:
+        if not jit.use_compiled_solver(1):
+            # Numba not imported yet: this call takes the batch path (the NumPy engine,
+            # ≈ 2 ms), so that a one-shot call (the command line) does not pay Numba's
+            # import; the next single call of this machine imports it and runs compiled
+            if not jit.use_compiled_solver(jit.SOLVER_ROWS):
+                return None  # no Numba, or PKMKIT_COMPILED=0
+            if not machine.__dict__.get("_direct_warm"):
+                object.__setattr__(machine, "_direct_warm", True)
+                return None
+        solve_one = _numba_solve_one()
+    out = machine._direct_kernel().solve_one(q, solve_one)
     if out[6] != 0.0 or not (strokes == "ignore" or machine._within_strokes(q.tolist())):
         return None  # not OK (Status.OK is 0), or a stroke to judge
     return out[:6]
@@ -140,13 +149,14 @@ def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
 
 _EMPTY6 = np.zeros(6)
 _DEFAULT_OPTIONS = DirectKernel.options({})
-_module = None
+_numba: Callable[..., Any] | None = None
 
 
-def _kernel():
-    global _module
-    if _module is None:
-        from pkmkit.machines import full_pose_direct_kernel
+def _numba_solve_one() -> Callable[..., Any]:
+    """The Numba ``solve_one`` (its module imported once)."""
+    global _numba
+    if _numba is None:
+        from pkmkit.machines.full_pose_direct_kernel import solve_one
 
-        _module = full_pose_direct_kernel
-    return _module
+        _numba = solve_one
+    return _numba

@@ -112,12 +112,12 @@ class FullPoseForms:
     def inverse_compiled(self, x: np.ndarray, sigma: np.ndarray,
                          consistency_tol: float) -> tuple[np.ndarray, np.ndarray]:
         """The inverse model of pose rows ``x (N, 6)`` in one compiled pass
-        (:func:`pkmkit.machines.full_pose_kernels.inverse_poses`): ``q (N, n_act)`` (NaN rows
+        (:func:`pkmkit.machines.full_pose_kernels.inverse_poses`, or its C twin: see
+        :func:`pkmkit.numerics.jit.kernel`): ``q (N, n_act)`` (NaN rows
         where not OK) and ``status (N,)`` — OK, UNREACHABLE (a rod cannot close, or the rods
         of one actuator disagree by more than ``consistency_tol``) or INVALID_INPUT; the same
         as :meth:`rod_coordinates` then :meth:`combine` and the machine's checks."""
-        from pkmkit.machines import full_pose_kernels
-
+        inverse_poses = jit.kernel("pkmkit.machines.full_pose_kernels", "inverse_poses")
         m = self.model
         act = m.rod_actuator
         counts = np.bincount(act, minlength=m.n_actuators)
@@ -128,14 +128,13 @@ class FullPoseForms:
         q = np.empty((x.shape[0], m.n_actuators))
         status = np.empty(x.shape[0], dtype=np.int64)
         x = np.ascontiguousarray(x, dtype=float)
-        rods = (m.rod_kind.astype(np.int64), m.rod_base, m.rod_platform, m.rod_axis,
+        rods = (m.rod_kind.astype(np.int64), *_plain(m.rod_base, m.rod_platform, m.rod_axis,
                 m.rod_pivot, self.crank_e1, self.crank_e2, self.length_sq, m.rod_length,
-                self.crank_radius, self.crank_offset, np.asarray(sigma, dtype=float),
-                BOUNDARY_TOL, groups, counts.astype(np.int64), angular, float(consistency_tol))
+                self.crank_radius, self.crank_offset, sigma), BOUNDARY_TOL, groups,
+                counts.astype(np.int64), angular, float(consistency_tol))
 
         def work(start: int, stop: int) -> None:
-            full_pose_kernels.inverse_poses(x[start:stop], *rods, q[start:stop],
-                                            status[start:stop])
+            inverse_poses(x[start:stop], *rods, q[start:stop], status[start:stop])
 
         jit.run_chunks(work, x.shape[0])
         return q, status
@@ -279,3 +278,8 @@ class FullPoseForms:
         b_dot = np.zeros((x.shape[0], m.n_rods, m.n_actuators))
         b_dot[:, np.arange(m.n_rods), m.rod_actuator] = diag
         return a_dot, b_dot
+
+
+def _plain(*arrays: np.ndarray) -> list[np.ndarray]:
+    """C-contiguous float64 copies where needed (what the C kernels take)."""
+    return [np.ascontiguousarray(a, dtype=float) for a in arrays]

@@ -14,6 +14,15 @@ Environment: ``PKMKIT_COMPILED=0`` forces the NumPy paths everywhere (``=1`` for
 compiled ones for every batch size, which the tests use). Without Numba installed the NumPy
 paths are used silently.
 
+Ahead-of-time kernels: where the optional C extension :mod:`pkmkit.native` (built with the
+package when a compiler is present) holds a twin of a Numba kernel (:data:`NATIVE_TWINS`: the
+full-pose inverse and direct models), :func:`kernel` returns it instead, and the call sites that
+pass ``native=True`` to :func:`use_compiled` / :func:`use_compiled_solver` then need no Numba:
+no import cost, so the per-pose solvers run native at every batch size.
+``PKMKIT_NATIVE=0`` disables the extension (the Numba kernels run as without it);
+``PKMKIT_COMPILED=0`` still means NumPy everywhere. This module is the one place that choice
+is made.
+
 Threads: the compiled kernels release the GIL, and :func:`run_chunks` spreads a large batch
 over :func:`thread_count` threads in chunks taken from a shared queue (a thread slowed by a
 competing process simply takes fewer chunks). ``PKMKIT_THREADS=N`` sets the count; by default
@@ -24,11 +33,13 @@ independent, so the results do not depend on the count.
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 import os
 import sys
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # imported when a pool is first needed (≈ 14 ms of start-up otherwise)
     from concurrent.futures import ThreadPoolExecutor
@@ -41,7 +52,15 @@ SOLVER_ROWS = 64
 #: Smallest batch spread over several threads, and rows per chunk.
 THREAD_ROWS = 1 << 16
 
+#: The Numba kernels that have a C twin of the same name and arguments in
+#: ``pkmkit.native._kernels``.
+NATIVE_TWINS = {
+    "pkmkit.machines.full_pose_kernels": ("inverse_poses",),
+    "pkmkit.machines.full_pose_direct_kernel": ("solve_rows", "solve_one"),
+}
+
 _available: bool | None = None
+_native: ModuleType | bool | None = False  # False: not looked for yet
 _pool: tuple[int, ThreadPoolExecutor] | None = None
 
 
@@ -59,19 +78,55 @@ def numba_available() -> bool:
     return _available
 
 
-def use_compiled_solver(rows: int) -> bool:
+def native_kernels() -> ModuleType | None:
+    """The C extension ``pkmkit.native._kernels``, or None when it was not built (no compiler
+    at install time), or ``PKMKIT_NATIVE=0`` or ``PKMKIT_COMPILED=0`` is set."""
+    global _native
+    if os.environ.get("PKMKIT_NATIVE", "").strip() == "0" or mode() == "0":
+        return None
+    if _native is False:
+        try:
+            from pkmkit.native import _kernels
+        except ImportError:
+            _native = None
+        else:
+            _native = _kernels
+    return _native
+
+
+def native_kernel(module: str, name: str) -> Callable[..., Any] | None:
+    """The C twin of the Numba kernel ``module.name`` (:data:`NATIVE_TWINS`) when
+    :func:`native_kernels` has it, else None."""
+    if name not in NATIVE_TWINS.get(module, ()):
+        return None
+    native = native_kernels()
+    return None if native is None else getattr(native, name)
+
+
+def kernel(module: str, name: str) -> Callable[..., Any]:
+    """The compiled kernel ``module.name`` to run: its C twin (:func:`native_kernel`), else
+    the Numba function (``module`` imported now)."""
+    native = native_kernel(module, name)
+    return native if native is not None else getattr(importlib.import_module(module), name)
+
+
+def use_compiled_solver(rows: int, *, native: bool = False) -> bool:
     """Whether the compiled per-pose solvers run on a batch of ``rows`` rows: an iterative solve
     costs hundreds of microseconds per pose through the NumPy engine and a few through its
     compiled kernel, so they run from :data:`SOLVER_ROWS` rows, or at any size once Numba is
     imported in the process (its import, ≈ 0.4 s of CPU with the on-disk cache, is then paid);
-    ``PKMKIT_COMPILED=1`` forces them, ``=0`` (or Numba missing) never."""
+    ``PKMKIT_COMPILED=1`` forces them, ``=0`` (or Numba missing) never. ``native=True``
+    (a solver with a C twin, run through :func:`kernel`): at every size when the extension is
+    present — it costs no import."""
     choice = mode()
+    if native and native_kernels() is not None:
+        return choice != "0"
     if choice == "0" or not numba_available():
         return False
     return choice == "1" or rows >= SOLVER_ROWS or "numba" in sys.modules
 
 
-def use_compiled(rows: int, *, imports: bool = True) -> bool:
+def use_compiled(rows: int, *, imports: bool = True, native: bool = False) -> bool:
     """Whether a batch of ``rows`` rows should run the compiled kernels (the caller imports
     its kernel module lazily, e.g. :mod:`pkmkit.machines.kernels`).
 
@@ -80,10 +135,14 @@ def use_compiled(rows: int, *, imports: bool = True) -> bool:
     compiled only once Numba is imported in the process, because importing it and loading a
     cached kernel costs ≈ 0.6–0.9 s of CPU, which the compiled path repays only after tens of
     millions of poses — a one-shot command (``pkmkit ik --input``) stays on NumPy.
-    ``PKMKIT_COMPILED=1`` still forces them."""
+    ``PKMKIT_COMPILED=1`` still forces them. ``native=True``: a kernel with a C twin (run
+    through :func:`kernel`), compiled whenever the extension is present (from
+    :data:`MIN_ROWS` rows), Numba or not."""
     choice = mode()
     if choice == "0" or (choice == "auto" and rows < MIN_ROWS):
         return False
+    if native and native_kernels() is not None:
+        return True
     if choice == "auto" and not imports and "numba" not in sys.modules:
         return False
     return numba_available()

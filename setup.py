@@ -1,0 +1,43 @@
+"""Build of the optional C extension ``pkmkit.native._kernels`` (everything else about the
+package is in pyproject.toml).
+
+The extension holds ahead-of-time twins of the full-pose Numba kernels, so that a fresh
+process's first large batch does not pay Numba's import (docs/architecture.md, "Compiled
+kernels: Numba and the optional C extension").
+It is optional: without a C compiler or the Python headers the build prints a warning and the
+package installs without it (the Numba kernels are then used). Plain C, the CPython API and the
+buffer protocol only (no NumPy headers); -O3 in ISO C mode without fast-math and with no
+floating-point contraction, so that its results are those of the Numba kernels.
+"""
+
+from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
+
+NATIVE = "src/pkmkit/native/"
+
+#: Flags for GCC and Clang (ISO C: no FMA contraction either way; no -ffast-math).
+UNIX_FLAGS = ["-O3", "-std=c11", "-ffp-contract=off", "-fno-fast-math"]
+
+
+class BuildExt(build_ext):
+    """``build_ext`` with the compiler's flags chosen by its type (MSVC takes its own
+    defaults: /O2, /fp:precise)."""
+
+    def build_extensions(self) -> None:
+        if self.compiler.compiler_type == "unix":
+            for ext in self.extensions:
+                ext.extra_compile_args = [*UNIX_FLAGS, *ext.extra_compile_args]
+        super().build_extensions()
+
+
+setup(
+    ext_modules=[
+        Extension(
+            "pkmkit.native._kernels",
+            sources=[NATIVE + "_kernels.c", NATIVE + "inverse.c", NATIVE + "direct.c"],
+            depends=[NATIVE + "kernels.h"],
+            optional=True,
+        )
+    ],
+    cmdclass={"build_ext": BuildExt},
+)

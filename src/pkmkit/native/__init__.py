@@ -1,0 +1,15 @@
+"""Ahead-of-time compiled (C) kernels, optional.
+
+``pkmkit.native._kernels`` is a C extension built with the package when a C compiler is
+present (``setup.py``; without one the install still succeeds, with a warning, and this
+package holds no extension). It holds twins of the full-pose Numba kernels, with the same
+arguments, the same algorithm and statuses, run without the GIL:
+
+- ``inverse_poses`` — :func:`pkmkit.machines.full_pose_kernels.inverse_poses`;
+- ``solve_rows``, ``solve_one`` — :func:`pkmkit.machines.full_pose_direct_kernel.solve_rows`
+  and ``solve_one``.
+
+Loading it costs a millisecond, where Numba's import and its first compiled call cost
+0.8–0.9 s of CPU in a fresh process. Which implementation runs is decided in one place,
+:mod:`pkmkit.numerics.jit` (``PKMKIT_NATIVE=0`` disables the extension).
+"""
