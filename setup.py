@@ -1,4 +1,4 @@
-"""Build of the optional C extension ``pkmkit.native._kernels`` (everything else about the
+"""Build of the optional C extension ``pkmkit.native.kernels`` (everything else about the
 package is in pyproject.toml).
 
 The extension holds ahead-of-time twins of the full-pose Numba kernels, so that a fresh
@@ -33,8 +33,8 @@ class BuildExt(build_ext):
 setup(
     ext_modules=[
         Extension(
-            "pkmkit.native._kernels",
-            sources=[NATIVE + "_kernels.c", NATIVE + "inverse.c", NATIVE + "direct.c"],
+            "pkmkit.native.kernels",
+            sources=[NATIVE + "module.c", NATIVE + "inverse.c", NATIVE + "direct.c"],
             depends=[NATIVE + "kernels.h"],
             optional=True,
         )

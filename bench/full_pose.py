@@ -186,7 +186,7 @@ def backend_rows(label: str, m, poses: np.ndarray, q: np.ndarray, repeat: int) -
                 os.environ[key] = value
     med = {key: statistics.median(v[1:]) for key, v in cpu.items()}
     if jit.native_kernels() is None:
-        print(f"  {label}: pkmkit.native._kernels not built, no C row")
+        print(f"  {label}: pkmkit.native.kernels not built, no C row")
         return
     print(f"  {label} one thread, CPU: IK ({len(poses)} poses) C "
           f"{len(poses) / med['C', 'ik'] / 1e6:.2f} Mposes/s, Numba "

@@ -155,10 +155,10 @@ def test_a_rod_leg_batch_imports_no_compiler(tmp_path, suffix):
 def _native_built() -> bool:
     import importlib.util
 
-    return importlib.util.find_spec("pkmkit.native._kernels") is not None
+    return importlib.util.find_spec("pkmkit.native.kernels") is not None
 
 
-@pytest.mark.skipif(not _native_built(), reason="pkmkit.native._kernels was not built")
+@pytest.mark.skipif(not _native_built(), reason="pkmkit.native.kernels was not built")
 @pytest.mark.parametrize("command", ["ik gough-stewart", "fk verne"])
 def test_a_full_pose_batch_imports_no_compiler_with_the_c_kernels(tmp_path, command):
     """``pkmkit ik gough-stewart`` on 5,000 poses (above the size from which the compiled
@@ -193,5 +193,5 @@ def test_a_full_pose_batch_imports_no_compiler_with_the_c_kernels(tmp_path, comm
             pass
     """)
     assert output.exists() and len(output.read_text().splitlines()) > len(rows)
-    assert "pkmkit.native._kernels" in modules
+    assert "pkmkit.native.kernels" in modules
     assert "numba" not in modules

@@ -1,4 +1,4 @@
-"""The optional C extension ``pkmkit.native._kernels`` (issue 22 §5) against the Numba kernels
+"""The optional C extension ``pkmkit.native.kernels`` (issue 22 §5) against the Numba kernels
 it twins and the NumPy reference paths (the independent oracle: vectorised NumPy over the batch),
 three ways on the same rows: the full-pose inverse model (statuses, q) on random poses with
 invalid, unreachable, inconsistent and beyond-stroke rows; the one-mode direct model (statuses,
@@ -23,11 +23,11 @@ from pkmkit.spatial import pose_from_angles
 from pkmkit.status import Status
 
 try:
-    from pkmkit.native import _kernels
+    from pkmkit.native import kernels as _kernels
 except ImportError:  # built without a compiler: allowed, except in CI (first test)
     _kernels = None
 
-built = pytest.mark.skipif(_kernels is None, reason="pkmkit.native._kernels was not built")
+built = pytest.mark.skipif(_kernels is None, reason="pkmkit.native.kernels was not built")
 NAMES = ["gough-stewart", "verne", "delta6"]
 BACKENDS = {"native": {"PKMKIT_COMPILED": "1", "PKMKIT_NATIVE": "1"},
             "numba": {"PKMKIT_COMPILED": "1", "PKMKIT_NATIVE": "0"},
@@ -41,7 +41,7 @@ def test_the_extension_is_built_in_ci():
     be skipped."""
     if os.environ.get("CI", "").strip().lower() in ("", "0", "false"):  # as tests/conftest.py
         pytest.skip("outside CI an install without a compiler is allowed")
-    assert _kernels is not None, "pkmkit.native._kernels was not built: see pip's build log"
+    assert _kernels is not None, "pkmkit.native.kernels was not built: see pip's build log"
 
 
 def _machine(name):

@@ -1,6 +1,6 @@
 """Ahead-of-time compiled (C) kernels, optional.
 
-``pkmkit.native._kernels`` is a C extension built with the package when a C compiler is
+``pkmkit.native.kernels`` is a C extension built with the package when a C compiler is
 present (``setup.py``; without one the install still succeeds, with a warning, and this
 package holds no extension). It holds twins of the full-pose Numba kernels, with the same
 arguments, the same algorithm and statuses, run without the GIL:

@@ -1,6 +1,6 @@
-/* pkmkit.native._kernels: ahead-of-time twins of the Numba kernels of the full-pose rod
+/* pkmkit.native.kernels: ahead-of-time twins of the Numba kernels of the full-pose rod
  * machines (see __init__.py). Plain C99, no NumPy headers: arrays come through the buffer
- * protocol, already checked for shape and type by _kernels.c. */
+ * protocol, already checked for shape and type by module.c. */
 #ifndef PKMKIT_NATIVE_KERNELS_H
 #define PKMKIT_NATIVE_KERNELS_H
 

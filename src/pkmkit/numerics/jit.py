@@ -53,7 +53,7 @@ SOLVER_ROWS = 64
 THREAD_ROWS = 1 << 16
 
 #: The Numba kernels that have a C twin of the same name and arguments in
-#: ``pkmkit.native._kernels``.
+#: ``pkmkit.native.kernels``.
 NATIVE_TWINS = {
     "pkmkit.machines.full_pose_kernels": ("inverse_poses",),
     "pkmkit.machines.full_pose_direct_kernel": ("solve_rows", "solve_one"),
@@ -79,18 +79,18 @@ def numba_available() -> bool:
 
 
 def native_kernels() -> ModuleType | None:
-    """The C extension ``pkmkit.native._kernels``, or None when it was not built (no compiler
+    """The C extension ``pkmkit.native.kernels``, or None when it was not built (no compiler
     at install time), or ``PKMKIT_NATIVE=0`` or ``PKMKIT_COMPILED=0`` is set."""
     global _native
     if os.environ.get("PKMKIT_NATIVE", "").strip() == "0" or mode() == "0":
         return None
     if _native is False:
         try:
-            from pkmkit.native import _kernels
+            from pkmkit.native import kernels
         except ImportError:
             _native = None
         else:
-            _native = _kernels
+            _native = kernels
     return _native
 
 

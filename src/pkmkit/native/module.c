@@ -1,4 +1,4 @@
-/* pkmkit.native._kernels: the module face of the C kernels (inverse.c, direct.c).
+/* pkmkit.native.kernels: the module face of the C kernels (inverse.c, direct.c).
  *
  * Each function takes the same positional arguments as its Numba twin, as C-contiguous
  * buffers (float64, int64, bool), checks their types and shapes (TypeError / ValueError
@@ -243,9 +243,9 @@ static PyMethodDef methods[] = {
 };
 
 static struct PyModuleDef module = {
-    PyModuleDef_HEAD_INIT, "pkmkit.native._kernels",
+    PyModuleDef_HEAD_INIT, "pkmkit.native.kernels",
     "Ahead-of-time (C) twins of pkmkit's full-pose Numba kernels (pkmkit.native).", -1,
     methods, NULL, NULL, NULL, NULL,
 };
 
-PyMODINIT_FUNC PyInit__kernels(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit_kernels(void) { return PyModule_Create(&module); }
