@@ -193,11 +193,14 @@ class ChainWarmStart:
         if pair is None:
             return
         home = self._home["values"]
+        turn = pair[0]
+        reach = max(abs(self.model.q_min[turn] - home[turn]),
+                    abs(self.model.q_max[turn] - home[turn]))
 
         def rule(result: Any, t: np.ndarray, tool: np.ndarray) -> None:
             nearest_head_branch(solve, t, tool, result, np.full(len(result.status),
-                                home[pair[0]]), pair, lambda u, rows: self._within_strokes(u),
-                                home[pair[1]])
+                                home[turn]), pair, lambda u, rows: self._within_strokes(u),
+                                home[pair[1]], turn_reach=reach)
 
         rule(res, targets, lengths)
         if started is None:
