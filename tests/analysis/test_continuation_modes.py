@@ -64,7 +64,7 @@ def trimule():
 
 
 def test_the_trimule_grid_by_continuation_is_the_start_from_home(trimule):
-    g = _grid(trimule, TRIMULE_BOX, 11)
+    g = _grid(trimule, TRIMULE_BOX, 13)
     moved = _check_against_home(trimule, g, strokes=True)
     assert moved.any()  # points whose start from home ended in another mode: home's now
 
