@@ -76,9 +76,10 @@ def test_chunks_cut_across_slabs_continue_the_same(grid_and_machine, monkeypatch
     np.testing.assert_allclose(cut.q, whole.q, rtol=0, atol=1e-12)
 
 
-def test_continuation_is_asked_for(grid_and_machine, monkeypatch):
-    """Off by default (the grid at once, every point from home); ``continuation=True`` solves
-    it slab by slab."""
+def test_continuation_is_the_default(grid_and_machine, monkeypatch):
+    """On by default (slab by slab: the legs' modes are checked,
+    tests/analysis/test_continuation_modes.py); ``continuation=False`` solves the grid at
+    once, every point from home."""
     import pkmkit.analysis.criteria as criteria
 
     seen = []
@@ -86,8 +87,8 @@ def test_continuation_is_asked_for(grid_and_machine, monkeypatch):
                         lambda m, p, slab: seen.append(slab) or m.ik(p, full_output=True))
     m, g = grid_and_machine
     evaluate_grid(m, g, Criteria())
-    evaluate_grid(m, g, Criteria(continuation=True))
-    assert seen == [None, g.size // g.shape[0]]
+    evaluate_grid(m, g, Criteria(continuation=False))
+    assert seen == [g.size // g.shape[0], None]
 
 
 @pytest.fixture(scope="module")

@@ -59,33 +59,42 @@ def test_rows_without_a_usable_start_are_solved_from_home(tripteor):
     np.testing.assert_allclose(warm.q, home.q, rtol=0, atol=1e-12)
 
 
-def test_rows_that_do_not_converge_from_their_start_are_solved_again_from_home(tripteor):
+def test_rows_that_do_not_converge_or_leave_the_home_modes_are_solved_again_from_home(
+        tripteor):
     """The engine's call is replaced by one whose rows started from ``start`` (u0 ≠ home)
-    fail: those rows, and only those, take the solution from home."""
+    fail (row 0), converge in home's assembly modes (row 1) or converge with a leg slide of
+    the opposite sign (row 3: another assembly of the legs): rows 0 and 3, and only those,
+    take the solution from home."""
     from types import SimpleNamespace
 
     from pkmkit.status import Status
 
-    u_home = np.zeros((5, 3))
-    u0 = np.ones((5, 3))
+    home = np.concatenate([tripteor.home_platform, tripteor.home_values])
+    u_home = np.tile(home, (5, 1))
     started = np.array([True, True, False, True, False])
+    u0 = u_home.copy()
+    u0[started, 0] += 0.01
+    slide = 6 + int(np.flatnonzero(tripteor.model.actuated)[0])  # Q1: a leg's slide
     calls = []
 
     def solve(t, u, tool):
         calls.append(len(u))
-        from_start = (u == 1).all(axis=1)
-        status = np.where(from_start & (t[:, 0] > 0), Status.NOT_CONVERGED, Status.OK)
-        return SimpleNamespace(u=u + 10 * from_start[:, None], status=status,
-                               residual=np.where(status == 0, 0.0, 1.0),
+        from_start = u[:, 0] != home[0]
+        status = np.where(from_start & (t[:, 0] > 1), Status.NOT_CONVERGED, Status.OK)
+        out = u.copy()
+        out[from_start & (t[:, 0] < 0), slide] *= -1.0  # the other assembly of the leg
+        return SimpleNamespace(u=out, status=status, residual=np.where(status == 0, 0.0, 1.0),
                                iterations=np.where(from_start, 30, 7), rank=np.zeros(len(u)))
 
-    u0[~started] = 0
-    targets = np.array([[1.0], [-1.0], [1.0], [1.0], [1.0]])
+    targets = np.array([[2.0], [0.5], [2.0], [-1.0], [1.0]])
     res = tripteor._solve_inverse_from(solve, targets, u0, u_home, started, np.ones(5))
     assert calls == [5, 2]  # rows 0 and 3 again
     np.testing.assert_array_equal(res.status, [0, 0, 0, 0, 0])
-    np.testing.assert_array_equal(res.u[:, 0], [0, 11, 0, 0, 0])
+    np.testing.assert_array_equal(res.u[:, 0], home[0] + np.array([0, 0.01, 0, 0, 0]))
+    assert (res.u[:, slide] == home[slide]).all()
     np.testing.assert_array_equal(res.iterations, [7, 30, 7, 7, 7])
+    assert tripteor.in_home_modes(u0).all() and not tripteor.in_home_modes(
+        np.where(np.arange(u0.shape[1]) == slide, -u0, u0)).any()
 
 
 def test_revolute_actuators_stay_on_the_turn_nearest_home(tripteor):

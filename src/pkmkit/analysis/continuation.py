@@ -9,6 +9,11 @@ so continuation loses no point the start from home reaches; revolute actuators s
 turn nearest home. A neighbour next to a joint-chain head's wrist singularity, where the
 head's two branches meet, is not a start (``machine.continues_from``,
 :mod:`pkmkit.machines.warm_starts`): the grid reports the branch the start from home reaches.
+A point whose continued closure leaves the legs' home assembly modes (a slide of the opposite
+sign, a revolute leg joint beyond a quarter turn of home: ``machine.in_home_modes``) is solved
+again from home, so the grid gives the start from home's answer wherever that is in home's
+modes (tests/analysis/test_continuation_modes.py). On by default
+(:attr:`~pkmkit.analysis.criteria.Criteria.continuation`).
 """
 
 from __future__ import annotations
@@ -34,6 +39,8 @@ class ContinuedInverse:
         closure_start: ``(M, 6 + n_p)`` platform and passive joints found (the velocity model's
             start).
         iterations: ``(M,)`` the engine's iterations per point.
+        solution: ``(M, 6 + n_var)`` platform and every joint variable found (NaN where not
+            reached).
         pose: None (the points are complete poses).
     """
 
@@ -42,6 +49,7 @@ class ContinuedInverse:
     out_of_stroke: np.ndarray
     closure_start: np.ndarray
     iterations: np.ndarray
+    solution: np.ndarray
     pose: None = None
 
 
@@ -72,4 +80,5 @@ def inverse_of_chunk(machine: Any, points: np.ndarray, slab: int | None) -> Any:
         closure_start=np.concatenate([np.full((len(p.q), width), np.nan)
                                       if p.closure_start is None else p.closure_start
                                       for p in parts]),
-        iterations=np.concatenate([p.iterations for p in parts]))
+        iterations=np.concatenate([p.iterations for p in parts]),
+        solution=np.concatenate([p.solution for p in parts]))

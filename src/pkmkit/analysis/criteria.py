@@ -55,12 +55,11 @@ class Criteria:
             None: the machine's own).
         continuation: solve a grid's inverse model slab by slab from the neighbouring slab's
             solution where the machine's inverse continues (joint chains:
-            :mod:`pkmkit.analysis.continuation`; ~40 % fewer iterations away from a head's
-            wrist singularity). The Tripteor's grids then equal the start from home point by
-            point (the head's branch is stated, :mod:`pkmkit.machines.warm_starts`); the
-            TriMule's do not (a neighbour's start reaches other assembly modes of its legs:
-            24 of 13,950 points of its default study change their strokes mask), so it stays
-            off by default.
+            :mod:`pkmkit.analysis.continuation`; about half the iterations). The head's
+            branch is stated and a row whose continued closure leaves the legs' home assembly
+            modes is solved again from home (:mod:`pkmkit.machines.warm_starts`), so the
+            grids give the start from home's answer wherever it is in home's modes
+            (tests/analysis/test_continuation_modes.py); False: every point from home.
     """
 
     bounds: tuple[float, float] | None = None
@@ -74,7 +73,7 @@ class Criteria:
     max_deflection: float | None = None
     wrench: tuple[float, ...] | None = None
     stiffness_data: Any = None
-    continuation: bool = False
+    continuation: bool = True
 
     def __post_init__(self) -> None:
         for name in ("min_stiffness", "max_deflection"):

@@ -49,7 +49,7 @@ def wrapped(angle: np.ndarray) -> np.ndarray:
 def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarray, res,
                         reference: np.ndarray, flip: tuple[int, int],
                         inside: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
-                        tilt_centre: float = 0.0):
+                        tilt_centre: float = 0.0, turn_reach: float = np.inf):
     """Apply the rule to an inverse result ``res`` (a
     :class:`~pkmkit.solve.least_squares.SolveResult` whose ``u (N, 6 + V)`` holds the platform
     then every joint variable): the rows solved exactly whose turn is more than π/2 −
@@ -61,12 +61,19 @@ def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarra
     joint of the solutions ``u`` of those rows within its stroke), where it alone is within
     the strokes (also solved where the kept one is beyond a stroke; the generated LinuxCNC
     module does the same). ``res`` is updated in place (the re-solved rows' iterations added)
-    and returned."""
+    and returned.
+
+    ``turn_reach`` (rad): the farthest the turn's stroke reaches from ``reference``. Below
+    π/2 a row within π/2 − FLIP_MARGIN of the reference has its mirror's turn at least π/2 +
+    FLIP_MARGIN away (to within the FLIP_MARGIN the rule already allows between a turn + π and
+    the mirror's), so beyond the turn's stroke and farther than the row's own: the mirror
+    cannot be chosen and is not solved (the Tripteor's Q4, ±15°: every row beyond a stroke
+    had its mirror solved before, for nothing)."""
     turn, tilt = 6 + flip[0], 6 + flip[1]
     with np.errstate(invalid="ignore"):
         far = np.abs(wrapped(res.u[:, turn] - reference)) > np.pi / 2 - FLIP_MARGIN
     rows = np.flatnonzero((res.status == Status.OK) & np.isfinite(reference))
-    if inside is not None:  # far from the start, or beyond a stroke
+    if inside is not None and turn_reach >= np.pi / 2:  # far from the start, or beyond a stroke
         rows = rows[far[rows] | ~inside(res.u[rows], rows)]
     else:
         rows = rows[far[rows]]

@@ -637,7 +637,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
 
         res = self._solve_inverse_from(solve, targets, u0, u_home, started, lengths)
         if q0 is None:  # the default start's branch of the head, whatever the start
-            self._nearest_branch(solve, targets, res, lengths)
+            self._nearest_branch(solve, targets, res, lengths, started, u_home)
         else:  # a caller's start: a two-branch head keeps the branch nearest the start's turn
             if (flip := head_flip_variables(self.kind, self.model.variables)) is not None:
                 res = nearest_head_branch(solve, targets, lengths, res, u0[:, 6 + flip[0]], flip,

@@ -28,6 +28,20 @@ Right at the singularity Q4 is undetermined and the mirror may not come out near
 either is reported): continuation does not start from a neighbour within
 :data:`WRIST_SINGULAR_ANGLE` of it (:meth:`ChainWarmStart.continues_from`), those points start
 from home. With ``q0`` the caller chooses the branch and nothing is changed.
+
+**The legs' assembly modes** (issue 22 §3, fourth pass). A neighbour's start may also reach
+another assembly of the legs than the start from home: on the TriMule, a slide of the opposite
+sign (the leg through its base joint the other way), or a universal joint's other
+parametrisation of a leg's line (ψ + π, π − θ) with the platform elsewhere. The mode
+signature of a closure (:meth:`ChainWarmStart.in_home_modes`): every leg slide has its home
+value's sign and every revolute leg joint lies within a quarter turn of its home value. A row
+solved from a warm start whose closure is not in the home modes is solved again from home
+(its answer is then the start from home's, whatever mode that reaches), so a warm start is
+kept only where it is in home's modes; on the grids checked (tests/analysis/
+test_continuation_modes.py) the start from home, wherever it ends in those modes, gives the
+same closure, so continuation gives the start from home's answer point by point there — and
+where the start from home ends in another mode (or fails) while the neighbour's start stays
+in home's, continuation reports the mode containing home.
 """
 
 from __future__ import annotations
@@ -96,16 +110,50 @@ class ChainWarmStart:
                             u_home: np.ndarray, started: np.ndarray,
                             lengths: np.ndarray) -> Any:
         """``solve(targets, u0, lengths)`` (the engine's inverse), then the rows started from a
-        warm start that did not converge solved again from ``u_home``: a warm start may only
-        speed a row up, never lose one the start from home reaches (a retried row reports
-        the retry's iterations)."""
+        warm start that did not converge, or converged outside the legs' home assembly modes
+        (:meth:`in_home_modes`), solved again from ``u_home``: a warm start may only speed a
+        row up, never lose one the start from home reaches nor move it to another assembly
+        of the legs (a retried row reports the retry's iterations and is no longer marked in
+        ``started``, updated in place)."""
         res = solve(targets, u0, lengths)
-        retry = np.flatnonzero(started & (res.status != Status.OK))
+        with np.errstate(invalid="ignore"):
+            retry = np.flatnonzero(started & ((res.status != Status.OK)
+                                              | ~self.in_home_modes(res.u)))
         if retry.size:
+            started[retry] = False  # these rows now hold the start from home's answer
             again = solve(targets[retry], u_home[retry], lengths[retry])
             for name in ("u", "status", "residual", "iterations", "rank"):
                 getattr(res, name)[retry] = getattr(again, name)
         return res
+
+    def in_home_modes(self, u: np.ndarray) -> np.ndarray:
+        """``(N,)`` bool: the closures ``u (N, 6 + n_var)`` (platform, every joint variable)
+        are in the legs' home assembly modes — every leg slide with its home value's sign
+        (slides at 0 at home not judged) and every revolute leg joint within a quarter turn
+        of its home value (module docstring: the mode signature). NaN rows are False."""
+        home = self._home["values"]
+        slides, turns = self._leg_joints_by_type()
+        values = np.asarray(u, dtype=float)[:, 6:]
+        with np.errstate(invalid="ignore"):
+            same_side = values[:, slides] * np.sign(home[slides]) > 0
+            near = np.cos(values[:, turns] - home[turns]) > 0
+        return same_side.all(axis=1) & near.all(axis=1)
+
+    def _leg_joints_by_type(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(slides, turns)``: variable indices of the legs' prismatic joints away from 0 at
+        home, and of their revolute joints (each shared joint once); cached."""
+        cached = self.__dict__.get("_leg_joints_cache")
+        if cached is not None:
+            return cached
+        model = self.model
+        home = self._home["values"]
+        kinds = {int(model.element_variable[e]): model.elements[e].type
+                 for leg in model.legs for e in leg if model.element_variable[e] >= 0}
+        slides = np.array(sorted(v for v, k in kinds.items() if k == "P" and home[v] != 0),
+                          dtype=int)
+        turns = np.array(sorted(v for v, k in kinds.items() if k == "R"), dtype=int)
+        object.__setattr__(self, "_leg_joints_cache", (slides, turns))
+        return slides, turns
 
     def continues_from(self, solution: np.ndarray) -> np.ndarray:
         """``(N,)`` bool: rows of inverse solutions ``solution (N, 6 + n_var)`` (an inverse
@@ -133,16 +181,38 @@ class ChainWarmStart:
         return ok
 
     def _nearest_branch(self, solve: Any, targets: np.ndarray, res: Any,
-                        lengths: np.ndarray) -> None:
+                        lengths: np.ndarray, started: np.ndarray | None = None,
+                        u_home: np.ndarray | None = None) -> None:
         """The head's branch of the default start (module docstring):
         :func:`~pkmkit.machines.head_branches.nearest_head_branch` on the wrist pair with home
-        as the reference, the strokes judged around home; ``res`` updated in place."""
+        as the reference, the strokes judged around home; ``res`` updated in place. Rows
+        ``started (N,)`` from a warm start whose branch's closure then leaves the legs' home
+        modes (the mirror solve may move the legs) are solved again from ``u_home`` with the
+        rule: the start from home's answer."""
         pair = self._wrist_pair()
         if pair is None:
             return
         home = self._home["values"]
-        nearest_head_branch(solve, targets, lengths, res, np.full(len(res.status), home[pair[0]]),
-                            pair, lambda u, rows: self._within_strokes(u), home[pair[1]])
+        turn = pair[0]
+        reach = max(abs(self.model.q_min[turn] - home[turn]),
+                    abs(self.model.q_max[turn] - home[turn]))
+
+        def rule(result: Any, t: np.ndarray, tool: np.ndarray) -> None:
+            nearest_head_branch(solve, t, tool, result, np.full(len(result.status),
+                                home[turn]), pair, lambda u, rows: self._within_strokes(u),
+                                home[pair[1]], turn_reach=reach)
+
+        rule(res, targets, lengths)
+        if started is None:
+            return
+        with np.errstate(invalid="ignore"):
+            again = np.flatnonzero(started & (res.status == Status.OK)
+                                   & ~self.in_home_modes(res.u))
+        if again.size:
+            other = solve(targets[again], u_home[again], lengths[again])
+            rule(other, targets[again], lengths[again])
+            for name in ("u", "status", "residual", "iterations", "rank"):
+                getattr(res, name)[again] = getattr(other, name)
 
     def _within_strokes(self, u: np.ndarray, around: np.ndarray | None = None) -> np.ndarray:
         """``(N,)`` bool: every joint (actuators, revolute ones on the turn nearest home — or
