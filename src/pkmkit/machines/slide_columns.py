@@ -1,0 +1,73 @@
+"""Positions that differ only along a common slide axis (issue 22 §3).
+
+When every rod of a machine hangs from a slide and all the slides run along one axis ``d``
+(the Verne-type module: three vertical slides), the rods' closure is unchanged by moving the
+platform by ``t d`` and every carriage by ``t``: a solution ``(q, R)`` at position ``p`` gives
+``(q + t, R)`` at ``p + t d``, and the engine's first-order start moves the same way (its
+home Jacobian maps a common slide rate to the translation ``d``). A batch of positions then
+needs one inverse per line parallel to ``d`` — a grid over x-y-z one per x-y column — and
+the others follow by the shift. :func:`slide_columns` finds those lines exactly (positions
+whose component across ``d`` is the same to the bit); rows that are not finite or beyond
+:data:`~pkmkit.machines.common.MAX_COORDINATE` keep their own row.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pkmkit.machines.common import _valid_rows
+from pkmkit.model.rods import SLIDE
+
+
+@dataclass(frozen=True)
+class SlideColumns:
+    """Rows of a batch grouped by the line parallel to the common slide axis they lie on.
+
+    Attributes:
+        rows: ``(K,)`` the row solved for each line (its first row), then each row that is not
+            a valid position.
+        of: ``(N,)`` for each row, the index into ``rows`` of the row it follows.
+        shift: ``(N,)`` how far each row lies from that row along the axis, in actuator units
+            (m): its actuators are that row's plus ``shift`` (0 for the rows solved).
+    """
+
+    rows: np.ndarray
+    of: np.ndarray
+    shift: np.ndarray
+
+
+def common_slide_axis(model) -> np.ndarray | None:
+    """``(3,)`` the axis every rod's slide runs along (the same for all, to the bit), when every
+    rod hangs from a slide and every actuator drives one; else None."""
+    axis = np.asarray(model.rod_axis, dtype=float)
+    if (axis.shape[0] == 0 or not np.all(model.rod_kind == SLIDE)
+            or not np.array_equal(axis, np.broadcast_to(axis[0], axis.shape))
+            or np.unique(model.rod_actuator).size != model.n_actuators
+            or not np.all(np.isfinite(axis[0])) or not np.any(axis[0])):
+        return None
+    return axis[0].copy()
+
+
+def slide_columns(model, positions: np.ndarray) -> SlideColumns | None:
+    """The lines parallel to the common slide axis of ``model`` through ``positions (N, 3)``
+    (:class:`SlideColumns`), or None when the model has no common axis or no two rows share a
+    line (nothing to spare)."""
+    d = common_slide_axis(model)
+    if d is None or positions.shape[0] < 2:
+        return None
+    valid = _valid_rows(positions)
+    good = np.flatnonzero(valid)
+    along = positions[good] @ d / (d @ d)  # carriage travel to each row's foot, m
+    across = positions[good] - along[:, None] * d
+    _, first, inverse = np.unique(across, axis=0, return_index=True, return_inverse=True)
+    if first.size == good.size:
+        return None
+    bad = np.flatnonzero(~valid)
+    of = np.empty(positions.shape[0], dtype=np.intp)
+    of[good] = inverse.reshape(-1)
+    of[bad] = first.size + np.arange(bad.size)
+    shift = np.zeros(positions.shape[0])
+    shift[good] = (positions[good] - positions[good[first]][of[good]]) @ d / (d @ d)
+    return SlideColumns(rows=np.concatenate([good[first], bad]), of=of, shift=shift)
