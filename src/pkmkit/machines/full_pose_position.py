@@ -18,7 +18,7 @@ from pkmkit.machines.common import (
 )
 from pkmkit.machines.full_pose_direct import usable
 from pkmkit.machines.results import InverseResult
-from pkmkit.machines.slide_columns import slide_columns
+from pkmkit.machines.slide_columns import SlideColumns, slide_columns
 from pkmkit.machines.strokes import judge_rows
 from pkmkit.model.rods import SLIDE
 from pkmkit.numerics.arrays import restore_shape
@@ -101,6 +101,15 @@ class PositionInverse:
                             **_stroke_fields(check))
         return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
                                       "residual", "pose", "out_of_stroke", "stroke_excess"))
+
+    def translation_lines(self, points: np.ndarray) -> SlideColumns | None:
+        """The lines along the common slide axis through positions ``points (N, 3)`` whose
+        rows ``ik`` solves once (:func:`slide_columns`); None for poses ``(N, 6)`` or a
+        machine commanded by its whole pose or without a common slide axis."""
+        points = np.asarray(points, dtype=float)
+        if not self.position_controlled or points.ndim != 2 or points.shape[1] != 3:
+            return None
+        return slide_columns(self.model, points)
 
     def _position_rows(self, pb, q0, branches, engine_options, compiled):
         """``(q (N, n), pose (N, 6), status (N,), iterations (N,), residual (N,))`` of positions

@@ -14,6 +14,7 @@ whose component across ``d`` is the same to the bit); rows that are not finite o
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -36,6 +37,28 @@ class SlideColumns:
     rows: np.ndarray
     of: np.ndarray
     shift: np.ndarray
+
+    def spread(self, record: Any) -> Any:
+        """A view of ``record`` (a velocity model or criteria rates computed at :attr:`rows`)
+        whose array fields, read lazily (a lazy record computes only what is read), are
+        given at every row of the batch; None fields stay None."""
+        return _Spread(record, self.of)
+
+
+class _Spread:
+    """Fields of a record computed at the rows solved, taken at every row (on first read)."""
+
+    def __init__(self, record: Any, of: np.ndarray) -> None:
+        self._record = record
+        self._of = of
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        value = getattr(self._record, name)
+        out = None if value is None else np.asarray(value)[self._of]
+        setattr(self, name, out)
+        return out
 
 
 def common_slide_axis(model) -> np.ndarray | None:
