@@ -44,7 +44,7 @@ def test_criteria_along_the_lines_as_row_by_row(criteria, monkeypatch):
     alone = _alone(monkeypatch, lambda: evaluate_poses(m, points, criteria))
     for name, mask in alone.masks.items():
         np.testing.assert_array_equal(shared.masks[name], mask, name)
-        assert 0 < mask.sum() < len(points) or name == "reachable" and mask.sum() > 0
+        assert 0 < mask.sum() < len(points) or (name == "reachable" and mask.sum() > 0)
     assert not alone.feasible.all() and alone.feasible.any()
     np.testing.assert_allclose(shared.factors, alone.factors, rtol=1e-11, equal_nan=True)
     np.testing.assert_allclose(shared.condition, alone.condition, rtol=1e-11, equal_nan=True)

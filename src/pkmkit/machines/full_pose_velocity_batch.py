@@ -128,7 +128,12 @@ def velocity_model(machine: Any, record: type, xb: np.ndarray, qb: np.ndarray,
     if m == 6 and ok.any():
         det_a[ok] = np.linalg.det(a[ok])
     # the parallel measure (an SVD per row) only where its lower bound cannot settle the flag
-    near = ok & ~_surely_above(unit, tol) if m == 6 else ok
+    if m == 6:  # det U from det A: rows over |d_j|, moment columns over L
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            det_u = det_a / np.prod(dist, axis=1) / length**3
+        near = ok & ~_surely_above(unit, det_u, tol)
+    else:
+        near = ok
     parallel = np.full(size, np.nan)
     parallel[near] = _parallel_measure(machine, unit[near], ok[near])
     flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
@@ -149,18 +154,15 @@ def _parallel_measure(machine: Any, unit: np.ndarray, ok: np.ndarray) -> np.ndar
         return sv_a[:, -1] / sv_a[:, 0]
 
 
-def _surely_above(unit: np.ndarray, tol: float) -> np.ndarray:
-    """``(N,)`` rows of square ``unit (N, 6, 6)`` whose σ_min/σ_max is surely ≥ ``tol``: the
-    lower bound |det U| / (‖U‖²_F / 3)³ of the compiled single-pose model
-    (:func:`pkmkit.machines.full_pose_velocity_kernel._surely_above`, its margins for the
-    rounding of the determinant and of the singular values); False on rows not finite."""
-    out = np.zeros(unit.shape[0], dtype=bool)
-    good = np.isfinite(unit).all(axis=(1, 2))
-    if good.any():
-        u = unit[good]
-        frobenius = np.einsum("nij,nij->n", u, u)
-        out[good] = np.abs(np.linalg.det(u)) > (4.0 * tol + 2e-12) * (frobenius / 3.0) ** 3
-    return out
+def _surely_above(unit: np.ndarray, det_u: np.ndarray, tol: float) -> np.ndarray:
+    """``(N,)`` rows of square ``unit (N, 6, 6)`` (determinants ``det_u (N,)``) whose
+    σ_min/σ_max is surely ≥ ``tol``: the lower bound |det U| / (‖U‖²_F / 3)³ of the compiled
+    single-pose model (:func:`pkmkit.machines.full_pose_velocity_kernel._surely_above`, its
+    margins for the rounding of the determinant and of the singular values); False on rows
+    not finite."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        frobenius = np.einsum("nij,nij->n", unit, unit)
+        return np.abs(det_u) > (4.0 * tol + 2e-12) * (frobenius / 3.0) ** 3
 
 
 def lazy_class(base: type) -> type:
