@@ -61,7 +61,9 @@ def test_rows_along_a_slide_line_get_their_own_solution(compiled, monkeypatch):
     z = m.home_pose[2] + np.array([-0.35, -0.1, 0.0, 0.27, 0.5])
     grid = np.stack(np.meshgrid(xy, xy, z, indexing="ij"), -1).reshape(-1, 3)
     edge = _boundary_rows(m, z - m.home_pose[2])
-    invalid = np.array([[np.nan, 0.0, 0.1], [0.0, np.inf, 0.1], [0.1, 0.1, 2e6]])
+    home = m.home_pose[:3]
+    invalid = np.concatenate([[[np.nan, 0.0, 0.1], [0.0, np.inf, 0.1], [0.1, 0.1, 2e9]],
+                              home + np.array([[0, 0, 1e5], [0, 0, 1e7], [0, 0, 1e3]])])
     positions = np.concatenate([grid, edge, invalid])
     columns = slide_columns(m.model, positions)
     assert columns is not None and len(columns.rows) * 4 < len(positions)
@@ -99,7 +101,8 @@ def test_the_common_axis_and_the_lines():
     assert common_slide_axis(SimpleNamespace(**{**verne, "rod_kind": kinds})) is None
     d = np.array([0.0, 0.6, 0.8])
     model = SimpleNamespace(rod_axis=np.tile(d, (4, 1)), rod_kind=np.full(4, SLIDE),
-                            rod_actuator=np.array([0, 1, 2, 2]), n_actuators=3)
+                            rod_actuator=np.array([0, 1, 2, 2]), n_actuators=3,
+                            rod_length=np.ones(4))
     np.testing.assert_array_equal(common_slide_axis(model), d)
     idle = SimpleNamespace(**{**vars(model), "n_actuators": 4})
     assert common_slide_axis(idle) is None
@@ -115,3 +118,5 @@ def test_the_common_axis_and_the_lines():
                                positions[of[good]] + columns.shift[good, None] * d, atol=1e-15)
     assert columns.of[5] == len(columns.rows) - 1 and columns.rows[-1] == 5
     assert slide_columns(model, feet) is None  # no two rows on one line
+    far = np.concatenate([feet, feet + 300.0 * d])  # beyond LINE_SPAN machine lengths
+    assert slide_columns(model, far) is None

@@ -7,8 +7,11 @@ platform by ``t d`` and every carriage by ``t``: a solution ``(q, R)`` at positi
 home Jacobian maps a common slide rate to the translation ``d``). A batch of positions then
 needs one inverse per line parallel to ``d`` — a grid over x-y-z one per x-y column — and
 the others follow by the shift. :func:`slide_columns` finds those lines exactly (positions
-whose component across ``d`` is the same to the bit); rows that are not finite or beyond
-:data:`~pkmkit.machines.common.MAX_COORDINATE` keep their own row.
+whose component across ``d`` is the same to the bit); rows that are not finite, beyond
+:data:`~pkmkit.machines.common.MAX_COORDINATE` or farther than :data:`LINE_SPAN` machine
+lengths from the origin keep their own row (far out the rounding of a shift exceeds the
+solve's tolerances: a lone solve refuses a position 10⁵ m up the Verne module's slides, so the
+batch must too).
 """
 
 from __future__ import annotations
@@ -20,6 +23,10 @@ import numpy as np
 
 from pkmkit.machines.common import _valid_rows
 from pkmkit.model.rods import SLIDE
+
+#: Rows with a coordinate beyond this many machine lengths (1 + the longest rod, m) keep their
+#: own solve (the Verne module's lone solves converge to 10⁴ m along its slides, not 10⁵).
+LINE_SPAN = 100.0
 
 
 @dataclass(frozen=True)
@@ -75,12 +82,15 @@ def common_slide_axis(model) -> np.ndarray | None:
 
 def slide_columns(model, positions: np.ndarray) -> SlideColumns | None:
     """The lines parallel to the common slide axis of ``model`` through ``positions (N, 3)``
-    (:class:`SlideColumns`), or None when the model has no common axis or no two rows share a
-    line (nothing to spare)."""
+    (:class:`SlideColumns`; rows not finite or beyond :data:`LINE_SPAN` machine lengths on
+    their own), or None when the model has no common axis or no two rows share a line
+    (nothing to spare)."""
     d = common_slide_axis(model)
     if d is None or positions.shape[0] < 2:
         return None
-    valid = _valid_rows(positions)
+    span = LINE_SPAN * (1.0 + float(np.max(model.rod_length)))
+    with np.errstate(invalid="ignore"):
+        valid = _valid_rows(positions) & (np.abs(positions).max(axis=1) <= span)
     good = np.flatnonzero(valid)
     along = positions[good] @ d / (d @ d)  # carriage travel to each row's foot, m
     across = positions[good] - along[:, None] * d
