@@ -13,7 +13,7 @@ import pytest
 import pkmkit
 from pkmkit.analysis.criteria import Criteria, evaluate_poses
 from pkmkit.machines.full_pose import FullPoseJacobians
-from pkmkit.machines.full_pose_velocity_batch import LAZY_FIELDS
+from pkmkit.machines.full_pose_velocity_batch import LAZY_FIELDS, _surely_above
 from pkmkit.machines.full_pose_velocity_one import FIELDS
 
 
@@ -51,3 +51,37 @@ def test_masks_without_factors_are_the_masks(criteria):
     assert full.feasible.any() and not full.feasible.all()
     read = criteria.bounds is not None or criteria.kappa_max is not None
     assert np.isnan(lean.factors).all() != read
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "verne"])
+def test_parallel_flag_and_working_mode_as_from_the_measure(name):
+    """The parallel-singularity flag, taken from the parallel measure only where its lower
+    bound does not clear the tolerance, and ``in_working_mode`` read from that flag: the
+    same as from the measure computed on every row, at tolerances from where the bound clears
+    most rows to where most rows are flagged. Fails on a bound that is not one (a row cleared
+    while its measure is below the tolerance) and on a flag read wrongly."""
+    m = pkmkit.machine(name)
+    points = _poses(m, 3000, 0.6, seed=3)
+    first = m.jacobian(points)
+    measure = first.parallel_measure
+    assert np.isfinite(measure).sum() > 1000
+    a = first.A
+    unit = a / np.linalg.norm(a[:, :, :3], axis=2)[:, :, None]
+    unit[:, :, 3:] /= m.characteristic_length
+    with np.errstate(invalid="ignore"):
+        det_unit = np.linalg.det(unit)
+    tolerances = np.concatenate([np.geomspace(1e-4, 0.1, 16),
+                                 np.nanquantile(measure, [0.1, 0.5, 0.9])])
+    cleared, flagged_rows = 0, 0
+    for tol in tolerances:
+        jac = m.jacobian(points, tol=tol)
+        parallel = jac.parallel_measure  # every row, read after the flags
+        flagged = (np.asarray(jac.singularity) & 2).astype(bool)
+        np.testing.assert_array_equal(flagged, parallel < tol)
+        with np.errstate(invalid="ignore"):
+            expected = (np.sign(jac.det_A) == m.working_mode) & (parallel >= tol)
+        mode = m.in_working_mode(m.jacobian(points, tol=tol), tol)
+        np.testing.assert_array_equal(mode, expected)
+        cleared += int(_surely_above(unit, det_unit, tol).sum())
+        flagged_rows += int(flagged.sum())
+    assert cleared > 10000 and flagged_rows > 3000  # both paths taken, often

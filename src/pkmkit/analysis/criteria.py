@@ -240,8 +240,16 @@ def _evaluate_kinematics(machine: Machine, points: np.ndarray, criteria: Criteri
     inv = inverse_of_chunk(machine, points, slab)
     q = np.atleast_2d(inv.q)
     reachable = np.atleast_1d(inv.status == Status.OK)
-    jac = machine.jacobian(solved_poses(points, inv), q=q, tol=criteria.tol,
-                           **closure_start(inv))
+    lines = machine.translation_lines(points)
+    if lines is None:
+        jac = machine.jacobian(solved_poses(points, inv), q=q, tol=criteria.tol,
+                               **closure_start(inv))
+        mode = reachable & machine.in_working_mode(jac, criteria.tol)
+    else:  # one velocity model per line along the slides (the same along it)
+        rows = lines.rows
+        solved = machine.jacobian(solved_poses(points, inv)[rows], q=q[rows], tol=criteria.tol)
+        mode = reachable & machine.in_working_mode(solved, criteria.tol)[lines.of]
+        jac = lines.spread(solved)
     read = factors or criteria.bounds is not None or criteria.kappa_max is not None
     # a full-pose velocity model computes J's singular values only when read
     sv = jac.singular_values if read else np.full(q.shape, np.nan)
@@ -258,7 +266,6 @@ def _evaluate_kinematics(machine: Machine, points: np.ndarray, criteria: Criteri
             bounds = reachable & criteria.within_bounds(sv)
         condition = reachable.copy() if criteria.kappa_max is None else (
             reachable & (kappa <= criteria.kappa_max))
-    mode = reachable & machine.in_working_mode(jac, criteria.tol)
     masks = {"reachable": reachable, "strokes": strokes, "bounds": bounds,
              "condition": condition, "mode": mode}
     return PoseEvaluation(q=q, factors=sv, condition=kappa, masks=masks)

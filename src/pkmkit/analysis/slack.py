@@ -11,6 +11,8 @@ its gradient is that part's gradient.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from pkmkit.analysis.criteria import Criteria, solved_poses
@@ -52,13 +54,21 @@ def _slack(machine: Machine, points: np.ndarray, criteria: Criteria, length: flo
     inv = machine.ik(points, full_output=True)
     q = inv.q
     reach = -np.max(inv.shortfall, axis=1) / length
-    jac = machine.jacobian(solved_poses(points, inv), q=q, tol=criteria.tol)
+    # one velocity model (and its rates) per line along a common slide axis: the same along it
+    lines = machine.translation_lines(points)
+    rows = slice(None) if lines is None else lines.rows
+    poses = solved_poses(points, inv)
+    jac = machine.jacobian(poses[rows], q=q[rows], tol=criteria.tol)
     rates = None
     if free is not None:
         factors = criteria.bounds is not None or criteria.kappa_max is not None
-        rates = machine.criteria_rates(points, inv, jac, free, factors=factors)
+        solved = inv if lines is None else SimpleNamespace(pose=poses[rows])
+        rates = machine.criteria_rates(points[rows], solved, jac, free, factors=factors)
         if rates is None:
             return np.empty(0), None
+    if lines is not None:
+        jac = lines.spread(jac)
+        rates = None if rates is None else lines.spread(rates)
     parts = [reach]
     lo_q, hi_q = criteria.limits(machine)
     with np.errstate(invalid="ignore"):

@@ -339,21 +339,27 @@ def refine_box(machine: Machine, box: InscribedBox, criteria: Criteria, grid: Gr
                                                        np.zeros((1, len(free)))),
                                   criteria, length, grid.free) is not None
 
-    def feasible(c: np.ndarray, half: float) -> bool:
-        if half <= 0:
-            return True
+    def failing(c: np.ndarray, half: float, rows: Any = slice(None)) -> np.ndarray:
+        """Indices into ``rows`` of the box's lattice of the points failing a criterion."""
         lattice = region_grid(machine, _full(box.center, free, c), 2.0 * half, grid.free,
                               samples)
-        return bool(evaluate_poses(machine, lattice.points, criteria,
-                                   factors=False).feasible.all())
+        return np.flatnonzero(~evaluate_poses(machine, lattice.points[rows], criteria,
+                                              factors=False).feasible)
+
+    def feasible(c: np.ndarray, half: float) -> bool:
+        return half <= 0 or failing(c, half).size == 0
 
     center, half = largest_box(slack, full_points, box.center[free], 0.5 * box.side,
                                grid.lower_bounds, grid.upper_bounds, samples=samples,
                                rtol=rtol, slack_gradient=slack_gradient if analytic else None)
     start = (box.center[free], 0.5 * box.side)
-    if not feasible(center, half):  # rounding at the optimum: shrink about its centre
+    bad = failing(center, half) if half > 0 else np.empty(0, dtype=int)
+    if bad.size:  # rounding at the optimum: shrink about its centre
         for cut in (1e-10, 1e-8, 1e-6, 1e-5):
-            if feasible(center, half * (1.0 - cut)):
+            # a cut box that still fails at one of the lattice points that failed fails: its
+            # whole lattice is checked only once they pass
+            if (failing(center, half * (1.0 - cut), bad).size == 0
+                    and feasible(center, half * (1.0 - cut))):
                 half *= 1.0 - cut
                 break
         else:

@@ -14,8 +14,10 @@ from pkmkit.machines.common import (
     _checked_batch,
     _valid_rows,
 )
+from pkmkit.machines.modes import ModeNaming
 from pkmkit.machines.results import (
     PoseSolutions,
+    Singularity,
 )
 from pkmkit.model.rods import STRUT
 from pkmkit.status import Status
@@ -23,6 +25,18 @@ from pkmkit.status import Status
 
 class FullPoseModes:
     """Mixin of :class:`~pkmkit.machines.full_pose.FullPoseMachine`: its assembly modes."""
+
+    def in_working_mode(self, jacobians, tol: float) -> np.ndarray:
+        """``(N,)`` bool: the configurations of a velocity model lie in the working assembly
+        mode (sign of det A) at least ``tol`` from a parallel singularity — read from its
+        parallel-singularity flag when it was classified at ``tol`` (the flag is the
+        parallel measure below its tolerance; a batch computes that measure only where its
+        lower bound does not clear it), else from ``parallel_measure``."""
+        if float(jacobians.tolerance) != float(tol):
+            return ModeNaming.in_working_mode(self, jacobians, tol)
+        with np.errstate(invalid="ignore"):
+            clear = (np.asarray(jacobians.singularity) & int(Singularity.PARALLEL)) == 0
+            return (np.sign(jacobians.det_A) == self.working_mode) & clear
 
     def fk_all(self, q: Any, *, tol: float = 1e-10) -> PoseSolutions:
         """Every real assembly mode of actuator coordinates ``q`` (a six-rod machine): the

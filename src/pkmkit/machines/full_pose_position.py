@@ -18,6 +18,7 @@ from pkmkit.machines.common import (
 )
 from pkmkit.machines.full_pose_direct import usable
 from pkmkit.machines.results import InverseResult
+from pkmkit.machines.slide_columns import SlideColumns, slide_columns
 from pkmkit.machines.strokes import judge_rows
 from pkmkit.model.rods import SLIDE
 from pkmkit.numerics.arrays import restore_shape
@@ -50,9 +51,6 @@ class PositionInverse:
 
     def _ik_position(self, arr, q0, branches, full_output, engine_options, strokes="flag"):
         pb, single = _checked_batch(arr, 3, "position")
-        n = self.n_actuators
-        hopeless = self._surely_unreachable(pb)
-        skip = ~_valid_rows(pb) | hopeless
         engine_options.setdefault("compute_rank", False)
         if q0 is None and "max_iter" not in engine_options:
             # from the first-order guess a reachable position converges in ≤ 11 iterations
@@ -62,8 +60,69 @@ class PositionInverse:
             engine_options["max_iter"] = POSITION_MAX_ITER
             engine_options.setdefault("crawl", (POSITION_CRAWL[0], POSITION_CRAWL[1] * (
                 1.0 + float(self.model.rod_length.max()))))
-        if q0 is None and self._compiled_positions(engine_options, pb.shape[0]):
-            result = self._solve_positions(pb, None, engine_options, skip)  # guess compiled too
+        compiled = q0 is None and self._compiled_positions(engine_options, pb.shape[0])
+        # one solve per line along a common slide axis (from the first-order start, which
+        # moves with the line): the other rows of the line follow by a shift
+        columns = slide_columns(self.model, pb) if q0 is None else None
+        if columns is None:
+            q, pose, status, iterations, residual = self._position_rows(
+                pb, q0, branches, engine_options, compiled)
+        else:
+            q, pose, status, iterations, residual = (
+                a[columns.of] for a in self._position_rows(pb[columns.rows], None, branches,
+                                                           engine_options, compiled))
+            q += columns.shift[:, None]
+            pose[:, :3] = np.where(np.isnan(pose[:, :1]), np.nan, pb)
+        bad = status != Status.OK
+        if single and bad[0]:
+            if status[0] == Status.INVALID_INPUT:
+                raise InputError(f"position {pb[0].tolist()} has a coordinate beyond "
+                                 f"{MAX_COORDINATE:g} m")
+            if status[0] == Status.WRONG_MODE:
+                raise ConvergenceError(
+                    "the inverse model converged to another branch or assembly mode than the "
+                    "working one; pass q0 closer to the wanted solution")
+            raise UnreachablePoseError(-1, "the rods", float(residual[0]), detail=(
+                f"the rods cannot close at position {pb[0].tolist()} (least-squares residual "
+                f"{float(residual[0]):.6g} m)"))
+        check = judge_rows(self, q, status, strokes, single, f"position {pb[0].tolist()}",
+                           full_output, stacklevel=4)
+        bad = status != Status.OK
+        q[bad] = np.nan
+        pose[bad] = np.nan
+        if not full_output:
+            return restore_shape(q, single)
+        sigma = self._branches(branches)
+        shortfall = np.full((pb.shape[0], self.model.n_rods), np.nan)
+        shortfall[~bad] = self._forms.shortfall(pose[~bad])  # at the orientation found
+        out = InverseResult(q=q, status=status, branches=sigma, shortfall=shortfall,
+                            method="numeric", mode=self._mode_of(pose, q),
+                            iterations=iterations, residual=residual, pose=pose,
+                            **_stroke_fields(check))
+        return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
+                                      "residual", "pose", "out_of_stroke", "stroke_excess"))
+
+    def translation_lines(self, points: np.ndarray) -> SlideColumns | None:
+        """The lines along the common slide axis through positions ``points (N, 3)`` whose
+        rows ``ik`` solves once (:func:`slide_columns`); None for poses ``(N, 6)`` or a
+        machine commanded by its whole pose or without a common slide axis."""
+        points = np.asarray(points, dtype=float)
+        if not self.position_controlled or points.ndim != 2 or points.shape[1] != 3:
+            return None
+        return slide_columns(self.model, points)
+
+    def _position_rows(self, pb, q0, branches, engine_options, compiled):
+        """``(q (N, n), pose (N, 6), status (N,), iterations (N,), residual (N,))`` of positions
+        ``pb (N, 3)``: the engine's solve (compiled when ``compiled``; with ``q0`` given, by
+        the batch's size), the rows found on another branch or mode WRONG_MODE, the hopeless
+        ones UNREACHABLE, the invalid ones INVALID_INPUT, NaN in q and pose wherever the
+        status is not OK."""
+        n = self.n_actuators
+        hopeless = self._surely_unreachable(pb)
+        skip = ~_valid_rows(pb) | hopeless
+        if compiled:
+            result = self._solve_positions(pb, None, engine_options, skip,
+                                           compiled=True)  # guess compiled too
         else:
             if q0 is None:
                 # first order from home: the position rows of J(home) are square (n = 3)
@@ -79,7 +138,8 @@ class PositionInverse:
             guess_pose = self.first_order_pose(guess_q)
             u0 = np.concatenate([guess_q, guess_pose[:, 3:]], axis=1)
             u0[skip] = np.nan
-            result = self._solve_positions(pb, u0, engine_options)
+            result = self._solve_positions(pb, u0, engine_options,
+                                           compiled=None if q0 is not None else False)
         q = result.u[:, :n].copy()
         pose = np.concatenate([pb, result.u[:, n:]], axis=1)
         status = result.status.copy()
@@ -99,33 +159,7 @@ class PositionInverse:
         bad = status != Status.OK
         q[bad] = np.nan
         pose[bad] = np.nan
-        if single and bad[0]:
-            if status[0] == Status.INVALID_INPUT:
-                raise InputError(f"position {pb[0].tolist()} has a coordinate beyond "
-                                 f"{MAX_COORDINATE:g} m")
-            if status[0] == Status.WRONG_MODE:
-                raise ConvergenceError(
-                    "the inverse model converged to another branch or assembly mode than the "
-                    "working one; pass q0 closer to the wanted solution")
-            raise UnreachablePoseError(-1, "the rods", float(result.residual[0]), detail=(
-                f"the rods cannot close at position {pb[0].tolist()} (least-squares residual "
-                f"{float(result.residual[0]):.6g} m)"))
-        check = judge_rows(self, q, status, strokes, single, f"position {pb[0].tolist()}",
-                           full_output, stacklevel=4)
-        bad = status != Status.OK
-        q[bad] = np.nan
-        pose[bad] = np.nan
-        if not full_output:
-            return restore_shape(q, single)
-        sigma = self._branches(branches)
-        shortfall = np.full((pb.shape[0], self.model.n_rods), np.nan)
-        shortfall[~bad] = self._forms.shortfall(pose[~bad])  # at the orientation found
-        out = InverseResult(q=q, status=status, branches=sigma, shortfall=shortfall,
-                            method="numeric", mode=self._mode_of(pose, q),
-                            iterations=result.iterations, residual=result.residual, pose=pose,
-                            **_stroke_fields(check))
-        return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
-                                      "residual", "pose", "out_of_stroke", "stroke_excess"))
+        return q, pose, status, result.iterations, result.residual
 
     def _compiled_positions(self, engine_options: dict[str, Any], rows: int) -> bool:
         """Whether the compiled position inverse serves ``rows`` rows with these options
@@ -135,13 +169,17 @@ class PositionInverse:
 
     def _solve_positions(self, pb: np.ndarray, u0: np.ndarray | None,
                          engine_options: dict[str, Any],
-                         skip: np.ndarray | None = None) -> SolveResult:
+                         skip: np.ndarray | None = None, *,
+                         compiled: bool | None = None) -> SolveResult:
         """The engine's position inverse of ``pb (N, 3)`` from ``u0 (N, n + 3)`` (None: the
         first-order start from home, computed in the kernel; ``skip`` rows not solved):
         compiled per row (:mod:`pkmkit.machines.full_pose_position_kernel`, the engine's rules,
         ≈ 10× faster) for three actuators with the engine's own options, else the batched
-        NumPy engine."""
-        if self._compiled_positions(engine_options, pb.shape[0]):
+        NumPy engine (``compiled``: the choice made for the caller's whole batch, None: by
+        ``pb``'s size)."""
+        if compiled is None:
+            compiled = self._compiled_positions(engine_options, pb.shape[0])
+        if compiled:
             from pkmkit.machines import full_pose_position_kernel as kernel
 
             data = self._direct_kernel()

@@ -3,11 +3,14 @@
 
 :meth:`FullPoseMachine.jacobian` of a batch returns a
 :class:`~pkmkit.machines.full_pose.FullPoseJacobians` whose cheap fields — ``A``, ``B``, the
-singularity measures and flags, ``det_A``, ``mode`` — are computed at once, and whose costly
+serial measure and the flags, ``det_A``, ``mode`` — are computed at once, and whose costly
 ones — ``J`` (a 6×6 solve per row), ``J_homogeneous``, ``singular_values`` and ``condition``
 (an SVD per row), ``translation_singular_values`` and ``rotation_singular_values`` (two more),
-``J_inv`` and ``det_B`` — when first read, with the same formulas on the same arrays, hence the
-same bits. A workspace's criteria read the assembly mode (``det_A``, ``parallel_measure``) and,
+``J_inv``, ``det_B`` and ``parallel_measure`` (an SVD of A with unit rows) — when first read,
+with the same formulas on the same arrays, hence the same bits. The parallel-singularity flag
+takes the parallel measure only on the rows where its lower bound |det U| / (‖U‖²_F / 3)³ does
+not clear the tolerance (as the compiled single-pose model does). A workspace's criteria read
+the assembly mode (``det_A`` and that flag: :meth:`FullPoseMachine.in_working_mode`) and,
 with factor bounds or a condition bound, the singular values of J: the two SVDs of J's linear
 and angular rows and J⁻¹ are never computed for them.
 
@@ -28,7 +31,7 @@ from pkmkit.model.rods import STRUT
 
 #: The fields computed when first read.
 LAZY_FIELDS = ("J", "J_homogeneous", "singular_values", "condition", "J_inv", "det_B",
-               "translation_singular_values", "rotation_singular_values")
+               "translation_singular_values", "rotation_singular_values", "parallel_measure")
 
 
 class BatchFullVelocity:
@@ -40,14 +43,16 @@ class BatchFullVelocity:
         a: ``(N, m, 6)`` A. b: ``(N, m, n)`` B. ok: ``(N,)`` rows with finite x and q.
         at_parallel: ``(N,)`` rows classified as a parallel singularity (no J there).
         length: the characteristic length L (m).
+        unit: ``(N, m, 6)`` A with unit rows, moments over L (its singular values give the
+            parallel measure).
     """
 
-    __slots__ = ("_values", "a", "at_parallel", "b", "length", "machine", "ok")
+    __slots__ = ("_values", "a", "at_parallel", "b", "length", "machine", "ok", "unit")
 
     def __init__(self, machine: Any, a: np.ndarray, b: np.ndarray, ok: np.ndarray,
-                 at_parallel: np.ndarray, length: float):
+                 at_parallel: np.ndarray, length: float, unit: np.ndarray):
         self.machine, self.a, self.b, self.ok = machine, a, b, ok
-        self.at_parallel, self.length = at_parallel, length
+        self.at_parallel, self.length, self.unit = at_parallel, length, unit
         self._values: dict[str, Any] = {}
 
     def field(self, name: str) -> Any:
@@ -82,6 +87,8 @@ class BatchFullVelocity:
             if good.any():
                 j_inv[good] = rod_b_pinv(b[good]) @ a[good]
             values[name] = j_inv
+        elif name == "parallel_measure":
+            values[name] = _parallel_measure(machine, self.unit, ok)
         elif name == "det_B":
             det_b = np.full(size, np.nan)
             if b.shape[1] == n and ok.any():
@@ -111,9 +118,6 @@ def velocity_model(machine: Any, record: type, xb: np.ndarray, qb: np.ndarray,
         dist = np.linalg.norm(a[:, :, :3], axis=2)
         unit = a / dist[:, :, None]
         unit[:, :, 3:] /= length
-        sv_a = np.full((size, 6), np.nan)
-        sv_a[ok] = machine._singular_values(unit[ok])[:, :6]
-        parallel = sv_a[:, -1] / sv_a[:, 0]
         speed = machine._base_joint_speeds(qb)
         strut = machine.model.rod_kind == STRUT
         cos = np.abs(np.take_along_axis(b, machine.model.rod_actuator[None, :, None], 2)[:, :, 0]
@@ -123,13 +127,42 @@ def velocity_model(machine: Any, record: type, xb: np.ndarray, qb: np.ndarray,
     det_a = np.full(size, np.nan)
     if m == 6 and ok.any():
         det_a[ok] = np.linalg.det(a[ok])
+    # the parallel measure (an SVD per row) only where its lower bound cannot settle the flag
+    if m == 6:  # det U from det A: rows over |d_j|, moment columns over L
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            det_u = det_a / np.prod(dist, axis=1) / length**3
+        near = ok & ~_surely_above(unit, det_u, tol)
+    else:
+        near = ok
+    parallel = np.full(size, np.nan)
+    parallel[near] = _parallel_measure(machine, unit[near], ok[near])
     flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
     flags |= np.where(parallel < tol, int(Singularity.PARALLEL), 0)
     at_parallel = (flags & Singularity.PARALLEL).astype(bool)
-    evaluation = BatchFullVelocity(machine, a, b, ok, at_parallel, length)
-    return record(evaluation, A=a, B=b, det_A=det_a, parallel_measure=parallel,
-                  serial_measure=serial, singularity=flags, tolerance=tol, q=qb,
+    evaluation = BatchFullVelocity(machine, a, b, ok, at_parallel, length, unit)
+    return record(evaluation, A=a, B=b, det_A=det_a, serial_measure=serial,
+                  singularity=flags, tolerance=tol, q=qb,
                   mode=np.sign(np.nan_to_num(det_a)).astype(int), characteristic_length=length)
+
+
+def _parallel_measure(machine: Any, unit: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """``(N,)`` σ_min/σ_max of each ``unit (N, m, 6)`` row where ``ok``, NaN elsewhere."""
+    sv_a = np.full((unit.shape[0], 6), np.nan)
+    if ok.any():
+        sv_a[ok] = machine._singular_values(unit[ok])[:, :6]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return sv_a[:, -1] / sv_a[:, 0]
+
+
+def _surely_above(unit: np.ndarray, det_u: np.ndarray, tol: float) -> np.ndarray:
+    """``(N,)`` rows of square ``unit (N, 6, 6)`` (determinants ``det_u (N,)``) whose
+    σ_min/σ_max is surely ≥ ``tol``: the lower bound |det U| / (‖U‖²_F / 3)³ of the compiled
+    single-pose model (:func:`pkmkit.machines.full_pose_velocity_kernel._surely_above`, its
+    margins for the rounding of the determinant and of the singular values); False on rows
+    not finite."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        frobenius = np.einsum("nij,nij->n", unit, unit)
+        return np.abs(det_u) > (4.0 * tol + 2e-12) * (frobenius / 3.0) ** 3
 
 
 def lazy_class(base: type) -> type:

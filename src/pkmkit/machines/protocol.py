@@ -94,6 +94,14 @@ class MachineFace(StiffnessModel):
         (:mod:`pkmkit.machines.full_pose_criteria_rates`)."""
         return None
 
+    def translation_lines(self, points: np.ndarray) -> Any:
+        """Rows of ``points`` (as given to ``ik``) whose inverse model is another row's shifted
+        along a common slide axis, so that their velocity model and criteria rates are that
+        row's (:class:`pkmkit.machines.slide_columns.SlideColumns`; their strokes are their
+        own), or None: every row its own. Position-controlled full-pose machines with parallel
+        slides answer (the Verne module)."""
+        return None
+
     @property
     def angular_actuators(self) -> np.ndarray:
         """``(n_actuators,)`` bool: True for angular actuators (cranks, revolute joints), whose

@@ -1,0 +1,106 @@
+"""Positions that differ only along a common slide axis (issue 22 §3).
+
+When every rod of a machine hangs from a slide and all the slides run along one axis ``d``
+(the Verne-type module: three vertical slides), the rods' closure is unchanged by moving the
+platform by ``t d`` and every carriage by ``t``: a solution ``(q, R)`` at position ``p`` gives
+``(q + t, R)`` at ``p + t d``, and the engine's first-order start moves the same way (its
+home Jacobian maps a common slide rate to the translation ``d``). A batch of positions then
+needs one inverse per line parallel to ``d`` — a grid over x-y-z one per x-y column — and
+the others follow by the shift. :func:`slide_columns` finds those lines exactly (positions
+whose component across ``d`` is the same to the bit); rows that are not finite, beyond
+:data:`~pkmkit.machines.common.MAX_COORDINATE` or farther than :data:`LINE_SPAN` machine
+lengths from the origin keep their own row (far out the rounding of a shift exceeds the
+solve's tolerances: a lone solve refuses a position 10⁵ m up the Verne module's slides, so the
+batch must too).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pkmkit.machines.common import _valid_rows
+from pkmkit.model.rods import SLIDE
+
+#: Rows with a coordinate beyond this many machine lengths (1 + the longest rod, m) keep their
+#: own solve (the Verne module's lone solves converge to 10⁴ m along its slides, not 10⁵).
+LINE_SPAN = 100.0
+
+
+@dataclass(frozen=True)
+class SlideColumns:
+    """Rows of a batch grouped by the line parallel to the common slide axis they lie on.
+
+    Attributes:
+        rows: ``(K,)`` the row solved for each line (its first row), then each row that is not
+            a valid position.
+        of: ``(N,)`` for each row, the index into ``rows`` of the row it follows.
+        shift: ``(N,)`` how far each row lies from that row along the axis, in actuator units
+            (m): its actuators are that row's plus ``shift`` (0 for the rows solved).
+    """
+
+    rows: np.ndarray
+    of: np.ndarray
+    shift: np.ndarray
+
+    def spread(self, record: Any) -> Any:
+        """A view of ``record`` (a velocity model or criteria rates computed at :attr:`rows`)
+        whose array fields, read lazily (a lazy record computes only what is read), are
+        given at every row of the batch; None fields stay None."""
+        return _Spread(record, self.of)
+
+
+class _Spread:
+    """Fields of a record computed at the rows solved, taken at every row (on first read)."""
+
+    def __init__(self, record: Any, of: np.ndarray) -> None:
+        self._record = record
+        self._of = of
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        value = getattr(self._record, name)
+        out = None if value is None else np.asarray(value)[self._of]
+        setattr(self, name, out)
+        return out
+
+
+def common_slide_axis(model) -> np.ndarray | None:
+    """``(3,)`` the axis every rod's slide runs along (the same for all, to the bit), when every
+    rod hangs from a slide and every actuator drives one; else None."""
+    axis = np.asarray(model.rod_axis, dtype=float)
+    if (axis.shape[0] == 0 or not np.all(model.rod_kind == SLIDE)
+            or not np.array_equal(axis, np.broadcast_to(axis[0], axis.shape))
+            or np.unique(model.rod_actuator).size != model.n_actuators
+            or not np.all(np.isfinite(axis[0])) or not np.any(axis[0])):
+        return None
+    return axis[0].copy()
+
+
+def slide_columns(model, positions: np.ndarray) -> SlideColumns | None:
+    """The lines parallel to the common slide axis of ``model`` through ``positions (N, 3)``
+    (:class:`SlideColumns`; rows not finite or beyond :data:`LINE_SPAN` machine lengths on
+    their own), or None when the model has no common axis or no two rows share a line
+    (nothing to spare)."""
+    d = common_slide_axis(model)
+    if d is None or positions.shape[0] < 2:
+        return None
+    span = LINE_SPAN * (1.0 + float(np.max(model.rod_length)))
+    with np.errstate(invalid="ignore"):
+        valid = _valid_rows(positions) & (np.abs(positions).max(axis=1) <= span)
+    good = np.flatnonzero(valid)
+    along = positions[good] @ d / (d @ d)  # carriage travel to each row's foot, m
+    across = positions[good] - along[:, None] * d
+    _, first, inverse = np.unique(across, axis=0, return_index=True, return_inverse=True)
+    if first.size == good.size:
+        return None
+    bad = np.flatnonzero(~valid)
+    of = np.empty(positions.shape[0], dtype=np.intp)
+    of[good] = inverse.reshape(-1)
+    of[bad] = first.size + np.arange(bad.size)
+    shift = np.zeros(positions.shape[0])
+    shift[good] = (positions[good] - positions[good[first]][of[good]]) @ d / (d @ d)
+    return SlideColumns(rows=np.concatenate([good[first], bad]), of=of, shift=shift)
