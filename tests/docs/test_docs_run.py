@@ -4,7 +4,10 @@ executed in a temporary folder (one per file, with ``docs/examples``, ``bench``,
 (see ``docs_blocks``). Blocks marked ``ci`` (long examples) carry the pytest marker ``ci``: the
 ordinary run leaves them out, ``.ci/run`` runs them (``python -m pytest -m "slow or ci"``). The
 blocks of one file share its folder and run in order, so under pytest-xdist they go to one
-worker (``xdist_group``, with ``--dist loadgroup``)."""
+worker (``xdist_group``, with ``--dist loadgroup``). A plain ``pkmkit ...`` command and a Python
+block run in a child forked from a pre-warmed process (``fork_server``: a fresh process state
+without the start-up of a new interpreter); other commands run through bash, and every block
+does with ``PKMKIT_DOCS_FRESH=1``."""
 
 import atexit
 import os

@@ -85,3 +85,27 @@ print(round(2 ** 0.5, 4))
     for wrong in (error, program):
         with pytest.raises(AssertionError):
             _run(wrong, tmp_path, check=True)
+
+
+def test_a_block_marked_fresh_runs_in_a_new_process(tmp_path, monkeypatch):
+    """The fork server's children see its warm imports; a ``fresh`` block does not."""
+    monkeypatch.delenv("PKMKIT_DOCS_FRESH", raising=False)
+    program = '```python\nimport sys\nprint("numpy" in sys.modules)\n```\n'
+    page = tmp_path / "page.md"
+    page.write_text(f"""{program}
+<!-- docs-test: output -->
+```text
+True
+```
+
+<!-- docs-test: fresh -->
+{program}
+<!-- docs-test: output -->
+```text
+False
+```
+""")
+    warm, fresh = blocks(page)
+    assert "fresh" in fresh.options
+    _run(warm, tmp_path, check=True)
+    _run(fresh, tmp_path, check=True)
