@@ -23,9 +23,11 @@ folder as for ``python -c``) and imported by the tests for the client: standard 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import select
+import shutil
 import signal
 import subprocess
 import sys
@@ -88,6 +90,7 @@ class ForkServer:
         self._folder = Path(tempfile.mkdtemp(prefix="docs-fork-"))
 
     def _start(self) -> subprocess.Popen:
+        self._folder.mkdir(exist_ok=True)
         log = open(self._folder / "server.log", "wb")  # the server's stderr
         process = subprocess.Popen(
             [sys.executable, "-c", Path(__file__).read_text(encoding="utf-8")],
@@ -96,6 +99,7 @@ class ForkServer:
         log.close()
         reply = self._reply(process, 600)
         if not reply.get("ready"):
+            _kill(process)
             raise RuntimeError(f"the documentation fork server did not start: {reply} "
                                "(PKMKIT_DOCS_FRESH=1 runs every block in a new process)")
         return process
@@ -104,11 +108,11 @@ class ForkServer:
         ready, _, _ = select.select([process.stdout], [], [], timeout)
         line = process.stdout.readline() if ready else b""
         if not line:
+            _kill(process)
+            self._process = None
             if not ready:
-                self.close(kill=True)
                 raise subprocess.TimeoutExpired("fork server", timeout)
             log = (self._folder / "server.log").read_text(errors="replace")
-            self.close(kill=True)
             raise RuntimeError(f"the documentation fork server died:\n{log}")
         return json.loads(line)
 
@@ -129,16 +133,24 @@ class ForkServer:
         stderr = "" if merge else err.read_text()
         return status, stdout, stderr
 
-    def close(self, kill: bool = False) -> None:
+    def close(self) -> None:
+        """Stop the server (it ends at the end of its input) and remove its files."""
         process, self._process = self._process, None
-        if process is None:
-            return
-        if kill:
-            os.killpg(process.pid, signal.SIGKILL)
-        else:
+        if process is not None:
             process.stdin.close()
-        process.wait()
-        process.stdout.close()
+            process.wait()
+            process.stdout.close()
+        shutil.rmtree(self._folder, ignore_errors=True)
+
+
+def _kill(process: subprocess.Popen) -> None:
+    """Kill the server and the child it runs (its own process group)."""
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(process.pid, signal.SIGKILL)
+    process.wait()
+    for pipe in (process.stdin, process.stdout):
+        with contextlib.suppress(OSError):
+            pipe.close()
 
 
 def serve() -> None:

@@ -2,10 +2,12 @@
 exit status as the fresh-process path, a fresh state for every block, and a wrong output
 fails either way."""
 
+import subprocess
+
 import pytest
 
 from .docs_blocks import blocks
-from .fork_server import shell_words
+from .fork_server import ForkServer, shell_words
 from .test_docs_run import _command, _environment, _python, _run
 
 
@@ -109,3 +111,18 @@ False
     assert "fresh" in fresh.options
     _run(warm, tmp_path, check=True)
     _run(fresh, tmp_path, check=True)
+
+
+def test_a_block_past_its_time_limit_is_stopped(tmp_path):
+    """A hung block is killed with the server at the limit (as ``subprocess.run`` would kill
+    its process); the next block gets a new server."""
+    server = ForkServer(_environment())
+    request = {"cwd": str(tmp_path), "env": _environment()}
+    try:
+        with pytest.raises(subprocess.TimeoutExpired):
+            server.run({**request, "program": "import time; time.sleep(600)"}, merge=False,
+                       timeout=2)
+        assert server.run({**request, "program": "print(6 * 7)"}, merge=False,
+                          timeout=600) == (0, "42\n", "")
+    finally:
+        server.close()
