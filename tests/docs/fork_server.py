@@ -237,7 +237,8 @@ def _run(request: dict) -> int:
         main_module = types.ModuleType("__main__")
         main_module.__dict__["__builtins__"] = builtins
         sys.modules["__main__"] = main_module
-        code = compile(request["program"], "<string>", "exec")
+        # dont_inherit: not this file's ``from __future__ import annotations``
+        code = compile(request["program"], "<string>", "exec", dont_inherit=True)
 
         def target():
             exec(code, main_module.__dict__)

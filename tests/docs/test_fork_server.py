@@ -43,12 +43,15 @@ def test_each_program_starts_from_a_fresh_state(tmp_path):
     env = _environment()
     first = ("import os, sys, numpy, pkmkit\n"
              "print(__name__, sys.argv, os.getcwd(), repr(sys.path[0]), 'numba' in sys.modules)\n"
+             "def f(x: int): pass\n"
+             "print(f.__annotations__)\n"  # no future flag of the server's code
              "pkmkit.planted = 1; os.environ['PLANTED'] = '1'; os.chdir('/')\n")
     later = ("import os, pkmkit\n"
              "print(hasattr(pkmkit, 'planted'), 'PLANTED' in os.environ, os.getcwd())\n")
     for fresh in (False, True):
         status, out, _ = _python(first, tmp_path, env, fresh)
-        assert (status, out) == (0, f"__main__ ['-c'] {tmp_path} '' False\n")
+        assert (status, out) == (0, f"__main__ ['-c'] {tmp_path} '' False\n"
+                                    "{'x': <class 'int'>}\n")
         assert _python(later, tmp_path, env, fresh)[:2] == (0, f"False False {tmp_path}\n")
     for program, want in (("import sys; sys.exit(3)", (3, "")),
                           ("import sys; sys.exit('stopped')", (1, "stopped\n")),
