@@ -12,7 +12,11 @@ on-disk cache) by the child that needs them, as by a fresh process.
 The child runs a command as the ``pkmkit`` console script does (``sys.exit(main())`` with
 ``sys.argv`` set) and a program as ``python -c`` does (in a new ``__main__`` module, tracebacks
 on standard error and exit status 1, ``SystemExit`` as the interpreter treats it), then runs
-the exit handlers, flushes its output and exits. Anything the fork server cannot reproduce (a
+the exit handlers, flushes its output and exits. What a block can still tell from a fresh
+process (compared with a fingerprint of the interpreter's state, 2026-11-26): the warm modules
+are imported, with the warning filters NumPy and SciPy add at import (a fresh block that
+imports them gets the same filters), and the warm heap is frozen for the garbage collector
+(``gc.freeze``, so that the children do not copy it). Anything the fork server cannot reproduce (a
 shell pipeline, redirection, variable, glob, another program, a ``fresh`` block) runs in a new
 process as before: ``docs_blocks``/``test_docs_run`` decide which; ``PKMKIT_DOCS_FRESH=1`` sends
 every block there.
@@ -234,8 +238,9 @@ def _run(request: dict) -> int:
             sys.exit(main())
     else:
         sys.argv = ["-c"]
-        main_module = types.ModuleType("__main__")
-        main_module.__dict__["__builtins__"] = builtins
+        main_module = types.ModuleType("__main__")  # as python -c's (the server's is one)
+        main_module.__dict__.update(__builtins__=builtins, __annotations__={},
+                                    __loader__=sys.modules["__main__"].__loader__)
         sys.modules["__main__"] = main_module
         # dont_inherit: not this file's ``from __future__ import annotations``
         code = compile(request["program"], "<string>", "exec", dont_inherit=True)
