@@ -11,7 +11,9 @@ shows, as in the interpreter). A block may be preceded by a marker comment
   ``.ci/run`` runs it;
 - ``any-numbers``: the numbers printed are not compared (timings);
 - ``command="..."``: a ``text`` block is the output of this command;
-- ``output``: a ``text`` block is what the ``python`` program right above it prints.
+- ``output``: a ``text`` block is what the ``python`` program right above it prints;
+- ``fresh``: run in a new process even where the fork server could run it (a block that
+  measures its own start-up or imports, see ``fork_server``).
 
 Shown output is compared line by line: numbers to their printed precision (one unit in the
 last digit shown), everything else exactly (runs of spaces as one); a line ``...`` stands for

@@ -4,8 +4,12 @@ executed in a temporary folder (one per file, with ``docs/examples``, ``bench``,
 (see ``docs_blocks``). Blocks marked ``ci`` (long examples) carry the pytest marker ``ci``: the
 ordinary run leaves them out, ``.ci/run`` runs them (``python -m pytest -m "slow or ci"``). The
 blocks of one file share its folder and run in order, so under pytest-xdist they go to one
-worker (``xdist_group``, with ``--dist loadgroup``)."""
+worker (``xdist_group``, with ``--dist loadgroup``). A plain ``pkmkit ...`` command and a Python
+block run in a child forked from a pre-warmed process (``fork_server``: a fresh process state
+without the start-up of a new interpreter); other commands run through bash, and every block
+does with ``PKMKIT_DOCS_FRESH=1``."""
 
+import atexit
 import os
 import shutil
 import subprocess
@@ -15,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from .docs_blocks import blocks, compare
+from .fork_server import ForkServer, shell_words
 
 ROOT = Path(__file__).resolve().parents[2]
 FILES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -89,33 +94,69 @@ def _run(block, work: Path, check: bool) -> None:
     """Run one block in ``work``; with ``check``, compare its exit statuses and output with
     what the page shows."""
     env = _environment()
+    fresh = "fresh" in block.options or os.environ.get("PKMKIT_DOCS_FRESH") == "1"
     if block.lang == "python":
         program, expected = block.program()
-        done = subprocess.run([sys.executable, "-c", program], cwd=work, env=env,
-                              capture_output=True, text=True, timeout=TIMEOUT)
+        returncode, stdout, stderr = _python(program, work, env, fresh)
         if not check:
             return
-        assert done.returncode == 0, f"{block.name}: {done.stderr}"
+        assert returncode == 0, f"{block.name}: {stderr}"
         if expected:
-            problem = compare(expected, done.stdout, numbers="any-numbers" not in block.options)
+            problem = compare(expected, stdout, numbers="any-numbers" not in block.options)
             assert problem is None, f"{block.name}\n{problem}"
         return
     for command in block.commands():
-        done = subprocess.run(["bash", "-c", command.text], cwd=work, env=env,
-                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                              timeout=TIMEOUT)
+        returncode, output = _command(command.text, work, env, fresh)
         if not check:
             continue
         where = f"{block.path.name}:{command.line}: $ {command.text}"
         shows_error = bool(command.expected) and command.expected[0].startswith("Error:")
         if shows_error:
-            assert done.returncode == 1, f"{where}\nexpected a failure, got:\n{done.stdout}"
+            assert returncode == 1, f"{where}\nexpected a failure, got:\n{output}"
         else:
-            assert done.returncode in (0, 3), f"{where}\nexit {done.returncode}:\n{done.stdout}"
+            assert returncode in (0, 3), f"{where}\nexit {returncode}:\n{output}"
         if command.expected:
-            problem = compare(command.expected, done.stdout,
+            problem = compare(command.expected, output,
                               numbers="any-numbers" not in block.options)
             assert problem is None, f"{where}\n{problem}"
+
+
+_SERVER: list[ForkServer] = []
+
+
+def _server(env: dict[str, str]) -> ForkServer:
+    """This test process's fork server (started on first use, stopped at exit)."""
+    if not _SERVER:
+        _SERVER.append(ForkServer(env))
+        atexit.register(_SERVER[0].close)
+    return _SERVER[0]
+
+
+def _python(program: str, work: Path, env: dict[str, str], fresh: bool) -> tuple[int, str, str]:
+    """``python -c PROGRAM`` in ``work``: a child of the fork server, or with ``fresh`` a new
+    interpreter; (exit status, stdout, stderr)."""
+    if not fresh:
+        return _server(env).run({"program": program, "cwd": str(work), "env": env},
+                                merge=False, timeout=TIMEOUT)
+    done = subprocess.run([sys.executable, "-c", program], cwd=work, env=env,
+                          capture_output=True, text=True, timeout=TIMEOUT)
+    return done.returncode, done.stdout, done.stderr
+
+
+def _command(text: str, work: Path, env: dict[str, str], fresh: bool) -> tuple[int, str]:
+    """One console command in ``work``, stderr merged into stdout: a plain ``pkmkit ...``
+    (no shell feature but quoting) in a child of the fork server, anything else (or with
+    ``fresh``) through bash; (exit status, output)."""
+    words = None if fresh else shell_words(text)
+    script = shutil.which("pkmkit", path=env["PATH"])
+    if words and words[0] == "pkmkit" and script:
+        returncode, output, _ = _server(env).run(
+            {"cli": words[1:], "script": script, "cwd": str(work), "env": env},
+            merge=True, timeout=TIMEOUT)
+        return returncode, output
+    done = subprocess.run(["bash", "-c", text], cwd=work, env=env, stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True, timeout=TIMEOUT)
+    return done.returncode, done.stdout
 
 
 def test_every_file_an_example_reads_ships_with_the_docs():
