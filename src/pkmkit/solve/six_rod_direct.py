@@ -214,6 +214,7 @@ def six_rod_direct_all(
     tol: float = 1e-10,
     predictor_tol: float = 1e-3,
     retries: int = 1,
+    compiled: bool | None = None,
 ) -> SixRodSolutions:
     """Every real pose of six-rod platforms with given joint centres and rod lengths.
 
@@ -229,6 +230,10 @@ def six_rod_direct_all(
             smaller is slower and safer.
         retries: how many times configurations that fail a completeness check are tracked
             again, each time with a 100× tighter ``predictor_tol``.
+        compiled: track the paths with the compiled tracker (True) or the NumPy reference
+            (False); None (default): compiled whenever Numba is installed, unless
+            ``PKMKIT_COMPILED=0`` (:func:`~pkmkit.solve.six_rod_paths.use_compiled_tracker`).
+            Both follow the same rules and give the same solutions.
 
     Returns:
         :class:`SixRodSolutions`.
@@ -270,7 +275,8 @@ def six_rod_direct_all(
     if rows.size:
         geo = _Normalised.of(a[rows], b[rows], ell[rows])
         target = RodParameters.from_geometry(geo.base, geo.platform, geo.lengths)
-        ends = track_configurations(load_start_system(), target, predictor_tol, retries)
+        ends = track_configurations(load_start_system(), target, predictor_tol, retries,
+                                    compiled)
         found = _real_solutions(ends, geo, tol)
         found["poses"] = geo.to_caller(found["poses"])
         found["residual"] = found["residual"] * geo.scale[:, None]
