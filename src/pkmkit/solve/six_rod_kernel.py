@@ -42,6 +42,7 @@ import numpy as np
 from numba import njit
 
 from pkmkit.solve.path_tracking import PathStatus
+from pkmkit.solve.study_rods import _BASIS_INDEX
 
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 
@@ -51,20 +52,30 @@ REACHED, STOPPED, FAILED, NOT_FINITE = (int(PathStatus.REACHED), int(PathStatus.
                                         int(PathStatus.FAILED), int(PathStatus.NOT_FINITE))
 N = 8  # unknowns and equations
 
+#: Rows where each map ``Z_m`` has entries (m = 0–5: a_k, b_k, all 8; 6–15: a_k b_l and d, the
+#: e rows 0–3; 16: the constant, the g rows 4–7): :func:`evaluate` skips the others.
+_ROWS = np.zeros((len(_BASIS_INDEX), N), dtype=bool)
+_ROWS[:6] = True
+_ROWS[6:16, :4] = True
+_ROWS[16, 4:] = True
+if not np.array_equal(_ROWS, _BASIS_INDEX < N):  # pragma: no cover - guards study_rods' order
+    raise RuntimeError("study_rods' maps Z_m changed: update six_rod_kernel.evaluate")
+
 
 @njit(**_OPTIONS)
 def evaluate(x, t, coeffs, conf, patch, index, scale, work, res, jac, d_t):  # pragma: no cover
     """``H``, ``∂H/∂x``, ``∂H/∂t`` at ``x (8,)``, ``t`` for configuration ``conf`` into
     ``res (8,)``, ``jac (8, 8)``, ``d_t (8,)``. ``coeffs (3, C, 6, 17)``: coefficients of t⁰,
     t¹, t² (:class:`~pkmkit.solve.study_rods.StudyHomotopy`); ``index``, ``scale (17, 8)``: the
-    maps ``Z_m``; ``work (15, 17)`` complex scratch (rows 0–7: ``Z_mᵀ``, 8–13: ``c_j(t)``, 14:
-    ``x·Z_m(x)``)."""
+    maps ``Z_m``, whose zero entries (:data:`_ROWS`) are skipped: the sums keep the order of the
+    full products and lose only exact zeros; ``work (15, 17)`` complex scratch (rows 0–7:
+    ``Z_mᵀ``, 8–13: ``c_j(t)``, 14: ``x·Z_m(x)``)."""
     n_maps = index.shape[0]
-    for m in range(n_maps):
+    for m in range(n_maps):  # Z_m has entries in rows lo…hi−1 only (see _ROWS)
+        lo, hi = (0, N) if m < 6 else ((0, 4) if m < 16 else (4, N))
         acc = 0j
-        for r in range(N):
-            k = index[m, r]
-            v = scale[m, r] * x[k] if k < N else 0j
+        for r in range(lo, hi):
+            v = scale[m, r] * x[index[m, r]]
             work[r, m] = v
             acc += v * x[r]
         work[14, m] = acc
@@ -78,10 +89,16 @@ def evaluate(x, t, coeffs, conf, patch, index, scale, work, res, jac, d_t):  # p
             tj += (c1 + (2.0 * t) * c2) * work[14, m]
         res[j] = rj
         d_t[j] = tj
-        for r in range(N):
+        for r in range(4):  # e columns: maps 0–15
             acc = 0j
-            for m in range(n_maps):
+            for m in range(16):
                 acc += work[8 + j, m] * work[r, m]
+            jac[j, r] = 2.0 * acc
+        for r in range(4, N):  # g columns: maps 0–5 and 16
+            acc = 0j
+            for m in range(6):
+                acc += work[8 + j, m] * work[r, m]
+            acc += work[8 + j, 16] * work[r, 16]
             jac[j, r] = 2.0 * acc
     study, lin = 0j, 0j
     for k in range(4):
