@@ -10,8 +10,15 @@ exceptional quadric or at a singular point.
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
+
+import pkmkit
+from pkmkit.numerics import jit
 
 pytest.importorskip("numba")
 
@@ -211,9 +218,12 @@ def test_same_number_of_steps_as_numpy(both):
 
 def test_compiled_by_default_numpy_when_asked(monkeypatch):
     monkeypatch.delenv("PKMKIT_COMPILED", raising=False)
-    assert use_compiled_tracker()
+    assert use_compiled_tracker(1) and use_compiled_tracker(5)  # Numba imported here
+    monkeypatch.setattr(jit, "_available", False)
+    assert not use_compiled_tracker(5)  # no Numba
+    monkeypatch.setattr(jit, "_available", True)
     monkeypatch.setenv("PKMKIT_COMPILED", "0")
-    assert not use_compiled_tracker()
+    assert not use_compiled_tracker(5)
 
     def refuse(*args):
         raise AssertionError("the compiled tracker ran under PKMKIT_COMPILED=0")
@@ -226,3 +236,30 @@ def test_compiled_by_default_numpy_when_asked(monkeypatch):
     with pytest.raises(AssertionError, match="compiled tracker ran"):
         six_rod_direct_all(base[0], platform[0], lengths[0], compiled=True)
 
+
+
+def test_a_one_shot_single_call_does_not_import_numba():
+    """In a fresh process the first lone configuration takes the NumPy tracker (no Numba
+    import: the command line makes one call), the second the compiled one; a batch of two
+    configurations runs compiled at once; the same solutions."""
+    code = ("import sys, numpy as np\n"
+            "from pkmkit.solve.six_rod_direct import six_rod_direct_all\n"
+            "from tests.solve.test_six_rod_direct import random_configurations\n"
+            "a, b, ell, _ = random_configurations(2, seed=9)\n"
+            "one = six_rod_direct_all(a[0], b[0], ell[0])\n"
+            "first = 'numba' in sys.modules\n"
+            "two = six_rod_direct_all(a[0], b[0], ell[0])\n"
+            "print(first, 'numba' in sys.modules, int(one.count), int(two.count),\n"
+            "      float(np.abs(one.poses - two.poses)[:one.count].max()))\n")
+    root = Path(__file__).resolve().parents[2]
+    env = {"PYTHONPATH": f"{Path(pkmkit.__file__).resolve().parents[1]}:{root}",
+           "PATH": "/usr/bin:/bin"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                         check=True, cwd=root).stdout.split()
+    assert out[:2] == ["False", "True"]
+    assert out[2] == out[3] and float(out[4]) <= 1e-10
+    batch = "import sys\n" + code.split("one = ")[0] + (
+        "six_rod_direct_all(a, b, ell)\nprint('numba' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", batch], capture_output=True, text=True, env=env,
+                         check=True, cwd=root).stdout.split()
+    assert out == ["True"]

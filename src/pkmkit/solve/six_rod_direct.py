@@ -231,9 +231,11 @@ def six_rod_direct_all(
         retries: how many times configurations that fail a completeness check are tracked
             again, each time with a 100× tighter ``predictor_tol``.
         compiled: track the paths with the compiled tracker (True) or the NumPy reference
-            (False); None (default): compiled whenever Numba is installed, unless
-            ``PKMKIT_COMPILED=0`` (:func:`~pkmkit.solve.six_rod_paths.use_compiled_tracker`).
-            Both follow the same rules and give the same solutions.
+            (False); None (default): compiled when Numba is installed, for two configurations
+            or more or once Numba is imported, never under ``PKMKIT_COMPILED=0``
+            (:func:`~pkmkit.solve.six_rod_paths.use_compiled_tracker`: a one-shot single call
+            does not pay Numba's import). Both follow the same rules and give the same
+            solutions.
 
     Returns:
         :class:`SixRodSolutions`.

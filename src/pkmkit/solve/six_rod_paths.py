@@ -45,7 +45,7 @@ import numpy as np
 
 from pkmkit.numerics import jit
 from pkmkit.solve.path_tracking import PathStatus, TrackResult, track_paths
-from pkmkit.solve.six_rod_start import StartSystem
+from pkmkit.solve.six_rod_start import GENERIC_COUNT, StartSystem
 from pkmkit.solve.study_rods import BASIS_INDEX, BASIS_SCALE, RodParameters, StudyHomotopy
 
 #: ``|g|/|e|`` beyond which a path is stopped at infinity at any t.
@@ -102,12 +102,26 @@ class EndPoints:
 CHUNK = 16
 
 
-def use_compiled_tracker() -> bool:
-    """Whether the compiled tracker (:mod:`pkmkit.solve.six_rod_kernel`) runs by default:
-    whenever Numba is installed, unless ``PKMKIT_COMPILED=0``. One configuration costs tens of
-    milliseconds through the NumPy tracker, so even a single call repays loading the cached
-    kernel (the first call of a process also imports Numba, a few tenths of a second)."""
-    return jit.mode() != "0" and jit.numba_available()
+def use_compiled_tracker(n_conf: int = 1) -> bool:
+    """Whether the compiled tracker (:mod:`pkmkit.solve.six_rod_kernel`) runs by default on
+    ``n_conf`` configurations: the rule of :func:`pkmkit.numerics.jit.use_compiled_solver` on
+    their 40 paths each — from two configurations, or at any size once Numba is imported, never
+    under ``PKMKIT_COMPILED=0`` or without Numba. The first lone configuration of a process in
+    which Numba is not imported yet takes the NumPy tracker (≈ 0.1 s, where importing Numba and
+    loading the kernel cost ≈ 0.4 s: a one-shot ``pkmkit fk --all`` stays on NumPy); the next
+    call imports it (a loop of single calls runs compiled from its second call)."""
+    global _single_seen
+    if not jit.use_compiled_solver(jit.SOLVER_ROWS):
+        return False  # PKMKIT_COMPILED=0, or no Numba
+    if jit.use_compiled_solver(GENERIC_COUNT * n_conf) or _single_seen:
+        return True
+    _single_seen = True
+    return False
+
+
+#: Whether a lone configuration already took the NumPy tracker in this process (only speed
+#: depends on it: both trackers give the same solutions).
+_single_seen = False
 
 
 def track_configurations(
@@ -128,7 +142,7 @@ def track_configurations(
             (None: :func:`use_compiled_tracker`); both follow the same rules.
     """
     if compiled is None:
-        compiled = use_compiled_tracker()
+        compiled = use_compiled_tracker(target.offset.shape[1])
     ends = _track_in_chunks(start, target, predictor_tol, compiled)
     tol = predictor_tol
     for _ in range(retries):
