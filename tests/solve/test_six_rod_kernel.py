@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 import pkmkit
+from pkmkit.exceptions import InputError
 from pkmkit.numerics import jit
 
 pytest.importorskip("numba")
@@ -221,6 +222,8 @@ def test_compiled_by_default_numpy_when_asked(monkeypatch):
     assert use_compiled_tracker(1) and use_compiled_tracker(5)  # Numba imported here
     monkeypatch.setattr(jit, "_available", False)
     assert not use_compiled_tracker(5)  # no Numba
+    with pytest.raises(InputError, match="compiled=True needs Numba"):
+        six_rod_direct_all(np.eye(6, 3), np.eye(6, 3), np.ones(6), compiled=True)
     monkeypatch.setattr(jit, "_available", True)
     monkeypatch.setenv("PKMKIT_COMPILED", "0")
     assert not use_compiled_tracker(5)

@@ -37,6 +37,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from pkmkit.exceptions import InputError
+from pkmkit.numerics.jit import numba_available
 from pkmkit.solve.least_squares import solve_least_squares
 from pkmkit.solve.six_rod_paths import EndKind, EndPoints, pair_distance, track_configurations
 from pkmkit.solve.six_rod_start import GENERIC_COUNT, load_start_system
@@ -242,8 +243,9 @@ def six_rod_direct_all(
 
     Raises:
         InputError: an argument has the wrong shape (the message names it and the expected
-            shape), the batch sizes differ, or an option is out of range. Non-finite values and
-            rod lengths ≤ 0 flag their rows (``INVALID_INPUT``) instead.
+            shape), the batch sizes differ, an option is out of range, or ``compiled=True``
+            without Numba. Non-finite values and rod lengths ≤ 0 flag their rows
+            (``INVALID_INPUT``) instead.
 
     Example:
         >>> import numpy as np
@@ -266,6 +268,8 @@ def six_rod_direct_all(
         raise InputError(f"predictor_tol must lie in (0, 1), got {predictor_tol!r}")
     if int(retries) != retries or retries < 0:
         raise InputError(f"retries must be a non-negative integer, got {retries!r}")
+    if compiled and not numba_available():
+        raise InputError("compiled=True needs Numba, which is not installed")
     a, b, ell, single = _broadcast_inputs(base, platform, lengths)
     n_rows = a.shape[0]
     with np.errstate(invalid="ignore"):
