@@ -68,22 +68,26 @@ def _options(**changes) -> np.ndarray:
 
 
 def test_homotopy_value_jacobian_and_t_derivative_match_numpy():
+    """At random points, t and configurations; in the order new t, the same t at another point
+    (coefficients reused), the same t for another configuration (recomputed)."""
     homotopy, _ = _homotopy(3, seed=1)
     rng = np.random.default_rng(2)
     x = rng.normal(size=(12, 8)) + 1j * rng.normal(size=(12, 8))
     t = rng.uniform(0, 1, 12)
-    conf = np.arange(12) % 3
-    res_ref, jac_ref, dt_ref = homotopy.evaluate(x, t, conf)
-    work = np.empty((15, BASIS_INDEX.shape[0]), dtype=complex)
+    point, at, conf = (np.array(v).ravel() for v in zip(
+        *[((p, (p + 1) % 12, p), (t[p],) * 3, (p % 3, p % 3, (p + 1) % 3)) for p in range(12)],
+        strict=True))
+    res_ref, jac_ref, dt_ref = homotopy.evaluate(x[point], at, conf)
+    work = np.full((22, BASIS_INDEX.shape[0]), np.nan, dtype=complex)
     res, jac, d_t = np.empty(8, complex), np.empty((8, 8), complex), np.empty(8, complex)
     coeffs = np.ascontiguousarray(homotopy.coeffs)
-    for p in range(12):
-        kernel.evaluate(x[p], t[p], coeffs, conf[p], homotopy.patch, BASIS_INDEX, BASIS_SCALE,
-                        work, res, jac, d_t)
-        scale = np.abs(jac_ref[p]).max()
-        np.testing.assert_allclose(res, res_ref[p], rtol=0, atol=1e-13 * scale * 10)
-        np.testing.assert_allclose(jac, jac_ref[p], rtol=0, atol=1e-13 * scale)
-        np.testing.assert_allclose(d_t, dt_ref[p], rtol=0, atol=1e-13 * scale * 10)
+    for k in range(point.size):
+        kernel.evaluate(x[point[k]], at[k], coeffs, conf[k], homotopy.patch, BASIS_INDEX,
+                        BASIS_SCALE, work, res, jac, d_t)
+        scale = np.abs(jac_ref[k]).max()
+        np.testing.assert_allclose(res, res_ref[k], rtol=0, atol=1e-13 * scale * 10)
+        np.testing.assert_allclose(jac, jac_ref[k], rtol=0, atol=1e-13 * scale)
+        np.testing.assert_allclose(d_t, dt_ref[k], rtol=0, atol=1e-13 * scale * 10)
 
 
 def test_lu_with_pivoting_matches_numpy_and_flags_a_singular_matrix():

@@ -68,8 +68,10 @@ def evaluate(x, t, coeffs, conf, patch, index, scale, work, res, jac, d_t):  # p
     ``res (8,)``, ``jac (8, 8)``, ``d_t (8,)``. ``coeffs (3, C, 6, 17)``: coefficients of t⁰,
     t¹, t² (:class:`~pkmkit.solve.study_rods.StudyHomotopy`); ``index``, ``scale (17, 8)``: the
     maps ``Z_m``, whose zero entries (:data:`_ROWS`) are skipped: the sums keep the order of the
-    full products and lose only exact zeros; ``work (15, 17)`` complex scratch (rows 0–7:
-    ``Z_mᵀ``, 8–13: ``c_j(t)``, 14: ``x·Z_m(x)``)."""
+    full products and lose only exact zeros; ``work (22, 17)`` complex scratch (rows 0–7:
+    ``Z_mᵀ``, 8–13: ``c_j(t)``, 14: ``x·Z_m(x)``, 15–20: ``ċ_j(t)``; ``work[21, 0] = t + i·conf``
+    of the coefficients held, NaN for none: the Runge–Kutta stages and the Newton iterations of a
+    step share their t, so the coefficients are formed about twice per step)."""
     n_maps = index.shape[0]
     for m in range(n_maps):  # Z_m has entries in rows lo…hi−1 only (see _ROWS)
         lo, hi = (0, N) if m < 6 else ((0, 4) if m < 16 else (4, N))
@@ -79,14 +81,19 @@ def evaluate(x, t, coeffs, conf, patch, index, scale, work, res, jac, d_t):  # p
             work[r, m] = v
             acc += v * x[r]
         work[14, m] = acc
+    key = complex(t, conf)
+    if work[21, 0] != key:  # c_j(t), ċ_j(t) of another t (or configuration): recompute
+        for j in range(6):
+            for m in range(n_maps):
+                c1, c2 = coeffs[1, conf, j, m], coeffs[2, conf, j, m]
+                work[8 + j, m] = coeffs[0, conf, j, m] + t * (c1 + t * c2)
+                work[15 + j, m] = c1 + (2.0 * t) * c2
+        work[21, 0] = key
     for j in range(6):
         rj, tj = 0j, 0j
         for m in range(n_maps):
-            c1, c2 = coeffs[1, conf, j, m], coeffs[2, conf, j, m]
-            cjm = coeffs[0, conf, j, m] + t * (c1 + t * c2)
-            work[8 + j, m] = cjm
-            rj += cjm * work[14, m]
-            tj += (c1 + (2.0 * t) * c2) * work[14, m]
+            rj += work[8 + j, m] * work[14, m]
+            tj += work[15 + j, m] * work[14, m]
         res[j] = rj
         d_t[j] = tj
         for r in range(4):  # e columns: maps 0–15
@@ -190,7 +197,7 @@ def _max_abs(v):  # pragma: no cover
 def _track_path(x, conf, coeffs, patch, index, scale, opts, w, jac, rhs, vec):  # pragma: no cover
     """Follow one path from ``x`` (overwritten with its end) at t = 1.
 
-    Scratch: ``w (15, 17)`` (:func:`evaluate`), ``jac (8, 8)``, ``rhs (8, 2)``, ``vec (8, 8)``
+    Scratch: ``w (22, 17)`` (:func:`evaluate`), ``jac (8, 8)``, ``rhs (8, 2)``, ``vec (8, 8)``
     (rows: H, H_t, the tangent k1, k2, k3, k4, the trial point, the corrected point).
     Returns ``(t, status, accepted steps, rejected steps)``."""
     h, max_step, min_step = opts[0], opts[1], opts[2]
@@ -275,7 +282,8 @@ def track_range(start, n_conf, coeffs, patch, index, scale, opts, lo, hi,
     ``start (P0, 8)`` (path ``p``: configuration ``p // P0``, start ``p % P0``), into
     ``x_out (P, 8)``, ``t_out``, ``status``, ``steps``, ``rejected (P,)``."""
     n_start = start.shape[0]
-    w = np.empty((15, index.shape[0]), dtype=np.complex128)
+    w = np.empty((22, index.shape[0]), dtype=np.complex128)
+    w[21, 0] = complex(np.nan, np.nan)
     jac = np.empty((N, N), dtype=np.complex128)
     rhs = np.empty((N, 2), dtype=np.complex128)
     vec = np.empty((8, N), dtype=np.complex128)
