@@ -14,10 +14,11 @@ Method (details in ``docs/full-pose.md``):
    solutions.
 3. **Coefficient-parameter homotopy** from a stored generic complex system with its 40 known
    solutions (:mod:`pkmkit.solve.six_rod_start`) to every target configuration: 40 paths per
-   configuration, every configuration and path tracked in one batch
-   (:mod:`pkmkit.solve.path_tracking`); end points are classified and checked for
-   completeness, and configurations that fail a check are tracked again with tighter
-   tolerances (:mod:`pkmkit.solve.six_rod_paths`).
+   configuration, each followed on its own by the compiled tracker
+   (:mod:`pkmkit.solve.six_rod_kernel`) or all together by the NumPy reference
+   (:mod:`pkmkit.solve.path_tracking`), with the same rules; end points are classified and
+   checked for completeness, and configurations that fail a check are tracked again with
+   tighter tolerances (:mod:`pkmkit.solve.six_rod_paths`).
 4. **Real solutions**: self-conjugate regular end points (and nearly real singular ones) are
    converted to poses and refined by Gauss–Newton / Levenberg–Marquardt on the original rod
    equations in squared form (:func:`pkmkit.solve.least_squares.solve_least_squares`); a
