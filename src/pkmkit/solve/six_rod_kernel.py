@@ -194,6 +194,62 @@ def _max_abs(v):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
+def _predict(x, t, dt, coeffs, conf, patch, index, scale, w, jac, rhs, vec):  # pragma: no cover
+    """Runge–Kutta 4 from ``(x, t)`` over ``dt`` into ``vec[7]`` (the tangent ``vec[2]`` at
+    ``x`` given; ``vec``'s rows as :func:`_track_path`)."""
+    res, d_t, k1, k2, k3, k4, xs, xn = (vec[0], vec[1], vec[2], vec[3], vec[4], vec[5],
+                                        vec[6], vec[7])
+    half = dt / 2
+    for k in range(N):
+        xs[k] = x[k] - half * k1[k]
+    _tangent(xs, t - dt / 2, coeffs, conf, patch, index, scale, w, res, jac, d_t, rhs, k2)
+    for k in range(N):
+        xs[k] = x[k] - half * k2[k]
+    _tangent(xs, t - dt / 2, coeffs, conf, patch, index, scale, w, res, jac, d_t, rhs, k3)
+    for k in range(N):
+        xs[k] = x[k] - dt * k3[k]
+    _tangent(xs, t - dt, coeffs, conf, patch, index, scale, w, res, jac, d_t, rhs, k4)
+    for k in range(N):
+        xn[k] = x[k] - (dt / 6) * (k1[k] + 2.0 * k2[k] + 2.0 * k3[k] + k4[k])
+
+
+@njit(**_OPTIONS)
+def _correct(xn, t, sc, coeffs, conf, patch, index, scale, opts, w, jac, rhs,
+             vec):  # pragma: no cover
+    """Newton at ``t`` from ``xn`` (updated in place), updates relative to ``sc``; ``rhs[:, 1]``
+    is left with ``H_x⁻¹ H_t`` of the last factorisation. Returns ``(first update size,
+    converged)``."""
+    res, d_t = vec[0], vec[1]
+    corrector_tol, max_newton = opts[4], int(opts[5])
+    first, last = np.inf, np.inf
+    for it in range(max_newton):
+        evaluate(xn, t, coeffs, conf, patch, index, scale, w, res, jac, d_t)
+        for k in range(N):
+            rhs[k, 0] = res[k]
+            rhs[k, 1] = d_t[k]
+        size = np.inf
+        if lu_solve(jac, rhs, 2):
+            for k in range(N):
+                xn[k] -= rhs[k, 0]
+            size = _max_abs(rhs[:, 0]) / sc
+            if not math.isfinite(size):
+                size = np.inf
+        if it == 0:
+            first = size
+            ok, going = size <= corrector_tol, True
+        else:
+            theta = size / last
+            going = theta <= 0.5
+            ok = size <= corrector_tol or (going and theta * size <= corrector_tol)
+        if ok:
+            return first, True
+        if not going or size == np.inf:  # an infinite update never recovers
+            return first, False
+        last = size
+    return first, False
+
+
+@njit(**_OPTIONS)
 def _track_path(x, conf, coeffs, patch, index, scale, opts, w, jac, rhs, vec):  # pragma: no cover
     """Follow one path from ``x`` (overwritten with its end) at t = 1.
 
@@ -201,58 +257,19 @@ def _track_path(x, conf, coeffs, patch, index, scale, opts, w, jac, rhs, vec):  
     (rows: H, H_t, the tangent k1, k2, k3, k4, the trial point, the corrected point).
     Returns ``(t, status, accepted steps, rejected steps)``."""
     h, max_step, min_step = opts[0], opts[1], opts[2]
-    predictor_tol, corrector_tol = opts[3], opts[4]
-    max_newton, max_steps = int(opts[5]), int(opts[6])
-    res, d_t, k1, k2, k3, k4, xs, xn = (vec[0], vec[1], vec[2], vec[3], vec[4], vec[5],
-                                        vec[6], vec[7])
+    predictor_tol, max_steps = opts[3], int(opts[6])
+    k1, xn = vec[2], vec[7]
     t, steps, rejected = 1.0, 0, 0
     for k in range(N):
         if not (math.isfinite(x[k].real) and math.isfinite(x[k].imag)):
             return t, NOT_FINITE, steps, rejected
-    _tangent(x, t, coeffs, conf, patch, index, scale, w, res, jac, d_t, rhs, k1)
+    _tangent(x, t, coeffs, conf, patch, index, scale, w, vec[0], jac, vec[1], rhs, k1)
     while True:
         dt = min(h, t)
-        half = dt / 2
-        for k in range(N):
-            xs[k] = x[k] - half * k1[k]
-        _tangent(xs, t - dt / 2, coeffs, conf, patch, index, scale, w, res, jac, d_t, rhs, k2)
-        for k in range(N):
-            xs[k] = x[k] - half * k2[k]
-        _tangent(xs, t - dt / 2, coeffs, conf, patch, index, scale, w, res, jac, d_t, rhs, k3)
-        for k in range(N):
-            xs[k] = x[k] - dt * k3[k]
-        _tangent(xs, t - dt, coeffs, conf, patch, index, scale, w, res, jac, d_t, rhs, k4)
-        for k in range(N):
-            xn[k] = x[k] - (dt / 6) * (k1[k] + 2.0 * k2[k] + 2.0 * k3[k] + k4[k])
+        _predict(x, t, dt, coeffs, conf, patch, index, scale, w, jac, rhs, vec)
         t_new = t - dt
-        sc = max(1.0, _max_abs(x))
-        # corrector: Newton at t_new; the tangent from its last factorisation
-        first, last, converged = np.inf, np.inf, False
-        for it in range(max_newton):
-            evaluate(xn, t_new, coeffs, conf, patch, index, scale, w, res, jac, d_t)
-            for k in range(N):
-                rhs[k, 0] = res[k]
-                rhs[k, 1] = d_t[k]
-            size = np.inf
-            if lu_solve(jac, rhs, 2):
-                for k in range(N):
-                    xn[k] -= rhs[k, 0]
-                size = _max_abs(rhs[:, 0]) / sc
-                if not math.isfinite(size):
-                    size = np.inf
-            if it == 0:
-                first = size
-                ok, going = size <= corrector_tol, True
-            else:
-                theta = size / last
-                going = theta <= 0.5
-                ok = size <= corrector_tol or (going and theta * size <= corrector_tol)
-            if ok:
-                converged = True
-                break
-            if not going or size == np.inf:  # an infinite update never recovers
-                break
-            last = size
+        first, converged = _correct(xn, t_new, max(1.0, _max_abs(x)), coeffs, conf, patch,
+                                    index, scale, opts, w, jac, rhs, vec)
         accept = converged and first <= predictor_tol
         factor = 0.7 * (predictor_tol / max(first, 1e-300)) ** 0.2
         if math.isnan(factor):
@@ -260,7 +277,7 @@ def _track_path(x, conf, coeffs, patch, index, scale, opts, w, jac, rhs, vec):  
         if accept:
             for k in range(N):
                 x[k] = xn[k]
-                k1[k] = -rhs[k, 1]
+                k1[k] = -rhs[k, 1]  # the next tangent, from the corrector's factorisation
             t = t_new
             steps += 1
             h = min(h * min(max(factor, 1.0), 2.0), max_step)
