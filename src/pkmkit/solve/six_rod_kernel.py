@@ -42,7 +42,7 @@ import numpy as np
 from numba import njit
 
 from pkmkit.solve.path_tracking import PathStatus
-from pkmkit.solve.study_rods import _BASIS_INDEX
+from pkmkit.solve.study_rods import BASIS_INDEX
 
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 
@@ -54,11 +54,11 @@ N = 8  # unknowns and equations
 
 #: Rows where each map ``Z_m`` has entries (m = 0–5: a_k, b_k, all 8; 6–15: a_k b_l and d, the
 #: e rows 0–3; 16: the constant, the g rows 4–7): :func:`evaluate` skips the others.
-_ROWS = np.zeros((len(_BASIS_INDEX), N), dtype=bool)
+_ROWS = np.zeros((len(BASIS_INDEX), N), dtype=bool)
 _ROWS[:6] = True
 _ROWS[6:16, :4] = True
 _ROWS[16, 4:] = True
-if not np.array_equal(_ROWS, _BASIS_INDEX < N):  # pragma: no cover - guards study_rods' order
+if not np.array_equal(_ROWS, BASIS_INDEX < N):  # pragma: no cover - guards study_rods' order
     raise RuntimeError("study_rods' maps Z_m changed: update six_rod_kernel.evaluate")
 
 
