@@ -7,12 +7,21 @@ against a baseline run in the same process on the same configurations: a multi-s
 distinct converged solutions. The baseline is what one writes without an all-solutions
 method; it finds *some* of the real solutions, the homotopy finds all of them (certified).
 
+The homotopy runs twice on every input, in the same process: with the compiled path tracker
+(:mod:`pkmkit.solve.six_rod_kernel`, the default) and with the NumPy reference tracker
+(``compiled=False``, what ``PKMKIT_COMPILED=0`` selects); the two must give the same real
+solutions (checked), and their ratio is printed for CPU and wall time (CPU time is the figure
+to compare on a shared machine).
+
 Printed:
 
-- single configurations, one call each (after loading the stored start system once): median
-  and best time, the count of real solutions and the worst rod-length residual;
-- one batched call on ``--batch`` configurations: time per configuration;
-- Dietmaier's 40-real-solution platform: time and count, and what the baseline finds there;
+- the first call of the compiled tracker (Numba's import and the cached kernel's load);
+- single configurations, one call each (after loading the stored start system once), the two
+  trackers alternated: median, best and worst wall time, median CPU time; their ratios, the
+  count of real solutions and the worst rod-length residual;
+- one batched call on ``--batch`` configurations per tracker: time per configuration;
+- Dietmaier's 40-real-solution platform: time and count (both trackers), and what the baseline
+  finds there;
 - the baseline on the first ``--baseline`` configurations: time per configuration, the fraction
   of the homotopy's real solutions it found; ratios of times (medians);
 - a faster multi-start for reference: pkmkit's own batched Levenberg–Marquardt engine started
@@ -127,6 +136,33 @@ def _same(u, v, tol=1e-6) -> bool:
     return bool(np.abs(u[:3] - v[:3]).max() <= tol and angle <= tol)
 
 
+_NAME = {True: "compiled", False: "NumPy"}
+
+
+def _ratio(times: dict, which: int) -> str:
+    """``"3.1x"``: median of the NumPy tracker's times over the compiled one's."""
+    return (f"{statistics.median(times[False][which]) / statistics.median(times[True][which]):.1f}"
+            "x")
+
+
+def _solution_gap(a, b, k=None) -> float:
+    """Largest distance between the real solutions of two results (row ``k`` of batched ones);
+    asserts that they have the same count and status."""
+    if k is not None:
+        a, b = (type(a)(**{f: getattr(r, f)[k] for f in r.__dataclass_fields__}) for r in (a, b))
+    assert int(a.count) == int(b.count) and int(a.status) == int(b.status)
+    n = int(a.count)
+    if n == 0:
+        return 0.0
+    gaps = [[_gap(u, v) for v in b.poses[:n]] for u in a.poses[:n]]
+    return float(np.max(np.min(gaps, axis=1)))
+
+
+def _gap(u, v) -> float:
+    angle = (Rotation.from_rotvec(u[3:]).inv() * Rotation.from_rotvec(v[3:])).magnitude()
+    return float(max(np.abs(u[:3] - v[:3]).max(), angle))
+
+
 def _burn(stop) -> None:  # the competing process
     a = np.random.default_rng(0).normal(size=(300, 300))
     while not stop.is_set():
@@ -171,39 +207,77 @@ def run(args) -> dict:
           "(once per process)")
     n = max(args.configs, args.batch, args.baseline)
     base, plat, lengths = configurations(n)
+    start, start_cpu = time.perf_counter(), time.process_time()
+    six_rod_direct_all(base[0], plat[0], lengths[0], compiled=True)
+    print(f"first call of the compiled tracker: {time.perf_counter() - start:.2f} s "
+          f"(CPU {time.process_time() - start_cpu:.2f} s: Numba import and kernel load, once "
+          "per process)")
 
-    single, cpu, counts, worst = [], [], [], 0.0
+    # single calls, the two trackers alternated so that both see the same load
+    single = {True: ([], []), False: ([], [])}
+    counts, worst, gap = [], 0.0, 0.0
     for k in range(args.configs):
+        got = {}
+        for compiled in (True, False):
+            wall, cpu = single[compiled]
+            start, start_cpu = time.perf_counter(), time.process_time()
+            got[compiled] = six_rod_direct_all(base[k], plat[k], lengths[k], compiled=compiled)
+            wall.append(time.perf_counter() - start)
+            cpu.append(time.process_time() - start_cpu)
+            sols = got[compiled]
+            assert sols.complete and sols.n_finite == 40
+            worst = max(worst, float(np.nanmax(sols.residual)))
+        counts.append(int(got[True].count))
+        gap = max(gap, _solution_gap(got[True], got[False]))
+    for compiled in (True, False):
+        wall, cpu = single[compiled]
+        print(f"single configuration, {_NAME[compiled]} tracker: median "
+              f"{1e3 * statistics.median(wall):.1f} ms, best {1e3 * min(wall):.1f} ms, worst "
+              f"{1e3 * max(wall):.1f} ms over {args.configs} (CPU time: median "
+              f"{1e3 * statistics.median(cpu):.1f} ms)")
+    med = statistics.median(single[True][0])
+    print(f"ratio NumPy / compiled tracker, single: {_ratio(single, 1)} CPU, "
+          f"{_ratio(single, 0)} wall; real solutions {min(counts)}–{max(counts)} (mean "
+          f"{np.mean(counts):.1f}), the same from both (largest difference {gap:.1e}), worst "
+          f"residual {worst:.1e} m")
+
+    rows = slice(0, args.batch)
+    timed = {True: ([], []), False: ([], [])}
+    batches = {}
+    for compiled in (True, False):
         start, start_cpu = time.perf_counter(), time.process_time()
-        sols = six_rod_direct_all(base[k], plat[k], lengths[k])
-        single.append(time.perf_counter() - start)
-        cpu.append(time.process_time() - start_cpu)
-        counts.append(int(sols.count))
-        worst = max(worst, float(np.nanmax(sols.residual)))
-        assert sols.complete and sols.n_finite == 40
-    med = statistics.median(single)
-    print(f"single configuration: median {1e3 * med:.1f} ms, best {1e3 * min(single):.1f} ms, "
-          f"worst {1e3 * max(single):.1f} ms over {args.configs} (CPU time: median "
-          f"{1e3 * statistics.median(cpu):.1f} ms); real solutions "
-          f"{min(counts)}–{max(counts)} (mean {np.mean(counts):.1f}), worst residual "
-          f"{worst:.1e} m")
+        batches[compiled] = six_rod_direct_all(base[rows], plat[rows], lengths[rows],
+                                               compiled=compiled)
+        timed[compiled][0].append((time.perf_counter() - start) / args.batch)
+        timed[compiled][1].append((time.process_time() - start_cpu) / args.batch)
+    batch = batches[True]
+    per_config = timed[True][0][0]
+    gap = max(_solution_gap(batches[True], batches[False], k) for k in range(args.batch))
+    for compiled in (True, False):
+        print(f"batched, {args.batch} configurations, {_NAME[compiled]} tracker: "
+              f"{1e3 * timed[compiled][0][0]:.1f} ms per configuration (CPU "
+              f"{1e3 * timed[compiled][1][0]:.1f} ms), {batches[compiled].complete.sum()} "
+              f"certified complete, worst residual {np.nanmax(batches[compiled].residual):.1e} m")
+    print(f"ratio NumPy / compiled tracker, batched: {_ratio(timed, 1)} CPU, {_ratio(timed, 0)} "
+          f"wall; the same real solutions (largest difference {gap:.1e})")
 
-    start = time.perf_counter()
-    batch = six_rod_direct_all(base[: args.batch], plat[: args.batch], lengths[: args.batch])
-    per_config = (time.perf_counter() - start) / args.batch
-    print(f"batched, {args.batch} configurations: {1e3 * per_config:.1f} ms per configuration, "
-          f"{batch.complete.sum()} certified complete, worst residual "
-          f"{np.nanmax(batch.residual):.1e} m")
-
-    start = time.perf_counter()
-    dm = six_rod_direct_all(*DIETMAIER)
-    t_dm = time.perf_counter() - start
+    dietmaier = {}
+    for compiled in (True, False):
+        start, start_cpu = time.perf_counter(), time.process_time()
+        dietmaier[compiled] = (six_rod_direct_all(*DIETMAIER, compiled=compiled),
+                               time.perf_counter() - start, time.process_time() - start_cpu)
+    dm, t_dm, cpu_dm = dietmaier[True]
+    dm_np, t_dm_np, cpu_dm_np = dietmaier[False]
+    assert dm.complete and dm_np.complete and int(dm.count) == int(dm_np.count)
     rng = np.random.default_rng(1)
     start = time.perf_counter()
     dm_found = multistart(*DIETMAIER, args.starts, rng)
     t_dm_base = time.perf_counter() - start
     print(f"Dietmaier 1998: {int(dm.count)} real solutions of {int(dm.n_finite)} in "
-          f"{1e3 * t_dm:.1f} ms, worst residual {np.nanmax(dm.residual):.1e} m; baseline "
+          f"{1e3 * t_dm:.1f} ms (CPU {1e3 * cpu_dm:.1f} ms; NumPy tracker: "
+          f"{int(dm_np.count)} in {1e3 * t_dm_np:.1f} ms, CPU {1e3 * cpu_dm_np:.1f} ms; the same "
+          f"solutions to {_solution_gap(dm, dm_np):.1e}), worst residual "
+          f"{np.nanmax(dm.residual):.1e} m; baseline "
           f"({args.starts} starts): {len(dm_found)} of them in {t_dm_base:.1f} s "
           f"({t_dm_base / t_dm:.0f}x the time)")
 
@@ -242,7 +316,13 @@ def run(args) -> dict:
           f"{100 * complete:.0f}% of the configurations; Dietmaier: {len(dm_eng)} of 40 in "
           f"{1e3 * t_dm_eng:.0f} ms")
     return {
-        "single_median_s": med, "single_best_s": min(single), "batched_per_config_s": per_config,
+        "single_median_s": med, "single_best_s": min(single[True][0]),
+        "single_cpu_median_s": statistics.median(single[True][1]),
+        "numpy_single_median_s": statistics.median(single[False][0]),
+        "numpy_single_cpu_median_s": statistics.median(single[False][1]),
+        "batched_per_config_s": per_config, "batched_cpu_per_config_s": timed[True][1][0],
+        "numpy_batched_per_config_s": timed[False][0][0],
+        "numpy_batched_cpu_per_config_s": timed[False][1][0],
         "dietmaier_s": t_dm, "dietmaier_count": int(dm.count), "baseline_median_s": base_med,
         "dietmaier_baseline_s": t_dm_base, "dietmaier_baseline_count": len(dm_found),
         "baseline_found_fraction": float(np.mean(fractions)), "worst_residual_m": worst,

@@ -93,8 +93,8 @@ def test_uncertified_configurations_are_tracked_again(tracked, monkeypatch):
     calls = []
     original = six_rod_paths._track
 
-    def first_call_jumps(start, tgt, tol):
-        ends = original(start, tgt, tol)
+    def first_call_jumps(start, tgt, tol, compiled):
+        ends = original(start, tgt, tol, compiled)
         calls.append((tgt.offset.shape[1], tol))
         if len(calls) == 1:  # simulate a path that jumped onto another one in configuration 2
             ends.normal[2, 5] = ends.normal[2, 4]

@@ -14,10 +14,11 @@ Method (details in ``docs/full-pose.md``):
    solutions.
 3. **Coefficient-parameter homotopy** from a stored generic complex system with its 40 known
    solutions (:mod:`pkmkit.solve.six_rod_start`) to every target configuration: 40 paths per
-   configuration, every configuration and path tracked in one batch
-   (:mod:`pkmkit.solve.path_tracking`); end points are classified and checked for
-   completeness, and configurations that fail a check are tracked again with tighter
-   tolerances (:mod:`pkmkit.solve.six_rod_paths`).
+   configuration, each followed on its own by the compiled tracker
+   (:mod:`pkmkit.solve.six_rod_kernel`) or all together by the NumPy reference
+   (:mod:`pkmkit.solve.path_tracking`), with the same rules; end points are classified and
+   checked for completeness, and configurations that fail a check are tracked again with
+   tighter tolerances (:mod:`pkmkit.solve.six_rod_paths`).
 4. **Real solutions**: self-conjugate regular end points (and nearly real singular ones) are
    converted to poses and refined by Gauss–Newton / Levenberg–Marquardt on the original rod
    equations in squared form (:func:`pkmkit.solve.least_squares.solve_least_squares`); a
@@ -37,6 +38,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from pkmkit.exceptions import InputError
+from pkmkit.numerics.jit import numba_available
 from pkmkit.solve.least_squares import solve_least_squares
 from pkmkit.solve.six_rod_paths import EndKind, EndPoints, pair_distance, track_configurations
 from pkmkit.solve.six_rod_start import GENERIC_COUNT, load_start_system
@@ -214,6 +216,7 @@ def six_rod_direct_all(
     tol: float = 1e-10,
     predictor_tol: float = 1e-3,
     retries: int = 1,
+    compiled: bool | None = None,
 ) -> SixRodSolutions:
     """Every real pose of six-rod platforms with given joint centres and rod lengths.
 
@@ -229,14 +232,21 @@ def six_rod_direct_all(
             smaller is slower and safer.
         retries: how many times configurations that fail a completeness check are tracked
             again, each time with a 100× tighter ``predictor_tol``.
+        compiled: track the paths with the compiled tracker (True) or the NumPy reference
+            (False); None (default): compiled when Numba is installed, for two configurations
+            or more or once Numba is imported, never under ``PKMKIT_COMPILED=0``
+            (:func:`~pkmkit.solve.six_rod_paths.use_compiled_tracker`: a one-shot single call
+            does not pay Numba's import). Both follow the same rules and give the same
+            solutions.
 
     Returns:
         :class:`SixRodSolutions`.
 
     Raises:
         InputError: an argument has the wrong shape (the message names it and the expected
-            shape), the batch sizes differ, or an option is out of range. Non-finite values and
-            rod lengths ≤ 0 flag their rows (``INVALID_INPUT``) instead.
+            shape), the batch sizes differ, an option is out of range, or ``compiled=True``
+            without Numba. Non-finite values and rod lengths ≤ 0 flag their rows
+            (``INVALID_INPUT``) instead.
 
     Example:
         >>> import numpy as np
@@ -259,6 +269,8 @@ def six_rod_direct_all(
         raise InputError(f"predictor_tol must lie in (0, 1), got {predictor_tol!r}")
     if int(retries) != retries or retries < 0:
         raise InputError(f"retries must be a non-negative integer, got {retries!r}")
+    if compiled and not numba_available():
+        raise InputError("compiled=True needs Numba, which is not installed")
     a, b, ell, single = _broadcast_inputs(base, platform, lengths)
     n_rows = a.shape[0]
     with np.errstate(invalid="ignore"):
@@ -270,7 +282,8 @@ def six_rod_direct_all(
     if rows.size:
         geo = _Normalised.of(a[rows], b[rows], ell[rows])
         target = RodParameters.from_geometry(geo.base, geo.platform, geo.lengths)
-        ends = track_configurations(load_start_system(), target, predictor_tol, retries)
+        ends = track_configurations(load_start_system(), target, predictor_tol, retries,
+                                    compiled)
         found = _real_solutions(ends, geo, tol)
         found["poses"] = geo.to_caller(found["poses"])
         found["residual"] = found["residual"] * geo.scale[:, None]

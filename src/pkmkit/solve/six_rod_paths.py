@@ -43,9 +43,10 @@ from enum import IntEnum
 
 import numpy as np
 
-from pkmkit.solve.path_tracking import PathStatus, track_paths
-from pkmkit.solve.six_rod_start import StartSystem
-from pkmkit.solve.study_rods import RodParameters, StudyHomotopy
+from pkmkit.numerics import jit
+from pkmkit.solve.path_tracking import PathStatus, TrackResult, track_paths
+from pkmkit.solve.six_rod_start import GENERIC_COUNT, StartSystem
+from pkmkit.solve.study_rods import BASIS_INDEX, BASIS_SCALE, RodParameters, StudyHomotopy
 
 #: ``|g|/|e|`` beyond which a path is stopped at infinity at any t.
 DIVERGED_RATIO = 1e7
@@ -59,6 +60,9 @@ LATE_T, LARGE_RATIO, NULL_STOP = 1e-6, 1e4, 1e-6
 ENDGAME_T, NULL_END, NULL_FAR, SINGULAR_T = 1e-3, 1e-4, 1e2, 1e-6
 #: Jacobian condition number above which an end point reached at t = 0 is singular.
 SINGULAR_CONDITION = 1e10
+#: Options of the path tracker (both implementations); ``predictor_tol`` comes from the caller.
+TRACKER_OPTIONS = {"initial_step": 0.05, "max_step": 0.2, "min_step": 1e-12,
+                   "corrector_tol": 1e-9, "max_newton": 3, "max_steps": 2000}
 
 
 class EndKind(IntEnum):
@@ -98,8 +102,34 @@ class EndPoints:
 CHUNK = 16
 
 
+def use_compiled_tracker(n_conf: int = 1) -> bool:
+    """Whether the compiled tracker (:mod:`pkmkit.solve.six_rod_kernel`) runs by default on
+    ``n_conf`` configurations: the rule of :func:`pkmkit.numerics.jit.use_compiled_solver` on
+    their 40 paths each — from two configurations, or at any size once Numba is imported, never
+    under ``PKMKIT_COMPILED=0`` or without Numba. The first lone configuration of a process in
+    which Numba is not imported yet takes the NumPy tracker (≈ 0.1 s, where importing Numba and
+    loading the kernel cost ≈ 0.4 s: a one-shot ``pkmkit fk --all`` stays on NumPy); the next
+    call imports it (a loop of single calls runs compiled from its second call)."""
+    global _single_seen
+    if not jit.use_compiled_solver(jit.SOLVER_ROWS):
+        return False  # PKMKIT_COMPILED=0, or no Numba
+    if jit.use_compiled_solver(GENERIC_COUNT * n_conf) or _single_seen:
+        return True
+    _single_seen = True
+    return False
+
+
+#: Whether a lone configuration already took the NumPy tracker in this process (only speed
+#: depends on it: both trackers give the same solutions).
+_single_seen = False
+
+
 def track_configurations(
-    start: StartSystem, target: RodParameters, predictor_tol: float = 1e-3, retries: int = 1
+    start: StartSystem,
+    target: RodParameters,
+    predictor_tol: float = 1e-3,
+    retries: int = 1,
+    compiled: bool | None = None,
 ) -> EndPoints:
     """Track the start solutions to every target configuration and classify the ends.
 
@@ -108,15 +138,19 @@ def track_configurations(
         target: C normalised target configurations.
         predictor_tol: relative predictor error accepted per step.
         retries: re-tracking rounds (each 100× tighter) for configurations not certified.
+        compiled: the compiled tracker (True), the NumPy one (False) or the default
+            (None: :func:`use_compiled_tracker`); both follow the same rules.
     """
-    ends = _track_in_chunks(start, target, predictor_tol)
+    if compiled is None:
+        compiled = use_compiled_tracker(target.offset.shape[1])
+    ends = _track_in_chunks(start, target, predictor_tol, compiled)
     tol = predictor_tol
     for _ in range(retries):
         redo = np.flatnonzero(~ends.certified)
         if redo.size == 0:
             break
         tol *= 0.01
-        again = _track_in_chunks(start, target.take(redo), tol)
+        again = _track_in_chunks(start, target.take(redo), tol, compiled)
         fails_before = (ends.kind[redo] == EndKind.FAILED).sum(axis=1)
         better = again.certified | ((again.kind == EndKind.FAILED).sum(axis=1) <= fails_before)
         for name in ("x", "normal", "kind", "certified"):
@@ -125,11 +159,12 @@ def track_configurations(
     return ends
 
 
-def _track_in_chunks(start: StartSystem, target: RodParameters, tol: float) -> EndPoints:
+def _track_in_chunks(start: StartSystem, target: RodParameters, tol: float,
+                     compiled: bool) -> EndPoints:
     n_conf = target.offset.shape[1]
     if n_conf <= CHUNK:
-        return _track(start, target, tol)
-    parts = [_track(start, target.take(np.arange(i, min(i + CHUNK, n_conf))), tol)
+        return _track(start, target, tol, compiled)
+    parts = [_track(start, target.take(np.arange(i, min(i + CHUNK, n_conf))), tol, compiled)
              for i in range(0, n_conf, CHUNK)]
     return EndPoints(*(np.concatenate([getattr(p, f) for p in parts])
                        for f in ("x", "normal", "kind", "certified", "steps")))
@@ -177,18 +212,21 @@ def classify(x: np.ndarray, t: np.ndarray, status: np.ndarray, cond: np.ndarray)
     return kind
 
 
-def _track(start: StartSystem, target: RodParameters, predictor_tol: float) -> EndPoints:
+def _track(start: StartSystem, target: RodParameters, predictor_tol: float,
+           compiled: bool = False) -> EndPoints:
     n_conf = target.offset.shape[1]
     n_paths = start.solutions.shape[0]
     homotopy = StudyHomotopy.between(start.parameters, target, start.patch)
     cols = np.repeat(np.arange(n_conf), n_paths)
     single = n_conf == 1
+    if compiled:
+        result = _track_compiled(homotopy, start.solutions, n_conf, predictor_tol)
+    else:
+        def evaluate(x, t, rows):
+            return homotopy.evaluate(x, t, None if single else cols[rows])
 
-    def evaluate(x, t, rows):
-        return homotopy.evaluate(x, t, None if single else cols[rows])
-
-    result = track_paths(evaluate, np.tile(start.solutions, (n_conf, 1)), stop=_stop,
-                         predictor_tol=predictor_tol, max_step=0.2)
+        result = track_paths(evaluate, np.tile(start.solutions, (n_conf, 1)), stop=_stop,
+                             predictor_tol=predictor_tol, **TRACKER_OPTIONS)
     x = result.x
     cond = np.full(x.shape[0], np.inf)
     idx = np.flatnonzero(result.status == PathStatus.REACHED)
@@ -204,6 +242,24 @@ def _track(start: StartSystem, target: RodParameters, predictor_tol: float) -> E
     certified &= distinct_regular(normal, kind) & closed_under_conjugation(normal, kind)
     steps = result.steps.reshape(n_conf, n_paths).sum(axis=1)
     return EndPoints(x, normal, kind, certified, steps)
+
+
+def _track_compiled(homotopy: StudyHomotopy, start: np.ndarray, n_conf: int,
+                    predictor_tol: float) -> TrackResult:
+    """The compiled tracker (:mod:`pkmkit.solve.six_rod_kernel`) on every path of ``n_conf``
+    configurations (path ``p``: configuration ``p // 40``, start ``p % 40``)."""
+    from pkmkit.solve import six_rod_kernel as kernel
+
+    values = {**TRACKER_OPTIONS, "predictor_tol": predictor_tol, "diverged": DIVERGED_RATIO,
+              "late_t": LATE_T, "large": LARGE_RATIO, "null_stop": NULL_STOP}
+    opts = np.array([values[name] for name in kernel.OPTION_NAMES], dtype=float)
+    n = n_conf * start.shape[0]
+    x, t = np.empty((n, start.shape[1]), dtype=complex), np.empty(n)
+    status, steps, rejected = (np.empty(n, dtype=np.int64) for _ in range(3))
+    kernel.track_range(np.ascontiguousarray(start), n_conf,
+                       np.ascontiguousarray(homotopy.coeffs), homotopy.patch, BASIS_INDEX,
+                       BASIS_SCALE, opts, 0, n, x, t, status, steps, rejected)
+    return TrackResult(x=x, t=t, status=status, steps=steps, rejected=rejected)
 
 
 def _polish(homotopy: StudyHomotopy, x: np.ndarray, cols, iterations: int = 3):

@@ -160,6 +160,8 @@ def _basis_images() -> tuple[np.ndarray, np.ndarray]:
 
 
 _BASIS_INDEX, _BASIS_SCALE = _basis_images()
+#: ``(17, 8)`` gather indices (8: zero) and scales of the maps ``Z_m`` (compiled tracker).
+BASIS_INDEX, BASIS_SCALE = _BASIS_INDEX, _BASIS_SCALE
 #: Number of coefficients per rod in the expansion ``Q_j x = Σ_m c_jm Z_m(x)``.
 N_COEFFS = _BASIS_INDEX.shape[0]
 
