@@ -97,6 +97,7 @@ def test_analyze_deflection_beyond_the_linear_model_exits_3(run):
     assert fine.exit_code == 0 and "doubtful" not in fine.output
 
 
+@pytest.mark.ci
 def test_map_of_deflections_beyond_the_linear_model_exits_3(run, tmp_path):
     """A map of 0.86 km deflections under 1e9 N was drawn with exit 0."""
     args = ["map", "orthoglide", "--index", "deflection", "--slice", "z=0", "--resolution",

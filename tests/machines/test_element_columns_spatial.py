@@ -6,6 +6,7 @@ frame's rotation change taken as R₀ᵀ R₋ instead of R₋ R₀ᵀ on one sid
 whose element-described machines are planar: rotations about one axis commute)."""
 
 import numpy as np
+import pytest
 
 import pkmkit
 from pkmkit.exceptions import PkmError
@@ -21,6 +22,7 @@ def _tool(m, q):
     return r.pose[0, :3], rotvec_to_matrix(r.tool_frame[:, 3:])[0]
 
 
+@pytest.mark.ci
 def test_element_columns_match_central_differences_on_a_spatial_chain(tmp_path):
     path = tmp_path / "tripteor-elements.toml"
     path.write_text(machine_file_text(pkmkit.machine("tripteor-x7")))
