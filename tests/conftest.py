@@ -2,7 +2,9 @@
 settings profiles, registered here once for the whole session and loaded here only:
 
 - ``dev`` (alias ``default``): 25 examples per property, the same on every run (``derandomize``);
-- ``ci`` (when ``CI`` is set, as in ``.ci/run``): 100 examples, the same on every run;
+- ``ci``: 100 examples, the same on every run: ``.ci/run``'s second stage (``-m "slow or ci or
+  hypothesis"``: the heavy tests and every property test again with 4x the examples); the
+  ordinary run keeps ``dev`` even when ``CI`` is set (docs/testing.md, "Suite time");
 - ``fuzz``: 400 examples, the same on every run (``.ci/run``'s gate of ``tests/fuzz``);
 - ``explore``: 400 new random examples on every run, to hunt for bugs by hand;
 - ``mutation``: ``dev``'s examples without shrinking failures (``tools/mutation.py
@@ -38,8 +40,7 @@ settings.register_profile("explore", settings.get_profile("fuzz"), derandomize=F
 # kill, the smallest failing example is not needed)
 settings.register_profile("mutation", settings.get_profile("dev"),
                           phases=[Phase.explicit, Phase.reuse, Phase.generate])
-settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE")
-                      or ("ci" if os.environ.get("CI") else "dev"))
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or "dev")
 
 
 ALL_PRESETS = [m for m in pkmkit.machines() if m not in ALIASES]

@@ -161,6 +161,7 @@ def test_design_population_on_dask_is_identical(client):
     assert remote.best == serial.best
 
 
+@pytest.mark.ci
 def test_cli_scheduler_option(client, tmp_path):
     """--scheduler ADDRESS on map, workspace and optimize: same output as the serial run."""
     import json

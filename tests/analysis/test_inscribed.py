@@ -40,6 +40,7 @@ def test_largest_box_stays_within_bounds():
     assert 2 * h == pytest.approx(1.0, rel=1e-9) and center[0] == pytest.approx(0.5)
 
 
+@pytest.mark.ci
 def test_orthoglide_cube_is_centred_on_the_symmetry_axis_and_beats_the_grid():
     """The Orthoglide is symmetric about x = y = z: so is its largest cube under 1/2 ≤ λ ≤ 2.
     The refined cube is at least as large as any cube about the grid's centre."""
@@ -58,6 +59,7 @@ def test_orthoglide_cube_is_centred_on_the_symmetry_axis_and_beats_the_grid():
     assert hi == pytest.approx(2.0, rel=1e-6) or lo == pytest.approx(0.5, rel=1e-6)
 
 
+@pytest.mark.ci
 def test_refined_square_does_not_depend_on_the_grid_and_matches_a_fine_grid():
     """Five-bar, 1/3 ≤ λ ≤ 3 in a box that cuts the workspace: the refined square from a 31- and
     a 61-point grid agree to 1e-4, and a 601-point grid (no refinement: an independent method,
@@ -80,6 +82,7 @@ def test_refined_square_does_not_depend_on_the_grid_and_matches_a_fine_grid():
     assert coarse.side - fine.side <= 2.5 * fine_grid.step
 
 
+@pytest.mark.ci
 def test_seed004_useful_workspace_squares_are_refined():
     """The issue's figures: the squares inscribed in seed 004's useful workspaces were 0.5–0.9 %
     small when only grown about the grid's centre."""

@@ -73,6 +73,7 @@ def joint_square_half_side(m, bounds):
     return lo
 
 
+@pytest.mark.ci
 def test_five_bar_designs_compared_as_in_seed_004():
     """Isotropic vs biglide with the same AB and L and 1/3 < λ < 3: the square inscribed in the
     useful workspace is about 7 times larger (by area) for the isotropic design. The joint
@@ -140,6 +141,7 @@ def isotropic_five_bar_factors(q, length=0.5):
     return np.where(np.isnan(out[0]), out[1], out[0])
 
 
+@pytest.mark.ci
 def test_isotropic_useful_workspace_range_against_independent_direct_model():
     """The exact λ range over the useful workspace = extremes over the image of the joint
     square, checked by a dense independent sweep of the square (its edges included)."""
@@ -161,6 +163,7 @@ def test_isotropic_useful_workspace_range_against_independent_direct_model():
                                [3.0, 0.6], atol=1e-4)
 
 
+@pytest.mark.ci
 def test_five_bar_results_do_not_depend_on_ab():
     """Moving B along its slide line only offsets ρ2: every result of the study is unchanged
     (joint square side, useful area, inscribed square, exact factor ranges)."""

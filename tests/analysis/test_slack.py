@@ -66,6 +66,7 @@ def test_no_gradient_without_rates():
     assert slack_and_gradient(hexapod, _points(hexapod, 3, 0, 0.01), stiff, 1.0, (0,)) is None
 
 
+@pytest.mark.ci
 def test_refined_box_as_with_finite_differences(monkeypatch):
     """The hexapod's square (z = 0.8 m) refined with the analytic gradient equals the one
     refined with finite differences to the refinement's tolerance (1e-4 of the side)."""

@@ -87,6 +87,7 @@ def orthoglide_q1_q2():
     return brentq(excess, -0.2, 0.0, xtol=1e-15), brentq(excess, 0.0, 0.1, xtol=1e-15)
 
 
+@pytest.mark.ci
 def test_orthoglide_prototype_cube_between_q1_and_q2():
     """Seed 001: the cube whose diagonal joins Q1 and Q2 keeps the factors within [0.5, 2];
     with L = 310 mm its side is 200 mm and the slider stroke 257 mm (r = 0.78). Reference:
@@ -121,6 +122,7 @@ def test_orthoglide_prototype_cube_between_q1_and_q2():
     assert "λ" in bigger.worst["bounds"]
 
 
+@pytest.mark.ci
 def test_orthoglide_workspace_inscribed_cube():
     m = pkmkit.machine("orthoglide")
     grid = make_grid([-0.2] * 3, [0.2] * 3, free=(0, 1, 2), base=np.zeros(3),
@@ -283,6 +285,7 @@ def test_parallel_singularity_splits_the_workspace():
     assert not w.feasible[diagonal, diagonal, diagonal][past].any()
 
 
+@pytest.mark.ci
 def test_useful_workspace_on_a_coarse_grid():
     """Reviewer's case ``useful-workspace five-bar --bounds 0.5,2 --resolution 11``: the grid
     square around home had side 0 ("criteria fail there" where λ = 1). The dense bisection now
@@ -301,6 +304,7 @@ def test_useful_workspace_on_a_coarse_grid():
         useful_workspace(m, Criteria(bounds=(1.5, 3.0)), resolution=11)
 
 
+@pytest.mark.ci
 def test_useful_workspace_with_three_actuators():
     """The same procedure with cubes for the Orthoglide, independent of the grid."""
     m = pkmkit.machine("orthoglide")

@@ -47,6 +47,7 @@ def _worst_miss(fixed, path, true, nominal):
     return worst
 
 
+@pytest.mark.ci
 def test_the_loaded_tool_point_follows_the_program(machines):
     """The sag (0.9 µm here) is corrected like the calibration: with --gravity the loaded tool
     point stays within the tolerance of the programmed path; without it misses by the sag."""

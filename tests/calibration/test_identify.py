@@ -55,6 +55,7 @@ def test_noise_free_tripteor_is_fitted_exactly():
     assert res.validation.after.max < 1e-6
 
 
+@pytest.mark.ci
 def test_linear_delta_recovers_base_parameters_and_matches_scipy():
     m = pkmkit.machine("linear-delta")
     rng = np.random.default_rng(2)
@@ -78,6 +79,7 @@ def test_linear_delta_recovers_base_parameters_and_matches_scipy():
         np.testing.assert_allclose(jac[:, k], fd, atol=1e-6 * np.abs(jac).max())
 
 
+@pytest.mark.ci
 def test_standard_deviations_match_the_scatter_over_noise_draws():
     """z-scores of the identified values over 25 noise draws: spread ≈ 1 when the stds are
     right (the truth is mapped onto the identified parameters by a noise-free fit)."""
@@ -115,6 +117,7 @@ def test_robust_loss_reports_and_resists_outliers(delta_case):
     assert robust.validation.after.rms < 1.3 * delta_case.result.validation.after.rms
 
 
+@pytest.mark.ci
 def test_frame_identified_jointly_and_fixed():
     """The same noisy readings expressed in the machine frame and in a tracker frame: with the
     frame given (fixed) or identified jointly, the calibration fits them equally well."""

@@ -13,6 +13,7 @@ import pytest
 from pkmkit.calibration import studies
 
 
+@pytest.mark.ci
 def test_verne_part_within_the_seed_bounds():
     study = studies.verne_part(sections=120)
     s = study.summary()
@@ -102,6 +103,7 @@ def _same_lengths(mm: dict, m: dict, factor: float, path: str = "") -> None:
             assert value == pytest.approx(factor * m[key], rel=1e-12), f"{path}.{key}"
 
 
+@pytest.mark.ci
 def test_tripteor_residual_scales_with_the_injected_tracker_noise():
     """The synthetic Tripteor residuals are the injected noise: the same study (same defects,
     poses and draws) without noise leaves a floor of a few µm (weakly identifiable defects
@@ -154,6 +156,7 @@ def test_simulated_registration_follows_table_5_4_direction_convention():
     assert dn[0] @ axis == pytest.approx(-1.0, abs=1e-12)
 
 
+@pytest.mark.ci
 def test_verne_part_residual_scales_with_the_injected_cmm_noise():
     """Seed 003's synthetic part: the identification residual is the CMM noise (none → a floor
     well below, twice the noise → twice the residual) and the compensated part is best without

@@ -83,6 +83,7 @@ def test_rigid_motion_removal_is_the_linearised_kabsch_alignment():
     assert np.abs(basis.T @ once.reshape(-1)).max() < 1e-12 * np.abs(once).max() * len(pts)
 
 
+@pytest.mark.ci
 def test_monte_carlo_scatter_matches_the_predicted_band(tracker_setup):
     """Re-identify with 60 re-sampled noise draws: the scatter of the identified tool points
     (each draw aligned rigidly on the reference, the frame being free) matches the predicted

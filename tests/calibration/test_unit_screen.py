@@ -74,6 +74,7 @@ def test_ballbar_lengths_25_4_times_too_large_name_the_unit():
     assert "25.4× too large (inches and millimetres mixed up?)" in res.verdict.causes[0].message
 
 
+@pytest.mark.ci
 def test_a_part_25_4_times_too_large_is_refused_naming_the_unit(part):
     m, data = part
     with pytest.raises(InputError, match="does not assemble") as info:
@@ -82,6 +83,7 @@ def test_a_part_25_4_times_too_large_is_refused_naming_the_unit(part):
     assert "rescaled ×0.0393701" in str(info.value)
 
 
+@pytest.mark.ci
 def test_a_part_25_4_times_too_small_is_named_before_the_identification(part, monkeypatch):
     """The identification walked the defects away for 561 iterations (20–100 s) before the
     verdict named the unit: now the screen names it and nothing is solved."""

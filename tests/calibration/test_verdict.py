@@ -26,6 +26,7 @@ def test_chi2_upper_tail_against_the_closed_form_for_two_degrees_of_freedom():
         assert p == pytest.approx(math.exp(-x / 2), rel=1e-12)
 
 
+@pytest.mark.ci
 def test_chi2_tails_agree_with_scipy_stats():
     from scipy.stats import chi2
 

@@ -17,6 +17,7 @@ def test_analyze(run, as_json):
     assert "force transmission factors" in text and "ellipsoid axis 2" in text
 
 
+@pytest.mark.ci
 def test_map_index_and_actuators(run, tmp_path, as_json):
     out = tmp_path / "cond.png"
     data = as_json(run("map", "linear-delta", "--index", "condition", "--slice", "z=0",
@@ -32,6 +33,7 @@ def test_map_index_and_actuators(run, tmp_path, as_json):
     assert planar["plane"] == ["x", "y"]
 
 
+@pytest.mark.ci
 def test_workspace_json_summary(run, tmp_path, as_json):
     data = as_json(run("workspace", "orthoglide", "--bounds", "0.5,2", "--resolution", "41",
                        "--json", "--out", tmp_path / "w.png"))
@@ -55,6 +57,7 @@ def test_workspace_prescribed_cube(run, as_json):
     assert bad.exit_code == 0 and "NOT feasible" in bad.output and "λ" in bad.output
 
 
+@pytest.mark.ci
 def test_useful_workspace(run, tmp_path, as_json):
     data = as_json(run("useful-workspace", "five-bar", "--bounds", "0.3333333,3",
                        "--resolution", "151", "--json", "--out", tmp_path / "u.png"))
@@ -89,6 +92,7 @@ def test_useful_workspace_coarse_grid_and_three_actuators(run, as_json):
     assert "actuator cube" in text.output and "inscribed cube" in text.output
 
 
+@pytest.mark.ci
 def test_planar_map_ignores_unreachable_poses(run, tmp_path, as_json):
     """λ_min over the five-bar's box: the unreachable corner (0.4, −0.6) used to be reported
     as the minimum 0, and κ = inf as the maximum."""
@@ -135,6 +139,7 @@ def test_workspace_gci_and_fully_feasible_box(run, as_json):
     assert "global conditioning index" in text
 
 
+@pytest.mark.ci
 def test_workspace_slice_box_and_centre(run, as_json):
     base = ("workspace", "orthoglide", "--bounds", "0.5,2", "--resolution", "41")
     full = as_json(run(*base, "--slice", "z=0.05", "--box", "-0.2,0.2,-0.2,0.2,-0.2,0.2",

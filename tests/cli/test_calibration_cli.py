@@ -41,6 +41,7 @@ def delta_run(tmp_path_factory):
     return d, json.loads(out.stdout)
 
 
+@pytest.mark.ci
 def test_simulate_writes_measurements_and_truth(delta_run):
     d, _ = delta_run
     text = (d / "ident.csv").read_text()
@@ -102,6 +103,7 @@ def test_report_content(delta_run):
     assert len(residuals) == 2 + 60 + 25
 
 
+@pytest.mark.ci
 def test_report_embeds_the_3d_view_of_the_correction(delta_run):
     """Issue 23 §5: report.html embeds the 3-D view (``pkmkit view --calibration``): the
     machine with a slider per actuator, and the tool error of the identified machine against
@@ -127,6 +129,7 @@ def test_report_embeds_the_3d_view_of_the_correction(delta_run):
 
 @pytest.mark.skipif(not (shutil.which("chromium") or shutil.which("chromium-browser")),
                     reason="headless Chromium is not installed")
+@pytest.mark.ci
 def test_report_with_its_view_loads_in_a_browser(delta_run):
     """The report opens in headless Chromium without script errors and its view is drawn:
     the page script reports the tool point shown (the nominal machine at home, mm)."""
@@ -143,6 +146,7 @@ def test_report_with_its_view_loads_in_a_browser(delta_run):
     np.testing.assert_allclose(shown, np.asarray(m.fk(m.home_q)) * 1000, atol=1e-6)
 
 
+@pytest.mark.ci
 def test_report_without_the_view(tmp_path, delta_run):
     from click.testing import CliRunner
 
@@ -173,6 +177,7 @@ def test_calibrate_text_output(run, delta_run):
     assert "likely cause (noise-or-model)" in res.output
 
 
+@pytest.mark.ci
 def test_register_reproduces_table_5_4_and_feeds_calibrate(run, as_json, tmp_path):
     lts = tmp_path / "lts.csv"
     bcs = tmp_path / "bcs.csv"

@@ -7,11 +7,13 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 import pkmkit
 from pkmkit.calibration.gravity import gravity_deflection
 
 
+@pytest.mark.ci
 def test_report_and_json_carry_the_sag_at_the_measured_configurations(run, tmp_path):
     res = run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 30,
               "--defects", "random", "--seed", 3, "--units", "mm", "--out", tmp_path / "m.csv")

@@ -237,6 +237,7 @@ def test_noise_stated_too_small_is_named_as_such(run, tmp_path):
                    tmp_path / "h.csv")).output.count("verdict: PASSED") == 1
 
 
+@pytest.mark.ci
 def test_a_file_in_inches_that_says_mm_is_judged_even_when_nothing_converges(tmp_path):
     """Readings written in inches in a millimetre file: no plausible machine fits them, the
     identification does not converge (exit 1 and a traceback-free error before, no verdict);

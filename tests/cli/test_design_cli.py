@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 
+@pytest.mark.ci
 def test_design_orthoglide(run, as_json):
     data = as_json(run("design", "orthoglide", "--cube", "200", "--bounds", "0.5,2",
                        "--units", "mm", "--json"))
@@ -19,6 +20,7 @@ def test_design_orthoglide(run, as_json):
     assert "compactness" in text
 
 
+@pytest.mark.ci
 def test_design_five_bar(run, as_json):
     data = as_json(run("design", "five-bar", "--square", "0.2", "--bounds", "0.333333,3",
                        "--json"))
@@ -27,6 +29,7 @@ def test_design_five_bar(run, as_json):
     assert iso["L"] < big["L"] and iso["verified"]["feasible"] and big["verified"]["feasible"]
 
 
+@pytest.mark.ci
 def test_optimize_single_and_pareto(run, tmp_path, as_json):
     out = tmp_path / "single"
     data = as_json(run("optimize", "linear-delta", "--vary", "R=0.5:1.0", "--vary",
@@ -109,6 +112,7 @@ def test_optimize_reports_infeasible_specification(run, tmp_path):
     assert "gci>=0.99" in result.output and "best" in result.output
 
 
+@pytest.mark.ci
 def test_optimize_units_are_consistent(run, tmp_path):
     """--units mm: the constraint value, the variables and the region are read in mm and every
     output is in mm (angles in degrees) and says so. Before, "stroke<=750" was compared with
@@ -194,11 +198,13 @@ def test_design_orthoglide_tie_at_the_reference_points(run, as_json):
     assert data["notes"] == []
 
 
+@pytest.mark.ci
 def test_design_orthoglide_degenerate_bounds_say_so(run):
     result = run("design", "orthoglide", "--cube", "0.2", "--bounds", "0.999999,1.000001")
     assert result.exit_code == 0 and "note: degenerate specification" in result.output
 
 
+@pytest.mark.ci
 def test_design_five_bar_both_reports_the_isotropic_design(run, as_json):
     """With [0.9, 1.1] the biglide cannot work (λ = 0.707 at home) but the isotropic design
     can: the default --design both reports it and says why the biglide is infeasible."""

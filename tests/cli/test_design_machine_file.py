@@ -42,6 +42,7 @@ def assert_same_machine(ref, loaded, center, side):
     np.testing.assert_allclose(loaded.home_pose, ref.home_pose, rtol=0, atol=1e-12)
 
 
+@pytest.mark.ci
 def test_design_orthoglide_writes_machine_file(run, tmp_path, as_json):
     path = tmp_path / "ortho.toml"
     data = as_json(run("design", "orthoglide", "--cube", "200", "--bounds", "0.5,2", "--units",
@@ -68,6 +69,7 @@ def test_design_linear_delta_writes_machine_file(run, tmp_path):
     assert_same_machine(ref.machine, pkmkit.load(path), ref.center, 0.2)
 
 
+@pytest.mark.ci
 def test_design_five_bar_writes_machine_file(run, tmp_path):
     path = tmp_path / "five.toml"
     result = run("design", "five-bar", "--square", "0.2", "--bounds", "0.5,2", "--design",

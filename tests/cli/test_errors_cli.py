@@ -25,6 +25,7 @@ def test_defect_listing_and_bad_names(run, as_json):
     assert bad.exit_code == 1 and "unknown defect or owner 'dZ9'" in bad.output
 
 
+@pytest.mark.ci
 def test_sensitivity_and_tolerance_write_figures(run, as_json, tmp_path):
     out = as_json(run("errors", "linear-delta", "--sensitivity", "--units", "mm", "--region",
                       "-100,100,-100,100,0,200", "--points", "20", "--out", tmp_path,
@@ -73,6 +74,7 @@ def test_identifiability_and_pose_selection(run, as_json, tmp_path):
     assert wrong.exit_code == 1 and "rod machines" in wrong.output
 
 
+@pytest.mark.ci
 def test_demo_summary(tmp_path):
     from pkmkit.calibration.identifiability import observability
     from pkmkit.demos.errors import error_summary

@@ -114,6 +114,7 @@ def test_a_machine_file_in_mm_without_units_is_refused(run, tmp_path):
     assert run("ik", source, "--pose", "0,0,0").exit_code == 0
 
 
+@pytest.mark.ci
 def test_an_absurd_feed_the_path_never_reaches_is_refused(run):
     """--feed 120 meant in mm/s, read as 120 m/s: the run went at a few cm/s, exit 0."""
     result = run("path", "orthoglide", "--line", "0,0,0,0.1,0,0", "--feed", "120", "--accel",

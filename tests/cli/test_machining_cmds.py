@@ -8,6 +8,7 @@ import pytest
 from .conftest import parse_json
 
 
+@pytest.mark.ci
 def test_gcode_to_identified_parameters(run, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     out = run("machined-part", "program", "verne", "--out", "part.nc")

@@ -78,6 +78,7 @@ def _plan(path: Path) -> tuple[list[str], list[list[str]]]:
     return rows[0], rows[1:]
 
 
+@pytest.mark.ci
 def test_ballbar_plan_tool_lengths_in_mm_and_m(run, tmp_path, monkeypatch):
     """The documented default tools are 0 and 100 mm: given explicitly in mm or in m, the same
     plan; other tools change only the second tool's rows."""
@@ -102,6 +103,7 @@ def _cmm(path: Path) -> tuple[list[str], list[list[str]]]:
     return _plan(path)
 
 
+@pytest.mark.ci
 def test_machined_part_origin_in_mm_and_m(run, tmp_path, monkeypatch):
     """``--origin`` is in the command's unit: 10 mm or 0.01 m cut and probe the same part (the
     same machine: random defects of seed 0), and the part moves by 10 mm along x against the

@@ -54,6 +54,7 @@ def test_kinematics_commands_are_light(args):
     assert _heavy(modules) == []
 
 
+@pytest.mark.ci
 def test_listing_machines_builds_them_without_the_heavy_packages():
     """``pkmkit machines`` builds every built-in machine; the full-pose and joint-chain ones use
     SciPy's rotations to assemble, nothing heavier."""
@@ -66,6 +67,7 @@ def test_listing_machines_builds_them_without_the_heavy_packages():
                                                   for a in allowed)] == []
 
 
+@pytest.mark.ci
 def test_a_lazy_command_still_runs_with_its_imports():
     modules = _modules_after("""
         from pkmkit.cli.main import cli
@@ -107,6 +109,7 @@ def test_help_lists_every_command(run):
     ["jacobian", "linear-delta", "--pose", "0,0,0"],
     ["jacobian", "gough-stewart", "--pose", "0,0,800,0,0,0"],
 ])
+@pytest.mark.ci
 def test_one_shot_commands_import_no_compiler(args):
     """A one-pose command never imports Numba (≈ 0.3 s of CPU, and its first compiled call
     loads SciPy's linear algebra: ≈ 0.6 s in all); ``--help`` and the translational ones not
@@ -125,6 +128,7 @@ def test_one_shot_commands_import_no_compiler(args):
 
 
 @pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+@pytest.mark.ci
 def test_a_rod_leg_batch_imports_no_compiler(tmp_path, suffix):
     """``pkmkit ik`` of a translational machine on a table runs the closed form's NumPy path
     (modes and statuses in the same pass): 5,000 rows — above the size from which the compiled

@@ -19,6 +19,7 @@ def _hexapod_feasible(m, points):
     return ((lengths >= lo) & (lengths <= hi)).all(axis=1)
 
 
+@pytest.mark.ci
 def test_hexapod_workspace_at_a_held_orientation_matches_the_strut_lengths(run, as_json):
     m = pkmkit.machine("gough-stewart")
     data = as_json(run("workspace", "gough-stewart", "--box", "-800,800,-800,800,300,1300",
@@ -90,6 +91,7 @@ def test_joint_chain_workspace_counts_passive_joint_ranges(run, as_json):
     assert counts["strokes"] == int(inside.sum())
 
 
+@pytest.mark.ci
 def test_joint_chain_map_and_its_indices(run, tmp_path, as_json):
     bad = run("map", "tripteor-x7", "--index", "serial_distance", "--slice", "z=1.84",
               "--out", tmp_path / "s.png")

@@ -10,6 +10,7 @@ def test_isotropy_of_j_inverse_fixes_the_slide_orientations():
     assert isotropic_orientations() == [(0.0, 90.0)]
 
 
+@pytest.mark.ci
 def test_sized_designs_hold_the_square():
     iso = size_five_bar(0.2, (1 / 3, 3.0), design="isotropic")
     big = size_five_bar(0.2, (1 / 3, 3.0), design="biglide")
@@ -44,6 +45,7 @@ def test_bad_five_bar_specifications():
         size_five_bar(-1.0, (1 / 3, 3.0))
 
 
+@pytest.mark.ci
 def test_narrow_bounds_around_the_isotropic_configuration():
     """[0.99, 1.01] holds near home (λ = 1 there) but only in a tiny useful zone: the sizing
     must find it (it said "criteria fail there" on a coarse joint grid) and call the

@@ -74,6 +74,7 @@ def test_shortest_arms_for_the_seed_cube(shortest):
     np.testing.assert_allclose(res.machine.model.q_min, res.q_min)
 
 
+@pytest.mark.ci
 def test_no_shorter_arms_work(shortest):
     """1 % shorter arms: no slide offset d keeps the cube within the bounds (fine scan of d,
     seed formulas, 9³ poses)."""
@@ -84,6 +85,7 @@ def test_no_shorter_arms_work(shortest):
     assert feasible(shortest.d, shortest.L, (0.4, 2.5), pts)
 
 
+@pytest.mark.ci
 def test_most_compact_design_with_bounded_arms():
     """Largest Lw / stroke with L ≤ 1.3 m (the seed's set A arms): no design of a (d, L) grid
     does better (seed formulas, 7³ poses; the grid stroke under-estimates the true one, hence

@@ -64,6 +64,7 @@ def dominates(a, b):
     return a[0] >= b[0] and a[1] >= b[1] and (a[0] > b[0] or a[1] > b[1])
 
 
+@pytest.mark.ci
 def test_pareto_front_is_non_dominated_and_feasible(tmp_path):
     problem = delta_problem([Objective("compactness", "max"), Objective("gci", "max")])
     result = optimize(problem, seed=1, generations=10, population=24)
@@ -124,6 +125,7 @@ def test_outputs_in_command_line_units(tmp_path):
     assert result.summary()["units"] == {"length": "m", "area": "m^2", "angle": "rad"}
 
 
+@pytest.mark.ci
 def test_cmaes_and_constraints():
     """Shortest stroke with GCI ≥ 0.35: CMA-ES does at least as well as a scan of (R, L), the
     constraint holds and is active at the optimum (a larger GCI costs stroke), and the best

@@ -47,6 +47,7 @@ def test_independent_brute_force_of_the_whole_cube():
                         Criteria(bounds=(0.5, 2.0))).feasible
 
 
+@pytest.mark.ci
 def test_scaling_and_bounds_sweep():
     """L scales with Lw; widening the bounds shrinks the machine (Lw/L grows) but the
     compactness Lw/stroke decreases — the seed's claim that r increases is not reproduced."""
@@ -97,6 +98,7 @@ def test_sweep_of_bound_pairs_is_accepted_and_verified(bounds):
     assert not bigger.feasible
 
 
+@pytest.mark.ci
 def test_very_wide_bounds_are_limited_by_a_singularity():
     """[1e-9, 1e9]: along the diagonal the factors stay within the bounds up to singularities,
     and the cube between those ends crosses singular configurations. Every design feasible for

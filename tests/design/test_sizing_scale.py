@@ -5,10 +5,12 @@ smaller (arms, slide offset, strokes). Checked from the seed's 0.5 m cube down t
 would no longer contain the answer."""
 
 import numpy as np
+import pytest
 
 from pkmkit.design.linear_delta import size_linear_delta
 
 
+@pytest.mark.ci
 def test_linear_delta_sized_for_a_cube_a_thousand_times_smaller_is_a_thousand_times_smaller():
     big = size_linear_delta(0.5, (0.4, 1.2), samples=9, search_samples=5)
     small = size_linear_delta(0.5e-3, (0.4, 1.2), samples=9, search_samples=5)
@@ -21,6 +23,7 @@ def test_linear_delta_sized_for_a_cube_a_thousand_times_smaller_is_a_thousand_ti
     np.testing.assert_allclose(small.compactness, big.compactness, rtol=1e-9)
 
 
+@pytest.mark.ci
 def test_most_compact_linear_delta_for_a_cube_1000_times_smaller_is_1000_times_smaller():
     kw = {"objective": "compactness", "samples": 9, "search_samples": 5}
     big = size_linear_delta(0.5, (0.4, 1.2), max_leg=1.5, **kw)

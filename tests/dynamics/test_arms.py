@@ -81,6 +81,7 @@ def test_sizing_where_the_combined_stress_binds():
     assert a.stress_safety == pytest.approx(safety, rel=1e-9)
 
 
+@pytest.mark.ci
 def test_sizing_is_the_lightest_admissible_rod():
     design = size_arm(axial_force=1000.0, length=1.04, buckling_safety=3.0)
     assert design.feasible
@@ -94,6 +95,7 @@ def test_sizing_is_the_lightest_admissible_rod():
     assert stiff.analysis.mass == pytest.approx(7700 * 5e7 * 1.04**2 / 210e9, rel=1e-8)
 
 
+@pytest.mark.ci
 def test_infeasible_and_bad_sizing():
     design = size_arm(axial_force=1e7, length=1.04, diameter_range=(0.005, 0.02))
     assert not design.feasible and "buckling" in design.message
@@ -111,6 +113,7 @@ def test_infeasible_and_bad_sizing():
 
 
 @pytest.mark.parametrize("force", [56.0, 1000.0, 2e4])
+@pytest.mark.ci
 def test_free_bore_tube_is_the_thinnest_wall_at_the_buckling_limit(force):
     """With the bore free, the lightest tube has the thinnest allowed wall (1 mm) and the outer
     diameter where Euler buckling reaches its safety factor: found here by bisection."""
@@ -130,6 +133,7 @@ def test_free_bore_tube_is_the_thinnest_wall_at_the_buckling_limit(force):
     assert a.outer_diameter - a.inner_diameter == pytest.approx(0.002, rel=1e-8)
 
 
+@pytest.mark.ci
 def test_tube_with_a_fixed_bore():
     """The seed's tubes have a 25 mm bore: the lightest tube with that bore has the outer
     diameter where buckling reaches its safety factor (bisection here), at least 2 walls wider;

@@ -11,6 +11,7 @@ samples (10 ms apart), independently of the continuous-time search."""
 import itertools
 
 import numpy as np
+import pytest
 
 import pkmkit
 from pkmkit.dynamics.trajectory import simulate_path
@@ -18,6 +19,7 @@ from pkmkit.motion.joints import Limits
 from pkmkit.motion.paths import Path, line
 
 
+@pytest.mark.ci
 def test_first_excursion_is_the_earliest_of_all_actuators():
     m = pkmkit.machine("linear-delta-table-iv1")
     p0 = np.array([0.0, 0.0, 0.2])

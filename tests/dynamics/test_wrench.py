@@ -16,6 +16,7 @@ def test_interpolation_and_hold():
                                [[0, 0, 0], [5, 0, -50], [10, 10, -100], [10, 20, -100]])
 
 
+@pytest.mark.ci
 def test_time_series_drives_the_forces(tmp_path):
     """Massless machine: the actuator forces are Jᵀ of the sampled cutting force, sample by
     sample."""

@@ -322,6 +322,7 @@ def test_a_module_in_inches_or_metres(tmp_path, units):
     assert np.abs(_joint_points(m, pose) - _joint_points(m, x)).max() <= TOL
 
 
+@pytest.mark.ci
 def test_a_six_slide_hexapod(tmp_path):
     """Full-pose slides (no built-in has them): inverse on 10⁵ poses, forward on 10³."""
     from .six_slides import six_slide_machine

@@ -127,6 +127,7 @@ def module(request, tmp_path_factory):
     return ChainModule(machine, tmp_path_factory.mktemp(name))
 
 
+@pytest.mark.ci
 def test_forward_matches_pkmkit_and_refuses_where_it_does(module):
     """From home: the same tool point and axis (1e-9 m, rad) and the same refusals as pkmkit's
     direct model refusing strokes (actuators beyond theirs, passive joints beyond theirs)."""
@@ -210,6 +211,7 @@ def test_home_type_and_invalid_inputs(module):
     assert (module.forward(q)[1] == -4).all()
 
 
+@pytest.mark.ci
 def test_the_module_carries_the_calibrated_geometry(tmp_path):
     """The nominal Tripteor's module misses a calibrated Tripteor by more than the defects'
     effect: the defects did reach the calibrated file (whose round trips are above)."""

@@ -47,6 +47,7 @@ def _targets(m) -> np.ndarray:
     return np.vstack(rows)
 
 
+@pytest.mark.ci
 def test_from_home_both_take_the_branch_nearest_home(module):
     """From home (Q4 = 0): the module's joints are pkmkit's (1e-9 m, rad), every target
     reached, and |Q4| ≤ π/2 (the branch nearest home's Q4)."""

@@ -93,7 +93,9 @@ def test_the_supported_presets_are_exactly_these():
     assert exported == sorted(SUPPORTED + CHAINS + PLANAR)
 
 
-@pytest.mark.parametrize("name", SUPPORTED)
+# the first machine in the ordinary run, the others marked ci (.ci/run): 0.35 s each
+@pytest.mark.parametrize("name", [pytest.param(n, marks=[pytest.mark.ci] if k else [])
+                                  for k, n in enumerate(SUPPORTED)])
 @pytest.mark.parametrize("calibrated", [False, True], ids=["nominal", "calibrated"])
 def test_driven_actuators_settle_the_platform_where_pkmkit_puts_it(name, calibrated):
     m = pkmkit.machine(name)
@@ -198,6 +200,7 @@ def test_the_self_check_catches_a_model_off_pkmkit():
         check_mjcf_model(m, wrong)
 
 
+@pytest.mark.ci
 def test_a_six_slide_hexapod_settles_where_pkmkit_puts_it(tmp_path):
     from .six_slides import six_slide_machine
 

@@ -184,6 +184,7 @@ def test_planted_errors_are_caught():
         check_chain_mjcf(m, ChainMjcf(**{**export.__dict__, "xml": shifted}))
 
 
+@pytest.mark.ci
 def test_compatible_defects_are_exported_incompatible_ones_refused():
     m = pkmkit.machine("tripteor-x7")
     bent = m.with_defects({"dJ21": 2e-3, "db21": 1e-4, "dK12": 1e-3})

@@ -109,6 +109,7 @@ def test_command_line_writes_the_page_and_flags_a_path(tmp_path):
 
 
 @pytest.mark.skipif(CHROMIUM is None, reason="headless Chromium is not installed")
+@pytest.mark.ci
 def test_the_page_loads_draws_and_its_slider_moves_the_platform(tmp_path):
     m = pkmkit.machine("orthoglide")
     html, _ = view_html(m, steps=5)
@@ -140,6 +141,7 @@ def test_the_page_loads_draws_and_its_slider_moves_the_platform(tmp_path):
     assert drawn > 0.05
 
 
+@pytest.mark.ci
 def test_the_workspace_surface_closes_on_the_study_box():
     """The hexapod's workspace fills its study box: the surface still closes, on the box's
     faces (a layer of infeasible points one step outside)."""

@@ -73,6 +73,7 @@ def test_crank_slider_junctions_and_base_give_frame_relations(crank):
                                           if n not in r.forced_zero and n not in involved]
 
 
+@pytest.mark.ci
 def test_crank_slider_symbolic_stationarity_agrees():
     """An independent derivation: the closure T1 = T2 of eqs. (4.9)-(4.12) written in SymPy with
     first-order defect rotations, linearised in the passive joints, projected on the left null

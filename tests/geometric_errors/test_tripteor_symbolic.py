@@ -243,6 +243,7 @@ def test_the_printed_4_6_is_not_a_rotation():
     assert sp.simplify((corrected.T * corrected).subs(on_unit)) == sp.eye(3)
 
 
+@pytest.mark.ci
 def test_loop_1_3_compatibility_in_exact_arithmetic_agrees_with_the_numeric_rank(exact, numeric):
     """Forced defects and conditions, exact: the same twelve forced defects as pkmkit's numeric
     rank test, and its two conditions with the exact coefficient 1/L (dK21 + dc63/L = 0:

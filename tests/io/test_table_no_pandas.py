@@ -58,8 +58,13 @@ def inputs(tmp_path_factory) -> dict[str, Path]:
     return paths
 
 
-@pytest.mark.parametrize("source", ["parquet", "arrow", "csv"])
-@pytest.mark.parametrize("target", ["parquet", "csv"])
+# Parquet to Parquet in the ordinary run, the other pairs marked ci (.ci/run): 0.37 s each
+_CI = [pytest.mark.ci]
+
+
+@pytest.mark.parametrize("source", ["parquet", pytest.param("arrow", marks=_CI),
+                                    pytest.param("csv", marks=_CI)])
+@pytest.mark.parametrize("target", ["parquet", pytest.param("csv", marks=_CI)])
 def test_batch_reading_and_writing_do_not_import_pandas(inputs, tmp_path, source, target):
     out = tmp_path / f"out.{target}"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(Path(__file__).parents[2] / "src"),

@@ -34,6 +34,7 @@ def wrap(a):
     return np.arctan2(np.sin(a), np.cos(a))
 
 
+@pytest.mark.ci
 def test_closure_reproduces_4_8_over_the_full_crank_turn(crank):
     """Along a full turn of the crank (two degrees apart, each pose warm-started from the
     previous one, as along any path), the closure's passive joints satisfy (4.8) to 1e-12 and

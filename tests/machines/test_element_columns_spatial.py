@@ -24,6 +24,7 @@ def _tool(m, q):
     return r.pose[0, :3], rotvec_to_matrix(r.tool_frame[:, 3:])[0]
 
 
+@pytest.mark.ci
 def test_element_columns_match_central_differences_on_a_spatial_chain(tmp_path):
     path = tmp_path / "tripteor-elements.toml"
     path.write_text(machine_file_text(pkmkit.machine("tripteor-x7")))

@@ -231,6 +231,7 @@ def test_every_assembly_mode_of_a_general_hexapod():
 
 
 @pytest.mark.parametrize("name", ["gough-stewart", "verne"])
+@pytest.mark.ci
 def test_fk_all_batches_and_contains_the_engine_solution(name):
     m = pkmkit.machine(name)
     if m.position_controlled:

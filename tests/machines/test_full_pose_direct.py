@@ -127,6 +127,7 @@ def test_kernel_start_is_the_first_order_guess():
     np.testing.assert_allclose(pose, m.first_order_pose(q), rtol=0, atol=1e-15)
 
 
+@pytest.mark.ci
 def test_a_one_shot_call_does_not_import_numba():
     """Without the C extension (``PKMKIT_NATIVE=0``), the first single fk of a fresh process
     takes the NumPy engine (no Numba import, which costs ≈ 0.4 s: the command line makes one

@@ -96,7 +96,9 @@ def test_an_unknown_stroke_mode_is_refused_also_for_a_plain_pose(name):
         m.fk(m.home_q, strokes="Ignore")
 
 
-@pytest.mark.parametrize("name", NAMES)
+# the first machine in the ordinary run, the others marked ci (.ci/run): 0.35 s each
+@pytest.mark.parametrize("name", [pytest.param(n, marks=[pytest.mark.ci] if k else [])
+                                  for k, n in enumerate(NAMES)])
 @pytest.mark.parametrize("threads", ["1", "2"])
 def test_fused_compiled_inverse_is_the_numpy_path(name, threads, monkeypatch):
     """The one-pass compiled inverse (statuses included) against the NumPy reference path on

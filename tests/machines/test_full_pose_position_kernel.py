@@ -76,6 +76,7 @@ def test_the_compiled_path_of_ik_is_the_numpy_one(monkeypatch):
     np.testing.assert_allclose(compiled.pose[ok], numpy_path.pose[ok], atol=1e-12)
 
 
+@pytest.mark.ci
 def test_the_early_stop_loses_no_reachable_position(monkeypatch):
     """Every position the inverse reaches in the working mode without the crawl limit it
     reaches with it, to the same q (a dense grid over the Verne module's study box, where most

@@ -106,6 +106,7 @@ def test_seed000_circle_extrema_bound_a_dense_sampling():
         assert np.all(values.min(axis=0) - e.low[name] <= 1e-5 * span), name
 
 
+@pytest.mark.ci
 def test_limit_broken_between_samples_is_reported_whatever_the_period():
     """The issue's case: a speed limit six times too low, a period longer than the move."""
     for period in (0.005, 10.0):
@@ -121,6 +122,7 @@ def test_limit_broken_between_samples_is_reported_whatever_the_period():
     assert first["t"] <= first_dense + 1e-12 and first["t"] > first_dense - 1e-4
 
 
+@pytest.mark.ci
 def test_trapezoid_acceleration_jumps_are_caught_at_any_period():
     """With a trapezoidal law the acceleration jumps at phase changes: the peak is a one-sided
     limit at a breakpoint, found whatever the period."""

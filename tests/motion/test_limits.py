@@ -67,6 +67,7 @@ def fast_rapid():
     return m, path, kwargs, r
 
 
+@pytest.mark.ci
 def test_every_actuator_over_its_speed_limit_is_reported(fast_rapid):
     m, path, kwargs, r = fast_rapid
     speed = {v.joint: v for v in r.violations if v.kind == "speed"}

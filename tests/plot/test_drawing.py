@@ -1,4 +1,5 @@
 import numpy as np
+import pytest
 
 import pkmkit
 from pkmkit.plot.drawing import draw_machine, machine_geometry
@@ -11,6 +12,7 @@ def test_geometry_rods_have_their_length(preset):
     np.testing.assert_allclose(lengths, preset.model.rod_length, atol=1e-12)
 
 
+@pytest.mark.ci
 def test_png_written(tmp_path):
     for ident in ("linear-delta", "five-bar"):
         m = pkmkit.machine(ident)

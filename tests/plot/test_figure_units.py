@@ -75,6 +75,7 @@ def test_workspace_in_units(monkeypatch, tmp_path, units, low, high):
     assert x0 <= home.get_xdata()[0] <= x1 and 0 < side < x1 - x0
 
 
+@pytest.mark.ci
 def test_useful_workspace_in_mm(monkeypatch, tmp_path):
     figures = _figures(monkeypatch, "maps")
     _run("useful-workspace", "five-bar", "--units", "mm", "--out", str(tmp_path / "u.png"))

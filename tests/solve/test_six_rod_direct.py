@@ -114,6 +114,7 @@ def general():
     return base, platform, lengths, poses, six_rod_direct_all(base, platform, lengths)
 
 
+@pytest.mark.ci
 def test_general_geometries_find_the_true_pose_among_40(general):
     base, platform, lengths, poses, sols = general
     assert sols.poses.shape == (24, MAX_SOLUTIONS, 6)
@@ -142,6 +143,7 @@ def test_single_call_matches_the_batch_and_drops_the_batch_axis(general):
     np.testing.assert_allclose(one.poses[: one.count], batch.poses[3, : one.count], atol=1e-12)
 
 
+@pytest.mark.ci
 def test_invariance_to_units_and_frames():
     """Millimetres give the same poses ×1000; moving the base frame moves every solution."""
     base, platform, lengths, _ = random_configurations(1, seed=9)
@@ -291,6 +293,7 @@ def test_no_assembly_is_certified_empty():
 
 
 @pytest.mark.parametrize("case", ["random", "planar", "dietmaier"])
+@pytest.mark.ci
 def test_many_start_search_never_finds_a_missed_solution(case):
     if case == "dietmaier":
         base, platform, lengths = DIETMAIER_BASE, DIETMAIER_PLATFORM, DIETMAIER_LENGTHS

@@ -88,6 +88,7 @@ def test_projective_normal_is_scale_free():
     np.testing.assert_allclose(projective_normal(x), projective_normal(scale * x), atol=1e-12)
 
 
+@pytest.mark.ci
 def test_uncertified_configurations_are_tracked_again(tracked, monkeypatch):
     target, reference = tracked
     calls = []

@@ -31,6 +31,7 @@ def test_stored_start_system_is_checked_and_complete():
     check_start_system(start)  # raises unless regular and distinct
 
 
+@pytest.mark.ci
 def test_total_degree_homotopy_finds_the_same_40_solutions():
     """Ab initio count, independent of the monodromy: a total-degree homotopy (2⁷ = 128 paths)
     on the start system; its finite regular end points must be exactly the stored 40."""
@@ -72,6 +73,7 @@ def test_total_degree_homotopy_finds_the_same_40_solutions():
     assert _same_set(ends, start.solutions)
 
 
+@pytest.mark.ci
 def test_monodromy_regenerates_the_stored_file(tmp_path):
     """The documented script (same seed) reproduces the package data, and a file round trip
     keeps it."""

@@ -28,6 +28,7 @@ def pocket():
     return m, traj, default_masses(m)
 
 
+@pytest.mark.ci
 def test_samples_are_the_pose_model_and_the_peak_holds_between_samples(pocket):
     m, traj, masses = pocket
     force = np.array([150.0, -60.0, -250.0])

@@ -32,6 +32,7 @@ def as_json(result):
     return json.loads(result.stdout)
 
 
+@pytest.mark.ci
 def test_map_stiffness_is_the_library_index_in_n_per_um(tmp_path):
     out = as_json(run("map", "orthoglide", "--index", "stiffness", "--slice", "z=0",
                       "--range", "-100,100,-100,100", "--resolution", "21", "--units", "mm",
@@ -71,6 +72,7 @@ def test_analyze_stiffness_and_deflection_agree_with_the_library():
     assert "deflection" not in text
 
 
+@pytest.mark.ci
 def test_workspace_with_a_stiffness_criterion():
     base = ("workspace", "orthoglide", "--slice", "z=0", "--box", "-150,150,-150,150",
             "--resolution", "31", "--units", "mm", "--json")
@@ -118,6 +120,7 @@ def test_path_deflection_is_the_library_figure(tmp_path):
     np.testing.assert_allclose(norms, np.linalg.norm(ref.total, axis=1) * 1e6, rtol=1e-9)
 
 
+@pytest.mark.ci
 def test_path_deflection_limit_exits_3():
     args = ("path", "orthoglide", "--line", "-50,0,0:50,0,0", "--units", "mm", "--feed", "50",
             "--accel", "1000", "--wrench", "0,0,-800")
@@ -127,6 +130,7 @@ def test_path_deflection_limit_exits_3():
     assert run(*args, "--max-deflection", f"{1.1 * peak:.6g}").exit_code == 0
 
 
+@pytest.mark.ci
 def test_optimize_with_a_stiffness_constraint(tmp_path):
     out = as_json(run("optimize", "linear-delta", "--vary", "r=150:300", "--objective",
                       "min:stroke", "--constraint", "min_stiffness>=20", "--region", "150",
