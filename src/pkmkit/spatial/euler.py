@@ -116,7 +116,9 @@ def quat_from_rotvec(rotvec: np.ndarray) -> np.ndarray:
 def rotvec_from_quat(quat: np.ndarray) -> np.ndarray:
     """Rotation vectors ``(N, 3)`` (rad, angle in [0, π]) of quaternions ``(N, 4)``."""
     quat = np.asarray(quat, dtype=float).reshape(-1, 4)
-    quat = np.where(quat[:, 3:] < 0.0, -quat, quat)
+    x, y, z, w = quat.T  # canonical: w > 0, else the first non-zero of x, y, z positive
+    flip = (w < 0) | ((w == 0) & ((x < 0) | ((x == 0) & ((y < 0) | ((y == 0) & (z < 0))))))
+    quat = np.where(flip[:, None], -quat, quat)
     angle = 2.0 * np.arctan2(_norm3(quat[:, :3]), quat[:, 3])
     small = angle <= 1e-3
     angle2 = angle * angle
@@ -124,6 +126,12 @@ def rotvec_from_quat(quat: np.ndarray) -> np.ndarray:
     scale = np.where(small, 2.0 + angle2 / 12.0 + 7.0 * angle2 * angle2 / 2880.0,
                      angle / half_sin)
     return scale[:, None] * quat[:, :3]
+
+
+def compose_rotvecs(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Rotation vectors ``(N, 3)`` of ``exp(δ) exp(φ)`` (rows ``(N, 3)`` or ``(1, 3)``
+    broadcast), as ``(Rotation.from_rotvec(δ) * Rotation.from_rotvec(φ)).as_rotvec()``."""
+    return rotvec_from_quat(quat_multiply(quat_from_rotvec(delta), quat_from_rotvec(phi)))
 
 
 def matrix_from_quat(quat: np.ndarray) -> np.ndarray:

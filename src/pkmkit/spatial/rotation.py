@@ -111,11 +111,9 @@ def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
 
 
 def compose_rotvec(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """Rotation vector of ``exp(δ) · exp(φ)`` (left increment δ applied to φ), rows ``(N, 3)``."""
-    rotation = rotation_class()
-    d = rotation.from_rotvec(_rows3(delta))
-    p = rotation.from_rotvec(_rows3(phi))
-    return (d * p).as_rotvec()
+    """Rotation vector of ``exp(δ) · exp(φ)`` (left increment δ applied to φ), rows ``(N, 3)``
+    (a single row of either broadcast), in NumPy alone (scipy's quaternion arithmetic)."""
+    return _euler.compose_rotvecs(_rows3(delta), _rows3(phi))
 
 
 def left_jacobian(phi: np.ndarray) -> np.ndarray:
