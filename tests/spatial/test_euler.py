@@ -142,6 +142,11 @@ def test_rotation_vector_near_zero_and_near_half_turn():
         np.testing.assert_allclose(q[0], Rotation.from_rotvec(phi).as_quat(), rtol=0, atol=TOL)
         np.testing.assert_allclose(euler.rotvec_from_quat(q)[0],
                                    Rotation.from_rotvec(phi).as_rotvec(), rtol=0, atol=TOL)
+    small = np.array([[5e-4, -6e-4, 4e-4], [9e-4, 1e-5, 0.0]])  # the series' branch, relative
+    np.testing.assert_allclose(euler.rotvec_from_quat(euler.quat_from_rotvec(small)), small,
+                               rtol=1e-15, atol=0)
+    np.testing.assert_allclose(euler.quat_from_rotvec(small),
+                               Rotation.from_rotvec(small).as_quat(), rtol=1e-15, atol=0)
 
 
 def test_poses_convert_without_scipy_as_before():
