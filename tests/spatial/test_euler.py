@@ -172,3 +172,19 @@ def test_poses_convert_without_scipy_as_before():
         pose_from_angles([0, 0, 0], [0, 0, 0], "xxy")
     with pytest.raises(InputError, match="rotation vectors must have shape"):
         angles_from_rotvec(np.zeros(4))
+
+
+def test_non_finite_rows_give_nan_rows_silently():
+    """A batch's failed rows (NaN, ±inf) come out NaN without a warning (warnings are errors
+    under pytest; scipy's kernels are silent too), the good rows unchanged."""
+    from pkmkit.spatial.rotation import compose_rotvec, rotvec_to_matrix
+
+    phi = np.array([[0.1, 0.2, 0.3], [np.nan, 0, 0], [np.inf, 0, 0], [0, -np.inf, 1.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mats = rotvec_to_matrix(phi)
+        composed = compose_rotvec(phi, phi)
+        angles = angles_from_rotvec(phi)
+    assert np.isnan(mats[1:]).all() and np.isnan(composed[1:]).all()
+    assert np.isnan(angles[1:]).any(axis=1).all()
+    np.testing.assert_allclose(mats[0], Rotation.from_rotvec(phi[0]).as_matrix(), atol=TOL)

@@ -104,13 +104,14 @@ def angles_from_quat(quat: np.ndarray, seq: str) -> np.ndarray:
 def quat_from_rotvec(rotvec: np.ndarray) -> np.ndarray:
     """Quaternions ``(N, 4)`` of rotation vectors ``(N, 3)`` (rad)."""
     rotvec = np.asarray(rotvec, dtype=float).reshape(-1, 3)
-    angle = _norm3(rotvec)
-    small = angle <= 1e-3
-    angle2 = angle * angle
-    safe = np.where(small, 1.0, angle)
-    scale = np.where(small, 0.5 - angle2 / 48.0 + angle2 * angle2 / 3840.0,
-                     np.sin(safe / 2.0) / safe)
-    return np.concatenate([rotvec * scale[:, None], np.cos(angle / 2.0)[:, None]], axis=1)
+    with np.errstate(invalid="ignore", over="ignore"):  # non-finite rows give NaN, silently
+        angle = _norm3(rotvec)
+        small = angle <= 1e-3
+        angle2 = angle * angle
+        safe = np.where(small, 1.0, angle)
+        scale = np.where(small, 0.5 - angle2 / 48.0 + angle2 * angle2 / 3840.0,
+                         np.sin(safe / 2.0) / safe)
+        return np.concatenate([rotvec * scale[:, None], np.cos(angle / 2.0)[:, None]], axis=1)
 
 
 def rotvec_from_quat(quat: np.ndarray) -> np.ndarray:
@@ -119,13 +120,14 @@ def rotvec_from_quat(quat: np.ndarray) -> np.ndarray:
     x, y, z, w = quat.T  # canonical: w > 0, else the first non-zero of x, y, z positive
     flip = (w < 0) | ((w == 0) & ((x < 0) | ((x == 0) & ((y < 0) | ((y == 0) & (z < 0))))))
     quat = np.where(flip[:, None], -quat, quat)
-    angle = 2.0 * np.arctan2(_norm3(quat[:, :3]), quat[:, 3])
-    small = angle <= 1e-3
-    angle2 = angle * angle
-    half_sin = np.where(small, 1.0, np.sin(angle / 2.0))
-    scale = np.where(small, 2.0 + angle2 / 12.0 + 7.0 * angle2 * angle2 / 2880.0,
-                     angle / half_sin)
-    return scale[:, None] * quat[:, :3]
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        angle = 2.0 * np.arctan2(_norm3(quat[:, :3]), quat[:, 3])
+        small = angle <= 1e-3
+        angle2 = angle * angle
+        half_sin = np.where(small, 1.0, np.sin(angle / 2.0))
+        scale = np.where(small, 2.0 + angle2 / 12.0 + 7.0 * angle2 * angle2 / 2880.0,
+                         angle / half_sin)
+        return scale[:, None] * quat[:, :3]
 
 
 def compose_rotvecs(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
