@@ -62,10 +62,12 @@ def pose_from_parts(position: Any, rotation: Rotation | Any) -> np.ndarray:
     Raises:
         InputError: mis-shaped or non-finite positions, matrices that are not rotations.
     """
-    if hasattr(rotation, "as_rotvec"):  # a Rotation (duck-typed: no SciPy import for matrices)
+    rotation_type = rotation_class()
+    if isinstance(rotation, rotation_type):
         return _pose_rows_of(position, rotation.as_rotvec().reshape(-1, 3), rotation.single)
-    matrices = as_rotation_matrices(rotation)
-    rotvec = euler.rotvec_from_quat(euler.quat_from_matrix(matrices))
+    # scipy's from_matrix: a matrix within the tolerance but not orthonormal to 1e-12 is
+    # orthonormalised by SVD first
+    rotvec = rotation_type.from_matrix(as_rotation_matrices(rotation)).as_rotvec()
     return _pose_rows_of(position, rotvec, np.asarray(rotation).ndim == 2)
 
 
