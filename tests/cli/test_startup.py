@@ -199,3 +199,61 @@ def test_a_full_pose_batch_imports_no_compiler_with_the_c_kernels(tmp_path, comm
     assert output.exists() and len(output.read_text().splitlines()) > len(rows)
     assert "pkmkit.native.kernels" in modules
     assert "numba" not in modules
+
+
+@pytest.mark.parametrize("args", [
+    ["ik", "gough-stewart", "--pose", "0.08,-0.04,0.84,10,0,5"],
+    ["ik", "gough-stewart", "--pose", "0,0,0.8,30,20,10", "--angles", "ZYZ"],
+    ["fk", "gough-stewart", "--q", "0.840576605,0.91933439,0.974075654,0.94315616,0.87964248,"
+     "0.891357828"],
+    ["jacobian", "gough-stewart", "--pose", "0.08,-0.04,0.84,10,0,5"],
+    ["ik", "verne", "--pose", "0.15,0.1,-0.1"],
+    ["fk", "verne", "--q", "1.3,1.1,1.2"],
+    ["jacobian", "verne", "--pose", "0.15,0.1,-0.1"],
+    ["ik", "dietmaier-hexapod", "--pose", "0.636,0.771,0.015,90,0,-75"],
+    ["fk", "dietmaier-hexapod", "--q", "1.0,0.645275,1.086284,1.503439,1.281933,0.771071"],
+    ["jacobian", "dietmaier-hexapod", "--pose", "0.636,0.771,0.015,90,0,-75"],
+])
+def test_full_pose_one_shot_commands_never_import_scipy_spatial(args):
+    """The full-pose commands build their machine (reference poses from angles) and convert
+    angles ↔ rotation vectors in NumPy (:mod:`pkmkit.spatial.euler`): importing
+    ``scipy.spatial`` (its k-d tree, ``scipy.sparse``) costs ≈ 0.2 s, half a one-pose ``ik``."""
+    modules = _modules_after(f"""
+        from pkmkit.cli.main import cli
+        try:
+            cli({args!r}, standalone_mode=False)
+        except SystemExit:
+            pass
+    """)
+    assert "pkmkit.spatial.euler" in modules
+    assert "scipy.spatial" not in modules
+
+
+@pytest.mark.parametrize("command", ["ik gough-stewart", "fk gough-stewart", "ik verne",
+                                     "fk verne", "fk dietmaier-hexapod"])
+def test_full_pose_table_commands_never_import_scipy_spatial(tmp_path, command):
+    """The same on small tables (``--input``/``--output``): the file's angles convert in NumPy."""
+    import pkmkit
+
+    action, name = command.split()
+    m = pkmkit.machine(name)
+    if action == "ik":
+        rows = [[*m.home_pose[:3], 2.0, -1.0, 3.0], [*m.home_pose[:3], 0.0, 0.0, 0.0]]
+        columns = ["x", "y", "z", "A", "B", "C"]
+    else:
+        rows = [list(m.home_q), list(m.home_q)]
+        columns = [f"q{k + 1}" for k in range(m.n_actuators)]
+    source = tmp_path / "in.csv"
+    source.write_text(",".join(columns) + "\n"
+                      + "".join(",".join(repr(float(v)) for v in r) + "\n" for r in rows))
+    output = tmp_path / "out.csv"
+    args = [action, name, "--input", str(source), "--output", str(output)]
+    modules = _modules_after(f"""
+        from pkmkit.cli.main import cli
+        try:
+            cli({args!r}, standalone_mode=False)
+        except SystemExit:
+            pass
+    """)
+    assert output.exists()
+    assert "scipy.spatial" not in modules

@@ -17,14 +17,18 @@ axis. Unlike Euler angles they have no singularity at θ = 0, which is where mac
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from pkmkit.exceptions import InputError
 from pkmkit.machines.strokes import signed_excess
+from pkmkit.spatial.euler import matrix_from_angles
+from pkmkit.spatial.rotation import rotation_class, rotvec_to_matrix
 from pkmkit.status import Status
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 
 def tilt_torsion_rotation(azimuth: Any, tilt: Any, torsion: Any = 0.0) -> Rotation:
@@ -32,20 +36,25 @@ def tilt_torsion_rotation(azimuth: Any, tilt: Any, torsion: Any = 0.0) -> Rotati
     phi, theta, sigma = np.broadcast_arrays(np.asarray(azimuth, float), np.asarray(tilt, float),
                                             np.asarray(torsion, float))
     angles = np.stack([phi.ravel(), theta.ravel(), (sigma - phi).ravel()], axis=1)
-    return Rotation.from_euler("ZYZ", angles)
+    return rotation_class().from_euler("ZYZ", angles)
 
 
 def tilt_torsion_angles(rotation: Rotation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(azimuth, tilt, torsion)`` of rotations (radians): the tilt from the platform z axis
     ``R e_z``, the azimuth of its horizontal projection, the torsion the rest (at zero tilt the
     azimuth is 0 and the torsion the rotation about z)."""
-    mat = rotation.as_matrix().reshape(-1, 3, 3)
+    return _tilt_torsion_of_matrices(rotation.as_matrix().reshape(-1, 3, 3))
+
+
+def _tilt_torsion_of_matrices(mat: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`tilt_torsion_angles` of rotation matrices ``(N, 3, 3)``, in NumPy alone (the
+    one-pose ``pkmkit ik verne`` must not import SciPy's rotations)."""
     z = mat[:, :, 2]
     tilt = np.arccos(np.clip(z[:, 2], -1.0, 1.0))
     azimuth = np.where(np.hypot(z[:, 0], z[:, 1]) > 1e-15, np.arctan2(z[:, 1], z[:, 0]), 0.0)
-    # R Rz(φ − σ) ... : undo azimuth and tilt, the remaining rotation is about z
-    undone = (tilt_torsion_rotation(azimuth, tilt, 0.0).inv() * Rotation.from_matrix(mat))
-    rest = undone.as_matrix().reshape(-1, 3, 3)
+    # Rz(φ) Ry(θ) Rz(−φ) undone: the remaining rotation is about z
+    undo = matrix_from_angles(np.stack([azimuth, tilt, -azimuth], axis=1), "ZYZ")
+    rest = np.swapaxes(undo, 1, 2) @ mat
     torsion = np.arctan2(rest[:, 1, 0], rest[:, 0, 0])
     return azimuth, tilt, torsion
 
@@ -177,7 +186,7 @@ def coupled_orientation(machine, positions: Any) -> CoupledOrientation:
     azimuth = np.full(len(pts), np.nan)
     torsion = np.full(len(pts), np.nan)
     if ok.any():
-        a, t, s = tilt_torsion_angles(Rotation.from_rotvec(rotvec[ok]))
+        a, t, s = _tilt_torsion_of_matrices(rotvec_to_matrix(rotvec[ok]))
         azimuth[ok], tilt[ok], torsion[ok] = a, t, s
     return CoupledOrientation(positions=pts, rotation=rotvec, tilt=tilt, azimuth=azimuth,
                               torsion=torsion, angle=np.linalg.norm(rotvec, axis=1),

@@ -25,12 +25,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
+from pkmkit.spatial import euler
 from pkmkit.spatial.rotation import (
     DEFAULT_CONVENTION,
-    angles_from_rotation,
+    angles_from_rotvec,
     as_rotation_matrices,
     rotation_class,
-    rotation_from_angles,
+    rotvec_from_angles,
 )
 
 if TYPE_CHECKING:
@@ -61,30 +62,39 @@ def pose_from_parts(position: Any, rotation: Rotation | Any) -> np.ndarray:
     Raises:
         InputError: mis-shaped or non-finite positions, matrices that are not rotations.
     """
+    rotation_type = rotation_class()
+    if isinstance(rotation, rotation_type):
+        return _pose_rows_of(position, rotation.as_rotvec().reshape(-1, 3), rotation.single)
+    # scipy's from_matrix: a matrix within the tolerance but not orthonormal to 1e-12 is
+    # orthonormalised by SVD first
+    rotvec = rotation_type.from_matrix(as_rotation_matrices(rotation)).as_rotvec()
+    return _pose_rows_of(position, rotvec, np.asarray(rotation).ndim == 2)
+
+
+def _pose_rows_of(position: Any, rotvec: np.ndarray, rot_single: bool) -> np.ndarray:
+    """Pose rows of positions ``(3,)``/``(N, 3)`` and rotation vectors ``(M, 3)``, one of
+    ``N``, ``M`` broadcast when it is 1; a single row when both inputs are single."""
     pos = np.asarray(position, dtype=float)
     if pos.shape[-1:] != (3,) or pos.ndim not in (1, 2) or not np.isfinite(pos).all():
         raise InputError(f"position must be finite with shape (3,) or (N, 3), got {pos.shape}")
-    rotation_type = rotation_class()
-    if isinstance(rotation, rotation_type):
-        rotvec = rotation.as_rotvec().reshape(-1, 3)
-    else:
-        rotvec = rotation_type.from_matrix(as_rotation_matrices(rotation)).as_rotvec()
     p = pos.reshape(-1, 3)
     if rotvec.shape[0] != p.shape[0] and 1 not in (rotvec.shape[0], p.shape[0]):
         raise InputError(f"{p.shape[0]} positions but {rotvec.shape[0]} rotations")
     n = max(p.shape[0], rotvec.shape[0])
     out = np.concatenate([np.broadcast_to(p, (n, 3)), np.broadcast_to(rotvec, (n, 3))], axis=1)
-    rot_single = (rotation.single if isinstance(rotation, rotation_type)
-                  else np.asarray(rotation).ndim == 2)
-    single = pos.ndim == 1 and rot_single
-    return out[0] if single else out
+    return out[0] if pos.ndim == 1 and rot_single else out
 
 
 def pose_from_angles(position: Any, angles: Any, convention: str = DEFAULT_CONVENTION, *,
                      degrees: bool = False) -> np.ndarray:
     """Pose rows from positions (m) and angles in a named convention (see
-    :mod:`pkmkit.spatial.rotation`)."""
-    return pose_from_parts(position, rotation_from_angles(angles, convention, degrees=degrees))
+    :mod:`pkmkit.spatial.rotation`), in NumPy alone (:func:`rotvec_from_angles`).
+
+    Raises:
+        InputError: unknown convention, mis-shaped or non-finite positions or angles.
+    """
+    rotvec = rotvec_from_angles(angles, convention, degrees=degrees)
+    return _pose_rows_of(position, rotvec.reshape(-1, 3), rotvec.ndim == 1)
 
 
 def pose_parts(pose: Any) -> tuple[np.ndarray, Rotation]:
@@ -98,9 +108,13 @@ def pose_parts(pose: Any) -> tuple[np.ndarray, Rotation]:
 
 def pose_to_angles(pose: Any, convention: str = DEFAULT_CONVENTION, *,
                    degrees: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """``(positions, angles)`` of pose rows in a named convention."""
-    pos, rot = pose_parts(pose)
-    return pos, angles_from_rotation(rot, convention, degrees=degrees)
+    """``(positions, angles)`` of pose rows in a named convention, in NumPy alone
+    (:func:`pkmkit.spatial.rotation.angles_from_rotvec`: ranges and gimbal lock as scipy's)."""
+    rows, single = _pose_rows(pose)
+    angles = angles_from_rotvec(rows[:, 3:], convention, degrees=degrees)
+    if single:
+        return rows[0, :3].copy(), angles[0]
+    return rows[:, :3].copy(), angles
 
 
 def to_transform(pose: Any) -> RigidTransform:
@@ -122,7 +136,7 @@ def from_transform(transform: RigidTransform) -> np.ndarray:
 def pose_matrices(pose: Any) -> tuple[np.ndarray, np.ndarray]:
     """Positions ``(N, 3)`` and rotation matrices ``(N, 3, 3)`` of pose rows (kernel form)."""
     rows, _ = _pose_rows(pose)
-    return rows[:, :3], rotation_class().from_rotvec(rows[:, 3:]).as_matrix().reshape(-1, 3, 3)
+    return rows[:, :3], euler.matrix_from_quat(euler.quat_from_rotvec(rows[:, 3:]))
 
 
 def compose_poses(a: Any, b: Any) -> np.ndarray:

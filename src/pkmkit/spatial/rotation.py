@@ -2,7 +2,9 @@
 
 Orientations are rotation vectors φ (axis × angle, radians) at the interfaces and rotation
 matrices inside computations. Conversions go through :class:`scipy.spatial.transform.Rotation`,
-which handles the small-angle and near-π cases carefully.
+which handles the small-angle and near-π cases carefully, or through its arithmetic redone in
+NumPy (:mod:`pkmkit.spatial.euler`) on the command line's start-up paths, where importing SciPy's
+``spatial`` (≈ 0.2 s) would cost more than the command.
 
 Perturbations are *left* (world-frame) increments: ``R ← exp([δ]×) R``.
 
@@ -31,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pkmkit.exceptions import InputError
+from pkmkit.spatial import euler as _euler
 
 if TYPE_CHECKING:
     from scipy.spatial.transform import Rotation
@@ -89,8 +92,9 @@ def _rows3(value: np.ndarray) -> np.ndarray:
 
 
 def rotvec_to_matrix(phi: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(N, 3, 3)`` of rotation vectors ``(N, 3)`` (radians)."""
-    return rotation_class().from_rotvec(_rows3(phi)).as_matrix()
+    """Rotation matrices ``(N, 3, 3)`` of rotation vectors ``(N, 3)`` (radians), in NumPy alone
+    (scipy's ``from_rotvec(...).as_matrix()`` arithmetic, the same bits)."""
+    return _euler.matrix_from_quat(_euler.quat_from_rotvec(_rows3(phi)))
 
 
 def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
@@ -107,11 +111,9 @@ def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
 
 
 def compose_rotvec(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """Rotation vector of ``exp(δ) · exp(φ)`` (left increment δ applied to φ), rows ``(N, 3)``."""
-    rotation = rotation_class()
-    d = rotation.from_rotvec(_rows3(delta))
-    p = rotation.from_rotvec(_rows3(phi))
-    return (d * p).as_rotvec()
+    """Rotation vector of ``exp(δ) · exp(φ)`` (left increment δ applied to φ), rows ``(N, 3)``
+    (a single row of either broadcast), in NumPy alone (scipy's quaternion arithmetic)."""
+    return _euler.compose_rotvecs(_rows3(delta), _rows3(phi))
 
 
 def left_jacobian(phi: np.ndarray) -> np.ndarray:
@@ -206,6 +208,15 @@ def describe_convention(name: Any) -> str:
     return f"{seq}: {kind} {', '.join(seq.lower())}"
 
 
+def _checked_angles(angles: Any) -> np.ndarray:
+    arr = np.asarray(angles, dtype=float)
+    if arr.shape[-1:] != (3,) or arr.ndim > 2:
+        raise InputError(f"angles must have shape (3,) or (N, 3), got {arr.shape}")
+    if not np.isfinite(arr).all():
+        raise InputError(f"angles must be finite, got {arr.tolist()}")
+    return arr
+
+
 def rotation_from_angles(angles: Any, convention: str = DEFAULT_CONVENTION, *,
                          degrees: bool = False) -> Rotation:
     """A (batched) :class:`~scipy.spatial.transform.Rotation` from angles in a named convention.
@@ -219,19 +230,51 @@ def rotation_from_angles(angles: Any, convention: str = DEFAULT_CONVENTION, *,
         InputError: unknown convention, mis-shaped or non-finite angles.
     """
     seq = resolve_convention(convention)
-    arr = np.asarray(angles, dtype=float)
-    if arr.shape[-1:] != (3,) or arr.ndim > 2:
-        raise InputError(f"angles must have shape (3,) or (N, 3), got {arr.shape}")
-    if not np.isfinite(arr).all():
-        raise InputError(f"angles must be finite, got {arr.tolist()}")
+    arr = _checked_angles(angles)
     return rotation_class().from_euler(seq, arr, degrees=degrees)
+
+
+def rotvec_from_angles(angles: Any, convention: str = DEFAULT_CONVENTION, *,
+                       degrees: bool = False) -> np.ndarray:
+    """Rotation vectors ``(3,)`` or ``(N, 3)`` (rad, angle in [0, π]) of angles in a named
+    convention, in NumPy alone (no SciPy import: the command line's start-up path); the same
+    numbers as ``rotation_from_angles(...).as_rotvec()`` to a few ulps.
+
+    Args:
+        angles: ``(3,)`` or ``(N, 3)`` angles in the order of the convention's axes.
+        convention: see :func:`resolve_convention`.
+        degrees: angles in degrees instead of radians.
+
+    Raises:
+        InputError: unknown convention, mis-shaped or non-finite angles.
+    """
+    seq = resolve_convention(convention)
+    return _euler.rotvec_from_angles(_checked_angles(angles), seq, degrees=degrees)
+
+
+def angles_from_rotvec(rotvec: Any, convention: str = DEFAULT_CONVENTION, *,
+                       degrees: bool = False) -> np.ndarray:
+    """Angles ``(3,)`` or ``(N, 3)`` in a named convention of rotation vectors ``(3,)`` or
+    ``(N, 3)`` (rad), in NumPy alone; the numbers of scipy's ``as_euler`` (ranges and gimbal
+    lock as :func:`angles_from_rotation`) to a few ulps.
+
+    Raises:
+        InputError: unknown convention, mis-shaped rotation vectors.
+    """
+    seq = resolve_convention(convention)
+    arr = np.asarray(rotvec, dtype=float)
+    if arr.shape[-1:] != (3,) or arr.ndim > 2:
+        raise InputError(f"rotation vectors must have shape (3,) or (N, 3), got {arr.shape}")
+    return _euler.angles_from_rotvec(arr, seq, degrees=degrees)
 
 
 def angles_from_rotation(rotation: Rotation, convention: str = DEFAULT_CONVENTION, *,
                          degrees: bool = False) -> np.ndarray:
     """Angles ``(3,)`` or ``(N, 3)`` of a rotation in a named convention.
 
-    At a gimbal lock (the middle angle at ±90° for Cardan sequences, 0/180° for Euler ones) the
+    The first and third angles lie in [−π, π], the middle one in [−π/2, π/2] for Cardan
+    sequences (three different axes) and in [0, π] for proper Euler ones (``"ZYZ"``...). At a
+    gimbal lock (the middle angle at ±90° for Cardan sequences, 0/180° for Euler ones) the
     first and third angles are not unique; scipy then sets the third to zero.
     """
     seq = resolve_convention(convention)
