@@ -27,6 +27,17 @@ def _modules_after(code: str) -> set[str]:
     return set(json.loads(out.splitlines()[-1]))
 
 
+def _modules_after_cli(args: list[str]) -> set[str]:
+    """The modules a fresh interpreter holds after running ``pkmkit ARGS`` in it."""
+    return _modules_after(f"""
+        from pkmkit.cli.main import cli
+        try:
+            cli({args!r}, standalone_mode=False)
+        except SystemExit:
+            pass
+    """)
+
+
 def _heavy(modules: set[str]) -> list[str]:
     return sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in HEAVY))
 
@@ -43,13 +54,7 @@ def test_import_pkmkit_is_light():
     ["jacobian", "five-bar", "--pose", "1.05,0.05"],
 ])
 def test_kinematics_commands_are_light(args):
-    modules = _modules_after(f"""
-        from pkmkit.cli.main import cli
-        try:
-            cli({args!r}, standalone_mode=False)
-        except SystemExit:
-            pass
-    """)
+    modules = _modules_after_cli(args)
     assert "pkmkit.cli.main" in modules
     assert _heavy(modules) == []
 
@@ -115,13 +120,7 @@ def test_one_shot_commands_import_no_compiler(args):
     loads SciPy's linear algebra: ≈ 0.6 s in all); ``--help`` and the translational ones not
     even a thread pool (``concurrent.futures``, imported by ``numerics.jit`` when a batch is
     spread over threads)."""
-    modules = _modules_after(f"""
-        from pkmkit.cli.main import cli
-        try:
-            cli({args!r}, standalone_mode=False)
-        except SystemExit:
-            pass
-    """)
+    modules = _modules_after_cli(args)
     assert "numba" not in modules
     if "gough-stewart" not in args:
         assert "concurrent" not in modules
@@ -145,13 +144,7 @@ def test_a_rod_leg_batch_imports_no_compiler(tmp_path, suffix):
         writer.write({"x": x[:, 0], "y": x[:, 1], "z": x[:, 2]})
     output = tmp_path / f"out{suffix}"
     args = ["ik", "linear-delta", "--input", str(source), "--output", str(output)]
-    modules = _modules_after(f"""
-        from pkmkit.cli.main import cli
-        try:
-            cli({args!r}, standalone_mode=False)
-        except SystemExit:
-            pass
-    """)
+    modules = _modules_after_cli(args)
     assert output.exists()
     assert "numba" not in modules
 
@@ -189,13 +182,7 @@ def test_a_full_pose_batch_imports_no_compiler_with_the_c_kernels(tmp_path, comm
         writer.write({c: rows[:, k] for k, c in enumerate(columns)})
     output = tmp_path / "out.csv"
     args = [action, name, "--input", str(source), "--output", str(output)]
-    modules = _modules_after(f"""
-        from pkmkit.cli.main import cli
-        try:
-            cli({args!r}, standalone_mode=False)
-        except SystemExit:
-            pass
-    """)
+    modules = _modules_after_cli(args)
     assert output.exists() and len(output.read_text().splitlines()) > len(rows)
     assert "pkmkit.native.kernels" in modules
     assert "numba" not in modules
@@ -218,13 +205,7 @@ def test_full_pose_one_shot_commands_never_import_scipy_spatial(args):
     """The full-pose commands build their machine (reference poses from angles) and convert
     angles ↔ rotation vectors in NumPy (:mod:`pkmkit.spatial.euler`): importing
     ``scipy.spatial`` (its k-d tree, ``scipy.sparse``) costs ≈ 0.2 s, half a one-pose ``ik``."""
-    modules = _modules_after(f"""
-        from pkmkit.cli.main import cli
-        try:
-            cli({args!r}, standalone_mode=False)
-        except SystemExit:
-            pass
-    """)
+    modules = _modules_after_cli(args)
     assert "pkmkit.spatial.euler" in modules
     assert "scipy.spatial" not in modules
 
@@ -248,12 +229,6 @@ def test_full_pose_table_commands_never_import_scipy_spatial(tmp_path, command):
                       + "".join(",".join(repr(float(v)) for v in r) + "\n" for r in rows))
     output = tmp_path / "out.csv"
     args = [action, name, "--input", str(source), "--output", str(output)]
-    modules = _modules_after(f"""
-        from pkmkit.cli.main import cli
-        try:
-            cli({args!r}, standalone_mode=False)
-        except SystemExit:
-            pass
-    """)
+    modules = _modules_after_cli(args)
     assert output.exists()
     assert "scipy.spatial" not in modules
