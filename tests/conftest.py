@@ -62,6 +62,24 @@ def workspace_half_width(machine: pkmkit.Machine) -> float:
     return 0.25 * float(machine.model.leg_length.min())
 
 
+def near_parallel_singular_poses(count: int, rng: np.random.Generator
+                                  ) -> tuple[pkmkit.Machine, np.ndarray, np.ndarray]:
+    """The Gough–Stewart platform and ``count`` of its poses ``(count, 6)`` whose parallel
+    measure μ (σ_min/σ_max of the unit-row A, ``(count,)``, also returned) is below 1e-2, the
+    smallest below 1e-4: drawn in its default box with angles within ±70°."""
+    from pkmkit.spatial import pose_from_angles
+
+    m = pkmkit.machine("gough-stewart")
+    lo, hi = m.default_box()
+    x = pose_from_angles(rng.uniform(lo, hi, (20000, 3)), rng.uniform(-70, 70, (20000, 3)),
+                         "xyz", degrees=True)
+    measure = m.jacobian(x).parallel_measure
+    near = measure < 1e-2
+    x, measure = x[near][:count], measure[near][:count]
+    assert len(x) == count and measure.min() < 1e-4
+    return m, x, measure
+
+
 def random_poses(machine: pkmkit.Machine, n: int, seed: int = 0) -> np.ndarray:
     """``n`` poses drawn uniformly in a box around the home pose, ``(n, dims)``."""
     rng = np.random.default_rng(seed)

@@ -14,8 +14,8 @@ import pytest
 import pkmkit
 from pkmkit.exceptions import InputError, NoAssemblyError, OutOfStrokeError, StrokeWarning
 from pkmkit.machines.full_pose_direct import DirectKernel
-from pkmkit.spatial import pose_from_angles
 from pkmkit.status import Status
+from tests.conftest import near_parallel_singular_poses
 
 pytest.importorskip("numba")
 
@@ -60,15 +60,8 @@ def test_compiled_direct_model_near_parallel_singularities(monkeypatch):
     (down to ~1e-5): a rounding-level residual moves the solution by ~1/μ times as much, so
     kernel and engine agree row by row to 1e-12/μ (m, rad), both close every rod to 1e-12 m,
     and the statuses agree exactly — from the first-order guess and from a warm start."""
-    m = pkmkit.machine("gough-stewart")
     rng = np.random.default_rng(1)
-    lo, hi = m.default_box()
-    x = pose_from_angles(rng.uniform(lo, hi, (20000, 3)), rng.uniform(-70, 70, (20000, 3)),
-                         "xyz", degrees=True)
-    measure = m.jacobian(x).parallel_measure
-    near = measure < 1e-2
-    x, measure = x[near][:300], measure[near][:300]
-    assert len(x) == 300 and measure.min() < 1e-4
+    m, x, measure = near_parallel_singular_poses(300, rng)
     q = m.ik(x, strokes="ignore")
     warm = x + rng.normal(scale=1e-4, size=x.shape)
     for options in ({}, {"x0": warm}):

@@ -19,8 +19,8 @@ from pkmkit.machines.full_pose import FullPoseMachine
 from pkmkit.machines.full_pose_direct import DirectKernel
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.numerics import jit
-from pkmkit.spatial import pose_from_angles
 from pkmkit.status import Status
+from tests.conftest import near_parallel_singular_poses
 
 try:
     from pkmkit.native import kernels as _kernels
@@ -261,15 +261,8 @@ def test_direct_near_parallel_singularities(monkeypatch):
     guess and from warm starts: the C and Numba solves give the same statuses, iterations and
     poses to 1e-12 (the same operations); against the NumPy engine the statuses agree and the
     poses within 1e-12/μ (a rounding-level residual moves the solution by ~1/μ)."""
-    m = pkmkit.machine("gough-stewart")
     rng = np.random.default_rng(1)
-    lo, hi = m.default_box()
-    x = pose_from_angles(rng.uniform(lo, hi, (20000, 3)), rng.uniform(-70, 70, (20000, 3)),
-                         "xyz", degrees=True)
-    measure = m.jacobian(x).parallel_measure
-    near = measure < 1e-2
-    x, measure = x[near][:200], measure[near][:200]
-    assert len(x) == 200 and measure.min() < 1e-4
+    m, x, measure = near_parallel_singular_poses(200, rng)
     q = m.ik(x, strokes="ignore")
     for options in ({}, {"x0": x + rng.normal(scale=1e-4, size=x.shape)}):
         results = _direct_three_ways(m, q, monkeypatch, **options)
