@@ -131,15 +131,10 @@ def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
         return None
     solve_one = jit.native_kernel(KERNELS, "solve_one")  # the C twin: no import to pay
     if solve_one is None:
-        if not jit.use_compiled_solver(1):
-            # Numba not imported yet: this call takes the batch path (the NumPy engine,
-            # ≈ 2 ms), so that a one-shot call (the command line) does not pay Numba's
-            # import; the next single call of this machine imports it and runs compiled
-            if not jit.use_compiled_solver(jit.SOLVER_ROWS):
-                return None  # no Numba, or PKMKIT_COMPILED=0
-            if not machine.__dict__.get("_direct_warm"):
-                object.__setattr__(machine, "_direct_warm", True)
-                return None
+        if not jit.compiled_from_second_call(machine, "direct"):
+            # no Numba, PKMKIT_COMPILED=0, or this machine's first single call while Numba is
+            # not imported: the batch path (the NumPy engine, ≈ 2 ms)
+            return None
         solve_one = _numba_solve_one()
     out = machine._direct_kernel().solve_one(q, solve_one)
     if out[6] != 0.0 or not (strokes == "ignore" or machine._within_strokes(q.tolist())):

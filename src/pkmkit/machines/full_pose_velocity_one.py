@@ -159,11 +159,4 @@ def usable(machine: Any) -> bool:
     Numba; the machine's next single call does)."""
     if "numba" in sys.modules and "PKMKIT_COMPILED" not in os.environ:
         return jit.numba_available()  # the common case, without reading the mode
-    if jit.use_compiled_solver(1):
-        return True
-    if not jit.use_compiled_solver(jit.SOLVER_ROWS):
-        return False  # no Numba, or PKMKIT_COMPILED=0
-    if machine.__dict__.get("_velocity_warm"):
-        return True
-    object.__setattr__(machine, "_velocity_warm", True)
-    return False
+    return jit.compiled_from_second_call(machine, "velocity")

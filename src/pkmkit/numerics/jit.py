@@ -126,6 +126,23 @@ def use_compiled_solver(rows: int, *, native: bool = False) -> bool:
     return choice == "1" or rows >= SOLVER_ROWS or "numba" in sys.modules
 
 
+def compiled_from_second_call(owner: Any, tag: str) -> bool:
+    """Whether a single call runs its compiled solver now: yes once Numba is imported (or
+    ``PKMKIT_COMPILED=1``), never without Numba or with ``PKMKIT_COMPILED=0``; otherwise the
+    first call for ``owner`` (a machine, a module) and ``tag`` answers no — a one-shot call,
+    the command line, does not pay Numba's import (≈ 0.4 s of CPU) — and records it on
+    ``owner`` so that the next call answers yes (a loop runs compiled from its second call)."""
+    if use_compiled_solver(1):
+        return True
+    if not use_compiled_solver(SOLVER_ROWS):
+        return False
+    key = f"_{tag}_called_once"
+    if getattr(owner, key, False):
+        return True
+    object.__setattr__(owner, key, True)
+    return False
+
+
 def use_compiled(rows: int, *, imports: bool = True, native: bool = False) -> bool:
     """Whether a batch of ``rows`` rows should run the compiled kernels (the caller imports
     its kernel module lazily, e.g. :mod:`pkmkit.machines.kernels`).

@@ -38,6 +38,7 @@ tracked again with a 100× tighter predictor tolerance.
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -110,18 +111,9 @@ def use_compiled_tracker(n_conf: int = 1) -> bool:
     which Numba is not imported yet takes the NumPy tracker (≈ 0.1 s, where importing Numba and
     loading the kernel cost ≈ 0.4 s: a one-shot ``pkmkit fk --all`` stays on NumPy); the next
     call imports it (a loop of single calls runs compiled from its second call)."""
-    global _single_seen
-    if not jit.use_compiled_solver(jit.SOLVER_ROWS):
-        return False  # PKMKIT_COMPILED=0, or no Numba
-    if jit.use_compiled_solver(GENERIC_COUNT * n_conf) or _single_seen:
+    if jit.use_compiled_solver(GENERIC_COUNT * n_conf):
         return True
-    _single_seen = True
-    return False
-
-
-#: Whether a lone configuration already took the NumPy tracker in this process (only speed
-#: depends on it: both trackers give the same solutions).
-_single_seen = False
+    return jit.compiled_from_second_call(sys.modules[__name__], "tracker")
 
 
 def track_configurations(
