@@ -57,6 +57,26 @@ CHAIN_PRESETS = [m for m in ALL_PRESETS
 LINEAR_PRESETS = [m for m in PRESETS if not (pkmkit.machine(m).model.leg_kind == CRANK).any()]
 
 
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Carry pytest-xdist's ``@group`` suffix into the node id pytest 9 reads.
+
+    With ``--dist loadgroup``, pytest-xdist 3.8's worker hook appends ``@<group>`` to
+    ``item._nodeid``; pytest 9 computes ``item.nodeid`` from ``item._id`` and never reads
+    ``_nodeid``, so the scheduler saw no group and spread a documentation page's blocks over
+    both workers (docs/testing.md). This hook runs after xdist's and moves the suffixed id
+    into ``_id``. It does nothing where the two already agree (pytest < 9, no xdist, no group).
+    """
+    for item in items:
+        suffixed = item.__dict__.get("_nodeid")
+        if not isinstance(suffixed, str) or suffixed == item.nodeid or "@" not in suffixed:
+            continue
+        from _pytest.nodeid import coerce_node_id  # pytest >= 9 only
+        item._id = coerce_node_id(suffixed)
+        if item.nodeid != suffixed:  # pragma: no cover - a pytest that parses ids differently
+            raise pytest.UsageError(f"cannot group {suffixed!r} for --dist loadgroup")
+
+
 def workspace_half_width(machine: pkmkit.Machine) -> float:
     """Half side of a box around home that is reachable and far from singularities."""
     return 0.25 * float(machine.model.leg_length.min())

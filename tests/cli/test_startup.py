@@ -200,6 +200,8 @@ def test_a_full_pose_batch_imports_no_compiler_with_the_c_kernels(tmp_path, comm
     ["ik", "dietmaier-hexapod", "--pose", "0.636,0.771,0.015,90,0,-75"],
     ["fk", "dietmaier-hexapod", "--q", "1.0,0.645275,1.086284,1.503439,1.281933,0.771071"],
     ["jacobian", "dietmaier-hexapod", "--pose", "0.636,0.771,0.015,90,0,-75"],
+    ["fk", "dietmaier-hexapod", "--q", "1.0,0.645275,1.086284,1.503439,1.281933,0.771071",
+     "--all"],
 ])
 def test_full_pose_one_shot_commands_never_import_scipy_spatial(args):
     """The full-pose commands build their machine (reference poses from angles) and convert

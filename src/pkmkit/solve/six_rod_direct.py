@@ -35,7 +35,6 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from pkmkit.exceptions import InputError
 from pkmkit.numerics.jit import numba_available
@@ -43,6 +42,7 @@ from pkmkit.solve.least_squares import solve_least_squares
 from pkmkit.solve.six_rod_paths import EndKind, EndPoints, pair_distance, track_configurations
 from pkmkit.solve.six_rod_start import GENERIC_COUNT, load_start_system
 from pkmkit.solve.study_rods import RodParameters, study_to_pose
+from pkmkit.spatial.euler import rotvec_from_quat
 from pkmkit.spatial.rotation import compose_rotvec, rotvec_to_matrix
 from pkmkit.status import Status
 
@@ -354,7 +354,8 @@ def _real_solutions(ends: EndPoints, geo: _Normalised, tol: float) -> dict[str, 
     unconfirmed = np.zeros(n_conf, dtype=bool)
     if conf.size:
         position, quat = study_to_pose(normal[conf, path].real)
-        rotvec = Rotation.from_quat(quat[:, [1, 2, 3, 0]]).as_rotvec()
+        unit = quat[:, [1, 2, 3, 0]] / np.linalg.norm(quat, axis=1)[:, None]  # (x, y, z, w)
+        rotvec = rotvec_from_quat(unit)  # scipy's Rotation arithmetic, without scipy.spatial
         u0 = np.concatenate([position, rotvec], axis=1)
         is_sing = singular[conf, path]
         u, res, cond = _refine(u0, geo.base[conf], geo.platform[conf], geo.lengths[conf], tol)
