@@ -49,8 +49,12 @@ MIN_ROWS = 4096
 
 #: Smallest batch for which the compiled solvers are used before Numba is imported.
 SOLVER_ROWS = 64
-#: Smallest batch spread over several threads, and rows per chunk.
-THREAD_ROWS = 1 << 16
+#: Rows per piece of a batch spread over several threads (a batch of two pieces or more is
+#: spread). Several pieces fit in one chunk of the protocol's memory chunking
+#: (:data:`pkmkit.machines.chunks.CHUNK_ROWS`, 2¹⁶ rows), so a large ``m.ik``/``m.fk`` runs on
+#: every thread: with pieces of 2¹⁶ rows, no chunk was ever spread and a 10⁶-row batch ran on
+#: one core whatever the thread count.
+THREAD_ROWS = 1 << 14
 
 #: The Numba kernels that have a C twin of the same name and arguments in
 #: ``pkmkit.native.kernels``.
