@@ -51,6 +51,11 @@ static inline PK_AVX2 vd pk_vmax(vd a, vd b) { return pk_select(b > a, b, a); }
 
 static inline PK_AVX2 vd pk_splat(double v) { return (vd){v, v, v, v}; }
 
+/* (lo[0], lo[1], hi[0], hi[1]) (_mm256_loadu2_m128d, which older GCCs lack). */
+static inline PK_AVX2 __m256d pk_load_pairs(const double *lo, const double *hi) {
+    return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(lo)), _mm_loadu_pd(hi), 1);
+}
+
 /* Poses x (4, 6) (rows k..k+3 of the batch) into q (4, n), status (4,); rod_q: scratch of m
  * vectors. */
 static PK_AVX2 void pk_block(const double *x, const pk_rods *g, const pk_actuators *act,
@@ -60,8 +65,8 @@ static PK_AVX2 void pk_block(const double *x, const pk_rods *g, const pk_actuato
      * interleaved */
     vd cols[6];
     for (int i = 0; i < 3; i++) {
-        __m256d even = _mm256_loadu2_m128d(x + 12 + 2 * i, x + 2 * i);
-        __m256d odd = _mm256_loadu2_m128d(x + 18 + 2 * i, x + 6 + 2 * i);
+        __m256d even = pk_load_pairs(x + 2 * i, x + 12 + 2 * i);
+        __m256d odd = pk_load_pairs(x + 6 + 2 * i, x + 18 + 2 * i);
         cols[2 * i] = (vd)_mm256_unpacklo_pd(even, odd);
         cols[2 * i + 1] = (vd)_mm256_unpackhi_pd(even, odd);
     }
