@@ -8,7 +8,9 @@ For each condition (``quiet``; ``loaded`` with one process keeping a core and th
   kernel for large batches) of the hexapod and of the Verne-type module (full poses it reaches,
   whose rods are checked for consistency): poses/s, the ratio to the same formula written per
   pose in pure Python (``math``, on a 20 000-pose sample) and the ratio to a plain copy of the
-  input (``X.copy()``, the memory-bandwidth limit of a pass over the data);
+  input (``X.copy()``, the memory-bandwidth limit of a pass over the data); then the CPU time
+  per pose on one thread (best of ``--repeat``) against the copy's CPU time, and whether the
+  C kernel runs vectorised (``pkmkit.native.kernels.simd()``);
 - **engine direct model** — ``m.fk(Q)`` (batched Levenberg–Marquardt over the six rods, from the
   first-order guess) on ``--configurations`` hexapod configurations against
   ``scipy.optimize.least_squares(method="lm")`` per configuration with the analytic Jacobian of
@@ -21,7 +23,7 @@ For each condition (``quiet``; ``loaded`` with one process keeping a core and th
   random general 6-6 configurations: seconds per configuration, count, worst residual.
 
     python bench/full_pose.py [--poses 1000000] [--configurations 10000] [--repeat 5]
-                              [--load none|busy|both] [--backends]
+                              [--load none|busy|both] [--backends] [--ik-only]
 """
 
 from __future__ import annotations
@@ -96,14 +98,16 @@ def _cpu_median(fun, repeat: int) -> float:
 def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
     m.ik(poses[:5000])  # compile / warm up
     sample = poses[:20000]
-    t_api, t_one, t_copy, t_loop, c_api = [], [], [], [], []
+    t_api, t_one, t_copy, t_loop, c_api, c_one, c_copy = [], [], [], [], [], [], []
     for _ in range(repeat):
         t_api.append(_median(lambda: m.ik(poses), 1))
         c_api.append(_cpu_median(lambda: m.ik(poses), 1))
         os.environ["PKMKIT_THREADS"] = "1"
         t_one.append(_median(lambda: m.ik(poses), 1))
+        c_one.append(_cpu_median(lambda: m.ik(poses), 1))
         del os.environ["PKMKIT_THREADS"]
         t_copy.append(_median(lambda: poses.copy(), 1))
+        c_copy.append(_cpu_median(lambda: poses.copy(), 1))
         t_loop.append(_median(lambda: python_ik(m.model, sample), 1) * len(poses) / len(sample))
     api, one, copy, loop, cpu = (statistics.median(t) for t in (t_api, t_one, t_copy, t_loop,
                                                                   c_api))
@@ -115,6 +119,10 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
           f" one thread {len(poses) / one / 1e6:.2f}; {len(poses) / cpu / 1e6:.2f} per CPU "
           f"second)   ×loop {loop / api:6.0f}   time / copy {api / copy:5.1f}   (largest "
           f"difference to the loop {check:.1e} m)")
+    lanes = jit.native_kernels().simd() if hasattr(jit.native_kernels(), "simd") else 0
+    print(f"     one thread, CPU: {min(c_one) / len(poses) * 1e9:.1f} ns per pose (best of "
+          f"{repeat}), copy {min(c_copy) * 1e3:.2f} ms, CPU / copy "
+          f"{min(c_one) / min(c_copy):.1f} (vectorised C kernel: {lanes or 'no'} lanes)")
 
 
 def engine_rows(m, q: np.ndarray, repeat: int) -> None:
@@ -231,6 +239,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--load", choices=("none", "busy", "both"), default="both")
     parser.add_argument("--no-modes", action="store_true", help="skip the every-mode rows")
+    parser.add_argument("--ik-only", action="store_true", help="only the inverse-model rows")
     parser.add_argument("--backends", action="store_true",
                         help="only the C against Numba kernel rows (steady state, one thread)")
     args = parser.parse_args()
@@ -258,6 +267,8 @@ def main() -> None:
         with context():
             inverse_rows("hexapod", hexapod, poses, args.repeat)
             inverse_rows("Verne (poses)", verne, verne_poses, args.repeat)
+            if args.ik_only:
+                continue
             engine_rows(hexapod, q, args.repeat)
             if not args.no_modes:
                 all_modes_rows(args.repeat)

@@ -5,7 +5,10 @@ present (``setup.py``; without one the install still succeeds, with a warning, a
 package holds no extension). It holds twins of the full-pose Numba kernels, with the same
 arguments, the same algorithm and statuses, run without the GIL:
 
-- ``inverse_poses`` — :func:`pkmkit.machines.full_pose_kernels.inverse_poses`;
+- ``inverse_poses`` — :func:`pkmkit.machines.full_pose_kernels.inverse_poses` (four poses per
+  AVX2 block on x86-64 CPUs that have it, for machines of slides and struts: the same bits;
+  ``simd()`` gives the poses per block in use, 0 for one at a time, ``simd(False)`` switches
+  it off);
 - ``solve_rows``, ``solve_one`` — :func:`pkmkit.machines.full_pose_direct_kernel.solve_rows`
   and ``solve_one``.
 

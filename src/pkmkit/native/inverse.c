@@ -1,6 +1,7 @@
 /* The full-pose inverse model in one pass per pose: the C twin of
  * pkmkit.machines.full_pose_kernels.inverse_poses (and _pose_rods), statement for statement,
- * in the same order of operations, so that both give the same bits. */
+ * in the same order of operations, so that both give the same bits. pk_inverse_poses
+ * (inverse_simd.c) runs it, or its vectorised twin four poses at a time. */
 #include "kernels.h"
 
 /* Every rod's actuator coordinate of pose xk (6,) into out (m,) (_pose_rods). */
@@ -59,8 +60,8 @@ static void pose_rods(const double *xk, const pk_rods *g, double *out) {
     }
 }
 
-void pk_inverse_poses(const double *x, ptrdiff_t rows, const pk_rods *rods,
-                      const pk_actuators *act, double *q, int64_t *status, double *rod_q) {
+void pk_inverse_poses_scalar(const double *x, ptrdiff_t rows, const pk_rods *rods,
+                             const pk_actuators *act, double *q, int64_t *status, double *rod_q) {
     const ptrdiff_t m = rods->m, n = act->n;
     for (ptrdiff_t k = 0; k < rows; k++) {
         const double *xk = x + 6 * k;

@@ -80,6 +80,18 @@ typedef struct {
 void pk_inverse_poses(const double *x, ptrdiff_t rows, const pk_rods *rods,
                       const pk_actuators *act, double *q, int64_t *status, double *rod_q);
 
+/* The same, one pose at a time (inverse.c); pk_inverse_poses (inverse_simd.c) runs its
+ * vectorised twin (AVX2, 4 poses per block, the same bits) where the CPU and the rods allow,
+ * and this for the rest. */
+void pk_inverse_poses_scalar(const double *x, ptrdiff_t rows, const pk_rods *rods,
+                             const pk_actuators *act, double *q, int64_t *status,
+                             double *rod_q);
+
+/* Poses per block of the vectorised inverse kernel in use (0: none, scalar only);
+ * pk_simd_set(0) switches it off (tests), returning the previous setting. */
+int pk_simd_lanes(void);
+int pk_simd_set(int enabled);
+
 /* Working arrays of one direct solve for m rods (full_pose_direct_kernel.scratch). */
 typedef struct {
     double *base;   /* (m, 3) */

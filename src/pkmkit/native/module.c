@@ -235,10 +235,28 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     return solve(args, nargs, 0, "solve_one");
 }
 
+PyDoc_STRVAR(simd_doc,
+"simd(enabled=None)\n\n"
+"Poses per block of the vectorised inverse_poses in use (4 with AVX2 on x86-64; 0: one pose\n"
+"at a time). simd(False) / simd(True) switch it off / back on for the process (tests compare\n"
+"both paths); the results are the same bits either way.");
+
+static PyObject *simd(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs > 1) return PyErr_Format(PyExc_TypeError, "simd() takes at most 1 argument");
+    if (nargs == 1 && args[0] != Py_None) {
+        int enabled = PyObject_IsTrue(args[0]);
+        if (enabled < 0) return NULL;
+        pk_simd_set(enabled);
+    }
+    return PyLong_FromLong(pk_simd_lanes());
+}
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
     {"solve_one", (PyCFunction)(void (*)(void))solve_one, METH_FASTCALL, solve_one_doc},
+    {"simd", (PyCFunction)(void (*)(void))simd, METH_FASTCALL, simd_doc},
     {NULL, NULL, 0, NULL},
 };
 
