@@ -44,6 +44,7 @@ from pkmkit.machines.chain_jacobians import (  # noqa: F401  (re-exported)
     ChainVelocity,
     HyperstatismCount,
 )
+from pkmkit.machines.chain_one import one_pose_paths
 from pkmkit.machines.chain_results import (
     ChainDirectResult,
     ChainInverseResult,
@@ -88,6 +89,7 @@ POSE_NAMES = ("x", "y", "z", "i", "j", "k")
 STROKE_MODES = ("flag", "refuse", "ignore")
 
 
+@one_pose_paths  # one plain pose: ik, fk, jacobian in one compiled call (machines/chain_one.py)
 @dataclass(frozen=True, eq=False)
 class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayout, ChainReports,
                         ChainWarmStart, ChainInverseRows, MachineFace):
@@ -253,8 +255,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(loop))
         q = np.tile(home, (len(grid), 1))
         q[:, loop] = grid
-        # compiled once Numba is loaded (an identification's divergence bound); not imported
-        # for this alone
+        # compiled once Numba is loaded (an identification's bound); not imported for this alone
         points = self.fk(q, full_output=True, strokes="ignore", check_singular=False,
                          compiled=use_compiled_solver(1)).pose[:, :3]
         points = np.vstack([points[np.isfinite(points).all(axis=1)], self.home_pose[:3]])
@@ -320,9 +321,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             check_singular: check the closure's Jacobian (platform and passive joints) at the
                 solution: rows where σ_min/σ_max falls below :data:`SINGULAR_TOL` (a parallel
                 singularity: the actuators do not determine the passive joints) get status
-                SINGULAR, values kept; a single row
-                raises :class:`~pkmkit.exceptions.SingularConfigurationError`. Default: on for a
-                single row, off for a batch (one SVD per row).
+                SINGULAR, values kept; a single row raises SingularConfigurationError.
+                Default: on for a single row, off for a batch (one SVD per row).
             max_misfit: largest closure residual (m) accepted as an assembly: default the
                 engine's tolerance for a nominal geometry, unbounded for one with defects
                 (whose least-squares misfit cannot be told from actuator values out of reach

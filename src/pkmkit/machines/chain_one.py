@@ -1,0 +1,357 @@
+"""One pose per call on a joint-chain machine (issue 22 §1): ``m.ik(x)``, ``m.fk(q)`` and
+``m.jacobian(x)`` of one plain pose or configuration through one compiled call each
+(:mod:`pkmkit.solve.chain_one_kernel`), without the batch machinery.
+
+Per machine, once (:class:`ChainOneConstants`, cached on the machine): the kernel's arrays,
+the home start, the first-order start's rates, the strokes, the head's wrist pair. Per call: a
+type and range check of the plain numbers, one compiled solve on preallocated arrays, the
+stroke test in Python floats, the result assembled directly. Anything unusual returns None and
+the machine takes the batch path, which gives the same numbers and raises the typed errors:
+not 6 (or ``n``) plain finite numbers within ±``MAX_COORDINATE``, a zero tool axis, no
+convergence, a joint beyond its stroke (unless ``strokes="ignore"`` and the batch path would
+keep the solution), an inverse solution whose head could be on its other branch (the batch
+path's :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` rule solves the
+mirror), a closure the bound of :mod:`~pkmkit.solve.chain_one_kernel` cannot certify regular,
+a machine whose closure Jacobian at home is rank deficient, and every option the fast paths do
+not take (``q0``, ``start``, ``tool_length``, ``full_output``, engine options).
+
+Agreement with the batch row of the same input: ``ik`` bit for bit (the same kernel from the
+same start, the head's turn wrapped with NumPy's ``arctan2`` as ``np.angle`` does); ``fk`` and
+``jacobian`` to rounding (the direct model's first-order start is formed in the kernel, not by
+NumPy's matrix product and ``sin``; the closure rates by Cholesky with one refinement step,
+not LAPACK's pseudo-inverse). No result depends on an earlier call: only constants are cached.
+
+A one-shot call in a fresh process does not import Numba
+(:func:`pkmkit.numerics.jit.compiled_from_second_call`): until Numba is imported, a machine's
+first single call takes the batch path and the next imports it.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import math
+import operator
+import os
+import sys
+from typing import Any
+
+import numpy as np
+
+from pkmkit.machines.common import MAX_COORDINATE
+from pkmkit.machines.head_branches import FLIP_MARGIN
+from pkmkit.machines.lazy_records import lazy_record_class
+from pkmkit.machines.strokes import STROKE_TOL
+from pkmkit.numerics import jit
+
+_KERNELS = "pkmkit.solve.chain_one_kernel"
+_FAR = math.pi / 2 - FLIP_MARGIN
+_TWO_PI = 2.0 * math.pi
+#: Margin of the singularity bound over the thresholds (the batch path's SVD rounds).
+BOUND_MARGIN = 2.0
+
+
+def usable(machine: Any, tag: str = "chain_ik") -> bool:
+    """Whether a single call (``tag``: ``chain_ik``, ``chain_fk``, ``chain_jacobian``) of
+    ``machine`` runs compiled now (module docstring; each method's first call counts, as the
+    full-pose paths' direct and velocity calls: ``m.ik(m.home_pose)`` is a first ``fk`` then
+    a first ``ik``)."""
+    if "numba" in sys.modules and "PKMKIT_COMPILED" not in os.environ:
+        return jit.numba_available()
+    return jit.compiled_from_second_call(machine, tag)
+
+
+def _options(function: Any, **override: float) -> np.ndarray:
+    """The engine options of the batch path's kernel call, as the one-row kernels take them."""
+    defaults = {k: p.default for k, p in inspect.signature(function).parameters.items()}
+    defaults.update(override)
+    return np.array([defaults[k] for k in ("max_iter", "xtol", "atol", "gtol", "stall",
+                                           "residual_tol", "damping")], dtype=float)
+
+
+class ChainOneConstants:
+    """What a machine's one-pose calls need, built once (module docstring)."""
+
+    def __init__(self, m: Any) -> None:
+        from pkmkit.solve import chain_kernel
+        from pkmkit.solve.chains import CLOSURE_DAMPING
+
+        model = m.model
+        n_var = model.n_variables
+        passive = np.asarray(m.passive_variables, dtype=int)
+        act = np.flatnonzero(model.actuated)
+        frames, types, evar, elements, offsets, position = chain_kernel.model_arrays(
+            model, passive)
+        every = chain_kernel.model_arrays(model, np.arange(n_var))[-1]
+        head = np.array(model.head, dtype=np.int64)
+        home = m._home["values"]
+        self.n, self.n_u = len(act), 6 + len(passive)
+        self.regular = m._expected_rank() == self.n_u  # else the bound cannot certify
+        self.expected_rank = m._expected_rank()
+        self.length = float(model.characteristic_length)
+        self.tool = float(m.tool_length)
+        self.home_list = home.tolist()
+        self.home_q = home[act].tolist()
+        self.act = act
+        # inverse model: u = (platform, every variable) from home
+        self.u_inv = np.zeros((1, 6 + n_var))
+        self.u_home_inv = np.concatenate([m._home["platform"], home])
+        self.target, self.tool_row = np.zeros((1, 6)), np.full(1, self.tool)
+        self.inverse_args = (frames, types, evar, elements, offsets, every, head,
+                             np.zeros((1, n_var)), self.length,
+                             _options(chain_kernel.solve_inverse))
+        # direct model: u = (platform, passive) from the first-order start
+        rates, residual_rates = m._home_rates()
+        self.values, self.delta = np.zeros((1, n_var)), np.zeros(len(act))
+        self.u_dir = np.zeros((1, self.n_u))
+        self.direct_args = (frames, types, evar, elements, offsets, position, head, self.values,
+                            np.concatenate([m._home["platform"], home[passive]]),
+                            np.ascontiguousarray(rates, dtype=float),
+                            np.ascontiguousarray(residual_rates, dtype=float), self.delta,
+                            self.length, self.tool,
+                            _options(chain_kernel.solve, damping=CLOSURE_DAMPING))
+        self.pose, self.info = np.zeros(6), np.zeros(4)
+        # velocity model: closure columns (platform, passive, leg actuators), head actuators
+        loop_act = [int(v) for v in act if model.loop_variables[v]]
+        vel = np.full(n_var, -1, dtype=np.int64)
+        vel[passive] = 6 + np.arange(len(passive))
+        vel[loop_act] = self.n_u + np.arange(len(loop_act))
+        head_position = np.full(n_var, -1, dtype=np.int64)
+        order = {int(v): k for k, v in enumerate(act)}
+        for v in act:
+            if not model.loop_variables[v]:
+                head_position[v] = order[int(v)]
+        self.velocity_extra = (vel, head_position,
+                               np.array([order[v] for v in loop_act], dtype=np.int64))
+        self.scale = np.array([1, 1, 1, self.length, self.length, self.length], dtype=float)
+        # strokes: (index in the joint values, lower − tol, upper + tol) of every joint
+        joints = model.loop_variables | model.actuated
+        self.lower = np.where(joints, model.q_min - STROKE_TOL, -np.inf).tolist()
+        self.upper = np.where(joints, model.q_max + STROKE_TOL, np.inf).tolist()
+        self.actuators = operator.itemgetter(*act.tolist())
+        self.turns = tuple((k, int(v), float(home[v])) for k, v in enumerate(act)
+                           if m._element_of(int(v)).type == "R")
+        pair = m._wrist_pair()
+        self.wrist = None
+        if pair is not None:
+            t = pair[0]
+            reach = max(abs(model.q_min[t] - home[t]), abs(model.q_max[t] - home[t]))
+            self.wrist = (t, float(home[t]), bool(reach >= np.pi / 2))
+        self.inverse_kernel = jit.kernel(_KERNELS, "inverse_one")
+        self.direct_kernel = jit.kernel(_KERNELS, "direct_one")
+        self.velocity_kernel = jit.kernel(_KERNELS, "velocity_one")
+
+    def within(self, values: list[float]) -> bool:
+        """Every joint of ``values`` (every variable, model order) within its stroke (the
+        comparisons of :func:`~pkmkit.machines.strokes.signed_excess`, in C)."""
+        return all(map(operator.le, self.lower, values)) and all(
+            map(operator.le, values, self.upper))
+
+
+def constants(m: Any, tag: str = "chain_ik") -> ChainOneConstants | None:
+    """The machine's one-pose constants (built at the first compiled single call), or None
+    where its single call of kind ``tag`` (:func:`usable`) takes the batch path."""
+    c = m.__dict__.get("_chain_one_constants")
+    if c is None or not ("numba" in sys.modules and "PKMKIT_COMPILED" not in os.environ):
+        if not usable(m, tag):
+            return None
+        if c is None:
+            c = ChainOneConstants(m)
+            object.__setattr__(m, "_chain_one_constants", c)
+    return c if c.regular else None
+
+
+def _plain(x: Any, width: int) -> list[float] | None:
+    """``width`` finite floats within ±MAX_COORDINATE from a list, tuple or 1-D float array."""
+    if isinstance(x, np.ndarray):
+        if x.shape != (width,) or x.dtype.kind != "f":
+            return None
+        x = x.tolist()
+    elif type(x) in (list, tuple) and len(x) == width:
+        if not all(type(v) is float or type(v) is int for v in x):
+            return None
+        x = [float(v) for v in x]
+    else:
+        return None
+    for v in x:
+        if not abs(v) <= MAX_COORDINATE:  # NaN fails too
+            return None
+    return x
+
+
+def inverse(m: Any, x: Any, strokes: str) -> np.ndarray | None:
+    """``m.ik(x)`` of one plain pose ``x`` (6 numbers): ``q (n,)``, or None (module
+    docstring)."""
+    c = constants(m)
+    xs = None if c is None else _plain(x, 6)
+    if xs is None:
+        return None
+    values = _inverse_values(c, xs)
+    if values is None:
+        return None
+    if not c.within(values) and (strokes != "ignore" or (c.wrist is not None and c.wrist[2])):
+        return None  # the batch path warns, refuses, or weighs the head's other branch
+    return np.array(c.actuators(values))
+
+
+def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None:
+    """Every joint variable of the inverse solution of pose ``xs``, revolute actuators on the
+    turn nearest home; None where the batch path must decide."""
+    a, b, d = xs[3], xs[4], xs[5]
+    norm = math.sqrt(a * a + b * b + d * d)
+    if not norm > 0:
+        return None
+    c.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
+    c.u_inv[0] = c.u_home_inv
+    info = c.info
+    c.inverse_kernel(*c.inverse_args, c.u_inv, c.target, c.tool_row, info)
+    if info[0] != 0:
+        return None
+    values = c.u_inv[0, 6:].tolist()
+    if c.wrist is not None:  # the head's other branch could be nearer home: batch path
+        turn, home_turn, _ = c.wrist
+        offset = math.pi - (math.pi - (values[turn] - home_turn)) % _TWO_PI
+        if abs(offset) > _FAR:
+            return None
+    for _, v, home in c.turns:  # np.angle(np.exp(1j d)), NumPy's arctan2
+        d = values[v] - home
+        values[v] = home + float(np.arctan2(math.sin(d), math.cos(d)))
+    return values
+
+
+def _direct_inputs(c: ChainOneConstants, qs: list[float]) -> None:
+    """The kernel's inputs of configuration ``qs``: every joint at home with the actuators
+    set, and the actuators' change from home."""
+    row = c.values[0]
+    row[:] = c.home_list
+    row[c.act] = qs
+    c.delta[:] = [q - h for q, h in zip(qs, c.home_q, strict=True)]
+
+
+def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndarray | None:
+    """``m.fk(q)`` of one plain configuration ``q`` (``n`` numbers): the tool point and axis
+    ``(6,)``, or None (module docstring)."""
+    c = constants(m, "chain_fk")
+    qs = None if c is None else _plain(q, c.n)
+    if qs is None:
+        return None
+    _direct_inputs(c, qs)
+    check = check_singular is None or bool(check_singular)
+    info = c.info
+    c.direct_kernel(*c.direct_args, check, c.u_dir, c.pose, info)
+    if info[0] != 0 or (check and not info[3] >= BOUND_MARGIN * _singular_tol()):
+        return None
+    if strokes != "ignore" and not c.within(c.values[0].tolist()):
+        return None
+    return c.pose.copy()
+
+
+def _singular_tol() -> float:
+    from pkmkit.machines.chain_jacobians import SINGULAR_TOL
+
+    return SINGULAR_TOL
+
+
+# ---------------------------------------------------------------- velocity model
+def _record_class() -> type:
+    from pkmkit.machines.chain_jacobians import ChainJacobians
+
+    return lazy_record_class(
+        ChainJacobians, "OnePose",
+        lambda r: f"1 pose, {len(r.q)} actuators; singular values computed when read",
+        "A joint-chain machine's velocity model of one pose (:mod:`pkmkit.machines.chain_one`)"
+        "; J_homogeneous, singular_values and condition computed when first read.")
+
+
+_RECORD: type | None = None
+
+
+class _Velocity:
+    """The fields of a one-pose record not given at construction (computed when read)."""
+
+    __slots__ = ("J", "scale", "sv")
+
+    def __init__(self, jac: np.ndarray, scale: np.ndarray) -> None:
+        self.J, self.scale, self.sv = jac, scale, None
+
+    def field(self, name: str) -> Any:
+        if name == "J_homogeneous":
+            return self.J * self.scale[:, None]
+        if self.sv is None:
+            from pkmkit.numerics.linalg import small_singular_values
+
+            self.sv = small_singular_values((self.J * self.scale[:, None])[None])
+        if name == "singular_values":
+            return self.sv[0].copy()
+        if name == "condition":
+            return self.sv[:, 0][0] / self.sv[:, -1][0]
+        raise AttributeError(name)
+
+
+def jacobian(m: Any, x: Any, tol: float) -> Any:
+    """``m.jacobian(x)`` of one plain pose ``x``: a record with the batch row's fields
+    (``J``, ``passive_rates``, ``status``, ranks at once; ``J_homogeneous``,
+    ``singular_values``, ``condition`` when read), or None (module docstring)."""
+    global _RECORD
+    if type(tol) is not float or not tol > 0 or tol == math.inf:
+        return None
+    c = constants(m, "chain_jacobian")
+    xs = None if c is None else _plain(x, 6)
+    values = None if xs is None else _inverse_values(c, xs)
+    if values is None:
+        return None
+    qs = list(c.actuators(values))
+    _direct_inputs(c, qs)
+    jac = np.empty((6, c.n))
+    rates = np.empty((c.n_u - 6, c.n))
+    info = c.info
+    c.velocity_kernel(*c.direct_args, *c.velocity_extra, c.u_dir, jac, rates, info)
+    from pkmkit.machines.chain_jacobians import RANK_RCOND
+
+    if info[0] != 0 or not info[3] >= BOUND_MARGIN * max(tol, RANK_RCOND):
+        return None
+    if _RECORD is None:
+        _RECORD = _record_class()
+    return _RECORD(_Velocity(jac, c.scale), J=jac, passive_rates=rates,
+                   closure_rank=np.int64(c.n_u), expected_rank=c.expected_rank,
+                   q=np.array(qs), status=np.int64(0))
+
+
+# ---------------------------------------------------------------- the machine's entry points
+_MODES = ("flag", "refuse", "ignore")
+
+
+def one_pose_paths(cls: type) -> type:
+    """Class decorator of :class:`~pkmkit.machines.joint_chain.JointChainMachine`: its ``ik``,
+    ``fk`` and ``jacobian`` try the one-pose path first (one plain row, no option but
+    ``strokes``, ``check_singular``, ``tol``), then the batch path with the arguments given."""
+    batch_ik, batch_fk, batch_jacobian = cls.ik, cls.fk, cls.jacobian
+
+    @functools.wraps(batch_ik)
+    def ik(self, x, **options):
+        if not options or (options.keys() == {"strokes"} and options["strokes"] in _MODES):
+            fast = inverse(self, x, options.get("strokes", "flag"))
+            if fast is not None:
+                return fast
+        return batch_ik(self, x, **options)
+
+    @functools.wraps(batch_fk)
+    def fk(self, q, **options):
+        if options.keys() <= {"strokes", "check_singular"} \
+                and options.get("strokes", "flag") in _MODES:
+            fast = direct(self, q, options.get("strokes", "flag"),
+                          options.get("check_singular"))
+            if fast is not None:
+                return fast
+        return batch_fk(self, q, **options)
+
+    @functools.wraps(batch_jacobian)
+    def jacobian_(self, x=None, **options):
+        if x is not None and options.keys() <= {"tol"}:
+            fast = jacobian(self, x, options.get("tol", _singular_tol()))
+            if fast is not None:
+                return fast
+        return batch_jacobian(self, x, **options)
+
+    cls.ik, cls.fk, cls.jacobian = ik, fk, jacobian_
+    return cls
