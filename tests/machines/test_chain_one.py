@@ -4,6 +4,7 @@ calls, and no Numba import for a one-shot call."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import subprocess
 import sys
@@ -20,7 +21,6 @@ from pkmkit.exceptions import (
     StrokeWarning,
 )
 from pkmkit.machines import chain_one
-from pkmkit.machines.joint_chain import JointChainMachine
 from pkmkit.numerics import jit
 
 pytestmark = pytest.mark.skipif(not jit.numba_available() or jit.mode() == "0",
@@ -34,9 +34,32 @@ POSE_TOL = 1e-12
 #: singular values then differ as J does (relative to the largest entry).
 VELOCITY_TOL = 1e-12
 
-BATCH_IK, BATCH_FK, BATCH_JACOBIAN = (JointChainMachine.ik.__wrapped__,
-                                      JointChainMachine.fk.__wrapped__,
-                                      JointChainMachine.jacobian.__wrapped__)
+
+
+@contextlib.contextmanager
+def batch_path():
+    """Every single call inside takes the batch path (the one-pose paths find no constants)."""
+    saved = chain_one.constants
+    chain_one.constants = lambda m, tag="chain_ik": None
+    try:
+        yield
+    finally:
+        chain_one.constants = saved
+
+
+def batch_ik(m, x, **options):
+    with batch_path():
+        return m.ik(x, **options)
+
+
+def batch_fk(m, q, **options):
+    with batch_path():
+        return m.fk(q, **options)
+
+
+def batch_jacobian(m, x, **options):
+    with batch_path():
+        return m.jacobian(x, **options)
 
 
 def fresh(name: str):
@@ -90,7 +113,7 @@ def ik_mismatches(m, poses) -> tuple[int, int]:
             fast += chain_one.inverse(m, x, "flag") is not None
             one = m.ik(x)
             wrong += not (np.array_equal(one, batch[k], equal_nan=True)
-                          and np.array_equal(one, BATCH_IK(m, x)))
+                          and np.array_equal(one, batch_ik(m, x)))
     return fast, wrong
 
 
@@ -120,7 +143,7 @@ def test_fk_is_the_batch_row(machine):
         fast += 1
         np.testing.assert_allclose(one, batch[k], rtol=0, atol=POSE_TOL)
         np.testing.assert_allclose(machine.fk(v, strokes="ignore"),
-                                   BATCH_FK(machine, v, strokes="ignore"), rtol=0, atol=POSE_TOL)
+                                   batch_fk(machine, v, strokes="ignore"), rtol=0, atol=POSE_TOL)
     assert fast == len(q)
 
 
@@ -132,7 +155,7 @@ def test_jacobian_fields_are_the_batch_row(machine):
         if not type(one).__name__.startswith("OnePose"):
             continue
         fast += 1
-        ref = BATCH_JACOBIAN(machine, pose)
+        ref = batch_jacobian(machine, pose)
         for name in ("J", "J_homogeneous", "passive_rates", "singular_values"):
             a, b = getattr(one, name), getattr(ref, name)
             assert a.shape == b.shape and a.dtype == b.dtype, name
@@ -232,4 +255,4 @@ def test_numpy_mode_takes_the_batch_path(monkeypatch):
     m = pkmkit.machine("tripteor-x7")
     monkeypatch.setenv("PKMKIT_COMPILED", "0")
     assert chain_one.constants(m) is None
-    np.testing.assert_array_equal(m.ik(m.home_pose), BATCH_IK(m, m.home_pose))
+    np.testing.assert_array_equal(m.ik(m.home_pose), batch_ik(m, m.home_pose))

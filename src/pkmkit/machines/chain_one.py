@@ -28,7 +28,6 @@ first single call takes the batch path and the next imports it.
 
 from __future__ import annotations
 
-import functools
 import inspect
 import math
 import operator
@@ -47,6 +46,7 @@ from pkmkit.numerics import jit
 _KERNELS = "pkmkit.solve.chain_one_kernel"
 _FAR = math.pi / 2 - FLIP_MARGIN
 _TWO_PI = 2.0 * math.pi
+_ATAN2 = np.arctan2
 #: Margin of the singularity bound over the thresholds (the batch path's SVD rounds).
 BOUND_MARGIN = 2.0
 
@@ -67,6 +67,31 @@ def _options(function: Any, **override: float) -> np.ndarray:
     defaults.update(override)
     return np.array([defaults[k] for k in ("max_iter", "xtol", "atol", "gtol", "stall",
                                            "residual_tol", "damping")], dtype=float)
+
+
+class _Kernel:
+    """A compiled kernel called with the same argument types every time: after the first call
+    through Numba's dispatcher (which compiles or loads it), its compiled entry point for
+    those types is called directly (no type dispatch: ≈ 2 µs less per call); a C twin, or a
+    kernel whose entry point is not found, is called as it is."""
+
+    __slots__ = ("call", "function")
+
+    def __init__(self, function: Any) -> None:
+        self.function = function
+        self.call = None
+
+    def first(self, *args: Any) -> None:
+        """Call through the dispatcher and find the entry point for ``args``' types."""
+        self.function(*args)
+        overloads = getattr(self.function, "overloads", None)
+        entry = None
+        if overloads:
+            from numba import typeof
+
+            found = overloads.get(tuple(typeof(a) for a in args))
+            entry = getattr(found, "entry_point", None)
+        self.call = entry if entry is not None else self.function
 
 
 class ChainOneConstants:
@@ -90,8 +115,6 @@ class ChainOneConstants:
         self.expected_rank = m._expected_rank()
         self.length = float(model.characteristic_length)
         self.tool = float(m.tool_length)
-        self.home_list = home.tolist()
-        self.home_q = home[act].tolist()
         self.act = act
         # inverse model: u = (platform, every variable) from home
         self.u_inv = np.zeros((1, 6 + n_var))
@@ -109,7 +132,9 @@ class ChainOneConstants:
                             np.ascontiguousarray(rates, dtype=float),
                             np.ascontiguousarray(residual_rates, dtype=float), self.delta,
                             self.length, self.tool,
-                            _options(chain_kernel.solve, damping=CLOSURE_DAMPING))
+                            _options(chain_kernel.solve, damping=CLOSURE_DAMPING), home,
+                            act.astype(np.int64))
+        self.q = np.zeros(len(act))
         self.pose, self.info = np.zeros(6), np.zeros(4)
         # velocity model: closure columns (platform, passive, leg actuators), head actuators
         loop_act = [int(v) for v in act if model.loop_variables[v]]
@@ -129,7 +154,7 @@ class ChainOneConstants:
         self.lower = np.where(joints, model.q_min - STROKE_TOL, -np.inf).tolist()
         self.upper = np.where(joints, model.q_max + STROKE_TOL, np.inf).tolist()
         self.actuators = operator.itemgetter(*act.tolist())
-        self.turns = tuple((k, int(v), float(home[v])) for k, v in enumerate(act)
+        self.turns = tuple((int(v), float(home[v])) for v in act
                            if m._element_of(int(v)).type == "R")
         pair = m._wrist_pair()
         self.wrist = None
@@ -137,9 +162,9 @@ class ChainOneConstants:
             t = pair[0]
             reach = max(abs(model.q_min[t] - home[t]), abs(model.q_max[t] - home[t]))
             self.wrist = (t, float(home[t]), bool(reach >= np.pi / 2))
-        self.inverse_kernel = jit.kernel(_KERNELS, "inverse_one")
-        self.direct_kernel = jit.kernel(_KERNELS, "direct_one")
-        self.velocity_kernel = jit.kernel(_KERNELS, "velocity_one")
+        self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
+        self.direct_kernel = _Kernel(jit.kernel(_KERNELS, "direct_one"))
+        self.velocity_kernel = _Kernel(jit.kernel(_KERNELS, "velocity_one"))
 
     def within(self, values: list[float]) -> bool:
         """Every joint of ``values`` (every variable, model order) within its stroke (the
@@ -204,7 +229,8 @@ def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None
     c.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
     c.u_inv[0] = c.u_home_inv
     info = c.info
-    c.inverse_kernel(*c.inverse_args, c.u_inv, c.target, c.tool_row, info)
+    kernel = c.inverse_kernel
+    (kernel.call or kernel.first)(*c.inverse_args, c.u_inv, c.target, c.tool_row, info)
     if info[0] != 0:
         return None
     values = c.u_inv[0, 6:].tolist()
@@ -213,19 +239,12 @@ def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None
         offset = math.pi - (math.pi - (values[turn] - home_turn)) % _TWO_PI
         if abs(offset) > _FAR:
             return None
-    for _, v, home in c.turns:  # np.angle(np.exp(1j d)), NumPy's arctan2
-        d = values[v] - home
-        values[v] = home + float(np.arctan2(math.sin(d), math.cos(d)))
+    if c.turns:  # np.angle(np.exp(1j d)): NumPy's arctan2 (math's differs in the last place)
+        d = [values[v] - home for v, home in c.turns]
+        for (v, home), a in zip(c.turns, _ATAN2(tuple(map(math.sin, d)),
+                                                tuple(map(math.cos, d))).tolist(), strict=True):
+            values[v] = home + a
     return values
-
-
-def _direct_inputs(c: ChainOneConstants, qs: list[float]) -> None:
-    """The kernel's inputs of configuration ``qs``: every joint at home with the actuators
-    set, and the actuators' change from home."""
-    row = c.values[0]
-    row[:] = c.home_list
-    row[c.act] = qs
-    c.delta[:] = [q - h for q, h in zip(qs, c.home_q, strict=True)]
 
 
 def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndarray | None:
@@ -235,10 +254,11 @@ def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndar
     qs = None if c is None else _plain(q, c.n)
     if qs is None:
         return None
-    _direct_inputs(c, qs)
+    c.q[:] = qs
     check = check_singular is None or bool(check_singular)
     info = c.info
-    c.direct_kernel(*c.direct_args, check, c.u_dir, c.pose, info)
+    kernel = c.direct_kernel
+    (kernel.call or kernel.first)(*c.direct_args, c.q, check, c.u_dir, c.pose, info)
     if info[0] != 0 or (check and not info[3] >= BOUND_MARGIN * _singular_tol()):
         return None
     if strokes != "ignore" and not c.within(c.values[0].tolist()):
@@ -300,12 +320,14 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
     values = None if xs is None else _inverse_values(c, xs)
     if values is None:
         return None
-    qs = list(c.actuators(values))
-    _direct_inputs(c, qs)
+    qs = c.actuators(values)
+    c.q[:] = qs
     jac = np.empty((6, c.n))
     rates = np.empty((c.n_u - 6, c.n))
     info = c.info
-    c.velocity_kernel(*c.direct_args, *c.velocity_extra, c.u_dir, jac, rates, info)
+    kernel = c.velocity_kernel
+    (kernel.call or kernel.first)(*c.direct_args, c.q, *c.velocity_extra, c.u_dir, jac, rates,
+                                  info)
     from pkmkit.machines.chain_jacobians import RANK_RCOND
 
     if info[0] != 0 or not info[3] >= BOUND_MARGIN * max(tol, RANK_RCOND):
@@ -314,44 +336,42 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
         _RECORD = _record_class()
     return _RECORD(_Velocity(jac, c.scale), J=jac, passive_rates=rates,
                    closure_rank=np.int64(c.n_u), expected_rank=c.expected_rank,
-                   q=np.array(qs), status=np.int64(0))
+                   q=c.q.copy(), status=np.int64(0))
 
 
 # ---------------------------------------------------------------- the machine's entry points
 _MODES = ("flag", "refuse", "ignore")
 
 
-def one_pose_paths(cls: type) -> type:
-    """Class decorator of :class:`~pkmkit.machines.joint_chain.JointChainMachine`: its ``ik``,
-    ``fk`` and ``jacobian`` try the one-pose path first (one plain row, no option but
-    ``strokes``, ``check_singular``, ``tol``), then the batch path with the arguments given."""
-    batch_ik, batch_fk, batch_jacobian = cls.ik, cls.fk, cls.jacobian
+class ChainOnePose:
+    """Mixin of :class:`~pkmkit.machines.joint_chain.JointChainMachine` (through
+    :class:`~pkmkit.machines.chain_jacobians.ChainVelocity`): the first lines of its ``ik``,
+    ``fk`` and ``jacobian`` ask these for the one-pose answer — ``(result,)`` for one plain row
+    without options (but ``strokes``, ``check_singular``, ``tol``), ``()`` where the batch
+    path answers (module docstring)."""
 
-    @functools.wraps(batch_ik)
-    def ik(self, x, **options):
-        if not options or (options.keys() == {"strokes"} and options["strokes"] in _MODES):
-            fast = inverse(self, x, options.get("strokes", "flag"))
+    def _ik_one(self, x: Any, q0: Any, tool_length: Any, full_output: bool, strokes: str,
+                start: Any, engine_options: dict) -> tuple:
+        if q0 is None and tool_length is None and start is None and not full_output \
+                and not engine_options and strokes in _MODES:
+            fast = inverse(self, x, strokes)
             if fast is not None:
-                return fast
-        return batch_ik(self, x, **options)
+                return (fast,)
+        return ()
 
-    @functools.wraps(batch_fk)
-    def fk(self, q, **options):
-        if options.keys() <= {"strokes", "check_singular"} \
-                and options.get("strokes", "flag") in _MODES:
-            fast = direct(self, q, options.get("strokes", "flag"),
-                          options.get("check_singular"))
+    def _fk_one(self, q: Any, strokes: str, check_singular: bool | None, x0: Any, start: Any,
+                tool_length: Any, full_output: bool, max_misfit: Any,
+                engine_options: dict) -> tuple:
+        if x0 is None and start is None and tool_length is None and max_misfit is None \
+                and not full_output and not engine_options and strokes in _MODES:
+            fast = direct(self, q, strokes, check_singular)
             if fast is not None:
-                return fast
-        return batch_fk(self, q, **options)
+                return (fast,)
+        return ()
 
-    @functools.wraps(batch_jacobian)
-    def jacobian_(self, x=None, **options):
-        if x is not None and options.keys() <= {"tol"}:
-            fast = jacobian(self, x, options.get("tol", _singular_tol()))
+    def _jacobian_one(self, x: Any, q: Any, branches: Any, tol: float, start: Any) -> tuple:
+        if x is not None and q is None and branches is None and start is None:
+            fast = jacobian(self, x, tol)
             if fast is not None:
-                return fast
-        return batch_jacobian(self, x, **options)
-
-    cls.ik, cls.fk, cls.jacobian = ik, fk, jacobian_
-    return cls
+                return (fast,)
+        return ()

@@ -151,9 +151,16 @@ def _cholesky_apply(low, b, x):  # pragma: no cover
 
 @njit(**_OPTIONS)
 def _closure_solve(frames, types, evar, elements, offsets, position, values, u_home, rates,
-                   residual_rates, delta, length, options, u, info):  # pragma: no cover
-    """Start (:func:`_start`) and closure of one configuration: ``u (1, n_u)`` the solution,
-    ``values (1, n_var)`` every joint (its passive entries written), ``info`` filled."""
+                   residual_rates, delta, length, options, home_values, act, q, u,
+                   info):  # pragma: no cover
+    """Start (:func:`_start`) and closure of configuration ``q (n,)`` (actuators ``act`` of
+    the variables): ``u (1, n_u)`` the solution, ``values (1, n_var)`` every joint (home's
+    with the actuators set, then the passive joints found), ``delta (n,)`` the actuators'
+    change from ``home_values``, ``info`` filled."""
+    values[0, :] = home_values
+    for j in range(act.shape[0]):
+        values[0, act[j]] = q[j]
+        delta[j] = q[j] - home_values[act[j]]
     _start(frames, types, evar, elements, offsets, position, values[0], u_home, rates,
            residual_rates, delta, length, u)
     status = np.empty(1, dtype=np.int64)
@@ -172,14 +179,14 @@ def _closure_solve(frames, types, evar, elements, offsets, position, values, u_h
 
 @njit(**_OPTIONS)
 def direct_one(frames, types, evar, elements, offsets, position, head, values, u_home, rates,
-               residual_rates, delta, length, tool, options, check, u, pose,
-               info):  # pragma: no cover
-    """The direct model of one configuration (module docstring): ``values (1, n_var)`` every
-    joint at home with the actuators set (passive entries written), ``delta (n,)`` the
-    actuators' change from home, ``u (1, n_u)`` out, ``pose (6,)`` out (tool point ``tool``
-    along the tool axis, the axis), ``info (4,)`` out; ``check``: compute the bound."""
+               residual_rates, delta, length, tool, options, home_values, act, q, check, u,
+               pose, info):  # pragma: no cover
+    """The direct model of configuration ``q (n,)`` (module docstring; ``values``, ``delta``
+    work arrays, see :func:`_closure_solve`): ``u (1, n_u)`` out, ``pose (6,)`` out (tool
+    point ``tool`` along the tool axis, the axis), ``info (4,)`` out; ``check``: compute the
+    bound."""
     _closure_solve(frames, types, evar, elements, offsets, position, values, u_home, rates,
-                   residual_rates, delta, length, options, u, info)
+                   residual_rates, delta, length, options, home_values, act, q, u, info)
     if info[STATUS] != 0:
         return
     n_u = u.shape[1]
@@ -200,8 +207,9 @@ def direct_one(frames, types, evar, elements, offsets, position, head, values, u
 
 @njit(**_OPTIONS)
 def velocity_one(frames, types, evar, elements, offsets, position, head, values, u_home, rates,
-                 residual_rates, delta, length, tool, options, vel_position, head_position,
-                 loop_columns, u, jac_out, passive_rates, info):  # pragma: no cover
+                 residual_rates, delta, length, tool, options, home_values, act, q, vel_position,
+                 head_position, loop_columns, u, jac_out, passive_rates,
+                 info):  # pragma: no cover
     """The velocity model at one configuration (module docstring): the closure as
     :func:`direct_one`, then ``jac_out (6, n)`` (tool point velocity, angular velocity per
     actuator rate) and ``passive_rates (n_p, n)``. ``vel_position (n_var,)``: the column of
@@ -210,7 +218,7 @@ def velocity_one(frames, types, evar, elements, offsets, position, head, values,
     ``loop_columns (n_loop,)`` the actuator index of each leg actuator; ``info[BOUND]`` the
     bound of σ_min/σ_max of C_U."""
     _closure_solve(frames, types, evar, elements, offsets, position, values, u_home, rates,
-                   residual_rates, delta, length, options, u, info)
+                   residual_rates, delta, length, options, home_values, act, q, u, info)
     if info[STATUS] != 0:
         return
     n_u = u.shape[1]
