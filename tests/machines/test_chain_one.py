@@ -256,3 +256,14 @@ def test_numpy_mode_takes_the_batch_path(monkeypatch):
     monkeypatch.setenv("PKMKIT_COMPILED", "0")
     assert chain_one.constants(m) is None
     np.testing.assert_array_equal(m.ik(m.home_pose), batch_ik(m, m.home_pose))
+
+
+def test_a_one_actuator_machine_keeps_its_shapes():
+    m = fresh("crank-slider")
+    x, q = m.fk(m.home_q), m.home_q
+    assert chain_one.inverse(m, x, "flag") is not None
+    one, ref = m.ik(x), batch_ik(m, x)
+    assert one.shape == ref.shape == (1,)
+    np.testing.assert_array_equal(one, ref)
+    assert m.fk(q).shape == batch_fk(m, q).shape == (6,)
+    assert m.jacobian(x).J.shape == batch_jacobian(m, x).J.shape

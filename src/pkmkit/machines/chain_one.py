@@ -153,7 +153,9 @@ class ChainOneConstants:
         joints = model.loop_variables | model.actuated
         self.lower = np.where(joints, model.q_min - STROKE_TOL, -np.inf).tolist()
         self.upper = np.where(joints, model.q_max + STROKE_TOL, np.inf).tolist()
-        self.actuators = operator.itemgetter(*act.tolist())
+        # the actuators' values from every variable's, as a tuple (one actuator too)
+        self.actuators = (operator.itemgetter(*act.tolist()) if len(act) > 1 else
+                          lambda values, i=int(act[0]): (values[i],))
         self.turns = tuple((int(v), float(home[v])) for v in act
                            if m._element_of(int(v)).type == "R")
         pair = m._wrist_pair()
