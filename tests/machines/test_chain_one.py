@@ -132,6 +132,24 @@ def test_ik_near_the_wrist_singularity(machine):
     assert fast > 0
 
 
+def test_ik_where_the_batch_path_solves_the_heads_mirror():
+    """TriMule: a wrist turn farther than 75° from home's has its mirror (turn + π, tilt
+    mirrored) solved and the branch nearer home kept — in the one-pose path as in the batch
+    path's rule."""
+    m = fresh("trimule-600")
+    rng = np.random.default_rng(6)
+    q = np.tile(m.home_q, (20, 1))
+    q[:, 3] = rng.choice([-1, 1], 20) * rng.uniform(np.radians(80), np.radians(175), 20)
+    q[:, 4] = rng.uniform(-0.6, 0.6, 20)
+    q[:, :3] += rng.uniform(-0.02, 0.02, (20, 3))
+    x = m.fk(q, strokes="ignore")
+    x = x[np.isfinite(x).all(axis=1)]
+    fast, wrong = ik_mismatches(m, x)
+    assert wrong == 0
+    assert fast >= len(x) // 2
+    assert (np.abs(m.ik(x, strokes="ignore")[:, 3]) < np.pi / 2).any()  # mirrors were taken
+
+
 def test_fk_is_the_batch_row(machine):
     q, _ = within_stroke_poses(machine, 30, seed=2)
     batch = machine.fk(q, strokes="ignore")

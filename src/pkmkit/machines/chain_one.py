@@ -160,10 +160,11 @@ class ChainOneConstants:
                            if m._element_of(int(v)).type == "R")
         pair = m._wrist_pair()
         self.wrist = None
-        if pair is not None:
+        if pair is not None:  # (turn, its home, tilt, its home, the turn reaches π/2)
             t = pair[0]
             reach = max(abs(model.q_min[t] - home[t]), abs(model.q_max[t] - home[t]))
-            self.wrist = (t, float(home[t]), bool(reach >= np.pi / 2))
+            self.wrist = (t, float(home[t]), pair[1], float(home[pair[1]]),
+                          bool(reach >= np.pi / 2))
         self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
         self.direct_kernel = _Kernel(jit.kernel(_KERNELS, "direct_one"))
         self.velocity_kernel = _Kernel(jit.kernel(_KERNELS, "velocity_one"))
@@ -216,36 +217,81 @@ def inverse(m: Any, x: Any, strokes: str) -> np.ndarray | None:
     values = _inverse_values(c, xs)
     if values is None:
         return None
-    if not c.within(values) and (strokes != "ignore" or (c.wrist is not None and c.wrist[2])):
-        return None  # the batch path warns, refuses, or weighs the head's other branch
+    if strokes != "ignore" and not c.within(values):
+        return None  # the batch path warns or refuses
     return np.array(c.actuators(values))
 
 
 def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None:
     """Every joint variable of the inverse solution of pose ``xs``, revolute actuators on the
-    turn nearest home; None where the batch path must decide."""
+    turn nearest home, on the head's branch of the batch path's rule; None where the batch path
+    must decide."""
     a, b, d = xs[3], xs[4], xs[5]
     norm = math.sqrt(a * a + b * b + d * d)
     if not norm > 0:
         return None
     c.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
-    c.u_inv[0] = c.u_home_inv
-    info = c.info
-    kernel = c.inverse_kernel
-    (kernel.call or kernel.first)(*c.inverse_args, c.u_inv, c.target, c.tool_row, info)
-    if info[0] != 0:
+    u = _solve_inverse(c, c.u_home_inv)
+    if u is None:
         return None
-    values = c.u_inv[0, 6:].tolist()
-    if c.wrist is not None:  # the head's other branch could be nearer home: batch path
-        turn, home_turn, _ = c.wrist
-        offset = math.pi - (math.pi - (values[turn] - home_turn)) % _TWO_PI
-        if abs(offset) > _FAR:
-            return None
-    if c.turns:  # np.angle(np.exp(1j d)): NumPy's arctan2 (math's differs in the last place)
+    values = _wrapped(c, u[6:])
+    if c.wrist is not None:
+        values = _nearest_branch(c, u, values)
+    return values
+
+
+def _solve_inverse(c: ChainOneConstants, start: Any) -> list[float] | None:
+    """The kernel's inverse of ``c.target`` from ``start`` (6 + n_var): the solution, or None
+    where it did not converge (the batch path reports it)."""
+    c.u_inv[0] = start
+    kernel = c.inverse_kernel
+    (kernel.call or kernel.first)(*c.inverse_args, c.u_inv, c.target, c.tool_row, c.info)
+    return c.u_inv[0].tolist() if c.info[0] == 0 else None
+
+
+def _wrapped(c: ChainOneConstants, values: list[float]) -> list[float]:
+    """``values`` with the revolute actuators on the turn nearest home: ``home +
+    np.angle(np.exp(1j (v − home)))`` — NumPy's arctan2 (math's differs in the last place)."""
+    values = list(values)
+    if c.turns:
         d = [values[v] - home for v, home in c.turns]
         for (v, home), a in zip(c.turns, _ATAN2(tuple(map(math.sin, d)),
                                                 tuple(map(math.cos, d))).tolist(), strict=True):
             values[v] = home + a
+    return values
+
+
+def _turn_offset(angle: float) -> float:
+    """``angle`` wrapped to (−π, π] (:func:`~pkmkit.machines.head_branches.wrapped`; Python's
+    ``%`` is NumPy's ``mod`` for floats)."""
+    return math.pi - (math.pi - angle) % _TWO_PI
+
+
+def _nearest_branch(c: ChainOneConstants, u: list[float], values: list[float]
+                    ) -> list[float] | None:
+    """The rule of :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` for one
+    row (:func:`~pkmkit.machines.head_branches.nearest_head_branch` with home as the
+    reference, the strokes judged around home): the mirror solved where the solution's turn is
+    far from home's (or, when the turn's stroke reaches a quarter turn, beyond a stroke) and
+    kept where it is nearer or alone within the strokes. ``values`` (wrapped) of the branch
+    kept, or None (the mirror did not converge: the batch path)."""
+    turn, home_turn, tilt, tilt_centre, wide = c.wrist
+    far = abs(_turn_offset(u[6 + turn] - home_turn)) > _FAR
+    kept_inside = c.within(values)
+    if not (far or (wide and not kept_inside)):
+        return values
+    start = list(u)
+    start[6 + turn] += math.pi
+    start[6 + tilt] = 2.0 * tilt_centre - start[6 + tilt]
+    other = _solve_inverse(c, start)
+    if other is None:
+        return None  # not converged: the batch path (which keeps the first solution)
+    other_values = _wrapped(c, other[6:])
+    closer = abs(_turn_offset(other[6 + turn] - home_turn)) < abs(
+        _turn_offset(u[6 + turn] - home_turn))
+    flipped_inside = c.within(other_values)
+    if (flipped_inside and not kept_inside) or (flipped_inside == kept_inside and closer):
+        return other_values
     return values
 
 
