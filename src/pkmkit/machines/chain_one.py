@@ -168,6 +168,7 @@ class ChainOneConstants:
         self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
         self.direct_kernel = _Kernel(jit.kernel(_KERNELS, "direct_one"))
         self.velocity_kernel = _Kernel(jit.kernel(_KERNELS, "velocity_one"))
+        self.svd_kernel = _Kernel(jit.kernel("pkmkit.numerics.svd_kernel", "singular_values"))
 
     def within(self, values: list[float]) -> bool:
         """Every joint of ``values`` (every variable, model order) within its stroke (the
@@ -335,20 +336,23 @@ _RECORD: type | None = None
 
 
 class _Velocity:
-    """The fields of a one-pose record not given at construction (computed when read)."""
+    """The fields of a one-pose record not given at construction (computed when read): the
+    singular values of ``J_homogeneous`` by the compiled one-sided Jacobi kernel of
+    :mod:`pkmkit.numerics.svd_kernel` (what the batch path runs on large stacks; on one row it
+    calls LAPACK: the same values to ~1e-15 of σ_max)."""
 
-    __slots__ = ("J", "scale", "sv")
+    __slots__ = ("J", "c", "sv")
 
-    def __init__(self, jac: np.ndarray, scale: np.ndarray) -> None:
-        self.J, self.scale, self.sv = jac, scale, None
+    def __init__(self, jac: np.ndarray, c: ChainOneConstants) -> None:
+        self.J, self.c, self.sv = jac, c, None
 
     def field(self, name: str) -> Any:
         if name == "J_homogeneous":
-            return self.J * self.scale[:, None]
+            return self.J * self.c.scale[:, None]
         if self.sv is None:
-            from pkmkit.numerics.linalg import small_singular_values
-
-            self.sv = small_singular_values((self.J * self.scale[:, None])[None])
+            self.sv = np.empty((1, min(self.J.shape)))
+            kernel = self.c.svd_kernel
+            (kernel.call or kernel.first)((self.J * self.c.scale[:, None])[None], self.sv)
         if name == "singular_values":
             return self.sv[0].copy()
         if name == "condition":
@@ -382,7 +386,7 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
         return None
     if _RECORD is None:
         _RECORD = _record_class()
-    return _RECORD(_Velocity(jac, c.scale), J=jac, passive_rates=rates,
+    return _RECORD(_Velocity(jac, c), J=jac, passive_rates=rates,
                    closure_rank=np.int64(c.n_u), expected_rank=c.expected_rank,
                    q=c.q.copy(), status=np.int64(0))
 
