@@ -204,7 +204,8 @@ def test_beyond_a_stroke_takes_the_batch_path(machine):
     np.testing.assert_array_equal(flagged, machine.ik(x[None], strokes="ignore")[0])
 
 
-@pytest.mark.parametrize("bad", [[np.nan, 0, 1, 0, 0, 1], [0, 0, 1, 0, 0, 0],
+@pytest.mark.parametrize("bad", [[np.nan, 0, 1, 0, 0, 1], [0.1, 0.2, 1.0, 0, np.inf, 1],
+                                 [0.1, 0.2, 1.0, 0, np.nan, 1], [0, 0, 1, 0, 0, 0],
                                  [2e9, 0, 1, 0, 0, 1], [0.1, 0.2, 1.0, 0, 0, 1, 0]])
 def test_bad_poses_raise_typed_errors(machine, bad):
     with pytest.raises(InputError):

@@ -149,6 +149,9 @@ class ChainOneConstants:
         self.velocity_extra = (vel, head_position,
                                np.array([order[v] for v in loop_act], dtype=np.int64))
         self.scale = np.array([1, 1, 1, self.length, self.length, self.length], dtype=float)
+        from pkmkit.machines.chain_jacobians import SINGULAR_TOL
+
+        self.singular_bound = BOUND_MARGIN * SINGULAR_TOL  # fk's default check
         # strokes: (index in the joint values, lower − tol, upper + tol) of every joint
         joints = model.loop_variables | model.actuated
         self.lower = np.where(joints, model.q_min - STROKE_TOL, -np.inf).tolist()
@@ -202,9 +205,9 @@ def _plain(x: Any, width: int) -> list[float] | None:
         x = [float(v) for v in x]
     else:
         return None
-    for v in x:
-        if not abs(v) <= MAX_COORDINATE:  # NaN fails too
-            return None
+    total = sum(x)  # NaN if any is
+    if not (max(map(abs, x)) <= MAX_COORDINATE and total == total):
+        return None
     return x
 
 
@@ -308,17 +311,11 @@ def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndar
     info = c.info
     kernel = c.direct_kernel
     (kernel.call or kernel.first)(*c.direct_args, c.q, check, c.u_dir, c.pose, info)
-    if info[0] != 0 or (check and not info[3] >= BOUND_MARGIN * _singular_tol()):
+    if info[0] != 0 or (check and not info[3] >= c.singular_bound):
         return None
     if strokes != "ignore" and not c.within(c.values[0].tolist()):
         return None
     return c.pose.copy()
-
-
-def _singular_tol() -> float:
-    from pkmkit.machines.chain_jacobians import SINGULAR_TOL
-
-    return SINGULAR_TOL
 
 
 # ---------------------------------------------------------------- velocity model
