@@ -136,7 +136,21 @@ class ChainOneConstants:
                             act.astype(np.int64))
         self.q = np.zeros(len(act))
         self.pose, self.info = np.zeros(6), np.zeros(4)
-        # velocity model: closure columns (platform, passive, leg actuators), head actuators
+        self._velocity_constants(m, passive)
+        self._joint_constants(m)
+        self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
+        self.direct_kernel = _Kernel(jit.kernel(_KERNELS, "direct_one"))
+        self.velocity_kernel = _Kernel(jit.kernel(_KERNELS, "velocity_one"))
+        self.svd_kernel = _Kernel(jit.kernel("pkmkit.numerics.svd_kernel", "singular_values"))
+
+    def _velocity_constants(self, m: Any, passive: np.ndarray) -> None:
+        """The velocity kernel's column maps: the closure's (platform, passive, leg
+        actuators), the head actuators' places in J, the leg actuators'; J's homogenising
+        scale; the singularity bound's threshold of ``fk``'s default check."""
+        from pkmkit.machines.chain_jacobians import SINGULAR_TOL
+
+        model, act = m.model, self.act
+        n_var = model.n_variables
         loop_act = [int(v) for v in act if model.loop_variables[v]]
         vel = np.full(n_var, -1, dtype=np.int64)
         vel[passive] = 6 + np.arange(len(passive))
@@ -149,10 +163,14 @@ class ChainOneConstants:
         self.velocity_extra = (vel, head_position,
                                np.array([order[v] for v in loop_act], dtype=np.int64))
         self.scale = np.array([1, 1, 1, self.length, self.length, self.length], dtype=float)
-        from pkmkit.machines.chain_jacobians import SINGULAR_TOL
+        self.singular_bound = BOUND_MARGIN * SINGULAR_TOL
 
-        self.singular_bound = BOUND_MARGIN * SINGULAR_TOL  # fk's default check
-        # strokes: (index in the joint values, lower − tol, upper + tol) of every joint
+    def _joint_constants(self, m: Any) -> None:
+        """The strokes (every variable: its bounds widened by ``STROKE_TOL``, unbounded for the
+        head's passive joints), the actuators' places, the revolute actuators' home values and
+        the wrist pair of the head's branch rule."""
+        model, act = m.model, self.act
+        home = m._home["values"]
         joints = model.loop_variables | model.actuated
         self.lower = np.where(joints, model.q_min - STROKE_TOL, -np.inf).tolist()
         self.upper = np.where(joints, model.q_max + STROKE_TOL, np.inf).tolist()
@@ -168,10 +186,6 @@ class ChainOneConstants:
             reach = max(abs(model.q_min[t] - home[t]), abs(model.q_max[t] - home[t]))
             self.wrist = (t, float(home[t]), pair[1], float(home[pair[1]]),
                           bool(reach >= np.pi / 2))
-        self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
-        self.direct_kernel = _Kernel(jit.kernel(_KERNELS, "direct_one"))
-        self.velocity_kernel = _Kernel(jit.kernel(_KERNELS, "velocity_one"))
-        self.svd_kernel = _Kernel(jit.kernel("pkmkit.numerics.svd_kernel", "singular_values"))
 
     def within(self, values: list[float]) -> bool:
         """Every joint of ``values`` (every variable, model order) within its stroke (the

@@ -239,28 +239,8 @@ def velocity_one(frames, types, evar, elements, offsets, position, head, values,
     info[BOUND] = _bound(low, _factor(cu, low))
     if not info[BOUND] > 0.0:
         return
-    # dU = −(C_UᵀC_U)⁻¹ C_Uᵀ C_q, one step of refinement on the residual C_q + C_U dU
-    du, rhs, fix = np.empty((n_u, n_loop)), np.empty(n_u), np.empty(n_u)
-    for j in range(n_loop):
-        for a in range(n_u):
-            s = 0.0
-            for i in range(m):
-                s += cu[i, a] * jac[i, n_u + j]
-            rhs[a] = -s
-        _cholesky_apply(low, rhs, fix)
-        for a in range(n_u):
-            du[a, j] = fix[a]
-        for a in range(n_u):
-            s = 0.0
-            for i in range(m):
-                res = jac[i, n_u + j]
-                for b in range(n_u):
-                    res += cu[i, b] * du[b, j]
-                s += cu[i, a] * res
-            rhs[a] = -s
-        _cholesky_apply(low, rhs, fix)
-        for a in range(n_u):
-            du[a, j] += fix[a]
+    du = np.empty((n_u, n_loop))
+    _closure_rates(cu, jac[:, n_u:], low, du)
     # the tool frame and the head actuators' twists
     n_twist = _head_walk(frames, types, evar, head, head_position, row, u[0], scratch)
     rot, pos, tw, tw_col = scratch[0][1], scratch[1], scratch[2], scratch[3]
@@ -284,6 +264,34 @@ def velocity_one(frames, types, evar, elements, offsets, position, head, values,
         for i in range(6):
             twist[i] = tw[k, i]
         _point_column(twist, point, jac_out, tw_col[k])
+
+
+@njit(**_OPTIONS)
+def _closure_rates(cu, cq, low, du):  # pragma: no cover
+    """``du = −(C_UᵀC_U)⁻¹ C_Uᵀ C_q`` (``low``: the Cholesky factor of C_UᵀC_U), one step of
+    refinement on the residual ``C_q + C_U du``."""
+    m, n_u = cu.shape
+    rhs, fix = np.empty(n_u), np.empty(n_u)
+    for j in range(cq.shape[1]):
+        for a in range(n_u):
+            s = 0.0
+            for i in range(m):
+                s += cu[i, a] * cq[i, j]
+            rhs[a] = -s
+        _cholesky_apply(low, rhs, fix)
+        for a in range(n_u):
+            du[a, j] = fix[a]
+        for a in range(n_u):
+            s = 0.0
+            for i in range(m):
+                res = cq[i, j]
+                for b in range(n_u):
+                    res += cu[i, b] * du[b, j]
+                s += cu[i, a] * res
+            rhs[a] = -s
+        _cholesky_apply(low, rhs, fix)
+        for a in range(n_u):
+            du[a, j] += fix[a]
 
 
 @njit(**_OPTIONS)
