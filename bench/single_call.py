@@ -186,14 +186,17 @@ def chain_rows(name: str, calls: int) -> dict:
     ones, q_ones = [p[None] for p in rows], [v[None] for v in qs]
     few = max(1, len(rows) // 10)
 
+    w = chain_one._work(c)
+
     def ik_kernel(x):
-        c.target[0] = x
-        c.u_inv[0] = c.u_home_inv
-        c.inverse_kernel.call(*c.inverse_args, c.u_inv, c.target, c.tool_row, c.info)
+        w.target[0] = x
+        w.u_inv[0] = c.u_home_inv
+        c.inverse_kernel.call(*c.inverse_args, w.u_inv, w.target, c.tool_row, w.info)
 
     def fk_kernel(v):
-        c.q[:] = v
-        c.direct_kernel.call(*c.direct_args, c.q, True, c.u_dir, c.pose, c.info)
+        w.q[:] = v
+        c.direct_kernel.call(*c.direct_args, w.values, w.delta, w.q, True, w.u_dir, w.pose,
+                             w.info)
 
     figures = {"poses": len(rows), "fast": fast}
     for _ in range(2):  # interleaved: every method twice, the second round kept

@@ -33,6 +33,7 @@ import math
 import operator
 import os
 import sys
+import threading
 from typing import Any
 
 import numpy as np
@@ -116,26 +117,23 @@ class ChainOneConstants:
         self.length = float(model.characteristic_length)
         self.tool = float(m.tool_length)
         self.act = act
+        self.n_var = n_var
         # inverse model: u = (platform, every variable) from home
-        self.u_inv = np.zeros((1, 6 + n_var))
         self.u_home_inv = np.concatenate([m._home["platform"], home])
-        self.target, self.tool_row = np.zeros((1, 6)), np.full(1, self.tool)
+        self.tool_row = np.full(1, self.tool)
         self.inverse_args = (frames, types, evar, elements, offsets, every, head,
                              np.zeros((1, n_var)), self.length,
                              _options(chain_kernel.solve_inverse))
         # direct model: u = (platform, passive) from the first-order start
         rates, residual_rates = m._home_rates()
-        self.values, self.delta = np.zeros((1, n_var)), np.zeros(len(act))
-        self.u_dir = np.zeros((1, self.n_u))
-        self.direct_args = (frames, types, evar, elements, offsets, position, head, self.values,
+        self.direct_args = (frames, types, evar, elements, offsets, position, head,
                             np.concatenate([m._home["platform"], home[passive]]),
                             np.ascontiguousarray(rates, dtype=float),
-                            np.ascontiguousarray(residual_rates, dtype=float), self.delta,
+                            np.ascontiguousarray(residual_rates, dtype=float),
                             self.length, self.tool,
                             _options(chain_kernel.solve, damping=CLOSURE_DAMPING), home,
                             act.astype(np.int64))
-        self.q = np.zeros(len(act))
-        self.pose, self.info = np.zeros(6), np.zeros(4)
+        self.local = threading.local()  # each thread's work arrays (_work)
         self._velocity_constants(m, passive)
         self._joint_constants(m)
         self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
@@ -194,6 +192,27 @@ class ChainOneConstants:
             map(operator.le, values, self.upper))
 
 
+class _Work:
+    """One thread's work arrays for the kernels of a machine (the kernels release the GIL:
+    threads calling one machine must not share them)."""
+
+    __slots__ = ("delta", "info", "pose", "q", "target", "u_dir", "u_inv", "values")
+
+    def __init__(self, c: ChainOneConstants) -> None:
+        self.u_inv, self.target = np.zeros((1, 6 + c.n_var)), np.zeros((1, 6))
+        self.values, self.delta, self.q = np.zeros((1, c.n_var)), np.zeros(c.n), np.zeros(c.n)
+        self.u_dir, self.pose, self.info = np.zeros((1, c.n_u)), np.zeros(6), np.zeros(4)
+
+
+def _work(c: ChainOneConstants) -> _Work:
+    """This thread's work arrays of ``c``."""
+    try:
+        return c.local.work
+    except AttributeError:
+        c.local.work = _Work(c)
+        return c.local.work
+
+
 def constants(m: Any, tag: str = "chain_ik") -> ChainOneConstants | None:
     """The machine's one-pose constants (built at the first compiled single call), or None
     where its single call of kind ``tag`` (:func:`usable`) takes the batch path."""
@@ -248,8 +267,9 @@ def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None
     norm = math.sqrt(a * a + b * b + d * d)
     if not norm > 0:
         return None
-    c.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
-    u = _solve_inverse(c, c.u_home_inv)
+    w = _work(c)
+    w.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
+    u = _solve_inverse(c, w, c.u_home_inv)
     if u is None:
         return None
     values = _wrapped(c, u[6:])
@@ -258,13 +278,13 @@ def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None
     return values
 
 
-def _solve_inverse(c: ChainOneConstants, start: Any) -> list[float] | None:
-    """The kernel's inverse of ``c.target`` from ``start`` (6 + n_var): the solution, or None
+def _solve_inverse(c: ChainOneConstants, w: _Work, start: Any) -> list[float] | None:
+    """The kernel's inverse of ``w.target`` from ``start`` (6 + n_var): the solution, or None
     where it did not converge (the batch path reports it)."""
-    c.u_inv[0] = start
+    w.u_inv[0] = start
     kernel = c.inverse_kernel
-    (kernel.call or kernel.first)(*c.inverse_args, c.u_inv, c.target, c.tool_row, c.info)
-    return c.u_inv[0].tolist() if c.info[0] == 0 else None
+    (kernel.call or kernel.first)(*c.inverse_args, w.u_inv, w.target, c.tool_row, w.info)
+    return w.u_inv[0].tolist() if w.info[0] == 0 else None
 
 
 def _wrapped(c: ChainOneConstants, values: list[float]) -> list[float]:
@@ -301,7 +321,7 @@ def _nearest_branch(c: ChainOneConstants, u: list[float], values: list[float]
     start = list(u)
     start[6 + turn] += math.pi
     start[6 + tilt] = 2.0 * tilt_centre - start[6 + tilt]
-    other = _solve_inverse(c, start)
+    other = _solve_inverse(c, _work(c), start)
     if other is None:
         return None  # not converged: the batch path (which keeps the first solution)
     other_values = _wrapped(c, other[6:])
@@ -320,16 +340,18 @@ def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndar
     qs = None if c is None else _plain(q, c.n)
     if qs is None:
         return None
-    c.q[:] = qs
+    w = _work(c)
+    w.q[:] = qs
     check = check_singular is None or bool(check_singular)
-    info = c.info
+    info = w.info
     kernel = c.direct_kernel
-    (kernel.call or kernel.first)(*c.direct_args, c.q, check, c.u_dir, c.pose, info)
+    (kernel.call or kernel.first)(*c.direct_args, w.values, w.delta, w.q, check, w.u_dir,
+                                  w.pose, info)
     if info[0] != 0 or (check and not info[3] >= c.singular_bound):
         return None
-    if strokes != "ignore" and not c.within(c.values[0].tolist()):
+    if strokes != "ignore" and not c.within(w.values[0].tolist()):
         return None
-    return c.pose.copy()
+    return w.pose.copy()
 
 
 # ---------------------------------------------------------------- velocity model
@@ -384,13 +406,14 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
     if values is None:
         return None
     qs = c.actuators(values)
-    c.q[:] = qs
+    w = _work(c)
+    w.q[:] = qs
     jac = np.empty((6, c.n))
     rates = np.empty((c.n_u - 6, c.n))
-    info = c.info
+    info = w.info
     kernel = c.velocity_kernel
-    (kernel.call or kernel.first)(*c.direct_args, c.q, *c.velocity_extra, c.u_dir, jac, rates,
-                                  info)
+    (kernel.call or kernel.first)(*c.direct_args, *c.velocity_extra, w.values, w.delta, w.q,
+                                  w.u_dir, jac, rates, info)
     from pkmkit.machines.chain_jacobians import RANK_RCOND
 
     if info[0] != 0 or not info[3] >= BOUND_MARGIN * max(tol, RANK_RCOND):
@@ -399,7 +422,7 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
         _RECORD = _record_class()
     return _RECORD(_Velocity(jac, c), J=jac, passive_rates=rates,
                    closure_rank=np.int64(c.n_u), expected_rank=c.expected_rank,
-                   q=c.q.copy(), status=np.int64(0))
+                   q=w.q.copy(), status=np.int64(0))
 
 
 # ---------------------------------------------------------------- the machine's entry points

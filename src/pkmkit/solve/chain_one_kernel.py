@@ -150,8 +150,8 @@ def _cholesky_apply(low, b, x):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
-def _closure_solve(frames, types, evar, elements, offsets, position, values, u_home, rates,
-                   residual_rates, delta, length, options, home_values, act, q, u,
+def _closure_solve(frames, types, evar, elements, offsets, position, u_home, rates,
+                   residual_rates, length, options, home_values, act, values, delta, q, u,
                    info):  # pragma: no cover
     """Start (:func:`_start`) and closure of configuration ``q (n,)`` (actuators ``act`` of
     the variables): ``u (1, n_u)`` the solution, ``values (1, n_var)`` every joint (home's
@@ -178,15 +178,15 @@ def _closure_solve(frames, types, evar, elements, offsets, position, values, u_h
 
 
 @njit(**_OPTIONS)
-def direct_one(frames, types, evar, elements, offsets, position, head, values, u_home, rates,
-               residual_rates, delta, length, tool, options, home_values, act, q, check, u,
-               pose, info):  # pragma: no cover
+def direct_one(frames, types, evar, elements, offsets, position, head, u_home, rates,
+               residual_rates, length, tool, options, home_values, act, values, delta, q,
+               check, u, pose, info):  # pragma: no cover
     """The direct model of configuration ``q (n,)`` (module docstring; ``values``, ``delta``
     work arrays, see :func:`_closure_solve`): ``u (1, n_u)`` out, ``pose (6,)`` out (tool
     point ``tool`` along the tool axis, the axis), ``info (4,)`` out; ``check``: compute the
     bound."""
-    _closure_solve(frames, types, evar, elements, offsets, position, values, u_home, rates,
-                   residual_rates, delta, length, options, home_values, act, q, u, info)
+    _closure_solve(frames, types, evar, elements, offsets, position, u_home, rates,
+                   residual_rates, length, options, home_values, act, values, delta, q, u, info)
     if info[STATUS] != 0:
         return
     n_u = u.shape[1]
@@ -206,9 +206,9 @@ def direct_one(frames, types, evar, elements, offsets, position, head, values, u
 
 
 @njit(**_OPTIONS)
-def velocity_one(frames, types, evar, elements, offsets, position, head, values, u_home, rates,
-                 residual_rates, delta, length, tool, options, home_values, act, q, vel_position,
-                 head_position, loop_columns, u, jac_out, passive_rates,
+def velocity_one(frames, types, evar, elements, offsets, position, head, u_home, rates,
+                 residual_rates, length, tool, options, home_values, act, vel_position,
+                 head_position, loop_columns, values, delta, q, u, jac_out, passive_rates,
                  info):  # pragma: no cover
     """The velocity model at one configuration (module docstring): the closure as
     :func:`direct_one`, then ``jac_out (6, n)`` (tool point velocity, angular velocity per
@@ -217,8 +217,8 @@ def velocity_one(frames, types, evar, elements, offsets, position, head, values,
     none), ``head_position (n_var,)`` the actuator index of each head actuator (−1 for none),
     ``loop_columns (n_loop,)`` the actuator index of each leg actuator; ``info[BOUND]`` the
     bound of σ_min/σ_max of C_U."""
-    _closure_solve(frames, types, evar, elements, offsets, position, values, u_home, rates,
-                   residual_rates, delta, length, options, home_values, act, q, u, info)
+    _closure_solve(frames, types, evar, elements, offsets, position, u_home, rates,
+                   residual_rates, length, options, home_values, act, values, delta, q, u, info)
     if info[STATUS] != 0:
         return
     n_u = u.shape[1]
