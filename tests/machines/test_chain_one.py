@@ -305,3 +305,22 @@ def test_threads_calling_one_machine_get_their_own_answers():
 
     with ThreadPoolExecutor(4) as pool:
         assert all(pool.map(work, range(len(x))))
+
+
+def test_a_machine_from_a_chain_file(tmp_path):
+    """An element-by-element machine file (no kind, so no declared head pair: the wrist pair
+    found from the head) takes the same path with the batch path's bits."""
+    from pkmkit.machines.chain_file import machine_file_text
+
+    path = tmp_path / "tripteor.toml"
+    path.write_text(machine_file_text(pkmkit.machine("tripteor-x7")))
+    m = pkmkit.load(path)
+    for tag in ("chain_ik", "chain_fk", "chain_jacobian"):
+        chain_one.usable(m, tag)
+    q, x = within_stroke_poses(m, 12, seed=8)
+    fast, wrong = ik_mismatches(m, x)
+    assert wrong == 0 and fast == len(x)
+    for k, v in enumerate(q):
+        assert chain_one.direct(m, v, "flag", None) is not None
+        np.testing.assert_allclose(m.fk(v), batch_fk(m, v), rtol=0, atol=POSE_TOL)
+        assert type(m.jacobian(x[k])).__name__ == "OnePoseChainJacobians"
