@@ -324,3 +324,14 @@ def test_a_machine_from_a_chain_file(tmp_path):
         assert chain_one.direct(m, v, "flag", None) is not None
         np.testing.assert_allclose(m.fk(v), batch_fk(m, v), rtol=0, atol=POSE_TOL)
         assert type(m.jacobian(x[k])).__name__ == "OnePoseChainJacobians"
+
+
+def test_a_machine_pickles_after_one_pose_calls():
+    import copy
+    import pickle
+
+    m = fresh("tripteor-x7")
+    x = m.fk(m.home_q)
+    q = m.ik(x)
+    for other in (pickle.loads(pickle.dumps(m)), copy.deepcopy(m)):
+        np.testing.assert_array_equal(other.ik(x), q)

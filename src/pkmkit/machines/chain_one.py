@@ -185,11 +185,21 @@ class ChainOneConstants:
             self.wrist = (t, float(home[t]), pair[1], float(home[pair[1]]),
                           bool(reach >= np.pi / 2))
 
+    def __reduce__(self) -> tuple:
+        """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
+        holds compiled functions and per-thread arrays)."""
+        return _nothing, ()
+
     def within(self, values: list[float]) -> bool:
         """Every joint of ``values`` (every variable, model order) within its stroke (the
         comparisons of :func:`~pkmkit.machines.strokes.signed_excess`, in C)."""
         return all(map(operator.le, self.lower, values)) and all(
             map(operator.le, values, self.upper))
+
+
+def _nothing() -> None:
+    """What a pickled :class:`ChainOneConstants` becomes."""
+    return None
 
 
 class _Work:
