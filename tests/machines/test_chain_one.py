@@ -202,6 +202,10 @@ def test_beyond_a_stroke_takes_the_batch_path(machine):
     with pytest.raises(OutOfStrokeError):
         machine.ik(x, strokes="refuse")
     np.testing.assert_array_equal(flagged, machine.ik(x[None], strokes="ignore")[0])
+    ignored = chain_one.inverse(machine, x, "ignore")  # the fast path keeps it, as the batch
+    assert ignored is not None
+    np.testing.assert_array_equal(ignored, batch_ik(machine, x, strokes="ignore"))
+    np.testing.assert_array_equal(machine.ik(x, strokes="ignore"), ignored)
 
 
 @pytest.mark.parametrize("bad", [[np.nan, 0, 1, 0, 0, 1], [0.1, 0.2, 1.0, 0, np.inf, 1],
