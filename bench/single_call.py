@@ -161,6 +161,60 @@ def six_axis_rows(name: str, calls: int) -> dict:
     return figures
 
 
+def chain_rows(name: str, calls: int) -> dict:
+    """The joint-chain machines (5 axes: ``ik``, ``fk``, ``jacobian`` of one pose through one
+    compiled call, :mod:`pkmkit.machines.chain_one`) against the batch path of one row (what
+    a single call cost before), and the compiled solve alone on the preallocated row (the
+    floor: the closure's iterations from the batch path's start)."""
+    from pkmkit.machines import chain_one
+
+    m = pkmkit.machine(name)
+    rng = np.random.default_rng(2)
+    act = np.flatnonzero(m.model.actuated)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    q = lo + (hi - lo) * (0.1 + 0.8 * rng.random((calls, len(act))))
+    poses = m.fk(q, strokes="ignore")
+    # within every stroke, as ik and as fk judge them
+    inside = (np.isfinite(m.ik(poses, strokes="refuse")).all(axis=1)
+              & np.isfinite(m.fk(q, strokes="refuse")).all(axis=1))
+    rows, qs = list(poses[inside]), list(q[inside])
+    for tag in ("chain_ik", "chain_fk", "chain_jacobian"):  # past the first (batch) call
+        chain_one.usable(m, tag)
+    c = chain_one.constants(m)
+    fast = sum(chain_one.inverse(m, x, "flag") is not None for x in rows)
+    m.fk(qs[0]), m.jacobian(rows[0]).condition
+    ones, q_ones = [p[None] for p in rows], [v[None] for v in qs]
+    few = max(1, len(rows) // 10)
+
+    w = chain_one._work(c)
+
+    def ik_kernel(x):
+        w.target[0] = x
+        w.u_inv[0] = c.u_home_inv
+        c.inverse_kernel.call(*c.inverse_args, w.u_inv, w.target, c.tool_row, w.info)
+
+    def fk_kernel(v):
+        w.q[:] = v
+        c.direct_kernel.call(*c.direct_args, w.values, w.delta, w.q, True, w.u_dir, w.pose,
+                             w.info)
+
+    figures = {"poses": len(rows), "fast": fast}
+    for _ in range(2):  # interleaved: every method twice, the second round kept
+        figures["ik one pose"] = per_call(lambda p: m.ik(p), rows)
+        figures["ik batch of one (before)"] = per_call(lambda p: m.ik(p), ones[:few])
+        figures["ik compiled solve alone"] = per_call(ik_kernel, rows)
+        figures["fk one"] = per_call(lambda v: m.fk(v), qs)
+        figures["fk batch of one (before)"] = per_call(lambda v: m.fk(v), q_ones[:few])
+        figures["fk compiled solve + bound alone"] = per_call(fk_kernel, qs)
+        figures["jacobian one pose, call"] = per_call(m.jacobian, rows)
+        figures["jacobian one pose, call + J"] = per_call(lambda p: m.jacobian(p).J, rows)
+        figures["jacobian one pose, call + condition"] = per_call(
+            lambda p: m.jacobian(p).condition, rows)
+        figures["jacobian batch of one + J (before)"] = per_call(lambda p: m.jacobian(p).J,
+                                                                 ones[:few])
+    return figures
+
+
 def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None) -> None:
     """``m.jacobian(x)`` of one pose: the call (the fields are computed when read, each from
     only the pieces it needs), the call and reading ``J``, ``condition`` or ``singularity``,
@@ -184,24 +238,36 @@ def main() -> None:
     parser.add_argument("--calls", type=int, default=20000)
     parser.add_argument("--load", default="both", choices=("none", "busy", "both"))
     parser.add_argument("--json")
+    parser.add_argument("--machines", help="comma-separated subset of the machines")
     args = parser.parse_args()
     warnings.simplefilter("ignore", StrokeWarning)  # the batch path's, beyond a stroke
     names = [n for n in ("orthoglide", "linear-delta", "five-bar", "delta")]
     six = ("gough-stewart", "verne", "dietmaier-hexapod")
+    chains = ("tripteor-x7", "trimule-600")
+    if args.machines:
+        wanted = set(args.machines.split(","))
+        names, six, chains = ([n for n in group if n in wanted] for group in (names, six, chains))
     report = {}
     for label, context in conditions(args.load):
         with context():
             load = os.getloadavg()[0]
             report[label] = {n: machine_rows(n, args.calls) for n in names}
             report[label].update({n: six_axis_rows(n, args.calls // 4) for n in six})
-        print(f"== {label} (load average {load:.2f} before)")
+            report[label].update({n: chain_rows(n, args.calls // 4) for n in chains})
+            after = os.getloadavg()[0]
+        print(f"== {label} (load average {load:.2f} before, {after:.2f} after)")
         for n, f in report[label].items():
             print(f"  {n}")
             for k, v in f.items():
                 if k == "jacobian one pose (fast path)":
                     print(f"    {k:38s} {v[0]} of {v[1]} poses (the others beyond a stroke)")
+                elif k == "fast":
+                    print(f"    one-pose path taken by ik on {v} of {f['poses']} poses within "
+                          "the strokes")
                 elif k != "poses":
                     print(f"    {k:38s} {v[0]:8.2f} µs  (CPU {v[1]:7.2f} µs)")
+            if n in chains:
+                continue
             ik_before = f["ik batch of one (before)"][0]
             fk_before = f.get("fk batch of one (before)",
                               f.get("fk batch of one, NumPy engine (before)"))[0]

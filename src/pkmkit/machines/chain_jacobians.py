@@ -14,6 +14,7 @@ from pkmkit.exceptions import (
     SingularConfigurationError,
     UnsupportedOperationError,
 )
+from pkmkit.machines.chain_one import ChainOnePose
 from pkmkit.machines.common import _checked_batch
 from pkmkit.machines.results import VelocityModel
 from pkmkit.model.chains import FIXED
@@ -88,8 +89,9 @@ class HyperstatismCount:
     rank_hyperstatism: int
 
 
-class ChainVelocity:
-    """Mixin of :class:`~pkmkit.machines.joint_chain.JointChainMachine`: its velocity model."""
+class ChainVelocity(ChainOnePose):
+    """Mixin of :class:`~pkmkit.machines.joint_chain.JointChainMachine`: its velocity model
+    (and, from :class:`~pkmkit.machines.chain_one.ChainOnePose`, the one-pose paths)."""
 
     # ---------------------------------------------------------------- velocity
     def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
@@ -119,6 +121,8 @@ class ChainVelocity:
             ClosureMissError: a single q whose legs do not close.
             SingularConfigurationError: a single q at a singular closure.
         """
+        if fast := self._jacobian_one(x, q, branches, tol, start):
+            return fast[0]  # one plain pose: one compiled call (machines/chain_one.py)
         if branches is not None:
             raise InputError("a joint-chain machine has no leg branches: reach another "
                              "solution with ik(x, q0=...) and pass its q")

@@ -253,8 +253,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(loop))
         q = np.tile(home, (len(grid), 1))
         q[:, loop] = grid
-        # compiled once Numba is loaded (an identification's divergence bound); not imported
-        # for this alone
+        # compiled once Numba is loaded (an identification's bound); not imported for this alone
         points = self.fk(q, full_output=True, strokes="ignore", check_singular=False,
                          compiled=use_compiled_solver(1)).pose[:, :3]
         points = np.vstack([points[np.isfinite(points).all(axis=1)], self.home_pose[:3]])
@@ -305,9 +304,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                 from one (UnsupportedOperationError); ``(6 + n_p)`` values per row are the
                 deprecated name of ``start`` (:mod:`pkmkit.machines.warm_starts`).
             start: warm start of the closure: ``(6 + n_p,)`` or ``(N, 6 + n_p)`` platform
-                position, rotation vector and passive joints (e.g. the previous solution along
-                a path); default (and rows of ``start`` that are not finite) the home
-                configuration.
+                position, rotation vector and passive joints (e.g. the previous solution along a
+                path); default (and rows of ``start`` that are not finite) the home one.
             tool_length: tool length(s) along the tool axis (m); default the machine's.
             full_output: return a :class:`ChainDirectResult`.
             strokes: joint values outside their strokes (the actuators given, the passive
@@ -320,9 +318,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             check_singular: check the closure's Jacobian (platform and passive joints) at the
                 solution: rows where σ_min/σ_max falls below :data:`SINGULAR_TOL` (a parallel
                 singularity: the actuators do not determine the passive joints) get status
-                SINGULAR, values kept; a single row
-                raises :class:`~pkmkit.exceptions.SingularConfigurationError`. Default: on for a
-                single row, off for a batch (one SVD per row).
+                SINGULAR, values kept; a single row raises SingularConfigurationError.
+                Default: on for a single row, off for a batch (one SVD per row).
             max_misfit: largest closure residual (m) accepted as an assembly: default the
                 engine's tolerance for a nominal geometry, unbounded for one with defects
                 (whose least-squares misfit cannot be told from actuator values out of reach
@@ -330,13 +327,12 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             **engine_options: forwarded to the engine (``max_iter``, ``residual_tol``, …).
 
         Returns:
-            tool point and axis ``(6,)`` / ``(N, 6)``, or a :class:`ChainDirectResult`. A
-            machine with incompatible defects has no exact closure: its rows are the
-            least-squares closure (status INCONSISTENT, ``closure_residual`` > 0), as a real
-            hyperstatic machine deforms to assemble — up to ``max_misfit`` if given. For a
-            nominal geometry any misfit means the actuator values admit no assembly. Such rows
-            have status NO_ASSEMBLY, NaN, and ``messages`` name the leg that misses the
-            platform and by how much.
+            tool point and axis ``(6,)`` / ``(N, 6)``, or a :class:`ChainDirectResult`. A machine
+            with incompatible defects has no exact closure: its rows are the least-squares closure
+            (status INCONSISTENT, ``closure_residual`` > 0), as a real hyperstatic machine deforms
+            to assemble — up to ``max_misfit`` if given. For a nominal geometry any misfit means the
+            actuator values admit no assembly. Such rows have status NO_ASSEMBLY, NaN, and
+            ``messages`` name the leg that misses the platform and by how much.
 
         Raises:
             InputError: mis-shaped q, a non-finite single q, an unknown ``strokes`` mode.
@@ -345,6 +341,9 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
             SingularConfigurationError: a single q at a singular closure.
         """
+        if fast := self._fk_one(q, strokes, check_singular, x0, start, tool_length, full_output,
+                                max_misfit, engine_options):
+            return fast[0]  # one plain configuration: one compiled call (machines/chain_one.py)
         if strokes not in STROKE_MODES:
             raise InputError(f"strokes must be one of {', '.join(STROKE_MODES)}, got {strokes!r}")
         qb, single = _checked_batch(q, self.n_actuators, "q")
@@ -566,9 +565,10 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         Raises:
             InputError: mis-shaped input, an axis of zero length, an unknown ``strokes`` mode.
             ConvergenceError: a single target the engine could not reach exactly.
-            OutOfStrokeError: a single target reached beyond a stroke with
-                ``strokes="refuse"``.
+            OutOfStrokeError: a single target reached beyond a stroke with ``strokes="refuse"``.
         """
+        if fast := self._ik_one(x, q0, tool_length, full_output, strokes, start, engine_options):
+            return fast[0]  # one plain pose: one compiled call (machines/chain_one.py)
         if strokes not in STROKE_MODES:
             raise InputError(f"strokes must be one of {', '.join(STROKE_MODES)}, got {strokes!r}")
         xb, single = _checked_batch(x, 6, "pose")

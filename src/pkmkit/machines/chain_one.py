@@ -1,0 +1,473 @@
+"""One pose per call on a joint-chain machine (issue 22 §1): ``m.ik(x)``, ``m.fk(q)`` and
+``m.jacobian(x)`` of one plain pose or configuration through one compiled call each
+(:mod:`pkmkit.solve.chain_one_kernel`), without the batch machinery.
+
+Per machine, once (:class:`ChainOneConstants`, cached on the machine): the kernel's arrays,
+the home start, the first-order start's rates, the strokes, the head's wrist pair. Per call: a
+type and range check of the plain numbers, one compiled solve on preallocated arrays, the
+stroke test in Python floats, the result assembled directly. Anything unusual returns None and
+the machine takes the batch path, which gives the same numbers and raises the typed errors:
+not 6 (or ``n``) plain finite numbers within ±``MAX_COORDINATE``, a zero tool axis, no
+convergence, a joint beyond its stroke (unless ``strokes="ignore"`` and the batch path would
+keep the solution), an inverse solution whose head could be on its other branch (the batch
+path's :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` rule solves the
+mirror), a closure the bound of :mod:`~pkmkit.solve.chain_one_kernel` cannot certify regular,
+a machine whose closure Jacobian at home is rank deficient, and every option the fast paths do
+not take (``q0``, ``start``, ``tool_length``, ``full_output``, engine options).
+
+Agreement with the batch row of the same input: ``ik`` bit for bit (the same kernel from the
+same start, the head's turn wrapped with NumPy's ``arctan2`` as ``np.angle`` does); ``fk`` and
+``jacobian`` to rounding (the direct model's first-order start is formed in the kernel, not by
+NumPy's matrix product and ``sin``; the closure rates by Cholesky with one refinement step,
+not LAPACK's pseudo-inverse). No result depends on an earlier call: only constants are cached.
+
+A one-shot call in a fresh process does not import Numba
+(:func:`pkmkit.numerics.jit.compiled_from_second_call`): until Numba is imported, a machine's
+first single call takes the batch path and the next imports it.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import operator
+import os
+import sys
+import threading
+from typing import Any
+
+import numpy as np
+
+from pkmkit.machines.common import MAX_COORDINATE
+from pkmkit.machines.head_branches import FLIP_MARGIN
+from pkmkit.machines.lazy_records import lazy_record_class
+from pkmkit.machines.strokes import STROKE_TOL
+from pkmkit.numerics import jit
+
+_KERNELS = "pkmkit.solve.chain_one_kernel"
+_FAR = math.pi / 2 - FLIP_MARGIN
+_TWO_PI = 2.0 * math.pi
+_ATAN2 = np.arctan2
+#: Margin of the singularity bound over the thresholds (the batch path's SVD rounds).
+BOUND_MARGIN = 2.0
+
+
+def usable(machine: Any, tag: str = "chain_ik") -> bool:
+    """Whether a single call (``tag``: ``chain_ik``, ``chain_fk``, ``chain_jacobian``) of
+    ``machine`` runs compiled now (module docstring; each method's first call counts, as the
+    full-pose paths' direct and velocity calls: ``m.ik(m.home_pose)`` is a first ``fk`` then
+    a first ``ik``)."""
+    if "numba" in sys.modules and "PKMKIT_COMPILED" not in os.environ:
+        return jit.numba_available()
+    return jit.compiled_from_second_call(machine, tag)
+
+
+def _options(function: Any, **override: float) -> np.ndarray:
+    """The engine options of the batch path's kernel call, as the one-row kernels take them."""
+    defaults = {k: p.default for k, p in inspect.signature(function).parameters.items()}
+    defaults.update(override)
+    return np.array([defaults[k] for k in ("max_iter", "xtol", "atol", "gtol", "stall",
+                                           "residual_tol", "damping")], dtype=float)
+
+
+class _Kernel:
+    """A compiled kernel called with the same argument types every time: after the first call
+    through Numba's dispatcher (which compiles or loads it), its compiled entry point for
+    those types is called directly (no type dispatch: ≈ 2 µs less per call); a C twin, or a
+    kernel whose entry point is not found, is called as it is."""
+
+    __slots__ = ("call", "function")
+
+    def __init__(self, function: Any) -> None:
+        self.function = function
+        self.call = None
+
+    def first(self, *args: Any) -> None:
+        """Call through the dispatcher and find the entry point for ``args``' types."""
+        self.function(*args)
+        overloads = getattr(self.function, "overloads", None)
+        entry = None
+        if overloads:
+            from numba import typeof
+
+            found = overloads.get(tuple(typeof(a) for a in args))
+            entry = getattr(found, "entry_point", None)
+        self.call = entry if entry is not None else self.function
+
+
+class ChainOneConstants:
+    """What a machine's one-pose calls need, built once (module docstring)."""
+
+    def __init__(self, m: Any) -> None:
+        from pkmkit.solve import chain_kernel
+        from pkmkit.solve.chains import CLOSURE_DAMPING
+
+        model = m.model
+        n_var = model.n_variables
+        passive = np.asarray(m.passive_variables, dtype=int)
+        act = np.flatnonzero(model.actuated)
+        frames, types, evar, elements, offsets, position = chain_kernel.model_arrays(
+            model, passive)
+        every = chain_kernel.model_arrays(model, np.arange(n_var))[-1]
+        head = np.array(model.head, dtype=np.int64)
+        home = m._home["values"]
+        self.n, self.n_u = len(act), 6 + len(passive)
+        self.regular = m._expected_rank() == self.n_u  # else the bound cannot certify
+        self.expected_rank = m._expected_rank()
+        self.length = float(model.characteristic_length)
+        self.tool = float(m.tool_length)
+        self.act = act
+        self.n_var = n_var
+        # inverse model: u = (platform, every variable) from home
+        self.u_home_inv = np.concatenate([m._home["platform"], home])
+        self.tool_row = np.full(1, self.tool)
+        self.inverse_args = (frames, types, evar, elements, offsets, every, head,
+                             np.zeros((1, n_var)), self.length,
+                             _options(chain_kernel.solve_inverse))
+        # direct model: u = (platform, passive) from the first-order start
+        rates, residual_rates = m._home_rates()
+        self.direct_args = (frames, types, evar, elements, offsets, position, head,
+                            np.concatenate([m._home["platform"], home[passive]]),
+                            np.ascontiguousarray(rates, dtype=float),
+                            np.ascontiguousarray(residual_rates, dtype=float),
+                            self.length, self.tool,
+                            _options(chain_kernel.solve, damping=CLOSURE_DAMPING), home,
+                            act.astype(np.int64))
+        self.local = threading.local()  # each thread's work arrays (_work)
+        self._velocity_constants(m, passive)
+        self._joint_constants(m)
+        self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
+        self.direct_kernel = _Kernel(jit.kernel(_KERNELS, "direct_one"))
+        self.velocity_kernel = _Kernel(jit.kernel(_KERNELS, "velocity_one"))
+        self.svd_kernel = _Kernel(jit.kernel("pkmkit.numerics.svd_kernel", "singular_values"))
+
+    def _velocity_constants(self, m: Any, passive: np.ndarray) -> None:
+        """The velocity kernel's column maps: the closure's (platform, passive, leg
+        actuators), the head actuators' places in J, the leg actuators'; J's homogenising
+        scale; the singularity bound's threshold of ``fk``'s default check."""
+        from pkmkit.machines.chain_jacobians import SINGULAR_TOL
+
+        model, act = m.model, self.act
+        n_var = model.n_variables
+        loop_act = [int(v) for v in act if model.loop_variables[v]]
+        vel = np.full(n_var, -1, dtype=np.int64)
+        vel[passive] = 6 + np.arange(len(passive))
+        vel[loop_act] = self.n_u + np.arange(len(loop_act))
+        head_position = np.full(n_var, -1, dtype=np.int64)
+        order = {int(v): k for k, v in enumerate(act)}
+        for v in act:
+            if not model.loop_variables[v]:
+                head_position[v] = order[int(v)]
+        self.velocity_extra = (vel, head_position,
+                               np.array([order[v] for v in loop_act], dtype=np.int64))
+        self.scale = np.array([1, 1, 1, self.length, self.length, self.length], dtype=float)
+        self.singular_bound = BOUND_MARGIN * SINGULAR_TOL
+
+    def _joint_constants(self, m: Any) -> None:
+        """The strokes (every variable: its bounds widened by ``STROKE_TOL``, unbounded for the
+        head's passive joints), the actuators' places, the revolute actuators' home values and
+        the wrist pair of the head's branch rule."""
+        model, act = m.model, self.act
+        home = m._home["values"]
+        joints = model.loop_variables | model.actuated
+        self.lower = np.where(joints, model.q_min - STROKE_TOL, -np.inf).tolist()
+        self.upper = np.where(joints, model.q_max + STROKE_TOL, np.inf).tolist()
+        # the actuators' values from every variable's, as a tuple (one actuator too)
+        self.actuators = (operator.itemgetter(*act.tolist()) if len(act) > 1 else
+                          lambda values, i=int(act[0]): (values[i],))
+        self.turns = tuple((int(v), float(home[v])) for v in act
+                           if m._element_of(int(v)).type == "R")
+        pair = m._wrist_pair()
+        self.wrist = None
+        if pair is not None:  # (turn, its home, tilt, its home, the turn reaches π/2)
+            t = pair[0]
+            reach = max(abs(model.q_min[t] - home[t]), abs(model.q_max[t] - home[t]))
+            self.wrist = (t, float(home[t]), pair[1], float(home[pair[1]]),
+                          bool(reach >= np.pi / 2))
+
+    def __reduce__(self) -> tuple:
+        """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
+        holds compiled functions and per-thread arrays)."""
+        return _nothing, ()
+
+    def within(self, values: list[float]) -> bool:
+        """Every joint of ``values`` (every variable, model order) within its stroke (the
+        comparisons of :func:`~pkmkit.machines.strokes.signed_excess`, in C)."""
+        return all(map(operator.le, self.lower, values)) and all(
+            map(operator.le, values, self.upper))
+
+
+def _nothing() -> None:
+    """What a pickled :class:`ChainOneConstants` becomes."""
+    return None
+
+
+class _Work:
+    """One thread's work arrays for the kernels of a machine (the kernels release the GIL:
+    threads calling one machine must not share them)."""
+
+    __slots__ = ("delta", "info", "pose", "q", "target", "u_dir", "u_inv", "values")
+
+    def __init__(self, c: ChainOneConstants) -> None:
+        self.u_inv, self.target = np.zeros((1, 6 + c.n_var)), np.zeros((1, 6))
+        self.values, self.delta, self.q = np.zeros((1, c.n_var)), np.zeros(c.n), np.zeros(c.n)
+        self.u_dir, self.pose, self.info = np.zeros((1, c.n_u)), np.zeros(6), np.zeros(4)
+
+
+def _work(c: ChainOneConstants) -> _Work:
+    """This thread's work arrays of ``c``."""
+    try:
+        return c.local.work
+    except AttributeError:
+        c.local.work = _Work(c)
+        return c.local.work
+
+
+def constants(m: Any, tag: str = "chain_ik") -> ChainOneConstants | None:
+    """The machine's one-pose constants (built at the first compiled single call), or None
+    where its single call of kind ``tag`` (:func:`usable`) takes the batch path."""
+    c = m.__dict__.get("_chain_one_constants")
+    if c is None or not ("numba" in sys.modules and "PKMKIT_COMPILED" not in os.environ):
+        if not usable(m, tag):
+            return None
+        if c is None:
+            c = ChainOneConstants(m)
+            object.__setattr__(m, "_chain_one_constants", c)
+    return c if c.regular else None
+
+
+def _plain(x: Any, width: int) -> list[float] | None:
+    """``width`` finite floats within ±MAX_COORDINATE from a list, tuple or 1-D float array."""
+    if isinstance(x, np.ndarray):
+        if x.shape != (width,) or x.dtype.kind != "f":
+            return None
+        x = x.tolist()
+    elif type(x) in (list, tuple) and len(x) == width:
+        if not all(type(v) is float or type(v) is int for v in x):
+            return None
+        x = [float(v) for v in x]
+    else:
+        return None
+    total = sum(x)  # NaN if any is
+    if not (max(map(abs, x)) <= MAX_COORDINATE and total == total):
+        return None
+    return x
+
+
+def inverse(m: Any, x: Any, strokes: str) -> np.ndarray | None:
+    """``m.ik(x)`` of one plain pose ``x`` (6 numbers): ``q (n,)``, or None (module
+    docstring)."""
+    c = constants(m)
+    xs = None if c is None else _plain(x, 6)
+    if xs is None:
+        return None
+    values = _inverse_values(c, xs)
+    if values is None:
+        return None
+    if strokes != "ignore" and not c.within(values):
+        return None  # the batch path warns or refuses
+    return np.array(c.actuators(values))
+
+
+def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None:
+    """Every joint variable of the inverse solution of pose ``xs``, revolute actuators on the
+    turn nearest home, on the head's branch of the batch path's rule; None where the batch path
+    must decide."""
+    a, b, d = xs[3], xs[4], xs[5]
+    norm = math.sqrt(a * a + b * b + d * d)
+    if not norm > 0:
+        return None
+    w = _work(c)
+    w.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
+    u = _solve_inverse(c, w, c.u_home_inv)
+    if u is None:
+        return None
+    values = _wrapped(c, u[6:])
+    if c.wrist is not None:
+        values = _nearest_branch(c, u, values)
+    return values
+
+
+def _solve_inverse(c: ChainOneConstants, w: _Work, start: Any) -> list[float] | None:
+    """The kernel's inverse of ``w.target`` from ``start`` (6 + n_var): the solution, or None
+    where it did not converge (the batch path reports it)."""
+    w.u_inv[0] = start
+    kernel = c.inverse_kernel
+    (kernel.call or kernel.first)(*c.inverse_args, w.u_inv, w.target, c.tool_row, w.info)
+    return w.u_inv[0].tolist() if w.info[0] == 0 else None
+
+
+def _wrapped(c: ChainOneConstants, values: list[float]) -> list[float]:
+    """``values`` with the revolute actuators on the turn nearest home: ``home +
+    np.angle(np.exp(1j (v − home)))`` — NumPy's arctan2 (math's differs in the last place)."""
+    values = list(values)
+    if c.turns:
+        d = [values[v] - home for v, home in c.turns]
+        for (v, home), a in zip(c.turns, _ATAN2(tuple(map(math.sin, d)),
+                                                tuple(map(math.cos, d))).tolist(), strict=True):
+            values[v] = home + a
+    return values
+
+
+def _turn_offset(angle: float) -> float:
+    """``angle`` wrapped to (−π, π] (:func:`~pkmkit.machines.head_branches.wrapped`; Python's
+    ``%`` is NumPy's ``mod`` for floats)."""
+    return math.pi - (math.pi - angle) % _TWO_PI
+
+
+def _nearest_branch(c: ChainOneConstants, u: list[float], values: list[float]
+                    ) -> list[float] | None:
+    """The rule of :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` for one
+    row (:func:`~pkmkit.machines.head_branches.nearest_head_branch` with home as the
+    reference, the strokes judged around home): the mirror solved where the solution's turn is
+    far from home's (or, when the turn's stroke reaches a quarter turn, beyond a stroke) and
+    kept where it is nearer or alone within the strokes. ``values`` (wrapped) of the branch
+    kept, or None (the mirror did not converge: the batch path)."""
+    turn, home_turn, tilt, tilt_centre, wide = c.wrist
+    far = abs(_turn_offset(u[6 + turn] - home_turn)) > _FAR
+    kept_inside = c.within(values)
+    if not (far or (wide and not kept_inside)):
+        return values
+    start = list(u)
+    start[6 + turn] += math.pi
+    start[6 + tilt] = 2.0 * tilt_centre - start[6 + tilt]
+    other = _solve_inverse(c, _work(c), start)
+    if other is None:
+        return None  # not converged: the batch path (which keeps the first solution)
+    other_values = _wrapped(c, other[6:])
+    closer = abs(_turn_offset(other[6 + turn] - home_turn)) < abs(
+        _turn_offset(u[6 + turn] - home_turn))
+    flipped_inside = c.within(other_values)
+    if (flipped_inside and not kept_inside) or (flipped_inside == kept_inside and closer):
+        return other_values
+    return values
+
+
+def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndarray | None:
+    """``m.fk(q)`` of one plain configuration ``q`` (``n`` numbers): the tool point and axis
+    ``(6,)``, or None (module docstring)."""
+    c = constants(m, "chain_fk")
+    qs = None if c is None else _plain(q, c.n)
+    if qs is None:
+        return None
+    w = _work(c)
+    w.q[:] = qs
+    check = check_singular is None or bool(check_singular)
+    info = w.info
+    kernel = c.direct_kernel
+    (kernel.call or kernel.first)(*c.direct_args, w.values, w.delta, w.q, check, w.u_dir,
+                                  w.pose, info)
+    if info[0] != 0 or (check and not info[3] >= c.singular_bound):
+        return None
+    if strokes != "ignore" and not c.within(w.values[0].tolist()):
+        return None
+    return w.pose.copy()
+
+
+# ---------------------------------------------------------------- velocity model
+def _record_class() -> type:
+    from pkmkit.machines.chain_jacobians import ChainJacobians
+
+    return lazy_record_class(
+        ChainJacobians, "OnePose",
+        lambda r: f"1 pose, {len(r.q)} actuators; singular values computed when read",
+        "A joint-chain machine's velocity model of one pose (:mod:`pkmkit.machines.chain_one`)"
+        "; J_homogeneous, singular_values and condition computed when first read.")
+
+
+_RECORD: type | None = None
+
+
+class _Velocity:
+    """The fields of a one-pose record not given at construction (computed when read): the
+    singular values of ``J_homogeneous`` by the compiled one-sided Jacobi kernel of
+    :mod:`pkmkit.numerics.svd_kernel` (what the batch path runs on large stacks; on one row it
+    calls LAPACK: the same values to ~1e-15 of σ_max)."""
+
+    __slots__ = ("J", "c", "sv")
+
+    def __init__(self, jac: np.ndarray, c: ChainOneConstants) -> None:
+        self.J, self.c, self.sv = jac, c, None
+
+    def field(self, name: str) -> Any:
+        if name == "J_homogeneous":
+            return self.J * self.c.scale[:, None]
+        if self.sv is None:
+            self.sv = np.empty((1, min(self.J.shape)))
+            kernel = self.c.svd_kernel
+            (kernel.call or kernel.first)((self.J * self.c.scale[:, None])[None], self.sv)
+        if name == "singular_values":
+            return self.sv[0].copy()
+        if name == "condition":
+            return self.sv[:, 0][0] / self.sv[:, -1][0]
+        raise AttributeError(name)
+
+
+def jacobian(m: Any, x: Any, tol: float) -> Any:
+    """``m.jacobian(x)`` of one plain pose ``x``: a record with the batch row's fields
+    (``J``, ``passive_rates``, ``status``, ranks at once; ``J_homogeneous``,
+    ``singular_values``, ``condition`` when read), or None (module docstring)."""
+    global _RECORD
+    if type(tol) is not float or not tol > 0 or tol == math.inf:
+        return None
+    c = constants(m, "chain_jacobian")
+    xs = None if c is None else _plain(x, 6)
+    values = None if xs is None else _inverse_values(c, xs)
+    if values is None:
+        return None
+    qs = c.actuators(values)
+    w = _work(c)
+    w.q[:] = qs
+    jac = np.empty((6, c.n))
+    rates = np.empty((c.n_u - 6, c.n))
+    info = w.info
+    kernel = c.velocity_kernel
+    (kernel.call or kernel.first)(*c.direct_args, *c.velocity_extra, w.values, w.delta, w.q,
+                                  w.u_dir, jac, rates, info)
+    from pkmkit.machines.chain_jacobians import RANK_RCOND
+
+    if info[0] != 0 or not info[3] >= BOUND_MARGIN * max(tol, RANK_RCOND):
+        return None
+    if _RECORD is None:
+        _RECORD = _record_class()
+    return _RECORD(_Velocity(jac, c), J=jac, passive_rates=rates,
+                   closure_rank=np.int64(c.n_u), expected_rank=c.expected_rank,
+                   q=w.q.copy(), status=np.int64(0))
+
+
+# ---------------------------------------------------------------- the machine's entry points
+_MODES = ("flag", "refuse", "ignore")
+
+
+class ChainOnePose:
+    """Mixin of :class:`~pkmkit.machines.joint_chain.JointChainMachine` (through
+    :class:`~pkmkit.machines.chain_jacobians.ChainVelocity`): the first lines of its ``ik``,
+    ``fk`` and ``jacobian`` ask these for the one-pose answer — ``(result,)`` for one plain row
+    without options (but ``strokes``, ``check_singular``, ``tol``), ``()`` where the batch
+    path answers (module docstring)."""
+
+    def _ik_one(self, x: Any, q0: Any, tool_length: Any, full_output: bool, strokes: str,
+                start: Any, engine_options: dict) -> tuple:
+        if q0 is None and tool_length is None and start is None and not full_output \
+                and not engine_options and strokes in _MODES:
+            fast = inverse(self, x, strokes)
+            if fast is not None:
+                return (fast,)
+        return ()
+
+    def _fk_one(self, q: Any, strokes: str, check_singular: bool | None, x0: Any, start: Any,
+                tool_length: Any, full_output: bool, max_misfit: Any,
+                engine_options: dict) -> tuple:
+        if x0 is None and start is None and tool_length is None and max_misfit is None \
+                and not full_output and not engine_options and strokes in _MODES:
+            fast = direct(self, q, strokes, check_singular)
+            if fast is not None:
+                return (fast,)
+        return ()
+
+    def _jacobian_one(self, x: Any, q: Any, branches: Any, tol: float, start: Any) -> tuple:
+        if x is not None and q is None and branches is None and start is None:
+            fast = jacobian(self, x, tol)
+            if fast is not None:
+                return (fast,)
+        return ()
