@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
 from pkmkit.machines.lazy_records import lazy_record_class
@@ -145,8 +146,6 @@ class ChainOneConstants:
         """The velocity kernel's column maps: the closure's (platform, passive, leg
         actuators), the head actuators' places in J, the leg actuators'; J's homogenising
         scale; the singularity bound's threshold of ``fk``'s default check."""
-        from pkmkit.machines.chain_jacobians import SINGULAR_TOL
-
         model, act = m.model, self.act
         n_var = model.n_variables
         loop_act = [int(v) for v in act if model.loop_variables[v]]
@@ -366,8 +365,6 @@ def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndar
 
 # ---------------------------------------------------------------- velocity model
 def _record_class() -> type:
-    from pkmkit.machines.chain_jacobians import ChainJacobians
-
     return lazy_record_class(
         ChainJacobians, "OnePose",
         lambda r: f"1 pose, {len(r.q)} actuators; singular values computed when read",
@@ -424,8 +421,6 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
     kernel = c.velocity_kernel
     (kernel.call or kernel.first)(*c.direct_args, *c.velocity_extra, w.values, w.delta, w.q,
                                   w.u_dir, jac, rates, info)
-    from pkmkit.machines.chain_jacobians import RANK_RCOND
-
     if info[0] != 0 or not info[3] >= BOUND_MARGIN * max(tol, RANK_RCOND):
         return None
     if _RECORD is None:
