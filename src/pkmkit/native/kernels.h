@@ -96,4 +96,22 @@ void pk_solve_row(const double *q, ptrdiff_t n, const double *u0, int has_guess,
                   const double *geom, ptrdiff_t m, const double *home, const double *opts,
                   double *out, pk_work *work);
 
+/* direct.c's helpers, shared with position.c: compose (out[0:3] = rotation vector of
+ * exp(d) exp(p)), rods (base joints and rod lengths at q), the damped Cholesky step, the
+ * stationarity test (full_pose_direct_kernel.compose, _rods, _step, _stationary). */
+void pk_compose(double dx, double dy, double dz, double px, double py, double pz, double *out);
+void pk_rod_joints(const double *q, const double *geom, ptrdiff_t m, double *base,
+                   double *length);
+void pk_lm_step(const double *jac, const double *r, ptrdiff_t m, double lam, double *step,
+                double *h);
+int pk_stationary(const double *jac, const double *r, ptrdiff_t m, double cost, double gtol);
+
+/* full_pose_position_kernel.solve_rows over rows positions p (rows, 3): u0 (rows, 6) read
+ * when has_guess, else the first-order start from home (6 + 3 + 18,) and jt_inv (3, 3), rows
+ * of skip (bool) left INVALID_INPUT; geom (m, 16), opts (9,), out (rows, 9). */
+void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has_guess,
+                      const unsigned char *skip, const double *geom, ptrdiff_t m,
+                      const double *home, const double *jt_inv, const double *opts,
+                      double *out, pk_work *work);
+
 #endif

@@ -1,4 +1,5 @@
-/* pkmkit.native.kernels: the module face of the C kernels (inverse.c, direct.c).
+/* pkmkit.native.kernels: the module face of the C kernels (inverse.c, direct.c,
+ * position.c).
  *
  * Each function takes the same positional arguments as its Numba twin, as C-contiguous
  * buffers (float64, int64, bool), checks their types and shapes (TypeError / ValueError
@@ -235,10 +236,69 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     return solve(args, nargs, 0, "solve_one");
 }
 
+PyDoc_STRVAR(position_rows_doc,
+"position_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out)\n\n"
+"The C twin of pkmkit.machines.full_pose_position_kernel.solve_rows (the position inverse\n"
+"of a machine with three actuators whose rods set the orientation): p (N, 3), u0 (N, 6),\n"
+"skip (N,) bool, geom (m, 16) with actuator indices 0..2, home (27,), jt_inv (3, 3),\n"
+"opts (9,), out (N, 9). Runs without the GIL.");
+
+static PyObject *position_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (check_args(nargs, 9, "position_rows") < 0) return NULL;
+    buffers held = {.count = 0};
+    const double *p = take(&held, args[0], "p", 'd', 0, 2, -1, 3);
+    if (!p) goto fail;
+    Py_ssize_t rows = dim(&held, 0, 0);
+    const double *u0 = take(&held, args[1], "u0", 'd', 0, 2, rows, 6);
+    if (!u0) goto fail;
+    int has_guess = PyObject_IsTrue(args[2]);
+    if (has_guess < 0) goto fail;
+    const unsigned char *skip = take(&held, args[3], "skip", '?', 0, 1, rows, -1);
+    if (!skip) goto fail;
+    const double *geom = take(&held, args[4], "geom", 'd', 0, 2, -1, 16);
+    if (!geom) goto fail;
+    Py_ssize_t m = dim(&held, held.count - 1, 0);
+    const double *home = take(&held, args[5], "home", 'd', 0, 1, 6 + 7 * 3, -1);
+    if (!home) goto fail;
+    const double *jt_inv = take(&held, args[6], "jt_inv", 'd', 0, 2, 3, 3);
+    if (!jt_inv) goto fail;
+    const double *opts = take(&held, args[7], "opts", 'd', 0, 1, 9, -1);
+    if (!opts) goto fail;
+    double *out = take(&held, args[8], "out", 'd', 1, 2, rows, 9);
+    if (!out) goto fail;
+    for (Py_ssize_t j = 0; j < m; j++) {
+        double actuator = geom[16 * j + 14], kind = geom[16 * j + 13];
+        if (!(actuator >= 0.0 && actuator < 3.0) || !(kind >= 0.0 && kind <= 2.0)) {
+            PyErr_Format(PyExc_ValueError, "rod %zd: actuator index or kind out of range", j);
+            goto fail;
+        }
+    }
+    size_t cells = (size_t)(m > 0 ? m : 1);
+    double *memory = malloc(sizeof(double) * cells * 18);
+    if (!memory) {
+        PyErr_NoMemory();
+        goto fail;
+    }
+    pk_work work = {memory, memory + 3 * cells, memory + 4 * cells, memory + 5 * cells,
+                    memory + 6 * cells, memory + 12 * cells};
+    Py_BEGIN_ALLOW_THREADS
+    pk_position_rows(p, rows, u0, has_guess, skip, geom, m, home, jt_inv, opts, out, &work);
+    Py_END_ALLOW_THREADS
+    free(memory);
+    release(&held);
+    Py_RETURN_NONE;
+fail:
+    release(&held);
+    return NULL;
+}
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
     {"solve_one", (PyCFunction)(void (*)(void))solve_one, METH_FASTCALL, solve_one_doc},
+    {"position_rows", (PyCFunction)(void (*)(void))position_rows, METH_FASTCALL,
+     position_rows_doc},
     {NULL, NULL, 0, NULL},
 };
 
