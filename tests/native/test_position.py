@@ -126,6 +126,19 @@ def _starts(m, p):
     return u0
 
 
+def _struts(m):
+    """``m``'s kernel geometry with every slide made a strut of variable length (kind 1) fixed
+    where its slide's joint sits at home (length ℓ − q_home): the same home assembly, so that
+    the strut branches of the kernels are compared too (the library has no three-strut
+    position-controlled machine)."""
+    geom = m._direct_kernel().geom.copy()
+    q_home = m.home_q[geom[:, 14].astype(int)]
+    geom[:, 0:3] += q_home[:, None] * geom[:, 6:9]
+    geom[:, 12] -= q_home
+    geom[:, 13] = 1.0
+    return geom
+
+
 @pytest.mark.parametrize("guess", [False, True])
 @pytest.mark.parametrize("crawl", [True, False])
 def test_c_writes_the_numba_kernels_bits(case, guess, crawl):
@@ -134,8 +147,21 @@ def test_c_writes_the_numba_kernels_bits(case, guess, crawl):
     u, status, iterations, residual — the same bits, row by row, with and without the early
     stop (``crawl``)."""
     m, p = case
+    _compare_bits(m, p, _arguments(m, p)[0], guess, crawl)
+
+
+@pytest.mark.parametrize("guess", [False, True])
+@pytest.mark.parametrize("crawl", [True, False])
+def test_c_writes_the_numba_kernels_bits_on_struts(guess, crawl):
+    """As above with struts in place of the Verne module's slides (:func:`_struts`)."""
+    m = pkmkit.machine("verne")
+    p = _positions(m, 2000, seed=5)
+    _compare_bits(m, p, _struts(m), guess, crawl)
+
+
+def _compare_bits(m, p, geom, guess, crawl):
     data = m._direct_kernel()
-    geom, _, _, opts = _arguments(m, p)
+    opts = _arguments(m, p)[3]
     if not crawl:
         opts = opts.copy()
         opts[7:] = (0.0, np.inf)
