@@ -114,4 +114,38 @@ void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has
                       const double *home, const double *jt_inv, const double *opts,
                       double *out, pk_work *work);
 
+/* A joint-chain machine as chain_kernel._solve_rows takes it (chain_kernel.model_arrays). */
+typedef struct {
+    const double *frames;    /* (E, 4, 4) every element's invariant frame */
+    const int64_t *types;    /* (E,) 0 fixed, 1 revolute, 2 prismatic */
+    const int64_t *evar;     /* (E,) the element's variable */
+    const int64_t *elements; /* the legs' elements, flattened */
+    const int64_t *offsets;  /* (L + 1,) each leg's first element in `elements` */
+    const int64_t *position; /* (n_var,) column of each variable in u, -1 when known */
+    const int64_t *head;     /* (H,) the head's elements (inverse model) */
+    ptrdiff_t n_legs, n_var, n, n_head;
+    double length;           /* characteristic length (m) */
+    int inverse;             /* the tool rows too */
+} pk_chain;
+
+typedef struct {
+    int64_t max_iter;
+    double xtol, atol, gtol, stall, residual_tol, damping;
+} pk_chain_options;
+
+/* Working arrays of pk_chain_rows: m residual rows (6L, + 6 for the inverse), n unknowns,
+ * twists of up to `elements + head` joints. */
+typedef struct {
+    ptrdiff_t m;
+    double *values, *r, *jac, *r_new, *j_new, *u_new, *step, *grad, *h, *low, *tw;
+    int64_t *nz, *tw_col;
+} pk_chain_work;
+
+/* chain_kernel._solve_rows over u (rows, n) in place: known (known_rows, n_var) (one row for
+ * all, or one per row), targets (., 6) and tools (.,) (row k for the inverse, row 0 else). */
+void pk_chain_rows(const pk_chain *c, const double *known, ptrdiff_t known_rows, double *u,
+                   ptrdiff_t rows, const pk_chain_options *o, int64_t *status,
+                   double *residual, int64_t *iterations, const double *targets,
+                   const double *tools, pk_chain_work *w);
+
 #endif
