@@ -24,7 +24,9 @@ calls, the kernel about a millisecond (12 µs per configuration). Imported lazil
 costs ≈ 0.3 s), used when the caller asks (``solve_closure(..., compiled=True)``,
 ``tool_sensitivity(..., compiled=True)``) and Numba is available and not disabled
 (:func:`pkmkit.solve.chains.compiled_closure_available`); the NumPy code is the reference it is
-tested against (``tests/solve/test_chain_kernel.py``).
+tested against (``tests/solve/test_chain_kernel.py``). The closure's batch entry points live in
+the Numba-free :mod:`pkmkit.solve.chain_rows` (re-exported here), which runs the C twin of
+:func:`_solve_rows` in :mod:`pkmkit.native` when it was built (``tests/native/test_chain.py``).
 """
 
 from __future__ import annotations
