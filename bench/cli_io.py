@@ -20,7 +20,7 @@ compared with the library's read + write in ``rest/lib``.
 Start-up: ``pkmkit --help`` and a one-pose ``pkmkit ik`` against ``python -c pass`` and
 ``python -c "import numpy"`` (the floor any NumPy program pays); then the CPU time of a fresh
 process's first batch call (5,000 poses or Verne positions; 200 configurations for the
-direct models) over
+direct models, the joint-chain closures included) over
 ``import pkmkit``, by default (the C kernels of ``pkmkit.native`` where built), with the Numba
 kernels (``PKMKIT_NATIVE=0``) and with the compiled kernels forced (``PKMKIT_COMPILED=1``);
 ``--first-calls-only`` prints that table alone. ``m.ik(X)`` against ``m.ik(X,
@@ -271,7 +271,9 @@ FIRST_CASES = (("linear-delta", "m.ik(x)", FIRST_CALL, False),
                ("gough-stewart", "m.fk(q)", FIRST_FK, True),
                ("verne", "m.fk(q)", FIRST_FK, True),
                ("verne", "m.ik(p)", FIRST_POSITIONS, True),
-               ("verne", "m.ik(p, full_output=True)", FIRST_POSITIONS, True))
+               ("verne", "m.ik(p, full_output=True)", FIRST_POSITIONS, True),
+               ("tripteor-x7", "m.fk(q)", FIRST_FK, True),
+               ("trimule-600", "m.fk(q)", FIRST_FK, True))
 
 
 def first_calls(repeat: int) -> None:
