@@ -403,7 +403,7 @@ static PyObject *chain_rows(PyObject *self, PyObject *const *args, Py_ssize_t na
     pk_chain_work w;
     w.m = 6 * c.n_legs + (c.inverse ? 6 : 0);
     size_t m = (size_t)w.m, n = (size_t)c.n, twists = (size_t)(n_leg_elements + c.n_head) + 1;
-    size_t cells = (size_t)c.n_var + 1 + 4 * m + 2 * m * n + 3 * n + 2 * n * n + 6 * twists;
+    size_t cells = (size_t)c.n_var + 1 + 2 * m + 2 * m * n + 3 * n + 2 * n * n + 6 * twists;
     double *memory = malloc(sizeof(double) * cells);
     int64_t *indices = malloc(sizeof(int64_t) * (n + twists));
     if (!memory || !indices) {
@@ -414,8 +414,8 @@ static PyObject *chain_rows(PyObject *self, PyObject *const *args, Py_ssize_t na
     }
     double *next = memory;
     w.values = next, next += c.n_var + 1;
-    w.r = next, next += 2 * m;
-    w.r_new = next, next += 2 * m;
+    w.r = next, next += m;
+    w.r_new = next, next += m;
     w.jac = next, next += m * n;
     w.j_new = next, next += m * n;
     w.u_new = next, next += n;
