@@ -35,7 +35,7 @@ setup(
         Extension(
             "pkmkit.native.kernels",
             sources=[NATIVE + "module.c", NATIVE + "inverse.c", NATIVE + "direct.c",
-                     NATIVE + "inverse_simd.c"],
+                     NATIVE + "inverse_simd.c", NATIVE + "position.c", NATIVE + "chain.c"],
             depends=[NATIVE + "kernels.h"],
             optional=True,
         )

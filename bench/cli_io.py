@@ -19,7 +19,8 @@ compared with the library's read + write in ``rest/lib``.
 
 Start-up: ``pkmkit --help`` and a one-pose ``pkmkit ik`` against ``python -c pass`` and
 ``python -c "import numpy"`` (the floor any NumPy program pays); then the CPU time of a fresh
-process's first batch call (5,000 poses; 200 configurations for the direct models) over
+process's first batch call (5,000 poses or Verne positions; 200 configurations for the
+direct models, the joint-chain closures included) over
 ``import pkmkit``, by default (the C kernels of ``pkmkit.native`` where built), with the Numba
 kernels (``PKMKIT_NATIVE=0``) and with the compiled kernels forced (``PKMKIT_COMPILED=1``);
 ``--first-calls-only`` prints that table alone. ``m.ik(X)`` against ``m.ik(X,
@@ -257,13 +258,22 @@ FIRST_CALL = ("import numpy as np, pkmkit; m = pkmkit.machine({name!r}); "
 #: A fresh process's first direct-model batch (200 configurations, above jit.SOLVER_ROWS).
 FIRST_FK = ("import numpy as np, pkmkit; m = pkmkit.machine({name!r}); "
             "q = m.home_q + np.random.default_rng(0).uniform(-0.02, 0.02, (200, m.n_actuators))")
+#: A fresh process's first position batch (5,000 positions of a machine commanded by its
+#: position alone: the Verne module's iterative position inverse).
+FIRST_POSITIONS = ("import numpy as np, pkmkit; m = pkmkit.machine({name!r}); "
+                   "p = m.home_pose[:3] + np.random.default_rng(0).uniform(-0.05, 0.05, "
+                   "(5000, 3))")
 #: (machine, call, set-up, whether the C kernels of pkmkit.native serve it)
 FIRST_CASES = (("linear-delta", "m.ik(x)", FIRST_CALL, False),
                ("linear-delta", "m.ik(x, full_output=True)", FIRST_CALL, False),
                ("gough-stewart", "m.ik(x)", FIRST_CALL, True),
                ("gough-stewart", "m.ik(x, full_output=True)", FIRST_CALL, True),
                ("gough-stewart", "m.fk(q)", FIRST_FK, True),
-               ("verne", "m.fk(q)", FIRST_FK, True))
+               ("verne", "m.fk(q)", FIRST_FK, True),
+               ("verne", "m.ik(p)", FIRST_POSITIONS, True),
+               ("verne", "m.ik(p, full_output=True)", FIRST_POSITIONS, True),
+               ("tripteor-x7", "m.fk(q)", FIRST_FK, True),
+               ("trimule-600", "m.fk(q)", FIRST_FK, True))
 
 
 def first_calls(repeat: int) -> None:

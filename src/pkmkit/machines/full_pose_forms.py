@@ -94,9 +94,12 @@ class FullPoseForms:
 
         Large batches run the compiled kernel :func:`pkmkit.machines.full_pose_kernels.
         rod_coordinates` (the result is then a transposed view of ``(m, N)``); small ones the
-        NumPy reference :meth:`rod_coordinates_numpy`."""
+        NumPy reference :meth:`rod_coordinates_numpy`, and so do large ones while Numba is not
+        imported (``imports=False``: its callers — the position inverse's branch check, one
+        pose's inverse — stay within milliseconds on NumPy, and a fresh process does not pay
+        Numba's import for them)."""
         sigma = self.rod_branch if branches is None else branches
-        if jit.use_compiled(x.shape[0]):
+        if jit.use_compiled(x.shape[0], imports=False):
             from pkmkit.machines import full_pose_kernels
 
             m = self.model

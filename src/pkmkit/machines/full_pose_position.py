@@ -163,9 +163,10 @@ class PositionInverse:
 
     def _compiled_positions(self, engine_options: dict[str, Any], rows: int) -> bool:
         """Whether the compiled position inverse serves ``rows`` rows with these options
-        (three actuators, the engine's own options: :func:`full_pose_direct.usable`)."""
+        (three actuators, the engine's own options: :func:`full_pose_direct.usable`; at every
+        size when the C twin of :mod:`pkmkit.native` is built, as the direct solve)."""
         plain = {k: v for k, v in engine_options.items() if k != "crawl"}
-        return self.n_actuators == 3 and usable(plain, rows)
+        return self.n_actuators == 3 and usable(plain, rows, native=True)
 
     def _solve_positions(self, pb: np.ndarray, u0: np.ndarray | None,
                          engine_options: dict[str, Any],
@@ -180,7 +181,7 @@ class PositionInverse:
         if compiled is None:
             compiled = self._compiled_positions(engine_options, pb.shape[0])
         if compiled:
-            from pkmkit.machines import full_pose_position_kernel as kernel
+            from pkmkit.machines import full_pose_position_solve as kernel  # C or Numba
 
             data = self._direct_kernel()
             jt_inv = self.__dict__.get("_position_jt_inv")
@@ -206,7 +207,7 @@ class PositionInverse:
         out = np.zeros(positions.shape[0], dtype=bool)
         if slides.size == 0:
             return out
-        with np.errstate(invalid="ignore"):
+        with np.errstate(invalid="ignore", over="ignore"):  # rows beyond 1e154: invalid
             rel = positions[:, None, :] - m.rod_base[slides][None]
             along = np.einsum("nsk,sk->ns", rel, m.rod_axis[slides])
             perp = rel - along[..., None] * m.rod_axis[slides][None]

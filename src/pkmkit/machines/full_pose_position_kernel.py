@@ -240,26 +240,9 @@ def solve(geom: np.ndarray, positions: np.ndarray, u0: np.ndarray | None, opts: 
           *, skip: np.ndarray | None = None, home: np.ndarray | None = None,
           jt_inv: np.ndarray | None = None
           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The position inverse of ``positions (N, 3)`` from ``u0 (N, 6)`` (rows with a non-finite
-    start are INVALID_INPUT) or, with ``u0`` None, from the first-order start of
-    :func:`first_order` (``home``: the direct kernel's home vector, ``jt_inv (3, 3)``; rows of
-    ``skip`` left INVALID_INPUT), in chunks over the threads of
-    :func:`pkmkit.numerics.jit.run_chunks`: ``(u (N, 6), status (N,), iterations (N,),
-    residual (N,))`` as :func:`pkmkit.solve.rod_closure.solve_position_inverse`'s result."""
-    from pkmkit.numerics import jit
+    """:func:`pkmkit.machines.full_pose_position_solve.solve` through this module's Numba
+    :func:`solve_rows` (never its C twin): the position inverse of ``positions (N, 3)``."""
+    from pkmkit.machines.full_pose_position_solve import solve as run
 
-    positions = np.ascontiguousarray(positions, dtype=float)
-    size = positions.shape[0]
-    has_guess = u0 is not None
-    u0 = np.ascontiguousarray(u0, dtype=float) if has_guess else np.empty((size, 6))
-    skip = np.zeros(size, dtype=np.bool_) if skip is None else np.ascontiguousarray(skip)
-    home = np.zeros(6 + 3 + 18) if home is None else home
-    jt_inv = np.eye(3) if jt_inv is None else np.ascontiguousarray(jt_inv)
-    out = np.empty((size, 9))
-
-    def work(start: int, stop: int) -> None:
-        solve_rows(positions[start:stop], u0[start:stop], has_guess, skip[start:stop], geom,
-                   home, jt_inv, opts, out[start:stop])
-
-    jit.run_chunks(work, size)
-    return out[:, :6].copy(), out[:, 6].astype(int), out[:, 7].astype(int), out[:, 8].copy()
+    return run(geom, positions, u0, opts, skip=skip, home=home, jt_inv=jt_inv,
+               function=solve_rows)

@@ -2,7 +2,7 @@
 
 ``pkmkit.native.kernels`` is a C extension built with the package when a C compiler is
 present (``setup.py``; without one the install still succeeds, with a warning, and this
-package holds no extension). It holds twins of the full-pose Numba kernels, with the same
+package holds no extension). It holds twins of Numba kernels, with the same
 arguments, the same algorithm and statuses, run without the GIL:
 
 - ``inverse_poses`` — :func:`pkmkit.machines.full_pose_kernels.inverse_poses` (four poses per
@@ -11,6 +11,10 @@ arguments, the same algorithm and statuses, run without the GIL:
   it off);
 - ``solve_rows``, ``solve_one`` — :func:`pkmkit.machines.full_pose_direct_kernel.solve_rows`
   and ``solve_one``.
+- ``position_rows`` — :func:`pkmkit.machines.full_pose_position_kernel.solve_rows` (the
+  position inverse of the Verne-type module);
+- ``chain_rows`` — :func:`pkmkit.solve.chain_kernel._solve_rows` (the joint-chain closure and
+  machine inverse).
 
 Loading it costs a millisecond, where Numba's import and its first compiled call cost
 0.8–0.9 s of CPU in a fresh process. Which implementation runs is decided in one place,

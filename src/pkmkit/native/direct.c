@@ -265,3 +265,23 @@ void pk_solve_row(const double *q, ptrdiff_t n, const double *u0, int has_guess,
     else
         out[6] = INCONSISTENT;
 }
+
+/* The helpers above for the position inverse (position.c): the same functions, not copies. */
+void pk_compose(double dx, double dy, double dz, double px, double py, double pz,
+                double *out) {
+    compose(dx, dy, dz, px, py, pz, out);
+}
+
+void pk_rod_joints(const double *q, const double *geom, ptrdiff_t m, double *base,
+                   double *length) {
+    rods(q, geom, m, base, length);
+}
+
+void pk_lm_step(const double *jac, const double *r, ptrdiff_t m, double lam, double *step,
+                double *h) {
+    lm_step(jac, r, m, lam, step, h);
+}
+
+int pk_stationary(const double *jac, const double *r, ptrdiff_t m, double cost, double gtol) {
+    return stationary(jac, r, m, cost, gtol);
+}

@@ -108,4 +108,56 @@ void pk_solve_row(const double *q, ptrdiff_t n, const double *u0, int has_guess,
                   const double *geom, ptrdiff_t m, const double *home, const double *opts,
                   double *out, pk_work *work);
 
+/* direct.c's helpers, shared with position.c: compose (out[0:3] = rotation vector of
+ * exp(d) exp(p)), rods (base joints and rod lengths at q), the damped Cholesky step, the
+ * stationarity test (full_pose_direct_kernel.compose, _rods, _step, _stationary). */
+void pk_compose(double dx, double dy, double dz, double px, double py, double pz, double *out);
+void pk_rod_joints(const double *q, const double *geom, ptrdiff_t m, double *base,
+                   double *length);
+void pk_lm_step(const double *jac, const double *r, ptrdiff_t m, double lam, double *step,
+                double *h);
+int pk_stationary(const double *jac, const double *r, ptrdiff_t m, double cost, double gtol);
+
+/* full_pose_position_kernel.solve_rows over rows positions p (rows, 3): u0 (rows, 6) read
+ * when has_guess, else the first-order start from home (6 + 3 + 18,) and jt_inv (3, 3), rows
+ * of skip (bool) left INVALID_INPUT; geom (m, 16), opts (9,), out (rows, 9). */
+void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has_guess,
+                      const unsigned char *skip, const double *geom, ptrdiff_t m,
+                      const double *home, const double *jt_inv, const double *opts,
+                      double *out, pk_work *work);
+
+/* A joint-chain machine as chain_kernel._solve_rows takes it (chain_kernel.model_arrays). */
+typedef struct {
+    const double *frames;    /* (E, 4, 4) every element's invariant frame */
+    const int64_t *types;    /* (E,) 0 fixed, 1 revolute, 2 prismatic */
+    const int64_t *evar;     /* (E,) the element's variable */
+    const int64_t *elements; /* the legs' elements, flattened */
+    const int64_t *offsets;  /* (L + 1,) each leg's first element in `elements` */
+    const int64_t *position; /* (n_var,) column of each variable in u, -1 when known */
+    const int64_t *head;     /* (H,) the head's elements (inverse model) */
+    ptrdiff_t n_legs, n_var, n, n_head;
+    double length;           /* characteristic length (m) */
+    int inverse;             /* the tool rows too */
+} pk_chain;
+
+typedef struct {
+    int64_t max_iter;
+    double xtol, atol, gtol, stall, residual_tol, damping;
+} pk_chain_options;
+
+/* Working arrays of pk_chain_rows: m residual rows (6L, + 6 for the inverse), n unknowns,
+ * twists of up to `elements + head` joints. */
+typedef struct {
+    ptrdiff_t m;
+    double *values, *r, *jac, *r_new, *j_new, *u_new, *step, *grad, *h, *low, *tw;
+    int64_t *nz, *tw_col;
+} pk_chain_work;
+
+/* chain_kernel._solve_rows over u (rows, n) in place: known (known_rows, n_var) (one row for
+ * all, or one per row), targets (., 6) and tools (.,) (row k for the inverse, row 0 else). */
+void pk_chain_rows(const pk_chain *c, const double *known, ptrdiff_t known_rows, double *u,
+                   ptrdiff_t rows, const pk_chain_options *o, int64_t *status,
+                   double *residual, int64_t *iterations, const double *targets,
+                   const double *tools, pk_chain_work *w);
+
 #endif

@@ -1,4 +1,5 @@
-/* pkmkit.native.kernels: the module face of the C kernels (inverse.c, direct.c).
+/* pkmkit.native.kernels: the module face of the C kernels (inverse.c, direct.c,
+ * position.c, chain.c).
  *
  * Each function takes the same positional arguments as its Numba twin, as C-contiguous
  * buffers (float64, int64, bool), checks their types and shapes (TypeError / ValueError
@@ -252,11 +253,217 @@ static PyObject *simd(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     return PyLong_FromLong(pk_simd_lanes());
 }
 
+PyDoc_STRVAR(position_rows_doc,
+"position_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out)\n\n"
+"The C twin of pkmkit.machines.full_pose_position_kernel.solve_rows (the position inverse\n"
+"of a machine with three actuators whose rods set the orientation): p (N, 3), u0 (N, 6),\n"
+"skip (N,) bool, geom (m, 16) with actuator indices 0..2, home (27,), jt_inv (3, 3),\n"
+"opts (9,), out (N, 9). Runs without the GIL.");
+
+static PyObject *position_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (check_args(nargs, 9, "position_rows") < 0) return NULL;
+    buffers held = {.count = 0};
+    const double *p = take(&held, args[0], "p", 'd', 0, 2, -1, 3);
+    if (!p) goto fail;
+    Py_ssize_t rows = dim(&held, 0, 0);
+    const double *u0 = take(&held, args[1], "u0", 'd', 0, 2, rows, 6);
+    if (!u0) goto fail;
+    int has_guess = PyObject_IsTrue(args[2]);
+    if (has_guess < 0) goto fail;
+    const unsigned char *skip = take(&held, args[3], "skip", '?', 0, 1, rows, -1);
+    if (!skip) goto fail;
+    const double *geom = take(&held, args[4], "geom", 'd', 0, 2, -1, 16);
+    if (!geom) goto fail;
+    Py_ssize_t m = dim(&held, held.count - 1, 0);
+    const double *home = take(&held, args[5], "home", 'd', 0, 1, 6 + 7 * 3, -1);
+    if (!home) goto fail;
+    const double *jt_inv = take(&held, args[6], "jt_inv", 'd', 0, 2, 3, 3);
+    if (!jt_inv) goto fail;
+    const double *opts = take(&held, args[7], "opts", 'd', 0, 1, 9, -1);
+    if (!opts) goto fail;
+    double *out = take(&held, args[8], "out", 'd', 1, 2, rows, 9);
+    if (!out) goto fail;
+    for (Py_ssize_t j = 0; j < m; j++) {
+        double actuator = geom[16 * j + 14], kind = geom[16 * j + 13];
+        if (!(actuator >= 0.0 && actuator < 3.0) || !(kind >= 0.0 && kind <= 2.0)) {
+            PyErr_Format(PyExc_ValueError, "rod %zd: actuator index or kind out of range", j);
+            goto fail;
+        }
+    }
+    size_t cells = (size_t)(m > 0 ? m : 1);
+    double *memory = malloc(sizeof(double) * cells * 18);
+    if (!memory) {
+        PyErr_NoMemory();
+        goto fail;
+    }
+    pk_work work = {memory, memory + 3 * cells, memory + 4 * cells, memory + 5 * cells,
+                    memory + 6 * cells, memory + 12 * cells};
+    Py_BEGIN_ALLOW_THREADS
+    pk_position_rows(p, rows, u0, has_guess, skip, geom, m, home, jt_inv, opts, out, &work);
+    Py_END_ALLOW_THREADS
+    free(memory);
+    release(&held);
+    Py_RETURN_NONE;
+fail:
+    release(&held);
+    return NULL;
+}
+
+PyDoc_STRVAR(chain_rows_doc,
+"chain_rows(frames, types, evar, elements, offsets, position, known, u, length, max_iter,\n"
+"           xtol, atol, gtol, stall, residual_tol, damping, status, residual, iterations,\n"
+"           head, targets, tools, inverse)\n\n"
+"The C twin of pkmkit.solve.chain_kernel._solve_rows (the closure of joint-chain machines,\n"
+"or with inverse the inverse model of a complete one): frames (E, 4, 4), types, evar (E,),\n"
+"elements (K,), offsets (L + 1,), position (n_var,), head (H,) int64; known (1 or N, n_var),\n"
+"u (N, n) solved in place, status, iterations (N,) int64, residual (N,), targets (T, 6),\n"
+"tools (T,) with T >= N for the inverse, >= 1 else. Runs without the GIL.");
+
+/* An int64 index array's entries within [low, high). */
+static int indices_within(const int64_t *a, Py_ssize_t count, int64_t low, int64_t high,
+                          const char *name) {
+    for (Py_ssize_t i = 0; i < count; i++) {
+        if (a[i] < low || a[i] >= high) {
+            PyErr_Format(PyExc_ValueError, "%s[%zd] = %lld out of range [%lld, %lld)", name, i,
+                         (long long)a[i], (long long)low, (long long)high);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static PyObject *chain_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (check_args(nargs, 23, "chain_rows") < 0) return NULL;
+    buffers held = {.count = 0};
+    pk_chain c;
+    pk_chain_options o;
+    c.frames = take(&held, args[0], "frames", 'd', 0, 3, -1, 4);
+    if (!c.frames) goto fail;
+    Py_ssize_t n_elem = dim(&held, 0, 0);
+    if (dim(&held, 0, 2) != 4) {
+        PyErr_SetString(PyExc_ValueError, "frames: wrong shape (E, 4, 4 expected)");
+        goto fail;
+    }
+    c.types = take(&held, args[1], "types", 'i', 0, 1, n_elem, -1);
+    if (!c.types) goto fail;
+    c.evar = take(&held, args[2], "evar", 'i', 0, 1, n_elem, -1);
+    if (!c.evar) goto fail;
+    c.elements = take(&held, args[3], "elements", 'i', 0, 1, -1, -1);
+    if (!c.elements) goto fail;
+    Py_ssize_t n_leg_elements = dim(&held, 3, 0);
+    c.offsets = take(&held, args[4], "offsets", 'i', 0, 1, -1, -1);
+    if (!c.offsets) goto fail;
+    c.n_legs = dim(&held, 4, 0) - 1;
+    c.position = take(&held, args[5], "position", 'i', 0, 1, -1, -1);
+    if (!c.position) goto fail;
+    c.n_var = dim(&held, 5, 0);
+    const double *known = take(&held, args[6], "known", 'd', 0, 2, -1, c.n_var);
+    if (!known) goto fail;
+    Py_ssize_t known_rows = dim(&held, 6, 0);
+    double *u = take(&held, args[7], "u", 'd', 1, 2, -1, -1);
+    if (!u) goto fail;
+    Py_ssize_t rows = dim(&held, 7, 0);
+    c.n = dim(&held, 7, 1);
+    c.length = PyFloat_AsDouble(args[8]);
+    if (c.length == -1.0 && PyErr_Occurred()) goto fail;
+    o.max_iter = PyLong_AsLongLong(args[9]);
+    if (o.max_iter == -1 && PyErr_Occurred()) goto fail;
+    double *floats[] = {&o.xtol, &o.atol, &o.gtol, &o.stall, &o.residual_tol, &o.damping};
+    for (int i = 0; i < 6; i++) {
+        *floats[i] = PyFloat_AsDouble(args[10 + i]);
+        if (*floats[i] == -1.0 && PyErr_Occurred()) goto fail;
+    }
+    int64_t *status = take(&held, args[16], "status", 'i', 1, 1, rows, -1);
+    if (!status) goto fail;
+    double *residual = take(&held, args[17], "residual", 'd', 1, 1, rows, -1);
+    if (!residual) goto fail;
+    int64_t *iterations = take(&held, args[18], "iterations", 'i', 1, 1, rows, -1);
+    if (!iterations) goto fail;
+    c.head = take(&held, args[19], "head", 'i', 0, 1, -1, -1);
+    if (!c.head) goto fail;
+    c.n_head = held.views[held.count - 1].shape[0];
+    const double *targets = take(&held, args[20], "targets", 'd', 0, 2, -1, 6);
+    if (!targets) goto fail;
+    Py_ssize_t n_targets = held.views[held.count - 1].shape[0];
+    const double *tools = take(&held, args[21], "tools", 'd', 0, 1, -1, -1);
+    if (!tools) goto fail;
+    Py_ssize_t n_tools = held.views[held.count - 1].shape[0];
+    c.inverse = PyObject_IsTrue(args[22]);
+    if (c.inverse < 0) goto fail;
+    Py_ssize_t need = c.inverse ? rows : 1;
+    if (c.n < 6 || c.n_legs < 0 || known_rows < 1 || (known_rows > 1 && known_rows < rows)
+        || n_targets < need || n_tools < need) {
+        PyErr_SetString(PyExc_ValueError, "u needs at least 6 columns, offsets one entry, known "
+                        "1 or N rows, targets and tools N rows (inverse) or 1");
+        goto fail;
+    }
+    if (indices_within(c.types, n_elem, 0, 3, "types") < 0
+        || indices_within(c.elements, n_leg_elements, 0, n_elem, "elements") < 0
+        || indices_within(c.head, c.n_head, 0, n_elem, "head") < 0
+        || indices_within(c.offsets, c.n_legs + 1, 0, n_leg_elements + 1, "offsets") < 0
+        || indices_within(c.position, c.n_var, -1, c.n, "position") < 0)
+        goto fail;
+    for (Py_ssize_t e = 0; e < n_elem; e++) {
+        if (c.types[e] != 0 && (c.evar[e] < 0 || c.evar[e] >= c.n_var)) {
+            PyErr_Format(PyExc_ValueError, "evar[%zd] out of range", e);
+            goto fail;
+        }
+    }
+    for (Py_ssize_t leg = 0; leg < c.n_legs; leg++) {
+        if (c.offsets[leg + 1] < c.offsets[leg]) {
+            PyErr_SetString(PyExc_ValueError, "offsets must not decrease");
+            goto fail;
+        }
+    }
+    pk_chain_work w;
+    w.m = 6 * c.n_legs + (c.inverse ? 6 : 0);
+    size_t m = (size_t)w.m, n = (size_t)c.n, twists = (size_t)(n_leg_elements + c.n_head) + 1;
+    size_t cells = (size_t)c.n_var + 1 + 2 * m + 2 * m * n + 3 * n + 2 * n * n + 6 * twists;
+    double *memory = malloc(sizeof(double) * cells);
+    int64_t *indices = malloc(sizeof(int64_t) * (n + twists));
+    if (!memory || !indices) {
+        free(memory);
+        free(indices);
+        PyErr_NoMemory();
+        goto fail;
+    }
+    double *next = memory;
+    w.values = next, next += c.n_var + 1;
+    w.r = next, next += m;
+    w.r_new = next, next += m;
+    w.jac = next, next += m * n;
+    w.j_new = next, next += m * n;
+    w.u_new = next, next += n;
+    w.step = next, next += n;
+    w.grad = next, next += n;
+    w.h = next, next += n * n;
+    w.low = next, next += n * n;
+    w.tw = next;
+    w.nz = indices;
+    w.tw_col = indices + n;
+    Py_BEGIN_ALLOW_THREADS
+    pk_chain_rows(&c, known, known_rows, u, rows, &o, status, residual, iterations, targets,
+                  tools, &w);
+    Py_END_ALLOW_THREADS
+    free(memory);
+    free(indices);
+    release(&held);
+    Py_RETURN_NONE;
+fail:
+    release(&held);
+    return NULL;
+}
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
     {"solve_one", (PyCFunction)(void (*)(void))solve_one, METH_FASTCALL, solve_one_doc},
     {"simd", (PyCFunction)(void (*)(void))simd, METH_FASTCALL, simd_doc},
+    {"position_rows", (PyCFunction)(void (*)(void))position_rows, METH_FASTCALL,
+     position_rows_doc},
+    {"chain_rows", (PyCFunction)(void (*)(void))chain_rows, METH_FASTCALL, chain_rows_doc},
     {NULL, NULL, 0, NULL},
 };
 

@@ -16,7 +16,9 @@ paths are used silently.
 
 Ahead-of-time kernels: where the optional C extension :mod:`pkmkit.native` (built with the
 package when a compiler is present) holds a twin of a Numba kernel (:data:`NATIVE_TWINS`: the
-full-pose inverse and direct models), :func:`kernel` returns it instead, and the call sites that
+full-pose inverse and direct models, the position inverse of the Verne-type module, the
+joint-chain closure),
+:func:`kernel` returns it instead, and the call sites that
 pass ``native=True`` to :func:`use_compiled` / :func:`use_compiled_solver` then need no Numba:
 no import cost, so the per-pose solvers run native at every batch size.
 ``PKMKIT_NATIVE=0`` disables the extension (the Numba kernels run as without it);
@@ -61,7 +63,12 @@ THREAD_ROWS = 1 << 14
 NATIVE_TWINS = {
     "pkmkit.machines.full_pose_kernels": ("inverse_poses",),
     "pkmkit.machines.full_pose_direct_kernel": ("solve_rows", "solve_one"),
+    "pkmkit.machines.full_pose_position_kernel": ("solve_rows",),
+    "pkmkit.solve.chain_kernel": ("_solve_rows",),
 }
+#: Twins named differently in ``pkmkit.native.kernels`` (one namespace for every module's).
+NATIVE_NAMES = {("pkmkit.machines.full_pose_position_kernel", "solve_rows"): "position_rows",
+                ("pkmkit.solve.chain_kernel", "_solve_rows"): "chain_rows"}
 
 _available: bool | None = None
 _native: ModuleType | bool | None = False  # False: not looked for yet
@@ -104,7 +111,9 @@ def native_kernel(module: str, name: str) -> Callable[..., Any] | None:
     if name not in NATIVE_TWINS.get(module, ()):
         return None
     native = native_kernels()
-    return None if native is None else getattr(native, name)
+    # an extension built from older sources lacks the newer twins: Numba then runs them
+    return None if native is None else getattr(native, NATIVE_NAMES.get((module, name), name),
+                                               None)
 
 
 def kernel(module: str, name: str) -> Callable[..., Any]:

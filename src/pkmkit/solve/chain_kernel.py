@@ -24,7 +24,9 @@ calls, the kernel about a millisecond (12 µs per configuration). Imported lazil
 costs ≈ 0.3 s), used when the caller asks (``solve_closure(..., compiled=True)``,
 ``tool_sensitivity(..., compiled=True)``) and Numba is available and not disabled
 (:func:`pkmkit.solve.chains.compiled_closure_available`); the NumPy code is the reference it is
-tested against (``tests/solve/test_chain_kernel.py``).
+tested against (``tests/solve/test_chain_kernel.py``). The closure's batch entry points live in
+the Numba-free :mod:`pkmkit.solve.chain_rows` (re-exported here), which runs the C twin of
+:func:`_solve_rows` in :mod:`pkmkit.native` when it was built (``tests/native/test_chain.py``).
 """
 
 from __future__ import annotations
@@ -34,86 +36,18 @@ import math
 import numpy as np
 from numba import njit
 
-from pkmkit.model.chains import FIXED, PRISMATIC, REVOLUTE, JointChainModel
+from pkmkit.model.chains import JointChainModel
 
 # the closure Jacobians' linear algebra (dU = −C_U⁺ C_δ, −C_U⁺ C_q), re-exported
 from pkmkit.solve.chain_linalg import RANK_PIVOT, absorb, closure_rates  # noqa: F401
+
+# the batch entry points, which need no Numba (their C twin may run: pkmkit.native), re-exported
+from pkmkit.solve.chain_rows import model_arrays, solve, solve_inverse  # noqa: F401
 from pkmkit.status import Status
 
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
-_TYPE_CODE = {FIXED: 0, REVOLUTE: 1, PRISMATIC: 2}
 _OK, _INCONSISTENT = int(Status.OK), int(Status.INCONSISTENT)
 _NOT_CONVERGED, _INVALID = int(Status.NOT_CONVERGED), int(Status.INVALID_INPUT)
-
-
-def model_arrays(model: JointChainModel, unknown_variables: np.ndarray) -> tuple:
-    """The kernel's view of ``model``: ``(frames (E, 4, 4), types (E,), element variable (E,),
-    leg elements (flattened), leg offsets (L + 1,), position of every variable in u (−1 for a
-    known one))``; all but the positions computed once per (immutable) model."""
-    cached = model.__dict__.get("_kernel_arrays")
-    if cached is None:
-        types = np.array([_TYPE_CODE[e.type] for e in model.elements], dtype=np.int64)
-        evar = np.asarray(model.element_variable, dtype=np.int64)
-        elements = np.array([e for leg in model.legs for e in leg], dtype=np.int64)
-        offsets = np.cumsum([0] + [len(leg) for leg in model.legs]).astype(np.int64)
-        cached = (np.ascontiguousarray(model.frames, dtype=float), types, evar, elements,
-                  offsets)
-        object.__setattr__(model, "_kernel_arrays", cached)
-    position = np.full(model.n_variables, -1, dtype=np.int64)
-    position[np.asarray(unknown_variables, dtype=int)] = 6 + np.arange(len(unknown_variables))
-    return (*cached, position)
-
-
-def solve(model: JointChainModel, known: np.ndarray, u0: np.ndarray,
-          unknown_variables: np.ndarray, *, max_iter: int = 60, xtol: float = 1e-14,
-          atol: float = 1e-14, gtol: float = 1e-12, stall: float = 0.01,
-          residual_tol: float = 1e-9, damping: float = 1e-4) -> tuple[np.ndarray, ...]:
-    """Closures of ``known (N, n_var)`` from ``u0 (N, 6 + n_u)``: ``(u (N, 6 + n_u), status
-    (N,), residual (N,), iterations (N,))`` with the meanings of
-    :class:`pkmkit.solve.least_squares.SolveResult` (options as there)."""
-    frames, types, evar, elements, offsets, position = model_arrays(model, unknown_variables)
-    known = np.ascontiguousarray(known, dtype=float)
-    u = np.array(u0, dtype=float, order="C", copy=True)
-    n_rows = u.shape[0]
-    status = np.empty(n_rows, dtype=np.int64)
-    residual = np.full(n_rows, np.nan)
-    iterations = np.zeros(n_rows, dtype=np.int64)
-    _solve_rows(frames, types, evar, elements, offsets, position, known, u,
-                float(model.characteristic_length), int(max_iter), float(xtol), float(atol),
-                float(gtol), float(stall), float(residual_tol), float(damping), status,
-                residual, iterations, _NO_HEAD, _NO_TARGETS, _NO_TARGETS[:, 0], False)
-    return u, status, residual, iterations
-
-
-_NO_HEAD = np.zeros(0, dtype=np.int64)
-_NO_TARGETS = np.zeros((1, 6))
-
-
-def solve_inverse(model: JointChainModel, targets: np.ndarray, u0: np.ndarray,
-                  tool_length: np.ndarray, *, max_iter: int = 60, xtol: float = 1e-14,
-                  atol: float = 1e-14, gtol: float = 1e-12, stall: float = 0.01,
-                  residual_tol: float = 1e-9, damping: float = 1e-4) -> tuple[np.ndarray, ...]:
-    """The inverse model of a complete machine, compiled: the problem of
-    :func:`pkmkit.solve.chains.solve_machine_inverse` (the legs' closure rows, then the tool
-    rows ``(p_tool − p_target, L (a_tool − a_target))``; unknowns the platform pose and every
-    joint variable) for ``targets (N, 6)`` (tool point m, unit axis), ``u0 (N, 6 + n_var)``
-    and ``tool_length (N,)`` (m), with :func:`solve`'s algorithm. Returns ``(u, status,
-    residual, iterations)`` as :func:`solve`."""
-    every = np.arange(model.n_variables)
-    frames, types, evar, elements, offsets, position = model_arrays(model, every)
-    head = np.array(model.head, dtype=np.int64)
-    u = np.array(u0, dtype=float, order="C", copy=True)
-    n_rows = u.shape[0]
-    status = np.empty(n_rows, dtype=np.int64)
-    residual = np.full(n_rows, np.nan)
-    iterations = np.zeros(n_rows, dtype=np.int64)
-    _solve_rows(frames, types, evar, elements, offsets, position,
-                np.zeros((1, model.n_variables)), u, float(model.characteristic_length),
-                int(max_iter), float(xtol), float(atol), float(gtol), float(stall),
-                float(residual_tol), float(damping), status, residual, iterations, head,
-                np.ascontiguousarray(targets, dtype=float),
-                np.ascontiguousarray(tool_length, dtype=float).reshape(-1), True)
-    return u, status, residual, iterations
 
 
 def closure_jacobian(model: JointChainModel, values: np.ndarray, platform: np.ndarray,
@@ -266,7 +200,7 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
         target, tool = targets[row], tools[row]
         _evaluate_any(frames, types, evar, elements, offsets, position, values, u[k], length,
                       r, jac, scratch, head, target, tool, inverse)
-        cost = 0.5 * np.dot(r, r)
+        cost = 0.5 * _dot(r, r)
         if not (math.isfinite(cost) and np.isfinite(jac).all()):
             status[k] = _INVALID
             continue
@@ -318,7 +252,7 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
             _retract(u[k], step, u_new)
             _evaluate_any(frames, types, evar, elements, offsets, position, values, u_new,
                           length, r_new, j_new, scratch, head, target, tool, inverse)
-            cost_new = 0.5 * np.dot(r_new, r_new)
+            cost_new = 0.5 * _dot(r_new, r_new)
             accept = math.isfinite(cost_new) and cost_new <= cost * (1.0 + 1e-13)
             count += 1
             if accept:
@@ -329,8 +263,8 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
                 lam = max(lam * 0.1, 1e-12)
             else:
                 lam *= 10.0
-            step_norm = math.sqrt(np.dot(step, step))
-            u_norm = math.sqrt(np.dot(u[k], u[k]))
+            step_norm = math.sqrt(_dot(step, step))
+            u_norm = math.sqrt(_dot(u[k], u[k]))
             done = (accept and step_norm <= xtol * (1.0 + u_norm)) or lam > 1e12
             if count % 10 == 0:
                 if cost > (1.0 - stall) * checkpoint and cost > 0.5 * residual_tol ** 2:
@@ -347,6 +281,15 @@ def _solve_rows(frames, types, evar, elements, offsets, position, known, u, leng
         residual[k] = worst
         if stopped:
             status[k] = _OK if worst <= residual_tol else _INCONSISTENT
+
+
+@njit(inline="always", **_OPTIONS)
+def _dot(a, b):  # pragma: no cover
+    """Σ a_i b_i in order (not BLAS ``ddot``, whose partial sums the C twin could not match)."""
+    acc = 0.0
+    for i in range(a.shape[0]):
+        acc += a[i] * b[i]
+    return acc
 
 
 @njit(**_OPTIONS)

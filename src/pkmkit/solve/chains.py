@@ -478,7 +478,7 @@ def solve_closure(model: JointChainModel, known: np.ndarray, u0: np.ndarray, *,
         :class:`SolveResult` whose ``u`` holds (p_X, φ_X, unknown variables).
     """
     if compiled and _compiled_closure_applies(len(u0), options):
-        from pkmkit.solve import chain_kernel
+        from pkmkit.solve import chain_rows as chain_kernel  # C twin or Numba
 
         options.pop("compute_rank", None)
         options.setdefault("damping", CLOSURE_DAMPING)
@@ -518,8 +518,11 @@ def compiled_closure_available() -> bool:
 
 def _compiled_closure_applies(rows: int, options: dict) -> bool:
     """Whether ``solve_closure(..., compiled=True)`` runs the compiled kernel."""
+    from pkmkit.numerics import jit  # the C twin of the closure needs no Numba
+
+    native = jit.native_kernel("pkmkit.solve.chain_kernel", "_solve_rows") is not None
     return (set(options) <= COMPILED_OPTIONS and not options.get("compute_rank", True)
-            and rows > 0 and compiled_closure_available())
+            and rows > 0 and (native or compiled_closure_available()))
 
 
 def tool_frame(model: JointChainModel, rot_x: np.ndarray, p_x: np.ndarray, values: np.ndarray,
@@ -558,7 +561,7 @@ def solve_machine_inverse(model: JointChainModel, targets: np.ndarray, u0: np.nd
             under the conditions of :func:`solve_closure`'s ``compiled``; else the NumPy engine.
     """
     if compiled and _compiled_closure_applies(len(u0), options):
-        from pkmkit.solve import chain_kernel
+        from pkmkit.solve import chain_rows as chain_kernel  # C twin or Numba
 
         options.pop("compute_rank", None)
         u, status, residual, iterations = chain_kernel.solve_inverse(

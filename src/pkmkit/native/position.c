@@ -1,0 +1,192 @@
+/* The position inverse of a full-pose machine commanded by its position alone (three
+ * actuators, the rods setting the orientation: the Verne-type module) by Levenberg-Marquardt:
+ * the C twin of pkmkit.machines.full_pose_position_kernel.solve_rows and the functions it
+ * calls, statement for statement and in the same order of operations (the same statuses,
+ * iterations, stopping tests and, with the same libm, the same bits). The helpers shared with
+ * the direct solve (compose, rods, the damped step, the stationarity test) are direct.c's. */
+#include "kernels.h"
+
+enum { OK = 0, NOT_CONVERGED = 3, INVALID_INPUT = 4, INCONSISTENT = 7 };
+
+/* Residuals r (m,) and Jacobian jac (m, 6) at unknowns u (6,) = (q, rotation vector) for
+ * position p (3,); the cost 1/2 |r|^2 (NaN or inf when not finite, the Jacobian included)
+ * (_evaluate). base, length: scratch for the base joints and rod lengths. */
+static double evaluate(const double *u, const double *p, const double *geom, ptrdiff_t m,
+                       double *base, double *length, double *r, double *jac) {
+    pk_rod_joints(u, geom, m, base, length);
+    double rot[9];
+    pk_rotation(u[3], u[4], u[5], rot);
+    double cost = 0.0, check = 0.0;
+    for (ptrdiff_t j = 0; j < m; j++) {
+        const double *gj = geom + 16 * j;
+        const double *bj = base + 3 * j;
+        double *jj = jac + 6 * j;
+        double bx = gj[3], by = gj[4], bz = gj[5];
+        double sx = rot[0] * bx + rot[1] * by + rot[2] * bz;
+        double sy = rot[3] * bx + rot[4] * by + rot[5] * bz;
+        double sz = rot[6] * bx + rot[7] * by + rot[8] * bz;
+        double dx = p[0] + sx - bj[0];
+        double dy = p[1] + sy - bj[1];
+        double dz = p[2] + sz - bj[2];
+        double dist = sqrt(dx * dx + dy * dy + dz * dz);
+        r[j] = dist - length[j];
+        cost += r[j] * r[j];
+        double ux = dx / dist, uy = dy / dist, uz = dz / dist;
+        double kind = gj[13], along;
+        if (kind == 0.0) { /* slide: da/dq = its axis */
+            along = ux * gj[6] + uy * gj[7] + uz * gj[8];
+        } else if (kind == 1.0) { /* strut: dl/dq = 1 */
+            along = 1.0;
+        } else { /* crank: da/dq = w x (a - pivot) */
+            double wx = gj[6], wy = gj[7], wz = gj[8];
+            double ax = bj[0] - gj[9], ay = bj[1] - gj[10], az = bj[2] - gj[11];
+            along = (ux * (wy * az - wz * ay) + uy * (wz * ax - wx * az)
+                     + uz * (wx * ay - wy * ax));
+        }
+        for (int k = 0; k < 3; k++) jj[k] = 0.0;
+        jj[(ptrdiff_t)gj[14]] = -along;
+        jj[3] = sy * uz - sz * uy;
+        jj[4] = sz * ux - sx * uz;
+        jj[5] = sx * uy - sy * ux;
+        check += jj[3] + jj[4] + jj[5] + along;
+    }
+    return 0.5 * cost + 0.0 * check; /* NaN when any Jacobian entry is not finite */
+}
+
+/* int(value) of a Numba option, as x86-64 converts it: a value that is not finite or beyond
+ * the int64 range gives INT64_MIN. */
+static int64_t numba_int(double value) {
+    if (!(value > -9223372036854775808.0 && value < 9223372036854775808.0)) return INT64_MIN;
+    return (int64_t)value;
+}
+
+/* max |r_j| (_largest). */
+static double largest_of(const double *r, ptrdiff_t m) {
+    double largest = 0.0;
+    for (ptrdiff_t j = 0; j < m; j++) largest = pk_max(largest, fabs(r[j]));
+    return largest;
+}
+
+/* One position p (3,) from u0 (6,): out (9,) = u (6), status, iterations, largest |residual|
+ * (NaN when the start is invalid) (solve_row). */
+static void solve_row(const double *p, const double *u0, const double *geom, ptrdiff_t m,
+                      const double *opts, double *out, pk_work *work) {
+    double *base = work->base, *length = work->length, *r = work->r, *r_new = work->r_new;
+    double *jac = work->jac, *jac_new = work->jac_new;
+    double u[6], u_new[6], step[6], h[36];
+    /* _start */
+    out[6] = INVALID_INPUT;
+    out[7] = 0.0;
+    out[8] = NAN;
+    int valid = 1;
+    for (int i = 0; i < 6; i++) {
+        u[i] = u0[i];
+        out[i] = u0[i];
+        if (!(u0[i] == u0[i]) || fabs(u0[i]) == INFINITY) valid = 0;
+    }
+    if (!valid) return;
+    int64_t max_iter = numba_int(opts[0]);
+    double xtol = opts[1], atol = opts[2], gtol = opts[3];
+    double stall = opts[4], residual_tol = opts[5], lam = opts[6];
+    int64_t crawl_iter = numba_int(opts[7]);
+    double crawl_residual = opts[8];
+    double cost = evaluate(u, p, geom, m, base, length, r, jac);
+    if (!(cost == cost && cost < INFINITY)) return;
+    double checkpoint = cost;
+    int stopped = 0;
+    int64_t iterations = 0;
+    for (int64_t it = 0; it < max_iter; it++) {
+        if (cost <= 0.5 * atol * atol || pk_stationary(jac, r, m, cost, gtol)) {
+            stopped = 1;
+            break;
+        }
+        pk_lm_step(jac, r, m, lam, step, h);
+        for (int i = 0; i < 3; i++) u_new[i] = u[i] + step[i];
+        pk_compose(step[3], step[4], step[5], u[3], u[4], u[5], u_new + 3);
+        double cost_new = evaluate(u_new, p, geom, m, base, length, r_new, jac_new);
+        int accept = cost_new == cost_new && cost_new < INFINITY
+                     && cost_new <= cost * (1.0 + 1e-13);
+        iterations += 1;
+        if (accept) { /* _take */
+            for (int i = 0; i < 6; i++) u[i] = u_new[i];
+            for (ptrdiff_t j = 0; j < m; j++) {
+                r[j] = r_new[j];
+                for (int i = 0; i < 6; i++) jac[6 * j + i] = jac_new[6 * j + i];
+            }
+            cost = cost_new;
+            lam = pk_max(lam * 0.1, 1e-12);
+        } else {
+            lam *= 10.0;
+        }
+        int done = 0;
+        if (accept) { /* _short */
+            double step_norm = 0.0, u_norm = 0.0;
+            for (int i = 0; i < 6; i++) {
+                step_norm += step[i] * step[i];
+                u_norm += u[i] * u[i];
+            }
+            done = sqrt(step_norm) <= xtol * (1.0 + sqrt(u_norm));
+        }
+        done = done || lam > 1e12;
+        if (iterations % 10 == 0) {
+            if (cost > (1.0 - stall) * checkpoint && cost > 0.5 * residual_tol * residual_tol)
+                done = 1;
+            checkpoint = cost;
+        }
+        if (done) {
+            stopped = 1;
+            break;
+        }
+        if (iterations == crawl_iter && largest_of(r, m) > crawl_residual)
+            break; /* far from any solution: NOT_CONVERGED now */
+    }
+    /* _finish */
+    double largest = largest_of(r, m);
+    for (int i = 0; i < 6; i++) out[i] = u[i];
+    out[7] = (double)iterations;
+    out[8] = largest;
+    if (!stopped)
+        out[6] = NOT_CONVERGED;
+    else if (largest <= residual_tol)
+        out[6] = OK;
+    else
+        out[6] = INCONSISTENT;
+}
+
+/* The engine's default start u0 (6,) for position p (3,) (first_order): q = q_home +
+ * J_p^-1 (p - p_home), then the rotation of the twist J(home)(q - q_home) composed with
+ * home's. */
+static void first_order(const double *p, const double *home, const double *jt_inv,
+                        double *u0) {
+    const int n = 3;
+    double dq[3], w[3];
+    for (int i = 0; i < 3; i++) {
+        double acc = 0.0;
+        for (int k = 0; k < 3; k++) acc += jt_inv[3 * i + k] * (p[k] - home[k]);
+        dq[i] = acc;
+    }
+    for (int i = 0; i < 3; i++) u0[i] = home[6 + i] + dq[i];
+    for (int i = 0; i < 3; i++) {
+        double acc = 0.0;
+        for (int k = 0; k < n; k++) acc += (u0[k] - home[6 + k]) * home[6 + n + (3 + i) * n + k];
+        w[i] = acc;
+    }
+    pk_compose(w[0], w[1], w[2], home[3], home[4], home[5], u0 + 3);
+}
+
+void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has_guess,
+                      const unsigned char *skip, const double *geom, ptrdiff_t m,
+                      const double *home, const double *jt_inv, const double *opts,
+                      double *out, pk_work *work) {
+    double start[6];
+    for (ptrdiff_t k = 0; k < rows; k++) {
+        if (has_guess) {
+            for (int i = 0; i < 6; i++) start[i] = u0[6 * k + i];
+        } else if (skip[k]) {
+            for (int i = 0; i < 6; i++) start[i] = NAN;
+        } else {
+            first_order(p + 3 * k, home, jt_inv, start);
+        }
+        solve_row(p + 3 * k, start, geom, m, opts, out + 9 * k, work);
+    }
+}

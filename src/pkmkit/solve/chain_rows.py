@@ -1,0 +1,100 @@
+"""The batch entry points of the compiled closure of joint-chain machines
+(:mod:`pkmkit.solve.chain_kernel`, whose module docstring states the problem and the
+algorithm): :func:`solve` (the closure: the direct model) and :func:`solve_inverse` (the inverse
+model of a complete machine), and :func:`model_arrays` (the kernel's view of a model).
+
+They run the per-row Levenberg–Marquardt loop ``chain_kernel._solve_rows`` or, chosen by
+:func:`pkmkit.numerics.jit.kernel`, its C twin in :mod:`pkmkit.native` (``chain_rows``: the same
+statements, the same statuses, iterations and bits), which needs no Numba: this module imports
+none, so a fresh process's closures with the extension built never pay Numba's import.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from pkmkit.model.chains import FIXED, PRISMATIC, REVOLUTE, JointChainModel
+from pkmkit.numerics import jit
+
+_TYPE_CODE = {FIXED: 0, REVOLUTE: 1, PRISMATIC: 2}
+#: The Numba kernel's module (:func:`pkmkit.numerics.jit.kernel` may run its C twin).
+KERNEL = "pkmkit.solve.chain_kernel"
+
+
+def _rows_kernel() -> Callable[..., Any]:
+    """``_solve_rows``: its C twin when built, else the Numba kernel."""
+    return jit.kernel(KERNEL, "_solve_rows")
+
+
+def model_arrays(model: JointChainModel, unknown_variables: np.ndarray) -> tuple:
+    """The kernel's view of ``model``: ``(frames (E, 4, 4), types (E,), element variable (E,),
+    leg elements (flattened), leg offsets (L + 1,), position of every variable in u (−1 for a
+    known one))``; all but the positions computed once per (immutable) model."""
+    cached = model.__dict__.get("_kernel_arrays")
+    if cached is None:
+        types = np.array([_TYPE_CODE[e.type] for e in model.elements], dtype=np.int64)
+        evar = np.asarray(model.element_variable, dtype=np.int64)
+        elements = np.array([e for leg in model.legs for e in leg], dtype=np.int64)
+        offsets = np.cumsum([0] + [len(leg) for leg in model.legs]).astype(np.int64)
+        cached = (np.ascontiguousarray(model.frames, dtype=float), types, evar, elements,
+                  offsets)
+        object.__setattr__(model, "_kernel_arrays", cached)
+    position = np.full(model.n_variables, -1, dtype=np.int64)
+    position[np.asarray(unknown_variables, dtype=int)] = 6 + np.arange(len(unknown_variables))
+    return (*cached, position)
+
+
+def solve(model: JointChainModel, known: np.ndarray, u0: np.ndarray,
+          unknown_variables: np.ndarray, *, max_iter: int = 60, xtol: float = 1e-14,
+          atol: float = 1e-14, gtol: float = 1e-12, stall: float = 0.01,
+          residual_tol: float = 1e-9, damping: float = 1e-4) -> tuple[np.ndarray, ...]:
+    """Closures of ``known (N, n_var)`` from ``u0 (N, 6 + n_u)``: ``(u (N, 6 + n_u), status
+    (N,), residual (N,), iterations (N,))`` with the meanings of
+    :class:`pkmkit.solve.least_squares.SolveResult` (options as there)."""
+    frames, types, evar, elements, offsets, position = model_arrays(model, unknown_variables)
+    known = np.ascontiguousarray(known, dtype=float)
+    u = np.array(u0, dtype=float, order="C", copy=True)
+    n_rows = u.shape[0]
+    status = np.empty(n_rows, dtype=np.int64)
+    residual = np.full(n_rows, np.nan)
+    iterations = np.zeros(n_rows, dtype=np.int64)
+    _rows_kernel()(frames, types, evar, elements, offsets, position, known, u,
+                   float(model.characteristic_length), int(max_iter), float(xtol),
+                   float(atol), float(gtol), float(stall), float(residual_tol),
+                   float(damping), status, residual, iterations, _NO_HEAD, _NO_TARGETS,
+                   _NO_TARGETS[:, 0], False)
+    return u, status, residual, iterations
+
+
+_NO_HEAD = np.zeros(0, dtype=np.int64)
+_NO_TARGETS = np.zeros((1, 6))
+
+
+def solve_inverse(model: JointChainModel, targets: np.ndarray, u0: np.ndarray,
+                  tool_length: np.ndarray, *, max_iter: int = 60, xtol: float = 1e-14,
+                  atol: float = 1e-14, gtol: float = 1e-12, stall: float = 0.01,
+                  residual_tol: float = 1e-9, damping: float = 1e-4) -> tuple[np.ndarray, ...]:
+    """The inverse model of a complete machine, compiled: the problem of
+    :func:`pkmkit.solve.chains.solve_machine_inverse` (the legs' closure rows, then the tool
+    rows ``(p_tool − p_target, L (a_tool − a_target))``; unknowns the platform pose and every
+    joint variable) for ``targets (N, 6)`` (tool point m, unit axis), ``u0 (N, 6 + n_var)``
+    and ``tool_length (N,)`` (m), with :func:`solve`'s algorithm. Returns ``(u, status,
+    residual, iterations)`` as :func:`solve`."""
+    every = np.arange(model.n_variables)
+    frames, types, evar, elements, offsets, position = model_arrays(model, every)
+    head = np.array(model.head, dtype=np.int64)
+    u = np.array(u0, dtype=float, order="C", copy=True)
+    n_rows = u.shape[0]
+    status = np.empty(n_rows, dtype=np.int64)
+    residual = np.full(n_rows, np.nan)
+    iterations = np.zeros(n_rows, dtype=np.int64)
+    _rows_kernel()(frames, types, evar, elements, offsets, position,
+                   np.zeros((1, model.n_variables)), u, float(model.characteristic_length),
+                   int(max_iter), float(xtol), float(atol), float(gtol), float(stall),
+                   float(residual_tol), float(damping), status, residual, iterations, head,
+                   np.ascontiguousarray(targets, dtype=float),
+                   np.ascontiguousarray(tool_length, dtype=float).reshape(-1), True)
+    return u, status, residual, iterations
