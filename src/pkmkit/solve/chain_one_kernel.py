@@ -31,8 +31,6 @@ import numpy as np
 from numba import njit
 
 from pkmkit.solve.chain_kernel import (
-    _NO_HEAD,
-    _NO_TARGETS,
     _OPTIONS,
     _evaluate,
     _head_walk,
@@ -40,6 +38,7 @@ from pkmkit.solve.chain_kernel import (
     _scratch,
     _solve_rows,
 )
+from pkmkit.solve.chain_rows import _NO_HEAD, _NO_TARGETS
 
 #: ``info`` slots: status, largest residual, iterations, lower bound of σ_min/σ_max (NaN when
 #: not computed).
