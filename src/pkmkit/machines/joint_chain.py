@@ -68,6 +68,7 @@ from pkmkit.machines.workspace_reports import ChainReports
 from pkmkit.model.chains import JointChainModel
 from pkmkit.numerics.arrays import restore_shape
 from pkmkit.numerics.jit import use_compiled_solver
+from pkmkit.numerics.rowwise import einsum
 from pkmkit.solve.chains import (
     chain_pose,
     closure,
@@ -521,17 +522,19 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         home = np.concatenate([self._home["platform"], self._home["values"][self._passive]])
         u_home = np.tile(home, (n, 1))
         rates, residual_rates = self._home_rates()
-        delta = qb - self.home_q
+        delta = np.ascontiguousarray((qb - self.home_q).T)  # (n, N): batch last
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-            du = delta @ rates.T
+            # batch-last contractions (not a matrix product, whose rounding changes with N:
+            # a row's start must not depend on the rows beside it, pkmkit.numerics.rowwise)
+            du = einsum("pn,nk->pk", rates, delta).T
             u_pred = u_home + du
             u_pred[:, 3:6] = compose_rotvecs(du[:, 3:6].T, u_home[:, 3:6].T).T
             full = values.T.copy()
             full[self._passive] = u_pred[:, 6:].T
             res = closure_residuals(self.model, rotvec_matrices(u_pred[:, 3:6].T),
                                     u_pred[:, :3].T, full)
-            from_home = delta @ residual_rates.T
-        worse = ~(np.einsum("mk,mk->k", res, res) <= np.einsum("km,km->k", from_home, from_home))
+            from_home = einsum("pn,nk->pk", residual_rates, delta)
+        worse = ~(einsum("mk,mk->k", res, res) <= einsum("mk,mk->k", from_home, from_home))
         u_pred[worse] = u_home[worse]
         return u_pred
 
