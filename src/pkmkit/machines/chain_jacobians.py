@@ -14,6 +14,7 @@ from pkmkit.exceptions import (
     SingularConfigurationError,
     UnsupportedOperationError,
 )
+from pkmkit.machines.chunks import chunked
 from pkmkit.machines.common import _checked_batch
 from pkmkit.machines.results import VelocityModel
 from pkmkit.model.chains import FIXED
@@ -92,6 +93,7 @@ class ChainVelocity:
     """Mixin of :class:`~pkmkit.machines.joint_chain.JointChainMachine`: its velocity model."""
 
     # ---------------------------------------------------------------- velocity
+    @chunked  # a batch of more than ``chunk_rows`` rows chunk by chunk (issue 22 §6)
     def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
                  tol: float = SINGULAR_TOL, start: Any = None) -> ChainJacobians:
         """Velocity model at tool poses ``x`` or at actuator coordinates ``q`` (the closure
