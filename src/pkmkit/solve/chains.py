@@ -433,7 +433,8 @@ class _Buffers:
     def get(self, m: int, n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
         key = (m, n, k)
         if key not in self._arrays:
-            self._arrays = {key: (np.empty((m, k)), np.zeros((m, n, k)))}
+            self._arrays.clear()  # the former size's arrays freed before the new ones exist
+            self._arrays[key] = (np.empty((m, k)), np.zeros((m, n, k)))
         return self._arrays[key]
 
 

@@ -332,6 +332,7 @@ def solve_least_squares(
         r[:, live], jac[:, :, live] = r_live, j_live
     cost = np.full(n_rows, np.inf)
     cost[live] = 0.5 * einsum("mk,mk->k", r_live, r_live)
+    del r_live, j_live  # copied: the evaluation's arrays may be freed when the batch shrinks
     valid &= np.isfinite(cost) & np.isfinite(jac).all(axis=(0, 1))
     lam = np.full(n_rows, float(damping))
     checkpoint = cost.copy()  # cost ten iterations ago, for the stall test
@@ -377,6 +378,10 @@ def solve_least_squares(
             jtj.add_diagonal(lam[idx] * (diag + floor))
             step = -jtj.solve(grad)
         u_new = retract(_batch(u, idx), step, idx)
+        # the active rows' Jacobians (a copy when some rows have left) and the previous
+        # evaluation's are not needed any more: freed before the evaluation makes new ones
+        del j_a, r_a, jtj
+        r_new = j_new = None
         r_new, j_new = evaluate(u_new, idx)
         cost_new = 0.5 * einsum("mk,mk->k", r_new, r_new)
         # accept rounding-level increases: near a solution the cost stops being informative
