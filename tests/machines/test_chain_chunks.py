@@ -82,9 +82,10 @@ def test_chain_batches_in_chunks_are_the_whole_batch(ident, size, path, monkeypa
 
 
 def test_chain_chunks_are_small(monkeypatch):
-    """The chunk size keeps the engine's working set near 10–20 MB (≈ 21 kB per row on the NumPy
-    engine, ≈ 1.3 kB for ik and fk compiled, 7.5 kB for the velocity model) and is far above
-    the batch size from which the compiled kernels run (every chunk takes the batch's path)."""
+    """The chunk size keeps the engine's working set within ≈ 30 MB (≈ 16 kB per row on the
+    NumPy engine, ≈ 1.3 kB for ik and fk compiled, 7.5 kB for the velocity model) and is far
+    above the batch size from which the compiled kernels run (every chunk takes the batch's
+    path)."""
     m = pkmkit.machine("tripteor-x7")
     monkeypatch.setenv("PKMKIT_COMPILED", "0")
     assert m.chunk_rows == NUMPY_CHAIN_CHUNK_ROWS
@@ -92,4 +93,4 @@ def test_chain_chunks_are_small(monkeypatch):
         monkeypatch.setenv("PKMKIT_COMPILED", "1")
         assert m.chunk_rows == CHAIN_CHUNK_ROWS
     assert 4 * SOLVER_ROWS <= NUMPY_CHAIN_CHUNK_ROWS // 2
-    assert NUMPY_CHAIN_CHUNK_ROWS * 21e3 <= 12e6 and CHAIN_CHUNK_ROWS * 7.5e3 <= 32e6
+    assert NUMPY_CHAIN_CHUNK_ROWS * 16e3 <= 17e6 and CHAIN_CHUNK_ROWS * 7.5e3 <= 32e6
