@@ -12,7 +12,10 @@ within about twice the input plus the output (column ``ratio`` ≤ 2).
 
 Machines: ``linear-delta`` (translational, closed forms), ``gough-stewart`` (full-pose hexapod:
 closed-form ik, compiled engine fk) and ``tripteor-x7`` (joint chain: iterative engine, hence
-fewer rows).
+fewer rows; chunked as well, ``PKMKIT_COMPILED=0`` measures its NumPy engine).
+
+The figure is the rise above the peak the warm-up left: a chunked call reuses the memory the
+warm-up's chunks freed, so a small rise (or 0) is a floor, not an exact working set.
 """
 
 from __future__ import annotations

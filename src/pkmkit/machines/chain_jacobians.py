@@ -20,6 +20,7 @@ from pkmkit.machines.chain_velocity_record import (
     SINGULAR_TOL,
     ChainJacobians,
 )
+from pkmkit.machines.chunks import chunked
 from pkmkit.machines.common import _checked_batch
 from pkmkit.model.chains import FIXED
 from pkmkit.numerics.arrays import as_batch
@@ -61,6 +62,7 @@ class ChainVelocity(ChainOnePose):
     (and, from :class:`~pkmkit.machines.chain_one.ChainOnePose`, the one-pose paths)."""
 
     # ---------------------------------------------------------------- velocity
+    @chunked  # a batch of more than ``chunk_rows`` rows chunk by chunk (issue 22 §6)
     def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
                  tol: float = SINGULAR_TOL, start: Any = None) -> ChainJacobians:
         """Velocity model at tool poses ``x`` or at actuator coordinates ``q`` (the closure

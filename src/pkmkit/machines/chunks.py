@@ -10,9 +10,10 @@ at least half of :data:`CHUNK_ROWS`, far above the batch size from which the com
 so that every chunk takes the same path as the whole batch would).
 
 Only a NumPy array ``(N, d)`` input is chunked (a single pose or a list is passed on as it is);
-row-aligned keyword arguments (``q0``, ``x0``, ``q``, ``tool_length``) with N rows are cut with
-it, and a call whose row-aligned arguments do not have N rows (or one) is left whole so that it
-raises its own error.
+row-aligned keyword arguments (``q0``, ``x0``, ``q``, ``tool_length``, a joint chain's ``start``)
+with N rows are cut with it, and a call whose row-aligned arguments do not have N rows (or one)
+is left whole so that it raises its own error. A class may set its own chunk size
+(``chunk_rows``: the joint chains' iterative engine, :mod:`pkmkit.machines.joint_chain`).
 """
 
 from __future__ import annotations
@@ -27,13 +28,21 @@ from typing import Any
 import numpy as np
 
 from pkmkit.machines.results import DirectResult, InverseResult
+from pkmkit.numerics.jit import use_compiled_solver
 
 #: Rows per chunk of a batch call (the chunks of a larger batch have nearly equal sizes, each
 #: between half and all of this).
 CHUNK_ROWS = 1 << 16
 
-#: keyword arguments with one row per input row
-ROW_ARGUMENTS = ("q0", "x0", "q", "tool_length")
+#: Rows per chunk of the joint chains' batch calls (:func:`iterative_chunk_rows`) on the compiled
+#: kernels (≈ 0.8–1.3 kB per row for ik and fk, 7.5 kB for the velocity model) and on the NumPy
+#: engine (≈ 16 kB per row: three dense closure Jacobians — the engine's, the evaluation's, the
+#: active rows' copy; 512-row chunks cost it 40 % more CPU, 1024 none measurable).
+CHAIN_CHUNK_ROWS = 4096
+NUMPY_CHAIN_CHUNK_ROWS = 1024
+
+#: keyword arguments with one row per input row (``start``: a joint chain's warm starts)
+ROW_ARGUMENTS = ("q0", "x0", "q", "tool_length", "start")
 
 #: fields of the result records that describe the call, not a row (taken from the first chunk)
 _CALL_FIELDS: dict[type, frozenset[str]] = {
@@ -55,6 +64,16 @@ def chunk_bounds(rows: int, size: int | None = None) -> list[tuple[int, int]]:
     return list(itertools.pairwise(edges))
 
 
+def iterative_chunk_rows(machine: Any) -> int:
+    """``chunk_rows`` of a machine solved by the iterative closure engine (a joint chain): its
+    batch ``ik``, ``fk``, ``jacobian`` run in chunks of :data:`CHAIN_CHUNK_ROWS` rows on the
+    compiled kernels, :data:`NUMPY_CHAIN_CHUNK_ROWS` on the NumPy engine — a working set of
+    ≈ 3–30 MB whatever the batch, and chunks far above the batch size from which the compiled
+    kernels run (every chunk takes the whole batch's path). A row's result does not depend on
+    its batch (:mod:`pkmkit.numerics.rowwise`), so the chunks give the whole batch's result."""
+    return CHAIN_CHUNK_ROWS if use_compiled_solver(CHAIN_CHUNK_ROWS) else NUMPY_CHAIN_CHUNK_ROWS
+
+
 def _call_fields(record: Any) -> frozenset[str]:
     names: frozenset[str] = frozenset()
     for cls in type(record).__mro__:
@@ -69,32 +88,46 @@ class _Rows:
         self.values = values
 
 
-def _allocate(part: Any, rows: int, size: int) -> Any:
+def _allocate(part: Any, rows: int, size: int, shared: dict | None = None) -> Any:
     """Storage for the joined result of ``rows`` rows, shaped after the first chunk's result
-    ``part`` (of ``size`` rows): per-row arrays allocated once, per-row tuples as lists,
-    records as dicts of their fields (the fields that describe the call left out), anything
-    else kept as the first chunk has it."""
+    ``part`` (of ``size`` rows): per-row arrays allocated once (one storage for an array two
+    fields share, e.g. an inverse result's ``pose`` and its direct record's), per-row tuples
+    as lists, records as dicts of their fields (the fields that describe the call left out),
+    anything else kept as the first chunk has it."""
+    shared = {} if shared is None else shared
+    if isinstance(part, np.ndarray) and id(part) in shared:
+        return shared[id(part)]
     if isinstance(part, np.ndarray) and part.ndim and part.shape[0] == size:
         # in the chunk's memory order: a (N, n) result the kernels write column by column
         # (a transposed view) is copied column by column, not transposed on every chunk
         order = "F" if part.ndim == 2 and not part.flags.c_contiguous else "C"
-        return _Rows(np.empty((rows, *part.shape[1:]), dtype=part.dtype, order=order))
+        shared[id(part)] = _Rows(np.empty((rows, *part.shape[1:]), dtype=part.dtype,
+                                          order=order))
+        return shared[id(part)]
     if isinstance(part, tuple) and len(part) == size:
         return []
     if dataclasses.is_dataclass(part):
         fixed = _call_fields(part)
-        return {f.name: _allocate(getattr(part, f.name), rows, size)
+        return {f.name: _allocate(getattr(part, f.name), rows, size, shared)
                 for f in dataclasses.fields(part) if f.init and f.name not in fixed}
     return part
 
 
-def _put(store: Any, part: Any, start: int, stop: int) -> None:
+def _put(store: Any, part: Any, start: int, stop: int, written: dict | None = None) -> None:
     """Copy the result ``part`` of the chunk ``start:stop`` into the storage (raise
-    :class:`_Whole` if it does not have the first chunk's layout)."""
+    :class:`_Whole` if it does not have the first chunk's layout, or if two fields sharing a
+    storage differ in this chunk; ``written``: the storages filled from this chunk)."""
+    written = {} if written is None else written
     if isinstance(store, _Rows):
         if not (isinstance(part, np.ndarray) and part.dtype == store.values.dtype
                 and part.shape == (stop - start, *store.values.shape[1:])):
             raise _Whole
+        if id(store) in written:  # a field sharing another's array: the same rows
+            other = written[id(store)]
+            if other is not part and other.tobytes() != part.tobytes():
+                raise _Whole
+            return
+        written[id(store)] = part
         store.values[start:stop] = part
     elif isinstance(store, list):
         if not (isinstance(part, tuple) and len(part) == stop - start):
@@ -104,7 +137,7 @@ def _put(store: Any, part: Any, start: int, stop: int) -> None:
         if part is None:
             raise _Whole
         for name, value in store.items():
-            _put(value, getattr(part, name), start, stop)
+            _put(value, getattr(part, name), start, stop, written)
     elif (store is None) != (part is None):  # e.g. a record in one chunk, None in another
         raise _Whole
 
@@ -139,26 +172,32 @@ def _row_arguments(kwargs: dict[str, Any], rows: int) -> list[str] | None:
 
 
 def chunked(method: Callable[..., Any]) -> Callable[..., Any]:
-    """Decorate a batch method ``method(self, x, **kwargs)`` of the protocol (``ik``, ``fk``)
-    so that a batch of more than :data:`CHUNK_ROWS` rows runs chunk by chunk."""
+    """Decorate a batch method ``method(self, x, **kwargs)`` of the protocol (``ik``, ``fk``,
+    a joint chain's ``jacobian``, also called as ``jacobian(q=...)``) so that a batch of more
+    than ``self.chunk_rows`` rows (default :data:`CHUNK_ROWS`) runs chunk by chunk."""
 
     leading = list(inspect.signature(method).parameters)[1]  # x or q
 
     @functools.wraps(method)
     def call(self, *args: Any, **kwargs: Any) -> Any:
-        size = CHUNK_ROWS
+        size = getattr(self, "chunk_rows", None) or CHUNK_ROWS
         x = args[0] if len(args) == 1 else kwargs.get(leading) if not args else None
+        by_q = x is None and not args and leading != "q"  # jacobian(q=...): cut with q
+        if by_q:
+            x = kwargs.get("q")
         if not (isinstance(x, np.ndarray) and x.ndim == 2 and x.shape[0] > size):
             return method(self, *args, **kwargs)
-        kwargs.pop(leading, None)
         rows = x.shape[0]
+        if not by_q:
+            kwargs.pop(leading, None)
+        head = () if by_q else (x,)
         cut = _row_arguments(kwargs, rows)
         if cut is None:
-            return method(self, x, **kwargs)
+            return method(self, *head, **kwargs)
         first = store = None
         try:
             for start, stop in chunk_bounds(rows, size):
-                part = method(self, x[start:stop],
+                part = method(self, *(h[start:stop] for h in head),
                               **{**kwargs, **{name: kwargs[name][start:stop] for name in cut}})
                 if start == 0:
                     first, store = part, _allocate(part, rows, stop)
@@ -166,7 +205,7 @@ def chunked(method: Callable[..., Any]) -> Callable[..., Any]:
                 del part
         except _Whole:  # e.g. a chunk without any solved row has no direct record
             del first, store
-            return method(self, x, **kwargs)
+            return method(self, *head, **kwargs)
         return _build(store, first)
 
     return call

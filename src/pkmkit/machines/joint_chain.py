@@ -49,6 +49,8 @@ from pkmkit.machines.chain_results import (
     ChainInverseResult,
     single_row,
 )
+from pkmkit.machines.chain_starts import default_start
+from pkmkit.machines.chunks import chunked, iterative_chunk_rows
 from pkmkit.machines.common import (
     MAX_COORDINATE,
     MachineKind,
@@ -70,10 +72,6 @@ from pkmkit.numerics.arrays import restore_shape
 from pkmkit.numerics.jit import use_compiled_solver
 from pkmkit.solve.chains import (
     chain_pose,
-    closure,
-    closure_residuals,
-    compose_rotvecs,
-    rotvec_matrices,
     solve_closure,
     solve_machine_inverse,
     tool_frame,
@@ -102,6 +100,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
     """
 
     family: ClassVar[str] = "chain"
+    chunk_rows = property(iterative_chunk_rows)  # batch calls in chunks (issue 22 §6)
 
     id: str
     name: str
@@ -292,6 +291,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         return arr
 
     # ---------------------------------------------------------------- direct
+    @chunked
     def fk(self, q: Any, *, x0: Any = None, start: Any = None, tool_length: Any = None,
            full_output: bool = False, strokes: str = "flag", check_singular: bool | None = None,
            max_misfit: float | None = None,
@@ -495,46 +495,13 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         if report["out_of_stroke"][0]:
             warnings.warn(message, StrokeWarning, stacklevel=3)
 
-    def _home_rates(self) -> tuple[np.ndarray, np.ndarray]:
-        """At home, per unit actuator change: ``(6 + n_p, n)`` first-order change of the
-        platform (δp, δω) and passive joints, and ``(6L, n)`` change of the closure residual
-        with the platform and passive joints held (zero columns for the head); cached."""
-        cached = self.__dict__.get("_home_rates_cache")
-        if cached is not None:
-            return cached
-        model = self.model
-        values = self._home["values"][:, None]
-        rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
-        c = closure(model, rot, self._home["platform"][:3, None], values)
-        cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1)[:, :, 0]
-        cq = c.variables[:, self._actuated, 0]
-        rates = (-np.linalg.pinv(cu, rcond=RANK_RCOND) @ cq, cq)
-        object.__setattr__(self, "_home_rates_cache", rates)
-        return rates
-
     def _default_start(self, qb: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """Starts ``(N, 6 + n_p)`` of the direct model: home moved to first order towards each
-        q (a Gauss–Newton iteration fewer near home), or home itself where the legs close worse
-        from that prediction than from home (far from home; the home residual to first order)."""
-        n = qb.shape[0]
-        home = np.concatenate([self._home["platform"], self._home["values"][self._passive]])
-        u_home = np.tile(home, (n, 1))
-        rates, residual_rates = self._home_rates()
-        delta = qb - self.home_q
-        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-            du = delta @ rates.T
-            u_pred = u_home + du
-            u_pred[:, 3:6] = compose_rotvecs(du[:, 3:6].T, u_home[:, 3:6].T).T
-            full = values.T.copy()
-            full[self._passive] = u_pred[:, 6:].T
-            res = closure_residuals(self.model, rotvec_matrices(u_pred[:, 3:6].T),
-                                    u_pred[:, :3].T, full)
-            from_home = delta @ residual_rates.T
-        worse = ~(np.einsum("mk,mk->k", res, res) <= np.einsum("km,km->k", from_home, from_home))
-        u_pred[worse] = u_home[worse]
-        return u_pred
+        """Starts ``(N, 6 + n_p)`` of the direct model
+        (:func:`pkmkit.machines.chain_starts.default_start`)."""
+        return default_start(self, qb, values)
 
     # ---------------------------------------------------------------- inverse
+    @chunked
     def ik(self, x: Any, *, q0: Any = None, tool_length: Any = None, full_output: bool = False,
            strokes: str = "flag", start: Any = None,
            **engine_options: Any) -> np.ndarray | ChainInverseResult:

@@ -46,6 +46,7 @@ from pkmkit.model.chains import (
     JointChainModel,
     cached_defect_twists,
 )
+from pkmkit.numerics.rowwise import einsum
 from pkmkit.solve.least_squares import BlockPattern, SolveResult, solve_least_squares
 from pkmkit.spatial.rotation import skew
 
@@ -108,8 +109,8 @@ def chain_pose(model: JointChainModel, chain: tuple[int, ...], values: np.ndarra
         if defects:
             mine = np.flatnonzero(model.defect_index.element == e)
             if mine.size:
-                w = np.einsum("abk,ib->aik", rot, local[mine, 3:])
-                v = np.einsum("abk,ib->aik", rot, local[mine, :3]) + _cross(pos[:, None], w)
+                w = einsum("abk,ib->aik", rot, local[mine, 3:])
+                v = einsum("abk,ib->aik", rot, local[mine, :3]) + _cross(pos[:, None], w)
                 def_tw[:3, mine], def_tw[3:, mine] = v, w
         pos = pos + _rotate(rot, frame[:3, 3])
         rot = _times_constant(rot, frame[:3, :3])
@@ -218,7 +219,7 @@ def rotation_rows(m: np.ndarray, length: float) -> np.ndarray:
 def leg_residual(leg: ChainPose, rot_x: np.ndarray, p_x: np.ndarray, length: float
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Closure residual ``(6, k)`` of one leg on the platform pose and ``M = R_leg R_Xᵀ``."""
-    m = np.einsum("abk,cbk->ack", leg.R, rot_x)
+    m = einsum("abk,cbk->ack", leg.R, rot_x)
     with np.errstate(divide="ignore", invalid="ignore"):
         rot_res = length * _vee_skew(m) / _gibbs_factor(m)
     return np.concatenate([leg.p - p_x, rot_res]), m
@@ -231,7 +232,7 @@ def twist_rows(tw: np.ndarray, p_end: np.ndarray, m: np.ndarray, length: float,
     v, w = tw[:3], tw[3:]
     dp = v + _cross(w, p_end[:, None, :])
     rows = rotation_rows(m, length) if rot_rows is None else rot_rows
-    dr = np.einsum("abk,bck->ack", rows, w)
+    dr = einsum("abk,bck->ack", rows, w)
     return np.concatenate([dp, dr])
 
 
@@ -303,7 +304,7 @@ def closure_residuals(model: JointChainModel, rot_x: np.ndarray, p_x: np.ndarray
 def rotvec_matrices(phi: np.ndarray) -> np.ndarray:
     """Rotation matrices ``(3, 3, k)`` of batch-last rotation vectors ``φ (3, k)`` (Rodrigues,
     with series below 1e-4 rad)."""
-    sq = np.einsum("ak,ak->k", phi, phi)
+    sq = einsum("ak,ak->k", phi, phi)
     theta = np.sqrt(sq)
     small = theta < 1e-4
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -323,7 +324,7 @@ def rotvec_matrices(phi: np.ndarray) -> np.ndarray:
 
 def _quaternions(phi: np.ndarray) -> np.ndarray:
     """Unit quaternions ``(w, x, y, z)`` ``(4, k)`` of batch-last rotation vectors ``(3, k)``."""
-    sq = np.einsum("ak,ak->k", phi, phi)
+    sq = einsum("ak,ak->k", phi, phi)
     half = 0.5 * np.sqrt(sq)
     small = half < 1e-4
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -341,7 +342,7 @@ def compose_rotvecs(delta: np.ndarray, phi: np.ndarray) -> np.ndarray:
                     a[0] * b[3] + b[0] * a[3] + a[1] * b[2] - a[2] * b[1]])
     vec = np.where(w < 0, -vec, vec)  # the same rotation with w ≥ 0: angle ≤ π
     w = np.abs(w)
-    norm = np.sqrt(np.einsum("ak,ak->k", vec, vec))
+    norm = np.sqrt(einsum("ak,ak->k", vec, vec))
     angle = 2.0 * np.arctan2(norm, w)
     small = norm < 1e-8
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -432,7 +433,8 @@ class _Buffers:
     def get(self, m: int, n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
         key = (m, n, k)
         if key not in self._arrays:
-            self._arrays = {key: (np.empty((m, k)), np.zeros((m, n, k)))}
+            self._arrays.clear()  # the former size's arrays freed before the new ones exist
+            self._arrays[key] = (np.empty((m, k)), np.zeros((m, n, k)))
         return self._arrays[key]
 
 

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pkmkit.exceptions import InputError
+from pkmkit.numerics.rowwise import einsum
 from pkmkit.status import Status
 
 #: ``evaluate(u (n, k), rows (k,)) -> (r (m, k), J (m, n, k))`` for the given rows of the batch.
@@ -105,7 +106,7 @@ class _BlockNormal:
             b_g = np.empty((n_shared, len(cols), jac.shape[2]))
             for i in range(n_shared):
                 for j in range(len(cols)):
-                    b_g[i, j] = np.einsum("mk,mk->k", j_sg[:, i], j_g[:, j])
+                    b_g[i, j] = einsum("mk,mk->k", j_sg[:, i], j_g[:, j])
             b.append(b_g)
             c.append(normal_matrix(j_g))
         return cls(pattern, a, b, c)
@@ -140,14 +141,14 @@ class _BlockNormal:
             stacked = np.concatenate([np.swapaxes(b_g, 0, 1), rhs[_index(cols)][:, None]],
                                      axis=1)
             z = solve_spd_many(c_g, stacked)
-            schur -= np.einsum("ijk,jlk->ilk", b_g, z[:, :-1])
-            top -= np.einsum("ijk,jk->ik", b_g, z[:, -1])
+            schur -= einsum("ijk,jlk->ilk", b_g, z[:, :-1])
+            top -= einsum("ijk,jk->ik", b_g, z[:, -1])
             solved.append(z)
         x = np.empty_like(rhs)
         x_s = solve_spd(schur, top)
         x[shared] = x_s
         for (_, cols), z in zip(self.pattern.groups, solved, strict=True):
-            x[_index(cols)] = z[:, -1] - np.einsum("jik,ik->jk", z[:, :-1], x_s)
+            x[_index(cols)] = z[:, -1] - einsum("jik,ik->jk", z[:, :-1], x_s)
         return x
 
 
@@ -189,7 +190,7 @@ def normal_matrix(jac: np.ndarray) -> np.ndarray:
     out = np.empty((n, n, jac.shape[2]))
     for i in range(n):
         for j in range(i + 1):
-            out[i, j] = out[j, i] = np.einsum("mk,mk->k", jac[:, i], jac[:, j])
+            out[i, j] = out[j, i] = einsum("mk,mk->k", jac[:, i], jac[:, j])
     return out
 
 
@@ -305,7 +306,9 @@ def solve_least_squares(
         :class:`SolveResult` (batch axis first).
     """
     retract = retract or _add
-    u = np.array(np.asarray(u0, dtype=float).T, copy=True)  # (n, N)
+    # (n, N) C-contiguous: batch-last arrays whose batch axis is contiguous, whether every row
+    # is active (a view of u) or some (a copy): the same arithmetic for a row either way
+    u = np.array(np.asarray(u0, dtype=float).T, order="C", copy=True)
     n, n_rows = u.shape
     rows_all = np.arange(n_rows)
     valid = np.isfinite(u).all(axis=0)
@@ -328,7 +331,8 @@ def solve_least_squares(
         jac = np.full((m, n, n_rows), np.nan)
         r[:, live], jac[:, :, live] = r_live, j_live
     cost = np.full(n_rows, np.inf)
-    cost[live] = 0.5 * np.einsum("mk,mk->k", r_live, r_live)
+    cost[live] = 0.5 * einsum("mk,mk->k", r_live, r_live)
+    del r_live, j_live  # copied: the evaluation's arrays may be freed when the batch shrinks
     valid &= np.isfinite(cost) & np.isfinite(jac).all(axis=(0, 1))
     lam = np.full(n_rows, float(damping))
     checkpoint = cost.copy()  # cost ten iterations ago, for the stall test
@@ -343,9 +347,9 @@ def solve_least_squares(
         if idx.size == n_rows:  # every row active: slices avoid copies
             idx = slice(None)
         j_a, r_a = _batch(jac, idx), _batch(r, idx)
-        grad = np.einsum("mnk,mk->nk", j_a, r_a)
+        grad = einsum("mnk,mk->nk", j_a, r_a)
         # stationary (cosine test) or exact rows stop before stepping (and before JᵀJ)
-        columns = np.einsum("mnk,mnk->nk", j_a, j_a)  # the diagonal of JᵀJ
+        columns = einsum("mnk,mnk->nk", j_a, j_a)  # the diagonal of JᵀJ
         with np.errstate(invalid="ignore", divide="ignore"):
             cosine = np.abs(grad) / np.sqrt(columns * (2.0 * cost[idx]))
         stop = (cost[idx] <= 0.5 * atol * atol) | ~(np.nan_to_num(cosine, nan=0.0).max(
@@ -374,8 +378,12 @@ def solve_least_squares(
             jtj.add_diagonal(lam[idx] * (diag + floor))
             step = -jtj.solve(grad)
         u_new = retract(_batch(u, idx), step, idx)
+        # the active rows' Jacobians (a copy when some rows have left) and the previous
+        # evaluation's are not needed any more: freed before the evaluation makes new ones
+        del j_a, r_a, jtj
+        r_new = j_new = None
         r_new, j_new = evaluate(u_new, idx)
-        cost_new = 0.5 * np.einsum("mk,mk->k", r_new, r_new)
+        cost_new = 0.5 * einsum("mk,mk->k", r_new, r_new)
         # accept rounding-level increases: near a solution the cost stops being informative
         accept = np.isfinite(cost_new) & (cost_new <= cost[idx] * (1.0 + 1e-13))
         iterations[idx] += 1
@@ -393,8 +401,8 @@ def solve_least_squares(
         lam[took] = np.maximum(lam[took] * 0.1, 1e-12)
         lam[idx[~accept]] *= 10.0
 
-        step_norm = np.sqrt(np.einsum("nk,nk->k", step, step))
-        u_norm = np.sqrt(np.einsum("nk,nk->k", u[:, idx], u[:, idx]))
+        step_norm = np.sqrt(einsum("nk,nk->k", step, step))
+        u_norm = np.sqrt(einsum("nk,nk->k", u[:, idx], u[:, idx]))
         small = step_norm <= xtol * (1.0 + u_norm)
         done = (accept & small) | (lam[idx] > 1e12)
         at_checkpoint = iterations[idx] % 10 == 0
