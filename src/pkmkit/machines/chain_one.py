@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.machines.chain_starts import home_rates
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
@@ -126,7 +127,7 @@ class ChainOneConstants:
                              np.zeros((1, n_var)), self.length,
                              _options(chain_kernel.solve_inverse))
         # direct model: u = (platform, passive) from the first-order start
-        rates, residual_rates = m._home_rates()
+        rates, residual_rates = home_rates(m)
         self.direct_args = (frames, types, evar, elements, offsets, position, head,
                             np.concatenate([m._home["platform"], home[passive]]),
                             np.ascontiguousarray(rates, dtype=float),

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.chain_jacobians import RANK_RCOND
+from pkmkit.machines.chain_velocity_record import RANK_RCOND
 from pkmkit.numerics.rowwise import einsum
 from pkmkit.solve.chains import closure, closure_residuals, compose_rotvecs, rotvec_matrices
 from pkmkit.spatial.rotation import rotvec_to_matrix
