@@ -16,6 +16,7 @@ variables, legs first then head (rad for revolutes, m for prismatic joints).
 from __future__ import annotations
 
 import warnings
+from collections import defaultdict
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
@@ -430,7 +431,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         of rows without assembly, stroke violations, singular closures."""
         model = self.model
         n = values.shape[0]
-        parts: list[list[str]] = [[] for _ in range(n)]
+        # the diagnoses of the rows that have any (a batch's rows are mostly silent)
+        parts: defaultdict[int, list[str]] = defaultdict(list)
         failed = np.flatnonzero(status == Status.NO_ASSEMBLY)
         misses = {}
         if failed.size:
@@ -475,7 +477,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                                     "determine the passive joints and the platform there")
         keep = usable | (status == Status.SINGULAR)
         return {"usable": keep, "out_of_stroke": out_of_stroke, "misses": misses,
-                "violations": first_violation, "messages": ["; ".join(p) for p in parts]}
+                "violations": first_violation, "messages": _joined(parts, n)}
 
     def _raise_single(self, q: np.ndarray, status: int, report: dict, residual: float) -> None:
         """The typed error (or warning) of a single-row direct model."""
@@ -666,6 +668,15 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         """Passive joints by name at actuator coordinates ``q`` (rad or m)."""
         res = self.fk(q, full_output=True)
         return {name: res.passive[..., i] for i, name in enumerate(self.passive_names)}
+
+
+def _joined(parts: Mapping[int, list[str]], n: int) -> list[str]:
+    """One message per row of ``n``: the diagnoses of each row in ``parts`` joined by "; ",
+    ``""`` for the others."""
+    messages = [""] * n
+    for i, texts in parts.items():
+        messages[i] = "; ".join(texts)
+    return messages
 
 
 def machine_with_tool(m: JointChainMachine, tool_length: float) -> JointChainMachine:
