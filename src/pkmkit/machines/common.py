@@ -40,9 +40,6 @@ class MachineKind:
             workspace studies (None: around home, see :meth:`Machine.default_box`).
         head_flip: names ``(turn, tilt)`` of a joint-chain head with two branches ``(a, c)`` and
             ``(a ± π, −c)`` (:mod:`pkmkit.machines.head_branches`), or None.
-        head_mirror_beyond: ``(params, model, targets (N, 6), tool lengths (N,)) -> (N,)``
-            bool, targets where no configuration is within every stroke (a sound bound: the
-            head rule then does not solve those rows' mirrors), or None.
     """
 
     kind: str
@@ -54,7 +51,6 @@ class MachineKind:
     default_box: Callable[[Mapping[str, Any], RodModel], tuple[np.ndarray, np.ndarray]] | None = (
         None)
     head_flip: tuple[str, str] | None = None
-    head_mirror_beyond: Callable[..., np.ndarray] | None = None
 
 
 def _valid_rows(arr: np.ndarray) -> np.ndarray:

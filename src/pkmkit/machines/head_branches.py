@@ -49,8 +49,7 @@ def wrapped(angle: np.ndarray) -> np.ndarray:
 def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarray, res,
                         reference: np.ndarray, flip: tuple[int, int],
                         inside: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
-                        tilt_centre: float = 0.0, turn_reach: float = np.inf,
-                        hopeless: np.ndarray | None = None):
+                        tilt_centre: float = 0.0, turn_reach: float = np.inf):
     """Apply the rule to an inverse result ``res`` (a
     :class:`~pkmkit.solve.least_squares.SolveResult` whose ``u (N, 6 + V)`` holds the platform
     then every joint variable): the rows solved exactly whose turn is more than π/2 −
@@ -69,22 +68,13 @@ def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarra
     FLIP_MARGIN away (to within the FLIP_MARGIN the rule already allows between a turn + π and
     the mirror's), so beyond the turn's stroke and farther than the row's own: the mirror
     cannot be chosen and is not solved (the Tripteor's Q4, ±15°: every row beyond a stroke
-    had its mirror solved before, for nothing).
-
-    ``hopeless (N,)`` bool: targets where no configuration is within every stroke (a sound
-    bound, the kind's ``head_mirror_beyond``: the TriMule's,
-    :mod:`pkmkit.machines.trimule_mirror`): a row there within π/2 − FLIP_MARGIN of the
-    reference is not mirrored for being beyond a stroke, the mirror being beyond one too
-    (far rows are solved as before)."""
+    had its mirror solved before, for nothing)."""
     turn, tilt = 6 + flip[0], 6 + flip[1]
     with np.errstate(invalid="ignore"):
         far = np.abs(wrapped(res.u[:, turn] - reference)) > np.pi / 2 - FLIP_MARGIN
     rows = np.flatnonzero((res.status == Status.OK) & np.isfinite(reference))
     if inside is not None and turn_reach >= np.pi / 2:  # far from the start, or beyond a stroke
-        beyond = ~inside(res.u[rows], rows)
-        if hopeless is not None:
-            beyond &= ~hopeless[rows]
-        rows = rows[far[rows] | beyond]
+        rows = rows[far[rows] | ~inside(res.u[rows], rows)]
     else:
         rows = rows[far[rows]]
     if not rows.size:

@@ -38,7 +38,6 @@ import numpy as np
 from pkmkit.exceptions import ParameterError
 from pkmkit.machines import trimule_forms as forms
 from pkmkit.machines.machine import MachineKind
-from pkmkit.machines.trimule_mirror import mirror_beyond_strokes
 from pkmkit.model.chain_layout import chain_from_layout, chains_from_layout
 from pkmkit.model.chains import ElementSpec, JointChainModel, build_chain_model
 from pkmkit.model.parameters import ParameterSpec
@@ -181,5 +180,4 @@ KIND = MachineKind(
     reference_poses=reference_poses,
     source="seed 002 (Guyon 2021) §3.4: Table 3.2, eqs. 3.24–3.36; dimensions assumed",
     head_flip=("Q4", "Q5"),
-    head_mirror_beyond=mirror_beyond_strokes,
 )

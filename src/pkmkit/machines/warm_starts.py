@@ -197,13 +197,10 @@ class ChainWarmStart:
         reach = max(abs(self.model.q_min[turn] - home[turn]),
                     abs(self.model.q_max[turn] - home[turn]))
 
-        bound = getattr(self.kind, "head_mirror_beyond", None)
-
         def rule(result: Any, t: np.ndarray, tool: np.ndarray) -> None:
-            hopeless = None if bound is None else bound(self.params, self.model, t, tool)
             nearest_head_branch(solve, t, tool, result, np.full(len(result.status),
                                 home[turn]), pair, lambda u, rows: self._within_strokes(u),
-                                home[pair[1]], turn_reach=reach, hopeless=hopeless)
+                                home[pair[1]], turn_reach=reach)
 
         rule(res, targets, lengths)
         if started is None:
