@@ -65,7 +65,8 @@ class ChainInverseResult(InverseResult):
             the strokes were ignored).
         pose: ``(N, 6)`` the tool point and axis reached (NaN where it failed).
         direct: the direct model at ``q`` (:class:`ChainDirectResult`: platform, passive
-            joints, messages), None when no row was solved.
+            joints, messages), None when no row was solved; a batch's record computes it when
+            first read (:mod:`pkmkit.machines.chain_inverse_record`).
         solution: ``(N, 6 + n_var)`` the engine's complete solution — platform position,
             rotation vector, every joint variable in the model's order (NaN where it failed):
             the ``start`` of a next inverse model nearby (continuation).
