@@ -97,7 +97,9 @@ def _ab_direct(machines: list[str], extra: list[str], rounds: int) -> None:
     """Each study alternately with the joint-chain inverse record's direct model read at once
     and left to be computed when read (the first study of the process also loads the compiled
     kernels: run a warm-up machine first to compare like with like)."""
-    import pkmkit.machines.joint_chain as joint_chain
+    import importlib
+
+    joint_chain = importlib.import_module("pkmkit.machines.joint_chain")
 
     lazy = joint_chain.inverse_record
 
