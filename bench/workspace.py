@@ -75,6 +75,10 @@ def main() -> None:
     parser.add_argument("machines", nargs="*", default=["gough-stewart"])
     parser.add_argument("--args", default="", help="extra workspace arguments, e.g. "
                         "'--no-strokes --resolution 31'")
+    parser.add_argument("--ab-direct", type=int, default=0, metavar="ROUNDS",
+                        help="joint chains: run each study ROUNDS times in this process with "
+                        "the inverse record's direct model computed at once (what every batch "
+                        "paid before issue 22 §3's fifth pass) and when read, alternately")
     options = parser.parse_args()
     print(f"pkmkit {pkmkit.__version__} (stages nest: check_region holds _q_extremes, "
           "refine_box and enclosing_frame hold grid evaluations)")
@@ -82,8 +86,35 @@ def main() -> None:
                          (workspace, "refine_box"), (workspace, "check_region"),
                          (analysis_cmds, "check_region"), (region_check, "_q_extremes")):
         _timed(module, name, SECONDS, CALLS, name)
+    if options.ab_direct:
+        _ab_direct(options.machines, options.args.split(), options.ab_direct)
+        return
     for machine in options.machines:
         study(machine, options.args.split())
+
+
+def _ab_direct(machines: list[str], extra: list[str], rounds: int) -> None:
+    """Each study alternately with the joint-chain inverse record's direct model read at once
+    and left to be computed when read (the first study of the process also loads the compiled
+    kernels: run a warm-up machine first to compare like with like)."""
+    import importlib
+
+    joint_chain = importlib.import_module("pkmkit.machines.joint_chain")
+
+    lazy = joint_chain.inverse_record
+
+    def eager(*args: Any, **kwargs: Any) -> Any:
+        record = lazy(*args, **kwargs)
+        _ = record.direct  # computed at once
+        return record
+
+    for machine in machines:
+        for _round in range(rounds):
+            for label, assemble in (("direct at once", eager), ("direct when read", lazy)):
+                joint_chain.inverse_record = assemble
+                print(f"[{label}]", end=" ")
+                study(machine, extra)
+    joint_chain.inverse_record = lazy
 
 
 if __name__ == "__main__":

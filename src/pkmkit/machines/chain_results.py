@@ -65,22 +65,31 @@ class ChainInverseResult(InverseResult):
             the strokes were ignored).
         pose: ``(N, 6)`` the tool point and axis reached (NaN where it failed).
         direct: the direct model at ``q`` (:class:`ChainDirectResult`: platform, passive
-            joints, messages), None when no row was solved.
+            joints, messages), None when no row was solved; a batch's record computes it when
+            first read (:mod:`pkmkit.machines.chain_inverse_record`).
         solution: ``(N, 6 + n_var)`` the engine's complete solution — platform position,
             rotation vector, every joint variable in the model's order (NaN where it failed):
             the ``start`` of a next inverse model nearby (continuation).
         branches, shortfall, mode: no leg branches, shortfalls or sign of det A for a joint
             chain: ``(0,)``, ``(N, 0)`` and zeros.
+        closure: ``(N, 6 + n_p)`` the closure the inverse model found with ``q`` — platform
+            position, rotation vector, passive joints (NaN where not solved; None when no row
+            was) — read by :attr:`closure_start`; None in a record built without it (then
+            :attr:`closure_start` reads ``direct``).
     """
 
     direct: ChainDirectResult | None = None
     solution: np.ndarray | None = None
+    closure: np.ndarray | None = None
 
     @property
     def closure_start(self) -> np.ndarray | None:
         """``(N, 6 + n_p)`` the closure found with ``q`` — platform position (m), rotation
         vector (rad), passive joints — as the ``start`` of the velocity model or of ``fk`` at
-        ``q`` (NaN rows start from home); None when no row was solved."""
+        ``q`` (NaN rows start from home); None when no row was solved. The inverse's own
+        closure: the direct model at ``q`` from it converges at once on the same values."""
+        if self.closure is not None:
+            return np.atleast_2d(self.closure)
         if self.direct is None:
             return None
         return np.concatenate([np.atleast_2d(self.direct.platform),

@@ -16,6 +16,7 @@ variables, legs first then head (rad for revolutes, m for prismatic joints).
 from __future__ import annotations
 
 import warnings
+from collections import defaultdict
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
@@ -37,6 +38,7 @@ from pkmkit.machines.chain_checks import (
     miss_message,
     stroke_violations,
 )
+from pkmkit.machines.chain_inverse_record import inverse_record
 from pkmkit.machines.chain_jacobians import (  # noqa: F401  (re-exported)
     RANK_RCOND,
     SINGULAR_TOL,
@@ -428,7 +430,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         of rows without assembly, stroke violations, singular closures."""
         model = self.model
         n = values.shape[0]
-        parts: list[list[str]] = [[] for _ in range(n)]
+        # the diagnoses of the rows that have any (a batch's rows are mostly silent)
+        parts: defaultdict[int, list[str]] = defaultdict(list)
         failed = np.flatnonzero(status == Status.NO_ASSEMBLY)
         misses = {}
         if failed.size:
@@ -473,7 +476,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                                     "determine the passive joints and the platform there")
         keep = usable | (status == Status.SINGULAR)
         return {"usable": keep, "out_of_stroke": out_of_stroke, "misses": misses,
-                "violations": first_violation, "messages": ["; ".join(p) for p in parts]}
+                "violations": first_violation, "messages": _joined(parts, n)}
 
     def _raise_single(self, q: np.ndarray, status: int, report: dict, residual: float) -> None:
         """The typed error (or warning) of a single-row direct model."""
@@ -554,24 +557,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                                        joints, texts[0], bad[0])
         if not full_output:
             return restore_shape(q, single)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", StrokeWarning)
-            # the direct model at q starts from the closure the inverse found (it converges
-            # at once, on that assembly)
-            start = np.concatenate([res.u[:, :6], res.u[:, 6:][:, self._passive]], axis=1)
-            direct = self.fk(q if not single else q[0], tool_length=lengths if not single else
-                             lengths[0], start=start if not single else start[0],
-                             full_output=True, strokes=strokes,
-                             check_singular=False) if np.isfinite(q).any() else None
-        pose = np.full((n, 6), np.nan) if direct is None else np.atleast_2d(direct.pose)
-        act = self._actuated
-        out = ChainInverseResult(
-            q=q, status=status, branches=None, shortfall=None, method="numeric",
-            mode=np.zeros(n, dtype=int), iterations=res.iterations, residual=res.residual,
-            pose=pose, out_of_stroke=self._inverse_out_of_stroke(strokes, bad, direct),
-            stroke_excess=signed_excess(q, self.model.q_min[act], self.model.q_max[act]),
-            direct=direct, solution=np.where((res.status == Status.OK)[:, None], res.u, np.nan))
-        return single_row(out) if single else out
+        return inverse_record(self, res, status, q, lengths, strokes, bad, single)
 
     def _inverse_solve(self, xb: np.ndarray, single: bool, q0: Any, tool_length: Any,
                        engine_options: dict, start: Any = None) -> tuple:
@@ -641,17 +627,6 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             warnings.warn(f"the inverse model of {x.tolist()}: {text}", StrokeWarning,
                           stacklevel=3)
 
-    @staticmethod
-    def _inverse_out_of_stroke(strokes: str, bad: np.ndarray, direct) -> np.ndarray | None:
-        """``(N,)`` rows of an inverse model with a joint beyond its stroke: with ``"flag"``
-        the direct model's check at the solution (actuators and passive joints), with
-        ``"refuse"`` the rows refused; None with ``"ignore"``."""
-        if strokes == "ignore":
-            return None
-        if strokes == "refuse" or direct is None:
-            return bad
-        return np.atleast_1d(np.asarray(direct.out_of_stroke, dtype=bool))
-
     def mobility(self) -> dict[str, Any]:
         """The same as :meth:`hyperstatism`, as a dict (for ``pkmkit show``)."""
         return {"hyperstatism": self.hyperstatism()}
@@ -660,6 +635,15 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         """Passive joints by name at actuator coordinates ``q`` (rad or m)."""
         res = self.fk(q, full_output=True)
         return {name: res.passive[..., i] for i, name in enumerate(self.passive_names)}
+
+
+def _joined(parts: Mapping[int, list[str]], n: int) -> list[str]:
+    """One message per row of ``n``: the diagnoses of each row in ``parts`` joined by "; ",
+    ``""`` for the others."""
+    messages = [""] * n
+    for i, texts in parts.items():
+        messages[i] = "; ".join(texts)
+    return messages
 
 
 def machine_with_tool(m: JointChainMachine, tool_length: float) -> JointChainMachine:
