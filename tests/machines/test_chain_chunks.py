@@ -94,3 +94,34 @@ def test_chain_chunks_are_small(monkeypatch):
         assert m.chunk_rows == CHAIN_CHUNK_ROWS
     assert 4 * SOLVER_ROWS <= NUMPY_CHAIN_CHUNK_ROWS // 2
     assert NUMPY_CHAIN_CHUNK_ROWS * 16e3 <= 17e6 and CHAIN_CHUNK_ROWS * 7.5e3 <= 32e6
+
+
+def test_a_chunked_inverse_record_stays_lazy(path, monkeypatch):
+    """Joining the chunks of ``ik(full_output=True)`` keeps its direct model unread (a
+    workspace study reads only the strokes: joining used to run ``fk`` on every chunk), and the
+    joined fields, read later, are the whole call's — also where a chunk has no solved row, so
+    that its ``direct`` is None and the chunks' records cannot be joined (the whole call then
+    gives the field)."""
+    m = pkmkit.machine("tripteor-x7")
+    x = poses(m)
+    x = np.concatenate([x, np.tile(x[:1] + [0.0, 0.0, 9.0, 0.0, 0.0, 0.0][:x.shape[1]],
+                                   (6, 1))])  # the last chunk: out of reach only
+    calls = []
+
+    def counting(self, q, **kwargs):
+        calls.append(len(q) if np.ndim(q) == 2 else 1)
+        return _FK(self, q, **kwargs)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        monkeypatch.setattr(JointChainMachine, "chunk_rows", 10**9)
+        whole = m.ik(x, full_output=True)
+        monkeypatch.setattr(JointChainMachine, "chunk_rows", 6)
+        monkeypatch.setattr(JointChainMachine, "fk", counting)
+        joined = m.ik(x, full_output=True)
+        assert calls == []  # nothing read yet
+        np.testing.assert_array_equal(joined.q, whole.q)
+        np.testing.assert_array_equal(joined.out_of_stroke, whole.out_of_stroke)
+        assert calls == []
+        same(whole, joined, "tripteor-x7 ik full, lazy chunks")
+    assert calls  # reading the direct model ran it

@@ -157,3 +157,50 @@ def test_a_translational_batch_runs_chunk_by_chunk(monkeypatch):
     m.ik(x, full_output=True)
     m.fk(q, full_output=True)
     assert seen == [8, 8, 9, 8, 8, 9]
+
+
+def test_a_lazy_record_is_joined_lazily_and_a_field_that_does_not_join_comes_from_the_whole():
+    """chunks keeps a lazy record (pkmkit.machines.lazy_records) lazy: its given fields are
+    joined at once, any other field read from the chunks' records and joined when first read;
+    a field the chunks cannot join (None in one chunk, an array in another) is the whole
+    call's."""
+    import dataclasses
+
+    from pkmkit.machines.chunks import chunked
+    from pkmkit.machines.lazy_records import lazy_record_class
+
+    @dataclasses.dataclass(frozen=True)
+    class Record:
+        q: np.ndarray
+        twice: np.ndarray | None
+
+    Lazy = lazy_record_class(Record, "Lazy", lambda r: "", "a test record")
+    reads = []
+
+    class Evaluation:
+        def __init__(self, q):
+            self.q = q
+
+        def field(self, name):
+            reads.append(len(self.q))
+            return None if np.isnan(self.q).all() else 2.0 * self.q
+
+    class Toy:
+        chunk_rows = 4
+
+        @chunked
+        def ik(self, x):
+            return Lazy(Evaluation(x), q=x.copy())
+
+    x = np.arange(10.0)[:, None]
+    joined = Toy().ik(x)
+    assert type(joined) is Lazy and reads == []
+    np.testing.assert_array_equal(joined.q, x)
+    np.testing.assert_array_equal(joined.twice, 2.0 * x)
+    assert reads == [3, 3, 4]  # each chunk's field, when read
+    x[:3] = np.nan  # the first chunk's field is None: the whole call's field
+    reads.clear()
+    joined = Toy().ik(x)
+    assert reads == []
+    np.testing.assert_array_equal(joined.twice, 2.0 * x)
+    assert reads == [3, 3, 4, 10]

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.machines.lazy_records import lazy_parts
 from pkmkit.machines.results import DirectResult, InverseResult
 from pkmkit.numerics.jit import use_compiled_solver
 
@@ -88,6 +89,37 @@ class _Rows:
         self.values = values
 
 
+class _Lazy:
+    """The joined storage of a record whose fields are computed when read
+    (:mod:`pkmkit.machines.lazy_records`): the fields each chunk's record was given, joined
+    now; the chunks' records kept, so that any other field is read from them and joined when
+    the joined record's field is first read (joining them now would compute every field)."""
+
+    def __init__(self, given: dict[str, Any], rows: int):
+        self.given, self.rows = given, rows
+        self.parts: list[tuple[Any, int, int]] = []
+
+
+class _JoinedEvaluation:
+    """The evaluation of a joined lazy record: a field is each chunk's record's field, joined
+    (or, should the chunks' values not join, the field of the whole call, ``rerun()``)."""
+
+    def __init__(self, parts: list[tuple[Any, int, int]], rows: int,
+                 rerun: Callable[[], Any]):
+        self._parts, self._rows, self._rerun = parts, rows, rerun
+
+    def field(self, name: str) -> Any:
+        values = [(getattr(part, name), start, stop) for part, start, stop in self._parts]
+        first, _, size = values[0]
+        try:
+            store = _allocate(first, self._rows, size)
+            for value, start, stop in values:
+                _put(store, value, start, stop)
+        except _Whole:  # e.g. a chunk without any solved row has no direct record
+            return getattr(self._rerun(), name)
+        return _build(store, first)
+
+
 def _allocate(part: Any, rows: int, size: int, shared: dict | None = None) -> Any:
     """Storage for the joined result of ``rows`` rows, shaped after the first chunk's result
     ``part`` (of ``size`` rows): per-row arrays allocated once (one storage for an array two
@@ -106,6 +138,10 @@ def _allocate(part: Any, rows: int, size: int, shared: dict | None = None) -> An
         return shared[id(part)]
     if isinstance(part, tuple) and len(part) == size:
         return []
+    lazy = lazy_parts(part)
+    if lazy is not None:
+        return _Lazy({name: _allocate(value, rows, size, shared)
+                      for name, value in lazy[1].items()}, rows)
     if dataclasses.is_dataclass(part):
         fixed = _call_fields(part)
         return {f.name: _allocate(getattr(part, f.name), rows, size, shared)
@@ -133,6 +169,13 @@ def _put(store: Any, part: Any, start: int, stop: int, written: dict | None = No
         if not (isinstance(part, tuple) and len(part) == stop - start):
             raise _Whole
         store.extend(part)
+    elif isinstance(store, _Lazy):
+        lazy = lazy_parts(part)
+        if lazy is None or lazy[1].keys() != store.given.keys():
+            raise _Whole
+        for name, value in store.given.items():
+            _put(value, lazy[1][name], start, stop, written)
+        store.parts.append((part, start, stop))
     elif isinstance(store, dict):
         if part is None:
             raise _Whole
@@ -142,12 +185,17 @@ def _put(store: Any, part: Any, start: int, stop: int, written: dict | None = No
         raise _Whole
 
 
-def _build(store: Any, first: Any) -> Any:
-    """The joined result from its storage (``first``: the first chunk's result)."""
+def _build(store: Any, first: Any, rerun: Callable[[], Any] | None = None) -> Any:
+    """The joined result from its storage (``first``: the first chunk's result; ``rerun()``:
+    the whole call, for a lazy record's fields that do not join)."""
     if isinstance(store, _Rows):
         return store.values
     if isinstance(store, list):
         return tuple(store)
+    if isinstance(store, _Lazy):
+        given = lazy_parts(first)[1]
+        fields = {name: _build(value, given[name]) for name, value in store.given.items()}
+        return type(first)(_JoinedEvaluation(store.parts, store.rows, rerun), **fields)
     if isinstance(store, dict):
         return dataclasses.replace(first, **{name: _build(value, getattr(first, name))
                                              for name, value in store.items()})
@@ -206,6 +254,6 @@ def chunked(method: Callable[..., Any]) -> Callable[..., Any]:
         except _Whole:  # e.g. a chunk without any solved row has no direct record
             del first, store
             return method(self, *head, **kwargs)
-        return _build(store, first)
+        return _build(store, first, lambda: method(self, *head, **kwargs))
 
     return call

@@ -46,3 +46,14 @@ def lazy_record_class(base: type, prefix: str, describe: Callable[[Any], str],
                  "__doc__": doc}
     namespace.update({name: prop(name) for name in names})
     return type(f"{prefix}{base.__name__}", (base,), namespace)
+
+
+def lazy_parts(record: Any) -> tuple[Any, dict[str, Any]] | None:
+    """``(evaluation, fields given or computed so far)`` of a record made by a
+    :func:`lazy_record_class` class, None for any other object (joining the chunks of a batch
+    call keeps a lazy record lazy: :mod:`pkmkit.machines.chunks`)."""
+    given = record.__dict__.get("_cache") if hasattr(record, "__dict__") else None
+    if not isinstance(given, dict) or "_evaluation" not in record.__dict__:
+        return None
+    return record.__dict__["_evaluation"], given
+
