@@ -55,8 +55,8 @@ def rows_of(result, a: int, b: int, n: int):
 
 def check_pieces(call, rows: np.ndarray, whole, sizes: list[int], where: str) -> None:
     """Every piece of ``rows`` (of the given sizes, in order) called alone gives the batch's
-    rows bit for bit (a piece without any solved row has no direct record: then the batch's
-    rows are not solved either)."""
+    rows bit for bit (a piece without any solved row has no direct record and no closure: then
+    the batch's rows are not solved either)."""
     edges = np.cumsum([0, *sizes])
     assert edges[-1] == len(rows)
     for a, b in itertools.pairwise(edges.tolist()):
@@ -64,6 +64,9 @@ def check_pieces(call, rows: np.ndarray, whole, sizes: list[int], where: str) ->
         if getattr(part, "direct", False) is None:
             assert np.isnan(expected.q).all(), where
             part = dataclasses.replace(part, direct=expected.direct)
+        if getattr(part, "closure", False) is None:  # likewise: no closure found in the piece
+            assert np.isnan(expected.closure).all(), where
+            part = dataclasses.replace(part, closure=expected.closure)
         same(part, expected, f"{where}, rows {a}:{b}")
 
 
