@@ -34,7 +34,8 @@ setup(
     ext_modules=[
         Extension(
             "pkmkit.native.kernels",
-            sources=[NATIVE + "module.c", NATIVE + "inverse.c", NATIVE + "direct.c"],
+            sources=[NATIVE + "module.c", NATIVE + "inverse.c", NATIVE + "direct.c",
+                     NATIVE + "velocity.c"],
             depends=[NATIVE + "kernels.h"],
             optional=True,
         )

@@ -235,10 +235,21 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     return solve(args, nargs, 0, "solve_one");
 }
 
+/* velocity.c */
+extern const char pk_rod_velocity_doc[], pk_rod_field_doc[], pk_rod_inverse_doc[];
+PyObject *pk_py_rod_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
     {"solve_one", (PyCFunction)(void (*)(void))solve_one, METH_FASTCALL, solve_one_doc},
+    {"rod_velocity", (PyCFunction)(void (*)(void))pk_py_rod_velocity, METH_FASTCALL,
+     pk_rod_velocity_doc},
+    {"rod_field", (PyCFunction)(void (*)(void))pk_py_rod_field, METH_FASTCALL, pk_rod_field_doc},
+    {"rod_inverse", (PyCFunction)(void (*)(void))pk_py_rod_inverse, METH_FASTCALL,
+     pk_rod_inverse_doc},
     {NULL, NULL, 0, NULL},
 };
 
