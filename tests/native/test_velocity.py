@@ -181,7 +181,7 @@ def test_bisected_onto_parallel_singularities(name, monkeypatch):
             break
         if len(poses) >= 60:
             break
-    assert len(poses) >= 20
+    assert len(poses) >= 10
     x = np.array(poses)
     _check(m, x, monkeypatch, name=name)
     _check(m, x, monkeypatch, tol=1e-2, name=name)
@@ -231,7 +231,7 @@ def test_refusals():
         (TypeError, lambda: rv(legs, x, q, 1e-6)),
         (TypeError, lambda: rv(bytearray(legs), x, q, 1e-6, 1e-2)),
         (ValueError, lambda: rv(legs[:-8], x, q, 1e-6, 1e-2)),
-        (ValueError, lambda: rv(b"\0" * 8 * 14 * 4, x + [0.0], q + [0.0], 1e-6, 1e-2)),
+        (ValueError, lambda: rv(b"\0" * 8 * 14 * 4, [*x, 0.0], [*q, 0.0], 1e-6, 1e-2)),
         (ValueError, lambda: rv(np.full(42, 7.0).tobytes(), x, q, 1e-6, 1e-2)),  # kind 7
         (TypeError, lambda: rv(legs, np.array(x), q, 1e-6, 1e-2)),
         (TypeError, lambda: rv(legs, [1, 2, 3], q, 1e-6, 1e-2)),  # ints
