@@ -21,6 +21,7 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Callable
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -95,8 +96,22 @@ class OnePoseFullVelocity:
         return self._build(name)
 
     def _run(self, full: bool) -> None:
-        kernel = _kernel()
         geom = self.geom
+        native = _native_twin(geom)
+        if native is not None:  # the C twin: no arrays but the result's, no Numba
+            self._spot = layout(geom.shape[0], self.n)
+            x, q = self.x, self.q
+            if type(x) is not list:  # (a caller's array)
+                x = np.asarray(x, dtype=float).tolist()
+            if type(q) is not list:
+                q = np.asarray(q, dtype=float).tolist()
+            state = native(geom, x, q, self.length, self.tol, full)
+            if state is None:
+                self._batch = self.batch()
+            else:
+                self._out, self._full = np.frombuffer(state), full
+            return
+        kernel = _kernel()
         self._spot = spot = kernel.layout(geom.shape[0], self.n)
         out = np.empty(spot["flags"][1])
         run = kernel.velocity_one if full else kernel.velocity_matrices
@@ -142,6 +157,28 @@ class OnePoseFullVelocity:
         return np.float64(part(key)[0])
 
 
+def _native_twin(geom: np.ndarray) -> Callable[..., Any] | None:
+    """``pkmkit.native.kernels.pose_velocity`` when the extension is present (and enabled)
+    and the machine has six rods, else None (the Numba kernel)."""
+    if geom.shape[0] != 6:
+        return None
+    return getattr(jit.native_kernels_now(), "pose_velocity", None)
+
+
+@lru_cache(maxsize=64)
+def layout(m: int, n: int) -> dict[str, tuple[int, int]]:
+    """``name -> (start, stop)`` of each field in the output vector of the velocity kernels
+    (:func:`pkmkit.machines.full_pose_velocity_kernel.layout`, without importing Numba)."""
+    sizes = [("A", 6 * m), ("B", m * n), ("J", 6 * n), ("J_inv", 6 * n), ("sv", min(6, n)),
+             ("sv_t", min(3, n)), ("sv_r", min(3, n)), ("condition", 1), ("det_A", 1),
+             ("det_B", 1), ("parallel", 1), ("serial", 1), ("flags", 1)]
+    out, start = {}, 0
+    for name, size in sizes:
+        out[name] = (start, start + size)
+        start += size
+    return out
+
+
 def one_pose_class(base: type) -> type:
     """The lazy single-pose subclass of the record class ``base`` (a
     :class:`FullPoseJacobians`): every field read from an :class:`OnePoseFullVelocity` when
@@ -154,9 +191,12 @@ def one_pose_class(base: type) -> type:
 
 
 def usable(machine: Any) -> bool:
-    """Whether a single pose of ``machine`` takes the compiled path now (the rule of
-    :func:`pkmkit.machines.full_pose_direct.direct_one`: a one-shot call does not import
+    """Whether a single pose of ``machine`` takes the compiled path now: always with the C
+    twin (:func:`_native_twin`: no import), else the rule of
+    :func:`pkmkit.machines.full_pose_direct.direct_one` (a one-shot call does not import
     Numba; the machine's next single call does)."""
+    if _native_twin(machine._direct_kernel().geom) is not None:
+        return True
     if "numba" in sys.modules and "PKMKIT_COMPILED" not in os.environ:
         return jit.numba_available()  # the common case, without reading the mode
     return jit.compiled_from_second_call(machine, "velocity")
