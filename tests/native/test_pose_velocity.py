@@ -35,7 +35,7 @@ pytestmark = [pytest.mark.skipif(_kernels is None or not hasattr(_kernels, "pose
 
 SIX_RODS = [name for name in pkmkit.machines()
             if pkmkit.machine(name).family == "full-pose"
-            and pkmkit.machine(name)._direct_kernel().geom.shape[0] == 6]
+            and pkmkit.machine(name)._direct_kernel().geom.shape[0] == 6] + ["delta6"]
 #: Fields of plain arithmetic on A and B: the Numba kernel's bits.
 EXACT = ("A", "B", "J_inv", "serial_measure", "tolerance", "q", "characteristic_length")
 
@@ -116,9 +116,23 @@ def _compare(m, poses, tol, monkeypatch, where):
     return compared
 
 
+def _machine(name):
+    """A built-in machine, or ``delta6``: the Delta robot's six forearm rods on a free
+    platform (cranks; as tests/native/test_kernels.py)."""
+    if name != "delta6":
+        return pkmkit.machine(name)
+    from pkmkit.machines.full_pose import FullPoseMachine
+    from pkmkit.model.rods import build_rod_model, leg_specs
+
+    delta = pkmkit.machine("delta")
+    model = build_rod_model(leg_specs(delta.model), dims=6, actuator_names=("q1", "q2", "q3"),
+                            home_pose=(*delta.home_pose, 0.0, 0.0, 0.0))
+    return FullPoseMachine(id="delta6", name="delta6", kind=None, params={}, model=model)
+
+
 @pytest.mark.parametrize("name", SIX_RODS)
 def test_random_and_far_poses(name, monkeypatch):
-    m = pkmkit.machine(name)
+    m = _machine(name)
     compared = 0
     for spread, tol in ((0.05, 1e-6), (0.2, 0.02), (0.5, 0.3)):
         compared += _compare(m, _poses(m, 15, seed=31, spread=spread), tol, monkeypatch,
