@@ -10,8 +10,12 @@ batch path to rounding: the same formulas; J by LAPACK's solve (Numba's) where t
 calls NumPy's; singular values by one-sided Jacobi where the batch path calls LAPACK (1e-15 of
 σ_max). A row the kernel refuses (not finite, a singular A) is handed to the batch path.
 
-As for the direct model (:func:`pkmkit.machines.full_pose_direct.direct_one`), a one-shot
-call does not pay Numba's import: until Numba is imported the machine's first single call
+With the C extension (six rods), the kernel is its C twin ``pkmkit.native.kernels.
+pose_velocity`` instead: plain Python floats in, the output vector as a bytearray, no Numba at
+any call; its own 6×6 LU where Numba calls LAPACK (the same numbers to 1e-12 of their scale,
+tests/native/test_pose_velocity.py). Without it, as for the direct model
+(:func:`pkmkit.machines.full_pose_direct.direct_one`), a one-shot call does not pay Numba's
+import: until Numba is imported the machine's first single call
 takes the batch path and the next one imports it; ``PKMKIT_COMPILED=0`` (or no Numba) keeps
 the batch path.
 """

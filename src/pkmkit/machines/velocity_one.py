@@ -21,6 +21,11 @@ parallel singularity is the measure itself computed. Whatever the batch path tre
 handed to it (a :class:`LazyJacobians` of one row, the same numbers): a zero row, overflow, a
 determinant whose reciprocal overflows. The machine-constant parts (per-leg tuples of Python
 floats) are built once per machine.
+
+With the C extension (:func:`pkmkit.numerics.jit.native_kernels_now`) the same operations run
+in C: ``rod_inverse`` for the inverse model of a list or tuple of floats, ``rod_velocity`` once
+when a field is first read, ``rod_field`` per field (the same bits); whatever the C kernel does
+not answer (the cases above, LAPACK for nearly equal singular values) the Python pieces do.
 """
 
 from __future__ import annotations
