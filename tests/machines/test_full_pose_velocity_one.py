@@ -136,6 +136,7 @@ def test_refusals_are_those_of_the_batch_path():
 
 
 def test_a_row_the_kernel_refuses_goes_to_the_batch_path(monkeypatch):
+    monkeypatch.setenv("PKMKIT_NATIVE", "0")  # the Numba kernel (its C twin: tests/native)
     m = pkmkit.machine("dietmaier-hexapod")
     m.jacobian(m.home_pose)
     x = m.home_pose + 0.01
