@@ -215,3 +215,45 @@ def test_a_fresh_process_imports_no_numba():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "True"]
+
+
+@pytest.mark.parametrize("name", SIX_RODS)
+def test_pose_inverse_is_one_pose_inverse_bit_for_bit(name):
+    """``pose_inverse`` (the inverse model of :meth:`FullPoseMachine.jacobian`'s one-pose
+    path) against :class:`~pkmkit.machines.full_pose_one.OnePoseInverse`, which ``m.ik`` of
+    one pose runs: the same q, the same refusals (rods that cannot close, rods of one actuator
+    that disagree: the Verne module's and delta6's pairs), on reachable poses, poses nudged off
+    the Verne's constraint and far ones."""
+    m = _machine(name)
+    inverse = m._one_pose_inverse()
+    rng = np.random.default_rng(33)
+    if m.position_controlled:
+        x = m.ik(m.home_pose[:3] + rng.uniform(-0.3, 0.3, (300, 3)), full_output=True,
+                 strokes="ignore").pose
+        x = x[np.isfinite(x).all(axis=1)]
+        x = np.vstack([x, x + rng.normal(scale=1e-7, size=x.shape)])
+    else:
+        x = m.home_pose + rng.uniform(-0.4, 0.4, (300, 6))
+    refused = 0
+    for pose in x.tolist():
+        want = inverse(pose)
+        got = full_pose_velocity_one.inverse_one(m, pose)
+        assert got == want and (got is None or {type(v) for v in got} == {float}), pose
+        assert full_pose_velocity_one.inverse_one(m, tuple(pose)) == want
+        refused += want is None
+    assert 0 < refused < len(x) or not m.position_controlled
+    tables = full_pose_velocity_one._inverse_tables(inverse)
+    for pose in ([1, 2, 3, 4, 5, 6], np.array(x[0]), x[0].tolist()[:5], "abcdef",
+                 [np.float64(v) for v in x[0]]):
+        assert _kernels.pose_inverse(*tables, pose) is NotImplemented
+    assert _kernels.pose_inverse(*tables, [float("nan"), *x[0].tolist()[1:]]) is None
+    rods, groups = tables[0], tables[1]
+    for error, args in [
+        (ValueError, (rods[:-8], *tables[1:])),
+        (ValueError, (rods, groups[:-8], *tables[2:])),
+        (TypeError, (list(rods), *tables[1:])),
+        (ValueError, (np.full(24 * 6, 5.0).tobytes(), *tables[1:])),  # kind 5
+        (TypeError, tables[:-1]),
+    ]:
+        with pytest.raises(error):
+            _kernels.pose_inverse(*args, x[0].tolist())

@@ -101,6 +101,7 @@ void pk_solve_row(const double *q, ptrdiff_t n, const double *u0, int has_guess,
  * the terms of velocity_one._legs, zero-padded). Bits of `ok`: the fields answered. */
 #define PK_LEG 14
 #define PK_INV_LEG 20 /* closed_form.RodClosedForm._single_legs */
+#define PK_POSE_ROD 24 /* full_pose_one.OnePoseInverse.rows */
 #define PK_F_A (1u << 0)
 #define PK_F_B (1u << 1)
 #define PK_F_J (1u << 2)

@@ -345,3 +345,164 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
     }
     return state;
 }
+
+/* ------------------------------------------------------------------ inverse model */
+
+/* full_pose_one.OnePoseInverse.__call__ for a pose x (6 finite floats): rods (m, PK_POSE_ROD)
+ * as its rows, groups (n, 8): count, angular, then the rod indices, of the actuators (unused
+ * when simple). 0, or 1 where it returns None. */
+static int pose_inverse(const double *x, const double *rods, ptrdiff_t m, const double *groups,
+                        ptrdiff_t n, int simple, double boundary_tol, double tol, double *q,
+                        double *rod_q) {
+    double px = x[0], py = x[1], pz = x[2], r[9];
+    pk_rotation(x[3], x[4], x[5], r);
+    for (ptrdiff_t j = 0; j < m; j++) {
+        const double *t = rods + PK_POSE_ROD * j;
+        double kind = t[0], bx = t[1], by = t[2], bz = t[3], cx = t[4], cy = t[5], cz = t[6],
+               ux = t[7], uy = t[8], uz = t[9], length_sq = t[10], length = t[11],
+               ox = t[12], oy = t[13], oz = t[14], e1x = t[15], e1y = t[16], e1z = t[17],
+               e2x = t[18], e2y = t[19], e2z = t[20], radius = t[21], offset = t[22],
+               sigma = t[23];
+        double qx = px + r[0] * bx + r[1] * by + r[2] * bz;
+        double qy = py + r[3] * bx + r[4] * by + r[5] * bz;
+        double qz = pz + r[6] * bx + r[7] * by + r[8] * bz;
+        if (kind == 2.0) { /* crank */
+            double vx = qx - ox, vy = qy - oy, vz = qz - oz;
+            double vw = vx * ux + vy * uy + vz * uz - offset;
+            double v1 = vx * e1x + vy * e1y + vz * e1z;
+            double v2 = vx * e2x + vy * e2y + vz * e2z;
+            double perp = sqrt(v1 * v1 + v2 * v2);
+            double g = vw * vw + perp * perp + radius * radius - length_sq;
+            double amplitude = 2.0 * radius * perp;
+            if (amplitude <= 0.0) return 1;
+            double cosine = g / amplitude;
+            if (fabs(g) - amplitude <= boundary_tol * length_sq) {
+                cosine = pk_min(1.0, pk_max(-1.0, cosine));
+            } else if (!(-1.0 <= cosine && cosine <= 1.0)) {
+                return 1;
+            }
+            double angle = atan2(v2, v1) + sigma * acos(cosine);
+            rod_q[j] = pk_pymod(angle + PK_PI, 2.0 * PK_PI) - PK_PI;
+            continue;
+        }
+        double wxr = qx - cx, wyr = qy - cy, wzr = qz - cz;
+        double dist_sq = wxr * wxr + wyr * wyr + wzr * wzr;
+        if (kind == 1.0) { /* strut */
+            rod_q[j] = sqrt(dist_sq) - length;
+            continue;
+        }
+        double s = wxr * ux + wyr * uy + wzr * uz;
+        double radicand = length_sq - dist_sq + s * s;
+        if (radicand < 0.0) {
+            if (radicand <= -boundary_tol * length_sq) return 1;
+            radicand = 0.0;
+        }
+        rod_q[j] = s + sigma * sqrt(radicand);
+    }
+    if (simple) {
+        for (ptrdiff_t j = 0; j < m; j++) q[j] = rod_q[j];
+        return 0;
+    }
+    for (ptrdiff_t k = 0; k < n; k++) {
+        const double *g = groups + 8 * k;
+        int count = (int)g[0], angular = g[1] != 0.0;
+        double first = rod_q[(ptrdiff_t)g[2]], diffs[6], sum = 0.0;
+        diffs[0] = 0.0;
+        for (int i = 1; i < count; i++) {
+            double d = rod_q[(ptrdiff_t)g[2 + i]] - first;
+            if (angular) d = pk_pymod(d + PK_PI, 2.0 * PK_PI) - PK_PI;
+            diffs[i] = d;
+            sum += d;
+        }
+        double mean = sum / count;
+        double worst = fabs(diffs[0] - mean);
+        for (int i = 1; i < count; i++) worst = pk_max(worst, fabs(diffs[i] - mean));
+        if (worst > tol) return 1;
+        q[k] = first + mean;
+    }
+    return 0;
+}
+
+const char pk_pose_inverse_doc[] =
+"pose_inverse(rods, groups, simple, boundary_tol, tol, max_abs, x)\n\n"
+"The C twin of pkmkit.machines.full_pose_one.OnePoseInverse.__call__: rods (bytes of m x 24\n"
+"float64, its rows), groups (bytes of n x 8 float64: rod count, angular, rod indices), simple\n"
+"(one rod per actuator, in order), the boundary and consistency tolerances, max_abs, and x\n"
+"(6 floats, a list or tuple). Returns q (a list), None where OnePoseInverse returns None, or\n"
+"NotImplemented where x is not six exact floats (OnePoseInverse then decides).";
+
+PyObject *pk_py_pose_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 7) {
+        PyErr_Format(PyExc_TypeError, "pose_inverse() takes 7 positional arguments (%zd given)",
+                     nargs);
+        return NULL;
+    }
+    if (!PyBytes_CheckExact(args[0]) || !PyBytes_CheckExact(args[1])) {
+        PyErr_SetString(PyExc_TypeError, "rods, groups: bytes are needed");
+        return NULL;
+    }
+    Py_ssize_t rod_size = PyBytes_GET_SIZE(args[0]), group_size = PyBytes_GET_SIZE(args[1]);
+    Py_ssize_t m = rod_size / (Py_ssize_t)(PK_POSE_ROD * sizeof(double));
+    Py_ssize_t n = group_size / (Py_ssize_t)(8 * sizeof(double));
+    if (m < 1 || m > 6 || rod_size != m * (Py_ssize_t)(PK_POSE_ROD * sizeof(double)) || n < 1
+        || n > m || group_size != n * (Py_ssize_t)(8 * sizeof(double))) {
+        PyErr_SetString(PyExc_ValueError, "rods: 1 to 6 of 24 float64; groups: 1 to m of 8");
+        return NULL;
+    }
+    int simple = PyObject_IsTrue(args[2]);
+    if (simple < 0) return NULL;
+    double boundary_tol = PyFloat_AsDouble(args[3]);
+    if (boundary_tol == -1.0 && PyErr_Occurred()) return NULL;
+    double tol = PyFloat_AsDouble(args[4]);
+    if (tol == -1.0 && PyErr_Occurred()) return NULL;
+    double max_abs = PyFloat_AsDouble(args[5]);
+    if (max_abs == -1.0 && PyErr_Occurred()) return NULL;
+    double rods[6 * PK_POSE_ROD], groups[48], x[6], q[6], rod_q[6];
+    memcpy(rods, PyBytes_AS_STRING(args[0]), (size_t)rod_size);
+    memcpy(groups, PyBytes_AS_STRING(args[1]), (size_t)group_size);
+    if (simple && n != m) {
+        PyErr_SetString(PyExc_ValueError, "simple: as many actuators as rods are needed");
+        return NULL;
+    }
+    for (Py_ssize_t j = 0; j < m; j++) {
+        double kind = rods[PK_POSE_ROD * j];
+        if (kind != 0.0 && kind != 1.0 && kind != 2.0) {
+            PyErr_Format(PyExc_ValueError, "rod %zd: kind must be 0, 1 or 2", j);
+            return NULL;
+        }
+    }
+    for (Py_ssize_t k = 0; !simple && k < n; k++) {
+        double count = groups[8 * k];
+        int bad = !(count >= 1.0 && count <= 6.0 && count == floor(count));
+        for (int i = 0; !bad && i < (int)count; i++) {
+            double rod = groups[8 * k + 2 + i];
+            bad = !(rod >= 0.0 && rod < (double)m && rod == floor(rod));
+        }
+        if (bad) {
+            PyErr_Format(PyExc_ValueError, "actuator %zd: rod group out of range", k);
+            return NULL;
+        }
+    }
+    PyObject *seq = args[6];
+    if (!PyList_CheckExact(seq) && !PyTuple_CheckExact(seq)) Py_RETURN_NOTIMPLEMENTED;
+    if (PySequence_Fast_GET_SIZE(seq) != 6) Py_RETURN_NOTIMPLEMENTED;
+    PyObject **items = PySequence_Fast_ITEMS(seq);
+    for (int i = 0; i < 6; i++) {
+        if (!PyFloat_CheckExact(items[i])) Py_RETURN_NOTIMPLEMENTED;
+        x[i] = PyFloat_AS_DOUBLE(items[i]);
+        if (!(-max_abs <= x[i] && x[i] <= max_abs)) Py_RETURN_NONE;
+    }
+    if (pose_inverse(x, rods, m, groups, n, simple, boundary_tol, tol, q, rod_q)) Py_RETURN_NONE;
+    PyObject *out = PyList_New(n);
+    if (!out) return NULL;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        PyObject *v = PyFloat_FromDouble(q[k]);
+        if (!v) {
+            Py_DECREF(out);
+            return NULL;
+        }
+        PyList_SET_ITEM(out, k, v);
+    }
+    return out;
+}
