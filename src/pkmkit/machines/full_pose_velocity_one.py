@@ -57,6 +57,9 @@ def _kernel():
 #: :func:`~pkmkit.machines.full_pose_velocity_kernel.velocity_matrices`.
 _SINGULAR = frozenset(("singular_values", "translation_singular_values",
                        "rotation_singular_values", "condition", "parallel_measure"))
+#: The kernel's level each field needs (:meth:`OnePoseFullVelocity._run`).
+_LEVEL = {"singular_values": 1, "condition": 1, "parallel_measure": 1,
+          "translation_singular_values": 2, "rotation_singular_values": 2}
 
 
 class OnePoseFullVelocity:
@@ -84,7 +87,7 @@ class OnePoseFullVelocity:
         self.batch = batch
         self._out: np.ndarray | None = None
         self._batch = None
-        self._full = False
+        self._full = 0  # the level computed (see _run)
 
     def field(self, name: str):
         """The value of field ``name`` of the single-pose model."""
@@ -94,14 +97,16 @@ class OnePoseFullVelocity:
             return self.tol
         if name == "characteristic_length":
             return self.length
-        full = name in _SINGULAR
-        if self._batch is None and (self._out is None or (full and not self._full)):
-            self._run(full)
+        level = _LEVEL.get(name, 0)
+        if self._batch is None and (self._out is None or level > self._full):
+            self._run(level)
         if self._batch is not None:
             return getattr(self._batch, name)
         return self._build(name)
 
-    def _run(self, full: bool) -> None:
+    def _run(self, level: int) -> None:
+        """Fill ``_out``: the matrices (level 0), with the singular values of J_h (1), and of
+        J's linear and angular rows (2; the Numba kernel computes them all from 1)."""
         geom = self.geom
         native = _native_twin(geom)
         if native is not None:  # the C twin: no arrays but the result's, no Numba
@@ -111,15 +116,16 @@ class OnePoseFullVelocity:
                 x = np.asarray(x, dtype=float).tolist()
             if type(q) is not list:
                 q = np.asarray(q, dtype=float).tolist()
-            state = native(geom, x, q, self.length, self.tol, full)
+            state = native(geom, x, q, self.length, self.tol, level)
             if state is None:
                 self._batch = self.batch()
             else:
-                self._out, self._full = np.frombuffer(state), full
+                self._out, self._full = np.frombuffer(state), level
             return
         kernel = _kernel()
         self._spot = spot = kernel.layout(geom.shape[0], self.n)
         out = np.empty(spot["flags"][1])
+        full = level > 0
         run = kernel.velocity_one if full else kernel.velocity_matrices
         try:
             refused = run(np.array(self.x, dtype=float), np.array(self.q, dtype=float), geom,
@@ -129,7 +135,7 @@ class OnePoseFullVelocity:
         if refused:
             self._batch = self.batch()
         else:
-            self._out, self._full = out, full
+            self._out, self._full = out, 2 if full else 0
 
     def _build(self, name: str):
         out, m, n, spot = self._out, self.geom.shape[0], self.n, self._spot

@@ -264,8 +264,12 @@ static int pose_fill(const double *x, const double *q, const double *geom, ptrdi
         for (ptrdiff_t t = 0; t < 6 * n; t++) j_h[t] = j_mat[t];
         for (ptrdiff_t t = 3 * n; t < 6 * n; t++) j_h[t] *= length_l;
         jacobi_values(j_h, 6, (int)n, out + o_sv);
-        jacobi_values(j_mat, 3, (int)n, out + o_st);
-        jacobi_values(j_mat + 3 * n, 3, (int)n, out + o_sr);
+        if (exact > 1) {
+            jacobi_values(j_mat, 3, (int)n, out + o_st);
+            jacobi_values(j_mat + 3 * n, 3, (int)n, out + o_sr);
+        } else { /* level 1: those of J_h only (condition, singular_values) */
+            for (ptrdiff_t t = o_st; t < o_cond; t++) out[t] = NAN;
+        }
         out[o_cond] = out[o_sv] / out[o_sv + k6 - 1];
     } else {
         for (ptrdiff_t t = o_sv; t < o_cond + 1; t++) out[t] = NAN;
@@ -276,8 +280,8 @@ static int pose_fill(const double *x, const double *q, const double *geom, ptrdi
 const char pk_pose_velocity_doc[] =
 "pose_velocity(geom, x, q, length, tol, exact)\n\n"
 "The velocity model of one full pose of a six-rod machine: the C twin of\n"
-"pkmkit.machines.full_pose_velocity_kernel.velocity_matrices (exact false) and velocity_one\n"
-"(exact true). geom (6, 16) float64 C-contiguous (full_pose_direct.DirectKernel.geom), x the\n"
+"pkmkit.machines.full_pose_velocity_kernel.velocity_matrices (exact 0) and velocity_one\n"
+"(exact 2; 1: without the singular values of J's linear and angular rows). geom (6, 16) float64 C-contiguous (full_pose_direct.DirectKernel.geom), x the\n"
 "pose (6 floats) and q its actuator coordinates (n <= 6 floats), lists or tuples; length the\n"
 "characteristic length, tol the singularity threshold. Returns the output vector of\n"
 "full_pose_velocity_kernel.layout(6, n) as a bytearray of float64, or None when the row is\n"
@@ -305,8 +309,12 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
     if (length_l == -1.0 && PyErr_Occurred()) return NULL;
     double tol = PyFloat_AsDouble(args[4]);
     if (tol == -1.0 && PyErr_Occurred()) return NULL;
-    int exact = PyObject_IsTrue(args[5]);
-    if (exact < 0) return NULL;
+    long exact = PyLong_AsLong(args[5]);
+    if (exact == -1 && PyErr_Occurred()) return NULL;
+    if (exact < 0 || exact > 2) {
+        PyErr_SetString(PyExc_ValueError, "exact: 0, 1 or 2");
+        return NULL;
+    }
     if (!(tol > 0 && tol < INFINITY) || !(length_l > 0 && length_l < INFINITY)) {
         PyErr_SetString(PyExc_ValueError, "length and tol must be positive and finite");
         return NULL;
@@ -339,7 +347,7 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
     Py_ssize_t size = 36 + 6 * n + 6 * n + 6 * n + k6 + 2 * k3 + 6;
     PyObject *state = PyByteArray_FromStringAndSize(NULL, size * (Py_ssize_t)sizeof(double));
     if (!state) return NULL;
-    if (pose_fill(x, q, geom, n, length_l, tol, exact, (double *)PyByteArray_AS_STRING(state))) {
+    if (pose_fill(x, q, geom, n, length_l, tol, (int)exact, (double *)PyByteArray_AS_STRING(state))) {
         Py_DECREF(state);
         Py_RETURN_NONE;
     }
