@@ -162,7 +162,8 @@ def test_the_c_kernel_answered(monkeypatch):
     assert type(jac).__name__.startswith("OnePose")
     assert jac.J.shape == (6, 6) and jac.condition >= 1.0  # matrices, then singular values
     assert jac.translation_singular_values.shape == (3,)  # then those of J's rows
-    assert calls == [0, 1, 2]
+    assert 0.0 < jac.parallel_measure <= 1.0  # then the measure itself
+    assert calls == [0, 1, 3, 7]
 
 
 def test_a_refused_row_goes_to_the_batch_path(monkeypatch):

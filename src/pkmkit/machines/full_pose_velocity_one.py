@@ -58,8 +58,10 @@ def _kernel():
 _SINGULAR = frozenset(("singular_values", "translation_singular_values",
                        "rotation_singular_values", "condition", "parallel_measure"))
 #: The kernel's level each field needs (:meth:`OnePoseFullVelocity._run`).
-_LEVEL = {"singular_values": 1, "condition": 1, "parallel_measure": 1,
-          "translation_singular_values": 2, "rotation_singular_values": 2}
+#: (bits: 1 the singular values of J_h, 2 those of J's linear and angular rows, 4 the
+#: parallel measure where its bound settles the flags)
+_LEVEL = {"singular_values": 1, "condition": 1, "parallel_measure": 4,
+          "translation_singular_values": 3, "rotation_singular_values": 3}
 
 
 class OnePoseFullVelocity:
@@ -98,15 +100,15 @@ class OnePoseFullVelocity:
         if name == "characteristic_length":
             return self.length
         level = _LEVEL.get(name, 0)
-        if self._batch is None and (self._out is None or level > self._full):
-            self._run(level)
+        if self._batch is None and (self._out is None or level & ~self._full):
+            self._run(level | self._full)
         if self._batch is not None:
             return getattr(self._batch, name)
         return self._build(name)
 
     def _run(self, level: int) -> None:
-        """Fill ``_out``: the matrices (level 0), with the singular values of J_h (1), and of
-        J's linear and angular rows (2; the Numba kernel computes them all from 1)."""
+        """Fill ``_out``: the matrices (level 0) and the pieces of :data:`_LEVEL`'s bits in
+        ``level`` (the Numba kernel computes them all for any)."""
         geom = self.geom
         native = _native_twin(geom)
         if native is not None:  # the C twin: no arrays but the result's, no Numba
@@ -135,7 +137,7 @@ class OnePoseFullVelocity:
         if refused:
             self._batch = self.batch()
         else:
-            self._out, self._full = out, 2 if full else 0
+            self._out, self._full = out, 7 if full else 0
 
     def _build(self, name: str):
         out, m, n, spot = self._out, self.geom.shape[0], self.n, self._spot

@@ -146,8 +146,8 @@ static double det6(const double *m) {
     return lu6(a, perm);
 }
 
-/* One full pose: full_pose_velocity_kernel._fill (and, when exact, velocity_one's singular
- * values) for six rods; out laid out as its layout(6, n). 0, or 1 when the row is refused
+/* One full pose: full_pose_velocity_kernel._fill (and, by the bits of exact, velocity_one's
+ * singular values: pk_pose_velocity_doc) for six rods; out laid out as its layout(6, n). 0, or 1 when the row is refused
  * (not finite, or A exactly singular where J is needed: the batch path decides). */
 static int pose_fill(const double *x, const double *q, const double *geom, ptrdiff_t n,
                      double length_l, double tol, int exact, double *out) {
@@ -202,7 +202,7 @@ static int pose_fill(const double *x, const double *q, const double *geom, ptrdi
               o_st = o_sv + k6, o_sr = o_st + k3, o_cond = o_sr + k3;
     double parallel = NAN;
     int settle = 0;
-    if (!exact) { /* _surely_above */
+    if (!(exact & 4)) { /* _surely_above */
         double frobenius = 0.0;
         for (int t = 0; t < 36; t++) frobenius += unit[t] * unit[t];
         double f3 = frobenius / 3.0;
@@ -259,15 +259,15 @@ static int pose_fill(const double *x, const double *q, const double *geom, ptrdi
     out[o_cond + 3] = parallel;
     out[o_cond + 4] = serial;
     out[o_cond + 5] = (double)flags;
-    if (exact) {
+    if (exact & 3) {
         double j_h[36];
         for (ptrdiff_t t = 0; t < 6 * n; t++) j_h[t] = j_mat[t];
         for (ptrdiff_t t = 3 * n; t < 6 * n; t++) j_h[t] *= length_l;
         jacobi_values(j_h, 6, (int)n, out + o_sv);
-        if (exact > 1) {
+        if (exact & 2) {
             jacobi_values(j_mat, 3, (int)n, out + o_st);
             jacobi_values(j_mat + 3 * n, 3, (int)n, out + o_sr);
-        } else { /* level 1: those of J_h only (condition, singular_values) */
+        } else { /* those of J_h only (condition, singular_values) */
             for (ptrdiff_t t = o_st; t < o_cond; t++) out[t] = NAN;
         }
         out[o_cond] = out[o_sv] / out[o_sv + k6 - 1];
@@ -281,7 +281,8 @@ const char pk_pose_velocity_doc[] =
 "pose_velocity(geom, x, q, length, tol, exact)\n\n"
 "The velocity model of one full pose of a six-rod machine: the C twin of\n"
 "pkmkit.machines.full_pose_velocity_kernel.velocity_matrices (exact 0) and velocity_one\n"
-"(exact 2; 1: without the singular values of J's linear and angular rows). geom (6, 16) float64 C-contiguous (full_pose_direct.DirectKernel.geom), x the\n"
+"(exact 7; its bits: 1 the singular values of J_h and the condition, 2 those of J's linear\n"
+"and angular rows (with 1), 4 the parallel measure even where its bound settles). geom (6, 16) float64 C-contiguous (full_pose_direct.DirectKernel.geom), x the\n"
 "pose (6 floats) and q its actuator coordinates (n <= 6 floats), lists or tuples; length the\n"
 "characteristic length, tol the singularity threshold. Returns the output vector of\n"
 "full_pose_velocity_kernel.layout(6, n) as a bytearray of float64, or None when the row is\n"
@@ -311,8 +312,8 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
     if (tol == -1.0 && PyErr_Occurred()) return NULL;
     long exact = PyLong_AsLong(args[5]);
     if (exact == -1 && PyErr_Occurred()) return NULL;
-    if (exact < 0 || exact > 2) {
-        PyErr_SetString(PyExc_ValueError, "exact: 0, 1 or 2");
+    if (exact < 0 || exact > 7) {
+        PyErr_SetString(PyExc_ValueError, "exact: 0 to 7");
         return NULL;
     }
     if (!(tol > 0 && tol < INFINITY) || !(length_l > 0 && length_l < INFINITY)) {
