@@ -259,3 +259,39 @@ def test_pose_inverse_is_one_pose_inverse_bit_for_bit(name):
     ]:
         with pytest.raises(error):
             _kernels.pose_inverse(*args, x[0].tolist())
+
+
+@pytest.mark.parametrize("name", ["verne", "delta6"])
+def test_pose_inverse_at_the_edge_of_reach(name):
+    """Poses bisected onto the edge of reach (slides: the radicand's clamp within the boundary
+    tolerance; cranks: the cosine's clamp to ±1) from both sides: the same q and refusals."""
+    m = _machine(name)
+    inverse = m._one_pose_inverse()
+    rng = np.random.default_rng(34)
+
+    def pose_at(t, d):
+        if m.position_controlled:  # the pose its rods impose at that position
+            return m.ik((m.home_pose[:3] + t * d)[None], full_output=True,
+                        strokes="ignore").pose[0]
+        return m.home_pose + t * d
+
+    edge = 0
+    for _ in range(8):
+        d = rng.normal(size=3 if m.position_controlled else 6)
+        d /= np.linalg.norm(d)
+        lo, hi = 0.0, 4.0
+        if inverse(pose_at(hi, d).tolist()) is not None:
+            continue
+        poses = []
+        for _ in range(52):
+            mid = 0.5 * (lo + hi)
+            pose = pose_at(mid, d)
+            if not np.isfinite(pose).all():
+                hi = mid
+                continue
+            poses.append(pose.tolist())
+            lo, hi = (mid, hi) if inverse(pose.tolist()) is not None else (lo, mid)
+        for pose in poses[-20:]:
+            assert full_pose_velocity_one.inverse_one(m, pose) == inverse(pose), pose
+        edge += 1
+    assert edge >= 3
