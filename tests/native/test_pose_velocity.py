@@ -242,6 +242,7 @@ def test_pose_inverse_is_one_pose_inverse_bit_for_bit(name):
         got = full_pose_velocity_one.inverse_one(m, pose)
         assert got == want and (got is None or {type(v) for v in got} == {float}), pose
         assert full_pose_velocity_one.inverse_one(m, tuple(pose)) == want
+        assert full_pose_velocity_one.inverse_one(m, np.array(pose)) == want
         refused += want is None
     assert 0 < refused < len(x) or not m.position_controlled
     tables = full_pose_velocity_one._inverse_tables(inverse)

@@ -225,6 +225,8 @@ def inverse_one(machine: Any, x: Any) -> list[float] | None:
     ``pose_inverse`` when the extension is present and ``x`` is six floats, or None (the
     batch path then answers)."""
     inverse = machine._one_pose_inverse()
+    if type(x) is np.ndarray and x.shape == (6,):
+        x = x.tolist()  # (an integer array: ints, which inverse() below converts)
     if type(x) is list or type(x) is tuple:
         pose_inverse = getattr(jit.native_kernels_now(), "pose_inverse", None)
         if pose_inverse is not None:
