@@ -296,3 +296,20 @@ def test_pose_inverse_at_the_edge_of_reach(name):
             assert full_pose_velocity_one.inverse_one(m, pose) == inverse(pose), pose
         edge += 1
     assert edge >= 3
+
+
+def test_state_array_refusals():
+    m = pkmkit.machine("gough-stewart")
+    x = (m.home_pose + 0.01).tolist()
+    state = _kernels.pose_velocity(m._direct_kernel().geom, x, m.ik(np.array(x)).tolist(), 1.0,
+                                   1e-6, 0)
+    size = len(state) // 8
+    a = _kernels.state_array(state, 0, 6, 6)
+    assert a.shape == (6, 6) and a.flags.writeable and a.flags.c_contiguous
+    assert np.array_equal(a.ravel(), np.frombuffer(state)[:36])
+    assert _kernels.state_array(state, size - 2, 2, 0).shape == (2,)
+    for error, args in [(ValueError, (state, size - 1, 2, 0)), (ValueError, (state, -1, 1, 1)),
+                        (ValueError, (state, 0, 0, 1)), (TypeError, (bytes(state), 0, 1, 1)),
+                        (TypeError, (state, 0, 1))]:
+        with pytest.raises(error):
+            _kernels.state_array(*args)

@@ -80,14 +80,16 @@ class OnePoseFullVelocity:
             refuses the row).
     """
 
-    __slots__ = ("_batch", "_full", "_out", "_spot", "batch", "geom", "length", "n", "q",
-                 "tol", "x")
+    __slots__ = ("_array", "_batch", "_full", "_out", "_spot", "_state", "batch", "geom",
+                 "length", "n", "q", "tol", "x")
 
     def __init__(self, geom: np.ndarray, n: int, length: float, x: list[float],
                  q: list[float], tol: float, batch: Callable[[], Any]):
         self.geom, self.n, self.length, self.x, self.q, self.tol = geom, n, length, x, q, tol
         self.batch = batch
         self._out: np.ndarray | None = None
+        self._state: bytearray | None = None  # the C kernel's result (its arrays: _array)
+        self._array: Callable[..., np.ndarray] | None = None
         self._batch = None
         self._full = 0  # the level computed (see _run)
 
@@ -122,7 +124,8 @@ class OnePoseFullVelocity:
             if state is None:
                 self._batch = self.batch()
             else:
-                self._out, self._full = np.frombuffer(state), level
+                self._state, self._out, self._full = state, None, level
+                self._array = jit.native_kernels_now().state_array
             return
         kernel = _kernel()
         self._spot = spot = kernel.layout(geom.shape[0], self.n)
@@ -140,7 +143,17 @@ class OnePoseFullVelocity:
             self._out, self._full = out, 7 if full else 0
 
     def _build(self, name: str):
-        out, m, n, spot = self._out, self.geom.shape[0], self.n, self._spot
+        m, n, spot, state = self.geom.shape[0], self.n, self._spot, self._state
+        shape = _SHAPES.get(name)
+        if state is not None and shape is not None:  # one C call: a new array of the field
+            key, rows, cols = shape(m, n)
+            j = self._array(state, spot[key][0], rows, cols)
+            if name == "J_homogeneous":
+                j[3:] *= self.length
+            return j
+        out = self._out
+        if out is None:  # the C kernel's result, for its scalars
+            out = self._out = np.frombuffer(state)
 
         def part(key: str) -> np.ndarray:
             start, stop = spot[key]
@@ -169,6 +182,17 @@ class OnePoseFullVelocity:
             return np.int64(np.sign(det_a)) if det_a == det_a else np.int64(0)
         key = {"parallel_measure": "parallel", "serial_measure": "serial"}.get(name, name)
         return np.float64(part(key)[0])
+
+
+#: The array fields of the C kernel's result: ``(key, rows, cols)`` for m rods, n actuators
+#: (cols 0: a vector).
+_SHAPES: dict[str, Callable[[int, int], tuple[str, int, int]]] = {
+    "A": lambda m, n: ("A", m, 6), "B": lambda m, n: ("B", m, n),
+    "J": lambda m, n: ("J", 6, n), "J_homogeneous": lambda m, n: ("J", 6, n),
+    "J_inv": lambda m, n: ("J_inv", n, 6),
+    "singular_values": lambda m, n: ("sv", min(6, n), 0),
+    "translation_singular_values": lambda m, n: ("sv_t", min(3, n), 0),
+    "rotation_singular_values": lambda m, n: ("sv_r", min(3, n), 0)}
 
 
 def _native_twin(geom: np.ndarray) -> Callable[..., Any] | None:

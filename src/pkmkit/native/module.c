@@ -238,7 +238,8 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
 /* velocity.c */
 extern const char pk_rod_velocity_doc[], pk_rod_field_doc[], pk_rod_inverse_doc[];
 PyObject *pk_py_rod_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
-extern const char pk_pose_velocity_doc[], pk_pose_inverse_doc[];
+extern const char pk_pose_velocity_doc[], pk_pose_inverse_doc[], pk_state_array_doc[];
+PyObject *pk_py_state_array(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_pose_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
@@ -257,6 +258,8 @@ static PyMethodDef methods[] = {
      pk_pose_velocity_doc},
     {"pose_inverse", (PyCFunction)(void (*)(void))pk_py_pose_inverse, METH_FASTCALL,
      pk_pose_inverse_doc},
+    {"state_array", (PyCFunction)(void (*)(void))pk_py_state_array, METH_FASTCALL,
+     pk_state_array_doc},
     {NULL, NULL, 0, NULL},
 };
 

@@ -18,6 +18,7 @@
 #include "kernels.h"
 
 int pk_floats(PyObject *seq, const char *name, Py_ssize_t n, double *out); /* velocity.c */
+PyObject *pk_numpy_empty(void);                                              /* velocity.c */
 
 
 /* full_pose_direct_kernel._rods: base joints a_j(q) and rod lengths of m rods. */
@@ -513,5 +514,48 @@ PyObject *pk_py_pose_inverse(PyObject *self, PyObject *const *args, Py_ssize_t n
         }
         PyList_SET_ITEM(out, k, v);
     }
+    return out;
+}
+
+const char pk_state_array_doc[] =
+"state_array(state, start, rows, cols)\n\n"
+"A new float64 array of shape (rows, cols) (cols 0: (rows,)) holding the doubles\n"
+"state[start:start + rows * max(cols, 1)] of a pose_velocity result.";
+
+PyObject *pk_py_state_array(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "state_array() takes 4 positional arguments (%zd given)",
+                     nargs);
+        return NULL;
+    }
+    if (!PyByteArray_CheckExact(args[0])) {
+        PyErr_SetString(PyExc_TypeError, "state: a pose_velocity result is needed");
+        return NULL;
+    }
+    Py_ssize_t start = PyLong_AsSsize_t(args[1]), rows = PyLong_AsSsize_t(args[2]),
+               cols = PyLong_AsSsize_t(args[3]);
+    if (PyErr_Occurred()) return NULL;
+    Py_ssize_t size = PyByteArray_GET_SIZE(args[0]) / (Py_ssize_t)sizeof(double);
+    Py_ssize_t count = rows * (cols ? cols : 1);
+    if (start < 0 || rows < 1 || rows > 36 || cols < 0 || cols > 36 || start + count > size) {
+        PyErr_SetString(PyExc_ValueError, "start, rows, cols: out of the state");
+        return NULL;
+    }
+    PyObject *empty = pk_numpy_empty();
+    if (!empty) return NULL;
+    PyObject *shape = cols ? Py_BuildValue("(nn)", rows, cols) : Py_BuildValue("(n)", rows);
+    if (!shape) return NULL;
+    PyObject *out = PyObject_CallOneArg(empty, shape);
+    Py_DECREF(shape);
+    if (!out) return NULL;
+    Py_buffer view;
+    if (PyObject_GetBuffer(out, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
+        Py_DECREF(out);
+        return NULL;
+    }
+    memcpy(view.buf, PyByteArray_AS_STRING(args[0]) + sizeof(double) * (size_t)start,
+           sizeof(double) * (size_t)count);
+    PyBuffer_Release(&view);
     return out;
 }

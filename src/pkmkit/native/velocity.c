@@ -299,6 +299,11 @@ condition:
 
 static PyObject *np_empty = NULL, *np_float64 = NULL, *np_int64 = NULL;
 
+static int numpy_names(void);
+
+/* numpy.empty (a borrowed reference), or NULL with an exception (also for pose_velocity.c). */
+PyObject *pk_numpy_empty(void) { return numpy_names() < 0 ? NULL : np_empty; }
+
 static int numpy_names(void) {
     if (np_empty) return 0;
     PyObject *numpy = PyImport_ImportModule("numpy");
