@@ -313,3 +313,22 @@ def test_state_array_refusals():
                         (TypeError, (state, 0, 1))]:
         with pytest.raises(error):
             _kernels.state_array(*args)
+
+
+def test_the_kernel_runs_once_per_record_and_level(monkeypatch):
+    m = pkmkit.machine("gough-stewart")
+    calls = []
+    real = _kernels.pose_velocity
+
+    def counted(*args):
+        calls.append(args[-1])
+        return real(*args)
+
+    monkeypatch.setattr(full_pose_velocity_one, "_native_twin", lambda geom: counted)
+    jac = m.jacobian((m.home_pose + 0.01).tolist())
+    for name in ("J", "A", "B", "J_inv", "J_homogeneous", "det_A", "mode", "singularity",
+                 "serial_measure"):
+        getattr(jac, name)
+    assert calls == [0]
+    jac.condition, jac.singular_values  # noqa: B018
+    assert calls == [0, 1]

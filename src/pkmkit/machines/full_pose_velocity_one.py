@@ -102,7 +102,8 @@ class OnePoseFullVelocity:
         if name == "characteristic_length":
             return self.length
         level = _LEVEL.get(name, 0)
-        if self._batch is None and (self._out is None or level & ~self._full):
+        if self._batch is None and ((self._out is None and self._state is None)
+                                    or level & ~self._full):
             self._run(level | self._full)
         if self._batch is not None:
             return getattr(self._batch, name)
