@@ -35,7 +35,8 @@ setup(
         Extension(
             "pkmkit.native.kernels",
             sources=[NATIVE + "module.c", NATIVE + "inverse.c", NATIVE + "direct.c",
-                     NATIVE + "inverse_simd.c", NATIVE + "position.c", NATIVE + "chain.c"],
+                     NATIVE + "inverse_simd.c", NATIVE + "position.c", NATIVE + "chain.c",
+                     NATIVE + "velocity.c", NATIVE + "pose_velocity.c"],
             depends=[NATIVE + "kernels.h"],
             optional=True,
         )

@@ -13,7 +13,8 @@ poses:
 
 ``m.jacobian(x)`` of one pose (every machine): the call alone (each field is computed when
 first read, from only the pieces it needs), the call and reading ``J``, ``condition`` or
-``singularity``, against the batch path of one row and reading ``J``.
+``singularity``, against the batch path of one row and reading ``J``; for the translational
+machines also with the C extension disabled (``PKMKIT_NATIVE=0``: the plain-Python path).
 
 For the six-axis machines (hexapod, Verne module's full poses, Dietmaier's general platform):
 ``m.ik(x)`` (plain Python), ``m.fk(q)`` (the compiled per-pose solve) and ``m.jacobian(x)`` (the
@@ -115,7 +116,7 @@ def machine_rows(name: str, calls: int) -> dict:
         figures["fk one"] = per_call(lambda q: m.fk(q, strokes="ignore"), qs)
         figures["fk batch of one (before)"] = per_call(lambda q: m.fk(q, strokes="ignore"),
                                                        q_ones)
-        jacobian_rows(m, figures, rows)
+        jacobian_rows(m, figures, rows, without_c=True)
         if (m.model.leg_kind == SLIDE).all():
             plain = plain_formula(m)
             lists = [p.tolist() for p in rows]
@@ -215,7 +216,8 @@ def chain_rows(name: str, calls: int) -> dict:
     return figures
 
 
-def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None) -> None:
+def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None,
+                  without_c: bool = False) -> None:
     """``m.jacobian(x)`` of one pose: the call (the fields are computed when read, each from
     only the pieces it needs), the call and reading ``J``, ``condition`` or ``singularity``,
     against the batch path of one row (``m.jacobian(x[None])`` and reading ``J``, what a
@@ -228,6 +230,15 @@ def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None)
                                                               within)
     figures["jacobian one pose, call + singularity"] = per_call(
         lambda p: m.jacobian(p).singularity, within)
+    if without_c:  # the same calls without the C extension (the plain-Python path)
+        os.environ["PKMKIT_NATIVE"] = "0"
+        try:
+            figures["jacobian one pose, call + J, no C"] = per_call(lambda p: m.jacobian(p).J,
+                                                                    within)
+            figures["jacobian one pose, call + condition, no C"] = per_call(
+                lambda p: m.jacobian(p).condition, within)
+        finally:
+            os.environ.pop("PKMKIT_NATIVE")
     before = (before_rows or within)[: max(1, len(within) // 10)]
     figures["jacobian batch of one + J (before)"] = per_call(lambda p: m.jacobian(p[None]).J,
                                                              before)

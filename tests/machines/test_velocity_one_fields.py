@@ -118,7 +118,8 @@ def test_the_parallel_bound_holds():
         assert (sv[:, -1] / sv[:, 0] < np.abs(np.linalg.det(u)) / 2 * 1.5).any()  # near tight
 
 
-def test_a_field_computes_only_its_pieces():
+def test_a_field_computes_only_its_pieces(monkeypatch):
+    monkeypatch.setenv("PKMKIT_NATIVE", "0")  # the Python pieces (the C kernel: tests/native)
     m = pkmkit.machine("linear-delta")
     x = m.home_pose + np.array([0.02, -0.01, 0.03])
     jac = m.jacobian(x)

@@ -570,7 +570,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
     def _jacobian_one(self, x: Any, tol: float) -> FullPoseJacobians | None:
         """The compiled velocity model of one plain full pose within the strokes, computed
         when read (:mod:`pkmkit.machines.full_pose_velocity_one`), or None."""
-        q1 = None if x is None else self._one_pose_inverse()(x)
+        q1 = None if x is None else velocity_one.inverse_one(self, x)
         if q1 is None or not self._within_strokes(q1) or not velocity_one.usable(self):
             return None
         x1 = x.tolist() if isinstance(x, np.ndarray) else [float(v) for v in x]

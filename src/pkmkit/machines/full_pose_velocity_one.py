@@ -10,8 +10,12 @@ batch path to rounding: the same formulas; J by LAPACK's solve (Numba's) where t
 calls NumPy's; singular values by one-sided Jacobi where the batch path calls LAPACK (1e-15 of
 σ_max). A row the kernel refuses (not finite, a singular A) is handed to the batch path.
 
-As for the direct model (:func:`pkmkit.machines.full_pose_direct.direct_one`), a one-shot
-call does not pay Numba's import: until Numba is imported the machine's first single call
+With the C extension (six rods), the kernel is its C twin ``pkmkit.native.kernels.
+pose_velocity`` instead: plain Python floats in, the output vector as a bytearray, no Numba at
+any call; its own 6×6 LU where Numba calls LAPACK (the same numbers to 1e-12 of their scale,
+tests/native/test_pose_velocity.py). Without it, as for the direct model
+(:func:`pkmkit.machines.full_pose_direct.direct_one`), a one-shot call does not pay Numba's
+import: until Numba is imported the machine's first single call
 takes the batch path and the next one imports it; ``PKMKIT_COMPILED=0`` (or no Numba) keeps
 the batch path.
 """
@@ -21,10 +25,13 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Callable
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
+from pkmkit.machines.full_pose_forms import BOUNDARY_TOL
+from pkmkit.machines.full_pose_one import MAX_ABS
 from pkmkit.machines.lazy_records import lazy_record_class
 from pkmkit.numerics import jit
 
@@ -50,6 +57,11 @@ def _kernel():
 #: :func:`~pkmkit.machines.full_pose_velocity_kernel.velocity_matrices`.
 _SINGULAR = frozenset(("singular_values", "translation_singular_values",
                        "rotation_singular_values", "condition", "parallel_measure"))
+#: The kernel's level each field needs (:meth:`OnePoseFullVelocity._run`).
+#: (bits: 1 the singular values of J_h, 2 those of J's linear and angular rows, 4 the
+#: parallel measure where its bound settles the flags)
+_LEVEL = {"singular_values": 1, "condition": 1, "parallel_measure": 4,
+          "translation_singular_values": 3, "rotation_singular_values": 3}
 
 
 class OnePoseFullVelocity:
@@ -68,16 +80,18 @@ class OnePoseFullVelocity:
             refuses the row).
     """
 
-    __slots__ = ("_batch", "_full", "_out", "_spot", "batch", "geom", "length", "n", "q",
-                 "tol", "x")
+    __slots__ = ("_array", "_batch", "_full", "_out", "_spot", "_state", "batch", "geom",
+                 "length", "n", "q", "tol", "x")
 
     def __init__(self, geom: np.ndarray, n: int, length: float, x: list[float],
                  q: list[float], tol: float, batch: Callable[[], Any]):
         self.geom, self.n, self.length, self.x, self.q, self.tol = geom, n, length, x, q, tol
         self.batch = batch
         self._out: np.ndarray | None = None
+        self._state: bytearray | None = None  # the C kernel's result (its arrays: _array)
+        self._array: Callable[..., np.ndarray] | None = None
         self._batch = None
-        self._full = False
+        self._full = 0  # the level computed (see _run)
 
     def field(self, name: str):
         """The value of field ``name`` of the single-pose model."""
@@ -87,18 +101,37 @@ class OnePoseFullVelocity:
             return self.tol
         if name == "characteristic_length":
             return self.length
-        full = name in _SINGULAR
-        if self._batch is None and (self._out is None or (full and not self._full)):
-            self._run(full)
+        level = _LEVEL.get(name, 0)
+        if self._batch is None and ((self._out is None and self._state is None)
+                                    or level & ~self._full):
+            self._run(level | self._full)
         if self._batch is not None:
             return getattr(self._batch, name)
         return self._build(name)
 
-    def _run(self, full: bool) -> None:
-        kernel = _kernel()
+    def _run(self, level: int) -> None:
+        """Fill ``_out``: the matrices (level 0) and the pieces of :data:`_LEVEL`'s bits in
+        ``level`` (the Numba kernel computes them all for any)."""
         geom = self.geom
+        native = _native_twin(geom)
+        if native is not None:  # the C twin: no arrays but the result's, no Numba
+            self._spot = layout(geom.shape[0], self.n)
+            x, q = self.x, self.q
+            if type(x) is not list:  # (a caller's array)
+                x = np.asarray(x, dtype=float).tolist()
+            if type(q) is not list:
+                q = np.asarray(q, dtype=float).tolist()
+            state = native(geom, x, q, self.length, self.tol, level)
+            if state is None:
+                self._batch = self.batch()
+            else:
+                self._state, self._out, self._full = state, None, level
+                self._array = jit.native_kernels_now().state_array
+            return
+        kernel = _kernel()
         self._spot = spot = kernel.layout(geom.shape[0], self.n)
         out = np.empty(spot["flags"][1])
+        full = level > 0
         run = kernel.velocity_one if full else kernel.velocity_matrices
         try:
             refused = run(np.array(self.x, dtype=float), np.array(self.q, dtype=float), geom,
@@ -108,10 +141,20 @@ class OnePoseFullVelocity:
         if refused:
             self._batch = self.batch()
         else:
-            self._out, self._full = out, full
+            self._out, self._full = out, 7 if full else 0
 
     def _build(self, name: str):
-        out, m, n, spot = self._out, self.geom.shape[0], self.n, self._spot
+        m, n, spot, state = self.geom.shape[0], self.n, self._spot, self._state
+        shape = _SHAPES.get(name)
+        if state is not None and shape is not None:  # one C call: a new array of the field
+            key, rows, cols = shape(m, n)
+            j = self._array(state, spot[key][0], rows, cols)
+            if name == "J_homogeneous":
+                j[3:] *= self.length
+            return j
+        out = self._out
+        if out is None:  # the C kernel's result, for its scalars
+            out = self._out = np.frombuffer(state)
 
         def part(key: str) -> np.ndarray:
             start, stop = spot[key]
@@ -142,6 +185,39 @@ class OnePoseFullVelocity:
         return np.float64(part(key)[0])
 
 
+#: The array fields of the C kernel's result: ``(key, rows, cols)`` for m rods, n actuators
+#: (cols 0: a vector).
+_SHAPES: dict[str, Callable[[int, int], tuple[str, int, int]]] = {
+    "A": lambda m, n: ("A", m, 6), "B": lambda m, n: ("B", m, n),
+    "J": lambda m, n: ("J", 6, n), "J_homogeneous": lambda m, n: ("J", 6, n),
+    "J_inv": lambda m, n: ("J_inv", n, 6),
+    "singular_values": lambda m, n: ("sv", min(6, n), 0),
+    "translation_singular_values": lambda m, n: ("sv_t", min(3, n), 0),
+    "rotation_singular_values": lambda m, n: ("sv_r", min(3, n), 0)}
+
+
+def _native_twin(geom: np.ndarray) -> Callable[..., Any] | None:
+    """``pkmkit.native.kernels.pose_velocity`` when the extension is present (and enabled)
+    and the machine has six rods, else None (the Numba kernel)."""
+    if geom.shape[0] != 6:
+        return None
+    return getattr(jit.native_kernels_now(), "pose_velocity", None)
+
+
+@lru_cache(maxsize=64)
+def layout(m: int, n: int) -> dict[str, tuple[int, int]]:
+    """``name -> (start, stop)`` of each field in the output vector of the velocity kernels
+    (:func:`pkmkit.machines.full_pose_velocity_kernel.layout`, without importing Numba)."""
+    sizes = [("A", 6 * m), ("B", m * n), ("J", 6 * n), ("J_inv", 6 * n), ("sv", min(6, n)),
+             ("sv_t", min(3, n)), ("sv_r", min(3, n)), ("condition", 1), ("det_A", 1),
+             ("det_B", 1), ("parallel", 1), ("serial", 1), ("flags", 1)]
+    out, start = {}, 0
+    for name, size in sizes:
+        out[name] = (start, start + size)
+        start += size
+    return out
+
+
 def one_pose_class(base: type) -> type:
     """The lazy single-pose subclass of the record class ``base`` (a
     :class:`FullPoseJacobians`): every field read from an :class:`OnePoseFullVelocity` when
@@ -153,10 +229,45 @@ def one_pose_class(base: type) -> type:
         "A single-pose velocity model computed when read (module doc).")
 
 
+def _inverse_tables(inverse: Any) -> tuple:
+    """The arguments of ``pkmkit.native.kernels.pose_inverse`` before the pose, for an
+    :class:`~pkmkit.machines.full_pose_one.OnePoseInverse` (built once, kept on it)."""
+    tables = inverse.__dict__.get("_native_tables")
+    if tables is None:
+        groups = np.zeros((len(inverse.groups), 8))
+        for k, (rods, angular) in enumerate(inverse.groups):
+            groups[k, :2] = len(rods), angular
+            groups[k, 2:2 + len(rods)] = rods
+        tables = (np.array(inverse.rows, dtype=float).tobytes(), groups.tobytes(),
+                  inverse.simple, BOUNDARY_TOL, inverse.tol, MAX_ABS)
+        inverse._native_tables = tables
+    return tables
+
+
+def inverse_one(machine: Any, x: Any) -> list[float] | None:
+    """The actuator coordinates of one plain pose ``x`` as
+    :meth:`FullPoseMachine._one_pose_inverse` gives them (the same bits), by its C twin
+    ``pose_inverse`` when the extension is present and ``x`` is six floats, or None (the
+    batch path then answers)."""
+    inverse = machine._one_pose_inverse()
+    if type(x) is np.ndarray and x.shape == (6,):
+        x = x.tolist()  # (an integer array: ints, which inverse() below converts)
+    if type(x) is list or type(x) is tuple:
+        pose_inverse = getattr(jit.native_kernels_now(), "pose_inverse", None)
+        if pose_inverse is not None:
+            q = pose_inverse(*_inverse_tables(inverse), x)
+            if q is not NotImplemented:
+                return q
+    return inverse(x)
+
+
 def usable(machine: Any) -> bool:
-    """Whether a single pose of ``machine`` takes the compiled path now (the rule of
-    :func:`pkmkit.machines.full_pose_direct.direct_one`: a one-shot call does not import
+    """Whether a single pose of ``machine`` takes the compiled path now: always with the C
+    twin (:func:`_native_twin`: no import), else the rule of
+    :func:`pkmkit.machines.full_pose_direct.direct_one` (a one-shot call does not import
     Numba; the machine's next single call does)."""
+    if _native_twin(machine._direct_kernel().geom) is not None:
+        return True
     if "numba" in sys.modules and "PKMKIT_COMPILED" not in os.environ:
         return jit.numba_available()  # the common case, without reading the mode
     return jit.compiled_from_second_call(machine, "velocity")

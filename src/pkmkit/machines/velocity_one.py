@@ -21,6 +21,11 @@ parallel singularity is the measure itself computed. Whatever the batch path tre
 handed to it (a :class:`LazyJacobians` of one row, the same numbers): a zero row, overflow, a
 determinant whose reciprocal overflows. The machine-constant parts (per-leg tuples of Python
 floats) are built once per machine.
+
+With the C extension (:func:`pkmkit.numerics.jit.native_kernels_now`) the same operations run
+in C: ``rod_inverse`` for the inverse model of a list or tuple of floats, ``rod_velocity`` once
+when a field is first read, ``rod_field`` per field (the same bits); whatever the C kernel does
+not answer (the cases above, LAPACK for nearly equal singular values) the Python pieces do.
 """
 
 from __future__ import annotations
@@ -31,10 +36,11 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.closed_form import RodClosedForm
+from pkmkit.machines.closed_form import MAX_ABS, RodClosedForm
 from pkmkit.machines.results import Singularity
 from pkmkit.machines.velocity import NEAR_PARALLEL, LazyJacobians, VelocityEvaluation
 from pkmkit.model.rods import CRANK, SLIDE
+from pkmkit.numerics import jit
 
 _SERIAL = int(Singularity.SERIAL)
 _PARALLEL = int(Singularity.PARALLEL)
@@ -83,6 +89,20 @@ def _legs(closed: RodClosedForm) -> tuple:
             legs.append((kind, terms))
         cached = tuple(legs)
         object.__setattr__(closed, "_one_velocity", cached)
+    return cached
+
+
+def native_legs(closed: RodClosedForm) -> bytes:
+    """:func:`_legs` as the C kernel ``rod_velocity`` takes them: ``n × 14`` float64 (the
+    kind, then the terms, zero-padded), computed once per machine."""
+    cached = closed.__dict__.get("_one_velocity_native")
+    if cached is None:
+        table = np.zeros((closed.model.n_legs, 14))
+        for i, (kind, terms) in enumerate(_legs(closed)):
+            table[i, 0] = kind
+            table[i, 1:1 + len(terms)] = terms
+        cached = table.tobytes()
+        object.__setattr__(closed, "_one_velocity_native", cached)
     return cached
 
 
@@ -197,6 +217,9 @@ class OnePoseVelocity:
 
     # the pieces, computed when first needed (class-level None: a record sets only its inputs)
     _ab = _adj = _lengths = _parallel = _flags = _j = _sv = _batch = None
+    #: the C kernel's state (:meth:`native`): None not yet asked, False no extension
+    _state: Any = None
+    _native_field: Any = None
 
     def __init__(self, closed: RodClosedForm, x: list[float], q: list[float], tol: float):
         self.closed, self.x, self.q, self.tol = closed, x, q, tol
@@ -216,6 +239,21 @@ class OnePoseVelocity:
             x, q = np.array([self.x]), np.array([self.q])
             self._batch = LazyJacobians(VelocityEvaluation(self.closed, x, q, self.tol), True)
         return getattr(self._batch, name)
+
+    def native(self) -> Any:
+        """The state of the C twin ``pkmkit.native.kernels.rod_velocity`` of this pose (every
+        field it can answer, the batch row's bits), or False without the extension (not
+        built, ``PKMKIT_NATIVE=0``, ``PKMKIT_COMPILED=0``): the Python pieces then answer."""
+        native = jit.native_kernels_now()
+        rod_velocity = getattr(native, "rod_velocity", None)
+        if rod_velocity is None:
+            state = False
+        else:
+            state = rod_velocity(native_legs(self.closed), self.x, self.q, self.tol,
+                                 NEAR_PARALLEL)
+            self._native_field = native.rod_field
+        self._state = state
+        return state
 
     # ------------------------------------------------------------------ pieces
     def ab(self) -> tuple[list[float], list[float]]:
@@ -406,16 +444,31 @@ _BUILD: dict[str, Callable[[OnePoseVelocity], Any]] = {
 }
 
 
+#: The codes of the fields the C kernel answers (``rod_field``).
+_NATIVE_CODES = {name: code for code, name in enumerate(
+    ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
+     "parallel_measure", "serial_measure", "singularity", "mode"))}
+
+
 def _one_field(name: str) -> property:
     build = _BUILD[name]
+    code = _NATIVE_CODES.get(name)
 
     def get(self):
         cache = self._cache
         if name in cache:
             return cache[name]
         evaluation = self._evaluation
+        value = None
+        if code is not None and evaluation._batch is None:
+            state = evaluation._state
+            if state is None:
+                state = evaluation.native()
+            if state:  # None from the kernel: the Python pieces below decide
+                value = evaluation._native_field(state, code)
         try:
-            value = build(evaluation) if evaluation._batch is None else None
+            if value is None and evaluation._batch is None:
+                value = build(evaluation)
         except _HANDED_OVER:
             value = None
         if value is None:
@@ -451,23 +504,42 @@ def _record(evaluation: OnePoseVelocity) -> OnePoseJacobians:
     return record
 
 
+def _native_inverse_legs(closed: RodClosedForm, branches: Sequence[float]) -> bytes:
+    """:meth:`RodClosedForm._single_legs` as the C kernel ``rod_inverse`` takes them
+    (``n × 20`` float64), the previous call's for the same tuple of branches."""
+    last = closed.__dict__.get("_one_inverse_native")
+    if last is not None and last[0] is branches:
+        return last[1]
+    legs = np.array(closed._single_legs(branches), dtype=float).tobytes()
+    if type(branches) is tuple:  # immutable: kept for the next call
+        object.__setattr__(closed, "_one_inverse_native", (branches, legs))
+    return legs
+
+
 def jacobian_one(closed: RodClosedForm, x: Any, tol: float, branches: Sequence[float],
                  within_strokes: Callable[[list[float]], bool]) -> OnePoseJacobians | None:
     """The velocity model of one plain pose ``x`` (``dims`` finite floats: a list, a tuple or a
     1-D float array) whose inverse model (working ``branches``) lies within the strokes, or
-    None: the machine's batch path then answers (and raises what it raises)."""
+    None: the machine's batch path then answers (and raises what it raises).
+
+    With the C extension (:func:`pkmkit.numerics.jit.native_kernels`) the inverse model of a
+    list or tuple of floats is its C twin ``rod_inverse`` (the same bits), and the fields are
+    read from ``rod_velocity`` (:meth:`OnePoseVelocity.native`)."""
     if isinstance(x, np.ndarray):
         if x.ndim != 1 or x.dtype.kind != "f":
             return None
         x = x.tolist()  # floats
-        q = closed.inverse_one(x, branches)
-    elif isinstance(x, list | tuple):
-        q = closed.inverse_one(x, branches)  # checks the entries are plain finite numbers
-        if q is None:
-            return None
-        x = [float(v) for v in x]
-    else:
+    elif not isinstance(x, list | tuple):
         return None
+    native = jit.native_kernels_now()
+    rod_inverse = None if native is None else getattr(native, "rod_inverse", None)
+    if rod_inverse is not None:
+        q = rod_inverse(_native_inverse_legs(closed, branches), x, MAX_ABS)
+        if q is not None:  # x: exact floats, every leg closes
+            if not within_strokes(q):
+                return None
+            return _record(OnePoseVelocity(closed, list(x), q, tol))
+    q = closed.inverse_one(x, branches)  # checks the entries are plain finite numbers
     if q is None or not within_strokes(q):
         return None
-    return _record(OnePoseVelocity(closed, x, q, tol))
+    return _record(OnePoseVelocity(closed, [float(v) for v in x], q, tol))

@@ -10,11 +10,17 @@ arguments, the same algorithm and statuses, run without the GIL:
   ``simd()`` gives the poses per block in use, 0 for one at a time, ``simd(False)`` switches
   it off);
 - ``solve_rows``, ``solve_one`` — :func:`pkmkit.machines.full_pose_direct_kernel.solve_rows`
-  and ``solve_one``.
+  and ``solve_one``;
 - ``position_rows`` — :func:`pkmkit.machines.full_pose_position_kernel.solve_rows` (the
   position inverse of the Verne-type module);
 - ``chain_rows`` — :func:`pkmkit.solve.chain_kernel._solve_rows` (the joint-chain closure and
-  machine inverse).
+  machine inverse);
+- ``rod_inverse``, ``rod_velocity``, ``rod_field`` (``velocity.c``) — the one-pose inverse
+  and velocity model of translational rod machines
+  (:meth:`pkmkit.machines.closed_form.RodClosedForm.inverse_one`,
+  :class:`pkmkit.machines.velocity_one.OnePoseVelocity`), the batch row's bits;
+- ``pose_velocity`` (``pose_velocity.c``) — the one-pose velocity kernels of six-rod
+  full-pose machines (:mod:`pkmkit.machines.full_pose_velocity_kernel`).
 
 Loading it costs a millisecond, where Numba's import and its first compiled call cost
 0.8–0.9 s of CPU in a fresh process. Which implementation runs is decided in one place,

@@ -160,4 +160,36 @@ void pk_chain_rows(const pk_chain *c, const double *known, ptrdiff_t known_rows,
                    double *residual, int64_t *iterations, const double *targets,
                    const double *tools, pk_chain_work *w);
 
+/* velocity.c: the velocity model of one pose of a translational rod-leg machine
+ * (machines/velocity_one.py). Legs: PK_LEG doubles each (kind 0 slide, 1 strut, 2 crank, then
+ * the terms of velocity_one._legs, zero-padded). Bits of `ok`: the fields answered. */
+#define PK_LEG 14
+#define PK_INV_LEG 20 /* closed_form.RodClosedForm._single_legs */
+#define PK_POSE_ROD 24 /* full_pose_one.OnePoseInverse.rows */
+#define PK_F_A (1u << 0)
+#define PK_F_B (1u << 1)
+#define PK_F_J (1u << 2)
+#define PK_F_J_INV (1u << 3)
+#define PK_F_SV (1u << 4)
+#define PK_F_CONDITION (1u << 5)
+#define PK_F_DET_A (1u << 6)
+#define PK_F_DET_B (1u << 7)
+#define PK_F_PARALLEL (1u << 8)
+#define PK_F_SERIAL (1u << 9)
+#define PK_F_SINGULARITY (1u << 10)
+#define PK_F_MODE (1u << 11)
+
+typedef struct {
+    int n;             /* 2 or 3 */
+    unsigned ok;       /* PK_F_* of the fields answered */
+    double a[9], b[3], j[9], j_inv[9], sv[3];
+    double det_a, det_b, condition, parallel, serial;
+    long flags, mode;
+} pk_rod_state;
+
+/* One pose x (n,) at q (n,), thresholds tol (singularities) and near (J's singular values
+ * from J^-1 below it); needs the GIL (NumPy's arccos is looked up on first use). */
+void pk_rod_velocity(const double *legs, int n, const double *x, const double *q, double tol,
+                     double near, pk_rod_state *s);
+
 #endif

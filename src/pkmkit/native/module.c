@@ -456,6 +456,16 @@ fail:
     return NULL;
 }
 
+/* velocity.c */
+extern const char pk_rod_velocity_doc[], pk_rod_field_doc[], pk_rod_inverse_doc[];
+PyObject *pk_py_rod_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+extern const char pk_pose_velocity_doc[], pk_pose_inverse_doc[], pk_state_array_doc[];
+PyObject *pk_py_state_array(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_pose_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
@@ -464,6 +474,17 @@ static PyMethodDef methods[] = {
     {"position_rows", (PyCFunction)(void (*)(void))position_rows, METH_FASTCALL,
      position_rows_doc},
     {"chain_rows", (PyCFunction)(void (*)(void))chain_rows, METH_FASTCALL, chain_rows_doc},
+    {"rod_velocity", (PyCFunction)(void (*)(void))pk_py_rod_velocity, METH_FASTCALL,
+     pk_rod_velocity_doc},
+    {"rod_field", (PyCFunction)(void (*)(void))pk_py_rod_field, METH_FASTCALL, pk_rod_field_doc},
+    {"rod_inverse", (PyCFunction)(void (*)(void))pk_py_rod_inverse, METH_FASTCALL,
+     pk_rod_inverse_doc},
+    {"pose_velocity", (PyCFunction)(void (*)(void))pk_py_pose_velocity, METH_FASTCALL,
+     pk_pose_velocity_doc},
+    {"pose_inverse", (PyCFunction)(void (*)(void))pk_py_pose_inverse, METH_FASTCALL,
+     pk_pose_inverse_doc},
+    {"state_array", (PyCFunction)(void (*)(void))pk_py_state_array, METH_FASTCALL,
+     pk_state_array_doc},
     {NULL, NULL, 0, NULL},
 };
 

@@ -208,3 +208,20 @@ def run_chunks(work: Callable[[int, int], None], rows: int) -> None:
     starts = range(0, rows, THREAD_ROWS)
     for future in [pool.submit(work, s, min(s + THREAD_ROWS, rows)) for s in starts]:
         future.result()
+
+
+# ``os.environ``'s own dict on POSIX (encoded keys): a membership test there costs tens of
+# nanoseconds where ``os.environ.get`` costs half a microsecond (encoding, the mapping's
+# methods) — what a one-pose call can afford
+_ENV_DATA = getattr(os.environ, "_data", None)
+_ENV_KEYS = tuple(os.environ.encodekey(k) for k in ("PKMKIT_NATIVE", "PKMKIT_COMPILED")) if (
+    isinstance(_ENV_DATA, dict) and hasattr(os.environ, "encodekey")) else None
+
+
+def native_kernels_now() -> ModuleType | None:
+    """:func:`native_kernels` for one-pose calls: the same answer, read in ≈ 0.1 µs when
+    neither ``PKMKIT_NATIVE`` nor ``PKMKIT_COMPILED`` is set (the common case), else as
+    :func:`native_kernels`."""
+    if _ENV_KEYS is None or _ENV_KEYS[0] in _ENV_DATA or _ENV_KEYS[1] in _ENV_DATA:
+        return native_kernels()
+    return native_kernels() if _native is False else _native

@@ -1,0 +1,579 @@
+/* pkmkit.native.kernels: the velocity model of one pose of a translational rod-leg machine
+ * (issue 22 §1), the C twin of pkmkit.machines.velocity_one.OnePoseVelocity.
+ *
+ * The same operations in the same order as velocity_one.py (itself the operations of
+ * velocity_chunk and numerics.small on one row), compiled without FMA contraction and without
+ * fast-math, so every field it answers is the batch row's bits. NumPy's arccos is not libm's
+ * acos (it differs in the last place for about one argument in ten on AVX-512 machines), so
+ * the closed-form singular values call NumPy's own float64 arccos loop (found once, checked
+ * against numpy.arccos; when it cannot be found the fields that need it are not answered).
+ * Whatever velocity_one.py hands elsewhere (a sum that is not finite, a zero row, a
+ * reciprocal that overflows, a ZeroDivisionError, LAPACK for nearly equal singular values) is
+ * not answered here either: rod_field returns None and the Python path decides.
+ *
+ * Python face: rod_inverse(legs, x, max_abs) -> q (list) or None, the twin of
+ * RodClosedForm.inverse_one; rod_velocity(legs, x, q, tol, near) -> state (a bytearray
+ * holding a pk_rod_state); rod_field(state, code) -> the field (NumPy array or scalar) or
+ * None. */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <string.h>
+
+#include "kernels.h"
+
+/* ------------------------------------------------------------------ NumPy's arccos */
+
+/* The head of NumPy's PyUFuncObject (numpy/ufuncobject.h, unchanged since NumPy 1.x). */
+typedef void (*pk_loop)(char **args, const Py_ssize_t *dims, const Py_ssize_t *steps,
+                        void *data);
+typedef struct {
+    PyObject_HEAD
+    int nin, nout, nargs;
+    int identity;
+    pk_loop *functions;
+    void *const *data;
+    int ntypes;
+    int reserved1;
+    const char *name;
+    const char *types;
+} pk_ufunc_head;
+
+static pk_loop acos_loop = NULL;
+static void *acos_data = NULL;
+static int acos_state = 0; /* 0 not looked for, 1 found and checked, -1 unavailable */
+
+static double np_acos(double x) {
+    double out;
+    char *args[2] = {(char *)&x, (char *)&out};
+    Py_ssize_t dims[1] = {1}, steps[2] = {8, 8};
+    acos_loop(args, dims, steps, acos_data);
+    return out;
+}
+
+/* Find numpy.arccos's float64 loop and check it against numpy.arccos on 64 arguments. */
+static int find_acos(void) {
+    PyObject *numpy = PyImport_ImportModule("numpy");
+    if (!numpy) return -1;
+    PyObject *ufunc = PyObject_GetAttrString(numpy, "arccos");
+    Py_DECREF(numpy);
+    if (!ufunc) return -1;
+    int found = -1;
+    const pk_ufunc_head *head = (const pk_ufunc_head *)ufunc;
+    if (strcmp(Py_TYPE(ufunc)->tp_name, "numpy.ufunc") == 0 && head->nin == 1
+        && head->nout == 1 && head->nargs == 2 && head->name
+        && strcmp(head->name, "arccos") == 0 && head->types && head->functions) {
+        for (int i = 0; i < head->ntypes; i++) {
+            if (head->types[2 * i] == 12 && head->types[2 * i + 1] == 12) { /* NPY_DOUBLE */
+                acos_loop = head->functions[i];
+                acos_data = head->data ? head->data[i] : NULL;
+                found = 1;
+                break;
+            }
+        }
+    }
+    for (int k = 0; found == 1 && k < 64; k++) {
+        double x = -1.0 + k / 31.5 + 1e-3 * sin((double)k);
+        if (x > 1.0) x = 1.0;
+        PyObject *arg = PyFloat_FromDouble(x);
+        PyObject *want = arg ? PyObject_CallOneArg(ufunc, arg) : NULL;
+        Py_XDECREF(arg);
+        double w = want ? PyFloat_AsDouble(want) : -2.0;
+        Py_XDECREF(want);
+        if (PyErr_Occurred()) PyErr_Clear();
+        if (memcmp(&w, &(double){np_acos(x)}, sizeof(double)) != 0) found = -1;
+    }
+    Py_DECREF(ufunc);
+    if (found != 1) acos_loop = NULL;
+    return found;
+}
+
+/* --------------------------------------------------------------- singular values */
+
+/* velocity_one.singular_values of a finite row-major 2x2 or 3x3 matrix into sv (decreasing);
+ * 0, or 1 where the Python path calls LAPACK (or NumPy's arccos is unavailable). */
+static int pk_singular_values(const double *mat, int n, double *sv) {
+    if (n == 2) {
+        double a = mat[0], b = mat[1], c = mat[2], d = mat[3];
+        double s1 = 0.5 * (hypot(a + d, c - b) + hypot(a - d, b + c));
+        sv[0] = s1;
+        sv[1] = s1 > 0 ? fabs(a * d - b * c) / s1 : 0.0;
+        return 0;
+    }
+    if (acos_state == 0) acos_state = find_acos();
+    if (acos_state != 1) return 1;
+    double m00 = mat[0], m01 = mat[1], m02 = mat[2], m10 = mat[3], m11 = mat[4],
+           m12 = mat[5], m20 = mat[6], m21 = mat[7], m22 = mat[8];
+    double g00 = m00 * m00 + m10 * m10 + m20 * m20;
+    double g11 = m01 * m01 + m11 * m11 + m21 * m21;
+    double g22 = m02 * m02 + m12 * m12 + m22 * m22;
+    double g01 = m00 * m01 + m10 * m11 + m20 * m21;
+    double g02 = m00 * m02 + m10 * m12 + m20 * m22;
+    double g12 = m01 * m02 + m11 * m12 + m21 * m22;
+    double mean = (g00 + g11 + g22) / 3.0;
+    double d0 = g00 - mean, d1 = g11 - mean, d2 = g22 - mean;
+    double spread = sqrt((d0 * d0 + d1 * d1 + d2 * d2
+                          + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12)) / 6.0);
+    double scale = spread > 0 ? 1.0 / spread : 0.0;
+    double s00 = d0 * scale, s11 = d1 * scale, s22 = d2 * scale;
+    double s01 = g01 * scale, s02 = g02 * scale, s12 = g12 * scale;
+    double sym_det = (s00 * (s11 * s22 - s12 * s12) - s01 * (s01 * s22 - s12 * s02)
+                      + s02 * (s01 * s12 - s11 * s02));
+    double half_det = pk_min(pk_max(0.5 * sym_det, -1.0), 1.0);
+    double lam1 = mean + 2.0 * spread * cos(np_acos(half_det) / 3.0);
+    double s1 = lam1 > 0 ? sqrt(lam1) : 0.0;
+    double c00 = m11 * m22 - m12 * m21, c01 = m12 * m20 - m10 * m22, c02 = m10 * m21 - m11 * m20;
+    double c10 = m21 * m02 - m22 * m01, c11 = m22 * m00 - m20 * m02, c12 = m20 * m01 - m21 * m00;
+    double c20 = m01 * m12 - m02 * m11, c21 = m02 * m10 - m00 * m12, c22 = m00 * m11 - m01 * m10;
+    double d = fabs(m00 * c00 + m01 * c01 + m02 * c02);
+    double e2 = (c00 * c00 + c01 * c01 + c02 * c02 + c10 * c10 + c11 * c11 + c12 * c12
+                 + c20 * c20 + c21 * c21 + c22 * c22);
+    double pair = s1 > 0 ? d / s1 : 0.0;
+    double rest = lam1 > 0 ? (e2 - pair * pair) / lam1 : 0.0;
+    if (spread > 0 && (fabs(half_det) > 1.0 - 1e-6 || rest - 2 * pair < 1e-6 * rest))
+        return 1; /* nearly equal singular values: LAPACK, in the Python path */
+    double s2 = 0.5 * (sqrt(pk_max(rest + 2 * pair, 0.0)) + sqrt(pk_max(rest - 2 * pair, 0.0)));
+    double s3 = s2 > 0 ? pair / s2 : 0.0;
+    if (s2 > s1) s2 = s1;
+    sv[0] = s1;
+    sv[1] = s2;
+    sv[2] = s3 < s2 ? s3 : s2;
+    return 0;
+}
+
+/* ------------------------------------------------------------------ the pieces */
+
+/* velocity_one._surely_above */
+static int surely_above(double det_a, const double *lengths, int n, double t) {
+    double product = lengths[0] * lengths[1] * (n == 3 ? lengths[2] : 1.0);
+    return fabs(det_a) > (4.0 * t + 2e-12) * product;
+}
+
+/* velocity_one.rows: A row-major (n x n) and diag B of one pose; legs (n, PK_LEG). */
+static void rod_rows(const double *legs, int n, const double *x, const double *q, double *a,
+                     double *b) {
+    double x0 = x[0], x1 = x[1], x2 = n == 2 ? 0.0 : x[2];
+    for (int i = 0; i < n; i++) {
+        const double *t = legs + PK_LEG * i;
+        double qi = q[i], a0, a1, a2, bi;
+        if (t[0] == 0.0) { /* slide */
+            double u0 = t[4], u1 = t[5], u2 = t[6];
+            a0 = x0 - (t[1] + qi * u0);
+            a1 = x1 - (t[2] + qi * u1);
+            a2 = x2 - (t[3] + qi * u2);
+            bi = 0.0;
+            if (u0) bi += a0 * u0;
+            if (u1) bi += a1 * u1;
+            if (u2) bi += a2 * u2;
+        } else if (t[0] == 2.0) { /* crank */
+            double e0 = t[4], e1 = t[5], e2 = t[6], f0 = t[7], f1 = t[8], f2 = t[9];
+            double radius = t[10], c = cos(qi), s = sin(qi);
+            a0 = x0 - ((t[1] + radius * (c * e0 + s * f0)) - t[11]);
+            a1 = x1 - ((t[2] + radius * (c * e1 + s * f1)) - t[12]);
+            a2 = x2 - ((t[3] + radius * (c * e2 + s * f2)) - t[13]);
+            bi = (0.0 + a0 * (radius * (c * f0 - s * e0)) + a1 * (radius * (c * f1 - s * e1))
+                  + a2 * (radius * (c * f2 - s * e2)));
+        } else { /* strut */
+            a0 = x0 - t[1];
+            a1 = x1 - t[2];
+            a2 = x2 - t[3];
+            bi = t[4] + qi;
+        }
+        a[n * i] = a0;
+        a[n * i + 1] = a1;
+        if (n == 3) a[n * i + 2] = a2;
+        b[i] = bi;
+    }
+}
+
+void pk_rod_velocity(const double *legs, int n, const double *x, const double *q, double tol,
+                     double near, pk_rod_state *s) {
+    double *a = s->a, *b = s->b;
+    int nn = n * n;
+    s->n = n;
+    s->ok = 0;
+    rod_rows(legs, n, x, q, a, b);
+    double sum_a = 0.0, sum_b = 0.0; /* Python's sum(a) + sum(b) (3.11: in order) */
+    for (int k = 0; k < nn; k++) sum_a += a[k];
+    for (int i = 0; i < n; i++) sum_b += b[i];
+    double total = sum_a + sum_b;
+    if (!(-INFINITY < total && total < INFINITY)) return; /* the Python path decides */
+    s->ok |= PK_F_A | PK_F_B | PK_F_DET_A | PK_F_DET_B | PK_F_MODE;
+    double cof[9] = {0}, det_a;
+    if (n == 2) {
+        cof[0] = a[3]; cof[1] = -a[2]; cof[2] = -a[1]; cof[3] = a[0];
+        det_a = a[0] * a[3] - a[1] * a[2];
+    } else {
+        double a00 = a[0], a01 = a[1], a02 = a[2], a10 = a[3], a11 = a[4], a12 = a[5],
+               a20 = a[6], a21 = a[7], a22 = a[8];
+        cof[0] = a11 * a22 - a12 * a21; cof[1] = a12 * a20 - a10 * a22;
+        cof[2] = a10 * a21 - a11 * a20; cof[3] = a21 * a02 - a22 * a01;
+        cof[4] = a22 * a00 - a20 * a02; cof[5] = a20 * a01 - a21 * a00;
+        cof[6] = a01 * a12 - a02 * a11; cof[7] = a02 * a10 - a00 * a12;
+        cof[8] = a00 * a11 - a01 * a10;
+        det_a = a00 * cof[0] + a01 * cof[1] + a02 * cof[2];
+    }
+    s->det_a = det_a;
+    s->mode = (det_a > 0) - (det_a < 0);
+    s->det_b = n == 3 ? b[0] * b[1] * b[2] : b[0] * b[1];
+    int zero_b = 0;
+    for (int i = 0; i < n; i++) zero_b |= b[i] == 0.0;
+    if (!zero_b) {
+        for (int k = 0; k < nn; k++) s->j_inv[k] = a[k] / b[k / n];
+        s->ok |= PK_F_J_INV;
+    }
+    double lengths[3];
+    for (int i = 0; i < n; i++) {
+        const double *r = a + n * i;
+        lengths[i] = n == 2 ? sqrt(r[0] * r[0] + r[1] * r[1])
+                            : sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    }
+    if (!(lengths[0] > 0 && lengths[1] > 0 && lengths[n - 1] > 0)) return; /* a zero row */
+    double serial = fabs(b[0]) / lengths[0];
+    for (int i = 1; i < n; i++) {
+        double v = fabs(b[i]) / lengths[i];
+        if (v < serial) serial = v;
+    }
+    s->serial = serial;
+    s->ok |= PK_F_SERIAL;
+    /* the parallel measure: sigma_min / sigma_max of A with unit rows */
+    double unit[9], sv_u[3];
+    for (int k = 0; k < nn; k++) unit[k] = a[k] / lengths[k / n];
+    int parallel_ok = !pk_singular_values(unit, n, sv_u) && sv_u[0] != 0.0;
+    double parallel = parallel_ok ? sv_u[n - 1] / sv_u[0] : NAN;
+    s->parallel = parallel;
+    if (parallel_ok) s->ok |= PK_F_PARALLEL;
+    /* velocity_one.at_parallel */
+    int at_parallel;
+    if (surely_above(det_a, lengths, n, tol)) {
+        at_parallel = 0;
+    } else if (!parallel_ok) {
+        return;
+    } else {
+        at_parallel = parallel < tol || det_a == 0.0;
+    }
+    s->flags = (serial < tol ? 1 : 0) | (at_parallel ? 2 : 0); /* Singularity.SERIAL, PARALLEL */
+    s->ok |= PK_F_SINGULARITY;
+    double *j = s->j;
+    if (at_parallel) {
+        for (int k = 0; k < nn; k++) j[k] = NAN;
+        for (int i = 0; i < n; i++) s->sv[i] = NAN;
+        s->condition = NAN;
+        s->ok |= PK_F_J | PK_F_SV | PK_F_CONDITION;
+        return;
+    }
+    double inv_det = 1.0 / det_a; /* det_a != 0 here (else at_parallel) */
+    if (!(-INFINITY < inv_det && inv_det < INFINITY)) return;
+    double s0 = b[0] * inv_det, s1 = b[1] * inv_det;
+    if (n == 2) {
+        j[0] = cof[0] * s0; j[1] = cof[2] * s1; j[2] = cof[1] * s0; j[3] = cof[3] * s1;
+    } else {
+        double s2 = b[2] * inv_det;
+        j[0] = cof[0] * s0; j[1] = cof[3] * s1; j[2] = cof[6] * s2;
+        j[3] = cof[1] * s0; j[4] = cof[4] * s1; j[5] = cof[7] * s2;
+        j[6] = cof[2] * s0; j[7] = cof[5] * s1; j[8] = cof[8] * s2;
+    }
+    for (int k = 0; k < nn; k++)
+        if (!(-INFINITY < j[k] && j[k] < INFINITY)) return;
+    s->ok |= PK_F_J;
+    /* velocity_one.sv: from J^-1 near a parallel singularity, as the batch path */
+    double *sv = s->sv;
+    if (!surely_above(det_a, lengths, n, near)) {
+        if (!parallel_ok) return;
+        if (parallel < near && parallel < serial) {
+            double inverse[3];
+            if (zero_b || pk_singular_values(s->j_inv, n, inverse)) return;
+            for (int i = 0; i < n; i++) {
+                if (inverse[n - 1 - i] == 0.0) return; /* ZeroDivisionError in Python */
+                sv[i] = 1.0 / inverse[n - 1 - i];
+            }
+            goto condition;
+        }
+    }
+    if (pk_singular_values(j, n, sv)) return;
+condition:
+    s->condition = sv[n - 1] == 0.0 ? INFINITY : sv[0] / sv[n - 1];
+    s->ok |= PK_F_SV | PK_F_CONDITION;
+}
+
+/* ------------------------------------------------------------------ Python face */
+
+static PyObject *np_empty = NULL, *np_float64 = NULL, *np_int64 = NULL;
+
+static int numpy_names(void);
+
+/* numpy.empty (a borrowed reference), or NULL with an exception (also for pose_velocity.c). */
+PyObject *pk_numpy_empty(void) { return numpy_names() < 0 ? NULL : np_empty; }
+
+static int numpy_names(void) {
+    if (np_empty) return 0;
+    PyObject *numpy = PyImport_ImportModule("numpy");
+    if (!numpy) return -1;
+    np_float64 = PyObject_GetAttrString(numpy, "float64");
+    np_int64 = PyObject_GetAttrString(numpy, "int64");
+    np_empty = PyObject_GetAttrString(numpy, "empty");
+    Py_DECREF(numpy);
+    return np_empty && np_float64 && np_int64 ? 0 : -1;
+}
+
+/* n floats from a list or tuple of exact Python floats; -1 with TypeError otherwise (also
+ * used by pose_velocity.c). */
+int pk_floats(PyObject *seq, const char *name, Py_ssize_t n, double *out) {
+    if (!PyList_CheckExact(seq) && !PyTuple_CheckExact(seq)) {
+        PyErr_Format(PyExc_TypeError, "%s: a list or tuple of floats is needed", name);
+        return -1;
+    }
+    if (PySequence_Fast_GET_SIZE(seq) != n) {
+        PyErr_Format(PyExc_ValueError, "%s: %zd values needed", name, n);
+        return -1;
+    }
+    PyObject **items = PySequence_Fast_ITEMS(seq);
+    for (Py_ssize_t i = 0; i < n; i++) {
+        if (!PyFloat_CheckExact(items[i])) {
+            PyErr_Format(PyExc_TypeError, "%s[%zd]: a float is needed", name, i);
+            return -1;
+        }
+        out[i] = PyFloat_AS_DOUBLE(items[i]);
+    }
+    return 0;
+}
+
+const char pk_rod_velocity_doc[] =
+"rod_velocity(legs, x, q, tol, near)\n\n"
+"The velocity model of one pose of a translational rod-leg machine (the C twin of\n"
+"pkmkit.machines.velocity_one.OnePoseVelocity): legs the per-leg constants (bytes of n x 14\n"
+"float64: kind, then the terms of velocity_one._legs, zero-padded), x the pose and q its\n"
+"actuator coordinates (n = 2 or 3 floats each, list or tuple), tol and near the thresholds.\n"
+"Returns the state (a bytearray) that rod_field reads.";
+
+PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 5) {
+        PyErr_Format(PyExc_TypeError, "rod_velocity() takes 5 positional arguments (%zd given)",
+                     nargs);
+        return NULL;
+    }
+    if (!PyBytes_CheckExact(args[0])) {
+        PyErr_SetString(PyExc_TypeError, "legs: bytes are needed");
+        return NULL;
+    }
+    Py_ssize_t size = PyBytes_GET_SIZE(args[0]);
+    Py_ssize_t n = size / (Py_ssize_t)(PK_LEG * sizeof(double));
+    if ((n != 2 && n != 3) || size != n * (Py_ssize_t)(PK_LEG * sizeof(double))) {
+        PyErr_SetString(PyExc_ValueError, "legs: 2 or 3 legs of 14 float64 are needed");
+        return NULL;
+    }
+    double legs[3 * PK_LEG], x[3], q[3], tol, near;
+    memcpy(legs, PyBytes_AS_STRING(args[0]), (size_t)size);
+    for (Py_ssize_t i = 0; i < n; i++) {
+        double kind = legs[PK_LEG * i];
+        if (kind != 0.0 && kind != 1.0 && kind != 2.0) {
+            PyErr_Format(PyExc_ValueError, "legs: leg %zd: kind must be 0, 1 or 2", i);
+            return NULL;
+        }
+    }
+    if (pk_floats(args[1], "x", n, x) < 0 || pk_floats(args[2], "q", n, q) < 0) return NULL;
+    tol = PyFloat_AsDouble(args[3]);
+    if (tol == -1.0 && PyErr_Occurred()) return NULL;
+    near = PyFloat_AsDouble(args[4]);
+    if (near == -1.0 && PyErr_Occurred()) return NULL;
+    if (!(tol > 0 && tol < INFINITY) || !(near > 0 && near < INFINITY)) {
+        PyErr_SetString(PyExc_ValueError, "tol and near must be positive and finite");
+        return NULL;
+    }
+    PyObject *state = PyByteArray_FromStringAndSize(NULL, sizeof(pk_rod_state));
+    if (!state) return NULL;
+    pk_rod_state *s = (pk_rod_state *)PyByteArray_AS_STRING(state);
+    memset(s, 0, sizeof(pk_rod_state));
+    pk_rod_velocity(legs, (int)n, x, q, tol, near, s);
+    if (PyErr_Occurred()) { /* finding NumPy's arccos raised (then cleared): never here */
+        Py_DECREF(state);
+        return NULL;
+    }
+    return state;
+}
+
+/* The shapes (n,) and (n, n) for n = 2, 3, built once. */
+static PyObject *shapes[2][2];
+
+/* A new float64 array of shape (rows, cols) (cols 0: (rows,)), rows = 2 or 3, holding values. */
+static PyObject *array_of(const double *values, int rows, int cols) {
+    PyObject **shape = &shapes[rows - 2][cols ? 1 : 0];
+    if (!*shape) {
+        *shape = cols ? Py_BuildValue("(ii)", rows, cols) : Py_BuildValue("(i)", rows);
+        if (!*shape) return NULL;
+    }
+    PyObject *out = PyObject_CallOneArg(np_empty, *shape);
+    if (!out) return NULL;
+    Py_buffer view;
+    if (PyObject_GetBuffer(out, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
+        Py_DECREF(out);
+        return NULL;
+    }
+    memcpy(view.buf, values, sizeof(double) * (size_t)(rows * (cols ? cols : 1)));
+    PyBuffer_Release(&view);
+    return out;
+}
+
+static PyObject *scalar(PyObject *type, PyObject *value) {
+    if (!value) return NULL;
+    PyObject *out = PyObject_CallOneArg(type, value);
+    Py_DECREF(value);
+    return out;
+}
+
+const char pk_rod_field_doc[] =
+"rod_field(state, code)\n\n"
+"Field `code` of a rod_velocity state (0 A, 1 B, 2 J, 3 J_inv, 4 singular_values,\n"
+"5 condition, 6 det_A, 7 det_B, 8 parallel_measure, 9 serial_measure, 10 singularity,\n"
+"11 mode), as the single-pose Jacobians record holds it (NumPy arrays, numpy.float64,\n"
+"numpy.int64), or None where the Python path must answer.";
+
+PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 2) {
+        PyErr_Format(PyExc_TypeError, "rod_field() takes 2 positional arguments (%zd given)",
+                     nargs);
+        return NULL;
+    }
+    if (!PyByteArray_CheckExact(args[0])
+        || PyByteArray_GET_SIZE(args[0]) != (Py_ssize_t)sizeof(pk_rod_state)) {
+        PyErr_SetString(PyExc_TypeError, "state: a rod_velocity state is needed");
+        return NULL;
+    }
+    long code = PyLong_AsLong(args[1]);
+    if (code == -1 && PyErr_Occurred()) return NULL;
+    if (code < 0 || code > 11) {
+        PyErr_Format(PyExc_ValueError, "code: 0 to 11, got %ld", code);
+        return NULL;
+    }
+    const pk_rod_state *s = (const pk_rod_state *)PyByteArray_AS_STRING(args[0]);
+    if (!(s->ok & (1u << code))) Py_RETURN_NONE;
+    if (numpy_names() < 0) return NULL;
+    int n = s->n;
+    switch (code) {
+    case 0: return array_of(s->a, n, n);
+    case 1: {
+        double diag[9] = {0};
+        for (int i = 0; i < n; i++) diag[(n + 1) * i] = s->b[i];
+        return array_of(diag, n, n);
+    }
+    case 2: return array_of(s->j, n, n);
+    case 3: return array_of(s->j_inv, n, n);
+    case 4: return array_of(s->sv, n, 0);
+    case 5: return scalar(np_float64, PyFloat_FromDouble(s->condition));
+    case 6: return scalar(np_float64, PyFloat_FromDouble(s->det_a));
+    case 7: return scalar(np_float64, PyFloat_FromDouble(s->det_b));
+    case 8: return scalar(np_float64, PyFloat_FromDouble(s->parallel));
+    case 9: return scalar(np_float64, PyFloat_FromDouble(s->serial));
+    case 10: return scalar(np_int64, PyLong_FromLong(s->flags));
+    default: return scalar(np_int64, PyLong_FromLong(s->mode));
+    }
+}
+
+/* ------------------------------------------------------------------ inverse model */
+
+/* RodClosedForm.inverse_one for one pose x (dims = 2 or 3) and legs (n, PK_INV_LEG) laid out
+ * as its _single_legs tuples; 0, or 1 where inverse_one returns None. */
+static int rod_inverse(const double *legs, Py_ssize_t n, int dims, const double *x, double *q) {
+    double x0 = x[0], x1 = x[1], x2 = dims == 3 ? x[2] : 0.0;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const double *t = legs + PK_INV_LEG * i;
+        double y0, y1, y2, perp_sq;
+        if (dims == 3) {
+            y0 = t[1] * x0 + t[2] * x1 + t[3] * x2 - t[10];
+            y1 = t[4] * x0 + t[5] * x1 + t[6] * x2 - t[11];
+            y2 = t[7] * x0 + t[8] * x1 + t[9] * x2 - t[12];
+            perp_sq = y1 * y1 + y2 * y2;
+        } else {
+            y0 = t[1] * x0 + t[2] * x1 - t[10];
+            y1 = t[4] * x0 + t[5] * x1 - t[11];
+            y2 = 0.0;
+            perp_sq = y1 * y1;
+        }
+        double length_sq = t[13], length = t[14], limit = t[15], radius_sq = t[16],
+               diameter = t[17], offset = t[18], branch = t[19];
+        if (t[0] == 0.0) { /* slide */
+            double radicand = length_sq - perp_sq;
+            if (radicand < 0.0) {
+                if (radicand <= -limit) return 1;
+                radicand = 0.0;
+            }
+            double root = sqrt(radicand);
+            q[i] = branch < 0 ? y0 - root : y0 + root;
+        } else if (t[0] == 2.0) { /* crank */
+            double along = y0 - offset;
+            double g = along * along + perp_sq + radius_sq - length_sq;
+            double amplitude = diameter * sqrt(perp_sq);
+            if (amplitude == 0.0) return 1;
+            double cosine = g / amplitude;
+            if (!(-1.0 <= cosine && cosine <= 1.0)) {
+                if (fabs(g) - amplitude > limit) return 1;
+                cosine = cosine < 0.0 ? -1.0 : 1.0;
+            }
+            double angle = atan2(y2, y1) + branch * acos(cosine);
+            q[i] = pk_pymod(angle + PK_PI, 2.0 * PK_PI) - PK_PI;
+        } else { /* strut */
+            q[i] = sqrt(perp_sq + y0 * y0) - length;
+        }
+    }
+    return 0;
+}
+
+const char pk_rod_inverse_doc[] =
+"rod_inverse(legs, x, max_abs)\n\n"
+"The C twin of pkmkit.machines.closed_form.RodClosedForm.inverse_one: legs the per-leg\n"
+"constants of its _single_legs (bytes of n x 20 float64), x the pose (a list or tuple of 2 or\n"
+"3 floats). Returns q (a list of n floats), or None where inverse_one returns None and also\n"
+"where x is not a list or tuple of exact floats (inverse_one then decides).";
+
+PyObject *pk_py_rod_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 3) {
+        PyErr_Format(PyExc_TypeError, "rod_inverse() takes 3 positional arguments (%zd given)",
+                     nargs);
+        return NULL;
+    }
+    if (!PyBytes_CheckExact(args[0])) {
+        PyErr_SetString(PyExc_TypeError, "legs: bytes are needed");
+        return NULL;
+    }
+    Py_ssize_t size = PyBytes_GET_SIZE(args[0]);
+    Py_ssize_t n = size / (Py_ssize_t)(PK_INV_LEG * sizeof(double));
+    if (n < 1 || n > 3 || size != n * (Py_ssize_t)(PK_INV_LEG * sizeof(double))) {
+        PyErr_SetString(PyExc_ValueError, "legs: 1 to 3 legs of 20 float64 are needed");
+        return NULL;
+    }
+    double max_abs = PyFloat_AsDouble(args[2]);
+    if (max_abs == -1.0 && PyErr_Occurred()) return NULL;
+    PyObject *seq = args[1];
+    if (!PyList_CheckExact(seq) && !PyTuple_CheckExact(seq)) Py_RETURN_NONE;
+    Py_ssize_t dims = PySequence_Fast_GET_SIZE(seq);
+    if (dims != n || dims < 2) Py_RETURN_NONE; /* as many legs as coordinates */
+    PyObject **items = PySequence_Fast_ITEMS(seq);
+    double x[3], q[3], legs[3 * PK_INV_LEG];
+    for (Py_ssize_t i = 0; i < dims; i++) {
+        if (!PyFloat_CheckExact(items[i])) Py_RETURN_NONE;
+        x[i] = PyFloat_AS_DOUBLE(items[i]);
+        if (!(-max_abs <= x[i] && x[i] <= max_abs)) Py_RETURN_NONE;
+    }
+    memcpy(legs, PyBytes_AS_STRING(args[0]), (size_t)size);
+    for (Py_ssize_t i = 0; i < n; i++) {
+        double kind = legs[PK_INV_LEG * i];
+        if (kind != 0.0 && kind != 1.0 && kind != 2.0) {
+            PyErr_Format(PyExc_ValueError, "legs: leg %zd: kind must be 0, 1 or 2", i);
+            return NULL;
+        }
+    }
+    if (rod_inverse(legs, n, (int)dims, x, q)) Py_RETURN_NONE;
+    PyObject *out = PyList_New(n);
+    if (!out) return NULL;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *v = PyFloat_FromDouble(q[i]);
+        if (!v) {
+            Py_DECREF(out);
+            return NULL;
+        }
+        PyList_SET_ITEM(out, i, v);
+    }
+    return out;
+}
