@@ -11,7 +11,7 @@ import pytest
 import pkmkit
 from pkmkit.calibration import calibrate, identification_problem, random_defects, simulate
 from pkmkit.calibration.simulate import default_configurations
-from pkmkit.solve import chain_kernel
+from pkmkit.solve import chain_rows
 from pkmkit.solve.chains import compiled_closure_available
 
 TRIPTEOR = {"frame": "identify", "prior": True}
@@ -56,8 +56,8 @@ def _same(new, old):
 def test_tripteor_identification_is_the_numpy_paths(tripteor_data, monkeypatch):
     m, data = tripteor_data
     calls = []
-    solve = chain_kernel.solve
-    monkeypatch.setattr(chain_kernel, "solve", lambda *a, **k: calls.append(1) or solve(*a, **k))
+    solve = chain_rows.solve  # the engine's entry point (the C twin or the Numba kernel)
+    monkeypatch.setattr(chain_rows, "solve", lambda *a, **k: calls.append(1) or solve(*a, **k))
     new = calibrate(m, data, **TRIPTEOR)
     assert len(calls) >= new.iterations  # every residual's closure ran compiled
     monkeypatch.setenv("PKMKIT_COMPILED", "0")

@@ -28,7 +28,6 @@ first single call takes the batch path and the next imports it.
 
 from __future__ import annotations
 
-import inspect
 import math
 import operator
 import os
@@ -64,10 +63,11 @@ def usable(machine: Any, tag: str = "chain_ik") -> bool:
     return jit.compiled_from_second_call(machine, tag)
 
 
-def _options(function: Any, **override: float) -> np.ndarray:
-    """The engine options of the batch path's kernel call, as the one-row kernels take them."""
-    defaults = {k: p.default for k, p in inspect.signature(function).parameters.items()}
-    defaults.update(override)
+def _options(defaults: dict[str, Any], **override: float) -> np.ndarray:
+    """The engine options of the batch path's kernel call (``defaults``: the keyword defaults
+    of :func:`pkmkit.solve.chain_rows.solve` or ``solve_inverse``, read at their import), as
+    the one-row kernels take them."""
+    defaults = {**defaults, **override}
     return np.array([defaults[k] for k in ("max_iter", "xtol", "atol", "gtol", "stall",
                                            "residual_tol", "damping")], dtype=float)
 
@@ -101,7 +101,7 @@ class ChainOneConstants:
     """What a machine's one-pose calls need, built once (module docstring)."""
 
     def __init__(self, m: Any) -> None:
-        from pkmkit.solve import chain_kernel
+        from pkmkit.solve import chain_kernel, chain_rows
         from pkmkit.solve.chains import CLOSURE_DAMPING
 
         model = m.model
@@ -125,7 +125,7 @@ class ChainOneConstants:
         self.tool_row = np.full(1, self.tool)
         self.inverse_args = (frames, types, evar, elements, offsets, every, head,
                              np.zeros((1, n_var)), self.length,
-                             _options(chain_kernel.solve_inverse))
+                             _options(chain_rows.SOLVE_INVERSE_DEFAULTS))
         # direct model: u = (platform, passive) from the first-order start
         rates, residual_rates = home_rates(m)
         self.direct_args = (frames, types, evar, elements, offsets, position, head,
@@ -133,7 +133,7 @@ class ChainOneConstants:
                             np.ascontiguousarray(rates, dtype=float),
                             np.ascontiguousarray(residual_rates, dtype=float),
                             self.length, self.tool,
-                            _options(chain_kernel.solve, damping=CLOSURE_DAMPING), home,
+                            _options(chain_rows.SOLVE_DEFAULTS, damping=CLOSURE_DAMPING), home,
                             act.astype(np.int64))
         self.local = threading.local()  # each thread's work arrays (_work)
         self._velocity_constants(m, passive)

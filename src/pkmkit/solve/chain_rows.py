@@ -98,3 +98,17 @@ def solve_inverse(model: JointChainModel, targets: np.ndarray, u0: np.ndarray,
                    np.ascontiguousarray(targets, dtype=float),
                    np.ascontiguousarray(tool_length, dtype=float).reshape(-1), True)
     return u, status, residual, iterations
+
+
+def _keyword_defaults(function: Callable[..., Any]) -> dict[str, Any]:
+    import inspect
+
+    return {k: p.default for k, p in inspect.signature(function).parameters.items()
+            if p.default is not inspect.Parameter.empty}
+
+
+#: The engine options' defaults of :func:`solve` and :func:`solve_inverse` (read once, at
+#: import: the one-pose paths pass them to their kernels as the batch path's calls do).
+SOLVE_DEFAULTS = _keyword_defaults(solve)
+SOLVE_INVERSE_DEFAULTS = _keyword_defaults(solve_inverse)
+
