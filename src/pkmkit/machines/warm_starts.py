@@ -131,13 +131,20 @@ class ChainWarmStart:
         are in the legs' home assembly modes — every leg slide with its home value's sign
         (slides at 0 at home not judged) and every revolute leg joint within a quarter turn
         of its home value (module docstring: the mode signature). NaN rows are False."""
+        return self.mode_signature(u).all(axis=1)
+
+    def mode_signature(self, u: np.ndarray) -> np.ndarray:
+        """``(N, k)`` bool: the legs' assembly-mode signature of the closures ``u (N, 6 +
+        n_var)`` — per leg slide away from 0 at home, whether it has its home value's sign;
+        per revolute leg joint, whether it lies within a quarter turn of its home value. Two
+        closures with equal rows are in the same modes; all True is home's. NaN: False."""
         home = self._home["values"]
         slides, turns = self._leg_joints_by_type()
         values = np.asarray(u, dtype=float)[:, 6:]
         with np.errstate(invalid="ignore"):
             same_side = values[:, slides] * np.sign(home[slides]) > 0
             near = np.cos(values[:, turns] - home[turns]) > 0
-        return same_side.all(axis=1) & near.all(axis=1)
+        return np.concatenate([same_side, near], axis=1)
 
     def _leg_joints_by_type(self) -> tuple[np.ndarray, np.ndarray]:
         """``(slides, turns)``: variable indices of the legs' prismatic joints away from 0 at
