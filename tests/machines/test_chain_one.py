@@ -261,6 +261,7 @@ def test_a_planted_wrong_constant_is_caught():
         test_fk_is_the_batch_row(m)
 
 
+@pytest.mark.ci  # a fresh process (1-4 s of CPU): .ci/run's second stage
 def test_a_one_shot_call_does_not_import_numba():
     m = pkmkit.machine("tripteor-x7")
     x, q = m.home_pose.tolist(), m.home_q.tolist()

@@ -290,6 +290,7 @@ def test_jit_dispatch(monkeypatch):
     assert not _compiled_closure_applies(10, {"compute_rank": False})
 
 
+@pytest.mark.ci  # a fresh process (1-4 s of CPU): .ci/run's second stage
 def test_a_fresh_chain_batch_does_not_import_numba(tmp_path):
     """``pkmkit ik tripteor-x7 --input`` (the machine inverse) and ``pkmkit fk trimule-600
     --input`` (the closure) in fresh processes: the C kernel, no Numba."""

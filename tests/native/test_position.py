@@ -305,6 +305,7 @@ def test_jit_dispatch(monkeypatch):
     assert not m._compiled_positions({}, 10_000)
 
 
+@pytest.mark.ci  # a fresh process (1-4 s of CPU): .ci/run's second stage
 def test_a_fresh_position_batch_does_not_import_numba(tmp_path):
     """A fresh process's ``m.ik`` of 5,000 positions of the Verne module (the compiled solve,
     then the working-mode check) and ``pkmkit ik verne --input``: the C kernel, no Numba."""

@@ -245,6 +245,7 @@ def test_compiled_by_default_numpy_when_asked(monkeypatch):
 
 
 
+@pytest.mark.ci  # a fresh process (1-4 s of CPU): .ci/run's second stage
 def test_a_one_shot_single_call_does_not_import_numba():
     """In a fresh process the first lone configuration takes the NumPy tracker (no Numba
     import: the command line makes one call), the second the compiled one; a batch of two
