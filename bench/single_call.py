@@ -24,10 +24,10 @@ directly on one preallocated row.
 
 Medians of interleaved repeats (each method sees the same load); each figure is the wall time
 per call and, in brackets, the CPU time of the process per call (what the call costs when the
-2 cores are shared); the load average is printed before each condition. Pinocchio is not a
-dependency
-and is not installed here (``import pinocchio`` fails), so its 2.2 µs per forward-kinematics
-call (the issue's figure) is not re-measured.
+2 cores are shared); the load average is printed before each condition. The peer of the
+issue, Pinocchio (``pin``, in the ``test`` extra), runs in the same rounds where pkmkit exports
+the machine to URDF: forward kinematics with frame placements of that URDF's open tree
+(:func:`pinocchio_peer`).
 
 Usage::
 
@@ -92,6 +92,39 @@ def plain_formula(m):
     return ik
 
 
+def pinocchio_peer(m, calls: int):
+    """The issue's peer: Pinocchio's forward kinematics with the frame placements
+    (``framesForwardKinematics``, then reading the last frame's translation) of the open tree
+    of pkmkit's own URDF export of ``m``, at random configurations; None where Pinocchio is
+    missing or ``m`` has no URDF export. (A serial tree's forward pass: the work of one pose
+    per call, not a closed chain's solve.)"""
+    try:
+        import pinocchio as pin
+
+        from pkmkit.export.urdf import urdf_export
+        export = urdf_export(m)
+    except Exception:  # no Pinocchio, or no URDF export of this machine
+        return None
+    model = pin.buildModelFromXML(export.urdf)
+    data = model.createData()
+    frame = model.nframes - 1
+    rng = np.random.default_rng(3)
+    qs = []
+    for _ in range(calls):
+        q = pin.neutral(model)
+        for jid in range(1, model.njoints):
+            joint, v = model.joints[jid], 0.1 * rng.standard_normal()
+            q[joint.idx_q:joint.idx_q + joint.nq] = ([np.cos(v), np.sin(v)] if joint.nq == 2
+                                                     else v)
+        qs.append(q)
+
+    def forward(q):
+        pin.framesForwardKinematics(model, data, q)
+        return data.oMf[frame].translation
+
+    return lambda: per_call(forward, qs)
+
+
 def machine_rows(name: str, calls: int) -> dict:
     m = pkmkit.machine(name)
     lo, hi = m.default_box()
@@ -110,7 +143,10 @@ def machine_rows(name: str, calls: int) -> dict:
     q_ones = [q[None] for q in qs]
     m.ik(rows[0], strokes="ignore")
     figures: dict = {"poses": len(rows)}
+    peer = pinocchio_peer(m, len(rows))
     for _ in range(2):  # interleaved: every method twice, the second round kept
+        if peer is not None:
+            figures["Pinocchio FK + frame (URDF tree, peer)"] = peer()
         figures["ik one pose"] = per_call(lambda p: m.ik(p, strokes="ignore"), rows)
         figures["ik batch of one (before)"] = per_call(lambda p: m.ik(p, strokes="ignore"), ones)
         figures["fk one"] = per_call(lambda q: m.fk(q, strokes="ignore"), qs)
@@ -147,7 +183,10 @@ def six_axis_rows(name: str, calls: int) -> dict:
     kernel = m._direct_kernel()
     m.fk(qs[0])
     figures = {"poses": len(rows)}
+    peer = pinocchio_peer(m, len(rows))
     for _ in range(2):
+        if peer is not None:
+            figures["Pinocchio FK + frame (URDF tree, peer)"] = peer()
         figures["ik one pose"] = per_call(lambda p: m.ik(p, strokes="ignore"), rows)
         figures["ik batch of one (before)"] = per_call(lambda p: m.ik(p, strokes="ignore"), ones)
         figures["fk one"] = per_call(lambda v: m.fk(v, strokes="ignore"), qs)
