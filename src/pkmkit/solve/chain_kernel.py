@@ -314,18 +314,26 @@ def _cholesky_solve(h, grad, low, step):  # pragma: no cover
             for p in range(j):
                 t -= low[i, p] * low[j, p]
             low[i, j] = t / d
-    for i in range(n):
-        t = grad[i]
-        for p in range(i):
-            t -= low[i, p] * step[p]
-        step[i] = t / low[i, i]
-    for i in range(n - 1, -1, -1):
-        t = step[i]
-        for p in range(i + 1, n):
-            t -= low[p, i] * step[p]
-        step[i] = t / low[i, i]
+    _cholesky_apply(low, grad, step)
     for i in range(n):
         step[i] = -step[i]
+
+
+@njit(inline="always", **_OPTIONS)
+def _cholesky_apply(low, b, x):  # pragma: no cover
+    """``x = (LLᵀ)⁻¹ b`` for a vector ``b`` (``low``: the Cholesky factor L); shared with the
+    one-row kernels (:mod:`pkmkit.solve.chain_one_kernel`)."""
+    n = low.shape[0]
+    for i in range(n):
+        s = b[i]
+        for p in range(i):
+            s -= low[i, p] * x[p]
+        x[i] = s / low[i, i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for p in range(i + 1, n):
+            s -= low[p, i] * x[p]
+        x[i] = s / low[i, i]
 
 
 @njit(inline="always", **_OPTIONS)

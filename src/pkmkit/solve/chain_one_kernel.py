@@ -32,6 +32,7 @@ from numba import njit
 
 from pkmkit.solve.chain_kernel import (
     _OPTIONS,
+    _cholesky_apply,
     _evaluate,
     _head_walk,
     _retract,
@@ -130,22 +131,6 @@ def _bound(low, fro):  # pragma: no cover
             inv[i, j] = s / low[i, i]
             total += inv[i, j] * inv[i, j]
     return 1.0 / math.sqrt(fro * total)
-
-
-@njit(**_OPTIONS)
-def _cholesky_apply(low, b, x):  # pragma: no cover
-    """``x = (LLᵀ)⁻¹ b`` for a vector ``b``."""
-    n = low.shape[0]
-    for i in range(n):
-        s = b[i]
-        for p in range(i):
-            s -= low[i, p] * x[p]
-        x[i] = s / low[i, i]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for p in range(i + 1, n):
-            s -= low[p, i] * x[p]
-        x[i] = s / low[i, i]
 
 
 @njit(**_OPTIONS)
