@@ -441,3 +441,21 @@ def test_an_identified_frame_is_written_as_a_reusable_registration(run, as_json,
     again = run("simulate-measurements", "linear-delta", "--measure", "point", "--poses", 5,
                 "--frame", tmp_path / "cal" / "frame.json", "--out", tmp_path / "n.csv")
     assert again.exit_code == 0, again.output
+
+
+@pytest.mark.parametrize(("value", "std", "text"), [
+    (0.0258488, 0.025, "+0.026 ± 0.025"),
+    (-2.81269e-05, 0.0012, "-0.0000 ± 0.0012"),
+    (-0.00190212, 0.00042, "-0.00190 ± 0.00042"),
+    (1000.6254, 0.0021, "+1000.6254 ± 0.0021"),
+    (7.77, 0.996, "+7.8 ± 1.0"),          # std rounds up to a new decade: one decimal, not two
+    (7.77, 0.994, "+7.77 ± 0.99"),
+    (123456.7, 250.0, "+123460 ± 250"),
+    (1.234e-12, 3.1e-14, "+1.234e-12 ± 3.1e-14"),
+    (0.32050026, 0.015, "+0.321 ± 0.015"),
+    (5.0, float("inf"), "+5 ± inf"),        # undetermined: the value's own digits
+    (5.0, 0.0, "+5 ± 0"),
+])
+def test_identified_values_printed_to_their_uncertainty(value, std, text):
+    from pkmkit.cli.calibration_cmds import with_std
+    assert with_std(value, std) == text

@@ -7,6 +7,7 @@ Lengths are in metres unless ``--units`` or the files say otherwise; angles in d
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -343,6 +344,23 @@ def _tolerances(items, machine, unit: str) -> dict[str, float]:
     return out
 
 
+def with_std(value: float, std: float) -> str:
+    """``value ± std`` with the standard deviation to two significant digits and the value
+    rounded at the same decimal place (GUM's convention: no digit finer than the uncertainty),
+    e.g. ``+0.026 ± 0.025``; ``value``'s six significant digits where ``std`` is not a positive
+    finite number."""
+    if not (math.isfinite(std) and std > 0.0) or not math.isfinite(value):
+        return f"{value:+.6g} ± {std:.2g}"
+    std_text = f"{std:.2g}"
+    place = math.floor(math.log10(float(std_text))) - 1  # decimal place of std's second digit
+    if -10 <= place <= 0:
+        return f"{round(value, -place):+.{-place}f} ± {std:.{-place}f}"
+    if 0 < place <= 15 and abs(value) < 1e16:
+        return f"{round(value, -place):+.0f} ± {float(std_text):.0f}"
+    digits = max(1, math.floor(math.log10(abs(value))) - place + 1) if value else 1
+    return f"{value:+.{digits}g} ± {std_text}"
+
+
 def _print_calibration(result, payload: dict, unit: str) -> None:
     scale = length_scale(unit)
     click.echo(f"{result.nominal.name}: {result.kind} calibration, "
@@ -367,10 +385,10 @@ def _print_calibration(result, payload: dict, unit: str) -> None:
     elif result.names or result.setup_names:
         click.echo("  identified (value ± std):")
     for n in result.names:
-        click.echo(f"    {n:10s} {payload['parameters'][n]:+.6g} ± {payload['std'][n]:.2g} "
+        click.echo(f"    {n:10s} {with_std(payload['parameters'][n], payload['std'][n])} "
                    f"{payload['parameter_units'][n]}")
     for n in result.setup_names:
-        click.echo(f"    {n:10s} {payload['setup'][n]:+.8g} ± {payload['setup_std'][n]:.2g}")
+        click.echo(f"    {n:10s} {with_std(payload['setup'][n], payload['setup_std'][n])}")
     click.echo(f"  left at nominal: {len(result.unidentifiable)} (see --json or report.html)")
     if result.verdict is not None:
         for line in result.verdict.lines():
