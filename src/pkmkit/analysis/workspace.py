@@ -296,8 +296,9 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     here. Where only home's part is kept and the machine's inverse continues from neighbours
     (joint chains), the grid is evaluated by a flood fill from home instead
     (:mod:`pkmkit.analysis.flood`: the same kept part; ``criteria.whole_grid`` or a
-    ``scheduler`` evaluates every point). ``factors=False``: the map's transmission factors and condition numbers are NaN
-    unless a criterion reads them (:func:`evaluate_poses`), e.g. to size the region."""
+    ``scheduler`` evaluates every point). ``factors=False``: the map's transmission factors
+    and condition numbers are NaN unless a criterion reads them (:func:`evaluate_poses`),
+    e.g. to size the region."""
     criteria = criteria or Criteria()
     flooded = (flood_grid(machine, grid, criteria, machine.home_pose, factors=factors)
                if floods(machine, criteria, scheduler) else None)
