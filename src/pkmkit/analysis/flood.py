@@ -16,7 +16,7 @@ infeasible rim, and the kept part is the one the whole grid gives.
 
 Seeds: home's grid point when it is feasible; else, as the whole grid's study does
 (``_part_next_to``: a home at a stroke end rounds to a grid point just outside), the feasible
-points of the cell around it (one step along each free axis). With no feasible seed — or home
+point nearest home of the cell around it (one step along each free axis). With no feasible seed — or home
 outside the grid — the study keeps the largest part, which needs every point: :func:`flood_grid`
 returns None and the caller evaluates the whole grid.
 """
@@ -110,9 +110,11 @@ def _evaluate(machine: Any, grid: Grid, criteria: Criteria, flat: np.ndarray,
 
 
 def _seeds(machine: Any, grid: Grid, criteria: Criteria, home: np.ndarray, factors: bool,
-           store: _Store) -> tuple[np.ndarray, np.ndarray] | None:
-    """Flat indices and solutions of the points the fill starts from (module docstring), or
-    None (no feasible seed: the whole grid is needed)."""
+           store: _Store, known: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray] | None:
+    """Flat index and solution of the point the fill starts from (module docstring), or None
+    (no feasible seed: the whole grid is needed). The feasible points of the cell evaluated on
+    the way are put in ``known`` (flat index: solution): the fill takes them in when it
+    reaches them."""
     index = grid.nearest_index(home)
     if index is None:
         return None
@@ -127,10 +129,16 @@ def _seeds(machine: Any, grid: Grid, criteria: Criteria, home: np.ndarray, facto
     if not cell.size:
         return None
     solution = _evaluate(machine, grid, criteria, cell, None, factors, store)
-    ok = store.feasible[cell]
-    if not ok.any():
+    ok = np.flatnonzero(store.feasible[cell])
+    if not ok.size:
         return None
-    return cell[ok], solution[ok]
+    # the feasible point nearest home (the first in C order at a tie), whose part the whole
+    # grid's study keeps (workspace._part_next_to): the other parts around home are not filled
+    free = list(grid.free)
+    gap = np.linalg.norm(grid_points_at(grid, cell[ok])[:, free] - home[free], axis=1)
+    nearest = ok[int(np.argmin(gap))]
+    known.update({int(cell[k]): solution[k] for k in ok})
+    return cell[nearest:nearest + 1], solution[nearest:nearest + 1]
 
 
 def _frontier(grid: Grid, machine: Any, new: np.ndarray, solution: np.ndarray,
@@ -169,10 +177,14 @@ def flood_grid(machine: Any, grid: Grid, criteria: Criteria, home: np.ndarray, *
     not evaluated) and the ``(grid.size,)`` mask of the points evaluated — or None when no
     seed is feasible (the caller evaluates the whole grid)."""
     store = _Store(grid.size)
-    seeds = _seeds(machine, grid, criteria, np.asarray(home, dtype=float), factors, store)
+    known: dict[int, np.ndarray] = {}
+    seeds = _seeds(machine, grid, criteria, np.asarray(home, dtype=float), factors, store,
+                   known)
     if seeds is None:
         return None
     new, solution = seeds
+    filled = np.zeros(grid.size, dtype=bool)  # the points of the fill (feasible, reached)
+    filled[new] = True
     # a bar over the grid's points counts those evaluated (the fill ends well short of all)
     bar = tracked(range(grid.size), total=grid.size, unit="point",
                   label=f"{machine.id}: flood fill from home, points evaluated")
@@ -180,14 +192,24 @@ def flood_grid(machine: Any, grid: Grid, criteria: Criteria, home: np.ndarray, *
     if counted is not None:
         counted(store.points)
     while new.size:
-        target, start = _frontier(grid, machine, new, solution, store.evaluated)
-        if not target.size:
-            break
-        found = _evaluate(machine, grid, criteria, target, start, factors, store)
-        if counted is not None:
-            counted(len(target))
+        # the neighbours not evaluated, and the feasible ones evaluated around home and not
+        # yet reached (their part may be the fill's)
+        closed = store.evaluated & ~(store.feasible & ~filled)
+        target, start = _frontier(grid, machine, new, solution, closed)
+        taken = store.evaluated[target]
+        joined = target[taken]
+        target, start = target[~taken], start[~taken]
+        found = np.empty((0, solution.shape[1]))
+        if target.size:
+            found = _evaluate(machine, grid, criteria, target, start, factors, store)
+            if counted is not None:
+                counted(len(target))
         ok = store.feasible[target]
-        new, solution = target[ok], found[ok]
+        new = np.concatenate([target[ok], joined])
+        solution = np.concatenate([found[ok], *([known[int(k)]] for k in joined)])
+        order = np.argsort(new)
+        new, solution = new[order], solution[order]
+        filled[new] = True
     if counted is not None:
         bar.close()
     return store.evaluation(), store.evaluated
