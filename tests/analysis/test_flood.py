@@ -111,8 +111,8 @@ def test_each_point_starts_from_a_feasible_neighbour_the_one_behind_first(monkey
     mask = np.ones((6, 5), dtype=bool)
     mask[2, 1:] = False  # a wall: the points beyond it are reached around its end
     home = [0.0, 0.4]  # grid point (0, 4)
-    grid, m, out = _flooded(monkeypatch, mask, home, no_start=[np.ravel_multi_index((1, 0),
-                                                                                      (6, 5))])
+    no_start = [np.ravel_multi_index((1, 0), (6, 5))]
+    _, m, out = _flooded(monkeypatch, mask, home, no_start=no_start)
     ev, evaluated = out
     assert evaluated.all()
     feasible = ev.feasible.reshape(mask.shape)
@@ -129,7 +129,8 @@ def test_each_point_starts_from_a_feasible_neighbour_the_one_behind_first(monkey
                 assert set(neighbours) <= {np.ravel_multi_index((1, 0), mask.shape)}
                 continue
             j = np.unravel_index(m._flat(row[None])[0], mask.shape)
-            assert seen[j] and feasible[j] and sum(abs(a - b) for a, b in zip(i, j)) == 1
+            assert seen[j] and feasible[j]
+            assert sum(abs(a - b) for a, b in zip(i, j, strict=True)) == 1
             behind = (i[0] - 1, i[1])
             if i[0] > 0 and seen[behind] and feasible[behind] and behind != (1, 0):
                 assert j == behind  # the whole grid's continuation neighbour when it is there
@@ -163,7 +164,7 @@ def test_the_progress_bar_counts_the_points_evaluated(monkeypatch):
     mask = np.zeros((8, 8), dtype=bool)
     mask[:5, :5] = True
     with progress_display(True, delay=0.0, stream=stream):
-        _grid_, _m, out = _flooded(monkeypatch, mask, [0.2, 0.2])
+        out = _flooded(monkeypatch, mask, [0.2, 0.2])[2]
     assert "flood fill from home, points evaluated" in stream.getvalue()
     assert bars[0].total == 64 and bars[0].n == int(out[1].sum()) == 25 + 10
 
@@ -205,7 +206,7 @@ def test_tripteor_flood_is_the_whole_grid():
     lo, hi = m.default_box()
     grid = make_grid(lo, hi, free=(0, 1, 2), base=m.home_pose, names=m.pose_names,
                      resolution=15)
-    fl, whole = _compare(m, grid)
+    fl = _compare(m, grid)[0]
     assert fl.reference == "home"
 
 
@@ -213,11 +214,12 @@ def test_tripteor_flood_from_the_cell_around_home():
     """Home's own grid point beyond a stroke: the fill starts from the feasible points of the
     cell around it (the study's "home (within one grid step of it)")."""
     m = pkmkit.machine("tripteor-x7")
-    point = m.home_pose[:3] + [3.8e-5, 4.4e-5, 1.01e-3]  # beyond Q5's stroke (home at its end)
+    # a point beyond Q5's stroke (home is at its end)
+    point = m.home_pose[:3] + np.array([3.8e-5, 4.4e-5, 1.01e-3])
     half = np.array([6, 6, 4]) * 0.004
     grid = make_grid(point - half, point + half, free=(0, 1, 2), base=m.home_pose,
                      names=m.pose_names, resolution=13)  # step 4 mm, a point at `point`
-    fl, whole = _compare(m, grid)
+    fl = _compare(m, grid)[0]
     assert fl.reference == "home (within one grid step of it)"
 
 
@@ -242,3 +244,20 @@ def test_closed_form_machines_evaluate_the_whole_grid():
     assert not flood.floods(tri, Criteria(whole_grid=True))
     assert not flood.floods(tri, Criteria(), scheduler="local:1")
     assert flood.floods(tri, Criteria())
+
+
+def test_tripteor_flood_with_a_stiffness_criterion_and_a_wrench():
+    m = pkmkit.machine("tripteor-x7")
+    lo, hi = m.default_box()
+    grid = make_grid(lo, hi, free=(0, 1, 2), base=m.home_pose, names=m.pose_names,
+                     resolution=11)
+    wrench = (0.0, 0.0, -100.0, 0.0, 0.0, 0.0)
+    plain = compute_workspace(m, grid, Criteria(wrench=wrench), refine=False, inscribed=False)
+    bound = float(np.median(plain.stiffness[plain.feasible]))
+    crit = Criteria(min_stiffness=bound, wrench=wrench)
+    fl, whole = _compare(m, grid, crit)
+    assert "stiffness" in fl.masks and fl.feasible.sum() < plain.feasible.sum()
+    keep = fl.feasible
+    np.testing.assert_allclose(fl.stiffness[keep], whole.stiffness[keep], rtol=1e-10)
+    np.testing.assert_allclose(fl.deflection[keep], whole.deflection[keep], rtol=1e-10)
+    assert np.isnan(fl.stiffness[~fl.evaluated]).all()

@@ -16,9 +16,10 @@ infeasible rim, and the kept part is the one the whole grid gives.
 
 Seeds: home's grid point when it is feasible; else, as the whole grid's study does
 (``_part_next_to``: a home at a stroke end rounds to a grid point just outside), the feasible
-point nearest home of the cell around it (one step along each free axis). With no feasible seed — or home
-outside the grid — the study keeps the largest part, which needs every point: :func:`flood_grid`
-returns None and the caller evaluates the whole grid.
+point nearest home of the cell around it (one step along each free axis); the cell's other
+feasible points join the fill when it reaches them. With no feasible seed — or home outside the
+grid — the study keeps the largest part, which needs every point: :func:`flood_grid` returns
+None and the caller evaluates the whole grid.
 """
 
 from __future__ import annotations
