@@ -98,11 +98,12 @@ _MAP_INDICES = {"chain": (*CHAIN_INDICES, *STIFFNESS_INDICES, "actuators")}
 _INSCRIBED_RTOLS = {"chain": None}
 
 
-def _criteria(bounds, kappa_max, no_strokes) -> Criteria:
+def _criteria(bounds, kappa_max, no_strokes, whole_grid: bool = False) -> Criteria:
     if kappa_max is not None and not (np.isfinite(kappa_max) and kappa_max >= 1):
         raise InputError(f"--kappa-max must be a condition number >= 1, got {kappa_max:g}")
     check_plausible("--kappa-max", kappa_max, "condition")
-    return Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max, strokes=not no_strokes)
+    return Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max, strokes=not no_strokes,
+                    whole_grid=whole_grid)
 
 
 def register(cli: click.Group) -> None:
@@ -384,8 +385,7 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
     m, data = machine_and_data(machine_name, assignments, units)
     scale = length_scale(units)
     elastic, _ = stiffness_criteria(m, data, min_stiffness, max_deflection, wrench_text)
-    criteria = replace(_criteria(bounds, kappa_max, no_strokes), whole_grid=whole_grid,
-                       **elastic)
+    criteria = replace(_criteria(bounds, kappa_max, no_strokes, whole_grid), **elastic)
     frame = machine_frame(m, parse_orientation(m, orientation_text, convention))
     slice_ = parse_slice(frame, slice_text, scale)
     grid = build_grid(frame, box_text, slice_, scale, resolution)
