@@ -184,8 +184,10 @@ def flood_grid(machine: Any, grid: Grid, criteria: Criteria, home: np.ndarray, *
     if seeds is None:
         return None
     new, solution = seeds
-    filled = np.zeros(grid.size, dtype=bool)  # the points of the fill (feasible, reached)
-    filled[new] = True
+    # closed: evaluated, except the feasible points of home's cell the fill has not reached
+    # (their part may be the fill's: they join it when reached)
+    closed = store.evaluated.copy()
+    closed[[k for k in known if k not in set(new.tolist())]] = False
     # a bar over the grid's points counts those evaluated (the fill ends well short of all)
     bar = tracked(range(grid.size), total=grid.size, unit="point",
                   label=f"{machine.id}: flood fill from home, points evaluated")
@@ -193,10 +195,8 @@ def flood_grid(machine: Any, grid: Grid, criteria: Criteria, home: np.ndarray, *
     if counted is not None:
         counted(store.points)
     while new.size:
-        # the neighbours not evaluated, and the feasible ones evaluated around home and not
-        # yet reached (their part may be the fill's)
-        closed = store.evaluated & ~(store.feasible & ~filled)
         target, start = _frontier(grid, machine, new, solution, closed)
+        closed[target] = True
         taken = store.evaluated[target]
         joined = target[taken]
         target, start = target[~taken], start[~taken]
@@ -210,7 +210,6 @@ def flood_grid(machine: Any, grid: Grid, criteria: Criteria, home: np.ndarray, *
         solution = np.concatenate([found[ok], *([known[int(k)]] for k in joined)])
         order = np.argsort(new)
         new, solution = new[order], solution[order]
-        filled[new] = True
     if counted is not None:
         bar.close()
     return store.evaluation(), store.evaluated
