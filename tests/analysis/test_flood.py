@@ -147,6 +147,18 @@ def _neighbours(i, mask):
                 yield tuple(j)
 
 
+def test_large_wavefronts_are_evaluated_in_chunks(monkeypatch):
+    mask = np.ones((9, 9), dtype=bool)
+    mask[4, :7] = False
+    whole = _flooded(monkeypatch, mask, [0.1, 0.2])[2]
+    monkeypatch.setattr(flood, "EVALUATION_CHUNK", 3)
+    _, m, chunked = _flooded(monkeypatch, mask, [0.1, 0.2])
+    assert max(len(points) for points, _ in m.calls) == 3
+    np.testing.assert_array_equal(chunked[1], whole[1])
+    np.testing.assert_array_equal(chunked[0].feasible, whole[0].feasible)
+    np.testing.assert_array_equal(chunked[0].q, whole[0].q)
+
+
 def test_home_off_the_grid_or_no_feasible_seed_needs_the_whole_grid(monkeypatch):
     mask = np.zeros((7, 7), dtype=bool)
     mask[5:, 5:] = True
