@@ -371,9 +371,8 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
 @JSON_OPTION
 def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text,
               orientation_text, convention, no_strokes, whole_grid, cube, center_text,
-              min_stiffness,
-              max_deflection, wrench_text, with_stiffness, resolution, out, scheduler, units,
-              as_json):
+              min_stiffness, max_deflection, wrench_text, with_stiffness, resolution, out,
+              scheduler, units, as_json):
     """Workspace over a box or a plane: area/volume, largest inscribed square/cube, transmission
     factors inside it, global conditioning index, and (with --cube/--center) whether a
     prescribed one is feasible (in the --slice plane when one is given).
