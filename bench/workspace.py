@@ -3,10 +3,12 @@ run in this process, with the CPU time of each stage and the rows sent to the in
 velocity models by each.
 
 Stages: ``enclosing_frame`` (the default box widened on coarse grids until the workspace fits),
-``evaluate_grid`` (the criteria on the study grid), ``refine_box`` (the inscribed cube refined
-beyond the grid: SLSQP on a 25³ lattice; analytic slack gradients for full-pose machines,
-finite differences otherwise), ``check_region`` (the
-refined cube checked densely, with its actuator extremes refined by ``_q_extremes``).
+``evaluate_grid`` (the criteria on every point of a grid), ``flood_grid`` (the criteria by a
+flood fill from home, joint chains: :mod:`pkmkit.analysis.flood`), ``refine_box`` (the
+inscribed cube refined beyond the grid: SLSQP on a 25³ lattice; analytic slack gradients for
+full-pose machines, finite differences otherwise), ``check_region`` (the refined cube
+checked densely, with its actuator extremes refined by ``_q_extremes``); per study, the points
+evaluated against the grids' points.
 
 Run: ``python bench/workspace.py gough-stewart verne tripteor-x7`` (each study once: they take
 seconds to minutes; the machine is shared, so compare CPU seconds, not wall time). The
@@ -28,9 +30,11 @@ import pkmkit
 import pkmkit.analysis.region_check as region_check
 import pkmkit.analysis.workspace as workspace
 import pkmkit.cli.analysis_cmds as analysis_cmds
+import pkmkit.cli.grid_options as grid_options
 from pkmkit.cli.main import cli
 
-STAGES = ("enclosing_frame", "evaluate_grid", "refine_box", "check_region", "_q_extremes")
+STAGES = ("enclosing_frame", "evaluate_grid", "flood_grid", "refine_box", "check_region",
+          "_q_extremes")
 
 
 def _timed(module: Any, name: str, seconds: collections.Counter, calls: collections.Counter,
@@ -51,12 +55,30 @@ def _timed(module: Any, name: str, seconds: collections.Counter, calls: collecti
 
 SECONDS: collections.Counter = collections.Counter()
 CALLS: collections.Counter = collections.Counter()
+#: per grid of the study (label): [points evaluated, grid points], summed over its grids
+POINTS: dict[str, list[int]] = {}
+
+
+def _counted(module: Any, label: str) -> None:
+    """Replace ``module.compute_workspace`` by a wrapper adding the points its maps evaluated
+    and their grids' points to ``POINTS[label]``."""
+    function: Callable = module.compute_workspace
+
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        wmap = function(*args, **kwargs)
+        totals = POINTS.setdefault(label, [0, 0])
+        totals[0] += wmap.points_evaluated
+        totals[1] += wmap.grid.size
+        return wmap
+
+    module.compute_workspace = wrapper
 
 
 def study(machine: str, extra: list[str]) -> None:
     """One ``pkmkit workspace`` study, its CPU time per stage printed."""
     SECONDS.clear()
     CALLS.clear()
+    POINTS.clear()
     start, wall = time.process_time(), time.perf_counter()
     result = CliRunner().invoke(cli, ["workspace", machine, *extra])
     total, elapsed = time.process_time() - start, time.perf_counter() - wall
@@ -65,6 +87,8 @@ def study(machine: str, extra: list[str]) -> None:
     for name in STAGES:
         if CALLS[name]:
             print(f"  {name:16s} {SECONDS[name]:7.2f} s  ({CALLS[name]} calls)")
+    for label, (evaluated, size) in POINTS.items():
+        print(f"  {label}: {evaluated:,} points evaluated of {size:,} grid points")
     print("  " + result.output.replace("\n", "\n  ").rstrip())
     if result.exception is not None and not isinstance(result.exception, SystemExit):
         raise result.exception
@@ -83,9 +107,12 @@ def main() -> None:
     print(f"pkmkit {pkmkit.__version__} (stages nest: check_region holds _q_extremes, "
           "refine_box and enclosing_frame hold grid evaluations)")
     for module, name in ((analysis_cmds, "enclosing_frame"), (workspace, "evaluate_grid"),
-                         (workspace, "refine_box"), (workspace, "check_region"),
+                         (workspace, "flood_grid"), (workspace, "refine_box"),
+                         (workspace, "check_region"),
                          (analysis_cmds, "check_region"), (region_check, "_q_extremes")):
         _timed(module, name, SECONDS, CALLS, name)
+    _counted(analysis_cmds, "study grid")
+    _counted(grid_options, "frame search grids")
     if options.ab_direct:
         _ab_direct(options.machines, options.args.split(), options.ab_direct)
         return

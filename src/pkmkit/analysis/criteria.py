@@ -60,6 +60,14 @@ class Criteria:
             modes is solved again from home (:mod:`pkmkit.machines.warm_starts`), so the
             grids give the start from home's answer wherever it is in home's modes
             (tests/analysis/test_continuation_modes.py); False: every point from home.
+        whole_grid: evaluate every point of a grid. By default, when only the part connected
+            to home is kept (``connected``) and the machine's inverse is numerical and
+            continues from a neighbour's solution (``machine.inverse_continues``: joint
+            chains), a grid is evaluated by a flood fill from home
+            (:mod:`pkmkit.analysis.flood`): the same kept part, the points outside it and
+            not next to it left unevaluated (:attr:`WorkspaceMap.evaluated
+            <pkmkit.analysis.workspace.WorkspaceMap>`); True: every criterion's map over
+            the whole grid.
     """
 
     bounds: tuple[float, float] | None = None
@@ -74,6 +82,7 @@ class Criteria:
     wrench: tuple[float, ...] | None = None
     stiffness_data: Any = None
     continuation: bool = True
+    whole_grid: bool = False
 
     def __post_init__(self) -> None:
         for name in ("min_stiffness", "max_deflection"):
@@ -201,10 +210,14 @@ def _concatenate(parts: list[PoseEvaluation]) -> PoseEvaluation:
 
 
 def _evaluate_chunk(machine: Machine, points: np.ndarray, criteria: Criteria,
-                    slab: int | None = None, *, factors: bool = True) -> PoseEvaluation:
+                    slab: int | None = None, *, factors: bool = True,
+                    inverse: Any = None) -> PoseEvaluation:
     """The criteria at ``points`` (``slab``: points per slab of the grid they come from, for
-    the inverse model's continuation, :mod:`pkmkit.analysis.continuation`)."""
-    ev = _evaluate_kinematics(machine, points, criteria, slab, factors=factors)
+    the inverse model's continuation, :mod:`pkmkit.analysis.continuation`; ``inverse``: the
+    inverse model's ``full_output`` record at ``points`` when the caller solved it, e.g. from
+    neighbours' solutions, :mod:`pkmkit.analysis.flood`)."""
+    ev = _evaluate_kinematics(machine, points, criteria, slab, factors=factors,
+                              inverse=inverse)
     if not (criteria.stiffness_bounded or criteria.wrench is not None):
         return ev
     return _with_stiffness(machine, points, ev, criteria)
@@ -232,12 +245,13 @@ def _with_stiffness(machine: Machine, points: np.ndarray, ev: PoseEvaluation,
 
 
 def _evaluate_kinematics(machine: Machine, points: np.ndarray, criteria: Criteria,
-                         slab: int | None = None, *, factors: bool = True) -> PoseEvaluation:
+                         slab: int | None = None, *, factors: bool = True,
+                         inverse: Any = None) -> PoseEvaluation:
     """The criteria at poses ``points (M, dims)`` through the machine protocol: ``ik``
     (reachable; joints beyond their strokes — a joint chain's passive joints too), ``jacobian``
     (transmission factors, conditioning) and ``in_working_mode`` (the assembly mode, away from
     parallel singularities)."""
-    inv = inverse_of_chunk(machine, points, slab)
+    inv = inverse_of_chunk(machine, points, slab) if inverse is None else inverse
     q = np.atleast_2d(inv.q)
     reachable = np.atleast_1d(inv.status == Status.OK)
     lines = machine.translation_lines(points)

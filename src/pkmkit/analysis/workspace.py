@@ -34,6 +34,7 @@ from pkmkit.analysis.criteria import (  # noqa: F401  (re-exported: their old ho
     evaluate_poses,
     study_length,
 )
+from pkmkit.analysis.flood import flood_grid, floods
 from pkmkit.analysis.grids import Grid
 from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.inscribed import largest_box
@@ -184,6 +185,10 @@ class WorkspaceMap:
         stiffness: ``grid.shape`` smallest translational stiffness (N/m) when the criteria ask
             for stiffness (:attr:`Criteria.stiffness_bounded` or a wrench), else None.
         deflection: ``grid.shape`` deflection under the criteria's wrench (m), or None.
+        evaluated: ``grid.shape`` the points whose criteria were evaluated, or None (every
+            point). A flood fill from home (:mod:`pkmkit.analysis.flood`) evaluates the kept
+            part and its rim only: elsewhere every mask is False and q, the factors and the
+            condition NaN — not evaluated, not failing (:attr:`criteria_counts`).
     """
 
     grid: Grid
@@ -198,6 +203,18 @@ class WorkspaceMap:
     inscribed_check: RegionCheck | None = field(default=None)
     stiffness: np.ndarray | None = field(default=None)
     deflection: np.ndarray | None = field(default=None)
+    evaluated: np.ndarray | None = field(default=None)
+
+    @property
+    def points_evaluated(self) -> int:
+        """Number of grid points whose criteria were evaluated."""
+        return self.grid.size if self.evaluated is None else int(self.evaluated.sum())
+
+    @property
+    def criteria_counts(self) -> dict[str, int]:
+        """``{criterion: points passing it}`` among the points evaluated
+        (:attr:`points_evaluated`; after a flood fill, not the whole grid)."""
+        return {k: int(v.sum()) for k, v in self.masks.items()}
 
     @property
     def measure(self) -> float:
@@ -276,10 +293,20 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
     is refined in its centre and side to 10⁻⁴ of the side (:func:`refine_box`), which removes
     the grid's under-estimate (up to two steps) and its centring on grid points.
     ``scheduler``: evaluate the grid on Dask (see :func:`evaluate_grid`); the rest runs
-    here. ``factors=False``: the map's transmission factors and condition numbers are NaN
-    unless a criterion reads them (:func:`evaluate_poses`), e.g. to size the region."""
+    here. Where only home's part is kept and the machine's inverse continues from neighbours
+    (joint chains), the grid is evaluated by a flood fill from home instead
+    (:mod:`pkmkit.analysis.flood`: the same kept part; ``criteria.whole_grid`` or a
+    ``scheduler`` evaluates every point). ``factors=False``: the map's transmission factors
+    and condition numbers are NaN unless a criterion reads them (:func:`evaluate_poses`),
+    e.g. to size the region."""
     criteria = criteria or Criteria()
-    evaluation = evaluate_grid(machine, grid, criteria, scheduler=scheduler, factors=factors)
+    flooded = (flood_grid(machine, grid, criteria, machine.home_pose, factors=factors)
+               if floods(machine, criteria, scheduler) else None)
+    if flooded is None:
+        evaluation, evaluated = evaluate_grid(machine, grid, criteria, scheduler=scheduler,
+                                              factors=factors), None
+    else:
+        evaluation, evaluated = flooded
     shape = grid.shape
     masks = {k: v.reshape(shape) for k, v in evaluation.masks.items()}
     feasible = evaluation.feasible.reshape(shape)
@@ -301,6 +328,7 @@ def compute_workspace(machine: Machine, grid: Grid, criteria: Criteria | None = 
         stiffness=None if evaluation.stiffness is None else evaluation.stiffness.reshape(shape),
         deflection=(None if evaluation.deflection is None
                     else evaluation.deflection.reshape(shape)),
+        evaluated=None if evaluated is None else evaluated.reshape(shape),
     )
 
 

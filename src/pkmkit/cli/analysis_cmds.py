@@ -98,11 +98,12 @@ _MAP_INDICES = {"chain": (*CHAIN_INDICES, *STIFFNESS_INDICES, "actuators")}
 _INSCRIBED_RTOLS = {"chain": None}
 
 
-def _criteria(bounds, kappa_max, no_strokes) -> Criteria:
+def _criteria(bounds, kappa_max, no_strokes, whole_grid: bool = False) -> Criteria:
     if kappa_max is not None and not (np.isfinite(kappa_max) and kappa_max >= 1):
         raise InputError(f"--kappa-max must be a condition number >= 1, got {kappa_max:g}")
     check_plausible("--kappa-max", kappa_max, "condition")
-    return Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max, strokes=not no_strokes)
+    return Criteria(bounds=parse_bounds(bounds), kappa_max=kappa_max, strokes=not no_strokes,
+                    whole_grid=whole_grid)
 
 
 def register(cli: click.Group) -> None:
@@ -318,7 +319,10 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
                      "strokes": crit.strokes, "connected": crit.connected},
         ("area" if two_d else "volume"): wmap.measure / scale ** len(grid.free),
         "feasible_points": int(wmap.feasible.sum()),
-        "points_per_criterion": {k: int(v.sum()) for k, v in wmap.masks.items()},
+        # after a flood fill from home, over the points evaluated (not the whole grid)
+        "points_per_criterion": wmap.criteria_counts,
+        "points_evaluated": wmap.points_evaluated,
+        "evaluation": "whole grid" if wmap.evaluated is None else "flood fill from home",
         "reference": wmap.reference,
         "faces_reached": wmap.faces_reached(),
         "inscribed": None if box is None else {
@@ -349,6 +353,9 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
 @ORIENTATION_OPTION
 @ANGLES_OPTION
 @click.option("--no-strokes", is_flag=True, help="Ignore the actuator strokes.")
+@click.option("--whole-grid", is_flag=True,
+              help="Evaluate every grid point (joint chains are otherwise evaluated by a flood "
+                   "fill from home: the same workspace, fewer points evaluated).")
 @click.option("--cube", "cube", type=float, metavar="SIDE",
               help="Check a prescribed square/cube of this side (needs --center).")
 @click.option("--center", "center_text", help="Centre X,Y[,Z] of the prescribed square/cube.")
@@ -363,9 +370,9 @@ def workspace_summary(m: Machine, wmap: WorkspaceMap, scale: float, units: str) 
 @UNITS_OPTION
 @JSON_OPTION
 def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text,
-              orientation_text, convention, no_strokes, cube, center_text, min_stiffness,
-              max_deflection, wrench_text, with_stiffness, resolution, out, scheduler, units,
-              as_json):
+              orientation_text, convention, no_strokes, whole_grid, cube, center_text,
+              min_stiffness, max_deflection, wrench_text, with_stiffness, resolution, out,
+              scheduler, units, as_json):
     """Workspace over a box or a plane: area/volume, largest inscribed square/cube, transmission
     factors inside it, global conditioning index, and (with --cube/--center) whether a
     prescribed one is feasible (in the --slice plane when one is given).
@@ -377,7 +384,7 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
     m, data = machine_and_data(machine_name, assignments, units)
     scale = length_scale(units)
     elastic, _ = stiffness_criteria(m, data, min_stiffness, max_deflection, wrench_text)
-    criteria = replace(_criteria(bounds, kappa_max, no_strokes), **elastic)
+    criteria = replace(_criteria(bounds, kappa_max, no_strokes, whole_grid), **elastic)
     frame = machine_frame(m, parse_orientation(m, orientation_text, convention))
     slice_ = parse_slice(frame, slice_text, scale)
     grid = build_grid(frame, box_text, slice_, scale, resolution)
@@ -397,9 +404,9 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
     if not wmap.masks["reachable"].any():
         raise InputError("no pose of the box is reachable; choose another --box or --slice")
     if not wmap.feasible.any():
-        counts = ", ".join(f"{k} {int(v.sum())}" for k, v in wmap.masks.items())
+        counts = ", ".join(f"{k} {v}" for k, v in wmap.criteria_counts.items())
         raise InputError(f"no pose of the box satisfies every criterion (points passing each: "
-                         f"{counts} of {grid.size})")
+                         f"{counts} of {wmap.points_evaluated} evaluated)")
     summary = workspace_summary(m, wmap, scale, units)
     summary["grid"]["default_box_widened"] = widened
     summary["criteria"].update(criteria_fields(criteria))
@@ -478,8 +485,10 @@ def _print_workspace(m: Machine, s: dict, units: str) -> None:
         g = s["grid"]
         click.echo(f"  default box widened {g['default_box_widened']} time(s) to hold the "
                    f"workspace: {fmt(g['lower'])} to {fmt(g['upper'])} {units}")
+    flood = ("" if s["evaluation"] == "whole grid" else
+             f"; {s['points_evaluated']} evaluated, by a flood fill from home")
     click.echo(f"  {what}: {s[what]:.6g} {units}^{power} "
-               f"({s['feasible_points']} of {int(np.prod(s['grid']['shape']))} points)")
+               f"({s['feasible_points']} of {int(np.prod(s['grid']['shape']))} points{flood})")
     if "orientation" in s:
         o = s["orientation"]
         held = (f"tool axis {fmt(o['tool_axis'])}" if "tool_axis" in o else

@@ -36,7 +36,9 @@ _CLASSES = (
     ("stiffness", "#9ecae1"),
     ("disconnected", "#c7e9c0"),
     ("workspace", "#41ab5d"),
+    ("not evaluated", "#ffffff"),  # beyond a flood fill's rim (WorkspaceMap.evaluated)
 )
+_DISCONNECTED, _WORKSPACE, _NOT_EVALUATED = 6, 7, 8
 
 
 def check_figure_path(path: str | Path) -> Path:
@@ -203,8 +205,9 @@ def _draw_box(ax, box: InscribedBox | None, free: tuple[int, ...], unit: str = "
 
 def classify(wmap: WorkspaceMap) -> np.ndarray:
     """Integer class per grid point: index into the workspace classes (first failing criterion,
-    "disconnected", or "workspace")."""
-    out = np.full(wmap.grid.shape, len(_CLASSES) - 2)  # disconnected by default
+    "disconnected", "workspace", or "not evaluated": beyond the rim of a flood fill from
+    home)."""
+    out = np.full(wmap.grid.shape, _DISCONNECTED)  # disconnected by default
     order = ("reachable", "strokes", "mode", "bounds", "condition", "stiffness")
     assigned = np.zeros(wmap.grid.shape, bool)
     for k, name in enumerate(order):
@@ -213,7 +216,9 @@ def classify(wmap: WorkspaceMap) -> np.ndarray:
         fail = ~wmap.masks[name] & ~assigned
         out[fail] = k
         assigned |= fail
-    out[wmap.feasible] = len(_CLASSES) - 1
+    out[wmap.feasible] = _WORKSPACE
+    if wmap.evaluated is not None:
+        out[~wmap.evaluated] = _NOT_EVALUATED
     return out
 
 
