@@ -192,22 +192,61 @@ def thread_count() -> int:
 
 
 def run_chunks(work: Callable[[int, int], None], rows: int) -> None:
-    """``work(start, stop)`` over ``range(rows)`` in chunks of :data:`THREAD_ROWS`, on
-    :func:`thread_count` threads when the batch has at least two chunks (``work`` must release
-    the GIL to gain anything: the compiled kernels do), else in this thread."""
+    """``work(start, stop)`` over ``range(rows)`` in pieces of :data:`THREAD_ROWS`, on
+    :func:`thread_count` threads when the batch has at least two pieces (``work`` must release
+    the GIL to gain anything: the compiled kernels do), else in this thread.
+
+    The calling thread takes part: it and ``threads − 1`` threads of a persistent pool each
+    draw the next piece from one shared counter until none is left (a thread slowed by a
+    competing process simply takes fewer), so a call costs one hand-off per helper thread,
+    not one submission and one future per piece (≈ 30 µs each, 2 ms of CPU per 10⁶ rows
+    measured). An exception in any piece stops the others from drawing and is raised here
+    once every helper has returned (``work`` never runs after this returns). A helper the
+    pool has not started by the time the calling thread finds no piece left is withdrawn, so
+    concurrent and nested calls cannot wait on each other."""
     threads = thread_count()
     if threads == 1 or rows < 2 * THREAD_ROWS:
         work(0, rows)
         return
+    import threading
+
+    pieces = iter(range(0, rows, THREAD_ROWS))
+    lock = threading.Lock()
+    failed: list[bool] = []
+
+    def drain() -> None:
+        while True:
+            with lock:
+                start = None if failed else next(pieces, None)
+            if start is None:
+                return
+            try:
+                work(start, min(start + THREAD_ROWS, rows))
+            except BaseException:
+                failed.append(True)
+                raise
+
+    helpers = [_helper_pool(threads - 1).submit(drain)
+               for _ in range(min(threads, -(-rows // THREAD_ROWS)) - 1)]
+    try:
+        drain()
+    finally:
+        # a helper still queued (the pool busy: another call, or a nested one) is withdrawn,
+        # not awaited — the pieces are all drawn; a running one is waited for
+        errors = [None if h.cancel() else h.exception() for h in helpers]
+    for error in errors:
+        if error is not None:
+            raise error
+
+
+def _helper_pool(workers: int) -> ThreadPoolExecutor:
+    """The persistent pool of ``workers`` threads that helps :func:`run_chunks`."""
     global _pool
-    if _pool is None or _pool[0] != threads:
+    if _pool is None or _pool[0] != workers:
         from concurrent.futures import ThreadPoolExecutor
 
-        _pool = (threads, ThreadPoolExecutor(max_workers=threads, thread_name_prefix="pkmkit"))
-    pool = _pool[1]
-    starts = range(0, rows, THREAD_ROWS)
-    for future in [pool.submit(work, s, min(s + THREAD_ROWS, rows)) for s in starts]:
-        future.result()
+        _pool = (workers, ThreadPoolExecutor(max_workers=workers, thread_name_prefix="pkmkit"))
+    return _pool[1]
 
 
 # ``os.environ``'s own dict on POSIX (encoded keys): a membership test there costs tens of
