@@ -26,11 +26,12 @@ no import cost, so the per-pose solvers run native at every batch size.
 is made.
 
 Threads: the compiled kernels release the GIL, and :func:`run_chunks` spreads a large batch
-over :func:`thread_count` threads in chunks taken from a shared queue (a thread slowed by a
-competing process simply takes fewer chunks). ``PKMKIT_THREADS=N`` sets the count; by default
-it is the number of cores this process may use, or 1 where ``OMP_NUM_THREADS=1`` (Dask
-workers, and anyone who bounded the threads of their numerical libraries). The rows are
-independent, so the results do not depend on the count.
+over :func:`thread_count` threads (the calling one and helpers of a persistent pool) in pieces
+drawn from a shared counter (a thread slowed by a competing process simply takes fewer).
+``PKMKIT_THREADS=N`` sets the count; by default it is the number of cores this process may
+use, or 1 where ``OMP_NUM_THREADS=1`` (Dask workers, and anyone who bounded the threads of
+their numerical libraries). The rows are independent, so the results do not depend on the
+count.
 """
 
 from __future__ import annotations
