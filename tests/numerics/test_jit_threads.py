@@ -213,3 +213,46 @@ def test_the_fused_inverse_leaves_nan_exactly_on_the_rows_not_ok(name, monkeypat
             assert not np.isnan(plain[~bad]).any()
             if strokes == "refuse":
                 assert (np.asarray(record.status) == 8).sum() >= 3  # OUT_OF_STROKE rows
+
+
+@pytest.mark.parametrize("name", ["gough-stewart", "verne"])
+def test_a_few_thousand_solver_rows_run_on_two_threads(name, monkeypatch):
+    """The per-row solvers (the hexapod's direct model, the Verne module's position inverse)
+    cost microseconds per row: their pieces are ``SOLVER_PIECE_ROWS`` rows, so a 3000-row
+    batch runs on two threads at once (with ``THREAD_ROWS`` pieces it was one piece, one
+    thread) and gives the one-thread result bit for bit."""
+    import pkmkit
+
+    m = pkmkit.machine(name)
+    rng = np.random.default_rng(11)
+    home = np.asarray(m.home_pose, dtype=float)
+    if name == "verne":
+        x = home[:3] + rng.uniform(-0.1, 0.1, (3000, 3))
+        call = lambda: m.ik(x, full_output=True, strokes="ignore")  # noqa: E731
+    else:
+        q = m.ik(home + rng.uniform(-0.03, 0.03, (3000, 6)), strokes="ignore")
+        call = lambda: m.fk(q, full_output=True, strokes="ignore")  # noqa: E731
+    monkeypatch.setenv("PKMKIT_THREADS", "1")
+    one = call()
+    monkeypatch.setenv("PKMKIT_THREADS", "2")
+    pieces = []
+    real = jit.run_chunks
+
+    def spy(work, rows, *args):
+        meet = threading.Barrier(2, timeout=30)  # breaks unless two threads run at once
+
+        def traced(a, b):
+            pieces.append(b - a)
+            if a == 0 or b - a == jit.SOLVER_PIECE_ROWS and a < 2 * jit.SOLVER_PIECE_ROWS:
+                meet.wait()
+            work(a, b)
+        real(traced, rows, *args)
+
+    monkeypatch.setattr(jit, "run_chunks", spy)
+    two = call()
+    assert sum(pieces) == 3000 and len(pieces) == 3
+    for field in ("pose", "q", "status", "iterations"):
+        a, b = getattr(one, field, None), getattr(two, field, None)
+        if a is not None:
+            a, b = np.asarray(a), np.asarray(b)
+            assert a.tobytes() == b.tobytes(), field

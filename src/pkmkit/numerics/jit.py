@@ -58,6 +58,12 @@ SOLVER_ROWS = 64
 #: every thread: with pieces of 2¹⁶ rows, no chunk was ever spread and a 10⁶-row batch ran on
 #: one core whatever the thread count.
 THREAD_ROWS = 1 << 14
+#: Rows per piece for the per-row iterative solvers (the full-pose direct model, the position
+#: inverse of machines with fewer actuators than six: microseconds per row, not nanoseconds),
+#: passed to :func:`run_chunks` as ``piece``: a piece of 2¹⁰ rows is milliseconds of work, so
+#: a batch of a few thousand rows — the usual size of a direct-model batch — already runs on
+#: every thread (with :data:`THREAD_ROWS` a 10⁴-row batch was one piece, on one thread).
+SOLVER_PIECE_ROWS = 1 << 10
 
 #: The Numba kernels that have a C twin of the same name and arguments in
 #: ``pkmkit.native.kernels``.
@@ -192,8 +198,9 @@ def thread_count() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def run_chunks(work: Callable[[int, int], None], rows: int) -> None:
-    """``work(start, stop)`` over ``range(rows)`` in pieces of :data:`THREAD_ROWS`, on
+def run_chunks(work: Callable[[int, int], None], rows: int, piece: int = 0) -> None:
+    """``work(start, stop)`` over ``range(rows)`` in pieces of ``piece`` rows (default
+    :data:`THREAD_ROWS`; :data:`SOLVER_PIECE_ROWS` for per-row solvers), on
     :func:`thread_count` threads when the batch has at least two pieces (``work`` must release
     the GIL to gain anything: the compiled kernels do), else in this thread.
 
@@ -205,13 +212,14 @@ def run_chunks(work: Callable[[int, int], None], rows: int) -> None:
     once every helper has returned (``work`` never runs after this returns). A helper the
     pool has not started by the time the calling thread finds no piece left is withdrawn, so
     concurrent and nested calls cannot wait on each other."""
+    size = piece if piece > 0 else THREAD_ROWS
     threads = thread_count()
-    if threads == 1 or rows < 2 * THREAD_ROWS:
+    if threads == 1 or rows < 2 * size:
         work(0, rows)
         return
     import threading
 
-    pieces = iter(range(0, rows, THREAD_ROWS))
+    pieces = iter(range(0, rows, size))
     lock = threading.Lock()
     failed: list[bool] = []
 
@@ -222,13 +230,13 @@ def run_chunks(work: Callable[[int, int], None], rows: int) -> None:
             if start is None:
                 return
             try:
-                work(start, min(start + THREAD_ROWS, rows))
+                work(start, min(start + size, rows))
             except BaseException:
                 failed.append(True)
                 raise
 
     helpers = [_helper_pool(threads - 1).submit(drain)
-               for _ in range(min(threads, -(-rows // THREAD_ROWS)) - 1)]
+               for _ in range(min(threads, -(-rows // size)) - 1)]
     try:
         drain()
     finally:
