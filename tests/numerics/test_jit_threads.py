@@ -243,7 +243,7 @@ def test_a_few_thousand_solver_rows_run_on_two_threads(name, monkeypatch):
 
         def traced(a, b):
             pieces.append(b - a)
-            if a == 0 or b - a == jit.SOLVER_PIECE_ROWS and a < 2 * jit.SOLVER_PIECE_ROWS:
+            if a == 0 or (b - a == jit.SOLVER_PIECE_ROWS and a < 2 * jit.SOLVER_PIECE_ROWS):
                 meet.wait()
             work(a, b)
         real(traced, rows, *args)
