@@ -258,3 +258,30 @@ def test_a_few_thousand_solver_rows_run_on_two_threads(name, monkeypatch):
         if a is not None:
             a, b = np.asarray(a), np.asarray(b)
             assert a.tobytes() == b.tobytes(), field
+
+
+def test_a_large_verne_inverse_runs_whole_with_the_same_bits(monkeypatch):
+    """The Verne module (six rods, three actuators: the rods' consistency decides the status)
+    on 3 memory chunks of full poses it reaches, a few disturbed: the whole call on two
+    threads gives the one-thread bits and the chunked record's (``full_output``) q."""
+    import pkmkit
+    from pkmkit.machines.chunks import CHUNK_ROWS
+
+    m = pkmkit.machine("verne")
+    rng = np.random.default_rng(12)
+    reached = m.ik(np.asarray(m.home_pose)[:3] + rng.uniform(-0.1, 0.1, (3000, 3)),
+                   full_output=True)
+    x = np.resize(np.asarray(reached.pose), (3 * CHUNK_ROWS, 6))
+    x[::97, 3] += 1e-3  # an orientation the rods cannot all take: UNREACHABLE
+    monkeypatch.setenv("PKMKIT_THREADS", "1")
+    one = m.ik(x)
+    record = m.ik(x, full_output=True)
+    monkeypatch.setenv("PKMKIT_THREADS", "2")
+    calls = []
+    real = jit.run_chunks
+    monkeypatch.setattr(jit, "run_chunks", lambda w, r, *a: calls.append(r) or real(w, r, *a))
+    two = m.ik(x)
+    assert calls == [3 * CHUNK_ROWS]
+    status = np.asarray(record.status)
+    assert (status == 0).sum() > CHUNK_ROWS and (status != 0).sum() > 1000
+    assert one.tobytes() == two.tobytes() == np.asarray(record.q).tobytes()
