@@ -19,11 +19,18 @@ For each condition (``quiet``; ``loaded`` with one process keeping a core and th
 - **C against Numba** (``--backends``, only these rows) — the same ``m.ik`` and ``m.fk`` on one
   thread by the C kernels of :mod:`pkmkit.native` and by the Numba ones (``PKMKIT_NATIVE=0``)
   in this process, warm: CPU time;
+- **threads** (``--threads``, only these rows) — CPU accounting of ``m.ik(X)`` on one and on
+  two threads, for scaling that wall time cannot show on a loaded machine: the kernel's CPU
+  (``time.thread_time`` around each kernel call, per thread) against the calling thread's CPU
+  outside the kernel (the serial part: validation, allocation, Python, joins), the serial
+  fraction and the two-thread speed-up it allows (Amdahl); and the kernel alone on
+  preallocated arrays, the batch halved over one and two threads (CPU per pose; were the
+  two threads bound by memory bandwidth their CPU per pose would rise);
 - **every assembly mode** — ``m.fk_all(q)`` of Dietmaier's general hexapod (40 real modes) and of
   random general 6-6 configurations: seconds per configuration, count, worst residual.
 
     python bench/full_pose.py [--poses 1000000] [--configurations 10000] [--repeat 5]
-                              [--load none|busy|both] [--backends] [--ik-only]
+                              [--load none|busy|both] [--backends] [--ik-only] [--threads]
 """
 
 from __future__ import annotations
@@ -34,6 +41,7 @@ import os
 import platform
 import statistics
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -205,6 +213,106 @@ def backend_rows(label: str, m, poses: np.ndarray, q: np.ndarray, repeat: int) -
           f"{med['C', 'fk'] / med['Numba', 'fk']:.2f})")
 
 
+def _traced_kernel(log: list) -> tuple:
+    """Replace ``jit.kernel`` so that the inverse kernel's calls append ``(thread, CPU s,
+    rows)`` to ``log``; returns the real ``jit.kernel`` and a dict that keeps the rod
+    arguments of the last call."""
+    real = jit.kernel
+    kept: dict = {}
+
+    def kernel(module, name):
+        fun = real(module, name)
+        if name != "inverse_poses":
+            return fun
+
+        def traced(x, *rest):
+            kept["rods"] = rest[:-2]
+            start = time.thread_time()
+            fun(x, *rest)
+            log.append((threading.get_ident(), time.thread_time() - start, x.shape[0]))
+        return traced
+
+    jit.kernel = kernel
+    return real, kept
+
+
+def _accounted_ik(m, poses: np.ndarray, log: list) -> dict:
+    """One ``m.ik(poses)``: process CPU, the calling thread's CPU outside the kernel (serial),
+    the kernel's CPU summed and per thread."""
+    log.clear()
+    me = threading.get_ident()
+    cpu0, mine0 = time.process_time(), time.thread_time()
+    m.ik(poses)
+    total, mine = time.process_time() - cpu0, time.thread_time() - mine0
+    per: dict = {}
+    for ident, cpu, _ in log:
+        per[ident] = per.get(ident, 0.0) + cpu
+    return {"total": total, "serial": mine - per.get(me, 0.0), "kernel": sum(per.values()),
+            "per": sorted(per.values()), "calls": len(log)}
+
+
+def _kernel_alone(fun, rods, poses: np.ndarray, n: int, threads: int) -> tuple[float, list]:
+    """The kernel on preallocated arrays (written once before), the batch cut in ``threads``
+    equal parts run at once: process CPU and each thread's CPU."""
+    q = np.empty((len(poses), n))
+    status = np.empty(len(poses), dtype=np.int64)
+    fun(poses, *rods, q, status)
+    edges = np.linspace(0, len(poses), threads + 1).astype(int)
+    cpu = [0.0] * threads
+
+    def part(i):
+        start = time.thread_time()
+        lo, hi = edges[i], edges[i + 1]
+        fun(poses[lo:hi], *rods, q[lo:hi], status[lo:hi])
+        cpu[i] = time.thread_time() - start
+
+    cpu0 = time.process_time()
+    workers = [threading.Thread(target=part, args=(i,)) for i in range(threads)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    return time.process_time() - cpu0, cpu
+
+
+def thread_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
+    """CPU accounting of ``m.ik`` on one and two threads (module docstring, ``--threads``)."""
+    log: list = []
+    real, kept = _traced_kernel(log)
+    saved = os.environ.get("PKMKIT_THREADS")
+    try:
+        m.ik(poses[:70000])
+        m.ik(poses)
+        rows = {1: [], 2: []}
+        alone = {1: [], 2: []}
+        fun = real("pkmkit.machines.full_pose_kernels", "inverse_poses")
+        for _ in range(repeat):  # one and two threads alternated
+            for threads in (1, 2):
+                os.environ["PKMKIT_THREADS"] = str(threads)
+                rows[threads].append(_accounted_ik(m, poses, log))
+                alone[threads].append(_kernel_alone(fun, kept["rods"], poses, m.n_actuators,
+                                                    threads))
+    finally:
+        jit.kernel = real
+        if saved is None:
+            os.environ.pop("PKMKIT_THREADS", None)
+        else:
+            os.environ["PKMKIT_THREADS"] = saved
+    n = len(poses)
+    for threads in (1, 2):
+        best = min(rows[threads], key=lambda r: r["total"])
+        serial = best["serial"] / best["total"]
+        bound = 1.0 / (serial + (1.0 - serial) / 2.0)
+        cpu, per = min(alone[threads])
+        print(f"  IK {label:<14} {threads} thread{'s' if threads > 1 else ' '}: m.ik "
+              f"{best['total'] / n * 1e9:5.1f} ns of CPU per pose, serial (calling thread "
+              f"outside the kernel) {best['serial'] * 1e3:5.2f} ms = {serial:5.1%} -> two-thread "
+              f"bound ×{bound:.2f}; kernel {best['kernel'] * 1e3:5.1f} ms in {best['calls']} "
+              f"calls, per thread {'/'.join(f'{c * 1e3:.1f}' for c in best['per'])} ms; "
+              f"kernel alone (preallocated) {cpu / n * 1e9:5.1f} ns per pose, per thread "
+              f"{'/'.join(f'{c * 1e3:.1f}' for c in per)} ms")
+
+
 def all_modes_rows(repeat: int) -> None:
     general = pkmkit.machine("dietmaier-hexapod")
     start = time.perf_counter()
@@ -240,6 +348,8 @@ def main() -> None:
     parser.add_argument("--load", choices=("none", "busy", "both"), default="both")
     parser.add_argument("--no-modes", action="store_true", help="skip the every-mode rows")
     parser.add_argument("--ik-only", action="store_true", help="only the inverse-model rows")
+    parser.add_argument("--threads", action="store_true",
+                        help="only the CPU accounting of m.ik on one and two threads")
     parser.add_argument("--backends", action="store_true",
                         help="only the C against Numba kernel rows (steady state, one thread)")
     args = parser.parse_args()
@@ -254,6 +364,14 @@ def main() -> None:
     reached = verne.ik(positions, full_output=True).pose
     verne_poses = np.ascontiguousarray(np.resize(reached, (args.poses, 6)))
     q = hexapod.ik(poses[:args.configurations])
+    if args.threads:
+        for label, context in conditions(args.load):
+            print(f"{label} (load average {os.getloadavg()[0]:.2f} before):")
+            with context():
+                thread_rows("hexapod", hexapod, poses, args.repeat)
+                thread_rows("Verne (poses)", verne, verne_poses, args.repeat)
+            print(f"  (load average {os.getloadavg()[0]:.2f} after)")
+        return
     if args.backends:
         verne_q = verne.ik(verne_poses[:args.configurations], strokes="ignore")
         for label, context in conditions(args.load):

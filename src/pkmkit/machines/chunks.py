@@ -13,7 +13,12 @@ Only a NumPy array ``(N, d)`` input is chunked (a single pose or a list is passe
 row-aligned keyword arguments (``q0``, ``x0``, ``q``, ``tool_length``, a joint chain's ``start``)
 with N rows are cut with it, and a call whose row-aligned arguments do not have N rows (or one)
 is left whole so that it raises its own error. A class may set its own chunk size
-(``chunk_rows``: the joint chains' iterative engine, :mod:`pkmkit.machines.joint_chain`).
+(``chunk_rows``: the joint chains' iterative engine, :mod:`pkmkit.machines.joint_chain`), and
+may run some calls whole (``unchunked_call(name, x, kwargs) -> bool``: a call whose only
+memory is its input and its output, e.g. a full-pose machine's plain ``ik`` on the fused
+compiled kernel, :meth:`pkmkit.machines.full_pose.FullPoseMachine.unchunked_call`) — chunking
+it would only add serial work per chunk (the joining copy, Python around the kernel) to what
+the threads of :func:`pkmkit.numerics.jit.run_chunks` do in parallel.
 """
 
 from __future__ import annotations
@@ -234,6 +239,9 @@ def chunked(method: Callable[..., Any]) -> Callable[..., Any]:
         if by_q:
             x = kwargs.get("q")
         if not (isinstance(x, np.ndarray) and x.ndim == 2 and x.shape[0] > size):
+            return method(self, *args, **kwargs)
+        whole = getattr(self, "unchunked_call", None)
+        if whole is not None and whole(method.__name__, x, kwargs):
             return method(self, *args, **kwargs)
         rows = x.shape[0]
         if not by_q:

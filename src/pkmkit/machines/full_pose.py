@@ -87,6 +87,10 @@ from pkmkit.status import Status
 CONSISTENCY_TOL = 1e-9
 
 
+#: ``strokes`` of an ``ik`` that may run unchunked (:meth:`FullPoseMachine.unchunked_call`).
+_UNCHUNKED = ("flag", "ignore")
+
+
 @dataclass(frozen=True)
 class FullPoseJacobians(Jacobians):
     """Velocity model of a full-pose machine at N poses (single pose: leading axis dropped).
@@ -340,6 +344,18 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         return guess
 
     # ---------------------------------------------------------------- inverse
+    def unchunked_call(self, name: str, x: np.ndarray, kwargs: Mapping[str, Any]) -> bool:
+        """Whether the batch call ``name(x (N, w), **kwargs)`` runs whole instead of in memory
+        chunks (:mod:`pkmkit.machines.chunks`): a plain ``ik`` of full poses on the fused
+        compiled kernel (no record, no warm start, strokes flagged or ignored) holds nothing
+        but its input and its output ``q (N, n)``, ``status (N,)``, and run whole its pieces
+        go to both cores in one :func:`pkmkit.numerics.jit.run_chunks` with no serial joining
+        copy per chunk (issue 22 §2)."""
+        return (name == "ik" and x.shape[1] == 6 and not kwargs.get("full_output")
+                and kwargs.get("q0") is None and kwargs.get("strokes", "flag") in _UNCHUNKED
+                and kwargs.keys() <= {"branches", "full_output", "q0", "strokes"}
+                and jit.use_compiled(x.shape[0], native=True))
+
     @chunked
     def ik(
         self,
@@ -389,7 +405,8 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             return self._ik_position(arr, q0, branches, full_output, engine_options, strokes)
         xb, single = _checked_batch(x, 6, "pose")
         sigma = self._branches(branches)
-        if not single and jit.use_compiled(xb.shape[0], native=True):  # one fused pass
+        fused = not single and jit.use_compiled(xb.shape[0], native=True)
+        if fused:  # one pass, q NaN on every row whose status is not OK
             q, status = self._forms.inverse_compiled(xb, sigma, self._consistency_tol())
         else:
             with np.errstate(invalid="ignore", over="ignore"):
@@ -405,7 +422,8 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             self._raise_inverse(xb, status[0], spread[0])
         check = judge_rows(self, q, status, strokes, single, f"pose {xb[0].tolist()}",
                            full_output)
-        q[status != Status.OK] = np.nan
+        if not fused or strokes == "refuse":  # only "refuse" turns OK rows into others
+            q[status != Status.OK] = np.nan
         if not full_output:
             return restore_shape(q, single)
         result = InverseResult(q=q, status=status, branches=sigma.copy(),

@@ -100,7 +100,7 @@ class DirectKernel:
             solve_rows(q[start:stop], guess[start:stop], x0 is not None, self.geom, self.home,
                        opts, out[start:stop])
 
-        jit.run_chunks(work, q.shape[0])
+        jit.run_chunks(work, q.shape[0], jit.SOLVER_PIECE_ROWS)
         return (out[:, :6].copy(), out[:, 6].astype(int), out[:, 7].astype(int),
                 out[:, 8].copy())
 

@@ -45,5 +45,5 @@ def solve(geom: np.ndarray, positions: np.ndarray, u0: np.ndarray | None, opts: 
         solve_rows(positions[start:stop], u0[start:stop], has_guess, skip[start:stop], geom,
                    home, jt_inv, opts, out[start:stop])
 
-    jit.run_chunks(work, size)
+    jit.run_chunks(work, size, jit.SOLVER_PIECE_ROWS)
     return out[:, :6].copy(), out[:, 6].astype(int), out[:, 7].astype(int), out[:, 8].copy()

@@ -26,11 +26,12 @@ no import cost, so the per-pose solvers run native at every batch size.
 is made.
 
 Threads: the compiled kernels release the GIL, and :func:`run_chunks` spreads a large batch
-over :func:`thread_count` threads in chunks taken from a shared queue (a thread slowed by a
-competing process simply takes fewer chunks). ``PKMKIT_THREADS=N`` sets the count; by default
-it is the number of cores this process may use, or 1 where ``OMP_NUM_THREADS=1`` (Dask
-workers, and anyone who bounded the threads of their numerical libraries). The rows are
-independent, so the results do not depend on the count.
+over :func:`thread_count` threads (the calling one and helpers of a persistent pool) in pieces
+drawn from a shared counter (a thread slowed by a competing process simply takes fewer).
+``PKMKIT_THREADS=N`` sets the count; by default it is the number of cores this process may
+use, or 1 where ``OMP_NUM_THREADS=1`` (Dask workers, and anyone who bounded the threads of
+their numerical libraries). The rows are independent, so the results do not depend on the
+count.
 """
 
 from __future__ import annotations
@@ -57,6 +58,12 @@ SOLVER_ROWS = 64
 #: every thread: with pieces of 2¹⁶ rows, no chunk was ever spread and a 10⁶-row batch ran on
 #: one core whatever the thread count.
 THREAD_ROWS = 1 << 14
+#: Rows per piece for the per-row iterative solvers (the full-pose direct model, the position
+#: inverse of machines with fewer actuators than six: microseconds per row, not nanoseconds),
+#: passed to :func:`run_chunks` as ``piece``: a piece of 2¹⁰ rows is milliseconds of work, so
+#: a batch of a few thousand rows — the usual size of a direct-model batch — already runs on
+#: every thread (with :data:`THREAD_ROWS` a 10⁴-row batch was one piece, on one thread).
+SOLVER_PIECE_ROWS = 1 << 10
 
 #: The Numba kernels that have a C twin of the same name and arguments in
 #: ``pkmkit.native.kernels``.
@@ -191,23 +198,64 @@ def thread_count() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def run_chunks(work: Callable[[int, int], None], rows: int) -> None:
-    """``work(start, stop)`` over ``range(rows)`` in chunks of :data:`THREAD_ROWS`, on
-    :func:`thread_count` threads when the batch has at least two chunks (``work`` must release
-    the GIL to gain anything: the compiled kernels do), else in this thread."""
+def run_chunks(work: Callable[[int, int], None], rows: int, piece: int = 0) -> None:
+    """``work(start, stop)`` over ``range(rows)`` in pieces of ``piece`` rows (default
+    :data:`THREAD_ROWS`; :data:`SOLVER_PIECE_ROWS` for per-row solvers), on
+    :func:`thread_count` threads when the batch has at least two pieces (``work`` must release
+    the GIL to gain anything: the compiled kernels do), else in this thread.
+
+    The calling thread takes part: it and ``threads − 1`` threads of a persistent pool each
+    draw the next piece from one shared counter until none is left (a thread slowed by a
+    competing process simply takes fewer), so a call costs one hand-off per helper thread,
+    not one submission and one future per piece (≈ 30 µs each, 2 ms of CPU per 10⁶ rows
+    measured). An exception in any piece stops the others from drawing and is raised here
+    once every helper has returned (``work`` never runs after this returns). A helper the
+    pool has not started by the time the calling thread finds no piece left is withdrawn, so
+    concurrent and nested calls cannot wait on each other."""
+    size = piece if piece > 0 else THREAD_ROWS
     threads = thread_count()
-    if threads == 1 or rows < 2 * THREAD_ROWS:
+    if threads == 1 or rows < 2 * size:
         work(0, rows)
         return
+    import threading
+
+    pieces = iter(range(0, rows, size))
+    lock = threading.Lock()
+    failed: list[bool] = []
+
+    def drain() -> None:
+        while True:
+            with lock:
+                start = None if failed else next(pieces, None)
+            if start is None:
+                return
+            try:
+                work(start, min(start + size, rows))
+            except BaseException:
+                failed.append(True)
+                raise
+
+    helpers = [_helper_pool(threads - 1).submit(drain)
+               for _ in range(min(threads, -(-rows // size)) - 1)]
+    try:
+        drain()
+    finally:
+        # a helper still queued (the pool busy: another call, or a nested one) is withdrawn,
+        # not awaited — the pieces are all drawn; a running one is waited for
+        errors = [None if h.cancel() else h.exception() for h in helpers]
+    for error in errors:
+        if error is not None:
+            raise error
+
+
+def _helper_pool(workers: int) -> ThreadPoolExecutor:
+    """The persistent pool of ``workers`` threads that helps :func:`run_chunks`."""
     global _pool
-    if _pool is None or _pool[0] != threads:
+    if _pool is None or _pool[0] != workers:
         from concurrent.futures import ThreadPoolExecutor
 
-        _pool = (threads, ThreadPoolExecutor(max_workers=threads, thread_name_prefix="pkmkit"))
-    pool = _pool[1]
-    starts = range(0, rows, THREAD_ROWS)
-    for future in [pool.submit(work, s, min(s + THREAD_ROWS, rows)) for s in starts]:
-        future.result()
+        _pool = (workers, ThreadPoolExecutor(max_workers=workers, thread_name_prefix="pkmkit"))
+    return _pool[1]
 
 
 # ``os.environ``'s own dict on POSIX (encoded keys): a membership test there costs tens of
