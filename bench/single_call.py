@@ -229,9 +229,8 @@ def chain_rows(name: str, calls: int) -> dict:
     w = chain_one._work(c)
 
     def ik_kernel(x):
-        w.target[0] = x
-        w.u_inv[0] = c.u_home_inv
-        c.inverse_kernel.call(*c.inverse_args, w.u_inv, w.target, c.tool_row, w.info)
+        w.target[0] = x  # from the default (first-order) start
+        c.first_kernel.call(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
 
     def fk_kernel(v):
         w.q[:] = v

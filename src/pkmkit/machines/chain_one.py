@@ -3,7 +3,7 @@
 (:mod:`pkmkit.solve.chain_one_kernel`), without the batch machinery.
 
 Per machine, once (:class:`ChainOneConstants`, cached on the machine): the kernel's arrays,
-the home start, the first-order start's rates, the strokes, the head's wrist pair. Per call: a
+the inverse's and the direct model's first-order starts' rates, the strokes, the head's wrist pair. Per call: a
 type and range check of the plain numbers, one compiled solve on preallocated arrays, the
 stroke test in Python floats, the result assembled directly. Anything unusual returns None and
 the machine takes the batch path, which gives the same numbers and raises the typed errors:
@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.chain_starts import home_rates
+from pkmkit.machines.chain_starts import home_rates, inverse_rates
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
@@ -120,12 +120,14 @@ class ChainOneConstants:
         self.tool = float(m.tool_length)
         self.act = act
         self.n_var = n_var
-        # inverse model: u = (platform, every variable) from home
-        self.u_home_inv = np.concatenate([m._home["platform"], home])
+        # inverse model: u = (platform, every variable) from the first-order start
         self.tool_row = np.full(1, self.tool)
         self.inverse_args = (frames, types, evar, elements, offsets, every, head,
                              np.zeros((1, n_var)), self.length,
                              _options(chain_rows.SOLVE_INVERSE_DEFAULTS))
+        # the first-order start's home, flange point and axis at home, rates (own copies)
+        self.first_args = (*self.inverse_args, *(a.copy() for a in inverse_rates(m)))
+        self._mode_constants(m)
         # direct model: u = (platform, passive) from the first-order start
         rates, residual_rates = home_rates(m)
         self.direct_args = (frames, types, evar, elements, offsets, position, head,
@@ -139,9 +141,28 @@ class ChainOneConstants:
         self._velocity_constants(m, passive)
         self._joint_constants(m)
         self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
+        self.first_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_first_one"))
         self.direct_kernel = _Kernel(jit.kernel(_KERNELS, "direct_one"))
         self.velocity_kernel = _Kernel(jit.kernel(_KERNELS, "velocity_one"))
         self.svd_kernel = _Kernel(jit.kernel("pkmkit.numerics.svd_kernel", "singular_values"))
+
+    def _mode_constants(self, m: Any) -> None:
+        """The legs' home assembly modes
+        (:meth:`~pkmkit.machines.warm_starts.ChainWarmStart.mode_signature`) as places in u
+        ``(6 + n_var)``: each slide's with its home sign, each revolute leg joint's with its
+        home value."""
+        slides, turns = m._leg_joints_by_type()
+        home = m._home["values"]
+        self.mode_slides = tuple((6 + int(v), float(np.sign(home[v]))) for v in slides)
+        self.mode_turns = tuple((6 + int(v), float(home[v])) for v in turns)
+
+    def in_home_modes(self, u: list[float]) -> bool:
+        """The closure ``u`` (6 + n_var) in the legs' home assembly modes (the test of
+        :meth:`~pkmkit.machines.warm_starts.ChainWarmStart.in_home_modes`; its cosine here by
+        ``math.cos``, whose sign agrees with NumPy's but for a joint a quarter turn from home
+        to the last place)."""
+        return all(u[i] * sign > 0 for i, sign in self.mode_slides) and all(
+            math.cos(u[i] - home) > 0 for i, home in self.mode_turns)
 
     def _velocity_constants(self, m: Any, passive: np.ndarray) -> None:
         """The velocity kernel's column maps: the closure's (platform, passive, leg
@@ -279,9 +300,13 @@ def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None
         return None
     w = _work(c)
     w.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
-    u = _solve_inverse(c, w, c.u_home_inv)
-    if u is None:
-        return None
+    kernel = c.first_kernel  # from the first-order start, as the batch path's default
+    (kernel.call or kernel.first)(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
+    if w.info[0] != 0:
+        return None  # the batch path solves it again from home
+    u = w.u_inv[0].tolist()
+    if not c.in_home_modes(u):
+        return None  # likewise
     values = _wrapped(c, u[6:])
     if c.wrist is not None:
         values = _nearest_branch(c, u, values)
@@ -322,7 +347,8 @@ def _nearest_branch(c: ChainOneConstants, u: list[float], values: list[float]
     reference, the strokes judged around home): the mirror solved where the solution's turn is
     far from home's (or, when the turn's stroke reaches a quarter turn, beyond a stroke) and
     kept where it is nearer or alone within the strokes. ``values`` (wrapped) of the branch
-    kept, or None (the mirror did not converge: the batch path)."""
+    kept, or None (the mirror did not converge, or is kept outside the legs' home modes: the
+    batch path)."""
     turn, home_turn, tilt, tilt_centre, wide = c.wrist
     far = abs(_turn_offset(u[6 + turn] - home_turn)) > _FAR
     kept_inside = c.within(values)
@@ -339,7 +365,8 @@ def _nearest_branch(c: ChainOneConstants, u: list[float], values: list[float]
         _turn_offset(u[6 + turn] - home_turn))
     flipped_inside = c.within(other_values)
     if (flipped_inside and not kept_inside) or (flipped_inside == kept_inside and closer):
-        return other_values
+        # the batch path solves a mirror outside the legs' home modes again from home
+        return other_values if c.in_home_modes(other) else None
     return values
 
 

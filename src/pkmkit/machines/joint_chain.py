@@ -51,7 +51,7 @@ from pkmkit.machines.chain_results import (
     ChainInverseResult,
     single_row,
 )
-from pkmkit.machines.chain_starts import default_start
+from pkmkit.machines.chain_starts import default_start, inverse_starts
 from pkmkit.machines.chunks import chunked, iterative_chunk_rows
 from pkmkit.machines.common import (
     MAX_COORDINATE,
@@ -577,9 +577,14 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             values[:, self._actuated] = _rows_like(q0, self.n_actuators, "q0", n)
         u_home = np.concatenate([np.tile(self._home["platform"], (n, 1)), values], axis=1)
         u0, started = self._inverse_starts(start, u_home)
+        lengths = self._tool_lengths(tool_length, n)
+        if q0 is None:  # the default start: home moved to first order towards each target,
+            # solved again from home where it fails or leaves the legs' home modes
+            u0 = u0.copy()  # without start= it is u_home itself
+            u0[~started] = inverse_starts(self, targets[~started], lengths[~started])
+            started[:] = True
         for u in (u0, u_home):
             u[~valid_rows(xb) | bad_axis] = np.nan
-        lengths = self._tool_lengths(tool_length, n)
         engine_options.setdefault("compute_rank", False)
         engine_options.setdefault("compiled", use_compiled_solver(n))
 
