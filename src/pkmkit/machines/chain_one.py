@@ -3,22 +3,25 @@
 (:mod:`pkmkit.solve.chain_one_kernel`), without the batch machinery.
 
 Per machine, once (:class:`ChainOneConstants`, cached on the machine): the kernel's arrays,
-the inverse's and the direct model's first-order starts' rates, the strokes, the head's wrist pair. Per call: a
-type and range check of the plain numbers, one compiled solve on preallocated arrays, the
-stroke test in Python floats, the result assembled directly. Anything unusual returns None and
-the machine takes the batch path, which gives the same numbers and raises the typed errors:
-not 6 (or ``n``) plain finite numbers within ±``MAX_COORDINATE``, a zero tool axis, no
-convergence, a joint beyond its stroke (unless ``strokes="ignore"`` and the batch path would
-keep the solution), an inverse solution whose head could be on its other branch (the batch
-path's :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` rule solves the
-mirror), a closure the bound of :mod:`~pkmkit.solve.chain_one_kernel` cannot certify regular,
-a machine whose closure Jacobian at home is rank deficient, and every option the fast paths do
-not take (``q0``, ``start``, ``tool_length``, ``full_output``, engine options).
+the inverse's and the direct model's first-order starts, the strokes, the legs' home modes, the
+head's wrist pair. Per call: a type and range check of the plain numbers, one compiled solve on
+preallocated arrays, the stroke test in Python floats, the result assembled directly. Anything
+unusual returns None and the machine takes the batch path, which gives the same numbers and
+raises the typed errors: not 6 (or ``n``) plain finite numbers within ±``MAX_COORDINATE``, a
+zero tool axis, no convergence, an inverse solution outside the legs' home assembly modes (the
+batch path solves it again from home), a joint beyond its stroke (unless ``strokes="ignore"``
+and the batch path would keep the solution), an inverse solution whose head could be on its
+other branch (the batch path's
+:meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` rule solves the mirror), a
+closure the bound of :mod:`~pkmkit.solve.chain_one_kernel` cannot certify regular, a machine
+whose closure Jacobian at home is rank deficient, and every option the fast paths do not take
+(``q0``, ``start``, ``tool_length``, ``full_output``, engine options).
 
 Agreement with the batch row of the same input: ``ik`` bit for bit (the same kernel from the
-same start, the head's turn wrapped with NumPy's ``arctan2`` as ``np.angle`` does); ``fk`` and
-``jacobian`` to rounding (the direct model's first-order start is formed in the kernel, not by
-NumPy's matrix product and ``sin``; the closure rates by Cholesky with one refinement step,
+same first-order start, :func:`~pkmkit.machines.chain_starts.inverse_starts`; the head's turn
+wrapped with NumPy's ``arctan2`` as ``np.angle`` does); ``fk`` and ``jacobian`` to rounding
+(the direct model's first-order start is formed in the kernel, not by NumPy's matrix product
+and ``sin``; the closure rates by Cholesky with one refinement step,
 not LAPACK's pseudo-inverse). No result depends on an earlier call: only constants are cached.
 
 A one-shot call in a fresh process does not import Numba
