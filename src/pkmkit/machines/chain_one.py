@@ -8,8 +8,8 @@ head's wrist pair. Per call: a type and range check of the plain numbers, one co
 preallocated arrays, the stroke test in Python floats, the result assembled directly. Anything
 unusual returns None and the machine takes the batch path, which gives the same numbers and
 raises the typed errors: not 6 (or ``n``) plain finite numbers within ±``MAX_COORDINATE``, a
-zero tool axis, no convergence, an inverse solution outside the legs' home assembly modes (the
-batch path solves it again from home), a joint beyond its stroke (unless ``strokes="ignore"``
+zero tool axis, no convergence (from the first-order start, or outside the legs' home
+assembly modes from there, the row is solved again from home, as on the batch path), a joint beyond its stroke (unless ``strokes="ignore"``
 and the batch path would keep the solution), an inverse solution whose head could be on its
 other branch (the batch path's
 :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` rule solves the mirror), a
@@ -305,14 +305,15 @@ def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None
     w.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
     kernel = c.first_kernel  # from the first-order start, as the batch path's default
     (kernel.call or kernel.first)(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
-    if w.info[0] != 0:
-        return None  # the batch path solves it again from home
     u = w.u_inv[0].tolist()
-    if not c.in_home_modes(u):
-        return None  # likewise
+    first = w.info[0] == 0 and c.in_home_modes(u)
+    if not first:  # solved again from home, as the batch path does
+        u = _solve_inverse(c, w, c.first_args[-3])
+        if u is None:
+            return None
     values = _wrapped(c, u[6:])
     if c.wrist is not None:
-        values = _nearest_branch(c, u, values)
+        values = _nearest_branch(c, u, values, first)
     return values
 
 
@@ -343,15 +344,15 @@ def _turn_offset(angle: float) -> float:
     return math.pi - (math.pi - angle) % _TWO_PI
 
 
-def _nearest_branch(c: ChainOneConstants, u: list[float], values: list[float]
-                    ) -> list[float] | None:
+def _nearest_branch(c: ChainOneConstants, u: list[float], values: list[float],
+                    first: bool) -> list[float] | None:
     """The rule of :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` for one
     row (:func:`~pkmkit.machines.head_branches.nearest_head_branch` with home as the
     reference, the strokes judged around home): the mirror solved where the solution's turn is
     far from home's (or, when the turn's stroke reaches a quarter turn, beyond a stroke) and
     kept where it is nearer or alone within the strokes. ``values`` (wrapped) of the branch
-    kept, or None (the mirror did not converge, or is kept outside the legs' home modes: the
-    batch path)."""
+    kept, or None (the mirror did not converge, or is kept outside the legs' home modes after
+    the first-order start (``first``): the batch path)."""
     turn, home_turn, tilt, tilt_centre, wide = c.wrist
     far = abs(_turn_offset(u[6 + turn] - home_turn)) > _FAR
     kept_inside = c.within(values)
@@ -368,8 +369,9 @@ def _nearest_branch(c: ChainOneConstants, u: list[float], values: list[float]
         _turn_offset(u[6 + turn] - home_turn))
     flipped_inside = c.within(other_values)
     if (flipped_inside and not kept_inside) or (flipped_inside == kept_inside and closer):
-        # the batch path solves a mirror outside the legs' home modes again from home
-        return other_values if c.in_home_modes(other) else None
+        # the batch path solves a mirror outside the legs' home modes again from home (a row
+        # from the first-order start)
+        return other_values if not first or c.in_home_modes(other) else None
     return values
 
 
