@@ -8,10 +8,10 @@ head's wrist pair. Per call: a type and range check of the plain numbers, one co
 preallocated arrays, the stroke test in Python floats, the result assembled directly. Anything
 unusual returns None and the machine takes the batch path, which gives the same numbers and
 raises the typed errors: not 6 (or ``n``) plain finite numbers within ±``MAX_COORDINATE``, a
-zero tool axis, no convergence (from the first-order start, or outside the legs' home
-assembly modes from there, the row is solved again from home, as on the batch path), a joint beyond its stroke (unless ``strokes="ignore"``
-and the batch path would keep the solution), an inverse solution whose head could be on its
-other branch (the batch path's
+zero tool axis, no convergence (a row that fails from the first-order start, or leaves the
+legs' home assembly modes from there, is first solved again from home, as on the batch path),
+a joint beyond its stroke (unless ``strokes="ignore"`` and the batch path would keep the
+solution), an inverse solution whose head could be on its other branch (the batch path's
 :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` rule solves the mirror), a
 closure the bound of :mod:`~pkmkit.solve.chain_one_kernel` cannot certify regular, a machine
 whose closure Jacobian at home is rank deficient, and every option the fast paths do not take
