@@ -251,7 +251,7 @@ def test_a_planted_wrong_constant_is_caught():
     _, x = within_stroke_poses(m, 10, seed=5)
     assert ik_mismatches(m, x)[1] == 0
     c = chain_one.constants(m)
-    u_home, base, rates = c.first_args[-3:]
+    u_home, base, rates = c.first_args[-7:-4]
     for planted, k in ((u_home, (6 + int(m.passive_variables[0]),)),  # home, slightly off
                        (base, (0,)),  # the flange point at home
                        (rates, (6 + int(m.passive_variables[0]), 3))):  # a rate

@@ -130,8 +130,11 @@ class ChainOneConstants:
                              np.zeros((1, n_var)), self.length,
                              _options(chain_rows.SOLVE_INVERSE_DEFAULTS))
         # the first-order start's home, flange point and axis at home, rates (own copies)
-        self.first_args = (*self.inverse_args, *(a.copy() for a in inverse_rates(m)))
+        # and the legs' home modes (_mode_constants)
         self._mode_constants(m)
+        self.u_home = inverse_rates(m)[0].copy()
+        self.first_args = (*self.inverse_args, *(a.copy() for a in inverse_rates(m)),
+                           *self.modes)
         # direct model: u = (platform, passive) from the first-order start
         rates, residual_rates = home_rates(m)
         self.direct_args = (frames, types, evar, elements, offsets, position, head,
@@ -148,6 +151,7 @@ class ChainOneConstants:
         self.q_min, self.q_max = model.q_min[act], model.q_max[act]
         self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
         self.first_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_first_one"))
+        self.from_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_from_one"))
         self.direct_kernel = _Kernel(jit.kernel(_KERNELS, "direct_one"))
         self.velocity_kernel = _Kernel(jit.kernel(_KERNELS, "velocity_one"))
         self.svd_kernel = _Kernel(jit.kernel("pkmkit.numerics.svd_kernel", "singular_values"))
@@ -161,6 +165,10 @@ class ChainOneConstants:
         home = m._home["values"]
         self.mode_slides = tuple((6 + int(v), float(np.sign(home[v]))) for v in slides)
         self.mode_turns = tuple((6 + int(v), float(home[v])) for v in turns)
+        self.modes = (np.array([i for i, _ in self.mode_slides], dtype=np.int64),
+                      np.array([s for _, s in self.mode_slides], dtype=float),
+                      np.array([i for i, _ in self.mode_turns], dtype=np.int64),
+                      np.array([h for _, h in self.mode_turns], dtype=float))
 
     def in_home_modes(self, u: list[float]) -> bool:
         """The closure ``u`` (6 + n_var) in the legs' home assembly modes (the test of
@@ -380,17 +388,17 @@ def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | 
         return None
     w = _work(c)
     w.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
-    if start is None:
-        kernel = c.first_kernel  # from the first-order start, as the batch path's default
-        (kernel.call or kernel.first)(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
+    if start is None:  # from the first-order start, as the batch path's default
+        kernel = c.first_kernel
     else:
         w.u_inv[0] = start
-        kernel = c.inverse_kernel
-        (kernel.call or kernel.first)(*c.inverse_args, w.u_inv, w.target, c.tool_row, w.info)
-    u = w.u_inv[0].tolist()
-    first = w.info[0] == 0 and c.in_home_modes(u)
-    if not first:  # solved again from home, as the batch path does
-        u = _solve_inverse(c, w, c.first_args[-3])
+        kernel = c.from_kernel
+    (kernel.call or kernel.first)(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
+    first = w.info[0] == 0 and w.info[3] == 1.0  # converged, in the legs' home modes
+    if first:
+        u = w.u_inv[0].tolist()
+    else:  # solved again from home, as the batch path does
+        u = _solve_inverse(c, w, c.u_home)
         if u is None:
             return None
     found = (_wrapped(c, u[6:]), u, int(w.info[2]), float(w.info[1]))

@@ -83,11 +83,40 @@ def inverse_start(u_home, base, rates, target, tool, u):  # pragma: no cover
 
 @njit(**_OPTIONS)
 def inverse_first_one(frames, types, evar, elements, offsets, position, head, known, length,
-                      options, u_home, base, rates, u, target, tool, info):  # pragma: no cover
-    """:func:`inverse_one` from the first-order start of :func:`inverse_start` (``u`` out)."""
+                      options, u_home, base, rates, slides, signs, turns, homes, u, target,
+                      tool, info):  # pragma: no cover
+    """:func:`inverse_one` from the first-order start of :func:`inverse_start` (``u`` out),
+    then ``info[BOUND]`` 1.0 where the solution is in the legs' home modes, else 0.0
+    (:func:`in_home_modes`)."""
     inverse_start(u_home, base, rates, target, tool, u)
     inverse_one(frames, types, evar, elements, offsets, position, head, known, length, options,
                 u, target, tool, info)
+    info[BOUND] = 1.0 if in_home_modes(u[0], slides, signs, turns, homes) else 0.0
+
+
+@njit(**_OPTIONS)
+def inverse_from_one(frames, types, evar, elements, offsets, position, head, known, length,
+                     options, u_home, base, rates, slides, signs, turns, homes, u, target,
+                     tool, info):  # pragma: no cover
+    """:func:`inverse_first_one` from the start in ``u`` (a caller's)."""
+    inverse_one(frames, types, evar, elements, offsets, position, head, known, length, options,
+                u, target, tool, info)
+    info[BOUND] = 1.0 if in_home_modes(u[0], slides, signs, turns, homes) else 0.0
+
+
+@njit(**_OPTIONS)
+def in_home_modes(u, slides, signs, turns, homes):  # pragma: no cover
+    """The closure ``u (6 + n_var)`` in the legs' home assembly modes: each slide ``u[slides]``
+    with the sign ``signs``, each revolute leg joint ``u[turns]`` within a quarter turn of
+    ``homes`` (the test of :meth:`~pkmkit.machines.warm_starts.ChainWarmStart.in_home_modes`;
+    libm's cosine, whose sign is NumPy's but a last-place rounding a quarter turn from home)."""
+    for k in range(slides.shape[0]):
+        if not u[slides[k]] * signs[k] > 0:
+            return False
+    for k in range(turns.shape[0]):
+        if not math.cos(u[turns[k]] - homes[k]) > 0:
+            return False
+    return True
 
 
 @njit(**_OPTIONS)
