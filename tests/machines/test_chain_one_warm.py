@@ -25,16 +25,16 @@ def machine(request):
 
 
 def toolpath(m, n: int) -> np.ndarray:
-    """A circle of radius 1 cm, points 0.5 mm apart, around the pose of mid-stroke actuators
-    (the wrist tilted by 0.5 rad), the tool axis swinging by up to 3° about it."""
+    """A circle of radius 4 mm, points 0.5 mm apart, around the pose of mid-stroke actuators
+    (the wrist tilted by 0.3 rad), the tool axis swinging by up to 3° about it."""
     act = np.flatnonzero(m.model.actuated)
     centre = 0.5 * (m.model.q_min[act] + m.model.q_max[act])
-    centre[4] = 0.5
+    centre[4] = 0.3
     pose = m.fk(centre)
-    t = np.arange(n) * 0.05
+    t = np.arange(n) * 0.125
     x = np.tile(pose, (n, 1))
-    x[:, 0] += 0.01 * np.cos(t) - 0.01
-    x[:, 1] += 0.01 * np.sin(t)
+    x[:, 0] += 0.004 * np.cos(t)
+    x[:, 1] += 0.004 * np.sin(t)
     side = np.cross(pose[3:], [0.0, 0.0, 1.0])
     x[:, 3:] += np.radians(3.0) * np.sin(t / 3)[:, None] * side / np.linalg.norm(side)
     x[:, 3:] /= np.linalg.norm(x[:, 3:], axis=1)[:, None]
@@ -103,7 +103,7 @@ def test_a_loop_from_each_previous_solution_is_the_batch_path(machine):
             warm += one.iterations
             default += m.ik(pose, full_output=True).iterations
             solution = one.solution
-    assert fast > 0.6 * (len(x) - 1)  # the others beyond a stroke (the batch path's flag)
+    assert fast == len(x) - 1
     assert warm < default
 
 
