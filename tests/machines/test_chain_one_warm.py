@@ -121,3 +121,15 @@ def test_a_start_the_fast_path_does_not_take_goes_to_the_batch_path(machine):
                     m.ik(x[1], start=bad)
                 continue
             assert np.array_equal(m.ik(x[1], start=bad), expected)
+
+
+def test_a_one_pose_record_pickles_as_the_plain_record(machine):
+    import copy
+    import pickle
+
+    _, x = within_stroke_poses(machine, 3, seed=6)
+    one = machine.ik(x[0], full_output=True)
+    assert is_one_pose(one)
+    for again in (pickle.loads(pickle.dumps(one)), copy.deepcopy(one)):
+        assert type(again) is ChainInverseResult
+        assert_same_record(again, batch_ik(machine, x[0], full_output=True))

@@ -319,6 +319,11 @@ def inverse_record(m: Any, x: Any, strokes: str, start: Any = None) -> Any:
             lambda r: f"1 pose, {len(r.q)} actuators; the direct model at q computed when read",
             "A joint chain's inverse record of one pose (:mod:`pkmkit.machines.chain_one`); "
             "direct and pose computed when first read.")
+        from pkmkit.machines.chain_inverse_record import _plain_record
+
+        # pickled as the plain record, every field computed (its fields are keyword-only)
+        _INVERSE_RECORD.__reduce__ = lambda self: (_plain_record, (
+            {name: getattr(self, name) for name in ChainInverseResult.__dataclass_fields__},))
     record = _INVERSE_RECORD(None, q=q, status=np.int64(0), branches=None, shortfall=None,
                              method="numeric", mode=np.int64(0),
                              iterations=np.int64(iterations), residual=np.float64(residual),
