@@ -229,18 +229,31 @@ def chain_rows(name: str, calls: int) -> dict:
     w = chain_one._work(c)
 
     def ik_kernel(x):
-        w.target[0] = x
-        w.u_inv[0] = c.u_home_inv
-        c.inverse_kernel.call(*c.inverse_args, w.u_inv, w.target, c.tool_row, w.info)
+        w.target[0] = x  # from the default (first-order) start
+        c.first_kernel.call(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
 
     def fk_kernel(v):
         w.q[:] = v
         c.direct_kernel.call(*c.direct_args, w.values, w.delta, w.q, True, w.u_dir, w.pose,
                              w.info)
 
+    path = toolpath(m, calls)
+    first = m.ik(path[0], full_output=True).solution
+
+    def along(record: bool):  # each call started from the previous call's solution
+        def run(_):
+            solution = first
+            for x in path[1:]:
+                solution = m.ik(x, start=solution, full_output=True).solution if record else \
+                    m.ik(x, start=solution)
+        return run
+
     figures = {"poses": len(rows), "fast": fast}
     for _ in range(2):  # interleaved: every method twice, the second round kept
         figures["ik one pose"] = per_call(lambda p: m.ik(p), rows)
+        figures["ik along a toolpath, default start"] = per_call(lambda p: m.ik(p), path[1:])
+        figures["ik along it, start=previous, full_output"] = tuple(
+            v * (1 / (len(path) - 1)) for v in per_call(along(True), [None]))
         figures["ik batch of one (before)"] = per_call(lambda p: m.ik(p), ones[:few])
         figures["ik compiled solve alone"] = per_call(ik_kernel, rows)
         figures["fk one"] = per_call(lambda v: m.fk(v), qs)
@@ -253,6 +266,24 @@ def chain_rows(name: str, calls: int) -> dict:
         figures["jacobian batch of one + J (before)"] = per_call(lambda p: m.jacobian(p).J,
                                                                  ones[:few])
     return figures
+
+
+def toolpath(m, n: int) -> np.ndarray:
+    """``n`` poses 0.5 mm apart on a circle of radius 4 mm around the pose of mid-stroke
+    actuators (the wrist tilted by 0.3 rad), the tool axis swinging by up to 3° (the path of
+    tests/machines/test_chain_one_warm.py)."""
+    act = np.flatnonzero(m.model.actuated)
+    centre = 0.5 * (m.model.q_min[act] + m.model.q_max[act])
+    centre[4] = 0.3
+    pose = m.fk(centre)
+    t = np.arange(n) * 0.125
+    x = np.tile(pose, (n, 1))
+    x[:, 0] += 0.004 * np.cos(t)
+    x[:, 1] += 0.004 * np.sin(t)
+    side = np.cross(pose[3:], [0.0, 0.0, 1.0])
+    x[:, 3:] += np.radians(3.0) * np.sin(t / 3)[:, None] * side / np.linalg.norm(side)
+    x[:, 3:] /= np.linalg.norm(x[:, 3:], axis=1)[:, None]
+    return x
 
 
 def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None,

@@ -49,7 +49,12 @@ def test_slabs_start_from_their_neighbours_in_fewer_iterations(grid_and_machine)
     home = m.ik(points, full_output=True)
     # the first slab from home, the others from their neighbours
     np.testing.assert_array_equal(cont.iterations[:slab], home.iterations[:slab])
-    assert cont.iterations[slab:].mean() < 0.8 * home.iterations[slab:].mean()
+    # the default start (home moved to first order towards the target) takes as few here:
+    # fewer than from home itself
+    from_home = m.ik(points, full_output=True,
+                     start=np.concatenate([m._home["platform"], m._home["values"]]))
+    assert cont.iterations[slab:].mean() < 0.8 * from_home.iterations[slab:].mean()
+    assert cont.iterations[slab:].mean() <= home.iterations[slab:].mean()
     np.testing.assert_allclose(cont.q, home.q, rtol=0, atol=1e-12)
     np.testing.assert_allclose(cont.closure_start, home.closure_start, rtol=0, atol=1e-12)
 

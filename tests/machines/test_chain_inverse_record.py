@@ -36,6 +36,8 @@ def chain(request):
 def test_the_lazy_record_is_the_direct_models_row_by_row(chain):
     m = chain
     x = _targets(m, 1500, seed=3)
+    x[::300, 2] = 0.0  # a few out of reach (the legs cannot close with the tool at the
+    # base's height; from its first-order start the Tripteor reaches every other row)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         inv = m.ik(x, full_output=True)

@@ -251,11 +251,16 @@ def test_a_planted_wrong_constant_is_caught():
     _, x = within_stroke_poses(m, 10, seed=5)
     assert ik_mismatches(m, x)[1] == 0
     c = chain_one.constants(m)
-    c.u_home_inv[6 + int(m.passive_variables[0])] += 1e-7  # the home start, slightly off
-    try:
-        assert ik_mismatches(m, x)[1] > 0
-    finally:
-        c.u_home_inv[6 + int(m.passive_variables[0])] -= 1e-7
+    u_home, base, rates = c.first_args[-7:-4]
+    for planted, k in ((u_home, (6 + int(m.passive_variables[0]),)),  # home, slightly off
+                       (base, (0,)),  # the flange point at home
+                       (rates, (6 + int(m.passive_variables[0]), 3))):  # a rate
+        planted[k] += 1e-7
+        try:
+            assert ik_mismatches(m, x)[1] > 0
+        finally:
+            planted[k] -= 1e-7
+    assert ik_mismatches(m, x)[1] == 0
     c.direct_args = (*c.direct_args[:11], c.tool + 1e-6, *c.direct_args[12:])  # tool length
     with pytest.raises(AssertionError):
         test_fk_is_the_batch_row(m)

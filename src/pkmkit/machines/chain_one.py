@@ -3,22 +3,25 @@
 (:mod:`pkmkit.solve.chain_one_kernel`), without the batch machinery.
 
 Per machine, once (:class:`ChainOneConstants`, cached on the machine): the kernel's arrays,
-the home start, the first-order start's rates, the strokes, the head's wrist pair. Per call: a
-type and range check of the plain numbers, one compiled solve on preallocated arrays, the
-stroke test in Python floats, the result assembled directly. Anything unusual returns None and
-the machine takes the batch path, which gives the same numbers and raises the typed errors:
-not 6 (or ``n``) plain finite numbers within ±``MAX_COORDINATE``, a zero tool axis, no
-convergence, a joint beyond its stroke (unless ``strokes="ignore"`` and the batch path would
-keep the solution), an inverse solution whose head could be on its other branch (the batch
-path's :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` rule solves the
-mirror), a closure the bound of :mod:`~pkmkit.solve.chain_one_kernel` cannot certify regular,
-a machine whose closure Jacobian at home is rank deficient, and every option the fast paths do
-not take (``q0``, ``start``, ``tool_length``, ``full_output``, engine options).
+the inverse's and the direct model's first-order starts, the strokes, the legs' home modes, the
+head's wrist pair. Per call: a type and range check of the plain numbers, one compiled solve on
+preallocated arrays, the stroke test in Python floats, the result assembled directly. Anything
+unusual returns None and the machine takes the batch path, which gives the same numbers and
+raises the typed errors: not 6 (or ``n``) plain finite numbers within ±``MAX_COORDINATE``, a
+zero tool axis, no convergence (a row that fails from the first-order start, or leaves the
+legs' home assembly modes from there, is first solved again from home, as on the batch path),
+a joint beyond its stroke (unless ``strokes="ignore"`` and the batch path would keep the
+solution), an inverse solution whose head could be on its other branch (the batch path's
+:meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` rule solves the mirror), a
+closure the bound of :mod:`~pkmkit.solve.chain_one_kernel` cannot certify regular, a machine
+whose closure Jacobian at home is rank deficient, and every option the fast paths do not take
+(``q0``, ``start``, ``tool_length``, ``full_output``, engine options).
 
 Agreement with the batch row of the same input: ``ik`` bit for bit (the same kernel from the
-same start, the head's turn wrapped with NumPy's ``arctan2`` as ``np.angle`` does); ``fk`` and
-``jacobian`` to rounding (the direct model's first-order start is formed in the kernel, not by
-NumPy's matrix product and ``sin``; the closure rates by Cholesky with one refinement step,
+same first-order start, :func:`~pkmkit.machines.chain_starts.inverse_starts`; the head's turn
+wrapped with NumPy's ``arctan2`` as ``np.angle`` does); ``fk`` and ``jacobian`` to rounding
+(the direct model's first-order start is formed in the kernel, not by NumPy's matrix product
+and ``sin``; the closure rates by Cholesky with one refinement step,
 not LAPACK's pseudo-inverse). No result depends on an earlier call: only constants are cached.
 
 A one-shot call in a fresh process does not import Numba
@@ -37,12 +40,13 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.chain_starts import home_rates
+from pkmkit.machines.chain_results import ChainInverseResult
+from pkmkit.machines.chain_starts import home_rates, inverse_rates
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
 from pkmkit.machines.lazy_records import lazy_record_class
-from pkmkit.machines.strokes import STROKE_TOL
+from pkmkit.machines.strokes import STROKE_TOL, signed_excess
 from pkmkit.numerics import jit
 
 _KERNELS = "pkmkit.solve.chain_one_kernel"
@@ -120,12 +124,17 @@ class ChainOneConstants:
         self.tool = float(m.tool_length)
         self.act = act
         self.n_var = n_var
-        # inverse model: u = (platform, every variable) from home
-        self.u_home_inv = np.concatenate([m._home["platform"], home])
+        # inverse model: u = (platform, every variable) from the first-order start
         self.tool_row = np.full(1, self.tool)
         self.inverse_args = (frames, types, evar, elements, offsets, every, head,
                              np.zeros((1, n_var)), self.length,
                              _options(chain_rows.SOLVE_INVERSE_DEFAULTS))
+        # the first-order start's home, flange point and axis at home, rates (own copies)
+        # and the legs' home modes (_mode_constants)
+        self._mode_constants(m)
+        self.u_home = inverse_rates(m)[0].copy()
+        self.first_args = (*self.inverse_args, *(a.copy() for a in inverse_rates(m)),
+                           *self.modes)
         # direct model: u = (platform, passive) from the first-order start
         rates, residual_rates = home_rates(m)
         self.direct_args = (frames, types, evar, elements, offsets, position, head,
@@ -138,10 +147,36 @@ class ChainOneConstants:
         self.local = threading.local()  # each thread's work arrays (_work)
         self._velocity_constants(m, passive)
         self._joint_constants(m)
+        self.passive = np.asarray(m.passive_variables, dtype=int)
+        self.q_min, self.q_max = model.q_min[act], model.q_max[act]
         self.inverse_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_one"))
+        self.first_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_first_one"))
+        self.from_kernel = _Kernel(jit.kernel(_KERNELS, "inverse_from_one"))
         self.direct_kernel = _Kernel(jit.kernel(_KERNELS, "direct_one"))
         self.velocity_kernel = _Kernel(jit.kernel(_KERNELS, "velocity_one"))
         self.svd_kernel = _Kernel(jit.kernel("pkmkit.numerics.svd_kernel", "singular_values"))
+
+    def _mode_constants(self, m: Any) -> None:
+        """The legs' home assembly modes
+        (:meth:`~pkmkit.machines.warm_starts.ChainWarmStart.mode_signature`) as places in u
+        ``(6 + n_var)``: each slide's with its home sign, each revolute leg joint's with its
+        home value."""
+        slides, turns = m._leg_joints_by_type()
+        home = m._home["values"]
+        self.mode_slides = tuple((6 + int(v), float(np.sign(home[v]))) for v in slides)
+        self.mode_turns = tuple((6 + int(v), float(home[v])) for v in turns)
+        self.modes = (np.array([i for i, _ in self.mode_slides], dtype=np.int64),
+                      np.array([s for _, s in self.mode_slides], dtype=float),
+                      np.array([i for i, _ in self.mode_turns], dtype=np.int64),
+                      np.array([h for _, h in self.mode_turns], dtype=float))
+
+    def in_home_modes(self, u: list[float]) -> bool:
+        """The closure ``u`` (6 + n_var) in the legs' home assembly modes (the test of
+        :meth:`~pkmkit.machines.warm_starts.ChainWarmStart.in_home_modes`; its cosine here by
+        ``math.cos``, whose sign agrees with NumPy's but for a joint a quarter turn from home
+        to the last place)."""
+        return all(u[i] * sign > 0 for i, sign in self.mode_slides) and all(
+            math.cos(u[i] - home) > 0 for i, home in self.mode_turns)
 
     def _velocity_constants(self, m: Any, passive: np.ndarray) -> None:
         """The velocity kernel's column maps: the closure's (platform, passive, leg
@@ -254,38 +289,127 @@ def _plain(x: Any, width: int) -> list[float] | None:
     return x
 
 
-def inverse(m: Any, x: Any, strokes: str) -> np.ndarray | None:
-    """``m.ik(x)`` of one plain pose ``x`` (6 numbers): ``q (n,)``, or None (module
+def inverse(m: Any, x: Any, strokes: str, start: Any = None) -> np.ndarray | None:
+    """``m.ik(x)`` of one plain pose ``x`` (6 numbers) from the default start, or from
+    ``start`` (6 + n_var plain numbers: a previous solution, as the batch path's ``start``):
+    ``q (n,)``, or None (module docstring)."""
+    found = _inverse_within(m, x, strokes, start)
+    return None if found is None else np.array(found[0].actuators(found[1]))
+
+
+def inverse_record(m: Any, x: Any, strokes: str, start: Any = None) -> Any:
+    """``m.ik(x, full_output=True)`` of one plain pose (from ``start`` if given): the batch
+    path's single-row :class:`~pkmkit.machines.chain_results.ChainInverseResult`, its fields
+    but ``direct`` and ``pose`` given at once (``solution`` the ``start`` of a next call: a
+    controller's loop), those two computed when read (the direct model at ``q`` from the
+    inverse's closure, as the batch path computes them at once); or None (module
     docstring)."""
+    global _INVERSE_RECORD
+    found = _inverse_within(m, x, strokes, start)
+    if found is None:
+        return None
+    c, values, u, iterations, residual = found  # within the strokes but with "ignore":
+    # no actuator's excess (signed_excess's +0.0) there
+    q = np.array(c.actuators(values))
+    solution = np.array(u)
+    closure = np.concatenate([solution[:6], solution[6:][c.passive]])
+    if _INVERSE_RECORD is None:
+        _INVERSE_RECORD = lazy_record_class(
+            ChainInverseResult, "OnePose",
+            lambda r: f"1 pose, {len(r.q)} actuators; the direct model at q computed when read",
+            "A joint chain's inverse record of one pose (:mod:`pkmkit.machines.chain_one`); "
+            "direct and pose computed when first read.")
+        from pkmkit.machines.chain_inverse_record import _plain_record
+
+        # pickled as the plain record, every field computed (its fields are keyword-only)
+        _INVERSE_RECORD.__reduce__ = lambda self: (_plain_record, (
+            {name: getattr(self, name) for name in ChainInverseResult.__dataclass_fields__},))
+    record = _INVERSE_RECORD(None, q=q, status=np.int64(0), branches=None, shortfall=None,
+                             method="numeric", mode=np.int64(0),
+                             iterations=np.int64(iterations), residual=np.float64(residual),
+                             out_of_stroke=None if strokes == "ignore" else np.False_,
+                             stroke_excess=(signed_excess(q[None], c.q_min, c.q_max)[0]
+                                            if strokes == "ignore" else np.zeros(c.n)),
+                             solution=solution, closure=closure)
+    object.__setattr__(record, "_evaluation", _InverseFields(m, q, closure, strokes,
+                                                             record._cache))
+    return record
+
+
+_INVERSE_RECORD: type | None = None
+
+
+class _InverseFields:
+    """The fields of a one-pose inverse record computed when read: ``direct`` (the batch
+    path's single-row ``direct_at``) and ``pose`` (its tool pose)."""
+
+    __slots__ = ("cache", "closure", "m", "q", "strokes")
+
+    def __init__(self, m: Any, q: np.ndarray, closure: np.ndarray, strokes: str,
+                 cache: dict) -> None:
+        self.m, self.q, self.closure, self.strokes, self.cache = m, q, closure, strokes, cache
+
+    def field(self, name: str) -> Any:
+        from pkmkit.machines.chain_inverse_record import direct_at
+
+        if name == "direct":
+            return direct_at(self.m, self.q[None], self.closure[None],
+                             np.array([float(self.m.tool_length)]), self.strokes, True)
+        if name == "pose":
+            if "direct" not in self.cache:
+                self.cache["direct"] = self.field("direct")
+            return np.atleast_2d(self.cache["direct"].pose)[0]
+        raise AttributeError(name)  # pragma: no cover - every other field is given
+
+
+def _inverse_within(m: Any, x: Any, strokes: str, start: Any) -> tuple | None:
+    """``(constants, every joint's value, the solution u, iterations, residual)`` of one plain
+    pose within the strokes (or any with ``strokes="ignore"``), or None."""
     c = constants(m)
     xs = None if c is None else _plain(x, 6)
     if xs is None:
         return None
-    values = _inverse_values(c, xs)
-    if values is None:
+    if start is not None:
+        start = _plain(start, 6 + c.n_var)
+        if start is None:
+            return None
+    found = _inverse_values(c, xs, start)
+    if found is None:
         return None
-    if strokes != "ignore" and not c.within(values):
+    if strokes != "ignore" and not c.within(found[0]):
         return None  # the batch path warns or refuses
-    return np.array(c.actuators(values))
+    return (c, *found)
 
 
-def _inverse_values(c: ChainOneConstants, xs: list[float]) -> list[float] | None:
-    """Every joint variable of the inverse solution of pose ``xs``, revolute actuators on the
-    turn nearest home, on the head's branch of the batch path's rule; None where the batch path
-    must decide."""
+def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | None = None
+                    ) -> tuple | None:
+    """``(every joint variable, u, iterations, residual)`` of the inverse solution of pose
+    ``xs`` from the first-order start (or ``start``), revolute actuators on the turn nearest
+    home, on the head's branch of the batch path's rule; None where the batch path must
+    decide."""
     a, b, d = xs[3], xs[4], xs[5]
     norm = math.sqrt(a * a + b * b + d * d)
     if not norm > 0:
         return None
     w = _work(c)
     w.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
-    u = _solve_inverse(c, w, c.u_home_inv)
-    if u is None:
-        return None
-    values = _wrapped(c, u[6:])
+    if start is None:  # from the first-order start, as the batch path's default
+        kernel = c.first_kernel
+    else:
+        w.u_inv[0] = start
+        kernel = c.from_kernel
+    (kernel.call or kernel.first)(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
+    first = w.info[0] == 0 and w.info[3] == 1.0  # converged, in the legs' home modes
+    if first:
+        u = w.u_inv[0].tolist()
+    else:  # solved again from home, as the batch path does
+        u = _solve_inverse(c, w, c.u_home)
+        if u is None:
+            return None
+    found = (_wrapped(c, u[6:]), u, int(w.info[2]), float(w.info[1]))
     if c.wrist is not None:
-        values = _nearest_branch(c, u, values)
-    return values
+        return _nearest_branch(c, found, first)
+    return found
 
 
 def _solve_inverse(c: ChainOneConstants, w: _Work, start: Any) -> list[float] | None:
@@ -315,32 +439,40 @@ def _turn_offset(angle: float) -> float:
     return math.pi - (math.pi - angle) % _TWO_PI
 
 
-def _nearest_branch(c: ChainOneConstants, u: list[float], values: list[float]
-                    ) -> list[float] | None:
+def _nearest_branch(c: ChainOneConstants, found: tuple, first: bool) -> tuple | None:
     """The rule of :meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch` for one
     row (:func:`~pkmkit.machines.head_branches.nearest_head_branch` with home as the
     reference, the strokes judged around home): the mirror solved where the solution's turn is
     far from home's (or, when the turn's stroke reaches a quarter turn, beyond a stroke) and
-    kept where it is nearer or alone within the strokes. ``values`` (wrapped) of the branch
-    kept, or None (the mirror did not converge: the batch path)."""
+    kept where it is nearer or alone within the strokes. ``found`` and the result: ``(values
+    (wrapped), u, iterations, residual)`` of the branch kept (the iterations of both solves,
+    as the batch path counts them), or None (the mirror did not converge, or is kept outside
+    the legs' home modes after the first start (``first``): the batch path)."""
+    values, u, iterations, _ = found
     turn, home_turn, tilt, tilt_centre, wide = c.wrist
     far = abs(_turn_offset(u[6 + turn] - home_turn)) > _FAR
     kept_inside = c.within(values)
     if not (far or (wide and not kept_inside)):
-        return values
+        return found
     start = list(u)
     start[6 + turn] += math.pi
     start[6 + tilt] = 2.0 * tilt_centre - start[6 + tilt]
-    other = _solve_inverse(c, _work(c), start)
+    w = _work(c)
+    other = _solve_inverse(c, w, start)
     if other is None:
         return None  # not converged: the batch path (which keeps the first solution)
     other_values = _wrapped(c, other[6:])
     closer = abs(_turn_offset(other[6 + turn] - home_turn)) < abs(
         _turn_offset(u[6 + turn] - home_turn))
     flipped_inside = c.within(other_values)
+    iterations += int(w.info[2])
     if (flipped_inside and not kept_inside) or (flipped_inside == kept_inside and closer):
-        return other_values
-    return values
+        # the batch path solves a mirror outside the legs' home modes again from home (a row
+        # from the first start)
+        if first and not c.in_home_modes(other):
+            return None
+        return other_values, other, iterations, float(w.info[1])
+    return values, u, iterations, found[3]
 
 
 def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndarray | None:
@@ -410,9 +542,10 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
         return None
     c = constants(m, "chain_jacobian")
     xs = None if c is None else _plain(x, 6)
-    values = None if xs is None else _inverse_values(c, xs)
-    if values is None:
+    found = None if xs is None else _inverse_values(c, xs)
+    if found is None:
         return None
+    values = found[0]
     qs = c.actuators(values)
     w = _work(c)
     w.q[:] = qs
@@ -444,9 +577,8 @@ class ChainOnePose:
 
     def _ik_one(self, x: Any, q0: Any, tool_length: Any, full_output: bool, strokes: str,
                 start: Any, engine_options: dict) -> tuple:
-        if q0 is None and tool_length is None and start is None and not full_output \
-                and not engine_options and strokes in _MODES:
-            fast = inverse(self, x, strokes)
+        if q0 is None and tool_length is None and not engine_options and strokes in _MODES:
+            fast = (inverse_record if full_output else inverse)(self, x, strokes, start)
             if fast is not None:
                 return (fast,)
         return ()

@@ -15,7 +15,14 @@ import numpy as np
 
 from pkmkit.machines.chain_velocity_record import RANK_RCOND
 from pkmkit.numerics.rowwise import einsum
-from pkmkit.solve.chains import closure, closure_residuals, compose_rotvecs, rotvec_matrices
+from pkmkit.solve.chains import (
+    closure,
+    closure_residuals,
+    compose_rotvecs,
+    rotvec_matrices,
+    tool_frame,
+    tool_rows,
+)
 from pkmkit.spatial.rotation import rotvec_to_matrix
 
 
@@ -60,3 +67,87 @@ def default_start(m: Any, qb: np.ndarray, values: np.ndarray) -> np.ndarray:
     worse = ~(einsum("mk,mk->k", res, res) <= einsum("mk,mk->k", from_home, from_home))
     u_pred[worse] = u_home[worse]
     return u_pred
+
+
+#: Singular values of the inverse model's Jacobian at home below this fraction of the largest
+#: are left out of the first-order start's rates (the wrist singularity at home: its rates
+#: would be ~1/0.004 of the others' and throw the start far off).
+INVERSE_RATE_CUTOFF = 0.02
+
+
+def inverse_rates(m: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The inverse model's first-order start at home of the machine ``m``, cached on ``m``:
+    ``(u_home (6 + n_var,), base (6,), rates (6 + n_var, 6))`` — home's unknowns (platform
+    position, rotation vector, every joint variable), the flange point (the tool frame's
+    origin, m) and tool axis at home, and the change of the unknowns per unit change of the
+    flange point and axis (the rotation-vector rows for a rotation composed on the left, as
+    the engine's retraction). Rates in the flange point, not the tool point, so that one set
+    serves every tool length: a target ``(p, a)`` with tool length ``ℓ`` is the flange point
+    ``p − ℓ a`` with axis ``a``. The least-squares rates of the residual of
+    :func:`pkmkit.solve.chains.solve_machine_inverse` (tool length 0) linearised at home,
+    its singular values below :data:`INVERSE_RATE_CUTOFF` × the largest left out."""
+    cached = m.__dict__.get("_inverse_rates_cache")
+    if cached is not None:
+        return cached
+    model = m.model
+    length = float(model.characteristic_length)
+    platform = m._home["platform"]
+    values = m._home["values"][:, None]
+    rot = rotvec_to_matrix(platform[3:]).transpose(1, 2, 0)
+    position = platform[:3, None]
+    c = closure(model, rot, position, values)
+    frame = tool_frame(model, rot, position, values, twists=True)
+    flange, axis = frame.p[:, 0], frame.R[:, 2, 0]
+    rigid = np.zeros((6, 6, 1))  # the platform increments as a spatial twist of the tool frame
+    rigid[:3, :3, 0] = rigid[3:, 3:, 0] = np.eye(3)
+    rigid[:3, 3:, 0] = _skew(platform[:3])
+    tool = np.concatenate([tool_rows(rigid, frame.p, frame.R[:, 2], length),
+                           tool_rows(frame.variable_twists, frame.p, frame.R[:, 2], length)],
+                          axis=1)[:, :, 0]
+    jac = np.concatenate([np.concatenate([c.platform, c.variables], axis=1)[:, :, 0], tool])
+    rhs = np.zeros((len(jac), 6))
+    rhs[-6:-3, :3] = np.eye(3)
+    rhs[-3:, 3:] = length * np.eye(3)
+    left, sv, right = np.linalg.svd(jac, full_matrices=False)
+    keep = sv > INVERSE_RATE_CUTOFF * sv[0]
+    rates = (right[keep].T / sv[keep]) @ (left[:, keep].T @ rhs)
+    rates[3:6] = _left_jacobian_inverse(platform[3:]) @ rates[3:6]
+    cached = (np.concatenate([platform, m._home["values"]]), np.concatenate([flange, axis]),
+              np.ascontiguousarray(rates))
+    object.__setattr__(m, "_inverse_rates_cache", cached)
+    return cached
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def _left_jacobian_inverse(phi: np.ndarray) -> np.ndarray:
+    """``(3, 3)``: the change of the rotation vector ``log(exp(δ) exp(φ))`` per unit ``δ`` at
+    ``δ = 0`` (the inverse of SO(3)'s left Jacobian at ``phi``; ``|φ|`` up to π)."""
+    theta = float(np.linalg.norm(phi))
+    k = _skew(phi)
+    if theta < 1e-4:
+        factor = 1.0 / 12.0
+    else:
+        factor = 1.0 / theta ** 2 - 1.0 / (2.0 * theta * np.tan(theta / 2.0))
+    return np.eye(3) - 0.5 * k + factor * (k @ k)
+
+
+def inverse_starts(m: Any, targets: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """``(N, 6 + n_var)`` first-order starts of the inverse model of ``m`` (:func:`inverse_rates`)
+    for ``targets (N, 6)`` (tool point m, unit axis) and tool lengths ``lengths (N,)`` (m):
+    ``u_home + Σ_j rates[:, j] d_j`` with ``d = (p − ℓ a − flange_home, a − axis_home)``,
+    summed in ``j``'s order term by term — each row's bits its own, whatever the batch, and
+    those of :func:`pkmkit.solve.chain_one_kernel.inverse_start` (the one-pose path)."""
+    u_home, base, rates = inverse_rates(m)
+    targets = np.asarray(targets, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        d = np.empty((len(targets), 6))
+        d[:, :3] = targets[:, :3] - lengths[:, None] * targets[:, 3:]
+        d[:, :3] -= base[:3]
+        d[:, 3:] = targets[:, 3:] - base[3:]
+        acc = d[:, 0, None] * rates[:, 0]
+        for j in range(1, 6):
+            acc = acc + d[:, j, None] * rates[:, j]
+        return u_home + acc

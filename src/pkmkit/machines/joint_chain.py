@@ -51,7 +51,7 @@ from pkmkit.machines.chain_results import (
     ChainInverseResult,
     single_row,
 )
-from pkmkit.machines.chain_starts import default_start
+from pkmkit.machines.chain_starts import default_start, inverse_starts
 from pkmkit.machines.chunks import chunked, iterative_chunk_rows
 from pkmkit.machines.common import (
     MAX_COORDINATE,
@@ -512,8 +512,10 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
 
         Args:
             x: ``(6,)`` or ``(N, 6)`` tool point (m) and tool axis (normalised here).
-            q0: warm start for the actuators (default: home); other branches of the head are
-                reached from other starts.
+            q0: warm start for the actuators (the other unknowns from home); other branches
+                of the head are reached from other starts. Default: home moved to first order
+                towards each target (:func:`~pkmkit.machines.chain_starts.inverse_starts`),
+                solved again from home where that fails or leaves the legs' home assembly modes.
             tool_length: tool length(s) (m); default the machine's.
             full_output: return a :class:`ChainInverseResult` (its ``direct`` the direct
                 model at the solution).
@@ -525,8 +527,11 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             start: ``(6 + n_var,)`` or ``(N, 6 + n_var)`` warm start of every unknown —
                 platform position, rotation vector, every joint variable in the model's order:
                 a previous result's ``solution`` (e.g. at a neighbouring point: continuation).
-                Rows not finite start from home (or ``q0``), so do rows that do not converge
-                from their start; revolute actuators stay on the turn nearest ``q0`` (home).
+                Rows not finite take the default start (or ``q0``); rows that do not converge
+                from their start are solved again from home; revolute actuators stay on the turn
+                nearest ``q0`` (home). One plain pose with a plain ``start`` row (and
+                ``full_output``) takes the one-pose path (:mod:`pkmkit.machines.chain_one`):
+                the same answer, the ``solution`` the next call's ``start``.
 
         Returns:
             q ``(n,)`` / ``(N, n)``; with ``full_output`` a :class:`ChainInverseResult` (which
@@ -577,9 +582,14 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             values[:, self._actuated] = _rows_like(q0, self.n_actuators, "q0", n)
         u_home = np.concatenate([np.tile(self._home["platform"], (n, 1)), values], axis=1)
         u0, started = self._inverse_starts(start, u_home)
+        lengths = self._tool_lengths(tool_length, n)
+        if q0 is None:  # the default start: home moved to first order towards each target,
+            # solved again from home where it fails or leaves the legs' home modes
+            u0 = u0.copy()  # without start= it is u_home itself
+            u0[~started] = inverse_starts(self, targets[~started], lengths[~started])
+            started[:] = True
         for u in (u0, u_home):
             u[~valid_rows(xb) | bad_axis] = np.nan
-        lengths = self._tool_lengths(tool_length, n)
         engine_options.setdefault("compute_rank", False)
         engine_options.setdefault("compiled", use_compiled_solver(n))
 

@@ -6,7 +6,9 @@ Each is one Numba call on arrays built once per machine, running the loop of
 row:
 
 - :func:`inverse_one`: the machine's inverse model from the start given (the batch path's
-  ``solve_inverse`` on one row: the same bits from the same start);
+  ``solve_inverse`` on one row: the same bits from the same start); :func:`inverse_first_one`
+  the same from the default first-order start (:func:`inverse_start`, the bits of
+  :func:`pkmkit.machines.chain_starts.inverse_starts`);
 - :func:`direct_one`: the direct model's closure from the first-order start of
   :meth:`~pkmkit.machines.joint_chain.JointChainMachine._default_start` (here in scalars: the
   start agrees with the batch path's NumPy one to rounding, not bit for bit), a lower bound of
@@ -60,6 +62,61 @@ def inverse_one(frames, types, evar, elements, offsets, position, head, known, l
                 options[6], status, residual, iterations, head, target, tool, True)
     info[STATUS], info[RESIDUAL], info[ITERATIONS] = status[0], residual[0], iterations[0]
     info[BOUND] = np.nan
+
+
+@njit(**_OPTIONS)
+def inverse_start(u_home, base, rates, target, tool, u):  # pragma: no cover
+    """The inverse model's first-order start into ``u (1, 6 + n_var)`` for ``target (1, 6)``
+    and tool length ``tool (1,)``: the operations of
+    :func:`pkmkit.machines.chain_starts.inverse_starts` on one row (the same bits)."""
+    t = target[0]
+    d = np.empty(6)
+    for i in range(3):
+        d[i] = (t[i] - tool[0] * t[3 + i]) - base[i]
+        d[3 + i] = t[3 + i] - base[3 + i]
+    for i in range(u_home.shape[0]):
+        s = d[0] * rates[i, 0]
+        for j in range(1, 6):
+            s = s + d[j] * rates[i, j]
+        u[0, i] = u_home[i] + s
+
+
+@njit(**_OPTIONS)
+def inverse_first_one(frames, types, evar, elements, offsets, position, head, known, length,
+                      options, u_home, base, rates, slides, signs, turns, homes, u, target,
+                      tool, info):  # pragma: no cover
+    """:func:`inverse_one` from the first-order start of :func:`inverse_start` (``u`` out),
+    then ``info[BOUND]`` 1.0 where the solution is in the legs' home modes, else 0.0
+    (:func:`in_home_modes`)."""
+    inverse_start(u_home, base, rates, target, tool, u)
+    inverse_one(frames, types, evar, elements, offsets, position, head, known, length, options,
+                u, target, tool, info)
+    info[BOUND] = 1.0 if in_home_modes(u[0], slides, signs, turns, homes) else 0.0
+
+
+@njit(**_OPTIONS)
+def inverse_from_one(frames, types, evar, elements, offsets, position, head, known, length,
+                     options, u_home, base, rates, slides, signs, turns, homes, u, target,
+                     tool, info):  # pragma: no cover
+    """:func:`inverse_first_one` from the start in ``u`` (a caller's)."""
+    inverse_one(frames, types, evar, elements, offsets, position, head, known, length, options,
+                u, target, tool, info)
+    info[BOUND] = 1.0 if in_home_modes(u[0], slides, signs, turns, homes) else 0.0
+
+
+@njit(**_OPTIONS)
+def in_home_modes(u, slides, signs, turns, homes):  # pragma: no cover
+    """The closure ``u (6 + n_var)`` in the legs' home assembly modes: each slide ``u[slides]``
+    with the sign ``signs``, each revolute leg joint ``u[turns]`` within a quarter turn of
+    ``homes`` (the test of :meth:`~pkmkit.machines.warm_starts.ChainWarmStart.in_home_modes`;
+    libm's cosine, whose sign is NumPy's but a last-place rounding a quarter turn from home)."""
+    for k in range(slides.shape[0]):
+        if not u[slides[k]] * signs[k] > 0:
+            return False
+    for k in range(turns.shape[0]):
+        if not math.cos(u[turns[k]] - homes[k]) > 0:
+            return False
+    return True
 
 
 @njit(**_OPTIONS)
