@@ -153,7 +153,8 @@ def test_bits_at_bisected_parallel_singularities(name):
         assert got[4].sum() >= 90  # coinciding singular values: left to the reference
 
 
-@pytest.mark.parametrize("name", ["orthoglide", "linear-delta-ch3", "five-bar-biglide", "strut-tripod"])
+@pytest.mark.parametrize("name", ["orthoglide", "linear-delta-ch3", "five-bar-biglide",
+                                  "strut-tripod"])
 def test_jacobian_batch_against_the_numpy_reference(name, monkeypatch):
     """``m.jacobian`` of a batch large enough for the kernel, through the C kernel (no Numba
     needed), against the NumPy reference (``PKMKIT_COMPILED=0``)."""
