@@ -108,7 +108,16 @@ def test_bits_of_numba(name, limit):
     q_free[::3] = rng.uniform(-2, 2, q_free[::3].shape)
     q_free[4] = np.nan
     q_free[11, 0] = np.inf
-    _compare(m, x, q_free, limit, name + " free q")
+    # degenerate rows: sums that overflow from finite inputs (B's entries, not A's), and a
+    # pose on a leg's joint (a zero row of A: the bound is 0/0)
+    closed = m._closed
+    q_free[12:15] = 0.1
+    x[12] = 1.5e308
+    x[13] = -1.5e308
+    x[13, 0] = 1.5e308
+    x[14] = closed.centre0[0] + q_free[14, 0] * closed.axis[0]
+    got = _compare(m, x, q_free, limit, name + " free q")
+    assert got[4][14] and np.isnan(got[0][12]) and np.isnan(got[3][12])
 
 
 @pytest.mark.parametrize("name", list(MACHINES))
