@@ -165,10 +165,11 @@ def test_bits_at_bisected_parallel_singularities(name):
 @pytest.mark.parametrize("name", ["orthoglide", "linear-delta-ch3", "five-bar-biglide",
                                   "strut-tripod"])
 def test_jacobian_batch_against_the_numpy_reference(name, monkeypatch):
-    """``m.jacobian`` of a batch large enough for the kernel, through the C kernel (no Numba
-    needed), against the NumPy reference (``PKMKIT_COMPILED=0``)."""
+    """``m.jacobian`` of a batch large enough for the kernel, through the C kernel (Numba not
+    imported, as in a fresh process), against the NumPy reference (``PKMKIT_COMPILED=0``)."""
     m = MACHINES[name]
     x = _poses(m, jit.MIN_ROWS + 100, seed=3)
+    monkeypatch.delitem(sys.modules, "numba", raising=False)  # put back after the test
     calls = []
     real = jit.kernel
 
@@ -192,6 +193,19 @@ def test_jacobian_batch_against_the_numpy_reference(name, monkeypatch):
             np.testing.assert_allclose(got, want, rtol=1e-11, atol=1e-14, err_msg=f)
         else:
             np.testing.assert_array_equal(got, want, err_msg=f)
+
+
+def test_velocity3_twin_only_until_numba_is_imported(monkeypatch):
+    """The planar twin runs at Numba's speed and is always taken; the spatial one is slower
+    than Numba's vectorised loop once both are loaded, so Numba's is taken after its import
+    (the same bits, test_bits_of_numba)."""
+    from pkmkit.machines import kernels
+
+    assert "numba" in sys.modules  # imported by the module above
+    assert jit.kernel("pkmkit.machines.kernels", "velocity3") is kernels.velocity3
+    assert jit.kernel("pkmkit.machines.kernels", "velocity2") is _kernels.rod_velocity2
+    monkeypatch.delitem(sys.modules, "numba")
+    assert jit.kernel("pkmkit.machines.kernels", "velocity3") is _kernels.rod_velocity3
 
 
 def test_polynomial_is_the_numba_kernels():

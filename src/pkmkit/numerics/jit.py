@@ -76,6 +76,12 @@ NATIVE_NAMES = {("pkmkit.machines.full_pose_position_kernel", "solve_rows"): "po
                 ("pkmkit.machines.kernels", "velocity3"): "rod_velocity3",
                 ("pkmkit.machines.kernels", "velocity2"): "rod_velocity2"}
 
+#: Twins slower than their Numba kernel once both are loaded (GCC does not vectorise the
+#: velocity summary's per-pose loop as LLVM does: ≈ 95 against 30 ns per pose): taken while
+#: Numba is not imported — a fresh process then pays no Numba for them — and Numba's after.
+#: The same bits either way.
+NATIVE_UNTIL_NUMBA = {("pkmkit.machines.kernels", "velocity3")}
+
 _available: bool | None = None
 _native: ModuleType | bool | None = False  # False: not looked for yet
 _pool: tuple[int, ThreadPoolExecutor] | None = None
@@ -114,7 +120,8 @@ def native_kernels() -> ModuleType | None:
 def native_kernel(module: str, name: str) -> Callable[..., Any] | None:
     """The C twin of the Numba kernel ``module.name`` (:data:`NATIVE_TWINS`) when
     :func:`native_kernels` has it, else None."""
-    if name not in NATIVE_TWINS.get(module, ()):
+    if name not in NATIVE_TWINS.get(module, ()) or (
+            (module, name) in NATIVE_UNTIL_NUMBA and "numba" in sys.modules):
         return None
     native = native_kernels()
     # an extension built from older sources lacks the newer twins: Numba then runs them
