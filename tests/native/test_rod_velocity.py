@@ -6,12 +6,10 @@ at random poses in and far beyond the workspace, on segments crossing parallel s
 and at poses bisected onto them (det A changing sign), at coinciding singular values, and on
 invalid rows (NaN, ±inf, huge, tiny); ``m.jacobian`` of a large batch through the C kernel
 against the NumPy reference (the independent oracle); the polynomial shared with the Numba
-kernel; the arguments refused; and that a fresh ``pkmkit jacobian --input`` of a rod-leg
-machine imports no Numba."""
+kernel; the arguments refused (a fresh process: tests/native/test_fresh_commands.py)."""
 
 from __future__ import annotations
 
-import subprocess
 import sys
 from pathlib import Path
 
@@ -246,28 +244,3 @@ def test_refused_arguments():
         _kernels.rod_velocity3(np.zeros((3, 4)).T, q, *legs, 1e-3, *out)  # not C-ordered
     with pytest.raises(TypeError):
         _kernels.rod_velocity3(x, q, *legs, 1e-3)
-
-
-@pytest.mark.ci
-def test_fresh_commands_import_no_numba(tmp_path):
-    """A fresh ``pkmkit jacobian MACHINE --input`` of translational rod-leg machines (3-DOF
-    and planar) and ``pkmkit workspace gough-stewart`` run the C kernels: Numba is never
-    imported."""
-    rows = []
-    for name in ("orthoglide", "linear-delta", "five-bar"):
-        m = pkmkit.machine(name)
-        x = random_poses(m, jit.MIN_ROWS + 10, seed=1)
-        path = tmp_path / f"{name}.csv"
-        header = ",".join("xyz"[: m.dims])
-        np.savetxt(path, x, delimiter=",", header=header, comments="", fmt="%.9g")
-        rows.append(["jacobian", name, "--input", str(path), "--output",
-                     str(tmp_path / f"{name}-j.csv")])
-    rows.append(["workspace", "gough-stewart"])
-    for args in rows:
-        code = ("import sys\nfrom pkmkit.cli.main import cli\n"
-                f"try:\n    cli({args!r}, standalone_mode=False)\n"
-                "except SystemExit:\n    pass\n"
-                "print('numba' in sys.modules, 'pkmkit.native.kernels' in sys.modules)\n")
-        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                             check=True).stdout.split()
-        assert out[-2:] == ["False", "True"], (args, out[-2:])
