@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 from dataclasses import replace
+from types import ModuleType
 
 import click
 import numpy as np
@@ -31,13 +32,6 @@ from pkmkit.exceptions import InputError
 from pkmkit.machines.machine import Machine
 from pkmkit.model.parameters import length_scale
 from pkmkit.numerics.magnitudes import check_plausible
-from pkmkit.plot.maps import (
-    check_figure_path,
-    plot_actuator_maps,
-    plot_scalar_map,
-    plot_useful_workspace,
-    plot_workspace,
-)
 from pkmkit.stiffness.indices import STIFFNESS_INDICES
 from pkmkit.stiffness.results import linear_range_problem
 
@@ -72,6 +66,15 @@ from .stiffness_options import (
     stiffness_map_values,
     workspace_stiffness,
 )
+
+
+def _maps() -> ModuleType:
+    """:mod:`pkmkit.plot.maps`, imported when a figure is asked for (matplotlib: ≈ 0.3–0.6 s of
+    a fresh process otherwise spent by every ``workspace`` and ``analyze``)."""
+    from pkmkit.plot import maps
+
+    return maps
+
 
 BOUNDS_OPTION = click.option(
     "--bounds", metavar="LO,HI",
@@ -235,7 +238,7 @@ def _condition_text(kappa: float) -> str:
 def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orientation_text,
             convention, resolution, color_scale, out, wrench_text, scheduler, units, as_json):
     """Iso-contours of an index (or actuator coordinates) over a plane."""
-    check_figure_path(out)
+    _maps().check_figure_path(out)
     m, data = machine_and_data(machine_name, assignments, units)
     scale = length_scale(units)
     wrench, _ = parse_wrench(wrench_text, m)
@@ -261,7 +264,7 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
                "plane": list(grid.free_names), "reachable_points": int(reachable.sum()),
                "points": grid.size, "step": grid.step / scale}
     if index_name == "actuators":
-        plot_actuator_maps(m, grid, unit=units, path=out)
+        _maps().plot_actuator_maps(m, grid, unit=units, path=out)
         summary["min"] = np.nanmin(q, axis=0) / scale
         summary["max"] = np.nanmax(q, axis=0) / scale
     else:
@@ -274,8 +277,9 @@ def map_cmd(machine_name, assignments, index_name, slice_text, range_text, orien
         finite = np.isfinite(values)
         if not finite.any():
             raise InputError(f"{index_name} is undefined on every reachable point of the plane")
-        plot_scalar_map(grid, values.reshape(grid.shape), title=f"{m.name}: {title}",
-                        label=label, scale=color_scale, unit=units, path=out)
+        _maps().plot_scalar_map(grid, values.reshape(grid.shape),
+                                title=f"{m.name}: {title}", label=label, scale=color_scale,
+                                unit=units, path=out)
         k_min, k_max = np.nanargmin(values), np.nanargmax(values)
         summary.update({"min": float(values[k_min]), "at_min": points[k_min] / scale,
                         "max": float(values[k_max]), "at_max": points[k_max] / scale})
@@ -380,7 +384,7 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
     With --min-stiffness, --max-deflection or --wrench, stiffness is a criterion or a figure
     (docs/stiffness.md)."""
     if out is not None:
-        check_figure_path(out)
+        _maps().check_figure_path(out)
     m, data = machine_and_data(machine_name, assignments, units)
     scale = length_scale(units)
     elastic, _ = stiffness_criteria(m, data, min_stiffness, max_deflection, wrench_text)
@@ -423,7 +427,7 @@ def workspace(machine_name, assignments, bounds, kappa_max, box_text, slice_text
                             "worst": check.worst, "index_range": list(check.factor_range),
                             "q_min": check.q_range[0] / scale, "q_max": check.q_range[1] / scale}
     if out is not None:
-        plot_workspace(wmap, m, unit=units, path=out)
+        _maps().plot_workspace(wmap, m, unit=units, path=out)
         summary["figure"] = out
     if as_json:
         emit_json(summary)
@@ -549,7 +553,7 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
     cubes. The transmission-factor range over the useful workspace is exact (extremes over the
     joint square refined by optimisation)."""
     if out is not None:
-        check_figure_path(out)
+        _maps().check_figure_path(out)
     m = resolve_machine(machine_name, assignments, units)
     n = m.n_actuators
     if n not in (2, 3):
@@ -579,7 +583,7 @@ def useful_workspace_cmd(machine_name, assignments, bounds, kappa_max, anywhere,
         "global_conditioning_index": useful.workspace.global_conditioning_index(),
     }
     if out is not None:
-        plot_useful_workspace(useful, m, unit=units, path=out)
+        _maps().plot_useful_workspace(useful, m, unit=units, path=out)
         summary["figure"] = out
     if as_json:
         emit_json(summary)

@@ -16,6 +16,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from pkmkit.machines.cos_third import COEFFICIENTS
+
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 #: Poses per block of the inverse model: the block's coordinates stay in L1/L2 between legs.
 _BLOCK = 2048
@@ -181,19 +183,7 @@ def _legs(centre, axis, slide, rod):  # pragma: no cover
     return out
 
 
-def _cos_third_coefficients(degree: int = 12) -> np.ndarray:
-    """Monomial coefficients (increasing powers) of the Chebyshev interpolant of
-    s ↦ cos(2 arccos(s) / 3) on [0, 1] (smooth there; error 2e-12 at degree 12)."""
-    from numpy.polynomial import Chebyshev, Polynomial
-
-    def target(s):
-        return np.cos(2.0 * np.arccos(np.clip(s, 0.0, 1.0)) / 3.0)
-
-    fit = Chebyshev.interpolate(target, degree, domain=[0.0, 1.0])
-    return fit.convert(kind=Polynomial, domain=[0.0, 1.0], window=[0.0, 1.0]).coef
-
-
-_COS_THIRD = _cos_third_coefficients()
+_COS_THIRD = COEFFICIENTS  # shared with the C twin (native/rod_velocity.c)
 
 
 @njit(inline="always")

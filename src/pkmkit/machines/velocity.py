@@ -97,7 +97,7 @@ class VelocityEvaluation:
     def summary(self) -> dict[str, np.ndarray]:
         """det A ``(N,)``, singular values ``(n, N)``, condition, serial measure, singularity
         flags, and the exact parallel measure where it was computed (NaN elsewhere)."""
-        if jit.use_compiled(self.size) and not self.closed.crank.any():  # kernels: no cranks
+        if jit.use_compiled(self.size, native=True) and not self.closed.crank.any():  # no cranks
             return self._summary_compiled()
         return self._summary_numpy()
 
@@ -127,17 +127,19 @@ class VelocityEvaluation:
                 "serial": serial, "parallel": parallel, "flags": flags}
 
     def _summary_compiled(self) -> dict[str, np.ndarray]:
-        from pkmkit.machines import kernels
-
         closed, n, size = self.closed, self.n, self.size
         det_a, condition, serial = np.empty(size), np.empty(size), np.empty(size)
         sv = np.empty((n, size))
         hard = np.empty(size, dtype=bool)
-        kernel = kernels.velocity3 if n == 3 else kernels.velocity2
+        # the C twin (native/rod_velocity.c) when built, else Numba's
+        kernel = jit.kernel("pkmkit.machines.kernels", "velocity3" if n == 3 else "velocity2")
         limit = max(NEAR_PARALLEL, self.tol)
         q_t = self.q.T if self.q.flags.f_contiguous else np.ascontiguousarray(self.q.T)
-        kernel(self.x, q_t, closed.centre0, closed.axis, closed.slide > 0,
-               closed.model.leg_length, limit, det_a, sv, condition, serial, hard)
+        legs = [np.ascontiguousarray(a, dtype=float)
+                for a in (closed.centre0, closed.axis, closed.model.leg_length)]
+        kernel(np.ascontiguousarray(self.x, dtype=float), q_t, legs[0], legs[1],
+               np.ascontiguousarray(closed.slide > 0), legs[2], limit, det_a, sv, condition,
+               serial, hard)
         # every row not left to the reference has parallel measure ≥ limit ≥ tol
         parallel = np.full(size, np.nan)
         rows = np.flatnonzero(hard)

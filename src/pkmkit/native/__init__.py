@@ -20,7 +20,15 @@ arguments, the same algorithm and statuses, run without the GIL:
   (:meth:`pkmkit.machines.closed_form.RodClosedForm.inverse_one`,
   :class:`pkmkit.machines.velocity_one.OnePoseVelocity`), the batch row's bits;
 - ``pose_velocity`` (``pose_velocity.c``) — the one-pose velocity kernels of six-rod
-  full-pose machines (:mod:`pkmkit.machines.full_pose_velocity_kernel`).
+  full-pose machines (:mod:`pkmkit.machines.full_pose_velocity_kernel`);
+- ``singular_values``, ``singular_rates`` (``svd.c``) —
+  :func:`pkmkit.numerics.svd_kernel.singular_values` and
+  :func:`pkmkit.numerics.svd_rates_kernel.singular_rates` (batched one-sided Jacobi SVDs of
+  small matrices, with the singular values' rates: the workspace studies' conditioning and
+  slack gradients);
+- ``rod_velocity3``, ``rod_velocity2`` (``rod_velocity.c``) —
+  :func:`pkmkit.machines.kernels.velocity3` and ``velocity2`` (the batched velocity summary
+  of square translational rod-leg machines), the same bits.
 
 Loading it costs a millisecond, where Numba's import and its first compiled call cost
 0.8–0.9 s of CPU in a fresh process. Which implementation runs is decided in one place,

@@ -465,6 +465,13 @@ PyObject *pk_py_pose_inverse(PyObject *self, PyObject *const *args, Py_ssize_t n
 PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+/* svd.c, rod_velocity.c: batched SVD kernels and the rod-leg velocity summaries */
+extern const char pk_singular_values_doc[], pk_singular_rates_doc[];
+extern const char pk_rod_velocity3_doc[], pk_rod_velocity2_doc[];
+PyObject *pk_py_singular_values(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_singular_rates(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_rod_velocity3(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_rod_velocity2(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
@@ -485,6 +492,14 @@ static PyMethodDef methods[] = {
      pk_pose_inverse_doc},
     {"state_array", (PyCFunction)(void (*)(void))pk_py_state_array, METH_FASTCALL,
      pk_state_array_doc},
+    {"singular_values", (PyCFunction)(void (*)(void))pk_py_singular_values, METH_FASTCALL,
+     pk_singular_values_doc},
+    {"singular_rates", (PyCFunction)(void (*)(void))pk_py_singular_rates, METH_FASTCALL,
+     pk_singular_rates_doc},
+    {"rod_velocity3", (PyCFunction)(void (*)(void))pk_py_rod_velocity3, METH_FASTCALL,
+     pk_rod_velocity3_doc},
+    {"rod_velocity2", (PyCFunction)(void (*)(void))pk_py_rod_velocity2, METH_FASTCALL,
+     pk_rod_velocity2_doc},
     {NULL, NULL, 0, NULL},
 };
 

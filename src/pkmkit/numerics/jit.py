@@ -17,7 +17,8 @@ paths are used silently.
 Ahead-of-time kernels: where the optional C extension :mod:`pkmkit.native` (built with the
 package when a compiler is present) holds a twin of a Numba kernel (:data:`NATIVE_TWINS`: the
 full-pose inverse and direct models, the position inverse of the Verne-type module, the
-joint-chain closure),
+joint-chain closure, the batched small SVDs with and without rates, the rod-leg velocity
+summaries),
 :func:`kernel` returns it instead, and the call sites that
 pass ``native=True`` to :func:`use_compiled` / :func:`use_compiled_solver` then need no Numba:
 no import cost, so the per-pose solvers run native at every batch size.
@@ -72,10 +73,21 @@ NATIVE_TWINS = {
     "pkmkit.machines.full_pose_direct_kernel": ("solve_rows", "solve_one"),
     "pkmkit.machines.full_pose_position_kernel": ("solve_rows",),
     "pkmkit.solve.chain_kernel": ("_solve_rows",),
+    "pkmkit.numerics.svd_kernel": ("singular_values",),
+    "pkmkit.numerics.svd_rates_kernel": ("singular_rates",),
+    "pkmkit.machines.kernels": ("velocity3", "velocity2"),
 }
 #: Twins named differently in ``pkmkit.native.kernels`` (one namespace for every module's).
 NATIVE_NAMES = {("pkmkit.machines.full_pose_position_kernel", "solve_rows"): "position_rows",
-                ("pkmkit.solve.chain_kernel", "_solve_rows"): "chain_rows"}
+                ("pkmkit.solve.chain_kernel", "_solve_rows"): "chain_rows",
+                ("pkmkit.machines.kernels", "velocity3"): "rod_velocity3",
+                ("pkmkit.machines.kernels", "velocity2"): "rod_velocity2"}
+
+#: Twins slower than their Numba kernel once both are loaded (GCC does not vectorise the
+#: velocity summary's per-pose loop as LLVM does: ≈ 95 against 30 ns per pose): taken while
+#: Numba is not imported — a fresh process then pays no Numba for them — and Numba's after.
+#: The same bits either way.
+NATIVE_UNTIL_NUMBA = {("pkmkit.machines.kernels", "velocity3")}
 
 _available: bool | None = None
 _native: ModuleType | bool | None = False  # False: not looked for yet
@@ -115,7 +127,8 @@ def native_kernels() -> ModuleType | None:
 def native_kernel(module: str, name: str) -> Callable[..., Any] | None:
     """The C twin of the Numba kernel ``module.name`` (:data:`NATIVE_TWINS`) when
     :func:`native_kernels` has it, else None."""
-    if name not in NATIVE_TWINS.get(module, ()):
+    if name not in NATIVE_TWINS.get(module, ()) or (
+            (module, name) in NATIVE_UNTIL_NUMBA and "numba" in sys.modules):
         return None
     native = native_kernels()
     # an extension built from older sources lacks the newer twins: Numba then runs them

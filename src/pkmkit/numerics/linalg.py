@@ -72,8 +72,8 @@ def small_singular_values(m: np.ndarray) -> np.ndarray:
     m = np.asarray(m, dtype=float)
     rows, r, c = m.shape
     out = np.full((rows, min(r, c)), np.nan)
-    if rows and jit.use_compiled(rows):
-        from pkmkit.numerics.svd_kernel import singular_values as kernel
+    if rows and jit.use_compiled(rows, native=True):  # the C twin (native/svd.c) when built
+        kernel = jit.kernel("pkmkit.numerics.svd_kernel", "singular_values")
 
         mats = np.ascontiguousarray(m)
 
@@ -107,8 +107,8 @@ def singular_value_rates(m: np.ndarray, rates: np.ndarray) -> tuple[np.ndarray, 
     rows, c = m.shape[0], m.shape[2]
     sigma = np.full((rows, c), np.nan)
     out = np.full((rows, c, rates.shape[-1]), np.nan)
-    if rows and jit.use_compiled(rows):
-        from pkmkit.numerics.svd_rates_kernel import singular_rates as kernel
+    if rows and jit.use_compiled(rows, native=True):  # the C twin (native/svd.c) when built
+        kernel = jit.kernel("pkmkit.numerics.svd_rates_kernel", "singular_rates")
 
         mats, derivs = np.ascontiguousarray(m), np.ascontiguousarray(rates)
 

@@ -1,0 +1,319 @@
+/* pkmkit.native.kernels: batched singular values of small matrices by one-sided Jacobi
+ * (Hestenes), the C twins of pkmkit.numerics.svd_kernel.singular_values and
+ * pkmkit.numerics.svd_rates_kernel.singular_rates (issue 22 §3, §5: a fresh
+ * `pkmkit workspace gough-stewart` then needs no Numba).
+ *
+ * The same statements in the same order as the Numba kernels (sequential sums, the same
+ * rotation formulas, the same insertion sorts), compiled without FMA contraction and without
+ * fast-math: the same bits (tests/native/test_svd.py).
+ *
+ * Python face (the Numba kernels' arguments, C-contiguous float64 arrays, run without the
+ * GIL): singular_values(mats (N, r, c), out (N, min(r, c)));
+ * singular_rates(mats (N, r, c) with r >= c, rates (N, r, c, d), sigma (N, c), out (N, c, d)). */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <stdlib.h>
+
+#include "kernels.h"
+
+/* svd_kernel.MAX_SWEEPS, svd_rates_kernel.MAX_SWEEPS */
+#define PK_SVD_SWEEPS 60
+#define PK_EPS 2.220446049250313e-16
+
+/* ------------------------------------------------------------------ kernels */
+
+/* svd_kernel.singular_values over n matrices (r, c) row-major; out (n, k). */
+static void pk_singular_values(const double *mats, ptrdiff_t n, ptrdiff_t r, ptrdiff_t c,
+                               double *out, double *work, double *norms) {
+    int tall = r >= c;
+    ptrdiff_t p = tall ? r : c; /* length of a working column */
+    ptrdiff_t k = tall ? c : r; /* working columns = singular values */
+    double tol = (double)p * PK_EPS;
+    for (ptrdiff_t m = 0; m < n; m++) {
+        const double *mat = mats + m * r * c;
+        double *o = out + m * k;
+        int finite = 1;
+        for (ptrdiff_t i = 0; i < r; i++) {
+            for (ptrdiff_t j = 0; j < c; j++) {
+                double v = mat[i * c + j];
+                if (!isfinite(v)) finite = 0;
+                if (tall) work[j * p + i] = v;
+                else work[i * p + j] = v;
+            }
+        }
+        if (!finite) {
+            for (ptrdiff_t i = 0; i < k; i++) o[i] = NAN;
+            continue;
+        }
+        for (int sweep = 0; sweep < PK_SVD_SWEEPS; sweep++) {
+            for (ptrdiff_t i = 0; i < k; i++) {
+                double s = 0.0;
+                for (ptrdiff_t t = 0; t < p; t++) s += work[i * p + t] * work[i * p + t];
+                norms[i] = s;
+            }
+            int rotated = 0;
+            for (ptrdiff_t i = 0; i < k - 1; i++) {
+                for (ptrdiff_t j = i + 1; j < k; j++) {
+                    double alpha = norms[i], beta = norms[j], gamma = 0.0;
+                    double *wi = work + i * p, *wj = work + j * p;
+                    for (ptrdiff_t t = 0; t < p; t++) gamma += wi[t] * wj[t];
+                    if (gamma == 0.0 || fabs(gamma) <= tol * sqrt(alpha) * sqrt(beta)) continue;
+                    rotated = 1;
+                    double zeta = (beta - alpha) / (2.0 * gamma);
+                    double tn = copysign(1.0, zeta) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
+                    double cs = 1.0 / sqrt(1.0 + tn * tn);
+                    double sn = cs * tn;
+                    for (ptrdiff_t t = 0; t < p; t++) {
+                        double a = wi[t], b = wj[t];
+                        wi[t] = cs * a - sn * b;
+                        wj[t] = sn * a + cs * b;
+                    }
+                    norms[i] = alpha - tn * gamma;
+                    norms[j] = beta + tn * gamma;
+                }
+            }
+            if (!rotated) break;
+        }
+        for (ptrdiff_t i = 0; i < k; i++) {
+            double s = 0.0;
+            for (ptrdiff_t t = 0; t < p; t++) s += work[i * p + t] * work[i * p + t];
+            norms[i] = sqrt(s);
+        }
+        for (ptrdiff_t i = 1; i < k; i++) { /* insertion sort, decreasing */
+            double v = norms[i];
+            ptrdiff_t j = i - 1;
+            while (j >= 0 && norms[j] < v) {
+                norms[j + 1] = norms[j];
+                j--;
+            }
+            norms[j + 1] = v;
+        }
+        for (ptrdiff_t i = 0; i < k; i++) o[i] = norms[i];
+    }
+}
+
+/* svd_rates_kernel.jacobi_sweeps: work (c, r), vmat (c, c). */
+static void pk_jacobi_sweeps(double *work, double *vmat, double *norms, ptrdiff_t c,
+                             ptrdiff_t r, double tol) {
+    for (int sweep = 0; sweep < PK_SVD_SWEEPS; sweep++) {
+        for (ptrdiff_t i = 0; i < c; i++) {
+            double s = 0.0;
+            for (ptrdiff_t t = 0; t < r; t++) s += work[i * r + t] * work[i * r + t];
+            norms[i] = s;
+        }
+        int rotated = 0;
+        for (ptrdiff_t i = 0; i < c - 1; i++) {
+            for (ptrdiff_t j = i + 1; j < c; j++) {
+                double alpha = norms[i], beta = norms[j], gamma = 0.0;
+                double *wi = work + i * r, *wj = work + j * r;
+                for (ptrdiff_t t = 0; t < r; t++) gamma += wi[t] * wj[t];
+                if (gamma == 0.0 || fabs(gamma) <= tol * sqrt(alpha) * sqrt(beta)) continue;
+                rotated = 1;
+                double zeta = (beta - alpha) / (2.0 * gamma);
+                double tn = copysign(1.0, zeta) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
+                double cs = 1.0 / sqrt(1.0 + tn * tn);
+                double sn = cs * tn;
+                for (ptrdiff_t t = 0; t < r; t++) {
+                    double a = wi[t], b = wj[t];
+                    wi[t] = cs * a - sn * b;
+                    wj[t] = sn * a + cs * b;
+                }
+                double *vi = vmat + i * c, *vj = vmat + j * c;
+                for (ptrdiff_t t = 0; t < c; t++) {
+                    double a = vi[t], b = vj[t];
+                    vi[t] = cs * a - sn * b;
+                    vj[t] = sn * a + cs * b;
+                }
+                norms[i] = alpha - tn * gamma;
+                norms[j] = beta + tn * gamma;
+            }
+        }
+        if (!rotated) break;
+    }
+}
+
+/* svd_rates_kernel.singular_rates over n tall matrices (r, c), rates (r, c, d). */
+static void pk_singular_rates(const double *mats, const double *rates, ptrdiff_t n,
+                              ptrdiff_t r, ptrdiff_t c, ptrdiff_t d, double *sigma, double *out,
+                              double *work, double *vmat, double *norms, ptrdiff_t *order) {
+    double tol = (double)r * PK_EPS;
+    for (ptrdiff_t m = 0; m < n; m++) {
+        const double *mat = mats + m * r * c;
+        const double *rate = rates + m * r * c * d;
+        double *sg = sigma + m * c, *o = out + m * c * d;
+        int finite = 1; /* svd_rates_kernel._load */
+        for (ptrdiff_t i = 0; i < r; i++) {
+            for (ptrdiff_t j = 0; j < c; j++) {
+                if (!isfinite(mat[i * c + j])) finite = 0;
+                work[j * r + i] = mat[i * c + j];
+                for (ptrdiff_t e = 0; e < d; e++)
+                    if (!isfinite(rate[(i * c + j) * d + e])) finite = 0;
+            }
+        }
+        if (!finite) {
+            for (ptrdiff_t i = 0; i < c; i++) {
+                sg[i] = NAN;
+                for (ptrdiff_t e = 0; e < d; e++) o[i * d + e] = NAN;
+            }
+            continue;
+        }
+        for (ptrdiff_t i = 0; i < c; i++)
+            for (ptrdiff_t j = 0; j < c; j++) vmat[i * c + j] = i == j ? 1.0 : 0.0;
+        pk_jacobi_sweeps(work, vmat, norms, c, r, tol);
+        for (ptrdiff_t i = 0; i < c; i++) {
+            double s = 0.0;
+            for (ptrdiff_t t = 0; t < r; t++) s += work[i * r + t] * work[i * r + t];
+            norms[i] = s;
+            order[i] = i;
+        }
+        for (ptrdiff_t i = 1; i < c; i++) { /* insertion sort of the indices, decreasing */
+            ptrdiff_t k = order[i], j = i - 1;
+            while (j >= 0 && norms[order[j]] < norms[k]) {
+                order[j + 1] = order[j];
+                j--;
+            }
+            order[j + 1] = k;
+        }
+        for (ptrdiff_t slot = 0; slot < c; slot++) {
+            ptrdiff_t i = order[slot];
+            sg[slot] = sqrt(norms[i]);
+            for (ptrdiff_t e = 0; e < d; e++) { /* σ̇ = w_i·(Ṁ v_i)/σ_i (_quadratic) */
+                if (norms[i] > 0.0) {
+                    const double *w = work + i * r, *v = vmat + i * c;
+                    double acc = 0.0;
+                    for (ptrdiff_t t = 0; t < r; t++) {
+                        double mv = 0.0;
+                        for (ptrdiff_t s = 0; s < c; s++) mv += rate[(t * c + s) * d + e] * v[s];
+                        acc += w[t] * mv;
+                    }
+                    o[slot * d + e] = acc / sg[slot];
+                } else {
+                    o[slot * d + e] = NAN;
+                }
+            }
+        }
+    }
+}
+
+/* ------------------------------------------------------------------ Python face */
+
+/* A C-contiguous float64 buffer of `ndim` dimensions (writable when asked), or -1 with a
+ * TypeError / ValueError set. */
+static int svd_take(PyObject *obj, Py_buffer *view, const char *name, int ndim, int writable) {
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, view, flags) < 0) {
+        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous%s float64 array is needed", name,
+                     writable ? " writable" : "");
+        return -1;
+    }
+    const char *f = view->format ? view->format : "B";
+    if (f[0] == '@' || f[0] == '=' || f[0] == '<') f++;
+    if (!(f[0] == 'd' && !f[1] && view->itemsize == 8)) {
+        PyErr_Format(PyExc_TypeError, "%s: float64 array expected (format %s)", name,
+                     view->format ? view->format : "B");
+        PyBuffer_Release(view);
+        return -1;
+    }
+    if (view->ndim != ndim) {
+        PyErr_Format(PyExc_ValueError, "%s: %d dimensions expected (%d given)", name, ndim,
+                     view->ndim);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+const char pk_singular_values_doc[] =
+    "singular_values(mats, out)\n\n"
+    "The C twin of pkmkit.numerics.svd_kernel.singular_values: out (N, min(r, c)), decreasing,\n"
+    "of mats (N, r, c); NaN rows for matrices with a non-finite entry. C-contiguous float64\n"
+    "arrays; runs without the GIL.";
+
+PyObject *pk_py_singular_values(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 2) {
+        PyErr_Format(PyExc_TypeError, "singular_values() takes 2 positional arguments "
+                     "(%zd given)", nargs);
+        return NULL;
+    }
+    Py_buffer vm, vo;
+    if (svd_take(args[0], &vm, "mats", 3, 0) < 0) return NULL;
+    if (svd_take(args[1], &vo, "out", 2, 1) < 0) {
+        PyBuffer_Release(&vm);
+        return NULL;
+    }
+    ptrdiff_t n = vm.shape[0], r = vm.shape[1], c = vm.shape[2];
+    ptrdiff_t k = r < c ? r : c, p = r < c ? c : r;
+    PyObject *result = NULL;
+    if (vo.shape[0] != n || vo.shape[1] != k) {
+        PyErr_SetString(PyExc_ValueError, "out: shape (N, min(r, c)) expected");
+        goto done;
+    }
+    if (n > 0 && k > 0) {
+        double *work = malloc(sizeof(double) * (size_t)(k * p + k));
+        if (!work) {
+            PyErr_NoMemory();
+            goto done;
+        }
+        Py_BEGIN_ALLOW_THREADS
+        pk_singular_values(vm.buf, n, r, c, vo.buf, work, work + k * p);
+        Py_END_ALLOW_THREADS
+        free(work);
+    }
+    result = Py_NewRef(Py_None);
+done:
+    PyBuffer_Release(&vm);
+    PyBuffer_Release(&vo);
+    return result;
+}
+
+const char pk_singular_rates_doc[] =
+    "singular_rates(mats, rates, sigma, out)\n\n"
+    "The C twin of pkmkit.numerics.svd_rates_kernel.singular_rates: sigma (N, c), decreasing,\n"
+    "of tall mats (N, r, c) (r >= c) and their rates out (N, c, d) along rates (N, r, c, d);\n"
+    "NaN rows for a non-finite matrix or derivative, NaN rates for a zero singular value.\n"
+    "C-contiguous float64 arrays; runs without the GIL.";
+
+PyObject *pk_py_singular_rates(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "singular_rates() takes 4 positional arguments "
+                     "(%zd given)", nargs);
+        return NULL;
+    }
+    Py_buffer v[4];
+    const char *names[4] = {"mats", "rates", "sigma", "out"};
+    const int ndims[4] = {3, 4, 2, 3};
+    int held = 0;
+    PyObject *result = NULL;
+    for (; held < 4; held++)
+        if (svd_take(args[held], &v[held], names[held], ndims[held], held >= 2) < 0) goto done;
+    ptrdiff_t n = v[0].shape[0], r = v[0].shape[1], c = v[0].shape[2], d = v[1].shape[3];
+    if (r < c || v[1].shape[0] != n || v[1].shape[1] != r || v[1].shape[2] != c
+        || v[2].shape[0] != n || v[2].shape[1] != c || v[3].shape[0] != n
+        || v[3].shape[1] != c || v[3].shape[2] != d) {
+        PyErr_SetString(PyExc_ValueError, "singular_rates: mats (N, r, c) with r >= c, rates "
+                        "(N, r, c, d), sigma (N, c), out (N, c, d) expected");
+        goto done;
+    }
+    if (n > 0 && c > 0) {
+        double *buf = malloc(sizeof(double) * (size_t)(c * r + c * c + c));
+        ptrdiff_t *order = malloc(sizeof(ptrdiff_t) * (size_t)c);
+        if (!buf || !order) {
+            free(buf);
+            free(order);
+            PyErr_NoMemory();
+            goto done;
+        }
+        Py_BEGIN_ALLOW_THREADS
+        pk_singular_rates(v[0].buf, v[1].buf, n, r, c, d, v[2].buf, v[3].buf, buf,
+                          buf + c * r, buf + c * r + c * c, order);
+        Py_END_ALLOW_THREADS
+        free(buf);
+        free(order);
+    }
+    result = Py_NewRef(Py_None);
+done:
+    for (int i = 0; i < held; i++) PyBuffer_Release(&v[i]);
+    return result;
+}
