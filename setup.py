@@ -36,7 +36,8 @@ setup(
             "pkmkit.native.kernels",
             sources=[NATIVE + "module.c", NATIVE + "inverse.c", NATIVE + "direct.c",
                      NATIVE + "inverse_simd.c", NATIVE + "position.c", NATIVE + "chain.c",
-                     NATIVE + "velocity.c", NATIVE + "pose_velocity.c"],
+                     NATIVE + "velocity.c", NATIVE + "pose_velocity.c",
+                     NATIVE + "chain_velocity.c"],
             depends=[NATIVE + "kernels.h"],
             optional=True,
         )

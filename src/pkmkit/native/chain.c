@@ -160,6 +160,12 @@ static void evaluate(const pk_chain *c, double *values, const double *u, double 
     }
 }
 
+/* evaluate for chain_velocity.c (the closure's Jacobian at solved configurations). */
+void pk_chain_evaluate(const pk_chain *c, double *values, const double *u, double *r,
+                       double *jac, pk_chain_work *w) {
+    evaluate(c, values, u, r, jac, w);
+}
+
 /* The tool rows of the inverse model at rows base..base+5 (_tool_rows, _head_walk). */
 static void tool_rows(const pk_chain *c, const double *values, const double *u,
                       const double *target, double tool, ptrdiff_t base, double *r,

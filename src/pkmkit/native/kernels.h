@@ -160,6 +160,20 @@ void pk_chain_rows(const pk_chain *c, const double *known, ptrdiff_t known_rows,
                    double *residual, int64_t *iterations, const double *targets,
                    const double *tools, pk_chain_work *w);
 
+/* chain.c's evaluate: residual r (w->m,) and Jacobian jac (w->m, c->n) of the closure at u
+ * (values (n_var,) filled from u; w->tw, w->tw_col used). */
+void pk_chain_evaluate(const pk_chain *c, double *values, const double *u, double *r,
+                       double *jac, pk_chain_work *w);
+
+/* chain_velocity.c: chain_kernel._jacobian_rows and chain_linalg._closure_rates_rows. */
+void pk_chain_jacobian_rows(const pk_chain *c, const double *values, const double *u,
+                            ptrdiff_t rows, double *out, double *row, double *r,
+                            pk_chain_work *w);
+void pk_closure_rates_rows(const double *cu, const double *cq, ptrdiff_t n, ptrdiff_t r,
+                           ptrdiff_t c, ptrdiff_t k, double rcond, double tol,
+                           int64_t expected, double *du, int64_t *rank, double *ratio,
+                           double *scratch);
+
 /* velocity.c: the velocity model of one pose of a translational rod-leg machine
  * (machines/velocity_one.py). Legs: PK_LEG doubles each (kind 0 slide, 1 strut, 2 crank, then
  * the terms of velocity_one._legs, zero-padded). Bits of `ok`: the fields answered. */

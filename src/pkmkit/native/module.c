@@ -466,6 +466,11 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
 PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
+/* chain_velocity.c */
+extern const char pk_chain_jacobian_rows_doc[], pk_closure_rates_doc[];
+PyObject *pk_py_chain_jacobian_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_closure_rates(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
@@ -485,6 +490,10 @@ static PyMethodDef methods[] = {
      pk_pose_inverse_doc},
     {"state_array", (PyCFunction)(void (*)(void))pk_py_state_array, METH_FASTCALL,
      pk_state_array_doc},
+    {"chain_jacobian_rows", (PyCFunction)(void (*)(void))pk_py_chain_jacobian_rows,
+     METH_FASTCALL, pk_chain_jacobian_rows_doc},
+    {"closure_rates", (PyCFunction)(void (*)(void))pk_py_closure_rates, METH_FASTCALL,
+     pk_closure_rates_doc},
     {NULL, NULL, 0, NULL},
 };
 

@@ -42,30 +42,17 @@ from pkmkit.model.chains import JointChainModel
 from pkmkit.solve.chain_linalg import RANK_PIVOT, absorb, closure_rates  # noqa: F401
 
 # the batch entry points, which need no Numba (their C twin may run: pkmkit.native), re-exported
-from pkmkit.solve.chain_rows import model_arrays, solve, solve_inverse  # noqa: F401
+from pkmkit.solve.chain_rows import (  # noqa: F401
+    closure_jacobian,
+    model_arrays,
+    solve,
+    solve_inverse,
+)
 from pkmkit.status import Status
 
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 _OK, _INCONSISTENT = int(Status.OK), int(Status.INCONSISTENT)
 _NOT_CONVERGED, _INVALID = int(Status.NOT_CONVERGED), int(Status.INVALID_INPUT)
-
-
-def closure_jacobian(model: JointChainModel, values: np.ndarray, platform: np.ndarray,
-                     variables: np.ndarray) -> np.ndarray:
-    """``(N, 6L, 6 + len(variables))`` the closure's Jacobian at configurations ``values
-    (N, n_var)`` (every joint variable) and ``platform (N, 6)`` (position, rotation vector):
-    columns the platform increments, then ``variables`` — :func:`pkmkit.solve.chains.closure`'s
-    ``platform`` and ``variables[:, variables]`` side by side, compiled."""
-    variables = np.asarray(variables, dtype=int)
-    frames, types, evar, elements, offsets, position = model_arrays(model, variables)
-    values = np.ascontiguousarray(values, dtype=float)
-    u = np.empty((len(values), 6 + len(variables)))
-    u[:, :6] = platform
-    u[:, 6:] = values[:, variables]
-    out = np.empty((len(values), 6 * len(model.legs), u.shape[1]))
-    _jacobian_rows(frames, types, evar, elements, offsets, position, values, u,
-                   float(model.characteristic_length), out)
-    return out
 
 
 @njit(**_OPTIONS)
