@@ -88,8 +88,8 @@ def _variables(m):
     return np.concatenate([m.passive_variables, loop_act]).astype(int)
 
 
-def _jacobians(m, values, platform, kernel):
-    variables = _variables(m)
+def _jacobians(m, values, platform, kernel, variables=None):
+    variables = _variables(m) if variables is None else variables
     args = chain_rows.model_arrays(m.model, variables)
     u = np.empty((len(values), 6 + len(variables)))
     u[:, :6] = platform
@@ -112,6 +112,10 @@ def test_closure_jacobian_c_writes_the_numba_kernels_bits(machines, which):
     _same_bits(c_out, numba_out)
     assert not (c_out == -7.0).any()
     assert np.isnan(c_out[1]).any() and np.isnan(c_out[2]).any()
+    # the actuators known (read from each row's values, not from u): the same bits too
+    passive = m.passive_variables
+    _same_bits(_jacobians(m, values, platform, _kernels.chain_jacobian_rows, passive),
+               _jacobians(m, values, platform, numba_kernel._jacobian_rows, passive))
     rot = rotvec_to_matrix(platform[:, 3:]).transpose(1, 2, 0)
     ref = closure(m.model, rot, platform[:, :3].T, values.T)
     full = np.concatenate([ref.platform, ref.variables[:, _variables(m)]], axis=1)

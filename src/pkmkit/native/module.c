@@ -468,8 +468,11 @@ PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t narg
 
 /* chain_velocity.c */
 extern const char pk_chain_jacobian_rows_doc[], pk_closure_rates_doc[];
+extern const char pk_chain_linearise_rows_doc[], pk_absorb_doc[];
 PyObject *pk_py_chain_jacobian_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_closure_rates(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_chain_linearise_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_absorb(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
@@ -494,6 +497,9 @@ static PyMethodDef methods[] = {
      METH_FASTCALL, pk_chain_jacobian_rows_doc},
     {"closure_rates", (PyCFunction)(void (*)(void))pk_py_closure_rates, METH_FASTCALL,
      pk_closure_rates_doc},
+    {"chain_linearise_rows", (PyCFunction)(void (*)(void))pk_py_chain_linearise_rows,
+     METH_FASTCALL, pk_chain_linearise_rows_doc},
+    {"absorb", (PyCFunction)(void (*)(void))pk_py_absorb, METH_FASTCALL, pk_absorb_doc},
     {NULL, NULL, 0, NULL},
 };
 

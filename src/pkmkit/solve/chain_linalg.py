@@ -15,29 +15,17 @@ from numba import njit
 
 from pkmkit.numerics.svd_rates_kernel import jacobi_sweeps
 
-# the entry point of _closure_rates_rows (Numba-free: its C twin may run), re-exported
-from pkmkit.solve.chain_rows import closure_rates  # noqa: F401
+# the entry points of _absorb_rows and _closure_rates_rows (Numba-free: their C twins may
+# run), re-exported
+from pkmkit.solve.chain_rows import absorb, closure_rates  # noqa: F401
 
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 
 
 #: A closure Jacobian C_U whose Cholesky pivots of C_Uᵀ C_U fall below this fraction of its
-#: largest diagonal entry is treated as rank-deficient (left to the pseudo-inverse).
+#: largest diagonal entry is treated as rank-deficient (left to the pseudo-inverse); the C
+#: twin (native/chain_velocity.c) has the same constant.
 RANK_PIVOT = 1e-10
-
-
-def absorb(cu: np.ndarray, cd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``dU = −C_U⁺ C_δ (N, u, d)`` and the part no motion absorbs, ``C_δ + C_U dU (N, r, d)``,
-    for closure Jacobians ``cu (N, r, u)`` of full column rank, by the normal equations
-    (Cholesky of ``C_Uᵀ C_U``, compiled); ``ok (N,)`` False for the rows whose ``C_U`` is
-    (nearly) rank-deficient (pivot below :data:`RANK_PIVOT`), whose outputs are NaN: the
-    caller takes the pseudo-inverse there."""
-    n, r, u = cu.shape
-    du = np.empty((n, u, cd.shape[2]))
-    rest = np.empty((n, r, cd.shape[2]))
-    ok = np.empty(n, dtype=np.bool_)
-    _absorb_rows(np.ascontiguousarray(cu), np.ascontiguousarray(cd), du, rest, ok)
-    return du, rest, ok
 
 
 @njit(**_OPTIONS)
