@@ -93,7 +93,7 @@ def test_linearise_c_writes_the_numba_kernels_bits(name, case, monkeypatch):
             for k in (_kernels.chain_linearise_rows, numba_kernel._linearise_rows)]
     for a, b in zip(*outs, strict=True):
         _same_bits(a, b)
-    cu, cd, _, _, tool_tw = outs[0]
+    _, cd, _, _, tool_tw = outs[0]
     assert np.nanmax(np.abs(cd)) > 0 and np.nanmax(np.abs(tool_tw)) > 0
     if case == "solved":  # the oracle on one row: the NumPy closure with defects=True
         rot = rotvec_to_matrix(platform[:2, 3:]).transpose(1, 2, 0)
