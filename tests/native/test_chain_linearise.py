@@ -1,5 +1,5 @@
 """The C twins of the identification's chain kernels (``pkmkit.native.kernels``,
-native/chain_velocity.c): ``chain_linearise_rows`` (twin of
+native/chain_linearise.c): ``chain_linearise_rows`` (twin of
 :func:`pkmkit.solve.chain_kernel._linearise_rows`: C_U, the defect columns C_δ, the tool frame
 and its defect twists) and ``absorb`` (twin of :func:`pkmkit.solve.chain_linalg._absorb_rows`:
 ``dU = −C_U⁺ C_δ`` by the normal equations) against the Numba kernels, bit for bit, on solved,

@@ -187,7 +187,7 @@ typedef struct {
     ptrdiff_t n_defects;
 } pk_defects;
 
-/* chain_velocity.c: chain_kernel._linearise_rows and chain_linalg._absorb_rows. */
+/* chain_linearise.c: chain_kernel._linearise_rows and chain_linalg._absorb_rows. */
 void pk_chain_linearise_rows(const pk_chain *c, const pk_defects *d, const double *values,
                              const double *u, ptrdiff_t rows, double *cu, double *cd,
                              double *tool_r, double *tool_p, double *tool_tw, double *row,

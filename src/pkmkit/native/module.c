@@ -466,7 +466,7 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
 PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
-/* chain_velocity.c */
+/* chain_velocity.c, chain_linearise.c */
 extern const char pk_chain_jacobian_rows_doc[], pk_closure_rates_doc[];
 extern const char pk_chain_linearise_rows_doc[], pk_absorb_doc[];
 PyObject *pk_py_chain_jacobian_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);

@@ -18,7 +18,8 @@ solved configurations, as :func:`pkmkit.solve.chains.closure` and
 :func:`~pkmkit.solve.chains.tool_frame` with ``defects=True``); :func:`absorb` (``dU = −C_U⁺
 C_δ`` by the normal equations) is in :mod:`pkmkit.solve.chain_linalg`. Their entry points
 (and the velocity model's :func:`closure_jacobian`) are in the Numba-free
-:mod:`pkmkit.solve.chain_rows`, which runs their C twins (native/chain_velocity.c) when built.
+:mod:`pkmkit.solve.chain_rows`, which runs their C twins (native/chain_velocity.c,
+chain_linearise.c) when built.
 
 Why: the engine runs each iteration as a few hundred NumPy calls over the batch; a residual of
 the Tripteor's identification (107 configurations, 10–15 iterations) cost 25–58 ms of such

@@ -24,7 +24,7 @@ _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache"
 
 #: A closure Jacobian C_U whose Cholesky pivots of C_Uᵀ C_U fall below this fraction of its
 #: largest diagonal entry is treated as rank-deficient (left to the pseudo-inverse); the C
-#: twin (native/chain_velocity.c) has the same constant.
+#: twin (native/chain_linearise.c) has the same constant.
 RANK_PIVOT = 1e-10
 
 

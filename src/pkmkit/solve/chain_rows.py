@@ -13,7 +13,8 @@ statements, the same statuses, iterations and bits), which needs no Numba: this 
 none, so a fresh process's closures with the extension built never pay Numba's import. The
 same for ``chain_kernel._jacobian_rows``, ``_linearise_rows`` and
 ``chain_linalg._closure_rates_rows``, ``_absorb_rows`` (C twins ``chain_jacobian_rows``,
-``chain_linearise_rows``, ``closure_rates``, ``absorb``: native/chain_velocity.c).
+``chain_linearise_rows``, ``closure_rates``, ``absorb``: native/chain_velocity.c and
+chain_linearise.c).
 """
 
 from __future__ import annotations
