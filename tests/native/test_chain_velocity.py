@@ -360,8 +360,7 @@ def test_jit_dispatch(monkeypatch):
     assert not _compiled_velocity(100_000)
 
 
-@pytest.mark.ci  # a fresh process (1-2 s of CPU): .ci/run's second stage
-def test_a_fresh_chain_velocity_batch_does_not_import_numba():
+def test_a_fresh_chain_velocity_batch_does_not_import_numba():  # one process, ≈ 1.5 s
     """``m.jacobian(q=...)`` of 200 Tripteor configurations and 100 TriMule ones in a fresh
     process: the closure, its Jacobian and its rates through the C kernels (no Numba), the
     same bits as in this process (Numba or C, whichever ran here: the same bits)."""
