@@ -37,8 +37,9 @@ setup(
             sources=[NATIVE + "module.c", NATIVE + "inverse.c", NATIVE + "direct.c",
                      NATIVE + "inverse_simd.c", NATIVE + "position.c", NATIVE + "chain.c",
                      NATIVE + "velocity.c", NATIVE + "pose_velocity.c",
-                     NATIVE + "svd.c", NATIVE + "rod_velocity.c"],
-            depends=[NATIVE + "kernels.h"],
+                     NATIVE + "svd.c", NATIVE + "rod_velocity.c",
+                     NATIVE + "chain_velocity.c", NATIVE + "chain_linearise.c"],
+            depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h"],
             optional=True,
         )
     ],

@@ -273,7 +273,9 @@ FIRST_CASES = (("linear-delta", "m.ik(x)", FIRST_CALL, False),
                ("verne", "m.ik(p)", FIRST_POSITIONS, True),
                ("verne", "m.ik(p, full_output=True)", FIRST_POSITIONS, True),
                ("tripteor-x7", "m.fk(q)", FIRST_FK, True),
-               ("trimule-600", "m.fk(q)", FIRST_FK, True))
+               ("trimule-600", "m.fk(q)", FIRST_FK, True),
+               ("tripteor-x7", "m.jacobian(q=q)", FIRST_FK, True),
+               ("trimule-600", "m.jacobian(q=q)", FIRST_FK, True))
 
 
 def first_calls(repeat: int) -> None:

@@ -258,15 +258,12 @@ class ChainVelocity(ChainOnePose):
         """``(C_U (N, 6L, 6 + n_p), C_q (N, 6L, n_loop))``: the closure's Jacobian at
         ``values (N, n_var)`` and ``platform (N, 6)`` (``rot (3, 3, N)``, ``p_x (3, N)`` its
         rotation and position) for the platform and passive joints, and for the legs'
-        actuators — compiled (:func:`pkmkit.solve.chain_kernel.closure_jacobian`) in a batch
-        the compiled solvers take, else :func:`pkmkit.solve.chains.closure`."""
-        from pkmkit.numerics.jit import use_compiled_solver
-        from pkmkit.solve.chains import compiled_closure_available
+        actuators — compiled (:func:`pkmkit.solve.chain_rows.closure_jacobian`: C or Numba)
+        in a batch the compiled solvers take, else :func:`pkmkit.solve.chains.closure`."""
+        from pkmkit.solve.chain_rows import closure_jacobian
 
         n_u = 6 + len(self._passive)
-        if len(values) > 1 and use_compiled_solver(len(values)) \
-                and compiled_closure_available():
-            from pkmkit.solve.chain_kernel import closure_jacobian
+        if len(values) > 1 and _compiled_velocity(len(values)):
 
             full = closure_jacobian(self.model, values, np.nan_to_num(platform),
                                     np.concatenate([self._passive, loop_act]).astype(int))
@@ -319,21 +316,30 @@ def _closure_rates(cu: np.ndarray, cq: np.ndarray, tol: float, expected: int, si
     """``(−C_U⁺ C_q (N, c, k), rank of C_U (N,), σ_expected / σ_max (N,))`` of closure
     Jacobians ``cu (N, r, c)`` and ``cq (N, r, k)`` (pseudo-inverse and rank cutoff
     :data:`RANK_RCOND`). A batch the compiled solvers take, with a tall C_U, goes through
-    :func:`pkmkit.solve.chain_kernel.closure_rates` (a QR where the closure is certainly
+    :func:`pkmkit.solve.chain_rows.closure_rates` (a QR where the closure is certainly
     regular — ``ratio`` is then a lower bound above ``tol`` — else a one-sided Jacobi SVD;
-    equal to LAPACK's pseudo-inverse to rounding); a single row (whose error message quotes
-    the ratio) and the rest through LAPACK."""
-    from pkmkit.numerics.jit import use_compiled_solver
-    from pkmkit.solve.chains import compiled_closure_available
-
-    if not single and cu.shape[1] >= cu.shape[2] and use_compiled_solver(len(cu)) \
-            and compiled_closure_available():
-        from pkmkit.solve.chain_linalg import closure_rates
+    equal to LAPACK's pseudo-inverse to rounding; C or Numba); a single row (whose error
+    message quotes the ratio) and the rest through LAPACK."""
+    if not single and cu.shape[1] >= cu.shape[2] and _compiled_velocity(len(cu)):
+        from pkmkit.solve.chain_rows import closure_rates
 
         return closure_rates(cu, cq, RANK_RCOND, tol, expected)
     pinv, sv = _pinv_and_singular_values(cu, RANK_RCOND)
     return (-pinv @ cq, (sv > RANK_RCOND * sv[:, :1]).sum(axis=1),
             sv[:, expected - 1] / sv[:, 0])
+
+
+def _compiled_velocity(rows: int) -> bool:
+    """Whether a batch of ``rows`` closure Jacobians goes through the compiled kernels: their
+    C twins (:mod:`pkmkit.native`, no Numba import) at every size when built, else Numba
+    where the compiled solvers run (:func:`pkmkit.numerics.jit.use_compiled_solver`)."""
+    from pkmkit.numerics.jit import use_compiled_solver
+    from pkmkit.solve.chain_rows import velocity_native
+    from pkmkit.solve.chains import compiled_closure_available
+
+    if velocity_native():
+        return use_compiled_solver(rows, native=True)
+    return use_compiled_solver(rows) and compiled_closure_available()
 
 
 def _pinv_and_singular_values(a: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray]:

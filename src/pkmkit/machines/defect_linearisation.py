@@ -211,6 +211,7 @@ class ChainLinearisation:
         (``columns``: a model with the machine's frames whose defect columns to use instead,
         :func:`pkmkit.solve.chains.with_column_twists`; ``start``, ``engine_options``: as
         :meth:`fk`'s)."""
+        from pkmkit.solve import chain_rows  # C twins of the compiled kernels, else Numba
         from pkmkit.solve.chains import closure, compiled_closure_available
         from pkmkit.spatial.rotation import rotvec_to_matrix
 
@@ -230,11 +231,10 @@ class ChainLinearisation:
         p_x = direct.platform[:, :3].T
         source = columns if columns is not None else model
         rot = rotvec_to_matrix(direct.platform[:, 3:]).transpose(1, 2, 0)
-        if engine_options.get("compiled") and compiled_closure_available():
-            from pkmkit.solve import chain_kernel
-
-            cu, cd, _, _, tool = chain_kernel.linearise(source, values, direct.platform,
-                                                        passive)
+        if engine_options.get("compiled") and (chain_rows.linearise_native()
+                                               or compiled_closure_available()):
+            cu, cd, _, _, tool = chain_rows.linearise(source, values, direct.platform,
+                                                      passive)
             return {"direct": direct, "cu": cu, "cd": cd, "values": values, "rot": rot,
                     "p_x": p_x, "tool_twists": tool}
         c = closure(source, rot, p_x, values.T, defects=True)
@@ -255,7 +255,7 @@ class ChainLinearisation:
         n = q.shape[0]
         # dU = −C_U⁺ C_δ (N, 6 + n_p, d) and the part of C_δ no motion absorbs, (I − C_U C_U⁺) C_δ
         if "tool_twists" in lin:  # compiled: normal equations, the pseudo-inverse where singular
-            from pkmkit.solve.chain_kernel import absorb
+            from pkmkit.solve.chain_rows import absorb
 
             du, incompatible, ok = absorb(cu, cd)
         else:

@@ -223,8 +223,14 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
 
     @property
     def home_pose(self) -> np.ndarray:
-        """Tool point and axis of the home configuration ``(6,)``."""
-        return self.fk(self.home_q)
+        """Tool point and axis of the home configuration ``(6,)``: ``fk(home_q)``, solved once
+        per machine (a workspace study reads it several times: each read was a one-pose solve,
+        and the second one loaded the one-pose kernels, hence Numba, in a fresh process)."""
+        pose = self.__dict__.get("_home_pose")
+        if pose is None:
+            pose = self.fk(self.home_q)
+            object.__setattr__(self, "_home_pose", pose)
+        return pose.copy()
 
     @property
     def home_passive(self) -> np.ndarray:

@@ -160,6 +160,25 @@ static void evaluate(const pk_chain *c, double *values, const double *u, double 
     }
 }
 
+/* evaluate for chain_velocity.c (the closure's Jacobian at solved configurations). */
+void pk_chain_evaluate(const pk_chain *c, double *values, const double *u, double *r,
+                       double *jac, pk_chain_work *w) {
+    evaluate(c, values, u, r, jac, w);
+}
+
+/* rotvec_matrix, apply_frame and rotation_rows for chain_velocity.c (the linearisation). */
+void pk_chain_rotvec_matrix(double x, double y, double z, double *out) {
+    rotvec_matrix(x, y, z, out);
+}
+
+void pk_chain_apply_frame(double *rot, double *pos, const double *f, double *tmp) {
+    apply_frame(rot, pos, f, tmp);
+}
+
+void pk_chain_rotation_rows(const double *mm, double length, double sign, double *out) {
+    rotation_rows(mm, length, sign, out);
+}
+
 /* The tool rows of the inverse model at rows base..base+5 (_tool_rows, _head_walk). */
 static void tool_rows(const pk_chain *c, const double *values, const double *u,
                       const double *target, double tool, ptrdiff_t base, double *r,

@@ -160,6 +160,42 @@ void pk_chain_rows(const pk_chain *c, const double *known, ptrdiff_t known_rows,
                    double *residual, int64_t *iterations, const double *targets,
                    const double *tools, pk_chain_work *w);
 
+/* chain.c's evaluate: residual r (w->m,) and Jacobian jac (w->m, c->n) of the closure at u
+ * (values (n_var,) filled from u; w->tw, w->tw_col used). */
+void pk_chain_evaluate(const pk_chain *c, double *values, const double *u, double *r,
+                       double *jac, pk_chain_work *w);
+
+/* chain.c's _rotvec_matrix, _apply_frame, _rotation_rows (3 x 3 row-major). */
+void pk_chain_rotvec_matrix(double x, double y, double z, double *out);
+void pk_chain_apply_frame(double *rot, double *pos, const double *f, double *tmp);
+void pk_chain_rotation_rows(const double *mm, double length, double sign, double *out);
+
+/* chain_velocity.c: chain_kernel._jacobian_rows and chain_linalg._closure_rates_rows. */
+void pk_chain_jacobian_rows(const pk_chain *c, const double *values, const double *u,
+                            ptrdiff_t rows, double *out, double *row, double *r,
+                            pk_chain_work *w);
+void pk_closure_rates_rows(const double *cu, const double *cq, ptrdiff_t n, ptrdiff_t r,
+                           ptrdiff_t c, ptrdiff_t k, double rcond, double tol,
+                           int64_t expected, double *du, int64_t *rank, double *ratio,
+                           double *scratch);
+
+/* The defects of a joint-chain model (chain_kernel.linearise): local twists (D, 6), their
+ * order by element (D,) and each element's first entry in it (E + 1,). */
+typedef struct {
+    const double *local;
+    const int64_t *order, *starts;
+    ptrdiff_t n_defects;
+} pk_defects;
+
+/* chain_linearise.c: chain_kernel._linearise_rows and chain_linalg._absorb_rows. */
+void pk_chain_linearise_rows(const pk_chain *c, const pk_defects *d, const double *values,
+                             const double *u, ptrdiff_t rows, double *cu, double *cd,
+                             double *tool_r, double *tool_p, double *tool_tw, double *row,
+                             double *r, double *twists, int64_t *ids, pk_chain_work *w);
+void pk_absorb_rows(const double *cu, const double *cd, ptrdiff_t n, ptrdiff_t r,
+                    ptrdiff_t u, ptrdiff_t d, double *du, double *rest, unsigned char *ok,
+                    double *h, double *low, double *g);
+
 /* velocity.c: the velocity model of one pose of a translational rod-leg machine
  * (machines/velocity_one.py). Legs: PK_LEG doubles each (kind 0 slide, 1 strut, 2 crank, then
  * the terms of velocity_one._legs, zero-padded). Bits of `ok`: the fields answered. */

@@ -473,6 +473,14 @@ PyObject *pk_py_singular_rates(PyObject *self, PyObject *const *args, Py_ssize_t
 PyObject *pk_py_rod_velocity3(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_velocity2(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
+/* chain_velocity.c, chain_linearise.c */
+extern const char pk_chain_jacobian_rows_doc[], pk_closure_rates_doc[];
+extern const char pk_chain_linearise_rows_doc[], pk_absorb_doc[];
+PyObject *pk_py_chain_jacobian_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_closure_rates(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_chain_linearise_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_absorb(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
@@ -500,6 +508,13 @@ static PyMethodDef methods[] = {
      pk_rod_velocity3_doc},
     {"rod_velocity2", (PyCFunction)(void (*)(void))pk_py_rod_velocity2, METH_FASTCALL,
      pk_rod_velocity2_doc},
+    {"chain_jacobian_rows", (PyCFunction)(void (*)(void))pk_py_chain_jacobian_rows,
+     METH_FASTCALL, pk_chain_jacobian_rows_doc},
+    {"closure_rates", (PyCFunction)(void (*)(void))pk_py_closure_rates, METH_FASTCALL,
+     pk_closure_rates_doc},
+    {"chain_linearise_rows", (PyCFunction)(void (*)(void))pk_py_chain_linearise_rows,
+     METH_FASTCALL, pk_chain_linearise_rows_doc},
+    {"absorb", (PyCFunction)(void (*)(void))pk_py_absorb, METH_FASTCALL, pk_absorb_doc},
     {NULL, NULL, 0, NULL},
 };
 

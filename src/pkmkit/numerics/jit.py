@@ -17,7 +17,8 @@ paths are used silently.
 Ahead-of-time kernels: where the optional C extension :mod:`pkmkit.native` (built with the
 package when a compiler is present) holds a twin of a Numba kernel (:data:`NATIVE_TWINS`: the
 full-pose inverse and direct models, the position inverse of the Verne-type module, the
-joint-chain closure, the batched small SVDs with and without rates, the rod-leg velocity
+joint-chain closure, its velocity model's Jacobian and rates and its linearisation for the
+identification, the batched small SVDs with and without rates, the rod-leg velocity
 summaries),
 :func:`kernel` returns it instead, and the call sites that
 pass ``native=True`` to :func:`use_compiled` / :func:`use_compiled_solver` then need no Numba:
@@ -72,7 +73,8 @@ NATIVE_TWINS = {
     "pkmkit.machines.full_pose_kernels": ("inverse_poses",),
     "pkmkit.machines.full_pose_direct_kernel": ("solve_rows", "solve_one"),
     "pkmkit.machines.full_pose_position_kernel": ("solve_rows",),
-    "pkmkit.solve.chain_kernel": ("_solve_rows",),
+    "pkmkit.solve.chain_kernel": ("_solve_rows", "_jacobian_rows", "_linearise_rows"),
+    "pkmkit.solve.chain_linalg": ("_closure_rates_rows", "_absorb_rows"),
     "pkmkit.numerics.svd_kernel": ("singular_values",),
     "pkmkit.numerics.svd_rates_kernel": ("singular_rates",),
     "pkmkit.machines.kernels": ("velocity3", "velocity2"),
@@ -80,6 +82,10 @@ NATIVE_TWINS = {
 #: Twins named differently in ``pkmkit.native.kernels`` (one namespace for every module's).
 NATIVE_NAMES = {("pkmkit.machines.full_pose_position_kernel", "solve_rows"): "position_rows",
                 ("pkmkit.solve.chain_kernel", "_solve_rows"): "chain_rows",
+                ("pkmkit.solve.chain_kernel", "_jacobian_rows"): "chain_jacobian_rows",
+                ("pkmkit.solve.chain_kernel", "_linearise_rows"): "chain_linearise_rows",
+                ("pkmkit.solve.chain_linalg", "_closure_rates_rows"): "closure_rates",
+                ("pkmkit.solve.chain_linalg", "_absorb_rows"): "absorb",
                 ("pkmkit.machines.kernels", "velocity3"): "rod_velocity3",
                 ("pkmkit.machines.kernels", "velocity2"): "rod_velocity2"}
 

@@ -16,7 +16,10 @@ loop with the tool rows added, for workspace grids), and for the identification'
 :func:`linearise` (the closure's Jacobians C_U and C_δ and the tool frame's defect twists at
 solved configurations, as :func:`pkmkit.solve.chains.closure` and
 :func:`~pkmkit.solve.chains.tool_frame` with ``defects=True``); :func:`absorb` (``dU = −C_U⁺
-C_δ`` by the normal equations) is in :mod:`pkmkit.solve.chain_linalg`.
+C_δ`` by the normal equations) is in :mod:`pkmkit.solve.chain_linalg`. Their entry points
+(and the velocity model's :func:`closure_jacobian`) are in the Numba-free
+:mod:`pkmkit.solve.chain_rows`, which runs their C twins (native/chain_velocity.c,
+chain_linearise.c) when built.
 
 Why: the engine runs each iteration as a few hundred NumPy calls over the batch; a residual of
 the Tripteor's identification (107 configurations, 10–15 iterations) cost 25–58 ms of such
@@ -36,36 +39,22 @@ import math
 import numpy as np
 from numba import njit
 
-from pkmkit.model.chains import JointChainModel
-
 # the closure Jacobians' linear algebra (dU = −C_U⁺ C_δ, −C_U⁺ C_q), re-exported
 from pkmkit.solve.chain_linalg import RANK_PIVOT, absorb, closure_rates  # noqa: F401
 
 # the batch entry points, which need no Numba (their C twin may run: pkmkit.native), re-exported
-from pkmkit.solve.chain_rows import model_arrays, solve, solve_inverse  # noqa: F401
+from pkmkit.solve.chain_rows import (  # noqa: F401
+    closure_jacobian,
+    linearise,
+    model_arrays,
+    solve,
+    solve_inverse,
+)
 from pkmkit.status import Status
 
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 _OK, _INCONSISTENT = int(Status.OK), int(Status.INCONSISTENT)
 _NOT_CONVERGED, _INVALID = int(Status.NOT_CONVERGED), int(Status.INVALID_INPUT)
-
-
-def closure_jacobian(model: JointChainModel, values: np.ndarray, platform: np.ndarray,
-                     variables: np.ndarray) -> np.ndarray:
-    """``(N, 6L, 6 + len(variables))`` the closure's Jacobian at configurations ``values
-    (N, n_var)`` (every joint variable) and ``platform (N, 6)`` (position, rotation vector):
-    columns the platform increments, then ``variables`` — :func:`pkmkit.solve.chains.closure`'s
-    ``platform`` and ``variables[:, variables]`` side by side, compiled."""
-    variables = np.asarray(variables, dtype=int)
-    frames, types, evar, elements, offsets, position = model_arrays(model, variables)
-    values = np.ascontiguousarray(values, dtype=float)
-    u = np.empty((len(values), 6 + len(variables)))
-    u[:, :6] = platform
-    u[:, 6:] = values[:, variables]
-    out = np.empty((len(values), 6 * len(model.legs), u.shape[1]))
-    _jacobian_rows(frames, types, evar, elements, offsets, position, values, u,
-                   float(model.characteristic_length), out)
-    return out
 
 
 @njit(**_OPTIONS)
@@ -504,36 +493,6 @@ def _evaluate(frames, types, evar, elements, offsets, position, values, u, lengt
             jac[base + 2, col] = tw[a, 2] + w0 * pos[1] - w1 * pos[0]
             for i in range(3):
                 jac[base + 3 + i, col] = rows[i, 0] * w0 + rows[i, 1] * w1 + rows[i, 2] * w2
-
-
-def linearise(model: JointChainModel, values: np.ndarray, platform: np.ndarray,
-              unknown_variables: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The closure linearised at solved configurations, compiled: ``values (N, n_var)`` every
-    joint variable, ``platform (N, 6)`` position and rotation vector. Returns ``C_U (N, 6L,
-    6 + n_u)`` (platform increments, then ``unknown_variables``), ``C_δ (N, 6L, d)`` (the
-    model's defect columns, :func:`pkmkit.solve.chains.closure` with ``defects=True``), and
-    the tool frame (:func:`pkmkit.solve.chains.tool_frame` with ``defects=True``): rotations
-    ``(N, 3, 3)``, positions ``(N, 3)``, defect twists ``(N, 6, d)``."""
-    from pkmkit.model.chains import cached_defect_twists
-
-    frames, types, evar, elements, offsets, position = model_arrays(model, unknown_variables)
-    local = np.ascontiguousarray(cached_defect_twists(model), dtype=float)
-    owner = np.asarray(model.defect_index.element, dtype=np.int64)
-    order = np.argsort(owner, kind="stable").astype(np.int64)
-    counts = np.bincount(owner, minlength=len(model.elements))
-    starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    head = np.array(model.head, dtype=np.int64)
-    n, m, d = values.shape[0], 6 * len(model.legs), len(owner)
-    cu = np.empty((n, m, 6 + len(unknown_variables)))
-    cd = np.zeros((n, m, d))
-    tool_r, tool_p, tool_tw = np.empty((n, 3, 3)), np.empty((n, 3)), np.zeros((n, 6, d))
-    u = np.zeros((n, 6 + len(unknown_variables)))
-    u[:, :6] = platform
-    u[:, 6:] = values[:, np.asarray(unknown_variables, dtype=int)]
-    _linearise_rows(frames, types, evar, elements, offsets, position, local, order, starts,
-                    head, np.ascontiguousarray(values, dtype=float), u,
-                    float(model.characteristic_length), cu, cd, tool_r, tool_p, tool_tw)
-    return cu, cd, tool_r, tool_p, tool_tw
 
 
 @njit(**_OPTIONS)

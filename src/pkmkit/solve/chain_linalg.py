@@ -15,26 +15,17 @@ from numba import njit
 
 from pkmkit.numerics.svd_rates_kernel import jacobi_sweeps
 
+# the entry points of _absorb_rows and _closure_rates_rows (Numba-free: their C twins may
+# run), re-exported
+from pkmkit.solve.chain_rows import absorb, closure_rates  # noqa: F401
+
 _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache": True}
 
 
 #: A closure Jacobian C_U whose Cholesky pivots of C_Uᵀ C_U fall below this fraction of its
-#: largest diagonal entry is treated as rank-deficient (left to the pseudo-inverse).
+#: largest diagonal entry is treated as rank-deficient (left to the pseudo-inverse); the C
+#: twin (native/chain_linearise.c) has the same constant.
 RANK_PIVOT = 1e-10
-
-
-def absorb(cu: np.ndarray, cd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``dU = −C_U⁺ C_δ (N, u, d)`` and the part no motion absorbs, ``C_δ + C_U dU (N, r, d)``,
-    for closure Jacobians ``cu (N, r, u)`` of full column rank, by the normal equations
-    (Cholesky of ``C_Uᵀ C_U``, compiled); ``ok (N,)`` False for the rows whose ``C_U`` is
-    (nearly) rank-deficient (pivot below :data:`RANK_PIVOT`), whose outputs are NaN: the
-    caller takes the pseudo-inverse there."""
-    n, r, u = cu.shape
-    du = np.empty((n, u, cd.shape[2]))
-    rest = np.empty((n, r, cd.shape[2]))
-    ok = np.empty(n, dtype=np.bool_)
-    _absorb_rows(np.ascontiguousarray(cu), np.ascontiguousarray(cd), du, rest, ok)
-    return du, rest, ok
 
 
 @njit(**_OPTIONS)
@@ -101,30 +92,6 @@ def _absorb_rows(cu, cd, du, rest, ok):  # pragma: no cover
                 for col in range(d):
                     rest[k, i, col] += v * x[a, col]
 
-
-
-def closure_rates(cu: np.ndarray, cq: np.ndarray, rcond: float, tol: float, expected: int
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(dU (N, c, k), rank (N,), ratio (N,))`` of tall closure Jacobians ``cu (N, r, c)``
-    (r ≥ c) and ``cq (N, r, k)``, compiled: ``dU = −C_U⁺ C_q`` (``np.linalg.pinv``'s cutoff
-    ``rcond · σ_max``), the rank of C_U (singular values above that cutoff) and
-    ``ratio = σ_expected / σ_max`` (``expected``: the rank at home).
-
-    A row first gets a Householder QR ``C_U = Q R``: ``1 / (‖R‖_F ‖R⁻¹‖_F)`` is a lower bound
-    of ``σ_min / σ_max``; where it clears ``max(tol, rcond)`` and ``expected = c`` the rank is
-    ``c``, ``dU = −R⁻¹ Qᵀ C_q`` (the least-squares solution the pseudo-inverse gives, to
-    rounding) and ``ratio`` is that bound (it clears ``tol``). Other rows — near a singular
-    closure, or a machine rank-deficient at home — take the exact path: a one-sided Jacobi SVD
-    (``C_U V = U Σ``, V accumulated; :mod:`pkmkit.numerics.svd_kernel`'s iteration) and
-    ``C_U⁺ = V Σ⁻¹ Uᵀ``. Rows holding a non-finite entry give NaN (rank 0)."""
-    n, _, c = cu.shape
-    du = np.empty((n, c, cq.shape[2]))
-    rank = np.zeros(n, dtype=np.int64)
-    ratio = np.empty(n)
-    _closure_rates_rows(np.ascontiguousarray(cu, dtype=float),
-                        np.ascontiguousarray(cq, dtype=float), float(rcond), float(tol),
-                        int(expected), du, rank, ratio)
-    return du, rank, ratio
 
 
 @njit(**_OPTIONS)
