@@ -26,7 +26,9 @@ not LAPACK's pseudo-inverse). No result depends on an earlier call: only constan
 
 A one-shot call in a fresh process does not import Numba
 (:func:`pkmkit.numerics.jit.compiled_from_second_call`): until Numba is imported, a machine's
-first single call takes the batch path and the next imports it.
+first single call takes the batch path and the next imports it. Only a plain single pose (or
+configuration) counts: a batch, even of one row, never builds the constants nor imports Numba
+(a workspace study's batches run the closure's C twin).
 """
 
 from __future__ import annotations
