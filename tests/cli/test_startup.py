@@ -188,6 +188,19 @@ def test_a_full_pose_batch_imports_no_compiler_with_the_c_kernels(tmp_path, comm
     assert "numba" not in modules
 
 
+@pytest.mark.ci  # a fresh process: 2-5 s of CPU each
+@pytest.mark.skipif(not _native_built(), reason="pkmkit.native.kernels was not built")
+@pytest.mark.parametrize("name", ["tripteor-x7", "trimule-600"])
+def test_a_chain_workspace_study_imports_no_compiler_with_the_c_kernels(name):
+    """``pkmkit workspace tripteor-x7|trimule-600`` runs the closure's C twin at every batch
+    size and never takes the one-pose path for its batches (whose constants import the Numba
+    kernels): Numba is never imported (≈ 1 s of CPU with its cache)."""
+    modules = _modules_after_cli(["workspace", name])
+    assert "pkmkit.native.kernels" in modules
+    assert "numba" not in modules
+    assert "pkmkit.solve.chain_one_kernel" not in modules
+
+
 @pytest.mark.parametrize("args", [
     ["ik", "gough-stewart", "--pose", "0.08,-0.04,0.84,10,0,5"],
     ["ik", "gough-stewart", "--pose", "0,0,0.8,30,20,10", "--angles", "ZYZ"],

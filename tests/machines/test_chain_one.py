@@ -280,6 +280,25 @@ def test_a_one_shot_call_does_not_import_numba():
     assert out.returncode == 0, out.stderr
 
 
+@pytest.mark.ci  # a fresh process (1-4 s of CPU): .ci/run's second stage
+def test_batch_calls_are_no_single_calls():
+    """Batches (a study's frontier, two rows or one) never count as a first single call: the
+    second does not build the one-pose constants, which import Numba; a plain pose still
+    does from its second call."""
+    m = pkmkit.machine("tripteor-x7")
+    x, q = m.home_pose.tolist(), m.home_q.tolist()
+    code = (f"import sys, numpy as np, pkmkit; m = pkmkit.machine('tripteor-x7'); "
+            f"X = np.array([{x}, {x}]); Q = np.array([{q}, {q}]); "
+            "[m.ik(X), m.ik(X[:1], full_output=True), m.fk(Q), m.fk(Q[:1]), m.jacobian(X).J, "
+            "m.jacobian(X[:1]).J, m.ik(X), m.fk(Q), m.jacobian(X).J]; "
+            f"assert 'numba' not in sys.modules, 'imported'; m.ik({x}); m.ik({x}); "
+            "assert 'numba' in sys.modules")
+    env = {k: v for k, v in os.environ.items() if k != "PKMKIT_COMPILED"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                         check=False)
+    assert out.returncode == 0, out.stderr
+
+
 def test_numpy_mode_takes_the_batch_path(monkeypatch):
     m = pkmkit.machine("tripteor-x7")
     monkeypatch.setenv("PKMKIT_COMPILED", "0")

@@ -26,7 +26,9 @@ not LAPACK's pseudo-inverse). No result depends on an earlier call: only constan
 
 A one-shot call in a fresh process does not import Numba
 (:func:`pkmkit.numerics.jit.compiled_from_second_call`): until Numba is imported, a machine's
-first single call takes the batch path and the next imports it.
+first single call takes the batch path and the next imports it. Only a plain single pose (or
+configuration) counts: a batch, even of one row, never builds the constants nor imports Numba
+(a workspace study's batches run the closure's C twin).
 """
 
 from __future__ import annotations
@@ -365,9 +367,9 @@ class _InverseFields:
 def _inverse_within(m: Any, x: Any, strokes: str, start: Any) -> tuple | None:
     """``(constants, every joint's value, the solution u, iterations, residual)`` of one plain
     pose within the strokes (or any with ``strokes="ignore"``), or None."""
-    c = constants(m)
-    xs = None if c is None else _plain(x, 6)
-    if xs is None:
+    xs = _plain(x, 6)  # before constants(): a batch call is no single call (no Numba import)
+    c = None if xs is None else constants(m)
+    if c is None:
         return None
     if start is not None:
         start = _plain(start, 6 + c.n_var)
@@ -478,6 +480,8 @@ def _nearest_branch(c: ChainOneConstants, found: tuple, first: bool) -> tuple | 
 def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndarray | None:
     """``m.fk(q)`` of one plain configuration ``q`` (``n`` numbers): the tool point and axis
     ``(6,)``, or None (module docstring)."""
+    if isinstance(q, np.ndarray) and q.ndim != 1:
+        return None  # a batch: no single call (constants() would count it, import Numba)
     c = constants(m, "chain_fk")
     qs = None if c is None else _plain(q, c.n)
     if qs is None:
@@ -540,9 +544,9 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
     global _RECORD
     if type(tol) is not float or not tol > 0 or tol == math.inf:
         return None
-    c = constants(m, "chain_jacobian")
-    xs = None if c is None else _plain(x, 6)
-    found = None if xs is None else _inverse_values(c, xs)
+    xs = _plain(x, 6)  # before constants(), as in _inverse_within
+    c = None if xs is None else constants(m, "chain_jacobian")
+    found = None if c is None else _inverse_values(c, xs)
     if found is None:
         return None
     values = found[0]

@@ -71,7 +71,7 @@ from pkmkit.machines.warm_starts import ChainWarmStart
 from pkmkit.machines.workspace_reports import ChainReports
 from pkmkit.model.chains import JointChainModel
 from pkmkit.numerics.arrays import restore_shape
-from pkmkit.numerics.jit import use_compiled_solver
+from pkmkit.numerics.jit import native_kernel, use_compiled_solver
 from pkmkit.solve.chains import (
     chain_pose,
     solve_closure,
@@ -134,7 +134,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         # the compiled closure once Numba is loaded (an identification rebuilds the machine at
         # every step); never imported for this one row
         res = solve_closure(model, values[None], u0, unknown_variables=self._passive,
-                            compute_rank=False, compiled=use_compiled_solver(1))
+                            compute_rank=False, compiled=_closure_compiled(1))
         converged = res.status[0] == Status.OK or (
             res.status[0] == Status.INCONSISTENT and model.defects.any())
         if not converged:
@@ -262,7 +262,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         q[:, loop] = grid
         # compiled once Numba is loaded (an identification's bound); not imported for this alone
         points = self.fk(q, full_output=True, strokes="ignore", check_singular=False,
-                         compiled=use_compiled_solver(1)).pose[:, :3]
+                         compiled=_closure_compiled(1)).pose[:, :3]
         points = np.vstack([points[np.isfinite(points).all(axis=1)], self.home_pose[:3]])
         lower, upper = points.min(axis=0), points.max(axis=0)
         pad = np.maximum(0.1 * (upper - lower), 0.01)
@@ -396,7 +396,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         valid = valid_rows(qb)
         u0[~valid] = np.nan
         engine_options.setdefault("compute_rank", False)
-        engine_options.setdefault("compiled", use_compiled_solver(n))
+        engine_options.setdefault("compiled", _closure_compiled(n))
         with np.errstate(invalid="ignore", over="ignore"):
             res = solve_closure(self.model, values, u0, unknown_variables=self._passive,
                                 **engine_options)
@@ -597,7 +597,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         for u in (u0, u_home):
             u[~valid_rows(xb) | bad_axis] = np.nan
         engine_options.setdefault("compute_rank", False)
-        engine_options.setdefault("compiled", use_compiled_solver(n))
+        engine_options.setdefault("compiled", _closure_compiled(n))
 
         def solve(t: np.ndarray, u: np.ndarray, tool: np.ndarray):
             with np.errstate(invalid="ignore", over="ignore"):
@@ -651,6 +651,17 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         """Passive joints by name at actuator coordinates ``q`` (rad or m)."""
         res = self.fk(q, full_output=True)
         return {name: res.passive[..., i] for i, name in enumerate(self.passive_names)}
+
+
+def _closure_compiled(rows: int) -> bool:
+    """Whether a batch of ``rows`` rows runs the compiled closure: its C twin
+    (:mod:`pkmkit.solve.chain_rows`, the same bits as the Numba kernel, no import) at every
+    size when the extension is built, else Numba under
+    :func:`~pkmkit.numerics.jit.use_compiled_solver`'s rule — so the kernel a batch takes does
+    not depend on whether the process imported Numba before."""
+    from pkmkit.solve.chain_rows import KERNEL
+
+    return use_compiled_solver(rows, native=native_kernel(KERNEL, "_solve_rows") is not None)
 
 
 def _joined(parts: Mapping[int, list[str]], n: int) -> list[str]:
