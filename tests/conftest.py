@@ -17,14 +17,22 @@ at collection would change the settings of every test collected after it).
 from __future__ import annotations
 
 import os
+import sys
 
-import numpy as np
-import pytest
-from hypothesis import HealthCheck, Phase, settings
+# Write the bytecode caches (``__pycache__``) even under PYTHONDONTWRITEBYTECODE=1: without
+# them every test process compiles pkmkit's ~300 modules and pytest rewrites the asserts of
+# ~260 test modules again (≈ 9 s of CPU per pytest-xdist worker, ≈ 0.1 s per ``pkmkit``
+# subprocess the tests start, which read the caches whatever the variable says).
+# docs/testing.md, "Suite time".
+sys.dont_write_bytecode = False
 
-import pkmkit
-from pkmkit.machines.registry import ALIASES
-from pkmkit.model.rods import CRANK
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from hypothesis import HealthCheck, Phase, settings  # noqa: E402
+
+import pkmkit  # noqa: E402
+from pkmkit.machines.registry import ALIASES  # noqa: E402
+from pkmkit.model.rods import CRANK  # noqa: E402
 
 _COMMON = {"deadline": None,
            "suppress_health_check": [HealthCheck.too_slow, HealthCheck.filter_too_much,
@@ -55,6 +63,28 @@ CHAIN_PRESETS = [m for m in ALL_PRESETS
 #: Translational presets whose actuators are all linear (slides, struts): what the dynamics
 #: layer models.
 LINEAR_PRESETS = [m for m in PRESETS if not (pkmkit.machine(m).model.leg_kind == CRANK).any()]
+
+
+class _ModuleGroups:
+    """Run a test module's tests on one pytest-xdist worker (``--dist loadgroup``).
+
+    A test without an ``xdist_group`` mark (the documentation pages have one each) joins the
+    group of its module. Without it, ``loadgroup`` hands out the ungrouped tests one at a time,
+    so consecutive tests of a module alternated between the workers and both paid the module's
+    fixtures and the first calls of its compiled kernels (docs/testing.md, "Suite time").
+    """
+
+    @pytest.hookimpl(tryfirst=True)  # before pytest-xdist's worker hook reads the marks
+    def pytest_collection_modifyitems(self, items: list[pytest.Item]) -> None:
+        if os.environ.get("PKMKIT_TEST_GROUP") == "0":
+            return
+        for item in items:
+            if item.get_closest_marker("xdist_group") is None:
+                item.add_marker(pytest.mark.xdist_group(item.nodeid.split("::", 1)[0]))
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.pluginmanager.register(_ModuleGroups(), "pkmkit-module-groups")
 
 
 @pytest.hookimpl(trylast=True)

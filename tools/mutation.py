@@ -191,7 +191,7 @@ def _plausible(args) -> int:
                           operators=operators, timeout=args.timeout,
                           workdir=Path(args.workdir), results=Path(args.results),
                           again=args.survivors, resume=args.resume,
-                          tests_for=_tests_for(args.tests_for))
+                          tests_for=_tests_for(args.tests_for), markers=args.markers)
     return 0
 
 
@@ -212,6 +212,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--plausible", action="store_true",
                         help="plant the plausible one-line bugs of tools/plausible_mutants.py")
     parser.add_argument("--tests", nargs="*", help="(--plausible) test paths to run")
+    parser.add_argument("--markers", default="not slow",
+                        help="(--plausible) pytest -m selection; 'not slow and not ci' for the "
+                             "ordinary run alone")
     parser.add_argument("--operators", help="(--plausible) comma-separated operators")
     parser.add_argument("--list", action="store_true",
                         help="(--plausible) list the sample's mutants, run nothing")

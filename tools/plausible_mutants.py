@@ -336,7 +336,8 @@ def restore(mutant: Mutant, root: Path) -> None:
 
 def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tuple[str, ...],
         timeout: float, workdir: Path, results: Path, again: bool = False,
-        resume: bool = False, tests_for: dict[str, list[str]] | None = None) -> dict:
+        resume: bool = False, tests_for: dict[str, list[str]] | None = None,
+        markers: str = "not slow") -> dict:
     """Plant a sample of mutants one at a time in a copy of ``src`` and run ``tests`` on each
     (``pytest -x -m "not slow"``: the ordinary suite and the heavy checks marked ``ci``, as
     mutmut's selection in pyproject.toml). Results are appended to ``results`` (JSON
@@ -344,7 +345,9 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
     ``resume``, the sample less the mutants ``results`` already has an outcome for (a run
     stopped by its time limit, continued). ``tests_for`` maps a source file name (``ik_cmd.py``)
     to the tests its mutants run instead of ``tests`` (a package whose whole test directory
-    takes longer than the time limit per mutant, such as ``cli``)."""
+    takes longer than the time limit per mutant, such as ``cli``). ``markers`` is the
+    ``-m`` selection: ``"not slow and not ci"`` measures the ordinary run alone (what is left
+    when the heavy checks marked ``ci`` are not run)."""
     every = [m for m in mutants_of_package(package) if m.operator in operators]
     chosen = stratified_sample(every, sample, seed)
     if resume and results.exists():
@@ -370,7 +373,7 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
         try:
             proc = subprocess.run(
                 [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
-                 "-m", "not slow", *(tests_for or {}).get(Path(m.path).name, tests)],
+                 "-m", markers, *(tests_for or {}).get(Path(m.path).name, tests)],
                 cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
             code = proc.returncode
             # 1: a test failed; 2–4: collection or a conftest failed (the mutant breaks an

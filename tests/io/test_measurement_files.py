@@ -147,3 +147,19 @@ def test_column_names_in_another_case(tmp_path):
     path.write_text("q1,q2,q3,x,X,y,z\n1,1,1,0,0,0,0\n")
     with pytest.raises(InputError, match=r"f\.csv:1: repeated column"):
         read_measurements(path, pkmkit.machine("linear-delta"), "point")
+
+
+def test_a_ballbar_length_not_positive_names_its_line(tmp_path):
+    """A bar length ≤ 0 is refused with its file line (a typed error, not an IndexError)."""
+    m = pkmkit.machine("verne")
+    data = simulate(m, m, "ballbar", 5, np.random.default_rng(0), noise="none")
+    path = tmp_path / "ballbar.csv"
+    write_measurements(path, data, m, units="m", comment="a test\nsecond line")
+    lines = path.read_text().splitlines()
+    column = lines[3].split(",").index("length")
+    cells = lines[6].split(",")
+    cells[column] = "-0.5"
+    lines[6] = ",".join(cells)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"ballbar\.csv:7: column 'length' must be > 0"):
+        read_measurements(path, m, "ballbar")

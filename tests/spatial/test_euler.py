@@ -166,6 +166,9 @@ def test_poses_convert_without_scipy_as_before():
     single = pose_from_angles([0.1, 0.2, 0.3], [10.0, 20.0, 30.0], degrees=True)
     assert single.shape == (6,)
     assert pose_to_angles(single, degrees=True)[1].shape == (3,)
+    position, angles = pose_to_angles(single, degrees=True)  # one pose: its own parts
+    np.testing.assert_array_equal(position, [0.1, 0.2, 0.3])
+    np.testing.assert_allclose(angles, [10.0, 20.0, 30.0], rtol=0, atol=1e-12)
     with pytest.raises(InputError, match="angles must be finite"):
         pose_from_angles([0, 0, 0], [np.nan, 0, 0])
     with pytest.raises(InputError, match="unknown angle convention"):
