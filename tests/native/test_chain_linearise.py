@@ -217,7 +217,9 @@ def test_jit_dispatch(monkeypatch):
 def test_a_fresh_chain_calibration_does_not_import_numba(tmp_path):
     """``pkmkit calibrate tripteor-x7`` (simulated tracker points) in a fresh process: the
     identification's closure, linearisation and absorption through the C kernels, no Numba,
-    and the same report as with the Numba kernels (``PKMKIT_NATIVE=0``)."""
+    and the same report as with the Numba kernels at every batch size (``PKMKIT_NATIVE=0`` and
+    ``PKMKIT_COMPILED=1``: without the latter, a process without the C kernels solves its small
+    closures by the NumPy engine until Numba is imported, which rounds differently)."""
     env = {"PYTHONPATH": str(SRC), "PATH": "/usr/bin:/bin"}
     ident = tmp_path / "ident.csv"
     subprocess.run([sys.executable, "-m", "pkmkit.cli.main", "simulate-measurements",
@@ -229,10 +231,10 @@ def test_a_fresh_chain_calibration_does_not_import_numba(tmp_path):
             "try:\n    main()\nexcept SystemExit as e:\n    assert e.code in (0, 3, None), e.code\n"
             "print('NUMBA', 'numba' in sys.modules, 'pkmkit.native.kernels' in sys.modules)")
     outputs = []
-    for native in ("1", "0"):
+    for switches in ({"PKMKIT_NATIVE": "1"}, {"PKMKIT_NATIVE": "0", "PKMKIT_COMPILED": "1"}):
         out = subprocess.run([sys.executable, "-c", code, "calibrate", "tripteor-x7",
                               "--measure", "point", "--measurements", str(ident), "--json"],
-                             capture_output=True, text=True, env={**env, "PKMKIT_NATIVE": native},
+                             capture_output=True, text=True, env={**env, **switches},
                              timeout=300, check=True).stdout
         outputs.append(out)
     assert outputs[0].strip().splitlines()[-1] == "NUMBA False True"

@@ -19,50 +19,6 @@ void pk_chain_jacobian_rows(const pk_chain *c, const double *values, const doubl
     }
 }
 
-/* svd_rates_kernel.jacobi_sweeps on work (c, r) (rows: the columns of M), each rotation
- * applied to V held by columns in vmat (c, c): V's column i is vmat[., i]. */
-#define MAX_SWEEPS 60
-static void jacobi_sweeps(double *work, ptrdiff_t c, ptrdiff_t r, double *vmat, double *norms,
-                          double tol) {
-    for (int sweep = 0; sweep < MAX_SWEEPS; sweep++) {
-        for (ptrdiff_t i = 0; i < c; i++) {
-            double s = 0.0;
-            for (ptrdiff_t t = 0; t < r; t++) s += work[i * r + t] * work[i * r + t];
-            norms[i] = s;
-        }
-        int rotated = 0;
-        for (ptrdiff_t i = 0; i < c - 1; i++) {
-            for (ptrdiff_t j = i + 1; j < c; j++) {
-                double alpha = norms[i];
-                double beta = norms[j];
-                double gamma = 0.0;
-                for (ptrdiff_t t = 0; t < r; t++) gamma += work[i * r + t] * work[j * r + t];
-                if (gamma == 0.0 || fabs(gamma) <= tol * sqrt(alpha) * sqrt(beta)) continue;
-                rotated = 1;
-                double zeta = (beta - alpha) / (2.0 * gamma);
-                double tan_ = copysign(1.0, zeta) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
-                double cos_ = 1.0 / sqrt(1.0 + tan_ * tan_);
-                double sin_ = cos_ * tan_;
-                for (ptrdiff_t t = 0; t < r; t++) {
-                    double a = work[i * r + t];
-                    double b = work[j * r + t];
-                    work[i * r + t] = cos_ * a - sin_ * b;
-                    work[j * r + t] = sin_ * a + cos_ * b;
-                }
-                for (ptrdiff_t t = 0; t < c; t++) { /* vmat.T[i, t] = vmat[t, i] */
-                    double a = vmat[t * c + i];
-                    double b = vmat[t * c + j];
-                    vmat[t * c + i] = cos_ * a - sin_ * b;
-                    vmat[t * c + j] = sin_ * a + cos_ * b;
-                }
-                norms[i] = alpha - tan_ * gamma;
-                norms[j] = beta + tan_ * gamma;
-            }
-        }
-        if (!rotated) break;
-    }
-}
-
 /* chain_linalg._householder: QR of a (r, c) in place, applied to b (r, k); 0 where a column
  * is zero. */
 static int householder(double *a, ptrdiff_t r, ptrdiff_t c, double *b, ptrdiff_t k) {
@@ -134,7 +90,8 @@ static void jacobi_rates(const double *cu_m, const double *cq_m, ptrdiff_t r, pt
         for (ptrdiff_t j = 0; j < c; j++) work[j * r + i] = cu_m[i * c + j];
     for (ptrdiff_t i = 0; i < c; i++)
         for (ptrdiff_t j = 0; j < c; j++) vmat[i * c + j] = i == j ? 1.0 : 0.0;
-    jacobi_sweeps(work, c, r, vmat, norms, tol);
+    /* svd_rates_kernel.jacobi_sweeps, V held by columns: V's column i is vmat[., i] */
+    pk_jacobi_sweeps(work, c, r, vmat, 1, c, c, norms, tol);
     double biggest = 0.0;
     for (ptrdiff_t i = 0; i < c; i++) {
         double s = 0.0;

@@ -228,4 +228,11 @@ typedef struct {
 void pk_rod_velocity(const double *legs, int n, const double *x, const double *q, double tol,
                      double near, pk_rod_state *s);
 
+/* svd.c: one-sided Jacobi sweeps (V optional, any layout) and the singular values of one
+ * small matrix, shared by the SVD, chain-velocity and pose-velocity kernels. */
+void pk_jacobi_sweeps(double *work, ptrdiff_t k, ptrdiff_t p, double *vmat, ptrdiff_t v_row,
+                      ptrdiff_t v_col, ptrdiff_t v_len, double *norms, double tol);
+void pk_singular_values_one(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out,
+                            double *work, double *norms);
+
 #endif

@@ -49,62 +49,8 @@ static void pose_rods(const double *q, const double *geom, ptrdiff_t m, double *
 /* svd_kernel.singular_values of one r x c matrix (row-major) into out (min(r, c)): one-sided
  * Jacobi, the same operations (NaN for a non-finite entry). r, c <= 6. */
 static void jacobi_values(const double *mat, int r, int c, double *out) {
-    int tall = r >= c, p = tall ? r : c, k = tall ? c : r;
-    double work[6][6], norms[6], tol = p * 2.220446049250313e-16;
-    int finite = 1;
-    for (int i = 0; i < r; i++)
-        for (int j = 0; j < c; j++) {
-            double v = mat[c * i + j];
-            if (!isfinite(v)) finite = 0;
-            if (tall) work[j][i] = v;
-            else work[i][j] = v;
-        }
-    if (!finite) {
-        for (int i = 0; i < k; i++) out[i] = NAN;
-        return;
-    }
-    for (int sweep = 0; sweep < 60; sweep++) {
-        for (int i = 0; i < k; i++) {
-            double s = 0.0;
-            for (int t = 0; t < p; t++) s += work[i][t] * work[i][t];
-            norms[i] = s;
-        }
-        int rotated = 0;
-        for (int i = 0; i < k - 1; i++)
-            for (int j = i + 1; j < k; j++) {
-                double alpha = norms[i], beta = norms[j], gamma = 0.0;
-                for (int t = 0; t < p; t++) gamma += work[i][t] * work[j][t];
-                if (gamma == 0.0 || fabs(gamma) <= tol * sqrt(alpha) * sqrt(beta)) continue;
-                rotated = 1;
-                double zeta = (beta - alpha) / (2.0 * gamma);
-                double tan_ = copysign(1.0, zeta) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
-                double cos_ = 1.0 / sqrt(1.0 + tan_ * tan_);
-                double sin_ = cos_ * tan_;
-                for (int t = 0; t < p; t++) {
-                    double a = work[i][t], b = work[j][t];
-                    work[i][t] = cos_ * a - sin_ * b;
-                    work[j][t] = sin_ * a + cos_ * b;
-                }
-                norms[i] = alpha - tan_ * gamma;
-                norms[j] = beta + tan_ * gamma;
-            }
-        if (!rotated) break;
-    }
-    for (int i = 0; i < k; i++) {
-        double s = 0.0;
-        for (int t = 0; t < p; t++) s += work[i][t] * work[i][t];
-        norms[i] = sqrt(s);
-    }
-    for (int i = 1; i < k; i++) {
-        double v = norms[i];
-        int j = i - 1;
-        while (j >= 0 && norms[j] < v) {
-            norms[j + 1] = norms[j];
-            j--;
-        }
-        norms[j + 1] = v;
-    }
-    for (int i = 0; i < k; i++) out[i] = norms[i];
+    double work[36], norms[6];
+    pk_singular_values_one(mat, r, c, out, work, norms);
 }
 
 /* LU with partial pivoting (the first largest |pivot|, as LAPACK's idamax) of a 6x6

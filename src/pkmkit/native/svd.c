@@ -22,107 +22,44 @@
 
 /* ------------------------------------------------------------------ kernels */
 
-/* svd_kernel.singular_values over n matrices (r, c) row-major; out (n, k). */
-static void pk_singular_values(const double *mats, ptrdiff_t n, ptrdiff_t r, ptrdiff_t c,
-                               double *out, double *work, double *norms) {
-    int tall = r >= c;
-    ptrdiff_t p = tall ? r : c; /* length of a working column */
-    ptrdiff_t k = tall ? c : r; /* working columns = singular values */
-    double tol = (double)p * PK_EPS;
-    for (ptrdiff_t m = 0; m < n; m++) {
-        const double *mat = mats + m * r * c;
-        double *o = out + m * k;
-        int finite = 1;
-        for (ptrdiff_t i = 0; i < r; i++) {
-            for (ptrdiff_t j = 0; j < c; j++) {
-                double v = mat[i * c + j];
-                if (!isfinite(v)) finite = 0;
-                if (tall) work[j * p + i] = v;
-                else work[i * p + j] = v;
-            }
-        }
-        if (!finite) {
-            for (ptrdiff_t i = 0; i < k; i++) o[i] = NAN;
-            continue;
-        }
-        for (int sweep = 0; sweep < PK_SVD_SWEEPS; sweep++) {
-            for (ptrdiff_t i = 0; i < k; i++) {
-                double s = 0.0;
-                for (ptrdiff_t t = 0; t < p; t++) s += work[i * p + t] * work[i * p + t];
-                norms[i] = s;
-            }
-            int rotated = 0;
-            for (ptrdiff_t i = 0; i < k - 1; i++) {
-                for (ptrdiff_t j = i + 1; j < k; j++) {
-                    double alpha = norms[i], beta = norms[j], gamma = 0.0;
-                    double *wi = work + i * p, *wj = work + j * p;
-                    for (ptrdiff_t t = 0; t < p; t++) gamma += wi[t] * wj[t];
-                    if (gamma == 0.0 || fabs(gamma) <= tol * sqrt(alpha) * sqrt(beta)) continue;
-                    rotated = 1;
-                    double zeta = (beta - alpha) / (2.0 * gamma);
-                    double tn = copysign(1.0, zeta) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
-                    double cs = 1.0 / sqrt(1.0 + tn * tn);
-                    double sn = cs * tn;
-                    for (ptrdiff_t t = 0; t < p; t++) {
-                        double a = wi[t], b = wj[t];
-                        wi[t] = cs * a - sn * b;
-                        wj[t] = sn * a + cs * b;
-                    }
-                    norms[i] = alpha - tn * gamma;
-                    norms[j] = beta + tn * gamma;
-                }
-            }
-            if (!rotated) break;
-        }
+/* svd_rates_kernel.jacobi_sweeps (and svd_kernel's sweeps with vmat NULL): one-sided Jacobi
+ * on the k working columns of length p in work (k, p); each rotation also applied to V, whose
+ * entry (i, t), t < v_len, is vmat[i * v_row + t * v_col] (V by rows: v_row = v_len,
+ * v_col = 1; by columns: v_row = 1, v_col = v_len). Shared by svd.c, chain_velocity.c and
+ * pose_velocity.c: one copy of the sweeps, the operations of the Numba kernels in their order. */
+void pk_jacobi_sweeps(double *work, ptrdiff_t k, ptrdiff_t p, double *vmat, ptrdiff_t v_row,
+                      ptrdiff_t v_col, ptrdiff_t v_len, double *norms, double tol) {
+    for (int sweep = 0; sweep < PK_SVD_SWEEPS; sweep++) {
         for (ptrdiff_t i = 0; i < k; i++) {
             double s = 0.0;
             for (ptrdiff_t t = 0; t < p; t++) s += work[i * p + t] * work[i * p + t];
-            norms[i] = sqrt(s);
-        }
-        for (ptrdiff_t i = 1; i < k; i++) { /* insertion sort, decreasing */
-            double v = norms[i];
-            ptrdiff_t j = i - 1;
-            while (j >= 0 && norms[j] < v) {
-                norms[j + 1] = norms[j];
-                j--;
-            }
-            norms[j + 1] = v;
-        }
-        for (ptrdiff_t i = 0; i < k; i++) o[i] = norms[i];
-    }
-}
-
-/* svd_rates_kernel.jacobi_sweeps: work (c, r), vmat (c, c). */
-static void pk_jacobi_sweeps(double *work, double *vmat, double *norms, ptrdiff_t c,
-                             ptrdiff_t r, double tol) {
-    for (int sweep = 0; sweep < PK_SVD_SWEEPS; sweep++) {
-        for (ptrdiff_t i = 0; i < c; i++) {
-            double s = 0.0;
-            for (ptrdiff_t t = 0; t < r; t++) s += work[i * r + t] * work[i * r + t];
             norms[i] = s;
         }
         int rotated = 0;
-        for (ptrdiff_t i = 0; i < c - 1; i++) {
-            for (ptrdiff_t j = i + 1; j < c; j++) {
+        for (ptrdiff_t i = 0; i < k - 1; i++) {
+            for (ptrdiff_t j = i + 1; j < k; j++) {
                 double alpha = norms[i], beta = norms[j], gamma = 0.0;
-                double *wi = work + i * r, *wj = work + j * r;
-                for (ptrdiff_t t = 0; t < r; t++) gamma += wi[t] * wj[t];
+                double *wi = work + i * p, *wj = work + j * p;
+                for (ptrdiff_t t = 0; t < p; t++) gamma += wi[t] * wj[t];
                 if (gamma == 0.0 || fabs(gamma) <= tol * sqrt(alpha) * sqrt(beta)) continue;
                 rotated = 1;
                 double zeta = (beta - alpha) / (2.0 * gamma);
                 double tn = copysign(1.0, zeta) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
                 double cs = 1.0 / sqrt(1.0 + tn * tn);
                 double sn = cs * tn;
-                for (ptrdiff_t t = 0; t < r; t++) {
+                for (ptrdiff_t t = 0; t < p; t++) {
                     double a = wi[t], b = wj[t];
                     wi[t] = cs * a - sn * b;
                     wj[t] = sn * a + cs * b;
                 }
-                double *vi = vmat + i * c, *vj = vmat + j * c;
-                for (ptrdiff_t t = 0; t < c; t++) {
-                    double a = vi[t], b = vj[t];
-                    vi[t] = cs * a - sn * b;
-                    vj[t] = sn * a + cs * b;
+                if (vmat) {
+                    for (ptrdiff_t t = 0; t < v_len; t++) {
+                        double *vi = vmat + i * v_row + t * v_col;
+                        double *vj = vmat + j * v_row + t * v_col;
+                        double a = *vi, b = *vj;
+                        *vi = cs * a - sn * b;
+                        *vj = sn * a + cs * b;
+                    }
                 }
                 norms[i] = alpha - tn * gamma;
                 norms[j] = beta + tn * gamma;
@@ -130,6 +67,53 @@ static void pk_jacobi_sweeps(double *work, double *vmat, double *norms, ptrdiff_
         }
         if (!rotated) break;
     }
+}
+
+/* svd_kernel.singular_values of one matrix mat (r, c) row-major into out (min(r, c)),
+ * decreasing (NaN for a non-finite entry); work (max(r, c) * min(r, c)), norms (min(r, c)). */
+void pk_singular_values_one(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out,
+                            double *work, double *norms) {
+    int tall = r >= c;
+    ptrdiff_t p = tall ? r : c; /* length of a working column */
+    ptrdiff_t k = tall ? c : r; /* working columns = singular values */
+    double tol = (double)p * PK_EPS;
+    int finite = 1;
+    for (ptrdiff_t i = 0; i < r; i++) {
+        for (ptrdiff_t j = 0; j < c; j++) {
+            double v = mat[i * c + j];
+            if (!isfinite(v)) finite = 0;
+            if (tall) work[j * p + i] = v;
+            else work[i * p + j] = v;
+        }
+    }
+    if (!finite) {
+        for (ptrdiff_t i = 0; i < k; i++) out[i] = NAN;
+        return;
+    }
+    pk_jacobi_sweeps(work, k, p, NULL, 0, 0, 0, norms, tol);
+    for (ptrdiff_t i = 0; i < k; i++) {
+        double s = 0.0;
+        for (ptrdiff_t t = 0; t < p; t++) s += work[i * p + t] * work[i * p + t];
+        norms[i] = sqrt(s);
+    }
+    for (ptrdiff_t i = 1; i < k; i++) { /* insertion sort, decreasing */
+        double v = norms[i];
+        ptrdiff_t j = i - 1;
+        while (j >= 0 && norms[j] < v) {
+            norms[j + 1] = norms[j];
+            j--;
+        }
+        norms[j + 1] = v;
+    }
+    for (ptrdiff_t i = 0; i < k; i++) out[i] = norms[i];
+}
+
+/* svd_kernel.singular_values over n matrices (r, c) row-major; out (n, min(r, c)). */
+static void pk_singular_values(const double *mats, ptrdiff_t n, ptrdiff_t r, ptrdiff_t c,
+                               double *out, double *work, double *norms) {
+    ptrdiff_t k = r >= c ? c : r;
+    for (ptrdiff_t m = 0; m < n; m++)
+        pk_singular_values_one(mats + m * r * c, r, c, out + m * k, work, norms);
 }
 
 /* svd_rates_kernel.singular_rates over n tall matrices (r, c), rates (r, c, d). */
@@ -159,7 +143,7 @@ static void pk_singular_rates(const double *mats, const double *rates, ptrdiff_t
         }
         for (ptrdiff_t i = 0; i < c; i++)
             for (ptrdiff_t j = 0; j < c; j++) vmat[i * c + j] = i == j ? 1.0 : 0.0;
-        pk_jacobi_sweeps(work, vmat, norms, c, r, tol);
+        pk_jacobi_sweeps(work, c, r, vmat, c, 1, c, norms, tol);
         for (ptrdiff_t i = 0; i < c; i++) {
             double s = 0.0;
             for (ptrdiff_t t = 0; t < r; t++) s += work[i * r + t] * work[i * r + t];
