@@ -91,7 +91,7 @@ def joint_points(machine, q, result):
     """A_i (base joints) and B_i (platform joints) from the solver's passive joints, through
     the legs' chains: the origin of the first joint's frame and of the last joint's frame."""
     model = machine.model
-    values = machine._full_values(np.atleast_2d(q))
+    values = machine.full_values(np.atleast_2d(q))
     values[:, machine._passive] = np.atleast_2d(result.passive)
     names = model.element_names()
     out = {}
@@ -419,7 +419,7 @@ def platform_and_head_frames(machine, q):
     """R_P, R_T in the thesis's frames (see the test below) and the solver's passive joints."""
     model = machine.model
     res = machine.fk(q, full_output=True)
-    values = machine._full_values(q)
+    values = machine.full_values(q)
     values[:, machine._passive] = res.passive
     index = {n: i for i, n in enumerate(model.element_names())}
     to_mps = (*model.legs[0], index["R51_MPS"])

@@ -86,7 +86,7 @@ def _closure_rows(machine, rng, n):
     edge of assembly (one actuator bisected between an assembled configuration and one 5 units
     away, by the statuses of the closure), with their default starts."""
     q = machine.measurement_configurations(n, rng)
-    values = machine._full_values(q)
+    values = machine.full_values(q)
     u0 = machine._default_start(q, values)
     u0[n // 2:] += rng.normal(0.0, 1e-3, u0[n // 2:].shape)
     u0[3, 2] = np.nan

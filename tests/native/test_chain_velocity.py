@@ -71,7 +71,7 @@ def _configurations(m, rng, n=80):
     Jacobian is defined anyway), a large rotation, and non-finite entries."""
     q = m.home_q + rng.uniform(-0.04, 0.04, (n, m.n_actuators))
     direct = m.fk(q, full_output=True, strokes="ignore")
-    values = m._full_values(q)
+    values = m.full_values(q)
     values[:, m.passive_variables] = np.nan_to_num(direct.passive)
     platform = np.nan_to_num(direct.platform)
     values[n // 2:] += rng.normal(0.0, 0.3, values[n // 2:].shape)

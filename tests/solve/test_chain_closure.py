@@ -197,7 +197,7 @@ def test_block_and_dense_direct_models_agree(tripteor):
 
 
 def _values(machine, q, passive):
-    values = machine._full_values(q)
+    values = machine.full_values(q)
     values[:, machine._passive] = passive
     return values.T
 

@@ -39,7 +39,7 @@ def machines(request):
 def _problem(machine, rng, n=40):
     """Known values (actuators drawn in the default region) and the engine's default start."""
     q = machine.measurement_configurations(n, rng)
-    values = machine._full_values(q)
+    values = machine.full_values(q)
     return q, values, machine._default_start(q, values)
 
 

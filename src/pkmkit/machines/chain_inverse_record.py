@@ -89,7 +89,7 @@ def tool_pose(machine: Any, closure: np.ndarray, values: np.ndarray,
     model's own tool rows."""
     usable = np.isfinite(closure).all(axis=1)
     # the engine result's one field the tool rows read
-    return machine._tool_rows(SimpleNamespace(u=closure), values, lengths, usable)[0]
+    return machine.tool_rows(SimpleNamespace(u=closure), values, lengths, usable)[0]
 
 
 def inverse_record(machine: Any, res: Any, status: np.ndarray, q: np.ndarray,
@@ -105,7 +105,7 @@ def inverse_record(machine: Any, res: Any, status: np.ndarray, q: np.ndarray,
     solved = status == Status.OK
     closure = np.concatenate([res.u[:, :6], res.u[:, 6:][:, passive]], axis=1)
     closure[~solved] = np.nan
-    act = machine._actuated
+    act = machine.actuated_columns
     given = dict(
         q=q, status=status, branches=None, shortfall=None, method="numeric",
         mode=np.zeros(n, dtype=int), iterations=res.iterations, residual=res.residual,
@@ -117,7 +117,7 @@ def inverse_record(machine: Any, res: Any, status: np.ndarray, q: np.ndarray,
         direct = direct_at(machine, q, closure, lengths, strokes, True)
         pose = np.full((n, 6), np.nan) if direct is None else np.atleast_2d(direct.pose)
         return single_row(ChainInverseResult(pose=pose, direct=direct, **given))
-    values = machine._full_values(q)
+    values = machine.full_values(q)
     values[:, passive] = closure[:, 6:]
     record = LazyChainInverseResult(None, **given)
     object.__setattr__(record, "_evaluation", _InverseEvaluation(

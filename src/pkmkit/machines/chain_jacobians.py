@@ -187,7 +187,7 @@ class ChainVelocity(ChainOnePose):
         direct = self.fk(qb, start=start, full_output=True, strokes="ignore",
                          check_singular=False)
         n = qb.shape[0]
-        values = self._full_values(np.nan_to_num(qb))
+        values = self.full_values(np.nan_to_num(qb))
         values[:, self._passive] = np.nan_to_num(direct.passive)  # failed rows: NaN at the end
         rot = rotvec_to_matrix(np.nan_to_num(direct.platform[:, 3:])).transpose(1, 2, 0)
         p_x = np.nan_to_num(direct.platform[:, :3]).T

@@ -39,7 +39,7 @@ def home_rates(m: Any) -> tuple[np.ndarray, np.ndarray]:
     rot = rotvec_to_matrix(m._home["platform"][3:]).transpose(1, 2, 0)
     c = closure(model, rot, m._home["platform"][:3, None], values)
     cu = np.concatenate([c.platform, c.variables[:, m._passive]], axis=1)[:, :, 0]
-    cq = c.variables[:, m._actuated, 0]
+    cq = c.variables[:, m.actuated_columns, 0]
     rates = (-np.linalg.pinv(cu, rcond=RANK_RCOND) @ cq, cq)
     object.__setattr__(m, "_home_rates_cache", rates)
     return rates

@@ -180,6 +180,11 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         return self.model.actuator_names
 
     @property
+    def actuated_columns(self) -> np.ndarray:
+        """``(n,)`` int: the actuators' columns among the joint variables (``full_values``)."""
+        return self._actuated
+
+    @property
     def n_actuators(self) -> int:
         """Number of actuated joints."""
         return len(self._actuated)
@@ -283,7 +288,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                           tool_length=float(params.get("tool_length", 0.0)))
 
     # ---------------------------------------------------------------- helpers
-    def _full_values(self, q: np.ndarray) -> np.ndarray:
+    def full_values(self, q: np.ndarray) -> np.ndarray:
+        """``(N, n_var)`` every joint variable: home's, with the actuators at ``q (N, n)``."""
         values = np.tile(self._home["values"], (q.shape[0], 1))
         values[:, self._actuated] = q
         return values
@@ -361,7 +367,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         report = self._direct_report(values, res, status, valid, strokes,
                                      single if check_singular is None else check_singular)
         usable = report["usable"]
-        pose, frame = self._tool_rows(res, values, tool_length, usable)
+        pose, frame = self.tool_rows(res, values, tool_length, usable)
         if single:
             self._raise_single(qb[0], status[0], report, res.residual[0])
         if not full_output:
@@ -384,7 +390,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         """The legs' closure of every row: ``(values (N, n_joints), engine result,
         status (N,), valid (N,))``, the passive joints found written into ``values``."""
         n = qb.shape[0]
-        values = self._full_values(qb)
+        values = self.full_values(qb)
         given, keyword = self._closure_start(x0, start)
         if given is None:
             u0 = self._default_start(qb, values)
@@ -416,10 +422,11 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         values[:, self._passive] = res.u[:, 6:]
         return values, res, status, valid
 
-    def _tool_rows(self, res, values: np.ndarray, tool_length: Any,
+    def tool_rows(self, res, values: np.ndarray, tool_length: Any,
                    usable: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``pose (N, 6)`` (tool point and axis at ``tool_length``) and ``frame (N, 6)``
-        (spindle nose point and rotation vector) of closed rows, NaN where not usable."""
+        (spindle nose point and rotation vector) of closed rows, NaN where not usable; ``res``:
+        anything with ``u (N, 6 + n_p)``, the closure (platform, passive joints)."""
         rot = rotvec_to_matrix(np.nan_to_num(res.u[:, 3:6])).transpose(1, 2, 0)
         tool = tool_frame(self.model, rot, np.nan_to_num(res.u[:, :3]).T, values.T)
         lengths = self._tool_lengths(tool_length, res.u.shape[0])
