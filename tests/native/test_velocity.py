@@ -193,7 +193,7 @@ def test_rod_inverse_is_inverse_one_bit_for_bit():
     for name in TRANSLATIONAL:
         m = pkmkit.machine(name)
         closed, branches = m._closed, m._default_branches
-        legs = velocity_one._native_inverse_legs(closed, branches)
+        legs = closed.single_legs_packed(branches)
         lo, hi = m.default_box()
         x = lo + (hi - lo) * (1.6 * np.random.default_rng(25).random((300, m.dims)) - 0.3)
         for p in x.tolist():  # reachable and not
@@ -250,7 +250,7 @@ def test_refusals():
     for error, call in bad_calls:
         with pytest.raises(error):
             call()
-    inv = velocity_one._native_inverse_legs(m._closed, m._default_branches)
+    inv = m._closed.single_legs_packed(m._default_branches)
     with pytest.raises(ValueError):
         _kernels.rod_inverse(inv[:-8], x, 1e9)
     # rod_inverse hands whatever is not a list or tuple of finite exact floats to Python

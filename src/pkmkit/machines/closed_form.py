@@ -346,6 +346,18 @@ class RodClosedForm:
         object.__setattr__(self, "_single_last", (branches, legs))
         return legs
 
+    def single_legs_packed(self, branches: Sequence[float]) -> bytes:
+        """:meth:`_single_legs` as the C kernel ``rod_inverse`` takes them (``n × 20`` float64
+        bytes); the previous call's bytes for the same tuple of branches (a tuple is immutable:
+        kept for the next call)."""
+        last = self.__dict__.get("_one_inverse_native")
+        if last is not None and last[0] is branches:
+            return last[1]
+        legs = np.array(self._single_legs(branches), dtype=float).tobytes()
+        if type(branches) is tuple:
+            object.__setattr__(self, "_one_inverse_native", (branches, legs))
+        return legs
+
     def _crank_terms(self, v_w, v_1, v_2, perp_sq, i):
         """``(K − ℓ², 2 r ρ⊥)`` of crank leg i (see the module docstring)."""
         radius = self.crank_radius[i]

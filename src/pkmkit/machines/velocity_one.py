@@ -504,18 +504,6 @@ def _record(evaluation: OnePoseVelocity) -> OnePoseJacobians:
     return record
 
 
-def _native_inverse_legs(closed: RodClosedForm, branches: Sequence[float]) -> bytes:
-    """:meth:`RodClosedForm._single_legs` as the C kernel ``rod_inverse`` takes them
-    (``n × 20`` float64), the previous call's for the same tuple of branches."""
-    last = closed.__dict__.get("_one_inverse_native")
-    if last is not None and last[0] is branches:
-        return last[1]
-    legs = np.array(closed._single_legs(branches), dtype=float).tobytes()
-    if type(branches) is tuple:  # immutable: kept for the next call
-        object.__setattr__(closed, "_one_inverse_native", (branches, legs))
-    return legs
-
-
 def jacobian_one(closed: RodClosedForm, x: Any, tol: float, branches: Sequence[float],
                  within_strokes: Callable[[list[float]], bool]) -> OnePoseJacobians | None:
     """The velocity model of one plain pose ``x`` (``dims`` finite floats: a list, a tuple or a
@@ -534,7 +522,7 @@ def jacobian_one(closed: RodClosedForm, x: Any, tol: float, branches: Sequence[f
     native = jit.native_kernels_now()
     rod_inverse = None if native is None else getattr(native, "rod_inverse", None)
     if rod_inverse is not None:
-        q = rod_inverse(_native_inverse_legs(closed, branches), x, MAX_ABS)
+        q = rod_inverse(closed.single_legs_packed(branches), x, MAX_ABS)
         if q is not None:  # x: exact floats, every leg closes
             if not within_strokes(q):
                 return None
