@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.machines import chain_one_velocity
 from pkmkit.machines.chain_results import ChainInverseResult
 from pkmkit.machines.chain_starts import home_rates, inverse_rates
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
@@ -551,6 +552,10 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
         return None
     values = found[0]
     qs = c.actuators(values)
+    fast = chain_one_velocity.record(m, qs, found[1], found[3], max(tol, RANK_RCOND),
+                                     BOUND_MARGIN, c.expected_rank)  # at u, in C
+    if fast is not False:
+        return fast
     w = _work(c)
     w.q[:] = qs
     jac = np.empty((6, c.n))

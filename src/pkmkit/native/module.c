@@ -481,6 +481,11 @@ PyObject *pk_py_closure_rates(PyObject *self, PyObject *const *args, Py_ssize_t 
 PyObject *pk_py_chain_linearise_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_absorb(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
+/* chain_one_velocity.c: the one-pose velocity model of joint-chain machines */
+extern const char pk_chain_velocity_pack_doc[], pk_chain_one_velocity_doc[];
+PyObject *pk_py_chain_velocity_pack(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
@@ -515,6 +520,10 @@ static PyMethodDef methods[] = {
     {"chain_linearise_rows", (PyCFunction)(void (*)(void))pk_py_chain_linearise_rows,
      METH_FASTCALL, pk_chain_linearise_rows_doc},
     {"absorb", (PyCFunction)(void (*)(void))pk_py_absorb, METH_FASTCALL, pk_absorb_doc},
+    {"chain_velocity_pack", (PyCFunction)(void (*)(void))pk_py_chain_velocity_pack,
+     METH_FASTCALL, pk_chain_velocity_pack_doc},
+    {"chain_one_velocity", (PyCFunction)(void (*)(void))pk_py_chain_one_velocity,
+     METH_FASTCALL, pk_chain_one_velocity_doc},
     {NULL, NULL, 0, NULL},
 };
 

@@ -1,0 +1,193 @@
+"""The velocity model of one pose of a joint-chain machine in one C call (issue 22 §1): what
+``m.jacobian(x)`` does once the inverse solution of ``x`` is known
+(:func:`pkmkit.machines.chain_one.jacobian`).
+
+The inverse solution ``u`` = (platform pose, every joint variable) is the configuration the
+batch path reaches again by the direct model at its actuators (``m.jacobian(X)``:
+``ik``, then ``fk(q)`` from the direct model's first-order start, then the velocity model
+there: :meth:`~pkmkit.machines.chain_jacobians.ChainVelocity._velocity`), so the velocity
+model is evaluated at ``u`` directly — one call of the C kernel
+``pkmkit.native.kernels.chain_one_velocity`` (``native/chain_one_velocity.c``) on constants
+packed once per machine (:class:`VelocityPack`, cached on the machine): the closure's Jacobian
+``[C_U | C_q]`` (platform and passive joints; legs' actuators), the closure rates
+``dU = −C_U⁺ C_q`` by a QR of ``C_U`` that takes each leg's own joints first (each leg's block
+involves only the platform, its joints and the joints it shares), the tool twist per actuator
+``J (6, n)``, ``J_homogeneous`` (the batch path's scale: angular rows × the characteristic
+length), its singular values (one-sided Jacobi, ``native/svd.c``), the condition number and a
+lower bound of σ_min/σ_max of ``C_U`` (``1 / (‖C_U‖_F ‖C_U⁺‖_F)``).
+
+The record (:func:`record`) has the batch row's fields and meanings; ``J``,
+``J_homogeneous``, ``singular_values``, ``condition`` and ``passive_rates`` are views of the
+kernel's one output buffer, made when first read. ``closure_rank`` is ``n_u`` and ``status``
+OK only where the bound clears :data:`~pkmkit.machines.chain_one.BOUND_MARGIN` × max(``tol``,
+:data:`~pkmkit.machines.chain_velocity_record.RANK_RCOND`): the closure is then certainly
+regular, of full rank, and not singular by the batch path's SVD; elsewhere (near a singular
+closure) the batch path answers, and raises its typed errors.
+
+Agreement with the batch row (tests/machines/test_chain_one_velocity.py): the same
+configuration to the solvers' tolerances, the same closure rates to rounding × the closure's
+condition number; measured over 1,000 workspace poses of the Tripteor X7 and the TriMule 600,
+every field within ~1e-12 relative (docs/benchmarks.md, "One pose per call"). The inverse
+solution is used only when its residual (its largest closure or tool row, m) is within
+:data:`RESIDUAL_GUARD`: a converged but inconsistent closure (a defective model: residuals up
+to the solver's ``residual_tol``, 1e-9) is not the direct model's least-squares closure, and
+the Numba path that solves the direct model again (:func:`pkmkit.solve.chain_one_kernel.
+velocity_one`) answers — as it does without the C extension (``PKMKIT_NATIVE=0``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from pkmkit.machines.chain_velocity_record import ChainJacobians
+from pkmkit.machines.lazy_records import lazy_record_class
+from pkmkit.numerics import jit
+
+#: Largest residual of the inverse solution (its closure and tool rows: m, and rad × the
+#: characteristic length) for which it is taken as the direct model's closure (module
+#: docstring). A nominal machine's inverse converges to ~1e-16.
+RESIDUAL_GUARD = 1e-12
+#: The fields computed when read (views of the kernel's output).
+_VIEWS = ("J", "J_homogeneous", "singular_values", "condition", "passive_rates")
+
+
+class VelocityPack:
+    """A machine's constants of the C kernel (module docstring), built once: the model
+    arrays, the closure Jacobian's column of each variable (platform 0–5, the passive joints
+    in ``m.passive_variables`` order, then the legs' actuators), the head actuators' and the
+    leg actuators' places in J, the leg owning each column alone (−1: the platform's and the
+    joints shared by legs), and the output buffer's layout."""
+
+    __slots__ = ("call", "layout", "n", "n_p", "pack", "size")
+
+    def __init__(self, m: Any, native: Any) -> None:
+        from pkmkit.solve import chain_kernel
+
+        model = m.model
+        n_var = model.n_variables
+        passive = np.asarray(m.passive_variables, dtype=np.int64)
+        act = np.flatnonzero(model.actuated)
+        n_u = 6 + len(passive)
+        loop_act = [int(v) for v in act if model.loop_variables[v]]
+        position = np.full(n_var, -1, dtype=np.int64)
+        position[passive] = 6 + np.arange(len(passive))
+        position[loop_act] = n_u + np.arange(len(loop_act))
+        order = {int(v): k for k, v in enumerate(act)}
+        head_position = np.full(n_var, -1, dtype=np.int64)
+        for v in act:
+            if not model.loop_variables[v]:
+                head_position[v] = order[int(v)]
+        loop_columns = np.array([order[v] for v in loop_act], dtype=np.int64)
+        frames, types, evar, elements, offsets, _ = chain_kernel.model_arrays(model, passive)
+        column_leg = _column_legs(types, evar, elements, offsets, position, n_u)
+        slides, turns = m._leg_joints_by_type()  # the legs' home modes
+        home = m._home["values"]
+        self.pack = native.chain_velocity_pack(
+            frames, types, evar, elements, offsets, position,
+            np.array(model.head, dtype=np.int64), head_position, loop_columns, column_leg,
+            n_u, float(model.characteristic_length), float(m.tool_length),
+            6 + np.array(slides, dtype=np.int64), np.sign(home[slides]).astype(float),
+            6 + np.array(turns, dtype=np.int64), home[turns].astype(float))
+        self.call = native.chain_one_velocity
+        n = len(act)
+        k = min(6, n)
+        self.n, self.n_p = n, n_u - 6
+        self.size = 12 * n + k + 1 + self.n_p * n
+        self.layout = {"J": (0, 6 * n, (6, n)), "J_homogeneous": (6 * n, 12 * n, (6, n)),
+                       "singular_values": (12 * n, 12 * n + k, None),
+                       "condition": (12 * n + k, None, None),
+                       "passive_rates": (12 * n + k + 1, self.size, (self.n_p, n))}
+
+    def __reduce__(self) -> tuple:
+        """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
+        holds a capsule)."""
+        return _nothing, ()
+
+
+def _nothing() -> None:
+    """What a pickled :class:`VelocityPack` becomes."""
+    return None
+
+
+def _column_legs(types: np.ndarray, evar: np.ndarray, elements: np.ndarray,
+                 offsets: np.ndarray, position: np.ndarray, n_u: int) -> np.ndarray:
+    """``(n_u,)`` the leg whose joint alone each unknown column of the closure is (−1 for the
+    platform's columns and a joint met in several legs)."""
+    owner = np.full(n_u, -1, dtype=np.int64)
+    seen = np.zeros(n_u, dtype=np.int64)
+    for leg in range(len(offsets) - 1):
+        cols = {int(position[evar[e]]) for e in elements[offsets[leg]:offsets[leg + 1]]
+                if types[e] != 0 and 6 <= position[evar[e]] < n_u}
+        for col in cols:
+            seen[col] += 1
+            owner[col] = leg
+    owner[seen != 1] = -1
+    return owner
+
+
+def pack(m: Any) -> VelocityPack | None:
+    """The machine's :class:`VelocityPack` (built at its first call), or None without the C
+    extension (or one built from sources without the kernel)."""
+    p = m.__dict__.get("_chain_one_velocity")
+    if p is None:
+        native = jit.native_kernels_now()
+        if native is None or not hasattr(native, "chain_one_velocity"):
+            return None
+        p = VelocityPack(m, native)
+        object.__setattr__(m, "_chain_one_velocity", p)
+    elif jit.native_kernels_now() is None:  # PKMKIT_NATIVE=0 set since
+        return None
+    return p
+
+
+class _Fields:
+    """The fields of a one-pose record made when read: views of the kernel's output."""
+
+    __slots__ = ("layout", "out")
+
+    def __init__(self, out: np.ndarray, layout: dict) -> None:
+        self.out, self.layout = out, layout
+
+    def field(self, name: str) -> Any:
+        start, stop, shape = self.layout[name]
+        if stop is None:
+            return self.out[start]
+        view = self.out[start:stop]
+        return view if shape is None else view.reshape(shape)
+
+
+_RECORD: type | None = None
+
+
+def _record_class() -> type:
+    return lazy_record_class(
+        ChainJacobians, "OnePose",
+        lambda r: f"1 pose, {len(r.q)} actuators; fields read from one C call",
+        "A joint-chain machine's velocity model of one pose "
+        "(:mod:`pkmkit.machines.chain_one_velocity`).")
+
+
+def record(m: Any, q: tuple, u: list, residual: float, tol: float, margin: float,
+           expected_rank: int) -> Any:
+    """The velocity model of one pose at the inverse solution ``u`` (a list of 6 + n_var
+    floats; ``q`` its actuators, ``residual`` its largest residual): the record; None where
+    the bound does not clear ``margin`` × ``tol`` (the batch path answers); False where this
+    path does not apply (no C extension, a residual beyond :data:`RESIDUAL_GUARD`, ``u``
+    outside the legs' home assembly modes: the Numba path, which solves the direct model
+    again as the batch path does, answers)."""
+    global _RECORD
+    p = pack(m) if residual <= RESIDUAL_GUARD else None
+    if p is None:
+        return False
+    out = np.empty(p.size)
+    bound = p.call(p.pack, u, out)
+    if bound < 0.0:  # outside the legs' home modes: the direct model's closure may differ
+        return False
+    if not bound >= margin * tol:
+        return None
+    if _RECORD is None:
+        _RECORD = _record_class()
+    return _RECORD(_Fields(out, p.layout), closure_rank=np.int64(p.n_p + 6),
+                   expected_rank=expected_rank, q=np.array(q), status=np.int64(0))

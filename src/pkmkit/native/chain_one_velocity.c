@@ -1,0 +1,515 @@
+/* The velocity model of a joint-chain machine at one configuration, in one call from Python
+ * (issue 22 section 1; machines/chain_one_velocity.py): at a given inverse solution u =
+ * (platform pose, every joint variable), the closure's Jacobian (chain.c's evaluate) with
+ * respect to the platform, the passive joints and the legs' actuators; the closure rates
+ * dU = -C_U^+ C_q by a QR of C_U that exploits its blocks; the tool twist per actuator J (6, n)
+ * and its homogenised copy, J's singular values (svd.c) and condition number; the lower bound
+ * 1 / (|C_U|_F |C_U^+|_F) of sigma_min / sigma_max of C_U that certifies the closure regular.
+ *
+ * Blocks: the rows of a leg involve the platform, the leg's own joints and any joint it shares
+ * with another leg (the TriMule's legs share their base pivot). A column of a joint met in one
+ * leg only is that leg's *local* column; the platform's and the shared joints' are *global*.
+ * Householder reflections on each leg's 6 rows triangularise its local columns (R_l, and S_l
+ * on the global columns), the rows left over (6 - p_l per leg, zero on every local column)
+ * are triangularised on the global columns (R_g): the QR of C_U with its columns permuted,
+ * each reflection touching 6 rows. The right-hand sides (C_q) are reflected along, so
+ * R_g dU_g = -b_g and R_l dU_l = -b_l - S_l dU_g give the least-squares solution (backward
+ * stable, as the batch path's pseudo-inverse: equal to it to rounding x the closure's
+ * condition number). |C_U^+|_F = |R^-1|_F with R^-1 = [[D^-1, -D^-1 S R_g^-1], [0, R_g^-1]].
+ *
+ * Python face: chain_velocity_pack(...) -> a capsule of the machine's constants (copied) and
+ * scratch, built once per machine; chain_one_velocity(pack, u, out) -> the bound (a float),
+ * out filled. Holds the GIL (the scratch is the capsule's: a few microseconds of work). */
+#include "chain_face.h"
+
+#define CAPSULE "pkmkit.native.chain_one_velocity"
+
+typedef struct {
+    pk_chain c;               /* position: column of each variable in the closure's Jacobian */
+    pk_chain_work w;
+    ptrdiff_t n_u, n_loop, n_act, n_head, n_global, n_elem;
+    double tool;
+    const int64_t *head_position, *loop_columns;
+    const int64_t *slides, *turns; /* places in u of the legs' slides and revolute joints */
+    const double *signs, *homes;   /* their home signs and values */
+    ptrdiff_t n_slides, n_turns;
+    int64_t *leg_cols;        /* (L, 6) each leg's local columns */
+    int64_t *leg_count;       /* (L,) */
+    int64_t *global_cols;     /* (n_global,) */
+    int64_t *reduced;         /* (6L,) the rows left to the global columns */
+    double *values, *full_u, *r, *jac, *du, *rg_inv, *head_tw, *work, *norms;
+    int64_t *head_col;
+    void *memory;             /* every array above, one allocation */
+    void *owned[14];          /* the copied arrays */
+} chain_velocity;
+
+static void pack_free(PyObject *capsule) {
+    chain_velocity *v = PyCapsule_GetPointer(capsule, CAPSULE);
+    if (v) {
+        for (int i = 0; i < 14; i++) free(v->owned[i]);
+        free(v->memory);
+        free(v);
+    }
+}
+
+/* Householder QR of the columns piv (np) over the rows `rows` (nr) of a (leading dimension
+ * ld), the reflections applied to the columns rest (nrest) too; R left in place (a[rows[i],
+ * piv[j]], i <= j). 0 where a pivot column is zero. */
+static int reflect(double *a, ptrdiff_t ld, const int64_t *rows, ptrdiff_t nr,
+                   const int64_t *piv, ptrdiff_t np, const int64_t *rest, ptrdiff_t nrest) {
+    for (ptrdiff_t j = 0; j < np; j++) {
+        ptrdiff_t col = piv[j];
+        double norm = 0.0;
+        for (ptrdiff_t i = j; i < nr; i++) norm += a[rows[i] * ld + col] * a[rows[i] * ld + col];
+        norm = sqrt(norm);
+        if (!(norm > 0.0)) return 0;
+        double *top = a + rows[j] * ld + col;
+        double alpha = *top >= 0 ? -norm : norm;
+        double v0 = *top - alpha;
+        double vtv = v0 * v0;
+        for (ptrdiff_t i = j + 1; i < nr; i++) vtv += a[rows[i] * ld + col] * a[rows[i] * ld + col];
+        *top = v0;
+        for (ptrdiff_t k = j + 1; k < np + nrest; k++) {
+            ptrdiff_t other = k < np ? piv[k] : rest[k - np];
+            double s = 0.0;
+            for (ptrdiff_t i = j; i < nr; i++) s += a[rows[i] * ld + col] * a[rows[i] * ld + other];
+            s *= 2.0 / vtv;
+            for (ptrdiff_t i = j; i < nr; i++) a[rows[i] * ld + other] -= s * a[rows[i] * ld + col];
+        }
+        *top = alpha;
+    }
+    return 1;
+}
+
+/* x (np,) = R^-1 x in place for the upper-triangular R of reflect (rows, piv). */
+static void back_substitute(const double *a, ptrdiff_t ld, const int64_t *rows,
+                            const int64_t *piv, ptrdiff_t np, double *x) {
+    for (ptrdiff_t i = np - 1; i >= 0; i--) {
+        double s = x[i];
+        for (ptrdiff_t p = i + 1; p < np; p++) s -= a[rows[i] * ld + piv[p]] * x[p];
+        x[i] = s / a[rows[i] * ld + piv[i]];
+    }
+}
+
+/* The tool frame walked along the head from the platform pose u[:6] (chain_kernel._head_walk
+ * with the head actuators' places): rot (3, 3), pos (3,); the head actuators' spatial twists
+ * into v->head_tw, their actuator index into v->head_col. Returns their count. */
+static ptrdiff_t head_walk(const chain_velocity *v, const double *u, double *rot, double *pos) {
+    const pk_chain *c = &v->c;
+    double tmp[9];
+    pk_chain_rotvec_matrix(u[3], u[4], u[5], rot);
+    for (int i = 0; i < 3; i++) pos[i] = u[i];
+    ptrdiff_t n_twist = 0;
+    for (ptrdiff_t idx = 0; idx < v->n_head; idx++) {
+        int64_t e = c->head[idx];
+        pk_chain_apply_frame(rot, pos, c->frames + 16 * e, tmp);
+        int64_t type = c->types[e];
+        if (type == 0) continue;
+        int64_t var = c->evar[e];
+        int64_t col = v->head_position[var];
+        double q = v->values[var];
+        double z0 = rot[2], z1 = rot[5], z2 = rot[8];
+        double *tw = v->head_tw + 6 * n_twist;
+        if (col >= 0) {
+            if (type == 1) {
+                tw[0] = pos[1] * z2 - pos[2] * z1;
+                tw[1] = pos[2] * z0 - pos[0] * z2;
+                tw[2] = pos[0] * z1 - pos[1] * z0;
+                tw[3] = z0;
+                tw[4] = z1;
+                tw[5] = z2;
+            } else {
+                tw[0] = z0;
+                tw[1] = z1;
+                tw[2] = z2;
+                tw[3] = tw[4] = tw[5] = 0.0;
+            }
+            v->head_col[n_twist++] = col;
+        }
+        if (type == 1) {
+            double cq = cos(q), sq = sin(q);
+            for (int i = 0; i < 3; i++) {
+                double x = rot[3 * i], y = rot[3 * i + 1];
+                rot[3 * i] = cq * x + sq * y;
+                rot[3 * i + 1] = cq * y - sq * x;
+            }
+        } else {
+            pos[0] += q * z0;
+            pos[1] += q * z1;
+            pos[2] += q * z2;
+        }
+    }
+    return n_twist;
+}
+
+/* Column c of J (6, n): the velocity v + w x point and w of a spatial twist. */
+static void point_column(const double *twist, const double *point, double *jac, ptrdiff_t n,
+                         ptrdiff_t c) {
+    double w0 = twist[3], w1 = twist[4], w2 = twist[5];
+    jac[0 * n + c] = twist[0] + (w1 * point[2] - w2 * point[1]);
+    jac[1 * n + c] = twist[1] + (w2 * point[0] - w0 * point[2]);
+    jac[2 * n + c] = twist[2] + (w0 * point[1] - w1 * point[0]);
+    jac[3 * n + c] = w0;
+    jac[4 * n + c] = w1;
+    jac[5 * n + c] = w2;
+}
+
+/* The closure rates du (n_u, n_loop) from v->jac (module comment); returns the bound, 0.0
+ * where a pivot vanishes or too few rows are left (the caller takes the batch path). */
+static double closure_rates(chain_velocity *v) {
+    const pk_chain *c = &v->c;
+    const ptrdiff_t ld = v->n_u + v->n_loop, n_loop = v->n_loop, n_g = v->n_global;
+    double *a = v->jac;
+    double fro = 0.0;
+    for (ptrdiff_t i = 0; i < v->w.m; i++)
+        for (ptrdiff_t j = 0; j < v->n_u; j++) fro += a[i * ld + j] * a[i * ld + j];
+    int64_t rest[64], rows[6];
+    ptrdiff_t n_reduced = 0;
+    for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
+        const int64_t *piv = v->leg_cols + 6 * leg;
+        ptrdiff_t p = v->leg_count[leg], nrest = 0;
+        for (ptrdiff_t g = 0; g < n_g; g++) rest[nrest++] = v->global_cols[g];
+        for (ptrdiff_t k = 0; k < n_loop; k++) rest[nrest++] = v->n_u + k;
+        for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
+        if (!reflect(a, ld, rows, 6, piv, p, rest, nrest)) return 0.0;
+        for (ptrdiff_t i = p; i < 6; i++) v->reduced[n_reduced++] = 6 * leg + i;
+    }
+    if (n_reduced < n_g) return 0.0;
+    for (ptrdiff_t k = 0; k < n_loop; k++) rest[k] = v->n_u + k;
+    if (!reflect(a, ld, v->reduced, n_reduced, v->global_cols, n_g, rest, n_loop)) return 0.0;
+    /* global unknowns: R_g du_g = -b_g; then each leg's: R_l du_l = -b_l - S_l du_g */
+    double x[64];
+    for (ptrdiff_t k = 0; k < n_loop; k++) {
+        for (ptrdiff_t i = 0; i < n_g; i++) x[i] = -a[v->reduced[i] * ld + v->n_u + k];
+        back_substitute(a, ld, v->reduced, v->global_cols, n_g, x);
+        for (ptrdiff_t i = 0; i < n_g; i++) v->du[v->global_cols[i] * n_loop + k] = x[i];
+        for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
+            const int64_t *piv = v->leg_cols + 6 * leg;
+            ptrdiff_t p = v->leg_count[leg];
+            for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
+            for (ptrdiff_t i = 0; i < p; i++) {
+                const double *row = a + rows[i] * ld;
+                double s = -row[v->n_u + k];
+                for (ptrdiff_t g = 0; g < n_g; g++)
+                    s -= row[v->global_cols[g]] * v->du[v->global_cols[g] * n_loop + k];
+                x[i] = s;
+            }
+            back_substitute(a, ld, rows, piv, p, x);
+            for (ptrdiff_t i = 0; i < p; i++) v->du[piv[i] * n_loop + k] = x[i];
+        }
+    }
+    /* |R^-1|_F^2: R_g^-1 (columns by back substitution), each leg's R_l^-1 and
+     * R_l^-1 S_l R_g^-1 */
+    double total = 0.0;
+    double *rg = v->rg_inv;
+    for (ptrdiff_t j = 0; j < n_g; j++) {
+        for (ptrdiff_t i = 0; i < n_g; i++) x[i] = i == j ? 1.0 : 0.0;
+        back_substitute(a, ld, v->reduced, v->global_cols, n_g, x);
+        for (ptrdiff_t i = 0; i < n_g; i++) {
+            rg[i * n_g + j] = x[i];
+            total += x[i] * x[i];
+        }
+    }
+    for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
+        const int64_t *piv = v->leg_cols + 6 * leg;
+        ptrdiff_t p = v->leg_count[leg];
+        for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
+        for (ptrdiff_t j = 0; j < p; j++) { /* columns of R_l^-1 */
+            for (ptrdiff_t i = 0; i < p; i++) x[i] = i == j ? 1.0 : 0.0;
+            back_substitute(a, ld, rows, piv, p, x);
+            for (ptrdiff_t i = 0; i < p; i++) total += x[i] * x[i];
+        }
+        for (ptrdiff_t j = 0; j < n_g; j++) { /* columns of R_l^-1 S_l R_g^-1 */
+            for (ptrdiff_t i = 0; i < p; i++) {
+                double s = 0.0;
+                for (ptrdiff_t g = 0; g < n_g; g++)
+                    s += a[rows[i] * ld + v->global_cols[g]] * rg[g * n_g + j];
+                x[i] = s;
+            }
+            back_substitute(a, ld, rows, piv, p, x);
+            for (ptrdiff_t i = 0; i < p; i++) total += x[i] * x[i];
+        }
+    }
+    double bound = 1.0 / sqrt(fro * total);
+    return bound > 0.0 ? bound : 0.0; /* NaN (a non-finite entry) refused too */
+}
+
+/* The velocity model at u (6 + n_var): out = [J (6, n) | J_homogeneous (6, n) | singular
+ * values (min(6, n)) | condition | passive rates (n_u - 6, n)]; returns the bound (0.0: out
+ * not filled), or -1.0 where u is not in the legs' home assembly modes (each slide of its
+ * home sign, each revolute leg joint within a quarter turn of home: chain_one_kernel.
+ * in_home_modes), where the batch path's direct model may reach another closure. */
+static double velocity(chain_velocity *v, const double *u, double *out) {
+    const pk_chain *c = &v->c;
+    const ptrdiff_t n = v->n_act, n_loop = v->n_loop, n_u = v->n_u;
+    for (ptrdiff_t k = 0; k < v->n_slides; k++)
+        if (!(u[v->slides[k]] * v->signs[k] > 0)) return -1.0;
+    for (ptrdiff_t k = 0; k < v->n_turns; k++)
+        if (!(cos(u[v->turns[k]] - v->homes[k]) > 0)) return -1.0;
+    for (ptrdiff_t i = 0; i < 6; i++) v->full_u[i] = u[i];
+    for (ptrdiff_t var = 0; var < c->n_var; var++) {
+        v->values[var] = u[6 + var];
+        if (c->position[var] >= 0) v->full_u[c->position[var]] = u[6 + var];
+    }
+    pk_chain_evaluate(c, v->values, v->full_u, v->r, v->jac, &v->w);
+    double bound = closure_rates(v);
+    if (!(bound > 0.0)) return 0.0;
+    double rot[9], pos[3], point[3], twist[6];
+    ptrdiff_t n_twist = head_walk(v, u, rot, pos);
+    for (int i = 0; i < 3; i++) point[i] = pos[i] + v->tool * rot[3 * i + 2];
+    double *jac = out, *j_h = out + 6 * n;
+    ptrdiff_t k = n < 6 ? n : 6;
+    double *sv = j_h + 6 * n, *condition = sv + k, *rates = condition + 1;
+    for (ptrdiff_t i = 0; i < 6 * n; i++) jac[i] = 0.0;
+    for (ptrdiff_t i = 0; i < (n_u - 6) * n; i++) rates[i] = 0.0;
+    const double *du = v->du;
+    for (ptrdiff_t j = 0; j < n_loop; j++) { /* a leg actuator: the platform's twist */
+        ptrdiff_t col = v->loop_columns[j];
+        double w0 = du[3 * n_loop + j], w1 = du[4 * n_loop + j], w2 = du[5 * n_loop + j];
+        twist[0] = du[0 * n_loop + j] + (u[1] * w2 - u[2] * w1);
+        twist[1] = du[1 * n_loop + j] + (u[2] * w0 - u[0] * w2);
+        twist[2] = du[2 * n_loop + j] + (u[0] * w1 - u[1] * w0);
+        twist[3] = w0;
+        twist[4] = w1;
+        twist[5] = w2;
+        point_column(twist, point, jac, n, col);
+        for (ptrdiff_t a = 0; a < n_u - 6; a++) rates[a * n + col] = du[(6 + a) * n_loop + j];
+    }
+    for (ptrdiff_t t = 0; t < n_twist; t++) point_column(v->head_tw + 6 * t, point, jac, n,
+                                                         v->head_col[t]);
+    for (ptrdiff_t i = 0; i < 6 * n; i++) j_h[i] = i < 3 * n ? jac[i] : jac[i] * c->length;
+    pk_singular_values_one(j_h, 6, n, sv, v->work, v->norms);
+    *condition = sv[0] / sv[k - 1];
+    return bound;
+}
+
+/* ---------------------------------------------------------------- module face */
+
+const char pk_chain_velocity_pack_doc[] =
+    "chain_velocity_pack(frames, types, evar, elements, offsets, position, head, head_position,\n"
+    "                    loop_columns, column_leg, n_u, length, tool, slides, signs, turns,\n"
+    "                    homes)\n\n"
+    "The constants of chain_one_velocity for one joint-chain machine, copied into a capsule:\n"
+    "the model arrays of pkmkit.solve.chain_kernel.model_arrays with position (n_var,) the\n"
+    "column of each variable in the closure's Jacobian (platform 0-5, the passive joints, then\n"
+    "the legs' actuators from n_u on; -1 for none), head (H,) the head's elements,\n"
+    "head_position (n_var,) the actuator index of each head actuator (-1 else), loop_columns\n"
+    "(n_loop,) the actuator index of each leg actuator, column_leg (n_u,) the leg whose joint\n"
+    "alone a column is (-1: the platform's and shared joints'), n_u, the characteristic length,\n"
+    "the tool length (m), and the legs' home modes: slides (int64, places in u) with their\n"
+    "home signs, revolute joints turns (int64) with their home values homes.";
+
+static int copy_array(held_buffers *held, PyObject *obj, const char *name, char type, int ndim,
+                      void **dst, Py_ssize_t *count) {
+    void *src = grab(held, obj, name, type, 0, ndim);
+    if (!src) return -1;
+    Py_buffer *view = &held->views[held->count - 1];
+    *count = view->len / view->itemsize;
+    *dst = malloc((size_t)view->len + 8);
+    if (!*dst) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    memcpy(*dst, src, (size_t)view->len);
+    return 0;
+}
+
+/* The pack's checks beyond take_chain's: index ranges and block sizes; -1 on error. */
+static int check_pack(const chain_velocity *v, Py_ssize_t n_head, Py_ssize_t n_hp,
+                      Py_ssize_t n_cl, const int64_t *column_leg) {
+    const pk_chain *c = &v->c;
+    if (n_head != v->n_head || n_hp != c->n_var || n_cl != v->n_u || v->n_u < 6
+        || v->n_u > 6 * c->n_legs || v->n_loop > 32 || v->n_act < 1) {
+        PyErr_SetString(PyExc_ValueError, "chain_velocity_pack: head_position (n_var,), "
+                        "column_leg (n_u,) with 6 <= n_u <= 6L, at most 32 leg actuators");
+        return -1;
+    }
+    if (in_range(c->position, c->n_var, -1, v->n_u + v->n_loop, "position") < 0
+        || in_range(c->head, n_head, 0, v->n_elem, "head") < 0
+        || in_range(v->head_position, c->n_var, -1, v->n_act, "head_position") < 0
+        || in_range(v->loop_columns, v->n_loop, 0, v->n_act, "loop_columns") < 0
+        || in_range(column_leg, v->n_u, -1, c->n_legs, "column_leg") < 0)
+        return -1;
+    for (ptrdiff_t idx = 0; idx < n_head; idx++) {
+        int64_t e = c->head[idx];
+        if (c->types[e] != 0 && (c->evar[e] < 0 || c->evar[e] >= c->n_var)) {
+            PyErr_SetString(PyExc_ValueError, "head: an element's variable out of range");
+            return -1;
+        }
+    }
+    return 0;
+}
+
+/* Lay the scratch and the columns' blocks out in one allocation; -1 on error. */
+static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twists) {
+    const pk_chain *c = &v->c;
+    ptrdiff_t m = 6 * c->n_legs, ld = v->n_u + v->n_loop, L = c->n_legs;
+    size_t doubles = (size_t)(c->n_var + ld + m + m * ld + v->n_u * v->n_loop
+                              + v->n_u * v->n_u + 6 * twists + 6 * v->n_head
+                              + 6 * (v->n_act + 6) + v->n_act + 6);
+    size_t ints = (size_t)(twists + v->n_head + 6 * L + L + v->n_u + m);
+    char *memory = malloc(doubles * sizeof(double) + ints * sizeof(int64_t));
+    if (!memory) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    v->memory = memory;
+    double *d = (double *)memory;
+    v->values = d; d += c->n_var;
+    v->full_u = d; d += ld;
+    v->r = d; d += m;
+    v->jac = d; d += m * ld;
+    v->du = d; d += v->n_u * v->n_loop;
+    v->rg_inv = d; d += v->n_u * v->n_u;
+    v->w.tw = d; d += 6 * twists;
+    v->head_tw = d; d += 6 * v->n_head;
+    v->work = d; d += 6 * (v->n_act + 6);
+    v->norms = d; d += v->n_act + 6;
+    int64_t *k = (int64_t *)d;
+    v->w.tw_col = k; k += twists;
+    v->head_col = k; k += v->n_head;
+    v->leg_cols = k; k += 6 * L;
+    v->leg_count = k; k += L;
+    v->global_cols = k; k += v->n_u;
+    v->reduced = k;
+    v->w.m = m;
+    v->n_global = 0;
+    for (ptrdiff_t leg = 0; leg < L; leg++) v->leg_count[leg] = 0;
+    for (ptrdiff_t j = 0; j < v->n_u; j++) {
+        int64_t leg = j < 6 ? -1 : column_leg[j];
+        if (leg >= 0 && v->leg_count[leg] < 6) v->leg_cols[6 * leg + v->leg_count[leg]++] = j;
+        else v->global_cols[v->n_global++] = j;
+    }
+    if (v->n_global > 32) {
+        PyErr_SetString(PyExc_ValueError, "chain_velocity_pack: more than 32 global columns");
+        return -1;
+    }
+    return 0;
+}
+
+PyObject *pk_py_chain_velocity_pack(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 17) {
+        PyErr_Format(PyExc_TypeError, "chain_velocity_pack() takes 17 positional arguments "
+                     "(%zd given)", nargs);
+        return NULL;
+    }
+    held_buffers held = {.count = 0};
+    chain_velocity *v = calloc(1, sizeof *v);
+    if (!v) return PyErr_NoMemory();
+    void **arrays = v->owned;
+    pk_chain *c = &v->c;
+    Py_ssize_t n_elem, n_leg_elements, counts[14];
+    if (take_chain(&held, args, c, &n_elem, &n_leg_elements) < 0) goto fail;
+    let_go(&held);
+    const char *names[10] = {"frames", "types", "evar", "elements", "offsets", "position",
+                             "head", "head_position", "loop_columns", "column_leg"};
+    const char kinds[10] = {'d', 'i', 'i', 'i', 'i', 'i', 'i', 'i', 'i', 'i'};
+    for (int i = 0; i < 10; i++)
+        if (copy_array(&held, args[i], names[i], kinds[i], i == 0 ? 3 : 1, &arrays[i],
+                       &counts[i]) < 0)
+            goto fail;
+    let_go(&held);
+    c->frames = arrays[0];
+    c->types = arrays[1];
+    c->evar = arrays[2];
+    c->elements = arrays[3];
+    c->offsets = arrays[4];
+    c->position = arrays[5];
+    c->head = arrays[6];
+    v->head_position = arrays[7];
+    v->loop_columns = arrays[8];
+    const char *more[4] = {"slides", "signs", "turns", "homes"};
+    for (int i = 0; i < 4; i++)
+        if (copy_array(&held, args[13 + i], more[i], i % 2 ? 'd' : 'i', 1, &arrays[10 + i],
+                       &counts[10 + i]) < 0)
+            goto fail;
+    let_go(&held);
+    v->slides = arrays[10];
+    v->signs = arrays[11];
+    v->turns = arrays[12];
+    v->homes = arrays[13];
+    v->n_slides = counts[10];
+    v->n_turns = counts[12];
+    v->n_elem = n_elem;
+    v->n_head = counts[6];
+    v->n_loop = counts[8];
+    v->n_u = PyLong_AsSsize_t(args[10]);
+    if (v->n_u == -1 && PyErr_Occurred()) goto fail;
+    c->length = PyFloat_AsDouble(args[11]);
+    if (c->length == -1.0 && PyErr_Occurred()) goto fail;
+    v->tool = PyFloat_AsDouble(args[12]);
+    if (v->tool == -1.0 && PyErr_Occurred()) goto fail;
+    c->n = v->n_u + v->n_loop;
+    c->n_head = counts[6];
+    v->n_act = v->n_loop;
+    for (Py_ssize_t var = 0; var < c->n_var; var++)
+        if (v->head_position[var] >= 0) v->n_act++;
+    if (check_pack(v, counts[6], counts[7], counts[9], arrays[9]) < 0) goto fail;
+    if (counts[11] != v->n_slides || counts[13] != v->n_turns
+        || in_range(v->slides, v->n_slides, 0, 6 + c->n_var, "slides") < 0
+        || in_range(v->turns, v->n_turns, 0, 6 + c->n_var, "turns") < 0) {
+        if (!PyErr_Occurred())
+            PyErr_SetString(PyExc_ValueError, "signs (homes) as long as slides (turns)");
+        goto fail;
+    }
+    if (lay_out(v, arrays[9], n_leg_elements + 1) < 0) goto fail;
+    PyObject *capsule = PyCapsule_New(v, CAPSULE, pack_free);
+    if (!capsule) goto fail;
+    return capsule;
+fail:
+    let_go(&held);
+    for (int i = 0; i < 14; i++) free(arrays[i]);
+    free(v->memory);
+    free(v);
+    return NULL;
+}
+
+const char pk_chain_one_velocity_doc[] =
+    "chain_one_velocity(pack, u, out) -> bound\n\n"
+    "The velocity model of one joint-chain configuration u (a list of 6 + n_var floats: the\n"
+    "platform's position and rotation vector, every joint variable) with the constants of\n"
+    "chain_velocity_pack: out (a float64 buffer of 12 n + min(6, n) + 1 + (n_u - 6) n) filled\n"
+    "with J (6, n), J_homogeneous (6, n), J_homogeneous's singular values, its condition\n"
+    "number and the passive joints' rates (n_u - 6, n); returns the lower bound of\n"
+    "sigma_min / sigma_max of the closure's Jacobian C_U (0.0 where a pivot vanished, -1.0\n"
+    "where u is not in the legs' home modes: out is then not filled).";
+
+PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 3) {
+        PyErr_Format(PyExc_TypeError, "chain_one_velocity() takes 3 positional arguments "
+                     "(%zd given)", nargs);
+        return NULL;
+    }
+    chain_velocity *v = PyCapsule_GetPointer(args[0], CAPSULE);
+    if (!v) return NULL;
+    PyObject *list = args[1];
+    Py_ssize_t width = 6 + v->c.n_var;
+    if (!PyList_CheckExact(list) || PyList_GET_SIZE(list) != width) {
+        PyErr_Format(PyExc_TypeError, "u: a list of %zd floats expected", width);
+        return NULL;
+    }
+    double u[256];
+    if (width > 256) {
+        PyErr_SetString(PyExc_ValueError, "u: at most 250 variables");
+        return NULL;
+    }
+    for (Py_ssize_t i = 0; i < width; i++) {
+        PyObject *item = PyList_GET_ITEM(list, i);
+        u[i] = PyFloat_CheckExact(item) ? PyFloat_AS_DOUBLE(item) : PyFloat_AsDouble(item);
+        if (u[i] == -1.0 && PyErr_Occurred()) return NULL;
+    }
+    Py_buffer view;
+    if (PyObject_GetBuffer(args[2], &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) return NULL;
+    ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
+    Py_ssize_t need = (Py_ssize_t)((12 * n + k + 1 + (v->n_u - 6) * n) * sizeof(double));
+    if (view.len != need) {
+        PyBuffer_Release(&view);
+        PyErr_Format(PyExc_ValueError, "out: %zd bytes expected, not %zd", need, view.len);
+        return NULL;
+    }
+    double bound = velocity(v, u, view.buf);
+    PyBuffer_Release(&view);
+    return PyFloat_FromDouble(bound);
+}
