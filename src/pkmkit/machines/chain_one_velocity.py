@@ -62,38 +62,13 @@ class VelocityPack:
 
     __slots__ = ("call", "layout", "n", "n_p", "pack", "size")
 
-    def __init__(self, m: Any, native: Any) -> None:
-        from pkmkit.solve import chain_kernel
-
-        model = m.model
-        n_var = model.n_variables
-        passive = np.asarray(m.passive_variables, dtype=np.int64)
-        act = np.flatnonzero(model.actuated)
-        n_u = 6 + len(passive)
-        loop_act = [int(v) for v in act if model.loop_variables[v]]
-        position = np.full(n_var, -1, dtype=np.int64)
-        position[passive] = 6 + np.arange(len(passive))
-        position[loop_act] = n_u + np.arange(len(loop_act))
-        order = {int(v): k for k, v in enumerate(act)}
-        head_position = np.full(n_var, -1, dtype=np.int64)
-        for v in act:
-            if not model.loop_variables[v]:
-                head_position[v] = order[int(v)]
-        loop_columns = np.array([order[v] for v in loop_act], dtype=np.int64)
-        frames, types, evar, elements, offsets, _ = chain_kernel.model_arrays(model, passive)
-        column_leg = _column_legs(types, evar, elements, offsets, position, n_u)
-        slides, turns = m._leg_joints_by_type()  # the legs' home modes
-        home = m._home["values"]
-        self.pack = native.chain_velocity_pack(
-            frames, types, evar, elements, offsets, position,
-            np.array(model.head, dtype=np.int64), head_position, loop_columns, column_leg,
-            n_u, float(model.characteristic_length), float(m.tool_length),
-            6 + np.array(slides, dtype=np.int64), np.sign(home[slides]).astype(float),
-            6 + np.array(turns, dtype=np.int64), home[turns].astype(float))
+    def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
+        arguments = pack_arguments(m) if arguments is None else arguments
+        self.pack = native.chain_velocity_pack(*arguments.values())
         self.call = native.chain_one_velocity
-        n = len(act)
+        n = int(np.count_nonzero(m.model.actuated))
         k = min(6, n)
-        self.n, self.n_p = n, n_u - 6
+        self.n, self.n_p = n, len(m.passive_variables)
         self.size = 12 * n + k + 1 + self.n_p * n
         self.layout = {"J": (0, 6 * n, (6, n)), "J_homogeneous": (6 * n, 12 * n, (6, n)),
                        "singular_values": (12 * n, 12 * n + k, None),
@@ -104,6 +79,39 @@ class VelocityPack:
         """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
         holds a capsule)."""
         return _nothing, ()
+
+
+def pack_arguments(m: Any) -> dict[str, Any]:
+    """The arguments of ``chain_velocity_pack`` for machine ``m``, by name (in order)."""
+    from pkmkit.solve.chain_rows import model_arrays
+
+    model = m.model
+    n_var = model.n_variables
+    passive = np.asarray(m.passive_variables, dtype=np.int64)
+    act = np.flatnonzero(model.actuated)
+    n_u = 6 + len(passive)
+    loop_act = [int(v) for v in act if model.loop_variables[v]]
+    position = np.full(n_var, -1, dtype=np.int64)
+    position[passive] = 6 + np.arange(len(passive))
+    position[loop_act] = n_u + np.arange(len(loop_act))
+    order = {int(v): k for k, v in enumerate(act)}
+    head_position = np.full(n_var, -1, dtype=np.int64)
+    for v in act:
+        if not model.loop_variables[v]:
+            head_position[v] = order[int(v)]
+    frames, types, evar, elements, offsets, _ = model_arrays(model, passive)
+    slides, turns = m._leg_joints_by_type()  # the legs' home modes
+    home = m._home["values"]
+    return {"frames": frames, "types": types, "evar": evar, "elements": elements,
+            "offsets": offsets, "position": position,
+            "head": np.array(model.head, dtype=np.int64), "head_position": head_position,
+            "loop_columns": np.array([order[v] for v in loop_act], dtype=np.int64),
+            "column_leg": _column_legs(types, evar, elements, offsets, position, n_u),
+            "n_u": n_u, "length": float(model.characteristic_length),
+            "tool": float(m.tool_length),
+            "slides": 6 + np.array(slides, dtype=np.int64),
+            "signs": np.sign(home[slides]).astype(float),
+            "turns": 6 + np.array(turns, dtype=np.int64), "homes": home[turns].astype(float)}
 
 
 def _nothing() -> None:
