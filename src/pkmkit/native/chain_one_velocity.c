@@ -469,7 +469,7 @@ const char pk_chain_one_velocity_doc[] =
     "chain_one_velocity(pack, u, out) -> bound\n\n"
     "The velocity model of one joint-chain configuration u (a list of 6 + n_var floats: the\n"
     "platform's position and rotation vector, every joint variable) with the constants of\n"
-    "chain_velocity_pack: out (a float64 buffer of 12 n + min(6, n) + 1 + (n_u - 6) n) filled\n"
+    "chain_velocity_pack: out (a float64 array of 12 n + min(6, n) + 1 + (n_u - 6) n) filled\n"
     "with J (6, n), J_homogeneous (6, n), J_homogeneous's singular values, its condition\n"
     "number and the passive joints' rates (n_u - 6, n); returns the lower bound of\n"
     "sigma_min / sigma_max of the closure's Jacobian C_U (0.0 where a pivot vanished, -1.0\n"
@@ -482,8 +482,12 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
                      "(%zd given)", nargs);
         return NULL;
     }
-    chain_velocity *v = PyCapsule_GetPointer(args[0], CAPSULE);
-    if (!v) return NULL;
+    chain_velocity *v = PyCapsule_IsValid(args[0], CAPSULE)
+                        ? PyCapsule_GetPointer(args[0], CAPSULE) : NULL;
+    if (!v) {
+        PyErr_SetString(PyExc_TypeError, "pack: a chain_velocity_pack() result expected");
+        return NULL;
+    }
     PyObject *list = args[1];
     Py_ssize_t width = 6 + v->c.n_var;
     if (!PyList_CheckExact(list) || PyList_GET_SIZE(list) != width) {
@@ -500,16 +504,21 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
         u[i] = PyFloat_CheckExact(item) ? PyFloat_AS_DOUBLE(item) : PyFloat_AsDouble(item);
         if (u[i] == -1.0 && PyErr_Occurred()) return NULL;
     }
-    Py_buffer view;
-    if (PyObject_GetBuffer(args[2], &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) return NULL;
-    ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
-    Py_ssize_t need = (Py_ssize_t)((12 * n + k + 1 + (v->n_u - 6) * n) * sizeof(double));
-    if (view.len != need) {
-        PyBuffer_Release(&view);
-        PyErr_Format(PyExc_ValueError, "out: %zd bytes expected, not %zd", need, view.len);
+    held_buffers held = {.count = 0};
+    double *out = grab(&held, args[2], "out", 'd', 1, 1);
+    if (!out) {
+        let_go(&held);
         return NULL;
     }
-    double bound = velocity(v, u, view.buf);
-    PyBuffer_Release(&view);
+    ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
+    Py_ssize_t need = 12 * n + k + 1 + (v->n_u - 6) * n;
+    if (extent(&held, 0, 0) != need) {
+        PyErr_Format(PyExc_ValueError, "out: %zd floats expected, not %zd", need,
+                     extent(&held, 0, 0));
+        let_go(&held);
+        return NULL;
+    }
+    double bound = velocity(v, u, out);
+    let_go(&held);
     return PyFloat_FromDouble(bound);
 }

@@ -1,0 +1,135 @@
+"""The one-pose velocity kernel of joint chains (``pkmkit.native.kernels.chain_velocity_pack``,
+``chain_one_velocity``; native/chain_one_velocity.c) against NumPy oracles built from the
+NumPy closure (:func:`pkmkit.solve.chains.closure`): the closure rates against LAPACK's least
+squares, the regularity bound against ``1 / (‖C_U‖_F ‖C_U⁺‖_F)`` and below σ_min/σ_max, at
+solved configurations and at configurations that close nothing (the Jacobians are defined
+anyway); and the argument checks (typed errors)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pkmkit
+from pkmkit.machines import chain_one_velocity as cov
+from pkmkit.solve.chains import closure
+from pkmkit.spatial.rotation import rotvec_to_matrix
+
+try:
+    from pkmkit.native import kernels as _kernels
+except ImportError:  # built without a compiler (tests/native/test_kernels.py checks CI)
+    _kernels = None
+
+pytestmark = pytest.mark.skipif(_kernels is None or not hasattr(_kernels, "chain_one_velocity"),
+                                reason="pkmkit.native.kernels was not built")
+
+NAMES = ("tripteor-x7", "trimule-600")
+
+
+@pytest.fixture(scope="module", params=NAMES)
+def machine(request):
+    return pkmkit.machine(request.param)
+
+
+def configurations(m, n: int, seed: int) -> list[list[float]]:
+    """``u`` (platform pose, every variable) of solved closures near home (from ``fk``'s
+    record) and of random perturbations of them (closing nothing)."""
+    rng = np.random.default_rng(seed)
+    act = np.flatnonzero(m.model.actuated)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    q = lo + (hi - lo) * (0.2 + 0.6 * rng.random((n, len(act))))
+    d = m.fk(q, full_output=True, strokes="ignore")
+    values = m.full_values(q)
+    values[:, m.passive_variables] = d.passive
+    u = np.concatenate([d.platform, values], axis=1)
+    noisy = u + rng.normal(0.0, 0.01, u.shape)
+    return [row.tolist() for row in np.concatenate([u, noisy]) if np.isfinite(row).all()]
+
+
+def oracle(m, u: list[float]) -> tuple[np.ndarray, float]:
+    """``(passive rates (n_p, n), 1 / (‖C_U‖_F ‖C_U⁺‖_F))`` by the NumPy closure and LAPACK."""
+    u = np.array(u)
+    model = m.model
+    act = np.flatnonzero(model.actuated)
+    loop = [v for v in act if model.loop_variables[v]]
+    c = closure(model, rotvec_to_matrix(u[None, 3:6]).transpose(1, 2, 0), u[:3, None],
+                u[6:, None])
+    cu = np.concatenate([c.platform, c.variables[:, m.passive_variables]], axis=1)[:, :, 0]
+    cq = c.variables[:, loop][:, :, 0]
+    du = -np.linalg.lstsq(cu, cq, rcond=None)[0]
+    rates = np.zeros((len(m.passive_variables), len(act)))
+    for j, v in enumerate(loop):
+        rates[:, list(act).index(v)] = du[6:, j]
+    bound = 1.0 / (np.linalg.norm(cu) * np.linalg.norm(np.linalg.pinv(cu)))
+    sv = np.linalg.svd(cu, compute_uv=False)
+    assert bound <= sv[-1] / sv[0] * (1 + 1e-12)
+    return rates, bound
+
+
+def test_rates_and_bound_are_the_numpy_least_squares(machine):
+    p = cov.VelocityPack(machine, _kernels)
+    for u in configurations(machine, 8, seed=1):
+        out = np.empty(p.size)
+        bound = p.call(p.pack, u, out)
+        rates, expected = oracle(machine, u)
+        assert bound == pytest.approx(expected, rel=1e-10)
+        start = p.layout["passive_rates"][0]
+        got = out[start:].reshape(rates.shape)
+        np.testing.assert_allclose(got, rates, rtol=0, atol=1e-11 * np.abs(rates).max())
+        j = out[:6 * p.n].reshape(6, p.n)
+        sv = out[12 * p.n:12 * p.n + min(6, p.n)]
+        np.testing.assert_allclose(sv, np.linalg.svd(out[6 * p.n:12 * p.n].reshape(6, p.n),
+                                                     compute_uv=False), rtol=1e-13)
+        assert np.isfinite(j).all()
+
+
+def test_argument_checks(machine):
+    args = cov.pack_arguments(machine)
+    p = cov.VelocityPack(machine, _kernels)
+    u = configurations(machine, 1, seed=2)[0]
+    out = np.empty(p.size)
+    with pytest.raises(TypeError):
+        _kernels.chain_one_velocity(p.pack, u)
+    with pytest.raises(TypeError):
+        _kernels.chain_one_velocity(p.pack, tuple(u), out)  # a list is needed
+    with pytest.raises(TypeError):
+        _kernels.chain_one_velocity(p.pack, u[:-1], out)
+    with pytest.raises(TypeError):
+        _kernels.chain_one_velocity(p.pack, [*u[:-1], "a"], out)
+    with pytest.raises(ValueError):
+        _kernels.chain_one_velocity(p.pack, u, np.empty(p.size + 1))
+    with pytest.raises(TypeError):
+        _kernels.chain_one_velocity(p.pack, u, bytes(8 * p.size))  # read-only
+    with pytest.raises(TypeError):
+        _kernels.chain_one_velocity(p.pack, u, np.empty(p.size, dtype=np.float32))
+    with pytest.raises(TypeError):  # not a pack
+        _kernels.chain_one_velocity(object(), u, out)
+    with pytest.raises(TypeError):
+        _kernels.chain_velocity_pack(*list(args.values())[:-1])
+    bad = dict(args, position=args["position"] + 100)
+    with pytest.raises(ValueError):
+        _kernels.chain_velocity_pack(*bad.values())
+    bad = dict(args, column_leg=np.full_like(args["column_leg"], 99))
+    with pytest.raises(ValueError):
+        _kernels.chain_velocity_pack(*bad.values())
+    bad = dict(args, loop_columns=args["loop_columns"].astype(float))
+    with pytest.raises(TypeError):
+        _kernels.chain_velocity_pack(*bad.values())
+    bad = dict(args, signs=args["signs"][:-1])
+    with pytest.raises(ValueError):
+        _kernels.chain_velocity_pack(*bad.values())
+
+
+def test_a_zero_pivot_declines(machine):
+    """A configuration whose closure Jacobian has a zero column (every revolute joint of a leg
+    NaN would be refused; here the pivot vanishes): the bound 0.0, out untouched."""
+    args = cov.pack_arguments(machine)
+    # a leg's local column read at an element of another leg: zero in its own rows
+    args["column_leg"] = args["column_leg"].copy()
+    local = np.flatnonzero(args["column_leg"] == 0)
+    args["column_leg"][local[0]] = 1
+    pack = _kernels.chain_velocity_pack(*args.values())
+    p = cov.VelocityPack(machine, _kernels)
+    out = np.full(p.size, 7.0)
+    assert _kernels.chain_one_velocity(pack, configurations(machine, 1, seed=3)[0], out) == 0.0
+    assert (out == 7.0).all()
