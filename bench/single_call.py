@@ -108,6 +108,18 @@ def pinocchio_peer(m, calls: int):
     model = pin.buildModelFromXML(export.urdf)
     data = model.createData()
     frame = model.nframes - 1
+    qs = tree_configurations(pin, model, calls)
+
+    def forward(q):
+        pin.framesForwardKinematics(model, data, q)
+        return data.oMf[frame].translation
+
+    return lambda: per_call(forward, qs)
+
+
+def tree_configurations(pin, model, calls: int) -> list:
+    """``calls`` random configurations of a Pinocchio model (joints 0.1 rad or m around
+    neutral; a two-number joint as its cosine and sine)."""
     rng = np.random.default_rng(3)
     qs = []
     for _ in range(calls):
@@ -117,12 +129,7 @@ def pinocchio_peer(m, calls: int):
             q[joint.idx_q:joint.idx_q + joint.nq] = ([np.cos(v), np.sin(v)] if joint.nq == 2
                                                      else v)
         qs.append(q)
-
-    def forward(q):
-        pin.framesForwardKinematics(model, data, q)
-        return data.oMf[frame].translation
-
-    return lambda: per_call(forward, qs)
+    return qs
 
 
 def machine_rows(name: str, calls: int) -> dict:
@@ -249,6 +256,7 @@ def chain_rows(name: str, calls: int) -> dict:
         return run
 
     figures = {"poses": len(rows), "fast": fast}
+    peer = pinocchio_jacobian_peer(m, len(rows))
     for _ in range(2):  # interleaved: every method twice, the second round kept
         figures["ik one pose"] = per_call(lambda p: m.ik(p), rows)
         figures["ik along a toolpath, default start"] = per_call(lambda p: m.ik(p), path[1:])
@@ -265,7 +273,69 @@ def chain_rows(name: str, calls: int) -> dict:
             lambda p: m.jacobian(p).condition, rows)
         figures["jacobian batch of one + J (before)"] = per_call(lambda p: m.jacobian(p).J,
                                                                  ones[:few])
+        velocity_rows(m, figures, rows, peer)
     return figures
+
+
+def pinocchio_jacobian_peer(m, calls: int):
+    """The issue's peer for one-pose Jacobians of a joint chain: Pinocchio's frame Jacobian
+    (``computeFrameJacobian``: forward kinematics and the Jacobian of the tool point's frame,
+    world-aligned) of the open tree of pkmkit's URDF export of ``m`` (legs cut at the
+    platform: a serial tree's work, no closure), at random configurations; None without
+    Pinocchio."""
+    try:
+        import pinocchio as pin
+
+        from pkmkit.export.urdf_chains import chain_urdf_export
+        export = chain_urdf_export(m)
+    except Exception:  # no Pinocchio, or no URDF export of this machine
+        return None
+    model = pin.buildModelFromXML(export.urdf)
+    data = model.createData()
+    frame = model.getFrameId("tool_point")
+    qs = tree_configurations(pin, model, calls)
+    frame_jacobian, aligned = pin.computeFrameJacobian, pin.LOCAL_WORLD_ALIGNED
+
+    def jacobian(q):
+        return frame_jacobian(model, data, q, frame, aligned)
+
+    return lambda: per_call(jacobian, qs)
+
+
+def velocity_rows(m, figures: dict, rows: list, peer) -> None:
+    """``m.jacobian(x)`` of a joint chain: the call reading ``J`` and ``condition``; the same
+    with the velocity model in Numba (``PKMKIT_NATIVE=0``: the direct model solved again, then
+    the velocity kernel — what the call cost before the C kernel); the velocity part alone
+    (:func:`pkmkit.machines.chain_one_velocity.record` at the inverse solutions, and its C call
+    alone on a preallocated buffer); Pinocchio's frame Jacobian of the machine's open tree."""
+    from pkmkit.machines import chain_one
+    from pkmkit.machines import chain_one_velocity as cov
+
+    c = chain_one.constants(m, "chain_jacobian")
+    found = [chain_one._inverse_values(c, list(map(float, x))) for x in rows]
+    args = [(c.actuators(f[0]), f[1], f[3]) for f in found if f is not None]
+    p = cov.pack(m)
+    if p is None:
+        return
+    out = np.empty(p.size)
+    call, pack = p.call, p.pack
+
+    def part(a):
+        r = cov.record(m, a[0], a[1], a[2], 1e-6, 2.0, c.expected_rank)
+        return r.J, r.condition
+
+    if peer is not None:
+        figures["Pinocchio frame Jacobian (URDF tree, peer)"] = peer()
+    figures["jacobian one pose, call + J + condition"] = per_call(
+        lambda x: (r := m.jacobian(x)).J is r.condition, rows)
+    os.environ["PKMKIT_NATIVE"] = "0"
+    try:
+        figures["the same, velocity in Numba (before)"] = per_call(
+            lambda x: (r := m.jacobian(x)).J is r.condition, rows)
+    finally:
+        os.environ.pop("PKMKIT_NATIVE")
+    figures["velocity part alone: record + J + cond."] = per_call(part, args)
+    figures["velocity part alone: the C call"] = per_call(lambda a: call(pack, a[1], out), args)
 
 
 def toolpath(m, n: int) -> np.ndarray:
@@ -348,6 +418,18 @@ def main() -> None:
                 elif k != "poses":
                     print(f"    {k:38s} {v[0]:8.2f} µs  (CPU {v[1]:7.2f} µs)")
             if n in chains:
+                if "the same, velocity in Numba (before)" in f:
+                    call = f["jacobian one pose, call + J + condition"]
+                    before = f["the same, velocity in Numba (before)"]
+                    ik = f["ik one pose"]
+                    print(f"    velocity part (call + J + condition − ik): "
+                          f"{call[0] - ik[0]:.2f} µs (CPU {call[1] - ik[1]:.2f} µs), before "
+                          f"{before[0] - ik[0]:.2f} µs (CPU {before[1] - ik[1]:.2f} µs); "
+                          f"the call {before[1] / call[1]:.2f}× faster (CPU)")
+                    if "Pinocchio frame Jacobian (URDF tree, peer)" in f:
+                        peer_cpu = f["Pinocchio frame Jacobian (URDF tree, peer)"][1]
+                        print(f"    velocity part alone / Pinocchio frame Jacobian (CPU): "
+                              f"{f['velocity part alone: record + J + cond.'][1] / peer_cpu:.1f}×")
                 continue
             ik_before = f["ik batch of one (before)"][0]
             fk_before = f.get("fk batch of one (before)",
