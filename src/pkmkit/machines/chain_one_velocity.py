@@ -49,8 +49,7 @@ from pkmkit.numerics import jit
 #: characteristic length) for which it is taken as the direct model's closure (module
 #: docstring). A nominal machine's inverse converges to ~1e-16.
 RESIDUAL_GUARD = 1e-12
-#: The fields computed when read (views of the kernel's output).
-_VIEWS = ("J", "J_homogeneous", "singular_values", "condition", "passive_rates")
+_OK = np.int64(0)  # Status.OK, as the batch row's
 
 
 class VelocityPack:
@@ -60,7 +59,7 @@ class VelocityPack:
     leg actuators' places in J, the leg owning each column alone (−1: the platform's and the
     joints shared by legs), and the output buffer's layout."""
 
-    __slots__ = ("call", "layout", "n", "n_p", "pack", "size")
+    __slots__ = ("call", "layout", "n", "n_p", "pack", "rank", "size")
 
     def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
         arguments = pack_arguments(m) if arguments is None else arguments
@@ -69,6 +68,7 @@ class VelocityPack:
         n = int(np.count_nonzero(m.model.actuated))
         k = min(6, n)
         self.n, self.n_p = n, len(m.passive_variables)
+        self.rank = np.int64(6 + self.n_p)  # the closure's, where the bound certifies it
         self.size = 12 * n + k + 1 + self.n_p * n
         self.layout = {"J": (0, 6 * n, (6, n)), "J_homogeneous": (6 * n, 12 * n, (6, n)),
                        "singular_values": (12 * n, 12 * n + k, None),
@@ -197,5 +197,5 @@ def record(m: Any, q: tuple, u: list, residual: float, tol: float, margin: float
         return None
     if _RECORD is None:
         _RECORD = _record_class()
-    return _RECORD(_Fields(out, p.layout), closure_rank=np.int64(p.n_p + 6),
-                   expected_rank=expected_rank, q=np.array(q), status=np.int64(0))
+    return _RECORD(_Fields(out, p.layout), closure_rank=p.rank, expected_rank=expected_rank,
+                   q=np.array(q), status=_OK)
