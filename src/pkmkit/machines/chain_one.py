@@ -541,7 +541,10 @@ class _Velocity:
 def jacobian(m: Any, x: Any, tol: float) -> Any:
     """``m.jacobian(x)`` of one plain pose ``x``: a record with the batch row's fields
     (``J``, ``passive_rates``, ``status``, ranks at once; ``J_homogeneous``,
-    ``singular_values``, ``condition`` when read), or None (module docstring)."""
+    ``singular_values``, ``condition`` when read), or None (module docstring). With the C
+    extension the velocity model is one C call at the inverse solution
+    (:mod:`pkmkit.machines.chain_one_velocity`); where that does not apply, the compiled
+    ``velocity_one`` below (the direct model solved again)."""
     global _RECORD
     if type(tol) is not float or not tol > 0 or tol == math.inf:
         return None
