@@ -28,7 +28,10 @@ arguments, the same algorithm and statuses, run without the GIL:
   slack gradients);
 - ``rod_velocity3``, ``rod_velocity2`` (``rod_velocity.c``) —
   :func:`pkmkit.machines.kernels.velocity3` and ``velocity2`` (the batched velocity summary
-  of square translational rod-leg machines), the same bits.
+  of square translational rod-leg machines), the same bits;
+- ``chain_velocity_pack``, ``chain_one_velocity`` (``chain_one_velocity.c``) — no twin: the
+  velocity model of one joint-chain configuration at the inverse solution, constants packed
+  once per machine (:mod:`pkmkit.machines.chain_one_velocity`).
 
 Loading it costs a millisecond, where Numba's import and its first compiled call cost
 0.8–0.9 s of CPU in a fresh process. Which implementation runs is decided in one place,
