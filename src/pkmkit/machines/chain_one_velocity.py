@@ -27,12 +27,15 @@ closure) the batch path answers, and raises its typed errors.
 Agreement with the batch row (tests/machines/test_chain_one_velocity.py): the same
 configuration to the solvers' tolerances, the same closure rates to rounding × the closure's
 condition number; measured over 1,000 workspace poses of the Tripteor X7 and the TriMule 600,
-every field within ~1e-12 relative (docs/benchmarks.md, "One pose per call"). The inverse
-solution is used only when its residual (its largest closure or tool row, m) is within
-:data:`RESIDUAL_GUARD`: a converged but inconsistent closure (a defective model: residuals up
-to the solver's ``residual_tol``, 1e-9) is not the direct model's least-squares closure, and
-the Numba path that solves the direct model again (:func:`pkmkit.solve.chain_one_kernel.
-velocity_one`) answers — as it does without the C extension (``PKMKIT_NATIVE=0``).
+every field within 1.5e-13 of its largest entry (``bench/chain_jacobian_agreement.py``;
+docs/benchmarks.md, "One pose per call"). The kernel declines (and the Numba path that solves
+the direct model again, :func:`pkmkit.solve.chain_one_kernel.velocity_one`, answers, as it
+does without the C extension or with ``PKMKIT_NATIVE=0``): an inverse solution outside the
+legs' home assembly modes (the batch path's direct model, started near home, may reach the
+home-mode closure: the same J, a passive rate of the other sign), and a residual (the
+largest closure or tool row, m) beyond :data:`RESIDUAL_GUARD` — a converged but inconsistent
+closure (a model with defects: residuals up to the solver's ``residual_tol``, 1e-9) need not
+be the direct model's least-squares closure.
 """
 
 from __future__ import annotations
