@@ -39,7 +39,8 @@ setup(
                      NATIVE + "velocity.c", NATIVE + "pose_velocity.c",
                      NATIVE + "svd.c", NATIVE + "rod_velocity.c",
                      NATIVE + "chain_velocity.c", NATIVE + "chain_linearise.c"],
-            depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h"],
+            depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h",
+                     NATIVE + "inverse_block.h"],
             optional=True,
         )
     ],

@@ -133,6 +133,47 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
           f"{min(c_one) / min(c_copy):.1f} (vectorised C kernel: {lanes or 'no'} lanes)")
 
 
+def accuracy_rows(label: str, m, poses: np.ndarray) -> None:
+    """q of the vectorised C kernel (its own sincos), of the scalar C kernel (libm's sin and
+    cos) and of the NumPy path (``PKMKIT_COMPILED=0``) on ``poses``, in slices of 10⁶: the
+    largest differences in metres and in ulps of the leg (the actuator's first rod's length or
+    |q|, whichever is larger), and the rows whose statuses differ."""
+    native = jit.native_kernels()
+    if native is None or not native.simd():
+        print(f"  {label}: no vectorised C kernel here, nothing to compare")
+        return
+    rod = m.model.rod_length[[int(np.flatnonzero(m.model.rod_actuator == k)[0])
+                              for k in range(m.n_actuators)]]
+    worst = {"vector": [0.0, 0.0], "scalar": [0.0, 0.0], "vector/scalar": [0.0, 0.0]}
+    statuses = 0
+    lanes = native.simd()
+    for start in range(0, len(poses), 1_000_000):
+        x = poses[start:start + 1_000_000]
+        out = {}
+        for key, env, simd in (("vector", "1", True), ("scalar", "1", False),
+                               ("numpy", "0", True)):
+            os.environ["PKMKIT_COMPILED"] = env
+            native.simd(simd)
+            try:
+                out[key] = m.ik(x, full_output=True, strokes="ignore")
+            finally:
+                native.simd(True)
+                del os.environ["PKMKIT_COMPILED"]
+        statuses += int((out["vector"].status != out["numpy"].status).sum())
+        for key, (a, b) in {"vector": ("vector", "numpy"), "scalar": ("scalar", "numpy"),
+                            "vector/scalar": ("vector", "scalar")}.items():
+            both = (out[a].status == 0) & (out[b].status == 0)
+            qa, qb = np.asarray(out[a].q)[both], np.asarray(out[b].q)[both]
+            gap = np.abs(qa - qb)
+            ulp = np.spacing(np.maximum(np.abs(qb), rod))
+            worst[key] = [max(worst[key][0], float(gap.max(initial=0.0))),
+                          max(worst[key][1], float((gap / ulp).max(initial=0.0)))]
+    print(f"  IK {label:<14} {len(poses)} poses, {lanes} lanes: largest |q difference| "
+          + "; ".join(f"{key} {'against NumPy' if key != 'vector/scalar' else ''} "
+                      f"{v[0]:.1e} m = {v[1]:.1f} ulp of the leg" for key, v in worst.items())
+          + f"; statuses differing from NumPy's: {statuses} rows")
+
+
 def engine_rows(m, q: np.ndarray, repeat: int) -> None:
     model = m.model
     guesses = np.array(m.fk(q, full_output=True).pose)  # reference answers
@@ -350,6 +391,9 @@ def main() -> None:
     parser.add_argument("--ik-only", action="store_true", help="only the inverse-model rows")
     parser.add_argument("--threads", action="store_true",
                         help="only the CPU accounting of m.ik on one and two threads")
+    parser.add_argument("--accuracy", action="store_true",
+                        help="only the vectorised kernel's q against the scalar C and NumPy "
+                             "paths (no timing)")
     parser.add_argument("--backends", action="store_true",
                         help="only the C against Numba kernel rows (steady state, one thread)")
     args = parser.parse_args()
@@ -364,6 +408,12 @@ def main() -> None:
     reached = verne.ik(positions, full_output=True).pose
     verne_poses = np.ascontiguousarray(np.resize(reached, (args.poses, 6)))
     q = hexapod.ik(poses[:args.configurations])
+    if args.accuracy:  # the Verne module's poses solved anew, not repeated (≤ 10⁶)
+        positions = rng.uniform(-0.15, 0.15, (min(args.poses, 1_000_000), 3))
+        unique = np.ascontiguousarray(verne.ik(positions, full_output=True).pose)
+        accuracy_rows("hexapod", hexapod, poses)
+        accuracy_rows("Verne (poses)", verne, unique[np.isfinite(unique).all(axis=1)])
+        return
     if args.threads:
         for label, context in conditions(args.load):
             print(f"{label} (load average {os.getloadavg()[0]:.2f} before):")
