@@ -40,7 +40,8 @@ setup(
                      NATIVE + "svd.c", NATIVE + "rod_velocity.c",
                      NATIVE + "chain_velocity.c", NATIVE + "chain_linearise.c",
                      NATIVE + "chain_one_velocity.c"],
-            depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h"],
+            depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h",
+                     NATIVE + "inverse_block.h"],
             optional=True,
         )
     ],

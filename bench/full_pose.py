@@ -7,8 +7,11 @@ For each condition (``quiet``; ``loaded`` with one process keeping a core and th
 - **inverse model** — ``m.ik(X)`` on ``--poses`` full poses (closed form rod by rod, the compiled
   kernel for large batches) of the hexapod and of the Verne-type module (full poses it reaches,
   whose rods are checked for consistency): poses/s, the ratio to the same formula written per
-  pose in pure Python (``math``, on a 20 000-pose sample) and the ratio to a plain copy of the
-  input (``X.copy()``, the memory-bandwidth limit of a pass over the data); then the CPU time
+  pose in pure Python (``math``, on a 20 000-pose sample) and the ratios to a plain copy of the
+  input (``X.copy()``, the memory-bandwidth limit of a pass over the data, with the page faults
+  of a fresh array as ``m.ik``'s output has them) and to a copy into a preallocated array
+  (``np.copyto``: the memory traffic alone, the issue's limit), all measured interleaved in
+  the same condition (quiet, or beside the competing process); then the CPU time
   per pose on one thread (best of ``--repeat``) against the copy's CPU time, and whether the
   C kernel runs vectorised (``pkmkit.native.kernels.simd()``);
 - **engine direct model** — ``m.fk(Q)`` (batched Levenberg–Marquardt over the six rods, from the
@@ -26,11 +29,19 @@ For each condition (``quiet``; ``loaded`` with one process keeping a core and th
   fraction and the two-thread speed-up it allows (Amdahl); and the kernel alone on
   preallocated arrays, the batch halved over one and two threads (CPU per pose; were the
   two threads bound by memory bandwidth their CPU per pose would rise);
+- **block widths** (``--widths``, only these rows) — the C inverse kernel alone on
+  preallocated arrays, one thread, scalar (libm's sin and cos) and per vector width the CPU
+  has (4 poses per AVX2 block, 8 per AVX-512 one; their own sincos), against a copy of the
+  input into a preallocated array: CPU per pose;
+- **accuracy** (``--accuracy``, only these rows, no timing) — q of the vectorised kernel, of
+  the scalar C kernel and of the NumPy path on ``--poses`` hexapod poses and up to 10⁶ Verne
+  module ones: the largest differences in metres and in ulps of the leg, statuses differing;
 - **every assembly mode** — ``m.fk_all(q)`` of Dietmaier's general hexapod (40 real modes) and of
   random general 6-6 configurations: seconds per configuration, count, worst residual.
 
     python bench/full_pose.py [--poses 1000000] [--configurations 10000] [--repeat 5]
                               [--load none|busy|both] [--backends] [--ik-only] [--threads]
+                              [--widths] [--accuracy]
 """
 
 from __future__ import annotations
@@ -107,6 +118,8 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
     m.ik(poses[:5000])  # compile / warm up
     sample = poses[:20000]
     t_api, t_one, t_copy, t_loop, c_api, c_one, c_copy = [], [], [], [], [], [], []
+    t_pre, target = [], np.empty_like(poses)
+    np.copyto(target, poses)  # its pages touched once: the copy's memory traffic alone
     for _ in range(repeat):
         t_api.append(_median(lambda: m.ik(poses), 1))
         c_api.append(_cpu_median(lambda: m.ik(poses), 1))
@@ -116,6 +129,7 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
         del os.environ["PKMKIT_THREADS"]
         t_copy.append(_median(lambda: poses.copy(), 1))
         c_copy.append(_cpu_median(lambda: poses.copy(), 1))
+        t_pre.append(_median(lambda: np.copyto(target, poses), 1))
         t_loop.append(_median(lambda: python_ik(m.model, sample), 1) * len(poses) / len(sample))
     api, one, copy, loop, cpu = (statistics.median(t) for t in (t_api, t_one, t_copy, t_loop,
                                                                   c_api))
@@ -125,12 +139,54 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
     check = np.abs(loop_q - m.ik(sample[:2000])).max()
     print(f"  IK {label:<14} {len(poses) / api / 1e6:6.2f} Mposes/s ({jit.thread_count()} threads;"
           f" one thread {len(poses) / one / 1e6:.2f}; {len(poses) / cpu / 1e6:.2f} per CPU "
-          f"second)   ×loop {loop / api:6.0f}   time / copy {api / copy:5.1f}   (largest "
-          f"difference to the loop {check:.1e} m)")
+          f"second)   ×loop {loop / api:6.0f}   time / copy {api / copy:5.1f}, / preallocated "
+          f"copy {api / statistics.median(t_pre):4.1f}   (largest difference to the loop "
+          f"{check:.1e} m)")
     lanes = jit.native_kernels().simd() if hasattr(jit.native_kernels(), "simd") else 0
     print(f"     one thread, CPU: {min(c_one) / len(poses) * 1e9:.1f} ns per pose (best of "
           f"{repeat}), copy {min(c_copy) * 1e3:.2f} ms, CPU / copy "
           f"{min(c_one) / min(c_copy):.1f} (vectorised C kernel: {lanes or 'no'} lanes)")
+
+
+def accuracy_rows(label: str, m, poses: np.ndarray) -> None:
+    """q of the vectorised C kernel (its own sincos), of the scalar C kernel (libm's sin and
+    cos) and of the NumPy path (``PKMKIT_COMPILED=0``) on ``poses``, in slices of 10⁶: the
+    largest differences in metres and in ulps of the leg (the actuator's first rod's length or
+    |q|, whichever is larger), and the rows whose statuses differ."""
+    native = jit.native_kernels()
+    if native is None or not native.simd():
+        print(f"  {label}: no vectorised C kernel here, nothing to compare")
+        return
+    rod = m.model.rod_length[[int(np.flatnonzero(m.model.rod_actuator == k)[0])
+                              for k in range(m.n_actuators)]]
+    worst = {"vector": [0.0, 0.0], "scalar": [0.0, 0.0], "vector/scalar": [0.0, 0.0]}
+    statuses = 0
+    lanes = native.simd()
+    for start in range(0, len(poses), 1_000_000):
+        x = poses[start:start + 1_000_000]
+        out = {}
+        for key, env, simd in (("vector", "1", True), ("scalar", "1", False),
+                               ("numpy", "0", True)):
+            os.environ["PKMKIT_COMPILED"] = env
+            native.simd(simd)
+            try:
+                out[key] = m.ik(x, full_output=True, strokes="ignore")
+            finally:
+                native.simd(True)
+                del os.environ["PKMKIT_COMPILED"]
+        statuses += int((out["vector"].status != out["numpy"].status).sum())
+        for key, (a, b) in {"vector": ("vector", "numpy"), "scalar": ("scalar", "numpy"),
+                            "vector/scalar": ("vector", "scalar")}.items():
+            both = (out[a].status == 0) & (out[b].status == 0)
+            qa, qb = np.asarray(out[a].q)[both], np.asarray(out[b].q)[both]
+            gap = np.abs(qa - qb)
+            ulp = np.spacing(np.maximum(np.abs(qb), rod))
+            worst[key] = [max(worst[key][0], float(gap.max(initial=0.0))),
+                          max(worst[key][1], float((gap / ulp).max(initial=0.0)))]
+    print(f"  IK {label:<14} {len(poses)} poses, {lanes} lanes: largest |q difference| "
+          + "; ".join(f"{key} {'against NumPy' if key != 'vector/scalar' else ''} "
+                      f"{v[0]:.1e} m = {v[1]:.1f} ulp of the leg" for key, v in worst.items())
+          + f"; statuses differing from NumPy's: {statuses} rows")
 
 
 def engine_rows(m, q: np.ndarray, repeat: int) -> None:
@@ -313,6 +369,54 @@ def thread_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
               f"{'/'.join(f'{c * 1e3:.1f}' for c in per)} ms")
 
 
+def width_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
+    """The C kernel alone on preallocated arrays, one thread, per block width the CPU has
+    (0: the scalar kernel, libm's sin and cos; 4: AVX2; 8: AVX-512), interleaved with a copy
+    of the input into a preallocated array: CPU per pose, best of ``repeat`` rounds of 3."""
+    native = jit.native_kernels()
+    if native is None:
+        print(f"  {label}: pkmkit.native.kernels not built")
+        return
+    log: list = []
+    real, kept = _traced_kernel(log)
+    saved = os.environ.get("PKMKIT_THREADS")
+    os.environ["PKMKIT_THREADS"] = "1"
+    try:
+        m.ik(poses[:jit.MIN_ROWS])
+    finally:
+        jit.kernel = real
+        if saved is None:
+            del os.environ["PKMKIT_THREADS"]
+        else:
+            os.environ["PKMKIT_THREADS"] = saved
+    widths = [w for w in (0, 4, 8) if w == 0 or (native.simd(w) == w)]
+    native.simd(True)
+    q = np.empty((len(poses), m.n_actuators))
+    status = np.empty(len(poses), dtype=np.int64)
+    target = np.empty_like(poses)
+    best = dict.fromkeys([*widths, "copy"], math.inf)
+    try:
+        for _ in range(repeat):
+            for w in widths:
+                native.simd(w)
+                for _ in range(3):
+                    start = time.thread_time()
+                    native.inverse_poses(poses, *kept["rods"], q, status)
+                    best[w] = min(best[w], time.thread_time() - start)
+            for _ in range(3):
+                start = time.thread_time()
+                np.copyto(target, poses)
+                best["copy"] = min(best["copy"], time.thread_time() - start)
+    finally:
+        native.simd(True)
+    per = {k: v / len(poses) * 1e9 for k, v in best.items()}
+    names = {0: "scalar (libm)", 4: "AVX2", 8: "AVX-512"}
+    print(f"  IK {label:<14} kernel alone, {len(poses)} poses, one thread, CPU per pose: "
+          + ", ".join(f"{names[w]} {per[w]:.1f} ns" for w in widths)
+          + f"; preallocated copy {per['copy']:.1f} ns (widest / copy "
+          f"{per[widths[-1]] / per['copy']:.1f})")
+
+
 def all_modes_rows(repeat: int) -> None:
     general = pkmkit.machine("dietmaier-hexapod")
     start = time.perf_counter()
@@ -350,6 +454,11 @@ def main() -> None:
     parser.add_argument("--ik-only", action="store_true", help="only the inverse-model rows")
     parser.add_argument("--threads", action="store_true",
                         help="only the CPU accounting of m.ik on one and two threads")
+    parser.add_argument("--widths", action="store_true",
+                        help="only the C kernel alone per block width (scalar, AVX2, AVX-512)")
+    parser.add_argument("--accuracy", action="store_true",
+                        help="only the vectorised kernel's q against the scalar C and NumPy "
+                             "paths (no timing)")
     parser.add_argument("--backends", action="store_true",
                         help="only the C against Numba kernel rows (steady state, one thread)")
     args = parser.parse_args()
@@ -364,6 +473,19 @@ def main() -> None:
     reached = verne.ik(positions, full_output=True).pose
     verne_poses = np.ascontiguousarray(np.resize(reached, (args.poses, 6)))
     q = hexapod.ik(poses[:args.configurations])
+    if args.widths:
+        for label, context in conditions(args.load):
+            print(f"{label} (load average {os.getloadavg()[0]:.2f} before):")
+            with context():
+                width_rows("hexapod", hexapod, poses, args.repeat)
+                width_rows("Verne (poses)", verne, verne_poses, args.repeat)
+        return
+    if args.accuracy:  # the Verne module's poses solved anew, not repeated (≤ 10⁶)
+        positions = rng.uniform(-0.15, 0.15, (min(args.poses, 1_000_000), 3))
+        unique = np.ascontiguousarray(verne.ik(positions, full_output=True).pose)
+        accuracy_rows("hexapod", hexapod, poses)
+        accuracy_rows("Verne (poses)", verne, unique[np.isfinite(unique).all(axis=1)])
+        return
     if args.threads:
         for label, context in conditions(args.load):
             print(f"{label} (load average {os.getloadavg()[0]:.2f} before):")

@@ -5,10 +5,13 @@ present (``setup.py``; without one the install still succeeds, with a warning, a
 package holds no extension). It holds twins of Numba kernels, with the same
 arguments, the same algorithm and statuses, run without the GIL:
 
-- ``inverse_poses`` — :func:`pkmkit.machines.full_pose_kernels.inverse_poses` (four poses per
-  AVX2 block on x86-64 CPUs that have it, for machines of slides and struts: the same bits;
-  ``simd()`` gives the poses per block in use, 0 for one at a time, ``simd(False)`` switches
-  it off);
+- ``inverse_poses`` — :func:`pkmkit.machines.full_pose_kernels.inverse_poses` (eight poses
+  per AVX-512 block, four per AVX2 one, on x86-64 CPUs that have them, for machines of slides
+  and struts: the same operations lane by lane but sin and cos, which a vectorised sincos
+  computes — at most 1 ulp from the exact values on [0, 2π] —, so q may differ from the scalar
+  and Numba kernels' in its last bits, within 4 ulp of the leg; ``simd()`` gives the poses per
+  block in use, 0 for one at a time, ``simd(False)`` switches it off, ``simd(4)`` asks for
+  AVX2; ``simd_sincos`` exposes the sincos to the tests);
 - ``solve_rows``, ``solve_one`` — :func:`pkmkit.machines.full_pose_direct_kernel.solve_rows`
   and ``solve_one``;
 - ``position_rows`` — :func:`pkmkit.machines.full_pose_position_kernel.solve_rows` (the

@@ -1,7 +1,8 @@
 /* The full-pose inverse model in one pass per pose: the C twin of
  * pkmkit.machines.full_pose_kernels.inverse_poses (and _pose_rods), statement for statement,
  * in the same order of operations, so that both give the same bits. pk_inverse_poses
- * (inverse_simd.c) runs it, or its vectorised twin four poses at a time. */
+ * (inverse_simd.c) runs it, or its vectorised twin eight or four poses at a time (the same
+ * operations but sin and cos: q within a few ulps). */
 #include "kernels.h"
 
 /* Every rod's actuator coordinate of pose xk (6,) into out (m,) (_pose_rods). */

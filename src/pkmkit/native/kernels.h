@@ -81,16 +81,20 @@ void pk_inverse_poses(const double *x, ptrdiff_t rows, const pk_rods *rods,
                       const pk_actuators *act, double *q, int64_t *status, double *rod_q);
 
 /* The same, one pose at a time (inverse.c); pk_inverse_poses (inverse_simd.c) runs its
- * vectorised twin (AVX2, 4 poses per block, the same bits) where the CPU and the rods allow,
- * and this for the rest. */
+ * vectorised twin (AVX-512 or AVX2, 8 or 4 poses per block; the same operations but a
+ * vectorised sincos: q within a few ulps) where the CPU and the rods allow, and this for the
+ * rest. */
 void pk_inverse_poses_scalar(const double *x, ptrdiff_t rows, const pk_rods *rods,
                              const pk_actuators *act, double *q, int64_t *status,
                              double *rod_q);
 
 /* Poses per block of the vectorised inverse kernel in use (0: none, scalar only);
- * pk_simd_set(0) switches it off (tests), returning the previous setting. */
+ * pk_simd_set(0) switches it off (tests), 4 or 8 asks for that width, 1 the widest the CPU
+ * has; it returns the lanes in use before. pk_simd_sincos: the vectorised kernel's sin and
+ * cos of t (count,) into s and c by the width in use; returns it (0: nothing written). */
 int pk_simd_lanes(void);
-int pk_simd_set(int enabled);
+int pk_simd_set(int choice);
+int pk_simd_sincos(const double *t, ptrdiff_t count, double *s, double *c);
 
 /* Working arrays of one direct solve for m rods (full_pose_direct_kernel.scratch). */
 typedef struct {
