@@ -111,7 +111,7 @@ class DirectKernel:
         out = np.empty(9)
         solve_one = function or jit.kernel(KERNELS, "solve_one")
         solve_one(np.ascontiguousarray(q), _EMPTY6, False, self.geom, self.home,
-                  _DEFAULT_OPTIONS, out)
+                  DEFAULT_OPTIONS, out)
         return out
 
 
@@ -143,7 +143,9 @@ def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
 
 
 _EMPTY6 = np.zeros(6)
-_DEFAULT_OPTIONS = DirectKernel.options({})
+#: The kernel's option vector of the defaults (one-pose calls; also
+#: :func:`pkmkit.machines.full_pose_one.native_one`).
+DEFAULT_OPTIONS = DirectKernel.options({})
 _numba: Callable[..., Any] | None = None
 
 

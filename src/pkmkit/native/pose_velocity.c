@@ -95,8 +95,9 @@ static double det6(const double *m) {
 
 /* One full pose: full_pose_velocity_kernel._fill (and, by the bits of exact, velocity_one's
  * singular values: pk_pose_velocity_doc) for six rods; out laid out as its layout(6, n). 0, or 1 when the row is refused
- * (not finite, or A exactly singular where J is needed: the batch path decides). */
-static int pose_fill(const double *x, const double *q, const double *geom, ptrdiff_t n,
+ * (not finite, or A exactly singular where J is needed: the batch path decides). Also
+ * called by pose_one.c. */
+int pk_pose_fill(const double *x, const double *q, const double *geom, ptrdiff_t n,
                      double length_l, double tol, int exact, double *out) {
     enum { M = 6 };
     double base[3 * M], length[M], r[9], a[6 * M], unit[6 * M], b[6 * M];
@@ -295,7 +296,7 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
     Py_ssize_t size = 36 + 6 * n + 6 * n + 6 * n + k6 + 2 * k3 + 6;
     PyObject *state = PyByteArray_FromStringAndSize(NULL, size * (Py_ssize_t)sizeof(double));
     if (!state) return NULL;
-    if (pose_fill(x, q, geom, n, length_l, tol, (int)exact, (double *)PyByteArray_AS_STRING(state))) {
+    if (pk_pose_fill(x, q, geom, n, length_l, tol, (int)exact, (double *)PyByteArray_AS_STRING(state))) {
         Py_DECREF(state);
         Py_RETURN_NONE;
     }
@@ -306,8 +307,8 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
 
 /* full_pose_one.OnePoseInverse.__call__ for a pose x (6 finite floats): rods (m, PK_POSE_ROD)
  * as its rows, groups (n, 8): count, angular, then the rod indices, of the actuators (unused
- * when simple). 0, or 1 where it returns None. */
-static int pose_inverse(const double *x, const double *rods, ptrdiff_t m, const double *groups,
+ * when simple). 0, or 1 where it returns None. Also called by pose_one.c. */
+int pk_pose_inverse_one(const double *x, const double *rods, ptrdiff_t m, const double *groups,
                         ptrdiff_t n, int simple, double boundary_tol, double tol, double *q,
                         double *rod_q) {
     double px = x[0], py = x[1], pz = x[2], r[9];
@@ -449,7 +450,7 @@ PyObject *pk_py_pose_inverse(PyObject *self, PyObject *const *args, Py_ssize_t n
         x[i] = PyFloat_AS_DOUBLE(items[i]);
         if (!(-max_abs <= x[i] && x[i] <= max_abs)) Py_RETURN_NONE;
     }
-    if (pose_inverse(x, rods, m, groups, n, simple, boundary_tol, tol, q, rod_q)) Py_RETURN_NONE;
+    if (pk_pose_inverse_one(x, rods, m, groups, n, simple, boundary_tol, tol, q, rod_q)) Py_RETURN_NONE;
     PyObject *out = PyList_New(n);
     if (!out) return NULL;
     for (Py_ssize_t k = 0; k < n; k++) {
