@@ -20,7 +20,7 @@ import pytest
 
 import pkmkit
 from pkmkit.exceptions import StrokeWarning
-from pkmkit.machines import full_pose_velocity_one
+from pkmkit.machines import full_pose, full_pose_one, full_pose_velocity_one
 from pkmkit.machines.full_pose_velocity_one import FIELDS
 from tests.conftest import near_parallel_singular_poses
 
@@ -64,14 +64,31 @@ def _record(m, x, tol):
 
 def _fields(m, x, tol, native, monkeypatch):
     """Every field of a fresh one-pose record per field, C (native) or Numba; None where the
-    inverse model refuses the pose."""
+    inverse model refuses the pose. Native: the record ``m.jacobian`` builds
+    (``PoseOne.jacobian``, tests/native/test_pose_one.py), checked bit for bit against the one
+    of ``pose_velocity`` (the same kernel, pk_pose_fill)."""
     monkeypatch.setenv("PKMKIT_NATIVE", "1" if native else "0")
     try:
         if _record(m, x, tol) is None:
             return None
-        return {name: getattr(_record(m, x, tol), name) for name in FIELDS}
+        fields = {name: getattr(_record(m, x, tol), name) for name in FIELDS}
+        if native:
+            one = full_pose_one.native_one(m)
+            for name in FIELDS:
+                evaluation = one.jacobian(x, tol, False, lambda *a: pytest.fail("refused"))
+                got, want = evaluation.field(name), fields[name]
+                assert type(got) is type(want) and np.array_equal(
+                    np.asarray(got), np.asarray(want), equal_nan=True), name
+        return fields
     finally:
         monkeypatch.delenv("PKMKIT_NATIVE")
+
+
+@pytest.fixture
+def no_pose_one(monkeypatch):
+    """``m.jacobian`` of one pose through OnePoseFullVelocity and its ``pose_velocity`` twin
+    (the path of poses PoseOne does not take: float32 or int32 arrays)."""
+    monkeypatch.setattr(full_pose, "native_one", lambda machine: None)
 
 
 def _close(got, want, name, where, kappa=1.0):
@@ -148,7 +165,7 @@ def test_near_parallel_singularities(monkeypatch):
         assert _compare(m, x, tol, monkeypatch, f"near-singular tol {tol}") >= 15
 
 
-def test_the_c_kernel_answered(monkeypatch):
+def test_the_c_kernel_answered(monkeypatch, no_pose_one):
     m = pkmkit.machine("gough-stewart")
     calls = []
     real = _kernels.pose_velocity
@@ -166,7 +183,7 @@ def test_the_c_kernel_answered(monkeypatch):
     assert calls == [0, 1, 3, 7]
 
 
-def test_a_refused_row_goes_to_the_batch_path(monkeypatch):
+def test_a_refused_row_goes_to_the_batch_path(monkeypatch, no_pose_one):
     m = pkmkit.machine("dietmaier-hexapod")
     x = m.home_pose + 0.01
     monkeypatch.setattr(full_pose_velocity_one, "_native_twin",
@@ -315,7 +332,7 @@ def test_state_array_refusals():
             _kernels.state_array(*args)
 
 
-def test_the_kernel_runs_once_per_record_and_level(monkeypatch):
+def test_the_kernel_runs_once_per_record_and_level(monkeypatch, no_pose_one):
     m = pkmkit.machine("gough-stewart")
     calls = []
     real = _kernels.pose_velocity

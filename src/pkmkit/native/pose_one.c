@@ -109,9 +109,9 @@ enum { TAKEN = 0, REFUSED = 1, OTHER = 2 };
 /* count numbers from x: a list or tuple of exact floats or ints (any other item, or another
  * length: REFUSED, as OnePoseInverse and direct_one answer None), or a float64 or int64
  * vector of `count` entries (TAKEN; the batch path converts an int64 one to the same
- * doubles) — another buffer (float32, int32, more dimensions...): OTHER, another object:
- * REFUSED. A value not finite or beyond max_abs: REFUSED. -1 with an exception set only for
- * a failed conversion that is not an overflow. */
+ * doubles; another shape: REFUSED) — another buffer (float32, int32, bytes): OTHER, another
+ * object: REFUSED. A value not finite or beyond max_abs: REFUSED. -1 with an exception set
+ * only for a failed conversion that is not an overflow. */
 static int read_numbers(PyObject *x, Py_ssize_t count, double max_abs, double *out) {
     if (PyList_CheckExact(x) || PyTuple_CheckExact(x)) {
         if (PySequence_Fast_GET_SIZE(x) != count) return REFUSED;
@@ -144,9 +144,9 @@ static int read_numbers(PyObject *x, Py_ssize_t count, double max_abs, double *o
     if (f[0] == '@' || f[0] == '=' || f[0] == '<') f++;
     int status = OTHER;
     int integer = (f[0] == 'l' || f[0] == 'q') && !f[1] && view.itemsize == 8;
-    if ((integer || (f[0] == 'd' && !f[1])) && view.itemsize == 8 && view.ndim == 1) {
+    if ((integer || (f[0] == 'd' && !f[1])) && view.itemsize == 8) {
         status = TAKEN;
-        if (view.shape[0] != count) {
+        if (view.ndim != 1 || view.shape[0] != count) {
             status = REFUSED;
         } else {
             for (Py_ssize_t i = 0; i < count; i++) {
@@ -319,6 +319,10 @@ static const int field_level[F_COUNT] = {
 static PyObject *field_index; /* name -> index */
 
 static int field_of(PyObject *name) {
+    if (!PyUnicode_Check(name)) {
+        PyErr_SetString(PyExc_TypeError, "field: a name (str) is needed");
+        return -1;
+    }
     if (!field_index) {
         field_index = PyDict_New();
         if (!field_index) return -1;
