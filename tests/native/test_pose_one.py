@@ -160,10 +160,10 @@ def _velocity(one, x, tol, batch=None):
 
 @pytest.mark.parametrize("name", ["gough-stewart", "verne", "dietmaier-hexapod"])
 def test_jacobian_fields_are_the_kernels_bits(name):
-    """Every field of PoseOne.jacobian equals pose_velocity's (one pk_pose_fill: the same
-    bits) whatever the order the fields are read in, at poses within and beyond the strokes
-    and far ones; the levels computed: 1 at the first read (J with the singular values of
-    J_h), 3 for those of J's rows, 4 added for the exact parallel measure."""
+    """Every field of PoseOne.jacobian equals pose_velocity's at its highest level (the same
+    bits) whatever the order the fields are read in — the first read's pk_pose_fill, then
+    the SVDs added from the state (add_singular_values) — at poses within and beyond the
+    strokes and far ones; the first read computes only the SVDs its field needs."""
     m = _machine(name)
     one = _one(m)
     geom, length = m._direct_kernel().geom, float(m.characteristic_length)
@@ -198,9 +198,8 @@ def test_jacobian_fields_are_the_kernels_bits(name):
                 k, name_)
             levels.append(ev.level)
         assert ev.level == 7
-        first = next(lv for lv, f in zip(levels, order, strict=True)
-                     if f not in ("q", "tolerance", "characteristic_length"))
-        assert first in (1, 3, 5, 7)
+        first = next(f for f in order if f not in ("q", "tolerance", "characteristic_length"))
+        assert levels[order.index(first)] == LEVELS.get(first, 0)
 
 
 def full_pose_one_layout(n):
@@ -212,13 +211,21 @@ def full_pose_one_layout(n):
             "condition": spot["condition"][0], "flags": spot["flags"][0]}
 
 
-def test_a_field_read_first_computes_j_condition_and_flags_in_one_call():
+#: pk_pose_fill's level bits each field needs (pose_one.c's field_level)
+LEVELS = {"singular_values": 1, "condition": 1, "parallel_measure": 4,
+          "translation_singular_values": 3, "rotation_singular_values": 3}
+
+
+def test_the_first_field_read_computes_the_matrices_and_flags_in_one_call():
     m = pkmkit.machine("dietmaier-hexapod")
-    ev = _velocity(_one(m), (m.home_pose + 0.01).tolist(), 1e-6)
+    one, x = _one(m), (m.home_pose + 0.01).tolist()
+    ev = _velocity(one, x, 1e-6)
     assert ev.level == -1
-    ev.field("J")
-    assert ev.level == 1
-    ev.field("condition"), ev.field("singularity"), ev.field("singular_values")  # noqa: B018
+    ev.field("J"), ev.field("singularity"), ev.field("det_A"), ev.field("J_inv")  # noqa: B018
+    assert ev.level == 0
+    assert 0.0 < ev.field("parallel_measure") <= 1.0 and ev.level == 4
+    ev = _velocity(one, x, 1e-6)
+    ev.field("condition"), ev.field("J"), ev.field("singular_values")  # noqa: B018
     assert ev.level == 1
     ev.field("rotation_singular_values")
     assert ev.level == 3

@@ -14,10 +14,12 @@
  *                           a PoseVelocity: the velocity model of the pose, computed when a
  *                           field is first read (PoseVelocity.field(name)) by one call of
  *                           pose_velocity.c's pk_pose_fill — A, B, J, J^-1, the
- *                           determinants, the flags, the singular values of J_h and the
- *                           condition together; the singular values of J's linear and
- *                           angular rows and an exact parallel measure by a second call when
- *                           read.
+ *                           determinants, the flags (the singularity), with the singular
+ *                           values of J_h and the condition when the field read needs them;
+ *                           each SVD a later field needs (J_h's; J's linear and angular
+ *                           rows'; the unit-row A's for an exact parallel measure) is then
+ *                           added from the state's own J and A (add_singular_values: the
+ *                           bits pk_pose_fill gives at that level).
  *
  * Each returns None where the batch path must answer (not finite, beyond max_abs, no closure,
  * not OK, beyond a stroke when check is true): it gives the same numbers and the typed
@@ -313,9 +315,6 @@ static const char *field_names[F_COUNT] = {
     "rotation_singular_values"};
 static const int field_level[F_COUNT] = {
     [F_SV] = 1, [F_CONDITION] = 1, [F_PARALLEL] = 4, [F_SV_T] = 3, [F_SV_R] = 3};
-/* the level of the first computation: every field but the rarest two (module doc) */
-#define FIRST_LEVEL 1
-
 static PyObject *field_index; /* name -> index */
 
 static int field_of(PyObject *name) {
@@ -385,6 +384,41 @@ static PyObject *batch_record(PoseVelocity *self) {
     return self->record;
 }
 
+/* The pieces of pk_pose_fill's level bits `missing` added to a computed state from its own
+ * J and A (the same operations on the same numbers: the bits of pk_pose_fill at the higher
+ * level): 1 the singular values of J_h and the condition, 2 those of J's linear and angular
+ * rows, 4 the parallel measure where the bound settled the flags without it. */
+static void add_singular_values(PoseVelocity *self, int missing) {
+    const PoseOne *o = self->owner;
+    Py_ssize_t n = o->n, k6 = n < 6 ? n : 6, k3 = n < 3 ? n : 3;
+    Py_ssize_t o_j = 36 + 6 * n, o_sv = o_j + 12 * n, o_st = o_sv + k6, o_sr = o_st + k3,
+               o_c = o_sr + k3;
+    double *s = self->state, work[36], norms[6];
+    if (missing & 1) {
+        double j_h[36];
+        memcpy(j_h, s + o_j, sizeof(double) * (size_t)(6 * n));
+        for (Py_ssize_t t = 3 * n; t < 6 * n; t++) j_h[t] *= o->length;
+        pk_singular_values_one(j_h, 6, n, s + o_sv, work, norms);
+        s[o_c] = s[o_sv] / s[o_sv + k6 - 1];
+    }
+    if (missing & 2) {
+        pk_singular_values_one(s + o_j, 3, n, s + o_st, work, norms);
+        pk_singular_values_one(s + o_j + 3 * n, 3, n, s + o_sr, work, norms);
+    }
+    if ((missing & 4) && s[o_c + 3] != s[o_c + 3]) { /* settled: the measure not computed */
+        double unit[36], sv_a[6];
+        for (int j = 0; j < 6; j++) {
+            const double *row = s + 6 * j;
+            double dist = sqrt(row[0] * row[0] + row[1] * row[1] + row[2] * row[2]);
+            for (int i = 0; i < 6; i++)
+                unit[6 * j + i] = i < 3 ? row[i] / dist : row[i] / dist / o->length;
+        }
+        pk_singular_values_one(unit, 6, 6, sv_a, work, norms);
+        s[o_c + 3] = sv_a[5] / sv_a[0];
+    }
+    self->level |= missing;
+}
+
 static PyObject *velocity_field(PoseVelocity *self, PyObject *name) {
     int id = field_of(name);
     if (id < 0) return NULL;
@@ -395,15 +429,15 @@ static PyObject *velocity_field(PoseVelocity *self, PyObject *name) {
     if (id == F_LENGTH) return PyFloat_FromDouble(o->length);
     if (!self->record) {
         int need = field_level[id];
-        if (self->level < 0 || (need & ~self->level)) {
-            int level = (self->level < 0 ? FIRST_LEVEL : self->level) | need;
-            if (pk_pose_fill(self->x, self->q, o->geom, n, o->length, self->tol, level,
+        if (self->level < 0) { /* the first field read: everything but the SVDs it needs not */
+            if (pk_pose_fill(self->x, self->q, o->geom, n, o->length, self->tol, need,
                              self->state)) {
-                self->level = -1;
                 if (!batch_record(self)) return NULL;
             } else {
-                self->level = level;
+                self->level = need;
             }
+        } else if (need & ~self->level) {
+            add_singular_values(self, need & ~self->level);
         }
     }
     if (self->record) return PyObject_GetAttr(self->record, name);
