@@ -117,7 +117,9 @@ class DirectKernel:
 
 def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
     """The pose ``(6,)`` of one plain configuration of a full-pose ``machine`` by the compiled
-    solve (the batch path's own function, so the same bits), or None — not one plain finite
+    solve (the batch path's own function, so the same bits) where the C extension's
+    ``PoseOne.fk`` (:func:`pkmkit.machines.full_pose_one.native_one`: the same solve, checks
+    and stroke test in one C call) does not serve the machine, or None — not one plain finite
     row, no assembly reached, a stroke to flag or refuse, no compiled solve, or the machine's
     first single call while Numba is not imported: the caller then takes the batch path (the
     same numbers, typed errors and warnings)."""

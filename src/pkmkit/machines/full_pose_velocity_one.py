@@ -1,5 +1,12 @@
 """The velocity model of one full pose of a rod machine, compiled (issue 22 §1).
 
+With the C extension, :meth:`FullPoseMachine.jacobian` of one plain pose (a list, tuple,
+float64 or int64 vector) of a machine of up to six rods takes ``PoseOne.jacobian``
+(:func:`pkmkit.machines.full_pose_one.native_one`, ``native/pose_one.c``): the inverse, the
+stroke test and the record in one C call, the fields from one more when first read — the
+bits of this module's C twin below. This module answers the rest: no extension, more than
+six rods, a pose of another type (a float32 array).
+
 :meth:`FullPoseMachine.jacobian` of one plain pose row ``(x, y, z, rx, ry, rz)`` whose inverse
 model (:class:`~pkmkit.machines.full_pose_one.OnePoseInverse`) lies within the strokes returns
 a :class:`OnePoseFullJacobians`: a :class:`~pkmkit.machines.full_pose.FullPoseJacobians` with
