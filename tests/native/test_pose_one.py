@@ -221,11 +221,11 @@ def test_the_first_field_read_computes_the_matrices_and_flags_in_one_call():
     one, x = _one(m), (m.home_pose + 0.01).tolist()
     ev = _velocity(one, x, 1e-6)
     assert ev.level == -1
-    ev.field("J"), ev.field("singularity"), ev.field("det_A"), ev.field("J_inv")  # noqa: B018
+    ev.field("J"), ev.field("singularity"), ev.field("det_A"), ev.field("J_inv")
     assert ev.level == 0
     assert 0.0 < ev.field("parallel_measure") <= 1.0 and ev.level == 4
     ev = _velocity(one, x, 1e-6)
-    ev.field("condition"), ev.field("J"), ev.field("singular_values")  # noqa: B018
+    ev.field("condition"), ev.field("J"), ev.field("singular_values")
     assert ev.level == 1
     ev.field("rotation_singular_values")
     assert ev.level == 3
@@ -327,7 +327,7 @@ def test_pickles_with_the_machine():
     m = pkmkit.machine("dietmaier-hexapod")
     x = m.home_pose + 0.01
     q = m.ik(x)
-    m.fk(q), m.jacobian(x).J  # noqa: B018
+    m.fk(q), m.jacobian(x).J
     assert type(m.__dict__["_pose_one"]).__name__ == "PoseOne"
     back = pickle.loads(pickle.dumps(m))
     np.testing.assert_array_equal(back.ik(x), q)
