@@ -3,8 +3,9 @@
 (:mod:`pkmkit.machines.full_pose_velocity_kernel`, ``PKMKIT_NATIVE=0``) and the batch path's
 row (NumPy, LAPACK: the independent oracle), at random poses, far poses and poses near parallel
 singularities: the plain arithmetic (A, B, J⁻¹, the serial measure) bit for bit with Numba's;
-the parallel measure and the singular values bit for bit with Numba's one-sided Jacobi where
-both compute them; J and the determinants, which the C kernel takes from its own LU
+the parallel measure and J's singular values (the C kernel's Jacobi in round-robin order,
+Numba's cyclic) to 1e-12 of their scale; J and the determinants, which the C kernel takes
+from its own LU
 factorisation where Numba and NumPy call LAPACK, to 1e-12 of their scale (× cond A near a
 parallel singularity); the flags equal. Also: its refusals, a refused row handed to the batch
 path, and a fresh process's first one-pose Jacobian of a hexapod without Numba."""

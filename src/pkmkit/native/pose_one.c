@@ -39,6 +39,8 @@ int pk_pose_fill(const double *x, const double *q, const double *geom, ptrdiff_t
 int pk_pose_inverse_one(const double *x, const double *rods, ptrdiff_t m, const double *groups,
                         ptrdiff_t n, int simple, double boundary_tol, double tol, double *q,
                         double *rod_q);                                     /* pose_velocity.c */
+void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c,
+                             double *out);                                  /* svd.c */
 
 #define MAX_RODS 6
 /* layout(6, n <= 6) of full_pose_velocity_kernel: A, B, J, J^-1, sv, sv_t, sv_r, 6 scalars */
@@ -398,12 +400,12 @@ static void add_singular_values(PoseVelocity *self, int missing) {
         double j_h[36];
         memcpy(j_h, s + o_j, sizeof(double) * (size_t)(6 * n));
         for (Py_ssize_t t = 3 * n; t < 6 * n; t++) j_h[t] *= o->length;
-        pk_singular_values_one(j_h, 6, n, s + o_sv, work, norms);
+        pk_singular_values_fast(j_h, 6, n, s + o_sv);
         s[o_c] = s[o_sv] / s[o_sv + k6 - 1];
     }
     if (missing & 2) {
-        pk_singular_values_one(s + o_j, 3, n, s + o_st, work, norms);
-        pk_singular_values_one(s + o_j + 3 * n, 3, n, s + o_sr, work, norms);
+        pk_singular_values_fast(s + o_j, 3, n, s + o_st);
+        pk_singular_values_fast(s + o_j + 3 * n, 3, n, s + o_sr);
     }
     if ((missing & 4) && s[o_c + 3] != s[o_c + 3]) { /* settled: the measure not computed */
         double unit[36], sv_a[6];
