@@ -17,10 +17,12 @@ first read, from only the pieces it needs), the call and reading ``J``, ``condit
 machines also with the C extension disabled (``PKMKIT_NATIVE=0``: the plain-Python path).
 
 For the six-axis machines (hexapod, Verne module's full poses, Dietmaier's general platform):
-``m.ik(x)`` (plain Python), ``m.fk(q)`` (the compiled per-pose solve) and ``m.jacobian(x)`` (the
-compiled single-pose kernel) against the batch path with one row — for ``fk`` the NumPy engine
-(``PKMKIT_COMPILED=0``), what a single call cost before — and the compiled solve called
-directly on one preallocated row.
+``m.ik(x)``, ``m.fk(q)`` and ``m.jacobian(x)`` (with the C extension one C call each,
+``PoseOne`` of ``native/pose_one.c``) against the batch path with one row — for ``fk`` the
+NumPy engine (``PKMKIT_COMPILED=0``), what a single call cost before — the compiled solve
+called through ``DirectKernel.solve_one`` on one row, and the ``PoseOne`` calls alone
+(:func:`pose_one_rows`). ``--agreement POSES`` prints instead the largest differences of the
+one-pose answers from the batch path's rows (:func:`agreement`).
 
 Medians of interleaved repeats (each method sees the same load); each figure is the wall time
 per call and, in brackets, the CPU time of the process per call (what the call costs when the

@@ -540,7 +540,7 @@ const char pk_pose_one_doc[] =
 "A PoseOne: the one-pose calls ik, fk, jacobian of a full-pose machine of m <= 6 rods and\n"
 "n actuators (module doc of pose_one.c). rods (m x 24 float64: OnePoseInverse.rows), groups\n"
 "(n x 8: rod count, angular, rod indices), simple, the boundary and consistency tolerances\n"
-"and max_abs as pose_inverse takes them; lower, upper (n,) the strokes widened by their\n"
+"and max_abs (pk_pose_inverse_one); lower, upper (n,) the strokes widened by their\n"
 "tolerance; geom (m x 16), home (6 + 7n,), opts (7,) as solve_one takes them; length the\n"
 "characteristic length. Buffers: bytes or C-contiguous float64 arrays.";
 
