@@ -36,7 +36,7 @@ setup(
             "pkmkit.native.kernels",
             sources=[NATIVE + "module.c", NATIVE + "inverse.c", NATIVE + "direct.c",
                      NATIVE + "inverse_simd.c", NATIVE + "position.c", NATIVE + "chain.c",
-                     NATIVE + "velocity.c", NATIVE + "pose_velocity.c",
+                     NATIVE + "velocity.c", NATIVE + "pose_velocity.c", NATIVE + "pose_one.c",
                      NATIVE + "svd.c", NATIVE + "rod_velocity.c",
                      NATIVE + "chain_velocity.c", NATIVE + "chain_linearise.c",
                      NATIVE + "chain_one_velocity.c"],

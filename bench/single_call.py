@@ -17,10 +17,12 @@ first read, from only the pieces it needs), the call and reading ``J``, ``condit
 machines also with the C extension disabled (``PKMKIT_NATIVE=0``: the plain-Python path).
 
 For the six-axis machines (hexapod, Verne module's full poses, Dietmaier's general platform):
-``m.ik(x)`` (plain Python), ``m.fk(q)`` (the compiled per-pose solve) and ``m.jacobian(x)`` (the
-compiled single-pose kernel) against the batch path with one row — for ``fk`` the NumPy engine
-(``PKMKIT_COMPILED=0``), what a single call cost before — and the compiled solve called
-directly on one preallocated row.
+``m.ik(x)``, ``m.fk(q)`` and ``m.jacobian(x)`` (with the C extension one C call each,
+``PoseOne`` of ``native/pose_one.c``) against the batch path with one row — for ``fk`` the
+NumPy engine (``PKMKIT_COMPILED=0``), what a single call cost before — the compiled solve
+called through ``DirectKernel.solve_one`` on one row, and the ``PoseOne`` calls alone
+(:func:`pose_one_rows`). ``--agreement POSES`` prints instead the largest differences of the
+one-pose answers from the batch path's rows (:func:`agreement`).
 
 Medians of interleaved repeats (each method sees the same load); each figure is the wall time
 per call and, in brackets, the CPU time of the process per call (what the call costs when the
@@ -32,6 +34,7 @@ the machine to URDF: forward kinematics with frame placements of that URDF's ope
 Usage::
 
     python bench/single_call.py [--calls 20000] [--load none|busy|both] [--json FILE]
+    python bench/single_call.py --agreement 1000 [--machines gough-stewart,verne]
 """
 
 from __future__ import annotations
@@ -54,7 +57,7 @@ from load import conditions
 
 import pkmkit
 from pkmkit.exceptions import StrokeWarning
-from pkmkit.machines import kernels
+from pkmkit.machines import full_pose_one, kernels
 from pkmkit.machines.closed_form import BOUNDARY_TOL
 from pkmkit.model.rods import CRANK, SLIDE
 
@@ -205,7 +208,66 @@ def six_axis_rows(name: str, calls: int) -> dict:
             os.environ.pop("PKMKIT_COMPILED")
         figures["fk compiled solve, one row"] = per_call(kernel.solve_one, qs)
         jacobian_rows(m, figures, rows)
+        pose_one_rows(m, figures, rows, qs)
     return figures
+
+
+def pose_one_rows(m, figures: dict, rows: list, qs: list) -> None:
+    """The C calls of the six-axis one-pose paths alone (``PoseOne.ik``, ``.fk``,
+    ``.jacobian`` and its first field: the floor under ``m.ik``, ``m.fk``, ``m.jacobian``)
+    and the jacobian call with J, condition and singularity all read."""
+    one = full_pose_one.native_one(m)
+    if one is None:
+        return
+    tol = 1e-6
+
+    def fields(p):
+        j = m.jacobian(p)
+        return j.J, j.condition, j.singularity
+
+    figures["jacobian one pose, call + J, condition, singularity"] = per_call(fields, rows)
+    figures["ik C call alone (PoseOne.ik)"] = per_call(lambda p: one.ik(p, True), rows)
+    figures["fk C call alone (PoseOne.fk)"] = per_call(lambda v: one.fk(v, True), qs)
+    figures["jacobian C call + J alone (PoseOne)"] = per_call(
+        lambda p: one.jacobian(p, tol, True, m._jacobian_row).field("J"), rows)
+
+
+def agreement(name: str, count: int) -> dict:
+    """Largest differences between the one-pose answers and the batch path's rows over
+    ``count`` poses around home (those within the strokes): ``ik`` and ``fk`` (m, rad), each
+    field of ``jacobian`` relative to the field's scale (max(1, its largest entry)), and how
+    many rows are bit for bit equal."""
+    m = pkmkit.machine(name)
+    rng = np.random.default_rng(5)
+    if m.position_controlled:
+        positions = m.home_pose[:3] + rng.uniform(-0.1, 0.1, (count, 3))
+        poses = m.ik(positions, full_output=True, strokes="ignore").pose
+    else:
+        poses = m.home_pose + rng.uniform(-0.05, 0.05, (count, 6))
+    q = m.ik(poses)
+    good = np.isfinite(q).all(axis=1)
+    poses, q = poses[good], q[good]
+    out = {"poses": len(poses)}
+    one_q = np.array([m.ik(p) for p in poses])
+    one_x = np.array([m.fk(v) for v in q])
+    out["ik max |diff|"] = float(np.abs(one_q - q).max())
+    out["ik rows equal"] = int((one_q == q).all(axis=1).sum())
+    batch_x = m.fk(q)
+    out["fk max |diff|"] = float(np.abs(one_x - batch_x).max())
+    out["fk rows equal"] = int((one_x == batch_x).all(axis=1).sum())
+    batch = m.jacobian(poses, q=q)
+    worst = {}
+    for k, p in enumerate(poses):
+        j = m.jacobian(p)
+        for field in ("J", "J_inv", "singular_values", "condition", "det_A",
+                      "parallel_measure", "serial_measure", "singularity"):
+            got, want = np.asarray(getattr(j, field), float), np.asarray(getattr(batch, field)[k],
+                                                                         float)
+            scale = max(1.0, float(np.abs(want).max()))
+            worst[field] = max(worst.get(field, 0.0),
+                               float(np.nan_to_num(np.abs(got - want).max(), nan=np.inf)) / scale)
+    out.update({f"jacobian {k} max rel. diff": v for k, v in worst.items()})
+    return out
 
 
 def chain_rows(name: str, calls: int) -> dict:
@@ -390,7 +452,14 @@ def main() -> None:
     parser.add_argument("--load", default="both", choices=("none", "busy", "both"))
     parser.add_argument("--json")
     parser.add_argument("--machines", help="comma-separated subset of the machines")
+    parser.add_argument("--agreement", type=int, metavar="POSES",
+                        help="print the one-pose paths' largest differences from the batch "
+                             "path's rows over POSES poses per six-axis machine, then stop")
     args = parser.parse_args()
+    if args.agreement:
+        for name in (args.machines or "gough-stewart,verne,dietmaier-hexapod").split(","):
+            print(name, json.dumps(agreement(name, args.agreement), indent=1))
+        return
     warnings.simplefilter("ignore", StrokeWarning)  # the batch path's, beyond a stroke
     names = [n for n in ("orthoglide", "linear-delta", "five-bar", "delta")]
     six = ("gough-stewart", "verne", "dietmaier-hexapod")

@@ -16,6 +16,7 @@ import pytest
 
 import pkmkit
 from pkmkit.exceptions import InputError, StrokeWarning, UnreachablePoseError
+from pkmkit.machines import full_pose
 from pkmkit.machines import full_pose_velocity_kernel as kernel
 from pkmkit.machines.full_pose import FullPoseJacobians
 from pkmkit.machines.full_pose_velocity_one import FIELDS, OnePoseFullVelocity
@@ -215,10 +216,13 @@ def _bits(got, want, where):
 
 
 @pytest.mark.parametrize("name", FULL_POSE)
-def test_a_field_read_alone_runs_only_the_matrices_kernel_with_the_same_bits(name):
+def test_a_field_read_alone_runs_only_the_matrices_kernel_with_the_same_bits(name, monkeypatch):
     """J, A, B, J⁻¹, the determinants and the flags of a fresh record come from
     ``velocity_matrices`` (no singular values computed), bit for bit what the full kernel
-    gives; the singular values, condition and parallel measure run the full kernel."""
+    gives; the singular values, condition and parallel measure run the full kernel (the
+    OnePoseFullVelocity path; with the C extension m.jacobian takes PoseOne:
+    tests/native/test_pose_one.py)."""
+    monkeypatch.setattr(full_pose, "native_one", lambda machine: None)
     m = pkmkit.machine(name)
     for k, p in enumerate(_poses(m, 12, seed=21)):
         full = m.jacobian(p)
@@ -235,16 +239,24 @@ def test_a_field_read_alone_runs_only_the_matrices_kernel_with_the_same_bits(nam
 
 
 @pytest.mark.parametrize("name", ["gough-stewart", "dietmaier-hexapod"])
-def test_flags_with_the_tolerance_at_the_parallel_measure(name):
+def test_flags_with_the_tolerance_at_the_parallel_measure(name, monkeypatch):
     """A tolerance equal to a pose's parallel measure does not flag it, the next float up
-    does: the matrices kernel decides by the measure itself where its bound cannot."""
+    does: the matrices kernel decides by the measure itself where its bound cannot (both
+    one-pose paths: OnePoseFullVelocity's, then PoseOne's)."""
+    for native_one in (lambda machine: None, full_pose.native_one):
+        monkeypatch.setattr(full_pose, "native_one", native_one)
+        _flags_at_the_measure(name)
+
+
+def _flags_at_the_measure(name):
     m = pkmkit.machine(name)
     for p in _poses(m, 8, seed=22):
         measure = float(m.jacobian(p).parallel_measure)
         for tol in (measure, float(np.nextafter(measure, np.inf))):
             jac = m.jacobian(p, tol=tol)
             assert bool(jac.singularity & 2) == (tol > measure)
-            assert not jac._evaluation._full
+            ev = jac._evaluation  # the exact-measure level not run (the flags decided it)
+            assert not (ev._full if hasattr(ev, "_full") else ev.level & 4)
             assert np.isnan(jac.J).all() == (tol > measure)
 
 

@@ -3,8 +3,9 @@
 (:mod:`pkmkit.machines.full_pose_velocity_kernel`, ``PKMKIT_NATIVE=0``) and the batch path's
 row (NumPy, LAPACK: the independent oracle), at random poses, far poses and poses near parallel
 singularities: the plain arithmetic (A, B, J⁻¹, the serial measure) bit for bit with Numba's;
-the parallel measure and the singular values bit for bit with Numba's one-sided Jacobi where
-both compute them; J and the determinants, which the C kernel takes from its own LU
+the parallel measure and J's singular values (the C kernel's Jacobi in round-robin order,
+Numba's cyclic) to 1e-12 of their scale; J and the determinants, which the C kernel takes
+from its own LU
 factorisation where Numba and NumPy call LAPACK, to 1e-12 of their scale (× cond A near a
 parallel singularity); the flags equal. Also: its refusals, a refused row handed to the batch
 path, and a fresh process's first one-pose Jacobian of a hexapod without Numba."""
@@ -20,7 +21,7 @@ import pytest
 
 import pkmkit
 from pkmkit.exceptions import StrokeWarning
-from pkmkit.machines import full_pose_velocity_one
+from pkmkit.machines import full_pose, full_pose_one, full_pose_velocity_one
 from pkmkit.machines.full_pose_velocity_one import FIELDS
 from tests.conftest import near_parallel_singular_poses
 
@@ -64,14 +65,31 @@ def _record(m, x, tol):
 
 def _fields(m, x, tol, native, monkeypatch):
     """Every field of a fresh one-pose record per field, C (native) or Numba; None where the
-    inverse model refuses the pose."""
+    inverse model refuses the pose. Native: the record ``m.jacobian`` builds
+    (``PoseOne.jacobian``, tests/native/test_pose_one.py), checked bit for bit against the one
+    of ``pose_velocity`` (the same kernel, pk_pose_fill)."""
     monkeypatch.setenv("PKMKIT_NATIVE", "1" if native else "0")
     try:
         if _record(m, x, tol) is None:
             return None
-        return {name: getattr(_record(m, x, tol), name) for name in FIELDS}
+        fields = {name: getattr(_record(m, x, tol), name) for name in FIELDS}
+        if native:
+            one = full_pose_one.native_one(m)
+            for name in FIELDS:
+                evaluation = one.jacobian(x, tol, False, lambda *a: pytest.fail("refused"))
+                got, want = evaluation.field(name), fields[name]
+                assert type(got) is type(want) and np.array_equal(
+                    np.asarray(got), np.asarray(want), equal_nan=True), name
+        return fields
     finally:
         monkeypatch.delenv("PKMKIT_NATIVE")
+
+
+@pytest.fixture
+def no_pose_one(monkeypatch):
+    """``m.jacobian`` of one pose through OnePoseFullVelocity and its ``pose_velocity`` twin
+    (the path of poses PoseOne does not take: float32 or int32 arrays)."""
+    monkeypatch.setattr(full_pose, "native_one", lambda machine: None)
 
 
 def _close(got, want, name, where, kappa=1.0):
@@ -148,7 +166,7 @@ def test_near_parallel_singularities(monkeypatch):
         assert _compare(m, x, tol, monkeypatch, f"near-singular tol {tol}") >= 15
 
 
-def test_the_c_kernel_answered(monkeypatch):
+def test_the_c_kernel_answered(monkeypatch, no_pose_one):
     m = pkmkit.machine("gough-stewart")
     calls = []
     real = _kernels.pose_velocity
@@ -166,7 +184,7 @@ def test_the_c_kernel_answered(monkeypatch):
     assert calls == [0, 1, 3, 7]
 
 
-def test_a_refused_row_goes_to_the_batch_path(monkeypatch):
+def test_a_refused_row_goes_to_the_batch_path(monkeypatch, no_pose_one):
     m = pkmkit.machine("dietmaier-hexapod")
     x = m.home_pose + 0.01
     monkeypatch.setattr(full_pose_velocity_one, "_native_twin",
@@ -219,13 +237,20 @@ def test_a_fresh_process_imports_no_numba():
     assert out == ["False", "True"]
 
 
+def _c_inverse(m, pose):
+    """q of one pose by the C inverse (``PoseOne.ik``, no stroke test) as a list, or None."""
+    q = full_pose_one.native_one(m).ik(pose, False)
+    return None if q is None else q.tolist()
+
+
 @pytest.mark.parametrize("name", SIX_RODS)
-def test_pose_inverse_is_one_pose_inverse_bit_for_bit(name):
-    """``pose_inverse`` (the inverse model of :meth:`FullPoseMachine.jacobian`'s one-pose
-    path) against :class:`~pkmkit.machines.full_pose_one.OnePoseInverse`, which ``m.ik`` of
-    one pose runs: the same q, the same refusals (rods that cannot close, rods of one actuator
-    that disagree: the Verne module's and delta6's pairs), on reachable poses, poses nudged off
-    the Verne's constraint and far ones."""
+def test_c_inverse_is_one_pose_inverse_bit_for_bit(name):
+    """The C inverse model (``pose_velocity.c``'s ``pk_pose_inverse_one``, which ``m.ik``,
+    ``m.jacobian`` of one pose run through ``PoseOne``) against
+    :class:`~pkmkit.machines.full_pose_one.OnePoseInverse`: the same q, the same refusals (rods
+    that cannot close, rods of one actuator that disagree: the Verne module's and delta6's
+    pairs), on reachable poses, poses nudged off the Verne's constraint and far ones; lists,
+    tuples and arrays alike (tests/native/test_pose_one.py: the other entries)."""
     m = _machine(name)
     inverse = m._one_pose_inverse()
     rng = np.random.default_rng(33)
@@ -239,31 +264,15 @@ def test_pose_inverse_is_one_pose_inverse_bit_for_bit(name):
     refused = 0
     for pose in x.tolist():
         want = inverse(pose)
-        got = full_pose_velocity_one.inverse_one(m, pose)
-        assert got == want and (got is None or {type(v) for v in got} == {float}), pose
-        assert full_pose_velocity_one.inverse_one(m, tuple(pose)) == want
-        assert full_pose_velocity_one.inverse_one(m, np.array(pose)) == want
+        assert _c_inverse(m, pose) == want, pose
+        assert _c_inverse(m, tuple(pose)) == want
+        assert _c_inverse(m, np.array(pose)) == want
         refused += want is None
     assert 0 < refused < len(x) or not m.position_controlled
-    tables = full_pose_velocity_one._inverse_tables(inverse)
-    for pose in ([1, 2, 3, 4, 5, 6], np.array(x[0]), x[0].tolist()[:5], "abcdef",
-                 [np.float64(v) for v in x[0]]):
-        assert _kernels.pose_inverse(*tables, pose) is NotImplemented
-    assert _kernels.pose_inverse(*tables, [float("nan"), *x[0].tolist()[1:]]) is None
-    rods, groups = tables[0], tables[1]
-    for error, args in [
-        (ValueError, (rods[:-8], *tables[1:])),
-        (ValueError, (rods, groups[:-8], *tables[2:])),
-        (TypeError, (list(rods), *tables[1:])),
-        (ValueError, (np.full(24 * 6, 5.0).tobytes(), *tables[1:])),  # kind 5
-        (TypeError, tables[:-1]),
-    ]:
-        with pytest.raises(error):
-            _kernels.pose_inverse(*args, x[0].tolist())
 
 
 @pytest.mark.parametrize("name", ["verne", "delta6"])
-def test_pose_inverse_at_the_edge_of_reach(name):
+def test_c_inverse_at_the_edge_of_reach(name):
     """Poses bisected onto the edge of reach (slides: the radicand's clamp within the boundary
     tolerance; cranks: the cosine's clamp to ±1) from both sides: the same q and refusals."""
     m = _machine(name)
@@ -293,7 +302,7 @@ def test_pose_inverse_at_the_edge_of_reach(name):
             poses.append(pose.tolist())
             lo, hi = (mid, hi) if inverse(pose.tolist()) is not None else (lo, mid)
         for pose in poses[-20:]:
-            assert full_pose_velocity_one.inverse_one(m, pose) == inverse(pose), pose
+            assert _c_inverse(m, pose) == inverse(pose), pose
         edge += 1
     assert edge >= 3
 
@@ -315,7 +324,7 @@ def test_state_array_refusals():
             _kernels.state_array(*args)
 
 
-def test_the_kernel_runs_once_per_record_and_level(monkeypatch):
+def test_the_kernel_runs_once_per_record_and_level(monkeypatch, no_pose_one):
     m = pkmkit.machine("gough-stewart")
     calls = []
     real = _kernels.pose_velocity

@@ -52,7 +52,7 @@ from pkmkit.machines.export_layouts import FullPoseLayout
 from pkmkit.machines.full_pose_criteria_rates import FullPoseCriteriaRates
 from pkmkit.machines.full_pose_forms import FullPoseForms
 from pkmkit.machines.full_pose_modes import FullPoseModes
-from pkmkit.machines.full_pose_one import OnePoseInverse
+from pkmkit.machines.full_pose_one import OnePoseInverse, native_one
 from pkmkit.machines.full_pose_position import PositionInverse, _stroke_fields
 from pkmkit.machines.full_pose_rates import FullPoseRates
 from pkmkit.machines.inverse_rows import RodInverseRows
@@ -395,9 +395,14 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         """
         if (branches is None and q0 is None and not full_output and not engine_options
                 and strokes in STROKE_MODES):  # one plain pose: microseconds, same numbers
-            q1 = self._one_pose_inverse()(x)
-            if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
-                return np.array(q1)
+            one = native_one(self)
+            q1 = NotImplemented if one is None else one.ik(x, strokes != "ignore")
+            if q1 is NotImplemented:  # no C extension, or a pose of another type
+                q1 = self._one_pose_inverse()(x)
+                if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
+                    return np.array(q1)
+            elif q1 is not None:
+                return q1
         check_mode(strokes)
         arr = np.asarray(x, dtype=float) if not isinstance(x, np.ndarray) else x
         width = arr.shape[-1] if arr.ndim in (1, 2) else 6
@@ -482,7 +487,9 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
         if x0 is None and not full_output and not engine_options and strokes in STROKE_MODES:
-            fast = direct.direct_one(self, q, strokes)  # one plain configuration: µs
+            one = native_one(self)  # one plain configuration: µs
+            fast = (one.fk(q, strokes != "ignore") if one is not None
+                    else direct.direct_one(self, q, strokes))
             if fast is not None:
                 return fast
         check_mode(strokes)
@@ -588,14 +595,20 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
     def _jacobian_one(self, x: Any, tol: float) -> FullPoseJacobians | None:
         """The compiled velocity model of one plain full pose within the strokes, computed
         when read (:mod:`pkmkit.machines.full_pose_velocity_one`), or None."""
-        q1 = None if x is None else velocity_one.inverse_one(self, x)
+        if x is None:
+            return None
+        one = native_one(self)
+        if one is not None:  # one C call now, one when a field is first read
+            evaluation = one.jacobian(x, tol, True, self._jacobian_row)
+            if evaluation is not NotImplemented:
+                return None if evaluation is None else _ONE_POSE_JACOBIANS(evaluation)
+        q1 = self._one_pose_inverse()(x)
         if q1 is None or not self._within_strokes(q1) or not velocity_one.usable(self):
             return None
-        x1 = x.tolist() if isinstance(x, np.ndarray) else [float(v) for v in x]
+        x1 = [float(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
 
         def batch() -> FullPoseJacobians:
-            xb, qb = np.array([x1], dtype=float), np.array([q1])
-            return _restore(self._jacobians(xb, qb, tol), True, _JACOBIAN_FIELDS)
+            return self._jacobian_row(x1, q1, tol)
 
         constants = self.__dict__.get("_velocity_one_constants")
         if constants is None:  # once per machine
@@ -604,6 +617,12 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             object.__setattr__(self, "_velocity_one_constants", constants)
         return _ONE_POSE_JACOBIANS(velocity_one.OnePoseFullVelocity(*constants, x1, q1, tol,
                                                                     batch))
+
+    def _jacobian_row(self, x: list[float], q: list[float], tol: float) -> FullPoseJacobians:
+        """The batch path's velocity model of one pose ``x`` at ``q`` (a row the one-pose
+        kernel refused), its leading axis dropped."""
+        xb, qb = np.array([x], dtype=float), np.array([q], dtype=float)
+        return _restore(self._jacobians(xb, qb, tol), True, _JACOBIAN_FIELDS)
 
     def _jacobians(self, xb: np.ndarray, qb: np.ndarray, tol: float) -> FullPoseJacobians:
         """The velocity model of pose rows ``xb`` at ``qb``, its costly fields (J, its singular

@@ -111,13 +111,15 @@ class DirectKernel:
         out = np.empty(9)
         solve_one = function or jit.kernel(KERNELS, "solve_one")
         solve_one(np.ascontiguousarray(q), _EMPTY6, False, self.geom, self.home,
-                  _DEFAULT_OPTIONS, out)
+                  DEFAULT_OPTIONS, out)
         return out
 
 
 def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
     """The pose ``(6,)`` of one plain configuration of a full-pose ``machine`` by the compiled
-    solve (the batch path's own function, so the same bits), or None — not one plain finite
+    solve (the batch path's own function, so the same bits) where the C extension's
+    ``PoseOne.fk`` (:func:`pkmkit.machines.full_pose_one.native_one`: the same solve, checks
+    and stroke test in one C call) does not serve the machine, or None — not one plain finite
     row, no assembly reached, a stroke to flag or refuse, no compiled solve, or the machine's
     first single call while Numba is not imported: the caller then takes the batch path (the
     same numbers, typed errors and warnings)."""
@@ -143,7 +145,9 @@ def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
 
 
 _EMPTY6 = np.zeros(6)
-_DEFAULT_OPTIONS = DirectKernel.options({})
+#: The kernel's option vector of the defaults (one-pose calls; also
+#: :func:`pkmkit.machines.full_pose_one.native_one`).
+DEFAULT_OPTIONS = DirectKernel.options({})
 _numba: Callable[..., Any] | None = None
 
 

@@ -9,6 +9,14 @@
 few microseconds where a batch call of one row costs a hundred or more. Anything else — not six
 plain finite numbers, a rod that cannot close, rods of one actuator that disagree — returns
 None, and the machine takes the batch path, which gives the same numbers and the typed errors.
+
+With the C extension, :func:`native_one` packs these constants, the strokes and the direct
+model's data once per machine (of up to six rods) into ``pkmkit.native.kernels.pose_one``,
+whose ``ik``, ``fk`` and ``jacobian`` check one plain pose or configuration, run the kernel
+and judge the strokes in one C call each (``native/pose_one.c``; the same bits as this
+class, the batch path's direct solve and the velocity kernel): ``m.ik(x)`` and ``m.fk(q)``
+of :class:`~pkmkit.machines.full_pose.FullPoseMachine` take it first, this class only where
+the pose is of another type (an integer array) or the extension is absent.
 """
 
 from __future__ import annotations
@@ -18,8 +26,11 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.machines.full_pose_direct import DEFAULT_OPTIONS
 from pkmkit.machines.full_pose_forms import BOUNDARY_TOL, FullPoseForms
+from pkmkit.machines.strokes import STROKE_TOL, stroke_limits
 from pkmkit.model.rods import CRANK, STRUT
+from pkmkit.numerics import jit
 
 #: Pose coordinates beyond this magnitude are refused by the batch path (invalid input).
 MAX_ABS = 1e9
@@ -128,3 +139,37 @@ class OnePoseInverse:
                 return None  # the rods disagree: the batch path says which and by how much
             out.append(first + mean)
         return out
+
+
+def native_one(machine: Any) -> Any | None:
+    """The ``pkmkit.native.kernels.PoseOne`` of a full-pose ``machine`` (built once, kept on
+    it), or None: no C extension (or ``PKMKIT_NATIVE=0`` / ``PKMKIT_COMPILED=0``), or more than
+    six rods."""
+    native = jit.native_kernels_now()
+    if native is None:
+        return None
+    one = machine.__dict__.get("_pose_one")
+    if one is None:
+        one = _pose_one(machine, native) or False
+        object.__setattr__(machine, "_pose_one", one)
+    return one or None
+
+
+def _pose_one(machine: Any, native: Any) -> Any | None:
+    """``native.pose_one(...)`` of ``machine`` (its arguments: the C file's docstring)."""
+    model = machine.model
+    if model.n_rods > 6 or not hasattr(native, "pose_one"):
+        return None
+    inverse = machine._one_pose_inverse()
+    groups = np.zeros((len(inverse.groups), 8))
+    for k, (rods, angular) in enumerate(inverse.groups):
+        groups[k, :2] = len(rods), angular
+        groups[k, 2:2 + len(rods)] = rods
+    lower, upper = stroke_limits(machine)
+    kernel = machine._direct_kernel()
+    return native.pose_one(np.array(inverse.rows, dtype=float).tobytes(), groups.tobytes(),
+                           inverse.simple, BOUNDARY_TOL, inverse.tol, MAX_ABS,
+                           np.ascontiguousarray(lower - STROKE_TOL, dtype=float),
+                           np.ascontiguousarray(upper + STROKE_TOL, dtype=float),
+                           np.ascontiguousarray(kernel.geom), kernel.home, DEFAULT_OPTIONS,
+                           float(machine.characteristic_length))

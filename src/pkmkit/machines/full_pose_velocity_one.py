@@ -1,5 +1,12 @@
 """The velocity model of one full pose of a rod machine, compiled (issue 22 §1).
 
+With the C extension, :meth:`FullPoseMachine.jacobian` of one plain pose (a list, tuple,
+float64 or int64 vector) of a machine of up to six rods takes ``PoseOne.jacobian``
+(:func:`pkmkit.machines.full_pose_one.native_one`, ``native/pose_one.c``): the inverse, the
+stroke test and the record in one C call, the fields from one more when first read — the
+bits of this module's C twin below. This module answers the rest: no extension, more than
+six rods, a pose of another type (a float32 array).
+
 :meth:`FullPoseMachine.jacobian` of one plain pose row ``(x, y, z, rx, ry, rz)`` whose inverse
 model (:class:`~pkmkit.machines.full_pose_one.OnePoseInverse`) lies within the strokes returns
 a :class:`OnePoseFullJacobians`: a :class:`~pkmkit.machines.full_pose.FullPoseJacobians` with
@@ -30,8 +37,6 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.full_pose_forms import BOUNDARY_TOL
-from pkmkit.machines.full_pose_one import MAX_ABS
 from pkmkit.machines.lazy_records import lazy_record_class
 from pkmkit.numerics import jit
 
@@ -227,38 +232,6 @@ def one_pose_class(base: type) -> type:
         lambda r: f"1 pose, {len(r.q)} actuators, tolerance {r.tolerance:g}; fields computed "
                   "when read",
         "A single-pose velocity model computed when read (module doc).")
-
-
-def _inverse_tables(inverse: Any) -> tuple:
-    """The arguments of ``pkmkit.native.kernels.pose_inverse`` before the pose, for an
-    :class:`~pkmkit.machines.full_pose_one.OnePoseInverse` (built once, kept on it)."""
-    tables = inverse.__dict__.get("_native_tables")
-    if tables is None:
-        groups = np.zeros((len(inverse.groups), 8))
-        for k, (rods, angular) in enumerate(inverse.groups):
-            groups[k, :2] = len(rods), angular
-            groups[k, 2:2 + len(rods)] = rods
-        tables = (np.array(inverse.rows, dtype=float).tobytes(), groups.tobytes(),
-                  inverse.simple, BOUNDARY_TOL, inverse.tol, MAX_ABS)
-        inverse._native_tables = tables
-    return tables
-
-
-def inverse_one(machine: Any, x: Any) -> list[float] | None:
-    """The actuator coordinates of one plain pose ``x`` as
-    :meth:`FullPoseMachine._one_pose_inverse` gives them (the same bits), by its C twin
-    ``pose_inverse`` when the extension is present and ``x`` is six floats, or None (the
-    batch path then answers)."""
-    inverse = machine._one_pose_inverse()
-    if type(x) is np.ndarray and x.shape == (6,):
-        x = x.tolist()  # (an integer array: ints, which inverse() below converts)
-    if type(x) is list or type(x) is tuple:
-        pose_inverse = getattr(jit.native_kernels_now(), "pose_inverse", None)
-        if pose_inverse is not None:
-            q = pose_inverse(*_inverse_tables(inverse), x)
-            if q is not NotImplemented:
-                return q
-    return inverse(x)
 
 
 def usable(machine: Any) -> bool:

@@ -24,6 +24,11 @@ arguments, the same algorithm and statuses, run without the GIL:
   :class:`pkmkit.machines.velocity_one.OnePoseVelocity`), the batch row's bits;
 - ``pose_velocity`` (``pose_velocity.c``) — the one-pose velocity kernels of six-rod
   full-pose machines (:mod:`pkmkit.machines.full_pose_velocity_kernel`);
+- ``pose_one`` (``pose_one.c``; not a twin) — a full-pose machine's constants packed once
+  (:func:`pkmkit.machines.full_pose_one.native_one`) into an object whose ``ik``, ``fk`` and
+  ``jacobian`` take one plain pose or configuration each in one C call (checks, the kernels
+  above, the stroke test; the same bits as ``OnePoseInverse``, ``solve_one`` and
+  ``pose_velocity``);
 - ``singular_values``, ``singular_rates`` (``svd.c``) —
   :func:`pkmkit.numerics.svd_kernel.singular_values` and
   :func:`pkmkit.numerics.svd_rates_kernel.singular_rates` (batched one-sided Jacobi SVDs of

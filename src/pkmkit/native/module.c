@@ -489,10 +489,12 @@ fail:
 /* velocity.c */
 extern const char pk_rod_velocity_doc[], pk_rod_field_doc[], pk_rod_inverse_doc[];
 PyObject *pk_py_rod_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
-extern const char pk_pose_velocity_doc[], pk_pose_inverse_doc[], pk_state_array_doc[];
+extern const char pk_pose_velocity_doc[], pk_state_array_doc[];
 PyObject *pk_py_state_array(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
-PyObject *pk_py_pose_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+/* pose_one.c: one-pose ik, fk, jacobian of a full-pose machine in one call each */
+extern const char pk_pose_one_doc[];
+PyObject *pk_py_pose_one(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 /* svd.c, rod_velocity.c: batched SVD kernels and the rod-leg velocity summaries */
@@ -532,10 +534,9 @@ static PyMethodDef methods[] = {
      pk_rod_inverse_doc},
     {"pose_velocity", (PyCFunction)(void (*)(void))pk_py_pose_velocity, METH_FASTCALL,
      pk_pose_velocity_doc},
-    {"pose_inverse", (PyCFunction)(void (*)(void))pk_py_pose_inverse, METH_FASTCALL,
-     pk_pose_inverse_doc},
     {"state_array", (PyCFunction)(void (*)(void))pk_py_state_array, METH_FASTCALL,
      pk_state_array_doc},
+    {"pose_one", (PyCFunction)(void (*)(void))pk_py_pose_one, METH_FASTCALL, pk_pose_one_doc},
     {"singular_values", (PyCFunction)(void (*)(void))pk_py_singular_values, METH_FASTCALL,
      pk_singular_values_doc},
     {"singular_rates", (PyCFunction)(void (*)(void))pk_py_singular_rates, METH_FASTCALL,

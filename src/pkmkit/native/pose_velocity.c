@@ -2,9 +2,12 @@
  * §1), the C twin of pkmkit.machines.full_pose_velocity_kernel.velocity_matrices and
  * velocity_one (the Numba kernels behind full_pose_velocity_one.OnePoseFullVelocity).
  *
- * The plain arithmetic (A, B, J^-1, the serial measure, the one-sided Jacobi singular values
- * of svd_kernel) is the Numba kernel's, operation for operation, without FMA contraction: the
- * same bits. Where the Numba kernel calls LAPACK (np.linalg.solve and det of 6x6 matrices),
+ * The plain arithmetic (A, B, J^-1, the serial measure, the parallel measure's one-sided
+ * Jacobi singular values of svd_kernel) is the Numba kernel's, operation for operation, without
+ * FMA contraction: the same bits. J's singular values (condition, singular_values and those of
+ * its rows) take svd.c's round-robin Jacobi instead (pk_singular_values_fast, ≈ 1.5x faster:
+ * the same accuracy, not the same bits). Where the Numba kernel calls LAPACK (np.linalg.solve
+ * and det of 6x6 matrices),
  * this file factors A by its own LU with partial pivoting: the same numbers to rounding (tested
  * to 1e-12 of their scale, x cond A near a parallel singularity, in tests/native), and the
  * flags, whose bound on det(U) keeps a margin far above that rounding, equal.
@@ -47,11 +50,15 @@ static void pose_rods(const double *q, const double *geom, ptrdiff_t m, double *
 }
 
 /* svd_kernel.singular_values of one r x c matrix (row-major) into out (min(r, c)): one-sided
- * Jacobi, the same operations (NaN for a non-finite entry). r, c <= 6. */
+ * Jacobi, the same operations (NaN for a non-finite entry). r, c <= 6. The parallel
+ * measure's (the flags: Numba's bits). */
 static void jacobi_values(const double *mat, int r, int c, double *out) {
     double work[36], norms[6];
     pk_singular_values_one(mat, r, c, out, work, norms);
 }
+
+/* svd.c: the same in round-robin order (J's singular values: condition, singular_values). */
+void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out);
 
 /* LU with partial pivoting (the first largest |pivot|, as LAPACK's idamax) of a 6x6
  * row-major matrix in place; perm the row order; returns the determinant (0 for an exactly
@@ -95,8 +102,9 @@ static double det6(const double *m) {
 
 /* One full pose: full_pose_velocity_kernel._fill (and, by the bits of exact, velocity_one's
  * singular values: pk_pose_velocity_doc) for six rods; out laid out as its layout(6, n). 0, or 1 when the row is refused
- * (not finite, or A exactly singular where J is needed: the batch path decides). */
-static int pose_fill(const double *x, const double *q, const double *geom, ptrdiff_t n,
+ * (not finite, or A exactly singular where J is needed: the batch path decides). Also
+ * called by pose_one.c. */
+int pk_pose_fill(const double *x, const double *q, const double *geom, ptrdiff_t n,
                      double length_l, double tol, int exact, double *out) {
     enum { M = 6 };
     double base[3 * M], length[M], r[9], a[6 * M], unit[6 * M], b[6 * M];
@@ -210,10 +218,10 @@ static int pose_fill(const double *x, const double *q, const double *geom, ptrdi
         double j_h[36];
         for (ptrdiff_t t = 0; t < 6 * n; t++) j_h[t] = j_mat[t];
         for (ptrdiff_t t = 3 * n; t < 6 * n; t++) j_h[t] *= length_l;
-        jacobi_values(j_h, 6, (int)n, out + o_sv);
+        pk_singular_values_fast(j_h, 6, n, out + o_sv);
         if (exact & 2) {
-            jacobi_values(j_mat, 3, (int)n, out + o_st);
-            jacobi_values(j_mat + 3 * n, 3, (int)n, out + o_sr);
+            pk_singular_values_fast(j_mat, 3, n, out + o_st);
+            pk_singular_values_fast(j_mat + 3 * n, 3, n, out + o_sr);
         } else { /* those of J_h only (condition, singular_values) */
             for (ptrdiff_t t = o_st; t < o_cond; t++) out[t] = NAN;
         }
@@ -295,7 +303,7 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
     Py_ssize_t size = 36 + 6 * n + 6 * n + 6 * n + k6 + 2 * k3 + 6;
     PyObject *state = PyByteArray_FromStringAndSize(NULL, size * (Py_ssize_t)sizeof(double));
     if (!state) return NULL;
-    if (pose_fill(x, q, geom, n, length_l, tol, (int)exact, (double *)PyByteArray_AS_STRING(state))) {
+    if (pk_pose_fill(x, q, geom, n, length_l, tol, (int)exact, (double *)PyByteArray_AS_STRING(state))) {
         Py_DECREF(state);
         Py_RETURN_NONE;
     }
@@ -306,8 +314,8 @@ PyObject *pk_py_pose_velocity(PyObject *self, PyObject *const *args, Py_ssize_t 
 
 /* full_pose_one.OnePoseInverse.__call__ for a pose x (6 finite floats): rods (m, PK_POSE_ROD)
  * as its rows, groups (n, 8): count, angular, then the rod indices, of the actuators (unused
- * when simple). 0, or 1 where it returns None. */
-static int pose_inverse(const double *x, const double *rods, ptrdiff_t m, const double *groups,
+ * when simple). 0, or 1 where it returns None. Called by pose_one.c (PoseOne.ik, .jacobian). */
+int pk_pose_inverse_one(const double *x, const double *rods, ptrdiff_t m, const double *groups,
                         ptrdiff_t n, int simple, double boundary_tol, double tol, double *q,
                         double *rod_q) {
     double px = x[0], py = x[1], pz = x[2], r[9];
@@ -377,90 +385,6 @@ static int pose_inverse(const double *x, const double *rods, ptrdiff_t m, const 
         q[k] = first + mean;
     }
     return 0;
-}
-
-const char pk_pose_inverse_doc[] =
-"pose_inverse(rods, groups, simple, boundary_tol, tol, max_abs, x)\n\n"
-"The C twin of pkmkit.machines.full_pose_one.OnePoseInverse.__call__: rods (bytes of m x 24\n"
-"float64, its rows), groups (bytes of n x 8 float64: rod count, angular, rod indices), simple\n"
-"(one rod per actuator, in order), the boundary and consistency tolerances, max_abs, and x\n"
-"(6 floats, a list or tuple). Returns q (a list), None where OnePoseInverse returns None, or\n"
-"NotImplemented where x is not six exact floats (OnePoseInverse then decides).";
-
-PyObject *pk_py_pose_inverse(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
-    (void)self;
-    if (nargs != 7) {
-        PyErr_Format(PyExc_TypeError, "pose_inverse() takes 7 positional arguments (%zd given)",
-                     nargs);
-        return NULL;
-    }
-    if (!PyBytes_CheckExact(args[0]) || !PyBytes_CheckExact(args[1])) {
-        PyErr_SetString(PyExc_TypeError, "rods, groups: bytes are needed");
-        return NULL;
-    }
-    Py_ssize_t rod_size = PyBytes_GET_SIZE(args[0]), group_size = PyBytes_GET_SIZE(args[1]);
-    Py_ssize_t m = rod_size / (Py_ssize_t)(PK_POSE_ROD * sizeof(double));
-    Py_ssize_t n = group_size / (Py_ssize_t)(8 * sizeof(double));
-    if (m < 1 || m > 6 || rod_size != m * (Py_ssize_t)(PK_POSE_ROD * sizeof(double)) || n < 1
-        || n > m || group_size != n * (Py_ssize_t)(8 * sizeof(double))) {
-        PyErr_SetString(PyExc_ValueError, "rods: 1 to 6 of 24 float64; groups: 1 to m of 8");
-        return NULL;
-    }
-    int simple = PyObject_IsTrue(args[2]);
-    if (simple < 0) return NULL;
-    double boundary_tol = PyFloat_AsDouble(args[3]);
-    if (boundary_tol == -1.0 && PyErr_Occurred()) return NULL;
-    double tol = PyFloat_AsDouble(args[4]);
-    if (tol == -1.0 && PyErr_Occurred()) return NULL;
-    double max_abs = PyFloat_AsDouble(args[5]);
-    if (max_abs == -1.0 && PyErr_Occurred()) return NULL;
-    double rods[6 * PK_POSE_ROD], groups[48], x[6], q[6], rod_q[6];
-    memcpy(rods, PyBytes_AS_STRING(args[0]), (size_t)rod_size);
-    memcpy(groups, PyBytes_AS_STRING(args[1]), (size_t)group_size);
-    if (simple && n != m) {
-        PyErr_SetString(PyExc_ValueError, "simple: as many actuators as rods are needed");
-        return NULL;
-    }
-    for (Py_ssize_t j = 0; j < m; j++) {
-        double kind = rods[PK_POSE_ROD * j];
-        if (kind != 0.0 && kind != 1.0 && kind != 2.0) {
-            PyErr_Format(PyExc_ValueError, "rod %zd: kind must be 0, 1 or 2", j);
-            return NULL;
-        }
-    }
-    for (Py_ssize_t k = 0; !simple && k < n; k++) {
-        double count = groups[8 * k];
-        int bad = !(count >= 1.0 && count <= 6.0 && count == floor(count));
-        for (int i = 0; !bad && i < (int)count; i++) {
-            double rod = groups[8 * k + 2 + i];
-            bad = !(rod >= 0.0 && rod < (double)m && rod == floor(rod));
-        }
-        if (bad) {
-            PyErr_Format(PyExc_ValueError, "actuator %zd: rod group out of range", k);
-            return NULL;
-        }
-    }
-    PyObject *seq = args[6];
-    if (!PyList_CheckExact(seq) && !PyTuple_CheckExact(seq)) Py_RETURN_NOTIMPLEMENTED;
-    if (PySequence_Fast_GET_SIZE(seq) != 6) Py_RETURN_NOTIMPLEMENTED;
-    PyObject **items = PySequence_Fast_ITEMS(seq);
-    for (int i = 0; i < 6; i++) {
-        if (!PyFloat_CheckExact(items[i])) Py_RETURN_NOTIMPLEMENTED;
-        x[i] = PyFloat_AS_DOUBLE(items[i]);
-        if (!(-max_abs <= x[i] && x[i] <= max_abs)) Py_RETURN_NONE;
-    }
-    if (pose_inverse(x, rods, m, groups, n, simple, boundary_tol, tol, q, rod_q)) Py_RETURN_NONE;
-    PyObject *out = PyList_New(n);
-    if (!out) return NULL;
-    for (Py_ssize_t k = 0; k < n; k++) {
-        PyObject *v = PyFloat_FromDouble(q[k]);
-        if (!v) {
-            Py_DECREF(out);
-            return NULL;
-        }
-        PyList_SET_ITEM(out, k, v);
-    }
-    return out;
 }
 
 const char pk_state_array_doc[] =
