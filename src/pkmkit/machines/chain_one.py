@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.machines.chain_one_native import packed
 from pkmkit.machines.chain_results import ChainInverseResult
 from pkmkit.machines.chain_starts import home_rates, inverse_rates
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
@@ -582,6 +583,9 @@ class ChainOnePose:
     def _ik_one(self, x: Any, q0: Any, tool_length: Any, full_output: bool, strokes: str,
                 start: Any, engine_options: dict) -> tuple:
         if q0 is None and tool_length is None and not engine_options and strokes in _MODES:
+            if not full_output and start is None and (c := packed(self)) is not None:
+                q = c.ik(c.capsule, x, strokes == "ignore", False)  # chain_one_native.py
+                return () if q is None else (q,)
             fast = (inverse_record if full_output else inverse)(self, x, strokes, start)
             if fast is not None:
                 return (fast,)
@@ -592,6 +596,10 @@ class ChainOnePose:
                 engine_options: dict) -> tuple:
         if x0 is None and start is None and tool_length is None and max_misfit is None \
                 and not full_output and not engine_options and strokes in _MODES:
+            if (c := packed(self)) is not None:  # chain_one_native.py
+                fast = c.fk(c.capsule, q, strokes == "ignore",
+                            check_singular is None or bool(check_singular))
+                return () if fast is None else (fast,)
             fast = direct(self, q, strokes, check_singular)
             if fast is not None:
                 return (fast,)
