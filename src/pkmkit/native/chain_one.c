@@ -14,285 +14,20 @@
  * head's joints, so H = [[A, B'], [B, D]] with D block diagonal; each D_b (at most a few
  * joints) is factored alone, the Schur complement S = A - sum B_b' D_b^-1 B_b (6 x 6) gives
  * the platform's step, then each block's. The step agrees with the dense Cholesky's to
- * rounding (not to the bit): results agree with the batch rows to ~1e-15 (tests). A model
- * whose joints are shared between blocks is solved dense (pk_chain_rows). */
-#include "chain_face.h"
+ * rounding (not to the bit): results agree with the batch rows to ~1e-13 (tests). Joints
+ * that several blocks share (the TriMule's psi1) join the platform's 6 columns in the core
+ * (chain_one_solve.c). chain_one_pack.c packs the constants. */
+#include "chain_one.h"
 
 #include <math.h>
 
-enum { OK = 0, NOT_CONVERGED = 3 };
-
-/* Columns of each block of rows (legs, then the tool rows of the inverse model). */
-typedef struct {
-    ptrdiff_t count;     /* blocks */
-    int64_t *start;      /* (count + 1,) into cols */
-    int64_t *cols;       /* the blocks' columns, each >= 6 */
-    ptrdiff_t widest;    /* largest block */
-    ptrdiff_t n_core;    /* the platform's 6 columns and the joints shared by blocks */
-    int64_t *core;
-} pk_blocks;
-
-typedef struct {
-    pk_chain inv, dir;
-    pk_chain_options inv_o, dir_o;
-    pk_blocks inv_b, dir_b;
-    int structured;
-    double *u_home_inv, *base, *inv_rates, tool;
-    int64_t *slides, *turns, *act_turns, *act;
-    double *signs, *turn_homes, *act_turn_homes, *lower, *upper;
-    ptrdiff_t n_slides, n_turns, n_act_turns, n_act;
-    int wrist, wide;
-    int64_t w_turn, w_tilt;
-    double w_home, w_centre, far;
-    double *u_home_dir, *dir_rates, *residual_rates, *home_values;
-    double singular_bound, max_coordinate;
-    ptrdiff_t twists, m_dir;
-    PyObject *empty, *ndarray, *n_obj, *u_obj, *six;
-    void *owned[48];
-    int n_owned;
-} pk_one;
-
-/* ---------------------------------------------------------------- the structured solve */
-
-/* Lower Cholesky factor of the k x k matrix a (row-major, lower part read) into low; NaN
- * where not positive definite (chain.c's rule). */
-static void factor(const double *a, double *low, ptrdiff_t k) {
-    for (ptrdiff_t j = 0; j < k; j++) {
-        double s = a[j * k + j];
-        for (ptrdiff_t p = 0; p < j; p++) s -= low[j * k + p] * low[j * k + p];
-        double d = s > 0.0 ? sqrt(s) : NAN;
-        low[j * k + j] = d;
-        for (ptrdiff_t i = j + 1; i < k; i++) {
-            double t = a[i * k + j];
-            for (ptrdiff_t p = 0; p < j; p++) t -= low[i * k + p] * low[j * k + p];
-            low[i * k + j] = t / d;
-        }
-    }
-}
-
-/* x <- L^-1 x (stride sx between entries of x). */
-static void forward(const double *low, ptrdiff_t k, double *x, ptrdiff_t sx) {
-    for (ptrdiff_t i = 0; i < k; i++) {
-        double t = x[i * sx];
-        for (ptrdiff_t p = 0; p < i; p++) t -= low[i * k + p] * x[p * sx];
-        x[i * sx] = t / low[i * k + i];
-    }
-}
-
-/* x <- L^-T x. */
-static void backward(const double *low, ptrdiff_t k, double *x) {
-    for (ptrdiff_t i = k - 1; i >= 0; i--) {
-        double t = x[i];
-        for (ptrdiff_t p = i + 1; p < k; p++) t -= low[p * k + i] * x[p];
-        x[i] = t / low[i * k + i];
-    }
-}
-
-/* The damped Gauss-Newton step of pk_chain_rows, step = -(H + lam (diag H + floor))^-1 grad,
- * with H = J'J built block by block (the dense loop's sums: zero entries skipped, x + 0.0 is
- * x) and solved by the Schur complement onto the core columns (the platform's 6 and the
- * joints shared by several blocks): per block b (rows 6b..6b+5, its own columns) D_b = L_b
- * L_b', Y_b = L_b^-1 B_b, z_b = L_b^-1 g_b; S = A - sum Y_b'Y_b; x_C = S^-1 (g_C - sum
- * Y_b'z_b); x_b = L_b^-T (z_b - Y_b x_C). scratch: block_scratch doubles. */
-static void block_step(const pk_blocks *bk, const double *jac, ptrdiff_t m, ptrdiff_t n,
-                       const double *grad, double lam, double *step, double *scratch) {
-    const ptrdiff_t nc = bk->n_core, w = bk->widest;
-    const int64_t *core = bk->core;
-    double *a = scratch, *sl = a + nc * nc, *xp = sl + nc * nc, *diag = xp + nc;
-    double *hbb = diag + n, *store = hbb + w * w;
-    for (ptrdiff_t p = 0; p < nc * nc; p++) a[p] = 0.0;
-    for (ptrdiff_t i = 0; i < m; i++) {  /* A over every row, in row order */
-        const double *row = jac + i * n;
-        for (ptrdiff_t p = 0; p < nc; p++) {
-            double v = row[core[p]];
-            if (v == 0.0) continue;
-            for (ptrdiff_t t = 0; t <= p; t++) a[p * nc + t] += v * row[core[t]];
-        }
-    }
-    for (ptrdiff_t c = 0; c < n; c++) diag[c] = 0.0;
-    for (ptrdiff_t p = 0; p < nc; p++) diag[core[p]] = a[p * nc + p];
-    for (ptrdiff_t b = 0; b < bk->count; b++) {
-        const int64_t *cols = bk->cols + bk->start[b];
-        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
-        for (ptrdiff_t p = 0; p < k; p++) {
-            double acc = 0.0;
-            for (ptrdiff_t i = 6 * b; i < 6 * b + 6; i++)
-                acc += jac[i * n + cols[p]] * jac[i * n + cols[p]];
-            diag[cols[p]] = acc;
-        }
-    }
-    double dmax = 0.0;
-    for (ptrdiff_t c = 0; c < n; c++)
-        if (diag[c] > dmax) dmax = diag[c];
-    double floor_ = 1e-9 * dmax + 1e-300;
-    for (ptrdiff_t p = 0; p < nc; p++) a[p * nc + p] += lam * (a[p * nc + p] + floor_);
-    for (ptrdiff_t p = 0; p < nc; p++) xp[p] = grad[core[p]];
-    /* free columns (in no block: zero Jacobian): no step */
-    for (ptrdiff_t c = 0; c < n; c++) step[c] = -(grad[c] / (lam * (diag[c] + floor_)));
-    for (ptrdiff_t b = 0; b < bk->count; b++) {
-        const int64_t *cols = bk->cols + bk->start[b];
-        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
-        const double *rows = jac + 6 * b * n;
-        double *lbb = store + b * (w * w + nc * w + w), *y = lbb + w * w, *z = y + nc * w;
-        for (ptrdiff_t p = 0; p < k; p++) {
-            for (ptrdiff_t t = 0; t <= p; t++) {
-                double acc = 0.0;
-                for (int i = 0; i < 6; i++) acc += rows[i * n + cols[p]] * rows[i * n + cols[t]];
-                hbb[p * k + t] = acc;
-            }
-            hbb[p * k + p] += lam * (hbb[p * k + p] + floor_);
-            for (ptrdiff_t t = 0; t < nc; t++) {  /* B_b (k x nc) */
-                double acc = 0.0;
-                for (int i = 0; i < 6; i++) acc += rows[i * n + cols[p]] * rows[i * n + core[t]];
-                y[p * nc + t] = acc;
-            }
-            z[p] = grad[cols[p]];
-        }
-        factor(hbb, lbb, k);
-        for (ptrdiff_t t = 0; t < nc; t++) forward(lbb, k, y + t, nc);
-        forward(lbb, k, z, 1);
-        for (ptrdiff_t p = 0; p < nc; p++) {
-            for (ptrdiff_t t = 0; t <= p; t++) {
-                double acc = 0.0;
-                for (ptrdiff_t q = 0; q < k; q++) acc += y[q * nc + p] * y[q * nc + t];
-                a[p * nc + t] -= acc;
-            }
-            double acc = 0.0;
-            for (ptrdiff_t q = 0; q < k; q++) acc += y[q * nc + p] * z[q];
-            xp[p] -= acc;
-        }
-    }
-    factor(a, sl, nc);
-    forward(sl, nc, xp, 1);
-    backward(sl, nc, xp);
-    for (ptrdiff_t p = 0; p < nc; p++) step[core[p]] = -xp[p];
-    for (ptrdiff_t b = 0; b < bk->count; b++) {
-        const int64_t *cols = bk->cols + bk->start[b];
-        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
-        double *lbb = store + b * (w * w + nc * w + w), *y = lbb + w * w, *z = y + nc * w;
-        for (ptrdiff_t p = 0; p < k; p++) {
-            double acc = z[p];
-            for (ptrdiff_t t = 0; t < nc; t++) acc -= y[p * nc + t] * xp[t];
-            z[p] = acc;
-        }
-        backward(lbb, k, z);
-        for (ptrdiff_t p = 0; p < k; p++) step[cols[p]] = -z[p];
-    }
-}
-
-/* Doubles of block_step's scratch. */
-static ptrdiff_t block_scratch(const pk_blocks *bk, ptrdiff_t n) {
-    ptrdiff_t nc = bk->n_core, w = bk->widest;
-    return 2 * nc * nc + nc + n + w * w + bk->count * (w * w + nc * w + w);
-}
+enum { OK = 0 };
 
 /* sum a_i b_i in order. */
 static double dot(const double *a, const double *b, ptrdiff_t n) {
     double acc = 0.0;
     for (ptrdiff_t i = 0; i < n; i++) acc += a[i] * b[i];
     return acc;
-}
-
-/* The loop of pk_chain_rows on one row u (n,), from known (n_var,), its normal equations by
- * block_step: status, residual, iterations out. */
-static void solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *known,
-                         double *u, const pk_chain_options *o, const double *target,
-                         double tool, pk_chain_work *w, double *scratch, int64_t *status,
-                         double *residual, int64_t *iterations) {
-    const ptrdiff_t n = c->n, m = w->m;
-    double *values = w->values, *r = w->r, *jac = w->jac, *r_new = w->r_new;
-    double *j_new = w->j_new, *u_new = w->u_new, *step = w->step, *grad = w->grad;
-    *iterations = 0;
-    *residual = NAN;
-    for (ptrdiff_t i = 0; i < n; i++)
-        if (!isfinite(u[i])) {
-            *status = 4;
-            return;
-        }
-    memcpy(values, known, (size_t)c->n_var * sizeof(double));
-    pk_chain_evaluate_any(c, values, u, r, jac, target, tool, w);
-    double cost = 0.5 * dot(r, r, m);
-    int jac_finite = 1;
-    for (ptrdiff_t i = 0; i < m * n; i++) jac_finite = jac_finite && isfinite(jac[i]);
-    if (!(isfinite(cost) && jac_finite)) {
-        *status = 4;
-        return;
-    }
-    *status = NOT_CONVERGED;
-    double lam = o->damping;
-    double checkpoint = cost;
-    int64_t count = 0;
-    int stopped = 0;
-    for (int64_t it = 0; it < o->max_iter; it++) {
-        double biggest = 0.0;
-        for (ptrdiff_t a = 0; a < n; a++) grad[a] = 0.0;
-        /* the gradient and the columns' norms: the dense loop's sums, zero entries skipped
-         * (x + 0.0 is x): the platform's columns over every row, a block's over its rows */
-        for (ptrdiff_t p = 0; p < bk->n_core; p++) {
-            ptrdiff_t a = bk->core[p];
-            double g = 0.0, col = 0.0;
-            for (ptrdiff_t i = 0; i < m; i++) {
-                g += jac[i * n + a] * r[i];
-                col += jac[i * n + a] * jac[i * n + a];
-            }
-            grad[a] = g;
-            double cosine = fabs(g) / sqrt(col * (2.0 * cost));
-            if (cosine > biggest) biggest = cosine;
-        }
-        for (ptrdiff_t b = 0; b < bk->count; b++) {
-            for (int64_t q = bk->start[b]; q < bk->start[b + 1]; q++) {
-                ptrdiff_t a = bk->cols[q];
-                double g = 0.0, col = 0.0;
-                for (ptrdiff_t i = 6 * b; i < 6 * b + 6; i++) {
-                    g += jac[i * n + a] * r[i];
-                    col += jac[i * n + a] * jac[i * n + a];
-                }
-                grad[a] = g;
-                double cosine = fabs(g) / sqrt(col * (2.0 * cost));
-                if (cosine > biggest) biggest = cosine;
-            }
-        }
-        if (cost <= 0.5 * o->atol * o->atol || !(biggest > o->gtol)) {
-            stopped = 1;
-            break;
-        }
-        block_step(bk, jac, m, n, grad, lam, step, scratch);
-        pk_chain_retract(u, step, u_new, n);
-        pk_chain_evaluate_any(c, values, u_new, r_new, j_new, target, tool, w);
-        double cost_new = 0.5 * dot(r_new, r_new, m);
-        int accept = isfinite(cost_new) && cost_new <= cost * (1.0 + 1e-13);
-        count += 1;
-        if (accept) {
-            memcpy(u, u_new, (size_t)n * sizeof(double));
-            memcpy(r, r_new, (size_t)m * sizeof(double));
-            double *swap = jac;  /* the new Jacobian is the current one */
-            jac = j_new;
-            j_new = swap;
-            cost = cost_new;
-            lam = pk_max(lam * 0.1, 1e-12);
-        } else {
-            lam *= 10.0;
-        }
-        double step_norm = sqrt(dot(step, step, n));
-        double u_norm = sqrt(dot(u, u, n));
-        int done = (accept && step_norm <= o->xtol * (1.0 + u_norm)) || lam > 1e12;
-        if (count % 10 == 0) {
-            if (cost > (1.0 - o->stall) * checkpoint
-                && cost > 0.5 * (o->residual_tol * o->residual_tol))
-                done = 1;
-            checkpoint = cost;
-        }
-        if (done) {
-            stopped = 1;
-            break;
-        }
-    }
-    *iterations = count;
-    double worst = 0.0;
-    for (ptrdiff_t i = 0; i < m; i++)
-        if (fabs(r[i]) > worst || isnan(r[i])) worst = fabs(r[i]);
-    *residual = worst;
-    if (stopped) *status = worst <= o->residual_tol ? OK : 7;
 }
 
 /* ---------------------------------------------------------------- one call's work */
@@ -307,7 +42,8 @@ typedef struct {
 /* The work arrays of one call (the larger of the two models'), one allocation; 0 on success. */
 static int work_alloc(const pk_one *s, pk_one_work *k) {
     ptrdiff_t n = s->inv.n, m = 6 * s->inv.n_legs + 6, nv = s->inv.n_var;
-    ptrdiff_t wide = block_scratch(&s->inv_b, n), wide_dir = block_scratch(&s->dir_b, n);
+    ptrdiff_t wide = pk_one_block_scratch(&s->inv_b, n);
+    ptrdiff_t wide_dir = pk_one_block_scratch(&s->dir_b, n);
     if (wide_dir > wide) wide = wide_dir;
     size_t cells = (size_t)(nv + 2 * m + 2 * m * n + 3 * n + 2 * n * n + 6 * s->twists)
                    + (size_t)wide + (size_t)(4 * n + 2 * nv + 2 * n);
@@ -348,7 +84,7 @@ static void solve(const pk_one *s, const pk_chain *c, const pk_blocks *bk,
                   double *residual, int64_t *iterations) {
     k->w.m = 6 * c->n_legs + (c->inverse ? 6 : 0);
     if (s->structured) {
-        solve_blocks(c, bk, known, u, o, target, tool, &k->w, k->scratch, status, residual,
+        pk_one_solve_blocks(c, bk, known, u, o, target, tool, &k->w, k->scratch, status, residual,
                      iterations);
     } else {
         *residual = NAN;
@@ -618,10 +354,10 @@ static PyObject *new_array(const pk_one *s, PyObject *size, const double *data, 
     return arr;
 }
 
-static const char CAPSULE[] = "pkmkit.chain_one";
+
 
 static pk_one *capsule_state(PyObject *capsule) {
-    return PyCapsule_GetPointer(capsule, CAPSULE);
+    return PyCapsule_GetPointer(capsule, PK_ONE_CAPSULE);
 }
 
 const char pk_chain_one_ik_doc[] =
@@ -720,286 +456,13 @@ PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t n
     return new_array(s, s->six, pose, 6);
 }
 
-/* ---------------------------------------------------------------- packing */
-
-static int check_count(Py_ssize_t nargs, Py_ssize_t expected, const char *name) {
-    if (nargs != expected) {
-        PyErr_Format(PyExc_TypeError, "%s() takes %zd positional arguments (%zd given)", name,
-                     expected, nargs);
-        return -1;
-    }
-    return 0;
-}
-
-static void release_state(PyObject *capsule) {
-    pk_one *s = PyCapsule_GetPointer(capsule, CAPSULE);
-    if (!s) return;
-    for (int i = 0; i < s->n_owned; i++) free(s->owned[i]);
-    Py_XDECREF(s->empty);
-    Py_XDECREF(s->ndarray);
-    Py_XDECREF(s->n_obj);
-    Py_XDECREF(s->u_obj);
-    Py_XDECREF(s->six);
-    free(s);
-}
-
-/* A copy of argument obj (type 'd' or 'i', ndim dimensions, `count` entries when >= 0; its
- * count into *got). */
-static void *copy_of(pk_one *s, held_buffers *held, PyObject *obj, const char *name, char type,
-                     int ndim, Py_ssize_t count, Py_ssize_t *got) {
-    void *data = grab(held, obj, name, type, 0, ndim);
-    if (!data) return NULL;
-    Py_buffer *view = &held->views[held->count - 1];
-    Py_ssize_t items = view->len / 8;
-    if (count >= 0 && items != count) {
-        PyErr_Format(PyExc_ValueError, "%s: %zd entries expected, not %zd", name, count, items);
-        return NULL;
-    }
-    void *copy = malloc((size_t)(items > 0 ? items : 1) * 8);
-    if (!copy) {
-        PyErr_NoMemory();
-        return NULL;
-    }
-    memcpy(copy, data, (size_t)items * 8);
-    s->owned[s->n_owned++] = copy;
-    if (got) *got = items;
-    return copy;
-}
-
-/* The blocks of model c: each leg's unknown joints (and the head's when inverse) not shared
- * with another block; the shared ones join the platform's 6 columns in the core. -2 when out
- * of memory. */
-static int find_blocks(pk_one *s, const pk_chain *c, pk_blocks *bk) {
-    ptrdiff_t count = c->n_legs + (c->inverse ? 1 : 0);
-    int64_t *start = malloc(sizeof(int64_t) * (size_t)(count + 1));
-    int64_t *cols = malloc(sizeof(int64_t) * (size_t)(c->n + 1));
-    int64_t *core = malloc(sizeof(int64_t) * (size_t)(c->n + 1));
-    int64_t *owner = malloc(sizeof(int64_t) * (size_t)(c->n + 1));
-    if (!start || !cols || !core || !owner) {
-        free(start), free(cols), free(core), free(owner);
-        return -2;
-    }
-    s->owned[s->n_owned++] = start;
-    s->owned[s->n_owned++] = cols;
-    s->owned[s->n_owned++] = core;
-    for (ptrdiff_t a = 0; a < c->n; a++) owner[a] = a < 6 ? -2 : -1;  /* -2: core */
-    for (int pass = 0; pass < 2; pass++) {  /* owners, then the blocks' own columns */
-        ptrdiff_t used = 0, widest = 0;
-        for (ptrdiff_t b = 0; b < count; b++) {
-            start[b] = used;
-            const int64_t *list = b < c->n_legs ? c->elements + c->offsets[b] : c->head;
-            ptrdiff_t length = b < c->n_legs ? c->offsets[b + 1] - c->offsets[b] : c->n_head;
-            for (ptrdiff_t i = 0; i < length; i++) {
-                int64_t e = list[i];
-                int64_t col = c->types[e] == 0 ? -1 : c->position[c->evar[e]];
-                if (col < 0) continue;
-                if (pass == 0) {
-                    owner[col] = owner[col] == -1 || owner[col] == b ? b : -2;
-                } else if (owner[col] == b) {
-                    owner[col] = -3;  /* listed */
-                    cols[used++] = col;
-                }
-            }
-            if (used - start[b] > widest) widest = used - start[b];
-        }
-        start[count] = used;
-        bk->widest = widest;
-    }
-    ptrdiff_t nc = 0;
-    for (ptrdiff_t a = 0; a < c->n; a++)
-        if (owner[a] == -2) core[nc++] = a;
-    free(owner);
-    bk->count = count;
-    bk->start = start;
-    bk->cols = cols;
-    bk->core = core;
-    bk->n_core = nc;
-    return 0;
-}
-
-const char pk_chain_one_pack_doc[] =
-    "chain_one_pack(frames, types, evar, elements, offsets, head, inv_position, dir_position,\n"
-    "               length, inv_options, dir_options, u_home_inv, base, inv_rates, tool,\n"
-    "               slides, signs, turns, turn_homes, act_turns, act_turn_homes, lower, upper,\n"
-    "               act, wrist, far, u_home_dir, dir_rates, residual_rates, home_values,\n"
-    "               singular_bound, max_coordinate, structured, empty, ndarray)\n\n"
-    "A joint-chain machine's one-pose constants, copied into a capsule for chain_one_ik and\n"
-    "chain_one_fk (machines/chain_one_native.py builds the arguments). wrist: (5,) turn\n"
-    "variable, its home, tilt variable, its home, whether the turn reaches a quarter turn, or\n"
-    "(0,) for none. structured: block elimination (else the dense solve of chain_rows).";
-
-PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
-    (void)self;
-    (void)take_chain;  /* chain_face.h's, unused here */
-    if (check_count(nargs, 35, "chain_one_pack") < 0) return NULL;
-    pk_one *s = calloc(1, sizeof(pk_one));
-    if (!s) return PyErr_NoMemory();
-    held_buffers held = {.count = 0};
-    Py_ssize_t n_elem, n_leg_el, n_off, n_head, n_var, got;
-    double *frames = copy_of(s, &held, args[0], "frames", 'd', 3, -1, &got);
-    if (!frames) goto fail;
-    n_elem = got / 16;
-    int64_t *types = copy_of(s, &held, args[1], "types", 'i', 1, n_elem, NULL);
-    int64_t *evar = types ? copy_of(s, &held, args[2], "evar", 'i', 1, n_elem, NULL) : NULL;
-    int64_t *elements = evar ? copy_of(s, &held, args[3], "elements", 'i', 1, -1, &n_leg_el)
-                             : NULL;
-    int64_t *offsets = elements ? copy_of(s, &held, args[4], "offsets", 'i', 1, -1, &n_off)
-                                : NULL;
-    int64_t *head = offsets ? copy_of(s, &held, args[5], "head", 'i', 1, -1, &n_head) : NULL;
-    int64_t *inv_pos = head ? copy_of(s, &held, args[6], "inv_position", 'i', 1, -1, &n_var)
-                            : NULL;
-    int64_t *dir_pos = inv_pos ? copy_of(s, &held, args[7], "dir_position", 'i', 1, n_var, NULL)
-                               : NULL;
-    if (!dir_pos) goto fail;
-    let_go(&held);
-    if (n_off < 1) {
-        PyErr_SetString(PyExc_ValueError, "offsets: one entry at least");
-        goto fail;
-    }
-    if (in_range(types, n_elem, 0, 3, "types") < 0
-        || in_range(elements, n_leg_el, 0, n_elem, "elements") < 0
-        || in_range(head, n_head, 0, n_elem, "head") < 0
-        || in_range(offsets, n_off, 0, n_leg_el + 1, "offsets") < 0
-        || in_range(inv_pos, n_var, 6, 6 + n_var, "inv_position") < 0
-        || in_range(dir_pos, n_var, -1, 6 + n_var, "dir_position") < 0)
-        goto fail;
-    for (Py_ssize_t e = 0; e < n_elem; e++)
-        if (types[e] != 0 && (evar[e] < 0 || evar[e] >= n_var)) {
-            PyErr_Format(PyExc_ValueError, "evar[%zd] out of range", e);
-            goto fail;
-        }
-    for (Py_ssize_t leg = 0; leg + 1 < n_off; leg++)
-        if (offsets[leg + 1] < offsets[leg]) {
-            PyErr_SetString(PyExc_ValueError, "offsets must not decrease");
-            goto fail;
-        }
-    ptrdiff_t n_dir = 6;
-    for (Py_ssize_t v = 0; v < n_var; v++)
-        if (dir_pos[v] >= 0) n_dir++;
-    for (Py_ssize_t v = 0; v < n_var; v++)
-        if (dir_pos[v] >= n_dir) {
-            PyErr_SetString(PyExc_ValueError, "dir_position: columns beyond the unknowns");
-            goto fail;
-        }
-    double length = PyFloat_AsDouble(args[8]);
-    if (length == -1.0 && PyErr_Occurred()) goto fail;
-    pk_chain base_chain = {frames, types, evar, elements, offsets, inv_pos, head,
-                           n_off - 1, n_var, 6 + n_var, n_head, length, 1};
-    s->inv = base_chain;
-    s->dir = base_chain;
-    s->dir.position = dir_pos;
-    s->dir.n = n_dir;
-    s->dir.inverse = 0;
-    s->m_dir = 6 * (n_off - 1);
-    s->twists = n_leg_el + n_head + 1;
-    double *opts[2];
-    for (int i = 0; i < 2; i++) {
-        opts[i] = copy_of(s, &held, args[9 + i], "options", 'd', 1, 7, NULL);
-        if (!opts[i]) goto fail;
-        let_go(&held);
-        pk_chain_options *o = i == 0 ? &s->inv_o : &s->dir_o;
-        o->max_iter = (int64_t)opts[i][0];
-        o->xtol = opts[i][1], o->atol = opts[i][2], o->gtol = opts[i][3];
-        o->stall = opts[i][4], o->residual_tol = opts[i][5], o->damping = opts[i][6];
-    }
-    Py_ssize_t n_s, n_t, n_at, n_act, n_w;
-    s->u_home_inv = copy_of(s, &held, args[11], "u_home_inv", 'd', 1, 6 + n_var, NULL);
-    s->base = s->u_home_inv ? copy_of(s, &held, args[12], "base", 'd', 1, 6, NULL) : NULL;
-    s->inv_rates = s->base ? copy_of(s, &held, args[13], "inv_rates", 'd', 2, 6 * (6 + n_var),
-                                     NULL) : NULL;
-    if (!s->inv_rates) goto fail;
-    let_go(&held);
-    s->tool = PyFloat_AsDouble(args[14]);
-    if (s->tool == -1.0 && PyErr_Occurred()) goto fail;
-    s->slides = copy_of(s, &held, args[15], "slides", 'i', 1, -1, &n_s);
-    s->signs = s->slides ? copy_of(s, &held, args[16], "signs", 'd', 1, n_s, NULL) : NULL;
-    s->turns = s->signs ? copy_of(s, &held, args[17], "turns", 'i', 1, -1, &n_t) : NULL;
-    s->turn_homes = s->turns ? copy_of(s, &held, args[18], "turn_homes", 'd', 1, n_t, NULL) : NULL;
-    s->act_turns = s->turn_homes ? copy_of(s, &held, args[19], "act_turns", 'i', 1, -1, &n_at)
-                                 : NULL;
-    s->act_turn_homes = s->act_turns ? copy_of(s, &held, args[20], "act_turn_homes", 'd', 1,
-                                               n_at, NULL) : NULL;
-    s->lower = s->act_turn_homes ? copy_of(s, &held, args[21], "lower", 'd', 1, n_var, NULL)
-                                 : NULL;
-    s->upper = s->lower ? copy_of(s, &held, args[22], "upper", 'd', 1, n_var, NULL) : NULL;
-    s->act = s->upper ? copy_of(s, &held, args[23], "act", 'i', 1, -1, &n_act) : NULL;
-    double *wrist = s->act ? copy_of(s, &held, args[24], "wrist", 'd', 1, -1, &n_w) : NULL;
-    if (!wrist) goto fail;
-    let_go(&held);
-    s->n_slides = n_s, s->n_turns = n_t, s->n_act_turns = n_at, s->n_act = n_act;
-    if (in_range(s->slides, n_s, 6, 6 + n_var, "slides") < 0
-        || in_range(s->turns, n_t, 6, 6 + n_var, "turns") < 0
-        || in_range(s->act_turns, n_at, 0, n_var, "act_turns") < 0
-        || in_range(s->act, n_act, 0, n_var, "act") < 0)
-        goto fail;
-    if (n_act < 1 || n_act > 64 || (n_w != 0 && n_w != 5)) {
-        PyErr_SetString(PyExc_ValueError, "1 to 64 actuators; wrist (5,) or (0,)");
-        goto fail;
-    }
-    s->wrist = n_w == 5;
-    if (s->wrist) {
-        s->w_turn = (int64_t)wrist[0], s->w_home = wrist[1], s->w_tilt = (int64_t)wrist[2];
-        s->w_centre = wrist[3], s->wide = wrist[4] != 0.0;
-        if (s->w_turn < 0 || s->w_turn >= n_var || s->w_tilt < 0 || s->w_tilt >= n_var) {
-            PyErr_SetString(PyExc_ValueError, "wrist: variables out of range");
-            goto fail;
-        }
-    }
-    s->far = PyFloat_AsDouble(args[25]);
-    if (s->far == -1.0 && PyErr_Occurred()) goto fail;
-    s->u_home_dir = copy_of(s, &held, args[26], "u_home_dir", 'd', 1, n_dir, NULL);
-    s->dir_rates = s->u_home_dir ? copy_of(s, &held, args[27], "dir_rates", 'd', 2,
-                                           n_dir * n_act, NULL) : NULL;
-    s->residual_rates = s->dir_rates ? copy_of(s, &held, args[28], "residual_rates", 'd', 2,
-                                               s->m_dir * n_act, NULL) : NULL;
-    s->home_values = s->residual_rates ? copy_of(s, &held, args[29], "home_values", 'd', 1,
-                                                 n_var, NULL) : NULL;
-    if (!s->home_values) goto fail;
-    let_go(&held);
-    s->singular_bound = PyFloat_AsDouble(args[30]);
-    if (s->singular_bound == -1.0 && PyErr_Occurred()) goto fail;
-    s->max_coordinate = PyFloat_AsDouble(args[31]);
-    if (s->max_coordinate == -1.0 && PyErr_Occurred()) goto fail;
-    s->structured = PyObject_IsTrue(args[32]);
-    if (s->structured < 0) goto fail;
-    int found_inv = find_blocks(s, &s->inv, &s->inv_b);
-    int found_dir = found_inv == -2 ? -2 : find_blocks(s, &s->dir, &s->dir_b);
-    if (found_inv == -2 || found_dir == -2) {
-        PyErr_NoMemory();
-        goto fail;
-    }
-    if (!PyType_Check(args[34]) || !PyCallable_Check(args[33])) {
-        PyErr_SetString(PyExc_TypeError, "empty: numpy.empty; ndarray: numpy.ndarray");
-        goto fail;
-    }
-    s->empty = Py_NewRef(args[33]);
-    s->ndarray = Py_NewRef(args[34]);
-    s->n_obj = PyLong_FromSsize_t(n_act);
-    s->u_obj = PyLong_FromSsize_t(6 + n_var);
-    s->six = PyLong_FromLong(6);
-    if (!s->n_obj || !s->u_obj || !s->six) goto fail;
-    PyObject *capsule = PyCapsule_New(s, CAPSULE, release_state);
-    if (!capsule) goto fail;
-    return capsule;
-fail:
-    let_go(&held);
-    for (int i = 0; i < s->n_owned; i++) free(s->owned[i]);
-    Py_XDECREF(s->empty);
-    Py_XDECREF(s->ndarray);
-    Py_XDECREF(s->n_obj);
-    Py_XDECREF(s->u_obj);
-    Py_XDECREF(s->six);
-    free(s);
-    return NULL;
-}
-
 const char pk_chain_one_structured_doc[] =
     "chain_one_structured(packed)\n\n"
     "Whether the packed machine's solves run by block elimination (else dense).";
 
 PyObject *pk_py_chain_one_structured(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
-    if (check_count(nargs, 1, "chain_one_structured") < 0) return NULL;
+    if (nargs != 1 && PyErr_Format(PyExc_TypeError, "chain_one_structured(packed)") == NULL) return NULL;
     pk_one *s = capsule_state(args[0]);
     if (!s) return NULL;
     return PyBool_FromLong(s->structured);
