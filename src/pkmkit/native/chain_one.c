@@ -295,7 +295,8 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
 
 /* ---------------------------------------------------------------- the module face */
 
-/* width plain finite numbers within +-max_coordinate from a list, tuple (floats and ints) or
+/* width plain finite numbers within +-max_coordinate from a list, tuple (floats, NumPy's
+ * float64s, ints but not bools) or
  * a 1-D float64 / float32 array into out: 1, else 0 (the batch path; no error set). */
 static int plain(const pk_one *s, PyObject *x, ptrdiff_t width, double *out) {
     if (PyList_CheckExact(x) || PyTuple_CheckExact(x)) {
@@ -303,7 +304,7 @@ static int plain(const pk_one *s, PyObject *x, ptrdiff_t width, double *out) {
         PyObject **items = PySequence_Fast_ITEMS(x);
         for (ptrdiff_t i = 0; i < width; i++) {
             PyObject *v = items[i];
-            if (PyFloat_CheckExact(v)) {
+            if (PyFloat_Check(v)) {  /* float and its subclasses (NumPy's float64) */
                 out[i] = PyFloat_AS_DOUBLE(v);
             } else if (PyLong_CheckExact(v)) {
                 out[i] = PyLong_AsDouble(v);
