@@ -215,20 +215,35 @@ static void tool_pose(const pk_one *s, const double *values, const double *u, do
     }
 }
 
-/* 1 / sqrt(||J||_F^2 ||L^-1||_F^2) with L L' = J'J (chain_one_kernel._factor, _bound). */
+/* 1 / sqrt(||J||_F^2 ||L^-1||_F^2) with L L' = J'J (chain_one_kernel._factor, _bound): J'J
+ * summed over each row's nonzero entries (nz: n indices), L's diagonal and L^-1's by
+ * reciprocals (multiplications: the rounding of the bound, which has a margin of 2, not of
+ * the answer). */
 static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double *low,
-                            double *inv) {
+                            double *inv, int64_t *nz) {
     double fro = 0.0;
     for (ptrdiff_t i = 0; i < m * n; i++) fro += jac[i] * jac[i];
-    for (ptrdiff_t j = 0; j < n; j++) {
-        for (ptrdiff_t i = j; i < n; i++) {
-            double acc = 0.0;
-            for (ptrdiff_t q = 0; q < m; q++) acc += jac[q * n + i] * jac[q * n + j];
-            for (ptrdiff_t p = 0; p < j; p++) acc -= low[i * n + p] * low[j * n + p];
-            if (i == j)
-                low[j * n + j] = acc > 0.0 ? sqrt(acc) : NAN;
-            else
-                low[i * n + j] = acc / low[j * n + j];
+    for (ptrdiff_t i = 0; i < n * n; i++) low[i] = 0.0;
+    for (ptrdiff_t i = 0; i < m; i++) {
+        const double *row = jac + i * n;
+        ptrdiff_t count = 0;
+        for (ptrdiff_t a = 0; a < n; a++)
+            if (row[a] != 0.0) nz[count++] = a;
+        for (ptrdiff_t p = 0; p < count; p++) {
+            double v = row[nz[p]];
+            double *target = low + nz[p] * n;
+            for (ptrdiff_t t = 0; t <= p; t++) target[nz[t]] += v * row[nz[t]];
+        }
+    }
+    for (ptrdiff_t j = 0; j < n; j++) {  /* in place: J'J's lower part into L */
+        double acc = low[j * n + j];
+        for (ptrdiff_t p = 0; p < j; p++) acc -= low[j * n + p] * low[j * n + p];
+        double d = acc > 0.0 ? 1.0 / sqrt(acc) : NAN;
+        low[j * n + j] = d;
+        for (ptrdiff_t i = j + 1; i < n; i++) {
+            double t = low[i * n + j];
+            for (ptrdiff_t p = 0; p < j; p++) t -= low[i * n + p] * low[j * n + p];
+            low[i * n + j] = t * d;
         }
     }
     double total = 0.0;
@@ -236,7 +251,7 @@ static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double 
         for (ptrdiff_t i = j; i < n; i++) {
             double acc = i == j ? 1.0 : 0.0;
             for (ptrdiff_t p = j; p < i; p++) acc -= low[i * n + p] * inv[p * n + j];
-            inv[i * n + j] = acc / low[i * n + i];
+            inv[i * n + j] = acc * low[i * n + i];
             total += inv[i * n + j] * inv[i * n + j];
         }
     }
@@ -286,7 +301,7 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
         k->w.m = m;
         memcpy(k->values2, values, (size_t)c->n_var * sizeof(double));
         pk_chain_evaluate(c, k->values2, u, k->w.r, k->w.jac, &k->w);
-        double bound = regular_bound(k->w.jac, m, n_u, k->w.h, k->w.low);
+        double bound = regular_bound(k->w.jac, m, n_u, k->w.h, k->w.low, k->w.nz);
         if (!(bound >= s->singular_bound)) return 0;
     }
     tool_pose(s, values, u, pose);

@@ -9,122 +9,155 @@ enum { OK = 0, NOT_CONVERGED = 3 };
 
 /* ---------------------------------------------------------------- the structured solve */
 
-/* Lower Cholesky factor of the k x k matrix a (row-major, lower part read) into low; NaN
- * where not positive definite (chain.c's rule). */
+/* Lower Cholesky factor of the k x k matrix a (row-major, lower part read) into low, its
+ * diagonal holding the reciprocals 1 / L_jj (multiplications, not divisions, in the
+ * substitutions: the divider's latency was a fifth of the solve); NaN where not positive
+ * definite (chain.c's rule). */
 static void factor(const double *a, double *low, ptrdiff_t k) {
     for (ptrdiff_t j = 0; j < k; j++) {
         double s = a[j * k + j];
         for (ptrdiff_t p = 0; p < j; p++) s -= low[j * k + p] * low[j * k + p];
-        double d = s > 0.0 ? sqrt(s) : NAN;
-        low[j * k + j] = d;
+        double inv = s > 0.0 ? 1.0 / sqrt(s) : NAN;
+        low[j * k + j] = inv;
         for (ptrdiff_t i = j + 1; i < k; i++) {
             double t = a[i * k + j];
             for (ptrdiff_t p = 0; p < j; p++) t -= low[i * k + p] * low[j * k + p];
-            low[i * k + j] = t / d;
+            low[i * k + j] = t * inv;
         }
     }
 }
 
-/* x <- L^-1 x (stride sx between entries of x). */
-static void forward(const double *low, ptrdiff_t k, double *x, ptrdiff_t sx) {
+/* x <- L^-1 x for the columns of x (k x cols, row-major): factor's low. */
+static void forward(const double *low, ptrdiff_t k, double *x, ptrdiff_t cols) {
     for (ptrdiff_t i = 0; i < k; i++) {
-        double t = x[i * sx];
-        for (ptrdiff_t p = 0; p < i; p++) t -= low[i * k + p] * x[p * sx];
-        x[i * sx] = t / low[i * k + i];
+        double *xi = x + i * cols;
+        for (ptrdiff_t p = 0; p < i; p++) {
+            double l = low[i * k + p];
+            const double *xp = x + p * cols;
+            for (ptrdiff_t c = 0; c < cols; c++) xi[c] -= l * xp[c];
+        }
+        double inv = low[i * k + i];
+        for (ptrdiff_t c = 0; c < cols; c++) xi[c] *= inv;
     }
 }
 
-/* x <- L^-T x. */
+/* x <- L^-T x (factor's low). */
 static void backward(const double *low, ptrdiff_t k, double *x) {
     for (ptrdiff_t i = k - 1; i >= 0; i--) {
         double t = x[i];
         for (ptrdiff_t p = i + 1; p < k; p++) t -= low[p * k + i] * x[p];
-        x[i] = t / low[i * k + i];
+        x[i] = t * low[i * k + i];
     }
 }
 
-/* The damped Gauss-Newton step of pk_chain_rows, step = -(H + lam (diag H + floor))^-1 grad,
- * with H = J'J built block by block (the dense loop's sums: zero entries skipped, x + 0.0 is
- * x) and solved by the Schur complement onto the core columns (the platform's 6 and the
- * joints shared by several blocks): per block b (rows 6b..6b+5, its own columns) D_b = L_b
- * L_b', Y_b = L_b^-1 B_b, z_b = L_b^-1 g_b; S = A - sum Y_b'Y_b; x_C = S^-1 (g_C - sum
- * Y_b'z_b); x_b = L_b^-T (z_b - Y_b x_C). scratch: block_scratch doubles. */
-static void block_step(const pk_blocks *bk, const double *jac, ptrdiff_t m, ptrdiff_t n,
-                       const double *grad, double lam, double *step, double *scratch) {
+/* a . b for 6-vectors, in pairs (independent additions). */
+static inline double dot6(const double *a, const double *b) {
+    return ((a[0] * b[0] + a[1] * b[1]) + (a[2] * b[2] + a[3] * b[3]))
+           + (a[4] * b[4] + a[5] * b[5]);
+}
+
+/* The layout of the scratch: the core block A (nc x nc), its damped factor, the core's
+ * right-hand side, every column's squared norm, then per block its core and own columns
+ * transposed (nc x 6, k x 6), D_b, its factor L_b, B_b then Y_b (k x nc), z_b (k). */
+typedef struct {
+    double *a, *sl, *xp, *diag, *blocks;
+    ptrdiff_t per_block;
+} layout;
+
+static layout lay_out(const pk_blocks *bk, ptrdiff_t n, double *scratch) {
+    ptrdiff_t nc = bk->n_core, w = bk->widest;
+    layout l;
+    l.a = scratch, l.sl = l.a + nc * nc, l.xp = l.sl + nc * nc, l.diag = l.xp + nc;
+    l.blocks = l.diag + n;
+    l.per_block = 6 * nc + 6 * w + 2 * w * w + w * nc + w;
+    return l;
+}
+
+/* The normal equations' pieces at the Jacobian jac (m = 6 blocks' rows, n columns) and the
+ * residual r: A = J_C'J_C, per block D_b = J_b'J_b and B_b = J_b'J_C (own columns J_b), the
+ * gradient J'r into grad and every column's squared norm into l.diag (zero for a column in no
+ * block: no step). Sums by 6-row blocks: H, the gradient and the columns' norms are the dense
+ * loop's to rounding. */
+static void normal(const pk_blocks *bk, const double *jac, const double *r, ptrdiff_t n,
+                   double *grad, const layout *l) {
     const ptrdiff_t nc = bk->n_core, w = bk->widest;
     const int64_t *core = bk->core;
-    double *a = scratch, *sl = a + nc * nc, *xp = sl + nc * nc, *diag = xp + nc;
-    double *hbb = diag + n, *store = hbb + w * w;
-    for (ptrdiff_t p = 0; p < nc * nc; p++) a[p] = 0.0;
-    for (ptrdiff_t i = 0; i < m; i++) {  /* A over every row, in row order */
-        const double *row = jac + i * n;
-        for (ptrdiff_t p = 0; p < nc; p++) {
-            double v = row[core[p]];
-            if (v == 0.0) continue;
-            for (ptrdiff_t t = 0; t <= p; t++) a[p * nc + t] += v * row[core[t]];
-        }
-    }
-    for (ptrdiff_t c = 0; c < n; c++) diag[c] = 0.0;
-    for (ptrdiff_t p = 0; p < nc; p++) diag[core[p]] = a[p * nc + p];
+    for (ptrdiff_t p = 0; p < nc * nc; p++) l->a[p] = 0.0;
+    for (ptrdiff_t c = 0; c < n; c++) grad[c] = l->diag[c] = 0.0;
     for (ptrdiff_t b = 0; b < bk->count; b++) {
         const int64_t *cols = bk->cols + bk->start[b];
         ptrdiff_t k = bk->start[b + 1] - bk->start[b];
+        const double *rows = jac + 6 * b * n, *rb = r + 6 * b;
+        double *ct = l->blocks + b * l->per_block, *ot = ct + 6 * nc, *hbb = ot + 6 * w;
+        double *y = hbb + 2 * w * w;
+        for (int i = 0; i < 6; i++) {
+            for (ptrdiff_t t = 0; t < nc; t++) ct[t * 6 + i] = rows[i * n + core[t]];
+            for (ptrdiff_t p = 0; p < k; p++) ot[p * 6 + i] = rows[i * n + cols[p]];
+        }
+        for (ptrdiff_t p = 0; p < nc; p++) {
+            for (ptrdiff_t t = 0; t <= p; t++) l->a[p * nc + t] += dot6(ct + 6 * p, ct + 6 * t);
+            grad[core[p]] += dot6(ct + 6 * p, rb);
+        }
         for (ptrdiff_t p = 0; p < k; p++) {
-            double acc = 0.0;
-            for (ptrdiff_t i = 6 * b; i < 6 * b + 6; i++)
-                acc += jac[i * n + cols[p]] * jac[i * n + cols[p]];
-            diag[cols[p]] = acc;
+            for (ptrdiff_t t = 0; t <= p; t++) hbb[p * k + t] = dot6(ot + 6 * p, ot + 6 * t);
+            for (ptrdiff_t t = 0; t < nc; t++) y[p * nc + t] = dot6(ot + 6 * p, ct + 6 * t);
+            grad[cols[p]] = dot6(ot + 6 * p, rb);
+            l->diag[cols[p]] = hbb[p * k + p];
         }
     }
+    for (ptrdiff_t p = 0; p < nc; p++) l->diag[core[p]] = l->a[p * nc + p];
+}
+
+/* The damped Gauss-Newton step of pk_chain_rows, step = -(H + lam (diag H + floor))^-1 grad,
+ * from normal()'s pieces, by the Schur complement onto the core columns (the platform's 6
+ * and the joints shared by several blocks): per block b D_b = L_b L_b', Y_b = L_b^-1 B_b,
+ * z_b = L_b^-1 g_b; S = A - sum Y_b'Y_b; x_C = S^-1 (g_C - sum Y_b'z_b); x_b = L_b^-T (z_b -
+ * Y_b x_C). */
+static void block_step(const pk_blocks *bk, ptrdiff_t n, const double *grad, double lam,
+                       double *step, const layout *l) {
+    const ptrdiff_t nc = bk->n_core, w = bk->widest;
+    const int64_t *core = bk->core;
+    double *s = l->sl, *xp = l->xp;
     double dmax = 0.0;
     for (ptrdiff_t c = 0; c < n; c++)
-        if (diag[c] > dmax) dmax = diag[c];
+        if (l->diag[c] > dmax) dmax = l->diag[c];
     double floor_ = 1e-9 * dmax + 1e-300;
-    for (ptrdiff_t p = 0; p < nc; p++) a[p * nc + p] += lam * (a[p * nc + p] + floor_);
-    for (ptrdiff_t p = 0; p < nc; p++) xp[p] = grad[core[p]];
-    /* free columns (in no block: zero Jacobian): no step */
-    for (ptrdiff_t c = 0; c < n; c++) step[c] = -(grad[c] / (lam * (diag[c] + floor_)));
+    for (ptrdiff_t c = 0; c < n; c++) step[c] = -(grad[c] / (lam * (l->diag[c] + floor_)));
+    for (ptrdiff_t p = 0; p < nc; p++) {
+        for (ptrdiff_t t = 0; t < p; t++) s[p * nc + t] = l->a[p * nc + t];
+        s[p * nc + p] = l->a[p * nc + p] + lam * (l->a[p * nc + p] + floor_);
+        xp[p] = grad[core[p]];
+    }
     for (ptrdiff_t b = 0; b < bk->count; b++) {
         const int64_t *cols = bk->cols + bk->start[b];
         ptrdiff_t k = bk->start[b + 1] - bk->start[b];
-        const double *rows = jac + 6 * b * n;
-        double *lbb = store + b * (w * w + nc * w + w), *y = lbb + w * w, *z = y + nc * w;
+        double *hbb = l->blocks + b * l->per_block + 6 * nc + 6 * w, *lbb = hbb + w * w;
+        double *y = lbb + w * w, *z = y + w * nc;
         for (ptrdiff_t p = 0; p < k; p++) {
-            for (ptrdiff_t t = 0; t <= p; t++) {
-                double acc = 0.0;
-                for (int i = 0; i < 6; i++) acc += rows[i * n + cols[p]] * rows[i * n + cols[t]];
-                hbb[p * k + t] = acc;
-            }
             hbb[p * k + p] += lam * (hbb[p * k + p] + floor_);
-            for (ptrdiff_t t = 0; t < nc; t++) {  /* B_b (k x nc) */
-                double acc = 0.0;
-                for (int i = 0; i < 6; i++) acc += rows[i * n + cols[p]] * rows[i * n + core[t]];
-                y[p * nc + t] = acc;
-            }
             z[p] = grad[cols[p]];
         }
         factor(hbb, lbb, k);
-        for (ptrdiff_t t = 0; t < nc; t++) forward(lbb, k, y + t, nc);
+        forward(lbb, k, y, nc);
         forward(lbb, k, z, 1);
-        for (ptrdiff_t p = 0; p < nc; p++) {
-            for (ptrdiff_t t = 0; t <= p; t++) {
-                double acc = 0.0;
-                for (ptrdiff_t q = 0; q < k; q++) acc += y[q * nc + p] * y[q * nc + t];
-                a[p * nc + t] -= acc;
+        for (ptrdiff_t q = 0; q < k; q++) {  /* S -= Y'Y, xp -= Y'z: row by row of Y */
+            const double *yq = y + q * nc;
+            for (ptrdiff_t p = 0; p < nc; p++) {
+                double v = yq[p];
+                for (ptrdiff_t t = 0; t <= p; t++) s[p * nc + t] -= v * yq[t];
+                xp[p] -= v * z[q];
             }
-            double acc = 0.0;
-            for (ptrdiff_t q = 0; q < k; q++) acc += y[q * nc + p] * z[q];
-            xp[p] -= acc;
         }
     }
-    factor(a, sl, nc);
-    forward(sl, nc, xp, 1);
-    backward(sl, nc, xp);
+    factor(s, s, nc);  /* in place: each entry read before it is written */
+    forward(s, nc, xp, 1);
+    backward(s, nc, xp);
     for (ptrdiff_t p = 0; p < nc; p++) step[core[p]] = -xp[p];
     for (ptrdiff_t b = 0; b < bk->count; b++) {
         const int64_t *cols = bk->cols + bk->start[b];
         ptrdiff_t k = bk->start[b + 1] - bk->start[b];
-        double *lbb = store + b * (w * w + nc * w + w), *y = lbb + w * w, *z = y + nc * w;
+        double *lbb = l->blocks + b * l->per_block + 6 * nc + 6 * w + w * w;
+        double *y = lbb + w * w, *z = y + w * nc;
         for (ptrdiff_t p = 0; p < k; p++) {
             double acc = z[p];
             for (ptrdiff_t t = 0; t < nc; t++) acc -= y[p * nc + t] * xp[t];
@@ -135,10 +168,10 @@ static void block_step(const pk_blocks *bk, const double *jac, ptrdiff_t m, ptrd
     }
 }
 
-/* Doubles of block_step's scratch. */
+/* Doubles of the solve's scratch (layout). */
 ptrdiff_t pk_one_block_scratch(const pk_blocks *bk, ptrdiff_t n) {
-    ptrdiff_t nc = bk->n_core, w = bk->widest;
-    return 2 * nc * nc + nc + n + w * w + bk->count * (w * w + nc * w + w);
+    layout l = lay_out(bk, n, NULL);
+    return 2 * bk->n_core * bk->n_core + bk->n_core + n + bk->count * l.per_block;
 }
 
 /* sum a_i b_i in order. */
@@ -157,6 +190,7 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
     const ptrdiff_t n = c->n, m = w->m;
     double *values = w->values, *r = w->r, *jac = w->jac, *r_new = w->r_new;
     double *j_new = w->j_new, *u_new = w->u_new, *step = w->step, *grad = w->grad;
+    layout l = lay_out(bk, n, scratch);
     *iterations = 0;
     *residual = NAN;
     for (ptrdiff_t i = 0; i < n; i++)
@@ -167,9 +201,9 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
     memcpy(values, known, (size_t)c->n_var * sizeof(double));
     pk_chain_evaluate_any(c, values, u, r, jac, target, tool, w);
     double cost = 0.5 * dot(r, r, m);
-    int jac_finite = 1;
-    for (ptrdiff_t i = 0; i < m * n; i++) jac_finite = jac_finite && isfinite(jac[i]);
-    if (!(isfinite(cost) && jac_finite)) {
+    double spread = 0.0;  /* x - x is 0 for a finite x, NaN else: one vectorised pass */
+    for (ptrdiff_t i = 0; i < m * n; i++) spread += jac[i] - jac[i];
+    if (!(isfinite(cost) && spread == 0.0)) {
         *status = 4;
         return;
     }
@@ -179,39 +213,17 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
     int64_t count = 0;
     int stopped = 0;
     for (int64_t it = 0; it < o->max_iter; it++) {
+        normal(bk, jac, r, n, grad, &l);
         double biggest = 0.0;
-        for (ptrdiff_t a = 0; a < n; a++) grad[a] = 0.0;
-        /* the gradient and the columns' norms: the dense loop's sums, zero entries skipped
-         * (x + 0.0 is x): the platform's columns over every row, a block's over its rows */
-        for (ptrdiff_t p = 0; p < bk->n_core; p++) {
-            ptrdiff_t a = bk->core[p];
-            double g = 0.0, col = 0.0;
-            for (ptrdiff_t i = 0; i < m; i++) {
-                g += jac[i * n + a] * r[i];
-                col += jac[i * n + a] * jac[i * n + a];
-            }
-            grad[a] = g;
-            double cosine = fabs(g) / sqrt(col * (2.0 * cost));
+        for (ptrdiff_t a = 0; a < n; a++) {
+            double cosine = fabs(grad[a]) / sqrt(l.diag[a] * (2.0 * cost));
             if (cosine > biggest) biggest = cosine;
-        }
-        for (ptrdiff_t b = 0; b < bk->count; b++) {
-            for (int64_t q = bk->start[b]; q < bk->start[b + 1]; q++) {
-                ptrdiff_t a = bk->cols[q];
-                double g = 0.0, col = 0.0;
-                for (ptrdiff_t i = 6 * b; i < 6 * b + 6; i++) {
-                    g += jac[i * n + a] * r[i];
-                    col += jac[i * n + a] * jac[i * n + a];
-                }
-                grad[a] = g;
-                double cosine = fabs(g) / sqrt(col * (2.0 * cost));
-                if (cosine > biggest) biggest = cosine;
-            }
         }
         if (cost <= 0.5 * o->atol * o->atol || !(biggest > o->gtol)) {
             stopped = 1;
             break;
         }
-        block_step(bk, jac, m, n, grad, lam, step, scratch);
+        block_step(bk, n, grad, lam, step, &l);
         pk_chain_retract(u, step, u_new, n);
         pk_chain_evaluate_any(c, values, u_new, r_new, j_new, target, tool, w);
         double cost_new = 0.5 * dot(r_new, r_new, m);
