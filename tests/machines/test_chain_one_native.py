@@ -229,7 +229,7 @@ def test_a_machine_pickles_and_copies_after_a_call(machine):
 def test_the_start_option_and_the_full_answer(machine):
     """``chain_one_ik``'s ``start`` (a previous solution) and ``full`` (q, u, iterations,
     residual) against the batch record of the same start."""
-    q, x = workspace(machine, 20, seed=4)
+    _, x = workspace(machine, 20, seed=4)
     c = chain_one_native.packed(machine)
     for row in x[1:]:
         first = batch(machine.ik, x[0], full_output=True, strokes="ignore")

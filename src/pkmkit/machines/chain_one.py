@@ -2,6 +2,13 @@
 ``m.jacobian(x)`` of one plain pose or configuration through one compiled call each
 (:mod:`pkmkit.solve.chain_one_kernel`), without the batch machinery.
 
+With the C extension, plain ``m.ik(x)`` (no ``start``, no ``full_output``) and ``m.fk(q)`` are
+one C call each instead (:mod:`pkmkit.machines.chain_one_native`: the same rules in C, the
+solve by block elimination, the batch row to rounding — not to the bit); the rest of this
+module is then ``ik``'s ``start``/``full_output`` path, the Jacobian, and the path of every
+call where the extension is absent or ``PKMKIT_NATIVE=0`` was set before the machine's first
+single call.
+
 Per machine, once (:class:`ChainOneConstants`, cached on the machine): the kernel's arrays,
 the inverse's and the direct model's first-order starts, the strokes, the legs' home modes, the
 head's wrist pair. Per call: a type and range check of the plain numbers, one compiled solve on
