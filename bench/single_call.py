@@ -212,6 +212,7 @@ def chain_rows(name: str, calls: int) -> dict:
     on the preallocated row (the compiled-kernel baseline: the batch path's dense solve from
     its start) and Pinocchio's forward pass of the machine's spanning tree (the peer)."""
     from pkmkit.machines import chain_one, chain_one_native
+    from pkmkit.numerics import jit
 
     m = pkmkit.machine(name)
     rng = np.random.default_rng(2)
@@ -244,6 +245,11 @@ def chain_rows(name: str, calls: int) -> dict:
                                                         True, w.u_dir, w.pose, w.info)
 
     native = chain_one_native.packed(m)
+    ext = jit.native_kernels()
+    dense = None if native is None else chain_one_native.Packed(
+        ext.chain_one_pack(*chain_one_native.pack_arguments(m, False)), ext)
+    # the same C call with the batch path's dense solve (pk_chain_rows): the block
+    # elimination's share
     peer = pinocchio_peer(m, len(rows))
     path = toolpath(m, calls)
     first = m.ik(path[0], full_output=True).solution
@@ -257,6 +263,18 @@ def chain_rows(name: str, calls: int) -> dict:
         return run
 
     figures = {"poses": len(rows), "fast": fast}
+    if native is not None:  # the C answers against the batch rows (the same poses)
+        ik_batch, fk_batch = m.ik(np.array(rows)), m.fk(np.array(qs))
+        ik_c = [native.ik(native.capsule, p, False, False) for p in rows]
+        fk_c = [native.fk(native.capsule, v, False, True) for v in qs]
+        counts = np.array([native.ik(native.capsule, p, False, True)[2] for p in rows])
+        batch_counts = m.ik(np.array(rows), full_output=True).iterations
+        figures["iterations"] = (counts.mean(), counts.min(), counts.max(),
+                                 int((counts == batch_counts).sum()))
+        figures["agreement"] = tuple(
+            max((float(np.abs(a - b).max()) for a, b in zip(c, ref, strict=True)
+                 if a is not None), default=math.nan)
+            for c, ref in ((ik_c, ik_batch), (fk_c, fk_batch)))
     for _ in range(2):  # interleaved: every method twice, the second round kept
         figures["ik one pose"] = per_call(lambda p: m.ik(p), rows)
         figures["ik along a toolpath, default start"] = per_call(lambda p: m.ik(p), path[1:])
@@ -266,12 +284,16 @@ def chain_rows(name: str, calls: int) -> dict:
         if native is not None:
             figures["ik C call alone"] = per_call(
                 lambda p: native.ik(native.capsule, p, False, False), rows)
+            figures["ik C call alone, dense solve"] = per_call(
+                lambda p: dense.ik(dense.capsule, p, False, False), rows)
         figures["ik Numba kernel alone (baseline)"] = per_call(ik_kernel, rows)
         figures["fk one"] = per_call(lambda v: m.fk(v), qs)
         figures["fk batch of one (before)"] = per_call(lambda v: m.fk(v), q_ones[:few])
         if native is not None:
             figures["fk C call alone"] = per_call(
                 lambda v: native.fk(native.capsule, v, False, True), qs)
+            figures["fk C call alone, dense solve"] = per_call(
+                lambda v: dense.fk(dense.capsule, v, False, True), qs)
         figures["fk Numba solve + bound alone (baseline)"] = per_call(fk_kernel, qs)
         if peer is not None:
             figures["pinocchio tree fk + frame (peer)"] = peer()
@@ -358,6 +380,12 @@ def main() -> None:
             for k, v in f.items():
                 if k == "jacobian one pose (fast path)":
                     print(f"    {k:38s} {v[0]} of {v[1]} poses (the others beyond a stroke)")
+                elif k == "agreement":
+                    print(f"    C call against the batch rows: max |difference| ik {v[0]:.1e}, "
+                          f"fk {v[1]:.1e} (m, rad) over {f['poses']} poses")
+                elif k == "iterations":
+                    print(f"    ik iterations (C call): mean {v[0]:.2f}, {v[1]} to {v[2]}; the "
+                          f"batch rows' count on {v[3]} of {f['poses']} poses")
                 elif k == "fast":
                     print(f"    one-pose path taken by ik on {v} of {f['poses']} poses within "
                           "the strokes")

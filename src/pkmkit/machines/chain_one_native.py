@@ -29,6 +29,7 @@ No Numba: a fresh process's first single call runs here (the extension costs no 
 
 from __future__ import annotations
 
+import contextlib
 from typing import Any
 
 import numpy as np
@@ -122,9 +123,9 @@ def packed(m: Any) -> Packed | None:
         native = jit.native_kernels()
         if native is None or not hasattr(native, "chain_one_pack"):
             return None
-        if m._expected_rank() != 6 + len(m.passive_variables):
-            p = False
-        else:
-            p = Packed(native.chain_one_pack(*pack_arguments(m)), native)
+        p = False  # rank deficient at home, or beyond the C limits (more than 64 actuators)
+        if m._expected_rank() == 6 + len(m.passive_variables):
+            with contextlib.suppress(ValueError):
+                p = Packed(native.chain_one_pack(*pack_arguments(m)), native)
         object.__setattr__(m, _KEY, p)
     return p or None

@@ -431,10 +431,19 @@ PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t n
     PyObject *qa = new_array(s, s->n_obj, q, s->n_act);
     if (qa && full) {
         PyObject *ua = new_array(s, s->u_obj, u, 6 + nv);
-        out = ua ? Py_BuildValue("(NNLd)", qa, ua, (long long)iterations, residual) : NULL;
-        if (!out) {
+        PyObject *count = PyLong_FromLongLong((long long)iterations);
+        PyObject *worst = PyFloat_FromDouble(residual);
+        out = ua && count && worst ? PyTuple_New(4) : NULL;
+        if (out) {  /* the tuple takes the four references */
+            PyTuple_SET_ITEM(out, 0, qa);
+            PyTuple_SET_ITEM(out, 1, ua);
+            PyTuple_SET_ITEM(out, 2, count);
+            PyTuple_SET_ITEM(out, 3, worst);
+        } else {
             Py_DECREF(qa);
             Py_XDECREF(ua);
+            Py_XDECREF(count);
+            Py_XDECREF(worst);
         }
     } else {
         out = qa;
