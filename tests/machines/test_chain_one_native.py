@@ -276,3 +276,27 @@ def test_planted_wrong_constants_are_caught(plant):
                 for k, v in enumerate(ik))
     wrong += sum(v is None or np.abs(v - fk_ref[k]).max() > TOL for k, v in enumerate(fk))
     assert wrong > 0
+
+
+def test_fks_regularity_bound_never_exceeds_the_closures_conditioning(machine):
+    """Oracle: σ_min/σ_max of the closure Jacobian at the solution by NumPy's SVD. With the
+    threshold just above that ratio the C call must not certify the closure (a bound above the
+    ratio would answer where the batch path calls the closure singular); well below, it does."""
+    from pkmkit.solve import chain_rows
+
+    q, _ = workspace(machine, 8, seed=7)
+    res = machine.fk(q, full_output=True, strokes="ignore")
+    passive = np.asarray(machine.passive_variables, dtype=int)
+    values = np.tile(machine._home["values"], (len(q), 1))
+    values[:, np.flatnonzero(machine.model.actuated)] = q
+    values[:, passive] = res.passive
+    cu = chain_rows.closure_jacobian(machine.model, values, res.platform, passive)
+    sv = np.linalg.svd(cu, compute_uv=False)
+    ratio = sv[:, -1] / sv[:, 0]
+    args = list(chain_one_native.pack_arguments(machine))
+    for k in range(len(q)):
+        for threshold, answered in ((ratio[k] * (1 + 1e-9), False), (ratio[k] / 40, True)):
+            args[30] = threshold
+            c = chain_one_native.Packed(native.chain_one_pack(*args), native)
+            assert (c.fk(c.capsule, q[k], True, True) is not None) == answered, (k, threshold)
+            assert c.fk(c.capsule, q[k], True, False) is not None  # no check asked
