@@ -39,8 +39,10 @@ setup(
                      NATIVE + "velocity.c", NATIVE + "pose_velocity.c", NATIVE + "pose_one.c",
                      NATIVE + "svd.c", NATIVE + "rod_velocity.c",
                      NATIVE + "chain_velocity.c", NATIVE + "chain_linearise.c",
-                     NATIVE + "chain_one_velocity.c"],
-            depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h",
+                     NATIVE + "chain_one_velocity.c",
+                     NATIVE + "chain_one.c", NATIVE + "chain_one_solve.c",
+                     NATIVE + "chain_one_pack.c"],
+            depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h", NATIVE + "chain_one.h",
                      NATIVE + "inverse_block.h"],
             optional=True,
         )

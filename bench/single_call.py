@@ -100,12 +100,14 @@ def pinocchio_peer(m, calls: int):
     (``framesForwardKinematics``, then reading the last frame's translation) of the open tree
     of pkmkit's own URDF export of ``m``, at random configurations; None where Pinocchio is
     missing or ``m`` has no URDF export. (A serial tree's forward pass: the work of one pose
-    per call, not a closed chain's solve.)"""
+    per call, not a closed chain's solve; a joint chain's export is the spanning tree of its
+    legs and head, :func:`pkmkit.export.urdf_chains.chain_urdf_export`.)"""
     try:
         import pinocchio as pin
 
         from pkmkit.export.urdf import urdf_export
-        export = urdf_export(m)
+        from pkmkit.export.urdf_chains import chain_urdf_export
+        export = (chain_urdf_export if hasattr(m, "passive_variables") else urdf_export)(m)
     except Exception:  # no Pinocchio, or no URDF export of this machine
         return None
     model = pin.buildModelFromXML(export.urdf)
@@ -272,10 +274,14 @@ def agreement(name: str, count: int) -> dict:
 
 def chain_rows(name: str, calls: int) -> dict:
     """The joint-chain machines (5 axes: ``ik``, ``fk``, ``jacobian`` of one pose through one
-    compiled call, :mod:`pkmkit.machines.chain_one`) against the batch path of one row (what
-    a single call cost before), and the compiled solve alone on the preallocated row (the
-    floor: the closure's iterations from the batch path's start)."""
-    from pkmkit.machines import chain_one
+    compiled call, :mod:`pkmkit.machines.chain_one`; ``ik``, ``fk`` one C call each where the
+    extension is built, :mod:`pkmkit.machines.chain_one_native`) against the batch path of one
+    row (what a single call cost before), the C call alone (``chain_one_ik`` /
+    ``chain_one_fk``: the call without the machine's Python), the Numba one-pose kernel alone
+    on the preallocated row (the compiled-kernel baseline: the batch path's dense solve from
+    its start) and Pinocchio's forward pass of the machine's spanning tree (the peer)."""
+    from pkmkit.machines import chain_one, chain_one_native
+    from pkmkit.numerics import jit
 
     m = pkmkit.machine(name)
     rng = np.random.default_rng(2)
@@ -299,13 +305,21 @@ def chain_rows(name: str, calls: int) -> dict:
 
     def ik_kernel(x):
         w.target[0] = x  # from the default (first-order) start
-        c.first_kernel.call(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
+        (c.first_kernel.call or c.first_kernel.first)(*c.first_args, w.u_inv, w.target,
+                                                     c.tool_row, w.info)
 
     def fk_kernel(v):
         w.q[:] = v
-        c.direct_kernel.call(*c.direct_args, w.values, w.delta, w.q, True, w.u_dir, w.pose,
-                             w.info)
+        (c.direct_kernel.call or c.direct_kernel.first)(*c.direct_args, w.values, w.delta, w.q,
+                                                        True, w.u_dir, w.pose, w.info)
 
+    native = chain_one_native.packed(m)
+    ext = jit.native_kernels()
+    dense = None if native is None else chain_one_native.Packed(
+        ext.chain_one_pack(*chain_one_native.pack_arguments(m, False)), ext)
+    # the same C call with the batch path's dense solve (pk_chain_rows): the block
+    # elimination's share
+    peer = pinocchio_peer(m, len(rows))
     path = toolpath(m, calls)
     first = m.ik(path[0], full_output=True).solution
 
@@ -319,16 +333,40 @@ def chain_rows(name: str, calls: int) -> dict:
 
     figures = {"poses": len(rows), "fast": fast}
     peer = pinocchio_jacobian_peer(m, len(rows))
+    if native is not None:  # the C answers against the batch rows (the same poses)
+        ik_batch, fk_batch = m.ik(np.array(rows)), m.fk(np.array(qs))
+        ik_c = [native.ik(native.capsule, p, False, False) for p in rows]
+        fk_c = [native.fk(native.capsule, v, False, True) for v in qs]
+        counts = np.array([native.ik(native.capsule, p, False, True)[2] for p in rows])
+        batch_counts = m.ik(np.array(rows), full_output=True).iterations
+        figures["iterations"] = (counts.mean(), counts.min(), counts.max(),
+                                 int((counts == batch_counts).sum()))
+        figures["agreement"] = tuple(
+            max((float(np.abs(a - b).max()) for a, b in zip(c, ref, strict=True)
+                 if a is not None), default=math.nan)
+            for c, ref in ((ik_c, ik_batch), (fk_c, fk_batch)))
     for _ in range(2):  # interleaved: every method twice, the second round kept
         figures["ik one pose"] = per_call(lambda p: m.ik(p), rows)
         figures["ik along a toolpath, default start"] = per_call(lambda p: m.ik(p), path[1:])
         figures["ik along it, start=previous, full_output"] = tuple(
             v * (1 / (len(path) - 1)) for v in per_call(along(True), [None]))
         figures["ik batch of one (before)"] = per_call(lambda p: m.ik(p), ones[:few])
-        figures["ik compiled solve alone"] = per_call(ik_kernel, rows)
+        if native is not None:
+            figures["ik C call alone"] = per_call(
+                lambda p: native.ik(native.capsule, p, False, False), rows)
+            figures["ik C call alone, dense solve"] = per_call(
+                lambda p: dense.ik(dense.capsule, p, False, False), rows)
+        figures["ik Numba kernel alone (baseline)"] = per_call(ik_kernel, rows)
         figures["fk one"] = per_call(lambda v: m.fk(v), qs)
         figures["fk batch of one (before)"] = per_call(lambda v: m.fk(v), q_ones[:few])
-        figures["fk compiled solve + bound alone"] = per_call(fk_kernel, qs)
+        if native is not None:
+            figures["fk C call alone"] = per_call(
+                lambda v: native.fk(native.capsule, v, False, True), qs)
+            figures["fk C call alone, dense solve"] = per_call(
+                lambda v: dense.fk(dense.capsule, v, False, True), qs)
+        figures["fk Numba solve + bound alone (baseline)"] = per_call(fk_kernel, qs)
+        if peer is not None:
+            figures["pinocchio tree fk + frame (peer)"] = peer()
         figures["jacobian one pose, call"] = per_call(m.jacobian, rows)
         figures["jacobian one pose, call + J"] = per_call(lambda p: m.jacobian(p).J, rows)
         figures["jacobian one pose, call + condition"] = per_call(
@@ -481,6 +519,12 @@ def main() -> None:
             for k, v in f.items():
                 if k == "jacobian one pose (fast path)":
                     print(f"    {k:38s} {v[0]} of {v[1]} poses (the others beyond a stroke)")
+                elif k == "agreement":
+                    print(f"    C call against the batch rows: max |difference| ik {v[0]:.1e}, "
+                          f"fk {v[1]:.1e} (m, rad) over {f['poses']} poses")
+                elif k == "iterations":
+                    print(f"    ik iterations (C call): mean {v[0]:.2f}, {v[1]} to {v[2]}; the "
+                          f"batch rows' count on {v[3]} of {f['poses']} poses")
                 elif k == "fast":
                     print(f"    one-pose path taken by ik on {v} of {f['poses']} poses within "
                           "the strokes")

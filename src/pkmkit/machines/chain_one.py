@@ -2,6 +2,13 @@
 ``m.jacobian(x)`` of one plain pose or configuration through one compiled call each
 (:mod:`pkmkit.solve.chain_one_kernel`), without the batch machinery.
 
+With the C extension, plain ``m.ik(x)`` (no ``start``, no ``full_output``) and ``m.fk(q)`` are
+one C call each instead (:mod:`pkmkit.machines.chain_one_native`: the same rules in C, the
+solve by block elimination, the batch row to rounding — not to the bit); the rest of this
+module is then ``ik``'s ``start``/``full_output`` path, the Jacobian, and the path of every
+call where the extension is absent or ``PKMKIT_NATIVE=0`` was set before the machine's first
+single call.
+
 Per machine, once (:class:`ChainOneConstants`, cached on the machine): the kernel's arrays,
 the inverse's and the direct model's first-order starts, the strokes, the legs' home modes, the
 head's wrist pair. Per call: a type and range check of the plain numbers, one compiled solve on
@@ -43,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.machines import chain_one_velocity
+from pkmkit.machines.chain_one_native import packed
 from pkmkit.machines.chain_results import ChainInverseResult
 from pkmkit.machines.chain_starts import home_rates, inverse_rates
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
@@ -542,12 +550,21 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
     """``m.jacobian(x)`` of one plain pose ``x``: a record with the batch row's fields
     (``J``, ``passive_rates``, ``status``, ranks at once; ``J_homogeneous``,
     ``singular_values``, ``condition`` when read), or None (module docstring). With the C
-    extension the velocity model is one C call at the inverse solution
-    (:mod:`pkmkit.machines.chain_one_velocity`); where that does not apply, the compiled
-    ``velocity_one`` below (the direct model solved again)."""
+    extension the inverse solution is one C call (:mod:`pkmkit.machines.chain_one_native`)
+    and the velocity model one more at it (:mod:`pkmkit.machines.chain_one_velocity`); where
+    that does not apply, the compiled ``velocity_one`` below (the direct model solved
+    again)."""
     global _RECORD
     if type(tol) is not float or not tol > 0 or tol == math.inf:
         return None
+    if (p := packed(m)) is not None and (got := p.ik(p.capsule, x, True, True)) is not None:
+        # the inverse solution by one C call (chain_one_native.py; the stroke test left to
+        # the batch path, as _inverse_values), then the velocity model at it
+        fast = chain_one_velocity.record(m, got[0], got[1].tolist(), got[3],
+                                         max(tol, RANK_RCOND), BOUND_MARGIN,
+                                         6 + len(m.passive_variables))
+        if fast is not False:
+            return fast
     xs = _plain(x, 6)  # before constants(), as in _inverse_within
     c = None if xs is None else constants(m, "chain_jacobian")
     found = None if c is None else _inverse_values(c, xs)
@@ -590,6 +607,9 @@ class ChainOnePose:
     def _ik_one(self, x: Any, q0: Any, tool_length: Any, full_output: bool, strokes: str,
                 start: Any, engine_options: dict) -> tuple:
         if q0 is None and tool_length is None and not engine_options and strokes in _MODES:
+            if not full_output and start is None and (c := packed(self)) is not None:
+                q = c.ik(c.capsule, x, strokes == "ignore", False)  # chain_one_native.py
+                return () if q is None else (q,)
             fast = (inverse_record if full_output else inverse)(self, x, strokes, start)
             if fast is not None:
                 return (fast,)
@@ -600,6 +620,10 @@ class ChainOnePose:
                 engine_options: dict) -> tuple:
         if x0 is None and start is None and tool_length is None and max_misfit is None \
                 and not full_output and not engine_options and strokes in _MODES:
+            if (c := packed(self)) is not None:  # chain_one_native.py
+                fast = c.fk(c.capsule, q, strokes == "ignore",
+                            check_singular is None or bool(check_singular))
+                return () if fast is None else (fast,)
             fast = direct(self, q, strokes, check_singular)
             if fast is not None:
                 return (fast,)

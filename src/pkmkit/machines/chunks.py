@@ -233,12 +233,14 @@ def chunked(method: Callable[..., Any]) -> Callable[..., Any]:
 
     @functools.wraps(method)
     def call(self, *args: Any, **kwargs: Any) -> Any:
-        size = getattr(self, "chunk_rows", None) or CHUNK_ROWS
         x = args[0] if len(args) == 1 else kwargs.get(leading) if not args else None
         by_q = x is None and not args and leading != "q"  # jacobian(q=...): cut with q
         if by_q:
             x = kwargs.get("q")
-        if not (isinstance(x, np.ndarray) and x.ndim == 2 and x.shape[0] > size):
+        if not (isinstance(x, np.ndarray) and x.ndim == 2):  # one pose: no chunk size looked
+            return method(self, *args, **kwargs)  # up (a joint chain's costs a microsecond)
+        size = getattr(self, "chunk_rows", None) or CHUNK_ROWS
+        if x.shape[0] <= size:
             return method(self, *args, **kwargs)
         whole = getattr(self, "unchunked_call", None)
         if whole is not None and whole(method.__name__, x, kwargs):

@@ -415,3 +415,13 @@ void pk_chain_rows(const pk_chain *c, const double *known, ptrdiff_t known_rows,
         if (stopped) status[k] = worst <= o->residual_tol ? OK : INCONSISTENT;
     }
 }
+
+/* evaluate_any and retract for chain_one.c (the one-pose solve by block elimination). */
+void pk_chain_evaluate_any(const pk_chain *c, double *values, const double *u, double *r,
+                           double *jac, const double *target, double tool, pk_chain_work *w) {
+    evaluate_any(c, values, u, r, jac, target, tool, w);
+}
+
+void pk_chain_retract(const double *u, const double *step, double *out, ptrdiff_t n) {
+    retract(u, step, out, n);
+}

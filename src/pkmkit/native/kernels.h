@@ -169,6 +169,12 @@ void pk_chain_rows(const pk_chain *c, const double *known, ptrdiff_t known_rows,
 void pk_chain_evaluate(const pk_chain *c, double *values, const double *u, double *r,
                        double *jac, pk_chain_work *w);
 
+/* chain.c's evaluate_any (the closure, and the tool rows of the inverse model) and retract
+ * (u + step, the rotation composed on the left), for chain_one.c. */
+void pk_chain_evaluate_any(const pk_chain *c, double *values, const double *u, double *r,
+                           double *jac, const double *target, double tool, pk_chain_work *w);
+void pk_chain_retract(const double *u, const double *step, double *out, ptrdiff_t n);
+
 /* chain.c's _rotvec_matrix, _apply_frame, _rotation_rows (3 x 3 row-major). */
 void pk_chain_rotvec_matrix(double x, double y, double z, double *out);
 void pk_chain_apply_frame(double *rot, double *pos, const double *f, double *tmp);

@@ -517,6 +517,13 @@ PyObject *pk_py_absorb(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 extern const char pk_chain_velocity_pack_doc[], pk_chain_one_velocity_doc[];
 PyObject *pk_py_chain_velocity_pack(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+/* chain_one.c: joint-chain one pose per call (machines/chain_one_native.py) */
+extern const char pk_chain_one_pack_doc[], pk_chain_one_ik_doc[], pk_chain_one_fk_doc[];
+extern const char pk_chain_one_structured_doc[];
+PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_chain_one_structured(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
@@ -556,6 +563,14 @@ static PyMethodDef methods[] = {
      METH_FASTCALL, pk_chain_velocity_pack_doc},
     {"chain_one_velocity", (PyCFunction)(void (*)(void))pk_py_chain_one_velocity,
      METH_FASTCALL, pk_chain_one_velocity_doc},
+    {"chain_one_pack", (PyCFunction)(void (*)(void))pk_py_chain_one_pack, METH_FASTCALL,
+     pk_chain_one_pack_doc},
+    {"chain_one_ik", (PyCFunction)(void (*)(void))pk_py_chain_one_ik, METH_FASTCALL,
+     pk_chain_one_ik_doc},
+    {"chain_one_fk", (PyCFunction)(void (*)(void))pk_py_chain_one_fk, METH_FASTCALL,
+     pk_chain_one_fk_doc},
+    {"chain_one_structured", (PyCFunction)(void (*)(void))pk_py_chain_one_structured,
+     METH_FASTCALL, pk_chain_one_structured_doc},
     {NULL, NULL, 0, NULL},
 };
 

@@ -1,0 +1,494 @@
+/* One pose per call on a joint-chain machine (machines/chain_one_native.py, issue 22 §1):
+ * the machine's constants packed once into a capsule (chain_one_pack), then one call per
+ * pose: chain_one_ik (the inverse model: plain-number check, first-order start, solve, the
+ * legs' home-mode test, the retry from home, the turn wrapping, the head's branch rule, the
+ * stroke test) and chain_one_fk (the direct model: start, closure, regularity bound, stroke
+ * test, tool point and axis). Anything the batch path must decide (not plain numbers, no
+ * convergence, a stroke, a mirror that left the legs' home modes, a bound that does not
+ * certify the closure regular) returns None: the caller takes the batch path.
+ *
+ * The solve is chain.c's Levenberg-Marquardt loop (pk_chain_rows: the same stopping rules,
+ * statuses, damping and, to the bit, the same gradient and normal matrix), with the normal
+ * equations solved by block elimination: the residual of leg b (rows 6b..6b+5) depends on the
+ * platform's 6 unknowns and leg b's own joints only, the tool rows on the platform and the
+ * head's joints, so H = [[A, B'], [B, D]] with D block diagonal; each D_b (at most a few
+ * joints) is factored alone, the Schur complement S = A - sum B_b' D_b^-1 B_b (6 x 6) gives
+ * the platform's step, then each block's. The step agrees with the dense Cholesky's to
+ * rounding (not to the bit): results agree with the batch rows to ~1e-13 (tests). Joints
+ * that several blocks share (the TriMule's psi1) join the platform's 6 columns in the core
+ * (chain_one_solve.c). chain_one_pack.c packs the constants. */
+#include "chain_one.h"
+
+#include <math.h>
+
+enum { OK = 0 };
+
+/* sum a_i b_i in order. */
+static double dot(const double *a, const double *b, ptrdiff_t n) {
+    double acc = 0.0;
+    for (ptrdiff_t i = 0; i < n; i++) acc += a[i] * b[i];
+    return acc;
+}
+
+/* ---------------------------------------------------------------- one call's work */
+
+typedef struct {
+    pk_chain_work w;
+    double *scratch, *u, *u2, *values, *values2, *pred, *du, *low;
+    int64_t *ints;
+    void *memory;
+} pk_one_work;
+
+/* The work arrays of one call (the larger of the two models'), one allocation; 0 on success. */
+static int work_alloc(const pk_one *s, pk_one_work *k) {
+    ptrdiff_t n = s->inv.n, m = 6 * s->inv.n_legs + 6, nv = s->inv.n_var;
+    ptrdiff_t wide = pk_one_block_scratch(&s->inv_b, n);
+    ptrdiff_t wide_dir = pk_one_block_scratch(&s->dir_b, n);
+    if (wide_dir > wide) wide = wide_dir;
+    size_t cells = (size_t)(nv + 2 * m + 2 * m * n + 3 * n + 2 * n * n + 6 * s->twists)
+                   + (size_t)wide + (size_t)(4 * n + 2 * nv + 2 * n);
+    size_t ints = (size_t)(n + s->twists);
+    k->memory = malloc(sizeof(double) * cells + sizeof(int64_t) * ints);
+    if (!k->memory) return -1;
+    double *next = k->memory;
+    k->w.m = m;
+    k->w.values = next, next += nv;
+    k->w.r = next, next += m;
+    k->w.jac = next, next += m * n;
+    k->w.r_new = next, next += m;
+    k->w.j_new = next, next += m * n;
+    k->w.u_new = next, next += n;
+    k->w.step = next, next += n;
+    k->w.grad = next, next += n;
+    k->w.h = next, next += n * n;
+    k->w.low = next, next += n * n;
+    k->w.tw = next, next += 6 * s->twists;
+    k->scratch = next, next += wide;
+    k->u = next, next += n;
+    k->u2 = next, next += n;
+    k->pred = next, next += n;
+    k->du = next, next += n;
+    k->values = next, next += nv;
+    k->values2 = next, next += nv;
+    k->low = next, next += 2 * n;  /* unused slack */
+    k->ints = (int64_t *)next;
+    k->w.nz = k->ints;
+    k->w.tw_col = k->ints + n;
+    return 0;
+}
+
+/* One solve of model c (its blocks bk), structured or dense as packed. */
+static void solve(const pk_one *s, const pk_chain *c, const pk_blocks *bk,
+                  const pk_chain_options *o, const double *known, double *u,
+                  const double *target, double tool, pk_one_work *k, int64_t *status,
+                  double *residual, int64_t *iterations) {
+    k->w.m = 6 * c->n_legs + (c->inverse ? 6 : 0);
+    if (s->structured) {
+        pk_one_solve_blocks(c, bk, known, u, o, target, tool, &k->w, k->scratch, status, residual,
+                     iterations);
+    } else {
+        *residual = NAN;
+        *iterations = 0;
+        pk_chain_rows(c, known, 1, u, 1, o, status, residual, iterations, target, &tool, &k->w);
+    }
+}
+
+/* ---------------------------------------------------------------- the inverse model */
+
+static int in_home_modes(const pk_one *s, const double *u) {
+    for (ptrdiff_t i = 0; i < s->n_slides; i++)
+        if (!(u[s->slides[i]] * s->signs[i] > 0)) return 0;
+    for (ptrdiff_t i = 0; i < s->n_turns; i++)
+        if (!(cos(u[s->turns[i]] - s->turn_homes[i]) > 0)) return 0;
+    return 1;
+}
+
+/* values (n_var,) <- u[6:] with the revolute actuators on the turn nearest home. */
+static void wrapped(const pk_one *s, const double *u, double *values) {
+    memcpy(values, u + 6, (size_t)s->inv.n_var * sizeof(double));
+    for (ptrdiff_t i = 0; i < s->n_act_turns; i++) {
+        int64_t v = s->act_turns[i];
+        double d = values[v] - s->act_turn_homes[i];
+        values[v] = s->act_turn_homes[i] + atan2(sin(d), cos(d));
+    }
+}
+
+static int within(const pk_one *s, const double *values) {
+    for (ptrdiff_t v = 0; v < s->inv.n_var; v++)
+        if (!(s->lower[v] <= values[v] && values[v] <= s->upper[v])) return 0;
+    return 1;
+}
+
+static double turn_offset(double angle) { return PK_PI - pk_pymod(PK_PI - angle, 2.0 * PK_PI); }
+
+/* The inverse of target (6,) (axis unit) from start (n,) or the first-order start (NULL):
+ * 1 with values, u (the kept solution), *iterations, *residual filled; 0 where the batch path
+ * must decide. machines/chain_one.py's _inverse_values and _nearest_branch, statement for
+ * statement. */
+static int inverse(const pk_one *s, const double *target, const double *start, pk_one_work *k,
+                   double *values, double *u, int64_t *iterations, double *residual) {
+    const pk_chain *c = &s->inv;
+    ptrdiff_t n = c->n;
+    int64_t status;
+    if (start == NULL) {
+        double d[6];
+        for (int i = 0; i < 3; i++) {
+            d[i] = (target[i] - s->tool * target[3 + i]) - s->base[i];
+            d[3 + i] = target[3 + i] - s->base[3 + i];
+        }
+        for (ptrdiff_t i = 0; i < n; i++) {
+            double acc = d[0] * s->inv_rates[6 * i];
+            for (int j = 1; j < 6; j++) acc = acc + d[j] * s->inv_rates[6 * i + j];
+            u[i] = s->u_home_inv[i] + acc;
+        }
+    } else {
+        memcpy(u, start, (size_t)n * sizeof(double));
+    }
+    solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, u, target, s->tool, k, &status,
+          residual, iterations);
+    int first = status == OK && in_home_modes(s, u);
+    if (!first) {
+        memcpy(u, s->u_home_inv, (size_t)n * sizeof(double));
+        solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, u, target, s->tool, k, &status,
+              residual, iterations);
+        if (status != OK) return 0;
+    }
+    wrapped(s, u, values);
+    if (!s->wrist) return 1;
+    /* the head's branch rule */
+    double offset = turn_offset(u[6 + s->w_turn] - s->w_home);
+    int far = fabs(offset) > s->far;
+    int kept_inside = within(s, values);
+    if (!(far || (s->wide && !kept_inside))) return 1;
+    double *other = k->u2, *other_values = k->values2;
+    memcpy(other, u, (size_t)n * sizeof(double));
+    other[6 + s->w_turn] += PK_PI;
+    other[6 + s->w_tilt] = 2.0 * s->w_centre - other[6 + s->w_tilt];
+    int64_t other_iterations;
+    double other_residual;
+    solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, other, target, s->tool, k, &status,
+          &other_residual, &other_iterations);
+    if (status != OK) return 0;
+    wrapped(s, other, other_values);
+    int closer = fabs(turn_offset(other[6 + s->w_turn] - s->w_home)) < fabs(offset);
+    int flipped_inside = within(s, other_values);
+    *iterations += other_iterations;
+    if ((flipped_inside && !kept_inside) || (flipped_inside == kept_inside && closer)) {
+        if (first && !in_home_modes(s, other)) return 0;
+        memcpy(u, other, (size_t)n * sizeof(double));
+        memcpy(values, other_values, (size_t)c->n_var * sizeof(double));
+        *residual = other_residual;
+    }
+    return 1;
+}
+
+/* ---------------------------------------------------------------- the direct model */
+
+/* The tool point and axis into pose (6,): the head walked from the platform u[:6]. */
+static void tool_pose(const pk_one *s, const double *values, const double *u, double *pose) {
+    const pk_chain *c = &s->dir;
+    double rot[9], pos[3], tmp[9];
+    pk_chain_rotvec_matrix(u[3], u[4], u[5], rot);
+    for (int i = 0; i < 3; i++) pos[i] = u[i];
+    for (ptrdiff_t idx = 0; idx < c->n_head; idx++) {
+        int64_t e = c->head[idx];
+        pk_chain_apply_frame(rot, pos, c->frames + 16 * e, tmp);
+        int64_t t = c->types[e];
+        if (t == 0) continue;
+        double q = values[c->evar[e]];
+        if (t == 1) {
+            double cq = cos(q), sq = sin(q);
+            for (int i = 0; i < 3; i++) {
+                double x = rot[3 * i], y = rot[3 * i + 1];
+                rot[3 * i] = cq * x + sq * y;
+                rot[3 * i + 1] = cq * y - sq * x;
+            }
+        } else {
+            pos[0] += q * rot[2];
+            pos[1] += q * rot[5];
+            pos[2] += q * rot[8];
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        pose[i] = pos[i] + s->tool * rot[3 * i + 2];
+        pose[3 + i] = rot[3 * i + 2];
+    }
+}
+
+/* 1 / sqrt(||J||_F^2 ||L^-1||_F^2) with L L' = J'J (chain_one_kernel._factor, _bound): J'J
+ * summed over each row's nonzero entries (nz: n indices), L's diagonal and L^-1's by
+ * reciprocals (multiplications: the rounding of the bound, which has a margin of 2, not of
+ * the answer). */
+static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double *low,
+                            double *inv, int64_t *nz) {
+    double fro = 0.0;
+    for (ptrdiff_t i = 0; i < m * n; i++) fro += jac[i] * jac[i];
+    for (ptrdiff_t i = 0; i < n * n; i++) low[i] = 0.0;
+    for (ptrdiff_t i = 0; i < m; i++) {
+        const double *row = jac + i * n;
+        ptrdiff_t count = 0;
+        for (ptrdiff_t a = 0; a < n; a++)
+            if (row[a] != 0.0) nz[count++] = a;
+        for (ptrdiff_t p = 0; p < count; p++) {
+            double v = row[nz[p]];
+            double *target = low + nz[p] * n;
+            for (ptrdiff_t t = 0; t <= p; t++) target[nz[t]] += v * row[nz[t]];
+        }
+    }
+    for (ptrdiff_t j = 0; j < n; j++) {  /* in place: J'J's lower part into L */
+        double acc = low[j * n + j];
+        for (ptrdiff_t p = 0; p < j; p++) acc -= low[j * n + p] * low[j * n + p];
+        double d = acc > 0.0 ? 1.0 / sqrt(acc) : NAN;
+        low[j * n + j] = d;
+        for (ptrdiff_t i = j + 1; i < n; i++) {
+            double t = low[i * n + j];
+            for (ptrdiff_t p = 0; p < j; p++) t -= low[i * n + p] * low[j * n + p];
+            low[i * n + j] = t * d;
+        }
+    }
+    double total = 0.0;
+    for (ptrdiff_t j = 0; j < n; j++) {
+        for (ptrdiff_t i = j; i < n; i++) {
+            double acc = i == j ? 1.0 : 0.0;
+            for (ptrdiff_t p = j; p < i; p++) acc -= low[i * n + p] * inv[p * n + j];
+            inv[i * n + j] = acc * low[i * n + i];
+            total += inv[i * n + j] * inv[i * n + j];
+        }
+    }
+    return 1.0 / sqrt(fro * total);
+}
+
+/* The direct model of q (n_act,): 1 with pose (6,) and values (n_var,) filled, 0 where the
+ * batch path must decide (chain_one_kernel.direct_one and chain_one.direct). */
+static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, double *values,
+                  double *pose) {
+    const pk_chain *c = &s->dir;
+    ptrdiff_t n_u = c->n, m = s->m_dir, n = s->n_act;
+    double *u = k->u, *pred = k->pred, *du = k->du, delta[64];
+    if (n > 64) return 0;
+    memcpy(values, s->home_values, (size_t)c->n_var * sizeof(double));
+    for (ptrdiff_t j = 0; j < n; j++) {
+        values[s->act[j]] = q[j];
+        delta[j] = q[j] - s->home_values[s->act[j]];
+    }
+    /* the start: home moved to first order, or home where that closes worse */
+    for (ptrdiff_t i = 0; i < n_u; i++) {
+        double acc = 0.0;
+        for (ptrdiff_t j = 0; j < n; j++) acc += delta[j] * s->dir_rates[i * n + j];
+        du[i] = acc;
+    }
+    pk_chain_retract(s->u_home_dir, du, pred, n_u);
+    k->w.m = m;
+    memcpy(k->values2, values, (size_t)c->n_var * sizeof(double));
+    pk_chain_evaluate(c, k->values2, pred, k->w.r, k->w.jac, &k->w);
+    double home_cost = 0.0;
+    for (ptrdiff_t i = 0; i < m; i++) {
+        double acc = 0.0;
+        for (ptrdiff_t j = 0; j < n; j++) acc += delta[j] * s->residual_rates[i * n + j];
+        home_cost += acc * acc;
+    }
+    int worse = !(dot(k->w.r, k->w.r, m) <= home_cost);
+    memcpy(u, worse ? s->u_home_dir : pred, (size_t)n_u * sizeof(double));
+    int64_t status, iterations;
+    double residual;
+    double no_target[6] = {0, 0, 0, 0, 0, 0};
+    solve(s, c, &s->dir_b, &s->dir_o, values, u, no_target, 0.0, k, &status, &residual,
+          &iterations);
+    if (status != OK) return 0;
+    for (ptrdiff_t v = 0; v < c->n_var; v++)
+        if (c->position[v] >= 0) values[v] = u[c->position[v]];
+    if (check) {
+        k->w.m = m;
+        memcpy(k->values2, values, (size_t)c->n_var * sizeof(double));
+        pk_chain_evaluate(c, k->values2, u, k->w.r, k->w.jac, &k->w);
+        double bound = regular_bound(k->w.jac, m, n_u, k->w.h, k->w.low, k->w.nz);
+        if (!(bound >= s->singular_bound)) return 0;
+    }
+    tool_pose(s, values, u, pose);
+    return 1;
+}
+
+/* ---------------------------------------------------------------- the module face */
+
+/* width plain finite numbers within +-max_coordinate from a list, tuple (floats, NumPy's
+ * float64s, ints but not bools) or
+ * a 1-D float64 / float32 array into out: 1, else 0 (the batch path; no error set). */
+static int plain(const pk_one *s, PyObject *x, ptrdiff_t width, double *out) {
+    if (PyList_CheckExact(x) || PyTuple_CheckExact(x)) {
+        if (PySequence_Fast_GET_SIZE(x) != width) return 0;
+        PyObject **items = PySequence_Fast_ITEMS(x);
+        for (ptrdiff_t i = 0; i < width; i++) {
+            PyObject *v = items[i];
+            if (PyFloat_Check(v)) {  /* float and its subclasses (NumPy's float64) */
+                out[i] = PyFloat_AS_DOUBLE(v);
+            } else if (PyLong_CheckExact(v)) {
+                out[i] = PyLong_AsDouble(v);
+                if (out[i] == -1.0 && PyErr_Occurred()) {
+                    PyErr_Clear();
+                    return 0;
+                }
+            } else {
+                return 0;
+            }
+        }
+    } else if (PyObject_TypeCheck(x, (PyTypeObject *)s->ndarray)) {
+        Py_buffer view;
+        if (PyObject_GetBuffer(x, &view, PyBUF_RECORDS_RO) < 0) {
+            PyErr_Clear();
+            return 0;
+        }
+        const char *f = view.format ? view.format : "B";
+        if (f[0] == '@' || f[0] == '=' || (PY_LITTLE_ENDIAN && f[0] == '<')) f++;
+        int ok = view.ndim == 1 && view.shape[0] == width && f[1] == 0
+                 && ((f[0] == 'd' && view.itemsize == 8) || (f[0] == 'f' && view.itemsize == 4));
+        if (ok) {
+            const char *p = view.buf;
+            for (ptrdiff_t i = 0; i < width; i++, p += view.strides[0])
+                out[i] = f[0] == 'd' ? *(const double *)p : (double)*(const float *)p;
+        }
+        PyBuffer_Release(&view);
+        if (!ok) return 0;
+    } else {
+        return 0;
+    }
+    for (ptrdiff_t i = 0; i < width; i++)
+        if (!(fabs(out[i]) <= s->max_coordinate)) return 0;
+    return 1;
+}
+
+/* A new float64 array of `count` values (numpy.empty through the packed callable). */
+static PyObject *new_array(const pk_one *s, PyObject *size, const double *data, ptrdiff_t count) {
+    PyObject *arr = PyObject_CallOneArg(s->empty, size);
+    if (!arr) return NULL;
+    Py_buffer view;
+    if (PyObject_GetBuffer(arr, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
+        Py_DECREF(arr);
+        return NULL;
+    }
+    memcpy(view.buf, data, (size_t)count * sizeof(double));
+    PyBuffer_Release(&view);
+    return arr;
+}
+
+
+
+static pk_one *capsule_state(PyObject *capsule) {
+    return PyCapsule_GetPointer(capsule, PK_ONE_CAPSULE);
+}
+
+const char pk_chain_one_ik_doc[] =
+    "chain_one_ik(packed, x, ignore, full, start=None)\n\n"
+    "The inverse model of one plain pose x (6 numbers: list, tuple or 1-D float array) of the\n"
+    "machine packed by chain_one_pack: q (n,), or with full (q, u (6 + n_var,), iterations,\n"
+    "residual); None where the batch path must decide (machines/chain_one_native.py).\n"
+    "ignore: keep a solution beyond a stroke; start: 6 + n_var plain numbers (a previous\n"
+    "solution) instead of the first-order start.";
+
+PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs < 4 || nargs > 5) {
+        PyErr_SetString(PyExc_TypeError, "chain_one_ik(packed, x, ignore, full, start=None)");
+        return NULL;
+    }
+    pk_one *s = capsule_state(args[0]);
+    if (!s) return NULL;
+    ptrdiff_t n = s->inv.n, nv = s->inv.n_var;
+    double x[6], target[6];
+    if (!plain(s, args[1], 6, x)) Py_RETURN_NONE;
+    int ignore = PyObject_IsTrue(args[2]), full = PyObject_IsTrue(args[3]);
+    if (ignore < 0 || full < 0) return NULL;
+    double norm = sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]);
+    if (!(norm > 0)) Py_RETURN_NONE;
+    for (int i = 0; i < 3; i++) {
+        target[i] = x[i];
+        target[3 + i] = x[3 + i] / norm;
+    }
+    pk_one_work k;
+    if (work_alloc(s, &k) < 0) return PyErr_NoMemory();
+    double *start = NULL;
+    if (nargs == 5 && args[4] != Py_None) {
+        start = k.pred;
+        if (!plain(s, args[4], n, start)) {
+            free(k.memory);
+            Py_RETURN_NONE;
+        }
+    }
+    double *values = k.values, *u = k.u, q[64];
+    int64_t iterations = 0;
+    double residual = NAN;
+    int found;
+    Py_BEGIN_ALLOW_THREADS
+    found = inverse(s, target, start, &k, values, u, &iterations, &residual)
+            && (ignore || within(s, values)) && s->n_act <= 64;
+    if (found)
+        for (ptrdiff_t j = 0; j < s->n_act; j++) q[j] = values[s->act[j]];
+    Py_END_ALLOW_THREADS
+    PyObject *out = NULL;
+    if (!found) {
+        free(k.memory);
+        Py_RETURN_NONE;
+    }
+    PyObject *qa = new_array(s, s->n_obj, q, s->n_act);
+    if (qa && full) {
+        PyObject *ua = new_array(s, s->u_obj, u, 6 + nv);
+        PyObject *count = PyLong_FromLongLong((long long)iterations);
+        PyObject *worst = PyFloat_FromDouble(residual);
+        out = ua && count && worst ? PyTuple_New(4) : NULL;
+        if (out) {  /* the tuple takes the four references */
+            PyTuple_SET_ITEM(out, 0, qa);
+            PyTuple_SET_ITEM(out, 1, ua);
+            PyTuple_SET_ITEM(out, 2, count);
+            PyTuple_SET_ITEM(out, 3, worst);
+        } else {
+            Py_DECREF(qa);
+            Py_XDECREF(ua);
+            Py_XDECREF(count);
+            Py_XDECREF(worst);
+        }
+    } else {
+        out = qa;
+    }
+    free(k.memory);
+    return out;
+}
+
+const char pk_chain_one_fk_doc[] =
+    "chain_one_fk(packed, q, ignore, check)\n\n"
+    "The direct model of one plain configuration q (n numbers) of the machine packed by\n"
+    "chain_one_pack: the tool point and axis (6,), or None where the batch path must decide\n"
+    "(machines/chain_one_native.py). check: certify the closure regular (else None).";
+
+PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 4) {
+        PyErr_SetString(PyExc_TypeError, "chain_one_fk(packed, q, ignore, check)");
+        return NULL;
+    }
+    pk_one *s = capsule_state(args[0]);
+    if (!s) return NULL;
+    double q[64], pose[6];
+    if (s->n_act > 64 || !plain(s, args[1], s->n_act, q)) Py_RETURN_NONE;
+    int ignore = PyObject_IsTrue(args[2]), check = PyObject_IsTrue(args[3]);
+    if (ignore < 0 || check < 0) return NULL;
+    pk_one_work k;
+    if (work_alloc(s, &k) < 0) return PyErr_NoMemory();
+    int found;
+    Py_BEGIN_ALLOW_THREADS
+    found = direct(s, q, check, &k, k.values, pose) && (ignore || within(s, k.values));
+    Py_END_ALLOW_THREADS
+    free(k.memory);
+    if (!found) Py_RETURN_NONE;
+    return new_array(s, s->six, pose, 6);
+}
+
+const char pk_chain_one_structured_doc[] =
+    "chain_one_structured(packed)\n\n"
+    "Whether the packed machine's solves run by block elimination (else dense).";
+
+PyObject *pk_py_chain_one_structured(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 1 && PyErr_Format(PyExc_TypeError, "chain_one_structured(packed)") == NULL) return NULL;
+    pk_one *s = capsule_state(args[0]);
+    if (!s) return NULL;
+    return PyBool_FromLong(s->structured);
+}

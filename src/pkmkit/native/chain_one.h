@@ -1,0 +1,55 @@
+/* native/chain_one.c, chain_one_solve.c, chain_one_pack.c: a joint-chain machine's one-pose
+ * constants (the capsule's state) and the solve by block elimination (see chain_one.c). */
+#ifndef PKMKIT_CHAIN_ONE_H
+#define PKMKIT_CHAIN_ONE_H
+
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "kernels.h"
+
+#define PK_ONE_CAPSULE "pkmkit.chain_one"
+
+/* Columns of each block of rows (legs, then the tool rows of the inverse model). */
+typedef struct {
+    ptrdiff_t count;     /* blocks */
+    int64_t *start;      /* (count + 1,) into cols */
+    int64_t *cols;       /* the blocks' columns, each >= 6 */
+    ptrdiff_t widest;    /* largest block */
+    ptrdiff_t n_core;    /* the platform's 6 columns and the joints shared by blocks */
+    int64_t *core;
+} pk_blocks;
+
+typedef struct {
+    pk_chain inv, dir;
+    pk_chain_options inv_o, dir_o;
+    pk_blocks inv_b, dir_b;
+    int structured;
+    double *u_home_inv, *base, *inv_rates, tool;
+    int64_t *slides, *turns, *act_turns, *act;
+    double *signs, *turn_homes, *act_turn_homes, *lower, *upper;
+    ptrdiff_t n_slides, n_turns, n_act_turns, n_act;
+    int wrist, wide;
+    int64_t w_turn, w_tilt;
+    double w_home, w_centre, far;
+    double *u_home_dir, *dir_rates, *residual_rates, *home_values;
+    double singular_bound, max_coordinate;
+    ptrdiff_t twists, m_dir;
+    PyObject *empty, *ndarray, *n_obj, *u_obj, *six;
+    void *owned[48];
+    int n_owned;
+} pk_one;
+
+/* chain_one_solve.c: pk_chain_rows's loop on one row u (n,) from known (n_var,), its normal
+ * equations by block elimination (scratch: pk_one_block_scratch doubles); the blocks of a
+ * model (-2 when out of memory; their arrays appended to s->owned). */
+void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *known,
+                         double *u, const pk_chain_options *o, const double *target,
+                         double tool, pk_chain_work *w, double *scratch, int64_t *status,
+                         double *residual, int64_t *iterations);
+ptrdiff_t pk_one_block_scratch(const pk_blocks *bk, ptrdiff_t n);
+int pk_one_find_blocks(pk_one *s, const pk_chain *c, pk_blocks *bk);
+
+#endif

@@ -1,0 +1,315 @@
+/* The one-pose solve of native/chain_one.c: chain.c's Levenberg-Marquardt loop on one row
+ * with each iteration's normal equations solved by block elimination (the Schur complement
+ * onto the platform's 6 unknowns and the joints several legs share; chain_one.c's comment). */
+#include "chain_one.h"
+
+#include <math.h>
+
+enum { OK = 0, NOT_CONVERGED = 3 };
+
+/* ---------------------------------------------------------------- the structured solve */
+
+/* Lower Cholesky factor of the k x k matrix a (row-major, lower part read) into low, its
+ * diagonal holding the reciprocals 1 / L_jj (multiplications, not divisions, in the
+ * substitutions: the divider's latency was a fifth of the solve); NaN where not positive
+ * definite (chain.c's rule). */
+static void factor(const double *a, double *low, ptrdiff_t k) {
+    for (ptrdiff_t j = 0; j < k; j++) {
+        double s = a[j * k + j];
+        for (ptrdiff_t p = 0; p < j; p++) s -= low[j * k + p] * low[j * k + p];
+        double inv = s > 0.0 ? 1.0 / sqrt(s) : NAN;
+        low[j * k + j] = inv;
+        for (ptrdiff_t i = j + 1; i < k; i++) {
+            double t = a[i * k + j];
+            for (ptrdiff_t p = 0; p < j; p++) t -= low[i * k + p] * low[j * k + p];
+            low[i * k + j] = t * inv;
+        }
+    }
+}
+
+/* x <- L^-1 x for the columns of x (k x cols, row-major): factor's low. */
+static void forward(const double *low, ptrdiff_t k, double *x, ptrdiff_t cols) {
+    for (ptrdiff_t i = 0; i < k; i++) {
+        double *xi = x + i * cols;
+        for (ptrdiff_t p = 0; p < i; p++) {
+            double l = low[i * k + p];
+            const double *xp = x + p * cols;
+            for (ptrdiff_t c = 0; c < cols; c++) xi[c] -= l * xp[c];
+        }
+        double inv = low[i * k + i];
+        for (ptrdiff_t c = 0; c < cols; c++) xi[c] *= inv;
+    }
+}
+
+/* x <- L^-T x (factor's low). */
+static void backward(const double *low, ptrdiff_t k, double *x) {
+    for (ptrdiff_t i = k - 1; i >= 0; i--) {
+        double t = x[i];
+        for (ptrdiff_t p = i + 1; p < k; p++) t -= low[p * k + i] * x[p];
+        x[i] = t * low[i * k + i];
+    }
+}
+
+/* a . b for 6-vectors, in pairs (independent additions). */
+static inline double dot6(const double *a, const double *b) {
+    return ((a[0] * b[0] + a[1] * b[1]) + (a[2] * b[2] + a[3] * b[3]))
+           + (a[4] * b[4] + a[5] * b[5]);
+}
+
+/* The layout of the scratch: the core block A (nc x nc), its damped factor, the core's
+ * right-hand side, every column's squared norm, then per block its core and own columns
+ * transposed (nc x 6, k x 6), D_b, its factor L_b, B_b then Y_b (k x nc), z_b (k). */
+typedef struct {
+    double *a, *sl, *xp, *diag, *blocks;
+    ptrdiff_t per_block;
+} layout;
+
+static layout lay_out(const pk_blocks *bk, ptrdiff_t n, double *scratch) {
+    ptrdiff_t nc = bk->n_core, w = bk->widest;
+    layout l;
+    l.a = scratch, l.sl = l.a + nc * nc, l.xp = l.sl + nc * nc, l.diag = l.xp + nc;
+    l.blocks = l.diag + n;
+    l.per_block = 6 * nc + 6 * w + 2 * w * w + w * nc + w;
+    return l;
+}
+
+/* The normal equations' pieces at the Jacobian jac (m = 6 blocks' rows, n columns) and the
+ * residual r: A = J_C'J_C, per block D_b = J_b'J_b and B_b = J_b'J_C (own columns J_b), the
+ * gradient J'r into grad and every column's squared norm into l.diag (zero for a column in no
+ * block: no step). Sums by 6-row blocks: H, the gradient and the columns' norms are the dense
+ * loop's to rounding. */
+static void normal(const pk_blocks *bk, const double *jac, const double *r, ptrdiff_t n,
+                   double *grad, const layout *l) {
+    const ptrdiff_t nc = bk->n_core, w = bk->widest;
+    const int64_t *core = bk->core;
+    for (ptrdiff_t p = 0; p < nc * nc; p++) l->a[p] = 0.0;
+    for (ptrdiff_t c = 0; c < n; c++) grad[c] = l->diag[c] = 0.0;
+    for (ptrdiff_t b = 0; b < bk->count; b++) {
+        const int64_t *cols = bk->cols + bk->start[b];
+        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
+        const double *rows = jac + 6 * b * n, *rb = r + 6 * b;
+        double *ct = l->blocks + b * l->per_block, *ot = ct + 6 * nc, *hbb = ot + 6 * w;
+        double *y = hbb + 2 * w * w;
+        for (int i = 0; i < 6; i++) {
+            for (ptrdiff_t t = 0; t < nc; t++) ct[t * 6 + i] = rows[i * n + core[t]];
+            for (ptrdiff_t p = 0; p < k; p++) ot[p * 6 + i] = rows[i * n + cols[p]];
+        }
+        for (ptrdiff_t p = 0; p < nc; p++) {
+            for (ptrdiff_t t = 0; t <= p; t++) l->a[p * nc + t] += dot6(ct + 6 * p, ct + 6 * t);
+            grad[core[p]] += dot6(ct + 6 * p, rb);
+        }
+        for (ptrdiff_t p = 0; p < k; p++) {
+            for (ptrdiff_t t = 0; t <= p; t++) hbb[p * k + t] = dot6(ot + 6 * p, ot + 6 * t);
+            for (ptrdiff_t t = 0; t < nc; t++) y[p * nc + t] = dot6(ot + 6 * p, ct + 6 * t);
+            grad[cols[p]] = dot6(ot + 6 * p, rb);
+            l->diag[cols[p]] = hbb[p * k + p];
+        }
+    }
+    for (ptrdiff_t p = 0; p < nc; p++) l->diag[core[p]] = l->a[p * nc + p];
+}
+
+/* The damped Gauss-Newton step of pk_chain_rows, step = -(H + lam (diag H + floor))^-1 grad,
+ * from normal()'s pieces, by the Schur complement onto the core columns (the platform's 6
+ * and the joints shared by several blocks): per block b D_b = L_b L_b', Y_b = L_b^-1 B_b,
+ * z_b = L_b^-1 g_b; S = A - sum Y_b'Y_b; x_C = S^-1 (g_C - sum Y_b'z_b); x_b = L_b^-T (z_b -
+ * Y_b x_C). */
+static void block_step(const pk_blocks *bk, ptrdiff_t n, const double *grad, double lam,
+                       double *step, const layout *l) {
+    const ptrdiff_t nc = bk->n_core, w = bk->widest;
+    const int64_t *core = bk->core;
+    double *s = l->sl, *xp = l->xp;
+    double dmax = 0.0;
+    for (ptrdiff_t c = 0; c < n; c++)
+        if (l->diag[c] > dmax) dmax = l->diag[c];
+    double floor_ = 1e-9 * dmax + 1e-300;
+    for (ptrdiff_t c = 0; c < n; c++) step[c] = -(grad[c] / (lam * (l->diag[c] + floor_)));
+    for (ptrdiff_t p = 0; p < nc; p++) {
+        for (ptrdiff_t t = 0; t < p; t++) s[p * nc + t] = l->a[p * nc + t];
+        s[p * nc + p] = l->a[p * nc + p] + lam * (l->a[p * nc + p] + floor_);
+        xp[p] = grad[core[p]];
+    }
+    for (ptrdiff_t b = 0; b < bk->count; b++) {
+        const int64_t *cols = bk->cols + bk->start[b];
+        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
+        double *hbb = l->blocks + b * l->per_block + 6 * nc + 6 * w, *lbb = hbb + w * w;
+        double *y = lbb + w * w, *z = y + w * nc;
+        for (ptrdiff_t p = 0; p < k; p++) {
+            hbb[p * k + p] += lam * (hbb[p * k + p] + floor_);
+            z[p] = grad[cols[p]];
+        }
+        factor(hbb, lbb, k);
+        forward(lbb, k, y, nc);
+        forward(lbb, k, z, 1);
+        for (ptrdiff_t q = 0; q < k; q++) {  /* S -= Y'Y, xp -= Y'z: row by row of Y */
+            const double *yq = y + q * nc;
+            for (ptrdiff_t p = 0; p < nc; p++) {
+                double v = yq[p];
+                for (ptrdiff_t t = 0; t <= p; t++) s[p * nc + t] -= v * yq[t];
+                xp[p] -= v * z[q];
+            }
+        }
+    }
+    factor(s, s, nc);  /* in place: each entry read before it is written */
+    forward(s, nc, xp, 1);
+    backward(s, nc, xp);
+    for (ptrdiff_t p = 0; p < nc; p++) step[core[p]] = -xp[p];
+    for (ptrdiff_t b = 0; b < bk->count; b++) {
+        const int64_t *cols = bk->cols + bk->start[b];
+        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
+        double *lbb = l->blocks + b * l->per_block + 6 * nc + 6 * w + w * w;
+        double *y = lbb + w * w, *z = y + w * nc;
+        for (ptrdiff_t p = 0; p < k; p++) {
+            double acc = z[p];
+            for (ptrdiff_t t = 0; t < nc; t++) acc -= y[p * nc + t] * xp[t];
+            z[p] = acc;
+        }
+        backward(lbb, k, z);
+        for (ptrdiff_t p = 0; p < k; p++) step[cols[p]] = -z[p];
+    }
+}
+
+/* Doubles of the solve's scratch (layout). */
+ptrdiff_t pk_one_block_scratch(const pk_blocks *bk, ptrdiff_t n) {
+    layout l = lay_out(bk, n, NULL);
+    return 2 * bk->n_core * bk->n_core + bk->n_core + n + bk->count * l.per_block;
+}
+
+/* sum a_i b_i in order. */
+static double dot(const double *a, const double *b, ptrdiff_t n) {
+    double acc = 0.0;
+    for (ptrdiff_t i = 0; i < n; i++) acc += a[i] * b[i];
+    return acc;
+}
+
+/* The loop of pk_chain_rows on one row u (n,), from known (n_var,), its normal equations by
+ * block_step: status, residual, iterations out. */
+void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *known,
+                         double *u, const pk_chain_options *o, const double *target,
+                         double tool, pk_chain_work *w, double *scratch, int64_t *status,
+                         double *residual, int64_t *iterations) {
+    const ptrdiff_t n = c->n, m = w->m;
+    double *values = w->values, *r = w->r, *jac = w->jac, *r_new = w->r_new;
+    double *j_new = w->j_new, *u_new = w->u_new, *step = w->step, *grad = w->grad;
+    layout l = lay_out(bk, n, scratch);
+    *iterations = 0;
+    *residual = NAN;
+    for (ptrdiff_t i = 0; i < n; i++)
+        if (!isfinite(u[i])) {
+            *status = 4;
+            return;
+        }
+    memcpy(values, known, (size_t)c->n_var * sizeof(double));
+    pk_chain_evaluate_any(c, values, u, r, jac, target, tool, w);
+    double cost = 0.5 * dot(r, r, m);
+    double spread = 0.0;  /* x - x is 0 for a finite x, NaN else: one vectorised pass */
+    for (ptrdiff_t i = 0; i < m * n; i++) spread += jac[i] - jac[i];
+    if (!(isfinite(cost) && spread == 0.0)) {
+        *status = 4;
+        return;
+    }
+    *status = NOT_CONVERGED;
+    double lam = o->damping;
+    double checkpoint = cost;
+    int64_t count = 0;
+    int stopped = 0;
+    for (int64_t it = 0; it < o->max_iter; it++) {
+        normal(bk, jac, r, n, grad, &l);
+        double biggest = 0.0;
+        for (ptrdiff_t a = 0; a < n; a++) {
+            double cosine = fabs(grad[a]) / sqrt(l.diag[a] * (2.0 * cost));
+            if (cosine > biggest) biggest = cosine;
+        }
+        if (cost <= 0.5 * o->atol * o->atol || !(biggest > o->gtol)) {
+            stopped = 1;
+            break;
+        }
+        block_step(bk, n, grad, lam, step, &l);
+        pk_chain_retract(u, step, u_new, n);
+        pk_chain_evaluate_any(c, values, u_new, r_new, j_new, target, tool, w);
+        double cost_new = 0.5 * dot(r_new, r_new, m);
+        int accept = isfinite(cost_new) && cost_new <= cost * (1.0 + 1e-13);
+        count += 1;
+        if (accept) {
+            memcpy(u, u_new, (size_t)n * sizeof(double));
+            memcpy(r, r_new, (size_t)m * sizeof(double));
+            double *swap = jac;  /* the new Jacobian is the current one */
+            jac = j_new;
+            j_new = swap;
+            cost = cost_new;
+            lam = pk_max(lam * 0.1, 1e-12);
+        } else {
+            lam *= 10.0;
+        }
+        double step_norm = sqrt(dot(step, step, n));
+        double u_norm = sqrt(dot(u, u, n));
+        int done = (accept && step_norm <= o->xtol * (1.0 + u_norm)) || lam > 1e12;
+        if (count % 10 == 0) {
+            if (cost > (1.0 - o->stall) * checkpoint
+                && cost > 0.5 * (o->residual_tol * o->residual_tol))
+                done = 1;
+            checkpoint = cost;
+        }
+        if (done) {
+            stopped = 1;
+            break;
+        }
+    }
+    *iterations = count;
+    double worst = 0.0;
+    for (ptrdiff_t i = 0; i < m; i++)
+        if (fabs(r[i]) > worst || isnan(r[i])) worst = fabs(r[i]);
+    *residual = worst;
+    if (stopped) *status = worst <= o->residual_tol ? OK : 7;
+}
+
+/* The blocks of model c: each leg's unknown joints (and the head's when inverse) not shared
+ * with another block; the shared ones join the platform's 6 columns in the core. -2 when out
+ * of memory. */
+int pk_one_find_blocks(pk_one *s, const pk_chain *c, pk_blocks *bk) {
+    ptrdiff_t count = c->n_legs + (c->inverse ? 1 : 0);
+    int64_t *start = malloc(sizeof(int64_t) * (size_t)(count + 1));
+    int64_t *cols = malloc(sizeof(int64_t) * (size_t)(c->n + 1));
+    int64_t *core = malloc(sizeof(int64_t) * (size_t)(c->n + 1));
+    int64_t *owner = malloc(sizeof(int64_t) * (size_t)(c->n + 1));
+    if (!start || !cols || !core || !owner) {
+        free(start), free(cols), free(core), free(owner);
+        return -2;
+    }
+    s->owned[s->n_owned++] = start;
+    s->owned[s->n_owned++] = cols;
+    s->owned[s->n_owned++] = core;
+    for (ptrdiff_t a = 0; a < c->n; a++) owner[a] = a < 6 ? -2 : -1;  /* -2: core */
+    for (int pass = 0; pass < 2; pass++) {  /* owners, then the blocks' own columns */
+        ptrdiff_t used = 0, widest = 0;
+        for (ptrdiff_t b = 0; b < count; b++) {
+            start[b] = used;
+            const int64_t *list = b < c->n_legs ? c->elements + c->offsets[b] : c->head;
+            ptrdiff_t length = b < c->n_legs ? c->offsets[b + 1] - c->offsets[b] : c->n_head;
+            for (ptrdiff_t i = 0; i < length; i++) {
+                int64_t e = list[i];
+                int64_t col = c->types[e] == 0 ? -1 : c->position[c->evar[e]];
+                if (col < 0) continue;
+                if (pass == 0) {
+                    owner[col] = owner[col] == -1 || owner[col] == b ? b : -2;
+                } else if (owner[col] == b) {
+                    owner[col] = -3;  /* listed */
+                    cols[used++] = col;
+                }
+            }
+            if (used - start[b] > widest) widest = used - start[b];
+        }
+        start[count] = used;
+        bk->widest = widest;
+    }
+    ptrdiff_t nc = 0;
+    for (ptrdiff_t a = 0; a < c->n; a++)
+        if (owner[a] == -2) core[nc++] = a;
+    free(owner);
+    bk->count = count;
+    bk->start = start;
+    bk->cols = cols;
+    bk->core = core;
+    bk->n_core = nc;
+    return 0;
+}
+
