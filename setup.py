@@ -38,7 +38,8 @@ setup(
                      NATIVE + "inverse_simd.c", NATIVE + "position.c", NATIVE + "chain.c",
                      NATIVE + "velocity.c", NATIVE + "pose_velocity.c",
                      NATIVE + "svd.c", NATIVE + "rod_velocity.c",
-                     NATIVE + "chain_velocity.c", NATIVE + "chain_linearise.c"],
+                     NATIVE + "chain_velocity.c", NATIVE + "chain_linearise.c",
+                     NATIVE + "rod_one.c"],
             depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h"],
             optional=True,
         )

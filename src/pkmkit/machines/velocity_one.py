@@ -23,9 +23,14 @@ determinant whose reciprocal overflows. The machine-constant parts (per-leg tupl
 floats) are built once per machine.
 
 With the C extension (:func:`pkmkit.numerics.jit.native_kernels_now`) the same operations run
-in C: ``rod_inverse`` for the inverse model of a list or tuple of floats, ``rod_velocity`` once
-when a field is first read, ``rod_field`` per field (the same bits); whatever the C kernel does
-not answer (the cases above, LAPACK for nearly equal singular values) the Python pieces do.
+in C: :meth:`Machine.jacobian <pkmkit.machines.machine.Machine.jacobian>` of a plain pose is one
+call ``rod_jacobian_one`` (``native/rod_one.c``: the pose read and checked, its inverse model
+and stroke check, kept in a state; :func:`native_record`), and the first field read computes
+every field in that state in one call ``rod_field`` (each later field one ``rod_field`` more:
+the same bits); whatever the C kernel does not answer (the cases above, LAPACK for nearly equal
+singular values) the Python pieces do, from the state's pose and actuator coordinates.
+:func:`jacobian_one` is the path without the extension (``rod_inverse`` and ``rod_velocity``
+where only ``rod_velocity`` of an older build is present).
 """
 
 from __future__ import annotations
@@ -223,6 +228,16 @@ class OnePoseVelocity:
 
     def __init__(self, closed: RodClosedForm, x: list[float], q: list[float], tol: float):
         self.closed, self.x, self.q, self.tol = closed, x, q, tol
+
+    def __getattr__(self, name: str) -> Any:
+        """``x`` and ``q`` (lists of floats) of an evaluation made from a ``rod_jacobian_one``
+        state (:func:`native_record`), read from it when the Python pieces first need them."""
+        state = self.__dict__.get("_state")
+        if name not in ("x", "q") or not state:
+            raise AttributeError(name)
+        value = self._native_field(state, 13 if name == "x" else 12).tolist()
+        self.__dict__[name] = value
+        return value
 
     def field(self, name: str):
         """The value of field ``name`` of the single-pose :class:`Jacobians`."""
@@ -447,7 +462,7 @@ _BUILD: dict[str, Callable[[OnePoseVelocity], Any]] = {
 #: The codes of the fields the C kernel answers (``rod_field``).
 _NATIVE_CODES = {name: code for code, name in enumerate(
     ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
-     "parallel_measure", "serial_measure", "singularity", "mode"))}
+     "parallel_measure", "serial_measure", "singularity", "mode", "q"))}
 
 
 def _one_field(name: str) -> property:
@@ -501,6 +516,22 @@ def _record(evaluation: OnePoseVelocity) -> OnePoseJacobians:
     record = object.__new__(OnePoseJacobians)
     state = record.__dict__
     state["_evaluation"], state["_single"], state["_cache"] = evaluation, True, {}
+    return record
+
+
+def native_record(closed: RodClosedForm, state: bytearray, tol: float,
+                  field: Callable[[bytearray, int], Any]) -> OnePoseJacobians:
+    """The record of one pose from a ``rod_jacobian_one`` state (``native/rod_one.c``: the pose
+    and its inverse model, within the strokes), ``field`` the extension's ``rod_field``: the
+    first field read computes every field in the state (one C call), the Python pieces answer
+    what it does not."""
+    evaluation = object.__new__(OnePoseVelocity)
+    attributes = evaluation.__dict__
+    attributes["closed"], attributes["tol"] = closed, tol
+    attributes["_state"], attributes["_native_field"] = state, field
+    record = object.__new__(OnePoseJacobians)
+    attributes = record.__dict__
+    attributes["_evaluation"], attributes["_single"], attributes["_cache"] = evaluation, True, {}
     return record
 
 

@@ -190,7 +190,7 @@ void pk_rod_velocity(const double *legs, int n, const double *x, const double *q
     double *a = s->a, *b = s->b;
     int nn = n * n;
     s->n = n;
-    s->ok = 0;
+    s->ok &= PK_F_Q | PK_F_X; /* the inputs a rod_jacobian_one state keeps */
     rod_rows(legs, n, x, q, a, b);
     double sum_a = 0.0, sum_b = 0.0; /* Python's sum(a) + sum(b) (3.11: in order) */
     for (int k = 0; k < nn; k++) sum_a += a[k];
@@ -423,10 +423,12 @@ static PyObject *scalar(PyObject *type, PyObject *value) {
 
 const char pk_rod_field_doc[] =
 "rod_field(state, code)\n\n"
-"Field `code` of a rod_velocity state (0 A, 1 B, 2 J, 3 J_inv, 4 singular_values,\n"
-"5 condition, 6 det_A, 7 det_B, 8 parallel_measure, 9 serial_measure, 10 singularity,\n"
-"11 mode), as the single-pose Jacobians record holds it (NumPy arrays, numpy.float64,\n"
-"numpy.int64), or None where the Python path must answer.";
+"Field `code` of a rod_velocity or rod_jacobian_one state (0 A, 1 B, 2 J, 3 J_inv,\n"
+"4 singular_values, 5 condition, 6 det_A, 7 det_B, 8 parallel_measure, 9 serial_measure,\n"
+"10 singularity, 11 mode; of a rod_jacobian_one state also 12 q and 13 x, its inputs), as\n"
+"the single-pose Jacobians record holds it (NumPy arrays, numpy.float64, numpy.int64), or\n"
+"None where the Python path must answer. A rod_jacobian_one state computes every field\n"
+"(rod_velocity's work) when the first is read.";
 
 PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
@@ -442,11 +444,16 @@ PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t narg
     }
     long code = PyLong_AsLong(args[1]);
     if (code == -1 && PyErr_Occurred()) return NULL;
-    if (code < 0 || code > 11) {
-        PyErr_Format(PyExc_ValueError, "code: 0 to 11, got %ld", code);
+    if (code < 0 || code > 13) {
+        PyErr_Format(PyExc_ValueError, "code: 0 to 13, got %ld", code);
         return NULL;
     }
-    const pk_rod_state *s = (const pk_rod_state *)PyByteArray_AS_STRING(args[0]);
+    pk_rod_state *s = (pk_rod_state *)PyByteArray_AS_STRING(args[0]);
+    if (s->pending && code < 12) { /* rod_jacobian_one's state: every field, once */
+        s->pending = 0;
+        pk_rod_velocity(s->legs, s->n, s->x, s->q, s->tol, s->near, s);
+        if (PyErr_Occurred()) return NULL;
+    }
     if (!(s->ok & (1u << code))) Py_RETURN_NONE;
     if (numpy_names() < 0) return NULL;
     int n = s->n;
@@ -466,15 +473,18 @@ PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t narg
     case 8: return scalar(np_float64, PyFloat_FromDouble(s->parallel));
     case 9: return scalar(np_float64, PyFloat_FromDouble(s->serial));
     case 10: return scalar(np_int64, PyLong_FromLong(s->flags));
-    default: return scalar(np_int64, PyLong_FromLong(s->mode));
+    case 11: return scalar(np_int64, PyLong_FromLong(s->mode));
+    case 12: return array_of(s->q, n, 0);
+    default: return array_of(s->x, n, 0);
     }
 }
 
 /* ------------------------------------------------------------------ inverse model */
 
 /* RodClosedForm.inverse_one for one pose x (dims = 2 or 3) and legs (n, PK_INV_LEG) laid out
- * as its _single_legs tuples; 0, or 1 where inverse_one returns None. */
-static int rod_inverse(const double *legs, Py_ssize_t n, int dims, const double *x, double *q) {
+ * as its _single_legs tuples; 0, or 1 where inverse_one returns None (also for rod_one.c). */
+int pk_rod_inverse_one(const double *legs, Py_ssize_t n, int dims, const double *x,
+                       double *q) {
     double x0 = x[0], x1 = x[1], x2 = dims == 3 ? x[2] : 0.0;
     for (Py_ssize_t i = 0; i < n; i++) {
         const double *t = legs + PK_INV_LEG * i;
@@ -564,7 +574,7 @@ PyObject *pk_py_rod_inverse(PyObject *self, PyObject *const *args, Py_ssize_t na
             return NULL;
         }
     }
-    if (rod_inverse(legs, n, (int)dims, x, q)) Py_RETURN_NONE;
+    if (pk_rod_inverse_one(legs, n, (int)dims, x, q)) Py_RETURN_NONE;
     PyObject *out = PyList_New(n);
     if (!out) return NULL;
     for (Py_ssize_t i = 0; i < n; i++) {
