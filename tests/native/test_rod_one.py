@@ -118,6 +118,39 @@ def test_fk_one_call_is_the_python_path_the_batch_row_and_closes(name):
     assert refused > 0 or m.angular_actuators.any()
 
 
+@pytest.mark.parametrize("name", TRANSLATIONAL)
+def test_fk_one_call_at_the_edge_of_the_assembly_region(name):
+    """Configurations bisected onto the edge of the assembly region (a double root, t² within
+    rounding of 0, where both the C and the Python path take t = 0): the same bits."""
+    m = pkmkit.machine(name)
+    q = m.ik(_poses(m, 40, seed=8), strokes="ignore")
+    q = q[np.isfinite(q).all(axis=1)][:12]
+    step = 1.5 if m.angular_actuators.any() else 10.0 * m.model.leg_length.max()
+    edges = 0
+    for inside in q:
+        # towards a configuration without assembly (one actuator, else all, moved away)
+        away = [inside + step * k * np.eye(len(inside))[0] for k in (1, 2)]
+        away += [inside + step * k for k in (1, -1, 2, -2)]
+        outside = next((v for v in away if direct_one(m.closed_form, v, 1) is None), None)
+        if outside is None:
+            continue
+        for _ in range(60):
+            mid = 0.5 * (inside + outside)
+            if direct_one(m.closed_form, mid, 1) is None:
+                outside = mid
+            else:
+                inside = mid
+        for v in (inside, outside):
+            for sign in (1, -1):
+                pose = _kernels.rod_fk_one(m._one_pack, v, sign, "ignore")
+                python = direct_one(m.closed_form, v, sign)
+                assert (pose is None) == (python is None)
+                if pose is not None:
+                    assert pose.tobytes() == np.array(python).tobytes()
+        edges += 1
+    assert edges >= 4
+
+
 def test_inputs_it_reads_and_those_it_hands_over():
     m = pkmkit.machine("linear-delta")
     x = (m.home_pose + np.array([0.01, -0.02, 0.03])).tolist()
@@ -130,7 +163,7 @@ def test_inputs_it_reads_and_those_it_hands_over():
     assert (_kernels.rod_ik_one(m._one_pack, ints, "ignore").tobytes()
             == m.ik(np.array([ints], dtype=float), strokes="ignore")[0].tobytes())
     handed = ([*x, 0.0], x[:2], [np.nan, 0.0, 0.0], [0.0, np.inf, 0.0], [2e9, 0.0, 0.0],
-              [True, 0.0, 0.0], ["0", 0.0, 0.0], np.array(x, dtype=np.float32),
+              [True, 0.0, 0.0], [False, *x[1:]], ["0", 0.0, 0.0], np.array(x, dtype=np.float32),
               np.array([x]), np.array(x).astype(">f8"), np.array([0, 0, 1]), "abc", None,
               [10**400, 0.0, 0.0], {0: 0.0, 1: 0.0, 2: 0.0})
     for given in handed:

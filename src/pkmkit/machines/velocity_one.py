@@ -473,6 +473,12 @@ def _one_field(name: str) -> property:
         cache = self._cache
         if name in cache:
             return cache[name]
+        state = self._state  # a rod_jacobian_one state (native_record): one C call
+        if state is not None and code is not None:
+            value = self._field(state, code)
+            if value is not None:
+                cache[name] = value
+                return value
         evaluation = self._evaluation
         value = None
         if code is not None and evaluation._batch is None:
@@ -497,7 +503,25 @@ def _one_field(name: str) -> property:
 class OnePoseJacobians(LazyJacobians):
     """The :class:`~pkmkit.machines.velocity.LazyJacobians` of one pose (fields without the
     batch axis), each field computed from an :class:`OnePoseVelocity` when first read. Built
-    with every field (``dataclasses.replace``) it is a plain record."""
+    with every field (``dataclasses.replace``) it is a plain record. Made by
+    :func:`native_record`, it reads its fields from a C state (``_state``, ``_field``) and makes
+    its evaluation only when the Python pieces must answer a field."""
+
+    _state: Any = None  # a rod_jacobian_one state and rod_field (native_record), else None
+    _field: Any = None
+
+    def __getattr__(self, name: str) -> Any:
+        """The evaluation of a record made by :func:`native_record`, made when first needed."""
+        attributes = self.__dict__
+        state = attributes.get("_state")
+        if name != "_evaluation" or state is None:
+            raise AttributeError(name)
+        evaluation = object.__new__(OnePoseVelocity)
+        values = evaluation.__dict__
+        values["closed"], values["tol"] = attributes["_closed"], attributes["_tol"]
+        values["_state"], values["_native_field"] = state, attributes["_field"]
+        attributes["_evaluation"] = evaluation
+        return evaluation
 
     def __repr__(self) -> str:
         ev = self._evaluation
@@ -525,13 +549,10 @@ def native_record(closed: RodClosedForm, state: bytearray, tol: float,
     and its inverse model, within the strokes), ``field`` the extension's ``rod_field``: the
     first field read computes every field in the state (one C call), the Python pieces answer
     what it does not."""
-    evaluation = object.__new__(OnePoseVelocity)
-    attributes = evaluation.__dict__
-    attributes["closed"], attributes["tol"] = closed, tol
-    attributes["_state"], attributes["_native_field"] = state, field
     record = object.__new__(OnePoseJacobians)
-    attributes = record.__dict__
-    attributes["_evaluation"], attributes["_single"], attributes["_cache"] = evaluation, True, {}
+    attributes = record.__dict__  # its evaluation made when needed (OnePoseJacobians.__getattr__)
+    attributes["_state"], attributes["_field"], attributes["_cache"] = state, field, {}
+    attributes["_closed"], attributes["_tol"], attributes["_single"] = closed, tol, True
     return record
 
 
