@@ -284,3 +284,28 @@ def test_fk_mode_and_fallback_without_the_extension(monkeypatch):
         m.fk(q, mode="sideways")
     with pytest.raises(InputError, match="mode"):
         _python_path(monkeypatch, lambda: m.fk(q, mode="sideways"))
+
+
+def test_nearly_equal_singular_values_by_numpys_lapack_in_c():
+    """Near the Orthoglide's isotropic home the closed-form singular values hand the matrix to
+    LAPACK; the C state calls NumPy's own ``svd`` gufunc loop there: the batch row's bits,
+    every field answered in C."""
+    import struct
+
+    m = pkmkit.machine("orthoglide")
+    rng = np.random.default_rng(9)
+    near = 0
+    for scale in (1e-9, 1e-6, 1e-4, 1e-3):
+        for x in m.home_pose + scale * rng.standard_normal((6, 3)):
+            record = m.jacobian(x)
+            if record._state is None:
+                continue
+            batch = m.jacobian(x[None])
+            for field in ("singular_values", "condition", "parallel_measure", "J"):
+                got, want = getattr(record, field), getattr(batch, field)[0]
+                assert np.asarray(got).tobytes() == np.asarray(want).tobytes(), (field, x)
+            answered = struct.unpack_from("iI", record._state)[1]
+            assert answered == (1 << 14) - 1, hex(answered)  # every field, in C
+            sv = record.singular_values
+            near += bool(sv[0] - sv[-1] < 1e-3 * sv[0])
+    assert near >= 6

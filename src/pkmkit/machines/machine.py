@@ -7,7 +7,10 @@ generic least-squares engine over every rod (:mod:`pkmkit.solve.rod_closure`).
 
 Conventions: SI units (m, rad); poses ``(dims,)`` or ``(N, dims)``; actuator coordinates ``(n,)``
 or ``(N, n)``. Single-row calls raise a typed error on failure; batched calls return NaN rows
-and a per-row status (``full_output=True``).
+and a per-row status (``full_output=True``). One plain pose or configuration (no options) of
+``ik``, ``fk``, ``jacobian`` is one C call (:mod:`pkmkit.machines.closed_form_one`,
+:mod:`pkmkit.machines.velocity_one`), asked before the chunked batch paths; whatever it does
+not answer takes them (the same numbers, the typed errors).
 """
 
 from __future__ import annotations

@@ -27,8 +27,9 @@ in C: :meth:`Machine.jacobian <pkmkit.machines.machine.Machine.jacobian>` of a p
 call ``rod_jacobian_one`` (``native/rod_one.c``: the pose read and checked, its inverse model
 and stroke check, kept in a state; :func:`native_record`), and the first field read computes
 every field in that state in one call ``rod_field`` (each later field one ``rod_field`` more:
-the same bits); whatever the C kernel does not answer (the cases above, LAPACK for nearly equal
-singular values) the Python pieces do, from the state's pose and actuator coordinates.
+the same bits; nearly equal singular values by NumPy's own LAPACK ``svd`` loop called from C,
+so the Orthoglide near its isotropic home stays in C); whatever the C kernel does not answer
+(the cases above) the Python pieces do, from the state's pose and actuator coordinates.
 :func:`jacobian_one` is the path without the extension (``rod_inverse`` and ``rod_velocity``
 where only ``rod_velocity`` of an older build is present).
 """

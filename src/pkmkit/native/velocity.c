@@ -7,9 +7,11 @@
  * acos (it differs in the last place for about one argument in ten on AVX-512 machines), so
  * the closed-form singular values call NumPy's own float64 arccos loop (found once, checked
  * against numpy.arccos; when it cannot be found the fields that need it are not answered).
- * Whatever velocity_one.py hands elsewhere (a sum that is not finite, a zero row, a
- * reciprocal that overflows, a ZeroDivisionError, LAPACK for nearly equal singular values) is
- * not answered here either: rod_field returns None and the Python path decides.
+ * Nearly equal singular values, which velocity_one.py hands to numpy.linalg.svd, are answered
+ * by NumPy's own svd gufunc loop called from here (the same LAPACK call: the same bits).
+ * Whatever else velocity_one.py hands elsewhere (a sum that is not finite, a zero row, a
+ * reciprocal that overflows, a ZeroDivisionError) is not answered here either: rod_field
+ * returns None and the Python path decides.
  *
  * Python face: rod_inverse(legs, x, max_abs) -> q (list) or None, the twin of
  * RodClosedForm.inverse_one; rod_velocity(legs, x, q, tol, near) -> state (a bytearray
@@ -87,6 +89,90 @@ static int find_acos(void) {
     return found;
 }
 
+/* ------------------------------------------------------- NumPy's LAPACK singular values */
+
+/* Where the closed forms hand a 3x3 matrix to LAPACK (nearly equal singular values: the
+ * Orthoglide near its isotropic home, the linear Delta near its axis), the Python path and the
+ * batch path call numpy.linalg.svd(m, compute_uv=False): NumPy's gufunc
+ * numpy.linalg._umath_linalg.svd, loop 'd->d' (LAPACK dgesdd, JOBZ 'N'). Its float64 loop is
+ * found once, as the arccos loop, and called on the matrix (outer dimension 1, the core
+ * dimensions m = n = 3, the row-major strides): the same LAPACK call on the same numbers, so
+ * NumPy's bits — checked against numpy.linalg.svd on matrices with nearly equal singular
+ * values when found; unavailable (another NumPy), the Python path answers as before. */
+static pk_loop svd_loop = NULL;
+static void *svd_data = NULL;
+static int svd_state = 0; /* 0 not looked for, 1 found and checked, -1 unavailable */
+
+/* The singular values of a row-major 3x3 matrix by NumPy's gufunc loop; 0, or 1 where LAPACK
+ * did not converge (the loop gives NaN there: the Python path decides). */
+static int np_svd3(const double *mat, double *sv) {
+    char *args[2] = {(char *)mat, (char *)sv};
+    Py_ssize_t dims[4] = {1, 3, 3, 3};
+    Py_ssize_t steps[5] = {72, 24, 24, 8, 8};
+    svd_loop(args, dims, steps, svd_data);
+    return !(sv[0] == sv[0] && sv[1] == sv[1] && sv[2] == sv[2]);
+}
+
+static int find_svd(void) {
+    PyObject *mod = PyImport_ImportModule("numpy.linalg._umath_linalg");
+    if (!mod) {
+        PyErr_Clear();
+        return -1;
+    }
+    PyObject *ufunc = PyObject_GetAttrString(mod, "svd");
+    Py_DECREF(mod);
+    if (!ufunc) {
+        PyErr_Clear();
+        return -1;
+    }
+    int found = -1;
+    const pk_ufunc_head *head = (const pk_ufunc_head *)ufunc;
+    if (strcmp(Py_TYPE(ufunc)->tp_name, "numpy.ufunc") == 0 && head->nin == 1
+        && head->nout == 1 && head->nargs == 2 && head->name && strcmp(head->name, "svd") == 0
+        && head->types && head->functions) {
+        for (int i = 0; i < head->ntypes; i++) {
+            if (head->types[2 * i] == 12 && head->types[2 * i + 1] == 12) { /* NPY_DOUBLE */
+                svd_loop = head->functions[i];
+                svd_data = head->data ? head->data[i] : NULL;
+                found = 1;
+                break;
+            }
+        }
+    }
+    Py_DECREF(ufunc);
+    /* checked against numpy.linalg.svd: isotropic and nearly isotropic matrices, others */
+    PyObject *numpy = found == 1 ? PyImport_ImportModule("numpy") : NULL;
+    PyObject *linalg = numpy ? PyObject_GetAttrString(numpy, "linalg") : NULL;
+    PyObject *svd = linalg ? PyObject_GetAttrString(linalg, "svd") : NULL;
+    PyObject *array = numpy ? PyObject_GetAttrString(numpy, "array") : NULL;
+    for (int k = 0; found == 1 && k < 24; k++) {
+        double m[9], got[3] = {0, 0, 0}, want[3] = {-1, -1, -1};
+        for (int e = 0; e < 9; e++)
+            m[e] = (e % 4 == 0 ? 1.0 : 0.0) + (k < 12 ? 1e-7 : 0.3) * sin(1.0 + k * 9 + e);
+        PyObject *rows = Py_BuildValue("[[ddd][ddd][ddd]]", m[0], m[1], m[2], m[3], m[4], m[5],
+                                       m[6], m[7], m[8]);
+        PyObject *arr = rows && array ? PyObject_CallOneArg(array, rows) : NULL;
+        PyObject *kw = Py_BuildValue("{s:O}", "compute_uv", Py_False);
+        PyObject *out = arr && kw && svd ? PyObject_Call(svd, PyTuple_Pack(1, arr), kw) : NULL;
+        PyObject *list = out ? PyObject_CallMethod(out, "tolist", NULL) : NULL;
+        if (list && PyList_Check(list) && PyList_GET_SIZE(list) == 3)
+            for (int i = 0; i < 3; i++) want[i] = PyFloat_AsDouble(PyList_GET_ITEM(list, i));
+        Py_XDECREF(rows);
+        Py_XDECREF(arr);
+        Py_XDECREF(kw);
+        Py_XDECREF(out);
+        Py_XDECREF(list);
+        if (PyErr_Occurred()) PyErr_Clear();
+        if (np_svd3(m, got) || memcmp(got, want, sizeof(got)) != 0) found = -1;
+    }
+    Py_XDECREF(numpy);
+    Py_XDECREF(linalg);
+    Py_XDECREF(svd);
+    Py_XDECREF(array);
+    if (found != 1) svd_loop = NULL;
+    return found;
+}
+
 /* --------------------------------------------------------------- singular values */
 
 /* velocity_one.singular_values of a finite row-major 2x2 or 3x3 matrix into sv (decreasing);
@@ -129,8 +215,11 @@ static int pk_singular_values(const double *mat, int n, double *sv) {
                  + c20 * c20 + c21 * c21 + c22 * c22);
     double pair = s1 > 0 ? d / s1 : 0.0;
     double rest = lam1 > 0 ? (e2 - pair * pair) / lam1 : 0.0;
-    if (spread > 0 && (fabs(half_det) > 1.0 - 1e-6 || rest - 2 * pair < 1e-6 * rest))
-        return 1; /* nearly equal singular values: LAPACK, in the Python path */
+    if (spread > 0 && (fabs(half_det) > 1.0 - 1e-6 || rest - 2 * pair < 1e-6 * rest)) {
+        /* nearly equal singular values: LAPACK, as the Python and the batch paths */
+        if (svd_state == 0) svd_state = find_svd();
+        return svd_state == 1 ? np_svd3(mat, sv) : 1;
+    }
     double s2 = 0.5 * (sqrt(pk_max(rest + 2 * pair, 0.0)) + sqrt(pk_max(rest - 2 * pair, 0.0)));
     double s3 = s2 > 0 ? pair / s2 : 0.0;
     if (s2 > s1) s2 = s1;
