@@ -153,7 +153,9 @@ static int find_svd(void) {
                                        m[6], m[7], m[8]);
         PyObject *arr = rows && array ? PyObject_CallOneArg(array, rows) : NULL;
         PyObject *kw = Py_BuildValue("{s:O}", "compute_uv", Py_False);
-        PyObject *out = arr && kw && svd ? PyObject_Call(svd, PyTuple_Pack(1, arr), kw) : NULL;
+        PyObject *given = arr ? PyTuple_Pack(1, arr) : NULL;
+        PyObject *out = given && kw && svd ? PyObject_Call(svd, given, kw) : NULL;
+        Py_XDECREF(given);
         PyObject *list = out ? PyObject_CallMethod(out, "tolist", NULL) : NULL;
         if (list && PyList_Check(list) && PyList_GET_SIZE(list) == 3)
             for (int i = 0; i < 3; i++) want[i] = PyFloat_AsDouble(PyList_GET_ITEM(list, i));
