@@ -34,9 +34,14 @@ issue, Pinocchio (``pin``, in the ``test`` extra), runs in the same rounds where
 the machine to URDF: forward kinematics with frame placements of that URDF's open tree
 (:func:`pinocchio_peer`).
 
+``--alternate``: the 3-DOF machines' one-pose ``ik``, ``fk``, ``jacobian`` (and + ``J``)
+only, the machines timed in turn in every round (:func:`alternate`; whether one machine's call
+costs more than another's, free of the order in which the bench measures them).
+
 Usage::
 
     python bench/single_call.py [--calls 20000] [--load none|busy|both] [--json FILE]
+    python bench/single_call.py --alternate [--calls 400] [--machines a,b]
 """
 
 from __future__ import annotations
@@ -332,13 +337,48 @@ def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None,
                                                              before)
 
 
+def alternate(names: list[str], calls: int, rounds: int = 7) -> None:
+    """``ik``, ``fk``, ``jacobian`` and ``jacobian`` + ``J`` of one pose of each machine, the
+    machines timed in turn in every round (each sees the same load; the bench's machines are
+    otherwise measured one after the other): CPU µs per call, minimum and median of the
+    rounds. With ``PKMKIT_NATIVE=0``: the plain-Python one-pose paths."""
+    warnings.simplefilter("ignore", StrokeWarning)
+    data = {}
+    for name in names:
+        m = pkmkit.machine(name)
+        lo, hi = m.default_box()
+        centre, half = (lo + hi) / 2, (hi - lo) / 2
+        poses = centre + 0.3 * half * (2 * np.random.default_rng(0).random((calls, m.dims)) - 1)
+        rows = [p for p in poses[np.isfinite(m.ik(poses, strokes="ignore")).all(axis=1)]
+                if type(m.jacobian(p)).__name__.startswith("OnePose")]  # within the strokes
+        data[name] = (m, rows, [m.ik(p) for p in rows])
+    times: dict = {name: {} for name in names}
+    for _ in range(rounds):
+        for name, (m, rows, qs) in data.items():
+            for label, fun, given in (("ik", m.ik, rows), ("fk", m.fk, qs),
+                                      ("jacobian", m.jacobian, rows),
+                                      ("jacobian + J", lambda p, m=m: m.jacobian(p).J, rows)):
+                times[name].setdefault(label, []).append(per_call(fun, given, repeats=1)[1])
+    print(f"== alternate, {rounds} rounds (load average {os.getloadavg()[0]:.2f}), CPU µs "
+          "per call, min / median")
+    for name, rows in times.items():
+        print(f"  {name:14s} " + ", ".join(
+            f"{label} {min(v):.2f} / {statistics.median(v):.2f}" for label, v in rows.items()))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=20000)
     parser.add_argument("--load", default="both", choices=("none", "busy", "both"))
     parser.add_argument("--json")
     parser.add_argument("--machines", help="comma-separated subset of the machines")
+    parser.add_argument("--alternate", action="store_true",
+                        help="only the 3-DOF one-pose calls, the machines timed in turn")
     args = parser.parse_args()
+    if args.alternate:
+        alternate((args.machines or "orthoglide,linear-delta,five-bar,five-bar-biglide,delta")
+                  .split(","), args.calls)
+        return
     warnings.simplefilter("ignore", StrokeWarning)  # the batch path's, beyond a stroke
     names = [n for n in ("orthoglide", "linear-delta", "five-bar", "five-bar-biglide", "delta")]
     six = ("gough-stewart", "verne", "dietmaier-hexapod")
