@@ -309,3 +309,32 @@ def test_nearly_equal_singular_values_by_numpys_lapack_in_c():
             sv = record.singular_values
             near += bool(sv[0] - sv[-1] < 1e-3 * sv[0])
     assert near >= 6
+
+
+@pytest.mark.parametrize("name", ["orthoglide", "delta", "five-bar"])
+def test_each_field_read_first_is_answered_in_c(name):
+    """The state computes its fields in stages (J and the flags first; J's singular values,
+    the condition number and the parallel measure when one of them is read): each field read
+    first on a fresh record is answered in C, the batch row's bits."""
+    import struct
+
+    m = pkmkit.machine(name)
+    codes = {"A": 0, "B": 1, "J": 2, "J_inv": 3, "singular_values": 4, "condition": 5,
+             "det_A": 6, "det_B": 7, "parallel_measure": 8, "serial_measure": 9,
+             "singularity": 10, "mode": 11, "q": 12}
+    poses = [x for x in _poses(m, 60, seed=10)
+             if _kernels.rod_jacobian_one(m._one_pack, x, 1e-6) is not None][:8]
+    assert len(poses) >= 4
+    batch = m.jacobian(np.array(poses))
+    for k, x in enumerate(poses):
+        for field, code in codes.items():
+            record = m.jacobian(x)
+            got = getattr(record, field)
+            answered = struct.unpack_from("iI", record._state)[1]
+            assert answered & (1 << code), (field, hex(answered))
+            want = getattr(batch, field)[k]
+            assert np.asarray(got).tobytes() == np.asarray(want).tobytes(), (field, k)
+        lazy = m.jacobian(x)
+        _ = lazy.J  # J alone: the singular values not computed yet
+        answered = struct.unpack_from("iI", lazy._state)[1]
+        assert not answered & (1 << codes["condition"]), hex(answered)

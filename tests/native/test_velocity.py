@@ -64,7 +64,8 @@ def _records(m, poses, tol, monkeypatch):
             out.append(None)
             continue
         native = {f: getattr(m.jacobian(p, tol=tol), f) for f in FIELDS}
-        native["_answered"] = _answered(first) if first.J is not None else 0
+        native["_answered"] = _answered(first) if all(  # every field read: every stage
+            getattr(first, f) is not None for f in FIELDS) else 0
         monkeypatch.setenv("PKMKIT_NATIVE", "0")
         try:
             python = {f: getattr(m.jacobian(p, tol=tol), f) for f in FIELDS}

@@ -226,6 +226,9 @@ typedef struct {
     /* rod_one.c's rod_jacobian_one: the inputs, the fields computed when one is first read */
     int pending;       /* 1: not computed yet (rod_field computes them) */
     double legs[3 * PK_LEG], x[3], q[3], tol, near;
+    /* velocity.c's stages: J's singular values and the parallel measure when asked */
+    int svd_pending, parallel_tried, zero_b;
+    double lengths[3];
 } pk_rod_state;
 
 /* One pose x (n,) at q (n,), thresholds tol (singularities) and near (J's singular values

@@ -295,6 +295,7 @@ PyObject *pk_py_rod_jacobian_one(PyObject *self, PyObject *const *args, Py_ssize
     PyObject *state = PyByteArray_FromStringAndSize(NULL, sizeof(pk_rod_state));
     if (!state) return NULL;
     pk_rod_state *s = (pk_rod_state *)PyByteArray_AS_STRING(state);
+    memset(s, 0, sizeof(pk_rod_state));
     s->n = n;
     s->ok = PK_F_Q | PK_F_X;
     s->pending = 1;

@@ -276,7 +276,48 @@ static void rod_rows(const double *legs, int n, const double *x, const double *q
     }
 }
 
-void pk_rod_velocity(const double *legs, int n, const double *x, const double *q, double tol,
+/* The parallel measure (sigma_min / sigma_max of A with unit rows) into the state, once; 1 if
+ * it is answered. Needs the row lengths (PK_F_SERIAL). */
+static int rod_parallel(pk_rod_state *s) {
+    if (s->ok & PK_F_PARALLEL) return 1;
+    if (s->parallel_tried || !(s->ok & PK_F_SERIAL)) return 0;
+    s->parallel_tried = 1;
+    int n = s->n, nn = n * n;
+    double unit[9], sv_u[3];
+    for (int k = 0; k < nn; k++) unit[k] = s->a[k] / s->lengths[k / n];
+    int parallel_ok = !pk_singular_values(unit, n, sv_u) && sv_u[0] != 0.0;
+    s->parallel = parallel_ok ? sv_u[n - 1] / sv_u[0] : NAN;
+    if (parallel_ok) s->ok |= PK_F_PARALLEL;
+    return parallel_ok;
+}
+
+/* velocity_one.sv: J's singular values and the condition number, once J is known
+ * (s->svd_pending); from J^-1 near a parallel singularity, as the batch path. */
+static void rod_svd(pk_rod_state *s) {
+    s->svd_pending = 0;
+    int n = s->n;
+    double *sv = s->sv, det_a = s->det_a;
+    if (!surely_above(det_a, s->lengths, n, s->near)) {
+        if (!rod_parallel(s)) return;
+        if (s->parallel < s->near && s->parallel < s->serial) {
+            double inverse[3];
+            if (s->zero_b || pk_singular_values(s->j_inv, n, inverse)) return;
+            for (int i = 0; i < n; i++) {
+                if (inverse[n - 1 - i] == 0.0) return; /* ZeroDivisionError in Python */
+                sv[i] = 1.0 / inverse[n - 1 - i];
+            }
+            goto condition;
+        }
+    }
+    if (pk_singular_values(s->j, n, sv)) return;
+condition:
+    s->condition = sv[n - 1] == 0.0 ? INFINITY : sv[0] / sv[n - 1];
+    s->ok |= PK_F_SV | PK_F_CONDITION;
+}
+
+/* Every field but the singular values of J, the condition number and (where the flags do
+ * not need it) the parallel measure, which rod_svd and rod_parallel add when asked. */
+static void rod_core(const double *legs, int n, const double *x, const double *q, double tol,
                      double near, pk_rod_state *s) {
     double *a = s->a, *b = s->b;
     int nn = n * n;
@@ -308,11 +349,13 @@ void pk_rod_velocity(const double *legs, int n, const double *x, const double *q
     s->det_b = n == 3 ? b[0] * b[1] * b[2] : b[0] * b[1];
     int zero_b = 0;
     for (int i = 0; i < n; i++) zero_b |= b[i] == 0.0;
+    s->zero_b = zero_b;
     if (!zero_b) {
         for (int k = 0; k < nn; k++) s->j_inv[k] = a[k] / b[k / n];
         s->ok |= PK_F_J_INV;
     }
-    double lengths[3];
+    double *lengths = s->lengths;
+    s->near = near;
     for (int i = 0; i < n; i++) {
         const double *r = a + n * i;
         lengths[i] = n == 2 ? sqrt(r[0] * r[0] + r[1] * r[1])
@@ -326,21 +369,14 @@ void pk_rod_velocity(const double *legs, int n, const double *x, const double *q
     }
     s->serial = serial;
     s->ok |= PK_F_SERIAL;
-    /* the parallel measure: sigma_min / sigma_max of A with unit rows */
-    double unit[9], sv_u[3];
-    for (int k = 0; k < nn; k++) unit[k] = a[k] / lengths[k / n];
-    int parallel_ok = !pk_singular_values(unit, n, sv_u) && sv_u[0] != 0.0;
-    double parallel = parallel_ok ? sv_u[n - 1] / sv_u[0] : NAN;
-    s->parallel = parallel;
-    if (parallel_ok) s->ok |= PK_F_PARALLEL;
-    /* velocity_one.at_parallel */
+    /* velocity_one.at_parallel: the parallel measure only where its bound cannot tell */
     int at_parallel;
     if (surely_above(det_a, lengths, n, tol)) {
         at_parallel = 0;
-    } else if (!parallel_ok) {
+    } else if (!rod_parallel(s)) {
         return;
     } else {
-        at_parallel = parallel < tol || det_a == 0.0;
+        at_parallel = s->parallel < tol || det_a == 0.0;
     }
     s->flags = (serial < tol ? 1 : 0) | (at_parallel ? 2 : 0); /* Singularity.SERIAL, PARALLEL */
     s->ok |= PK_F_SINGULARITY;
@@ -366,24 +402,14 @@ void pk_rod_velocity(const double *legs, int n, const double *x, const double *q
     for (int k = 0; k < nn; k++)
         if (!(-INFINITY < j[k] && j[k] < INFINITY)) return;
     s->ok |= PK_F_J;
-    /* velocity_one.sv: from J^-1 near a parallel singularity, as the batch path */
-    double *sv = s->sv;
-    if (!surely_above(det_a, lengths, n, near)) {
-        if (!parallel_ok) return;
-        if (parallel < near && parallel < serial) {
-            double inverse[3];
-            if (zero_b || pk_singular_values(s->j_inv, n, inverse)) return;
-            for (int i = 0; i < n; i++) {
-                if (inverse[n - 1 - i] == 0.0) return; /* ZeroDivisionError in Python */
-                sv[i] = 1.0 / inverse[n - 1 - i];
-            }
-            goto condition;
-        }
-    }
-    if (pk_singular_values(j, n, sv)) return;
-condition:
-    s->condition = sv[n - 1] == 0.0 ? INFINITY : sv[0] / sv[n - 1];
-    s->ok |= PK_F_SV | PK_F_CONDITION;
+    s->svd_pending = 1;
+}
+
+void pk_rod_velocity(const double *legs, int n, const double *x, const double *q, double tol,
+                     double near, pk_rod_state *s) {
+    rod_core(legs, n, x, q, tol, near, s);
+    rod_parallel(s);
+    if (s->svd_pending) rod_svd(s);
 }
 
 /* ------------------------------------------------------------------ Python face */
@@ -540,11 +566,13 @@ PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t narg
         return NULL;
     }
     pk_rod_state *s = (pk_rod_state *)PyByteArray_AS_STRING(args[0]);
-    if (s->pending && code < 12) { /* rod_jacobian_one's state: every field, once */
+    if (s->pending && code < 12) { /* rod_jacobian_one's state: its fields, once */
         s->pending = 0;
-        pk_rod_velocity(s->legs, s->n, s->x, s->q, s->tol, s->near, s);
-        if (PyErr_Occurred()) return NULL;
+        rod_core(s->legs, s->n, s->x, s->q, s->tol, s->near, s);
     }
+    if (code == 8) rod_parallel(s); /* the singular values when a field needs them */
+    if ((code == 4 || code == 5) && s->svd_pending) rod_svd(s);
+    if (PyErr_Occurred()) return NULL;
     if (!(s->ok & (1u << code))) Py_RETURN_NONE;
     if (numpy_names() < 0) return NULL;
     int n = s->n;
