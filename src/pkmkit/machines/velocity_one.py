@@ -25,9 +25,10 @@ floats) are built once per machine.
 With the C extension (:func:`pkmkit.numerics.jit.native_kernels_now`) the same operations run
 in C: :meth:`Machine.jacobian <pkmkit.machines.machine.Machine.jacobian>` of a plain pose is one
 call ``rod_jacobian_one`` (``native/rod_one.c``: the pose read and checked, its inverse model
-and stroke check, kept in a state; :func:`native_record`), and the first field read computes
-every field in that state in one call ``rod_field`` (each later field one ``rod_field`` more:
-the same bits; nearly equal singular values by NumPy's own LAPACK ``svd`` loop called from C,
+and stroke check, kept in a state; :func:`native_record`), and a field read is one call
+``rod_field``: the first computes the rows, the determinants, J and the flags in that state,
+the first of ``singular_values``, ``condition``, ``parallel_measure`` the singular values (the
+same bits; nearly equal singular values by NumPy's own LAPACK ``svd`` loop called from C,
 so the Orthoglide near its isotropic home stays in C); whatever the C kernel does not answer
 (the cases above) the Python pieces do, from the state's pose and actuator coordinates.
 :func:`jacobian_one` is the path without the extension (``rod_inverse`` and ``rod_velocity``
@@ -547,9 +548,9 @@ def _record(evaluation: OnePoseVelocity) -> OnePoseJacobians:
 def native_record(closed: RodClosedForm, state: bytearray, tol: float,
                   field: Callable[[bytearray, int], Any]) -> OnePoseJacobians:
     """The record of one pose from a ``rod_jacobian_one`` state (``native/rod_one.c``: the pose
-    and its inverse model, within the strokes), ``field`` the extension's ``rod_field``: the
-    first field read computes every field in the state (one C call), the Python pieces answer
-    what it does not."""
+    and its inverse model, within the strokes), ``field`` the extension's ``rod_field``: each
+    field read is one C call computing what the state lacks for it (the module docstring), the
+    Python pieces answer what it does not."""
     record = object.__new__(OnePoseJacobians)
     attributes = record.__dict__  # its evaluation made when needed (OnePoseJacobians.__getattr__)
     attributes["_state"], attributes["_field"], attributes["_cache"] = state, field, {}

@@ -544,8 +544,9 @@ const char pk_rod_field_doc[] =
 "4 singular_values, 5 condition, 6 det_A, 7 det_B, 8 parallel_measure, 9 serial_measure,\n"
 "10 singularity, 11 mode; of a rod_jacobian_one state also 12 q and 13 x, its inputs), as\n"
 "the single-pose Jacobians record holds it (NumPy arrays, numpy.float64, numpy.int64), or\n"
-"None where the Python path must answer. A rod_jacobian_one state computes every field\n"
-"(rod_velocity's work) when the first is read.";
+"None where the Python path must answer. A rod_jacobian_one state computes its fields\n"
+"when first asked: the rows, determinants, J and the flags on the first read; J's singular\n"
+"values, the condition number and the parallel measure when one of them is read.";
 
 PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
