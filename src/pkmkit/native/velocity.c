@@ -115,13 +115,9 @@ static int np_svd3(const double *mat, double *sv) {
 
 static int find_svd(void) {
     PyObject *mod = PyImport_ImportModule("numpy.linalg._umath_linalg");
-    if (!mod) {
-        PyErr_Clear();
-        return -1;
-    }
-    PyObject *ufunc = PyObject_GetAttrString(mod, "svd");
-    Py_DECREF(mod);
-    if (!ufunc) {
+    PyObject *ufunc = mod ? PyObject_GetAttrString(mod, "svd") : NULL;
+    Py_XDECREF(mod);
+    if (!ufunc) { /* another NumPy: the Python path answers */
         PyErr_Clear();
         return -1;
     }
@@ -159,18 +155,13 @@ static int find_svd(void) {
         PyObject *list = out ? PyObject_CallMethod(out, "tolist", NULL) : NULL;
         if (list && PyList_Check(list) && PyList_GET_SIZE(list) == 3)
             for (int i = 0; i < 3; i++) want[i] = PyFloat_AsDouble(PyList_GET_ITEM(list, i));
-        Py_XDECREF(rows);
-        Py_XDECREF(arr);
-        Py_XDECREF(kw);
-        Py_XDECREF(out);
-        Py_XDECREF(list);
+        PyObject *held[5] = {rows, arr, kw, out, list};
+        for (int i = 0; i < 5; i++) Py_XDECREF(held[i]);
         if (PyErr_Occurred()) PyErr_Clear();
         if (np_svd3(m, got) || memcmp(got, want, sizeof(got)) != 0) found = -1;
     }
-    Py_XDECREF(numpy);
-    Py_XDECREF(linalg);
-    Py_XDECREF(svd);
-    Py_XDECREF(array);
+    PyObject *names[4] = {numpy, linalg, svd, array};
+    for (int i = 0; i < 4; i++) Py_XDECREF(names[i]);
     if (found != 1) svd_loop = NULL;
     return found;
 }
