@@ -41,7 +41,7 @@ setup(
                      NATIVE + "chain_velocity.c", NATIVE + "chain_linearise.c",
                      NATIVE + "chain_one_velocity.c",
                      NATIVE + "chain_one.c", NATIVE + "chain_one_solve.c",
-                     NATIVE + "chain_one_pack.c"],
+                     NATIVE + "chain_one_pack.c", NATIVE + "rod_one.c"],
             depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h", NATIVE + "chain_one.h",
                      NATIVE + "inverse_block.h"],
             optional=True,

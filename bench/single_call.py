@@ -1,8 +1,13 @@
 """Benchmark: one pose per call (issue 22 §1), quiet and with a competing process.
 
-For each translational built-in machine, the cost of one call ``m.ik(x)`` and ``m.fk(q)`` from
-Python (the plain-Python single-pose paths), against, in the same process and on the same
-poses:
+For each translational built-in machine (every 3-DOF family of the registry: the Orthoglide,
+the linear Delta, the five-bar and the biglide five-bar, the Delta robot with cranks), the cost
+of one call ``m.ik(x)`` and ``m.fk(q)`` from Python (with the C extension one C call each,
+``native/rod_one.c``; ``strokes="ignore"``, and the default ``strokes="flag"`` in its own
+rows), against, in the same process and on the same poses:
+
+- the C call alone (``rod_ik_one``, ``rod_fk_one`` on the machine's pack) — the floor of the
+  one-pose path: what remains is the Python of ``Machine.ik`` / ``fk`` around it;
 
 - the batch path with one row, ``m.ik(x[None])`` — what every single call cost before;
 - the formula in plain Python for one pose, leg constants precomputed (slide legs) — the floor
@@ -31,10 +36,15 @@ issue, Pinocchio (``pin``, in the ``test`` extra), runs in the same rounds where
 the machine to URDF: forward kinematics with frame placements of that URDF's open tree
 (:func:`pinocchio_peer`).
 
+``--alternate``: the 3-DOF machines' one-pose ``ik``, ``fk``, ``jacobian`` (and + ``J``)
+only, the machines timed in turn in every round (:func:`alternate`; whether one machine's call
+costs more than another's, free of the order in which the bench measures them).
+
 Usage::
 
     python bench/single_call.py [--calls 20000] [--load none|busy|both] [--json FILE]
     python bench/single_call.py --agreement 1000 [--machines gough-stewart,verne]
+    python bench/single_call.py --alternate [--calls 400] [--machines a,b]
 """
 
 from __future__ import annotations
@@ -60,6 +70,7 @@ from pkmkit.exceptions import StrokeWarning
 from pkmkit.machines import full_pose_one, kernels
 from pkmkit.machines.closed_form import BOUNDARY_TOL
 from pkmkit.model.rods import CRANK, SLIDE
+from pkmkit.numerics import jit
 
 
 def per_call(fun, poses, repeats: int = 5) -> tuple[float, float]:
@@ -153,6 +164,10 @@ def machine_rows(name: str, calls: int) -> dict:
     has_crank = bool((m.model.leg_kind == CRANK).any())
     qs = [q for q in m.ik(poses, strokes="ignore")]
     q_ones = [q[None] for q in qs]
+    within = [k for k, q in enumerate(qs) if m._within_strokes(q.tolist())]
+    inside, q_inside = [rows[k] for k in within], [qs[k] for k in within]
+    pack = m._one_pack  # the one-pose C entries' constants (closed_form_one.one_pose_pack)
+    native = jit.native_kernels_now() if pack is not None else None
     m.ik(rows[0], strokes="ignore")
     figures: dict = {"poses": len(rows)}
     peer = pinocchio_peer(m, len(rows))
@@ -160,8 +175,16 @@ def machine_rows(name: str, calls: int) -> dict:
         if peer is not None:
             figures["Pinocchio FK + frame (URDF tree, peer)"] = peer()
         figures["ik one pose"] = per_call(lambda p: m.ik(p, strokes="ignore"), rows)
+        if inside:  # within the strokes: the default strokes="flag" warns nothing
+            figures["ik one pose, default strokes"] = per_call(m.ik, inside)
+            figures["fk one, default strokes"] = per_call(m.fk, q_inside)
         figures["ik batch of one (before)"] = per_call(lambda p: m.ik(p, strokes="ignore"), ones)
         figures["fk one"] = per_call(lambda q: m.fk(q, strokes="ignore"), qs)
+        if native is not None:
+            figures["ik, the C call alone"] = per_call(
+                lambda p: native.rod_ik_one(pack, p, "ignore"), rows)
+            figures["fk, the C call alone"] = per_call(
+                lambda q: native.rod_fk_one(pack, q, 1, "ignore"), qs)
         figures["fk batch of one (before)"] = per_call(lambda q: m.fk(q, strokes="ignore"),
                                                        q_ones)
         jacobian_rows(m, figures, rows, without_c=True)
@@ -484,6 +507,35 @@ def jacobian_rows(m, figures: dict, rows: list, before_rows: list | None = None,
                                                              before)
 
 
+def alternate(names: list[str], calls: int, rounds: int = 7) -> None:
+    """``ik``, ``fk``, ``jacobian`` and ``jacobian`` + ``J`` of one pose of each machine, the
+    machines timed in turn in every round (each sees the same load; the bench's machines are
+    otherwise measured one after the other): CPU µs per call, minimum and median of the
+    rounds. With ``PKMKIT_NATIVE=0``: the plain-Python one-pose paths."""
+    warnings.simplefilter("ignore", StrokeWarning)
+    data = {}
+    for name in names:
+        m = pkmkit.machine(name)
+        lo, hi = m.default_box()
+        centre, half = (lo + hi) / 2, (hi - lo) / 2
+        poses = centre + 0.3 * half * (2 * np.random.default_rng(0).random((calls, m.dims)) - 1)
+        rows = [p for p in poses[np.isfinite(m.ik(poses, strokes="ignore")).all(axis=1)]
+                if type(m.jacobian(p)).__name__.startswith("OnePose")]  # within the strokes
+        data[name] = (m, rows, [m.ik(p) for p in rows])
+    times: dict = {name: {} for name in names}
+    for _ in range(rounds):
+        for name, (m, rows, qs) in data.items():
+            for label, fun, given in (("ik", m.ik, rows), ("fk", m.fk, qs),
+                                      ("jacobian", m.jacobian, rows),
+                                      ("jacobian + J", lambda p, m=m: m.jacobian(p).J, rows)):
+                times[name].setdefault(label, []).append(per_call(fun, given, repeats=1)[1])
+    print(f"== alternate, {rounds} rounds (load average {os.getloadavg()[0]:.2f}), CPU µs "
+          "per call, min / median")
+    for name, rows in times.items():
+        print(f"  {name:14s} " + ", ".join(
+            f"{label} {min(v):.2f} / {statistics.median(v):.2f}" for label, v in rows.items()))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=20000)
@@ -493,13 +545,19 @@ def main() -> None:
     parser.add_argument("--agreement", type=int, metavar="POSES",
                         help="print the one-pose paths' largest differences from the batch "
                              "path's rows over POSES poses per six-axis machine, then stop")
+    parser.add_argument("--alternate", action="store_true",
+                        help="only the 3-DOF one-pose calls, the machines timed in turn")
     args = parser.parse_args()
     if args.agreement:
         for name in (args.machines or "gough-stewart,verne,dietmaier-hexapod").split(","):
             print(name, json.dumps(agreement(name, args.agreement), indent=1))
         return
+    if args.alternate:
+        alternate((args.machines or "orthoglide,linear-delta,five-bar,five-bar-biglide,delta")
+                  .split(","), args.calls)
+        return
     warnings.simplefilter("ignore", StrokeWarning)  # the batch path's, beyond a stroke
-    names = [n for n in ("orthoglide", "linear-delta", "five-bar", "delta")]
+    names = [n for n in ("orthoglide", "linear-delta", "five-bar", "five-bar-biglide", "delta")]
     six = ("gough-stewart", "verne", "dietmaier-hexapod")
     chains = ("tripteor-x7", "trimule-600")
     if args.machines:
@@ -551,6 +609,14 @@ def main() -> None:
             print(f"    speed-up (wall): ik {ik_before / f['ik one pose'][0]:.0f}×, "
                   f"fk {fk_before / f['fk one'][0]:.0f}×; (CPU) jacobian + J "
                   f"{jac_before / f['jacobian one pose, call + J'][1]:.0f}×")
+            peer = f.get("Pinocchio FK + frame (URDF tree, peer)")
+            if peer is not None:  # CPU per call over the peer's, in the same rounds
+                print("    over Pinocchio (CPU): " + ", ".join(
+                    f"{label} {f[row][1] / peer[1]:.2f}×" for label, row in (
+                        ("ik", "ik one pose"), ("fk", "fk one"),
+                        ("jacobian + J", "jacobian one pose, call + J"),
+                        ("+ condition", "jacobian one pose, call + condition"),
+                        ("+ singularity", "jacobian one pose, call + singularity"))))
     if args.json:
         Path(args.json).write_text(json.dumps(report, indent=2))
 

@@ -69,7 +69,9 @@ def test_each_field_is_the_batch_row_bit_for_bit(name):
 @pytest.mark.parametrize(("name", "spread"), [("orthoglide", 1e-4), ("linear-delta", 0.02)])
 def test_nearly_equal_singular_values_go_to_lapack_in_both_paths(name, spread, monkeypatch):
     """Near the Orthoglide's isotropic home and the linear Delta's axis the closed forms hand
-    the matrices to LAPACK: the one-pose path does so too, with the same bits."""
+    the matrices to LAPACK: the one-pose path does so too, with the same bits (in Python
+    ``numpy.linalg.svd``; with the C extension NumPy's ``svd`` gufunc loop from C,
+    tests/native/test_rod_one.py)."""
     m = pkmkit.machine(name)
     x = _poses(m, 40, seed=12, spread=spread)
     calls = []
@@ -80,11 +82,14 @@ def test_nearly_equal_singular_values_go_to_lapack_in_both_paths(name, spread, m
         return svd(*args, **kwargs)
 
     monkeypatch.setattr(np.linalg, "svd", counted)
+    monkeypatch.setenv("PKMKIT_NATIVE", "0")  # the Python pieces
     for p in x:  # the one-pose path alone
         assert np.isfinite(_one(m, p).condition)
         assert np.isfinite(_one(m, p).parallel_measure)
     assert len(calls) >= 10
     _check(m, x, name=name)
+    monkeypatch.delenv("PKMKIT_NATIVE")
+    _check(m, x, name=name)  # the C path where the extension is built
 
 
 @pytest.mark.parametrize("name", ["orthoglide", "delta", "five-bar"])

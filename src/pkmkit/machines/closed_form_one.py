@@ -8,19 +8,31 @@ path treats specially returns None, and the machine then takes that path (which 
 numbers and the typed errors): not ``n`` plain finite numbers, no real assembly, sphere centres
 (nearly) aligned, a negative strut length, or a configuration near a parallel singularity whose
 solution the batch path checks leg by leg.
+
+With the C extension, the machine's one-pose ``ik``, ``fk`` and ``jacobian`` are one C call
+each (``rod_ik_one``, ``rod_fk_one``, ``rod_jacobian_one`` of ``native/rod_one.c``: the input
+read and checked, the solve, the stroke check and the result array in C — the same operations
+as here and as :meth:`RodClosedForm.inverse_one`, the same bits); :func:`one_pose_pack` packs the
+machine's constants for them once.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from pkmkit.machines.closed_form import MAX_ABS, SUSPECT_GRAM, RodClosedForm
+from pkmkit.machines.velocity import NEAR_PARALLEL
+from pkmkit.machines.velocity_one import native_legs
 
 #: A discriminant within this of the radius² is a double root (as ``direct_all``'s default).
 REL_TOL = 1e-12
+
+#: Doubles before the legs in :func:`one_pose_pack` (``PK_HEAD`` of ``native/rod_one.c``).
+PACK_HEAD = 14
 
 
 def _legs(closed: RodClosedForm) -> tuple:
@@ -112,3 +124,23 @@ def direct_one(closed: RodClosedForm, q: Any, sign: int) -> list[float] | None:
     if dims == 3:
         return [x1 + wx + t * nx, y1 + wy + t * ny, z1 + wz + t * nz]
     return [x1 + wx + t * nx, y1 + wy + t * ny]
+
+
+def one_pose_pack(closed: RodClosedForm, branches: Sequence[float], lower: Sequence[float],
+                  upper: Sequence[float]) -> bytes | None:
+    """The constants of the one-pose C entries of ``native/rod_one.c`` (bytes of float64): the
+    head (legs ``n``, :data:`~pkmkit.machines.closed_form.MAX_ABS`, ``SUSPECT_GRAM``,
+    :data:`REL_TOL`, ``NEAR_PARALLEL``, the strokes' ``lower`` and ``upper`` limits with their
+    tolerance), then the inverse legs of ``branches`` (:meth:`RodClosedForm.single_legs_packed`),
+    the velocity legs (:func:`~pkmkit.machines.velocity_one.native_legs`) and the direct legs
+    (:func:`_legs`). None for a machine with other than 2 or 3 legs, one per coordinate and
+    actuator (its one-pose calls stay in Python)."""
+    m = closed.model
+    n = m.n_legs
+    if n not in (2, 3) or m.dims != n or m.n_actuators != n or len(lower) != n:
+        return None
+    head = np.zeros(PACK_HEAD)
+    head[:5] = n, MAX_ABS, SUSPECT_GRAM, REL_TOL, NEAR_PARALLEL
+    head[8:8 + n], head[11:11 + n] = lower, upper
+    return (head.tobytes() + closed.single_legs_packed(branches) + native_legs(closed)
+            + np.array(_legs(closed), dtype=float).tobytes())

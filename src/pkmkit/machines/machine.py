@@ -7,7 +7,10 @@ generic least-squares engine over every rod (:mod:`pkmkit.solve.rod_closure`).
 
 Conventions: SI units (m, rad); poses ``(dims,)`` or ``(N, dims)``; actuator coordinates ``(n,)``
 or ``(N, n)``. Single-row calls raise a typed error on failure; batched calls return NaN rows
-and a per-row status (``full_output=True``).
+and a per-row status (``full_output=True``). One plain pose or configuration (no options) of
+``ik``, ``fk``, ``jacobian`` is one C call (:mod:`pkmkit.machines.closed_form_one`,
+:mod:`pkmkit.machines.velocity_one`), asked before the chunked batch paths; whatever it does
+not answer takes them (the same numbers, the typed errors).
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from pkmkit.exceptions import (
 )
 from pkmkit.machines.chunks import chunked
 from pkmkit.machines.closed_form import RodClosedForm
-from pkmkit.machines.closed_form_one import direct_one
+from pkmkit.machines.closed_form_one import direct_one, one_pose_pack
 from pkmkit.machines.common import (
     HOME_TOL,
     MAX_COORDINATE,  # noqa: F401  (re-exported: pkmkit.machines.machine.MAX_COORDINATE)
@@ -61,17 +64,19 @@ from pkmkit.machines.strokes import (
     stroke_limits,
 )
 from pkmkit.machines.velocity import LazyJacobians, VelocityEvaluation
-from pkmkit.machines.velocity_one import jacobian_one
+from pkmkit.machines.velocity_one import jacobian_one, native_record
 from pkmkit.machines.workspace_reports import RodReports
 from pkmkit.model.mobility import grubler_count
 from pkmkit.model.parameters import is_plain_number, resolve_parameters
 from pkmkit.model.rods import SLIDE, RodModel
 from pkmkit.numerics.arrays import as_batch, restore_shape
+from pkmkit.numerics.jit import native_kernels_now
 from pkmkit.numerics.linalg import batched_det
 from pkmkit.solve.rod_closure import instantaneous_mobility
 from pkmkit.status import Status
 
 _LE = operator.le
+_WORKING = "working"  # interned: `mode is _WORKING` for the default (else _mode_sign decides)
 
 
 @dataclass(frozen=True, eq=False)
@@ -129,6 +134,9 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         object.__setattr__(self, "_home_q", q_home[0])
         object.__setattr__(self, "_working_mode", 1 if det_a > 0 else -1)
         object.__setattr__(self, "_home_jacobian", np.linalg.solve(a[0], b[0]))
+        lo, hi = stroke_limits(self)  # the one-pose C entries' constants, packed once
+        object.__setattr__(self, "_one_pack", one_pose_pack(
+            closed, self._default_branches, lo - STROKE_TOL, hi + STROKE_TOL))
 
     # ---------------------------------------------------------------- properties
     @property
@@ -260,7 +268,6 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
                                                 self._home_jacobian)
 
     # ---------------------------------------------------------------- inverse
-    @chunked
     def ik(
         self,
         x: Any,
@@ -300,11 +307,24 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
         if (method == "closed" and branches is None and q0 is None and not full_output
-                and not engine_options and strokes in STROKE_MODES):  # one plain pose: µs
-            q1 = self._closed.inverse_one(x, self._default_branches)
-            if q1 is not None and (strokes == "ignore" or (
-                    strokes in ("flag", "refuse") and self._within_strokes(q1))):
-                return np.array(q1)
+                and not engine_options):  # one plain pose: one C call (closed_form_one)
+            native = native_kernels_now()
+            if native is not None and self._one_pack is not None:
+                q1 = native.rod_ik_one(self._one_pack, x, strokes)
+                if q1 is not None:
+                    return q1
+            elif strokes in STROKE_MODES:  # without the extension: Python floats
+                q1 = self._closed.inverse_one(x, self._default_branches)
+                if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
+                    return np.array(q1)
+        return self._ik_rows(x, method=method, branches=branches, q0=q0,
+                             full_output=full_output, strokes=strokes, **engine_options)
+
+    @chunked
+    def _ik_rows(self, x: Any, *, method: str, branches: Any, q0: Any, full_output: bool,
+                 strokes: str, **engine_options: Any) -> np.ndarray | InverseResult:
+        """:meth:`ik` of whatever its one-pose path does not answer (batches, options, rare
+        single poses), in chunks of rows (:func:`~pkmkit.machines.chunks.chunked`)."""
         check_mode(strokes)
         xb, single = _checked_batch(x, self.dims, "pose")
         br = self._branches(branches)
@@ -396,7 +416,6 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         )
         return _restore(modes, single, ("poses", "valid", "branches", "status"))
 
-    @chunked
     def fk(
         self,
         q: Any,
@@ -435,14 +454,27 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             ConvergenceError: a single numeric solve that failed or reached another mode.
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
-        if (method == "closed" and x0 is None and not full_output and not engine_options
-                and strokes in STROKE_MODES):  # one plain configuration: microseconds
-            working = isinstance(mode, str) and mode == "working"
-            sign = self._working_mode if working else self._mode_sign(mode)
-            p1 = direct_one(self._closed, q, sign)
-            if p1 is not None and (strokes == "ignore" or self._within_strokes(
-                    q.tolist() if isinstance(q, np.ndarray) else q)):
-                return np.array(p1)
+        if method == "closed" and x0 is None and not full_output and not engine_options:
+            # one plain configuration: one C call (closed_form_one)
+            sign = self._working_mode if mode is _WORKING else self._mode_sign(mode)
+            native = native_kernels_now()
+            if native is not None and self._one_pack is not None:
+                p1 = native.rod_fk_one(self._one_pack, q, sign, strokes)
+                if p1 is not None:
+                    return p1
+            elif strokes in STROKE_MODES:  # without the extension: Python floats
+                p1 = direct_one(self._closed, q, sign)
+                if p1 is not None and (strokes == "ignore" or self._within_strokes(
+                        q.tolist() if isinstance(q, np.ndarray) else q)):
+                    return np.array(p1)
+        return self._fk_rows(q, method=method, mode=mode, x0=x0, dof=dof,
+                             full_output=full_output, strokes=strokes, **engine_options)
+
+    @chunked
+    def _fk_rows(self, q: Any, *, method: str, mode: Any, x0: Any, dof: str,
+                 full_output: bool, strokes: str, **engine_options: Any
+                 ) -> np.ndarray | DirectResult:
+        """:meth:`fk` of whatever its one-pose path does not answer, in chunks of rows."""
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
         sign = self._mode_sign(mode)
@@ -524,10 +556,17 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
                 fit x (single pose; batched rows become NaN); a tolerance that is not > 0.
         """
         if q is None and branches is None and type(tol) is float and 0.0 < tol < math.inf:
-            fast = jacobian_one(self._closed, x, tol, self._default_branches,
-                                self._within_strokes)  # one plain pose: µs, same numbers
-            if fast is not None:
-                return fast
+            # one plain pose: one C call, the fields in one more when first read (velocity_one)
+            native = native_kernels_now()
+            if native is not None and self._one_pack is not None:
+                state = native.rod_jacobian_one(self._one_pack, x, tol)
+                if state is not None:
+                    return native_record(self._closed, state, tol, native.rod_field)
+            else:
+                fast = jacobian_one(self._closed, x, tol, self._default_branches,
+                                    self._within_strokes)  # same numbers, Python floats
+                if fast is not None:
+                    return fast
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):
             raise InputError(f"tol must be a positive number, got {tol!r}")
         if x is None:

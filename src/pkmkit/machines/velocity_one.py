@@ -23,9 +23,16 @@ determinant whose reciprocal overflows. The machine-constant parts (per-leg tupl
 floats) are built once per machine.
 
 With the C extension (:func:`pkmkit.numerics.jit.native_kernels_now`) the same operations run
-in C: ``rod_inverse`` for the inverse model of a list or tuple of floats, ``rod_velocity`` once
-when a field is first read, ``rod_field`` per field (the same bits); whatever the C kernel does
-not answer (the cases above, LAPACK for nearly equal singular values) the Python pieces do.
+in C: :meth:`Machine.jacobian <pkmkit.machines.machine.Machine.jacobian>` of a plain pose is one
+call ``rod_jacobian_one`` (``native/rod_one.c``: the pose read and checked, its inverse model
+and stroke check, kept in a state; :func:`native_record`), and a field read is one call
+``rod_field``: the first computes the rows, the determinants, J and the flags in that state,
+the first of ``singular_values``, ``condition``, ``parallel_measure`` the singular values (the
+same bits; nearly equal singular values by NumPy's own LAPACK ``svd`` loop called from C,
+so the Orthoglide near its isotropic home stays in C); whatever the C kernel does not answer
+(the cases above) the Python pieces do, from the state's pose and actuator coordinates.
+:func:`jacobian_one` is the path without the extension (``rod_inverse`` and ``rod_velocity``
+where only ``rod_velocity`` of an older build is present).
 """
 
 from __future__ import annotations
@@ -223,6 +230,16 @@ class OnePoseVelocity:
 
     def __init__(self, closed: RodClosedForm, x: list[float], q: list[float], tol: float):
         self.closed, self.x, self.q, self.tol = closed, x, q, tol
+
+    def __getattr__(self, name: str) -> Any:
+        """``x`` and ``q`` (lists of floats) of an evaluation made from a ``rod_jacobian_one``
+        state (:func:`native_record`), read from it when the Python pieces first need them."""
+        state = self.__dict__.get("_state")
+        if name not in ("x", "q") or not state:
+            raise AttributeError(name)
+        value = self._native_field(state, 13 if name == "x" else 12).tolist()
+        self.__dict__[name] = value
+        return value
 
     def field(self, name: str):
         """The value of field ``name`` of the single-pose :class:`Jacobians`."""
@@ -447,7 +464,7 @@ _BUILD: dict[str, Callable[[OnePoseVelocity], Any]] = {
 #: The codes of the fields the C kernel answers (``rod_field``).
 _NATIVE_CODES = {name: code for code, name in enumerate(
     ("A", "B", "J", "J_inv", "singular_values", "condition", "det_A", "det_B",
-     "parallel_measure", "serial_measure", "singularity", "mode"))}
+     "parallel_measure", "serial_measure", "singularity", "mode", "q"))}
 
 
 def _one_field(name: str) -> property:
@@ -458,6 +475,12 @@ def _one_field(name: str) -> property:
         cache = self._cache
         if name in cache:
             return cache[name]
+        state = self._state  # a rod_jacobian_one state (native_record): one C call
+        if state is not None and code is not None:
+            value = self._field(state, code)
+            if value is not None:
+                cache[name] = value
+                return value
         evaluation = self._evaluation
         value = None
         if code is not None and evaluation._batch is None:
@@ -482,7 +505,25 @@ def _one_field(name: str) -> property:
 class OnePoseJacobians(LazyJacobians):
     """The :class:`~pkmkit.machines.velocity.LazyJacobians` of one pose (fields without the
     batch axis), each field computed from an :class:`OnePoseVelocity` when first read. Built
-    with every field (``dataclasses.replace``) it is a plain record."""
+    with every field (``dataclasses.replace``) it is a plain record. Made by
+    :func:`native_record`, it reads its fields from a C state (``_state``, ``_field``) and makes
+    its evaluation only when the Python pieces must answer a field."""
+
+    _state: Any = None  # a rod_jacobian_one state and rod_field (native_record), else None
+    _field: Any = None
+
+    def __getattr__(self, name: str) -> Any:
+        """The evaluation of a record made by :func:`native_record`, made when first needed."""
+        attributes = self.__dict__
+        state = attributes.get("_state")
+        if name != "_evaluation" or state is None:
+            raise AttributeError(name)
+        evaluation = object.__new__(OnePoseVelocity)
+        values = evaluation.__dict__
+        values["closed"], values["tol"] = attributes["_closed"], attributes["_tol"]
+        values["_state"], values["_native_field"] = state, attributes["_field"]
+        attributes["_evaluation"] = evaluation
+        return evaluation
 
     def __repr__(self) -> str:
         ev = self._evaluation
@@ -501,6 +542,19 @@ def _record(evaluation: OnePoseVelocity) -> OnePoseJacobians:
     record = object.__new__(OnePoseJacobians)
     state = record.__dict__
     state["_evaluation"], state["_single"], state["_cache"] = evaluation, True, {}
+    return record
+
+
+def native_record(closed: RodClosedForm, state: bytearray, tol: float,
+                  field: Callable[[bytearray, int], Any]) -> OnePoseJacobians:
+    """The record of one pose from a ``rod_jacobian_one`` state (``native/rod_one.c``: the pose
+    and its inverse model, within the strokes), ``field`` the extension's ``rod_field``: each
+    field read is one C call computing what the state lacks for it (the module docstring), the
+    Python pieces answer what it does not."""
+    record = object.__new__(OnePoseJacobians)
+    attributes = record.__dict__  # its evaluation made when needed (OnePoseJacobians.__getattr__)
+    attributes["_state"], attributes["_field"], attributes["_cache"] = state, field, {}
+    attributes["_closed"], attributes["_tol"], attributes["_single"] = closed, tol, True
     return record
 
 

@@ -22,6 +22,11 @@ arguments, the same algorithm and statuses, run without the GIL:
   and velocity model of translational rod machines
   (:meth:`pkmkit.machines.closed_form.RodClosedForm.inverse_one`,
   :class:`pkmkit.machines.velocity_one.OnePoseVelocity`), the batch row's bits;
+- ``rod_ik_one``, ``rod_fk_one``, ``rod_jacobian_one`` (``rod_one.c``) — one pose per call of
+  a translational rod machine in one call each (``Machine.ik``, ``fk``, ``jacobian`` of a
+  plain pose: input checked, solve, stroke test and result array in C; the machine's
+  constants packed by :func:`pkmkit.machines.closed_form_one.one_pose_pack`), the Python
+  one-pose paths' bits;
 - ``pose_velocity`` (``pose_velocity.c``) — the one-pose velocity kernels of six-rod
   full-pose machines (:mod:`pkmkit.machines.full_pose_velocity_kernel`);
 - ``pose_one`` (``pose_one.c``; not a twin) — a full-pose machine's constants packed once

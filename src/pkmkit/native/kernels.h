@@ -224,6 +224,8 @@ void pk_absorb_rows(const double *cu, const double *cd, ptrdiff_t n, ptrdiff_t r
 #define PK_F_SERIAL (1u << 9)
 #define PK_F_SINGULARITY (1u << 10)
 #define PK_F_MODE (1u << 11)
+#define PK_F_Q (1u << 12) /* the inputs kept in the state (rod_one.c): q, then x */
+#define PK_F_X (1u << 13)
 
 typedef struct {
     int n;             /* 2 or 3 */
@@ -231,6 +233,12 @@ typedef struct {
     double a[9], b[3], j[9], j_inv[9], sv[3];
     double det_a, det_b, condition, parallel, serial;
     long flags, mode;
+    /* rod_one.c's rod_jacobian_one: the inputs, the fields computed when one is first read */
+    int pending;       /* 1: not computed yet (rod_field computes them) */
+    double legs[3 * PK_LEG], x[3], q[3], tol, near;
+    /* velocity.c's stages: J's singular values and the parallel measure when asked */
+    int svd_pending, parallel_tried, zero_b;
+    double lengths[3];
 } pk_rod_state;
 
 /* One pose x (n,) at q (n,), thresholds tol (singularities) and near (J's singular values

@@ -497,6 +497,11 @@ extern const char pk_pose_one_doc[];
 PyObject *pk_py_pose_one(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+/* rod_one.c: one pose per call of the translational rod-leg machines */
+extern const char pk_rod_ik_one_doc[], pk_rod_fk_one_doc[], pk_rod_jacobian_one_doc[];
+PyObject *pk_py_rod_ik_one(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_rod_fk_one(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_rod_jacobian_one(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 /* svd.c, rod_velocity.c: batched SVD kernels and the rod-leg velocity summaries */
 extern const char pk_singular_values_doc[], pk_singular_rates_doc[];
 extern const char pk_rod_velocity3_doc[], pk_rod_velocity2_doc[];
@@ -539,6 +544,12 @@ static PyMethodDef methods[] = {
     {"rod_field", (PyCFunction)(void (*)(void))pk_py_rod_field, METH_FASTCALL, pk_rod_field_doc},
     {"rod_inverse", (PyCFunction)(void (*)(void))pk_py_rod_inverse, METH_FASTCALL,
      pk_rod_inverse_doc},
+    {"rod_ik_one", (PyCFunction)(void (*)(void))pk_py_rod_ik_one, METH_FASTCALL,
+     pk_rod_ik_one_doc},
+    {"rod_fk_one", (PyCFunction)(void (*)(void))pk_py_rod_fk_one, METH_FASTCALL,
+     pk_rod_fk_one_doc},
+    {"rod_jacobian_one", (PyCFunction)(void (*)(void))pk_py_rod_jacobian_one, METH_FASTCALL,
+     pk_rod_jacobian_one_doc},
     {"pose_velocity", (PyCFunction)(void (*)(void))pk_py_pose_velocity, METH_FASTCALL,
      pk_pose_velocity_doc},
     {"state_array", (PyCFunction)(void (*)(void))pk_py_state_array, METH_FASTCALL,

@@ -7,9 +7,11 @@
  * acos (it differs in the last place for about one argument in ten on AVX-512 machines), so
  * the closed-form singular values call NumPy's own float64 arccos loop (found once, checked
  * against numpy.arccos; when it cannot be found the fields that need it are not answered).
- * Whatever velocity_one.py hands elsewhere (a sum that is not finite, a zero row, a
- * reciprocal that overflows, a ZeroDivisionError, LAPACK for nearly equal singular values) is
- * not answered here either: rod_field returns None and the Python path decides.
+ * Nearly equal singular values, which velocity_one.py hands to numpy.linalg.svd, are answered
+ * by NumPy's own svd gufunc loop called from here (the same LAPACK call: the same bits).
+ * Whatever else velocity_one.py hands elsewhere (a sum that is not finite, a zero row, a
+ * reciprocal that overflows, a ZeroDivisionError) is not answered here either: rod_field
+ * returns None and the Python path decides.
  *
  * Python face: rod_inverse(legs, x, max_abs) -> q (list) or None, the twin of
  * RodClosedForm.inverse_one; rod_velocity(legs, x, q, tol, near) -> state (a bytearray
@@ -87,6 +89,83 @@ static int find_acos(void) {
     return found;
 }
 
+/* ------------------------------------------------------- NumPy's LAPACK singular values */
+
+/* Where the closed forms hand a 3x3 matrix to LAPACK (nearly equal singular values: the
+ * Orthoglide near its isotropic home, the linear Delta near its axis), the Python path and the
+ * batch path call numpy.linalg.svd(m, compute_uv=False): NumPy's gufunc
+ * numpy.linalg._umath_linalg.svd, loop 'd->d' (LAPACK dgesdd, JOBZ 'N'). Its float64 loop is
+ * found once, as the arccos loop, and called on the matrix (outer dimension 1, the core
+ * dimensions m = n = 3, the row-major strides): the same LAPACK call on the same numbers, so
+ * NumPy's bits — checked against numpy.linalg.svd on matrices with nearly equal singular
+ * values when found; unavailable (another NumPy), the Python path answers as before. */
+static pk_loop svd_loop = NULL;
+static void *svd_data = NULL;
+static int svd_state = 0; /* 0 not looked for, 1 found and checked, -1 unavailable */
+
+/* The singular values of a row-major 3x3 matrix by NumPy's gufunc loop; 0, or 1 where LAPACK
+ * did not converge (the loop gives NaN there: the Python path decides). */
+static int np_svd3(const double *mat, double *sv) {
+    char *args[2] = {(char *)mat, (char *)sv};
+    Py_ssize_t dims[4] = {1, 3, 3, 3};
+    Py_ssize_t steps[5] = {72, 24, 24, 8, 8};
+    svd_loop(args, dims, steps, svd_data);
+    return !(sv[0] == sv[0] && sv[1] == sv[1] && sv[2] == sv[2]);
+}
+
+static int find_svd(void) {
+    PyObject *mod = PyImport_ImportModule("numpy.linalg._umath_linalg");
+    PyObject *ufunc = mod ? PyObject_GetAttrString(mod, "svd") : NULL;
+    Py_XDECREF(mod);
+    if (!ufunc) { /* another NumPy: the Python path answers */
+        PyErr_Clear();
+        return -1;
+    }
+    int found = -1;
+    const pk_ufunc_head *head = (const pk_ufunc_head *)ufunc;
+    if (strcmp(Py_TYPE(ufunc)->tp_name, "numpy.ufunc") == 0 && head->nin == 1
+        && head->nout == 1 && head->nargs == 2 && head->name && strcmp(head->name, "svd") == 0
+        && head->types && head->functions) {
+        for (int i = 0; i < head->ntypes; i++) {
+            if (head->types[2 * i] == 12 && head->types[2 * i + 1] == 12) { /* NPY_DOUBLE */
+                svd_loop = head->functions[i];
+                svd_data = head->data ? head->data[i] : NULL;
+                found = 1;
+                break;
+            }
+        }
+    }
+    Py_DECREF(ufunc);
+    /* checked against numpy.linalg.svd: isotropic and nearly isotropic matrices, others */
+    PyObject *numpy = found == 1 ? PyImport_ImportModule("numpy") : NULL;
+    PyObject *linalg = numpy ? PyObject_GetAttrString(numpy, "linalg") : NULL;
+    PyObject *svd = linalg ? PyObject_GetAttrString(linalg, "svd") : NULL;
+    PyObject *array = numpy ? PyObject_GetAttrString(numpy, "array") : NULL;
+    for (int k = 0; found == 1 && k < 24; k++) {
+        double m[9], got[3] = {0, 0, 0}, want[3] = {-1, -1, -1};
+        for (int e = 0; e < 9; e++)
+            m[e] = (e % 4 == 0 ? 1.0 : 0.0) + (k < 12 ? 1e-7 : 0.3) * sin(1.0 + k * 9 + e);
+        PyObject *rows = Py_BuildValue("[[ddd][ddd][ddd]]", m[0], m[1], m[2], m[3], m[4], m[5],
+                                       m[6], m[7], m[8]);
+        PyObject *arr = rows && array ? PyObject_CallOneArg(array, rows) : NULL;
+        PyObject *kw = Py_BuildValue("{s:O}", "compute_uv", Py_False);
+        PyObject *given = arr ? PyTuple_Pack(1, arr) : NULL;
+        PyObject *out = given && kw && svd ? PyObject_Call(svd, given, kw) : NULL;
+        Py_XDECREF(given);
+        PyObject *list = out ? PyObject_CallMethod(out, "tolist", NULL) : NULL;
+        if (list && PyList_Check(list) && PyList_GET_SIZE(list) == 3)
+            for (int i = 0; i < 3; i++) want[i] = PyFloat_AsDouble(PyList_GET_ITEM(list, i));
+        PyObject *held[5] = {rows, arr, kw, out, list};
+        for (int i = 0; i < 5; i++) Py_XDECREF(held[i]);
+        if (PyErr_Occurred()) PyErr_Clear();
+        if (np_svd3(m, got) || memcmp(got, want, sizeof(got)) != 0) found = -1;
+    }
+    PyObject *names[4] = {numpy, linalg, svd, array};
+    for (int i = 0; i < 4; i++) Py_XDECREF(names[i]);
+    if (found != 1) svd_loop = NULL;
+    return found;
+}
+
 /* --------------------------------------------------------------- singular values */
 
 /* velocity_one.singular_values of a finite row-major 2x2 or 3x3 matrix into sv (decreasing);
@@ -129,8 +208,11 @@ static int pk_singular_values(const double *mat, int n, double *sv) {
                  + c20 * c20 + c21 * c21 + c22 * c22);
     double pair = s1 > 0 ? d / s1 : 0.0;
     double rest = lam1 > 0 ? (e2 - pair * pair) / lam1 : 0.0;
-    if (spread > 0 && (fabs(half_det) > 1.0 - 1e-6 || rest - 2 * pair < 1e-6 * rest))
-        return 1; /* nearly equal singular values: LAPACK, in the Python path */
+    if (spread > 0 && (fabs(half_det) > 1.0 - 1e-6 || rest - 2 * pair < 1e-6 * rest)) {
+        /* nearly equal singular values: LAPACK, as the Python and the batch paths */
+        if (svd_state == 0) svd_state = find_svd();
+        return svd_state == 1 ? np_svd3(mat, sv) : 1;
+    }
     double s2 = 0.5 * (sqrt(pk_max(rest + 2 * pair, 0.0)) + sqrt(pk_max(rest - 2 * pair, 0.0)));
     double s3 = s2 > 0 ? pair / s2 : 0.0;
     if (s2 > s1) s2 = s1;
@@ -185,12 +267,53 @@ static void rod_rows(const double *legs, int n, const double *x, const double *q
     }
 }
 
-void pk_rod_velocity(const double *legs, int n, const double *x, const double *q, double tol,
+/* The parallel measure (sigma_min / sigma_max of A with unit rows) into the state, once; 1 if
+ * it is answered. Needs the row lengths (PK_F_SERIAL). */
+static int rod_parallel(pk_rod_state *s) {
+    if (s->ok & PK_F_PARALLEL) return 1;
+    if (s->parallel_tried || !(s->ok & PK_F_SERIAL)) return 0;
+    s->parallel_tried = 1;
+    int n = s->n, nn = n * n;
+    double unit[9], sv_u[3];
+    for (int k = 0; k < nn; k++) unit[k] = s->a[k] / s->lengths[k / n];
+    int parallel_ok = !pk_singular_values(unit, n, sv_u) && sv_u[0] != 0.0;
+    s->parallel = parallel_ok ? sv_u[n - 1] / sv_u[0] : NAN;
+    if (parallel_ok) s->ok |= PK_F_PARALLEL;
+    return parallel_ok;
+}
+
+/* velocity_one.sv: J's singular values and the condition number, once J is known
+ * (s->svd_pending); from J^-1 near a parallel singularity, as the batch path. */
+static void rod_svd(pk_rod_state *s) {
+    s->svd_pending = 0;
+    int n = s->n;
+    double *sv = s->sv, det_a = s->det_a;
+    if (!surely_above(det_a, s->lengths, n, s->near)) {
+        if (!rod_parallel(s)) return;
+        if (s->parallel < s->near && s->parallel < s->serial) {
+            double inverse[3];
+            if (s->zero_b || pk_singular_values(s->j_inv, n, inverse)) return;
+            for (int i = 0; i < n; i++) {
+                if (inverse[n - 1 - i] == 0.0) return; /* ZeroDivisionError in Python */
+                sv[i] = 1.0 / inverse[n - 1 - i];
+            }
+            goto condition;
+        }
+    }
+    if (pk_singular_values(s->j, n, sv)) return;
+condition:
+    s->condition = sv[n - 1] == 0.0 ? INFINITY : sv[0] / sv[n - 1];
+    s->ok |= PK_F_SV | PK_F_CONDITION;
+}
+
+/* Every field but the singular values of J, the condition number and (where the flags do
+ * not need it) the parallel measure, which rod_svd and rod_parallel add when asked. */
+static void rod_core(const double *legs, int n, const double *x, const double *q, double tol,
                      double near, pk_rod_state *s) {
     double *a = s->a, *b = s->b;
     int nn = n * n;
     s->n = n;
-    s->ok = 0;
+    s->ok &= PK_F_Q | PK_F_X; /* the inputs a rod_jacobian_one state keeps */
     rod_rows(legs, n, x, q, a, b);
     double sum_a = 0.0, sum_b = 0.0; /* Python's sum(a) + sum(b) (3.11: in order) */
     for (int k = 0; k < nn; k++) sum_a += a[k];
@@ -217,11 +340,13 @@ void pk_rod_velocity(const double *legs, int n, const double *x, const double *q
     s->det_b = n == 3 ? b[0] * b[1] * b[2] : b[0] * b[1];
     int zero_b = 0;
     for (int i = 0; i < n; i++) zero_b |= b[i] == 0.0;
+    s->zero_b = zero_b;
     if (!zero_b) {
         for (int k = 0; k < nn; k++) s->j_inv[k] = a[k] / b[k / n];
         s->ok |= PK_F_J_INV;
     }
-    double lengths[3];
+    double *lengths = s->lengths;
+    s->near = near;
     for (int i = 0; i < n; i++) {
         const double *r = a + n * i;
         lengths[i] = n == 2 ? sqrt(r[0] * r[0] + r[1] * r[1])
@@ -235,21 +360,14 @@ void pk_rod_velocity(const double *legs, int n, const double *x, const double *q
     }
     s->serial = serial;
     s->ok |= PK_F_SERIAL;
-    /* the parallel measure: sigma_min / sigma_max of A with unit rows */
-    double unit[9], sv_u[3];
-    for (int k = 0; k < nn; k++) unit[k] = a[k] / lengths[k / n];
-    int parallel_ok = !pk_singular_values(unit, n, sv_u) && sv_u[0] != 0.0;
-    double parallel = parallel_ok ? sv_u[n - 1] / sv_u[0] : NAN;
-    s->parallel = parallel;
-    if (parallel_ok) s->ok |= PK_F_PARALLEL;
-    /* velocity_one.at_parallel */
+    /* velocity_one.at_parallel: the parallel measure only where its bound cannot tell */
     int at_parallel;
     if (surely_above(det_a, lengths, n, tol)) {
         at_parallel = 0;
-    } else if (!parallel_ok) {
+    } else if (!rod_parallel(s)) {
         return;
     } else {
-        at_parallel = parallel < tol || det_a == 0.0;
+        at_parallel = s->parallel < tol || det_a == 0.0;
     }
     s->flags = (serial < tol ? 1 : 0) | (at_parallel ? 2 : 0); /* Singularity.SERIAL, PARALLEL */
     s->ok |= PK_F_SINGULARITY;
@@ -275,24 +393,14 @@ void pk_rod_velocity(const double *legs, int n, const double *x, const double *q
     for (int k = 0; k < nn; k++)
         if (!(-INFINITY < j[k] && j[k] < INFINITY)) return;
     s->ok |= PK_F_J;
-    /* velocity_one.sv: from J^-1 near a parallel singularity, as the batch path */
-    double *sv = s->sv;
-    if (!surely_above(det_a, lengths, n, near)) {
-        if (!parallel_ok) return;
-        if (parallel < near && parallel < serial) {
-            double inverse[3];
-            if (zero_b || pk_singular_values(s->j_inv, n, inverse)) return;
-            for (int i = 0; i < n; i++) {
-                if (inverse[n - 1 - i] == 0.0) return; /* ZeroDivisionError in Python */
-                sv[i] = 1.0 / inverse[n - 1 - i];
-            }
-            goto condition;
-        }
-    }
-    if (pk_singular_values(j, n, sv)) return;
-condition:
-    s->condition = sv[n - 1] == 0.0 ? INFINITY : sv[0] / sv[n - 1];
-    s->ok |= PK_F_SV | PK_F_CONDITION;
+    s->svd_pending = 1;
+}
+
+void pk_rod_velocity(const double *legs, int n, const double *x, const double *q, double tol,
+                     double near, pk_rod_state *s) {
+    rod_core(legs, n, x, q, tol, near, s);
+    rod_parallel(s);
+    if (s->svd_pending) rod_svd(s);
 }
 
 /* ------------------------------------------------------------------ Python face */
@@ -423,10 +531,13 @@ static PyObject *scalar(PyObject *type, PyObject *value) {
 
 const char pk_rod_field_doc[] =
 "rod_field(state, code)\n\n"
-"Field `code` of a rod_velocity state (0 A, 1 B, 2 J, 3 J_inv, 4 singular_values,\n"
-"5 condition, 6 det_A, 7 det_B, 8 parallel_measure, 9 serial_measure, 10 singularity,\n"
-"11 mode), as the single-pose Jacobians record holds it (NumPy arrays, numpy.float64,\n"
-"numpy.int64), or None where the Python path must answer.";
+"Field `code` of a rod_velocity or rod_jacobian_one state (0 A, 1 B, 2 J, 3 J_inv,\n"
+"4 singular_values, 5 condition, 6 det_A, 7 det_B, 8 parallel_measure, 9 serial_measure,\n"
+"10 singularity, 11 mode; of a rod_jacobian_one state also 12 q and 13 x, its inputs), as\n"
+"the single-pose Jacobians record holds it (NumPy arrays, numpy.float64, numpy.int64), or\n"
+"None where the Python path must answer. A rod_jacobian_one state computes its fields\n"
+"when first asked: the rows, determinants, J and the flags on the first read; J's singular\n"
+"values, the condition number and the parallel measure when one of them is read.";
 
 PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
@@ -442,11 +553,18 @@ PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t narg
     }
     long code = PyLong_AsLong(args[1]);
     if (code == -1 && PyErr_Occurred()) return NULL;
-    if (code < 0 || code > 11) {
-        PyErr_Format(PyExc_ValueError, "code: 0 to 11, got %ld", code);
+    if (code < 0 || code > 13) {
+        PyErr_Format(PyExc_ValueError, "code: 0 to 13, got %ld", code);
         return NULL;
     }
-    const pk_rod_state *s = (const pk_rod_state *)PyByteArray_AS_STRING(args[0]);
+    pk_rod_state *s = (pk_rod_state *)PyByteArray_AS_STRING(args[0]);
+    if (s->pending && code < 12) { /* rod_jacobian_one's state: its fields, once */
+        s->pending = 0;
+        rod_core(s->legs, s->n, s->x, s->q, s->tol, s->near, s);
+    }
+    if (code == 8) rod_parallel(s); /* the singular values when a field needs them */
+    if ((code == 4 || code == 5) && s->svd_pending) rod_svd(s);
+    if (PyErr_Occurred()) return NULL;
     if (!(s->ok & (1u << code))) Py_RETURN_NONE;
     if (numpy_names() < 0) return NULL;
     int n = s->n;
@@ -466,15 +584,18 @@ PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t narg
     case 8: return scalar(np_float64, PyFloat_FromDouble(s->parallel));
     case 9: return scalar(np_float64, PyFloat_FromDouble(s->serial));
     case 10: return scalar(np_int64, PyLong_FromLong(s->flags));
-    default: return scalar(np_int64, PyLong_FromLong(s->mode));
+    case 11: return scalar(np_int64, PyLong_FromLong(s->mode));
+    case 12: return array_of(s->q, n, 0);
+    default: return array_of(s->x, n, 0);
     }
 }
 
 /* ------------------------------------------------------------------ inverse model */
 
 /* RodClosedForm.inverse_one for one pose x (dims = 2 or 3) and legs (n, PK_INV_LEG) laid out
- * as its _single_legs tuples; 0, or 1 where inverse_one returns None. */
-static int rod_inverse(const double *legs, Py_ssize_t n, int dims, const double *x, double *q) {
+ * as its _single_legs tuples; 0, or 1 where inverse_one returns None (also for rod_one.c). */
+int pk_rod_inverse_one(const double *legs, Py_ssize_t n, int dims, const double *x,
+                       double *q) {
     double x0 = x[0], x1 = x[1], x2 = dims == 3 ? x[2] : 0.0;
     for (Py_ssize_t i = 0; i < n; i++) {
         const double *t = legs + PK_INV_LEG * i;
@@ -564,7 +685,7 @@ PyObject *pk_py_rod_inverse(PyObject *self, PyObject *const *args, Py_ssize_t na
             return NULL;
         }
     }
-    if (rod_inverse(legs, n, (int)dims, x, q)) Py_RETURN_NONE;
+    if (pk_rod_inverse_one(legs, n, (int)dims, x, q)) Py_RETURN_NONE;
     PyObject *out = PyList_New(n);
     if (!out) return NULL;
     for (Py_ssize_t i = 0; i < n; i++) {
