@@ -3,7 +3,8 @@ their message says the problem is."""
 
 import pytest
 
-from pkmkit.exceptions import OutOfStrokeError, PkmError
+import pkmkit
+from pkmkit.exceptions import OutOfStrokeError, PkmError, UnknownMachineError
 
 
 def test_out_of_stroke_names_the_batch_row_when_given():
@@ -18,3 +19,13 @@ def test_out_of_stroke_names_the_batch_row_when_given():
     assert str(first) == f"pose 0: {msg}"
     single = OutOfStrokeError(msg, "Q1", 0.87, (-0.785, 0.785))
     assert str(single) == msg and single.pose_index is None
+
+
+def test_unknown_machine_message_is_the_plain_text():
+    """``str()`` of an unknown machine id is its message, not the quoted repr a KeyError would
+    print, and it is what ``pkmkit.machine`` raises for a wrong id."""
+    err = UnknownMachineError("delta", ["orthoglide", "linear-delta"])
+    assert str(err) == "unknown machine 'delta'; valid ids: linear-delta, orthoglide"
+    assert isinstance(err, KeyError) and err.valid == ["linear-delta", "orthoglide"]
+    with pytest.raises(UnknownMachineError, match=r"^unknown machine 'no-such-machine'; valid"):
+        pkmkit.machine("no-such-machine")

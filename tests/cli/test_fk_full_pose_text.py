@@ -38,3 +38,20 @@ def test_fk_text_pose_halves(run, units, scale):
     np.testing.assert_allclose(_vector(line, "(xyz)"), ANGLES_DEG, atol=1e-7)
     np.testing.assert_allclose(_vector(line, "rotation vector"), rotvec, atol=1e-8)
     assert f"{units}, angles (xyz)" in line and "deg, rotation vector" in line
+
+
+@pytest.mark.parametrize("units, scale", [("mm", 1e-3), ("m", 1.0)])
+def test_fk_json_pose_halves(run, as_json, units, scale):
+    """The same pose through ``--json``: ``pose.position`` in --units, ``pose.angles`` in
+    degrees, ``pose.rotation_vector`` in rad, each half in its place."""
+    rotvec = Rotation.from_euler("xyz", ANGLES_DEG, degrees=True).as_rotvec()
+    m = pkmkit.machine("gough-stewart")
+    q = m.ik(np.concatenate([POSITION_MM * 1e-3, rotvec]))
+    q_text = ",".join(f"{v / scale:.12g}" for v in q)
+    pose = as_json(run("fk", "gough-stewart", "--q", q_text, "--units", units, "--angles",
+                       "xyz", "--json"))["pose"]
+    np.testing.assert_allclose(pose["position"], POSITION_MM * 1e-3 / scale, rtol=1e-7,
+                               atol=1e-9 / scale)
+    np.testing.assert_allclose(pose["angles"], ANGLES_DEG, atol=1e-7)
+    np.testing.assert_allclose(pose["rotation_vector"], rotvec, atol=1e-8)
+    assert pose["convention"] == "xyz"

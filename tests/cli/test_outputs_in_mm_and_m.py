@@ -78,6 +78,26 @@ def _plan(path: Path) -> tuple[list[str], list[list[str]]]:
     return rows[0], rows[1:]
 
 
+def test_ballbar_plan_tool_lengths_in_mm_and_m_short_plan(run, tmp_path, monkeypatch):
+    """The ordinary run's version of the test below (4 points per circle, 0.1 s): tools of 0
+    and 50 mm given in mm or as 0 and 0.05 m give the same plan, whose second tool's rows
+    carry 50 mm."""
+    monkeypatch.chdir(tmp_path)
+    for args, name in ((["--tool-lengths", "0,50"], "mm.csv"),
+                       (["--tool-lengths", "0,0.05", "--units", "m"], "m.csv")):
+        res = run("machined-part", "ballbar-plan", "verne", "--points", 4, "--out", name, *args)
+        assert res.exit_code == 0, res.output
+    header, mm = _plan(Path("mm.csv"))
+    _, m = _plan(Path("m.csv"))
+    tool = header.index("tool_length")
+    assert {row[tool] for row in mm} == {"0", "50"} and {row[tool] for row in m} == {"0", "0.05"}
+    assert len(m) == len(mm) == 24
+    for a, b in zip(mm, m, strict=True):
+        for k in range(header.index("id")):
+            if header[k] != "tool":
+                assert float(a[k]) == pytest.approx(1000 * float(b[k]), rel=1e-8, abs=1e-9)
+
+
 @pytest.mark.ci
 def test_ballbar_plan_tool_lengths_in_mm_and_m(run, tmp_path, monkeypatch):
     """The documented default tools are 0 and 100 mm: given explicitly in mm or in m, the same

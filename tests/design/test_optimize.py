@@ -36,6 +36,8 @@ def test_metrics_against_direct_computation():
     assert metrics["stroke"] == pytest.approx(np.max(q.max(0) - q.min(0)))
     assert metrics["compactness"] == pytest.approx(0.5 / metrics["stroke"])
     assert metrics["lambda_min"] == pytest.approx(sv[:, -1].min())
+    assert metrics["lambda_max"] == pytest.approx(sv[:, 0].max())
+    assert metrics["worst_condition"] == pytest.approx(np.max(sv[:, 0] / sv[:, -1]))
     assert metrics["gci"] == pytest.approx(np.mean(sv[:, -1] / sv[:, 0]))
     assert metrics["violation"] == 0.0
     # footprint: the slides' triangle of circumradius R (carriages above the x-y plane)

@@ -95,6 +95,16 @@ class LinearDeltaSizing:
     notes: tuple[str, ...] = ()
 
 
+def _candidate(base: Machine, d: float, r: float, length: float) -> Machine:
+    """The candidate (d, L) with slider stops ±3 L, which hold its home pose at every scale
+    (the stops are not searched: the criteria ignore them, and the result gets the cube's
+    strokes). The base's stops [0.7, 2] m put the home of arms of 750 m "beyond its stroke
+    by 374 times its size", refused as a unit slip, so cubes above ~200 m could not be sized.
+    """
+    return base.with_params(R=d + r, r=r, L=length, q_min=(-3.0 * length,) * 3,
+                            q_max=(3.0 * length,) * 3)
+
+
 class _Search:
     """Margins and metrics of candidate (d, L) designs on the coarse grid."""
 
@@ -106,7 +116,7 @@ class _Search:
 
     def machine(self, d: float, length: float) -> Machine | None:
         try:
-            return self.base.with_params(R=d + self.r, r=self.r, L=length)
+            return _candidate(self.base, d, self.r, length)
         except ParameterError:
             return None
 
@@ -232,7 +242,7 @@ def _verified_design(base, region, center: np.ndarray, r: float,
             guess = length
         else:
             d, length = search.most_compact(max_leg)
-        sized = base.with_params(R=d + r, r=r, L=length)
+        sized = _candidate(base, d, r, length)
         check = check_region(sized, center, cube_side, relaxed(criteria), samples=samples)
         if check.feasible:
             return d, length, sized, check
