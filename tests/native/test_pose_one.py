@@ -97,13 +97,14 @@ def test_ik_refusals_and_other_types():
     m = pkmkit.machine("gough-stewart")
     one, x = _one(m), m.home_pose.tolist()
     for pose in ([*x[:5], float("nan")], [*x[:5], float("inf")], [*x[:5], 2e9], [*x[:5], 10**400],
-                 x[:5], [*x, 0.0], [True, *x[1:]], ["a", *x[1:]], [np.float64(v) for v in x],
+                 x[:5], [*x, 0.0], [True, *x[1:]], ["a", *x[1:]], [np.int64(v) for v in x],
                  "abcdef", None, 3.0, np.zeros(5), np.zeros((1, 6))):
         assert one.ik(pose, False) is None, pose
     for pose in (m.home_pose.astype(np.float32), m.home_pose.astype(np.int32),
                  np.zeros((1, 6), dtype=np.float32), b"abcdefgh"):
         assert one.ik(pose, False) is NotImplemented, pose
         assert one.jacobian(pose, 1e-6, True, print) is NotImplemented
+    assert one.ik([np.float64(v) for v in x], False).tobytes() == one.ik(x, False).tobytes()
     assert one.ik([int(v) for v in np.round(x)], False).tolist() == \
         m._one_pose_inverse()([int(v) for v in np.round(x)])
     for error, args in [(TypeError, (x,)), (TypeError, (x, False, 1)), (TypeError, ())]:

@@ -289,7 +289,8 @@ def _plain(x: Any, width: int) -> list[float] | None:
             return None
         x = x.tolist()
     elif type(x) in (list, tuple) and len(x) == width:
-        if not all(type(v) is float or type(v) is int for v in x):
+        if not all(type(v) is float or (type(v) is int and abs(v) <= MAX_COORDINATE)
+                   for v in x):  # an int beyond a double: the batch path's typed error
             return None
         x = [float(v) for v in x]
     else:

@@ -110,8 +110,7 @@ def pack_arguments(m: Any, structured: bool = True) -> tuple:
         np.concatenate([m._home["platform"], home[passive]]),
         np.ascontiguousarray(d_rates, dtype=float),
         np.ascontiguousarray(residual_rates, dtype=float), np.ascontiguousarray(home),
-        BOUND_MARGIN * SINGULAR_TOL, float(MAX_COORDINATE), bool(structured), np.empty,
-        np.ndarray)
+        BOUND_MARGIN * SINGULAR_TOL, float(MAX_COORDINATE), bool(structured))
 
 
 def packed(m: Any) -> Packed | None:

@@ -404,7 +404,10 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             elif q1 is not None:
                 return q1
         check_mode(strokes)
-        arr = np.asarray(x, dtype=float) if not isinstance(x, np.ndarray) else x
+        try:  # an int beyond a double, a string: the typed error as_batch gives
+            arr = np.asarray(x, dtype=float) if not isinstance(x, np.ndarray) else x
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise InputError(f"pose must be an array of real numbers: {exc}") from None
         width = arr.shape[-1] if arr.ndim in (1, 2) else 6
         if width == 3 and self.position_controlled:
             return self._ik_position(arr, q0, branches, full_output, engine_options, strokes)

@@ -124,7 +124,8 @@ def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
     first single call while Numba is not imported: the caller then takes the batch path (the
     same numbers, typed errors and warnings)."""
     if isinstance(q, (list, tuple)):
-        if not all(type(v) in (float, int) for v in q):
+        if not all(type(v) in (float, int) for v in q) or any(
+                type(v) is int and abs(v) > 2**1023 for v in q):  # beyond a double: batch path
             return None
         q = np.array(q, dtype=float)
     elif not (isinstance(q, np.ndarray) and q.dtype == np.float64):

@@ -310,68 +310,6 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
 
 /* ---------------------------------------------------------------- the module face */
 
-/* width plain finite numbers within +-max_coordinate from a list, tuple (floats, NumPy's
- * float64s, ints but not bools) or
- * a 1-D float64 / float32 array into out: 1, else 0 (the batch path; no error set). */
-static int plain(const pk_one *s, PyObject *x, ptrdiff_t width, double *out) {
-    if (PyList_CheckExact(x) || PyTuple_CheckExact(x)) {
-        if (PySequence_Fast_GET_SIZE(x) != width) return 0;
-        PyObject **items = PySequence_Fast_ITEMS(x);
-        for (ptrdiff_t i = 0; i < width; i++) {
-            PyObject *v = items[i];
-            if (PyFloat_Check(v)) {  /* float and its subclasses (NumPy's float64) */
-                out[i] = PyFloat_AS_DOUBLE(v);
-            } else if (PyLong_CheckExact(v)) {
-                out[i] = PyLong_AsDouble(v);
-                if (out[i] == -1.0 && PyErr_Occurred()) {
-                    PyErr_Clear();
-                    return 0;
-                }
-            } else {
-                return 0;
-            }
-        }
-    } else if (PyObject_TypeCheck(x, (PyTypeObject *)s->ndarray)) {
-        Py_buffer view;
-        if (PyObject_GetBuffer(x, &view, PyBUF_RECORDS_RO) < 0) {
-            PyErr_Clear();
-            return 0;
-        }
-        const char *f = view.format ? view.format : "B";
-        if (f[0] == '@' || f[0] == '=' || (PY_LITTLE_ENDIAN && f[0] == '<')) f++;
-        int ok = view.ndim == 1 && view.shape[0] == width && f[1] == 0
-                 && ((f[0] == 'd' && view.itemsize == 8) || (f[0] == 'f' && view.itemsize == 4));
-        if (ok) {
-            const char *p = view.buf;
-            for (ptrdiff_t i = 0; i < width; i++, p += view.strides[0])
-                out[i] = f[0] == 'd' ? *(const double *)p : (double)*(const float *)p;
-        }
-        PyBuffer_Release(&view);
-        if (!ok) return 0;
-    } else {
-        return 0;
-    }
-    for (ptrdiff_t i = 0; i < width; i++)
-        if (!(fabs(out[i]) <= s->max_coordinate)) return 0;
-    return 1;
-}
-
-/* A new float64 array of `count` values (numpy.empty through the packed callable). */
-static PyObject *new_array(const pk_one *s, PyObject *size, const double *data, ptrdiff_t count) {
-    PyObject *arr = PyObject_CallOneArg(s->empty, size);
-    if (!arr) return NULL;
-    Py_buffer view;
-    if (PyObject_GetBuffer(arr, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
-        Py_DECREF(arr);
-        return NULL;
-    }
-    memcpy(view.buf, data, (size_t)count * sizeof(double));
-    PyBuffer_Release(&view);
-    return arr;
-}
-
-
-
 static pk_one *capsule_state(PyObject *capsule) {
     return PyCapsule_GetPointer(capsule, PK_ONE_CAPSULE);
 }
@@ -394,7 +332,8 @@ PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t n
     if (!s) return NULL;
     ptrdiff_t n = s->inv.n, nv = s->inv.n_var;
     double x[6], target[6];
-    if (!plain(s, args[1], 6, x)) Py_RETURN_NONE;
+    int got = pk_plain_numbers(args[1], 6, s->max_coordinate, x); /* plain_numbers.c */
+    if (got != PK_PLAIN_TAKEN) return got < 0 ? NULL : Py_NewRef(Py_None);
     int ignore = PyObject_IsTrue(args[2]), full = PyObject_IsTrue(args[3]);
     if (ignore < 0 || full < 0) return NULL;
     double norm = sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]);
@@ -408,9 +347,10 @@ PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t n
     double *start = NULL;
     if (nargs == 5 && args[4] != Py_None) {
         start = k.pred;
-        if (!plain(s, args[4], n, start)) {
+        got = pk_plain_numbers(args[4], n, s->max_coordinate, start);
+        if (got != PK_PLAIN_TAKEN) {
             free(k.memory);
-            Py_RETURN_NONE;
+            return got < 0 ? NULL : Py_NewRef(Py_None);
         }
     }
     double *values = k.values, *u = k.u, q[64];
@@ -428,9 +368,9 @@ PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t n
         free(k.memory);
         Py_RETURN_NONE;
     }
-    PyObject *qa = new_array(s, s->n_obj, q, s->n_act);
+    PyObject *qa = pk_new_array(q, s->n_act, 0);
     if (qa && full) {
-        PyObject *ua = new_array(s, s->u_obj, u, 6 + nv);
+        PyObject *ua = pk_new_array(u, 6 + nv, 0);
         PyObject *count = PyLong_FromLongLong((long long)iterations);
         PyObject *worst = PyFloat_FromDouble(residual);
         out = ua && count && worst ? PyTuple_New(4) : NULL;
@@ -467,7 +407,9 @@ PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t n
     pk_one *s = capsule_state(args[0]);
     if (!s) return NULL;
     double q[64], pose[6];
-    if (s->n_act > 64 || !plain(s, args[1], s->n_act, q)) Py_RETURN_NONE;
+    if (s->n_act > 64) Py_RETURN_NONE;
+    int got = pk_plain_numbers(args[1], s->n_act, s->max_coordinate, q);
+    if (got != PK_PLAIN_TAKEN) return got < 0 ? NULL : Py_NewRef(Py_None);
     int ignore = PyObject_IsTrue(args[2]), check = PyObject_IsTrue(args[3]);
     if (ignore < 0 || check < 0) return NULL;
     pk_one_work k;
@@ -478,7 +420,7 @@ PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t n
     Py_END_ALLOW_THREADS
     free(k.memory);
     if (!found) Py_RETURN_NONE;
-    return new_array(s, s->six, pose, 6);
+    return pk_new_array(pose, 6, 0);
 }
 
 const char pk_chain_one_structured_doc[] =

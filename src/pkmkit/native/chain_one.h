@@ -37,7 +37,6 @@ typedef struct {
     double *u_home_dir, *dir_rates, *residual_rates, *home_values;
     double singular_bound, max_coordinate;
     ptrdiff_t twists, m_dir;
-    PyObject *empty, *ndarray, *n_obj, *u_obj, *six;
     void *owned[48];
     int n_owned;
 } pk_one;

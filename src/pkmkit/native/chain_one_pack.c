@@ -18,11 +18,6 @@ static void release_state(PyObject *capsule) {
     pk_one *s = PyCapsule_GetPointer(capsule, PK_ONE_CAPSULE);
     if (!s) return;
     for (int i = 0; i < s->n_owned; i++) free(s->owned[i]);
-    Py_XDECREF(s->empty);
-    Py_XDECREF(s->ndarray);
-    Py_XDECREF(s->n_obj);
-    Py_XDECREF(s->u_obj);
-    Py_XDECREF(s->six);
     free(s);
 }
 
@@ -54,7 +49,7 @@ const char pk_chain_one_pack_doc[] =
     "               length, inv_options, dir_options, u_home_inv, base, inv_rates, tool,\n"
     "               slides, signs, turns, turn_homes, act_turns, act_turn_homes, lower, upper,\n"
     "               act, wrist, far, u_home_dir, dir_rates, residual_rates, home_values,\n"
-    "               singular_bound, max_coordinate, structured, empty, ndarray)\n\n"
+    "               singular_bound, max_coordinate, structured)\n\n"
     "A joint-chain machine's one-pose constants, copied into a capsule for chain_one_ik and\n"
     "chain_one_fk (machines/chain_one_native.py builds the arguments). wrist: (5,) turn\n"
     "variable, its home, tilt variable, its home, whether the turn reaches a quarter turn, or\n"
@@ -63,7 +58,7 @@ const char pk_chain_one_pack_doc[] =
 PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
     (void)take_chain;  /* chain_face.h's, unused here */
-    if (check_count(nargs, 35, "chain_one_pack") < 0) return NULL;
+    if (check_count(nargs, 33, "chain_one_pack") < 0) return NULL;
     pk_one *s = calloc(1, sizeof(pk_one));
     if (!s) return PyErr_NoMemory();
     held_buffers held = {.count = 0};
@@ -200,27 +195,12 @@ PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t
         PyErr_NoMemory();
         goto fail;
     }
-    if (!PyType_Check(args[34]) || !PyCallable_Check(args[33])) {
-        PyErr_SetString(PyExc_TypeError, "empty: numpy.empty; ndarray: numpy.ndarray");
-        goto fail;
-    }
-    s->empty = Py_NewRef(args[33]);
-    s->ndarray = Py_NewRef(args[34]);
-    s->n_obj = PyLong_FromSsize_t(n_act);
-    s->u_obj = PyLong_FromSsize_t(6 + n_var);
-    s->six = PyLong_FromLong(6);
-    if (!s->n_obj || !s->u_obj || !s->six) goto fail;
     PyObject *capsule = PyCapsule_New(s, PK_ONE_CAPSULE, release_state);
     if (!capsule) goto fail;
     return capsule;
 fail:
     let_go(&held);
     for (int i = 0; i < s->n_owned; i++) free(s->owned[i]);
-    Py_XDECREF(s->empty);
-    Py_XDECREF(s->ndarray);
-    Py_XDECREF(s->n_obj);
-    Py_XDECREF(s->u_obj);
-    Py_XDECREF(s->six);
     free(s);
     return NULL;
 }

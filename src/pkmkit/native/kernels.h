@@ -253,4 +253,14 @@ void pk_jacobi_sweeps(double *work, ptrdiff_t k, ptrdiff_t p, double *vmat, ptrd
 void pk_singular_values_one(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out,
                             double *work, double *norms);
 
+/* plain_numbers.c: the one reader of plain numbers (a pose or configuration given as a list,
+ * tuple or 1-D float64/int64 buffer) for the one-pose entries, and the one new-array helper;
+ * the rule set is documented at the top of plain_numbers.c. -1 with an exception set. */
+#ifdef Py_PYTHON_H /* only where Python.h came first */
+enum { PK_PLAIN_TAKEN = 0, PK_PLAIN_REFUSED = 1, PK_PLAIN_OTHER = 2 };
+int pk_plain_numbers(PyObject *x, Py_ssize_t count, double max_abs, double *out);
+/* A new float64 NumPy array (rows,) (cols 0) or (rows, cols) holding values (row-major). */
+PyObject *pk_new_array(const double *values, Py_ssize_t rows, Py_ssize_t cols);
+#endif
+
 #endif

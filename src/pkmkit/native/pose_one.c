@@ -88,82 +88,6 @@ static int numpy_loaded(void) {
     return 0;
 }
 
-/* A new float64 array (rows,) (cols 0) or (rows, cols) holding values (row-major). */
-static PyObject *new_array(const double *values, Py_ssize_t rows, Py_ssize_t cols) {
-    if (numpy_loaded() < 0) return NULL;
-    PyObject *shape = cols ? Py_BuildValue("(nn)", rows, cols) : PyLong_FromSsize_t(rows);
-    if (!shape) return NULL;
-    PyObject *out = PyObject_CallOneArg(np_empty, shape);
-    Py_DECREF(shape);
-    if (!out) return NULL;
-    Py_buffer view;
-    if (PyObject_GetBuffer(out, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
-        Py_DECREF(out);
-        return NULL;
-    }
-    memcpy(view.buf, values, sizeof(double) * (size_t)(rows * (cols ? cols : 1)));
-    PyBuffer_Release(&view);
-    return out;
-}
-
-/* ------------------------------------------------------------------ plain numbers in */
-
-enum { TAKEN = 0, REFUSED = 1, OTHER = 2 };
-
-/* count numbers from x: a list or tuple of exact floats or ints (any other item, or another
- * length: REFUSED, as OnePoseInverse and direct_one answer None), or a float64 or int64
- * vector of `count` entries (TAKEN; the batch path converts an int64 one to the same
- * doubles; another shape: REFUSED) — another buffer (float32, int32, bytes): OTHER, another
- * object: REFUSED. A value not finite or beyond max_abs: REFUSED. -1 with an exception set
- * only for a failed conversion that is not an overflow. */
-static int read_numbers(PyObject *x, Py_ssize_t count, double max_abs, double *out) {
-    if (PyList_CheckExact(x) || PyTuple_CheckExact(x)) {
-        if (PySequence_Fast_GET_SIZE(x) != count) return REFUSED;
-        PyObject **items = PySequence_Fast_ITEMS(x);
-        for (Py_ssize_t i = 0; i < count; i++) {
-            PyObject *v = items[i];
-            if (PyFloat_CheckExact(v)) {
-                out[i] = PyFloat_AS_DOUBLE(v);
-            } else if (PyLong_CheckExact(v)) {
-                out[i] = PyLong_AsDouble(v);
-                if (out[i] == -1.0 && PyErr_Occurred()) {
-                    if (!PyErr_ExceptionMatches(PyExc_OverflowError)) return -1;
-                    PyErr_Clear();
-                    return REFUSED; /* beyond any double: beyond max_abs */
-                }
-            } else {
-                return REFUSED; /* bools, strings, NumPy scalars: the batch path */
-            }
-            if (!(-max_abs <= out[i] && out[i] <= max_abs)) return REFUSED;
-        }
-        return TAKEN;
-    }
-    if (!PyObject_CheckBuffer(x)) return REFUSED;
-    Py_buffer view;
-    if (PyObject_GetBuffer(x, &view, PyBUF_STRIDES | PyBUF_FORMAT) < 0) {
-        PyErr_Clear();
-        return OTHER;
-    }
-    const char *f = view.format ? view.format : "B";
-    if (f[0] == '@' || f[0] == '=' || f[0] == '<') f++;
-    int status = OTHER;
-    int integer = (f[0] == 'l' || f[0] == 'q') && !f[1] && view.itemsize == 8;
-    if ((integer || (f[0] == 'd' && !f[1])) && view.itemsize == 8) {
-        status = TAKEN;
-        if (view.ndim != 1 || view.shape[0] != count) {
-            status = REFUSED;
-        } else {
-            for (Py_ssize_t i = 0; i < count; i++) {
-                const char *at = (const char *)view.buf + i * view.strides[0];
-                out[i] = integer ? (double)*(const int64_t *)at : *(const double *)at;
-                if (!(-max_abs <= out[i] && out[i] <= max_abs)) status = REFUSED;
-            }
-        }
-    }
-    PyBuffer_Release(&view);
-    return status;
-}
-
 static int within_strokes(const PoseOne *self, const double *q) {
     for (Py_ssize_t k = 0; k < self->n; k++)
         if (!(self->lo[k] <= q[k] && q[k] <= self->hi[k])) return 0; /* NaN: outside */
@@ -185,31 +109,31 @@ static PyObject *one_ik(PoseOne *self, PyObject *const *args, Py_ssize_t nargs) 
     int check = truth(args, nargs, 2, "ik");
     if (check < 0) return NULL;
     double x[6], q[MAX_RODS], rod_q[MAX_RODS];
-    int got = read_numbers(args[0], 6, self->max_abs, x);
+    int got = pk_plain_numbers(args[0], 6, self->max_abs, x);
     if (got < 0) return NULL;
-    if (got == OTHER) Py_RETURN_NOTIMPLEMENTED;
-    if (got == REFUSED
+    if (got == PK_PLAIN_OTHER) Py_RETURN_NOTIMPLEMENTED;
+    if (got == PK_PLAIN_REFUSED
         || pk_pose_inverse_one(x, self->rods, self->m, self->groups, self->n, self->simple,
                                self->boundary_tol, self->consistency_tol, q, rod_q)
         || (check && !within_strokes(self, q)))
         Py_RETURN_NONE;
-    return new_array(q, self->n, 0);
+    return pk_new_array(q, self->n, 0);
 }
 
 static PyObject *one_fk(PoseOne *self, PyObject *const *args, Py_ssize_t nargs) {
     int check = truth(args, nargs, 2, "fk");
     if (check < 0) return NULL;
     double q[MAX_RODS], out[9], zero[6] = {0};
-    int got = read_numbers(args[0], self->n, self->max_abs, q);
+    int got = pk_plain_numbers(args[0], self->n, self->max_abs, q);
     if (got < 0) return NULL;
-    if (got != TAKEN) Py_RETURN_NONE; /* the batch path converts it */
+    if (got != PK_PLAIN_TAKEN) Py_RETURN_NONE; /* the batch path converts it */
     double memory[18 * MAX_RODS];
     size_t cells = (size_t)self->m;
     pk_work work = {memory, memory + 3 * cells, memory + 4 * cells, memory + 5 * cells,
                     memory + 6 * cells, memory + 12 * cells};
     pk_solve_row(q, self->n, zero, 0, self->geom, self->m, self->home, self->opts, out, &work);
     if (out[6] != 0.0 || (check && !within_strokes(self, q))) Py_RETURN_NONE; /* Status.OK 0 */
-    return new_array(out, 6, 0);
+    return pk_new_array(out, 6, 0);
 }
 
 static PyObject *one_jacobian(PoseOne *self, PyObject *const *args, Py_ssize_t nargs) {
@@ -235,10 +159,10 @@ static PyObject *one_jacobian(PoseOne *self, PyObject *const *args, Py_ssize_t n
     }
     if (self->m != 6) Py_RETURN_NOTIMPLEMENTED; /* the velocity kernel is for six rods */
     double x[6], q[MAX_RODS], rod_q[MAX_RODS];
-    int got = read_numbers(args[0], 6, self->max_abs, x);
+    int got = pk_plain_numbers(args[0], 6, self->max_abs, x);
     if (got < 0) return NULL;
-    if (got == OTHER) Py_RETURN_NOTIMPLEMENTED;
-    if (got == REFUSED
+    if (got == PK_PLAIN_OTHER) Py_RETURN_NOTIMPLEMENTED;
+    if (got == PK_PLAIN_REFUSED
         || pk_pose_inverse_one(x, self->rods, self->m, self->groups, self->n, self->simple,
                                self->boundary_tol, self->consistency_tol, q, rod_q)
         || (check && !within_strokes(self, q)))
@@ -426,7 +350,7 @@ static PyObject *velocity_field(PoseVelocity *self, PyObject *name) {
     if (id < 0) return NULL;
     const PoseOne *o = self->owner;
     Py_ssize_t n = o->n, k6 = n < 6 ? n : 6, k3 = n < 3 ? n : 3;
-    if (id == F_Q) return new_array(self->q, n, 0);
+    if (id == F_Q) return pk_new_array(self->q, n, 0);
     if (id == F_TOLERANCE) return PyFloat_FromDouble(self->tol);
     if (id == F_LENGTH) return PyFloat_FromDouble(o->length);
     if (!self->record) {
@@ -447,19 +371,19 @@ static PyObject *velocity_field(PoseVelocity *self, PyObject *name) {
     Py_ssize_t o_b = 36, o_j = o_b + 6 * n, o_ji = o_j + 6 * n, o_sv = o_ji + 6 * n,
                o_st = o_sv + k6, o_sr = o_st + k3, o_c = o_sr + k3;
     switch (id) {
-    case F_A: return new_array(s, 6, 6);
-    case F_B: return new_array(s + o_b, 6, n);
-    case F_J: return new_array(s + o_j, 6, n);
+    case F_A: return pk_new_array(s, 6, 6);
+    case F_B: return pk_new_array(s + o_b, 6, n);
+    case F_J: return pk_new_array(s + o_j, 6, n);
     case F_J_H: {
         double j[36];
         memcpy(j, s + o_j, sizeof(double) * (size_t)(6 * n));
         for (Py_ssize_t t = 3 * n; t < 6 * n; t++) j[t] *= o->length;
-        return new_array(j, 6, n);
+        return pk_new_array(j, 6, n);
     }
-    case F_J_INV: return new_array(s + o_ji, n, 6);
-    case F_SV: return new_array(s + o_sv, k6, 0);
-    case F_SV_T: return new_array(s + o_st, k3, 0);
-    case F_SV_R: return new_array(s + o_sr, k3, 0);
+    case F_J_INV: return pk_new_array(s + o_ji, n, 6);
+    case F_SV: return pk_new_array(s + o_sv, k6, 0);
+    case F_SV_T: return pk_new_array(s + o_st, k3, 0);
+    case F_SV_R: return pk_new_array(s + o_sr, k3, 0);
     case F_CONDITION: return scalar(np_float64, s[o_c]);
     case F_DET_A: return scalar(np_float64, s[o_c + 1]);
     case F_DET_B: return scalar(np_float64, s[o_c + 2]);

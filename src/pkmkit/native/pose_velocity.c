@@ -21,7 +21,6 @@
 #include "kernels.h"
 
 int pk_floats(PyObject *seq, const char *name, Py_ssize_t n, double *out); /* velocity.c */
-PyObject *pk_numpy_empty(void);                                              /* velocity.c */
 
 
 /* full_pose_direct_kernel._rods: base joints a_j(q) and rod lengths of m rods. */
@@ -412,20 +411,5 @@ PyObject *pk_py_state_array(PyObject *self, PyObject *const *args, Py_ssize_t na
         PyErr_SetString(PyExc_ValueError, "start, rows, cols: out of the state");
         return NULL;
     }
-    PyObject *empty = pk_numpy_empty();
-    if (!empty) return NULL;
-    PyObject *shape = cols ? Py_BuildValue("(nn)", rows, cols) : Py_BuildValue("(n)", rows);
-    if (!shape) return NULL;
-    PyObject *out = PyObject_CallOneArg(empty, shape);
-    Py_DECREF(shape);
-    if (!out) return NULL;
-    Py_buffer view;
-    if (PyObject_GetBuffer(out, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
-        Py_DECREF(out);
-        return NULL;
-    }
-    memcpy(view.buf, PyByteArray_AS_STRING(args[0]) + sizeof(double) * (size_t)start,
-           sizeof(double) * (size_t)count);
-    PyBuffer_Release(&view);
-    return out;
+    return pk_new_array((const double *)PyByteArray_AS_STRING(args[0]) + start, rows, cols);
 }

@@ -31,58 +31,6 @@
 #define PK_DIR_LEG 17
 #define PK_HEAD 14
 
-PyObject *pk_numpy_empty(void); /* velocity.c */
-
-static PyObject *ndarray_type = NULL;
-
-/* 1 with the n values of `obj` in out (a list or tuple of floats — float subclasses too — or
- * ints that are not bools; or a 1-D float64 numpy.ndarray), each finite and within
- * +-max_abs; 0 for anything else (the batch path decides); -1 with an exception. */
-static int read_values(PyObject *obj, Py_ssize_t n, double max_abs, double *out) {
-    if (PyList_CheckExact(obj) || PyTuple_CheckExact(obj)) {
-        if (PySequence_Fast_GET_SIZE(obj) != n) return 0;
-        PyObject **items = PySequence_Fast_ITEMS(obj);
-        for (Py_ssize_t i = 0; i < n; i++) {
-            PyObject *v = items[i];
-            if (PyFloat_Check(v)) {
-                out[i] = PyFloat_AS_DOUBLE(v);
-            } else if (PyLong_CheckExact(v)) {
-                out[i] = PyLong_AsDouble(v);
-                if (out[i] == -1.0 && PyErr_Occurred()) { /* beyond a double: absurd */
-                    PyErr_Clear();
-                    return 0;
-                }
-            } else {
-                return 0;
-            }
-            if (!(-max_abs <= out[i] && out[i] <= max_abs)) return 0;
-        }
-        return 1;
-    }
-    if (!ndarray_type) {
-        PyObject *numpy = PyImport_ImportModule("numpy");
-        if (!numpy) return -1;
-        ndarray_type = PyObject_GetAttrString(numpy, "ndarray");
-        Py_DECREF(numpy);
-        if (!ndarray_type) return -1;
-    }
-    if ((PyObject *)Py_TYPE(obj) != ndarray_type) return 0;
-    Py_buffer view;
-    if (PyObject_GetBuffer(obj, &view, PyBUF_STRIDES | PyBUF_FORMAT) < 0) {
-        PyErr_Clear();
-        return 0;
-    }
-    const char *f = view.format ? view.format : "B";
-    if (f[0] == '@' || f[0] == '=' || f[0] == '<') f++;
-    int ok = f[0] == 'd' && !f[1] && view.itemsize == 8 && view.ndim == 1 && view.shape[0] == n;
-    for (Py_ssize_t i = 0; ok && i < n; i++) {
-        memcpy(&out[i], (const char *)view.buf + i * view.strides[0], sizeof(double));
-        ok = -max_abs <= out[i] && out[i] <= max_abs;
-    }
-    PyBuffer_Release(&view);
-    return ok;
-}
-
 /* The pack's legs count n (2 or 3) and its head; NULL with an exception if it is not one. */
 static const double *pack_of(PyObject *obj, int *n) {
     if (!PyBytes_CheckExact(obj)) {
@@ -116,27 +64,6 @@ static int within(const double *pack, int n, const double *v) {
     for (int i = 0; i < n; i++)
         if (!(pack[8 + i] <= v[i] && v[i] <= pack[11 + i])) return 0;
     return 1;
-}
-
-/* A new float64 NumPy array (n,) holding v. */
-static PyObject *new_vector(const double *v, int n) {
-    static PyObject *shapes[4];
-    PyObject *empty = pk_numpy_empty();
-    if (!empty) return NULL;
-    if (!shapes[n]) {
-        shapes[n] = PyLong_FromLong(n);
-        if (!shapes[n]) return NULL;
-    }
-    PyObject *out = PyObject_CallOneArg(empty, shapes[n]);
-    if (!out) return NULL;
-    Py_buffer view;
-    if (PyObject_GetBuffer(out, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
-        Py_DECREF(out);
-        return NULL;
-    }
-    memcpy(view.buf, v, sizeof(double) * (size_t)n);
-    PyBuffer_Release(&view);
-    return out;
 }
 
 /* closed_form_one.direct_one: the platform point of configuration q in the assembly mode of
@@ -230,13 +157,13 @@ PyObject *pk_py_rod_ik_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     const double *pack = pack_of(args[0], &n);
     if (!pack) return NULL;
     double x[3], q[3];
-    int got = read_values(args[1], n, pack[1], x);
-    if (got <= 0) return got < 0 ? NULL : Py_NewRef(Py_None);
+    int got = pk_plain_numbers(args[1], n, pack[1], x); /* plain_numbers.c */
+    if (got != PK_PLAIN_TAKEN) return got < 0 ? NULL : Py_NewRef(Py_None);
     int check = stroke_check(args[2]);
     if (check < 0 || pk_rod_inverse_one(pack + PK_HEAD, n, n, x, q)
         || (check && !within(pack, n, q)))
         Py_RETURN_NONE;
-    return new_vector(q, n);
+    return pk_new_array(q, n, 0);
 }
 
 const char pk_rod_fk_one_doc[] =
@@ -258,12 +185,12 @@ PyObject *pk_py_rod_fk_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     long sign = PyLong_AsLong(args[2]);
     if (sign == -1 && PyErr_Occurred()) return NULL;
     double q[3], pose[3];
-    int got = read_values(args[1], n, pack[1], q);
-    if (got <= 0) return got < 0 ? NULL : Py_NewRef(Py_None);
+    int got = pk_plain_numbers(args[1], n, pack[1], q);
+    if (got != PK_PLAIN_TAKEN) return got < 0 ? NULL : Py_NewRef(Py_None);
     int check = stroke_check(args[3]);
     if (check < 0 || (check && !within(pack, n, q)) || rod_direct(pack, n, q, sign, pose))
         Py_RETURN_NONE;
-    return new_vector(pose, n);
+    return pk_new_array(pose, n, 0);
 }
 
 const char pk_rod_jacobian_one_doc[] =
@@ -289,8 +216,8 @@ PyObject *pk_py_rod_jacobian_one(PyObject *self, PyObject *const *args, Py_ssize
         return NULL;
     }
     double x[3], q[3];
-    int got = read_values(args[1], n, pack[1], x);
-    if (got <= 0) return got < 0 ? NULL : Py_NewRef(Py_None);
+    int got = pk_plain_numbers(args[1], n, pack[1], x); /* plain_numbers.c */
+    if (got != PK_PLAIN_TAKEN) return got < 0 ? NULL : Py_NewRef(Py_None);
     if (pk_rod_inverse_one(pack + PK_HEAD, n, n, x, q) || !within(pack, n, q)) Py_RETURN_NONE;
     PyObject *state = PyByteArray_FromStringAndSize(NULL, sizeof(pk_rod_state));
     if (!state) return NULL;

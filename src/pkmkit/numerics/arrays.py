@@ -29,7 +29,7 @@ def as_batch(value: Any, width: int, name: str) -> tuple[np.ndarray, bool]:
     """
     try:
         arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:  # OverflowError: an int beyond a double
         raise InputError(f"{name} must be an array of real numbers: {exc}") from None
     if arr.ndim == 1:
         if arr.shape[0] != width:

@@ -1,0 +1,101 @@
+/* plain_numbers.c: the one reader of "plain numbers" shared by the one-pose C entries
+ * (rod_one.c, pose_one.c, chain_one.c), and the one new-array helper they answer with.
+ *
+ * The rule, the same for every machine family (docs/architecture.md, "plain numbers"):
+ *   - a list or tuple (exact types) of `count` items, each a float (a float subclass too:
+ *     NumPy's float64, the items of list(array), whose value NumPy reads the same way) or
+ *     an exact int (not a bool): TAKEN. A huge int (beyond any double) is beyond max_abs:
+ *     REFUSED. Any other item (bool, NumPy's int64/float32 scalars, a string) or another
+ *     length: REFUSED;
+ *   - an object with the buffer protocol of format float64 or int64 (native byte order),
+ *     1-D of `count` entries and any stride: TAKEN (an int64 entry is rounded to the
+ *     double NumPy's astype(float) gives); float64/int64 of another shape: REFUSED; any
+ *     other buffer (float32, int32, big-endian, bytes): OTHER;
+ *   - any other object (a string, None, a dict, a number): REFUSED;
+ *   - a value not finite or beyond +-max_abs: REFUSED.
+ * REFUSED: the caller answers None and the family's batch path decides (its typed error or
+ * its answer); OTHER: the family's Python one-pose path (or the batch path) converts it. */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "kernels.h"
+
+PyObject *pk_numpy_empty(void); /* velocity.c */
+
+static int in_range(double v, double max_abs) { return -max_abs <= v && v <= max_abs; }
+
+static int read_items(PyObject *x, Py_ssize_t count, double max_abs, double *out) {
+    if (PySequence_Fast_GET_SIZE(x) != count) return PK_PLAIN_REFUSED;
+    PyObject **items = PySequence_Fast_ITEMS(x);
+    for (Py_ssize_t i = 0; i < count; i++) {
+        PyObject *v = items[i];
+        if (PyFloat_Check(v)) { /* its C value, as numpy.asarray reads it */
+            out[i] = PyFloat_AS_DOUBLE(v);
+        } else if (PyLong_CheckExact(v)) { /* bool is a subclass: not exact */
+            out[i] = PyLong_AsDouble(v);
+            if (out[i] == -1.0 && PyErr_Occurred()) {
+                if (!PyErr_ExceptionMatches(PyExc_OverflowError)) return -1;
+                PyErr_Clear();
+                return PK_PLAIN_REFUSED; /* beyond any double: beyond max_abs */
+            }
+        } else {
+            return PK_PLAIN_REFUSED;
+        }
+        if (!in_range(out[i], max_abs)) return PK_PLAIN_REFUSED;
+    }
+    return PK_PLAIN_TAKEN;
+}
+
+int pk_plain_numbers(PyObject *x, Py_ssize_t count, double max_abs, double *out) {
+    if (PyList_CheckExact(x) || PyTuple_CheckExact(x)) return read_items(x, count, max_abs, out);
+    if (!PyObject_CheckBuffer(x)) return PK_PLAIN_REFUSED;
+    Py_buffer view;
+    if (PyObject_GetBuffer(x, &view, PyBUF_RECORDS_RO) < 0) {
+        PyErr_Clear();
+        return PK_PLAIN_OTHER;
+    }
+    const char *f = view.format ? view.format : "B";
+    if (f[0] == '@' || f[0] == '=' || (PY_LITTLE_ENDIAN && f[0] == '<')
+        || (!PY_LITTLE_ENDIAN && (f[0] == '>' || f[0] == '!')))
+        f++;
+    int integer = (f[0] == 'l' || f[0] == 'q') && !f[1] && view.itemsize == 8;
+    int real = f[0] == 'd' && !f[1] && view.itemsize == 8;
+    int status = PK_PLAIN_OTHER;
+    if (integer || real) {
+        status = PK_PLAIN_TAKEN;
+        if (view.ndim != 1 || view.shape[0] != count) status = PK_PLAIN_REFUSED;
+        for (Py_ssize_t i = 0; status == PK_PLAIN_TAKEN && i < count; i++) {
+            const char *at = (const char *)view.buf + i * view.strides[0];
+            if (integer) {
+                int64_t v;
+                memcpy(&v, at, sizeof v);
+                out[i] = (double)v;
+            } else {
+                memcpy(&out[i], at, sizeof(double));
+            }
+            if (!in_range(out[i], max_abs)) status = PK_PLAIN_REFUSED;
+        }
+    }
+    PyBuffer_Release(&view);
+    return status;
+}
+
+PyObject *pk_new_array(const double *values, Py_ssize_t rows, Py_ssize_t cols) {
+    PyObject *empty = pk_numpy_empty();
+    if (!empty) return NULL;
+    PyObject *shape = cols ? Py_BuildValue("(nn)", rows, cols) : PyLong_FromSsize_t(rows);
+    if (!shape) return NULL;
+    PyObject *out = PyObject_CallOneArg(empty, shape);
+    Py_DECREF(shape);
+    if (!out) return NULL;
+    Py_buffer view;
+    if (PyObject_GetBuffer(out, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
+        Py_DECREF(out);
+        return NULL;
+    }
+    memcpy(view.buf, values, sizeof(double) * (size_t)(rows * (cols ? cols : 1)));
+    PyBuffer_Release(&view);
+    return out;
+}
