@@ -1,0 +1,115 @@
+"""Benchmark: two builds of the C extension's joint-chain one-pose calls in one process.
+
+Loads two compiled ``pkmkit.native.kernels`` files (for example the worktree's build before
+and after a change to ``native/chain_one*.c`` or ``chain.c``, copied aside), packs each
+machine with each (``chain_one_pack``), and prints whether ``chain_one_ik`` (q, u, iterations,
+residual) and ``chain_one_fk`` answers are bit-identical on the same poses, and the CPU µs per
+call of each build (medians of interleaved rounds, so both see the same load). ``--calls N``
+with ``--only BUILD`` instead runs N rounds of ``chain_one_ik`` of one build alone (for an
+instruction count: ``valgrind --tool=callgrind --toggle-collect=pk_py_chain_one_ik python
+bench/chain_one_builds.py A B --only A --calls 1``).
+
+Usage::
+
+    python bench/chain_one_builds.py BEFORE.so AFTER.so [--poses 400] [--machines a,b]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.machinery
+import importlib.util
+import os
+import time
+
+import numpy as np
+
+import pkmkit
+from pkmkit.machines import chain_one_native
+
+
+def load(path: str):
+    """The extension module compiled at ``path`` (not registered in ``sys.modules``)."""
+    loader = importlib.machinery.ExtensionFileLoader("pkmkit.native.kernels", path)
+    spec = importlib.util.spec_from_file_location("pkmkit.native.kernels", path, loader=loader)
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+def poses(m, count: int) -> tuple[list, list]:
+    """Actuator values uniform over 10-90 % of the strokes and their tool poses."""
+    rng = np.random.default_rng(2)
+    act = np.flatnonzero(m.model.actuated)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    q = lo + (hi - lo) * (0.1 + 0.8 * rng.random((count, len(act))))
+    x = m.fk(q, strokes="ignore")
+    keep = np.isfinite(x).all(axis=1)
+    return list(x[keep]), list(q[keep])
+
+
+def identical(a, b) -> bool:
+    if a is None or b is None:
+        return a is None and b is None
+    if isinstance(a, tuple):
+        return all(np.array_equal(u, v) for u, v in zip(a, b, strict=True))
+    return np.array_equal(a, b)
+
+
+def cpu_per_call(fun, capsule, rows, *flags) -> float:
+    t = time.process_time()
+    for row in rows:
+        fun(capsule, row, *flags)
+    return (time.process_time() - t) / len(rows) * 1e6
+
+
+def compare(name: str, builds: list, count: int, rounds: int = 7) -> None:
+    m = pkmkit.machine(name)
+    args = chain_one_native.pack_arguments(m)
+    caps = [b.chain_one_pack(*args) for b in builds]
+    xs, qs = poses(m, count)
+    (a, ca), (b, cb) = zip(builds, caps, strict=True)
+    same_ik = all(identical(a.chain_one_ik(ca, x, True, True), b.chain_one_ik(cb, x, True, True))
+                  for x in xs)
+    same_fk = all(identical(a.chain_one_fk(ca, v, True, True), b.chain_one_fk(cb, v, True, True))
+                  for v in qs)
+    times = {k: [] for k in ("ik 1", "ik 2", "fk 1", "fk 2")}
+    for _ in range(rounds):
+        for i, (mod, cap) in enumerate(zip(builds, caps, strict=True), 1):
+            times[f"ik {i}"].append(cpu_per_call(mod.chain_one_ik, cap, xs, True, False))
+            times[f"fk {i}"].append(cpu_per_call(mod.chain_one_fk, cap, qs, True, True))
+    med = {k: float(np.median(v)) for k, v in times.items()}
+    print(f"{name}: {len(xs)} poses; bit-identical answers: ik {same_ik}, fk {same_fk}")
+    for f in ("ik", "fk"):
+        print(f"  {f} C call, CPU µs: first build {med[f + ' 1']:.2f}, second "
+              f"{med[f + ' 2']:.2f} (x{med[f + ' 1'] / med[f + ' 2']:.3f})")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("first")
+    parser.add_argument("second")
+    parser.add_argument("--poses", type=int, default=400)
+    parser.add_argument("--machines", default="tripteor-x7,trimule-600")
+    parser.add_argument("--only", help="one of the two paths: run its ik alone")
+    parser.add_argument("--calls", type=int, default=1, help="rounds with --only")
+    args = parser.parse_args()
+    if args.only:
+        build = load(args.only)
+        for name in args.machines.split(","):
+            m = pkmkit.machine(name)
+            cap = build.chain_one_pack(*chain_one_native.pack_arguments(m))
+            xs, _ = poses(m, args.poses)
+            for _ in range(args.calls):
+                for x in xs:
+                    build.chain_one_ik(cap, x, True, False)
+        return
+    print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
+    builds = [load(args.first), load(args.second)]
+    for name in args.machines.split(","):
+        compare(name, builds, args.poses)
+    print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
+
+
+if __name__ == "__main__":
+    main()

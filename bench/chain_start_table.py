@@ -1,0 +1,179 @@
+"""Benchmark: a start table for the joint-chain one-pose inverse (issue 22 §1, session 31).
+
+``m.ik(x)`` of one pose on a joint-chain machine is one C call (``chain_one_ik``) that starts
+Levenberg-Marquardt from the batch path's first-order start (home moved to first order towards
+the target). This measures whether a better start would pay: a table of solved configurations
+over the workspace (a grid of ``--grid`` values per actuator over 10-90 % of each stroke, each
+node's tool pose solved by the C call, its first-order rates du/dx by forward differences of the
+C call started from the node), the call started from the nearest node (tool-flange point and
+axis) moved to first order (``start=`` of ``chain_one_ik``). Printed per machine: the table's
+build time (CPU; built here in Python around the C calls), the iteration counts of the C call
+(the batch rules included: a retry from home, the head's mirror) from both starts, the CPU µs
+of the C call alone from both starts in the same process (the nearest-node search excluded:
+starts precomputed), and the largest difference of the answers q from the first-order start's
+(the batch rows' to ~1e-13, tests/machines/test_chain_one_native.py).
+
+Usage::
+
+    python bench/chain_start_table.py [--poses 1000] [--grid 3] [--machines tripteor-x7,trimule-600]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+import pkmkit
+from pkmkit.machines import chain_one_native
+
+
+def flange(x: np.ndarray, tool: float) -> np.ndarray:
+    """The table's key: the flange point (tool point moved back along the axis) and the axis."""
+    return np.concatenate([x[:3] - tool * x[3:], x[3:]])
+
+
+def table(m, p, grid: int, h: float = 1e-6):
+    """``(keys, us, rates)`` of the nodes the C call solves (module docstring)."""
+    act = np.flatnonzero(m.model.actuated)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    axes = [np.linspace(a + 0.1 * (b - a), b - 0.1 * (b - a), grid) for a, b in zip(lo, hi,
+                                                                                    strict=True)]
+    q = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, len(act))
+    xs = m.fk(q, strokes="ignore")
+    keys, us, rates = [], [], []
+    for x in xs[np.isfinite(xs).all(axis=1)]:
+        s = p.ik(p.capsule, x, True, True)
+        if s is None:
+            continue
+        k, cols = flange(x, m.tool_length), []
+        for j in range(6):
+            k2 = k.copy()
+            k2[j] += h
+            s2 = p.ik(p.capsule, np.concatenate([k2[:3] + m.tool_length * k2[3:], k2[3:]]),
+                      True, True, s[1])
+            if s2 is None:
+                break
+            cols.append((s2[1] - s[1]) / h)
+        if len(cols) == 6:
+            keys.append(k)
+            us.append(s[1])
+            rates.append(np.array(cols).T)
+    return np.array(keys), np.array(us), np.array(rates)
+
+
+def rules(m, xs: list, starts: list | None = None) -> dict:
+    """Which of the batch path's rules fire on the poses ``xs`` (from the first-order start,
+    or ``starts``): the Numba one-pose path's pieces (:mod:`pkmkit.machines.chain_one`, the
+    same rules as the C call), counted: the first solve's iterations, the retries from home
+    (first solve not converged or outside the legs' home modes), the head's mirror solved
+    because the turn is far from home's or because the kept solution is beyond a stroke, and
+    the mirror kept."""
+    import math
+
+    from pkmkit.machines import chain_one
+
+    chain_one.usable(m, "chain_ik")  # past the first (batch) call: the constants built
+    c = chain_one.constants(m)
+    w = chain_one._work(c)
+    out = {"first iterations": [], "retry": 0, "far": 0, "beyond": 0, "mirror kept": 0}
+    for i, x in enumerate(xs):
+        norm = math.sqrt(float(x[3:] @ x[3:]))
+        w.target[0] = (*x[:3], *(x[3:] / norm))
+        kernel = c.first_kernel if starts is None else c.from_kernel
+        if starts is not None:
+            w.u_inv[0] = starts[i]
+        (kernel.call or kernel.first)(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
+        out["first iterations"].append(int(w.info[2]))
+        first = w.info[0] == 0 and w.info[3] == 1.0
+        if not first:
+            out["retry"] += 1
+            u = chain_one._solve_inverse(c, w, c.u_home)
+            if u is None:
+                continue
+        else:
+            u = w.u_inv[0].tolist()
+        if c.wrist is None:
+            continue
+        turn, home_turn = c.wrist[0], c.wrist[1]
+        far = abs(chain_one._turn_offset(u[6 + turn] - home_turn)) > chain_one._FAR
+        inside = c.within(chain_one._wrapped(c, u[6:]))
+        out["far"] += far
+        out["beyond"] += (not far) and c.wrist[4] and not inside
+        found = (chain_one._wrapped(c, u[6:]), u, 0, 0.0)
+        kept = chain_one._nearest_branch(c, found, first)
+        out["mirror kept"] += kept is not None and kept[1] is not u
+    return out
+
+
+def per_call(fun, args, repeats: int = 5) -> float:
+    """Median over ``repeats`` of the mean CPU µs of ``fun(*a)`` over ``args``."""
+    cpu = []
+    for _ in range(repeats):
+        t = time.process_time()
+        for a in args:
+            fun(*a)
+        cpu.append((time.process_time() - t) / len(args) * 1e6)
+    return float(np.median(cpu))
+
+
+def run(name: str, poses: int, grid: int) -> None:
+    m = pkmkit.machine(name)
+    p = chain_one_native.packed(m)
+    rng = np.random.default_rng(0)
+    act = np.flatnonzero(m.model.actuated)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    q = lo + (hi - lo) * (0.05 + 0.9 * rng.random((poses, len(act))))
+    xs = m.fk(q, strokes="ignore")
+    xs = [x for x in xs[np.isfinite(xs).all(axis=1)]
+          if p.ik(p.capsule, x, True, True) is not None]
+    t = time.process_time()
+    keys, us, rates = table(m, p, grid)
+    build = time.process_time() - t
+    starts = []
+    for x in xs:
+        d = flange(x, m.tool_length) - keys
+        j = int(np.argmin((d * d).sum(axis=1)))
+        starts.append(us[j] + rates[j] @ d[j])
+    first = [p.ik(p.capsule, x, True, True) for x in xs]
+    fromt = [p.ik(p.capsule, x, True, True, s) for x, s in zip(xs, starts, strict=True)]
+    it0 = np.array([r[2] for r in first])
+    it1 = np.array([-1 if r is None else r[2] for r in fromt])
+    dq = max(float(np.abs(a[0] - b[0]).max()) for a, b in zip(first, fromt, strict=True)
+             if b is not None)
+    plain = [(p.capsule, x, True, False) for x in xs]
+    tabled = [(p.capsule, x, True, False, s) for x, s in zip(xs, starts, strict=True)]
+    for _ in range(2):  # interleaved, the second round kept
+        c0, c1 = per_call(p.ik, plain), per_call(p.ik, tabled)
+    print(f"{name}: {len(xs)} poses; table {len(keys)} nodes ({grid} per actuator), "
+          f"built in {build * 1e3:.0f} ms CPU (Python around the C calls)")
+    print(f"  iterations, first-order start: mean {it0.mean():.2f} (min {it0.min()}, "
+          f"max {it0.max()})")
+    print(f"  iterations, table start:       mean {it1[it1 >= 0].mean():.2f} (min "
+          f"{it1[it1 >= 0].min()}, max {it1.max()}), declined {(it1 < 0).sum()}")
+    print(f"  largest |q difference| between the two starts' answers: {dq:.1e}")
+    for label, r in (("first-order start", rules(m, xs)), ("table start", rules(m, xs, starts))):
+        f = np.array(r["first iterations"])
+        print(f"  rules from the {label}: first solve mean {f.mean():.2f} iterations (max "
+              f"{f.max()}); retried from home {r['retry']}; mirror solved {r['far'] + r['beyond']}"
+              f" (turn far from home's {r['far']}, kept solution beyond a stroke "
+              f"{r['beyond']}); mirror kept {r['mirror kept']}")
+    print(f"  C call alone, CPU µs: first-order start {c0:.1f}, table start {c1:.1f} "
+          f"(x{c0 / c1:.2f})")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--poses", type=int, default=1000)
+    parser.add_argument("--grid", type=int, default=3)
+    parser.add_argument("--machines", default="tripteor-x7,trimule-600")
+    args = parser.parse_args()
+    print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
+    for name in args.machines.split(","):
+        run(name, args.poses, args.grid)
+
+
+if __name__ == "__main__":
+    main()
