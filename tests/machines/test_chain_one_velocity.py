@@ -277,7 +277,7 @@ def test_the_singular_values_are_computed_when_read(machine):
         if not through_c(one):
             continue
         fields = one.__dict__["_evaluation"]
-        one.J
+        assert one.J.shape == (6, len(one.q))
         assert not fields.singular and np.isnan(fields.out[12 * one.J.shape[1]])
         ref = machine.jacobian(x[None])
         assert one.condition == pytest.approx(ref.condition[0], rel=1e-12)
