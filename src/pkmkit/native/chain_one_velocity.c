@@ -168,9 +168,16 @@ static double closure_rates(chain_velocity *v) {
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
         const int64_t *piv = v->leg_cols + 6 * leg;
         ptrdiff_t p = v->leg_count[leg], nrest = 0;
-        for (ptrdiff_t g = 0; g < n_g; g++) rest[nrest++] = v->global_cols[g];
-        for (ptrdiff_t k = 0; k < n_loop; k++) rest[nrest++] = v->n_u + k;
         for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
+        /* the columns the reflections change: a column zero on the leg's rows (a joint
+         * of another leg, another leg's actuator) stays zero */
+        for (ptrdiff_t g = 0; g < n_g + n_loop; g++) {
+            ptrdiff_t col = g < n_g ? v->global_cols[g] : v->n_u + g - n_g;
+            const double *x = a + rows[0] * ld + col;
+            if (x[0] != 0.0 || x[ld] != 0.0 || x[2 * ld] != 0.0 || x[3 * ld] != 0.0
+                || x[4 * ld] != 0.0 || x[5 * ld] != 0.0)
+                rest[nrest++] = col;
+        }
         if (!reflect(a, ld, rows, 6, piv, p, rest, nrest)) return 0.0;
         for (ptrdiff_t i = p; i < 6; i++) v->reduced[n_reduced++] = 6 * leg + i;
     }
