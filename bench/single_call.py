@@ -458,7 +458,11 @@ def velocity_rows(m, figures: dict, rows: list, peer) -> None:
     finally:
         os.environ.pop("PKMKIT_NATIVE")
     figures["velocity part alone: record + J + cond."] = per_call(part, args)
+    figures["velocity part alone: record + J"] = per_call(
+        lambda a: cov.record(m, a[0], a[1], a[2], 1e-6, 2.0, c.expected_rank).J, args)
     figures["velocity part alone: the C call"] = per_call(lambda a: call(pack, a[1], out), args)
+    figures["the C call without the singular stage"] = per_call(
+        lambda a: call(pack, a[1], out, False), args)
 
 
 def toolpath(m, n: int) -> np.ndarray:
@@ -601,6 +605,14 @@ def main() -> None:
                         peer_cpu = f["Pinocchio frame Jacobian (URDF tree, peer)"][1]
                         print(f"    velocity part alone / Pinocchio frame Jacobian (CPU): "
                               f"{f['velocity part alone: record + J + cond.'][1] / peer_cpu:.1f}×")
+                    if "the C call without the singular stage" in f:
+                        lazy = f["the C call without the singular stage"][1]
+                        full = f["velocity part alone: the C call"][1]
+                        just_j = f["velocity part alone: record + J"][1]
+                        both = f["velocity part alone: record + J + cond."][1]
+                        print(f"    the C call without / with the singular stage (CPU): "
+                              f"{lazy / full:.2f}; record + J / record + J + condition: "
+                              f"{just_j / both:.2f}")
                 continue
             ik_before = f["ik batch of one (before)"][0]
             fk_before = f.get("fk batch of one (before)",

@@ -267,3 +267,21 @@ def test_threads_get_their_own_answers(machine):
 
     with ThreadPoolExecutor(3) as pool:
         assert all(pool.map(work, range(len(xs))))
+
+
+def test_the_singular_values_are_computed_when_read(machine):
+    """J alone does not run the kernel's singular stage; the first read of ``condition`` or
+    ``singular_values`` runs it once, whichever comes first, with the batch row's values."""
+    for x in poses(machine, 3, seed=16):
+        one, other = machine.jacobian(x), machine.jacobian(x)
+        if not through_c(one):
+            continue
+        fields = one.__dict__["_evaluation"]
+        assert one.J.shape == (6, len(one.q))
+        assert not fields.singular and np.isnan(fields.out[12 * one.J.shape[1]])
+        ref = machine.jacobian(x[None])
+        assert one.condition == pytest.approx(ref.condition[0], rel=1e-12)
+        assert fields.singular
+        np.testing.assert_allclose(other.singular_values, ref.singular_values[0], rtol=1e-12)
+        assert other.condition == one.condition
+        np.testing.assert_array_equal(one.singular_values, other.singular_values)

@@ -83,6 +83,28 @@ def test_rates_and_bound_are_the_numpy_least_squares(machine):
         assert np.isfinite(j).all()
 
 
+def test_the_singular_stage_later_is_the_full_call(machine):
+    """``chain_one_velocity(pack, u, out, False)`` leaves the singular values and the condition
+    NaN and every other entry as the full call's; ``(pack, None, out)`` then fills them as the
+    full call does (and returns the condition), against LAPACK's singular values."""
+    p = cov.VelocityPack(machine, _kernels)
+    k = min(6, p.n)
+    stage = slice(12 * p.n, 12 * p.n + k + 1)
+    for u in configurations(machine, 4, seed=4):
+        full, later = np.empty(p.size), np.empty(p.size)
+        assert p.call(p.pack, u, full) == p.call(p.pack, u, later, False)
+        assert np.isnan(later[stage]).all()
+        rest = np.ones(p.size, dtype=bool)
+        rest[stage] = False
+        assert (later[rest] == full[rest]).all()
+        condition = p.call(p.pack, None, later)
+        assert (later == full).all()
+        assert condition == full[stage][-1]
+        sv = np.linalg.svd(later[6 * p.n:12 * p.n].reshape(6, p.n), compute_uv=False)
+        np.testing.assert_allclose(later[stage][:-1], sv, rtol=1e-13)
+        assert condition == pytest.approx(sv[0] / sv[-1], rel=1e-12)
+
+
 def test_argument_checks(machine):
     args = cov.pack_arguments(machine)
     p = cov.VelocityPack(machine, _kernels)
@@ -104,6 +126,12 @@ def test_argument_checks(machine):
         _kernels.chain_one_velocity(p.pack, u, np.empty(p.size, dtype=np.float32))
     with pytest.raises(TypeError):  # not a pack
         _kernels.chain_one_velocity(object(), u, out)
+    with pytest.raises(TypeError):
+        _kernels.chain_one_velocity(p.pack, u, out, True, True)
+    with pytest.raises(ValueError):  # the singular stage checks out too
+        _kernels.chain_one_velocity(p.pack, None, np.empty(p.size - 1))
+    with pytest.raises(TypeError):
+        _kernels.chain_one_velocity(p.pack, None, np.empty(p.size, dtype=np.float32))
     with pytest.raises(TypeError):
         _kernels.chain_velocity_pack(*list(args.values())[:-1])
     bad = dict(args, position=args["position"] + 100)

@@ -18,7 +18,9 @@ lower bound of σ_min/σ_max of ``C_U`` (``1 / (‖C_U‖_F ‖C_U⁺‖_F)``).
 
 The record (:func:`record`) has the batch row's fields and meanings; ``J``,
 ``J_homogeneous``, ``singular_values``, ``condition`` and ``passive_rates`` are views of the
-kernel's one output buffer, made when first read. ``closure_rank`` is ``n_u`` and ``status``
+kernel's one output buffer, made when first read; the singular values and the condition number
+are computed only then (one more C call on the buffer's ``J_homogeneous``: ``J`` alone does
+not pay the SVD). ``closure_rank`` is ``n_u`` and ``status``
 OK only where the bound clears :data:`~pkmkit.machines.chain_one.BOUND_MARGIN` × max(``tol``,
 :data:`~pkmkit.machines.chain_velocity_record.RANK_RCOND`): the closure is then certainly
 regular, of full rank, and not singular by the batch path's SVD; elsewhere (near a singular
@@ -153,16 +155,24 @@ def pack(m: Any) -> VelocityPack | None:
     return p
 
 
+_SINGULAR = frozenset(("singular_values", "condition"))
+
+
 class _Fields:
-    """The fields of a one-pose record made when read: views of the kernel's output."""
+    """The fields of a one-pose record made when read: views of the kernel's output; the
+    singular values and the condition number computed at the first read of either (the
+    kernel's singular stage, one more C call on the output's ``J_homogeneous``)."""
 
-    __slots__ = ("layout", "out")
+    __slots__ = ("out", "pack", "singular")
 
-    def __init__(self, out: np.ndarray, layout: dict) -> None:
-        self.out, self.layout = out, layout
+    def __init__(self, out: np.ndarray, pack: VelocityPack) -> None:
+        self.out, self.pack, self.singular = out, pack, False
 
     def field(self, name: str) -> Any:
-        start, stop, shape = self.layout[name]
+        if name in _SINGULAR and not self.singular:
+            self.pack.call(self.pack.pack, None, self.out)
+            self.singular = True
+        start, stop, shape = self.pack.layout[name]
         if stop is None:
             return self.out[start]
         view = self.out[start:stop]
@@ -193,12 +203,12 @@ def record(m: Any, q: tuple, u: list, residual: float, tol: float, margin: float
     if p is None:
         return False
     out = np.empty(p.size)
-    bound = p.call(p.pack, u, out)
+    bound = p.call(p.pack, u, out, False)  # the singular values when read (_Fields)
     if bound < 0.0:  # outside the legs' home modes: the direct model's closure may differ
         return False
     if not bound >= margin * tol:
         return None
     if _RECORD is None:
         _RECORD = _record_class()
-    return _RECORD(_Fields(out, p.layout), closure_rank=p.rank, expected_rank=expected_rank,
+    return _RECORD(_Fields(out, p), closure_rank=p.rank, expected_rank=expected_rank,
                    q=np.array(q), status=_OK)

@@ -168,9 +168,16 @@ static double closure_rates(chain_velocity *v) {
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
         const int64_t *piv = v->leg_cols + 6 * leg;
         ptrdiff_t p = v->leg_count[leg], nrest = 0;
-        for (ptrdiff_t g = 0; g < n_g; g++) rest[nrest++] = v->global_cols[g];
-        for (ptrdiff_t k = 0; k < n_loop; k++) rest[nrest++] = v->n_u + k;
         for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
+        /* the columns the reflections change: a column zero on the leg's rows (a joint
+         * of another leg, another leg's actuator) stays zero */
+        for (ptrdiff_t g = 0; g < n_g + n_loop; g++) {
+            ptrdiff_t col = g < n_g ? v->global_cols[g] : v->n_u + g - n_g;
+            const double *x = a + rows[0] * ld + col;
+            if (x[0] != 0.0 || x[ld] != 0.0 || x[2 * ld] != 0.0 || x[3 * ld] != 0.0
+                || x[4 * ld] != 0.0 || x[5 * ld] != 0.0)
+                rest[nrest++] = col;
+        }
         if (!reflect(a, ld, rows, 6, piv, p, rest, nrest)) return 0.0;
         for (ptrdiff_t i = p; i < 6; i++) v->reduced[n_reduced++] = 6 * leg + i;
     }
@@ -235,11 +242,21 @@ static double closure_rates(chain_velocity *v) {
 }
 
 /* The velocity model at u (6 + n_var): out = [J (6, n) | J_homogeneous (6, n) | singular
- * values (min(6, n)) | condition | passive rates (n_u - 6, n)]; returns the bound (0.0: out
- * not filled), or -1.0 where u is not in the legs' home assembly modes (each slide of its
+ * values (min(6, n)) | condition | passive rates (n_u - 6, n)] (the singular values and
+ * the condition NaN unless `singular`: singular_stage fills them later); returns the bound
+ * (0.0: out not filled), or -1.0 where u is not in the legs' home assembly modes (each slide of its
  * home sign, each revolute leg joint within a quarter turn of home: chain_one_kernel.
  * in_home_modes), where the batch path's direct model may reach another closure. */
-static double velocity(chain_velocity *v, const double *u, double *out) {
+/* The singular stage: J_homogeneous's singular values and condition number into out, from the
+ * J_homogeneous in out (velocity's layout). */
+static void singular_stage(chain_velocity *v, double *out) {
+    const ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
+    double *sv = out + 12 * n;
+    pk_singular_values_one(out + 6 * n, 6, n, sv, v->work, v->norms);
+    sv[k] = sv[0] / sv[k - 1];
+}
+
+static double velocity(chain_velocity *v, const double *u, double *out, int singular) {
     const pk_chain *c = &v->c;
     const ptrdiff_t n = v->n_act, n_loop = v->n_loop, n_u = v->n_u;
     for (ptrdiff_t k = 0; k < v->n_slides; k++)
@@ -259,7 +276,7 @@ static double velocity(chain_velocity *v, const double *u, double *out) {
     for (int i = 0; i < 3; i++) point[i] = pos[i] + v->tool * rot[3 * i + 2];
     double *jac = out, *j_h = out + 6 * n;
     ptrdiff_t k = n < 6 ? n : 6;
-    double *sv = j_h + 6 * n, *condition = sv + k, *rates = condition + 1;
+    double *sv = j_h + 6 * n, *rates = sv + k + 1;
     for (ptrdiff_t i = 0; i < 6 * n; i++) jac[i] = 0.0;
     for (ptrdiff_t i = 0; i < (n_u - 6) * n; i++) rates[i] = 0.0;
     const double *du = v->du;
@@ -278,8 +295,9 @@ static double velocity(chain_velocity *v, const double *u, double *out) {
     for (ptrdiff_t t = 0; t < n_twist; t++) point_column(v->head_tw + 6 * t, point, jac, n,
                                                          v->head_col[t]);
     for (ptrdiff_t i = 0; i < 6 * n; i++) j_h[i] = i < 3 * n ? jac[i] : jac[i] * c->length;
-    pk_singular_values_one(j_h, 6, n, sv, v->work, v->norms);
-    *condition = sv[0] / sv[k - 1];
+    if (singular) singular_stage(v, out);
+    else
+        for (ptrdiff_t i = 0; i <= k; i++) sv[i] = NAN; /* the singular stage not run */
     return bound;
 }
 
@@ -466,22 +484,55 @@ fail:
 }
 
 const char pk_chain_one_velocity_doc[] =
-    "chain_one_velocity(pack, u, out) -> bound\n\n"
+    "chain_one_velocity(pack, u, out[, singular]) -> bound\n\n"
     "The velocity model of one joint-chain configuration u (a list of 6 + n_var floats: the\n"
     "platform's position and rotation vector, every joint variable) with the constants of\n"
     "chain_velocity_pack: out (a float64 array of 12 n + min(6, n) + 1 + (n_u - 6) n) filled\n"
     "with J (6, n), J_homogeneous (6, n), J_homogeneous's singular values, its condition\n"
     "number and the passive joints' rates (n_u - 6, n); returns the lower bound of\n"
     "sigma_min / sigma_max of the closure's Jacobian C_U (0.0 where a pivot vanished, -1.0\n"
-    "where u is not in the legs' home modes: out is then not filled).";
+    "where u is not in the legs' home modes: out is then not filled). With singular false the\n"
+    "singular values and the condition are left NaN: chain_one_velocity(pack, None, out) then\n"
+    "computes them from out's J_homogeneous (and returns the condition number).";
+
+/* out's size check (velocity's layout); the out pointer, or NULL with an error set. */
+static double *take_out(const chain_velocity *v, held_buffers *held, PyObject *obj) {
+    double *out = grab(held, obj, "out", 'd', 1, 1);
+    if (!out) return NULL;
+    ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
+    Py_ssize_t need = 12 * n + k + 1 + (v->n_u - 6) * n;
+    if (extent(held, 0, 0) != need) {
+        PyErr_Format(PyExc_ValueError, "out: %zd floats expected, not %zd", need,
+                     extent(held, 0, 0));
+        return NULL;
+    }
+    return out;
+}
+
+/* chain_one_velocity(pack, None, out): the singular stage; returns the condition number. */
+static PyObject *singular_only(chain_velocity *v, PyObject *obj) {
+    held_buffers held = {.count = 0};
+    double *out = take_out(v, &held, obj);
+    if (!out) {
+        let_go(&held);
+        return NULL;
+    }
+    singular_stage(v, out);
+    ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
+    double condition = out[12 * n + k];
+    let_go(&held);
+    return PyFloat_FromDouble(condition);
+}
 
 PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
-    if (nargs != 3) {
-        PyErr_Format(PyExc_TypeError, "chain_one_velocity() takes 3 positional arguments "
+    if (nargs != 3 && nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "chain_one_velocity() takes 3 or 4 positional arguments "
                      "(%zd given)", nargs);
         return NULL;
     }
+    int singular = nargs == 3 ? 1 : PyObject_IsTrue(args[3]);
+    if (singular < 0) return NULL;
     chain_velocity *v = PyCapsule_IsValid(args[0], CAPSULE)
                         ? PyCapsule_GetPointer(args[0], CAPSULE) : NULL;
     if (!v) {
@@ -490,6 +541,8 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
     }
     PyObject *list = args[1];
     Py_ssize_t width = 6 + v->c.n_var;
+    if (list == Py_None) /* the singular stage alone, on out's J_homogeneous */
+        return singular_only(v, args[2]);
     if (!PyList_CheckExact(list) || PyList_GET_SIZE(list) != width) {
         PyErr_Format(PyExc_TypeError, "u: a list of %zd floats expected", width);
         return NULL;
@@ -505,20 +558,12 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
         if (u[i] == -1.0 && PyErr_Occurred()) return NULL;
     }
     held_buffers held = {.count = 0};
-    double *out = grab(&held, args[2], "out", 'd', 1, 1);
+    double *out = take_out(v, &held, args[2]);
     if (!out) {
         let_go(&held);
         return NULL;
     }
-    ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
-    Py_ssize_t need = 12 * n + k + 1 + (v->n_u - 6) * n;
-    if (extent(&held, 0, 0) != need) {
-        PyErr_Format(PyExc_ValueError, "out: %zd floats expected, not %zd", need,
-                     extent(&held, 0, 0));
-        let_go(&held);
-        return NULL;
-    }
-    double bound = velocity(v, u, out);
+    double bound = velocity(v, u, out, singular);
     let_go(&held);
     return PyFloat_FromDouble(bound);
 }
