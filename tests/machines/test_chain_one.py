@@ -280,14 +280,15 @@ def test_a_planted_wrong_constant_is_caught():
 def test_a_one_shot_call_does_not_import_numba():
     m = pkmkit.machine("tripteor-x7")
     x, q = m.home_pose.tolist(), m.home_q.tolist()
-    # with the C extension a plain ik and fk never import Numba (chain_one_native.py): the
-    # Jacobian's second call does
-    second = (f"m.jacobian({x}).J" if native_one_pose() else f"m.ik({x})")
+    # with the C extension plain ik, fk and jacobian calls never import Numba
+    # (chain_one_native.py, chain_one_velocity.py); without it the second ik does
+    native = native_one_pose()
+    second = f"m.jacobian({x}).J; m.jacobian({x}).condition" if native else f"m.ik({x})"
     code = (f"import sys, pkmkit; m = pkmkit.machine('tripteor-x7'); m.ik({x}); m.fk({q}); "
             f"pkmkit.machine('tripteor-x7').jacobian({x}).J; m.jacobian({x}).J; "
             f"m.ik({x}); m.fk({q}); "
             f"assert 'numba' not in sys.modules, 'imported'; {second}; {second}; "
-            "assert 'numba' in sys.modules")
+            f"assert {'not ' if native else ''}'numba' in sys.modules")
     env = {k: v for k, v in os.environ.items() if k != "PKMKIT_COMPILED"}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          check=False)
@@ -298,7 +299,7 @@ def test_a_one_shot_call_does_not_import_numba():
 def test_batch_calls_are_no_single_calls():
     """Batches (a study's frontier, two rows or one) never count as a first single call: the
     second does not build the one-pose constants, which import Numba; a plain pose still
-    does from its second call (the Jacobian's, where the C extension answers ik)."""
+    does from its second call where the C extension is not built (with it, never)."""
     m = pkmkit.machine("tripteor-x7")
     x, q = m.home_pose.tolist(), m.home_q.tolist()
     code = (f"import sys, numpy as np, pkmkit; m = pkmkit.machine('tripteor-x7'); "
@@ -306,10 +307,9 @@ def test_batch_calls_are_no_single_calls():
             "[m.ik(X), m.ik(X[:1], full_output=True), m.fk(Q), m.fk(Q[:1]), m.jacobian(X).J, "
             "m.jacobian(X[:1]).J, m.ik(X), m.fk(Q), m.jacobian(X).J]; "
             f"assert 'numba' not in sys.modules, 'imported'; "
-            + (f"m.ik({x}); m.ik({x}); assert 'numba' not in sys.modules, 'C'; "
-               f"m.jacobian({x}).J; m.jacobian({x}).J; " if native_one_pose()
-               else f"m.ik({x}); m.ik({x}); ")  # with the C extension ik never imports it
-            + "assert 'numba' in sys.modules")
+            + (f"m.ik({x}); m.ik({x}); m.jacobian({x}).J; m.jacobian({x}).J; "
+               "assert 'numba' not in sys.modules, 'C'" if native_one_pose()
+               else f"m.ik({x}); m.ik({x}); assert 'numba' in sys.modules"))
     env = {k: v for k, v in os.environ.items() if k != "PKMKIT_COMPILED"}
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          check=False)
