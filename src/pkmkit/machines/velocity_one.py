@@ -250,6 +250,20 @@ class OnePoseVelocity:
                 pass
         return self.from_batch(name)
 
+    def answer(self, name: str, code: int | None):
+        """Field ``name``: from the C state (``code`` its ``rod_field`` code, None where the C
+        kernel has no such field), else the Python pieces, else the batch path's row."""
+        value = None
+        if code is not None and self._batch is None:
+            state = self._state
+            if state is None:
+                state = self.native()
+            if state:  # None from the kernel: the Python pieces below decide
+                value = self._native_field(state, code)
+        if value is None:
+            value = self.field(name)
+        return value
+
     def from_batch(self, name: str):
         """Field ``name`` of the batch path's velocity model of this pose."""
         if self._batch is None:
@@ -468,7 +482,6 @@ _NATIVE_CODES = {name: code for code, name in enumerate(
 
 
 def _one_field(name: str) -> property:
-    build = _BUILD[name]
     code = _NATIVE_CODES.get(name)
 
     def get(self):
@@ -481,21 +494,7 @@ def _one_field(name: str) -> property:
             if value is not None:
                 cache[name] = value
                 return value
-        evaluation = self._evaluation
-        value = None
-        if code is not None and evaluation._batch is None:
-            state = evaluation._state
-            if state is None:
-                state = evaluation.native()
-            if state:  # None from the kernel: the Python pieces below decide
-                value = evaluation._native_field(state, code)
-        try:
-            if value is None and evaluation._batch is None:
-                value = build(evaluation)
-        except _HANDED_OVER:
-            value = None
-        if value is None:
-            value = evaluation.from_batch(name)
+        value = self._evaluation.answer(name, code)
         cache[name] = value
         return value
 
