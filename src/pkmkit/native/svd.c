@@ -22,6 +22,31 @@
 
 /* ------------------------------------------------------------------ kernels */
 
+/* One Jacobi rotation of the working columns wi, wj (length p) with squared norms
+ * norms[i], norms[j]: 0 where they are orthogonal to tol (nothing done), else 1 with the
+ * columns rotated, the norms updated and the rotation (cs, sn) out for V. Both sweep orders'
+ * operations, in the Numba kernels' order. */
+static inline int rotate_pair(double *wi, double *wj, ptrdiff_t p, double *norm_i,
+                              double *norm_j, double tol, double *cs_out, double *sn_out) {
+    double alpha = *norm_i, beta = *norm_j, gamma = 0.0;
+    for (ptrdiff_t t = 0; t < p; t++) gamma += wi[t] * wj[t];
+    if (gamma == 0.0 || fabs(gamma) <= tol * sqrt(alpha) * sqrt(beta)) return 0;
+    double zeta = (beta - alpha) / (2.0 * gamma);
+    double tn = copysign(1.0, zeta) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
+    double cs = 1.0 / sqrt(1.0 + tn * tn);
+    double sn = cs * tn;
+    for (ptrdiff_t t = 0; t < p; t++) {
+        double a = wi[t], b = wj[t];
+        wi[t] = cs * a - sn * b;
+        wj[t] = sn * a + cs * b;
+    }
+    *norm_i = alpha - tn * gamma;
+    *norm_j = beta + tn * gamma;
+    *cs_out = cs;
+    *sn_out = sn;
+    return 1;
+}
+
 /* svd_rates_kernel.jacobi_sweeps (and svd_kernel's sweeps with vmat NULL): one-sided Jacobi
  * on the k working columns of length p in work (k, p); each rotation also applied to V, whose
  * entry (i, t), t < v_len, is vmat[i * v_row + t * v_col] (V by rows: v_row = v_len,
@@ -38,20 +63,11 @@ void pk_jacobi_sweeps(double *work, ptrdiff_t k, ptrdiff_t p, double *vmat, ptrd
         int rotated = 0;
         for (ptrdiff_t i = 0; i < k - 1; i++) {
             for (ptrdiff_t j = i + 1; j < k; j++) {
-                double alpha = norms[i], beta = norms[j], gamma = 0.0;
-                double *wi = work + i * p, *wj = work + j * p;
-                for (ptrdiff_t t = 0; t < p; t++) gamma += wi[t] * wj[t];
-                if (gamma == 0.0 || fabs(gamma) <= tol * sqrt(alpha) * sqrt(beta)) continue;
+                double cs, sn;
+                if (!rotate_pair(work + i * p, work + j * p, p, &norms[i], &norms[j], tol, &cs,
+                                 &sn))
+                    continue;
                 rotated = 1;
-                double zeta = (beta - alpha) / (2.0 * gamma);
-                double tn = copysign(1.0, zeta) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
-                double cs = 1.0 / sqrt(1.0 + tn * tn);
-                double sn = cs * tn;
-                for (ptrdiff_t t = 0; t < p; t++) {
-                    double a = wi[t], b = wj[t];
-                    wi[t] = cs * a - sn * b;
-                    wj[t] = sn * a + cs * b;
-                }
                 if (vmat) {
                     for (ptrdiff_t t = 0; t < v_len; t++) {
                         double *vi = vmat + i * v_row + t * v_col;
@@ -61,8 +77,6 @@ void pk_jacobi_sweeps(double *work, ptrdiff_t k, ptrdiff_t p, double *vmat, ptrd
                         *vj = sn * a + cs * b;
                     }
                 }
-                norms[i] = alpha - tn * gamma;
-                norms[j] = beta + tn * gamma;
             }
         }
         if (!rotated) break;
@@ -150,22 +164,10 @@ void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c, double
                     i = j;
                     j = swap;
                 }
-                double alpha = norms[i], beta = norms[j], gamma = 0.0;
-                double *wi = work + i * p, *wj = work + j * p;
-                for (ptrdiff_t t = 0; t < p; t++) gamma += wi[t] * wj[t];
-                if (gamma == 0.0 || fabs(gamma) <= tol * sqrt(alpha) * sqrt(beta)) continue;
-                rotated = 1;
-                double zeta = (beta - alpha) / (2.0 * gamma);
-                double tn = copysign(1.0, zeta) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
-                double cs = 1.0 / sqrt(1.0 + tn * tn);
-                double sn = cs * tn;
-                for (ptrdiff_t t = 0; t < p; t++) {
-                    double a = wi[t], b = wj[t];
-                    wi[t] = cs * a - sn * b;
-                    wj[t] = sn * a + cs * b;
-                }
-                norms[i] = alpha - tn * gamma;
-                norms[j] = beta + tn * gamma;
+                double cs, sn;
+                if (rotate_pair(work + i * p, work + j * p, p, &norms[i], &norms[j], tol, &cs,
+                                &sn))
+                    rotated = 1;
             }
             int last = slot[even - 1]; /* the seats but the first move on by one */
             for (int h = even - 1; h > 1; h--) slot[h] = slot[h - 1];
