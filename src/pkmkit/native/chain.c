@@ -89,12 +89,6 @@ static void walk_element(const pk_chain *c, ptrdiff_t e, const double *values, d
             w->tw_col[*n_twist] = col;
             *n_twist += 1;
         }
-        double cq = cos(q), sq = sin(q);
-        for (int i = 0; i < 3; i++) {
-            double x = rot[3 * i], y = rot[3 * i + 1];
-            rot[3 * i] = cq * x + sq * y;
-            rot[3 * i + 1] = cq * y - sq * x;
-        }
     } else {
         if (col >= 0) {
             tw[0] = z0;
@@ -104,10 +98,8 @@ static void walk_element(const pk_chain *c, ptrdiff_t e, const double *values, d
             w->tw_col[*n_twist] = col;
             *n_twist += 1;
         }
-        pos[0] += q * z0;
-        pos[1] += q * z1;
-        pos[2] += q * z2;
     }
+    pk_chain_joint_move(rot, pos, t, q);
 }
 
 /* Residual r (6L,) and Jacobian jac (m, n) of the closure at u (_evaluate); jac zeroed

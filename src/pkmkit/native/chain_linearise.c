@@ -46,16 +46,7 @@ static ptrdiff_t walk(const pk_chain *c, const pk_defects *d, const double *valu
         int64_t t = c->types[e];
         if (t == 0) continue;
         double q = values[c->evar[e]];
-        if (t == 1) {
-            double cq = cos(q), sq = sin(q);
-            for (int i = 0; i < 3; i++) {
-                double x = rot[3 * i], y = rot[3 * i + 1];
-                rot[3 * i] = cq * x + sq * y;
-                rot[3 * i + 1] = cq * y - sq * x;
-            }
-        } else {
-            for (int i = 0; i < 3; i++) pos[i] += q * rot[3 * i + 2];
-        }
+        pk_chain_joint_move(rot, pos, t, q);
     }
     return count;
 }

@@ -196,18 +196,7 @@ static void tool_pose(const pk_one *s, const double *values, const double *u, do
         int64_t t = c->types[e];
         if (t == 0) continue;
         double q = values[c->evar[e]];
-        if (t == 1) {
-            double cq = cos(q), sq = sin(q);
-            for (int i = 0; i < 3; i++) {
-                double x = rot[3 * i], y = rot[3 * i + 1];
-                rot[3 * i] = cq * x + sq * y;
-                rot[3 * i + 1] = cq * y - sq * x;
-            }
-        } else {
-            pos[0] += q * rot[2];
-            pos[1] += q * rot[5];
-            pos[2] += q * rot[8];
-        }
+        pk_chain_joint_move(rot, pos, t, q);
     }
     for (int i = 0; i < 3; i++) {
         pose[i] = pos[i] + s->tool * rot[3 * i + 2];

@@ -126,18 +126,7 @@ static ptrdiff_t head_walk(const chain_velocity *v, const double *u, double *rot
             }
             v->head_col[n_twist++] = col;
         }
-        if (type == 1) {
-            double cq = cos(q), sq = sin(q);
-            for (int i = 0; i < 3; i++) {
-                double x = rot[3 * i], y = rot[3 * i + 1];
-                rot[3 * i] = cq * x + sq * y;
-                rot[3 * i + 1] = cq * y - sq * x;
-            }
-        } else {
-            pos[0] += q * z0;
-            pos[1] += q * z1;
-            pos[2] += q * z2;
-        }
+        pk_chain_joint_move(rot, pos, type, q);
     }
     return n_twist;
 }

@@ -175,6 +175,25 @@ void pk_chain_evaluate_any(const pk_chain *c, double *values, const double *u, d
                            double *jac, const double *target, double tool, pk_chain_work *w);
 void pk_chain_retract(const double *u, const double *step, double *out, ptrdiff_t n);
 
+/* A joint's motion along its element's local z axis (chain_kernel's walk): type 1 turns the
+ * frame rot (3 x 3 row-major) by q about its z axis, type 2 slides pos by q along it; the
+ * operations of the Numba kernels in their order. Shared by chain.c, chain_linearise.c,
+ * chain_one.c and chain_one_velocity.c. */
+static inline void pk_chain_joint_move(double *rot, double *pos, int64_t type, double q) {
+    if (type == 1) {
+        double cq = cos(q), sq = sin(q);
+        for (int i = 0; i < 3; i++) {
+            double x = rot[3 * i], y = rot[3 * i + 1];
+            rot[3 * i] = cq * x + sq * y;
+            rot[3 * i + 1] = cq * y - sq * x;
+        }
+    } else {
+        pos[0] += q * rot[2];
+        pos[1] += q * rot[5];
+        pos[2] += q * rot[8];
+    }
+}
+
 /* chain.c's _rotvec_matrix, _apply_frame, _rotation_rows (3 x 3 row-major). */
 void pk_chain_rotvec_matrix(double x, double y, double z, double *out);
 void pk_chain_apply_frame(double *rot, double *pos, const double *f, double *tmp);
