@@ -109,3 +109,35 @@ def test_a_leaning_wall_flags_its_section(run, tmp_path, monkeypatch):
            "cmm.csv:6" in out.output
     assert "3 sections of 1 passes → 2 tool centres" in out.output
     assert len((tmp_path / "c.csv").read_text().splitlines()) == 3 + 2
+
+
+def test_check_of_a_part_calibration_says_when_it_helps(run, tmp_path, monkeypatch):
+    """``machined-part check`` in the ordinary run (its end-to-end examples, with a calibration
+    in between, are ``ci``: the documentation's machined-part session and the ball-bar test
+    above): the defects of a simulated part's true machine, "compensated" by that same true
+    geometry, leave nothing; a machine without defects "compensated" by that geometry is made
+    worse (exit status 3)."""
+    from pkmkit.machines.registry import preset_path
+
+    monkeypatch.chdir(tmp_path)
+    run("machined-part", "program", "verne", "--out", "part.nc")
+    out = run("machined-part", "simulate", "verne", "--gcode", "part.nc", "--defects", "random",
+              "--seed", 3, "--sections", 12, "--out", "cmm.csv")
+    assert out.exit_code == 0, out.output
+    out = run("machined-part", "check", "verne", "--calibrated", "cmm.truth.toml", "--truth",
+              "cmm.truth.toml", "--json")
+    result = parse_json(out)
+    assert result["compensated"]["along_x"] < 1e-6 and result["compensated"]["along_y"] < 1e-6
+    assert result["nominal"]["along_x"] > 1 and not result["compensation_worse"]
+    # the library's figures, in metres, printed in µm
+    import pkmkit
+    from pkmkit.calibration.studies import machined_errors
+
+    truth = pkmkit.load(str(tmp_path / "cmm.truth.toml"))
+    errors = machined_errors(truth, pkmkit.machine("verne"), truth)
+    assert result["units"] == "µm"
+    for axis in ("along_x", "along_y"):
+        assert result["nominal"][axis] == pytest.approx(errors["nominal"][axis] * 1e6, rel=1e-12)
+    out = run("machined-part", "check", "verne", "--calibrated", "cmm.truth.toml", "--truth",
+              preset_path("verne"))
+    assert out.exit_code == 3 and "do not use this calibration" in out.output
