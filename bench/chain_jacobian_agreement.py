@@ -40,7 +40,7 @@ def agreement(name: str, n: int) -> tuple[int, int, dict, int]:
     through, wrong = 0, 0
     for pose in x:
         one = m.jacobian(pose)
-        if not isinstance(one.__dict__.get("_evaluation"), cov._Fields):
+        if not isinstance(one, cov.OnePoseChainJacobians):
             continue
         through += 1
         ref = m.jacobian(pose[None])

@@ -561,9 +561,8 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
     if (p := packed(m)) is not None and (got := p.ik(p.capsule, x, True, True)) is not None:
         # the inverse solution by one C call (chain_one_native.py; the stroke test left to
         # the batch path, as _inverse_values), then the velocity model at it
-        fast = chain_one_velocity.record(m, got[0], got[1].tolist(), got[3],
-                                         max(tol, RANK_RCOND), BOUND_MARGIN,
-                                         6 + len(m.passive_variables))
+        fast = chain_one_velocity.record(m, got[0], got[1], got[3], max(tol, RANK_RCOND),
+                                         BOUND_MARGIN, 6 + len(m.passive_variables))
         if fast is not False:
             return fast
     xs = _plain(x, 6)  # before constants(), as in _inverse_within

@@ -47,7 +47,6 @@ from typing import Any
 import numpy as np
 
 from pkmkit.machines.chain_velocity_record import ChainJacobians
-from pkmkit.machines.lazy_records import lazy_record_class
 from pkmkit.numerics import jit
 
 #: Largest residual of the inverse solution (its closure and tool rows: m, and rad × the
@@ -64,12 +63,12 @@ class VelocityPack:
     leg actuators' places in J, the leg owning each column alone (−1: the platform's and the
     joints shared by legs), and the output buffer's layout."""
 
-    __slots__ = ("call", "layout", "n", "n_p", "pack", "rank", "size")
+    __slots__ = ("call", "jacobian", "layout", "n", "n_p", "pack", "rank", "size")
 
     def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
         arguments = pack_arguments(m) if arguments is None else arguments
         self.pack = native.chain_velocity_pack(*arguments.values())
-        self.call = native.chain_one_velocity
+        self.call, self.jacobian = native.chain_one_velocity, native.chain_one_jacobian
         n = int(np.count_nonzero(m.model.actuated))
         k = min(6, n)
         self.n, self.n_p = n, len(m.passive_variables)
@@ -146,7 +145,7 @@ def pack(m: Any) -> VelocityPack | None:
     p = m.__dict__.get("_chain_one_velocity")
     if p is None:
         native = jit.native_kernels_now()
-        if native is None or not hasattr(native, "chain_one_velocity"):
+        if native is None or not hasattr(native, "chain_one_jacobian"):
             return None
         p = VelocityPack(m, native)
         object.__setattr__(m, "_chain_one_velocity", p)
@@ -155,60 +154,89 @@ def pack(m: Any) -> VelocityPack | None:
     return p
 
 
+def _singular_stage(fields: dict) -> None:
+    """The kernel's singular stage on a record's buffer (one C call on its ``J_homogeneous``):
+    ``singular_values`` and ``condition`` put in the record's ``fields`` (its ``__dict__``)."""
+    p, out = fields["_pack"], fields["_out"]
+    p.call(p.pack, None, out)
+    start, stop, _ = p.layout["singular_values"]
+    fields["singular_values"], fields["condition"] = out[start:stop], out[stop]
+
+
+class _Field:
+    """A field of :class:`OnePoseChainJacobians` made at its first read from the record's
+    buffer and kept in the record's ``__dict__`` (a non-data descriptor: later reads are plain
+    attribute reads). ``singular_values`` and ``condition`` run the singular stage, once, for
+    both."""
+
+    __slots__ = ("name",)
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        name = self.name
+        if name in _SINGULAR:
+            _singular_stage(fields)
+            return fields[name]
+        start, stop, shape = fields["_pack"].layout[name]
+        value = fields["_out"][start:stop].reshape(shape)
+        fields[name] = value
+        return value
+
+
 _SINGULAR = frozenset(("singular_values", "condition"))
 
 
-class _Fields:
-    """The fields of a one-pose record made when read: views of the kernel's output; the
-    singular values and the condition number computed at the first read of either (the
-    kernel's singular stage, one more C call on the output's ``J_homogeneous``)."""
+class OnePoseChainJacobians(ChainJacobians):
+    """A joint-chain machine's velocity model of one pose (this module): ``q``, ``status`` and
+    the ranks given; ``J``, ``J_homogeneous``, ``passive_rates`` views of the kernel's one
+    output array made when first read, ``singular_values`` and ``condition`` computed then (the
+    singular stage). Equality is identity (comparing would compute every field); pickled, it
+    becomes the plain :class:`~pkmkit.machines.chain_velocity_record.ChainJacobians`."""
 
-    __slots__ = ("out", "pack", "singular")
+    J = _Field("J")
+    J_homogeneous = _Field("J_homogeneous")
+    singular_values = _Field("singular_values")
+    condition = _Field("condition")
+    passive_rates = _Field("passive_rates")
 
-    def __init__(self, out: np.ndarray, pack: VelocityPack) -> None:
-        self.out, self.pack, self.singular = out, pack, False
+    def __eq__(self, other: object) -> bool:
+        return self is other
 
-    def field(self, name: str) -> Any:
-        if name in _SINGULAR and not self.singular:
-            self.pack.call(self.pack.pack, None, self.out)
-            self.singular = True
-        start, stop, shape = self.pack.layout[name]
-        if stop is None:
-            return self.out[start]
-        view = self.out[start:stop]
-        return view if shape is None else view.reshape(shape)
+    __hash__ = object.__hash__
 
+    def __repr__(self) -> str:
+        return f"ChainJacobians(1 pose, {len(self.q)} actuators; fields read from one C call)"
 
-_RECORD: type | None = None
-
-
-def _record_class() -> type:
-    return lazy_record_class(
-        ChainJacobians, "OnePose",
-        lambda r: f"1 pose, {len(r.q)} actuators; fields read from one C call",
-        "A joint-chain machine's velocity model of one pose "
-        "(:mod:`pkmkit.machines.chain_one_velocity`).")
+    def __reduce__(self) -> tuple:  # pickled as the plain record, every field computed
+        return ChainJacobians, tuple(getattr(self, name)
+                                     for name in ChainJacobians.__dataclass_fields__)
 
 
-def record(m: Any, q: tuple, u: list, residual: float, tol: float, margin: float,
+_NEW = object.__new__
+
+
+def record(m: Any, q: Any, u: Any, residual: float, tol: float, margin: float,
            expected_rank: int) -> Any:
-    """The velocity model of one pose at the inverse solution ``u`` (a list of 6 + n_var
-    floats; ``q`` its actuators, ``residual`` its largest residual): the record; None where
-    the bound does not clear ``margin`` × ``tol`` (the batch path answers); False where this
-    path does not apply (no C extension, a residual beyond :data:`RESIDUAL_GUARD`, ``u``
-    outside the legs' home assembly modes: the Numba path, which solves the direct model
-    again as the batch path does, answers)."""
-    global _RECORD
+    """The velocity model of one pose at the inverse solution ``u`` (6 + n_var floats: a list
+    or a float64 array; ``q`` its actuators, an array or a sequence, ``residual`` its largest
+    residual): the record; None where the bound does not clear ``margin`` × ``tol`` (the batch
+    path answers); False where this path does not apply (no C extension, a residual beyond
+    :data:`RESIDUAL_GUARD`, ``u`` outside the legs' home assembly modes: the Numba path,
+    which solves the direct model again as the batch path does, answers)."""
     p = pack(m) if residual <= RESIDUAL_GUARD else None
     if p is None:
         return False
-    out = np.empty(p.size)
-    bound = p.call(p.pack, u, out, False)  # the singular values when read (_Fields)
-    if bound < 0.0:  # outside the legs' home modes: the direct model's closure may differ
-        return False
-    if not bound >= margin * tol:
-        return None
-    if _RECORD is None:
-        _RECORD = _record_class()
-    return _RECORD(_Fields(out, p), closure_rank=p.rank, expected_rank=expected_rank,
-                   q=np.array(q), status=_OK)
+    out = p.jacobian(p.pack, u, margin * tol)  # the singular values when read (_Field)
+    if out is None or out is False:  # the bound does not clear; outside the legs' home modes
+        return out
+    one = _NEW(OnePoseChainJacobians)
+    fields = one.__dict__
+    fields["_out"], fields["_pack"], fields["status"] = out, p, _OK
+    fields["q"] = q if type(q) is np.ndarray else np.array(q)
+    fields["closure_rank"], fields["expected_rank"] = p.rank, expected_rank
+    return one

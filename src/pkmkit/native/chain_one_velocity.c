@@ -24,6 +24,9 @@
 
 #define CAPSULE "pkmkit.native.chain_one_velocity"
 
+/* svd.c: the singular values of one small matrix (k <= 6), round-robin Jacobi */
+void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out);
+
 typedef struct {
     pk_chain c;               /* position: column of each variable in the closure's Jacobian */
     pk_chain_work w;
@@ -36,8 +39,12 @@ typedef struct {
     int64_t *leg_cols;        /* (L, 6) each leg's local columns */
     int64_t *leg_count;       /* (L,) */
     int64_t *global_cols;     /* (n_global,) */
-    int64_t *reduced;         /* (6L,) the rows left to the global columns */
     double *values, *full_u, *r, *jac, *du, *rg_inv, *head_tw, *work, *norms;
+    double *panels;           /* (L, 6 + n_u + n_loop, 6) each leg's columns (closure_rates) */
+    double *rest;             /* (n_u + n_loop, 6L) the rows left by the legs' reflections */
+    double *diag;             /* (6L + n_u,) the reciprocals of R_l's, then R_g's diagonal */
+    double *out;              /* (size,) chain_one_jacobian's answer before its array */
+    ptrdiff_t size;           /* 12 n + min(6, n) + 1 + (n_u - 6) n */
     int64_t *head_col;
     void *memory;             /* every array above, one allocation */
     void *owned[14];          /* the copied arrays */
@@ -52,43 +59,49 @@ static void pack_free(PyObject *capsule) {
     }
 }
 
-/* Householder QR of the columns piv (np) over the rows `rows` (nr) of a (leading dimension
- * ld), the reflections applied to the columns rest (nrest) too; R left in place (a[rows[i],
- * piv[j]], i <= j). 0 where a pivot column is zero. */
-static int reflect(double *a, ptrdiff_t ld, const int64_t *rows, ptrdiff_t nr,
-                   const int64_t *piv, ptrdiff_t np, const int64_t *rest, ptrdiff_t nrest) {
+/* Householder QR of the columns 0..np-1 of a column-major panel a (column j at a + j * ld,
+ * rows 0..nr-1), the reflections applied to the panel's columns rest (nrest) too; R left in
+ * place (a[i + j * ld], i <= j). 0 where a pivot column is zero. */
+static int reflect(double *a, ptrdiff_t ld, ptrdiff_t nr, ptrdiff_t np, const int64_t *rest,
+                   ptrdiff_t nrest) {
     for (ptrdiff_t j = 0; j < np; j++) {
-        ptrdiff_t col = piv[j];
+        double *col = a + j * ld;
         double norm = 0.0;
-        for (ptrdiff_t i = j; i < nr; i++) norm += a[rows[i] * ld + col] * a[rows[i] * ld + col];
+        for (ptrdiff_t i = j; i < nr; i++) norm += col[i] * col[i];
         norm = sqrt(norm);
         if (!(norm > 0.0)) return 0;
-        double *top = a + rows[j] * ld + col;
-        double alpha = *top >= 0 ? -norm : norm;
-        double v0 = *top - alpha;
+        double alpha = col[j] >= 0 ? -norm : norm;
+        double v0 = col[j] - alpha;
         double vtv = v0 * v0;
-        for (ptrdiff_t i = j + 1; i < nr; i++) vtv += a[rows[i] * ld + col] * a[rows[i] * ld + col];
-        *top = v0;
+        for (ptrdiff_t i = j + 1; i < nr; i++) vtv += col[i] * col[i];
+        col[j] = v0;
+        double scale = 2.0 / vtv;
         for (ptrdiff_t k = j + 1; k < np + nrest; k++) {
-            ptrdiff_t other = k < np ? piv[k] : rest[k - np];
+            double *other = a + (k < np ? k : rest[k - np]) * ld;
             double s = 0.0;
-            for (ptrdiff_t i = j; i < nr; i++) s += a[rows[i] * ld + col] * a[rows[i] * ld + other];
-            s *= 2.0 / vtv;
-            for (ptrdiff_t i = j; i < nr; i++) a[rows[i] * ld + other] -= s * a[rows[i] * ld + col];
+            for (ptrdiff_t i = j; i < nr; i++) s += col[i] * other[i];
+            s *= scale;
+            for (ptrdiff_t i = j; i < nr; i++) other[i] -= s * col[i];
         }
-        *top = alpha;
+        col[j] = alpha;
     }
     return 1;
 }
 
-/* x (np,) = R^-1 x in place for the upper-triangular R of reflect (rows, piv). */
-static void back_substitute(const double *a, ptrdiff_t ld, const int64_t *rows,
-                            const int64_t *piv, ptrdiff_t np, double *x) {
+/* x (np,) = R^-1 x in place for the upper-triangular R (np, np) of a column-major panel,
+ * with inv (np,) the reciprocals of its diagonal (a product where a division would wait). */
+static void back_substitute(const double *a, ptrdiff_t ld, const double *inv, ptrdiff_t np,
+                            double *x) {
     for (ptrdiff_t i = np - 1; i >= 0; i--) {
         double s = x[i];
-        for (ptrdiff_t p = i + 1; p < np; p++) s -= a[rows[i] * ld + piv[p]] * x[p];
-        x[i] = s / a[rows[i] * ld + piv[i]];
+        for (ptrdiff_t p = i + 1; p < np; p++) s -= a[i + p * ld] * x[p];
+        x[i] = s * inv[i];
     }
+}
+
+/* inv (np,) the reciprocals of the diagonal of a panel's R (np, np). */
+static void reciprocals(const double *a, ptrdiff_t ld, ptrdiff_t np, double *inv) {
+    for (ptrdiff_t i = 0; i < np; i++) inv[i] = 1.0 / a[i + i * ld];
 }
 
 /* The tool frame walked along the head from the platform pose u[:6] (chain_kernel._head_walk
@@ -143,87 +156,112 @@ static void point_column(const double *twist, const double *point, double *jac, 
     jac[5 * n + c] = w2;
 }
 
+/* Each leg's 6 rows of v->jac gathered into its panel (column-major, 6 rows): its local
+ * columns, then every global column, then the leg actuators' (a column the leg's rows do not
+ * involve copied as zeros and left out of the reflections: rest, nrest); adds the squares of
+ * C_U's entries on those rows to *fro. */
+static ptrdiff_t gather(const chain_velocity *v, ptrdiff_t leg, double *panel, int64_t *rest,
+                        double *fro) {
+    const ptrdiff_t ld = v->n_u + v->n_loop, n_g = v->n_global, p = v->leg_count[leg];
+    const int64_t *piv = v->leg_cols + 6 * leg;
+    const double *rows = v->jac + 6 * leg * ld;
+    double sum = *fro;
+    for (ptrdiff_t j = 0; j < p; j++)
+        for (int i = 0; i < 6; i++) {
+            double x = rows[i * ld + piv[j]];
+            panel[6 * j + i] = x;
+            sum += x * x;
+        }
+    ptrdiff_t nrest = 0;
+    for (ptrdiff_t g = 0; g < n_g + v->n_loop; g++) {
+        ptrdiff_t col = g < n_g ? v->global_cols[g] : v->n_u + g - n_g;
+        double *dst = panel + 6 * (p + g);
+        int nonzero = 0;
+        for (int i = 0; i < 6; i++) {
+            double x = rows[i * ld + col];
+            dst[i] = x;
+            nonzero |= x != 0.0;
+            if (g < n_g) sum += x * x;
+        }
+        if (nonzero) rest[nrest++] = p + g;
+    }
+    *fro = sum;
+    return nrest;
+}
+
 /* The closure rates du (n_u, n_loop) from v->jac (module comment); returns the bound, 0.0
- * where a pivot vanishes or too few rows are left (the caller takes the batch path). */
+ * where a pivot vanishes or too few rows are left (the caller takes the batch path). Each
+ * leg's panel keeps R_l, S_l and its right-hand sides; v->rest (rows left, column-major with
+ * leading dimension 6L) R_g and its right-hand sides. */
 static double closure_rates(chain_velocity *v) {
     const pk_chain *c = &v->c;
-    const ptrdiff_t ld = v->n_u + v->n_loop, n_loop = v->n_loop, n_g = v->n_global;
-    double *a = v->jac;
-    double fro = 0.0;
-    for (ptrdiff_t i = 0; i < v->w.m; i++)
-        for (ptrdiff_t j = 0; j < v->n_u; j++) fro += a[i * ld + j] * a[i * ld + j];
-    int64_t rest[64], rows[6];
+    const ptrdiff_t n_loop = v->n_loop, n_g = v->n_global, ld_g = 6 * c->n_legs;
+    const ptrdiff_t width = 6 * (6 + n_g + n_loop);
+    double *rg = v->rest, fro = 0.0;
+    int64_t rest[64];
     ptrdiff_t n_reduced = 0;
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
-        const int64_t *piv = v->leg_cols + 6 * leg;
-        ptrdiff_t p = v->leg_count[leg], nrest = 0;
-        for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
-        /* the columns the reflections change: a column zero on the leg's rows (a joint
-         * of another leg, another leg's actuator) stays zero */
-        for (ptrdiff_t g = 0; g < n_g + n_loop; g++) {
-            ptrdiff_t col = g < n_g ? v->global_cols[g] : v->n_u + g - n_g;
-            const double *x = a + rows[0] * ld + col;
-            if (x[0] != 0.0 || x[ld] != 0.0 || x[2 * ld] != 0.0 || x[3 * ld] != 0.0
-                || x[4 * ld] != 0.0 || x[5 * ld] != 0.0)
-                rest[nrest++] = col;
-        }
-        if (!reflect(a, ld, rows, 6, piv, p, rest, nrest)) return 0.0;
-        for (ptrdiff_t i = p; i < 6; i++) v->reduced[n_reduced++] = 6 * leg + i;
+        double *panel = v->panels + leg * width;
+        ptrdiff_t p = v->leg_count[leg];
+        ptrdiff_t nrest = gather(v, leg, panel, rest, &fro);
+        if (!reflect(panel, 6, 6, p, rest, nrest)) return 0.0;
+        reciprocals(panel, 6, p, v->diag + 6 * leg);
+        for (ptrdiff_t i = p; i < 6; i++, n_reduced++) /* the rows left */
+            for (ptrdiff_t g = 0; g < n_g + n_loop; g++)
+                rg[g * ld_g + n_reduced] = panel[6 * (p + g) + i];
     }
     if (n_reduced < n_g) return 0.0;
-    for (ptrdiff_t k = 0; k < n_loop; k++) rest[k] = v->n_u + k;
-    if (!reflect(a, ld, v->reduced, n_reduced, v->global_cols, n_g, rest, n_loop)) return 0.0;
+    for (ptrdiff_t k = 0; k < n_loop; k++) rest[k] = n_g + k;
+    if (!reflect(rg, ld_g, n_reduced, n_g, rest, n_loop)) return 0.0;
+    const double *inv_g = v->diag + 6 * c->n_legs;
+    reciprocals(rg, ld_g, n_g, v->diag + 6 * c->n_legs);
     /* global unknowns: R_g du_g = -b_g; then each leg's: R_l du_l = -b_l - S_l du_g */
-    double x[64];
+    double x[64], y[8];
     for (ptrdiff_t k = 0; k < n_loop; k++) {
-        for (ptrdiff_t i = 0; i < n_g; i++) x[i] = -a[v->reduced[i] * ld + v->n_u + k];
-        back_substitute(a, ld, v->reduced, v->global_cols, n_g, x);
+        for (ptrdiff_t i = 0; i < n_g; i++) x[i] = -rg[(n_g + k) * ld_g + i];
+        back_substitute(rg, ld_g, inv_g, n_g, x);
         for (ptrdiff_t i = 0; i < n_g; i++) v->du[v->global_cols[i] * n_loop + k] = x[i];
         for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
+            const double *panel = v->panels + leg * width;
             const int64_t *piv = v->leg_cols + 6 * leg;
             ptrdiff_t p = v->leg_count[leg];
-            for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
             for (ptrdiff_t i = 0; i < p; i++) {
-                const double *row = a + rows[i] * ld;
-                double s = -row[v->n_u + k];
-                for (ptrdiff_t g = 0; g < n_g; g++)
-                    s -= row[v->global_cols[g]] * v->du[v->global_cols[g] * n_loop + k];
-                x[i] = s;
+                double s = -panel[6 * (p + n_g + k) + i];
+                for (ptrdiff_t g = 0; g < n_g; g++) s -= panel[6 * (p + g) + i] * x[g];
+                y[i] = s;
             }
-            back_substitute(a, ld, rows, piv, p, x);
-            for (ptrdiff_t i = 0; i < p; i++) v->du[piv[i] * n_loop + k] = x[i];
+            back_substitute(panel, 6, v->diag + 6 * leg, p, y);
+            for (ptrdiff_t i = 0; i < p; i++) v->du[piv[i] * n_loop + k] = y[i];
         }
     }
     /* |R^-1|_F^2: R_g^-1 (columns by back substitution), each leg's R_l^-1 and
      * R_l^-1 S_l R_g^-1 */
     double total = 0.0;
-    double *rg = v->rg_inv;
+    double *inv = v->rg_inv; /* R_g^-1 (n_g, n_g) */
     for (ptrdiff_t j = 0; j < n_g; j++) {
         for (ptrdiff_t i = 0; i < n_g; i++) x[i] = i == j ? 1.0 : 0.0;
-        back_substitute(a, ld, v->reduced, v->global_cols, n_g, x);
+        back_substitute(rg, ld_g, inv_g, j + 1, x); /* R_g^-1 is upper triangular */
         for (ptrdiff_t i = 0; i < n_g; i++) {
-            rg[i * n_g + j] = x[i];
+            inv[i * n_g + j] = x[i];
             total += x[i] * x[i];
         }
     }
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
-        const int64_t *piv = v->leg_cols + 6 * leg;
+        const double *panel = v->panels + leg * width;
         ptrdiff_t p = v->leg_count[leg];
-        for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
         for (ptrdiff_t j = 0; j < p; j++) { /* columns of R_l^-1 */
-            for (ptrdiff_t i = 0; i < p; i++) x[i] = i == j ? 1.0 : 0.0;
-            back_substitute(a, ld, rows, piv, p, x);
-            for (ptrdiff_t i = 0; i < p; i++) total += x[i] * x[i];
+            for (ptrdiff_t i = 0; i < p; i++) y[i] = i == j ? 1.0 : 0.0;
+            back_substitute(panel, 6, v->diag + 6 * leg, j + 1, y);
+            for (ptrdiff_t i = 0; i <= j; i++) total += y[i] * y[i];
         }
         for (ptrdiff_t j = 0; j < n_g; j++) { /* columns of R_l^-1 S_l R_g^-1 */
             for (ptrdiff_t i = 0; i < p; i++) {
                 double s = 0.0;
-                for (ptrdiff_t g = 0; g < n_g; g++)
-                    s += a[rows[i] * ld + v->global_cols[g]] * rg[g * n_g + j];
-                x[i] = s;
+                for (ptrdiff_t g = 0; g <= j; g++) s += panel[6 * (p + g) + i] * inv[g * n_g + j];
+                y[i] = s;
             }
-            back_substitute(a, ld, rows, piv, p, x);
-            for (ptrdiff_t i = 0; i < p; i++) total += x[i] * x[i];
+            back_substitute(panel, 6, v->diag + 6 * leg, p, y);
+            for (ptrdiff_t i = 0; i < p; i++) total += y[i] * y[i];
         }
     }
     double bound = 1.0 / sqrt(fro * total);
@@ -241,7 +279,10 @@ static double closure_rates(chain_velocity *v) {
 static void singular_stage(chain_velocity *v, double *out) {
     const ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
     double *sv = out + 12 * n;
-    pk_singular_values_one(out + 6 * n, 6, n, sv, v->work, v->norms);
+    if (n <= 6) /* round-robin Jacobi (its work holds 6 x 6) */
+        pk_singular_values_fast(out + 6 * n, 6, n, sv);
+    else
+        pk_singular_values_one(out + 6 * n, 6, n, sv, v->work, v->norms);
     sv[k] = sv[0] / sv[k - 1];
 }
 
@@ -266,7 +307,8 @@ static double velocity(chain_velocity *v, const double *u, double *out, int sing
     double *jac = out, *j_h = out + 6 * n;
     ptrdiff_t k = n < 6 ? n : 6;
     double *sv = j_h + 6 * n, *rates = sv + k + 1;
-    for (ptrdiff_t i = 0; i < 6 * n; i++) jac[i] = 0.0;
+    if (n_loop + n_twist < n) /* an actuator without a column below (none on these machines) */
+        for (ptrdiff_t i = 0; i < 6 * n; i++) jac[i] = 0.0;
     for (ptrdiff_t i = 0; i < (n_u - 6) * n; i++) rates[i] = 0.0;
     const double *du = v->du;
     for (ptrdiff_t j = 0; j < n_loop; j++) { /* a leg actuator: the platform's twist */
@@ -351,10 +393,12 @@ static int check_pack(const chain_velocity *v, Py_ssize_t n_head, Py_ssize_t n_h
 static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twists) {
     const pk_chain *c = &v->c;
     ptrdiff_t m = 6 * c->n_legs, ld = v->n_u + v->n_loop, L = c->n_legs;
+    v->size = 12 * v->n_act + (v->n_act < 6 ? v->n_act : 6) + 1 + (v->n_u - 6) * v->n_act;
     size_t doubles = (size_t)(c->n_var + ld + m + m * ld + v->n_u * v->n_loop
                               + v->n_u * v->n_u + 6 * twists + 6 * v->n_head
-                              + 6 * (v->n_act + 6) + v->n_act + 6);
-    size_t ints = (size_t)(twists + v->n_head + 6 * L + L + v->n_u + m);
+                              + 6 * (v->n_act + 6) + v->n_act + 6 + L * 6 * (6 + ld)
+                              + m * ld + m + v->n_u + v->size);
+    size_t ints = (size_t)(twists + v->n_head + 6 * L + L + v->n_u);
     char *memory = malloc(doubles * sizeof(double) + ints * sizeof(int64_t));
     if (!memory) {
         PyErr_NoMemory();
@@ -372,13 +416,16 @@ static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twist
     v->head_tw = d; d += 6 * v->n_head;
     v->work = d; d += 6 * (v->n_act + 6);
     v->norms = d; d += v->n_act + 6;
+    v->panels = d; d += L * 6 * (6 + ld);
+    v->rest = d; d += m * ld;
+    v->diag = d; d += m + v->n_u;
+    v->out = d; d += v->size;
     int64_t *k = (int64_t *)d;
     v->w.tw_col = k; k += twists;
     v->head_col = k; k += v->n_head;
     v->leg_cols = k; k += 6 * L;
     v->leg_count = k; k += L;
-    v->global_cols = k; k += v->n_u;
-    v->reduced = k;
+    v->global_cols = k;
     v->w.m = m;
     v->n_global = 0;
     for (ptrdiff_t leg = 0; leg < L; leg++) v->leg_count[leg] = 0;
@@ -555,4 +602,70 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
     double bound = velocity(v, u, out, singular);
     let_go(&held);
     return PyFloat_FromDouble(bound);
+}
+
+const char pk_chain_one_jacobian_doc[] =
+    "chain_one_jacobian(pack, u, threshold) -> out, None or False\n\n"
+    "chain_one_velocity's model of one configuration u (6 + n_var floats: a list, or a float64\n"
+    "1-D array such as chain_one_ik's solution) in a new float64 array out (its layout, the\n"
+    "singular values and the condition NaN: chain_one_velocity(pack, None, out) computes them)\n"
+    "where the bound clears threshold; None where it does not (or a pivot vanished), False\n"
+    "where u is not in the legs' home modes.";
+
+/* u (width) from a list of floats or a C-contiguous float64 1-D buffer; -1 with an error. */
+static int take_u(PyObject *obj, Py_ssize_t width, double *u) {
+    if (PyList_CheckExact(obj)) {
+        if (PyList_GET_SIZE(obj) != width) {
+            PyErr_Format(PyExc_TypeError, "u: %zd floats expected", width);
+            return -1;
+        }
+        for (Py_ssize_t i = 0; i < width; i++) {
+            PyObject *item = PyList_GET_ITEM(obj, i);
+            u[i] = PyFloat_CheckExact(item) ? PyFloat_AS_DOUBLE(item) : PyFloat_AsDouble(item);
+            if (u[i] == -1.0 && PyErr_Occurred()) return -1;
+        }
+        return 0;
+    }
+    held_buffers held = {.count = 0};
+    const double *src = grab(&held, obj, "u", 'd', 0, 1);
+    if (!src) {
+        let_go(&held);
+        return -1;
+    }
+    if (extent(&held, 0, 0) != width) {
+        let_go(&held);
+        PyErr_Format(PyExc_TypeError, "u: %zd floats expected", width);
+        return -1;
+    }
+    memcpy(u, src, (size_t)width * sizeof(double));
+    let_go(&held);
+    return 0;
+}
+
+PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 3) {
+        PyErr_Format(PyExc_TypeError, "chain_one_jacobian() takes 3 positional arguments "
+                     "(%zd given)", nargs);
+        return NULL;
+    }
+    chain_velocity *v = PyCapsule_IsValid(args[0], CAPSULE)
+                        ? PyCapsule_GetPointer(args[0], CAPSULE) : NULL;
+    if (!v) {
+        PyErr_SetString(PyExc_TypeError, "pack: a chain_velocity_pack() result expected");
+        return NULL;
+    }
+    double threshold = PyFloat_AsDouble(args[2]);
+    if (threshold == -1.0 && PyErr_Occurred()) return NULL;
+    Py_ssize_t width = 6 + v->c.n_var;
+    double u[256];
+    if (width > 256) {
+        PyErr_SetString(PyExc_ValueError, "u: at most 250 variables");
+        return NULL;
+    }
+    if (take_u(args[1], width, u) < 0) return NULL;
+    double bound = velocity(v, u, v->out, 0);
+    if (bound < 0.0) Py_RETURN_FALSE;
+    if (!(bound >= threshold) || !(bound > 0.0)) Py_RETURN_NONE;
+    return pk_new_array(v->out, v->size, 0);
 }
