@@ -344,7 +344,7 @@ def inverse_record(m: Any, x: Any, strokes: str, start: Any = None) -> Any:
                                             if strokes == "ignore" else np.zeros(c.n)),
                              solution=solution, closure=closure)
     object.__setattr__(record, "_evaluation", _InverseFields(m, q, closure, strokes,
-                                                             record._cache))
+                                                             record.known_fields()))
     return record
 
 
