@@ -285,3 +285,27 @@ def test_the_singular_values_are_computed_when_read(machine):
         np.testing.assert_allclose(other.singular_values, ref.singular_values[0], rtol=1e-12)
         assert other.condition == one.condition
         np.testing.assert_array_equal(one.singular_values, other.singular_values)
+
+
+def test_each_field_read_first_is_the_same(machine):
+    """Each field read first on a fresh record (its own view or singular stage) equals it read
+    after every other, bit for bit; a field read twice is the same object; equality is
+    identity; ``dataclasses.replace`` gives a record with every field given."""
+    import dataclasses
+
+    names = (*FIELDS, "condition", "q", "status", "closure_rank", "expected_rank")
+    for x in poses(machine, 3, seed=17):
+        full = machine.jacobian(x)
+        assert through_c(full)
+        for name in reversed(names):
+            getattr(full, name)
+        for name in names:
+            one = machine.jacobian(x)
+            value = getattr(one, name)
+            np.testing.assert_array_equal(value, getattr(full, name))
+            assert getattr(one, name) is value
+            assert one != full and one == one and hash(one) == object.__hash__(one)
+        assert "1 pose" in repr(full)
+        copy = dataclasses.replace(full, status=full.status)
+        for name in names:
+            np.testing.assert_array_equal(getattr(copy, name), getattr(full, name))
