@@ -309,3 +309,32 @@ def test_each_field_read_first_is_the_same(machine):
         copy = dataclasses.replace(full, status=full.status)
         for name in names:
             np.testing.assert_array_equal(getattr(copy, name), getattr(full, name))
+
+
+def test_at_solution_is_the_record_with_the_margin(machine):
+    """``at_solution`` (the per-call path of ``m.jacobian(x)``) on the C inverse's answer: the
+    record of :func:`~pkmkit.machines.chain_one_velocity.record` at the same solution bit for
+    bit; the threshold BOUND_MARGIN × max(tol, RANK_RCOND) on either side of a pose's bound;
+    a residual beyond the guard declines."""
+    from pkmkit.machines.chain_one_native import packed
+    from pkmkit.machines.chain_velocity_record import RANK_RCOND
+
+    c = packed(machine)
+    p = cov.pack(machine)
+    out = np.empty(p.size)
+    for x in poses(machine, 4, seed=18):
+        solved = c.ik(c.capsule, x, True, True)
+        one = cov.at_solution(machine, solved, 1e-6)
+        ref = cov.record(machine, solved[0], solved[1].tolist(), solved[3], 1e-6,
+                         cov.BOUND_MARGIN, 6 + len(machine.passive_variables))
+        for name in (*FIELDS, "condition", "q", "status", "closure_rank", "expected_rank"):
+            a, b = getattr(one, name), getattr(ref, name)
+            np.testing.assert_array_equal(a, b)
+            assert type(a) is type(b), name
+        bound = p.call(p.pack, solved[1].tolist(), out, False)
+        above, below = bound / cov.BOUND_MARGIN * 1.001, bound / cov.BOUND_MARGIN * 0.999
+        assert cov.at_solution(machine, solved, above) is None
+        assert through_c(cov.at_solution(machine, solved, below))
+        assert through_c(cov.at_solution(machine, solved, RANK_RCOND / 10))
+        far = (*solved[:3], 2 * cov.RESIDUAL_GUARD)
+        assert cov.at_solution(machine, far, 1e-6) is False

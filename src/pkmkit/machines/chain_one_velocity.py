@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.chain_velocity_record import ChainJacobians
+from pkmkit.machines.chain_velocity_record import RANK_RCOND, ChainJacobians
 from pkmkit.numerics import jit
 
 #: Largest residual of the inverse solution (its closure and tool rows: m, and rad × the
@@ -54,6 +54,8 @@ from pkmkit.numerics import jit
 #: docstring). A nominal machine's inverse converges to ~1e-16.
 RESIDUAL_GUARD = 1e-12
 _OK = np.int64(0)  # Status.OK, as the batch row's
+#: Margin of the bound over the thresholds (:data:`pkmkit.machines.chain_one.BOUND_MARGIN`).
+BOUND_MARGIN = 2.0
 
 
 class VelocityPack:
@@ -63,16 +65,18 @@ class VelocityPack:
     leg actuators' places in J, the leg owning each column alone (−1: the platform's and the
     joints shared by legs), and the output buffer's layout."""
 
-    __slots__ = ("call", "jacobian", "layout", "n", "n_p", "pack", "rank", "size")
+    __slots__ = ("call", "expected", "jacobian", "layout", "n", "n_p", "pack", "rank", "size")
 
     def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
         arguments = pack_arguments(m) if arguments is None else arguments
         self.pack = native.chain_velocity_pack(*arguments.values())
-        self.call, self.jacobian = native.chain_one_velocity, native.chain_one_jacobian
+        self.call = native.chain_one_velocity
+        self.jacobian = getattr(native, "chain_one_jacobian", None)  # None: an older build
         n = int(np.count_nonzero(m.model.actuated))
         k = min(6, n)
         self.n, self.n_p = n, len(m.passive_variables)
         self.rank = np.int64(6 + self.n_p)  # the closure's, where the bound certifies it
+        self.expected = 6 + self.n_p  # at home, where the one-pose path applies (an int)
         self.size = 12 * n + k + 1 + self.n_p * n
         self.layout = {"J": (0, 6 * n, (6, n)), "J_homogeneous": (6 * n, 12 * n, (6, n)),
                        "singular_values": (12 * n, 12 * n + k, None),
@@ -240,3 +244,29 @@ def record(m: Any, q: Any, u: Any, residual: float, tol: float, margin: float,
     fields["q"] = q if type(q) is np.ndarray else np.array(q)
     fields["closure_rank"], fields["expected_rank"] = p.rank, expected_rank
     return one
+
+
+def at_solution(m: Any, solved: tuple, tol: float) -> Any:
+    """:func:`record` of the C inverse's full answer ``solved`` = ``(q, u, iterations,
+    residual)`` (``chain_one_ik(..., full=True)``) with the one-pose path's threshold
+    :data:`BOUND_MARGIN` × max(``tol``, ``RANK_RCOND``) and the closure's rank at home: the
+    record, None or False as :func:`record` answers, in fewer Python steps (the per-call path
+    of ``m.jacobian(x)``)."""
+    p = m.__dict__.get("_chain_one_velocity")
+    if p is None or _native_now() is None:  # not packed yet, or PKMKIT_NATIVE=0 set since
+        p = pack(m)
+        if p is None:
+            return False
+    if solved[3] > RESIDUAL_GUARD:
+        return False
+    out = p.jacobian(p.pack, solved[1], BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND))
+    if out is None or out is False:
+        return out
+    one = _NEW(OnePoseChainJacobians)
+    fields = one.__dict__
+    fields["_out"], fields["_pack"], fields["status"], fields["q"] = out, p, _OK, solved[0]
+    fields["closure_rank"], fields["expected_rank"] = p.rank, p.expected
+    return one
+
+
+_native_now = jit.native_kernels_now

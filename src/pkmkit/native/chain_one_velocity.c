@@ -43,6 +43,7 @@ typedef struct {
     double *panels;           /* (L, 6 + n_u + n_loop, 6) each leg's columns (closure_rates) */
     double *rest;             /* (n_u + n_loop, 6L) the rows left by the legs' reflections */
     double *diag;             /* (6L + n_u,) the reciprocals of R_l's, then R_g's diagonal */
+    double *solve;            /* right-hand sides: (n_u, n_u + n_loop), (6, 6 + n_u + 32) */
     double *out;              /* (size,) chain_one_jacobian's answer before its array */
     ptrdiff_t size;           /* 12 n + min(6, n) + 1 + (n_u - 6) n */
     int64_t *head_col;
@@ -88,14 +89,48 @@ static int reflect(double *a, ptrdiff_t ld, ptrdiff_t nr, ptrdiff_t np, const in
     return 1;
 }
 
-/* x (np,) = R^-1 x in place for the upper-triangular R (np, np) of a column-major panel,
- * with inv (np,) the reciprocals of its diagonal (a product where a division would wait). */
-static void back_substitute(const double *a, ptrdiff_t ld, const double *inv, ptrdiff_t np,
-                            double *x) {
+/* reflect on a leg's panel (6 rows, leading dimension 6) with the Householder vector held
+ * on all 6 rows (zeros above the pivot): fixed-length loops the compiler unrolls, the same
+ * sums and updates as reflect's (a zero term adds +-0.0, a zero update subtracts it). */
+static int reflect_leg(double *a, ptrdiff_t np, const int64_t *rest, ptrdiff_t nrest) {
+    for (ptrdiff_t j = 0; j < np; j++) {
+        double *col = a + 6 * j, h[6];
+        double norm = 0.0;
+        for (ptrdiff_t i = j; i < 6; i++) norm += col[i] * col[i];
+        norm = sqrt(norm);
+        if (!(norm > 0.0)) return 0;
+        double alpha = col[j] >= 0 ? -norm : norm;
+        double v0 = col[j] - alpha;
+        double vtv = v0 * v0;
+        for (ptrdiff_t i = j + 1; i < 6; i++) vtv += col[i] * col[i];
+        for (int i = 0; i < 6; i++) h[i] = i < j ? 0.0 : col[i];
+        h[j] = v0;
+        double scale = 2.0 / vtv;
+        for (ptrdiff_t k = j + 1; k < np + nrest; k++) {
+            double *other = a + 6 * (k < np ? k : rest[k - np]);
+            double s = 0.0;
+            for (int i = 0; i < 6; i++) s += h[i] * other[i];
+            s *= scale;
+            for (int i = 0; i < 6; i++) other[i] -= s * h[i];
+        }
+        col[j] = alpha;
+    }
+    return 1;
+}
+
+/* x (np, w) row-major = R^-1 x in place for the upper-triangular R (np, np) of a
+ * column-major panel, with inv (np,) the reciprocals of its diagonal (a product where a
+ * division would wait): row by row from the last, each row's w columns at once (independent
+ * sums, in the order of one column's back substitution). */
+static void solve_rows(const double *a, ptrdiff_t ld, const double *inv, ptrdiff_t np,
+                       double *x, ptrdiff_t w) {
     for (ptrdiff_t i = np - 1; i >= 0; i--) {
-        double s = x[i];
-        for (ptrdiff_t p = i + 1; p < np; p++) s -= a[i + p * ld] * x[p];
-        x[i] = s * inv[i];
+        double *xi = x + i * w;
+        for (ptrdiff_t k = i + 1; k < np; k++) {
+            const double r = a[i + k * ld], *xk = x + k * w;
+            for (ptrdiff_t c = 0; c < w; c++) xi[c] -= r * xk[c];
+        }
+        for (ptrdiff_t c = 0; c < w; c++) xi[c] *= inv[i];
     }
 }
 
@@ -204,7 +239,7 @@ static double closure_rates(chain_velocity *v) {
         double *panel = v->panels + leg * width;
         ptrdiff_t p = v->leg_count[leg];
         ptrdiff_t nrest = gather(v, leg, panel, rest, &fro);
-        if (!reflect(panel, 6, 6, p, rest, nrest)) return 0.0;
+        if (!reflect_leg(panel, p, rest, nrest)) return 0.0;
         reciprocals(panel, 6, p, v->diag + 6 * leg);
         for (ptrdiff_t i = p; i < 6; i++, n_reduced++) /* the rows left */
             for (ptrdiff_t g = 0; g < n_g + n_loop; g++)
@@ -216,53 +251,50 @@ static double closure_rates(chain_velocity *v) {
     const double *inv_g = v->diag + 6 * c->n_legs;
     reciprocals(rg, ld_g, n_g, v->diag + 6 * c->n_legs);
     /* global unknowns: R_g du_g = -b_g; then each leg's: R_l du_l = -b_l - S_l du_g */
-    double x[64], y[8];
-    for (ptrdiff_t k = 0; k < n_loop; k++) {
-        for (ptrdiff_t i = 0; i < n_g; i++) x[i] = -rg[(n_g + k) * ld_g + i];
-        back_substitute(rg, ld_g, inv_g, n_g, x);
-        for (ptrdiff_t i = 0; i < n_g; i++) v->du[v->global_cols[i] * n_loop + k] = x[i];
-        for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
-            const double *panel = v->panels + leg * width;
-            const int64_t *piv = v->leg_cols + 6 * leg;
-            ptrdiff_t p = v->leg_count[leg];
-            for (ptrdiff_t i = 0; i < p; i++) {
-                double s = -panel[6 * (p + n_g + k) + i];
-                for (ptrdiff_t g = 0; g < n_g; g++) s -= panel[6 * (p + g) + i] * x[g];
-                y[i] = s;
-            }
-            back_substitute(panel, 6, v->diag + 6 * leg, p, y);
-            for (ptrdiff_t i = 0; i < p; i++) v->du[piv[i] * n_loop + k] = y[i];
-        }
-    }
-    /* |R^-1|_F^2: R_g^-1 (columns by back substitution), each leg's R_l^-1 and
-     * R_l^-1 S_l R_g^-1 */
-    double total = 0.0;
-    double *inv = v->rg_inv; /* R_g^-1 (n_g, n_g) */
-    for (ptrdiff_t j = 0; j < n_g; j++) {
-        for (ptrdiff_t i = 0; i < n_g; i++) x[i] = i == j ? 1.0 : 0.0;
-        back_substitute(rg, ld_g, inv_g, j + 1, x); /* R_g^-1 is upper triangular */
-        for (ptrdiff_t i = 0; i < n_g; i++) {
-            inv[i * n_g + j] = x[i];
-            total += x[i] * x[i];
-        }
-    }
+    double *x = v->solve, *y = v->solve + n_g * (n_g > n_loop ? n_g : n_loop);
+    for (ptrdiff_t i = 0; i < n_g; i++)
+        for (ptrdiff_t k = 0; k < n_loop; k++) x[i * n_loop + k] = -rg[(n_g + k) * ld_g + i];
+    solve_rows(rg, ld_g, inv_g, n_g, x, n_loop);
+    for (ptrdiff_t i = 0; i < n_g; i++)
+        for (ptrdiff_t k = 0; k < n_loop; k++)
+            v->du[v->global_cols[i] * n_loop + k] = x[i * n_loop + k];
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
         const double *panel = v->panels + leg * width;
+        const int64_t *piv = v->leg_cols + 6 * leg;
         ptrdiff_t p = v->leg_count[leg];
-        for (ptrdiff_t j = 0; j < p; j++) { /* columns of R_l^-1 */
-            for (ptrdiff_t i = 0; i < p; i++) y[i] = i == j ? 1.0 : 0.0;
-            back_substitute(panel, 6, v->diag + 6 * leg, j + 1, y);
-            for (ptrdiff_t i = 0; i <= j; i++) total += y[i] * y[i];
-        }
-        for (ptrdiff_t j = 0; j < n_g; j++) { /* columns of R_l^-1 S_l R_g^-1 */
-            for (ptrdiff_t i = 0; i < p; i++) {
-                double s = 0.0;
-                for (ptrdiff_t g = 0; g <= j; g++) s += panel[6 * (p + g) + i] * inv[g * n_g + j];
-                y[i] = s;
+        for (ptrdiff_t i = 0; i < p; i++) {
+            double *yi = y + i * n_loop;
+            for (ptrdiff_t k = 0; k < n_loop; k++) yi[k] = -panel[6 * (p + n_g + k) + i];
+            for (ptrdiff_t g = 0; g < n_g; g++) {
+                const double sg = panel[6 * (p + g) + i], *xg = x + g * n_loop;
+                for (ptrdiff_t k = 0; k < n_loop; k++) yi[k] -= sg * xg[k];
             }
-            back_substitute(panel, 6, v->diag + 6 * leg, p, y);
-            for (ptrdiff_t i = 0; i < p; i++) total += y[i] * y[i];
         }
+        solve_rows(panel, 6, v->diag + 6 * leg, p, y, n_loop);
+        for (ptrdiff_t i = 0; i < p; i++)
+            for (ptrdiff_t k = 0; k < n_loop; k++) v->du[piv[i] * n_loop + k] = y[i * n_loop + k];
+    }
+    /* |R^-1|_F^2: R_g^-1, then each leg's rows of R^-1, R_l^-1 [I, -S_l R_g^-1] */
+    double total = 0.0;
+    double *inv = v->rg_inv; /* R_g^-1 (n_g, n_g) */
+    for (ptrdiff_t i = 0; i < n_g * n_g; i++) inv[i] = 0.0;
+    for (ptrdiff_t i = 0; i < n_g; i++) inv[i * n_g + i] = 1.0;
+    solve_rows(rg, ld_g, inv_g, n_g, inv, n_g);
+    for (ptrdiff_t i = 0; i < n_g * n_g; i++) total += inv[i] * inv[i];
+    for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
+        const double *panel = v->panels + leg * width;
+        ptrdiff_t p = v->leg_count[leg], w = p + n_g;
+        for (ptrdiff_t i = 0; i < p; i++) {
+            double *yi = y + i * w;
+            for (ptrdiff_t j = 0; j < w; j++) yi[j] = j == i ? 1.0 : 0.0;
+            for (ptrdiff_t g = 0; g < n_g; g++) { /* S_l R_g^-1, R_g^-1 upper triangular */
+                const double sg = panel[6 * (p + g) + i], *row = inv + g * n_g;
+                if (sg != 0.0)
+                    for (ptrdiff_t j = g; j < n_g; j++) yi[p + j] += sg * row[j];
+            }
+        }
+        solve_rows(panel, 6, v->diag + 6 * leg, p, y, w);
+        for (ptrdiff_t i = 0; i < p * w; i++) total += y[i] * y[i];
     }
     double bound = 1.0 / sqrt(fro * total);
     return bound > 0.0 ? bound : 0.0; /* NaN (a non-finite entry) refused too */
@@ -397,7 +429,8 @@ static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twist
     size_t doubles = (size_t)(c->n_var + ld + m + m * ld + v->n_u * v->n_loop
                               + v->n_u * v->n_u + 6 * twists + 6 * v->n_head
                               + 6 * (v->n_act + 6) + v->n_act + 6 + L * 6 * (6 + ld)
-                              + m * ld + m + v->n_u + v->size);
+                              + m * ld + m + v->n_u + v->size + v->n_u * ld
+                              + 6 * (6 + v->n_u + 32));
     size_t ints = (size_t)(twists + v->n_head + 6 * L + L + v->n_u);
     char *memory = malloc(doubles * sizeof(double) + ints * sizeof(int64_t));
     if (!memory) {
@@ -420,6 +453,7 @@ static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twist
     v->rest = d; d += m * ld;
     v->diag = d; d += m + v->n_u;
     v->out = d; d += v->size;
+    v->solve = d; d += v->n_u * ld + 6 * (6 + v->n_u + 32);
     int64_t *k = (int64_t *)d;
     v->w.tw_col = k; k += twists;
     v->head_col = k; k += v->n_head;
