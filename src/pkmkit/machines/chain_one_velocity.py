@@ -7,20 +7,24 @@ batch path reaches again by the direct model at its actuators (``m.jacobian(X)``
 ``ik``, then ``fk(q)`` from the direct model's first-order start, then the velocity model
 there: :meth:`~pkmkit.machines.chain_jacobians.ChainVelocity._velocity`), so the velocity
 model is evaluated at ``u`` directly — one call of the C kernel
-``pkmkit.native.kernels.chain_one_velocity`` (``native/chain_one_velocity.c``) on constants
-packed once per machine (:class:`VelocityPack`, cached on the machine): the closure's Jacobian
+``pkmkit.native.kernels.chain_one_jacobian`` (``native/chain_one_velocity.c``; its buffer form
+``chain_one_velocity``) on constants packed once per machine (:class:`VelocityPack`, cached on
+the machine), given the C inverse's solution array as it comes: the closure's Jacobian
 ``[C_U | C_q]`` (platform and passive joints; legs' actuators), the closure rates
 ``dU = −C_U⁺ C_q`` by a QR of ``C_U`` that takes each leg's own joints first (each leg's block
 involves only the platform, its joints and the joints it shares), the tool twist per actuator
 ``J (6, n)``, ``J_homogeneous`` (the batch path's scale: angular rows × the characteristic
-length), its singular values (one-sided Jacobi, ``native/svd.c``), the condition number and a
+length), its singular values (round-robin one-sided Jacobi, ``native/svd.c``), the condition
+number and a
 lower bound of σ_min/σ_max of ``C_U`` (``1 / (‖C_U‖_F ‖C_U⁺‖_F)``).
 
-The record (:func:`record`) has the batch row's fields and meanings; ``J``,
-``J_homogeneous``, ``singular_values``, ``condition`` and ``passive_rates`` are views of the
-kernel's one output buffer, made when first read; the singular values and the condition number
-are computed only then (one more C call on the buffer's ``J_homogeneous``: ``J`` alone does
-not pay the SVD). ``closure_rank`` is ``n_u`` and ``status``
+The record (:class:`OnePoseChainJacobians`, made by :func:`at_solution` on the C inverse's
+answer or by :func:`record`) has the batch row's fields and meanings: ``q``, ``status`` and the
+ranks given; ``J``, ``J_homogeneous`` and ``passive_rates`` views of the kernel's new output
+array, made at their first read and kept in the record's ``__dict__`` (later reads are plain
+attribute reads); the singular values and the condition number computed at the first read of
+either (the kernel's singular stage, one more C call on the array's ``J_homogeneous``: ``J``
+alone does not pay the SVD). ``closure_rank`` is ``n_u`` and ``status``
 OK only where the bound clears :data:`~pkmkit.machines.chain_one.BOUND_MARGIN` × max(``tol``,
 :data:`~pkmkit.machines.chain_velocity_record.RANK_RCOND`): the closure is then certainly
 regular, of full rank, and not singular by the batch path's SVD; elsewhere (near a singular

@@ -17,9 +17,17 @@
  * stable, as the batch path's pseudo-inverse: equal to it to rounding x the closure's
  * condition number). |C_U^+|_F = |R^-1|_F with R^-1 = [[D^-1, -D^-1 S R_g^-1], [0, R_g^-1]].
  *
+ * Layout: each leg's 6 rows are gathered into a compact column-major panel (its local
+ * columns, the global ones, the legs' actuators') whose reflections run on fixed 6-row loops
+ * and skip the columns zero on the leg's rows; the rows left go to one panel for R_g; every
+ * triangular solve (the rates, R_g^-1, each leg's rows of R^-1) runs row by row over all its
+ * right-hand sides at once, with the diagonal's reciprocals (no division in the chains).
+ *
  * Python face: chain_velocity_pack(...) -> a capsule of the machine's constants (copied) and
  * scratch, built once per machine; chain_one_velocity(pack, u, out) -> the bound (a float),
- * out filled. Holds the GIL (the scratch is the capsule's: a few microseconds of work). */
+ * out filled; chain_one_jacobian(pack, u, threshold) -> a new array (None, False), the form
+ * m.jacobian(x) calls on the C inverse's solution array. Holds the GIL (the scratch is the
+ * capsule's: a few microseconds of work). */
 #include "chain_face.h"
 
 #define CAPSULE "pkmkit.native.chain_one_velocity"
@@ -555,7 +563,7 @@ fail:
 
 const char pk_chain_one_velocity_doc[] =
     "chain_one_velocity(pack, u, out[, singular]) -> bound\n\n"
-    "The velocity model of one joint-chain configuration u (a list of 6 + n_var floats: the\n"
+    "The velocity model of one joint-chain configuration u (6 + n_var floats, a list or a float64 array: the\n"
     "platform's position and rotation vector, every joint variable) with the constants of\n"
     "chain_velocity_pack: out (a float64 array of 12 n + min(6, n) + 1 + (n_u - 6) n) filled\n"
     "with J (6, n), J_homogeneous (6, n), J_homogeneous's singular values, its condition\n"
@@ -594,60 +602,13 @@ static PyObject *singular_only(chain_velocity *v, PyObject *obj) {
     return PyFloat_FromDouble(condition);
 }
 
-PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
-    (void)self;
-    if (nargs != 3 && nargs != 4) {
-        PyErr_Format(PyExc_TypeError, "chain_one_velocity() takes 3 or 4 positional arguments "
-                     "(%zd given)", nargs);
-        return NULL;
-    }
-    int singular = nargs == 3 ? 1 : PyObject_IsTrue(args[3]);
-    if (singular < 0) return NULL;
-    chain_velocity *v = PyCapsule_IsValid(args[0], CAPSULE)
-                        ? PyCapsule_GetPointer(args[0], CAPSULE) : NULL;
-    if (!v) {
-        PyErr_SetString(PyExc_TypeError, "pack: a chain_velocity_pack() result expected");
-        return NULL;
-    }
-    PyObject *list = args[1];
-    Py_ssize_t width = 6 + v->c.n_var;
-    if (list == Py_None) /* the singular stage alone, on out's J_homogeneous */
-        return singular_only(v, args[2]);
-    if (!PyList_CheckExact(list) || PyList_GET_SIZE(list) != width) {
-        PyErr_Format(PyExc_TypeError, "u: a list of %zd floats expected", width);
-        return NULL;
-    }
-    double u[256];
+/* u (width <= 256) from a list of floats or a C-contiguous float64 1-D buffer; -1 with an
+ * error. */
+static int take_u(PyObject *obj, Py_ssize_t width, double *u) {
     if (width > 256) {
         PyErr_SetString(PyExc_ValueError, "u: at most 250 variables");
-        return NULL;
+        return -1;
     }
-    for (Py_ssize_t i = 0; i < width; i++) {
-        PyObject *item = PyList_GET_ITEM(list, i);
-        u[i] = PyFloat_CheckExact(item) ? PyFloat_AS_DOUBLE(item) : PyFloat_AsDouble(item);
-        if (u[i] == -1.0 && PyErr_Occurred()) return NULL;
-    }
-    held_buffers held = {.count = 0};
-    double *out = take_out(v, &held, args[2]);
-    if (!out) {
-        let_go(&held);
-        return NULL;
-    }
-    double bound = velocity(v, u, out, singular);
-    let_go(&held);
-    return PyFloat_FromDouble(bound);
-}
-
-const char pk_chain_one_jacobian_doc[] =
-    "chain_one_jacobian(pack, u, threshold) -> out, None or False\n\n"
-    "chain_one_velocity's model of one configuration u (6 + n_var floats: a list, or a float64\n"
-    "1-D array such as chain_one_ik's solution) in a new float64 array out (its layout, the\n"
-    "singular values and the condition NaN: chain_one_velocity(pack, None, out) computes them)\n"
-    "where the bound clears threshold; None where it does not (or a pivot vanished), False\n"
-    "where u is not in the legs' home modes.";
-
-/* u (width) from a list of floats or a C-contiguous float64 1-D buffer; -1 with an error. */
-static int take_u(PyObject *obj, Py_ssize_t width, double *u) {
     if (PyList_CheckExact(obj)) {
         if (PyList_GET_SIZE(obj) != width) {
             PyErr_Format(PyExc_TypeError, "u: %zd floats expected", width);
@@ -676,6 +637,47 @@ static int take_u(PyObject *obj, Py_ssize_t width, double *u) {
     return 0;
 }
 
+/* The pack argument's state, NULL with a TypeError. */
+static chain_velocity *pack_state(PyObject *obj) {
+    chain_velocity *v = PyCapsule_IsValid(obj, CAPSULE) ? PyCapsule_GetPointer(obj, CAPSULE) : NULL;
+    if (!v) PyErr_SetString(PyExc_TypeError, "pack: a chain_velocity_pack() result expected");
+    return v;
+}
+
+PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 3 && nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "chain_one_velocity() takes 3 or 4 positional arguments "
+                     "(%zd given)", nargs);
+        return NULL;
+    }
+    int singular = nargs == 3 ? 1 : PyObject_IsTrue(args[3]);
+    if (singular < 0) return NULL;
+    chain_velocity *v = pack_state(args[0]);
+    if (!v) return NULL;
+    if (args[1] == Py_None) /* the singular stage alone, on out's J_homogeneous */
+        return singular_only(v, args[2]);
+    double u[256];
+    if (take_u(args[1], 6 + v->c.n_var, u) < 0) return NULL;
+    held_buffers held = {.count = 0};
+    double *out = take_out(v, &held, args[2]);
+    if (!out) {
+        let_go(&held);
+        return NULL;
+    }
+    double bound = velocity(v, u, out, singular);
+    let_go(&held);
+    return PyFloat_FromDouble(bound);
+}
+
+const char pk_chain_one_jacobian_doc[] =
+    "chain_one_jacobian(pack, u, threshold) -> out, None or False\n\n"
+    "chain_one_velocity's model of one configuration u (6 + n_var floats: a list, or a float64\n"
+    "1-D array such as chain_one_ik's solution) in a new float64 array out (its layout, the\n"
+    "singular values and the condition NaN: chain_one_velocity(pack, None, out) computes them)\n"
+    "where the bound clears threshold; None where it does not (or a pivot vanished), False\n"
+    "where u is not in the legs' home modes.";
+
 PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
     if (nargs != 3) {
@@ -683,21 +685,12 @@ PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssi
                      "(%zd given)", nargs);
         return NULL;
     }
-    chain_velocity *v = PyCapsule_IsValid(args[0], CAPSULE)
-                        ? PyCapsule_GetPointer(args[0], CAPSULE) : NULL;
-    if (!v) {
-        PyErr_SetString(PyExc_TypeError, "pack: a chain_velocity_pack() result expected");
-        return NULL;
-    }
+    chain_velocity *v = pack_state(args[0]);
+    if (!v) return NULL;
     double threshold = PyFloat_AsDouble(args[2]);
     if (threshold == -1.0 && PyErr_Occurred()) return NULL;
-    Py_ssize_t width = 6 + v->c.n_var;
     double u[256];
-    if (width > 256) {
-        PyErr_SetString(PyExc_ValueError, "u: at most 250 variables");
-        return NULL;
-    }
-    if (take_u(args[1], width, u) < 0) return NULL;
+    if (take_u(args[1], 6 + v->c.n_var, u) < 0) return NULL;
     double bound = velocity(v, u, v->out, 0);
     if (bound < 0.0) Py_RETURN_FALSE;
     if (!(bound >= threshold) || !(bound > 0.0)) Py_RETURN_NONE;
