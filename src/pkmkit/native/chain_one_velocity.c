@@ -563,9 +563,9 @@ fail:
 
 const char pk_chain_one_velocity_doc[] =
     "chain_one_velocity(pack, u, out[, singular]) -> bound\n\n"
-    "The velocity model of one joint-chain configuration u (6 + n_var floats, a list or a float64 array: the\n"
-    "platform's position and rotation vector, every joint variable) with the constants of\n"
-    "chain_velocity_pack: out (a float64 array of 12 n + min(6, n) + 1 + (n_u - 6) n) filled\n"
+    "The velocity model of one joint-chain configuration u (6 + n_var floats, a list or a\n"
+    "float64 array: the platform's position and rotation vector, every joint variable) with\n"
+    "the constants of chain_velocity_pack: out (12 n + min(6, n) + 1 + (n_u - 6) n floats) filled\n"
     "with J (6, n), J_homogeneous (6, n), J_homogeneous's singular values, its condition\n"
     "number and the passive joints' rates (n_u - 6, n); returns the lower bound of\n"
     "sigma_min / sigma_max of the closure's Jacobian C_U (0.0 where a pivot vanished, -1.0\n"
