@@ -14,11 +14,14 @@
 CPU µs per call (the process's CPU time: the 2 cores are shared), the minimum and the median
 of the rounds; ratios against the C inverse and against the peer from the same rounds.
 ``--profile`` adds cProfile's internal times of the whole call (the Python functions' shares).
+``--loop N`` only calls the velocity C call N times over the solutions, for a profiler of the
+C share (``perf record -o perf.data python bench/chain_jacobian_split.py --machines
+tripteor-x7 --loop 3000``, then ``perf report --sort symbol``).
 
 Usage::
 
     python bench/chain_jacobian_split.py [--poses 300] [--rounds 5] [--profile]
-        [--machines tripteor-x7,trimule-600]
+        [--machines tripteor-x7,trimule-600] [--loop N]
 """
 
 from __future__ import annotations
@@ -64,7 +67,7 @@ def rows_of(m, count: int) -> list[np.ndarray]:
     return list(poses[inside])
 
 
-def split(name: str, count: int, rounds: int, profile: bool) -> None:
+def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0) -> None:
     m = pkmkit.machine(name)
     rows = rows_of(m, count)
     for tag in ("chain_ik", "chain_fk", "chain_jacobian"):  # past the first (batch) call
@@ -79,6 +82,11 @@ def split(name: str, count: int, rounds: int, profile: bool) -> None:
     through = sum(isinstance(m.jacobian(x), cov.OnePoseChainJacobians) for x in rows)
     outs = [p.jacobian(p.pack, s[1], 2e-6) for s in solved]
     outs = [o for o in outs if isinstance(o, np.ndarray)]
+    if loop:  # the velocity C call alone, for a profiler
+        for _ in range(loop):
+            for s in solved:
+                p.jacobian(p.pack, s[1], 2e-6)
+        return
     from single_call import pinocchio_jacobian_peer
 
     peer = pinocchio_jacobian_peer(m, len(rows))
@@ -137,10 +145,11 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--profile", action="store_true")
     parser.add_argument("--machines", default="tripteor-x7,trimule-600")
+    parser.add_argument("--loop", type=int, default=0)
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     for name in args.machines.split(","):
-        split(name, args.poses, args.rounds, args.profile)
+        split(name, args.poses, args.rounds, args.profile, args.loop)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@
  * columns, the global ones, the legs' actuators') whose reflections run on fixed 6-row loops
  * and skip the columns zero on the leg's rows; the rows left go to one panel for R_g; every
  * triangular solve (the rates, R_g^-1, each leg's rows of R^-1) runs row by row over all its
- * right-hand sides at once, with the diagonal's reciprocals (no division in the chains).
+ * right-hand sides at once (independent sums and divisions).
  *
  * Python face: chain_velocity_pack(...) -> a capsule of the machine's constants (copied) and
  * scratch, built once per machine; chain_one_velocity(pack, u, out) -> the bound (a float),
@@ -50,7 +50,6 @@ typedef struct {
     double *values, *full_u, *r, *jac, *du, *rg_inv, *head_tw, *work, *norms;
     double *panels;           /* (L, 6 + n_u + n_loop, 6) each leg's columns (closure_rates) */
     double *rest;             /* (n_u + n_loop, 6L) the rows left by the legs' reflections */
-    double *diag;             /* (6L + n_u,) the reciprocals of R_l's, then R_g's diagonal */
     double *solve;            /* right-hand sides: (n_u, n_u + n_loop), (6, 6 + n_u + 32) */
     double *out;              /* (size,) chain_one_jacobian's answer before its array */
     ptrdiff_t size;           /* 12 n + min(6, n) + 1 + (n_u - 6) n */
@@ -127,24 +126,18 @@ static int reflect_leg(double *a, ptrdiff_t np, const int64_t *rest, ptrdiff_t n
 }
 
 /* x (np, w) row-major = R^-1 x in place for the upper-triangular R (np, np) of a
- * column-major panel, with inv (np,) the reciprocals of its diagonal (a product where a
- * division would wait): row by row from the last, each row's w columns at once (independent
- * sums, in the order of one column's back substitution). */
-static void solve_rows(const double *a, ptrdiff_t ld, const double *inv, ptrdiff_t np,
-                       double *x, ptrdiff_t w) {
+ * column-major panel: row by row from the last, each row's w columns at once (independent
+ * sums and divisions, each column's in the order of its own back substitution). */
+static void solve_rows(const double *a, ptrdiff_t ld, ptrdiff_t np, double *x, ptrdiff_t w) {
     for (ptrdiff_t i = np - 1; i >= 0; i--) {
         double *xi = x + i * w;
         for (ptrdiff_t k = i + 1; k < np; k++) {
             const double r = a[i + k * ld], *xk = x + k * w;
             for (ptrdiff_t c = 0; c < w; c++) xi[c] -= r * xk[c];
         }
-        for (ptrdiff_t c = 0; c < w; c++) xi[c] *= inv[i];
+        const double d = a[i + i * ld];
+        for (ptrdiff_t c = 0; c < w; c++) xi[c] /= d;
     }
-}
-
-/* inv (np,) the reciprocals of the diagonal of a panel's R (np, np). */
-static void reciprocals(const double *a, ptrdiff_t ld, ptrdiff_t np, double *inv) {
-    for (ptrdiff_t i = 0; i < np; i++) inv[i] = 1.0 / a[i + i * ld];
 }
 
 /* The tool frame walked along the head from the platform pose u[:6] (chain_kernel._head_walk
@@ -248,7 +241,6 @@ static double closure_rates(chain_velocity *v) {
         ptrdiff_t p = v->leg_count[leg];
         ptrdiff_t nrest = gather(v, leg, panel, rest, &fro);
         if (!reflect_leg(panel, p, rest, nrest)) return 0.0;
-        reciprocals(panel, 6, p, v->diag + 6 * leg);
         for (ptrdiff_t i = p; i < 6; i++, n_reduced++) /* the rows left */
             for (ptrdiff_t g = 0; g < n_g + n_loop; g++)
                 rg[g * ld_g + n_reduced] = panel[6 * (p + g) + i];
@@ -256,13 +248,11 @@ static double closure_rates(chain_velocity *v) {
     if (n_reduced < n_g) return 0.0;
     for (ptrdiff_t k = 0; k < n_loop; k++) rest[k] = n_g + k;
     if (!reflect(rg, ld_g, n_reduced, n_g, rest, n_loop)) return 0.0;
-    const double *inv_g = v->diag + 6 * c->n_legs;
-    reciprocals(rg, ld_g, n_g, v->diag + 6 * c->n_legs);
     /* global unknowns: R_g du_g = -b_g; then each leg's: R_l du_l = -b_l - S_l du_g */
     double *x = v->solve, *y = v->solve + n_g * (n_g > n_loop ? n_g : n_loop);
     for (ptrdiff_t i = 0; i < n_g; i++)
         for (ptrdiff_t k = 0; k < n_loop; k++) x[i * n_loop + k] = -rg[(n_g + k) * ld_g + i];
-    solve_rows(rg, ld_g, inv_g, n_g, x, n_loop);
+    solve_rows(rg, ld_g, n_g, x, n_loop);
     for (ptrdiff_t i = 0; i < n_g; i++)
         for (ptrdiff_t k = 0; k < n_loop; k++)
             v->du[v->global_cols[i] * n_loop + k] = x[i * n_loop + k];
@@ -278,7 +268,7 @@ static double closure_rates(chain_velocity *v) {
                 for (ptrdiff_t k = 0; k < n_loop; k++) yi[k] -= sg * xg[k];
             }
         }
-        solve_rows(panel, 6, v->diag + 6 * leg, p, y, n_loop);
+        solve_rows(panel, 6, p, y, n_loop);
         for (ptrdiff_t i = 0; i < p; i++)
             for (ptrdiff_t k = 0; k < n_loop; k++) v->du[piv[i] * n_loop + k] = y[i * n_loop + k];
     }
@@ -287,7 +277,7 @@ static double closure_rates(chain_velocity *v) {
     double *inv = v->rg_inv; /* R_g^-1 (n_g, n_g) */
     for (ptrdiff_t i = 0; i < n_g * n_g; i++) inv[i] = 0.0;
     for (ptrdiff_t i = 0; i < n_g; i++) inv[i * n_g + i] = 1.0;
-    solve_rows(rg, ld_g, inv_g, n_g, inv, n_g);
+    solve_rows(rg, ld_g, n_g, inv, n_g);
     for (ptrdiff_t i = 0; i < n_g * n_g; i++) total += inv[i] * inv[i];
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
         const double *panel = v->panels + leg * width;
@@ -301,7 +291,7 @@ static double closure_rates(chain_velocity *v) {
                     for (ptrdiff_t j = g; j < n_g; j++) yi[p + j] += sg * row[j];
             }
         }
-        solve_rows(panel, 6, v->diag + 6 * leg, p, y, w);
+        solve_rows(panel, 6, p, y, w);
         for (ptrdiff_t i = 0; i < p * w; i++) total += y[i] * y[i];
     }
     double bound = 1.0 / sqrt(fro * total);
@@ -437,7 +427,7 @@ static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twist
     size_t doubles = (size_t)(c->n_var + ld + m + m * ld + v->n_u * v->n_loop
                               + v->n_u * v->n_u + 6 * twists + 6 * v->n_head
                               + 6 * (v->n_act + 6) + v->n_act + 6 + L * 6 * (6 + ld)
-                              + m * ld + m + v->n_u + v->size + v->n_u * ld
+                              + m * ld + v->size + v->n_u * ld
                               + 6 * (6 + v->n_u + 32));
     size_t ints = (size_t)(twists + v->n_head + 6 * L + L + v->n_u);
     char *memory = malloc(doubles * sizeof(double) + ints * sizeof(int64_t));
@@ -459,7 +449,6 @@ static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twist
     v->norms = d; d += v->n_act + 6;
     v->panels = d; d += L * 6 * (6 + ld);
     v->rest = d; d += m * ld;
-    v->diag = d; d += m + v->n_u;
     v->out = d; d += v->size;
     v->solve = d; d += v->n_u * ld + 6 * (6 + v->n_u + 32);
     int64_t *k = (int64_t *)d;
