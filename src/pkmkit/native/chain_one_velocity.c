@@ -34,6 +34,7 @@
 
 /* svd.c: the singular values of one small matrix (k <= 6), round-robin Jacobi */
 void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out);
+PyObject *pk_numpy_empty(void); /* velocity.c: numpy.empty */
 
 typedef struct {
     pk_chain c;               /* position: column of each variable in the closure's Jacobian */
@@ -51,7 +52,6 @@ typedef struct {
     double *panels;           /* (L, 6 + n_u + n_loop, 6) each leg's columns (closure_rates) */
     double *rest;             /* (n_u + n_loop, 6L) the rows left by the legs' reflections */
     double *solve;            /* right-hand sides: (n_u, n_u + n_loop), (6, 6 + n_u + 32) */
-    double *out;              /* (size,) chain_one_jacobian's answer before its array */
     ptrdiff_t size;           /* 12 n + min(6, n) + 1 + (n_u - 6) n */
     int64_t *head_col;
     void *memory;             /* every array above, one allocation */
@@ -427,7 +427,7 @@ static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twist
     size_t doubles = (size_t)(c->n_var + ld + m + m * ld + v->n_u * v->n_loop
                               + v->n_u * v->n_u + 6 * twists + 6 * v->n_head
                               + 6 * (v->n_act + 6) + v->n_act + 6 + L * 6 * (6 + ld)
-                              + m * ld + v->size + v->n_u * ld
+                              + m * ld + v->n_u * ld
                               + 6 * (6 + v->n_u + 32));
     size_t ints = (size_t)(twists + v->n_head + 6 * L + L + v->n_u);
     char *memory = malloc(doubles * sizeof(double) + ints * sizeof(int64_t));
@@ -449,7 +449,6 @@ static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twist
     v->norms = d; d += v->n_act + 6;
     v->panels = d; d += L * 6 * (6 + ld);
     v->rest = d; d += m * ld;
-    v->out = d; d += v->size;
     v->solve = d; d += v->n_u * ld + 6 * (6 + v->n_u + 32);
     int64_t *k = (int64_t *)d;
     v->w.tw_col = k; k += twists;
@@ -680,8 +679,21 @@ PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssi
     if (threshold == -1.0 && PyErr_Occurred()) return NULL;
     double u[256];
     if (take_u(args[1], 6 + v->c.n_var, u) < 0) return NULL;
-    double bound = velocity(v, u, v->out, 0);
-    if (bound < 0.0) Py_RETURN_FALSE;
-    if (!(bound >= threshold) || !(bound > 0.0)) Py_RETURN_NONE;
-    return pk_new_array(v->out, v->size, 0);
+    /* the array first, then the kernel straight into it: no Python code runs between the
+     * capsule's scratch and the answer (a thread switch there could reuse the scratch) */
+    PyObject *empty = pk_numpy_empty(), *size = PyLong_FromSsize_t(v->size);
+    PyObject *array = empty && size ? PyObject_CallOneArg(empty, size) : NULL;
+    Py_XDECREF(size);
+    Py_buffer view;
+    if (!array || PyObject_GetBuffer(array, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
+        Py_XDECREF(array);
+        return NULL;
+    }
+    double bound = velocity(v, u, view.buf, 0);
+    PyBuffer_Release(&view);
+    if (bound < 0.0 || !(bound >= threshold) || !(bound > 0.0)) {
+        Py_DECREF(array);
+        return Py_NewRef(bound < 0.0 ? Py_False : Py_None);
+    }
+    return array;
 }
