@@ -3,7 +3,8 @@ inverse solution, :mod:`pkmkit.machines.chain_one_velocity`) with the batch row
 (``m.jacobian(X)`` with X of one row: the direct model solved again, LAPACK's pseudo-inverse
 and SVD) over random workspace poses (actuators uniform over 2–98 % of their strokes): how many
 calls took the C kernel, and per field the largest difference relative to the field's largest
-entry; statuses, ranks and q must be equal.
+entry (q: the largest absolute difference; the C inverse's q agrees to rounding, not to the
+bit); statuses and ranks must be equal.
 
 Usage::
 
@@ -26,8 +27,9 @@ FIELDS = ("J", "J_homogeneous", "singular_values", "condition", "passive_rates")
 
 
 def agreement(name: str, n: int) -> tuple[int, int, dict, int]:
-    """``(poses, calls through the C kernel, field -> largest relative difference,
-    mismatched statuses, ranks or q)``."""
+    """``(poses, calls through the C kernel, field -> largest relative difference (q: the
+    largest absolute one: the C inverse's q is the batch row's to rounding, not to the bit),
+    mismatched statuses or ranks)``."""
     m = pkmkit.machine(name)
     rng = np.random.default_rng(5)
     act = np.flatnonzero(m.model.actuated)
@@ -36,11 +38,11 @@ def agreement(name: str, n: int) -> tuple[int, int, dict, int]:
     x = x[np.isfinite(x).all(axis=1)]
     for tag in ("chain_ik", "chain_fk", "chain_jacobian"):
         chain_one.usable(m, tag)
-    worst = dict.fromkeys(FIELDS, 0.0)
+    worst = dict.fromkeys((*FIELDS, "q (m, rad)"), 0.0)
     through, wrong = 0, 0
     for pose in x:
         one = m.jacobian(pose)
-        if not isinstance(one.__dict__.get("_evaluation"), cov._Fields):
+        if not isinstance(one, cov.OnePoseChainJacobians):
             continue
         through += 1
         ref = m.jacobian(pose[None])
@@ -48,8 +50,8 @@ def agreement(name: str, n: int) -> tuple[int, int, dict, int]:
             a, b = np.asarray(getattr(one, field)), np.asarray(getattr(ref, field))[0]
             worst[field] = max(worst[field], float(np.abs(a - b).max() / np.abs(b).max()))
         wrong += not (one.status == ref.status[0] and one.closure_rank == ref.closure_rank[0]
-                      and one.expected_rank == ref.expected_rank
-                      and np.array_equal(one.q, ref.q[0]))
+                      and one.expected_rank == ref.expected_rank)
+        worst["q (m, rad)"] = max(worst["q (m, rad)"], float(np.abs(one.q - ref.q[0]).max()))
     return len(x), through, worst, wrong
 
 
@@ -61,7 +63,7 @@ def main() -> None:
     warnings.simplefilter("ignore", StrokeWarning)
     for name in args.machines.split(","):
         n, through, worst, wrong = agreement(name, args.poses)
-        print(f"{name}: {through} of {n} poses through the C kernel; statuses, ranks or q "
+        print(f"{name}: {through} of {n} poses through the C kernel; statuses or ranks "
               f"different: {wrong}")
         print("  largest difference / the field's largest entry: "
               + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))

@@ -6,7 +6,10 @@ Build the baseline first (the base commit's ``native/chain_one_velocity.c`` buil
 ``python setup.py build_ext --inplace``, its ``kernels*.so`` copied aside) and pass its path. Both
 builds get their own pack of the same machine and are timed in turn on the same inverse
 solutions (CPU µs per call, the median of 3 rounds of 7 repeats each); the baseline's call is
-the full one (3 arguments), this tree's also without the singular stage (``False``).
+the full one (3 arguments), this tree's also without the singular stage (``False``); and the
+per-call step of ``m.jacobian(x)`` after the inverse, where the baseline has no
+``chain_one_jacobian``: the baseline's record step (the solution's ``tolist()``, ``np.empty``,
+the call without the singular stage) against ``chain_one_jacobian`` on the solution array.
 
 Usage::
 
@@ -76,20 +79,34 @@ def main() -> None:
         m, us = solutions(name)
         old, new = cov.VelocityPack(m, base), cov.VelocityPack(m, here)
         out = np.empty(new.size)
+        arrays = [np.array(u) for u in us]  # as chain_one_ik returns the solution
         calls = {"baseline": lambda u, p=old, o=out: p.call(p.pack, u, o),
                  "this tree": lambda u, p=new, o=out: p.call(p.pack, u, o),
                  "this tree, no singular stage":
                      lambda u, p=new, o=out: p.call(p.pack, u, o, False)}
-        rounds = {k: [] for k in calls}
+        # the per-call step of m.jacobian(x) after the inverse: before, the record's
+        # tolist(), np.empty and the 4-argument call; now chain_one_jacobian on the array
+        steps = {"baseline, the record's step (tolist, np.empty, call)":
+                     lambda a, p=old: p.call(p.pack, a.tolist(), np.empty(p.size), False),
+                 "this tree, chain_one_jacobian":
+                     lambda a, p=new: p.jacobian(p.pack, a, 2e-6)}
+        rounds = {k: [] for k in (*calls, *steps)}
         for _ in range(3):
             for k, fun in calls.items():
                 rounds[k].append(cpu_per_call(fun, us))
-        med = {k: statistics.median(v) for k, v in rounds.items()}
+            if new.jacobian is not None and old.jacobian is None:
+                for k, fun in steps.items():
+                    rounds[k].append(cpu_per_call(fun, arrays))
+        med = {k: statistics.median(v) for k, v in rounds.items() if v}
         print(f"{name} ({len(us)} solutions), CPU µs per call: " + ", ".join(
-            f"{k} {v:.2f}" for k, v in med.items()))
+            f"{k} {v:.2f}" for k, v in med.items() if k in calls))
         lazy = med["this tree, no singular stage"]
         print(f"  this tree / baseline {med['this tree'] / med['baseline']:.3f}; without the "
               f"singular stage / baseline {lazy / med['baseline']:.3f}")
+        step = [k for k in steps if k in med]
+        if step:
+            print(f"  {step[0]} {med[step[0]]:.2f}, {step[1]} {med[step[1]]:.2f}: ratio "
+                  f"{med[step[1]] / med[step[0]]:.3f}")
     print(f"load average {os.getloadavg()[0]:.2f}")
 
 

@@ -103,3 +103,34 @@ def test_the_lazy_record_keeps_the_stroke_modes(strokes):
         assert np.array_equal(inv.out_of_stroke, refused)
         assert np.isnan(inv.pose[refused]).all() and np.isnan(inv.closure_start[refused]).all()
         assert np.array_equal(inv.pose, inv.direct.pose, equal_nan=True)
+
+
+def test_a_pose_read_after_direct_is_the_direct_records(monkeypatch):
+    """``known_fields()`` is the record's live mapping of the fields given or computed: a
+    ``pose`` read after ``direct`` takes the direct record's pose (no tool rows computed), one
+    read first computes the tool rows."""
+    from pkmkit.machines import chain_inverse_record
+
+    m = pkmkit.machine("tripteor-x7")
+    x = _targets(m, 40, seed=6)
+    calls = []
+    tool_pose = chain_inverse_record.tool_pose
+
+    def counted(*args):
+        calls.append(1)
+        return tool_pose(*args)
+
+    monkeypatch.setattr(chain_inverse_record, "tool_pose", counted)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        inv = m.ik(x, full_output=True)
+        known = inv.known_fields()
+        assert "q" in known and "direct" not in known
+        direct = inv.direct
+        assert known["direct"] is direct and inv.known_fields() is known
+        pose = inv.pose
+        assert calls == []
+        assert np.array_equal(pose, direct.pose, equal_nan=True)
+        other = m.ik(x, full_output=True)
+        assert np.array_equal(other.pose, pose, equal_nan=True)
+    assert calls == [1]

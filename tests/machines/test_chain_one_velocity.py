@@ -59,7 +59,7 @@ def poses(m, n: int, seed: int, margin: float = 0.02) -> np.ndarray:
 
 
 def through_c(record) -> bool:
-    return isinstance(record.__dict__.get("_evaluation"), cov._Fields)
+    return isinstance(record, cov.OnePoseChainJacobians)
 
 
 def mismatch(m, xs) -> tuple[int, float]:
@@ -276,12 +276,65 @@ def test_the_singular_values_are_computed_when_read(machine):
         one, other = machine.jacobian(x), machine.jacobian(x)
         if not through_c(one):
             continue
-        fields = one.__dict__["_evaluation"]
+        fields = one.__dict__
         assert one.J.shape == (6, len(one.q))
-        assert not fields.singular and np.isnan(fields.out[12 * one.J.shape[1]])
+        assert "condition" not in fields and np.isnan(fields["_out"][12 * one.J.shape[1]])
         ref = machine.jacobian(x[None])
         assert one.condition == pytest.approx(ref.condition[0], rel=1e-12)
-        assert fields.singular
+        assert "singular_values" in fields and not np.isnan(fields["_out"]).any()
         np.testing.assert_allclose(other.singular_values, ref.singular_values[0], rtol=1e-12)
         assert other.condition == one.condition
         np.testing.assert_array_equal(one.singular_values, other.singular_values)
+
+
+def test_each_field_read_first_is_the_same(machine):
+    """Each field read first on a fresh record (its own view or singular stage) equals it read
+    after every other, bit for bit; a field read twice is the same object; equality is
+    identity; ``dataclasses.replace`` gives a record with every field given."""
+    import dataclasses
+
+    names = (*FIELDS, "condition", "q", "status", "closure_rank", "expected_rank")
+    for x in poses(machine, 3, seed=17):
+        full = machine.jacobian(x)
+        assert through_c(full)
+        for name in reversed(names):
+            getattr(full, name)
+        for name in names:
+            one = machine.jacobian(x)
+            value = getattr(one, name)
+            np.testing.assert_array_equal(value, getattr(full, name))
+            assert getattr(one, name) is value
+            assert one != full and one == one and hash(one) == object.__hash__(one)
+        assert "1 pose" in repr(full)
+        copy = dataclasses.replace(full, status=full.status)
+        for name in names:
+            np.testing.assert_array_equal(getattr(copy, name), getattr(full, name))
+
+
+def test_at_solution_is_the_record_with_the_margin(machine):
+    """``at_solution`` (the per-call path of ``m.jacobian(x)``) on the C inverse's answer: the
+    record of :func:`~pkmkit.machines.chain_one_velocity.record` at the same solution bit for
+    bit; the threshold BOUND_MARGIN × max(tol, RANK_RCOND) on either side of a pose's bound;
+    a residual beyond the guard declines."""
+    from pkmkit.machines.chain_one_native import packed
+    from pkmkit.machines.chain_velocity_record import RANK_RCOND
+
+    c = packed(machine)
+    p = cov.pack(machine)
+    out = np.empty(p.size)
+    for x in poses(machine, 4, seed=18):
+        solved = c.ik(c.capsule, x, True, True)
+        one = cov.at_solution(machine, solved, 1e-6)
+        ref = cov.record(machine, solved[0], solved[1].tolist(), solved[3], 1e-6,
+                         cov.BOUND_MARGIN, 6 + len(machine.passive_variables))
+        for name in (*FIELDS, "condition", "q", "status", "closure_rank", "expected_rank"):
+            a, b = getattr(one, name), getattr(ref, name)
+            np.testing.assert_array_equal(a, b)
+            assert type(a) is type(b), name
+        bound = p.call(p.pack, solved[1].tolist(), out, False)
+        above, below = bound / cov.BOUND_MARGIN * 1.001, bound / cov.BOUND_MARGIN * 0.999
+        assert cov.at_solution(machine, solved, above) is None
+        assert through_c(cov.at_solution(machine, solved, below))
+        assert through_c(cov.at_solution(machine, solved, RANK_RCOND / 10))
+        far = (*solved[:3], 2 * cov.RESIDUAL_GUARD)
+        assert cov.at_solution(machine, far, 1e-6) is False

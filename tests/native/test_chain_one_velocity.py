@@ -161,3 +161,48 @@ def test_a_zero_pivot_declines(machine):
     out = np.full(p.size, 7.0)
     assert _kernels.chain_one_velocity(pack, configurations(machine, 1, seed=3)[0], out) == 0.0
     assert (out == 7.0).all()
+
+
+def test_chain_one_jacobian_is_the_buffer_call(machine):
+    """``chain_one_jacobian(pack, u, threshold)``: a new array with ``chain_one_velocity(pack,
+    u, out, False)``'s entries bit for bit (singular stage NaN), from a list or from a float64
+    array; None where the bound does not clear the threshold; False outside the home modes;
+    each call a new array."""
+    p = cov.VelocityPack(machine, _kernels)
+    for u in configurations(machine, 6, seed=5):
+        out = np.empty(p.size)
+        bound = p.call(p.pack, u, out, False)
+        if bound <= 0.0:
+            continue
+        got = _kernels.chain_one_jacobian(p.pack, np.array(u), 0.0)
+        again = _kernels.chain_one_jacobian(p.pack, u, bound)
+        assert got is not again and got.shape == (p.size,) and got.dtype == np.float64
+        np.testing.assert_array_equal(got, out)
+        np.testing.assert_array_equal(again, out)
+        assert _kernels.chain_one_jacobian(p.pack, u, np.nextafter(bound, 1.0)) is None
+    u = np.array(configurations(machine, 1, seed=6)[0])  # a solved closure
+    assert isinstance(_kernels.chain_one_jacobian(p.pack, u, 1e-6), np.ndarray)
+    turn = int(cov.pack_arguments(machine)["turns"][0])
+    u[turn] += np.pi  # a leg joint half a turn from home
+    assert _kernels.chain_one_jacobian(p.pack, u, 1e-6) is False
+
+
+def test_chain_one_jacobian_argument_checks(machine):
+    p = cov.VelocityPack(machine, _kernels)
+    u = configurations(machine, 1, seed=2)[0]
+    call = _kernels.chain_one_jacobian
+    for bad_args, error in [((p.pack, u), TypeError), ((p.pack, u, 0.0, 1), TypeError),
+                            ((object(), u, 0.0), TypeError), ((p.pack, u, "a"), TypeError),
+                            ((p.pack, u[:-1], 0.0), TypeError),
+                            ((p.pack, np.array(u[:-1]), 0.0), TypeError),
+                            ((p.pack, np.array(u, dtype=np.float32), 0.0), TypeError),
+                            ((p.pack, np.array([u]), 0.0), ValueError),
+                            ((p.pack, tuple(u), 0.0), TypeError),
+                            ((p.pack, [*u[:-1], "a"], 0.0), TypeError)]:
+        with pytest.raises(error):
+            call(*bad_args)
+    # a vanishing pivot (a leg's column read at another leg's element): None
+    args = cov.pack_arguments(machine)
+    args["column_leg"] = args["column_leg"].copy()
+    args["column_leg"][np.flatnonzero(args["column_leg"] == 0)[0]] = 1
+    assert call(_kernels.chain_velocity_pack(*args.values()), u, 0.0) is None

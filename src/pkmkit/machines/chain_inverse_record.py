@@ -51,9 +51,9 @@ class _InverseEvaluation:
     ``q`` from the inverse's closure, strokes as the inverse's) and ``pose`` (the tool point and
     axis at that closure, NaN where not solved)."""
 
-    def __init__(self, machine: Any, record_cache: dict, q: np.ndarray, closure: np.ndarray,
+    def __init__(self, machine: Any, known: dict, q: np.ndarray, closure: np.ndarray,
                  values: np.ndarray, lengths: np.ndarray, strokes: str) -> None:
-        self._machine, self._cache = machine, record_cache
+        self._machine, self._known = machine, known  # the record's known_fields()
         self._q, self._closure, self._values = q, closure, values
         self._lengths, self._strokes = lengths, strokes
 
@@ -62,8 +62,9 @@ class _InverseEvaluation:
             return direct_at(self._machine, self._q, self._closure, self._lengths,
                              self._strokes, False)
         if name == "pose":
-            if "direct" in self._cache and self._cache["direct"] is not None:
-                return np.atleast_2d(self._cache["direct"].pose)
+            direct = self._known.get("direct")
+            if direct is not None:  # already read: its pose
+                return np.atleast_2d(direct.pose)
             return tool_pose(self._machine, self._closure, self._values, self._lengths)
         raise AttributeError(name)  # pragma: no cover - every other field is given
 
@@ -121,5 +122,5 @@ def inverse_record(machine: Any, res: Any, status: np.ndarray, q: np.ndarray,
     values[:, passive] = closure[:, 6:]
     record = LazyChainInverseResult(None, **given)
     object.__setattr__(record, "_evaluation", _InverseEvaluation(
-        machine, record._cache, q, closure, values, lengths, strokes))
+        machine, record.known_fields(), q, closure, values, lengths, strokes))
     return record

@@ -65,7 +65,7 @@ _FAR = math.pi / 2 - FLIP_MARGIN
 _TWO_PI = 2.0 * math.pi
 _ATAN2 = np.arctan2
 #: Margin of the singularity bound over the thresholds (the batch path's SVD rounds).
-BOUND_MARGIN = 2.0
+BOUND_MARGIN = chain_one_velocity.BOUND_MARGIN
 
 
 def usable(machine: Any, tag: str = "chain_ik") -> bool:
@@ -344,7 +344,7 @@ def inverse_record(m: Any, x: Any, strokes: str, start: Any = None) -> Any:
                                             if strokes == "ignore" else np.zeros(c.n)),
                              solution=solution, closure=closure)
     object.__setattr__(record, "_evaluation", _InverseFields(m, q, closure, strokes,
-                                                             record._cache))
+                                                             record.known_fields()))
     return record
 
 
@@ -561,9 +561,7 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
     if (p := packed(m)) is not None and (got := p.ik(p.capsule, x, True, True)) is not None:
         # the inverse solution by one C call (chain_one_native.py; the stroke test left to
         # the batch path, as _inverse_values), then the velocity model at it
-        fast = chain_one_velocity.record(m, got[0], got[1].tolist(), got[3],
-                                         max(tol, RANK_RCOND), BOUND_MARGIN,
-                                         6 + len(m.passive_variables))
+        fast = chain_one_velocity.at_solution(m, got, tol)
         if fast is not False:
             return fast
     xs = _plain(x, 6)  # before constants(), as in _inverse_within

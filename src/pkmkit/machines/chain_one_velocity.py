@@ -7,20 +7,24 @@ batch path reaches again by the direct model at its actuators (``m.jacobian(X)``
 ``ik``, then ``fk(q)`` from the direct model's first-order start, then the velocity model
 there: :meth:`~pkmkit.machines.chain_jacobians.ChainVelocity._velocity`), so the velocity
 model is evaluated at ``u`` directly — one call of the C kernel
-``pkmkit.native.kernels.chain_one_velocity`` (``native/chain_one_velocity.c``) on constants
-packed once per machine (:class:`VelocityPack`, cached on the machine): the closure's Jacobian
+``pkmkit.native.kernels.chain_one_jacobian`` (``native/chain_one_velocity.c``; its buffer form
+``chain_one_velocity``) on constants packed once per machine (:class:`VelocityPack`, cached on
+the machine), given the C inverse's solution array as it comes: the closure's Jacobian
 ``[C_U | C_q]`` (platform and passive joints; legs' actuators), the closure rates
 ``dU = −C_U⁺ C_q`` by a QR of ``C_U`` that takes each leg's own joints first (each leg's block
 involves only the platform, its joints and the joints it shares), the tool twist per actuator
 ``J (6, n)``, ``J_homogeneous`` (the batch path's scale: angular rows × the characteristic
-length), its singular values (one-sided Jacobi, ``native/svd.c``), the condition number and a
+length), its singular values (round-robin one-sided Jacobi, ``native/svd.c``), the condition
+number and a
 lower bound of σ_min/σ_max of ``C_U`` (``1 / (‖C_U‖_F ‖C_U⁺‖_F)``).
 
-The record (:func:`record`) has the batch row's fields and meanings; ``J``,
-``J_homogeneous``, ``singular_values``, ``condition`` and ``passive_rates`` are views of the
-kernel's one output buffer, made when first read; the singular values and the condition number
-are computed only then (one more C call on the buffer's ``J_homogeneous``: ``J`` alone does
-not pay the SVD). ``closure_rank`` is ``n_u`` and ``status``
+The record (:class:`OnePoseChainJacobians`, made by :func:`at_solution` on the C inverse's
+answer or by :func:`record`) has the batch row's fields and meanings: ``q``, ``status`` and the
+ranks given; ``J``, ``J_homogeneous`` and ``passive_rates`` views of the kernel's new output
+array, made at their first read and kept in the record's ``__dict__`` (later reads are plain
+attribute reads); the singular values and the condition number computed at the first read of
+either (the kernel's singular stage, one more C call on the array's ``J_homogeneous``: ``J``
+alone does not pay the SVD). ``closure_rank`` is ``n_u`` and ``status``
 OK only where the bound clears :data:`~pkmkit.machines.chain_one.BOUND_MARGIN` × max(``tol``,
 :data:`~pkmkit.machines.chain_velocity_record.RANK_RCOND`): the closure is then certainly
 regular, of full rank, and not singular by the batch path's SVD; elsewhere (near a singular
@@ -46,8 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.chain_velocity_record import ChainJacobians
-from pkmkit.machines.lazy_records import lazy_record_class
+from pkmkit.machines.chain_velocity_record import RANK_RCOND, ChainJacobians
 from pkmkit.numerics import jit
 
 #: Largest residual of the inverse solution (its closure and tool rows: m, and rad × the
@@ -55,6 +58,8 @@ from pkmkit.numerics import jit
 #: docstring). A nominal machine's inverse converges to ~1e-16.
 RESIDUAL_GUARD = 1e-12
 _OK = np.int64(0)  # Status.OK, as the batch row's
+#: Margin of the bound over the thresholds (:data:`pkmkit.machines.chain_one.BOUND_MARGIN`).
+BOUND_MARGIN = 2.0
 
 
 class VelocityPack:
@@ -64,16 +69,18 @@ class VelocityPack:
     leg actuators' places in J, the leg owning each column alone (−1: the platform's and the
     joints shared by legs), and the output buffer's layout."""
 
-    __slots__ = ("call", "layout", "n", "n_p", "pack", "rank", "size")
+    __slots__ = ("call", "expected", "jacobian", "layout", "n", "n_p", "pack", "rank", "size")
 
     def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
         arguments = pack_arguments(m) if arguments is None else arguments
         self.pack = native.chain_velocity_pack(*arguments.values())
         self.call = native.chain_one_velocity
+        self.jacobian = getattr(native, "chain_one_jacobian", None)  # None: an older build
         n = int(np.count_nonzero(m.model.actuated))
         k = min(6, n)
         self.n, self.n_p = n, len(m.passive_variables)
         self.rank = np.int64(6 + self.n_p)  # the closure's, where the bound certifies it
+        self.expected = 6 + self.n_p  # at home, where the one-pose path applies (an int)
         self.size = 12 * n + k + 1 + self.n_p * n
         self.layout = {"J": (0, 6 * n, (6, n)), "J_homogeneous": (6 * n, 12 * n, (6, n)),
                        "singular_values": (12 * n, 12 * n + k, None),
@@ -146,7 +153,7 @@ def pack(m: Any) -> VelocityPack | None:
     p = m.__dict__.get("_chain_one_velocity")
     if p is None:
         native = jit.native_kernels_now()
-        if native is None or not hasattr(native, "chain_one_velocity"):
+        if native is None or not hasattr(native, "chain_one_jacobian"):
             return None
         p = VelocityPack(m, native)
         object.__setattr__(m, "_chain_one_velocity", p)
@@ -155,60 +162,115 @@ def pack(m: Any) -> VelocityPack | None:
     return p
 
 
+def _singular_stage(fields: dict) -> None:
+    """The kernel's singular stage on a record's buffer (one C call on its ``J_homogeneous``):
+    ``singular_values`` and ``condition`` put in the record's ``fields`` (its ``__dict__``)."""
+    p, out = fields["_pack"], fields["_out"]
+    p.call(p.pack, None, out)
+    start, stop, _ = p.layout["singular_values"]
+    fields["singular_values"], fields["condition"] = out[start:stop], out[stop]
+
+
+class _Field:
+    """A field of :class:`OnePoseChainJacobians` made at its first read from the record's
+    buffer and kept in the record's ``__dict__`` (a non-data descriptor: later reads are plain
+    attribute reads). ``singular_values`` and ``condition`` run the singular stage, once, for
+    both."""
+
+    __slots__ = ("name",)
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        name = self.name
+        if name in _SINGULAR:
+            _singular_stage(fields)
+            return fields[name]
+        start, stop, shape = fields["_pack"].layout[name]
+        value = fields["_out"][start:stop].reshape(shape)
+        fields[name] = value
+        return value
+
+
 _SINGULAR = frozenset(("singular_values", "condition"))
 
 
-class _Fields:
-    """The fields of a one-pose record made when read: views of the kernel's output; the
-    singular values and the condition number computed at the first read of either (the
-    kernel's singular stage, one more C call on the output's ``J_homogeneous``)."""
+class OnePoseChainJacobians(ChainJacobians):
+    """A joint-chain machine's velocity model of one pose (this module): ``q``, ``status`` and
+    the ranks given; ``J``, ``J_homogeneous``, ``passive_rates`` views of the kernel's one
+    output array made when first read, ``singular_values`` and ``condition`` computed then (the
+    singular stage). Equality is identity (comparing would compute every field); pickled, it
+    becomes the plain :class:`~pkmkit.machines.chain_velocity_record.ChainJacobians`."""
 
-    __slots__ = ("out", "pack", "singular")
+    J = _Field("J")
+    J_homogeneous = _Field("J_homogeneous")
+    singular_values = _Field("singular_values")
+    condition = _Field("condition")
+    passive_rates = _Field("passive_rates")
 
-    def __init__(self, out: np.ndarray, pack: VelocityPack) -> None:
-        self.out, self.pack, self.singular = out, pack, False
+    def __eq__(self, other: object) -> bool:
+        return self is other
 
-    def field(self, name: str) -> Any:
-        if name in _SINGULAR and not self.singular:
-            self.pack.call(self.pack.pack, None, self.out)
-            self.singular = True
-        start, stop, shape = self.pack.layout[name]
-        if stop is None:
-            return self.out[start]
-        view = self.out[start:stop]
-        return view if shape is None else view.reshape(shape)
+    __hash__ = object.__hash__
 
+    def __repr__(self) -> str:
+        return f"ChainJacobians(1 pose, {len(self.q)} actuators; fields read from one C call)"
 
-_RECORD: type | None = None
-
-
-def _record_class() -> type:
-    return lazy_record_class(
-        ChainJacobians, "OnePose",
-        lambda r: f"1 pose, {len(r.q)} actuators; fields read from one C call",
-        "A joint-chain machine's velocity model of one pose "
-        "(:mod:`pkmkit.machines.chain_one_velocity`).")
+    def __reduce__(self) -> tuple:  # pickled as the plain record, every field computed
+        return ChainJacobians, tuple(getattr(self, name)
+                                     for name in ChainJacobians.__dataclass_fields__)
 
 
-def record(m: Any, q: tuple, u: list, residual: float, tol: float, margin: float,
+_NEW = object.__new__
+
+
+def record(m: Any, q: Any, u: Any, residual: float, tol: float, margin: float,
            expected_rank: int) -> Any:
-    """The velocity model of one pose at the inverse solution ``u`` (a list of 6 + n_var
-    floats; ``q`` its actuators, ``residual`` its largest residual): the record; None where
-    the bound does not clear ``margin`` × ``tol`` (the batch path answers); False where this
-    path does not apply (no C extension, a residual beyond :data:`RESIDUAL_GUARD`, ``u``
-    outside the legs' home assembly modes: the Numba path, which solves the direct model
-    again as the batch path does, answers)."""
-    global _RECORD
+    """The velocity model of one pose at the inverse solution ``u`` (6 + n_var floats: a list
+    or a float64 array; ``q`` its actuators, an array or a sequence, ``residual`` its largest
+    residual): the record; None where the bound does not clear ``margin`` × ``tol`` (the batch
+    path answers); False where this path does not apply (no C extension, a residual beyond
+    :data:`RESIDUAL_GUARD`, ``u`` outside the legs' home assembly modes: the Numba path,
+    which solves the direct model again as the batch path does, answers)."""
     p = pack(m) if residual <= RESIDUAL_GUARD else None
     if p is None:
         return False
-    out = np.empty(p.size)
-    bound = p.call(p.pack, u, out, False)  # the singular values when read (_Fields)
-    if bound < 0.0:  # outside the legs' home modes: the direct model's closure may differ
+    out = p.jacobian(p.pack, u, margin * tol)  # the singular values when read (_Field)
+    if out is None or out is False:  # the bound does not clear; outside the legs' home modes
+        return out
+    one = _NEW(OnePoseChainJacobians)
+    fields = one.__dict__
+    fields["_out"], fields["_pack"], fields["status"] = out, p, _OK
+    fields["q"] = q if type(q) is np.ndarray else np.array(q)
+    fields["closure_rank"], fields["expected_rank"] = p.rank, expected_rank
+    return one
+
+
+def at_solution(m: Any, solved: tuple, tol: float) -> Any:
+    """:func:`record` of the C inverse's full answer ``solved`` = ``(q, u, iterations,
+    residual)`` (``chain_one_ik(..., full=True)``) with the one-pose path's threshold
+    :data:`BOUND_MARGIN` × max(``tol``, ``RANK_RCOND``) and the closure's rank at home: the
+    record, None or False as :func:`record` answers, in fewer Python steps (the per-call path
+    of ``m.jacobian(x)``)."""
+    p = m.__dict__.get("_chain_one_velocity")
+    if p is None or _native_now() is None:  # not packed yet, or PKMKIT_NATIVE=0 set since
+        p = pack(m)
+        if p is None:
+            return False
+    if solved[3] > RESIDUAL_GUARD:
         return False
-    if not bound >= margin * tol:
-        return None
-    if _RECORD is None:
-        _RECORD = _record_class()
-    return _RECORD(_Fields(out, p), closure_rank=p.rank, expected_rank=expected_rank,
-                   q=np.array(q), status=_OK)
+    out = p.jacobian(p.pack, solved[1], BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND))
+    if out is None or out is False:
+        return out
+    one = _NEW(OnePoseChainJacobians)
+    fields = one.__dict__
+    fields["_out"], fields["_pack"], fields["status"], fields["q"] = out, p, _OK, solved[0]
+    fields["closure_rank"], fields["expected_rank"] = p.rank, p.expected
+    return one
+
+
+_native_now = jit.native_kernels_now

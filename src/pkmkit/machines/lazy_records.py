@@ -29,6 +29,13 @@ def lazy_record_class(base: type, prefix: str, describe: Callable[[Any], str],
             cache[name] = self._evaluation.field(name)
         return cache[name]
 
+    def known_fields(self) -> dict[str, Any]:
+        """The fields given at construction or computed so far, by name: the record's own
+        mapping (live: a later read adds to it), where its evaluation finds a field already
+        computed (a ``pose`` from the ``direct`` record read before it) and may put one it
+        computed along."""
+        return self._cache
+
     def __eq__(self, other: object) -> bool:
         return self is other
 
@@ -41,7 +48,8 @@ def lazy_record_class(base: type, prefix: str, describe: Callable[[Any], str],
     def prop(name: str) -> property:
         return property(lambda self: self._get(name), doc=f"``{name}`` (computed when read)")
 
-    namespace = {"__init__": __init__, "_get": _get, "__eq__": __eq__,
+    namespace = {"__init__": __init__, "_get": _get, "known_fields": known_fields,
+                 "__eq__": __eq__,
                  "__hash__": object.__hash__, "__repr__": __repr__, "__reduce__": __reduce__,
                  "__doc__": doc}
     namespace.update({name: prop(name) for name in names})

@@ -17,12 +17,24 @@
  * stable, as the batch path's pseudo-inverse: equal to it to rounding x the closure's
  * condition number). |C_U^+|_F = |R^-1|_F with R^-1 = [[D^-1, -D^-1 S R_g^-1], [0, R_g^-1]].
  *
+ * Layout: each leg's 6 rows are gathered into a compact column-major panel (its local
+ * columns, the global ones, the legs' actuators') whose reflections run on fixed 6-row loops
+ * and skip the columns zero on the leg's rows; the rows left go to one panel for R_g; every
+ * triangular solve (the rates, R_g^-1, each leg's rows of R^-1) runs row by row over all its
+ * right-hand sides at once (independent sums and divisions).
+ *
  * Python face: chain_velocity_pack(...) -> a capsule of the machine's constants (copied) and
  * scratch, built once per machine; chain_one_velocity(pack, u, out) -> the bound (a float),
- * out filled. Holds the GIL (the scratch is the capsule's: a few microseconds of work). */
+ * out filled; chain_one_jacobian(pack, u, threshold) -> a new array (None, False), the form
+ * m.jacobian(x) calls on the C inverse's solution array. Holds the GIL (the scratch is the
+ * capsule's: a few microseconds of work). */
 #include "chain_face.h"
 
 #define CAPSULE "pkmkit.native.chain_one_velocity"
+
+/* svd.c: the singular values of one small matrix (k <= 6), round-robin Jacobi */
+void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out);
+PyObject *pk_numpy_empty(void); /* velocity.c: numpy.empty */
 
 typedef struct {
     pk_chain c;               /* position: column of each variable in the closure's Jacobian */
@@ -36,8 +48,11 @@ typedef struct {
     int64_t *leg_cols;        /* (L, 6) each leg's local columns */
     int64_t *leg_count;       /* (L,) */
     int64_t *global_cols;     /* (n_global,) */
-    int64_t *reduced;         /* (6L,) the rows left to the global columns */
     double *values, *full_u, *r, *jac, *du, *rg_inv, *head_tw, *work, *norms;
+    double *panels;           /* (L, 6 + n_u + n_loop, 6) each leg's columns (closure_rates) */
+    double *rest;             /* (n_u + n_loop, 6L) the rows left by the legs' reflections */
+    double *solve;            /* right-hand sides: (n_u, n_u + n_loop), (6, 6 + n_u + 32) */
+    ptrdiff_t size;           /* 12 n + min(6, n) + 1 + (n_u - 6) n */
     int64_t *head_col;
     void *memory;             /* every array above, one allocation */
     void *owned[14];          /* the copied arrays */
@@ -52,42 +67,76 @@ static void pack_free(PyObject *capsule) {
     }
 }
 
-/* Householder QR of the columns piv (np) over the rows `rows` (nr) of a (leading dimension
- * ld), the reflections applied to the columns rest (nrest) too; R left in place (a[rows[i],
- * piv[j]], i <= j). 0 where a pivot column is zero. */
-static int reflect(double *a, ptrdiff_t ld, const int64_t *rows, ptrdiff_t nr,
-                   const int64_t *piv, ptrdiff_t np, const int64_t *rest, ptrdiff_t nrest) {
+/* Householder QR of the columns 0..np-1 of a column-major panel a (column j at a + j * ld,
+ * rows 0..nr-1), the reflections applied to the panel's columns rest (nrest) too; R left in
+ * place (a[i + j * ld], i <= j). 0 where a pivot column is zero. */
+static int reflect(double *a, ptrdiff_t ld, ptrdiff_t nr, ptrdiff_t np, const int64_t *rest,
+                   ptrdiff_t nrest) {
     for (ptrdiff_t j = 0; j < np; j++) {
-        ptrdiff_t col = piv[j];
+        double *col = a + j * ld;
         double norm = 0.0;
-        for (ptrdiff_t i = j; i < nr; i++) norm += a[rows[i] * ld + col] * a[rows[i] * ld + col];
+        for (ptrdiff_t i = j; i < nr; i++) norm += col[i] * col[i];
         norm = sqrt(norm);
         if (!(norm > 0.0)) return 0;
-        double *top = a + rows[j] * ld + col;
-        double alpha = *top >= 0 ? -norm : norm;
-        double v0 = *top - alpha;
+        double alpha = col[j] >= 0 ? -norm : norm;
+        double v0 = col[j] - alpha;
         double vtv = v0 * v0;
-        for (ptrdiff_t i = j + 1; i < nr; i++) vtv += a[rows[i] * ld + col] * a[rows[i] * ld + col];
-        *top = v0;
+        for (ptrdiff_t i = j + 1; i < nr; i++) vtv += col[i] * col[i];
+        col[j] = v0;
+        double scale = 2.0 / vtv;
         for (ptrdiff_t k = j + 1; k < np + nrest; k++) {
-            ptrdiff_t other = k < np ? piv[k] : rest[k - np];
+            double *other = a + (k < np ? k : rest[k - np]) * ld;
             double s = 0.0;
-            for (ptrdiff_t i = j; i < nr; i++) s += a[rows[i] * ld + col] * a[rows[i] * ld + other];
-            s *= 2.0 / vtv;
-            for (ptrdiff_t i = j; i < nr; i++) a[rows[i] * ld + other] -= s * a[rows[i] * ld + col];
+            for (ptrdiff_t i = j; i < nr; i++) s += col[i] * other[i];
+            s *= scale;
+            for (ptrdiff_t i = j; i < nr; i++) other[i] -= s * col[i];
         }
-        *top = alpha;
+        col[j] = alpha;
     }
     return 1;
 }
 
-/* x (np,) = R^-1 x in place for the upper-triangular R of reflect (rows, piv). */
-static void back_substitute(const double *a, ptrdiff_t ld, const int64_t *rows,
-                            const int64_t *piv, ptrdiff_t np, double *x) {
+/* reflect on a leg's panel (6 rows, leading dimension 6) with the Householder vector held
+ * on all 6 rows (zeros above the pivot): fixed-length loops the compiler unrolls, the same
+ * sums and updates as reflect's (a zero term adds +-0.0, a zero update subtracts it). */
+static int reflect_leg(double *a, ptrdiff_t np, const int64_t *rest, ptrdiff_t nrest) {
+    for (ptrdiff_t j = 0; j < np; j++) {
+        double *col = a + 6 * j, h[6];
+        double norm = 0.0;
+        for (ptrdiff_t i = j; i < 6; i++) norm += col[i] * col[i];
+        norm = sqrt(norm);
+        if (!(norm > 0.0)) return 0;
+        double alpha = col[j] >= 0 ? -norm : norm;
+        double v0 = col[j] - alpha;
+        double vtv = v0 * v0;
+        for (ptrdiff_t i = j + 1; i < 6; i++) vtv += col[i] * col[i];
+        for (int i = 0; i < 6; i++) h[i] = i < j ? 0.0 : col[i];
+        h[j] = v0;
+        double scale = 2.0 / vtv;
+        for (ptrdiff_t k = j + 1; k < np + nrest; k++) {
+            double *other = a + 6 * (k < np ? k : rest[k - np]);
+            double s = 0.0;
+            for (int i = 0; i < 6; i++) s += h[i] * other[i];
+            s *= scale;
+            for (int i = 0; i < 6; i++) other[i] -= s * h[i];
+        }
+        col[j] = alpha;
+    }
+    return 1;
+}
+
+/* x (np, w) row-major = R^-1 x in place for the upper-triangular R (np, np) of a
+ * column-major panel: row by row from the last, each row's w columns at once (independent
+ * sums and divisions, each column's in the order of its own back substitution). */
+static void solve_rows(const double *a, ptrdiff_t ld, ptrdiff_t np, double *x, ptrdiff_t w) {
     for (ptrdiff_t i = np - 1; i >= 0; i--) {
-        double s = x[i];
-        for (ptrdiff_t p = i + 1; p < np; p++) s -= a[rows[i] * ld + piv[p]] * x[p];
-        x[i] = s / a[rows[i] * ld + piv[i]];
+        double *xi = x + i * w;
+        for (ptrdiff_t k = i + 1; k < np; k++) {
+            const double r = a[i + k * ld], *xk = x + k * w;
+            for (ptrdiff_t c = 0; c < w; c++) xi[c] -= r * xk[c];
+        }
+        const double d = a[i + i * ld];
+        for (ptrdiff_t c = 0; c < w; c++) xi[c] /= d;
     }
 }
 
@@ -143,88 +192,107 @@ static void point_column(const double *twist, const double *point, double *jac, 
     jac[5 * n + c] = w2;
 }
 
+/* Each leg's 6 rows of v->jac gathered into its panel (column-major, 6 rows): its local
+ * columns, then every global column, then the leg actuators' (a column the leg's rows do not
+ * involve copied as zeros and left out of the reflections: rest, nrest); adds the squares of
+ * C_U's entries on those rows to *fro. */
+static ptrdiff_t gather(const chain_velocity *v, ptrdiff_t leg, double *panel, int64_t *rest,
+                        double *fro) {
+    const ptrdiff_t ld = v->n_u + v->n_loop, n_g = v->n_global, p = v->leg_count[leg];
+    const int64_t *piv = v->leg_cols + 6 * leg;
+    const double *rows = v->jac + 6 * leg * ld;
+    double sum = *fro;
+    for (ptrdiff_t j = 0; j < p; j++)
+        for (int i = 0; i < 6; i++) {
+            double x = rows[i * ld + piv[j]];
+            panel[6 * j + i] = x;
+            sum += x * x;
+        }
+    ptrdiff_t nrest = 0;
+    for (ptrdiff_t g = 0; g < n_g + v->n_loop; g++) {
+        ptrdiff_t col = g < n_g ? v->global_cols[g] : v->n_u + g - n_g;
+        double *dst = panel + 6 * (p + g);
+        int nonzero = 0;
+        for (int i = 0; i < 6; i++) {
+            double x = rows[i * ld + col];
+            dst[i] = x;
+            nonzero |= x != 0.0;
+            if (g < n_g) sum += x * x;
+        }
+        if (nonzero) rest[nrest++] = p + g;
+    }
+    *fro = sum;
+    return nrest;
+}
+
 /* The closure rates du (n_u, n_loop) from v->jac (module comment); returns the bound, 0.0
- * where a pivot vanishes or too few rows are left (the caller takes the batch path). */
+ * where a pivot vanishes or too few rows are left (the caller takes the batch path). Each
+ * leg's panel keeps R_l, S_l and its right-hand sides; v->rest (rows left, column-major with
+ * leading dimension 6L) R_g and its right-hand sides. */
 static double closure_rates(chain_velocity *v) {
     const pk_chain *c = &v->c;
-    const ptrdiff_t ld = v->n_u + v->n_loop, n_loop = v->n_loop, n_g = v->n_global;
-    double *a = v->jac;
-    double fro = 0.0;
-    for (ptrdiff_t i = 0; i < v->w.m; i++)
-        for (ptrdiff_t j = 0; j < v->n_u; j++) fro += a[i * ld + j] * a[i * ld + j];
-    int64_t rest[64], rows[6];
+    const ptrdiff_t n_loop = v->n_loop, n_g = v->n_global, ld_g = 6 * c->n_legs;
+    const ptrdiff_t width = 6 * (6 + n_g + n_loop);
+    double *rg = v->rest, fro = 0.0;
+    int64_t rest[64];
     ptrdiff_t n_reduced = 0;
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
-        const int64_t *piv = v->leg_cols + 6 * leg;
-        ptrdiff_t p = v->leg_count[leg], nrest = 0;
-        for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
-        /* the columns the reflections change: a column zero on the leg's rows (a joint
-         * of another leg, another leg's actuator) stays zero */
-        for (ptrdiff_t g = 0; g < n_g + n_loop; g++) {
-            ptrdiff_t col = g < n_g ? v->global_cols[g] : v->n_u + g - n_g;
-            const double *x = a + rows[0] * ld + col;
-            if (x[0] != 0.0 || x[ld] != 0.0 || x[2 * ld] != 0.0 || x[3 * ld] != 0.0
-                || x[4 * ld] != 0.0 || x[5 * ld] != 0.0)
-                rest[nrest++] = col;
-        }
-        if (!reflect(a, ld, rows, 6, piv, p, rest, nrest)) return 0.0;
-        for (ptrdiff_t i = p; i < 6; i++) v->reduced[n_reduced++] = 6 * leg + i;
+        double *panel = v->panels + leg * width;
+        ptrdiff_t p = v->leg_count[leg];
+        ptrdiff_t nrest = gather(v, leg, panel, rest, &fro);
+        if (!reflect_leg(panel, p, rest, nrest)) return 0.0;
+        for (ptrdiff_t i = p; i < 6; i++, n_reduced++) /* the rows left */
+            for (ptrdiff_t g = 0; g < n_g + n_loop; g++)
+                rg[g * ld_g + n_reduced] = panel[6 * (p + g) + i];
     }
     if (n_reduced < n_g) return 0.0;
-    for (ptrdiff_t k = 0; k < n_loop; k++) rest[k] = v->n_u + k;
-    if (!reflect(a, ld, v->reduced, n_reduced, v->global_cols, n_g, rest, n_loop)) return 0.0;
+    for (ptrdiff_t k = 0; k < n_loop; k++) rest[k] = n_g + k;
+    if (!reflect(rg, ld_g, n_reduced, n_g, rest, n_loop)) return 0.0;
     /* global unknowns: R_g du_g = -b_g; then each leg's: R_l du_l = -b_l - S_l du_g */
-    double x[64];
-    for (ptrdiff_t k = 0; k < n_loop; k++) {
-        for (ptrdiff_t i = 0; i < n_g; i++) x[i] = -a[v->reduced[i] * ld + v->n_u + k];
-        back_substitute(a, ld, v->reduced, v->global_cols, n_g, x);
-        for (ptrdiff_t i = 0; i < n_g; i++) v->du[v->global_cols[i] * n_loop + k] = x[i];
-        for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
-            const int64_t *piv = v->leg_cols + 6 * leg;
-            ptrdiff_t p = v->leg_count[leg];
-            for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
-            for (ptrdiff_t i = 0; i < p; i++) {
-                const double *row = a + rows[i] * ld;
-                double s = -row[v->n_u + k];
-                for (ptrdiff_t g = 0; g < n_g; g++)
-                    s -= row[v->global_cols[g]] * v->du[v->global_cols[g] * n_loop + k];
-                x[i] = s;
-            }
-            back_substitute(a, ld, rows, piv, p, x);
-            for (ptrdiff_t i = 0; i < p; i++) v->du[piv[i] * n_loop + k] = x[i];
-        }
-    }
-    /* |R^-1|_F^2: R_g^-1 (columns by back substitution), each leg's R_l^-1 and
-     * R_l^-1 S_l R_g^-1 */
-    double total = 0.0;
-    double *rg = v->rg_inv;
-    for (ptrdiff_t j = 0; j < n_g; j++) {
-        for (ptrdiff_t i = 0; i < n_g; i++) x[i] = i == j ? 1.0 : 0.0;
-        back_substitute(a, ld, v->reduced, v->global_cols, n_g, x);
-        for (ptrdiff_t i = 0; i < n_g; i++) {
-            rg[i * n_g + j] = x[i];
-            total += x[i] * x[i];
-        }
-    }
+    double *x = v->solve, *y = v->solve + n_g * (n_g > n_loop ? n_g : n_loop);
+    for (ptrdiff_t i = 0; i < n_g; i++)
+        for (ptrdiff_t k = 0; k < n_loop; k++) x[i * n_loop + k] = -rg[(n_g + k) * ld_g + i];
+    solve_rows(rg, ld_g, n_g, x, n_loop);
+    for (ptrdiff_t i = 0; i < n_g; i++)
+        for (ptrdiff_t k = 0; k < n_loop; k++)
+            v->du[v->global_cols[i] * n_loop + k] = x[i * n_loop + k];
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
+        const double *panel = v->panels + leg * width;
         const int64_t *piv = v->leg_cols + 6 * leg;
         ptrdiff_t p = v->leg_count[leg];
-        for (int i = 0; i < 6; i++) rows[i] = 6 * leg + i;
-        for (ptrdiff_t j = 0; j < p; j++) { /* columns of R_l^-1 */
-            for (ptrdiff_t i = 0; i < p; i++) x[i] = i == j ? 1.0 : 0.0;
-            back_substitute(a, ld, rows, piv, p, x);
-            for (ptrdiff_t i = 0; i < p; i++) total += x[i] * x[i];
-        }
-        for (ptrdiff_t j = 0; j < n_g; j++) { /* columns of R_l^-1 S_l R_g^-1 */
-            for (ptrdiff_t i = 0; i < p; i++) {
-                double s = 0.0;
-                for (ptrdiff_t g = 0; g < n_g; g++)
-                    s += a[rows[i] * ld + v->global_cols[g]] * rg[g * n_g + j];
-                x[i] = s;
+        for (ptrdiff_t i = 0; i < p; i++) {
+            double *yi = y + i * n_loop;
+            for (ptrdiff_t k = 0; k < n_loop; k++) yi[k] = -panel[6 * (p + n_g + k) + i];
+            for (ptrdiff_t g = 0; g < n_g; g++) {
+                const double sg = panel[6 * (p + g) + i], *xg = x + g * n_loop;
+                for (ptrdiff_t k = 0; k < n_loop; k++) yi[k] -= sg * xg[k];
             }
-            back_substitute(a, ld, rows, piv, p, x);
-            for (ptrdiff_t i = 0; i < p; i++) total += x[i] * x[i];
         }
+        solve_rows(panel, 6, p, y, n_loop);
+        for (ptrdiff_t i = 0; i < p; i++)
+            for (ptrdiff_t k = 0; k < n_loop; k++) v->du[piv[i] * n_loop + k] = y[i * n_loop + k];
+    }
+    /* |R^-1|_F^2: R_g^-1, then each leg's rows of R^-1, R_l^-1 [I, -S_l R_g^-1] */
+    double total = 0.0;
+    double *inv = v->rg_inv; /* R_g^-1 (n_g, n_g) */
+    for (ptrdiff_t i = 0; i < n_g * n_g; i++) inv[i] = 0.0;
+    for (ptrdiff_t i = 0; i < n_g; i++) inv[i * n_g + i] = 1.0;
+    solve_rows(rg, ld_g, n_g, inv, n_g);
+    for (ptrdiff_t i = 0; i < n_g * n_g; i++) total += inv[i] * inv[i];
+    for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
+        const double *panel = v->panels + leg * width;
+        ptrdiff_t p = v->leg_count[leg], w = p + n_g;
+        for (ptrdiff_t i = 0; i < p; i++) {
+            double *yi = y + i * w;
+            for (ptrdiff_t j = 0; j < w; j++) yi[j] = j == i ? 1.0 : 0.0;
+            for (ptrdiff_t g = 0; g < n_g; g++) { /* S_l R_g^-1, R_g^-1 upper triangular */
+                const double sg = panel[6 * (p + g) + i], *row = inv + g * n_g;
+                if (sg != 0.0)
+                    for (ptrdiff_t j = g; j < n_g; j++) yi[p + j] += sg * row[j];
+            }
+        }
+        solve_rows(panel, 6, p, y, w);
+        for (ptrdiff_t i = 0; i < p * w; i++) total += y[i] * y[i];
     }
     double bound = 1.0 / sqrt(fro * total);
     return bound > 0.0 ? bound : 0.0; /* NaN (a non-finite entry) refused too */
@@ -241,7 +309,10 @@ static double closure_rates(chain_velocity *v) {
 static void singular_stage(chain_velocity *v, double *out) {
     const ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
     double *sv = out + 12 * n;
-    pk_singular_values_one(out + 6 * n, 6, n, sv, v->work, v->norms);
+    if (n <= 6) /* round-robin Jacobi (its work holds 6 x 6) */
+        pk_singular_values_fast(out + 6 * n, 6, n, sv);
+    else
+        pk_singular_values_one(out + 6 * n, 6, n, sv, v->work, v->norms);
     sv[k] = sv[0] / sv[k - 1];
 }
 
@@ -266,7 +337,8 @@ static double velocity(chain_velocity *v, const double *u, double *out, int sing
     double *jac = out, *j_h = out + 6 * n;
     ptrdiff_t k = n < 6 ? n : 6;
     double *sv = j_h + 6 * n, *rates = sv + k + 1;
-    for (ptrdiff_t i = 0; i < 6 * n; i++) jac[i] = 0.0;
+    if (n_loop + n_twist < n) /* an actuator without a column below (none on these machines) */
+        for (ptrdiff_t i = 0; i < 6 * n; i++) jac[i] = 0.0;
     for (ptrdiff_t i = 0; i < (n_u - 6) * n; i++) rates[i] = 0.0;
     const double *du = v->du;
     for (ptrdiff_t j = 0; j < n_loop; j++) { /* a leg actuator: the platform's twist */
@@ -351,10 +423,13 @@ static int check_pack(const chain_velocity *v, Py_ssize_t n_head, Py_ssize_t n_h
 static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twists) {
     const pk_chain *c = &v->c;
     ptrdiff_t m = 6 * c->n_legs, ld = v->n_u + v->n_loop, L = c->n_legs;
+    v->size = 12 * v->n_act + (v->n_act < 6 ? v->n_act : 6) + 1 + (v->n_u - 6) * v->n_act;
     size_t doubles = (size_t)(c->n_var + ld + m + m * ld + v->n_u * v->n_loop
                               + v->n_u * v->n_u + 6 * twists + 6 * v->n_head
-                              + 6 * (v->n_act + 6) + v->n_act + 6);
-    size_t ints = (size_t)(twists + v->n_head + 6 * L + L + v->n_u + m);
+                              + 6 * (v->n_act + 6) + v->n_act + 6 + L * 6 * (6 + ld)
+                              + m * ld + v->n_u * ld
+                              + 6 * (6 + v->n_u + 32));
+    size_t ints = (size_t)(twists + v->n_head + 6 * L + L + v->n_u);
     char *memory = malloc(doubles * sizeof(double) + ints * sizeof(int64_t));
     if (!memory) {
         PyErr_NoMemory();
@@ -372,13 +447,15 @@ static int lay_out(chain_velocity *v, const int64_t *column_leg, ptrdiff_t twist
     v->head_tw = d; d += 6 * v->n_head;
     v->work = d; d += 6 * (v->n_act + 6);
     v->norms = d; d += v->n_act + 6;
+    v->panels = d; d += L * 6 * (6 + ld);
+    v->rest = d; d += m * ld;
+    v->solve = d; d += v->n_u * ld + 6 * (6 + v->n_u + 32);
     int64_t *k = (int64_t *)d;
     v->w.tw_col = k; k += twists;
     v->head_col = k; k += v->n_head;
     v->leg_cols = k; k += 6 * L;
     v->leg_count = k; k += L;
-    v->global_cols = k; k += v->n_u;
-    v->reduced = k;
+    v->global_cols = k;
     v->w.m = m;
     v->n_global = 0;
     for (ptrdiff_t leg = 0; leg < L; leg++) v->leg_count[leg] = 0;
@@ -474,9 +551,9 @@ fail:
 
 const char pk_chain_one_velocity_doc[] =
     "chain_one_velocity(pack, u, out[, singular]) -> bound\n\n"
-    "The velocity model of one joint-chain configuration u (a list of 6 + n_var floats: the\n"
-    "platform's position and rotation vector, every joint variable) with the constants of\n"
-    "chain_velocity_pack: out (a float64 array of 12 n + min(6, n) + 1 + (n_u - 6) n) filled\n"
+    "The velocity model of one joint-chain configuration u (6 + n_var floats, a list or a\n"
+    "float64 array: the platform's position and rotation vector, every joint variable) with\n"
+    "the constants of chain_velocity_pack: out (12 n + min(6, n) + 1 + (n_u - 6) n floats) filled\n"
     "with J (6, n), J_homogeneous (6, n), J_homogeneous's singular values, its condition\n"
     "number and the passive joints' rates (n_u - 6, n); returns the lower bound of\n"
     "sigma_min / sigma_max of the closure's Jacobian C_U (0.0 where a pivot vanished, -1.0\n"
@@ -513,6 +590,48 @@ static PyObject *singular_only(chain_velocity *v, PyObject *obj) {
     return PyFloat_FromDouble(condition);
 }
 
+/* u (width <= 256) from a list of floats or a C-contiguous float64 1-D buffer; -1 with an
+ * error. */
+static int take_u(PyObject *obj, Py_ssize_t width, double *u) {
+    if (width > 256) {
+        PyErr_SetString(PyExc_ValueError, "u: at most 250 variables");
+        return -1;
+    }
+    if (PyList_CheckExact(obj)) {
+        if (PyList_GET_SIZE(obj) != width) {
+            PyErr_Format(PyExc_TypeError, "u: %zd floats expected", width);
+            return -1;
+        }
+        for (Py_ssize_t i = 0; i < width; i++) {
+            PyObject *item = PyList_GET_ITEM(obj, i);
+            u[i] = PyFloat_CheckExact(item) ? PyFloat_AS_DOUBLE(item) : PyFloat_AsDouble(item);
+            if (u[i] == -1.0 && PyErr_Occurred()) return -1;
+        }
+        return 0;
+    }
+    held_buffers held = {.count = 0};
+    const double *src = grab(&held, obj, "u", 'd', 0, 1);
+    if (!src) {
+        let_go(&held);
+        return -1;
+    }
+    if (extent(&held, 0, 0) != width) {
+        let_go(&held);
+        PyErr_Format(PyExc_TypeError, "u: %zd floats expected", width);
+        return -1;
+    }
+    memcpy(u, src, (size_t)width * sizeof(double));
+    let_go(&held);
+    return 0;
+}
+
+/* The pack argument's state, NULL with a TypeError. */
+static chain_velocity *pack_state(PyObject *obj) {
+    chain_velocity *v = PyCapsule_IsValid(obj, CAPSULE) ? PyCapsule_GetPointer(obj, CAPSULE) : NULL;
+    if (!v) PyErr_SetString(PyExc_TypeError, "pack: a chain_velocity_pack() result expected");
+    return v;
+}
+
 PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
     if (nargs != 3 && nargs != 4) {
@@ -522,30 +641,12 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
     }
     int singular = nargs == 3 ? 1 : PyObject_IsTrue(args[3]);
     if (singular < 0) return NULL;
-    chain_velocity *v = PyCapsule_IsValid(args[0], CAPSULE)
-                        ? PyCapsule_GetPointer(args[0], CAPSULE) : NULL;
-    if (!v) {
-        PyErr_SetString(PyExc_TypeError, "pack: a chain_velocity_pack() result expected");
-        return NULL;
-    }
-    PyObject *list = args[1];
-    Py_ssize_t width = 6 + v->c.n_var;
-    if (list == Py_None) /* the singular stage alone, on out's J_homogeneous */
+    chain_velocity *v = pack_state(args[0]);
+    if (!v) return NULL;
+    if (args[1] == Py_None) /* the singular stage alone, on out's J_homogeneous */
         return singular_only(v, args[2]);
-    if (!PyList_CheckExact(list) || PyList_GET_SIZE(list) != width) {
-        PyErr_Format(PyExc_TypeError, "u: a list of %zd floats expected", width);
-        return NULL;
-    }
     double u[256];
-    if (width > 256) {
-        PyErr_SetString(PyExc_ValueError, "u: at most 250 variables");
-        return NULL;
-    }
-    for (Py_ssize_t i = 0; i < width; i++) {
-        PyObject *item = PyList_GET_ITEM(list, i);
-        u[i] = PyFloat_CheckExact(item) ? PyFloat_AS_DOUBLE(item) : PyFloat_AsDouble(item);
-        if (u[i] == -1.0 && PyErr_Occurred()) return NULL;
-    }
+    if (take_u(args[1], 6 + v->c.n_var, u) < 0) return NULL;
     held_buffers held = {.count = 0};
     double *out = take_out(v, &held, args[2]);
     if (!out) {
@@ -555,4 +656,44 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
     double bound = velocity(v, u, out, singular);
     let_go(&held);
     return PyFloat_FromDouble(bound);
+}
+
+const char pk_chain_one_jacobian_doc[] =
+    "chain_one_jacobian(pack, u, threshold) -> out, None or False\n\n"
+    "chain_one_velocity's model of one configuration u (6 + n_var floats: a list, or a float64\n"
+    "1-D array such as chain_one_ik's solution) in a new float64 array out (its layout, the\n"
+    "singular values and the condition NaN: chain_one_velocity(pack, None, out) computes them)\n"
+    "where the bound clears threshold; None where it does not (or a pivot vanished), False\n"
+    "where u is not in the legs' home modes.";
+
+PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 3) {
+        PyErr_Format(PyExc_TypeError, "chain_one_jacobian() takes 3 positional arguments "
+                     "(%zd given)", nargs);
+        return NULL;
+    }
+    chain_velocity *v = pack_state(args[0]);
+    if (!v) return NULL;
+    double threshold = PyFloat_AsDouble(args[2]);
+    if (threshold == -1.0 && PyErr_Occurred()) return NULL;
+    double u[256];
+    if (take_u(args[1], 6 + v->c.n_var, u) < 0) return NULL;
+    /* the array first, then the kernel straight into it: no Python code runs between the
+     * capsule's scratch and the answer (a thread switch there could reuse the scratch) */
+    PyObject *empty = pk_numpy_empty(), *size = PyLong_FromSsize_t(v->size);
+    PyObject *array = empty && size ? PyObject_CallOneArg(empty, size) : NULL;
+    Py_XDECREF(size);
+    Py_buffer view;
+    if (!array || PyObject_GetBuffer(array, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
+        Py_XDECREF(array);
+        return NULL;
+    }
+    double bound = velocity(v, u, view.buf, 0);
+    PyBuffer_Release(&view);
+    if (bound < 0.0 || !(bound >= threshold) || !(bound > 0.0)) {
+        Py_DECREF(array);
+        return Py_NewRef(bound < 0.0 ? Py_False : Py_None);
+    }
+    return array;
 }

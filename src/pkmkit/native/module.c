@@ -522,6 +522,8 @@ PyObject *pk_py_absorb(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 extern const char pk_chain_velocity_pack_doc[], pk_chain_one_velocity_doc[];
 PyObject *pk_py_chain_velocity_pack(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+extern const char pk_chain_one_jacobian_doc[];
+PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 /* chain_one.c: joint-chain one pose per call (machines/chain_one_native.py) */
 extern const char pk_chain_one_pack_doc[], pk_chain_one_ik_doc[], pk_chain_one_fk_doc[];
 extern const char pk_chain_one_structured_doc[];
@@ -574,6 +576,8 @@ static PyMethodDef methods[] = {
      METH_FASTCALL, pk_chain_velocity_pack_doc},
     {"chain_one_velocity", (PyCFunction)(void (*)(void))pk_py_chain_one_velocity,
      METH_FASTCALL, pk_chain_one_velocity_doc},
+    {"chain_one_jacobian", (PyCFunction)(void (*)(void))pk_py_chain_one_jacobian,
+     METH_FASTCALL, pk_chain_one_jacobian_doc},
     {"chain_one_pack", (PyCFunction)(void (*)(void))pk_py_chain_one_pack, METH_FASTCALL,
      pk_chain_one_pack_doc},
     {"chain_one_ik", (PyCFunction)(void (*)(void))pk_py_chain_one_ik, METH_FASTCALL,
