@@ -302,7 +302,8 @@ def _exact_strut_q(m, row, mpmath):
     rot = [[(i == j) + a * skew[i][j] + b * (w[i] * w[j] - (i == j) * theta**2)
             for j in range(3)] for i in range(3)]
     out = []
-    for base, plat, length in zip(m.model.rod_base, m.model.rod_platform, m.model.rod_length):
+    rods = zip(m.model.rod_base, m.model.rod_platform, m.model.rod_length, strict=True)
+    for base, plat, length in rods:
         v = [(px, py, pz)[i] + sum(rot[i][j] * mpmath.mpf(float(plat[j])) for j in range(3))
              - mpmath.mpf(float(base[i])) for i in range(3)]
         out.append(float(mpmath.sqrt(sum(c * c for c in v)) - mpmath.mpf(float(length))))
