@@ -12,7 +12,8 @@
  * Lane by lane the operations of pk_inverse_poses_scalar (inverse.c), in the same order
  * (+, -, *, /, sqrt correctly rounded at any width; no FMA: -ffp-contract=off), the branches
  * turned into selections, EXCEPT sin and cos: a vectorised sincos (PK_FN(sincos) below) in
- * place of libm's, so q may differ from the scalar, Numba and NumPy paths in its last bits
+ * place of libm's, and up to 1 rad the Taylor series of sin/theta and cos (PK_FN(series)),
+ * so q may differ from the scalar, Numba and NumPy paths in its last bits
  * (the bound: tests/native/test_inverse_simd.py, docs/benchmarks.md "Six-axis kernels"). */
 
 /* mask ? a : b, mask lanes all ones or all zeros (C has no vector ?:). */

@@ -7,8 +7,10 @@
  * correctly rounded at any width; no FMA: the extension builds with -ffp-contract=off), the
  * branches become selections computed both ways — except sin and cos, which are a vectorised
  * sincos (Cody-Waite reduction, fdlibm's polynomials; at most 1 ulp from libm's) instead of
- * libm's called lane by lane, which cost half the kernel. So q may differ from the scalar C,
- * Numba and NumPy paths in its last bits (the bound is tested: tests/native/
+ * libm's called lane by lane, which cost half the kernel; and for rotations up to 1 rad not even
+ * that: sin(theta)/theta and cos(theta) by their Taylor series in theta^2 (no square root,
+ * reduction or sincos; b = (1 - cos)/theta^2 as pk_rotation has it). So q may differ from the
+ * scalar C, Numba and NumPy paths in its last bits (the bound is tested: tests/native/
  * test_inverse_simd.py); both widths give the same bits, and every row of a batch, the
  * last partial block included, takes the vectorised arithmetic.
  *
