@@ -31,7 +31,8 @@ For each condition (``quiet``; ``loaded`` with one process keeping a core and th
   two threads bound by memory bandwidth their CPU per pose would rise);
 - **block widths** (``--widths``, only these rows) — the C inverse kernel alone on
   preallocated arrays, one thread, scalar (libm's sin and cos) and per vector width the CPU
-  has (4 poses per AVX2 block, 8 per AVX-512 one; their own sincos), against a copy of the
+  has (4 poses per AVX2 block, 8 per AVX-512 one; their own sincos, or up to 1 rad the
+  Taylor series of sin θ / θ and cos θ), against a copy of the
   input into a preallocated array: CPU per pose;
 - **accuracy** (``--accuracy``, only these rows, no timing) — q of the vectorised kernel, of
   the scalar C kernel and of the NumPy path on ``--poses`` hexapod poses and up to 10⁶ Verne

@@ -4,7 +4,9 @@ machines of slides and struts) against the scalar C kernel (``kernels.simd(False
 Numba kernel and the NumPy path.
 
 The vectorised kernel computes sin and cos by its own sincos (not libm's, which cost half the
-kernel): its accuracy is tested against mpmath (at most 1 ulp on [0, 2π]), and so q may
+kernel) — and for rotations up to 1 rad sin/θ and cos by their Taylor series in θ², with no
+square root, reduction or division but the one of (1 − cos θ)/θ²: both are tested against
+mpmath (the sincos at most 1 ulp on [0, 2π], q of the series path against an exact q), so q may
 differ from the libm-based paths in its last bits — within 4 ulp of the leg here (measured:
 3 ulp over 10⁷ hexapod poses, the same distance as the scalar C kernel's from the NumPy path;
 ``bench/full_pose.py --accuracy``). Everything else is bit for bit: rows without a rotation
@@ -62,14 +64,16 @@ def simd():
 
 def _rotation_rows(m, rng):
     """Rows where the rotation's branches and inputs are odd: rotation vectors of norm 0,
-    1e-300, just under and over the series' switch (1e-8), in each quadrant of the sincos'
+    1e-300, just under and over the series' switch (1e-8), around the switch from the Taylor
+    series of sin/θ and cos to the sincos (1 rad), in each quadrant of the sincos'
     reduction, π, beyond 2π, around its switch to libm (1e5); signed zeros; coordinates at
     ±1e9 (valid) and just over (invalid); NaN and ±inf in each of the six columns in turn (a
     lane or column mixed up in the block's transposition shows)."""
     home = np.asarray(m.home_pose, dtype=float)
     rows = []
-    for norm in (0.0, 1e-300, 1e-9, np.nextafter(1e-8, 0), 1e-8, 2e-8, 1e-3, 0.3, 1.2, 2.0,
-                 np.pi, 4.0, 5.0, 7.0, 1e5, np.nextafter(1e5, 2e5), 3e5):
+    for norm in (0.0, 1e-300, 1e-9, np.nextafter(1e-8, 0), 1e-8, 2e-8, 1e-3, 0.3, 0.9,
+                 np.nextafter(1.0, 0), 1.0, np.nextafter(1.0, 2), 1.2, 2.0, np.pi, 4.0, 5.0, 7.0,
+                 1e5, np.nextafter(1e5, 2e5), 3e5):
         direction = rng.normal(size=3)
         rows.append(np.concatenate([home[:3], norm * direction / np.linalg.norm(direction)]))
     rows.append(np.concatenate([home[:3], [-0.0, 0.0, -0.0]]))
@@ -284,3 +288,80 @@ def test_vectorised_on_threads(threads, simd, monkeypatch):
         _close((np.asarray(on.q), on.status), (np.asarray(off.q), off.status),
                _leg_scale(m, args), _edge(len(x)))
         assert (on.status == 0).sum() > 1000
+
+
+def _exact_strut_q(m, row, mpmath):
+    """q of every strut of ``m`` at pose ``row`` in mpmath (the caller's precision): Rodrigues'
+    rotation from mpmath's sin and cos, |p + R b − a| − L."""
+    px, py, pz, wx, wy, wz = (mpmath.mpf(float(v)) for v in row)
+    theta = mpmath.sqrt(wx * wx + wy * wy + wz * wz)
+    a = mpmath.sin(theta) / theta if theta else mpmath.mpf(1)
+    b = (1 - mpmath.cos(theta)) / theta**2 if theta else mpmath.mpf(1) / 2
+    w = (wx, wy, wz)
+    skew = [[0, -wz, wy], [wz, 0, -wx], [-wy, wx, 0]]
+    rot = [[(i == j) + a * skew[i][j] + b * (w[i] * w[j] - (i == j) * theta**2)
+            for j in range(3)] for i in range(3)]
+    out = []
+    rods = zip(m.model.rod_base, m.model.rod_platform, m.model.rod_length, strict=True)
+    for base, plat, length in rods:
+        v = [(px, py, pz)[i] + sum(rot[i][j] * mpmath.mpf(float(plat[j])) for j in range(3))
+             - mpmath.mpf(float(base[i])) for i in range(3)]
+        out.append(float(mpmath.sqrt(sum(c * c for c in v)) - mpmath.mpf(float(length))))
+    return np.array(out)
+
+
+@vectorised
+def test_the_series_rotation_against_mpmath(simd):
+    """Rotations of norm up to 1 rad (the Taylor series of sin/θ and cos, no sincos) and just
+    beyond (the sincos): the hexapod's q (six struts, one per actuator) at each width within
+    :data:`LEG_ULPS` ulps of the leg of q computed in mpmath at 120 bits (an independent
+    oracle: mpmath's sin and cos, the rotation matrix from its axis-angle form) — as the scalar
+    kernel (libm) is; both widths the same bits."""
+    mpmath = pytest.importorskip("mpmath")
+    m = pkmkit.machine("gough-stewart")
+    rng = np.random.default_rng(12)
+    norms = np.concatenate([rng.uniform(0, 1, 150), 10.0 ** rng.uniform(-8, 0, 60),
+                            np.nextafter(1.0, [0.0, 2.0]), [1.0, 0.999, 1.001, 1.05]])
+    direction = rng.normal(size=(len(norms), 3))
+    x = np.empty((len(norms), 6))
+    x[:, :3] = m.home_pose[:3] + rng.uniform(-0.05, 0.05, (len(norms), 3))
+    x[:, 3:] = norms[:, None] * direction / np.linalg.norm(direction, axis=1)[:, None]
+    forms = FullPoseForms(m.model)
+    args = _inverse_args(forms, x, forms.rod_branch, m._consistency_tol())
+    with mpmath.workprec(120):
+        exact = np.array([_exact_strut_q(m, row, mpmath) for row in x])
+    scale = np.spacing(np.maximum(np.abs(exact), m.model.rod_length))
+    simd.simd(False)
+    scalar = _run(simd.inverse_poses, args, x)
+    got = {}
+    for width in _widths():
+        simd.simd(width)
+        got[width] = _run(simd.inverse_poses, args, x)
+    simd.simd(True)
+    for q, status in (scalar, *got.values()):
+        assert (status == 0).all()
+        assert np.all(np.abs(q - exact) <= LEG_ULPS * scale)
+    for width in _widths():
+        _same_bits(got[width], got[4])
+
+
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_a_plain_ik_skips_the_statuses(threads, monkeypatch):
+    """``inverse_compiled(..., statuses=False)`` (a plain ``m.ik(X)``: nothing reads the
+    statuses) gives None for them and q bit for bit as with the statuses, over several
+    thread pieces with rows of every kind; ``m.ik(X)`` equals ``m.ik(X, full_output=True).q``."""
+    from pkmkit.numerics import jit
+
+    monkeypatch.setenv("PKMKIT_THREADS", threads)
+    for name in NAMES:
+        m = pkmkit.machine(name)
+        x = _poses(m, 2 * jit.THREAD_ROWS + 13, seed=14)
+        forms = FullPoseForms(m.model)
+        sigma, tol = forms.rod_branch, m._consistency_tol()
+        q, status = forms.inverse_compiled(x, sigma, tol)
+        bare, none = forms.inverse_compiled(x, sigma, tol, statuses=False)
+        assert none is None and {0, 4} <= set(status.tolist())  # OK and invalid rows
+        _same_bits((bare, status), (q, status))
+        plain = m.ik(x, strokes="ignore")
+        _same_bits((plain, status), (np.asarray(m.ik(x, full_output=True, strokes="ignore").q),
+                                     status))

@@ -415,7 +415,9 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         sigma = self._branches(branches)
         fused = not single and jit.use_compiled(xb.shape[0], native=True)
         if fused:  # one pass, q NaN on every row whose status is not OK
-            q, status = self._forms.inverse_compiled(xb, sigma, self._consistency_tol())
+            # a plain batch (no record, strokes flagged or ignored) never reads the statuses
+            q, status = self._forms.inverse_compiled(
+                xb, sigma, self._consistency_tol(), full_output or strokes == "refuse")
         else:
             with np.errstate(invalid="ignore", over="ignore"):
                 q_rod = self._forms.rod_coordinates(xb, sigma)

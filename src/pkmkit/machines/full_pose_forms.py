@@ -112,14 +112,17 @@ class FullPoseForms:
             return out.T
         return self.rod_coordinates_numpy(x, sigma)
 
-    def inverse_compiled(self, x: np.ndarray, sigma: np.ndarray,
-                         consistency_tol: float) -> tuple[np.ndarray, np.ndarray]:
+    def inverse_compiled(self, x: np.ndarray, sigma: np.ndarray, consistency_tol: float,
+                         statuses: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
         """The inverse model of pose rows ``x (N, 6)`` in one compiled pass
         (:func:`pkmkit.machines.full_pose_kernels.inverse_poses`, or its C twin: see
         :func:`pkmkit.numerics.jit.kernel`): ``q (N, n_act)`` (NaN rows
         where not OK) and ``status (N,)`` — OK, UNREACHABLE (a rod cannot close, or the rods
         of one actuator disagree by more than ``consistency_tol``) or INVALID_INPUT; the same
-        as :meth:`rod_coordinates` then :meth:`combine` and the machine's checks."""
+        as :meth:`rod_coordinates` then :meth:`combine` and the machine's checks. With
+        ``statuses=False`` the status is None: each piece's statuses go to a scratch array of
+        the piece's size (reused memory, in cache) instead of a fresh ``(N,)`` one whose pages
+        a plain ``m.ik(X)`` would fault in and never read (issue 22 §2)."""
         inverse_poses = jit.kernel("pkmkit.machines.full_pose_kernels", "inverse_poses")
         m = self.model
         act = m.rod_actuator
@@ -129,7 +132,7 @@ class FullPoseForms:
             groups[k, :counts[k]] = np.flatnonzero(act == k)
         angular = np.array([m.rod_kind[groups[k, 0]] == CRANK for k in range(m.n_actuators)])
         q = np.empty((x.shape[0], m.n_actuators))
-        status = np.empty(x.shape[0], dtype=np.int64)
+        status = np.empty(x.shape[0] if statuses else 0, dtype=np.int64)
         x = np.ascontiguousarray(x, dtype=float)
         rods = (m.rod_kind.astype(np.int64), *_plain(m.rod_base, m.rod_platform, m.rod_axis,
                 m.rod_pivot, self.crank_e1, self.crank_e2, self.length_sq, m.rod_length,
@@ -137,10 +140,11 @@ class FullPoseForms:
                 counts.astype(np.int64), angular, float(consistency_tol))
 
         def work(start: int, stop: int) -> None:
-            inverse_poses(x[start:stop], *rods, q[start:stop], status[start:stop])
+            out = status[start:stop] if statuses else np.empty(stop - start, dtype=np.int64)
+            inverse_poses(x[start:stop], *rods, q[start:stop], out)
 
         jit.run_chunks(work, x.shape[0])
-        return q, status
+        return q, status if statuses else None
 
     def rod_coordinates_numpy(self, x: np.ndarray, sigma: np.ndarray) -> np.ndarray:
         """The NumPy reference of :meth:`rod_coordinates` (cache-sized chunks)."""

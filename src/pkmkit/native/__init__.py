@@ -8,7 +8,8 @@ arguments, the same algorithm and statuses, run without the GIL:
 - ``inverse_poses`` — :func:`pkmkit.machines.full_pose_kernels.inverse_poses` (eight poses
   per AVX-512 block, four per AVX2 one, on x86-64 CPUs that have them, for machines of slides
   and struts: the same operations lane by lane but sin and cos, which a vectorised sincos
-  computes — at most 1 ulp from the exact values on [0, 2π] —, so q may differ from the scalar
+  computes — at most 1 ulp from the exact values on [0, 2π] — or, for rotations up to 1 rad,
+  the Taylor series of sin θ / θ and cos θ in θ², so q may differ from the scalar
   and Numba kernels' in its last bits, within 4 ulp of the leg; ``simd()`` gives the poses per
   block in use, 0 for one at a time, ``simd(False)`` switches it off, ``simd(4)`` asks for
   AVX2; ``simd_sincos`` exposes the sincos to the tests);

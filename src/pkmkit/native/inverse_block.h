@@ -5,12 +5,15 @@
  *   PK_FN(name) the width's name of a function,
  *   vd, vi      PK_W doubles / int64 (GCC vector extensions),
  *   PK_SQRT(v)  the width's correctly rounded square root,
- *   PK_COLUMNS(x, cols) the block's rows x (PK_W, 6) to one vector per coordinate.
+ *   PK_COLUMNS(x, cols) the block's rows x (PK_W, 6) to one vector per coordinate,
+ *   PK_STORE_ROWS(v, n, q) the n vectors v (one per actuator) to the block's rows q (PK_W, n),
+ *   PK_ALL(mask) whether every lane of a mask is set.
  *
  * Lane by lane the operations of pk_inverse_poses_scalar (inverse.c), in the same order
  * (+, -, *, /, sqrt correctly rounded at any width; no FMA: -ffp-contract=off), the branches
  * turned into selections, EXCEPT sin and cos: a vectorised sincos (PK_FN(sincos) below) in
- * place of libm's, so q may differ from the scalar, Numba and NumPy paths in its last bits
+ * place of libm's, and up to 1 rad the Taylor series of sin/theta and cos (PK_FN(series)),
+ * so q may differ from the scalar, Numba and NumPy paths in its last bits
  * (the bound: tests/native/test_inverse_simd.py, docs/benchmarks.md "Six-axis kernels"). */
 
 /* mask ? a : b, mask lanes all ones or all zeros (C has no vector ?:). */
@@ -66,6 +69,19 @@ static inline PK_TGT void PK_FN(sincos)(vd t, vd *sin_out, vd *cos_out) {
     *cos_out = c;
 }
 
+/* sin(theta) / theta and cos(theta) from z = theta^2 <= 1 by their Taylor series (to z^8 and
+ * z^9: the next terms, 1/19! and 1/20!, are below 2^-55 of the values), in Horner's order: no
+ * square root, no argument reduction, no division. Against mpmath:
+ * tests/native/test_inverse_simd.py. */
+static inline PK_TGT void PK_FN(series)(vd z, vd *sinc, vd *cosine) {
+    *sinc = 1.0 + z * (-1.0 / 6.0 + z * (1.0 / 120.0 + z * (-1.0 / 5040.0 + z * (1.0 / 362880.0 +
+        z * (-1.0 / 39916800.0 + z * (1.0 / 6227020800.0 + z * (-1.0 / 1307674368000.0 +
+        z * (1.0 / 355687428096000.0))))))));
+    *cosine = 1.0 + z * (-1.0 / 2.0 + z * (1.0 / 24.0 + z * (-1.0 / 720.0 + z * (1.0 / 40320.0 +
+        z * (-1.0 / 3628800.0 + z * (1.0 / 479001600.0 + z * (-1.0 / 87178291200.0 +
+        z * (1.0 / 20922789888000.0 + z * (-1.0 / 6402373705728000.0)))))))));
+}
+
 /* Poses x (PK_W, 6) into q (PK_W, n), status (PK_W,); rod_q: scratch of m vectors. */
 static PK_TGT void PK_FN(block)(const double *x, const pk_rods *g, const pk_actuators *act,
                                 double *q, int64_t *status, vd *rod_q) {
@@ -77,14 +93,29 @@ static PK_TGT void PK_FN(block)(const double *x, const pk_rods *g, const pk_actu
     for (int i = 0; i < 6; i++) cols[i] = PK_FN(select)(valid, cols[i], PK_FN(splat)(0.0));
     vd px = cols[0], py = cols[1], pz = cols[2], wx = cols[3], wy = cols[4], wz = cols[5];
 
-    /* pk_rotation */
-    vd theta = PK_FN(sqrt)(wx * wx + wy * wy + wz * wz);
-    vi small = theta < 1e-8;
-    vd vsn, vcs;
-    PK_FN(sincos)(theta, &vsn, &vcs);
-    vd safe = PK_FN(select)(small, PK_FN(splat)(1.0), theta); /* no 0/0 in unused lanes */
-    vd a = PK_FN(select)(small, 1.0 - theta * theta / 6.0, vsn / safe);
-    vd b = PK_FN(select)(small, 0.5 - theta * theta / 24.0, (1.0 - vcs) / (safe * safe));
+    /* pk_rotation: a = sin(theta) / theta, b = (1 - cos(theta)) / theta^2 — below 1e-8 rad
+     * their series' first two terms, as pk_rotation; up to 1 rad (z <= PK_SERIES_MAX) sin /
+     * theta and cos by PK_FN(series), b by pk_rotation's formula (1 - cos) / theta^2 with
+     * theta^2 = z (its cancellation kept: q stays within a few ulps of the libm-based paths);
+     * beyond, the sincos and the divisions. */
+    vd z = wx * wx + wy * wy + wz * wz;
+    vi near = z <= PK_SERIES_MAX;
+    vi tiny = z < 1e-16;
+    vd a, cosine;
+    PK_FN(series)(z, &a, &cosine);
+    vd b = PK_FN(select)(tiny, 0.5 - z / 24.0,
+                         (1.0 - cosine) / PK_FN(select)(tiny, PK_FN(splat)(1.0), z));
+    if (!PK_ALL(near)) { /* some lane beyond 1 rad */
+        vd theta = PK_FN(sqrt)(z);
+        vi small = theta < 1e-8;
+        vd vsn, vcs;
+        PK_FN(sincos)(theta, &vsn, &vcs);
+        vd safe = PK_FN(select)(small, PK_FN(splat)(1.0), theta); /* no 0/0 in unused lanes */
+        vd a_far = PK_FN(select)(small, 1.0 - theta * theta / 6.0, vsn / safe);
+        vd b_far = PK_FN(select)(small, 0.5 - theta * theta / 24.0, (1.0 - vcs) / (safe * safe));
+        a = PK_FN(select)(near, a, a_far);
+        b = PK_FN(select)(near, b, b_far);
+    }
     vd r0 = 1.0 - b * (wy * wy + wz * wz);
     vd r4 = 1.0 - b * (wx * wx + wz * wz);
     vd r8 = 1.0 - b * (wx * wx + wy * wy);
@@ -147,10 +178,8 @@ static PK_TGT void PK_FN(block)(const double *x, const pk_rods *g, const pk_actu
     ok &= spread <= act->consistency_tol;
     ok &= valid;
     const vd nan = PK_FN(splat)(NAN);
-    for (ptrdiff_t a = 0; a < n; a++) {
-        vd v = PK_FN(select)(ok, value[a], nan);
-        for (int l = 0; l < PK_W; l++) q[n * l + a] = v[l];
-    }
+    for (ptrdiff_t a = 0; a < n; a++) value[a] = PK_FN(select)(ok, value[a], nan);
+    PK_STORE_ROWS(value, n, q);
     /* 0 OK, 1 unreachable, 4 invalid input */
     vi code = (~ok & valid & 1) | (~valid & 4);
     memcpy(status, &code, sizeof code);

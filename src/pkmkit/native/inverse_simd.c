@@ -7,8 +7,10 @@
  * correctly rounded at any width; no FMA: the extension builds with -ffp-contract=off), the
  * branches become selections computed both ways — except sin and cos, which are a vectorised
  * sincos (Cody-Waite reduction, fdlibm's polynomials; at most 1 ulp from libm's) instead of
- * libm's called lane by lane, which cost half the kernel. So q may differ from the scalar C,
- * Numba and NumPy paths in its last bits (the bound is tested: tests/native/
+ * libm's called lane by lane, which cost half the kernel; and for rotations up to 1 rad not even
+ * that: sin(theta)/theta and cos(theta) by their Taylor series in theta^2 (no square root,
+ * reduction or sincos; b = (1 - cos)/theta^2 as pk_rotation has it). So q may differ from the
+ * scalar C, Numba and NumPy paths in its last bits (the bound is tested: tests/native/
  * test_inverse_simd.py); both widths give the same bits, and every row of a batch, the
  * last partial block included, takes the vectorised arithmetic.
  *
@@ -35,6 +37,9 @@ static int pk_simd_choice = 1;
 #define PK_SIMD_RODS 64
 /* Rotation angles beyond this take libm's sin and cos (the reduction's n < 2^20). */
 #define PK_TRIG_MAX 1e5
+/* Rotation vectors of squared norm up to this take the Taylor series of Rodrigues'
+ * coefficients (inverse_block.h: rodrigues_series), the others the sincos and two divisions. */
+#define PK_SERIES_MAX 1.0
 
 /* (lo[0], lo[1], hi[0], hi[1]) (_mm256_loadu2_m128d, which older GCCs lack). */
 static inline __attribute__((target("avx2"))) __m256d pk_load_pairs(const double *lo,
@@ -62,6 +67,47 @@ static inline __attribute__((target("avx512f,avx512dq"))) void pk_columns8(const
         cols[i] = _mm512_insertf64x4(_mm512_castpd256_pd512(lo[i]), hi[i], 1);
 }
 
+/* Vectors v[a] (4 lanes, one per actuator a < n) to rows q (4, n): one store per value. */
+static inline __attribute__((target("avx2"))) void pk_rows4(const __m256d *v, ptrdiff_t n,
+                                                           double *q) {
+    for (ptrdiff_t a = 0; a < n; a++)
+        for (int l = 0; l < 4; l++) q[n * l + a] = v[a][l];
+}
+
+/* Vectors v[a] (8 lanes, one per actuator a < n) to rows q (8, n): for n <= 8 an 8 x 8
+ * transposition by unpacks and 128-bit lane shuffles (the missing vectors zero) and one
+ * masked store of n values per row; wider, one store per value. */
+static inline __attribute__((target("avx512f,avx512dq"))) void pk_rows8(const __m512d *v,
+                                                                       ptrdiff_t n, double *q) {
+    if (n > 8) {
+        for (ptrdiff_t a = 0; a < n; a++)
+            for (int l = 0; l < 8; l++) q[n * l + a] = v[a][l];
+        return;
+    }
+    __m512d c[8], t[8], u[8];
+    for (int a = 0; a < 8; a++) c[a] = a < n ? v[a] : _mm512_setzero_pd();
+    for (int i = 0; i < 4; i++) { /* (c0[l], c1[l]) pairs: lanes 0,2,4,6 in lo, 1,3,5,7 in hi */
+        t[2 * i] = _mm512_unpacklo_pd(c[2 * i], c[2 * i + 1]);
+        t[2 * i + 1] = _mm512_unpackhi_pd(c[2 * i], c[2 * i + 1]);
+    }
+    for (int i = 0; i < 2; i++) { /* 128-bit blocks 0, 2 and 1, 3 of two pairs of actuators */
+        for (int h = 0; h < 2; h++) {
+            u[4 * i + h] = _mm512_shuffle_f64x2(t[4 * i + h], t[4 * i + 2 + h], 0x88);
+            u[4 * i + 2 + h] = _mm512_shuffle_f64x2(t[4 * i + h], t[4 * i + 2 + h], 0xdd);
+        }
+    }
+    const __mmask8 keep = (__mmask8)((1u << n) - 1u);
+    for (int h = 0; h < 2; h++) {
+        for (int j = 0; j < 2; j++) {
+            __m512d lo = u[2 * j + h], hi = u[4 + 2 * j + h];
+            /* rows l = h + 2 (j + 2 s) for s = 0, 1: 128-bit blocks s and s + 2 of lo, hi */
+            _mm512_mask_storeu_pd(q + n * (h + 2 * j), keep, _mm512_shuffle_f64x2(lo, hi, 0x88));
+            _mm512_mask_storeu_pd(q + n * (h + 2 * j + 4), keep,
+                                  _mm512_shuffle_f64x2(lo, hi, 0xdd));
+        }
+    }
+}
+
 #define PK_W 4
 #define PK_COLUMNS(x, cols) pk_columns4((x), (__m256d *)(cols))
 #define PK_TGT __attribute__((target("avx2")))
@@ -69,6 +115,8 @@ static inline __attribute__((target("avx512f,avx512dq"))) void pk_columns8(const
 typedef double vd __attribute__((vector_size(32)));
 typedef int64_t vi __attribute__((vector_size(32)));
 #define PK_SQRT(v) ((vd)_mm256_sqrt_pd((__m256d)(v)))
+#define PK_ALL(mask) (_mm256_movemask_pd((__m256d)(mask)) == 0xF)
+#define PK_STORE_ROWS(v, n, q) pk_rows4((const __m256d *)(v), (n), (q))
 #include "inverse_block.h"
 #undef PK_W
 #undef PK_TGT
@@ -84,6 +132,10 @@ typedef double vd8 __attribute__((vector_size(64)));
 typedef int64_t vi8 __attribute__((vector_size(64)));
 #undef PK_SQRT
 #define PK_SQRT(v) ((vd)_mm512_sqrt_pd((__m512d)(v)))
+#undef PK_ALL
+#define PK_ALL(mask) (_mm512_movepi64_mask((__m512i)(mask)) == 0xFF)
+#undef PK_STORE_ROWS
+#define PK_STORE_ROWS(v, n, q) pk_rows8((const __m512d *)(v), (n), (q))
 #include "inverse_block.h"
 #undef vd
 #undef vi
