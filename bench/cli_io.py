@@ -5,7 +5,10 @@ outside, median of ``--repeat`` runs) on ``--rows`` rows, against baselines meas
 run on the same tables:
 
 - ``xlib``: pyarrow's own read of the input table plus write of the command's output table (the
-  least any tool reading and writing those tables with that library pays);
+  least any tool reading and writing those tables with that library pays), with pyarrow's
+  default write options; for Parquet also ``plain s``, the same write with the command's
+  encoding (numbers plain, texts dictionary-encoded: ``pkmkit.io.table_writer``), and
+  ``xplain`` against it;
 - ``xold``: the former implementation (csv module, per-row ``float()`` and ``.17g`` formatting,
   per-row status labels) on the first ``--old-rows`` rows, scaled to ``--rows``.
 
@@ -35,7 +38,8 @@ not grow with N).
 Usage::
 
     python bench/cli_io.py [--rows 1000000] [--repeat 5] [--big-rows 10000000] [--load]
-                           [--commands ik] [--old-rows 0] [--first-calls-only]
+                           [--commands ik] [--formats parquet] [--old-rows 0]
+                           [--first-calls-only | --no-first-calls]
 """
 
 from __future__ import annotations
@@ -136,9 +140,11 @@ def make_tables(folder: Path, rows: int) -> dict[str, Path]:
     return paths
 
 
-def library_read_write(src: Path, produced: Path, repeat: int, cpu: bool = False) -> float:
+def library_read_write(src: Path, produced: Path, repeat: int, cpu: bool = False,
+                       plain: bool = False) -> float:
     """pyarrow reading ``src`` and writing the table held in ``produced`` (same format): median
-    wall time, or CPU time with ``cpu``."""
+    wall time, or CPU time with ``cpu``; ``plain`` (Parquet): written with the command's
+    encoding (only the text columns dictionary-encoded) instead of pyarrow's defaults."""
     if src.suffix == ".csv":
         with open(produced, "rb") as handle:  # the command's "# units: m" line
             skip = 1 if handle.readline().startswith(b"#") else 0
@@ -149,10 +155,12 @@ def library_read_write(src: Path, produced: Path, repeat: int, cpu: bool = False
             pcsv.write_csv(out_table, produced.with_suffix(".lib.csv"))
     else:
         out_table = pq.read_table(produced)
+        options = {} if not plain else {"use_dictionary": [
+            f.name for f in out_table.schema if pa.types.is_dictionary(f.type)]}
 
         def run():
             pq.read_table(src)
-            pq.write_table(out_table, produced.with_suffix(".lib.parquet"))
+            pq.write_table(out_table, produced.with_suffix(".lib.parquet"), **options)
     return cpu_in_process(run, repeat) if cpu else median_in_process(run, repeat)
 
 
@@ -203,7 +211,7 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
             continue
         solve = median_in_process(solves[command], args.repeat)
         solve_cpu = cpu_in_process(solves[command], args.repeat)
-        for fmt in ("csv", "parquet"):
+        for fmt in args.formats:
             src = paths[f"{src_name}.{fmt}"]
             dst = folder / f"out-{command}.{fmt}"
             t, cpu = run_times([*cmd, command, "linear-delta", "--input", str(src), "--output",
@@ -213,6 +221,11 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
             print(f"pkmkit {command:<13} {fmt:<8} {t:7.3f} {lib:7.3f} {t / lib:6.2f} "
                   f"{solve:8.3f} {(t - solve) / lib:8.2f} {cpu:6.3f} {lib_cpu:7.3f} "
                   f"{solve_cpu:9.3f}")
+            if fmt == "parquet":
+                plain = library_read_write(src, dst, args.repeat, plain=True)
+                plain_cpu = library_read_write(src, dst, args.repeat, cpu=True, plain=True)
+                print(f"{'':<29} plain s {plain:7.3f} xplain {t / plain:6.2f} "
+                      f"plain cpu {plain_cpu:6.3f}")
     old_rows = min(args.old_rows, args.rows)
     if old_rows:
         start = time.perf_counter()
@@ -230,13 +243,15 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
                         ("pkmkit path --help", ["path", "--help"])):
         t, cpu = run_times([*cmd, *extra], args.repeat)
         print(f"{name:<34} {t:7.3f} {t / t_pass:9.1f} {t / t_numpy:8.2f} {cpu:6.3f}")
-    first_calls(args.repeat)
+    if not args.no_first_calls:
+        first_calls(args.repeat)
 
 
 def statuses_at_kernel_cost(m, x: np.ndarray, repeat: int) -> None:
-    """CPU time of ``m.ik(X)`` and ``m.ik(X, full_output=True)`` in this process, on the
-    NumPy path (Numba not imported yet) and then on the compiled one."""
-    for label in ("NumPy path (Numba not imported)", "compiled (Numba imported)"):
+    """CPU time of ``m.ik(X)`` and ``m.ik(X, full_output=True)`` in this process, before
+    Numba is imported (the C twins of ``pkmkit.native`` where built, else NumPy) and after
+    (where the extension is built the C twins still run: the same figures)."""
+    for label in ("no Numba (C twins, else NumPy)", "compiled (Numba imported)"):
         if label.startswith("compiled"):
             if "numba" not in sys.modules:
                 try:
@@ -313,10 +328,15 @@ def main() -> None:
     parser.add_argument("--load", action="store_true", help="also run beside a busy process")
     parser.add_argument("--commands", default="ik,fk,jacobian",
                         help="batch commands to time, comma-separated (default: all three)")
+    parser.add_argument("--formats", default="csv,parquet",
+                        help="batch table formats to time, comma-separated (default: both)")
     parser.add_argument("--first-calls-only", action="store_true",
                         help="only the table of a fresh process's first batch call")
+    parser.add_argument("--no-first-calls", action="store_true",
+                        help="leave out the table of a fresh process's first batch call")
     args = parser.parse_args()
     args.commands = args.commands.split(",")
+    args.formats = args.formats.split(",")
     if args.first_calls_only:
         first_calls(args.repeat)
         return
