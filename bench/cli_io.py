@@ -35,6 +35,12 @@ not grow with N).
 
 ``--load`` runs everything again beside a competing busy process.
 
+``--phases``: where a fresh ``pkmkit ik linear-delta`` process spends its CPU time, Parquet to
+Parquet (and CSV to CSV) on the ``--rows`` table, median of ``--repeat`` processes: the imports
+before the command runs (pkmkit, click, NumPy), the conversion of the read batches to float64
+arrays, the inverse model with statuses and modes, the output table built and written, and the
+rest of the command (pyarrow's imports, opening the file and reading its batches, the columns).
+
 Usage::
 
     python bench/cli_io.py [--rows 1000000] [--repeat 5] [--big-rows 10000000] [--load]
@@ -186,6 +192,63 @@ def old_implementation(src: Path, dst: Path, rows: int, columns: list[str]) -> N
                             + [m.mode_label(res.mode[k]) if res.mode[k] else "", lab])
 
 
+#: A fresh process running ``pkmkit ik linear-delta --input argv[1] --output argv[2]`` with
+#: its stages timed (CPU) by wrappers; prints ``stage seconds`` lines.
+PHASES = r"""
+import collections, importlib, sys, time
+t0 = time.process_time()
+main = importlib.import_module("pkmkit.cli.main")
+ik_cmd = importlib.import_module("pkmkit.cli.ik_cmd")
+imports = time.process_time() - t0
+acc = collections.Counter()
+def wrap(owner, name, label):
+    function = getattr(owner, name)
+    def wrapper(*args, **kwargs):
+        start = time.process_time()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            acc[label] += time.process_time() - start
+    setattr(owner, name, wrapper)
+sources = importlib.import_module("pkmkit.io.table_sources")
+writer = importlib.import_module("pkmkit.io.table_writer")
+wrap(sources.ArrowSource, "_convert", "read:batches-to-float64")
+wrap(sources.CsvSource, "_parse", "read:csv-parse-to-float64")
+wrap(ik_cmd, "inverse", "kernel:ik-full-output")
+wrap(writer.TableWriter, "write", "write:table-and-encode")
+wrap(writer.TableWriter, "close", "write:close-rename")
+sys.argv = ["pkmkit", "ik", "linear-delta", "--input", sys.argv[1], "--output", sys.argv[2]]
+start = time.process_time()
+try:
+    main.main()
+except SystemExit:
+    pass
+body = time.process_time() - start
+print("imports", imports)
+for label, seconds in acc.items():
+    print(label, seconds)
+print("rest", body - sum(acc.values()))
+print("total", imports + body)
+"""
+
+
+def phases(paths: dict[str, Path], folder: Path, repeat: int) -> None:
+    """Median CPU time of each stage of a fresh ``pkmkit ik`` process (``PHASES``)."""
+    for fmt in ("parquet", "csv"):
+        runs: dict[str, list[float]] = {}
+        for _ in range(repeat):
+            done = subprocess.run([sys.executable, "-c", PHASES, str(paths[f"poses.{fmt}"]),
+                                   str(folder / f"phases.{fmt}")], capture_output=True,
+                                  text=True, check=True)
+            for line in done.stdout.splitlines():
+                label, value = line.split()
+                runs.setdefault(label, []).append(float(value))
+        print(f"\npkmkit ik linear-delta, {fmt} -> {fmt}, CPU s (median of {repeat} fresh "
+              f"processes; load average {os.getloadavg()[0]:.2f})")
+        for label, values in runs.items():
+            print(f"  {label:28s} {statistics.median(values):6.3f}")
+
+
 def busy() -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-c", "while True: pass"])
 
@@ -332,6 +395,8 @@ def main() -> None:
                         help="batch table formats to time, comma-separated (default: both)")
     parser.add_argument("--first-calls-only", action="store_true",
                         help="only the table of a fresh process's first batch call")
+    parser.add_argument("--phases", action="store_true",
+                        help="only the CPU time of each stage of a fresh pkmkit ik process")
     parser.add_argument("--no-first-calls", action="store_true",
                         help="leave out the table of a fresh process's first batch call")
     args = parser.parse_args()
@@ -346,6 +411,9 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         paths = make_tables(folder, args.rows)
+        if args.phases:
+            phases(paths, folder, args.repeat)
+            return
         run_all(args, folder, paths, "quiet")
         if args.load:
             competitor = busy()
