@@ -5,7 +5,10 @@ outside, median of ``--repeat`` runs) on ``--rows`` rows, against baselines meas
 run on the same tables:
 
 - ``xlib``: pyarrow's own read of the input table plus write of the command's output table (the
-  least any tool reading and writing those tables with that library pays);
+  least any tool reading and writing those tables with that library pays), with pyarrow's
+  default write options; for Parquet also ``plain s``, the same write with the command's
+  encoding (numbers plain, texts dictionary-encoded: ``pkmkit.io.table_writer``), and
+  ``xplain`` against it;
 - ``xold``: the former implementation (csv module, per-row ``float()`` and ``.17g`` formatting,
   per-row status labels) on the first ``--old-rows`` rows, scaled to ``--rows``.
 
@@ -32,10 +35,17 @@ not grow with N).
 
 ``--load`` runs everything again beside a competing busy process.
 
+``--phases``: where a fresh ``pkmkit ik linear-delta`` process spends its CPU time, Parquet to
+Parquet (and CSV to CSV) on the ``--rows`` table, median of ``--repeat`` processes: the imports
+before the command runs (pkmkit, click, NumPy), the conversion of the read batches to float64
+arrays, the inverse model with statuses and modes, the output table built and written, and the
+rest of the command (pyarrow's imports, opening the file and reading its batches, the columns).
+
 Usage::
 
     python bench/cli_io.py [--rows 1000000] [--repeat 5] [--big-rows 10000000] [--load]
-                           [--commands ik] [--old-rows 0] [--first-calls-only]
+                           [--commands ik] [--formats parquet] [--old-rows 0]
+                           [--first-calls-only | --no-first-calls]
 """
 
 from __future__ import annotations
@@ -136,9 +146,11 @@ def make_tables(folder: Path, rows: int) -> dict[str, Path]:
     return paths
 
 
-def library_read_write(src: Path, produced: Path, repeat: int, cpu: bool = False) -> float:
+def library_read_write(src: Path, produced: Path, repeat: int, cpu: bool = False,
+                       plain: bool = False) -> float:
     """pyarrow reading ``src`` and writing the table held in ``produced`` (same format): median
-    wall time, or CPU time with ``cpu``."""
+    wall time, or CPU time with ``cpu``; ``plain`` (Parquet): written with the command's
+    encoding (only the text columns dictionary-encoded) instead of pyarrow's defaults."""
     if src.suffix == ".csv":
         with open(produced, "rb") as handle:  # the command's "# units: m" line
             skip = 1 if handle.readline().startswith(b"#") else 0
@@ -149,10 +161,12 @@ def library_read_write(src: Path, produced: Path, repeat: int, cpu: bool = False
             pcsv.write_csv(out_table, produced.with_suffix(".lib.csv"))
     else:
         out_table = pq.read_table(produced)
+        options = {} if not plain else {"use_dictionary": [
+            f.name for f in out_table.schema if pa.types.is_dictionary(f.type)]}
 
         def run():
             pq.read_table(src)
-            pq.write_table(out_table, produced.with_suffix(".lib.parquet"))
+            pq.write_table(out_table, produced.with_suffix(".lib.parquet"), **options)
     return cpu_in_process(run, repeat) if cpu else median_in_process(run, repeat)
 
 
@@ -176,6 +190,63 @@ def old_implementation(src: Path, dst: Path, rows: int, columns: list[str]) -> N
         for k, lab in enumerate(labels):
             writer.writerow([f"{float(v):.17g}" for v in (*values[k], *res.q[k])]
                             + [m.mode_label(res.mode[k]) if res.mode[k] else "", lab])
+
+
+#: A fresh process running ``pkmkit ik linear-delta --input argv[1] --output argv[2]`` with
+#: its stages timed (CPU) by wrappers; prints ``stage seconds`` lines.
+PHASES = r"""
+import collections, importlib, sys, time
+t0 = time.process_time()
+main = importlib.import_module("pkmkit.cli.main")
+ik_cmd = importlib.import_module("pkmkit.cli.ik_cmd")
+imports = time.process_time() - t0
+acc = collections.Counter()
+def wrap(owner, name, label):
+    function = getattr(owner, name)
+    def wrapper(*args, **kwargs):
+        start = time.process_time()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            acc[label] += time.process_time() - start
+    setattr(owner, name, wrapper)
+sources = importlib.import_module("pkmkit.io.table_sources")
+writer = importlib.import_module("pkmkit.io.table_writer")
+wrap(sources.ArrowSource, "_convert", "read:batches-to-float64")
+wrap(sources.CsvSource, "_parse", "read:csv-parse-to-float64")
+wrap(ik_cmd, "inverse", "kernel:ik-full-output")
+wrap(writer.TableWriter, "write", "write:table-and-encode")
+wrap(writer.TableWriter, "close", "write:close-rename")
+sys.argv = ["pkmkit", "ik", "linear-delta", "--input", sys.argv[1], "--output", sys.argv[2]]
+start = time.process_time()
+try:
+    main.main()
+except SystemExit:
+    pass
+body = time.process_time() - start
+print("imports", imports)
+for label, seconds in acc.items():
+    print(label, seconds)
+print("rest", body - sum(acc.values()))
+print("total", imports + body)
+"""
+
+
+def phases(paths: dict[str, Path], folder: Path, repeat: int) -> None:
+    """Median CPU time of each stage of a fresh ``pkmkit ik`` process (``PHASES``)."""
+    for fmt in ("parquet", "csv"):
+        runs: dict[str, list[float]] = {}
+        for _ in range(repeat):
+            done = subprocess.run([sys.executable, "-c", PHASES, str(paths[f"poses.{fmt}"]),
+                                   str(folder / f"phases.{fmt}")], capture_output=True,
+                                  text=True, check=True)
+            for line in done.stdout.splitlines():
+                label, value = line.split()
+                runs.setdefault(label, []).append(float(value))
+        print(f"\npkmkit ik linear-delta, {fmt} -> {fmt}, CPU s (median of {repeat} fresh "
+              f"processes; load average {os.getloadavg()[0]:.2f})")
+        for label, values in runs.items():
+            print(f"  {label:28s} {statistics.median(values):6.3f}")
 
 
 def busy() -> subprocess.Popen:
@@ -203,7 +274,7 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
             continue
         solve = median_in_process(solves[command], args.repeat)
         solve_cpu = cpu_in_process(solves[command], args.repeat)
-        for fmt in ("csv", "parquet"):
+        for fmt in args.formats:
             src = paths[f"{src_name}.{fmt}"]
             dst = folder / f"out-{command}.{fmt}"
             t, cpu = run_times([*cmd, command, "linear-delta", "--input", str(src), "--output",
@@ -213,6 +284,11 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
             print(f"pkmkit {command:<13} {fmt:<8} {t:7.3f} {lib:7.3f} {t / lib:6.2f} "
                   f"{solve:8.3f} {(t - solve) / lib:8.2f} {cpu:6.3f} {lib_cpu:7.3f} "
                   f"{solve_cpu:9.3f}")
+            if fmt == "parquet":
+                plain = library_read_write(src, dst, args.repeat, plain=True)
+                plain_cpu = library_read_write(src, dst, args.repeat, cpu=True, plain=True)
+                print(f"{'':<29} plain s {plain:7.3f} xplain {t / plain:6.2f} "
+                      f"plain cpu {plain_cpu:6.3f}")
     old_rows = min(args.old_rows, args.rows)
     if old_rows:
         start = time.perf_counter()
@@ -230,13 +306,15 @@ def run_all(args, folder: Path, paths: dict[str, Path], label: str) -> None:
                         ("pkmkit path --help", ["path", "--help"])):
         t, cpu = run_times([*cmd, *extra], args.repeat)
         print(f"{name:<34} {t:7.3f} {t / t_pass:9.1f} {t / t_numpy:8.2f} {cpu:6.3f}")
-    first_calls(args.repeat)
+    if not args.no_first_calls:
+        first_calls(args.repeat)
 
 
 def statuses_at_kernel_cost(m, x: np.ndarray, repeat: int) -> None:
-    """CPU time of ``m.ik(X)`` and ``m.ik(X, full_output=True)`` in this process, on the
-    NumPy path (Numba not imported yet) and then on the compiled one."""
-    for label in ("NumPy path (Numba not imported)", "compiled (Numba imported)"):
+    """CPU time of ``m.ik(X)`` and ``m.ik(X, full_output=True)`` in this process, before
+    Numba is imported (the C twins of ``pkmkit.native`` where built, else NumPy) and after
+    (where the extension is built the C twins still run: the same figures)."""
+    for label in ("no Numba (C twins, else NumPy)", "compiled (Numba imported)"):
         if label.startswith("compiled"):
             if "numba" not in sys.modules:
                 try:
@@ -313,10 +391,17 @@ def main() -> None:
     parser.add_argument("--load", action="store_true", help="also run beside a busy process")
     parser.add_argument("--commands", default="ik,fk,jacobian",
                         help="batch commands to time, comma-separated (default: all three)")
+    parser.add_argument("--formats", default="csv,parquet",
+                        help="batch table formats to time, comma-separated (default: both)")
     parser.add_argument("--first-calls-only", action="store_true",
                         help="only the table of a fresh process's first batch call")
+    parser.add_argument("--phases", action="store_true",
+                        help="only the CPU time of each stage of a fresh pkmkit ik process")
+    parser.add_argument("--no-first-calls", action="store_true",
+                        help="leave out the table of a fresh process's first batch call")
     args = parser.parse_args()
     args.commands = args.commands.split(",")
+    args.formats = args.formats.split(",")
     if args.first_calls_only:
         first_calls(args.repeat)
         return
@@ -326,6 +411,9 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         paths = make_tables(folder, args.rows)
+        if args.phases:
+            phases(paths, folder, args.repeat)
+            return
         run_all(args, folder, paths, "quiet")
         if args.load:
             competitor = busy()

@@ -10,6 +10,11 @@ full-pose machines, finite differences otherwise), ``check_region`` (the refined
 checked densely, with its actuator extremes refined by ``_q_extremes``); per study, the points
 evaluated against the grids' points.
 
+``--ab-shell ROUNDS``: the study's ``refine_box`` call run again ROUNDS times in this process,
+its optimiser constraining the lattice's faces (``inscribed.lattice_shell``, the default since
+session 32) and the whole lattice (the rule before) alternately: CPU time of each, their ratio
+and the cube found by each.
+
 Run: ``python bench/workspace.py gough-stewart verne tripteor-x7`` (each study once: they take
 seconds to minutes; the machine is shared, so compare CPU seconds, not wall time). The
 command's own output is printed last, to compare with the documented figures.
@@ -103,6 +108,9 @@ def main() -> None:
                         help="joint chains: run each study ROUNDS times in this process with "
                         "the inverse record's direct model computed at once (what every batch "
                         "paid before issue 22 §3's fifth pass) and when read, alternately")
+    parser.add_argument("--ab-shell", type=int, default=0, metavar="ROUNDS",
+                        help="refine_box with its optimiser on the lattice's faces and on the "
+                        "whole lattice, alternately, ROUNDS times each (module doc)")
     options = parser.parse_args()
     print(f"pkmkit {pkmkit.__version__} (stages nest: check_region holds _q_extremes, "
           "refine_box and enclosing_frame hold grid evaluations)")
@@ -115,6 +123,10 @@ def main() -> None:
     _counted(grid_options, "frame search grids")
     if options.ab_direct:
         _ab_direct(options.machines, options.args.split(), options.ab_direct)
+        return
+    if options.ab_shell:
+        for machine in options.machines:
+            _ab_shell(machine, options.args.split(), options.ab_shell)
         return
     for machine in options.machines:
         study(machine, options.args.split())
@@ -142,6 +154,47 @@ def _ab_direct(machines: list[str], extra: list[str], rounds: int) -> None:
                 print(f"[{label}]", end=" ")
                 study(machine, extra)
     joint_chain.inverse_record = lazy
+
+
+def _ab_shell(machine: str, extra: list[str], rounds: int) -> None:
+    """The study's ``refine_box`` call again, with the optimiser on the lattice's faces and on
+    the whole lattice alternately (in this process, after the study has loaded everything)."""
+    import statistics
+
+    from pkmkit.analysis.inscribed import lattice_offsets
+
+    calls: list[tuple] = []
+    timed = workspace.refine_box  # the stage timer's wrapper (main)
+
+    def recorded(*args: Any, **kwargs: Any) -> Any:
+        calls.append((args, kwargs))
+        return timed(*args, **kwargs)
+
+    workspace.refine_box = recorded
+    try:
+        study(machine, extra)
+    finally:
+        workspace.refine_box = timed
+    if not calls:
+        print(f"{machine}: no refine_box call (a joint chain, or no inscribed cube)")
+        return
+    args, kwargs = calls[0]
+    shell = workspace.lattice_shell
+    times: dict[str, list[float]] = {"faces": [], "whole lattice": []}
+    boxes = {}
+    for _round in range(rounds):
+        for label, offsets in (("faces", shell), ("whole lattice", lattice_offsets)):
+            workspace.lattice_shell = offsets
+            start = time.process_time()
+            boxes[label] = timed(*args, **kwargs)
+            times[label].append(time.process_time() - start)
+    workspace.lattice_shell = shell
+    faces, whole = (statistics.median(times[k]) for k in ("faces", "whole lattice"))
+    print(f"{machine} refine_box, median of {rounds} (CPU s, load average "
+          f"{os.getloadavg()[0]:.2f}): faces {faces:.3f}, whole lattice {whole:.3f}, "
+          f"x{faces / whole:.2f}")
+    for label, box in boxes.items():
+        print(f"  {label:14s} side {box.side!r}, centre {box.center.tolist()!r}")
 
 
 if __name__ == "__main__":

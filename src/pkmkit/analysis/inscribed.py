@@ -37,10 +37,19 @@ def lattice_offsets(d: int, samples: int) -> np.ndarray:
     return np.stack(np.meshgrid(*([axis] * d), indexing="ij"), axis=-1).reshape(-1, d)
 
 
+def lattice_shell(d: int, samples: int) -> np.ndarray:
+    """The points of :func:`lattice_offsets` on the faces of ``[-1, 1]^d`` (a coordinate
+    ±1), in the same order: ``samples**d − (samples − 2)**d`` of them (3,458 of 15,625 for a
+    cube of 25 per edge)."""
+    offsets = lattice_offsets(d, samples)
+    return offsets[(np.abs(offsets) == 1.0).any(axis=1)]
+
+
 def largest_box(slack: Slack, points_of: PointsOf, center: np.ndarray, half: float,
                 lower: np.ndarray, upper: np.ndarray, *, samples: int,
                 rtol: float = DEFAULT_RTOL, max_iter: int = 100,
-                slack_gradient: SlackGradient | None = None) -> tuple[np.ndarray, float]:
+                slack_gradient: SlackGradient | None = None,
+                offsets: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Largest box ``center ± half`` whose lattice satisfies ``slack ≥ 0``, from a start near
     it (see the module docstring).
 
@@ -55,6 +64,12 @@ def largest_box(slack: Slack, points_of: PointsOf, center: np.ndarray, half: flo
         slack_gradient: the slack at points with its gradient along the box's axes, in one
             evaluation (:func:`pkmkit.analysis.slack.slack_and_gradient`): one lattice per
             iterate instead of one per axis more; None: finite differences.
+        offsets: the points of ``[-1, 1]^d`` constrained (``(K, d)``); default the whole
+            lattice, :func:`lattice_offsets` ``(d, samples)``. :func:`lattice_shell` constrains
+            its faces only: the same optimum wherever no interior point holds the box — the
+            caller checks the interior at the optimum (as
+            :func:`pkmkit.analysis.workspace.refine_box` does) and runs the whole lattice if
+            one fails there.
 
     Returns:
         ``(center, half)``; the start if the optimiser does not improve on it.
@@ -75,7 +90,7 @@ def largest_box(slack: Slack, points_of: PointsOf, center: np.ndarray, half: flo
     scale = max(float(half), 1e-9 * max(1.0, float(np.max(np.abs(c0)))))
     lower = np.asarray(lower, dtype=float)
     upper = np.asarray(upper, dtype=float)
-    offsets = lattice_offsets(d, samples)
+    offsets = lattice_offsets(d, samples) if offsets is None else np.asarray(offsets, float)
     eps = 1e-7 * scale
     memo: dict[str, tuple[bytes, np.ndarray]] = {}
 

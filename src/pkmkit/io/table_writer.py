@@ -111,6 +111,10 @@ class TableWriter:
                                  for s in v.names)]
             self._writer = self._open(table.schema, any(_STRUCTURAL.search(str(t))
                                                         for t in texts))
+        elif table.schema.equals(self._schema, check_metadata=False):
+            # the usual later chunk: the same types, the first's metadata (no copy; cast
+            # would import pyarrow.compute, ≈ 0.05–0.2 s)
+            table = table.replace_schema_metadata(self._schema.metadata)
         else:
             table = table.cast(self._schema)
         try:
@@ -177,8 +181,23 @@ class TableWriter:
         if self.format == "parquet":
             import pyarrow.parquet as pq
 
-            return pq.ParquetWriter(str(self._temp), schema)
+            return pq.ParquetWriter(str(self._temp), schema,
+                                    use_dictionary=_dictionary_columns(schema))
         return pa.ipc.new_file(str(self._temp), schema)
+
+
+def _dictionary_columns(schema: Any) -> list[str]:
+    """The Parquet columns written dictionary-encoded: the text columns (:class:`Labels`:
+    ``status``, ``mode``, a handful of distinct values). Numbers are written plain (still
+    Snappy-compressed, pyarrow's default): pyarrow's default dictionary-encodes every column,
+    and on floats that rarely repeat (poses, actuator coordinates) it hashes a megabyte of
+    values per column and row group before falling back to plain pages — two thirds of the
+    write's time, for a file no larger (5 % smaller on random poses). Every Parquet
+    reader reads both encodings (pyarrow, pandas, Polars, DuckDB, Spark)."""
+    import pyarrow as pa
+
+    return [field.name for field in schema
+            if pa.types.is_dictionary(field.type) or pa.types.is_string(field.type)]
 
 
 #: Rows per thread below which a CSV chunk is formatted in one piece.

@@ -49,6 +49,10 @@ import numpy as np
 from pkmkit.model.rods import CRANK, SLIDE, STRUT, RodModel
 from pkmkit.numerics import jit
 
+#: The module of the compiled kernels of :meth:`RodClosedForm._inverse_pass` (and, through
+#: :func:`pkmkit.numerics.jit.kernel`, of their C twins).
+_KERNELS = "pkmkit.machines.kernels"
+
 #: Relative tolerance (on ℓ²) within which a negative inverse-model radicand is rounding noise at
 #: the workspace boundary (leg perpendicular to its slide) and is taken as 0.
 BOUNDARY_TOL = 1e-12
@@ -130,8 +134,10 @@ class RodClosedForm:
         """Actuator coordinates ``(N, n)`` of poses ``x (N, dims)``; NaN where a leg cannot
         close. ``branches (n,)`` holds ±1 per leg (ignored for struts).
 
-        Large batches run the compiled kernel :func:`pkmkit.machines.kernels.inverse`; small
-        ones (and ``PKMKIT_COMPILED=0``) the NumPy reference :meth:`inverse_numpy`. The result
+        Large batches run the compiled kernel :func:`pkmkit.machines.kernels.inverse` (its C
+        twin ``rod_inverse_rows`` where :mod:`pkmkit.native` is built: no Numba import, so a
+        fresh process's command line takes it too); small ones (and ``PKMKIT_COMPILED=0``)
+        the NumPy reference :meth:`inverse_numpy`. The result
         is a Fortran-ordered ``(N, n)`` array (a transposed view of ``(n, N)``).
         """
         return self.inverse_counted(x, branches)[0]
@@ -163,22 +169,27 @@ class RodClosedForm:
         return q, bad, short.T, det
 
     def _inverse_pass(self, x: np.ndarray, branches: np.ndarray, full: bool) -> tuple:
-        """``(q (N, n), bad, shortfall (n, N) | None, det (N,) | None)``: the compiled kernel
-        for large batches once Numba is imported, else the NumPy reference."""
+        """``(q (N, n), bad, shortfall (n, N) | None, det (N,) | None)``: the compiled kernels
+        for large batches — their C twins (``rod_inverse_rows``, ``rod_reach_det``) where the
+        extension is built, else the Numba kernels once Numba is imported — else the NumPy
+        reference. The same bits on every path."""
         n, rows = self.model.n_legs, x.shape[0]
         short = np.empty((n, rows)) if full else None
         det = np.empty(rows) if full else None
-        if jit.use_compiled(rows, imports=False) and not self.crank.any():  # slides, struts
-            from pkmkit.machines import kernels
-
+        twins = all(jit.native_kernel(_KERNELS, name) is not None
+                    for name in ("inverse", "reach_and_det"))
+        if jit.use_compiled(rows, imports=False, native=twins) and not self.crank.any():
+            inverse = jit.kernel(_KERNELS, "inverse")  # slides, struts
             x = np.ascontiguousarray(x, dtype=float)
             out = np.empty((n, rows))
             slide = self.model.leg_kind == SLIDE
-            bad = kernels.inverse(x, self.basis, self.basis_offset, self.model.leg_length,
-                                  slide, np.asarray(branches, dtype=float), BOUNDARY_TOL, out)
+            c = np.ascontiguousarray
+            bad = inverse(x, c(self.basis), c(self.basis_offset), c(self.model.leg_length),
+                          slide, np.array(branches, dtype=float), BOUNDARY_TOL, out)
             if full:
-                kernels.reach_and_det(x, out, self.basis, self.basis_offset, self.centre0,
-                                      self.axis, self.model.leg_length, slide, short, det)
+                jit.kernel(_KERNELS, "reach_and_det")(
+                    x, out, c(self.basis), c(self.basis_offset), c(self.centre0), c(self.axis),
+                    c(self.model.leg_length), slide, short, det)
             return out.T, int(bad), short, det
         q = self._inverse_numpy(x, branches, short, det)
         return q, int(np.count_nonzero(~np.isfinite(q))), short, det

@@ -45,7 +45,12 @@ arguments, the same algorithm and statuses, run without the GIL:
   of square translational rod-leg machines), the same bits;
 - ``chain_velocity_pack``, ``chain_one_velocity`` (``chain_one_velocity.c``) — no twin: the
   velocity model of one joint-chain configuration at the inverse solution, constants packed
-  once per machine (:mod:`pkmkit.machines.chain_one_velocity`).
+  once per machine (:mod:`pkmkit.machines.chain_one_velocity`);
+- ``rod_inverse_rows``, ``rod_reach_det`` (``rod_batch.c``) —
+  :func:`pkmkit.machines.kernels.inverse` and ``reach_and_det`` (the batched closed-form
+  inverse of rod-leg machines of slides and struts, with the shortfalls and det A that
+  ``ik(full_output=True)`` reports), the NumPy reference's bits: a fresh process's
+  ``pkmkit ik --input`` takes them without importing Numba.
 
 Loading it costs a millisecond, where Numba's import and its first compiled call cost
 0.8–0.9 s of CPU in a fresh process. Which implementation runs is decided in one place,

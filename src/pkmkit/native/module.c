@@ -532,6 +532,11 @@ PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t n
 PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_chain_one_structured(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
+/* rod_batch.c: the batched closed-form inverse of rod-leg machines (issue 22 §5) */
+extern const char pk_rod_inverse_rows_doc[], pk_rod_reach_det_doc[];
+PyObject *pk_py_rod_inverse_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_rod_reach_det(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
@@ -586,6 +591,10 @@ static PyMethodDef methods[] = {
      pk_chain_one_fk_doc},
     {"chain_one_structured", (PyCFunction)(void (*)(void))pk_py_chain_one_structured,
      METH_FASTCALL, pk_chain_one_structured_doc},
+    {"rod_inverse_rows", (PyCFunction)(void (*)(void))pk_py_rod_inverse_rows, METH_FASTCALL,
+     pk_rod_inverse_rows_doc},
+    {"rod_reach_det", (PyCFunction)(void (*)(void))pk_py_rod_reach_det, METH_FASTCALL,
+     pk_rod_reach_det_doc},
     {NULL, NULL, 0, NULL},
 };
 

@@ -19,7 +19,7 @@ package when a compiler is present) holds a twin of a Numba kernel (:data:`NATIV
 full-pose inverse and direct models, the position inverse of the Verne-type module, the
 joint-chain closure, its velocity model's Jacobian and rates and its linearisation for the
 identification, the batched small SVDs with and without rates, the rod-leg velocity
-summaries),
+summaries, the batched closed-form inverse of rod legs with its shortfalls and det A),
 :func:`kernel` returns it instead, and the call sites that
 pass ``native=True`` to :func:`use_compiled` / :func:`use_compiled_solver` then need no Numba:
 no import cost, so the per-pose solvers run native at every batch size.
@@ -77,7 +77,7 @@ NATIVE_TWINS = {
     "pkmkit.solve.chain_linalg": ("_closure_rates_rows", "_absorb_rows"),
     "pkmkit.numerics.svd_kernel": ("singular_values",),
     "pkmkit.numerics.svd_rates_kernel": ("singular_rates",),
-    "pkmkit.machines.kernels": ("velocity3", "velocity2"),
+    "pkmkit.machines.kernels": ("velocity3", "velocity2", "inverse", "reach_and_det"),
 }
 #: Twins named differently in ``pkmkit.native.kernels`` (one namespace for every module's).
 NATIVE_NAMES = {("pkmkit.machines.full_pose_position_kernel", "solve_rows"): "position_rows",
@@ -87,7 +87,9 @@ NATIVE_NAMES = {("pkmkit.machines.full_pose_position_kernel", "solve_rows"): "po
                 ("pkmkit.solve.chain_linalg", "_closure_rates_rows"): "closure_rates",
                 ("pkmkit.solve.chain_linalg", "_absorb_rows"): "absorb",
                 ("pkmkit.machines.kernels", "velocity3"): "rod_velocity3",
-                ("pkmkit.machines.kernels", "velocity2"): "rod_velocity2"}
+                ("pkmkit.machines.kernels", "velocity2"): "rod_velocity2",
+                ("pkmkit.machines.kernels", "inverse"): "rod_inverse_rows",
+                ("pkmkit.machines.kernels", "reach_and_det"): "rod_reach_det"}
 
 #: Twins slower than their Numba kernel once both are loaded (GCC does not vectorise the
 #: velocity summary's per-pose loop as LLVM does: ≈ 95 against 30 ns per pose): taken while

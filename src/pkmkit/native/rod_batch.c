@@ -1,0 +1,279 @@
+/* Batched closed-form inverse model of translational rod-leg machines (slides and struts):
+ * the C twins of pkmkit.machines.kernels.inverse and reach_and_det (issue 22 §5: statuses and
+ * modes at the cost of the kernel in a fresh process, which does not import Numba).
+ *
+ * The same operations in the same order as the Numba kernels and their NumPy reference
+ * (RodClosedForm._inverse_numpy, _det_rows), compiled without FMA contraction or fast-math
+ * (setup.py), so the same bits. Poses x (N, dims) C-ordered; per-leg outputs (n, N).
+ *
+ * Python faces (arrays through the buffer protocol, C-contiguous float64 / bool; run without
+ * the GIL):
+ *   rod_inverse_rows(x, basis, offset, length, slide, branch, boundary_tol, out) -> bad
+ *   rod_reach_det(x, q, basis, offset, centre, axis, length, slide, short_out, det_out)
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <stddef.h>
+
+#define RB_MAX_LEGS 6
+
+/* kernels.inverse: q of every leg into out (n, N); the number of non-finite outputs. */
+static Py_ssize_t rb_inverse(const double *x, Py_ssize_t size, int dims, int n,
+                             const double *basis, const double *offset, const double *length,
+                             const char *slide, const double *branch, double tol, double *out) {
+    Py_ssize_t bad = 0;
+    for (int i = 0; i < n; i++) {
+        const double *b = basis + (ptrdiff_t)i * dims * dims, *o = offset + i * dims;
+        double u0 = b[0], u1 = b[1], v0 = b[dims], v1 = b[dims + 1];
+        double u2 = 0.0, v2 = 0.0, w0 = 0.0, w1 = 0.0, w2 = 0.0, o2 = 0.0;
+        if (dims == 3) {
+            u2 = b[2];
+            v2 = b[5];
+            w0 = b[6];
+            w1 = b[7];
+            w2 = b[8];
+            o2 = o[2];
+        }
+        double o0 = o[0], o1 = o[1];
+        double *row = out + (ptrdiff_t)i * size;
+        if (slide[i] && dims == 2) {
+            double length_sq = length[i] * length[i], limit = -tol * length_sq;
+            double sign = branch[i];
+            for (Py_ssize_t k = 0; k < size; k++) {
+                double c0 = x[2 * k], c1 = x[2 * k + 1];
+                double s = u0 * c0 + u1 * c1 - o0;
+                double p = v0 * c0 + v1 * c1 - o1;
+                double radicand = length_sq - p * p;
+                radicand = (radicand < 0.0 && radicand > limit) ? 0.0 : radicand;
+                double value = s + sign * sqrt(radicand);
+                row[k] = value;
+                bad += value - value == 0.0 ? 0 : 1;
+            }
+        } else if (slide[i]) {
+            double length_sq = length[i] * length[i], limit = -tol * length_sq;
+            double sign = branch[i];
+            for (Py_ssize_t k = 0; k < size; k++) {
+                double c0 = x[3 * k], c1 = x[3 * k + 1], c2 = x[3 * k + 2];
+                double s = u0 * c0 + u1 * c1 + u2 * c2 - o0;
+                double p = v0 * c0 + v1 * c1 + v2 * c2 - o1;
+                double r = w0 * c0 + w1 * c1 + w2 * c2 - o2;
+                double radicand = length_sq - (p * p + r * r);
+                radicand = (radicand < 0.0 && radicand > limit) ? 0.0 : radicand;
+                double value = s + sign * sqrt(radicand);
+                row[k] = value;
+                bad += value - value == 0.0 ? 0 : 1;
+            }
+        } else {
+            double rod = length[i];
+            for (Py_ssize_t k = 0; k < size; k++) {
+                double c0 = x[dims * k], c1 = x[dims * k + 1];
+                double c2 = dims == 3 ? x[3 * k + 2] : 0.0;
+                double s = u0 * c0 + u1 * c1 + u2 * c2 - o0;
+                double p = v0 * c0 + v1 * c1 + v2 * c2 - o1;
+                double r = w0 * c0 + w1 * c1 + w2 * c2 - o2;
+                double value = sqrt((p * p + r * r) + s * s) - rod; /* the reference's order */
+                row[k] = value;
+                bad += value - value == 0.0 ? 0 : 1;
+            }
+        }
+    }
+    return bad;
+}
+
+/* kernels.reach_and_det: the shortfalls (n, N) (-inf for struts) and det A (N,) of a square
+ * machine (n = dims = 2 or 3) from its inverse q (n, N). */
+static void rb_reach_det(const double *x, Py_ssize_t size, int n, const double *q,
+                        const double *basis, const double *offset, const double *centre,
+                        const double *axis, const double *length, const char *slide,
+                        double *short_out, double *det_out) {
+    int dims = n;
+    for (int i = 0; i < n; i++) {
+        const double *b = basis + (ptrdiff_t)i * dims * dims, *o = offset + i * dims;
+        double v0 = b[dims], v1 = b[dims + 1], v2 = 0.0, w0 = 0.0, w1 = 0.0, w2 = 0.0;
+        double o2 = 0.0, o1 = o[1], rod = length[i];
+        if (dims == 3) {
+            v2 = b[5];
+            w0 = b[6];
+            w1 = b[7];
+            w2 = b[8];
+            o2 = o[2];
+        }
+        double *sh = short_out + (ptrdiff_t)i * size;
+        if (!slide[i]) {
+            for (Py_ssize_t k = 0; k < size; k++) sh[k] = -INFINITY;
+        } else if (dims == 2) {
+            for (Py_ssize_t k = 0; k < size; k++) {
+                double p = v0 * x[2 * k] + v1 * x[2 * k + 1] - o1;
+                sh[k] = sqrt(p * p) - rod;
+            }
+        } else {
+            for (Py_ssize_t k = 0; k < size; k++) {
+                double c0 = x[3 * k], c1 = x[3 * k + 1], c2 = x[3 * k + 2];
+                double p = v0 * c0 + v1 * c1 + v2 * c2 - o1;
+                double r = w0 * c0 + w1 * c1 + w2 * c2 - o2;
+                sh[k] = sqrt(p * p + r * r) - rod;
+            }
+        }
+    }
+    for (Py_ssize_t k = 0; k < size; k++) {
+        double a[3][3];
+        for (int i = 0; i < n; i++) {
+            double qi = q[(ptrdiff_t)i * size + k];
+            for (int d = 0; d < dims; d++) {
+                double centre_d = centre[i * dims + d], axis_d = axis[i * dims + d];
+                a[i][d] = x[dims * k + d] - (centre_d + (slide[i] ? qi : 0.0) * axis_d);
+            }
+        }
+        if (dims == 2)
+            det_out[k] = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        else
+            det_out[k] = (a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+                          - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+                          + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]));
+    }
+}
+
+/* ------------------------------------------------------------------ Python face */
+
+/* A C-contiguous buffer of `type` ('d' float64, '?' bool) with `ndim` dimensions and the
+ * shape `shape` (-1: any); -1 with TypeError / ValueError set. */
+static int rb_take(PyObject *obj, Py_buffer *view, const char *name, char type, int writable,
+                   int ndim, const Py_ssize_t *shape) {
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, view, flags) < 0) {
+        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous%s array is needed", name,
+                     writable ? " writable" : "");
+        return -1;
+    }
+    const char *f = view->format ? view->format : "B";
+    if (f[0] == '@' || f[0] == '=' || f[0] == '<') f++;
+    if (!(f[0] == type && !f[1] && view->itemsize == (type == 'd' ? 8 : 1))) {
+        PyErr_Format(PyExc_TypeError, "%s: %s array expected (format %s)", name,
+                     type == 'd' ? "float64" : "bool", view->format ? view->format : "B");
+        PyBuffer_Release(view);
+        return -1;
+    }
+    int ok = view->ndim == ndim;
+    for (int j = 0; ok && j < ndim; j++) ok = shape[j] < 0 || view->shape[j] == shape[j];
+    if (!ok) {
+        PyErr_Format(PyExc_ValueError, "%s: wrong shape", name);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+typedef struct {
+    const char *name;
+    char type;
+    int writable, ndim;
+    Py_ssize_t shape[3];
+} rb_spec;
+
+/* The buffers of args[...] per `spec` (`count` of them, args[skip] skipped: a float), held
+ * in `views`; the number held, or -1 with an exception set. */
+static int rb_take_all(PyObject *const *args, const rb_spec *spec, int count, int skip,
+                       Py_buffer *views) {
+    int held = 0;
+    for (int j = 0; j < count; j++) {
+        PyObject *obj = args[skip >= 0 && j >= skip ? j + 1 : j];
+        if (rb_take(obj, &views[held], spec[j].name, spec[j].type, spec[j].writable,
+                    spec[j].ndim, spec[j].shape) < 0) {
+            for (int i = 0; i < held; i++) PyBuffer_Release(&views[i]);
+            return -1;
+        }
+        held++;
+    }
+    return held;
+}
+
+/* x (N, 2 or 3) and the leg count n of basis (n, dims, dims); -1 with an exception set. */
+static int rb_shape(PyObject *x_obj, PyObject *basis_obj, Py_ssize_t *size, int *dims, int *n) {
+    Py_buffer view;
+    Py_ssize_t any2[2] = {-1, -1}, any3[3] = {-1, -1, -1};
+    if (rb_take(x_obj, &view, "x", 'd', 0, 2, any2) < 0) return -1;
+    *size = view.shape[0];
+    *dims = (int)view.shape[1];
+    PyBuffer_Release(&view);
+    if (rb_take(basis_obj, &view, "basis", 'd', 0, 3, any3) < 0) return -1;
+    *n = (int)view.shape[0];
+    PyBuffer_Release(&view);
+    if ((*dims != 2 && *dims != 3) || *n < 1 || *n > RB_MAX_LEGS) {
+        PyErr_SetString(PyExc_ValueError, "x: 2 or 3 columns and basis: 1 to 6 legs needed");
+        return -1;
+    }
+    return 0;
+}
+
+const char pk_rod_inverse_rows_doc[] =
+    "rod_inverse_rows(x, basis, offset, length, slide, branch, boundary_tol, out) -> bad\n\n"
+    "The C twin of pkmkit.machines.kernels.inverse (slides and struts): x (N, dims), basis\n"
+    "(n, dims, dims), offset (n, dims), length (n,), slide (n,) bool, branch (n,) +-1.0, out\n"
+    "(n, N) filled; returns the number of non-finite outputs. C-contiguous arrays; runs\n"
+    "without the GIL.";
+
+PyObject *pk_py_rod_inverse_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 8) {
+        PyErr_Format(PyExc_TypeError, "rod_inverse_rows() takes 8 positional arguments "
+                     "(%zd given)", nargs);
+        return NULL;
+    }
+    Py_ssize_t size;
+    int dims, n;
+    if (rb_shape(args[0], args[1], &size, &dims, &n) < 0) return NULL;
+    double tol = PyFloat_AsDouble(args[6]);
+    if (tol == -1.0 && PyErr_Occurred()) return NULL;
+    rb_spec spec[7] = {{"x", 'd', 0, 2, {size, dims}}, {"basis", 'd', 0, 3, {n, dims, dims}},
+                       {"offset", 'd', 0, 2, {n, dims}}, {"length", 'd', 0, 1, {n}},
+                       {"slide", '?', 0, 1, {n}}, {"branch", 'd', 0, 1, {n}},
+                       {"out", 'd', 1, 2, {n, size}}};
+    Py_buffer v[7];
+    int held = rb_take_all(args, spec, 7, 6, v);
+    if (held < 0) return NULL;
+    Py_ssize_t bad;
+    Py_BEGIN_ALLOW_THREADS
+    bad = rb_inverse(v[0].buf, size, dims, n, v[1].buf, v[2].buf, v[3].buf, v[4].buf,
+                     v[5].buf, tol, v[6].buf);
+    Py_END_ALLOW_THREADS
+    for (int i = 0; i < held; i++) PyBuffer_Release(&v[i]);
+    return PyLong_FromSsize_t(bad);
+}
+
+const char pk_rod_reach_det_doc[] =
+    "rod_reach_det(x, q, basis, offset, centre, axis, length, slide, short_out, det_out)\n\n"
+    "The C twin of pkmkit.machines.kernels.reach_and_det (square machines of slides and\n"
+    "struts, n = dims = 2 or 3): x (N, n), q (n, N), basis (n, n, n), offset, centre, axis\n"
+    "(n, n), length (n,), slide (n,) bool; short_out (n, N) and det_out (N,) filled.\n"
+    "C-contiguous arrays; runs without the GIL.";
+
+PyObject *pk_py_rod_reach_det(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 10) {
+        PyErr_Format(PyExc_TypeError, "rod_reach_det() takes 10 positional arguments "
+                     "(%zd given)", nargs);
+        return NULL;
+    }
+    Py_ssize_t size;
+    int dims, n;
+    if (rb_shape(args[0], args[2], &size, &dims, &n) < 0) return NULL;
+    if (n != dims) {
+        PyErr_SetString(PyExc_ValueError, "rod_reach_det: a square machine is needed");
+        return NULL;
+    }
+    rb_spec spec[10] = {{"x", 'd', 0, 2, {size, n}}, {"q", 'd', 0, 2, {n, size}},
+                        {"basis", 'd', 0, 3, {n, n, n}}, {"offset", 'd', 0, 2, {n, n}},
+                        {"centre", 'd', 0, 2, {n, n}}, {"axis", 'd', 0, 2, {n, n}},
+                        {"length", 'd', 0, 1, {n}}, {"slide", '?', 0, 1, {n}},
+                        {"short_out", 'd', 1, 2, {n, size}}, {"det_out", 'd', 1, 1, {size}}};
+    Py_buffer v[10];
+    int held = rb_take_all(args, spec, 10, -1, v);
+    if (held < 0) return NULL;
+    Py_BEGIN_ALLOW_THREADS
+    rb_reach_det(v[0].buf, size, n, v[1].buf, v[2].buf, v[3].buf, v[4].buf, v[5].buf,
+                 v[6].buf, v[7].buf, v[8].buf, v[9].buf);
+    Py_END_ALLOW_THREADS
+    for (int i = 0; i < held; i++) PyBuffer_Release(&v[i]);
+    Py_RETURN_NONE;
+}
