@@ -167,7 +167,7 @@ TESTS_FOR = {
 
 
 #: Packages whose mutants each run the test files that call the function they change (a map
-#: derived by one traced run of the package's tests: ``tools/test_map.py``); any module no
+#: derived by one traced run of the package's tests: ``tools/mutant_tests.py``); any module no
 #: test calls falls back to the package's tests. ``--tests-for`` or ``--tests`` override it.
 BY_CALLS = ("pkmkit.machines",)
 
@@ -229,7 +229,7 @@ def main(argv: list[str] | None = None) -> int:
                              "--tests or the default)")
     parser.add_argument("--by-calls", action=argparse.BooleanOptionalAction, default=None,
                         help="(--plausible) each mutant runs the tests that call its function "
-                             "(tools/test_map.py; default for BY_CALLS packages)")
+                             "(tools/mutant_tests.py; default for BY_CALLS packages)")
     parser.add_argument("--resume", action="store_true",
                         help="(--plausible) skip the sample's mutants --results already has")
     parser.add_argument("--plausible", action="store_true",

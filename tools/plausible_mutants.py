@@ -346,7 +346,7 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
     stopped by its time limit, continued). ``tests_for`` maps a source file name (``ik_cmd.py``)
     to the tests its mutants run instead of ``tests`` (a package whose whole test directory
     takes longer than the time limit per mutant, such as ``cli``). ``by_calls``: each mutant
-    runs the test files that call the function it changes (``tools/test_map.py``, derived
+    runs the test files that call the function it changes (``tools/mutant_tests.py``, derived
     by one run of ``tests`` first), else those that call its module, else ``tests``
     (a package such as ``machines``). ``markers`` is the
     ``-m`` selection: ``"not slow and not ci"`` measures the ordinary run alone (what is left
@@ -372,14 +372,14 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
     env = {**os.environ, "PYTHONPATH": str(workdir / "src"), "HYPOTHESIS_PROFILE": "mutation"}
     functions = None
     if by_calls and chosen:
-        import test_map
+        import mutant_tests
 
-        functions = test_map.derive(package.split(".")[1], tests, markers=markers,
+        functions = mutant_tests.derive(package.split(".")[1], tests, markers=markers,
                                     pythonpath=workdir / "src", timeout=20 * timeout)
     for m in chosen:
         run_tests = (tests_for or {}).get(Path(m.path).name, tests)
         if functions is not None:
-            run_tests = test_map.tests_for(functions, Path(m.path).name, _original(m.path),
+            run_tests = mutant_tests.tests_for(functions, Path(m.path).name, _original(m.path),
                                            m.line) or tests
         plant(m, workdir)
         start = time.monotonic()

@@ -1,8 +1,8 @@
 """Which test files exercise which function of a package: the map that lets a mutant run only
 the tests that reach the code it changes (``tools/mutation.py --plausible``).
 
-The map is derived, not declared: one run of the package's tests (``pytest -p test_map``, this
-module as a plugin) records, for each test file, the Python functions of ``src/pkmkit/<package>``
+The map is derived, not declared: one run of the package's tests (``pytest -p mutant_tests``,
+this module as a plugin) records, for each test file, the Python functions of ``src/pkmkit/<package>``
 it calls (a profile hook on ``call`` events, all threads). :func:`tests_for` then answers, for a
 line of a source file:
 
@@ -120,7 +120,7 @@ def derive(package: str, tests: list[str], *, markers: str, pythonpath: Path,
            "PKMKIT_TEST_MAP_SOURCE": str((pythonpath / "pkmkit" / package).resolve()),
            "PKMKIT_TEST_MAP_OUT": str(raw), "HYPOTHESIS_PROFILE": "mutation"}
     subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p",
-                    "test_map", "-m", markers, *tests], cwd=ROOT, env=env,
+                    "mutant_tests", "-m", markers, *tests], cwd=ROOT, env=env,
                    stdout=subprocess.DEVNULL, timeout=timeout, check=False)
     functions = json.loads(raw.read_text())
     raw.unlink()
