@@ -2,9 +2,9 @@
 the tests that reach the code it changes (``tools/mutation.py --plausible``).
 
 The map is derived, not declared: one run of the package's tests (``pytest -p mutant_tests``,
-this module as a plugin) records, for each test file, the Python functions of ``src/pkmkit/<package>``
-it calls (a profile hook on ``call`` events, all threads). :func:`tests_for` then answers, for a
-line of a source file:
+this module as a plugin) records, for each test file, the Python functions of
+``src/pkmkit/<package>`` it calls (a profile hook on ``call`` events, all threads).
+:func:`tests_for` then answers, for a line of a source file:
 
 1. the test files that called the innermost function (``def``) holding the line;
 2. where no test called that function (a module-level line, a class attribute, a function only
