@@ -370,17 +370,17 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
     print(f"{package}: {len(every)} plausible mutants, testing {len(chosen)}", flush=True)
     # the ordinary suite's examples (dev profile), without shrinking a failure
     env = {**os.environ, "PYTHONPATH": str(workdir / "src"), "HYPOTHESIS_PROFILE": "mutation"}
-    functions = None
+    test_map = None
     if by_calls and chosen:
         import mutant_tests
 
-        functions = mutant_tests.derive(package.split(".")[1], tests, markers=markers,
-                                    pythonpath=workdir / "src", timeout=20 * timeout)
+        test_map = mutant_tests.derive(package.split(".")[1], tests, markers=markers,
+                                       pythonpath=workdir / "src", timeout=20 * timeout)
     for m in chosen:
         run_tests = (tests_for or {}).get(Path(m.path).name, tests)
-        if functions is not None:
-            run_tests = mutant_tests.tests_for(functions, Path(m.path).name, _original(m.path),
-                                           m.line) or tests
+        if test_map is not None:
+            run_tests = test_map.tests_for(Path(m.path).name, _original(m.path), m.line) \
+                or tests
         plant(m, workdir)
         start = time.monotonic()
         try:
