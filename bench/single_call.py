@@ -164,7 +164,7 @@ def machine_rows(name: str, calls: int) -> dict:
     has_crank = bool((m.model.leg_kind == CRANK).any())
     qs = [q for q in m.ik(poses, strokes="ignore")]
     q_ones = [q[None] for q in qs]
-    within = [k for k, q in enumerate(qs) if m._within_strokes(q.tolist())]
+    within = [k for k, q in enumerate(qs) if m.within_strokes(q.tolist())]
     inside, q_inside = [rows[k] for k in within], [qs[k] for k in within]
     pack = m._one_pack  # the one-pose C entries' constants (closed_form_one.one_pose_pack)
     native = jit.native_kernels_now() if pack is not None else None
@@ -215,7 +215,7 @@ def six_axis_rows(name: str, calls: int) -> dict:
     good = np.isfinite(q).all(axis=1) & np.isfinite(poses).all(axis=1)
     rows, qs = list(poses[good]), list(q[good])
     ones, q_ones = [p[None] for p in rows], [v[None] for v in qs]
-    kernel = m._direct_kernel()
+    kernel = m.direct_kernel()
     m.fk(qs[0])
     figures = {"poses": len(rows)}
     peer = pinocchio_peer(m, len(rows))

@@ -10,6 +10,8 @@ Usage (from the repository root, in the project's virtual environment with the `
     python tools/mutation.py pkmkit.exceptions --plausible --sample 30 --seed 1
     python tools/mutation.py pkmkit.machines --plausible --sample 20 --resume  # continue a run
     python tools/mutation.py pkmkit.cli --plausible --sample 20 --tests-for cli  # per command
+    python tools/mutation.py pkmkit.machines --plausible --sample 20  # the tests calling each
+                                                    # mutant's function (BY_CALLS, --by-calls)
 
 ``--plausible`` plants, instead of mutmut's operator and constant changes, the one-line bugs
 people make in geometric code (``tools/plausible_mutants.py``: operands of ``@``, of ``*`` on
@@ -137,7 +139,8 @@ TESTS_FOR = {
                             "tests/cli/test_calibration_verdict_cli.py",
                             "tests/cli/test_register_directions_both_files.py"],
         "design_cmds.py": ["tests/cli/test_design_cli.py",
-                           "tests/cli/test_design_machine_file.py"],
+                           "tests/cli/test_design_machine_file.py",
+                           "tests/cli/test_units_of_sizing_and_origin.py"],
         "errors_cmds.py": ["tests/cli/test_errors_cli.py", "tests/cli/test_error_units.py",
                            "tests/cli/test_errors_sensitivity_degrees.py"],
         "ik_cmd.py": ["tests/cli/test_cli.py", "tests/cli/test_ik_one_path.py",
@@ -145,7 +148,8 @@ TESTS_FOR = {
                       "tests/cli/test_ik_chain_tool_axis.py",
                       "tests/cli/test_units_invariance_path_ik.py"],
         "machining_cmds.py": ["tests/cli/test_machining_cmds.py",
-                              "tests/cli/test_outputs_in_mm_and_m.py"],
+                              "tests/cli/test_outputs_in_mm_and_m.py",
+                              "tests/cli/test_units_of_sizing_and_origin.py"],
         "main.py": ["tests/cli/test_cli.py", "tests/cli/test_strokes_cli.py"],
         "motion_cmds.py": ["tests/cli/test_motion_cli.py", "tests/cli/test_limits.py",
                            "tests/cli/test_units_invariance_path_ik.py"],
@@ -160,6 +164,12 @@ TESTS_FOR = {
                          "tests/cli/test_error_units.py"],
     },
 }
+
+
+#: Packages whose mutants each run the test files that call the function they change (a map
+#: derived by one traced run of the package's tests: ``tools/mutant_tests.py``); any module no
+#: test calls falls back to the package's tests. ``--tests-for`` or ``--tests`` override it.
+BY_CALLS = ("pkmkit.machines",)
 
 
 def _tests_for(name: str | None) -> dict[str, list[str]] | None:
@@ -198,7 +208,10 @@ def _plausible(args) -> int:
                           operators=operators, timeout=args.timeout,
                           workdir=Path(args.workdir), results=Path(args.results),
                           again=args.survivors, resume=args.resume,
-                          tests_for=_tests_for(args.tests_for), markers=args.markers)
+                          tests_for=_tests_for(args.tests_for), markers=args.markers,
+                          by_calls=args.by_calls if args.by_calls is not None else (
+                              not args.tests and not args.tests_for
+                              and args.target.startswith(BY_CALLS)))
     return 0
 
 
@@ -214,6 +227,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tests-for", choices=sorted(TESTS_FOR),
                         help="(--plausible) per source file, the tests of TESTS_FOR (others: "
                              "--tests or the default)")
+    parser.add_argument("--by-calls", action=argparse.BooleanOptionalAction, default=None,
+                        help="(--plausible) each mutant runs the tests that call its function "
+                             "(tools/mutant_tests.py; default for BY_CALLS packages)")
     parser.add_argument("--resume", action="store_true",
                         help="(--plausible) skip the sample's mutants --results already has")
     parser.add_argument("--plausible", action="store_true",

@@ -337,7 +337,7 @@ def restore(mutant: Mutant, root: Path) -> None:
 def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tuple[str, ...],
         timeout: float, workdir: Path, results: Path, again: bool = False,
         resume: bool = False, tests_for: dict[str, list[str]] | None = None,
-        markers: str = "not slow") -> dict:
+        markers: str = "not slow", by_calls: bool = False) -> dict:
     """Plant a sample of mutants one at a time in a copy of ``src`` and run ``tests`` on each
     (``pytest -x -m "not slow"``: the ordinary suite and the heavy checks marked ``ci``, as
     mutmut's selection in pyproject.toml). Results are appended to ``results`` (JSON
@@ -345,7 +345,10 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
     ``resume``, the sample less the mutants ``results`` already has an outcome for (a run
     stopped by its time limit, continued). ``tests_for`` maps a source file name (``ik_cmd.py``)
     to the tests its mutants run instead of ``tests`` (a package whose whole test directory
-    takes longer than the time limit per mutant, such as ``cli``). ``markers`` is the
+    takes longer than the time limit per mutant, such as ``cli``). ``by_calls``: each mutant
+    runs the test files that call the function it changes (``tools/mutant_tests.py``, derived
+    by one run of ``tests`` first), else those that call its module, else ``tests``
+    (a package such as ``machines``). ``markers`` is the
     ``-m`` selection: ``"not slow and not ci"`` measures the ordinary run alone (what is left
     when the heavy checks marked ``ci`` are not run)."""
     every = [m for m in mutants_of_package(package) if m.operator in operators]
@@ -367,13 +370,23 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
     print(f"{package}: {len(every)} plausible mutants, testing {len(chosen)}", flush=True)
     # the ordinary suite's examples (dev profile), without shrinking a failure
     env = {**os.environ, "PYTHONPATH": str(workdir / "src"), "HYPOTHESIS_PROFILE": "mutation"}
+    test_map = None
+    if by_calls and chosen:
+        import mutant_tests
+
+        test_map = mutant_tests.derive(package.split(".")[1], tests, markers=markers,
+                                       pythonpath=workdir / "src", timeout=20 * timeout)
     for m in chosen:
+        run_tests = (tests_for or {}).get(Path(m.path).name, tests)
+        if test_map is not None:
+            run_tests = test_map.tests_for(Path(m.path).name, _original(m.path), m.line) \
+                or tests
         plant(m, workdir)
         start = time.monotonic()
         try:
             proc = subprocess.run(
                 [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
-                 "-m", markers, *(tests_for or {}).get(Path(m.path).name, tests)],
+                 "-m", markers, *run_tests],
                 cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
             code = proc.returncode
             # 1: a test failed; 2–4: collection or a conftest failed (the mutant breaks an
@@ -386,6 +399,7 @@ def run(package: str, tests: list[str], *, sample: int, seed: int, operators: tu
             restore(m, workdir)
         counts[outcome] += 1
         record = {**asdict(m), "name": m.name, "outcome": outcome, "failed": failed[:1],
+                  "tests": len(run_tests),
                   "exit": code, "seconds": round(time.monotonic() - start, 1), "package": package}
         results.parent.mkdir(parents=True, exist_ok=True)
         with results.open("a") as fh:

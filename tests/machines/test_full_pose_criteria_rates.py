@@ -88,3 +88,36 @@ def test_rates_refused_for_an_orientation_axis():
     inv, jac = _models(m, points)
     assert m.criteria_rates(points, inv, jac, (0, 4)) is None
     assert pkmkit.machine("orthoglide").criteria_rates(points[:, :3], None, None, (0,)) is None
+
+
+def _hexapod_rods_reversed():
+    """The Gough–Stewart platform with its six rods listed last to first: rod j drives
+    actuator 5 − j, so B (one entry a row, in the column of the rod's actuator) is a
+    permuted diagonal, not a diagonal — B⁺ ≠ B⁺ᵀ. The same machine: the same ik."""
+    from pkmkit.machines.full_pose import FullPoseMachine
+    from pkmkit.model.rods import build_rod_model, leg_specs
+
+    hexapod = pkmkit.machine("gough-stewart")
+    model = build_rod_model(list(reversed(leg_specs(hexapod.model))), dims=6,
+                            actuator_names=tuple(hexapod.model.actuator_names),
+                            home_pose=tuple(hexapod.home_pose))
+    return FullPoseMachine(id="hexapod-reversed", name="hexapod-reversed", kind=None,
+                           params={}, model=model)
+
+
+def test_actuator_rates_of_rods_listed_in_another_order():
+    """q̇ = B⁺A ṗ against central differences of ik, on a hexapod whose rods are not in the
+    order of their actuators (a transposed B⁺ is right only for a diagonal B)."""
+    m = _hexapod_rods_reversed()
+    assert list(m.model.rod_actuator) == [5, 4, 3, 2, 1, 0]
+    points = _points(m, 12, 5, 0.1)
+    inv, jac = _models(m, points)
+    np.testing.assert_array_equal(inv.q, pkmkit.machine("gough-stewart").ik(points))
+    rates = m.criteria_rates(points, inv, jac, (0, 1, 2))
+    ok = inv.status == 0
+    assert ok.sum() >= 8
+    for i in range(3):
+        step = np.zeros(6)
+        step[i] = H
+        want = (m.ik(points + step) - m.ik(points - step)) / (2 * H)
+        np.testing.assert_allclose(rates.q[ok, :, i], want[ok], rtol=0, atol=1e-7)

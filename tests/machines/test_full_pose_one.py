@@ -46,7 +46,7 @@ def test_one_pose_is_the_batch_row(name, compiled, monkeypatch):
     x = _poses(m, 300, seed=1)
     monkeypatch.setenv("PKMKIT_COMPILED", compiled)
     batch = m.ik(x, strokes="ignore")
-    one = m._one_pose_inverse()
+    one = m.one_pose_inverse()
     reached = 0
     for k in range(len(x)):
         for given in (x[k], x[k].tolist()):

@@ -47,7 +47,7 @@ def test_kernel_follows_the_engine(name, spread, crawl):
     if crawl is not None:
         options["crawl"] = crawl
     ref = solve_position_inverse(m.model, positions, u0, **options)
-    data = m._direct_kernel()
+    data = m.direct_kernel()
     limit = crawl or (0, np.inf)
     opts = np.concatenate([data.options(options), limit])
     u, status, iterations, residual = kernel.solve(data.geom, positions, u0, opts)

@@ -61,11 +61,11 @@ def _poses(m, n, seed, spread=0.05):
 
 def _one(m, x, tol):
     """The compiled one-pose model of pose x (whatever its strokes), or None."""
-    q = m._one_pose_inverse()(x)
+    q = m.one_pose_inverse()(x)
     if q is None:
         return None
     xb, qb = np.array([x], dtype=float), np.array([q])
-    evaluation = OnePoseFullVelocity(m._direct_kernel().geom, m.n_actuators,
+    evaluation = OnePoseFullVelocity(m.direct_kernel().geom, m.n_actuators,
                                      float(m.characteristic_length), xb[0], qb[0], tol,
                                      lambda: pytest.fail("the kernel refused the row"))
     return type(m.jacobian(m.home_pose))(evaluation)

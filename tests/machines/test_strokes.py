@@ -278,3 +278,18 @@ def test_chain_stroke_violations_name_the_first_joint_of_each_row_as_the_one_row
         excess = signed_excess(values[i:i + 1, joints], lo, hi)[0]
         k = int(np.flatnonzero(excess)[0])
         assert texts[i] == stroke_message(model, int(joints[k]), float(values[i, joints[k]]))
+
+
+def test_details_in_the_units_asked():
+    """The JSON details of a joint beyond its stroke (``--json`` of the commands): value,
+    excess and both ends of the stroke in the unit asked (the hexapod's q3 stroke is
+    [0.65, 1.1] m, as the message above says in mm)."""
+    q = machine("gough-stewart").home_q.copy()
+    q[2] = 1.83
+    check = stroke_excess(machine("gough-stewart"), q)
+    for units, factor in (("m", 1.0), ("mm", 1000.0)):
+        (row,) = check.details(0, units)
+        assert row["joint"] == "q3" and row["unit"] == units
+        assert row["value"] == pytest.approx(1.83 * factor)
+        assert row["excess"] == pytest.approx(0.73 * factor)
+        assert row["stroke"] == pytest.approx([0.65 * factor, 1.1 * factor])

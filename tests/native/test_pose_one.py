@@ -65,7 +65,7 @@ def test_ik_is_one_pose_inverse_bit_for_bit(name):
     float64 (also strided) and int64 vectors; the batch row to 1e-12; None beyond a stroke
     with check exactly where the machine's stroke test says so."""
     m = _machine(name)
-    one, inverse = _one(m), m._one_pose_inverse()
+    one, inverse = _one(m), m.one_pose_inverse()
     x = _poses(m, 400, seed=1)
     batch = m.ik(x, strokes="ignore")
     strided = np.repeat(x, 2, axis=1)[:, ::2]
@@ -83,7 +83,7 @@ def test_ik_is_one_pose_inverse_bit_for_bit(name):
             assert not np.isfinite(batch[k]).all()
             continue
         np.testing.assert_allclose(want, batch[k], rtol=0, atol=1e-12)
-        inside = m._within_strokes(want)
+        inside = m.within_strokes(want)
         beyond += not inside
         checked = one.ik(pose, True)
         assert (checked is None) == (not inside)
@@ -106,7 +106,7 @@ def test_ik_refusals_and_other_types():
         assert one.jacobian(pose, 1e-6, True, print) is NotImplemented
     assert one.ik([np.float64(v) for v in x], False).tobytes() == one.ik(x, False).tobytes()
     assert one.ik([int(v) for v in np.round(x)], False).tolist() == \
-        m._one_pose_inverse()([int(v) for v in np.round(x)])
+        m.one_pose_inverse()([int(v) for v in np.round(x)])
     for error, args in [(TypeError, (x,)), (TypeError, (x, False, 1)), (TypeError, ())]:
         with pytest.raises(error):
             one.ik(*args)
@@ -141,7 +141,7 @@ def test_fk_is_the_batch_paths_solve(name, monkeypatch):
         solved += 1
         assert got.shape == (6,) and np.array_equal(got, full.pose[k]), k
         np.testing.assert_allclose(got, engine[k], rtol=0, atol=1e-12)
-        inside = m._within_strokes(v.tolist())
+        inside = m.within_strokes(v.tolist())
         assert (one.fk(v, True) is None) == (not inside)
     assert solved > 200
 
@@ -167,10 +167,10 @@ def test_jacobian_fields_are_the_kernels_bits(name):
     strokes and far ones; the first read computes only the SVDs its field needs."""
     m = _machine(name)
     one = _one(m)
-    geom, length = m._direct_kernel().geom, float(m.characteristic_length)
+    geom, length = m.direct_kernel().geom, float(m.characteristic_length)
     rng = np.random.default_rng(3)
     for k, pose in enumerate(_poses(m, 40, seed=3, spread=0.3).tolist()):
-        q = m._one_pose_inverse()(pose)
+        q = m.one_pose_inverse()(pose)
         if q is None:
             assert _velocity(one, pose, 1e-6) is None
             continue
@@ -293,7 +293,7 @@ def test_a_refused_row_goes_to_the_batch_path_once():
     ev = broken.jacobian(x, 1e-6, False, batch)
     assert ev.field("J") == "batch J" and ev.field("condition") == "batch condition"
     assert ev.level == -1 and len(calls) == 1
-    assert calls[0][0] == x and calls[0][1] == m._one_pose_inverse()(x) and calls[0][2] == 1e-6
+    assert calls[0][0] == x and calls[0][1] == m.one_pose_inverse()(x) and calls[0][2] == 1e-6
     np.testing.assert_array_equal(ev.field("q"), calls[0][1])  # not from the batch record
 
 
@@ -301,7 +301,7 @@ def test_jacobian_strokes_and_errors():
     m = pkmkit.machine("gough-stewart")
     one = _one(m)
     high = (m.home_pose + np.array([0.0, 0.0, 0.5, 0.0, 0.0, 0.0])).tolist()
-    assert not m._within_strokes(m._one_pose_inverse()(high))
+    assert not m.within_strokes(m.one_pose_inverse()(high))
     assert one.jacobian(high, 1e-6, True, print) is None
     assert one.jacobian(high, 1e-6, False, print) is not None
     x = m.home_pose.tolist()
@@ -316,7 +316,7 @@ def test_constructor_refusals():
     m = pkmkit.machine("verne")
     args = list(_one(m).__reduce__()[1])
     make = _kernels.pose_one
-    assert make(*args).ik(m.home_pose, False).tolist() == m._one_pose_inverse()(
+    assert make(*args).ik(m.home_pose, False).tolist() == m.one_pose_inverse()(
         m.home_pose.tolist())
 
     def changed(i, value):

@@ -36,7 +36,7 @@ pytestmark = [pytest.mark.skipif(_kernels is None or not hasattr(_kernels, "pose
 
 SIX_RODS = [name for name in pkmkit.machines()
             if pkmkit.machine(name).family == "full-pose"
-            and pkmkit.machine(name)._direct_kernel().geom.shape[0] == 6] + ["delta6"]
+            and pkmkit.machine(name).direct_kernel().geom.shape[0] == 6] + ["delta6"]
 #: Fields of plain arithmetic on A and B: the Numba kernel's bits.
 EXACT = ("A", "B", "J_inv", "serial_measure", "tolerance", "q", "characteristic_length")
 
@@ -54,11 +54,11 @@ def _poses(m, n, seed, spread):
 def _record(m, x, tol):
     """The one-pose record of pose x whatever its strokes (as m.jacobian builds it), or None
     where its inverse model refuses it."""
-    q = m._one_pose_inverse()(x)
+    q = m.one_pose_inverse()(x)
     if q is None:
         return None
     evaluation = full_pose_velocity_one.OnePoseFullVelocity(
-        m._direct_kernel().geom, m.n_actuators, float(m.characteristic_length), list(x), q,
+        m.direct_kernel().geom, m.n_actuators, float(m.characteristic_length), list(x), q,
         tol, lambda: pytest.fail("the kernel refused the row"))
     return type(m.jacobian(m.home_pose))(evaluation)
 
@@ -198,7 +198,7 @@ def test_a_refused_row_goes_to_the_batch_path(monkeypatch, no_pose_one):
 
 def test_refusals():
     m = pkmkit.machine("gough-stewart")
-    geom = m._direct_kernel().geom
+    geom = m.direct_kernel().geom
     x = (m.home_pose + 0.01).tolist()
     q = m.ik(np.array(x)).tolist()
     pv = _kernels.pose_velocity
@@ -252,7 +252,7 @@ def test_c_inverse_is_one_pose_inverse_bit_for_bit(name):
     pairs), on reachable poses, poses nudged off the Verne's constraint and far ones; lists,
     tuples and arrays alike (tests/native/test_pose_one.py: the other entries)."""
     m = _machine(name)
-    inverse = m._one_pose_inverse()
+    inverse = m.one_pose_inverse()
     rng = np.random.default_rng(33)
     if m.position_controlled:
         x = m.ik(m.home_pose[:3] + rng.uniform(-0.3, 0.3, (300, 3)), full_output=True,
@@ -276,7 +276,7 @@ def test_c_inverse_at_the_edge_of_reach(name):
     """Poses bisected onto the edge of reach (slides: the radicand's clamp within the boundary
     tolerance; cranks: the cosine's clamp to ±1) from both sides: the same q and refusals."""
     m = _machine(name)
-    inverse = m._one_pose_inverse()
+    inverse = m.one_pose_inverse()
     rng = np.random.default_rng(34)
 
     def pose_at(t, d):
@@ -310,7 +310,7 @@ def test_c_inverse_at_the_edge_of_reach(name):
 def test_state_array_refusals():
     m = pkmkit.machine("gough-stewart")
     x = (m.home_pose + 0.01).tolist()
-    state = _kernels.pose_velocity(m._direct_kernel().geom, x, m.ik(np.array(x)).tolist(), 1.0,
+    state = _kernels.pose_velocity(m.direct_kernel().geom, x, m.ik(np.array(x)).tolist(), 1.0,
                                    1e-6, 0)
     size = len(state) // 8
     a = _kernels.state_array(state, 0, 6, 6)

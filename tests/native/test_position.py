@@ -56,7 +56,7 @@ def _reaches(m, positions):
 
 def _arguments(m, positions):
     """``(geom, positions, None, opts)`` and the keywords ``ik`` passes (its early stop)."""
-    data = m._direct_kernel()
+    data = m.direct_kernel()
     crawl = (position.POSITION_CRAWL[0],
              position.POSITION_CRAWL[1] * (1.0 + float(m.model.rod_length.max())))
     options = {"max_iter": position.POSITION_MAX_ITER, "compute_rank": False}
@@ -115,7 +115,7 @@ def case(request):
 def _starts(m, p):
     """Given starts ``(N, 6)``: the first-order ones moved a little, NaN in a few rows."""
     rng = np.random.default_rng(3)
-    data = m._direct_kernel()
+    data = m.direct_kernel()
     jt_inv = np.linalg.inv(m._home_jacobian[:3])
     u0 = np.empty((p.shape[0], 6))
     for k in range(p.shape[0]):
@@ -131,7 +131,7 @@ def _struts(m):
     where its slide's joint sits at home (length ℓ − q_home): the same home assembly, so that
     the strut branches of the kernels are compared too (the library has no three-strut
     position-controlled machine)."""
-    geom = m._direct_kernel().geom.copy()
+    geom = m.direct_kernel().geom.copy()
     q_home = m.home_q[geom[:, 14].astype(int)]
     geom[:, 0:3] += q_home[:, None] * geom[:, 6:9]
     geom[:, 12] -= q_home
@@ -160,7 +160,7 @@ def test_c_writes_the_numba_kernels_bits_on_struts(guess, crawl):
 
 
 def _compare_bits(m, p, geom, guess, crawl):
-    data = m._direct_kernel()
+    data = m.direct_kernel()
     opts = _arguments(m, p)[3]
     if not crawl:
         opts = opts.copy()
@@ -237,7 +237,7 @@ def test_threads_do_not_change_the_bits(monkeypatch):
 
 def _valid_call(m):
     p = m.home_pose[:3] + np.zeros((4, 3))
-    data = m._direct_kernel()
+    data = m.direct_kernel()
     geom, _, _, opts = _arguments(m, p)
     return [p, np.empty((4, 6)), False, np.zeros(4, dtype=bool), geom, data.home,
             np.eye(3), opts, np.empty((4, 9))]

@@ -4,7 +4,7 @@ plain-Python one-pose paths (``PKMKIT_NATIVE=0``), the batch path's row (bit for
 slides and struts, to 4 ulp of π for crank angles; the direct model to 1e-12 m, as
 tests/machines/test_single_call.py states it), the independent oracle of closure (every rod
 at its length between the pose and its actuator's joint), the input types it reads, the
-strokes judged as ``Machine._within_strokes`` judges them, and everything else handed to the
+strokes judged as ``Machine.within_strokes`` judges them, and everything else handed to the
 batch path (None from the kernel, the typed errors from the machine)."""
 
 from __future__ import annotations
@@ -196,7 +196,7 @@ def test_strokes_judged_as_the_machine_judges_them(monkeypatch):
         at[k] = edge
         beyond = at.copy()
         beyond[k] = np.nextafter(edge, outward)
-        assert m._within_strokes(at.tolist()) and not m._within_strokes(beyond.tolist())
+        assert m.within_strokes(at.tolist()) and not m.within_strokes(beyond.tolist())
         for strokes in ("flag", "refuse"):
             assert _kernels.rod_fk_one(m._one_pack, at, m._working_mode, strokes) is not None
             assert _kernels.rod_fk_one(m._one_pack, beyond, m._working_mode, strokes) is None
@@ -232,7 +232,7 @@ def test_jacobian_state_holds_the_pose_and_its_inverse(name):
             m.closed_form.inverse_numpy(x[None], m.model.leg_branch)).all() else None
         state = _kernels.rod_jacobian_one(m._one_pack, x, 1e-6)
         if state is None:
-            assert q is None or not m._within_strokes(q.tolist())
+            assert q is None or not m.within_strokes(q.tolist())
             continue
         assert _kernels.rod_field(state, 12).tobytes() == q.tobytes()  # the state's q
         assert _kernels.rod_field(state, 13).tobytes() == x.tobytes()  # and its x

@@ -112,7 +112,7 @@ def _random_poses(m, n, seed):
         warnings.simplefilter("ignore", StrokeWarning)
         q = m.ik(x, strokes="ignore")
     keep = [k for k in range(len(x)) if np.isfinite(q[k]).all()
-            and m._within_strokes(q[k].tolist())]
+            and m.within_strokes(q[k].tolist())]
     return x[keep[:n]]
 
 

@@ -398,8 +398,8 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             one = native_one(self)
             q1 = NotImplemented if one is None else one.ik(x, strokes != "ignore")
             if q1 is NotImplemented:  # no C extension, or a pose of another type
-                q1 = self._one_pose_inverse()(x)
-                if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
+                q1 = self.one_pose_inverse()(x)
+                if q1 is not None and (strokes == "ignore" or self.within_strokes(q1)):
                     return np.array(q1)
             elif q1 is not None:
                 return q1
@@ -500,7 +500,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
         if direct.usable(engine_options, qb.shape[0], native=True):  # compiled per-pose solve
-            pose, status, iterations, residual = self._direct_kernel().solve(
+            pose, status, iterations, residual = self.direct_kernel().solve(
                 qb, None if x0 is None else _rows_like(x0, 6, "x0", qb.shape[0]),
                 engine_options)
         else:
@@ -541,22 +541,32 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         return _restore(out, single, ("pose", "status", "mode", "branches", "iterations",
                                       "residual", "out_of_stroke", "stroke_excess"))
 
-    _within_strokes = Machine._within_strokes
+    # ------------------------------------------------ the kernels of its helper modules
+    # (full_pose_one, full_pose_direct, full_pose_velocity_one and _batch): built once per
+    # machine, asked for by name rather than read from its fields
+    within_strokes = Machine.within_strokes
 
-    def _one_pose_inverse(self) -> OnePoseInverse:
+    def one_pose_inverse(self) -> OnePoseInverse:
+        """The closed-form inverse of one plain pose (built once, kept on the machine)."""
         inverse = self.__dict__.get("_one_inverse")
         if inverse is None:
             inverse = OnePoseInverse(self._forms, self._consistency_tol())
             object.__setattr__(self, "_one_inverse", inverse)
         return inverse
 
-    def _direct_kernel(self) -> direct.DirectKernel:
+    def direct_kernel(self) -> direct.DirectKernel:
+        """The compiled direct model's constants (``geom``, ``home``; built once, kept)."""
         kernel = self.__dict__.get("_direct")
         if kernel is None:
             kernel = direct.DirectKernel.of(self.model, self._home_pose, self._home_q,
                                             self._home_jacobian)
             object.__setattr__(self, "_direct", kernel)
         return kernel
+
+    def rod_jacobians(self, x: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """A ``(N, m, 6)`` and B ``(N, m, n)`` of finite pose rows ``x (N, 6)`` at actuator
+        rows ``q (N, n)`` (the closed forms rod by rod: A ṗ = B q̇)."""
+        return self._forms.jacobians(x, q)
 
     # ---------------------------------------------------------------- velocity
     def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
@@ -607,8 +617,8 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             evaluation = one.jacobian(x, tol, True, self._jacobian_row)
             if evaluation is not NotImplemented:
                 return None if evaluation is None else _ONE_POSE_JACOBIANS(evaluation)
-        q1 = self._one_pose_inverse()(x)
-        if q1 is None or not self._within_strokes(q1) or not velocity_one.usable(self):
+        q1 = self.one_pose_inverse()(x)
+        if q1 is None or not self.within_strokes(q1) or not velocity_one.usable(self):
             return None
         x1 = [float(v) for v in (x.tolist() if isinstance(x, np.ndarray) else x)]
 
@@ -617,7 +627,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
 
         constants = self.__dict__.get("_velocity_one_constants")
         if constants is None:  # once per machine
-            constants = (self._direct_kernel().geom, self.n_actuators,
+            constants = (self.direct_kernel().geom, self.n_actuators,
                          float(self.characteristic_length))
             object.__setattr__(self, "_velocity_one_constants", constants)
         return _ONE_POSE_JACOBIANS(velocity_one.OnePoseFullVelocity(*constants, x1, q1, tol,

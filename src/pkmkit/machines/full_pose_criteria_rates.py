@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.full_pose_rates import rod_b_pinv
+from pkmkit.machines.full_pose_rates import rod_b_pinv, solve_j
 from pkmkit.model.rods import CRANK, SLIDE
 from pkmkit.numerics.linalg import singular_value_rates
 
@@ -162,7 +162,7 @@ class FullPoseCriteriaRates:
         ok = np.isfinite(j).all(axis=(1, 2)) & np.isfinite(rhs).all(axis=(1, 2, 3))
         if ok.any():
             for i in range(rhs.shape[-1]):
-                j_dot[ok, :, :, i] = self._solve_j(a[ok], rhs[ok, :, :, i])
+                j_dot[ok, :, :, i] = solve_j(a[ok], rhs[ok, :, :, i])
         scale = np.array([1.0, 1.0, 1.0, length, length, length])
         return singular_value_rates(j * scale[None, :, None], j_dot * scale[None, :, None, None])[1]
 

@@ -139,8 +139,8 @@ def direct_one(machine: Any, q: Any, strokes: str) -> np.ndarray | None:
             # not imported: the batch path (the NumPy engine, ≈ 2 ms)
             return None
         solve_one = _numba_solve_one()
-    out = machine._direct_kernel().solve_one(q, solve_one)
-    if out[6] != 0.0 or not (strokes == "ignore" or machine._within_strokes(q.tolist())):
+    out = machine.direct_kernel().solve_one(q, solve_one)
+    if out[6] != 0.0 or not (strokes == "ignore" or machine.within_strokes(q.tolist())):
         return None  # not OK (Status.OK is 0), or a stroke to judge
     return out[:6]
 

@@ -160,13 +160,13 @@ def _pose_one(machine: Any, native: Any) -> Any | None:
     model = machine.model
     if model.n_rods > 6 or not hasattr(native, "pose_one"):
         return None
-    inverse = machine._one_pose_inverse()
+    inverse = machine.one_pose_inverse()
     groups = np.zeros((len(inverse.groups), 8))
     for k, (rods, angular) in enumerate(inverse.groups):
         groups[k, :2] = len(rods), angular
         groups[k, 2:2 + len(rods)] = rods
     lower, upper = stroke_limits(machine)
-    kernel = machine._direct_kernel()
+    kernel = machine.direct_kernel()
     return native.pose_one(np.array(inverse.rows, dtype=float).tobytes(), groups.tobytes(),
                            inverse.simple, BOUNDARY_TOL, inverse.tol, MAX_ABS,
                            np.ascontiguousarray(lower - STROKE_TOL, dtype=float),

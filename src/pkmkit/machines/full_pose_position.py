@@ -183,7 +183,7 @@ class PositionInverse:
         if compiled:
             from pkmkit.machines import full_pose_position_solve as kernel  # C or Numba
 
-            data = self._direct_kernel()
+            data = self.direct_kernel()
             jt_inv = self.__dict__.get("_position_jt_inv")
             if jt_inv is None:
                 jt_inv = np.linalg.inv(self._home_jacobian[:3])

@@ -14,7 +14,6 @@ from pkmkit.machines.results import (
     JacobianRates,
 )
 from pkmkit.model.rods import STRUT
-from pkmkit.numerics.linalg import small_singular_values
 
 if TYPE_CHECKING:
     from pkmkit.machines.full_pose import FullPoseJacobians
@@ -89,7 +88,7 @@ class FullPoseRates:
         j_dot = np.full((size, 6, self.n_actuators), np.nan)
         ok = np.isfinite(a).all(axis=(1, 2)) & np.isfinite(rhs).all(axis=(1, 2))
         if ok.any():
-            j_dot[ok] = self._solve_j(a[ok], rhs[ok])
+            j_dot[ok] = solve_j(a[ok], rhs[ok])
         rates = JacobianRates(qd=qd, A_dot=a_dot, B_dot=b_dot, J_dot=j_dot)
         if single:
             return JacobianRates(**{k: v[0] for k, v in rates.__dict__.items()})
@@ -121,27 +120,24 @@ class FullPoseRates:
         qb[bad] = np.nan
         return qb
 
-    @staticmethod
-    def _solve_j(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """J = A⁻¹B (six rods) or the least-squares A⁺B (more rods)."""
-        if a.shape[1] == 6:
-            return np.linalg.solve(a, b)
-        return np.linalg.pinv(a) @ b
 
-    @staticmethod
-    def _singular_values(mat: np.ndarray) -> np.ndarray:
-        """``(N, min(r, c))`` singular values of ``mat (N, r, c)`` (NaN rows where it holds NaN):
-        :func:`~pkmkit.numerics.linalg.small_singular_values`."""
-        return small_singular_values(mat)
+def solve_j(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """J = A⁻¹B ``(N, 6, n)`` of ``a (N, m, 6)``, ``b (N, m, n)`` (six rods), or the
+    least-squares A⁺B (more rods); ``b`` may carry more trailing axes' worth of columns."""
+    if a.shape[1] == 6:
+        return np.linalg.solve(a, b)
+    return np.linalg.pinv(a) @ b
 
-    def _base_joint_speeds(self, q: np.ndarray) -> np.ndarray:
-        """``|∂a_j/∂q|`` ``(N, m)`` (1 for struts, whose base joints do not move)."""
-        from pkmkit.solve.rod_closure import actuator_rates
 
-        rates = actuator_rates(self.model, np.nan_to_num(q).T)  # (3, m, N)
-        speed = np.linalg.norm(rates, axis=0).T
-        speed[:, self.model.rod_kind == STRUT] = 1.0
-        return speed
+def base_joint_speeds(model: Any, q: np.ndarray) -> np.ndarray:
+    """``|∂a_j/∂q|`` ``(N, m)`` of a rod ``model`` at actuator rows ``q (N, n)`` (1 for
+    struts, whose base joints do not move)."""
+    from pkmkit.solve.rod_closure import actuator_rates
+
+    rates = actuator_rates(model, np.nan_to_num(q).T)  # (3, m, N)
+    speed = np.linalg.norm(rates, axis=0).T
+    speed[:, model.rod_kind == STRUT] = 1.0
+    return speed
 
 
 def rod_b_pinv(b: np.ndarray) -> np.ndarray:

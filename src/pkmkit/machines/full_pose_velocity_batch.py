@@ -24,10 +24,11 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.full_pose_rates import rod_b_pinv
+from pkmkit.machines.full_pose_rates import base_joint_speeds, rod_b_pinv, solve_j
 from pkmkit.machines.lazy_records import lazy_record_class
 from pkmkit.machines.results import Singularity
 from pkmkit.model.rods import STRUT
+from pkmkit.numerics.linalg import small_singular_values
 
 #: The fields computed when first read.
 LAZY_FIELDS = ("J", "J_homogeneous", "singular_values", "condition", "J_inv", "det_B",
@@ -38,8 +39,6 @@ class BatchFullVelocity:
     """The costly fields of a batched full-pose velocity model, computed when read.
 
     Args:
-        machine: the :class:`~pkmkit.machines.full_pose.FullPoseMachine` (its ``_solve_j``
-            and ``_singular_values``).
         a: ``(N, m, 6)`` A. b: ``(N, m, n)`` B. ok: ``(N,)`` rows with finite x and q.
         at_parallel: ``(N,)`` rows classified as a parallel singularity (no J there).
         length: the characteristic length L (m).
@@ -47,11 +46,11 @@ class BatchFullVelocity:
             parallel measure).
     """
 
-    __slots__ = ("_values", "a", "at_parallel", "b", "length", "machine", "ok", "unit")
+    __slots__ = ("_values", "a", "at_parallel", "b", "length", "ok", "unit")
 
-    def __init__(self, machine: Any, a: np.ndarray, b: np.ndarray, ok: np.ndarray,
-                 at_parallel: np.ndarray, length: float, unit: np.ndarray):
-        self.machine, self.a, self.b, self.ok = machine, a, b, ok
+    def __init__(self, a: np.ndarray, b: np.ndarray, ok: np.ndarray, at_parallel: np.ndarray,
+                 length: float, unit: np.ndarray):
+        self.a, self.b, self.ok = a, b, ok
         self.at_parallel, self.length, self.unit = at_parallel, length, unit
         self._values: dict[str, Any] = {}
 
@@ -60,27 +59,27 @@ class BatchFullVelocity:
         values = self._values
         if name in values:
             return values[name]
-        a, b, ok, machine = self.a, self.b, self.ok, self.machine
+        a, b, ok = self.a, self.b, self.ok
         size, n = b.shape[0], b.shape[2]
         if name == "J":
             j = np.full((size, 6, n), np.nan)  # no J at a parallel singularity (where an
             good = ok & ~self.at_parallel  # exactly singular A made np.linalg.solve raise)
             if good.any():
-                j[good] = machine._solve_j(a[good], b[good])
+                j[good] = solve_j(a[good], b[good])
             values[name] = j
         elif name == "J_homogeneous":
             scale = np.array([1.0, 1.0, 1.0, self.length, self.length, self.length])
             values[name] = self.field("J") * scale[None, :, None]
         elif name == "singular_values":
-            values[name] = machine._singular_values(self.field("J_homogeneous"))
+            values[name] = small_singular_values(self.field("J_homogeneous"))
         elif name == "condition":
             sv = self.field("singular_values")
             with np.errstate(invalid="ignore", divide="ignore"):
                 values[name] = sv[:, 0] / sv[:, -1]
         elif name == "translation_singular_values":
-            values[name] = machine._singular_values(self.field("J")[:, :3])
+            values[name] = small_singular_values(self.field("J")[:, :3])
         elif name == "rotation_singular_values":
-            values[name] = machine._singular_values(self.field("J")[:, 3:])
+            values[name] = small_singular_values(self.field("J")[:, 3:])
         elif name == "J_inv":
             j_inv = np.full((size, n, 6), np.nan)
             good = ok & ~self.at_parallel
@@ -88,7 +87,7 @@ class BatchFullVelocity:
                 j_inv[good] = rod_b_pinv(b[good]) @ a[good]
             values[name] = j_inv
         elif name == "parallel_measure":
-            values[name] = _parallel_measure(machine, self.unit, ok)
+            values[name] = _parallel_measure(self.unit, ok)
         elif name == "det_B":
             det_b = np.full(size, np.nan)
             if b.shape[1] == n and ok.any():
@@ -112,13 +111,13 @@ def velocity_model(machine: Any, record: type, xb: np.ndarray, qb: np.ndarray,
     a = np.full((size, m, 6), np.nan)
     b = np.full((size, m, n), np.nan)
     if ok.any():
-        a[ok], b[ok] = machine._forms.jacobians(xb[ok], qb[ok])
+        a[ok], b[ok] = machine.rod_jacobians(xb[ok], qb[ok])
     # singularity measures: unit rows, moments over L; base-joint motion vs rod direction
     with np.errstate(invalid="ignore", divide="ignore"):
         dist = np.linalg.norm(a[:, :, :3], axis=2)
         unit = a / dist[:, :, None]
         unit[:, :, 3:] /= length
-        speed = machine._base_joint_speeds(qb)
+        speed = base_joint_speeds(machine.model, qb)
         strut = machine.model.rod_kind == STRUT
         cos = np.abs(np.take_along_axis(b, machine.model.rod_actuator[None, :, None], 2)[:, :, 0]
                      ) / (dist * speed)
@@ -135,21 +134,21 @@ def velocity_model(machine: Any, record: type, xb: np.ndarray, qb: np.ndarray,
     else:
         near = ok
     parallel = np.full(size, np.nan)
-    parallel[near] = _parallel_measure(machine, unit[near], ok[near])
+    parallel[near] = _parallel_measure(unit[near], ok[near])
     flags = np.where(serial < tol, int(Singularity.SERIAL), 0)
     flags |= np.where(parallel < tol, int(Singularity.PARALLEL), 0)
     at_parallel = (flags & Singularity.PARALLEL).astype(bool)
-    evaluation = BatchFullVelocity(machine, a, b, ok, at_parallel, length, unit)
+    evaluation = BatchFullVelocity(a, b, ok, at_parallel, length, unit)
     return record(evaluation, A=a, B=b, det_A=det_a, serial_measure=serial,
                   singularity=flags, tolerance=tol, q=qb,
                   mode=np.sign(np.nan_to_num(det_a)).astype(int), characteristic_length=length)
 
 
-def _parallel_measure(machine: Any, unit: np.ndarray, ok: np.ndarray) -> np.ndarray:
+def _parallel_measure(unit: np.ndarray, ok: np.ndarray) -> np.ndarray:
     """``(N,)`` σ_min/σ_max of each ``unit (N, m, 6)`` row where ``ok``, NaN elsewhere."""
     sv_a = np.full((unit.shape[0], 6), np.nan)
     if ok.any():
-        sv_a[ok] = machine._singular_values(unit[ok])[:, :6]
+        sv_a[ok] = small_singular_values(unit[ok])[:, :6]
     with np.errstate(invalid="ignore", divide="ignore"):
         return sv_a[:, -1] / sv_a[:, 0]
 

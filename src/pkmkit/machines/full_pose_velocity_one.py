@@ -239,7 +239,7 @@ def usable(machine: Any) -> bool:
     twin (:func:`_native_twin`: no import), else the rule of
     :func:`pkmkit.machines.full_pose_direct.direct_one` (a one-shot call does not import
     Numba; the machine's next single call does)."""
-    if _native_twin(machine._direct_kernel().geom) is not None:
+    if _native_twin(machine.direct_kernel().geom) is not None:
         return True
     if "numba" in sys.modules and "PKMKIT_COMPILED" not in os.environ:
         return jit.numba_available()  # the common case, without reading the mode

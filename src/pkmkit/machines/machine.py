@@ -213,7 +213,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             object.__setattr__(self, "_branch_tuple", cached)
         return cached
 
-    def _within_strokes(self, q: list[float]) -> bool:
+    def within_strokes(self, q: list[float]) -> bool:
         """Every value of one configuration within its stroke (as :func:`signed_excess`)."""
         limits = self.__dict__.get("_stroke_tuples")
         if limits is None:
@@ -315,7 +315,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
                     return q1
             elif strokes in STROKE_MODES:  # without the extension: Python floats
                 q1 = self._closed.inverse_one(x, self._default_branches)
-                if q1 is not None and (strokes == "ignore" or self._within_strokes(q1)):
+                if q1 is not None and (strokes == "ignore" or self.within_strokes(q1)):
                     return np.array(q1)
         return self._ik_rows(x, method=method, branches=branches, q0=q0,
                              full_output=full_output, strokes=strokes, **engine_options)
@@ -464,7 +464,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
                     return p1
             elif strokes in STROKE_MODES:  # without the extension: Python floats
                 p1 = direct_one(self._closed, q, sign)
-                if p1 is not None and (strokes == "ignore" or self._within_strokes(
+                if p1 is not None and (strokes == "ignore" or self.within_strokes(
                         q.tolist() if isinstance(q, np.ndarray) else q)):
                     return np.array(p1)
         return self._fk_rows(q, method=method, mode=mode, x0=x0, dof=dof,
@@ -564,7 +564,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
                     return native_record(self._closed, state, tol, native.rod_field)
             else:
                 fast = jacobian_one(self._closed, x, tol, self._default_branches,
-                                    self._within_strokes)  # same numbers, Python floats
+                                    self.within_strokes)  # same numbers, Python floats
                 if fast is not None:
                     return fast
         if not (isinstance(tol, int | float | np.floating) and np.isfinite(tol) and tol > 0):

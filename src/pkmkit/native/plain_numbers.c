@@ -1,5 +1,6 @@
 /* plain_numbers.c: the one reader of "plain numbers" shared by the one-pose C entries
- * (rod_one.c, pose_one.c, chain_one.c), and the one new-array helper they answer with.
+ * (rod_one.c, pose_one.c, chain_one.c), and the one new-array helper they (and velocity.c's
+ * rod_field) answer with.
  *
  * The rule, the same for every machine family (docs/architecture.md, "plain numbers"):
  *   - a list or tuple (exact types) of `count` items, each a float (a float subclass too:
@@ -82,13 +83,21 @@ int pk_plain_numbers(PyObject *x, Py_ssize_t count, double max_abs, double *out)
     return status;
 }
 
+/* The shapes (rows,) and (rows, cols) of up to 6 x 6, built once (kept for the process). */
+static PyObject *shapes[7][7];
+
 PyObject *pk_new_array(const double *values, Py_ssize_t rows, Py_ssize_t cols) {
     PyObject *empty = pk_numpy_empty();
     if (!empty) return NULL;
-    PyObject *shape = cols ? Py_BuildValue("(nn)", rows, cols) : PyLong_FromSsize_t(rows);
-    if (!shape) return NULL;
+    int small = rows <= 6 && cols <= 6;
+    PyObject *shape = small ? shapes[rows][cols] : NULL;
+    if (!shape) {
+        shape = cols ? Py_BuildValue("(nn)", rows, cols) : Py_BuildValue("(n)", rows);
+        if (!shape) return NULL;
+        if (small) shapes[rows][cols] = shape; /* the table's reference */
+    }
     PyObject *out = PyObject_CallOneArg(empty, shape);
-    Py_DECREF(shape);
+    if (!small) Py_DECREF(shape);
     if (!out) return NULL;
     Py_buffer view;
     if (PyObject_GetBuffer(out, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {

@@ -31,6 +31,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <string.h>
+#include <structmember.h>
 
 #include "kernels.h"
 
@@ -41,6 +42,7 @@ int pk_pose_inverse_one(const double *x, const double *rods, ptrdiff_t m, const 
                         double *rod_q);                                     /* pose_velocity.c */
 void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c,
                              double *out);                                  /* svd.c */
+int pk_numpy_scalars(PyObject **float64, PyObject **int64);                /* velocity.c */
 
 #define MAX_RODS 6
 /* layout(6, n <= 6) of full_pose_velocity_kernel: A, B, J, J^-1, sv, sv_t, sv_r, 6 scalars */
@@ -68,25 +70,18 @@ typedef struct {
 
 static PyTypeObject PoseOneType, PoseVelocityType;
 
+/* The static type of one of this file's objects: the two differ only in these. */
+#define ONE_TYPE(object, name, dealloc, doc, methods, members)                              \
+    {                                                                                     \
+        PyVarObject_HEAD_INIT(NULL, 0).tp_name = "pkmkit.native.kernels." name,          \
+        .tp_basicsize = sizeof(object), .tp_dealloc = (destructor)(dealloc),              \
+        .tp_flags = Py_TPFLAGS_DEFAULT, .tp_doc = (doc), .tp_methods = (methods),          \
+        .tp_members = (members),                                                          \
+    }
+
 /* ------------------------------------------------------------------ NumPy, by name */
 
-static PyObject *np_empty, *np_float64, *np_int64;
-
-static int numpy_loaded(void) {
-    if (np_empty) return 0;
-    PyObject *numpy = PyImport_ImportModule("numpy");
-    if (!numpy) return -1;
-    np_float64 = PyObject_GetAttrString(numpy, "float64");
-    np_int64 = PyObject_GetAttrString(numpy, "int64");
-    PyObject *empty = PyObject_GetAttrString(numpy, "empty");
-    Py_DECREF(numpy);
-    if (!np_float64 || !np_int64 || !empty) {
-        Py_XDECREF(empty);
-        return -1;
-    }
-    np_empty = empty;
-    return 0;
-}
+static PyObject *np_float64, *np_int64; /* velocity.c's (pk_numpy_scalars), borrowed */
 
 static int within_strokes(const PoseOne *self, const double *q) {
     for (Py_ssize_t k = 0; k < self->n; k++)
@@ -105,19 +100,36 @@ static int truth(PyObject *const *args, Py_ssize_t nargs, Py_ssize_t expected, c
 
 /* ------------------------------------------------------------------ PoseOne methods */
 
-static PyObject *one_ik(PoseOne *self, PyObject *const *args, Py_ssize_t nargs) {
-    int check = truth(args, nargs, 2, "ik");
-    if (check < 0) return NULL;
-    double x[6], q[MAX_RODS], rod_q[MAX_RODS];
-    int got = pk_plain_numbers(args[0], 6, self->max_abs, x);
-    if (got < 0) return NULL;
-    if (got == PK_PLAIN_OTHER) Py_RETURN_NOTIMPLEMENTED;
+enum { SOLVED, BATCH_ANSWERS, OTHER_BUFFER };
+
+/* The inverse model of one plain pose (ik and jacobian): x and q filled and SOLVED, or
+ * BATCH_ANSWERS (refused, no closure, beyond a stroke when check), OTHER_BUFFER, -1 on error. */
+static int inverse_of(PoseOne *self, PyObject *pose, int check, double *x, double *q) {
+    double rod_q[MAX_RODS];
+    int got = pk_plain_numbers(pose, 6, self->max_abs, x);
+    if (got < 0) return -1;
+    if (got == PK_PLAIN_OTHER) return OTHER_BUFFER;
     if (got == PK_PLAIN_REFUSED
         || pk_pose_inverse_one(x, self->rods, self->m, self->groups, self->n, self->simple,
                                self->boundary_tol, self->consistency_tol, q, rod_q)
         || (check && !within_strokes(self, q)))
-        Py_RETURN_NONE;
-    return pk_new_array(q, self->n, 0);
+        return BATCH_ANSWERS;
+    return SOLVED;
+}
+
+/* What ik and jacobian answer where inverse_of did not solve: NULL, None or NotImplemented. */
+static PyObject *unsolved(int found) {
+    if (found < 0) return NULL;
+    if (found == OTHER_BUFFER) Py_RETURN_NOTIMPLEMENTED;
+    Py_RETURN_NONE;
+}
+
+static PyObject *one_ik(PoseOne *self, PyObject *const *args, Py_ssize_t nargs) {
+    int check = truth(args, nargs, 2, "ik");
+    if (check < 0) return NULL;
+    double x[6], q[MAX_RODS];
+    int found = inverse_of(self, args[0], check, x, q);
+    return found == SOLVED ? pk_new_array(q, self->n, 0) : unsolved(found);
 }
 
 static PyObject *one_fk(PoseOne *self, PyObject *const *args, Py_ssize_t nargs) {
@@ -158,15 +170,9 @@ static PyObject *one_jacobian(PoseOne *self, PyObject *const *args, Py_ssize_t n
         return NULL;
     }
     if (self->m != 6) Py_RETURN_NOTIMPLEMENTED; /* the velocity kernel is for six rods */
-    double x[6], q[MAX_RODS], rod_q[MAX_RODS];
-    int got = pk_plain_numbers(args[0], 6, self->max_abs, x);
-    if (got < 0) return NULL;
-    if (got == PK_PLAIN_OTHER) Py_RETURN_NOTIMPLEMENTED;
-    if (got == PK_PLAIN_REFUSED
-        || pk_pose_inverse_one(x, self->rods, self->m, self->groups, self->n, self->simple,
-                               self->boundary_tol, self->consistency_tol, q, rod_q)
-        || (check && !within_strokes(self, q)))
-        Py_RETURN_NONE;
+    double x[6], q[MAX_RODS];
+    int found = inverse_of(self, args[0], check, x, q);
+    if (found != SOLVED) return unsolved(found);
     PoseVelocity *v = PyObject_New(PoseVelocity, &PoseVelocityType);
     if (!v) return NULL;
     Py_INCREF(self);
@@ -207,26 +213,15 @@ static PyMethodDef one_methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static PyObject *one_get_n(PoseOne *self, void *unused) {
-    (void)unused;
-    return PyLong_FromSsize_t(self->n);
-}
-
-static PyGetSetDef one_getset[] = {
-    {"n", (getter)one_get_n, NULL, "actuators", NULL},
-    {NULL, NULL, NULL, NULL, NULL},
+static PyMemberDef one_members[] = {
+    {"n", T_PYSSIZET, offsetof(PoseOne, n), READONLY, "actuators"},
+    {NULL, 0, 0, 0, NULL},
 };
 
-static PyTypeObject PoseOneType = {
-    PyVarObject_HEAD_INIT(NULL, 0)
-    .tp_name = "pkmkit.native.kernels.PoseOne",
-    .tp_basicsize = sizeof(PoseOne),
-    .tp_dealloc = (destructor)one_dealloc,
-    .tp_flags = Py_TPFLAGS_DEFAULT,
-    .tp_doc = "A full-pose machine's constants for one-pose calls (pose_one).",
-    .tp_methods = one_methods,
-    .tp_getset = one_getset,
-};
+static PyTypeObject PoseOneType =
+    ONE_TYPE(PoseOne, "PoseOne", one_dealloc,
+             "A full-pose machine's constants for one-pose calls (pose_one).", one_methods,
+             one_members);
 
 /* ------------------------------------------------------------------ PoseVelocity */
 
@@ -397,11 +392,6 @@ static PyObject *velocity_field(PoseVelocity *self, PyObject *name) {
     }
 }
 
-static PyObject *velocity_level(PoseVelocity *self, void *unused) {
-    (void)unused;
-    return PyLong_FromLong(self->level);
-}
-
 static void velocity_dealloc(PoseVelocity *self) {
     Py_XDECREF(self->owner);
     Py_XDECREF(self->batch);
@@ -415,22 +405,16 @@ static PyMethodDef velocity_methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static PyGetSetDef velocity_getset[] = {
-    {"level", (getter)velocity_level, NULL,
-     "the pk_pose_fill level computed so far (-1: none, or the batch path answered)", NULL},
-    {NULL, NULL, NULL, NULL, NULL},
+static PyMemberDef velocity_members[] = {
+    {"level", T_INT, offsetof(PoseVelocity, level), READONLY,
+     "the pk_pose_fill level computed so far (-1: none, or the batch path answered)"},
+    {NULL, 0, 0, 0, NULL},
 };
 
-static PyTypeObject PoseVelocityType = {
-    PyVarObject_HEAD_INIT(NULL, 0)
-    .tp_name = "pkmkit.native.kernels.PoseVelocity",
-    .tp_basicsize = sizeof(PoseVelocity),
-    .tp_dealloc = (destructor)velocity_dealloc,
-    .tp_flags = Py_TPFLAGS_DEFAULT,
-    .tp_doc = "The velocity model of one pose, computed when first read (PoseOne.jacobian).",
-    .tp_methods = velocity_methods,
-    .tp_getset = velocity_getset,
-};
+static PyTypeObject PoseVelocityType =
+    ONE_TYPE(PoseVelocity, "PoseVelocity", velocity_dealloc,
+             "The velocity model of one pose, computed when first read (PoseOne.jacobian).",
+             velocity_methods, velocity_members);
 
 /* ------------------------------------------------------------------ constructor */
 
@@ -481,7 +465,7 @@ PyObject *pk_py_pose_one(PyObject *self, PyObject *const *args, Py_ssize_t nargs
         if (PyType_Ready(&PoseOneType) < 0 || PyType_Ready(&PoseVelocityType) < 0) return NULL;
         types_ready = 1;
     }
-    if (numpy_loaded() < 0) return NULL; /* np_float64, np_int64 for the fields */
+    if (pk_numpy_scalars(&np_float64, &np_int64) < 0) return NULL; /* for the fields */
     PoseOne *o = PyObject_New(PoseOne, &PoseOneType);
     if (!o) return NULL;
     o->args = PyTuple_New(nargs);

@@ -409,8 +409,17 @@ static PyObject *np_empty = NULL, *np_float64 = NULL, *np_int64 = NULL;
 
 static int numpy_names(void);
 
-/* numpy.empty (a borrowed reference), or NULL with an exception (also for pose_velocity.c). */
+/* numpy.empty (a borrowed reference), or NULL with an exception (also for pose_velocity.c
+ * and plain_numbers.c). */
 PyObject *pk_numpy_empty(void) { return numpy_names() < 0 ? NULL : np_empty; }
+
+/* numpy.float64 and numpy.int64 (borrowed) into the pointers (pose_one.c); -1 on error. */
+int pk_numpy_scalars(PyObject **float64, PyObject **int64) {
+    if (numpy_names() < 0) return -1;
+    *float64 = np_float64;
+    *int64 = np_int64;
+    return 0;
+}
 
 static int numpy_names(void) {
     if (np_empty) return 0;
@@ -500,28 +509,6 @@ PyObject *pk_py_rod_velocity(PyObject *self, PyObject *const *args, Py_ssize_t n
     return state;
 }
 
-/* The shapes (n,) and (n, n) for n = 2, 3, built once. */
-static PyObject *shapes[2][2];
-
-/* A new float64 array of shape (rows, cols) (cols 0: (rows,)), rows = 2 or 3, holding values. */
-static PyObject *array_of(const double *values, int rows, int cols) {
-    PyObject **shape = &shapes[rows - 2][cols ? 1 : 0];
-    if (!*shape) {
-        *shape = cols ? Py_BuildValue("(ii)", rows, cols) : Py_BuildValue("(i)", rows);
-        if (!*shape) return NULL;
-    }
-    PyObject *out = PyObject_CallOneArg(np_empty, *shape);
-    if (!out) return NULL;
-    Py_buffer view;
-    if (PyObject_GetBuffer(out, &view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0) {
-        Py_DECREF(out);
-        return NULL;
-    }
-    memcpy(view.buf, values, sizeof(double) * (size_t)(rows * (cols ? cols : 1)));
-    PyBuffer_Release(&view);
-    return out;
-}
-
 static PyObject *scalar(PyObject *type, PyObject *value) {
     if (!value) return NULL;
     PyObject *out = PyObject_CallOneArg(type, value);
@@ -569,15 +556,15 @@ PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t narg
     if (numpy_names() < 0) return NULL;
     int n = s->n;
     switch (code) {
-    case 0: return array_of(s->a, n, n);
+    case 0: return pk_new_array(s->a, n, n);
     case 1: {
         double diag[9] = {0};
         for (int i = 0; i < n; i++) diag[(n + 1) * i] = s->b[i];
-        return array_of(diag, n, n);
+        return pk_new_array(diag, n, n);
     }
-    case 2: return array_of(s->j, n, n);
-    case 3: return array_of(s->j_inv, n, n);
-    case 4: return array_of(s->sv, n, 0);
+    case 2: return pk_new_array(s->j, n, n);
+    case 3: return pk_new_array(s->j_inv, n, n);
+    case 4: return pk_new_array(s->sv, n, 0);
     case 5: return scalar(np_float64, PyFloat_FromDouble(s->condition));
     case 6: return scalar(np_float64, PyFloat_FromDouble(s->det_a));
     case 7: return scalar(np_float64, PyFloat_FromDouble(s->det_b));
@@ -585,8 +572,8 @@ PyObject *pk_py_rod_field(PyObject *self, PyObject *const *args, Py_ssize_t narg
     case 9: return scalar(np_float64, PyFloat_FromDouble(s->serial));
     case 10: return scalar(np_int64, PyLong_FromLong(s->flags));
     case 11: return scalar(np_int64, PyLong_FromLong(s->mode));
-    case 12: return array_of(s->q, n, 0);
-    default: return array_of(s->x, n, 0);
+    case 12: return pk_new_array(s->q, n, 0);
+    default: return pk_new_array(s->x, n, 0);
     }
 }
 
