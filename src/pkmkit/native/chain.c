@@ -374,27 +374,15 @@ void pk_chain_rows(const pk_chain *c, const double *known, ptrdiff_t known_rows,
             retract(uk, step, u_new, n);
             evaluate_any(c, values, u_new, r_new, j_new, target, tool, w);
             double cost_new = 0.5 * dot(r_new, r_new, m);
-            int accept = isfinite(cost_new) && cost_new <= cost * (1.0 + 1e-13);
+            int accept = pk_lm_accept(cost, cost_new, &lam);
             count += 1;
             if (accept) {
                 memcpy(uk, u_new, (size_t)n * sizeof(double));
                 memcpy(r, r_new, (size_t)m * sizeof(double));
                 memcpy(jac, j_new, (size_t)(m * n) * sizeof(double));
                 cost = cost_new;
-                lam = pk_max(lam * 0.1, 1e-12);
-            } else {
-                lam *= 10.0;
             }
-            double step_norm = sqrt(dot(step, step, n));
-            double u_norm = sqrt(dot(uk, uk, n));
-            int done = (accept && step_norm <= o->xtol * (1.0 + u_norm)) || lam > 1e12;
-            if (count % 10 == 0) {
-                if (cost > (1.0 - o->stall) * checkpoint
-                    && cost > 0.5 * (o->residual_tol * o->residual_tol))
-                    done = 1;
-                checkpoint = cost;
-            }
-            if (done) {
+            if (pk_lm_done(o, accept, step, uk, n, lam, cost, count, &checkpoint)) {
                 stopped = 1;
                 break;
             }
