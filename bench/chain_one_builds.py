@@ -11,7 +11,7 @@ bench/chain_one_builds.py A B --only A --calls 1``).
 
 Usage::
 
-    python bench/chain_one_builds.py BEFORE.so AFTER.so [--poses 400] [--machines a,b]
+    python bench/chain_one_builds.py BEFORE.so AFTER.so [--poses 400] [--rounds 7] [--machines a,b]
 """
 
 from __future__ import annotations
@@ -91,6 +91,7 @@ def main() -> None:
     parser.add_argument("second")
     parser.add_argument("--poses", type=int, default=400)
     parser.add_argument("--machines", default="tripteor-x7,trimule-600")
+    parser.add_argument("--rounds", type=int, default=7, help="interleaved rounds (medians)")
     parser.add_argument("--only", help="one of the two paths: run its ik alone")
     parser.add_argument("--calls", type=int, default=1, help="rounds with --only")
     args = parser.parse_args()
@@ -107,7 +108,7 @@ def main() -> None:
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
     builds = [load(args.first), load(args.second)]
     for name in args.machines.split(","):
-        compare(name, builds, args.poses)
+        compare(name, builds, args.poses, args.rounds)
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
 
 
