@@ -56,15 +56,19 @@ static void rotation_rows(const double *mm, double length, double sign, double *
     }
 }
 
-/* (rot, pos) <- (rot, pos) f for an element's frame f (4, 4) (_apply_frame). */
+/* (rot, pos) <- (rot, pos) f for an element's frame f (4, 4) (_apply_frame); tmp (9,) no
+ * longer used (the callers' scratch kept in the signature). */
 static void apply_frame(double *rot, double *pos, const double *f, double *tmp) {
+    double r[9], g[12];  /* local copies: no reloads for fear of aliasing (the same sums) */
+    memcpy(r, rot, sizeof r);
+    memcpy(g, f, sizeof g);
+    (void)tmp;
     for (int i = 0; i < 3; i++)
-        pos[i] += rot[3 * i] * f[3] + rot[3 * i + 1] * f[7] + rot[3 * i + 2] * f[11];
+        pos[i] += r[3 * i] * g[3] + r[3 * i + 1] * g[7] + r[3 * i + 2] * g[11];
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
-            tmp[3 * i + j] = rot[3 * i] * f[j] + rot[3 * i + 1] * f[4 + j]
-                             + rot[3 * i + 2] * f[8 + j];
-    memcpy(rot, tmp, 9 * sizeof(double));
+            rot[3 * i + j] = r[3 * i] * g[j] + r[3 * i + 1] * g[4 + j]
+                             + r[3 * i + 2] * g[8 + j];
 }
 
 /* One element of a walk: the frame, then the joint (its twist recorded when unknown). */
