@@ -5,13 +5,14 @@ and after a change to ``native/chain_one*.c`` or ``chain.c``, copied aside), pac
 machine with each (``chain_one_pack``), and prints whether ``chain_one_ik`` (q, u, iterations,
 residual) and ``chain_one_fk`` answers are bit-identical on the same poses, and the CPU µs per
 call of each build (medians of interleaved rounds, so both see the same load). ``--calls N``
-with ``--only BUILD`` instead runs N rounds of ``chain_one_ik`` of one build alone (for an
-instruction count: ``valgrind --tool=callgrind --toggle-collect=pk_py_chain_one_ik python
-bench/chain_one_builds.py A B --only A --calls 1``).
+with ``--only BUILD`` instead runs N rounds of ``chain_one_ik`` then ``chain_one_fk`` of one
+build alone (for an instruction count: ``valgrind --tool=callgrind
+--toggle-collect=pk_py_chain_one_ik python bench/chain_one_builds.py A B --only A --calls 1``,
+or ``--toggle-collect=pk_py_chain_one_fk``).
 
 Usage::
 
-    python bench/chain_one_builds.py BEFORE.so AFTER.so [--poses 400] [--machines a,b]
+    python bench/chain_one_builds.py BEFORE.so AFTER.so [--poses 400] [--rounds 7] [--machines a,b]
 """
 
 from __future__ import annotations
@@ -91,7 +92,8 @@ def main() -> None:
     parser.add_argument("second")
     parser.add_argument("--poses", type=int, default=400)
     parser.add_argument("--machines", default="tripteor-x7,trimule-600")
-    parser.add_argument("--only", help="one of the two paths: run its ik alone")
+    parser.add_argument("--rounds", type=int, default=7, help="interleaved rounds (medians)")
+    parser.add_argument("--only", help="one of the two paths: run its ik and fk alone")
     parser.add_argument("--calls", type=int, default=1, help="rounds with --only")
     args = parser.parse_args()
     if args.only:
@@ -99,15 +101,17 @@ def main() -> None:
         for name in args.machines.split(","):
             m = pkmkit.machine(name)
             cap = build.chain_one_pack(*chain_one_native.pack_arguments(m))
-            xs, _ = poses(m, args.poses)
+            xs, qs = poses(m, args.poses)
             for _ in range(args.calls):
                 for x in xs:
                     build.chain_one_ik(cap, x, True, False)
+                for q in qs:
+                    build.chain_one_fk(cap, q, True, True)
         return
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
     builds = [load(args.first), load(args.second)]
     for name in args.machines.split(","):
-        compare(name, builds, args.poses)
+        compare(name, builds, args.poses, args.rounds)
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
 
 

@@ -11,11 +11,15 @@ build time (CPU; built here in Python around the C calls), the iteration counts 
 (the batch rules included: a retry from home, the head's mirror) from both starts, the CPU µs
 of the C call alone from both starts in the same process (the nearest-node search excluded:
 starts precomputed), and the largest difference of the answers q from the first-order start's
-(the batch rows' to ~1e-13, tests/machines/test_chain_one_native.py).
+(the batch rows' to ~1e-13, tests/machines/test_chain_one_native.py). Beside the rules'
+counts, the head's mirror rule (turn far from home's, or beyond a stroke) judged on the start
+against the same rule on the solution (session 32: could the mirror's solve be decided before
+the first solve?); ``--rules-only`` prints those counts alone, from the first-order start.
 
 Usage::
 
     python bench/chain_start_table.py [--poses 1000] [--grid 3] [--machines tripteor-x7,trimule-600]
+    python bench/chain_start_table.py --rules-only --poses 2000 --machines trimule-600
 """
 
 from __future__ import annotations
@@ -78,10 +82,16 @@ def rules(m, xs: list, starts: list | None = None) -> dict:
     chain_one.usable(m, "chain_ik")  # past the first (batch) call: the constants built
     c = chain_one.constants(m)
     w = chain_one._work(c)
-    out = {"first iterations": [], "retry": 0, "far": 0, "beyond": 0, "mirror kept": 0}
+    out = {"first iterations": [], "retry": 0, "far": 0, "beyond": 0, "mirror kept": 0,
+           "start says": np.zeros((2, 2), int), "start says kept": np.zeros((2, 2), int)}
+    packed = chain_one_native.pack_arguments(m)
+    u_home, base, inv_rates, tool = (np.asarray(packed[k], float) for k in (11, 12, 13, 14))
     for i, x in enumerate(xs):
         norm = math.sqrt(float(x[3:] @ x[3:]))
         w.target[0] = (*x[:3], *(x[3:] / norm))
+        axis = x[3:] / norm
+        start = (u_home + inv_rates @ np.r_[x[:3] - tool * axis - base[:3], axis - base[3:]]
+                 if starts is None else np.asarray(starts[i]))
         kernel = c.first_kernel if starts is None else c.from_kernel
         if starts is not None:
             w.u_inv[0] = starts[i]
@@ -105,6 +115,12 @@ def rules(m, xs: list, starts: list | None = None) -> dict:
         found = (chain_one._wrapped(c, u[6:]), u, 0, 0.0)
         kept = chain_one._nearest_branch(c, found, first)
         out["mirror kept"] += kept is not None and kept[1] is not u
+        # the same rule judged on the start (turn far from home's, or beyond a stroke) against
+        # the rule on the solution: rows the start's verdict, columns the solution's
+        says = abs(chain_one._turn_offset(start[6 + turn] - home_turn)) > chain_one._FAR
+        says = says or bool(c.wrist[4] and not c.within(chain_one._wrapped(c, list(start[6:]))))
+        out["start says"][int(says), int(far or bool(c.wrist[4] and not inside))] += 1
+        out["start says kept"][int(says), int(kept is not None and kept[1] is not u)] += 1
     return out
 
 
@@ -160,19 +176,52 @@ def run(name: str, poses: int, grid: int) -> None:
               f"{f.max()}); retried from home {r['retry']}; mirror solved {r['far'] + r['beyond']}"
               f" (turn far from home's {r['far']}, kept solution beyond a stroke "
               f"{r['beyond']}); mirror kept {r['mirror kept']}")
+        if r["far"] + r["beyond"] or r["start says"][1].sum():
+            a, k = r["start says"], r["start says kept"]
+            print(f"    the rule judged on the start instead: mirror needed by both {a[1, 1]}, by "
+                  f"the start only {a[1, 0]}, by the solution only {a[0, 1]}, by neither "
+                  f"{a[0, 0]}; of the mirrors kept, the start says far/beyond on {k[1, 1]}, "
+                  f"not on {k[0, 1]}")
     print(f"  C call alone, CPU µs: first-order start {c0:.1f}, table start {c1:.1f} "
           f"(x{c0 / c1:.2f})")
+
+
+def rules_only(name: str, poses: int) -> None:
+    """The rules' counts from the first-order start, with the head's rule judged on the start
+    beside it (whether the mirror's solve could be decided before the first solve)."""
+    m = pkmkit.machine(name)
+    p = chain_one_native.packed(m)
+    rng = np.random.default_rng(0)
+    act = np.flatnonzero(m.model.actuated)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    q = lo + (hi - lo) * (0.05 + 0.9 * rng.random((poses, len(act))))
+    xs = m.fk(q, strokes="ignore")
+    xs = [x for x in xs[np.isfinite(xs).all(axis=1)]
+          if p.ik(p.capsule, x, True, True) is not None]
+    r = rules(m, xs)
+    a, k = r["start says"], r["start says kept"]
+    print(f"{name}: {len(xs)} poses; retried from home {r['retry']}; mirror solved "
+          f"{r['far'] + r['beyond']} (turn far from home's {r['far']}, kept solution beyond a "
+          f"stroke {r['beyond']}); mirror kept {r['mirror kept']}")
+    print(f"  the rule judged on the start instead: mirror needed by both {a[1, 1]}, by the "
+          f"start only {a[1, 0]}, by the solution only {a[0, 1]}, by neither {a[0, 0]}; of the "
+          f"mirrors kept, the start says far/beyond on {k[1, 1]}, not on {k[0, 1]}")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=1000)
     parser.add_argument("--grid", type=int, default=3)
+    parser.add_argument("--rules-only", action="store_true",
+                        help="the rules' counts from the first-order start alone (no table)")
     parser.add_argument("--machines", default="tripteor-x7,trimule-600")
     args = parser.parse_args()
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
     for name in args.machines.split(","):
-        run(name, args.poses, args.grid)
+        if args.rules_only:
+            rules_only(name, args.poses)
+        else:
+            run(name, args.poses, args.grid)
 
 
 if __name__ == "__main__":

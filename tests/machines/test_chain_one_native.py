@@ -303,6 +303,30 @@ def test_fks_regularity_bound_never_exceeds_the_closures_conditioning(machine):
             assert c.fk(c.capsule, q[k], True, False) is not None  # no check asked
 
 
+def test_fks_regularity_bound_is_the_frobenius_product_of_the_singular_values(machine):
+    """Oracle: the bound 1 / sqrt(||J||_F^2 ||J^+||_F^2) = 1 / sqrt(sum σ_i^2 sum σ_i^-2) from
+    NumPy's SVD of the closure Jacobian at the solution; the C call answers with the threshold
+    just below it and declines just above (session 32: the bound from the trace of J'J and L^-1
+    by rows; a bound off by a factor of 2 passes the test above but not this one)."""
+    from pkmkit.solve import chain_rows
+
+    q, _ = workspace(machine, 8, seed=7)
+    res = machine.fk(q, full_output=True, strokes="ignore")
+    passive = np.asarray(machine.passive_variables, dtype=int)
+    values = np.tile(machine._home["values"], (len(q), 1))
+    values[:, np.flatnonzero(machine.model.actuated)] = q
+    values[:, passive] = res.passive
+    cu = chain_rows.closure_jacobian(machine.model, values, res.platform, passive)
+    sv = np.linalg.svd(cu, compute_uv=False)
+    bound = 1.0 / np.sqrt((sv**2).sum(axis=1) * (sv**-2.0).sum(axis=1))
+    args = list(chain_one_native.pack_arguments(machine))
+    for k in range(len(q)):
+        for threshold, answered in ((bound[k] * (1 - 1e-7), True), (bound[k] * (1 + 1e-7), False)):
+            args[30] = threshold
+            c = chain_one_native.Packed(native.chain_one_pack(*args), native)
+            assert (c.fk(c.capsule, q[k], True, True) is not None) == answered, (k, threshold)
+
+
 #: A leg joint of each machine (its index in u) that, turned by a quarter turn and 0.3 rad from
 #: a solved configuration, leads the raw solve to a closure outside the legs' home assembly modes
 #: (found by trying each leg joint on 20 poses: 20 of 20 on the Tripteor, 14 of 20 on the TriMule).

@@ -56,15 +56,19 @@ static void rotation_rows(const double *mm, double length, double sign, double *
     }
 }
 
-/* (rot, pos) <- (rot, pos) f for an element's frame f (4, 4) (_apply_frame). */
+/* (rot, pos) <- (rot, pos) f for an element's frame f (4, 4) (_apply_frame); tmp (9,) no
+ * longer used (the callers' scratch kept in the signature). */
 static void apply_frame(double *rot, double *pos, const double *f, double *tmp) {
+    double r[9], g[12];  /* local copies: no reloads for fear of aliasing (the same sums) */
+    memcpy(r, rot, sizeof r);
+    memcpy(g, f, sizeof g);
+    (void)tmp;
     for (int i = 0; i < 3; i++)
-        pos[i] += rot[3 * i] * f[3] + rot[3 * i + 1] * f[7] + rot[3 * i + 2] * f[11];
+        pos[i] += r[3 * i] * g[3] + r[3 * i + 1] * g[7] + r[3 * i + 2] * g[11];
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
-            tmp[3 * i + j] = rot[3 * i] * f[j] + rot[3 * i + 1] * f[4 + j]
-                             + rot[3 * i + 2] * f[8 + j];
-    memcpy(rot, tmp, 9 * sizeof(double));
+            rot[3 * i + j] = r[3 * i] * g[j] + r[3 * i + 1] * g[4 + j]
+                             + r[3 * i + 2] * g[8 + j];
 }
 
 /* One element of a walk: the frame, then the joint (its twist recorded when unknown). */
@@ -374,27 +378,15 @@ void pk_chain_rows(const pk_chain *c, const double *known, ptrdiff_t known_rows,
             retract(uk, step, u_new, n);
             evaluate_any(c, values, u_new, r_new, j_new, target, tool, w);
             double cost_new = 0.5 * dot(r_new, r_new, m);
-            int accept = isfinite(cost_new) && cost_new <= cost * (1.0 + 1e-13);
+            int accept = pk_lm_accept(cost, cost_new, &lam);
             count += 1;
             if (accept) {
                 memcpy(uk, u_new, (size_t)n * sizeof(double));
                 memcpy(r, r_new, (size_t)m * sizeof(double));
                 memcpy(jac, j_new, (size_t)(m * n) * sizeof(double));
                 cost = cost_new;
-                lam = pk_max(lam * 0.1, 1e-12);
-            } else {
-                lam *= 10.0;
             }
-            double step_norm = sqrt(dot(step, step, n));
-            double u_norm = sqrt(dot(uk, uk, n));
-            int done = (accept && step_norm <= o->xtol * (1.0 + u_norm)) || lam > 1e12;
-            if (count % 10 == 0) {
-                if (cost > (1.0 - o->stall) * checkpoint
-                    && cost > 0.5 * (o->residual_tol * o->residual_tol))
-                    done = 1;
-                checkpoint = cost;
-            }
-            if (done) {
+            if (pk_lm_done(o, accept, step, uk, n, lam, cost, count, &checkpoint)) {
                 stopped = 1;
                 break;
             }

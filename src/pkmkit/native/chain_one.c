@@ -205,13 +205,14 @@ static void tool_pose(const pk_one *s, const double *values, const double *u, do
 }
 
 /* 1 / sqrt(||J||_F^2 ||L^-1||_F^2) with L L' = J'J (chain_one_kernel._factor, _bound): J'J
- * summed over each row's nonzero entries (nz: n indices), L's diagonal and L^-1's by
- * reciprocals (multiplications: the rounding of the bound, which has a margin of 2, not of
- * the answer). */
+ * summed over each row's nonzero entries (nz: n indices), ||J||_F^2 its trace, L's diagonal
+ * and L^-1's by reciprocals (multiplications: the rounding of the bound, which has a margin of
+ * 2, not of the answer). L^-1 = X by rows, X_i = (e_i - sum_{p<i} L_ip X_p) / L_ii, each row's
+ * entries independent sums (vectorised; the column-by-column substitution, one chain of
+ * dependent subtractions per entry, was a fifth of the call, and the separate pass for
+ * ||J||_F^2 another 7 %, session 32). */
 static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double *low,
                             double *inv, int64_t *nz) {
-    double fro = 0.0;
-    for (ptrdiff_t i = 0; i < m * n; i++) fro += jac[i] * jac[i];
     for (ptrdiff_t i = 0; i < n * n; i++) low[i] = 0.0;
     for (ptrdiff_t i = 0; i < m; i++) {
         const double *row = jac + i * n;
@@ -224,6 +225,8 @@ static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double 
             for (ptrdiff_t t = 0; t <= p; t++) target[nz[t]] += v * row[nz[t]];
         }
     }
+    double fro = 0.0;
+    for (ptrdiff_t j = 0; j < n; j++) fro += low[j * n + j];
     for (ptrdiff_t j = 0; j < n; j++) {  /* in place: J'J's lower part into L */
         double acc = low[j * n + j];
         for (ptrdiff_t p = 0; p < j; p++) acc -= low[j * n + p] * low[j * n + p];
@@ -236,12 +239,18 @@ static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double 
         }
     }
     double total = 0.0;
-    for (ptrdiff_t j = 0; j < n; j++) {
-        for (ptrdiff_t i = j; i < n; i++) {
-            double acc = i == j ? 1.0 : 0.0;
-            for (ptrdiff_t p = j; p < i; p++) acc -= low[i * n + p] * inv[p * n + j];
-            inv[i * n + j] = acc * low[i * n + i];
-            total += inv[i * n + j] * inv[i * n + j];
+    for (ptrdiff_t i = 0; i < n; i++) {
+        double *xi = inv + i * n;
+        for (ptrdiff_t c = 0; c <= i; c++) xi[c] = c == i ? 1.0 : 0.0;
+        for (ptrdiff_t p = 0; p < i; p++) {  /* X_p is zero beyond its diagonal */
+            double l = low[i * n + p];
+            const double *xp = inv + p * n;
+            for (ptrdiff_t c = 0; c <= p; c++) xi[c] -= l * xp[c];
+        }
+        double d = low[i * n + i];
+        for (ptrdiff_t c = 0; c <= i; c++) {
+            xi[c] *= d;
+            total += xi[c] * xi[c];
         }
     }
     return 1.0 / sqrt(fro * total);

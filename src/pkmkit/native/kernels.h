@@ -194,6 +194,35 @@ static inline void pk_chain_joint_move(double *rot, double *pos, int64_t type, d
     }
 }
 
+/* The end of one Levenberg-Marquardt iteration of chain_kernel._solve_rows, shared by chain.c
+ * (the batch rows) and chain_one_solve.c (one pose): pk_lm_accept judges the trial cost
+ * (accepted when finite and not above cost by more than 1e-13 relative) and moves the damping
+ * (x 0.1, floor 1e-12, when accepted; x 10 else); after the caller has kept the trial or not,
+ * pk_lm_done says whether the loop stops: an accepted step shorter than xtol (1 + |u|), the
+ * damping beyond 1e12, or, every 10 iterations (count), a stall above residual_tol (checkpoint
+ * updated). The operations of the Numba loop in its order (the same bits). */
+static inline int pk_lm_accept(double cost, double cost_new, double *lam) {
+    int accept = isfinite(cost_new) && cost_new <= cost * (1.0 + 1e-13);
+    *lam = accept ? pk_max(*lam * 0.1, 1e-12) : *lam * 10.0;
+    return accept;
+}
+
+static inline int pk_lm_done(const pk_chain_options *o, int accept, const double *step,
+                             const double *u, ptrdiff_t n, double lam, double cost,
+                             int64_t count, double *checkpoint) {
+    double ss = 0.0, uu = 0.0;
+    for (ptrdiff_t i = 0; i < n; i++) ss += step[i] * step[i];
+    for (ptrdiff_t i = 0; i < n; i++) uu += u[i] * u[i];
+    int done = (accept && sqrt(ss) <= o->xtol * (1.0 + sqrt(uu))) || lam > 1e12;
+    if (count % 10 == 0) {
+        if (cost > (1.0 - o->stall) * *checkpoint
+            && cost > 0.5 * (o->residual_tol * o->residual_tol))
+            done = 1;
+        *checkpoint = cost;
+    }
+    return done;
+}
+
 /* chain.c's _rotvec_matrix, _apply_frame, _rotation_rows (3 x 3 row-major). */
 void pk_chain_rotvec_matrix(double x, double y, double z, double *out);
 void pk_chain_apply_frame(double *rot, double *pos, const double *f, double *tmp);
