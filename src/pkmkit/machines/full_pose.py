@@ -51,6 +51,7 @@ from pkmkit.machines.error_faces import FullPoseErrors
 from pkmkit.machines.export_layouts import FullPoseLayout
 from pkmkit.machines.full_pose_criteria_rates import FullPoseCriteriaRates
 from pkmkit.machines.full_pose_forms import FullPoseForms
+from pkmkit.machines.full_pose_inverse_record import assembly_modes, lazy_inverse_record
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse, native_one
 from pkmkit.machines.full_pose_position import PositionInverse, _stroke_fields
@@ -436,11 +437,13 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             q[status != Status.OK] = np.nan
         if not full_output:
             return restore_shape(q, single)
-        result = InverseResult(q=q, status=status, branches=sigma.copy(),
-                               shortfall=self._forms.shortfall(xb), method="closed",
-                               mode=self._mode_of(xb, q), **_stroke_fields(check))
-        return _restore(result, single, ("q", "status", "shortfall", "mode", "out_of_stroke",
-                                         "stroke_excess"))
+        fields = dict(q=q, status=status, branches=sigma.copy(),
+                      shortfall=self._forms.shortfall(xb), method="closed",
+                      **_stroke_fields(check))
+        if not single:  # the mode (det A per row) computed when read
+            return lazy_inverse_record(self._forms, self.model.n_rods, xb, **fields)
+        return _restore(InverseResult(mode=self._mode_of(xb, q), **fields), single,
+                        ("q", "status", "shortfall", "mode", "out_of_stroke", "stroke_excess"))
 
     def _raise_inverse(self, xb: np.ndarray, status: int, spread: float) -> None:
         if status == Status.INVALID_INPUT:
@@ -458,12 +461,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
                 "its rods impose; give a position (3 values) instead"))
 
     def _mode_of(self, x: np.ndarray, q: np.ndarray) -> np.ndarray:
-        ok = np.isfinite(q).all(axis=1) & np.isfinite(x).all(axis=1)
-        out = np.zeros(x.shape[0], dtype=int)
-        if ok.any() and self.model.n_rods == 6:
-            a, _ = self._forms.jacobians(x[ok], q[ok])
-            out[ok] = np.sign(np.linalg.det(a)).astype(int)
-        return out
+        return assembly_modes(self._forms, self.model.n_rods, x, q)
 
     # ---------------------------------------------------------------- direct
     @chunked

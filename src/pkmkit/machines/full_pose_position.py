@@ -17,6 +17,7 @@ from pkmkit.machines.common import (
     _valid_rows,
 )
 from pkmkit.machines.full_pose_direct import usable
+from pkmkit.machines.full_pose_inverse_record import lazy_inverse_record
 from pkmkit.machines.results import InverseResult
 from pkmkit.machines.slide_columns import SlideColumns, slide_columns
 from pkmkit.machines.strokes import judge_rows
@@ -95,10 +96,12 @@ class PositionInverse:
         sigma = self._branches(branches)
         shortfall = np.full((pb.shape[0], self.model.n_rods), np.nan)
         shortfall[~bad] = self._forms.shortfall(pose[~bad])  # at the orientation found
-        out = InverseResult(q=q, status=status, branches=sigma, shortfall=shortfall,
-                            method="numeric", mode=self._mode_of(pose, q),
-                            iterations=iterations, residual=residual, pose=pose,
-                            **_stroke_fields(check))
+        fields = dict(q=q, status=status, branches=sigma, shortfall=shortfall,
+                      method="numeric", iterations=iterations, residual=residual, pose=pose,
+                      **_stroke_fields(check))
+        if not single:  # the mode (det A per row) computed when read
+            return lazy_inverse_record(self._forms, self.model.n_rods, pose, **fields)
+        out = InverseResult(mode=self._mode_of(pose, q), **fields)
         return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
                                       "residual", "pose", "out_of_stroke", "stroke_excess"))
 
