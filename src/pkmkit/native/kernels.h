@@ -309,6 +309,10 @@ enum { PK_PLAIN_TAKEN = 0, PK_PLAIN_REFUSED = 1, PK_PLAIN_OTHER = 2 };
 int pk_plain_numbers(PyObject *x, Py_ssize_t count, double max_abs, double *out);
 /* A new float64 NumPy array (rows,) (cols 0) or (rows, cols) holding values (row-major). */
 PyObject *pk_new_array(const double *values, Py_ssize_t rows, Py_ssize_t cols);
+/* A C-contiguous float64 ('d') or bool ('?') buffer argument of ndim dimensions, sizes shape
+ * (-1: any; NULL: any shape); 0, or -1 with an exception set and nothing held. */
+int pk_take(PyObject *obj, Py_buffer *view, const char *name, char type, int writable, int ndim,
+            const Py_ssize_t *shape);
 #endif
 
 #endif

@@ -108,3 +108,34 @@ PyObject *pk_new_array(const double *values, Py_ssize_t rows, Py_ssize_t cols) {
     PyBuffer_Release(&view);
     return out;
 }
+
+/* Argument `name` as a C-contiguous buffer of `type` ('d' float64, '?' bool) with `ndim`
+ * dimensions and, where shape is not NULL, the sizes shape[0..ndim-1] (-1: any); 0, or -1 with
+ * TypeError / ValueError set and nothing held. The one buffer check of rod_batch.c,
+ * rod_velocity.c and svd.c. */
+int pk_take(PyObject *obj, Py_buffer *view, const char *name, char type, int writable, int ndim,
+            const Py_ssize_t *shape) {
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, view, flags) < 0) {
+        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous%s array is needed", name,
+                     writable ? " writable" : "");
+        return -1;
+    }
+    const char *f = view->format ? view->format : "B";
+    if (f[0] == '@' || f[0] == '=' || f[0] == '<') f++;
+    if (!(f[0] == type && !f[1] && view->itemsize == (type == 'd' ? 8 : 1))) {
+        PyErr_Format(PyExc_TypeError, "%s: %s array expected (format %s)", name,
+                     type == 'd' ? "float64" : "bool", view->format ? view->format : "B");
+        PyBuffer_Release(view);
+        return -1;
+    }
+    int ok = view->ndim == ndim;
+    for (int j = 0; ok && shape && j < ndim; j++) ok = shape[j] < 0 || view->shape[j] == shape[j];
+    if (!ok) {
+        PyErr_Format(PyExc_ValueError, "%s: wrong shape (%d dimensions, %d expected)", name,
+                     view->ndim, ndim);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}

@@ -16,6 +16,8 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "kernels.h"
+
 #define RB_MAX_LEGS 6
 
 /* kernels.inverse: q of every leg into out (n, N); the number of non-finite outputs. */
@@ -136,34 +138,6 @@ static void rb_reach_det(const double *x, Py_ssize_t size, int n, const double *
 
 /* ------------------------------------------------------------------ Python face */
 
-/* A C-contiguous buffer of `type` ('d' float64, '?' bool) with `ndim` dimensions and the
- * shape `shape` (-1: any); -1 with TypeError / ValueError set. */
-static int rb_take(PyObject *obj, Py_buffer *view, const char *name, char type, int writable,
-                   int ndim, const Py_ssize_t *shape) {
-    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
-    if (PyObject_GetBuffer(obj, view, flags) < 0) {
-        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous%s array is needed", name,
-                     writable ? " writable" : "");
-        return -1;
-    }
-    const char *f = view->format ? view->format : "B";
-    if (f[0] == '@' || f[0] == '=' || f[0] == '<') f++;
-    if (!(f[0] == type && !f[1] && view->itemsize == (type == 'd' ? 8 : 1))) {
-        PyErr_Format(PyExc_TypeError, "%s: %s array expected (format %s)", name,
-                     type == 'd' ? "float64" : "bool", view->format ? view->format : "B");
-        PyBuffer_Release(view);
-        return -1;
-    }
-    int ok = view->ndim == ndim;
-    for (int j = 0; ok && j < ndim; j++) ok = shape[j] < 0 || view->shape[j] == shape[j];
-    if (!ok) {
-        PyErr_Format(PyExc_ValueError, "%s: wrong shape", name);
-        PyBuffer_Release(view);
-        return -1;
-    }
-    return 0;
-}
-
 typedef struct {
     const char *name;
     char type;
@@ -178,7 +152,7 @@ static int rb_take_all(PyObject *const *args, const rb_spec *spec, int count, in
     int held = 0;
     for (int j = 0; j < count; j++) {
         PyObject *obj = args[skip >= 0 && j >= skip ? j + 1 : j];
-        if (rb_take(obj, &views[held], spec[j].name, spec[j].type, spec[j].writable,
+        if (pk_take(obj, &views[held], spec[j].name, spec[j].type, spec[j].writable,
                     spec[j].ndim, spec[j].shape) < 0) {
             for (int i = 0; i < held; i++) PyBuffer_Release(&views[i]);
             return -1;
@@ -192,11 +166,11 @@ static int rb_take_all(PyObject *const *args, const rb_spec *spec, int count, in
 static int rb_shape(PyObject *x_obj, PyObject *basis_obj, Py_ssize_t *size, int *dims, int *n) {
     Py_buffer view;
     Py_ssize_t any2[2] = {-1, -1}, any3[3] = {-1, -1, -1};
-    if (rb_take(x_obj, &view, "x", 'd', 0, 2, any2) < 0) return -1;
+    if (pk_take(x_obj, &view, "x", 'd', 0, 2, any2) < 0) return -1;
     *size = view.shape[0];
     *dims = (int)view.shape[1];
     PyBuffer_Release(&view);
-    if (rb_take(basis_obj, &view, "basis", 'd', 0, 3, any3) < 0) return -1;
+    if (pk_take(basis_obj, &view, "basis", 'd', 0, 3, any3) < 0) return -1;
     *n = (int)view.shape[0];
     PyBuffer_Release(&view);
     if ((*dims != 2 && *dims != 3) || *n < 1 || *n > RB_MAX_LEGS) {

@@ -245,34 +245,6 @@ static void velocity2(const double *x, ptrdiff_t size, const double *q, const do
 
 /* ------------------------------------------------------------------ Python face */
 
-/* A C-contiguous buffer of `type` ('d' float64, '?' bool), `ndim` dimensions, shape d0, d1
- * (-1: any); -1 with TypeError / ValueError set. */
-static int rv_take(PyObject *obj, Py_buffer *view, const char *name, char type, int writable,
-                   int ndim, Py_ssize_t d0, Py_ssize_t d1) {
-    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
-    if (PyObject_GetBuffer(obj, view, flags) < 0) {
-        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous%s array is needed", name,
-                     writable ? " writable" : "");
-        return -1;
-    }
-    const char *f = view->format ? view->format : "B";
-    if (f[0] == '@' || f[0] == '=' || f[0] == '<') f++;
-    int typed = f[0] == type && !f[1] && view->itemsize == (type == 'd' ? 8 : 1);
-    if (!typed) {
-        PyErr_Format(PyExc_TypeError, "%s: %s array expected (format %s)", name,
-                     type == 'd' ? "float64" : "bool", view->format ? view->format : "B");
-        PyBuffer_Release(view);
-        return -1;
-    }
-    if (view->ndim != ndim || (d0 >= 0 && view->shape[0] != d0)
-        || (ndim > 1 && d1 >= 0 && view->shape[1] != d1)) {
-        PyErr_Format(PyExc_ValueError, "%s: wrong shape", name);
-        PyBuffer_Release(view);
-        return -1;
-    }
-    return 0;
-}
-
 static PyObject *rod_velocity(PyObject *const *args, Py_ssize_t nargs, int n,
                               const char *fname) {
     if (nargs != 12) {
@@ -284,7 +256,8 @@ static PyObject *rod_velocity(PyObject *const *args, Py_ssize_t nargs, int n,
     Py_buffer v[11];
     int held = 0;
     PyObject *result = NULL;
-    if (rv_take(args[0], &v[held], "x", 'd', 0, 2, -1, n) < 0) goto done;
+    Py_ssize_t x_shape[2] = {-1, n};
+    if (pk_take(args[0], &v[held], "x", 'd', 0, 2, x_shape) < 0) goto done;
     held++;
     Py_ssize_t size = v[0].shape[0];
     struct { const char *name; char type; int w, ndim; Py_ssize_t d0, d1; } spec[10] = {
@@ -295,8 +268,9 @@ static PyObject *rod_velocity(PyObject *const *args, Py_ssize_t nargs, int n,
         {"hard_out", '?', 1, 1, size, -1}};
     for (int i = 0; i < 10; i++) {
         PyObject *obj = args[i < 5 ? i + 1 : i + 2]; /* args[6] is bound_limit */
-        if (rv_take(obj, &v[held], spec[i].name, spec[i].type, spec[i].w, spec[i].ndim,
-                    spec[i].d0, spec[i].d1) < 0)
+        Py_ssize_t shape[2] = {spec[i].d0, spec[i].d1};
+        if (pk_take(obj, &v[held], spec[i].name, spec[i].type, spec[i].w, spec[i].ndim,
+                    shape) < 0)
             goto done;
         held++;
     }

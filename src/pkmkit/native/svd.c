@@ -265,32 +265,6 @@ static void pk_singular_rates(const double *mats, const double *rates, ptrdiff_t
 
 /* ------------------------------------------------------------------ Python face */
 
-/* A C-contiguous float64 buffer of `ndim` dimensions (writable when asked), or -1 with a
- * TypeError / ValueError set. */
-static int svd_take(PyObject *obj, Py_buffer *view, const char *name, int ndim, int writable) {
-    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
-    if (PyObject_GetBuffer(obj, view, flags) < 0) {
-        PyErr_Format(PyExc_TypeError, "%s: a C-contiguous%s float64 array is needed", name,
-                     writable ? " writable" : "");
-        return -1;
-    }
-    const char *f = view->format ? view->format : "B";
-    if (f[0] == '@' || f[0] == '=' || f[0] == '<') f++;
-    if (!(f[0] == 'd' && !f[1] && view->itemsize == 8)) {
-        PyErr_Format(PyExc_TypeError, "%s: float64 array expected (format %s)", name,
-                     view->format ? view->format : "B");
-        PyBuffer_Release(view);
-        return -1;
-    }
-    if (view->ndim != ndim) {
-        PyErr_Format(PyExc_ValueError, "%s: %d dimensions expected (%d given)", name, ndim,
-                     view->ndim);
-        PyBuffer_Release(view);
-        return -1;
-    }
-    return 0;
-}
-
 const char pk_singular_values_doc[] =
     "singular_values(mats, out)\n\n"
     "The C twin of pkmkit.numerics.svd_kernel.singular_values: out (N, min(r, c)), decreasing,\n"
@@ -305,8 +279,8 @@ PyObject *pk_py_singular_values(PyObject *self, PyObject *const *args, Py_ssize_
         return NULL;
     }
     Py_buffer vm, vo;
-    if (svd_take(args[0], &vm, "mats", 3, 0) < 0) return NULL;
-    if (svd_take(args[1], &vo, "out", 2, 1) < 0) {
+    if (pk_take(args[0], &vm, "mats", 'd', 0, 3, NULL) < 0) return NULL;
+    if (pk_take(args[1], &vo, "out", 'd', 1, 2, NULL) < 0) {
         PyBuffer_Release(&vm);
         return NULL;
     }
@@ -355,7 +329,8 @@ PyObject *pk_py_singular_rates(PyObject *self, PyObject *const *args, Py_ssize_t
     int held = 0;
     PyObject *result = NULL;
     for (; held < 4; held++)
-        if (svd_take(args[held], &v[held], names[held], ndims[held], held >= 2) < 0) goto done;
+        if (pk_take(args[held], &v[held], names[held], 'd', held >= 2, ndims[held], NULL) < 0)
+            goto done;
     ptrdiff_t n = v[0].shape[0], r = v[0].shape[1], c = v[0].shape[2], d = v[1].shape[3];
     if (r < c || v[1].shape[0] != n || v[1].shape[1] != r || v[1].shape[2] != c
         || v[2].shape[0] != n || v[2].shape[1] != c || v[3].shape[0] != n
