@@ -97,7 +97,7 @@ class TableReader:
         self.format = table_format(path)
         self.progress = 0
         self.total: int | None = None
-        self._stdin = stdin
+        self.stdin = stdin  # the stream read for "-" (None: sys.stdin)
         if self.format == "csv":
             self._source = CsvSource(self)
         else:

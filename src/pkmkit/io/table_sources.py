@@ -35,8 +35,8 @@ class CsvSource:
     def _open(self) -> BinaryIO:
         r = self.reader
         if r.path == STDIO:
-            if r._stdin is not None:
-                return r._stdin
+            if r.stdin is not None:
+                return r.stdin
             import sys
 
             return sys.stdin.buffer
@@ -58,7 +58,7 @@ class CsvSource:
         try:
             yield from self._chunks(handle)
         finally:
-            if handle is not r._stdin and r.path != STDIO:
+            if handle is not r.stdin and r.path != STDIO:
                 handle.close()
 
     def _read(self, handle: BinaryIO, size: int) -> bytes:

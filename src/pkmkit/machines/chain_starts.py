@@ -35,10 +35,10 @@ def home_rates(m: Any) -> tuple[np.ndarray, np.ndarray]:
     if cached is not None:
         return cached
     model = m.model
-    values = m._home["values"][:, None]
-    rot = rotvec_to_matrix(m._home["platform"][3:]).transpose(1, 2, 0)
-    c = closure(model, rot, m._home["platform"][:3, None], values)
-    cu = np.concatenate([c.platform, c.variables[:, m._passive]], axis=1)[:, :, 0]
+    values = m.home_values[:, None]
+    rot = rotvec_to_matrix(m.home_platform[3:]).transpose(1, 2, 0)
+    c = closure(model, rot, m.home_platform[:3, None], values)
+    cu = np.concatenate([c.platform, c.variables[:, m.passive_variables]], axis=1)[:, :, 0]
     cq = c.variables[:, m.actuated_columns, 0]
     rates = (-np.linalg.pinv(cu, rcond=RANK_RCOND) @ cq, cq)
     object.__setattr__(m, "_home_rates_cache", rates)
@@ -51,7 +51,7 @@ def default_start(m: Any, qb: np.ndarray, values: np.ndarray) -> np.ndarray:
     Gauss–Newton iteration fewer near home), or home itself where the legs close worse from
     that prediction than from home (far from home; the home residual to first order)."""
     n = qb.shape[0]
-    home = np.concatenate([m._home["platform"], m._home["values"][m._passive]])
+    home = np.concatenate([m.home_platform, m.home_values[m.passive_variables]])
     u_home = np.tile(home, (n, 1))
     rates, residual_rates = home_rates(m)
     delta = np.ascontiguousarray((qb - m.home_q).T)  # (n, N): batch last
@@ -60,7 +60,7 @@ def default_start(m: Any, qb: np.ndarray, values: np.ndarray) -> np.ndarray:
         u_pred = u_home + du
         u_pred[:, 3:6] = compose_rotvecs(du[:, 3:6].T, u_home[:, 3:6].T).T
         full = values.T.copy()
-        full[m._passive] = u_pred[:, 6:].T
+        full[m.passive_variables] = u_pred[:, 6:].T
         res = closure_residuals(m.model, rotvec_matrices(u_pred[:, 3:6].T), u_pred[:, :3].T,
                                 full)
         from_home = einsum("pn,nk->pk", residual_rates, delta)
@@ -91,8 +91,8 @@ def inverse_rates(m: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return cached
     model = m.model
     length = float(model.characteristic_length)
-    platform = m._home["platform"]
-    values = m._home["values"][:, None]
+    platform = m.home_platform
+    values = m.home_values[:, None]
     rot = rotvec_to_matrix(platform[3:]).transpose(1, 2, 0)
     position = platform[:3, None]
     c = closure(model, rot, position, values)
@@ -112,7 +112,7 @@ def inverse_rates(m: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     keep = sv > INVERSE_RATE_CUTOFF * sv[0]
     rates = (right[keep].T / sv[keep]) @ (left[:, keep].T @ rhs)
     rates[3:6] = _left_jacobian_inverse(platform[3:]) @ rates[3:6]
-    cached = (np.concatenate([platform, m._home["values"]]), np.concatenate([flange, axis]),
+    cached = (np.concatenate([platform, m.home_values]), np.concatenate([flange, axis]),
               np.ascontiguousarray(rates))
     object.__setattr__(m, "_inverse_rates_cache", cached)
     return cached
