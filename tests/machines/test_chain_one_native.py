@@ -105,7 +105,7 @@ def test_the_dense_solve_gives_the_batch_bits(machine):
     act = np.flatnonzero(machine.model.actuated)
     turns = np.array([machine.model.elements[machine.model.variable_element(v)].type == "R"
                       for v in act]) if hasattr(machine.model, "variable_element") else \
-        np.array([machine._element_of(int(v)).type == "R" for v in act])
+        np.array([machine.element_of(int(v)).type == "R" for v in act])
     np.testing.assert_array_equal(one[:, ~turns], ik_ref[:, ~turns])
     # the revolute actuators wrapped by libm's atan2, NumPy's on the batch path: 1 ulp at most
     assert (np.abs(one[:, turns] - ik_ref[:, turns]) <= np.spacing(np.abs(ik_ref[:, turns]))

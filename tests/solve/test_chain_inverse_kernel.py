@@ -65,7 +65,7 @@ def test_compiled_closure_rates_are_the_pseudo_inverse(grid):
     cq = c.variables[:, loop_act].transpose(2, 0, 1)
     deficient = cu.copy()
     deficient[:, :, -1] = deficient[:, :, -2]
-    expected = m._expected_rank()
+    expected = m.expected_rank()
     for mats, rank in ((cu, expected), (deficient, expected - 1)):
         pinv, sv = _pinv_and_singular_values(mats, RANK_RCOND)
         du, ranks, ratio = chain_kernel.closure_rates(mats, cq, RANK_RCOND, 1e-6, expected)

@@ -198,7 +198,7 @@ class ChainVelocity(ChainOnePose):
         closed = np.isfinite(direct.passive).all(axis=1)  # rows with an assembly
         du = np.full((n, cu.shape[2], len(loop_act)), np.nan)
         rank = np.zeros(n, dtype=int)
-        expected = self._expected_rank()
+        expected = self.expected_rank()
         ratio = np.full(n, np.nan)
         if closed.any():
             du[closed], rank[closed], ratio[closed] = _closure_rates(
@@ -272,7 +272,10 @@ class ChainVelocity(ChainOnePose):
         cu = np.concatenate([c.platform, c.variables[:, self._passive]], axis=1)
         return cu.transpose(2, 0, 1), c.variables[:, loop_act].transpose(2, 0, 1)
 
-    def _expected_rank(self) -> int:
+    def expected_rank(self) -> int:
+        """The rank of the closure's Jacobian in the platform and passive joints at home (its
+        singular values above ``RANK_RCOND`` × the largest): ``6 + n_p`` where the closure is
+        regular there."""
         values = self._home["values"][:, None]
         rot = rotvec_to_matrix(self._home["platform"][3:]).transpose(1, 2, 0)
         c = closure(self.model, rot, self._home["platform"][:3, None], values)

@@ -127,10 +127,10 @@ class ChainOneConstants:
             model, passive)
         every = chain_kernel.model_arrays(model, np.arange(n_var))[-1]
         head = np.array(model.head, dtype=np.int64)
-        home = m._home["values"]
+        home = m.home_values
         self.n, self.n_u = len(act), 6 + len(passive)
-        self.regular = m._expected_rank() == self.n_u  # else the bound cannot certify
-        self.expected_rank = m._expected_rank()
+        self.regular = m.expected_rank() == self.n_u  # else the bound cannot certify
+        self.expected_rank = m.expected_rank()
         self.length = float(model.characteristic_length)
         self.tool = float(m.tool_length)
         self.act = act
@@ -149,7 +149,7 @@ class ChainOneConstants:
         # direct model: u = (platform, passive) from the first-order start
         rates, residual_rates = home_rates(m)
         self.direct_args = (frames, types, evar, elements, offsets, position, head,
-                            np.concatenate([m._home["platform"], home[passive]]),
+                            np.concatenate([m.home_platform, home[passive]]),
                             np.ascontiguousarray(rates, dtype=float),
                             np.ascontiguousarray(residual_rates, dtype=float),
                             self.length, self.tool,
@@ -172,8 +172,8 @@ class ChainOneConstants:
         (:meth:`~pkmkit.machines.warm_starts.ChainWarmStart.mode_signature`) as places in u
         ``(6 + n_var)``: each slide's with its home sign, each revolute leg joint's with its
         home value."""
-        slides, turns = m._leg_joints_by_type()
-        home = m._home["values"]
+        slides, turns = m.leg_joints_by_type()
+        home = m.home_values
         self.mode_slides = tuple((6 + int(v), float(np.sign(home[v]))) for v in slides)
         self.mode_turns = tuple((6 + int(v), float(home[v])) for v in turns)
         self.modes = (np.array([i for i, _ in self.mode_slides], dtype=np.int64),
@@ -214,7 +214,7 @@ class ChainOneConstants:
         head's passive joints), the actuators' places, the revolute actuators' home values and
         the wrist pair of the head's branch rule."""
         model, act = m.model, self.act
-        home = m._home["values"]
+        home = m.home_values
         joints = model.loop_variables | model.actuated
         self.lower = np.where(joints, model.q_min - STROKE_TOL, -np.inf).tolist()
         self.upper = np.where(joints, model.q_max + STROKE_TOL, np.inf).tolist()
@@ -222,8 +222,8 @@ class ChainOneConstants:
         self.actuators = (operator.itemgetter(*act.tolist()) if len(act) > 1 else
                           lambda values, i=int(act[0]): (values[i],))
         self.turns = tuple((int(v), float(home[v])) for v in act
-                           if m._element_of(int(v)).type == "R")
-        pair = m._wrist_pair()
+                           if m.element_of(int(v)).type == "R")
+        pair = m.wrist_pair()
         self.wrist = None
         if pair is not None:  # (turn, its home, tilt, its home, the turn reaches π/2)
             t = pair[0]

@@ -81,13 +81,13 @@ def pack_arguments(m: Any, structured: bool = True) -> tuple:
     frames, types, evar, elements, offsets, dir_position = chain_rows.model_arrays(model,
                                                                                    passive)
     inv_position = chain_rows.model_arrays(model, np.arange(n_var))[-1]
-    home = m._home["values"]
+    home = m.home_values
     u_home, base, rates = inverse_rates(m)
-    slides, turns = m._leg_joints_by_type()
-    act_turns = [int(v) for v in act if m._element_of(int(v)).type == "R"]
+    slides, turns = m.leg_joints_by_type()
+    act_turns = [int(v) for v in act if m.element_of(int(v)).type == "R"]
     joints = model.loop_variables | model.actuated
     wrist = np.zeros(0)
-    pair = m._wrist_pair()
+    pair = m.wrist_pair()
     if pair is not None:
         t = pair[0]
         reach = max(abs(model.q_min[t] - home[t]), abs(model.q_max[t] - home[t]))
@@ -107,7 +107,7 @@ def pack_arguments(m: Any, structured: bool = True) -> tuple:
         np.where(joints, model.q_min - STROKE_TOL, -np.inf),
         np.where(joints, model.q_max + STROKE_TOL, np.inf), act.astype(i64), wrist,
         float(np.pi / 2 - FLIP_MARGIN),
-        np.concatenate([m._home["platform"], home[passive]]),
+        np.concatenate([m.home_platform, home[passive]]),
         np.ascontiguousarray(d_rates, dtype=float),
         np.ascontiguousarray(residual_rates, dtype=float), np.ascontiguousarray(home),
         BOUND_MARGIN * SINGULAR_TOL, float(MAX_COORDINATE), bool(structured))
@@ -123,7 +123,7 @@ def packed(m: Any) -> Packed | None:
         if native is None or not hasattr(native, "chain_one_pack"):
             return None
         p = False  # rank deficient at home, or beyond the C limits (more than 64 actuators)
-        if m._expected_rank() == 6 + len(m.passive_variables):
+        if m.expected_rank() == 6 + len(m.passive_variables):
             with contextlib.suppress(ValueError):
                 p = Packed(native.chain_one_pack(*pack_arguments(m)), native)
         object.__setattr__(m, _KEY, p)

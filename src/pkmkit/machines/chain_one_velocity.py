@@ -112,8 +112,8 @@ def pack_arguments(m: Any) -> dict[str, Any]:
         if not model.loop_variables[v]:
             head_position[v] = order[int(v)]
     frames, types, evar, elements, offsets, _ = model_arrays(model, passive)
-    slides, turns = m._leg_joints_by_type()  # the legs' home modes
-    home = m._home["values"]
+    slides, turns = m.leg_joints_by_type()  # the legs' home modes
+    home = m.home_values
     return {"frames": frames, "types": types, "evar": evar, "elements": elements,
             "offsets": offsets, "position": position,
             "head": np.array(model.head, dtype=np.int64), "head_position": head_position,

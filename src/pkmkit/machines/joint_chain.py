@@ -214,10 +214,11 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
     @property
     def actuator_quantities(self) -> tuple[str, ...]:
         """``"angle"`` for revolute actuators, ``"length"`` for prismatic ones."""
-        return tuple("angle" if self._element_of(i).type == "R" else "length"
+        return tuple("angle" if self.element_of(i).type == "R" else "length"
                      for i in self._actuated)
 
-    def _element_of(self, variable: int):
+    def element_of(self, variable: int):
+        """The element (joint) of ``model.elements`` that joint variable ``variable`` moves."""
         e = int(np.flatnonzero(self.model.element_variable == variable)[0])
         return self.model.elements[e]
 
@@ -480,7 +481,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         if check_singular and usable.any():
             rows = np.flatnonzero(usable)
             ratio = closure_conditioning(model, values[rows], res.u[rows, :6], self._passive,
-                                         self._expected_rank())
+                                         self.expected_rank())
             for i, value in zip(rows, ratio, strict=True):
                 if value < SINGULAR_TOL:
                     status[i] = Status.SINGULAR

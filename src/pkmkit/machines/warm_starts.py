@@ -139,14 +139,14 @@ class ChainWarmStart:
         per revolute leg joint, whether it lies within a quarter turn of its home value. Two
         closures with equal rows are in the same modes; all True is home's. NaN: False."""
         home = self._home["values"]
-        slides, turns = self._leg_joints_by_type()
+        slides, turns = self.leg_joints_by_type()
         values = np.asarray(u, dtype=float)[:, 6:]
         with np.errstate(invalid="ignore"):
             same_side = values[:, slides] * np.sign(home[slides]) > 0
             near = np.cos(values[:, turns] - home[turns]) > 0
         return np.concatenate([same_side, near], axis=1)
 
-    def _leg_joints_by_type(self) -> tuple[np.ndarray, np.ndarray]:
+    def leg_joints_by_type(self) -> tuple[np.ndarray, np.ndarray]:
         """``(slides, turns)``: variable indices of the legs' prismatic joints away from 0 at
         home, and of their revolute joints (each shared joint once); cached."""
         cached = self.__dict__.get("_leg_joints_cache")
@@ -196,7 +196,7 @@ class ChainWarmStart:
         ``started (N,)`` from a warm start whose branch's closure then leaves the legs' home
         modes (the mirror solve may move the legs) are solved again from ``u_home`` with the
         rule: the start from home's answer."""
-        pair = self._wrist_pair()
+        pair = self.wrist_pair()
         if pair is None:
             return
         home = self._home["values"]
@@ -229,7 +229,7 @@ class ChainWarmStart:
 
         model = self.model
         values = u[:, 6:].copy()
-        turn = [int(v) for v in self._actuated if self._element_of(int(v)).type == "R"]
+        turn = [int(v) for v in self._actuated if self.element_of(int(v)).type == "R"]
         home = self._home["values"][turn] if around is None else around[:, turn]
         with np.errstate(invalid="ignore"):
             values[:, turn] = home + np.angle(np.exp(1j * (values[:, turn] - home)))
@@ -237,7 +237,7 @@ class ChainWarmStart:
             excess = signed_excess(values[:, joints], model.q_min[joints], model.q_max[joints])
         return ~(excess != 0).any(axis=1)
 
-    def _wrist_pair(self) -> tuple[int, int] | None:
+    def wrist_pair(self) -> tuple[int, int] | None:
         """``(Q4, Q5)``: the variables of the head's first two revolute actuators, or None."""
         model = self.model
         wrist = [int(model.element_variable[e]) for e in model.head
