@@ -47,8 +47,9 @@ CHUNK_ROWS = 1 << 16
 CHAIN_CHUNK_ROWS = 4096
 NUMPY_CHAIN_CHUNK_ROWS = 1024
 
-#: keyword arguments with one row per input row (``start``: a joint chain's warm starts)
-ROW_ARGUMENTS = ("q0", "x0", "q", "tool_length", "start")
+#: keyword arguments with one row per input row (``start``: a joint chain's warm starts;
+#: ``out``: the caller's result array, :mod:`pkmkit.machines.out_arrays`, cut into views)
+ROW_ARGUMENTS = ("q0", "x0", "q", "tool_length", "start", "out")
 
 #: fields of the result records that describe the call, not a row (taken from the first chunk)
 _CALL_FIELDS: dict[type, frozenset[str]] = {
@@ -163,6 +164,8 @@ def _put(store: Any, part: Any, start: int, stop: int, written: dict | None = No
         if not (isinstance(part, np.ndarray) and part.dtype == store.values.dtype
                 and part.shape == (stop - start, *store.values.shape[1:])):
             raise _Whole
+        if part.ctypes.data == store.values[start:stop].ctypes.data and part.flags.c_contiguous:
+            return  # the chunk wrote into the caller's out= (a view of it): nothing to copy
         if id(store) in written:  # a field sharing another's array: the same rows
             other = written[id(store)]
             if other is not part and other.tobytes() != part.tobytes():
@@ -215,6 +218,9 @@ def _row_arguments(kwargs: dict[str, Any], rows: int) -> list[str] | None:
         value = kwargs.get(name)
         if value is None:
             continue
+        if name == "out" and not (isinstance(value, np.ndarray) and value.ndim == 2
+                                  and value.shape[0] == rows):
+            return None  # the whole call refuses it, naming the whole shapes
         arr = np.asarray(value)
         if arr.ndim >= 1 and arr.shape[0] == rows:
             kwargs[name] = arr
@@ -250,15 +256,17 @@ def chunked(method: Callable[..., Any]) -> Callable[..., Any]:
             kwargs.pop(leading, None)
         head = () if by_q else (x,)
         cut = _row_arguments(kwargs, rows)
-        if cut is None:
-            return method(self, *head, **kwargs)
+        if cut is None or ("out" in cut and np.shares_memory(kwargs["out"], x)):
+            return method(self, *head, **kwargs)  # the whole call refuses what it must
         first = store = None
+        out = kwargs.get("out") if "out" in cut else None
         try:
             for start, stop in chunk_bounds(rows, size):
-                part = method(self, *(h[start:stop] for h in head),
-                              **{**kwargs, **{name: kwargs[name][start:stop] for name in cut}})
-                if start == 0:
-                    first, store = part, _allocate(part, rows, stop)
+                views = {name: kwargs[name][start:stop] for name in cut}
+                part = method(self, *(h[start:stop] for h in head), **{**kwargs, **views})
+                if start == 0:  # the caller's out= is the joined q (pose) itself
+                    shared = {} if out is None else {id(views["out"]): _Rows(out)}
+                    first, store = part, _allocate(part, rows, stop, shared)
                 _put(store, part, start, stop)
                 del part
         except _Whole:  # e.g. a chunk without any solved row has no direct record

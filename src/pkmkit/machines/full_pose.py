@@ -61,6 +61,7 @@ from pkmkit.machines.joint_motion import JointMotion, full_pose_joint_motion
 from pkmkit.machines.machine import Machine
 from pkmkit.machines.measurement_models import FullPoseMeasurement
 from pkmkit.machines.modes import ModeNaming
+from pkmkit.machines.out_arrays import checked_out, filled, into
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
     DirectResult,
@@ -354,7 +355,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         copy per chunk (issue 22 §2)."""
         return (name == "ik" and x.shape[1] == 6 and not kwargs.get("full_output")
                 and kwargs.get("q0") is None and kwargs.get("strokes", "flag") in _UNCHUNKED
-                and kwargs.keys() <= {"branches", "full_output", "q0", "strokes"}
+                and kwargs.keys() <= {"branches", "full_output", "q0", "strokes", "out"}
                 and jit.use_compiled(x.shape[0], native=True))
 
     @chunked
@@ -366,6 +367,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         q0: Any = None,
         full_output: bool = False,
         strokes: str = "flag",
+        out: np.ndarray | None = None,
         **engine_options: Any,
     ) -> np.ndarray | InverseResult:
         """Inverse kinematics.
@@ -381,6 +383,8 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             strokes: actuator values outside their strokes: ``"flag"`` (default),
                 ``"refuse"`` or ``"ignore"``, as for
                 :meth:`pkmkit.machines.machine.Machine.ik`.
+            out: ``(N, n)`` float64 C-contiguous array the batch's q is written into (the
+                compiled kernel's own output) and returned (:mod:`pkmkit.machines.out_arrays`).
             **engine_options: forwarded to the engine (positions only).
 
         Returns:
@@ -395,7 +399,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
         if (branches is None and q0 is None and not full_output and not engine_options
-                and strokes in STROKE_MODES):  # one plain pose: microseconds, same numbers
+                and strokes in STROKE_MODES and out is None):  # one plain pose: µs
             one = native_one(self)
             q1 = NotImplemented if one is None else one.ik(x, strokes != "ignore")
             if q1 is NotImplemented:  # no C extension, or a pose of another type
@@ -411,14 +415,17 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             raise InputError(f"pose must be an array of real numbers: {exc}") from None
         width = arr.shape[-1] if arr.ndim in (1, 2) else 6
         if width == 3 and self.position_controlled:
-            return self._ik_position(arr, q0, branches, full_output, engine_options, strokes)
+            return into(out, x, self._ik_position(arr, q0, branches, full_output,
+                                                  engine_options, strokes), self.n_actuators)
         xb, single = _checked_batch(x, 6, "pose")
+        if out is not None:
+            checked_out(out, x, xb, single, self.n_actuators, "ik")
         sigma = self._branches(branches)
         fused = not single and jit.use_compiled(xb.shape[0], native=True)
         if fused:  # one pass, q NaN on every row whose status is not OK
             # a plain batch (no record, strokes flagged or ignored) never reads the statuses
             q, status = self._forms.inverse_compiled(
-                xb, sigma, self._consistency_tol(), full_output or strokes == "refuse")
+                xb, sigma, self._consistency_tol(), full_output or strokes == "refuse", out)
         else:
             with np.errstate(invalid="ignore", over="ignore"):
                 q_rod = self._forms.rod_coordinates(xb, sigma)
@@ -428,6 +435,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             inconsistent = ~unreachable & ~(spread <= self._consistency_tol())
             status[unreachable | inconsistent] = Status.UNREACHABLE
             status[~_valid_rows(xb)] = Status.INVALID_INPUT
+            q = filled(out, q)
             q[status != Status.OK] = np.nan
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], spread[0])
@@ -472,6 +480,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         x0: Any = None,
         full_output: bool = False,
         strokes: str = "flag",
+        out: np.ndarray | None = None,
         **engine_options: Any,
     ) -> np.ndarray | DirectResult:
         """Direct kinematics by the least-squares engine over every rod, from ``x0`` (a warm
@@ -482,14 +491,16 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             :class:`DirectResult`.
 
         ``strokes`` (``"flag"``, ``"refuse"``, ``"ignore"``) treats given actuator values
-        outside their strokes as :meth:`ik` does.
+        outside their strokes as :meth:`ik` does; ``out`` receives a batch's poses as
+        :meth:`ik`'s ``out`` its q.
 
         Raises:
             InputError: mis-shaped input or non-finite single q.
             NoAssemblyError: a single q with no assembly reached from the guess.
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
-        if x0 is None and not full_output and not engine_options and strokes in STROKE_MODES:
+        if (x0 is None and not full_output and not engine_options and strokes in STROKE_MODES
+                and out is None):
             one = native_one(self)  # one plain configuration: µs
             fast = (one.fk(q, strokes != "ignore") if one is not None
                     else direct.direct_one(self, q, strokes))
@@ -512,6 +523,8 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             iterations, residual = result.iterations, result.residual
         status[status == Status.INCONSISTENT] = Status.NO_ASSEMBLY
         status[~_valid_rows(qb)] = Status.INVALID_INPUT
+        if out is not None:
+            pose = filled(checked_out(out, q, qb, single, 6, "fk"), pose)
         check = None
         if not single or status[0] == Status.OK:
             check = judge_rows(self, qb, status, strokes, single, f"q = {qb[0].tolist()}",

@@ -113,7 +113,8 @@ class FullPoseForms:
         return self.rod_coordinates_numpy(x, sigma)
 
     def inverse_compiled(self, x: np.ndarray, sigma: np.ndarray, consistency_tol: float,
-                         statuses: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+                         statuses: bool = True, q: np.ndarray | None = None
+                         ) -> tuple[np.ndarray, np.ndarray | None]:
         """The inverse model of pose rows ``x (N, 6)`` in one compiled pass
         (:func:`pkmkit.machines.full_pose_kernels.inverse_poses`, or its C twin: see
         :func:`pkmkit.numerics.jit.kernel`): ``q (N, n_act)`` (NaN rows
@@ -122,7 +123,9 @@ class FullPoseForms:
         as :meth:`rod_coordinates` then :meth:`combine` and the machine's checks. With
         ``statuses=False`` the status is None: each piece's statuses go to a scratch array of
         the piece's size (reused memory, in cache) instead of a fresh ``(N,)`` one whose pages
-        a plain ``m.ik(X)`` would fault in and never read (issue 22 §2)."""
+        a plain ``m.ik(X)`` would fault in and never read (issue 22 §2). ``q``: the caller's
+        ``(N, n_act)`` C-contiguous float64 array the kernel writes into (``ik(X, out=Q)``,
+        :mod:`pkmkit.machines.out_arrays`), else a new one."""
         inverse_poses = jit.kernel("pkmkit.machines.full_pose_kernels", "inverse_poses")
         m = self.model
         act = m.rod_actuator
@@ -131,7 +134,7 @@ class FullPoseForms:
         for k in range(m.n_actuators):
             groups[k, :counts[k]] = np.flatnonzero(act == k)
         angular = np.array([m.rod_kind[groups[k, 0]] == CRANK for k in range(m.n_actuators)])
-        q = np.empty((x.shape[0], m.n_actuators))
+        q = np.empty((x.shape[0], m.n_actuators)) if q is None else q
         status = np.empty(x.shape[0] if statuses else 0, dtype=np.int64)
         x = np.ascontiguousarray(x, dtype=float)
         rods = (m.rod_kind.astype(np.int64), *_plain(m.rod_base, m.rod_platform, m.rod_axis,

@@ -65,6 +65,7 @@ from pkmkit.machines.export_layouts import ChainLayout
 from pkmkit.machines.head_branches import head_flip_variables, nearest_head_branch
 from pkmkit.machines.inverse_rows import ChainInverseRows
 from pkmkit.machines.measurement_models import ChainMeasurement
+from pkmkit.machines.out_arrays import checked_out, filled
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.strokes import signed_excess
 from pkmkit.machines.warm_starts import ChainWarmStart
@@ -309,7 +310,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
     @chunked
     def fk(self, q: Any, *, x0: Any = None, start: Any = None, tool_length: Any = None,
            full_output: bool = False, strokes: str = "flag", check_singular: bool | None = None,
-           max_misfit: float | None = None,
+           max_misfit: float | None = None, out: np.ndarray | None = None,
            **engine_options: Any) -> np.ndarray | ChainDirectResult:
         """Direct model: the legs' closure (platform pose and passive joints) then the head.
 
@@ -356,8 +357,9 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
             SingularConfigurationError: a single q at a singular closure.
         """
-        if fast := self._fk_one(q, strokes, check_singular, x0, start, tool_length, full_output,
-                                max_misfit, engine_options):
+        if out is None and (fast := self._fk_one(q, strokes, check_singular, x0, start,
+                                                 tool_length, full_output, max_misfit,
+                                                 engine_options)):
             return fast[0]  # one plain configuration: one compiled call (machines/chain_one.py)
         if strokes not in STROKE_MODES:
             raise InputError(f"strokes must be one of {', '.join(STROKE_MODES)}, got {strokes!r}")
@@ -369,6 +371,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                                      single if check_singular is None else check_singular)
         usable = report["usable"]
         pose, frame = self.tool_rows(res, values, tool_length, usable)
+        pose = filled(out if out is None else checked_out(out, q, qb, single, 6, "fk"), pose)
         if single:
             self._raise_single(qb[0], status[0], report, res.residual[0])
         if not full_output:
@@ -520,7 +523,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
     # ---------------------------------------------------------------- inverse
     @chunked
     def ik(self, x: Any, *, q0: Any = None, tool_length: Any = None, full_output: bool = False,
-           strokes: str = "flag", start: Any = None,
+           strokes: str = "flag", start: Any = None, out: np.ndarray | None = None,
            **engine_options: Any) -> np.ndarray | ChainInverseResult:
         """Inverse model: actuator coordinates that put the tool point and axis at ``x``.
 
@@ -546,6 +549,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                 nearest ``q0`` (home). One plain pose with a plain ``start`` row (and
                 ``full_output``) takes the one-pose path (:mod:`pkmkit.machines.chain_one`):
                 the same answer, the ``solution`` the next call's ``start``.
+            out: ``(N, n)`` array a batch's q is written into and returned, as on every family
+                (:mod:`pkmkit.machines.out_arrays`; ``fk``'s ``out`` takes its ``(N, 6)``).
 
         Returns:
             q ``(n,)`` / ``(N, n)``; with ``full_output`` a :class:`ChainInverseResult` (which
@@ -556,7 +561,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
             ConvergenceError: a single target the engine could not reach exactly.
             OutOfStrokeError: a single target reached beyond a stroke with ``strokes="refuse"``.
         """
-        if fast := self._ik_one(x, q0, tool_length, full_output, strokes, start, engine_options):
+        if out is None and (fast := self._ik_one(x, q0, tool_length, full_output, strokes, start,
+                                                 engine_options)):
             return fast[0]  # one plain pose: one compiled call (machines/chain_one.py)
         if strokes not in STROKE_MODES:
             raise InputError(f"strokes must be one of {', '.join(STROKE_MODES)}, got {strokes!r}")
@@ -564,6 +570,8 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         n = xb.shape[0]
         res, status, q, joint_values, lengths = self._inverse_solve(xb, single, q0, tool_length,
                                                                     engine_options, start)
+        q = filled(out if out is None else checked_out(out, x, xb, single, self.n_actuators,
+                                                       "ik"), q)
         joints = np.flatnonzero(self.model.loop_variables | self.model.actuated)
         bad, texts = (stroke_violations(self.model, joint_values, joints, status == Status.OK,
                                         messages=single)

@@ -45,6 +45,7 @@ from pkmkit.machines.inverse_rows import RodInverseRows
 from pkmkit.machines.joint_motion import JointMotion, rod_joint_motion
 from pkmkit.machines.measurement_models import TranslationalMeasurement
 from pkmkit.machines.modes import ModeNaming
+from pkmkit.machines.out_arrays import checked_out, filled
 from pkmkit.machines.protocol import MachineFace
 from pkmkit.machines.results import (
     AssemblyModes,
@@ -277,6 +278,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         q0: Any = None,
         full_output: bool = False,
         strokes: str = "flag",
+        out: np.ndarray | None = None,
         **engine_options: Any,
     ) -> np.ndarray | InverseResult:
         """Inverse kinematics: actuator coordinates of platform poses.
@@ -293,6 +295,8 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
                 :class:`~pkmkit.exceptions.StrokeWarning` for a single pose), ``"refuse"`` (NaN
                 rows with status OUT_OF_STROKE; a single pose raises
                 :class:`~pkmkit.exceptions.OutOfStrokeError`) or ``"ignore"``.
+            out: an ``(N, n)`` float64 C-contiguous array the batch's q is written into and
+                returned (also as a record's q); :mod:`pkmkit.machines.out_arrays`.
             **engine_options: forwarded to the engine (``max_iter``, ``residual_tol``, ...).
 
         Returns:
@@ -307,7 +311,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             OutOfStrokeError: a single pose beyond a stroke with ``strokes="refuse"``.
         """
         if (method == "closed" and branches is None and q0 is None and not full_output
-                and not engine_options):  # one plain pose: one C call (closed_form_one)
+                and not engine_options and out is None):  # one plain pose: one C call
             native = native_kernels_now()
             if native is not None and self._one_pack is not None:
                 q1 = native.rod_ik_one(self._one_pack, x, strokes)
@@ -318,15 +322,19 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
                 if q1 is not None and (strokes == "ignore" or self.within_strokes(q1)):
                     return np.array(q1)
         return self._ik_rows(x, method=method, branches=branches, q0=q0,
-                             full_output=full_output, strokes=strokes, **engine_options)
+                             full_output=full_output, strokes=strokes, out=out,
+                             **engine_options)
 
     @chunked
     def _ik_rows(self, x: Any, *, method: str, branches: Any, q0: Any, full_output: bool,
-                 strokes: str, **engine_options: Any) -> np.ndarray | InverseResult:
+                 strokes: str, out: np.ndarray | None = None,
+                 **engine_options: Any) -> np.ndarray | InverseResult:
         """:meth:`ik` of whatever its one-pose path does not answer (batches, options, rare
         single poses), in chunks of rows (:func:`~pkmkit.machines.chunks.chunked`)."""
         check_mode(strokes)
         xb, single = _checked_batch(x, self.dims, "pose")
+        if out is not None:
+            checked_out(out, x, xb, single, self.n_actuators, "ik")
         br = self._branches(branches)
         fused = full_output and method == "closed" and self._closed.fuses
         if fused:  # statuses, shortfalls and modes in the inverse's pass
@@ -335,6 +343,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         else:
             q, status, iterations, residual = self._inverse_rows(xb, br, method, q0,
                                                                  engine_options)
+        q = filled(out, q)
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], iterations)
         check = judge_rows(self, q, status, strokes, single, f"pose {xb[0].tolist()}",
@@ -426,6 +435,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         dof: str = "translation",
         full_output: bool = False,
         strokes: str = "flag",
+        out: np.ndarray | None = None,
         **engine_options: Any,
     ) -> np.ndarray | DirectResult:
         """Direct kinematics in one assembly mode (default: the working mode).
@@ -441,6 +451,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             full_output: return a :class:`DirectResult`.
             strokes: given actuator values outside their strokes: ``"flag"``, ``"refuse"`` or
                 ``"ignore"``, as for :meth:`ik`.
+            out: ``(N, dims)`` array the batch's poses are written into, as :meth:`ik`'s.
             **engine_options: forwarded to the engine.
 
         Returns:
@@ -454,7 +465,8 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             ConvergenceError: a single numeric solve that failed or reached another mode.
             OutOfStrokeError: a single q beyond a stroke with ``strokes="refuse"``.
         """
-        if method == "closed" and x0 is None and not full_output and not engine_options:
+        if (method == "closed" and x0 is None and not full_output and not engine_options
+                and out is None):
             # one plain configuration: one C call (closed_form_one)
             sign = self._working_mode if mode is _WORKING else self._mode_sign(mode)
             native = native_kernels_now()
@@ -468,15 +480,18 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
                         q.tolist() if isinstance(q, np.ndarray) else q)):
                     return np.array(p1)
         return self._fk_rows(q, method=method, mode=mode, x0=x0, dof=dof,
-                             full_output=full_output, strokes=strokes, **engine_options)
+                             full_output=full_output, strokes=strokes, out=out,
+                             **engine_options)
 
     @chunked
     def _fk_rows(self, q: Any, *, method: str, mode: Any, x0: Any, dof: str,
-                 full_output: bool, strokes: str, **engine_options: Any
-                 ) -> np.ndarray | DirectResult:
+                 full_output: bool, strokes: str, out: np.ndarray | None = None,
+                 **engine_options: Any) -> np.ndarray | DirectResult:
         """:meth:`fk` of whatever its one-pose path does not answer, in chunks of rows."""
         check_mode(strokes)
         qb, single = _checked_batch(q, self.n_actuators, "q")
+        if out is not None:
+            checked_out(out, q, qb, single, self.dims, "fk")
         sign = self._mode_sign(mode)
         pose, status, rotation, iterations, residual = self._direct_rows(
             qb, sign, method, x0, dof, single, engine_options)
@@ -493,6 +508,7 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             pose = np.where(ok[:, None], pose, np.nan)
             if rotation is not None:
                 rotation = np.where(ok[:, None], rotation, np.nan)
+        pose = filled(out, pose)
         if single and not ok[0]:
             self._raise_direct(qb[0], sign, status[0])
         if not full_output:
