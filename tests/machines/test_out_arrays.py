@@ -14,6 +14,7 @@ import pytest
 import pkmkit
 from pkmkit.exceptions import InputError
 from pkmkit.machines import chunks
+from pkmkit.numerics import jit
 from pkmkit.status import Status
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "docs" / "examples"
@@ -55,7 +56,18 @@ def garbage(shape) -> np.ndarray:
     return out
 
 
-def test_ik_out_is_filled_and_returned_bit_for_bit(machine):
+@pytest.fixture(params=["auto", "1"])
+def compiled(request, monkeypatch):
+    """The default choice (NumPy for a small batch of a rod machine) and the compiled kernels
+    forced (which write into out themselves)."""
+    if request.param == "auto":
+        monkeypatch.delenv("PKMKIT_COMPILED", raising=False)
+    else:
+        monkeypatch.setenv("PKMKIT_COMPILED", request.param)
+    return request.param
+
+
+def test_ik_out_is_filled_and_returned_bit_for_bit(machine, compiled):
     x = poses(machine)
     expected = machine.ik(x)
     out = garbage(expected.shape)
@@ -74,7 +86,7 @@ def test_fk_out_is_filled_and_returned_bit_for_bit(machine):
     assert bits(out) == bits(expected)
 
 
-def test_full_output_record_q_is_out_with_the_same_statuses(machine):
+def test_full_output_record_q_is_out_with_the_same_statuses(machine, compiled):
     x = poses(machine)
     plain = machine.ik(x, full_output=True, strokes="refuse")
     out = garbage(plain.q.shape)
@@ -151,3 +163,16 @@ def test_chunked_batches_write_into_out(ident, full, monkeypatch):
     assert m.fk(q, out=x_out) is x_out
     monkeypatch.setattr(chunks, "CHUNK_ROWS", 1 << 16)
     assert bits(x_out) == bits(m.fk(q))
+
+
+@pytest.mark.parametrize("ident", ["gough-stewart", "linear-delta"])
+def test_compiled_kernels_write_into_out_across_threads(ident, monkeypatch):
+    """A batch the compiled inverse cuts into pieces for its threads: every piece lands in
+    the caller's out (the rows of a piece written elsewhere would stay garbage)."""
+    monkeypatch.setenv("PKMKIT_COMPILED", "1")
+    m = pkmkit.machine(ident)
+    x = np.tile(poses(m), (3 * jit.THREAD_ROWS // 6 + 1, 1))
+    expected = m.ik(x)
+    out = garbage(expected.shape)
+    assert m.ik(x, out=out) is out
+    assert bits(out) == bits(expected)
