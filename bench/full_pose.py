@@ -10,7 +10,9 @@ For each condition (``quiet``; ``loaded`` with one process keeping a core and th
   pose in pure Python (``math``, on a 20 000-pose sample) and the ratios to a plain copy of the
   input (``X.copy()``, the memory-bandwidth limit of a pass over the data, with the page faults
   of a fresh array as ``m.ik``'s output has them) and to a copy into a preallocated array
-  (``np.copyto``: the memory traffic alone, the issue's limit), all measured interleaved in
+  (``np.copyto``: the memory traffic alone, the issue's limit), and ``m.ik(X, out=Q)`` with
+  ``Q`` reused call after call (no fresh pages; whether §2's ≤ 3× the preallocated copy is
+  met with it and without it), all measured interleaved in
   the same condition (quiet, or beside the competing process); then the CPU time
   per pose on one thread (best of ``--repeat``) against the copy's CPU time, and whether the
   C kernel runs vectorised (``pkmkit.native.kernels.simd()``);
@@ -121,8 +123,11 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
     t_api, t_one, t_copy, t_loop, c_api, c_one, c_copy = [], [], [], [], [], [], []
     t_pre, target = [], np.empty_like(poses)
     np.copyto(target, poses)  # its pages touched once: the copy's memory traffic alone
+    t_out, c_out, reused = [], [], m.ik(poses)  # out=: q into an array reused call after call
     for _ in range(repeat):
         t_api.append(_median(lambda: m.ik(poses), 1))
+        t_out.append(_median(lambda: m.ik(poses, out=reused), 1))
+        c_out.append(_cpu_median(lambda: m.ik(poses, out=reused), 1))
         c_api.append(_cpu_median(lambda: m.ik(poses), 1))
         os.environ["PKMKIT_THREADS"] = "1"
         t_one.append(_median(lambda: m.ik(poses), 1))
@@ -147,6 +152,13 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
     print(f"     one thread, CPU: {min(c_one) / len(poses) * 1e9:.1f} ns per pose (best of "
           f"{repeat}), copy {min(c_copy) * 1e3:.2f} ms, CPU / copy "
           f"{min(c_one) / min(c_copy):.1f} (vectorised C kernel: {lanes or 'no'} lanes)")
+    pre, out = statistics.median(t_pre), statistics.median(t_out)
+    print(f"     m.ik(X, out=Q), Q reused: {len(poses) / out / 1e6:6.2f} Mposes/s "
+          f"({len(poses) / statistics.median(c_out) / 1e6:.2f} per CPU second), / preallocated "
+          f"copy {out / pre:4.1f} (the plain m.ik(X) {api / pre:4.1f}, out= / plain "
+          f"{out / api:4.2f}); issue 22 §2's ≤ 3× the preallocated copy: with out= "
+          f"{'met' if out / pre <= 3.0 else 'NOT met'}, plain "
+          f"{'met' if api / pre <= 3.0 else 'NOT met'}")
 
 
 def accuracy_rows(label: str, m, poses: np.ndarray) -> None:
