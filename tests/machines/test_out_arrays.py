@@ -94,6 +94,7 @@ def test_full_output_record_q_is_out_with_the_same_statuses(machine, compiled):
     assert found.q is out
     assert bits(out) == bits(plain.q)
     np.testing.assert_array_equal(found.status, plain.status)
+    np.testing.assert_array_equal(found.mode, plain.mode)  # det A read from out (rod legs)
     assert found.status[3] == Status.INVALID_INPUT  # (row 1 is out of reach where rods end)
     assert np.isnan(out[found.status != Status.OK]).all()
     assert np.isfinite(out[found.status == Status.OK]).all()
@@ -176,3 +177,31 @@ def test_compiled_kernels_write_into_out_across_threads(ident, monkeypatch):
     out = garbage(expected.shape)
     assert m.ik(x, out=out) is out
     assert bits(out) == bits(expected)
+
+
+@pytest.mark.parametrize("ident", ["linear-delta", "orthoglide", "five-bar", "gough-stewart",
+                                   "verne"])
+def test_compiled_inverse_allocates_no_array_of_the_output_size(ident, monkeypatch):
+    """The compiled inverse writes q into out itself: the memory NumPy allocates during
+    ``ik(X, out=Q)`` (tracemalloc's peak) stays below the size of q, and with
+    ``full_output=True`` is at least q's size below the call without out — a kernel writing a
+    temporary then copied into out (the same values) fails it."""
+    tracemalloc = pytest.importorskip("tracemalloc")
+    monkeypatch.setenv("PKMKIT_COMPILED", "1")
+    m = pkmkit.machine(ident)
+    x = np.tile(np.asarray(m.home_pose, dtype=float), (100_000, 1))
+    x[:, 0] += np.linspace(-1e-3, 1e-3, x.shape[0])
+    out = np.empty((x.shape[0], m.n_actuators))
+
+    def peak(**options) -> int:
+        m.ik(x, **options)  # warm: kernels loaded, machine caches built
+        tracemalloc.start()
+        try:
+            m.ik(x, **options)
+            return tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+
+    assert peak() >= out.nbytes  # the measure sees the output of a call without out
+    assert peak(out=out) < 0.6 * out.nbytes
+    assert peak(full_output=True) - peak(full_output=True, out=out) >= out.nbytes

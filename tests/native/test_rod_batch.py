@@ -152,13 +152,18 @@ def test_arguments_refused():
             (0, np.zeros((4, 3), dtype=np.float32), TypeError, "x: float64"),
             (0, np.zeros((4, 4)), ValueError, "2 or 3 columns"),
             (7, np.empty((3, 5)), ValueError, "out: wrong shape"),
-            (7, np.empty((4, 3)).T, TypeError, "out: a C-contiguous"),
+            (7, np.empty((3, 8))[:, ::2], ValueError, "out: wrong shape or layout"),
             (4, np.ones(3), TypeError, "slide: bool"),
             (6, "tol", TypeError, "must be real number")]:
         broken = list(args)
         broken[k] = bad
         with pytest.raises(error, match=text):
             _kernels.rod_inverse_rows(*broken)
+    rows = np.empty((4, 3))  # out= of ik (pkmkit.machines.out_arrays): q written row-major
+    x_some = c(np.linspace(-0.1, 0.1, 12).reshape(4, 3) + m.home_pose)
+    _kernels.rod_inverse_rows(x_some, *args[1:7], rows.T)
+    _kernels.rod_inverse_rows(x_some, *args[1:7], args[7])
+    assert rows.T.tobytes() == args[7].tobytes() and np.isfinite(rows).all()
     out = np.empty((3, 4))
     out.flags.writeable = False
     with pytest.raises(TypeError, match="out: a C-contiguous writable"):

@@ -142,10 +142,13 @@ class RodClosedForm:
         """
         return self.inverse_counted(x, branches)[0]
 
-    def inverse_counted(self, x: np.ndarray, branches: np.ndarray) -> tuple[np.ndarray, int]:
+    def inverse_counted(self, x: np.ndarray, branches: np.ndarray,
+                        out: np.ndarray | None = None) -> tuple[np.ndarray, int]:
         """:meth:`inverse` and the number of non-finite coordinates in the result (0: every
-        pose reached; callers then skip looking for failed rows)."""
-        q, bad, _, _ = self._inverse_pass(x, branches, False)
+        pose reached; callers then skip looking for failed rows). ``out``: a caller's
+        C-contiguous ``(N, n)`` array the compiled kernels write q into (the NumPy reference's
+        result is copied into it), returned as q."""
+        q, bad, _, _ = self._inverse_pass(x, branches, False, out)
         return q, bad
 
     @property
@@ -156,19 +159,20 @@ class RodClosedForm:
         m = self.model
         return not self.crank.any() and m.n_legs == m.dims and m.dims in (2, 3)
 
-    def inverse_full(self, x: np.ndarray, branches: np.ndarray
+    def inverse_full(self, x: np.ndarray, branches: np.ndarray, out: np.ndarray | None = None
                      ) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
         """:meth:`inverse_counted`, :meth:`shortfall` and det A in one pass over ``x (N, dims)``
         (only where :attr:`fuses`): ``(q (N, n), bad, shortfall (N, n), det_a (N,))``, each
         bit for bit what the separate calls give — det A as
         :func:`~pkmkit.numerics.linalg.batched_det` of :meth:`jacobians`' A at ``(x, q)``
-        (meaningless on rows with a non-finite q)."""
+        (meaningless on rows with a non-finite q); ``out`` as for :meth:`inverse_counted`."""
         if not self.fuses:
             raise ValueError("inverse_full needs a square machine of slides and struts")
-        q, bad, short, det = self._inverse_pass(x, branches, True)
+        q, bad, short, det = self._inverse_pass(x, branches, True, out)
         return q, bad, short.T, det
 
-    def _inverse_pass(self, x: np.ndarray, branches: np.ndarray, full: bool) -> tuple:
+    def _inverse_pass(self, x: np.ndarray, branches: np.ndarray, full: bool,
+                      q_out: np.ndarray | None = None) -> tuple:
         """``(q (N, n), bad, shortfall (n, N) | None, det (N,) | None)``: the compiled kernels
         for large batches — their C twins (``rod_inverse_rows``, ``rod_reach_det``) where the
         extension is built, else the Numba kernels once Numba is imported — else the NumPy
@@ -181,7 +185,7 @@ class RodClosedForm:
         if jit.use_compiled(rows, imports=False, native=twins) and not self.crank.any():
             inverse = jit.kernel(_KERNELS, "inverse")  # slides, struts
             x = np.ascontiguousarray(x, dtype=float)
-            out = np.empty((n, rows))
+            out = np.empty((n, rows)) if q_out is None else q_out.T  # (n, N) either way
             slide = self.model.leg_kind == SLIDE
             c = np.ascontiguousarray
             bad = inverse(x, c(self.basis), c(self.basis_offset), c(self.model.leg_length),
@@ -190,8 +194,11 @@ class RodClosedForm:
                 jit.kernel(_KERNELS, "reach_and_det")(
                     x, out, c(self.basis), c(self.basis_offset), c(self.centre0), c(self.axis),
                     c(self.model.leg_length), slide, short, det)
-            return out.T, int(bad), short, det
+            return out.T if q_out is None else q_out, int(bad), short, det
         q = self._inverse_numpy(x, branches, short, det)
+        if q_out is not None:
+            np.copyto(q_out, q)
+            q = q_out
         return q, int(np.count_nonzero(~np.isfinite(q))), short, det
 
     def inverse_numpy(self, x: np.ndarray, branches: np.ndarray) -> np.ndarray:

@@ -338,11 +338,11 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         br = self._branches(branches)
         fused = full_output and method == "closed" and self._closed.fuses
         if fused:  # statuses, shortfalls and modes in the inverse's pass
-            q, status, shortfall, mode = self._inverse_closed_full(xb, br)
+            q, status, shortfall, mode = self._inverse_closed_full(xb, br, out)
             iterations = residual = None
         else:
             q, status, iterations, residual = self._inverse_rows(xb, br, method, q0,
-                                                                 engine_options)
+                                                                 engine_options, out)
         q = filled(out, q)
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], iterations)

@@ -24,27 +24,29 @@ class RodSolveRows:
     """Per-row inverse and direct solves of a rod-leg machine (mixed into ``Machine``)."""
 
     def _inverse_rows(self, xb: np.ndarray, br: np.ndarray, method: str, q0: Any,
-                      engine_options: dict) -> tuple[np.ndarray, np.ndarray, Any, Any]:
+                      engine_options: dict, out: np.ndarray | None = None
+                      ) -> tuple[np.ndarray, np.ndarray, Any, Any]:
         """``(q (N, n), status (N,), iterations, residual)`` of ``method`` on branches
-        ``br``; iterations and residual are None for the closed form."""
+        ``br``; iterations and residual are None for the closed form, whose compiled kernel
+        writes q into a caller's ``out`` (``ik(X, out=Q)``)."""
         if method == "closed":
-            return (*self._inverse_closed_rows(xb, br), None, None)
+            return (*self._inverse_closed_rows(xb, br, out), None, None)
         if method == "numeric":
             return self._inverse_numeric_rows(xb, br, q0, engine_options)
         raise InputError(f"unknown method {method!r}; use 'closed' or 'numeric'")
 
-    def _inverse_closed_rows(self, xb: np.ndarray,
-                             br: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _inverse_closed_rows(self, xb: np.ndarray, br: np.ndarray,
+                             out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The closed-form inverse: unreachable rows and non-finite input flagged, poses
         beyond MAX_COORDINATE refused (a vertical slide follows any height)."""
-        return self._closed_rows(xb, *self._closed.inverse_counted(xb, br))
+        return self._closed_rows(xb, *self._closed.inverse_counted(xb, br, out))
 
-    def _inverse_closed_full(self, xb: np.ndarray, br: np.ndarray
+    def _inverse_closed_full(self, xb: np.ndarray, br: np.ndarray, out: np.ndarray | None = None
                              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(q, status, shortfall (N, n), mode (N,))`` of the closed form in one pass
         (:meth:`RodClosedForm.inverse_full`; the machine's closed form must ``fuse``): the
         mode is the sign of det A on rows with a finite q, else 0."""
-        q, n_bad, shortfall, det_a = self._closed.inverse_full(xb, br)
+        q, n_bad, shortfall, det_a = self._closed.inverse_full(xb, br, out)
         q, status = self._closed_rows(xb, q, n_bad)
         # the rows not OK are exactly those whose q is not finite (NaN now): mode 0
         mode = np.where(status == Status.OK, np.sign(det_a), 0.0).astype(int)
