@@ -97,6 +97,28 @@ def run_batch(input_: str, output: str, columns: list[str], compute: Compute, *,
         sys.exit(3)
 
 
+class ChunkBuffers:
+    """Arrays a batch command's ``compute`` reuses from one chunk to the next instead of
+    fresh ones per chunk (issue 22 §2: on this 2-core machine Linux clearing an output's
+    fresh pages costs about a quarter of the six-axis inverse kernel's time per pose). A
+    chunk's arrays are dead once :func:`run_batch` has written its output (the writer copies
+    or writes them before ``write`` returns), so the next chunk may overwrite them."""
+
+    def __init__(self) -> None:
+        self._arrays: dict[str, np.ndarray] = {}
+
+    def take(self, name: str, rows: int, width: int, order: str = "C") -> np.ndarray:
+        """A ``(rows, width)`` float64 array named ``name``: the first ``rows`` rows of one
+        kept from an earlier chunk (C order: C-contiguous, e.g. for ``ik(X, out=...)``; F
+        order: each column contiguous, e.g. output columns), allocated anew only when a
+        chunk has more rows than any before. Its values are stale: the caller writes every
+        element."""
+        arr = self._arrays.get(name)
+        if arr is None or arr.shape[0] < rows or arr.shape[1] != width:
+            arr = self._arrays[name] = np.empty((rows, width), order=order)
+        return arr[:rows]
+
+
 def _compute_rows(compute: Compute, chunk: Any) -> tuple[dict[str, Any], np.ndarray]:
     """``compute`` on a chunk, never on a single row: NumPy's einsum sums in another order when
     the batch has one row, which changes the last bit of some results (singular values), and a

@@ -29,7 +29,7 @@ from pkmkit.model.parameters import length_scale
 from pkmkit.spatial.rotation import resolve_convention
 from pkmkit.status import Status
 
-from .batch import batch_options, run_batch
+from .batch import ChunkBuffers, batch_options, run_batch
 from .columns import mode_column, named, require_batch_pair, status_column
 from .options import (
     ANGLES_OPTION,
@@ -124,11 +124,15 @@ def _batch(m, face: Face, options: dict[str, Any], input_: str, output: str,
     columns = ["x", "y", "z"] if m.position_controlled else pose_columns(m)
     scales = actuator_scales(m, units)
     flags = BatchFlags(m, units)
+    buffers = ChunkBuffers()  # q and the actuator columns: the same memory every chunk
 
     def compute(values, chunk):
-        sol = inverse(m, pose_from_cli(values, m, units, convention), **options)
+        rows, n = len(values), m.n_actuators
+        sol = inverse(m, pose_from_cli(values, m, units, convention),
+                      out=buffers.take("q", rows, n), **options)
         status = flags(sol.q, sol.status, chunk, sol.passive)
-        out = {**named(columns, values), **named(m.actuator_names, sol.q / scales)}
+        actuators = np.divide(sol.q, scales, out=buffers.take("columns", rows, n, "F"))
+        out = {**named(columns, values), **named(m.actuator_names, actuators)}
         if sol.pose is not None:
             found = pose_to_cli(sol.pose, m, units, convention)
             out.update(named(["A", "B", "C"], found[:, 3:]))
