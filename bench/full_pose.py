@@ -124,6 +124,7 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
     t_pre, target = [], np.empty_like(poses)
     np.copyto(target, poses)  # its pages touched once: the copy's memory traffic alone
     t_out, c_out, reused = [], [], m.ik(poses)  # out=: q into an array reused call after call
+    c_one_out = []
     for _ in range(repeat):
         t_api.append(_median(lambda: m.ik(poses), 1))
         t_out.append(_median(lambda: m.ik(poses, out=reused), 1))
@@ -132,6 +133,7 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
         os.environ["PKMKIT_THREADS"] = "1"
         t_one.append(_median(lambda: m.ik(poses), 1))
         c_one.append(_cpu_median(lambda: m.ik(poses), 1))
+        c_one_out.append(_cpu_median(lambda: m.ik(poses, out=reused), 1))
         del os.environ["PKMKIT_THREADS"]
         t_copy.append(_median(lambda: poses.copy(), 1))
         c_copy.append(_cpu_median(lambda: poses.copy(), 1))
@@ -159,6 +161,9 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
           f"{out / api:4.2f}); issue 22 §2's ≤ 3× the preallocated copy: with out= "
           f"{'met' if out / pre <= 3.0 else 'NOT met'}, plain "
           f"{'met' if api / pre <= 3.0 else 'NOT met'}")
+    print(f"     one thread, CPU: m.ik(X, out=Q) {min(c_one_out) / len(poses) * 1e9:.1f} ns per "
+          f"pose against the plain call's {min(c_one) / len(poses) * 1e9:.1f} (best of "
+          f"{repeat}; out= / plain {min(c_one_out) / min(c_one):.2f})")
 
 
 def accuracy_rows(label: str, m, poses: np.ndarray) -> None:
