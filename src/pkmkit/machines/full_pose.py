@@ -427,16 +427,8 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             q, status = self._forms.inverse_compiled(
                 xb, sigma, self._consistency_tol(), full_output or strokes == "refuse", out)
         else:
-            with np.errstate(invalid="ignore", over="ignore"):
-                q_rod = self._forms.rod_coordinates(xb, sigma)
-                q, spread = self._forms.combine(q_rod)
-            status = np.full(xb.shape[0], int(Status.OK))
-            unreachable = ~np.isfinite(q_rod).all(axis=1)
-            inconsistent = ~unreachable & ~(spread <= self._consistency_tol())
-            status[unreachable | inconsistent] = Status.UNREACHABLE
-            status[~_valid_rows(xb)] = Status.INVALID_INPUT
+            q, status, spread = self._inverse_numpy(xb, sigma)
             q = filled(out, q)
-            q[status != Status.OK] = np.nan
         if single and status[0] != Status.OK:
             self._raise_inverse(xb, status[0], spread[0])
         check = judge_rows(self, q, status, strokes, single, f"pose {xb[0].tolist()}",
@@ -452,6 +444,21 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             return lazy_inverse_record(self._forms, self.model.n_rods, xb, **fields)
         return _restore(InverseResult(mode=self._mode_of(xb, q), **fields), single,
                         ("q", "status", "shortfall", "mode", "out_of_stroke", "stroke_excess"))
+
+    def _inverse_numpy(self, xb: np.ndarray, sigma: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The NumPy inverse of pose rows ``xb (N, 6)`` (small batches, no compiled kernel):
+        ``(q (N, n), status (N,), spread (N,))``, q NaN where the status is not OK."""
+        with np.errstate(invalid="ignore", over="ignore"):
+            q_rod = self._forms.rod_coordinates(xb, sigma)
+            q, spread = self._forms.combine(q_rod)
+        status = np.full(xb.shape[0], int(Status.OK))
+        unreachable = ~np.isfinite(q_rod).all(axis=1)
+        inconsistent = ~unreachable & ~(spread <= self._consistency_tol())
+        status[unreachable | inconsistent] = Status.UNREACHABLE
+        status[~_valid_rows(xb)] = Status.INVALID_INPUT
+        q[status != Status.OK] = np.nan
+        return q, status, spread
 
     def _raise_inverse(self, xb: np.ndarray, status: int, spread: float) -> None:
         if status == Status.INVALID_INPUT:
@@ -532,25 +539,28 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         ok = status == Status.OK
         pose[~ok] = np.nan
         if single and not ok[0]:
-            if status[0] == Status.INVALID_INPUT:
-                raise InputError(f"q = {qb[0].tolist()} has a coordinate beyond "
-                                 f"{MAX_COORDINATE:g}")
-            if status[0] == Status.NO_ASSEMBLY:
-                raise NoAssemblyError(
-                    f"q = {qb[0].tolist()}: no assembly found from the guess (closure residual "
-                    f"{residual[0]:.3g} m); the rods may not meet, or pass x0")
-            raise ConvergenceError(f"the direct model did not converge "
-                                   f"({Status(int(status[0])).label})")
+            self._raise_direct(qb[0], int(status[0]), float(residual[0]))
         if not full_output:
             return restore_shape(pose, single)
         mode = self._mode_of(pose, qb)
-        out = DirectResult(pose=pose, status=status, mode=mode,
-                           mode_label=self.mode_labels[0], branches=np.zeros(
-                               (qb.shape[0], self.model.n_legs), dtype=int),
-                           method="numeric", iterations=iterations,
-                           residual=residual, **_stroke_fields(check))
-        return _restore(out, single, ("pose", "status", "mode", "branches", "iterations",
-                                      "residual", "out_of_stroke", "stroke_excess"))
+        record = DirectResult(pose=pose, status=status, mode=mode,
+                              mode_label=self.mode_labels[0], branches=np.zeros(
+                                  (qb.shape[0], self.model.n_legs), dtype=int),
+                              method="numeric", iterations=iterations,
+                              residual=residual, **_stroke_fields(check))
+        return _restore(record, single, ("pose", "status", "mode", "branches", "iterations",
+                                         "residual", "out_of_stroke", "stroke_excess"))
+
+    @staticmethod
+    def _raise_direct(q: np.ndarray, status: int, residual: float) -> None:
+        """The typed error of one configuration ``q`` whose direct model has ``status``."""
+        if status == Status.INVALID_INPUT:
+            raise InputError(f"q = {q.tolist()} has a coordinate beyond {MAX_COORDINATE:g}")
+        if status == Status.NO_ASSEMBLY:
+            raise NoAssemblyError(
+                f"q = {q.tolist()}: no assembly found from the guess (closure residual "
+                f"{residual:.3g} m); the rods may not meet, or pass x0")
+        raise ConvergenceError(f"the direct model did not converge ({Status(status).label})")
 
     # ------------------------------------------------ the kernels of its helper modules
     # (full_pose_one, full_pose_direct, full_pose_velocity_one and _batch): built once per
