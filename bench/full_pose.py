@@ -53,6 +53,7 @@ import argparse
 import math
 import os
 import platform
+import resource
 import statistics
 import sys
 import threading
@@ -163,7 +164,19 @@ def inverse_rows(label: str, m, poses: np.ndarray, repeat: int) -> None:
           f"{'met' if api / pre <= 3.0 else 'NOT met'}")
     print(f"     one thread, CPU: m.ik(X, out=Q) {min(c_one_out) / len(poses) * 1e9:.1f} ns per "
           f"pose against the plain call's {min(c_one) / len(poses) * 1e9:.1f} (best of "
-          f"{repeat}; out= / plain {min(c_one_out) / min(c_one):.2f})")
+          f"{repeat}; out= / plain {min(c_one_out) / min(c_one):.2f}); minor page faults per "
+          f"call {_faults(lambda: m.ik(poses)):.0f} plain, "
+          f"{_faults(lambda: m.ik(poses, out=reused)):.0f} with out= (q {reused.nbytes / 1e6:.0f}"
+          " MB)")
+
+
+def _faults(fun, calls: int = 3) -> float:
+    """Minor page faults of this process per call of ``fun`` (fresh pages mapped and cleared;
+    memory malloc recycles from an earlier call has none)."""
+    start = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    for _ in range(calls):
+        fun()
+    return (resource.getrusage(resource.RUSAGE_SELF).ru_minflt - start) / calls
 
 
 def accuracy_rows(label: str, m, poses: np.ndarray) -> None:
