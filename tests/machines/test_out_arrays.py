@@ -205,3 +205,22 @@ def test_compiled_inverse_allocates_no_array_of_the_output_size(ident, monkeypat
     assert peak() >= out.nbytes  # the measure sees the output of a call without out
     assert peak(out=out) < 0.6 * out.nbytes
     assert peak(full_output=True) - peak(full_output=True, out=out) >= out.nbytes
+
+
+def test_positions_of_a_position_controlled_machine_fill_out():
+    """The Verne module given positions (N, 3): its q (N, n) into out, the record's q out and
+    its full poses as without out; out of the positions' width refused."""
+    m = pkmkit.machine("verne")
+    x = np.array([[0.0, 0.0, 0.0], [0.05, -0.02, 0.01], [5.0, 0.0, 0.0], [np.nan] * 3])
+    plain = m.ik(x, full_output=True)
+    out = garbage(plain.q.shape)
+    found = m.ik(x, full_output=True, out=out)
+    assert found.q is out and bits(out) == bits(plain.q)
+    assert bits(found.pose) == bits(plain.pose)
+    np.testing.assert_array_equal(found.status, plain.status)
+    again = garbage(plain.q.shape)
+    assert m.ik(x, out=again) is again and bits(again) == bits(plain.q)
+    with pytest.raises(InputError, match="out must be float64 of shape"):
+        m.ik(x, out=np.zeros((4, 3 + m.n_actuators)))
+    with pytest.raises(InputError, match="single row"):
+        m.ik(x[0], out=np.zeros(m.n_actuators))
