@@ -12,7 +12,11 @@ so that every chunk takes the same path as the whole batch would).
 Only a NumPy array ``(N, d)`` input is chunked (a single pose or a list is passed on as it is);
 row-aligned keyword arguments (``q0``, ``x0``, ``q``, ``tool_length``, a joint chain's ``start``)
 with N rows are cut with it, and a call whose row-aligned arguments do not have N rows (or one)
-is left whole so that it raises its own error. A class may set its own chunk size
+is left whole so that it raises its own error. The caller's ``out=`` array
+(:mod:`pkmkit.machines.out_arrays`) is cut into row views like them, each chunk writes its
+rows of it, and it is the joined result's q (pose) itself — nothing joined into a new array;
+an ``out`` that does not have N rows, or shares memory with the input, leaves the call whole
+(refused there, naming the whole shapes). A class may set its own chunk size
 (``chunk_rows``: the joint chains' iterative engine, :mod:`pkmkit.machines.joint_chain`), and
 may run some calls whole (``unchunked_call(name, x, kwargs) -> bool``: a call whose only
 memory is its input and its output, e.g. a full-pose machine's plain ``ik`` on the fused
