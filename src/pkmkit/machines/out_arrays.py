@@ -5,9 +5,9 @@ returns ``Q`` itself (``m.fk(Q, out=X)`` likewise the poses), as NumPy's ufuncs 
 that solves batch after batch (a controller's look-ahead, the command line's chunks) stops
 paying for fresh pages of memory on every call — on a 2-core machine Linux clearing a fresh
 output costs a quarter of the six-axis inverse kernel's time per pose (docs/benchmarks.md,
-"Six-axis kernels"). Every family takes it through the same keyword; the full-pose
-machines' compiled inverse writes straight into it, the others fill it from the result of
-their own pass.
+"Six-axis kernels"). Every family takes it through the same keyword; the compiled inverse
+kernels (the full-pose machines', the rod legs' closed form) write straight into it, the other
+paths (engines, NumPy references, joint chains) fill it from the result of their own pass.
 
 What ``out`` must be is checked here once per call, never silently copied or converted:
 float64, C-contiguous, writeable, of shape ``(N, width)`` for a batch of ``N`` rows, and not
