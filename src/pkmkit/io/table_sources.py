@@ -264,6 +264,8 @@ def _cell(text: str) -> tuple[float, str]:
     stripped = text.strip()
     if not stripped:
         return math.nan, "is empty"
+    if "_" in stripped or not stripped.isascii():  # float() takes 1_000 and other scripts' digits
+        return math.nan, f"is not a number: {text!r}"
     try:
         value = float(stripped)
     except ValueError:
@@ -396,8 +398,8 @@ def _cast_to_float(column: Any, name: str, path: str) -> Any:
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    try:
-        return pc.cast(column, pa.float64())
+    try:  # integers beyond 2**53 rounded to the nearest double, as a CSV cell's text is
+        return pc.cast(column, pa.float64(), safe=not pa.types.is_integer(column.type))
     except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
         raise InputError(f"{path}: column {name!r} is not numeric ({column.type})") from None
 
