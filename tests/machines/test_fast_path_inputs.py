@@ -283,3 +283,27 @@ def test_full_pose_inverse_record_mode_ignores_later_changes_and_survives_pickli
     jac = m.jacobian(x[:3])
     np.testing.assert_array_equal(mode[:3], np.sign(np.linalg.det(jac.A)).astype(int))
     assert mode[3] == 0
+
+
+@pytest.mark.parametrize("name", ["linear-delta", "five-bar", "gough-stewart"])
+def test_batched_velocity_model_ignores_a_reused_pose_or_q_buffer(name):
+    """A loop that refills one pose array and keeps each call's velocity model: the rod-leg
+    record's fields were computed when read from the caller's arrays (defect found by the
+    audit: every record of the loop described the last poses)."""
+    m = pkmkit.machine(name)
+    x = np.tile(_pose(m), (3, 1))
+    x[1, 0] += 0.01
+    x[2, 1] -= 0.01
+    reference = m.jacobian(x.copy())
+    fields = {f: np.array(getattr(reference, f)) for f in ("A", "B", "J", "J_inv",
+                                                             "singular_values", "det_A", "q",
+                                                             "mode")}
+    buffer = x.copy()
+    kept = m.jacobian(buffer)
+    q = np.array(reference.q)
+    given = m.jacobian(x.copy(), q=q)
+    buffer[:] = 0.0
+    q[:] = 0.0
+    for record in (kept, given):
+        for f, value in fields.items():
+            np.testing.assert_array_equal(getattr(record, f), value, err_msg=f)
