@@ -13,8 +13,9 @@ for a direct model): the same values (to 1e-9), the same exception type and mess
 warnings. The oracle is the general path, a different code path (the batch kernels).
 
 The lazy records' fields are computed when read: a joint chain's batched inverse record must
-not see the caller's later changes to its ``q``, ``closure`` or the ``tool_length`` array given
-(defect found by the audit: it computed ``direct`` and ``pose`` from them when first read).
+not see the caller's later changes to its ``q``, ``closure`` or the ``tool_length`` array given,
+nor a batched velocity model a refilled pose or ``q`` buffer (defects found by the audit: they
+computed their fields from those arrays when first read).
 """
 
 import array
