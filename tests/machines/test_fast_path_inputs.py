@@ -340,3 +340,34 @@ def test_direct_model_at_the_edge_of_the_assembly_region_answers_as_the_batch(na
                     _outcome(lambda q=q, mode=mode: m.fk(q, mode=mode, strokes="ignore",
                                                          full_output=True).pose))
     assert not found, "\n".join(found)
+
+
+def test_full_pose_inverse_at_the_edge_of_the_rods_consistency_answers_as_the_batch():
+    """Full poses of the Verne module (two rods on one actuator) turned away from home until
+    the rods of one actuator disagree by the consistency tolerance (bisection on the batch
+    status): the one-pose inverse rounds otherwise than the batch's ``combine`` (defect found
+    by the audit: at the edge it answered q where the general path raised
+    UnreachablePoseError, 24 of 40 edges)."""
+    m = pkmkit.machine("verne")
+    rng = np.random.default_rng(6)
+    home = np.asarray(m.home_pose, dtype=float)
+    found = []
+    for _ in range(8):
+        d = rng.normal(size=6)
+        d /= np.linalg.norm(d)
+        lo, hi = 0.0, 1e-6
+
+        def ok(s, d=d):
+            return m.ik((home + s * d)[None], strokes="ignore", full_output=True).status[0] == 0
+
+        if ok(hi):
+            continue
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+        for s in (lo, hi):
+            x = (home + s * d).tolist()
+            found += _differences(f"ik({x})",
+                                  _outcome(lambda x=x: m.ik(x, strokes="ignore")),
+                                  _outcome(lambda x=x: _general_ik(m, x, "ignore")))
+    assert not found, "\n".join(found)
