@@ -264,6 +264,8 @@ def _cell(text: str) -> tuple[float, str]:
     stripped = text.strip()
     if not stripped:
         return math.nan, "is empty"
+    if "_" in stripped or not stripped.isascii():  # float() takes 1_000 and other scripts' digits
+        return math.nan, f"is not a number: {text!r}"
     try:
         value = float(stripped)
     except ValueError:
@@ -365,7 +367,7 @@ class ArrowSource:
         n = table.num_rows
         values = np.empty((n, len(r.columns)))
         invalid = np.zeros(n, dtype=bool)
-        problems: list[str] = []
+        problems: list[tuple[int, int, str]] = []  # (row, column, message)
         for j, (name, actual) in enumerate(zip(r.columns, self.names, strict=True)):
             column = table.column(actual)
             floats = column if column.type == pa.float64() else _cast_to_float(column, name,
@@ -377,11 +379,12 @@ class ArrowSource:
             if nulls.any():
                 values[nulls, j] = np.nan
                 invalid |= nulls
-                problems.extend(f"{r.path}: row {first_row + k + 1}: column {name!r} is empty"
-                                for k in np.flatnonzero(nulls))
+                problems.extend((k, j, f"{r.path}: row {first_row + k + 1}: column {name!r} "
+                                 "is empty") for k in np.flatnonzero(nulls))
         self.reader.progress = first_row + n
+        # row by row, as a CSV's (the first message names the first bad row in any chunks)
         return TableChunk(values=values, first_row=first_row, invalid=invalid,
-                          problems=problems)
+                          problems=[text for _, _, text in sorted(problems)])
 
 
 def _cast_to_float(column: Any, name: str, path: str) -> Any:
@@ -396,8 +399,8 @@ def _cast_to_float(column: Any, name: str, path: str) -> Any:
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    try:
-        return pc.cast(column, pa.float64())
+    try:  # integers beyond 2**53 rounded to the nearest double, as a CSV cell's text is
+        return pc.cast(column, pa.float64(), safe=not pa.types.is_integer(column.type))
     except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
         raise InputError(f"{path}: column {name!r} is not numeric ({column.type})") from None
 

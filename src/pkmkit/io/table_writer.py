@@ -240,8 +240,8 @@ def _to_arrow(values: Any) -> Any:
     arr = np.asarray(values)
     if arr.dtype.kind == "f":
         return _numeric_array(np.ascontiguousarray(arr, dtype=np.float64))
-    if arr.dtype.kind in "iub":
-        return _numeric_array(np.ascontiguousarray(arr))
+    if arr.dtype.kind in "iub":  # in the machine's byte order: Arrow's buffers are little-endian
+        return _numeric_array(np.ascontiguousarray(arr, dtype=arr.dtype.newbyteorder("=")))
     return _string_array(arr)
 
 

@@ -121,6 +121,9 @@ def inverse_record(machine: Any, res: Any, status: np.ndarray, q: np.ndarray,
     values = machine.full_values(q)
     values[:, passive] = closure[:, 6:]
     record = LazyChainInverseResult(None, **given)
+    # copies: the caller may change the record's q or closure, or its tool lengths, before the
+    # first read
     object.__setattr__(record, "_evaluation", _InverseEvaluation(
-        machine, record.known_fields(), q, closure, values, lengths, strokes))
+        machine, record.known_fields(), q.copy(), closure.copy(), values, lengths.copy(),
+        strokes))
     return record

@@ -116,8 +116,8 @@ def direct_one(closed: RodClosedForm, q: Any, sign: int) -> list[float] | None:
         wx, wy, wz = alpha * ex, alpha * ey, 0.0
         nx, ny, nz = -ey, ex, 0.0
     t_sq = (r1 - (wx * wx + wy * wy + wz * wz)) / gram
-    if abs(t_sq) <= REL_TOL * r1 / gram:
-        t_sq = 0.0
+    if abs(t_sq) <= 2.0 * REL_TOL * r1 / gram:
+        return None  # a double root, or rounding away from the batch row's test of one
     if not t_sq >= 0.0:
         return None  # no real assembly: the batch path raises NoAssemblyError
     t = math.sqrt(t_sq) if sign > 0 else -math.sqrt(t_sq)

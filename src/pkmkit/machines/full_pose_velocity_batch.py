@@ -140,7 +140,7 @@ def velocity_model(machine: Any, record: type, xb: np.ndarray, qb: np.ndarray,
     at_parallel = (flags & Singularity.PARALLEL).astype(bool)
     evaluation = BatchFullVelocity(a, b, ok, at_parallel, length, unit)
     return record(evaluation, A=a, B=b, det_A=det_a, serial_measure=serial,
-                  singularity=flags, tolerance=tol, q=qb,
+                  singularity=flags, tolerance=tol, q=qb.copy(),  # not the caller's q array
                   mode=np.sign(np.nan_to_num(det_a)).astype(int), characteristic_length=length)
 
 

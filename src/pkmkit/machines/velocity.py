@@ -80,8 +80,10 @@ class VelocityEvaluation:
 
     def __init__(self, closed: RodClosedForm, x: np.ndarray, q: np.ndarray, tol: float):
         self.closed = closed
-        self.x = x
-        self.q = q
+        # copies (in their memory order): the caller may reuse its pose or q arrays before a
+        # field is first read
+        self.x = x.copy(order="K")
+        self.q = q.copy(order="K")
         self.tol = float(tol)
         self.size = x.shape[0]
         self.n = closed.model.n_legs

@@ -128,7 +128,9 @@ static int rod_direct(const double *pack, int n, const double *q, long sign, dou
         nz = 0.0;
     }
     double t_sq = (r1 - (wx * wx + wy * wy + wz * wz)) / gram;
-    if (fabs(t_sq) <= rel_tol * r1 / gram) t_sq = 0.0;
+    /* a double root, or rounding away from the batch row's test of one (direct_all's sums
+     * round otherwise): the batch path */
+    if (fabs(t_sq) <= 2.0 * rel_tol * r1 / gram) return 1;
     if (!(t_sq >= 0.0)) return 1; /* no real assembly */
     double t = sign > 0 ? sqrt(t_sq) : -sqrt(t_sq);
     out[0] = cx[0] + wx + t * nx;
