@@ -11,6 +11,7 @@ every subcommand").
 """
 
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -26,6 +27,8 @@ from pkmkit.cli.main import cli
 HEAVY = ("numba", "scipy", "pyarrow", "matplotlib")
 
 COMMANDS = cli.list_commands(click.Context(cli))
+
+needs_fork = pytest.mark.skipif(not hasattr(os, "fork"), reason="the children are forked")
 
 _SCRIPT = textwrap.dedent("""
     import contextlib, io, json, os, sys
@@ -85,6 +88,7 @@ def help_reports() -> dict:
     return json.loads(out.splitlines()[-1])
 
 
+@needs_fork
 def test_the_commands_are_listed_without_importing_them(help_reports):
     """The parametrisation below sees every command, the lazily imported ones included; the
     command line itself loads none of the heavy packages before a command is chosen."""
@@ -95,6 +99,7 @@ def test_the_commands_are_listed_without_importing_them(help_reports):
     assert help_reports["before"] == []
 
 
+@needs_fork
 @pytest.mark.parametrize("name", COMMANDS)
 def test_help_imports_no_heavy_package(name, help_reports):
     for command, printed, heavy in help_reports["reports"][name]:
@@ -102,6 +107,7 @@ def test_help_imports_no_heavy_package(name, help_reports):
         assert heavy == [], f"pkmkit {command} --help imports {heavy}"
 
 
+@needs_fork
 def test_a_group_s_subcommands_are_covered(help_reports):
     """``design`` is a group: its three sizing rules' ``--help`` run too."""
     commands = [row[0] for row in help_reports["reports"]["design"]]
