@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from pkmkit.analysis.criteria import (  # noqa: F401  (re-exported: their old home)
     EVALUATION_CHUNK,
@@ -90,6 +89,8 @@ def largest_inscribed_box(mask: np.ndarray, grid: Grid, center: Any = None
     def centres(k: int) -> np.ndarray:
         # true where the k-point window [i - k//2, i - k//2 + k - 1] (each axis) is all true;
         # outside the grid counts as false
+        from scipy import ndimage  # at first use: ≈ 0.2–0.3 s of imports `--help` need not pay
+
         return ndimage.minimum_filter(mask.view(np.uint8), size=k, mode="constant",
                                       cval=0).astype(bool)
 
@@ -154,6 +155,8 @@ def _part_next_to(labels: np.ndarray, grid: Grid, home: np.ndarray,
 def _connected_part(feasible: np.ndarray, grid: Grid, home: np.ndarray) -> tuple[np.ndarray, str]:
     if not feasible.any():
         return feasible, "empty"
+    from scipy import ndimage  # at first use (see largest_inscribed_box)
+
     structure = ndimage.generate_binary_structure(feasible.ndim, 1)
     labels, count = ndimage.label(feasible, structure=structure)
     index = grid.nearest_index(home)
@@ -240,6 +243,8 @@ class WorkspaceMap:
     @property
     def boundary(self) -> np.ndarray:
         """Feasible points with an infeasible (or off-grid) face neighbour."""
+        from scipy import ndimage  # at first use (see largest_inscribed_box)
+
         inner = ndimage.binary_erosion(self.feasible, border_value=0)
         return self.feasible & ~inner
 

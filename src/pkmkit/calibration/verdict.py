@@ -48,7 +48,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.special import chdtr, chdtrc
 
 #: Significance level of the χ² test (one-sided, each tail).
 ALPHA = 1e-3
@@ -193,6 +192,8 @@ def noise_check(chi2: float, dof: int, *, alpha: float = ALPHA,
         return Check("noise", False, float("inf"), ratio_max,
                      "the residual is not finite"), 0.0
     ratio = float(np.sqrt(max(chi2, 0.0) / dof))
+    from scipy.special import chdtr, chdtrc  # at first use (≈ 0.1 s of imports)
+
     upper = float(chdtrc(dof, chi2))  # scipy.stats.chi2.sf / .cdf, without its slow import
     lower = float(chdtr(dof, chi2))
     if upper < alpha and ratio > ratio_max:

@@ -31,7 +31,6 @@ from pkmkit.io.json_io import to_jsonable
 from pkmkit.io.sized_machine import box_corners, check_destination, write_sized_machine
 from pkmkit.model.parameters import length_scale
 from pkmkit.numerics.magnitudes import check_plausible
-from pkmkit.plot.design_figures import plot_pareto
 
 from .analysis_cmds import BOUNDS_OPTION, KAPPA_OPTION, parse_bounds
 from .options import (
@@ -385,6 +384,8 @@ def optimize_cmd(machine_name, assignments, vary, objectives, constraints, regio
         result.write_json(out / "summary.json", units=units)
         if len(objs) >= 2:
             result.write_csv(out / "pareto.csv", result.pareto, units=units)
+            from pkmkit.plot.design_figures import plot_pareto  # matplotlib: only here
+
             plot_pareto(result, path=out / "pareto.png", units=units)
     except OSError as exc:
         raise InputError(f"cannot write into {out_dir}: {exc.strerror or exc}") from None

@@ -21,8 +21,6 @@ from pkmkit.motion.limits import limit_bounds
 from pkmkit.motion.paths import circle, helix, line, raster
 from pkmkit.motion.timelaw import DEFAULT_JERK_PER_ACCEL, PROFILES
 from pkmkit.numerics.magnitudes import check_plausible
-from pkmkit.plot.deflection_figures import plot_path_deflection
-from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
 from pkmkit.stiffness.along_path import path_deflection
 
 from .limits import check_feed_reached, check_wrench
@@ -288,6 +286,10 @@ def _write_path_outputs(m, result, limits: Limits, bent, summary: dict, out, sca
                         units: str) -> list[str]:
     """``motion.png``, ``path.png``, ``trajectory.csv`` (and ``deflection.png``) in ``out``;
     returns the names written."""
+    # matplotlib (≈ 0.5 s of imports) only when figures are written, not for `--help`
+    from pkmkit.plot.deflection_figures import plot_path_deflection
+    from pkmkit.plot.motion_figures import plot_joint_motion, plot_tool_path
+
     motion = result.motion
     plot_joint_motion(motion, m.actuator_names, forces=result.forces.force,
                       title=f"{m.name}: {summary['duration']:.3f} s", length_unit=units,

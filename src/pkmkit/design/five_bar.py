@@ -18,7 +18,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from pkmkit.analysis.joint_space import useful_workspace
 from pkmkit.analysis.workspace import Criteria, RegionCheck, check_region
@@ -46,6 +45,8 @@ def isotropic_orientations(starts: int = 64, seed: int = 0,
     The roots are double (cos α1 = 1 at the solution), so least squares only reaches them to
     about √eps; solutions within ``tol_deg`` are merged and rounded to that precision.
     """
+    from scipy.optimize import least_squares  # at first use, not at `pkmkit design --help`
+
     rng = np.random.default_rng(seed)
     found: list[tuple[float, float]] = []
     for _ in range(starts):

@@ -39,7 +39,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 from pkmkit.analysis.workspace import Criteria, RegionCheck, check_region
 from pkmkit.design.checks import VERIFY_RTOL, degenerate_note, relaxed, require_side
@@ -140,6 +139,8 @@ class _Search:
 
     def best_d(self, length: float) -> tuple[float, float]:
         """(d, margin) minimising the margin for arms of ``length``."""
+        from scipy.optimize import minimize_scalar  # at first use, not at `--help`
+
         res = minimize_scalar(lambda d: self.margin(d, length), bounds=(1e-3 * length, length),
                               method="bounded", options={"xatol": 1e-7 * length})
         return float(res.x), float(res.fun)
@@ -164,6 +165,8 @@ class _Search:
                 raise InputError(f"no linear Delta with arms up to {limit} keeps every "
                                  f"transmission factor of the cube within {list(self.bounds)}")
             bad, good = good, min(2.0 * good, cap)
+        from scipy.optimize import brentq  # at first use, not at `--help`
+
         # the best margin decreases through 0 as L grows: its root, to 1e-6 relative
         root = brentq(lambda length: self.best_d(length)[1], bad, good, xtol=1e-7 * bad,
                       rtol=1e-6)

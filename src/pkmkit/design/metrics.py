@@ -28,7 +28,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from pkmkit.analysis.grids import make_grid
 from pkmkit.analysis.workspace import Criteria, compute_workspace, evaluate_poses
@@ -149,6 +148,8 @@ def _footprint(machine: Machine, q: np.ndarray) -> float:
     slide = (model.leg_kind == SLIDE)[None, :, None]
     joints = model.leg_base[None] + np.where(slide, q[:, :, None] * model.leg_axis[None], 0.0)
     xy = joints[:, :, :2].reshape(-1, 2)
+    from scipy.spatial import ConvexHull, QhullError  # at first use (≈ 0.2 s with scipy.sparse)
+
     try:
         return float(ConvexHull(xy).volume)  # the "volume" of a 2-D hull is its area
     except QhullError:

@@ -42,7 +42,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from pkmkit.exceptions import IdentifiabilityError, InputError
 from pkmkit.geometric_errors.blas_threads import single_blas
@@ -443,6 +442,8 @@ def analyse_jacobian(j: np.ndarray, names: tuple[str, ...], column_scale: np.nda
     zero_col = col_norm <= rtol * max(top, 1e-300)
     beta = np.zeros((rank, p - rank))
     if rank and other.size:
+        import scipy.linalg  # at first use: ≈ 0.3–0.6 s of imports `register` need not pay
+
         beta = scipy.linalg.solve_triangular(r[:rank, :rank], r[:rank, rank:], lower=False) \
             if r.shape[0] >= rank else np.linalg.lstsq(j[:, base_idx], j[:, other], rcond=None)[0]
         beta[np.abs(beta) < COEF_TOL * max(np.abs(beta).max(), 1e-300)] = 0.0

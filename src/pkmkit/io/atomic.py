@@ -16,7 +16,6 @@ from __future__ import annotations
 import contextlib
 import os
 import re
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -75,6 +74,8 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     target = check_output_file(path)
     directory = target.parent if str(target.parent) else Path(".")
     sweep_stale_temporaries(directory)
+    import tempfile  # at first write: a command that writes no file does not import it
+
     try:
         handle, temp = tempfile.mkstemp(prefix=f".{target.name}.{TEMP_TAG}{os.getpid()}.",
                                         suffix=f".part{target.suffix}", dir=directory)
@@ -169,6 +170,8 @@ def write_files_atomic(files: dict[str | Path, bytes | str]) -> list[Path]:
             target = check_output_file(path)
             directory = target.parent if str(target.parent) else Path(".")
             sweep_stale_temporaries(directory)
+            import tempfile  # at first write (see atomic_path)
+
             handle, temp = tempfile.mkstemp(prefix=f".{target.name}.{TEMP_TAG}{os.getpid()}.",
                                             suffix=f".part{target.suffix}", dir=directory)
             staged.append((Path(temp), target))

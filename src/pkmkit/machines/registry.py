@@ -26,7 +26,6 @@ import re
 from collections.abc import Mapping
 from dataclasses import replace
 from functools import cache
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -72,6 +71,11 @@ _LEG_KEYS = {"name", "actuator", "type", "base", "axis", "platform", "length", "
 
 
 def _data_dir():
+    here = Path(__file__).parent / "data"
+    if here.is_dir():  # an ordinary install: importlib.resources (≈ 10–20 ms of imports: its
+        return here  # tempfile, random) only for a packaging without files (a zip)
+    from importlib import resources
+
     return resources.files("pkmkit.machines") / "data"
 
 

@@ -97,11 +97,23 @@ def rotvec_to_matrix(phi: np.ndarray) -> np.ndarray:
     return _euler.matrix_from_quat(_euler.quat_from_rotvec(_rows3(phi)))
 
 
+def _orthonormal(arr: np.ndarray, tol: float = 1e-12) -> bool:
+    """Whether every matrix of ``(N, 3, 3)`` is a rotation to within ``tol`` (scipy's
+    ``from_matrix`` first projects other matrices onto the rotations; only then do the two
+    paths differ)."""
+    gram = np.einsum("nki,nkj->nij", arr, arr) - np.eye(3)
+    return bool(np.abs(gram).max(initial=0.0) <= tol and (np.linalg.det(arr) > 0).all())
+
+
 def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
     """Rotation vectors ``(N, 3)`` (radians, angle in [0, π]) of rotation matrices ``(N, 3, 3)``;
     NaN rows for matrices with a non-finite entry (failed rows of a batch)."""
     arr = np.asarray(matrix, dtype=float).reshape(-1, 3, 3)
     finite = np.isfinite(arr).all(axis=(1, 2))
+    if finite.all() and _orthonormal(arr):
+        # scipy's arithmetic in NumPy (equal to ~1e-15): building a joint-chain machine (its
+        # home) must not import scipy.spatial (≈ 0.2 s of a one-pose command's start-up)
+        return _euler.rotvec_from_quat(_euler.quat_from_matrix(arr))
     if finite.all():
         return rotation_class().from_matrix(arr).as_rotvec()
     out = np.full((arr.shape[0], 3), np.nan)
