@@ -23,6 +23,12 @@ import pkmkit
 from pkmkit.status import Status
 
 PIECES = {"ones": [1] * 23, "fours": [4] * 5 + [3], "nines": [9, 9, 5], "uneven": [5, 2, 11, 1, 4]}
+#: the NumPy engine's pieces (its calls cost 0.03–0.6 s each: 5.7 s of CPU for ``ik`` in
+#: PIECES, 3.0 s in these): alone every row up to the one not finite (the reached rows, the one
+#: beyond a stroke, the one without a closure), then the uneven pieces. Planted in
+#: pkmkit.numerics.rowwise, a batch of one computed as it comes and a batch axis left
+#: transposed each still fail both tests (docs/testing.md, "Fifth round").
+NUMPY_PIECES = {"ones": [1] * 15 + [8], "uneven": PIECES["uneven"]}
 
 
 def same(a, b, where: str) -> None:
@@ -128,7 +134,7 @@ def test_inverse_rows_do_not_depend_on_their_batch(ident, path):
         assert whole.out_of_stroke[3]
         assert whole.status[4] not in (Status.OK, Status.INVALID_INPUT)
         assert whole.status[14] == Status.INVALID_INPUT
-        for name, sizes in PIECES.items():
+        for name, sizes in (PIECES if path == "1" else NUMPY_PIECES).items():
             check_pieces(call, x, whole, sizes, f"{ident} ik in {name}")
 
 
@@ -147,5 +153,5 @@ def test_direct_rows_do_not_depend_on_their_batch(ident, path):
         assert whole.status[2] == Status.NO_ASSEMBLY
         assert whole.out_of_stroke[7]
         assert whole.status[11] == Status.INVALID_INPUT
-        for name, sizes in PIECES.items():
+        for name, sizes in (PIECES if path == "1" else NUMPY_PIECES).items():
             check_pieces(call, q, whole, sizes, f"{ident} fk in {name}")

@@ -80,13 +80,20 @@ def test_compiled_closure_rates_are_the_pseudo_inverse(grid):
 
 def test_workspace_criteria_compiled_and_numpy_agree(grid, monkeypatch):
     """The criteria of a grid with the compiled kernels and through the NumPy
-    engine and LAPACK (``PKMKIT_COMPILED=0``): the same masks, q to 1e-10, factors to 1e-10."""
+    engine and LAPACK (``PKMKIT_COMPILED=0``): the same masks, q to 1e-10, factors to 1e-10.
+    On a 6-point-per-edge grid of the same box (the TriMule's NumPy engine costs 1.6 s of CPU
+    there, 3.0 s on the 10-point ``grid``), which still has rows within and beyond the strokes
+    on both machines, and on the TriMule's rows out of the bounds and one out of reach
+    (docs/testing.md, "Fifth round": the planted bugs it still catches)."""
     m, g = grid
+    lo, hi = m.default_box()
+    g = make_grid(lo, hi, free=(0, 1, 2), base=m.home_pose, names=m.pose_names, resolution=6)
     fast = evaluate_grid(m, g, Criteria(bounds=(0.2, 5.0)))
     monkeypatch.setenv("PKMKIT_COMPILED", "0")
     slow = evaluate_grid(m, g, Criteria(bounds=(0.2, 5.0)))
     for name in fast.masks:
         np.testing.assert_array_equal(fast.masks[name], slow.masks[name], err_msg=name)
     assert fast.masks["reachable"].any()
+    assert 0 < fast.masks["strokes"].sum() < fast.masks["strokes"].size  # both kinds of rows
     np.testing.assert_allclose(fast.q, slow.q, rtol=0, atol=1e-10)
     np.testing.assert_allclose(fast.factors, slow.factors, rtol=1e-10, atol=0)
