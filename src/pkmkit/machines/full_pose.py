@@ -182,8 +182,7 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
                 f"machine {self.id!r} has {self.model.n_rods} rods: a six-DOF platform needs at "
                 "least six to be held")
         if self.characteristic_length is None:
-            radius = float(np.linalg.norm(self.model.rod_platform, axis=1).mean())
-            object.__setattr__(self, "characteristic_length", radius if radius > 0 else 1.0)
+            object.__setattr__(self, "characteristic_length", _default_length(self.model))
         forms = FullPoseForms(self.model)
         object.__setattr__(self, "_forms", forms)
         home = self.model.home_pose[None]
@@ -296,12 +295,14 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
                 "edit its machine file instead")
         params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
         model = self.kind.build(params)
-        rebuilt = type(self)(id=self.id, name=self.name, kind=self.kind, params=dict(params),
-                             model=model, description=self.description, source=self.source,
-                             extra_poses=self.kind.reference_poses(params, model))
-        extra = {k: v for k, v in self.extra_poses.items() if k not in rebuilt.extra_poses}
-        kept = {"characteristic_length": self.characteristic_length} if self.length_given else {}
-        return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra}, **kept)
+        poses = dict(self.kind.reference_poses(params, model))  # then the others kept
+        poses.update((k, v) for k, v in self.extra_poses.items() if k not in poses)
+        # one build; L as the former build-then-replace left it: this machine's when given,
+        # else the new geometry's default, given (length_given) from then on
+        length = self.characteristic_length if self.length_given else _default_length(model)
+        return type(self)(id=self.id, name=self.name, kind=self.kind, params=dict(params),
+                          model=model, description=self.description, source=self.source,
+                          extra_poses=poses, characteristic_length=length)
 
     def with_characteristic_length(self, length: float) -> FullPoseMachine:
         """The same machine with the characteristic length L (m) of its homogenised Jacobian
@@ -692,3 +693,10 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             "instantaneous": instantaneous_mobility(self.model, self._home_pose,
                                                     self._home_q),
         }
+
+
+def _default_length(model: RodModel) -> float:
+    """The characteristic length of a machine not given one: the mean distance of the rods'
+    platform joints from the platform's origin (1 m when that is 0)."""
+    radius = float(np.linalg.norm(model.rod_platform, axis=1).mean())
+    return radius if radius > 0 else 1.0

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -199,11 +199,11 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
             )
         params = resolve_parameters(self.kind.parameters, {**self.params, **overrides}, self.id)
         model = self.kind.build(params)
-        rebuilt = type(self)(id=self.id, name=self.name, kind=self.kind, params=dict(params),
-                             model=model, description=self.description, source=self.source,
-                             extra_poses=self.kind.reference_poses(params, model))
-        extra = {k: v for k, v in self.extra_poses.items() if k not in rebuilt.extra_poses}
-        return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra})
+        poses = dict(self.kind.reference_poses(params, model))  # then the others kept: one build
+        poses.update((k, v) for k, v in self.extra_poses.items() if k not in poses)
+        return type(self)(id=self.id, name=self.name, kind=self.kind, params=dict(params),
+                          model=model, description=self.description, source=self.source,
+                          extra_poses=poses)
 
     # ---------------------------------------------------------------- helpers
     @property

@@ -44,9 +44,15 @@ from pkmkit.machines import (
     verne,
 )
 from pkmkit.machines.build import build_machine
+from pkmkit.machines.built_machines import built
 from pkmkit.machines.chain_file import JOINT_CHAIN, chain_machine_from_document
 from pkmkit.machines.machine import Machine, MachineKind
-from pkmkit.model.machine_file import MachineDocument, read_machine_document
+from pkmkit.model.machine_file import (
+    MachineDocument,
+    parse_machine_document,
+    read_machine_document,
+    read_machine_text,
+)
 from pkmkit.model.parameters import (
     MAX_LENGTH,
     is_plain_number,
@@ -115,11 +121,19 @@ def load(path: str | Path, *, _overrides: Mapping[str, Any] | None = None,
          _id: str | None = None) -> Machine:
     """A machine from a TOML or YAML machine file.
 
+    Each call returns a new machine; loading a file whose text was loaded before (the same
+    path, id and engine) copies the machine built then instead of building it again
+    (:mod:`pkmkit.machines.built_machines`).
+
     Raises:
         MachineFileError: unreadable or malformed file, with the offending line when known.
     """
-    doc = read_machine_document(path)
-    return machine_from_document(doc, overrides=_overrides or {}, machine_id=_id)
+    if _overrides:
+        doc = read_machine_document(path)
+        return machine_from_document(doc, overrides=_overrides, machine_id=_id)
+    text = read_machine_text(path)
+    return built((str(path), text, _id), lambda: machine_from_document(
+        parse_machine_document(path, text), machine_id=_id))
 
 
 def _table(doc: MachineDocument, key: str, required: bool) -> dict[str, Any]:

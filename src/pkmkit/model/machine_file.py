@@ -63,15 +63,37 @@ def read_machine_document(path: str | Path) -> MachineDocument:
             error, a key given twice, nesting deeper than :data:`MAX_NESTING` (each with its
             line), or a document that is not a mapping.
     """
+    return parse_machine_document(path, read_machine_text(path))
+
+
+def read_machine_text(path: str | Path) -> str:
+    """The text of a machine file, unparsed (what :func:`read_machine_document` parses).
+
+    Raises:
+        MachineFileError: unknown extension, missing, binary or non-UTF-8 file.
+    """
+    _format(path)
+    return read_text(Path(path), lambda message, line: MachineFileError(str(path), message, line))
+
+
+def _format(path: str | Path) -> str:
     p = Path(path)
     fmt = SUFFIXES.get(p.suffix.lower())
     if fmt is None:
         raise MachineFileError(
             str(path), f"unknown machine file type {p.suffix!r}; use one of {sorted(SUFFIXES)}"
         )
-    text = read_text(p, lambda message, line: MachineFileError(str(path), message, line))
+    return fmt
+
+
+def parse_machine_document(path: str | Path, text: str) -> MachineDocument:
+    """Parse ``text``, the content of the machine file ``path`` (:func:`read_machine_text`).
+
+    Raises:
+        MachineFileError: as :func:`read_machine_document`, but for reading the file.
+    """
     parse: Callable[[str, str], tuple[Any, dict[KeyPath, int]]] = (
-        _parse_toml if fmt == "toml" else _parse_yaml
+        _parse_toml if _format(path) == "toml" else _parse_yaml
     )
     data, lines = parse(text, str(path))
     if not isinstance(data, dict):
