@@ -205,14 +205,14 @@ static void tool_pose(const pk_one *s, const double *values, const double *u, do
 }
 
 /* 1 / sqrt(||J||_F^2 ||L^-1||_F^2) with L L' = J'J (chain_one_kernel._factor, _bound): J'J
- * summed over each row's nonzero entries (nz: n indices), ||J||_F^2 its trace, L's diagonal
+ * summed over each row's nonzero entries (nz: n indices; dense_gram, the dense solve) or
+ * block by block from the solve's panels (pk_one_gram), ||J||_F^2 its trace, L's diagonal
  * and L^-1's by reciprocals (multiplications: the rounding of the bound, which has a margin of
  * 2, not of the answer). L^-1 = X by rows, X_i = (e_i - sum_{p<i} L_ip X_p) / L_ii, each row's
  * entries independent sums (vectorised; the column-by-column substitution, one chain of
  * dependent subtractions per entry, was a fifth of the call, and the separate pass for
  * ||J||_F^2 another 7 %, session 32). */
-static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double *low,
-                            double *inv, int64_t *nz) {
+static void dense_gram(const double *jac, ptrdiff_t m, ptrdiff_t n, double *low, int64_t *nz) {
     for (ptrdiff_t i = 0; i < n * n; i++) low[i] = 0.0;
     for (ptrdiff_t i = 0; i < m; i++) {
         const double *row = jac + i * n;
@@ -225,6 +225,10 @@ static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double 
             for (ptrdiff_t t = 0; t <= p; t++) target[nz[t]] += v * row[nz[t]];
         }
     }
+}
+
+/* The bound from J'J's lower part in low (n x n; overwritten by L), inv (n x n) scratch. */
+static double regular_bound(double *low, ptrdiff_t n, double *inv) {
     double fro = 0.0;
     for (ptrdiff_t j = 0; j < n; j++) fro += low[j * n + j];
     for (ptrdiff_t j = 0; j < n; j++) {  /* in place: J'J's lower part into L */
@@ -278,7 +282,10 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
     pk_chain_retract(s->u_home_dir, du, pred, n_u);
     k->w.m = m;
     memcpy(k->values2, values, (size_t)c->n_var * sizeof(double));
-    pk_chain_evaluate(c, k->values2, pred, k->w.r, k->w.jac, &k->w);
+    if (s->structured)  /* the closure alone (chain_one_closure.c) */
+        pk_one_evaluate(c, &s->dir_b, k->values2, pred, k->w.r, NULL, 0.0, k->scratch);
+    else
+        pk_chain_evaluate(c, k->values2, pred, k->w.r, k->w.jac, &k->w);
     double home_cost = 0.0;
     for (ptrdiff_t i = 0; i < m; i++) {
         double acc = 0.0;
@@ -295,11 +302,16 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
     if (status != OK) return 0;
     for (ptrdiff_t v = 0; v < c->n_var; v++)
         if (c->position[v] >= 0) values[v] = u[c->position[v]];
-    if (check) {
-        k->w.m = m;
-        memcpy(k->values2, values, (size_t)c->n_var * sizeof(double));
-        pk_chain_evaluate(c, k->values2, u, k->w.r, k->w.jac, &k->w);
-        double bound = regular_bound(k->w.jac, m, n_u, k->w.h, k->w.low, k->w.nz);
+    if (check) {  /* J'J from the solve's last Jacobian (at u: its panels), or evaluated */
+        if (s->structured) {
+            pk_one_gram(&s->dir_b, pk_one_panels(&s->dir_b, n_u, k->scratch), n_u, k->w.h);
+        } else {
+            k->w.m = m;
+            memcpy(k->values2, values, (size_t)c->n_var * sizeof(double));
+            pk_chain_evaluate(c, k->values2, u, k->w.r, k->w.jac, &k->w);
+            dense_gram(k->w.jac, m, n_u, k->w.h, k->w.nz);
+        }
+        double bound = regular_bound(k->w.h, n_u, k->w.low);
         if (!(bound >= s->singular_bound)) return 0;
     }
     tool_pose(s, values, u, pose);

@@ -68,4 +68,12 @@ void pk_one_closure(const pk_chain *c, const pk_blocks *bk, double *values, cons
 void pk_one_panels_init(const pk_chain *c, const pk_blocks *bk, double *panels);
 int pk_one_closure_plan(pk_one *s, const pk_chain *c, pk_blocks *bk);
 
+/* chain_one_solve.c: the panels in a solve's scratch (after pk_one_solve_blocks, the Jacobian
+ * at the returned u); the closure at u alone into them; J'J's lower part from them. */
+double *pk_one_panels(const pk_blocks *bk, ptrdiff_t n, double *scratch);
+double *pk_one_evaluate(const pk_chain *c, const pk_blocks *bk, double *values,
+                        const double *u, double *r, const double *target, double tool,
+                        double *scratch);
+void pk_one_gram(const pk_blocks *bk, const double *panels, ptrdiff_t n, double *h);
+
 #endif

@@ -323,6 +323,42 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
         if (fabs(r[i]) > worst || isnan(r[i])) worst = fabs(r[i]);
     *residual = worst;
     if (stopped) *status = worst <= o->residual_tol ? OK : 7;
+    if (jac != l.panels) memcpy(l.panels, jac, sizeof(double) * (size_t)cells);
+}
+
+/* The panels in scratch: after pk_one_solve_blocks the Jacobian at the returned u (its last
+ * accepted evaluation, the same bits as an evaluation there), after pk_one_evaluate u's. */
+double *pk_one_panels(const pk_blocks *bk, ptrdiff_t n, double *scratch) {
+    return lay_out(bk, n, scratch).panels;
+}
+
+/* The closure's residual r and panels at u alone (values filled), in scratch's panels. */
+double *pk_one_evaluate(const pk_chain *c, const pk_blocks *bk, double *values,
+                        const double *u, double *r, const double *target, double tool,
+                        double *scratch) {
+    layout l = lay_out(bk, c->n, scratch);
+    pk_one_panels_init(c, bk, l.panels);
+    for (ptrdiff_t i = 0; i < 3 * bk->n_elements; i++) l.cache[i] = NAN;
+    pk_one_closure(c, bk, values, u, r, l.panels, target, tool, l.cache);
+    return l.panels;
+}
+
+/* The lower part of J'J (n x n, row-major, the upper part zero) from the panels: per block the
+ * products of its columns (core and own) summed block after block. */
+void pk_one_gram(const pk_blocks *bk, const double *panels, ptrdiff_t n, double *h) {
+    const ptrdiff_t nc = bk->n_core;
+    memset(h, 0, sizeof(double) * (size_t)(n * n));
+    for (ptrdiff_t b = 0; b < bk->count; b++) {
+        const double *panel = panels + b * bk->panel;
+        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
+        for (ptrdiff_t p = 0; p < nc + k; p++) {
+            int64_t gp = p < nc ? bk->core[p] : bk->cols[bk->start[b] + p - nc];
+            for (ptrdiff_t t = 0; t < nc + k; t++) {
+                int64_t gt = t < nc ? bk->core[t] : bk->cols[bk->start[b] + t - nc];
+                if (gt <= gp) h[gp * n + gt] += dot6(panel + 6 * p, panel + 6 * t);
+            }
+        }
+    }
 }
 
 /* The blocks of model c: each leg's unknown joints (and the head's when inverse) not shared
