@@ -253,3 +253,70 @@ int pk_one_closure_plan(pk_one *s, const pk_chain *c, pk_blocks *bk) {
     free(slot);
     return 0;
 }
+
+/* ---------------------------------------------------------------- the module face (tests) */
+
+const char pk_chain_one_closure_doc[] =
+    "chain_one_closure(packed, u, values, inverse, target)\n\n"
+    "The one-pose solve's closure (native/chain_one_closure.c) of the machine packed by\n"
+    "chain_one_pack at u (n numbers of the model) and the known variables' values (n_var\n"
+    "numbers; the unknown ones taken from u), its panels reassembled into the dense Jacobian:\n"
+    "(r (m,), J (m, n)). inverse: the inverse model (the tool rows at target (6\n"
+    "numbers) and the packed tool length), else the direct model (target read, unused). For\n"
+    "tests: chain.c's evaluate (its Numba twin) is the oracle.";
+
+PyObject *pk_py_chain_one_closure(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "chain_one_closure(packed, u, values, inverse, target)");
+        return NULL;
+    }
+    pk_one *s = PyCapsule_GetPointer(args[0], PK_ONE_CAPSULE);
+    if (!s) return NULL;
+    int inverse = PyObject_IsTrue(args[3]);
+    if (inverse < 0) return NULL;
+    const pk_chain *c = inverse ? &s->inv : &s->dir;
+    const pk_blocks *bk = inverse ? &s->inv_b : &s->dir_b;
+    ptrdiff_t n = c->n, m = 6 * c->n_legs + (c->inverse ? 6 : 0);
+    ptrdiff_t cells = pk_one_block_scratch(bk, n);
+    double *memory = malloc(sizeof(double) * (size_t)(cells + c->n_var + m + m * n + n + 6));
+    if (!memory) return PyErr_NoMemory();
+    double *scratch = memory, *values = scratch + cells, *r = values + c->n_var;
+    double *jac = r + m, *u = jac + m * n, *target = u + n;
+    const char *wrong = NULL;
+    int got = pk_plain_numbers(args[1], n, INFINITY, u);
+    if (got == PK_PLAIN_TAKEN) {
+        got = pk_plain_numbers(args[2], c->n_var, INFINITY, values);
+        if (got == PK_PLAIN_TAKEN) {
+            got = pk_plain_numbers(args[4], 6, INFINITY, target);
+            if (got != PK_PLAIN_TAKEN) wrong = "target: 6 finite numbers expected";
+        } else {
+            wrong = "values: n_var finite numbers expected";
+        }
+    } else {
+        wrong = "u: n finite numbers expected (the model's unknowns)";
+    }
+    PyObject *out = NULL;
+    if (got < 0) goto done;
+    if (wrong) {
+        PyErr_SetString(PyExc_ValueError, wrong);
+        goto done;
+    }
+    double *panels = pk_one_evaluate(c, bk, values, u, r, target, s->tool, scratch);
+    memset(jac, 0, sizeof(double) * (size_t)(m * n));
+    for (ptrdiff_t b = 0; b < bk->count; b++) {
+        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
+        for (ptrdiff_t p = 0; p < bk->n_core + k; p++) {
+            int64_t col = p < bk->n_core ? bk->core[p] : bk->cols[bk->start[b] + p - bk->n_core];
+            for (int i = 0; i < 6; i++)
+                jac[(6 * b + i) * n + col] = panels[b * bk->panel + 6 * p + i];
+        }
+    }
+    PyObject *ra = pk_new_array(r, m, 0), *ja = ra ? pk_new_array(jac, m, n) : NULL;
+    out = ja ? PyTuple_Pack(2, ra, ja) : NULL;
+    Py_XDECREF(ra);
+    Py_XDECREF(ja);
+done:
+    free(memory);
+    return out;
+}
