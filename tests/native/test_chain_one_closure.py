@@ -103,7 +103,7 @@ def test_argument_checks(packed):
     with pytest.raises(ValueError, match="u: "):
         _kernels.chain_one_closure(cap, u[:-1], values, True, [0, 0, 0, 0, 0, 1])
     with pytest.raises(ValueError, match="u: "):
-        _kernels.chain_one_closure(cap, [np.nan] + u[1:], values, True, [0, 0, 0, 0, 0, 1])
+        _kernels.chain_one_closure(cap, [np.nan, *u[1:]], values, True, [0, 0, 0, 0, 0, 1])
     with pytest.raises(ValueError, match="values: "):
         _kernels.chain_one_closure(cap, u, values[:-1], True, [0, 0, 0, 0, 0, 1])
     with pytest.raises(ValueError, match="target: "):
