@@ -39,7 +39,7 @@ setup(
                      NATIVE + "velocity.c", NATIVE + "pose_velocity.c", NATIVE + "pose_one.c",
                      NATIVE + "svd.c", NATIVE + "rod_velocity.c",
                      NATIVE + "chain_velocity.c", NATIVE + "chain_linearise.c",
-                     NATIVE + "chain_one_velocity.c",
+                     NATIVE + "chain_one_velocity.c", NATIVE + "chain_one_velocity_doc.c",
                      NATIVE + "chain_one.c", NATIVE + "chain_one_solve.c",
                      NATIVE + "chain_one_pack.c", NATIVE + "chain_one_closure.c",
                      NATIVE + "rod_one.c",

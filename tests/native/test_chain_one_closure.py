@@ -110,3 +110,78 @@ def test_argument_checks(packed):
         _kernels.chain_one_closure(cap, u, values, True, [0, 0, 1])
     with pytest.raises((TypeError, ValueError)):
         _kernels.chain_one_closure(object(), u, values, True, [0, 0, 0, 0, 0, 1])
+
+
+def _workspace_poses(m, count, seed):
+    act = np.flatnonzero(m.model.actuated)
+    rng = np.random.default_rng(seed)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    x = m.fk(lo + (hi - lo) * (0.1 + 0.8 * rng.random((count, len(act)))), strokes="ignore")
+    return x[np.isfinite(x).all(axis=1)]
+
+
+def test_the_fused_jacobian_call_is_the_two_calls(packed):
+    """chain_one_ik_jacobian (the inverse's last Jacobian handed to the velocity kernel) gives
+    chain_one_ik's q and chain_one_jacobian's array at its solution, bit for bit — over
+    workspace poses that include the TriMule's mirror solves (the kept solution not the last
+    solve's: evaluated again) and the handed-over ones."""
+    m, args, cap = packed
+    from pkmkit.machines import chain_one_velocity
+
+    vp = chain_one_velocity.pack(m)
+    threshold = 2.0 * 1e-9
+    checked = 0
+    for x in _workspace_poses(m, 120, 11):
+        solved = _kernels.chain_one_ik(cap, list(x), True, True)
+        fused = _kernels.chain_one_ik_jacobian(cap, vp.pack, list(x), threshold, 1e-12)
+        if solved is None:
+            assert fused is None
+            continue
+        q, out = fused
+        assert np.array_equal(q, solved[0])
+        two = _kernels.chain_one_jacobian(vp.pack, solved[1], threshold)
+        if isinstance(two, np.ndarray):
+            assert np.array_equal(out, two, equal_nan=True)
+            checked += 1
+        else:
+            assert out is two
+    assert checked >= 100
+
+
+def test_the_fused_jacobian_calls_answers_and_checks(packed):
+    m, args, cap = packed
+    from pkmkit.machines import chain_one_velocity
+
+    vp = chain_one_velocity.pack(m)
+    x = list(_workspace_poses(m, 4, 5)[0])
+    q, out = _kernels.chain_one_ik_jacobian(cap, vp.pack, x, 2e-9, 1e-12)
+    assert isinstance(out, np.ndarray) and out.shape == (vp.size,)
+    assert _kernels.chain_one_ik_jacobian(cap, vp.pack, x, 1e9, 1e-12)[1] is None  # the bound
+    assert _kernels.chain_one_ik_jacobian(cap, vp.pack, x, 2e-9, -1.0)[1] is False  # guard
+    assert _kernels.chain_one_ik_jacobian(cap, vp.pack, x[:5], 2e-9, 1e-12) is None
+    assert _kernels.chain_one_ik_jacobian(cap, vp.pack, [0, 0, 0, 0, 0, 0], 2e-9, 1e-12) is None
+    with pytest.raises(TypeError):
+        _kernels.chain_one_ik_jacobian(cap, vp.pack, x, 2e-9)
+    with pytest.raises(TypeError):
+        _kernels.chain_one_ik_jacobian(cap, object(), x, 2e-9, 1e-12)  # not a velocity pack
+    with pytest.raises(TypeError):
+        _kernels.chain_one_ik_jacobian(cap, vp.pack, x, "2e-9", 1e-12)
+
+
+def test_m_jacobian_takes_the_fused_call(packed, monkeypatch):
+    """m.jacobian(x) answers through chain_one_ik_jacobian (counted), its record's fields the
+    two-call path's."""
+    m, args, cap = packed
+    from pkmkit.machines import chain_one_velocity
+
+    x = _workspace_poses(m, 4, 6)[1]
+    m.jacobian(x)  # packs
+    vp = chain_one_velocity.pack(m)
+    calls = []
+    real = vp.ik_jacobian
+    monkeypatch.setattr(vp, "ik_jacobian", lambda *a: calls.append(1) or real(*a))
+    record = m.jacobian(x)
+    assert calls == [1]
+    solved = _kernels.chain_one_ik(cap, list(x), True, True)
+    out = _kernels.chain_one_jacobian(vp.pack, solved[1], 2.0 * max(1e-9, 1e-9))
+    assert np.array_equal(record.J, out[:6 * vp.n].reshape(6, vp.n))

@@ -69,11 +69,19 @@ void pk_one_panels_init(const pk_chain *c, const pk_blocks *bk, double *panels);
 int pk_one_closure_plan(pk_one *s, const pk_chain *c, pk_blocks *bk);
 
 /* chain_one_solve.c: the panels in a solve's scratch (after pk_one_solve_blocks, the Jacobian
- * at the returned u); the closure at u alone into them; J'J's lower part from them. */
-double *pk_one_panels(const pk_blocks *bk, ptrdiff_t n, double *scratch);
+ * at the returned u, that u in *last); the closure at u alone into them; J'J's lower part from
+ * them. */
+double *pk_one_panels(const pk_blocks *bk, ptrdiff_t n, double *scratch, const double **last);
 double *pk_one_evaluate(const pk_chain *c, const pk_blocks *bk, double *values,
                         const double *u, double *r, const double *target, double tool,
                         double *scratch);
 void pk_one_gram(const pk_blocks *bk, const double *panels, ptrdiff_t n, double *h);
+
+/* chain_one_velocity.c: chain_one_jacobian's answer at u (a new reference: the array, None or
+ * False; NULL with an error), the legs' rows of the closure's Jacobian at u given (6 L rows,
+ * given_n columns, given_position[var] each variable's; the platform's at 0..5) or NULL. */
+PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
+                                const double *given, const int64_t *given_position,
+                                ptrdiff_t given_n);
 
 #endif

@@ -62,7 +62,7 @@ static inline double dot6(const double *a, const double *b) {
  * trial's: per block its core and own columns, 6 rows each, chain_one_closure.c), the turns'
  * cache (3 per element). */
 typedef struct {
-    double *a, *sl, *xp, *diag, *blocks, *panels, *trial, *cache;
+    double *a, *sl, *xp, *diag, *blocks, *panels, *trial, *cache, *last;
     ptrdiff_t per_block;
 } layout;
 
@@ -75,6 +75,7 @@ static layout lay_out(const pk_blocks *bk, ptrdiff_t n, double *scratch) {
     l.panels = l.blocks + bk->count * l.per_block;
     l.trial = l.panels + bk->count * bk->panel;
     l.cache = l.trial + bk->count * bk->panel;
+    l.last = l.cache + 3 * bk->n_elements;
     return l;
 }
 
@@ -228,7 +229,7 @@ static inline void block_step(const pk_blocks *bk, ptrdiff_t n, const double *gr
 ptrdiff_t pk_one_block_scratch(const pk_blocks *bk, ptrdiff_t n) {
     layout l = lay_out(bk, n, NULL);
     return 2 * bk->n_core * bk->n_core + bk->n_core + n + bk->count * l.per_block
-           + 2 * bk->count * bk->panel + 3 * bk->n_elements;
+           + 2 * bk->count * bk->panel + 3 * bk->n_elements + n;
 }
 
 /* sum a_i b_i in order. */
@@ -324,12 +325,16 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
     *residual = worst;
     if (stopped) *status = worst <= o->residual_tol ? OK : 7;
     if (jac != l.panels) memcpy(l.panels, jac, sizeof(double) * (size_t)cells);
+    memcpy(l.last, u, (size_t)n * sizeof(double));
 }
 
 /* The panels in scratch: after pk_one_solve_blocks the Jacobian at the returned u (its last
- * accepted evaluation, the same bits as an evaluation there), after pk_one_evaluate u's. */
-double *pk_one_panels(const pk_blocks *bk, ptrdiff_t n, double *scratch) {
-    return lay_out(bk, n, scratch).panels;
+ * accepted evaluation, the same bits as an evaluation there), after pk_one_evaluate u's;
+ * *last (NULL: not wanted) that u, kept by pk_one_solve_blocks. */
+double *pk_one_panels(const pk_blocks *bk, ptrdiff_t n, double *scratch, const double **last) {
+    layout l = lay_out(bk, n, scratch);
+    if (last) *last = l.last;
+    return l.panels;
 }
 
 /* The closure's residual r and panels at u alone (values filled), in scratch's panels. */
@@ -337,6 +342,7 @@ double *pk_one_evaluate(const pk_chain *c, const pk_blocks *bk, double *values,
                         const double *u, double *r, const double *target, double tool,
                         double *scratch) {
     layout l = lay_out(bk, c->n, scratch);
+    for (ptrdiff_t i = 0; i < c->n; i++) l.last[i] = NAN;  /* not a solve's */
     pk_one_panels_init(c, bk, l.panels);
     for (ptrdiff_t i = 0; i < 3 * bk->n_elements; i++) l.cache[i] = NAN;
     pk_one_closure(c, bk, values, u, r, l.panels, target, tool, l.cache);

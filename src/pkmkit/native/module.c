@@ -534,6 +534,8 @@ PyObject *pk_py_chain_one_structured(PyObject *self, PyObject *const *args, Py_s
 /* chain_one_closure.c: the one-pose solve's closure by blocks' panels (tests) */
 extern const char pk_chain_one_closure_doc[];
 PyObject *pk_py_chain_one_closure(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+extern const char pk_chain_one_ik_jacobian_doc[];  /* chain_one.c */
+PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
 /* rod_batch.c: the batched closed-form inverse of rod-leg machines (issue 22 §5) */
 extern const char pk_rod_inverse_rows_doc[], pk_rod_reach_det_doc[];
@@ -596,6 +598,8 @@ static PyMethodDef methods[] = {
      METH_FASTCALL, pk_chain_one_structured_doc},
     {"chain_one_closure", (PyCFunction)(void (*)(void))pk_py_chain_one_closure, METH_FASTCALL,
      pk_chain_one_closure_doc},
+    {"chain_one_ik_jacobian", (PyCFunction)(void (*)(void))pk_py_chain_one_ik_jacobian,
+     METH_FASTCALL, pk_chain_one_ik_jacobian_doc},
     {"rod_inverse_rows", (PyCFunction)(void (*)(void))pk_py_rod_inverse_rows, METH_FASTCALL,
      pk_rod_inverse_rows_doc},
     {"rod_reach_det", (PyCFunction)(void (*)(void))pk_py_rod_reach_det, METH_FASTCALL,
