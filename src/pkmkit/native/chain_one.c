@@ -16,7 +16,11 @@
  * the platform's step, then each block's. The step agrees with the dense Cholesky's to
  * rounding (not to the bit): results agree with the batch rows to ~1e-13 (tests). Joints
  * that several blocks share (the TriMule's psi1) join the platform's 6 columns in the core
- * (chain_one_solve.c). chain_one_pack.c packs the constants. */
+ * (chain_one_solve.c), whose closure (chain_one_closure.c) writes each block's nonzero
+ * Jacobian columns straight into the panels the solve reads (chain.c's operations: the same
+ * bits). chain_one_pack.c packs the constants. chain_one_ik_jacobian (m.jacobian(x)) hands
+ * the inverse's last Jacobian, when it was evaluated at the kept solution, to the velocity
+ * kernel (chain_one_velocity.c). */
 #include "chain_one.h"
 
 #include <math.h>
