@@ -21,8 +21,9 @@ iteration counts) with each iteration's normal equations solved by block elimina
 platform's 6 unknowns (native/chain_one.c; the closure written by blocks,
 native/chain_one_closure.c, chain.c's operations and bits): answers agree with the batch
 rows to rounding (≤ 1e-12 m / rad measured on 1,000 workspace poses per machine,
-tests/machines/test_chain_one_native.py), not to the bit. ``full_output``, ``start`` and the Jacobian keep the
-Numba one-pose path of :mod:`pkmkit.machines.chain_one` (bit for bit the batch record).
+tests/machines/test_chain_one_native.py), not to the bit. ``full_output``, ``start`` and
+the Jacobian keep the Numba one-pose path of :mod:`pkmkit.machines.chain_one` (bit for bit
+the batch record).
 
 No Numba: a fresh process's first single call runs here (the extension costs no import).
 ``PKMKIT_NATIVE=0`` (or an extension built without ``chain_one.c``) leaves the Numba path.
