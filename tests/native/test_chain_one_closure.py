@@ -125,7 +125,7 @@ def test_the_fused_jacobian_call_is_the_two_calls(packed):
     chain_one_ik's q and chain_one_jacobian's array at its solution, bit for bit — over
     workspace poses that include the TriMule's mirror solves (the kept solution not the last
     solve's: evaluated again) and the handed-over ones."""
-    m, args, cap = packed
+    m, _, cap = packed
     from pkmkit.machines import chain_one_velocity
 
     vp = chain_one_velocity.pack(m)
@@ -149,12 +149,13 @@ def test_the_fused_jacobian_call_is_the_two_calls(packed):
 
 
 def test_the_fused_jacobian_calls_answers_and_checks(packed):
-    m, args, cap = packed
+    m, _, cap = packed
     from pkmkit.machines import chain_one_velocity
 
     vp = chain_one_velocity.pack(m)
     x = list(_workspace_poses(m, 4, 5)[0])
     q, out = _kernels.chain_one_ik_jacobian(cap, vp.pack, x, 2e-9, 1e-12)
+    assert q.shape == (vp.n,)
     assert isinstance(out, np.ndarray) and out.shape == (vp.size,)
     assert _kernels.chain_one_ik_jacobian(cap, vp.pack, x, 1e9, 1e-12)[1] is None  # the bound
     assert _kernels.chain_one_ik_jacobian(cap, vp.pack, x, 2e-9, -1.0)[1] is False  # guard
@@ -171,7 +172,7 @@ def test_the_fused_jacobian_calls_answers_and_checks(packed):
 def test_m_jacobian_takes_the_fused_call(packed, monkeypatch):
     """m.jacobian(x) answers through chain_one_ik_jacobian (counted), its record's fields the
     two-call path's."""
-    m, args, cap = packed
+    m, _, cap = packed
     from pkmkit.machines import chain_one_velocity
 
     x = _workspace_poses(m, 4, 6)[1]
