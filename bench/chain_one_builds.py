@@ -4,7 +4,12 @@ Loads two compiled ``pkmkit.native.kernels`` files (for example the worktree's b
 and after a change to ``native/chain_one*.c`` or ``chain.c``, copied aside), packs each
 machine with each (``chain_one_pack``), and prints whether ``chain_one_ik`` (q, u, iterations,
 residual) and ``chain_one_fk`` answers are bit-identical on the same poses, and the CPU µs per
-call of each build (medians of interleaved rounds, so both see the same load). ``--calls N``
+call of each build (medians of interleaved rounds, so both see the same load); with
+``--jacobian``, also ``m.jacobian(x)``'s C part: the first build's two calls
+(``chain_one_ik`` with the full answer, then ``chain_one_jacobian`` at its solution) against
+the second's one ``chain_one_ik_jacobian`` where it has it (else its two calls), the output
+arrays compared bit for bit (``--two-calls-first``: the first build's two calls even where it
+has the fused one — the same build twice gives the fused call's own gain). ``--calls N``
 with ``--only BUILD`` instead runs N rounds of ``chain_one_ik`` then ``chain_one_fk`` of one
 build alone (for an instruction count: ``valgrind --tool=callgrind
 --toggle-collect=pk_py_chain_one_ik python bench/chain_one_builds.py A B --only A --calls 1``,
@@ -26,7 +31,7 @@ import time
 import numpy as np
 
 import pkmkit
-from pkmkit.machines import chain_one_native
+from pkmkit.machines import chain_one_native, chain_one_velocity
 
 
 def load(path: str):
@@ -53,8 +58,10 @@ def identical(a, b) -> bool:
     if a is None or b is None:
         return a is None and b is None
     if isinstance(a, tuple):
-        return all(np.array_equal(u, v) for u, v in zip(a, b, strict=True))
-    return np.array_equal(a, b)
+        return all(identical(u, v) for u, v in zip(a, b, strict=True))
+    if a is False or b is False:
+        return a is b
+    return np.array_equal(a, b, equal_nan=True)  # (the jacobian's singular values: NaN)
 
 
 def cpu_per_call(fun, capsule, rows, *flags) -> float:
@@ -64,7 +71,39 @@ def cpu_per_call(fun, capsule, rows, *flags) -> float:
     return (time.process_time() - t) / len(rows) * 1e6
 
 
-def compare(name: str, builds: list, count: int, rounds: int = 7) -> None:
+def jacobian_call(mod, cap, vpack, two_calls: bool = False):
+    """m.jacobian(x)'s C part with build ``mod``: one fused call where it has it."""
+    fused = None if two_calls else getattr(mod, "chain_one_ik_jacobian", None)
+    if fused is not None:
+        return lambda x: fused(cap, vpack, x, 2e-9, 1e-12)
+
+    def two(x):
+        got = mod.chain_one_ik(cap, x, True, True)
+        return None if got is None else (got[0], mod.chain_one_jacobian(vpack, got[1], 2e-9))
+    return two
+
+
+def compare_jacobian(m, builds: list, caps: list, xs: list, rounds: int,
+                     two_calls_first: bool) -> None:
+    vargs = list(chain_one_velocity.pack_arguments(m).values())
+    calls = [jacobian_call(b, c, b.chain_velocity_pack(*vargs), two_calls_first and i == 0)
+             for i, (b, c) in enumerate(zip(builds, caps, strict=True))]
+    same = all(identical(*(f(x) for f in calls)) for x in xs)
+    times: list[list[float]] = [[], []]
+    for _ in range(rounds):
+        for i, f in enumerate(calls):
+            t = time.process_time()
+            for x in xs:
+                f(x)
+            times[i].append((time.process_time() - t) / len(xs) * 1e6)
+    a, b = (float(np.median(t)) for t in times)
+    label = "one fused call" if hasattr(builds[1], "chain_one_ik_jacobian") else "two calls"
+    print(f"  jacobian C part (the second: {label}), bit-identical answers {same}: "
+          f"CPU µs first build {a:.2f}, second {b:.2f} (x{a / b:.3f})")
+
+
+def compare(name: str, builds: list, count: int, rounds: int = 7,
+            jacobian: bool = False, two_calls_first: bool = False) -> None:
     m = pkmkit.machine(name)
     args = chain_one_native.pack_arguments(m)
     caps = [b.chain_one_pack(*args) for b in builds]
@@ -84,6 +123,8 @@ def compare(name: str, builds: list, count: int, rounds: int = 7) -> None:
     for f in ("ik", "fk"):
         print(f"  {f} C call, CPU µs: first build {med[f + ' 1']:.2f}, second "
               f"{med[f + ' 2']:.2f} (x{med[f + ' 1'] / med[f + ' 2']:.3f})")
+    if jacobian:
+        compare_jacobian(m, builds, caps, xs, rounds, two_calls_first)
 
 
 def main() -> None:
@@ -95,6 +136,10 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=7, help="interleaved rounds (medians)")
     parser.add_argument("--only", help="one of the two paths: run its ik and fk alone")
     parser.add_argument("--calls", type=int, default=1, help="rounds with --only")
+    parser.add_argument("--jacobian", action="store_true",
+                        help="also m.jacobian(x)'s C part (module docstring)")
+    parser.add_argument("--two-calls-first", action="store_true",
+                        help="with --jacobian: the first build's two calls (module docstring)")
     args = parser.parse_args()
     if args.only:
         build = load(args.only)
@@ -111,7 +156,7 @@ def main() -> None:
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
     builds = [load(args.first), load(args.second)]
     for name in args.machines.split(","):
-        compare(name, builds, args.poses, args.rounds)
+        compare(name, builds, args.poses, args.rounds, args.jacobian, args.two_calls_first)
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
 
 

@@ -551,17 +551,16 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
     """``m.jacobian(x)`` of one plain pose ``x``: a record with the batch row's fields
     (``J``, ``passive_rates``, ``status``, ranks at once; ``J_homogeneous``,
     ``singular_values``, ``condition`` when read), or None (module docstring). With the C
-    extension the inverse solution is one C call (:mod:`pkmkit.machines.chain_one_native`)
-    and the velocity model one more at it (:mod:`pkmkit.machines.chain_one_velocity`); where
-    that does not apply, the compiled ``velocity_one`` below (the direct model solved
-    again)."""
+    extension the inverse solution and the velocity model at it are one C call
+    (:func:`pkmkit.machines.chain_one_velocity.at_pose`); where that does not apply, the
+    compiled ``velocity_one`` below (the direct model solved again)."""
     global _RECORD
     if type(tol) is not float or not tol > 0 or tol == math.inf:
         return None
-    if (p := packed(m)) is not None and (got := p.ik(p.capsule, x, True, True)) is not None:
-        # the inverse solution by one C call (chain_one_native.py; the stroke test left to
-        # the batch path, as _inverse_values), then the velocity model at it
-        fast = chain_one_velocity.at_solution(m, got, tol)
+    if (p := packed(m)) is not None:
+        # the inverse solution and the velocity model at it by one C call (chain_one_native.py;
+        # the stroke test left to the batch path, as _inverse_values)
+        fast = chain_one_velocity.at_pose(m, p, x, tol)
         if fast is not False:
             return fast
     xs = _plain(x, 6)  # before constants(), as in _inverse_within

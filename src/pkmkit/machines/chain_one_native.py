@@ -18,10 +18,12 @@ returns None and the machine takes the batch path (the same answers, the typed e
 
 The solve is the batch path's Levenberg–Marquardt loop (the same stopping rules, statuses and
 iteration counts) with each iteration's normal equations solved by block elimination onto the
-platform's 6 unknowns (native/chain_one.c): answers agree with the batch rows to rounding
-(≤ 1e-12 m / rad measured on 1,000 workspace poses per machine, tests/machines/
-test_chain_one_native.py), not to the bit. ``full_output``, ``start`` and the Jacobian keep the
-Numba one-pose path of :mod:`pkmkit.machines.chain_one` (bit for bit the batch record).
+platform's 6 unknowns (native/chain_one.c; the closure written by blocks,
+native/chain_one_closure.c, chain.c's operations and bits): answers agree with the batch
+rows to rounding (≤ 1e-12 m / rad measured on 1,000 workspace poses per machine,
+tests/machines/test_chain_one_native.py), not to the bit. ``full_output``, ``start`` and
+the Jacobian keep the Numba one-pose path of :mod:`pkmkit.machines.chain_one` (bit for bit
+the batch record).
 
 No Numba: a fresh process's first single call runs here (the extension costs no import).
 ``PKMKIT_NATIVE=0`` (or an extension built without ``chain_one.c``) leaves the Numba path.

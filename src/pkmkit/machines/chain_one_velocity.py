@@ -69,13 +69,15 @@ class VelocityPack:
     leg actuators' places in J, the leg owning each column alone (−1: the platform's and the
     joints shared by legs), and the output buffer's layout."""
 
-    __slots__ = ("call", "expected", "jacobian", "layout", "n", "n_p", "pack", "rank", "size")
+    __slots__ = ("call", "expected", "ik_jacobian", "jacobian", "layout", "n", "n_p", "pack",
+                 "rank", "size")
 
     def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
         arguments = pack_arguments(m) if arguments is None else arguments
         self.pack = native.chain_velocity_pack(*arguments.values())
         self.call = native.chain_one_velocity
         self.jacobian = getattr(native, "chain_one_jacobian", None)  # None: an older build
+        self.ik_jacobian = getattr(native, "chain_one_ik_jacobian", None)  # likewise
         n = int(np.count_nonzero(m.model.actuated))
         k = min(6, n)
         self.n, self.n_p = n, len(m.passive_variables)
@@ -269,6 +271,36 @@ def at_solution(m: Any, solved: tuple, tol: float) -> Any:
     one = _NEW(OnePoseChainJacobians)
     fields = one.__dict__
     fields["_out"], fields["_pack"], fields["status"], fields["q"] = out, p, _OK, solved[0]
+    fields["closure_rank"], fields["expected_rank"] = p.rank, p.expected
+    return one
+
+
+def at_pose(m: Any, c: Any, x: Any, tol: float) -> Any:
+    """``m.jacobian(x)``'s C path for one plain pose ``x`` given the machine's one-pose pack
+    ``c`` (:func:`pkmkit.machines.chain_one_native.packed`): the inverse and the velocity model
+    in one C call (``chain_one_ik_jacobian``, native/chain_one.c: the closure's Jacobian of the
+    inverse's last evaluation handed to the velocity kernel when that evaluation was at the
+    kept solution — the same bits as evaluating it again); the record, None or False as
+    :func:`at_solution` answers (False too where the C inverse declines). An older build
+    without the fused call takes ``chain_one_ik`` then :func:`at_solution`."""
+    p = m.__dict__.get("_chain_one_velocity")
+    if p is None or _native_now() is None:  # not packed yet, or PKMKIT_NATIVE=0 set since
+        p = pack(m)
+        if p is None:
+            return False
+    if p.ik_jacobian is None:
+        solved = c.ik(c.capsule, x, True, True)
+        return False if solved is None else at_solution(m, solved, tol)
+    got = p.ik_jacobian(c.capsule, p.pack, x,
+                        BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND), RESIDUAL_GUARD)
+    if got is None:
+        return False
+    q, out = got
+    if out is None or out is False:
+        return out
+    one = _NEW(OnePoseChainJacobians)
+    fields = one.__dict__
+    fields["_out"], fields["_pack"], fields["status"], fields["q"] = out, p, _OK, q
     fields["closure_rank"], fields["expected_rank"] = p.rank, p.expected
     return one
 

@@ -16,7 +16,11 @@
  * the platform's step, then each block's. The step agrees with the dense Cholesky's to
  * rounding (not to the bit): results agree with the batch rows to ~1e-13 (tests). Joints
  * that several blocks share (the TriMule's psi1) join the platform's 6 columns in the core
- * (chain_one_solve.c). chain_one_pack.c packs the constants. */
+ * (chain_one_solve.c), whose closure (chain_one_closure.c) writes each block's nonzero
+ * Jacobian columns straight into the panels the solve reads (chain.c's operations: the same
+ * bits). chain_one_pack.c packs the constants. chain_one_ik_jacobian (m.jacobian(x)) hands
+ * the inverse's last Jacobian, when it was evaluated at the kept solution, to the velocity
+ * kernel (chain_one_velocity.c). */
 #include "chain_one.h"
 
 #include <math.h>
@@ -205,14 +209,14 @@ static void tool_pose(const pk_one *s, const double *values, const double *u, do
 }
 
 /* 1 / sqrt(||J||_F^2 ||L^-1||_F^2) with L L' = J'J (chain_one_kernel._factor, _bound): J'J
- * summed over each row's nonzero entries (nz: n indices), ||J||_F^2 its trace, L's diagonal
+ * summed over each row's nonzero entries (nz: n indices; dense_gram, the dense solve) or
+ * block by block from the solve's panels (pk_one_gram), ||J||_F^2 its trace, L's diagonal
  * and L^-1's by reciprocals (multiplications: the rounding of the bound, which has a margin of
  * 2, not of the answer). L^-1 = X by rows, X_i = (e_i - sum_{p<i} L_ip X_p) / L_ii, each row's
  * entries independent sums (vectorised; the column-by-column substitution, one chain of
  * dependent subtractions per entry, was a fifth of the call, and the separate pass for
  * ||J||_F^2 another 7 %, session 32). */
-static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double *low,
-                            double *inv, int64_t *nz) {
+static void dense_gram(const double *jac, ptrdiff_t m, ptrdiff_t n, double *low, int64_t *nz) {
     for (ptrdiff_t i = 0; i < n * n; i++) low[i] = 0.0;
     for (ptrdiff_t i = 0; i < m; i++) {
         const double *row = jac + i * n;
@@ -225,6 +229,10 @@ static double regular_bound(const double *jac, ptrdiff_t m, ptrdiff_t n, double 
             for (ptrdiff_t t = 0; t <= p; t++) target[nz[t]] += v * row[nz[t]];
         }
     }
+}
+
+/* The bound from J'J's lower part in low (n x n; overwritten by L), inv (n x n) scratch. */
+static double regular_bound(double *low, ptrdiff_t n, double *inv) {
     double fro = 0.0;
     for (ptrdiff_t j = 0; j < n; j++) fro += low[j * n + j];
     for (ptrdiff_t j = 0; j < n; j++) {  /* in place: J'J's lower part into L */
@@ -278,7 +286,10 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
     pk_chain_retract(s->u_home_dir, du, pred, n_u);
     k->w.m = m;
     memcpy(k->values2, values, (size_t)c->n_var * sizeof(double));
-    pk_chain_evaluate(c, k->values2, pred, k->w.r, k->w.jac, &k->w);
+    if (s->structured)  /* the closure alone (chain_one_closure.c) */
+        pk_one_evaluate(c, &s->dir_b, k->values2, pred, k->w.r, NULL, 0.0, k->scratch);
+    else
+        pk_chain_evaluate(c, k->values2, pred, k->w.r, k->w.jac, &k->w);
     double home_cost = 0.0;
     for (ptrdiff_t i = 0; i < m; i++) {
         double acc = 0.0;
@@ -295,11 +306,16 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
     if (status != OK) return 0;
     for (ptrdiff_t v = 0; v < c->n_var; v++)
         if (c->position[v] >= 0) values[v] = u[c->position[v]];
-    if (check) {
-        k->w.m = m;
-        memcpy(k->values2, values, (size_t)c->n_var * sizeof(double));
-        pk_chain_evaluate(c, k->values2, u, k->w.r, k->w.jac, &k->w);
-        double bound = regular_bound(k->w.jac, m, n_u, k->w.h, k->w.low, k->w.nz);
+    if (check) {  /* J'J from the solve's last Jacobian (at u: its panels), or evaluated */
+        if (s->structured) {
+            pk_one_gram(&s->dir_b, pk_one_panels(&s->dir_b, n_u, k->scratch, NULL), n_u, k->w.h);
+        } else {
+            k->w.m = m;
+            memcpy(k->values2, values, (size_t)c->n_var * sizeof(double));
+            pk_chain_evaluate(c, k->values2, u, k->w.r, k->w.jac, &k->w);
+            dense_gram(k->w.jac, m, n_u, k->w.h, k->w.nz);
+        }
+        double bound = regular_bound(k->w.h, n_u, k->w.low);
         if (!(bound >= s->singular_bound)) return 0;
     }
     tool_pose(s, values, u, pose);
@@ -310,6 +326,21 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
 
 static pk_one *capsule_state(PyObject *capsule) {
     return PyCapsule_GetPointer(capsule, PK_ONE_CAPSULE);
+}
+
+/* x (6 plain numbers) into target, its axis normalised: 1; 0 where the batch path must decide
+ * (not plain numbers, a zero axis); -1 with an error set. */
+static int read_target(const pk_one *s, PyObject *obj, double *target) {
+    double x[6];
+    int got = pk_plain_numbers(obj, 6, s->max_coordinate, x); /* plain_numbers.c */
+    if (got != PK_PLAIN_TAKEN) return got < 0 ? -1 : 0;
+    double norm = sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]);
+    if (!(norm > 0)) return 0;
+    for (int i = 0; i < 3; i++) {
+        target[i] = x[i];
+        target[3 + i] = x[3 + i] / norm;
+    }
+    return 1;
 }
 
 const char pk_chain_one_ik_doc[] =
@@ -329,17 +360,11 @@ PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t n
     pk_one *s = capsule_state(args[0]);
     if (!s) return NULL;
     ptrdiff_t n = s->inv.n, nv = s->inv.n_var;
-    double x[6], target[6];
-    int got = pk_plain_numbers(args[1], 6, s->max_coordinate, x); /* plain_numbers.c */
-    if (got != PK_PLAIN_TAKEN) return got < 0 ? NULL : Py_NewRef(Py_None);
+    double target[6];
+    int got = read_target(s, args[1], target);
+    if (got <= 0) return got < 0 ? NULL : Py_NewRef(Py_None);
     int ignore = PyObject_IsTrue(args[2]), full = PyObject_IsTrue(args[3]);
     if (ignore < 0 || full < 0) return NULL;
-    double norm = sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]);
-    if (!(norm > 0)) Py_RETURN_NONE;
-    for (int i = 0; i < 3; i++) {
-        target[i] = x[i];
-        target[3 + i] = x[3 + i] / norm;
-    }
     pk_one_work k;
     if (work_alloc(s, &k) < 0) return PyErr_NoMemory();
     double *start = NULL;
@@ -419,6 +444,74 @@ PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t n
     free(k.memory);
     if (!found) Py_RETURN_NONE;
     return pk_new_array(pose, 6, 0);
+}
+
+const char pk_chain_one_ik_jacobian_doc[] =
+    "chain_one_ik_jacobian(packed, pack, x, threshold, guard)\n\n"
+    "m.jacobian(x)'s C path in one call: chain_one_ik's inverse of one plain pose x (no\n"
+    "stroke test) and chain_one_jacobian(pack, u, threshold) at its solution u, the closure's\n"
+    "Jacobian handed over from the inverse's last evaluation where that was at u (else\n"
+    "evaluated again): (q, out), out the array, None or False as chain_one_jacobian answers\n"
+    "(False too where the inverse's largest residual exceeds guard); None where the inverse\n"
+    "declines. pack: the machine's chain_velocity_pack capsule.";
+
+/* The legs' rows of the inverse model's Jacobian (6 L x n, row-major) from its panels. */
+static void legs_dense(const pk_one *s, const double *panels, double *jac) {
+    const pk_blocks *bk = &s->inv_b;
+    const ptrdiff_t n = s->inv.n;
+    memset(jac, 0, sizeof(double) * (size_t)(6 * s->inv.n_legs * n));
+    for (ptrdiff_t b = 0; b < s->inv.n_legs; b++) {
+        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
+        for (ptrdiff_t p = 0; p < bk->n_core + k; p++) {
+            int64_t col = p < bk->n_core ? bk->core[p] : bk->cols[bk->start[b] + p - bk->n_core];
+            for (int i = 0; i < 6; i++)
+                jac[(6 * b + i) * n + col] = panels[b * bk->panel + 6 * p + i];
+        }
+    }
+}
+
+PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError,
+                        "chain_one_ik_jacobian(packed, pack, x, threshold, guard)");
+        return NULL;
+    }
+    pk_one *s = capsule_state(args[0]);
+    if (!s) return NULL;
+    double threshold = PyFloat_AsDouble(args[3]), guard = PyFloat_AsDouble(args[4]);
+    if (PyErr_Occurred()) return NULL;
+    double target[6], q[64];
+    int got = read_target(s, args[2], target);
+    if (got <= 0) return got < 0 ? NULL : Py_NewRef(Py_None);
+    pk_one_work k;
+    if (work_alloc(s, &k) < 0) return PyErr_NoMemory();
+    const ptrdiff_t n = s->inv.n;
+    int64_t iterations = 0;
+    double residual = NAN, *u = k.u;
+    int found, fresh = 0;
+    Py_BEGIN_ALLOW_THREADS
+    found = inverse(s, target, NULL, &k, k.values, u, &iterations, &residual) && s->n_act <= 64;
+    if (found) {
+        for (ptrdiff_t j = 0; j < s->n_act; j++) q[j] = k.values[s->act[j]];
+        if (s->structured) {  /* the last solve's panels, if at u */
+            const double *last, *panels = pk_one_panels(&s->inv_b, n, k.scratch, &last);
+            fresh = memcmp(last, u, (size_t)n * sizeof(double)) == 0;
+            if (fresh) legs_dense(s, panels, k.w.jac);
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyObject *qa = found ? pk_new_array(q, s->n_act, 0) : NULL, *answer = NULL;
+    if (qa) {
+        PyObject *out = residual > guard ? Py_NewRef(Py_False)
+                        : pk_one_velocity_array(args[1], u, threshold, fresh ? k.w.jac : NULL,
+                                                s->inv.position, n);
+        answer = out ? PyTuple_Pack(2, qa, out) : NULL;
+        Py_XDECREF(out);
+        Py_DECREF(qa);
+    }
+    free(k.memory);
+    return found || PyErr_Occurred() ? answer : Py_NewRef(Py_None);
 }
 
 const char pk_chain_one_structured_doc[] =

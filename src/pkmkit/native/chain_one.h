@@ -20,7 +20,15 @@ typedef struct {
     ptrdiff_t widest;    /* largest block */
     ptrdiff_t n_core;    /* the platform's 6 columns and the joints shared by blocks */
     int64_t *core;
+    /* chain_one_closure.c's plan: each walk entry's twist offset in its block's panel (-1:
+     * none; the legs' elements, then the head's), each element's frame kind (PK_FRAME_*),
+     * doubles per panel (6 (n_core + widest)), elements */
+    int64_t *dest;
+    unsigned char *kind;
+    ptrdiff_t panel, n_elements;
 } pk_blocks;
+
+enum { PK_FRAME_GENERAL = 0, PK_FRAME_ROTATION = 1, PK_FRAME_SHIFT = 2, PK_FRAME_IDENTITY = 3 };
 
 typedef struct {
     pk_chain inv, dir;
@@ -50,5 +58,30 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
                          double *residual, int64_t *iterations);
 ptrdiff_t pk_one_block_scratch(const pk_blocks *bk, ptrdiff_t n);
 int pk_one_find_blocks(pk_one *s, const pk_chain *c, pk_blocks *bk);
+
+/* chain_one_closure.c: the closure written into the blocks' column panels (bk->count panels
+ * of bk->panel doubles), its constant entries, its plan (-2 when out of memory). cache: 3
+ * doubles per element (angle, cosine, sine), all NaN before a solve's first evaluation. */
+void pk_one_closure(const pk_chain *c, const pk_blocks *bk, double *values, const double *u,
+                    double *r, double *panels, const double *target, double tool,
+                    double *cache);
+void pk_one_panels_init(const pk_chain *c, const pk_blocks *bk, double *panels);
+int pk_one_closure_plan(pk_one *s, const pk_chain *c, pk_blocks *bk);
+
+/* chain_one_solve.c: the panels in a solve's scratch (after pk_one_solve_blocks, the Jacobian
+ * at the returned u, that u in *last); the closure at u alone into them; J'J's lower part from
+ * them. */
+double *pk_one_panels(const pk_blocks *bk, ptrdiff_t n, double *scratch, const double **last);
+double *pk_one_evaluate(const pk_chain *c, const pk_blocks *bk, double *values,
+                        const double *u, double *r, const double *target, double tool,
+                        double *scratch);
+void pk_one_gram(const pk_blocks *bk, const double *panels, ptrdiff_t n, double *h);
+
+/* chain_one_velocity.c: chain_one_jacobian's answer at u (a new reference: the array, None or
+ * False; NULL with an error), the legs' rows of the closure's Jacobian at u given (6 L rows,
+ * given_n columns, given_position[var] each variable's; the platform's at 0..5) or NULL. */
+PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
+                                const double *given, const int64_t *given_position,
+                                ptrdiff_t given_n);
 
 #endif

@@ -57,10 +57,12 @@ static inline double dot6(const double *a, const double *b) {
 }
 
 /* The layout of the scratch: the core block A (nc x nc), its damped factor, the core's
- * right-hand side, every column's squared norm, then per block its core and own columns
- * transposed (nc x 6, k x 6), D_b, its factor L_b, B_b then Y_b (k x nc), z_b (k). */
+ * right-hand side, every column's squared norm, then per block D_b, its factor L_b, B_b then
+ * Y_b (k x nc), z_b (k); the closure's two sets of panels (the current point's and the
+ * trial's: per block its core and own columns, 6 rows each, chain_one_closure.c), the turns'
+ * cache (3 per element). */
 typedef struct {
-    double *a, *sl, *xp, *diag, *blocks;
+    double *a, *sl, *xp, *diag, *blocks, *panels, *trial, *cache, *last;
     ptrdiff_t per_block;
 } layout;
 
@@ -69,75 +71,69 @@ static layout lay_out(const pk_blocks *bk, ptrdiff_t n, double *scratch) {
     layout l;
     l.a = scratch, l.sl = l.a + nc * nc, l.xp = l.sl + nc * nc, l.diag = l.xp + nc;
     l.blocks = l.diag + n;
-    l.per_block = 6 * nc + 6 * w + 2 * w * w + w * nc + w;
+    l.per_block = 2 * w * w + w * nc + w;
+    l.panels = l.blocks + bk->count * l.per_block;
+    l.trial = l.panels + bk->count * bk->panel;
+    l.cache = l.trial + bk->count * bk->panel;
+    l.last = l.cache + 3 * bk->n_elements;
     return l;
 }
 
-/* dot6(v, c) for the platform's column t of a leg's rows (chain.c's evaluate: -1 at row t for
- * t < 3, the rotation rows' entries rot (3 rows of stride 3) at rows 3..5 for t >= 3, zero
- * elsewhere): the same sum as dot6 on the column with its zeros, to the bit (a zero product
- * added to a partial sum leaves it unchanged), a sixth of its products. */
-static inline double platform_dot(const double *v, const double *diag, const double *rot,
-                                  ptrdiff_t t) {
-    if (t < 3) return v[t] * diag[t];
-    const double *c = rot + (t - 3);
-    return v[3] * c[0] + (v[4] * c[3] + v[5] * c[6]);
+/* dot6(v, c) for the platform's column t of a leg's panel (chain_one_closure.c: -1 at row t for
+ * t < 3, the rotation rows' entries at rows 3..5 for t >= 3, zero elsewhere): the same sum as
+ * dot6 on the column with its zeros, to the bit (a zero product added to a partial sum leaves
+ * it unchanged), a sixth of its products. */
+static inline double platform_dot(const double *v, const double *panel, ptrdiff_t t) {
+    if (t < 3) return v[t] * panel[7 * t];
+    const double *c = panel + 6 * t + 3;
+    return v[3] * c[0] + (v[4] * c[1] + v[5] * c[2]);
 }
 
-/* normal()'s sums for leg block b (rows: its 6 rows of the Jacobian): the platform's columns
- * read where chain.c's evaluate writes them (-1 on rows 0..2, the rotation rows' 3 x 3 on
- * rows 3..5), the shared core columns and the own ones gathered. */
-static inline void leg_normal(const pk_blocks *bk, const double *rows, const double *rb,
-                              ptrdiff_t b, ptrdiff_t n, double *grad, const layout *l,
-                              ptrdiff_t nc) {
+/* normal()'s sums for leg block b from its panel (its 6 rows by columns: the platform's read
+ * where the closure writes them, -1 on rows 0..2 and the rotation rows' 3 x 3 on rows 3..5,
+ * then the shared core columns and the own ones). */
+static inline void leg_normal(const pk_blocks *bk, const double *panel, const double *rb,
+                              ptrdiff_t b, double *grad, const layout *l, ptrdiff_t nc) {
     const ptrdiff_t w = bk->widest;
     const int64_t *core = bk->core, *cols = bk->cols + bk->start[b];
     ptrdiff_t k = bk->start[b + 1] - bk->start[b];
-    double *ct = l->blocks + b * l->per_block, *ot = ct + 6 * nc, *hbb = ot + 6 * w;
-    double *y = hbb + 2 * w * w, *a = l->a;
-    double diag[3], rot[9];
-    for (int i = 0; i < 3; i++) {
-        diag[i] = rows[i * n + i];
-        for (int j = 0; j < 3; j++) rot[3 * i + j] = rows[(3 + i) * n + 3 + j];
-    }
-    for (int i = 0; i < 6; i++) {
-        for (ptrdiff_t t = 6; t < nc; t++) ct[t * 6 + i] = rows[i * n + core[t]];
-        for (ptrdiff_t p = 0; p < k; p++) ot[p * 6 + i] = rows[i * n + cols[p]];
-    }
+    const double *ct = panel, *ot = panel + 6 * nc;
+    double *hbb = l->blocks + b * l->per_block, *y = hbb + 2 * w * w, *a = l->a;
     for (int p = 0; p < 3; p++) {
-        a[p * nc + p] += diag[p] * diag[p];
-        grad[p] += diag[p] * rb[p];
+        double d = panel[7 * p];
+        a[p * nc + p] += d * d;
+        grad[p] += d * rb[p];
     }
     for (int p = 3; p < 6; p++) {
-        const double *cp = rot + (p - 3);
+        const double *cp = panel + 6 * p + 3;
         for (int t = 3; t <= p; t++) {
-            const double *c = rot + (t - 3);
-            a[p * nc + t] += cp[0] * c[0] + (cp[3] * c[3] + cp[6] * c[6]);
+            const double *c = panel + 6 * t + 3;
+            a[p * nc + t] += cp[0] * c[0] + (cp[1] * c[1] + cp[2] * c[2]);
         }
-        grad[p] += platform_dot(rb, diag, rot, p);
+        grad[p] += platform_dot(rb, panel, p);
     }
     for (ptrdiff_t p = 6; p < nc; p++) {
         const double *g = ct + 6 * p;
-        for (ptrdiff_t t = 0; t < 6; t++) a[p * nc + t] += platform_dot(g, diag, rot, t);
+        for (ptrdiff_t t = 0; t < 6; t++) a[p * nc + t] += platform_dot(g, panel, t);
         for (ptrdiff_t t = 6; t <= p; t++) a[p * nc + t] += dot6(g, ct + 6 * t);
         grad[core[p]] += dot6(g, rb);
     }
     for (ptrdiff_t p = 0; p < k; p++) {
         const double *o = ot + 6 * p;
         for (ptrdiff_t t = 0; t <= p; t++) hbb[p * k + t] = dot6(o, ot + 6 * t);
-        for (ptrdiff_t t = 0; t < 6; t++) y[p * nc + t] = platform_dot(o, diag, rot, t);
+        for (ptrdiff_t t = 0; t < 6; t++) y[p * nc + t] = platform_dot(o, panel, t);
         for (ptrdiff_t t = 6; t < nc; t++) y[p * nc + t] = dot6(o, ct + 6 * t);
         grad[cols[p]] = dot6(o, rb);
         l->diag[cols[p]] = hbb[p * k + p];
     }
 }
 
-/* The normal equations' pieces at the Jacobian jac (m = 6 blocks' rows, n columns) and the
- * residual r: A = J_C'J_C, per block D_b = J_b'J_b and B_b = J_b'J_C (own columns J_b), the
- * gradient J'r into grad and every column's squared norm into l.diag (zero for a column in no
- * block: no step). Sums by 6-row blocks: H, the gradient and the columns' norms are the dense
- * loop's to rounding. */
-static inline void normal(const pk_blocks *bk, ptrdiff_t n_legs, const double *jac,
+/* The normal equations' pieces at the Jacobian's panels (chain_one_closure.c) and the residual
+ * r: A = J_C'J_C, per block D_b = J_b'J_b and B_b = J_b'J_C (own columns J_b), the gradient
+ * J'r into grad and every column's squared norm into l.diag (zero for a column in no block: no
+ * step). Sums by 6-row blocks: H, the gradient and the columns' norms are the dense loop's to
+ * rounding. */
+static inline void normal(const pk_blocks *bk, ptrdiff_t n_legs, const double *panels,
                           const double *r, ptrdiff_t n, double *grad, const layout *l,
                           ptrdiff_t nc) {
     const ptrdiff_t w = bk->widest;
@@ -145,19 +141,15 @@ static inline void normal(const pk_blocks *bk, ptrdiff_t n_legs, const double *j
     for (ptrdiff_t p = 0; p < nc * nc; p++) l->a[p] = 0.0;
     for (ptrdiff_t c = 0; c < n; c++) grad[c] = l->diag[c] = 0.0;
     for (ptrdiff_t b = 0; b < bk->count; b++) {
+        const double *panel = panels + b * bk->panel, *rb = r + 6 * b;
         if (b < n_legs) {
-            leg_normal(bk, jac + 6 * b * n, r + 6 * b, b, n, grad, l, nc);
+            leg_normal(bk, panel, rb, b, grad, l, nc);
             continue;
         }
         const int64_t *cols = bk->cols + bk->start[b];
         ptrdiff_t k = bk->start[b + 1] - bk->start[b];
-        const double *rows = jac + 6 * b * n, *rb = r + 6 * b;
-        double *ct = l->blocks + b * l->per_block, *ot = ct + 6 * nc, *hbb = ot + 6 * w;
-        double *y = hbb + 2 * w * w;
-        for (int i = 0; i < 6; i++) {
-            for (ptrdiff_t t = 0; t < nc; t++) ct[t * 6 + i] = rows[i * n + core[t]];
-            for (ptrdiff_t p = 0; p < k; p++) ot[p * 6 + i] = rows[i * n + cols[p]];
-        }
+        const double *ct = panel, *ot = panel + 6 * nc;
+        double *hbb = l->blocks + b * l->per_block, *y = hbb + 2 * w * w;
         for (ptrdiff_t p = 0; p < nc; p++) {
             for (ptrdiff_t t = 0; t <= p; t++) l->a[p * nc + t] += dot6(ct + 6 * p, ct + 6 * t);
             grad[core[p]] += dot6(ct + 6 * p, rb);
@@ -196,7 +188,7 @@ static inline void block_step(const pk_blocks *bk, ptrdiff_t n, const double *gr
     for (ptrdiff_t b = 0; b < bk->count; b++) {
         const int64_t *cols = bk->cols + bk->start[b];
         ptrdiff_t k = bk->start[b + 1] - bk->start[b];
-        double *hbb = l->blocks + b * l->per_block + 6 * nc + 6 * w, *lbb = hbb + w * w;
+        double *hbb = l->blocks + b * l->per_block, *lbb = hbb + w * w;
         double *y = lbb + w * w, *z = y + w * nc;
         for (ptrdiff_t p = 0; p < k; p++) {
             hbb[p * k + p] += lam * (hbb[p * k + p] + floor_);
@@ -221,7 +213,7 @@ static inline void block_step(const pk_blocks *bk, ptrdiff_t n, const double *gr
     for (ptrdiff_t b = 0; b < bk->count; b++) {
         const int64_t *cols = bk->cols + bk->start[b];
         ptrdiff_t k = bk->start[b + 1] - bk->start[b];
-        double *lbb = l->blocks + b * l->per_block + 6 * nc + 6 * w + w * w;
+        double *lbb = l->blocks + b * l->per_block + w * w;
         double *y = lbb + w * w, *z = y + w * nc;
         for (ptrdiff_t p = 0; p < k; p++) {
             double acc = z[p];
@@ -236,7 +228,8 @@ static inline void block_step(const pk_blocks *bk, ptrdiff_t n, const double *gr
 /* Doubles of the solve's scratch (layout). */
 ptrdiff_t pk_one_block_scratch(const pk_blocks *bk, ptrdiff_t n) {
     layout l = lay_out(bk, n, NULL);
-    return 2 * bk->n_core * bk->n_core + bk->n_core + n + bk->count * l.per_block;
+    return 2 * bk->n_core * bk->n_core + bk->n_core + n + bk->count * l.per_block
+           + 2 * bk->count * bk->panel + 3 * bk->n_elements + n;
 }
 
 /* sum a_i b_i in order. */
@@ -253,9 +246,11 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
                          double tool, pk_chain_work *w, double *scratch, int64_t *status,
                          double *residual, int64_t *iterations) {
     const ptrdiff_t n = c->n, m = w->m;
-    double *values = w->values, *r = w->r, *jac = w->jac, *r_new = w->r_new;
-    double *j_new = w->j_new, *u_new = w->u_new, *step = w->step, *grad = w->grad;
+    double *values = w->values, *r = w->r, *r_new = w->r_new;
+    double *u_new = w->u_new, *step = w->step, *grad = w->grad;
     layout l = lay_out(bk, n, scratch);
+    double *jac = l.panels, *j_new = l.trial;  /* the Jacobian by its blocks' panels */
+    const ptrdiff_t cells = bk->count * bk->panel;
     *iterations = 0;
     *residual = NAN;
     for (ptrdiff_t i = 0; i < n; i++)
@@ -264,15 +259,18 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
             return;
         }
     memcpy(values, known, (size_t)c->n_var * sizeof(double));
-    pk_chain_evaluate_any(c, values, u, r, jac, target, tool, w);
+    pk_one_panels_init(c, bk, jac);
+    pk_one_panels_init(c, bk, j_new);
+    for (ptrdiff_t i = 0; i < 3 * bk->n_elements; i++) l.cache[i] = NAN;
+    pk_one_closure(c, bk, values, u, r, jac, target, tool, l.cache);
     double cost = 0.5 * dot(r, r, m);
-    /* x - x is 0 for a finite x, NaN else: eight independent sums (one chain of m n additions
-     * was 4 % of the call), vectorised */
+    /* x - x is 0 for a finite x, NaN else (the panels hold every entry of the Jacobian that is
+     * not a structural zero): eight independent sums, vectorised */
     double spread[8] = {0, 0, 0, 0, 0, 0, 0, 0}, spread_all = 0.0;
     ptrdiff_t i8 = 0;
-    for (; i8 + 8 <= m * n; i8 += 8)
+    for (; i8 + 8 <= cells; i8 += 8)
         for (int j = 0; j < 8; j++) spread[j] += jac[i8 + j] - jac[i8 + j];
-    for (; i8 < m * n; i8++) spread[0] += jac[i8] - jac[i8];
+    for (; i8 < cells; i8++) spread[0] += jac[i8] - jac[i8];
     for (int j = 0; j < 8; j++) spread_all += spread[j];
     if (!(isfinite(cost) && spread_all == 0.0)) {
         *status = 4;
@@ -303,7 +301,7 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
         else
             block_step(bk, n, grad, lam, step, &l, bk->n_core);
         pk_chain_retract(u, step, u_new, n);
-        pk_chain_evaluate_any(c, values, u_new, r_new, j_new, target, tool, w);
+        pk_one_closure(c, bk, values, u_new, r_new, j_new, target, tool, l.cache);
         double cost_new = 0.5 * dot(r_new, r_new, m);
         int accept = pk_lm_accept(cost, cost_new, &lam);
         count += 1;
@@ -326,6 +324,47 @@ void pk_one_solve_blocks(const pk_chain *c, const pk_blocks *bk, const double *k
         if (fabs(r[i]) > worst || isnan(r[i])) worst = fabs(r[i]);
     *residual = worst;
     if (stopped) *status = worst <= o->residual_tol ? OK : 7;
+    if (jac != l.panels) memcpy(l.panels, jac, sizeof(double) * (size_t)cells);
+    memcpy(l.last, u, (size_t)n * sizeof(double));
+}
+
+/* The panels in scratch: after pk_one_solve_blocks the Jacobian at the returned u (its last
+ * accepted evaluation, the same bits as an evaluation there), after pk_one_evaluate u's;
+ * *last (NULL: not wanted) that u, kept by pk_one_solve_blocks. */
+double *pk_one_panels(const pk_blocks *bk, ptrdiff_t n, double *scratch, const double **last) {
+    layout l = lay_out(bk, n, scratch);
+    if (last) *last = l.last;
+    return l.panels;
+}
+
+/* The closure's residual r and panels at u alone (values filled), in scratch's panels. */
+double *pk_one_evaluate(const pk_chain *c, const pk_blocks *bk, double *values,
+                        const double *u, double *r, const double *target, double tool,
+                        double *scratch) {
+    layout l = lay_out(bk, c->n, scratch);
+    for (ptrdiff_t i = 0; i < c->n; i++) l.last[i] = NAN;  /* not a solve's */
+    pk_one_panels_init(c, bk, l.panels);
+    for (ptrdiff_t i = 0; i < 3 * bk->n_elements; i++) l.cache[i] = NAN;
+    pk_one_closure(c, bk, values, u, r, l.panels, target, tool, l.cache);
+    return l.panels;
+}
+
+/* The lower part of J'J (n x n, row-major, the upper part zero) from the panels: per block the
+ * products of its columns (core and own) summed block after block. */
+void pk_one_gram(const pk_blocks *bk, const double *panels, ptrdiff_t n, double *h) {
+    const ptrdiff_t nc = bk->n_core;
+    memset(h, 0, sizeof(double) * (size_t)(n * n));
+    for (ptrdiff_t b = 0; b < bk->count; b++) {
+        const double *panel = panels + b * bk->panel;
+        ptrdiff_t k = bk->start[b + 1] - bk->start[b];
+        for (ptrdiff_t p = 0; p < nc + k; p++) {
+            int64_t gp = p < nc ? bk->core[p] : bk->cols[bk->start[b] + p - nc];
+            for (ptrdiff_t t = 0; t < nc + k; t++) {
+                int64_t gt = t < nc ? bk->core[t] : bk->cols[bk->start[b] + t - nc];
+                if (gt <= gp) h[gp * n + gt] += dot6(panel + 6 * p, panel + 6 * t);
+            }
+        }
+    }
 }
 
 /* The blocks of model c: each leg's unknown joints (and the head's when inverse) not shared
@@ -376,6 +415,6 @@ int pk_one_find_blocks(pk_one *s, const pk_chain *c, pk_blocks *bk) {
     bk->cols = cols;
     bk->core = core;
     bk->n_core = nc;
-    return 0;
+    return pk_one_closure_plan(s, c, bk);
 }
 

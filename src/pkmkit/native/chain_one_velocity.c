@@ -32,6 +32,13 @@
 
 #define CAPSULE "pkmkit.native.chain_one_velocity"
 
+/* chain_one_velocity_doc.c: the Python face's docstrings */
+extern const char pk_chain_velocity_pack_doc[], pk_chain_one_velocity_doc[];
+extern const char pk_chain_one_jacobian_doc[];
+PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
+                                const double *given, const int64_t *given_position,
+                                ptrdiff_t given_n);
+
 /* svd.c: the singular values of one small matrix (k <= 6), round-robin Jacobi */
 void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out);
 PyObject *pk_numpy_empty(void); /* velocity.c: numpy.empty */
@@ -316,7 +323,8 @@ static void singular_stage(chain_velocity *v, double *out) {
     sv[k] = sv[0] / sv[k - 1];
 }
 
-static double velocity(chain_velocity *v, const double *u, double *out, int singular) {
+static double velocity(chain_velocity *v, const double *u, double *out, int singular,
+                       const double *given, const int64_t *given_position, ptrdiff_t given_n) {
     const pk_chain *c = &v->c;
     const ptrdiff_t n = v->n_act, n_loop = v->n_loop, n_u = v->n_u;
     for (ptrdiff_t k = 0; k < v->n_slides; k++)
@@ -328,7 +336,18 @@ static double velocity(chain_velocity *v, const double *u, double *out, int sing
         v->values[var] = u[6 + var];
         if (c->position[var] >= 0) v->full_u[c->position[var]] = u[6 + var];
     }
-    pk_chain_evaluate(c, v->values, v->full_u, v->r, v->jac, &v->w);
+    if (given) { /* the legs' rows at u from the caller (given_n columns, given_position) */
+        const ptrdiff_t ld = v->n_u + v->n_loop;
+        for (ptrdiff_t i = 0; i < 6 * c->n_legs; i++) {
+            const double *src = given + i * given_n;
+            double *dst = v->jac + i * ld;
+            memcpy(dst, src, 6 * sizeof(double));
+            for (ptrdiff_t var = 0; var < c->n_var; var++)
+                if (c->position[var] >= 0) dst[c->position[var]] = src[given_position[var]];
+        }
+    } else {
+        pk_chain_evaluate(c, v->values, v->full_u, v->r, v->jac, &v->w);
+    }
     double bound = closure_rates(v);
     if (!(bound > 0.0)) return 0.0;
     double rot[9], pos[3], point[3], twist[6];
@@ -363,20 +382,6 @@ static double velocity(chain_velocity *v, const double *u, double *out, int sing
 }
 
 /* ---------------------------------------------------------------- module face */
-
-const char pk_chain_velocity_pack_doc[] =
-    "chain_velocity_pack(frames, types, evar, elements, offsets, position, head, head_position,\n"
-    "                    loop_columns, column_leg, n_u, length, tool, slides, signs, turns,\n"
-    "                    homes)\n\n"
-    "The constants of chain_one_velocity for one joint-chain machine, copied into a capsule:\n"
-    "the model arrays of pkmkit.solve.chain_kernel.model_arrays with position (n_var,) the\n"
-    "column of each variable in the closure's Jacobian (platform 0-5, the passive joints, then\n"
-    "the legs' actuators from n_u on; -1 for none), head (H,) the head's elements,\n"
-    "head_position (n_var,) the actuator index of each head actuator (-1 else), loop_columns\n"
-    "(n_loop,) the actuator index of each leg actuator, column_leg (n_u,) the leg whose joint\n"
-    "alone a column is (-1: the platform's and shared joints'), n_u, the characteristic length,\n"
-    "the tool length (m), and the legs' home modes: slides (int64, places in u) with their\n"
-    "home signs, revolute joints turns (int64) with their home values homes.";
 
 static int copy_array(held_buffers *held, PyObject *obj, const char *name, char type, int ndim,
                       void **dst, Py_ssize_t *count) {
@@ -549,18 +554,6 @@ fail:
     return NULL;
 }
 
-const char pk_chain_one_velocity_doc[] =
-    "chain_one_velocity(pack, u, out[, singular]) -> bound\n\n"
-    "The velocity model of one joint-chain configuration u (6 + n_var floats, a list or a\n"
-    "float64 array: the platform's position and rotation vector, every joint variable) with\n"
-    "the constants of chain_velocity_pack: out (12 n + min(6, n) + 1 + (n_u - 6) n floats) filled\n"
-    "with J (6, n), J_homogeneous (6, n), J_homogeneous's singular values, its condition\n"
-    "number and the passive joints' rates (n_u - 6, n); returns the lower bound of\n"
-    "sigma_min / sigma_max of the closure's Jacobian C_U (0.0 where a pivot vanished, -1.0\n"
-    "where u is not in the legs' home modes: out is then not filled). With singular false the\n"
-    "singular values and the condition are left NaN: chain_one_velocity(pack, None, out) then\n"
-    "computes them from out's J_homogeneous (and returns the condition number).";
-
 /* out's size check (velocity's layout); the out pointer, or NULL with an error set. */
 static double *take_out(const chain_velocity *v, held_buffers *held, PyObject *obj) {
     double *out = grab(held, obj, "out", 'd', 1, 1);
@@ -653,18 +646,10 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
         let_go(&held);
         return NULL;
     }
-    double bound = velocity(v, u, out, singular);
+    double bound = velocity(v, u, out, singular, NULL, NULL, 0);
     let_go(&held);
     return PyFloat_FromDouble(bound);
 }
-
-const char pk_chain_one_jacobian_doc[] =
-    "chain_one_jacobian(pack, u, threshold) -> out, None or False\n\n"
-    "chain_one_velocity's model of one configuration u (6 + n_var floats: a list, or a float64\n"
-    "1-D array such as chain_one_ik's solution) in a new float64 array out (its layout, the\n"
-    "singular values and the condition NaN: chain_one_velocity(pack, None, out) computes them)\n"
-    "where the bound clears threshold; None where it does not (or a pivot vanished), False\n"
-    "where u is not in the legs' home modes.";
 
 PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
@@ -679,6 +664,19 @@ PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssi
     if (threshold == -1.0 && PyErr_Occurred()) return NULL;
     double u[256];
     if (take_u(args[1], 6 + v->c.n_var, u) < 0) return NULL;
+    return pk_one_velocity_array(args[0], u, threshold, NULL, NULL, 0);
+}
+
+/* chain_one_jacobian's answer at u (6 + n_var) for pack; given (6 L rows, given_n columns,
+ * given_position[var] the column of each variable, the platform's at 0..5): the closure's
+ * Jacobian at u evaluated by the caller (chain_one.c's inverse, its last evaluation), or NULL.
+ * A new reference (the array, None or False), NULL with an error set. */
+PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
+                                const double *given, const int64_t *given_position,
+                                ptrdiff_t given_n) {
+    chain_velocity *v = pack_state(pack);
+    if (!v) return NULL;
+    if (given && 6 + v->c.n_var != given_n) given = NULL; /* not the same machine's */
     /* the array first, then the kernel straight into it: no Python code runs between the
      * capsule's scratch and the answer (a thread switch there could reuse the scratch) */
     PyObject *empty = pk_numpy_empty(), *size = PyLong_FromSsize_t(v->size);
@@ -689,7 +687,7 @@ PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssi
         Py_XDECREF(array);
         return NULL;
     }
-    double bound = velocity(v, u, view.buf, 0);
+    double bound = velocity(v, u, view.buf, 0, given, given_position, given_n);
     PyBuffer_Release(&view);
     if (bound < 0.0 || !(bound >= threshold) || !(bound > 0.0)) {
         Py_DECREF(array);

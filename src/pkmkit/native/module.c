@@ -531,6 +531,11 @@ PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t
 PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_chain_one_structured(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+/* chain_one_closure.c: the one-pose solve's closure by blocks' panels (tests) */
+extern const char pk_chain_one_closure_doc[];
+PyObject *pk_py_chain_one_closure(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+extern const char pk_chain_one_ik_jacobian_doc[];  /* chain_one.c */
+PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
 /* rod_batch.c: the batched closed-form inverse of rod-leg machines (issue 22 §5) */
 extern const char pk_rod_inverse_rows_doc[], pk_rod_reach_det_doc[];
@@ -591,6 +596,10 @@ static PyMethodDef methods[] = {
      pk_chain_one_fk_doc},
     {"chain_one_structured", (PyCFunction)(void (*)(void))pk_py_chain_one_structured,
      METH_FASTCALL, pk_chain_one_structured_doc},
+    {"chain_one_closure", (PyCFunction)(void (*)(void))pk_py_chain_one_closure, METH_FASTCALL,
+     pk_chain_one_closure_doc},
+    {"chain_one_ik_jacobian", (PyCFunction)(void (*)(void))pk_py_chain_one_ik_jacobian,
+     METH_FASTCALL, pk_chain_one_ik_jacobian_doc},
     {"rod_inverse_rows", (PyCFunction)(void (*)(void))pk_py_rod_inverse_rows, METH_FASTCALL,
      pk_rod_inverse_rows_doc},
     {"rod_reach_det", (PyCFunction)(void (*)(void))pk_py_rod_reach_det, METH_FASTCALL,
