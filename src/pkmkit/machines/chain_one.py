@@ -52,7 +52,7 @@ import numpy as np
 from pkmkit.machines import chain_one_velocity
 from pkmkit.machines.chain_one_native import packed
 from pkmkit.machines.chain_results import ChainInverseResult
-from pkmkit.machines.chain_starts import home_rates, inverse_rates
+from pkmkit.machines.chain_starts import closed_starts, home_rates, inverse_rates
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
@@ -230,6 +230,10 @@ class ChainOneConstants:
             reach = max(abs(model.q_min[t] - home[t]), abs(model.q_max[t] - home[t]))
             self.wrist = (t, float(home[t]), pair[1], float(home[pair[1]]),
                           bool(reach >= np.pi / 2))
+        # the kind's closed-form start of the inverse model (chain_starts.closed_starts)
+        self.closed = None
+        if closed_starts(m, np.zeros((0, 6)), np.zeros(0)) is not None:
+            self.closed = (m.kind.inverse_start, dict(m.params))
 
     def __reduce__(self) -> tuple:
         """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
@@ -405,6 +409,10 @@ def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | 
         return None
     w = _work(c)
     w.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
+    if start is None and c.closed is not None:  # the kind's closed form, as the batch path
+        closed = _closed_start(c, w.target, None)
+        if closed is not None:
+            start = closed
     if start is None:  # from the first-order start, as the batch path's default
         kernel = c.first_kernel
     else:
@@ -422,6 +430,16 @@ def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | 
     if c.wrist is not None:
         return _nearest_branch(c, found, first)
     return found
+
+
+def _closed_start(c: ChainOneConstants, target: np.ndarray, branch: float | None
+                  ) -> np.ndarray | None:
+    """The kind's closed-form start (:func:`~pkmkit.machines.chain_starts.closed_starts`, the
+    same function on one row) of ``target (1, 6)`` on ``branch`` (±1, or None: nearest home),
+    or None where it declines."""
+    function, params = c.closed
+    u = function(params, target, c.tool_row, None if branch is None else np.full(1, branch))[0]
+    return u if np.isfinite(u).all() else None
 
 
 def _solve_inverse(c: ChainOneConstants, w: _Work, start: Any) -> list[float] | None:
@@ -470,6 +488,11 @@ def _nearest_branch(c: ChainOneConstants, found: tuple, first: bool) -> tuple | 
     start[6 + turn] += math.pi
     start[6 + tilt] = 2.0 * tilt_centre - start[6 + tilt]
     w = _work(c)
+    if c.closed is not None:  # the other branch's closed form, as the batch path
+        closed = _closed_start(c, w.target, 1.0 if math.sin(u[6 + tilt] - tilt_centre) < 0
+                               else -1.0)
+        if closed is not None:
+            start = closed
     other = _solve_inverse(c, w, start)
     if other is None:
         return None  # not converged: the batch path (which keeps the first solution)

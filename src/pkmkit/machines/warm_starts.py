@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError, UnsupportedOperationError
+from pkmkit.machines.chain_starts import closed_starts
 from pkmkit.machines.head_branches import nearest_head_branch
 from pkmkit.status import Status
 
@@ -204,10 +205,17 @@ class ChainWarmStart:
         reach = max(abs(self.model.q_min[turn] - home[turn]),
                     abs(self.model.q_max[turn] - home[turn]))
 
+        tilt = 6 + pair[1]
+
+        def mirror(t: np.ndarray, tool: np.ndarray, u: np.ndarray) -> np.ndarray | None:
+            # the kind's closed form on the other branch (the tilt's other side)
+            return closed_starts(self, t, tool,
+                                 np.where(np.sin(u[:, tilt] - home[pair[1]]) < 0, 1.0, -1.0))
+
         def rule(result: Any, t: np.ndarray, tool: np.ndarray) -> None:
             nearest_head_branch(solve, t, tool, result, np.full(len(result.status),
                                 home[turn]), pair, lambda u, rows: self._within_strokes(u),
-                                home[pair[1]], turn_reach=reach)
+                                home[pair[1]], turn_reach=reach, mirror_start=mirror)
 
         rule(res, targets, lengths)
         if started is None:
