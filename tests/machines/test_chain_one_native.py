@@ -253,16 +253,20 @@ def test_the_start_option_and_the_full_answer(machine):
         assert c.ik(c.capsule, x[0], True, True, [np.nan] * len(first.solution)) is None
 
 
-@pytest.mark.parametrize("plant", ["base", "rates", "lower", "wrist", "tool"])
+@pytest.mark.parametrize("plant", ["base", "rates", "lower", "wrist", "tool", "closed"])
 def test_planted_wrong_constants_are_caught(plant):
     """A packed constant slightly wrong: the answers leave the batch rows (or the C path stops
     answering where it should)."""
     m = pkmkit.machine("trimule-600")
     q, x = workspace(m, 150, seed=5)
     args = list(chain_one_native.pack_arguments(m))
-    where = {"base": 12, "rates": 13, "tool": 14, "lower": 21, "wrist": 24}[plant]
+    where = {"base": 12, "rates": 13, "tool": 14, "lower": 21, "wrist": 24, "closed": 33}[plant]
     planted = args[where] + 1e-6 if plant == "tool" else args[where].copy()
-    if plant == "base":
+    if plant in ("base", "rates"):  # the first-order start: the closed one's off (session 33)
+        args[33] = None
+    if plant == "closed":
+        planted[1] += 1e-4  # the eccentricity c2 of the closed-form start: more iterations
+    elif plant == "base":
         planted[0] += 1e-4
     elif plant == "rates":
         planted[:6] *= 0.0  # the platform's first-order rates: more iterations, other branch

@@ -86,12 +86,19 @@ def test_the_closed_start_is_the_models_solution(machine):
 def test_declined_rows(machine):
     p = machine.params
     length, psi, theta, q4, q5 = _configurations(3, 4)
-    q5 = np.array([0.0, 0.01, 0.3])  # at and near the wrist singularity, then away
+    q5 = np.array([0.0, 0.002, 0.3])  # at and near the wrist singularity, then away
     rot, point = forms.platform_pose(length, psi, theta)
     x = forms.tool_pose(p, rot, point, q4, q5, 0.1)
     x = np.vstack([x, [np.nan, 0, 1, 0, 0, 1], [0, 0, 0, 0, 0, 1]])  # NaN; W at the origin
     u = forms.inverse_unknowns(p, x, 0.1, 1.0)
-    assert list(np.isfinite(u).all(axis=1)) == [False, False, True, False, False]
+    answered = np.isfinite(u).all(axis=1)
+    assert list(answered[2:]) == [True, False, False]
+    # near the singularity the sweeps mostly diverge (declined); a row they answer is exact
+    v = u[answered, 6:]
+    back = forms.tool_pose(p, rotvec_to_matrix(u[answered, 3:6]), u[answered, :3],
+                           v[:, forms.VARIABLES.index("Q4")], v[:, forms.VARIABLES.index("Q5")],
+                           0.1)
+    np.testing.assert_allclose(back, x[answered], rtol=0, atol=1e-12)
 
 
 def test_a_rows_start_does_not_depend_on_its_batch(machine):
@@ -130,8 +137,11 @@ def test_the_first_order_start_gives_the_same_answers_and_branches(machine):
         warnings.simplefilter("ignore", StrokeWarning)
         new = m.ik(x, full_output=True)
         old = off.ik(x, full_output=True)
-    assert np.array_equal(new.status, old.status)
-    ok = new.status == 0
+    # the same statuses, but where the first-order start did not reach a pose (measured: 1
+    # of 2,000, |Q5| = 1.7°) that the closed start solves exactly; never the reverse
+    assert ((new.status == old.status) | ((new.status == 0) & (new.residual <= 1e-12))).all()
+    assert (new.status != old.status).sum() <= 2
+    ok = (new.status == 0) & (old.status == 0)
     home_new, home_old = m.in_home_modes(new.solution), m.in_home_modes(old.solution)
     assert not (ok & home_old & ~home_new).any()  # never out of home's modes where it was in
     same = ok & home_old

@@ -236,10 +236,12 @@ VARIABLES = ("psi1", "theta1", "Q1", "eta1", "kappa1", "phi1", "psi2", "theta2",
 #: foot (m) below which a row has converged.
 INVERSE_SWEEPS = 40
 INVERSE_TOL = 1e-15
-#: |sin Q5| below which :func:`inverse_unknowns` declines a row (the wrist singularity: Q4,
-#: hence the eccentricity's direction, undetermined; each sweep contracts by about
-#: c2 / (|W| |sin Q5|)).
-INVERSE_SINGULAR = 0.05
+#: |sin Q5| below which :func:`inverse_unknowns` declines a row (the wrist singularity: the
+#: eccentricity's direction g/|g| undetermined). Each sweep contracts by about
+#: c2 / (|W| |sin Q5|): on the TriMule 600 the sweeps stop converging within ~2° of it (2.7 %
+#: of poses with the actuators uniform over 5-95 % of their strokes), which the convergence
+#: test declines; a converged row is exact whatever |sin Q5|.
+INVERSE_SINGULAR = 1e-3
 
 
 def inverse_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,

@@ -126,7 +126,7 @@ static double turn_offset(double angle) { return PK_PI - pk_pymod(PK_PI - angle,
  * branch (+1: Q5 >= 0, -1: Q5 <= 0, 0: the branch whose Q4 is within a quarter turn of home's);
  * 1, or 0 where it declines (near the wrist singularity, not converged, not finite). */
 enum { CLOSED_SWEEPS = 40 };
-static const double CLOSED_TOL = 1e-15, CLOSED_SINGULAR = 0.05;
+static const double CLOSED_TOL = 1e-15, CLOSED_SINGULAR = 1e-3;
 
 static int closed_start(const pk_one *s, const double *target, double branch, double *u) {
     const double c1 = s->cl[0], c2 = s->cl[1], reach = s->cl[2] + s->tool;
