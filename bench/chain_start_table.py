@@ -247,7 +247,7 @@ def closed(name: str, poses: int, rounds: int) -> None:
     # the first solve and the mirror apart (the Numba one-pose pieces, the same rules)
     chain_one.usable(m, "chain_ik")
     c = chain_one.constants(m)
-    firsts, mirrors = [], 0
+    firsts, mirrors, declined = [], 0, 0
     for x in xs:
         found = chain_one._inverse_values(c, list(x))
         w = chain_one._work(c)
@@ -258,9 +258,11 @@ def closed(name: str, poses: int, rounds: int) -> None:
         norm = math.sqrt(float(x[3:] @ x[3:]))
         w.target[0] = (*x[:3], *(x[3:] / norm))
         start = chain_one._closed_start(c, w.target, None)
-        w.u_inv[0] = start
-        (c.from_kernel.call or c.from_kernel.first)(*c.first_args, w.u_inv, w.target,
-                                                     c.tool_row, w.info)
+        declined += start is None
+        kernel = c.first_kernel if start is None else c.from_kernel
+        if start is not None:
+            w.u_inv[0] = start
+        (kernel.call or kernel.first)(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
         firsts.append(int(w.info[2]))
     plain = [(p.capsule, x, True, False) for x in xs]
     base = [(first_order, x, True, False) for x in xs]
@@ -275,8 +277,10 @@ def closed(name: str, poses: int, rounds: int) -> None:
     print(f"  iterations per pose (C call, mirror included): first-order start mean "
           f"{it_old.mean():.2f} ({it_old.min()} to {it_old.max()}), closed start mean "
           f"{it_new.mean():.2f} ({it_new.min()} to {it_new.max()})")
-    print(f"  closed start: first solve mean {np.mean(firsts):.2f} (0 on {np.mean(np.array(firsts) == 0):.1%}"
-          f" of poses); mirror solved on {mirrors} poses ({mirrors / len(xs):.1%})")
+    zero = np.mean(np.array(firsts) == 0)
+    print(f"  closed start: declined on {declined} poses (the first-order start there); first "
+          f"solve mean {np.mean(firsts):.2f} (0 on {zero:.1%} of poses); mirror solved on "
+          f"{mirrors} poses ({mirrors / len(xs):.1%})")
     print(f"  largest |q difference| between the two starts' answers: {dq:.1e}")
     print(f"  C call alone, CPU µs: first-order start {med[0]:.2f}, closed start {med[1]:.2f} "
           f"(x{med[0] / med[1]:.2f})")
