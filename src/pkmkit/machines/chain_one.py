@@ -25,7 +25,8 @@ whose closure Jacobian at home is rank deficient, and every option the fast path
 (``q0``, ``start``, ``tool_length``, ``full_output``, engine options).
 
 Agreement with the batch row of the same input: ``ik`` bit for bit (the same kernel from the
-same first-order start, :func:`~pkmkit.machines.chain_starts.inverse_starts`; the head's turn
+same start, :func:`~pkmkit.machines.chain_starts.inverse_starts` — the kind's closed form where
+it answers, computed by the same NumPy function on one row; the head's turn
 wrapped with NumPy's ``arctan2`` as ``np.angle`` does); ``fk`` and ``jacobian`` to rounding
 (the direct model's first-order start is formed in the kernel, not by NumPy's matrix product
 and ``sin``; the closure rates by Cholesky with one refinement step,
@@ -400,7 +401,9 @@ def _inverse_within(m: Any, x: Any, strokes: str, start: Any) -> tuple | None:
 def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | None = None
                     ) -> tuple | None:
     """``(every joint variable, u, iterations, residual)`` of the inverse solution of pose
-    ``xs`` from the first-order start (or ``start``), revolute actuators on the turn nearest
+    ``xs`` from the batch path's default start — the kind's closed form where it answers
+    (:func:`_closed_start`), else the first-order start — (or ``start``), revolute actuators
+    on the turn nearest
     home, on the head's branch of the batch path's rule; None where the batch path must
     decide."""
     a, b, d = xs[3], xs[4], xs[5]

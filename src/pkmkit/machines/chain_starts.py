@@ -139,7 +139,9 @@ def inverse_starts(m: Any, targets: np.ndarray, lengths: np.ndarray) -> np.ndarr
     for ``targets (N, 6)`` (tool point m, unit axis) and tool lengths ``lengths (N,)`` (m):
     ``u_home + Σ_j rates[:, j] d_j`` with ``d = (p − ℓ a − flange_home, a − axis_home)``,
     summed in ``j``'s order term by term — each row's bits its own, whatever the batch, and
-    those of :func:`pkmkit.solve.chain_one_kernel.inverse_start` (the one-pose path)."""
+    those of :func:`pkmkit.solve.chain_one_kernel.inverse_start` (the one-pose path) — except
+    the rows where the kind's closed-form start answers (:func:`closed_starts`), which take
+    it."""
     u_home, base, rates = inverse_rates(m)
     targets = np.asarray(targets, dtype=float)
     with np.errstate(invalid="ignore", over="ignore"):

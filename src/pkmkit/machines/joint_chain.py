@@ -527,8 +527,9 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         Args:
             x: ``(6,)`` or ``(N, 6)`` tool point (m) and tool axis (normalised here).
             q0: warm start for the actuators (the other unknowns from home); other branches
-                of the head are reached from other starts. Default: home moved to first order
-                towards each target (:func:`~pkmkit.machines.chain_starts.inverse_starts`),
+                of the head are reached from other starts. Default: the kind's closed-form
+                start where it has one and it answers (the TriMule), else home moved to first
+                order towards each target (:func:`~pkmkit.machines.chain_starts.inverse_starts`),
                 solved again from home where that fails or leaves the legs' home assembly modes.
             tool_length: tool length(s) (m); default the machine's.
             full_output: return a :class:`ChainInverseResult` (its ``direct`` the direct
