@@ -412,6 +412,7 @@ def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | 
         return None
     w = _work(c)
     w.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
+    warm = start is not None  # a caller's start
     if start is None and c.closed is not None:  # the kind's closed form, as the batch path
         closed = _closed_start(c, w.target, None)
         if closed is not None:
@@ -425,8 +426,12 @@ def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | 
     first = w.info[0] == 0 and w.info[3] == 1.0  # converged, in the legs' home modes
     if first:
         u = w.u_inv[0].tolist()
-    else:  # solved again from home, as the batch path does
-        u = _solve_inverse(c, w, c.u_home)
+    else:  # solved again (warm_starts._solve_from_closed): a caller's start failed, from the
+        # closed-form start if it answers and converges within the legs' home modes; from home
+        closed = _closed_start(c, w.target, None) if warm and c.closed is not None else None
+        u = None if closed is None else _solve_inverse(c, w, closed)
+        if u is None or not c.in_home_modes(u):
+            u = _solve_inverse(c, w, c.u_home)
         if u is None:
             return None
     found = (_wrapped(c, u[6:]), u, int(w.info[2]), float(w.info[1]))

@@ -223,7 +223,14 @@ static int inverse(const pk_one *s, const double *target, const double *start, p
     solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, u, target, s->tool, k, &status,
           residual, iterations);
     int first = status == OK && in_home_modes(s, u);
-    if (!first) {
+    int again = !first;
+    if (again && start != NULL && s->closed && closed_start(s, target, 0.0, u)) {
+        /* a caller's start failed: the closed-form start next (warm_starts._solve_from_closed) */
+        solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, u, target, s->tool, k, &status,
+              residual, iterations);
+        again = !(status == OK && in_home_modes(s, u));
+    }
+    if (again) {
         memcpy(u, s->u_home_inv, (size_t)n * sizeof(double));
         solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, u, target, s->tool, k, &status,
               residual, iterations);
