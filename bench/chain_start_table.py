@@ -272,6 +272,16 @@ def closed(name: str, poses: int, rounds: int) -> None:
         c_new.append(per_call(p.ik, plain, 1))
         m_old.append(per_call(lambda x: off.ik(x, strokes="ignore"), [(x,) for x in xs], 1))
         m_new.append(per_call(lambda x: m.ik(x, strokes="ignore"), [(x,) for x in xs], 1))
+    batch = np.array(xs)
+    b_old, b_new = [], []
+    for _ in range(3):  # the batch path over every pose, one call each way
+        t = time.process_time()
+        off.ik(batch, strokes="ignore")
+        b_old.append(time.process_time() - t)
+        t = time.process_time()
+        m.ik(batch, strokes="ignore")
+        b_new.append(time.process_time() - t)
+    b_old, b_new = float(np.median(b_old)), float(np.median(b_new))
     med = [float(np.median(v)) for v in (c_old, c_new, m_old, m_new)]
     print(f"{name}: {len(xs)} poses")
     print(f"  iterations per pose (C call, mirror included): first-order start mean "
@@ -286,6 +296,8 @@ def closed(name: str, poses: int, rounds: int) -> None:
           f"(x{med[0] / med[1]:.2f})")
     print(f"  m.ik(x), CPU µs: first-order start {med[2]:.2f}, closed start {med[3]:.2f} "
           f"(x{med[2] / med[3]:.2f})")
+    print(f"  m.ik(X) of the {len(xs)} poses (batch path), CPU ms: first-order start "
+          f"{b_old * 1e3:.1f}, closed start {b_new * 1e3:.1f} (x{b_old / b_new:.2f})")
 
 
 def main() -> None:
