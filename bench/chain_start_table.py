@@ -20,6 +20,7 @@ Usage::
 
     python bench/chain_start_table.py [--poses 1000] [--grid 3] [--machines tripteor-x7,trimule-600]
     python bench/chain_start_table.py --rules-only --poses 2000 --machines trimule-600
+    python bench/chain_start_table.py --closed --machines trimule-600   # session 33
 """
 
 from __future__ import annotations
@@ -208,6 +209,97 @@ def rules_only(name: str, poses: int) -> None:
           f"mirrors kept, the start says far/beyond on {k[1, 1]}, not on {k[0, 1]}")
 
 
+def closed(name: str, poses: int, rounds: int) -> None:
+    """Session 33: the kind's closed-form start (the TriMule's,
+    :func:`pkmkit.machines.chain_starts.closed_starts`) against the first-order start, in one
+    process: the same C build packed with and without its constants (``chain_one_pack``'s
+    34th argument; without, the C call is the code before it), and ``m.ik(x)`` of the machine
+    against a copy with the closed start turned off (its batch path, Numba and C paths all
+    take the first-order start then). Printed: iterations per pose (the mirror's included),
+    the first solve's alone and the mirror solves (the Numba one-pose pieces), the largest
+    difference of the answers, CPU µs per call (median of ``rounds`` interleaved rounds)."""
+    import math
+
+    from pkmkit.machines import chain_one
+
+    m = pkmkit.machine(name)
+    off = pkmkit.machine(name)
+    object.__setattr__(off, "_closed_start_ok", False)
+    p = chain_one_native.packed(m)
+    args = chain_one_native.pack_arguments(m)
+    if args[-1] is None:
+        print(f"{name}: no closed-form start")
+        return
+    first_order = p.ik.__self__.chain_one_pack(*args[:-1])
+    rng = np.random.default_rng(0)
+    act = np.flatnonzero(m.model.actuated)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    q = lo + (hi - lo) * (0.05 + 0.9 * rng.random((poses, len(act))))
+    xs = m.fk(q, strokes="ignore")
+    xs = [x for x in xs[np.isfinite(xs).all(axis=1)]
+          if p.ik(p.capsule, x, True, True) is not None
+          and p.ik(first_order, x, True, True) is not None]
+    new = [p.ik(p.capsule, x, True, True) for x in xs]
+    old = [p.ik(first_order, x, True, True) for x in xs]
+    it_new = np.array([r[2] for r in new])
+    it_old = np.array([r[2] for r in old])
+    dq = max(float(np.abs(a[0] - b[0]).max()) for a, b in zip(new, old, strict=True))
+    # the first solve and the mirror apart (the Numba one-pose pieces, the same rules)
+    chain_one.usable(m, "chain_ik")
+    c = chain_one.constants(m)
+    firsts, mirrors, declined = [], 0, 0
+    for x in xs:
+        found = chain_one._inverse_values(c, list(x))
+        w = chain_one._work(c)
+        u = found[1]
+        turn, home_turn = c.wrist[0], c.wrist[1]
+        far = abs(chain_one._turn_offset(u[6 + turn] - home_turn)) > chain_one._FAR
+        mirrors += far or bool(c.wrist[4] and not c.within(found[0]))
+        norm = math.sqrt(float(x[3:] @ x[3:]))
+        w.target[0] = (*x[:3], *(x[3:] / norm))
+        start = chain_one._closed_start(c, w.target, None)
+        declined += start is None
+        kernel = c.first_kernel if start is None else c.from_kernel
+        if start is not None:
+            w.u_inv[0] = start
+        (kernel.call or kernel.first)(*c.first_args, w.u_inv, w.target, c.tool_row, w.info)
+        firsts.append(int(w.info[2]))
+    plain = [(p.capsule, x, True, False) for x in xs]
+    base = [(first_order, x, True, False) for x in xs]
+    c_new, c_old, m_new, m_old = [], [], [], []
+    for _ in range(rounds):  # interleaved
+        c_old.append(per_call(p.ik, base, 1))
+        c_new.append(per_call(p.ik, plain, 1))
+        m_old.append(per_call(lambda x: off.ik(x, strokes="ignore"), [(x,) for x in xs], 1))
+        m_new.append(per_call(lambda x: m.ik(x, strokes="ignore"), [(x,) for x in xs], 1))
+    batch = np.array(xs)
+    b_old, b_new = [], []
+    for _ in range(3):  # the batch path over every pose, one call each way
+        t = time.process_time()
+        off.ik(batch, strokes="ignore")
+        b_old.append(time.process_time() - t)
+        t = time.process_time()
+        m.ik(batch, strokes="ignore")
+        b_new.append(time.process_time() - t)
+    b_old, b_new = float(np.median(b_old)), float(np.median(b_new))
+    med = [float(np.median(v)) for v in (c_old, c_new, m_old, m_new)]
+    print(f"{name}: {len(xs)} poses")
+    print(f"  iterations per pose (C call, mirror included): first-order start mean "
+          f"{it_old.mean():.2f} ({it_old.min()} to {it_old.max()}), closed start mean "
+          f"{it_new.mean():.2f} ({it_new.min()} to {it_new.max()})")
+    zero = np.mean(np.array(firsts) == 0)
+    print(f"  closed start: declined on {declined} poses (the first-order start there); first "
+          f"solve mean {np.mean(firsts):.2f} (0 on {zero:.1%} of poses); mirror solved on "
+          f"{mirrors} poses ({mirrors / len(xs):.1%})")
+    print(f"  largest |q difference| between the two starts' answers: {dq:.1e}")
+    print(f"  C call alone, CPU µs: first-order start {med[0]:.2f}, closed start {med[1]:.2f} "
+          f"(x{med[0] / med[1]:.2f})")
+    print(f"  m.ik(x), CPU µs: first-order start {med[2]:.2f}, closed start {med[3]:.2f} "
+          f"(x{med[2] / med[3]:.2f})")
+    print(f"  m.ik(X) of the {len(xs)} poses (batch path), CPU ms: first-order start "
+          f"{b_old * 1e3:.1f}, closed start {b_new * 1e3:.1f} (x{b_old / b_new:.2f})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=1000)
@@ -215,10 +307,15 @@ def main() -> None:
     parser.add_argument("--rules-only", action="store_true",
                         help="the rules' counts from the first-order start alone (no table)")
     parser.add_argument("--machines", default="tripteor-x7,trimule-600")
+    parser.add_argument("--closed", action="store_true",
+                        help="the closed-form start against the first-order one (session 33)")
+    parser.add_argument("--rounds", type=int, default=7)
     args = parser.parse_args()
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
     for name in args.machines.split(","):
-        if args.rules_only:
+        if args.closed:
+            closed(name, args.poses, args.rounds)
+        elif args.rules_only:
             rules_only(name, args.poses)
         else:
             run(name, args.poses, args.grid)

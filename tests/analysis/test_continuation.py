@@ -185,7 +185,9 @@ def test_the_trimule_reports_the_near_branch_within_its_strokes():
     x = np.array([-0.5849, -0.1391, 1.215, 0.0, 0.0, 1.0])
     near = m.ik(x, full_output=True)
     assert abs(np.degrees(near.q[3])) < 90 and not near.out_of_stroke
-    q0 = np.array(near.q) + np.array([0, 0, 0, np.pi, 0])
+    # Q4 a little past the far branch's: exactly near + π would put the near branch's Q4 +
+    # 2π at the wrap's ±π boundary around q0, decided by the answer's last bit
+    q0 = np.array(near.q) + np.array([0, 0, 0, np.pi + 0.05, 0])
     q0[4] = -q0[4]
     far = m.ik(x, q0=q0, full_output=True, strokes="ignore")
     assert abs(np.degrees(far.q[3])) > 90

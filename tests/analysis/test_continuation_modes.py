@@ -60,13 +60,21 @@ def _check_against_home(m, g, strokes):
 
 @pytest.fixture(scope="module")
 def trimule():
-    return pkmkit.machine("trimule-600")
+    """The TriMule with its closed-form start turned off (session 33): the first-order start,
+    whose answers leave the legs' home modes at some points of the grid — what these tests
+    need to see the mode check at work."""
+    m = pkmkit.machine("trimule-600")
+    object.__setattr__(m, "_closed_start_ok", False)  # chain_starts.closed_starts: none
+    return m
 
 
 def test_the_trimule_grid_by_continuation_is_the_start_from_home(trimule):
     g = _grid(trimule, TRIMULE_BOX, 13)
     moved = _check_against_home(trimule, g, strokes=True)
     assert moved.any()  # points whose start from home ended in another mode: home's now
+    # with the closed-form start (the default) the start from home stays in home's modes
+    # there, and a warm start that fails is solved again from it: nothing moves
+    assert not _check_against_home(pkmkit.machine("trimule-600"), g, strokes=True).any()
 
 
 def test_without_the_mode_check_continuation_moves_points_to_other_modes(trimule,

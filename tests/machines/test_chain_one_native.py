@@ -16,7 +16,7 @@ import pytest
 
 import pkmkit
 from pkmkit.exceptions import ConvergenceError, InputError, OutOfStrokeError, StrokeWarning
-from pkmkit.machines import chain_one, chain_one_native
+from pkmkit.machines import chain_one, chain_one_native, chain_starts
 from pkmkit.numerics import jit
 
 native = jit.native_kernels()
@@ -106,6 +106,12 @@ def test_the_dense_solve_gives_the_batch_bits(machine):
     turns = np.array([machine.model.elements[machine.model.variable_element(v)].type == "R"
                       for v in act]) if hasattr(machine.model, "variable_element") else \
         np.array([machine.element_of(int(v)).type == "R" for v in act])
+    if chain_starts.closed_starts(machine, x[:1], np.array([machine.tool_length])) is not None:
+        # the TriMule's closed-form start: its sines, arcsines and arctangents are libm's in C,
+        # NumPy's on the batch path; from the solution to ~1e-15 the solve stops at once, so
+        # the start's last bits are the answer's: ≤ 1e-14 (measured 1.7e-15), not the bits
+        assert np.abs(one - ik_ref).max() <= 1e-14
+        return
     np.testing.assert_array_equal(one[:, ~turns], ik_ref[:, ~turns])
     # the revolute actuators wrapped by libm's atan2, NumPy's on the batch path: 1 ulp at most
     assert (np.abs(one[:, turns] - ik_ref[:, turns]) <= np.spacing(np.abs(ik_ref[:, turns]))
@@ -247,16 +253,20 @@ def test_the_start_option_and_the_full_answer(machine):
         assert c.ik(c.capsule, x[0], True, True, [np.nan] * len(first.solution)) is None
 
 
-@pytest.mark.parametrize("plant", ["base", "rates", "lower", "wrist", "tool"])
+@pytest.mark.parametrize("plant", ["base", "rates", "lower", "wrist", "tool", "closed"])
 def test_planted_wrong_constants_are_caught(plant):
     """A packed constant slightly wrong: the answers leave the batch rows (or the C path stops
     answering where it should)."""
     m = pkmkit.machine("trimule-600")
     q, x = workspace(m, 150, seed=5)
     args = list(chain_one_native.pack_arguments(m))
-    where = {"base": 12, "rates": 13, "tool": 14, "lower": 21, "wrist": 24}[plant]
+    where = {"base": 12, "rates": 13, "tool": 14, "lower": 21, "wrist": 24, "closed": 33}[plant]
     planted = args[where] + 1e-6 if plant == "tool" else args[where].copy()
-    if plant == "base":
+    if plant in ("base", "rates"):  # the first-order start: the closed one's off (session 33)
+        args[33] = None
+    if plant == "closed":
+        planted[1] += 1e-4  # the eccentricity c2 of the closed-form start: more iterations
+    elif plant == "base":
         planted[0] += 1e-4
     elif plant == "rates":
         planted[:6] *= 0.0  # the platform's first-order rates: more iterations, other branch

@@ -25,7 +25,8 @@ whose closure Jacobian at home is rank deficient, and every option the fast path
 (``q0``, ``start``, ``tool_length``, ``full_output``, engine options).
 
 Agreement with the batch row of the same input: ``ik`` bit for bit (the same kernel from the
-same first-order start, :func:`~pkmkit.machines.chain_starts.inverse_starts`; the head's turn
+same start, :func:`~pkmkit.machines.chain_starts.inverse_starts` — the kind's closed form where
+it answers, computed by the same NumPy function on one row; the head's turn
 wrapped with NumPy's ``arctan2`` as ``np.angle`` does); ``fk`` and ``jacobian`` to rounding
 (the direct model's first-order start is formed in the kernel, not by NumPy's matrix product
 and ``sin``; the closure rates by Cholesky with one refinement step,
@@ -52,7 +53,7 @@ import numpy as np
 from pkmkit.machines import chain_one_velocity
 from pkmkit.machines.chain_one_native import packed
 from pkmkit.machines.chain_results import ChainInverseResult
-from pkmkit.machines.chain_starts import home_rates, inverse_rates
+from pkmkit.machines.chain_starts import closed_starts, home_rates, inverse_rates
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
@@ -230,6 +231,10 @@ class ChainOneConstants:
             reach = max(abs(model.q_min[t] - home[t]), abs(model.q_max[t] - home[t]))
             self.wrist = (t, float(home[t]), pair[1], float(home[pair[1]]),
                           bool(reach >= np.pi / 2))
+        # the kind's closed-form start of the inverse model (chain_starts.closed_starts)
+        self.closed = None
+        if closed_starts(m, np.zeros((0, 6)), np.zeros(0)) is not None:
+            self.closed = (m.kind.inverse_start, dict(m.params))
 
     def __reduce__(self) -> tuple:
         """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
@@ -396,7 +401,9 @@ def _inverse_within(m: Any, x: Any, strokes: str, start: Any) -> tuple | None:
 def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | None = None
                     ) -> tuple | None:
     """``(every joint variable, u, iterations, residual)`` of the inverse solution of pose
-    ``xs`` from the first-order start (or ``start``), revolute actuators on the turn nearest
+    ``xs`` from the batch path's default start — the kind's closed form where it answers
+    (:func:`_closed_start`), else the first-order start — (or ``start``), revolute actuators
+    on the turn nearest
     home, on the head's branch of the batch path's rule; None where the batch path must
     decide."""
     a, b, d = xs[3], xs[4], xs[5]
@@ -405,6 +412,11 @@ def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | 
         return None
     w = _work(c)
     w.target[0] = (xs[0], xs[1], xs[2], a / norm, b / norm, d / norm)
+    warm = start is not None  # a caller's start
+    if start is None and c.closed is not None:  # the kind's closed form, as the batch path
+        closed = _closed_start(c, w.target, None)
+        if closed is not None:
+            start = closed
     if start is None:  # from the first-order start, as the batch path's default
         kernel = c.first_kernel
     else:
@@ -414,14 +426,28 @@ def _inverse_values(c: ChainOneConstants, xs: list[float], start: list[float] | 
     first = w.info[0] == 0 and w.info[3] == 1.0  # converged, in the legs' home modes
     if first:
         u = w.u_inv[0].tolist()
-    else:  # solved again from home, as the batch path does
-        u = _solve_inverse(c, w, c.u_home)
+    else:  # solved again (warm_starts._solve_from_closed): a caller's start failed, from the
+        # closed-form start if it answers and converges within the legs' home modes; from home
+        closed = _closed_start(c, w.target, None) if warm and c.closed is not None else None
+        u = None if closed is None else _solve_inverse(c, w, closed)
+        if u is None or not c.in_home_modes(u):
+            u = _solve_inverse(c, w, c.u_home)
         if u is None:
             return None
     found = (_wrapped(c, u[6:]), u, int(w.info[2]), float(w.info[1]))
     if c.wrist is not None:
         return _nearest_branch(c, found, first)
     return found
+
+
+def _closed_start(c: ChainOneConstants, target: np.ndarray, branch: float | None
+                  ) -> np.ndarray | None:
+    """The kind's closed-form start (:func:`~pkmkit.machines.chain_starts.closed_starts`, the
+    same function on one row) of ``target (1, 6)`` on ``branch`` (±1, or None: nearest home),
+    or None where it declines."""
+    function, params = c.closed
+    u = function(params, target, c.tool_row, None if branch is None else np.full(1, branch))[0]
+    return u if np.isfinite(u).all() else None
 
 
 def _solve_inverse(c: ChainOneConstants, w: _Work, start: Any) -> list[float] | None:
@@ -470,6 +496,11 @@ def _nearest_branch(c: ChainOneConstants, found: tuple, first: bool) -> tuple | 
     start[6 + turn] += math.pi
     start[6 + tilt] = 2.0 * tilt_centre - start[6 + tilt]
     w = _work(c)
+    if c.closed is not None:  # the other branch's closed form, as the batch path
+        closed = _closed_start(c, w.target, 1.0 if math.sin(u[6 + tilt] - tilt_centre) < 0
+                               else -1.0)
+        if closed is not None:
+            start = closed
     other = _solve_inverse(c, w, start)
     if other is None:
         return None  # not converged: the batch path (which keeps the first solution)

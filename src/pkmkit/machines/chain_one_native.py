@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.chain_starts import home_rates, inverse_rates
+from pkmkit.machines.chain_starts import closed_starts, home_rates, inverse_rates
 from pkmkit.machines.chain_velocity_record import SINGULAR_TOL
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
@@ -112,7 +112,20 @@ def pack_arguments(m: Any, structured: bool = True) -> tuple:
         np.concatenate([m.home_platform, home[passive]]),
         np.ascontiguousarray(d_rates, dtype=float),
         np.ascontiguousarray(residual_rates, dtype=float), np.ascontiguousarray(home),
-        BOUND_MARGIN * SINGULAR_TOL, float(MAX_COORDINATE), bool(structured))
+        BOUND_MARGIN * SINGULAR_TOL, float(MAX_COORDINATE), bool(structured),
+        _closed_constants(m))
+
+
+def _closed_constants(m: Any) -> np.ndarray | None:
+    """The TriMule's closed-form start's constants for chain_one.c (``c1, c2, spindle, L, l,
+    H, h``), or None: the kind has no closed-form start in C
+    (:func:`~pkmkit.machines.chain_starts.closed_starts`)."""
+    from pkmkit.machines import trimule_forms
+
+    if (getattr(m.kind, "inverse_start", None) is not trimule_forms.start_unknowns
+            or closed_starts(m, np.zeros((0, 6)), np.zeros(0)) is None):
+        return None
+    return np.array([float(m.params[k]) for k in ("c1", "c2", "spindle", "L", "l", "H", "h")])
 
 
 def packed(m: Any) -> Packed | None:

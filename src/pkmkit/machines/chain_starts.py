@@ -139,7 +139,9 @@ def inverse_starts(m: Any, targets: np.ndarray, lengths: np.ndarray) -> np.ndarr
     for ``targets (N, 6)`` (tool point m, unit axis) and tool lengths ``lengths (N,)`` (m):
     ``u_home + Σ_j rates[:, j] d_j`` with ``d = (p − ℓ a − flange_home, a − axis_home)``,
     summed in ``j``'s order term by term — each row's bits its own, whatever the batch, and
-    those of :func:`pkmkit.solve.chain_one_kernel.inverse_start` (the one-pose path)."""
+    those of :func:`pkmkit.solve.chain_one_kernel.inverse_start` (the one-pose path) — except
+    the rows where the kind's closed-form start answers (:func:`closed_starts`), which take
+    it."""
     u_home, base, rates = inverse_rates(m)
     targets = np.asarray(targets, dtype=float)
     with np.errstate(invalid="ignore", over="ignore"):
@@ -150,4 +152,35 @@ def inverse_starts(m: Any, targets: np.ndarray, lengths: np.ndarray) -> np.ndarr
         acc = d[:, 0, None] * rates[:, 0]
         for j in range(1, 6):
             acc = acc + d[:, j, None] * rates[:, j]
-        return u_home + acc
+        out = u_home + acc
+    closed = closed_starts(m, targets, lengths)
+    if closed is not None:
+        exact = np.isfinite(closed).all(axis=1)
+        out[exact] = closed[exact]
+    return out
+
+
+def closed_starts(m: Any, targets: np.ndarray, lengths: np.ndarray,
+                  branch: np.ndarray | None = None) -> np.ndarray | None:
+    """``(N, 6 + n_var)`` the kind's closed-form starts of the inverse model
+    (``MachineKind.inverse_start``; the TriMule's
+    :func:`~pkmkit.machines.trimule_forms.start_unknowns`) for ``targets (N, 6)`` (unit axes)
+    and tool lengths ``(N,)``, on the head's ``branch (N,)`` (±1) or the branch nearest home
+    (None); NaN rows where it declines; None where the kind has none (the first-order start).
+
+    With one, :func:`inverse_starts` takes it wherever it answers — on the TriMule the
+    solution itself to ~1e-15 on the poses away from the wrist singularity (the first solve
+    then stops at its first test: 0 iterations, where the first-order start took 8.3 on
+    average) — and the head's branch rule starts the mirror from it
+    (:meth:`~pkmkit.machines.warm_starts.ChainWarmStart._nearest_branch`): the batch path, the
+    Numba one-pose path (:mod:`pkmkit.machines.chain_one`) and the C call (``native/
+    chain_one.c``, the same arithmetic) start alike, so their answers agree as before (issue
+    22 §1, session 33)."""
+    start = getattr(m.kind, "inverse_start", None)
+    if start is None:
+        return None
+    ok = m.__dict__.get("_closed_start_ok")
+    if ok is None:  # the kind's own variables in its order: a model the kind built
+        ok = tuple(m.model.variables) == getattr(start, "variables", None)
+        object.__setattr__(m, "_closed_start_ok", ok)
+    return start(m.params, targets, lengths, branch) if ok else None

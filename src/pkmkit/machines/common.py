@@ -40,6 +40,10 @@ class MachineKind:
             workspace studies (None: around home, see :meth:`Machine.default_box`).
         head_flip: names ``(turn, tilt)`` of a joint-chain head with two branches ``(a, c)`` and
             ``(a ± π, −c)`` (:mod:`pkmkit.machines.head_branches`), or None.
+        inverse_start: ``(params, targets (N, 6), tool lengths (N,), branch (N,) ±1 or None)
+            -> (N, 6 + n_var)``, a joint chain's closed-form start of the inverse model (NaN
+            rows declined; branch None: the head's branch nearest home), or None: the
+            first-order start (:func:`pkmkit.machines.chain_starts.inverse_starts`).
     """
 
     kind: str
@@ -51,6 +55,7 @@ class MachineKind:
     default_box: Callable[[Mapping[str, Any], RodModel], tuple[np.ndarray, np.ndarray]] | None = (
         None)
     head_flip: tuple[str, str] | None = None
+    inverse_start: Callable[..., np.ndarray] | None = None
 
 
 def _valid_rows(arr: np.ndarray) -> np.ndarray:

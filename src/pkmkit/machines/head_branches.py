@@ -49,7 +49,8 @@ def wrapped(angle: np.ndarray) -> np.ndarray:
 def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarray, res,
                         reference: np.ndarray, flip: tuple[int, int],
                         inside: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
-                        tilt_centre: float = 0.0, turn_reach: float = np.inf):
+                        tilt_centre: float = 0.0, turn_reach: float = np.inf,
+                        mirror_start: Callable | None = None):
     """Apply the rule to an inverse result ``res`` (a
     :class:`~pkmkit.solve.least_squares.SolveResult` whose ``u (N, 6 + V)`` holds the platform
     then every joint variable): the rows solved exactly whose turn is more than π/2 −
@@ -68,7 +69,12 @@ def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarra
     FLIP_MARGIN away (to within the FLIP_MARGIN the rule already allows between a turn + π and
     the mirror's), so beyond the turn's stroke and farther than the row's own: the mirror
     cannot be chosen and is not solved (the Tripteor's Q4, ±15°: every row beyond a stroke
-    had its mirror solved before, for nothing)."""
+    had its mirror solved before, for nothing).
+
+    ``mirror_start(targets, lengths, u) -> (k, 6 + V)`` (the re-solved rows' targets, tool
+    lengths and solutions): the mirror's solve starts from its rows where they are finite —
+    a closed-form start on the other branch
+    (:func:`~pkmkit.machines.chain_starts.closed_starts`) — instead of the flipped solution."""
     turn, tilt = 6 + flip[0], 6 + flip[1]
     with np.errstate(invalid="ignore"):
         far = np.abs(wrapped(res.u[:, turn] - reference)) > np.pi / 2 - FLIP_MARGIN
@@ -82,6 +88,10 @@ def nearest_head_branch(solve: Callable, targets: np.ndarray, lengths: np.ndarra
     u0 = res.u[rows].copy()
     u0[:, turn] += np.pi
     u0[:, tilt] = 2.0 * tilt_centre - u0[:, tilt]
+    if mirror_start is not None and (closed := mirror_start(targets[rows], lengths[rows],
+                                                              res.u[rows])) is not None:
+        exact = np.isfinite(closed).all(axis=1)
+        u0[exact] = closed[exact]
     other = solve(targets[rows], u0, lengths[rows])
     ref = reference[rows]
     with np.errstate(invalid="ignore"):

@@ -530,8 +530,9 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         Args:
             x: ``(6,)`` or ``(N, 6)`` tool point (m) and tool axis (normalised here).
             q0: warm start for the actuators (the other unknowns from home); other branches
-                of the head are reached from other starts. Default: home moved to first order
-                towards each target (:func:`~pkmkit.machines.chain_starts.inverse_starts`),
+                of the head are reached from other starts. Default: the kind's closed-form
+                start where it has one and it answers (the TriMule), else home moved to first
+                order towards each target (:func:`~pkmkit.machines.chain_starts.inverse_starts`),
                 solved again from home where that fails or leaves the legs' home assembly modes.
             tool_length: tool length(s) (m); default the machine's.
             full_output: return a :class:`ChainInverseResult` (its ``direct`` the direct
@@ -605,6 +606,7 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
         u_home = np.concatenate([np.tile(self._home["platform"], (n, 1)), values], axis=1)
         u0, started = self._inverse_starts(start, u_home)
         lengths = self._tool_lengths(tool_length, n)
+        warm = started.copy() if q0 is None else None  # a caller's start, the default branch
         if q0 is None:  # the default start: home moved to first order towards each target,
             # solved again from home where it fails or leaves the legs' home modes
             u0 = u0.copy()  # without start= it is u_home itself
@@ -620,9 +622,9 @@ class JointChainMachine(ChainVelocity, ChainErrors, ChainMeasurement, ChainLayou
                 return solve_machine_inverse(self.model, t, u, tool_length=tool,
                                              **engine_options)
 
-        res = self._solve_inverse_from(solve, targets, u0, u_home, started, lengths)
+        res = self._solve_inverse_from(solve, targets, u0, u_home, started, lengths, warm)
         if q0 is None:  # the default start's branch of the head, whatever the start
-            self._nearest_branch(solve, targets, res, lengths, started, u_home)
+            self._nearest_branch(solve, targets, res, lengths, started, u_home, warm)
         else:  # a caller's start: a two-branch head keeps the branch nearest the start's turn
             if (flip := head_flip_variables(self.kind, self.model.variables)) is not None:
                 res = nearest_head_branch(solve, targets, lengths, res, u0[:, 6 + flip[0]], flip,

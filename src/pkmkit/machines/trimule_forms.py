@@ -226,3 +226,159 @@ def direct(params: Mapping[str, Any], q: Any, tool_length: Any) -> np.ndarray:
     leg = measured_leg(params, q[:, :3])
     rot, p = platform_pose(leg[:, 0], leg[:, 1], leg[:, 2])
     return tool_pose(params, rot, p, q[:, 3], q[:, 4], tool_length)
+
+
+#: The joint-chain model's variables in its order (:func:`inverse_unknowns`'s columns 6:).
+VARIABLES = ("psi1", "theta1", "Q1", "eta1", "kappa1", "phi1", "psi2", "theta2", "Q2", "eta2",
+             "kappa2", "phi2", "theta3", "Q3", "eta3", "kappa3", "phi3", "theta4", "L4", "Q4",
+             "Q5")
+#: Fixed-point sweeps of :func:`inverse_unknowns` at most, and the change of the Q5-axis
+#: foot (m) below which a row has converged.
+INVERSE_SWEEPS = 40
+INVERSE_TOL = 1e-15
+#: |sin Q5| below which :func:`inverse_unknowns` declines a row (the wrist singularity: the
+#: eccentricity's direction g/|g| undetermined). Each sweep contracts by about
+#: c2 / (|W| |sin Q5|): on the TriMule 600 the sweeps stop converging within ~2° of it (2.7 %
+#: of poses with the actuators uniform over 5-95 % of their strokes), which the convergence
+#: test declines; a converged row is exact whatever |sin Q5|.
+INVERSE_SINGULAR = 1e-3
+
+
+def inverse_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
+                     branch: Any) -> np.ndarray:
+    """Closed-form inverse of the complete machine on one head branch: ``(N, 27)`` unknowns of
+    the joint-chain inverse model — platform point P, the platform's rotation vector (angle in
+    [0, π], the engine's convention), then every joint variable in the model's order
+    (ψ1, θ1, Q1, η1, κ1, φ1, ψ2, θ2, Q2, η2, κ2, φ2, θ3, Q3, η3, κ3, φ3, θ4, L4, Q4, Q5) — for
+    ``targets (N, 6)`` (tool point m, unit tool axis a), tool lengths ``(N,)`` (m, from the
+    spindle gauge point) and ``branch (N,)`` (+1: Q5 ≥ 0, −1: Q5 ≤ 0; the head's two
+    branches ``(Q4, Q5)`` and ``(Q4 ± π, −Q5)``). NaN rows where it declines: within
+    :data:`INVERSE_SINGULAR` of the wrist singularity, not converged, no assembly.
+
+    From :func:`tool_pose`: the foot of the Q5 axis ``W = T − (spindle + ℓ) a`` is
+    ``(L4 + c1) d + c2 R_P (cos Q4, sin Q4, 0)`` with ``d = R_P e_z`` the direction of leg 4,
+    and ``R_P (cos Q4, sin Q4, 0) = ± g / |g|``, ``g = a − (a·d) d`` (the tool axis's part
+    normal to leg 4: ``|g| = |sin Q5|``). So ``d`` is the fixed point of ``v = W − c2 b g/|g|``,
+    ``d = v/|v|`` (b the branch; a contraction by about c2 / (|W| |sin Q5|)), then
+    ``L4 = |v| − c1``, ``θ4 = asin(−d_x)``, ``ψ1 = atan2(d_y, d_z)``, ``Q5 = b atan2(|g|, a·d)``,
+    ``Q4 = atan2(b a·y_P, b a·x_P)``, and the parallel part's joints as
+    :func:`passive_joints` and :func:`actuators` (written out term by term here). Every
+    operation is elementwise: a row's bits do not depend on the rows beside it (issue 22 §6),
+    and ``native/chain_one.c`` (``closed_start``) computes the same, statement for statement.
+    """
+    x = np.atleast_2d(np.asarray(targets, dtype=float))
+    n = x.shape[0]
+    tool = np.broadcast_to(np.asarray(tool_length, dtype=float), (n,))
+    b = np.broadcast_to(np.asarray(branch, dtype=float), (n,))
+    c1, c2 = float(params["c1"]), float(params["c2"])
+    ax, ay, az = x[:, 3], x[:, 4], x[:, 5]
+    reach = float(params["spindle"]) + tool
+    wx, wy, wz = x[:, 0] - reach * ax, x[:, 1] - reach * ay, x[:, 2] - reach * az
+    vx, vy, vz = wx.copy(), wy.copy(), wz.copy()
+    done = np.zeros(n, dtype=bool)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for _ in range(INVERSE_SWEEPS):
+            r = np.sqrt(vx * vx + vy * vy + vz * vz)
+            dx, dy, dz = vx / r, vy / r, vz / r
+            ad = ax * dx + ay * dy + az * dz
+            gx, gy, gz = ax - ad * dx, ay - ad * dy, az - ad * dz
+            k = c2 * b / np.sqrt(gx * gx + gy * gy + gz * gz)
+            nx, ny, nz = wx - k * gx, wy - k * gy, wz - k * gz
+            change = np.abs(nx - vx) + np.abs(ny - vy) + np.abs(nz - vz)
+            live = ~done
+            vx[live], vy[live], vz[live] = nx[live], ny[live], nz[live]
+            done |= change <= INVERSE_TOL
+            if done.all():
+                break
+        r = np.sqrt(vx * vx + vy * vy + vz * vz)
+        dx, dy, dz = vx / r, vy / r, vz / r
+        ad = ax * dx + ay * dy + az * dz
+        gx, gy, gz = ax - ad * dx, ay - ad * dy, az - ad * dz
+        gn = np.sqrt(gx * gx + gy * gy + gz * gz)
+        length = r - c1
+        theta = np.arcsin(-dx)
+        psi = np.arctan2(dy, dz)
+        ct, st, cp, sp = np.cos(theta), np.sin(theta), np.cos(psi), np.sin(psi)
+        q5 = b * np.arctan2(gn, ad)
+        # x_P = (−cos θ4, −sin θ4 sin ψ1, −sin θ4 cos ψ1), y_P = (0, −cos ψ1, sin ψ1)
+        q4 = np.arctan2(b * (-cp * ay + sp * az), b * (-ct * ax - st * sp * ay - st * cp * az))
+        u = np.empty((n, 27))
+        u[:, 0], u[:, 1], u[:, 2] = length * dx, length * dy, length * dz
+        u[:, 3:6] = _platform_rotvec(psi, theta)
+        u[:, 6:] = _parallel_joints(params, length, psi, theta, ct, st, cp, sp).T
+        u[:, 25], u[:, 26] = q4, q5
+    bad = ~(done & (gn >= INVERSE_SINGULAR) & np.isfinite(u).all(axis=1))
+    u[bad] = np.nan
+    return u
+
+
+def _platform_rotvec(psi: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """``(N, 3)`` rotation vectors of ``R_P = Rx(−ψ1) Ry(−θ4) Rz(π)`` (= eq. 3.31's
+    ``Rx(−ψ1) Rz(π) Ry(θ4)``) through its unit quaternion, taken with w ≥ 0 (angle in [0, π],
+    as :func:`pkmkit.solve.chains.compose_rotvecs`)."""
+    ch, sh = np.cos(-0.5 * psi), np.sin(-0.5 * psi)
+    ct, st = np.cos(-0.5 * theta), np.sin(-0.5 * theta)
+    # (ch, sh, 0, 0) (ct, 0, st, 0) (0, 0, 0, 1)
+    w, qx, qy, qz = -sh * st, ch * st, -sh * ct, ch * ct
+    flip = np.where(w < 0, -1.0, 1.0)
+    w, qx, qy, qz = w * flip, qx * flip, qy * flip, qz * flip
+    norm = np.sqrt(qx * qx + qy * qy + qz * qz)
+    scale = 2.0 * np.arctan2(norm, w) / norm
+    return np.stack([scale * qx, scale * qy, scale * qz], axis=1)
+
+
+def _parallel_joints(params: Mapping[str, Any], length: np.ndarray, psi: np.ndarray,
+                     theta: np.ndarray, ct: np.ndarray, st: np.ndarray, cp: np.ndarray,
+                     sp: np.ndarray) -> np.ndarray:
+    """``(21, N)`` every joint variable in the model's order (Q4, Q5 left 0) from the measured
+    leg: :func:`passive_joints` and :func:`actuators` elementwise."""
+    big, small, hb, hs = (float(params[k]) for k in ("L", "l", "H", "h"))
+    e1x, e1y = big - small * ct + 2 * length * st, small * st + 2 * length * ct
+    e3x, e3y = -big + small * ct + 2 * length * st, -small * st + 2 * length * ct
+    # B2 − A2 = P + h y_P − (0, −H, 0)
+    lx = -length * st
+    ly = length * ct * sp - hs * cp + hb
+    lz = length * ct * cp + hs * sp
+    q2 = np.sqrt(lx * lx + ly * ly + lz * lz)
+    theta2 = np.arcsin(-lx / q2)
+    psi2 = np.arctan2(ly, lz)
+    # g = Ry(θ2) Rx(ψ2 − ψ1) Ry(−θ4): its entries 00, 10, 20, 21, 22
+    ca, sa = np.cos(theta2), np.sin(theta2)
+    cb, sb = np.cos(psi2 - psi), np.sin(psi2 - psi)
+    cc, sc = ct, -st
+    g00 = ca * cc - sa * cb * sc
+    g10 = sb * sc
+    g20 = -sa * cc - ca * cb * sc
+    g21 = ca * sb
+    g22 = -sa * sc + ca * cb * cc
+    theta1, theta3 = np.arctan2(e1x, e1y), np.arctan2(e3x, e3y)
+    zero = np.zeros_like(psi)
+    return np.stack([psi, theta1, 0.5 * np.hypot(e1x, e1y), zero, zero, theta - theta1,
+                     psi2, theta2, q2, np.arctan2(g10, g00), np.arcsin(np.clip(g20, -1.0, 1.0)),
+                     np.arctan2(g21, g22), theta3, 0.5 * np.hypot(e3x, e3y), zero, zero,
+                     theta3 - theta, theta, length, zero, zero])
+
+
+def start_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
+                   branch: Any = None) -> np.ndarray:
+    """The inverse model's closed-form start (``MachineKind.inverse_start``): the unknowns of
+    :func:`inverse_unknowns` on ``branch (N,)`` (±1), or — None — on the branch whose Q4 is
+    within a quarter turn of home's (0): the sign of ``a · x_P`` with leg 4 along ``W`` (the
+    eccentricity left out; ``native/chain_one.c`` the same)."""
+    x = np.atleast_2d(np.asarray(targets, dtype=float))
+    if branch is None:
+        tool = np.broadcast_to(np.asarray(tool_length, dtype=float), (x.shape[0],))
+        reach = float(params["spindle"]) + tool
+        ax, ay, az = x[:, 3], x[:, 4], x[:, 5]
+        wx, wy, wz = x[:, 0] - reach * ax, x[:, 1] - reach * ay, x[:, 2] - reach * az
+        with np.errstate(invalid="ignore", divide="ignore"):
+            r = np.sqrt(wx * wx + wy * wy + wz * wz)
+            dx, dy, dz = wx / r, wy / r, wz / r
+            ct = np.sqrt(dy * dy + dz * dz)
+            # a · x_P, x_P = (−cos θ4, −sin θ4 sin ψ1, −sin θ4 cos ψ1), sin θ4 = −d_x
+            along = -ct * ax + dx * (dy * ay + dz * az) / ct
+        branch = np.where(along >= 0, 1.0, -1.0)
+    return inverse_unknowns(params, x, tool_length, branch)
+
+
+start_unknowns.variables = VARIABLES  # the model's variables it answers for (chain_starts)

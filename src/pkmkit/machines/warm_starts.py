@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.exceptions import InputError, UnsupportedOperationError
+from pkmkit.machines.chain_starts import closed_starts
 from pkmkit.machines.head_branches import nearest_head_branch
 from pkmkit.status import Status
 
@@ -108,22 +109,51 @@ class ChainWarmStart:
 
     def _solve_inverse_from(self, solve: Any, targets: np.ndarray, u0: np.ndarray,
                             u_home: np.ndarray, started: np.ndarray,
-                            lengths: np.ndarray) -> Any:
+                            lengths: np.ndarray, warm: np.ndarray | None = None) -> Any:
         """``solve(targets, u0, lengths)`` (the engine's inverse), then the rows started from a
         warm start that did not converge, or converged outside the legs' home assembly modes
         (:meth:`in_home_modes`), solved again from ``u_home``: a warm start may only speed a
         row up, never lose one the start from home reaches nor move it to another assembly
         of the legs (a retried row reports the retry's iterations and is no longer marked in
-        ``started``, updated in place)."""
+        ``started``, updated in place). Rows ``warm (N,)`` — a caller's start, with the
+        default branch (no ``q0``) — are solved again as :meth:`_solve_from_closed` says (the
+        kind's closed-form start first), the others from ``u_home``."""
         res = solve(targets, u0, lengths)
         with np.errstate(invalid="ignore"):
             retry = np.flatnonzero(started & ((res.status != Status.OK)
                                               | ~self.in_home_modes(res.u)))
         if retry.size:
             started[retry] = False  # these rows now hold the start from home's answer
-            again = solve(targets[retry], u_home[retry], lengths[retry])
+            again = self._solve_from_closed(solve, targets[retry], lengths[retry],
+                                            u_home[retry], warm is not None and warm[retry])
             for name in ("u", "status", "residual", "iterations", "rank"):
                 getattr(res, name)[retry] = getattr(again, name)
+        return res
+
+    def _solve_from_closed(self, solve: Any, targets: np.ndarray, lengths: np.ndarray,
+                           u_home: np.ndarray, closed: Any = True) -> Any:
+        """The rows solved again (session 33): from the kind's closed-form start
+        (:func:`~pkmkit.machines.chain_starts.closed_starts`) on the rows ``closed`` (True:
+        every row; False where the row's own start was that one already) where it answers,
+        kept where it converges within the legs' home modes, and from ``u_home`` elsewhere —
+        what the default start gives a row, so a warm start that fails or leaves the modes
+        ends on the default start's answer, not on home's (which may leave the modes where
+        the closed start's does not). The iterations reported are the last solve's."""
+        u0 = u_home.copy()
+        from_closed = np.zeros(len(u0), dtype=bool)
+        starts = closed_starts(self, targets, lengths)
+        if starts is not None:
+            from_closed = np.isfinite(starts).all(axis=1) & closed
+            u0[from_closed] = starts[from_closed]
+        res = solve(targets, u0, lengths)
+        if from_closed.any():
+            with np.errstate(invalid="ignore"):
+                home = np.flatnonzero(from_closed & ((res.status != Status.OK)
+                                                     | ~self.in_home_modes(res.u)))
+            if home.size:
+                again = solve(targets[home], u_home[home], lengths[home])
+                for name in ("u", "status", "residual", "iterations", "rank"):
+                    getattr(res, name)[home] = getattr(again, name)
         return res
 
     def in_home_modes(self, u: np.ndarray) -> np.ndarray:
@@ -189,7 +219,8 @@ class ChainWarmStart:
 
     def _nearest_branch(self, solve: Any, targets: np.ndarray, res: Any,
                         lengths: np.ndarray, started: np.ndarray | None = None,
-                        u_home: np.ndarray | None = None) -> None:
+                        u_home: np.ndarray | None = None,
+                        warm: np.ndarray | None = None) -> None:
         """The head's branch of the default start (module docstring):
         :func:`~pkmkit.machines.head_branches.nearest_head_branch` on the wrist pair with home
         as the reference, the strokes judged around home; ``res`` updated in place. Rows
@@ -204,10 +235,17 @@ class ChainWarmStart:
         reach = max(abs(self.model.q_min[turn] - home[turn]),
                     abs(self.model.q_max[turn] - home[turn]))
 
+        tilt = 6 + pair[1]
+
+        def mirror(t: np.ndarray, tool: np.ndarray, u: np.ndarray) -> np.ndarray | None:
+            # the kind's closed form on the other branch (the tilt's other side)
+            return closed_starts(self, t, tool,
+                                 np.where(np.sin(u[:, tilt] - home[pair[1]]) < 0, 1.0, -1.0))
+
         def rule(result: Any, t: np.ndarray, tool: np.ndarray) -> None:
             nearest_head_branch(solve, t, tool, result, np.full(len(result.status),
                                 home[turn]), pair, lambda u, rows: self._within_strokes(u),
-                                home[pair[1]], turn_reach=reach)
+                                home[pair[1]], turn_reach=reach, mirror_start=mirror)
 
         rule(res, targets, lengths)
         if started is None:
@@ -215,8 +253,9 @@ class ChainWarmStart:
         with np.errstate(invalid="ignore"):
             again = np.flatnonzero(started & (res.status == Status.OK)
                                    & ~self.in_home_modes(res.u))
-        if again.size:
-            other = solve(targets[again], u_home[again], lengths[again])
+        if again.size:  # a caller's start (warm): the closed-form start first
+            other = self._solve_from_closed(solve, targets[again], lengths[again],
+                                            u_home[again], warm is not None and warm[again])
             rule(other, targets[again], lengths[again])
             for name in ("u", "status", "residual", "iterations", "rank"):
                 getattr(res, name)[again] = getattr(other, name)

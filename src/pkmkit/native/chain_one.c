@@ -125,6 +125,80 @@ static int within(const pk_one *s, const double *values) {
 
 static double turn_offset(double angle) { return PK_PI - pk_pymod(PK_PI - angle, 2.0 * PK_PI); }
 
+/* The TriMule's closed-form start (machines/trimule_forms.py inverse_unknowns and
+ * start_unknowns, statement for statement; chain_starts.closed_starts): u (27,) on the head's
+ * branch (+1: Q5 >= 0, -1: Q5 <= 0, 0: the branch whose Q4 is within a quarter turn of home's);
+ * 1, or 0 where it declines (near the wrist singularity, not converged, not finite). */
+enum { CLOSED_SWEEPS = 40 };
+static const double CLOSED_TOL = 1e-15, CLOSED_SINGULAR = 1e-3;
+
+static int closed_start(const pk_one *s, const double *target, double branch, double *u) {
+    const double c1 = s->cl[0], c2 = s->cl[1], reach = s->cl[2] + s->tool;
+    const double big = s->cl[3], small = s->cl[4], hb = s->cl[5], hs = s->cl[6];
+    double ax = target[3], ay = target[4], az = target[5];
+    double wx = target[0] - reach * ax, wy = target[1] - reach * ay, wz = target[2] - reach * az;
+    double vx = wx, vy = wy, vz = wz, r, dx, dy, dz, ad, gx, gy, gz;
+    if (branch == 0.0) {
+        r = sqrt(wx * wx + wy * wy + wz * wz);
+        dx = wx / r, dy = wy / r, dz = wz / r;
+        double ct = sqrt(dy * dy + dz * dz);
+        double along = -ct * ax + dx * (dy * ay + dz * az) / ct;
+        branch = along >= 0 ? 1.0 : -1.0;
+    }
+    int done = 0;
+    for (int sweep = 0; sweep < CLOSED_SWEEPS && !done; sweep++) {
+        r = sqrt(vx * vx + vy * vy + vz * vz);
+        dx = vx / r, dy = vy / r, dz = vz / r;
+        ad = ax * dx + ay * dy + az * dz;
+        gx = ax - ad * dx, gy = ay - ad * dy, gz = az - ad * dz;
+        double k = c2 * branch / sqrt(gx * gx + gy * gy + gz * gz);
+        double nx = wx - k * gx, ny = wy - k * gy, nz = wz - k * gz;
+        double change = fabs(nx - vx) + fabs(ny - vy) + fabs(nz - vz);
+        vx = nx, vy = ny, vz = nz;
+        done = change <= CLOSED_TOL;
+    }
+    r = sqrt(vx * vx + vy * vy + vz * vz);
+    dx = vx / r, dy = vy / r, dz = vz / r;
+    ad = ax * dx + ay * dy + az * dz;
+    gx = ax - ad * dx, gy = ay - ad * dy, gz = az - ad * dz;
+    double gn = sqrt(gx * gx + gy * gy + gz * gz);
+    if (!(done && gn >= CLOSED_SINGULAR)) return 0;
+    double length = r - c1, theta = asin(-dx), psi = atan2(dy, dz);
+    double ct = cos(theta), st = sin(theta), cp = cos(psi), sp = sin(psi);
+    u[0] = length * dx, u[1] = length * dy, u[2] = length * dz;
+    /* the platform's rotation vector: Rx(-psi1) Ry(-theta4) Rz(pi) by its quaternion, w >= 0 */
+    double ch = cos(-0.5 * psi), sh = sin(-0.5 * psi), cq = cos(-0.5 * theta),
+           sq = sin(-0.5 * theta);
+    double w = -sh * sq, qx = ch * sq, qy = -sh * cq, qz = ch * cq;
+    double flip = w < 0 ? -1.0 : 1.0;
+    w *= flip, qx *= flip, qy *= flip, qz *= flip;
+    double norm = sqrt(qx * qx + qy * qy + qz * qz), scale = 2.0 * atan2(norm, w) / norm;
+    u[3] = scale * qx, u[4] = scale * qy, u[5] = scale * qz;
+    /* the parallel part's joints (trimule_forms._parallel_joints) */
+    double e1x = big - small * ct + 2 * length * st, e1y = small * st + 2 * length * ct;
+    double e3x = -big + small * ct + 2 * length * st, e3y = -small * st + 2 * length * ct;
+    double lx = -length * st, ly = length * ct * sp - hs * cp + hb, lz = length * ct * cp + hs * sp;
+    double q2 = sqrt(lx * lx + ly * ly + lz * lz), theta2 = asin(-lx / q2),
+           psi2 = atan2(ly, lz);
+    double ca = cos(theta2), sa = sin(theta2), cb = cos(psi2 - psi), sb = sin(psi2 - psi);
+    double cc = ct, sc = -st;
+    double g00 = ca * cc - sa * cb * sc, g10 = sb * sc, g20 = -sa * cc - ca * cb * sc;
+    double g21 = ca * sb, g22 = -sa * sc + ca * cb * cc;
+    double theta1 = atan2(e1x, e1y), theta3 = atan2(e3x, e3y);
+    double *v = u + 6;
+    v[0] = psi, v[1] = theta1, v[2] = 0.5 * hypot(e1x, e1y), v[3] = 0.0, v[4] = 0.0;
+    v[5] = theta - theta1, v[6] = psi2, v[7] = theta2, v[8] = q2, v[9] = atan2(g10, g00);
+    v[10] = asin(g20 < -1.0 ? -1.0 : (g20 > 1.0 ? 1.0 : g20)), v[11] = atan2(g21, g22);
+    v[12] = theta3, v[13] = 0.5 * hypot(e3x, e3y), v[14] = 0.0, v[15] = 0.0;
+    v[16] = theta3 - theta, v[17] = theta, v[18] = length;
+    /* x_P = (-cos th4, -sin th4 sin psi1, -sin th4 cos psi1), y_P = (0, -cos psi1, sin psi1) */
+    v[19] = atan2(branch * (-cp * ay + sp * az), branch * (-ct * ax - st * sp * ay - st * cp * az));
+    v[20] = branch * atan2(gn, ad);
+    for (int i = 0; i < 27; i++)
+        if (!isfinite(u[i])) return 0;
+    return 1;
+}
+
 /* The inverse of target (6,) (axis unit) from start (n,) or the first-order start (NULL):
  * 1 with values, u (the kept solution), *iterations, *residual filled; 0 where the batch path
  * must decide. machines/chain_one.py's _inverse_values and _nearest_branch, statement for
@@ -134,7 +208,9 @@ static int inverse(const pk_one *s, const double *target, const double *start, p
     const pk_chain *c = &s->inv;
     ptrdiff_t n = c->n;
     int64_t status;
-    if (start == NULL) {
+    if (start == NULL && s->closed && closed_start(s, target, 0.0, u)) {
+        /* the kind's closed-form start (the batch path's, chain_starts.inverse_starts) */
+    } else if (start == NULL) {
         double d[6];
         for (int i = 0; i < 3; i++) {
             d[i] = (target[i] - s->tool * target[3 + i]) - s->base[i];
@@ -151,7 +227,14 @@ static int inverse(const pk_one *s, const double *target, const double *start, p
     solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, u, target, s->tool, k, &status,
           residual, iterations);
     int first = status == OK && in_home_modes(s, u);
-    if (!first) {
+    int again = !first;
+    if (again && start != NULL && s->closed && closed_start(s, target, 0.0, u)) {
+        /* a caller's start failed: the closed-form start next (warm_starts._solve_from_closed) */
+        solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, u, target, s->tool, k, &status,
+              residual, iterations);
+        again = !(status == OK && in_home_modes(s, u));
+    }
+    if (again) {
         memcpy(u, s->u_home_inv, (size_t)n * sizeof(double));
         solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, u, target, s->tool, k, &status,
               residual, iterations);
@@ -168,6 +251,10 @@ static int inverse(const pk_one *s, const double *target, const double *start, p
     memcpy(other, u, (size_t)n * sizeof(double));
     other[6 + s->w_turn] += PK_PI;
     other[6 + s->w_tilt] = 2.0 * s->w_centre - other[6 + s->w_tilt];
+    if (s->closed) {  /* the other branch's closed form where it answers (the batch path's) */
+        double b = sin(u[6 + s->w_tilt] - s->w_centre) < 0 ? 1.0 : -1.0;
+        if (closed_start(s, target, b, k->du)) memcpy(other, k->du, (size_t)n * sizeof(double));
+    }
     int64_t other_iterations;
     double other_residual;
     solve(s, c, &s->inv_b, &s->inv_o, s->u_home_inv + 6, other, target, s->tool, k, &status,

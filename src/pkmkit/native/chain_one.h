@@ -45,6 +45,8 @@ typedef struct {
     double *u_home_dir, *dir_rates, *residual_rates, *home_values;
     double singular_bound, max_coordinate;
     ptrdiff_t twists, m_dir;
+    int closed;          /* the TriMule's closed-form start (chain_one.c closed_start) */
+    double cl[7];        /* c1, c2, spindle, L, l, H, h */
     void *owned[48];
     int n_owned;
 } pk_one;

@@ -49,16 +49,17 @@ const char pk_chain_one_pack_doc[] =
     "               length, inv_options, dir_options, u_home_inv, base, inv_rates, tool,\n"
     "               slides, signs, turns, turn_homes, act_turns, act_turn_homes, lower, upper,\n"
     "               act, wrist, far, u_home_dir, dir_rates, residual_rates, home_values,\n"
-    "               singular_bound, max_coordinate, structured)\n\n"
+    "               singular_bound, max_coordinate, structured, closed=None)\n\n"
     "A joint-chain machine's one-pose constants, copied into a capsule for chain_one_ik and\n"
     "chain_one_fk (machines/chain_one_native.py builds the arguments). wrist: (5,) turn\n"
     "variable, its home, tilt variable, its home, whether the turn reaches a quarter turn, or\n"
-    "(0,) for none. structured: block elimination (else the dense solve of chain_rows).";
+    "(0,) for none. structured: block elimination (else the dense solve of chain_rows).\n"
+    "closed: the TriMule's closed-form start (c1, c2, spindle, L, l, H, h; chain_one.c).";
 
 PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
     (void)take_chain;  /* chain_face.h's, unused here */
-    if (check_count(nargs, 33, "chain_one_pack") < 0) return NULL;
+    if (check_count(nargs, nargs == 34 ? 34 : 33, "chain_one_pack") < 0) return NULL;
     pk_one *s = calloc(1, sizeof(pk_one));
     if (!s) return PyErr_NoMemory();
     held_buffers held = {.count = 0};
@@ -189,6 +190,14 @@ PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t
     if (s->max_coordinate == -1.0 && PyErr_Occurred()) goto fail;
     s->structured = PyObject_IsTrue(args[32]);
     if (s->structured < 0) goto fail;
+    if (nargs == 34 && args[33] != Py_None) {  /* the closed-form start's constants */
+        Py_ssize_t n_cl;
+        double *cl = copy_of(s, &held, args[33], "closed", 'd', 1, 7, &n_cl);
+        if (!cl) goto fail;
+        memcpy(s->cl, cl, sizeof s->cl);
+        let_go(&held);
+        s->closed = n_var == 21;
+    }
     int found_inv = pk_one_find_blocks(s, &s->inv, &s->inv_b);
     int found_dir = found_inv == -2 ? -2 : pk_one_find_blocks(s, &s->dir, &s->dir_b);
     if (found_inv == -2 || found_dir == -2) {
