@@ -371,3 +371,45 @@ def test_full_pose_inverse_at_the_edge_of_the_rods_consistency_answers_as_the_ba
                                   _outcome(lambda x=x: m.ik(x, strokes="ignore")),
                                   _outcome(lambda x=x: _general_ik(m, x, "ignore")))
     assert not found, "\n".join(found)
+
+
+@pytest.mark.parametrize("name", ["delta", "gough-stewart"])
+def test_inverse_at_the_edge_of_a_stroke_answers_as_the_general_path(name):
+    """Poses moved from home until an actuator leaves its stroke by more than STROKE_TOL
+    (bisection on the batch's ``out_of_stroke``): the one-pose q may differ from the batch's
+    in its last bit (libm's acos for a crank, the NumPy rod forms for a hexapod), so the band
+    of STROKE_TOL is the batch path's (defect found by the audit: at its edge the fast ``ik``
+    answered without a StrokeWarning, or without OutOfStrokeError for ``strokes="refuse"``,
+    where the general path gave them)."""
+    m = pkmkit.machine(name)
+    rng = np.random.default_rng(8)
+    home = np.asarray(m.home_pose, dtype=float)
+    found = []
+    for _ in range(20):
+        d = rng.normal(size=home.shape)
+        if len(d) == 6:
+            d[3:] *= 0.2
+        d /= np.linalg.norm(d)
+
+        def inside(s, d=d):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                r = m.ik((home + s * d)[None], full_output=True)
+            return r.status[0] == 0 and not np.asarray(r.out_of_stroke)[0].any()
+
+        lo, hi = 0.0, 0.01
+        while inside(hi) and hi < 4.0:
+            hi *= 2.0
+        if inside(hi):
+            continue
+        for _ in range(70):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if inside(mid) else (lo, mid)
+        for s in (lo, hi):
+            x = (home + s * d).tolist()
+            for strokes in ("flag", "refuse"):
+                found += _differences(
+                    f"ik({x}, strokes={strokes})",
+                    _outcome(lambda x=x, strokes=strokes: m.ik(x, strokes=strokes)),
+                    _outcome(lambda x=x, strokes=strokes: _general_ik(m, x, strokes)))
+    assert not found, "\n".join(found)

@@ -184,8 +184,10 @@ def test_inputs_it_reads_and_those_it_hands_over():
 
 
 def test_strokes_judged_as_the_machine_judges_them(monkeypatch):
-    """At a stroke's limit (its tolerance included) the value is inside, one ulp beyond it
-    outside: the kernel hands it to the batch path (a StrokeWarning, an OutOfStrokeError)."""
+    """At a stroke's limit the value is inside, one ulp beyond it outside: the kernel hands it
+    to the batch path, which judges it with STROKE_TOL (session 33: the band is the batch
+    path's, whose q may round otherwise) — inside up to the tolerance, then a StrokeWarning,
+    an OutOfStrokeError."""
     m = pkmkit.machine("linear-delta")
     lo, hi = _limits(m)
     q = m.home_q.copy()
@@ -201,10 +203,16 @@ def test_strokes_judged_as_the_machine_judges_them(monkeypatch):
             assert _kernels.rod_fk_one(m._one_pack, at, m._working_mode, strokes) is not None
             assert _kernels.rod_fk_one(m._one_pack, beyond, m._working_mode, strokes) is None
         assert _kernels.rod_fk_one(m._one_pack, beyond, m._working_mode, "ignore") is not None
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # within the tolerance: the batch path, no warning
+            np.testing.assert_allclose(m.fk(beyond), m.fk(beyond, strokes="ignore"),
+                                       rtol=0, atol=1e-12)
+        past = at.copy()
+        past[k] = edge + 2e-12 * (1.0 if outward > 0 else -1.0)
         with pytest.warns(StrokeWarning):
-            m.fk(beyond)
+            m.fk(past)
         with pytest.raises(OutOfStrokeError):
-            m.fk(beyond, strokes="refuse")
+            m.fk(past, strokes="refuse")
     pose = [0.0, 0.0, 1.0]  # reachable, beyond the slides' strokes
     assert _kernels.rod_ik_one(m._one_pack, pose, "flag") is None
     assert _kernels.rod_jacobian_one(m._one_pack, pose, 1e-6) is None
@@ -219,9 +227,8 @@ def test_strokes_judged_as_the_machine_judges_them(monkeypatch):
 
 
 def _limits(m):
-    from pkmkit.machines.strokes import STROKE_TOL, stroke_limits
-    lo, hi = stroke_limits(m)
-    return lo - STROKE_TOL, hi + STROKE_TOL
+    from pkmkit.machines.strokes import stroke_limits
+    return stroke_limits(m)  # the kernel's window: the strokes themselves
 
 
 @pytest.mark.parametrize("name", TRANSLATIONAL)

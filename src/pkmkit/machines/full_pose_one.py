@@ -28,7 +28,7 @@ import numpy as np
 
 from pkmkit.machines.full_pose_direct import DEFAULT_OPTIONS
 from pkmkit.machines.full_pose_forms import BOUNDARY_TOL, FullPoseForms
-from pkmkit.machines.strokes import STROKE_TOL, stroke_limits
+from pkmkit.machines.strokes import stroke_limits
 from pkmkit.model.rods import CRANK, STRUT
 from pkmkit.numerics import jit
 
@@ -171,7 +171,7 @@ def _pose_one(machine: Any, native: Any) -> Any | None:
     kernel = machine.direct_kernel()
     return native.pose_one(np.array(inverse.rows, dtype=float).tobytes(), groups.tobytes(),
                            inverse.simple, BOUNDARY_TOL, inverse.tol, MAX_ABS,
-                           np.ascontiguousarray(lower - STROKE_TOL, dtype=float),
-                           np.ascontiguousarray(upper + STROKE_TOL, dtype=float),
+                           np.ascontiguousarray(lower, dtype=float),  # as within_strokes
+                           np.ascontiguousarray(upper, dtype=float),
                            np.ascontiguousarray(kernel.geom), kernel.home, DEFAULT_OPTIONS,
                            float(machine.characteristic_length))

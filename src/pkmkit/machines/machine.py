@@ -58,7 +58,6 @@ from pkmkit.machines.rod_refusals import RodRefusals
 from pkmkit.machines.rod_solves import RodSolveRows
 from pkmkit.machines.strokes import (
     STROKE_MODES,
-    STROKE_TOL,
     check_mode,
     judge_rows,
     refuse_absurd_home,
@@ -136,8 +135,8 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         object.__setattr__(self, "_working_mode", 1 if det_a > 0 else -1)
         object.__setattr__(self, "_home_jacobian", np.linalg.solve(a[0], b[0]))
         lo, hi = stroke_limits(self)  # the one-pose C entries' constants, packed once
-        object.__setattr__(self, "_one_pack", one_pose_pack(
-            closed, self._default_branches, lo - STROKE_TOL, hi + STROKE_TOL))
+        # the strokes without STROKE_TOL: as within_strokes
+        object.__setattr__(self, "_one_pack", one_pose_pack(closed, self._default_branches, lo, hi))
 
     # ---------------------------------------------------------------- properties
     @property
@@ -215,11 +214,14 @@ class Machine(RodSolveRows, RodRefusals, ModeNaming, TranslationalErrors,
         return cached
 
     def within_strokes(self, q: list[float]) -> bool:
-        """Every value of one configuration within its stroke (as :func:`signed_excess`)."""
+        """Every value of one configuration within its stroke, the one-pose paths' test: the
+        limits themselves, not widened by ``STROKE_TOL`` as :func:`signed_excess` does — a value
+        in that band goes to the batch path, whose q may round otherwise by an ulp (at the
+        band's edge the two answered differently)."""
         limits = self.__dict__.get("_stroke_tuples")
         if limits is None:
             lo, hi = stroke_limits(self)
-            limits = ((lo - STROKE_TOL).tolist(), (hi + STROKE_TOL).tolist())
+            limits = (lo.tolist(), hi.tolist())
             object.__setattr__(self, "_stroke_tuples", limits)
         if len(q) != len(limits[0]):
             raise ValueError(f"{len(q)} actuator values for {len(limits[0])} strokes")
