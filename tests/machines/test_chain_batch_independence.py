@@ -23,10 +23,10 @@ import pkmkit
 from pkmkit.status import Status
 
 PIECES = {"ones": [1] * 23, "fours": [4] * 5 + [3], "nines": [9, 9, 5], "uneven": [5, 2, 11, 1, 4]}
-#: the NumPy engine's pieces (its calls cost 0.03–0.6 s each: 5.7 s of CPU for ``ik`` in
-#: PIECES, 3.0 s in these): alone every row up to the one not finite (the reached rows, the one
-#: beyond a stroke, the one without a closure), then the uneven pieces. Planted in
-#: pkmkit.numerics.rowwise, a batch of one computed as it comes and a batch axis left
+#: the NumPy engine's pieces (its calls cost 0.03–0.6 s each: the ``ik`` test took 4.3 s of
+#: CPU with PIECES, 2.6 s with these): alone every row up to the one not finite (the reached
+#: rows, the one beyond a stroke, the one without a closure), then the uneven pieces. Planted
+#: in pkmkit.numerics.rowwise, a batch of one computed as it comes and a batch axis left
 #: transposed each still fail both tests (docs/testing.md, "Fifth round").
 NUMPY_PIECES = {"ones": [1] * 15 + [8], "uneven": PIECES["uneven"]}
 
