@@ -3,7 +3,9 @@
 
 The oracle is the former two-step path, written out here: the kind's machine with its reference
 poses, then ``replace`` adding this machine's other poses (and, for a full-pose machine, its
-characteristic length when given).
+characteristic length when given, else None so that the new geometry's default is taken and
+stays "not given": the former path passed the old default through ``replace``, which then
+counted as given and stuck through a second ``with_params`` — fixed in session 33).
 """
 
 from __future__ import annotations
@@ -24,8 +26,8 @@ def _two_step(m, **overrides):
                       description=m.description, source=m.source,
                       extra_poses=m.kind.reference_poses(params, model))
     extra = {k: v for k, v in m.extra_poses.items() if k not in rebuilt.extra_poses}
-    kept = ({"characteristic_length": m.characteristic_length}
-            if getattr(m, "length_given", False) else {})
+    kept = ({"characteristic_length": m.characteristic_length
+             if m.length_given else None} if hasattr(m, "length_given") else {})
     return replace(rebuilt, extra_poses={**rebuilt.extra_poses, **extra}, **kept)
 
 
@@ -71,6 +73,11 @@ def test_a_full_pose_machine_keeps_a_given_length_and_takes_the_new_default_else
     _check_same(new, _two_step(m, **overrides))
     radius = float(np.linalg.norm(new.model.rod_platform, axis=1).mean())
     assert new.characteristic_length == radius != m.characteristic_length
+    assert not new.length_given  # a default stays a default ...
+    again = new.with_params(**_scaled(new, 1.1, platform))
+    assert not again.length_given  # ... and follows the geometry again
+    assert again.characteristic_length == float(
+        np.linalg.norm(again.model.rod_platform, axis=1).mean()) != new.characteristic_length
     given = m.with_characteristic_length(0.37).with_params(**overrides)
     assert given.characteristic_length == 0.37 and given.length_given
     _check_same(given, _two_step(m.with_characteristic_length(0.37), **overrides))

@@ -50,7 +50,7 @@ from pkmkit.machines.common import (
 from pkmkit.machines.error_faces import FullPoseErrors
 from pkmkit.machines.export_layouts import FullPoseLayout
 from pkmkit.machines.full_pose_criteria_rates import FullPoseCriteriaRates
-from pkmkit.machines.full_pose_forms import FullPoseForms
+from pkmkit.machines.full_pose_forms import FullPoseForms, default_characteristic_length
 from pkmkit.machines.full_pose_inverse_record import assembly_modes, lazy_inverse_record
 from pkmkit.machines.full_pose_modes import FullPoseModes
 from pkmkit.machines.full_pose_one import OnePoseInverse, native_one
@@ -182,7 +182,8 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
                 f"machine {self.id!r} has {self.model.n_rods} rods: a six-DOF platform needs at "
                 "least six to be held")
         if self.characteristic_length is None:
-            object.__setattr__(self, "characteristic_length", _default_length(self.model))
+            length = default_characteristic_length(self.model)
+            object.__setattr__(self, "characteristic_length", length)
         forms = FullPoseForms(self.model)
         object.__setattr__(self, "_forms", forms)
         home = self.model.home_pose[None]
@@ -297,9 +298,8 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
         model = self.kind.build(params)
         poses = dict(self.kind.reference_poses(params, model))  # then the others kept
         poses.update((k, v) for k, v in self.extra_poses.items() if k not in poses)
-        # one build; L as the former build-then-replace left it: this machine's when given,
-        # else the new geometry's default, given (length_given) from then on
-        length = self.characteristic_length if self.length_given else _default_length(model)
+        # one build; L this machine's when given, else the new geometry's default (not given)
+        length = self.characteristic_length if self.length_given else None
         return type(self)(id=self.id, name=self.name, kind=self.kind, params=dict(params),
                           model=model, description=self.description, source=self.source,
                           extra_poses=poses, characteristic_length=length)
@@ -694,9 +694,3 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
                                                     self._home_q),
         }
 
-
-def _default_length(model: RodModel) -> float:
-    """The characteristic length of a machine not given one: the mean distance of the rods'
-    platform joints from the platform's origin (1 m when that is 0)."""
-    radius = float(np.linalg.norm(model.rod_platform, axis=1).mean())
-    return radius if radius > 0 else 1.0

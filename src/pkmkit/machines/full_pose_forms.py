@@ -293,3 +293,10 @@ class FullPoseForms:
 def _plain(*arrays: np.ndarray) -> list[np.ndarray]:
     """C-contiguous float64 copies where needed (what the C kernels take)."""
     return [np.ascontiguousarray(a, dtype=float) for a in arrays]
+
+
+def default_characteristic_length(model: RodModel) -> float:
+    """The characteristic length (m) of a full-pose machine not given one: the mean distance
+    of the rods' platform joints from the platform's origin (1 m when that is 0)."""
+    radius = float(np.linalg.norm(model.rod_platform, axis=1).mean())
+    return radius if radius > 0 else 1.0
