@@ -157,4 +157,14 @@ def test_orthonormal_matrices_take_the_numpy_path_with_scipy_s_answer():
     np.testing.assert_allclose(matrix_to_rotvec(skewed),
                                Rotation.from_matrix(skewed).as_rotvec(), atol=1e-13)
     np.testing.assert_array_equal(matrix_to_rotvec(np.eye(3)), [[0.0, 0.0, 0.0]])
+    # each row takes its own path: a rotation's answer is the same bits beside a failed (NaN)
+    # row and a skewed one as alone (a batch and its pieces agree, issue 22 §6)
+    # (a rotation whose two paths differ in the last bits, so the check can tell them apart)
+    alone = matrix_to_rotvec(rotations)
+    k = int(np.flatnonzero((alone != Rotation.from_matrix(rotations).as_rotvec()).any(axis=1))[0])
+    mixed = np.stack([rotations[k], np.full((3, 3), np.nan), skewed[1]])
+    out = matrix_to_rotvec(mixed)
+    np.testing.assert_array_equal(out[0], alone[k])
+    assert np.isnan(out[1]).all()
+    np.testing.assert_array_equal(out[2], matrix_to_rotvec(skewed[1:2])[0])
 
