@@ -76,6 +76,11 @@ _SCRIPT = textwrap.dedent("""
 """).format(heavy=HEAVY)
 
 
+def _short(modules: list[str]) -> list[str]:
+    """``scipy.spatial.transform._rotation`` → ``scipy.spatial``: the packages, for messages."""
+    return sorted({".".join(m.split(".")[:2]) for m in modules})
+
+
 @pytest.fixture(scope="module")
 def help_reports() -> dict:
     """One fresh interpreter imports the command line (``pkmkit.cli.main``, what every
@@ -104,7 +109,7 @@ def test_the_commands_are_listed_without_importing_them(help_reports):
 def test_help_imports_no_heavy_package(name, help_reports):
     for command, printed, heavy in help_reports["reports"][name]:
         assert printed, f"pkmkit {command} --help printed no usage"
-        assert heavy == [], f"pkmkit {command} --help imports {heavy}"
+        assert heavy == [], f"pkmkit {command} --help imports {_short(heavy)}"
 
 
 @needs_fork
@@ -157,4 +162,81 @@ def test_orthonormal_matrices_take_the_numpy_path_with_scipy_s_answer():
     np.testing.assert_allclose(matrix_to_rotvec(skewed),
                                Rotation.from_matrix(skewed).as_rotvec(), atol=1e-13)
     np.testing.assert_array_equal(matrix_to_rotvec(np.eye(3)), [[0.0, 0.0, 0.0]])
+    # each row takes its own path: a rotation's answer is the same bits beside a failed (NaN)
+    # row and a skewed one as alone (a batch and its pieces agree, issue 22 §6)
+    # (a rotation whose two paths differ in the last bits, so the check can tell them apart)
+    alone = matrix_to_rotvec(rotations)
+    k = int(np.flatnonzero((alone != Rotation.from_matrix(rotations).as_rotvec()).any(axis=1))[0])
+    mixed = np.stack([rotations[k], np.full((3, 3), np.nan), skewed[1]])
+    out = matrix_to_rotvec(mixed)
+    np.testing.assert_array_equal(out[0], alone[k])
+    assert np.isnan(out[1]).all()
+    np.testing.assert_array_equal(out[2], matrix_to_rotvec(skewed[1:2])[0])
 
+
+
+#: One-pose commands (and `machines`, which builds every machine): none loads the heavy packages.
+ONE_POSE = [
+    ["machines"],
+    ["show", "tripteor-x7"],
+    ["ik", "linear-delta", "--pose", "0.25,0.25,0"],
+    ["ik", "gough-stewart", "--pose", "0.08,-0.04,0.84,10,0,5"],
+    ["ik", "tripteor-x7", "--pose",
+     "-0.103203582,-0.458476529,1.83342075,0.0103095056,0.17988607,0.983633426"],
+    ["fk", "tripteor-x7", "--q", "0.982802,1.06375,0.989454,5,10"],
+    ["jacobian", "five-bar", "--pose", "1.05,0.05"],
+    ["analyze", "orthoglide", "--pose", "0,0,0"],
+    ["stiffness", "orthoglide", "--pose", "0,0,0"],
+    ["arm-sizing", "--force", "1000", "--length", "0.5", "--diameter", "0.03"],
+    ["errors", "five-bar"],
+    ["register", "--measured", "{tmp}/measured.csv", "--nominal", "{tmp}/nominal.csv"],
+]
+
+_RUN_SCRIPT = textwrap.dedent("""
+    import contextlib, io, json, os, sys
+
+    from pkmkit.cli.main import cli
+
+    HEAVY = {heavy!r}
+    reports = []
+    for args in json.loads(sys.argv[1]):
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:
+            os.close(read)
+            text = io.StringIO()
+            with contextlib.redirect_stdout(text), contextlib.redirect_stderr(io.StringIO()):
+                try:
+                    cli(args, standalone_mode=False)
+                    code = 0
+                except SystemExit as exc:
+                    code = exc.code
+                except Exception as exc:
+                    code = repr(exc)
+            heavy = sorted(m for m in sys.modules if m.split(".")[0] in HEAVY)
+            os.write(write, json.dumps([code, bool(text.getvalue()), heavy]).encode())
+            os._exit(0)
+        os.close(write)
+        with os.fdopen(read, "rb") as pipe:
+            data = pipe.read()
+        os.waitpid(pid, 0)
+        reports.append(json.loads(data) if data else ["the child failed", False, []])
+    print(json.dumps(reports))
+""").format(heavy=HEAVY)
+
+
+@needs_fork
+def test_one_pose_commands_import_no_heavy_package(tmp_path):
+    """A one-pose command of every family (the joint chains build their home through
+    ``matrix_to_rotvec``), ``register`` of 4 points, ``analyze``, ``stiffness``, ``errors`` and
+    an arm analysed: each in a forked child of one fresh interpreter, exit status 0, some output,
+    none of Numba, SciPy, pyarrow, matplotlib in ``sys.modules``."""
+    (tmp_path / "nominal.csv").write_text("x,y,z\n0,0,0\n1,0,0\n0,1,0\n0,0,1\n")
+    (tmp_path / "measured.csv").write_text("x,y,z\n0.1,0,0\n1.1,0,0\n0.1,1,0\n0.1,0,1\n")
+    runs = [[a.format(tmp=tmp_path) for a in args] for args in ONE_POSE]
+    out = subprocess.run([sys.executable, "-c", _RUN_SCRIPT, json.dumps(runs)],
+                         capture_output=True, text=True, check=True).stdout
+    for args, (code, printed, heavy) in zip(ONE_POSE, json.loads(out.splitlines()[-1]),
+                                            strict=True):
+        assert code in (0, None) and printed, f"pkmkit {' '.join(args)}: {code}"
+        assert heavy == [], f"pkmkit {' '.join(args)} imports {_short(heavy)}"

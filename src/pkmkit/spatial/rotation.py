@@ -97,28 +97,32 @@ def rotvec_to_matrix(phi: np.ndarray) -> np.ndarray:
     return _euler.matrix_from_quat(_euler.quat_from_rotvec(_rows3(phi)))
 
 
-def _orthonormal(arr: np.ndarray, tol: float = 1e-12) -> bool:
-    """Whether every matrix of ``(N, 3, 3)`` is a rotation to within ``tol`` (scipy's
-    ``from_matrix`` first projects other matrices onto the rotations; only then do the two
-    paths differ)."""
-    gram = np.einsum("nki,nkj->nij", arr, arr) - np.eye(3)
-    return bool(np.abs(gram).max(initial=0.0) <= tol and (np.linalg.det(arr) > 0).all())
+def _rotations(arr: np.ndarray, tol: float = 1e-12) -> np.ndarray:
+    """Which matrices of ``(N, 3, 3)`` are finite rotations to within ``tol`` (scipy's
+    ``from_matrix`` first projects other matrices onto the rotations; only for those do the two
+    paths below differ). Row by row, so a row's path never depends on the rows beside it."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        gram = np.matmul(np.swapaxes(arr, 1, 2), arr) - np.eye(3)
+        det = np.einsum("ni,ni->n", arr[:, 0], np.cross(arr[:, 1], arr[:, 2]))
+        return np.isfinite(arr).all(axis=(1, 2)) & (np.abs(gram).max(axis=(1, 2)) <= tol) \
+            & (det > 0)
 
 
 def matrix_to_rotvec(matrix: np.ndarray) -> np.ndarray:
     """Rotation vectors ``(N, 3)`` (radians, angle in [0, π]) of rotation matrices ``(N, 3, 3)``;
     NaN rows for matrices with a non-finite entry (failed rows of a batch)."""
     arr = np.asarray(matrix, dtype=float).reshape(-1, 3, 3)
-    finite = np.isfinite(arr).all(axis=(1, 2))
-    if finite.all() and _orthonormal(arr):
+    rotations = _rotations(arr)
+    if rotations.all():
         # scipy's arithmetic in NumPy (equal to ~1e-15): building a joint-chain machine (its
         # home) must not import scipy.spatial (≈ 0.2 s of a one-pose command's start-up)
         return _euler.rotvec_from_quat(_euler.quat_from_matrix(arr))
-    if finite.all():
-        return rotation_class().from_matrix(arr).as_rotvec()
     out = np.full((arr.shape[0], 3), np.nan)
-    if finite.any():
-        out[finite] = rotation_class().from_matrix(arr[finite]).as_rotvec()
+    if rotations.any():
+        out[rotations] = _euler.rotvec_from_quat(_euler.quat_from_matrix(arr[rotations]))
+    other = np.isfinite(arr).all(axis=(1, 2)) & ~rotations
+    if other.any():
+        out[other] = rotation_class().from_matrix(arr[other]).as_rotvec()
     return out
 
 
