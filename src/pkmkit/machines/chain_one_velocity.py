@@ -70,7 +70,7 @@ class VelocityPack:
     joints shared by legs), and the output buffer's layout."""
 
     __slots__ = ("call", "expected", "ik_jacobian", "jacobian", "layout", "n", "n_p", "pack",
-                 "rank", "size")
+                 "rank", "size", "sv_start", "sv_stop")
 
     def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
         arguments = pack_arguments(m) if arguments is None else arguments
@@ -88,6 +88,7 @@ class VelocityPack:
                        "singular_values": (12 * n, 12 * n + k, None),
                        "condition": (12 * n + k, None, None),
                        "passive_rates": (12 * n + k + 1, self.size, (self.n_p, n))}
+        self.sv_start, self.sv_stop = 12 * n, 12 * n + k  # the singular values; condition
 
     def __reduce__(self) -> tuple:
         """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
@@ -164,20 +165,10 @@ def pack(m: Any) -> VelocityPack | None:
     return p
 
 
-def _singular_stage(fields: dict) -> None:
-    """The kernel's singular stage on a record's buffer (one C call on its ``J_homogeneous``):
-    ``singular_values`` and ``condition`` put in the record's ``fields`` (its ``__dict__``)."""
-    p, out = fields["_pack"], fields["_out"]
-    p.call(p.pack, None, out)
-    start, stop, _ = p.layout["singular_values"]
-    fields["singular_values"], fields["condition"] = out[start:stop], out[stop]
-
-
-class _Field:
-    """A field of :class:`OnePoseChainJacobians` made at its first read from the record's
-    buffer and kept in the record's ``__dict__`` (a non-data descriptor: later reads are plain
-    attribute reads). ``singular_values`` and ``condition`` run the singular stage, once, for
-    both."""
+class _View:
+    """A view field of :class:`OnePoseChainJacobians` (``J``, ``J_homogeneous``,
+    ``passive_rates``) made at its first read from the record's buffer and kept in the
+    record's ``__dict__`` (a non-data descriptor: later reads are plain attribute reads)."""
 
     __slots__ = ("name",)
 
@@ -188,17 +179,31 @@ class _Field:
         if record is None:
             return self
         fields = record.__dict__
-        name = self.name
-        if name in _SINGULAR:
-            _singular_stage(fields)
-            return fields[name]
-        start, stop, shape = fields["_pack"].layout[name]
-        value = fields["_out"][start:stop].reshape(shape)
-        fields[name] = value
+        start, stop, shape = fields["_pack"].layout[self.name]
+        value = fields[self.name] = fields["_out"][start:stop].reshape(shape)
         return value
 
 
-_SINGULAR = frozenset(("singular_values", "condition"))
+class _Singular:
+    """``singular_values`` or ``condition`` of :class:`OnePoseChainJacobians`: the first read
+    of either runs the kernel's singular stage (one C call on the buffer's
+    ``J_homogeneous``) and keeps both in the record's ``__dict__``."""
+
+    __slots__ = ("condition",)
+
+    def __init__(self, condition: bool) -> None:
+        self.condition = condition
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        p, out = fields["_pack"], fields["_out"]
+        p.call(p.pack, None, out)
+        stop = p.sv_stop
+        values = fields["singular_values"] = out[p.sv_start:stop]
+        condition = fields["condition"] = out[stop]
+        return condition if self.condition else values
 
 
 class OnePoseChainJacobians(ChainJacobians):
@@ -208,11 +213,11 @@ class OnePoseChainJacobians(ChainJacobians):
     singular stage). Equality is identity (comparing would compute every field); pickled, it
     becomes the plain :class:`~pkmkit.machines.chain_velocity_record.ChainJacobians`."""
 
-    J = _Field("J")
-    J_homogeneous = _Field("J_homogeneous")
-    singular_values = _Field("singular_values")
-    condition = _Field("condition")
-    passive_rates = _Field("passive_rates")
+    J = _View("J")
+    J_homogeneous = _View("J_homogeneous")
+    singular_values = _Singular(False)
+    condition = _Singular(True)
+    passive_rates = _View("passive_rates")
 
     def __eq__(self, other: object) -> bool:
         return self is other
@@ -241,7 +246,7 @@ def record(m: Any, q: Any, u: Any, residual: float, tol: float, margin: float,
     p = pack(m) if residual <= RESIDUAL_GUARD else None
     if p is None:
         return False
-    out = p.jacobian(p.pack, u, margin * tol)  # the singular values when read (_Field)
+    out = p.jacobian(p.pack, u, margin * tol)  # the singular values when read (_Singular)
     if out is None or out is False:  # the bound does not clear; outside the legs' home modes
         return out
     one = _NEW(OnePoseChainJacobians)
