@@ -36,6 +36,30 @@ def _compiler() -> str:
     return cc
 
 
+FLAGS = ["-fPIC", "-O2", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", f"-I{STUB}"]
+_BUILT: dict[str, Path] = {}  # generated source text -> its library, built once per process
+_HARNESS: dict[str, Path] = {}  # compiler -> the harness object
+
+
+def _build(cc: str, source: Path, lib: Path) -> None:
+    """``gcc -O2 -Werror`` of the module with the harness, once per source text: a module built
+    again (the same machine in another test) is a copy of the first library (its own file, so
+    its own handle and static state when loaded); the harness compiled once to an object."""
+    text = source.read_text(encoding="utf-8")
+    if text in _BUILT and _BUILT[text].exists():
+        shutil.copyfile(_BUILT[text], lib)
+        return
+    harness = _HARNESS.get(cc)
+    if harness is None or not harness.exists():
+        harness = lib.parent / "harness.o"
+        subprocess.run([cc, "-c", *FLAGS, str(STUB / "harness.c"), "-o", str(harness)],
+                       check=True, capture_output=True)
+        _HARNESS[cc] = harness
+    subprocess.run([cc, "-shared", *FLAGS, str(source), str(harness), "-o", str(lib), "-lm"],
+                   check=True, capture_output=True)
+    _BUILT[text] = lib
+
+
 class Module:
     """A compiled module: batch inverse/forward in SI (poses: pkmkit's; joints: m, or rad for
     cranks, which LinuxCNC turns in degrees)."""
@@ -52,10 +76,7 @@ class Module:
         source = directory / f"{name}.c"
         source.write_text(linuxcnc_source(machine, units=units), encoding="utf-8")
         lib = directory / f"{name}.so"
-        subprocess.run([cc, "-shared", "-fPIC", "-O2", "-std=c99", "-pedantic", "-Wall", "-Wextra",
-                        "-Werror", f"-I{STUB}",
-                        str(source), str(STUB / "harness.c"), "-o", str(lib), "-lm"],
-                       check=True, capture_output=True)
+        _build(cc, source, lib)
         self.lib = ctypes.CDLL(str(lib))
         ptr = np.ctypeslib.ndpointer
         self.lib.pkm_batch_inverse.argtypes = [ctypes.c_long, ctypes.c_int,

@@ -384,29 +384,34 @@ def test_inverse_at_the_edge_of_a_stroke_answers_as_the_general_path(name):
     m = pkmkit.machine(name)
     rng = np.random.default_rng(8)
     home = np.asarray(m.home_pose, dtype=float)
+    d = rng.normal(size=(20, len(home)))  # 20 directions, bisected together (one batch a step)
+    if len(home) == 6:
+        d[:, 3:] *= 0.2
+    d /= np.linalg.norm(d, axis=1)[:, None]
+
+    def inside(s):
+        """Row k: home + s[k] d[k] solved within its strokes (a closed-form batch's rows do not
+        depend on each other, so this is the former one-row-a-call bisection's predicate)."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            r = m.ik(home + s[:, None] * d, full_output=True)
+        out = np.asarray(r.out_of_stroke).reshape(len(s), -1).any(axis=1)
+        return (np.asarray(r.status) == 0) & ~out
+
+    lo, hi = np.zeros(len(d)), np.full(len(d), 0.01)
+    while (grow := inside(hi) & (hi < 4.0)).any():
+        hi[grow] *= 2.0
+    keep = ~inside(hi)
+    d, lo, hi = d[keep], lo[keep], hi[keep]
+    assert len(d) >= 10
+    for _ in range(70):
+        mid = 0.5 * (lo + hi)
+        ok = inside(mid)
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
     found = []
-    for _ in range(20):
-        d = rng.normal(size=home.shape)
-        if len(d) == 6:
-            d[3:] *= 0.2
-        d /= np.linalg.norm(d)
-
-        def inside(s, d=d):
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                r = m.ik((home + s * d)[None], full_output=True)
-            return r.status[0] == 0 and not np.asarray(r.out_of_stroke)[0].any()
-
-        lo, hi = 0.0, 0.01
-        while inside(hi) and hi < 4.0:
-            hi *= 2.0
-        if inside(hi):
-            continue
-        for _ in range(70):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if inside(mid) else (lo, mid)
-        for s in (lo, hi):
-            x = (home + s * d).tolist()
+    for k in range(len(d)):
+        for s in (lo[k], hi[k]):
+            x = (home + s * d[k]).tolist()
             for strokes in ("flag", "refuse"):
                 found += _differences(
                     f"ik({x}, strokes={strokes})",

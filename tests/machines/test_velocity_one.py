@@ -143,17 +143,27 @@ def test_near_serial_and_parallel_singularities(name):
     det = m.jacobian(x, q=q, tol=1e-9).det_A
     crossings = [k for k in range(len(x) - 1)
                  if np.isfinite(det[k:k + 2]).all() and det[k] * det[k + 1] < 0]
-    for k in crossings[:12]:  # 12 parallel crossings are enough beside the serial ones
-        a, b, sign = x[k], x[k + 1], np.sign(det[k])
+    ks = np.array(crossings[:12], dtype=int)  # 12 parallel crossings beside the serial ones
+    a, b, sign = x[ks], x[ks + 1], np.sign(det[ks])
 
-        def same_sign(t, a=a, b=b, sign=sign):
-            p = a + t * (b - a)
-            qq = closed.inverse_one(p.tolist(), branches)
-            return qq is not None and np.sign(m.jacobian(p[None], q=np.array([qq])).det_A[
-                0]) == sign
+    def same_sign(t):
+        """Row j: a_j + t_j (b_j − a_j) reached with det A of a_j's sign (the crossings bisected
+        together: one batch Jacobian a step, the batch's rows independent of each other)."""
+        p = a + t[:, None] * (b - a)
+        qs = [closed.inverse_one(row.tolist(), branches) for row in p]
+        reached = np.array([qq is not None for qq in qs], dtype=bool)
+        out = np.zeros(len(p), dtype=bool)
+        if reached.any():
+            qq = np.array([qq for qq in qs if qq is not None], dtype=float)
+            out[reached] = np.sign(m.jacobian(p[reached], q=qq).det_A) == sign[reached]
+        return out
 
-        t = _bisect(same_sign, 0.0, 1.0)
-        near.append(a + t * (b - a))
+    lo, hi = np.zeros(len(ks)), np.ones(len(ks))
+    for _ in range(60):  # as _bisect, every crossing at once
+        mid = 0.5 * (lo + hi)
+        ok = same_sign(mid)
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+    near += list(a + lo[:, None] * (b - a))
     assert len(near) >= 10
     serial = parallel = 0
     for p in near:
