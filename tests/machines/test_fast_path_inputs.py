@@ -373,7 +373,7 @@ def test_full_pose_inverse_at_the_edge_of_the_rods_consistency_answers_as_the_ba
     assert not found, "\n".join(found)
 
 
-@pytest.mark.parametrize("name", ["delta", "gough-stewart"])
+@pytest.mark.parametrize("name", ["delta", "gough-stewart", "tripteor-x7"])
 def test_inverse_at_the_edge_of_a_stroke_answers_as_the_general_path(name):
     """Poses moved from home until an actuator leaves its stroke by more than STROKE_TOL
     (bisection on the batch's ``out_of_stroke``): the one-pose q may differ from the batch's
