@@ -240,9 +240,11 @@ def test_a_field_read_alone_runs_only_the_matrices_kernel_with_the_same_bits(nam
 
 @pytest.mark.parametrize("name", ["gough-stewart", "dietmaier-hexapod"])
 def test_flags_with_the_tolerance_at_the_parallel_measure(name, monkeypatch):
-    """A tolerance equal to a pose's parallel measure does not flag it, the next float up
-    does: the matrices kernel decides by the measure itself where its bound cannot (both
-    one-pose paths: OnePoseFullVelocity's, then PoseOne's)."""
+    """A tolerance 1e-6 (relative) below a pose's parallel measure does not flag it, 1e-6
+    above does: the matrices kernel decides by the measure itself where its bound cannot
+    (both one-pose paths: OnePoseFullVelocity's, then PoseOne's). A tolerance equal to the
+    measure, or the next float up, is within the band handed to the batch path (its measure
+    rounds otherwise by an ulp or a few): the flags and J are the batch's."""
     for native_one in (lambda machine: None, full_pose.native_one):
         monkeypatch.setattr(full_pose, "native_one", native_one)
         _flags_at_the_measure(name)
@@ -253,6 +255,11 @@ def _flags_at_the_measure(name):
     for p in _poses(m, 8, seed=22):
         measure = float(m.jacobian(p).parallel_measure)
         for tol in (measure, float(np.nextafter(measure, np.inf))):
+            jac = m.jacobian(p, tol=tol)
+            batch = m.jacobian(np.asarray(p, dtype=float)[None], tol=tol)
+            assert int(jac.singularity) == int(batch.singularity[0])
+            assert np.array_equal(np.isnan(jac.J), np.isnan(batch.J[0]))
+        for tol in (measure * (1 - 1e-6), measure * (1 + 1e-6)):
             jac = m.jacobian(p, tol=tol)
             assert bool(jac.singularity & 2) == (tol > measure)
             ev = jac._evaluation  # the exact-measure level not run (the flags decided it)

@@ -94,14 +94,21 @@ def test_nearly_equal_singular_values_go_to_lapack_in_both_paths(name, spread, m
 
 @pytest.mark.parametrize("name", ["orthoglide", "delta", "five-bar"])
 def test_flags_with_the_tolerance_at_the_parallel_measure(name):
-    """A tolerance equal to a pose's parallel measure does not flag it, the next float up does:
-    the one-pose flags decide by the measure itself wherever its cheap bound cannot."""
+    """A tolerance 1e-6 (relative) below a pose's parallel measure does not flag it, 1e-6
+    above does: the one-pose flags decide by the measure itself wherever its cheap bound
+    cannot. A tolerance equal to the measure, or the next float up, is within the band
+    handed to the general path (its q and measure round otherwise by an ulp): its flags and
+    J are the general path's."""
     m = pkmkit.machine(name)
     x = _poses(m, 12, seed=13)
     q = np.array([_one(m, p).q for p in x])  # (the Delta's cranks: an ulp from m.ik's)
     measures = m.jacobian(x, q=q).parallel_measure
     for p, measure in zip(x, measures, strict=True):
         for tol in (float(measure), float(np.nextafter(measure, np.inf))):
+            got, general = _one(m, p, tol), m.jacobian(p[None], tol=tol)
+            _same_bits(got.singularity, general.singularity[0], f"{name} {tol}")
+            _same_bits(got.J, general.J[0], name)
+        for tol in (float(measure) * (1 - 1e-6), float(measure) * (1 + 1e-6)):
             got = _one(m, p, tol)
             _same_bits(got.singularity, m.jacobian(p[None], q=np.array([got.q]),
                                                    tol=tol).singularity[0], f"{name} {tol}")

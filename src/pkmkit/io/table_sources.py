@@ -370,8 +370,18 @@ class ArrowSource:
         problems: list[tuple[int, int, str]] = []  # (row, column, message)
         for j, (name, actual) in enumerate(zip(r.columns, self.names, strict=True)):
             column = table.column(actual)
-            floats = column if column.type == pa.float64() else _cast_to_float(column, name,
-                                                                                r.path)
+            try:
+                floats = column if column.type == pa.float64() else _cast_to_float(column, name,
+                                                                                    r.path)
+            except InputError:
+                if not _is_text(column.type):
+                    raise
+                # a text column with some cells not numbers: those rows flagged, as a CSV's
+                bad = _text_cells(column, values[:, j])
+                invalid[[k for k, _ in bad]] = True
+                problems.extend((k, j, f"{r.path}: row {first_row + k + 1}: column {name!r} "
+                                 f"{what}") for k, what in bad)
+                continue
             _fill(values[:, j], floats)
             nulls = np.zeros(n, dtype=bool)
             if floats.null_count:
@@ -403,6 +413,26 @@ def _cast_to_float(column: Any, name: str, path: str) -> Any:
         return pc.cast(column, pa.float64(), safe=not pa.types.is_integer(column.type))
     except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
         raise InputError(f"{path}: column {name!r} is not numeric ({column.type})") from None
+
+
+def _is_text(kind: Any) -> bool:
+    """A string column, plain or dictionary-encoded."""
+    import pyarrow as pa
+
+    if pa.types.is_dictionary(kind):
+        kind = kind.value_type
+    return pa.types.is_string(kind) or pa.types.is_large_string(kind)
+
+
+def _text_cells(column: Any, out: np.ndarray) -> list[tuple[int, str]]:
+    """A text column's cells read as a CSV's (:func:`_cell`) into ``out`` ``(n,)``; the rows
+    whose cell is not a number (or null), with what is wrong with each."""
+    bad = []
+    for k, text in enumerate(column.to_pylist()):
+        out[k], what = (math.nan, "is empty") if text is None else _cell(text)
+        if what:
+            bad.append((k, what))
+    return bad
 
 
 def _null_flags(column: Any, n: int) -> np.ndarray:

@@ -101,7 +101,8 @@ class TableWriter:
         names in the same order at every call)."""
         import pyarrow as pa
 
-        arrays = [_to_arrow(v) for v in columns.values()]
+        csv_text = self.format == "csv"  # a CSV's bools are written 0/1, as they read back
+        arrays = [_to_arrow(v, csv_text) for v in columns.values()]
         table = pa.Table.from_arrays(arrays, names=list(columns))  # pa.table imports pandas
         if self._writer is None:
             if self.units is not None:
@@ -228,10 +229,12 @@ class Labels:
     names: Sequence[str]
 
 
-def _to_arrow(values: Any) -> Any:
+def _to_arrow(values: Any, csv_text: bool = False) -> Any:
     """An Arrow array of ``(n,)`` values, built from buffers: ``pa.array`` and ``pa.table`` ask
     pyarrow's pandas shim whether their argument is a pandas object, which imports pandas
-    (0.3 to 0.9 s) when it is installed."""
+    (0.3 to 0.9 s) when it is installed. With ``csv_text`` a bool array is written as uint8
+    0/1: pyarrow's CSV writer would write ``true``/``false``, which no number column reads
+    (pkmkit's reader flags them), while a Parquet/Feather bool column reads as 0/1."""
     import pyarrow as pa
 
     if isinstance(values, Labels):
@@ -240,6 +243,8 @@ def _to_arrow(values: Any) -> Any:
     arr = np.asarray(values)
     if arr.dtype.kind == "f":
         return _numeric_array(np.ascontiguousarray(arr, dtype=np.float64))
+    if csv_text and arr.dtype.kind == "b":
+        return _numeric_array(np.ascontiguousarray(arr, dtype=np.uint8))
     if arr.dtype.kind in "iub":  # in the machine's byte order: Arrow's buffers are little-endian
         return _numeric_array(np.ascontiguousarray(arr, dtype=arr.dtype.newbyteorder("=")))
     return _string_array(arr)

@@ -116,6 +116,8 @@ def _fill(x, q, geom, n, length_l, tol, out, exact):  # pragma: no cover
         sv_a = np.empty(6)
         _values(unit, sv_a, 0)
         parallel = sv_a[5] / sv_a[0]
+    if abs(serial - tol) <= 1e-9 * tol or abs(parallel - tol) <= 1e-9 * tol:
+        return 1  # a measure at tol: its flag the batch path's (velocity_one.FLAG_BAND)
     flags = (1 if serial < tol else 0) | (2 if parallel < tol else 0)
     det_a = np.linalg.det(a) if m == 6 else np.nan
     if flags & 2:  # no J at a parallel singularity (A may be exactly singular there)

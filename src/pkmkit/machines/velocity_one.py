@@ -63,8 +63,24 @@ class _Unusual(Exception):
     """A case the batch path treats specially: hand the pose to it."""
 
 
+class _AtTolerance(_Unusual):
+    """A singularity measure within :data:`FLAG_BAND` of ``tol``: the general path's answer."""
+
+
 #: What makes a one-pose field hand its pose to the batch path.
 _HANDED_OVER = (_Unusual, ZeroDivisionError, OverflowError, ValueError)
+
+#: A measure within this (relative) of ``tol``: its singularity flag is decided by its last
+#: bits, which the batch path rounds otherwise (an ulp or a few; 8 of 250 flags at ``tol``
+#: equal to the measure differed on the Delta), so the flags, J and what follows them are the
+#: batch path's (``native/velocity.c`` PK_FLAG_BAND, ``pose_velocity.c`` the same for the
+#: full-pose machines).
+FLAG_BAND = 1e-9
+
+
+def in_band(measure: float, tol: float) -> bool:
+    """Whether ``measure`` lies within :data:`FLAG_BAND` (relative) of ``tol``."""
+    return abs(measure - tol) <= FLAG_BAND * tol
 
 
 def _legs(closed: RodClosedForm) -> tuple:
@@ -224,6 +240,8 @@ class OnePoseVelocity:
 
     # the pieces, computed when first needed (class-level None: a record sets only its inputs)
     _ab = _adj = _lengths = _parallel = _flags = _j = _sv = _batch = None
+    #: a measure at the tolerance (in_band): the batch path's q too (its ik rounds otherwise)
+    _general_q = False
     #: the C kernel's state (:meth:`native`): None not yet asked, False no extension
     _state: Any = None
     _native_field: Any = None
@@ -246,6 +264,8 @@ class OnePoseVelocity:
         if self._batch is None:
             try:
                 return _BUILD[name](self)
+            except _AtTolerance:
+                self._general_q = True
             except _HANDED_OVER:
                 pass
         return self.from_batch(name)
@@ -268,6 +288,8 @@ class OnePoseVelocity:
         """Field ``name`` of the batch path's velocity model of this pose."""
         if self._batch is None:
             x, q = np.array([self.x]), np.array([self.q])
+            if self._general_q:  # the general path's: its q from the batch inverse model
+                q = np.ascontiguousarray(self.closed.inverse(x, self.closed.model.leg_branch))
             self._batch = LazyJacobians(VelocityEvaluation(self.closed, x, q, self.tol), True)
         return getattr(self._batch, name)
 
@@ -348,7 +370,10 @@ class OnePoseVelocity:
         det_a = self.adj()[1]
         if _surely_above(det_a, self.lengths(), self.tol):
             return False
-        return self.parallel() < self.tol or det_a == 0.0
+        parallel = self.parallel()
+        if det_a != 0.0 and in_band(parallel, self.tol):
+            raise _AtTolerance
+        return parallel < self.tol or det_a == 0.0
 
     def serial(self) -> float:
         b, lengths = self.ab()[1], self.lengths()
@@ -402,7 +427,10 @@ class OnePoseVelocity:
     def flags(self) -> int:
         flags = self._flags
         if flags is None:
-            flags = _SERIAL if self.serial() < self.tol else 0
+            serial = self.serial()
+            if in_band(serial, self.tol):
+                raise _AtTolerance
+            flags = _SERIAL if serial < self.tol else 0
             if self.at_parallel():
                 flags |= _PARALLEL
             self._flags = flags

@@ -308,6 +308,8 @@ condition:
 
 /* Every field but the singular values of J, the condition number and (where the flags do
  * not need it) the parallel measure, which rod_svd and rod_parallel add when asked. */
+#define PK_FLAG_BAND 1e-9 /* velocity_one.FLAG_BAND */
+
 static void rod_core(const double *legs, int n, const double *x, const double *q, double tol,
                      double near, pk_rod_state *s) {
     double *a = s->a, *b = s->b;
@@ -360,11 +362,17 @@ static void rod_core(const double *legs, int n, const double *x, const double *q
     }
     s->serial = serial;
     s->ok |= PK_F_SERIAL;
+    /* A measure within 1e-9 (relative) of tol: its flag is decided by its last bits, which the
+     * batch path rounds otherwise; the flags, J and what follows them are then left to the
+     * Python pieces, which hand that band to the batch path (velocity_one.in_band) */
+    if (fabs(serial - tol) <= PK_FLAG_BAND * tol) return;
     /* velocity_one.at_parallel: the parallel measure only where its bound cannot tell */
     int at_parallel;
     if (surely_above(det_a, lengths, n, tol)) {
         at_parallel = 0;
     } else if (!rod_parallel(s)) {
+        return;
+    } else if (det_a != 0.0 && fabs(s->parallel - tol) <= PK_FLAG_BAND * tol) {
         return;
     } else {
         at_parallel = s->parallel < tol || det_a == 0.0;
