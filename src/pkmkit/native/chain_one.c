@@ -440,7 +440,7 @@ static int first_order_start(const pk_one *s, const pk_chain *c, pk_one_work *k,
 /* The direct model of q (n_act,): 1 with pose (6,) and values (n_var,) filled, 0 where the
  * batch path must decide (chain_one_kernel.direct_one and chain_one.direct). */
 static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, double *values,
-                  double *pose) {
+                  double *pose, int64_t *iterations) {
     const pk_chain *c = &s->dir;
     ptrdiff_t n_u = c->n, m = s->m_dir, n = s->n_act;
     double *u = k->u, delta[64];
@@ -458,11 +458,11 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
     } else if (!first_order_start(s, c, k, values, delta, u)) {
         return 0;
     }
-    int64_t status, iterations;
+    int64_t status;
     double residual;
     double no_target[6] = {0, 0, 0, 0, 0, 0};
     solve(s, c, &s->dir_b, &s->dir_o, values, u, no_target, 0.0, k, &status, &residual,
-          &iterations);
+          iterations);
     if (status != OK) return 0;
     for (ptrdiff_t v = 0; v < c->n_var; v++)
         if (c->position[v] >= 0) values[v] = u[c->position[v]];
@@ -576,15 +576,16 @@ PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t n
 }
 
 const char pk_chain_one_fk_doc[] =
-    "chain_one_fk(packed, q, ignore, check)\n\n"
+    "chain_one_fk(packed, q, ignore, check, counts=False)\n\n"
     "The direct model of one plain configuration q (n numbers) of the machine packed by\n"
     "chain_one_pack: the tool point and axis (6,), or None where the batch path must decide\n"
-    "(machines/chain_one_native.py). check: certify the closure regular (else None).";
+    "(machines/chain_one_native.py). check: certify the closure regular (else None).\n"
+    "counts: (pose, the closure solve's iterations) instead (tests, bench).";
 
 PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
-    if (nargs != 4) {
-        PyErr_SetString(PyExc_TypeError, "chain_one_fk(packed, q, ignore, check)");
+    if (nargs != 4 && nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "chain_one_fk(packed, q, ignore, check, counts=False)");
         return NULL;
     }
     pk_one *s = capsule_state(args[0]);
@@ -594,16 +595,20 @@ PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t n
     int got = pk_plain_numbers(args[1], s->n_act, s->max_coordinate, q);
     if (got != PK_PLAIN_TAKEN) return got < 0 ? NULL : Py_NewRef(Py_None);
     int ignore = PyObject_IsTrue(args[2]), check = PyObject_IsTrue(args[3]);
-    if (ignore < 0 || check < 0) return NULL;
+    int counts = nargs == 5 ? PyObject_IsTrue(args[4]) : 0;
+    if (ignore < 0 || check < 0 || counts < 0) return NULL;
     pk_one_work k;
     if (work_alloc(s, &k) < 0) return PyErr_NoMemory();
     int found;
+    int64_t iterations = 0;
     Py_BEGIN_ALLOW_THREADS
-    found = direct(s, q, check, &k, k.values, pose) && (ignore || within(s, k.values));
+    found = direct(s, q, check, &k, k.values, pose, &iterations) &&
+            (ignore || within(s, k.values));
     Py_END_ALLOW_THREADS
     free(k.memory);
     if (!found) Py_RETURN_NONE;
-    return pk_new_array(pose, 6, 0);
+    if (!counts) return pk_new_array(pose, 6, 0);
+    return Py_BuildValue("(NL)", pk_new_array(pose, 6, 0), (long long)iterations);
 }
 
 const char pk_chain_one_ik_jacobian_doc[] =
