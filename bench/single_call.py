@@ -364,6 +364,8 @@ def chain_rows(name: str, calls: int) -> dict:
         batch_counts = m.ik(np.array(rows), full_output=True).iterations
         figures["iterations"] = (counts.mean(), counts.min(), counts.max(),
                                  int((counts == batch_counts).sum()))
+        fk_counts = m.fk(np.array(qs), strokes="ignore", full_output=True).iterations
+        figures["fk iterations"] = (fk_counts.mean(), fk_counts.min(), fk_counts.max())
         figures["agreement"] = tuple(
             max((float(np.abs(a - b).max()) for a, b in zip(c, ref, strict=True)
                  if a is not None), default=math.nan)
@@ -587,6 +589,9 @@ def main() -> None:
                 elif k == "iterations":
                     print(f"    ik iterations (C call): mean {v[0]:.2f}, {v[1]} to {v[2]}; the "
                           f"batch rows' count on {v[3]} of {f['poses']} poses")
+                elif k == "fk iterations":
+                    print(f"    fk iterations (batch rows; the C call starts alike): mean "
+                          f"{v[0]:.2f}, {v[1]} to {v[2]}")
                 elif k == "fast":
                     print(f"    one-pose path taken by ik on {v} of {f['poses']} poses within "
                           "the strokes")

@@ -66,7 +66,32 @@ def default_start(m: Any, qb: np.ndarray, values: np.ndarray) -> np.ndarray:
         from_home = einsum("pn,nk->pk", residual_rates, delta)
     worse = ~(einsum("mk,mk->k", res, res) <= einsum("mk,mk->k", from_home, from_home))
     u_pred[worse] = u_home[worse]
+    closed = closed_direct_starts(m, qb)
+    if closed is not None:
+        exact = np.isfinite(closed).all(axis=1)
+        u_pred[exact] = closed[exact]
     return u_pred
+
+
+def closed_direct_starts(m: Any, qb: np.ndarray) -> np.ndarray | None:
+    """``(N, 6 + n_p)`` the kind's closed-form starts of the direct model
+    (``MachineKind.direct_start``; the TriMule's
+    :func:`~pkmkit.machines.trimule_forms.direct_unknowns`: platform and passive joints) at
+    actuator values ``qb (N, n)``; NaN rows where it declines; None where the kind has none
+    or the model is not the kind's own (its variables in another order). :func:`default_start`
+    takes it wherever it answers; ``native/chain_one.c`` (``closed_direct``) starts the
+    one-pose call alike (issue 22 §1, session 33 wave 2)."""
+    start = getattr(m.kind, "direct_start", None)
+    if start is None:
+        return None
+    ok = m.__dict__.get("_closed_direct_ok")
+    if ok is None:
+        ok = tuple(m.model.variables) == getattr(start, "variables", None)
+        object.__setattr__(m, "_closed_direct_ok", ok)
+    if not ok:
+        return None
+    u = start(m.params, qb)  # qb's columns: the kind's actuators in its order
+    return u[:, np.concatenate([np.arange(6), 6 + np.asarray(m.passive_variables)])]
 
 
 #: Singular values of the inverse model's Jacobian at home below this fraction of the largest

@@ -44,6 +44,9 @@ class MachineKind:
             -> (N, 6 + n_var)``, a joint chain's closed-form start of the inverse model (NaN
             rows declined; branch None: the head's branch nearest home), or None: the
             first-order start (:func:`pkmkit.machines.chain_starts.inverse_starts`).
+        direct_start: ``(params, q (N, n)) -> (N, 6 + n_var)``, a joint chain's closed-form
+            start of the direct model (NaN rows declined), or None: home moved to first order
+            (:func:`pkmkit.machines.chain_starts.default_start`).
     """
 
     kind: str
@@ -56,6 +59,7 @@ class MachineKind:
         None)
     head_flip: tuple[str, str] | None = None
     inverse_start: Callable[..., np.ndarray] | None = None
+    direct_start: Callable[..., np.ndarray] | None = None
 
 
 def _valid_rows(arr: np.ndarray) -> np.ndarray:

@@ -181,4 +181,5 @@ KIND = MachineKind(
     source="seed 002 (Guyon 2021) §3.4: Table 3.2, eqs. 3.24–3.36; dimensions assumed",
     head_flip=("Q4", "Q5"),
     inverse_start=forms.start_unknowns,
+    direct_start=forms.direct_unknowns,
 )

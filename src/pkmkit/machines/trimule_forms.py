@@ -382,3 +382,35 @@ def start_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
 
 
 start_unknowns.variables = VARIABLES  # the model's variables it answers for (chain_starts)
+
+
+#: Bisection steps of :func:`direct_unknowns` before its two Newton steps (the bracket
+#: (−θ*, θ*) narrowed to ~2e-9 rad; Newton's two quadratic steps then reach rounding).
+DIRECT_BISECTIONS = 30
+
+
+def direct_unknowns(params: Mapping[str, Any], q: Any) -> np.ndarray:
+    """Closed-form direct model of the parallel part as the joint-chain unknowns: ``(N, 27)``
+    platform point P, rotation vector (angle in [0, π]) and every joint variable in the
+    model's order (:data:`VARIABLES`; Q1..Q5 the given ``q (N, 5)``) — the direct model's
+    start (``MachineKind.direct_start``, :func:`pkmkit.machines.chain_starts.default_start`).
+    The measured leg from :func:`measured_leg` (:data:`DIRECT_BISECTIONS` bisections), the
+    platform from :func:`platform_pose`, the passive joints as :func:`passive_joints`. NaN rows
+    where it declines (no assembly in the working mode). Elementwise: a row's bits its own;
+    ``native/chain_one.c`` (``closed_direct``) computes the same, statement for statement."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    n = q.shape[0]
+    leg = measured_leg(params, q[:, :3], iterations=DIRECT_BISECTIONS)
+    length, psi, theta = leg[:, 0], leg[:, 1], leg[:, 2]
+    u = np.empty((n, 27))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ct, st, cp, sp = np.cos(theta), np.sin(theta), np.cos(psi), np.sin(psi)
+        u[:, 0], u[:, 1], u[:, 2] = -length * st, length * ct * sp, length * ct * cp
+        u[:, 3:6] = _platform_rotvec(psi, theta)
+        u[:, 6:] = _parallel_joints(params, length, psi, theta, ct, st, cp, sp).T
+    u[:, 25], u[:, 26] = q[:, 3], q[:, 4]
+    u[~np.isfinite(u).all(axis=1)] = np.nan
+    return u
+
+
+direct_unknowns.variables = VARIABLES  # the model's variables it answers for (chain_starts)

@@ -146,9 +146,43 @@ static double turn_offset(double angle) { return PK_PI - pk_pymod(PK_PI - angle,
 enum { CLOSED_SWEEPS = 40 };
 static const double CLOSED_TOL = 1e-15, CLOSED_SINGULAR = 1e-3;
 
+/* The platform u[:6] (P = length d, the rotation vector) and the parallel part's joints
+ * u[6:25] from the measured leg (length, psi1, theta4; d its unit direction): the tail of
+ * trimule_forms.inverse_unknowns and direct_unknowns (_platform_rotvec, _parallel_joints). */
+static void closed_joints(const pk_one *s, double length, double psi, double theta, double dx,
+                          double dy, double dz, double *u) {
+    const double big = s->cl[3], small = s->cl[4], hb = s->cl[5], hs = s->cl[6];
+    double ct = cos(theta), st = sin(theta), cp = cos(psi), sp = sin(psi);
+    u[0] = length * dx, u[1] = length * dy, u[2] = length * dz;
+    /* the platform's rotation vector: Rx(-psi1) Ry(-theta4) Rz(pi) by its quaternion, w >= 0 */
+    double ch = cos(-0.5 * psi), sh = sin(-0.5 * psi), cq = cos(-0.5 * theta),
+           sq = sin(-0.5 * theta);
+    double w = -sh * sq, qx = ch * sq, qy = -sh * cq, qz = ch * cq;
+    double flip = w < 0 ? -1.0 : 1.0;
+    w *= flip, qx *= flip, qy *= flip, qz *= flip;
+    double norm = sqrt(qx * qx + qy * qy + qz * qz), scale = 2.0 * atan2(norm, w) / norm;
+    u[3] = scale * qx, u[4] = scale * qy, u[5] = scale * qz;
+    /* the parallel part's joints (trimule_forms._parallel_joints) */
+    double e1x = big - small * ct + 2 * length * st, e1y = small * st + 2 * length * ct;
+    double e3x = -big + small * ct + 2 * length * st, e3y = -small * st + 2 * length * ct;
+    double lx = -length * st, ly = length * ct * sp - hs * cp + hb, lz = length * ct * cp + hs * sp;
+    double q2 = sqrt(lx * lx + ly * ly + lz * lz), theta2 = asin(-lx / q2),
+           psi2 = atan2(ly, lz);
+    double ca = cos(theta2), sa = sin(theta2), cb = cos(psi2 - psi), sb = sin(psi2 - psi);
+    double cc = ct, sc = -st;
+    double g00 = ca * cc - sa * cb * sc, g10 = sb * sc, g20 = -sa * cc - ca * cb * sc;
+    double g21 = ca * sb, g22 = -sa * sc + ca * cb * cc;
+    double theta1 = atan2(e1x, e1y), theta3 = atan2(e3x, e3y);
+    double *v = u + 6;
+    v[0] = psi, v[1] = theta1, v[2] = 0.5 * hypot(e1x, e1y), v[3] = 0.0, v[4] = 0.0;
+    v[5] = theta - theta1, v[6] = psi2, v[7] = theta2, v[8] = q2, v[9] = atan2(g10, g00);
+    v[10] = asin(g20 < -1.0 ? -1.0 : (g20 > 1.0 ? 1.0 : g20)), v[11] = atan2(g21, g22);
+    v[12] = theta3, v[13] = 0.5 * hypot(e3x, e3y), v[14] = 0.0, v[15] = 0.0;
+    v[16] = theta3 - theta, v[17] = theta, v[18] = length;
+}
+
 static int closed_start(const pk_one *s, const double *target, double branch, double *u) {
     const double c1 = s->cl[0], c2 = s->cl[1], reach = s->cl[2] + s->tool;
-    const double big = s->cl[3], small = s->cl[4], hb = s->cl[5], hs = s->cl[6];
     double ax = target[3], ay = target[4], az = target[5];
     double wx = target[0] - reach * ax, wy = target[1] - reach * ay, wz = target[2] - reach * az;
     double vx = wx, vy = wy, vz = wz, r, dx, dy, dz, ad, gx, gy, gz;
@@ -179,35 +213,57 @@ static int closed_start(const pk_one *s, const double *target, double branch, do
     if (!(done && gn >= CLOSED_SINGULAR)) return 0;
     double length = r - c1, theta = asin(-dx), psi = atan2(dy, dz);
     double ct = cos(theta), st = sin(theta), cp = cos(psi), sp = sin(psi);
-    u[0] = length * dx, u[1] = length * dy, u[2] = length * dz;
-    /* the platform's rotation vector: Rx(-psi1) Ry(-theta4) Rz(pi) by its quaternion, w >= 0 */
-    double ch = cos(-0.5 * psi), sh = sin(-0.5 * psi), cq = cos(-0.5 * theta),
-           sq = sin(-0.5 * theta);
-    double w = -sh * sq, qx = ch * sq, qy = -sh * cq, qz = ch * cq;
-    double flip = w < 0 ? -1.0 : 1.0;
-    w *= flip, qx *= flip, qy *= flip, qz *= flip;
-    double norm = sqrt(qx * qx + qy * qy + qz * qz), scale = 2.0 * atan2(norm, w) / norm;
-    u[3] = scale * qx, u[4] = scale * qy, u[5] = scale * qz;
-    /* the parallel part's joints (trimule_forms._parallel_joints) */
-    double e1x = big - small * ct + 2 * length * st, e1y = small * st + 2 * length * ct;
-    double e3x = -big + small * ct + 2 * length * st, e3y = -small * st + 2 * length * ct;
-    double lx = -length * st, ly = length * ct * sp - hs * cp + hb, lz = length * ct * cp + hs * sp;
-    double q2 = sqrt(lx * lx + ly * ly + lz * lz), theta2 = asin(-lx / q2),
-           psi2 = atan2(ly, lz);
-    double ca = cos(theta2), sa = sin(theta2), cb = cos(psi2 - psi), sb = sin(psi2 - psi);
-    double cc = ct, sc = -st;
-    double g00 = ca * cc - sa * cb * sc, g10 = sb * sc, g20 = -sa * cc - ca * cb * sc;
-    double g21 = ca * sb, g22 = -sa * sc + ca * cb * cc;
-    double theta1 = atan2(e1x, e1y), theta3 = atan2(e3x, e3y);
-    double *v = u + 6;
-    v[0] = psi, v[1] = theta1, v[2] = 0.5 * hypot(e1x, e1y), v[3] = 0.0, v[4] = 0.0;
-    v[5] = theta - theta1, v[6] = psi2, v[7] = theta2, v[8] = q2, v[9] = atan2(g10, g00);
-    v[10] = asin(g20 < -1.0 ? -1.0 : (g20 > 1.0 ? 1.0 : g20)), v[11] = atan2(g21, g22);
-    v[12] = theta3, v[13] = 0.5 * hypot(e3x, e3y), v[14] = 0.0, v[15] = 0.0;
-    v[16] = theta3 - theta, v[17] = theta, v[18] = length;
+    closed_joints(s, length, psi, theta, dx, dy, dz, u);
     /* x_P = (-cos th4, -sin th4 sin psi1, -sin th4 cos psi1), y_P = (0, -cos psi1, sin psi1) */
-    v[19] = atan2(branch * (-cp * ay + sp * az), branch * (-ct * ax - st * sp * ay - st * cp * az));
-    v[20] = branch * atan2(gn, ad);
+    u[25] = atan2(branch * (-cp * ay + sp * az), branch * (-ct * ax - st * sp * ay - st * cp * az));
+    u[26] = branch * atan2(gn, ad);
+    for (int i = 0; i < 27; i++)
+        if (!isfinite(u[i])) return 0;
+    return 1;
+}
+
+/* The TriMule's closed-form direct start (trimule_forms.direct_unknowns and measured_leg,
+ * statement for statement; chain_starts.closed_direct_starts): u (27,) from q (5,) = Q1..Q5
+ * (the measured leg by DIRECT_BISECTIONS bisections and two Newton steps, then closed_joints);
+ * 1, or 0 where it declines (no assembly in the working mode, not finite). */
+enum { DIRECT_BISECTIONS = 30 };
+
+static double leg_h(double a, double b, double k, double t) {
+    double v = a + b * cos(t);
+    return sqrt(v > 0.0 ? v : 0.0) * sin(t) - k;
+}
+
+static int closed_direct(const pk_one *s, const double *q, double *u) {
+    const double big = s->cl[3], small = s->cl[4], hb = s->cl[5], hs = s->cl[6];
+    double q1 = q[0], q2 = q[1], q3 = q[2];
+    if (!(q1 > 0.0 && q2 > 0.0 && q3 > 0.0 && isfinite(q1) && isfinite(q2) && isfinite(q3)))
+        return 0;
+    double k = (q1 * q1 - q3 * q3) / big;
+    double a = 2 * (q1 * q1 + q3 * q3) - big * big - small * small, b = 2 * big * small;
+    double c_star = (-a + sqrt(a * a + 3 * b * b)) / (3 * b);
+    double limit = acos(c_star < -1.0 ? -1.0 : (c_star > 1.0 ? 1.0 : c_star));
+    double lo = -limit, hi = limit;
+    if (!(a - b > 0 && leg_h(a, b, k, lo) <= 0 && leg_h(a, b, k, hi) >= 0)) return 0;
+    for (int i = 0; i < DIRECT_BISECTIONS; i++) {
+        double mid = 0.5 * (lo + hi);
+        if (leg_h(a, b, k, mid) > 0) hi = mid; else lo = mid;
+    }
+    double theta = 0.5 * (lo + hi);
+    for (int i = 0; i < 2; i++) {  /* Newton: h' = (3B c^2 + 2A c - B) / (2u) */
+        double w = sqrt(a + b * cos(theta)), c = cos(theta);
+        theta = theta - leg_h(a, b, k, theta) * 2 * w / (3 * b * c * c + 2 * a * c - b);
+    }
+    double length = 0.5 * sqrt(a + b * cos(theta));
+    double ca = 2 * hb * length * cos(theta), cb = -2 * hb * hs;
+    double d = q2 * q2 - length * length - hs * hs - hb * hb, radius = hypot(ca, cb);
+    if (!(fabs(d) <= radius)) return 0;
+    double ratio = d / radius;
+    double psi = atan2(ca, cb) - acos(ratio < -1.0 ? -1.0 : (ratio > 1.0 ? 1.0 : ratio));
+    psi = pk_pymod(psi + PK_PI, 2 * PK_PI) - PK_PI;
+    double ct = cos(theta), st = sin(theta), cp = cos(psi), sp = sin(psi);
+    closed_joints(s, length, psi, theta, -st, ct * sp, ct * cp, u);
+    u[0] = -length * st, u[1] = length * ct * sp, u[2] = length * ct * cp;
+    u[25] = q[3], u[26] = q[4];
     for (int i = 0; i < 27; i++)
         if (!isfinite(u[i])) return 0;
     return 1;
@@ -365,20 +421,13 @@ static double regular_bound(double *low, ptrdiff_t n, double *inv) {
     return 1.0 / sqrt(fro * total);
 }
 
-/* The direct model of q (n_act,): 1 with pose (6,) and values (n_var,) filled, 0 where the
- * batch path must decide (chain_one_kernel.direct_one and chain_one.direct). */
-static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, double *values,
-                  double *pose) {
-    const pk_chain *c = &s->dir;
+/* The direct model's default start into u: home moved to first order towards q (delta its
+ * change, values every joint's), or home where that closes worse (chain_starts.default_start).
+ * Always 1. */
+static int first_order_start(const pk_one *s, const pk_chain *c, pk_one_work *k,
+                             const double *values, const double *delta, double *u) {
     ptrdiff_t n_u = c->n, m = s->m_dir, n = s->n_act;
-    double *u = k->u, *pred = k->pred, *du = k->du, delta[64];
-    if (n > 64) return 0;
-    memcpy(values, s->home_values, (size_t)c->n_var * sizeof(double));
-    for (ptrdiff_t j = 0; j < n; j++) {
-        values[s->act[j]] = q[j];
-        delta[j] = q[j] - s->home_values[s->act[j]];
-    }
-    /* the start: home moved to first order, or home where that closes worse */
+    double *pred = k->pred, *du = k->du;
     for (ptrdiff_t i = 0; i < n_u; i++) {
         double acc = 0.0;
         for (ptrdiff_t j = 0; j < n; j++) acc += delta[j] * s->dir_rates[i * n + j];
@@ -399,11 +448,35 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
     }
     int worse = !(dot(k->w.r, k->w.r, m) <= home_cost);
     memcpy(u, worse ? s->u_home_dir : pred, (size_t)n_u * sizeof(double));
-    int64_t status, iterations;
+    return 1;
+}
+
+/* The direct model of q (n_act,): 1 with pose (6,) and values (n_var,) filled, 0 where the
+ * batch path must decide (chain_one_kernel.direct_one and chain_one.direct). */
+static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, double *values,
+                  double *pose, int64_t *iterations) {
+    const pk_chain *c = &s->dir;
+    ptrdiff_t n_u = c->n, m = s->m_dir, n = s->n_act;
+    double *u = k->u, delta[64];
+    if (n > 64) return 0;
+    memcpy(values, s->home_values, (size_t)c->n_var * sizeof(double));
+    for (ptrdiff_t j = 0; j < n; j++) {
+        values[s->act[j]] = q[j];
+        delta[j] = q[j] - s->home_values[s->act[j]];
+    }
+    if (s->closed && n == 5 && closed_direct(s, q, k->u2)) {
+        /* the kind's closed-form start (the batch path's, chain_starts.closed_direct_starts) */
+        memcpy(u, k->u2, 6 * sizeof(double));
+        for (ptrdiff_t v = 0; v < c->n_var; v++)
+            if (c->position[v] >= 0) u[c->position[v]] = k->u2[6 + v];
+    } else if (!first_order_start(s, c, k, values, delta, u)) {
+        return 0;
+    }
+    int64_t status;
     double residual;
     double no_target[6] = {0, 0, 0, 0, 0, 0};
     solve(s, c, &s->dir_b, &s->dir_o, values, u, no_target, 0.0, k, &status, &residual,
-          &iterations);
+          iterations);
     if (status != OK) return 0;
     for (ptrdiff_t v = 0; v < c->n_var; v++)
         if (c->position[v] >= 0) values[v] = u[c->position[v]];
@@ -517,15 +590,16 @@ PyObject *pk_py_chain_one_ik(PyObject *self, PyObject *const *args, Py_ssize_t n
 }
 
 const char pk_chain_one_fk_doc[] =
-    "chain_one_fk(packed, q, ignore, check)\n\n"
+    "chain_one_fk(packed, q, ignore, check, counts=False)\n\n"
     "The direct model of one plain configuration q (n numbers) of the machine packed by\n"
     "chain_one_pack: the tool point and axis (6,), or None where the batch path must decide\n"
-    "(machines/chain_one_native.py). check: certify the closure regular (else None).";
+    "(machines/chain_one_native.py). check: certify the closure regular (else None).\n"
+    "counts: (pose, the closure solve's iterations) instead (tests, bench).";
 
 PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
-    if (nargs != 4) {
-        PyErr_SetString(PyExc_TypeError, "chain_one_fk(packed, q, ignore, check)");
+    if (nargs != 4 && nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "chain_one_fk(packed, q, ignore, check, counts=False)");
         return NULL;
     }
     pk_one *s = capsule_state(args[0]);
@@ -535,26 +609,21 @@ PyObject *pk_py_chain_one_fk(PyObject *self, PyObject *const *args, Py_ssize_t n
     int got = pk_plain_numbers(args[1], s->n_act, s->max_coordinate, q);
     if (got != PK_PLAIN_TAKEN) return got < 0 ? NULL : Py_NewRef(Py_None);
     int ignore = PyObject_IsTrue(args[2]), check = PyObject_IsTrue(args[3]);
-    if (ignore < 0 || check < 0) return NULL;
+    int counts = nargs == 5 ? PyObject_IsTrue(args[4]) : 0;
+    if (ignore < 0 || check < 0 || counts < 0) return NULL;
     pk_one_work k;
     if (work_alloc(s, &k) < 0) return PyErr_NoMemory();
     int found;
+    int64_t iterations = 0;
     Py_BEGIN_ALLOW_THREADS
-    found = direct(s, q, check, &k, k.values, pose) && (ignore || judged_within(s, k.values));
+    found = direct(s, q, check, &k, k.values, pose, &iterations) &&
+            (ignore || judged_within(s, k.values));
     Py_END_ALLOW_THREADS
     free(k.memory);
     if (!found) Py_RETURN_NONE;
-    return pk_new_array(pose, 6, 0);
+    if (!counts) return pk_new_array(pose, 6, 0);
+    return Py_BuildValue("(NL)", pk_new_array(pose, 6, 0), (long long)iterations);
 }
-
-const char pk_chain_one_ik_jacobian_doc[] =
-    "chain_one_ik_jacobian(packed, pack, x, threshold, guard)\n\n"
-    "m.jacobian(x)'s C path in one call: chain_one_ik's inverse of one plain pose x (no\n"
-    "stroke test) and chain_one_jacobian(pack, u, threshold) at its solution u, the closure's\n"
-    "Jacobian handed over from the inverse's last evaluation where that was at u (else\n"
-    "evaluated again): (q, out), out the array, None or False as chain_one_jacobian answers\n"
-    "(False too where the inverse's largest residual exceeds guard); None where the inverse\n"
-    "declines. pack: the machine's chain_velocity_pack capsule.";
 
 /* The legs' rows of the inverse model's Jacobian (6 L x n, row-major) from its panels. */
 static void legs_dense(const pk_one *s, const double *panels, double *jac) {

@@ -1,5 +1,5 @@
-/* The docstrings of native/chain_one_velocity.c's Python face (kept apart: that file's
- * 700-line limit). */
+/* The docstrings of native/chain_one_velocity.c's Python face and of chain_one.c's fused
+ * chain_one_ik_jacobian (kept apart: those files' 700-line limit). */
 
 const char pk_chain_velocity_pack_doc[] =
     "chain_velocity_pack(frames, types, evar, elements, offsets, position, head, head_position,\n"
@@ -34,3 +34,12 @@ const char pk_chain_one_jacobian_doc[] =
     "singular values and the condition NaN: chain_one_velocity(pack, None, out) computes them)\n"
     "where the bound clears threshold; None where it does not (or a pivot vanished), False\n"
     "where u is not in the legs' home modes.";
+
+const char pk_chain_one_ik_jacobian_doc[] =
+    "chain_one_ik_jacobian(packed, pack, x, threshold, guard)\n\n"
+    "m.jacobian(x)'s C path in one call: chain_one_ik's inverse of one plain pose x (no\n"
+    "stroke test) and chain_one_jacobian(pack, u, threshold) at its solution u, the closure's\n"
+    "Jacobian handed over from the inverse's last evaluation where that was at u (else\n"
+    "evaluated again): (q, out), out the array, None or False as chain_one_jacobian answers\n"
+    "(False too where the inverse's largest residual exceeds guard); None where the inverse\n"
+    "declines. pack: the machine's chain_velocity_pack capsule.";

@@ -534,7 +534,7 @@ PyObject *pk_py_chain_one_structured(PyObject *self, PyObject *const *args, Py_s
 /* chain_one_closure.c: the one-pose solve's closure by blocks' panels (tests) */
 extern const char pk_chain_one_closure_doc[];
 PyObject *pk_py_chain_one_closure(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
-extern const char pk_chain_one_ik_jacobian_doc[];  /* chain_one.c */
+extern const char pk_chain_one_ik_jacobian_doc[];  /* chain_one_velocity_doc.c */
 PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
 /* rod_batch.c: the batched closed-form inverse of rod-leg machines (issue 22 §5) */
