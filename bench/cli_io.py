@@ -41,11 +41,18 @@ before the command runs (pkmkit, click, NumPy), the conversion of the read batch
 arrays, the inverse model with statuses and modes, the output table built and written, and the
 rest of the command (pyarrow's imports, opening the file and reading its batches, the columns).
 
+``--six-axis gough-stewart,verne``: ``pkmkit ik`` of those machines on their own ``--rows``
+tables (the hexapod's full poses x,y,z,A,B,C in m and degrees, the Verne module's positions
+x,y,z, drawn about home), CSV and Parquet, against pyarrow's read + write of the same file
+(``xlib``) and the engine call ``m.ik(X, full_output=True)`` on the SI rows (``solve``), in
+the same run; then nothing else (issue 22 §5, session 33).
+
 Usage::
 
     python bench/cli_io.py [--rows 1000000] [--repeat 5] [--big-rows 10000000] [--load]
                            [--commands ik] [--formats parquet] [--old-rows 0]
                            [--first-calls-only | --no-first-calls]
+                           [--six-axis gough-stewart,verne]
 """
 
 from __future__ import annotations
@@ -249,6 +256,53 @@ def phases(paths: dict[str, Path], folder: Path, repeat: int) -> None:
             print(f"  {label:28s} {statistics.median(values):6.3f}")
 
 
+def six_axis_tables(folder: Path, name: str, rows: int) -> tuple[dict[str, Path], np.ndarray]:
+    """A ``rows``-row pose table of machine ``name`` about its home (CSV and Parquet, m and
+    degrees of the xyz convention; positions alone for a machine commanded by them) and its
+    rows in SI (rotation vectors) as the engine takes them."""
+    from pkmkit.boundary.coordinates import pose_from_cli
+
+    m = pkmkit.machine(name)
+    rng = np.random.default_rng(0)
+    width = 3 if m.position_controlled else 6
+    spread = np.array([0.05, 0.05, 0.05, 10.0, 10.0, 10.0])[:width]
+    home = np.asarray(m.home_pose, dtype=float)[:width].copy()
+    if width == 6:
+        home[3:] = 0.0
+    values = np.round(home + rng.uniform(-1.0, 1.0, (rows, width)) * spread, 6)
+    table = pa.table({c: values[:, j] for j, c in enumerate("xyzABC"[:width])})
+    paths = {"poses.csv": folder / f"{name}.csv", "poses.parquet": folder / f"{name}.parquet"}
+    pcsv.write_csv(table, paths["poses.csv"], write_options=pcsv.WriteOptions(
+        quoting_style="none"))
+    pq.write_table(table, paths["poses.parquet"])
+    return paths, pose_from_cli(values, m, "m", "xyz")
+
+
+def six_axis(args, folder: Path, label: str) -> None:
+    """``pkmkit ik`` of the ``--six-axis`` machines against pyarrow's read + write of the
+    same tables and the engine call, in one run."""
+    cmd = _pkmkit_command()
+    print(f"\n== {label}: pkmkit ik of six-axis machines, {args.rows} rows (load average "
+          f"{os.getloadavg()[0]:.2f})")
+    print(f"{'machine':<15} {'format':<8} {'s':>7} {'lib s':>7} {'xlib':>6} {'solve s':>8} "
+          f"{'cpu s':>6} {'lib cpu':>7} {'xlib cpu':>8} {'solve cpu':>9}")
+    for name in args.six_axis:
+        m = pkmkit.machine(name)
+        paths, x = six_axis_tables(folder, name, args.rows)
+        solve = median_in_process(lambda m=m, x=x: m.ik(x, full_output=True),
+                                  args.repeat)
+        solve_cpu = cpu_in_process(lambda m=m, x=x: m.ik(x, full_output=True),
+                                   args.repeat)
+        for fmt in args.formats:
+            src, dst = paths[f"poses.{fmt}"], folder / f"out-{name}.{fmt}"
+            t, cpu = run_times([*cmd, "ik", name, "--input", str(src), "--output", str(dst)],
+                               args.repeat)
+            lib = library_read_write(src, dst, args.repeat)
+            lib_cpu = library_read_write(src, dst, args.repeat, cpu=True)
+            print(f"{name:<15} {fmt:<8} {t:7.3f} {lib:7.3f} {t / lib:6.2f} {solve:8.3f} "
+                  f"{cpu:6.3f} {lib_cpu:7.3f} {cpu / lib_cpu:8.2f} {solve_cpu:9.3f}")
+
+
 def busy() -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-c", "while True: pass"])
 
@@ -399,7 +453,11 @@ def main() -> None:
                         help="only the CPU time of each stage of a fresh pkmkit ik process")
     parser.add_argument("--no-first-calls", action="store_true",
                         help="leave out the table of a fresh process's first batch call")
+    parser.add_argument("--six-axis", default="",
+                        help="only pkmkit ik of these machines, comma-separated (e.g. "
+                             "gough-stewart,verne) on their own tables")
     args = parser.parse_args()
+    args.six_axis = [name for name in args.six_axis.split(",") if name]
     args.commands = args.commands.split(",")
     args.formats = args.formats.split(",")
     if args.first_calls_only:
@@ -410,6 +468,15 @@ def main() -> None:
     print(f"{args.rows} rows, median of {args.repeat} runs (wall time of a fresh process)")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
+        if args.six_axis:
+            six_axis(args, folder, "quiet")
+            if args.load:
+                competitor = busy()
+                try:
+                    six_axis(args, folder, "beside a busy process")
+                finally:
+                    competitor.kill()
+            return
         paths = make_tables(folder, args.rows)
         if args.phases:
             phases(paths, folder, args.repeat)

@@ -64,14 +64,18 @@ def inverse_options(machine, **given: Any) -> dict[str, Any]:
     return out
 
 
-def inverse(machine, x: Any, *, out: np.ndarray | None = None, **options: Any) -> InverseRows:
+def inverse(machine, x: Any, *, out: np.ndarray | None = None, mode: bool = True,
+            **options: Any) -> InverseRows:
     """``machine.ik(x, full_output=True, strokes="ignore", **options)`` as :class:`InverseRows`
     (rows ``(N, …)`` also for one pose ``x (dims,)``, whose errors — unreachable, no
     convergence — are raised as ``ik`` raises them), read by the machine's own
     ``inverse_rows`` (:mod:`pkmkit.machines.inverse_rows`). ``out``: a batch's ``(N, n)``
     array q is written into (``ik``'s ``out``, :mod:`pkmkit.machines.out_arrays`), e.g. one
-    reused from chunk to chunk."""
+    reused from chunk to chunk. ``mode=False``: the assembly modes are not read (``mode`` is
+    None), for a caller that does not show them — a full-pose machine's record computes them
+    when read, one 6×6 Jacobian and determinant per row, about 25× its inverse kernel's cost
+    (issue 22 §5: half the CPU of ``pkmkit ik gough-stewart --input``)."""
     if out is not None:
         options["out"] = out
     found = machine.ik(x, full_output=True, strokes="ignore", **options)
-    return InverseRows(**machine.inverse_rows(found))
+    return InverseRows(**machine.inverse_rows(found, mode=mode))

@@ -129,7 +129,7 @@ def _batch(m, face: Face, options: dict[str, Any], input_: str, output: str,
     def compute(values, chunk):
         rows, n = len(values), m.n_actuators
         sol = inverse(m, pose_from_cli(values, m, units, convention),
-                      out=buffers.take("q", rows, n), **options)
+                      out=buffers.take("q", rows, n), mode=face.mode_column, **options)
         status = flags(sol.q, sol.status, chunk, sol.passive)
         actuators = np.divide(sol.q, scales, out=buffers.take("columns", rows, n, "F"))
         out = {**named(columns, values), **named(m.actuator_names, actuators)}

@@ -438,12 +438,12 @@ class FullPoseMachine(PositionInverse, FullPoseCriteriaRates, FullPoseModes, Ful
             q[status != Status.OK] = np.nan
         if not full_output:
             return restore_shape(q, single)
-        fields = dict(q=q, status=status, branches=sigma.copy(),
-                      shortfall=self._forms.shortfall(xb), method="closed",
+        fields = dict(q=q, status=status, branches=sigma.copy(), method="closed",
                       **_stroke_fields(check))
-        if not single:  # the mode (det A per row) computed when read
+        if not single:  # the mode (det A per row) and the shortfalls computed when read
             return lazy_inverse_record(self._forms, self.model.n_rods, xb, **fields)
-        return _restore(InverseResult(mode=self._mode_of(xb, q), **fields), single,
+        return _restore(InverseResult(mode=self._mode_of(xb, q),
+                                      shortfall=self._forms.shortfall(xb), **fields), single,
                         ("q", "status", "shortfall", "mode", "out_of_stroke", "stroke_excess"))
 
     def _inverse_numpy(self, xb: np.ndarray, sigma: np.ndarray

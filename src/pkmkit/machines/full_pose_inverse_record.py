@@ -31,14 +31,25 @@ def assembly_modes(forms: Any, n_rods: int, x: np.ndarray, q: np.ndarray) -> np.
 
 
 class _ModeEvaluation:
-    """The one field a lazy inverse record is not given: ``mode``."""
+    """The fields a lazy inverse record may not be given: ``mode`` and, when not given,
+    ``shortfall`` (per rod, :meth:`~pkmkit.machines.full_pose_forms.FullPoseForms.shortfall`
+    of the poses: a NumPy pass over every row costing ≈ 20× the fused inverse kernel, that
+    ``pkmkit ik --input`` never reads; issue 22 §5)."""
 
-    def __init__(self, forms: Any, n_rods: int, x: np.ndarray, q: np.ndarray) -> None:
+    def __init__(self, forms: Any, n_rods: int, x: np.ndarray, q: np.ndarray,
+                 finite_only: bool = False) -> None:
         # copies: the caller may change its poses, or the record's q, before the first read
-        self._forms, self._n_rods = forms, n_rods
+        self._forms, self._n_rods, self._finite_only = forms, n_rods, finite_only
         self._x, self._q = np.array(x, dtype=float), np.array(q, dtype=float)
 
     def field(self, name: str) -> Any:
+        if name == "shortfall":
+            if not self._finite_only:
+                return self._forms.shortfall(self._x)
+            ok = np.isfinite(self._x).all(axis=1)
+            out = np.full((self._x.shape[0], self._n_rods), np.nan)
+            out[ok] = self._forms.shortfall(self._x[ok])
+            return out
         if name != "mode":
             raise AttributeError(name)
         return assembly_modes(self._forms, self._n_rods, self._x, self._q)
@@ -52,11 +63,13 @@ LazyInverseResult = lazy_record_class(
     "(module doc).")
 
 
-def lazy_inverse_record(forms: Any, n_rods: int, x: np.ndarray, **fields: Any) -> Any:
+def lazy_inverse_record(forms: Any, n_rods: int, x: np.ndarray, finite_only: bool = False,
+                        **fields: Any) -> Any:
     """The batch inverse record of pose rows ``x (N, 6)`` with the given ``fields`` (every
     field of :class:`~pkmkit.machines.results.InverseResult` but ``mode``, which is computed
-    from ``x`` and ``fields["q"]`` when read)."""
+    from ``x`` and ``fields["q"]`` when read, and optionally ``shortfall``, computed from
+    ``x`` when read: NaN on the rows of ``x`` that are not finite if ``finite_only``)."""
     defaults = {f.name: f.default for f in dataclasses.fields(InverseResult)
-                if f.default is not dataclasses.MISSING}
-    return LazyInverseResult(_ModeEvaluation(forms, n_rods, x, fields["q"]),
+                if f.default is not dataclasses.MISSING and f.name != "shortfall"}
+    return LazyInverseResult(_ModeEvaluation(forms, n_rods, x, fields["q"], finite_only),
                              **{**defaults, **fields})

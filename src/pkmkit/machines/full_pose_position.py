@@ -94,14 +94,15 @@ class PositionInverse:
         if not full_output:
             return restore_shape(q, single)
         sigma = self._branches(branches)
-        shortfall = np.full((pb.shape[0], self.model.n_rods), np.nan)
-        shortfall[~bad] = self._forms.shortfall(pose[~bad])  # at the orientation found
-        fields = dict(q=q, status=status, branches=sigma, shortfall=shortfall,
+        fields = dict(q=q, status=status, branches=sigma,
                       method="numeric", iterations=iterations, residual=residual, pose=pose,
                       **_stroke_fields(check))
-        if not single:  # the mode (det A per row) computed when read
-            return lazy_inverse_record(self._forms, self.model.n_rods, pose, **fields)
-        out = InverseResult(mode=self._mode_of(pose, q), **fields)
+        if not single:  # the mode (det A per row) and the shortfalls computed when read
+            return lazy_inverse_record(self._forms, self.model.n_rods, pose, finite_only=True,
+                                       **fields)
+        shortfall = np.full((pb.shape[0], self.model.n_rods), np.nan)
+        shortfall[~bad] = self._forms.shortfall(pose[~bad])  # at the orientation found
+        out = InverseResult(mode=self._mode_of(pose, q), shortfall=shortfall, **fields)
         return _restore(out, single, ("q", "status", "shortfall", "mode", "iterations",
                                       "residual", "pose", "out_of_stroke", "stroke_excess"))
 

@@ -73,4 +73,7 @@ def into(out: np.ndarray | None, given: Any, result: Any, width: int, what: str 
     checked_out(out, given, rows, rows.ndim != 2, width, what)
     if isinstance(result, np.ndarray):
         return filled(out, result)
+    if hasattr(result, "known_fields"):  # a lazy record (lazy_records): replace would compute
+        result.known_fields()[name] = filled(out, getattr(result, name))  # every field
+        return result
     return dataclasses.replace(result, **{name: filled(out, getattr(result, name))})
