@@ -80,28 +80,10 @@ static void walk_element(const pk_chain *c, ptrdiff_t e, const double *values, d
     int64_t var = c->evar[e];
     int64_t col = c->position[var];
     double q = values[var];
-    double z0 = rot[2], z1 = rot[5], z2 = rot[8];
-    double *tw = w->tw + 6 * *n_twist;
-    if (t == 1) {
-        if (col >= 0) {
-            tw[0] = pos[1] * z2 - pos[2] * z1;
-            tw[1] = pos[2] * z0 - pos[0] * z2;
-            tw[2] = pos[0] * z1 - pos[1] * z0;
-            tw[3] = z0;
-            tw[4] = z1;
-            tw[5] = z2;
-            w->tw_col[*n_twist] = col;
-            *n_twist += 1;
-        }
-    } else {
-        if (col >= 0) {
-            tw[0] = z0;
-            tw[1] = z1;
-            tw[2] = z2;
-            tw[3] = tw[4] = tw[5] = 0.0;
-            w->tw_col[*n_twist] = col;
-            *n_twist += 1;
-        }
+    if (col >= 0) {
+        pk_chain_joint_twist(rot, pos, t, w->tw + 6 * *n_twist);
+        w->tw_col[*n_twist] = col;
+        *n_twist += 1;
     }
     pk_chain_joint_move(rot, pos, t, q);
 }

@@ -87,21 +87,7 @@ static inline void walk(const pk_chain *c, const pk_blocks *bk, const int64_t *l
         int64_t t = c->types[e];
         if (t == 0) continue;
         if (dest[i] >= 0) {
-            double *tw = panel + dest[i];
-            double z0 = rot[2], z1 = rot[5], z2 = rot[8];
-            if (t == 1) {
-                tw[0] = pos[1] * z2 - pos[2] * z1;
-                tw[1] = pos[2] * z0 - pos[0] * z2;
-                tw[2] = pos[0] * z1 - pos[1] * z0;
-                tw[3] = z0;
-                tw[4] = z1;
-                tw[5] = z2;
-            } else {
-                tw[0] = z0;
-                tw[1] = z1;
-                tw[2] = z2;
-                tw[3] = tw[4] = tw[5] = 0.0;
-            }
+            pk_chain_joint_twist(rot, pos, t, panel + dest[i]);
         }
         joint(rot, pos, t, values[c->evar[e]], cache + 3 * e);
     }

@@ -164,22 +164,8 @@ static ptrdiff_t head_walk(const chain_velocity *v, const double *u, double *rot
         int64_t var = c->evar[e];
         int64_t col = v->head_position[var];
         double q = v->values[var];
-        double z0 = rot[2], z1 = rot[5], z2 = rot[8];
-        double *tw = v->head_tw + 6 * n_twist;
         if (col >= 0) {
-            if (type == 1) {
-                tw[0] = pos[1] * z2 - pos[2] * z1;
-                tw[1] = pos[2] * z0 - pos[0] * z2;
-                tw[2] = pos[0] * z1 - pos[1] * z0;
-                tw[3] = z0;
-                tw[4] = z1;
-                tw[5] = z2;
-            } else {
-                tw[0] = z0;
-                tw[1] = z1;
-                tw[2] = z2;
-                tw[3] = tw[4] = tw[5] = 0.0;
-            }
+            pk_chain_joint_twist(rot, pos, type, v->head_tw + 6 * n_twist);
             v->head_col[n_twist++] = col;
         }
         pk_chain_joint_move(rot, pos, type, q);

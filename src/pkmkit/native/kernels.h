@@ -175,6 +175,27 @@ void pk_chain_evaluate_any(const pk_chain *c, double *values, const double *u, d
                            double *jac, const double *target, double tool, pk_chain_work *w);
 void pk_chain_retract(const double *u, const double *step, double *out, ptrdiff_t n);
 
+/* The spatial twist tw (6,) of a joint whose axis is z = rot[:, 2] at pos: [pos x z, z] for a
+ * revolute joint (type 1), [z, 0] for a prismatic one (chain.c, chain_one_closure.c and
+ * chain_one_velocity.c: the same operations, so the same bits). */
+static inline void pk_chain_joint_twist(const double *rot, const double *pos, int64_t type,
+                                        double *tw) {
+    double z0 = rot[2], z1 = rot[5], z2 = rot[8];
+    if (type == 1) {
+        tw[0] = pos[1] * z2 - pos[2] * z1;
+        tw[1] = pos[2] * z0 - pos[0] * z2;
+        tw[2] = pos[0] * z1 - pos[1] * z0;
+        tw[3] = z0;
+        tw[4] = z1;
+        tw[5] = z2;
+    } else {
+        tw[0] = z0;
+        tw[1] = z1;
+        tw[2] = z2;
+        tw[3] = tw[4] = tw[5] = 0.0;
+    }
+}
+
 /* A joint's motion along its element's local z axis (chain_kernel's walk): type 1 turns the
  * frame rot (3 x 3 row-major) by q about its z axis, type 2 slides pos by q along it; the
  * operations of the Numba kernels in their order. Shared by chain.c, chain_linearise.c,
