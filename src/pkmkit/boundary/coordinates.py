@@ -128,6 +128,35 @@ ANGLE_BLOCK_ROWS = 32768
 
 
 def _angles_from_cli(values: np.ndarray, scale: float, convention: str) -> np.ndarray:
+    from pkmkit.numerics.jit import native_kernels
+
+    kernels = native_kernels()
+    if kernels is not None:
+        return _angles_native(kernels, values, scale, convention)
+    return _angles_numpy(values, scale, convention)
+
+
+def _angles_native(kernels, values: np.ndarray, scale: float, convention: str) -> np.ndarray:
+    """:func:`_angles_numpy`'s rows and bits, its quaternion algebra in C
+    (``pkmkit.native.kernels.euler_quat``, ``euler_rotvec``: one pass per row instead of some
+    forty NumPy passes, issue 22 §5) and its transcendental functions NumPy's, on the same
+    values (NumPy's arctan2 is a vectorised one on AVX-512 CPUs, not the C library's)."""
+    values = np.ascontiguousarray(values, dtype=float)
+    out = np.empty((len(values), 6))
+    quat = np.empty((min(len(values), ANGLE_BLOCK_ROWS), 5))
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):  # non-finite rows: NaN
+        for start in range(0, len(values), ANGLE_BLOCK_ROWS):
+            block = values[start:start + ANGLE_BLOCK_ROWS]
+            q = quat[:len(block)]
+            half = np.deg2rad(block[:, 3:]) / 2.0
+            kernels.euler_quat(np.sin(half), np.cos(half), convention, q)
+            angle = 2.0 * np.arctan2(q[:, 4], q[:, 3])
+            kernels.euler_rotvec(block, q, angle, np.sin(angle / 2.0), float(scale),
+                                 out[start:start + len(block)])
+    return out
+
+
+def _angles_numpy(values: np.ndarray, scale: float, convention: str) -> np.ndarray:
     from pkmkit.spatial.poses import pose_from_angles
 
     out = np.full((len(values), 6), np.nan)

@@ -542,6 +542,11 @@ extern const char pk_rod_inverse_rows_doc[], pk_rod_reach_det_doc[];
 PyObject *pk_py_rod_inverse_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_reach_det(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
+/* angles.c: a table's angles -> rotation vectors, NumPy's bits (issue 22 §5) */
+extern const char pk_euler_quat_doc[], pk_euler_rotvec_doc[];
+PyObject *pk_py_euler_quat(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_euler_rotvec(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
@@ -604,6 +609,10 @@ static PyMethodDef methods[] = {
      pk_rod_inverse_rows_doc},
     {"rod_reach_det", (PyCFunction)(void (*)(void))pk_py_rod_reach_det, METH_FASTCALL,
      pk_rod_reach_det_doc},
+    {"euler_quat", (PyCFunction)(void (*)(void))pk_py_euler_quat, METH_FASTCALL,
+     pk_euler_quat_doc},
+    {"euler_rotvec", (PyCFunction)(void (*)(void))pk_py_euler_rotvec, METH_FASTCALL,
+     pk_euler_rotvec_doc},
     {NULL, NULL, 0, NULL},
 };
 
