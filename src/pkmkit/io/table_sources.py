@@ -141,7 +141,7 @@ class CsvSource:
                 cut = len(buffer)
             piece, buffer = buffer[:cut], buffer[cut:]
             chunk = self._parse(piece, line_no, first_row)
-            taken = piece.count(b"\n")
+            taken = min(newlines, r.chunk_rows)  # the piece's line ends (_nth_newline's cut)
             line_no += taken
             newlines -= taken
             if len(chunk):
@@ -163,7 +163,7 @@ class CsvSource:
         import pyarrow.csv as pcsv
 
         data = _COMMENT.sub(b"", piece) if b"#" in piece and _HAS_COMMENT.search(piece) else piece
-        if not data.strip():
+        if not data or data.isspace():  # strip()'s test without its copy of the piece
             return np.empty((0, len(self.index)))
         names = [f"c{i}" for i in range(self.width)]
         wanted = [names[i] for i in self.index]
@@ -244,8 +244,26 @@ def _nth_newline(buffer: bytes, n: int, count: int) -> int:
     if count <= n:
         last = buffer.rfind(b"\n")
         return last + 1 if last >= 0 else -1
+    # from where the lines' mean length puts it: count the line ends before that byte, then
+    # step to the n-th (a few finds on tables of even lines; bounded, else NumPy's scan)
+    guess = int(len(buffer) * (n / count))
+    seen = buffer.count(b"\n", 0, guess)
+    if 0 < n - seen <= _NEWLINE_STEPS:  # forward to the n-th line end
+        at = guess
+        for _ in range(n - seen):
+            at = buffer.index(b"\n", at) + 1
+        return at
+    if 0 <= seen - n <= _NEWLINE_STEPS:  # back from the seen-th, the last one before guess
+        at = buffer.rindex(b"\n", 0, guess)
+        for _ in range(seen - n):
+            at = buffer.rindex(b"\n", 0, at)
+        return at + 1
     ends = np.flatnonzero(np.frombuffer(buffer, dtype=np.uint8) == ord("\n"))
     return int(ends[n - 1]) + 1
+
+
+#: Line ends :func:`_nth_newline` steps over from its estimate before it scans the chunk.
+_NEWLINE_STEPS = 4096
 
 
 def _decode(line: bytes, path: str, line_no: int) -> str:
