@@ -82,7 +82,12 @@ class BatchFlags:
         stroke; names the joints of the first rows on standard error."""
         status = np.array(status, dtype=np.int64, copy=True)
         ok = status == Status.OK
-        rows = np.where(ok[:, None], np.asarray(q, dtype=float), np.nan)
+        # column-major, as the excess is computed column by column (C-ordered rows made it
+        # stride over every row: ≈ 0.1 s per 5·10⁵ six-actuator rows); the same values
+        rows = np.empty(np.shape(q), order="F")
+        np.copyto(rows, q)
+        if not ok.all():
+            rows[~ok] = np.nan
         pas = None
         if passive is not None:
             pas = np.where(ok[:, None], np.atleast_2d(np.asarray(passive, dtype=float)), np.nan)
