@@ -50,7 +50,12 @@ arguments, the same algorithm and statuses, run without the GIL:
   :func:`pkmkit.machines.kernels.inverse` and ``reach_and_det`` (the batched closed-form
   inverse of rod-leg machines of slides and struts, with the shortfalls and det A that
   ``ik(full_output=True)`` reports), the NumPy reference's bits: a fresh process's
-  ``pkmkit ik --input`` takes them without importing Numba.
+  ``pkmkit ik --input`` takes them without importing Numba;
+- ``euler_quat``, ``euler_rotvec`` (``angles.c``; no twin) — the quaternion algebra of a
+  table's angles → rotation vectors (:func:`pkmkit.spatial.euler.rotvec_from_angles`) in one
+  pass per row, for ``pkmkit ik <full-pose machine> --input``
+  (:func:`pkmkit.boundary.coordinates.pose_from_cli`): NumPy keeps the sines, cosines and
+  arctan2, so the rows are the NumPy path's bits.
 
 Loading it costs a millisecond, where Numba's import and its first compiled call cost
 0.8–0.9 s of CPU in a fresh process. Which implementation runs is decided in one place,
