@@ -39,7 +39,9 @@ not grow with N).
 Parquet (and CSV to CSV) on the ``--rows`` table, median of ``--repeat`` processes: the imports
 before the command runs (pkmkit, click, NumPy), the conversion of the read batches to float64
 arrays, the inverse model with statuses and modes, the output table built and written, and the
-rest of the command (pyarrow's imports, opening the file and reading its batches, the columns).
+rest of the command (pyarrow's imports, opening the file and reading its batches, the columns);
+with ``--six-axis`` those machines' tables instead, their angle conversion and stroke flags
+timed too (session 34).
 
 ``--six-axis gough-stewart,verne``: ``pkmkit ik`` of those machines on their own ``--rows``
 tables (the hexapod's full poses x,y,z,A,B,C in m and degrees, the Verne module's positions
@@ -224,7 +226,12 @@ wrap(sources.CsvSource, "_parse", "read:csv-parse-to-float64")
 wrap(ik_cmd, "inverse", "kernel:ik-full-output")
 wrap(writer.TableWriter, "write", "write:table-and-encode")
 wrap(writer.TableWriter, "close", "write:close-rename")
-sys.argv = ["pkmkit", "ik", "linear-delta", "--input", sys.argv[1], "--output", sys.argv[2]]
+if sys.argv[3:] and sys.argv[3] != "linear-delta":  # a six-axis machine's own stages
+    wrap(ik_cmd, "pose_from_cli", "angles:to-rotation-vectors")
+    wrap(importlib.import_module("pkmkit.cli.stroke_flags").BatchFlags, "__call__",
+         "flags:strokes")
+sys.argv = ["pkmkit", "ik", sys.argv[3] if sys.argv[3:] else "linear-delta", "--input",
+            sys.argv[1], "--output", sys.argv[2]]
 start = time.process_time()
 try:
     main.main()
@@ -239,18 +246,22 @@ print("total", imports + body)
 """
 
 
-def phases(paths: dict[str, Path], folder: Path, repeat: int) -> None:
-    """Median CPU time of each stage of a fresh ``pkmkit ik`` process (``PHASES``)."""
+def phases(paths: dict[str, Path], folder: Path, repeat: int,
+           name: str = "linear-delta") -> None:
+    """Median CPU time of each stage of a fresh ``pkmkit ik`` process (``PHASES``) of machine
+    ``name`` (a six-axis one adds its angle conversion and stroke flags)."""
     for fmt in ("parquet", "csv"):
         runs: dict[str, list[float]] = {}
         for _ in range(repeat):
             done = subprocess.run([sys.executable, "-c", PHASES, str(paths[f"poses.{fmt}"]),
-                                   str(folder / f"phases.{fmt}")], capture_output=True,
-                                  text=True, check=True)
+                                   str(folder / f"phases.{fmt}"), name], capture_output=True,
+                                  text=True)
+            if done.returncode not in (0, 3):
+                raise RuntimeError(done.stderr)
             for line in done.stdout.splitlines():
                 label, value = line.split()
                 runs.setdefault(label, []).append(float(value))
-        print(f"\npkmkit ik linear-delta, {fmt} -> {fmt}, CPU s (median of {repeat} fresh "
+        print(f"\npkmkit ik {name}, {fmt} -> {fmt}, CPU s (median of {repeat} fresh "
               f"processes; load average {os.getloadavg()[0]:.2f})")
         for label, values in runs.items():
             print(f"  {label:28s} {statistics.median(values):6.3f}")
@@ -450,7 +461,8 @@ def main() -> None:
     parser.add_argument("--first-calls-only", action="store_true",
                         help="only the table of a fresh process's first batch call")
     parser.add_argument("--phases", action="store_true",
-                        help="only the CPU time of each stage of a fresh pkmkit ik process")
+                        help="only the CPU time of each stage of a fresh pkmkit ik process "
+                             "(of the --six-axis machines if given)")
     parser.add_argument("--no-first-calls", action="store_true",
                         help="leave out the table of a fresh process's first batch call")
     parser.add_argument("--six-axis", default="",
@@ -468,6 +480,10 @@ def main() -> None:
     print(f"{args.rows} rows, median of {args.repeat} runs (wall time of a fresh process)")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
+        if args.six_axis and args.phases:
+            for name in args.six_axis:
+                phases(six_axis_tables(folder, name, args.rows)[0], folder, args.repeat, name)
+            return
         if args.six_axis:
             six_axis(args, folder, "quiet")
             if args.load:
