@@ -18,14 +18,19 @@
 CPU µs per call (the process's CPU time: the 2 cores are shared), the minimum and the median
 of the rounds; ratios against the C inverse and against the peer from the same rounds.
 ``--profile`` adds cProfile's internal times of the whole call (the Python functions' shares).
-``--loop N`` only calls the velocity C call N times over the solutions, for a profiler of the
-C share (``perf record -o perf.data python bench/chain_jacobian_split.py --machines
-tripteor-x7 --loop 3000``, then ``perf report --sort symbol``).
+``--whole-loop N`` only makes the whole call (+ ``J`` + ``condition``) N times over the poses,
+for an instruction count of the whole call with its Python (``valgrind --tool=callgrind
+--callgrind-out-file=/dev/null python bench/chain_jacobian_split.py --machines trimule-600
+--whole-loop 3``, and ``--whole-loop 1``: the difference / 2 / the poses is one call's count;
+it runs with an older tree's ``PYTHONPATH`` too). ``--loop N`` only calls the velocity C call N
+times over the solutions, for a profiler of the C share (``perf record -o perf.data python
+bench/chain_jacobian_split.py --machines tripteor-x7 --loop 3000``, then ``perf report --sort
+symbol``).
 
 Usage::
 
     python bench/chain_jacobian_split.py [--poses 300] [--rounds 5] [--profile]
-        [--machines tripteor-x7,trimule-600] [--loop N]
+        [--machines tripteor-x7,trimule-600] [--loop N] [--whole-loop N]
 """
 
 from __future__ import annotations
@@ -71,12 +76,18 @@ def rows_of(m, count: int) -> list[np.ndarray]:
     return list(poses[inside])
 
 
-def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0) -> None:
+def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0,
+          whole_loop: int = 0) -> None:
     m = pkmkit.machine(name)
     rows = rows_of(m, count)
     for tag in ("chain_ik", "chain_fk", "chain_jacobian"):  # past the first (batch) call
         chain_one.usable(m, tag)
     assert m.jacobian(rows[0]).condition > 0
+    if whole_loop:  # the whole call alone, for an instruction count (module docstring)
+        for _ in range(whole_loop):
+            for x in rows:
+                (r := m.jacobian(x)).J is r.condition  # noqa: B015
+        return
     mj = pkmkit.machine(name)  # J only: no condition read on this copy
     assert mj.jacobian(rows[0]).J.shape[0] == 6
     ik = chain_one_native.packed(m)
@@ -155,10 +166,11 @@ def main() -> None:
     parser.add_argument("--profile", action="store_true")
     parser.add_argument("--machines", default="tripteor-x7,trimule-600")
     parser.add_argument("--loop", type=int, default=0)
+    parser.add_argument("--whole-loop", type=int, default=0)
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     for name in args.machines.split(","):
-        split(name, args.poses, args.rounds, args.profile, args.loop)
+        split(name, args.poses, args.rounds, args.profile, args.loop, args.whole_loop)
 
 
 if __name__ == "__main__":
