@@ -24,7 +24,9 @@ ranks given; ``J``, ``J_homogeneous`` and ``passive_rates`` views of the kernel'
 array, made at their first read and kept in the record's ``__dict__`` (later reads are plain
 attribute reads); the singular values and the condition number computed at the first read of
 either (the kernel's singular stage, one more C call on the array's ``J_homogeneous``: ``J``
-alone does not pay the SVD). ``closure_rank`` is ``n_u`` and ``status``
+alone does not pay the SVD) — once that happened on a machine, its later calls run the stage
+inside their one C call (``_Singular``; the same bits), so a loop reading ``condition`` makes
+one C call per pose. ``closure_rank`` is ``n_u`` and ``status``
 OK only where the bound clears :data:`~pkmkit.machines.chain_one.BOUND_MARGIN` × max(``tol``,
 :data:`~pkmkit.machines.chain_velocity_record.RANK_RCOND`): the closure is then certainly
 regular, of full rank, and not singular by the batch path's SVD; elsewhere (near a singular
