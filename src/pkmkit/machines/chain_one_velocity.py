@@ -191,13 +191,14 @@ class _View:
 
 
 class _Singular:
-    """``singular_values`` or ``condition`` of :class:`OnePoseChainJacobians`: the first read
-    of either keeps both in the record's ``__dict__``, running the kernel's singular stage
-    first (one C call on the buffer's ``J_homogeneous``) unless the record's C call ran it
-    (the condition not NaN). That first run sets the pack's ``singular``: the machine's later
-    one-pose calls run the stage in their own C call (the same function on the same
-    ``J_homogeneous``: the same bits), so a loop reading ``condition`` pays no second call
-    and one that never reads it no singular stage."""
+    """``singular_values`` or ``condition`` of :class:`OnePoseChainJacobians`: its first read
+    keeps it in the record's ``__dict__`` (the other made at its own first read: one NumPy
+    object each), running the kernel's singular stage first (one C call on the buffer's
+    ``J_homogeneous``) unless the record's C call ran it (the condition not NaN). That first
+    run sets the pack's ``singular``: the machine's later one-pose calls run the stage in
+    their own C call (the same function on the same ``J_homogeneous``: the same bits), so a
+    loop reading ``condition`` pays no second call and one that never reads it no singular
+    stage."""
 
     __slots__ = ("condition",)
 
@@ -215,9 +216,11 @@ class _Singular:
             p.call(p.pack, None, out)
             condition = out[stop]
             p.singular = p.fusable
+        if self.condition:
+            fields["condition"] = condition
+            return condition
         values = fields["singular_values"] = out[p.sv_start:stop]
-        fields["condition"] = condition
-        return condition if self.condition else values
+        return values
 
 
 class OnePoseChainJacobians(ChainJacobians):
