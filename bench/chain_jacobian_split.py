@@ -1,27 +1,36 @@
 """Benchmark: where ``m.jacobian(x)`` of one pose of a joint-chain machine spends its time
 (issue 22 §1), every part timed in the same process on the same poses, in interleaved rounds:
 
-- the whole call reading ``J`` and ``condition`` (and reading ``J`` only);
+- the whole call reading ``J`` and ``condition`` (and reading ``J`` only, on a second copy of
+  the machine whose records' ``condition`` is never read: since session 34 a machine runs the
+  singular stage inside its one-pose C call once a record's ``condition`` was read);
+- the fused C call alone (``chain_one_ik_jacobian``: the inverse, the velocity model with the
+  closure's Jacobian handed over, and the singular stage), the floor of the whole call;
 - the C inverse alone (``chain_one_ik(..., full=True)``: chainiter's part, the floor of the
   call);
 - the velocity model's C call alone at the inverse solutions (``chain_one_jacobian``) and the
   singular stage alone (``chain_one_velocity(pack, None, out)``);
-- Python's share: the whole minus those three C calls (the machine's ``jacobian`` with the
-  batch wrapper, the one-pose glue, the record and reading its two fields);
+- Python's share: the whole minus the fused C call (the machine's ``jacobian``, the record and
+  reading its two fields), and the whole minus the three separate C calls (as session 33);
 - the issue's peer: Pinocchio's frame Jacobian (``computeFrameJacobian``) of the machine's
   open URDF tree (no closure; :func:`single_call.pinocchio_jacobian_peer`).
 
 CPU µs per call (the process's CPU time: the 2 cores are shared), the minimum and the median
 of the rounds; ratios against the C inverse and against the peer from the same rounds.
 ``--profile`` adds cProfile's internal times of the whole call (the Python functions' shares).
-``--loop N`` only calls the velocity C call N times over the solutions, for a profiler of the
-C share (``perf record -o perf.data python bench/chain_jacobian_split.py --machines
-tripteor-x7 --loop 3000``, then ``perf report --sort symbol``).
+``--whole-loop N`` only makes the whole call (+ ``J`` + ``condition``) N times over the poses,
+for an instruction count of the whole call with its Python (``valgrind --tool=callgrind
+--callgrind-out-file=/dev/null python bench/chain_jacobian_split.py --machines trimule-600
+--whole-loop 3``, and ``--whole-loop 1``: the difference / 2 / the poses is one call's count;
+it runs with an older tree's ``PYTHONPATH`` too). ``--loop N`` only calls the velocity C call N
+times over the solutions, for a profiler of the C share (``perf record -o perf.data python
+bench/chain_jacobian_split.py --machines tripteor-x7 --loop 3000``, then ``perf report --sort
+symbol``).
 
 Usage::
 
     python bench/chain_jacobian_split.py [--poses 300] [--rounds 5] [--profile]
-        [--machines tripteor-x7,trimule-600] [--loop N]
+        [--machines tripteor-x7,trimule-600] [--loop N] [--whole-loop N]
 """
 
 from __future__ import annotations
@@ -67,12 +76,20 @@ def rows_of(m, count: int) -> list[np.ndarray]:
     return list(poses[inside])
 
 
-def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0) -> None:
+def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0,
+          whole_loop: int = 0) -> None:
     m = pkmkit.machine(name)
     rows = rows_of(m, count)
     for tag in ("chain_ik", "chain_fk", "chain_jacobian"):  # past the first (batch) call
         chain_one.usable(m, tag)
     assert m.jacobian(rows[0]).condition > 0
+    if whole_loop:  # the whole call alone, for an instruction count (module docstring)
+        for _ in range(whole_loop):
+            for x in rows:
+                (r := m.jacobian(x)).J is r.condition  # noqa: B015
+        return
+    mj = pkmkit.machine(name)  # J only: no condition read on this copy
+    assert mj.jacobian(rows[0]).J.shape[0] == 6
     ik = chain_one_native.packed(m)
     p = cov.pack(m)
     if ik is None or p is None:
@@ -93,7 +110,9 @@ def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0) -> N
     parts = {
         "whole: m.jacobian(x) + J + condition": (
             lambda x: (r := m.jacobian(x)).J is r.condition, rows),
-        "whole: m.jacobian(x) + J": (lambda x: m.jacobian(x).J, rows),
+        "whole: m.jacobian(x) + J (never condition)": (lambda x: mj.jacobian(x).J, rows),
+        "fused C call (+ singular stage)": (
+            lambda x: p.ik_jacobian(ik.capsule, p.pack, x, 2e-6, 1e-12, True), rows),
         "the C inverse alone (chain_one_ik, full)": (
             lambda x: ik.ik(ik.capsule, x, True, True), rows),
         "velocity C call alone (chain_one_jacobian)": (
@@ -112,13 +131,14 @@ def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0) -> N
           f"{os.getloadavg()[0]:.2f}; CPU µs per call, min / median of {rounds} rounds")
     low = {k: min(v) for k, v in got.items()}
     for k, v in got.items():
-        print(f"  {k:46s} {min(v):7.2f} / {statistics.median(v):7.2f}")
+        print(f"  {k:48s} {min(v):7.2f} / {statistics.median(v):7.2f}")
     whole = low["whole: m.jacobian(x) + J + condition"]
     c_parts = (low["the C inverse alone (chain_one_ik, full)"]
                + low["velocity C call alone (chain_one_jacobian)"] + low["singular stage alone"])
     after = whole - low["the C inverse alone (chain_one_ik, full)"]
     print(f"  after the inverse (whole - C inverse): {after:.2f}; Python's share (whole - the "
-          f"three C calls): {whole - c_parts:.2f}; the inverse / whole "
+          f"fused C call): {whole - low['fused C call (+ singular stage)']:.2f} (whole - the "
+          f"three C calls: {whole - c_parts:.2f}); the inverse / whole "
           f"{low['the C inverse alone (chain_one_ik, full)'] / whole:.2f}")
     if peer is not None:
         pin = low["Pinocchio frame Jacobian (peer)"]
@@ -146,10 +166,11 @@ def main() -> None:
     parser.add_argument("--profile", action="store_true")
     parser.add_argument("--machines", default="tripteor-x7,trimule-600")
     parser.add_argument("--loop", type=int, default=0)
+    parser.add_argument("--whole-loop", type=int, default=0)
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     for name in args.machines.split(","):
-        split(name, args.poses, args.rounds, args.profile, args.loop)
+        split(name, args.poses, args.rounds, args.profile, args.loop, args.whole_loop)
 
 
 if __name__ == "__main__":

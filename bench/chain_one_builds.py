@@ -100,6 +100,24 @@ def compare_jacobian(m, builds: list, caps: list, xs: list, rounds: int,
     label = "one fused call" if hasattr(builds[1], "chain_one_ik_jacobian") else "two calls"
     print(f"  jacobian C part (the second: {label}), bit-identical answers {same}: "
           f"CPU µs first build {a:.2f}, second {b:.2f} (x{a / b:.3f})")
+    # the singular stage (condition, singular values: read later) on each build's own arrays
+    packs = [b.chain_velocity_pack(*vargs) for b in builds]
+    outs = [[got[1] for got in (f(x) for x in xs) if got is not None
+             and isinstance(got[1], np.ndarray)] for f in calls]
+    for b, p, o in zip(builds, packs, outs, strict=True):
+        for out in o:
+            b.chain_one_velocity(p, None, out)
+    same = all(np.array_equal(u, v) for u, v in zip(*outs, strict=True))
+    times = [[], []]
+    for _ in range(rounds):
+        for i, (b, p, o) in enumerate(zip(builds, packs, outs, strict=True)):
+            t = time.process_time()
+            for out in o:
+                b.chain_one_velocity(p, None, out)
+            times[i].append((time.process_time() - t) / len(o) * 1e6)
+    a, b = (float(np.median(t)) for t in times)
+    print(f"  singular stage C call, bit-identical answers {same}: CPU µs first build {a:.2f}, "
+          f"second {b:.2f} (x{a / b:.3f})")
 
 
 def compare(name: str, builds: list, count: int, rounds: int = 7,

@@ -269,22 +269,35 @@ def test_threads_get_their_own_answers(machine):
         assert all(pool.map(work, range(len(xs))))
 
 
-def test_the_singular_values_are_computed_when_read(machine):
-    """J alone does not run the kernel's singular stage; the first read of ``condition`` or
-    ``singular_values`` runs it once, whichever comes first, with the batch row's values."""
-    for x in poses(machine, 3, seed=16):
-        one, other = machine.jacobian(x), machine.jacobian(x)
-        if not through_c(one):
-            continue
+@pytest.mark.parametrize("name", NAMES)
+def test_the_singular_values_are_computed_when_read(name):
+    """On a machine whose records' ``condition`` was never read, J alone does not run the
+    kernel's singular stage; the first read of ``condition`` or ``singular_values`` runs it
+    once, whichever comes first, with the batch row's values — and sets the pack's
+    ``singular``: the machine's later calls run the stage in their own C call, the record's
+    buffer then bit for bit the lazy record's after its read (and ``condition`` read there
+    without a second call)."""
+    m = fresh(name)
+    xs = [x for x in poses(m, 4, seed=16) if through_c(m.jacobian(x))]
+    assert len(xs) >= 3
+    p = cov.pack(m)
+    assert p.fusable and not p.singular  # this build takes the flag; nothing read yet
+    lazy = [m.jacobian(x) for x in xs]
+    for one in lazy:
         fields = one.__dict__
         assert one.J.shape == (6, len(one.q))
         assert "condition" not in fields and np.isnan(fields["_out"][12 * one.J.shape[1]])
-        ref = machine.jacobian(x[None])
-        assert one.condition == pytest.approx(ref.condition[0], rel=1e-12)
-        assert "singular_values" in fields and not np.isnan(fields["_out"]).any()
-        np.testing.assert_allclose(other.singular_values, ref.singular_values[0], rtol=1e-12)
-        assert other.condition == one.condition
-        np.testing.assert_array_equal(one.singular_values, other.singular_values)
+    ref = m.jacobian(xs[0][None])
+    assert lazy[0].condition == pytest.approx(ref.condition[0], rel=1e-12)
+    assert "condition" in lazy[0].__dict__ and not np.isnan(lazy[0].__dict__["_out"]).any()
+    assert p.singular  # from now on in the call
+    fused = [m.jacobian(x) for x in xs]
+    for one, early in zip(fused, lazy, strict=True):
+        assert through_c(one) and not np.isnan(one.__dict__["_out"]).any()  # before any read
+        np.testing.assert_array_equal(early.singular_values, one.singular_values)
+        np.testing.assert_array_equal(one.__dict__["_out"], early.__dict__["_out"])
+        assert one.condition == early.condition
+    np.testing.assert_allclose(fused[0].singular_values, ref.singular_values[0], rtol=1e-12)
 
 
 def test_each_field_read_first_is_the_same(machine):

@@ -187,11 +187,55 @@ def test_chain_one_jacobian_is_the_buffer_call(machine):
     assert _kernels.chain_one_jacobian(p.pack, u, 1e-6) is False
 
 
+def test_the_singular_stage_in_the_call_is_the_later_call(machine):
+    """``chain_one_jacobian(pack, u, threshold, True)`` and ``chain_one_ik_jacobian(..., True)``
+    fill the singular values and the condition in the same call: the whole array bit for bit
+    the lazy call's after ``chain_one_velocity(pack, None, out)``, and those values LAPACK's
+    (of the array's own J_homogeneous) to 1e-13 of σ_max."""
+    from pkmkit.machines import chain_one_native
+
+    p = cov.VelocityPack(machine, _kernels)
+    n, k = p.n, min(6, p.n)
+    c = chain_one_native.packed(machine)
+    seen = 0
+    for u in configurations(machine, 6, seed=21):
+        lazy = _kernels.chain_one_jacobian(p.pack, u, 0.0)
+        if not isinstance(lazy, np.ndarray):
+            continue
+        fused = _kernels.chain_one_jacobian(p.pack, u, 0.0, True)
+        assert np.isnan(lazy[12 * n:12 * n + k + 1]).all()
+        assert not np.isnan(fused).any()
+        _kernels.chain_one_velocity(p.pack, None, lazy)
+        np.testing.assert_array_equal(fused, lazy)
+        sv = np.linalg.svd(fused[6 * n:12 * n].reshape(6, n), compute_uv=False)
+        assert np.abs(fused[12 * n:12 * n + k] - sv).max() <= 1e-13 * sv[0]
+        assert fused[12 * n + k] == fused[12 * n] / fused[12 * n + k - 1]
+        seen += 1
+    assert seen >= 3
+    if c is None or not hasattr(_kernels, "chain_one_ik_jacobian"):
+        return
+    act = np.flatnonzero(machine.model.actuated)
+    lo, hi = machine.model.q_min[act], machine.model.q_max[act]
+    q = lo + (hi - lo) * (0.2 + 0.6 * np.random.default_rng(22).random((4, len(act))))
+    poses = machine.fk(q, strokes="ignore")
+    for x in poses:
+        q, lazy = _kernels.chain_one_ik_jacobian(c.capsule, p.pack, x, 0.0, 1e-12)
+        q2, fused = _kernels.chain_one_ik_jacobian(c.capsule, p.pack, x, 0.0, 1e-12, True)
+        np.testing.assert_array_equal(q, q2)
+        _kernels.chain_one_velocity(p.pack, None, lazy)
+        np.testing.assert_array_equal(fused, lazy)
+    with pytest.raises(ValueError):  # the flag's truth
+        _kernels.chain_one_ik_jacobian(c.capsule, p.pack, poses[0], 0.0, 1e-12, np.ones(2))
+    with pytest.raises(TypeError):
+        _kernels.chain_one_ik_jacobian(c.capsule, p.pack, poses[0], 0.0, 1e-12, True, 1)
+
+
 def test_chain_one_jacobian_argument_checks(machine):
     p = cov.VelocityPack(machine, _kernels)
     u = configurations(machine, 1, seed=2)[0]
     call = _kernels.chain_one_jacobian
-    for bad_args, error in [((p.pack, u), TypeError), ((p.pack, u, 0.0, 1), TypeError),
+    for bad_args, error in [((p.pack, u), TypeError), ((p.pack, u, 0.0, 1, 2), TypeError),
+                            ((p.pack, u, 0.0, np.ones(2)), ValueError),  # its truth
                             ((object(), u, 0.0), TypeError), ((p.pack, u, "a"), TypeError),
                             ((p.pack, u[:-1], 0.0), TypeError),
                             ((p.pack, np.array(u[:-1]), 0.0), TypeError),

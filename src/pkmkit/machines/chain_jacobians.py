@@ -15,6 +15,8 @@ from pkmkit.exceptions import (
     UnsupportedOperationError,
 )
 from pkmkit.machines.chain_one import ChainOnePose
+from pkmkit.machines.chain_one import jacobian as one_pose_jacobian
+from pkmkit.machines.chain_one_velocity import at_call
 from pkmkit.machines.chain_velocity_record import (
     RANK_RCOND,
     SINGULAR_TOL,
@@ -62,7 +64,6 @@ class ChainVelocity(ChainOnePose):
     (and, from :class:`~pkmkit.machines.chain_one.ChainOnePose`, the one-pose paths)."""
 
     # ---------------------------------------------------------------- velocity
-    @chunked  # a batch of more than ``chunk_rows`` rows chunk by chunk (issue 22 §6)
     def jacobian(self, x: Any = None, *, q: Any = None, branches: Any = None,
                  tol: float = SINGULAR_TOL, start: Any = None) -> ChainJacobians:
         """Velocity model at tool poses ``x`` or at actuator coordinates ``q`` (the closure
@@ -90,8 +91,21 @@ class ChainVelocity(ChainOnePose):
             ClosureMissError: a single q whose legs do not close.
             SingularConfigurationError: a single q at a singular closure.
         """
-        if fast := self._jacobian_one(x, q, branches, tol, start):
-            return fast[0]  # one plain pose: one compiled call (machines/chain_one.py)
+        if q is None and branches is None and start is None and x is not None:
+            # one plain pose: one C call (machines/chain_one_velocity.py), before the batch
+            # wrapper; False: the other one-pose paths (machines/chain_one.py), None: the batch
+            fast = at_call(self, x, tol)
+            if fast is False:
+                fast = one_pose_jacobian(self, x, tol)
+            if fast is not None:
+                return fast
+        return self._jacobian_rows(x, q=q, branches=branches, tol=tol, start=start)
+
+    @chunked  # a batch of more than ``chunk_rows`` rows chunk by chunk (issue 22 §6)
+    def _jacobian_rows(self, x: Any = None, *, q: Any = None, branches: Any = None,
+                       tol: float = SINGULAR_TOL, start: Any = None) -> ChainJacobians:
+        """:meth:`jacobian` by the batch path (one pose too, where the one-pose paths do not
+        answer)."""
         if branches is not None:
             raise InputError("a joint-chain machine has no leg branches: reach another "
                              "solution with ik(x, q0=...) and pass its q")
@@ -104,7 +118,7 @@ class ChainVelocity(ChainOnePose):
             if self._is_actuator_array(x):
                 warnings.warn("jacobian(q) of a joint-chain machine: pass the actuator values "
                               "as jacobian(q=q) (a positional argument is a pose, as for every "
-                              "machine)", DeprecationWarning, stacklevel=2)
+                              "machine)", DeprecationWarning, stacklevel=4)
                 q = x
             else:
                 xb, single = _checked_batch(x, 6, "pose")

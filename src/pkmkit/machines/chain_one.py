@@ -628,10 +628,11 @@ _MODES = ("flag", "refuse", "ignore")
 
 class ChainOnePose:
     """Mixin of :class:`~pkmkit.machines.joint_chain.JointChainMachine` (through
-    :class:`~pkmkit.machines.chain_jacobians.ChainVelocity`): the first lines of its ``ik``,
-    ``fk`` and ``jacobian`` ask these for the one-pose answer — ``(result,)`` for one plain row
-    without options (but ``strokes``, ``check_singular``, ``tol``), ``()`` where the batch
-    path answers (module docstring)."""
+    :class:`~pkmkit.machines.chain_jacobians.ChainVelocity`): the first lines of its ``ik``
+    and ``fk`` ask these for the one-pose answer — ``(result,)`` for one plain row without
+    options (but ``strokes``, ``check_singular``, ``tol``), ``()`` where the batch path
+    answers (module docstring); its ``jacobian`` asks
+    :func:`~pkmkit.machines.chain_one_velocity.at_call`, then :func:`jacobian`."""
 
     def _ik_one(self, x: Any, q0: Any, tool_length: Any, full_output: bool, strokes: str,
                 start: Any, engine_options: dict) -> tuple:
@@ -654,13 +655,6 @@ class ChainOnePose:
                             check_singular is None or bool(check_singular))
                 return () if fast is None else (fast,)
             fast = direct(self, q, strokes, check_singular)
-            if fast is not None:
-                return (fast,)
-        return ()
-
-    def _jacobian_one(self, x: Any, q: Any, branches: Any, tol: float, start: Any) -> tuple:
-        if x is not None and q is None and branches is None and start is None:
-            fast = jacobian(self, x, tol)
             if fast is not None:
                 return (fast,)
         return ()

@@ -24,7 +24,9 @@ ranks given; ``J``, ``J_homogeneous`` and ``passive_rates`` views of the kernel'
 array, made at their first read and kept in the record's ``__dict__`` (later reads are plain
 attribute reads); the singular values and the condition number computed at the first read of
 either (the kernel's singular stage, one more C call on the array's ``J_homogeneous``: ``J``
-alone does not pay the SVD). ``closure_rank`` is ``n_u`` and ``status``
+alone does not pay the SVD) — once that happened on a machine, its later calls run the stage
+inside their one C call (``_Singular``; the same bits), so a loop reading ``condition`` makes
+one C call per pose. ``closure_rank`` is ``n_u`` and ``status``
 OK only where the bound clears :data:`~pkmkit.machines.chain_one.BOUND_MARGIN` × max(``tol``,
 :data:`~pkmkit.machines.chain_velocity_record.RANK_RCOND`): the closure is then certainly
 regular, of full rank, and not singular by the batch path's SVD; elsewhere (near a singular
@@ -69,8 +71,8 @@ class VelocityPack:
     leg actuators' places in J, the leg owning each column alone (−1: the platform's and the
     joints shared by legs), and the output buffer's layout."""
 
-    __slots__ = ("call", "expected", "ik_jacobian", "jacobian", "layout", "n", "n_p", "pack",
-                 "rank", "size", "sv_start", "sv_stop")
+    __slots__ = ("call", "expected", "fusable", "ik_jacobian", "jacobian", "layout", "n", "n_p",
+                 "pack", "rank", "singular", "size", "sv_start", "sv_stop")
 
     def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
         arguments = pack_arguments(m) if arguments is None else arguments
@@ -78,6 +80,10 @@ class VelocityPack:
         self.call = native.chain_one_velocity
         self.jacobian = getattr(native, "chain_one_jacobian", None)  # None: an older build
         self.ik_jacobian = getattr(native, "chain_one_ik_jacobian", None)  # likewise
+        # the singular stage in the same call (its sixth argument; not in an older build):
+        # asked once a record's condition or singular values were read (_Singular)
+        self.fusable = "singular=False" in (getattr(self.ik_jacobian, "__doc__", "") or "")
+        self.singular = False
         n = int(np.count_nonzero(m.model.actuated))
         k = min(6, n)
         self.n, self.n_p = n, len(m.passive_variables)
@@ -185,9 +191,14 @@ class _View:
 
 
 class _Singular:
-    """``singular_values`` or ``condition`` of :class:`OnePoseChainJacobians`: the first read
-    of either runs the kernel's singular stage (one C call on the buffer's
-    ``J_homogeneous``) and keeps both in the record's ``__dict__``."""
+    """``singular_values`` or ``condition`` of :class:`OnePoseChainJacobians`: its first read
+    keeps it in the record's ``__dict__`` (the other made at its own first read: one NumPy
+    object each), running the kernel's singular stage first (one C call on the buffer's
+    ``J_homogeneous``) unless the record's C call ran it (the condition not NaN). That first
+    run sets the pack's ``singular``: the machine's later one-pose calls run the stage in
+    their own C call (the same function on the same ``J_homogeneous``: the same bits), so a
+    loop reading ``condition`` pays no second call and one that never reads it no singular
+    stage."""
 
     __slots__ = ("condition",)
 
@@ -199,11 +210,17 @@ class _Singular:
             return self
         fields = record.__dict__
         p, out = fields["_pack"], fields["_out"]
-        p.call(p.pack, None, out)
         stop = p.sv_stop
+        condition = out[stop]
+        if condition != condition:  # NaN: not computed in the record's call
+            p.call(p.pack, None, out)
+            condition = out[stop]
+            p.singular = p.fusable
+        if self.condition:
+            fields["condition"] = condition
+            return condition
         values = fields["singular_values"] = out[p.sv_start:stop]
-        condition = fields["condition"] = out[stop]
-        return condition if self.condition else values
+        return values
 
 
 class OnePoseChainJacobians(ChainJacobians):
@@ -296,8 +313,31 @@ def at_pose(m: Any, c: Any, x: Any, tol: float) -> Any:
     if p.ik_jacobian is None:
         solved = c.ik(c.capsule, x, True, True)
         return False if solved is None else at_solution(m, solved, tol)
-    got = p.ik_jacobian(c.capsule, p.pack, x,
-                        BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND), RESIDUAL_GUARD)
+    return _fused(p, c, x, tol)
+
+
+def at_call(m: Any, x: Any, tol: Any) -> Any:
+    """The first step of ``m.jacobian(x)`` (:meth:`~pkmkit.machines.chain_jacobians.
+    ChainVelocity.jacobian`, before its batch wrapper): :func:`at_pose` once the machine's
+    packs exist, in the fewest Python steps — the record; None where the bound does not clear
+    (the batch path answers); False where the other one-pose paths answer
+    (:func:`pkmkit.machines.chain_one.jacobian`: the packs not built yet, no C extension or
+    ``PKMKIT_NATIVE=0``, a ``tol`` that is not a positive finite float, an ``x`` the C
+    inverse declines, a solution outside the legs' home modes or beyond the residual
+    guard)."""
+    fields = m.__dict__
+    p, c = fields.get("_chain_one_velocity"), fields.get(_PACKED)
+    if p is None or not c or type(tol) is not float or not 0.0 < tol < _INF \
+            or p.ik_jacobian is None or _native_now() is None:
+        return False
+    return _fused(p, c, x, tol)
+
+
+def _fused(p: VelocityPack, c: Any, x: Any, tol: float) -> Any:
+    """The fused C call (``chain_one_ik_jacobian``) and the record (:func:`at_pose`)."""
+    threshold = BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND)
+    got = p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD, True) if p.singular \
+        else p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD)
     if got is None:
         return False
     q, out = got
@@ -311,3 +351,5 @@ def at_pose(m: Any, c: Any, x: Any, tol: float) -> Any:
 
 
 _native_now = jit.native_kernels_now
+_PACKED = "_chain_one_native"  # the key of chain_one_native.packed's pack on the machine
+_INF = float("inf")

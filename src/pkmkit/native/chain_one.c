@@ -642,11 +642,12 @@ static void legs_dense(const pk_one *s, const double *panels, double *jac) {
 
 PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
-    if (nargs != 5) {
+    if (nargs != 5 && nargs != 6) {
         PyErr_SetString(PyExc_TypeError,
-                        "chain_one_ik_jacobian(packed, pack, x, threshold, guard)");
+                        "chain_one_ik_jacobian(packed, pack, x, threshold, guard[, singular])");
         return NULL;
     }
+    int singular = nargs == 5 ? 0 : PyObject_IsTrue(args[5]); /* -1: the check below */
     pk_one *s = capsule_state(args[0]);
     if (!s) return NULL;
     double threshold = PyFloat_AsDouble(args[3]), guard = PyFloat_AsDouble(args[4]);
@@ -675,7 +676,7 @@ PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_
     if (qa) {
         PyObject *out = residual > guard ? Py_NewRef(Py_False)
                         : pk_one_velocity_array(args[1], u, threshold, fresh ? k.w.jac : NULL,
-                                                s->inv.position, n);
+                                                s->inv.position, n, singular);
         answer = out ? PyTuple_Pack(2, qa, out) : NULL;
         Py_XDECREF(out);
         Py_DECREF(qa);

@@ -37,7 +37,7 @@ extern const char pk_chain_velocity_pack_doc[], pk_chain_one_velocity_doc[];
 extern const char pk_chain_one_jacobian_doc[];
 PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
                                 const double *given, const int64_t *given_position,
-                                ptrdiff_t given_n);
+                                ptrdiff_t given_n, int singular);
 
 /* svd.c: the singular values of one small matrix (k <= 6), round-robin Jacobi */
 void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out);
@@ -639,18 +639,20 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
 
 PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
-    if (nargs != 3) {
-        PyErr_Format(PyExc_TypeError, "chain_one_jacobian() takes 3 positional arguments "
+    if (nargs != 3 && nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "chain_one_jacobian() takes 3 or 4 positional arguments "
                      "(%zd given)", nargs);
         return NULL;
     }
+    int singular = nargs == 3 ? 0 : PyObject_IsTrue(args[3]);
+    if (singular < 0) return NULL;
     chain_velocity *v = pack_state(args[0]);
     if (!v) return NULL;
     double threshold = PyFloat_AsDouble(args[2]);
     if (threshold == -1.0 && PyErr_Occurred()) return NULL;
     double u[256];
     if (take_u(args[1], 6 + v->c.n_var, u) < 0) return NULL;
-    return pk_one_velocity_array(args[0], u, threshold, NULL, NULL, 0);
+    return pk_one_velocity_array(args[0], u, threshold, NULL, NULL, 0, singular);
 }
 
 /* chain_one_jacobian's answer at u (6 + n_var) for pack; given (6 L rows, given_n columns,
@@ -659,7 +661,7 @@ PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssi
  * A new reference (the array, None or False), NULL with an error set. */
 PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
                                 const double *given, const int64_t *given_position,
-                                ptrdiff_t given_n) {
+                                ptrdiff_t given_n, int singular) {
     chain_velocity *v = pack_state(pack);
     if (!v) return NULL;
     if (given && 6 + v->c.n_var != given_n) given = NULL; /* not the same machine's */
@@ -673,7 +675,7 @@ PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshol
         Py_XDECREF(array);
         return NULL;
     }
-    double bound = velocity(v, u, view.buf, 0, given, given_position, given_n);
+    double bound = velocity(v, u, view.buf, singular, given, given_position, given_n);
     PyBuffer_Release(&view);
     if (bound < 0.0 || !(bound >= threshold) || !(bound > 0.0)) {
         Py_DECREF(array);

@@ -28,18 +28,20 @@ const char pk_chain_one_velocity_doc[] =
     "computes them from out's J_homogeneous (and returns the condition number).";
 
 const char pk_chain_one_jacobian_doc[] =
-    "chain_one_jacobian(pack, u, threshold) -> out, None or False\n\n"
+    "chain_one_jacobian(pack, u, threshold, singular=False) -> out, None or False\n\n"
     "chain_one_velocity's model of one configuration u (6 + n_var floats: a list, or a float64\n"
     "1-D array such as chain_one_ik's solution) in a new float64 array out (its layout, the\n"
     "singular values and the condition NaN: chain_one_velocity(pack, None, out) computes them)\n"
     "where the bound clears threshold; None where it does not (or a pivot vanished), False\n"
-    "where u is not in the legs' home modes.";
+    "where u is not in the legs' home modes. singular true: the singular stage runs in the same\n"
+    "call (out's singular values and condition filled).";
 
 const char pk_chain_one_ik_jacobian_doc[] =
-    "chain_one_ik_jacobian(packed, pack, x, threshold, guard)\n\n"
+    "chain_one_ik_jacobian(packed, pack, x, threshold, guard, singular=False)\n\n"
     "m.jacobian(x)'s C path in one call: chain_one_ik's inverse of one plain pose x (no\n"
     "stroke test) and chain_one_jacobian(pack, u, threshold) at its solution u, the closure's\n"
     "Jacobian handed over from the inverse's last evaluation where that was at u (else\n"
     "evaluated again): (q, out), out the array, None or False as chain_one_jacobian answers\n"
     "(False too where the inverse's largest residual exceeds guard); None where the inverse\n"
-    "declines. pack: the machine's chain_velocity_pack capsule.";
+    "declines. pack: the machine's chain_velocity_pack capsule. singular true: out's\n"
+    "singular values and condition computed in the same call (chain_one_jacobian's).";
