@@ -9,7 +9,7 @@ compiling it again (≈ 0.25 s of CPU per build, 20 builds in the ordinary run:
 docs/testing.md, "Sixth round (session 34, suite3b)"). A changed generator, header, flag or
 compiler is a new key, hence a new ``-Werror`` build; a failing build is never kept. Each caller
 gets its own copy of the library (its own file, so its own ``dlopen`` handle and static state).
-``PKMKIT_TEST_C_CACHE=0`` compiles every time.
+At most :data:`MAX_KEPT` libraries are kept. ``PKMKIT_TEST_C_CACHE=0`` compiles every time.
 """
 
 from __future__ import annotations
@@ -23,6 +23,8 @@ from pathlib import Path
 
 STUB = Path(__file__).parent / "linuxcnc_stub"
 CACHE = Path(__file__).parent / "__pycache__" / "c-builds"
+#: Libraries kept at most (≈ 25 kB each; the oldest written go first).
+MAX_KEPT = 200
 _VERSIONS: dict[str, str] = {}
 
 
@@ -62,4 +64,12 @@ def build_shared(cc: str, flags: list[str], sources: list[Path], lib: Path) -> b
         os.close(fd)
         shutil.copyfile(lib, tmp)
         os.replace(tmp, kept)
+        _prune()
     return True
+
+
+def _prune() -> None:
+    """Drop the oldest libraries beyond :data:`MAX_KEPT` (those of generators since changed)."""
+    kept = sorted(CACHE.glob("*.so"), key=lambda p: p.stat().st_mtime)
+    for path in kept[:max(0, len(kept) - MAX_KEPT)]:
+        path.unlink(missing_ok=True)

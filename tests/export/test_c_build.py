@@ -75,3 +75,13 @@ def test_without_the_cache_every_build_compiles(cache, monkeypatch):
     for name in ("a", "b"):
         assert c_build.build_shared(cc, FLAGS, [_source(cache, name, GOOD)], cache / f"{name}.so")
     assert not c_build.CACHE.exists()
+
+
+def test_the_oldest_libraries_beyond_the_limit_are_dropped(cache, monkeypatch):
+    monkeypatch.setattr(c_build, "MAX_KEPT", 1)
+    cc = _compiler()
+    for k, name in enumerate(("a", "b")):
+        c_build.build_shared(cc, FLAGS, [_source(cache, name, GOOD + "\n" * k)],
+                             cache / f"{name}.so")
+    kept = list(c_build.CACHE.glob("*.so"))
+    assert [p.stem for p in kept] == [c_build.build_key(cc, FLAGS, [cache / "b.c"])]
