@@ -107,19 +107,6 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             raise pytest.UsageError(f"cannot group {suffixed!r} for --dist loadgroup")
 
 
-def pytest_collection_finish(session: pytest.Session) -> None:
-    """Freeze the heap the collection left (``gc.freeze``: the imported modules, the test
-    items) so the cyclic garbage collector's full passes during the run, and pytest's own at
-    the end, scan only what the tests allocate; reference counting still frees everything.
-    ``PKMKIT_TEST_GC_FREEZE=0`` turns it off (docs/testing.md, "Sixth round (session 34,
-    suite3b)")."""
-    if os.environ.get("PKMKIT_TEST_GC_FREEZE") != "0":
-        import gc
-
-        gc.collect()  # the collection's own garbage first, so it is not kept for the run
-        gc.freeze()
-
-
 def workspace_half_width(machine: pkmkit.Machine) -> float:
     """Half side of a box around home that is reachable and far from singularities."""
     return 0.25 * float(machine.model.leg_length.min())
