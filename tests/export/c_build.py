@@ -59,12 +59,15 @@ def build_shared(cc: str, flags: list[str], sources: list[Path], lib: Path) -> b
     subprocess.run([cc, "-shared", *flags, *map(str, sources), "-o", str(lib), "-lm"],
                    check=True, capture_output=True)
     if use_cache:
-        CACHE.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=CACHE, suffix=".tmp")  # another worker may write it too
-        os.close(fd)
-        shutil.copyfile(lib, tmp)
-        os.replace(tmp, kept)
-        _prune()
+        try:
+            CACHE.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=CACHE, suffix=".tmp")  # another worker may write it
+            os.close(fd)
+            shutil.copyfile(lib, tmp)
+            os.replace(tmp, kept)
+            _prune()
+        except OSError:  # a read-only checkout: compiled every time, as before
+            pass
     return True
 
 
