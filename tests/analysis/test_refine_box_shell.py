@@ -63,19 +63,21 @@ def test_a_hole_inside_is_missed_by_the_shell_alone():
     assert _disc_with_hole(whole_center + whole_half * u).min() > -1e-6
 
 
-def _refined(monkeypatch, *, plant_inside: bool, whole_only: bool = False):
-    """The hexapod's refined cube on a coarse grid, and the number of points each optimiser
-    run constrained; ``plant_inside``: the lattice's middle point (interior) fails at the first
-    whole-lattice check; ``whole_only``: the shell is the whole lattice (the rule before)."""
+def _refined(monkeypatch, *, plant_inside: bool):
+    """The hexapod's refined cube on a coarse grid, and each optimiser run's number of points
+    constrained and optimum (centre, half side); ``plant_inside``: the lattice's middle point
+    (interior) fails at the first whole-lattice check, so the box is optimised again on the
+    whole lattice from the same start — the optimum of the rule before the shell."""
     m = pkmkit.machine("gough-stewart")
     grid = make_grid([-0.4, -0.4, 0.55], [0.4, 0.4, 1.05], free=[0, 1, 2], base=m.home_pose,
                      names=m.pose_names, resolution=9)
-    constrained: list[int] = []
+    runs: list[tuple[int, np.ndarray, float]] = []
     planted = [plant_inside]
 
     def counted_box(*args, offsets=None, **kwargs):
-        constrained.append(25 ** 3 if offsets is None else len(offsets))
-        return largest_box(*args, offsets=offsets, **kwargs)
+        center, half = largest_box(*args, offsets=offsets, **kwargs)
+        runs.append((25 ** 3 if offsets is None else len(offsets), center, half))
+        return center, half
 
     def planted_poses(machine, points, criteria, **kwargs):
         out = evaluate_poses(machine, points, criteria, **kwargs)
@@ -88,22 +90,25 @@ def _refined(monkeypatch, *, plant_inside: bool, whole_only: bool = False):
     with monkeypatch.context() as patch:
         patch.setattr(workspace, "largest_box", counted_box)
         patch.setattr(workspace, "evaluate_poses", planted_poses)
-        if whole_only:
-            patch.setattr(workspace, "lattice_shell", lattice_offsets)
         box = workspace.compute_workspace(m, grid, Criteria(), refine=True).inscribed
-    return box, constrained
+    return box, runs
 
 
 def test_the_shells_box_is_the_whole_lattices_and_a_failing_interior_reruns_it(monkeypatch):
     """Fails if refine_box ignores a failing interior point (no second optimiser run on the
-    whole lattice) or if the shell's box differs from the whole lattice's."""
+    whole lattice), runs the whole lattice when no interior point fails, or if the shell's box
+    differs from the whole lattice's (the planted run's two optima, both from the grid's box:
+    one run of the whole lattice instead of a third workspace, session 34)."""
     shell, runs = _refined(monkeypatch, plant_inside=False)
-    assert runs == [25 ** 3 - 23 ** 3]
-    whole, whole_runs = _refined(monkeypatch, plant_inside=False, whole_only=True)
-    assert whole_runs == [25 ** 3]
-    assert shell.side == pytest.approx(whole.side, rel=1e-9)
-    np.testing.assert_allclose(shell.center, whole.center, atol=1e-9)
+    assert [n for n, _, _ in runs] == [25 ** 3 - 23 ** 3]
     rerun, rerun_runs = _refined(monkeypatch, plant_inside=True)
-    assert rerun_runs == [25 ** 3 - 23 ** 3, 25 ** 3]
-    assert rerun.side == whole.side
-    np.testing.assert_array_equal(rerun.center, whole.center)
+    assert [n for n, _, _ in rerun_runs] == [25 ** 3 - 23 ** 3, 25 ** 3]
+    (_, shell_center, shell_half), (_, whole_center, whole_half) = rerun_runs
+    np.testing.assert_array_equal(shell_center, runs[0][1])  # the same first run
+    assert shell_half == runs[0][2]
+    assert shell_half == pytest.approx(whole_half, rel=1e-9)
+    np.testing.assert_allclose(shell_center, whole_center, atol=1e-9)
+    # the box kept after the rerun is the one kept without it (the whole lattice's, before:
+    # the same checks and shrinking follow either optimum)
+    assert rerun.side == pytest.approx(shell.side, rel=1e-9) and 0.5 * rerun.side <= whole_half
+    np.testing.assert_allclose(rerun.center, shell.center, atol=1e-9)

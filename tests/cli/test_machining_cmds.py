@@ -3,6 +3,7 @@ and a user's CMM file with an error."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from .conftest import parse_json
@@ -141,3 +142,50 @@ def test_check_of_a_part_calibration_says_when_it_helps(run, tmp_path, monkeypat
     out = run("machined-part", "check", "verne", "--calibrated", "cmm.truth.toml", "--truth",
               preset_path("verne"))
     assert out.exit_code == 3 and "do not use this calibration" in out.output
+
+
+def test_ballbar_plan_bar_length_is_read_in_the_units_given(run, tmp_path, monkeypatch):
+    """``--bar-length`` in mm and in m: every reading's ball is that far from its table pivot
+    (the bar's definition, from the written coordinates), and the two plans are the same in SI
+    (a value taken as metres in mm, or the reverse, moves every ball)."""
+    monkeypatch.chdir(tmp_path)
+    plans = {}
+    for unit, length, scale in (("mm", 120, 1e-3), ("m", 0.12, 1.0)):
+        out = run("machined-part", "ballbar-plan", "verne", "--points", 4, "--bar-length",
+                  length, "--units", unit, "--out", f"{unit}.csv")
+        assert out.exit_code == 0, out.output
+        assert f"bar {length:g} {unit})" in out.output
+        lines = (tmp_path / f"{unit}.csv").read_text().splitlines()
+        assert f"# bar length: {length:g} {unit}" in lines
+        rows = np.array([[float(v) for v in line.split(",")[:6]]
+                         for line in lines if line[:1] not in "#x"])
+        np.testing.assert_allclose(np.linalg.norm(rows[:, :3] - rows[:, 3:], axis=1), length,
+                                   rtol=1e-8)
+        plans[unit] = rows * scale
+    np.testing.assert_allclose(plans["mm"], plans["m"], rtol=0, atol=1e-9)
+
+
+def test_simulate_placement_is_read_in_the_units_given(run, tmp_path, monkeypatch):
+    """``--placement`` in mm and in m, on a machine with defects (where the placement changes
+    what is cut): the CMM points are the same in SI, and the default placement's (the default
+    box's lower corner, 0.3°: −0.2 m each way for the Verne) when given as it."""
+    from pathlib import Path
+
+    monkeypatch.chdir(tmp_path)
+    gcode = Path(__file__).resolve().parents[2] / "docs" / "examples" / "pocket.nc"
+    points = {}
+    for name, unit, placement, scale in (("mm", "mm", "-200,-200,-200,0.3", 1e-3),
+                                         ("m", "m", "-0.2,-0.2,-0.2,0.3", 1.0),
+                                         ("default", "m", None, 1.0)):
+        args = ["machined-part", "simulate", "verne", "--gcode", gcode, "--sections", 6,
+                "--defects", "random", "--seed", 2, "--units", unit, "--out", f"{name}.csv",
+                "--json"]
+        out = run(*args, *(() if placement is None else (f"--placement={placement}",)))
+        assert out.exit_code == 0, out.output
+        echoed = parse_json(out)["placement"]
+        assert [echoed[k] for k in ("dx", "dy", "dz")] == pytest.approx([-0.2 / scale] * 3)
+        lines = (tmp_path / f"{name}.csv").read_text().splitlines()
+        points[name] = np.array([[float(v) for v in line.split(",")[2:5]]
+                                 for line in lines if line[:1].isdigit()]) * scale
+    np.testing.assert_allclose(points["mm"], points["m"], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(points["m"], points["default"], rtol=0, atol=1e-12)

@@ -237,6 +237,12 @@ def test_duplicate_and_inert_variables():
     assert DesignProblem(base=base, variables=[Variable("r", 0.1, 0.2)],
                          objectives=[Objective("gci", "max")], region=REGION,
                          samples=5).inert_variables() == []
+    # a metric that changes at the variable's lower end only: not inert (each of the three
+    # points is compared with the first, the lower end)
+    lower_only = {"narrow": lambda m: float(m.params["parallelogram_width"] <= 0.05)}
+    assert DesignProblem(base=base, variables=[Variable("parallelogram_width", 0.05, 0.2)],
+                         objectives=[Objective("gci", "max")], region=REGION, samples=5,
+                         user_metrics=lower_only).inert_variables() == []
 
 
 @pytest.mark.parametrize("text", ["gci>=1e", "gci>=1.2.3", "gci>=nan", "stroke<=inf"])

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import ctypes
 import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +21,8 @@ from pkmkit.model.defects_table import apply_defect_vector, defect_index
 from pkmkit.model.rods import CRANK, STRUT
 from pkmkit.status import Status
 
-STUB = Path(__file__).parent / "linuxcnc_stub"
+from .c_build import STUB, build_shared
+
 SUPPORTED = ["delta", "dietmaier-hexapod", "five-bar-biglide", "five-bar-isotropic",
              "gough-stewart", "linear-delta-ch3", "linear-delta-table-iv1", "orthoglide"]
 MM = 1e-3
@@ -37,27 +37,14 @@ def _compiler() -> str:
 
 
 FLAGS = ["-fPIC", "-O2", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", f"-I{STUB}"]
-_BUILT: dict[str, Path] = {}  # generated source text -> its library, built once per process
-_HARNESS: dict[str, Path] = {}  # compiler -> the harness object
 
 
 def _build(cc: str, source: Path, lib: Path) -> None:
-    """``gcc -O2 -Werror`` of the module with the harness, once per source text: a module built
-    again (the same machine in another test) is a copy of the first library (its own file, so
-    its own handle and static state when loaded); the harness compiled once to an object."""
-    text = source.read_text(encoding="utf-8")
-    if text in _BUILT and _BUILT[text].exists():
-        shutil.copyfile(_BUILT[text], lib)
-        return
-    harness = _HARNESS.get(cc)
-    if harness is None or not harness.exists():
-        harness = lib.parent / "harness.o"
-        subprocess.run([cc, "-c", *FLAGS, str(STUB / "harness.c"), "-o", str(harness)],
-                       check=True, capture_output=True)
-        _HARNESS[cc] = harness
-    subprocess.run([cc, "-shared", *FLAGS, str(source), str(harness), "-o", str(lib), "-lm"],
-                   check=True, capture_output=True)
-    _BUILT[text] = lib
+    """``gcc -O2 -Werror`` of the module with the harness, once per machine state for the same
+    inputs (:mod:`tests.export.c_build`): a module built again (the same machine in another
+    test, process or run) is a copy of the first library, its own file, so its own handle and
+    static state when loaded."""
+    build_shared(cc, FLAGS, [source, STUB / "harness.c"], lib)
 
 
 class Module:

@@ -6,7 +6,6 @@ and with calibration-sized compatible defects."""
 from __future__ import annotations
 
 import ctypes
-import subprocess
 import warnings
 from pathlib import Path
 
@@ -23,7 +22,8 @@ from pkmkit.export.linuxcnc_check import check_linuxcnc_source
 from pkmkit.model.defects_table import apply_defect_vector
 from pkmkit.status import Status
 
-from .test_linuxcnc import STUB, _compiler
+from .c_build import STUB, build_shared
+from .test_linuxcnc import FLAGS, _compiler
 
 CHAINS = ["tripteor-x7", "trimule-600", "crank-slider"]
 MM = 1e-3
@@ -60,9 +60,7 @@ class ChainModule:
         source = directory / f"{name}.c"
         source.write_text(linuxcnc_source(machine), encoding="utf-8")
         lib = directory / f"{name}.so"
-        subprocess.run([cc, "-shared", "-fPIC", "-O2", "-std=c99", "-pedantic", "-Wall", "-Wextra",
-                        "-Werror", f"-I{STUB}", str(source), str(STUB / "harness.c"), "-o",
-                        str(lib), "-lm"], check=True, capture_output=True)
+        build_shared(cc, FLAGS, [source, STUB / "harness.c"], lib)  # once per same inputs
         self.lib = ctypes.CDLL(str(lib))
         ptr = np.ctypeslib.ndpointer
         arr = ptr(np.float64, flags="C")
