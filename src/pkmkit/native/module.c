@@ -604,6 +604,10 @@ static PyMethodDef methods[] = {
      pk_rod_inverse_rows_doc},
     {"rod_reach_det", (PyCFunction)(void (*)(void))pk_py_rod_reach_det, METH_FASTCALL,
      pk_rod_reach_det_doc},
+    {"recycled_block", (PyCFunction)(void (*)(void))pk_py_recycled_block, METH_FASTCALL,
+     pk_recycled_block_doc},
+    {"recycled_release", (PyCFunction)(void (*)(void))pk_py_recycled_release, METH_FASTCALL,
+     pk_recycled_release_doc},
     {NULL, NULL, 0, NULL},
 };
 

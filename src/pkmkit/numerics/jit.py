@@ -279,6 +279,39 @@ def _helper_pool(workers: int) -> ThreadPoolExecutor:
     return _pool[1]
 
 
+#: Batch outputs of at least this many bytes are built on recycled memory
+#: (:func:`batch_output`): 32 MiB, glibc's largest dynamic ``mmap`` threshold — below it
+#: ``malloc`` already hands a freed output's memory to the next call (the Verne module's
+#: 24 MB q faults no page), above it every call maps and clears fresh pages.
+RECYCLE_BYTES = 1 << 25
+
+
+def batch_output(rows: int, width: int) -> Any:
+    """A new uninitialised float64 array ``(rows, width)`` for a large batch's result, as
+    ``numpy.empty``; from :data:`RECYCLE_BYTES` on, its memory is a block of the C extension
+    (``recycled_block``) that goes back to a list of at most two idle blocks once no array
+    uses it any more, and a later call of the same size takes it again: a loop of
+    ``q = m.ik(X)`` stops paying Linux's mapping and clearing of fresh pages (6–7 ns per
+    hexapod pose, a quarter of the call; docs/benchmarks.md "Session 34"). The array is a
+    view (``owndata`` False, its base holds the block), writeable, C-contiguous. At most two
+    idle outputs stay held (:func:`release_outputs` frees them). ``PKMKIT_RECYCLE=0``, or no
+    C extension: ``numpy.empty``."""
+    import numpy as np
+
+    nbytes = rows * width * 8
+    native = native_kernels()
+    if (nbytes < RECYCLE_BYTES or native is None
+            or os.environ.get("PKMKIT_RECYCLE", "").strip() == "0"):
+        return np.empty((rows, width))
+    return np.frombuffer(native.recycled_block(nbytes), dtype=np.float64).reshape(rows, width)
+
+
+def release_outputs() -> int:
+    """Free the idle recycled outputs (:func:`batch_output`) now; their bytes."""
+    native = native_kernels()
+    return 0 if native is None else int(native.recycled_release())
+
+
 # ``os.environ``'s own dict on POSIX (encoded keys): a membership test there costs tens of
 # nanoseconds where ``os.environ.get`` costs half a microsecond (encoding, the mapping's
 # methods) — what a one-pose call can afford
