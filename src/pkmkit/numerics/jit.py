@@ -27,6 +27,10 @@ no import cost, so the per-pose solvers run native at every batch size.
 ``PKMKIT_COMPILED=0`` still means NumPy everywhere. This module is the one place that choice
 is made.
 
+Outputs: :func:`batch_output` builds large batch results on recycled memory (a dropped
+output's block serves the next call of its size: no fresh pages to map and clear);
+``PKMKIT_RECYCLE=0`` gives ``numpy.empty``.
+
 Threads: the compiled kernels release the GIL, and :func:`run_chunks` spreads a large batch
 over :func:`thread_count` threads (the calling one and helpers of a persistent pool) in pieces
 drawn from a shared counter (a thread slowed by a competing process simply takes fewer).
