@@ -1,8 +1,8 @@
 """Recycled batch outputs (:func:`pkmkit.numerics.jit.batch_output`, ``native/recycled.c``,
 issue 22 §2): the memory of a large output goes to the next call only once no array uses it
-— never while the caller holds the output or any view of it —, at most two idle blocks are
-kept, and the hexapod's ``m.ik`` gives the same bits on recycled memory holding an older
-answer (NaN rows included) as on fresh memory."""
+— never while the caller holds the output or any view of it —, at most one idle block is
+kept (a loop alternates two blocks), and the hexapod's ``m.ik`` gives the same bits on
+recycled memory holding an older answer (NaN rows included) as on fresh memory."""
 
 from __future__ import annotations
 
@@ -52,13 +52,23 @@ def test_a_dropped_output_is_reused_and_a_held_one_never(small_blocks):
     assert (view == 1.0).all() and (b == 2.0).all()
     e = jit.batch_output(ROWS, WIDTH + 1)  # another size: never an idle block of this one
     assert e.shape == (ROWS, WIDTH + 1)
-    del view, b, d, e  # four blocks dropped, in this order: the last two stay idle
-    assert jit.release_outputs() == ROWS * WIDTH * 8 + ROWS * (WIDTH + 1) * 8
+    del view, b, d, e  # four blocks dropped, in this order: the last one stays idle
+    assert jit.release_outputs() == ROWS * (WIDTH + 1) * 8
     assert jit.release_outputs() == 0
+    f = jit.batch_output(ROWS, WIDTH)  # a loop of f = batch_output(): two blocks alternate
+    kept = {address(f)}
+    for _ in range(4):
+        f = jit.batch_output(ROWS, WIDTH)
+        kept.add(address(f))
+    assert len(kept) == 2
 
 
-def test_small_outputs_and_the_switch_are_plain_numpy(small_blocks, monkeypatch):
+def test_small_and_huge_outputs_and_the_switch_are_plain_numpy(small_blocks, monkeypatch):
     assert jit.batch_output(10, WIDTH).flags.owndata  # under RECYCLE_BYTES
+    monkeypatch.setattr(jit, "RECYCLE_MAX_BYTES", ROWS * WIDTH * 8 - 8)
+    assert jit.batch_output(ROWS, WIDTH).flags.owndata  # over RECYCLE_MAX_BYTES
+    monkeypatch.setattr(jit, "RECYCLE_MAX_BYTES", ROWS * WIDTH * 8)
+    assert not jit.batch_output(ROWS, WIDTH).flags.owndata
     monkeypatch.setenv("PKMKIT_RECYCLE", "0")
     assert jit.batch_output(ROWS, WIDTH).flags.owndata
 

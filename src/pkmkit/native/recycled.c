@@ -8,7 +8,8 @@
  * deallocation is the exact moment no array uses the memory any more — no reference
  * counting guesses. The block's memory then goes to a short list of idle blocks
  * (IDLE_BLOCKS, the oldest freed beyond it) from which a later request of the same size
- * takes it. Everything here runs with the GIL held (the factory and tp_dealloc), so the
+ * takes it; blocks in use are on no list, so one idle block serves a loop of
+ * q = m.ik(X), where the old q is dropped after the new call returns. Everything here runs with the GIL held (the factory and tp_dealloc), so the
  * list needs no other lock. recycled_release() frees the idle blocks and returns their
  * bytes. */
 #define PY_SSIZE_T_CLEAN
@@ -21,7 +22,7 @@
 
 #include "kernels.h"
 
-#define IDLE_BLOCKS 2
+#define IDLE_BLOCKS 1 /* a loop of q = m.ik(X) alternates two blocks: one idle */
 #define BLOCK_ALIGN ((size_t)1 << 21) /* 2 MiB: a transparent huge page */
 
 typedef struct {

@@ -288,30 +288,33 @@ def _helper_pool(workers: int) -> ThreadPoolExecutor:
 #: ``malloc`` already hands a freed output's memory to the next call (the Verne module's
 #: 24 MB q faults no page), above it every call maps and clears fresh pages.
 RECYCLE_BYTES = 1 << 25
+#: ... up to this many (256 MiB, 5.6 million hexapod poses): the idle block held between calls
+#: stays bounded; a larger output is fresh memory, as from ``numpy.empty``.
+RECYCLE_MAX_BYTES = 1 << 28
 
 
 def batch_output(rows: int, width: int) -> Any:
     """A new uninitialised float64 array ``(rows, width)`` for a large batch's result, as
-    ``numpy.empty``; from :data:`RECYCLE_BYTES` on, its memory is a block of the C extension
-    (``recycled_block``) that goes back to a list of at most two idle blocks once no array
-    uses it any more, and a later call of the same size takes it again: a loop of
+    ``numpy.empty``; from :data:`RECYCLE_BYTES` to :data:`RECYCLE_MAX_BYTES`, its memory is a
+    block of the C extension (``recycled_block``) that becomes the one idle block once no
+    array uses it any more, and a later call of the same size takes it again: a loop of
     ``q = m.ik(X)`` stops paying Linux's mapping and clearing of fresh pages (6–7 ns per
     hexapod pose, a quarter of the call; docs/benchmarks.md "Session 34"). The array is a
-    view (``owndata`` False, its base holds the block), writeable, C-contiguous. At most two
-    idle outputs stay held (:func:`release_outputs` frees them). ``PKMKIT_RECYCLE=0``, or no
+    view (``owndata`` False, its base holds the block), writeable, C-contiguous. At most one
+    idle output stays held (:func:`release_outputs` frees it). ``PKMKIT_RECYCLE=0``, or no
     C extension: ``numpy.empty``."""
     import numpy as np
 
     nbytes = rows * width * 8
     native = native_kernels()
-    if (nbytes < RECYCLE_BYTES or native is None
+    if (not RECYCLE_BYTES <= nbytes <= RECYCLE_MAX_BYTES or native is None
             or os.environ.get("PKMKIT_RECYCLE", "").strip() == "0"):
         return np.empty((rows, width))
     return np.frombuffer(native.recycled_block(nbytes), dtype=np.float64).reshape(rows, width)
 
 
 def release_outputs() -> int:
-    """Free the idle recycled outputs (:func:`batch_output`) now; their bytes."""
+    """Free the idle recycled output (:func:`batch_output`) now; its bytes."""
     native = native_kernels()
     return 0 if native is None else int(native.recycled_release())
 
