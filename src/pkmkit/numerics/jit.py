@@ -298,25 +298,25 @@ def batch_output(rows: int, width: int) -> Any:
     ``numpy.empty``; from :data:`RECYCLE_BYTES` to :data:`RECYCLE_MAX_BYTES`, its memory is a
     block of the C extension (``recycled_block``) that becomes the one idle block once no
     array uses it any more, and a later call of the same size takes it again: a loop of
-    ``q = m.ik(X)`` stops paying Linux's mapping and clearing of fresh pages (6–7 ns per
-    hexapod pose, a quarter of the call; docs/benchmarks.md "Session 34"). The array is a
+    ``q = m.ik(X)`` stops paying Linux's mapping and clearing of fresh pages (6–12 ns of CPU
+    per hexapod pose, a third of the call; docs/benchmarks.md "Session 34"). The array is a
     view (``owndata`` False, its base holds the block), writeable, C-contiguous. At most one
     idle output stays held (:func:`release_outputs` frees it). ``PKMKIT_RECYCLE=0``, or no
     C extension: ``numpy.empty``."""
     import numpy as np
 
     nbytes = rows * width * 8
-    native = native_kernels()
-    if (not RECYCLE_BYTES <= nbytes <= RECYCLE_MAX_BYTES or native is None
+    block = getattr(native_kernels(), "recycled_block", None)  # None: no (or an older) build
+    if (not RECYCLE_BYTES <= nbytes <= RECYCLE_MAX_BYTES or block is None
             or os.environ.get("PKMKIT_RECYCLE", "").strip() == "0"):
         return np.empty((rows, width))
-    return np.frombuffer(native.recycled_block(nbytes), dtype=np.float64).reshape(rows, width)
+    return np.frombuffer(block(nbytes), dtype=np.float64).reshape(rows, width)
 
 
 def release_outputs() -> int:
     """Free the idle recycled output (:func:`batch_output`) now; its bytes."""
-    native = native_kernels()
-    return 0 if native is None else int(native.recycled_release())
+    release = getattr(native_kernels(), "recycled_release", None)
+    return 0 if release is None else int(release())
 
 
 # ``os.environ``'s own dict on POSIX (encoded keys): a membership test there costs tens of
