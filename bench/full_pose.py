@@ -9,7 +9,8 @@ For each condition (``quiet``; ``loaded`` with one process keeping a core and th
   whose rods are checked for consistency): poses/s, the ratio to the same formula written per
   pose in pure Python (``math``, on a 20 000-pose sample) and the ratios to a plain copy of the
   input (``X.copy()``, the memory-bandwidth limit of a pass over the data, with the page faults
-  of a fresh array as ``m.ik``'s output has them) and to a copy into a preallocated array
+  of a fresh array; ``m.ik``'s own output is recycled memory since session 34,
+  ``jit.batch_output``) and to a copy into a preallocated array
   (``np.copyto``: the memory traffic alone, the issue's limit), and ``m.ik(X, out=Q)`` with
   ``Q`` reused call after call (no fresh pages; whether §2's ≤ 3× the preallocated copy is
   met with it and without it), all measured interleaved in

@@ -134,7 +134,7 @@ class FullPoseForms:
         for k in range(m.n_actuators):
             groups[k, :counts[k]] = np.flatnonzero(act == k)
         angular = np.array([m.rod_kind[groups[k, 0]] == CRANK for k in range(m.n_actuators)])
-        q = np.empty((x.shape[0], m.n_actuators)) if q is None else q
+        q = jit.batch_output(x.shape[0], m.n_actuators) if q is None else q
         status = np.empty(x.shape[0] if statuses else 0, dtype=np.int64)
         x = np.ascontiguousarray(x, dtype=float)
         rods = (m.rod_kind.astype(np.int64), *_plain(m.rod_base, m.rod_platform, m.rod_axis,

@@ -334,6 +334,10 @@ PyObject *pk_new_array(const double *values, Py_ssize_t rows, Py_ssize_t cols);
  * (-1: any; NULL: any shape); 0, or -1 with an exception set and nothing held. */
 int pk_take(PyObject *obj, Py_buffer *view, const char *name, char type, int writable, int ndim,
             const Py_ssize_t *shape);
+/* recycled.c: large batch outputs' memory handed back to the next call (issue 22 §2). */
+extern const char pk_recycled_block_doc[], pk_recycled_release_doc[];
+PyObject *pk_py_recycled_block(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_recycled_release(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 #endif
 
 #endif

@@ -613,6 +613,10 @@ static PyMethodDef methods[] = {
      pk_euler_quat_doc},
     {"euler_rotvec", (PyCFunction)(void (*)(void))pk_py_euler_rotvec, METH_FASTCALL,
      pk_euler_rotvec_doc},
+    {"recycled_block", (PyCFunction)(void (*)(void))pk_py_recycled_block, METH_FASTCALL,
+     pk_recycled_block_doc},
+    {"recycled_release", (PyCFunction)(void (*)(void))pk_py_recycled_release, METH_FASTCALL,
+     pk_recycled_release_doc},
     {NULL, NULL, 0, NULL},
 };
 

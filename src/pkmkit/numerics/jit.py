@@ -27,6 +27,10 @@ no import cost, so the per-pose solvers run native at every batch size.
 ``PKMKIT_COMPILED=0`` still means NumPy everywhere. This module is the one place that choice
 is made.
 
+Outputs: :func:`batch_output` builds large batch results on recycled memory (a dropped
+output's block serves the next call of its size: no fresh pages to map and clear);
+``PKMKIT_RECYCLE=0`` gives ``numpy.empty``.
+
 Threads: the compiled kernels release the GIL, and :func:`run_chunks` spreads a large batch
 over :func:`thread_count` threads (the calling one and helpers of a persistent pool) in pieces
 drawn from a shared counter (a thread slowed by a competing process simply takes fewer).
@@ -277,6 +281,42 @@ def _helper_pool(workers: int) -> ThreadPoolExecutor:
 
         _pool = (workers, ThreadPoolExecutor(max_workers=workers, thread_name_prefix="pkmkit"))
     return _pool[1]
+
+
+#: Batch outputs of at least this many bytes are built on recycled memory
+#: (:func:`batch_output`): 32 MiB, glibc's largest dynamic ``mmap`` threshold — below it
+#: ``malloc`` already hands a freed output's memory to the next call (the Verne module's
+#: 24 MB q faults no page), above it every call maps and clears fresh pages.
+RECYCLE_BYTES = 1 << 25
+#: ... up to this many (256 MiB, 5.6 million hexapod poses): the idle block held between calls
+#: stays bounded; a larger output is fresh memory, as from ``numpy.empty``.
+RECYCLE_MAX_BYTES = 1 << 28
+
+
+def batch_output(rows: int, width: int) -> Any:
+    """A new uninitialised float64 array ``(rows, width)`` for a large batch's result, as
+    ``numpy.empty``; from :data:`RECYCLE_BYTES` to :data:`RECYCLE_MAX_BYTES`, its memory is a
+    block of the C extension (``recycled_block``) that becomes the one idle block once no
+    array uses it any more, and a later call of the same size takes it again: a loop of
+    ``q = m.ik(X)`` stops paying Linux's mapping and clearing of fresh pages (6–12 ns of CPU
+    per hexapod pose, a third of the call; docs/benchmarks.md "Session 34"). The array is a
+    view (``owndata`` False, its base holds the block), writeable, C-contiguous. At most one
+    idle output stays held (:func:`release_outputs` frees it). ``PKMKIT_RECYCLE=0``, or no
+    C extension: ``numpy.empty``."""
+    import numpy as np
+
+    nbytes = rows * width * 8
+    block = getattr(native_kernels(), "recycled_block", None)  # None: no (or an older) build
+    if (not RECYCLE_BYTES <= nbytes <= RECYCLE_MAX_BYTES or block is None
+            or os.environ.get("PKMKIT_RECYCLE", "").strip() == "0"):
+        return np.empty((rows, width))
+    return np.frombuffer(block(nbytes), dtype=np.float64).reshape(rows, width)
+
+
+def release_outputs() -> int:
+    """Free the idle recycled output (:func:`batch_output`) now; its bytes."""
+    release = getattr(native_kernels(), "recycled_release", None)
+    return 0 if release is None else int(release())
 
 
 # ``os.environ``'s own dict on POSIX (encoded keys): a membership test there costs tens of
