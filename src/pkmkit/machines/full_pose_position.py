@@ -4,6 +4,7 @@ actuators, the orientation imposed by the rods: the Verne-type module): a mixin 
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import numpy as np
@@ -124,9 +125,10 @@ class PositionInverse:
         n = self.n_actuators
         hopeless = self._surely_unreachable(pb)
         skip = ~_valid_rows(pb) | hopeless
+        paired = np.zeros(pb.shape[0], dtype=bool)  # rows on the working branches by construction
         if compiled:
-            result = self._solve_positions(pb, None, engine_options, skip,
-                                           compiled=True)  # guess compiled too
+            result = self._solve_positions(pb, None, engine_options, skip, compiled=True,
+                                           paired=paired if branches is None else None)
         else:
             if q0 is None:
                 # first order from home: the position rows of J(home) are square (n = 3)
@@ -148,7 +150,7 @@ class PositionInverse:
         pose = np.concatenate([pb, result.u[:, n:]], axis=1)
         status = result.status.copy()
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
-        ok = status == Status.OK
+        ok = (status == Status.OK) & ~paired  # the paired solve's q are the rods' own values
         if branches is not None or ok.any():
             # the engine may land on another branch or assembly mode: say so
             sigma = self._branches(branches)
@@ -175,13 +177,16 @@ class PositionInverse:
     def _solve_positions(self, pb: np.ndarray, u0: np.ndarray | None,
                          engine_options: dict[str, Any],
                          skip: np.ndarray | None = None, *,
-                         compiled: bool | None = None) -> SolveResult:
+                         compiled: bool | None = None,
+                         paired: np.ndarray | None = None) -> SolveResult:
         """The engine's position inverse of ``pb (N, 3)`` from ``u0 (N, n + 3)`` (None: the
         first-order start from home, computed in the kernel; ``skip`` rows not solved):
         compiled per row (:mod:`pkmkit.machines.full_pose_position_kernel`, the engine's rules,
         ≈ 10× faster) for three actuators with the engine's own options, else the batched
         NumPy engine (``compiled``: the choice made for the caller's whole batch, None: by
-        ``pb``'s size)."""
+        ``pb``'s size). ``paired`` (N,) bool, for a compiled solve from the first-order start
+        on the working branches: set where the kernel's paired Newton solve answered
+        (:meth:`_paired_geometry`; the other rows ran the Levenberg–Marquardt solve)."""
         if compiled is None:
             compiled = self._compiled_positions(engine_options, pb.shape[0])
         if compiled:
@@ -194,12 +199,37 @@ class PositionInverse:
                 object.__setattr__(self, "_position_jt_inv", jt_inv)
             crawl = engine_options.get("crawl") or (0, np.inf)
             opts = np.concatenate([data.options(engine_options), [crawl[0], crawl[1]]])
-            u, status, iterations, residual = kernel.solve(
-                data.geom, pb, u0, opts, skip=skip, home=data.home, jt_inv=jt_inv)
+            geom = self._paired_geometry() if paired is not None and u0 is None else None
+            if geom is None:
+                u, status, iterations, residual = kernel.solve(
+                    data.geom, pb, u0, opts, skip=skip, home=data.home, jt_inv=jt_inv)
+            else:
+                u, status, iterations, residual, paired[:] = kernel.solve(
+                    geom, pb, u0, np.append(opts, 1.0), skip=skip, home=data.home,
+                    jt_inv=jt_inv, paired=True)
             return SolveResult(u=u, status=status, residual=residual, iterations=iterations,
                                rank=np.full(pb.shape[0], -1))
         with np.errstate(invalid="ignore", over="ignore"):
             return solve_position_inverse(self.model, pb, u0, **engine_options)
+
+    def _paired_geometry(self) -> np.ndarray | None:
+        """The direct kernel's geometry with each rod's working branch in column 15 when every
+        actuator carries two slide rods (the Verne-type module): the position inverse's kernel
+        then solves for the rotation alone, two rods of an actuator giving the same coordinate
+        (``solve_paired``); None otherwise, or with ``PKMKIT_POSITION_PAIRED=0`` (the
+        Levenberg–Marquardt solve on every row: the bench's baseline)."""
+        if os.environ.get("PKMKIT_POSITION_PAIRED", "").strip() == "0":
+            return None
+        geom = self.__dict__.get("_position_paired_geom", False)
+        if geom is False:
+            m = self.model
+            counts = np.bincount(m.rod_actuator, minlength=m.n_actuators)
+            geom = None
+            if m.n_actuators == 3 and (m.rod_kind == SLIDE).all() and (counts == 2).all():
+                geom = self.direct_kernel().geom.copy()
+                geom[:, 15] = self._forms.rod_branch
+            object.__setattr__(self, "_position_paired_geom", geom)
+        return geom
 
     def _surely_unreachable(self, positions: np.ndarray) -> np.ndarray:
         """``(N,)`` positions no orientation can serve: a slide rod whose platform joint, at most
