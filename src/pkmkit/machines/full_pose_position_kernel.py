@@ -289,8 +289,9 @@ def solve_paired(p, start, geom, out, qrod, f, jac):  # pragma: no cover
     Newton's method on the rotation alone (3 unknowns: the two rods of an actuator must give
     the same coordinate) from ``start (6,)`` (its rotation vector): True and ``out (9,)`` = u,
     OK, Newton steps, largest rod residual when it converges (a step ≤ PAIRED_STEP, then every
-    rod closing within PAIRED_TOL at the mean of its actuator's pair); False (``out``
-    untouched) otherwise — a rod that cannot close, a singular Jacobian, PAIRED_ITER steps."""
+    rod closing within PAIRED_TOL at the mean of its actuator's pair); False otherwise — a
+    rod that cannot close, a singular Jacobian, PAIRED_ITER steps (``out[:3]`` may then be
+    written: the caller rewrites the row)."""
     w = np.empty(3)
     step = np.empty(3)
     for i in range(3):
@@ -343,9 +344,9 @@ def solve_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out):  # pragma
     else :func:`first_order` from ``home``, the direct kernel's home vector), ``skip (N,)``
     rows left INVALID_INPUT (NaN start), ``out (N, 9)`` or ``(N, 10)``. With ``opts (10,)``
     and ``opts[9]`` = 1 (a machine whose every actuator carries two slide rods, branches in
-    ``geom[:, 15]``) the rows from the first-order start try :func:`solve_paired` first and
-    run :func:`solve_row` only where it fails; ``out[:, 9]`` (when present) = 1 where
-    :func:`solve_paired` answered, else 0."""
+    ``geom[:, 15]``) the rows from the first-order start run :func:`solve_paired` instead:
+    the rows it does not answer are left INVALID_INPUT (NaN) for the caller's
+    Levenberg–Marquardt pass; ``out[:, 9]`` (when present) = 1 where it answered, else 0."""
     work = scratch(geom.shape[0])
     start = np.empty(6)
     paired = opts.shape[0] > 9 and opts[9] == 1.0 and not has_guess
@@ -361,9 +362,18 @@ def solve_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out):  # pragma
                 start[i] = math.nan
         else:
             first_order(p[k], home, jt_inv, start)
-        done = paired and not skip[k] and solve_paired(p[k], start, geom, out[k], qrod, f, jac)
-        if not done:
+        if not paired:
             solve_row(p[k], start, geom, opts, out[k], work)
+            if out.shape[1] > 9:
+                out[k, 9] = 0.0
+            continue
+        done = not skip[k] and solve_paired(p[k], start, geom, out[k], qrod, f, jac)
+        if not done:  # left to the caller's Levenberg–Marquardt pass
+            for i in range(6):
+                out[k, i] = math.nan
+            out[k, 6] = INVALID_INPUT
+            out[k, 7] = 0.0
+            out[k, 8] = math.nan
         if out.shape[1] > 9:
             out[k, 9] = 1.0 if done else 0.0
 

@@ -94,6 +94,12 @@ def slide_columns(model, positions: np.ndarray) -> SlideColumns | None:
     good = np.flatnonzero(valid)
     along = positions[good] @ d / (d @ d)  # carriage travel to each row's foot, m
     across = positions[good] - along[:, None] * d
+    # rows sharing a line share every coordinate of ``across``: when no two rows share the
+    # first (a sorted copy with no equal neighbours — a table of random positions), none share
+    # a line, and the row-wise sort of np.unique (≈ 1.4 s per 10⁶ rows) is spared
+    firsts = np.sort(across[:, 0])
+    if not (firsts[1:] == firsts[:-1]).any():
+        return None
     _, first, inverse = np.unique(across, axis=0, return_index=True, return_inverse=True)
     if first.size == good.size:
         return None

@@ -5,8 +5,9 @@
  * iterations, stopping tests and, with the same libm, the same bits). The helpers shared with
  * the direct solve (compose, rods, the damped step, the stationarity test) are direct.c's.
  * With opts[9] = 1 (opts (10,): every actuator carries two slide rods, their branches in
- * geom[:, 15]) a row from the first-order start first tries Newton's method on the rotation
- * alone (solve_paired) and runs Levenberg-Marquardt only where it fails. */
+ * geom[:, 15]) a row from the first-order start runs Newton's method on the rotation alone
+ * (solve_paired) instead; the rows it does not answer are left INVALID_INPUT (NaN) for the
+ * caller's Levenberg-Marquardt pass (out[:, 9]: 1 where it answered). */
 #include "kernels.h"
 
 enum { OK = 0, NOT_CONVERGED = 3, INVALID_INPUT = 4, INCONSISTENT = 7 };
@@ -306,9 +307,18 @@ void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has
         } else {
             first_order(p + 3 * k, home, jt_inv, start);
         }
-        int done = use_paired && !skip[k] && solve_paired(p + 3 * k, start, geom, m, row,
-                                                          work->length);
-        if (!done) solve_row(p + 3 * k, start, geom, m, opts, row, work);
+        if (!use_paired) {
+            solve_row(p + 3 * k, start, geom, m, opts, row, work);
+            if (n_out > 9) row[9] = 0.0;
+            continue;
+        }
+        int done = !skip[k] && solve_paired(p + 3 * k, start, geom, m, row, work->length);
+        if (!done) { /* left to the caller's Levenberg-Marquardt pass */
+            for (int i = 0; i < 6; i++) row[i] = NAN;
+            row[6] = INVALID_INPUT;
+            row[7] = 0.0;
+            row[8] = NAN;
+        }
         if (n_out > 9) row[9] = done ? 1.0 : 0.0;
     }
 }
