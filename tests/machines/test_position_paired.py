@@ -93,15 +93,38 @@ def _answered(m, p):
     return paired
 
 
-def test_the_same_statuses_and_answers_as_the_former_solve(records):
-    """Every status and out-of-stroke flag the same on 10⁵ rows (edge rows included); q and
-    pose within 1e-12 where OK, NaN where not; the outcomes all present."""
-    _, old, new = records
-    np.testing.assert_array_equal(new.status, old.status)
-    np.testing.assert_array_equal(new.out_of_stroke, old.out_of_stroke)
-    np.testing.assert_array_equal(np.isnan(new.q), np.isnan(old.q))
-    np.testing.assert_array_equal(np.isnan(new.pose), np.isnan(old.pose))
-    ok = new.status == Status.OK
+def _branch_flips(m, old, new):
+    """``(N,)`` the rows where one solve says OK and the other WRONG_MODE at a pose where a rod
+    is at the end of its reach (its radicand ℓ² − |w|² + (e·w)² below 1e-9 m², where its two
+    branches meet): there the former solve's branch check is decided by rounding — NumPy below
+    its batch threshold, Numba above once Numba is imported, so even the former solve's status
+    there depends on the batch (the paired solve answers such a row OK, a closure on the
+    working branch with every radicand > 0, and spares it that check)."""
+    pair = {(int(a), int(b)) for a in (Status.OK, Status.WRONG_MODE)
+            for b in (Status.OK, Status.WRONG_MODE) if a != b}
+    flips = np.array([(int(a), int(b)) in pair for a, b in zip(old.status, new.status)])
+    rows = np.flatnonzero(flips)
+    pose = np.where(np.isfinite(new.pose[rows]), new.pose[rows], old.pose[rows])
+    w = m._forms.platform_points(pose) - m.model.rod_base[None]
+    along = np.einsum("njk,jk->nj", w, m.model.rod_axis)
+    radicand = m.model.rod_length ** 2 - np.einsum("njk,njk->nj", w, w) + along ** 2
+    assert (radicand.min(axis=1) < 1e-9).all(), radicand.min(axis=1)
+    return flips
+
+
+def test_the_same_statuses_and_answers_as_the_former_solve(verne, records):
+    """Every status and out-of-stroke flag the same on 10⁵ rows (edge rows included) but the
+    branch flips at the end of a rod's reach (:func:`_branch_flips`: at most 10, edge rows
+    only); q and pose within 1e-12 where OK, NaN where not; the outcomes all present."""
+    p, old, new = records
+    flips = _branch_flips(verne, old, new)
+    np.testing.assert_array_equal(new.status[~flips], old.status[~flips])
+    assert flips.sum() <= 10 and (flips[30_000:30_060].sum() == flips.sum())
+    keep = ~flips
+    np.testing.assert_array_equal(new.out_of_stroke[keep], old.out_of_stroke[keep])
+    np.testing.assert_array_equal(np.isnan(new.q[keep]), np.isnan(old.q[keep]))
+    np.testing.assert_array_equal(np.isnan(new.pose[keep]), np.isnan(old.pose[keep]))
+    ok = (new.status == Status.OK) & keep
     np.testing.assert_allclose(new.q[ok], old.q[ok], rtol=0, atol=1e-12)
     np.testing.assert_allclose(new.pose[ok], old.pose[ok], rtol=0, atol=1e-12)
     seen = set(new.status.tolist())
