@@ -100,9 +100,9 @@ def _branch_flips(m, old, new):
     its batch threshold, Numba above once Numba is imported, so even the former solve's status
     there depends on the batch (the paired solve answers such a row OK, a closure on the
     working branch with every radicand > 0, and spares it that check)."""
-    pair = {(int(a), int(b)) for a in (Status.OK, Status.WRONG_MODE)
-            for b in (Status.OK, Status.WRONG_MODE) if a != b}
-    flips = np.array([(int(a), int(b)) in pair for a, b in zip(old.status, new.status)])
+    either = np.isin(old.status, (Status.OK, Status.WRONG_MODE))
+    flips = either & np.isin(new.status, (Status.OK, Status.WRONG_MODE)) & (
+        old.status != new.status)
     rows = np.flatnonzero(flips)
     pose = np.where(np.isfinite(new.pose[rows]), new.pose[rows], old.pose[rows])
     w = m._forms.platform_points(pose) - m.model.rod_base[None]
@@ -116,7 +116,7 @@ def test_the_same_statuses_and_answers_as_the_former_solve(verne, records):
     """Every status and out-of-stroke flag the same on 10⁵ rows (edge rows included) but the
     branch flips at the end of a rod's reach (:func:`_branch_flips`: at most 10, edge rows
     only); q and pose within 1e-12 where OK, NaN where not; the outcomes all present."""
-    p, old, new = records
+    _, old, new = records
     flips = _branch_flips(verne, old, new)
     np.testing.assert_array_equal(new.status[~flips], old.status[~flips])
     assert flips.sum() <= 10 and (flips[30_000:30_060].sum() == flips.sum())
