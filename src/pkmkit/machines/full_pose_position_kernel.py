@@ -12,6 +12,12 @@ its stopping rules are :func:`pkmkit.machines.full_pose_direct_kernel.solve_row`
 engine's), only the unknowns differ, and the engine's ``crawl`` limit: options ``opts (9,)``
 are the direct kernel's seven, then ``crawl = (k, ρ)`` (k = 0: none). Geometry ``geom (m, 16)``
 as there. No temporaries per iteration, no BLAS, single-threaded.
+
+A machine whose every actuator carries two slide rods (the Verne-type module) runs
+:func:`solve_paired` instead (``opts[9]`` = 1): Newton's method on the rotation alone, each
+rod's coordinate closed form on its branch, the two rods of an actuator made to agree (3
+equations, 3 unknowns); the machine runs this module's Levenberg–Marquardt solve on the rows
+it leaves (:meth:`pkmkit.machines.full_pose_position.PositionInverse._compiled_rows`).
 """
 
 from __future__ import annotations
