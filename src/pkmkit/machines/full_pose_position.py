@@ -4,6 +4,7 @@ actuators, the orientation imposed by the rods: the Verne-type module): a mixin 
 
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import numpy as np
@@ -122,19 +123,21 @@ class PositionInverse:
         ones UNREACHABLE, the invalid ones INVALID_INPUT, NaN in q and pose wherever the
         status is not OK."""
         n = self.n_actuators
-        hopeless = self._surely_unreachable(pb)
-        skip = ~_valid_rows(pb) | hopeless
+        valid = _valid_rows(pb)
         if compiled:
-            result = self._solve_positions(pb, None, engine_options, skip,
-                                           compiled=True)  # guess compiled too
+            result, paired, hopeless = self._compiled_rows(pb, valid, engine_options,
+                                                           branches is None)
         else:
+            paired = np.zeros(pb.shape[0], dtype=bool)
+            hopeless = self._surely_unreachable(pb)
+            skip = ~valid | hopeless
             if q0 is None:
                 # first order from home: the position rows of J(home) are square (n = 3)
                 # (a row that is not finite or beyond MAX_COORDINATE enters as home: LAPACK
                 # scales the right-hand sides together, so one inf row would make every guess
                 # NaN)
                 j_t = self._home_jacobian[:3]
-                offset = np.where(_valid_rows(pb)[:, None], pb - self._home_pose[:3], 0.0)
+                offset = np.where(valid[:, None], pb - self._home_pose[:3], 0.0)
                 dq = np.linalg.lstsq(j_t, offset.T, rcond=None)[0].T
                 guess_q = self._home_q + dq
             else:
@@ -148,7 +151,7 @@ class PositionInverse:
         pose = np.concatenate([pb, result.u[:, n:]], axis=1)
         status = result.status.copy()
         status[status == Status.INCONSISTENT] = Status.UNREACHABLE
-        ok = status == Status.OK
+        ok = (status == Status.OK) & ~paired  # the paired solve's q are the rods' own values
         if branches is not None or ok.any():
             # the engine may land on another branch or assembly mode: say so
             sigma = self._branches(branches)
@@ -159,11 +162,42 @@ class PositionInverse:
             expected[ok] = np.abs(back - q[ok]).max(axis=1) <= 1e-7
             status[ok & ~expected] = Status.WRONG_MODE
         status[hopeless] = Status.UNREACHABLE
-        status[~_valid_rows(pb)] = Status.INVALID_INPUT
+        status[~valid] = Status.INVALID_INPUT
         bad = status != Status.OK
         q[bad] = np.nan
         pose[bad] = np.nan
         return q, pose, status, result.iterations, result.residual
+
+    def _compiled_rows(self, pb: np.ndarray, valid: np.ndarray, engine_options: dict[str, Any],
+                       working: bool) -> tuple[SolveResult, np.ndarray, np.ndarray]:
+        """The compiled position inverse of ``pb (N, 3)`` from the first-order start, with
+        ``valid`` (N,) its finite rows within MAX_COORDINATE: ``(result, paired (N,), hopeless
+        (N,))``. On the working branches (``working``) of a machine with two slide rods per
+        actuator (:meth:`_paired_geometry`) a first pass solves every valid row by the paired
+        Newton solve (``paired``: the rows it answered, OK on the working branches by
+        construction); the rows it leaves — and every row otherwise — are checked by
+        :meth:`_surely_unreachable` (``hopeless``: not solved) and the others solved by the
+        Levenberg–Marquardt solve as before (a row the paired solve answers closes every rod,
+        so it is never hopeless: the check is spared there)."""
+        geom = self._paired_geometry() if working else None
+        paired = np.zeros(pb.shape[0], dtype=bool)
+        if geom is None:
+            hopeless = self._surely_unreachable(pb)
+            return (self._solve_positions(pb, None, engine_options, ~valid | hopeless,
+                                          compiled=True), paired, hopeless)
+        result = self._solve_positions(pb, None, engine_options, ~valid, compiled=True,
+                                       geom=geom)
+        paired[:] = result.rank == 1
+        rest = np.flatnonzero(valid & ~paired)
+        hopeless = np.zeros(pb.shape[0], dtype=bool)
+        hopeless[rest] = self._surely_unreachable(pb[rest])
+        rest = rest[~hopeless[rest]]
+        if rest.size:
+            more = self._solve_positions(pb[rest], None, engine_options, compiled=True)
+            for name in ("u", "status", "iterations", "residual"):
+                getattr(result, name)[rest] = getattr(more, name)
+        result.rank[:] = -1
+        return result, paired, hopeless
 
     def _compiled_positions(self, engine_options: dict[str, Any], rows: int) -> bool:
         """Whether the compiled position inverse serves ``rows`` rows with these options
@@ -175,13 +209,16 @@ class PositionInverse:
     def _solve_positions(self, pb: np.ndarray, u0: np.ndarray | None,
                          engine_options: dict[str, Any],
                          skip: np.ndarray | None = None, *,
-                         compiled: bool | None = None) -> SolveResult:
+                         compiled: bool | None = None,
+                         geom: np.ndarray | None = None) -> SolveResult:
         """The engine's position inverse of ``pb (N, 3)`` from ``u0 (N, n + 3)`` (None: the
         first-order start from home, computed in the kernel; ``skip`` rows not solved):
         compiled per row (:mod:`pkmkit.machines.full_pose_position_kernel`, the engine's rules,
         ≈ 10× faster) for three actuators with the engine's own options, else the batched
         NumPy engine (``compiled``: the choice made for the caller's whole batch, None: by
-        ``pb``'s size)."""
+        ``pb``'s size). With ``geom`` (:meth:`_paired_geometry`), compiled from the
+        first-order start: the kernel's paired Newton solve alone, ``rank`` 1 on the rows it
+        answered (OK), −1 on the others (left INVALID_INPUT, NaN)."""
         if compiled is None:
             compiled = self._compiled_positions(engine_options, pb.shape[0])
         if compiled:
@@ -194,12 +231,38 @@ class PositionInverse:
                 object.__setattr__(self, "_position_jt_inv", jt_inv)
             crawl = engine_options.get("crawl") or (0, np.inf)
             opts = np.concatenate([data.options(engine_options), [crawl[0], crawl[1]]])
-            u, status, iterations, residual = kernel.solve(
-                data.geom, pb, u0, opts, skip=skip, home=data.home, jt_inv=jt_inv)
+            if geom is None:
+                u, status, iterations, residual = kernel.solve(
+                    data.geom, pb, u0, opts, skip=skip, home=data.home, jt_inv=jt_inv)
+                rank = np.full(pb.shape[0], -1)
+            else:
+                u, status, iterations, residual, answered = kernel.solve(
+                    geom, pb, None, np.append(opts, 1.0), skip=skip, home=data.home,
+                    jt_inv=jt_inv, paired=True)
+                rank = np.where(answered, 1, -1)
             return SolveResult(u=u, status=status, residual=residual, iterations=iterations,
-                               rank=np.full(pb.shape[0], -1))
+                               rank=rank)
         with np.errstate(invalid="ignore", over="ignore"):
             return solve_position_inverse(self.model, pb, u0, **engine_options)
+
+    def _paired_geometry(self) -> np.ndarray | None:
+        """The direct kernel's geometry with each rod's working branch in column 15 when every
+        actuator carries two slide rods (the Verne-type module): the position inverse's kernel
+        then solves for the rotation alone, two rods of an actuator giving the same coordinate
+        (``solve_paired``); None otherwise, or with ``PKMKIT_POSITION_PAIRED=0`` (the
+        Levenberg–Marquardt solve on every row: the bench's baseline)."""
+        if os.environ.get("PKMKIT_POSITION_PAIRED", "").strip() == "0":
+            return None
+        geom = self.__dict__.get("_position_paired_geom", False)
+        if geom is False:
+            m = self.model
+            counts = np.bincount(m.rod_actuator, minlength=m.n_actuators)
+            geom = None
+            if m.n_actuators == 3 and (m.rod_kind == SLIDE).all() and (counts == 2).all():
+                geom = self.direct_kernel().geom.copy()
+                geom[:, 15] = self._forms.rod_branch
+            object.__setattr__(self, "_position_paired_geom", geom)
+        return geom
 
     def _surely_unreachable(self, positions: np.ndarray) -> np.ndarray:
         """``(N,)`` positions no orientation can serve: a slide rod whose platform joint, at most

@@ -12,6 +12,12 @@ its stopping rules are :func:`pkmkit.machines.full_pose_direct_kernel.solve_row`
 engine's), only the unknowns differ, and the engine's ``crawl`` limit: options ``opts (9,)``
 are the direct kernel's seven, then ``crawl = (k, ρ)`` (k = 0: none). Geometry ``geom (m, 16)``
 as there. No temporaries per iteration, no BLAS, single-threaded.
+
+A machine whose every actuator carries two slide rods (the Verne-type module) runs
+:func:`solve_paired` instead (``opts[9]`` = 1): Newton's method on the rotation alone, each
+rod's coordinate closed form on its branch, the two rods of an actuator made to agree (3
+equations, 3 unknowns); the machine runs this module's Levenberg–Marquardt solve on the rows
+it leaves (:meth:`pkmkit.machines.full_pose_position.PositionInverse._compiled_rows`).
 """
 
 from __future__ import annotations
@@ -38,6 +44,12 @@ _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache"
 INCONSISTENT = 7
 #: Actuators of the machines this kernel serves (3 actuators + 3 rotation unknowns = 6).
 N_ACTUATORS = 3
+#: The paired Newton solve (:func:`solve_paired`): its step limit, the step (rad) below which it
+#: has converged (quadratic convergence: the error after it is ≈ its square), and the largest
+#: rod residual (m) it accepts — else the row runs the Levenberg–Marquardt solve as before.
+PAIRED_ITER = 8
+PAIRED_STEP = 1e-9
+PAIRED_TOL = 1e-12
 
 
 @njit(**_OPTIONS)
@@ -218,12 +230,135 @@ def first_order(p, home, jt_inv, u0):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
+def _paired(p, w, geom, qrod, f, jac):  # pragma: no cover
+    """The reduced closure of a machine whose every actuator carries two slide rods, at
+    rotation vector ``w (3,)`` for position ``p (3,)``: each rod's actuator coordinate on its
+    branch (``geom[:, 15]`` = ±1) into ``qrod (m,)`` (as ``rod_coordinates``: ``s + σ√(ℓ² −
+    |v|² + s²)``, ``v = p + R b − a0``, ``s = e·v``), the disagreements ``f (3,)`` = q of the
+    actuator's first rod − its second's and their derivatives ``jac (3, 3)`` in the rotation
+    (left increment: ``∂q_j/∂δ = (R b × d) / (d·e)``, ``d = v − q_j e``). False when a rod
+    cannot close (radicand ≤ 0) or a value is not finite."""
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(w[0], w[1], w[2])
+    for k in range(3):
+        f[k] = 0.0
+        for i in range(3):
+            jac[k, i] = 0.0
+    seen = np.zeros(3)
+    check = 0.0
+    for j in range(geom.shape[0]):
+        bx, by, bz = geom[j, 3], geom[j, 4], geom[j, 5]
+        ex, ey, ez = geom[j, 6], geom[j, 7], geom[j, 8]
+        sx = r00 * bx + r01 * by + r02 * bz
+        sy = r10 * bx + r11 * by + r12 * bz
+        sz = r20 * bx + r21 * by + r22 * bz
+        vx = p[0] + sx - geom[j, 0]
+        vy = p[1] + sy - geom[j, 1]
+        vz = p[2] + sz - geom[j, 2]
+        along = ex * vx + ey * vy + ez * vz
+        radicand = geom[j, 12] * geom[j, 12] - (vx * vx + vy * vy + vz * vz) + along * along
+        if not radicand > 0.0:
+            return False
+        q = along + geom[j, 15] * math.sqrt(radicand)
+        qrod[j] = q
+        dx, dy, dz = vx - q * ex, vy - q * ey, vz - q * ez
+        cosine = along - q  # d·e
+        k = int(geom[j, 14])
+        sign = 1.0 if seen[k] == 0.0 else -1.0
+        seen[k] = 1.0
+        f[k] += sign * q
+        jac[k, 0] += sign * (sy * dz - sz * dy) / cosine
+        jac[k, 1] += sign * (sz * dx - sx * dz) / cosine
+        jac[k, 2] += sign * (sx * dy - sy * dx) / cosine
+        check += jac[k, 0] + jac[k, 1] + jac[k, 2] + q
+    return check == check and abs(check) < math.inf
+
+
+@njit(**_OPTIONS)
+def _newton_step(f, jac, step):  # pragma: no cover
+    """``step (3,)`` = −jac⁻¹ f by Cramer's rule; False when jac is singular or not finite."""
+    a, b, c = jac[0, 0], jac[0, 1], jac[0, 2]
+    d, e, g = jac[1, 0], jac[1, 1], jac[1, 2]
+    h, i, k = jac[2, 0], jac[2, 1], jac[2, 2]
+    c0, c1, c2 = e * k - g * i, g * h - d * k, d * i - e * h
+    det = a * c0 + b * c1 + c * c2
+    if not (abs(det) > 1e-300 and abs(det) < math.inf):
+        return False
+    step[0] = -(f[0] * c0 + f[1] * (c * i - b * k) + f[2] * (b * g - c * e)) / det
+    step[1] = -(f[0] * c1 + f[1] * (a * k - c * h) + f[2] * (c * d - a * g)) / det
+    step[2] = -(f[0] * c2 + f[1] * (b * h - a * i) + f[2] * (a * e - b * d)) / det
+    return True
+
+
+@njit(**_OPTIONS)
+def solve_paired(p, start, geom, out, qrod, f, jac):  # pragma: no cover
+    """The position inverse of a machine whose every actuator carries two slide rods, by
+    Newton's method on the rotation alone (3 unknowns: the two rods of an actuator must give
+    the same coordinate) from ``start (6,)`` (its rotation vector): True and ``out (9,)`` = u,
+    OK, Newton steps, largest rod residual when it converges (a step ≤ PAIRED_STEP, then every
+    rod closing within PAIRED_TOL at the mean of its actuator's pair); False otherwise — a
+    rod that cannot close, a singular Jacobian, PAIRED_ITER steps (``out[:3]`` may then be
+    written: the caller rewrites the row)."""
+    w = np.empty(3)
+    step = np.empty(3)
+    for i in range(3):
+        w[i] = start[3 + i]
+    steps = 0
+    converged = False
+    while steps < PAIRED_ITER:
+        if not _paired(p, w, geom, qrod, f, jac) or not _newton_step(f, jac, step):
+            return False
+        compose(step[0], step[1], step[2], w[0], w[1], w[2], w, 0)
+        steps += 1
+        if math.sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]) <= PAIRED_STEP:
+            converged = True
+            break
+    if not converged or not _paired(p, w, geom, qrod, f, jac):
+        return False
+    seen = np.zeros(3)
+    for j in range(geom.shape[0]):
+        k = int(geom[j, 14])
+        if seen[k] == 0.0:
+            out[k] = qrod[j]
+            seen[k] = 1.0
+        else:
+            out[k] = out[k] + 0.5 * (qrod[j] - out[k])  # first + mean offset (combine)
+    largest = 0.0
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(w[0], w[1], w[2])
+    for j in range(geom.shape[0]):
+        qk = out[int(geom[j, 14])]
+        dx = p[0] - geom[j, 0] - qk * geom[j, 6]
+        dy = p[1] - geom[j, 1] - qk * geom[j, 7]
+        dz = p[2] - geom[j, 2] - qk * geom[j, 8]
+        bx, by, bz = geom[j, 3], geom[j, 4], geom[j, 5]
+        dx += r00 * bx + r01 * by + r02 * bz
+        dy += r10 * bx + r11 * by + r12 * bz
+        dz += r20 * bx + r21 * by + r22 * bz
+        largest = max(largest, abs(math.sqrt(dx * dx + dy * dy + dz * dz) - geom[j, 12]))
+    if not largest <= PAIRED_TOL:
+        return False
+    for i in range(3):
+        out[3 + i] = w[i]
+    out[6] = OK
+    out[7] = steps
+    out[8] = largest
+    return True
+
+
+@njit(**_OPTIONS)
 def solve_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out):  # pragma: no cover
     """:func:`solve_row` for every row: ``p (N, 3)``, ``u0 (N, 6)`` (read when ``has_guess``,
     else :func:`first_order` from ``home``, the direct kernel's home vector), ``skip (N,)``
-    rows left INVALID_INPUT (NaN start), ``out (N, 9)``."""
+    rows left INVALID_INPUT (NaN start), ``out (N, 9)`` or ``(N, 10)``. With ``opts (10,)``
+    and ``opts[9]`` = 1 (a machine whose every actuator carries two slide rods, branches in
+    ``geom[:, 15]``) the rows from the first-order start run :func:`solve_paired` instead:
+    the rows it does not answer are left INVALID_INPUT (NaN) for the caller's
+    Levenberg–Marquardt pass; ``out[:, 9]`` (when present) = 1 where it answered, else 0."""
     work = scratch(geom.shape[0])
     start = np.empty(6)
+    paired = opts.shape[0] > 9 and opts[9] == 1.0 and not has_guess
+    qrod = np.empty(geom.shape[0])
+    f = np.empty(3)
+    jac = np.empty((3, 3))
     for k in range(p.shape[0]):
         if has_guess:
             for i in range(6):
@@ -233,8 +368,20 @@ def solve_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out):  # pragma
                 start[i] = math.nan
         else:
             first_order(p[k], home, jt_inv, start)
-        solve_row(p[k], start, geom, opts, out[k], work)
-
+        if not paired:
+            solve_row(p[k], start, geom, opts, out[k], work)
+            if out.shape[1] > 9:
+                out[k, 9] = 0.0
+            continue
+        done = not skip[k] and solve_paired(p[k], start, geom, out[k], qrod, f, jac)
+        if not done:  # left to the caller's Levenberg–Marquardt pass
+            for i in range(6):
+                out[k, i] = math.nan
+            out[k, 6] = INVALID_INPUT
+            out[k, 7] = 0.0
+            out[k, 8] = math.nan
+        if out.shape[1] > 9:
+            out[k, 9] = 1.0 if done else 0.0
 
 def solve(geom: np.ndarray, positions: np.ndarray, u0: np.ndarray | None, opts: np.ndarray,
           *, skip: np.ndarray | None = None, home: np.ndarray | None = None,

@@ -124,11 +124,12 @@ int pk_stationary(const double *jac, const double *r, ptrdiff_t m, double cost, 
 
 /* full_pose_position_kernel.solve_rows over rows positions p (rows, 3): u0 (rows, 6) read
  * when has_guess, else the first-order start from home (6 + 3 + 18,) and jt_inv (3, 3), rows
- * of skip (bool) left INVALID_INPUT; geom (m, 16), opts (9,), out (rows, 9). */
+ * of skip (bool) left INVALID_INPUT; geom (m, 16), opts (n_opts = 9 or 10,), out (rows,
+ * n_out = 9 or 10; column 9: 1 where the paired Newton solve answered). */
 void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has_guess,
                       const unsigned char *skip, const double *geom, ptrdiff_t m,
                       const double *home, const double *jt_inv, const double *opts,
-                      double *out, pk_work *work);
+                      ptrdiff_t n_opts, double *out, ptrdiff_t n_out, pk_work *work);
 
 /* A joint-chain machine as chain_kernel._solve_rows takes it (chain_kernel.model_arrays). */
 typedef struct {

@@ -288,7 +288,9 @@ PyDoc_STRVAR(position_rows_doc,
 "The C twin of pkmkit.machines.full_pose_position_kernel.solve_rows (the position inverse\n"
 "of a machine with three actuators whose rods set the orientation): p (N, 3), u0 (N, 6),\n"
 "skip (N,) bool, geom (m, 16) with actuator indices 0..2, home (27,), jt_inv (3, 3),\n"
-"opts (9,), out (N, 9). Runs without the GIL.");
+"opts (9,) or (10,) (opts[9] = 1: the paired Newton solve first, the rods' branches in\n"
+"geom[:, 15]), out (N, 9) or (N, 10) (column 9: 1 where the paired solve answered).\n"
+"Runs without the GIL.");
 
 static PyObject *position_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
@@ -310,10 +312,27 @@ static PyObject *position_rows(PyObject *self, PyObject *const *args, Py_ssize_t
     if (!home) goto fail;
     const double *jt_inv = take(&held, args[6], "jt_inv", 'd', 0, 2, 3, 3);
     if (!jt_inv) goto fail;
-    const double *opts = take(&held, args[7], "opts", 'd', 0, 1, 9, -1);
+    const double *opts = take(&held, args[7], "opts", 'd', 0, 1, -1, -1);
     if (!opts) goto fail;
-    double *out = take(&held, args[8], "out", 'd', 1, 2, rows, 9);
+    Py_ssize_t n_opts = dim(&held, held.count - 1, 0);
+    double *out = take(&held, args[8], "out", 'd', 1, 2, rows, -1);
     if (!out) goto fail;
+    Py_ssize_t n_out = dim(&held, held.count - 1, 1);
+    if ((n_opts != 9 && n_opts != 10) || (n_out != 9 && n_out != 10)) {
+        PyErr_SetString(PyExc_ValueError, "position_rows: opts must be (9,) or (10,) and out "
+                        "(N, 9) or (N, 10)");
+        goto fail;
+    }
+    if (n_opts == 10 && opts[9] == 1.0) {
+        for (Py_ssize_t j = 0; j < m; j++) {
+            double kind = geom[16 * j + 13], sigma = geom[16 * j + 15];
+            if (kind != 0.0 || (sigma != 1.0 && sigma != -1.0)) {
+                PyErr_Format(PyExc_ValueError, "rod %zd: the paired solve needs slide rods "
+                             "with a branch of +1 or -1 in geom[:, 15]", j);
+                goto fail;
+            }
+        }
+    }
     for (Py_ssize_t j = 0; j < m; j++) {
         double actuator = geom[16 * j + 14], kind = geom[16 * j + 13];
         if (!(actuator >= 0.0 && actuator < 3.0) || !(kind >= 0.0 && kind <= 2.0)) {
@@ -330,7 +349,8 @@ static PyObject *position_rows(PyObject *self, PyObject *const *args, Py_ssize_t
     pk_work work = {memory, memory + 3 * cells, memory + 4 * cells, memory + 5 * cells,
                     memory + 6 * cells, memory + 12 * cells};
     Py_BEGIN_ALLOW_THREADS
-    pk_position_rows(p, rows, u0, has_guess, skip, geom, m, home, jt_inv, opts, out, &work);
+    pk_position_rows(p, rows, u0, has_guess, skip, geom, m, home, jt_inv, opts, n_opts, out,
+                     n_out, &work);
     Py_END_ALLOW_THREADS
     free(memory);
     release(&held);

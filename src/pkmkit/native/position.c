@@ -3,7 +3,11 @@
  * the C twin of pkmkit.machines.full_pose_position_kernel.solve_rows and the functions it
  * calls, statement for statement and in the same order of operations (the same statuses,
  * iterations, stopping tests and, with the same libm, the same bits). The helpers shared with
- * the direct solve (compose, rods, the damped step, the stationarity test) are direct.c's. */
+ * the direct solve (compose, rods, the damped step, the stationarity test) are direct.c's.
+ * With opts[9] = 1 (opts (10,): every actuator carries two slide rods, their branches in
+ * geom[:, 15]) a row from the first-order start runs Newton's method on the rotation alone
+ * (solve_paired) instead; the rows it does not answer are left INVALID_INPUT (NaN) for the
+ * caller's Levenberg-Marquardt pass (out[:, 9]: 1 where it answered). */
 #include "kernels.h"
 
 enum { OK = 0, NOT_CONVERGED = 3, INVALID_INPUT = 4, INCONSISTENT = 7 };
@@ -174,12 +178,128 @@ static void first_order(const double *p, const double *home, const double *jt_in
     pk_compose(w[0], w[1], w[2], home[3], home[4], home[5], u0 + 3);
 }
 
+/* The reduced closure of a machine whose every actuator carries two slide rods at rotation
+ * vector w (3,) for position p (3,): each rod's coordinate on its branch (geom[:, 15]) into
+ * qrod (m,), the disagreements f (3,) (first rod - second) and their derivatives jac (3, 3) in
+ * the rotation; 0 when a rod cannot close or a value is not finite (_paired). */
+static int paired(const double *p, const double *w, const double *geom, ptrdiff_t m,
+                  double *qrod, double *f, double *jac) {
+    double rot[9];
+    pk_rotation(w[0], w[1], w[2], rot);
+    for (int k = 0; k < 3; k++) {
+        f[k] = 0.0;
+        for (int i = 0; i < 3; i++) jac[3 * k + i] = 0.0;
+    }
+    double seen[3] = {0.0, 0.0, 0.0};
+    double check = 0.0;
+    for (ptrdiff_t j = 0; j < m; j++) {
+        const double *gj = geom + 16 * j;
+        double bx = gj[3], by = gj[4], bz = gj[5];
+        double ex = gj[6], ey = gj[7], ez = gj[8];
+        double sx = rot[0] * bx + rot[1] * by + rot[2] * bz;
+        double sy = rot[3] * bx + rot[4] * by + rot[5] * bz;
+        double sz = rot[6] * bx + rot[7] * by + rot[8] * bz;
+        double vx = p[0] + sx - gj[0];
+        double vy = p[1] + sy - gj[1];
+        double vz = p[2] + sz - gj[2];
+        double along = ex * vx + ey * vy + ez * vz;
+        double radicand = gj[12] * gj[12] - (vx * vx + vy * vy + vz * vz) + along * along;
+        if (!(radicand > 0.0)) return 0;
+        double q = along + gj[15] * sqrt(radicand);
+        qrod[j] = q;
+        double dx = vx - q * ex, dy = vy - q * ey, dz = vz - q * ez;
+        double cosine = along - q;
+        ptrdiff_t k = (ptrdiff_t)gj[14];
+        double sign = seen[k] == 0.0 ? 1.0 : -1.0;
+        seen[k] = 1.0;
+        double *jk = jac + 3 * k;
+        f[k] += sign * q;
+        jk[0] += sign * (sy * dz - sz * dy) / cosine;
+        jk[1] += sign * (sz * dx - sx * dz) / cosine;
+        jk[2] += sign * (sx * dy - sy * dx) / cosine;
+        check += jk[0] + jk[1] + jk[2] + q;
+    }
+    return check == check && fabs(check) < INFINITY;
+}
+
+/* step (3,) = -jac^-1 f by Cramer's rule; 0 when jac is singular or not finite
+ * (_newton_step). */
+static int newton_step(const double *f, const double *jac, double *step) {
+    double a = jac[0], b = jac[1], c = jac[2];
+    double d = jac[3], e = jac[4], g = jac[5];
+    double h = jac[6], i = jac[7], k = jac[8];
+    double c0 = e * k - g * i, c1 = g * h - d * k, c2 = d * i - e * h;
+    double det = a * c0 + b * c1 + c * c2;
+    if (!(fabs(det) > 1e-300 && fabs(det) < INFINITY)) return 0;
+    step[0] = -(f[0] * c0 + f[1] * (c * i - b * k) + f[2] * (b * g - c * e)) / det;
+    step[1] = -(f[0] * c1 + f[1] * (a * k - c * h) + f[2] * (c * d - a * g)) / det;
+    step[2] = -(f[0] * c2 + f[1] * (b * h - a * i) + f[2] * (a * e - b * d)) / det;
+    return 1;
+}
+
+enum { PAIRED_ITER = 8 };
+#define PAIRED_STEP 1e-9
+#define PAIRED_TOL 1e-12
+
+/* Newton's method on the rotation alone from start (6,): 1 and out (9,) = u, OK, steps,
+ * largest rod residual when it converges; 0 (out untouched) otherwise (solve_paired). */
+static int solve_paired(const double *p, const double *start, const double *geom, ptrdiff_t m,
+                        double *out, double *qrod) {
+    double w[3], step[3], f[3], jac[9];
+    for (int i = 0; i < 3; i++) w[i] = start[3 + i];
+    int64_t steps = 0;
+    int converged = 0;
+    while (steps < PAIRED_ITER) {
+        if (!paired(p, w, geom, m, qrod, f, jac) || !newton_step(f, jac, step)) return 0;
+        pk_compose(step[0], step[1], step[2], w[0], w[1], w[2], w);
+        steps += 1;
+        if (sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]) <= PAIRED_STEP) {
+            converged = 1;
+            break;
+        }
+    }
+    if (!converged || !paired(p, w, geom, m, qrod, f, jac)) return 0;
+    double q[3], seen[3] = {0.0, 0.0, 0.0};
+    for (ptrdiff_t j = 0; j < m; j++) {
+        ptrdiff_t k = (ptrdiff_t)geom[16 * j + 14];
+        if (seen[k] == 0.0) {
+            q[k] = qrod[j];
+            seen[k] = 1.0;
+        } else {
+            q[k] = q[k] + 0.5 * (qrod[j] - q[k]); /* first + mean offset (combine) */
+        }
+    }
+    double largest = 0.0, rot[9];
+    pk_rotation(w[0], w[1], w[2], rot);
+    for (ptrdiff_t j = 0; j < m; j++) {
+        const double *gj = geom + 16 * j;
+        double qk = q[(ptrdiff_t)gj[14]];
+        double dx = p[0] - gj[0] - qk * gj[6];
+        double dy = p[1] - gj[1] - qk * gj[7];
+        double dz = p[2] - gj[2] - qk * gj[8];
+        double bx = gj[3], by = gj[4], bz = gj[5];
+        dx += rot[0] * bx + rot[1] * by + rot[2] * bz;
+        dy += rot[3] * bx + rot[4] * by + rot[5] * bz;
+        dz += rot[6] * bx + rot[7] * by + rot[8] * bz;
+        largest = pk_max(largest, fabs(sqrt(dx * dx + dy * dy + dz * dz) - gj[12]));
+    }
+    if (!(largest <= PAIRED_TOL)) return 0;
+    for (int k = 0; k < 3; k++) out[k] = q[k];
+    for (int i = 0; i < 3; i++) out[3 + i] = w[i];
+    out[6] = OK;
+    out[7] = (double)steps;
+    out[8] = largest;
+    return 1;
+}
+
 void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has_guess,
                       const unsigned char *skip, const double *geom, ptrdiff_t m,
                       const double *home, const double *jt_inv, const double *opts,
-                      double *out, pk_work *work) {
+                      ptrdiff_t n_opts, double *out, ptrdiff_t n_out, pk_work *work) {
     double start[6];
+    int use_paired = n_opts > 9 && opts[9] == 1.0 && !has_guess;
     for (ptrdiff_t k = 0; k < rows; k++) {
+        double *row = out + n_out * k;
         if (has_guess) {
             for (int i = 0; i < 6; i++) start[i] = u0[6 * k + i];
         } else if (skip[k]) {
@@ -187,6 +307,18 @@ void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has
         } else {
             first_order(p + 3 * k, home, jt_inv, start);
         }
-        solve_row(p + 3 * k, start, geom, m, opts, out + 9 * k, work);
+        if (!use_paired) {
+            solve_row(p + 3 * k, start, geom, m, opts, row, work);
+            if (n_out > 9) row[9] = 0.0;
+            continue;
+        }
+        int done = !skip[k] && solve_paired(p + 3 * k, start, geom, m, row, work->length);
+        if (!done) { /* left to the caller's Levenberg-Marquardt pass */
+            for (int i = 0; i < 6; i++) row[i] = NAN;
+            row[6] = INVALID_INPUT;
+            row[7] = 0.0;
+            row[8] = NAN;
+        }
+        if (n_out > 9) row[9] = done ? 1.0 : 0.0;
     }
 }
