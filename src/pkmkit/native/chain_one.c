@@ -139,8 +139,9 @@ static int judged_within(const pk_one *s, const double *values) {
 
 static double turn_offset(double angle) { return PK_PI - pk_pymod(PK_PI - angle, 2.0 * PK_PI); }
 
-/* The TriMule's closed-form start (machines/trimule_forms.py inverse_unknowns and
- * start_unknowns, statement for statement; chain_starts.closed_starts): u (27,) on the head's
+/* The kind's closed-form start (chain_starts.closed_starts): the Tripteor's in
+ * chain_one_tripteor.c; the TriMule's here (machines/trimule_forms.py inverse_unknowns and
+ * start_unknowns, statement for statement): u (27,) on the head's
  * branch (+1: Q5 >= 0, -1: Q5 <= 0, 0: the branch whose Q4 is within a quarter turn of home's);
  * 1, or 0 where it declines (near the wrist singularity, not converged, not finite). */
 enum { CLOSED_SWEEPS = 40 };
@@ -182,6 +183,8 @@ static void closed_joints(const pk_one *s, double length, double psi, double the
 }
 
 static int closed_start(const pk_one *s, const double *target, double branch, double *u) {
+    if (s->closed == PK_CLOSED_TRIPTEOR) return pk_one_tripteor_start(s->cl, s->tool, target,
+                                                                      branch, u);
     const double c1 = s->cl[0], c2 = s->cl[1], reach = s->cl[2] + s->tool;
     double ax = target[3], ay = target[4], az = target[5];
     double wx = target[0] - reach * ax, wy = target[1] - reach * ay, wz = target[2] - reach * az;
@@ -464,7 +467,7 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
         values[s->act[j]] = q[j];
         delta[j] = q[j] - s->home_values[s->act[j]];
     }
-    if (s->closed && n == 5 && closed_direct(s, q, k->u2)) {
+    if (s->closed == PK_CLOSED_TRIMULE && n == 5 && closed_direct(s, q, k->u2)) {
         /* the kind's closed-form start (the batch path's, chain_starts.closed_direct_starts) */
         memcpy(u, k->u2, 6 * sizeof(double));
         for (ptrdiff_t v = 0; v < c->n_var; v++)
