@@ -32,6 +32,7 @@ Every operation is elementwise: a row's bits do not depend on the rows beside it
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from typing import Any
@@ -61,17 +62,27 @@ JACOBIAN_REFRESH = 1e-6
 def constants(params: Mapping[str, Any]) -> np.ndarray:
     """``(24,)`` the constants of :func:`inverse_unknowns` (and of ``chain_one_tripteor.c``):
     c1, spindle, L, D, the rows of R_m (MPS in R51, 9), p_m (3), b2 (3), b3 (3) and the home
-    assembly's signs s_ψ, s_σ (:data:`ASSEMBLY`)."""
+    assembly's signs s_ψ, s_σ (:data:`ASSEMBLY`); cached by the dimensions' values (a one-pose
+    call's start must not rebuild the platform's frames)."""
+    return _constants(tuple(float(params[k]) for k in _DIMENSIONS))
+
+
+_DIMENSIONS = ("c1", "spindle", "L", "D", "l", "d", "h")
+
+
+@functools.lru_cache(maxsize=16)
+def _constants(values: tuple[float, ...]) -> np.ndarray:
+    params = dict(zip(_DIMENSIONS, values, strict=True))
     mps = mps_frame(params)
     pts = platform_points(params)
     out = np.empty(24)
-    out[:4] = [float(params["c1"]), float(params["spindle"]), float(params["L"]),
-               float(params["D"])]
+    out[:4] = values[:4]
     out[4:13] = mps[:3, :3].reshape(-1)
     out[13:16] = mps[:3, 3]
     out[16:19] = pts[1]
     out[19:22] = pts[2]
     out[22:24] = ASSEMBLY
+    out.flags.writeable = False
     return out
 
 
