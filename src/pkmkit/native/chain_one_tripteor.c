@@ -9,7 +9,7 @@
 
 #include <math.h>
 
-enum { STEPS = 30 };
+enum { STEPS = 10 };  /* tripteor_forms.INVERSE_STEPS */
 static const double TOL = 1e-15, SINGULAR = 1e-3, H = 1e-7, REFRESH = 1e-6;
 
 /* tripteor_forms._explicit: psi, sigma of the platform whose MPS origin is p (NaN without
