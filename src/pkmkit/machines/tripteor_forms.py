@@ -163,6 +163,7 @@ def inverse_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
 
 
 def _inverse(k: np.ndarray, targets: Any, tool_length: Any, branch: Any) -> np.ndarray:
+    k = tuple(k.tolist())  # Python floats: the same operations, cheaper to index
     x = np.atleast_2d(np.asarray(targets, dtype=float))
     n = x.shape[0]
     tool = np.broadcast_to(np.asarray(tool_length, dtype=float), (n,))
@@ -172,6 +173,14 @@ def _inverse(k: np.ndarray, targets: Any, tool_length: Any, branch: Any) -> np.n
     wx, wy, wz = x[:, 0] - reach * ax, x[:, 1] - reach * ay, x[:, 2] - reach * az
     h = JACOBIAN_STEP
     with np.errstate(invalid="ignore", divide="ignore"):
+        if n == 1:  # one row (the one-pose paths): the same operations on scalars
+            u = np.empty((1, 21))
+            row = (wx[0], wy[0], wz[0], ax[0], ay[0], az[0], b[0])
+            psi, sigma, done = _newton_row(k, *row)
+            gn = _fill(k, psi, sigma, *row, u)
+            if not (done and gn >= INVERSE_SINGULAR and np.isfinite(u).all()):
+                u[:] = np.nan
+            return u
         psi, sigma = _explicit(k, wx, wy, wz, k[22], k[23])  # c1 = 0
         i00, i01, i10, i11 = (np.zeros(n) for _ in range(4))
         f_psi, f_sigma = _step(k, psi, sigma, wx, wy, wz, ax, ay, az, b)
@@ -204,6 +213,32 @@ def _inverse(k: np.ndarray, targets: Any, tool_length: Any, branch: Any) -> np.n
     bad = ~(done & (gn >= INVERSE_SINGULAR) & np.isfinite(u).all(axis=1))
     u[bad] = np.nan
     return u
+
+
+def _newton_row(k: np.ndarray, wx, wy, wz, ax, ay, az, b) -> tuple:
+    """:func:`_inverse`'s iterations on one row's scalars (the batch loop's operations on a
+    row, in its order): ``(ψ, σ, converged)``."""
+    h = JACOBIAN_STEP
+    psi, sigma = _explicit(k, wx, wy, wz, k[22], k[23])  # c1 = 0
+    f_psi, f_sigma = _step(k, psi, sigma, wx, wy, wz, ax, ay, az, b)
+    fresh = True
+    for _ in range(INVERSE_STEPS):
+        r0, r1 = f_psi - psi, f_sigma - sigma
+        if fresh:
+            p1, s1 = _step(k, psi + h, sigma, wx, wy, wz, ax, ay, az, b)
+            p2, s2 = _step(k, psi, sigma + h, wx, wy, wz, ax, ay, az, b)
+            j00, j10 = (p1 - f_psi) / h - 1.0, (s1 - f_sigma) / h
+            j01, j11 = (p2 - f_psi) / h, (s2 - f_sigma) / h - 1.0
+            det = j00 * j11 - j01 * j10
+            i00, i01, i10, i11 = j11 / det, -j01 / det, -j10 / det, j00 / det
+        d0, d1 = i00 * r0 + i01 * r1, i10 * r0 + i11 * r1
+        psi, sigma = psi - d0, sigma - d1
+        step = np.abs(d0) + np.abs(d1)
+        if step <= INVERSE_TOL:
+            return psi, sigma, True
+        fresh = step > JACOBIAN_REFRESH
+        f_psi, f_sigma = _step(k, psi, sigma, wx, wy, wz, ax, ay, az, b)
+    return psi, sigma, False
 
 
 def _fill(k, psi, sigma, wx, wy, wz, ax, ay, az, b, u) -> np.ndarray:
@@ -269,7 +304,7 @@ def _rotvec(psi: np.ndarray, sigma: np.ndarray) -> np.ndarray:
     w, qx, qy, qz = w * flip, qx * flip, qy * flip, qz * flip
     norm = np.sqrt(qx * qx + qy * qy + qz * qz)
     scale = 2.0 * np.arctan2(norm, w) / norm
-    return np.stack([scale * qx, scale * qy, scale * qz], axis=1)
+    return np.stack([scale * qx, scale * qy, scale * qz], axis=-1)
 
 
 def _qmul(p, q):
@@ -289,20 +324,28 @@ def start_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
     k = constants(params)
     x = np.atleast_2d(np.asarray(targets, dtype=float))
     if branch is None:
-        tool = np.broadcast_to(np.asarray(tool_length, dtype=float), (x.shape[0],))
-        reach = k[1] + tool
-        ax, ay, az = x[:, 3], x[:, 4], x[:, 5]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            psi, sigma = _explicit(k, x[:, 0] - reach * ax, x[:, 1] - reach * ay,
-                                   x[:, 2] - reach * az, k[22], k[23])
-            cp, sp, cs, ss = np.cos(psi), np.sin(psi), np.cos(sigma), np.sin(sigma)
-            x51 = (-sp * cs, -ss, cp * cs)
-            y51 = (sp * ss, -cs, -cp * ss)
-            z51 = (cp, 0.0 * cp, sp)
-            xp = [x51[i] * k[4] + y51[i] * k[7] + z51[i] * k[10] for i in range(3)]
-            along = -(ax * xp[0] + ay * xp[1] + az * xp[2])
-        branch = np.where(along >= 0, 1.0, -1.0)
+        n = x.shape[0]
+        reach = k[1] + np.broadcast_to(np.asarray(tool_length, dtype=float), (n,))
+        rows = [x[:, j] - reach * x[:, 3 + j] for j in range(3)] + [x[:, 3 + j] for j in
+                                                                  range(3)]
+        if n == 1:  # one row: its scalars (the same operations, cheaper)
+            rows = [v[0] for v in rows]
+        branch = _nearest_branch(tuple(k.tolist()), *rows)
     return _inverse(k, x, tool_length, branch)
+
+
+def _nearest_branch(k: tuple, wx, wy, wz, ax, ay, az):
+    """:func:`start_unknowns`'s branch rule (elementwise): +1 where ``−a · x_P ≥ 0`` at the
+    platform of ``c1 = 0``, else −1."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        psi, sigma = _explicit(k, wx, wy, wz, k[22], k[23])
+        cp, sp, cs, ss = np.cos(psi), np.sin(psi), np.cos(sigma), np.sin(sigma)
+        x51 = (-sp * cs, -ss, cp * cs)
+        y51 = (sp * ss, -cs, -cp * ss)
+        z51 = (cp, 0.0 * cp, sp)
+        xp = [x51[i] * k[4] + y51[i] * k[7] + z51[i] * k[10] for i in range(3)]
+        along = -(ax * xp[0] + ay * xp[1] + az * xp[2])
+    return np.where(along >= 0, 1.0, -1.0)
 
 
 start_unknowns.variables = VARIABLES  # the model's variables it answers for (chain_starts)
