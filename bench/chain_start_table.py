@@ -276,6 +276,12 @@ def closed(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
         c_new.append(per_call(p.ik, plain, 1))
         m_old.append(per_call(lambda x: off.ik(x, strokes="ignore"), [(x,) for x in xs], 1))
         m_new.append(per_call(lambda x: m.ik(x, strokes="ignore"), [(x,) for x in xs], 1))
+    f_old, f_new = [], []  # full_output: the Numba one-pose path (the kind's NumPy start)
+    for _ in range(max(1, rounds // 3)):
+        f_old.append(per_call(lambda x: off.ik(x, strokes="ignore", full_output=True),
+                              [(x,) for x in xs[:200]], 1))
+        f_new.append(per_call(lambda x: m.ik(x, strokes="ignore", full_output=True),
+                              [(x,) for x in xs[:200]], 1))
     batch = np.array(xs)
     b_old, b_new = [], []
     for _ in range(3):  # the batch path over every pose, one call each way
@@ -300,6 +306,9 @@ def closed(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
           f"(x{med[0] / med[1]:.2f})")
     print(f"  m.ik(x), CPU µs: first-order start {med[2]:.2f}, closed start {med[3]:.2f} "
           f"(x{med[2] / med[3]:.2f})")
+    f_old, f_new = float(np.median(f_old)), float(np.median(f_new))
+    print(f"  m.ik(x, full_output=True) (Numba one-pose path), CPU µs: first-order start "
+          f"{f_old:.2f}, closed start {f_new:.2f} (x{f_old / f_new:.2f})")
     print(f"  m.ik(X) of the {len(xs)} poses (batch path), CPU ms: first-order start "
           f"{b_old * 1e3:.1f}, closed start {b_new * 1e3:.1f} (x{b_old / b_new:.2f})")
 
