@@ -147,4 +147,5 @@ KIND = MachineKind(
     reference_poses=reference_poses,
     source="seed 002 (Guyon 2021): Table 4.2, eq. 4.19, dimensions from Table 5.6",
     inverse_start=forms.start_unknowns,
+    direct_start=forms.direct_unknowns,
 )

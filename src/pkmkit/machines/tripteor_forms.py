@@ -61,14 +61,14 @@ JACOBIAN_REFRESH = 1e-6
 
 
 def constants(params: Mapping[str, Any]) -> np.ndarray:
-    """``(24,)`` the constants of :func:`inverse_unknowns` (and of ``chain_one_tripteor.c``):
-    c1, spindle, L, D, the rows of R_m (MPS in R51, 9), p_m (3), b2 (3), b3 (3) and the home
-    assembly's signs s_ψ, s_σ (:data:`ASSEMBLY`); cached by the dimensions' values (a one-pose
-    call's start must not rebuild the platform's frames)."""
+    """``(25,)`` the constants of :func:`inverse_unknowns` and :func:`direct_unknowns` (and of
+    ``chain_one_tripteor.c``): c1, spindle, L, D, the rows of R_m (MPS in R51, 9), p_m (3), b2
+    (3), b3 (3), the home assembly's signs s_ψ, s_σ (:data:`ASSEMBLY`) and l; cached by the
+    dimensions' values (a one-pose call's start must not rebuild the platform's frames)."""
     return _constants(tuple(float(params[k]) for k in _DIMENSIONS))
 
 
-_DIMENSIONS = ("c1", "spindle", "L", "D", "l", "d", "h")
+_DIMENSIONS = ("c1", "spindle", "L", "D", "l", "d", "h")  # l: the constants' last
 
 
 @functools.lru_cache(maxsize=16)
@@ -76,8 +76,9 @@ def _constants(values: tuple[float, ...]) -> np.ndarray:
     params = dict(zip(_DIMENSIONS, values, strict=True))
     mps = mps_frame(params)
     pts = platform_points(params)
-    out = np.empty(24)
+    out = np.empty(25)
     out[:4] = values[:4]
+    out[24] = values[4]
     out[4:13] = mps[:3, :3].reshape(-1)
     out[13:16] = mps[:3, 3]
     out[16:19] = pts[1]
@@ -243,15 +244,30 @@ def _newton_row(k: np.ndarray, wx, wy, wz, ax, ay, az, b) -> tuple:
 
 def _fill(k, psi, sigma, wx, wy, wz, ax, ay, az, b, u) -> np.ndarray:
     """Every unknown into ``u (N, 21)`` from the platform angles; returns |g| (|sin Q5|)."""
-    (x51, y51, z51), _, az_dot, gn, xq = _head(k, psi, sigma, ax, ay, az, b)
+    frame, _, az_dot, gn, xq = _head(k, psi, sigma, ax, ay, az, b)
+    x51, y51, z51 = frame
     c1 = k[0]
-    px, py, pz = wx - c1 * xq[0], wy - c1 * xq[1], wz - c1 * xq[2]
+    pm = tuple(x51[i] * k[13] + y51[i] * k[14] + z51[i] * k[15] for i in range(3))
+    b1 = (wx - c1 * xq[0] - pm[0], wy - c1 * xq[1] - pm[1], wz - c1 * xq[2] - pm[2])
+    _legs(k, psi, sigma, frame, b1, u)
+    # the head: x' = R_P (cos Q4, sin Q4, 0), R_P = R51 R_m
+    xp = tuple(x51[i] * k[4] + y51[i] * k[7] + z51[i] * k[10] for i in range(3))
+    yp = tuple(x51[i] * k[5] + y51[i] * k[8] + z51[i] * k[11] for i in range(3))
+    u[:, 19] = np.arctan2(xq[0] * yp[0] + xq[1] * yp[1] + xq[2] * yp[2],
+                          xq[0] * xp[0] + xq[1] * xp[1] + xq[2] * xp[2])
+    u[:, 20] = b * np.arctan2(gn, -az_dot)
+    return gn
+
+
+def _legs(k, psi, sigma, frame, b1, u) -> None:
+    """The platform (B1, R51's rotation vector) and every joint of the legs into ``u[:, :19]``
+    from ψ, σ, R51's columns ``frame`` and the point B1."""
+    x51, y51, z51 = frame
 
     def at(v):  # R51 v
         return tuple(x51[i] * v[0] + y51[i] * v[1] + z51[i] * v[2] for i in range(3))
 
-    pm, b2, b3 = at(k[13:16]), at(k[16:19]), at(k[19:22])
-    b1 = (px - pm[0], py - pm[1], pz - pm[2])
+    b2, b3 = at(k[16:19]), at(k[19:22])
     u[:, 0], u[:, 1], u[:, 2] = b1
     u[:, 3:6] = _rotvec(psi, sigma)
     cp, sp = np.cos(psi), np.sin(psi)
@@ -275,17 +291,10 @@ def _fill(k, psi, sigma, wx, wy, wz, ax, ay, az, b, u) -> np.ndarray:
     phi2 = np.arctan2(d2[0] * z51[0] + d2[1] * z51[1] + d2[2] * z51[2],
                       d2[0] * y51[0] + d2[1] * y51[1] + d2[2] * y51[2])
     half = 0.5 * np.pi
-    # the head: x' = R_P (cos Q4, sin Q4, 0), R_P = R51 R_m
-    xp = tuple(x51[i] * k[4] + y51[i] * k[7] + z51[i] * k[10] for i in range(3))
-    yp = tuple(x51[i] * k[5] + y51[i] * k[8] + z51[i] * k[11] for i in range(3))
-    q4 = np.arctan2(xq[0] * yp[0] + xq[1] * yp[1] + xq[2] * yp[2],
-                    xq[0] * xp[0] + xq[1] * xp[1] + xq[2] * xp[2])
-    q5 = b * np.arctan2(gn, -az_dot)
     cols = (psi, theta1, np.hypot(e1b1, b1[1]), sigma - theta1 + half, psi2, theta2, eta2, q2,
-            phi2, psi, theta3, np.hypot(e1b3, d3[1]), sigma - theta3 + half, q4, q5)
+            phi2, psi, theta3, np.hypot(e1b3, d3[1]), sigma - theta3 + half)
     for j, v in enumerate(cols):
         u[:, 6 + j] = v
-    return gn
 
 
 def _rotvec(psi: np.ndarray, sigma: np.ndarray) -> np.ndarray:
@@ -352,9 +361,94 @@ start_unknowns.variables = VARIABLES  # the model's variables it answers for (ch
 
 
 def native_constants(params: Mapping[str, Any]) -> np.ndarray:
-    """``(25,)`` :func:`start_unknowns`'s constants for ``native/chain_one_tripteor.c``: the
+    """``(26,)`` :func:`start_unknowns`'s constants for ``native/chain_one_tripteor.c``: the
     family's code (2, ``PK_CLOSED_TRIPTEOR``), then :func:`constants`."""
     return np.concatenate([[2.0], constants(params)])
 
 
 start_unknowns.native = native_constants  # its C twin's constants (chain_one_native)
+
+
+#: The direct model (:func:`direct_unknowns`): the four-bar A1B1B3A3's assembly (the side of
+#: A3B1 that B3 lies on, home's), the start (θ1, ψ) (home's, rad), Newton's steps at most.
+FOUR_BAR = 1.0
+DIRECT_START = (math.radians(17.7023), math.radians(0.2813))
+DIRECT_STEPS = 12
+
+
+def _platform_of(k, theta, psi, q1, q3):
+    """The platform at θ1 and ψ (:func:`direct_unknowns`): ``(σ, B1, R51's columns)``."""
+    big, small = k[2], k[24]
+    s1, t1 = q1 * np.cos(theta), q1 * np.sin(theta)  # B1 in the plane (e1, e2)
+    ds, dt = s1, t1 - big  # B1 − A3, A3 = (0, L)
+    rho = np.sqrt(ds * ds + dt * dt)
+    ca = (q3 * q3 + rho * rho - small * small) / (2 * q3 * rho)
+    alpha = np.arctan2(dt, ds) + FOUR_BAR * np.arccos(ca)
+    s3, t3 = q3 * np.cos(alpha), big + q3 * np.sin(alpha)  # B3
+    sigma = np.arctan2(t1 - t3, s1 - s3)  # x51 = (B1 − B3) / l
+    cp, sp, cs, ss = np.cos(psi), np.sin(psi), np.cos(sigma), np.sin(sigma)
+    frame = ((-sp * cs, -ss, cp * cs), (sp * ss, -cs, -cp * ss), (cp, 0.0 * cp, sp))
+    return sigma, (-sp * s1, -t1, cp * s1), frame
+
+
+def _leg2(k, theta, psi, q1, q2, q3):
+    """Leg 2's two equations at θ1, ψ: (B2 − A2)·x51 and |B2 − A2| − Q2."""
+    _, b1, (x51, y51, z51) = _platform_of(k, theta, psi, q1, q3)
+    d = [b1[i] + x51[i] * k[16] + y51[i] * k[17] + z51[i] * k[18] for i in range(3)]
+    d[0] = d[0] + k[3]
+    d[1] = d[1] + 0.5 * k[2]
+    return (d[0] * x51[0] + d[1] * x51[1] + d[2] * x51[2],
+            np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - q2)
+
+
+def direct_unknowns(params: Mapping[str, Any], q: Any) -> np.ndarray:
+    """Near-closed-form direct model of the parallel part as the joint-chain unknowns: ``(N,
+    21)`` the platform point B1, R51's rotation vector and every joint variable
+    (:data:`VARIABLES`; Q1..Q5 the given ``q (N, 5)``) — the direct model's start
+    (``MachineKind.direct_start``). In the legs' plane (basis e1, e2; A1 at 0, A3 at (0, L)),
+    θ1 places B1 = Q1 (cos θ1, sin θ1) and the four-bar B3 (on the circle of radius Q3 about
+    A3, at l from B1, on :data:`FOUR_BAR`'s side), hence x51 and σ; with the plane's angle ψ,
+    leg 2's two equations (normal to x51, length Q2) are left in (θ1, ψ): Newton's steps from
+    :data:`DIRECT_START` (the Jacobian by differences, chord steps once a step is below 1e-6).
+    NaN rows where it declines (no assembly, not converged). Elementwise;
+    ``native/chain_one_tripteor.c`` the same."""
+    k = tuple(constants(params).tolist())
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    n = q.shape[0]
+    q1, q2, q3 = q[:, 0], q[:, 1], q[:, 2]
+    h = JACOBIAN_STEP
+    theta, psi = np.full(n, DIRECT_START[0]), np.full(n, DIRECT_START[1])
+    i00, i01, i10, i11 = (np.zeros(n) for _ in range(4))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f0, f1 = _leg2(k, theta, psi, q1, q2, q3)
+        done = np.zeros(n, dtype=bool)
+        fresh = np.ones(n, dtype=bool)
+        for _ in range(DIRECT_STEPS):
+            if fresh.any():  # Newton's Jacobian by differences
+                a0, a1 = _leg2(k, theta + h, psi, q1, q2, q3)
+                c0, c1 = _leg2(k, theta, psi + h, q1, q2, q3)
+                j00, j10, j01, j11 = (a0 - f0) / h, (a1 - f1) / h, (c0 - f0) / h, (c1 - f1) / h
+                det = j00 * j11 - j01 * j10
+                i00 = np.where(fresh, j11 / det, i00)
+                i01 = np.where(fresh, -j01 / det, i01)
+                i10 = np.where(fresh, -j10 / det, i10)
+                i11 = np.where(fresh, j00 / det, i11)
+            d0, d1 = i00 * f0 + i01 * f1, i10 * f0 + i11 * f1
+            live = ~done
+            theta = np.where(live, theta - d0, theta)
+            psi = np.where(live, psi - d1, psi)
+            step = np.abs(d0) + np.abs(d1)
+            done |= step <= INVERSE_TOL
+            fresh = ~done & (step > JACOBIAN_REFRESH)
+            if done.all():
+                break
+            f0, f1 = _leg2(k, theta, psi, q1, q2, q3)
+        sigma, b1, frame = _platform_of(k, theta, psi, q1, q3)
+        u = np.empty((n, 21))
+        _legs(k, psi, sigma, frame, b1, u)
+    u[:, 19], u[:, 20] = q[:, 3], q[:, 4]
+    u[~(done & np.isfinite(u).all(axis=1))] = np.nan
+    return u
+
+
+direct_unknowns.variables = VARIABLES  # the model's variables it answers for (chain_starts)

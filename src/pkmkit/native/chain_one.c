@@ -139,9 +139,8 @@ static int judged_within(const pk_one *s, const double *values) {
 
 static double turn_offset(double angle) { return PK_PI - pk_pymod(PK_PI - angle, 2.0 * PK_PI); }
 
-/* The kind's closed-form start (chain_starts.closed_starts): the Tripteor's in
- * chain_one_tripteor.c; the TriMule's here (machines/trimule_forms.py inverse_unknowns and
- * start_unknowns, statement for statement): u (27,) on the head's
+/* The kind's closed-form start (chain_starts.closed_starts; the Tripteor's: chain_one_tripteor.c),
+ * here the TriMule's (trimule_forms.py inverse_unknowns, start_unknowns): u (27,) on the head's
  * branch (+1: Q5 >= 0, -1: Q5 <= 0, 0: the branch whose Q4 is within a quarter turn of home's);
  * 1, or 0 where it declines (near the wrist singularity, not converged, not finite). */
 enum { CLOSED_SWEEPS = 40 };
@@ -237,6 +236,7 @@ static double leg_h(double a, double b, double k, double t) {
 }
 
 static int closed_direct(const pk_one *s, const double *q, double *u) {
+    if (s->closed == PK_CLOSED_TRIPTEOR) return pk_one_tripteor_direct(s->cl, q, u);
     const double big = s->cl[3], small = s->cl[4], hb = s->cl[5], hs = s->cl[6];
     double q1 = q[0], q2 = q[1], q3 = q[2];
     if (!(q1 > 0.0 && q2 > 0.0 && q3 > 0.0 && isfinite(q1) && isfinite(q2) && isfinite(q3)))
@@ -467,7 +467,7 @@ static int direct(const pk_one *s, const double *q, int check, pk_one_work *k, d
         values[s->act[j]] = q[j];
         delta[j] = q[j] - s->home_values[s->act[j]];
     }
-    if (s->closed == PK_CLOSED_TRIMULE && n == 5 && closed_direct(s, q, k->u2)) {
+    if (s->closed && n == 5 && closed_direct(s, q, k->u2)) {
         /* the kind's closed-form start (the batch path's, chain_starts.closed_direct_starts) */
         memcpy(u, k->u2, 6 * sizeof(double));
         for (ptrdiff_t v = 0; v < c->n_var; v++)

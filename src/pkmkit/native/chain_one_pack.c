@@ -196,8 +196,9 @@ PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t
         double *cl = copy_of(s, &held, args[33], "closed", 'd', 1, -1, &n_cl);
         if (!cl) goto fail;
         int family = n_cl > 0 ? (int)cl[0] : 0;
-        Py_ssize_t want = family == PK_CLOSED_TRIMULE ? 8 : family == PK_CLOSED_TRIPTEOR ? 25 : -1;
-        if (n_cl == want && n_var == (family == PK_CLOSED_TRIMULE ? 21 : 15)) {
+        Py_ssize_t want = family == PK_CLOSED_TRIMULE ? 8 : family == PK_CLOSED_TRIPTEOR ? 26 : -1;
+        if (n_cl == want && n_cl - 1 <= (Py_ssize_t)(sizeof s->cl / sizeof s->cl[0])
+            && n_var == (family == PK_CLOSED_TRIMULE ? 21 : 15)) {
             memcpy(s->cl, cl + 1, (size_t)(n_cl - 1) * sizeof(double));
             s->closed = family;
         }

@@ -64,19 +64,16 @@ static void qmul(const double *p, const double *q, double *out) {
     out[3] = p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0];
 }
 
-/* tripteor_forms._fill: every unknown into u (21,) from the platform angles; returns |g|. */
-static double fill(const double *k, double psi, double sigma, const double *w, const double *a,
-                   double b, double *u) {
-    head_t o;
-    head(k, psi, sigma, a, b, &o);
-    double c1 = k[0], p[3], pm[3], b2[3], b3[3], b1[3];
-    for (int i = 0; i < 3; i++) p[i] = w[i] - c1 * o.xq[i];
+/* tripteor_forms._legs: the platform (B1, R51's rotation vector) and every joint of the legs
+ * into u[:19] from psi, sigma, R51's columns (o->x, y, z) and B1. */
+static void legs(const double *k, double psi, double sigma, const head_t *o, const double *b1,
+                 double *u) {
+    double b2[3], b3[3];
     for (int i = 0; i < 3; i++) {
-        pm[i] = o.x[i] * k[13] + o.y[i] * k[14] + o.z[i] * k[15];
-        b2[i] = o.x[i] * k[16] + o.y[i] * k[17] + o.z[i] * k[18];
-        b3[i] = o.x[i] * k[19] + o.y[i] * k[20] + o.z[i] * k[21];
+        b2[i] = o->x[i] * k[16] + o->y[i] * k[17] + o->z[i] * k[18];
+        b3[i] = o->x[i] * k[19] + o->y[i] * k[20] + o->z[i] * k[21];
     }
-    for (int i = 0; i < 3; i++) b1[i] = p[i] - pm[i], u[i] = b1[i];
+    for (int i = 0; i < 3; i++) u[i] = b1[i];
     /* R51's rotation vector: (r, r, 0, 0) (cos psi/2, 0, 0, sin psi/2) F (cos sigma/2, 0, 0,
      * sin sigma/2), w >= 0 */
     double r = sqrt(0.5), ch = cos(0.5 * psi), sh = sin(0.5 * psi), cs = cos(0.5 * sigma),
@@ -99,23 +96,33 @@ static double fill(const double *k, double psi, double sigma, const double *w, c
     double psi2 = atan2(-d2[1], d2[2]);
     double theta2 = atan2(d2[0], sqrt(d2[1] * d2[1] + d2[2] * d2[2]));
     double c2 = cos(psi2), s2 = sin(psi2), ct2 = cos(theta2), st2 = sin(theta2);
-    double mx = ct2 * o.x[0] + s2 * st2 * o.x[1] - c2 * st2 * o.x[2];
-    double my = c2 * o.x[1] + s2 * o.x[2];
+    double mx = ct2 * o->x[0] + s2 * st2 * o->x[1] - c2 * st2 * o->x[2];
+    double my = c2 * o->x[1] + s2 * o->x[2];
     double eta2 = atan2(-mx, my);
-    double phi2 = atan2(d2[0] * o.z[0] + d2[1] * o.z[1] + d2[2] * o.z[2],
-                        d2[0] * o.y[0] + d2[1] * o.y[1] + d2[2] * o.y[2]);
-    double half = 0.5 * PK_PI, xp[3], yp[3];
+    double phi2 = atan2(d2[0] * o->z[0] + d2[1] * o->z[1] + d2[2] * o->z[2],
+                        d2[0] * o->y[0] + d2[1] * o->y[1] + d2[2] * o->y[2]);
+    double half = 0.5 * PK_PI, *v = u + 6;
+    v[0] = psi, v[1] = theta1, v[2] = hypot(e1b1, b1[1]), v[3] = sigma - theta1 + half;
+    v[4] = psi2, v[5] = theta2, v[6] = eta2, v[7] = q2, v[8] = phi2, v[9] = psi;
+    v[10] = theta3, v[11] = hypot(e1b3, d3[1]), v[12] = sigma - theta3 + half;
+}
+
+/* tripteor_forms._fill: every unknown into u (21,) from the platform angles; returns |g|. */
+static double fill(const double *k, double psi, double sigma, const double *w, const double *a,
+                   double b, double *u) {
+    head_t o;
+    head(k, psi, sigma, a, b, &o);
+    double c1 = k[0], b1[3], xp[3], yp[3];
+    for (int i = 0; i < 3; i++)
+        b1[i] = w[i] - c1 * o.xq[i] - (o.x[i] * k[13] + o.y[i] * k[14] + o.z[i] * k[15]);
+    legs(k, psi, sigma, &o, b1, u);
     for (int i = 0; i < 3; i++) {
         xp[i] = o.x[i] * k[4] + o.y[i] * k[7] + o.z[i] * k[10];
         yp[i] = o.x[i] * k[5] + o.y[i] * k[8] + o.z[i] * k[11];
     }
-    double q4 = atan2(o.xq[0] * yp[0] + o.xq[1] * yp[1] + o.xq[2] * yp[2],
-                      o.xq[0] * xp[0] + o.xq[1] * xp[1] + o.xq[2] * xp[2]);
-    double *v = u + 6;
-    v[0] = psi, v[1] = theta1, v[2] = hypot(e1b1, b1[1]), v[3] = sigma - theta1 + half;
-    v[4] = psi2, v[5] = theta2, v[6] = eta2, v[7] = q2, v[8] = phi2, v[9] = psi;
-    v[10] = theta3, v[11] = hypot(e1b3, d3[1]), v[12] = sigma - theta3 + half, v[13] = q4;
-    v[14] = b * atan2(o.gn, -o.az);
+    u[19] = atan2(o.xq[0] * yp[0] + o.xq[1] * yp[1] + o.xq[2] * yp[2],
+                  o.xq[0] * xp[0] + o.xq[1] * xp[1] + o.xq[2] * xp[2]);
+    u[20] = b * atan2(o.gn, -o.az);
     return o.gn;
 }
 
@@ -159,6 +166,79 @@ int pk_one_tripteor_start(const double *k, double tool, const double *target, do
     }
     double gn = fill(k, psi, sigma, w, a, b, u);
     if (!(done && gn >= SINGULAR)) return 0;
+    for (int i = 0; i < 21; i++)
+        if (!isfinite(u[i])) return 0;
+    return 1;
+}
+
+/* ---------------------------------------------------------------- the direct model's start */
+
+/* tripteor_forms.FOUR_BAR, DIRECT_START, DIRECT_STEPS. */
+static const double FOUR_BAR = 1.0;
+enum { DIRECT_STEPS = 12 };
+
+/* tripteor_forms._platform_of: sigma, B1 and R51's columns (o->x, y, z) at theta1, psi. */
+static void platform_of(const double *k, double theta, double psi, double q1, double q3,
+                        double *sigma, double *b1, head_t *o) {
+    double big = k[2], small = k[24];
+    double s1 = q1 * cos(theta), t1 = q1 * sin(theta);
+    double ds = s1, dt = t1 - big;
+    double rho = sqrt(ds * ds + dt * dt);
+    double ca = (q3 * q3 + rho * rho - small * small) / (2 * q3 * rho);
+    double alpha = atan2(dt, ds) + FOUR_BAR * acos(ca);
+    double s3 = q3 * cos(alpha), t3 = big + q3 * sin(alpha);
+    *sigma = atan2(t1 - t3, s1 - s3);
+    double cp = cos(psi), sp = sin(psi), cs = cos(*sigma), ss = sin(*sigma);
+    o->x[0] = -sp * cs, o->x[1] = -ss, o->x[2] = cp * cs;
+    o->y[0] = sp * ss, o->y[1] = -cs, o->y[2] = -cp * ss;
+    o->z[0] = cp, o->z[1] = 0.0 * cp, o->z[2] = sp;
+    b1[0] = -sp * s1, b1[1] = -t1, b1[2] = cp * s1;
+}
+
+/* tripteor_forms._leg2: (B2 - A2).x51 and |B2 - A2| - Q2. */
+static void leg2(const double *k, double theta, double psi, const double *q, double *f0,
+                 double *f1) {
+    double sigma, b1[3], d[3];
+    head_t o;
+    platform_of(k, theta, psi, q[0], q[2], &sigma, b1, &o);
+    for (int i = 0; i < 3; i++) d[i] = b1[i] + o.x[i] * k[16] + o.y[i] * k[17] + o.z[i] * k[18];
+    d[0] = d[0] + k[3];
+    d[1] = d[1] + 0.5 * k[2];
+    *f0 = d[0] * o.x[0] + d[1] * o.x[1] + d[2] * o.x[2];
+    *f1 = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - q[1];
+}
+
+int pk_one_tripteor_direct(const double *k, const double *q, double *u) {
+    double theta = 17.7023 * (PK_PI / 180.0), psi = 0.2813 * (PK_PI / 180.0);
+    double f0, f1, i00 = 0, i01 = 0, i10 = 0, i11 = 0;
+    leg2(k, theta, psi, q, &f0, &f1);
+    int done = 0, fresh = 1;
+    for (int it = 0; it < DIRECT_STEPS; it++) {
+        if (fresh) {  /* Newton's Jacobian by differences */
+            double a0, a1, c0, c1;
+            leg2(k, theta + H, psi, q, &a0, &a1);
+            leg2(k, theta, psi + H, q, &c0, &c1);
+            double j00 = (a0 - f0) / H, j10 = (a1 - f1) / H, j01 = (c0 - f0) / H,
+                   j11 = (c1 - f1) / H;
+            double det = j00 * j11 - j01 * j10;
+            i00 = j11 / det, i01 = -j01 / det, i10 = -j10 / det, i11 = j00 / det;
+        }
+        double d0 = i00 * f0 + i01 * f1, d1 = i10 * f0 + i11 * f1;
+        theta = theta - d0, psi = psi - d1;
+        double change = fabs(d0) + fabs(d1);
+        if (change <= TOL) {
+            done = 1;
+            break;
+        }
+        fresh = change > REFRESH;
+        leg2(k, theta, psi, q, &f0, &f1);
+    }
+    double sigma, b1[3];
+    head_t o;
+    platform_of(k, theta, psi, q[0], q[2], &sigma, b1, &o);
+    legs(k, psi, sigma, &o, b1, u);
+    u[19] = q[3], u[20] = q[4];
+    if (!done) return 0;
     for (int i = 0; i < 21; i++)
         if (!isfinite(u[i])) return 0;
     return 1;
