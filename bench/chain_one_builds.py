@@ -120,11 +120,23 @@ def compare_jacobian(m, builds: list, caps: list, xs: list, rounds: int,
           f"second {b:.2f} (x{a / b:.3f})")
 
 
+def pack(build, m):
+    """``chain_one_pack`` of machine ``m`` with ``build``; a build older than session 34 takes
+    the closed-form start's constants without the family's code, and the TriMule's alone: it
+    is packed so (its own start: the first-order start on the Tripteor)."""
+    args = chain_one_native.pack_arguments(m)
+    try:
+        return build.chain_one_pack(*args)
+    except ValueError:
+        closed = args[-1]
+        older = closed[1:] if closed is not None and closed[0] == 1.0 else None
+        return build.chain_one_pack(*args[:-1], older)
+
+
 def compare(name: str, builds: list, count: int, rounds: int = 7,
             jacobian: bool = False, two_calls_first: bool = False) -> None:
     m = pkmkit.machine(name)
-    args = chain_one_native.pack_arguments(m)
-    caps = [b.chain_one_pack(*args) for b in builds]
+    caps = [pack(b, m) for b in builds]
     xs, qs = poses(m, count)
     (a, ca), (b, cb) = zip(builds, caps, strict=True)
     same_ik = all(identical(a.chain_one_ik(ca, x, True, True), b.chain_one_ik(cb, x, True, True))
@@ -137,7 +149,11 @@ def compare(name: str, builds: list, count: int, rounds: int = 7,
             times[f"ik {i}"].append(cpu_per_call(mod.chain_one_ik, cap, xs, True, False))
             times[f"fk {i}"].append(cpu_per_call(mod.chain_one_fk, cap, qs, True, True))
     med = {k: float(np.median(v)) for k, v in times.items()}
-    print(f"{name}: {len(xs)} poses; bit-identical answers: ik {same_ik}, fk {same_fk}")
+    gap = max((float(np.abs(one[0] - two[0]).max()) for one, two in (
+        (a.chain_one_ik(ca, x, True, True), b.chain_one_ik(cb, x, True, True)) for x in xs)
+        if one is not None and two is not None), default=0.0)
+    print(f"{name}: {len(xs)} poses; bit-identical answers: ik {same_ik}, fk {same_fk}; "
+          f"ik's largest |Δq| {gap:.1e}")
     for f in ("ik", "fk"):
         print(f"  {f} C call, CPU µs: first build {med[f + ' 1']:.2f}, second "
               f"{med[f + ' 2']:.2f} (x{med[f + ' 1'] / med[f + ' 2']:.3f})")
@@ -163,7 +179,7 @@ def main() -> None:
         build = load(args.only)
         for name in args.machines.split(","):
             m = pkmkit.machine(name)
-            cap = build.chain_one_pack(*chain_one_native.pack_arguments(m))
+            cap = pack(build, m)
             xs, qs = poses(m, args.poses)
             for _ in range(args.calls):
                 for x in xs:

@@ -21,6 +21,7 @@ Usage::
     python bench/chain_start_table.py [--poses 1000] [--grid 3] [--machines tripteor-x7,trimule-600]
     python bench/chain_start_table.py --rules-only --poses 2000 --machines trimule-600
     python bench/chain_start_table.py --closed --machines trimule-600   # session 33
+    python bench/chain_start_table.py --closed --machines tripteor-x7 --spread 1.1  # session 34
 """
 
 from __future__ import annotations
@@ -209,7 +210,7 @@ def rules_only(name: str, poses: int) -> None:
           f"mirrors kept, the start says far/beyond on {k[1, 1]}, not on {k[0, 1]}")
 
 
-def closed(name: str, poses: int, rounds: int) -> None:
+def closed(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
     """Session 33: the kind's closed-form start (the TriMule's,
     :func:`pkmkit.machines.chain_starts.closed_starts`) against the first-order start, in one
     process: the same C build packed with and without its constants (``chain_one_pack``'s
@@ -217,7 +218,10 @@ def closed(name: str, poses: int, rounds: int) -> None:
     against a copy with the closed start turned off (its batch path, Numba and C paths all
     take the first-order start then). Printed: iterations per pose (the mirror's included),
     the first solve's alone and the mirror solves (the Numba one-pose pieces), the largest
-    difference of the answers, CPU µs per call (median of ``rounds`` interleaved rounds)."""
+    difference of the answers, CPU µs per call (median of ``rounds`` interleaved rounds). The
+    actuators uniform over the middle ``spread`` of their strokes (0.9: 5-95 %; above 1,
+    beyond them: the edges, and on the Tripteor the wrist's singularity at Q5 = 0, where the
+    closed start declines)."""
     import math
 
     from pkmkit.machines import chain_one
@@ -234,7 +238,7 @@ def closed(name: str, poses: int, rounds: int) -> None:
     rng = np.random.default_rng(0)
     act = np.flatnonzero(m.model.actuated)
     lo, hi = m.model.q_min[act], m.model.q_max[act]
-    q = lo + (hi - lo) * (0.05 + 0.9 * rng.random((poses, len(act))))
+    q = lo + (hi - lo) * ((1 - spread) / 2 + spread * rng.random((poses, len(act))))
     xs = m.fk(q, strokes="ignore")
     xs = [x for x in xs[np.isfinite(xs).all(axis=1)]
           if p.ik(p.capsule, x, True, True) is not None
@@ -272,6 +276,12 @@ def closed(name: str, poses: int, rounds: int) -> None:
         c_new.append(per_call(p.ik, plain, 1))
         m_old.append(per_call(lambda x: off.ik(x, strokes="ignore"), [(x,) for x in xs], 1))
         m_new.append(per_call(lambda x: m.ik(x, strokes="ignore"), [(x,) for x in xs], 1))
+    f_old, f_new = [], []  # full_output: the Numba one-pose path (the kind's NumPy start)
+    for _ in range(max(1, rounds // 3)):
+        f_old.append(per_call(lambda x: off.ik(x, strokes="ignore", full_output=True),
+                              [(x,) for x in xs[:200]], 1))
+        f_new.append(per_call(lambda x: m.ik(x, strokes="ignore", full_output=True),
+                              [(x,) for x in xs[:200]], 1))
     batch = np.array(xs)
     b_old, b_new = [], []
     for _ in range(3):  # the batch path over every pose, one call each way
@@ -296,6 +306,9 @@ def closed(name: str, poses: int, rounds: int) -> None:
           f"(x{med[0] / med[1]:.2f})")
     print(f"  m.ik(x), CPU µs: first-order start {med[2]:.2f}, closed start {med[3]:.2f} "
           f"(x{med[2] / med[3]:.2f})")
+    f_old, f_new = float(np.median(f_old)), float(np.median(f_new))
+    print(f"  m.ik(x, full_output=True) (Numba one-pose path), CPU µs: first-order start "
+          f"{f_old:.2f}, closed start {f_new:.2f} (x{f_old / f_new:.2f})")
     print(f"  m.ik(X) of the {len(xs)} poses (batch path), CPU ms: first-order start "
           f"{b_old * 1e3:.1f}, closed start {b_new * 1e3:.1f} (x{b_old / b_new:.2f})")
 
@@ -310,11 +323,13 @@ def main() -> None:
     parser.add_argument("--closed", action="store_true",
                         help="the closed-form start against the first-order one (session 33)")
     parser.add_argument("--rounds", type=int, default=7)
+    parser.add_argument("--spread", type=float, default=0.9,
+                        help="with --closed: the middle fraction of the strokes (1.1: beyond)")
     args = parser.parse_args()
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
     for name in args.machines.split(","):
         if args.closed:
-            closed(name, args.poses, args.rounds)
+            closed(name, args.poses, args.rounds, args.spread)
         elif args.rules_only:
             rules_only(name, args.poses)
         else:

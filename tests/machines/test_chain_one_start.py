@@ -70,6 +70,7 @@ def test_the_start_closes_to_second_order(machine, monkeypatch):
     (10×)."""
     monkeypatch.setattr(chain_starts, "INVERSE_RATE_CUTOFF", 0.0)
     m = pkmkit.machine(machine.id)  # its own cache of the rates
+    object.__setattr__(m, "_closed_start_ok", False)  # the first-order start (not the kind's)
     rng = np.random.default_rng(4)
     home = m.home_pose
     u_home = np.concatenate([m._home["platform"], m._home["values"]])

@@ -117,15 +117,13 @@ def pack_arguments(m: Any, structured: bool = True) -> tuple:
 
 
 def _closed_constants(m: Any) -> np.ndarray | None:
-    """The TriMule's closed-form start's constants for chain_one.c (``c1, c2, spindle, L, l,
-    H, h``), or None: the kind has no closed-form start in C
-    (:func:`~pkmkit.machines.chain_starts.closed_starts`)."""
-    from pkmkit.machines import trimule_forms
-
-    if (getattr(m.kind, "inverse_start", None) is not trimule_forms.start_unknowns
-            or closed_starts(m, np.zeros((0, 6)), np.zeros(0)) is None):
+    """The kind's closed-form start's constants for C (its ``native(params)``: the family's
+    code, then its constants; chain_one.c ``closed_start``), or None: the kind has no
+    closed-form start in C (:func:`~pkmkit.machines.chain_starts.closed_starts`)."""
+    native = getattr(getattr(m.kind, "inverse_start", None), "native", None)
+    if native is None or closed_starts(m, np.zeros((0, 6)), np.zeros(0)) is None:
         return None
-    return np.array([float(m.params[k]) for k in ("c1", "c2", "spindle", "L", "l", "H", "h")])
+    return np.asarray(native(m.params), dtype=float)
 
 
 def packed(m: Any) -> Packed | None:

@@ -384,6 +384,16 @@ def start_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
 start_unknowns.variables = VARIABLES  # the model's variables it answers for (chain_starts)
 
 
+def native_constants(params: Mapping[str, Any]) -> np.ndarray:
+    """``(8,)`` :func:`start_unknowns`'s constants for ``native/chain_one.c``: the family's
+    code (1, ``PK_CLOSED_TRIMULE``), then ``c1, c2, spindle, L, l, H, h``."""
+    return np.array([1.0] + [float(params[k]) for k in ("c1", "c2", "spindle", "L", "l", "H",
+                                                        "h")])
+
+
+start_unknowns.native = native_constants  # its C twin's constants (chain_one_native)
+
+
 #: Bisection steps of :func:`direct_unknowns` before its two Newton steps (the bracket
 #: (−θ*, θ*) narrowed to ~2e-9 rad; Newton's two quadratic steps then reach rounding).
 DIRECT_BISECTIONS = 30

@@ -35,8 +35,10 @@ from typing import Any
 
 import numpy as np
 
+from pkmkit.machines import tripteor_forms as forms
 from pkmkit.machines.machine import MachineKind
-from pkmkit.model.chains import ElementSpec, JointChainModel, build_chain_model, invariant_frame
+from pkmkit.machines.tripteor_forms import mps_frame, platform_points
+from pkmkit.model.chains import ElementSpec, JointChainModel, build_chain_model
 from pkmkit.model.parameters import ParameterSpec
 
 PARAMETERS = (
@@ -74,29 +76,6 @@ DISPLAY = {"psi1": "ψ1", "theta1": "θ1", "phi1": "φ1", "psi2": "ψ2", "theta2
 def _home(name: str, kind: str) -> float:
     value = HOME[name]
     return math.radians(value) if kind == "R" else value
-
-
-def platform_points(params: Mapping[str, Any]) -> np.ndarray:
-    """B1, B2, B3 ``(3, 3)`` in the frame R51 (origin B1), nominal geometry."""
-    big = np.eye(4)
-    f52 = invariant_frame((1, 0, 0), (params["d"], 0, -params["l"] / 2), -math.pi / 2)
-    f53 = invariant_frame((0, 0, 1), (params["l"], 0, 0))
-    b2 = np.linalg.inv(f52)[:3, 3]
-    b3 = np.linalg.inv(f53)[:3, 3]
-    return np.array([big[:3, 3], b2, b3])
-
-
-def mps_frame(params: Mapping[str, Any]) -> np.ndarray:
-    """T_R51^MPS ``(4, 4)``: the platform frame from the B points (module docstring)."""
-    b1, b2, b3 = platform_points(params)
-    x = (b3 - b1) / np.linalg.norm(b3 - b1)
-    normal = np.cross(b3 - b1, b2 - b1)
-    z = normal / np.linalg.norm(normal)
-    y = np.cross(z, x)
-    out = np.eye(4)
-    out[:3, :3] = np.column_stack([x, y, z])
-    out[:3, 3] = (b1 + b2 + b3) / 3.0 - params["h"] * z
-    return out
 
 
 def elements(params: Mapping[str, Any]) -> list[ElementSpec]:
@@ -139,6 +118,9 @@ def elements(params: Mapping[str, Any]) -> list[ElementSpec]:
     ]
 
 
+__all__ = ["HOME", "KIND", "build", "elements", "mps_frame", "platform_points"]
+
+
 def build(params: Mapping[str, Any]) -> JointChainModel:
     """Joint-chain model of the Tripteor X7."""
     return build_chain_model(
@@ -164,4 +146,6 @@ KIND = MachineKind(
     build=build,
     reference_poses=reference_poses,
     source="seed 002 (Guyon 2021): Table 4.2, eq. 4.19, dimensions from Table 5.6",
+    inverse_start=forms.start_unknowns,
+    direct_start=forms.direct_unknowns,
 )

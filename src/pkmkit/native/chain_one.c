@@ -139,8 +139,8 @@ static int judged_within(const pk_one *s, const double *values) {
 
 static double turn_offset(double angle) { return PK_PI - pk_pymod(PK_PI - angle, 2.0 * PK_PI); }
 
-/* The TriMule's closed-form start (machines/trimule_forms.py inverse_unknowns and
- * start_unknowns, statement for statement; chain_starts.closed_starts): u (27,) on the head's
+/* The kind's closed-form start (chain_starts.closed_starts; the Tripteor's: chain_one_tripteor.c),
+ * here the TriMule's (trimule_forms.py inverse_unknowns, start_unknowns): u (27,) on the head's
  * branch (+1: Q5 >= 0, -1: Q5 <= 0, 0: the branch whose Q4 is within a quarter turn of home's);
  * 1, or 0 where it declines (near the wrist singularity, not converged, not finite). */
 enum { CLOSED_SWEEPS = 40 };
@@ -182,6 +182,8 @@ static void closed_joints(const pk_one *s, double length, double psi, double the
 }
 
 static int closed_start(const pk_one *s, const double *target, double branch, double *u) {
+    if (s->closed == PK_CLOSED_TRIPTEOR) return pk_one_tripteor_start(s->cl, s->tool, target,
+                                                                      branch, u);
     const double c1 = s->cl[0], c2 = s->cl[1], reach = s->cl[2] + s->tool;
     double ax = target[3], ay = target[4], az = target[5];
     double wx = target[0] - reach * ax, wy = target[1] - reach * ay, wz = target[2] - reach * az;
@@ -234,6 +236,7 @@ static double leg_h(double a, double b, double k, double t) {
 }
 
 static int closed_direct(const pk_one *s, const double *q, double *u) {
+    if (s->closed == PK_CLOSED_TRIPTEOR) return pk_one_tripteor_direct(s->cl, q, u);
     const double big = s->cl[3], small = s->cl[4], hb = s->cl[5], hs = s->cl[6];
     double q1 = q[0], q2 = q[1], q3 = q[2];
     if (!(q1 > 0.0 && q2 > 0.0 && q3 > 0.0 && isfinite(q1) && isfinite(q2) && isfinite(q3)))

@@ -45,11 +45,21 @@ typedef struct {
     double *u_home_dir, *dir_rates, *residual_rates, *home_values;
     double singular_bound, max_coordinate;
     ptrdiff_t twists, m_dir;
-    int closed;          /* the TriMule's closed-form start (chain_one.c closed_start) */
-    double cl[7];        /* c1, c2, spindle, L, l, H, h */
+    int closed;          /* the kind's closed-form start: PK_CLOSED_* (chain_one.c closed_start) */
+    double cl[32];       /* its constants (the TriMule's c1, c2, spindle, L, l, H, h) */
     void *owned[48];
     int n_owned;
 } pk_one;
+
+/* The families with a closed-form start in C (the first entry of chain_one_pack's closed). */
+enum { PK_CLOSED_TRIMULE = 1, PK_CLOSED_TRIPTEOR = 2 };
+
+/* chain_one_tripteor.c: the Tripteor's start u (21,) of target (6,) on branch (+-1, 0: nearest
+ * home) from tripteor_forms.constants k (24,); 1, or 0 where it declines. */
+int pk_one_tripteor_start(const double *k, double tool, const double *target, double branch,
+                          double *u);
+/* chain_one_tripteor.c: the Tripteor's direct start u (21,) from q (5,); 1, or 0 (declined). */
+int pk_one_tripteor_direct(const double *k, const double *q, double *u);
 
 /* chain_one_solve.c: pk_chain_rows's loop on one row u (n,) from known (n_var,), its normal
  * equations by block elimination (scratch: pk_one_block_scratch doubles); the blocks of a

@@ -54,7 +54,8 @@ const char pk_chain_one_pack_doc[] =
     "chain_one_fk (machines/chain_one_native.py builds the arguments). wrist: (5,) turn\n"
     "variable, its home, tilt variable, its home, whether the turn reaches a quarter turn, or\n"
     "(0,) for none. structured: block elimination (else the dense solve of chain_rows).\n"
-    "closed: the TriMule's closed-form start (c1, c2, spindle, L, l, H, h; chain_one.c).";
+    "closed: the kind's closed-form start, its family (1: TriMule, 2: Tripteor) then its\n"
+    "constants (trimule_forms / tripteor_forms native_constants; chain_one.c closed_start).";
 
 PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
@@ -190,13 +191,18 @@ PyObject *pk_py_chain_one_pack(PyObject *self, PyObject *const *args, Py_ssize_t
     if (s->max_coordinate == -1.0 && PyErr_Occurred()) goto fail;
     s->structured = PyObject_IsTrue(args[32]);
     if (s->structured < 0) goto fail;
-    if (nargs == 34 && args[33] != Py_None) {  /* the closed-form start's constants */
+    if (nargs == 34 && args[33] != Py_None) {  /* the closed-form start: family, constants */
         Py_ssize_t n_cl;
-        double *cl = copy_of(s, &held, args[33], "closed", 'd', 1, 7, &n_cl);
+        double *cl = copy_of(s, &held, args[33], "closed", 'd', 1, -1, &n_cl);
         if (!cl) goto fail;
-        memcpy(s->cl, cl, sizeof s->cl);
+        int family = n_cl > 0 ? (int)cl[0] : 0;
+        Py_ssize_t want = family == PK_CLOSED_TRIMULE ? 8 : family == PK_CLOSED_TRIPTEOR ? 26 : -1;
+        if (n_cl == want && n_cl - 1 <= (Py_ssize_t)(sizeof s->cl / sizeof s->cl[0])
+            && n_var == (family == PK_CLOSED_TRIMULE ? 21 : 15)) {
+            memcpy(s->cl, cl + 1, (size_t)(n_cl - 1) * sizeof(double));
+            s->closed = family;
+        }
         let_go(&held);
-        s->closed = n_var == 21;
     }
     int found_inv = pk_one_find_blocks(s, &s->inv, &s->inv_b);
     int found_dir = found_inv == -2 ? -2 : pk_one_find_blocks(s, &s->dir, &s->dir_b);
