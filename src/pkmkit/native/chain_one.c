@@ -139,10 +139,9 @@ static int judged_within(const pk_one *s, const double *values) {
 
 static double turn_offset(double angle) { return PK_PI - pk_pymod(PK_PI - angle, 2.0 * PK_PI); }
 
-/* The kind's closed-form start (chain_starts.closed_starts; the Tripteor's: chain_one_tripteor.c),
- * here the TriMule's (trimule_forms.py inverse_unknowns, start_unknowns): u (27,) on the head's
- * branch (+1: Q5 >= 0, -1: Q5 <= 0, 0: the branch whose Q4 is within a quarter turn of home's);
- * 1, or 0 where it declines (near the wrist singularity, not converged, not finite). */
+/* The kind's closed-form start (chain_starts.closed_starts; the Tripteor's: chain_one_tripteor.c;
+ * the TriMule's: trimule_forms.py inverse_unknowns, start_unknowns): u (27,) on the head's branch
+ * (+1: Q5 >= 0, -1: Q5 <= 0, 0: Q4 within a quarter turn of home's); 1, or 0 where it declines. */
 enum { CLOSED_SWEEPS = 40 };
 static const double CLOSED_TOL = 1e-15, CLOSED_SINGULAR = 1e-3;
 
