@@ -23,7 +23,7 @@ def read_only(value: Any) -> Any:
     :class:`pkmkit.machines.velocity.LazyJacobians` and its one-pose subclass)."""
     if type(value) is np.ndarray and value.flags.writeable:
         value = value.view()
-        value.flags.writeable = False
+        value.setflags(write=False)  # half the cost of value.flags.writeable = False
     return value
 
 

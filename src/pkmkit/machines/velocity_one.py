@@ -522,7 +522,9 @@ def _one_field(name: str) -> property:
         if state is not None and code is not None:
             value = self._field(state, code)
             if value is not None:
-                value = cache[name] = read_only(value)
+                if type(value) is np.ndarray:  # a new array of the C call's: frozen, no view
+                    value.setflags(write=False)
+                cache[name] = value
                 return value
         value = cache[name] = read_only(self._evaluation.answer(name, code))
         return value
