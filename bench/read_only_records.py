@@ -21,8 +21,7 @@ import warnings
 import numpy as np
 
 import pkmkit
-from pkmkit.machines import (chain_one_velocity, lazy_records, results, velocity,
-                             velocity_one)
+from pkmkit.machines import chain_one_velocity, lazy_records, results, velocity, velocity_one
 
 MACHINES = ("orthoglide", "delta", "gough-stewart", "tripteor-x7")
 _USERS = (lazy_records, velocity, velocity_one, chain_one_velocity)
