@@ -8,7 +8,7 @@ the baseline of handing out the kept arrays themselves (``read_only`` and
 ``ReadOnlyFields.__post_init__`` patched to do nothing, the code before session 34), the two
 alternated round by round; it prints the per-call CPU time of each and their ratio.
 
-    python bench/read_only_records.py [--calls 2000] [--rounds 7]
+    python bench/read_only_records.py [--calls 400] [--rounds 5]
 """
 
 from __future__ import annotations
@@ -58,8 +58,8 @@ _SHIPPED = (lazy_records.read_only, lazy_records.ReadOnlyFields.__post_init__)
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--calls", type=int, default=2000)
-    parser.add_argument("--rounds", type=int, default=7)
+    parser.add_argument("--calls", type=int, default=400)
+    parser.add_argument("--rounds", type=int, default=5)
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     print(f"load average {os.getloadavg()[0]:.2f}; CPU µs per call, best of {args.rounds} "
