@@ -213,3 +213,20 @@ def test_cached_layout_is_read_only(module):
     with pytest.raises(TypeError):
         spots["J"] = (0, 0)
     assert layout(6, 6)["J"] == (6 * 6 + 6 * 6, 6 * 6 + 6 * 6 + 36)
+
+
+@pytest.mark.parametrize("name", ["delta", "gough-stewart"])
+def test_every_assembly_mode_and_jacobian_rates_are_read_only(name):
+    """``fk_all`` (:class:`AssemblyModes`, :class:`PoseSolutions`) and ``jacobian_dot``
+    (:class:`JacobianRates`): the same base class, the same contract."""
+    m = pkmkit.machine(name)
+    x = np.array(m.home_pose, dtype=float)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        records = (m.fk_all(np.array(m.home_q, dtype=float)),
+                   m.jacobian_dot(x, np.full(x.shape, 0.01)))
+    for record in records:
+        fields = _array_fields(record)
+        assert fields
+        for field, value in fields.items():
+            assert not value.flags.writeable, (type(record).__name__, field)
