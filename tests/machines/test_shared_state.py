@@ -159,6 +159,9 @@ def _exercise(m) -> None:
             for f in dataclasses.fields(record):
                 getattr(record, f.name)
         m.ik(np.repeat(np.array(m.home_pose, dtype=float)[None], 70, axis=0))
+    from pkmkit.model.defect_rule import defect_index
+
+    defect_index(m)  # kept on the model (a rod-leg machine's) by the identification
     if m.family == "chain":  # what the batch solver and the identification keep on the model
         from pkmkit.model.chains import cached_defect_twists
         from pkmkit.solve.chain_rows import model_arrays
