@@ -76,7 +76,7 @@ def test_batch_identical_across_formats_chunks_and_pipes(run, tmp_path, command,
     x = _poses(tmp_path)
     m = pkmkit.machine("linear-delta")
     if command == "fk":
-        values = m.ik(np.nan_to_num(x, nan=0.0), full_output=True).q
+        values = m.ik(np.nan_to_num(x, nan=0.0), full_output=True).q.copy()  # records: read-only
         values[5, 1] = np.nan
         values[7] = [0.1, 0.1, 3.0]  # no assembly
         columns = {"q1": values[:, 0], "q2": values[:, 1], "q3": values[:, 2]}

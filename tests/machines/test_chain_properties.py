@@ -46,7 +46,7 @@ def walk(model, chain, values, start=None):
 
 def frame_of(row):
     t = np.eye(4)
-    t[:3, :3] = Rotation.from_rotvec(row[3:]).as_matrix()
+    t[:3, :3] = Rotation.from_rotvec(np.array(row[3:])).as_matrix()  # records: read-only
     t[:3, 3] = row[:3]
     return t
 

@@ -74,7 +74,7 @@ def test_closed_form_agrees_with_the_engine(name):
     else:
         poses = _hexapod_poses(m, 50, seed=5)
     q = m.ik(poses)
-    rot = Rotation.from_rotvec(poses[:, 3:]).as_matrix()
+    rot = Rotation.from_rotvec(np.array(poses[:, 3:])).as_matrix()  # records: read-only
     res = solve_inverse(m.model, poses[:, :3], np.tile(m.home_q, (50, 1)), rotation=rot)
     assert (res.status == Status.OK).all()
     np.testing.assert_allclose(res.u, q, atol=1e-9)

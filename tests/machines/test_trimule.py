@@ -235,7 +235,7 @@ def test_al_kashi_3_29_in_triangle_a4_a2_b2(machine, sample):
 
 def _tool_cardan(direct):
     """The tool frame's Cardan angles in the thesis's x–z–y convention of (3.35)."""
-    return Rotation.from_rotvec(direct.tool_frame[:, 3:]).as_euler("XZY").T
+    return Rotation.from_rotvec(np.array(direct.tool_frame[:, 3:])).as_euler("XZY").T
 
 
 def test_head_orientation_3_35_and_3_36(machine, sample):
@@ -303,8 +303,8 @@ def test_tool_point_3_36(machine, sample):
 
 def test_tool_points_away_from_the_base(machine, sample):
     pose = sample["direct"].pose
-    leg_direction = sample["direct"].platform[:, :3]
-    leg_direction /= np.linalg.norm(leg_direction, axis=1)[:, None]
+    leg_direction = sample["direct"].platform[:, :3]  # read-only: the shared sample's record
+    leg_direction = leg_direction / np.linalg.norm(leg_direction, axis=1)[:, None]
     along = np.einsum("ij,ij->i", pose[:, 3:], leg_direction)
     assert (along >= np.cos(np.radians(45.0)) - 1e-12).all()  # |Q5| ≤ 45°
     assert machine.home_pose[2] == pytest.approx(1.0 + 0.2 + 0.12 + 0.1)

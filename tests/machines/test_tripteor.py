@@ -389,7 +389,8 @@ def test_inverse_then_direct_from_tool_point_and_axis(tripteor):
 
 def tool_rotations(machine, q):
     res = machine.fk(q, full_output=True)
-    return res.pose[:, :3], Rotation.from_rotvec(res.tool_frame[:, 3:]).as_matrix(), res
+    rot = Rotation.from_rotvec(np.array(res.tool_frame[:, 3:]))  # scipy: writeable only
+    return res.pose[:, :3], rot.as_matrix(), res
 
 
 def test_velocity_model_against_finite_differences(tripteor):

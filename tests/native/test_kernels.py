@@ -63,7 +63,7 @@ def _poses(m, n, seed):
     rng = np.random.default_rng(seed)
     q = m.home_q + rng.normal(scale=0.02, size=(n, m.n_actuators))
     with np.errstate(invalid="ignore"):
-        x = m.fk(q, strokes="ignore", full_output=True).pose
+        x = m.fk(q, strokes="ignore", full_output=True).pose.copy()  # records: read-only
     x[~np.isfinite(x).all(axis=1)] = m.home_pose
     quarter = n // 2 - n // 4  # moved by 1e-13 to 1e-3: the rods' spread straddles the tolerance
     scale = 10.0 ** rng.uniform(-13, -3, (quarter, 1))

@@ -102,6 +102,7 @@ def _rod_energy_stiffness(m, x0, q0, kq, k_rod, full, h=1e-5):
     actuator displacements (Schur complement). Rows of the equivalent legs (translating
     platforms) or of every rod (full-pose machines)."""
     model = m.model
+    x0 = np.array(x0, dtype=float)  # a record's pose is read-only, and scipy needs writeable
     if full:
         base, axis, plat = model.rod_base, model.rod_axis, model.rod_platform
         act, kind = model.rod_actuator, model.rod_kind
@@ -322,7 +323,7 @@ def test_reference_point_of_a_machine_given_positions_turns_with_its_platform():
     moved = stiffness(m, x, reference=offset).compliance
     rotvec = np.atleast_2d(m.ik(x, full_output=True, strokes="ignore").pose)[0, 3:]
     assert np.linalg.norm(rotvec) > 1e-3  # the platform is tilted there
-    p = Rotation.from_rotvec(rotvec).apply(offset)
+    p = Rotation.from_rotvec(np.array(rotvec)).apply(offset)  # scipy: writeable only
     oracle = np.zeros((6, 6))
     for i, w in enumerate(np.eye(6)):
         t = c0 @ np.concatenate([w[:3], w[3:] + np.cross(p, w[:3])])

@@ -180,7 +180,7 @@ def coupled_orientation(machine, positions: Any) -> CoupledOrientation:
     if pts.shape[1] != 3:
         raise InputError(f"positions must be (M, 3), got {pts.shape}")
     inv = machine.ik(pts, full_output=True)
-    rotvec = np.asarray(inv.pose)[:, 3:]
+    rotvec = np.array(inv.pose[:, 3:])  # the result's own (the record's fields are read-only)
     ok = np.isfinite(rotvec).all(axis=1)
     tilt = np.full(len(pts), np.nan)
     azimuth = np.full(len(pts), np.nan)

@@ -207,7 +207,8 @@ def _parallel_workspace(m, path: Path, per_axis: int) -> dict[str, Any]:
     from scipy.spatial.transform import Rotation
 
     z = Rotation.from_rotvec(res.platform[ok, 3:]).apply([0.0, 0.0, 1.0])
-    z0 = Rotation.from_rotvec(m.fk(m.home_q, full_output=True).platform[3:]).apply([0, 0, 1.0])
+    home = np.array(m.fk(m.home_q, full_output=True).platform[3:])  # scipy: writeable only
+    z0 = Rotation.from_rotvec(home).apply([0, 0, 1.0])
     tilt = np.degrees(np.arccos(np.clip(z @ z0, -1, 1)))
     fig = Figure(figsize=(12, 4), layout="constrained")
     for panel, (a, b) in enumerate(((0, 1), (0, 2), (1, 2))):

@@ -406,7 +406,7 @@ def expected_tool(res) -> np.ndarray:
     """``(4, 4)`` the tool frame of pkmkit's direct-model result ``res`` (one configuration)."""
     from pkmkit.spatial.rotation import rotation_class
 
-    frame = np.ravel(res.tool_frame)
+    frame = np.array(res.tool_frame, dtype=float).ravel()  # scipy: writeable buffers only
     out = np.eye(4)
     out[:3, :3] = rotation_class().from_rotvec(frame[3:]).as_matrix()
     out[:3, 3] = frame[:3]

@@ -12,7 +12,11 @@ copy (:func:`handed_out`): a new object whose dictionaries, lists, tuples and wr
 copied, so that changing ``m.params`` or an array of ``m.extra_poses`` in place, or any state a
 machine fills lazily on first use, never reaches the template or another caller's machine. The
 immutable parts (the frozen ``model``, the machine's kind, its closed-form kernels' constants,
-which no code writes) are shared. Errors are not kept: a file that fails is read again.
+which no code writes) are shared, and so that no caller can write into them either, every
+array reachable from them is made read-only when the template is kept (:func:`freeze_shared`:
+``pkmkit.machine("x").model.leg_base[0] = 1`` raises ``ValueError`` instead of changing every
+later ``pkmkit.machine("x")``; tests/machines/test_shared_state.py). Errors are not kept: a
+file that fails is read again.
 """
 
 from __future__ import annotations
@@ -51,6 +55,7 @@ def built(key: tuple, build: Callable[[], Any]) -> Any:
             _kept.move_to_end(key)
     if template is None:
         template = build()  # raises: nothing kept
+        freeze_shared(template)
         with _lock:
             _kept[key] = template
             while len(_kept) > MAX_KEPT:
@@ -84,3 +89,37 @@ def _fresh(value: Any) -> Any:
     if kind is tuple:
         return tuple(_fresh(v) for v in value)
     return value
+
+
+def freeze_shared(template: Any) -> None:
+    """Make read-only, in place, every NumPy array :func:`handed_out` shares between the
+    copies of ``template``: the arrays reachable from its attributes that are neither arrays,
+    dictionaries, lists nor tuples (those are copied), through their attributes, dictionaries,
+    lists and tuples."""
+    seen: set[int] = set()
+    for value in template.__dict__.values():
+        _freeze_parts(value, seen, False)
+
+
+def _freeze_parts(value: Any, seen: set[int], shared: bool) -> None:
+    """:func:`freeze_shared` below ``value``: ``shared`` once inside an object handed out as
+    is (every array there is frozen), else only what the copies will share."""
+    kind = type(value)
+    if kind is np.ndarray:
+        if shared and value.flags.writeable:
+            value.flags.writeable = False
+        return
+    if id(value) in seen or kind in (str, bytes, int, float, bool, type(None)):
+        return
+    seen.add(id(value))
+    if kind in (dict, list, tuple):
+        for item in (value.values() if kind is dict else value):
+            _freeze_parts(item, seen, shared)
+        return
+    if not kind.__module__.startswith("pkmkit."):
+        return  # a function, a capsule, a NumPy scalar: nothing a caller writes into
+    parts = getattr(value, "__dict__", {})
+    slots = [getattr(value, name) for name in getattr(kind, "__slots__", ())
+             if hasattr(value, name)]
+    for item in (*parts.values(), *slots):
+        _freeze_parts(item, seen, True)

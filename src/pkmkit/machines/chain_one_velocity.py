@@ -53,6 +53,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, ChainJacobians
+from pkmkit.machines.lazy_records import read_only
 from pkmkit.numerics import jit
 
 #: Largest residual of the inverse solution (its closure and tool rows: m, and rad × the
@@ -186,7 +187,7 @@ class _View:
             return self
         fields = record.__dict__
         start, stop, shape = fields["_pack"].layout[self.name]
-        value = fields[self.name] = fields["_out"][start:stop].reshape(shape)
+        value = fields[self.name] = read_only(fields["_out"][start:stop].reshape(shape))
         return value
 
 
@@ -219,8 +220,26 @@ class _Singular:
         if self.condition:
             fields["condition"] = condition
             return condition
-        values = fields["singular_values"] = out[p.sv_start:stop]
+        values = fields["singular_values"] = read_only(out[p.sv_start:stop])
         return values
+
+
+class _Given:
+    """``q`` of :class:`OnePoseChainJacobians` (a data descriptor: kept in the record's
+    ``__dict__`` by the builders below, handed out read-only: the caller's own array stays
+    writeable, this view of it does not)."""
+
+    __slots__ = ()
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        value = fields["q"] = read_only(fields["q"])
+        return value
+
+    def __set__(self, record: Any, value: Any) -> None:  # the dataclass __init__ (replace)
+        record.__dict__["q"] = value
 
 
 class OnePoseChainJacobians(ChainJacobians):
@@ -235,6 +254,7 @@ class OnePoseChainJacobians(ChainJacobians):
     singular_values = _Singular(False)
     condition = _Singular(True)
     passive_rates = _View("passive_rates")
+    q = _Given()
 
     def __eq__(self, other: object) -> bool:
         return self is other

@@ -137,15 +137,15 @@ def _allocate(part: Any, rows: int, size: int, shared: dict | None = None) -> An
     as lists, records as dicts of their fields (the fields that describe the call left out),
     anything else kept as the first chunk has it."""
     shared = {} if shared is None else shared
-    if isinstance(part, np.ndarray) and id(part) in shared:
-        return shared[id(part)]
+    if isinstance(part, np.ndarray) and _memory(part) in shared:
+        return shared[_memory(part)]
     if isinstance(part, np.ndarray) and part.ndim and part.shape[0] == size:
         # in the chunk's memory order: a (N, n) result the kernels write column by column
         # (a transposed view) is copied column by column, not transposed on every chunk
         order = "F" if part.ndim == 2 and not part.flags.c_contiguous else "C"
-        shared[id(part)] = _Rows(np.empty((rows, *part.shape[1:]), dtype=part.dtype,
-                                          order=order))
-        return shared[id(part)]
+        shared[_memory(part)] = _Rows(np.empty((rows, *part.shape[1:]), dtype=part.dtype,
+                                               order=order))
+        return shared[_memory(part)]
     if isinstance(part, tuple) and len(part) == size:
         return []
     lazy = lazy_parts(part)
@@ -157,6 +157,12 @@ def _allocate(part: Any, rows: int, size: int, shared: dict | None = None) -> An
         return {f.name: _allocate(getattr(part, f.name), rows, size, shared)
                 for f in dataclasses.fields(part) if f.init and f.name not in fixed}
     return part
+
+
+def _memory(arr: np.ndarray) -> tuple:
+    """What identifies an array's elements: two fields handing out views of one array (records
+    hand out read-only views, :func:`pkmkit.machines.lazy_records.read_only`) share a storage."""
+    return arr.__array_interface__["data"][0], arr.shape, arr.strides, arr.dtype.str
 
 
 def _put(store: Any, part: Any, start: int, stop: int, written: dict | None = None) -> None:
@@ -269,7 +275,7 @@ def chunked(method: Callable[..., Any]) -> Callable[..., Any]:
                 views = {name: kwargs[name][start:stop] for name in cut}
                 part = method(self, *(h[start:stop] for h in head), **{**kwargs, **views})
                 if start == 0:  # the caller's out= is the joined q (pose) itself
-                    shared = {} if out is None else {id(views["out"]): _Rows(out)}
+                    shared = {} if out is None else {_memory(views["out"]): _Rows(out)}
                     first, store = part, _allocate(part, rows, stop, shared)
                 _put(store, part, start, stop)
                 del part

@@ -128,6 +128,9 @@ class RodClosedForm:
         set_(self, "slide", (m.leg_kind == SLIDE).astype(float))
         set_(self, "strut", (m.leg_kind == STRUT).astype(float))
         set_(self, "length_sq", m.leg_length**2)
+        for value in vars(self).values():  # shared by every copy of a kept machine: read-only
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
 
     # ------------------------------------------------------------------ inverse
     def inverse(self, x: np.ndarray, branches: np.ndarray) -> np.ndarray:

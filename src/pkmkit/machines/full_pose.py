@@ -130,8 +130,9 @@ def _pose_distance(a: np.ndarray, b: np.ndarray, length: float) -> np.ndarray:
     """Distance between pose rows: position difference plus L × rotation angle (m)."""
     from scipy.spatial.transform import Rotation
 
-    angle = (Rotation.from_rotvec(a[..., 3:].reshape(-1, 3))
-             * Rotation.from_rotvec(b[..., 3:].reshape(-1, 3)).inv()).magnitude()
+    # copies: scipy takes writeable buffers only, and records hand out read-only arrays
+    angle = (Rotation.from_rotvec(np.array(a[..., 3:].reshape(-1, 3)))
+             * Rotation.from_rotvec(np.array(b[..., 3:].reshape(-1, 3))).inv()).magnitude()
     return np.linalg.norm(a[..., :3] - b[..., :3], axis=-1) + length * angle.reshape(
         a.shape[:-1])
 

@@ -67,6 +67,9 @@ class FullPoseForms:
         set_(self, "crank_offset", np.where(crank, along, 0.0))
         set_(self, "length_sq", m.rod_length**2)
         set_(self, "rod_branch", m.leg_branch[m.rod_leg])
+        for value in vars(self).values():  # shared by every copy of a kept machine: read-only
+            if isinstance(value, np.ndarray):
+                value.flags.writeable = False
 
     # ------------------------------------------------------------------ geometry
     def platform_points(self, x: np.ndarray) -> np.ndarray:

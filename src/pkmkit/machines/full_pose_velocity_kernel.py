@@ -22,7 +22,9 @@ takes the batch path).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from functools import lru_cache
+from types import MappingProxyType
 
 import numpy as np
 from numba import njit
@@ -35,7 +37,7 @@ _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache"
 
 
 @lru_cache(maxsize=64)
-def layout(m: int, n: int) -> dict[str, tuple[int, int]]:
+def layout(m: int, n: int) -> Mapping[str, tuple[int, int]]:
     """``name -> (start, stop)`` of each field in the output vector of :func:`velocity_one`."""
     sizes = [("A", 6 * m), ("B", m * n), ("J", 6 * n), ("J_inv", 6 * n), ("sv", min(6, n)),
              ("sv_t", min(3, n)), ("sv_r", min(3, n)), ("condition", 1), ("det_A", 1),
@@ -44,7 +46,7 @@ def layout(m: int, n: int) -> dict[str, tuple[int, int]]:
     for name, size in sizes:
         out[name] = (start, start + size)
         start += size
-    return out
+    return MappingProxyType(out)  # cached: every caller reads the same mapping
 
 
 @njit(**_OPTIONS)

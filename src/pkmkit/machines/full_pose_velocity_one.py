@@ -31,8 +31,9 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from functools import lru_cache
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -210,7 +211,7 @@ def _native_twin(geom: np.ndarray) -> Callable[..., Any] | None:
 
 
 @lru_cache(maxsize=64)
-def layout(m: int, n: int) -> dict[str, tuple[int, int]]:
+def layout(m: int, n: int) -> Mapping[str, tuple[int, int]]:
     """``name -> (start, stop)`` of each field in the output vector of the velocity kernels
     (:func:`pkmkit.machines.full_pose_velocity_kernel.layout`, without importing Numba)."""
     sizes = [("A", 6 * m), ("B", m * n), ("J", 6 * n), ("J_inv", 6 * n), ("sv", min(6, n)),
@@ -220,7 +221,7 @@ def layout(m: int, n: int) -> dict[str, tuple[int, int]]:
     for name, size in sizes:
         out[name] = (start, start + size)
         start += size
-    return out
+    return MappingProxyType(out)  # cached: every caller reads the same mapping
 
 
 def one_pose_class(base: type) -> type:

@@ -9,6 +9,42 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
+
+def read_only(value: Any) -> Any:
+    """``value`` as a record hands it out: a writeable NumPy array becomes a read-only *view*
+    of it (no copy; the array the record keeps, and any array of the caller's it may share
+    memory with, stay as they were), anything else is returned as is. A record's field is
+    what every later read, and every field derived from it afterwards, sees: writing into it
+    in place (``rec.J[...] = 0``) raises ``ValueError`` instead of changing them
+    (docs/kinematics.md, "Records are read-only"). Every record whose fields are computed when
+    read serves them through here (:func:`lazy_record_class`,
+    :class:`pkmkit.machines.velocity.LazyJacobians` and its one-pose subclass)."""
+    if type(value) is np.ndarray and value.flags.writeable:
+        value = value.view()
+        value.setflags(write=False)  # half the cost of value.flags.writeable = False
+    return value
+
+
+class ReadOnlyFields:
+    """Base of the frozen record dataclasses (:mod:`pkmkit.machines.results`): each array field
+    given at construction is kept as a read-only view (:func:`read_only`), so that no record
+    hands out an array a caller may write into; unpickled or copied, likewise. The lazy
+    subclasses (:func:`lazy_record_class`) serve their fields through :func:`read_only` when
+    read instead."""
+
+    __slots__ = ()
+
+    def __post_init__(self) -> None:
+        fields = self.__dict__
+        for name, value in fields.items():
+            if type(value) is np.ndarray and value.flags.writeable:
+                fields[name] = read_only(value)
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update({name: read_only(value) for name, value in state.items()})
+
 
 def lazy_record_class(base: type, prefix: str, describe: Callable[[Any], str],
                       doc: str) -> type:
@@ -25,9 +61,9 @@ def lazy_record_class(base: type, prefix: str, describe: Callable[[Any], str],
 
     def _get(self, name: str) -> Any:
         cache = self._cache
-        if name not in cache:
-            cache[name] = self._evaluation.field(name)
-        return cache[name]
+        value = cache[name] if name in cache else self._evaluation.field(name)
+        value = cache[name] = read_only(value)  # kept read-only: every later read sees it
+        return value
 
     def known_fields(self) -> dict[str, Any]:
         """The fields given at construction or computed so far, by name: the record's own

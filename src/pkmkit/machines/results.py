@@ -8,6 +8,10 @@ One record type per question, whatever the family: ``ik(..., full_output=True)``
 full_output=True)`` a :class:`DirectResult`, ``jacobian`` a :class:`VelocityModel`
 (:class:`Jacobians` for rod legs, a joint-chain machine's ``ChainJacobians``), ``jacobian_dot``
 a :class:`JacobianRates`.
+
+Every array a record hands out is read-only (:class:`~pkmkit.machines.lazy_records.
+ReadOnlyFields`, a view: no copy): writing into a field raises ``ValueError`` instead of
+changing what later reads, and fields derived afterwards, see (docs/kinematics.md).
 """
 
 from __future__ import annotations
@@ -16,6 +20,8 @@ from dataclasses import dataclass
 from enum import IntFlag
 
 import numpy as np
+
+from pkmkit.machines.lazy_records import ReadOnlyFields
 
 
 class Singularity(IntFlag):
@@ -37,7 +43,7 @@ class Singularity(IntFlag):
 
 
 @dataclass(frozen=True)
-class InverseResult:
+class InverseResult(ReadOnlyFields):
     """Inverse kinematics of N poses.
 
     Attributes:
@@ -76,7 +82,7 @@ class InverseResult:
 
 
 @dataclass(frozen=True)
-class DirectResult:
+class DirectResult(ReadOnlyFields):
     """Direct kinematics of N actuator vectors in one requested assembly mode.
 
     Attributes:
@@ -107,7 +113,7 @@ class DirectResult:
 
 
 @dataclass(frozen=True)
-class AssemblyModes:
+class AssemblyModes(ReadOnlyFields):
     """Every real assembly mode of N actuator vectors.
 
     Attributes:
@@ -134,7 +140,7 @@ class AssemblyModes:
         return self.valid.sum(axis=-1)
 
 
-class VelocityModel:
+class VelocityModel(ReadOnlyFields):
     """What every velocity-model record shares (``machine.jacobian(...)`` of any family).
 
     Attributes (fields of the concrete records):
@@ -210,7 +216,7 @@ class Jacobians(VelocityModel):
 
 
 @dataclass(frozen=True)
-class JacobianRates:
+class JacobianRates(ReadOnlyFields):
     """Time derivatives of the velocity model along a motion (N samples).
 
     Attributes:
@@ -227,7 +233,7 @@ class JacobianRates:
 
 
 @dataclass(frozen=True)
-class PoseSolutions:
+class PoseSolutions(ReadOnlyFields):
     """Every real assembly mode of N actuator vectors of a full-pose machine (up to K).
 
     Attributes:

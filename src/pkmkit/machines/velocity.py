@@ -22,6 +22,7 @@ from functools import cached_property
 import numpy as np
 
 from pkmkit.machines.closed_form import RodClosedForm
+from pkmkit.machines.lazy_records import read_only
 from pkmkit.machines.results import Jacobians, Singularity
 from pkmkit.numerics import jit, small
 from pkmkit.numerics.linalg import condition_number
@@ -207,10 +208,13 @@ class LazyJacobians(Jacobians):
 
     def _get(self, name: str, compute):
         cache = self._cache
-        if name not in cache:
+        if name in cache:
+            value = cache[name]
+        else:
             value = compute(self._evaluation)
-            cache[name] = value[0] if self._single and np.ndim(value) else value
-        return cache[name]
+            value = value[0] if self._single and np.ndim(value) else value
+        value = cache[name] = read_only(value)  # kept read-only: every later read sees it
+        return value
 
     def __repr__(self) -> str:
         ev = self._evaluation

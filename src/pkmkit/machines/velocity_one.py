@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from pkmkit.machines.closed_form import MAX_ABS, RodClosedForm
+from pkmkit.machines.lazy_records import read_only
 from pkmkit.machines.results import Singularity
 from pkmkit.machines.velocity import NEAR_PARALLEL, LazyJacobians, VelocityEvaluation
 from pkmkit.model.rods import CRANK, SLIDE
@@ -514,16 +515,18 @@ def _one_field(name: str) -> property:
 
     def get(self):
         cache = self._cache
-        if name in cache:
-            return cache[name]
+        if name in cache:  # computed, or given (dataclasses.replace): read-only once read
+            value = cache[name] = read_only(cache[name])
+            return value
         state = self._state  # a rod_jacobian_one state (native_record): one C call
         if state is not None and code is not None:
             value = self._field(state, code)
             if value is not None:
+                if type(value) is np.ndarray:  # a new array of the C call's: frozen, no view
+                    value.setflags(write=False)
                 cache[name] = value
                 return value
-        value = self._evaluation.answer(name, code)
-        cache[name] = value
+        value = cache[name] = read_only(self._evaluation.answer(name, code))
         return value
 
     return property(get, doc=f"``{name}`` of the single pose (computed when first read)")

@@ -331,8 +331,8 @@ def cached_defect_twists(model: JointChainModel) -> np.ndarray:
     model and kept on it."""
     cached = model.__dict__.get("_local_defect_twists")
     if cached is None:
-        cached = defect_twists(model.frames, model.defect_index, model.nominal_frames,
-                               model.defects)
+        cached = _frozen(defect_twists(model.frames, model.defect_index, model.nominal_frames,
+                                       model.defects))  # kept on the (shared) model
         object.__setattr__(model, "_local_defect_twists", cached)
     return cached
 

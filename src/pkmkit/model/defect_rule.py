@@ -60,6 +60,9 @@ def defect_index(machine):
     cached = model.__dict__.get("_defect_index")
     if cached is None:
         cached = rod_defect_index(model)
+        for value in vars(cached).values():  # kept on the model every load shares: read-only
+            if isinstance(value, np.ndarray):
+                value.setflags(write=False)
         object.__setattr__(model, "_defect_index", cached)
     return cached
 

@@ -156,6 +156,8 @@ def model_arrays(model: JointChainModel, unknown_variables: np.ndarray) -> tuple
         offsets = np.cumsum([0] + [len(leg) for leg in model.legs]).astype(np.int64)
         cached = (np.ascontiguousarray(model.frames, dtype=float), types, evar, elements,
                   offsets)
+        for arr in cached:  # kept on the model, which every copy of a machine shares
+            arr.flags.writeable = False
         object.__setattr__(model, "_kernel_arrays", cached)
     position = np.full(model.n_variables, -1, dtype=np.int64)
     position[np.asarray(unknown_variables, dtype=int)] = 6 + np.arange(len(unknown_variables))

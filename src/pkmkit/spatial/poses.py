@@ -100,7 +100,7 @@ def pose_from_angles(position: Any, angles: Any, convention: str = DEFAULT_CONVE
 def pose_parts(pose: Any) -> tuple[np.ndarray, Rotation]:
     """``(positions (N, 3) or (3,), Rotation)`` of pose rows ``(N, 6)`` or ``(6,)``."""
     rows, single = _pose_rows(pose)
-    rot = rotation_class().from_rotvec(rows[:, 3:])
+    rot = rotation_class().from_rotvec(np.array(rows[:, 3:]))  # scipy: writeable buffers only
     if single:
         return rows[0, :3].copy(), rot[0]
     return rows[:, :3].copy(), rot
