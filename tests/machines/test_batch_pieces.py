@@ -64,6 +64,6 @@ def test_every_split_gives_each_row_its_own_answer(case, alone, threads, piece, 
     out = np.full((ROWS, m.n_actuators), 1e300)
     out[::2] = np.nan  # stale garbage: every row must be written
     record = m.ik(x, strokes="ignore", full_output=True, out=out)
-    assert record.q is out
+    assert np.shares_memory(record.q, out) and record.q.shape == out.shape  # a read-only view
     assert bits(out) == bits(q_alone)
     assert (record.status == status_alone).all()
