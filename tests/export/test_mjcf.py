@@ -43,7 +43,7 @@ def _calibrated(machine, seed: int):
 
 def _points(machine, pose: np.ndarray) -> np.ndarray:
     """Platform joint centres (rods, 3) of a pose (m): one metric for every machine."""
-    rot = (Rotation.from_rotvec(pose[3:]).as_matrix() if len(pose) == 6 else np.eye(3))
+    rot = (Rotation.from_rotvec(np.array(pose[3:])).as_matrix() if len(pose) == 6 else np.eye(3))
     return pose[:3] + machine.model.rod_platform @ rot.T
 
 
