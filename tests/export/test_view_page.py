@@ -1,0 +1,63 @@
+"""The view's page without Plotly's validation of every frame (export/view.py, session 35):
+``view_html`` and ``view_fragment`` build the slider frames as the dictionaries Plotly's
+validation makes; the oracle is the page of ``view_figure``'s figure, every trace and frame of
+which goes through ``go.Scatter3d`` / ``go.Frame`` — the same bytes, for each family and option
+(a calibration's vectors, a workspace surface, a tool path, a six-axis machine first shown off
+home; a joint chain's frames are built by the same code from its skeleton)."""
+
+from __future__ import annotations
+
+import numpy as np
+import plotly.graph_objects as go
+import pytest
+from _plotly_utils.utils import to_typed_array_spec
+
+import pkmkit
+from pkmkit.export import view
+
+PROGRAM = "G21 G90\nG1 X0 Y0 Z0 F600\nG1 X40 Y0 Z0\nG1 X400 Y0 Z0\n"
+
+
+def _case(name: str):
+    if name == "calibrated":
+        m = pkmkit.machine("linear-delta")
+        return m, {"calibrated": m.with_params(R=0.7002, r=0.1499), "steps": 3,
+                   "rigid_free": True}
+    if name == "workspace-path":
+        return pkmkit.machine("orthoglide"), {"workspace": True, "resolution": 5,
+                                              "gcode": PROGRAM, "steps": 2}
+    m = pkmkit.machine("gough-stewart")  # six axes, first shown off home
+    q = np.array(m.home_q, dtype=float)
+    q[0] += 0.01
+    return m, {"q": q, "steps": 2}
+
+
+@pytest.mark.parametrize("case", ["calibrated", "workspace-path", "six-axis-off-home"])
+def test_the_page_and_fragment_are_the_validated_figures_byte_for_byte(case):
+    machine, options = _case(case)
+    fig, shown = view.view_figure(machine, **options)
+    page, content = view.view_html(machine, **options)
+    fragment, again = view.view_fragment(machine, **options)
+    assert content == shown == again
+    assert sum(content.steps.values()) == len(fig.frames) > 0
+    assert page == view._page(fig, full_html=True)
+    assert fragment == view._page(fig, full_html=False)
+
+
+@pytest.mark.parametrize("value", [
+    np.linspace(-1.5, 2.5, 7),
+    np.arange(12.0).reshape(4, 3)[:, 1],          # a column: not contiguous
+    np.arange(5),                                  # integers: to_dict() narrows them
+    np.ones((2, 3)),
+    [np.float64(3.25)],                            # the tool point's lists
+])
+def test_a_coordinate_is_written_as_plotlys_validation_and_to_dict_write_it(value):
+    validated = go.Figure(go.Scatter3d(x=value)).to_dict()["data"][0]["x"]
+    ours = view._coerced(value)
+    if isinstance(ours, np.ndarray):
+        ours = to_typed_array_spec(ours)
+    assert type(ours) is type(validated)
+    if isinstance(ours, dict):
+        assert ours == validated
+    else:
+        assert ours == validated and all(type(v) is float for v in ours)
