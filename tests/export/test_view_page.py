@@ -61,3 +61,25 @@ def test_a_coordinate_is_written_as_plotlys_validation_and_to_dict_write_it(valu
         assert ours == validated
     else:
         assert ours == validated and all(type(v) is float for v in ours)
+
+
+def test_a_frame_trace_is_the_validated_trace_whatever_the_traces_before_it():
+    """Traces that differ in one style argument only (a name, a legend flag, a colour, a
+    width: a machine file with more legs than colours has two legs of one colour) are each
+    the trace ``go.Scatter3d`` validates, in any order and after any other."""
+    from _plotly_utils.utils import convert_to_base64
+
+    rng = np.random.default_rng(3)
+    base = {"mode": "lines", "line": {"color": "#1f77b4", "width": 5}, "name": "leg 1",
+            "legendgroup": "leg 1", "showlegend": True, "hoverinfo": "name"}
+    styles = [base, {**base, "name": "leg 7"},
+              {**base, "showlegend": False}, {**base, "line": {"color": "#ff7f0e", "width": 5}},
+              {**base, "line": {"color": "#1f77b4", "width": 8}}]
+    maker = view._FrameTraces()
+    for k in [0, 1, 2, 0, 3, 4, 1, 2, 4, 3]:
+        p = rng.standard_normal((4, 3))
+        ours = [maker.Scatter3d(x=p[:, 0], y=p[:, 1], z=p[:, 2], **styles[k])]
+        convert_to_base64(ours)
+        fig = go.Figure(go.Scatter3d(x=p[:, 0], y=p[:, 1], z=p[:, 2], **styles[k]))
+        assert ours[0] == fig.to_dict()["data"][0]
+        assert list(ours[0]) == list(fig.to_dict()["data"][0])   # the keys' order too
