@@ -18,6 +18,7 @@ contains the true one; it is then checked to be compatible at configurations dra
 
 from __future__ import annotations
 
+import importlib.util
 import random
 from functools import cache
 
@@ -26,15 +27,48 @@ import pytest
 import pkmkit
 from pkmkit.geometric_errors.compatibility import compatibility
 
-sp = pytest.importorskip("sympy")
-from sympy.polys.matrices import DomainMatrix  # noqa: E402
+if importlib.util.find_spec("sympy") is None:
+    pytest.skip("could not import 'sympy'", allow_module_level=True)
 
-#: Table 5.6's dimensions as used by the preset (m), exact.
-L = sp.Rational("1.0006254")
-SMALL_L = sp.Rational("0.38986")
+
+class _Lazy:
+    """A module or class imported at its first use, not when the file is collected: every
+    pytest-xdist worker collects this file and one runs it, and SymPy's import costs ≈ 0.4 s
+    of CPU (docs/testing.md, "Seventh round")."""
+
+    def __init__(self, load):
+        self._load = load
+
+    def __getattr__(self, name):
+        if name.startswith("_"):  # pytest's collection asks for __test__, _pytestfixturefunction
+            raise AttributeError(name)
+        return getattr(self._load(), name)
+
+
+def _sympy():
+    import sympy
+
+    return sympy
+
+
+def _domain_matrix():
+    from sympy.polys.matrices import DomainMatrix
+
+    return DomainMatrix
+
+
+sp = _Lazy(_sympy)
+DomainMatrix = _Lazy(_domain_matrix)
+
+#: Table 5.6's dimensions as used by the preset (m), exact: the decimal texts of ``L`` and ``l``.
+L_TEXT, SMALL_L_TEXT = "1.0006254", "0.38986"
 PASSIVE = ("psi1", "theta1", "phi1", "psi3", "theta3", "phi3")
-#: Loop 1–3's elements after the reference joint 11: label, axis, point (Table 4.2), kind.
-ELEMENTS = (("21", (1, 0, 0), (0, 0, 0), "R"), ("41", (1, 0, 0), (0, 0, 0), "P"),
+
+
+def _elements_table():
+    """Loop 1–3's elements after the reference joint 11: label, axis, point (Table 4.2), kind."""
+    L, SMALL_L = sp.Rational(L_TEXT), sp.Rational(SMALL_L_TEXT)
+    return (("21", (1, 0, 0), (0, 0, 0), "R"), ("41", (1, 0, 0), (0, 0, 0), "P"),
             ("51", (0, 1, 0), (0, 0, 0), "R"), ("13", (0, -1, 0), (0, -L, 0), "R"),
             ("23", (1, 0, 0), (0, 0, 0), "R"), ("43", (1, 0, 0), (0, 0, 0), "P"),
             ("53", (0, 1, 0), (0, 0, 0), "R"), ("63", (0, 0, 1), (SMALL_L, 0, 0), "F"))
@@ -94,7 +128,8 @@ def element(label: str, axis, point, kind: str):
 
 @cache
 def elements():
-    return {label: element(label, axis, point, kind) for label, axis, point, kind in ELEMENTS}
+    return {label: element(label, axis, point, kind)
+            for label, axis, point, kind in _elements_table()}
 
 
 def defect_names() -> list[str]:
@@ -255,7 +290,8 @@ def test_loop_1_3_compatibility_in_exact_arithmetic_agrees_with_the_numeric_rank
     loop = [n for n in numeric.forced_zero if n in names]
     assert forced == loop == list(numeric.forced_zero)        # all forced defects are in loop 1–3
     conditions = _conditions(reduced, pivots, names)
-    assert conditions == [{"dK21": 1, "dc63": 1 / L}, {"dK23": 1, "dc63": 1 / L}]
+    inverse = 1 / sp.Rational(L_TEXT)
+    assert conditions == [{"dK21": 1, "dc63": inverse}, {"dK23": 1, "dc63": inverse}]
     numeric_terms = [c.terms for c in numeric.conditions]
     assert [list(t) for t in numeric_terms] == [list(c) for c in conditions]
     for terms, exact_terms in zip(numeric_terms, conditions, strict=True):
