@@ -19,7 +19,6 @@ from pkmkit.analysis.criteria import Criteria
 from pkmkit.analysis.evaluation import PoseEvaluation
 from pkmkit.analysis.grids import make_grid
 from pkmkit.analysis.workspace import _connected_part, compute_workspace
-from pkmkit.plot.maps import _CLASSES, classify
 from pkmkit.progress import progress_display, tracked
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "docs" / "examples"
@@ -244,6 +243,8 @@ def test_a_chain_file_in_a_plane_by_flood_is_the_whole_grid():
     fl, whole = _compare(m, grid)
     assert fl.points_evaluated < grid.size // 2
     # a figure draws the points never evaluated as such, not as failing a criterion
+    from pkmkit.plot.maps import _CLASSES, classify  # Matplotlib: imported when run, not collected
+
     classes, names = classify(fl), [name for name, _ in _CLASSES]
     assert (classes[~fl.evaluated] == names.index("not evaluated")).all()
     assert (classes[fl.evaluated] == classify(whole)[fl.evaluated]).all()
