@@ -83,3 +83,20 @@ def test_a_frame_trace_is_the_validated_trace_whatever_the_traces_before_it():
         fig = go.Figure(go.Scatter3d(x=p[:, 0], y=p[:, 1], z=p[:, 2], **styles[k]))
         assert ours[0] == fig.to_dict()["data"][0]
         assert list(ours[0]) == list(fig.to_dict()["data"][0])   # the keys' order too
+
+
+def test_a_style_holding_an_array_is_validated_every_time():
+    """Styles are told apart by their JSON text; one that has none (a colour per point, a NumPy
+    width) is not kept, so two such traces never share a style however alike they print."""
+    from _plotly_utils.utils import convert_to_base64
+
+    maker = view._FrameTraces()
+    x = np.zeros(1200)
+    for k in range(3):
+        colours = np.zeros(1200)
+        colours[600] = k                       # the same repr, '...' in its middle
+        for style in ({"marker": {"color": colours}}, {"line": {"width": np.float64(2 + k)}}):
+            ours = [maker.Scatter3d(x=x, y=x, z=x, mode="markers", **style)]
+            convert_to_base64(ours)
+            assert ours[0] == go.Figure(go.Scatter3d(x=x, y=x, z=x, mode="markers",
+                                                     **style)).to_dict()["data"][0]

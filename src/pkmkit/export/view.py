@@ -12,6 +12,7 @@ Lengths are drawn in millimetres.
 from __future__ import annotations
 
 import base64
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -371,7 +372,10 @@ class _FrameTraces:
 
     def Scatter3d(self, **kwargs: Any) -> dict[str, Any]:  # Plotly's name
         style = {k: v for k, v in kwargs.items() if k not in self._COORDS}
-        key = repr(sorted(style.items()))
+        try:  # a style holding an array or a NumPy scalar is validated every time
+            key = json.dumps(style, sort_keys=True)
+        except TypeError:
+            return self._go.Scatter3d(**kwargs).to_plotly_json()
         kept = self._styles.get(key)
         if kept is None:
             kept = self._styles[key] = self._go.Scatter3d(**kwargs).to_plotly_json()
