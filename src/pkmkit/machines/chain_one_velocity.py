@@ -74,8 +74,9 @@ class VelocityPack:
     leg actuators' places in J, the leg owning each column alone (−1: the platform's and the
     joints shared by legs), and the output buffer's layout."""
 
-    __slots__ = ("call", "expected", "fusable", "ik_jacobian", "jacobian", "layout", "n", "n_p",
-                 "pack", "rank", "size", "sv_start", "sv_stop")
+    __slots__ = ("call", "condition_at", "expected", "fusable", "ik_jacobian", "jacobian",
+                 "layout", "n", "n_p", "pack", "rank", "records", "rows", "size", "sv_start",
+                 "sv_stop")
 
     def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
         arguments = pack_arguments(m) if arguments is None else arguments
@@ -87,7 +88,9 @@ class VelocityPack:
         # asked on a machine object once one of its records' condition or singular values was
         # read (_Singular: the machine's own _FUSED entry, never this pack, which copies of
         # the machine share)
-        self.fusable = "singular=False" in (getattr(self.ik_jacobian, "__doc__", "") or "")
+        doc = getattr(self.ik_jacobian, "__doc__", "") or ""
+        self.fusable = "singular=False" in doc
+        self.records = "record=False" in doc  # the record layout (rows; _fused)
         n = int(np.count_nonzero(m.model.actuated))
         k = min(6, n)
         self.n, self.n_p = n, len(m.passive_variables)
@@ -99,6 +102,14 @@ class VelocityPack:
                        "condition": (12 * n + k, None, None),
                        "passive_rates": (12 * n + k + 1, self.size, (self.n_p, n))}
         self.sv_start, self.sv_stop = 12 * n, 12 * n + k  # the singular values; condition
+        # the record layout (chain_one_ik_jacobian(..., record=True)): a read-only (R, n) array
+        # of rows J, J_homogeneous, the singular values and the condition (s rows), the
+        # passive rates, q; each field one index of it (OnePoseChainJacobians)
+        s = 1 if k < n else 2
+        self.condition_at = divmod(12 * n + k, n)
+        self.rows = {"J": slice(0, 6), "J_homogeneous": slice(6, 12),
+                     "singular_values": (12, slice(0, k)),
+                     "passive_rates": slice(12 + s, 12 + s + self.n_p), "q": 12 + s + self.n_p}
 
     def __reduce__(self) -> tuple:
         """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
@@ -249,19 +260,72 @@ class _Given:
         return value
 
 
+class _Row:
+    """A field of :class:`OnePoseChainJacobians` (``J``, ``J_homogeneous``, ``passive_rates``,
+    ``q``): one index of the record's read-only array (the pack's ``rows``), a view read-only
+    as the array is, made at its first read and kept in the record's ``__dict__`` (a non-data
+    descriptor: later reads are plain attribute reads)."""
+
+    __slots__ = ("name",)
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        value = fields[self.name] = fields["_out"][fields["_pack"].rows[self.name]]
+        return value
+
+
+class _RowSingular:
+    """``singular_values`` or ``condition`` of :class:`OnePoseChainJacobians` (as
+    :class:`_Singular`, on the record layout): where the record's C call did not run the
+    singular stage (the condition NaN), the stage runs on a writeable copy of the record's
+    array (the one the fields read so far are views of stays as it is: read-only, the same
+    entries but the stage's), which becomes the record's array, read-only; and marks the
+    record's machine object (:data:`_FUSED`)."""
+
+    __slots__ = ("condition",)
+
+    def __init__(self, condition: bool) -> None:
+        self.condition = condition
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        p, out = fields["_pack"], fields["_out"]
+        condition = out[p.condition_at]
+        if condition != condition:  # NaN: not computed in the record's call
+            out = out.copy()
+            p.call(p.pack, None, out.reshape(-1))
+            out.setflags(write=False)
+            fields["_out"], condition = out, out[p.condition_at]
+            if p.fusable:  # this machine object's later calls: the stage in their C call
+                fields["_owner"][_FUSED] = True
+        if self.condition:
+            fields["condition"] = condition
+            return condition
+        values = fields["singular_values"] = out[p.rows["singular_values"]]
+        return values
+
+
 class OnePoseChainJacobians(ChainJacobians):
     """A joint-chain machine's velocity model of one pose (this module): ``q``, ``status`` and
-    the ranks given; ``J``, ``J_homogeneous``, ``passive_rates`` views of the kernel's one
-    output array made when first read, ``singular_values`` and ``condition`` computed then (the
+    the ranks given; ``J``, ``J_homogeneous``, ``passive_rates`` and ``q`` views of the one
+    read-only array of the fused C call (the record layout: one index each, made when first
+    read), ``singular_values`` and ``condition`` computed then where the call did not (the
     singular stage). Equality is identity (comparing would compute every field); pickled, it
     becomes the plain :class:`~pkmkit.machines.chain_velocity_record.ChainJacobians`."""
 
-    J = _View("J")
-    J_homogeneous = _View("J_homogeneous")
-    singular_values = _Singular(False)
-    condition = _Singular(True)
-    passive_rates = _View("passive_rates")
-    q = _Given()
+    J = _Row("J")
+    J_homogeneous = _Row("J_homogeneous")
+    singular_values = _RowSingular(False)
+    condition = _RowSingular(True)
+    passive_rates = _Row("passive_rates")
+    q = _Row("q")
 
     def __eq__(self, other: object) -> bool:
         return self is other
@@ -274,6 +338,20 @@ class OnePoseChainJacobians(ChainJacobians):
     def __reduce__(self) -> tuple:  # pickled as the plain record, every field computed
         return ChainJacobians, tuple(getattr(self, name)
                                      for name in ChainJacobians.__dataclass_fields__)
+
+
+class FlatOnePoseChainJacobians(OnePoseChainJacobians):
+    """:class:`OnePoseChainJacobians` on ``chain_one_jacobian``'s flat output array (the
+    records of :func:`record`, :func:`at_solution` and of a build without the record layout):
+    ``J``, ``J_homogeneous``, ``passive_rates`` read-only views of its slices, ``q`` the
+    actuators given (a read-only view made at its first read)."""
+
+    J = _View("J")
+    J_homogeneous = _View("J_homogeneous")
+    singular_values = _Singular(False)
+    condition = _Singular(True)
+    passive_rates = _View("passive_rates")
+    q = _Given()
 
 
 _NEW = object.__new__
@@ -294,7 +372,7 @@ def record(m: Any, q: Any, u: Any, residual: float, tol: float, margin: float,
         else p.jacobian(p.pack, u, margin * tol)  # the singular values when read (_Singular)
     if out is None or out is False:  # the bound does not clear; outside the legs' home modes
         return out
-    one = _NEW(OnePoseChainJacobians)
+    one = _NEW(FlatOnePoseChainJacobians)
     fields = one.__dict__
     fields["_out"], fields["_pack"], fields["status"] = out, p, _OK
     fields["_q"] = q if type(q) is np.ndarray else np.array(q)
@@ -322,7 +400,7 @@ def at_solution(m: Any, solved: tuple, tol: float) -> Any:
         else p.jacobian(p.pack, solved[1], threshold)
     if out is None or out is False:
         return out
-    one = _NEW(OnePoseChainJacobians)
+    one = _NEW(FlatOnePoseChainJacobians)
     fields = one.__dict__
     fields["_out"], fields["_pack"], fields["status"], fields["_q"] = out, p, _OK, solved[0]
     fields["closure_rank"], fields["expected_rank"] = p.rank, p.expected
@@ -371,6 +449,16 @@ def _fused(p: VelocityPack, c: Any, x: Any, tol: float, owner: dict) -> Any:
     machine object whose ``__dict__`` is ``owner`` (its :data:`_FUSED` entry: the singular
     stage in the call)."""
     threshold = BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND)
+    if p.records:  # the record layout: the array alone, or None / False
+        out = p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD, _FUSED in owner,
+                            True)
+        if type(out) is not _ARRAY:
+            return out
+        one = _NEW(OnePoseChainJacobians)
+        fields = one.__dict__
+        fields["_out"], fields["_pack"], fields["status"], fields["_owner"] = out, p, _OK, owner
+        fields["closure_rank"], fields["expected_rank"] = p.rank, p.expected
+        return one
     got = p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD, True) \
         if _FUSED in owner else p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD)
     if got is None:
@@ -378,7 +466,7 @@ def _fused(p: VelocityPack, c: Any, x: Any, tol: float, owner: dict) -> Any:
     q, out = got
     if out is None or out is False:
         return out
-    one = _NEW(OnePoseChainJacobians)
+    one = _NEW(FlatOnePoseChainJacobians)
     fields = one.__dict__
     fields["_out"], fields["_pack"], fields["status"], fields["_q"] = out, p, _OK, q
     fields["closure_rank"], fields["expected_rank"], fields["_owner"] = p.rank, p.expected, owner
@@ -388,6 +476,7 @@ def _fused(p: VelocityPack, c: Any, x: Any, tol: float, owner: dict) -> Any:
 _native_now = jit.native_kernels_now
 _PACKED = "_chain_one_native"  # the key of chain_one_native.packed's pack on the machine
 _INF = float("inf")
+_ARRAY = np.ndarray
 #: The key, in a machine object's ``__dict__``, that asks its one-pose calls for the singular
 #: stage inside their C call (set by :class:`_Singular` on a fusable build; per machine object:
 #: a copy of the machine has its own ``__dict__``).

@@ -37,7 +37,7 @@ extern const char pk_chain_velocity_pack_doc[], pk_chain_one_velocity_doc[];
 extern const char pk_chain_one_jacobian_doc[];
 PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
                                 const double *given, const int64_t *given_position,
-                                ptrdiff_t given_n, int singular);
+                                ptrdiff_t given_n, int singular, const double *q);
 
 /* svd.c: the singular values of one small matrix (k <= 6), round-robin Jacobi */
 void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out);
@@ -310,7 +310,8 @@ static void singular_stage(chain_velocity *v, double *out) {
 }
 
 static double velocity(chain_velocity *v, const double *u, double *out, int singular,
-                       const double *given, const int64_t *given_position, ptrdiff_t given_n) {
+                       const double *given, const int64_t *given_position, ptrdiff_t given_n,
+                       ptrdiff_t rates_at) { /* the passive rates at out + rates_at */
     const pk_chain *c = &v->c;
     const ptrdiff_t n = v->n_act, n_loop = v->n_loop, n_u = v->n_u;
     for (ptrdiff_t k = 0; k < v->n_slides; k++)
@@ -341,7 +342,8 @@ static double velocity(chain_velocity *v, const double *u, double *out, int sing
     for (int i = 0; i < 3; i++) point[i] = pos[i] + v->tool * rot[3 * i + 2];
     double *jac = out, *j_h = out + 6 * n;
     ptrdiff_t k = n < 6 ? n : 6;
-    double *sv = j_h + 6 * n, *rates = sv + k + 1;
+    double *sv = j_h + 6 * n, *rates = out + rates_at;
+    for (double *pad = sv + k + 1; pad < rates; pad++) *pad = 0.0; /* the record layout's */
     if (n_loop + n_twist < n) /* an actuator without a column below (none on these machines) */
         for (ptrdiff_t i = 0; i < 6 * n; i++) jac[i] = 0.0;
     for (ptrdiff_t i = 0; i < (n_u - 6) * n; i++) rates[i] = 0.0;
@@ -546,7 +548,8 @@ static double *take_out(const chain_velocity *v, held_buffers *held, PyObject *o
     if (!out) return NULL;
     ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
     Py_ssize_t need = 12 * n + k + 1 + (v->n_u - 6) * n;
-    if (extent(held, 0, 0) != need) {
+    if (extent(held, 0, 0) != need && extent(held, 0, 0) != v->n_act * (13 + (k < n ? 1 : 2)
+                                                                       + v->n_u - 6)) {
         PyErr_Format(PyExc_ValueError, "out: %zd floats expected, not %zd", need,
                      extent(held, 0, 0));
         return NULL;
@@ -632,7 +635,7 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
         let_go(&held);
         return NULL;
     }
-    double bound = velocity(v, u, out, singular, NULL, NULL, 0);
+    double bound = velocity(v, u, out, singular, NULL, NULL, 0, v->size - (v->n_u - 6) * v->n_act);
     let_go(&held);
     return PyFloat_FromDouble(bound);
 }
@@ -652,22 +655,28 @@ PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssi
     if (threshold == -1.0 && PyErr_Occurred()) return NULL;
     double u[256];
     if (take_u(args[1], 6 + v->c.n_var, u) < 0) return NULL;
-    return pk_one_velocity_array(args[0], u, threshold, NULL, NULL, 0, singular);
+    return pk_one_velocity_array(args[0], u, threshold, NULL, NULL, 0, singular, NULL);
 }
 
 /* chain_one_jacobian's answer at u (6 + n_var) for pack; given (6 L rows, given_n columns,
  * given_position[var] the column of each variable, the platform's at 0..5): the closure's
  * Jacobian at u evaluated by the caller (chain_one.c's inverse, its last evaluation), or NULL.
- * A new reference (the array, None or False), NULL with an error set. */
+ * q non-NULL: the record layout instead, a read-only (R, n) array of rows J (6), J_homogeneous
+ * (6), the singular values and the condition (1 or 2 rows, zero after), the passive rates,
+ * q (n). A new reference (the array, None or False), NULL with an error set. */
 PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
                                 const double *given, const int64_t *given_position,
-                                ptrdiff_t given_n, int singular) {
+                                ptrdiff_t given_n, int singular, const double *q) {
     chain_velocity *v = pack_state(pack);
     if (!v) return NULL;
     if (given && 6 + v->c.n_var != given_n) given = NULL; /* not the same machine's */
     /* the array first, then the kernel straight into it: no Python code runs between the
      * capsule's scratch and the answer (a thread switch there could reuse the scratch) */
-    PyObject *empty = pk_numpy_empty(), *size = PyLong_FromSsize_t(v->size);
+    const ptrdiff_t n = v->n_act, k = n < 6 ? n : 6, rows = 13 + (k < n ? 1 : 2) + v->n_u - 6;
+    static PyObject *seal; /* "setflags" (interned, kept): the record's read-only */
+    if (q && !seal && !(seal = PyUnicode_InternFromString("setflags"))) return NULL;
+    PyObject *empty = pk_numpy_empty(), *size = q ? Py_BuildValue("(nn)", rows, n)
+                                                  : PyLong_FromSsize_t(v->size);
     PyObject *array = empty && size ? PyObject_CallOneArg(empty, size) : NULL;
     Py_XDECREF(size);
     Py_buffer view;
@@ -675,11 +684,17 @@ PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshol
         Py_XDECREF(array);
         return NULL;
     }
-    double bound = velocity(v, u, view.buf, singular, given, given_position, given_n);
+    ptrdiff_t rates_at = q ? (rows - 1 - v->n_u + 6) * n : 12 * n + k + 1;
+    double *out = view.buf, bound = velocity(v, u, out, singular, given, given_position, given_n,
+                                             rates_at);
+    if (q) memcpy(out + (rows - 1) * n, q, (size_t)n * sizeof(double));
     PyBuffer_Release(&view);
     if (bound < 0.0 || !(bound >= threshold) || !(bound > 0.0)) {
         Py_DECREF(array);
         return Py_NewRef(bound < 0.0 ? Py_False : Py_None);
     }
+    PyObject *sealed = q ? PyObject_CallMethodOneArg(array, seal, Py_False) : Py_NewRef(Py_None);
+    if (!sealed) Py_CLEAR(array);
+    Py_XDECREF(sealed);
     return array;
 }

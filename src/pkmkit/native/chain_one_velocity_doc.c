@@ -37,11 +37,15 @@ const char pk_chain_one_jacobian_doc[] =
     "call (out's singular values and condition filled).";
 
 const char pk_chain_one_ik_jacobian_doc[] =
-    "chain_one_ik_jacobian(packed, pack, x, threshold, guard, singular=False)\n\n"
+    "chain_one_ik_jacobian(packed, pack, x, threshold, guard, singular=False, record=False)\n\n"
     "m.jacobian(x)'s C path in one call: chain_one_ik's inverse of one plain pose x (no\n"
     "stroke test) and chain_one_jacobian(pack, u, threshold) at its solution u, the closure's\n"
     "Jacobian handed over from the inverse's last evaluation where that was at u (else\n"
     "evaluated again): (q, out), out the array, None or False as chain_one_jacobian answers\n"
     "(False too where the inverse's largest residual exceeds guard); None where the inverse\n"
     "declines. pack: the machine's chain_velocity_pack capsule. singular true: out's\n"
-    "singular values and condition computed in the same call (chain_one_jacobian's).";
+    "singular values and condition computed in the same call (chain_one_jacobian's).\n"
+    "record true: the answer is the array alone in the record layout, a read-only (R, n)\n"
+    "float64 array of rows J (6), J_homogeneous (6), the singular values then the condition\n"
+    "(1 row, 2 where min(6, n) = n; zero after), the passive rates (n_u - 6), q; None where\n"
+    "the bound does not clear; False where the inverse declines or the answer would be False.";
