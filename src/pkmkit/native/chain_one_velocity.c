@@ -185,25 +185,27 @@ static void point_column(const double *twist, const double *point, double *jac, 
     jac[5 * n + c] = w2;
 }
 
-/* Each leg's 6 rows of v->jac gathered into its panel (column-major, 6 rows): its local
- * columns, then every global column, then the leg actuators' (a column the leg's rows do not
- * involve copied as zeros and left out of the reflections: rest, nrest); adds the squares of
- * C_U's entries on those rows to *fro. */
-static ptrdiff_t gather(const chain_velocity *v, ptrdiff_t leg, double *panel, int64_t *rest,
+/* Each leg's 6 rows of the closure's Jacobian (jac: row-major, leading dimension ld, column
+ * at[col] of each of the kernel's columns col) gathered into its panel (column-major, 6
+ * rows): its local columns, then every global column, then the leg actuators' (a column the
+ * leg's rows do not involve copied as zeros and left out of the reflections: rest, nrest);
+ * adds the squares of C_U's entries on those rows to *fro. */
+static ptrdiff_t gather(const chain_velocity *v, const double *jac, ptrdiff_t ld,
+                        const int64_t *at, ptrdiff_t leg, double *panel, int64_t *rest,
                         double *fro) {
-    const ptrdiff_t ld = v->n_u + v->n_loop, n_g = v->n_global, p = v->leg_count[leg];
+    const ptrdiff_t n_g = v->n_global, p = v->leg_count[leg];
     const int64_t *piv = v->leg_cols + 6 * leg;
-    const double *rows = v->jac + 6 * leg * ld;
+    const double *rows = jac + 6 * leg * ld;
     double sum = *fro;
     for (ptrdiff_t j = 0; j < p; j++)
         for (int i = 0; i < 6; i++) {
-            double x = rows[i * ld + piv[j]];
+            double x = rows[i * ld + at[piv[j]]];
             panel[6 * j + i] = x;
             sum += x * x;
         }
     ptrdiff_t nrest = 0;
     for (ptrdiff_t g = 0; g < n_g + v->n_loop; g++) {
-        ptrdiff_t col = g < n_g ? v->global_cols[g] : v->n_u + g - n_g;
+        ptrdiff_t col = at[g < n_g ? v->global_cols[g] : v->n_u + g - n_g];
         double *dst = panel + 6 * (p + g);
         int nonzero = 0;
         for (int i = 0; i < 6; i++) {
@@ -218,11 +220,12 @@ static ptrdiff_t gather(const chain_velocity *v, ptrdiff_t leg, double *panel, i
     return nrest;
 }
 
-/* The closure rates du (n_u, n_loop) from v->jac (module comment); returns the bound, 0.0
+/* The closure rates du (n_u, n_loop) from jac, ld, at (gather's; module comment); the bound, 0.0
  * where a pivot vanishes or too few rows are left (the caller takes the batch path). Each
  * leg's panel keeps R_l, S_l and its right-hand sides; v->rest (rows left, column-major with
  * leading dimension 6L) R_g and its right-hand sides. */
-static double closure_rates(chain_velocity *v) {
+static double closure_rates(chain_velocity *v, const double *jac, ptrdiff_t ld,
+                            const int64_t *at) {
     const pk_chain *c = &v->c;
     const ptrdiff_t n_loop = v->n_loop, n_g = v->n_global, ld_g = 6 * c->n_legs;
     const ptrdiff_t width = 6 * (6 + n_g + n_loop);
@@ -232,7 +235,7 @@ static double closure_rates(chain_velocity *v) {
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
         double *panel = v->panels + leg * width;
         ptrdiff_t p = v->leg_count[leg];
-        ptrdiff_t nrest = gather(v, leg, panel, rest, &fro);
+        ptrdiff_t nrest = gather(v, jac, ld, at, leg, panel, rest, &fro);
         if (!reflect_leg(panel, p, rest, nrest)) return 0.0;
         for (ptrdiff_t i = p; i < 6; i++, n_reduced++) /* the rows left */
             for (ptrdiff_t g = 0; g < n_g + n_loop; g++)
@@ -323,19 +326,16 @@ static double velocity(chain_velocity *v, const double *u, double *out, int sing
         v->values[var] = u[6 + var];
         if (c->position[var] >= 0) v->full_u[c->position[var]] = u[6 + var];
     }
+    int64_t at[256]; /* the column read for each of the kernel's columns (more: the batch path) */
+    if (n_u + n_loop > 256) return 0.0;
+    for (ptrdiff_t i = 0; i < n_u + n_loop; i++) at[i] = i;
     if (given) { /* the legs' rows at u from the caller (given_n columns, given_position) */
-        const ptrdiff_t ld = v->n_u + v->n_loop;
-        for (ptrdiff_t i = 0; i < 6 * c->n_legs; i++) {
-            const double *src = given + i * given_n;
-            double *dst = v->jac + i * ld;
-            memcpy(dst, src, 6 * sizeof(double));
-            for (ptrdiff_t var = 0; var < c->n_var; var++)
-                if (c->position[var] >= 0) dst[c->position[var]] = src[given_position[var]];
-        }
+        for (ptrdiff_t var = 0; var < c->n_var; var++)
+            if (c->position[var] >= 0) at[c->position[var]] = given_position[var];
     } else {
         pk_chain_evaluate(c, v->values, v->full_u, v->r, v->jac, &v->w);
     }
-    double bound = closure_rates(v);
+    double bound = closure_rates(v, given ? given : v->jac, given ? given_n : n_u + n_loop, at);
     if (!(bound > 0.0)) return 0.0;
     double rot[9], pos[3], point[3], twist[6];
     ptrdiff_t n_twist = head_walk(v, u, rot, pos);
