@@ -312,12 +312,31 @@ class _RowSingular:
         return values
 
 
+class _FromPack:
+    """``closure_rank`` or ``expected_rank`` of :class:`OnePoseChainJacobians`: the pack's
+    (``rank``, ``expected``: the closure's rank at home where the bound certifies it), kept in
+    the record's ``__dict__`` at the first read."""
+
+    __slots__ = ("name", "attribute")
+
+    def __init__(self, name: str, attribute: str) -> None:
+        self.name, self.attribute = name, attribute
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        value = fields[self.name] = getattr(fields["_pack"], self.attribute)
+        return value
+
+
 class OnePoseChainJacobians(ChainJacobians):
     """A joint-chain machine's velocity model of one pose (this module): ``q``, ``status`` and
     the ranks given; ``J``, ``J_homogeneous``, ``passive_rates`` and ``q`` views of the one
     read-only array of the fused C call (the record layout: one index each, made when first
-    read), ``singular_values`` and ``condition`` computed then where the call did not (the
-    singular stage). Equality is identity (comparing would compute every field); pickled, it
+    read; ``J`` and, on a machine object whose records' ``condition`` was read, ``condition``
+    kept at once: the fields a loop reads), ``singular_values`` and ``condition`` computed then
+    where the call did not (the singular stage); ``status`` OK and the ranks the pack's. Equality is identity (comparing would compute every field); pickled, it
     becomes the plain :class:`~pkmkit.machines.chain_velocity_record.ChainJacobians`."""
 
     J = _Row("J")
@@ -326,6 +345,9 @@ class OnePoseChainJacobians(ChainJacobians):
     condition = _RowSingular(True)
     passive_rates = _Row("passive_rates")
     q = _Row("q")
+    closure_rank = _FromPack("closure_rank", "rank")
+    expected_rank = _FromPack("expected_rank", "expected")
+    status = _OK  # the one-pose path answers only where the closure is certainly regular
 
     def __eq__(self, other: object) -> bool:
         return self is other
@@ -450,14 +472,15 @@ def _fused(p: VelocityPack, c: Any, x: Any, tol: float, owner: dict) -> Any:
     stage in the call)."""
     threshold = BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND)
     if p.records:  # the record layout: the array alone, or None / False
-        out = p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD, _FUSED in owner,
-                            True)
+        fused = _FUSED in owner
+        out = p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD, fused, True)
         if type(out) is not _ARRAY:
             return out
-        one = _NEW(OnePoseChainJacobians)
+        one = _NEW(OnePoseChainJacobians)  # status and the ranks: the class's (_FromPack)
         fields = one.__dict__
-        fields["_out"], fields["_pack"], fields["status"], fields["_owner"] = out, p, _OK, owner
-        fields["closure_rank"], fields["expected_rank"] = p.rank, p.expected
+        fields["_out"], fields["_pack"], fields["_owner"], fields["J"] = out, p, owner, out[:6]
+        if fused:  # this machine object's records have their condition read: kept now
+            fields["condition"] = out[p.condition_at]
         return one
     got = p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD, True) \
         if _FUSED in owner else p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD)
