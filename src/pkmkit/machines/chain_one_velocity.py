@@ -317,7 +317,7 @@ class _FromPack:
     (``rank``, ``expected``: the closure's rank at home where the bound certifies it), kept in
     the record's ``__dict__`` at the first read."""
 
-    __slots__ = ("name", "attribute")
+    __slots__ = ("attribute", "name")
 
     def __init__(self, name: str, attribute: str) -> None:
         self.name, self.attribute = name, attribute
