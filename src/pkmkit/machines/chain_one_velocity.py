@@ -331,13 +331,14 @@ class _FromPack:
 
 
 class OnePoseChainJacobians(ChainJacobians):
-    """A joint-chain machine's velocity model of one pose (this module): ``q``, ``status`` and
-    the ranks given; ``J``, ``J_homogeneous``, ``passive_rates`` and ``q`` views of the one
-    read-only array of the fused C call (the record layout: one index each, made when first
-    read; ``J`` and, on a machine object whose records' ``condition`` was read, ``condition``
-    kept at once: the fields a loop reads), ``singular_values`` and ``condition`` computed then
-    where the call did not (the singular stage); ``status`` OK and the ranks the pack's. Equality is identity (comparing would compute every field); pickled, it
-    becomes the plain :class:`~pkmkit.machines.chain_velocity_record.ChainJacobians`."""
+    """A joint-chain machine's velocity model of one pose (this module): ``J``,
+    ``J_homogeneous``, ``passive_rates`` and ``q`` views of the one read-only array of the
+    fused C call (the record layout: one index each, made when first read; ``J`` and, on a
+    machine object whose records' ``condition`` was read, ``condition`` kept at once: the
+    fields a loop reads), ``singular_values`` and ``condition`` computed then where the call
+    did not (the singular stage); ``status`` OK and the ranks the pack's. Equality is identity
+    (comparing would compute every field); pickled, it becomes the plain
+    :class:`~pkmkit.machines.chain_velocity_record.ChainJacobians`."""
 
     J = _Row("J")
     J_homogeneous = _Row("J_homogeneous")
