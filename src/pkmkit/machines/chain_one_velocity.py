@@ -28,6 +28,11 @@ alone does not pay the SVD) — once that happened on a machine object, its late
 stage inside their one C call (``_Singular``; the same bits; a mark in that object's own
 ``__dict__``, not on the pack its copies share), so a loop reading ``condition`` makes one C
 call per pose. ``q`` is a read-only view of the actuators, made at its first read and kept.
+``m.jacobian(x)`` itself (:func:`at_call`, :func:`at_pose`) takes the *record layout* of the
+fused call (``chain_one_ik_jacobian(..., record=True)``: one read-only ``(R, n)`` array of
+rows J, J_homogeneous, the singular values and the condition, the passive rates and q): each
+field of its record one index of that array (:class:`OnePoseChainJacobians`); the records of
+:func:`record` and :func:`at_solution` keep the flat array (:class:`FlatOnePoseChainJacobians`).
 ``closure_rank`` is ``n_u`` and ``status``
 OK only where the bound clears :data:`~pkmkit.machines.chain_one.BOUND_MARGIN` × max(``tol``,
 :data:`~pkmkit.machines.chain_velocity_record.RANK_RCOND`): the closure is then certainly

@@ -25,7 +25,9 @@ const char pk_chain_one_velocity_doc[] =
     "sigma_min / sigma_max of the closure's Jacobian C_U (0.0 where a pivot vanished, -1.0\n"
     "where u is not in the legs' home modes: out is then not filled). With singular false the\n"
     "singular values and the condition are left NaN: chain_one_velocity(pack, None, out) then\n"
-    "computes them from out's J_homogeneous (and returns the condition number).";
+    "computes them from out's J_homogeneous (and returns the condition number); out may there\n"
+    "also be the flat view of a writeable copy of a record-layout array (chain_one_ik_jacobian's:\n"
+    "the same places for J_homogeneous, the singular values and the condition).";
 
 const char pk_chain_one_jacobian_doc[] =
     "chain_one_jacobian(pack, u, threshold, singular=False) -> out, None or False\n\n"
