@@ -5,7 +5,12 @@
   the machine whose records' ``condition`` is never read: since session 34 a machine runs the
   singular stage inside its one-pose C call once a record's ``condition`` was read);
 - the fused C call alone (``chain_one_ik_jacobian``: the inverse, the velocity model with the
-  closure's Jacobian handed over, and the singular stage), the floor of the whole call;
+  closure's Jacobian handed over, and the singular stage), the floor of the whole call, in the
+  record layout the machine's call takes since session 35 (one read-only array, q its last row)
+  and in the flat one (``(q, out)``);
+- since session 35, the whole call on a third copy of the machine held to session 34's record
+  (its pack's ``records`` false: the flat array and the tuple, each field a slice, a reshape and
+  a read-only view), and its ratio to the whole call (the same C work);
 - the C inverse alone (``chain_one_ik(..., full=True)``: chainiter's part, the floor of the
   call);
 - the velocity model's C call alone at the inverse solutions (``chain_one_jacobian``) and the
@@ -90,6 +95,12 @@ def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0,
         return
     mj = pkmkit.machine(name)  # J only: no condition read on this copy
     assert mj.jacobian(rows[0]).J.shape[0] == 6
+    mf = pkmkit.machine(name)  # session 34's flat record (the pack's records false)
+    flat = cov.pack(mf)
+    records = flat is not None and flat.records
+    if records:
+        flat.records = False
+        assert mf.jacobian(rows[0]).condition > 0
     ik = chain_one_native.packed(m)
     p = cov.pack(m)
     if ik is None or p is None:
@@ -112,13 +123,19 @@ def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0,
             lambda x: (r := m.jacobian(x)).J is r.condition, rows),
         "whole: m.jacobian(x) + J (never condition)": (lambda x: mj.jacobian(x).J, rows),
         "fused C call (+ singular stage)": (
-            lambda x: p.ik_jacobian(ik.capsule, p.pack, x, 2e-6, 1e-12, True), rows),
+            (lambda x: p.ik_jacobian(ik.capsule, p.pack, x, 2e-6, 1e-12, True, True)) if records
+            else (lambda x: p.ik_jacobian(ik.capsule, p.pack, x, 2e-6, 1e-12, True)), rows),
         "the C inverse alone (chain_one_ik, full)": (
             lambda x: ik.ik(ik.capsule, x, True, True), rows),
         "velocity C call alone (chain_one_jacobian)": (
             lambda s: p.jacobian(p.pack, s[1], 2e-6), solved),
         "singular stage alone": (lambda o: p.call(p.pack, None, o), outs),
     }
+    if records:
+        parts["fused C call, flat (q, out)"] = (
+            lambda x: p.ik_jacobian(ik.capsule, p.pack, x, 2e-6, 1e-12, True), rows)
+        parts["whole, session 34's flat record"] = (
+            lambda x: (r := mf.jacobian(x)).J is r.condition, rows)
     got = {k: [] for k in parts}
     if peer is not None:
         got["Pinocchio frame Jacobian (peer)"] = []
@@ -140,6 +157,11 @@ def split(name: str, count: int, rounds: int, profile: bool, loop: int = 0,
           f"fused C call): {whole - low['fused C call (+ singular stage)']:.2f} (whole - the "
           f"three C calls: {whole - c_parts:.2f}); the inverse / whole "
           f"{low['the C inverse alone (chain_one_ik, full)'] / whole:.2f}")
+    if records:
+        old = low["whole, session 34's flat record"]
+        fused = low["fused C call, flat (q, out)"] / low["fused C call (+ singular stage)"]
+        print(f"  whole with session 34's flat record / whole: {old / whole:.3f}; the fused "
+              f"call flat / record layout {fused:.3f}")
     if peer is not None:
         pin = low["Pinocchio frame Jacobian (peer)"]
         print(f"  whole / Pinocchio {whole / pin:.1f}; after the inverse / Pinocchio "

@@ -118,6 +118,45 @@ def compare_jacobian(m, builds: list, caps: list, xs: list, rounds: int,
     a, b = (float(np.median(t)) for t in times)
     print(f"  singular stage C call, bit-identical answers {same}: CPU µs first build {a:.2f}, "
           f"second {b:.2f} (x{a / b:.3f})")
+    if "record=False" in (getattr(builds[1], "chain_one_ik_jacobian", None).__doc__ or ""):
+        record_layout(builds, caps, packs, calls[0], xs, rounds)
+
+
+def record_layout(builds: list, caps: list, packs: list, first, xs: list, rounds: int) -> None:
+    """Since session 35: the second build's record layout (``chain_one_ik_jacobian(...,
+    singular=True, record=True)``: one read-only (R, n) array, q its last row) against the
+    first build's flat fused call with the singular stage (its tuple ``(q, out)``), the rows
+    compared with the flat answer bit for bit."""
+    fused = getattr(builds[0], "chain_one_ik_jacobian", None)
+    if fused is None or "singular" not in (fused.__doc__ or ""):
+        return
+    rec = builds[1].chain_one_ik_jacobian
+    flat_call = lambda x: fused(caps[0], packs[0], x, 2e-9, 1e-12, True)  # noqa: E731
+    rec_call = lambda x: rec(caps[1], packs[1], x, 2e-9, 1e-12, True, True)  # noqa: E731
+    same = True
+    for x in xs:
+        flat, rows = flat_call(x), rec_call(x)
+        if flat is None or not isinstance(flat[1], np.ndarray):
+            same &= not isinstance(rows, np.ndarray)
+            continue
+        q, out = flat
+        n = len(q)
+        k = min(6, n)
+        s = 1 if k < n else 2
+        same &= (np.array_equal(rows[:12].ravel(), out[:12 * n])
+                 and np.array_equal(rows[12:12 + s].ravel()[:k + 1], out[12 * n:12 * n + k + 1])
+                 and np.array_equal(rows[12 + s:-1].ravel(), out[12 * n + k + 1:])
+                 and np.array_equal(rows[-1], q))
+    times: list[list[float]] = [[], []]
+    for _ in range(rounds):
+        for i, f in enumerate((flat_call, rec_call)):
+            t = time.process_time()
+            for x in xs:
+                f(x)
+            times[i].append((time.process_time() - t) / len(xs) * 1e6)
+    a, b = (float(np.median(t)) for t in times)
+    print(f"  fused call with the singular stage, the first build's (q, out) against the second's "
+          f"record layout, the same entries {same}: CPU µs {a:.2f}, {b:.2f} (x{a / b:.3f})")
 
 
 def pack(build, m):

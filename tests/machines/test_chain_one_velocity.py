@@ -62,6 +62,13 @@ def through_c(record) -> bool:
     return isinstance(record, cov.OnePoseChainJacobians)
 
 
+def stage_run(record) -> bool:
+    """Whether the record's array holds the singular stage's answer (its condition slot not
+    NaN: the record layout's or the flat one's)."""
+    out, p = record.__dict__["_out"], record.__dict__["_pack"]
+    return not np.isnan(out[p.condition_at] if out.ndim == 2 else out[p.sv_stop])
+
+
 def mismatch(m, xs) -> tuple[int, float]:
     """``(records through the C kernel, the largest difference of a field from the batch row's
     relative to its largest entry)``."""
@@ -273,24 +280,24 @@ def test_threads_get_their_own_answers(machine):
 def test_the_singular_values_are_computed_when_read(name):
     """On a machine whose records' ``condition`` was never read, J alone does not run the
     kernel's singular stage; the first read of ``condition`` or ``singular_values`` runs it
-    once, whichever comes first, with the batch row's values — and sets the pack's
-    ``singular``: the machine's later calls run the stage in their own C call, the record's
-    buffer then bit for bit the lazy record's after its read (and ``condition`` read there
-    without a second call)."""
+    once, whichever comes first, with the batch row's values — and marks the machine object
+    (``cov._FUSED`` in its ``__dict__``): its later calls run the stage in their own C call,
+    the record's buffer then bit for bit the lazy record's after its read (and ``condition``
+    read there without a second call)."""
     m = fresh(name)
     xs = [x for x in poses(m, 4, seed=16) if through_c(m.jacobian(x))]
     assert len(xs) >= 3
     p = cov.pack(m)
-    assert p.fusable and not p.singular  # this build takes the flag; nothing read yet
+    assert p.fusable and cov._FUSED not in m.__dict__  # this build takes the flag; none read
     lazy = [m.jacobian(x) for x in xs]
     for one in lazy:
         fields = one.__dict__
         assert one.J.shape == (6, len(one.q))
-        assert "condition" not in fields and np.isnan(fields["_out"][12 * one.J.shape[1]])
+        assert "condition" not in fields and not stage_run(one)
     ref = m.jacobian(xs[0][None])
     assert lazy[0].condition == pytest.approx(ref.condition[0], rel=1e-12)
     assert "condition" in lazy[0].__dict__ and not np.isnan(lazy[0].__dict__["_out"]).any()
-    assert p.singular  # from now on in the call
+    assert m.__dict__[cov._FUSED]  # from now on in the call
     fused = [m.jacobian(x) for x in xs]
     for one, early in zip(fused, lazy, strict=True):
         assert through_c(one) and not np.isnan(one.__dict__["_out"]).any()  # before any read
@@ -351,3 +358,71 @@ def test_at_solution_is_the_record_with_the_margin(machine):
         assert through_c(cov.at_solution(machine, solved, RANK_RCOND / 10))
         far = (*solved[:3], 2 * cov.RESIDUAL_GUARD)
         assert cov.at_solution(machine, far, 1e-6) is False
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_read_on_one_copy_changes_no_other_copys_calls(name):
+    """Copies of a machine share its velocity pack (``copy.copy``: a shallow copy of its
+    ``__dict__``); a thread that reads ``condition`` on one copy's records makes that copy's
+    later calls run the singular stage inside their C call, and changes nothing for the
+    other copy (its records' buffers still without the singular stage until read) nor for
+    the pack; either way the same bits (the lazy record after its read, the fused one)."""
+    import copy
+    import threading
+
+    m = fresh(name)
+    xs = [x for x in poses(m, 5, seed=19) if through_c(m.jacobian(x))]
+    assert len(xs) >= 3
+    a, b = copy.copy(m), copy.copy(m)
+    assert cov.pack(a) is cov.pack(b) is cov.pack(m)
+    before = {k for k in vars(cov.pack(m).__class__) if not k.startswith("__")}
+    state = [getattr(cov.pack(m), k) for k in cov.VelocityPack.__slots__]
+
+    def read_condition_on_a() -> None:
+        for x in xs:
+            assert a.jacobian(x).condition > 1.0
+
+    reader = threading.Thread(target=read_condition_on_a)
+    reader.start()
+    plain = [b.jacobian(x) for x in xs for _ in range(3)]  # while a's thread reads
+    reader.join()
+    assert a.__dict__[cov._FUSED] and cov._FUSED not in b.__dict__ | m.__dict__
+    assert [getattr(cov.pack(m), k) for k in cov.VelocityPack.__slots__] == state
+    assert {k for k in vars(cov.pack(m).__class__) if not k.startswith("__")} == before
+    lazy = [b.jacobian(x) for x in xs] + plain
+    fused = [a.jacobian(x) for x in xs]
+    for one in lazy:  # b's calls: no singular stage in the call
+        assert not stage_run(one)
+    for one, late in zip(fused, lazy, strict=False):
+        assert not np.isnan(one.__dict__["_out"]).any()  # a's: in the call, before any read
+        assert late.condition == one.condition  # b's stage run now: the same bits
+        np.testing.assert_array_equal(late.__dict__["_out"], one.__dict__["_out"])
+    assert cov._FUSED in b.__dict__ and cov._FUSED not in m.__dict__  # b's own read
+
+
+def test_q_is_a_read_only_view_made_once(machine):
+    """``q`` of a one-pose record: not stored before its first read, then one read-only
+    view kept (later reads the same object, not wrapped again); equal to the batch row's;
+    the record built from a caller's array (:func:`cov.record`) leaves that array
+    writeable; ``dataclasses.replace`` keeps it read-only."""
+    import dataclasses
+
+    x = poses(machine, 1, seed=20)[0]
+    one = machine.jacobian(x)
+    assert through_c(one) and "q" not in one.__dict__
+    q = one.q
+    assert not q.flags.writeable and one.__dict__["q"] is q and one.q is q
+    with pytest.raises(ValueError):
+        q[0] = 1.0
+    np.testing.assert_allclose(q, machine.jacobian(x[None]).q[0], rtol=0, atol=1e-12)
+    from pkmkit.machines.chain_one_native import packed
+
+    c = packed(machine)
+    solved = c.ik(c.capsule, x, True, True)
+    mine = np.array(solved[0])
+    built = cov.record(machine, mine, solved[1], solved[3], 1e-6, 2.0, one.expected_rank)
+    assert through_c(built) and built.q.base is mine and mine.flags.writeable
+    np.testing.assert_array_equal(built.J, one.J)
+    again = dataclasses.replace(built, status=built.status)
+    assert not again.q.flags.writeable
+    np.testing.assert_array_equal(again.q, mine)

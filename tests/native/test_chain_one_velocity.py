@@ -227,7 +227,60 @@ def test_the_singular_stage_in_the_call_is_the_later_call(machine):
     with pytest.raises(ValueError):  # the flag's truth
         _kernels.chain_one_ik_jacobian(c.capsule, p.pack, poses[0], 0.0, 1e-12, np.ones(2))
     with pytest.raises(TypeError):
-        _kernels.chain_one_ik_jacobian(c.capsule, p.pack, poses[0], 0.0, 1e-12, True, 1)
+        _kernels.chain_one_ik_jacobian(c.capsule, p.pack, poses[0], 0.0, 1e-12, True, True, 1)
+
+
+def test_the_record_layout_is_the_flat_answer_by_rows(machine):
+    """``chain_one_ik_jacobian(..., singular, True)`` (the record layout, the array alone): a
+    read-only (R, n) float64 array whose rows are the flat answer's pieces bit for bit (J,
+    J_homogeneous, the singular values and the condition, zero after them, the passive
+    rates) and q (the tuple's) last; with singular false the stage's slots NaN, and the stage
+    run on a writeable copy (``chain_one_velocity(pack, None, copy.reshape(-1))``) gives the
+    fused array; None where the bound does not clear, False where the inverse declines or
+    the guard refuses (where the flat form answers None and ``(q, False)``)."""
+    from pkmkit.machines import chain_one_native
+
+    c = chain_one_native.packed(machine)
+    p = cov.VelocityPack(machine, _kernels)
+    if c is None or not p.records:
+        pytest.skip("a build without the record layout")
+    n, k, n_p = p.n, min(6, p.n), p.n_p
+    s = 1 if k < n else 2
+    act = np.flatnonzero(machine.model.actuated)
+    lo, hi = machine.model.q_min[act], machine.model.q_max[act]
+    q = lo + (hi - lo) * (0.2 + 0.6 * np.random.default_rng(23).random((5, len(act))))
+    seen = 0
+    for x in machine.fk(q, strokes="ignore"):
+        q_flat, flat = _kernels.chain_one_ik_jacobian(c.capsule, p.pack, x, 0.0, 1e-12, True)
+        rec = _kernels.chain_one_ik_jacobian(c.capsule, p.pack, x, 0.0, 1e-12, True, True)
+        if not isinstance(flat, np.ndarray):
+            assert rec is flat
+            continue
+        seen += 1
+        assert rec.shape == (13 + s + n_p, n) and rec.dtype == np.float64
+        assert not rec.flags.writeable and rec.flags.c_contiguous
+        with pytest.raises(ValueError):
+            rec[0, 0] = 1.0
+        np.testing.assert_array_equal(rec[:12].reshape(-1), flat[:12 * n])
+        np.testing.assert_array_equal(rec[12:12 + s].reshape(-1)[:k + 1],
+                                      flat[12 * n:12 * n + k + 1])
+        assert (rec[12:12 + s].reshape(-1)[k + 1:] == 0.0).all()
+        np.testing.assert_array_equal(rec[12 + s:12 + s + n_p].reshape(-1), flat[12 * n + k + 1:])
+        np.testing.assert_array_equal(rec[-1], q_flat)
+        np.testing.assert_array_equal(rec[p.rows["J"]], flat[:6 * n].reshape(6, n))
+        assert rec[p.condition_at] == flat[12 * n + k]
+        lazy = _kernels.chain_one_ik_jacobian(c.capsule, p.pack, x, 0.0, 1e-12, False, True)
+        assert np.isnan(lazy[12:12 + s].reshape(-1)[:k + 1]).all()
+        late = lazy.copy()
+        _kernels.chain_one_velocity(p.pack, None, late.reshape(-1))
+        np.testing.assert_array_equal(late, rec)
+        assert _kernels.chain_one_ik_jacobian(c.capsule, p.pack, x, 1e9, 1e-12, False, True) is None
+        assert _kernels.chain_one_ik_jacobian(c.capsule, p.pack, x, 0.0, -1.0, False, True) is False
+    assert seen >= 3
+    assert _kernels.chain_one_ik_jacobian(c.capsule, p.pack, [0.0] * 6, 0.0, 1e-12, False,
+                                          True) is False
+    with pytest.raises(ValueError):  # the flag's truth
+        _kernels.chain_one_ik_jacobian(c.capsule, p.pack, x, 0.0, 1e-12, False, np.ones(2))
 
 
 def test_chain_one_jacobian_argument_checks(machine):

@@ -24,9 +24,16 @@ ranks given; ``J``, ``J_homogeneous`` and ``passive_rates`` views of the kernel'
 array, made at their first read and kept in the record's ``__dict__`` (later reads are plain
 attribute reads); the singular values and the condition number computed at the first read of
 either (the kernel's singular stage, one more C call on the array's ``J_homogeneous``: ``J``
-alone does not pay the SVD) — once that happened on a machine, its later calls run the stage
-inside their one C call (``_Singular``; the same bits), so a loop reading ``condition`` makes
-one C call per pose. ``closure_rank`` is ``n_u`` and ``status``
+alone does not pay the SVD) — once that happened on a machine object, its later calls run the
+stage inside their one C call (``_Singular``; the same bits; a mark in that object's own
+``__dict__``, not on the pack its copies share), so a loop reading ``condition`` makes one C
+call per pose. ``q`` is a read-only view of the actuators, made at its first read and kept.
+``m.jacobian(x)`` itself (:func:`at_call`, :func:`at_pose`) takes the *record layout* of the
+fused call (``chain_one_ik_jacobian(..., record=True)``: one read-only ``(R, n)`` array of
+rows J, J_homogeneous, the singular values and the condition, the passive rates and q): each
+field of its record one index of that array (:class:`OnePoseChainJacobians`); the records of
+:func:`record` and :func:`at_solution` keep the flat array (:class:`FlatOnePoseChainJacobians`).
+``closure_rank`` is ``n_u`` and ``status``
 OK only where the bound clears :data:`~pkmkit.machines.chain_one.BOUND_MARGIN` × max(``tol``,
 :data:`~pkmkit.machines.chain_velocity_record.RANK_RCOND`): the closure is then certainly
 regular, of full rank, and not singular by the batch path's SVD; elsewhere (near a singular
@@ -72,8 +79,9 @@ class VelocityPack:
     leg actuators' places in J, the leg owning each column alone (−1: the platform's and the
     joints shared by legs), and the output buffer's layout."""
 
-    __slots__ = ("call", "expected", "fusable", "ik_jacobian", "jacobian", "layout", "n", "n_p",
-                 "pack", "rank", "singular", "size", "sv_start", "sv_stop")
+    __slots__ = ("call", "condition_at", "expected", "fusable", "ik_jacobian", "jacobian",
+                 "layout", "n", "n_p", "pack", "rank", "records", "rows", "size", "sv_start",
+                 "sv_stop")
 
     def __init__(self, m: Any, native: Any, arguments: dict | None = None) -> None:
         arguments = pack_arguments(m) if arguments is None else arguments
@@ -82,9 +90,12 @@ class VelocityPack:
         self.jacobian = getattr(native, "chain_one_jacobian", None)  # None: an older build
         self.ik_jacobian = getattr(native, "chain_one_ik_jacobian", None)  # likewise
         # the singular stage in the same call (its sixth argument; not in an older build):
-        # asked once a record's condition or singular values were read (_Singular)
-        self.fusable = "singular=False" in (getattr(self.ik_jacobian, "__doc__", "") or "")
-        self.singular = False
+        # asked on a machine object once one of its records' condition or singular values was
+        # read (_Singular: the machine's own _FUSED entry, never this pack, which copies of
+        # the machine share)
+        doc = getattr(self.ik_jacobian, "__doc__", "") or ""
+        self.fusable = "singular=False" in doc
+        self.records = "record=False" in doc  # the record layout (rows; _fused)
         n = int(np.count_nonzero(m.model.actuated))
         k = min(6, n)
         self.n, self.n_p = n, len(m.passive_variables)
@@ -96,6 +107,14 @@ class VelocityPack:
                        "condition": (12 * n + k, None, None),
                        "passive_rates": (12 * n + k + 1, self.size, (self.n_p, n))}
         self.sv_start, self.sv_stop = 12 * n, 12 * n + k  # the singular values; condition
+        # the record layout (chain_one_ik_jacobian(..., record=True)): a read-only (R, n) array
+        # of rows J, J_homogeneous, the singular values and the condition (s rows), the
+        # passive rates, q; each field one index of it (OnePoseChainJacobians)
+        s = 1 if k < n else 2
+        self.condition_at = divmod(12 * n + k, n)
+        self.rows = {"J": slice(0, 6), "J_homogeneous": slice(6, 12),
+                     "singular_values": (12, slice(0, k)),
+                     "passive_rates": slice(12 + s, 12 + s + self.n_p), "q": 12 + s + self.n_p}
 
     def __reduce__(self) -> tuple:
         """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
@@ -196,10 +215,12 @@ class _Singular:
     keeps it in the record's ``__dict__`` (the other made at its own first read: one NumPy
     object each), running the kernel's singular stage first (one C call on the buffer's
     ``J_homogeneous``) unless the record's C call ran it (the condition not NaN). That first
-    run sets the pack's ``singular``: the machine's later one-pose calls run the stage in
-    their own C call (the same function on the same ``J_homogeneous``: the same bits), so a
-    loop reading ``condition`` pays no second call and one that never reads it no singular
-    stage."""
+    run marks the machine object the record came from (:data:`_FUSED` in its ``__dict__``,
+    kept by the record as ``_owner``; never the pack, which every copy of a built machine
+    shares): that object's later one-pose calls run the stage in their own C call (the same
+    function on the same ``J_homogeneous``: the same bits), so a loop reading ``condition``
+    pays no second call and one that never reads it no singular stage, and a read on one copy
+    changes no other copy's calls."""
 
     __slots__ = ("condition",)
 
@@ -216,7 +237,8 @@ class _Singular:
         if condition != condition:  # NaN: not computed in the record's call
             p.call(p.pack, None, out)
             condition = out[stop]
-            p.singular = p.fusable
+            if p.fusable:  # this machine object's later calls: the stage in their C call
+                fields["_owner"][_FUSED] = True
         if self.condition:
             fields["condition"] = condition
             return condition
@@ -225,9 +247,13 @@ class _Singular:
 
 
 class _Given:
-    """``q`` of :class:`OnePoseChainJacobians` (a data descriptor: kept in the record's
-    ``__dict__`` by the builders below, handed out read-only: the caller's own array stays
-    writeable, this view of it does not)."""
+    """``q`` of :class:`OnePoseChainJacobians`: the builders below keep the actuators given as
+    ``_q``; the first read stores their read-only view (:func:`read_only`: the caller's own
+    array stays writeable, this view of it does not) as ``q`` in the record's ``__dict__``,
+    where every later read finds it (a non-data descriptor: a plain attribute read, no second
+    wrapping; a record whose ``q`` is never read pays none). The dataclass ``__init__``
+    (``dataclasses.replace``) stores ``q`` there directly (its ``__post_init__`` makes it
+    read-only)."""
 
     __slots__ = ()
 
@@ -235,26 +261,99 @@ class _Given:
         if record is None:
             return self
         fields = record.__dict__
-        value = fields["q"] = read_only(fields["q"])
+        value = fields["q"] = read_only(fields["_q"])
         return value
 
-    def __set__(self, record: Any, value: Any) -> None:  # the dataclass __init__ (replace)
-        record.__dict__["q"] = value
+
+class _Row:
+    """A field of :class:`OnePoseChainJacobians` (``J``, ``J_homogeneous``, ``passive_rates``,
+    ``q``): one index of the record's read-only array (the pack's ``rows``), a view read-only
+    as the array is, made at its first read and kept in the record's ``__dict__`` (a non-data
+    descriptor: later reads are plain attribute reads)."""
+
+    __slots__ = ("name",)
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        value = fields[self.name] = fields["_out"][fields["_pack"].rows[self.name]]
+        return value
+
+
+class _RowSingular:
+    """``singular_values`` or ``condition`` of :class:`OnePoseChainJacobians` (as
+    :class:`_Singular`, on the record layout): where the record's C call did not run the
+    singular stage (the condition NaN), the stage runs on a writeable copy of the record's
+    array (the one the fields read so far are views of stays as it is: read-only, the same
+    entries but the stage's), which becomes the record's array, read-only; and marks the
+    record's machine object (:data:`_FUSED`)."""
+
+    __slots__ = ("condition",)
+
+    def __init__(self, condition: bool) -> None:
+        self.condition = condition
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        p, out = fields["_pack"], fields["_out"]
+        condition = out[p.condition_at]
+        if condition != condition:  # NaN: not computed in the record's call
+            out = out.copy()
+            p.call(p.pack, None, out.reshape(-1))
+            out.setflags(write=False)
+            fields["_out"], condition = out, out[p.condition_at]
+            if p.fusable:  # this machine object's later calls: the stage in their C call
+                fields["_owner"][_FUSED] = True
+        if self.condition:
+            fields["condition"] = condition
+            return condition
+        values = fields["singular_values"] = out[p.rows["singular_values"]]
+        return values
+
+
+class _FromPack:
+    """``closure_rank`` or ``expected_rank`` of :class:`OnePoseChainJacobians`: the pack's
+    (``rank``, ``expected``: the closure's rank at home where the bound certifies it), kept in
+    the record's ``__dict__`` at the first read."""
+
+    __slots__ = ("attribute", "name")
+
+    def __init__(self, name: str, attribute: str) -> None:
+        self.name, self.attribute = name, attribute
+
+    def __get__(self, record: Any, owner: type | None = None) -> Any:
+        if record is None:
+            return self
+        fields = record.__dict__
+        value = fields[self.name] = getattr(fields["_pack"], self.attribute)
+        return value
 
 
 class OnePoseChainJacobians(ChainJacobians):
-    """A joint-chain machine's velocity model of one pose (this module): ``q``, ``status`` and
-    the ranks given; ``J``, ``J_homogeneous``, ``passive_rates`` views of the kernel's one
-    output array made when first read, ``singular_values`` and ``condition`` computed then (the
-    singular stage). Equality is identity (comparing would compute every field); pickled, it
-    becomes the plain :class:`~pkmkit.machines.chain_velocity_record.ChainJacobians`."""
+    """A joint-chain machine's velocity model of one pose (this module): ``J``,
+    ``J_homogeneous``, ``passive_rates`` and ``q`` views of the one read-only array of the
+    fused C call (the record layout: one index each, made when first read; ``J`` and, on a
+    machine object whose records' ``condition`` was read, ``condition`` kept at once: the
+    fields a loop reads), ``singular_values`` and ``condition`` computed then where the call
+    did not (the singular stage); ``status`` OK and the ranks the pack's. Equality is identity
+    (comparing would compute every field); pickled, it becomes the plain
+    :class:`~pkmkit.machines.chain_velocity_record.ChainJacobians`."""
 
-    J = _View("J")
-    J_homogeneous = _View("J_homogeneous")
-    singular_values = _Singular(False)
-    condition = _Singular(True)
-    passive_rates = _View("passive_rates")
-    q = _Given()
+    J = _Row("J")
+    J_homogeneous = _Row("J_homogeneous")
+    singular_values = _RowSingular(False)
+    condition = _RowSingular(True)
+    passive_rates = _Row("passive_rates")
+    q = _Row("q")
+    closure_rank = _FromPack("closure_rank", "rank")
+    expected_rank = _FromPack("expected_rank", "expected")
+    status = _OK  # the one-pose path answers only where the closure is certainly regular
 
     def __eq__(self, other: object) -> bool:
         return self is other
@@ -267,6 +366,20 @@ class OnePoseChainJacobians(ChainJacobians):
     def __reduce__(self) -> tuple:  # pickled as the plain record, every field computed
         return ChainJacobians, tuple(getattr(self, name)
                                      for name in ChainJacobians.__dataclass_fields__)
+
+
+class FlatOnePoseChainJacobians(OnePoseChainJacobians):
+    """:class:`OnePoseChainJacobians` on ``chain_one_jacobian``'s flat output array (the
+    records of :func:`record`, :func:`at_solution` and of a build without the record layout):
+    ``J``, ``J_homogeneous``, ``passive_rates`` read-only views of its slices, ``q`` the
+    actuators given (a read-only view made at its first read)."""
+
+    J = _View("J")
+    J_homogeneous = _View("J_homogeneous")
+    singular_values = _Singular(False)
+    condition = _Singular(True)
+    passive_rates = _View("passive_rates")
+    q = _Given()
 
 
 _NEW = object.__new__
@@ -283,14 +396,16 @@ def record(m: Any, q: Any, u: Any, residual: float, tol: float, margin: float,
     p = pack(m) if residual <= RESIDUAL_GUARD else None
     if p is None:
         return False
-    out = p.jacobian(p.pack, u, margin * tol)  # the singular values when read (_Singular)
+    out = p.jacobian(p.pack, u, margin * tol, _FUSED in m.__dict__) if p.fusable \
+        else p.jacobian(p.pack, u, margin * tol)  # the singular values when read (_Singular)
     if out is None or out is False:  # the bound does not clear; outside the legs' home modes
         return out
-    one = _NEW(OnePoseChainJacobians)
+    one = _NEW(FlatOnePoseChainJacobians)
     fields = one.__dict__
     fields["_out"], fields["_pack"], fields["status"] = out, p, _OK
-    fields["q"] = q if type(q) is np.ndarray else np.array(q)
+    fields["_q"] = q if type(q) is np.ndarray else np.array(q)
     fields["closure_rank"], fields["expected_rank"] = p.rank, expected_rank
+    fields["_owner"] = m.__dict__
     return one
 
 
@@ -307,13 +422,17 @@ def at_solution(m: Any, solved: tuple, tol: float) -> Any:
             return False
     if solved[3] > RESIDUAL_GUARD:
         return False
-    out = p.jacobian(p.pack, solved[1], BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND))
+    owner = m.__dict__
+    threshold = BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND)
+    out = p.jacobian(p.pack, solved[1], threshold, _FUSED in owner) if p.fusable \
+        else p.jacobian(p.pack, solved[1], threshold)
     if out is None or out is False:
         return out
-    one = _NEW(OnePoseChainJacobians)
+    one = _NEW(FlatOnePoseChainJacobians)
     fields = one.__dict__
-    fields["_out"], fields["_pack"], fields["status"], fields["q"] = out, p, _OK, solved[0]
+    fields["_out"], fields["_pack"], fields["status"], fields["_q"] = out, p, _OK, solved[0]
     fields["closure_rank"], fields["expected_rank"] = p.rank, p.expected
+    fields["_owner"] = owner
     return one
 
 
@@ -333,7 +452,7 @@ def at_pose(m: Any, c: Any, x: Any, tol: float) -> Any:
     if p.ik_jacobian is None:
         solved = c.ik(c.capsule, x, True, True)
         return False if solved is None else at_solution(m, solved, tol)
-    return _fused(p, c, x, tol)
+    return _fused(p, c, x, tol, m.__dict__)
 
 
 def at_call(m: Any, x: Any, tol: Any) -> Any:
@@ -350,26 +469,44 @@ def at_call(m: Any, x: Any, tol: Any) -> Any:
     if p is None or not c or type(tol) is not float or not 0.0 < tol < _INF \
             or p.ik_jacobian is None or _native_now() is None:
         return False
-    return _fused(p, c, x, tol)
+    return _fused(p, c, x, tol, fields)
 
 
-def _fused(p: VelocityPack, c: Any, x: Any, tol: float) -> Any:
-    """The fused C call (``chain_one_ik_jacobian``) and the record (:func:`at_pose`)."""
+def _fused(p: VelocityPack, c: Any, x: Any, tol: float, owner: dict) -> Any:
+    """The fused C call (``chain_one_ik_jacobian``) and the record (:func:`at_pose`) of the
+    machine object whose ``__dict__`` is ``owner`` (its :data:`_FUSED` entry: the singular
+    stage in the call)."""
     threshold = BOUND_MARGIN * (tol if tol > RANK_RCOND else RANK_RCOND)
-    got = p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD, True) if p.singular \
-        else p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD)
+    if p.records:  # the record layout: the array alone, or None / False
+        fused = _FUSED in owner
+        out = p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD, fused, True)
+        if type(out) is not _ARRAY:
+            return out
+        one = _NEW(OnePoseChainJacobians)  # status and the ranks: the class's (_FromPack)
+        fields = one.__dict__
+        fields["_out"], fields["_pack"], fields["_owner"], fields["J"] = out, p, owner, out[:6]
+        if fused:  # this machine object's records have their condition read: kept now
+            fields["condition"] = out[p.condition_at]
+        return one
+    got = p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD, True) \
+        if _FUSED in owner else p.ik_jacobian(c.capsule, p.pack, x, threshold, RESIDUAL_GUARD)
     if got is None:
         return False
     q, out = got
     if out is None or out is False:
         return out
-    one = _NEW(OnePoseChainJacobians)
+    one = _NEW(FlatOnePoseChainJacobians)
     fields = one.__dict__
-    fields["_out"], fields["_pack"], fields["status"], fields["q"] = out, p, _OK, q
-    fields["closure_rank"], fields["expected_rank"] = p.rank, p.expected
+    fields["_out"], fields["_pack"], fields["status"], fields["_q"] = out, p, _OK, q
+    fields["closure_rank"], fields["expected_rank"], fields["_owner"] = p.rank, p.expected, owner
     return one
 
 
 _native_now = jit.native_kernels_now
 _PACKED = "_chain_one_native"  # the key of chain_one_native.packed's pack on the machine
 _INF = float("inf")
+_ARRAY = np.ndarray
+#: The key, in a machine object's ``__dict__``, that asks its one-pose calls for the singular
+#: stage inside their C call (set by :class:`_Singular` on a fusable build; per machine object:
+#: a copy of the machine has its own ``__dict__``).
+_FUSED = "_chain_one_fused"

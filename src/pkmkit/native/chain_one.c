@@ -644,19 +644,20 @@ static void legs_dense(const pk_one *s, const double *panels, double *jac) {
 
 PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
     (void)self;
-    if (nargs != 5 && nargs != 6) {
-        PyErr_SetString(PyExc_TypeError,
-                        "chain_one_ik_jacobian(packed, pack, x, threshold, guard[, singular])");
+    if (nargs < 5 || nargs > 7) {
+        PyErr_SetString(PyExc_TypeError, "chain_one_ik_jacobian(packed, pack, x, threshold, "
+                        "guard[, singular[, record]])");
         return NULL;
     }
     int singular = nargs == 5 ? 0 : PyObject_IsTrue(args[5]); /* -1: the check below */
+    int record = nargs == 7 ? PyObject_IsTrue(args[6]) : 0;   /* the record layout alone */
     pk_one *s = capsule_state(args[0]);
     if (!s) return NULL;
     double threshold = PyFloat_AsDouble(args[3]), guard = PyFloat_AsDouble(args[4]);
     if (PyErr_Occurred()) return NULL;
     double target[6], q[64];
     int got = read_target(s, args[2], target);
-    if (got <= 0) return got < 0 ? NULL : Py_NewRef(Py_None);
+    if (got <= 0) return got < 0 ? NULL : Py_NewRef(record ? Py_False : Py_None);
     pk_one_work k;
     if (work_alloc(s, &k) < 0) return PyErr_NoMemory();
     const ptrdiff_t n = s->inv.n;
@@ -674,17 +675,16 @@ PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_
         }
     }
     Py_END_ALLOW_THREADS
-    PyObject *qa = found ? pk_new_array(q, s->n_act, 0) : NULL, *answer = NULL;
-    if (qa) {
-        PyObject *out = residual > guard ? Py_NewRef(Py_False)
-                        : pk_one_velocity_array(args[1], u, threshold, fresh ? k.w.jac : NULL,
-                                                s->inv.position, n, singular);
-        answer = out ? PyTuple_Pack(2, qa, out) : NULL;
-        Py_XDECREF(out);
-        Py_DECREF(qa);
+    PyObject *qa = found && !record ? pk_new_array(q, s->n_act, 0) : NULL, *answer = NULL;
+    if (found && (qa || record)) { /* record: the array alone (q its last row) */
+        answer = residual > guard ? Py_NewRef(Py_False)
+                 : pk_one_velocity_array(args[1], u, threshold, fresh ? k.w.jac : NULL,
+                                         s->inv.position, n, singular, record ? q : NULL);
+        if (qa && answer) Py_SETREF(answer, PyTuple_Pack(2, qa, answer));
     }
+    Py_XDECREF(qa);
     free(k.memory);
-    return found || PyErr_Occurred() ? answer : Py_NewRef(Py_None);
+    return found || PyErr_Occurred() ? answer : Py_NewRef(record ? Py_False : Py_None);
 }
 
 const char pk_chain_one_structured_doc[] =

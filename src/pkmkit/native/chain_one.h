@@ -92,9 +92,10 @@ void pk_one_gram(const pk_blocks *bk, const double *panels, ptrdiff_t n, double 
 /* chain_one_velocity.c: chain_one_jacobian's answer at u (a new reference: the array, None or
  * False; NULL with an error), the legs' rows of the closure's Jacobian at u given (6 L rows,
  * given_n columns, given_position[var] each variable's; the platform's at 0..5) or NULL; the
- * singular stage run too where singular is nonzero. */
+ * singular stage run too where singular is nonzero; q (n) non-NULL: the record layout, a
+ * read-only (R, n) array with q its last row. */
 PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
                                 const double *given, const int64_t *given_position,
-                                ptrdiff_t given_n, int singular);
+                                ptrdiff_t given_n, int singular, const double *q);
 
 #endif

@@ -37,7 +37,7 @@ extern const char pk_chain_velocity_pack_doc[], pk_chain_one_velocity_doc[];
 extern const char pk_chain_one_jacobian_doc[];
 PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
                                 const double *given, const int64_t *given_position,
-                                ptrdiff_t given_n, int singular);
+                                ptrdiff_t given_n, int singular, const double *q);
 
 /* svd.c: the singular values of one small matrix (k <= 6), round-robin Jacobi */
 void pk_singular_values_fast(const double *mat, ptrdiff_t r, ptrdiff_t c, double *out);
@@ -185,25 +185,27 @@ static void point_column(const double *twist, const double *point, double *jac, 
     jac[5 * n + c] = w2;
 }
 
-/* Each leg's 6 rows of v->jac gathered into its panel (column-major, 6 rows): its local
- * columns, then every global column, then the leg actuators' (a column the leg's rows do not
- * involve copied as zeros and left out of the reflections: rest, nrest); adds the squares of
- * C_U's entries on those rows to *fro. */
-static ptrdiff_t gather(const chain_velocity *v, ptrdiff_t leg, double *panel, int64_t *rest,
+/* Each leg's 6 rows of the closure's Jacobian (jac: row-major, leading dimension ld, column
+ * at[col] of each of the kernel's columns col) gathered into its panel (column-major, 6
+ * rows): its local columns, then every global column, then the leg actuators' (a column the
+ * leg's rows do not involve copied as zeros and left out of the reflections: rest, nrest);
+ * adds the squares of C_U's entries on those rows to *fro. */
+static ptrdiff_t gather(const chain_velocity *v, const double *jac, ptrdiff_t ld,
+                        const int64_t *at, ptrdiff_t leg, double *panel, int64_t *rest,
                         double *fro) {
-    const ptrdiff_t ld = v->n_u + v->n_loop, n_g = v->n_global, p = v->leg_count[leg];
+    const ptrdiff_t n_g = v->n_global, p = v->leg_count[leg];
     const int64_t *piv = v->leg_cols + 6 * leg;
-    const double *rows = v->jac + 6 * leg * ld;
+    const double *rows = jac + 6 * leg * ld;
     double sum = *fro;
     for (ptrdiff_t j = 0; j < p; j++)
         for (int i = 0; i < 6; i++) {
-            double x = rows[i * ld + piv[j]];
+            double x = rows[i * ld + at[piv[j]]];
             panel[6 * j + i] = x;
             sum += x * x;
         }
     ptrdiff_t nrest = 0;
     for (ptrdiff_t g = 0; g < n_g + v->n_loop; g++) {
-        ptrdiff_t col = g < n_g ? v->global_cols[g] : v->n_u + g - n_g;
+        ptrdiff_t col = at[g < n_g ? v->global_cols[g] : v->n_u + g - n_g];
         double *dst = panel + 6 * (p + g);
         int nonzero = 0;
         for (int i = 0; i < 6; i++) {
@@ -218,11 +220,12 @@ static ptrdiff_t gather(const chain_velocity *v, ptrdiff_t leg, double *panel, i
     return nrest;
 }
 
-/* The closure rates du (n_u, n_loop) from v->jac (module comment); returns the bound, 0.0
+/* The closure rates du (n_u, n_loop) from jac, ld, at (gather's; module comment); the bound, 0.0
  * where a pivot vanishes or too few rows are left (the caller takes the batch path). Each
  * leg's panel keeps R_l, S_l and its right-hand sides; v->rest (rows left, column-major with
  * leading dimension 6L) R_g and its right-hand sides. */
-static double closure_rates(chain_velocity *v) {
+static double closure_rates(chain_velocity *v, const double *jac, ptrdiff_t ld,
+                            const int64_t *at) {
     const pk_chain *c = &v->c;
     const ptrdiff_t n_loop = v->n_loop, n_g = v->n_global, ld_g = 6 * c->n_legs;
     const ptrdiff_t width = 6 * (6 + n_g + n_loop);
@@ -232,7 +235,7 @@ static double closure_rates(chain_velocity *v) {
     for (ptrdiff_t leg = 0; leg < c->n_legs; leg++) {
         double *panel = v->panels + leg * width;
         ptrdiff_t p = v->leg_count[leg];
-        ptrdiff_t nrest = gather(v, leg, panel, rest, &fro);
+        ptrdiff_t nrest = gather(v, jac, ld, at, leg, panel, rest, &fro);
         if (!reflect_leg(panel, p, rest, nrest)) return 0.0;
         for (ptrdiff_t i = p; i < 6; i++, n_reduced++) /* the rows left */
             for (ptrdiff_t g = 0; g < n_g + n_loop; g++)
@@ -310,7 +313,8 @@ static void singular_stage(chain_velocity *v, double *out) {
 }
 
 static double velocity(chain_velocity *v, const double *u, double *out, int singular,
-                       const double *given, const int64_t *given_position, ptrdiff_t given_n) {
+                       const double *given, const int64_t *given_position, ptrdiff_t given_n,
+                       ptrdiff_t rates_at) { /* the passive rates at out + rates_at */
     const pk_chain *c = &v->c;
     const ptrdiff_t n = v->n_act, n_loop = v->n_loop, n_u = v->n_u;
     for (ptrdiff_t k = 0; k < v->n_slides; k++)
@@ -322,26 +326,24 @@ static double velocity(chain_velocity *v, const double *u, double *out, int sing
         v->values[var] = u[6 + var];
         if (c->position[var] >= 0) v->full_u[c->position[var]] = u[6 + var];
     }
+    int64_t at[256]; /* the column read for each of the kernel's columns (more: the batch path) */
+    if (n_u + n_loop > 256) return 0.0;
+    for (ptrdiff_t i = 0; i < n_u + n_loop; i++) at[i] = i;
     if (given) { /* the legs' rows at u from the caller (given_n columns, given_position) */
-        const ptrdiff_t ld = v->n_u + v->n_loop;
-        for (ptrdiff_t i = 0; i < 6 * c->n_legs; i++) {
-            const double *src = given + i * given_n;
-            double *dst = v->jac + i * ld;
-            memcpy(dst, src, 6 * sizeof(double));
-            for (ptrdiff_t var = 0; var < c->n_var; var++)
-                if (c->position[var] >= 0) dst[c->position[var]] = src[given_position[var]];
-        }
+        for (ptrdiff_t var = 0; var < c->n_var; var++)
+            if (c->position[var] >= 0) at[c->position[var]] = given_position[var];
     } else {
         pk_chain_evaluate(c, v->values, v->full_u, v->r, v->jac, &v->w);
     }
-    double bound = closure_rates(v);
+    double bound = closure_rates(v, given ? given : v->jac, given ? given_n : n_u + n_loop, at);
     if (!(bound > 0.0)) return 0.0;
     double rot[9], pos[3], point[3], twist[6];
     ptrdiff_t n_twist = head_walk(v, u, rot, pos);
     for (int i = 0; i < 3; i++) point[i] = pos[i] + v->tool * rot[3 * i + 2];
     double *jac = out, *j_h = out + 6 * n;
     ptrdiff_t k = n < 6 ? n : 6;
-    double *sv = j_h + 6 * n, *rates = sv + k + 1;
+    double *sv = j_h + 6 * n, *rates = out + rates_at;
+    for (double *pad = sv + k + 1; pad < rates; pad++) *pad = 0.0; /* the record layout's */
     if (n_loop + n_twist < n) /* an actuator without a column below (none on these machines) */
         for (ptrdiff_t i = 0; i < 6 * n; i++) jac[i] = 0.0;
     for (ptrdiff_t i = 0; i < (n_u - 6) * n; i++) rates[i] = 0.0;
@@ -546,7 +548,8 @@ static double *take_out(const chain_velocity *v, held_buffers *held, PyObject *o
     if (!out) return NULL;
     ptrdiff_t n = v->n_act, k = n < 6 ? n : 6;
     Py_ssize_t need = 12 * n + k + 1 + (v->n_u - 6) * n;
-    if (extent(held, 0, 0) != need) {
+    if (extent(held, 0, 0) != need && extent(held, 0, 0) != v->n_act * (13 + (k < n ? 1 : 2)
+                                                                       + v->n_u - 6)) {
         PyErr_Format(PyExc_ValueError, "out: %zd floats expected, not %zd", need,
                      extent(held, 0, 0));
         return NULL;
@@ -632,7 +635,7 @@ PyObject *pk_py_chain_one_velocity(PyObject *self, PyObject *const *args, Py_ssi
         let_go(&held);
         return NULL;
     }
-    double bound = velocity(v, u, out, singular, NULL, NULL, 0);
+    double bound = velocity(v, u, out, singular, NULL, NULL, 0, v->size - (v->n_u - 6) * v->n_act);
     let_go(&held);
     return PyFloat_FromDouble(bound);
 }
@@ -652,22 +655,28 @@ PyObject *pk_py_chain_one_jacobian(PyObject *self, PyObject *const *args, Py_ssi
     if (threshold == -1.0 && PyErr_Occurred()) return NULL;
     double u[256];
     if (take_u(args[1], 6 + v->c.n_var, u) < 0) return NULL;
-    return pk_one_velocity_array(args[0], u, threshold, NULL, NULL, 0, singular);
+    return pk_one_velocity_array(args[0], u, threshold, NULL, NULL, 0, singular, NULL);
 }
 
 /* chain_one_jacobian's answer at u (6 + n_var) for pack; given (6 L rows, given_n columns,
  * given_position[var] the column of each variable, the platform's at 0..5): the closure's
  * Jacobian at u evaluated by the caller (chain_one.c's inverse, its last evaluation), or NULL.
- * A new reference (the array, None or False), NULL with an error set. */
+ * q non-NULL: the record layout instead, a read-only (R, n) array of rows J (6), J_homogeneous
+ * (6), the singular values and the condition (1 or 2 rows, zero after), the passive rates,
+ * q (n). A new reference (the array, None or False), NULL with an error set. */
 PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshold,
                                 const double *given, const int64_t *given_position,
-                                ptrdiff_t given_n, int singular) {
+                                ptrdiff_t given_n, int singular, const double *q) {
     chain_velocity *v = pack_state(pack);
     if (!v) return NULL;
     if (given && 6 + v->c.n_var != given_n) given = NULL; /* not the same machine's */
     /* the array first, then the kernel straight into it: no Python code runs between the
      * capsule's scratch and the answer (a thread switch there could reuse the scratch) */
-    PyObject *empty = pk_numpy_empty(), *size = PyLong_FromSsize_t(v->size);
+    const ptrdiff_t n = v->n_act, k = n < 6 ? n : 6, rows = 13 + (k < n ? 1 : 2) + v->n_u - 6;
+    static PyObject *seal; /* "setflags" (interned, kept): the record's read-only */
+    if (q && !seal && !(seal = PyUnicode_InternFromString("setflags"))) return NULL;
+    PyObject *empty = pk_numpy_empty(), *size = q ? Py_BuildValue("(nn)", rows, n)
+                                                  : PyLong_FromSsize_t(v->size);
     PyObject *array = empty && size ? PyObject_CallOneArg(empty, size) : NULL;
     Py_XDECREF(size);
     Py_buffer view;
@@ -675,11 +684,17 @@ PyObject *pk_one_velocity_array(PyObject *pack, const double *u, double threshol
         Py_XDECREF(array);
         return NULL;
     }
-    double bound = velocity(v, u, view.buf, singular, given, given_position, given_n);
+    ptrdiff_t rates_at = q ? (rows - 1 - v->n_u + 6) * n : 12 * n + k + 1;
+    double *out = view.buf, bound = velocity(v, u, out, singular, given, given_position, given_n,
+                                             rates_at);
+    if (q) memcpy(out + (rows - 1) * n, q, (size_t)n * sizeof(double));
     PyBuffer_Release(&view);
     if (bound < 0.0 || !(bound >= threshold) || !(bound > 0.0)) {
         Py_DECREF(array);
         return Py_NewRef(bound < 0.0 ? Py_False : Py_None);
     }
+    PyObject *sealed = q ? PyObject_CallMethodOneArg(array, seal, Py_False) : Py_NewRef(Py_None);
+    if (!sealed) Py_CLEAR(array);
+    Py_XDECREF(sealed);
     return array;
 }

@@ -25,7 +25,9 @@ const char pk_chain_one_velocity_doc[] =
     "sigma_min / sigma_max of the closure's Jacobian C_U (0.0 where a pivot vanished, -1.0\n"
     "where u is not in the legs' home modes: out is then not filled). With singular false the\n"
     "singular values and the condition are left NaN: chain_one_velocity(pack, None, out) then\n"
-    "computes them from out's J_homogeneous (and returns the condition number).";
+    "computes them from out's J_homogeneous (and returns the condition number); out may there\n"
+    "also be the flat view of a writeable copy of a record-layout array (chain_one_ik_jacobian's:\n"
+    "the same places for J_homogeneous, the singular values and the condition).";
 
 const char pk_chain_one_jacobian_doc[] =
     "chain_one_jacobian(pack, u, threshold, singular=False) -> out, None or False\n\n"
@@ -37,11 +39,15 @@ const char pk_chain_one_jacobian_doc[] =
     "call (out's singular values and condition filled).";
 
 const char pk_chain_one_ik_jacobian_doc[] =
-    "chain_one_ik_jacobian(packed, pack, x, threshold, guard, singular=False)\n\n"
+    "chain_one_ik_jacobian(packed, pack, x, threshold, guard, singular=False, record=False)\n\n"
     "m.jacobian(x)'s C path in one call: chain_one_ik's inverse of one plain pose x (no\n"
     "stroke test) and chain_one_jacobian(pack, u, threshold) at its solution u, the closure's\n"
     "Jacobian handed over from the inverse's last evaluation where that was at u (else\n"
     "evaluated again): (q, out), out the array, None or False as chain_one_jacobian answers\n"
     "(False too where the inverse's largest residual exceeds guard); None where the inverse\n"
     "declines. pack: the machine's chain_velocity_pack capsule. singular true: out's\n"
-    "singular values and condition computed in the same call (chain_one_jacobian's).";
+    "singular values and condition computed in the same call (chain_one_jacobian's).\n"
+    "record true: the answer is the array alone in the record layout, a read-only (R, n)\n"
+    "float64 array of rows J (6), J_homogeneous (6), the singular values then the condition\n"
+    "(1 row, 2 where min(6, n) = n; zero after), the passive rates (n_u - 6), q; None where\n"
+    "the bound does not clear; False where the inverse declines or the answer would be False.";
