@@ -24,6 +24,7 @@ SI units everywhere in the Python API (m, rad).
 
 import sys
 import types
+from typing import TYPE_CHECKING
 
 from pkmkit.exceptions import (
     ConvergenceError,
@@ -38,6 +39,9 @@ from pkmkit.exceptions import (
     UnreachablePoseError,
 )
 from pkmkit.status import Status
+
+if TYPE_CHECKING:  # what the names below resolve to, for type checkers and editors
+    from pkmkit.machines import Machine, Singularity, load, machine, machines
 
 __version__ = "0.1.0"
 
