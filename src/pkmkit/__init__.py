@@ -22,6 +22,10 @@ Quick start:
 SI units everywhere in the Python API (m, rad).
 """
 
+import sys
+import types
+from typing import TYPE_CHECKING
+
 from pkmkit.exceptions import (
     ConvergenceError,
     InputError,
@@ -34,10 +38,49 @@ from pkmkit.exceptions import (
     UnknownParameterError,
     UnreachablePoseError,
 )
-from pkmkit.machines import Machine, Singularity, load, machine, machines
 from pkmkit.status import Status
 
+if TYPE_CHECKING:  # what the names below resolve to, for type checkers and editors
+    from pkmkit.machines import Machine, Singularity, load, machine, machines
+
 __version__ = "0.1.0"
+
+#: Names served by :mod:`pkmkit.machines`, imported on first use: ``import pkmkit`` (and so
+#: ``pkmkit --help``) loads neither NumPy nor the machine library (issue 22 §5).
+_FROM_MACHINES = ("Machine", "Singularity", "load", "machine")
+
+
+def __getattr__(name: str):
+    if name in _FROM_MACHINES:
+        from importlib import import_module  # `from pkmkit import machines` is the function
+
+        value = getattr(import_module("pkmkit.machines"), name)
+        globals()[name] = value  # later look-ups skip this function
+        return value
+    raise AttributeError(f"module 'pkmkit' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_FROM_MACHINES, "machines"})
+
+
+class _Package(types.ModuleType):
+    """``pkmkit.machines`` is the function listing the built-in machines, as it was when this
+    package imported it eagerly; the import system's binding of the ``pkmkit.machines``
+    sub-package to this attribute, once it is loaded, leaves the function in place."""
+
+    @property
+    def machines(self):
+        from pkmkit.machines.registry import machines
+
+        return machines
+
+    @machines.setter
+    def machines(self, value) -> None:
+        pass  # the sub-package itself stays in sys.modules["pkmkit.machines"]
+
+
+sys.modules[__name__].__class__ = _Package
 
 __all__ = [
     "ConvergenceError",

@@ -8,8 +8,10 @@ compares with the members (``status == Status.OK``).
 from __future__ import annotations
 
 from enum import IntEnum
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:
+    import numpy as np
 
 
 class Status(IntEnum):
@@ -41,4 +43,6 @@ class Status(IntEnum):
 
 def status_labels(status: np.ndarray) -> list[str]:
     """Labels of an integer status array, flattened (shape ``(N,)`` → list of N strings)."""
+    import numpy as np  # imported here: `import pkmkit` (and `pkmkit --help`) needs no NumPy
+
     return [Status(int(s)).label for s in np.ravel(status)]
