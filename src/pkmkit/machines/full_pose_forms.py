@@ -149,8 +149,14 @@ class FullPoseForms:
         if shared is not None:  # every thread on one plan: no held piece (jit.run_together)
             kernel, plan = shared
             args = [x, *rods, q, status, plan]
+
+            def run(wait: bool) -> None:
+                held = args.copy()  # one step under the GIL: all the arguments or none
+                if held:
+                    kernel(*held, wait)
+
             try:
-                jit.run_together(lambda wait: kernel(*args, wait) if args else None)
+                jit.run_together(run)
             finally:  # a helper not started yet holds no array (a recycled q is freed on time)
                 args.clear()
             return q, status if statuses else None
