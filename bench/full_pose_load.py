@@ -11,14 +11,19 @@ process, every variant interleaved round by round with the preallocated copy
   default) and against ``m.ik(X, out=Q)`` with ``Q`` reused;
 - **threads** — 2 threads (the default on 2 cores) against 1 (``PKMKIT_THREADS=1``);
 - **pieces** — the rows per piece drawn from the shared counter (``jit.THREAD_ROWS``: 2¹²,
-  2¹⁴ the default, 2¹⁶, and half the batch: two static halves).
+  2¹⁴, 2¹⁶, and half the batch: two static halves) by :func:`jit.run_chunks`, the default
+  until session 35;
+- **the shared plan** (``jit.SHARED_INVERSE``, the default since session 35,
+  ``native/inverse_shared.c``): every thread on one plan, a held slice computed again by an
+  idle thread and written once, the call not waiting for a descheduled helper.
 
 Per variant: the median wall time, the median of the per-round ratios to the same round's
 preallocated copy with their range, the best CPU time per pose (process CPU), and minor page
 faults per call. For the default variant the pieces are traced: how many each thread ran,
 the page faults each thread took (``RUSAGE_THREAD``: who first-touches the fresh output) and
 the tail — how long the first thread to run out of pieces waited for the other (a thread
-descheduled in the middle of a piece holds the call that long).
+descheduled in the middle of a piece holds the call that long); for the shared plan, how long
+the helper ran on after the call had returned (what the pieces would have waited).
 
     python bench/full_pose_load.py [--poses 1000000] [--repeat 7] [--load none|busy|both]
 """
@@ -46,27 +51,31 @@ from pkmkit.spatial import pose_from_angles
 
 
 def _variants(n: int) -> dict:
-    """``{label: (environment, THREAD_ROWS, uses out=)}``."""
+    """``{label: (environment, THREAD_ROWS, uses out=, the shared plan)}``: the shared plan
+    (``jit.SHARED_INVERSE``, session 35's default) or :func:`jit.run_chunks`' pieces."""
     default = jit.THREAD_ROWS
     return {
-        "plain, fresh pages, 2 threads": ({"PKMKIT_RECYCLE": "0"}, default, False),
-        "plain, recycled, 2 threads": ({}, default, False),
-        "out=Q, 2 threads": ({}, default, True),
+        "plain, shared plan (default)": ({}, default, False, True),
+        "out=Q, shared plan": ({}, default, True, True),
+        "plain, fresh pages, 2 threads": ({"PKMKIT_RECYCLE": "0"}, default, False, False),
+        "plain, recycled, 2 threads": ({}, default, False, False),
+        "out=Q, 2 threads": ({}, default, True, False),
         "plain, fresh pages, 1 thread": ({"PKMKIT_RECYCLE": "0", "PKMKIT_THREADS": "1"},
-                                         default, False),
-        "plain, recycled, 1 thread": ({"PKMKIT_THREADS": "1"}, default, False),
-        "plain, recycled, pieces 2^12": ({}, 1 << 12, False),
-        "plain, recycled, pieces 2^16": ({}, 1 << 16, False),
-        "plain, recycled, two halves": ({}, -(-n // 2), False),
+                                         default, False, False),
+        "plain, recycled, 1 thread": ({"PKMKIT_THREADS": "1"}, default, False, False),
+        "plain, recycled, pieces 2^12": ({}, 1 << 12, False, False),
+        "plain, recycled, pieces 2^16": ({}, 1 << 16, False, False),
+        "plain, recycled, two halves": ({}, -(-n // 2), False, False),
     }
 
 
 def _call(m, poses, reused, setting) -> tuple[float, float, int]:
     """One call under ``setting``: wall s, process CPU s, minor page faults."""
-    env, rows, use_out = setting
+    env, rows, use_out, shared = setting
     saved = {k: os.environ.get(k) for k in env}
     os.environ.update(env)
     jit.THREAD_ROWS = rows
+    jit.SHARED_INVERSE = shared
     try:
         faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
         cpu, wall = time.process_time(), time.perf_counter()
@@ -75,6 +84,7 @@ def _call(m, poses, reused, setting) -> tuple[float, float, int]:
         faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
         del q
     finally:
+        jit.SHARED_INVERSE = True
         for k, v in saved.items():
             if v is None:
                 os.environ.pop(k, None)
@@ -89,8 +99,41 @@ def _copy(poses, target) -> float:
     return time.perf_counter() - start
 
 
+def _trace_shared(m, poses, repeat: int) -> str:
+    """The shared plan's calls: how long the helper ran on after the call returned (what a
+    call that waits for its threads — the pieces — would have waited), over ``repeat``
+    calls."""
+    real = jit.run_together
+    log: list = []
+
+    def together(work):
+        def timed(wait):
+            try:
+                work(wait)
+            finally:
+                log.append((wait, time.perf_counter()))
+        real(timed)
+
+    outlived = []
+    jit.run_together = together
+    try:
+        for _ in range(repeat):
+            log.clear()
+            m.ik(poses)
+            returned = time.perf_counter()
+            jit._helper_pool(jit.thread_count() - 1).submit(lambda: None).result()  # idle
+            helpers = [t for wait, t in log if not wait]
+            outlived.append(max([0.0, *(t - returned for t in helpers)]) * 1e3)
+    finally:
+        jit.run_together = real
+    return (f"the helper ran on after the call returned: {statistics.median(outlived):.2f} ms "
+            f"median (range {min(outlived):.2f}–{max(outlived):.2f})")
+
+
 def _trace(m, poses, repeat: int, fresh: bool) -> str:
-    """Pieces per thread, faults per thread and the tail of ``repeat`` default calls."""
+    """Pieces per thread, faults per thread and the tail of ``repeat`` calls on
+    :func:`jit.run_chunks`' pieces (``jit.SHARED_INVERSE`` off)."""
+    jit.SHARED_INVERSE = False
     real = jit.kernel
     log: list = []
 
@@ -126,6 +169,7 @@ def _trace(m, poses, repeat: int, fresh: bool) -> str:
                                    for ident in sorted(ends, key=lambda i: i != me)))
     finally:
         jit.kernel = real
+        jit.SHARED_INVERSE = True
         os.environ.pop("PKMKIT_RECYCLE", None)
     return (f"pieces (calling thread/helper) {', '.join(counts)}; page faults in the pieces "
             f"{', '.join(faults)}; tail {statistics.median(tails):.2f} ms median "
@@ -159,8 +203,9 @@ def load_rows(m, poses: np.ndarray, repeat: int) -> None:
               f"/ copy {statistics.median(ratios):4.1f} (rounds {ratios[0]:.1f}–"
               f"{ratios[-1]:.1f}), CPU {min(r[1] for r in rows) / n * 1e9:5.1f} ns per pose "
               f"(best), {statistics.median(r[2] for r in rows):.0f} faults per call")
-    print(f"  traced, fresh pages: {_trace(m, poses, repeat, True)}")
-    print(f"  traced, recycled:    {_trace(m, poses, repeat, False)}")
+    print(f"  traced, pieces, fresh pages: {_trace(m, poses, repeat, True)}")
+    print(f"  traced, pieces, recycled:    {_trace(m, poses, repeat, False)}")
+    print(f"  traced, shared plan:         {_trace_shared(m, poses, repeat)}")
 
 
 def main() -> None:

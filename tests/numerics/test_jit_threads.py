@@ -141,11 +141,13 @@ def test_a_memory_chunk_of_a_protocol_call_is_spread_over_the_threads(monkeypatc
     assert len(pieces) >= 2
 
 
-def test_a_large_protocol_call_runs_its_kernel_on_several_threads(monkeypatch):
+@pytest.mark.parametrize("shared", [False, True], ids=["pieces", "shared plan"])
+def test_a_large_protocol_call_runs_its_kernel_on_several_threads(shared, monkeypatch):
     """End to end: a plain hexapod ``m.ik`` of 3 memory chunks runs whole — one
-    ``run_chunks`` over every row, no memory chunks (their joining copy ran on one thread:
-    a third of the call's CPU) —, its pieces on two threads at once, and gives bit for bit
-    the one-thread result and the chunked path's (``full_output``), NaN rows included."""
+    ``run_chunks`` over every row (or, by default since session 35, one shared plan:
+    ``jit.run_together``), no memory chunks (their joining copy ran on one thread: a third of
+    the call's CPU) —, on two threads at once, and gives bit for bit the one-thread result and
+    the chunked path's (``full_output``), NaN rows included."""
     import pkmkit
     from pkmkit.machines.chunks import CHUNK_ROWS
 
@@ -161,6 +163,20 @@ def test_a_large_protocol_call_runs_its_kernel_on_several_threads(monkeypatch):
     monkeypatch.setenv("PKMKIT_THREADS", "2")
     calls = []
     real = jit.run_chunks
+    real_together = jit.run_together
+    if shared:  # the native inverse's shared plan (session 35): both threads on one plan
+
+        def spy_together(work):
+            meet = threading.Barrier(2, timeout=60)  # breaks unless two threads run at once
+
+            def traced(wait):
+                meet.wait()
+                work(wait)
+            calls.append(x.shape[0])
+            real_together(traced)
+
+        monkeypatch.setattr(jit, "run_together", spy_together)
+    monkeypatch.setattr(jit, "SHARED_INVERSE", shared)
 
     def spy(work, rows):
         meet = threading.Barrier(2, timeout=60)  # breaks unless two threads run at once
@@ -281,8 +297,11 @@ def test_a_large_verne_inverse_runs_whole_with_the_same_bits(monkeypatch):
     record = m.ik(x, full_output=True)
     monkeypatch.setenv("PKMKIT_THREADS", "2")
     calls = []
-    real = jit.run_chunks
+    real, real_together = jit.run_chunks, jit.run_together
     monkeypatch.setattr(jit, "run_chunks", lambda w, r, *a: calls.append(r) or real(w, r, *a))
+    # the shared plan (session 35) runs every row in one call too
+    monkeypatch.setattr(jit, "run_together",
+                        lambda w: calls.append(3 * CHUNK_ROWS) or real_together(w))
     two = m.ik(x)
     assert calls == [3 * CHUNK_ROWS]
     status = np.asarray(record.status)

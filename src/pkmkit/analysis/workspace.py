@@ -34,6 +34,7 @@ from pkmkit.analysis.criteria import (  # noqa: F401  (re-exported: their old ho
     study_length,
 )
 from pkmkit.analysis.flood import flood_grid, floods
+from pkmkit.analysis.grid_masks import erode_faces, label_faces, window_all
 from pkmkit.analysis.grids import Grid
 from pkmkit.analysis.inscribed import DEFAULT_RTOL as INSCRIBED_RTOL
 from pkmkit.analysis.inscribed import largest_box, lattice_shell
@@ -89,10 +90,7 @@ def largest_inscribed_box(mask: np.ndarray, grid: Grid, center: Any = None
     def centres(k: int) -> np.ndarray:
         # true where the k-point window [i - k//2, i - k//2 + k - 1] (each axis) is all true;
         # outside the grid counts as false
-        from scipy import ndimage  # at first use: ≈ 0.2–0.3 s of imports `--help` need not pay
-
-        return ndimage.minimum_filter(mask.view(np.uint8), size=k, mode="constant",
-                                      cval=0).astype(bool)
+        return window_all(mask, k)
 
     lo, hi = 1, min(mask.shape)
     while lo < hi:  # largest k with a feasible k × k (× k) block
@@ -155,17 +153,14 @@ def _part_next_to(labels: np.ndarray, grid: Grid, home: np.ndarray,
 def _connected_part(feasible: np.ndarray, grid: Grid, home: np.ndarray) -> tuple[np.ndarray, str]:
     if not feasible.any():
         return feasible, "empty"
-    from scipy import ndimage  # at first use (see largest_inscribed_box)
-
-    structure = ndimage.generate_binary_structure(feasible.ndim, 1)
-    labels, count = ndimage.label(feasible, structure=structure)
+    labels, count = label_faces(feasible)
     index = grid.nearest_index(home)
     if index is not None and labels[index] > 0:
         return labels == labels[index], "home"
     near = _part_next_to(labels, grid, home, index)
     if near:  # home at the edge of a part (a stroke end): its nearest grid point just outside
         return labels == near, "home (within one grid step of it)"
-    sizes = ndimage.sum_labels(feasible, labels, index=np.arange(1, count + 1))
+    sizes = np.bincount(labels.ravel(), minlength=count + 1)[1:]
     return labels == (1 + int(np.argmax(sizes))), "largest connected part (home not in it)"
 
 
@@ -243,9 +238,7 @@ class WorkspaceMap:
     @property
     def boundary(self) -> np.ndarray:
         """Feasible points with an infeasible (or off-grid) face neighbour."""
-        from scipy import ndimage  # at first use (see largest_inscribed_box)
-
-        inner = ndimage.binary_erosion(self.feasible, border_value=0)
+        inner = erode_faces(self.feasible)
         return self.feasible & ~inner
 
     def factor_range(self, region: np.ndarray | None = None) -> tuple[float, float]:

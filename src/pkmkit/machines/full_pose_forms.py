@@ -145,6 +145,22 @@ class FullPoseForms:
                 self.crank_radius, self.crank_offset, sigma), BOUNDARY_TOL, groups,
                 counts.astype(np.int64), angular, float(consistency_tol))
 
+        shared = _shared_inverse(x.shape[0], inverse_poses)
+        if shared is not None:  # every thread on one plan: no held piece (jit.run_together)
+            kernel, plan = shared
+            args = [x, *rods, q, status, plan]
+
+            def run(wait: bool) -> None:
+                held = args.copy()  # one step under the GIL: all the arguments or none
+                if held:
+                    kernel(*held, wait)
+
+            try:
+                jit.run_together(run)
+            finally:  # a helper not started yet holds no array (a recycled q is freed on time)
+                args.clear()
+            return q, status if statuses else None
+
         def work(start: int, stop: int) -> None:
             out = status[start:stop] if statuses else np.empty(stop - start, dtype=np.int64)
             inverse_poses(x[start:stop], *rods, q[start:stop], out)
@@ -291,6 +307,22 @@ class FullPoseForms:
         b_dot = np.zeros((x.shape[0], m.n_rods, m.n_actuators))
         b_dot[:, np.arange(m.n_rods), m.rod_actuator] = diag
         return a_dot, b_dot
+
+
+def _shared_inverse(rows: int, inverse_poses: object) -> tuple | None:
+    """``(inverse_poses_shared, plan)`` of the C extension for a batch of ``rows`` rows when
+    the kernel chosen, ``inverse_poses``, is the C one and runs on several threads
+    (:data:`pkmkit.numerics.jit.SHARED_INVERSE`; two blocks and two of
+    :func:`~pkmkit.numerics.jit.run_chunks`' pieces or more, as it spreads), else None
+    (:func:`pkmkit.numerics.jit.run_chunks`' pieces)."""
+    slice_rows, block = jit.SHARED_SLICE_ROWS, jit.SHARED_BLOCK_SLICES
+    native = jit.native_kernels()
+    if (not jit.SHARED_INVERSE or rows < 2 * max(slice_rows * block, jit.THREAD_ROWS)
+            or jit.thread_count() == 1
+            or native is None or inverse_poses is not getattr(native, "inverse_poses", None)):
+        return None
+    kernel = getattr(native, "inverse_poses_shared", None)  # None: an older build
+    return None if kernel is None else (kernel, native.inverse_plan(rows, slice_rows, block))
 
 
 def _plain(*arrays: np.ndarray) -> list[np.ndarray]:

@@ -335,6 +335,27 @@ PyObject *pk_new_array(const double *values, Py_ssize_t rows, Py_ssize_t cols);
  * (-1: any; NULL: any shape); 0, or -1 with an exception set and nothing held. */
 int pk_take(PyObject *obj, Py_buffer *view, const char *name, char type, int writable, int ndim,
             const Py_ssize_t *shape);
+/* inverse_shared.c: one batch's inverse on several threads, held rows computed again by an
+ * idle thread and written once (issue 22 §2). */
+ptrdiff_t pk_inverse_plan_bytes(ptrdiff_t rows, ptrdiff_t slice_rows, ptrdiff_t block_slices);
+void pk_inverse_plan_init(unsigned char *plan, ptrdiff_t rows, ptrdiff_t slice_rows,
+                          ptrdiff_t block_slices);
+int pk_inverse_plan_fits(unsigned char *plan, ptrdiff_t bytes, ptrdiff_t rows);
+ptrdiff_t pk_inverse_plan_slice(unsigned char *plan); /* its slice_rows */
+void pk_inverse_shared(const double *x, ptrdiff_t rows, const pk_rods *rods,
+                       const pk_actuators *act, double *q, int64_t *status,
+                       unsigned char *plan, int wait, double *scratch_q,
+                       int64_t *scratch_status, double *rod_q);
+extern const char pk_inverse_plan_doc[], pk_inverse_shared_doc[];
+/* The plan argument (a writable buffer fitting rows; view held on success, else NULL with
+ * an exception), and pk_inverse_shared with this thread's scratch, the GIL released (-1 and
+ * MemoryError when the scratch cannot be had). */
+unsigned char *pk_take_plan(PyObject *obj, Py_buffer *view, Py_ssize_t rows);
+int pk_run_shared(const double *x, ptrdiff_t rows, const pk_rods *rods,
+                  const pk_actuators *act, double *q, int64_t *status, unsigned char *plan,
+                  int wait, double *rod_q);
+PyObject *pk_py_inverse_plan(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
 /* recycled.c: large batch outputs' memory handed back to the next call (issue 22 §2). */
 extern const char pk_recycled_block_doc[], pk_recycled_release_doc[];
 PyObject *pk_py_recycled_block(PyObject *self, PyObject *const *args, Py_ssize_t nargs);

@@ -88,9 +88,12 @@ PyDoc_STRVAR(inverse_doc,
 "of pose rows x (N, 6); float64, int64 (kind, groups, counts, status) and bool (angular)\n"
 "C-contiguous arrays. Runs without the GIL.");
 
-static PyObject *inverse_poses(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
-    (void)self;
-    if (check_args(nargs, 20, "inverse_poses") < 0) return NULL;
+/* inverse_poses (shared 0: 20 arguments) and inverse_poses_shared (shared 1: the same and
+ * plan, wait; an empty status writes none). */
+static PyObject *inverse_call(PyObject *const *args, Py_ssize_t nargs, int shared) {
+    if (check_args(nargs, shared ? 22 : 20, shared ? "inverse_poses_shared" : "inverse_poses")
+        < 0)
+        return NULL;
     buffers held = {.count = 0};
     pk_rods rods;
     pk_actuators act;
@@ -129,8 +132,23 @@ static PyObject *inverse_poses(PyObject *self, PyObject *const *args, Py_ssize_t
     if (act.consistency_tol == -1.0 && PyErr_Occurred()) goto fail;
     double *q = take(&held, args[18], "q", 'd', 1, 2, rows, act.n);
     if (!q) goto fail;
-    int64_t *status = take(&held, args[19], "status", 'i', 1, 1, rows, -1);
+    int64_t *status = take(&held, args[19], "status", 'i', 1, 1, shared ? -1 : rows, -1);
     if (!status) goto fail;
+    if (shared && dim(&held, held.count - 1, 0) != rows) {
+        if (dim(&held, held.count - 1, 0) != 0) {
+            PyErr_SetString(PyExc_ValueError, "status: wrong shape (rows or 0 needed)");
+            goto fail;
+        }
+        status = NULL;
+    }
+    unsigned char *plan = NULL;
+    int wait = 0;
+    if (shared) {
+        plan = pk_take_plan(args[20], &held.views[held.count], rows);
+        if (!plan) goto fail;
+        held.count++;
+        if ((wait = PyObject_IsTrue(args[21])) < 0) goto fail;
+    }
     for (Py_ssize_t a = 0; a < act.n; a++) {
         int64_t count = act.counts[a];
         int bad = count < 1 || count > act.width;
@@ -154,15 +172,34 @@ static PyObject *inverse_poses(PyObject *self, PyObject *const *args, Py_ssize_t
         PyErr_NoMemory();
         goto fail;
     }
-    Py_BEGIN_ALLOW_THREADS
-    pk_inverse_poses(x, rows, &rods, &act, q, status, rod_q);
-    Py_END_ALLOW_THREADS
+    if (shared) {
+        int failed = pk_run_shared(x, rows, &rods, &act, q, status, plan, wait, rod_q);
+        if (failed) {
+            free(rod_q);
+            goto fail;
+        }
+    } else {
+        Py_BEGIN_ALLOW_THREADS
+        pk_inverse_poses(x, rows, &rods, &act, q, status, rod_q);
+        Py_END_ALLOW_THREADS
+    }
     free(rod_q);
     release(&held);
     Py_RETURN_NONE;
 fail:
     release(&held);
     return NULL;
+}
+
+static PyObject *inverse_poses(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
+    (void)self;
+    return inverse_call(args, nargs, 0);
+}
+
+static PyObject *inverse_poses_shared(PyObject *self, PyObject *const *args,
+                                      Py_ssize_t nargs) {
+    (void)self;
+    return inverse_call(args, nargs, 1);
 }
 
 /* The arguments common to solve_rows and solve_one; rows < 0 for one pose. */
@@ -569,6 +606,10 @@ PyObject *pk_py_euler_rotvec(PyObject *self, PyObject *const *args, Py_ssize_t n
 
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
+    {"inverse_poses_shared", (PyCFunction)(void (*)(void))inverse_poses_shared, METH_FASTCALL,
+     pk_inverse_shared_doc},
+    {"inverse_plan", (PyCFunction)(void (*)(void))pk_py_inverse_plan, METH_FASTCALL,
+     pk_inverse_plan_doc},
     {"solve_rows", (PyCFunction)(void (*)(void))solve_rows, METH_FASTCALL, solve_rows_doc},
     {"solve_one", (PyCFunction)(void (*)(void))solve_one, METH_FASTCALL, solve_one_doc},
     {"simd", (PyCFunction)(void (*)(void))simd, METH_FASTCALL, simd_doc},

@@ -70,6 +70,15 @@ THREAD_ROWS = 1 << 14
 #: a batch of a few thousand rows — the usual size of a direct-model batch — already runs on
 #: every thread (with :data:`THREAD_ROWS` a 10⁴-row batch was one piece, on one thread).
 SOLVER_PIECE_ROWS = 1 << 10
+#: The full-pose machines' native inverse runs one shared plan on every thread instead of
+#: :func:`run_chunks`' pieces (:func:`run_together`, ``native/inverse_shared.c``): rows in
+#: slices of :data:`SHARED_SLICE_ROWS`, taken in blocks of :data:`SHARED_BLOCK_SLICES`
+#: slices, a held slice computed again by an idle thread and written once — no thread
+#: descheduled by a competing process holds the call (docs/benchmarks.md "Session 35").
+#: ``SHARED_INVERSE = False`` gives the pieces (benches compare both in one process).
+SHARED_INVERSE = True
+SHARED_SLICE_ROWS = 32
+SHARED_BLOCK_SLICES = 32
 
 #: The Numba kernels that have a C twin of the same name and arguments in
 #: ``pkmkit.native.kernels``.
@@ -268,6 +277,26 @@ def run_chunks(work: Callable[[int, int], None], rows: int, piece: int = 0) -> N
         # a helper still queued (the pool busy: another call, or a nested one) is withdrawn,
         # not awaited — the pieces are all drawn; a running one is waited for
         errors = [None if h.cancel() else h.exception() for h in helpers]
+    for error in errors:
+        if error is not None:
+            raise error
+
+
+def run_together(work: Callable[[bool], None]) -> None:
+    """``work(True)`` in this thread beside ``work(False)`` in :func:`thread_count` − 1
+    helpers of the persistent pool, returning when this thread's call returns — for kernels
+    that finish the whole batch in the calling thread whatever the helpers do (the full-pose
+    inverse's shared plan, ``native/inverse_shared.c``: a helper descheduled by a competing
+    process holds nothing, so it is not waited for; it writes nothing once the batch is
+    done). A helper the pool has not started is withdrawn; one that has finished with an
+    exception has it raised here (one still running is left to finish, as such kernels
+    raise only on their arguments, before taking any row)."""
+    threads = thread_count()
+    helpers = [_helper_pool(threads - 1).submit(work, False) for _ in range(threads - 1)]
+    try:
+        work(True)
+    finally:
+        errors = [None if h.cancel() or not h.done() else h.exception() for h in helpers]
     for error in errors:
         if error is not None:
             raise error
