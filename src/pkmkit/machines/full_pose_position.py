@@ -19,6 +19,7 @@ from pkmkit.machines.common import (
 )
 from pkmkit.machines.full_pose_direct import usable
 from pkmkit.machines.full_pose_inverse_record import lazy_inverse_record
+from pkmkit.machines.position_start import start_table
 from pkmkit.machines.results import InverseResult
 from pkmkit.machines.slide_columns import SlideColumns, slide_columns
 from pkmkit.machines.strokes import judge_rows
@@ -236,9 +237,11 @@ class PositionInverse:
                     data.geom, pb, u0, opts, skip=skip, home=data.home, jt_inv=jt_inv)
                 rank = np.full(pb.shape[0], -1)
             else:
+                paired = np.append(opts, 1.0)
+                table = self._position_start(kernel, geom, paired, data.home, jt_inv)
                 u, status, iterations, residual, answered = kernel.solve(
-                    geom, pb, None, np.append(opts, 1.0), skip=skip, home=data.home,
-                    jt_inv=jt_inv, paired=True)
+                    geom, pb, None, paired if table is None else np.append(paired, table),
+                    skip=skip, home=data.home, jt_inv=jt_inv, paired=True)
                 rank = np.where(answered, 1, -1)
             return SolveResult(u=u, status=status, residual=residual, iterations=iterations,
                                rank=rank)
@@ -263,6 +266,25 @@ class PositionInverse:
                 geom[:, 15] = self._forms.rod_branch
             object.__setattr__(self, "_position_paired_geom", geom)
         return geom
+
+    def _position_start(self, kernel, geom: np.ndarray, opts: np.ndarray, home: np.ndarray,
+                        jt_inv: np.ndarray) -> np.ndarray | None:
+        """The paired solve's start table (:mod:`pkmkit.machines.position_start`), built once
+        per machine by the paired solve itself from the first-order start (``kernel``, its
+        ``geom``, ``opts (10,)``, ``home``, ``jt_inv``); None without a common slide axis or
+        with ``PKMKIT_POSITION_TABLE=0`` (the first-order start on every row)."""
+        if os.environ.get("PKMKIT_POSITION_TABLE", "").strip() == "0":
+            return None
+        table = self.__dict__.get("_position_start_table", False)
+        if table is False:
+            def solve(points):
+                u, *_, answered = kernel.solve(geom, points, None, opts, home=home,
+                                               jt_inv=jt_inv, paired=True)
+                return u[:, 3:], answered
+
+            table = start_table(self.model, np.asarray(self._home_pose[:3], dtype=float), solve)
+            object.__setattr__(self, "_position_start_table", table)
+        return table
 
     def _surely_unreachable(self, positions: np.ndarray) -> np.ndarray:
         """``(N,)`` positions no orientation can serve: a slide rod whose platform joint, at most
