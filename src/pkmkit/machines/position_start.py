@@ -98,6 +98,6 @@ def pack(origin: np.ndarray, u_axis: np.ndarray, v_axis: np.ndarray, side: float
     """The table as the kernels read it: ``[cells, degree, side, corner, origin (3), u (3),
     v (3)]`` then ``coef (cells, cells, terms, 3)`` row-major."""
     cells, terms = coef.shape[0], coef.shape[2]
-    degree = int(round((np.sqrt(8 * terms + 1) - 3) / 2))
+    degree = round((float(np.sqrt(8 * terms + 1)) - 3) / 2)
     header = np.concatenate([[cells, degree, side, corner], origin, u_axis, v_axis])
     return np.ascontiguousarray(np.concatenate([header, coef.reshape(-1)]), dtype=float)
