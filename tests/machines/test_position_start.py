@@ -83,7 +83,7 @@ def test_the_table_gives_the_rods_rotation_within_1e_9(verne):
     starts = _table_starts(table, p)
     assert np.isfinite(starts).all()
     for k in range(p.shape[0]):
-        q, rotvec = _rod_oracle(verne, p[k])
+        _, rotvec = _rod_oracle(verne, p[k])
         want = Rotation.from_rotvec(rotvec).as_quat()  # x, y, z, w
         want = want if want[3] >= 0 else -want
         np.testing.assert_allclose(starts[k], want, rtol=0, atol=1e-9)
