@@ -138,7 +138,7 @@ def test_it_answers_nearly_every_reachable_row_in_few_steps(verne, records):
     """The paired solve answers ≥ 99 % of the OK rows (a wrong derivative or combination
     would leave them to the former solve, which hides it from the comparison above) and every
     row within ±0.25 m of home (the default box is ±0.2 m) in ≤ 4 Newton steps, 3.3 or fewer
-    on average (quadratic convergence from the first-order start)."""
+    on average (one from the start table inside its square: test_position_start.py)."""
     p, _, new = records
     paired = _answered(verne, p)
     ok = new.status == Status.OK
