@@ -314,3 +314,21 @@ def test_slide_columns_against_np_unique(verne, kind):
     np.testing.assert_allclose(columns.shift[good], (p[good] - p[solved[good]]) @ d / (d @ d),
                                rtol=0, atol=1e-15)
     assert (columns.shift[alone] == 0.0).all()
+
+
+def test_a_few_shared_lines_are_solved_row_by_row(verne, monkeypatch):
+    """A table whose shared lines spare fewer than LINE_SHARE of its rows solves every row on
+    its own (each row's bits those of the row alone); a grid solves one row per line (every
+    row of a line has its first row's rotation, to the bit)."""
+    rng = np.random.default_rng(6)
+    p = rng.uniform(-0.2, 0.2, (400, 3))
+    p[1:4] = p[0] + np.array([0.0, 0.0, 1.0]) * np.array([[0.01], [0.02], [0.03]])
+    together = _ik(verne, p, monkeypatch, paired=True)
+    alone = np.concatenate([_ik(verne, p[k:k + 1], monkeypatch, paired=True).pose
+                            for k in range(4)])
+    np.testing.assert_array_equal(together.pose[:4], alone)
+    g = np.linspace(-0.15, 0.15, 9)
+    grid = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    pose = _ik(verne, grid, monkeypatch, paired=True).pose.reshape(9, 9, 9, 6)
+    np.testing.assert_array_equal(pose[..., 3:], np.broadcast_to(pose[:, :, :1, 3:],
+                                                                 pose[..., 3:].shape))

@@ -39,6 +39,10 @@ POSITION_MAX_ITER = 30
 #: workspace study's grid); the rows that ran to POSITION_MAX_ITER were 57 % of the solve's
 #: row-iterations there (issue 22 §3).
 POSITION_CRAWL = (12, 1e-6)
+#: The share of a batch's rows its shared lines along a common slide axis must spare for
+#: ``ik`` to solve one row per line (a grid: most rows; a table of rounded random positions:
+#: 54 of 10⁶, whose gathers cost more than their solves, issue 22 §5).
+LINE_SHARE = 1.0 / 16.0
 
 
 def _stroke_fields(check) -> dict[str, Any]:
@@ -67,6 +71,8 @@ class PositionInverse:
         # one solve per line along a common slide axis (from the first-order start, which
         # moves with the line): the other rows of the line follow by a shift
         columns = slide_columns(self.model, pb) if q0 is None else None
+        if columns is not None and columns.rows.size > (1.0 - LINE_SHARE) * pb.shape[0]:
+            columns = None  # a table's few shared lines: gathering every row costs more
         if columns is None:
             q, pose, status, iterations, residual = self._position_rows(
                 pb, q0, branches, engine_options, compiled)
