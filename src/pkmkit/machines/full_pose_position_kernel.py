@@ -271,9 +271,10 @@ def _paired(p, rot, geom, qrod, f, jac):  # pragma: no cover
         sign = 1.0 if seen[k] == 0.0 else -1.0
         seen[k] = 1.0
         f[k] += sign * q
-        jac[k, 0] += sign * (sy * dz - sz * dy) / cosine
-        jac[k, 1] += sign * (sz * dx - sx * dz) / cosine
-        jac[k, 2] += sign * (sx * dy - sy * dx) / cosine
+        scale = sign / cosine  # one division per rod
+        jac[k, 0] += scale * (sy * dz - sz * dy)
+        jac[k, 1] += scale * (sz * dx - sx * dz)
+        jac[k, 2] += scale * (sx * dy - sy * dx)
         check += jac[k, 0] + jac[k, 1] + jac[k, 2] + q
     return check == check and abs(check) < math.inf
 

@@ -211,10 +211,11 @@ static int paired(const double *p, const double *rot, const double *geom, ptrdif
         double sign = seen[k] == 0.0 ? 1.0 : -1.0;
         seen[k] = 1.0;
         double *jk = jac + 3 * k;
+        double scale = sign / cosine; /* one division per rod */
         f[k] += sign * q;
-        jk[0] += sign * (sy * dz - sz * dy) / cosine;
-        jk[1] += sign * (sz * dx - sx * dz) / cosine;
-        jk[2] += sign * (sx * dy - sy * dx) / cosine;
+        jk[0] += scale * (sy * dz - sz * dy);
+        jk[1] += scale * (sz * dx - sx * dz);
+        jk[2] += scale * (sx * dy - sy * dx);
         check += jk[0] + jk[1] + jk[2] + q;
     }
     return check == check && fabs(check) < INFINITY;
