@@ -230,6 +230,12 @@ if sys.argv[3:] and sys.argv[3] != "linear-delta":  # a six-axis machine's own s
     wrap(ik_cmd, "pose_from_cli", "angles:to-rotation-vectors")
     wrap(importlib.import_module("pkmkit.cli.stroke_flags").BatchFlags, "__call__",
          "flags:strokes")
+    # a position-controlled machine's (the Verne module's) own stages; "in ik:" stages are
+    # parts of kernel:ik-full-output (session 35)
+    position = importlib.import_module("pkmkit.machines.full_pose_position")
+    wrap(position, "slide_columns", "in ik: slide-columns")
+    wrap(position.PositionInverse, "_compiled_rows", "in ik: position-solve")
+    wrap(ik_cmd, "pose_to_cli", "angles:from-rotation-vectors")
 sys.argv = ["pkmkit", "ik", sys.argv[3] if sys.argv[3:] else "linear-delta", "--input",
             sys.argv[1], "--output", sys.argv[2]]
 start = time.process_time()
@@ -241,7 +247,7 @@ body = time.process_time() - start
 print("imports", imports)
 for label, seconds in acc.items():
     print(label, seconds)
-print("rest", body - sum(acc.values()))
+print("rest", body - sum(v for k, v in acc.items() if not k.startswith("in ik:")))
 print("total", imports + body)
 """
 
@@ -259,7 +265,7 @@ def phases(paths: dict[str, Path], folder: Path, repeat: int,
             if done.returncode not in (0, 3):
                 raise RuntimeError(done.stderr)
             for line in done.stdout.splitlines():
-                label, value = line.split()
+                label, value = line.rsplit(maxsplit=1)
                 runs.setdefault(label, []).append(float(value))
         print(f"\npkmkit ik {name}, {fmt} -> {fmt}, CPU s (median of {repeat} fresh "
               f"processes; load average {os.getloadavg()[0]:.2f})")

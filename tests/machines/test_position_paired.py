@@ -138,7 +138,7 @@ def test_it_answers_nearly_every_reachable_row_in_few_steps(verne, records):
     """The paired solve answers ≥ 99 % of the OK rows (a wrong derivative or combination
     would leave them to the former solve, which hides it from the comparison above) and every
     row within ±0.25 m of home (the default box is ±0.2 m) in ≤ 4 Newton steps, 3.3 or fewer
-    on average (quadratic convergence from the first-order start)."""
+    on average (one from the start table inside its square: test_position_start.py)."""
     p, _, new = records
     paired = _answered(verne, p)
     ok = new.status == Status.OK
@@ -261,3 +261,74 @@ def test_slide_columns_spare_the_sort_only_when_no_row_shares_a_line(verne):
     columns = slide_columns(verne.model, line)
     assert columns is not None and columns.rows.size == 2
     np.testing.assert_array_equal(columns.of[[0, 2]], [columns.of[0]] * 2)
+
+
+def _lines_by_unique(m, p):
+    """The oracle of :func:`slide_columns`: np.unique over every valid row's foot across the
+    axis (broadcast arithmetic, the reduction along rows): ``(first rows, each row's line)``
+    with the invalid rows and those beyond the span their own lines (None when none shared)."""
+    from pkmkit.machines.slide_columns import LINE_SPAN
+
+    d = m.model.rod_axis[0]
+    span = LINE_SPAN * (1.0 + float(np.max(m.model.rod_length)))
+    with np.errstate(invalid="ignore"):
+        valid = _valid_rows(p) & (np.abs(p).max(axis=1) <= span)
+    good = np.flatnonzero(valid)
+    across = p[good] - (p[good] @ d / (d @ d))[:, None] * d
+    _, first, inverse = np.unique(across + 0.0, axis=0, return_index=True,
+                                  return_inverse=True)
+    if first.size == good.size:
+        return None
+    return good[first], good, inverse.reshape(-1)
+
+
+@pytest.mark.parametrize("kind", ["grid", "table", "invalid", "far", "distinct"])
+def test_slide_columns_against_np_unique(verne, kind):
+    """The lines found (their first rows, each row's line, the shifts) are np.unique's on a
+    grid, a rounded table with a few shared lines, rows with NaN/inf/beyond-span cells, and
+    distinct rows (None), the hashes' shortcuts (the whole-batch span test, the sort before
+    the argsort) included."""
+    rng = np.random.default_rng(8)
+    if kind == "grid":
+        g = np.linspace(-0.1, 0.1, 7)
+        p = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    else:
+        p = np.round(rng.uniform(-0.05, 0.05, (20_000, 3)), 3 if kind != "distinct" else 9)
+    if kind == "invalid":
+        p[::97, 1] = np.nan
+        p[5::101, 2] = -np.inf
+    if kind == "far":
+        p[3::89, 0] = 1e6
+    columns = slide_columns(verne.model, p)
+    want = _lines_by_unique(verne, p)
+    if want is None:
+        assert columns is None
+        return
+    first, good, line = want
+    assert columns is not None
+    solved = columns.rows[columns.of]  # the row each row takes its answer from
+    np.testing.assert_array_equal(solved[good], first[line])
+    alone = np.setdiff1d(np.arange(p.shape[0]), good)
+    np.testing.assert_array_equal(solved[alone], alone)
+    d = verne.model.rod_axis[0]
+    np.testing.assert_allclose(columns.shift[good], (p[good] - p[solved[good]]) @ d / (d @ d),
+                               rtol=0, atol=1e-15)
+    assert (columns.shift[alone] == 0.0).all()
+
+
+def test_a_few_shared_lines_are_solved_row_by_row(verne, monkeypatch):
+    """A table whose shared lines spare fewer than LINE_SHARE of its rows solves every row on
+    its own (each row's bits those of the row alone); a grid solves one row per line (every
+    row of a line has its first row's rotation, to the bit)."""
+    rng = np.random.default_rng(6)
+    p = rng.uniform(-0.2, 0.2, (400, 3))
+    p[1:4] = p[0] + np.array([0.0, 0.0, 1.0]) * np.array([[0.01], [0.02], [0.03]])
+    together = _ik(verne, p, monkeypatch, paired=True)
+    alone = np.concatenate([_ik(verne, p[k:k + 1], monkeypatch, paired=True).pose
+                            for k in range(4)])
+    np.testing.assert_array_equal(together.pose[:4], alone)
+    g = np.linspace(-0.15, 0.15, 9)
+    grid = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    pose = _ik(verne, grid, monkeypatch, paired=True).pose.reshape(9, 9, 9, 6)
+    np.testing.assert_array_equal(pose[..., 3:], np.broadcast_to(pose[:, :, :1, 3:],
+                                                                 pose[..., 3:].shape))

@@ -181,13 +181,26 @@ def pose_to_cli(poses: np.ndarray, m, units: str, convention: str) -> np.ndarray
     out = poses.copy()
     out[:, :3] /= scale
     if m.pose_orientation == "rotvec":
-        from pkmkit.spatial.poses import pose_to_angles
+        from pkmkit.spatial.rotation import angles_from_rotvec
 
         finite = np.isfinite(poses).all(axis=1)
-        out[~finite, 3:] = np.nan
-        if finite.any():
-            out[finite, 3:] = np.atleast_2d(pose_to_angles(poses[finite], convention,
-                                                          degrees=True)[1])
+        # in blocks that stay in cache, as _angles_from_cli (the Verne module's table: ≈ 0.2 s
+        # of CPU per 10⁶ rows spared, issue 22 §5); each row's arithmetic is the same (the
+        # same contiguity), so are its bits; a block of finite rows is taken as a view
+        for start in range(0, len(poses), ANGLE_BLOCK_ROWS):
+            rows = slice(start, start + ANGLE_BLOCK_ROWS)
+            block, ok = poses[rows], finite[rows]
+            whole = bool(ok.all())
+            if not whole:
+                out[rows][~ok, 3:] = np.nan
+                if not ok.any():
+                    continue
+                block = block[ok]
+            angles = angles_from_rotvec(block[:, 3:], convention, degrees=True)
+            if whole:
+                out[rows, 3:] = angles
+            else:
+                out[rows][ok, 3:] = angles
     return out
 
 

@@ -19,6 +19,7 @@ from pkmkit.machines.common import (
 )
 from pkmkit.machines.full_pose_direct import usable
 from pkmkit.machines.full_pose_inverse_record import lazy_inverse_record
+from pkmkit.machines.position_start import start_table
 from pkmkit.machines.results import InverseResult
 from pkmkit.machines.slide_columns import SlideColumns, slide_columns
 from pkmkit.machines.strokes import judge_rows
@@ -38,6 +39,10 @@ POSITION_MAX_ITER = 30
 #: workspace study's grid); the rows that ran to POSITION_MAX_ITER were 57 % of the solve's
 #: row-iterations there (issue 22 §3).
 POSITION_CRAWL = (12, 1e-6)
+#: The share of a batch's rows its shared lines along a common slide axis must spare for
+#: ``ik`` to solve one row per line (a grid: most rows; a table of rounded random positions:
+#: 54 of 10⁶, whose gathers cost more than their solves, issue 22 §5).
+LINE_SHARE = 1.0 / 16.0
 
 
 def _stroke_fields(check) -> dict[str, Any]:
@@ -66,6 +71,8 @@ class PositionInverse:
         # one solve per line along a common slide axis (from the first-order start, which
         # moves with the line): the other rows of the line follow by a shift
         columns = slide_columns(self.model, pb) if q0 is None else None
+        if columns is not None and columns.rows.size > (1.0 - LINE_SHARE) * pb.shape[0]:
+            columns = None  # a table's few shared lines: gathering every row costs more
         if columns is None:
             q, pose, status, iterations, residual = self._position_rows(
                 pb, q0, branches, engine_options, compiled)
@@ -236,9 +243,11 @@ class PositionInverse:
                     data.geom, pb, u0, opts, skip=skip, home=data.home, jt_inv=jt_inv)
                 rank = np.full(pb.shape[0], -1)
             else:
+                paired = np.append(opts, 1.0)
+                table = self._position_start(kernel, geom, paired, data.home, jt_inv)
                 u, status, iterations, residual, answered = kernel.solve(
-                    geom, pb, None, np.append(opts, 1.0), skip=skip, home=data.home,
-                    jt_inv=jt_inv, paired=True)
+                    geom, pb, None, paired if table is None else np.append(paired, table),
+                    skip=skip, home=data.home, jt_inv=jt_inv, paired=True)
                 rank = np.where(answered, 1, -1)
             return SolveResult(u=u, status=status, residual=residual, iterations=iterations,
                                rank=rank)
@@ -263,6 +272,25 @@ class PositionInverse:
                 geom[:, 15] = self._forms.rod_branch
             object.__setattr__(self, "_position_paired_geom", geom)
         return geom
+
+    def _position_start(self, kernel, geom: np.ndarray, opts: np.ndarray, home: np.ndarray,
+                        jt_inv: np.ndarray) -> np.ndarray | None:
+        """The paired solve's start table (:mod:`pkmkit.machines.position_start`), built once
+        per machine by the paired solve itself from the first-order start (``kernel``, its
+        ``geom``, ``opts (10,)``, ``home``, ``jt_inv``); None without a common slide axis or
+        with ``PKMKIT_POSITION_TABLE=0`` (the first-order start on every row)."""
+        if os.environ.get("PKMKIT_POSITION_TABLE", "").strip() == "0":
+            return None
+        table = self.__dict__.get("_position_start_table", False)
+        if table is False:
+            def solve(points):
+                u, *_, answered = kernel.solve(geom, points, None, opts, home=home,
+                                               jt_inv=jt_inv, paired=True)
+                return u[:, 3:], answered
+
+            table = start_table(self.model, np.asarray(self._home_pose[:3], dtype=float), solve)
+            object.__setattr__(self, "_position_start_table", table)
+        return table
 
     def _surely_unreachable(self, positions: np.ndarray) -> np.ndarray:
         """``(N,)`` positions no orientation can serve: a slide rod whose platform joint, at most

@@ -50,6 +50,10 @@ N_ACTUATORS = 3
 PAIRED_ITER = 8
 PAIRED_STEP = 1e-9
 PAIRED_TOL = 1e-12
+#: The half angle (rad) up to which a step's quaternion takes its sine and cosine by their series.
+PAIRED_SERIES = 0.05
+#: Values of a start table's header (:mod:`pkmkit.machines.position_start`).
+START_HEADER = 13
 
 
 @njit(**_OPTIONS)
@@ -230,15 +234,16 @@ def first_order(p, home, jt_inv, u0):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
-def _paired(p, w, geom, qrod, f, jac):  # pragma: no cover
+def _paired(p, rot, geom, qrod, f, jac):  # pragma: no cover
     """The reduced closure of a machine whose every actuator carries two slide rods, at
-    rotation vector ``w (3,)`` for position ``p (3,)``: each rod's actuator coordinate on its
-    branch (``geom[:, 15]`` = ±1) into ``qrod (m,)`` (as ``rod_coordinates``: ``s + σ√(ℓ² −
+    rotation ``rot (9,)`` (row-major) for position ``p (3,)``: each rod's actuator coordinate on
+    its branch (``geom[:, 15]`` = ±1) into ``qrod (m,)`` (as ``rod_coordinates``: ``s + σ√(ℓ² −
     |v|² + s²)``, ``v = p + R b − a0``, ``s = e·v``), the disagreements ``f (3,)`` = q of the
     actuator's first rod − its second's and their derivatives ``jac (3, 3)`` in the rotation
     (left increment: ``∂q_j/∂δ = (R b × d) / (d·e)``, ``d = v − q_j e``). False when a rod
     cannot close (radicand ≤ 0) or a value is not finite."""
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(w[0], w[1], w[2])
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = (rot[0], rot[1], rot[2], rot[3], rot[4],
+                                                   rot[5], rot[6], rot[7], rot[8])
     for k in range(3):
         f[k] = 0.0
         for i in range(3):
@@ -266,9 +271,10 @@ def _paired(p, w, geom, qrod, f, jac):  # pragma: no cover
         sign = 1.0 if seen[k] == 0.0 else -1.0
         seen[k] = 1.0
         f[k] += sign * q
-        jac[k, 0] += sign * (sy * dz - sz * dy) / cosine
-        jac[k, 1] += sign * (sz * dx - sx * dz) / cosine
-        jac[k, 2] += sign * (sx * dy - sy * dx) / cosine
+        scale = sign / cosine  # one division per rod
+        jac[k, 0] += scale * (sy * dz - sz * dy)
+        jac[k, 1] += scale * (sz * dx - sx * dz)
+        jac[k, 2] += scale * (sx * dy - sy * dx)
         check += jac[k, 0] + jac[k, 1] + jac[k, 2] + q
     return check == check and abs(check) < math.inf
 
@@ -290,54 +296,189 @@ def _newton_step(f, jac, step):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
-def solve_paired(p, start, geom, out, qrod, f, jac):  # pragma: no cover
-    """The position inverse of a machine whose every actuator carries two slide rods, by
-    Newton's method on the rotation alone (3 unknowns: the two rods of an actuator must give
-    the same coordinate) from ``start (6,)`` (its rotation vector): True and ``out (9,)`` = u,
-    OK, Newton steps, largest rod residual when it converges (a step ≤ PAIRED_STEP, then every
-    rod closing within PAIRED_TOL at the mean of its actuator's pair); False otherwise — a
-    rod that cannot close, a singular Jacobian, PAIRED_ITER steps (``out[:3]`` may then be
-    written: the caller rewrites the row)."""
-    w = np.empty(3)
-    step = np.empty(3)
+def _step_quaternion(dx, dy, dz, qt):  # pragma: no cover
+    """``qt (4,)`` = (x, y, z, w), the unit quaternion of rotation vector (dx, dy, dz): the half
+    angle's cosine and sine / angle by their Taylor series up to a half angle of
+    PAIRED_SERIES (the first term left out below 1e-20 of the sum), the C library's above."""
+    angle = math.sqrt(dx * dx + dy * dy + dz * dz)
+    h = 0.5 * angle
+    if h <= PAIRED_SERIES:
+        h2 = h * h
+        c = 1.0 - h2 * (0.5 - h2 * (1.0 / 24.0 - h2 * (1.0 / 720.0 - h2 / 40320.0)))
+        s = 0.5 * (1.0 - h2 * (1.0 / 6.0 - h2 * (1.0 / 120.0 - h2 * (1.0 / 5040.0
+                                                                     - h2 / 362880.0))))
+    else:
+        c = math.cos(h)
+        s = math.sin(h) / angle
+    qt[0] = dx * s
+    qt[1] = dy * s
+    qt[2] = dz * s
+    qt[3] = c
+
+
+@njit(**_OPTIONS)
+def _turn(a, qt):  # pragma: no cover
+    """``qt`` ← ``a qt`` (Hamilton product, as :func:`compose`'s), normalised."""
+    ax, ay, az, aw = a[0], a[1], a[2], a[3]
+    bx, by, bz, bw = qt[0], qt[1], qt[2], qt[3]
+    x = aw * bx + ax * bw + ay * bz - az * by
+    y = aw * by - ax * bz + ay * bw + az * bx
+    z = aw * bz + ax * by - ay * bx + az * bw
+    w = aw * bw - ax * bx - ay * by - az * bz
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    qt[0] = x / norm
+    qt[1] = y / norm
+    qt[2] = z / norm
+    qt[3] = w / norm
+
+
+@njit(**_OPTIONS)
+def _quaternion_matrix(qt, rot):  # pragma: no cover
+    """``rot (9,)`` row-major of the unit quaternion ``qt``."""
+    x, y, z, w = qt[0], qt[1], qt[2], qt[3]
+    rot[0] = 1.0 - 2.0 * (y * y + z * z)
+    rot[1] = 2.0 * (x * y - z * w)
+    rot[2] = 2.0 * (x * z + y * w)
+    rot[3] = 2.0 * (x * y + z * w)
+    rot[4] = 1.0 - 2.0 * (x * x + z * z)
+    rot[5] = 2.0 * (y * z - x * w)
+    rot[6] = 2.0 * (x * z - y * w)
+    rot[7] = 2.0 * (y * z + x * w)
+    rot[8] = 1.0 - 2.0 * (x * x + y * y)
+
+
+@njit(**_OPTIONS)
+def _quaternion_rotvec(qt, out, at):  # pragma: no cover
+    """``out[at:at+3]`` = the rotation vector of the unit quaternion ``qt`` (angle in [0, π],
+    :func:`compose`'s tail)."""
+    x, y, z, w = qt[0], qt[1], qt[2], qt[3]
+    if w < 0.0:
+        x, y, z, w = -x, -y, -z, -w
+    norm = math.sqrt(x * x + y * y + z * z)
+    angle = 2.0 * math.atan2(norm, w)
+    if angle <= 1e-3:
+        a2 = angle * angle
+        scale = 2.0 + a2 / 12.0 + 7.0 * a2 * a2 / 2880.0
+    else:
+        scale = angle / math.sin(0.5 * angle)
+    out[at] = x * scale
+    out[at + 1] = y * scale
+    out[at + 2] = z * scale
+
+
+@njit(**_OPTIONS)
+def _first_order_quaternion(p, home, jt_inv, qt, a):  # pragma: no cover
+    """The first-order start's rotation as a unit quaternion ``qt (4,)`` for position ``p
+    (3,)``: the twist J(home)(q − q_home) of :func:`first_order`'s q turned onto home's
+    rotation (``a (4,)``: scratch)."""
+    n = 3
+    dq = np.empty(3)
     for i in range(3):
-        w[i] = start[3 + i]
+        acc = 0.0
+        for k in range(3):
+            acc += jt_inv[i, k] * (p[k] - home[k])
+        dq[i] = acc
+    w = np.empty(3)
+    for i in range(3):
+        acc = 0.0
+        for k in range(n):
+            acc += dq[k] * home[6 + n + (3 + i) * n + k]
+        w[i] = acc
+    _step_quaternion(home[3], home[4], home[5], qt)
+    _step_quaternion(w[0], w[1], w[2], a)
+    _turn(a, qt)
+
+
+@njit(**_OPTIONS)
+def _table_start(p, table, qt):  # pragma: no cover
+    """The start ``qt (4,)`` of position ``p (3,)`` from the start table ``table``
+    (:func:`pkmkit.machines.position_start.pack`): True when p's projection on the table's
+    plane falls in a cell whose fit is finite and gives a vector part shorter than 1 (then
+    w = √(1 − |v|²)), else False."""
+    cells, side, corner = table[0], table[2], table[3]
+    c, d = int(cells), int(table[1])
+    rx, ry, rz = p[0] - table[4], p[1] - table[5], p[2] - table[6]
+    tu = (rx * table[7] + ry * table[8] + rz * table[9] - corner) / side
+    tv = (rx * table[10] + ry * table[11] + rz * table[12] - corner) / side
+    if not (tu >= 0.0 and tu < cells and tv >= 0.0 and tv < cells):
+        return False
+    iu, iv = int(tu), int(tv)
+    a = tu - float(iu) - 0.5
+    b = tv - float(iv) - 0.5
+    terms = (d + 1) * (d + 2) // 2
+    base = START_HEADER + (iu * c + iv) * terms * 3
+    v0 = v1 = v2 = 0.0
+    for i in range(d, -1, -1):
+        at = base + 3 * (i * (d + 1) - i * (i - 1) // 2)
+        in0 = in1 = in2 = 0.0
+        for j in range(d - i, -1, -1):
+            in0 = in0 * b + table[at + 3 * j]
+            in1 = in1 * b + table[at + 3 * j + 1]
+            in2 = in2 * b + table[at + 3 * j + 2]
+        v0 = v0 * a + in0
+        v1 = v1 * a + in1
+        v2 = v2 * a + in2
+    rest = 1.0 - (v0 * v0 + v1 * v1 + v2 * v2)
+    if not rest > 0.0:  # NaN too: a cell the table left
+        return False
+    qt[0], qt[1], qt[2], qt[3] = v0, v1, v2, math.sqrt(rest)
+    return True
+
+
+@njit(**_OPTIONS)
+def solve_paired(p, qt, geom, out, qrod, f, jac):  # pragma: no cover
+    """The position inverse of a machine whose every actuator carries two slide rods, by
+    Newton's method on the rotation alone (a unit quaternion ``qt (4,)``, turned by left
+    increments; 3 unknowns: the two rods of an actuator must give the same coordinate) from
+    ``qt``: True and ``out (9,)`` = u (q, rotation vector), OK, Newton steps, largest rod
+    residual when it converges (a step ≤ PAIRED_STEP, then every rod closing within
+    PAIRED_TOL at the mean of its actuator's pair); False otherwise — a rod that cannot close,
+    a singular Jacobian, PAIRED_ITER steps (``out`` untouched)."""
+    step = np.empty(3)
+    a = np.empty(4)
+    rot = np.empty(9)
     steps = 0
     converged = False
     while steps < PAIRED_ITER:
-        if not _paired(p, w, geom, qrod, f, jac) or not _newton_step(f, jac, step):
+        _quaternion_matrix(qt, rot)
+        if not _paired(p, rot, geom, qrod, f, jac) or not _newton_step(f, jac, step):
             return False
-        compose(step[0], step[1], step[2], w[0], w[1], w[2], w, 0)
+        _step_quaternion(step[0], step[1], step[2], a)
+        _turn(a, qt)
         steps += 1
         if math.sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]) <= PAIRED_STEP:
             converged = True
             break
-    if not converged or not _paired(p, w, geom, qrod, f, jac):
+    if not converged:
         return False
+    _quaternion_matrix(qt, rot)
+    if not _paired(p, rot, geom, qrod, f, jac):
+        return False
+    q = np.empty(3)
     seen = np.zeros(3)
     for j in range(geom.shape[0]):
         k = int(geom[j, 14])
         if seen[k] == 0.0:
-            out[k] = qrod[j]
+            q[k] = qrod[j]
             seen[k] = 1.0
         else:
-            out[k] = out[k] + 0.5 * (qrod[j] - out[k])  # first + mean offset (combine)
+            q[k] = q[k] + 0.5 * (qrod[j] - q[k])  # first + mean offset (combine)
     largest = 0.0
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = rotation_entries(w[0], w[1], w[2])
     for j in range(geom.shape[0]):
-        qk = out[int(geom[j, 14])]
+        qk = q[int(geom[j, 14])]
         dx = p[0] - geom[j, 0] - qk * geom[j, 6]
         dy = p[1] - geom[j, 1] - qk * geom[j, 7]
         dz = p[2] - geom[j, 2] - qk * geom[j, 8]
         bx, by, bz = geom[j, 3], geom[j, 4], geom[j, 5]
-        dx += r00 * bx + r01 * by + r02 * bz
-        dy += r10 * bx + r11 * by + r12 * bz
-        dz += r20 * bx + r21 * by + r22 * bz
+        dx += rot[0] * bx + rot[1] * by + rot[2] * bz
+        dy += rot[3] * bx + rot[4] * by + rot[5] * bz
+        dz += rot[6] * bx + rot[7] * by + rot[8] * bz
         largest = max(largest, abs(math.sqrt(dx * dx + dy * dy + dz * dz) - geom[j, 12]))
     if not largest <= PAIRED_TOL:
         return False
-    for i in range(3):
-        out[3 + i] = w[i]
+    for k in range(3):
+        out[k] = q[k]
+    _quaternion_rotvec(qt, out, 3)
     out[6] = OK
     out[7] = steps
     out[8] = largest
@@ -352,13 +493,19 @@ def solve_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out):  # pragma
     and ``opts[9]`` = 1 (a machine whose every actuator carries two slide rods, branches in
     ``geom[:, 15]``) the rows from the first-order start run :func:`solve_paired` instead:
     the rows it does not answer are left INVALID_INPUT (NaN) for the caller's
-    Levenberg–Marquardt pass; ``out[:, 9]`` (when present) = 1 where it answered, else 0."""
+    Levenberg–Marquardt pass; ``out[:, 9]`` (when present) = 1 where it answered, else 0.
+    Its start: the first order's rotation, or with ``opts (10 + k,)`` the start table
+    ``opts[10:]`` (:mod:`pkmkit.machines.position_start`) where it covers the row."""
     work = scratch(geom.shape[0])
     start = np.empty(6)
     paired = opts.shape[0] > 9 and opts[9] == 1.0 and not has_guess
     qrod = np.empty(geom.shape[0])
     f = np.empty(3)
     jac = np.empty((3, 3))
+    qt = np.empty(4)
+    turn = np.empty(4)
+    table = paired and opts.shape[0] > 10
+    start_table = opts[10:]
     for k in range(p.shape[0]):
         if has_guess:
             for i in range(6):
@@ -366,14 +513,18 @@ def solve_rows(p, u0, has_guess, skip, geom, home, jt_inv, opts, out):  # pragma
         elif skip[k]:
             for i in range(6):
                 start[i] = math.nan
-        else:
+        elif not paired:
             first_order(p[k], home, jt_inv, start)
         if not paired:
             solve_row(p[k], start, geom, opts, out[k], work)
             if out.shape[1] > 9:
                 out[k, 9] = 0.0
             continue
-        done = not skip[k] and solve_paired(p[k], start, geom, out[k], qrod, f, jac)
+        done = False
+        if not skip[k]:
+            if not (table and _table_start(p[k], start_table, qt)):
+                _first_order_quaternion(p[k], home, jt_inv, qt, turn)
+            done = solve_paired(p[k], qt, geom, out[k], qrod, f, jac)
         if not done:  # left to the caller's Levenberg–Marquardt pass
             for i in range(6):
                 out[k, i] = math.nan

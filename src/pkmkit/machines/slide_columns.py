@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from pkmkit.machines.common import _valid_rows
+from pkmkit.machines.common import MAX_COORDINATE, _valid_rows
 from pkmkit.model.rods import SLIDE
 
 #: Rows with a coordinate beyond this many machine lengths (1 + the longest rod, m) keep their
@@ -92,6 +92,9 @@ def _lines(across: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | No
     mixed = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
     mixed ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
     mixed ^= bits[:, 2] * np.uint64(0x165667B19E3779F9)
+    ranked = np.sort(mixed)  # ≈ 3× cheaper than argsort: most tables stop here
+    if not (ranked[1:] == ranked[:-1]).any():
+        return None
     order = np.argsort(mixed)
     same = mixed[order[1:]] == mixed[order[:-1]]
     if not same.any():
@@ -120,10 +123,21 @@ def slide_columns(model, positions: np.ndarray) -> SlideColumns | None:
         return None
     span = LINE_SPAN * (1.0 + float(np.max(model.rod_length)))
     with np.errstate(invalid="ignore"):
-        valid = _valid_rows(positions) & (np.abs(positions).max(axis=1) <= span)
+        # one reduction over the whole batch when every row is within the span (a table's
+        # rows): a reduction along the short last axis costs ≈ 25× more (issue 22 §5)
+        if np.abs(positions).max() <= min(span, MAX_COORDINATE):
+            valid = np.ones(positions.shape[0], dtype=bool)
+        else:
+            valid = _valid_rows(positions)
+            for j in range(positions.shape[1]):
+                valid &= np.abs(positions[:, j]) <= span
     good = np.flatnonzero(valid)
-    along = positions[good] @ d / (d @ d)  # carriage travel to each row's foot, m
-    across = positions[good] - along[:, None] * d
+    inside = positions if good.size == positions.shape[0] else positions[good]
+    along = inside @ d / (d @ d)  # carriage travel to each row's foot, m
+    across = np.empty_like(inside)
+    for j in range(3):  # column by column: the bits of inside − along[:, None] · d
+        np.multiply(along, d[j], out=across[:, j])
+        np.subtract(inside[:, j], across[:, j], out=across[:, j])
     lines = _lines(across)
     if lines is None:
         return None

@@ -126,6 +126,9 @@ int pk_stationary(const double *jac, const double *r, ptrdiff_t m, double cost, 
  * when has_guess, else the first-order start from home (6 + 3 + 18,) and jt_inv (3, 3), rows
  * of skip (bool) left INVALID_INPUT; geom (m, 16), opts (n_opts = 9 or 10,), out (rows,
  * n_out = 9 or 10; column 9: 1 where the paired Newton solve answered). */
+/* n itself when the start table opts[10:] of the paired position solve (n values: a header
+ * and the coefficients its header asks for; position.c) is well formed, else -1. */
+ptrdiff_t pk_start_table_size(const double *table, ptrdiff_t n);
 void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has_guess,
                       const unsigned char *skip, const double *geom, ptrdiff_t m,
                       const double *home, const double *jt_inv, const double *opts,

@@ -326,7 +326,8 @@ PyDoc_STRVAR(position_rows_doc,
 "of a machine with three actuators whose rods set the orientation): p (N, 3), u0 (N, 6),\n"
 "skip (N,) bool, geom (m, 16) with actuator indices 0..2, home (27,), jt_inv (3, 3),\n"
 "opts (9,) or (10,) (opts[9] = 1: the paired Newton solve first, the rods' branches in\n"
-"geom[:, 15]), out (N, 9) or (N, 10) (column 9: 1 where the paired solve answered).\n"
+"geom[:, 15]) or (10 + k,) (then opts[10:] its start table: position_start.pack), out\n"
+"(N, 9) or (N, 10) (column 9: 1 where the paired solve answered).\n"
 "Runs without the GIL.");
 
 static PyObject *position_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs) {
@@ -355,12 +356,13 @@ static PyObject *position_rows(PyObject *self, PyObject *const *args, Py_ssize_t
     double *out = take(&held, args[8], "out", 'd', 1, 2, rows, -1);
     if (!out) goto fail;
     Py_ssize_t n_out = dim(&held, held.count - 1, 1);
-    if ((n_opts != 9 && n_opts != 10) || (n_out != 9 && n_out != 10)) {
-        PyErr_SetString(PyExc_ValueError, "position_rows: opts must be (9,) or (10,) and out "
-                        "(N, 9) or (N, 10)");
+    if (n_opts < 9 || (n_out != 9 && n_out != 10)
+        || (n_opts > 10 && (opts[9] != 1.0 || pk_start_table_size(opts + 10, n_opts - 10) < 0))) {
+        PyErr_SetString(PyExc_ValueError, "position_rows: opts must be (9,), (10,) or (10 + "
+                        "a start table,) with opts[9] = 1, and out (N, 9) or (N, 10)");
         goto fail;
     }
-    if (n_opts == 10 && opts[9] == 1.0) {
+    if (n_opts >= 10 && opts[9] == 1.0) {
         for (Py_ssize_t j = 0; j < m; j++) {
             double kind = geom[16 * j + 13], sigma = geom[16 * j + 15];
             if (kind != 0.0 || (sigma != 1.0 && sigma != -1.0)) {

@@ -179,13 +179,11 @@ static void first_order(const double *p, const double *home, const double *jt_in
 }
 
 /* The reduced closure of a machine whose every actuator carries two slide rods at rotation
- * vector w (3,) for position p (3,): each rod's coordinate on its branch (geom[:, 15]) into
- * qrod (m,), the disagreements f (3,) (first rod - second) and their derivatives jac (3, 3) in
- * the rotation; 0 when a rod cannot close or a value is not finite (_paired). */
-static int paired(const double *p, const double *w, const double *geom, ptrdiff_t m,
+ * rot (3, 3) row-major for position p (3,): each rod's coordinate on its branch (geom[:, 15])
+ * into qrod (m,), the disagreements f (3,) (first rod - second) and their derivatives jac (3, 3)
+ * in the rotation; 0 when a rod cannot close or a value is not finite (_paired). */
+static int paired(const double *p, const double *rot, const double *geom, ptrdiff_t m,
                   double *qrod, double *f, double *jac) {
-    double rot[9];
-    pk_rotation(w[0], w[1], w[2], rot);
     for (int k = 0; k < 3; k++) {
         f[k] = 0.0;
         for (int i = 0; i < 3; i++) jac[3 * k + i] = 0.0;
@@ -213,10 +211,11 @@ static int paired(const double *p, const double *w, const double *geom, ptrdiff_
         double sign = seen[k] == 0.0 ? 1.0 : -1.0;
         seen[k] = 1.0;
         double *jk = jac + 3 * k;
+        double scale = sign / cosine; /* one division per rod */
         f[k] += sign * q;
-        jk[0] += sign * (sy * dz - sz * dy) / cosine;
-        jk[1] += sign * (sz * dx - sx * dz) / cosine;
-        jk[2] += sign * (sx * dy - sy * dx) / cosine;
+        jk[0] += scale * (sy * dz - sz * dy);
+        jk[1] += scale * (sz * dx - sx * dz);
+        jk[2] += scale * (sx * dy - sy * dx);
         check += jk[0] + jk[1] + jk[2] + q;
     }
     return check == check && fabs(check) < INFINITY;
@@ -240,25 +239,178 @@ static int newton_step(const double *f, const double *jac, double *step) {
 enum { PAIRED_ITER = 8 };
 #define PAIRED_STEP 1e-9
 #define PAIRED_TOL 1e-12
+#define PAIRED_SERIES 0.05
 
-/* Newton's method on the rotation alone from start (6,): 1 and out (9,) = u, OK, steps,
- * largest rod residual when it converges; 0 (out untouched) otherwise (solve_paired). */
-static int solve_paired(const double *p, const double *start, const double *geom, ptrdiff_t m,
+/* qt (4,) = (x, y, z, w), the unit quaternion of rotation vector (dx, dy, dz): the half
+ * angle's cosine and sine / angle by their Taylor series up to a half angle of PAIRED_SERIES
+ * (the first term left out below 1e-20 of the sum), the C library's above (_step_quaternion). */
+static void step_quaternion(double dx, double dy, double dz, double *qt) {
+    double angle = sqrt(dx * dx + dy * dy + dz * dz);
+    double h = 0.5 * angle, c, s;
+    if (h <= PAIRED_SERIES) {
+        double h2 = h * h;
+        c = 1.0 - h2 * (0.5 - h2 * (1.0 / 24.0 - h2 * (1.0 / 720.0 - h2 / 40320.0)));
+        s = 0.5 * (1.0 - h2 * (1.0 / 6.0 - h2 * (1.0 / 120.0 - h2 * (1.0 / 5040.0
+                                                                       - h2 / 362880.0))));
+    } else {
+        c = cos(h);
+        s = sin(h) / angle;
+    }
+    qt[0] = dx * s;
+    qt[1] = dy * s;
+    qt[2] = dz * s;
+    qt[3] = c;
+}
+
+/* qt <- a qt (Hamilton product, as compose's), normalised (_turn). */
+static void turn(const double *a, double *qt) {
+    double ax = a[0], ay = a[1], az = a[2], aw = a[3];
+    double bx = qt[0], by = qt[1], bz = qt[2], bw = qt[3];
+    double x = aw * bx + ax * bw + ay * bz - az * by;
+    double y = aw * by - ax * bz + ay * bw + az * bx;
+    double z = aw * bz + ax * by - ay * bx + az * bw;
+    double w = aw * bw - ax * bx - ay * by - az * bz;
+    double norm = sqrt(x * x + y * y + z * z + w * w);
+    qt[0] = x / norm;
+    qt[1] = y / norm;
+    qt[2] = z / norm;
+    qt[3] = w / norm;
+}
+
+/* rot (3, 3) row-major of the unit quaternion qt (_quaternion_matrix). */
+static void quaternion_matrix(const double *qt, double *rot) {
+    double x = qt[0], y = qt[1], z = qt[2], w = qt[3];
+    rot[0] = 1.0 - 2.0 * (y * y + z * z);
+    rot[1] = 2.0 * (x * y - z * w);
+    rot[2] = 2.0 * (x * z + y * w);
+    rot[3] = 2.0 * (x * y + z * w);
+    rot[4] = 1.0 - 2.0 * (x * x + z * z);
+    rot[5] = 2.0 * (y * z - x * w);
+    rot[6] = 2.0 * (x * z - y * w);
+    rot[7] = 2.0 * (y * z + x * w);
+    rot[8] = 1.0 - 2.0 * (x * x + y * y);
+}
+
+/* out (3,) = the rotation vector of the unit quaternion qt (angle in [0, pi], compose's
+ * tail) (_quaternion_rotvec). */
+static void quaternion_rotvec(const double *qt, double *out) {
+    double x = qt[0], y = qt[1], z = qt[2], w = qt[3];
+    if (w < 0.0) {
+        x = -x;
+        y = -y;
+        z = -z;
+        w = -w;
+    }
+    double norm = sqrt(x * x + y * y + z * z);
+    double angle = 2.0 * atan2(norm, w);
+    double scale;
+    if (angle <= 1e-3) {
+        double a2 = angle * angle;
+        scale = 2.0 + a2 / 12.0 + 7.0 * a2 * a2 / 2880.0;
+    } else {
+        scale = angle / sin(0.5 * angle);
+    }
+    out[0] = x * scale;
+    out[1] = y * scale;
+    out[2] = z * scale;
+}
+
+/* The first-order start's rotation as a unit quaternion qt (4,) for position p (3,): the
+ * twist J(home)(q - q_home) of first_order's q turned onto home's rotation
+ * (_first_order_quaternion). */
+static void first_order_quaternion(const double *p, const double *home, const double *jt_inv,
+                                   double *qt) {
+    const int n = 3;
+    double dq[3], w[3], a[4];
+    for (int i = 0; i < 3; i++) {
+        double acc = 0.0;
+        for (int k = 0; k < 3; k++) acc += jt_inv[3 * i + k] * (p[k] - home[k]);
+        dq[i] = acc;
+    }
+    for (int i = 0; i < 3; i++) {
+        double acc = 0.0;
+        for (int k = 0; k < n; k++) acc += dq[k] * home[6 + n + (3 + i) * n + k];
+        w[i] = acc;
+    }
+    step_quaternion(home[3], home[4], home[5], qt);
+    step_quaternion(w[0], w[1], w[2], a);
+    turn(a, qt);
+}
+
+/* The start table (opts[10:], position_start.pack): a header of START_HEADER values — cells
+ * per side, the degree, the cell's side, the corner of the first cell in the plane's
+ * coordinates, the plane's origin (3) and axes (3 + 3) — then per cell (row-major) and per
+ * term a^i b^j (i ascending, then j) the three vector components of the solution's unit
+ * quaternion; a cell with a node the solve left is NaN. */
+enum { START_HEADER = 13, START_MAX_DEGREE = 15 };
+
+ptrdiff_t pk_start_table_size(const double *table, ptrdiff_t n) {
+    if (n < START_HEADER) return -1;
+    double cells = table[0], degree = table[1];
+    if (!(cells >= 1.0 && cells <= 1024.0 && cells == floor(cells))
+        || !(degree >= 0.0 && degree <= START_MAX_DEGREE && degree == floor(degree))
+        || !(table[2] > 0.0 && table[2] < INFINITY))
+        return -1;
+    ptrdiff_t c = (ptrdiff_t)cells, d = (ptrdiff_t)degree;
+    ptrdiff_t size = START_HEADER + c * c * ((d + 1) * (d + 2) / 2) * 3;
+    return size == n ? n : -1;
+}
+
+/* The start qt (4,) of position p (3,) from the start table: 1 when p's projection on the
+ * table's plane falls in a cell whose fit is finite and gives a vector part shorter than 1
+ * (then w = sqrt(1 - |v|^2)), else 0 (_table_start). */
+static int table_start(const double *p, const double *table, double *qt) {
+    double cells = table[0], side = table[2], corner = table[3];
+    ptrdiff_t c = (ptrdiff_t)cells, d = (ptrdiff_t)table[1];
+    double rx = p[0] - table[4], ry = p[1] - table[5], rz = p[2] - table[6];
+    double tu = (rx * table[7] + ry * table[8] + rz * table[9] - corner) / side;
+    double tv = (rx * table[10] + ry * table[11] + rz * table[12] - corner) / side;
+    if (!(tu >= 0.0 && tu < cells && tv >= 0.0 && tv < cells)) return 0;
+    ptrdiff_t iu = (ptrdiff_t)tu, iv = (ptrdiff_t)tv;
+    double a = tu - (double)iu - 0.5, b = tv - (double)iv - 0.5;
+    ptrdiff_t terms = (d + 1) * (d + 2) / 2;
+    const double *coef = table + START_HEADER + (iu * c + iv) * terms * 3;
+    double v[3] = {0.0, 0.0, 0.0};
+    for (ptrdiff_t i = d; i >= 0; i--) {
+        ptrdiff_t at = i * (d + 1) - i * (i - 1) / 2; /* the first term of a^i */
+        double inner[3] = {0.0, 0.0, 0.0};
+        for (ptrdiff_t j = d - i; j >= 0; j--) {
+            const double *cj = coef + 3 * (at + j);
+            for (int k = 0; k < 3; k++) inner[k] = inner[k] * b + cj[k];
+        }
+        for (int k = 0; k < 3; k++) v[k] = v[k] * a + inner[k];
+    }
+    double rest = 1.0 - (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(rest > 0.0)) return 0; /* NaN too: a cell the table left */
+    qt[0] = v[0];
+    qt[1] = v[1];
+    qt[2] = v[2];
+    qt[3] = sqrt(rest);
+    return 1;
+}
+
+/* Newton's method on the rotation alone (a unit quaternion, left increments) from qt (4,):
+ * 1 and out (9,) = u (q, rotation vector), OK, steps, largest rod residual when it converges;
+ * 0 (out untouched) otherwise (solve_paired). */
+static int solve_paired(const double *p, double *qt, const double *geom, ptrdiff_t m,
                         double *out, double *qrod) {
-    double w[3], step[3], f[3], jac[9];
-    for (int i = 0; i < 3; i++) w[i] = start[3 + i];
+    double step[3], f[3], jac[9], a[4], rot[9];
     int64_t steps = 0;
     int converged = 0;
     while (steps < PAIRED_ITER) {
-        if (!paired(p, w, geom, m, qrod, f, jac) || !newton_step(f, jac, step)) return 0;
-        pk_compose(step[0], step[1], step[2], w[0], w[1], w[2], w);
+        quaternion_matrix(qt, rot);
+        if (!paired(p, rot, geom, m, qrod, f, jac) || !newton_step(f, jac, step)) return 0;
+        step_quaternion(step[0], step[1], step[2], a);
+        turn(a, qt);
         steps += 1;
         if (sqrt(step[0] * step[0] + step[1] * step[1] + step[2] * step[2]) <= PAIRED_STEP) {
             converged = 1;
             break;
         }
     }
-    if (!converged || !paired(p, w, geom, m, qrod, f, jac)) return 0;
+    if (!converged) return 0;
+    quaternion_matrix(qt, rot);
+    if (!paired(p, rot, geom, m, qrod, f, jac)) return 0;
     double q[3], seen[3] = {0.0, 0.0, 0.0};
     for (ptrdiff_t j = 0; j < m; j++) {
         ptrdiff_t k = (ptrdiff_t)geom[16 * j + 14];
@@ -269,8 +421,7 @@ static int solve_paired(const double *p, const double *start, const double *geom
             q[k] = q[k] + 0.5 * (qrod[j] - q[k]); /* first + mean offset (combine) */
         }
     }
-    double largest = 0.0, rot[9];
-    pk_rotation(w[0], w[1], w[2], rot);
+    double largest = 0.0;
     for (ptrdiff_t j = 0; j < m; j++) {
         const double *gj = geom + 16 * j;
         double qk = q[(ptrdiff_t)gj[14]];
@@ -285,7 +436,7 @@ static int solve_paired(const double *p, const double *start, const double *geom
     }
     if (!(largest <= PAIRED_TOL)) return 0;
     for (int k = 0; k < 3; k++) out[k] = q[k];
-    for (int i = 0; i < 3; i++) out[3 + i] = w[i];
+    quaternion_rotvec(qt, out + 3);
     out[6] = OK;
     out[7] = (double)steps;
     out[8] = largest;
@@ -298,13 +449,14 @@ void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has
                       ptrdiff_t n_opts, double *out, ptrdiff_t n_out, pk_work *work) {
     double start[6];
     int use_paired = n_opts > 9 && opts[9] == 1.0 && !has_guess;
+    const double *table = use_paired && n_opts > 10 ? opts + 10 : NULL;
     for (ptrdiff_t k = 0; k < rows; k++) {
         double *row = out + n_out * k;
         if (has_guess) {
             for (int i = 0; i < 6; i++) start[i] = u0[6 * k + i];
         } else if (skip[k]) {
             for (int i = 0; i < 6; i++) start[i] = NAN;
-        } else {
+        } else if (!use_paired) {
             first_order(p + 3 * k, home, jt_inv, start);
         }
         if (!use_paired) {
@@ -312,7 +464,13 @@ void pk_position_rows(const double *p, ptrdiff_t rows, const double *u0, int has
             if (n_out > 9) row[9] = 0.0;
             continue;
         }
-        int done = !skip[k] && solve_paired(p + 3 * k, start, geom, m, row, work->length);
+        int done = 0;
+        if (!skip[k]) {
+            double qt[4];
+            if (!table || !table_start(p + 3 * k, table, qt))
+                first_order_quaternion(p + 3 * k, home, jt_inv, qt);
+            done = solve_paired(p + 3 * k, qt, geom, m, row, work->length);
+        }
         if (!done) { /* left to the caller's Levenberg-Marquardt pass */
             for (int i = 0; i < 6; i++) row[i] = NAN;
             row[6] = INVALID_INPUT;
