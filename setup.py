@@ -47,9 +47,11 @@ setup(
                      NATIVE + "plain_numbers.c",
                      NATIVE + "rod_batch.c",
                      NATIVE + "angles.c",
-                     NATIVE + "recycled.c"],
+                     NATIVE + "recycled.c",
+                     NATIVE + "csv_text.c"],
             depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h", NATIVE + "chain_one.h",
-                     NATIVE + "inverse_block.h"],
+                     NATIVE + "inverse_block.h",
+                     NATIVE + "shortest_table.h"],
             optional=True,
         )
     ],
