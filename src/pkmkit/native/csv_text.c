@@ -110,7 +110,39 @@ static int digits_of(uint64_t u, char *end) {
     return (int)(end - p);
 }
 
-/* x as pyarrow writes a float64 into p; the bytes written (at most 24) */
+#if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "csv_text.c stores digits as little-endian words"
+#endif
+
+static const uint64_t P10[20] = {
+    1ull, 10ull, 100ull, 1000ull, 10000ull, 100000ull, 1000000ull, 10000000ull, 100000000ull,
+    1000000000ull, 10000000000ull, 100000000000ull, 1000000000000ull, 10000000000000ull,
+    100000000000000ull, 1000000000000000ull, 10000000000000000ull, 100000000000000000ull,
+    1000000000000000000ull, 10000000000000000000ull};
+
+/* the count of decimal digits of u >= 1 */
+static inline int count_digits(uint64_t u) {
+    int t = ((64 - __builtin_clzll(u)) * 1233) >> 12; /* floor(log10 2^bits), off by <= 1 */
+    return t + (u >= P10[t]);
+}
+
+/* the eight decimal digits of v < 10^8 (leading zeros included) as ASCII bytes, the first
+ * in the lowest byte: halves, quarters, digits split in the lanes of one word */
+static inline uint64_t eight_digits(uint32_t v) {
+    uint64_t x = v;
+    uint64_t hi = (x * 109951163) >> 40; /* x / 10^4, exact for x < 10^8 */
+    uint64_t y = hi | ((x - hi * 10000) << 32);
+    uint64_t q = ((y * 10486) >> 20) & 0x0000007F0000007Full; /* each 32-bit lane / 100 */
+    y = q | ((y - q * 100) << 16);
+    q = ((y * 103) >> 10) & 0x000F000F000F000Full; /* each 16-bit lane / 10 */
+    y = q | ((y - q * 10) << 8);
+    return y + 0x3030303030303030ull;
+}
+
+/* x as pyarrow writes a float64 into p; the bytes written (at most 25:
+ * "-0.0000012345678901234567"). It may write up to DOUBLE_ROOM bytes from p (whole words):
+ * the caller's room. */
+#define DOUBLE_ROOM 32
 static int write_double(double x, char *p) {
     uint64_t bits;
     memcpy(&bits, &x, 8);
@@ -143,42 +175,50 @@ static int write_double(double x, char *p) {
     if (f % 10000 == 0) { f /= 10000; e += 4; }
     if (f % 100 == 0) { f /= 100; e += 2; }
     if (f % 10 == 0) { f /= 10; e += 1; }
-    char buf[20];
-    int n = digits_of(f, buf + 20);
-    const char *d = buf + 20 - n;
-    int e10 = e + n - 1; /* the decimal exponent of the leading digit */
-    if (e10 < -6 || e10 > 9) {
-        *p++ = d[0];
-        if (n > 1) {
-            *p++ = '.';
-            memcpy(p, d + 1, (size_t)(n - 1));
-            p += n - 1;
-        }
+    int n = count_digits(f); /* f < 10^17 */
+    int e10 = e + n - 1;     /* the decimal exponent of the leading digit */
+    uint64_t full = f * P10[17 - n]; /* the digits and zeros after them: 17 digits */
+    uint64_t lead = full / 10000000000000000ull, rest = full - lead * 10000000000000000ull;
+    char d0 = (char)('0' + lead);
+    uint64_t a = eight_digits((uint32_t)(rest / 100000000));
+    uint64_t b = eight_digits((uint32_t)(rest % 100000000));
+    if (e10 < -6 || e10 > 9) { /* d.ddde+XX */
+        p[0] = d0;
+        p[1] = '.';
+        memcpy(p + 2, &a, 8);
+        memcpy(p + 10, &b, 8);
+        p += n > 1 ? n + 1 : 1;
         *p++ = 'e';
         *p++ = e10 < 0 ? '-' : '+';
-        char ebuf[20];
-        int en = digits_of((uint64_t)(e10 < 0 ? -e10 : e10), ebuf + 20);
-        memcpy(p, ebuf + 20 - en, (size_t)en);
-        return (int)(p + en - start);
+        unsigned m = (unsigned)(e10 < 0 ? -e10 : e10);
+        if (m >= 100) {
+            *p++ = (char)('0' + m / 100);
+            memcpy(p, DIGITS2 + 2 * (m % 100), 2);
+            p += 2;
+        } else if (m >= 10) {
+            memcpy(p, DIGITS2 + 2 * m, 2);
+            p += 2;
+        } else {
+            *p++ = (char)('0' + m);
+        }
+        return (int)(p - start);
     }
-    if (e10 < 0) {
-        *p++ = '0';
-        *p++ = '.';
-        memset(p, '0', (size_t)(-e10 - 1));
-        p += -e10 - 1;
-        memcpy(p, d, (size_t)n);
+    if (e10 < 0) { /* 0.000ddd */
+        memcpy(p, "0.000000", 8);
+        p += 1 - e10;
+        p[0] = d0;
+        memcpy(p + 1, &a, 8);
+        memcpy(p + 9, &b, 8);
         return (int)(p + n - start);
     }
-    if (n <= e10 + 1) {
-        memcpy(p, d, (size_t)n);
-        memset(p + n, '0', (size_t)(e10 + 1 - n));
-        return (int)(p + e10 + 1 - start);
-    }
-    memcpy(p, d, (size_t)(e10 + 1));
-    p += e10 + 1;
-    *p++ = '.';
-    memcpy(p, d + e10 + 1, (size_t)(n - e10 - 1));
-    return (int)(p + n - e10 - 1 - start);
+    /* ddd000 or ddd.ddd: the first k = e10 + 1 digits, a point if more follow */
+    int k = e10 + 1;
+    pk_u128 w = (pk_u128)a | ((pk_u128)b << 64), low = (((pk_u128)1) << (8 * (k - 1))) - 1;
+    pk_u128 with_point = (w & low) | ((pk_u128)'.' << (8 * (k - 1))) | ((w & ~low) << 8);
+    p[0] = d0;
+    memcpy(p + 1, &with_point, 16);
+    p[17] = (char)(w >> 120);
+    return (int)(p + (n > k ? n + 1 : k) - start);
 }
 
 static int write_integer(int64_t v, int is_unsigned, char *p) {
@@ -278,7 +318,7 @@ static int open_column(PyObject *obj, Py_ssize_t stop, Column *col) {
     if (col->kind == COL_INT && format &&
         (!strcmp(format, "d") || !strcmp(format, "<d") || !strcmp(format, "=d"))) {
         col->kind = COL_DOUBLE;
-        col->width = 24;
+        col->width = DOUBLE_ROOM;
         return 0;
     }
     if (!integer_code(format, &col->code)) {
