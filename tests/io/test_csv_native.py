@@ -114,6 +114,25 @@ def test_bad_input_is_a_typed_error(columns, start, stop, error, match):
         kernels.csv_rows(columns, start, stop)
 
 
+@pytest.mark.ci
+def test_the_table_of_powers_of_ten_is_the_exact_one():
+    """``native/shortest_table.h`` is what ``tools/shortest_table.py`` computes with exact
+    integers (its integer logarithms checked against exact ones on the way; ≈ 3 s of CPU)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "tools" / "shortest_table.py"
+    if not path.exists():
+        pytest.skip("tools/ is not beside the tests")
+    spec = importlib.util.spec_from_file_location("shortest_table", path)
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    tool.check_logarithms()
+    assert tool.HEADER.read_text() == tool.text()
+    k_min, k_max, rows = tool.table()
+    assert (k_min, k_max, len(rows)) == (-324, 292, 617)
+
+
 def _table(n: int, seed: int) -> dict:
     rng = np.random.default_rng(seed)
     x = _doubles(n, seed)[:n]
