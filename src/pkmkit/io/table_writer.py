@@ -163,8 +163,9 @@ class TableWriter:
 
     def _write_native_csv(self, columns: tuple, rows: int) -> None:
         """Rows formatted by ``pkmkit.native.kernels.csv_rows`` in pieces of
-        :data:`NATIVE_CSV_ROWS` rows over the cores, written in order as they come (at most
-        a piece per core and the pieces done ahead of the one being written are held)."""
+        :data:`NATIVE_CSV_ROWS` rows over the cores, written in order as they come (the
+        pieces finished ahead of the one being written wait for it: at most the chunk's text,
+        as with pyarrow's slices)."""
         from pkmkit.numerics.jit import native_kernels
 
         csv_rows = native_kernels().csv_rows
