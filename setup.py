@@ -48,9 +48,10 @@ setup(
                      NATIVE + "rod_batch.c",
                      NATIVE + "angles.c",
                      NATIVE + "recycled.c",
-                     NATIVE + "inverse_shared.c"],
+                     NATIVE + "inverse_shared.c", NATIVE + "csv_text.c"],
             depends=[NATIVE + "kernels.h", NATIVE + "chain_face.h", NATIVE + "chain_one.h",
-                     NATIVE + "inverse_block.h"],
+                     NATIVE + "inverse_block.h",
+                     NATIVE + "shortest_table.h"],
             optional=True,
         )
     ],

@@ -21,8 +21,12 @@ def _floats(seed: int) -> np.ndarray:
     return np.concatenate([bits.view(np.float64), magnitudes, np.round(magnitudes, 3), edges])
 
 
+@pytest.mark.parametrize("native", ["0", "1"])
 @pytest.mark.parametrize("seed", [0, 1])
-def test_the_same_bytes_as_pyarrow(seed):
+def test_the_same_bytes_as_pyarrow(seed, native, monkeypatch):
+    """``PKMKIT_NATIVE=0``: pyarrow's own writer is the oracle; ``1``: the C formatter
+    (``native/csv_text.c``) where built, the same bytes."""
+    monkeypatch.setenv("PKMKIT_NATIVE", native)
     x = _floats(seed)
     n = len(x)
     plain = {"q 1": x, "k": np.arange(n, dtype=np.int64) - 7,

@@ -59,6 +59,7 @@ class TableWriter:
         self._temp: Path | None = None
         self._sink: Any = None  # CSV: the byte stream written
         self._csv_options: Any = None  # CSV: pyarrow's write options
+        self._quote = False  # CSV: every text cell quoted (some text needs it)
         self._owned: Any = None  # ... when this writer opened it
         self.rows = 0
         if self.path != STDIO:
@@ -131,8 +132,14 @@ class TableWriter:
         self.rows += table.num_rows
 
     def _write_csv(self, table: Any) -> None:
-        """Format the rows as CSV in slices on every core (pyarrow's formatting releases the
-        GIL; each row's text is the same whatever the slicing), then write them in order."""
+        """Format the rows as CSV in slices on every core (the formatting releases the GIL;
+        each row's text is the same whatever the slicing), then write them in order: by the C
+        formatter (:func:`_native_columns`) when the table's columns are its kinds, else by
+        pyarrow."""
+        columns = _native_columns(table, self._quote)
+        if columns is not None:
+            self._write_native_csv(columns, table.num_rows)
+            return
         import pyarrow as pa
         import pyarrow.csv as pcsv
 
@@ -153,6 +160,26 @@ class TableWriter:
                 parts = list(pool.map(encode, slices))
         for part in parts:
             self._sink.write(memoryview(part))
+
+    def _write_native_csv(self, columns: tuple, rows: int) -> None:
+        """Rows formatted by ``pkmkit.native.kernels.csv_rows`` in pieces of
+        :data:`NATIVE_CSV_ROWS` rows over the cores, written in order as they come (the
+        pieces finished ahead of the one being written wait for it: at most the chunk's text,
+        as with pyarrow's slices)."""
+        from pkmkit.numerics.jit import native_kernels
+
+        csv_rows = native_kernels().csv_rows
+        pieces = [(k, min(rows, k + NATIVE_CSV_ROWS)) for k in range(0, rows, NATIVE_CSV_ROWS)]
+        workers = min(_cpu_count(), max(1, rows // PARALLEL_CSV_ROWS), len(pieces))
+        if workers <= 1:
+            for start, stop in pieces:
+                self._sink.write(csv_rows(columns, start, stop))
+            return
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(workers) as pool:
+            for part in pool.map(lambda piece: csv_rows(columns, *piece), pieces):
+                self._sink.write(part)
 
     def _open(self, schema: Any, quote: bool) -> Any:
         """The pyarrow writer; CSV texts are quoted only if some text needs it (pyarrow then
@@ -176,6 +203,7 @@ class TableWriter:
                 header.write(f"# units: {self.units}\n")
             csv.writer(header, lineterminator="\n").writerow(schema.names)
             self._sink.write(header.getvalue().encode("utf-8"))
+            self._quote = quote
             self._csv_options = pcsv.WriteOptions(
                 include_header=False, quoting_style="needed" if quote else "none",
                 batch_size=1 << 16)
@@ -204,8 +232,44 @@ def _dictionary_columns(schema: Any) -> list[str]:
 
 #: Rows per thread below which a CSV chunk is formatted in one piece.
 PARALLEL_CSV_ROWS = 50_000
+#: Rows per piece the C formatter formats at once (a few MB of text).
+NATIVE_CSV_ROWS = 1 << 15
 #: Marks a CSV output (formatted by :meth:`TableWriter._write_csv`, no pyarrow writer object).
 _CSV_WRITER = object()
+
+
+def _native_columns(table: Any, quote: bool) -> tuple | None:
+    """The table's columns as ``pkmkit.native.kernels.csv_rows`` takes them (float64 and
+    integer arrays; a text column of :class:`Labels` as its codes and its texts, quoted when
+    ``quote``), or None where pyarrow writes the table: no extension (or ``PKMKIT_NATIVE=0``),
+    a column of another type (strings, bools), nulls, several chunks, or a text that needs
+    quotes in a file whose texts are not quoted (pyarrow's error then)."""
+    from pkmkit.numerics.jit import native_kernels
+
+    kernels = native_kernels()
+    if kernels is None or not hasattr(kernels, "csv_rows"):
+        return None
+    import pyarrow as pa
+
+    columns: list[Any] = []
+    for column in table.columns:
+        if column.num_chunks != 1 or column.null_count:
+            return None
+        values = column.chunk(0)
+        kind = values.type
+        if pa.types.is_float64(kind) or pa.types.is_integer(kind):
+            columns.append(values.to_numpy(zero_copy_only=True))
+            continue
+        if not (pa.types.is_dictionary(kind) and pa.types.is_string(kind.value_type)
+                and values.dictionary.null_count == 0):
+            return None
+        texts = values.dictionary.to_pylist()
+        if not quote and any(_STRUCTURAL.search(t) for t in texts):
+            return None
+        cells = tuple(('"' + t.replace('"', '""') + '"' if quote else t).encode("utf-8")
+                      for t in texts)
+        columns.append((values.indices.to_numpy(zero_copy_only=True), cells))
+    return tuple(columns)
 
 
 def _cpu_count() -> int:

@@ -606,6 +606,10 @@ extern const char pk_euler_quat_doc[], pk_euler_rotvec_doc[];
 PyObject *pk_py_euler_quat(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_euler_rotvec(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
+/* csv_text.c: a table's rows as CSV text, pyarrow's bytes (issue 22 §5, session 35) */
+extern const char pk_csv_rows_doc[];
+PyObject *pk_py_csv_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
     {"inverse_poses_shared", (PyCFunction)(void (*)(void))inverse_poses_shared, METH_FASTCALL,
@@ -680,6 +684,7 @@ static PyMethodDef methods[] = {
      pk_recycled_block_doc},
     {"recycled_release", (PyCFunction)(void (*)(void))pk_py_recycled_release, METH_FASTCALL,
      pk_recycled_release_doc},
+    {"csv_rows", (PyCFunction)(void (*)(void))pk_py_csv_rows, METH_FASTCALL, pk_csv_rows_doc},
     {NULL, NULL, 0, NULL},
 };
 
