@@ -42,6 +42,7 @@ count.
 
 from __future__ import annotations
 
+import _thread
 import importlib
 import importlib.util
 import os
@@ -104,6 +105,7 @@ NATIVE_UNTIL_NUMBA = {("pkmkit.machines.kernels", "velocity3")}
 _available: bool | None = None
 _native: ModuleType | bool | None = False  # False: not looked for yet
 _pool: tuple[int, ThreadPoolExecutor] | None = None
+_pool_lock = _thread.allocate_lock()  # _thread: built in, no import cost (threading's is)
 
 
 def mode() -> str:
@@ -274,13 +276,19 @@ def run_chunks(work: Callable[[int, int], None], rows: int, piece: int = 0) -> N
 
 
 def _helper_pool(workers: int) -> ThreadPoolExecutor:
-    """The persistent pool of ``workers`` threads that helps :func:`run_chunks`."""
+    """The persistent pool of ``workers`` threads that helps :func:`run_chunks`, made under a
+    lock: threads calling at once for the first time get one pool, not one each (each with
+    its own helpers: more threads than :func:`thread_count`)."""
     global _pool
-    if _pool is None or _pool[0] != workers:
-        from concurrent.futures import ThreadPoolExecutor
+    with _pool_lock:
+        if _pool is None or _pool[0] != workers:
+            from concurrent.futures import ThreadPoolExecutor
 
-        _pool = (workers, ThreadPoolExecutor(max_workers=workers, thread_name_prefix="pkmkit"))
-    return _pool[1]
+            if _pool is not None:  # a new count: the old helpers end once their queue is done
+                _pool[1].shutdown(wait=False)
+            _pool = (workers, ThreadPoolExecutor(max_workers=workers,
+                                                 thread_name_prefix="pkmkit"))
+        return _pool[1]
 
 
 #: Batch outputs of at least this many bytes are built on recycled memory

@@ -1,0 +1,59 @@
+"""The helper pool of :func:`pkmkit.numerics.jit.run_chunks` when threads meet it at once
+(docs/testing.md, "Audit of threads, session 35").
+
+``_helper_pool`` made the pool on first use without a lock: threads whose first large batch
+started together could each make a pool (57 of 200 trials of eight threads with a short switch
+interval, on the old code), each with its own helpers — more threads than ``thread_count()``,
+the executors left for the garbage collector. It is now made under a lock; and a pool
+replaced because the count changed (``PKMKIT_THREADS``) is shut down once its queue is done,
+instead of keeping idle threads."""
+
+from __future__ import annotations
+
+import sys
+import threading
+
+import pytest
+
+from pkmkit.numerics import jit
+
+
+@pytest.fixture
+def fresh_pool(monkeypatch):
+    old = jit._pool
+    monkeypatch.setattr(jit, "_pool", None)
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)  # threads switch often: the unlocked code's window opens
+    yield
+    sys.setswitchinterval(interval)
+    if jit._pool is not None:
+        jit._pool[1].shutdown(wait=True)
+    jit._pool = old
+
+
+def test_threads_asking_at_once_get_one_pool(fresh_pool):
+    for _ in range(100):
+        jit._pool = None
+        got = []
+        start = threading.Barrier(8)
+
+        def ask(got=got, start=start):
+            start.wait()
+            got.append(jit._helper_pool(3))
+
+        askers = [threading.Thread(target=ask, daemon=True) for _ in range(8)]
+        for t in askers:
+            t.start()
+        for t in askers:
+            t.join(60)
+        assert len(got) == 8 and len({id(pool) for pool in got}) == 1
+
+
+def test_a_replaced_pool_is_shut_down_after_its_work(fresh_pool):
+    first = jit._helper_pool(2)
+    done = first.submit(lambda: 7)
+    second = jit._helper_pool(3)  # another count: a new pool
+    assert second is not first and done.result(60) == 7
+    with pytest.raises(RuntimeError, match="shutdown"):
+        first.submit(lambda: 0)
+    assert jit._helper_pool(3) is second
