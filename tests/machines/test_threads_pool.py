@@ -6,10 +6,14 @@ started together could each make a pool (57 of 200 trials of eight threads with 
 interval, on the old code), each with its own helpers — more threads than ``thread_count()``,
 the executors left for the garbage collector. It is now made under a lock; and a pool
 replaced because the count changed (``PKMKIT_THREADS``) is shut down once its queue is done,
-instead of keeping idle threads."""
+instead of keeping idle threads. A process forked from one that used the pool makes a pool of
+its own (the inherited one has no threads there)."""
 
 from __future__ import annotations
 
+import concurrent.futures
+import multiprocessing
+import os
 import sys
 import threading
 
@@ -57,3 +61,29 @@ def test_a_replaced_pool_is_shut_down_after_its_work(fresh_pool):
     with pytest.raises(RuntimeError, match="shutdown"):
         first.submit(lambda: 0)
     assert jit._helper_pool(3) is second
+
+
+def _child_pool(parent_pool, answers) -> None:
+    pool = jit._helper_pool(1)
+    try:
+        ran = pool.submit(os.getpid).result(timeout=20)
+    except concurrent.futures.TimeoutError:
+        ran = None
+    answers.put((pool is parent_pool, ran == os.getpid()))
+
+
+@pytest.mark.skipif(not hasattr(os, "register_at_fork"), reason="no fork")
+def test_a_forked_child_gets_a_pool_of_its_own():
+    """A child made by ``fork`` (multiprocessing's default on Linux before 3.14) inherited the
+    parent's pool without its threads: a submitted helper never ran (every large batch on one
+    thread in the child, silently). The child now makes its own pool."""
+    parent_pool = jit._helper_pool(1)
+    assert parent_pool.submit(os.getpid).result(timeout=20) == os.getpid()
+    context = multiprocessing.get_context("fork")
+    answers = context.Queue()
+    child = context.Process(target=_child_pool, args=(parent_pool, answers))
+    child.start()
+    try:
+        assert answers.get(timeout=120) == (False, True)
+    finally:
+        child.join(60)

@@ -291,6 +291,18 @@ def _helper_pool(workers: int) -> ThreadPoolExecutor:
         return _pool[1]
 
 
+def _forget_pool_in_child() -> None:
+    """After ``fork``: the parent's pool has no threads in the child (its helpers would wait
+    in its queue for ever, and each large batch run on one thread) and its lock may have been
+    held by a parent thread: both made anew."""
+    global _pool, _pool_lock
+    _pool, _pool_lock = None, _thread.allocate_lock()
+
+
+if hasattr(os, "register_at_fork"):  # POSIX
+    os.register_at_fork(after_in_child=_forget_pool_in_child)
+
+
 #: Batch outputs of at least this many bytes are built on recycled memory
 #: (:func:`batch_output`): 32 MiB, glibc's largest dynamic ``mmap`` threshold — below it
 #: ``malloc`` already hands a freed output's memory to the next call (the Verne module's
