@@ -11,8 +11,8 @@ every case ``rounds`` times in an order of their own, half of them on one machin
 share and half on copies each thread loads itself, and compares each answer with the
 single-threaded one bit for bit (the arrays' bytes: NaN rows included).
 
-As a script, ``python -m tests.machines.thread_stress THREADS ROUNDS [--fresh INPUTS.npz]``
-prints ``ok`` or the differences (exit status 1); ``--fresh``: the inputs read from a file
+As a script, ``python -m tests.machines.thread_stress THREADS ROUNDS [--fresh INPUTS.npz]
+[--timeout=SECONDS]`` prints ``ok`` or the differences (exit status 1); ``--fresh``: the inputs read from a file
 (:func:`write_inputs`) and the threads started before any single-threaded call of the process,
 so that every lazily built state (the extension's load, caches, kernel modules, the pool, the
 built machines) is first built by competing threads; the references are computed afterwards."""
@@ -204,8 +204,9 @@ def _run(threads, rounds, families, table, fresh, timeout, folder) -> list[str]:
     stuck = [t.name for t in pool if t.is_alive()]
     if stuck:
         faulthandler.dump_traceback(all_threads=True)
-        return [f"threads {stuck} still running after {timeout:.0f} s: a deadlock or a "
-                "livelock (stacks above, on stderr)"]
+        return [f"threads {stuck} still running after {timeout:.0f} s: a deadlock, a livelock "
+                "or work far slower than expected (Numba compiling from an empty cache on a "
+                "loaded machine): the stacks above, on stderr, tell which"]
     failures = [f"thread {k}: {type(e).__name__}: {e}" for k, e in sorted(errors.items())]
     if fresh:
         reference = _references(table, families, folder)
@@ -227,7 +228,9 @@ if __name__ == "__main__":
         with np.load(args[2]) as saved:
             fresh_data = {k: saved[k] for k in saved.files}
     jit.RECYCLE_BYTES = 1 << 16  # the large batches' q on recycled blocks (3 MiB at 2¹⁶ rows)
+    limit = [float(a.split("=", 1)[1]) for a in sys.argv if a.startswith("--timeout=")]
     found = run(int(args[0]) if args else 4, int(args[1]) if len(args) > 1 else 1,
-                data=fresh_data, fresh=fresh_data is not None)
+                data=fresh_data, fresh=fresh_data is not None,
+                timeout=limit[0] if limit else TIMEOUT)
     print("\n".join(found) if found else "ok")
     sys.exit(1 if found else 0)
