@@ -12,10 +12,11 @@ share and half on copies each thread loads itself, and compares each answer with
 single-threaded one bit for bit (the arrays' bytes: NaN rows included).
 
 As a script, ``python -m tests.machines.thread_stress THREADS ROUNDS [--fresh INPUTS.npz]
-[--timeout=SECONDS]`` prints ``ok`` or the differences (exit status 1); ``--fresh``: the inputs read from a file
-(:func:`write_inputs`) and the threads started before any single-threaded call of the process,
-so that every lazily built state (the extension's load, caches, kernel modules, the pool, the
-built machines) is first built by competing threads; the references are computed afterwards."""
+[--timeout=SECONDS]`` prints ``ok`` or the differences (exit status 1); ``--fresh``: the inputs
+read from a file (:func:`write_inputs`) and the threads started before any single-threaded call
+of the process, so that every lazily built state (the extension's load, caches, kernel
+modules, the pool, the built machines) is first built by competing threads; the references are
+computed afterwards."""
 
 from __future__ import annotations
 
