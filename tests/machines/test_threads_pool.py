@@ -4,10 +4,8 @@
 ``_helper_pool`` made the pool on first use without a lock: threads whose first large batch
 started together could each make a pool (57 of 200 trials of eight threads with a short switch
 interval, on the old code), each with its own helpers — more threads than ``thread_count()``,
-the executors left for the garbage collector. It is now made under a lock; and a pool
-replaced because the count changed (``PKMKIT_THREADS``) is shut down once its queue is done,
-instead of keeping idle threads. A process forked from one that used the pool makes a pool of
-its own (the inherited one has no threads there)."""
+the executors left for the garbage collector. It is now made under a lock. A process forked
+from one that used the pool makes a pool of its own (the inherited one has no threads there)."""
 
 from __future__ import annotations
 
@@ -51,16 +49,6 @@ def test_threads_asking_at_once_get_one_pool(fresh_pool):
         for t in askers:
             t.join(60)
         assert len(got) == 8 and len({id(pool) for pool in got}) == 1
-
-
-def test_a_replaced_pool_is_shut_down_after_its_work(fresh_pool):
-    first = jit._helper_pool(2)
-    done = first.submit(lambda: 7)
-    second = jit._helper_pool(3)  # another count: a new pool
-    assert second is not first and done.result(60) == 7
-    with pytest.raises(RuntimeError, match="shutdown"):
-        first.submit(lambda: 0)
-    assert jit._helper_pool(3) is second
 
 
 def _child_pool(parent_pool, answers) -> None:

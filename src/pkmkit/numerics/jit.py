@@ -278,14 +278,14 @@ def run_chunks(work: Callable[[int, int], None], rows: int, piece: int = 0) -> N
 def _helper_pool(workers: int) -> ThreadPoolExecutor:
     """The persistent pool of ``workers`` threads that helps :func:`run_chunks`, made under a
     lock: threads calling at once for the first time get one pool, not one each (each with
-    its own helpers: more threads than :func:`thread_count`)."""
+    its own helpers: more threads than :func:`thread_count`). A pool replaced for a new count
+    is not shut down — a call may be about to submit to it —; its idle threads end when it is
+    garbage-collected."""
     global _pool
     with _pool_lock:
         if _pool is None or _pool[0] != workers:
             from concurrent.futures import ThreadPoolExecutor
 
-            if _pool is not None:  # a new count: the old helpers end once their queue is done
-                _pool[1].shutdown(wait=False)
             _pool = (workers, ThreadPoolExecutor(max_workers=workers,
                                                  thread_name_prefix="pkmkit"))
         return _pool[1]
