@@ -542,6 +542,23 @@ def alternate(names: list[str], calls: int, rounds: int = 7) -> None:
             f"{label} {min(v):.2f} / {statistics.median(v):.2f}" for label, v in rows.items()))
 
 
+def json_ready(value):
+    """``value`` (the report: dicts, lists, tuples of numbers and strings) with NumPy scalars
+    and arrays replaced by Python numbers and lists, which ``json`` serialises (the counts of
+    the report are ``numpy.int64``: ``json.dumps`` refused them). Anything else: TypeError."""
+    if isinstance(value, dict):
+        return {str(k): json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return json_ready(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    raise TypeError(f"json_ready: {type(value).__name__} is not a report value")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=20000)
@@ -556,7 +573,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.agreement:
         for name in (args.machines or "gough-stewart,verne,dietmaier-hexapod").split(","):
-            print(name, json.dumps(agreement(name, args.agreement), indent=1))
+            print(name, json.dumps(json_ready(agreement(name, args.agreement)), indent=1))
         return
     if args.alternate:
         alternate((args.machines or "orthoglide,linear-delta,five-bar,five-bar-biglide,delta")
@@ -635,7 +652,7 @@ def main() -> None:
                         ("+ condition", "jacobian one pose, call + condition"),
                         ("+ singularity", "jacobian one pose, call + singularity"))))
     if args.json:
-        Path(args.json).write_text(json.dumps(report, indent=2))
+        Path(args.json).write_text(json.dumps(json_ready(report), indent=2))
 
 
 if __name__ == "__main__":

@@ -135,7 +135,7 @@ def linuxcnc_source(machine, *, units: str = "mm", name: str | None = None,
 
 def _home_world(machine, geo: RodGeometry) -> np.ndarray:
     """Home pose as LinuxCNC world coordinates (SI lengths; A, B, C in degrees)."""
-    home = np.asarray(machine.home_pose, dtype=float)
+    home = np.array(machine.home_pose, dtype=float)  # scipy's from_rotvec: writeable only
     if not geo.full_pose:
         return np.concatenate([home, np.zeros(6 - len(home))])
     from pkmkit.spatial.rotation import angles_from_rotation, rotation_class

@@ -94,7 +94,14 @@ PyObject *pk_new_array(const double *values, Py_ssize_t rows, Py_ssize_t cols) {
     if (!shape) {
         shape = cols ? Py_BuildValue("(nn)", rows, cols) : Py_BuildValue("(n)", rows);
         if (!shape) return NULL;
-        if (small) shapes[rows][cols] = shape; /* the table's reference */
+        if (small) { /* building may run the collector, hence Python code and another thread */
+            if (shapes[rows][cols]) { /* that thread's shape, kept meanwhile: ours dropped */
+                Py_DECREF(shape);
+                shape = shapes[rows][cols];
+            } else {
+                shapes[rows][cols] = shape; /* the table's reference */
+            }
+        }
     }
     PyObject *out = PyObject_CallOneArg(empty, shape);
     if (!small) Py_DECREF(shape);

@@ -42,6 +42,7 @@ count.
 
 from __future__ import annotations
 
+import _thread
 import importlib
 import importlib.util
 import os
@@ -113,6 +114,7 @@ NATIVE_UNTIL_NUMBA = {("pkmkit.machines.kernels", "velocity3")}
 _available: bool | None = None
 _native: ModuleType | bool | None = False  # False: not looked for yet
 _pool: tuple[int, ThreadPoolExecutor] | None = None
+_pool_lock = _thread.allocate_lock()  # _thread: built in, no import cost (threading's is)
 
 
 def mode() -> str:
@@ -303,13 +305,31 @@ def run_together(work: Callable[[bool], None]) -> None:
 
 
 def _helper_pool(workers: int) -> ThreadPoolExecutor:
-    """The persistent pool of ``workers`` threads that helps :func:`run_chunks`."""
+    """The persistent pool of ``workers`` threads that helps :func:`run_chunks`, made under a
+    lock: threads calling at once for the first time get one pool, not one each (each with
+    its own helpers: more threads than :func:`thread_count`). A pool replaced for a new count
+    is not shut down — a call may be about to submit to it —; its idle threads end when it is
+    garbage-collected."""
     global _pool
-    if _pool is None or _pool[0] != workers:
-        from concurrent.futures import ThreadPoolExecutor
+    with _pool_lock:
+        if _pool is None or _pool[0] != workers:
+            from concurrent.futures import ThreadPoolExecutor
 
-        _pool = (workers, ThreadPoolExecutor(max_workers=workers, thread_name_prefix="pkmkit"))
-    return _pool[1]
+            _pool = (workers, ThreadPoolExecutor(max_workers=workers,
+                                                 thread_name_prefix="pkmkit"))
+        return _pool[1]
+
+
+def _forget_pool_in_child() -> None:
+    """After ``fork``: the parent's pool has no threads in the child (its helpers would wait
+    in its queue for ever, and each large batch run on one thread) and its lock may have been
+    held by a parent thread: both made anew."""
+    global _pool, _pool_lock
+    _pool, _pool_lock = None, _thread.allocate_lock()
+
+
+if hasattr(os, "register_at_fork"):  # POSIX
+    os.register_at_fork(after_in_child=_forget_pool_in_child)
 
 
 #: Batch outputs of at least this many bytes are built on recycled memory

@@ -120,8 +120,8 @@ def pose_to_angles(pose: Any, convention: str = DEFAULT_CONVENTION, *,
 def to_transform(pose: Any) -> RigidTransform:
     """The pose rows as one (batched) :class:`RigidTransform`."""
     rows, single = _pose_rows(pose)
-    out = _rigid_class().from_components(rows[:, :3],
-                                         rotation_class().from_rotvec(rows[:, 3:]))
+    out = _rigid_class().from_components(  # scipy's from_rotvec: writeable buffers only
+        rows[:, :3], rotation_class().from_rotvec(np.array(rows[:, 3:])))
     return out[0] if single else out
 
 
