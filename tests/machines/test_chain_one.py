@@ -113,7 +113,12 @@ def near_wrist_singularity(m, n: int, seed: int = 1):
 
 def ik_mismatches(m, poses) -> tuple[int, int]:
     """``(fast rows, rows where the Numba one-pose answer differs from the batch path in any
-    bit, or m.ik(x) — whichever path it took — by more than IK_TOL)``."""
+    bit, or m.ik(x) — whichever path it took — by more than IK_TOL)``. The batch rows are
+    computed once Numba is imported: from then on the batch path's closed-form start is the
+    compiled twin the one-pose path runs (:func:`pkmkit.machines.chain_starts.compiled_start`:
+    bit for bit); before it, the NumPy reference (to rounding)."""
+    import numba  # noqa: F401 - the one-pose path's state, before the batch call
+
     fast = wrong = 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", StrokeWarning)

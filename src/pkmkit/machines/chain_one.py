@@ -53,7 +53,12 @@ import numpy as np
 from pkmkit.machines import chain_one_velocity
 from pkmkit.machines.chain_one_native import packed
 from pkmkit.machines.chain_results import ChainInverseResult
-from pkmkit.machines.chain_starts import closed_starts, home_rates, inverse_rates
+from pkmkit.machines.chain_starts import (
+    closed_starts,
+    compiled_start,
+    home_rates,
+    inverse_rates,
+)
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
@@ -232,9 +237,14 @@ class ChainOneConstants:
             self.wrist = (t, float(home[t]), pair[1], float(home[pair[1]]),
                           bool(reach >= np.pi / 2))
         # the kind's closed-form start of the inverse model (chain_starts.closed_starts)
+        # — its compiled twin where it has one (chain_starts.compiled_start: the batch rows'
+        # function, on one row)
         self.closed = None
         if closed_starts(m, np.zeros((0, 6)), np.zeros(0)) is not None:
-            self.closed = (m.kind.inverse_start, dict(m.params))
+            start = m.kind.inverse_start
+            twin = compiled_start(m, start)
+            self.closed = ((start, dict(m.params)) if twin is None else
+                           (_Kernel(twin[0].inverse_rows), twin[1]))
 
     def __reduce__(self) -> tuple:
         """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
@@ -257,10 +267,12 @@ class _Work:
     """One thread's work arrays for the kernels of a machine (the kernels release the GIL:
     threads calling one machine must not share them)."""
 
-    __slots__ = ("delta", "info", "pose", "q", "target", "u_dir", "u_inv", "values")
+    __slots__ = ("branch", "closed", "delta", "info", "pose", "q", "target", "u_dir", "u_inv",
+                 "values")
 
     def __init__(self, c: ChainOneConstants) -> None:
         self.u_inv, self.target = np.zeros((1, 6 + c.n_var)), np.zeros((1, 6))
+        self.closed, self.branch = np.zeros((1, 6 + c.n_var)), np.zeros(1)
         self.values, self.delta, self.q = np.zeros((1, c.n_var)), np.zeros(c.n), np.zeros(c.n)
         self.u_dir, self.pose, self.info = np.zeros((1, c.n_u)), np.zeros(6), np.zeros(4)
 
@@ -446,6 +458,14 @@ def _closed_start(c: ChainOneConstants, target: np.ndarray, branch: float | None
     same function on one row) of ``target (1, 6)`` on ``branch`` (±1, or None: nearest home),
     or None where it declines."""
     function, params = c.closed
+    if type(function) is _Kernel:  # the compiled twin (0: the branch nearest home)
+        w = _work(c)
+        w.branch[0] = 0.0 if branch is None else branch
+        if function.call is None:
+            function.first(params, target, c.tool_row, w.branch, w.closed)
+        function.call(params, target, c.tool_row, w.branch, w.closed)
+        u = w.closed[0]
+        return u if u[0] == u[0] else None  # a declined row: NaN throughout
     u = function(params, target, c.tool_row, None if branch is None else np.full(1, branch))[0]
     return u if np.isfinite(u).all() else None
 

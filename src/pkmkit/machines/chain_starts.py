@@ -9,11 +9,14 @@ closure, does not depend on the rows beside it (issue 22 §6).
 
 from __future__ import annotations
 
+import importlib
+import sys
 from typing import Any
 
 import numpy as np
 
 from pkmkit.machines.chain_velocity_record import RANK_RCOND
+from pkmkit.numerics import jit
 from pkmkit.numerics.rowwise import einsum
 from pkmkit.solve.chains import (
     closure,
@@ -90,8 +93,39 @@ def closed_direct_starts(m: Any, qb: np.ndarray) -> np.ndarray | None:
         object.__setattr__(m, "_closed_direct_ok", ok)
     if not ok:
         return None
-    u = start(m.params, qb)  # qb's columns: the kind's actuators in its order
+    twin = compiled_start(m, start)
+    if twin is None:
+        u = start(m.params, qb)  # qb's columns: the kind's actuators in its order
+    else:
+        u = np.empty((len(qb), 6 + len(start.variables)))
+        twin[0].direct_rows(twin[1], np.ascontiguousarray(qb, dtype=float), u)
     return u[:, np.concatenate([np.arange(6), 6 + np.asarray(m.passive_variables)])]
+
+
+def compiled_start(m: Any, start: Any) -> tuple[Any, np.ndarray] | None:
+    """``(module, constants)`` of the compiled (Numba) twin of the kind's closed-form start
+    ``start`` (``MachineKind.inverse_start`` / ``direct_start``) of the machine ``m`` where it
+    runs now, else None (the NumPy function). A start declares its twin by attributes: the
+    name of the module holding ``inverse_rows`` / ``direct_rows`` and ``inverse_row`` /
+    ``direct_row`` as ``start.compiled``, their constants as ``start.native(params)[1:]`` (the C
+    twin's, after the family's code). It runs once Numba is imported (or
+    ``PKMKIT_COMPILED=1``; never with ``=0``): then the batch rows here and the one-pose Numba
+    path (:mod:`pkmkit.machines.chain_one`) start from the same compiled function — their
+    answers agree bit for bit — whatever the batch's size (a row's start does not depend on
+    the rows beside it). Before, a one-row call of the NumPy function cost ≈ 250–300 µs, a
+    one-pose ``full_output`` call's most (issue 22 §1, session 35)."""
+    name = getattr(start, "compiled", None)
+    if name is None or not jit.use_compiled_solver(1):
+        return None
+    cache = m.__dict__.get("_compiled_starts")  # the constants by module (picklable)
+    if cache is None:
+        cache = {}
+        object.__setattr__(m, "_compiled_starts", cache)
+    k = cache.get(name)
+    if k is None:
+        k = cache[name] = np.ascontiguousarray(start.native(m.params)[1:], dtype=float)
+    module = sys.modules.get(name)
+    return (importlib.import_module(name) if module is None else module), k
 
 
 #: Singular values of the inverse model's Jacobian at home below this fraction of the largest
@@ -208,4 +242,15 @@ def closed_starts(m: Any, targets: np.ndarray, lengths: np.ndarray,
     if ok is None:  # the kind's own variables in its order: a model the kind built
         ok = tuple(m.model.variables) == getattr(start, "variables", None)
         object.__setattr__(m, "_closed_start_ok", ok)
-    return start(m.params, targets, lengths, branch) if ok else None
+    if not ok:
+        return None
+    twin = compiled_start(m, start)
+    if twin is None:
+        return start(m.params, targets, lengths, branch)
+    targets = np.ascontiguousarray(targets, dtype=float)
+    n = len(targets)
+    out = np.empty((n, 6 + len(start.variables)))
+    branches = np.zeros(n) if branch is None else np.ascontiguousarray(branch, dtype=float)
+    twin[0].inverse_rows(twin[1], targets, np.ascontiguousarray(
+        np.broadcast_to(np.asarray(lengths, dtype=float), (n,))), branches, out)
+    return out

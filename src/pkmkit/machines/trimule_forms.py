@@ -392,6 +392,8 @@ def native_constants(params: Mapping[str, Any]) -> np.ndarray:
 
 
 start_unknowns.native = native_constants  # its C twin's constants (chain_one_native)
+#: its Numba twin (chain_starts.compiled_start): that module's ``inverse_rows``
+start_unknowns.compiled = "pkmkit.machines.trimule_start_kernel"
 
 
 #: Bisection steps of :func:`direct_unknowns` before its two Newton steps (the bracket
@@ -424,3 +426,5 @@ def direct_unknowns(params: Mapping[str, Any], q: Any) -> np.ndarray:
 
 
 direct_unknowns.variables = VARIABLES  # the model's variables it answers for (chain_starts)
+direct_unknowns.native = native_constants  # the constants of its C and Numba twins
+direct_unknowns.compiled = start_unknowns.compiled  # that module's ``direct_rows``

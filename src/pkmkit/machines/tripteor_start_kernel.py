@@ -29,6 +29,7 @@ _OPTIONS = {"nogil": True, "boundscheck": False, "error_model": "numpy", "cache"
 _STEPS = _forms.INVERSE_STEPS
 _DIRECT_STEPS = _forms.DIRECT_STEPS
 _TOL = _forms.INVERSE_TOL
+_STALL = _forms.INVERSE_STALL
 _SINGULAR = _forms.INVERSE_SINGULAR
 _H = _forms.JACOBIAN_STEP
 _REFRESH = _forms.JACOBIAN_REFRESH
@@ -129,6 +130,7 @@ def _newton2(which, k, z0, z1, steps, data, f, xq):
     f0, f1 = _equations(which, k, z0, z1, data, f, xq)
     i00 = i01 = i10 = i11 = 0.0
     fresh = True
+    last = math.inf
     for _ in range(steps):
         r0, r1 = f0 - shift * z0, f1 - shift * z1
         if fresh:
@@ -141,8 +143,9 @@ def _newton2(which, k, z0, z1, steps, data, f, xq):
         d0, d1 = i00 * r0 + i01 * r1, i10 * r0 + i11 * r1
         z0, z1 = z0 - d0, z1 - d1
         change = abs(d0) + abs(d1)
-        if change <= _TOL:
+        if change <= _TOL or (change <= _STALL and change >= last):
             return z0, z1, True
+        last = change
         fresh = change > _REFRESH
         f0, f1 = _equations(which, k, z0, z1, data, f, xq)
     return z0, z1, False

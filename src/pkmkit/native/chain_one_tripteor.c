@@ -10,7 +10,7 @@
 #include <math.h>
 
 enum { STEPS = 10 };  /* tripteor_forms.INVERSE_STEPS */
-static const double TOL = 1e-15, SINGULAR = 1e-3, H = 1e-7, REFRESH = 1e-6;
+static const double TOL = 1e-15, STALL = 1e-13, SINGULAR = 1e-3, H = 1e-7, REFRESH = 1e-6;
 
 /* tripteor_forms._explicit: psi, sigma of the platform whose MPS origin is p (NaN without
  * assembly). */
@@ -206,6 +206,7 @@ static int newton2(int which, const double *k, double *z0, double *z1, int steps
     double shift = which == INVERSE ? 1.0 : 0.0, x0 = *z0, x1 = *z1, f0, f1;
     double i00 = 0, i01 = 0, i10 = 0, i11 = 0;
     int done = 0, fresh = 1;
+    double last = INFINITY;
     equations(which, k, x0, x1, data, &f0, &f1);
     for (int it = 0; it < steps; it++) {
         double r0 = f0 - shift * x0, r1 = f1 - shift * x1;
@@ -221,10 +222,11 @@ static int newton2(int which, const double *k, double *z0, double *z1, int steps
         double d0 = i00 * r0 + i01 * r1, d1 = i10 * r0 + i11 * r1;
         x0 = x0 - d0, x1 = x1 - d1;
         double change = fabs(d0) + fabs(d1);
-        if (change <= TOL) {
+        if (change <= TOL || (change <= STALL && change >= last)) {  /* or rounding */
             done = 1;
             break;
         }
+        last = change;
         fresh = change > REFRESH;
         equations(which, k, x0, x1, data, &f0, &f1);
     }
