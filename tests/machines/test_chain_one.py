@@ -117,7 +117,7 @@ def ik_mismatches(m, poses) -> tuple[int, int]:
     computed once Numba is imported: from then on the batch path's closed-form start is the
     compiled twin the one-pose path runs (:func:`pkmkit.machines.chain_starts.compiled_start`:
     bit for bit); before it, the NumPy reference (to rounding)."""
-    import numba  # noqa: F401 - the one-pose path's state, before the batch call
+    import numba  # the one-pose path's state, before the batch call
 
     fast = wrong = 0
     with warnings.catch_warnings():
