@@ -76,10 +76,11 @@ def _off(name: str, key: str):
 @pytest.mark.parametrize("name", INVERSE)
 def test_the_inverse_start_is_the_engines_solution(name):
     """Tool poses of the engine's direct model at known actuators, random tool lengths: the
-    start gives the actuators back, and the engine's inverse solve started from it stops at
-    once (0 iterations on nearly every row, residual within tolerance, the same unknowns)."""
+    engine's direct model of the start's actuators lands on the pose, and the engine's inverse
+    solve started from it stops at once (0 iterations on nearly every row, residual within
+    tolerance, the same unknowns)."""
     m = pkmkit.machine(name)
-    q, x = _poses(m, 300, 1)
+    _, x = _poses(m, 300, 1)
     tools = np.random.default_rng(2).uniform(0.0, 0.3, len(x))
     x = x.copy()
     x[:, :3] += (tools - m.tool_length)[:, None] * x[:, 3:]  # the same flange
