@@ -335,3 +335,41 @@ def test_the_c_call_starts_the_direct_model_alike(name):
             assert one[1] == full.iterations[k]
     assert got >= 0.99 * len(q)
     assert full.iterations.mean() < 0.5
+
+
+# ---------------------------------------------------------------- continuation (§3)
+@pytest.mark.parametrize("name", INVERSE)
+def test_continuation_takes_the_closed_start_and_keeps_the_answers(name, monkeypatch):
+    """A grid's slab continuation (:func:`pkmkit.analysis.continuation.inverse_of_chunk`) with
+    the kind's closed start first (``continuation_starts``) against the neighbours' starts
+    alone (the protocol's default, patched in): the same statuses and answers (to 1e-11),
+    fewer iterations; ``continuation_starts`` keeps a neighbour's start where the closed start
+    declines (a NaN target) and takes the closed start elsewhere."""
+    from pkmkit.analysis.continuation import inverse_of_chunk
+    from pkmkit.machines.protocol import MachineFace
+
+    m = pkmkit.machine(name)
+    act = np.flatnonzero(m.model.actuated)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    middle = lo + (hi - lo) * np.array([0.5, 0.5, 0.5, 0.5, 0.8])  # off the wrist singularity
+    centre = m.fk(middle, strokes="ignore")
+    axes = [np.linspace(-0.03, 0.03, 7)] * 3
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, 3)
+    points = np.tile(centre, (len(grid), 1))
+    points[:, :3] += grid
+    slab = 49
+    new = inverse_of_chunk(m, points, slab)
+    with monkeypatch.context() as patch:
+        patch.setattr(type(m), "continuation_starts", MachineFace.continuation_starts)
+        old = inverse_of_chunk(pkmkit.machine(name), points, slab)
+    assert np.array_equal(new.status, old.status) and (new.status == 0).mean() >= 0.9
+    ok = new.status == 0
+    assert np.abs(new.q[ok] - old.q[ok]).max() <= 1e-11
+    assert new.iterations.sum() < old.iterations.sum()
+    neighbours = np.tile(new.solution[:1], (3, 1))
+    x = points[:3].copy()
+    x[0, 0] = np.nan
+    got = m.continuation_starts(x, neighbours)
+    assert np.array_equal(got[0], neighbours[0])
+    closed = chain_starts.closed_starts(m, x[1:], np.full(2, m.tool_length))
+    np.testing.assert_array_equal(got[1:], closed)
