@@ -1,10 +1,8 @@
 """The TriMule's closed-form inverse (:func:`pkmkit.machines.trimule_forms.inverse_unknowns`),
-the inverse model's start on the batch path, the one-pose paths and the head's mirror (issue 22
-§1, session 33): against the forward closed forms and the joint-chain model (independent
-oracles), row by row (batch independence), and — with the closed start turned off — the same
-answers and head branches as the first-order start's on 2,000 poses. The properties every kind's start shares (the engine's oracles, batch independence, the
-start turned off, the C call, the compiled twin) are tested once for every kind in
-test_closed_starts.py."""
+issue 22 §1, session 33: its own geometry — against the forward closed forms (an independent
+oracle), the declined rows, a caller's start leaving the legs' home modes. The properties every
+kind's start shares (the engine's oracles, batch independence, the start turned off, the C call,
+the compiled twin) are tested once for every kind in test_closed_starts.py."""
 
 from __future__ import annotations
 

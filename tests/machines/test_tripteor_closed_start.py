@@ -1,11 +1,10 @@
-"""The Tripteor X7's near-closed-form inverse (:func:`pkmkit.machines.tripteor_forms.
-inverse_unknowns`), the inverse model's start on the batch path, the one-pose paths and the C
-call (issue 22 §1, session 34): against the engine's own direct model and solve (independent
-oracles: the joint-chain model's closure, not the forms' geometry), row by row (batch
-independence), and — with the closed start turned off — the same answers and head branches as
-the first-order start's on 2,000 poses, edges and the wrist's near singularity included. The properties every kind's start shares (the engine's oracles, batch independence, the
-start turned off, the C call, the compiled twin) are tested once for every kind in
-test_closed_starts.py."""
+"""The Tripteor X7's near-closed-form inverse
+(:func:`pkmkit.machines.tripteor_forms.inverse_unknowns`), issue 22 §1, session 34: its own
+geometry — the actuators back from the engine's direct model (an independent oracle: the
+joint-chain model's closure, not the forms' geometry), the head's other branch, the declined
+rows, the near singularity where its answer is the exact one, a C constant planted off. The
+properties every kind's start shares (the engine's oracles, batch independence, the start turned
+off, the C call, the compiled twin) are tested once for every kind in test_closed_starts.py."""
 
 from __future__ import annotations
 

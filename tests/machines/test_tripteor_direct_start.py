@@ -3,9 +3,9 @@
 batch path (:func:`pkmkit.machines.chain_starts.default_start`) and the one-pose C call
 (``native/chain_one_tripteor.c``), issue 22 §1, session 34: against the joint-chain model's
 closure and the inverse (independent oracles), row by row (batch independence), and — with it
-turned off — the same answers and statuses as the first-order start's. The properties every kind's start shares (the engine's oracles, batch independence, the
-start turned off, the C call, the compiled twin) are tested once for every kind in
-test_closed_starts.py."""
+turned off — the same answers and statuses as the first-order start's. The properties every
+kind's start shares (the engine's oracles, batch independence, the start turned off, the C call,
+the compiled twin) are tested once for every kind in test_closed_starts.py."""
 
 from __future__ import annotations
 
