@@ -1,5 +1,5 @@
-"""The one-pose record's stroke excess in Python floats (:func:`pkmkit.machines.chain_one.
-excess`, session 35) against the batch path's :func:`~pkmkit.machines.strokes.signed_excess`
+"""The one-pose record's stroke excess in Python floats (:func:`pkmkit.machines.strokes.
+row_excess`, session 35) against the batch path's :func:`~pkmkit.machines.strokes.signed_excess`
 (the oracle): the same bits on values within, at, just beyond (by less and more than
 ``STROKE_TOL``) and far beyond either end, NaN and infinite values, one-sided strokes; and a
 joint chain's one-pose ``full_output`` record with ``strokes="ignore"`` beyond a stroke against
@@ -15,15 +15,14 @@ import pytest
 import pkmkit
 from pkmkit.exceptions import StrokeWarning
 from pkmkit.machines import chain_one
-from pkmkit.machines.strokes import STROKE_TOL, signed_excess
+from pkmkit.machines.strokes import STROKE_TOL, row_excess, signed_excess, stroke_ends
 
 
 def test_the_excess_is_signed_excess_to_the_bit():
     rng = np.random.default_rng(0)
     lower = np.array([0.1, -1.0, -np.inf, 0.2, -0.5])
     upper = np.array([0.9, 1.0, 0.3, np.inf, 0.5])
-    strokes = tuple((lo, hi, lo - STROKE_TOL, hi + STROKE_TOL)
-                    for lo, hi in zip(lower.tolist(), upper.tolist(), strict=True))
+    strokes = stroke_ends(lower, upper)
     edges = np.concatenate([lower, upper])
     edges = edges[np.isfinite(edges)]
     near = np.concatenate([edges + d for d in (0.0, 0.5 * STROKE_TOL, -0.5 * STROKE_TOL,
@@ -31,7 +30,7 @@ def test_the_excess_is_signed_excess_to_the_bit():
     values = np.concatenate([rng.uniform(-3, 3, 2000), near, [np.nan, np.inf, -np.inf]])
     rows = rng.choice(values, (3000, 5))
     ref = signed_excess(rows, lower, upper)
-    got = np.array([chain_one.excess(r.tolist(), strokes) for r in rows])
+    got = np.array([row_excess(r.tolist(), strokes) for r in rows])
     assert np.array_equal(got, ref, equal_nan=True)
     assert np.array_equal(np.signbit(got), np.signbit(ref))
     assert (ref != 0).any(axis=1).mean() > 0.5
