@@ -321,8 +321,10 @@ def closed(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
 
 
 def compiled(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
-    """Session 35: the one-pose Numba path (``m.ik(x, full_output=True)``, and ``m.ik(x)``
-    without the C extension: :func:`pkmkit.machines.chain_one.inverse`) and the batch rows
+    """Session 35: the one-pose Numba path (``m.ik(x, full_output=True)``, and ``m.ik(x)`` and
+    ``m.fk(q)`` without the C extension: :func:`pkmkit.machines.chain_one.inverse`,
+    :func:`~pkmkit.machines.chain_one.direct` — before, ``fk``'s kernel started from first
+    order, with no closed start) and the batch rows
     with the kind's closed start computed by its NumPy function (before) and by its compiled
     twin (after), and from the first-order start (the closed start off: what the calls cost
     before the closed starts landed); the largest difference of the answers q and the
@@ -335,6 +337,7 @@ def compiled(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
     m = pkmkit.machine(name)
     off = pkmkit.machine(name)
     object.__setattr__(off, "_closed_start_ok", False)
+    object.__setattr__(off, "_closed_direct_ok", False)
     rng = np.random.default_rng(0)
     act = np.flatnonzero(m.model.actuated)
     lo, hi = m.model.q_min[act], m.model.q_max[act]
@@ -346,14 +349,15 @@ def compiled(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
         machine.ik(xs[0], strokes="ignore", full_output=True)
     c = chain_one.constants(m)
     twin, numpy_start = c.closed, (m.kind.inverse_start, dict(m.params))
+    direct_twin = c.closed_direct
     real = chain_starts.compiled_start
 
-    def before() -> None:
-        c.closed = numpy_start
+    def before() -> None:  # the one-pose fk: the kernel's first-order start, as before
+        c.closed, c.closed_direct = numpy_start, None
         chain_starts.compiled_start = lambda *a: None
 
     def after() -> None:
-        c.closed = twin
+        c.closed, c.closed_direct = twin, direct_twin
         chain_starts.compiled_start = real
 
     fast = [x for x in xs if chain_one.inverse(m, x, "ignore") is not None]
@@ -372,7 +376,13 @@ def compiled(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
           f"{np.mean(iterations[0] == iterations[1]):.1%} (mean {iterations[1].mean():.2f})")
     rows = [(x,) for x in fast[:200]]
     cases = {"full_output": lambda mm: (lambda x: mm.ik(x, strokes="ignore", full_output=True)),
-             "no C": lambda mm: (lambda x: chain_one.inverse(mm, x, "ignore"))}
+             "no C": lambda mm: (lambda x: chain_one.inverse(mm, x, "ignore")),
+             "fk no C": lambda mm: (lambda x, mm=mm: chain_one.direct(
+                 mm, actuators[id(x)], "ignore", None))}
+    actuators = {id(x): np.asarray(m.ik(x, strokes="ignore")) for x in fast[:200]}
+    for mm in (m, off):  # the fk's one-pose constants (past the first single call)
+        for _ in range(2):
+            chain_one.direct(mm, actuators[id(fast[0])], "ignore", None)
     times: dict = {}
     for _ in range(rounds):  # interleaved
         for label, make in cases.items():
@@ -384,8 +394,9 @@ def compiled(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
     med = {key: float(np.median(v)) for key, v in times.items()}
     for label in cases:
         old, new, first = med[label, "NumPy"], med[label, "twin"], med[label, "first-order"]
-        call = "m.ik(x, full_output=True)" if label == "full_output" else \
-            "m.ik(x) without C (chain_one.inverse)"
+        call = {"full_output": "m.ik(x, full_output=True)",
+                "no C": "m.ik(x) without C (chain_one.inverse)",
+                "fk no C": "m.fk(q) without C (chain_one.direct; before: no closed start)"}[label]
         print(f"  {call}, CPU µs: NumPy start {old:.2f}, compiled twin {new:.2f} "
               f"(x{old / new:.2f}); first-order start {first:.2f} (twin x{first / new:.2f})")
     batch = {"NumPy": [], "twin": [], "start NumPy": [], "start twin": []}
