@@ -103,29 +103,55 @@ def closed_direct_starts(m: Any, qb: np.ndarray) -> np.ndarray | None:
 
 
 def compiled_start(m: Any, start: Any) -> tuple[Any, np.ndarray] | None:
-    """``(module, constants)`` of the compiled (Numba) twin of the kind's closed-form start
-    ``start`` (``MachineKind.inverse_start`` / ``direct_start``) of the machine ``m`` where it
-    runs now, else None (the NumPy function). A start declares its twin by attributes: the
-    name of the module holding ``inverse_rows`` / ``direct_rows`` and ``inverse_row`` /
-    ``direct_row`` as ``start.compiled``, their constants as ``start.native(params)[1:]`` (the C
-    twin's, after the family's code). It runs once Numba is imported (or
-    ``PKMKIT_COMPILED=1``; never with ``=0``): then the batch rows here and the one-pose Numba
-    path (:mod:`pkmkit.machines.chain_one`) start from the same compiled function — their
-    answers agree bit for bit — whatever the batch's size (a row's start does not depend on
-    the rows beside it). Before, a one-row call of the NumPy function cost ≈ 250–300 µs, a
-    one-pose ``full_output`` call's most (issue 22 §1, session 35)."""
+    """``(kernels, constants)`` of the compiled twin of the kind's closed-form start ``start``
+    (``MachineKind.inverse_start`` / ``direct_start``) of the machine ``m``, or None (its NumPy
+    function): ``kernels.inverse_rows(constants, targets, tools, branches, out)`` /
+    ``kernels.direct_rows(constants, q, out)`` (branch 0: the one nearest home; NaN rows where
+    it declines). A start declares its twins by attributes: its C constants as
+    ``start.native(params)`` (the family's code first), its Numba module's name as
+    ``start.compiled`` (the constants after the code).
+
+    With the C extension, its batch entries (``native/chain_closed_rows.c``: the one-pose C
+    call's starts over rows) in every process — no Numba import, the same bits whether Numba
+    is imported or not; without it, the Numba twin once Numba is imported (or
+    ``PKMKIT_COMPILED=1``; never with ``=0``), whose bits are the C's (the same libm calls, no
+    contraction; ``tests/machines/test_closed_starts.py``). The batch rows here and the
+    one-pose paths (:mod:`pkmkit.machines.chain_one`) start from the same compiled function —
+    their answers agree bit for bit — whatever the batch's size. The NumPy function (the
+    reference, to rounding: its AVX-512 transcendentals are not libm's) runs where neither
+    does; before, a one-row call of it cost ≈ 250–650 µs, a one-pose ``full_output`` call's
+    most (issue 22 §1, session 35)."""
     name = getattr(start, "compiled", None)
-    if name is None or not jit.use_compiled_solver(1):
+    if name is None or jit.mode() == "0":
         return None
-    cache = m.__dict__.get("_compiled_starts")  # the constants by module (picklable)
+    native = jit.native_kernels()
+    if native is not None and hasattr(native, "chain_closed_rows") and hasattr(start, "native"):
+        key, kernels = "C " + name, _NativeStarts(native)
+    elif jit.use_compiled_solver(1):
+        key, module = name, sys.modules.get(name)
+        kernels = importlib.import_module(name) if module is None else module
+    else:
+        return None
+    cache = m.__dict__.get("_compiled_starts")  # the constants by twin (picklable)
     if cache is None:
         cache = {}
         object.__setattr__(m, "_compiled_starts", cache)
-    k = cache.get(name)
+    k = cache.get(key)
     if k is None:
-        k = cache[name] = np.ascontiguousarray(start.native(m.params)[1:], dtype=float)
-    module = sys.modules.get(name)
-    return (importlib.import_module(name) if module is None else module), k
+        k = np.ascontiguousarray(start.native(m.params), dtype=float)
+        k = cache[key] = k if key.startswith("C ") else np.ascontiguousarray(k[1:])
+    return kernels, k
+
+
+class _NativeStarts:
+    """The C extension's batch entries of the closed-form starts under the Numba twins'
+    names (:func:`compiled_start`)."""
+
+    __slots__ = ("direct_rows", "inverse_rows")
+
+    def __init__(self, native: Any) -> None:
+        self.inverse_rows = native.chain_closed_rows
+        self.direct_rows = native.chain_closed_direct_rows
 
 
 #: Singular values of the inverse model's Jacobian at home below this fraction of the largest
