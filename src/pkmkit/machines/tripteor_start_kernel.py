@@ -4,13 +4,15 @@
 statement with ``native/chain_one_tripteor.c`` (the C call's twin).
 
 The start functions carry this module's name as ``start.compiled``
-(:func:`pkmkit.machines.chain_starts.compiled_start` reads it): once Numba is imported the batch
-path (:func:`~pkmkit.machines.chain_starts.closed_starts`,
+(:func:`pkmkit.machines.chain_starts.compiled_start` reads it): without the C extension, once
+Numba is imported, the batch path (:func:`~pkmkit.machines.chain_starts.closed_starts`,
 :func:`~pkmkit.machines.chain_starts.closed_direct_starts`) and the one-pose Numba path
-(:mod:`pkmkit.machines.chain_one`) both run :func:`inverse_row` / :func:`direct_row` — the
+(:mod:`pkmkit.machines.chain_one`) both run :func:`inverse_rows` / :func:`direct_rows` — the
 same compiled function on each row, so their answers agree bit for bit — where the NumPy
-functions cost ≈ 250 µs per one-row call. The NumPy functions stay the reference (agreement to
-rounding: libm's and NumPy's transcendental functions differ in the last place).
+functions cost ≈ 250 µs per one-row call; with it, the C twin's batch entries
+(``native/chain_closed_rows.c``), whose bits are these (tests/machines/test_closed_starts.py).
+The NumPy functions stay the reference (agreement to rounding: NumPy's AVX-512
+transcendental functions and libm's differ in the last place).
 
 ``k``: :func:`pkmkit.machines.tripteor_forms.constants` (25,). The module's constants are
 :mod:`~pkmkit.machines.tripteor_forms`'s (read at its import: one set of values).
