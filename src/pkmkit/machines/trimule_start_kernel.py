@@ -6,7 +6,8 @@ statement with ``native/chain_one.c`` (``closed_start``, ``closed_direct``: the 
 As :mod:`pkmkit.machines.tripteor_start_kernel`: the start functions carry this module's name as
 ``start.compiled``; without the C extension, once Numba is imported, the batch path and the
 one-pose Numba path both run :func:`inverse_rows` / :func:`direct_rows` (with it, the C twin's
-batch entries, ``native/chain_closed_rows.c`` and ``chain_one_trimule.c``: the same bits). ``k``: ``trimule_forms.native_constants(params)[1:]``
+batch entries, ``native/chain_closed_rows.c`` and ``chain_one_trimule.c``: the same bits).
+``k``: ``trimule_forms.native_constants(params)[1:]``
 (c1, c2, spindle, L, l, H, h).
 """
 
