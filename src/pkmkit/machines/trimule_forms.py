@@ -264,7 +264,7 @@ def inverse_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
     ``Q4 = atan2(b a·y_P, b a·x_P)``, and the parallel part's joints as
     :func:`passive_joints` and :func:`actuators` (written out term by term here). Every
     operation is elementwise: a row's bits do not depend on the rows beside it (issue 22 §6),
-    and ``native/chain_one.c`` (``closed_start``) computes the same, statement for statement.
+    and ``native/chain_one_trimule.c`` computes the same, statement for statement.
     """
     x = np.atleast_2d(np.asarray(targets, dtype=float))
     n = x.shape[0]
@@ -364,7 +364,7 @@ def start_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
     """The inverse model's closed-form start (``MachineKind.inverse_start``): the unknowns of
     :func:`inverse_unknowns` on ``branch (N,)`` (±1), or — None — on the branch whose Q4 is
     within a quarter turn of home's (0): the sign of ``a · x_P`` with leg 4 along ``W`` (the
-    eccentricity left out; ``native/chain_one.c`` the same)."""
+    eccentricity left out; ``native/chain_one_trimule.c`` the same)."""
     x = np.atleast_2d(np.asarray(targets, dtype=float))
     if branch is None:
         tool = np.broadcast_to(np.asarray(tool_length, dtype=float), (x.shape[0],))
@@ -409,7 +409,7 @@ def direct_unknowns(params: Mapping[str, Any], q: Any) -> np.ndarray:
     The measured leg from :func:`measured_leg` (:data:`DIRECT_BISECTIONS` bisections), the
     platform from :func:`platform_pose`, the passive joints as :func:`passive_joints`. NaN rows
     where it declines (no assembly in the working mode). Elementwise: a row's bits its own;
-    ``native/chain_one.c`` (``closed_direct``) computes the same, statement for statement."""
+    ``native/chain_one_trimule.c`` computes the same, statement for statement."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
     n = q.shape[0]
     leg = measured_leg(params, q[:, :3], iterations=DIRECT_BISECTIONS)

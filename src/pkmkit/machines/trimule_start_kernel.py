@@ -1,7 +1,7 @@
 """The TriMule 600's closed-form starts compiled (issue 22 §1, session 35): the Numba twin of
 :func:`pkmkit.machines.trimule_forms.start_unknowns` (the inverse model's start) and
 :func:`~pkmkit.machines.trimule_forms.direct_unknowns` (the direct model's), statement for
-statement with ``native/chain_one.c`` (``closed_start``, ``closed_direct``: the C call's twin).
+statement with ``native/chain_one_trimule.c`` (``pk_one_trimule_start``, ``_direct``: the C twin).
 
 As :mod:`pkmkit.machines.tripteor_start_kernel`: the start functions carry this module's name as
 ``start.compiled``; without the C extension, once Numba is imported, the batch path and the
