@@ -43,6 +43,7 @@ setup(
                      NATIVE + "chain_one.c", NATIVE + "chain_one_solve.c",
                      NATIVE + "chain_one_pack.c", NATIVE + "chain_one_closure.c",
                      NATIVE + "chain_one_tripteor.c",
+                     NATIVE + "chain_one_trimule.c", NATIVE + "chain_closed_rows.c",
                      NATIVE + "rod_one.c",
                      NATIVE + "plain_numbers.c",
                      NATIVE + "rod_batch.c",

@@ -22,6 +22,13 @@ Usage::
     python bench/chain_start_table.py --rules-only --poses 2000 --machines trimule-600
     python bench/chain_start_table.py --closed --machines trimule-600   # session 33
     python bench/chain_start_table.py --closed --machines tripteor-x7 --spread 1.1  # session 34
+    python bench/chain_start_table.py --compiled [--spread 1.1]  # session 35
+
+``--compiled`` (session 35): the kind's closed-form start by its compiled twin
+(:func:`pkmkit.machines.chain_starts.compiled_start`) against its NumPy function (what the
+one-pose Numba path and the batch rows ran before), in one process: the NumPy function put
+back in the machine's one-pose constants and in ``chain_starts`` for the "before" figures
+(:func:`compiled`).
 """
 
 from __future__ import annotations
@@ -313,6 +320,104 @@ def closed(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
           f"{b_old * 1e3:.1f}, closed start {b_new * 1e3:.1f} (x{b_old / b_new:.2f})")
 
 
+def compiled(name: str, poses: int, rounds: int, spread: float = 0.9) -> None:
+    """Session 35: the one-pose Numba path (``m.ik(x, full_output=True)``, and ``m.ik(x)`` and
+    ``m.fk(q)`` without the C extension: :func:`pkmkit.machines.chain_one.inverse`,
+    :func:`~pkmkit.machines.chain_one.direct` — before, ``fk``'s kernel started from first
+    order, with no closed start) and the batch rows
+    with the kind's closed start computed by its NumPy function (before) and by its compiled
+    twin (after), and from the first-order start (the closed start off: what the calls cost
+    before the closed starts landed); the largest difference of the answers q and the
+    iteration counts of the two starts; CPU µs per call (median of ``rounds`` interleaved
+    rounds), the batch's CPU ms and the start alone over the batch."""
+    import numba  # noqa: F401 - the compiled paths
+
+    from pkmkit.machines import chain_one, chain_starts
+
+    m = pkmkit.machine(name)
+    off = pkmkit.machine(name)
+    object.__setattr__(off, "_closed_start_ok", False)
+    object.__setattr__(off, "_closed_direct_ok", False)
+    rng = np.random.default_rng(0)
+    act = np.flatnonzero(m.model.actuated)
+    lo, hi = m.model.q_min[act], m.model.q_max[act]
+    q = lo + (hi - lo) * ((1 - spread) / 2 + spread * rng.random((poses, len(act))))
+    xs = m.fk(q, strokes="ignore")
+    xs = xs[np.isfinite(xs).all(axis=1)]
+    for machine in (m, off):
+        machine.ik(xs[0], strokes="ignore", full_output=True)  # builds the constants
+        machine.ik(xs[0], strokes="ignore", full_output=True)
+    c = chain_one.constants(m)
+    twin, numpy_start = c.closed, (m.kind.inverse_start, dict(m.params))
+    direct_twin = c.closed_direct
+    real = chain_starts.compiled_start
+
+    def before() -> None:  # the one-pose fk: the kernel's first-order start, as before
+        c.closed, c.closed_direct = numpy_start, None
+        chain_starts.compiled_start = lambda *a: None
+
+    def after() -> None:
+        c.closed, c.closed_direct = twin, direct_twin
+        chain_starts.compiled_start = real
+
+    fast = [x for x in xs if chain_one.inverse(m, x, "ignore") is not None]
+    answers, iterations = [], []
+    for switch in (before, after):
+        switch()
+        rec = [m.ik(x, strokes="ignore", full_output=True) for x in fast]
+        answers.append(np.array([r.q for r in rec]))
+        iterations.append(np.array([int(r.iterations) for r in rec]))
+        answers.append(m.ik(xs, strokes="ignore"))
+    print(f"{name}: {len(xs)} poses, {len(fast)} on the one-pose Numba path")
+    print(f"  largest |q difference|, NumPy start against the twin: one-pose "
+          f"{np.abs(answers[0] - answers[2]).max():.1e}, batch "
+          f"{np.nanmax(np.abs(answers[1] - answers[3])):.1e}; NaN rows alike "
+          f"{np.array_equal(np.isnan(answers[1]), np.isnan(answers[3]))}; iterations alike on "
+          f"{np.mean(iterations[0] == iterations[1]):.1%} (mean {iterations[1].mean():.2f})")
+    rows = [(x,) for x in fast[:200]]
+    cases = {"full_output": lambda mm: (lambda x: mm.ik(x, strokes="ignore", full_output=True)),
+             "no C": lambda mm: (lambda x: chain_one.inverse(mm, x, "ignore")),
+             "fk no C": lambda mm: (lambda x, mm=mm: chain_one.direct(
+                 mm, actuators[id(x)], "ignore", None))}
+    actuators = {id(x): np.asarray(m.ik(x, strokes="ignore")) for x in fast[:200]}
+    for mm in (m, off):  # the fk's one-pose constants (past the first single call)
+        for _ in range(2):
+            chain_one.direct(mm, actuators[id(fast[0])], "ignore", None)
+    times: dict = {}
+    for _ in range(rounds):  # interleaved
+        for label, make in cases.items():
+            times.setdefault((label, "first-order"), []).append(per_call(make(off), rows, 1))
+            before()
+            times.setdefault((label, "NumPy"), []).append(per_call(make(m), rows, 1))
+            after()
+            times.setdefault((label, "twin"), []).append(per_call(make(m), rows, 1))
+    med = {key: float(np.median(v)) for key, v in times.items()}
+    for label in cases:
+        old, new, first = med[label, "NumPy"], med[label, "twin"], med[label, "first-order"]
+        call = {"full_output": "m.ik(x, full_output=True)",
+                "no C": "m.ik(x) without C (chain_one.inverse)",
+                "fk no C": "m.fk(q) without C (chain_one.direct; before: no closed start)"}[label]
+        print(f"  {call}, CPU µs: NumPy start {old:.2f}, compiled twin {new:.2f} "
+              f"(x{old / new:.2f}); first-order start {first:.2f} (twin x{first / new:.2f})")
+    batch = {"NumPy": [], "twin": [], "start NumPy": [], "start twin": []}
+    tools = np.full(len(xs), m.tool_length)
+    for _ in range(3):
+        for switch, label in ((before, "NumPy"), (after, "twin")):
+            switch()
+            t = time.process_time()
+            m.ik(xs, strokes="ignore")
+            batch[label].append(time.process_time() - t)
+            t = time.process_time()
+            chain_starts.closed_starts(m, xs, tools)
+            batch["start " + label].append(time.process_time() - t)
+    after()
+    b = {k: float(np.median(v)) * 1e3 for k, v in batch.items()}
+    print(f"  m.ik(X) of the {len(xs)} poses (batch path), CPU ms: NumPy start {b['NumPy']:.1f}, "
+          f"twin {b['twin']:.1f} (x{b['NumPy'] / b['twin']:.2f}); the start alone "
+          f"{b['start NumPy']:.2f} against {b['start twin']:.2f} "
+          f"(x{b['start NumPy'] / b['start twin']:.1f})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=1000)
@@ -322,13 +427,18 @@ def main() -> None:
     parser.add_argument("--machines", default="tripteor-x7,trimule-600")
     parser.add_argument("--closed", action="store_true",
                         help="the closed-form start against the first-order one (session 33)")
+    parser.add_argument("--compiled", action="store_true",
+                        help="the closed start's compiled twin against its NumPy function "
+                             "(session 35)")
     parser.add_argument("--rounds", type=int, default=7)
     parser.add_argument("--spread", type=float, default=0.9,
                         help="with --closed: the middle fraction of the strokes (1.1: beyond)")
     args = parser.parse_args()
     print("load average:", " ".join(f"{v:.1f}" for v in os.getloadavg()))
     for name in args.machines.split(","):
-        if args.closed:
+        if args.compiled:
+            compiled(name, args.poses, args.rounds, args.spread)
+        elif args.closed:
             closed(name, args.poses, args.rounds, args.spread)
         elif args.rules_only:
             rules_only(name, args.poses)

@@ -372,6 +372,11 @@ def chain_rows(name: str, calls: int) -> dict:
             for c, ref in ((ik_c, ik_batch), (fk_c, fk_batch)))
     for _ in range(2):  # interleaved: every method twice, the second round kept
         figures["ik one pose"] = per_call(lambda p: m.ik(p), rows)
+        # the Numba one-pose path (full_output; and the call without the C extension), the
+        # kind's closed start by its compiled twin (session 35; the NumPy function before)
+        figures["ik one pose, full_output"] = per_call(lambda p: m.ik(p, full_output=True), rows)
+        figures["ik one pose, Numba path (no C)"] = per_call(
+            lambda p: chain_one.inverse(m, p, "flag"), rows)
         figures["ik along a toolpath, default start"] = per_call(lambda p: m.ik(p), path[1:])
         figures["ik along it, start=previous, full_output"] = tuple(
             v * (1 / (len(path) - 1)) for v in per_call(along(True), [None]))

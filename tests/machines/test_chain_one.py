@@ -113,7 +113,13 @@ def near_wrist_singularity(m, n: int, seed: int = 1):
 
 def ik_mismatches(m, poses) -> tuple[int, int]:
     """``(fast rows, rows where the Numba one-pose answer differs from the batch path in any
-    bit, or m.ik(x) — whichever path it took — by more than IK_TOL)``."""
+    bit, or m.ik(x) — whichever path it took — by more than IK_TOL)``. The batch rows are
+    computed once Numba is imported: without the C extension the batch path's closed-form
+    start is the Numba twin the one-pose path runs only from then on
+    (:func:`pkmkit.machines.chain_starts.compiled_start`; with it, the C entry in every
+    process)."""
+    import numba  # the one-pose path's state, before the batch call
+
     fast = wrong = 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", StrokeWarning)

@@ -1,8 +1,8 @@
 """The TriMule's closed-form inverse (:func:`pkmkit.machines.trimule_forms.inverse_unknowns`),
-the inverse model's start on the batch path, the one-pose paths and the head's mirror (issue 22
-§1, session 33): against the forward closed forms and the joint-chain model (independent
-oracles), row by row (batch independence), and — with the closed start turned off — the same
-answers and head branches as the first-order start's on 2,000 poses."""
+issue 22 §1, session 33: its own geometry — against the forward closed forms (an independent
+oracle), the declined rows, a caller's start leaving the legs' home modes. The properties every
+kind's start shares (the engine's oracles, batch independence, the start turned off, the C call,
+the compiled twin) are tested once for every kind in test_closed_starts.py."""
 
 from __future__ import annotations
 
@@ -13,9 +13,8 @@ import pytest
 
 import pkmkit
 from pkmkit.exceptions import StrokeWarning
-from pkmkit.machines import chain_one_native, chain_starts
+from pkmkit.machines import chain_one_native
 from pkmkit.machines import trimule_forms as forms
-from pkmkit.solve import chain_rows
 from pkmkit.spatial.rotation import rotvec_to_matrix
 
 
@@ -68,21 +67,6 @@ def test_the_closed_inverse_inverts_the_forward_closed_forms(machine):
     np.testing.assert_allclose(back, x, rtol=0, atol=1e-12)
 
 
-def test_the_closed_start_is_the_models_solution(machine):
-    """The joint-chain model's inverse solve (the engine, not the closed forms) started from
-    it stops at once: its residual already within the engine's tolerance."""
-    m = machine
-    length, psi, theta, q4, q5 = _configurations(200, 3)
-    rot, point = forms.platform_pose(length, psi, theta)
-    tools = np.full(len(q4), m.tool_length)
-    x = forms.tool_pose(m.params, rot, point, q4, q5, tools)
-    u0 = chain_starts.closed_starts(m, x, tools, np.sign(q5))
-    u, status, residual, iterations = chain_rows.solve_inverse(m.model, x, u0, tools)[:4]
-    assert (status == 0).all() and residual.max() <= 1e-12
-    assert (iterations == 0).mean() >= 0.95
-    assert np.abs(u - u0).max() <= 1e-12
-
-
 def test_declined_rows(machine):
     p = machine.params
     length, psi, theta, q4, q5 = _configurations(3, 4)
@@ -101,79 +85,11 @@ def test_declined_rows(machine):
     np.testing.assert_allclose(back, x[answered], rtol=0, atol=1e-12)
 
 
-def test_a_rows_start_does_not_depend_on_its_batch(machine):
-    m = machine
-    x = m.fk(_actuators(m, 80, 5), strokes="ignore")
-    tools = np.random.default_rng(6).uniform(0.0, 0.3, len(x))
-    batch = chain_starts.closed_starts(m, x, tools)
-    for k in range(len(x)):
-        assert np.array_equal(chain_starts.closed_starts(m, x[k:k + 1], tools[k:k + 1])[0],
-                              batch[k], equal_nan=True)
-    assert np.isfinite(batch).all(axis=1).mean() >= 0.8
-
-
 def _actuators(m, n: int, seed: int, spread: float = 0.9) -> np.ndarray:
     act = np.flatnonzero(m.model.actuated)
     lo, hi = m.model.q_min[act], m.model.q_max[act]
     rng = np.random.default_rng(seed)
     return lo + (hi - lo) * ((1 - spread) / 2 + spread * rng.random((n, len(act))))
-
-
-def test_the_first_order_start_gives_the_same_answers_and_branches(machine):
-    """2,000 poses (actuators over 95 % of their strokes and 5 % beyond): the batch answers from
-    the closed start (the mirror started from the other branch's) against those of the same
-    machine with it turned off (the first-order start, the mirror from the flipped solution):
-    the same statuses, the same head branch and answers to 1e-11 on every row whose answer
-    stays in the legs' home modes (the first-order start's answer leaves them on a few rows
-    where the closed start's stays in them: measured 6 of 1,999, one with other actuator
-    values; 19 leave them from both starts, the same answers)."""
-    m = machine
-    off = pkmkit.machine("trimule-600")
-    object.__setattr__(off, "_closed_start_ok", False)
-    x = m.fk(_actuators(m, 2100, 7, spread=1.1), strokes="ignore")
-    x = x[np.isfinite(x).all(axis=1)][:2000]
-    assert len(x) == 2000
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", StrokeWarning)
-        new = m.ik(x, full_output=True)
-        old = off.ik(x, full_output=True)
-    # the same statuses, but where the first-order start did not reach a pose (measured: 1
-    # of 2,000, |Q5| = 1.7°) that the closed start solves exactly; never the reverse
-    assert ((new.status == old.status) | ((new.status == 0) & (new.residual <= 1e-12))).all()
-    assert (new.status != old.status).sum() <= 2
-    ok = (new.status == 0) & (old.status == 0)
-    home_new, home_old = m.in_home_modes(new.solution), m.in_home_modes(old.solution)
-    assert not (ok & home_old & ~home_new).any()  # never out of home's modes where it was in
-    same = ok & home_old
-    assert same.sum() >= 0.98 * ok.sum()
-    assert np.abs(new.q[same] - old.q[same]).max() <= 1e-11
-    moved = ok & (np.abs(new.q - old.q).max(axis=1) > 1e-11)
-    assert (moved <= (home_new & ~home_old)).all()  # only into home's modes
-    q5 = 6 + forms.VARIABLES.index("Q5")
-    assert np.array_equal(np.sign(new.solution[same, q5]), np.sign(old.solution[same, q5]))
-    # and in far fewer iterations (counts, not times)
-    assert new.iterations[same].mean() < 0.2 * old.iterations[same].mean()
-
-
-def test_the_c_call_starts_alike(machine):
-    """The C call's closed start (chain_one.c) against the batch path's (NumPy): the answers
-    to 1e-13 and the iteration counts equal, mirror solves included."""
-    m = machine
-    native = chain_one_native.packed(m)
-    if native is None:
-        pytest.skip("no C extension")
-    x = m.fk(_actuators(m, 400, 8), strokes="ignore")
-    ref = m.ik(x, strokes="ignore", full_output=True)
-    got = 0
-    for k in range(len(x)):
-        one = native.ik(native.capsule, x[k], True, True)
-        if one is None:
-            continue
-        got += 1
-        assert np.abs(one[0] - ref.q[k]).max() <= 1e-13
-        assert one[2] == ref.iterations[k]
-    assert got >= 0.99 * len(x)
-    assert ref.iterations.mean() < 2.0
 
 
 def test_a_start_leaving_the_modes_ends_on_the_default_starts_answer(machine):

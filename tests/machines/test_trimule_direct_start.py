@@ -4,18 +4,16 @@ batch path (:func:`pkmkit.machines.chain_starts.default_start`) and the one-pose
 (``native/chain_one.c`` ``closed_direct``), issue 22 §1, session 33 wave 2: against the inverse
 closed forms and the joint-chain model's closure (independent oracles), row by row (batch
 independence), and — with it turned off — the same answers and statuses as the first-order
-start's."""
+start's. The properties every kind's start shares (the engine's oracles, batch independence, the
+start turned off, the C call, the compiled twin) are tested once for every kind in
+test_closed_starts.py."""
 
 from __future__ import annotations
-
-import warnings
 
 import numpy as np
 import pytest
 
 import pkmkit
-from pkmkit.exceptions import StrokeWarning
-from pkmkit.machines import chain_one_native, chain_starts
 from pkmkit.machines import trimule_forms as forms
 from pkmkit.solve.chains import closure_residuals, rotvec_matrices
 
@@ -51,30 +49,6 @@ def test_the_start_gives_back_the_actuators_and_closes_the_legs(machine):
     assert np.abs(res).max() <= 1e-12
 
 
-def test_the_start_is_the_engines_solution_from_home(machine):
-    """The first-order start (home moved towards q; the closed start turned off) solved by the
-    engine lands where the closed start is: platform and passive joints to 1e-11, the same
-    statuses; from the closed start the solve stops at once on nearly every row."""
-    m = machine
-    off = pkmkit.machine("trimule-600")
-    object.__setattr__(off, "_closed_direct_ok", False)
-    q = _actuators(m, 1000, 2, spread=1.05)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", StrokeWarning)
-        new, old = m.fk(q, full_output=True), off.fk(q, full_output=True)
-    assert np.array_equal(new.status, old.status)
-    ok = new.status == 0
-    assert ok.mean() >= 0.95
-    np.testing.assert_allclose(new.pose[ok], old.pose[ok], rtol=0, atol=1e-11)
-    np.testing.assert_allclose(new.passive[ok], old.passive[ok], rtol=0, atol=1e-11)
-    assert np.array_equal(np.asarray(new.out_of_stroke), np.asarray(old.out_of_stroke))
-    closed = chain_starts.closed_direct_starts(m, q)
-    here = ok & np.isfinite(closed).all(axis=1)
-    np.testing.assert_allclose(closed[here, 6:], new.passive[here], rtol=0, atol=1e-11)
-    # iteration counts, not times
-    assert new.iterations[ok].mean() < 0.1 * old.iterations[ok].mean()
-
-
 def test_declined_rows(machine):
     m = machine
     q = _actuators(m, 4, 3)
@@ -83,34 +57,3 @@ def test_declined_rows(machine):
     q[3, 0] = np.nan
     u = forms.direct_unknowns(m.params, q)
     assert list(np.isfinite(u).all(axis=1)) == [True, False, False, False]
-
-
-def test_a_rows_start_does_not_depend_on_its_batch(machine):
-    m = machine
-    q = _actuators(m, 60, 4)
-    batch = chain_starts.closed_direct_starts(m, q)
-    for k in range(len(q)):
-        assert np.array_equal(chain_starts.closed_direct_starts(m, q[k:k + 1])[0], batch[k],
-                              equal_nan=True)
-
-
-def test_the_c_call_starts_alike(machine):
-    """The C call's closed direct start against the batch path's: the answers to 1e-12 and
-    the closure's iteration counts equal (both start from the closed form)."""
-    m = machine
-    native = chain_one_native.packed(m)
-    if native is None:
-        pytest.skip("no C extension")
-    q = _actuators(m, 300, 5)
-    full = m.fk(q, strokes="ignore", full_output=True)
-    ref = full.pose
-    got = 0
-    for k in range(len(q)):
-        one = native.fk(native.capsule, q[k], True, True, True)
-        if one is None:
-            continue
-        got += 1
-        assert np.abs(np.asarray(one[0]) - ref[k]).max() <= 1e-12
-        assert one[1] == full.iterations[k]
-    assert got >= 0.99 * len(q)
-    assert full.iterations.mean() < 0.5

@@ -1,9 +1,10 @@
-"""The Tripteor X7's near-closed-form inverse (:func:`pkmkit.machines.tripteor_forms.
-inverse_unknowns`), the inverse model's start on the batch path, the one-pose paths and the C
-call (issue 22 §1, session 34): against the engine's own direct model and solve (independent
-oracles: the joint-chain model's closure, not the forms' geometry), row by row (batch
-independence), and — with the closed start turned off — the same answers and head branches as
-the first-order start's on 2,000 poses, edges and the wrist's near singularity included."""
+"""The Tripteor X7's near-closed-form inverse
+(:func:`pkmkit.machines.tripteor_forms.inverse_unknowns`), issue 22 §1, session 34: its own
+geometry — the actuators back from the engine's direct model (an independent oracle: the
+joint-chain model's closure, not the forms' geometry), the head's other branch, the declined
+rows, the near singularity where its answer is the exact one, a C constant planted off. The
+properties every kind's start shares (the engine's oracles, batch independence, the start turned
+off, the C call, the compiled twin) are tested once for every kind in test_closed_starts.py."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import pytest
 
 import pkmkit
 from pkmkit.exceptions import StrokeWarning
-from pkmkit.machines import chain_one_native, chain_starts
+from pkmkit.machines import chain_one_native
 from pkmkit.machines import tripteor_forms as forms
 from pkmkit.solve import chain_rows
 
@@ -109,48 +110,6 @@ def test_declined_rows(machine):
     np.testing.assert_allclose(r.q, q, rtol=0, atol=1e-9)
 
 
-def test_a_rows_start_does_not_depend_on_its_batch(machine):
-    m = machine
-    _, x = _poses(m, 80, 5, spread=1.1)
-    tools = np.random.default_rng(6).uniform(0.0, 0.3, len(x))
-    batch = chain_starts.closed_starts(m, x, tools)
-    for k in range(len(x)):
-        assert np.array_equal(chain_starts.closed_starts(m, x[k:k + 1], tools[k:k + 1])[0],
-                              batch[k], equal_nan=True)
-    assert np.isfinite(batch).all(axis=1).mean() >= 0.8
-
-
-def test_the_first_order_start_gives_the_same_answers_and_branches(machine):
-    """2,000 poses (actuators over 110 % of their strokes: the edges, and Q5 from −2.75° through
-    the wrist singularity at 0 to 57.75°): the batch answers from the closed start against
-    those of the same machine with it turned off (the first-order start): the same statuses,
-    legs' modes and head branches, the answers to 1e-11 (measured: ≤ 2.8e-12; the three rows
-    beyond 1e-12 at |Q5| ≈ 1.8-1.9°, where the first-order start's answer is the less exact of
-    the two, :func:`test_near_the_singularity_the_closed_answer_is_the_exact_one`)."""
-    m = machine
-    off = pkmkit.machine("tripteor-x7")
-    object.__setattr__(off, "_closed_start_ok", False)
-    _, x = _poses(m, 2100, 7, spread=1.1)
-    x = x[:2000]
-    assert len(x) == 2000
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", StrokeWarning)
-        new = m.ik(x, full_output=True)
-        old = off.ik(x, full_output=True)
-    assert np.array_equal(new.status, old.status)
-    ok = new.status == 0
-    assert ok.mean() >= 0.99
-    assert np.array_equal(m.in_home_modes(new.solution), m.in_home_modes(old.solution))
-    assert np.abs(new.q[ok] - old.q[ok]).max() <= 1e-11
-    assert np.array_equal(np.sign(new.solution[ok, Q5]), np.sign(old.solution[ok, Q5]))
-    # the closed start answered most (declined near Q5 = 0) and in far fewer iterations
-    declined = ~np.isfinite(chain_starts.closed_starts(m, x, np.full(len(x), m.tool_length))
-                            ).all(axis=1)
-    assert declined.mean() <= 0.05
-    assert (np.abs(old.q[declined, 4]) <= np.radians(3.0)).all()
-    assert new.iterations.mean() < 0.1 * old.iterations.mean()
-
-
 def test_near_the_singularity_the_closed_answer_is_the_exact_one(machine):
     """Where the two starts' answers differ beyond 1e-12 (|Q5| within ~2° of the wrist
     singularity), the engine's direct model of each answer's actuators against the target:
@@ -167,30 +126,6 @@ def test_near_the_singularity_the_closed_answer_is_the_exact_one(machine):
         miss_new = np.abs(m.fk(new.q[rows], strokes="ignore") - x[rows]).max(axis=1)
         miss_old = np.abs(m.fk(old.q[rows], strokes="ignore") - x[rows]).max(axis=1)
     assert (miss_new <= miss_old).all()
-
-
-def test_the_c_call_starts_alike(machine):
-    """The C call's closed start (chain_one_tripteor.c) against the batch path's (NumPy): the
-    answers to 1e-12 (1e-13 but near the wrist singularity) and the iteration counts equal, on
-    poses where it answers and where it declines (the first-order start in both)."""
-    m = machine
-    native = chain_one_native.packed(m)
-    if native is None:
-        pytest.skip("no C extension")
-    _, x = _poses(m, 600, 8, spread=1.1)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", StrokeWarning)
-        ref = m.ik(x, strokes="ignore", full_output=True)
-    got = 0
-    for k in range(len(x)):
-        one = native.ik(native.capsule, x[k], True, True)
-        if one is None:
-            continue
-        got += 1
-        assert np.abs(one[0] - ref.q[k]).max() <= 1e-12
-        assert one[2] == ref.iterations[k]
-    assert got >= 0.99 * len(x)
-    assert 0 < (ref.iterations > 0).sum() <= 0.05 * len(x)  # the declined rows among them
 
 
 def test_a_wrong_constant_in_c_is_caught(machine):

@@ -66,8 +66,10 @@ def inverse_of_chunk(machine: Any, points: np.ndarray, slab: int | None) -> Any:
         for k in tracked(slabs, total=len(slabs), unit="slab",
                          label=f"{machine.id}: inverse model of {len(points):,} poses"):
             piece = points[k:k + slab]
+            if start is not None:  # the kind's closed start first (continuation_starts)
+                start = machine.continuation_starts(piece, start[:len(piece)])
             inv = (machine.ik(piece, full_output=True) if start is None else
-                   machine.ik(piece, full_output=True, start=start[:len(piece)]))
+                   machine.ik(piece, full_output=True, start=start))
             parts.append(inv)
             start = np.where(machine.continues_from(inv.solution)[:, None], inv.solution,
                              np.nan)

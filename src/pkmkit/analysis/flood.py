@@ -100,6 +100,8 @@ def _evaluate(machine: Any, grid: Grid, criteria: Criteria, flat: np.ndarray,
         given = None if start is None else start[k:k + EVALUATION_CHUNK]
         if given is not None and not np.isfinite(given).all(axis=1).any():
             given = None
+        if given is not None:  # the kind's closed start first (continuation_starts)
+            given = machine.continuation_starts(points, given)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", StrokeWarning)
             inv = (machine.ik(points, full_output=True) if given is None else

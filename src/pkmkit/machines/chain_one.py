@@ -26,10 +26,10 @@ whose closure Jacobian at home is rank deficient, and every option the fast path
 
 Agreement with the batch row of the same input: ``ik`` bit for bit (the same kernel from the
 same start, :func:`~pkmkit.machines.chain_starts.inverse_starts` — the kind's closed form where
-it answers, computed by the same NumPy function on one row; the head's turn
-wrapped with NumPy's ``arctan2`` as ``np.angle`` does); ``fk`` and ``jacobian`` to rounding
-(the direct model's first-order start is formed in the kernel, not by NumPy's matrix product
-and ``sin``; the closure rates by Cholesky with one refinement step,
+it answers, by its compiled twin as the batch rows once Numba is imported; the head's turn
+wrapped as ``np.angle`` does); ``fk`` and ``jacobian`` to rounding (the direct model's start:
+the kind's closed form by its twin, else first order formed in the kernel; the batch closure
+may be C's; the rates by Cholesky with one refinement step,
 not LAPACK's pseudo-inverse). No result depends on an earlier call: only constants are cached.
 
 A one-shot call in a fresh process does not import Numba
@@ -53,12 +53,18 @@ import numpy as np
 from pkmkit.machines import chain_one_velocity
 from pkmkit.machines.chain_one_native import packed
 from pkmkit.machines.chain_results import ChainInverseResult
-from pkmkit.machines.chain_starts import closed_starts, home_rates, inverse_rates
+from pkmkit.machines.chain_starts import (
+    closed_direct_starts,
+    closed_starts,
+    compiled_start,
+    home_rates,
+    inverse_rates,
+)
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
 from pkmkit.machines.lazy_records import lazy_record_class
-from pkmkit.machines.strokes import STROKE_TOL, signed_excess
+from pkmkit.machines.strokes import STROKE_TOL, row_excess, stroke_ends
 from pkmkit.numerics import jit
 
 _KERNELS = "pkmkit.solve.chain_one_kernel"
@@ -217,6 +223,7 @@ class ChainOneConstants:
         model, act = m.model, self.act
         home = m.home_values
         joints = model.loop_variables | model.actuated
+        self.strokes = stroke_ends(model.q_min[act], model.q_max[act])  # row_excess()
         self.lower = np.where(joints, model.q_min - STROKE_TOL, -np.inf).tolist()
         self.upper = np.where(joints, model.q_max + STROKE_TOL, np.inf).tolist()
         # the actuators' values from every variable's, as a tuple (one actuator too)
@@ -231,10 +238,18 @@ class ChainOneConstants:
             reach = max(abs(model.q_min[t] - home[t]), abs(model.q_max[t] - home[t]))
             self.wrist = (t, float(home[t]), pair[1], float(home[pair[1]]),
                           bool(reach >= np.pi / 2))
-        # the kind's closed-form start of the inverse model (chain_starts.closed_starts)
-        self.closed = None
+        # the kind's closed-form starts (chain_starts): their compiled twins where they have
+        # them (compiled_start: the batch rows' functions, on one row)
+        self.closed = self.closed_direct = None
+        twin = compiled_start(m, m.kind.direct_start) if closed_direct_starts(
+            m, np.zeros((0, len(act)))) is not None else None
+        if twin is not None:
+            self.closed_direct = (_Kernel(twin[0].direct_rows), twin[1], np.concatenate(
+                [np.arange(6), 6 + np.asarray(m.passive_variables, dtype=int)]))
         if closed_starts(m, np.zeros((0, 6)), np.zeros(0)) is not None:
-            self.closed = (m.kind.inverse_start, dict(m.params))
+            twin = compiled_start(m, m.kind.inverse_start)
+            self.closed = ((m.kind.inverse_start, dict(m.params)) if twin is None else
+                           (_Kernel(twin[0].inverse_rows), twin[1]))
 
     def __reduce__(self) -> tuple:
         """Pickled (or deep-copied with its machine) as nothing: rebuilt at the next call (it
@@ -257,10 +272,12 @@ class _Work:
     """One thread's work arrays for the kernels of a machine (the kernels release the GIL:
     threads calling one machine must not share them)."""
 
-    __slots__ = ("delta", "info", "pose", "q", "target", "u_dir", "u_inv", "values")
+    __slots__ = ("branch", "closed", "delta", "info", "pose", "q", "target", "u_dir", "u_inv",
+                 "values")
 
     def __init__(self, c: ChainOneConstants) -> None:
         self.u_inv, self.target = np.zeros((1, 6 + c.n_var)), np.zeros((1, 6))
+        self.closed, self.branch = np.zeros((1, 6 + c.n_var)), np.zeros(1)
         self.values, self.delta, self.q = np.zeros((1, c.n_var)), np.zeros(c.n), np.zeros(c.n)
         self.u_dir, self.pose, self.info = np.zeros((1, c.n_u)), np.zeros(6), np.zeros(4)
 
@@ -345,8 +362,8 @@ def inverse_record(m: Any, x: Any, strokes: str, start: Any = None) -> Any:
                              method="numeric", mode=np.int64(0),
                              iterations=np.int64(iterations), residual=np.float64(residual),
                              out_of_stroke=None if strokes == "ignore" else np.False_,
-                             stroke_excess=(signed_excess(q[None], c.q_min, c.q_max)[0]
-                                            if strokes == "ignore" else np.zeros(c.n)),
+                             stroke_excess=(row_excess(q.tolist(), c.strokes) if strokes == "ignore"
+                                            else np.zeros(c.n)),
                              solution=solution, closure=closure)
     object.__setattr__(record, "_evaluation", _InverseFields(m, q, closure, strokes,
                                                              record.known_fields()))
@@ -446,8 +463,30 @@ def _closed_start(c: ChainOneConstants, target: np.ndarray, branch: float | None
     same function on one row) of ``target (1, 6)`` on ``branch`` (±1, or None: nearest home),
     or None where it declines."""
     function, params = c.closed
+    if type(function) is _Kernel:  # the compiled twin (0: the branch nearest home)
+        w = _work(c)
+        w.branch[0] = 0.0 if branch is None else branch
+        if function.call is None:
+            function.first(params, target, c.tool_row, w.branch, w.closed)
+        function.call(params, target, c.tool_row, w.branch, w.closed)
+        u = w.closed[0]
+        return u if u[0] == u[0] else None  # a declined row: NaN throughout
     u = function(params, target, c.tool_row, None if branch is None else np.full(1, branch))[0]
     return u if np.isfinite(u).all() else None
+
+
+def _closed_direct(c: ChainOneConstants, w: _Work) -> bool:
+    """Whether the kind's direct start at ``w.q`` answered (its twin: the batch rows' start,
+    :func:`~pkmkit.machines.chain_starts.closed_direct_starts`), into ``w.u_dir``."""
+    kernel, k, columns = c.closed_direct
+    q = w.q[None]
+    if kernel.call is None:
+        kernel.first(k, q, w.closed)
+    kernel.call(k, q, w.closed)
+    if not w.closed[0, 0] == w.closed[0, 0]:  # declined: NaN throughout
+        return False
+    w.u_dir[0] = w.closed[0, columns]
+    return True
 
 
 def _solve_inverse(c: ChainOneConstants, w: _Work, start: Any) -> list[float] | None:
@@ -531,9 +570,10 @@ def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndar
     w.q[:] = qs
     check = check_singular is None or bool(check_singular)
     info = w.info
+    given = c.closed_direct is not None and _closed_direct(c, w)
     kernel = c.direct_kernel
     (kernel.call or kernel.first)(*c.direct_args, w.values, w.delta, w.q, check, w.u_dir,
-                                  w.pose, info)
+                                  w.pose, info, given)
     if info[0] != 0 or (check and not info[3] >= c.singular_bound):
         return None
     if strokes != "ignore" and not c.within(w.values[0].tolist()):

@@ -9,11 +9,14 @@ closure, does not depend on the rows beside it (issue 22 §6).
 
 from __future__ import annotations
 
+import importlib
+import sys
 from typing import Any
 
 import numpy as np
 
 from pkmkit.machines.chain_velocity_record import RANK_RCOND
+from pkmkit.numerics import jit
 from pkmkit.numerics.rowwise import einsum
 from pkmkit.solve.chains import (
     closure,
@@ -90,8 +93,65 @@ def closed_direct_starts(m: Any, qb: np.ndarray) -> np.ndarray | None:
         object.__setattr__(m, "_closed_direct_ok", ok)
     if not ok:
         return None
-    u = start(m.params, qb)  # qb's columns: the kind's actuators in its order
+    twin = compiled_start(m, start)
+    if twin is None:
+        u = start(m.params, qb)  # qb's columns: the kind's actuators in its order
+    else:
+        u = np.empty((len(qb), 6 + len(start.variables)))
+        twin[0].direct_rows(twin[1], np.ascontiguousarray(qb, dtype=float), u)
     return u[:, np.concatenate([np.arange(6), 6 + np.asarray(m.passive_variables)])]
+
+
+def compiled_start(m: Any, start: Any) -> tuple[Any, np.ndarray] | None:
+    """``(kernels, constants)`` of the compiled twin of the kind's closed-form start ``start``
+    (``MachineKind.inverse_start`` / ``direct_start``) of the machine ``m``, or None (its NumPy
+    function): ``kernels.inverse_rows(constants, targets, tools, branches, out)`` /
+    ``kernels.direct_rows(constants, q, out)`` (branch 0: the one nearest home; NaN rows where
+    it declines). A start declares its twins by attributes: its C constants as
+    ``start.native(params)`` (the family's code first), its Numba module's name as
+    ``start.compiled`` (the constants after the code).
+
+    With the C extension, its batch entries (``native/chain_closed_rows.c``: the one-pose C
+    call's starts over rows) in every process — no Numba import, the same bits whether Numba
+    is imported or not; without it, the Numba twin once Numba is imported (or
+    ``PKMKIT_COMPILED=1``; never with ``=0``), whose bits are the C's (the same libm calls, no
+    contraction; ``tests/machines/test_closed_starts.py``). The batch rows here and the
+    one-pose paths (:mod:`pkmkit.machines.chain_one`) start from the same compiled function —
+    their answers agree bit for bit — whatever the batch's size. The NumPy function (the
+    reference, to rounding: its AVX-512 transcendentals are not libm's) runs where neither
+    does; before, a one-row call of it cost ≈ 250–650 µs, a one-pose ``full_output`` call's
+    most (issue 22 §1, session 35)."""
+    name = getattr(start, "compiled", None)
+    if name is None or jit.mode() == "0":
+        return None
+    native = jit.native_kernels()
+    if native is not None and hasattr(native, "chain_closed_rows") and hasattr(start, "native"):
+        key, kernels = "C " + name, _NativeStarts(native)
+    elif jit.use_compiled_solver(1):
+        key, module = name, sys.modules.get(name)
+        kernels = importlib.import_module(name) if module is None else module
+    else:
+        return None
+    cache = m.__dict__.get("_compiled_starts")  # the constants by twin (picklable)
+    if cache is None:
+        cache = {}
+        object.__setattr__(m, "_compiled_starts", cache)
+    k = cache.get(key)
+    if k is None:
+        k = np.ascontiguousarray(start.native(m.params), dtype=float)
+        k = cache[key] = k if key.startswith("C ") else np.ascontiguousarray(k[1:])
+    return kernels, k
+
+
+class _NativeStarts:
+    """The C extension's batch entries of the closed-form starts under the Numba twins'
+    names (:func:`compiled_start`)."""
+
+    __slots__ = ("direct_rows", "inverse_rows")
+
+    def __init__(self, native: Any) -> None:
+        self.inverse_rows = native.chain_closed_rows
+        self.direct_rows = native.chain_closed_direct_rows
 
 
 #: Singular values of the inverse model's Jacobian at home below this fraction of the largest
@@ -208,4 +268,15 @@ def closed_starts(m: Any, targets: np.ndarray, lengths: np.ndarray,
     if ok is None:  # the kind's own variables in its order: a model the kind built
         ok = tuple(m.model.variables) == getattr(start, "variables", None)
         object.__setattr__(m, "_closed_start_ok", ok)
-    return start(m.params, targets, lengths, branch) if ok else None
+    if not ok:
+        return None
+    twin = compiled_start(m, start)
+    if twin is None:
+        return start(m.params, targets, lengths, branch)
+    targets = np.ascontiguousarray(targets, dtype=float)
+    n = len(targets)
+    out = np.empty((n, 6 + len(start.variables)))
+    branches = np.zeros(n) if branch is None else np.ascontiguousarray(branch, dtype=float)
+    twin[0].inverse_rows(twin[1], targets, np.ascontiguousarray(
+        np.broadcast_to(np.asarray(lengths, dtype=float), (n,))), branches, out)
+    return out

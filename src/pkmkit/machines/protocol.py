@@ -85,6 +85,14 @@ class MachineFace(StiffnessModel):
         :mod:`pkmkit.analysis.continuation`); False for closed-form inverses."""
         return False
 
+    def continuation_starts(self, points: np.ndarray, start: np.ndarray) -> np.ndarray:
+        """The starts a grid's continuation gives ``ik(points, start=...)`` (machines whose
+        inverse continues): ``start (N, ·)`` — the neighbours' solutions, NaN rows none — with
+        the rows a better start answers replaced (a joint chain's closed-form start,
+        :meth:`~pkmkit.machines.warm_starts.ChainWarmStart.continuation_starts`); here
+        ``start`` itself."""
+        return start
+
     def criteria_rates(self, points: np.ndarray, inverse: Any, jacobians: Any,
                        axes: tuple[int, ...], *, factors: bool = False) -> Any:
         """Derivatives of what the workspace criteria read (actuator coordinates, rod

@@ -264,7 +264,7 @@ def inverse_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
     ``Q4 = atan2(b a·y_P, b a·x_P)``, and the parallel part's joints as
     :func:`passive_joints` and :func:`actuators` (written out term by term here). Every
     operation is elementwise: a row's bits do not depend on the rows beside it (issue 22 §6),
-    and ``native/chain_one.c`` (``closed_start``) computes the same, statement for statement.
+    and ``native/chain_one_trimule.c`` computes the same, statement for statement.
     """
     x = np.atleast_2d(np.asarray(targets, dtype=float))
     n = x.shape[0]
@@ -364,7 +364,7 @@ def start_unknowns(params: Mapping[str, Any], targets: Any, tool_length: Any,
     """The inverse model's closed-form start (``MachineKind.inverse_start``): the unknowns of
     :func:`inverse_unknowns` on ``branch (N,)`` (±1), or — None — on the branch whose Q4 is
     within a quarter turn of home's (0): the sign of ``a · x_P`` with leg 4 along ``W`` (the
-    eccentricity left out; ``native/chain_one.c`` the same)."""
+    eccentricity left out; ``native/chain_one_trimule.c`` the same)."""
     x = np.atleast_2d(np.asarray(targets, dtype=float))
     if branch is None:
         tool = np.broadcast_to(np.asarray(tool_length, dtype=float), (x.shape[0],))
@@ -392,6 +392,8 @@ def native_constants(params: Mapping[str, Any]) -> np.ndarray:
 
 
 start_unknowns.native = native_constants  # its C twin's constants (chain_one_native)
+#: its Numba twin (chain_starts.compiled_start): that module's ``inverse_rows``
+start_unknowns.compiled = "pkmkit.machines.trimule_start_kernel"
 
 
 #: Bisection steps of :func:`direct_unknowns` before its two Newton steps (the bracket
@@ -407,7 +409,7 @@ def direct_unknowns(params: Mapping[str, Any], q: Any) -> np.ndarray:
     The measured leg from :func:`measured_leg` (:data:`DIRECT_BISECTIONS` bisections), the
     platform from :func:`platform_pose`, the passive joints as :func:`passive_joints`. NaN rows
     where it declines (no assembly in the working mode). Elementwise: a row's bits its own;
-    ``native/chain_one.c`` (``closed_direct``) computes the same, statement for statement."""
+    ``native/chain_one_trimule.c`` computes the same, statement for statement."""
     q = np.atleast_2d(np.asarray(q, dtype=float))
     n = q.shape[0]
     leg = measured_leg(params, q[:, :3], iterations=DIRECT_BISECTIONS)
@@ -424,3 +426,5 @@ def direct_unknowns(params: Mapping[str, Any], q: Any) -> np.ndarray:
 
 
 direct_unknowns.variables = VARIABLES  # the model's variables it answers for (chain_starts)
+direct_unknowns.native = native_constants  # the constants of its C and Numba twins
+direct_unknowns.compiled = start_unknowns.compiled  # that module's ``direct_rows``

@@ -192,6 +192,28 @@ class ChainWarmStart:
         object.__setattr__(self, "_leg_joints_cache", (slides, turns))
         return slides, turns
 
+    def continuation_starts(self, points: np.ndarray, start: np.ndarray) -> np.ndarray:
+        """The starts of a grid's continuation at tool poses ``points (N, 6)`` (the machine's
+        tool length): the kind's closed-form start of the inverse model wherever it answers
+        (:func:`~pkmkit.machines.chain_starts.closed_starts`: the solution itself, 0
+        iterations, where a neighbour's solution took 2.9 on the Tripteor X7's and 3.0 on the
+        TriMule 600's default workspaces), the neighbours' ``start (N, 6 + n_var)`` elsewhere
+        (issue 22 §3, session 35). The same answers: a row's start is the one its default
+        start would be, or the neighbour's as before."""
+        x = np.atleast_2d(np.asarray(points, dtype=float))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            targets = np.concatenate([x[:, :3], x[:, 3:] / np.linalg.norm(x[:, 3:], axis=1,
+                                                                         keepdims=True)], axis=1)
+        closed = closed_starts(self, targets, self._tool_lengths(None, len(x)))
+        if closed is None:
+            return start
+        exact = np.isfinite(closed).all(axis=1)
+        if not exact.any():
+            return start
+        out = np.array(start, dtype=float)
+        out[exact] = closed[exact]
+        return out
+
     def continues_from(self, solution: np.ndarray) -> np.ndarray:
         """``(N,)`` bool: rows of inverse solutions ``solution (N, 6 + n_var)`` (an inverse
         result's ``solution``) from which a neighbouring point may start — finite, and (on a

@@ -60,6 +60,10 @@ int pk_one_tripteor_start(const double *k, double tool, const double *target, do
                           double *u);
 /* chain_one_tripteor.c: the Tripteor's direct start u (21,) from q (5,); 1, or 0 (declined). */
 int pk_one_tripteor_direct(const double *k, const double *q, double *u);
+/* The TriMule's (chain_one_trimule.c): cl the constants after the family's code. */
+int pk_one_trimule_start(const double *cl, double tool, const double *target, double branch,
+                         double *u);
+int pk_one_trimule_direct(const double *cl, const double *q, double *u);
 
 /* chain_one_solve.c: pk_chain_rows's loop on one row u (n,) from known (n_var,), its normal
  * equations by block elimination (scratch: pk_one_block_scratch doubles); the blocks of a

@@ -10,7 +10,7 @@
 #include <math.h>
 
 enum { STEPS = 10 };  /* tripteor_forms.INVERSE_STEPS */
-static const double TOL = 1e-15, SINGULAR = 1e-3, H = 1e-7, REFRESH = 1e-6;
+static const double TOL = 1e-15, STALL = 1e-13, SINGULAR = 1e-3, H = 1e-7, REFRESH = 1e-6;
 
 /* tripteor_forms._explicit: psi, sigma of the platform whose MPS origin is p (NaN without
  * assembly). */
@@ -126,6 +126,12 @@ static double fill(const double *k, double psi, double sigma, const double *w, c
     return o.gn;
 }
 
+/* newton2's equations: the inverse's fixed point of Phi (data: w, a, b), the direct model's
+ * leg 2 (data: q). */
+enum { INVERSE = 0, DIRECT = 1 };
+static int newton2(int which, const double *k, double *z0, double *z1, int steps,
+                   const double *data);
+
 int pk_one_tripteor_start(const double *k, double tool, const double *target, double branch,
                           double *u) {
     const double *a = target + 3;
@@ -140,30 +146,8 @@ int pk_one_tripteor_start(const double *k, double tool, const double *target, do
             along += a[i] * (o.x[i] * k[4] + o.y[i] * k[7] + o.z[i] * k[10]);
         branch = -along >= 0 ? 1.0 : -1.0;
     }
-    double b = branch, f_psi, f_sigma, i00 = 0, i01 = 0, i10 = 0, i11 = 0;
-    step(k, psi, sigma, w, a, b, &f_psi, &f_sigma);
-    int done = 0, fresh = 1;
-    for (int it = 0; it < STEPS; it++) {
-        double r0 = f_psi - psi, r1 = f_sigma - sigma;
-        if (fresh) {  /* Newton's Jacobian of Phi(z) - z by differences */
-            double p1, s1, p2, s2;
-            step(k, psi + H, sigma, w, a, b, &p1, &s1);
-            step(k, psi, sigma + H, w, a, b, &p2, &s2);
-            double j00 = (p1 - f_psi) / H - 1.0, j10 = (s1 - f_sigma) / H;
-            double j01 = (p2 - f_psi) / H, j11 = (s2 - f_sigma) / H - 1.0;
-            double det = j00 * j11 - j01 * j10;
-            i00 = j11 / det, i01 = -j01 / det, i10 = -j10 / det, i11 = j00 / det;
-        }
-        double d0 = i00 * r0 + i01 * r1, d1 = i10 * r0 + i11 * r1;
-        psi = psi - d0, sigma = sigma - d1;
-        double change = fabs(d0) + fabs(d1);
-        if (change <= TOL) {
-            done = 1;
-            break;
-        }
-        fresh = change > REFRESH;
-        step(k, psi, sigma, w, a, b, &f_psi, &f_sigma);
-    }
+    double b = branch, data[7] = {w[0], w[1], w[2], a[0], a[1], a[2], branch};
+    int done = newton2(INVERSE, k, &psi, &sigma, STEPS, data);
     double gn = fill(k, psi, sigma, w, a, b, u);
     if (!(done && gn >= SINGULAR)) return 0;
     for (int i = 0; i < 21; i++)
@@ -208,31 +192,51 @@ static void leg2(const double *k, double theta, double psi, const double *q, dou
     *f1 = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - q[1];
 }
 
-int pk_one_tripteor_direct(const double *k, const double *q, double *u) {
-    double theta = 17.7023 * (PK_PI / 180.0), psi = 0.2813 * (PK_PI / 180.0);
-    double f0, f1, i00 = 0, i01 = 0, i10 = 0, i11 = 0;
-    leg2(k, theta, psi, q, &f0, &f1);
+/* tripteor_forms._newton2 on one row: Newton's steps on F(z) - shift z = 0 (shift 1: the
+ * inverse's fixed point of Phi; 0: the direct model's leg-2 equations) from (z0, z1), the
+ * Jacobian by differences, chord steps once a step is below REFRESH; 1 where converged. */
+static void equations(int which, const double *k, double z0, double z1, const double *data,
+                      double *f0, double *f1) {
+    if (which == INVERSE) step(k, z0, z1, data, data + 3, data[6], f0, f1);
+    else leg2(k, z0, z1, data, f0, f1);
+}
+
+static int newton2(int which, const double *k, double *z0, double *z1, int steps,
+                   const double *data) {
+    double shift = which == INVERSE ? 1.0 : 0.0, x0 = *z0, x1 = *z1, f0, f1;
+    double i00 = 0, i01 = 0, i10 = 0, i11 = 0;
     int done = 0, fresh = 1;
-    for (int it = 0; it < DIRECT_STEPS; it++) {
-        if (fresh) {  /* Newton's Jacobian by differences */
+    double last = INFINITY;
+    equations(which, k, x0, x1, data, &f0, &f1);
+    for (int it = 0; it < steps; it++) {
+        double r0 = f0 - shift * x0, r1 = f1 - shift * x1;
+        if (fresh) {  /* the Jacobian by differences */
             double a0, a1, c0, c1;
-            leg2(k, theta + H, psi, q, &a0, &a1);
-            leg2(k, theta, psi + H, q, &c0, &c1);
-            double j00 = (a0 - f0) / H, j10 = (a1 - f1) / H, j01 = (c0 - f0) / H,
-                   j11 = (c1 - f1) / H;
+            equations(which, k, x0 + H, x1, data, &a0, &a1);
+            equations(which, k, x0, x1 + H, data, &c0, &c1);
+            double j00 = (a0 - f0) / H - shift, j10 = (a1 - f1) / H;
+            double j01 = (c0 - f0) / H, j11 = (c1 - f1) / H - shift;
             double det = j00 * j11 - j01 * j10;
             i00 = j11 / det, i01 = -j01 / det, i10 = -j10 / det, i11 = j00 / det;
         }
-        double d0 = i00 * f0 + i01 * f1, d1 = i10 * f0 + i11 * f1;
-        theta = theta - d0, psi = psi - d1;
+        double d0 = i00 * r0 + i01 * r1, d1 = i10 * r0 + i11 * r1;
+        x0 = x0 - d0, x1 = x1 - d1;
         double change = fabs(d0) + fabs(d1);
-        if (change <= TOL) {
+        if (change <= TOL || (change <= STALL && change >= last)) {  /* or rounding */
             done = 1;
             break;
         }
+        last = change;
         fresh = change > REFRESH;
-        leg2(k, theta, psi, q, &f0, &f1);
+        equations(which, k, x0, x1, data, &f0, &f1);
     }
+    *z0 = x0, *z1 = x1;
+    return done;
+}
+
+int pk_one_tripteor_direct(const double *k, const double *q, double *u) {
+    double theta = 17.7023 * (PK_PI / 180.0), psi = 0.2813 * (PK_PI / 180.0);
+    int done = newton2(DIRECT, k, &theta, &psi, DIRECT_STEPS, q);
     double sigma, b1[3];
     head_t o;
     platform_of(k, theta, psi, q[0], q[2], &sigma, b1, &o);

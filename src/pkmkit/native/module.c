@@ -600,6 +600,11 @@ PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_
 extern const char pk_rod_inverse_rows_doc[], pk_rod_reach_det_doc[];
 PyObject *pk_py_rod_inverse_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_reach_det(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+/* chain_closed_rows.c: the joint chains' closed-form starts over rows (session 35). */
+extern const char pk_chain_closed_rows_doc[], pk_chain_closed_direct_rows_doc[];
+PyObject *pk_py_chain_closed_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_chain_closed_direct_rows(PyObject *self, PyObject *const *args,
+                                         Py_ssize_t nargs);
 
 /* angles.c: a table's angles -> rotation vectors, NumPy's bits (issue 22 §5) */
 extern const char pk_euler_quat_doc[], pk_euler_rotvec_doc[];
@@ -676,6 +681,10 @@ static PyMethodDef methods[] = {
      pk_rod_inverse_rows_doc},
     {"rod_reach_det", (PyCFunction)(void (*)(void))pk_py_rod_reach_det, METH_FASTCALL,
      pk_rod_reach_det_doc},
+    {"chain_closed_rows", (PyCFunction)(void (*)(void))pk_py_chain_closed_rows, METH_FASTCALL,
+     pk_chain_closed_rows_doc},
+    {"chain_closed_direct_rows", (PyCFunction)(void (*)(void))pk_py_chain_closed_direct_rows,
+     METH_FASTCALL, pk_chain_closed_direct_rows_doc},
     {"euler_quat", (PyCFunction)(void (*)(void))pk_py_euler_quat, METH_FASTCALL,
      pk_euler_quat_doc},
     {"euler_rotvec", (PyCFunction)(void (*)(void))pk_py_euler_rotvec, METH_FASTCALL,

@@ -193,17 +193,19 @@ def _bound(low, fro):  # pragma: no cover
 @njit(**_OPTIONS)
 def _closure_solve(frames, types, evar, elements, offsets, position, u_home, rates,
                    residual_rates, length, options, home_values, act, values, delta, q, u,
-                   info):  # pragma: no cover
-    """Start (:func:`_start`) and closure of configuration ``q (n,)`` (actuators ``act`` of
-    the variables): ``u (1, n_u)`` the solution, ``values (1, n_var)`` every joint (home's
-    with the actuators set, then the passive joints found), ``delta (n,)`` the actuators'
-    change from ``home_values``, ``info`` filled."""
+                   info, given=False):  # pragma: no cover
+    """Start (:func:`_start`; ``given``: the start already in ``u``, the kind's closed form,
+    session 35) and closure of configuration ``q (n,)`` (actuators ``act`` of the variables):
+    ``u (1, n_u)`` the solution, ``values (1, n_var)`` every joint (home's with the actuators
+    set, then the passive joints found), ``delta (n,)`` the actuators' change from
+    ``home_values``, ``info`` filled."""
     values[0, :] = home_values
     for j in range(act.shape[0]):
         values[0, act[j]] = q[j]
         delta[j] = q[j] - home_values[act[j]]
-    _start(frames, types, evar, elements, offsets, position, values[0], u_home, rates,
-           residual_rates, delta, length, u)
+    if not given:
+        _start(frames, types, evar, elements, offsets, position, values[0], u_home, rates,
+               residual_rates, delta, length, u)
     status = np.empty(1, dtype=np.int64)
     residual = np.full(1, np.nan)
     iterations = np.zeros(1, dtype=np.int64)
@@ -221,13 +223,14 @@ def _closure_solve(frames, types, evar, elements, offsets, position, u_home, rat
 @njit(**_OPTIONS)
 def direct_one(frames, types, evar, elements, offsets, position, head, u_home, rates,
                residual_rates, length, tool, options, home_values, act, values, delta, q,
-               check, u, pose, info):  # pragma: no cover
+               check, u, pose, info, given=False):  # pragma: no cover
     """The direct model of configuration ``q (n,)`` (module docstring; ``values``, ``delta``
-    work arrays, see :func:`_closure_solve`): ``u (1, n_u)`` out, ``pose (6,)`` out (tool
-    point ``tool`` along the tool axis, the axis), ``info (4,)`` out; ``check``: compute the
-    bound."""
+    work arrays, see :func:`_closure_solve`): ``u (1, n_u)`` out (``given``: in, the start —
+    the kind's closed form, as the batch path's), ``pose (6,)`` out (tool point ``tool`` along
+    the tool axis, the axis), ``info (4,)`` out; ``check``: compute the bound."""
     _closure_solve(frames, types, evar, elements, offsets, position, u_home, rates,
-                   residual_rates, length, options, home_values, act, values, delta, q, u, info)
+                   residual_rates, length, options, home_values, act, values, delta, q, u, info,
+                   given)
     if info[STATUS] != 0:
         return
     n_u = u.shape[1]
