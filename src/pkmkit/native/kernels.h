@@ -363,6 +363,21 @@ PyObject *pk_py_inverse_plan(PyObject *self, PyObject *const *args, Py_ssize_t n
 extern const char pk_recycled_block_doc[], pk_recycled_release_doc[];
 PyObject *pk_py_recycled_block(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_recycled_release(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
+/* chain_closed_rows.c: the joint chains' closed-form starts over rows (session 35). */
+extern const char pk_chain_closed_rows_doc[], pk_chain_closed_direct_rows_doc[];
+PyObject *pk_py_chain_closed_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_chain_closed_direct_rows(PyObject *self, PyObject *const *args,
+                                         Py_ssize_t nargs);
+
+/* angles.c: a table's angles -> rotation vectors, NumPy's bits (issue 22 §5) */
+extern const char pk_euler_quat_doc[], pk_euler_rotvec_doc[];
+PyObject *pk_py_euler_quat(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+PyObject *pk_py_euler_rotvec(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
+
+/* csv_text.c: a table's rows as CSV text, pyarrow's bytes (issue 22 §5, session 35) */
+extern const char pk_csv_rows_doc[];
+PyObject *pk_py_csv_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 #endif
 
 #endif

@@ -600,20 +600,6 @@ PyObject *pk_py_chain_one_ik_jacobian(PyObject *self, PyObject *const *args, Py_
 extern const char pk_rod_inverse_rows_doc[], pk_rod_reach_det_doc[];
 PyObject *pk_py_rod_inverse_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 PyObject *pk_py_rod_reach_det(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
-/* chain_closed_rows.c: the joint chains' closed-form starts over rows (session 35). */
-extern const char pk_chain_closed_rows_doc[], pk_chain_closed_direct_rows_doc[];
-PyObject *pk_py_chain_closed_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
-PyObject *pk_py_chain_closed_direct_rows(PyObject *self, PyObject *const *args,
-                                         Py_ssize_t nargs);
-
-/* angles.c: a table's angles -> rotation vectors, NumPy's bits (issue 22 §5) */
-extern const char pk_euler_quat_doc[], pk_euler_rotvec_doc[];
-PyObject *pk_py_euler_quat(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
-PyObject *pk_py_euler_rotvec(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
-
-/* csv_text.c: a table's rows as CSV text, pyarrow's bytes (issue 22 §5, session 35) */
-extern const char pk_csv_rows_doc[];
-PyObject *pk_py_csv_rows(PyObject *self, PyObject *const *args, Py_ssize_t nargs);
 
 static PyMethodDef methods[] = {
     {"inverse_poses", (PyCFunction)(void (*)(void))inverse_poses, METH_FASTCALL, inverse_doc},
