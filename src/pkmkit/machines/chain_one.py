@@ -63,7 +63,7 @@ from pkmkit.machines.chain_starts import (
 from pkmkit.machines.chain_velocity_record import RANK_RCOND, SINGULAR_TOL, ChainJacobians
 from pkmkit.machines.common import MAX_COORDINATE
 from pkmkit.machines.head_branches import FLIP_MARGIN
-from pkmkit.machines.lazy_records import lazy_record_class
+from pkmkit.machines.lazy_records import built_once, lazy_record_class
 from pkmkit.machines.strokes import STROKE_TOL, row_excess, stroke_ends
 from pkmkit.numerics import jit
 
@@ -338,7 +338,6 @@ def inverse_record(m: Any, x: Any, strokes: str, start: Any = None) -> Any:
     controller's loop), those two computed when read (the direct model at ``q`` from the
     inverse's closure, as the batch path computes them at once); or None (module
     docstring)."""
-    global _INVERSE_RECORD
     found = _inverse_within(m, x, strokes, start)
     if found is None:
         return None
@@ -347,18 +346,7 @@ def inverse_record(m: Any, x: Any, strokes: str, start: Any = None) -> Any:
     q = np.array(c.actuators(values))
     solution = np.array(u)
     closure = np.concatenate([solution[:6], solution[6:][c.passive]])
-    if _INVERSE_RECORD is None:
-        _INVERSE_RECORD = lazy_record_class(
-            ChainInverseResult, "OnePose",
-            lambda r: f"1 pose, {len(r.q)} actuators; the direct model at q computed when read",
-            "A joint chain's inverse record of one pose (:mod:`pkmkit.machines.chain_one`); "
-            "direct and pose computed when first read.")
-        from pkmkit.machines.chain_inverse_record import _plain_record
-
-        # pickled as the plain record, every field computed (its fields are keyword-only)
-        _INVERSE_RECORD.__reduce__ = lambda self: (_plain_record, (
-            {name: getattr(self, name) for name in ChainInverseResult.__dataclass_fields__},))
-    record = _INVERSE_RECORD(None, q=q, status=np.int64(0), branches=None, shortfall=None,
+    record = _inverse_record_class()(None, q=q, status=np.int64(0), branches=None, shortfall=None,
                              method="numeric", mode=np.int64(0),
                              iterations=np.int64(iterations), residual=np.float64(residual),
                              out_of_stroke=None if strokes == "ignore" else np.False_,
@@ -370,7 +358,21 @@ def inverse_record(m: Any, x: Any, strokes: str, start: Any = None) -> Any:
     return record
 
 
-_INVERSE_RECORD: type | None = None
+@built_once
+def _inverse_record_class() -> type:
+    """The one-pose inverse record class, built on first use (its ``__reduce__`` set before
+    any thread sees it)."""
+    cls = lazy_record_class(
+        ChainInverseResult, "OnePose",
+        lambda r: f"1 pose, {len(r.q)} actuators; the direct model at q computed when read",
+        "A joint chain's inverse record of one pose (:mod:`pkmkit.machines.chain_one`); "
+        "direct and pose computed when first read.")
+    from pkmkit.machines.chain_inverse_record import _plain_record
+
+    # pickled as the plain record, every field computed (its fields are keyword-only)
+    cls.__reduce__ = lambda self: (_plain_record, (
+        {name: getattr(self, name) for name in ChainInverseResult.__dataclass_fields__},))
+    return cls
 
 
 class _InverseFields:
@@ -582,7 +584,9 @@ def direct(m: Any, q: Any, strokes: str, check_singular: bool | None) -> np.ndar
 
 
 # ---------------------------------------------------------------- velocity model
+@built_once
 def _record_class() -> type:
+    """The one-pose velocity record class, built on first use."""
     return lazy_record_class(
         ChainJacobians, "OnePose",
         lambda r: f"1 pose, {len(r.q)} actuators; singular values computed when read",
@@ -590,7 +594,6 @@ def _record_class() -> type:
         "; J_homogeneous, singular_values and condition computed when first read.")
 
 
-_RECORD: type | None = None
 
 
 class _Velocity:
@@ -625,7 +628,6 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
     extension the inverse solution and the velocity model at it are one C call
     (:func:`pkmkit.machines.chain_one_velocity.at_pose`); where that does not apply, the
     compiled ``velocity_one`` below (the direct model solved again)."""
-    global _RECORD
     if type(tol) is not float or not tol > 0 or tol == math.inf:
         return None
     if (p := packed(m)) is not None:
@@ -655,9 +657,7 @@ def jacobian(m: Any, x: Any, tol: float) -> Any:
                                   w.u_dir, jac, rates, info)
     if info[0] != 0 or not info[3] >= BOUND_MARGIN * max(tol, RANK_RCOND):
         return None
-    if _RECORD is None:
-        _RECORD = _record_class()
-    return _RECORD(_Velocity(jac, c), J=jac, passive_rates=rates,
+    return _record_class()(_Velocity(jac, c), J=jac, passive_rates=rates,
                    closure_rank=np.int64(c.n_u), expected_rank=c.expected_rank,
                    q=w.q.copy(), status=np.int64(0))
 

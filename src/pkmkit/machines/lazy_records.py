@@ -6,10 +6,13 @@ velocity models of one pose and of a batch (:mod:`pkmkit.machines.full_pose_velo
 
 from __future__ import annotations
 
+import _thread
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
+
+_T = TypeVar("_T")
 
 
 def read_only(value: Any) -> Any:
@@ -101,3 +104,22 @@ def lazy_parts(record: Any) -> tuple[Any, dict[str, Any]] | None:
         return None
     return record.__dict__["_evaluation"], given
 
+
+
+def built_once(build: Callable[[], _T]) -> Callable[[], _T]:
+    """A function returning ``build()``, run once on first use under a lock and handed out
+    only when complete: threads making their first calls at once get the same object (one
+    record class, its ``__reduce__`` already set), not one each (docs/testing.md, "Audit of
+    threads, session 35"). Lazy so that importing the module builds nothing."""
+    lock = _thread.allocate_lock()  # _thread: built in, no import cost (threading's is)
+    built: list[_T] = []
+
+    def get() -> _T:
+        if not built:
+            with lock:
+                if not built:
+                    built.append(build())
+        return built[0]
+
+    get.__doc__ = build.__doc__
+    return get
