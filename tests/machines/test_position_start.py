@@ -1,6 +1,7 @@
 """The start table of the paired position solve (:mod:`pkmkit.machines.position_start`) and its
 quaternion steps (``full_pose_position_kernel``'s ``_step_quaternion``, ``_turn``,
-``_quaternion_matrix``, ``_quaternion_rotvec`` and their C twins in ``native/position.c``).
+``_quaternion_matrix``, ``full_pose_direct_kernel.quaternion_rotvec`` and their C twins in
+``native/position.c``, ``native/direct.c``).
 
 Oracles: scipy's ``least_squares`` on the six rod equations |p + R b_j − a_j − q_k e| = ℓ_j (q
 and the rotation vector free), scipy's ``Rotation`` for the quaternion algebra, the solve from
@@ -181,7 +182,7 @@ def test_the_quaternion_algebra_against_scipy(angle):
     np.testing.assert_allclose(rot.reshape(3, 3), (Rotation.from_rotvec(vec) * base).as_matrix(),
                                rtol=0, atol=1e-15)
     out = np.empty(3)
-    nk._quaternion_rotvec(-qt, out, 0)  # the sign of a quaternion does not matter
+    nk.quaternion_rotvec(*(-qt), out, 0)  # the sign of a quaternion does not matter
     np.testing.assert_allclose(out, vec, rtol=1e-15, atol=1e-18)
 
 

@@ -56,6 +56,13 @@ def compose(dx, dy, dz, px, py, pz, out, at):  # pragma: no cover
     y = aw * by - ax * bz + ay * bw + az * bx
     z = aw * bz + ax * by - ay * bx + az * bw
     w = aw * bw - ax * bx - ay * by - az * bz
+    quaternion_rotvec(x, y, z, w, out, at)
+
+
+@njit(**_OPTIONS)
+def quaternion_rotvec(x, y, z, w, out, at):  # pragma: no cover
+    """``out[at:at+3]`` = the rotation vector of the unit quaternion (x, y, z, w), its angle
+    in [0, π] (:func:`compose`'s tail; the Verne position solve's answer)."""
     if w < 0.0:
         x, y, z, w = -x, -y, -z, -w
     norm = math.sqrt(x * x + y * y + z * z)

@@ -35,6 +35,7 @@ from pkmkit.machines.full_pose_direct_kernel import (
     _stationary,
     _step,
     compose,
+    quaternion_rotvec,
     scratch,
 )
 from pkmkit.machines.full_pose_kernels import rotation_entries
@@ -348,25 +349,6 @@ def _quaternion_matrix(qt, rot):  # pragma: no cover
 
 
 @njit(**_OPTIONS)
-def _quaternion_rotvec(qt, out, at):  # pragma: no cover
-    """``out[at:at+3]`` = the rotation vector of the unit quaternion ``qt`` (angle in [0, π],
-    :func:`compose`'s tail)."""
-    x, y, z, w = qt[0], qt[1], qt[2], qt[3]
-    if w < 0.0:
-        x, y, z, w = -x, -y, -z, -w
-    norm = math.sqrt(x * x + y * y + z * z)
-    angle = 2.0 * math.atan2(norm, w)
-    if angle <= 1e-3:
-        a2 = angle * angle
-        scale = 2.0 + a2 / 12.0 + 7.0 * a2 * a2 / 2880.0
-    else:
-        scale = angle / math.sin(0.5 * angle)
-    out[at] = x * scale
-    out[at + 1] = y * scale
-    out[at + 2] = z * scale
-
-
-@njit(**_OPTIONS)
 def _first_order_quaternion(p, home, jt_inv, qt, a):  # pragma: no cover
     """The first-order start's rotation as a unit quaternion ``qt (4,)`` for position ``p
     (3,)``: the twist J(home)(q − q_home) of :func:`first_order`'s q turned onto home's
@@ -478,7 +460,7 @@ def solve_paired(p, qt, geom, out, qrod, f, jac):  # pragma: no cover
         return False
     for k in range(3):
         out[k] = q[k]
-    _quaternion_rotvec(qt, out, 3)
+    quaternion_rotvec(qt[0], qt[1], qt[2], qt[3], out, 3)
     out[6] = OK
     out[7] = steps
     out[8] = largest

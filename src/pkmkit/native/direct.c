@@ -23,18 +23,9 @@ static void rotvec_quaternion(double wx, double wy, double wz, double out[4]) {
     out[3] = cos(0.5 * angle);
 }
 
-/* out[0:3] = rotation vector of exp(d) exp(p) (angle in [0, pi], as scipy). */
-static void compose(double dx, double dy, double dz, double px, double py, double pz,
-                    double *out) {
-    double a[4], b[4];
-    rotvec_quaternion(dx, dy, dz, a);
-    rotvec_quaternion(px, py, pz, b);
-    double ax = a[0], ay = a[1], az = a[2], aw = a[3];
-    double bx = b[0], by = b[1], bz = b[2], bw = b[3];
-    double x = aw * bx + ax * bw + ay * bz - az * by;
-    double y = aw * by - ax * bz + ay * bw + az * bx;
-    double z = aw * bz + ax * by - ay * bx + az * bw;
-    double w = aw * bw - ax * bx - ay * by - az * bz;
+/* out[0:3] = the rotation vector of the unit quaternion (x, y, z, w), its angle in [0, pi]
+ * (compose's tail; the Verne position solve's answer, position.c). */
+void pk_quaternion_rotvec(double x, double y, double z, double w, double *out) {
     if (w < 0.0) {
         x = -x;
         y = -y;
@@ -53,6 +44,21 @@ static void compose(double dx, double dy, double dz, double px, double py, doubl
     out[0] = x * scale;
     out[1] = y * scale;
     out[2] = z * scale;
+}
+
+/* out[0:3] = rotation vector of exp(d) exp(p) (angle in [0, pi], as scipy). */
+static void compose(double dx, double dy, double dz, double px, double py, double pz,
+                    double *out) {
+    double a[4], b[4];
+    rotvec_quaternion(dx, dy, dz, a);
+    rotvec_quaternion(px, py, pz, b);
+    double ax = a[0], ay = a[1], az = a[2], aw = a[3];
+    double bx = b[0], by = b[1], bz = b[2], bw = b[3];
+    double x = aw * bx + ax * bw + ay * bz - az * by;
+    double y = aw * by - ax * bz + ay * bw + az * bx;
+    double z = aw * bz + ax * by - ay * bx + az * bw;
+    double w = aw * bw - ax * bx - ay * by - az * bz;
+    pk_quaternion_rotvec(x, y, z, w, out);
 }
 
 /* Base joints a_j(q) into base (m, 3) and rod lengths l_j(q) into length (m,) (_rods). */

@@ -114,7 +114,9 @@ void pk_solve_row(const double *q, ptrdiff_t n, const double *u0, int has_guess,
 
 /* direct.c's helpers, shared with position.c: compose (out[0:3] = rotation vector of
  * exp(d) exp(p)), rods (base joints and rod lengths at q), the damped Cholesky step, the
- * stationarity test (full_pose_direct_kernel.compose, _rods, _step, _stationary). */
+ * stationarity test, a unit quaternion's rotation vector (full_pose_direct_kernel.compose,
+ * _rods, _step, _stationary, quaternion_rotvec). */
+void pk_quaternion_rotvec(double x, double y, double z, double w, double *out);
 void pk_compose(double dx, double dy, double dz, double px, double py, double pz, double *out);
 void pk_rod_joints(const double *q, const double *geom, ptrdiff_t m, double *base,
                    double *length);

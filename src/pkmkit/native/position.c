@@ -291,30 +291,6 @@ static void quaternion_matrix(const double *qt, double *rot) {
     rot[8] = 1.0 - 2.0 * (x * x + y * y);
 }
 
-/* out (3,) = the rotation vector of the unit quaternion qt (angle in [0, pi], compose's
- * tail) (_quaternion_rotvec). */
-static void quaternion_rotvec(const double *qt, double *out) {
-    double x = qt[0], y = qt[1], z = qt[2], w = qt[3];
-    if (w < 0.0) {
-        x = -x;
-        y = -y;
-        z = -z;
-        w = -w;
-    }
-    double norm = sqrt(x * x + y * y + z * z);
-    double angle = 2.0 * atan2(norm, w);
-    double scale;
-    if (angle <= 1e-3) {
-        double a2 = angle * angle;
-        scale = 2.0 + a2 / 12.0 + 7.0 * a2 * a2 / 2880.0;
-    } else {
-        scale = angle / sin(0.5 * angle);
-    }
-    out[0] = x * scale;
-    out[1] = y * scale;
-    out[2] = z * scale;
-}
-
 /* The first-order start's rotation as a unit quaternion qt (4,) for position p (3,): the
  * twist J(home)(q - q_home) of first_order's q turned onto home's rotation
  * (_first_order_quaternion). */
@@ -436,7 +412,7 @@ static int solve_paired(const double *p, double *qt, const double *geom, ptrdiff
     }
     if (!(largest <= PAIRED_TOL)) return 0;
     for (int k = 0; k < 3; k++) out[k] = q[k];
-    quaternion_rotvec(qt, out + 3);
+    pk_quaternion_rotvec(qt[0], qt[1], qt[2], qt[3], out + 3);
     out[6] = OK;
     out[7] = (double)steps;
     out[8] = largest;
