@@ -258,7 +258,8 @@ def _native_columns(table: Any, quote: bool) -> tuple | None:
         values = column.chunk(0)
         kind = values.type
         if pa.types.is_float64(kind) or pa.types.is_integer(kind):
-            columns.append(values.to_numpy(zero_copy_only=True))
+            columns.append(_values_of(values, np.dtype(np.float64) if pa.types.is_float64(kind)
+                                      else _integer_dtype(kind)))
             continue
         if not (pa.types.is_dictionary(kind) and pa.types.is_string(kind.value_type)
                 and values.dictionary.null_count == 0):
@@ -268,8 +269,25 @@ def _native_columns(table: Any, quote: bool) -> tuple | None:
             return None
         cells = tuple(('"' + t.replace('"', '""') + '"' if quote else t).encode("utf-8")
                       for t in texts)
-        columns.append((values.indices.to_numpy(zero_copy_only=True), cells))
+        indices = values.indices
+        columns.append((_values_of(indices, _integer_dtype(indices.type)), cells))
     return tuple(columns)
+
+
+def _integer_dtype(kind: Any) -> np.dtype:
+    """The NumPy dtype of an Arrow integer type (int8 … uint64)."""
+    import pyarrow as pa
+
+    return np.dtype(f"{'i' if pa.types.is_signed_integer(kind) else 'u'}{kind.bit_width // 8}")
+
+
+def _values_of(values: Any, dtype: np.dtype) -> np.ndarray:
+    """A null-free Arrow array's values ``(n,)`` as a read-only NumPy view of its data buffer
+    (no copy). Not ``to_numpy``: pyarrow's conversion consults its pandas shim, which imports
+    pandas when it is installed (0.3 to 0.9 s; ``tests/io/test_table_no_pandas.py``), as
+    ``table_sources._fill`` says."""
+    return np.frombuffer(values.buffers()[1], dtype=dtype, count=len(values),
+                         offset=dtype.itemsize * values.offset)
 
 
 def _cpu_count() -> int:
